@@ -1,0 +1,39 @@
+# kodawari_embed_shaders(TARGET <target> SOURCES <file.comp>... INCLUDE_DIRS <dir>...)
+#
+# Compiles each compute shader to SPIR-V at build time with glslangValidator (its
+# --depfile tracks the #included headers, so editing shaders/shared/*.h rebuilds
+# what uses it) and embeds the words in a C++ source added to <target>:
+# kodawari::gpu::embedded_shader("<name>") returns them.
+function(kodawari_embed_shaders)
+  cmake_parse_arguments(ARG "" "TARGET" "SOURCES;INCLUDE_DIRS" ${ARGN})
+  set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/spirv)
+  file(MAKE_DIRECTORY ${out_dir})
+  set(include_flags)
+  foreach(dir IN LISTS ARG_INCLUDE_DIRS)
+    list(APPEND include_flags -I${dir})
+  endforeach()
+  set(headers)
+  set(includes "")
+  set(entries "")
+  foreach(src IN LISTS ARG_SOURCES)
+    get_filename_component(name ${src} NAME_WE)
+    get_filename_component(abs ${src} ABSOLUTE)
+    set(header ${out_dir}/${name}.spv.h)
+    add_custom_command(
+      OUTPUT ${header}
+      COMMAND Vulkan::glslangValidator --quiet --target-env vulkan1.1 -V ${include_flags}
+              --vn kodawari_spirv_${name} --depfile ${header}.d -o ${header} ${abs}
+      DEPENDS ${abs}
+      DEPFILE ${header}.d
+      COMMENT "glslang ${name}.comp"
+      VERBATIM)
+    list(APPEND headers ${header})
+    string(APPEND includes "#include \"${name}.spv.h\"\n")
+    string(APPEND entries "    {\"${name}\", std::span<const std::uint32_t>(kodawari_spirv_${name})},\n")
+  endforeach()
+  set(KODAWARI_SHADER_INCLUDES "${includes}")
+  set(KODAWARI_SHADER_ENTRIES "${entries}")
+  configure_file(${PROJECT_SOURCE_DIR}/cmake/embedded_shaders.cpp.in ${out_dir}/embedded_shaders.cpp @ONLY)
+  target_sources(${ARG_TARGET} PRIVATE ${headers} ${out_dir}/embedded_shaders.cpp)
+  target_include_directories(${ARG_TARGET} PRIVATE ${out_dir})
+endfunction()

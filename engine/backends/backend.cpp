@@ -1,0 +1,23 @@
+#include "backends/backends.hpp"
+
+namespace kodawari {
+
+std::string_view backend_name(BackendKind kind) {
+    switch (kind) {
+        case BackendKind::CpuReference: return "cpu-reference";
+        case BackendKind::Cpu: return "cpu";
+        case BackendKind::Vulkan: return "vulkan";
+    }
+    return "cpu-reference";
+}
+
+Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options) {
+    switch (kind) {
+        case BackendKind::CpuReference: return make_cpu_bird_backend(true, 1);
+        case BackendKind::Cpu: return make_cpu_bird_backend(false, options.threads);
+        case BackendKind::Vulkan: return make_vulkan_bird_backend(options);
+    }
+    return make_error(Error::Kind::Internal, "unknown backend");
+}
+
+}  // namespace kodawari

@@ -1,0 +1,202 @@
+// The Vulkan bird backend: one dispatch of shaders/birds_flap.comp evaluates every bird
+// for a run of frames, keeping each bird's state in registers between frames (lavapipe
+// executes storage-buffer access lane by lane, so state is loaded and stored once per
+// dispatch; see shared/PERF-NOTES.md). Poses go to a ring of frame slots that is read
+// back after each dispatch when the caller wants them.
+#include <algorithm>
+#include <cstring>
+#include <optional>
+
+#include "backends/backends.hpp"
+#include "gpu/compute_pipeline.hpp"
+#include "kodawari/birds/flight.hpp"
+
+namespace kodawari {
+namespace {
+
+using gpu::GpuBuffer;
+
+// Upper bound of the pose + diagnostics ring: many frames per dispatch for small
+// flocks, one frame per dispatch for a million birds.
+constexpr std::uint64_t kRingBytes = 256ull << 20;
+
+template <typename T>
+std::span<const std::byte> bytes_of(const std::vector<T>& v) {
+    return std::as_bytes(std::span<const T>(v));
+}
+
+class VulkanBirdBackend final : public BirdBackend {
+public:
+    explicit VulkanBirdBackend(std::unique_ptr<gpu::VulkanContext> ctx, gpu::ComputePipeline pipeline)
+        : ctx_(std::move(ctx)), pipeline_(std::move(pipeline)) {}
+
+    std::string_view name() const override { return "vulkan"; }
+    std::string device() const override { return ctx_->info().name; }
+    double last_gpu_ms() const override { return gpu_ms_; }
+    std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
+
+    Result<void> load(const birds::BirdWorld& world) override {
+        const std::size_t count = world.birds.size();
+        if (count == 0) return make_error(Error::Kind::InvalidInput, "the world has no birds");
+        const std::uint64_t groups = (count + KW_BIRDS_WORKGROUP_SIZE - 1) / KW_BIRDS_WORKGROUP_SIZE;
+        if (groups > ctx_->info().max_workgroup_count[0]) {
+            return make_error(Error::Kind::Unsupported, std::to_string(count) + " birds exceed what one dispatch on " +
+                                                            ctx_->info().name + " can cover (" +
+                                                            std::to_string(std::uint64_t{ctx_->info().max_workgroup_count[0]} *
+                                                                           KW_BIRDS_WORKGROUP_SIZE) +
+                                                            ")");
+        }
+        count_ = static_cast<std::uint32_t>(count);
+        frame_ = 0;
+        const std::uint64_t per_frame = std::uint64_t{count} * (sizeof(gpu::BirdPose) + sizeof(gpu::BirdDiag));
+        slots_ = static_cast<std::uint32_t>(std::clamp<std::uint64_t>(kRingBytes / per_frame, 1, std::max(world.frames, 1u)));
+        const std::uint64_t max_range = ctx_->info().max_storage_buffer_range;
+        while (slots_ > 1 && std::uint64_t{slots_} * count * sizeof(gpu::BirdPose) > max_range) --slots_;
+        if (std::uint64_t{count} * sizeof(gpu::BirdPose) > max_range) {
+            return make_error(Error::Kind::Unsupported, std::to_string(count) + " birds' poses exceed the device's storage buffer range");
+        }
+
+        const gpu::FlightUniforms uniforms = world.uniforms();
+        const std::vector<gpu::BirdState> states(count, birds::initial_state());
+        buffers_.clear();
+        const std::span<const std::byte> contents[KW_BIRDS_BINDING_COUNT] = {
+            std::as_bytes(std::span(&uniforms, 1)), bytes_of(world.routes), bytes_of(world.control_points),
+            bytes_of(world.arc_samples), bytes_of(world.birds), bytes_of(states), {}, {}};
+        const std::uint64_t sizes[KW_BIRDS_BINDING_COUNT] = {
+            sizeof(uniforms), contents[1].size(), contents[2].size(), contents[3].size(), contents[4].size(),
+            contents[5].size(), std::uint64_t{slots_} * count * sizeof(gpu::BirdPose),
+            std::uint64_t{slots_} * count * sizeof(gpu::BirdDiag)};
+        for (std::uint32_t b = 0; b < KW_BIRDS_BINDING_COUNT; ++b) {
+            auto buffer = GpuBuffer::create(*ctx_, std::max<std::uint64_t>(sizes[b], 16), GpuBuffer::Kind::Storage);
+            if (!buffer) return buffer.error();
+            KW_TRY(gpu::upload(*ctx_, buffer.value(), contents[b]));
+            buffers_.push_back(std::move(buffer).value());
+        }
+        readback_.reset();
+        if (!ctx_->unified_memory()) {
+            auto readback = GpuBuffer::create(*ctx_, sizes[KW_BIRDS_BINDING_POSES] + sizes[KW_BIRDS_BINDING_DIAGNOSTICS],
+                                              GpuBuffer::Kind::Readback);
+            if (!readback) return readback.error();
+            readback_.emplace(std::move(readback).value());
+        }
+        std::vector<const GpuBuffer*> bound;
+        for (const auto& b : buffers_) bound.push_back(&b);
+        pipeline_.bind_buffers(*ctx_, bound);
+        return {};
+    }
+
+    Result<void> simulate(std::uint32_t frames, FrameOutput out) override {
+        assert(count_ > 0 && "load() first");
+        assert(out.poses.empty() || out.poses.size() == std::size_t{frames} * count_);
+        assert(out.diag.empty() || out.diag.size() == std::size_t{frames} * count_);
+        const bool want_poses = !out.poses.empty();
+        const bool want_diag = !out.diag.empty();
+        const std::uint32_t groups = (count_ + KW_BIRDS_WORKGROUP_SIZE - 1) / KW_BIRDS_WORKGROUP_SIZE;
+        gpu_ms_ = 0.0;
+
+        // Records the dispatches of frames [first, first + n) in chunks of at most slots_.
+        auto record_chunk = [&](const vk::raii::CommandBuffer& cmd, std::uint32_t first, std::uint32_t n) {
+            // The previous dispatch (this or an earlier submission) wrote the states and
+            // the ring; this one reads and overwrites them.
+            const vk::MemoryBarrier before{.srcAccessMask = vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferRead,
+                                           .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
+            cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
+                                vk::PipelineStageFlagBits::eComputeShader, {}, before, {}, {});
+            const gpu::BirdPush push{{first, n, slots_, want_diag ? 1u : 0u}};
+            pipeline_.dispatch(cmd, std::as_bytes(std::span(&push, 1)), groups);
+        };
+        auto record_readback = [&](const vk::raii::CommandBuffer& cmd, std::uint32_t n) {
+            if (readback_) {
+                const vk::MemoryBarrier to_copy{.srcAccessMask = vk::AccessFlagBits::eShaderWrite,
+                                                .dstAccessMask = vk::AccessFlagBits::eTransferRead};
+                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eTransfer, {}, to_copy,
+                                    {}, {});
+                const vk::DeviceSize pose_bytes = vk::DeviceSize{n} * count_ * sizeof(gpu::BirdPose);
+                const vk::DeviceSize diag_bytes = vk::DeviceSize{n} * count_ * sizeof(gpu::BirdDiag);
+                cmd.copyBuffer(buffers_[KW_BIRDS_BINDING_POSES].handle(), readback_->handle(),
+                               vk::BufferCopy{.srcOffset = 0, .dstOffset = 0, .size = pose_bytes});
+                if (want_diag) {
+                    cmd.copyBuffer(buffers_[KW_BIRDS_BINDING_DIAGNOSTICS].handle(), readback_->handle(),
+                                   vk::BufferCopy{.srcOffset = 0, .dstOffset = buffers_[KW_BIRDS_BINDING_POSES].size(), .size = diag_bytes});
+                }
+                const vk::MemoryBarrier to_host{.srcAccessMask = vk::AccessFlagBits::eTransferWrite,
+                                                .dstAccessMask = vk::AccessFlagBits::eHostRead};
+                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eHost, {}, to_host, {}, {});
+            } else {
+                const vk::MemoryBarrier to_host{.srcAccessMask = vk::AccessFlagBits::eShaderWrite,
+                                                .dstAccessMask = vk::AccessFlagBits::eHostRead};
+                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eHost, {}, to_host, {},
+                                    {});
+            }
+        };
+
+        if (!want_poses && !want_diag) {
+            // Benchmarks: every chunk in one submission, nothing read back.
+            double ms = -1.0;
+            KW_TRY(ctx_->submit(
+                [&](const vk::raii::CommandBuffer& cmd) {
+                    ctx_->write_timestamp(cmd, 0, vk::PipelineStageFlagBits::eTopOfPipe);
+                    for (std::uint32_t done = 0; done < frames;) {
+                        const std::uint32_t n = std::min(slots_, frames - done);
+                        record_chunk(cmd, frame_ + done, n);
+                        done += n;
+                    }
+                    ctx_->write_timestamp(cmd, 1, vk::PipelineStageFlagBits::eBottomOfPipe);
+                },
+                &ms));
+            gpu_ms_ = ms;
+            frame_ += frames;
+            return {};
+        }
+
+        for (std::uint32_t done = 0; done < frames;) {
+            const std::uint32_t n = std::min(slots_, frames - done);
+            double ms = -1.0;
+            KW_TRY(ctx_->submit(
+                [&](const vk::raii::CommandBuffer& cmd) {
+                    ctx_->write_timestamp(cmd, 0, vk::PipelineStageFlagBits::eTopOfPipe);
+                    record_chunk(cmd, frame_ + done, n);
+                    ctx_->write_timestamp(cmd, 1, vk::PipelineStageFlagBits::eBottomOfPipe);
+                    record_readback(cmd, n);
+                },
+                &ms));
+            if (ms >= 0.0) gpu_ms_ += ms;
+            const std::size_t pose_count = std::size_t{n} * count_;
+            const std::byte* poses = readback_ ? readback_->mapped() : buffers_[KW_BIRDS_BINDING_POSES].mapped();
+            const std::byte* diags = readback_ ? readback_->mapped() + buffers_[KW_BIRDS_BINDING_POSES].size()
+                                               : buffers_[KW_BIRDS_BINDING_DIAGNOSTICS].mapped();
+            if (readback_) KW_TRY(readback_->invalidate(*ctx_));
+            if (want_poses) {
+                std::memcpy(out.poses.data() + std::size_t{done} * count_, poses, pose_count * sizeof(gpu::BirdPose));
+            }
+            if (want_diag) {
+                std::memcpy(out.diag.data() + std::size_t{done} * count_, diags, pose_count * sizeof(gpu::BirdDiag));
+            }
+            done += n;
+        }
+        frame_ += frames;
+        return {};
+    }
+
+private:
+    std::unique_ptr<gpu::VulkanContext> ctx_;
+    gpu::ComputePipeline pipeline_;
+    std::vector<GpuBuffer> buffers_;
+    std::optional<GpuBuffer> readback_;
+    std::uint32_t count_ = 0;
+    std::uint32_t slots_ = 1;
+    std::uint32_t frame_ = 0;
+    double gpu_ms_ = -1.0;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<BirdBackend>> make_vulkan_bird_backend(const BackendOptions& options) {
+    auto ctx = gpu::VulkanContext::create({.device = options.device, .validation = options.validation});
+    if (!ctx) return ctx.error();
+    auto pipeline = gpu::ComputePipeline::create(*ctx.value(), "birds_flap", KW_BIRDS_BINDING_COUNT, sizeof(gpu::BirdPush));
+    if (!pipeline) return pipeline.error();
+    return std::unique_ptr<BirdBackend>(new VulkanBirdBackend(std::move(ctx).value(), std::move(pipeline).value()));
+}
+
+}  // namespace kodawari

@@ -1,0 +1,50 @@
+#include "kodawari/birds/rig.hpp"
+
+#include <cassert>
+
+namespace kodawari::birds {
+namespace {
+
+// Figures and their sources: docs/wing-types.md. Frequencies of gull and hawk are
+// Pennycuick's (1996) allometric estimate; amplitude is ours (gull and buzzard beat
+// shallower than a pigeon: "fast, stiff, shallow" in field guides).
+constexpr WingTypeSpec kSpecs[kWingTypeCount] = {
+    {"pigeon", 0.67f, 0.33f, 0.31f, 0.10f, 5.5f, 19.7f, 1.0f, 0.45f},
+    {"gull", 1.40f, 0.60f, 1.0f, 0.14f, 3.6f, 12.0f, 0.8f, 0.5f},
+    {"hawk", 1.20f, 0.54f, 0.875f, 0.22f, 3.6f, 11.0f, 0.7f, 0.45f},
+};
+
+}  // namespace
+
+const WingTypeSpec& wing_type_spec(WingType type) {
+    const auto index = static_cast<std::size_t>(type);
+    assert(index < kWingTypeCount);
+    return kSpecs[index];
+}
+
+std::optional<WingType> parse_wing_type(std::string_view name) {
+    for (std::size_t i = 0; i < kWingTypeCount; ++i) {
+        if (kSpecs[i].name == name) return static_cast<WingType>(i);
+    }
+    return std::nullopt;
+}
+
+std::array<std::array<float, 3>, kPartCount> part_offsets(WingType type) {
+    const WingTypeSpec& spec = wing_type_spec(type);
+    const float length = spec.body_length;
+    // Shoulders sit a little forward of the centre of mass and on top of the body.
+    const float shoulder_x = 0.06f * length;
+    const float half_span = 0.5f * spec.wingspan - shoulder_x;
+    const float arm1 = spec.arm1_fraction * half_span;
+    std::array<std::array<float, 3>, kPartCount> offsets{};
+    offsets[KW_PART_BODY] = {0.0f, 0.0f, 0.0f};
+    offsets[KW_PART_HEAD] = {0.0f, 0.05f * length, 0.40f * length};
+    offsets[KW_PART_TAIL] = {0.0f, 0.0f, -0.35f * length};
+    offsets[KW_PART_LEFT_ARM1] = {shoulder_x, 0.05f * length, 0.08f * length};
+    offsets[KW_PART_LEFT_ARM2] = {arm1, 0.0f, 0.0f};
+    offsets[KW_PART_RIGHT_ARM1] = {-shoulder_x, 0.05f * length, 0.08f * length};
+    offsets[KW_PART_RIGHT_ARM2] = {-arm1, 0.0f, 0.0f};
+    return offsets;
+}
+
+}  // namespace kodawari::birds

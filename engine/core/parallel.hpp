@@ -1,0 +1,16 @@
+#pragma once
+// Splits [0, n) into one contiguous range per thread. Ranges are fixed by n and the
+// thread count alone, so results never depend on scheduling.
+
+#include <cstddef>
+#include <functional>
+
+namespace kodawari {
+
+/// Threads to use for `requested` (0 = hardware concurrency, at least 1).
+[[nodiscard]] unsigned resolve_threads(unsigned requested);
+
+/// Calls fn(begin, end) for `threads` ranges covering [0, n), in parallel, and waits.
+void parallel_for(std::size_t n, unsigned threads, const std::function<void(std::size_t, std::size_t)>& fn);
+
+}  // namespace kodawari

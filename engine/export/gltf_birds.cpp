@@ -1,0 +1,561 @@
+// glTF 2.0 export of a bird simulation (SPEC C): one node hierarchy per bird, a small
+// closed mesh per part shared by every bird of a wing type, and one animation whose
+// channels hold every simulated frame.
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <cstring>
+#include <exception>
+#include <limits>
+#include <new>
+#include <span>
+#include <ostream>
+#include <streambuf>
+#include <string>
+#include <vector>
+
+#if defined(__GNUC__)
+#pragma GCC diagnostic push
+#pragma GCC diagnostic ignored "-Wconversion"
+#pragma GCC diagnostic ignored "-Wsign-conversion"
+#pragma GCC diagnostic ignored "-Wshadow"
+#pragma GCC diagnostic ignored "-Wold-style-cast"
+#pragma GCC diagnostic ignored "-Wdouble-promotion"
+#pragma GCC diagnostic ignored "-Wnull-dereference"
+#pragma GCC diagnostic ignored "-Wcast-align"
+#pragma GCC diagnostic ignored "-Wunused-parameter"
+#pragma GCC diagnostic ignored "-Wpedantic"
+#endif
+#include <tiny_gltf.h>
+#if defined(__GNUC__)
+#pragma GCC diagnostic pop
+#endif
+
+#include "kodawari/birds/rig.hpp"
+#include "kodawari/export.hpp"
+
+namespace kodawari {
+namespace {
+
+using Vec3 = std::array<float, 3>;
+using Quat = std::array<float, 4>;
+
+constexpr int kArrayBuffer = TINYGLTF_TARGET_ARRAY_BUFFER;
+constexpr int kElementArrayBuffer = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
+
+/// A triangle mesh with one normal per triangle (flat shading: each triangle has its
+/// own three vertices).
+struct MeshData {
+    std::vector<Vec3> positions;
+    std::vector<Vec3> normals;
+    std::vector<std::uint16_t> indices;
+};
+
+/// Adds the triangles of a convex solid, each turned so that its normal points away
+/// from the solid's centre. Deciding the winding geometrically instead of by hand keeps
+/// the mirrored right wing correct without a separate winding rule.
+void add_convex_triangles(MeshData& mesh, const std::vector<Vec3>& corners,
+                          const std::vector<std::array<int, 3>>& triangles) {
+    double centre[3] = {0, 0, 0};
+    for (const Vec3& c : corners) {
+        for (int i = 0; i < 3; ++i) centre[i] += static_cast<double>(c[i]);
+    }
+    for (double& c : centre) c /= static_cast<double>(corners.size());
+
+    for (const auto& tri : triangles) {
+        Vec3 a = corners[tri[0]];
+        Vec3 b = corners[tri[1]];
+        Vec3 c = corners[tri[2]];
+        double e1[3];
+        double e2[3];
+        double mid[3];
+        for (int i = 0; i < 3; ++i) {
+            e1[i] = static_cast<double>(b[i]) - static_cast<double>(a[i]);
+            e2[i] = static_cast<double>(c[i]) - static_cast<double>(a[i]);
+            mid[i] = (static_cast<double>(a[i]) + static_cast<double>(b[i]) + static_cast<double>(c[i])) / 3.0 -
+                     centre[i];
+        }
+        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
+        const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
+        assert(length > 0.0 && "degenerate triangle in a part mesh");
+        for (double& v : n) v /= length;
+        if (n[0] * mid[0] + n[1] * mid[1] + n[2] * mid[2] < 0.0) {
+            std::swap(b, c);
+            for (double& v : n) v = -v;
+        }
+        const Vec3 normal = {static_cast<float>(n[0]), static_cast<float>(n[1]), static_cast<float>(n[2])};
+        for (const Vec3& p : {a, b, c}) {
+            mesh.indices.push_back(static_cast<std::uint16_t>(mesh.positions.size()));
+            mesh.positions.push_back(p);
+            mesh.normals.push_back(normal);
+        }
+    }
+}
+
+/// A hexahedron from its 8 corners, indexed x + 2y + 4z (bit set = the "high" side).
+/// Tapered panels are allowed: every quad is split into two triangles.
+MeshData hexahedron(const std::array<Vec3, 8>& c) {
+    static const std::vector<std::array<int, 3>> kTriangles = {
+        {0, 2, 6}, {0, 6, 4},  // -x
+        {1, 5, 7}, {1, 7, 3},  // +x
+        {0, 4, 5}, {0, 5, 1},  // -y
+        {2, 3, 7}, {2, 7, 6},  // +y
+        {0, 1, 3}, {0, 3, 2},  // -z
+        {4, 6, 7}, {4, 7, 5},  // +z
+    };
+    MeshData mesh;
+    add_convex_triangles(mesh, std::vector<Vec3>(c.begin(), c.end()), kTriangles);
+    return mesh;
+}
+
+/// An axis-aligned box from its lower and upper corner.
+MeshData box(const Vec3& lo, const Vec3& hi) {
+    std::array<Vec3, 8> c{};
+    for (int i = 0; i < 8; ++i) {
+        c[i] = {(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]};
+    }
+    return hexahedron(c);
+}
+
+/// A flat panel lying in the XZ plane: the root edge at x = x0 spans z in
+/// [root_back, root_front], the tip edge at x = x1 spans [tip_back, tip_front].
+MeshData panel(float x0, float x1, float root_back, float root_front, float tip_back, float tip_front,
+               float thickness) {
+    const float h = 0.5f * thickness;
+    std::array<Vec3, 8> c{};
+    for (int i = 0; i < 8; ++i) {
+        const bool tip = (i & 1) != 0;
+        const bool front = (i & 4) != 0;
+        const float x = tip ? x1 : x0;
+        const float z = tip ? (front ? tip_front : tip_back) : (front ? root_front : root_back);
+        c[i] = {x, (i & 2) ? h : -h, z};
+    }
+    return hexahedron(c);
+}
+
+/// The body: an octahedron stretched along Z (nose forward).
+MeshData body_mesh(float length) {
+    const float front = 0.38f * length;
+    const float back = -0.35f * length;
+    const float mid = 0.05f * length;
+    const float half_width = 0.11f * length;
+    const float half_height = 0.10f * length;
+    const std::vector<Vec3> corners = {
+        {0.0f, 0.0f, front},       {0.0f, 0.0f, back},         {half_width, 0.0f, mid},
+        {0.0f, half_height, mid},  {-half_width, 0.0f, mid},   {0.0f, -half_height, mid},
+    };
+    const std::vector<std::array<int, 3>> triangles = {
+        {0, 2, 3}, {0, 3, 4}, {0, 4, 5}, {0, 5, 2}, {1, 2, 3}, {1, 3, 4}, {1, 4, 5}, {1, 5, 2},
+    };
+    MeshData mesh;
+    add_convex_triangles(mesh, corners, triangles);
+    return mesh;
+}
+
+constexpr float kWingThickness = 0.01f;
+
+/// The seven meshes of a wing type, in part order.
+std::array<MeshData, birds::kPartCount> part_meshes(birds::WingType type) {
+    const birds::WingTypeSpec& spec = birds::wing_type_spec(type);
+    const auto offsets = birds::part_offsets(type);
+    const float length = spec.body_length;
+    const float chord = spec.mean_chord;
+    // The wing lengths follow the rig, so the arm2 joint sits where arm1's panel ends.
+    const float arm1 = std::abs(offsets[KW_PART_LEFT_ARM2][0]);
+    const float half_span = 0.5f * spec.wingspan - std::abs(offsets[KW_PART_LEFT_ARM1][0]);
+    const float arm2 = std::max(half_span - arm1, 0.1f * half_span);
+    // The leading edge sits a little ahead of the joint, as on a real wing; arm2 tapers.
+    const float front = 0.3f * chord;
+    const float back = -0.7f * chord;
+
+    std::array<MeshData, birds::kPartCount> meshes;
+    meshes[KW_PART_BODY] = body_mesh(length);
+    const float head = 0.06f * length;
+    meshes[KW_PART_HEAD] = box({-head, -head, -head}, {head, head, head});
+    meshes[KW_PART_TAIL] = panel(0.0f, -0.2f * length, -0.03f * length, 0.03f * length, -0.14f * length,
+                                 0.14f * length, kWingThickness);
+    // The tail panel above is built along X; turn it to point backward (-Z), fanning out.
+    for (Vec3& p : meshes[KW_PART_TAIL].positions) p = {p[2], p[1], p[0]};
+    for (Vec3& n : meshes[KW_PART_TAIL].normals) n = {n[2], n[1], n[0]};
+    // Swapping two axes mirrors the mesh: restore outward winding.
+    for (std::size_t i = 0; i + 2 < meshes[KW_PART_TAIL].indices.size(); i += 3) {
+        std::swap(meshes[KW_PART_TAIL].indices[i + 1], meshes[KW_PART_TAIL].indices[i + 2]);
+    }
+    meshes[KW_PART_LEFT_ARM1] = panel(0.0f, arm1, back, front, back, front, kWingThickness);
+    meshes[KW_PART_LEFT_ARM2] = panel(0.0f, arm2, back, front, 0.5f * back, 0.5f * front, kWingThickness);
+    meshes[KW_PART_RIGHT_ARM1] = panel(0.0f, -arm1, back, front, back, front, kWingThickness);
+    meshes[KW_PART_RIGHT_ARM2] = panel(0.0f, -arm2, back, front, 0.5f * back, 0.5f * front, kWingThickness);
+    return meshes;
+}
+
+/// Base colours per wing type: pigeon grey-blue, gull white, hawk brown.
+constexpr std::array<std::array<double, 4>, birds::kWingTypeCount> kColours = {{
+    {0.42, 0.45, 0.55, 1.0},
+    {0.92, 0.92, 0.90, 1.0},
+    {0.48, 0.30, 0.16, 1.0},
+}};
+
+/// Writes into the one buffer of the model; every block starts 4-byte aligned.
+class BufferWriter {
+public:
+    explicit BufferWriter(std::vector<unsigned char>& bytes) : bytes_(bytes) {}
+
+    /// Reserves `size` bytes (rounded up to 4) and returns their offset.
+    std::size_t allocate(std::size_t size) {
+        const std::size_t offset = bytes_.size();
+        bytes_.resize(offset + ((size + 3) & ~std::size_t{3}));
+        return offset;
+    }
+
+    std::size_t append(const void* data, std::size_t size) {
+        const std::size_t offset = allocate(size);
+        std::memcpy(bytes_.data() + offset, data, size);
+        return offset;
+    }
+
+private:
+    std::vector<unsigned char>& bytes_;
+};
+
+int add_buffer_view(tinygltf::Model& model, std::size_t offset, std::size_t length, int target) {
+    tinygltf::BufferView view;
+    view.buffer = 0;
+    view.byteOffset = offset;
+    view.byteLength = length;
+    view.target = target;
+    model.bufferViews.push_back(std::move(view));
+    return static_cast<int>(model.bufferViews.size() - 1);
+}
+
+int add_accessor(tinygltf::Model& model, int view, std::size_t offset, int component, std::size_t count,
+                 int type) {
+    tinygltf::Accessor accessor;
+    accessor.bufferView = view;
+    accessor.byteOffset = offset;
+    accessor.componentType = component;
+    accessor.count = count;
+    accessor.type = type;
+    model.accessors.push_back(std::move(accessor));
+    return static_cast<int>(model.accessors.size() - 1);
+}
+
+/// Float VEC3 accessor with its own ARRAY_BUFFER view, min/max filled in.
+int add_vec3_attribute(tinygltf::Model& model, BufferWriter& writer, const std::vector<Vec3>& values) {
+    const std::size_t bytes = values.size() * sizeof(Vec3);
+    const std::size_t offset = writer.append(values.data(), bytes);
+    const int view = add_buffer_view(model, offset, bytes, kArrayBuffer);
+    const int accessor =
+        add_accessor(model, view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, values.size(), TINYGLTF_TYPE_VEC3);
+    std::vector<double> lo(3, std::numeric_limits<double>::max());
+    std::vector<double> hi(3, std::numeric_limits<double>::lowest());
+    for (const Vec3& v : values) {
+        for (int i = 0; i < 3; ++i) {
+            lo[i] = std::min(lo[i], static_cast<double>(v[i]));
+            hi[i] = std::max(hi[i], static_cast<double>(v[i]));
+        }
+    }
+    model.accessors[accessor].minValues = std::move(lo);
+    model.accessors[accessor].maxValues = std::move(hi);
+    return accessor;
+}
+
+/// Adds the meshes and the material of one wing type; returns the mesh index per part.
+std::array<int, birds::kPartCount> add_wing_type_meshes(tinygltf::Model& model, BufferWriter& writer,
+                                                         birds::WingType type) {
+    const std::size_t type_index = static_cast<std::size_t>(type);
+    const std::string type_name(birds::wing_type_spec(type).name);
+
+    tinygltf::Material material;
+    material.name = type_name;
+    material.pbrMetallicRoughness.baseColorFactor.assign(kColours[type_index].begin(), kColours[type_index].end());
+    material.pbrMetallicRoughness.metallicFactor = 0.0;
+    material.pbrMetallicRoughness.roughnessFactor = 0.8;
+    model.materials.push_back(std::move(material));
+    const int material_index = static_cast<int>(model.materials.size() - 1);
+
+    std::array<int, birds::kPartCount> mesh_indices{};
+    const auto meshes = part_meshes(type);
+    for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+        const MeshData& data = meshes[part];
+        assert(data.positions.size() <= std::numeric_limits<std::uint16_t>::max());
+        tinygltf::Primitive primitive;
+        primitive.mode = TINYGLTF_MODE_TRIANGLES;
+        primitive.material = material_index;
+        primitive.attributes["POSITION"] = add_vec3_attribute(model, writer, data.positions);
+        primitive.attributes["NORMAL"] = add_vec3_attribute(model, writer, data.normals);
+        const std::size_t index_bytes = data.indices.size() * sizeof(std::uint16_t);
+        const std::size_t offset = writer.append(data.indices.data(), index_bytes);
+        const int view = add_buffer_view(model, offset, index_bytes, kElementArrayBuffer);
+        primitive.indices = add_accessor(model, view, 0, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
+                                         data.indices.size(), TINYGLTF_TYPE_SCALAR);
+
+        tinygltf::Mesh mesh;
+        mesh.name = type_name + "_" + std::string(birds::kPartNames[part]);
+        mesh.primitives.push_back(std::move(primitive));
+        model.meshes.push_back(std::move(mesh));
+        mesh_indices[part] = static_cast<int>(model.meshes.size() - 1);
+    }
+    return mesh_indices;
+}
+
+/// Unit quaternion from a pose; a zero or non-finite input is a backend bug and is
+/// reported by the caller, here it only must not divide by zero.
+bool normalized(const gpu::vec4& q, Quat& out) {
+    const double n = std::sqrt(static_cast<double>(q.x) * static_cast<double>(q.x) +
+                               static_cast<double>(q.y) * static_cast<double>(q.y) +
+                               static_cast<double>(q.z) * static_cast<double>(q.z) +
+                               static_cast<double>(q.w) * static_cast<double>(q.w));
+    if (!(n > 1e-12) || !std::isfinite(n)) return false;
+    out = {static_cast<float>(static_cast<double>(q.x) / n), static_cast<float>(static_cast<double>(q.y) / n),
+           static_cast<float>(static_cast<double>(q.z) / n), static_cast<float>(static_cast<double>(q.w) / n)};
+    return true;
+}
+
+/// An ostream that appends to an AtomicFile, so the GLB goes to disk without a second
+/// in-memory copy of a buffer that can reach a gigabyte.
+class AtomicFileBuf : public std::streambuf {
+public:
+    explicit AtomicFileBuf(AtomicFile& file) : file_(file) {}
+
+protected:
+    std::streamsize xsputn(const char* data, std::streamsize count) override {
+        file_.write(data, static_cast<std::size_t>(count));
+        return count;
+    }
+    int_type overflow(int_type ch) override {
+        if (traits_type::eq_int_type(ch, traits_type::eof())) return traits_type::not_eof(ch);
+        const char c = traits_type::to_char_type(ch);
+        file_.write(&c, 1);
+        return ch;
+    }
+
+private:
+    AtomicFile& file_;
+};
+
+Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, std::span<const gpu::BirdPose> poses,
+                             std::uint32_t frames) {
+    const std::size_t bird_count = world.birds.size();
+    tinygltf::Model model;
+    model.asset.version = "2.0";
+    model.asset.generator = std::string("kodawari ") + KODAWARI_VERSION;
+    model.buffers.emplace_back();
+    std::vector<unsigned char>& bytes = model.buffers[0].data;
+    BufferWriter writer(bytes);
+
+    // Meshes first, only for the wing types that occur.
+    std::array<std::array<int, birds::kPartCount>, birds::kWingTypeCount> type_meshes{};
+    std::array<bool, birds::kWingTypeCount> used{};
+    for (std::size_t b = 0; b < bird_count; ++b) {
+        const std::uint32_t type = world.birds[b].ids.y;
+        if (type >= birds::kWingTypeCount) {
+            return make_error(Error::Kind::InvalidInput,
+                              "bird " + std::to_string(b) + " has unknown wing type " + std::to_string(type));
+        }
+        used[type] = true;
+    }
+    std::array<std::array<std::array<float, 3>, birds::kPartCount>, birds::kWingTypeCount> offsets{};
+    for (std::size_t t = 0; t < birds::kWingTypeCount; ++t) {
+        if (!used[t]) continue;
+        type_meshes[t] = add_wing_type_meshes(model, writer, static_cast<birds::WingType>(t));
+        offsets[t] = birds::part_offsets(static_cast<birds::WingType>(t));
+    }
+
+    // Animation data: the shared key times, then per bird its Body translation and the
+    // rotations of its parts, each channel contiguous over the frames.
+    const std::size_t time_bytes = frames * sizeof(float);
+    const std::size_t translation_bytes = frames * 3 * sizeof(float);
+    const std::size_t rotation_bytes = frames * 4 * sizeof(float);
+    const std::size_t per_bird = translation_bytes + birds::kPartCount * rotation_bytes;
+    const std::size_t animation_start = bytes.size();
+    bytes.reserve(animation_start + time_bytes + bird_count * per_bird);
+    writer.allocate(time_bytes + bird_count * per_bird);
+    const std::size_t animation_bytes = bytes.size() - animation_start;
+    const int animation_view = add_buffer_view(model, animation_start, animation_bytes, 0);
+
+    const float fps = world.fps;
+    for (std::uint32_t f = 0; f < frames; ++f) {
+        const float time = static_cast<float>(f) / fps;
+        std::memcpy(bytes.data() + animation_start + f * sizeof(float), &time, sizeof(float));
+    }
+    const int time_accessor =
+        add_accessor(model, animation_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_SCALAR);
+    model.accessors[time_accessor].minValues = {0.0};
+    model.accessors[time_accessor].maxValues = {static_cast<double>(static_cast<float>(frames - 1) / fps)};
+
+    auto bird_offset = [&](std::size_t b) { return animation_start + time_bytes + b * per_bird; };
+    auto translation_key = [&](std::size_t b, std::size_t f) {
+        return bytes.data() + bird_offset(b) + f * sizeof(Vec3);
+    };
+    auto rotation_key = [&](std::size_t b, std::size_t part, std::size_t f) {
+        return bytes.data() + bird_offset(b) + translation_bytes + part * rotation_bytes + f * sizeof(Quat);
+    };
+
+    // Frame-major input, channel-major output. Going through the birds in small groups,
+    // all frames of a group at a time, keeps the group's 8 x kGroup output streams in
+    // cache; a whole row of 12 000 birds at a time missed the cache on every key.
+    constexpr std::size_t kGroup = 32;
+    for (std::size_t first = 0; first < bird_count; first += kGroup) {
+        const std::size_t last = std::min(first + kGroup, bird_count);
+        for (std::uint32_t f = 0; f < frames; ++f) {
+            const gpu::BirdPose* row = poses.data() + static_cast<std::size_t>(f) * bird_count;
+            for (std::size_t b = first; b < last; ++b) {
+                const gpu::BirdPose& pose = row[b];
+                const Vec3 position = {pose.position.x, pose.position.y, pose.position.z};
+                if (!std::isfinite(position[0]) || !std::isfinite(position[1]) || !std::isfinite(position[2])) {
+                    return make_error(Error::Kind::Internal, "bird " + std::to_string(b) + ", frame " +
+                                                                 std::to_string(f) + ": position is not finite");
+                }
+                std::memcpy(translation_key(b, f), position.data(), sizeof(Vec3));
+                for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+                    Quat q;
+                    if (!normalized(pose.rotation[part], q)) {
+                        return make_error(Error::Kind::Internal,
+                                          "bird " + std::to_string(b) + ", frame " + std::to_string(f) + ": " +
+                                              std::string(birds::kPartNames[part]) + " rotation is not a quaternion");
+                    }
+                    // q and -q are the same rotation, but LINEAR (slerp) interpolation between
+                    // keys in opposite hemispheres would spin the long way round.
+                    if (f > 0) {
+                        Quat previous;
+                        std::memcpy(previous.data(), rotation_key(b, part, f - 1), sizeof(Quat));
+                        const float dot =
+                            previous[0] * q[0] + previous[1] * q[1] + previous[2] * q[2] + previous[3] * q[3];
+                        if (dot < 0.0f) {
+                            for (float& v : q) v = -v;
+                        }
+                    }
+                    std::memcpy(rotation_key(b, part, f), q.data(), sizeof(Quat));
+                }
+            }
+        }
+    }
+
+    // Nodes: the root, then 7 per bird (Body first, so bird b's part k is 1 + 7b + k).
+    model.nodes.reserve(1 + bird_count * birds::kPartCount);
+    tinygltf::Node root;
+    root.name = "Birds";
+    root.children.reserve(bird_count);
+    model.nodes.push_back(std::move(root));
+    tinygltf::Animation animation;
+    animation.name = "flight";
+    animation.channels.reserve(bird_count * (birds::kPartCount + 1));
+    animation.samplers.reserve(bird_count * (birds::kPartCount + 1));
+    model.accessors.reserve(model.accessors.size() + bird_count * (birds::kPartCount + 1));
+
+    auto add_channel = [&](int accessor, int node, const char* path) {
+        tinygltf::AnimationSampler sampler;
+        sampler.input = time_accessor;
+        sampler.output = accessor;
+        sampler.interpolation = "LINEAR";
+        animation.samplers.push_back(std::move(sampler));
+        tinygltf::AnimationChannel channel;
+        channel.sampler = static_cast<int>(animation.samplers.size() - 1);
+        channel.target_node = node;
+        channel.target_path = path;
+        animation.channels.push_back(std::move(channel));
+    };
+
+    for (std::size_t b = 0; b < bird_count; ++b) {
+        const std::uint32_t type = world.birds[b].ids.y;
+        const std::string suffix = "_" + std::to_string(b);
+        const int body_node = static_cast<int>(model.nodes.size());
+        model.nodes[0].children.push_back(body_node);
+        for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+            tinygltf::Node node;
+            node.name = part == KW_PART_BODY ? std::string(birds::wing_type_spec(static_cast<birds::WingType>(type)).name) + suffix
+                                             : std::string(birds::kPartNames[part]) + suffix;
+            node.mesh = type_meshes[type][part];
+            // The rest pose is frame 0, so a viewer that ignores the animation still
+            // shows the flock where it starts.
+            Quat q0;
+            std::memcpy(q0.data(), rotation_key(b, part, 0), sizeof(Quat));
+            node.rotation = {static_cast<double>(q0[0]), static_cast<double>(q0[1]), static_cast<double>(q0[2]),
+                             static_cast<double>(q0[3])};
+            if (part == KW_PART_BODY) {
+                Vec3 t0;
+                std::memcpy(t0.data(), translation_key(b, 0), sizeof(Vec3));
+                node.translation = {static_cast<double>(t0[0]), static_cast<double>(t0[1]),
+                                    static_cast<double>(t0[2])};
+            } else {
+                const auto& o = offsets[type][part];
+                node.translation = {static_cast<double>(o[0]), static_cast<double>(o[1]), static_cast<double>(o[2])};
+            }
+            model.nodes.push_back(std::move(node));
+        }
+        for (std::size_t part = 1; part < birds::kPartCount; ++part) {
+            const int parent = birds::kPartParents[part];
+            model.nodes[body_node + parent].children.push_back(body_node + static_cast<int>(part));
+        }
+
+        const std::size_t base = bird_offset(b) - animation_start;
+        const int translation = add_accessor(model, animation_view, base, TINYGLTF_COMPONENT_TYPE_FLOAT, frames,
+                                             TINYGLTF_TYPE_VEC3);
+        add_channel(translation, body_node, "translation");
+        for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+            const int rotation =
+                add_accessor(model, animation_view, base + translation_bytes + part * rotation_bytes,
+                             TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_VEC4);
+            add_channel(rotation, body_node + static_cast<int>(part), "rotation");
+        }
+    }
+    // An animation without channels is invalid glTF: a world without birds gets none.
+    if (!animation.channels.empty()) model.animations.push_back(std::move(animation));
+
+    tinygltf::Scene scene;
+    scene.name = "flock";
+    scene.nodes.push_back(0);
+    model.scenes.push_back(std::move(scene));
+    model.defaultScene = 0;
+
+    AtomicFileBuf buffer(file);
+    std::ostream stream(&buffer);
+    tinygltf::TinyGLTF gltf;
+    if (!gltf.WriteGltfSceneToStream(&model, stream, false, true) || !stream) {
+        return make_error(Error::Kind::Io, file.path() + ": glTF serialization failed");
+    }
+    return {};
+}
+
+}  // namespace
+
+Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
+                             std::span<const gpu::BirdPose> poses, std::uint32_t frames) {
+    const std::size_t bird_count = world.birds.size();
+    if (frames == 0) {
+        return make_error(Error::Kind::InvalidInput, path + ": cannot write an animation of 0 frames");
+    }
+    if (poses.size() != static_cast<std::size_t>(frames) * bird_count) {
+        return make_error(Error::Kind::InvalidInput,
+                          path + ": expected " + std::to_string(frames) + " frames x " + std::to_string(bird_count) +
+                              " birds = " + std::to_string(static_cast<std::size_t>(frames) * bird_count) +
+                              " poses, got " + std::to_string(poses.size()));
+    }
+    if (!(world.fps > 0.0f) || !std::isfinite(world.fps)) {
+        return make_error(Error::Kind::InvalidInput, path + ": fps must be positive, got " + std::to_string(world.fps));
+    }
+    // A GLB's length field is 32 bits.
+    const double estimated = static_cast<double>(poses.size()) * static_cast<double>(3 + 4 * birds::kPartCount) * 4.0;
+    if (estimated > 4.0e9) {
+        return make_error(Error::Kind::InvalidInput,
+                          path + ": " + std::to_string(poses.size()) + " poses exceed the 4 GiB limit of a .glb");
+    }
+
+    auto file = AtomicFile::open(path);
+    if (!file) return file.error();
+    // tinygltf reports some failures by throwing (json, allocation); nothing may escape.
+    try {
+        KW_TRY(build_and_write(file.value(), world, poses, frames));
+    } catch (const std::bad_alloc&) {
+        return make_error(Error::Kind::Io, path + ": out of memory while building the glTF file");
+    } catch (const std::exception& e) {
+        return make_error(Error::Kind::Io, path + ": glTF serialization failed (" + e.what() + ")");
+    }
+    return file.value().commit();
+}
+
+}  // namespace kodawari

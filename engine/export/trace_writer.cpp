@@ -1,0 +1,211 @@
+// JSON Lines traces (docs/trace-format.md). Written by hand rather than through a JSON
+// library: a trace of a large flock has millions of records, and formatting straight
+// into one growing buffer is several times faster than building DOM objects.
+
+#include <array>
+#include <cassert>
+#include <charconv>
+#include <cmath>
+#include <cstddef>
+#include <cstdint>
+#include <span>
+#include <string>
+#include <string_view>
+
+#include "kodawari/birds/rig.hpp"
+#include "kodawari/birds/wingbeat.hpp"
+#include "kodawari/export.hpp"
+
+namespace kodawari {
+namespace {
+
+/// The buffer goes to the file once it holds this much.
+constexpr std::size_t kFlushBytes = std::size_t{1} << 20;
+
+void append_number(std::string& out, float value) {
+    // A non-finite value means the simulation broke; JSON has no spelling for it.
+    assert(std::isfinite(value) && "non-finite value in a trace");
+    if (!std::isfinite(value)) {
+        out += "null";
+        return;
+    }
+    char text[32];
+    const auto result = std::to_chars(text, text + sizeof(text), value);
+    assert(result.ec == std::errc());
+    out.append(text, result.ptr);
+}
+
+void append_number(std::string& out, double value) {
+    assert(std::isfinite(value) && "non-finite value in a trace");
+    if (!std::isfinite(value)) {
+        out += "null";
+        return;
+    }
+    char text[32];
+    const auto result = std::to_chars(text, text + sizeof(text), value);
+    assert(result.ec == std::errc());
+    out.append(text, result.ptr);
+}
+
+void append_integer(std::string& out, std::uint64_t value) {
+    char text[24];
+    const auto result = std::to_chars(text, text + sizeof(text), value);
+    assert(result.ec == std::errc());
+    out.append(text, result.ptr);
+}
+
+/// A JSON string literal; bytes from 0x80 up pass through (the input is UTF-8).
+void append_string(std::string& out, std::string_view text) {
+    static constexpr char kHex[] = "0123456789abcdef";
+    out += '"';
+    for (const char c : text) {
+        const auto byte = static_cast<unsigned char>(c);
+        switch (c) {
+            case '"': out += "\\\""; break;
+            case '\\': out += "\\\\"; break;
+            case '\n': out += "\\n"; break;
+            case '\r': out += "\\r"; break;
+            case '\t': out += "\\t"; break;
+            default:
+                if (byte < 0x20) {
+                    out += "\\u00";
+                    out += kHex[byte >> 4];
+                    out += kHex[byte & 0xF];
+                } else {
+                    out += c;
+                }
+        }
+    }
+    out += '"';
+}
+
+void append_vec3(std::string& out, float x, float y, float z) {
+    out += '[';
+    append_number(out, x);
+    out += ',';
+    append_number(out, y);
+    out += ',';
+    append_number(out, z);
+    out += ']';
+}
+
+const char* mode_of(float value) {
+    const long mode = std::lround(value);
+    assert(mode >= 0 && mode <= 2 && "diagnostic mode out of range");
+    if (mode < 0 || mode > 2) return "level";
+    return birds::mode_name(static_cast<birds::FlightMode>(mode));
+}
+
+}  // namespace
+
+Result<TraceWriter> TraceWriter::open(const std::string& path, const TraceHeader& header) {
+    auto file = AtomicFile::open(path);
+    if (!file) return file.error();
+    TraceWriter writer(std::move(file).value());
+    std::string& out = writer.buffer_;
+    out.reserve(kFlushBytes + 4096);
+    out += "{\"kind\":\"header\",\"scene\":";
+    append_string(out, header.scene);
+    out += ",\"fps\":";
+    append_number(out, header.fps);
+    out += ",\"frames\":";
+    append_integer(out, header.frames);
+    out += ",\"backend\":";
+    append_string(out, header.backend);
+    out += "}\n";
+    return writer;
+}
+
+void TraceWriter::write_frame(std::uint32_t frame, const birds::BirdWorld& world,
+                              std::span<const gpu::BirdPose> poses, std::span<const gpu::BirdDiag> diag) {
+    const std::size_t bird_count = world.birds.size();
+    assert(poses.size() == bird_count && diag.size() == bird_count);
+
+    // Per wing type, the constant part of every record's "parts" that is not Body.
+    std::array<std::array<std::array<float, 3>, birds::kPartCount>, birds::kWingTypeCount> offsets{};
+    for (std::size_t t = 0; t < birds::kWingTypeCount; ++t) {
+        offsets[t] = birds::part_offsets(static_cast<birds::WingType>(t));
+    }
+    const double time = static_cast<double>(frame) / static_cast<double>(world.fps);
+
+    std::string& out = buffer_;
+    for (std::size_t b = 0; b < bird_count; ++b) {
+        const gpu::BirdPose& pose = poses[b];
+        const gpu::BirdDiag& d = diag[b];
+        const std::uint32_t type = world.birds[b].ids.y;
+        assert(type < birds::kWingTypeCount);
+
+        out += "{\"kind\":\"bird\",\"frame\":";
+        append_integer(out, frame);
+        out += ",\"time\":";
+        append_number(out, time);
+        out += ",\"id\":";
+        append_integer(out, b);
+        out += ",\"wing_type\":\"";
+        out += birds::wing_type_spec(static_cast<birds::WingType>(type)).name;
+        out += "\",\"mode\":\"";
+        out += mode_of(d.acceleration.w);
+        out += "\",\"phase\":";
+        append_number(out, d.attitude.w);
+        out += ",\"blend\":";
+        append_number(out, d.velocity.w);
+        out += ",\"position\":";
+        append_vec3(out, pose.position.x, pose.position.y, pose.position.z);
+        out += ",\"velocity\":";
+        append_vec3(out, d.velocity.x, d.velocity.y, d.velocity.z);
+        out += ",\"acceleration\":";
+        append_vec3(out, d.acceleration.x, d.acceleration.y, d.acceleration.z);
+        out += ",\"yaw\":";
+        append_number(out, d.attitude.x);
+        out += ",\"pitch\":";
+        append_number(out, d.attitude.y);
+        out += ",\"bank\":";
+        append_number(out, d.attitude.z);
+        out += ",\"angles\":{\"arm1_pitch\":";
+        append_number(out, d.angles.x);
+        out += ",\"arm2_pitch\":";
+        append_number(out, d.angles.y);
+        out += ",\"arm1_heading\":";
+        append_number(out, d.angles.z);
+        out += ",\"arm2_heading\":";
+        append_number(out, d.angles.w);
+        out += "},\"parts\":{";
+        for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+            if (part > 0) out += ',';
+            out += '"';
+            out += birds::kPartNames[part];
+            out += "\":{\"t\":";
+            if (part == KW_PART_BODY) {
+                append_vec3(out, pose.position.x, pose.position.y, pose.position.z);
+            } else {
+                const auto& t = offsets[type][part];
+                append_vec3(out, t[0], t[1], t[2]);
+            }
+            const gpu::vec4& r = pose.rotation[part];
+            out += ",\"r\":[";
+            append_number(out, r.x);
+            out += ',';
+            append_number(out, r.y);
+            out += ',';
+            append_number(out, r.z);
+            out += ',';
+            append_number(out, r.w);
+            out += "]}";
+        }
+        out += "}}\n";
+
+        if (out.size() >= kFlushBytes) {
+            file_.write(out);
+            out.clear();
+        }
+    }
+}
+
+Result<void> TraceWriter::finish() {
+    file_.write(buffer_);
+    buffer_.clear();
+    buffer_.shrink_to_fit();
+    return file_.commit();
+}
+
+}  // namespace kodawari

@@ -1,0 +1,69 @@
+#include "gpu/compute_pipeline.hpp"
+
+namespace kodawari::gpu {
+
+Result<ComputePipeline> ComputePipeline::create(const VulkanContext& ctx, std::string_view shader, std::uint32_t bindings,
+                                                std::uint32_t push_bytes) {
+    const auto code = embedded_shader(shader);
+    assert(!code.empty() && "shader not embedded: add it to shaders/CMakeLists.txt");
+    ComputePipeline out;
+    out.bindings_ = bindings;
+    try {
+        const auto& device = ctx.device();
+        std::vector<vk::DescriptorSetLayoutBinding> slots(bindings);
+        for (std::uint32_t i = 0; i < bindings; ++i) {
+            slots[i] = vk::DescriptorSetLayoutBinding{.binding = i,
+                        .descriptorType = vk::DescriptorType::eStorageBuffer,
+                        .descriptorCount = 1,
+                        .stageFlags = vk::ShaderStageFlagBits::eCompute};
+        }
+        out.set_layout_ = device.createDescriptorSetLayout({.bindingCount = bindings, .pBindings = slots.data()});
+        const vk::PushConstantRange push{.stageFlags = vk::ShaderStageFlagBits::eCompute, .offset = 0, .size = push_bytes};
+        const vk::DescriptorSetLayout set_layout = *out.set_layout_;
+        out.layout_ = device.createPipelineLayout({.setLayoutCount = 1,
+                                                   .pSetLayouts = &set_layout,
+                                                   .pushConstantRangeCount = push_bytes > 0 ? 1u : 0u,
+                                                   .pPushConstantRanges = &push});
+        out.module_ = device.createShaderModule({.codeSize = code.size_bytes(), .pCode = code.data()});
+        out.pipeline_ = device.createComputePipeline(
+            nullptr, {.stage = {.stage = vk::ShaderStageFlagBits::eCompute, .module = *out.module_, .pName = "main"},
+                      .layout = *out.layout_});
+        const vk::DescriptorPoolSize size{.type = vk::DescriptorType::eStorageBuffer, .descriptorCount = bindings};
+        out.pool_ = device.createDescriptorPool({.flags = vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet,
+                                                 .maxSets = 1,
+                                                 .poolSizeCount = 1,
+                                                 .pPoolSizes = &size});
+        out.set_ = std::move(device.allocateDescriptorSets(
+            {.descriptorPool = *out.pool_, .descriptorSetCount = 1, .pSetLayouts = &set_layout})[0]);
+    } catch (const std::exception& e) {
+        return vulkan_error("Vulkan pipeline " + std::string(shader), e);
+    }
+    return out;
+}
+
+void ComputePipeline::bind_buffers(const VulkanContext& ctx, std::span<const GpuBuffer* const> buffers) const {
+    assert(buffers.size() == bindings_);
+    std::vector<vk::DescriptorBufferInfo> infos(buffers.size());
+    std::vector<vk::WriteDescriptorSet> writes(buffers.size());
+    for (std::uint32_t i = 0; i < buffers.size(); ++i) {
+        infos[i] = vk::DescriptorBufferInfo{.buffer = buffers[i]->handle(), .offset = 0, .range = VK_WHOLE_SIZE};
+        writes[i] = vk::WriteDescriptorSet{.dstSet = *set_,
+                     .dstBinding = i,
+                     .descriptorCount = 1,
+                     .descriptorType = vk::DescriptorType::eStorageBuffer,
+                     .pBufferInfo = &infos[i]};
+    }
+    ctx.device().updateDescriptorSets(writes, {});
+}
+
+void ComputePipeline::dispatch(const vk::raii::CommandBuffer& cmd, std::span<const std::byte> push,
+                               std::uint32_t groups_x) const {
+    cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *pipeline_);
+    cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *layout_, 0, *set_, {});
+    if (!push.empty()) {
+        cmd.pushConstants<std::byte>(*layout_, vk::ShaderStageFlagBits::eCompute, 0, push);
+    }
+    cmd.dispatch(groups_x, 1, 1);
+}
+
+}  // namespace kodawari::gpu

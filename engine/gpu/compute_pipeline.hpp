@@ -1,0 +1,45 @@
+#pragma once
+// A compute kernel from the embedded SPIR-V with its descriptor set of storage buffers
+// and push constants.
+
+#include <cstdint>
+#include <span>
+#include <string_view>
+#include <vector>
+
+#include "gpu/gpu_buffer.hpp"
+
+namespace kodawari::gpu {
+
+/// SPIR-V of shaders/<name>.comp, compiled at build time (empty when unknown).
+[[nodiscard]] std::span<const std::uint32_t> embedded_shader(std::string_view name);
+
+class ComputePipeline {
+public:
+    /// `bindings` storage buffers at bindings 0..n-1, `push_bytes` of push constants.
+    [[nodiscard]] static Result<ComputePipeline> create(const VulkanContext& ctx, std::string_view shader,
+                                                        std::uint32_t bindings, std::uint32_t push_bytes);
+
+    ComputePipeline(ComputePipeline&&) noexcept = default;
+    ComputePipeline& operator=(ComputePipeline&&) noexcept = default;
+    ComputePipeline(const ComputePipeline&) = delete;
+    ComputePipeline& operator=(const ComputePipeline&) = delete;
+
+    /// Points binding i at buffers[i] (whole buffer).
+    void bind_buffers(const VulkanContext& ctx, std::span<const GpuBuffer* const> buffers) const;
+
+    /// Binds pipeline and set, pushes constants and dispatches.
+    void dispatch(const vk::raii::CommandBuffer& cmd, std::span<const std::byte> push, std::uint32_t groups_x) const;
+
+private:
+    ComputePipeline() = default;
+    vk::raii::DescriptorSetLayout set_layout_{nullptr};
+    vk::raii::PipelineLayout layout_{nullptr};
+    vk::raii::ShaderModule module_{nullptr};
+    vk::raii::Pipeline pipeline_{nullptr};
+    vk::raii::DescriptorPool pool_{nullptr};
+    vk::raii::DescriptorSet set_{nullptr};
+    std::uint32_t bindings_ = 0;
+};
+
+}  // namespace kodawari::gpu

@@ -1,0 +1,48 @@
+#pragma once
+// Storage buffers: mapped device memory where memory is unified, otherwise
+// device-local memory filled and read through host-visible staging buffers.
+
+#include <cstddef>
+#include <span>
+
+#include "gpu/vulkan_context.hpp"
+
+namespace kodawari::gpu {
+
+class GpuBuffer {
+public:
+    enum class Kind {
+        Storage,   ///< read/written by kernels; mapped when memory is unified
+        Upload,    ///< host-visible source of copies
+        Readback,  ///< host-visible (cached when possible) destination of copies
+    };
+
+    [[nodiscard]] static Result<GpuBuffer> create(const VulkanContext& ctx, vk::DeviceSize size, Kind kind);
+
+    GpuBuffer(GpuBuffer&&) noexcept = default;
+    GpuBuffer& operator=(GpuBuffer&&) noexcept = default;
+    GpuBuffer(const GpuBuffer&) = delete;
+    GpuBuffer& operator=(const GpuBuffer&) = delete;
+    ~GpuBuffer() = default;  // freeing the memory unmaps it
+
+    [[nodiscard]] vk::Buffer handle() const { return *buffer_; }
+    [[nodiscard]] vk::DeviceSize size() const { return size_; }
+    /// Host address when the memory is mapped, else nullptr.
+    [[nodiscard]] std::byte* mapped() const { return mapped_; }
+    /// Makes device writes visible to the host (no-op on coherent memory).
+    [[nodiscard]] Result<void> invalidate(const VulkanContext& ctx) const;
+
+private:
+    GpuBuffer() = default;
+    vk::raii::DeviceMemory memory_{nullptr};
+    vk::raii::Buffer buffer_{nullptr};
+    vk::DeviceSize size_ = 0;
+    std::byte* mapped_ = nullptr;
+    bool coherent_ = true;
+};
+
+/// Writes `bytes` into a Storage buffer: by memcpy when mapped, else through a
+/// temporary staging buffer and a copy on the queue.
+[[nodiscard]] Result<void> upload(VulkanContext& ctx, const GpuBuffer& buffer, std::span<const std::byte> bytes);
+
+}  // namespace kodawari::gpu

@@ -1,0 +1,327 @@
+#include "gpu/vulkan_context.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cstdio>
+#include <cstdlib>
+#include <cstring>
+#include <optional>
+
+VULKAN_HPP_DEFAULT_DISPATCH_LOADER_DYNAMIC_STORAGE
+
+namespace kodawari::gpu {
+namespace {
+
+bool env_flag(const char* name) {
+    const char* value = std::getenv(name);
+    return value != nullptr && std::strcmp(value, "") != 0 && std::strcmp(value, "0") != 0;
+}
+
+std::string version_text(std::uint32_t v) {
+    return std::to_string(VK_API_VERSION_MAJOR(v)) + "." + std::to_string(VK_API_VERSION_MINOR(v)) + "." +
+           std::to_string(VK_API_VERSION_PATCH(v));
+}
+
+const char* type_name(vk::PhysicalDeviceType type) {
+    switch (type) {
+        case vk::PhysicalDeviceType::eDiscreteGpu: return "discrete";
+        case vk::PhysicalDeviceType::eIntegratedGpu: return "integrated";
+        case vk::PhysicalDeviceType::eVirtualGpu: return "virtual";
+        case vk::PhysicalDeviceType::eCpu: return "cpu";
+        default: return "other";
+    }
+}
+
+std::optional<std::uint32_t> compute_family(const vk::raii::PhysicalDevice& device) {
+    const auto families = device.getQueueFamilyProperties();
+    // A compute-only family first (async compute on GPUs), else any with compute.
+    for (std::uint32_t i = 0; i < families.size(); ++i) {
+        const auto flags = families[i].queueFlags;
+        if ((flags & vk::QueueFlagBits::eCompute) && !(flags & vk::QueueFlagBits::eGraphics)) return i;
+    }
+    for (std::uint32_t i = 0; i < families.size(); ++i) {
+        if (families[i].queueFlags & vk::QueueFlagBits::eCompute) return i;
+    }
+    return std::nullopt;
+}
+
+GpuDeviceInfo describe(const vk::raii::PhysicalDevice& device, std::uint32_t index) {
+    const auto chain = device.getProperties2<vk::PhysicalDeviceProperties2, vk::PhysicalDeviceSubgroupProperties,
+                                             vk::PhysicalDeviceDriverProperties>();
+    const auto& props = chain.get<vk::PhysicalDeviceProperties2>().properties;
+    const auto& driver = chain.get<vk::PhysicalDeviceDriverProperties>();
+    GpuDeviceInfo info;
+    info.index = index;
+    info.name = props.deviceName.data();
+    info.type = type_name(props.deviceType);
+    info.driver = std::string(driver.driverName.data()) + " " + driver.driverInfo.data();
+    info.api_version = version_text(props.apiVersion);
+    const auto family = compute_family(device);
+    info.has_compute_queue = family.has_value();
+    if (family) {
+        info.timestamps = props.limits.timestampPeriod > 0.0f &&
+                          device.getQueueFamilyProperties()[*family].timestampValidBits > 0;
+    }
+    info.subgroup_size = chain.get<vk::PhysicalDeviceSubgroupProperties>().subgroupSize;
+    info.max_workgroup_invocations = props.limits.maxComputeWorkGroupInvocations;
+    info.max_workgroup_count = {props.limits.maxComputeWorkGroupCount[0], props.limits.maxComputeWorkGroupCount[1],
+                                props.limits.maxComputeWorkGroupCount[2]};
+    info.max_storage_buffer_range = props.limits.maxStorageBufferRange;
+    info.max_push_constants = props.limits.maxPushConstantsSize;
+    const auto memory = device.getMemoryProperties();
+    for (std::uint32_t h = 0; h < memory.memoryHeapCount; ++h) {
+        if (memory.memoryHeaps[h].flags & vk::MemoryHeapFlagBits::eDeviceLocal) info.device_local_bytes += memory.memoryHeaps[h].size;
+    }
+    return info;
+}
+
+std::string lower(std::string text) {
+    std::transform(text.begin(), text.end(), text.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return text;
+}
+
+// Picks a device: by index or name substring when asked, else the best type.
+void choose(GpuInventory& inventory, std::string request) {
+    if (request.empty()) {
+        if (const char* env = std::getenv("KODAWARI_DEVICE")) request = env;
+    }
+    auto& devices = inventory.devices;
+    if (!request.empty()) {
+        const bool numeric = std::all_of(request.begin(), request.end(), [](unsigned char c) { return std::isdigit(c); });
+        for (std::size_t i = 0; i < devices.size(); ++i) {
+            const bool match = numeric ? std::to_string(devices[i].index) == request
+                                       : lower(devices[i].name).find(lower(request)) != std::string::npos;
+            if (match && devices[i].has_compute_queue) {
+                inventory.chosen = static_cast<int>(i);
+                inventory.reason = "asked for \"" + request + "\"";
+                return;
+            }
+        }
+        inventory.reason = "no Vulkan device with a compute queue matches \"" + request + "\"";
+        return;
+    }
+    static constexpr const char* kOrder[] = {"discrete", "integrated", "virtual", "cpu", "other"};
+    for (const char* type : kOrder) {
+        for (std::size_t i = 0; i < devices.size(); ++i) {
+            if (devices[i].type == type && devices[i].has_compute_queue) {
+                inventory.chosen = static_cast<int>(i);
+                inventory.reason = std::string("the first ") + type +
+                                   " device (preference: discrete > integrated > virtual > cpu)";
+                return;
+            }
+        }
+    }
+    inventory.reason = "no Vulkan device has a compute queue";
+}
+
+VKAPI_ATTR VkBool32 VKAPI_CALL on_validation_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
+                                                     VkDebugUtilsMessageTypeFlagsEXT,
+                                                     const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
+    if (severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) {
+        static_cast<std::atomic<std::uint32_t>*>(user)->fetch_add(1);
+        std::fprintf(stderr, "[vulkan validation] %s\n", data->pMessage != nullptr ? data->pMessage : "(no message)");
+    }
+    return VK_FALSE;
+}
+
+std::unique_ptr<vk::raii::Context> open_loader(std::string& error) {
+    try {
+        return std::make_unique<vk::raii::Context>();
+    } catch (const std::exception& e) {
+        error = std::string("no Vulkan loader (libvulkan.so.1): ") + e.what();
+        return nullptr;
+    }
+}
+
+vk::raii::Instance make_instance(const vk::raii::Context& context, bool validation) {
+    const std::uint32_t loader_version = context.enumerateInstanceVersion();
+    const vk::ApplicationInfo app{.pApplicationName = "kodawari",
+                                  .applicationVersion = 1,
+                                  .pEngineName = "kodawari",
+                                  .engineVersion = 1,
+                                  .apiVersion = std::min(loader_version, VK_API_VERSION_1_3)};
+    std::vector<const char*> layers, extensions;
+    static constexpr vk::ValidationFeatureEnableEXT kFeatures[] = {vk::ValidationFeatureEnableEXT::eSynchronizationValidation};
+    vk::ValidationFeaturesEXT features{.enabledValidationFeatureCount = 1, .pEnabledValidationFeatures = kFeatures};
+    if (validation) {
+        layers.push_back("VK_LAYER_KHRONOS_validation");
+        extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
+    }
+    const vk::InstanceCreateInfo info{.pNext = validation ? &features : nullptr,
+                                      .pApplicationInfo = &app,
+                                      .enabledLayerCount = static_cast<std::uint32_t>(layers.size()),
+                                      .ppEnabledLayerNames = layers.data(),
+                                      .enabledExtensionCount = static_cast<std::uint32_t>(extensions.size()),
+                                      .ppEnabledExtensionNames = extensions.data()};
+    return vk::raii::Instance(context, info);
+}
+
+bool has_validation_layer(const vk::raii::Context& context) {
+    for (const auto& layer : context.enumerateInstanceLayerProperties()) {
+        if (std::strcmp(layer.layerName.data(), "VK_LAYER_KHRONOS_validation") == 0) return true;
+    }
+    return false;
+}
+
+}  // namespace
+
+Error vulkan_error(const std::string& what, const std::exception& e) {
+    return make_error(Error::Kind::Vulkan, what + ": " + e.what());
+}
+
+}  // namespace kodawari::gpu
+
+namespace kodawari {
+
+Result<GpuInventory> list_gpus(const std::string& request) {
+    std::string error;
+    auto context = gpu::open_loader(error);
+    if (!context) return make_error(Error::Kind::Unsupported, error);
+    try {
+        const vk::raii::Instance instance = gpu::make_instance(*context, false);
+        GpuInventory inventory;
+        const vk::raii::PhysicalDevices devices(instance);
+        for (std::uint32_t i = 0; i < devices.size(); ++i) inventory.devices.push_back(gpu::describe(devices[i], i));
+        if (inventory.devices.empty()) {
+            inventory.reason = "the Vulkan loader found no device (is a driver such as Mesa's lavapipe installed?)";
+        } else {
+            gpu::choose(inventory, request);
+        }
+        return inventory;
+    } catch (const std::exception& e) {
+        return gpu::vulkan_error("Vulkan instance", e);
+    }
+}
+
+}  // namespace kodawari
+
+namespace kodawari::gpu {
+
+VulkanContext::~VulkanContext() {
+    if (static_cast<VkDevice>(*device_) != VK_NULL_HANDLE) device_.waitIdle();
+}
+
+Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOptions& options) {
+    std::unique_ptr<VulkanContext> ctx(new VulkanContext());
+    std::string error;
+    ctx->context_ = open_loader(error);
+    if (!ctx->context_) return make_error(Error::Kind::Unsupported, error);
+    ctx->validation_ = options.validation || env_flag("KODAWARI_VALIDATION");
+    try {
+        if (ctx->validation_ && !has_validation_layer(*ctx->context_)) {
+            return make_error(Error::Kind::Unsupported,
+                              "validation was asked for but VK_LAYER_KHRONOS_validation is not installed "
+                              "(Debian package vulkan-validationlayers; scripts/setup installs it)");
+        }
+        ctx->instance_ = make_instance(*ctx->context_, ctx->validation_);
+        if (ctx->validation_) {
+            using Severity = vk::DebugUtilsMessageSeverityFlagBitsEXT;
+            using Type = vk::DebugUtilsMessageTypeFlagBitsEXT;
+            ctx->messenger_ = ctx->instance_.createDebugUtilsMessengerEXT(
+                {.messageSeverity = Severity::eWarning | Severity::eError,
+                 .messageType = Type::eGeneral | Type::eValidation | Type::ePerformance,
+                 .pfnUserCallback = &on_validation_message,
+                 .pUserData = ctx->messages_.get()});
+        }
+
+        GpuInventory inventory;
+        vk::raii::PhysicalDevices devices(ctx->instance_);
+        for (std::uint32_t i = 0; i < devices.size(); ++i) inventory.devices.push_back(describe(devices[i], i));
+        if (inventory.devices.empty()) {
+            return make_error(Error::Kind::Unsupported,
+                              "no Vulkan device: the loader found no driver (install Mesa's lavapipe: mesa-vulkan-drivers)");
+        }
+        choose(inventory, options.device);
+        if (inventory.chosen < 0) return make_error(Error::Kind::Unsupported, inventory.reason);
+        ctx->info_ = inventory.devices[static_cast<std::size_t>(inventory.chosen)];
+        ctx->physical_ = std::move(devices[ctx->info_.index]);
+        ctx->queue_family_ = *compute_family(ctx->physical_);
+
+        const float priority = 1.0f;
+        const vk::DeviceQueueCreateInfo queue_info{.queueFamilyIndex = ctx->queue_family_, .queueCount = 1, .pQueuePriorities = &priority};
+        ctx->device_ = ctx->physical_.createDevice({.queueCreateInfoCount = 1, .pQueueCreateInfos = &queue_info});
+        ctx->queue_ = ctx->device_.getQueue(ctx->queue_family_, 0);
+        ctx->pool_ = ctx->device_.createCommandPool(
+            {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer, .queueFamilyIndex = ctx->queue_family_});
+        ctx->command_buffer_ = std::move(ctx->device_.allocateCommandBuffers(
+            {.commandPool = *ctx->pool_, .level = vk::CommandBufferLevel::ePrimary, .commandBufferCount = 1})[0]);
+        ctx->fence_ = ctx->device_.createFence({});
+
+        const auto props = ctx->physical_.getProperties();
+        ctx->memory_ = ctx->physical_.getMemoryProperties();
+        if (ctx->info_.timestamps) {
+            ctx->timestamp_period_ns_ = props.limits.timestampPeriod;
+            const std::uint32_t bits = ctx->physical_.getQueueFamilyProperties()[ctx->queue_family_].timestampValidBits;
+            ctx->timestamp_mask_ = bits >= 64 ? ~0ull : ((1ull << bits) - 1);
+            ctx->timestamps_ = ctx->device_.createQueryPool({.queryType = vk::QueryType::eTimestamp, .queryCount = 2});
+        }
+        // Unified memory: the device shares the host's RAM and exposes it as
+        // device-local + host-visible + coherent, so mapping beats staging copies.
+        // KODAWARI_FORCE_STAGING=1 takes the discrete-GPU path anyway (tests use it).
+        const bool shares_ram = props.deviceType == vk::PhysicalDeviceType::eIntegratedGpu ||
+                                props.deviceType == vk::PhysicalDeviceType::eCpu;
+        const auto unified_flags = vk::MemoryPropertyFlagBits::eDeviceLocal | vk::MemoryPropertyFlagBits::eHostVisible |
+                                   vk::MemoryPropertyFlagBits::eHostCoherent;
+        bool has_unified_type = false;
+        for (std::uint32_t i = 0; i < ctx->memory_.memoryTypeCount; ++i) {
+            if ((ctx->memory_.memoryTypes[i].propertyFlags & unified_flags) == unified_flags) has_unified_type = true;
+        }
+        ctx->unified_ = shares_ram && has_unified_type && !env_flag("KODAWARI_FORCE_STAGING");
+    } catch (const std::exception& e) {
+        return vulkan_error("Vulkan device setup", e);
+    }
+    return ctx;
+}
+
+Result<void> VulkanContext::submit(const std::function<void(const vk::raii::CommandBuffer&)>& record, double* gpu_ms) {
+    try {
+        command_buffer_.reset();
+        command_buffer_.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
+        if (static_cast<VkQueryPool>(*timestamps_) != VK_NULL_HANDLE) command_buffer_.resetQueryPool(*timestamps_, 0, 2);
+        record(command_buffer_);
+        command_buffer_.end();
+        device_.resetFences(*fence_);
+        const vk::CommandBuffer cmd = *command_buffer_;
+        queue_.submit(vk::SubmitInfo{.commandBufferCount = 1, .pCommandBuffers = &cmd}, *fence_);
+        // A generous bound: a hung device must not hang the program.
+        constexpr std::uint64_t kTimeoutNs = 600ull * 1000 * 1000 * 1000;
+        if (device_.waitForFences(*fence_, VK_TRUE, kTimeoutNs) != vk::Result::eSuccess) {
+            return make_error(Error::Kind::Vulkan, "the GPU did not finish within 600 s");
+        }
+        if (gpu_ms != nullptr) {
+            *gpu_ms = -1.0;
+            if (static_cast<VkQueryPool>(*timestamps_) != VK_NULL_HANDLE) {
+                auto [result, stamps] = timestamps_.getResults<std::uint64_t>(
+                    0, 2, 2 * sizeof(std::uint64_t), sizeof(std::uint64_t), vk::QueryResultFlagBits::e64);
+                if (result == vk::Result::eSuccess) {
+                    const std::uint64_t ticks = (stamps[1] - stamps[0]) & timestamp_mask_;
+                    *gpu_ms = static_cast<double>(ticks) * static_cast<double>(timestamp_period_ns_) * 1e-6;
+                }
+            }
+        }
+    } catch (const std::exception& e) {
+        return vulkan_error("Vulkan submission", e);
+    }
+    return {};
+}
+
+void VulkanContext::write_timestamp(const vk::raii::CommandBuffer& cmd, std::uint32_t which,
+                                    vk::PipelineStageFlagBits stage) const {
+    if (static_cast<VkQueryPool>(*timestamps_) != VK_NULL_HANDLE) cmd.writeTimestamp(stage, *timestamps_, which);
+}
+
+Result<std::uint32_t> VulkanContext::memory_type(std::uint32_t type_bits, vk::MemoryPropertyFlags required,
+                                                 vk::MemoryPropertyFlags preferred) const {
+    std::optional<std::uint32_t> fallback;
+    for (std::uint32_t i = 0; i < memory_.memoryTypeCount; ++i) {
+        if (!(type_bits & (1u << i))) continue;
+        const auto flags = memory_.memoryTypes[i].propertyFlags;
+        if ((flags & required) != required) continue;
+        if ((flags & preferred) == preferred) return i;
+        if (!fallback) fallback = i;
+    }
+    if (fallback) return *fallback;
+    return make_error(Error::Kind::Vulkan, "no Vulkan memory type with the required properties " + vk::to_string(required));
+}
+
+}  // namespace kodawari::gpu

@@ -1,0 +1,69 @@
+#pragma once
+/// @file
+/// The narrow interface every bird backend implements (cpu-reference, cpu, vulkan).
+/// The same tests run against each.
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "birds/world.hpp"
+#include "result.hpp"
+
+namespace kodawari {
+
+/// Which implementation runs the simulation.
+enum class BackendKind { CpuReference, Cpu, Vulkan };
+
+/// "cpu-reference", "cpu", "vulkan".
+[[nodiscard]] std::string_view backend_name(BackendKind kind);
+
+/// Options for creating backends.
+struct BackendOptions {
+    std::string device;        ///< Vulkan device name substring or index ("" = best; env KODAWARI_DEVICE)
+    bool validation = false;   ///< Khronos validation + synchronization validation (also KODAWARI_VALIDATION=1)
+    unsigned threads = 0;      ///< cpu backend threads (0 = hardware concurrency)
+};
+
+/// Where simulated frames go. Empty spans: the backend still does all the work but
+/// keeps results on its side (benchmarks).
+struct FrameOutput {
+    std::span<gpu::BirdPose> poses;  ///< frames x birds, frame-major
+    std::span<gpu::BirdDiag> diag;   ///< frames x birds, or empty
+};
+
+/// Simulates a BirdWorld frame after frame.
+class BirdBackend {
+public:
+    virtual ~BirdBackend() = default;
+    BirdBackend() = default;
+    BirdBackend(const BirdBackend&) = delete;
+    BirdBackend& operator=(const BirdBackend&) = delete;
+
+    /// The backend's name ("vulkan").
+    [[nodiscard]] virtual std::string_view name() const = 0;
+    /// What it runs on ("llvmpipe (LLVM 15.0.6, 256 bits)", "2 threads").
+    [[nodiscard]] virtual std::string device() const = 0;
+
+    /// Takes the world (uploads it) and rewinds to frame 0.
+    [[nodiscard]] virtual Result<void> load(const birds::BirdWorld& world) = 0;
+
+    /// Simulates the next `frames` frames. `out.poses` must hold frames x birds entries
+    /// or be empty; likewise `out.diag`.
+    [[nodiscard]] virtual Result<void> simulate(std::uint32_t frames, FrameOutput out) = 0;
+
+    /// GPU time of the last simulate() in milliseconds, when the device has timestamps.
+    [[nodiscard]] virtual double last_gpu_ms() const { return -1.0; }
+
+    /// Validation messages seen so far (Vulkan with validation on; 0 otherwise).
+    [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
+};
+
+/// Creates a backend. Vulkan fails with a readable reason when no loader, driver or
+/// device is available.
+[[nodiscard]] Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options);
+
+}  // namespace kodawari

@@ -1,0 +1,65 @@
+#pragma once
+/// @file
+/// The scalar reference of the bird engine (SPEC B.3-B.6): route sampling, attitude,
+/// flight mode, transitions and the seven part rotations of one bird for one frame.
+/// shaders/birds_flap.comp implements the same steps; the CPU backends call these.
+
+#include <array>
+
+#include <shared/birds.h>
+
+#include "wingbeat.hpp"
+#include "world.hpp"
+
+namespace kodawari::birds {
+
+struct Vec3 {
+    float x = 0, y = 0, z = 0;
+};
+
+/// A point of a route with its time derivatives.
+struct RouteSample {
+    Vec3 position;      ///< m
+    Vec3 velocity;      ///< m/s
+    Vec3 acceleration;  ///< m/s^2
+    /// The mode decisions' inputs, exact on every backend (shaders/shared/birds.h):
+    /// a positive multiple of the velocity (P'), and acceleration.y = lift / lift_scale
+    /// with lift_scale > 0.
+    Vec3 direction;
+    float lift = 0.0f;
+    float lift_scale = 1.0f;
+};
+
+/// Position, velocity and acceleration of a bird flying `route` at `speed` for
+/// `time` seconds (arc-length timing), or at the route's parametric timing.
+[[nodiscard]] RouteSample sample_route(const BirdWorld& world, std::uint32_t route, float time, float speed);
+
+/// Route parameter u (segment index + local parameter) at arc length s in [0, length].
+[[nodiscard]] float route_parameter_at(const BirdWorld& world, std::uint32_t route, float s);
+
+/// Body attitude (SPEC B.4): yaw from the horizontal velocity, pitch = climb angle,
+/// bank by the chosen rule. Radians; bank > 0 = right wing down.
+struct Attitude {
+    float yaw = 0, pitch = 0, bank = 0;
+};
+[[nodiscard]] Attitude attitude(const gpu::FlightUniforms& uniforms, const RouteSample& sample);
+
+/// The next flight mode (SPEC B.5) given the previous one (KW_MODE_UNSET on frame 0).
+[[nodiscard]] std::uint32_t next_mode(const gpu::FlightUniforms& uniforms, std::uint32_t previous, const RouteSample& sample);
+
+/// Everything about one bird in one frame.
+struct BirdFrame {
+    gpu::BirdPose pose;
+    gpu::BirdDiag diag;
+};
+
+/// Advances `state` to frame `frame` and evaluates the bird. Frames must be visited in
+/// order from 0 (the state carries hysteresis, transition and phase).
+/// `uniforms` = world.uniforms(), passed in so a loop over birds computes it once.
+[[nodiscard]] BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
+                                  const gpu::BirdParams& bird, gpu::BirdState& state, std::uint32_t frame);
+
+/// A state before frame 0.
+[[nodiscard]] gpu::BirdState initial_state();
+
+}  // namespace kodawari::birds

@@ -1,0 +1,61 @@
+#pragma once
+/// @file
+/// The bird rig (SPEC B.1): seven parts and three wing types with dimensions, flap
+/// frequency and cruise speed from real birds (sources in docs/wing-types.md).
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <string_view>
+
+#include <shared/birds.h>
+
+namespace kodawari::birds {
+
+/// The three wing types of the seed, by aspect ratio.
+enum class WingType : std::uint32_t { Pigeon = 0, Gull = 1, Hawk = 2 };
+inline constexpr std::size_t kWingTypeCount = 3;
+
+/// The rig's parts in BirdPose order.
+enum class Part : std::uint32_t {
+    Body = KW_PART_BODY,
+    Head = KW_PART_HEAD,
+    Tail = KW_PART_TAIL,
+    LeftArm1 = KW_PART_LEFT_ARM1,
+    LeftArm2 = KW_PART_LEFT_ARM2,
+    RightArm1 = KW_PART_RIGHT_ARM1,
+    RightArm2 = KW_PART_RIGHT_ARM2,
+};
+inline constexpr std::size_t kPartCount = KW_PART_COUNT;
+
+/// glTF node names of the parts, in Part order.
+inline constexpr std::array<std::string_view, kPartCount> kPartNames = {
+    "Body", "Head", "Tail", "LeftArm1", "LeftArm2", "RightArm1", "RightArm2"};
+
+/// Parent of each part (-1 for Body).
+inline constexpr std::array<int, kPartCount> kPartParents = {-1, 0, 0, 0, 3, 0, 5};
+
+/// Size and motion defaults of a wing type. Axes (glTF): +Y up, +Z forward, +X the
+/// bird's left. Lengths in metres, mass in kg.
+struct WingTypeSpec {
+    std::string_view name;         ///< "pigeon", "gull", "hawk"
+    float wingspan;                ///< tip to tip, wings spread
+    float body_length;             ///< beak to tail tip
+    float mass;                    ///< body mass
+    float mean_chord;              ///< wing area / span
+    float flap_frequency;          ///< wingbeat frequency in level flight (Hz)
+    float cruise_speed;            ///< typical flight speed (m/s)
+    float amplitude;               ///< default scale of the wingbeat angles (1 = the seed's)
+    float arm1_fraction;           ///< share of the half-span taken by arm1 (inner wing)
+};
+
+/// The spec of a wing type.
+[[nodiscard]] const WingTypeSpec& wing_type_spec(WingType type);
+
+/// Parses "pigeon", "gull" or "hawk".
+[[nodiscard]] std::optional<WingType> parse_wing_type(std::string_view name);
+
+/// Rest translation of every part relative to its parent (Body: zero), metres.
+[[nodiscard]] std::array<std::array<float, 3>, kPartCount> part_offsets(WingType type);
+
+}  // namespace kodawari::birds

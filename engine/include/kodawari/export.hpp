@@ -1,0 +1,52 @@
+#pragma once
+/// @file
+/// Outputs of a simulation: glTF 2.0 binary files with the animation baked, and JSON
+/// Lines traces (docs/trace-format.md). Both are written atomically.
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+
+#include <shared/birds.h>
+
+#include "atomic_file.hpp"
+#include "birds/world.hpp"
+#include "result.hpp"
+
+namespace kodawari {
+
+/// Writes a `.glb`: per bird a node hierarchy of the 7 parts (a simple mesh per part,
+/// shared by all birds of a wing type) and one animation with TRS channels sampled at
+/// every frame. `poses` holds `frames` x birds entries, frame-major.
+[[nodiscard]] Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
+                                           std::span<const gpu::BirdPose> poses, std::uint32_t frames);
+
+/// What the first line of a trace says.
+struct TraceHeader {
+    std::string scene;
+    float fps = 60.0f;
+    std::uint32_t frames = 0;
+    std::string backend;
+};
+
+/// Streams a JSON Lines trace: a header line, then one line per bird and frame.
+class TraceWriter {
+public:
+    /// Opens the (temporary) file and writes the header line.
+    [[nodiscard]] static Result<TraceWriter> open(const std::string& path, const TraceHeader& header);
+
+    /// Appends the records of one frame; `poses` and `diag` hold one entry per bird.
+    void write_frame(std::uint32_t frame, const birds::BirdWorld& world, std::span<const gpu::BirdPose> poses,
+                     std::span<const gpu::BirdDiag> diag);
+
+    /// Completes the file (renames it into place).
+    [[nodiscard]] Result<void> finish();
+
+private:
+    explicit TraceWriter(AtomicFile file) : file_(std::move(file)) {}
+    AtomicFile file_;
+    std::string buffer_;
+};
+
+}  // namespace kodawari

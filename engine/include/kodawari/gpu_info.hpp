@@ -1,0 +1,43 @@
+#pragma once
+/// @file
+/// What Vulkan offers on this machine, for `kodawari info` and for messages.
+
+#include <array>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "result.hpp"
+
+namespace kodawari {
+
+/// One Vulkan physical device and the limits that matter to the compute kernels.
+struct GpuDeviceInfo {
+    std::uint32_t index = 0;
+    std::string name;
+    std::string type;         ///< "discrete", "integrated", "virtual", "cpu", "other"
+    std::string driver;       ///< driver name and info
+    std::string api_version;  ///< "1.3.230"
+    bool has_compute_queue = false;
+    bool timestamps = false;
+    std::uint32_t subgroup_size = 0;
+    std::uint32_t max_workgroup_invocations = 0;
+    std::array<std::uint32_t, 3> max_workgroup_count{};
+    std::uint64_t max_storage_buffer_range = 0;
+    std::uint32_t max_push_constants = 0;
+    std::uint64_t device_local_bytes = 0;
+};
+
+/// All devices, which one would be chosen and why.
+struct GpuInventory {
+    std::vector<GpuDeviceInfo> devices;
+    int chosen = -1;      ///< index into devices, -1 when none fits
+    std::string reason;   ///< why that one (or why none)
+};
+
+/// Lists the Vulkan devices. `request` is a device index or a name substring ("" = the
+/// best: discrete > integrated > virtual > cpu; env KODAWARI_DEVICE overrides "").
+/// Fails when there is no Vulkan loader or driver.
+[[nodiscard]] Result<GpuInventory> list_gpus(const std::string& request);
+
+}  // namespace kodawari

@@ -1,0 +1,326 @@
+// The scene file format (docs/scene-format.md): reads and checks every key, so a
+// scene that loads is one the builder can turn into a BirdWorld. Checks that need the
+// route's geometry (coincident control points, cusps) stay in BirdWorld::add_route,
+// which reports them with the route's JSON path.
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <filesystem>
+#include <limits>
+#include <numbers>
+#include <string>
+#include <utility>
+
+#include <kodawari/scene.hpp>
+
+#include "scene/json_reader.hpp"
+
+namespace kodawari {
+namespace {
+
+using scene_detail::JsonNode;
+using scene_detail::JsonReader;
+using scene_detail::NumberRange;
+
+constexpr std::uint64_t kMaxBirds = 10'000'000;   // per flock and per scene
+constexpr double kMaxCoordinate = 1e6;            // BirdWorld::add_route's limit (m)
+constexpr double kDegToRad = std::numbers::pi / 180.0;
+
+// Reads `key` of `object` into `out` when present; absent keys keep the default.
+template <typename T, typename Read>
+Result<void> optional_member(const JsonReader& r, const JsonNode& object, std::string_view key, T& out, Read read) {
+    const JsonNode node = r.member(object, key);
+    if (!node.present()) return {};
+    KW_SCENE_ASSIGN(out, read(node));
+    return {};
+}
+
+Result<void> read_camera(const JsonReader& r, const JsonNode& node, CameraSpec& camera) {
+    KW_TRY(r.object(node, {"position", "target", "fov_deg"}));
+    const NumberRange coordinate = NumberRange::closed(-kMaxCoordinate, kMaxCoordinate);
+    const auto vec = [&](const JsonNode& n) { return r.vec3(n, coordinate); };
+    KW_TRY(optional_member(r, node, "position", camera.position, vec));
+    KW_TRY(optional_member(r, node, "target", camera.target, vec));
+    if (camera.target == camera.position) {
+        return r.expected(r.member(node, "target"), "a point other than the camera position (the camera needs a direction)");
+    }
+    KW_TRY(optional_member(r, node, "fov_deg", camera.fov_deg,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::open(0.0, 180.0)); }));
+    return {};
+}
+
+// The climb thresholds are read in degrees and must nest so the hysteresis works:
+// descend_enter < descend_exit <= ascend_exit < ascend_enter.
+Result<void> read_climb_thresholds(const JsonReader& r, const JsonNode& node, birds::FlightSettings& flight) {
+    struct Threshold {
+        const char* key;
+        float* target;
+        double degrees;
+        bool given;
+    };
+    std::array<Threshold, 4> t = {{
+        {"ascend_enter_deg", &flight.ascend_enter, 0.0, false},
+        {"ascend_exit_deg", &flight.ascend_exit, 0.0, false},
+        {"descend_enter_deg", &flight.descend_enter, 0.0, false},
+        {"descend_exit_deg", &flight.descend_exit, 0.0, false},
+    }};
+    for (Threshold& th : t) {
+        // Defaults are stored in radians; round them back to the degrees a person wrote.
+        th.degrees = std::round(static_cast<double>(*th.target) / kDegToRad * 1e6) / 1e6;
+        const JsonNode n = r.member(node, th.key);
+        if (n.present()) {
+            KW_SCENE_ASSIGN(th.degrees, r.number(n, NumberRange::open(-90.0, 90.0)));
+            th.given = true;
+        }
+    }
+    // Blame the left-hand key of the relation when the file gave it, else the other.
+    const auto check = [&](const Threshold& low, const Threshold& high, bool strict) -> Result<void> {
+        if (strict ? low.degrees < high.degrees : low.degrees <= high.degrees) return {};
+        if (low.given || !high.given) {
+            return r.expected(r.member(node, low.key), std::string("a number ") + (strict ? "below " : "at or below ") +
+                                                           high.key + " (" + scene_detail::format_number(high.degrees) + ")");
+        }
+        return r.expected(r.member(node, high.key), std::string("a number ") + (strict ? "above " : "at or above ") +
+                                                        low.key + " (" + scene_detail::format_number(low.degrees) + ")");
+    };
+    KW_TRY(check(t[1], t[0], true));   // ascend_exit < ascend_enter
+    KW_TRY(check(t[2], t[3], true));   // descend_enter < descend_exit
+    KW_TRY(check(t[3], t[1], false));  // descend_exit <= ascend_exit
+    for (const Threshold& th : t) *th.target = static_cast<float>(th.degrees * kDegToRad);
+    return {};
+}
+
+Result<void> read_flight(const JsonReader& r, const JsonNode& node, birds::FlightSettings& flight) {
+    KW_TRY(r.object(node, {"bank_rule", "max_bank_deg", "mode_rule", "ascend_enter_deg", "ascend_exit_deg",
+                           "descend_enter_deg", "descend_exit_deg", "seed_accel_threshold", "blend_rates", "gravity"}));
+    const JsonNode bank_rule = r.member(node, "bank_rule");
+    if (bank_rule.present()) {
+        std::size_t index = 0;
+        KW_SCENE_ASSIGN(index, r.choice(bank_rule, {"coordinated", "seed"}));
+        flight.bank_rule = index == 0 ? birds::BankRule::Coordinated : birds::BankRule::Seed;
+    }
+    const JsonNode max_bank = r.member(node, "max_bank_deg");
+    if (max_bank.present()) {
+        double degrees = 0.0;
+        KW_SCENE_ASSIGN(degrees, r.number(max_bank, NumberRange::closed(0.0, 89.0)));
+        flight.max_bank = static_cast<float>(degrees * kDegToRad);
+    }
+    const JsonNode mode_rule = r.member(node, "mode_rule");
+    if (mode_rule.present()) {
+        std::size_t index = 0;
+        KW_SCENE_ASSIGN(index, r.choice(mode_rule, {"climb", "seed"}));
+        flight.mode_rule = index == 0 ? birds::ModeRule::Climb : birds::ModeRule::Seed;
+    }
+    KW_TRY(read_climb_thresholds(r, node, flight));
+    KW_TRY(optional_member(r, node, "seed_accel_threshold", flight.seed_accel_threshold,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+    const JsonNode rates = r.member(node, "blend_rates");
+    if (rates.present()) {
+        KW_TRY(r.object(rates, {"level", "ascend", "descend"}));
+        const auto rate = [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1.0)); };
+        KW_TRY(optional_member(r, rates, "level", flight.blend_rates[0], rate));
+        KW_TRY(optional_member(r, rates, "ascend", flight.blend_rates[1], rate));
+        KW_TRY(optional_member(r, rates, "descend", flight.blend_rates[2], rate));
+    }
+    KW_TRY(optional_member(r, node, "gravity", flight.gravity,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+    return {};
+}
+
+Result<void> read_route(const JsonReader& r, const JsonNode& node, birds::RouteSpec& route) {
+    KW_TRY(r.object(node, {"points", "loop", "segment_duration"}));
+    const JsonNode points = r.member(node, "points");
+    constexpr std::string_view kPointsWhat =
+        "an array of 3n+1 control points [x, y, z] (n >= 1 cubic Bezier segments: 4, 7, 10, ... points)";
+    std::size_t count = 0;
+    KW_SCENE_ASSIGN(count, r.array(points, kPointsWhat));
+    if (count < 4 || (count - 1) % 3 != 0) return r.expected(points, kPointsWhat);
+    constexpr std::size_t kMaxPoints = 3 * 4096 + 1;
+    if (count > kMaxPoints) return r.expected(points, "at most " + std::to_string(kMaxPoints) + " control points (4096 segments)");
+    route.points.resize(count);
+    const NumberRange coordinate = NumberRange::closed(-kMaxCoordinate, kMaxCoordinate);
+    for (std::size_t i = 0; i < count; ++i) KW_SCENE_ASSIGN(route.points[i], r.vec3(r.element(points, i), coordinate));
+    KW_TRY(optional_member(r, node, "loop", route.loop, [&](const JsonNode& n) { return r.boolean(n); }));
+    if (route.loop && route.points.back() != route.points.front()) {
+        return r.expected(r.element(points, count - 1),
+                          "the same point as points[0] (a looping route ends where it starts)");
+    }
+    KW_TRY(optional_member(r, node, "segment_duration", route.segment_duration,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 3600.0)); }));
+    return {};
+}
+
+Result<void> read_generated_route(const JsonReader& r, const JsonNode& node, GeneratedRouteSpec& gen) {
+    KW_TRY(r.object(node, {"seed", "segments", "center", "extent", "loop"}));
+    KW_TRY(optional_member(r, node, "seed", gen.seed, [&](const JsonNode& n) {
+        return r.integer(n, 0, std::numeric_limits<std::uint64_t>::max());
+    }));
+    KW_TRY(optional_member(r, node, "loop", gen.loop, [&](const JsonNode& n) { return r.boolean(n); }));
+    const JsonNode segments = r.member(node, "segments");
+    if (segments.present()) {
+        // A loop turns through 360 degrees at its waypoints; with at most 120 degrees
+        // per waypoint (flock_builder.cpp) it needs at least 4 of them.
+        std::uint64_t value = 0;
+        KW_SCENE_ASSIGN(value, r.integer(segments, gen.loop ? 4 : 1, 64));
+        gen.segments = static_cast<std::uint32_t>(value);
+    } else if (gen.loop && gen.segments < 4) {
+        gen.segments = 4;
+    }
+    // Half the coordinate limit each, so center +- extent stays within it.
+    KW_TRY(optional_member(r, node, "center", gen.center, [&](const JsonNode& n) {
+        return r.vec3(n, NumberRange::closed(-kMaxCoordinate / 2, kMaxCoordinate / 2));
+    }));
+    KW_TRY(optional_member(r, node, "extent", gen.extent, [&](const JsonNode& n) {
+        return r.vec3(n, NumberRange::left_open(0.0, kMaxCoordinate / 2));
+    }));
+    return {};
+}
+
+Result<void> read_formation(const JsonReader& r, const JsonNode& node, FormationSpec& formation) {
+    KW_TRY(r.object(node, {"spread", "route_variants", "jitter", "trail"}));
+    KW_TRY(optional_member(r, node, "spread", formation.spread,
+                           [&](const JsonNode& n) { return r.vec3(n, NumberRange::closed(0.0, 10000.0)); }));
+    const JsonNode variants = r.member(node, "route_variants");
+    if (variants.present()) {
+        std::uint64_t value = 0;
+        KW_SCENE_ASSIGN(value, r.integer(variants, 1, 256));
+        formation.route_variants = static_cast<std::uint32_t>(value);
+    }
+    KW_TRY(optional_member(r, node, "jitter", formation.jitter,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 10000.0)); }));
+    KW_TRY(optional_member(r, node, "trail", formation.trail,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 3600.0)); }));
+    return {};
+}
+
+Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t index, std::uint64_t& total_birds,
+                        FlockSpec& flock) {
+    KW_TRY(r.object(node, {"name", "wing_type", "count", "seed", "speed", "speed_jitter", "frequency", "frequency_jitter",
+                           "amplitude", "amplitude_jitter", "phase_jitter", "timing", "route", "generated_route",
+                           "formation"}));
+    flock.name = "flock" + std::to_string(index);
+    KW_TRY(optional_member(r, node, "name", flock.name, [&](const JsonNode& n) { return r.string(n); }));
+
+    std::size_t wing = 0;
+    KW_SCENE_ASSIGN(wing, r.choice(r.member(node, "wing_type"), {"pigeon", "gull", "hawk"}));
+    flock.wing_type = static_cast<birds::WingType>(wing);
+
+    const JsonNode count = r.member(node, "count");
+    std::uint64_t birds_in_flock = 0;
+    KW_SCENE_ASSIGN(birds_in_flock, r.integer(count, 1, kMaxBirds));
+    if (total_birds + birds_in_flock > kMaxBirds) {
+        return r.expected(count, "an integer in [1, " + std::to_string(kMaxBirds - total_birds) +
+                                     "] (a scene holds at most " + std::to_string(kMaxBirds) + " birds in all)");
+    }
+    total_birds += birds_in_flock;
+    flock.count = static_cast<std::uint32_t>(birds_in_flock);
+
+    KW_TRY(optional_member(r, node, "seed", flock.seed, [&](const JsonNode& n) {
+        return r.integer(n, 0, std::numeric_limits<std::uint64_t>::max());
+    }));
+    // Upper bounds keep base * (1 + jitter) finite and the numbers physical.
+    const auto positive = [&](double max) {
+        return [&r, max](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, max)); };
+    };
+    const auto jitter = [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 0.9)); };
+    KW_TRY(optional_member(r, node, "speed", flock.speed, positive(1000.0)));
+    KW_TRY(optional_member(r, node, "speed_jitter", flock.speed_jitter, jitter));
+    KW_TRY(optional_member(r, node, "frequency", flock.frequency, positive(1000.0)));
+    KW_TRY(optional_member(r, node, "frequency_jitter", flock.frequency_jitter, jitter));
+    KW_TRY(optional_member(r, node, "amplitude", flock.amplitude, positive(3.0)));
+    KW_TRY(optional_member(r, node, "amplitude_jitter", flock.amplitude_jitter, jitter));
+    KW_TRY(optional_member(r, node, "phase_jitter", flock.phase_jitter,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0)); }));
+    const JsonNode timing = r.member(node, "timing");
+    if (timing.present()) {
+        std::size_t value = 0;
+        KW_SCENE_ASSIGN(value, r.choice(timing, {"arc-length", "parametric"}));
+        flock.timing = value == 0 ? birds::RouteTiming::ArcLength : birds::RouteTiming::Parametric;
+    }
+
+    const JsonNode route = r.member(node, "route");
+    const JsonNode generated = r.member(node, "generated_route");
+    if (route.present() && generated.present()) {
+        return r.fail(generated.path, "expected exactly one of \"route\" and \"generated_route\", got both");
+    }
+    if (route.present()) {
+        birds::RouteSpec spec;
+        KW_TRY(read_route(r, route, spec));
+        spec.timing = flock.timing;
+        flock.route = std::move(spec);
+    } else if (generated.present()) {
+        GeneratedRouteSpec spec;
+        KW_TRY(read_generated_route(r, generated, spec));
+        flock.generated_route = spec;
+    } else {
+        return r.fail(node.path, "expected exactly one of \"route\" and \"generated_route\", got neither");
+    }
+
+    const JsonNode formation = r.member(node, "formation");
+    if (formation.present()) KW_TRY(read_formation(r, formation, flock.formation));
+    return {};
+}
+
+Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, const std::string& path) {
+    const JsonNode root{&document, "$"};
+    KW_TRY(r.object(root, {"format", "version", "name", "fps", "duration", "camera", "flight", "flocks"}));
+
+    const JsonNode format = r.member(root, "format");
+    if (!format.present() || !format.value->is_string() || *format.value != "kodawari-scene") {
+        return r.expected(format, "\"kodawari-scene\"");
+    }
+    const JsonNode version = r.member(root, "version");
+    if (!version.present() || !version.value->is_number() || version.value->get<double>() != 1.0) {
+        return r.expected(version, "1 (the only version this build reads)");
+    }
+
+    Scene scene;
+    scene.path = path;
+    scene.name = std::filesystem::path(path).stem().string();
+    if (scene.name.empty()) scene.name = "scene";
+    KW_TRY(optional_member(r, root, "name", scene.name, [&](const JsonNode& n) { return r.string(n); }));
+    KW_TRY(optional_member(r, root, "fps", scene.fps,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+    KW_TRY(optional_member(r, root, "duration", scene.duration,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 3600.0)); }));
+    const JsonNode camera = r.member(root, "camera");
+    if (camera.present()) KW_TRY(read_camera(r, camera, scene.camera));
+    const JsonNode flight = r.member(root, "flight");
+    if (flight.present()) KW_TRY(read_flight(r, flight, scene.flight));
+
+    const JsonNode flocks = r.member(root, "flocks");
+    constexpr std::string_view kFlocksWhat = "a non-empty array of flocks";
+    std::size_t count = 0;
+    KW_SCENE_ASSIGN(count, r.array(flocks, kFlocksWhat));
+    if (count == 0) return r.expected(flocks, kFlocksWhat);
+    scene.flocks.resize(count);
+    std::uint64_t total_birds = 0;
+    for (std::size_t i = 0; i < count; ++i) KW_TRY(read_flock(r, r.element(flocks, i), i, total_birds, scene.flocks[i]));
+    return scene;
+}
+
+}  // namespace
+
+std::uint32_t Scene::frame_count() const {
+    const double frames = std::round(static_cast<double>(duration) * static_cast<double>(fps));
+    // The loader bounds both factors (3600 s, 1000 fps); clamp anyway for hand-made scenes.
+    if (!(frames >= 1.0)) return 1;
+    if (frames > 4294967295.0) return 4294967295u;
+    return static_cast<std::uint32_t>(frames);
+}
+
+Result<Scene> parse_scene(const std::string& text, const std::string& path) {
+    nlohmann::json document;
+    KW_SCENE_ASSIGN(document, scene_detail::parse_json(text, path));
+    const JsonReader reader(path);
+    return read_scene(reader, document, path);
+}
+
+Result<Scene> load_scene(const std::string& path) {
+    std::string text;
+    KW_SCENE_ASSIGN(text, scene_detail::read_text_file(path));
+    return parse_scene(text, path);
+}
+
+}  // namespace kodawari

@@ -1,0 +1,106 @@
+#include "cli_common.hpp"
+
+#include <cstdio>
+#include <unistd.h>
+
+namespace kodawari::cli {
+
+std::optional<std::string> Args::option(const std::string& name) {
+    const std::string flag_text = "--" + name;
+    for (std::size_t i = 0; i < args_.size(); ++i) {
+        if (args_[i] == flag_text) {
+            if (i + 1 >= args_.size()) throw UsageError{flag_text + " needs a value"};
+            std::string value = args_[i + 1];
+            args_.erase(args_.begin() + static_cast<std::ptrdiff_t>(i), args_.begin() + static_cast<std::ptrdiff_t>(i) + 2);
+            return value;
+        }
+        if (args_[i].rfind(flag_text + "=", 0) == 0) {
+            std::string value = args_[i].substr(flag_text.size() + 1);
+            args_.erase(args_.begin() + static_cast<std::ptrdiff_t>(i));
+            return value;
+        }
+    }
+    return std::nullopt;
+}
+
+bool Args::flag(const std::string& name) {
+    for (std::size_t i = 0; i < args_.size(); ++i) {
+        if (args_[i] == "--" + name) {
+            args_.erase(args_.begin() + static_cast<std::ptrdiff_t>(i));
+            return true;
+        }
+    }
+    return false;
+}
+
+std::optional<std::uint64_t> Args::count(const std::string& name, std::uint64_t min, std::uint64_t max) {
+    auto text = option(name);
+    if (!text) return std::nullopt;
+    std::size_t used = 0;
+    unsigned long long value = 0;
+    try {
+        value = std::stoull(*text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used != text->size() || text->empty() || (*text)[0] == '-' || value < min || value > max) {
+        throw UsageError{"--" + name + ": expected an integer in [" + std::to_string(min) + ", " + std::to_string(max) +
+                         "], got \"" + *text + "\""};
+    }
+    return value;
+}
+
+std::vector<std::string> Args::positionals() const {
+    for (const auto& a : args_) {
+        if (a.rfind("--", 0) == 0) throw UsageError{"unknown option " + a};
+    }
+    return args_;
+}
+
+BackendChoice read_backend_choice(Args& args) {
+    BackendChoice choice;
+    if (auto b = args.option("backend")) choice.backend = *b;
+    if (choice.backend != "auto" && !parse_backend(choice.backend)) {
+        throw UsageError{"--backend: expected auto, vulkan, cpu or cpu-reference, got \"" + choice.backend + "\""};
+    }
+    if (auto d = args.option("device")) choice.options.device = *d;
+    if (auto t = args.count("threads", 1, 1024)) choice.options.threads = static_cast<unsigned>(*t);
+    choice.options.validation = args.flag("validation");
+    return choice;
+}
+
+std::optional<BackendKind> parse_backend(const std::string& name) {
+    for (BackendKind kind : {BackendKind::CpuReference, BackendKind::Cpu, BackendKind::Vulkan}) {
+        if (backend_name(kind) == name) return kind;
+    }
+    return std::nullopt;
+}
+
+Result<std::unique_ptr<BirdBackend>> open_backend(const BackendChoice& choice) {
+    if (choice.backend != "auto") return make_bird_backend(*parse_backend(choice.backend), choice.options);
+    auto vulkan = make_bird_backend(BackendKind::Vulkan, choice.options);
+    if (vulkan) return vulkan;
+    std::fprintf(stderr, "kodawari: Vulkan unavailable (%s); running on the CPU\n", vulkan.error().message.c_str());
+    return make_bird_backend(BackendKind::Cpu, choice.options);
+}
+
+int report(const Error& error) {
+    std::fprintf(stderr, "kodawari: error: %s\n", error.message.c_str());
+    return error.kind == Error::Kind::InvalidInput ? kExitBadInput : kExitFailure;
+}
+
+bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) == 1; }
+
+void progress(const char* what, std::uint64_t done, std::uint64_t total) {
+    constexpr int kWidth = 30;
+    const int filled = total ? static_cast<int>(kWidth * done / total) : kWidth;
+    char bar[kWidth + 1];
+    for (int i = 0; i < kWidth; ++i) bar[i] = i < filled ? '#' : '.';
+    bar[kWidth] = '\0';
+    std::fprintf(stderr, "\r%s [%s] %3d%% %llu/%llu", what, bar, total ? static_cast<int>(100 * done / total) : 100,
+                 static_cast<unsigned long long>(done), static_cast<unsigned long long>(total));
+    if (done >= total) std::fputc('\n', stderr);
+    std::fflush(stderr);
+}
+
+}  // namespace kodawari::cli

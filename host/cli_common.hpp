@@ -1,0 +1,65 @@
+#pragma once
+// Shared pieces of the command line: argument reading, backend choice, exit codes.
+
+#include <memory>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "kodawari/backend.hpp"
+#include "kodawari/result.hpp"
+
+namespace kodawari::cli {
+
+/// Exit codes: 0 success, 1 failure (a check did not pass, a runtime error), 2 bad
+/// input or usage.
+inline constexpr int kExitOk = 0;
+inline constexpr int kExitFailure = 1;
+inline constexpr int kExitBadInput = 2;
+
+/// Thrown for usage errors; main() prints it with the usage and exits 2.
+struct UsageError {
+    std::string message;
+};
+
+/// A simple argument reader: `--name value` options, flags and positionals.
+class Args {
+public:
+    Args(std::vector<std::string> args) : args_(std::move(args)) {}  // NOLINT
+    /// Value of `--name VALUE` (or --name=VALUE), removed from the list.
+    std::optional<std::string> option(const std::string& name);
+    /// Presence of `--name`, removed from the list.
+    bool flag(const std::string& name);
+    /// Unsigned integer option with a range check.
+    std::optional<std::uint64_t> count(const std::string& name, std::uint64_t min, std::uint64_t max);
+    /// What is left; unknown `--options` are usage errors.
+    std::vector<std::string> positionals() const;
+
+private:
+    std::vector<std::string> args_;
+};
+
+/// Options common to commands that run a simulation.
+struct BackendChoice {
+    std::string backend = "auto";  ///< auto | vulkan | cpu | cpu-reference
+    BackendOptions options;
+};
+BackendChoice read_backend_choice(Args& args);
+
+/// Creates the backend. "auto" takes Vulkan when a device exists, else the CPU (saying
+/// why in one line on stderr).
+[[nodiscard]] Result<std::unique_ptr<BirdBackend>> open_backend(const BackendChoice& choice);
+
+/// Parses a backend name.
+[[nodiscard]] std::optional<BackendKind> parse_backend(const std::string& name);
+
+/// Prints an error and returns its exit code.
+int report(const Error& error);
+
+/// True when stderr is a terminal (progress bars).
+bool stderr_is_terminal();
+
+/// Draws a progress bar line on stderr.
+void progress(const char* what, std::uint64_t done, std::uint64_t total);
+
+}  // namespace kodawari::cli

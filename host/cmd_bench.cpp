@@ -1,0 +1,151 @@
+#include <chrono>
+#include <cstdio>
+#include <sstream>
+#include <vector>
+
+#include "commands.hpp"
+#include "kodawari/atomic_file.hpp"
+#include "kodawari/scene.hpp"
+
+namespace kodawari::cli {
+namespace {
+
+// The benchmark flock: the three wing types in equal shares over generated looping
+// routes with 16 variants each, birds spread and staggered so modes and phases differ.
+Scene bench_scene(std::uint32_t count, std::uint32_t frames) {
+    Scene scene;
+    scene.name = "bench-birds";
+    scene.path = "(bench)";
+    scene.fps = 60.0f;
+    scene.duration = static_cast<float>(frames) / scene.fps;
+    const birds::WingType types[3] = {birds::WingType::Pigeon, birds::WingType::Gull, birds::WingType::Hawk};
+    for (std::uint32_t t = 0; t < 3; ++t) {
+        FlockSpec flock;
+        flock.name = std::string(birds::wing_type_spec(types[t]).name);
+        flock.wing_type = types[t];
+        flock.count = count / 3 + (t < count % 3 ? 1 : 0);
+        if (flock.count == 0) continue;
+        flock.seed = 100 + t;
+        flock.speed_jitter = 0.1f;
+        flock.frequency_jitter = 0.1f;
+        flock.amplitude_jitter = 0.1f;
+        flock.generated_route = GeneratedRouteSpec{.seed = 7 + t, .segments = 8, .center = {0, 60, 0}, .extent = {300, 50, 300}, .loop = true};
+        flock.formation = FormationSpec{.spread = {20, 8, 20}, .route_variants = 16, .jitter = 10, .trail = 20};
+        scene.flocks.push_back(flock);
+    }
+    return scene;
+}
+
+struct Measured {
+    std::string backend, device;
+    double per_second = 0, ms_per_frame = 0, gpu_ms_per_frame = -1;
+};
+
+std::string json_escape(const std::string& s) {
+    std::string out;
+    for (char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        if (static_cast<unsigned char>(c) >= 0x20) out += c;
+    }
+    return out;
+}
+
+}  // namespace
+
+int cmd_bench(Args args) {
+    const auto positionals_check = [&] { return args.positionals(); };
+    BackendChoice choice = read_backend_choice(args);
+    const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 4'000'000).value_or(1'000'000));
+    const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(30));
+    const auto json_path = args.option("json");
+    const bool readback = args.flag("readback");
+    std::string list = args.option("backends").value_or("cpu-reference,cpu,vulkan");
+    const auto positionals = positionals_check();
+    if (positionals.size() != 1 || positionals[0] != "birds") throw UsageError{"usage: kodawari bench birds [options]"};
+
+    std::vector<BackendKind> kinds;
+    std::stringstream names(list);
+    for (std::string name; std::getline(names, name, ',');) {
+        auto kind = parse_backend(name);
+        if (!kind) throw UsageError{"--backends: unknown backend \"" + name + "\""};
+        kinds.push_back(*kind);
+    }
+
+    auto built = build_bird_world(bench_scene(count, frames));
+    if (!built) return report(built.error());
+    const birds::BirdWorld& world = built.value();
+    std::printf("bench birds: %u birds (pigeon, gull, hawk), %u frames at 60 fps after 1 warm-up frame per backend, %s\n", count,
+                frames, readback ? "poses read back every frame" : "no readback");
+    std::fflush(stdout);
+
+    std::vector<gpu::BirdPose> poses(readback ? std::size_t{count} : 0);
+    std::vector<Measured> results;
+    for (BackendKind kind : kinds) {
+        auto backend = make_bird_backend(kind, choice.options);
+        if (!backend) {
+            std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), backend.error().message.c_str());
+            continue;
+        }
+        BirdBackend& b = *backend.value();
+        if (auto r = b.load(world); !r) return report(r.error());
+        // Warm-up: lavapipe compiles the kernel at its first dispatch.
+        if (auto r = b.simulate(1, {poses, {}}); !r) return report(r.error());
+        double gpu_ms = 0.0;
+        const auto start = std::chrono::steady_clock::now();
+        if (readback) {
+            for (std::uint32_t f = 0; f < frames; ++f) {
+                if (auto r = b.simulate(1, {poses, {}}); !r) return report(r.error());
+                gpu_ms += b.last_gpu_ms();
+            }
+        } else {
+            if (auto r = b.simulate(frames, {}); !r) return report(r.error());
+            gpu_ms = b.last_gpu_ms();
+        }
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        Measured m{std::string(b.name()), b.device(), static_cast<double>(count) * frames / seconds, 1e3 * seconds / frames,
+                   b.last_gpu_ms() >= 0.0 ? gpu_ms / frames : -1.0};
+        if (b.validation_messages() > 0) {
+            std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", b.validation_messages());
+            return kExitFailure;
+        }
+        results.push_back(m);
+        std::printf("  %-14s done: %.3g bird-frames/s\n", m.backend.c_str(), m.per_second);
+        std::fflush(stdout);
+    }
+
+    double reference = 0.0;
+    for (const auto& m : results) {
+        if (m.backend == "cpu-reference") reference = m.per_second;
+    }
+    std::printf("\n%-14s %-40s %16s %12s %12s %16s\n", "backend", "device", "bird-frames/s", "ms/frame", "GPU ms/frame",
+                "vs cpu-reference");
+    for (const auto& m : results) {
+        char gpu[32] = "-";
+        if (m.gpu_ms_per_frame >= 0.0) std::snprintf(gpu, sizeof gpu, "%.3f", m.gpu_ms_per_frame);
+        char ratio[32] = "-";
+        if (reference > 0.0) std::snprintf(ratio, sizeof ratio, "%.2fx", m.per_second / reference);
+        std::printf("%-14s %-40s %16.4g %12.3f %12s %16s\n", m.backend.c_str(), m.device.c_str(), m.per_second, m.ms_per_frame, gpu,
+                    ratio);
+    }
+
+    if (json_path) {
+        std::string text = "{\"benchmark\":\"birds\",\"count\":" + std::to_string(count) + ",\"frames\":" + std::to_string(frames) +
+                           ",\"readback\":" + (readback ? "true" : "false") + ",\"results\":[";
+        for (std::size_t i = 0; i < results.size(); ++i) {
+            const auto& m = results[i];
+            char numbers[160];
+            std::snprintf(numbers, sizeof numbers, "\"per_second\":%.6g,\"ms_per_frame\":%.6g", m.per_second, m.ms_per_frame);
+            text += (i ? "," : "") + std::string("{\"backend\":\"") + m.backend + "\",\"device\":\"" + json_escape(m.device) + "\"," +
+                    numbers + "}";
+        }
+        text += "]}\n";
+        auto file = AtomicFile::open(*json_path);
+        if (!file) return report(file.error());
+        file.value().write(text);
+        if (auto r = file.value().commit(); !r) return report(r.error());
+        std::printf("wrote %s\n", json_path->c_str());
+    }
+    return kExitOk;
+}
+
+}  // namespace kodawari::cli

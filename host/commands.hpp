@@ -1,0 +1,16 @@
+#pragma once
+// The subcommands of `kodawari`; each returns the process exit code.
+
+#include "cli_common.hpp"
+
+namespace kodawari::cli {
+
+int cmd_run(Args args);
+int cmd_validate(Args args);
+int cmd_info(Args args);
+int cmd_bench(Args args);
+
+/// The scene `make run` and a bare `kodawari run` use.
+inline constexpr const char* kDefaultScene = "scenes/flock.json";
+
+}  // namespace kodawari::cli

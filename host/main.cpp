@@ -1,0 +1,56 @@
+// kodawari: the command line of the crowd simulator.
+#include <cstdio>
+#include <exception>
+#include <string>
+#include <vector>
+
+#include "commands.hpp"
+
+namespace {
+
+constexpr const char* kUsage = R"(usage: kodawari <command> [options]
+
+commands:
+  run [SCENE] [--backend auto|vulkan|cpu|cpu-reference] [--frames N] [--out FILE.glb] [--no-export]
+              [--trace FILE.jsonl] [--device NAME|INDEX] [--threads N] [--validation]
+      simulate a scene (default )" "scenes/flock.json" R"() and bake it to glTF (default out/<scene>.glb)
+  validate [SCENE] [--backend vulkan|cpu] [--frames N]
+      run a backend and the CPU reference side by side; exit 1 above tolerance
+  bench birds [--count N] [--frames F] [--json FILE] [--readback] [--backends LIST]
+      time every backend on the same birds
+  info
+      version, Vulkan devices and which one is chosen, CPU threads
+
+environment: KODAWARI_DEVICE (device choice), KODAWARI_VALIDATION=1 (Khronos validation
++ synchronization validation), KODAWARI_FORCE_STAGING=1 (staging copies even on unified memory)
+)";
+
+}  // namespace
+
+int main(int argc, char** argv) {
+    using namespace kodawari::cli;
+    std::vector<std::string> args(argv + 1, argv + argc);
+    if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
+        std::fputs(kUsage, args.empty() ? stderr : stdout);
+        return args.empty() ? kExitBadInput : kExitOk;
+    }
+    if (args[0] == "--version") {
+        std::printf("kodawari %s\n", KODAWARI_VERSION);
+        return kExitOk;
+    }
+    const std::string command = args[0];
+    args.erase(args.begin());
+    try {
+        if (command == "run") return cmd_run(args);
+        if (command == "validate") return cmd_validate(args);
+        if (command == "info") return cmd_info(args);
+        if (command == "bench") return cmd_bench(args);
+        throw UsageError{"unknown command \"" + command + "\""};
+    } catch (const UsageError& e) {
+        std::fprintf(stderr, "kodawari: %s\n\n%s", e.message.c_str(), kUsage);
+        return kExitBadInput;
+    } catch (const std::exception& e) {
+        std::fprintf(stderr, "kodawari: internal error: %s\n", e.what());
+        return kExitFailure;
+    }
+}

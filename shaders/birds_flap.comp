@@ -1,0 +1,288 @@
+#version 450
+// Bird flapping (SPEC part B): one invocation per bird evaluates `frames.y` consecutive
+// frames, keeping the bird's state in registers between them, and writes the 7 part
+// rotations (and optional diagnostics) of every frame. Mirrors engine/birds/flight.cpp
+// step for step; see there for the equations' sources.
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/birds.h"
+
+layout(local_size_x = KW_BIRDS_WORKGROUP_SIZE) in;
+
+layout(std430, binding = KW_BIRDS_BINDING_UNIFORMS) readonly buffer Uniforms { FlightUniforms u; };
+layout(std430, binding = KW_BIRDS_BINDING_ROUTES) readonly buffer Routes { RouteHeader routes[]; };
+layout(std430, binding = KW_BIRDS_BINDING_CONTROL_POINTS) readonly buffer ControlPoints { vec4 control_points[]; };
+layout(std430, binding = KW_BIRDS_BINDING_ARC_SAMPLES) readonly buffer ArcSamples { ArcSample arc_samples[]; };
+layout(std430, binding = KW_BIRDS_BINDING_PARAMS) readonly buffer Params { BirdParams params[]; };
+layout(std430, binding = KW_BIRDS_BINDING_STATES) buffer States { BirdState states[]; };
+layout(std430, binding = KW_BIRDS_BINDING_POSES) writeonly buffer Poses { BirdPose poses[]; };
+layout(std430, binding = KW_BIRDS_BINDING_DIAGNOSTICS) writeonly buffer Diagnostics { BirdDiag diags[]; };
+
+layout(push_constant) uniform Push { BirdPush push; };
+
+const float PI = 3.14159265358979;
+const float TWO_PI = 6.28318530717959;
+const float HALF_PI = 1.57079632679490;
+
+vec4 quat_mul(vec4 a, vec4 b) {
+    return vec4(a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y, a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
+                a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w, a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z);
+}
+vec4 quat_x(float a) { return vec4(sin(0.5 * a), 0.0, 0.0, cos(0.5 * a)); }
+vec4 quat_y(float a) { return vec4(0.0, sin(0.5 * a), 0.0, cos(0.5 * a)); }
+vec4 quat_z(float a) { return vec4(0.0, 0.0, sin(0.5 * a), cos(0.5 * a)); }
+vec4 arm_rotation(float pitch, float heading) { return quat_mul(quat_z(pitch), quat_y(heading)); }
+vec4 mirror_x(vec4 q) { return vec4(q.x, -q.y, -q.z, q.w); }
+
+// `precise` below: the exact decisions of shared/birds.h (no contraction, source order).
+struct Bezier { vec3 p; vec3 d1; vec3 d2; };
+
+Bezier bezier(RouteHeader route, uint seg, float u) {
+    uint c = route.extent.x + 3u * seg;
+    vec3 b0 = control_points[c].xyz, b1 = control_points[c + 1u].xyz;
+    vec3 b2 = control_points[c + 2u].xyz, b3 = control_points[c + 3u].xyz;
+    precise float v = 1.0 - u;
+    precise vec3 p = (v * v * v) * b0 + (3.0 * u * v * v) * b1 + (3.0 * u * u * v) * b2 + (u * u * u) * b3;
+    precise vec3 d1 = 3.0 * ((v * v) * (b1 - b0) + (2.0 * u * v) * (b2 - b1) + (u * u) * (b3 - b2));
+    precise vec3 d2 = 6.0 * (v * (b2 - 2.0 * b1 + b0) + u * (b3 - 2.0 * b2 + b1));
+    Bezier r;
+    r.p = p;
+    r.d1 = d1;
+    r.d2 = d2;
+    return r;
+}
+
+Bezier bezier_global(RouteHeader route, float u) {
+    uint seg = min(uint(max(u, 0.0)), route.extent.y - 1u);
+    precise float local_u = u - float(seg);
+    return bezier(route, seg, local_u);
+}
+
+float route_parameter_at(RouteHeader route, float s) {
+    uint base = route.extent.z;
+    uint lo = 0u, hi = route.extent.w - 1u;
+    while (hi - lo > 1u) {
+        uint mid = (lo + hi) / 2u;
+        if (arc_samples[base + mid].s_u_duds.x <= s) lo = mid; else hi = mid;
+    }
+    vec4 a = arc_samples[base + lo].s_u_duds, b = arc_samples[base + hi].s_u_duds;
+    precise float h = b.x - a.x;
+    precise float t = clamp((s - a.x) * arc_samples[base + lo].next.x, 0.0, 1.0);
+    precise float t2 = t * t;
+    precise float t3 = t2 * t;
+    precise float u_at_s = (2.0 * t3 - 3.0 * t2 + 1.0) * a.y + (t3 - 2.0 * t2 + t) * h * a.w + (-2.0 * t3 + 3.0 * t2) * b.y +
+                           (t3 - t2) * h * b.z;
+    return u_at_s;
+}
+
+struct RouteSample {
+    vec3 position;
+    vec3 velocity;
+    vec3 acceleration;
+    vec3 direction;  // P', a positive multiple of the velocity (exact)
+    float lift;      // acceleration.y = lift / lift_scale (exact)
+    float lift_scale;
+};
+
+RouteSample sample_route(uint route_index, float time, float speed) {
+    RouteHeader route = routes[route_index];
+    bool loop = (route.flags.x & KW_ROUTE_LOOP) != 0u;
+    float n = float(route.extent.y);
+    RouteSample r;
+    r.acceleration = vec3(0.0);
+    r.lift = 0.0;
+    r.lift_scale = 1.0;
+    if ((route.flags.x & KW_ROUTE_PARAMETRIC) != 0u) {
+        float duration = route.info.y;
+        precise float u = time * route.info.w;
+        if (loop) {  // u mod n without a division
+            float whole = floor(u);
+            int wrapped = int(whole) % int(route.extent.y);
+            if (wrapped < 0) wrapped += int(route.extent.y);
+            u = float(wrapped) + (u - whole);
+        }
+        if (u < 0.0 || u > n) {
+            float end = u < 0.0 ? 0.0 : n;
+            Bezier e = bezier_global(route, end);
+            r.position = e.p + (u - end) * e.d1;
+            r.velocity = route.info.w * e.d1;
+            r.direction = e.d1;
+            return r;
+        }
+        Bezier e = bezier_global(route, u);
+        r.position = e.p;
+        r.velocity = route.info.w * e.d1;
+        r.acceleration = (route.info.w * route.info.w) * e.d2;
+        r.direction = e.d1;
+        r.lift = e.d2.y;
+        precise float scale = duration * duration;
+        r.lift_scale = scale;
+        return r;
+    }
+    float total = route.info.x;
+    precise float s = speed * time;
+    if (loop) s = s - total * floor(s * route.info.z);
+    if (s < 0.0 || s > total) {
+        float end_s = s < 0.0 ? 0.0 : total;
+        Bezier e = bezier_global(route, s < 0.0 ? 0.0 : n);
+        vec3 tangent = (1.0 / length(e.d1)) * e.d1;
+        r.position = e.p + (s - end_s) * tangent;
+        r.velocity = speed * tangent;
+        r.direction = e.d1;
+        return r;
+    }
+    Bezier e = bezier_global(route, route_parameter_at(route, s));
+    float d1_len = length(e.d1);
+    vec3 tangent = (1.0 / d1_len) * e.d1;
+    r.position = e.p;
+    r.velocity = speed * tangent;
+    r.acceleration = ((speed * speed) / (d1_len * d1_len)) * (e.d2 - dot(e.d2, tangent) * tangent);
+    r.direction = e.d1;
+    precise float dd = e.d1.x * e.d1.x + e.d1.y * e.d1.y + e.d1.z * e.d1.z;
+    precise float d2d1 = e.d2.x * e.d1.x + e.d2.y * e.d1.y + e.d2.z * e.d1.z;
+    precise float lift = (speed * speed) * (e.d2.y * dd - d2d1 * e.d1.y);
+    precise float lift_scale = dd * dd;
+    r.lift = lift;
+    r.lift_scale = lift_scale;
+    return r;
+}
+
+vec3 attitude(vec3 v, vec3 a) {
+    float horizontal = sqrt(v.x * v.x + v.z * v.z);
+    if (horizontal <= 0.0 && v.y == 0.0) return vec3(0.0);
+    vec3 att = vec3(atan(v.x, v.z), atan(v.y, horizontal), 0.0);
+    float max_bank = u.physics.y;
+    if (u.rules.x == KW_BANK_SEED) {
+        vec3 c = cross(v, a);
+        if (length(a) <= 0.0) return att;
+        float bank = atan(length(c), dot(v, a)) - HALF_PI;
+        if (c.y > 0.0) bank = -bank;
+        att.z = clamp(bank, -max_bank, max_bank);
+        return att;
+    }
+    if (horizontal <= 1e-6 * abs(v.y)) return att;
+    vec3 right = (1.0 / horizontal) * vec3(-v.z, 0.0, v.x);
+    att.z = clamp(atan(dot(a, right), u.physics.x), -max_bank, max_bank);
+    return att;
+}
+
+uint next_mode(uint previous, RouteSample r) {
+    if (u.rules.y == KW_MODE_RULE_SEED) {
+        precise float threshold = u.blend_rates.w * r.lift_scale;
+        if (r.lift > threshold) return KW_MODE_ASCEND;
+        if (r.lift < -threshold) return KW_MODE_DESCEND;
+        return KW_MODE_LEVEL;
+    }
+    vec3 d = r.direction;
+    precise float dd = d.x * d.x + d.y * d.y + d.z * d.z;
+    precise float climb = d.y * abs(d.y);
+    precise float ascend_enter = u.climb.x * dd;
+    precise float ascend_exit = u.climb.y * dd;
+    precise float descend_enter = u.climb.z * dd;
+    precise float descend_exit = u.climb.w * dd;
+    uint mode = previous;
+    if (mode == KW_MODE_ASCEND && climb < ascend_exit) mode = KW_MODE_LEVEL;
+    if (mode == KW_MODE_DESCEND && climb > descend_exit) mode = KW_MODE_LEVEL;
+    if (mode == KW_MODE_LEVEL || mode == KW_MODE_UNSET) {
+        mode = climb > ascend_enter ? KW_MODE_ASCEND : climb < descend_enter ? KW_MODE_DESCEND : KW_MODE_LEVEL;
+    }
+    return mode;
+}
+
+// Wingbeat functions, SPEC B.2 eqs. 4.1-4.5: (arm1 pitch, arm2 pitch, arm1 heading, arm2 heading).
+vec4 wing_angles(uint mode, float t, float amplitude) {
+    float s = sin(t);
+    bool first_half = t < PI;
+    vec4 a = vec4(0.0);
+    if (mode == KW_MODE_LEVEL) {
+        a.x = t < 0.5 * PI ? 0.0 : t < PI ? -(2.0 / 3.0) * t + PI / 3.0 : t < 1.5 * PI ? -PI / 3.0 : (2.0 / 3.0) * t - (4.0 / 3.0) * PI;
+        a.y = first_half ? -(PI / 3.0) * s : -(3.0 / 18.0) * PI * s;
+    } else if (mode == KW_MODE_ASCEND) {
+        a.x = first_half ? -(PI / 3.0) * s : -(3.0 / 18.0) * PI * s;
+        a.y = first_half ? -(4.0 / 9.0) * PI * s : -(5.0 / 18.0) * PI * s;
+    } else {
+        a.z = (PI / 180.0) * s;
+        a.w = first_half ? -(PI / 36.0) * s : -(PI / 90.0) * s;
+    }
+    return a * amplitude;
+}
+
+vec4 blend_quats(vec4 q0, vec4 q1, vec4 q2, vec3 weights, float alpha, uint mode) {
+    vec4 target = mode == KW_MODE_LEVEL ? q0 : mode == KW_MODE_ASCEND ? q1 : q2;
+    vec4 sum = alpha * target;
+    sum += ((1.0 - alpha) * weights.x * (dot(q0, target) < 0.0 ? -1.0 : 1.0)) * q0;
+    sum += ((1.0 - alpha) * weights.y * (dot(q1, target) < 0.0 ? -1.0 : 1.0)) * q1;
+    sum += ((1.0 - alpha) * weights.z * (dot(q2, target) < 0.0 ? -1.0 : 1.0)) * q2;
+    return sum * (1.0 / sqrt(dot(sum, sum)));
+}
+
+vec3 one_hot(uint mode) {
+    return vec3(mode == KW_MODE_LEVEL ? 1.0 : 0.0, mode == KW_MODE_ASCEND ? 1.0 : 0.0, mode == KW_MODE_DESCEND ? 1.0 : 0.0);
+}
+
+void main() {
+    uint i = gl_GlobalInvocationID.x;
+    uint count = u.rules.z;
+    if (i >= count) return;
+
+    BirdParams bird = params[i];
+    BirdState state = states[i];
+    float dt = u.physics.z;
+
+    for (uint k = 0u; k < push.frames.y; ++k) {
+        uint frame = push.frames.x + k;
+        bool first = state.mode.x == KW_MODE_UNSET;
+        precise float phase = first ? bird.motion.w : state.phase.x + bird.motion.y * dt;
+        phase = phase - floor(phase);
+        state.phase.x = phase;
+
+        precise float time = float(frame) * dt + bird.offset.w;
+        RouteSample r = sample_route(bird.ids.x, time, bird.motion.x);
+        vec3 position = r.position, velocity = r.velocity, acceleration = r.acceleration;
+        vec3 att = attitude(velocity, acceleration);
+
+        uint mode = next_mode(state.mode.x, r);
+        if (first) {
+            state.blend = vec4(one_hot(mode), 1.0);
+        } else if (mode != state.mode.x) {
+            float alpha = state.blend.w;
+            precise vec3 weights = (1.0 - alpha) * state.blend.xyz + alpha * one_hot(state.mode.x);
+            state.blend = vec4(weights, 0.0);
+        } else if (state.blend.w < 1.0) {
+            float rate = mode == KW_MODE_LEVEL ? u.blend_rates.x : mode == KW_MODE_ASCEND ? u.blend_rates.y : u.blend_rates.z;
+            precise float alpha = state.blend.w + rate * u.physics.w;
+            state.blend.w = alpha;
+            if (state.blend.w >= 1.0) state.blend = vec4(one_hot(mode), 1.0);
+        }
+        state.mode.x = mode;
+
+        float t = phase * TWO_PI;
+        if (t >= TWO_PI) t = 0.0;
+        float amplitude = bird.motion.z;
+        vec4 a0 = wing_angles(KW_MODE_LEVEL, t, amplitude);
+        vec4 a1 = wing_angles(KW_MODE_ASCEND, t, amplitude);
+        vec4 a2 = wing_angles(KW_MODE_DESCEND, t, amplitude);
+        vec4 left1 = blend_quats(arm_rotation(a0.x, a0.z), arm_rotation(a1.x, a1.z), arm_rotation(a2.x, a2.z),
+                                 state.blend.xyz, state.blend.w, mode);
+        vec4 left2 = blend_quats(arm_rotation(a0.y, a0.w), arm_rotation(a1.y, a1.w), arm_rotation(a2.y, a2.w),
+                                 state.blend.xyz, state.blend.w, mode);
+
+        uint slot = (k % push.frames.z) * count + i;
+        poses[slot].position = vec4(position + bird.offset.xyz, 0.0);
+        poses[slot].rotation[KW_PART_BODY] = quat_mul(quat_mul(quat_y(att.x), quat_x(-att.y)), quat_z(att.z));
+        poses[slot].rotation[KW_PART_HEAD] = vec4(0.0, 0.0, 0.0, 1.0);
+        poses[slot].rotation[KW_PART_TAIL] = vec4(0.0, 0.0, 0.0, 1.0);
+        poses[slot].rotation[KW_PART_LEFT_ARM1] = left1;
+        poses[slot].rotation[KW_PART_LEFT_ARM2] = left2;
+        poses[slot].rotation[KW_PART_RIGHT_ARM1] = mirror_x(left1);
+        poses[slot].rotation[KW_PART_RIGHT_ARM2] = mirror_x(left2);
+        if (push.frames.w != 0u) {
+            vec4 target = mode == KW_MODE_LEVEL ? a0 : mode == KW_MODE_ASCEND ? a1 : a2;
+            diags[slot].velocity = vec4(velocity, state.blend.w);
+            diags[slot].acceleration = vec4(acceleration, float(mode));
+            diags[slot].angles = target;
+            diags[slot].attitude = vec4(att, t);
+        }
+    }
+    states[i] = state;
+}

@@ -1,0 +1,115 @@
+// GPU-shared data of the bird flapping kernel (SPEC part B): every struct, binding
+// index and the workgroup size, defined once for shaders/birds_flap.comp and the C++
+// backends. Layout: std430; only vec4/uvec4 members (see glsl_types.h). Sizes and
+// offsets are checked by static_asserts in engine/gpu/shared_layout.cpp.
+#ifndef KODAWARI_SHADERS_SHARED_BIRDS_H
+#define KODAWARI_SHADERS_SHARED_BIRDS_H
+
+#include "glsl_types.h"
+
+#define KW_BIRDS_WORKGROUP_SIZE 64
+
+#define KW_BIRDS_BINDING_UNIFORMS 0
+#define KW_BIRDS_BINDING_ROUTES 1
+#define KW_BIRDS_BINDING_CONTROL_POINTS 2
+#define KW_BIRDS_BINDING_ARC_SAMPLES 3
+#define KW_BIRDS_BINDING_PARAMS 4
+#define KW_BIRDS_BINDING_STATES 5
+#define KW_BIRDS_BINDING_POSES 6
+#define KW_BIRDS_BINDING_DIAGNOSTICS 7
+#define KW_BIRDS_BINDING_COUNT 8
+
+// Flight modes (SPEC B.5). KW_MODE_UNSET marks a state that has not seen frame 0.
+#define KW_MODE_LEVEL 0u
+#define KW_MODE_ASCEND 1u
+#define KW_MODE_DESCEND 2u
+#define KW_MODE_UNSET 0xFFFFFFFFu
+
+#define KW_BANK_COORDINATED 0u
+#define KW_BANK_SEED 1u
+#define KW_MODE_RULE_CLIMB 0u
+#define KW_MODE_RULE_SEED 1u
+
+#define KW_ROUTE_LOOP 1u
+#define KW_ROUTE_PARAMETRIC 2u
+
+// Parts of the rig (SPEC B.1), the order of BirdPose.rotation.
+#define KW_PART_BODY 0
+#define KW_PART_HEAD 1
+#define KW_PART_TAIL 2
+#define KW_PART_LEFT_ARM1 3
+#define KW_PART_LEFT_ARM2 4
+#define KW_PART_RIGHT_ARM1 5
+#define KW_PART_RIGHT_ARM2 6
+#define KW_PART_COUNT 7
+
+KW_NAMESPACE_BEGIN
+
+// World-wide flight settings, one per dispatch.
+struct FlightUniforms {
+    vec4 physics;      // x: gravity (m/s^2), y: max bank (rad), z: dt (s), w: dt * 60 (blend steps per frame)
+    vec4 climb;        // sin(g)|sin(g)| of the climb thresholds g: x ascend enter, y ascend exit, z descend enter, w descend exit
+    vec4 blend_rates;  // x: into level, y: into ascend, z: into descend (per 1/60 s), w: seed rule's |a_y| threshold
+    uvec4 rules;       // x: bank rule, y: mode rule, z: bird count, w: unused
+};
+
+// One route: a chain of cubic Bezier segments sharing end points (SPEC B.3).
+struct RouteHeader {
+    uvec4 extent;  // x: first control point, y: segment count, z: first arc sample, w: arc samples (intervals + 1)
+    uvec4 flags;   // x: KW_ROUTE_* bits
+    vec4 info;     // x: arc length L (m), y: seconds per segment D (parametric timing), z: 1/L, w: 1/D
+};
+
+// Arc-length table sample: x: s (m from route start), y: u (global parameter: segment +
+// local), z: du/ds just before the sample, w: du/ds just after it. The two derivatives
+// differ at segment junctions whose handles have different lengths; the cubic Hermite
+// interpolation of u(s) over [s_j, s_j+1] uses w of sample j and z of sample j+1.
+// next.x: 1 / (s_j+1 - s_j), so no division is needed (see "exact decisions" below).
+struct ArcSample {
+    vec4 s_u_duds;
+    vec4 next;
+};
+
+// Exact decisions: flight modes, transitions and the phase are discrete or carried from
+// frame to frame, so a rounding difference between backends could change a decision and
+// with it every later frame. Everything they depend on is computed with +, -, * only
+// (correctly rounded, no contraction: `precise` in GLSL, -ffp-contract=off in C++), in
+// the same order on every backend, so they agree bit for bit.
+
+// Per-bird constants.
+struct BirdParams {
+    vec4 offset;  // xyz: translation added to the route (m), w: time offset (s)
+    vec4 motion;  // x: speed (m/s), y: flap frequency (Hz), z: flap amplitude scale, w: initial phase (cycles)
+    uvec4 ids;    // x: route index, y: wing type, z, w: unused
+};
+
+// Per-bird state carried from frame to frame (mode hysteresis, transitions, phase).
+struct BirdState {
+    vec4 blend;  // xyz: weights of level/ascend/descend poses in the blend source, w: alpha (1 = no transition)
+    vec4 phase;  // x: wingbeat phase in cycles [0, 1), yzw: unused
+    uvec4 mode;  // x: current target mode (KW_MODE_*), yzw: unused
+};
+
+// Per-bird, per-frame output: the 7 part transforms. Translations other than the
+// body's are constants of the wing type's rig and are not repeated here.
+struct BirdPose {
+    vec4 position;     // xyz: Body world position, w: 0
+    vec4 rotation[7];  // local rotations, quaternion (x, y, z, w), KW_PART_* order; Body in world space
+};
+
+// Optional per-bird, per-frame diagnostics (trace, validation).
+struct BirdDiag {
+    vec4 velocity;      // xyz (m/s), w: blend alpha
+    vec4 acceleration;  // xyz (m/s^2), w: mode (as float)
+    vec4 angles;        // target pose of the left wing: arm1 pitch, arm2 pitch, arm1 heading, arm2 heading (rad)
+    vec4 attitude;      // yaw, pitch (climb), bank, phase (rad)
+};
+
+// Push constants of birds_flap.comp.
+struct BirdPush {
+    uvec4 frames;  // x: first frame, y: frame count, z: output slots (frames the pose buffer holds), w: write diagnostics
+};
+
+KW_NAMESPACE_END
+
+#endif

@@ -1,0 +1,80 @@
+#!/usr/bin/env bash
+# End-to-end checks of the `kodawari` command: real runs on the shipped scenes, exit
+# codes, atomic outputs, the trace format and glTF-Validator on the export.
+# usage: cli_test.sh KODAWARI_BINARY SOURCE_DIR
+set -uo pipefail
+bin=$1
+src=$2
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+passed=0
+failed=0
+check() {  # check NAME CONDITION-COMMAND...
+    local name=$1; shift
+    if "$@"; then passed=$((passed + 1)); echo "ok   $name"; else failed=$((failed + 1)); echo "FAIL $name"; fi
+}
+
+cd "$src"
+
+# A run on the Vulkan backend writes the glb and the trace, and says where.
+"$bin" run scenes/flock.json --backend vulkan --frames 120 --out "$work/flock.glb" --trace "$work/flock.jsonl" >"$work/run.out" 2>"$work/run.err"
+rc=$?
+cat "$work/run.out"
+check "run exits 0" test $rc -eq 0
+check "run names the output" grep -q "wrote $work/flock.glb" "$work/run.out"
+check "run prints the backend" grep -q "backend vulkan on" "$work/run.out"
+check "glb exists" test -s "$work/flock.glb"
+check "no temporary files left" bash -c "! ls '$work' | grep -q tmp"
+check "trace header" bash -c "head -1 '$work/flock.jsonl' | grep -q '\"kind\":\"header\".*\"backend\":\"vulkan\"'"
+birds=$(grep -c '"frame":0,' "$work/flock.jsonl")
+lines=$(wc -l <"$work/flock.jsonl")
+check "trace has 1 + frames x birds lines" test "$lines" -eq $((1 + 120 * birds))
+check "glTF-Validator: 0 errors" node tests/tools/validate_gltf.mjs "$work/flock.glb"
+
+# validate: the GPU against the CPU reference.
+"$bin" validate scenes/flock.json --frames 600 >"$work/validate.out" 2>&1
+rc=$?
+cat "$work/validate.out"
+check "validate flock passes" test $rc -eq 0
+
+# Bad input: exit 2, the file and the JSON path named, nothing written.
+printf '{"format":"kodawari-scene","version":1,"flocks":[{"wing_type":"pigeon","count":3,"colour":1}]}' >"$work/bad.json"
+"$bin" run "$work/bad.json" --out "$work/bad.glb" >"$work/bad.out" 2>&1
+rc=$?
+check "bad scene exits 2" test $rc -eq 2
+check "bad scene names file and path" grep -q "bad.json.*\$.flocks\[0\].colour" "$work/bad.out"
+check "bad scene writes nothing" test ! -e "$work/bad.glb"
+"$bin" run "$work/missing.json" >/dev/null 2>&1
+check "missing scene fails" test $? -ne 0
+"$bin" run scenes/flock.json --frames banana >/dev/null 2>&1
+check "bad option exits 2" test $? -eq 2
+"$bin" run scenes/flock.json --backend warp >/dev/null 2>&1
+check "unknown backend exits 2" test $? -eq 2
+
+# An output that cannot be written: an error naming it, no partial file.
+"$bin" run scenes/flock.json --backend cpu --frames 5 --out "$work/no/such/dir/x.glb" >"$work/io.out" 2>&1
+rc=$?
+check "unwritable output fails" test $rc -ne 0
+check "unwritable output is named" grep -q "no/such/dir/x.glb" "$work/io.out"
+
+# info lists the device it would choose.
+"$bin" info >"$work/info.out" 2>&1
+cat "$work/info.out"
+check "info names the chosen device" grep -q "^chosen: " "$work/info.out"
+
+# The same input on the same backend gives the same bits.
+"$bin" run scenes/flock.json --backend vulkan --frames 30 --out "$work/a.glb" >/dev/null 2>&1
+"$bin" run scenes/flock.json --backend vulkan --frames 30 --out "$work/b.glb" >/dev/null 2>&1
+check "vulkan runs are deterministic" cmp -s "$work/a.glb" "$work/b.glb"
+"$bin" run scenes/flock.json --backend cpu --frames 30 --out "$work/c.glb" >/dev/null 2>&1
+"$bin" run scenes/flock.json --backend cpu-reference --frames 30 --out "$work/d.glb" >/dev/null 2>&1
+check "cpu equals cpu-reference bit for bit" cmp -s "$work/c.glb" "$work/d.glb"
+
+# bench writes the documented JSON.
+"$bin" bench birds --count 1001 --frames 3 --json "$work/bench.json" >"$work/bench.out" 2>&1
+rc=$?
+check "bench exits 0" test $rc -eq 0
+check "bench json has three backends" bash -c "node -e 'const r=require(\"$work/bench.json\"); if (r.benchmark!==\"birds\"||r.results.length!==3) process.exit(1)'"
+
+echo "cli: $passed passed, $failed failed"
+test $failed -eq 0

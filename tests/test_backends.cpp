@@ -1,0 +1,204 @@
+// The same test bodies against every bird backend: cpu-reference, cpu and vulkan (on
+// lavapipe where there is no GPU, with validation and synchronization validation on:
+// ctest sets KODAWARI_VALIDATION=1 and any message fails the test).
+#include <gtest/gtest.h>
+
+#include <cstdlib>
+#include <cstring>
+#include <vector>
+
+#include "kodawari/backend.hpp"
+#include "kodawari/compare.hpp"
+#include "kodawari/gpu_info.hpp"
+#include "kodawari/scene.hpp"
+
+using namespace kodawari;
+
+namespace {
+
+std::string scene_path(const char* name) { return std::string(KODAWARI_SOURCE_DIR) + "/scenes/" + name; }
+
+birds::BirdWorld load_world(const char* name) {
+    auto scene = load_scene(scene_path(name));
+    EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.error().message);
+    if (!scene.ok()) return {};
+    auto world = build_bird_world(scene.value());
+    EXPECT_TRUE(world.ok()) << (world.ok() ? "" : world.error().message);
+    return world.ok() ? std::move(world).value() : birds::BirdWorld{};
+}
+
+// A hand-made world of `count` birds on two routes (one looping, one parametric).
+birds::BirdWorld small_world(std::uint32_t count) {
+    birds::BirdWorld world;
+    world.frames = 90;
+    birds::RouteSpec loop;
+    loop.points = {{0, 10, 0}, {40, 20, 0}, {40, 0, 40}, {0, 10, 40}, {-40, 20, 40}, {-40, 0, 0}, {0, 10, 0}};
+    loop.loop = true;
+    birds::RouteSpec dive;
+    dive.points = {{0, 50, 0}, {0, 50, 30}, {0, 10, 30}, {0, 10, 60}};
+    dive.timing = birds::RouteTiming::Parametric;
+    dive.segment_duration = 1.0f;
+    EXPECT_TRUE(world.add_route(loop, "loop").ok());
+    EXPECT_TRUE(world.add_route(dive, "dive").ok());
+    for (std::uint32_t i = 0; i < count; ++i) {
+        gpu::BirdParams b{};
+        b.offset = {static_cast<float>(i % 7), 0.0f, static_cast<float>(i % 5), 0.01f * static_cast<float>(i)};
+        b.motion = {10.0f + 0.1f * static_cast<float>(i % 10), 3.0f + 0.05f * static_cast<float>(i % 20), 1.0f, 0.013f * static_cast<float>(i % 77)};
+        b.ids = {i % 2, i % 3, 0, 0};
+        world.birds.push_back(b);
+    }
+    return world;
+}
+
+struct Frames {
+    std::vector<gpu::BirdPose> poses;
+    std::vector<gpu::BirdDiag> diag;
+};
+
+// Runs all frames, in chunks of `chunk` frames.
+Frames simulate_all(BirdBackend& backend, const birds::BirdWorld& world, std::uint32_t chunk) {
+    Frames r;
+    const std::size_t n = world.birds.size();
+    r.poses.resize(std::size_t{world.frames} * n);
+    r.diag.resize(r.poses.size());
+    EXPECT_TRUE(backend.load(world).ok());
+    for (std::uint32_t done = 0; done < world.frames;) {
+        const std::uint32_t k = std::min(chunk, world.frames - done);
+        const auto result = backend.simulate(k, {std::span(r.poses).subspan(done * n, k * n), std::span(r.diag).subspan(done * n, k * n)});
+        EXPECT_TRUE(result.ok()) << (result.ok() ? "" : result.error().message);
+        done += k;
+    }
+    return r;
+}
+
+class BirdBackends : public ::testing::TestWithParam<BackendKind> {
+protected:
+    void SetUp() override {
+        if (GetParam() == BackendKind::Vulkan) {
+            // Skip only when no Vulkan device exists at all; any other failure fails.
+            auto gpus = list_gpus("");
+            if (!gpus.ok() || gpus.value().devices.empty()) {
+                GTEST_SKIP() << "no Vulkan device on this machine ("
+                             << (gpus.ok() ? gpus.value().reason : gpus.error().message) << "); the GPU tests need one";
+            }
+        }
+        auto made = make_bird_backend(GetParam(), {});
+        ASSERT_TRUE(made.ok()) << made.error().message;
+        backend_ = std::move(made).value();
+        reference_ = std::move(make_bird_backend(BackendKind::CpuReference, {})).value();
+    }
+    void TearDown() override {
+        if (backend_) {
+            EXPECT_EQ(backend_->validation_messages(), 0u) << "Vulkan validation reported problems (see stderr)";
+        }
+    }
+
+    void expect_parity(const birds::BirdWorld& world, std::uint32_t chunk) {
+        const Frames ref = simulate_all(*reference_, world, 600);
+        const Frames got = simulate_all(*backend_, world, chunk);
+        BirdComparison comparison(world);
+        comparison.add(0, world.frames, ref.poses, got.poses, ref.diag, got.diag);
+        for (const Deviation& d : comparison.results()) {
+            EXPECT_TRUE(d.within()) << d.quantity << ": max " << d.max << " " << d.unit << " (bird " << d.worst_bird << ", frame "
+                                    << d.worst_frame << ") over tolerance " << d.tolerance;
+        }
+        if (GetParam() != BackendKind::Vulkan) {
+            // The CPU backends run the same code: the same bits.
+            EXPECT_EQ(std::memcmp(ref.poses.data(), got.poses.data(), ref.poses.size() * sizeof(gpu::BirdPose)), 0);
+        }
+    }
+
+    std::unique_ptr<BirdBackend> backend_;
+    std::unique_ptr<BirdBackend> reference_;
+};
+
+}  // namespace
+
+TEST_P(BirdBackends, MatchesTheReferenceOnTheFlockScene) {
+    const birds::BirdWorld world = load_world("flock.json");
+    ASSERT_FALSE(world.birds.empty());
+    ASSERT_NE(world.birds.size() % KW_BIRDS_WORKGROUP_SIZE, 0u) << "the scene must exercise a partial workgroup";
+    ASSERT_GE(world.frames, 600u);
+    expect_parity(world, 600);
+}
+
+TEST_P(BirdBackends, MatchesTheReferenceOnTheMurmuration) {
+    birds::BirdWorld world = load_world("murmuration.json");
+    ASSERT_GE(world.birds.size(), 10000u);
+    world.frames = 600;
+    expect_parity(world, 600);
+}
+
+TEST_P(BirdBackends, CountsAroundTheWorkgroupSize) {
+    for (std::uint32_t count : {1u, 63u, 65u, 130u, 1001u}) {
+        SCOPED_TRACE("birds: " + std::to_string(count));
+        expect_parity(small_world(count), 17);
+    }
+}
+
+TEST_P(BirdBackends, ChunkingAndRepetitionGiveTheSameBits) {
+    const birds::BirdWorld world = small_world(333);
+    const Frames whole = simulate_all(*backend_, world, 1000);
+    const Frames chunked = simulate_all(*backend_, world, 7);
+    const Frames again = simulate_all(*backend_, world, 1000);
+    ASSERT_EQ(whole.poses.size(), chunked.poses.size());
+    EXPECT_EQ(std::memcmp(whole.poses.data(), chunked.poses.data(), whole.poses.size() * sizeof(gpu::BirdPose)), 0);
+    EXPECT_EQ(std::memcmp(whole.poses.data(), again.poses.data(), whole.poses.size() * sizeof(gpu::BirdPose)), 0);
+    EXPECT_EQ(std::memcmp(whole.diag.data(), again.diag.data(), whole.diag.size() * sizeof(gpu::BirdDiag)), 0);
+}
+
+TEST_P(BirdBackends, EveryModeAndTransitionOccursInTheFlockScene) {
+    const birds::BirdWorld world = load_world("flock.json");
+    const Frames r = simulate_all(*backend_, world, 600);
+    int modes[3] = {0, 0, 0};
+    std::size_t blending = 0;
+    for (const auto& d : r.diag) {
+        modes[static_cast<int>(d.acceleration.w)]++;
+        if (d.velocity.w < 1.0f) ++blending;
+        ASSERT_GE(d.attitude.w, 0.0f);
+        ASSERT_LT(d.attitude.w, 6.2831855f);
+    }
+    EXPECT_GT(modes[KW_MODE_LEVEL], 0);
+    EXPECT_GT(modes[KW_MODE_ASCEND], 0);
+    EXPECT_GT(modes[KW_MODE_DESCEND], 0);
+    EXPECT_GT(blending, 0u);
+}
+
+TEST_P(BirdBackends, OutputWithoutReadbackStillAdvances) {
+    // Benchmarks simulate without output; the state must advance exactly as with it.
+    const birds::BirdWorld world = small_world(100);
+    const Frames full = simulate_all(*backend_, world, 1000);
+    ASSERT_TRUE(backend_->load(world).ok());
+    ASSERT_TRUE(backend_->simulate(world.frames - 1, {}).ok());
+    std::vector<gpu::BirdPose> last(world.birds.size());
+    ASSERT_TRUE(backend_->simulate(1, {last, {}}).ok());
+    EXPECT_EQ(std::memcmp(last.data(), full.poses.data() + (world.frames - 1) * world.birds.size(), last.size() * sizeof(gpu::BirdPose)),
+              0);
+}
+
+INSTANTIATE_TEST_SUITE_P(All, BirdBackends, ::testing::Values(BackendKind::CpuReference, BackendKind::Cpu, BackendKind::Vulkan),
+                         [](const auto& param_info) {
+                             std::string name(backend_name(param_info.param));
+                             for (char& c : name) if (c == '-') c = '_';
+                             return name;
+                         });
+
+TEST(VulkanStaging, DiscreteGpuPathMatchesTheReference) {
+    // lavapipe has unified memory; force the staging-copy path a discrete GPU takes.
+    auto gpus = list_gpus("");
+    if (!gpus.ok() || gpus.value().devices.empty()) GTEST_SKIP() << "no Vulkan device on this machine";
+    ::setenv("KODAWARI_FORCE_STAGING", "1", 1);
+    auto made = make_bird_backend(BackendKind::Vulkan, {});
+    ::unsetenv("KODAWARI_FORCE_STAGING");
+    ASSERT_TRUE(made.ok()) << made.error().message;
+    auto reference = std::move(make_bird_backend(BackendKind::CpuReference, {})).value();
+    const birds::BirdWorld world = small_world(257);
+    const Frames ref = simulate_all(*reference, world, 1000);
+    const Frames got = simulate_all(*made.value(), world, 13);
+    BirdComparison comparison(world);
+    comparison.add(0, world.frames, ref.poses, got.poses, ref.diag, got.diag);
+    for (const Deviation& d : comparison.results()) {
+        EXPECT_TRUE(d.within()) << d.quantity << ": max " << d.max << " (bird " << d.worst_bird << ", frame " << d.worst_frame << ")";
+    }
+    EXPECT_EQ(made.value()->validation_messages(), 0u);
+}
