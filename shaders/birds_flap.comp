@@ -9,13 +9,13 @@
 
 layout(local_size_x = KW_BIRDS_WORKGROUP_SIZE) in;
 
-layout(std430, binding = KW_BIRDS_BINDING_UNIFORMS) readonly buffer Uniforms { FlightUniforms u; };
+layout(std140, binding = KW_BIRDS_BINDING_UNIFORMS) uniform Uniforms { FlightUniforms u; };
 layout(std430, binding = KW_BIRDS_BINDING_ROUTES) readonly buffer Routes { RouteHeader routes[]; };
 layout(std430, binding = KW_BIRDS_BINDING_CONTROL_POINTS) readonly buffer ControlPoints { vec4 control_points[]; };
 layout(std430, binding = KW_BIRDS_BINDING_ARC_SAMPLES) readonly buffer ArcSamples { ArcSample arc_samples[]; };
 layout(std430, binding = KW_BIRDS_BINDING_PARAMS) readonly buffer Params { BirdParams params[]; };
 layout(std430, binding = KW_BIRDS_BINDING_STATES) buffer States { BirdState states[]; };
-layout(std430, binding = KW_BIRDS_BINDING_POSES) writeonly buffer Poses { BirdPose poses[]; };
+layout(std430, binding = KW_BIRDS_BINDING_POSES) writeonly buffer Poses { BirdPoseGpu poses[]; };
 layout(std430, binding = KW_BIRDS_BINDING_DIAGNOSTICS) writeonly buffer Diagnostics { BirdDiag diags[]; };
 
 layout(push_constant) uniform Push { BirdPush push; };
@@ -31,18 +31,48 @@ vec4 quat_mul(vec4 a, vec4 b) {
 vec4 quat_x(float a) { return vec4(sin(0.5 * a), 0.0, 0.0, cos(0.5 * a)); }
 vec4 quat_y(float a) { return vec4(0.0, sin(0.5 * a), 0.0, cos(0.5 * a)); }
 vec4 quat_z(float a) { return vec4(0.0, 0.0, sin(0.5 * a), cos(0.5 * a)); }
-vec4 arm_rotation(float pitch, float heading) { return quat_mul(quat_z(pitch), quat_y(heading)); }
+// quat_z(pitch) * quat_y(heading); no mode has both angles, so one of the factors is
+// the identity (and multiplying by it is exact).
+vec4 arm_rotation(float pitch, float heading) { return heading == 0.0 ? quat_z(pitch) : pitch == 0.0 ? quat_y(heading) : quat_mul(quat_z(pitch), quat_y(heading)); }
 vec4 mirror_x(vec4 q) { return vec4(q.x, -q.y, -q.z, q.w); }
 
 // `precise` below: the exact decisions of shared/birds.h (no contraction, source order).
 struct Bezier { vec3 p; vec3 d1; vec3 d2; };
 
-Bezier bezier(RouteHeader route, uint seg, float u) {
-    uint c = route.extent.x + 3u * seg;
-    vec3 b0 = control_points[c].xyz, b1 = control_points[c + 1u].xyz;
-    vec3 b2 = control_points[c + 2u].xyz, b3 = control_points[c + 3u].xyz;
+// Storage loads are the expensive part on lavapipe, and a bird moves a little along its
+// route each frame: the current Bezier segment and arc-length interval stay in registers
+// and are reloaded only when the bird leaves them. The values used are the same as
+// without the cache, so results do not change.
+struct RouteCache {
+    uint segment;  // cached segment, 0xFFFFFFFF = none
+    vec3 b0, b1, b2, b3;
+    uint lo;       // cached arc-length interval [lo, lo + 1], 0xFFFFFFFF = none
+    vec4 a, b;     // its two samples
+    float inv_h;
+};
+
+RouteCache empty_cache() {
+    RouteCache c;
+    c.segment = 0xFFFFFFFFu;
+    c.lo = 0xFFFFFFFFu;
+    c.b0 = c.b1 = c.b2 = c.b3 = vec3(0.0);
+    c.a = c.b = vec4(0.0);
+    c.inv_h = 0.0;
+    return c;
+}
+
+Bezier bezier(RouteHeader route, uint seg, float u, inout RouteCache cache) {
+    if (cache.segment != seg) {
+        uint c = route.extent.x + 3u * seg;
+        cache.segment = seg;
+        cache.b0 = control_points[c].xyz;
+        cache.b1 = control_points[c + 1u].xyz;
+        cache.b2 = control_points[c + 2u].xyz;
+        cache.b3 = control_points[c + 3u].xyz;
+    }
+    vec3 b0 = cache.b0, b1 = cache.b1, b2 = cache.b2, b3 = cache.b3;
     precise float v = 1.0 - u;
-    precise vec3 p = (v * v * v) * b0 + (3.0 * u * v * v) * b1 + (3.0 * u * u * v) * b2 + (u * u * u) * b3;
+    vec3 p = (v * v * v) * b0 + (3.0 * u * v * v) * b1 + (3.0 * u * u * v) * b2 + (u * u * u) * b3;
     precise vec3 d1 = 3.0 * ((v * v) * (b1 - b0) + (2.0 * u * v) * (b2 - b1) + (u * u) * (b3 - b2));
     precise vec3 d2 = 6.0 * (v * (b2 - 2.0 * b1 + b0) + u * (b3 - 2.0 * b2 + b1));
     Bezier r;
@@ -52,22 +82,38 @@ Bezier bezier(RouteHeader route, uint seg, float u) {
     return r;
 }
 
-Bezier bezier_global(RouteHeader route, float u) {
+Bezier bezier_global(RouteHeader route, float u, inout RouteCache cache) {
     uint seg = min(uint(max(u, 0.0)), route.extent.y - 1u);
     precise float local_u = u - float(seg);
-    return bezier(route, seg, local_u);
+    return bezier(route, seg, local_u, cache);
 }
 
-float route_parameter_at(RouteHeader route, float s) {
+// The interval a binary search over the samples would find: the last lo with
+// s_lo <= s, at most count - 2.
+float route_parameter_at(RouteHeader route, float s, inout RouteCache cache) {
     uint base = route.extent.z;
-    uint lo = 0u, hi = route.extent.w - 1u;
-    while (hi - lo > 1u) {
-        uint mid = (lo + hi) / 2u;
-        if (arc_samples[base + mid].s_u_duds.x <= s) lo = mid; else hi = mid;
+    uint last = route.extent.w - 1u;
+    bool valid = cache.lo != 0xFFFFFFFFu && cache.a.x <= s && (s < cache.b.x || cache.lo + 1u == last);
+    if (!valid) {
+        uint lo = 0u, hi = last;
+        // Forward flight: the next interval is the usual answer.
+        if (cache.lo != 0xFFFFFFFFu && cache.lo + 2u <= last && cache.b.x <= s &&
+            (s < arc_samples[base + cache.lo + 2u].s_u_duds.x || cache.lo + 2u == last)) {
+            lo = cache.lo + 1u;
+        } else {
+            while (hi - lo > 1u) {
+                uint mid = (lo + hi) / 2u;
+                if (arc_samples[base + mid].s_u_duds.x <= s) lo = mid; else hi = mid;
+            }
+        }
+        cache.lo = lo;
+        cache.a = arc_samples[base + lo].s_u_duds;
+        cache.b = arc_samples[base + lo + 1u].s_u_duds;
+        cache.inv_h = arc_samples[base + lo].next.x;
     }
-    vec4 a = arc_samples[base + lo].s_u_duds, b = arc_samples[base + hi].s_u_duds;
+    vec4 a = cache.a, b = cache.b;
     precise float h = b.x - a.x;
-    precise float t = clamp((s - a.x) * arc_samples[base + lo].next.x, 0.0, 1.0);
+    precise float t = clamp((s - a.x) * cache.inv_h, 0.0, 1.0);
     precise float t2 = t * t;
     precise float t3 = t2 * t;
     precise float u_at_s = (2.0 * t3 - 3.0 * t2 + 1.0) * a.y + (t3 - 2.0 * t2 + t) * h * a.w + (-2.0 * t3 + 3.0 * t2) * b.y +
@@ -84,8 +130,7 @@ struct RouteSample {
     float lift_scale;
 };
 
-RouteSample sample_route(uint route_index, float time, float speed) {
-    RouteHeader route = routes[route_index];
+RouteSample sample_route(RouteHeader route, float time, float speed, inout RouteCache cache) {
     bool loop = (route.flags.x & KW_ROUTE_LOOP) != 0u;
     float n = float(route.extent.y);
     RouteSample r;
@@ -103,13 +148,13 @@ RouteSample sample_route(uint route_index, float time, float speed) {
         }
         if (u < 0.0 || u > n) {
             float end = u < 0.0 ? 0.0 : n;
-            Bezier e = bezier_global(route, end);
+            Bezier e = bezier_global(route, end, cache);
             r.position = e.p + (u - end) * e.d1;
             r.velocity = route.info.w * e.d1;
             r.direction = e.d1;
             return r;
         }
-        Bezier e = bezier_global(route, u);
+        Bezier e = bezier_global(route, u, cache);
         r.position = e.p;
         r.velocity = route.info.w * e.d1;
         r.acceleration = (route.info.w * route.info.w) * e.d2;
@@ -124,14 +169,14 @@ RouteSample sample_route(uint route_index, float time, float speed) {
     if (loop) s = s - total * floor(s * route.info.z);
     if (s < 0.0 || s > total) {
         float end_s = s < 0.0 ? 0.0 : total;
-        Bezier e = bezier_global(route, s < 0.0 ? 0.0 : n);
+        Bezier e = bezier_global(route, s < 0.0 ? 0.0 : n, cache);
         vec3 tangent = (1.0 / length(e.d1)) * e.d1;
         r.position = e.p + (s - end_s) * tangent;
         r.velocity = speed * tangent;
         r.direction = e.d1;
         return r;
     }
-    Bezier e = bezier_global(route, route_parameter_at(route, s));
+    Bezier e = bezier_global(route, route_parameter_at(route, s, cache), cache);
     float d1_len = length(e.d1);
     vec3 tangent = (1.0 / d1_len) * e.d1;
     r.position = e.p;
@@ -166,6 +211,51 @@ vec3 attitude(vec3 v, vec3 a) {
     return att;
 }
 
+// (cos(x/2), sin(x/2)) from (cos x, sin x), cos x >= 0.
+vec2 half_angle(float c, float s) {
+    float hc = sqrt(0.5 * (1.0 + c));
+    return vec2(hc, s / (2.0 * hc));
+}
+
+// engine/birds/flight.cpp body_rotation(): the attitude's rotation without trig.
+vec4 body_rotation(vec3 v, vec3 a) {
+    float horizontal = sqrt(v.x * v.x + v.z * v.z);
+    float speed = sqrt(horizontal * horizontal + v.y * v.y);
+    if (speed <= 0.0) return vec4(0.0, 0.0, 0.0, 1.0);
+    vec4 yaw = vec4(0.0, 0.0, 0.0, 1.0);
+    if (horizontal > 0.0) {
+        float c = v.z / horizontal, s = v.x / horizontal;
+        if (c >= 0.0) {
+            vec2 h = half_angle(c, s);
+            yaw.w = h.x;
+            yaw.y = h.y;
+        } else {
+            yaw.y = (s < 0.0 ? -1.0 : 1.0) * sqrt(0.5 * (1.0 - c));
+            yaw.w = s / (2.0 * yaw.y);
+        }
+    }
+    vec2 p = half_angle(horizontal / speed, -v.y / speed);
+    vec4 pitch = vec4(p.y, 0.0, 0.0, p.x);
+    float bc = 1.0, bs = 0.0;
+    if (u.rules.x == KW_BANK_SEED) {
+        float bank = attitude(v, a).z;
+        bc = cos(bank);
+        bs = sin(bank);
+    } else if (horizontal > 1e-6 * abs(v.y)) {
+        float lateral = (a.x * -v.z + a.z * v.x) / horizontal;
+        float g = u.physics.x;
+        float norm = sqrt(lateral * lateral + g * g);
+        bc = g / norm;
+        bs = lateral / norm;
+        if (bc < u.bank_limit.x) {
+            bc = u.bank_limit.x;
+            bs = (lateral < 0.0 ? -1.0 : 1.0) * u.bank_limit.y;
+        }
+    }
+    vec2 b = half_angle(bc, bs);
+    return quat_mul(quat_mul(yaw, pitch), vec4(0.0, 0.0, b.y, b.x));
+}
+
 uint next_mode(uint previous, RouteSample r) {
     if (u.rules.y == KW_MODE_RULE_SEED) {
         precise float threshold = u.blend_rates.w * r.lift_scale;
@@ -190,8 +280,7 @@ uint next_mode(uint previous, RouteSample r) {
 }
 
 // Wingbeat functions, SPEC B.2 eqs. 4.1-4.5: (arm1 pitch, arm2 pitch, arm1 heading, arm2 heading).
-vec4 wing_angles(uint mode, float t, float amplitude) {
-    float s = sin(t);
+vec4 wing_angles(uint mode, float t, float s, float amplitude) {
     bool first_half = t < PI;
     vec4 a = vec4(0.0);
     if (mode == KW_MODE_LEVEL) {
@@ -227,6 +316,8 @@ void main() {
 
     BirdParams bird = params[i];
     BirdState state = states[i];
+    RouteHeader route = routes[bird.ids.x];
+    RouteCache cache = empty_cache();
     float dt = u.physics.z;
 
     for (uint k = 0u; k < push.frames.y; ++k) {
@@ -237,9 +328,8 @@ void main() {
         state.phase.x = phase;
 
         precise float time = float(frame) * dt + bird.offset.w;
-        RouteSample r = sample_route(bird.ids.x, time, bird.motion.x);
+        RouteSample r = sample_route(route, time, bird.motion.x, cache);
         vec3 position = r.position, velocity = r.velocity, acceleration = r.acceleration;
-        vec3 att = attitude(velocity, acceleration);
 
         uint mode = next_mode(state.mode.x, r);
         if (first) {
@@ -259,29 +349,30 @@ void main() {
         float t = phase * TWO_PI;
         if (t >= TWO_PI) t = 0.0;
         float amplitude = bird.motion.z;
-        vec4 a0 = wing_angles(KW_MODE_LEVEL, t, amplitude);
-        vec4 a1 = wing_angles(KW_MODE_ASCEND, t, amplitude);
-        vec4 a2 = wing_angles(KW_MODE_DESCEND, t, amplitude);
-        vec4 left1 = blend_quats(arm_rotation(a0.x, a0.z), arm_rotation(a1.x, a1.z), arm_rotation(a2.x, a2.z),
-                                 state.blend.xyz, state.blend.w, mode);
-        vec4 left2 = blend_quats(arm_rotation(a0.y, a0.w), arm_rotation(a1.y, a1.w), arm_rotation(a2.y, a2.w),
-                                 state.blend.xyz, state.blend.w, mode);
+        float sin_t = sin(t);
+        vec4 target = wing_angles(mode, t, sin_t, amplitude);
+        vec4 left1 = arm_rotation(target.x, target.z);
+        vec4 left2 = arm_rotation(target.y, target.w);
+        if (state.blend.w < 1.0) {  // a transition: blend all three poses (SPEC B.6)
+            vec4 a0 = wing_angles(KW_MODE_LEVEL, t, sin_t, amplitude);
+            vec4 a1 = wing_angles(KW_MODE_ASCEND, t, sin_t, amplitude);
+            vec4 a2 = wing_angles(KW_MODE_DESCEND, t, sin_t, amplitude);
+            left1 = blend_quats(arm_rotation(a0.x, a0.z), arm_rotation(a1.x, a1.z), arm_rotation(a2.x, a2.z),
+                                state.blend.xyz, state.blend.w, mode);
+            left2 = blend_quats(arm_rotation(a0.y, a0.w), arm_rotation(a1.y, a1.w), arm_rotation(a2.y, a2.w),
+                                state.blend.xyz, state.blend.w, mode);
+        }
 
         uint slot = (k % push.frames.z) * count + i;
         poses[slot].position = vec4(position + bird.offset.xyz, 0.0);
-        poses[slot].rotation[KW_PART_BODY] = quat_mul(quat_mul(quat_y(att.x), quat_x(-att.y)), quat_z(att.z));
-        poses[slot].rotation[KW_PART_HEAD] = vec4(0.0, 0.0, 0.0, 1.0);
-        poses[slot].rotation[KW_PART_TAIL] = vec4(0.0, 0.0, 0.0, 1.0);
-        poses[slot].rotation[KW_PART_LEFT_ARM1] = left1;
-        poses[slot].rotation[KW_PART_LEFT_ARM2] = left2;
-        poses[slot].rotation[KW_PART_RIGHT_ARM1] = mirror_x(left1);
-        poses[slot].rotation[KW_PART_RIGHT_ARM2] = mirror_x(left2);
+        poses[slot].body = body_rotation(velocity, acceleration);
+        poses[slot].left_arm1 = left1;
+        poses[slot].left_arm2 = left2;
         if (push.frames.w != 0u) {
-            vec4 target = mode == KW_MODE_LEVEL ? a0 : mode == KW_MODE_ASCEND ? a1 : a2;
             diags[slot].velocity = vec4(velocity, state.blend.w);
             diags[slot].acceleration = vec4(acceleration, float(mode));
             diags[slot].angles = target;
-            diags[slot].attitude = vec4(att, t);
+            diags[slot].attitude = vec4(attitude(velocity, acceleration), t);
         }
     }
     states[i] = state;

@@ -170,3 +170,35 @@ TEST(Flight, TransitionsAreTimeBasedAndContinuous) {
     }
     EXPECT_GT(blending, 20) << "the route must produce transitions";
 }
+
+TEST(Flight, BodyRotationIsTheAttitudesRotation) {
+    // body_rotation() builds the quaternion without trig; it must equal
+    // yaw(Y) * climb(-X) * bank(Z) of attitude() for every direction, including flight
+    // backwards (yaw near 180 degrees), steep climbs and clamped banks.
+    for (BankRule rule : {BankRule::Coordinated, BankRule::Seed}) {
+        BirdWorld world;
+        world.settings.bank_rule = rule;
+        const gpu::FlightUniforms u = world.uniforms();
+        std::uint32_t seed = 12345;
+        auto next = [&] {
+            seed = seed * 1664525u + 1013904223u;
+            return static_cast<float>(seed >> 8) / 16777216.0f * 2.0f - 1.0f;
+        };
+        for (int i = 0; i < 2000; ++i) {
+            const Vec3 v{20 * next(), 15 * next(), 20 * next()};
+            const Vec3 a{30 * next(), 5 * next(), 30 * next()};
+            const RouteSample sample = moving(v, a);
+            const Attitude att = attitude(u, sample);
+            auto axis = [](float x, float y, float z, float angle) {
+                return gpu::vec4{x * std::sin(0.5f * angle), y * std::sin(0.5f * angle), z * std::sin(0.5f * angle), std::cos(0.5f * angle)};
+            };
+            auto mul = [](const gpu::vec4& p, const gpu::vec4& q) {
+                return gpu::vec4{p.w * q.x + p.x * q.w + p.y * q.z - p.z * q.y, p.w * q.y - p.x * q.z + p.y * q.w + p.z * q.x,
+                                 p.w * q.z + p.x * q.y - p.y * q.x + p.z * q.w, p.w * q.w - p.x * q.x - p.y * q.y - p.z * q.z};
+            };
+            const gpu::vec4 expected = mul(mul(axis(0, 1, 0, att.yaw), axis(1, 0, 0, -att.pitch)), axis(0, 0, 1, att.bank));
+            // Float trig against square roots: a few 1e-7 rad.
+            EXPECT_LT(quaternion_angle(body_rotation(u, sample), expected), 2e-6) << "v " << v.x << " " << v.y << " " << v.z;
+        }
+    }
+}

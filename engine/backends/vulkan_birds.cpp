@@ -20,6 +20,25 @@ using gpu::GpuBuffer;
 // flocks, one frame per dispatch for a million birds.
 constexpr std::uint64_t kRingBytes = 256ull << 20;
 
+// The kernel stores the moving parts only (shared/birds.h, BirdPoseGpu); the rest
+// follows from the rig: Head and Tail at rest, the right wing the mirror of the left.
+void expand(const gpu::BirdPoseGpu* in, std::size_t count, gpu::BirdPose* out) {
+    constexpr gpu::vec4 kIdentity{0.0f, 0.0f, 0.0f, 1.0f};
+    auto mirror = [](const gpu::vec4& q) { return gpu::vec4{q.x, -q.y, -q.z, q.w}; };
+    for (std::size_t i = 0; i < count; ++i) {
+        const gpu::BirdPoseGpu& g = in[i];
+        gpu::BirdPose& p = out[i];
+        p.position = g.position;
+        p.rotation[KW_PART_BODY] = g.body;
+        p.rotation[KW_PART_HEAD] = kIdentity;
+        p.rotation[KW_PART_TAIL] = kIdentity;
+        p.rotation[KW_PART_LEFT_ARM1] = g.left_arm1;
+        p.rotation[KW_PART_LEFT_ARM2] = g.left_arm2;
+        p.rotation[KW_PART_RIGHT_ARM1] = mirror(g.left_arm1);
+        p.rotation[KW_PART_RIGHT_ARM2] = mirror(g.left_arm2);
+    }
+}
+
 template <typename T>
 std::span<const std::byte> bytes_of(const std::vector<T>& v) {
     return std::as_bytes(std::span<const T>(v));
@@ -48,11 +67,11 @@ public:
         }
         count_ = static_cast<std::uint32_t>(count);
         frame_ = 0;
-        const std::uint64_t per_frame = std::uint64_t{count} * (sizeof(gpu::BirdPose) + sizeof(gpu::BirdDiag));
+        const std::uint64_t per_frame = std::uint64_t{count} * (sizeof(gpu::BirdPoseGpu) + sizeof(gpu::BirdDiag));
         slots_ = static_cast<std::uint32_t>(std::clamp<std::uint64_t>(kRingBytes / per_frame, 1, std::max(world.frames, 1u)));
         const std::uint64_t max_range = ctx_->info().max_storage_buffer_range;
-        while (slots_ > 1 && std::uint64_t{slots_} * count * sizeof(gpu::BirdPose) > max_range) --slots_;
-        if (std::uint64_t{count} * sizeof(gpu::BirdPose) > max_range) {
+        while (slots_ > 1 && std::uint64_t{slots_} * count * sizeof(gpu::BirdPoseGpu) > max_range) --slots_;
+        if (std::uint64_t{count} * sizeof(gpu::BirdPoseGpu) > max_range) {
             return make_error(Error::Kind::Unsupported, std::to_string(count) + " birds' poses exceed the device's storage buffer range");
         }
 
@@ -64,7 +83,7 @@ public:
             bytes_of(world.arc_samples), bytes_of(world.birds), bytes_of(states), {}, {}};
         const std::uint64_t sizes[KW_BIRDS_BINDING_COUNT] = {
             sizeof(uniforms), contents[1].size(), contents[2].size(), contents[3].size(), contents[4].size(),
-            contents[5].size(), std::uint64_t{slots_} * count * sizeof(gpu::BirdPose),
+            contents[5].size(), std::uint64_t{slots_} * count * sizeof(gpu::BirdPoseGpu),
             std::uint64_t{slots_} * count * sizeof(gpu::BirdDiag)};
         for (std::uint32_t b = 0; b < KW_BIRDS_BINDING_COUNT; ++b) {
             auto buffer = GpuBuffer::create(*ctx_, std::max<std::uint64_t>(sizes[b], 16), GpuBuffer::Kind::Storage);
@@ -111,7 +130,7 @@ public:
                                                 .dstAccessMask = vk::AccessFlagBits::eTransferRead};
                 cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eTransfer, {}, to_copy,
                                     {}, {});
-                const vk::DeviceSize pose_bytes = vk::DeviceSize{n} * count_ * sizeof(gpu::BirdPose);
+                const vk::DeviceSize pose_bytes = vk::DeviceSize{n} * count_ * sizeof(gpu::BirdPoseGpu);
                 const vk::DeviceSize diag_bytes = vk::DeviceSize{n} * count_ * sizeof(gpu::BirdDiag);
                 cmd.copyBuffer(buffers_[KW_BIRDS_BINDING_POSES].handle(), readback_->handle(),
                                vk::BufferCopy{.srcOffset = 0, .dstOffset = 0, .size = pose_bytes});
@@ -131,16 +150,13 @@ public:
         };
 
         if (!want_poses && !want_diag) {
-            // Benchmarks: every chunk in one submission, nothing read back.
+            // Nothing read back (benchmarks): one dispatch runs every frame; each frame's
+            // poses still go to the ring, whose slots are reused.
             double ms = -1.0;
             KW_TRY(ctx_->submit(
                 [&](const vk::raii::CommandBuffer& cmd) {
                     ctx_->write_timestamp(cmd, 0, vk::PipelineStageFlagBits::eTopOfPipe);
-                    for (std::uint32_t done = 0; done < frames;) {
-                        const std::uint32_t n = std::min(slots_, frames - done);
-                        record_chunk(cmd, frame_ + done, n);
-                        done += n;
-                    }
+                    record_chunk(cmd, frame_, frames);
                     ctx_->write_timestamp(cmd, 1, vk::PipelineStageFlagBits::eBottomOfPipe);
                 },
                 &ms));
@@ -167,7 +183,7 @@ public:
                                                : buffers_[KW_BIRDS_BINDING_DIAGNOSTICS].mapped();
             if (readback_) KW_TRY(readback_->invalidate(*ctx_));
             if (want_poses) {
-                std::memcpy(out.poses.data() + std::size_t{done} * count_, poses, pose_count * sizeof(gpu::BirdPose));
+                expand(reinterpret_cast<const gpu::BirdPoseGpu*>(poses), pose_count, out.poses.data() + std::size_t{done} * count_);
             }
             if (want_diag) {
                 std::memcpy(out.diag.data() + std::size_t{done} * count_, diags, pose_count * sizeof(gpu::BirdDiag));
@@ -194,7 +210,11 @@ private:
 Result<std::unique_ptr<BirdBackend>> make_vulkan_bird_backend(const BackendOptions& options) {
     auto ctx = gpu::VulkanContext::create({.device = options.device, .validation = options.validation});
     if (!ctx) return ctx.error();
-    auto pipeline = gpu::ComputePipeline::create(*ctx.value(), "birds_flap", KW_BIRDS_BINDING_COUNT, sizeof(gpu::BirdPush));
+    std::vector<vk::DescriptorType> types(KW_BIRDS_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
+    // Read by every invocation many times: a uniform buffer, which lavapipe loads once
+    // for all lanes instead of lane by lane.
+    types[KW_BIRDS_BINDING_UNIFORMS] = vk::DescriptorType::eUniformBuffer;
+    auto pipeline = gpu::ComputePipeline::create(*ctx.value(), "birds_flap", types, sizeof(gpu::BirdPush));
     if (!pipeline) return pipeline.error();
     return std::unique_ptr<BirdBackend>(new VulkanBirdBackend(std::move(ctx).value(), std::move(pipeline).value()));
 }

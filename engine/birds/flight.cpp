@@ -25,7 +25,6 @@ gpu::vec4 quat_mul(const gpu::vec4& a, const gpu::vec4& b) {
     return {a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y, a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
             a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w, a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z};
 }
-gpu::vec4 quat_x(float angle) { return {std::sin(0.5f * angle), 0.0f, 0.0f, std::cos(0.5f * angle)}; }
 gpu::vec4 quat_y(float angle) { return {0.0f, std::sin(0.5f * angle), 0.0f, std::cos(0.5f * angle)}; }
 gpu::vec4 quat_z(float angle) { return {0.0f, 0.0f, std::sin(0.5f * angle), std::cos(0.5f * angle)}; }
 float quat_dot(const gpu::vec4& a, const gpu::vec4& b) { return a.x * b.x + a.y * b.y + a.z * b.z + a.w * b.w; }
@@ -169,6 +168,58 @@ Attitude attitude(const gpu::FlightUniforms& uniforms, const RouteSample& sample
     return att;
 }
 
+namespace {
+
+// (cos(x/2), sin(x/2)) from (cos x, sin x) of an angle with cos x >= 0, without trig.
+void half_angle(float c, float s, float& half_c, float& half_s) {
+    half_c = std::sqrt(0.5f * (1.0f + c));
+    half_s = s / (2.0f * half_c);
+}
+
+}  // namespace
+
+gpu::vec4 body_rotation(const gpu::FlightUniforms& uniforms, const RouteSample& sample) {
+    // The rotation of attitude(): yaw about +Y, climb about -X, bank about +Z, built from
+    // the sines and cosines the velocity and acceleration give directly (no atan2, sin or
+    // cos: the largest arithmetic cost of the kernel).
+    const Vec3 v = sample.velocity, a = sample.acceleration;
+    const float horizontal = std::sqrt(v.x * v.x + v.z * v.z);
+    const float speed = std::sqrt(horizontal * horizontal + v.y * v.y);
+    if (speed <= 0.0f) return {0.0f, 0.0f, 0.0f, 1.0f};
+    gpu::vec4 yaw{0.0f, 0.0f, 0.0f, 1.0f};
+    if (horizontal > 0.0f) {
+        const float c = v.z / horizontal, s = v.x / horizontal;
+        if (c >= 0.0f) {
+            half_angle(c, s, yaw.w, yaw.y);
+        } else {  // near 180 degrees the half sine is the stable one
+            yaw.y = std::copysign(std::sqrt(0.5f * (1.0f - c)), s);
+            yaw.w = s / (2.0f * yaw.y);
+        }
+    }
+    gpu::vec4 pitch{0.0f, 0.0f, 0.0f, 1.0f};
+    half_angle(horizontal / speed, -v.y / speed, pitch.w, pitch.x);
+    gpu::vec4 bank{0.0f, 0.0f, 0.0f, 1.0f};
+    float bc = 1.0f, bs = 0.0f;
+    if (uniforms.rules.x == KW_BANK_SEED) {
+        const Attitude att = attitude(uniforms, sample);
+        bc = std::cos(att.bank);
+        bs = std::sin(att.bank);
+    } else if (horizontal > 1e-6f * std::fabs(v.y)) {
+        // tan(bank) = a_lat / g, clamped to the maximum bank.
+        const float lateral = (a.x * -v.z + a.z * v.x) / horizontal;
+        const float g = uniforms.physics.x;
+        const float norm = std::sqrt(lateral * lateral + g * g);
+        bc = g / norm;
+        bs = lateral / norm;
+        if (bc < uniforms.bank_limit.x) {
+            bc = uniforms.bank_limit.x;
+            bs = std::copysign(uniforms.bank_limit.y, lateral);
+        }
+    }
+    half_angle(bc, bs, bank.w, bank.z);
+    return quat_mul(quat_mul(yaw, pitch), bank);
+}
+
 std::uint32_t next_mode(const gpu::FlightUniforms& uniforms, std::uint32_t previous, const RouteSample& sample) {
     if (uniforms.rules.y == KW_MODE_RULE_SEED) {
         // The seed's rule: vertical acceleration against a fixed threshold, no memory.
@@ -255,11 +306,12 @@ BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
         arm2[m] = arm_rotation(poses[m].arm2_pitch, poses[m].arm2_heading);
     }
     // SPEC B.6: Q = ((1-a) Qa + a Qb) / |...|, Qa the blend source, each term flipped
-    // into the target's hemisphere.
+    // into the target's hemisphere. Outside a transition (a = 1) Q is the target pose.
     const float weights[3] = {state.blend.x, state.blend.y, state.blend.z};
     const float alpha = state.blend.w;
     auto blend = [&](const gpu::vec4* q) {
         const gpu::vec4& target = q[mode];
+        if (alpha >= 1.0f) return target;
         gpu::vec4 sum{alpha * target.x, alpha * target.y, alpha * target.z, alpha * target.w};
         for (std::uint32_t m = 0; m < 3; ++m) {
             const float w = (1.0f - alpha) * weights[m] * (quat_dot(q[m], target) < 0.0f ? -1.0f : 1.0f);
@@ -272,9 +324,7 @@ BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
     BirdFrame out{};
     const Vec3 position = sample.position + xyz(bird.offset);
     out.pose.position = {position.x, position.y, position.z, 0.0f};
-    // Body: yaw about +Y, then nose up by the climb angle (about -X), then bank about +Z
-    // (positive = right wing down).
-    out.pose.rotation[KW_PART_BODY] = quat_mul(quat_mul(quat_y(att.yaw), quat_x(-att.pitch)), quat_z(att.bank));
+    out.pose.rotation[KW_PART_BODY] = body_rotation(uniforms, sample);
     out.pose.rotation[KW_PART_HEAD] = {0.0f, 0.0f, 0.0f, 1.0f};
     out.pose.rotation[KW_PART_TAIL] = {0.0f, 0.0f, 0.0f, 1.0f};
     out.pose.rotation[KW_PART_LEFT_ARM1] = left1;

@@ -147,6 +147,7 @@ gpu::FlightUniforms BirdWorld::uniforms() const {
     u.blend_rates = {f.blend_rates[0], f.blend_rates[1], f.blend_rates[2], f.seed_accel_threshold};
     u.rules = {static_cast<std::uint32_t>(f.bank_rule), static_cast<std::uint32_t>(f.mode_rule),
                static_cast<std::uint32_t>(birds.size()), 0};
+    u.bank_limit = {static_cast<float>(std::cos(double{f.max_bank})), static_cast<float>(std::sin(double{f.max_bank})), 0.0f, 0.0f};
     return u;
 }
 

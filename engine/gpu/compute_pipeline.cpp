@@ -2,18 +2,19 @@
 
 namespace kodawari::gpu {
 
-Result<ComputePipeline> ComputePipeline::create(const VulkanContext& ctx, std::string_view shader, std::uint32_t bindings,
-                                                std::uint32_t push_bytes) {
+Result<ComputePipeline> ComputePipeline::create(const VulkanContext& ctx, std::string_view shader,
+                                                std::span<const vk::DescriptorType> types, std::uint32_t push_bytes) {
+    const auto bindings = static_cast<std::uint32_t>(types.size());
     const auto code = embedded_shader(shader);
     assert(!code.empty() && "shader not embedded: add it to shaders/CMakeLists.txt");
     ComputePipeline out;
-    out.bindings_ = bindings;
+    out.types_.assign(types.begin(), types.end());
     try {
         const auto& device = ctx.device();
         std::vector<vk::DescriptorSetLayoutBinding> slots(bindings);
         for (std::uint32_t i = 0; i < bindings; ++i) {
             slots[i] = vk::DescriptorSetLayoutBinding{.binding = i,
-                        .descriptorType = vk::DescriptorType::eStorageBuffer,
+                        .descriptorType = types[i],
                         .descriptorCount = 1,
                         .stageFlags = vk::ShaderStageFlagBits::eCompute};
         }
@@ -28,11 +29,12 @@ Result<ComputePipeline> ComputePipeline::create(const VulkanContext& ctx, std::s
         out.pipeline_ = device.createComputePipeline(
             nullptr, {.stage = {.stage = vk::ShaderStageFlagBits::eCompute, .module = *out.module_, .pName = "main"},
                       .layout = *out.layout_});
-        const vk::DescriptorPoolSize size{.type = vk::DescriptorType::eStorageBuffer, .descriptorCount = bindings};
+        std::vector<vk::DescriptorPoolSize> sizes;
+        for (const vk::DescriptorType type : types) sizes.push_back({.type = type, .descriptorCount = 1});
         out.pool_ = device.createDescriptorPool({.flags = vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet,
                                                  .maxSets = 1,
-                                                 .poolSizeCount = 1,
-                                                 .pPoolSizes = &size});
+                                                 .poolSizeCount = static_cast<std::uint32_t>(sizes.size()),
+                                                 .pPoolSizes = sizes.data()});
         out.set_ = std::move(device.allocateDescriptorSets(
             {.descriptorPool = *out.pool_, .descriptorSetCount = 1, .pSetLayouts = &set_layout})[0]);
     } catch (const std::exception& e) {
@@ -42,7 +44,7 @@ Result<ComputePipeline> ComputePipeline::create(const VulkanContext& ctx, std::s
 }
 
 void ComputePipeline::bind_buffers(const VulkanContext& ctx, std::span<const GpuBuffer* const> buffers) const {
-    assert(buffers.size() == bindings_);
+    assert(buffers.size() == types_.size());
     std::vector<vk::DescriptorBufferInfo> infos(buffers.size());
     std::vector<vk::WriteDescriptorSet> writes(buffers.size());
     for (std::uint32_t i = 0; i < buffers.size(); ++i) {
@@ -50,7 +52,7 @@ void ComputePipeline::bind_buffers(const VulkanContext& ctx, std::span<const Gpu
         writes[i] = vk::WriteDescriptorSet{.dstSet = *set_,
                      .dstBinding = i,
                      .descriptorCount = 1,
-                     .descriptorType = vk::DescriptorType::eStorageBuffer,
+                     .descriptorType = types_[i],
                      .pBufferInfo = &infos[i]};
     }
     ctx.device().updateDescriptorSets(writes, {});

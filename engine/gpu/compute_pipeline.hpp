@@ -16,9 +16,10 @@ namespace kodawari::gpu {
 
 class ComputePipeline {
 public:
-    /// `bindings` storage buffers at bindings 0..n-1, `push_bytes` of push constants.
+    /// Buffers of the given descriptor types (uniform or storage) at bindings 0..n-1,
+    /// `push_bytes` of push constants.
     [[nodiscard]] static Result<ComputePipeline> create(const VulkanContext& ctx, std::string_view shader,
-                                                        std::uint32_t bindings, std::uint32_t push_bytes);
+                                                        std::span<const vk::DescriptorType> bindings, std::uint32_t push_bytes);
 
     ComputePipeline(ComputePipeline&&) noexcept = default;
     ComputePipeline& operator=(ComputePipeline&&) noexcept = default;
@@ -39,7 +40,7 @@ private:
     vk::raii::Pipeline pipeline_{nullptr};
     vk::raii::DescriptorPool pool_{nullptr};
     vk::raii::DescriptorSet set_{nullptr};
-    std::uint32_t bindings_ = 0;
+    std::vector<vk::DescriptorType> types_;
 };
 
 }  // namespace kodawari::gpu

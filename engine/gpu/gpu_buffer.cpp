@@ -13,7 +13,7 @@ Result<GpuBuffer> GpuBuffer::create(const VulkanContext& ctx, vk::DeviceSize siz
     vk::MemoryPropertyFlags required, preferred;
     switch (kind) {
         case Kind::Storage:
-            usage = Usage::eStorageBuffer | Usage::eTransferSrc | Usage::eTransferDst;
+            usage = Usage::eStorageBuffer | Usage::eUniformBuffer | Usage::eTransferSrc | Usage::eTransferDst;
             required = ctx.unified_memory() ? Memory::eDeviceLocal | Memory::eHostVisible | Memory::eHostCoherent
                                             : vk::MemoryPropertyFlags(Memory::eDeviceLocal);
             break;

@@ -12,7 +12,7 @@ namespace kodawari::gpu {
 class GpuBuffer {
 public:
     enum class Kind {
-        Storage,   ///< read/written by kernels; mapped when memory is unified
+        Storage,   ///< read/written by kernels (storage or uniform); mapped when memory is unified
         Upload,    ///< host-visible source of copies
         Readback,  ///< host-visible (cached when possible) destination of copies
     };

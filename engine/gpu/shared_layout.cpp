@@ -6,9 +6,10 @@
 
 namespace kodawari::gpu {
 
-static_assert(sizeof(FlightUniforms) == 64);
+static_assert(sizeof(FlightUniforms) == 80);
 static_assert(offsetof(FlightUniforms, physics) == 0 && offsetof(FlightUniforms, climb) == 16 &&
-              offsetof(FlightUniforms, blend_rates) == 32 && offsetof(FlightUniforms, rules) == 48);
+              offsetof(FlightUniforms, blend_rates) == 32 && offsetof(FlightUniforms, rules) == 48 &&
+              offsetof(FlightUniforms, bank_limit) == 64);
 static_assert(sizeof(RouteHeader) == 48);
 static_assert(offsetof(RouteHeader, extent) == 0 && offsetof(RouteHeader, flags) == 16 && offsetof(RouteHeader, info) == 32);
 static_assert(sizeof(ArcSample) == 32 && offsetof(ArcSample, next) == 16);
@@ -18,6 +19,9 @@ static_assert(sizeof(BirdState) == 48);
 static_assert(offsetof(BirdState, blend) == 0 && offsetof(BirdState, phase) == 16 && offsetof(BirdState, mode) == 32);
 static_assert(sizeof(BirdPose) == 128);
 static_assert(offsetof(BirdPose, position) == 0 && offsetof(BirdPose, rotation) == 16);
+static_assert(sizeof(BirdPoseGpu) == 64);
+static_assert(offsetof(BirdPoseGpu, position) == 0 && offsetof(BirdPoseGpu, body) == 16 && offsetof(BirdPoseGpu, left_arm1) == 32 &&
+              offsetof(BirdPoseGpu, left_arm2) == 48);
 static_assert(sizeof(BirdDiag) == 64);
 static_assert(offsetof(BirdDiag, velocity) == 0 && offsetof(BirdDiag, acceleration) == 16 &&
               offsetof(BirdDiag, angles) == 32 && offsetof(BirdDiag, attitude) == 48);

@@ -15,7 +15,7 @@
 #define KW_BIRDS_BINDING_ARC_SAMPLES 3
 #define KW_BIRDS_BINDING_PARAMS 4
 #define KW_BIRDS_BINDING_STATES 5
-#define KW_BIRDS_BINDING_POSES 6
+#define KW_BIRDS_BINDING_POSES 6  // BirdPoseGpu
 #define KW_BIRDS_BINDING_DIAGNOSTICS 7
 #define KW_BIRDS_BINDING_COUNT 8
 
@@ -51,6 +51,7 @@ struct FlightUniforms {
     vec4 climb;        // sin(g)|sin(g)| of the climb thresholds g: x ascend enter, y ascend exit, z descend enter, w descend exit
     vec4 blend_rates;  // x: into level, y: into ascend, z: into descend (per 1/60 s), w: seed rule's |a_y| threshold
     uvec4 rules;       // x: bank rule, y: mode rule, z: bird count, w: unused
+    vec4 bank_limit;   // x: cos(max bank), y: sin(max bank), z, w: unused
 };
 
 // One route: a chain of cubic Bezier segments sharing end points (SPEC B.3).
@@ -95,6 +96,17 @@ struct BirdState {
 struct BirdPose {
     vec4 position;     // xyz: Body world position, w: 0
     vec4 rotation[7];  // local rotations, quaternion (x, y, z, w), KW_PART_* order; Body in world space
+};
+
+// What the kernel stores per bird and frame: the parts that move. Head and Tail keep the
+// rig's rest pose and the right wing mirrors the left (SPEC B.2), so storing them would
+// only double the stores, the largest cost of the kernel on lavapipe; the Vulkan backend
+// expands this to BirdPose when it reads poses back.
+struct BirdPoseGpu {
+    vec4 position;   // xyz: Body world position, w: 0
+    vec4 body;       // Body world rotation
+    vec4 left_arm1;  // LeftArm1 local rotation
+    vec4 left_arm2;  // LeftArm2 local rotation
 };
 
 // Optional per-bird, per-frame diagnostics (trace, validation).

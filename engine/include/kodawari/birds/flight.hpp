@@ -44,6 +44,10 @@ struct Attitude {
 };
 [[nodiscard]] Attitude attitude(const gpu::FlightUniforms& uniforms, const RouteSample& sample);
 
+/// The Body's world rotation for `attitude()`: yaw about +Y, then nose up by the climb
+/// angle (about -X), then bank about +Z (positive = right wing down).
+[[nodiscard]] gpu::vec4 body_rotation(const gpu::FlightUniforms& uniforms, const RouteSample& sample);
+
 /// The next flight mode (SPEC B.5) given the previous one (KW_MODE_UNSET on frame 0).
 [[nodiscard]] std::uint32_t next_mode(const gpu::FlightUniforms& uniforms, std::uint32_t previous, const RouteSample& sample);
 
