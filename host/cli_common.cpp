@@ -84,6 +84,17 @@ Result<std::unique_ptr<BirdBackend>> open_backend(const BackendChoice& choice) {
     return make_bird_backend(BackendKind::Cpu, choice.options);
 }
 
+Result<LoadedScene> load_scene_arguments(const std::vector<std::string>& positionals, const char* command,
+                                         std::optional<std::uint64_t> frames) {
+    if (positionals.size() > 1) throw UsageError{std::string(command) + " takes one scene file"};
+    auto scene = load_scene(positionals.empty() ? std::string(kDefaultScene) : positionals[0]);
+    if (!scene) return scene.error();
+    auto world = build_bird_world(scene.value());
+    if (!world) return world.error();
+    if (frames) world.value().frames = static_cast<std::uint32_t>(*frames);
+    return LoadedScene{std::move(scene).value(), std::move(world).value()};
+}
+
 int report(const Error& error) {
     std::fprintf(stderr, "kodawari: error: %s\n", error.message.c_str());
     return error.kind == Error::Kind::InvalidInput ? kExitBadInput : kExitFailure;

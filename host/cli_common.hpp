@@ -8,6 +8,7 @@
 
 #include "kodawari/backend.hpp"
 #include "kodawari/result.hpp"
+#include "kodawari/scene.hpp"
 
 namespace kodawari::cli {
 
@@ -16,6 +17,9 @@ namespace kodawari::cli {
 inline constexpr int kExitOk = 0;
 inline constexpr int kExitFailure = 1;
 inline constexpr int kExitBadInput = 2;
+
+/// The scene `make run` and a bare `kodawari run` use.
+inline constexpr const char* kDefaultScene = "scenes/flock.json";
 
 /// Thrown for usage errors; main() prints it with the usage and exits 2.
 struct UsageError {
@@ -52,6 +56,17 @@ BackendChoice read_backend_choice(Args& args);
 
 /// Parses a backend name.
 [[nodiscard]] std::optional<BackendKind> parse_backend(const std::string& name);
+
+/// A scene and the birds built from it.
+struct LoadedScene {
+    Scene scene;
+    birds::BirdWorld world;
+};
+
+/// Loads the scene of a command's positionals (default kDefaultScene; `command` names it
+/// in usage errors), builds its birds and applies --frames.
+[[nodiscard]] Result<LoadedScene> load_scene_arguments(const std::vector<std::string>& positionals, const char* command,
+                                                       std::optional<std::uint64_t> frames);
 
 /// Prints an error and returns its exit code.
 int report(const Error& error);

@@ -16,23 +16,17 @@ int cmd_run(Args args) {
     const auto out_option = args.option("out");
     const bool no_export = args.flag("no-export");
     const auto trace_path = args.option("trace");
-    const auto positionals = args.positionals();
-    if (positionals.size() > 1) throw UsageError{"run takes one scene file"};
     if (no_export && out_option) throw UsageError{"--out and --no-export exclude each other"};
-    const std::string scene_path = positionals.empty() ? kDefaultScene : positionals[0];
-
-    auto scene = load_scene(scene_path);
-    if (!scene) return report(scene.error());
-    auto built = build_bird_world(scene.value());
-    if (!built) return report(built.error());
-    birds::BirdWorld& world = built.value();
-    if (frames_option) world.frames = static_cast<std::uint32_t>(*frames_option);
+    auto loaded = load_scene_arguments(args.positionals(), "run", frames_option);
+    if (!loaded) return report(loaded.error());
+    const Scene& scene = loaded.value().scene;
+    birds::BirdWorld& world = loaded.value().world;
     const std::uint32_t frames = world.frames;
     const std::size_t count = world.birds.size();
 
     std::string out_path;
     if (!no_export) {
-        out_path = out_option ? *out_option : "out/" + scene.value().name + ".glb";
+        out_path = out_option ? *out_option : "out/" + scene.name + ".glb";
         const std::uint64_t bytes = std::uint64_t{frames} * count * sizeof(gpu::BirdPose);
         if (bytes > (6ull << 30)) {
             return report(make_error(Error::Kind::InvalidInput,
@@ -53,13 +47,13 @@ int cmd_run(Args args) {
 
     std::optional<TraceWriter> trace;
     if (trace_path) {
-        auto t = TraceWriter::open(*trace_path, {scene.value().name, world.fps, frames, std::string(backend.name())});
+        auto t = TraceWriter::open(*trace_path, {scene.name, world.fps, frames, std::string(backend.name())});
         if (!t) return report(t.error());
         trace.emplace(std::move(t).value());
     }
 
-    std::printf("kodawari: scene \"%s\" (%s): %zu birds, %u frames at %g fps\n", scene.value().name.c_str(),
-                scene_path.c_str(), count, frames, static_cast<double>(world.fps));
+    std::printf("kodawari: scene \"%s\" (%s): %zu birds, %u frames at %g fps\n", scene.name.c_str(),
+                scene.path.c_str(), count, frames, static_cast<double>(world.fps));
     std::fflush(stdout);
 
     std::vector<gpu::BirdPose> poses(no_export ? 0 : std::size_t{frames} * count);

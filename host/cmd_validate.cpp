@@ -13,16 +13,10 @@ int cmd_validate(Args args) {
     if (choice.backend == "auto") choice.backend = "vulkan";
     if (choice.backend == "cpu-reference") throw UsageError{"validate compares a backend against cpu-reference; choose vulkan or cpu"};
     const auto frames_option = args.count("frames", 1, 10'000'000);
-    const auto positionals = args.positionals();
-    if (positionals.size() > 1) throw UsageError{"validate takes one scene file"};
-    const std::string scene_path = positionals.empty() ? kDefaultScene : positionals[0];
-
-    auto scene = load_scene(scene_path);
-    if (!scene) return report(scene.error());
-    auto built = build_bird_world(scene.value());
-    if (!built) return report(built.error());
-    birds::BirdWorld& world = built.value();
-    if (frames_option) world.frames = static_cast<std::uint32_t>(*frames_option);
+    auto loaded = load_scene_arguments(args.positionals(), "validate", frames_option);
+    if (!loaded) return report(loaded.error());
+    const Scene& scene = loaded.value().scene;
+    birds::BirdWorld& world = loaded.value().world;
 
     auto tested = open_backend(choice);
     if (!tested) return report(tested.error());
@@ -47,7 +41,7 @@ int cmd_validate(Args args) {
         if (stderr_is_terminal()) progress("validating", done, world.frames);
     }
 
-    std::printf("validate \"%s\": %s on %s vs cpu-reference, %zu birds x %u frames\n", scene.value().name.c_str(),
+    std::printf("validate \"%s\": %s on %s vs cpu-reference, %zu birds x %u frames\n", scene.name.c_str(),
                 std::string(tested.value()->name()).c_str(), tested.value()->device().c_str(), count, world.frames);
     std::printf("%-20s %-4s %12s %12s %12s  %s\n", "quantity", "unit", "max", "mean", "tolerance", "worst (bird, frame)");
     for (const Deviation& d : comparison.results()) {

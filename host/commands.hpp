@@ -10,7 +10,4 @@ int cmd_validate(Args args);
 int cmd_info(Args args);
 int cmd_bench(Args args);
 
-/// The scene `make run` and a bare `kodawari run` use.
-inline constexpr const char* kDefaultScene = "scenes/flock.json";
-
 }  // namespace kodawari::cli

@@ -57,6 +57,15 @@ rc=$?
 check "unwritable output fails" test $rc -ne 0
 check "unwritable output is named" grep -q "no/such/dir/x.glb" "$work/io.out"
 
+# No Vulkan driver: auto says so in one line and runs on the CPU; --backend vulkan fails clearly.
+VK_ICD_FILENAMES=/nonexistent.json "$bin" run scenes/flock.json --frames 10 --no-export >"$work/nodev.out" 2>"$work/nodev.err"
+rc=$?
+check "no driver: auto runs on the cpu" bash -c "test $rc -eq 0 && grep -q 'backend cpu on' '$work/nodev.out'"
+check "no driver: one line says why" bash -c "test \$(grep -c 'Vulkan unavailable' '$work/nodev.err') -eq 1 && grep -q 'no Vulkan driver found' '$work/nodev.err'"
+VK_ICD_FILENAMES=/nonexistent.json "$bin" run scenes/flock.json --frames 10 --no-export --backend vulkan >/dev/null 2>"$work/nodev2.err"
+rc=$?
+check "no driver: --backend vulkan fails clearly" bash -c "test $rc -eq 1 && grep -q 'no Vulkan driver found' '$work/nodev2.err'"
+
 # info lists the device it would choose.
 "$bin" info >"$work/info.out" 2>&1
 cat "$work/info.out"

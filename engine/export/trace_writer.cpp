@@ -22,20 +22,9 @@ namespace {
 /// The buffer goes to the file once it holds this much.
 constexpr std::size_t kFlushBytes = std::size_t{1} << 20;
 
-void append_number(std::string& out, float value) {
+template <typename Number>
+void append_number(std::string& out, Number value) {
     // A non-finite value means the simulation broke; JSON has no spelling for it.
-    assert(std::isfinite(value) && "non-finite value in a trace");
-    if (!std::isfinite(value)) {
-        out += "null";
-        return;
-    }
-    char text[32];
-    const auto result = std::to_chars(text, text + sizeof(text), value);
-    assert(result.ec == std::errc());
-    out.append(text, result.ptr);
-}
-
-void append_number(std::string& out, double value) {
     assert(std::isfinite(value) && "non-finite value in a trace");
     if (!std::isfinite(value)) {
         out += "null";

@@ -166,6 +166,11 @@ bool has_validation_layer(const vk::raii::Context& context) {
 }  // namespace
 
 Error vulkan_error(const std::string& what, const std::exception& e) {
+    // The loader answers "incompatible driver" when it found no usable driver at all.
+    if (dynamic_cast<const vk::IncompatibleDriverError*>(&e) != nullptr) {
+        return make_error(Error::Kind::Unsupported,
+                          "no Vulkan driver found (install Mesa's lavapipe, Debian package mesa-vulkan-drivers, or a GPU driver)");
+    }
     return make_error(Error::Kind::Vulkan, what + ": " + e.what());
 }
 
