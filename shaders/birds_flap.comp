@@ -9,6 +9,13 @@
 
 layout(local_size_x = KW_BIRDS_WORKGROUP_SIZE) in;
 
+// The rules and the diagnostics switch are specialization constants, not uniforms:
+// lavapipe executes both sides of every branch, uniform ones included, so code that a
+// run does not need must not be in its pipeline at all.
+layout(constant_id = KW_BIRDS_SPEC_BANK_RULE) const uint BANK_RULE = KW_BANK_COORDINATED;
+layout(constant_id = KW_BIRDS_SPEC_MODE_RULE) const uint MODE_RULE = KW_MODE_RULE_CLIMB;
+layout(constant_id = KW_BIRDS_SPEC_DIAGNOSTICS) const bool WRITE_DIAGNOSTICS = false;
+
 layout(std140, binding = KW_BIRDS_BINDING_UNIFORMS) uniform Uniforms { FlightUniforms u; };
 layout(std430, binding = KW_BIRDS_BINDING_ROUTES) readonly buffer Routes { RouteHeader routes[]; };
 layout(std430, binding = KW_BIRDS_BINDING_CONTROL_POINTS) readonly buffer ControlPoints { vec4 control_points[]; };
@@ -28,12 +35,8 @@ vec4 quat_mul(vec4 a, vec4 b) {
     return vec4(a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y, a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
                 a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w, a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z);
 }
-vec4 quat_x(float a) { return vec4(sin(0.5 * a), 0.0, 0.0, cos(0.5 * a)); }
 vec4 quat_y(float a) { return vec4(0.0, sin(0.5 * a), 0.0, cos(0.5 * a)); }
 vec4 quat_z(float a) { return vec4(0.0, 0.0, sin(0.5 * a), cos(0.5 * a)); }
-// quat_z(pitch) * quat_y(heading); no mode has both angles, so one of the factors is
-// the identity (and multiplying by it is exact).
-vec4 arm_rotation(float pitch, float heading) { return heading == 0.0 ? quat_z(pitch) : pitch == 0.0 ? quat_y(heading) : quat_mul(quat_z(pitch), quat_y(heading)); }
 vec4 mirror_x(vec4 q) { return vec4(q.x, -q.y, -q.z, q.w); }
 
 // `precise` below: the exact decisions of shared/birds.h (no contraction, source order).
@@ -130,65 +133,74 @@ struct RouteSample {
     float lift_scale;
 };
 
+// One Bezier evaluation per frame: lavapipe runs both sides of a divergent branch, so
+// the timing and end cases only choose the parameter and how the result is used.
 RouteSample sample_route(RouteHeader route, float time, float speed, inout RouteCache cache) {
     bool loop = (route.flags.x & KW_ROUTE_LOOP) != 0u;
+    bool parametric = (route.flags.x & KW_ROUTE_PARAMETRIC) != 0u;
     float n = float(route.extent.y);
-    RouteSample r;
-    r.acceleration = vec3(0.0);
-    r.lift = 0.0;
-    r.lift_scale = 1.0;
-    if ((route.flags.x & KW_ROUTE_PARAMETRIC) != 0u) {
-        float duration = route.info.y;
-        precise float u = time * route.info.w;
+    // Where on the route (u), and how far past an end of an open route (`beyond`: in u
+    // for parametric timing, in metres for arc-length timing).
+    precise float u;
+    precise float beyond = 0.0;
+    bool outside;
+    if (parametric) {
+        u = time * route.info.w;  // the seed's timing: one segment per duration D
         if (loop) {  // u mod n without a division
             float whole = floor(u);
             int wrapped = int(whole) % int(route.extent.y);
             if (wrapped < 0) wrapped += int(route.extent.y);
             u = float(wrapped) + (u - whole);
         }
-        if (u < 0.0 || u > n) {
-            float end = u < 0.0 ? 0.0 : n;
-            Bezier e = bezier_global(route, end, cache);
-            r.position = e.p + (u - end) * e.d1;
-            r.velocity = route.info.w * e.d1;
-            r.direction = e.d1;
-            return r;
+        outside = u < 0.0 || u > n;
+        float end = u < 0.0 ? 0.0 : n;
+        if (outside) {
+            beyond = u - end;
+            u = end;
         }
-        Bezier e = bezier_global(route, u, cache);
-        r.position = e.p;
-        r.velocity = route.info.w * e.d1;
-        r.acceleration = (route.info.w * route.info.w) * e.d2;
-        r.direction = e.d1;
-        r.lift = e.d2.y;
-        precise float scale = duration * duration;
-        r.lift_scale = scale;
-        return r;
-    }
-    float total = route.info.x;
-    precise float s = speed * time;
-    if (loop) s = s - total * floor(s * route.info.z);
-    if (s < 0.0 || s > total) {
+    } else {
+        float total = route.info.x;
+        precise float s = speed * time;  // arc-length timing (SPEC B.3)
+        if (loop) s = s - total * floor(s * route.info.z);
+        outside = s < 0.0 || s > total;
         float end_s = s < 0.0 ? 0.0 : total;
-        Bezier e = bezier_global(route, s < 0.0 ? 0.0 : n, cache);
-        vec3 tangent = (1.0 / length(e.d1)) * e.d1;
-        r.position = e.p + (s - end_s) * tangent;
-        r.velocity = speed * tangent;
-        r.direction = e.d1;
-        return r;
+        u = route_parameter_at(route, clamp(s, 0.0, total), cache);
+        if (outside) {
+            beyond = s - end_s;
+            u = s < 0.0 ? 0.0 : n;
+        }
     }
-    Bezier e = bezier_global(route, route_parameter_at(route, s, cache), cache);
-    float d1_len = length(e.d1);
-    vec3 tangent = (1.0 / d1_len) * e.d1;
-    r.position = e.p;
-    r.velocity = speed * tangent;
-    r.acceleration = ((speed * speed) / (d1_len * d1_len)) * (e.d2 - dot(e.d2, tangent) * tangent);
+    Bezier e = bezier_global(route, u, cache);
+    RouteSample r;
     r.direction = e.d1;
-    precise float dd = e.d1.x * e.d1.x + e.d1.y * e.d1.y + e.d1.z * e.d1.z;
-    precise float d2d1 = e.d2.x * e.d1.x + e.d2.y * e.d1.y + e.d2.z * e.d1.z;
-    precise float lift = (speed * speed) * (e.d2.y * dd - d2d1 * e.d1.y);
-    precise float lift_scale = dd * dd;
-    r.lift = lift;
-    r.lift_scale = lift_scale;
+    r.acceleration = vec3(0.0);
+    r.lift = 0.0;
+    r.lift_scale = 1.0;
+    if (parametric) {
+        r.position = outside ? e.p + beyond * e.d1 : e.p;
+        r.velocity = route.info.w * e.d1;
+        if (!outside) {
+            r.acceleration = (route.info.w * route.info.w) * e.d2;
+            r.lift = e.d2.y;  // a_y = P''_y / D^2
+            precise float scale = route.info.y * route.info.y;
+            r.lift_scale = scale;
+        }
+    } else {
+        float d1_len = length(e.d1);
+        vec3 tangent = (1.0 / d1_len) * e.d1;
+        r.position = outside ? e.p + beyond * tangent : e.p;
+        r.velocity = speed * tangent;
+        if (!outside) {
+            // a = v^2 (P'' - (P''.T)T) / |P'|^2; a_y exactly as lift / lift_scale.
+            r.acceleration = ((speed * speed) / (d1_len * d1_len)) * (e.d2 - dot(e.d2, tangent) * tangent);
+            precise float dd = e.d1.x * e.d1.x + e.d1.y * e.d1.y + e.d1.z * e.d1.z;
+            precise float d2d1 = e.d2.x * e.d1.x + e.d2.y * e.d1.y + e.d2.z * e.d1.z;
+            precise float lift = (speed * speed) * (e.d2.y * dd - d2d1 * e.d1.y);
+            precise float lift_scale = dd * dd;
+            r.lift = lift;
+            r.lift_scale = lift_scale;
+        }
+    }
     return r;
 }
 
@@ -197,7 +209,7 @@ vec3 attitude(vec3 v, vec3 a) {
     if (horizontal <= 0.0 && v.y == 0.0) return vec3(0.0);
     vec3 att = vec3(atan(v.x, v.z), atan(v.y, horizontal), 0.0);
     float max_bank = u.physics.y;
-    if (u.rules.x == KW_BANK_SEED) {
+    if (BANK_RULE == KW_BANK_SEED) {
         vec3 c = cross(v, a);
         if (length(a) <= 0.0) return att;
         float bank = atan(length(c), dot(v, a)) - HALF_PI;
@@ -237,7 +249,7 @@ vec4 body_rotation(vec3 v, vec3 a) {
     vec2 p = half_angle(horizontal / speed, -v.y / speed);
     vec4 pitch = vec4(p.y, 0.0, 0.0, p.x);
     float bc = 1.0, bs = 0.0;
-    if (u.rules.x == KW_BANK_SEED) {
+    if (BANK_RULE == KW_BANK_SEED) {
         float bank = attitude(v, a).z;
         bc = cos(bank);
         bs = sin(bank);
@@ -257,7 +269,7 @@ vec4 body_rotation(vec3 v, vec3 a) {
 }
 
 uint next_mode(uint previous, RouteSample r) {
-    if (u.rules.y == KW_MODE_RULE_SEED) {
+    if (MODE_RULE == KW_MODE_RULE_SEED) {
         precise float threshold = u.blend_rates.w * r.lift_scale;
         if (r.lift > threshold) return KW_MODE_ASCEND;
         if (r.lift < -threshold) return KW_MODE_DESCEND;
@@ -350,17 +362,20 @@ void main() {
         if (t >= TWO_PI) t = 0.0;
         float amplitude = bird.motion.z;
         float sin_t = sin(t);
-        vec4 target = wing_angles(mode, t, sin_t, amplitude);
-        vec4 left1 = arm_rotation(target.x, target.z);
-        vec4 left2 = arm_rotation(target.y, target.w);
-        if (state.blend.w < 1.0) {  // a transition: blend all three poses (SPEC B.6)
-            vec4 a0 = wing_angles(KW_MODE_LEVEL, t, sin_t, amplitude);
-            vec4 a1 = wing_angles(KW_MODE_ASCEND, t, sin_t, amplitude);
-            vec4 a2 = wing_angles(KW_MODE_DESCEND, t, sin_t, amplitude);
-            left1 = blend_quats(arm_rotation(a0.x, a0.z), arm_rotation(a1.x, a1.z), arm_rotation(a2.x, a2.z),
-                                state.blend.xyz, state.blend.w, mode);
-            left2 = blend_quats(arm_rotation(a0.y, a0.w), arm_rotation(a1.y, a1.w), arm_rotation(a2.y, a2.w),
-                                state.blend.xyz, state.blend.w, mode);
+        // All three mode poses (the transition blends them; outside one the target is
+        // picked): computed once, as lavapipe would run a divergent branch anyway.
+        vec4 a0 = wing_angles(KW_MODE_LEVEL, t, sin_t, amplitude);
+        vec4 a1 = wing_angles(KW_MODE_ASCEND, t, sin_t, amplitude);
+        vec4 a2 = wing_angles(KW_MODE_DESCEND, t, sin_t, amplitude);
+        vec4 level1 = quat_z(a0.x), level2 = quat_z(a0.y);
+        vec4 ascend1 = quat_z(a1.x), ascend2 = quat_z(a1.y);
+        vec4 descend1 = quat_y(a2.z), descend2 = quat_y(a2.w);
+        vec4 target = mode == KW_MODE_LEVEL ? a0 : mode == KW_MODE_ASCEND ? a1 : a2;
+        vec4 left1 = mode == KW_MODE_LEVEL ? level1 : mode == KW_MODE_ASCEND ? ascend1 : descend1;
+        vec4 left2 = mode == KW_MODE_LEVEL ? level2 : mode == KW_MODE_ASCEND ? ascend2 : descend2;
+        if (state.blend.w < 1.0) {  // a transition (SPEC B.6)
+            left1 = blend_quats(level1, ascend1, descend1, state.blend.xyz, state.blend.w, mode);
+            left2 = blend_quats(level2, ascend2, descend2, state.blend.xyz, state.blend.w, mode);
         }
 
         uint slot = (k % push.frames.z) * count + i;
@@ -368,7 +383,7 @@ void main() {
         poses[slot].body = body_rotation(velocity, acceleration);
         poses[slot].left_arm1 = left1;
         poses[slot].left_arm2 = left2;
-        if (push.frames.w != 0u) {
+        if (WRITE_DIAGNOSTICS) {
             diags[slot].velocity = vec4(velocity, state.blend.w);
             diags[slot].acceleration = vec4(acceleration, float(mode));
             diags[slot].angles = target;

@@ -136,6 +136,14 @@ TEST_P(BirdBackends, CountsAroundTheWorkgroupSize) {
     }
 }
 
+TEST_P(BirdBackends, SeedRulesMatchTheReference) {
+    // The seed's bank and mode rules (the Vulkan kernel's other specializations).
+    birds::BirdWorld world = small_world(201);
+    world.settings.bank_rule = birds::BankRule::Seed;
+    world.settings.mode_rule = birds::ModeRule::Seed;
+    expect_parity(world, 31);
+}
+
 TEST_P(BirdBackends, ChunkingAndRepetitionGiveTheSameBits) {
     const birds::BirdWorld world = small_world(333);
     const Frames whole = simulate_all(*backend_, world, 1000);

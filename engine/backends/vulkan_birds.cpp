@@ -4,6 +4,7 @@
 // dispatch; see shared/PERF-NOTES.md). Poses go to a ring of frame slots that is read
 // back after each dispatch when the caller wants them.
 #include <algorithm>
+#include <array>
 #include <cstring>
 #include <optional>
 
@@ -46,8 +47,25 @@ std::span<const std::byte> bytes_of(const std::vector<T>& v) {
 
 class VulkanBirdBackend final : public BirdBackend {
 public:
-    explicit VulkanBirdBackend(std::unique_ptr<gpu::VulkanContext> ctx, gpu::ComputePipeline pipeline)
-        : ctx_(std::move(ctx)), pipeline_(std::move(pipeline)) {}
+    explicit VulkanBirdBackend(std::unique_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
+
+    /// The kernel specialized for this world's rules, with or without diagnostics; built
+    /// on first use (lavapipe compiles it at its first dispatch) and kept.
+    Result<const gpu::ComputePipeline*> pipeline(bool diagnostics) {
+        const std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT> spec = {rules_.x, rules_.y, diagnostics ? 1u : 0u};
+        for (const auto& [key, p] : pipelines_) {
+            if (key == spec) return &p;
+        }
+        std::vector<vk::DescriptorType> types(KW_BIRDS_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
+        // Read by every invocation many times: a uniform buffer, which lavapipe loads once
+        // for all lanes instead of lane by lane.
+        types[KW_BIRDS_BINDING_UNIFORMS] = vk::DescriptorType::eUniformBuffer;
+        auto created = gpu::ComputePipeline::create(*ctx_, "birds_flap", types, sizeof(gpu::BirdPush), spec);
+        if (!created) return created.error();
+        pipelines_.emplace_back(spec, std::move(created).value());
+        if (!buffers_.empty()) pipelines_.back().second.bind_buffers(*ctx_, bound_buffers());
+        return &pipelines_.back().second;
+    }
 
     std::string_view name() const override { return "vulkan"; }
     std::string device() const override { return ctx_->info().name; }
@@ -98,9 +116,8 @@ public:
             if (!readback) return readback.error();
             readback_.emplace(std::move(readback).value());
         }
-        std::vector<const GpuBuffer*> bound;
-        for (const auto& b : buffers_) bound.push_back(&b);
-        pipeline_.bind_buffers(*ctx_, bound);
+        rules_ = uniforms.rules;
+        for (auto& [key, p] : pipelines_) p.bind_buffers(*ctx_, bound_buffers());
         return {};
     }
 
@@ -110,6 +127,8 @@ public:
         assert(out.diag.empty() || out.diag.size() == std::size_t{frames} * count_);
         const bool want_poses = !out.poses.empty();
         const bool want_diag = !out.diag.empty();
+        auto kernel = pipeline(want_diag);
+        if (!kernel) return kernel.error();
         const std::uint32_t groups = (count_ + KW_BIRDS_WORKGROUP_SIZE - 1) / KW_BIRDS_WORKGROUP_SIZE;
         gpu_ms_ = 0.0;
 
@@ -121,8 +140,8 @@ public:
                                            .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
             cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
                                 vk::PipelineStageFlagBits::eComputeShader, {}, before, {}, {});
-            const gpu::BirdPush push{{first, n, slots_, want_diag ? 1u : 0u}};
-            pipeline_.dispatch(cmd, std::as_bytes(std::span(&push, 1)), groups);
+            const gpu::BirdPush push{{first, n, slots_, 0u}};
+            kernel.value()->dispatch(cmd, std::as_bytes(std::span(&push, 1)), groups);
         };
         auto record_readback = [&](const vk::raii::CommandBuffer& cmd, std::uint32_t n) {
             if (readback_) {
@@ -196,7 +215,15 @@ public:
 
 private:
     std::unique_ptr<gpu::VulkanContext> ctx_;
-    gpu::ComputePipeline pipeline_;
+    std::vector<const GpuBuffer*> bound_buffers() const {
+        std::vector<const GpuBuffer*> bound;
+        for (const auto& b : buffers_) bound.push_back(&b);
+        return bound;
+    }
+
+    // A handful of variants at most (rules x diagnostics): a vector is the simplest map.
+    std::vector<std::pair<std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT>, gpu::ComputePipeline>> pipelines_;
+    gpu::uvec4 rules_{};
     std::vector<GpuBuffer> buffers_;
     std::optional<GpuBuffer> readback_;
     std::uint32_t count_ = 0;
@@ -210,13 +237,10 @@ private:
 Result<std::unique_ptr<BirdBackend>> make_vulkan_bird_backend(const BackendOptions& options) {
     auto ctx = gpu::VulkanContext::create({.device = options.device, .validation = options.validation});
     if (!ctx) return ctx.error();
-    std::vector<vk::DescriptorType> types(KW_BIRDS_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
-    // Read by every invocation many times: a uniform buffer, which lavapipe loads once
-    // for all lanes instead of lane by lane.
-    types[KW_BIRDS_BINDING_UNIFORMS] = vk::DescriptorType::eUniformBuffer;
-    auto pipeline = gpu::ComputePipeline::create(*ctx.value(), "birds_flap", types, sizeof(gpu::BirdPush));
-    if (!pipeline) return pipeline.error();
-    return std::unique_ptr<BirdBackend>(new VulkanBirdBackend(std::move(ctx).value(), std::move(pipeline).value()));
+    auto backend = std::make_unique<VulkanBirdBackend>(std::move(ctx).value());
+    // The default variant now, so a broken shader or driver shows up at creation.
+    if (auto p = backend->pipeline(false); !p) return p.error();
+    return std::unique_ptr<BirdBackend>(std::move(backend));
 }
 
 }  // namespace kodawari

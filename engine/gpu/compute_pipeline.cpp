@@ -3,7 +3,8 @@
 namespace kodawari::gpu {
 
 Result<ComputePipeline> ComputePipeline::create(const VulkanContext& ctx, std::string_view shader,
-                                                std::span<const vk::DescriptorType> types, std::uint32_t push_bytes) {
+                                                std::span<const vk::DescriptorType> types, std::uint32_t push_bytes,
+                                                std::span<const std::uint32_t> specialization) {
     const auto bindings = static_cast<std::uint32_t>(types.size());
     const auto code = embedded_shader(shader);
     assert(!code.empty() && "shader not embedded: add it to shaders/CMakeLists.txt");
@@ -26,8 +27,19 @@ Result<ComputePipeline> ComputePipeline::create(const VulkanContext& ctx, std::s
                                                    .pushConstantRangeCount = push_bytes > 0 ? 1u : 0u,
                                                    .pPushConstantRanges = &push});
         out.module_ = device.createShaderModule({.codeSize = code.size_bytes(), .pCode = code.data()});
+        std::vector<vk::SpecializationMapEntry> entries;
+        for (std::uint32_t i = 0; i < specialization.size(); ++i) {
+            entries.push_back({.constantID = i, .offset = i * 4u, .size = 4});
+        }
+        const vk::SpecializationInfo spec{.mapEntryCount = static_cast<std::uint32_t>(entries.size()),
+                                          .pMapEntries = entries.data(),
+                                          .dataSize = specialization.size_bytes(),
+                                          .pData = specialization.data()};
         out.pipeline_ = device.createComputePipeline(
-            nullptr, {.stage = {.stage = vk::ShaderStageFlagBits::eCompute, .module = *out.module_, .pName = "main"},
+            nullptr, {.stage = {.stage = vk::ShaderStageFlagBits::eCompute,
+                                .module = *out.module_,
+                                .pName = "main",
+                                .pSpecializationInfo = specialization.empty() ? nullptr : &spec},
                       .layout = *out.layout_});
         std::vector<vk::DescriptorPoolSize> sizes;
         for (const vk::DescriptorType type : types) sizes.push_back({.type = type, .descriptorCount = 1});

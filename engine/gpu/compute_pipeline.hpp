@@ -17,9 +17,11 @@ namespace kodawari::gpu {
 class ComputePipeline {
 public:
     /// Buffers of the given descriptor types (uniform or storage) at bindings 0..n-1,
-    /// `push_bytes` of push constants.
+    /// `push_bytes` of push constants, and 32-bit specialization constants with ids
+    /// 0..m-1.
     [[nodiscard]] static Result<ComputePipeline> create(const VulkanContext& ctx, std::string_view shader,
-                                                        std::span<const vk::DescriptorType> bindings, std::uint32_t push_bytes);
+                                                        std::span<const vk::DescriptorType> bindings, std::uint32_t push_bytes,
+                                                        std::span<const std::uint32_t> specialization = {});
 
     ComputePipeline(ComputePipeline&&) noexcept = default;
     ComputePipeline& operator=(ComputePipeline&&) noexcept = default;

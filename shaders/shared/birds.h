@@ -19,6 +19,12 @@
 #define KW_BIRDS_BINDING_DIAGNOSTICS 7
 #define KW_BIRDS_BINDING_COUNT 8
 
+// Specialization constant ids of birds_flap.comp.
+#define KW_BIRDS_SPEC_BANK_RULE 0
+#define KW_BIRDS_SPEC_MODE_RULE 1
+#define KW_BIRDS_SPEC_DIAGNOSTICS 2
+#define KW_BIRDS_SPEC_COUNT 3
+
 // Flight modes (SPEC B.5). KW_MODE_UNSET marks a state that has not seen frame 0.
 #define KW_MODE_LEVEL 0u
 #define KW_MODE_ASCEND 1u
@@ -50,7 +56,7 @@ struct FlightUniforms {
     vec4 physics;      // x: gravity (m/s^2), y: max bank (rad), z: dt (s), w: dt * 60 (blend steps per frame)
     vec4 climb;        // sin(g)|sin(g)| of the climb thresholds g: x ascend enter, y ascend exit, z descend enter, w descend exit
     vec4 blend_rates;  // x: into level, y: into ascend, z: into descend (per 1/60 s), w: seed rule's |a_y| threshold
-    uvec4 rules;       // x: bank rule, y: mode rule, z: bird count, w: unused
+    uvec4 rules;       // x: bank rule, y: mode rule (the kernel takes both as specialization constants), z: bird count, w: unused
     vec4 bank_limit;   // x: cos(max bank), y: sin(max bank), z, w: unused
 };
 
@@ -119,7 +125,7 @@ struct BirdDiag {
 
 // Push constants of birds_flap.comp.
 struct BirdPush {
-    uvec4 frames;  // x: first frame, y: frame count, z: output slots (frames the pose buffer holds), w: write diagnostics
+    uvec4 frames;  // x: first frame, y: frame count, z: output slots (frames the pose buffer holds), w: unused
 };
 
 KW_NAMESPACE_END
