@@ -53,14 +53,13 @@ std::string json_escape(const std::string& s) {
 }  // namespace
 
 int cmd_bench(Args args) {
-    const auto positionals_check = [&] { return args.positionals(); };
     BackendChoice choice = read_backend_choice(args);
     const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 4'000'000).value_or(1'000'000));
     const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(30));
     const auto json_path = args.option("json");
     const bool readback = args.flag("readback");
     std::string list = args.option("backends").value_or("cpu-reference,cpu,vulkan");
-    const auto positionals = positionals_check();
+    const auto positionals = args.positionals();
     if (positionals.size() != 1 || positionals[0] != "birds") throw UsageError{"usage: kodawari bench birds [options]"};
 
     std::vector<BackendKind> kinds;

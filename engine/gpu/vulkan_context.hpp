@@ -73,8 +73,6 @@ private:
     bool validation_ = false;
     // Heap-allocated so the callback's pointer stays valid when the context moves.
     std::unique_ptr<std::atomic<std::uint32_t>> messages_ = std::make_unique<std::atomic<std::uint32_t>>(0);
-
-    friend Result<GpuInventory> kodawari::list_gpus(const std::string&);
 };
 
 /// Turns an exception from vulkan.hpp into an Error.
