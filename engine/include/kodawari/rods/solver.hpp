@@ -1,0 +1,138 @@
+#pragma once
+/// @file
+/// The scalar reference of the rods physics (SPEC A.4, A.5): oriented particles
+/// (Mueller & Chentanez, "Solid Simulation with Oriented Particles", SCA 2011) with a
+/// PBD distance constraint per segment, one particle per joint. The GPU path will
+/// mirror these steps; the data is fixed-size per chain for that reason.
+///
+/// Conventions. World units are metres and seconds. Quaternions are glm::quat.
+/// The *root transform* is the world pose of the chain root's frame, the frame the
+/// chain's shapes are given in (SPEC A.1); joint 0 follows it exactly. The *bone axis*
+/// of joint i is the unit vector u_i, in joint i's own frame, that points along segment
+/// i (towards joint i+1) in the base shape: u_i = o_i^-1 dir_i (the last joint uses the
+/// last segment). For a rig whose bones point down local +Y, u_i = +Y for every joint.
+/// The particle ellipsoid's long axis is u_i.
+///
+/// Status (issue 3, open): inextensibility, colliders, stability under violent motion
+/// and frame-rate independence are met and tested. Two properties of SPEC A.4/A.5 are
+/// not met yet, so no scene or backend uses this solver: a chain with gravity off does
+/// not converge to its rest shape within 1e-3 of its length (a rigid rotation of the
+/// whole chain about the root is restored only through the weak orientation terms of
+/// the shape-matching moment matrix), and momentum suppression does not yet cut the peak
+/// kinetic energy of a rest-shape switch to a quarter (measured ratio 1.1-1.2).
+
+#include <array>
+#include <cstdint>
+#include <span>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "kodawari/result.hpp"
+#include "kodawari/rods/shape.hpp"
+
+namespace kodawari::rods {
+
+/// A rigid transform: world = position + rotation * local.
+struct Transform {
+    glm::vec3 position{0.0f};
+    glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
+};
+
+/// A kinematic sphere collider, world space.
+struct Sphere {
+    glm::vec3 center{0.0f};
+    float radius = 0.0f;  ///< m, >= 0
+};
+
+/// A kinematic capsule collider (a segment swept by a sphere), world space.
+struct Capsule {
+    glm::vec3 a{0.0f}, b{0.0f};
+    float radius = 0.0f;  ///< m, >= 0
+};
+
+/// Solver settings, shared by all chains of a character. Ranges are checked by
+/// validate(); step() asserts them.
+struct SolverParams {
+    /// Longest substep, s, in (0, 0.05]. A frame of length dt runs ceil(dt / max_substep)
+    /// equal substeps, so a result depends on the caller's frame rate only through that
+    /// rounding. 1/120 s keeps a 60 fps frame at two substeps.
+    float max_substep = 1.0f / 120.0f;
+    /// Projection iterations per substep, 1 .. 64.
+    std::uint32_t iterations = 4;
+    /// Shape-matching stiffness k in [0, 1]: the fraction of the way to the shape-matching
+    /// goals covered per substep, whatever `iterations` is. Each iteration uses
+    /// k' = 1 - (1 - k)^(1/iterations), so that `iterations` moves compound to k.
+    float stiffness = 0.5f;
+    /// Linear and angular velocity damping rate, 1/s, >= 0: velocities are multiplied by
+    /// exp(-damping h) per substep h, which is independent of the substep length.
+    float damping = 1.0f;
+    glm::vec3 gravity{0.0f, -9.81f, 0.0f};  ///< m/s^2
+    glm::vec3 wind{0.0f};                   ///< an extra acceleration, m/s^2
+    /// Momentum suppression (SPEC A.5) in [0, 1]: 0 = plain shape matching, 1 = a change
+    /// of rest shape moves the particles kinematically and injects no velocity.
+    float momentum_suppression = 1.0f;
+};
+
+/// Checks every SolverParams range above.
+[[nodiscard]] Result<void> validate(const SolverParams& params);
+
+/// One chain's constant description, built from its base shape by make_chain().
+struct Chain {
+    std::uint32_t joint_count = 0;
+    float thickness = 0.0f;                                ///< m: ellipsoid radii b = c, collision radius
+    std::array<float, kMaxChainJoints> mass{};             ///< kg, > 0 (joint 0's too: it counts in shape matching)
+    std::array<float, kMaxChainJoints> segment_length{};   ///< l_i, m, joint i to i+1
+    std::array<float, kMaxChainJoints> half_length{};      ///< ellipsoid radius a along u_i, m
+    std::array<glm::vec3, kMaxChainJoints> bone_axis{};    ///< u_i, unit, in joint i's frame
+};
+
+/// A chain from its base shape (SPEC A.1), with `thickness` > 0 m and every particle of
+/// `mass` > 0 kg. Fails on a base shape make_basis() rejects or a bad thickness or mass.
+[[nodiscard]] Result<Chain> make_chain(const ChainShape& base, float thickness, float mass);
+
+/// Everything a chain carries from one step to the next. Joint 0 is kinematic.
+struct ChainState {
+    std::array<glm::vec3, kMaxChainJoints> x{};      ///< positions, world, m
+    std::array<glm::vec3, kMaxChainJoints> v{};      ///< velocities, m/s
+    std::array<glm::quat, kMaxChainJoints> q{};      ///< orientations, world
+    std::array<glm::vec3, kMaxChainJoints> omega{};  ///< angular velocities, rad/s, world
+    /// The shape-matching rotation of group i from the last iteration: the warm start of
+    /// the next extraction (Mueller et al. 2016).
+    std::array<glm::quat, kMaxChainJoints> group_rotation{};
+    Transform root;                                          ///< the last step's root transform
+    std::array<glm::vec3, kMaxChainJoints> rest_position{};  ///< the last step's rest shape, root frame
+    std::array<glm::quat, kMaxChainJoints> rest_orientation{};
+};
+
+/// A chain at rest: the rest shape `rest` (root frame, e.g. a blend from A.2) placed by
+/// `root`, zero velocities.
+[[nodiscard]] ChainState initial_state(const Chain& chain, const Transform& root, const ChainShape& rest);
+
+/// Advances `state` by a frame of `dt` > 0 seconds (SPEC A.4). `root` is the root
+/// transform at the end of the frame; within the frame the substeps interpolate it from
+/// the previous one (linearly, and by slerp), so a fast root does not jump. `rest` is
+/// this frame's rest shape in the root frame (positions and orientations, joint_count
+/// each); the solver places it by the interpolated root in every substep. Colliders are
+/// taken as fixed during the frame.
+void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
+          std::span<const Sphere> spheres, std::span<const Capsule> capsules, float dt, ChainState& state);
+
+/// What a renderer or a skinned mesh needs from a chain.
+struct ChainPose {
+    std::array<glm::vec3, kMaxChainJoints> position{};     ///< world
+    std::array<glm::quat, kMaxChainJoints> orientation{};  ///< world, the particles' own
+    /// The skinning rotation of each bone relative to its parent: joint 0's relative to
+    /// the root transform, joint i's relative to joint i-1's bone. A bone's world rotation
+    /// is the particle orientation turned by the shortest arc that makes its bone axis
+    /// u_i point exactly at particle i+1 (the last joint keeps its particle orientation).
+    std::array<glm::quat, kMaxChainJoints> local_rotation{};
+};
+
+/// The pose of `state` (SPEC A.4, output).
+[[nodiscard]] ChainPose pose(const Chain& chain, const ChainState& state);
+
+/// Kinetic energy of the simulated particles (all but joint 0), J. For tests and tools.
+[[nodiscard]] float kinetic_energy(const Chain& chain, const ChainState& state);
+
+}  // namespace kodawari::rods

@@ -1,0 +1,339 @@
+// The scalar reference of the rods physics (SPEC A.4, A.5). Single precision throughout,
+// as the GPU path will be.
+#include "kodawari/rods/solver.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <string>
+
+namespace kodawari::rods {
+namespace {
+
+constexpr glm::quat kIdentity{1.0f, 0.0f, 0.0f, 0.0f};
+
+// Iteration cap of the rotation extraction. Warm-started from the previous step's
+// rotation it usually converges in one to three; the cap bounds the cost when the
+// deformation jumps.
+constexpr int kExtractIterations = 10;
+
+// The kinematic root's weight in shape matching, in multiples of its mass. In PBD the
+// root has infinite mass; with an infinite weight its two groups would be clamped rigid
+// to the root's frame, with its plain mass the chain's overall direction is held only
+// through the root's small ellipsoid term (a straight strand bent by sideways gravity then
+// recovered ~85% of the way in 4 s). Ten times makes the root dominate its own group, so
+// the strand leaves the root along its rest direction like a hair from its follicle,
+// while every weight stays finite and A well conditioned.
+constexpr float kRootShapeWeight = 10.0f;
+
+// The same rotation with w >= 0, the identity's hemisphere: slerp from the identity and
+// the angle 2 atan2(|xyz|, w) then take the short way.
+glm::quat positive_w(glm::quat q) { return q.w < 0.0f ? -q : q; }
+
+// The rotation by `fraction` of `q`'s angle about its axis (slerp from the identity).
+glm::quat partial(glm::quat q, float fraction) {
+    if (fraction >= 1.0f) return q;
+    if (fraction <= 0.0f) return kIdentity;
+    return glm::normalize(glm::slerp(kIdentity, positive_w(q), fraction));
+}
+
+// Rotational part of A by the iterative method of Mueller, Bender, Chentanez, Macklin,
+// "A Robust Method to Extract the Rotational Part of Deformations" (MIG 2016), Algorithm
+// 1, warm-started from `q`. It turns q by the torque-like vector
+// omega = sum_i r_i x a_i / |sum_i r_i . a_i| (r_i, a_i the columns of R(q) and A) until
+// the step is below rounding; it stays a rotation and never fails, even for a singular A.
+glm::quat extract_rotation(const glm::mat3& a, glm::quat q) {
+    for (int iter = 0; iter < kExtractIterations; ++iter) {
+        const glm::mat3 r = glm::mat3_cast(q);
+        const glm::vec3 torque = glm::cross(r[0], a[0]) + glm::cross(r[1], a[1]) + glm::cross(r[2], a[2]);
+        const float alignment = std::abs(glm::dot(r[0], a[0]) + glm::dot(r[1], a[1]) + glm::dot(r[2], a[2]));
+        const glm::vec3 omega = torque / (alignment + 1e-9f);
+        const float angle = glm::length(omega);
+        // 1e-6 rad: below that a turn is lost in single-precision rounding of q anyway.
+        if (!(angle > 1e-6f)) break;
+        q = glm::normalize(glm::angleAxis(angle, omega / angle) * q);
+    }
+    return q;
+}
+
+// World position of the point of segment [a, b] nearest to p.
+glm::vec3 closest_on_segment(glm::vec3 p, glm::vec3 a, glm::vec3 b) {
+    const glm::vec3 ab = b - a;
+    const float len2 = glm::dot(ab, ab);
+    if (len2 <= 0.0f) return a;
+    const float t = std::clamp(glm::dot(p - a, ab) / len2, 0.0f, 1.0f);
+    return a + t * ab;
+}
+
+// Moves p out of the ball of `radius` around `center` (SPEC A.4, collisions).
+void push_out(glm::vec3& p, glm::vec3 center, float radius) {
+    const glm::vec3 d = p - center;
+    const float len2 = glm::dot(d, d);
+    if (len2 >= radius * radius) return;
+    const float len = std::sqrt(len2);
+    // A particle exactly at the centre has no outward direction; +Y is as good as any
+    // and keeps the result deterministic.
+    const glm::vec3 n = len > 1e-9f ? d / len : glm::vec3(0.0f, 1.0f, 0.0f);
+    p = center + radius * n;
+}
+
+// A.5 momentum suppression: the change of rest shape since the last step, applied
+// kinematically. Each segment of the current chain is turned by `suppression` of the
+// turn that takes its old rest direction to its new one (both placed by the current
+// root), walking out from the root; each orientation likewise by the change of its rest
+// orientation. A chain resting on the old shape so lands exactly on the new one, segment
+// lengths are kept, and velocities are left alone, so the switch injects no momentum.
+void suppress_momentum(const Chain& chain, const ChainShape& rest, float suppression, ChainState& s) {
+    if (suppression <= 0.0f) return;
+    const std::uint32_t n = chain.joint_count;
+    const glm::quat root = s.root.rotation;
+    const glm::quat root_inv = glm::conjugate(root);
+    glm::vec3 previous_old = s.x[0];
+    for (std::uint32_t i = 0; i + 1 < n; ++i) {
+        const glm::vec3 old_dir = glm::normalize(s.rest_position[i + 1] - s.rest_position[i]);
+        const glm::vec3 new_dir = glm::normalize(rest.positions[i + 1] - rest.positions[i]);
+        const glm::quat turn = partial(root * shortest_arc(old_dir, new_dir) * root_inv, suppression);
+        const glm::vec3 segment = s.x[i + 1] - previous_old;
+        previous_old = s.x[i + 1];
+        s.x[i + 1] = s.x[i] + turn * segment;
+    }
+    for (std::uint32_t i = 1; i < n; ++i) {
+        const glm::quat change = positive_w(rest.orientations[i] * glm::conjugate(s.rest_orientation[i]));
+        s.q[i] = glm::normalize(partial(root * change * root_inv, suppression) * s.q[i]);
+    }
+}
+
+}  // namespace
+
+Result<void> validate(const SolverParams& p) {
+    auto bad = [](const std::string& what) { return make_error(Error::Kind::InvalidInput, "rods solver: " + what); };
+    if (!(p.max_substep > 0.0f && p.max_substep <= 0.05f)) return bad("max_substep must be in (0, 0.05] s");
+    if (p.iterations < 1 || p.iterations > 64) return bad("iterations must be 1 to 64");
+    if (!(p.stiffness >= 0.0f && p.stiffness <= 1.0f)) return bad("stiffness must be in [0, 1]");
+    if (!(p.damping >= 0.0f && std::isfinite(p.damping))) return bad("damping must be >= 0");
+    if (!(p.momentum_suppression >= 0.0f && p.momentum_suppression <= 1.0f)) {
+        return bad("momentum_suppression must be in [0, 1]");
+    }
+    if (!std::isfinite(glm::dot(p.gravity, p.gravity)) || !std::isfinite(glm::dot(p.wind, p.wind))) {
+        return bad("gravity and wind must be finite");
+    }
+    return {};
+}
+
+Result<Chain> make_chain(const ChainShape& base, float thickness, float mass) {
+    auto basis = make_basis(base);
+    if (!basis) return basis.error();
+    if (!(thickness > 0.0f && std::isfinite(thickness))) {
+        return make_error(Error::Kind::InvalidInput, "rods chain: thickness must be > 0 m");
+    }
+    if (!(mass > 0.0f && std::isfinite(mass))) {
+        return make_error(Error::Kind::InvalidInput, "rods chain: mass must be > 0 kg");
+    }
+    Chain chain;
+    chain.joint_count = basis.value().joint_count();
+    chain.thickness = thickness;
+    const std::uint32_t n = chain.joint_count;
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const std::uint32_t seg = std::min(i, n - 2);
+        chain.mass[i] = mass;
+        if (i + 1 < n) chain.segment_length[i] = basis.value().lengths[i];
+        // SPEC A.4: a = half the segment length along the segment.
+        chain.half_length[i] = 0.5f * basis.value().lengths[seg];
+        const glm::vec3 dir = glm::normalize(base.positions[seg + 1] - base.positions[seg]);
+        chain.bone_axis[i] = glm::normalize(glm::conjugate(glm::normalize(base.orientations[i])) * dir);
+    }
+    return chain;
+}
+
+ChainState initial_state(const Chain& chain, const Transform& root, const ChainShape& rest) {
+    assert(rest.positions.size() == chain.joint_count && rest.orientations.size() == chain.joint_count);
+    ChainState s;
+    s.root = root;
+    for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
+        s.x[i] = root.position + root.rotation * rest.positions[i];
+        s.q[i] = glm::normalize(root.rotation * rest.orientations[i]);
+        s.rest_position[i] = rest.positions[i];
+        s.rest_orientation[i] = rest.orientations[i];
+        s.group_rotation[i] = kIdentity;
+    }
+    // Group rotations are measured from the rest shape placed by the root, so a chain at
+    // rest has the identity in every group: the root's rotation does not enter.
+    return s;
+}
+
+void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
+          std::span<const Sphere> spheres, std::span<const Capsule> capsules, float dt, ChainState& s) {
+    assert(validate(params).ok());
+    assert(dt > 0.0f && std::isfinite(dt));
+    const std::uint32_t n = chain.joint_count;
+    assert(n >= 2 && n <= kMaxChainJoints);
+    assert(rest.positions.size() == n && rest.orientations.size() == n);
+
+    const std::uint32_t substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / params.max_substep)));
+    const float h = dt / static_cast<float>(substeps);
+    // SPEC A.4 / this header: k per substep from k' per iteration, (1 - k')^iterations = 1 - k.
+    const float k_iter =
+        1.0f - std::pow(1.0f - params.stiffness, 1.0f / static_cast<float>(params.iterations));
+    const float decay = std::exp(-params.damping * h);
+    const glm::vec3 acceleration = params.gravity + params.wind;
+
+    // A.5, once per frame: the rest shape changes at frame boundaries only.
+    suppress_momentum(chain, rest, params.momentum_suppression, s);
+    for (std::uint32_t i = 0; i < n; ++i) {
+        s.rest_position[i] = rest.positions[i];
+        s.rest_orientation[i] = rest.orientations[i];
+    }
+
+    const Transform from = s.root;
+    std::array<glm::vec3, kMaxChainJoints> p{}, xbar{}, goal_sum{};
+    std::array<glm::quat, kMaxChainJoints> qs{}, obar{}, q_new{};
+    std::array<float, kMaxChainJoints> goal_count{};
+    for (std::uint32_t sub = 1; sub <= substeps; ++sub) {
+        const float t = static_cast<float>(sub) / static_cast<float>(substeps);
+        const Transform r{glm::mix(from.position, root.position, t),
+                          glm::normalize(glm::slerp(from.rotation, root.rotation, t))};
+
+        // 1-2. Kinematic root and the rest shape placed by the root (SPEC A.4).
+        for (std::uint32_t i = 0; i < n; ++i) {
+            xbar[i] = r.position + r.rotation * rest.positions[i];
+            obar[i] = glm::normalize(r.rotation * rest.orientations[i]);
+        }
+        p[0] = xbar[0];
+        qs[0] = obar[0];
+
+        // 4. Predict: external acceleration, damping, explicit position and orientation
+        // update q* = [omega^ sin(|omega| h/2), cos(|omega| h/2)] q (Mueller & Chentanez 2011, sec. 3).
+        for (std::uint32_t i = 1; i < n; ++i) {
+            s.v[i] = decay * (s.v[i] + h * acceleration);
+            s.omega[i] = decay * s.omega[i];
+            p[i] = s.x[i] + h * s.v[i];
+            const float w = glm::length(s.omega[i]);
+            if (w > 0.0f) {
+                const float half = 0.5f * w * h;
+                const glm::vec3 axis = s.omega[i] / w;
+                const float sn = std::sin(half);
+                qs[i] = glm::normalize(glm::quat(std::cos(half), sn * axis.x, sn * axis.y, sn * axis.z) * s.q[i]);
+            } else {
+                qs[i] = s.q[i];
+            }
+        }
+
+        // 5. Project.
+        for (std::uint32_t it = 0; it < params.iterations; ++it) {
+            // Shape matching, Jacobi over the groups G_i = {i-1, i, i+1}: every particle
+            // moves toward the mean of its goals, so the result does not depend on the
+            // order of the groups (as on the GPU).
+            goal_sum.fill(glm::vec3(0.0f));
+            goal_count.fill(0.0f);
+            for (std::uint32_t i = 0; i < n; ++i) {
+                const std::uint32_t lo = i == 0 ? 0 : i - 1;
+                const std::uint32_t hi = std::min(i + 1, n - 1);
+                auto weight = [&](std::uint32_t j) { return j == 0 ? kRootShapeWeight * chain.mass[0] : chain.mass[j]; };
+                float group_mass = 0.0f;
+                glm::vec3 c(0.0f), cbar(0.0f);
+                for (std::uint32_t j = lo; j <= hi; ++j) {
+                    group_mass += weight(j);
+                    c += weight(j) * p[j];
+                    cbar += weight(j) * xbar[j];
+                }
+                c /= group_mass;
+                cbar /= group_mass;
+                // A = sum_j (m_j p_j xbar_j^T + A_j) - M c cbar^T (Mueller & Chentanez 2011,
+                // eq. 9), summed in the centred form sum_j m_j (p_j - c)(xbar_j - cbar)^T,
+                // equal but free of the cancellation of world coordinates in float.
+                // A_j = (m_j/5) R_j diag(a^2, b^2, c^2) Rbar_j^T with b = c = thickness and a
+                // along the bone axis u_j: diag = b^2 I + (a^2 - b^2) u u^T in the particle
+                // frame, so A_j = (m_j/5)(b^2 R_j Rbar_j^T + (a^2 - b^2)(R_j u)(Rbar_j u)^T).
+                glm::mat3 a(0.0f);
+                const float b2 = chain.thickness * chain.thickness;
+                for (std::uint32_t j = lo; j <= hi; ++j) {
+                    const float m = weight(j);
+                    a += m * glm::outerProduct(p[j] - c, xbar[j] - cbar);
+                    const float a2 = chain.half_length[j] * chain.half_length[j];
+                    const glm::mat3 rj = glm::mat3_cast(qs[j]);
+                    const glm::mat3 rbarj = glm::mat3_cast(obar[j]);
+                    const glm::vec3 u = chain.bone_axis[j];
+                    a += (m / 5.0f) * (b2 * (rj * glm::transpose(rbarj)) +
+                                       (a2 - b2) * glm::outerProduct(rj * u, rbarj * u));
+                }
+                const glm::quat rot = extract_rotation(a, s.group_rotation[i]);
+                s.group_rotation[i] = rot;
+                for (std::uint32_t j = lo; j <= hi; ++j) {
+                    goal_sum[j] += c + rot * (xbar[j] - cbar);  // g_j = c + R (xbar_j - cbar)
+                    goal_count[j] += 1.0f;
+                }
+                q_new[i] = glm::normalize(rot * obar[i]);  // the centre's orientation: R obar_i
+            }
+            for (std::uint32_t i = 1; i < n; ++i) {
+                p[i] += k_iter * (goal_sum[i] / goal_count[i] - p[i]);
+                qs[i] = q_new[i];
+            }
+
+            // Distance constraints (SPEC A.4), one sweep from the root outward in which
+            // each child takes the whole correction: the parent counts as kinematic with
+            // respect to its child, as the root (inverse mass 0) does for joint 1. This is
+            // the follow-the-leader order of Mueller, Kim, Chentanez, "Fast Simulation of
+            // Inextensible Hair and Fur" (VRIPHYS 2012): one sweep leaves every segment at
+            // its length, where mass-weighted Gauss-Seidel needs many iterations on a long
+            // chain and lets a violently shaken one stretch by several times its length.
+            // The price is extra damping towards the tip, which hair does not mind.
+            for (std::uint32_t i = 0; i + 1 < n; ++i) {
+                const glm::vec3 d = p[i + 1] - p[i];
+                const float len = glm::length(d);
+                if (!(len > 1e-9f)) continue;  // no direction to correct along
+                p[i + 1] = p[i] + (chain.segment_length[i] / len) * d;
+            }
+
+            // Collisions: the particle's radius is the chain's thickness.
+            for (std::uint32_t i = 1; i < n; ++i) {
+                for (const Sphere& sphere : spheres) push_out(p[i], sphere.center, sphere.radius + chain.thickness);
+                for (const Capsule& cap : capsules) {
+                    push_out(p[i], closest_on_segment(p[i], cap.a, cap.b), cap.radius + chain.thickness);
+                }
+            }
+        }
+
+        // 6. Update.
+        for (std::uint32_t i = 0; i < n; ++i) {
+            s.v[i] = (p[i] - s.x[i]) / h;
+            // omega from the shortest arc of q* q^-1: angle 2 atan2(|v|, w) about v^.
+            const glm::quat dq = positive_w(qs[i] * glm::conjugate(s.q[i]));
+            const glm::vec3 im(dq.x, dq.y, dq.z);
+            const float sn = glm::length(im);
+            s.omega[i] = sn > 0.0f ? im * (2.0f * std::atan2(sn, dq.w) / (sn * h)) : glm::vec3(0.0f);
+            s.x[i] = p[i];
+            s.q[i] = qs[i];
+        }
+    }
+    s.root = root;
+}
+
+ChainPose pose(const Chain& chain, const ChainState& s) {
+    const std::uint32_t n = chain.joint_count;
+    ChainPose out;
+    std::array<glm::quat, kMaxChainJoints> bone{};
+    for (std::uint32_t i = 0; i < n; ++i) {
+        out.position[i] = s.x[i];
+        out.orientation[i] = s.q[i];
+        bone[i] = s.q[i];
+        if (i + 1 < n) {
+            const glm::vec3 d = s.x[i + 1] - s.x[i];
+            const float len = glm::length(d);
+            if (len > 1e-9f) {
+                const glm::vec3 axis = glm::normalize(s.q[i] * chain.bone_axis[i]);
+                bone[i] = glm::normalize(shortest_arc(axis, d / len) * s.q[i]);
+            }
+        }
+        const glm::quat parent = i == 0 ? s.root.rotation : bone[i - 1];
+        out.local_rotation[i] = glm::normalize(glm::conjugate(parent) * bone[i]);
+    }
+    return out;
+}
+
+float kinetic_energy(const Chain& chain, const ChainState& s) {
+    float e = 0.0f;
+    for (std::uint32_t i = 1; i < chain.joint_count; ++i) e += 0.5f * chain.mass[i] * glm::dot(s.v[i], s.v[i]);
+    return e;
+}
+
+}  // namespace kodawari::rods
