@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <cstring>
+#include <dlfcn.h>
 #include <optional>
 
 VULKAN_HPP_DEFAULT_DISPATCH_LOADER_DYNAMIC_STORAGE
@@ -217,6 +218,12 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
             return make_error(Error::Kind::Unsupported,
                               "validation was asked for but VK_LAYER_KHRONOS_validation is not installed "
                               "(Debian package vulkan-validationlayers; scripts/setup installs it)");
+        }
+        if (ctx->validation_) {
+            // The layer keeps allocations until the process ends; pinned in memory, its
+            // frames stay symbolized, so LeakSanitizer can tell them from ours
+            // (tests/lsan.supp).
+            (void)::dlopen("libVkLayer_khronos_validation.so", RTLD_NOW | RTLD_NODELETE);
         }
         ctx->instance_ = make_instance(*ctx->context_, ctx->validation_);
         if (ctx->validation_) {
