@@ -37,7 +37,6 @@ vec4 quat_mul(vec4 a, vec4 b) {
 }
 vec4 quat_y(float a) { return vec4(0.0, sin(0.5 * a), 0.0, cos(0.5 * a)); }
 vec4 quat_z(float a) { return vec4(0.0, 0.0, sin(0.5 * a), cos(0.5 * a)); }
-vec4 mirror_x(vec4 q) { return vec4(q.x, -q.y, -q.z, q.w); }
 
 // `precise` below: the exact decisions of shared/birds.h (no contraction, source order).
 struct Bezier { vec3 p; vec3 d1; vec3 d2; };
