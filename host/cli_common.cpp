@@ -57,6 +57,13 @@ std::vector<std::string> Args::positionals() const {
     return args_;
 }
 
+std::string Args::first_word() const {
+    for (const auto& a : args_) {
+        if (a.rfind("--", 0) != 0) return a;
+    }
+    return "";
+}
+
 BackendChoice read_backend_choice(Args& args) {
     BackendChoice choice;
     if (auto b = args.option("backend")) choice.backend = *b;

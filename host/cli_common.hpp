@@ -38,6 +38,8 @@ public:
     std::optional<std::uint64_t> count(const std::string& name, std::uint64_t min, std::uint64_t max);
     /// What is left; unknown `--options` are usage errors.
     std::vector<std::string> positionals() const;
+    /// The first argument that is not an `--option` ("" when none), without checking the rest.
+    std::string first_word() const;
 
 private:
     std::vector<std::string> args_;
