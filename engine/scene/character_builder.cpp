@@ -92,10 +92,6 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
     out.frames = scene.frame_count();
     out.fov_deg = scene.camera.fov_deg;
     out.camera = scene.camera.motion;
-    if (out.camera.kind == rods::CameraMotion::Kind::Fixed) {
-        out.camera.position = glm::vec3(scene.camera.position[0], scene.camera.position[1], scene.camera.position[2]);
-        out.camera.target = glm::vec3(scene.camera.target[0], scene.camera.target[1], scene.camera.target[2]);
-    }
     rods::RodWorld& world = out.world;
 
     // Templates, shared by every instance of a character.

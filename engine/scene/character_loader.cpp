@@ -171,7 +171,11 @@ Result<rods::ChainShape> read_shape(const JsonReader& r, const JsonNode& node, s
         }
         return shape;
     }
-    const std::string what = "an array of " + count_what + " positions [x, y, z], the first [0, 0, 0]";
+    const std::string what =
+        "an array of " +
+        (joints == 0 ? "2 to " + std::to_string(rods::kMaxChainJoints) + " joint positions"
+                     : std::to_string(joints) + " joint positions (as many as the chain's base shape)") +
+        " [x, y, z], the first [0, 0, 0]";
     std::size_t n = 0;
     KW_SCENE_ASSIGN(n, read_array(r, positions, joints == 0 ? 2 : joints, joints == 0 ? rods::kMaxChainJoints : joints, what));
     shape.positions.resize(n);
@@ -325,8 +329,8 @@ Result<rods::Skeleton> read_skeleton(const JsonReader& r, const JsonNode& node) 
         for (std::size_t k = static_cast<std::size_t>(parent[j]); k != j; k = static_cast<std::size_t>(parent[k])) {
             cycle += " -> \"" + joints[k].name + "\"";
         }
-        return r.expected(r.member(r.element(node, j), "parent"),
-                          "a parent chain that reaches the root joint, got a cycle (" + cycle + " -> \"" + joints[j].name + "\")");
+        return r.fail(r.member(r.element(node, j), "parent").path,
+                      "expected a parent chain that reaches the root joint, got a cycle: " + cycle + " -> \"" + joints[j].name + "\"");
     }
     std::vector<std::int32_t> new_index(n, -1);
     for (std::size_t i = 0; i < n; ++i) new_index[order[i]] = static_cast<std::int32_t>(i);

@@ -27,9 +27,10 @@ struct CameraSpec {
     std::array<float, 3> position = {0.0f, 30.0f, -120.0f};
     std::array<float, 3> target = {0.0f, 30.0f, 0.0f};
     float fov_deg = 50.0f;
-    /// How the camera moves. Kind Fixed: `position` and `target` above are used (the
-    /// loader copies them into motion.position and motion.target as well). A path is
-    /// stored as keyframes that all look at the path's target.
+    /// How the camera moves; this is what build_rod_scene uses. For a fixed camera the
+    /// loader copies `position` and `target` above into motion.position and
+    /// motion.target (set both when building a Scene by hand). A path is stored as
+    /// keyframes that all look at the path's target.
     rods::CameraMotion motion;
 };
 
