@@ -504,6 +504,29 @@ TEST(CharacterScene, BadCameras) {
               "test.json: $.camera.path.interpolation: expected one of \"catmull-rom\", \"linear\", got \"cubic\"");
 }
 
+// Every JSON example in docs/scene-format.md loads (and builds, where it has characters).
+TEST(CharacterScene, DocumentationExamplesLoad) {
+    std::FILE* file = std::fopen(source_path("docs/scene-format.md").c_str(), "rb");
+    ASSERT_NE(file, nullptr);
+    std::string text;
+    std::array<char, 4096> buffer{};
+    for (std::size_t n; (n = std::fread(buffer.data(), 1, buffer.size(), file)) > 0;) text.append(buffer.data(), n);
+    std::fclose(file);
+    int examples = 0;
+    for (std::size_t at = text.find("```json\n"); at != std::string::npos; at = text.find("```json\n", at)) {
+        at += 8;
+        const std::size_t end = text.find("```", at);
+        ASSERT_NE(end, std::string::npos);
+        const auto scene = kodawari::parse_scene(text.substr(at, end - at), "docs/scene-format.md");
+        ASSERT_TRUE(scene.ok()) << scene.error().message;
+        if (!scene.value().characters.empty()) {
+            EXPECT_TRUE(kodawari::build_rod_scene(scene.value()).ok());
+        }
+        ++examples;
+    }
+    EXPECT_GE(examples, 2);
+}
+
 // Bird scenes still load as they did, and a scene may hold birds and characters.
 TEST(CharacterScene, BirdScenesAndMixedScenes) {
     const Scene flock = load("scenes/flock.json");
@@ -590,6 +613,7 @@ TEST(CharacterScenes, ShippedRodScenesLoadAndBuild) {
     const RodScene crowd = build(load("scenes/crowd.json"));
     EXPECT_GE(crowd.world.character_count, 1000u);
     EXPECT_GE(crowd.chain_count(0), 8u);
+    EXPECT_EQ(crowd.world.joint_count, 75776u);  // scenes/README.md
     for (const rods::ChainTemplate& t : crowd.world.templates) {
         EXPECT_GE(t.chain.joint_count, 8u) << t.name;
         EXPECT_LE(t.chain.joint_count, 16u) << t.name;
