@@ -194,6 +194,28 @@ TEST(CharacterScene, ValidSceneLoadsWithDefaults) {
     EXPECT_EQ(rs.world.templates[0].name, "bunny/ear");
     EXPECT_EQ(rs.world.joint_count, 16u);
     EXPECT_EQ(rs.frames, 600u);
+    // Colliders follow their joint; a sphere is a capsule with a == b.
+    const rods::RodFrame frame = rs.frame(0);
+    ASSERT_EQ(frame.colliders.size(), 1u);
+    EXPECT_EQ(frame.colliders[0].a, frame.colliders[0].b);
+    EXPECT_EQ(frame.colliders[0].a, rs.joint_poses(0, 0)[1].position);
+    EXPECT_EQ(frame.colliders[0].radius, 0.1f);
+    EXPECT_EQ(rs.world.chains[0].collider_count, 1u);
+    // "collide": false leaves a chain without colliders; a chain's physics overrides the
+    // character's key by key.
+    json doc = valid_character_scene();
+    doc["characters"][0]["physics"] = {{"damping", 2.5}, {"stiffness", 0.7}};
+    chain0(doc)["collide"] = false;
+    chain0(doc)["physics"] = {{"stiffness", 0.9}, {"gravity", {0, 0, 0}}};
+    const auto custom = kodawari::parse_scene(doc.dump(), "test.json");
+    ASSERT_TRUE(custom.ok()) << custom.error().message;
+    const RodScene crs = build(custom.value());
+    EXPECT_EQ(crs.world.chains[0].collider_count, 0u);
+    const rods::SolverParams& p = crs.world.templates[0].params;
+    EXPECT_EQ(p.damping, 2.5f);
+    EXPECT_EQ(p.stiffness, 0.9f);
+    EXPECT_EQ(p.gravity, glm::vec3(0.0f));
+    EXPECT_EQ(p.iterations, rods::SolverParams{}.iterations);
 }
 
 // A mirrored chain is the mirror image across its joint's X = 0 plane: x negated in its
