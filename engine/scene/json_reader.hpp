@@ -132,4 +132,14 @@ private:
     std::string file_;
 };
 
+/// Reads `key` of `object` into `out` with `read(node)` when present; absent keys keep
+/// the default already in `out`.
+template <typename T, typename Read>
+Result<void> optional_member(const JsonReader& r, const JsonNode& object, std::string_view key, T& out, Read read) {
+    const JsonNode node = r.member(object, key);
+    if (!node.present()) return {};
+    KW_SCENE_ASSIGN(out, read(node));
+    return {};
+}
+
 }  // namespace kodawari::scene_detail

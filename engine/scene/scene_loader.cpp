@@ -14,6 +14,7 @@
 
 #include <kodawari/scene.hpp>
 
+#include "scene/character_loader.hpp"
 #include "scene/json_reader.hpp"
 
 namespace kodawari {
@@ -22,22 +23,27 @@ namespace {
 using scene_detail::JsonNode;
 using scene_detail::JsonReader;
 using scene_detail::NumberRange;
+using scene_detail::optional_member;
 
 constexpr std::uint64_t kMaxBirds = 10'000'000;   // per flock and per scene
 constexpr double kMaxCoordinate = 1e6;            // BirdWorld::add_route's limit (m)
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 
-// Reads `key` of `object` into `out` when present; absent keys keep the default.
-template <typename T, typename Read>
-Result<void> optional_member(const JsonReader& r, const JsonNode& object, std::string_view key, T& out, Read read) {
-    const JsonNode node = r.member(object, key);
-    if (!node.present()) return {};
-    KW_SCENE_ASSIGN(out, read(node));
+// Keys that only version 2 knows: in a version-1 file they are reported as such rather
+// than as unknown, so the fix (the version) is in the message.
+Result<void> require_version_2(const JsonReader& r, const JsonNode& node, std::uint32_t version,
+                               std::initializer_list<std::string_view> keys) {
+    if (version >= 2) return {};
+    for (const std::string_view key : keys) {
+        const JsonNode n = r.member(node, key);
+        if (n.present()) return r.fail(n.path, "needs \"version\": 2 (version 1 scenes describe birds only)");
+    }
     return {};
 }
 
-Result<void> read_camera(const JsonReader& r, const JsonNode& node, CameraSpec& camera) {
-    KW_TRY(r.object(node, {"position", "target", "fov_deg"}));
+Result<void> read_camera(const JsonReader& r, const JsonNode& node, std::uint32_t version, CameraSpec& camera) {
+    KW_TRY(require_version_2(r, node, version, {"projection", "orbit", "path", "keyframes"}));
+    KW_TRY(r.object(node, {"position", "target", "fov_deg", "projection", "orbit", "path", "keyframes"}));
     const NumberRange coordinate = NumberRange::closed(-kMaxCoordinate, kMaxCoordinate);
     const auto vec = [&](const JsonNode& n) { return r.vec3(n, coordinate); };
     KW_TRY(optional_member(r, node, "position", camera.position, vec));
@@ -47,7 +53,7 @@ Result<void> read_camera(const JsonReader& r, const JsonNode& node, CameraSpec& 
     }
     KW_TRY(optional_member(r, node, "fov_deg", camera.fov_deg,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::open(0.0, 180.0)); }));
-    return {};
+    return scene_detail::read_camera_motion(r, node, camera);
 }
 
 // The climb thresholds are read in degrees and must nest so the hysteresis works:
@@ -264,18 +270,21 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
 
 Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, const std::string& path) {
     const JsonNode root{&document, "$"};
-    KW_TRY(r.object(root, {"format", "version", "name", "fps", "duration", "camera", "flight", "flocks"}));
+    KW_TRY(r.object(root, {"format", "version", "name", "fps", "duration", "camera", "flight", "flocks", "characters", "crowds"}));
 
     const JsonNode format = r.member(root, "format");
     if (!format.present() || !format.value->is_string() || *format.value != "kodawari-scene") {
         return r.expected(format, "\"kodawari-scene\"");
     }
     const JsonNode version = r.member(root, "version");
-    if (!version.present() || !version.value->is_number() || version.value->get<double>() != 1.0) {
-        return r.expected(version, "1 (the only version this build reads)");
+    if (!version.present() || !version.value->is_number() ||
+        (version.value->get<double>() != 1.0 && version.value->get<double>() != 2.0)) {
+        return r.expected(version, "1 or 2 (the versions this build reads; 2 adds characters)");
     }
 
     Scene scene;
+    scene.version = version.value->get<double>() == 2.0 ? 2u : 1u;
+    KW_TRY(require_version_2(r, root, scene.version, {"characters", "crowds"}));
     scene.path = path;
     scene.name = std::filesystem::path(path).stem().string();
     if (scene.name.empty()) scene.name = "scene";
@@ -285,18 +294,35 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
     KW_TRY(optional_member(r, root, "duration", scene.duration,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 3600.0)); }));
     const JsonNode camera = r.member(root, "camera");
-    if (camera.present()) KW_TRY(read_camera(r, camera, scene.camera));
+    if (camera.present()) {
+        KW_TRY(read_camera(r, camera, scene.version, scene.camera));
+    } else {
+        scene.camera.motion.position = glm::vec3(scene.camera.position[0], scene.camera.position[1], scene.camera.position[2]);
+        scene.camera.motion.target = glm::vec3(scene.camera.target[0], scene.camera.target[1], scene.camera.target[2]);
+    }
     const JsonNode flight = r.member(root, "flight");
     if (flight.present()) KW_TRY(read_flight(r, flight, scene.flight));
 
     const JsonNode flocks = r.member(root, "flocks");
-    constexpr std::string_view kFlocksWhat = "a non-empty array of flocks";
-    std::size_t count = 0;
-    KW_SCENE_ASSIGN(count, r.array(flocks, kFlocksWhat));
-    if (count == 0) return r.expected(flocks, kFlocksWhat);
-    scene.flocks.resize(count);
-    std::uint64_t total_birds = 0;
-    for (std::size_t i = 0; i < count; ++i) KW_TRY(read_flock(r, r.element(flocks, i), i, total_birds, scene.flocks[i]));
+    const JsonNode characters = r.member(root, "characters");
+    const JsonNode crowds = r.member(root, "crowds");
+    // From version 2 a scene may hold characters only.
+    if (flocks.present() || scene.version < 2) {
+        constexpr std::string_view kFlocksWhat = "a non-empty array of flocks";
+        std::size_t count = 0;
+        KW_SCENE_ASSIGN(count, r.array(flocks, kFlocksWhat));
+        if (count == 0) return r.expected(flocks, kFlocksWhat);
+        scene.flocks.resize(count);
+        std::uint64_t total_birds = 0;
+        for (std::size_t i = 0; i < count; ++i) KW_TRY(read_flock(r, r.element(flocks, i), i, total_birds, scene.flocks[i]));
+    } else if (!characters.present()) {
+        return r.fail(root.path, "expected \"flocks\", \"characters\" or both, got neither");
+    }
+    if (characters.present()) {
+        KW_TRY(scene_detail::read_characters(r, characters, crowds, scene));
+    } else if (crowds.present()) {
+        return r.fail(crowds.path, "needs \"characters\" (a crowd is made of a scene's characters)");
+    }
     return scene;
 }
 

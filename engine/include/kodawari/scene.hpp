@@ -1,8 +1,9 @@
 #pragma once
 /// @file
-/// Scenes: the JSON format of docs/scene-format.md (birds now, characters later), its
-/// loader with errors that name the file and the JSON path, and the step from a scene
-/// to the data the backends run.
+/// Scenes: the JSON format of docs/scene-format.md (birds, and from version 2 hair-rigged
+/// characters), its loader with errors that name the file and the JSON path, and the
+/// step from a scene to the data the bird backends run (rod_scene.hpp does the same for
+/// the characters).
 
 #include <array>
 #include <cstdint>
@@ -12,14 +13,25 @@
 
 #include "birds/world.hpp"
 #include "result.hpp"
+#include "rods/kinematics.hpp"
+#include "rods/shape.hpp"
+#include "rods/solver.hpp"
+#include "rods/view.hpp"
 
 namespace kodawari {
 
-/// A fixed camera (the viewer and renderer use it; the birds ignore it).
+/// The camera: fixed at `position` looking at `target`, or moving (`motion`, from
+/// version 2: orbit, path or keyframes). The birds ignore it; for characters it decides
+/// the view direction of every chain (SPEC A.3).
 struct CameraSpec {
     std::array<float, 3> position = {0.0f, 30.0f, -120.0f};
     std::array<float, 3> target = {0.0f, 30.0f, 0.0f};
     float fov_deg = 50.0f;
+    /// How the camera moves; this is what build_rod_scene uses. For a fixed camera the
+    /// loader copies `position` and `target` above into motion.position and
+    /// motion.target (set both when building a Scene by hand). A path is stored as
+    /// keyframes that all look at the path's target.
+    rods::CameraMotion motion;
 };
 
 /// A leader route made from a seed: `segments` Bezier segments through random
@@ -59,15 +71,89 @@ struct FlockSpec {
     FormationSpec formation;
 };
 
+/// One kinematic collider of a character, in its joint's frame (a sphere is a capsule
+/// with a == b).
+struct ColliderSpec {
+    std::uint32_t joint = 0;  ///< index into CharacterSpec::skeleton.joints
+    glm::vec3 a{0.0f}, b{0.0f};
+    float radius = 0.0f;  ///< m, > 0
+};
+
+/// One view example of a chain (SPEC A.1): direction and influence, and its shape.
+struct ViewSpec {
+    std::string name;        ///< for people ("front"); may be empty
+    rods::ViewExample view;  ///< direction unit, in the reference joint's frame
+    rods::ChainShape shape;  ///< chain root frame, the base shape's joint count
+};
+
+/// One joint chain of a character (SPEC A.1), after mirroring: a mirrored pair is two
+/// ChainSpecs.
+struct ChainSpec {
+    std::string name;
+    std::uint32_t joint = 0;  ///< the skeleton joint the chain root is attached to
+    rods::Transform offset;   ///< the chain root's frame in that joint's frame
+    rods::ChainShape base;    ///< the base shape C_0 in the chain root's frame
+    std::vector<ViewSpec> views;
+    float thickness = 0.005f;  ///< m
+    float mass = 0.002f;       ///< kg per joint
+    rods::SolverParams params;
+    bool collide = true;  ///< against all of its character's colliders
+    std::string path;     ///< its JSON path (for messages from the builder)
+};
+
+/// A character template: skeleton, motions, colliders and chains (SPEC A.1).
+struct CharacterSpec {
+    std::string name;
+    rods::Skeleton skeleton;  ///< parents first; skeleton.reference is the reference joint
+    rods::CharacterMotion motion;
+    std::vector<ColliderSpec> colliders;
+    std::vector<ChainSpec> chains;
+    std::string path;
+};
+
+/// How a crowd lays out its generated instances.
+enum class CrowdLayout { Grid, Ring };
+
+/// One explicitly placed character instance.
+struct InstanceSpec {
+    glm::vec3 position{0.0f};
+    float yaw = 0.0f;          ///< rad about +Y; 0 faces +Z
+    float time_offset = 0.0f;  ///< s, added to the scene time for this instance's motions
+};
+
+/// `count` instances of a character on a grid or a ring, plus explicit instances
+/// (SPEC C: each with its own transform and time offset).
+struct CrowdSpec {
+    std::string name;
+    std::uint32_t character = 0;  ///< index into Scene::characters
+    std::uint32_t count = 0;      ///< generated instances
+    CrowdLayout layout = CrowdLayout::Grid;
+    float spacing = 1.5f;              ///< m between neighbours
+    std::uint32_t columns = 0;         ///< grid; 0 = ceil(sqrt(count))
+    std::optional<float> radius;       ///< ring, m; default: spacing * count / (2 pi), at least spacing
+    glm::vec3 center{0.0f};
+    float yaw = 0.0f;                  ///< rad; on a ring, added to facing outwards
+    float yaw_jitter = 0.0f;           ///< rad, uniform in [-j, j)
+    float position_jitter = 0.0f;      ///< m, x and z uniform in [-j, j)
+    float time_offset = 0.0f;          ///< s, per instance uniform in [0, time_offset)
+    std::uint64_t seed = 1;
+    std::vector<InstanceSpec> instances;  ///< after the generated ones
+};
+
 /// A whole scene file.
 struct Scene {
     std::string path;  ///< where it was loaded from (for messages)
     std::string name;
+    std::uint32_t version = 1;  ///< 1: birds only; 2: characters, crowds and camera motion too
     float fps = 60.0f;
     float duration = 10.0f;  ///< seconds
     CameraSpec camera;
     birds::FlightSettings flight;
     std::vector<FlockSpec> flocks;
+    std::vector<CharacterSpec> characters;
+    /// Instances of the characters. When the file has no `crowds`, the loader puts one
+    /// instance of every character at the origin here.
+    std::vector<CrowdSpec> crowds;
 
     /// Number of frames: round(duration * fps), at least 1.
     [[nodiscard]] std::uint32_t frame_count() const;

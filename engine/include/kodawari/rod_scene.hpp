@@ -1,0 +1,103 @@
+#pragma once
+/// @file
+/// From a scene's characters to what the rod backends run (SPEC A, C): one chain
+/// template per chain of each character, one chain instance per chain of each character
+/// instance, and the kinematic model (skeletons, procedural motions, instance
+/// placements, the camera) that produces every frame's input on demand.
+
+#include <cstdint>
+#include <span>
+#include <string>
+#include <vector>
+
+#include "result.hpp"
+#include "rods/kinematics.hpp"
+#include "rods/world.hpp"
+#include "scene.hpp"
+
+namespace kodawari {
+
+/// A chain of a character template: where its root sits on the skeleton.
+struct ChainAttachment {
+    std::uint32_t joint = 0;  ///< skeleton joint
+    rods::Transform offset;   ///< the chain root's frame in the joint's frame
+    bool collide = true;      ///< false: the chain instance gets no colliders
+};
+
+/// A collider of a character template, in its joint's frame.
+struct ColliderAttachment {
+    std::uint32_t joint = 0;
+    glm::vec3 a{0.0f}, b{0.0f};
+    float radius = 0.0f;
+};
+
+/// The kinematic model of one character template.
+struct CharacterKinematics {
+    std::string name;
+    rods::Skeleton skeleton;
+    rods::CharacterMotion motion;
+    std::vector<ChainAttachment> chains;        ///< chain k uses RodWorld template first_template + k
+    std::vector<ColliderAttachment> colliders;
+    std::uint32_t first_template = 0;
+    std::vector<std::string> joint_names;       ///< skeleton order (parents first)
+    std::vector<std::int32_t> joint_parents;    ///< -1 for the root
+};
+
+/// One character instance (SPEC C).
+struct CharacterInstance {
+    std::uint32_t character = 0;  ///< index into RodScene::characters
+    rods::Transform placement;    ///< the instance's transform (position, yaw)
+    float time_offset = 0.0f;     ///< s, added to the scene time for its motions
+    std::uint32_t chain_begin = 0;     ///< its chains: RodWorld::chains[begin, begin + chain count)
+    std::uint32_t collider_begin = 0;  ///< its colliders: RodFrame::colliders[begin, begin + collider count)
+};
+
+/// The characters of a scene, ready for the rod backends.
+struct RodScene {
+    /// Templates (one per character chain, "bunny/ear_l"), chains (one per chain per
+    /// instance, instance by instance), counts finalized.
+    rods::RodWorld world;
+    std::vector<std::string> character_names;  ///< per character instance, "bunny#12"
+    std::vector<std::string> chain_names;      ///< per chain instance, "bunny#12/ear_l"
+    float fps = 60.0f;
+    std::uint32_t frames = 1;  ///< the scene's frame count; frames 0 .. frames - 1
+    std::vector<CharacterKinematics> characters;  ///< templates
+    std::vector<CharacterInstance> instances;     ///< world.character_count of them
+    rods::CameraMotion camera;
+    float fov_deg = 50.0f;  ///< vertical field of view, for renderers and projections
+
+    /// The time of frame `index`: index / fps, s.
+    [[nodiscard]] float time(std::uint32_t index) const;
+
+    /// The kinematic input of frame `index` (time = index / fps; dt = 1 / fps; frame 0 is
+    /// the initial pose: start the chains with rods::initial_state from it, then step
+    /// with frames 1, 2, ...). Deterministic: the same index gives the same bits.
+    [[nodiscard]] rods::RodFrame frame(std::uint32_t index) const;
+    /// As frame(index), into `out`, reusing its storage (no allocation once it has the
+    /// right sizes): the per-frame path for large crowds.
+    void frame(std::uint32_t index, rods::RodFrame& out) const;
+
+    /// The camera at frame `index` (position, target, forward); with fov_deg it gives a
+    /// look-at + perspective projection.
+    [[nodiscard]] rods::CameraPose camera_pose(std::uint32_t index) const;
+
+    /// World transforms of every skeleton joint of character instance `c` at frame
+    /// `index`, in joint_names(c) order (for export and rendering).
+    [[nodiscard]] std::vector<rods::Transform> joint_poses(std::uint32_t c, std::uint32_t index) const;
+    /// As joint_poses(c, index), into `out` (resized to the joint count).
+    void joint_poses(std::uint32_t c, std::uint32_t index, std::vector<rods::Transform>& out) const;
+    /// The skeleton joint names of character instance `c`.
+    [[nodiscard]] const std::vector<std::string>& joint_names(std::uint32_t c) const;
+    /// The parent of each skeleton joint of character instance `c` (-1 for the root).
+    [[nodiscard]] const std::vector<std::int32_t>& joint_parents(std::uint32_t c) const;
+    /// The chain instances of character instance `c`: world.chains[first, first + count).
+    [[nodiscard]] std::uint32_t chain_count(std::uint32_t c) const;
+};
+
+/// Builds the rod data of `scene`'s characters and crowds. Deterministic: the same scene
+/// gives the same bits (on the same build and platform: the motions use the C library's
+/// sin and cos). A scene without characters gives an empty RodScene (no chains).
+/// Errors (InvalidInput) name the file and the JSON path.
+[[nodiscard]] Result<RodScene> build_rod_scene(const Scene& scene);
+
+}  // namespace kodawari

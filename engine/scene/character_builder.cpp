@@ -1,0 +1,159 @@
+// From a Scene's characters and crowds to a RodScene (SPEC A.1, C): one chain template
+// per chain of each character (shared by all its instances), then the instances crowd
+// by crowd, each with its chains and colliders in contiguous ranges. The random numbers
+// (jitter, time offsets) come from std::mt19937_64, mapped to [0, 1) here, as in
+// flock_builder.cpp, so that no standard library's distribution changes the result.
+
+#include <cmath>
+#include <cstdint>
+#include <numbers>
+#include <random>
+#include <string>
+#include <utility>
+
+#include <kodawari/rod_scene.hpp>
+
+namespace kodawari {
+namespace {
+
+// Purposes of a crowd's random streams: each has its own generator so that, say,
+// adding yaw jitter does not move every instance's time offset.
+enum class Stream : std::uint64_t { Position = 1, Yaw = 2, TimeOffset = 3 };
+
+std::uint64_t splitmix64(std::uint64_t x) {
+    x += 0x9E3779B97F4A7C15ull;
+    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
+    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
+    return x ^ (x >> 31);
+}
+
+class Random {
+public:
+    Random(std::uint64_t seed, Stream stream)
+        : engine_(splitmix64(splitmix64(seed) ^ static_cast<std::uint64_t>(stream))) {}
+    /// Uniform in [0, 1): the top 53 bits of one draw.
+    double unit() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
+    /// Uniform in [-1, 1).
+    double symmetric() { return 2.0 * unit() - 1.0; }
+
+private:
+    std::mt19937_64 engine_;
+};
+
+rods::Transform placement(glm::vec3 position, double yaw) {
+    return rods::Transform{position, glm::angleAxis(static_cast<float>(yaw), glm::vec3(0.0f, 1.0f, 0.0f))};
+}
+
+// The generated instances of a crowd: a grid (rows along +Z, centred on `center`) or a
+// ring (instance k at angle 2 pi k / count, facing outwards, plus `yaw`), then jitter.
+std::vector<InstanceSpec> generate(const CrowdSpec& crowd) {
+    std::vector<InstanceSpec> out(crowd.count);
+    if (crowd.count == 0) return out;
+    Random position_rng(crowd.seed, Stream::Position);
+    Random yaw_rng(crowd.seed, Stream::Yaw);
+    Random time_rng(crowd.seed, Stream::TimeOffset);
+    const double spacing = crowd.spacing;
+    const std::uint32_t columns =
+        crowd.columns != 0 ? crowd.columns : static_cast<std::uint32_t>(std::ceil(std::sqrt(static_cast<double>(crowd.count))));
+    const std::uint32_t rows = (crowd.count + columns - 1) / columns;
+    const double ring_radius =
+        crowd.radius ? static_cast<double>(*crowd.radius)
+                     : std::max(spacing, spacing * static_cast<double>(crowd.count) / (2.0 * std::numbers::pi));
+    for (std::uint32_t k = 0; k < crowd.count; ++k) {
+        double x = 0.0;
+        double z = 0.0;
+        double yaw = crowd.yaw;
+        if (crowd.layout == CrowdLayout::Grid) {
+            x = (static_cast<double>(k % columns) - 0.5 * static_cast<double>(columns - 1)) * spacing;
+            z = (static_cast<double>(k / columns) - 0.5 * static_cast<double>(rows - 1)) * spacing;
+        } else {
+            const double angle = 2.0 * std::numbers::pi * static_cast<double>(k) / static_cast<double>(crowd.count);
+            x = ring_radius * std::sin(angle);
+            z = ring_radius * std::cos(angle);
+            yaw += angle;
+        }
+        // Always draw, so that a jitter of 0 keeps the other streams' numbers the same.
+        x += static_cast<double>(crowd.position_jitter) * position_rng.symmetric();
+        z += static_cast<double>(crowd.position_jitter) * position_rng.symmetric();
+        yaw += static_cast<double>(crowd.yaw_jitter) * yaw_rng.symmetric();
+        InstanceSpec& s = out[k];
+        s.position = crowd.center + glm::vec3(static_cast<float>(x), 0.0f, static_cast<float>(z));
+        s.yaw = static_cast<float>(yaw);
+        s.time_offset = static_cast<float>(static_cast<double>(crowd.time_offset) * time_rng.unit());
+    }
+    return out;
+}
+
+}  // namespace
+
+Result<RodScene> build_rod_scene(const Scene& scene) {
+    RodScene out;
+    out.fps = scene.fps;
+    out.frames = scene.frame_count();
+    out.fov_deg = scene.camera.fov_deg;
+    out.camera = scene.camera.motion;
+    rods::RodWorld& world = out.world;
+
+    // Templates, shared by every instance of a character.
+    for (const CharacterSpec& ch : scene.characters) {
+        CharacterKinematics k;
+        k.name = ch.name;
+        k.skeleton = ch.skeleton;
+        k.motion = ch.motion;
+        k.first_template = static_cast<std::uint32_t>(world.templates.size());
+        for (const rods::SkeletonJoint& j : ch.skeleton.joints) {
+            k.joint_names.push_back(j.name);
+            k.joint_parents.push_back(j.parent);
+        }
+        for (const ChainSpec& chain : ch.chains) {
+            std::vector<rods::ChainShape> shapes;
+            std::vector<rods::ViewExample> views;
+            for (const ViewSpec& v : chain.views) {
+                shapes.push_back(v.shape);
+                views.push_back(v.view);
+            }
+            auto t = rods::make_chain_template(ch.name + "/" + chain.name, chain.base, shapes, views, chain.thickness,
+                                               chain.mass, chain.params);
+            if (!t) return make_error(Error::Kind::InvalidInput, scene.path + ": " + chain.path + ": " + t.error().message);
+            world.templates.push_back(std::move(t.value()));
+            k.chains.push_back(ChainAttachment{chain.joint, chain.offset, chain.collide});
+        }
+        for (const ColliderSpec& c : ch.colliders) k.colliders.push_back(ColliderAttachment{c.joint, c.a, c.b, c.radius});
+        out.characters.push_back(std::move(k));
+    }
+
+    // Instances, crowd by crowd: generated ones first, then the explicit ones.
+    std::vector<std::uint32_t> per_character(scene.characters.size(), 0);
+    for (const CrowdSpec& crowd : scene.crowds) {
+        std::vector<InstanceSpec> instances = generate(crowd);
+        instances.insert(instances.end(), crowd.instances.begin(), crowd.instances.end());
+        const CharacterKinematics& k = out.characters[crowd.character];
+        for (const InstanceSpec& s : instances) {
+            CharacterInstance inst;
+            inst.character = crowd.character;
+            inst.placement = placement(s.position, static_cast<double>(s.yaw));
+            inst.time_offset = s.time_offset;
+            inst.chain_begin = static_cast<std::uint32_t>(world.chains.size());
+            inst.collider_begin = world.collider_count;
+            const auto index = static_cast<std::uint32_t>(out.instances.size());
+            const std::string name = k.name + "#" + std::to_string(per_character[crowd.character]++);
+            for (std::size_t c = 0; c < k.chains.size(); ++c) {
+                rods::ChainInstance chain;
+                chain.template_index = k.first_template + static_cast<std::uint32_t>(c);
+                chain.character = index;
+                chain.collider_begin = inst.collider_begin;
+                chain.collider_count = k.chains[c].collide ? static_cast<std::uint32_t>(k.colliders.size()) : 0u;
+                world.chains.push_back(chain);
+                out.chain_names.push_back(name + "/" + scene.characters[crowd.character].chains[c].name);
+            }
+            world.collider_count += static_cast<std::uint32_t>(k.colliders.size());
+            out.character_names.push_back(name);
+            out.instances.push_back(inst);
+        }
+    }
+    world.character_count = static_cast<std::uint32_t>(out.instances.size());
+    KW_TRY(world.finalize());
+    return out;
+}
+
+}  // namespace kodawari

@@ -1,0 +1,85 @@
+// The per-frame kinematic input of a RodScene (SPEC A.4 step 1: the root joints and the
+// colliders follow the animated skeleton; SPEC A.3: the camera and the reference joints
+// decide the view). Runs every frame for every character instance, so it allocates
+// nothing once `out` has its sizes and poses each skeleton in a fixed-size buffer.
+
+#include <array>
+#include <cassert>
+#include <span>
+
+#include <kodawari/rod_scene.hpp>
+
+namespace kodawari {
+
+float RodScene::time(std::uint32_t index) const {
+    // In double, so that frame n is n / fps rounded once, not n times 1/fps rounded twice.
+    return static_cast<float>(static_cast<double>(index) / static_cast<double>(fps));
+}
+
+rods::CameraPose RodScene::camera_pose(std::uint32_t index) const { return rods::camera_pose(camera, time(index)); }
+
+rods::RodFrame RodScene::frame(std::uint32_t index) const {
+    rods::RodFrame out;
+    frame(index, out);
+    return out;
+}
+
+void RodScene::frame(std::uint32_t index, rods::RodFrame& out) const {
+    const float t = time(index);
+    out.time = t;
+    out.dt = static_cast<float>(1.0 / static_cast<double>(fps));
+    out.camera = camera_pose(index).camera();
+    out.reference.resize(world.character_count);
+    out.roots.resize(world.chains.size());
+    out.colliders.resize(world.collider_count);
+    std::array<rods::Transform, rods::kMaxSkeletonJoints> poses;
+    for (std::size_t i = 0; i < instances.size(); ++i) {
+        const CharacterInstance& inst = instances[i];
+        const CharacterKinematics& k = characters[inst.character];
+        rods::pose_skeleton(k.skeleton, k.motion, inst.placement, t + inst.time_offset, poses);
+        out.reference[i] = poses[k.skeleton.reference];
+        for (std::size_t c = 0; c < k.chains.size(); ++c) {
+            const ChainAttachment& a = k.chains[c];
+            rods::Transform root = rods::compose(poses[a.joint], a.offset);
+            root.rotation = glm::normalize(root.rotation);
+            out.roots[inst.chain_begin + c] = root;
+        }
+        for (std::size_t c = 0; c < k.colliders.size(); ++c) {
+            const ColliderAttachment& a = k.colliders[c];
+            const rods::Transform& joint = poses[a.joint];
+            out.colliders[inst.collider_begin + c] =
+                rods::Capsule{joint.position + joint.rotation * a.a, joint.position + joint.rotation * a.b, a.radius};
+        }
+    }
+}
+
+std::vector<rods::Transform> RodScene::joint_poses(std::uint32_t c, std::uint32_t index) const {
+    std::vector<rods::Transform> out;
+    joint_poses(c, index, out);
+    return out;
+}
+
+void RodScene::joint_poses(std::uint32_t c, std::uint32_t index, std::vector<rods::Transform>& out) const {
+    assert(c < instances.size());
+    const CharacterInstance& inst = instances[c];
+    const CharacterKinematics& k = characters[inst.character];
+    out.resize(k.skeleton.joints.size());
+    rods::pose_skeleton(k.skeleton, k.motion, inst.placement, time(index) + inst.time_offset, out);
+}
+
+const std::vector<std::string>& RodScene::joint_names(std::uint32_t c) const {
+    assert(c < instances.size());
+    return characters[instances[c].character].joint_names;
+}
+
+const std::vector<std::int32_t>& RodScene::joint_parents(std::uint32_t c) const {
+    assert(c < instances.size());
+    return characters[instances[c].character].joint_parents;
+}
+
+std::uint32_t RodScene::chain_count(std::uint32_t c) const {
+    assert(c < instances.size());
+    return static_cast<std::uint32_t>(characters[instances[c].character].chains.size());
+}
+
+}  // namespace kodawari
