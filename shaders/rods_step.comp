@@ -27,7 +27,6 @@ layout(std430, binding = KW_RODS_BINDING_ROOTS) readonly buffer Roots { RodTrans
 layout(std430, binding = KW_RODS_BINDING_COLLIDERS) readonly buffer Colliders { RodColliderGpu colliders[]; };
 layout(std430, binding = KW_RODS_BINDING_MOTION) buffer Motion { RodJointMotionGpu motion[]; };
 layout(std430, binding = KW_RODS_BINDING_SPIN) buffer Spin { RodJointSpinGpu spin[]; };
-layout(std430, binding = KW_RODS_BINDING_REST) buffer Rest { RodJointRestGpu rest[]; };
 layout(std430, binding = KW_RODS_BINDING_CHAIN_STATE) buffer ChainStates { RodChainStateGpu chain_states[]; };
 
 layout(push_constant) uniform Push { RodPush push; };
@@ -172,29 +171,51 @@ void main() {
         w[0] = 1.0 - sum;
     }
 
-    // ---- A.2: blend, then forward kinematics (shape.cpp blend, to_positions) ----
-    vec3 rest_p[MAX_J];
-    vec4 rest_o[MAX_J];
+    // ---- A.2: blend, then forward kinematics (shape.cpp blend, to_positions), for this
+    // frame's weights and, for A.5, last frame's (the same arithmetic gives back the
+    // rest shape the last frame used, as the CPU keeps it) ----
+    float w_old[KW_RODS_MAX_VIEWS + 1];
     {
-        vec3 dir = t.first_dir.xyz;
+        const RodChainStateGpu last = chain_states[c];
+        w_old[0] = last.weights[0].x;
+        w_old[1] = last.weights[0].y;
+        w_old[2] = last.weights[0].z;
+        w_old[3] = last.weights[0].w;
+        w_old[4] = last.weights[1].x;
+        w_old[5] = last.weights[1].y;
+        w_old[6] = last.weights[1].z;
+        w_old[7] = last.weights[1].w;
+    }
+    vec3 rest_p[MAX_J], old_rest_p[MAX_J];
+    vec4 rest_o[MAX_J], old_rest_o[MAX_J];
+    {
+        vec3 dir = t.first_dir.xyz, old_dir = t.first_dir.xyz;
         rest_p[0] = vec3(0.0);
+        old_rest_p[0] = vec3(0.0);
         [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
             if (i < n) {
                 const RodShapeJointGpu base = shapes[shape0 + i];
-                vec4 r_sum = vec4(0.0), o_sum = vec4(0.0);
+                vec4 r_sum = vec4(0.0), o_sum = vec4(0.0), r_old = vec4(0.0), o_old = vec4(0.0);
                 [[unroll]] for (uint k = 0; k <= KW_RODS_MAX_VIEWS; ++k) {
                     if (k <= m) {
                         const RodShapeJointGpu s = shapes[shape0 + k * n + i];
-                        r_sum += ((dot(s.rotation, base.rotation) < 0.0 ? -1.0 : 1.0) * w[k]) * s.rotation;
-                        o_sum += ((dot(s.orientation, base.orientation) < 0.0 ? -1.0 : 1.0) * w[k]) * s.orientation;
+                        const float r_sign = dot(s.rotation, base.rotation) < 0.0 ? -1.0 : 1.0;
+                        const float o_sign = dot(s.orientation, base.orientation) < 0.0 ? -1.0 : 1.0;
+                        r_sum += (r_sign * w[k]) * s.rotation;
+                        o_sum += (o_sign * w[k]) * s.orientation;
+                        r_old += (r_sign * w_old[k]) * s.rotation;
+                        o_old += (o_sign * w_old[k]) * s.orientation;
                     }
                 }
-                const float r_len = length(r_sum), o_len = length(o_sum);
-                rest_o[i] = o_len > 1e-12 ? o_sum / o_len : base.orientation;
+                rest_o[i] = length(o_sum) > 1e-12 ? o_sum / length(o_sum) : base.orientation;
+                old_rest_o[i] = length(o_old) > 1e-12 ? o_old / length(o_old) : base.orientation;
                 if (i + 1 < MAX_J && i + 1 < n) {
-                    const vec4 r = r_len > 1e-12 ? r_sum / r_len : base.rotation;
+                    const vec4 r = length(r_sum) > 1e-12 ? r_sum / length(r_sum) : base.rotation;
+                    const vec4 ro = length(r_old) > 1e-12 ? r_old / length(r_old) : base.rotation;
                     dir = normalize(qrot(r, dir));
+                    old_dir = normalize(qrot(ro, old_dir));
                     rest_p[i + 1] = rest_p[i] + seg_len[i] * dir;
+                    old_rest_p[i + 1] = old_rest_p[i] + seg_len[i] * old_dir;
                 }
             }
         }
@@ -202,21 +223,15 @@ void main() {
 
     // ---- load the state ----
     vec3 x[MAX_J], v[MAX_J], omega[MAX_J];
-    vec4 q[MAX_J], group[MAX_J];
-    vec3 old_rest_p[MAX_J];
-    vec4 old_rest_o[MAX_J];
+    vec4 q[MAX_J];
     [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
         if (i < n) {
             const RodJointMotionGpu mo = motion[j0 + i];
             const RodJointSpinGpu sp = spin[j0 + i];
-            const RodJointRestGpu re = rest[j0 + i];
             x[i] = mo.x.xyz;
             v[i] = mo.v.xyz;
             q[i] = sp.q;
             omega[i] = sp.omega.xyz;
-            group[i] = sp.group;
-            old_rest_p[i] = re.position.xyz;
-            old_rest_o[i] = re.orientation;
         }
     }
     const RodTransformGpu from = chain_states[c].root;
@@ -339,8 +354,8 @@ void main() {
                         a += weight[hi] * outerProduct(p[hi] - cm, xbar[hi] - cbar);
                         a += a_j[hi];
                     }
-                    const vec4 rot = extract_rotation(a, group[i]);
-                    group[i] = rot;
+                    // Warm start from the centre's orientation (solver.cpp).
+                    const vec4 rot = extract_rotation(a, qmul(qs[i], qconj(obar[i])));
                     goal_sum[lo] += cm + qrot(rot, xbar[lo] - cbar);
                     if (i != 0) goal_sum[i] += cm + qrot(rot, xbar[i] - cbar);
                     if (i == 0 || has_next) goal_sum[hi] += cm + qrot(rot, xbar[hi] - cbar);
@@ -397,8 +412,7 @@ void main() {
     [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
         if (i < n) {
             motion[j0 + i] = RodJointMotionGpu(vec4(x[i] - travel, 0.0), vec4(v[i], 0.0));
-            spin[j0 + i] = RodJointSpinGpu(q[i], vec4(omega[i], 0.0), group[i]);
-            rest[j0 + i] = RodJointRestGpu(vec4(rest_p[i], 0.0), rest_o[i]);
+            spin[j0 + i] = RodJointSpinGpu(q[i], vec4(omega[i], 0.0));
         }
     }
     chain_states[c] = RodChainStateGpu(to, vec4(d, 0.0), vec4[2](vec4(w[0], w[1], w[2], w[3]), vec4(w[4], w[5], w[6], w[7])));

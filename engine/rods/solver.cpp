@@ -173,10 +173,7 @@ ChainState initial_state(const Chain& chain, const Transform& root, const ChainS
         s.q[i] = glm::normalize(root.rotation * rest.orientations[i]);
         s.rest_position[i] = rest.positions[i];
         s.rest_orientation[i] = rest.orientations[i];
-        s.group_rotation[i] = kIdentity;
     }
-    // Group rotations are measured from the rest shape placed by the root, so a chain at
-    // rest has the identity in every group: the root's rotation does not enter.
     return s;
 }
 
@@ -293,8 +290,10 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
                     a += weight(j) * glm::outerProduct(p[j] - c, xbar[j] - cbar);
                     a += ellipsoid[j];
                 }
-                const glm::quat rot = extract_rotation(a, s.group_rotation[i]);
-                s.group_rotation[i] = rot;
+                // Warm start: the centre's orientation is R obar_i after every iteration,
+                // so q_i obar_i^-1 is the group's last rotation (turned on by the
+                // prediction at a new substep), with no state of its own.
+                const glm::quat rot = extract_rotation(a, qs[i] * glm::conjugate(obar[i]));
                 for (std::uint32_t j = lo; j <= hi; ++j) goal_sum[j] += c + rot * (xbar[j] - cbar);  // g_j = c + R (xbar_j - cbar)
                 q_new[i] = glm::normalize(rot * obar[i]);  // the centre's orientation: R obar_i
             }
