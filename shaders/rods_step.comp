@@ -17,6 +17,11 @@ layout(local_size_x = KW_RODS_WORKGROUP_SIZE) in;
 // array index is a constant and the arrays live in registers: with a loop index, lavapipe
 // keeps them in scratch memory and accesses it lane by lane (several times slower).
 layout(constant_id = KW_RODS_SPEC_MAX_JOINTS) const uint MAX_J = 16;
+// The most view examples of any chain of the world, and how its chains suppress momentum
+// (KW_RODS_SUPPRESSION_*): lavapipe executes both sides of every branch, even uniform
+// ones, so only a constant removes the blending of unused examples or A.5's turns.
+layout(constant_id = KW_RODS_SPEC_MAX_VIEWS) const uint MAX_VIEWS = KW_RODS_MAX_VIEWS;
+layout(constant_id = KW_RODS_SPEC_SUPPRESSION) const uint SUPPRESSION = KW_RODS_SUPPRESSION_PARTIAL;
 
 layout(std430, binding = KW_RODS_BINDING_TEMPLATES) readonly buffer Templates { RodTemplateGpu templates[]; };
 layout(std430, binding = KW_RODS_BINDING_TEMPLATE_JOINTS) readonly buffer TemplateJoints { RodTemplateJointGpu tjoints[]; };
@@ -155,8 +160,8 @@ void main() {
     float w[KW_RODS_MAX_VIEWS + 1];
     {
         float sum = 0.0;
-        [[unroll]] for (uint k = 0; k < KW_RODS_MAX_VIEWS; ++k) {
-            w[k + 1] = 0.0;
+        [[unroll]] for (uint k = 0; k < KW_RODS_MAX_VIEWS; ++k) w[k + 1] = 0.0;
+        [[unroll]] for (uint k = 0; k < MAX_VIEWS; ++k) {
             if (k < m) {
                 const vec4 view = t.views[k];
                 const float s = clamp((dot(view.xyz, d) + 1.0) * 0.5, 0.0, 1.0);
@@ -165,7 +170,7 @@ void main() {
             }
         }
         if (sum >= 1.0) {
-            [[unroll]] for (uint k = 1; k <= KW_RODS_MAX_VIEWS; ++k) w[k] /= sum;
+            [[unroll]] for (uint k = 1; k <= MAX_VIEWS; ++k) w[k] /= sum;
             sum = 1.0;
         }
         w[0] = 1.0 - sum;
@@ -194,9 +199,11 @@ void main() {
         old_rest_p[0] = vec3(0.0);
         [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
             if (i < n) {
+                // Shape 0 is the base: its quaternions decide the hemisphere of the others.
                 const RodShapeJointGpu base = shapes[shape0 + i];
-                vec4 r_sum = vec4(0.0), o_sum = vec4(0.0), r_old = vec4(0.0), o_old = vec4(0.0);
-                [[unroll]] for (uint k = 0; k <= KW_RODS_MAX_VIEWS; ++k) {
+                vec4 r_sum = w[0] * base.rotation, o_sum = w[0] * base.orientation;
+                vec4 r_old = w_old[0] * base.rotation, o_old = w_old[0] * base.orientation;
+                [[unroll]] for (uint k = 1; k <= MAX_VIEWS; ++k) {
                     if (k <= m) {
                         const RodShapeJointGpu s = shapes[shape0 + k * n + i];
                         const float r_sign = dot(s.rotation, base.rotation) < 0.0 ? -1.0 : 1.0;
@@ -238,8 +245,8 @@ void main() {
     const RodTransformGpu to = roots[c];
 
     // ---- A.5: momentum suppression (solver.cpp suppress_momentum) ----
-    const float suppression = t.step.w;
-    if (suppression > 0.0) {
+    const float suppression = SUPPRESSION == KW_RODS_SUPPRESSION_FULL ? 1.0 : t.step.w;
+    if (SUPPRESSION != KW_RODS_SUPPRESSION_NONE && suppression > 0.0) {
         const vec4 root = from.rotation;
         const vec4 root_inv = qconj(root);
         vec3 previous_old = x[0];
@@ -299,14 +306,8 @@ void main() {
                 v[i] = decay * (v[i] + h * acceleration);
                 omega[i] = decay * omega[i];
                 p[i] = x[i] + h * v[i];
-                const float wl = length(omega[i]);
-                if (wl > 0.0) {
-                    const float half_angle = 0.5 * wl * h;
-                    const vec3 spin_axis = omega[i] / wl;
-                    qs[i] = qnormalize(qmul(vec4(sin(half_angle) * spin_axis, cos(half_angle)), q[i]));
-                } else {
-                    qs[i] = q[i];
-                }
+                // First-order orientation update (solver.cpp).
+                qs[i] = qnormalize(q[i] + qmul(vec4((0.5 * h) * omega[i], 0.0), q[i]));
             }
         }
 
@@ -400,8 +401,7 @@ void main() {
             if (i < n) {
                 v[i] = (p[i] - x[i]) / h;
                 const vec4 dq = positive_w(qmul(qs[i], qconj(q[i])));
-                const float sn = length(dq.xyz);
-                omega[i] = sn > 0.0 ? dq.xyz * (2.0 * atan(sn, dq.w) / (sn * h)) : vec3(0.0);
+                omega[i] = (2.0 / h) * dq.xyz;
                 x[i] = p[i];
                 q[i] = qs[i];
             }

@@ -50,16 +50,18 @@ class VulkanRodBackend final : public RodBackend {
 public:
     explicit VulkanRodBackend(std::unique_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
 
-    /// The kernel for chains of up to `max_joints` joints; built on first use and kept.
-    Result<const gpu::ComputePipeline*> pipeline(std::uint32_t max_joints) {
+    using Variant = std::array<std::uint32_t, KW_RODS_SPEC_COUNT>;
+
+    /// The kernel specialized for a world (shared/rods.h, KW_RODS_SPEC_*); built on first
+    /// use and kept.
+    Result<const gpu::ComputePipeline*> pipeline(const Variant& spec) {
         for (const auto& [key, p] : pipelines_) {
-            if (key == max_joints) return &p;
+            if (key == spec) return &p;
         }
         const std::vector<vk::DescriptorType> types(KW_RODS_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
-        const std::array<std::uint32_t, KW_RODS_SPEC_COUNT> spec = {max_joints};
         auto created = gpu::ComputePipeline::create(*ctx_, "rods_step", types, sizeof(gpu::RodPush), spec);
         if (!created) return created.error();
-        pipelines_.emplace_back(max_joints, std::move(created).value());
+        pipelines_.emplace_back(spec, std::move(created).value());
         return &pipelines_.back().second;
     }
 
@@ -81,13 +83,17 @@ public:
         dt_ = -1.0f;
 
         // Constants: templates, their joints and shapes.
-        std::uint32_t max_joints = 2;
+        std::uint32_t max_joints = 2, max_views = 0;
+        bool all_none = true, all_full = true;
         templates_.clear();
         std::vector<gpu::RodTemplateJointGpu> tjoints;
         std::vector<gpu::RodShapeJointGpu> shapes;
         for (const rods::ChainTemplate& t : world.templates) {
             const std::uint32_t n = t.chain.joint_count;
             max_joints = std::max(max_joints, n);
+            max_views = std::max(max_views, static_cast<std::uint32_t>(t.views.size()));
+            all_none = all_none && t.params.momentum_suppression == 0.0f;
+            all_full = all_full && t.params.momentum_suppression == 1.0f;
             gpu::RodTemplateGpu g{};
             g.counts = {n, static_cast<std::uint32_t>(t.views.size()), static_cast<std::uint32_t>(tjoints.size()),
                         static_cast<std::uint32_t>(shapes.size())};
@@ -168,7 +174,10 @@ public:
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_SPIN], bytes_of(spin)));
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], bytes_of(chain_states)));
 
-        auto kernel = pipeline(max_joints);
+        const std::uint32_t suppression = all_none   ? KW_RODS_SUPPRESSION_NONE
+                                          : all_full ? KW_RODS_SUPPRESSION_FULL
+                                                     : KW_RODS_SUPPRESSION_PARTIAL;
+        auto kernel = pipeline({max_joints, max_views, suppression});
         if (!kernel) return kernel.error();
         kernel_ = kernel.value();
         std::vector<const GpuBuffer*> bound;
@@ -302,8 +311,8 @@ private:
     }
 
     std::unique_ptr<gpu::VulkanContext> ctx_;
-    // A few variants at most (one per longest-chain length): a vector is the simplest map.
-    std::vector<std::pair<std::uint32_t, gpu::ComputePipeline>> pipelines_;
+    // A few variants at most (one per kind of world): a vector is the simplest map.
+    std::vector<std::pair<Variant, gpu::ComputePipeline>> pipelines_;
     const gpu::ComputePipeline* kernel_ = nullptr;
     const rods::RodWorld* world_ = nullptr;
     std::vector<GpuBuffer> buffers_;

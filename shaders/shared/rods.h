@@ -37,7 +37,13 @@
 
 // Specialization constant ids of rods_step.comp.
 #define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the world: sizes the register arrays
-#define KW_RODS_SPEC_COUNT 1
+#define KW_RODS_SPEC_MAX_VIEWS 1   // the most view examples of a chain of the world
+#define KW_RODS_SPEC_SUPPRESSION 2 // KW_RODS_SUPPRESSION_*: what the world's chains need of SPEC A.5
+#define KW_RODS_SPEC_COUNT 3
+
+#define KW_RODS_SUPPRESSION_NONE 0u     // every chain has momentum_suppression 0
+#define KW_RODS_SUPPRESSION_FULL 1u     // every chain has momentum_suppression 1
+#define KW_RODS_SUPPRESSION_PARTIAL 2u  // anything else
 
 KW_NAMESPACE_BEGIN
 
