@@ -324,7 +324,7 @@ float max_stretch(const Chain& chain, const ChainState& s) {
 float rest_error(const Chain& chain, const ChainState& s, const Transform& root, const ChainShape& rest) {
     float e = 0.0f;
     for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
-        e = std::max(e, glm::length(s.x[i] - (root.position + root.rotation * rest.positions[i])));
+        e = std::max(e, glm::length(position(s, i) - (root.position + root.rotation * rest.positions[i])));
     }
     return e;
 }
@@ -461,11 +461,11 @@ TEST(RodSolver, CollidersKeepParticlesOut) {
             for (std::uint32_t i = 1; i < rig.chain.joint_count; ++i) {
                 float gap;
                 if (which == 0) {
-                    gap = glm::length(s.x[i] - sphere.center) - sphere.radius - thickness;
+                    gap = glm::length(position(s, i) - sphere.center) - sphere.radius - thickness;
                 } else {
                     const glm::vec3 ab = capsule.b - capsule.a;
-                    const float u = std::clamp(glm::dot(s.x[i] - capsule.a, ab) / glm::dot(ab, ab), 0.0f, 1.0f);
-                    gap = glm::length(s.x[i] - (capsule.a + u * ab)) - capsule.radius - thickness;
+                    const float u = std::clamp(glm::dot(position(s, i) - capsule.a, ab) / glm::dot(ab, ab), 0.0f, 1.0f);
+                    gap = glm::length(position(s, i) - (capsule.a + u * ab)) - capsule.radius - thickness;
                 }
                 deepest = std::max(deepest, -gap);
                 closest = std::min(closest, gap);
@@ -524,12 +524,12 @@ TEST(RodSolver, FrameRateIndependentAtEqualSubsteps) {
     EXPECT_LT(diff, 1e-4f);
 }
 
-// SPEC A.5's measured outcome: an instant switch of rest shape (a straight 13-joint
-// strand told to curl by 0.3 rad per segment). With suppression on the switch is applied
-// kinematically, so the peak kinetic energy must be at most a quarter of the peak without
-// it (measured: ~1e-12 J against ~1e-3 J), and the chain must still end on the new shape
-// (within 1e-3 of its length). Gravity is off here: under gravity a switch also moves
-// the sagging equilibrium, whose motion suppression does not remove (see solver.hpp).
+// SPEC A.5's measured outcome, under gravity: an instant switch of rest shape (a
+// straight hanging 13-joint strand told to curl by 0.3 rad per segment). With
+// suppression on the switch is applied kinematically, so the peak kinetic energy must be
+// at most a quarter of the peak without it (measured: ~3e-3 J against ~1.3 J), and the
+// chain must still end on the new shape: within 5% of its length, the sag of the curl
+// under gravity at the default rest_stiffness (measured 3.2%).
 TEST(RodSolver, MomentumSuppressionQuartersThePeakKineticEnergy) {
     const float length = 0.3f;
     const ChainShape straight = arc_shape(13, length, glm::vec3(0, -1, 0), glm::vec3(0, 0, 1), 0.0f);
@@ -540,11 +540,10 @@ TEST(RodSolver, MomentumSuppressionQuartersThePeakKineticEnergy) {
     float final_error[2] = {0.0f, 0.0f};
     for (int on = 0; on < 2; ++on) {
         SolverParams params;
-        params.gravity = glm::vec3(0.0f);
         params.momentum_suppression = on ? 1.0f : 0.0f;
         ChainState s = initial_state(rig.chain, root, straight);
         for (int frame = 0; frame < 60; ++frame) step(rig.chain, params, root, straight, {}, {}, 1.0f / 60.0f, s);
-        for (int frame = 0; frame < 240; ++frame) {
+        for (int frame = 0; frame < 600; ++frame) {
             step(rig.chain, params, root, curl, {}, {}, 1.0f / 60.0f, s);
             peak[on] = std::max(peak[on], kinetic_energy(rig.chain, s));
         }
@@ -552,5 +551,51 @@ TEST(RodSolver, MomentumSuppressionQuartersThePeakKineticEnergy) {
     }
     EXPECT_GT(peak[0], 0.0f) << "without suppression the switch must set the chain moving";
     EXPECT_LE(peak[1], 0.25f * peak[0]);
-    EXPECT_LT(final_error[1], 1e-3f * length);
+    EXPECT_LT(final_error[1], 0.05f * length);
+    EXPECT_LT(final_error[0], 0.05f * length);
+    std::printf("[ measured ] switch under gravity: peak KE %.3g J with suppression, %.3g J without; final error %.3g of L\n",
+                static_cast<double>(peak[1]), static_cast<double>(peak[0]), static_cast<double>(final_error[1] / length));
+}
+
+// A chain displaced from its rest shape, gravity off, no suppression: plain dynamics must
+// bring it to rest on its rest shape. Bound: 1e-3 of the length after 10 s (measured
+// ~1e-5: float rounding of the goals).
+TEST(RodSolver, ConvergesToItsRestShapeWithoutGravity) {
+    const float length = 0.3f;
+    const ChainShape straight = arc_shape(13, length, glm::vec3(0, -1, 0), glm::vec3(0, 0, 1), 0.0f);
+    const ChainShape curl = arc_shape(13, length, glm::vec3(0, -1, 0), glm::vec3(0, 0, 1), 0.3f);
+    const Rig rig = make_rig(straight);
+    const Transform root{glm::vec3(4, 1.5f, -3), glm::angleAxis(0.7f, glm::normalize(glm::vec3(1, 1, 0)))};
+    SolverParams params;
+    params.gravity = glm::vec3(0.0f);
+    params.momentum_suppression = 0.0f;
+    ChainState s = initial_state(rig.chain, root, straight);
+    for (int frame = 0; frame < 600; ++frame) step(rig.chain, params, root, curl, {}, {}, 1.0f / 60.0f, s);
+    const float error = rest_error(rig.chain, s, root, curl);
+    EXPECT_LT(error, 1e-3f * length);
+    EXPECT_LT(kinetic_energy(rig.chain, s), 1e-9f);
+    std::printf("[ measured ] displaced strand without gravity, after 10 s: %.3g of L\n", static_cast<double>(error / length));
+}
+
+// The artist's shape holds against gravity: a strand curling up and sideways (a bunny
+// ear's shape) ends within 5% of its length of the rest shape at the default
+// rest_stiffness (measured ~1-3%). Without the rest-pose attraction (rest_stiffness 0)
+// it must sag far more (>= 30% of its length), which shows why solver.hpp adds it.
+TEST(RodSolver, HoldsItsShapeAgainstGravity) {
+    const float length = 0.3f;
+    const ChainShape ear = arc_shape(12, length, glm::vec3(0.2f, 1, 0), glm::vec3(0, 0, 1), 0.08f);
+    const Rig rig = make_rig(ear);
+    const Transform root{glm::vec3(0, 1.7f, 0), glm::quat(1, 0, 0, 0)};
+    float error[2] = {0.0f, 0.0f};
+    for (int attract = 0; attract < 2; ++attract) {
+        SolverParams params;
+        if (!attract) params.rest_stiffness = 0.0f;
+        ChainState s = initial_state(rig.chain, root, ear);
+        for (int frame = 0; frame < 300; ++frame) step(rig.chain, params, root, ear, {}, {}, 1.0f / 60.0f, s);
+        error[attract] = rest_error(rig.chain, s, root, ear);
+    }
+    EXPECT_LT(error[1], 0.05f * length);
+    EXPECT_GT(error[0], 0.3f * length);
+    std::printf("[ measured ] upright ear under gravity: %.3g of L with rest_stiffness 0.1, %.3g without\n",
+                static_cast<double>(error[1] / length), static_cast<double>(error[0] / length));
 }

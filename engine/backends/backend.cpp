@@ -20,4 +20,13 @@ Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const B
     return make_error(Error::Kind::Internal, "unknown backend");
 }
 
+Result<std::unique_ptr<RodBackend>> make_rod_backend(BackendKind kind, const BackendOptions& options) {
+    switch (kind) {
+        case BackendKind::CpuReference: return make_cpu_rod_backend(true, 1);
+        case BackendKind::Cpu: return make_cpu_rod_backend(false, options.threads);
+        case BackendKind::Vulkan: return make_vulkan_rod_backend(options);
+    }
+    return make_error(Error::Kind::Internal, "unknown backend");
+}
+
 }  // namespace kodawari

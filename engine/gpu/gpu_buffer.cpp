@@ -1,5 +1,6 @@
 #include "gpu/gpu_buffer.hpp"
 
+#include <cassert>
 #include <cstring>
 
 namespace kodawari::gpu {
@@ -72,6 +73,35 @@ Result<void> upload(VulkanContext& ctx, const GpuBuffer& buffer, std::span<const
                                         .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
         cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eComputeShader, {}, barrier, {}, {});
     });
+}
+
+}  // namespace kodawari::gpu
+
+namespace kodawari::gpu {
+
+Result<void> download(VulkanContext& ctx, const GpuBuffer& buffer, std::span<std::byte> bytes) {
+    assert(bytes.size() <= buffer.size());
+    if (bytes.empty()) return {};
+    if (buffer.mapped() != nullptr) {
+        KW_TRY(buffer.invalidate(ctx));
+        std::memcpy(bytes.data(), buffer.mapped(), bytes.size());
+        return {};
+    }
+    auto staging = GpuBuffer::create(ctx, bytes.size(), GpuBuffer::Kind::Readback);
+    if (!staging) return staging.error();
+    KW_TRY(ctx.submit([&](const vk::raii::CommandBuffer& cmd) {
+        // The kernels wrote what the copy reads; the host then reads the copy.
+        const vk::MemoryBarrier before{.srcAccessMask = vk::AccessFlagBits::eShaderWrite,
+                                       .dstAccessMask = vk::AccessFlagBits::eTransferRead};
+        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eTransfer, {}, before, {}, {});
+        cmd.copyBuffer(buffer.handle(), staging.value().handle(), vk::BufferCopy{.size = bytes.size()});
+        const vk::MemoryBarrier after{.srcAccessMask = vk::AccessFlagBits::eTransferWrite,
+                                      .dstAccessMask = vk::AccessFlagBits::eHostRead};
+        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eHost, {}, after, {}, {});
+    }));
+    KW_TRY(staging.value().invalidate(ctx));
+    std::memcpy(bytes.data(), staging.value().mapped(), bytes.size());
+    return {};
 }
 
 }  // namespace kodawari::gpu

@@ -45,4 +45,8 @@ private:
 /// temporary staging buffer and a copy on the queue.
 [[nodiscard]] Result<void> upload(VulkanContext& ctx, const GpuBuffer& buffer, std::span<const std::byte> bytes);
 
+/// Reads the first bytes.size() bytes of a Storage buffer that kernels wrote in earlier,
+/// completed submissions: by memcpy when mapped, else through a readback buffer.
+[[nodiscard]] Result<void> download(VulkanContext& ctx, const GpuBuffer& buffer, std::span<std::byte> bytes);
+
 }  // namespace kodawari::gpu

@@ -3,6 +3,9 @@
 #include <cstddef>
 
 #include <shared/birds.h>
+#include <shared/rods.h>
+
+#include "kodawari/rods/world.hpp"
 
 namespace kodawari::gpu {
 
@@ -27,5 +30,26 @@ static_assert(offsetof(BirdDiag, velocity) == 0 && offsetof(BirdDiag, accelerati
               offsetof(BirdDiag, angles) == 32 && offsetof(BirdDiag, attitude) == 48);
 static_assert(sizeof(BirdPush) == 16);
 static_assert(KW_BIRDS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
+
+// shared/rods.h
+static_assert(sizeof(RodTemplateGpu) == 16 * (6 + KW_RODS_MAX_VIEWS));
+static_assert(offsetof(RodTemplateGpu, counts) == 0 && offsetof(RodTemplateGpu, solver) == 16 &&
+              offsetof(RodTemplateGpu, step) == 32 && offsetof(RodTemplateGpu, physics) == 48 &&
+              offsetof(RodTemplateGpu, accel) == 64 && offsetof(RodTemplateGpu, first_dir) == 80 &&
+              offsetof(RodTemplateGpu, views) == 96);
+static_assert(sizeof(RodTemplateJointGpu) == 32 && offsetof(RodTemplateJointGpu, lengths) == 16);
+static_assert(sizeof(RodShapeJointGpu) == 32 && offsetof(RodShapeJointGpu, orientation) == 16);
+static_assert(sizeof(RodChainGpu) == 32 && offsetof(RodChainGpu, joints) == 16);
+static_assert(sizeof(RodTransformGpu) == 32 && offsetof(RodTransformGpu, rotation) == 16);
+static_assert(sizeof(RodColliderGpu) == 32 && offsetof(RodColliderGpu, b) == 16);
+static_assert(sizeof(RodJointMotionGpu) == 32 && offsetof(RodJointMotionGpu, v) == 16);
+static_assert(sizeof(RodJointSpinGpu) == 48 && offsetof(RodJointSpinGpu, omega) == 16 && offsetof(RodJointSpinGpu, group) == 32);
+static_assert(sizeof(RodJointRestGpu) == 32 && offsetof(RodJointRestGpu, orientation) == 16);
+static_assert(sizeof(RodChainStateGpu) == 80);
+static_assert(offsetof(RodChainStateGpu, root) == 0 && offsetof(RodChainStateGpu, view) == 32 &&
+              offsetof(RodChainStateGpu, weights) == 48);
+static_assert(sizeof(RodPush) == 48 && offsetof(RodPush, camera_position) == 16 && offsetof(RodPush, camera_forward) == 32);
+static_assert(KW_RODS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
+static_assert(KW_RODS_MAX_JOINTS == rods::kMaxChainJoints && KW_RODS_MAX_VIEWS == rods::kMaxViewExamples);
 
 }  // namespace kodawari::gpu

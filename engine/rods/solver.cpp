@@ -26,15 +26,28 @@ constexpr int kExtractIterations = 10;
 // while every weight stays finite and A well conditioned.
 constexpr float kRootShapeWeight = 10.0f;
 
-// The same rotation with w >= 0, the identity's hemisphere: slerp from the identity and
-// the angle 2 atan2(|xyz|, w) then take the short way.
+// The same rotation with w >= 0, the identity's hemisphere.
 glm::quat positive_w(glm::quat q) { return q.w < 0.0f ? -q : q; }
 
-// The rotation by `fraction` of `q`'s angle about its axis (slerp from the identity).
+// The rotation by `fraction` of `q`'s angle about its axis, the short way. The angle is
+// 2 atan2(|xyz|, w), well conditioned everywhere; glm::slerp's acos of a dot product
+// near 1 loses half the digits of small angles, and the GPU's acos differs from the
+// CPU's there by far more than rounding (shaders/rods_step.comp uses the same formula).
 glm::quat partial(glm::quat q, float fraction) {
     if (fraction >= 1.0f) return q;
     if (fraction <= 0.0f) return kIdentity;
-    return glm::normalize(glm::slerp(kIdentity, positive_w(q), fraction));
+    q = positive_w(q);
+    const glm::vec3 v(q.x, q.y, q.z);
+    const float sn = glm::length(v);
+    if (!(sn > 0.0f)) return kIdentity;
+    const float half = fraction * std::atan2(sn, q.w);
+    const glm::vec3 axis = v / sn;
+    return glm::normalize(glm::quat(std::cos(half), std::sin(half) * axis.x, std::sin(half) * axis.y, std::sin(half) * axis.z));
+}
+
+// Spherical interpolation from a to b (t in [0, 1]) by partial(): a (a^-1 b)^t.
+glm::quat interpolate(glm::quat a, glm::quat b, float t) {
+    return glm::normalize(a * partial(glm::conjugate(a) * b, t));
 }
 
 // Rotational part of A by the iterative method of Mueller, Bender, Chentanez, Macklin,
@@ -110,6 +123,7 @@ Result<void> validate(const SolverParams& p) {
     if (!(p.max_substep > 0.0f && p.max_substep <= 0.05f)) return bad("max_substep must be in (0, 0.05] s");
     if (p.iterations < 1 || p.iterations > 64) return bad("iterations must be 1 to 64");
     if (!(p.stiffness >= 0.0f && p.stiffness <= 1.0f)) return bad("stiffness must be in [0, 1]");
+    if (!(p.rest_stiffness >= 0.0f && p.rest_stiffness <= 1.0f)) return bad("rest_stiffness must be in [0, 1]");
     if (!(p.damping >= 0.0f && std::isfinite(p.damping))) return bad("damping must be >= 0");
     if (!(p.momentum_suppression >= 0.0f && p.momentum_suppression <= 1.0f)) {
         return bad("momentum_suppression must be in [0, 1]");
@@ -150,7 +164,7 @@ ChainState initial_state(const Chain& chain, const Transform& root, const ChainS
     ChainState s;
     s.root = root;
     for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
-        s.x[i] = root.position + root.rotation * rest.positions[i];
+        s.x[i] = root.rotation * rest.positions[i];
         s.q[i] = glm::normalize(root.rotation * rest.orientations[i]);
         s.rest_position[i] = rest.positions[i];
         s.rest_orientation[i] = rest.orientations[i];
@@ -174,6 +188,8 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
     // SPEC A.4 / this header: k per substep from k' per iteration, (1 - k')^iterations = 1 - k.
     const float k_iter =
         1.0f - std::pow(1.0f - params.stiffness, 1.0f / static_cast<float>(params.iterations));
+    const float k_rest =
+        1.0f - std::pow(1.0f - params.rest_stiffness, 1.0f / static_cast<float>(params.iterations));
     const float decay = std::exp(-params.damping * h);
     const glm::vec3 acceleration = params.gravity + params.wind;
 
@@ -184,14 +200,29 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
         s.rest_orientation[i] = rest.orientations[i];
     }
 
+    // The frame is solved relative to the previous root position (s.x already is): the
+    // root moves by `travel`. Far from the world origin, world coordinates would round to
+    // ~1e-6 m at 10 m, as coarse as the solver's own corrections on a small strand.
     const Transform from = s.root;
+    const glm::vec3 travel = root.position - from.position;
+    std::array<Sphere, kMaxChainColliders> local_spheres{};
+    std::array<Capsule, kMaxChainColliders> local_capsules{};
+    assert(spheres.size() <= local_spheres.size() && capsules.size() <= local_capsules.size());
+    for (std::size_t k = 0; k < spheres.size(); ++k) {
+        local_spheres[k] = Sphere{spheres[k].center - from.position, spheres[k].radius};
+    }
+    for (std::size_t k = 0; k < capsules.size(); ++k) {
+        local_capsules[k] = Capsule{capsules[k].a - from.position, capsules[k].b - from.position, capsules[k].radius};
+    }
+    spheres = std::span<const Sphere>(local_spheres.data(), spheres.size());
+    capsules = std::span<const Capsule>(local_capsules.data(), capsules.size());
     std::array<glm::vec3, kMaxChainJoints> p{}, xbar{}, goal_sum{};
     std::array<glm::quat, kMaxChainJoints> qs{}, obar{}, q_new{};
-    std::array<float, kMaxChainJoints> goal_count{};
+    std::array<glm::mat3, kMaxChainJoints> ellipsoid{};
+    auto weight = [&](std::uint32_t j) { return j == 0 ? kRootShapeWeight * chain.mass[0] : chain.mass[j]; };
     for (std::uint32_t sub = 1; sub <= substeps; ++sub) {
         const float t = static_cast<float>(sub) / static_cast<float>(substeps);
-        const Transform r{glm::mix(from.position, root.position, t),
-                          glm::normalize(glm::slerp(from.rotation, root.rotation, t))};
+        const Transform r{t * travel, interpolate(from.rotation, root.rotation, t)};
 
         // 1-2. Kinematic root and the rest shape placed by the root (SPEC A.4).
         for (std::uint32_t i = 0; i < n; ++i) {
@@ -222,13 +253,24 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
         for (std::uint32_t it = 0; it < params.iterations; ++it) {
             // Shape matching, Jacobi over the groups G_i = {i-1, i, i+1}: every particle
             // moves toward the mean of its goals, so the result does not depend on the
-            // order of the groups (as on the GPU).
-            goal_sum.fill(glm::vec3(0.0f));
-            goal_count.fill(0.0f);
+            // order of the groups.
+            // A_j = (m_j/5) R_j diag(a^2, b^2, c^2) Rbar_j^T (Mueller & Chentanez 2011, eq. 11)
+            // with b = c = thickness and a along the bone axis u_j: diag = b^2 I +
+            // (a^2 - b^2) u u^T in the particle frame, so A_j = (m_j/5)(b^2 R_j Rbar_j^T +
+            // (a^2 - b^2)(R_j u)(Rbar_j u)^T). Once per particle: each is in three groups.
+            const float b2 = chain.thickness * chain.thickness;
+            for (std::uint32_t j = 0; j < n; ++j) {
+                const float a2 = chain.half_length[j] * chain.half_length[j];
+                const glm::mat3 rj = glm::mat3_cast(qs[j]);
+                const glm::mat3 rbarj = glm::mat3_cast(obar[j]);
+                const glm::vec3 u = chain.bone_axis[j];
+                ellipsoid[j] = (weight(j) / 5.0f) *
+                               (b2 * (rj * glm::transpose(rbarj)) + (a2 - b2) * glm::outerProduct(rj * u, rbarj * u));
+                goal_sum[j] = glm::vec3(0.0f);
+            }
             for (std::uint32_t i = 0; i < n; ++i) {
                 const std::uint32_t lo = i == 0 ? 0 : i - 1;
                 const std::uint32_t hi = std::min(i + 1, n - 1);
-                auto weight = [&](std::uint32_t j) { return j == 0 ? kRootShapeWeight * chain.mass[0] : chain.mass[j]; };
                 float group_mass = 0.0f;
                 glm::vec3 c(0.0f), cbar(0.0f);
                 for (std::uint32_t j = lo; j <= hi; ++j) {
@@ -241,33 +283,29 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
                 // A = sum_j (m_j p_j xbar_j^T + A_j) - M c cbar^T (Mueller & Chentanez 2011,
                 // eq. 9), summed in the centred form sum_j m_j (p_j - c)(xbar_j - cbar)^T,
                 // equal but free of the cancellation of world coordinates in float.
-                // A_j = (m_j/5) R_j diag(a^2, b^2, c^2) Rbar_j^T with b = c = thickness and a
-                // along the bone axis u_j: diag = b^2 I + (a^2 - b^2) u u^T in the particle
-                // frame, so A_j = (m_j/5)(b^2 R_j Rbar_j^T + (a^2 - b^2)(R_j u)(Rbar_j u)^T).
                 glm::mat3 a(0.0f);
-                const float b2 = chain.thickness * chain.thickness;
                 for (std::uint32_t j = lo; j <= hi; ++j) {
-                    const float m = weight(j);
-                    a += m * glm::outerProduct(p[j] - c, xbar[j] - cbar);
-                    const float a2 = chain.half_length[j] * chain.half_length[j];
-                    const glm::mat3 rj = glm::mat3_cast(qs[j]);
-                    const glm::mat3 rbarj = glm::mat3_cast(obar[j]);
-                    const glm::vec3 u = chain.bone_axis[j];
-                    a += (m / 5.0f) * (b2 * (rj * glm::transpose(rbarj)) +
-                                       (a2 - b2) * glm::outerProduct(rj * u, rbarj * u));
+                    a += weight(j) * glm::outerProduct(p[j] - c, xbar[j] - cbar);
+                    a += ellipsoid[j];
                 }
                 const glm::quat rot = extract_rotation(a, s.group_rotation[i]);
                 s.group_rotation[i] = rot;
-                for (std::uint32_t j = lo; j <= hi; ++j) {
-                    goal_sum[j] += c + rot * (xbar[j] - cbar);  // g_j = c + R (xbar_j - cbar)
-                    goal_count[j] += 1.0f;
-                }
+                for (std::uint32_t j = lo; j <= hi; ++j) goal_sum[j] += c + rot * (xbar[j] - cbar);  // g_j = c + R (xbar_j - cbar)
                 q_new[i] = glm::normalize(rot * obar[i]);  // the centre's orientation: R obar_i
             }
             for (std::uint32_t i = 1; i < n; ++i) {
-                p[i] += k_iter * (goal_sum[i] / goal_count[i] - p[i]);
+                // Groups containing particle i: 2 at either end, 3 inside.
+                const float goal_count = i + 1 == n ? 2.0f : 3.0f;
+                p[i] += k_iter * (goal_sum[i] / goal_count - p[i]);
                 qs[i] = q_new[i];
             }
+
+            // Rest-pose attraction: every particle moves k_rest' of the way to its rest
+            // position placed by the root (the global shape constraint of Han & Harada,
+            // "Real-Time Hair Simulation with Efficient Hair Style Preservation", VRIPHYS
+            // 2012). The overlapping groups above cannot hold a bend (solver.hpp); this
+            // does, and as a projection towards a fixed target it never adds energy.
+            for (std::uint32_t i = 1; i < n; ++i) p[i] += k_rest * (xbar[i] - p[i]);
 
             // Distance constraints (SPEC A.4), one sweep from the root outward in which
             // each child takes the whole correction: the parent counts as kinematic with
@@ -305,6 +343,7 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
             s.q[i] = qs[i];
         }
     }
+    for (std::uint32_t i = 0; i < n; ++i) s.x[i] -= travel;
     s.root = root;
 }
 
@@ -313,7 +352,7 @@ ChainPose pose(const Chain& chain, const ChainState& s) {
     ChainPose out;
     std::array<glm::quat, kMaxChainJoints> bone{};
     for (std::uint32_t i = 0; i < n; ++i) {
-        out.position[i] = s.x[i];
+        out.position[i] = position(s, i);
         out.orientation[i] = s.q[i];
         bone[i] = s.q[i];
         if (i + 1 < n) {
@@ -329,6 +368,8 @@ ChainPose pose(const Chain& chain, const ChainState& s) {
     }
     return out;
 }
+
+glm::vec3 position(const ChainState& s, std::uint32_t joint) { return s.root.position + s.x[joint]; }
 
 float kinetic_energy(const Chain& chain, const ChainState& s) {
     float e = 0.0f;

@@ -73,6 +73,9 @@ Result<void> RodWorld::finalize() {
         if (chain.collider_begin > collider_count || chain.collider_count > collider_count - chain.collider_begin) {
             return bad(where + "collider range out of range");
         }
+        if (chain.collider_count > kMaxChainColliders) {
+            return bad(where + "at most " + std::to_string(kMaxChainColliders) + " colliders per chain");
+        }
         chain.joint_begin = joint_count;
         joint_count += templates[chain.template_index].chain.joint_count;
     }

@@ -13,16 +13,25 @@
 /// last segment). For a rig whose bones point down local +Y, u_i = +Y for every joint.
 /// The particle ellipsoid's long axis is u_i.
 ///
-/// Status (issue 3, open): inextensibility, colliders, stability under violent motion,
-/// frame-rate independence and the A.5 outcome without gravity (peak kinetic energy of a
-/// rest-shape switch ~1e-9 of the unsuppressed peak) are met and tested. Not met yet, so
-/// no scene or backend uses this solver: (1) with gravity off a displaced chain reaches
-/// its rest shape to ~1% of its length in 10 s but then keeps a slow wobble of 0.1-0.9%
-/// of its length instead of settling below 0.1% (measured on a 13-joint strand; neither
-/// Gauss-Seidel groups, symmetric distance constraints, more extraction iterations nor
-/// dropping the angular-velocity integration removes it, so the orientation coupling of
-/// the groups is the suspect); (2) under gravity, suppression does not lower the peak
-/// kinetic energy of a switch (ratio 1.1-1.2), since the sagging equilibrium moves too.
+/// Why the solver has a rest-pose attraction besides SPEC A.4's shape matching. Shape
+/// matching over overlapping groups {i-1, i, i+1} cannot resist a uniform bend: for a
+/// chain bent into an arc (curvature k, straight rest), group i's best rigid fit moves its
+/// centre particle by -2s/3 towards the chord and its two end particles by +s/3 away from
+/// it (s = the sagitta, k l^2 / 2), so the three groups that contain a particle pull it by
+/// -2s/3 + s/3 + s/3 = 0. This holds for any group width (the residuals of a straight fit
+/// to a parabola sum to zero over a symmetric window) and the orientation term does not
+/// change it (every particle's orientation follows its own group). Only the clipped groups
+/// at the root resist, so a strand sags under gravity into an arc of its own length
+/// whatever the stiffness (measured: a curled 13-joint strand ended 0.9-1.1 chain lengths
+/// from its rest shape at stiffness 0.5 and 1). Measured fixes, on the same strand:
+/// larger or self-weighted groups went unstable (Jacobi overshoot); Gauss-Seidel groups
+/// stayed soft; bend-twist constraints on the orientations (Kugelstadt & Schoemer 2016)
+/// and local shape constraints in the parent's frame either stayed soft or pumped energy
+/// next to the groups. The global shape constraint (rest_stiffness) fixes it: 3% of the
+/// length of sag at 0.1, convergence to the rest shape to 1e-5 of the length without
+/// gravity, and a 1e-7 m perturbation of 200 strands stays below 1e-5 m over 300 frames
+/// (without it, the same perturbation grew to 0.2 m: the soft mode made the system
+/// chaotic).
 
 #include <array>
 #include <cstdint>
@@ -41,6 +50,9 @@ struct Transform {
     glm::vec3 position{0.0f};
     glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
 };
+
+/// The most colliders of each kind one chain may touch.
+inline constexpr std::uint32_t kMaxChainColliders = 16;
 
 /// A kinematic sphere collider, world space.
 struct Sphere {
@@ -67,6 +79,12 @@ struct SolverParams {
     /// goals covered per substep, whatever `iterations` is. Each iteration uses
     /// k' = 1 - (1 - k)^(1/iterations), so that `iterations` moves compound to k.
     float stiffness = 0.5f;
+    /// Rest-pose attraction k_rest in [0, 1]: the fraction of the way each particle moves
+    /// towards its rest position (the blended rest shape placed by the root) per substep,
+    /// whatever `iterations` is (same conversion as `stiffness`). It holds the artist's
+    /// shape against gravity; 0 leaves only shape matching, which cannot (see above).
+    /// Sag of a horizontal-ish strand scales as g h^2 / k_rest.
+    float rest_stiffness = 0.1f;
     /// Linear and angular velocity damping rate, 1/s, >= 0: velocities are multiplied by
     /// exp(-damping h) per substep h, which is independent of the substep length.
     float damping = 1.0f;
@@ -96,7 +114,10 @@ struct Chain {
 
 /// Everything a chain carries from one step to the next. Joint 0 is kinematic.
 struct ChainState {
-    std::array<glm::vec3, kMaxChainJoints> x{};      ///< positions, world, m
+    /// Positions relative to root.position (world axes), m: position() gives the world
+    /// position. Relative, so that precision follows the strand's size, not its distance
+    /// from the world origin.
+    std::array<glm::vec3, kMaxChainJoints> x{};
     std::array<glm::vec3, kMaxChainJoints> v{};      ///< velocities, m/s
     std::array<glm::quat, kMaxChainJoints> q{};      ///< orientations, world
     std::array<glm::vec3, kMaxChainJoints> omega{};  ///< angular velocities, rad/s, world
@@ -117,7 +138,7 @@ struct ChainState {
 /// the previous one (linearly, and by slerp), so a fast root does not jump. `rest` is
 /// this frame's rest shape in the root frame (positions and orientations, joint_count
 /// each); the solver places it by the interpolated root in every substep. Colliders are
-/// taken as fixed during the frame.
+/// taken as fixed during the frame; at most kMaxChainColliders of each.
 void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
           std::span<const Sphere> spheres, std::span<const Capsule> capsules, float dt, ChainState& state);
 
@@ -134,6 +155,9 @@ struct ChainPose {
 
 /// The pose of `state` (SPEC A.4, output).
 [[nodiscard]] ChainPose pose(const Chain& chain, const ChainState& state);
+
+/// World position of a joint: root.position + x[joint].
+[[nodiscard]] glm::vec3 position(const ChainState& state, std::uint32_t joint);
 
 /// Kinetic energy of the simulated particles (all but joint 0), J. For tests and tools.
 [[nodiscard]] float kinetic_energy(const Chain& chain, const ChainState& state);

@@ -1,0 +1,124 @@
+// The CPU rod backends: "cpu-reference" runs engine/rods (world.cpp, solver.cpp) chain
+// after chain on one thread (the validation oracle); "cpu" runs the same code on several
+// threads, each over a fixed range of chains, so both produce the same bits.
+#include <algorithm>
+#include <string>
+#include <vector>
+
+#include "backends/backends.hpp"
+#include "core/parallel.hpp"
+
+namespace kodawari {
+
+void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
+                          rods::ChainState& state, rods::RestShape* rest_out) {
+    const rods::ChainInstance& c = world.chains[chain];
+    const rods::ChainTemplate& t = world.templ(c);
+    rods::RestShape rest = rods::rest_shape(world, chain, frame);
+    const std::span<const rods::Capsule> colliders(frame.colliders.data() + c.collider_begin, c.collider_count);
+    rods::step(t.chain, t.params, frame.roots[chain], rest.shape, {}, colliders, frame.dt, state);
+    if (rest_out != nullptr) *rest_out = std::move(rest);
+}
+
+namespace {
+
+constexpr std::size_t kWeights = rods::kMaxViewExamples + 1;
+
+class CpuRodBackend final : public RodBackend {
+public:
+    CpuRodBackend(bool reference, unsigned threads) : reference_(reference), threads_(reference ? 1 : resolve_threads(threads)) {}
+
+    std::string_view name() const override { return reference_ ? "cpu-reference" : "cpu"; }
+    std::string device() const override { return std::to_string(threads_) + (threads_ == 1 ? " thread" : " threads"); }
+
+    Result<void> load(const rods::RodWorld& world, const rods::RodFrame& initial) override {
+        KW_TRY(rods::check_frame(world, initial));
+        world_ = &world;
+        const std::size_t count = world.chains.size();
+        states_.resize(count);
+        view_.assign(count, glm::vec3(0.0f));
+        weights_.assign(count * kWeights, 0.0f);
+        rest_.assign(world.joint_count, glm::vec3(0.0f));
+        run([&](std::uint32_t c) {
+            const rods::RestShape rest = rods::rest_shape(world, c, initial);
+            states_[c] = rods::initial_state(world.templ(world.chains[c]).chain, initial.roots[c], rest.shape);
+            keep(c, rest);
+        });
+        return {};
+    }
+
+    Result<void> step(const rods::RodFrame& frame) override {
+        assert(world_ != nullptr && "load() first");
+        KW_TRY(rods::check_frame(*world_, frame));
+        run([&](std::uint32_t c) {
+            rods::RestShape rest;
+            step_chain_reference(*world_, c, frame, states_[c], &rest);
+            keep(c, rest);
+        });
+        return {};
+    }
+
+    Result<void> read(ChainSnapshot& out) override {
+        assert(world_ != nullptr && "load() first");
+        out.positions.resize(world_->joint_count);
+        out.orientations.resize(world_->joint_count);
+        out.rest = rest_;
+        out.view_directions = view_;
+        out.weights = weights_;
+        for (std::size_t c = 0; c < world_->chains.size(); ++c) {
+            const rods::ChainInstance& chain = world_->chains[c];
+            const std::uint32_t n = world_->templ(chain).chain.joint_count;
+            for (std::uint32_t i = 0; i < n; ++i) {
+                out.positions[chain.joint_begin + i] = rods::position(states_[c], i);
+                out.orientations[chain.joint_begin + i] = states_[c].q[i];
+            }
+        }
+        return {};
+    }
+
+    Result<void> read_states(std::vector<rods::ChainState>& out) override {
+        out = states_;
+        return {};
+    }
+
+private:
+    template <typename Fn>
+    void run(Fn&& fn) {
+        const std::size_t count = world_->chains.size();
+        auto range = [&](std::size_t begin, std::size_t end) {
+            for (std::size_t c = begin; c < end; ++c) fn(static_cast<std::uint32_t>(c));
+        };
+        if (reference_) {
+            range(0, count);
+        } else {
+            parallel_for(count, threads_, range);
+        }
+    }
+
+    // What read() reports besides the state: the frame's view, weights and rest shape.
+    void keep(std::uint32_t c, const rods::RestShape& rest) {
+        const rods::ChainInstance& chain = world_->chains[c];
+        view_[c] = rest.view_direction;
+        std::copy(rest.weights.begin(), rest.weights.end(), weights_.begin() + static_cast<std::ptrdiff_t>(c * kWeights));
+        const rods::Transform& root = states_[c].root;
+        for (std::size_t i = 0; i < rest.shape.positions.size(); ++i) {
+            rest_[chain.joint_begin + i] = root.position + root.rotation * rest.shape.positions[i];
+        }
+    }
+
+    bool reference_;
+    unsigned threads_;
+    const rods::RodWorld* world_ = nullptr;
+    std::vector<rods::ChainState> states_;
+    std::vector<glm::vec3> view_;
+    std::vector<float> weights_;
+    std::vector<glm::vec3> rest_;
+};
+
+}  // namespace
+
+std::unique_ptr<RodBackend> make_cpu_rod_backend(bool reference, unsigned threads) {
+    return std::make_unique<CpuRodBackend>(reference, threads);
+}
+
+}  // namespace kodawari

@@ -1,0 +1,325 @@
+// The Vulkan rod backend: one dispatch of shaders/rods_step.comp per frame advances every
+// chain (view weights, blend, suppression, all substeps and iterations in registers; see
+// shaders/shared/rods.h for the layout and why). Per frame the host writes only the
+// kinematic input (reference joints, chain roots, colliders) and, when dt changes, the
+// templates' step sizes; state stays on the device until the caller reads it.
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstring>
+
+#include <shared/rods.h>
+
+#include "backends/backends.hpp"
+#include "core/parallel.hpp"
+#include "gpu/compute_pipeline.hpp"
+
+namespace kodawari {
+namespace {
+
+using gpu::GpuBuffer;
+
+gpu::vec4 to_gpu(glm::vec3 v, float w = 0.0f) { return {v.x, v.y, v.z, w}; }
+gpu::vec4 to_gpu(glm::quat q) { return {q.x, q.y, q.z, q.w}; }
+glm::vec3 vec3_of(const gpu::vec4& v) { return {v.x, v.y, v.z}; }
+glm::quat quat_of(const gpu::vec4& v) { return glm::quat(v.w, v.x, v.y, v.z); }
+gpu::RodTransformGpu to_gpu(const rods::Transform& t) { return {to_gpu(t.position), to_gpu(t.rotation)}; }
+rods::Transform transform_of(const gpu::RodTransformGpu& t) { return {vec3_of(t.position), quat_of(t.rotation)}; }
+
+template <typename T>
+std::span<const std::byte> bytes_of(const std::vector<T>& v) {
+    return std::as_bytes(std::span<const T>(v));
+}
+template <typename T>
+std::span<std::byte> writable_bytes_of(std::vector<T>& v) {
+    return std::as_writable_bytes(std::span<T>(v));
+}
+
+// The step fields of a template for a frame of `dt`, computed exactly as rods::step
+// computes them (same expressions, same library calls), so both sides use the same bits.
+void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
+    const std::uint32_t substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / p.max_substep)));
+    const float h = dt / static_cast<float>(substeps);
+    g.solver = {p.iterations, substeps, 0u, 0u};
+    g.step = {h, std::exp(-p.damping * h),
+              1.0f - std::pow(1.0f - p.stiffness, 1.0f / static_cast<float>(p.iterations)), p.momentum_suppression};
+    g.physics.y = 1.0f - std::pow(1.0f - p.rest_stiffness, 1.0f / static_cast<float>(p.iterations));
+}
+
+class VulkanRodBackend final : public RodBackend {
+public:
+    explicit VulkanRodBackend(std::unique_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
+
+    /// The kernel for chains of up to `max_joints` joints; built on first use and kept.
+    Result<const gpu::ComputePipeline*> pipeline(std::uint32_t max_joints) {
+        for (const auto& [key, p] : pipelines_) {
+            if (key == max_joints) return &p;
+        }
+        const std::vector<vk::DescriptorType> types(KW_RODS_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
+        const std::array<std::uint32_t, KW_RODS_SPEC_COUNT> spec = {max_joints};
+        auto created = gpu::ComputePipeline::create(*ctx_, "rods_step", types, sizeof(gpu::RodPush), spec);
+        if (!created) return created.error();
+        pipelines_.emplace_back(max_joints, std::move(created).value());
+        return &pipelines_.back().second;
+    }
+
+    std::string_view name() const override { return "vulkan"; }
+    std::string device() const override { return ctx_->info().name; }
+    double last_gpu_ms() const override { return gpu_ms_; }
+    std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
+
+    Result<void> load(const rods::RodWorld& world, const rods::RodFrame& initial) override {
+        KW_TRY(rods::check_frame(world, initial));
+        const std::size_t count = world.chains.size();
+        if (count == 0) return make_error(Error::Kind::InvalidInput, "the world has no chains");
+        const std::uint64_t groups = (count + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE;
+        if (groups > ctx_->info().max_workgroup_count[0]) {
+            return make_error(Error::Kind::Unsupported,
+                              std::to_string(count) + " chains exceed what one dispatch on " + ctx_->info().name + " can cover");
+        }
+        world_ = &world;
+        dt_ = -1.0f;
+
+        // Constants: templates, their joints and shapes.
+        std::uint32_t max_joints = 2;
+        templates_.clear();
+        std::vector<gpu::RodTemplateJointGpu> tjoints;
+        std::vector<gpu::RodShapeJointGpu> shapes;
+        for (const rods::ChainTemplate& t : world.templates) {
+            const std::uint32_t n = t.chain.joint_count;
+            max_joints = std::max(max_joints, n);
+            gpu::RodTemplateGpu g{};
+            g.counts = {n, static_cast<std::uint32_t>(t.views.size()), static_cast<std::uint32_t>(tjoints.size()),
+                        static_cast<std::uint32_t>(shapes.size())};
+            g.physics = {t.chain.thickness, 0.0f, 0.0f, 0.0f};
+            g.accel = to_gpu(t.params.gravity + t.params.wind);
+            g.first_dir = to_gpu(t.basis.first_direction);
+            for (std::size_t k = 0; k < t.views.size(); ++k) g.views[k] = to_gpu(t.views[k].direction, t.views[k].influence);
+            templates_.push_back(g);
+            for (std::uint32_t i = 0; i < n; ++i) {
+                tjoints.push_back({to_gpu(t.chain.bone_axis[i], t.chain.mass[i]),
+                                   {t.chain.segment_length[i], t.chain.half_length[i], 0.0f, 0.0f}});
+            }
+            for (const rods::RotationShape& s : t.shapes) {
+                for (std::uint32_t i = 0; i < n; ++i) {
+                    const glm::quat r = i + 1 < n ? s.rotations[i] : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+                    shapes.push_back({to_gpu(r), to_gpu(s.orientations[i])});
+                }
+            }
+        }
+        std::vector<gpu::RodChainGpu> chains(count);
+        for (std::size_t c = 0; c < count; ++c) {
+            const rods::ChainInstance& ch = world.chains[c];
+            chains[c] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, 0u, 0u, 0u}};
+        }
+
+        // The initial state, from the CPU reference's initial_state (so all backends start
+        // from the same bits).
+        std::vector<gpu::RodJointMotionGpu> motion(world.joint_count);
+        std::vector<gpu::RodJointSpinGpu> spin(world.joint_count);
+        std::vector<gpu::RodJointRestGpu> rest(world.joint_count);
+        std::vector<gpu::RodChainStateGpu> chain_states(count);
+        parallel_for(count, 0, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t c = begin; c < end; ++c) {
+                const rods::ChainInstance& ch = world.chains[c];
+                const rods::RestShape r = rods::rest_shape(world, static_cast<std::uint32_t>(c), initial);
+                const rods::ChainState s = rods::initial_state(world.templ(ch).chain, initial.roots[c], r.shape);
+                for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
+                    const std::uint32_t j = ch.joint_begin + i;
+                    motion[j] = {to_gpu(s.x[i]), to_gpu(s.v[i])};
+                    spin[j] = {to_gpu(s.q[i]), to_gpu(s.omega[i]), to_gpu(s.group_rotation[i])};
+                    rest[j] = {to_gpu(s.rest_position[i]), to_gpu(s.rest_orientation[i])};
+                }
+                gpu::RodChainStateGpu& cs = chain_states[c];
+                cs.root = to_gpu(s.root);
+                cs.view = to_gpu(r.view_direction);
+                float w[8] = {};
+                std::copy(r.weights.begin(), r.weights.end(), w);
+                cs.weights[0] = {w[0], w[1], w[2], w[3]};
+                cs.weights[1] = {w[4], w[5], w[6], w[7]};
+            }
+        });
+
+        buffers_.clear();
+        const std::uint64_t sizes[KW_RODS_BINDING_COUNT] = {
+            templates_.size() * sizeof(gpu::RodTemplateGpu),
+            tjoints.size() * sizeof(gpu::RodTemplateJointGpu),
+            shapes.size() * sizeof(gpu::RodShapeJointGpu),
+            chains.size() * sizeof(gpu::RodChainGpu),
+            std::uint64_t{world.character_count} * sizeof(gpu::RodTransformGpu),
+            count * sizeof(gpu::RodTransformGpu),
+            std::uint64_t{world.collider_count} * sizeof(gpu::RodColliderGpu),
+            motion.size() * sizeof(gpu::RodJointMotionGpu),
+            spin.size() * sizeof(gpu::RodJointSpinGpu),
+            rest.size() * sizeof(gpu::RodJointRestGpu),
+            chain_states.size() * sizeof(gpu::RodChainStateGpu)};
+        for (std::uint32_t b = 0; b < KW_RODS_BINDING_COUNT; ++b) {
+            if (sizes[b] > ctx_->info().max_storage_buffer_range) {
+                return make_error(Error::Kind::Unsupported,
+                                  "the rod world needs a storage buffer of " + std::to_string(sizes[b]) + " bytes (binding " +
+                                      std::to_string(b) + "); " + ctx_->info().name + " allows " +
+                                      std::to_string(ctx_->info().max_storage_buffer_range));
+            }
+            auto buffer = GpuBuffer::create(*ctx_, std::max<std::uint64_t>(sizes[b], 16), GpuBuffer::Kind::Storage);
+            if (!buffer) return buffer.error();
+            buffers_.push_back(std::move(buffer).value());
+        }
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_TEMPLATE_JOINTS], bytes_of(tjoints)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_SHAPES], bytes_of(shapes)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAINS], bytes_of(chains)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_MOTION], bytes_of(motion)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_SPIN], bytes_of(spin)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_REST], bytes_of(rest)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], bytes_of(chain_states)));
+
+        auto kernel = pipeline(max_joints);
+        if (!kernel) return kernel.error();
+        kernel_ = kernel.value();
+        std::vector<const GpuBuffer*> bound;
+        for (const auto& b : buffers_) bound.push_back(&b);
+        kernel_->bind_buffers(*ctx_, bound);
+        return {};
+    }
+
+    Result<void> step(const rods::RodFrame& frame) override {
+        assert(world_ != nullptr && "load() first");
+        KW_TRY(rods::check_frame(*world_, frame));
+        if (frame.dt != dt_) {
+            for (std::size_t t = 0; t < templates_.size(); ++t) set_step(templates_[t], world_->templates[t].params, frame.dt);
+            KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_TEMPLATES], bytes_of(templates_)));
+            dt_ = frame.dt;
+        }
+        reference_.resize(frame.reference.size());
+        std::transform(frame.reference.begin(), frame.reference.end(), reference_.begin(),
+                       [](const rods::Transform& t) { return to_gpu(t); });
+        roots_.resize(frame.roots.size());
+        std::transform(frame.roots.begin(), frame.roots.end(), roots_.begin(), [](const rods::Transform& t) { return to_gpu(t); });
+        colliders_.resize(frame.colliders.size());
+        std::transform(frame.colliders.begin(), frame.colliders.end(), colliders_.begin(), [](const rods::Capsule& c) {
+            return gpu::RodColliderGpu{to_gpu(c.a, c.radius), to_gpu(c.b)};
+        });
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_REFERENCE], bytes_of(reference_)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_ROOTS], bytes_of(roots_)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_COLLIDERS], bytes_of(colliders_)));
+
+        const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
+        const gpu::RodPush push{{static_cast<std::uint32_t>(world_->chains.size()), 0u, 0u, 0u},
+                                to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f),
+                                to_gpu(frame.camera.forward)};
+        const std::uint32_t groups =
+            static_cast<std::uint32_t>((world_->chains.size() + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE);
+        double ms = -1.0;
+        KW_TRY(ctx_->submit(
+            [&](const vk::raii::CommandBuffer& cmd) {
+                // The last frame's dispatch (or a copy) wrote the state this one reads and
+                // overwrites.
+                const vk::MemoryBarrier before{
+                    .srcAccessMask = vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferWrite,
+                    .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
+                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
+                                    vk::PipelineStageFlagBits::eComputeShader, {}, before, {}, {});
+                ctx_->write_timestamp(cmd, 0, vk::PipelineStageFlagBits::eTopOfPipe);
+                kernel_->dispatch(cmd, std::as_bytes(std::span(&push, 1)), groups);
+                ctx_->write_timestamp(cmd, 1, vk::PipelineStageFlagBits::eBottomOfPipe);
+                // Mapped state is read by the host after the fence.
+                const vk::MemoryBarrier to_host{.srcAccessMask = vk::AccessFlagBits::eShaderWrite,
+                                                .dstAccessMask = vk::AccessFlagBits::eHostRead};
+                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eHost, {}, to_host,
+                                    {}, {});
+            },
+            &ms));
+        gpu_ms_ = ms;
+        return {};
+    }
+
+    Result<void> read(ChainSnapshot& out) override {
+        assert(world_ != nullptr && "load() first");
+        KW_TRY(fetch());
+        const std::size_t count = world_->chains.size();
+        constexpr std::size_t kWeights = rods::kMaxViewExamples + 1;
+        out.positions.resize(world_->joint_count);
+        out.orientations.resize(world_->joint_count);
+        out.rest.resize(world_->joint_count);
+        out.view_directions.resize(count);
+        out.weights.assign(count * kWeights, 0.0f);
+        for (std::size_t c = 0; c < count; ++c) {
+            const rods::ChainInstance& ch = world_->chains[c];
+            const gpu::RodChainStateGpu& cs = chain_states_[c];
+            const rods::Transform root = transform_of(cs.root);
+            out.view_directions[c] = vec3_of(cs.view);
+            const float w[8] = {cs.weights[0].x, cs.weights[0].y, cs.weights[0].z, cs.weights[0].w,
+                                cs.weights[1].x, cs.weights[1].y, cs.weights[1].z, cs.weights[1].w};
+            const std::size_t m = world_->templ(ch).views.size();
+            for (std::size_t k = 0; k <= m; ++k) out.weights[c * kWeights + k] = w[k];
+            for (std::uint32_t i = 0; i < world_->templ(ch).chain.joint_count; ++i) {
+                const std::uint32_t j = ch.joint_begin + i;
+                out.positions[j] = root.position + vec3_of(motion_[j].x);
+                out.orientations[j] = quat_of(spin_[j].q);
+                out.rest[j] = root.position + root.rotation * vec3_of(rest_[j].position);
+            }
+        }
+        return {};
+    }
+
+    Result<void> read_states(std::vector<rods::ChainState>& out) override {
+        assert(world_ != nullptr && "load() first");
+        KW_TRY(fetch());
+        out.assign(world_->chains.size(), rods::ChainState{});
+        for (std::size_t c = 0; c < out.size(); ++c) {
+            const rods::ChainInstance& ch = world_->chains[c];
+            rods::ChainState& s = out[c];
+            s.root = transform_of(chain_states_[c].root);
+            for (std::uint32_t i = 0; i < world_->templ(ch).chain.joint_count; ++i) {
+                const std::uint32_t j = ch.joint_begin + i;
+                s.x[i] = vec3_of(motion_[j].x);
+                s.v[i] = vec3_of(motion_[j].v);
+                s.q[i] = quat_of(spin_[j].q);
+                s.omega[i] = vec3_of(spin_[j].omega);
+                s.group_rotation[i] = quat_of(spin_[j].group);
+                s.rest_position[i] = vec3_of(rest_[j].position);
+                s.rest_orientation[i] = quat_of(rest_[j].orientation);
+            }
+        }
+        return {};
+    }
+
+private:
+    Result<void> fetch() {
+        motion_.resize(world_->joint_count);
+        spin_.resize(world_->joint_count);
+        rest_.resize(world_->joint_count);
+        chain_states_.resize(world_->chains.size());
+        KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_MOTION], writable_bytes_of(motion_)));
+        KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_SPIN], writable_bytes_of(spin_)));
+        KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_REST], writable_bytes_of(rest_)));
+        KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], writable_bytes_of(chain_states_)));
+        return {};
+    }
+
+    std::unique_ptr<gpu::VulkanContext> ctx_;
+    // A few variants at most (one per longest-chain length): a vector is the simplest map.
+    std::vector<std::pair<std::uint32_t, gpu::ComputePipeline>> pipelines_;
+    const gpu::ComputePipeline* kernel_ = nullptr;
+    const rods::RodWorld* world_ = nullptr;
+    std::vector<GpuBuffer> buffers_;
+    std::vector<gpu::RodTemplateGpu> templates_;
+    float dt_ = -1.0f;
+    double gpu_ms_ = -1.0;
+    // Per-frame staging on the host, kept to avoid reallocating every frame.
+    std::vector<gpu::RodTransformGpu> reference_, roots_;
+    std::vector<gpu::RodColliderGpu> colliders_;
+    std::vector<gpu::RodJointMotionGpu> motion_;
+    std::vector<gpu::RodJointSpinGpu> spin_;
+    std::vector<gpu::RodJointRestGpu> rest_;
+    std::vector<gpu::RodChainStateGpu> chain_states_;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<RodBackend>> make_vulkan_rod_backend(const BackendOptions& options) {
+    auto ctx = gpu::VulkanContext::create({.device = options.device, .validation = options.validation});
+    if (!ctx) return ctx.error();
+    return std::unique_ptr<RodBackend>(std::make_unique<VulkanRodBackend>(std::move(ctx).value()));
+}
+
+}  // namespace kodawari

@@ -1,0 +1,71 @@
+#pragma once
+/// @file
+/// The narrow interface every rod backend implements (cpu-reference, cpu, vulkan), the
+/// same shape as the bird backends (backend.hpp). The same tests run against each.
+
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include "backend.hpp"
+#include "result.hpp"
+#include "rods/world.hpp"
+
+namespace kodawari {
+
+/// What a caller reads back after a frame. Per-joint arrays hold RodWorld::joint_count
+/// entries, chain c's joints from chains[c].joint_begin.
+struct ChainSnapshot {
+    std::vector<glm::vec3> positions;        ///< world
+    std::vector<glm::quat> orientations;     ///< world, the particles' own
+    std::vector<glm::vec3> rest;             ///< the blended rest shape of the frame, placed by the chain root (world)
+    std::vector<glm::vec3> view_directions;  ///< per chain: d, in its reference joint's frame (SPEC A.3)
+    /// Per chain, rods::kMaxViewExamples + 1 entries: w_0 (the base's) .. w_m, then zeros.
+    std::vector<float> weights;
+};
+
+/// Simulates a RodWorld frame after frame.
+class RodBackend {
+public:
+    virtual ~RodBackend() = default;
+    RodBackend() = default;
+    RodBackend(const RodBackend&) = delete;
+    RodBackend& operator=(const RodBackend&) = delete;
+
+    [[nodiscard]] virtual std::string_view name() const = 0;
+    [[nodiscard]] virtual std::string device() const = 0;
+
+    /// Takes the world (uploads it) and puts every chain at rest on the rest shape that
+    /// `initial` gives it (rods::initial_state). `world` must be finalized and outlive
+    /// the backend's use of it.
+    [[nodiscard]] virtual Result<void> load(const rods::RodWorld& world, const rods::RodFrame& initial) = 0;
+
+    /// Advances every chain by one frame (SPEC A.4): `frame` holds the kinematic input
+    /// at the end of the frame (check_frame() must accept it).
+    [[nodiscard]] virtual Result<void> step(const rods::RodFrame& frame) = 0;
+
+    /// The state after the last step (or load).
+    [[nodiscard]] virtual Result<void> read(ChainSnapshot& out) = 0;
+
+    /// Every chain's full solver state, for parity tests: the GPU's state can be
+    /// advanced by the CPU reference and compared.
+    [[nodiscard]] virtual Result<void> read_states(std::vector<rods::ChainState>& out) = 0;
+
+    /// GPU time of the last step in milliseconds, when the device has timestamps.
+    [[nodiscard]] virtual double last_gpu_ms() const { return -1.0; }
+    /// Validation messages seen so far (Vulkan with validation on; 0 otherwise).
+    [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
+};
+
+/// Creates a rod backend; Vulkan fails with a readable reason when no loader, driver or
+/// device is available.
+[[nodiscard]] Result<std::unique_ptr<RodBackend>> make_rod_backend(BackendKind kind, const BackendOptions& options);
+
+/// One chain's frame with the CPU reference (SPEC A.3, A.2, A.5, A.4): its rest shape
+/// from `frame`, then rods::step. What every backend computes; exposed for tests.
+void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
+                          rods::ChainState& state, rods::RestShape* rest_out = nullptr);
+
+}  // namespace kodawari

@@ -1,0 +1,112 @@
+// GPU-shared data of the rods kernel (SPEC part A): every struct, binding index and the
+// workgroup size, defined once for shaders/rods_step.comp and the C++ backend
+// (engine/backends/vulkan_rods.cpp). Layout: std430, only vec4/uvec4 members (see
+// glsl_types.h); sizes and offsets are checked in engine/gpu/shared_layout.cpp.
+//
+// Why this layout. One invocation simulates one whole chain: every substep and
+// iteration of SPEC A.4 runs in registers, and the chain's state is loaded once and
+// stored once per frame (lavapipe executes each storage access lane by lane, see
+// shared/PERF-NOTES.md, so a kernel per solver phase would spend most of its time
+// loading and storing). A chain's joints are contiguous (joint_begin + i) in every
+// per-joint buffer, so one invocation walks consecutive addresses. The state is split
+// by what each phase needs and by size: lavapipe caps one storage buffer at 128 MiB,
+// and 100 000 chains x 16 joints x 112 bytes of state would not fit in one.
+// Quaternions are vec4(x, y, z, w).
+#ifndef KODAWARI_SHADERS_SHARED_RODS_H
+#define KODAWARI_SHADERS_SHARED_RODS_H
+
+#include "glsl_types.h"
+
+#define KW_RODS_WORKGROUP_SIZE 64
+#define KW_RODS_MAX_JOINTS 32  // rods::kMaxChainJoints
+#define KW_RODS_MAX_VIEWS 7    // rods::kMaxViewExamples
+
+#define KW_RODS_BINDING_TEMPLATES 0        // RodTemplateGpu, per chain template
+#define KW_RODS_BINDING_TEMPLATE_JOINTS 1  // RodTemplateJointGpu, per template joint
+#define KW_RODS_BINDING_SHAPES 2           // RodShapeJointGpu, per template x shape x joint
+#define KW_RODS_BINDING_CHAINS 3           // RodChainGpu, per chain
+#define KW_RODS_BINDING_REFERENCE 4        // RodTransformGpu, per character: reference joint (this frame)
+#define KW_RODS_BINDING_ROOTS 5            // RodTransformGpu, per chain: root frame (this frame)
+#define KW_RODS_BINDING_COLLIDERS 6        // RodColliderGpu (this frame)
+#define KW_RODS_BINDING_MOTION 7           // RodJointMotionGpu, per joint (state)
+#define KW_RODS_BINDING_SPIN 8             // RodJointSpinGpu, per joint (state)
+#define KW_RODS_BINDING_REST 9             // RodJointRestGpu, per joint (state: last rest shape)
+#define KW_RODS_BINDING_CHAIN_STATE 10     // RodChainStateGpu, per chain (state and diagnostics)
+#define KW_RODS_BINDING_COUNT 11
+
+// Specialization constant ids of rods_step.comp.
+#define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the world: sizes the register arrays
+#define KW_RODS_SPEC_COUNT 1
+
+KW_NAMESPACE_BEGIN
+
+// A chain template's constants (rods::ChainTemplate) and this frame's step sizes.
+struct RodTemplateGpu {
+    uvec4 counts;     // x: joint count n, y: view examples m, z: first RodTemplateJointGpu, w: first RodShapeJointGpu
+    uvec4 solver;     // x: projection iterations, y: substeps this frame, z, w: unused
+    vec4 step;        // x: substep h (s), y: velocity decay exp(-damping h), z: k' per iteration, w: suppression
+    vec4 physics;     // x: thickness (m), y: k_rest' per iteration (this frame), z, w: unused
+    vec4 accel;       // xyz: gravity + wind (m/s^2), w: unused
+    vec4 first_dir;   // xyz: e, the base shape's first segment direction (SPEC A.2)
+    vec4 views[KW_RODS_MAX_VIEWS];  // xyz: d_k (unit, reference joint's frame), w: influence p_k
+};
+
+// Per joint of a template.
+struct RodTemplateJointGpu {
+    vec4 axis_mass;  // xyz: bone axis u_i (joint frame), w: mass (kg)
+    vec4 lengths;    // x: segment length l_i (0 for the last joint), y: ellipsoid half length a_i, z, w: unused
+};
+
+// Per joint of one shape of a template (shape 0 = base, k = view example k), SPEC A.2.
+struct RodShapeJointGpu {
+    vec4 rotation;     // r_i (identity for the last joint, which has no segment)
+    vec4 orientation;  // o_i
+};
+
+struct RodChainGpu {
+    uvec4 ids;     // x: template, y: character, z: first collider, w: collider count
+    uvec4 joints;  // x: first joint in the per-joint buffers, y, z, w: unused
+};
+
+struct RodTransformGpu {
+    vec4 position;  // xyz, w: unused
+    vec4 rotation;  // quaternion
+};
+
+// A capsule; a sphere has a == b.
+struct RodColliderGpu {
+    vec4 a;  // xyz, w: radius (m)
+    vec4 b;  // xyz, w: unused
+};
+
+struct RodJointMotionGpu {
+    vec4 x;  // position relative to the chain's root position (RodChainStateGpu.root), w: unused
+    vec4 v;  // velocity, w: unused
+};
+
+struct RodJointSpinGpu {
+    vec4 q;      // orientation
+    vec4 omega;  // angular velocity (world), w: unused
+    vec4 group;  // the last shape-matching rotation of the group centred here (warm start)
+};
+
+struct RodJointRestGpu {
+    vec4 position;     // last frame's rest shape, root frame (SPEC A.5 needs it)
+    vec4 orientation;
+};
+
+struct RodChainStateGpu {
+    RodTransformGpu root;  // last frame's root frame
+    vec4 view;             // xyz: this frame's view direction d (reference joint's frame), w: unused
+    vec4 weights[2];       // w_0 .. w_7 (w_0 = the base's)
+};
+
+struct RodPush {
+    uvec4 counts;           // x: chain count, y, z, w: unused
+    vec4 camera_position;   // xyz, w: 1 = orthographic
+    vec4 camera_forward;    // xyz, w: unused
+};
+
+KW_NAMESPACE_END
+
+#endif
