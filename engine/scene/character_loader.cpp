@@ -25,7 +25,7 @@ constexpr double kMaxCoordinate = 1e6;  // world positions (m), as the bird load
 constexpr double kMaxLocal = 1000.0;    // offsets inside a character (m)
 constexpr double kMaxShape = 100.0;     // chain shape coordinates (m)
 constexpr double kMaxTime = 1e5;        // motion times (s)
-constexpr std::size_t kMaxPerCharacter = 64;  // joints, chains, colliders, motions
+constexpr std::size_t kMaxPerCharacter = 64;  // joints, chains, motions (colliders: rods::kMaxChainColliders)
 constexpr std::size_t kMaxCameraKeys = 4096;
 
 using Vec3 = glm::vec3;
