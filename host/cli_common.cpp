@@ -1,5 +1,7 @@
 #include "cli_common.hpp"
 
+#include "kodawari/gpu_info.hpp"
+
 #include <cstdio>
 #include <unistd.h>
 
@@ -57,6 +59,13 @@ std::vector<std::string> Args::positionals() const {
     return args_;
 }
 
+std::string Args::first_word() const {
+    for (const auto& a : args_) {
+        if (a.rfind("--", 0) != 0) return a;
+    }
+    return "";
+}
+
 BackendChoice read_backend_choice(Args& args) {
     BackendChoice choice;
     if (auto b = args.option("backend")) choice.backend = *b;
@@ -82,6 +91,20 @@ Result<std::unique_ptr<BirdBackend>> open_backend(const BackendChoice& choice) {
     if (vulkan) return vulkan;
     std::fprintf(stderr, "kodawari: Vulkan unavailable (%s); running on the CPU\n", vulkan.error().message.c_str());
     return make_bird_backend(BackendKind::Cpu, choice.options);
+}
+
+Result<std::unique_ptr<RodBackend>> open_rod_backend(const BackendChoice& choice) {
+    if (choice.backend != "auto") return make_rod_backend(*parse_backend(choice.backend), choice.options);
+    auto vulkan = make_rod_backend(BackendKind::Vulkan, choice.options);
+    if (vulkan) return vulkan;
+    std::fprintf(stderr, "kodawari: Vulkan unavailable (%s); running on the CPU\n", vulkan.error().message.c_str());
+    return make_rod_backend(BackendKind::Cpu, choice.options);
+}
+
+std::string resolved_backend_name(const BackendChoice& choice) {
+    if (choice.backend != "auto") return choice.backend;
+    auto gpus = list_gpus(choice.options.device);
+    return gpus.ok() && !gpus.value().devices.empty() ? "vulkan" : "cpu";
 }
 
 Result<LoadedScene> load_scene_arguments(const std::vector<std::string>& positionals, const char* command,

@@ -7,6 +7,7 @@
 #include <vector>
 
 #include "kodawari/backend.hpp"
+#include "kodawari/rod_backend.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/scene.hpp"
 
@@ -38,6 +39,8 @@ public:
     std::optional<std::uint64_t> count(const std::string& name, std::uint64_t min, std::uint64_t max);
     /// What is left; unknown `--options` are usage errors.
     std::vector<std::string> positionals() const;
+    /// The first argument that is not an `--option` ("" when none), without checking the rest.
+    std::string first_word() const;
 
 private:
     std::vector<std::string> args_;
@@ -53,6 +56,13 @@ BackendChoice read_backend_choice(Args& args);
 /// Creates the backend. "auto" takes Vulkan when a device exists, else the CPU (saying
 /// why in one line on stderr).
 [[nodiscard]] Result<std::unique_ptr<BirdBackend>> open_backend(const BackendChoice& choice);
+
+/// The rod backend of `choice`, with the same "auto" rule.
+[[nodiscard]] Result<std::unique_ptr<RodBackend>> open_rod_backend(const BackendChoice& choice);
+
+/// The backend "auto" resolves to on this machine ("vulkan" when a Vulkan device exists,
+/// else "cpu"), or the chosen one.
+[[nodiscard]] std::string resolved_backend_name(const BackendChoice& choice);
 
 /// Parses a backend name.
 [[nodiscard]] std::optional<BackendKind> parse_backend(const std::string& name);

@@ -1,10 +1,13 @@
 #include <chrono>
+#include <optional>
 #include <cstdio>
 #include <sstream>
 #include <vector>
 
 #include "commands.hpp"
 #include "kodawari/atomic_file.hpp"
+#include "kodawari/rod_backend.hpp"
+#include "kodawari/rods/synthetic.hpp"
 #include "kodawari/scene.hpp"
 
 namespace kodawari::cli {
@@ -50,25 +53,123 @@ std::string json_escape(const std::string& s) {
     return out;
 }
 
-}  // namespace
-
-int cmd_bench(Args args) {
-    BackendChoice choice = read_backend_choice(args);
-    const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 4'000'000).value_or(1'000'000));
-    const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(30));
-    const auto json_path = args.option("json");
-    const bool readback = args.flag("readback");
-    std::string list = args.option("backends").value_or("cpu-reference,cpu,vulkan");
-    const auto positionals = args.positionals();
-    if (positionals.size() != 1 || positionals[0] != "birds") throw UsageError{"usage: kodawari bench birds [options]"};
-
+std::vector<BackendKind> read_backends(Args& args) {
     std::vector<BackendKind> kinds;
-    std::stringstream names(list);
+    std::stringstream names(args.option("backends").value_or("cpu-reference,cpu,vulkan"));
     for (std::string name; std::getline(names, name, ',');) {
         auto kind = parse_backend(name);
         if (!kind) throw UsageError{"--backends: unknown backend \"" + name + "\""};
         kinds.push_back(*kind);
     }
+    return kinds;
+}
+
+// The table and the --json file, the same shape for every benchmark.
+int report_results(const std::vector<Measured>& results, const char* unit, const std::string& json_head,
+                   const std::optional<std::string>& json_path) {
+    double reference = 0.0;
+    for (const auto& m : results) {
+        if (m.backend == "cpu-reference") reference = m.per_second;
+    }
+    std::printf("\n%-14s %-40s %16s %12s %12s %16s\n", "backend", "device", unit, "ms/frame", "GPU ms/frame", "vs cpu-reference");
+    for (const auto& m : results) {
+        char gpu[32] = "-";
+        if (m.gpu_ms_per_frame >= 0.0) std::snprintf(gpu, sizeof gpu, "%.3f", m.gpu_ms_per_frame);
+        char ratio[32] = "-";
+        if (reference > 0.0) std::snprintf(ratio, sizeof ratio, "%.2fx", m.per_second / reference);
+        std::printf("%-14s %-40s %16.4g %12.3f %12s %16s\n", m.backend.c_str(), m.device.c_str(), m.per_second, m.ms_per_frame, gpu,
+                    ratio);
+    }
+    if (json_path) {
+        std::string text = json_head + ",\"results\":[";
+        for (std::size_t i = 0; i < results.size(); ++i) {
+            const auto& m = results[i];
+            char numbers[160];
+            std::snprintf(numbers, sizeof numbers, "\"per_second\":%.6g,\"ms_per_frame\":%.6g", m.per_second, m.ms_per_frame);
+            text += (i ? "," : "") + std::string("{\"backend\":\"") + m.backend + "\",\"device\":\"" + json_escape(m.device) + "\"," +
+                    numbers + "}";
+        }
+        text += "]}\n";
+        auto file = AtomicFile::open(*json_path);
+        if (!file) return report(file.error());
+        file.value().write(text);
+        if (auto r = file.value().commit(); !r) return report(r.error());
+        std::printf("wrote %s\n", json_path->c_str());
+    }
+    return kExitOk;
+}
+
+// kodawari bench chains: every backend on the same procedural chains (rods/synthetic.hpp),
+// one solver substep per step, joint-steps per second = chains x joints x steps / s.
+int bench_chains(Args& args, const BackendChoice& choice) {
+    rods::SyntheticOptions options;
+    options.chains = static_cast<std::uint32_t>(args.count("chains", 1, 2'000'000).value_or(100'000));
+    options.joints = static_cast<std::uint32_t>(args.count("joints", 2, rods::kMaxChainJoints).value_or(16));
+    options.iterations = static_cast<std::uint32_t>(args.count("iterations", 1, 64).value_or(4));
+    const std::uint32_t steps = static_cast<std::uint32_t>(args.count("steps", 1, 100'000).value_or(20));
+    const auto json_path = args.option("json");
+    const std::vector<BackendKind> kinds = read_backends(args);
+    if (args.positionals().size() != 1) throw UsageError{"usage: kodawari bench chains [options]"};
+    auto made = rods::SyntheticScene::make(options);
+    if (!made) return report(made.error());
+    const rods::SyntheticScene& scene = made.value();
+    const float dt = rods::SolverParams{}.max_substep;  // one substep per step
+    std::printf("bench chains: %u chains x %u joints, %u iterations, %u view examples, a head collider each; %u steps of "
+                "1/120 s after 1 warm-up step per backend (it also compiles the kernel)\n",
+                options.chains, options.joints, options.iterations, options.views, steps);
+    std::fflush(stdout);
+    // The kinematic input of every step, made before timing: it is the caller's work.
+    std::vector<rods::RodFrame> frames(steps + 2);
+    for (std::uint32_t f = 0; f < frames.size(); ++f) scene.frame(f, dt, frames[f]);
+
+    std::vector<Measured> results;
+    for (BackendKind kind : kinds) {
+        auto backend = make_rod_backend(kind, choice.options);
+        if (!backend) {
+            std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), backend.error().message.c_str());
+            continue;
+        }
+        RodBackend& b = *backend.value();
+        if (auto r = b.load(scene.world(), frames[0]); !r) return report(r.error());
+        if (auto r = b.step(frames[1]); !r) return report(r.error());
+        double gpu_ms = 0.0;
+        const auto start = std::chrono::steady_clock::now();
+        for (std::uint32_t f = 0; f < steps; ++f) {
+            if (auto r = b.step(frames[f + 2]); !r) return report(r.error());
+            gpu_ms += b.last_gpu_ms();
+        }
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        Measured m{std::string(b.name()), b.device(),
+                   static_cast<double>(options.chains) * options.joints * steps / seconds, 1e3 * seconds / steps,
+                   b.last_gpu_ms() >= 0.0 ? gpu_ms / steps : -1.0};
+        if (b.validation_messages() > 0) {
+            std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", b.validation_messages());
+            return kExitFailure;
+        }
+        results.push_back(m);
+        std::printf("  %-14s done: %.3g joint-steps/s\n", m.backend.c_str(), m.per_second);
+        std::fflush(stdout);
+    }
+    const std::string head = "{\"benchmark\":\"chains\",\"chains\":" + std::to_string(options.chains) +
+                             ",\"joints\":" + std::to_string(options.joints) + ",\"iterations\":" +
+                             std::to_string(options.iterations) + ",\"steps\":" + std::to_string(steps);
+    return report_results(results, "joint-steps/s", head, json_path);
+}
+
+}  // namespace
+
+int cmd_bench(Args args) {
+    BackendChoice choice = read_backend_choice(args);
+    if (args.first_word() == "chains") return bench_chains(args, choice);
+    const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 4'000'000).value_or(1'000'000));
+    const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(30));
+    const auto json_path = args.option("json");
+    const bool readback = args.flag("readback");
+    const auto positionals = args.positionals();
+    if (positionals.size() != 1 || positionals[0] != "birds") {
+        throw UsageError{"usage: kodawari bench birds|chains [options]"};
+    }
+    const std::vector<BackendKind> kinds = read_backends(args);
 
     auto built = build_bird_world(bench_scene(count, frames));
     if (!built) return report(built.error());
@@ -112,39 +213,9 @@ int cmd_bench(Args args) {
         std::fflush(stdout);
     }
 
-    double reference = 0.0;
-    for (const auto& m : results) {
-        if (m.backend == "cpu-reference") reference = m.per_second;
-    }
-    std::printf("\n%-14s %-40s %16s %12s %12s %16s\n", "backend", "device", "bird-frames/s", "ms/frame", "GPU ms/frame",
-                "vs cpu-reference");
-    for (const auto& m : results) {
-        char gpu[32] = "-";
-        if (m.gpu_ms_per_frame >= 0.0) std::snprintf(gpu, sizeof gpu, "%.3f", m.gpu_ms_per_frame);
-        char ratio[32] = "-";
-        if (reference > 0.0) std::snprintf(ratio, sizeof ratio, "%.2fx", m.per_second / reference);
-        std::printf("%-14s %-40s %16.4g %12.3f %12s %16s\n", m.backend.c_str(), m.device.c_str(), m.per_second, m.ms_per_frame, gpu,
-                    ratio);
-    }
-
-    if (json_path) {
-        std::string text = "{\"benchmark\":\"birds\",\"count\":" + std::to_string(count) + ",\"frames\":" + std::to_string(frames) +
-                           ",\"readback\":" + (readback ? "true" : "false") + ",\"results\":[";
-        for (std::size_t i = 0; i < results.size(); ++i) {
-            const auto& m = results[i];
-            char numbers[160];
-            std::snprintf(numbers, sizeof numbers, "\"per_second\":%.6g,\"ms_per_frame\":%.6g", m.per_second, m.ms_per_frame);
-            text += (i ? "," : "") + std::string("{\"backend\":\"") + m.backend + "\",\"device\":\"" + json_escape(m.device) + "\"," +
-                    numbers + "}";
-        }
-        text += "]}\n";
-        auto file = AtomicFile::open(*json_path);
-        if (!file) return report(file.error());
-        file.value().write(text);
-        if (auto r = file.value().commit(); !r) return report(r.error());
-        std::printf("wrote %s\n", json_path->c_str());
-    }
-    return kExitOk;
+    const std::string head = "{\"benchmark\":\"birds\",\"count\":" + std::to_string(count) + ",\"frames\":" +
+                             std::to_string(frames) + ",\"readback\":" + (readback ? "true" : "false");
+    return report_results(results, "bird-frames/s", head, json_path);
 }
 
 }  // namespace kodawari::cli

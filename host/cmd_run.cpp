@@ -2,13 +2,107 @@
 #include <chrono>
 #include <cstdio>
 #include <filesystem>
+#include <optional>
 #include <vector>
 
 #include "commands.hpp"
 #include "kodawari/export.hpp"
+#include "kodawari/rod_scene.hpp"
 #include "kodawari/scene.hpp"
 
 namespace kodawari::cli {
+
+namespace {
+
+// Where a run's outputs go and what it reports.
+struct RunOutputs {
+    bool no_export = false;
+    std::string out_path;  // "" when not exporting
+    std::optional<TraceWriter>* trace = nullptr;
+};
+
+int run_birds(const Scene& scene, birds::BirdWorld& world, const BackendChoice& choice, const std::string& out_path,
+              std::optional<TraceWriter>& trace);
+
+int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<std::uint64_t> frames_option,
+               const RunOutputs& outputs) {
+    auto built = build_rod_scene(scene);
+    if (!built) return report(built.error());
+    const RodScene& rods_scene = built.value();
+    const rods::RodWorld& world = rods_scene.world;
+    const std::uint32_t frames = frames_option ? static_cast<std::uint32_t>(*frames_option) : rods_scene.frames;
+    const std::size_t joints = world.joint_count;
+    if (!outputs.out_path.empty()) {
+        const std::uint64_t bytes = std::uint64_t{frames} * joints * (sizeof(glm::vec3) + sizeof(glm::quat));
+        if (bytes > (6ull << 30)) {
+            return report(make_error(Error::Kind::InvalidInput, "baking " + std::to_string(joints) + " joints x " +
+                                                                    std::to_string(frames) + " frames needs " +
+                                                                    std::to_string(bytes >> 20) +
+                                                                    " MiB; use --frames or --no-export"));
+        }
+    }
+    auto opened = open_rod_backend(choice);
+    if (!opened) return report(opened.error());
+    RodBackend& backend = *opened.value();
+    std::printf("kodawari: scene \"%s\" (%s): %u characters, %zu chains, %zu joints, %u frames at %g fps\n",
+                scene.name.c_str(), scene.path.c_str(), world.character_count, world.chains.size(), joints, frames,
+                static_cast<double>(rods_scene.fps));
+    std::fflush(stdout);
+
+    // Per chain, its character and its index within the character (trace records).
+    std::vector<std::uint32_t> characters(world.chains.size()), within(world.chains.size());
+    for (std::uint32_t c = 0; c < world.character_count; ++c) {
+        for (std::uint32_t k = 0; k < rods_scene.chain_count(c); ++k) {
+            characters[rods_scene.instances[c].chain_begin + k] = c;
+            within[rods_scene.instances[c].chain_begin + k] = k;
+        }
+    }
+    std::vector<glm::vec3> positions(outputs.out_path.empty() ? 0 : std::size_t{frames} * joints);
+    std::vector<glm::quat> orientations(positions.size());
+    rods::RodFrame frame;
+    ChainSnapshot snapshot;
+    const bool show_progress = stderr_is_terminal() && std::uint64_t{frames} * joints >= 2'000'000;
+    double seconds = 0.0, gpu_ms = 0.0;
+    for (std::uint32_t f = 0; f < frames; ++f) {
+        rods_scene.frame(f, frame);
+        const auto start = std::chrono::steady_clock::now();
+        // Frame 0 is the initial pose; every later frame is one step.
+        if (auto r = f == 0 ? backend.load(world, frame) : backend.step(frame); !r) return report(r.error());
+        seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (f > 0 && backend.last_gpu_ms() >= 0.0) gpu_ms += backend.last_gpu_ms();
+        if (*outputs.trace || !positions.empty()) {
+            if (auto r = backend.read(snapshot); !r) return report(r.error());
+        }
+        if (*outputs.trace) {
+            (*outputs.trace)->write_chains(f, rods_scene.time(f), world, characters, within, rods_scene.chain_names, snapshot);
+        }
+        if (!positions.empty()) {
+            std::copy(snapshot.positions.begin(), snapshot.positions.end(), positions.begin() + static_cast<std::ptrdiff_t>(f * joints));
+            std::copy(snapshot.orientations.begin(), snapshot.orientations.end(),
+                      orientations.begin() + static_cast<std::ptrdiff_t>(f * joints));
+        }
+        if (show_progress) progress("simulating", f + 1, frames);
+    }
+    const std::uint32_t steps = std::max(frames, 2u) - 1;
+    std::printf("kodawari: backend %s on %s: %.3f ms per frame", std::string(backend.name()).c_str(), backend.device().c_str(),
+                1e3 * seconds / frames);
+    if (backend.name() == "vulkan" && gpu_ms > 0.0) std::printf(" (GPU %.3f ms)", gpu_ms / steps);
+    std::printf(", %.3g joint-steps/s\n", static_cast<double>(joints) * steps / std::max(seconds, 1e-9));
+    if (backend.validation_messages() > 0) {
+        std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", backend.validation_messages());
+        return kExitFailure;
+    }
+    if (!positions.empty()) {
+        if (auto r = write_chains_glb(outputs.out_path, rods_scene, frames, positions, orientations); !r) return report(r.error());
+        std::error_code ec;
+        const auto size = std::filesystem::file_size(outputs.out_path, ec);
+        std::printf("kodawari: wrote %s (%.1f MiB, glTF 2.0 binary)\n", outputs.out_path.c_str(),
+                    ec ? 0.0 : static_cast<double>(size) / (1 << 20));
+    }
+    return kExitOk;
+}
+
+}  // namespace
 
 int cmd_run(Args args) {
     const BackendChoice choice = read_backend_choice(args);
@@ -23,10 +117,53 @@ int cmd_run(Args args) {
     birds::BirdWorld& world = loaded.value().world;
     const std::uint32_t frames = world.frames;
     const std::size_t count = world.birds.size();
+    const bool has_birds = count > 0;
+    const bool has_chains = !scene.characters.empty();
+    if (!no_export && !out_option) {
+        std::error_code ec;
+        std::filesystem::create_directories("out", ec);
+    }
+    // One file per kind of content; a scene with both writes <out> for the birds and
+    // <out without .glb>-characters.glb for the characters.
+    const std::string base_out = out_option ? *out_option : "out/" + scene.name + ".glb";
+    std::string chains_out;
+    if (!no_export && has_chains) {
+        chains_out = has_birds ? base_out.substr(0, base_out.size() - (base_out.ends_with(".glb") ? 4 : 0)) + "-characters.glb"
+                               : base_out;
+    }
 
-    std::string out_path;
+    std::optional<TraceWriter> trace;
+    if (trace_path) {
+        auto t = TraceWriter::open(*trace_path, {scene.name, world.fps, frames,
+                                                 resolved_backend_name(choice)});
+        if (!t) return report(t.error());
+        trace.emplace(std::move(t).value());
+    }
+    if (has_birds) {
+        if (const int code = run_birds(scene, world, choice, no_export ? std::string() : base_out, trace); code != kExitOk) {
+            return code;
+        }
+    }
+    if (has_chains) {
+        if (const int code = run_chains(scene, choice, frames_option, {no_export, chains_out, &trace}); code != kExitOk) {
+            return code;
+        }
+    }
+    if (trace) {
+        if (auto r = trace->finish(); !r) return report(r.error());
+        std::printf("kodawari: wrote trace %s\n", trace_path->c_str());
+    }
+    return kExitOk;
+}
+
+namespace {
+
+int run_birds(const Scene& scene, birds::BirdWorld& world, const BackendChoice& choice, const std::string& out_path,
+              std::optional<TraceWriter>& trace) {
+    const bool no_export = out_path.empty();
+    const std::uint32_t frames = world.frames;
+    const std::size_t count = world.birds.size();
     if (!no_export) {
-        out_path = out_option ? *out_option : "out/" + scene.name + ".glb";
         const std::uint64_t bytes = std::uint64_t{frames} * count * sizeof(gpu::BirdPose);
         if (bytes > (6ull << 30)) {
             return report(make_error(Error::Kind::InvalidInput,
@@ -34,23 +171,12 @@ int cmd_run(Args args) {
                                          " frames needs " + std::to_string(bytes >> 20) +
                                          " MiB of poses; use --frames or --no-export"));
         }
-        if (!out_option) {
-            std::error_code ec;
-            std::filesystem::create_directories("out", ec);
-        }
     }
 
     auto opened = open_backend(choice);
     if (!opened) return report(opened.error());
     BirdBackend& backend = *opened.value();
     if (auto r = backend.load(world); !r) return report(r.error());
-
-    std::optional<TraceWriter> trace;
-    if (trace_path) {
-        auto t = TraceWriter::open(*trace_path, {scene.name, world.fps, frames, std::string(backend.name())});
-        if (!t) return report(t.error());
-        trace.emplace(std::move(t).value());
-    }
 
     std::printf("kodawari: scene \"%s\" (%s): %zu birds, %u frames at %g fps\n", scene.name.c_str(),
                 scene.path.c_str(), count, frames, static_cast<double>(world.fps));
@@ -99,10 +225,6 @@ int cmd_run(Args args) {
         std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", backend.validation_messages());
         return kExitFailure;
     }
-    if (trace) {
-        if (auto r = trace->finish(); !r) return report(r.error());
-        std::printf("kodawari: wrote trace %s\n", trace_path->c_str());
-    }
     if (!no_export) {
         if (auto r = write_birds_glb(out_path, world, poses, frames); !r) return report(r.error());
         std::error_code ec;
@@ -112,5 +234,7 @@ int cmd_run(Args args) {
     }
     return kExitOk;
 }
+
+}  // namespace
 
 }  // namespace kodawari::cli

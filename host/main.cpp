@@ -17,7 +17,8 @@ commands:
   validate [SCENE] [--backend vulkan|cpu] [--frames N]
       run a backend and the CPU reference side by side; exit 1 above tolerance
   bench birds [--count N] [--frames F] [--json FILE] [--readback] [--backends LIST]
-      time every backend on the same birds
+  bench chains [--chains N] [--joints M] [--iterations K] [--steps S] [--json FILE] [--backends LIST]
+      time every backend on the same birds (or chains: joint-steps per second) and print the ratios
   info
       version, Vulkan devices and which one is chosen, CPU threads
 

@@ -5,13 +5,17 @@
 // the oriented-particles solver (A.4) in registers. Mirrors engine/rods/world.cpp,
 // shape.cpp and solver.cpp step for step; the equations' sources are cited there.
 #extension GL_GOOGLE_include_directive : require
+#extension GL_EXT_control_flow_attributes : require
 
 #include "shared/rods.h"
 
 layout(local_size_x = KW_RODS_WORKGROUP_SIZE) in;
 
 // Sizes the per-chain register arrays: the longest chain of the world, not
-// KW_RODS_MAX_JOINTS, so short chains do not pay for 32-joint arrays.
+// KW_RODS_MAX_JOINTS, so short chains do not pay for 32-joint arrays. Every loop over
+// joints (and view examples) is unrolled to this bound with `if (i < n)` guards, so every
+// array index is a constant and the arrays live in registers: with a loop index, lavapipe
+// keeps them in scratch memory and accesses it lane by lane (several times slower).
 layout(constant_id = KW_RODS_SPEC_MAX_JOINTS) const uint MAX_J = 16;
 
 layout(std430, binding = KW_RODS_BINDING_TEMPLATES) readonly buffer Templates { RodTemplateGpu templates[]; };
@@ -23,14 +27,13 @@ layout(std430, binding = KW_RODS_BINDING_ROOTS) readonly buffer Roots { RodTrans
 layout(std430, binding = KW_RODS_BINDING_COLLIDERS) readonly buffer Colliders { RodColliderGpu colliders[]; };
 layout(std430, binding = KW_RODS_BINDING_MOTION) buffer Motion { RodJointMotionGpu motion[]; };
 layout(std430, binding = KW_RODS_BINDING_SPIN) buffer Spin { RodJointSpinGpu spin[]; };
-layout(std430, binding = KW_RODS_BINDING_REST) buffer Rest { RodJointRestGpu rest[]; };
 layout(std430, binding = KW_RODS_BINDING_CHAIN_STATE) buffer ChainStates { RodChainStateGpu chain_states[]; };
 
 layout(push_constant) uniform Push { RodPush push; };
 
 const vec4 IDENTITY = vec4(0.0, 0.0, 0.0, 1.0);
 const float ROOT_SHAPE_WEIGHT = 10.0;  // solver.cpp kRootShapeWeight
-const int EXTRACT_ITERATIONS = 10;     // solver.cpp kExtractIterations
+const int EXTRACT_ITERATIONS = 1;      // solver.cpp kExtractIterations
 
 // ---- quaternions, as glm computes them -------------------------------------------------
 
@@ -58,7 +61,6 @@ mat3 mat3_cast(vec4 q) {
                 vec3(2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx)),
                 vec3(2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy)));
 }
-vec4 angle_axis(float angle, vec3 axis) { return vec4(axis * sin(angle * 0.5), cos(angle * 0.5)); }
 // solver.cpp partial(): the rotation by `fraction` of q's angle, the short way.
 vec4 partial_turn(vec4 q, float fraction) {
     if (fraction >= 1.0) return q;
@@ -83,16 +85,15 @@ vec4 shortest_arc(vec3 from, vec3 to) {
     const vec3 hn = h / h_len;
     return qnormalize(vec4(cross(from, hn), dot(from, hn)));
 }
-// solver.cpp extract_rotation(): Mueller et al. 2016, Algorithm 1, warm-started.
+// solver.cpp extract_rotation(): Mueller et al. 2016, Algorithm 1, warm-started, with
+// the first-order turn.
 vec4 extract_rotation(mat3 a, vec4 q) {
-    for (int iter = 0; iter < EXTRACT_ITERATIONS; ++iter) {
+    [[unroll]] for (int iter = 0; iter < EXTRACT_ITERATIONS; ++iter) {
         const mat3 r = mat3_cast(q);
         const vec3 torque = cross(r[0], a[0]) + cross(r[1], a[1]) + cross(r[2], a[2]);
         const float alignment = abs(dot(r[0], a[0]) + dot(r[1], a[1]) + dot(r[2], a[2]));
-        const vec3 omega = torque / (alignment + 1e-9);
-        const float angle = length(omega);
-        if (!(angle > 1e-6)) break;
-        q = qnormalize(qmul(angle_axis(angle, omega / angle), q));
+        const vec3 half_omega = torque * (0.5 / (alignment + 1e-9));
+        q = qnormalize(q + qmul(vec4(half_omega, 0.0), q));
     }
     return q;
 }
@@ -124,6 +125,20 @@ void main() {
     const uint shape0 = t.counts.w;
     const uint j0 = chain.joints.x;
 
+    // Per-joint constants, loaded once.
+    float mass[MAX_J], weight[MAX_J], seg_len[MAX_J], half_len[MAX_J];
+    vec3 axis[MAX_J];
+    [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
+        if (i < n) {
+            const RodTemplateJointGpu tjoint = tjoints[tj + i];
+            axis[i] = tjoint.axis_mass.xyz;
+            mass[i] = tjoint.axis_mass.w;
+            weight[i] = i == 0 ? ROOT_SHAPE_WEIGHT * mass[i] : mass[i];
+            seg_len[i] = tjoint.lengths.x;
+            half_len[i] = tjoint.lengths.y;
+        }
+    }
+
     // ---- A.3: view direction and weights (world.cpp rest_shape, view.cpp) ----
     const RodTransformGpu ref = reference[chain.ids.y];
     const vec4 to_reference = qconj(ref.rotation);
@@ -140,54 +155,84 @@ void main() {
     float w[KW_RODS_MAX_VIEWS + 1];
     {
         float sum = 0.0;
-        for (uint k = 0; k < m; ++k) {
-            const vec4 view = t.views[k];
-            const float s = clamp((dot(view.xyz, d) + 1.0) * 0.5, 0.0, 1.0);
-            w[k + 1] = pow(s, view.w);
-            sum += w[k + 1];
+        [[unroll]] for (uint k = 0; k < KW_RODS_MAX_VIEWS; ++k) {
+            w[k + 1] = 0.0;
+            if (k < m) {
+                const vec4 view = t.views[k];
+                const float s = clamp((dot(view.xyz, d) + 1.0) * 0.5, 0.0, 1.0);
+                w[k + 1] = pow(s, view.w);
+                sum += w[k + 1];
+            }
         }
         if (sum >= 1.0) {
-            for (uint k = 1; k <= m; ++k) w[k] /= sum;
+            [[unroll]] for (uint k = 1; k <= KW_RODS_MAX_VIEWS; ++k) w[k] /= sum;
             sum = 1.0;
         }
         w[0] = 1.0 - sum;
     }
 
-    // ---- A.2: blend, then forward kinematics (shape.cpp blend, to_positions) ----
-    vec3 rest_p[MAX_J];
-    vec4 rest_o[MAX_J];
+    // ---- A.2: blend, then forward kinematics (shape.cpp blend, to_positions), for this
+    // frame's weights and, for A.5, last frame's (the same arithmetic gives back the
+    // rest shape the last frame used, as the CPU keeps it) ----
+    float w_old[KW_RODS_MAX_VIEWS + 1];
     {
-        vec3 dir = t.first_dir.xyz;
+        const RodChainStateGpu last = chain_states[c];
+        w_old[0] = last.weights[0].x;
+        w_old[1] = last.weights[0].y;
+        w_old[2] = last.weights[0].z;
+        w_old[3] = last.weights[0].w;
+        w_old[4] = last.weights[1].x;
+        w_old[5] = last.weights[1].y;
+        w_old[6] = last.weights[1].z;
+        w_old[7] = last.weights[1].w;
+    }
+    vec3 rest_p[MAX_J], old_rest_p[MAX_J];
+    vec4 rest_o[MAX_J], old_rest_o[MAX_J];
+    {
+        vec3 dir = t.first_dir.xyz, old_dir = t.first_dir.xyz;
         rest_p[0] = vec3(0.0);
-        for (uint i = 0; i < n; ++i) {
-            const RodShapeJointGpu base = shapes[shape0 + i];
-            vec4 r_sum = vec4(0.0), o_sum = vec4(0.0);
-            for (uint k = 0; k <= m; ++k) {
-                const RodShapeJointGpu s = shapes[shape0 + k * n + i];
-                r_sum += ((dot(s.rotation, base.rotation) < 0.0 ? -1.0 : 1.0) * w[k]) * s.rotation;
-                o_sum += ((dot(s.orientation, base.orientation) < 0.0 ? -1.0 : 1.0) * w[k]) * s.orientation;
-            }
-            const float r_len = length(r_sum), o_len = length(o_sum);
-            rest_o[i] = o_len > 1e-12 ? o_sum / o_len : base.orientation;
-            if (i + 1 < n) {
-                const vec4 r = r_len > 1e-12 ? r_sum / r_len : base.rotation;
-                dir = normalize(qrot(r, dir));
-                rest_p[i + 1] = rest_p[i] + tjoints[tj + i].lengths.x * dir;
+        old_rest_p[0] = vec3(0.0);
+        [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
+            if (i < n) {
+                const RodShapeJointGpu base = shapes[shape0 + i];
+                vec4 r_sum = vec4(0.0), o_sum = vec4(0.0), r_old = vec4(0.0), o_old = vec4(0.0);
+                [[unroll]] for (uint k = 0; k <= KW_RODS_MAX_VIEWS; ++k) {
+                    if (k <= m) {
+                        const RodShapeJointGpu s = shapes[shape0 + k * n + i];
+                        const float r_sign = dot(s.rotation, base.rotation) < 0.0 ? -1.0 : 1.0;
+                        const float o_sign = dot(s.orientation, base.orientation) < 0.0 ? -1.0 : 1.0;
+                        r_sum += (r_sign * w[k]) * s.rotation;
+                        o_sum += (o_sign * w[k]) * s.orientation;
+                        r_old += (r_sign * w_old[k]) * s.rotation;
+                        o_old += (o_sign * w_old[k]) * s.orientation;
+                    }
+                }
+                rest_o[i] = length(o_sum) > 1e-12 ? o_sum / length(o_sum) : base.orientation;
+                old_rest_o[i] = length(o_old) > 1e-12 ? o_old / length(o_old) : base.orientation;
+                if (i + 1 < MAX_J && i + 1 < n) {
+                    const vec4 r = length(r_sum) > 1e-12 ? r_sum / length(r_sum) : base.rotation;
+                    const vec4 ro = length(r_old) > 1e-12 ? r_old / length(r_old) : base.rotation;
+                    dir = normalize(qrot(r, dir));
+                    old_dir = normalize(qrot(ro, old_dir));
+                    rest_p[i + 1] = rest_p[i] + seg_len[i] * dir;
+                    old_rest_p[i + 1] = old_rest_p[i] + seg_len[i] * old_dir;
+                }
             }
         }
     }
 
     // ---- load the state ----
     vec3 x[MAX_J], v[MAX_J], omega[MAX_J];
-    vec4 q[MAX_J], group[MAX_J];
-    for (uint i = 0; i < n; ++i) {
-        const RodJointMotionGpu mo = motion[j0 + i];
-        const RodJointSpinGpu sp = spin[j0 + i];
-        x[i] = mo.x.xyz;
-        v[i] = mo.v.xyz;
-        q[i] = sp.q;
-        omega[i] = sp.omega.xyz;
-        group[i] = sp.group;
+    vec4 q[MAX_J];
+    [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
+        if (i < n) {
+            const RodJointMotionGpu mo = motion[j0 + i];
+            const RodJointSpinGpu sp = spin[j0 + i];
+            x[i] = mo.x.xyz;
+            v[i] = mo.v.xyz;
+            q[i] = sp.q;
+            omega[i] = sp.omega.xyz;
+        }
     }
     const RodTransformGpu from = chain_states[c].root;
     const RodTransformGpu to = roots[c];
@@ -198,23 +243,23 @@ void main() {
         const vec4 root = from.rotation;
         const vec4 root_inv = qconj(root);
         vec3 previous_old = x[0];
-        vec3 old_rest = rest[j0].position.xyz;
-        for (uint i = 0; i + 1 < n; ++i) {
-            const vec3 old_next = rest[j0 + i + 1].position.xyz;
-            const vec3 old_dir = normalize(old_next - old_rest);
-            const vec3 new_dir = normalize(rest_p[i + 1] - rest_p[i]);
-            old_rest = old_next;
-            const vec4 turn = partial_turn(qmul(qmul(root, shortest_arc(old_dir, new_dir)), root_inv), suppression);
-            const vec3 segment = x[i + 1] - previous_old;
-            previous_old = x[i + 1];
-            x[i + 1] = x[i] + qrot(turn, segment);
+        [[unroll]] for (uint i = 0; i + 1 < MAX_J; ++i) {
+            if (i + 1 < n) {
+                const vec3 old_dir = normalize(old_rest_p[i + 1] - old_rest_p[i]);
+                const vec3 new_dir = normalize(rest_p[i + 1] - rest_p[i]);
+                const vec4 turn = partial_turn(qmul(qmul(root, shortest_arc(old_dir, new_dir)), root_inv), suppression);
+                const vec3 segment = x[i + 1] - previous_old;
+                previous_old = x[i + 1];
+                x[i + 1] = x[i] + qrot(turn, segment);
+            }
         }
-        for (uint i = 1; i < n; ++i) {
-            const vec4 change = positive_w(qmul(rest_o[i], qconj(rest[j0 + i].orientation)));
-            q[i] = qnormalize(qmul(partial_turn(qmul(qmul(root, change), root_inv), suppression), q[i]));
+        [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
+            if (i < n) {
+                const vec4 change = positive_w(qmul(rest_o[i], qconj(old_rest_o[i])));
+                q[i] = qnormalize(qmul(partial_turn(qmul(qmul(root, change), root_inv), suppression), q[i]));
+            }
         }
     }
-    for (uint i = 0; i < n; ++i) rest[j0 + i] = RodJointRestGpu(vec4(rest_p[i], 0.0), rest_o[i]);
 
     // ---- A.4: the substeps (solver.cpp step) ----
     const uint substeps = t.solver.y;
@@ -223,123 +268,152 @@ void main() {
     const float decay = t.step.y;
     const float k_iter = t.step.z;
     const float k_rest = t.physics.y;
-    const float b2 = t.physics.x * t.physics.x;
-    const vec3 acceleration = t.accel.xyz;
     const float thickness = t.physics.x;
+    const float b2 = thickness * thickness;
+    const vec3 acceleration = t.accel.xyz;
     const uint cbegin = chain.ids.z;
     const uint cend = chain.ids.z + chain.ids.w;
-
     // Solved relative to the previous root position, as the state is (solver.cpp).
     const vec3 travel = to.position.xyz - from.position.xyz;
-    vec3 p[MAX_J], xbar[MAX_J], goal_sum[MAX_J];
+
+    vec3 p[MAX_J], xbar[MAX_J], goal_sum[MAX_J], obar_axis[MAX_J];
     vec4 qs[MAX_J], obar[MAX_J], q_new[MAX_J];
+    mat3 a_j[MAX_J];
     for (uint sub = 1; sub <= substeps; ++sub) {
         const float f = float(sub) / float(substeps);
         const vec3 r_pos = f * travel;
         const vec4 r_rot = interpolate(from.rotation, to.rotation, f);
 
-        for (uint i = 0; i < n; ++i) {
-            xbar[i] = r_pos + qrot(r_rot, rest_p[i]);
-            obar[i] = qnormalize(qmul(r_rot, rest_o[i]));
+        [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
+            if (i < n) {
+                xbar[i] = r_pos + qrot(r_rot, rest_p[i]);
+                obar[i] = qnormalize(qmul(r_rot, rest_o[i]));
+                obar_axis[i] = qrot(obar[i], axis[i]);
+            }
         }
         p[0] = xbar[0];
         qs[0] = obar[0];
 
-        for (uint i = 1; i < n; ++i) {
-            v[i] = decay * (v[i] + h * acceleration);
-            omega[i] = decay * omega[i];
-            p[i] = x[i] + h * v[i];
-            const float wl = length(omega[i]);
-            if (wl > 0.0) {
-                const float half_angle = 0.5 * wl * h;
-                const vec3 axis = omega[i] / wl;
-                qs[i] = qnormalize(qmul(vec4(sin(half_angle) * axis, cos(half_angle)), q[i]));
-            } else {
-                qs[i] = q[i];
+        [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
+            if (i < n) {
+                v[i] = decay * (v[i] + h * acceleration);
+                omega[i] = decay * omega[i];
+                p[i] = x[i] + h * v[i];
+                const float wl = length(omega[i]);
+                if (wl > 0.0) {
+                    const float half_angle = 0.5 * wl * h;
+                    const vec3 spin_axis = omega[i] / wl;
+                    qs[i] = qnormalize(qmul(vec4(sin(half_angle) * spin_axis, cos(half_angle)), q[i]));
+                } else {
+                    qs[i] = q[i];
+                }
             }
         }
 
         for (uint it = 0; it < iterations; ++it) {
             // The ellipsoid terms A_j (solver.cpp), once per particle per iteration.
-            mat3 a_j[MAX_J];
-            for (uint j = 0; j < n; ++j) {
-                const vec4 am = tjoints[tj + j].axis_mass;
-                const float mass = j == 0 ? ROOT_SHAPE_WEIGHT * am.w : am.w;
-                const float half_length = tjoints[tj + j].lengths.y;
-                const float a2 = half_length * half_length;
-                const mat3 rj = mat3_cast(qs[j]);
-                const mat3 rbarj = mat3_cast(obar[j]);
-                const vec3 u = am.xyz;
-                a_j[j] = (mass / 5.0) * (b2 * (rj * transpose(rbarj)) + (a2 - b2) * outerProduct(rj * u, rbarj * u));
-                goal_sum[j] = vec3(0.0);
-            }
-            for (uint i = 0; i < n; ++i) {
-                const uint lo = i == 0 ? 0 : i - 1;
-                const uint hi = min(i + 1, n - 1);
-                float group_mass = 0.0;
-                vec3 cm = vec3(0.0), cbar = vec3(0.0);
-                for (uint j = lo; j <= hi; ++j) {
-                    const float mass = j == 0 ? ROOT_SHAPE_WEIGHT * tjoints[tj].axis_mass.w : tjoints[tj + j].axis_mass.w;
-                    group_mass += mass;
-                    cm += mass * p[j];
-                    cbar += mass * xbar[j];
+            [[unroll]] for (uint j = 0; j < MAX_J; ++j) {
+                if (j < n) {
+                    const float a2 = half_len[j] * half_len[j];
+                    const mat3 relative = mat3_cast(qmul(qs[j], qconj(obar[j])));
+                    a_j[j] = (weight[j] / 5.0) *
+                             (b2 * relative + (a2 - b2) * outerProduct(qrot(qs[j], axis[j]), obar_axis[j]));
+                    goal_sum[j] = vec3(0.0);
                 }
-                cm /= group_mass;
-                cbar /= group_mass;
-                mat3 a = mat3(0.0);
-                for (uint j = lo; j <= hi; ++j) {
-                    const float mass = j == 0 ? ROOT_SHAPE_WEIGHT * tjoints[tj].axis_mass.w : tjoints[tj + j].axis_mass.w;
-                    a += mass * outerProduct(p[j] - cm, xbar[j] - cbar);
-                    a += a_j[j];
-                }
-                const vec4 rot = extract_rotation(a, group[i]);
-                group[i] = rot;
-                for (uint j = lo; j <= hi; ++j) goal_sum[j] += cm + qrot(rot, xbar[j] - cbar);
-                q_new[i] = qnormalize(qmul(rot, obar[i]));
             }
-            for (uint i = 1; i < n; ++i) {
-                // Groups containing joint i: 2 at either end, 3 inside.
-                const float count = (i + 1 == n) ? 2.0 : 3.0;
-                p[i] += k_iter * (goal_sum[i] / count - p[i]);
-                qs[i] = q_new[i];
+            // Shape matching over G_i = {i-1, i, i+1}, clipped at the ends.
+            [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
+                if (i < n) {
+                    const uint lo = i == 0 ? 0 : i - 1;
+                    const bool has_next = i + 1 < MAX_J && i + 1 < n && i != 0;
+                    // Group 0 is {0, 1}: its "previous" member is joint 0 itself.
+                    const uint hi = i == 0 ? 1 : i + 1;
+                    float group_mass = weight[lo];
+                    vec3 cm = weight[lo] * p[lo];
+                    vec3 cbar = weight[lo] * xbar[lo];
+                    if (i != 0) {
+                        group_mass += weight[i];
+                        cm += weight[i] * p[i];
+                        cbar += weight[i] * xbar[i];
+                    }
+                    if (i == 0 || has_next) {
+                        group_mass += weight[hi];
+                        cm += weight[hi] * p[hi];
+                        cbar += weight[hi] * xbar[hi];
+                    }
+                    cm /= group_mass;
+                    cbar /= group_mass;
+                    mat3 a = mat3(0.0);
+                    a += weight[lo] * outerProduct(p[lo] - cm, xbar[lo] - cbar);
+                    a += a_j[lo];
+                    if (i != 0) {
+                        a += weight[i] * outerProduct(p[i] - cm, xbar[i] - cbar);
+                        a += a_j[i];
+                    }
+                    if (i == 0 || has_next) {
+                        a += weight[hi] * outerProduct(p[hi] - cm, xbar[hi] - cbar);
+                        a += a_j[hi];
+                    }
+                    // Warm start from the centre's orientation (solver.cpp).
+                    const vec4 rot = extract_rotation(a, qmul(qs[i], qconj(obar[i])));
+                    goal_sum[lo] += cm + qrot(rot, xbar[lo] - cbar);
+                    if (i != 0) goal_sum[i] += cm + qrot(rot, xbar[i] - cbar);
+                    if (i == 0 || has_next) goal_sum[hi] += cm + qrot(rot, xbar[hi] - cbar);
+                    q_new[i] = qnormalize(qmul(rot, obar[i]));
+                }
+            }
+            [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
+                if (i < n) {
+                    // Groups containing joint i: 2 at either end, 3 inside.
+                    const float count = (i + 1 == n) ? 2.0 : 3.0;
+                    p[i] += k_iter * (goal_sum[i] / count - p[i]);
+                    qs[i] = q_new[i];
+                }
             }
 
             // Rest-pose attraction (solver.cpp; Han & Harada 2012, global shape constraint).
-            for (uint i = 1; i < n; ++i) p[i] += k_rest * (xbar[i] - p[i]);
-
-            for (uint i = 0; i + 1 < n; ++i) {
-                const vec3 dd = p[i + 1] - p[i];
-                const float len = length(dd);
-                if (!(len > 1e-9)) continue;
-                p[i + 1] = p[i] + (tjoints[tj + i].lengths.x / len) * dd;
+            [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
+                if (i < n) p[i] += k_rest * (xbar[i] - p[i]);
             }
 
-            // Collisions, in the CPU's order: each particle against every collider.
-            for (uint i = 1; i < n; ++i) {
-                for (uint ci = cbegin; ci < cend; ++ci) {
-                    const RodColliderGpu col = colliders[ci];
-                    const vec3 a = col.a.xyz - from.position.xyz, b = col.b.xyz - from.position.xyz;
-                    push_out(p[i], closest_on_segment(p[i], a, b), col.a.w + thickness);
+            // Distance constraints, follow-the-leader (solver.cpp).
+            [[unroll]] for (uint i = 0; i + 1 < MAX_J; ++i) {
+                if (i + 1 < n) {
+                    const vec3 dd = p[i + 1] - p[i];
+                    const float len = length(dd);
+                    if (len > 1e-9) p[i + 1] = p[i] + (seg_len[i] / len) * dd;
+                }
+            }
+
+            // Collisions, collider by collider (solver.cpp).
+            for (uint ci = cbegin; ci < cend; ++ci) {
+                const RodColliderGpu col = colliders[ci];
+                const vec3 ca = col.a.xyz - from.position.xyz, cb = col.b.xyz - from.position.xyz;
+                const float radius = col.a.w + thickness;
+                [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
+                    if (i < n) push_out(p[i], closest_on_segment(p[i], ca, cb), radius);
                 }
             }
         }
 
-        for (uint i = 0; i < n; ++i) {
-            v[i] = (p[i] - x[i]) / h;
-            const vec4 dq = positive_w(qmul(qs[i], qconj(q[i])));
-            const float sn = length(dq.xyz);
-            omega[i] = sn > 0.0 ? dq.xyz * (2.0 * atan(sn, dq.w) / (sn * h)) : vec3(0.0);
-            x[i] = p[i];
-            q[i] = qs[i];
+        [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
+            if (i < n) {
+                v[i] = (p[i] - x[i]) / h;
+                const vec4 dq = positive_w(qmul(qs[i], qconj(q[i])));
+                const float sn = length(dq.xyz);
+                omega[i] = sn > 0.0 ? dq.xyz * (2.0 * atan(sn, dq.w) / (sn * h)) : vec3(0.0);
+                x[i] = p[i];
+                q[i] = qs[i];
+            }
         }
     }
 
     // ---- store ----
-    for (uint i = 0; i < n; ++i) {
-        x[i] -= travel;
-        motion[j0 + i] = RodJointMotionGpu(vec4(x[i], 0.0), vec4(v[i], 0.0));
-        spin[j0 + i] = RodJointSpinGpu(q[i], vec4(omega[i], 0.0), group[i]);
+    [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
+        if (i < n) {
+            motion[j0 + i] = RodJointMotionGpu(vec4(x[i] - travel, 0.0), vec4(v[i], 0.0));
+            spin[j0 + i] = RodJointSpinGpu(q[i], vec4(omega[i], 0.0));
+        }
     }
-    for (uint k = m + 1; k <= KW_RODS_MAX_VIEWS; ++k) w[k] = 0.0;
     chain_states[c] = RodChainStateGpu(to, vec4(d, 0.0), vec4[2](vec4(w[0], w[1], w[2], w[3]), vec4(w[4], w[5], w[6], w[7])));
 }

@@ -85,5 +85,18 @@ rc=$?
 check "bench exits 0" test $rc -eq 0
 check "bench json has three backends" bash -c "node -e 'const r=require(\"$work/bench.json\"); if (r.benchmark!==\"birds\"||r.results.length!==3) process.exit(1)'"
 
+# Rod scenes (SPEC A): a run with a trace of chain records and a validator-clean export,
+# validate against the CPU reference, and the chains benchmark's JSON.
+"$bin" run scenes/ahoge.json --frames 60 --out "$work/ahoge.glb" --trace "$work/ahoge.jsonl" >"$work/ahoge.out" 2>&1
+rc=$?
+check "rod scene runs" test $rc -eq 0
+check "rod trace: header + 60 chain records" bash -c "test \$(wc -l <'$work/ahoge.jsonl') -eq 61 && test \$(grep -c '\"kind\":\"chain\"' '$work/ahoge.jsonl') -eq 60"
+check "rod trace records have the documented fields" bash -c "sed -n 2p '$work/ahoge.jsonl' | node -e 'const r=JSON.parse(require(\"fs\").readFileSync(0,\"utf8\")); for (const k of [\"frame\",\"time\",\"character\",\"chain\",\"view_dir\",\"weights\",\"rest\",\"joints\",\"orientations\"]) if (!(k in r)) process.exit(1); if (r.joints.length!==r.rest.length||r.orientations[0].length!==4) process.exit(1)'"
+check "rod export passes glTF-Validator" node tests/tools/validate_gltf.mjs "$work/ahoge.glb"
+"$bin" validate scenes/bunny.json --frames 120 >"$work/validate-bunny.out" 2>&1
+check "validate passes on the bunny" grep -q "validate: PASS" "$work/validate-bunny.out"
+"$bin" bench chains --chains 130 --joints 9 --steps 2 --json "$work/bench-chains.json" >/dev/null 2>&1
+check "bench chains json" bash -c "node -e 'const r=require(\"$work/bench-chains.json\"); if (r.benchmark!==\"chains\"||r.results.length!==3||!(r.results[0].per_second>0)) process.exit(1)'"
+
 echo "cli: $passed passed, $failed failed"
 test $failed -eq 0

@@ -1213,8 +1213,8 @@ protected:
 
 }  // namespace
 
-// The first 4 s of each small scene (240 frames; the whole scenes took 48 s on lavapipe
-// on a busy 2-core machine, and ended within 9.3e-7 of the chain length of the
+// The first 2 s of each small scene (120 frames: lavapipe takes 2 to 40 ms a frame on a
+// shared 2-core machine; the whole scenes ended within 9.3e-7 of the chain length of the
 // reference). Bounds: the CPU backends run the reference's code, so the same bits;
 // Vulkan within 1e-3 of the chain length (the rod backends' own 300-frame parity bound):
 // GLSL's transcendental functions are a few ulp off, and those ~1e-7 m per frame
@@ -1227,7 +1227,7 @@ TEST_P(CharacterBackends, ShippedScenesMatchTheReference) {
         rs.frame(0, frame);
         ASSERT_TRUE(backend_->load(rs.world, frame).ok()) << file;
         Simulation sim(rs);
-        const std::uint32_t frames = std::min(rs.frames, 241u);
+        const std::uint32_t frames = std::min(rs.frames, 121u);
         for (std::uint32_t f = 1; f < frames; ++f) {
             rs.frame(f, frame);
             const auto stepped = backend_->step(frame);

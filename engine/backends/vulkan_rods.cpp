@@ -117,7 +117,6 @@ public:
         // from the same bits).
         std::vector<gpu::RodJointMotionGpu> motion(world.joint_count);
         std::vector<gpu::RodJointSpinGpu> spin(world.joint_count);
-        std::vector<gpu::RodJointRestGpu> rest(world.joint_count);
         std::vector<gpu::RodChainStateGpu> chain_states(count);
         parallel_for(count, 0, [&](std::size_t begin, std::size_t end) {
             for (std::size_t c = begin; c < end; ++c) {
@@ -127,8 +126,7 @@ public:
                 for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
                     const std::uint32_t j = ch.joint_begin + i;
                     motion[j] = {to_gpu(s.x[i]), to_gpu(s.v[i])};
-                    spin[j] = {to_gpu(s.q[i]), to_gpu(s.omega[i]), to_gpu(s.group_rotation[i])};
-                    rest[j] = {to_gpu(s.rest_position[i]), to_gpu(s.rest_orientation[i])};
+                    spin[j] = {to_gpu(s.q[i]), to_gpu(s.omega[i])};
                 }
                 gpu::RodChainStateGpu& cs = chain_states[c];
                 cs.root = to_gpu(s.root);
@@ -151,7 +149,6 @@ public:
             std::uint64_t{world.collider_count} * sizeof(gpu::RodColliderGpu),
             motion.size() * sizeof(gpu::RodJointMotionGpu),
             spin.size() * sizeof(gpu::RodJointSpinGpu),
-            rest.size() * sizeof(gpu::RodJointRestGpu),
             chain_states.size() * sizeof(gpu::RodChainStateGpu)};
         for (std::uint32_t b = 0; b < KW_RODS_BINDING_COUNT; ++b) {
             if (sizes[b] > ctx_->info().max_storage_buffer_range) {
@@ -169,7 +166,6 @@ public:
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAINS], bytes_of(chains)));
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_MOTION], bytes_of(motion)));
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_SPIN], bytes_of(spin)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_REST], bytes_of(rest)));
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], bytes_of(chain_states)));
 
         auto kernel = pipeline(max_joints);
@@ -251,11 +247,12 @@ public:
                                 cs.weights[1].x, cs.weights[1].y, cs.weights[1].z, cs.weights[1].w};
             const std::size_t m = world_->templ(ch).views.size();
             for (std::size_t k = 0; k <= m; ++k) out.weights[c * kWeights + k] = w[k];
+            const rods::ChainShape rest = rest_of(static_cast<std::uint32_t>(c));
             for (std::uint32_t i = 0; i < world_->templ(ch).chain.joint_count; ++i) {
                 const std::uint32_t j = ch.joint_begin + i;
                 out.positions[j] = root.position + vec3_of(motion_[j].x);
                 out.orientations[j] = quat_of(spin_[j].q);
-                out.rest[j] = root.position + root.rotation * vec3_of(rest_[j].position);
+                out.rest[j] = root.position + root.rotation * rest.positions[i];
             }
         }
         return {};
@@ -269,29 +266,37 @@ public:
             const rods::ChainInstance& ch = world_->chains[c];
             rods::ChainState& s = out[c];
             s.root = transform_of(chain_states_[c].root);
+            const rods::ChainShape rest = rest_of(static_cast<std::uint32_t>(c));
             for (std::uint32_t i = 0; i < world_->templ(ch).chain.joint_count; ++i) {
                 const std::uint32_t j = ch.joint_begin + i;
                 s.x[i] = vec3_of(motion_[j].x);
                 s.v[i] = vec3_of(motion_[j].v);
                 s.q[i] = quat_of(spin_[j].q);
                 s.omega[i] = vec3_of(spin_[j].omega);
-                s.group_rotation[i] = quat_of(spin_[j].group);
-                s.rest_position[i] = vec3_of(rest_[j].position);
-                s.rest_orientation[i] = quat_of(rest_[j].orientation);
+                s.rest_position[i] = rest.positions[i];
+                s.rest_orientation[i] = rest.orientations[i];
             }
         }
         return {};
     }
 
 private:
+    // The rest shape of chain c's last frame from its weights (SPEC A.2), as the kernel
+    // blends it; the GPU keeps only the weights.
+    rods::ChainShape rest_of(std::uint32_t c) const {
+        const rods::ChainTemplate& t = world_->templ(world_->chains[c]);
+        const gpu::RodChainStateGpu& cs = chain_states_[c];
+        const float w[8] = {cs.weights[0].x, cs.weights[0].y, cs.weights[0].z, cs.weights[0].w,
+                            cs.weights[1].x, cs.weights[1].y, cs.weights[1].z, cs.weights[1].w};
+        return rods::to_positions(t.basis, rods::blend(t.shapes, std::span<const float>(w, t.shapes.size())));
+    }
+
     Result<void> fetch() {
         motion_.resize(world_->joint_count);
         spin_.resize(world_->joint_count);
-        rest_.resize(world_->joint_count);
         chain_states_.resize(world_->chains.size());
         KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_MOTION], writable_bytes_of(motion_)));
         KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_SPIN], writable_bytes_of(spin_)));
-        KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_REST], writable_bytes_of(rest_)));
         KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], writable_bytes_of(chain_states_)));
         return {};
     }
@@ -310,7 +315,6 @@ private:
     std::vector<gpu::RodColliderGpu> colliders_;
     std::vector<gpu::RodJointMotionGpu> motion_;
     std::vector<gpu::RodJointSpinGpu> spin_;
-    std::vector<gpu::RodJointRestGpu> rest_;
     std::vector<gpu::RodChainStateGpu> chain_states_;
 };
 

@@ -18,93 +18,14 @@
 #include <string>
 #include <vector>
 
-#include <tiny_gltf.h>  // a system header: its warnings are not ours
-
+#include "export/gltf_common.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/export.hpp"
 
 namespace kodawari {
 namespace {
 
-using Vec3 = std::array<float, 3>;
-using Quat = std::array<float, 4>;
-
-constexpr int kArrayBuffer = TINYGLTF_TARGET_ARRAY_BUFFER;
-constexpr int kElementArrayBuffer = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
-
-/// A triangle mesh with one normal per triangle (flat shading: each triangle has its
-/// own three vertices).
-struct MeshData {
-    std::vector<Vec3> positions;
-    std::vector<Vec3> normals;
-    std::vector<std::uint16_t> indices;
-};
-
-/// Adds the triangles of a convex solid, each turned so that its normal points away
-/// from the solid's centre. Deciding the winding geometrically instead of by hand keeps
-/// the mirrored right wing correct without a separate winding rule.
-void add_convex_triangles(MeshData& mesh, const std::vector<Vec3>& corners,
-                          const std::vector<std::array<int, 3>>& triangles) {
-    double centre[3] = {0, 0, 0};
-    for (const Vec3& c : corners) {
-        for (int i = 0; i < 3; ++i) centre[i] += static_cast<double>(c[i]);
-    }
-    for (double& c : centre) c /= static_cast<double>(corners.size());
-
-    for (const auto& tri : triangles) {
-        Vec3 a = corners[tri[0]];
-        Vec3 b = corners[tri[1]];
-        Vec3 c = corners[tri[2]];
-        double e1[3];
-        double e2[3];
-        double mid[3];
-        for (int i = 0; i < 3; ++i) {
-            e1[i] = static_cast<double>(b[i]) - static_cast<double>(a[i]);
-            e2[i] = static_cast<double>(c[i]) - static_cast<double>(a[i]);
-            mid[i] = (static_cast<double>(a[i]) + static_cast<double>(b[i]) + static_cast<double>(c[i])) / 3.0 -
-                     centre[i];
-        }
-        double n[3] = {e1[1] * e2[2] - e1[2] * e2[1], e1[2] * e2[0] - e1[0] * e2[2], e1[0] * e2[1] - e1[1] * e2[0]};
-        const double length = std::sqrt(n[0] * n[0] + n[1] * n[1] + n[2] * n[2]);
-        assert(length > 0.0 && "degenerate triangle in a part mesh");
-        for (double& v : n) v /= length;
-        if (n[0] * mid[0] + n[1] * mid[1] + n[2] * mid[2] < 0.0) {
-            std::swap(b, c);
-            for (double& v : n) v = -v;
-        }
-        const Vec3 normal = {static_cast<float>(n[0]), static_cast<float>(n[1]), static_cast<float>(n[2])};
-        for (const Vec3& p : {a, b, c}) {
-            mesh.indices.push_back(static_cast<std::uint16_t>(mesh.positions.size()));
-            mesh.positions.push_back(p);
-            mesh.normals.push_back(normal);
-        }
-    }
-}
-
-/// A hexahedron from its 8 corners, indexed x + 2y + 4z (bit set = the "high" side).
-/// Tapered panels are allowed: every quad is split into two triangles.
-MeshData hexahedron(const std::array<Vec3, 8>& c) {
-    static const std::vector<std::array<int, 3>> kTriangles = {
-        {0, 2, 6}, {0, 6, 4},  // -x
-        {1, 5, 7}, {1, 7, 3},  // +x
-        {0, 4, 5}, {0, 5, 1},  // -y
-        {2, 3, 7}, {2, 7, 6},  // +y
-        {0, 1, 3}, {0, 3, 2},  // -z
-        {4, 6, 7}, {4, 7, 5},  // +z
-    };
-    MeshData mesh;
-    add_convex_triangles(mesh, std::vector<Vec3>(c.begin(), c.end()), kTriangles);
-    return mesh;
-}
-
-/// An axis-aligned box from its lower and upper corner.
-MeshData box(const Vec3& lo, const Vec3& hi) {
-    std::array<Vec3, 8> c{};
-    for (int i = 0; i < 8; ++i) {
-        c[i] = {(i & 1) ? hi[0] : lo[0], (i & 2) ? hi[1] : lo[1], (i & 4) ? hi[2] : lo[2]};
-    }
-    return hexahedron(c);
-}
+using namespace gltf;
 
 /// A flat panel lying in the XZ plane: the root edge at x = x0 spans z in
 /// [root_back, root_front], the tip edge at x = x1 spans [tip_back, tip_front].
@@ -184,70 +105,6 @@ constexpr std::array<std::array<double, 4>, birds::kWingTypeCount> kColours = {{
     {0.48, 0.30, 0.16, 1.0},
 }};
 
-/// Writes into the one buffer of the model; every block starts 4-byte aligned.
-class BufferWriter {
-public:
-    explicit BufferWriter(std::vector<unsigned char>& bytes) : bytes_(bytes) {}
-
-    /// Reserves `size` bytes (rounded up to 4) and returns their offset.
-    std::size_t allocate(std::size_t size) {
-        const std::size_t offset = bytes_.size();
-        bytes_.resize(offset + ((size + 3) & ~std::size_t{3}));
-        return offset;
-    }
-
-    std::size_t append(const void* data, std::size_t size) {
-        const std::size_t offset = allocate(size);
-        std::memcpy(bytes_.data() + offset, data, size);
-        return offset;
-    }
-
-private:
-    std::vector<unsigned char>& bytes_;
-};
-
-int add_buffer_view(tinygltf::Model& model, std::size_t offset, std::size_t length, int target) {
-    tinygltf::BufferView view;
-    view.buffer = 0;
-    view.byteOffset = offset;
-    view.byteLength = length;
-    view.target = target;
-    model.bufferViews.push_back(std::move(view));
-    return static_cast<int>(model.bufferViews.size() - 1);
-}
-
-int add_accessor(tinygltf::Model& model, int view, std::size_t offset, int component, std::size_t count,
-                 int type) {
-    tinygltf::Accessor accessor;
-    accessor.bufferView = view;
-    accessor.byteOffset = offset;
-    accessor.componentType = component;
-    accessor.count = count;
-    accessor.type = type;
-    model.accessors.push_back(std::move(accessor));
-    return static_cast<int>(model.accessors.size() - 1);
-}
-
-/// Float VEC3 accessor with its own ARRAY_BUFFER view, min/max filled in.
-int add_vec3_attribute(tinygltf::Model& model, BufferWriter& writer, const std::vector<Vec3>& values) {
-    const std::size_t bytes = values.size() * sizeof(Vec3);
-    const std::size_t offset = writer.append(values.data(), bytes);
-    const int view = add_buffer_view(model, offset, bytes, kArrayBuffer);
-    const int accessor =
-        add_accessor(model, view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, values.size(), TINYGLTF_TYPE_VEC3);
-    std::vector<double> lo(3, std::numeric_limits<double>::max());
-    std::vector<double> hi(3, std::numeric_limits<double>::lowest());
-    for (const Vec3& v : values) {
-        for (int i = 0; i < 3; ++i) {
-            lo[i] = std::min(lo[i], static_cast<double>(v[i]));
-            hi[i] = std::max(hi[i], static_cast<double>(v[i]));
-        }
-    }
-    model.accessors[accessor].minValues = std::move(lo);
-    model.accessors[accessor].maxValues = std::move(hi);
-    return accessor;
-}
-
 /// Adds the meshes and the material of one wing type; returns the mesh index per part.
 std::array<int, birds::kPartCount> add_wing_type_meshes(tinygltf::Model& model, BufferWriter& writer,
                                                          birds::WingType type) {
@@ -300,27 +157,6 @@ bool normalized(const gpu::vec4& q, Quat& out) {
     return true;
 }
 
-/// An ostream that appends to an AtomicFile, so the GLB goes to disk without a second
-/// in-memory copy of a buffer that can reach a gigabyte.
-class AtomicFileBuf : public std::streambuf {
-public:
-    explicit AtomicFileBuf(AtomicFile& file) : file_(file) {}
-
-protected:
-    std::streamsize xsputn(const char* data, std::streamsize count) override {
-        file_.write(data, static_cast<std::size_t>(count));
-        return count;
-    }
-    int_type overflow(int_type ch) override {
-        if (traits_type::eq_int_type(ch, traits_type::eof())) return traits_type::not_eof(ch);
-        const char c = traits_type::to_char_type(ch);
-        file_.write(&c, 1);
-        return ch;
-    }
-
-private:
-    AtomicFile& file_;
-};
 
 Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, std::span<const gpu::BirdPose> poses,
                              std::uint32_t frames) {
@@ -497,13 +333,7 @@ Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, st
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
 
-    AtomicFileBuf buffer(file);
-    std::ostream stream(&buffer);
-    tinygltf::TinyGLTF gltf;
-    if (!gltf.WriteGltfSceneToStream(&model, stream, false, true) || !stream) {
-        return make_error(Error::Kind::Io, file.path() + ": glTF serialization failed");
-    }
-    return {};
+    return write_glb(file, model);
 }
 
 }  // namespace

@@ -190,6 +190,71 @@ void TraceWriter::write_frame(std::uint32_t frame, const birds::BirdWorld& world
     }
 }
 
+void TraceWriter::write_chains(std::uint32_t frame, float time, const rods::RodWorld& world,
+                               std::span<const std::uint32_t> characters, std::span<const std::uint32_t> chains_in_character,
+                               std::span<const std::string> names, const ChainSnapshot& snapshot) {
+    assert(characters.size() == world.chains.size() && chains_in_character.size() == world.chains.size());
+    assert(names.empty() || names.size() == world.chains.size());
+    constexpr std::size_t kWeights = rods::kMaxViewExamples + 1;
+    std::string& out = buffer_;
+    for (std::size_t c = 0; c < world.chains.size(); ++c) {
+        const rods::ChainInstance& chain = world.chains[c];
+        const std::uint32_t n = world.templ(chain).chain.joint_count;
+        const std::size_t m = world.templ(chain).views.size();
+        out += "{\"kind\":\"chain\",\"frame\":";
+        append_integer(out, frame);
+        out += ",\"time\":";
+        append_number(out, time);
+        out += ",\"character\":";
+        append_integer(out, characters[c]);
+        out += ",\"chain\":";
+        append_integer(out, chains_in_character[c]);
+        if (!names.empty()) {
+            out += ",\"name\":";
+            append_string(out, names[c]);
+        }
+        const glm::vec3 d = snapshot.view_directions[c];
+        out += ",\"view_dir\":";
+        append_vec3(out, d.x, d.y, d.z);
+        out += ",\"weights\":[";
+        for (std::size_t k = 0; k <= m; ++k) {
+            if (k > 0) out += ',';
+            append_number(out, snapshot.weights[c * kWeights + k]);
+        }
+        out += "],\"rest\":[";
+        for (std::uint32_t i = 0; i < n; ++i) {
+            if (i > 0) out += ',';
+            const glm::vec3 r = snapshot.rest[chain.joint_begin + i];
+            append_vec3(out, r.x, r.y, r.z);
+        }
+        out += "],\"joints\":[";
+        for (std::uint32_t i = 0; i < n; ++i) {
+            if (i > 0) out += ',';
+            const glm::vec3 x = snapshot.positions[chain.joint_begin + i];
+            append_vec3(out, x.x, x.y, x.z);
+        }
+        out += "],\"orientations\":[";
+        for (std::uint32_t i = 0; i < n; ++i) {
+            if (i > 0) out += ',';
+            const glm::quat q = snapshot.orientations[chain.joint_begin + i];
+            out += '[';
+            append_number(out, q.x);
+            out += ',';
+            append_number(out, q.y);
+            out += ',';
+            append_number(out, q.z);
+            out += ',';
+            append_number(out, q.w);
+            out += ']';
+        }
+        out += "]}\n";
+        if (out.size() >= kFlushBytes) {
+            file_.write(out);
+            out.clear();
+        }
+    }
+}
+
 Result<void> TraceWriter::finish() {
     file_.write(buffer_);
     buffer_.clear();

@@ -43,8 +43,7 @@ static_assert(sizeof(RodChainGpu) == 32 && offsetof(RodChainGpu, joints) == 16);
 static_assert(sizeof(RodTransformGpu) == 32 && offsetof(RodTransformGpu, rotation) == 16);
 static_assert(sizeof(RodColliderGpu) == 32 && offsetof(RodColliderGpu, b) == 16);
 static_assert(sizeof(RodJointMotionGpu) == 32 && offsetof(RodJointMotionGpu, v) == 16);
-static_assert(sizeof(RodJointSpinGpu) == 48 && offsetof(RodJointSpinGpu, omega) == 16 && offsetof(RodJointSpinGpu, group) == 32);
-static_assert(sizeof(RodJointRestGpu) == 32 && offsetof(RodJointRestGpu, orientation) == 16);
+static_assert(sizeof(RodJointSpinGpu) == 32 && offsetof(RodJointSpinGpu, omega) == 16);
 static_assert(sizeof(RodChainStateGpu) == 80);
 static_assert(offsetof(RodChainStateGpu, root) == 0 && offsetof(RodChainStateGpu, view) == 32 &&
               offsetof(RodChainStateGpu, weights) == 48);

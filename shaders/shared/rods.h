@@ -10,7 +10,9 @@
 // loading and storing). A chain's joints are contiguous (joint_begin + i) in every
 // per-joint buffer, so one invocation walks consecutive addresses. The state is split
 // by what each phase needs and by size: lavapipe caps one storage buffer at 128 MiB,
-// and 100 000 chains x 16 joints x 112 bytes of state would not fit in one.
+// and 100 000 chains x 16 joints x 64 bytes of state would not fit in one. Nothing a
+// frame can recompute from per-chain data is stored per joint: the shape-matching warm
+// start comes from the orientations, last frame's rest shape from last frame's weights.
 // Quaternions are vec4(x, y, z, w).
 #ifndef KODAWARI_SHADERS_SHARED_RODS_H
 #define KODAWARI_SHADERS_SHARED_RODS_H
@@ -30,9 +32,8 @@
 #define KW_RODS_BINDING_COLLIDERS 6        // RodColliderGpu (this frame)
 #define KW_RODS_BINDING_MOTION 7           // RodJointMotionGpu, per joint (state)
 #define KW_RODS_BINDING_SPIN 8             // RodJointSpinGpu, per joint (state)
-#define KW_RODS_BINDING_REST 9             // RodJointRestGpu, per joint (state: last rest shape)
-#define KW_RODS_BINDING_CHAIN_STATE 10     // RodChainStateGpu, per chain (state and diagnostics)
-#define KW_RODS_BINDING_COUNT 11
+#define KW_RODS_BINDING_CHAIN_STATE 9      // RodChainStateGpu, per chain (state and diagnostics)
+#define KW_RODS_BINDING_COUNT 10
 
 // Specialization constant ids of rods_step.comp.
 #define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the world: sizes the register arrays
@@ -87,18 +88,14 @@ struct RodJointMotionGpu {
 struct RodJointSpinGpu {
     vec4 q;      // orientation
     vec4 omega;  // angular velocity (world), w: unused
-    vec4 group;  // the last shape-matching rotation of the group centred here (warm start)
-};
-
-struct RodJointRestGpu {
-    vec4 position;     // last frame's rest shape, root frame (SPEC A.5 needs it)
-    vec4 orientation;
 };
 
 struct RodChainStateGpu {
     RodTransformGpu root;  // last frame's root frame
     vec4 view;             // xyz: this frame's view direction d (reference joint's frame), w: unused
-    vec4 weights[2];       // w_0 .. w_7 (w_0 = the base's)
+    vec4 weights[2];       // w_0 .. w_7 (w_0 = the base's); the next frame blends last
+                           // frame's rest shape from them again for SPEC A.5 instead of
+                           // storing it per joint (loads and stores are the costly part)
 };
 
 struct RodPush {

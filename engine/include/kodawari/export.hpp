@@ -13,6 +13,8 @@
 #include "atomic_file.hpp"
 #include "birds/world.hpp"
 #include "result.hpp"
+#include "rod_backend.hpp"
+#include "rod_scene.hpp"
 
 namespace kodawari {
 
@@ -21,6 +23,15 @@ namespace kodawari {
 /// every frame. `poses` holds `frames` x birds entries, frame-major.
 [[nodiscard]] Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
                                            std::span<const gpu::BirdPose> poses, std::uint32_t frames);
+
+/// Writes a `.glb` of a rod scene: per character instance its skeleton as a node
+/// hierarchy and, under each chain's attachment joint, the chain's joints as a
+/// hierarchy (joint i the child of joint i-1) whose bones point at the next joint
+/// (SPEC A.4's skinning output); one animation with translation and rotation channels
+/// on every node, one key per frame. `positions` and `orientations` hold frames x
+/// scene.world.joint_count world-space entries (ChainSnapshot's), frame-major.
+[[nodiscard]] Result<void> write_chains_glb(const std::string& path, const RodScene& scene, std::uint32_t frames,
+                                            std::span<const glm::vec3> positions, std::span<const glm::quat> orientations);
 
 /// What the first line of a trace says.
 struct TraceHeader {
@@ -39,6 +50,14 @@ public:
     /// Appends the records of one frame; `poses` and `diag` hold one entry per bird.
     void write_frame(std::uint32_t frame, const birds::BirdWorld& world, std::span<const gpu::BirdPose> poses,
                      std::span<const gpu::BirdDiag> diag);
+
+    /// Appends one chain record per chain of one frame (docs/trace-format.md): for chain
+    /// c its character instance characters[c], its index chains_in_character[c] within
+    /// that character, its name (names may be empty), and the snapshot's view direction,
+    /// weights, rest shape, joints and orientations (world space).
+    void write_chains(std::uint32_t frame, float time, const rods::RodWorld& world, std::span<const std::uint32_t> characters,
+                      std::span<const std::uint32_t> chains_in_character, std::span<const std::string> names,
+                      const ChainSnapshot& snapshot);
 
     /// Completes the file (renames it into place).
     [[nodiscard]] Result<void> finish();

@@ -121,9 +121,6 @@ struct ChainState {
     std::array<glm::vec3, kMaxChainJoints> v{};      ///< velocities, m/s
     std::array<glm::quat, kMaxChainJoints> q{};      ///< orientations, world
     std::array<glm::vec3, kMaxChainJoints> omega{};  ///< angular velocities, rad/s, world
-    /// The shape-matching rotation of group i from the last iteration: the warm start of
-    /// the next extraction (Mueller et al. 2016).
-    std::array<glm::quat, kMaxChainJoints> group_rotation{};
     Transform root;                                          ///< the last step's root transform
     std::array<glm::vec3, kMaxChainJoints> rest_position{};  ///< the last step's rest shape, root frame
     std::array<glm::quat, kMaxChainJoints> rest_orientation{};

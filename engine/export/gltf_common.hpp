@@ -1,0 +1,68 @@
+#pragma once
+// Pieces shared by the glTF writers (gltf_birds.cpp, gltf_chains.cpp): simple flat-shaded
+// meshes, the model's single buffer, accessors, and streaming a .glb into an AtomicFile.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+#include <streambuf>
+#include <vector>
+
+#include <tiny_gltf.h>  // a system header: its warnings are not ours
+
+#include "kodawari/atomic_file.hpp"
+#include "kodawari/result.hpp"
+
+namespace kodawari::gltf {
+
+using Vec3 = std::array<float, 3>;
+using Quat = std::array<float, 4>;
+
+inline constexpr int kArrayBuffer = TINYGLTF_TARGET_ARRAY_BUFFER;
+inline constexpr int kElementArrayBuffer = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
+
+/// A triangle mesh with one normal per triangle (flat shading: each triangle has its
+/// own three vertices).
+struct MeshData {
+    std::vector<Vec3> positions;
+    std::vector<Vec3> normals;
+    std::vector<std::uint16_t> indices;
+};
+
+/// Adds the triangles of a convex solid, each turned so that its normal points away
+/// from the solid's centre.
+void add_convex_triangles(MeshData& mesh, const std::vector<Vec3>& corners, const std::vector<std::array<int, 3>>& triangles);
+
+/// A hexahedron from its 8 corners, indexed x + 2y + 4z (bit set = the "high" side).
+[[nodiscard]] MeshData hexahedron(const std::array<Vec3, 8>& c);
+
+/// An axis-aligned box from its lower and upper corner.
+[[nodiscard]] MeshData box(const Vec3& lo, const Vec3& hi);
+
+/// Writes into the one buffer of the model; every block starts 4-byte aligned.
+class BufferWriter {
+public:
+    explicit BufferWriter(std::vector<unsigned char>& bytes) : bytes_(bytes) {}
+    /// Reserves `size` bytes (zeroed) and returns their offset.
+    std::size_t allocate(std::size_t size);
+    /// Copies `size` bytes in and returns their offset.
+    std::size_t append(const void* data, std::size_t size);
+
+private:
+    std::vector<unsigned char>& bytes_;
+};
+
+[[nodiscard]] int add_buffer_view(tinygltf::Model& model, std::size_t offset, std::size_t length, int target);
+[[nodiscard]] int add_accessor(tinygltf::Model& model, int view, std::size_t offset, int component, std::size_t count,
+                               int type);
+/// Float VEC3 accessor with its own ARRAY_BUFFER view, min/max filled in.
+[[nodiscard]] int add_vec3_attribute(tinygltf::Model& model, BufferWriter& writer, const std::vector<Vec3>& values);
+/// A mesh of one triangle primitive with positions, normals and indices.
+[[nodiscard]] int add_mesh(tinygltf::Model& model, BufferWriter& writer, const MeshData& data, int material,
+                           const std::string& name);
+
+/// Serializes `model` as a .glb into `file` (not committed). tinygltf may throw; callers
+/// catch.
+[[nodiscard]] Result<void> write_glb(AtomicFile& file, tinygltf::Model& model);
+
+}  // namespace kodawari::gltf
