@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <memory>
 #include <numbers>
 #include <string>
 #include <vector>
@@ -17,6 +18,8 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <kodawari/gpu_info.hpp>
+#include <kodawari/rod_backend.hpp>
 #include <kodawari/rod_scene.hpp>
 #include <kodawari/rods/kinematics.hpp>
 #include <kodawari/rods/solver.hpp>
@@ -64,27 +67,16 @@ public:
         }
     }
 
-    /// Advances every chain to frame `index` (call with 1, 2, 3, ...).
+    /// Advances every chain to frame `index` (call with 1, 2, 3, ...): the frame's
+    /// kinematic input, then each chain's view-blended rest shape (SPEC A.3, A.2) and one
+    /// solver step (A.4), as every rod backend does.
     void step(std::uint32_t index) {
         scene_.frame(index, frame_);
-        for (std::uint32_t c = 0; c < count_; ++c) {
-            const rods::ChainInstance& chain = scene_.world.chains[c];
-            const rods::ChainTemplate& t = scene_.world.templ(chain);
-            const rods::RestShape rest = rods::rest_shape(scene_.world, c, frame_);
-            spheres_.clear();
-            capsules_.clear();
-            for (std::uint32_t k = chain.collider_begin; k < chain.collider_begin + chain.collider_count; ++k) {
-                const rods::Capsule& cap = frame_.colliders[k];
-                if (cap.a == cap.b) {
-                    spheres_.push_back(rods::Sphere{cap.a, cap.radius});
-                } else {
-                    capsules_.push_back(cap);
-                }
-            }
-            rods::step(t.chain, t.params, frame_.roots[c], rest.shape, spheres_, capsules_, frame_.dt, states_[c]);
-        }
+        for (std::uint32_t c = 0; c < count_; ++c) kodawari::step_chain_reference(scene_.world, c, frame_, states_[c]);
     }
 
+    /// World position of joint `i` of chain `c`.
+    [[nodiscard]] glm::vec3 x(std::uint32_t c, std::uint32_t i) const { return rods::position(states_[c], i); }
     [[nodiscard]] const rods::ChainState& state(std::uint32_t chain) const { return states_[chain]; }
     [[nodiscard]] const rods::RodFrame& frame() const { return frame_; }
 
@@ -93,8 +85,6 @@ private:
     std::uint32_t count_;
     rods::RodFrame frame_;
     std::vector<rods::ChainState> states_;
-    std::vector<rods::Sphere> spheres_;
-    std::vector<rods::Capsule> capsules_;
 };
 
 // A look-at + perspective camera on a 1920 x 1080 picture, +Y up: what a viewer shows.
@@ -206,7 +196,7 @@ TEST(CharacterScene, ValidSceneLoadsWithDefaults) {
     json doc = valid_character_scene();
     doc["characters"][0]["physics"] = {{"damping", 2.5}, {"stiffness", 0.7}};
     chain0(doc)["collide"] = false;
-    chain0(doc)["physics"] = {{"stiffness", 0.9}, {"gravity", {0, 0, 0}}};
+    chain0(doc)["physics"] = {{"stiffness", 0.9}, {"gravity", {0, 0, 0}}, {"rest_stiffness", 0.3}};
     const auto custom = kodawari::parse_scene(doc.dump(), "test.json");
     ASSERT_TRUE(custom.ok()) << custom.error().message;
     const RodScene crs = build(custom.value());
@@ -215,6 +205,7 @@ TEST(CharacterScene, ValidSceneLoadsWithDefaults) {
     EXPECT_EQ(p.damping, 2.5f);
     EXPECT_EQ(p.stiffness, 0.9f);
     EXPECT_EQ(p.gravity, glm::vec3(0.0f));
+    EXPECT_EQ(p.rest_stiffness, 0.3f);
     EXPECT_EQ(p.iterations, rods::SolverParams{}.iterations);
 }
 
@@ -467,6 +458,10 @@ TEST(CharacterScene, BadPhysicsAndMotions) {
     json nan = valid_character_scene();
     nan["characters"][0]["motions"][0]["frequency"] = "NaN";
     EXPECT_EQ(parse_error(nan), "test.json: $.characters[0].motions[0].frequency: expected a finite number in [0, 100], got \"NaN\"");
+    json many = valid_character_scene();
+    for (int k = 0; k < 16; ++k) many["characters"][0]["colliders"].push_back(many["characters"][0]["colliders"][0]);
+    EXPECT_EQ(parse_error(many),
+              "test.json: $.characters[0].colliders: expected an array of colliders (at most 16), got an array of 17 elements");
     json collider = valid_character_scene();
     collider["characters"][0]["colliders"][0]["radius"] = 0;
     EXPECT_EQ(parse_error(collider),
@@ -660,9 +655,9 @@ TEST(CharacterScenes, FramesAreDeterministic) {
     }
 }
 
-// The crowd's per-frame input is cheap, and one instance's chains simulate through the
+// The crowd's per-frame input is cheap, and a few instances' chains simulate through the
 // whole scene (stopping, turning, walking) without blowing up or stretching.
-TEST(CharacterScenes, CrowdFrameCostAndOneInstanceSimulates) {
+TEST(CharacterScenes, CrowdFrameCostAndInstancesSimulate) {
     const RodScene rs = build(load("scenes/crowd.json"));
     rods::RodFrame frame;
     rs.frame(0, frame);
@@ -671,23 +666,51 @@ TEST(CharacterScenes, CrowdFrameCostAndOneInstanceSimulates) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     std::printf("[ measured ] crowd: RodScene::frame for %u characters, %zu chains: %.3f ms per frame\n",
                 rs.world.character_count, rs.world.chains.size(), 1e3 * seconds / static_cast<double>(rs.frames));
-    Simulation sim(rs, rs.chain_count(0));
+    constexpr std::uint32_t kInstances = 4;  // each on its own clock (time offsets)
+    const std::uint32_t chains = kInstances * rs.chain_count(0);
+    Simulation sim(rs, chains);
     float worst_stretch = 0.0f;
     for (std::uint32_t f = 1; f < rs.frames; ++f) {
         sim.step(f);
-        for (std::uint32_t c = 0; c < rs.chain_count(0); ++c) {
+        for (std::uint32_t c = 0; c < chains; ++c) {
             const rods::Chain& chain = rs.world.templ(rs.world.chains[c]).chain;
-            const rods::ChainState& s = sim.state(c);
             for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) {
-                const float l = glm::length(s.x[i + 1] - s.x[i]);
+                const float l = glm::length(sim.x(c, i + 1) - sim.x(c, i));
                 ASSERT_TRUE(std::isfinite(l)) << rs.chain_names[c] << " frame " << f;
                 worst_stretch = std::max(worst_stretch, std::abs(l - chain.segment_length[i]) / chain.segment_length[i]);
             }
         }
     }
-    std::printf("[ measured ] crowd instance 0: worst segment stretch %.3g over %u frames\n", static_cast<double>(worst_stretch),
-                rs.frames);
-    EXPECT_LT(worst_stretch, 0.01f);
+    std::printf("[ measured ] crowd instances 0-%u: worst segment stretch %.3g over %u frames\n", kInstances - 1,
+                static_cast<double>(worst_stretch), rs.frames);
+    // Bound 2% of a segment. The solver projects collisions after the distance constraints
+    // (SPEC A.4's order), so a segment pressed hard against the head sphere does stretch:
+    // with the bangs 6 mm off the collider a run-and-stop stretched one by 4.9%; they now
+    // ride 16 mm off it, and nothing else touches.
+    EXPECT_LT(worst_stretch, 0.02f);
+}
+
+// The small scenes simulate through their whole length: every value finite, every segment
+// within 2% of its length (the bound of the crowd test above, for the same reason).
+TEST(CharacterScenes, SmallScenesSimulateWithoutStretch) {
+    for (const char* file : {"scenes/bunny.json", "scenes/ahoge.json", "scenes/bangs.json"}) {
+        const RodScene rs = build(load(file));
+        Simulation sim(rs);
+        float worst = 0.0f;
+        for (std::uint32_t f = 1; f < rs.frames; ++f) {
+            sim.step(f);
+            for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
+                const rods::Chain& chain = rs.world.templ(rs.world.chains[c]).chain;
+                for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) {
+                    const float l = glm::length(sim.x(c, i + 1) - sim.x(c, i));
+                    ASSERT_TRUE(std::isfinite(l)) << file << " " << rs.chain_names[c] << " frame " << f;
+                    worst = std::max(worst, std::abs(l - chain.segment_length[i]) / chain.segment_length[i]);
+                }
+            }
+        }
+        std::printf("[ measured ] %s: worst segment stretch %.3g over %u frames\n", file, static_cast<double>(worst), rs.frames);
+        EXPECT_LT(worst, 0.02f) << file;
+    }
 }
 
 // ---------------------------------------------------------------------------------------
@@ -985,8 +1008,8 @@ AhogeRun run_ahoge(const RodScene& scene, float margin, float warmup_s) {
         sim.step(f);
         if (f < first_checked) continue;
         const Projector cam(scene.camera_pose(f), scene.fov_deg);
-        const rods::ChainState& s = sim.state(0);
-        const float sideways = (cam.pixel(s.x[last]).x - cam.pixel(s.x[0]).x) / (length * cam.scale(s.x[0]));
+        const glm::vec3 root = sim.x(0, 0);
+        const float sideways = (cam.pixel(sim.x(0, last)).x - cam.pixel(root).x) / (length * cam.scale(root));
         const glm::vec3 d = rods::rest_shape(scene.world, 0, sim.frame()).view_direction;
         float azimuth = std::atan2(d.x, d.z) * 180.0f / kPi;  // 0 = the head's front, 90 = its left
         if (azimuth < 0.0f) azimuth += 360.0f;
@@ -1009,9 +1032,10 @@ AhogeRun run_ahoge(const RodScene& scene, float margin, float warmup_s) {
 // look-at + perspective camera and the tip must lie to the camera's right of the root by
 // at least 0.25 of the strand's length. Why 0.25: the view examples are 150-degree curls
 // whose tip sits ~0.7 of the length sideways; the blend between two neighbouring examples
-// (45 degrees off both) still curls ~0.69 sideways, and the simulated strand keeps a
-// wobble of a few per cent of its length (solver.hpp), so 0.25 leaves a wide margin while
-// a curl that opens the wrong way (negative) or faces the camera (near 0) fails. The same
+// (45 degrees off both) still curls ~0.69 sideways, and the simulated strand lags the
+// orbit, the head turn and the sway by a few per cent of its length, so 0.25 leaves a wide
+// margin while a curl that opens the wrong way (negative) or faces the camera (near 0)
+// fails. The same
 // scene without its view examples (the base shape, curled to the character's left) must
 // fail the check somewhere, so the test can fail: seen from behind, the base curl opens
 // to the camera's left.
@@ -1074,10 +1098,9 @@ float eye_clearance(Scene scene) {
             const glm::vec3 eye_local = centre + radius * glm::vec3(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
             const glm::vec2 eye = cam.pixel(head.position + head.rotation * eye_local);
             for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
-                const rods::ChainState& st = sim.state(c);
                 const std::uint32_t n = rs.world.templ(rs.world.chains[c]).chain.joint_count;
                 for (std::uint32_t i = 0; i + 1 < n; ++i) {
-                    clearance = std::min(clearance, segment_distance(eye, cam.pixel(st.x[i]), cam.pixel(st.x[i + 1])) / head_px);
+                    clearance = std::min(clearance, segment_distance(eye, cam.pixel(sim.x(c, i)), cam.pixel(sim.x(c, i + 1))) / head_px);
                 }
             }
         }
@@ -1088,12 +1111,10 @@ float eye_clearance(Scene scene) {
 }  // namespace
 
 // The seed's first example: front hair that keeps off the eyes when seen from the front.
-// Bounds: with the front example every strand stays at least 0.12 head radii (13 mm at
+// Bounds: with the front example every strand stays at least 0.2 head radii (22 mm at
 // this head) from both eye centres on screen; the base shape alone (hanging straight
-// down the forehead) brings a strand within 0.06 head radii of an eye. Measured 0.21
-// and 0.03: gravity pulls the parted strands down towards the eyes (the solver cannot
-// hold a shape fully against gravity, solver.hpp), which is why the scene parts them
-// into a curtain that hangs down beside the eyes rather than across the forehead.
+// down the forehead) brings a strand within 0.1 head radii of an eye. Measured 0.38 and
+// 0.05; the rest shapes alone give 0.41 and 0.06, so gravity and the sway take little.
 TEST(Characters, BangsPartFromTheFront) {
     Scene scene = load("scenes/bangs.json");
     const float with_views = eye_clearance(scene);
@@ -1101,8 +1122,8 @@ TEST(Characters, BangsPartFromTheFront) {
     const float base_only = eye_clearance(scene);
     std::printf("[ measured ] eye clearance seen from the front: %.3f head radii with the view example, %.3f with the base shape only\n",
                 static_cast<double>(with_views), static_cast<double>(base_only));
-    EXPECT_GE(with_views, 0.12f);
-    EXPECT_LE(base_only, 0.06f);
+    EXPECT_GE(with_views, 0.2f);
+    EXPECT_LE(base_only, 0.1f);
 }
 
 namespace {
@@ -1131,8 +1152,8 @@ float ear_tip_separation(Scene scene, float azimuth_deg) {
         sim.step(f);
         if (rs.time(f) < 2.0f) continue;
         const Projector cam(rs.camera_pose(f), rs.fov_deg);
-        const glm::vec3 left = sim.state(0).x[ear.joint_count - 1];
-        const glm::vec3 right = sim.state(1).x[ear.joint_count - 1];
+        const glm::vec3 left = sim.x(0, ear.joint_count - 1);
+        const glm::vec3 right = sim.x(1, ear.joint_count - 1);
         separation = std::min(separation, std::abs(cam.pixel(left).x - cam.pixel(right).x) / (length * cam.scale(0.5f * (left + right))));
     }
     return separation;
@@ -1162,3 +1183,107 @@ TEST(Characters, BunnyEarsSplayPerView) {
     EXPECT_GE(front, front_base + 0.5f);
 }
 
+// ---------------------------------------------------------------------------------------
+// The shipped character scenes on every rod backend (rod_backend.hpp): the RodScene's
+// world and frames are what the backends take, and they agree with the loop above.
+
+namespace {
+
+class CharacterBackends : public ::testing::TestWithParam<kodawari::BackendKind> {
+protected:
+    void SetUp() override {
+        if (GetParam() == kodawari::BackendKind::Vulkan) {
+            auto gpus = kodawari::list_gpus("");
+            if (!gpus.ok() || gpus.value().devices.empty()) {
+                GTEST_SKIP() << "no Vulkan device on this machine ("
+                             << (gpus.ok() ? gpus.value().reason : gpus.error().message) << ")";
+            }
+        }
+        auto made = kodawari::make_rod_backend(GetParam(), {});
+        ASSERT_TRUE(made.ok()) << made.error().message;
+        backend_ = std::move(made).value();
+    }
+    void TearDown() override {
+        if (backend_) {
+            EXPECT_EQ(backend_->validation_messages(), 0u) << "Vulkan validation reported problems (see stderr)";
+        }
+    }
+    std::unique_ptr<kodawari::RodBackend> backend_;
+};
+
+}  // namespace
+
+// The first 2 s of each small scene (120 frames: lavapipe takes 2 to 40 ms a frame on a
+// shared 2-core machine; the whole scenes ended within 9.3e-7 of the chain length of the
+// reference). Bounds: the CPU backends run the reference's code, so the same bits;
+// Vulkan within 1e-3 of the chain length (the rod backends' own 300-frame parity bound):
+// GLSL's transcendental functions are a few ulp off, and those ~1e-7 m per frame
+// compound through the dynamics and the collisions but stay bounded, as damping and the
+// rest-pose attraction pull both runs towards the same rest shapes.
+TEST_P(CharacterBackends, ShippedScenesMatchTheReference) {
+    for (const char* file : {"scenes/bunny.json", "scenes/ahoge.json", "scenes/bangs.json"}) {
+        const RodScene rs = build(load(file));
+        rods::RodFrame frame;
+        rs.frame(0, frame);
+        ASSERT_TRUE(backend_->load(rs.world, frame).ok()) << file;
+        Simulation sim(rs);
+        const std::uint32_t frames = std::min(rs.frames, 121u);
+        for (std::uint32_t f = 1; f < frames; ++f) {
+            rs.frame(f, frame);
+            const auto stepped = backend_->step(frame);
+            ASSERT_TRUE(stepped.ok()) << file << ": " << stepped.error().message;
+            sim.step(f);
+        }
+        kodawari::ChainSnapshot snap;
+        ASSERT_TRUE(backend_->read(snap).ok());
+        float worst = 0.0f;
+        float length = 1e9f;
+        for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
+            const rods::ChainInstance& ch = rs.world.chains[c];
+            const rods::Chain& chain = rs.world.templ(ch).chain;
+            float l = 0.0f;
+            for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) l += chain.segment_length[i];
+            length = std::min(length, l);
+            for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
+                worst = std::max(worst, glm::length(sim.x(c, i) - snap.positions[ch.joint_begin + i]));
+            }
+        }
+        std::printf("[ measured ] %s on %s, %u frames: max %.3g of the chain length from the reference\n", file,
+                    std::string(backend_->name()).c_str(), frames - 1, static_cast<double>(worst / length));
+        if (GetParam() == kodawari::BackendKind::Vulkan) {
+            EXPECT_LT(worst, 1e-3f * length) << file;
+        } else {
+            EXPECT_EQ(worst, 0.0f) << file << ": the CPU backends run the reference's code";
+        }
+    }
+}
+
+// The crowd's 8 192 chains load and step (one frame: the CPU reference takes seconds).
+TEST_P(CharacterBackends, CrowdLoadsAndSteps) {
+    const RodScene rs = build(load("scenes/crowd.json"));
+    rods::RodFrame frame;
+    rs.frame(0, frame);
+    ASSERT_TRUE(backend_->load(rs.world, frame).ok());
+    rs.frame(1, frame);
+    const auto start = std::chrono::steady_clock::now();
+    const auto stepped = backend_->step(frame);
+    kodawari::ChainSnapshot snap;
+    ASSERT_TRUE(stepped.ok()) << stepped.error().message;
+    ASSERT_TRUE(backend_->read(snap).ok());
+    const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+    ASSERT_EQ(snap.positions.size(), rs.world.joint_count);
+    for (const glm::vec3& p : snap.positions) ASSERT_TRUE(std::isfinite(glm::dot(p, p)));
+    std::printf("[ measured ] crowd on %s (%s): one frame of %zu chains in %.1f ms\n", std::string(backend_->name()).c_str(),
+                backend_->device().c_str(), rs.world.chains.size(), 1e3 * seconds);
+}
+
+INSTANTIATE_TEST_SUITE_P(All, CharacterBackends,
+                         ::testing::Values(kodawari::BackendKind::CpuReference, kodawari::BackendKind::Cpu,
+                                           kodawari::BackendKind::Vulkan),
+                         [](const auto& param_info) {
+                             std::string n(kodawari::backend_name(param_info.param));
+                             for (char& ch : n) {
+                                 if (ch == '-') ch = '_';
+                             }
+                             return n;
+                         });

@@ -25,7 +25,7 @@ constexpr double kMaxCoordinate = 1e6;  // world positions (m), as the bird load
 constexpr double kMaxLocal = 1000.0;    // offsets inside a character (m)
 constexpr double kMaxShape = 100.0;     // chain shape coordinates (m)
 constexpr double kMaxTime = 1e5;        // motion times (s)
-constexpr std::size_t kMaxPerCharacter = 64;  // joints, chains, colliders, motions
+constexpr std::size_t kMaxPerCharacter = 64;  // joints, chains, motions (colliders: rods::kMaxChainColliders)
 constexpr std::size_t kMaxCameraKeys = 4096;
 
 using Vec3 = glm::vec3;
@@ -214,8 +214,11 @@ Result<rods::ChainShape> read_shape(const JsonReader& r, const JsonNode& node, s
 }
 
 Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::SolverParams& p) {
-    KW_TRY(r.object(node, {"stiffness", "damping", "iterations", "max_substep", "gravity", "wind", "momentum_suppression"}));
+    KW_TRY(r.object(node, {"stiffness", "rest_stiffness", "damping", "iterations", "max_substep", "gravity", "wind",
+                           "momentum_suppression"}));
     KW_TRY(optional_member(r, node, "stiffness", p.stiffness,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0)); }));
+    KW_TRY(optional_member(r, node, "rest_stiffness", p.rest_stiffness,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0)); }));
     KW_TRY(optional_member(r, node, "damping", p.damping,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1000.0)); }));
@@ -577,8 +580,11 @@ Result<CharacterSpec> read_character(const JsonReader& r, const JsonNode& node) 
     }
     const JsonNode colliders = r.member(node, "colliders");
     if (colliders.present()) {
+        // Every colliding chain of the character touches all of them, and one chain may
+        // touch at most rods::kMaxChainColliders (the GPU keeps them in fixed arrays).
         std::size_t n = 0;
-        KW_SCENE_ASSIGN(n, read_array(r, colliders, 0, kMaxPerCharacter, "an array of colliders" + per));
+        KW_SCENE_ASSIGN(n, read_array(r, colliders, 0, rods::kMaxChainColliders,
+                                      "an array of colliders (at most " + std::to_string(rods::kMaxChainColliders) + ")"));
         for (std::size_t i = 0; i < n; ++i) {
             ColliderSpec c;
             KW_SCENE_ASSIGN(c, read_collider(r, r.element(colliders, i), ch.skeleton));
