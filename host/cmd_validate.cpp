@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <string>
 #include <cmath>
 #include <cstdio>
 #include <optional>
@@ -13,9 +14,17 @@
 namespace kodawari::cli {
 namespace {
 
-// The rods of a scene: the backend and the CPU reference side by side, frame by frame.
-// Tolerance: every joint within 1e-3 of its chain's length of the reference (the
-// issue's trajectory bound), the rest shapes likewise, the weights within 1e-5.
+// The rods of a scene against the CPU reference. The gate is the one-step consistency of
+// issue 3: every frame, the tested backend's state is also advanced by the reference,
+// and every joint must agree within 1e-5 of its chain's length, compared relative to the
+// chain root as the state is kept (in world coordinates 30 m from the origin one float
+// step is already 2e-6 m); and the view weights, which decide the rest shape, within
+// 1e-5. Whole trajectories (each backend on its own from frame 0) and world-space rest
+// shapes are reported as well but do not decide: a strand in violent motion is a
+// chaotic system, and in the crowd's sudden stop a 1e-7 m difference doubled every frame
+// until it reached ~1e-3 of the strand.
+constexpr double kOneStepTolerance = 1e-5, kWeightTolerance = 1e-5;
+
 bool validate_chains(const Scene& scene, const BackendChoice& choice, std::optional<std::uint64_t> frames_option) {
     auto built = build_rod_scene(scene);
     if (!built) {
@@ -36,13 +45,32 @@ bool validate_chains(const Scene& scene, const BackendChoice& choice, std::optio
         const rods::Chain& ch = world.templ(world.chains[c]).chain;
         for (std::uint32_t i = 0; i + 1 < ch.joint_count; ++i) lengths[c] += ch.segment_length[i];
     }
+    struct Worst {
+        double max = 0.0, sum = 0.0;
+        std::uint64_t samples = 0;
+        std::uint32_t chain = 0, frame = 0;
+        void add(double e, std::uint32_t c, std::uint32_t f) {
+            sum += e;
+            ++samples;
+            if (e > max) {
+                max = e;
+                chain = c;
+                frame = f;
+            }
+        }
+        [[nodiscard]] double mean() const { return samples ? sum / static_cast<double>(samples) : 0.0; }
+    } one_step, trajectory, rest;
+    double worst_weight = 0.0;
     rods::RodFrame frame;
     ChainSnapshot want, got;
-    double worst_joint = 0.0, worst_rest = 0.0, worst_weight = 0.0, sum_joint = 0.0;
-    std::uint32_t worst_chain = 0, worst_frame = 0;
-    std::uint64_t samples = 0;
+    std::vector<rods::ChainState> states, got_states;
     for (std::uint32_t f = 0; f < frames; ++f) {
         rods_scene.frame(f, frame);
+        if (f > 0) {
+            // The reference's step from the tested backend's own state.
+            if (!tested.value()->read_states(states)) return false;
+            for (std::uint32_t c = 0; c < world.chains.size(); ++c) step_chain_reference(world, c, frame, states[c]);
+        }
         for (RodBackend* b : {tested.value().get(), reference.value().get()}) {
             if (auto r = f == 0 ? b->load(world, frame) : b->step(frame); !r) {
                 report(r.error());
@@ -50,20 +78,14 @@ bool validate_chains(const Scene& scene, const BackendChoice& choice, std::optio
             }
         }
         if (!tested.value()->read(got) || !reference.value()->read(want)) return false;
-        for (std::size_t c = 0; c < world.chains.size(); ++c) {
+        if (f > 0 && !tested.value()->read_states(got_states)) return false;
+        for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
             const rods::ChainInstance& ch = world.chains[c];
             for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
                 const std::size_t j = ch.joint_begin + i;
-                const double e = glm::length(got.positions[j] - want.positions[j]) / lengths[c];
-                const double r = glm::length(got.rest[j] - want.rest[j]) / lengths[c];
-                sum_joint += e;
-                ++samples;
-                if (e > worst_joint) {
-                    worst_joint = e;
-                    worst_chain = static_cast<std::uint32_t>(c);
-                    worst_frame = f;
-                }
-                worst_rest = std::max(worst_rest, r);
+                if (f > 0) one_step.add(glm::length(got_states[c].x[i] - states[c].x[i]) / lengths[c], c, f);
+                trajectory.add(glm::length(got.positions[j] - want.positions[j]) / lengths[c], c, f);
+                rest.add(glm::length(got.rest[j] - want.rest[j]) / lengths[c], c, f);
             }
         }
         for (std::size_t k = 0; k < got.weights.size(); ++k) {
@@ -73,18 +95,21 @@ bool validate_chains(const Scene& scene, const BackendChoice& choice, std::optio
     }
     std::printf("validate \"%s\": %s on %s vs cpu-reference, %zu chains x %u frames\n", scene.name.c_str(),
                 std::string(tested.value()->name()).c_str(), tested.value()->device().c_str(), world.chains.size(), frames);
-    std::printf("%-20s %-8s %12s %12s %12s  %s\n", "quantity", "unit", "max", "mean", "tolerance", "worst (chain, frame)");
-    const bool joints_ok = worst_joint <= 1e-3, rest_ok = worst_rest <= 1e-3, weights_ok = worst_weight <= 1e-5;
-    std::printf("%-20s %-8s %12.3e %12.3e %12.3e  (%s, %u) %s\n", "joint position", "L", worst_joint,
-                samples ? sum_joint / static_cast<double>(samples) : 0.0, 1e-3, rods_scene.chain_names[worst_chain].c_str(),
-                worst_frame, joints_ok ? "ok" : "OVER TOLERANCE");
-    std::printf("%-20s %-8s %12.3e %12s %12.3e  %s\n", "rest position", "L", worst_rest, "-", 1e-3,
-                rest_ok ? "ok" : "OVER TOLERANCE");
-    std::printf("%-20s %-8s %12.3e %12s %12.3e  %s\n", "view weight", "", worst_weight, "-", 1e-5,
+    std::printf("%-22s %-4s %12s %12s %12s  %s\n", "quantity", "unit", "max", "mean", "tolerance", "worst (chain, frame)");
+    const bool one_step_ok = one_step.max <= kOneStepTolerance;
+    const bool weights_ok = worst_weight <= kWeightTolerance;
+    auto line = [&](const char* what, const Worst& w, const char* tolerance, const char* verdict) {
+        std::printf("%-22s %-4s %12.3e %12.3e %12s  (%s, %u) %s\n", what, "L", w.max, w.mean(), tolerance,
+                    w.samples ? rods_scene.chain_names[w.chain].c_str() : "-", w.frame, verdict);
+    };
+    line("joint, one step", one_step, "1.000e-05", one_step_ok ? "ok" : "OVER TOLERANCE");
+    std::printf("%-22s %-4s %12.3e %12s %12.3e  %s\n", "view weight", "", worst_weight, "-", kWeightTolerance,
                 weights_ok ? "ok" : "OVER TOLERANCE");
+    line("joint, trajectory", trajectory, "(info)", "");
+    line("rest, world", rest, "(info)", "");
     const std::uint32_t messages = tested.value()->validation_messages();
     if (messages > 0) std::printf("Vulkan validation messages: %u\n", messages);
-    return joints_ok && rest_ok && weights_ok && messages == 0;
+    return one_step_ok && weights_ok && messages == 0;
 }
 
 }  // namespace
