@@ -2,8 +2,8 @@
 /// @file
 /// The scalar reference of the rods physics (SPEC A.4, A.5): oriented particles
 /// (Mueller & Chentanez, "Solid Simulation with Oriented Particles", SCA 2011) with a
-/// PBD distance constraint per segment, one particle per joint. The GPU path will
-/// mirror these steps; the data is fixed-size per chain for that reason.
+/// PBD distance constraint per segment, one particle per joint. shaders/rods_step.comp
+/// mirrors these steps line by line; the data is fixed-size per chain for that reason.
 ///
 /// Conventions. World units are metres and seconds. Quaternions are glm::quat.
 /// The *root transform* is the world pose of the chain root's frame, the frame the
