@@ -132,21 +132,27 @@ Result<ChainSetup> find_chains(const Character& character, const ChainSearch& se
             continue;
         }
 
-        auto shape = base_shape(character, pose, strand);
-        if (!shape) return shape.error();
-        const auto basis = rods::make_basis(shape.value());
-        if (!basis) {
-            return invalid(character, "chain \"" + chain_name(character, root) + "\": " + basis.error().message);
-        }
-        FoundChain chain;
-        chain.name = chain_name(character, root);
-        chain.nodes = std::move(strand);
-        chain.parent = character.nodes[r].parent;
-        chain.base = std::move(shape).value();
-        for (const float l : basis.value().lengths) chain.length += l;
-        setup.chains.push_back(std::move(chain));
+        auto chain = make_found_chain(character, pose, std::move(strand));
+        if (!chain) return chain.error();
+        setup.chains.push_back(std::move(chain).value());
     }
     return setup;
+}
+
+Result<FoundChain> make_found_chain(const Character& character, const Pose& rest, std::vector<int> nodes) {
+    assert(nodes.size() >= 2 && nodes.size() <= rods::kMaxChainJoints);
+    const int root = nodes.front();
+    auto shape = base_shape(character, rest, nodes);
+    if (!shape) return shape.error();
+    const auto basis = rods::make_basis(shape.value());
+    if (!basis) return invalid(character, "chain \"" + chain_name(character, root) + "\": " + basis.error().message);
+    FoundChain chain;
+    chain.name = chain_name(character, root);
+    chain.nodes = std::move(nodes);
+    chain.parent = character.nodes[static_cast<std::size_t>(root)].parent;
+    chain.base = std::move(shape).value();
+    for (const float l : basis.value().lengths) chain.length += l;
+    return chain;
 }
 
 float character_size(const Character& character) {

@@ -208,7 +208,9 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
     return true;
 }
 
-Result<tinygltf::Model> parse(const Context& ctx, const std::vector<unsigned char>& bytes, const fs::path& base_dir) {
+// Also sets `extensions` to the root `extensions` object as JSON text ("" when absent).
+Result<tinygltf::Model> parse(const Context& ctx, const std::vector<unsigned char>& bytes, const fs::path& base_dir,
+                              std::string& extensions) {
     const bool binary = bytes.size() >= 4 && read_u32(bytes, 0) == kGlbMagic;
     const bool named_glb = fs::path(ctx.file).extension() == ".glb";
     if (named_glb && !binary) KW_TRY(split_glb(ctx, bytes));  // reports the wrong magic
@@ -235,6 +237,10 @@ Result<tinygltf::Model> parse(const Context& ctx, const std::vector<unsigned cha
         return ctx.invalid("$", std::string("invalid JSON: ") + e.what());
     }
     KW_TRY(check_buffers(ctx, doc, base_dir, binary ? &glb : nullptr));
+    if (doc.is_object()) {
+        const auto ext = doc.find("extensions");
+        if (ext != doc.end()) extensions = ext->dump();
+    }
 
     tinygltf::Model model;
     std::string err;
@@ -783,12 +789,14 @@ Result<Character> load_character(const std::string& path) {
         auto bytes = read_bytes(path);
         if (!bytes) return bytes.error();
         const fs::path base_dir = fs::path(path).parent_path();
-        auto parsed = parse(ctx, bytes.value(), base_dir);
+        std::string extensions;
+        auto parsed = parse(ctx, bytes.value(), base_dir, extensions);
         if (!parsed) return parsed.error();
         const tinygltf::Model& model = parsed.value();
         KW_TRY(check_storage(ctx, model));
         Character character;
         character.source = path;
+        character.extensions = std::move(extensions);
         for (const tinygltf::Mesh& mesh : model.meshes) character.meshes.push_back({mesh.name, mesh.primitives.size()});
         KW_TRY(load_nodes(ctx, model, character));
         KW_TRY(load_skins(ctx, model, character));

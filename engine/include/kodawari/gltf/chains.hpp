@@ -81,6 +81,12 @@ struct ChainSetup {
 /// rods::make_basis() rejects for any other reason.
 [[nodiscard]] Result<ChainSetup> find_chains(const Character& character, const ChainSearch& search);
 
+/// The chain of the joints `nodes` (root first, each the child of the one before, 2..32
+/// of them; the caller checks that) with its base shape from `rest` (rest_pose()), as
+/// find_chains() builds each of its chains. Errors as find_chains(): two consecutive
+/// joints closer than 1e-6 m, or a base shape rods::make_basis() rejects.
+[[nodiscard]] Result<FoundChain> make_found_chain(const Character& character, const Pose& rest, std::vector<int> nodes);
+
 /// Physical parameters of one chain for rods::make_chain().
 struct PhysicsScale {
     float thickness = 0.0f;  ///< m, > 0

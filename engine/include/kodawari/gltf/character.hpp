@@ -94,6 +94,10 @@ struct Character {
     std::vector<Skin> skins;
     std::vector<Animation> animations;
     std::vector<Mesh> meshes;
+    /// The file's root-level `extensions` object as JSON text, "" when it has none. Kept
+    /// verbatim (not checked) for readers of extensions such as VRM spring bones
+    /// (read_vrm_springs()), so that this header does not depend on a JSON library.
+    std::string extensions;
 };
 
 /// A pose: local TRS and world matrix of every node, indexed like Character::nodes.
