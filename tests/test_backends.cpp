@@ -7,6 +7,7 @@
 #include <cstring>
 #include <vector>
 
+#include "test_support.hpp"
 #include "kodawari/backend.hpp"
 #include "kodawari/compare.hpp"
 #include "kodawari/gpu_info.hpp"
@@ -75,12 +76,7 @@ class BirdBackends : public ::testing::TestWithParam<BackendKind> {
 protected:
     void SetUp() override {
         if (GetParam() == BackendKind::Vulkan) {
-            // Skip only when no Vulkan device exists at all; any other failure fails.
-            auto gpus = list_gpus("");
-            if (!gpus.ok() || gpus.value().devices.empty()) {
-                GTEST_SKIP() << "no Vulkan device on this machine ("
-                             << (gpus.ok() ? gpus.value().reason : gpus.error().message) << "); the GPU tests need one";
-            }
+            if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
         }
         auto made = make_bird_backend(GetParam(), {});
         ASSERT_TRUE(made.ok()) << made.error().message;
@@ -200,8 +196,7 @@ INSTANTIATE_TEST_SUITE_P(All, BirdBackends, ::testing::Values(BackendKind::CpuRe
 
 TEST(VulkanStaging, DiscreteGpuPathMatchesTheReference) {
     // lavapipe has unified memory; force the staging-copy path a discrete GPU takes.
-    auto gpus = list_gpus("");
-    if (!gpus.ok() || gpus.value().devices.empty()) GTEST_SKIP() << "no Vulkan device on this machine";
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
     ::setenv("KODAWARI_FORCE_STAGING", "1", 1);
     auto made = make_bird_backend(BackendKind::Vulkan, {});
     ::unsetenv("KODAWARI_FORCE_STAGING");

@@ -26,6 +26,8 @@
 #include <kodawari/rods/world.hpp>
 #include <kodawari/scene.hpp>
 
+#include "test_support.hpp"
+
 namespace {
 
 using kodawari::Error;
@@ -1193,10 +1195,8 @@ class CharacterBackends : public ::testing::TestWithParam<kodawari::BackendKind>
 protected:
     void SetUp() override {
         if (GetParam() == kodawari::BackendKind::Vulkan) {
-            auto gpus = kodawari::list_gpus("");
-            if (!gpus.ok() || gpus.value().devices.empty()) {
-                GTEST_SKIP() << "no Vulkan device on this machine ("
-                             << (gpus.ok() ? gpus.value().reason : gpus.error().message) << ")";
+            if (const std::string why = kodawari::testing_support::no_vulkan_device_reason(); !why.empty()) {
+                GTEST_SKIP() << why;
             }
         }
         auto made = kodawari::make_rod_backend(GetParam(), {});

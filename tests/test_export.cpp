@@ -25,6 +25,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
+#include "test_support.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/birds/world.hpp"
 #include "kodawari/export.hpp"
@@ -40,37 +41,7 @@ constexpr std::size_t kBirds = 67;  // three wing types, and not a multiple of t
 constexpr std::uint32_t kFrames = 12;
 constexpr float kFps = 24.0f;
 
-/// A fresh directory, removed with everything in it at the end of the test.
-class TempDir {
-public:
-    TempDir() {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        path_ = fs::temp_directory_path() /
-                ("kodawari_" + std::string(info->test_suite_name()) + "_" + info->name() + "_" +
-                 std::to_string(::getpid()));
-        fs::remove_all(path_);
-        fs::create_directories(path_);
-    }
-    ~TempDir() {
-        std::error_code ignored;
-        fs::remove_all(path_, ignored);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-
-    [[nodiscard]] const fs::path& path() const { return path_; }
-    [[nodiscard]] std::string file(const std::string& name) const { return (path_ / name).string(); }
-
-    /// Names of everything in the directory.
-    [[nodiscard]] std::vector<std::string> entries() const {
-        std::vector<std::string> names;
-        for (const auto& entry : fs::directory_iterator(path_)) names.push_back(entry.path().filename().string());
-        return names;
-    }
-
-private:
-    fs::path path_;
-};
+using testing_support::TempDir;
 
 birds::BirdWorld make_world() {
     birds::BirdWorld world;

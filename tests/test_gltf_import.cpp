@@ -20,6 +20,7 @@
 
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
+#include "test_support.hpp"
 #include "kodawari/gltf/character.hpp"
 
 namespace kodawari {
@@ -31,27 +32,7 @@ using nlohmann::json;
 const std::string kAssets = std::string(KODAWARI_SOURCE_DIR) + "/tests/assets";
 const std::string kRiggedSimple = kAssets + "/khronos/RiggedSimple.gltf";
 
-// A fresh directory per test, removed afterwards.
-class TempDir {
-public:
-    TempDir() {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        path_ = fs::temp_directory_path() /
-                ("kodawari_" + std::string(info->test_suite_name()) + "_" + info->name() + "_" + std::to_string(::getpid()));
-        fs::remove_all(path_);
-        fs::create_directories(path_);
-    }
-    ~TempDir() {
-        std::error_code ignored;
-        fs::remove_all(path_, ignored);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    [[nodiscard]] std::string file(const std::string& name) const { return (path_ / name).string(); }
-
-private:
-    fs::path path_;
-};
+using testing_support::TempDir;
 
 void write_bytes(const std::string& path, const std::vector<unsigned char>& bytes) {
     std::ofstream out(path, std::ios::binary);

@@ -15,6 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "test_support.hpp"
 #include "kodawari/gltf/vrm.hpp"
 #include "kodawari/rods/solver.hpp"
 
@@ -28,26 +29,7 @@ const std::string kAssets = std::string(KODAWARI_SOURCE_DIR) + "/tests/assets";
 const std::string kSpringDir = kAssets + "/vrm-springbone";
 const std::array<std::string, 3> kSpringFiles = {"inside-collider.gltf", "plane-collider.gltf", "sphere-collider.gltf"};
 
-class TempDir {
-public:
-    TempDir() {
-        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
-        path_ = fs::temp_directory_path() /
-                ("kodawari_" + std::string(info->test_suite_name()) + "_" + info->name() + "_" + std::to_string(::getpid()));
-        fs::remove_all(path_);
-        fs::create_directories(path_);
-    }
-    ~TempDir() {
-        std::error_code ignored;
-        fs::remove_all(path_, ignored);
-    }
-    TempDir(const TempDir&) = delete;
-    TempDir& operator=(const TempDir&) = delete;
-    [[nodiscard]] std::string file(const std::string& name) const { return (path_ / name).string(); }
-
-private:
-    fs::path path_;
-};
+using testing_support::TempDir;
 
 json read_json(const std::string& path) {
     std::ifstream in(path);

@@ -10,6 +10,7 @@
 
 #include <shared/rods.h>
 
+#include "test_support.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rods/synthetic.hpp"
@@ -42,12 +43,7 @@ class RodBackends : public ::testing::TestWithParam<BackendKind> {
 protected:
     void SetUp() override {
         if (GetParam() == BackendKind::Vulkan) {
-            // Skip only when no Vulkan device exists at all; any other failure fails.
-            auto gpus = list_gpus("");
-            if (!gpus.ok() || gpus.value().devices.empty()) {
-                GTEST_SKIP() << "no Vulkan device on this machine ("
-                             << (gpus.ok() ? gpus.value().reason : gpus.error().message) << "); the GPU tests need one";
-            }
+            if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
         }
         auto made = make_rod_backend(GetParam(), {});
         ASSERT_TRUE(made.ok()) << made.error().message;

@@ -122,24 +122,8 @@ std::array<int, birds::kPartCount> add_wing_type_meshes(tinygltf::Model& model, 
     std::array<int, birds::kPartCount> mesh_indices{};
     const auto meshes = part_meshes(type);
     for (std::size_t part = 0; part < birds::kPartCount; ++part) {
-        const MeshData& data = meshes[part];
-        assert(data.positions.size() <= std::numeric_limits<std::uint16_t>::max());
-        tinygltf::Primitive primitive;
-        primitive.mode = TINYGLTF_MODE_TRIANGLES;
-        primitive.material = material_index;
-        primitive.attributes["POSITION"] = add_vec3_attribute(model, writer, data.positions);
-        primitive.attributes["NORMAL"] = add_vec3_attribute(model, writer, data.normals);
-        const std::size_t index_bytes = data.indices.size() * sizeof(std::uint16_t);
-        const std::size_t offset = writer.append(data.indices.data(), index_bytes);
-        const int view = add_buffer_view(model, offset, index_bytes, kElementArrayBuffer);
-        primitive.indices = add_accessor(model, view, 0, TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT,
-                                         data.indices.size(), TINYGLTF_TYPE_SCALAR);
-
-        tinygltf::Mesh mesh;
-        mesh.name = type_name + "_" + std::string(birds::kPartNames[part]);
-        mesh.primitives.push_back(std::move(primitive));
-        model.meshes.push_back(std::move(mesh));
-        mesh_indices[part] = static_cast<int>(model.meshes.size() - 1);
+        mesh_indices[part] = add_mesh(model, writer, meshes[part], material_index,
+                                      type_name + "_" + std::string(birds::kPartNames[part]));
     }
     return mesh_indices;
 }

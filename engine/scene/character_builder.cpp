@@ -13,6 +13,8 @@
 
 #include <kodawari/rod_scene.hpp>
 
+#include "scene/seeded_random.hpp"
+
 namespace kodawari {
 namespace {
 
@@ -20,25 +22,7 @@ namespace {
 // adding yaw jitter does not move every instance's time offset.
 enum class Stream : std::uint64_t { Position = 1, Yaw = 2, TimeOffset = 3 };
 
-std::uint64_t splitmix64(std::uint64_t x) {
-    x += 0x9E3779B97F4A7C15ull;
-    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return x ^ (x >> 31);
-}
-
-class Random {
-public:
-    Random(std::uint64_t seed, Stream stream)
-        : engine_(splitmix64(splitmix64(seed) ^ static_cast<std::uint64_t>(stream))) {}
-    /// Uniform in [0, 1): the top 53 bits of one draw.
-    double unit() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
-    /// Uniform in [-1, 1).
-    double symmetric() { return 2.0 * unit() - 1.0; }
-
-private:
-    std::mt19937_64 engine_;
-};
+using Random = scene_detail::SeededRandom;
 
 rods::Transform placement(glm::vec3 position, double yaw) {
     return rods::Transform{position, glm::angleAxis(static_cast<float>(yaw), glm::vec3(0.0f, 1.0f, 0.0f))};

@@ -17,6 +17,7 @@
 #include <kodawari/scene.hpp>
 
 #include "scene/json_reader.hpp"
+#include "scene/seeded_random.hpp"
 
 namespace kodawari {
 namespace {
@@ -36,26 +37,7 @@ enum class Stream : std::uint64_t {
     Phase = 8,
 };
 
-std::uint64_t splitmix64(std::uint64_t x) {
-    x += 0x9E3779B97F4A7C15ull;
-    x = (x ^ (x >> 30)) * 0xBF58476D1CE4E5B9ull;
-    x = (x ^ (x >> 27)) * 0x94D049BB133111EBull;
-    return x ^ (x >> 31);
-}
-
-class Random {
-public:
-    Random(std::uint64_t seed, Stream stream)
-        : engine_(splitmix64(splitmix64(seed) ^ static_cast<std::uint64_t>(stream))) {}
-
-    /// Uniform in [0, 1): the top 53 bits of one 64-bit draw.
-    double unit() { return static_cast<double>(engine_() >> 11) * 0x1.0p-53; }
-    /// Uniform in [-1, 1). 2u is exact, so no rounding step can differ between compilers.
-    double symmetric() { return 2.0 * unit() - 1.0; }
-
-private:
-    std::mt19937_64 engine_;
-};
+using Random = scene_detail::SeededRandom;
 
 // a * b rounded on its own. Compilers may fuse `c + a * b` into one FMA (GCC does by
 // default on targets that have one), which rounds once instead of twice and would make

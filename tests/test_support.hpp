@@ -1,0 +1,57 @@
+#pragma once
+// Helpers shared by the test suites.
+
+#include <gtest/gtest.h>
+
+#include <filesystem>
+#include <string>
+#include <system_error>
+#include <vector>
+
+#include <unistd.h>
+
+#include "kodawari/gpu_info.hpp"
+
+namespace kodawari::testing_support {
+
+/// A fresh directory per test (named after it and the process), removed with everything
+/// in it at the end of the test.
+class TempDir {
+public:
+    TempDir() {
+        const auto* info = ::testing::UnitTest::GetInstance()->current_test_info();
+        path_ = std::filesystem::temp_directory_path() /
+                ("kodawari_" + std::string(info->test_suite_name()) + "_" + info->name() + "_" + std::to_string(::getpid()));
+        std::filesystem::remove_all(path_);
+        std::filesystem::create_directories(path_);
+    }
+    ~TempDir() {
+        std::error_code ignored;
+        std::filesystem::remove_all(path_, ignored);
+    }
+    TempDir(const TempDir&) = delete;
+    TempDir& operator=(const TempDir&) = delete;
+
+    [[nodiscard]] const std::filesystem::path& path() const { return path_; }
+    [[nodiscard]] std::string file(const std::string& name) const { return (path_ / name).string(); }
+    /// The names of what the directory holds (to check that no temporary file is left).
+    [[nodiscard]] std::vector<std::string> entries() const {
+        std::vector<std::string> names;
+        for (const auto& entry : std::filesystem::directory_iterator(path_)) names.push_back(entry.path().filename().string());
+        return names;
+    }
+
+private:
+    std::filesystem::path path_;
+};
+
+/// Why the GPU tests cannot run here ("" when a Vulkan device exists). The GPU tests skip
+/// only when there is no Vulkan device at all, and say why; any other failure fails.
+inline std::string no_vulkan_device_reason() {
+    auto gpus = list_gpus("");
+    if (gpus.ok() && !gpus.value().devices.empty()) return "";
+    return "no Vulkan device on this machine (" + (gpus.ok() ? gpus.value().reason : gpus.error().message) +
+           "); the GPU tests need one";
+}
+
+}  // namespace kodawari::testing_support
