@@ -9,5 +9,6 @@ int cmd_run(Args args);
 int cmd_validate(Args args);
 int cmd_info(Args args);
 int cmd_bench(Args args);
+int cmd_rig(Args args);
 
 }  // namespace kodawari::cli

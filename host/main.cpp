@@ -19,6 +19,9 @@ commands:
   bench birds [--count N] [--frames F] [--json FILE] [--readback] [--backends LIST]
   bench chains [--chains N] [--joints M] [--iterations K] [--steps S] [--json FILE] [--backends LIST]
       time every backend on the same birds (or chains: joint-steps per second) and print the ratios
+  rig CHARACTER [--chains PATTERNS|--roots NAMES] [--animation CLIP] [--name NAME] [--out SCENE.json]
+      find the chains (VRM spring bones, name patterns or named roots) and colliders of a rigged
+      .gltf/.glb/.vrm character and write a scene that simulates it (default ./<character>.json)
   info
       version, Vulkan devices and which one is chosen, CPU threads
 
@@ -46,6 +49,7 @@ int main(int argc, char** argv) {
         if (command == "validate") return cmd_validate(args);
         if (command == "info") return cmd_info(args);
         if (command == "bench") return cmd_bench(args);
+        if (command == "rig") return cmd_rig(args);
         throw UsageError{"unknown command \"" + command + "\""};
     } catch (const UsageError& e) {
         std::fprintf(stderr, "kodawari: %s\n\n%s", e.message.c_str(), kUsage);

@@ -103,11 +103,20 @@ Result<void> build_and_write(AtomicFile& file, const RodScene& scene, std::uint3
         const CharacterKinematics& kind = scene.characters[instance.character];
         const auto& names = scene.joint_names(c);
         const auto& parents = scene.joint_parents(c);
-        const std::size_t first_track = tracks.size();
-        std::vector<int> joint_nodes(names.size());
-        for (std::size_t j = 0; j < names.size(); ++j) {
-            const int parent = parents[j] < 0 ? 0 : joint_nodes[static_cast<std::size_t>(parents[j])];
-            joint_nodes[j] = add_node(scene.character_names[c] + "/" + names[j], joint_mesh, parent);
+        // Parents first: a rigged character's joints are its glTF nodes in file order,
+        // where a child may come before its parent. Tracks stay in joint order.
+        std::vector<int> joint_nodes(names.size(), -1);
+        std::vector<std::size_t> joint_tracks(names.size());
+        for (std::size_t placed = 0; placed < names.size();) {
+            for (std::size_t j = 0; j < names.size(); ++j) {
+                if (joint_nodes[j] >= 0) continue;
+                const int p = parents[j];
+                if (p >= 0 && joint_nodes[static_cast<std::size_t>(p)] < 0) continue;
+                const int parent = p < 0 ? 0 : joint_nodes[static_cast<std::size_t>(p)];
+                joint_tracks[j] = tracks.size();
+                joint_nodes[j] = add_node(scene.character_names[c] + "/" + names[j], joint_mesh, parent);
+                ++placed;
+            }
         }
         const std::uint32_t chain_count = scene.chain_count(c);
         std::vector<std::size_t> chain_tracks(chain_count);
@@ -127,7 +136,7 @@ Result<void> build_and_write(AtomicFile& file, const RodScene& scene, std::uint3
                                                : relative(joints[static_cast<std::size_t>(parents[j])].position,
                                                           joints[static_cast<std::size_t>(parents[j])].rotation,
                                                           joints[j].position, joints[j].rotation);
-                write_key(tracks[first_track + j], f, l);
+                write_key(tracks[joint_tracks[j]], f, l);
             }
             for (std::uint32_t k = 0; k < chain_count; ++k) {
                 const std::uint32_t chain = instance.chain_begin + k;

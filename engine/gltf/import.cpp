@@ -722,7 +722,8 @@ Result<void> load_animations(const Context& ctx, const tinygltf::Model& model, C
         const tinygltf::Animation& src = model.animations[a];
         const std::string path = at("$.animations", a);
         Animation animation;
-        animation.name = src.name;
+        // Scenes pick clips by name, so an unnamed clip gets one (see Animation::name).
+        animation.name = src.name.empty() ? "animation" + std::to_string(a) : src.name;
         animation.samplers.resize(src.samplers.size());
         std::vector<int> sampler_path(src.samplers.size(), -1);  // the Path a sampler was loaded for
         bool any = false;

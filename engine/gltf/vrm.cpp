@@ -466,3 +466,45 @@ Result<VrmSprings> read_vrm_springs(const Character& character) {
 }
 
 }  // namespace kodawari::gltf
+
+namespace kodawari::gltf {
+
+int vrm_humanoid_bone(const Character& character, std::string_view bone) {
+    if (character.extensions.empty()) return -1;
+    const json ext = json::parse(character.extensions, nullptr, /*allow_exceptions=*/false);
+    if (!ext.is_object()) return -1;
+    const auto in_range = [&](const json& v) {
+        return v.is_number_integer() && v.get<std::int64_t>() >= 0 &&
+               v.get<std::int64_t>() < static_cast<std::int64_t>(character.nodes.size());
+    };
+    const std::string key(bone);
+    if (const auto vrm1 = ext.find("VRMC_vrm"); vrm1 != ext.end() && vrm1->is_object()) {
+        const json* bones = nullptr;
+        if (const auto h = vrm1->find("humanoid"); h != vrm1->end() && h->is_object()) {
+            if (const auto b = h->find("humanBones"); b != h->end() && b->is_object()) bones = &*b;
+        }
+        if (bones != nullptr) {
+            if (const auto entry = bones->find(key); entry != bones->end() && entry->is_object()) {
+                if (const auto node = entry->find("node"); node != entry->end() && in_range(*node)) return node->get<int>();
+            }
+        }
+    }
+    if (const auto vrm0 = ext.find("VRM"); vrm0 != ext.end() && vrm0->is_object()) {
+        if (const auto h = vrm0->find("humanoid"); h != vrm0->end() && h->is_object()) {
+            if (const auto b = h->find("humanBones"); b != h->end() && b->is_array()) {
+                for (const json& entry : *b) {
+                    if (!entry.is_object()) continue;
+                    const auto name = entry.find("bone");
+                    const auto node = entry.find("node");
+                    if (name != entry.end() && name->is_string() && name->get<std::string>() == key && node != entry.end() &&
+                        in_range(*node)) {
+                        return node->get<int>();
+                    }
+                }
+            }
+        }
+    }
+    return -1;
+}
+
+}  // namespace kodawari::gltf

@@ -4,6 +4,7 @@
 // (jitter, time offsets) come from std::mt19937_64, mapped to [0, 1) here, as in
 // flock_builder.cpp, so that no standard library's distribution changes the result.
 
+#include <algorithm>
 #include <cmath>
 #include <cstdint>
 #include <numbers>
@@ -20,7 +21,7 @@ namespace {
 
 // Purposes of a crowd's random streams: each has its own generator so that, say,
 // adding yaw jitter does not move every instance's time offset.
-enum class Stream : std::uint64_t { Position = 1, Yaw = 2, TimeOffset = 3 };
+enum class Stream : std::uint64_t { Position = 1, Yaw = 2, TimeOffset = 3, Clip = 4 };
 
 using Random = scene_detail::SeededRandom;
 
@@ -36,6 +37,7 @@ std::vector<InstanceSpec> generate(const CrowdSpec& crowd) {
     Random position_rng(crowd.seed, Stream::Position);
     Random yaw_rng(crowd.seed, Stream::Yaw);
     Random time_rng(crowd.seed, Stream::TimeOffset);
+    Random clip_rng(crowd.seed, Stream::Clip);
     const double spacing = crowd.spacing;
     const std::uint32_t columns =
         crowd.columns != 0 ? crowd.columns : static_cast<std::uint32_t>(std::ceil(std::sqrt(static_cast<double>(crowd.count))));
@@ -64,6 +66,10 @@ std::vector<InstanceSpec> generate(const CrowdSpec& crowd) {
         s.position = crowd.center + glm::vec3(static_cast<float>(x), 0.0f, static_cast<float>(z));
         s.yaw = static_cast<float>(yaw);
         s.time_offset = static_cast<float>(static_cast<double>(crowd.time_offset) * time_rng.unit());
+        if (!crowd.clips.empty()) {
+            const auto pick = static_cast<std::size_t>(clip_rng.unit() * static_cast<double>(crowd.clips.size()));
+            s.clip = crowd.clips[std::min(pick, crowd.clips.size() - 1)];
+        }
     }
     return out;
 }
@@ -89,6 +95,14 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
             k.joint_names.push_back(j.name);
             k.joint_parents.push_back(j.parent);
         }
+        if (ch.rig) {
+            k.rig = ch.rig->character;
+            for (std::size_t n = 0; n < k.rig->nodes.size(); ++n) {
+                const std::string& name = k.rig->nodes[n].name;
+                k.joint_names.push_back(name.empty() ? "node" + std::to_string(n) : name);
+                k.joint_parents.push_back(k.rig->nodes[n].parent);
+            }
+        }
         for (const ChainSpec& chain : ch.chains) {
             std::vector<rods::ChainShape> shapes;
             std::vector<rods::ViewExample> views;
@@ -101,6 +115,7 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
             if (!t) return make_error(Error::Kind::InvalidInput, scene.path + ": " + chain.path + ": " + t.error().message);
             world.templates.push_back(std::move(t.value()));
             k.chains.push_back(ChainAttachment{chain.joint, chain.offset, chain.collide});
+            k.chain_nodes.push_back(chain.nodes);
         }
         for (const ColliderSpec& c : ch.colliders) k.colliders.push_back(ColliderAttachment{c.joint, c.a, c.b, c.radius});
         out.characters.push_back(std::move(k));
@@ -117,6 +132,9 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
             inst.character = crowd.character;
             inst.placement = placement(s.position, static_cast<double>(s.yaw));
             inst.time_offset = s.time_offset;
+            if (const CharacterSpec& spec = scene.characters[crowd.character]; spec.rig) {
+                inst.clip = s.clip.value_or(spec.rig->clip);
+            }
             inst.chain_begin = static_cast<std::uint32_t>(world.chains.size());
             inst.collider_begin = world.collider_count;
             const auto index = static_cast<std::uint32_t>(out.instances.size());

@@ -18,14 +18,13 @@
 #include <kodawari/rods/world.hpp>
 
 namespace kodawari::scene_detail {
-namespace {
 
 constexpr double kDegToRad = std::numbers::pi / 180.0;
 constexpr double kMaxCoordinate = 1e6;  // world positions (m), as the bird loader
 constexpr double kMaxLocal = 1000.0;    // offsets inside a character (m)
 constexpr double kMaxShape = 100.0;     // chain shape coordinates (m)
 constexpr double kMaxTime = 1e5;        // motion times (s)
-constexpr std::size_t kMaxPerCharacter = 64;  // joints, chains, motions (colliders: rods::kMaxChainColliders)
+
 constexpr std::size_t kMaxCameraKeys = 4096;
 
 using Vec3 = glm::vec3;
@@ -433,14 +432,15 @@ Result<void> read_motion(const JsonReader& r, const JsonNode& node, const rods::
     return {};
 }
 
-Result<ColliderSpec> read_collider(const JsonReader& r, const JsonNode& node, const rods::Skeleton& skeleton) {
+Result<ColliderSpec> read_collider(const JsonReader& r, const JsonNode& node,
+                                  const std::function<Result<std::uint32_t>(const JsonNode&)>& joint) {
     if (!node.present() || !node.value->is_object()) {
         return r.expected(node, "an object with \"type\": \"sphere\" or \"capsule\"");
     }
     std::size_t type = 0;
     KW_SCENE_ASSIGN(type, r.choice(r.member(node, "type"), {"sphere", "capsule"}));
     ColliderSpec c;
-    KW_SCENE_ASSIGN(c.joint, find_joint(r, r.member(node, "joint"), skeleton));
+    KW_SCENE_ASSIGN(c.joint, joint(r.member(node, "joint")));
     if (type == 0) {
         KW_TRY(r.object(node, {"type", "joint", "center", "radius"}));
         KW_TRY(optional_member(r, node, "center", c.a, [&](const JsonNode& n) { return read_point(r, n, kMaxLocal); }));
@@ -550,6 +550,7 @@ Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::S
 }
 
 Result<CharacterSpec> read_character(const JsonReader& r, const JsonNode& node) {
+    if (node.present() && node.value->is_object() && r.member(node, "gltf").present()) return read_rigged_character(r, node);
     KW_TRY(r.object(node, {"name", "skeleton", "reference_joint", "motions", "colliders", "physics", "chains"}));
     CharacterSpec ch;
     ch.path = node.path;
@@ -587,7 +588,8 @@ Result<CharacterSpec> read_character(const JsonReader& r, const JsonNode& node) 
                                       "an array of colliders (at most " + std::to_string(rods::kMaxChainColliders) + ")"));
         for (std::size_t i = 0; i < n; ++i) {
             ColliderSpec c;
-            KW_SCENE_ASSIGN(c, read_collider(r, r.element(colliders, i), ch.skeleton));
+            KW_SCENE_ASSIGN(c, read_collider(r, r.element(colliders, i),
+                                             [&](const JsonNode& j) { return find_joint(r, j, ch.skeleton); }));
             ch.colliders.push_back(c);
         }
     }
@@ -605,21 +607,40 @@ Result<CharacterSpec> read_character(const JsonReader& r, const JsonNode& node) 
     return ch;
 }
 
-Result<InstanceSpec> read_instance(const JsonReader& r, const JsonNode& node) {
-    KW_TRY(r.object(node, {"position", "yaw_deg", "time_offset"}));
+// A clip of a rigged character by name; procedural characters have none.
+Result<std::int32_t> read_clip(const JsonReader& r, const JsonNode& node, const CharacterSpec& character) {
+    std::string name;
+    KW_SCENE_ASSIGN(name, r.string(node));
+    if (!character.rig) {
+        return r.fail(node.path, "only rigged characters (with \"gltf\") play animation clips; \"" + character.name +
+                                     "\" moves by its \"motions\"");
+    }
+    std::vector<std::string> names;
+    const auto& clips = character.rig->character->animations;
+    for (std::size_t i = 0; i < clips.size(); ++i) {
+        if (clips[i].name == name) return static_cast<std::int32_t>(i);
+        names.push_back(clips[i].name);
+    }
+    return r.expected(node, "the name of an animation of " + character.rig->file + " (" + quoted_list(names) + ")");
+}
+
+Result<InstanceSpec> read_instance(const JsonReader& r, const JsonNode& node, const CharacterSpec& character) {
+    KW_TRY(r.object(node, {"position", "yaw_deg", "time_offset", "animation"}));
     InstanceSpec s;
     KW_SCENE_ASSIGN(s.position, read_point(r, r.member(node, "position"), kMaxCoordinate));
     KW_TRY(optional_member(r, node, "yaw_deg", s.yaw,
                            [&](const JsonNode& n) { return read_degrees(r, n, NumberRange::closed(-3600.0, 3600.0)); }));
     KW_TRY(optional_member(r, node, "time_offset", s.time_offset,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 3600.0)); }));
+    const JsonNode animation = r.member(node, "animation");
+    if (animation.present()) KW_SCENE_ASSIGN(s.clip, read_clip(r, animation, character));
     return s;
 }
 
 Result<CrowdSpec> read_crowd(const JsonReader& r, const JsonNode& node, std::size_t index, const Scene& scene,
                              std::uint64_t& characters, std::uint64_t& chains) {
     KW_TRY(r.object(node, {"name", "character", "count", "layout", "spacing", "columns", "radius", "center", "yaw_deg",
-                           "yaw_jitter_deg", "position_jitter", "time_offset", "seed", "instances"}));
+                           "yaw_jitter_deg", "position_jitter", "time_offset", "seed", "animations", "instances"}));
     CrowdSpec c;
     c.name = "crowd" + std::to_string(index);
     KW_TRY(optional_member(r, node, "name", c.name, [&](const JsonNode& n) { return read_name(r, n); }));
@@ -675,13 +696,24 @@ Result<CrowdSpec> read_crowd(const JsonReader& r, const JsonNode& node, std::siz
     KW_TRY(optional_member(r, node, "seed", c.seed, [&](const JsonNode& n) {
         return r.integer(n, 0, std::numeric_limits<std::uint64_t>::max());
     }));
+    const CharacterSpec& spec = scene.characters[c.character];
+    const JsonNode animations = r.member(node, "animations");
+    if (animations.present()) {
+        std::size_t n = 0;
+        KW_SCENE_ASSIGN(n, read_array(r, animations, 1, 1024, "a non-empty array of animation names"));
+        for (std::size_t i = 0; i < n; ++i) {
+            std::int32_t clip = 0;
+            KW_SCENE_ASSIGN(clip, read_clip(r, r.element(animations, i), spec));
+            c.clips.push_back(clip);
+        }
+    }
     const JsonNode instances = r.member(node, "instances");
     if (instances.present()) {
         std::size_t n = 0;
         KW_SCENE_ASSIGN(n, read_array(r, instances, 0, kMaxCharacterInstances, "an array of instances"));
         for (std::size_t i = 0; i < n; ++i) {
             InstanceSpec s;
-            KW_SCENE_ASSIGN(s, read_instance(r, r.element(instances, i)));
+            KW_SCENE_ASSIGN(s, read_instance(r, r.element(instances, i), spec));
             c.instances.push_back(s);
         }
     }
@@ -793,7 +825,6 @@ Result<void> read_keyframes(const JsonReader& r, const JsonNode& node, rods::Cam
     return {};
 }
 
-}  // namespace
 
 Result<void> read_camera_motion(const JsonReader& r, const JsonNode& node, CameraSpec& camera) {
     rods::CameraMotion& m = camera.motion;

@@ -4,6 +4,10 @@
 /// and the moving camera. Used by scene_loader.cpp; errors follow its style (file, JSON
 /// path, what was expected).
 
+#include <functional>
+#include <string>
+#include <vector>
+
 #include <kodawari/scene.hpp>
 
 #include "scene/json_reader.hpp"
@@ -14,6 +18,36 @@ namespace kodawari::scene_detail {
 /// memory of the rod state: about 3.5 kB per chain).
 inline constexpr std::uint64_t kMaxCharacterInstances = 100'000;
 inline constexpr std::uint64_t kMaxChainInstances = 1'000'000;
+/// The most joints, chains and motions of one character (colliders:
+/// rods::kMaxChainColliders).
+inline constexpr std::size_t kMaxPerCharacter = 64;
+
+// Readers shared by the procedural characters (character_loader.cpp) and the rigged
+// ones (rigged_character_loader.cpp); each reports errors at the node's JSON path.
+
+/// [x, y, z], each coordinate in [-limit, limit].
+[[nodiscard]] Result<glm::vec3> read_point(const JsonReader& r, const JsonNode& node, double limit);
+/// A name that may become part of "bunny#12/ear_l": non-empty, no '#' or '/'.
+[[nodiscard]] Result<std::string> read_name(const JsonReader& r, const JsonNode& node);
+/// An array of min..max elements; `what` describes a valid one.
+[[nodiscard]] Result<std::size_t> read_array(const JsonReader& r, const JsonNode& node, std::size_t min, std::size_t max,
+                                             const std::string& what);
+/// `"a", "b", "c"`, for messages that list the valid names.
+[[nodiscard]] std::string quoted_list(const std::vector<std::string>& names);
+/// The `physics` object, over the values already in `p`.
+[[nodiscard]] Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::SolverParams& p);
+/// A view example whose shape has `joints` joints.
+[[nodiscard]] Result<ViewSpec> read_view(const JsonReader& r, const JsonNode& node, std::size_t joints);
+/// A sphere or capsule on the joint whose index `joint` returns for the `joint` member.
+[[nodiscard]] Result<ColliderSpec> read_collider(const JsonReader& r, const JsonNode& node,
+                                                 const std::function<Result<std::uint32_t>(const JsonNode&)>& joint);
+/// Builds the chain's template once, so that a bad shape is reported where it is written.
+[[nodiscard]] Result<void> check_template(const JsonReader& r, const JsonNode& node, const ChainSpec& chain);
+
+/// A character with `gltf` (docs/scene-format.md, "Rigged characters"): the file loaded
+/// relative to the scene's folder, chains by node names with base shapes from its rest
+/// pose, colliders on its nodes.
+[[nodiscard]] Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode& node);
 
 /// Reads `characters` (a non-empty array) and `crowds` (absent: one instance of every
 /// character at the origin) into `scene`.

@@ -5,7 +5,10 @@
 
 #include <array>
 #include <cassert>
+#include <cmath>
 #include <span>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <kodawari/rod_scene.hpp>
 
@@ -33,9 +36,16 @@ void RodScene::frame(std::uint32_t index, rods::RodFrame& out) const {
     out.roots.resize(world.chains.size());
     out.colliders.resize(world.collider_count);
     std::array<rods::Transform, rods::kMaxSkeletonJoints> poses;
+    gltf::Pose pose;
+    std::vector<glm::mat4> nodes;
     for (std::size_t i = 0; i < instances.size(); ++i) {
         const CharacterInstance& inst = instances[i];
         const CharacterKinematics& k = characters[inst.character];
+        if (k.rig) {
+            rig_world(static_cast<std::uint32_t>(i), index, pose, nodes);
+            rigged_frame(static_cast<std::uint32_t>(i), nodes, out);
+            continue;
+        }
         rods::pose_skeleton(k.skeleton, k.motion, inst.placement, t + inst.time_offset, poses);
         out.reference[i] = poses[k.skeleton.reference];
         for (std::size_t c = 0; c < k.chains.size(); ++c) {
@@ -63,6 +73,14 @@ void RodScene::joint_poses(std::uint32_t c, std::uint32_t index, std::vector<rod
     assert(c < instances.size());
     const CharacterInstance& inst = instances[c];
     const CharacterKinematics& k = characters[inst.character];
+    if (k.rig) {
+        gltf::Pose pose;
+        std::vector<glm::mat4> nodes;
+        rig_world(c, index, pose, nodes);
+        out.resize(nodes.size());
+        for (std::size_t n = 0; n < nodes.size(); ++n) out[n] = gltf::rigid_part(nodes[n]);
+        return;
+    }
     out.resize(k.skeleton.joints.size());
     rods::pose_skeleton(k.skeleton, k.motion, inst.placement, time(index) + inst.time_offset, out);
 }
@@ -75,6 +93,49 @@ const std::vector<std::string>& RodScene::joint_names(std::uint32_t c) const {
 const std::vector<std::int32_t>& RodScene::joint_parents(std::uint32_t c) const {
     assert(c < instances.size());
     return characters[instances[c].character].joint_parents;
+}
+
+float RodScene::clip_time(std::uint32_t c, std::uint32_t index) const {
+    assert(c < instances.size());
+    const CharacterInstance& inst = instances[c];
+    const float t = time(index) + inst.time_offset;
+    const CharacterKinematics& k = characters[inst.character];
+    if (!k.rig || inst.clip < 0) return t;
+    const gltf::Animation& clip = k.rig->animations[static_cast<std::size_t>(inst.clip)];
+    const float d = clip.end - clip.start;
+    if (!(d > 0.0f)) return clip.start;
+    const float u = t - clip.start;
+    return clip.start + (u - d * std::floor(u / d));
+}
+
+void RodScene::rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose, std::vector<glm::mat4>& nodes) const {
+    const CharacterInstance& inst = instances[c];
+    const gltf::Character& ch = *characters[inst.character].rig;
+    if (inst.clip >= 0) {
+        gltf::evaluate(ch, static_cast<std::size_t>(inst.clip), clip_time(c, index), pose);
+    } else {
+        pose = gltf::rest_pose(ch);
+    }
+    const glm::mat4 placement = glm::translate(glm::mat4(1.0f), inst.placement.position) * glm::mat4_cast(inst.placement.rotation);
+    nodes.resize(pose.world.size());
+    for (std::size_t n = 0; n < nodes.size(); ++n) nodes[n] = placement * pose.world[n];
+}
+
+void RodScene::rigged_frame(std::uint32_t c, std::span<const glm::mat4> nodes, rods::RodFrame& out) const {
+    assert(c < instances.size());
+    const CharacterInstance& inst = instances[c];
+    const CharacterKinematics& k = characters[inst.character];
+    assert(k.rig && nodes.size() == k.rig->nodes.size());
+    out.reference[c] = gltf::rigid_part(nodes[k.skeleton.reference]);
+    for (std::size_t i = 0; i < k.chains.size(); ++i) {
+        out.roots[inst.chain_begin + i] = gltf::rigid_part(nodes[k.chains[i].joint]);
+    }
+    for (std::size_t i = 0; i < k.colliders.size(); ++i) {
+        const ColliderAttachment& a = k.colliders[i];
+        const rods::Transform joint = gltf::rigid_part(nodes[a.joint]);
+        out.colliders[inst.collider_begin + i] =
+            rods::Capsule{joint.position + joint.rotation * a.a, joint.position + joint.rotation * a.b, a.radius};
+    }
 }
 
 std::uint32_t RodScene::chain_count(std::uint32_t c) const {

@@ -6,10 +6,12 @@
 /// placements, the camera) that produces every frame's input on demand.
 
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
+#include "gltf/character.hpp"
 #include "result.hpp"
 #include "rods/kinematics.hpp"
 #include "rods/world.hpp"
@@ -31,11 +33,17 @@ struct ColliderAttachment {
     float radius = 0.0f;
 };
 
-/// The kinematic model of one character template.
+/// The kinematic model of one character template: a procedural skeleton and motions,
+/// or a rigged glTF character (`rig` set) whose animation clips pose its nodes. For a
+/// rigged character, joint indices (chain attachments, colliders, skeleton.reference)
+/// are node indices, skeleton.joints is empty, and a chain's root frame is its root
+/// node's world transform with the scale removed (gltf::rigid_part).
 struct CharacterKinematics {
     std::string name;
     rods::Skeleton skeleton;
     rods::CharacterMotion motion;
+    std::shared_ptr<const gltf::Character> rig;
+    std::vector<std::vector<int>> chain_nodes;  ///< rigged: per chain its nodes, root first
     std::vector<ChainAttachment> chains;        ///< chain k uses RodWorld template first_template + k
     std::vector<ColliderAttachment> colliders;
     std::uint32_t first_template = 0;
@@ -48,6 +56,7 @@ struct CharacterInstance {
     std::uint32_t character = 0;  ///< index into RodScene::characters
     rods::Transform placement;    ///< the instance's transform (position, yaw)
     float time_offset = 0.0f;     ///< s, added to the scene time for its motions
+    std::int32_t clip = -1;       ///< rigged characters: the clip it plays (looping), -1 = rest pose
     std::uint32_t chain_begin = 0;     ///< its chains: RodWorld::chains[begin, begin + chain count)
     std::uint32_t collider_begin = 0;  ///< its colliders: RodFrame::colliders[begin, begin + collider count)
 };
@@ -92,6 +101,19 @@ struct RodScene {
     [[nodiscard]] const std::vector<std::int32_t>& joint_parents(std::uint32_t c) const;
     /// The chain instances of character instance `c`: world.chains[first, first + count).
     [[nodiscard]] std::uint32_t chain_count(std::uint32_t c) const;
+
+    /// The time at which rigged instance `c` samples its clip at frame `index`: the
+    /// scene time plus its offset, wrapped into the clip's [start, end] (clips loop).
+    [[nodiscard]] float clip_time(std::uint32_t c, std::uint32_t index) const;
+    /// Rigged instance `c`'s entries of `out` (reference, chain roots, colliders) from
+    /// its nodes' world matrices `nodes` (placement included, as a pose backend returns
+    /// them). frame() does this with gltf::evaluate; a GPU pose backend feeds it too.
+    void rigged_frame(std::uint32_t c, std::span<const glm::mat4> nodes, rods::RodFrame& out) const;
+
+private:
+    // Rigged instance c's node world matrices at frame `index` on the CPU, placement
+    // included; `pose` is scratch.
+    void rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose, std::vector<glm::mat4>& nodes) const;
 };
 
 /// Builds the rod data of `scene`'s characters and crowds. Deterministic: the same scene

@@ -7,11 +7,13 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <optional>
 #include <string>
 #include <vector>
 
 #include "birds/world.hpp"
+#include "gltf/character.hpp"
 #include "result.hpp"
 #include "rods/kinematics.hpp"
 #include "rods/shape.hpp"
@@ -99,13 +101,32 @@ struct ChainSpec {
     rods::SolverParams params;
     bool collide = true;  ///< against all of its character's colliders
     std::string path;     ///< its JSON path (for messages from the builder)
+    /// A rigged (glTF) character's chain: its joints' node indices, root first. Then
+    /// `joint` is nodes[0], `offset` the identity, and the chain root's frame is the
+    /// root node's animated world transform with its scale removed (gltf::rigid_part).
+    std::vector<int> nodes;
 };
 
-/// A character template: skeleton, motions, colliders and chains (SPEC A.1).
+/// Where a rigged character comes from (issue 4, SPEC A.7): a glTF 2.0 / VRM file whose
+/// node hierarchy and animation clips pose the character.
+struct RigSpec {
+    std::string file;      ///< as written in the scene
+    std::string resolved;  ///< the path it was loaded from (relative to the scene file's folder)
+    std::shared_ptr<const gltf::Character> character;
+    /// The clip instances play unless their crowd says otherwise: an index into
+    /// character->animations, or -1 for the rest pose.
+    std::int32_t clip = -1;
+};
+
+/// A character template: skeleton, motions, colliders and chains (SPEC A.1). A rigged
+/// character (`rig` set) has no skeleton joints or motions: its joints are the glTF
+/// file's nodes (joint index = node index, in colliders, chains and
+/// skeleton.reference) and its animation clips move them.
 struct CharacterSpec {
     std::string name;
     rods::Skeleton skeleton;  ///< parents first; skeleton.reference is the reference joint
     rods::CharacterMotion motion;
+    std::optional<RigSpec> rig;
     std::vector<ColliderSpec> colliders;
     std::vector<ChainSpec> chains;
     std::string path;
@@ -119,6 +140,9 @@ struct InstanceSpec {
     glm::vec3 position{0.0f};
     float yaw = 0.0f;          ///< rad about +Y; 0 faces +Z
     float time_offset = 0.0f;  ///< s, added to the scene time for this instance's motions
+    /// Rigged characters: the clip it plays (index, -1 = rest pose); none: the crowd's
+    /// or the character's.
+    std::optional<std::int32_t> clip;
 };
 
 /// `count` instances of a character on a grid or a ring, plus explicit instances
@@ -137,6 +161,9 @@ struct CrowdSpec {
     float position_jitter = 0.0f;      ///< m, x and z uniform in [-j, j)
     float time_offset = 0.0f;          ///< s, per instance uniform in [0, time_offset)
     std::uint64_t seed = 1;
+    /// Rigged characters: clips (indices) the generated instances pick from, uniformly
+    /// at random (a stream of its own); empty: the character's clip.
+    std::vector<std::int32_t> clips;
     std::vector<InstanceSpec> instances;  ///< after the generated ones
 };
 

@@ -77,7 +77,7 @@ struct Channel {
 
 /// One animation clip.
 struct Animation {
-    std::string name;
+    std::string name;  ///< the file's, or "animation<index>" when it has none (scenes pick clips by name)
     std::vector<Channel> channels;
     std::vector<Sampler> samplers;
     float start = 0.0f;             ///< earliest key time over all samplers, s

@@ -1,0 +1,336 @@
+// `kodawari rig` (SPEC A.7: the seed's one menu command that builds the whole physics
+// structure of an imported character): chains and colliders found in a glTF / VRM file,
+// written as a scene that the scene loader reads back with the same rules.
+
+#include "kodawari/gltf/rig_scene.hpp"
+
+#include <algorithm>
+#include <cctype>
+#include <cmath>
+#include <cstdio>
+#include <cstdlib>
+#include <filesystem>
+#include <set>
+#include <string>
+#include <utility>
+
+#include <nlohmann/json.hpp>
+
+#include "kodawari/gltf/vrm.hpp"
+#include "kodawari/rods/world.hpp"
+
+namespace kodawari::gltf {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+// The scene format's bound on collider coordinates in their joint's frame and on radii
+// (docs/scene-format.md, "Colliders"), m.
+constexpr float kMaxColliderReach = 1000.0f;
+
+// Six significant digits: what a person reads and edits, and well inside every
+// tolerance the loader applies (float keeps about seven).
+double num(float v) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.6g", static_cast<double>(v));
+    return std::strtod(text, nullptr);
+}
+Json vec(glm::vec3 v) { return Json::array({num(v.x), num(v.y), num(v.z)}); }
+
+// nlohmann puts every array element on a line of its own; [x, y, z] on one line reads
+// better. Only arrays of plain numbers are joined (names could hold brackets).
+std::string compact_number_arrays(const std::string& text) {
+    std::string out;
+    out.reserve(text.size());
+    for (std::size_t i = 0; i < text.size(); ++i) {
+        if (text[i] == '[') {
+            const std::size_t close = text.find(']', i);
+            const std::string inner = close == std::string::npos ? std::string() : text.substr(i + 1, close - i - 1);
+            if (!inner.empty() && inner.find_first_not_of("0123456789.eE+-, \n") == std::string::npos) {
+                std::string joined = "[";
+                std::size_t start = 0;
+                for (std::size_t k = 0; k <= inner.size(); ++k) {
+                    if (k == inner.size() || inner[k] == ',') {
+                        std::string item = inner.substr(start, k - start);
+                        item.erase(0, item.find_first_not_of(" \n"));
+                        item.erase(item.find_last_not_of(" \n") + 1);
+                        joined += (joined.size() > 1 ? ", " : "") + item;
+                        start = k + 1;
+                    }
+                }
+                out += joined + "]";
+                i = close;
+                continue;
+            }
+        }
+        out += text[i];
+    }
+    return out;
+}
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+// A chain or character name the scene format accepts: non-empty, no '#' or '/'.
+std::string scene_name(std::string s) {
+    std::replace(s.begin(), s.end(), '#', '_');
+    std::replace(s.begin(), s.end(), '/', '_');
+    return s.empty() ? std::string("chain") : s;
+}
+
+// Nodes the scene can name: a non-empty name no other node has.
+std::vector<bool> nameable(const Character& ch) {
+    std::vector<bool> out(ch.nodes.size(), false);
+    for (std::size_t i = 0; i < ch.nodes.size(); ++i) {
+        if (ch.nodes[i].name.empty()) continue;
+        out[i] = std::count_if(ch.nodes.begin(), ch.nodes.end(), [&](const Node& n) { return n.name == ch.nodes[i].name; }) == 1;
+    }
+    return out;
+}
+
+struct Candidate {
+    FoundChain chain;
+    PhysicsScale physics;
+    std::optional<rods::SolverParams> params;  // VRM's mapped parameters
+    std::size_t colliders_used = 0;            // VRM: how many colliders the spring had
+};
+
+float max_scale(const glm::mat4& m) {
+    return std::max({glm::length(glm::vec3(m[0])), glm::length(glm::vec3(m[1])), glm::length(glm::vec3(m[2]))});
+}
+
+}  // namespace
+
+Result<RigScene> make_rig_scene(const std::string& character_path, const std::string& scene_path, const RigOptions& options) {
+    auto loaded = load_character(character_path);
+    if (!loaded) return loaded.error();
+    const Character& ch = loaded.value();
+    RigScene out;
+    out.size = character_size(ch);
+    const std::vector<bool> named = nameable(ch);
+    const Pose rest = rest_pose(ch);
+
+    // The chains, by the first rule that applies (see the header).
+    std::vector<Candidate> candidates;
+    std::vector<VrmCollider> vrm_colliders;
+    const auto from_search = [&](const ChainSearch& search) -> Result<void> {
+        auto found = find_chains(ch, search);
+        if (!found) return found.error();
+        for (FoundChain& c : found.value().chains) {
+            Candidate k;
+            k.physics = scaled_physics(ch, c);
+            k.chain = std::move(c);
+            candidates.push_back(std::move(k));
+        }
+        out.warnings.insert(out.warnings.end(), found.value().warnings.begin(), found.value().warnings.end());
+        return {};
+    };
+    if (options.search) {
+        out.source = options.search->roots.empty() ? "name patterns" : "named roots";
+        KW_TRY(from_search(*options.search));
+    } else {
+        auto springs = read_vrm_springs(ch);
+        if (!springs) return springs.error();
+        VrmSprings& vrm = springs.value();
+        out.warnings.insert(out.warnings.end(), vrm.warnings.begin(), vrm.warnings.end());
+        if (!vrm.springs.empty()) {
+            out.source = vrm.version == 2 ? "VRM 1.0 spring bones" : "VRM 0.x secondaryAnimation";
+            for (VrmSpring& s : vrm.springs) {
+                Candidate k;
+                k.chain = std::move(s.chain);
+                k.physics = s.physics;
+                k.params = s.params;
+                k.colliders_used = s.colliders.size();
+                candidates.push_back(std::move(k));
+            }
+            vrm_colliders = std::move(vrm.colliders);
+        } else {
+            out.source = "name patterns";
+            KW_TRY(from_search(ChainSearch{}));
+        }
+    }
+
+    // Chains the scene can express: nameable nodes, one chain per joint, at most 64.
+    Json chains = Json::array();
+    std::set<int> used_nodes;
+    std::set<std::string> used_names;
+    std::size_t min_colliders_used = SIZE_MAX;
+    for (const Candidate& k : candidates) {
+        const FoundChain& c = k.chain;
+        const auto unnamed = std::find_if(c.nodes.begin(), c.nodes.end(), [&](int n) { return !named[static_cast<std::size_t>(n)]; });
+        if (unnamed != c.nodes.end()) {
+            out.warnings.push_back(ch.source + ": chain \"" + c.name + "\" skipped: node " + std::to_string(*unnamed) +
+                                   " has no name of its own, and scenes refer to nodes by name");
+            continue;
+        }
+        const auto shared = std::find_if(c.nodes.begin(), c.nodes.end(), [&](int n) { return used_nodes.count(n) != 0; });
+        if (shared != c.nodes.end()) {
+            out.warnings.push_back(ch.source + ": chain \"" + c.name + "\" skipped: node \"" +
+                                   ch.nodes[static_cast<std::size_t>(*shared)].name + "\" is in a chain already");
+            continue;
+        }
+        if (chains.size() == 64) {
+            out.warnings.push_back(ch.source + ": chain \"" + c.name + "\" and later ones skipped: a character has at most 64 chains");
+            break;
+        }
+        std::string name = scene_name(c.name);
+        for (int suffix = 2; used_names.count(name) != 0; ++suffix) name = scene_name(c.name) + "_" + std::to_string(suffix);
+        used_names.insert(name);
+        used_nodes.insert(c.nodes.begin(), c.nodes.end());
+
+        Json j;
+        j["name"] = name;
+        // "root" + "joints" when the walk down single children gives these nodes, else the list.
+        bool walk = true;
+        for (std::size_t i = 0; i + 1 < c.nodes.size(); ++i) {
+            const Node& n = ch.nodes[static_cast<std::size_t>(c.nodes[i])];
+            walk = walk && n.children.size() == 1 && n.children.front() == c.nodes[i + 1];
+        }
+        if (walk) {
+            j["root"] = ch.nodes[static_cast<std::size_t>(c.nodes.front())].name;
+            j["joints"] = c.nodes.size();
+        } else {
+            Json list = Json::array();
+            for (const int n : c.nodes) list.push_back(ch.nodes[static_cast<std::size_t>(n)].name);
+            j["nodes"] = list;
+        }
+        j["thickness"] = num(k.physics.thickness);
+        j["mass"] = num(k.physics.mass);
+        if (k.params) {
+            Json physics;
+            physics["gravity"] = vec(k.params->gravity);
+            physics["rest_stiffness"] = num(k.params->rest_stiffness);
+            physics["damping"] = num(k.params->damping);
+            j["physics"] = physics;
+            min_colliders_used = std::min(min_colliders_used, k.colliders_used);
+        }
+        chains.push_back(j);
+        out.chains.push_back(RigChain{name, ch.nodes[static_cast<std::size_t>(c.nodes.front())].name,
+                                      static_cast<std::uint32_t>(c.nodes.size()), c.length, k.physics.thickness});
+    }
+    if (chains.empty()) {
+        return make_error(Error::Kind::InvalidInput,
+                          ch.source + ": no chain found (" + out.source +
+                              "); name the roots with --roots or the name patterns with --chains");
+    }
+
+    // Colliders, in their node's rigid frame at rest (docs/scene-format.md), metres.
+    Json colliders = Json::array();
+    for (std::size_t i = 0; i < vrm_colliders.size(); ++i) {
+        const VrmCollider& c = vrm_colliders[i];
+        const std::string what = ch.source + ": collider " + std::to_string(i);
+        if (c.inside) continue;  // read_vrm_springs() has warned
+        if (!named[static_cast<std::size_t>(c.node)]) {
+            out.warnings.push_back(what + " skipped: its node " + std::to_string(c.node) + " has no name of its own");
+            continue;
+        }
+        const glm::mat4& world = rest.world[static_cast<std::size_t>(c.node)];
+        const float radius = c.radius * max_scale(world);
+        if (!(radius > 0.0f)) {
+            out.warnings.push_back(what + " skipped: radius 0");
+            continue;
+        }
+        if (colliders.size() == rods::kMaxChainColliders) {
+            out.warnings.push_back(what + " and later ones skipped: a chain collides with at most " +
+                                   std::to_string(rods::kMaxChainColliders) + " colliders");
+            break;
+        }
+        const rods::Transform frame = rigid_part(world);
+        const glm::quat inverse = glm::inverse(frame.rotation);
+        const auto local = [&](glm::vec3 p) { return inverse * (glm::vec3(world * glm::vec4(p, 1.0f)) - frame.position); };
+        const glm::vec3 a = local(c.offset);
+        const glm::vec3 b = local(c.tail);
+        const float reach = std::max({std::abs(a.x), std::abs(a.y), std::abs(a.z), std::abs(b.x), std::abs(b.y), std::abs(b.z)});
+        if (!(reach <= kMaxColliderReach && radius <= kMaxColliderReach)) {
+            out.warnings.push_back(what + " skipped: it lies " + std::to_string(std::max(reach, radius)) +
+                                   " m from its node; scenes allow " + std::to_string(static_cast<int>(kMaxColliderReach)) + " m");
+            continue;
+        }
+        Json j;
+        j["type"] = c.capsule ? "capsule" : "sphere";
+        j["joint"] = ch.nodes[static_cast<std::size_t>(c.node)].name;
+        if (c.capsule) {
+            j["a"] = vec(a);
+            j["b"] = vec(b);
+        } else {
+            j["center"] = vec(a);
+        }
+        j["radius"] = num(radius);
+        colliders.push_back(j);
+    }
+    out.colliders = static_cast<std::uint32_t>(colliders.size());
+    if (min_colliders_used < colliders.size()) {
+        out.warnings.push_back(ch.source + ": every chain collides with all " + std::to_string(colliders.size()) +
+                               " colliders; some VRM springs used only " + std::to_string(min_colliders_used) +
+                               " (per-spring collider groups are not kept)");
+    }
+
+    // The reference joint: "head", the VRM humanoid head, else what the first chain hangs from.
+    int reference = -1;
+    for (std::size_t i = 0; i < ch.nodes.size() && reference < 0; ++i) {
+        if (named[i] && lower(ch.nodes[i].name) == "head") reference = static_cast<int>(i);
+    }
+    if (reference < 0) {
+        const int head = vrm_humanoid_bone(ch, "head");
+        if (head >= 0 && named[static_cast<std::size_t>(head)]) reference = head;
+    }
+    if (reference < 0) {
+        const FoundChain& first = candidates.front().chain;
+        reference = first.parent >= 0 && named[static_cast<std::size_t>(first.parent)] ? first.parent : first.nodes.front();
+        out.warnings.push_back(ch.source + ": no \"head\" node and no VRM humanoid head: view directions are measured in \"" +
+                               ch.nodes[static_cast<std::size_t>(reference)].name +
+                               "\" (change \"reference_joint\" in the scene if that is wrong)");
+    }
+    out.reference = ch.nodes[static_cast<std::size_t>(reference)].name;
+
+    if (!options.clip.empty()) {
+        const auto it = std::find_if(ch.animations.begin(), ch.animations.end(), [&](const Animation& a) { return a.name == options.clip; });
+        if (it == ch.animations.end()) {
+            std::string names;
+            for (const Animation& a : ch.animations) names += (names.empty() ? "\"" : ", \"") + a.name + "\"";
+            return make_error(Error::Kind::InvalidInput, ch.source + ": no animation is called \"" + options.clip + "\" (" +
+                                                             (names.empty() ? std::string("the file has none") : names) + ")");
+        }
+        out.clip = options.clip;
+    } else if (!ch.animations.empty()) {
+        out.clip = ch.animations.front().name;
+    }
+
+    // The scene: the character once at the origin, the camera orbiting its head.
+    namespace fs = std::filesystem;
+    const fs::path scene_dir = fs::absolute(fs::path(scene_path)).parent_path();
+    const std::string file = fs::absolute(fs::path(character_path)).lexically_relative(scene_dir).generic_string();
+    const std::string stem = fs::path(character_path).stem().string();
+    const std::string name = scene_name(options.name.empty() ? stem : options.name);
+    const glm::vec3 head = glm::vec3(rest.world[static_cast<std::size_t>(reference)][3]);
+    Json character;
+    character["name"] = name;
+    character["gltf"] = file;
+    character["reference_joint"] = out.reference;
+    if (!out.clip.empty()) {
+        character["animation"] = out.clip;
+    } else {
+        character["animate"] = false;
+    }
+    if (!colliders.empty()) character["colliders"] = colliders;
+    character["chains"] = chains;
+    Json scene;
+    scene["format"] = "kodawari-scene";
+    scene["version"] = 2;
+    scene["name"] = name;
+    scene["fps"] = 60;
+    scene["duration"] = num(options.duration);
+    Json orbit;
+    orbit["target"] = vec(head);
+    orbit["radius"] = num(std::max(0.5f, 1.5f * out.size));
+    orbit["height"] = 0;
+    orbit["degrees_per_second"] = 30;
+    scene["camera"] = Json{{"orbit", orbit}};
+    scene["characters"] = Json::array({character});
+    out.json = compact_number_arrays(scene.dump(2)) + "\n";
+    return out;
+}
+
+}  // namespace kodawari::gltf

@@ -1,0 +1,64 @@
+#pragma once
+/// @file
+/// One-command chain setup (SPEC A.7, issue 4; `kodawari rig`): from a rigged glTF / VRM
+/// character to a scene file (docs/scene-format.md, "Rigged characters") that simulates
+/// its chains, ready for `kodawari run`.
+///
+/// Where the chains come from, first rule that applies:
+/// 1. RigOptions::search given (`--roots` or `--chains`): find_chains() with it.
+/// 2. The file has VRM spring bones (read_vrm_springs()): one chain per spring, with its
+///    mapped physics, and the springs' sphere and capsule colliders.
+/// 3. Otherwise find_chains() with the default name patterns.
+/// Colliders in the scene are in their node's rigid frame (rest pose, metres). Every
+/// colliding chain of a scene character collides with all of its colliders (at most
+/// rods::kMaxChainColliders): VRM's per-spring collider groups are merged, and a
+/// warning says so when a spring used fewer colliders than the character has.
+
+#include <cstdint>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "kodawari/gltf/chains.hpp"
+#include "kodawari/result.hpp"
+
+namespace kodawari::gltf {
+
+/// What `kodawari rig` is asked to do.
+struct RigOptions {
+    std::optional<ChainSearch> search;  ///< none: VRM springs, else the default patterns
+    std::string clip;                   ///< the animation to play; "": the file's first (or the rest pose)
+    std::string name;                   ///< the scene character's name; "": from the file name
+    float duration = 10.0f;             ///< s, the scene's
+};
+
+/// One chain in the written scene.
+struct RigChain {
+    std::string name;
+    std::string root;  ///< the root node's name
+    std::uint32_t joints = 0;
+    float length = 0.0f;     ///< m
+    float thickness = 0.0f;  ///< m
+};
+
+/// What make_rig_scene() wrote and found.
+struct RigScene {
+    std::string json;  ///< the scene file's text
+    std::string source;  ///< "VRM 1.0 spring bones", "VRM 0.x secondaryAnimation", "name patterns", "named roots"
+    std::string reference;  ///< the reference joint's node name
+    std::string clip;       ///< the clip instances play, "" for the rest pose
+    std::vector<RigChain> chains;
+    std::uint32_t colliders = 0;
+    float size = 0.0f;  ///< character_size(), m
+    std::vector<std::string> warnings;  ///< what could not be used, each naming the file
+};
+
+/// Loads `character_path` and writes the text of a scene that simulates it; the scene
+/// refers to the character by its path relative to the folder of `scene_path` (where
+/// the caller will write it). Errors: the file does not load, no chain is found, a
+/// chain node has no unique name (the scene refers to nodes by name), the clip does not
+/// exist. The scene has one instance at the origin and a camera orbiting the head.
+[[nodiscard]] Result<RigScene> make_rig_scene(const std::string& character_path, const std::string& scene_path,
+                                              const RigOptions& options);
+
+}  // namespace kodawari::gltf

@@ -1,0 +1,250 @@
+// Rigged characters in a scene (docs/scene-format.md, "Rigged characters"; issue 4,
+// SPEC A.7): a character given by a glTF 2.0 / VRM file instead of a hand-written
+// skeleton. The file is loaded here, relative to the scene's folder, so that every name
+// in the scene (reference joint, chain roots, collider joints, clips) is checked against
+// it and reported at its JSON path. Chains take their base shapes from the file's rest
+// pose (gltf::make_found_chain), and their thickness and mass, unless given, from the
+// character's size (gltf::scaled_physics).
+
+#include <algorithm>
+#include <cctype>
+#include <filesystem>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <kodawari/gltf/chains.hpp>
+#include <kodawari/gltf/vrm.hpp>
+#include <kodawari/rods/world.hpp>
+
+#include "scene/character_loader.hpp"
+
+namespace kodawari::scene_detail {
+namespace {
+
+std::string lower(std::string s) {
+    std::transform(s.begin(), s.end(), s.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+    return s;
+}
+
+// The node called `name`: exactly one must have it.
+Result<int> find_node(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
+    std::string name;
+    KW_SCENE_ASSIGN(name, r.string(node));
+    int found = -1;
+    for (std::size_t i = 0; i < ch.nodes.size(); ++i) {
+        if (ch.nodes[i].name != name) continue;
+        if (found >= 0) {
+            return r.fail(node.path, "\"" + name + "\" names two nodes of " + ch.source + " (" + std::to_string(found) +
+                                         " and " + std::to_string(i) + "); rename one in the file");
+        }
+        found = static_cast<int>(i);
+    }
+    if (found < 0) return r.expected(node, "the name of a node of " + ch.source);
+    return found;
+}
+
+// The reference joint when the scene names none: a node called "head" (any case), else
+// the humanoid head bone of a VRM file.
+Result<int> default_reference(const JsonReader& r, const JsonNode& at, const gltf::Character& ch) {
+    int found = -1;
+    for (std::size_t i = 0; i < ch.nodes.size(); ++i) {
+        if (lower(ch.nodes[i].name) != "head") continue;
+        if (found >= 0) {
+            return r.fail(at.path, "two nodes of " + ch.source + " are called \"head\"; name the reference joint");
+        }
+        found = static_cast<int>(i);
+    }
+    if (found >= 0) return found;
+    if (const int head = gltf::vrm_humanoid_bone(ch, "head"); head >= 0) return head;
+    return r.fail(at.path, "no node of " + ch.source +
+                               " is called \"head\" and it has no VRM humanoid head; name the node that view directions "
+                               "are measured in (\"reference_joint\")");
+}
+
+Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
+    std::string name;
+    KW_SCENE_ASSIGN(name, r.string(node));
+    std::vector<std::string> names;
+    for (std::size_t i = 0; i < ch.animations.size(); ++i) {
+        if (ch.animations[i].name == name) return static_cast<std::int32_t>(i);
+        names.push_back(ch.animations[i].name);
+    }
+    if (names.empty()) return r.expected(node, "no animation: " + ch.source + " has no animation clips");
+    return r.expected(node, "the name of an animation of " + ch.source + " (" + quoted_list(names) + ")");
+}
+
+// A chain's nodes: "nodes" (each the child of the one before) or "root" walked down
+// single children (docs: at most "joints" of them).
+Result<std::vector<int>> read_chain_nodes(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
+    const JsonNode root = r.member(node, "root");
+    const JsonNode list = r.member(node, "nodes");
+    const JsonNode joints = r.member(node, "joints");
+    if (root.present() == list.present()) {
+        return r.fail(node.path, std::string("expected exactly one of \"root\" and \"nodes\", got ") +
+                                     (root.present() ? "both" : "neither"));
+    }
+    const std::string range = "[2, " + std::to_string(rods::kMaxChainJoints) + "]";
+    std::vector<int> nodes;
+    if (list.present()) {
+        if (joints.present()) return r.fail(joints.path, "only used with \"root\" (\"nodes\" lists every joint)");
+        std::size_t n = 0;
+        KW_SCENE_ASSIGN(n, read_array(r, list, 2, rods::kMaxChainJoints, "an array of " + range + " node names"));
+        for (std::size_t i = 0; i < n; ++i) {
+            const JsonNode element = r.element(list, i);
+            int index = 0;
+            KW_SCENE_ASSIGN(index, find_node(r, element, ch));
+            if (i > 0 && ch.nodes[static_cast<std::size_t>(index)].parent != nodes.back()) {
+                return r.expected(element, "a child of the node before it (\"" +
+                                               ch.nodes[static_cast<std::size_t>(nodes.back())].name + "\")");
+            }
+            nodes.push_back(index);
+        }
+        return nodes;
+    }
+    int start = 0;
+    KW_SCENE_ASSIGN(start, find_node(r, root, ch));
+    std::uint64_t wanted = 0;
+    if (joints.present()) KW_SCENE_ASSIGN(wanted, r.integer(joints, 2, rods::kMaxChainJoints));
+    nodes.push_back(start);
+    while (ch.nodes[static_cast<std::size_t>(nodes.back())].children.size() == 1 &&
+           (wanted == 0 || nodes.size() < wanted)) {
+        nodes.push_back(ch.nodes[static_cast<std::size_t>(nodes.back())].children.front());
+        if (wanted == 0 && nodes.size() > rods::kMaxChainJoints) {
+            return r.fail(root.path, "the strand from \"" + ch.nodes[static_cast<std::size_t>(start)].name + "\" has more than " +
+                                         std::to_string(rods::kMaxChainJoints) +
+                                         " single-child joints; give \"joints\" (at most " +
+                                         std::to_string(rods::kMaxChainJoints) + ") to simulate the first ones");
+        }
+    }
+    if (nodes.size() < 2 || (wanted != 0 && nodes.size() < wanted)) {
+        return r.fail(root.path, "the strand from \"" + ch.nodes[static_cast<std::size_t>(start)].name + "\" has " +
+                                     std::to_string(nodes.size()) + " single-child joint(s) before a branch or a leaf; " +
+                                     (wanted != 0 ? std::to_string(wanted) : std::string("2")) + " needed (or list \"nodes\")");
+    }
+    return nodes;
+}
+
+Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const gltf::Character& ch, const gltf::Pose& rest,
+                               const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
+    KW_TRY(r.object(node, {"name", "root", "nodes", "joints", "thickness", "mass", "physics", "collide", "views"}));
+    ChainSpec c;
+    c.path = node.path;
+    c.params = defaults;
+    const JsonNode name = r.member(node, "name");
+    KW_SCENE_ASSIGN(c.name, read_name(r, name));
+    for (const ChainSpec& other : chains) {
+        if (other.name == c.name) return r.expected(name, "a chain name this character does not use yet (\"" + c.name + "\" is taken)");
+    }
+    KW_SCENE_ASSIGN(c.nodes, read_chain_nodes(r, node, ch));
+    for (const ChainSpec& other : chains) {
+        for (const int n : c.nodes) {
+            if (std::find(other.nodes.begin(), other.nodes.end(), n) != other.nodes.end()) {
+                return r.fail(node.path, "node \"" + ch.nodes[static_cast<std::size_t>(n)].name + "\" is already simulated by chain \"" +
+                                             other.name + "\" (a joint belongs to one chain)");
+            }
+        }
+    }
+    auto found = gltf::make_found_chain(ch, rest, c.nodes);
+    if (!found) return r.fail(node.path, found.error().message);
+    c.joint = static_cast<std::uint32_t>(c.nodes.front());
+    c.base = found.value().base;
+    const gltf::PhysicsScale scaled = gltf::scaled_physics(ch, found.value());
+    c.thickness = scaled.thickness;
+    c.mass = scaled.mass;
+    KW_TRY(optional_member(r, node, "thickness", c.thickness,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1.0)); }));
+    KW_TRY(optional_member(r, node, "mass", c.mass, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+    const JsonNode physics = r.member(node, "physics");
+    if (physics.present()) KW_TRY(read_physics(r, physics, c.params));
+    KW_TRY(optional_member(r, node, "collide", c.collide, [&](const JsonNode& n) { return r.boolean(n); }));
+    const JsonNode views = r.member(node, "views");
+    if (views.present()) {
+        std::size_t n = 0;
+        KW_SCENE_ASSIGN(n, read_array(r, views, 0, rods::kMaxViewExamples,
+                                      "an array of at most " + std::to_string(rods::kMaxViewExamples) + " view examples"));
+        for (std::size_t k = 0; k < n; ++k) {
+            ViewSpec v;
+            KW_SCENE_ASSIGN(v, read_view(r, r.element(views, k), c.base.positions.size()));
+            c.views.push_back(std::move(v));
+        }
+    }
+    KW_TRY(check_template(r, node, c));
+    chains.push_back(std::move(c));
+    return {};
+}
+
+}  // namespace
+
+Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode& node) {
+    KW_TRY(r.object(node, {"name", "gltf", "reference_joint", "animation", "animate", "colliders", "physics", "chains"}));
+    CharacterSpec out;
+    out.path = node.path;
+    KW_SCENE_ASSIGN(out.name, read_name(r, r.member(node, "name")));
+
+    RigSpec rig;
+    const JsonNode file = r.member(node, "gltf");
+    KW_SCENE_ASSIGN(rig.file, r.string(file));
+    if (rig.file.empty()) return r.expected(file, "the path of a .gltf, .glb or .vrm file");
+    const std::filesystem::path given(rig.file);
+    rig.resolved = given.is_absolute() ? rig.file : (std::filesystem::path(r.file()).parent_path() / given).string();
+    auto loaded = gltf::load_character(rig.resolved);
+    if (!loaded) {
+        return make_error(loaded.error().kind, r.file() + ": " + file.path + ": " + loaded.error().message);
+    }
+    auto character = std::make_shared<const gltf::Character>(std::move(loaded.value()));
+    const gltf::Character& ch = *character;
+
+    const JsonNode reference = r.member(node, "reference_joint");
+    int reference_node = 0;
+    if (reference.present()) {
+        KW_SCENE_ASSIGN(reference_node, find_node(r, reference, ch));
+    } else {
+        KW_SCENE_ASSIGN(reference_node, default_reference(r, reference, ch));
+    }
+    out.skeleton.reference = static_cast<std::uint32_t>(reference_node);
+
+    bool animate = true;
+    KW_TRY(optional_member(r, node, "animate", animate, [&](const JsonNode& n) { return r.boolean(n); }));
+    const JsonNode animation = r.member(node, "animation");
+    if (animation.present()) {
+        if (!animate) return r.fail(animation.path, "not used with \"animate\": false (the rest pose)");
+        KW_SCENE_ASSIGN(rig.clip, find_clip(r, animation, ch));
+    } else {
+        rig.clip = animate && !ch.animations.empty() ? 0 : -1;
+    }
+
+    const auto node_index = [&](const JsonNode& n) -> Result<std::uint32_t> {
+        int index = 0;
+        KW_SCENE_ASSIGN(index, find_node(r, n, ch));
+        return static_cast<std::uint32_t>(index);
+    };
+    const JsonNode colliders = r.member(node, "colliders");
+    if (colliders.present()) {
+        std::size_t n = 0;
+        KW_SCENE_ASSIGN(n, read_array(r, colliders, 0, rods::kMaxChainColliders,
+                                      "an array of colliders (at most " + std::to_string(rods::kMaxChainColliders) + ")"));
+        for (std::size_t i = 0; i < n; ++i) {
+            ColliderSpec c;
+            KW_SCENE_ASSIGN(c, read_collider(r, r.element(colliders, i), node_index));
+            out.colliders.push_back(c);
+        }
+    }
+
+    rods::SolverParams defaults;
+    const JsonNode physics = r.member(node, "physics");
+    if (physics.present()) KW_TRY(read_physics(r, physics, defaults));
+    const gltf::Pose rest = gltf::rest_pose(ch);
+    const JsonNode chains = r.member(node, "chains");
+    std::size_t n = 0;
+    KW_SCENE_ASSIGN(n, read_array(r, chains, 1, kMaxPerCharacter,
+                                  "a non-empty array of chains (at most " + std::to_string(kMaxPerCharacter) + ")"));
+    for (std::size_t i = 0; i < n; ++i) KW_TRY(read_rigged_chain(r, r.element(chains, i), ch, rest, defaults, out.chains));
+
+    rig.character = std::move(character);
+    out.rig = std::move(rig);
+    return out;
+}
+
+}  // namespace kodawari::scene_detail

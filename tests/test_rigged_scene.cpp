@@ -1,0 +1,310 @@
+// Rigged characters in scenes (issue 4, SPEC A.7): the scene format's `gltf` characters,
+// crowds of them with clips and time offsets, the per-frame kinematic input they give
+// the rod backends, a simulation of the project's own character, and `kodawari rig`'s
+// scene writer on every shipped sample.
+
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <optional>
+#include <set>
+#include <string>
+#include <vector>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "kodawari/gltf/rig_scene.hpp"
+#include "kodawari/rod_backend.hpp"
+#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
+#include "test_support.hpp"
+
+namespace kodawari {
+namespace {
+
+using testing_support::TempDir;
+
+const std::string kSource = KODAWARI_SOURCE_DIR;
+const std::string kChibi = kSource + "/scenes/characters/chibi.glb";
+const std::string kCrowdScene = kSource + "/scenes/crowd-gltf.json";
+
+Scene load(const std::string& path) {
+    auto scene = load_scene(path);
+    EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.error().message);
+    return std::move(scene).value();
+}
+
+RodScene build(const Scene& scene) {
+    auto built = build_rod_scene(scene);
+    EXPECT_TRUE(built.ok()) << (built.ok() ? "" : built.error().message);
+    return std::move(built).value();
+}
+
+// A scene text with one chibi character (its `gltf` path absolute) and `crowd` as the
+// crowds array; `character_extra` is spliced into the character object.
+std::string chibi_scene(const std::string& chains, const std::string& crowd = "", const std::string& character_extra = "") {
+    return std::string(R"({"format": "kodawari-scene", "version": 2, "fps": 60, "duration": 1,
+      "camera": {"position": [0, 1, 3], "target": [0, 1, 0]},
+      "characters": [{"name": "chibi", "gltf": ")") +
+           kChibi + R"(", )" + character_extra + R"("chains": )" + chains + "}]" +
+           (crowd.empty() ? "" : ", \"crowds\": " + crowd) + "}";
+}
+
+std::string error_of(const std::string& text) {
+    auto scene = parse_scene(text, "test.json");
+    return scene.ok() ? std::string("(loaded)") : scene.error().message;
+}
+
+int node_named(const gltf::Character& ch, const std::string& name) {
+    for (std::size_t i = 0; i < ch.nodes.size(); ++i) {
+        if (ch.nodes[i].name == name) return static_cast<int>(i);
+    }
+    ADD_FAILURE() << "no node " << name;
+    return 0;
+}
+
+float max_difference(glm::vec3 a, glm::vec3 b) { return glm::length(a - b); }
+
+TEST(RiggedScene, ShippedCrowdLoadsWithClipsAndOffsets) {
+    const Scene scene = load(kCrowdScene);
+    ASSERT_EQ(scene.characters.size(), 1u);
+    ASSERT_TRUE(scene.characters[0].rig.has_value());
+    const RodScene rods = build(scene);
+    EXPECT_EQ(rods.instances.size(), 64u);
+    EXPECT_EQ(rods.world.chains.size(), 64u * 7u);
+    // The crowd picks from three clips: each must be played by someone, and the time
+    // offsets must differ (a crowd that moves in lockstep would be a bug).
+    std::set<std::int32_t> clips;
+    std::set<float> offsets;
+    for (const CharacterInstance& inst : rods.instances) {
+        clips.insert(inst.clip);
+        offsets.insert(inst.time_offset);
+    }
+    EXPECT_EQ(clips, (std::set<std::int32_t>{0, 1, 2}));
+    EXPECT_GT(offsets.size(), 60u);
+}
+
+// The per-frame input of a rigged instance, recomputed here from gltf::evaluate with the
+// placement written out as translate * rotate-about-Y: reference joint, chain roots and
+// the head collider, at frames where the clip time wraps.
+TEST(RiggedScene, FrameInputFollowsTheClipAtTheInstanceTime) {
+    const std::string chains = R"([{"name": "tail", "root": "tail_0"}, {"name": "bang", "root": "bang_C_0", "joints": 3}])";
+    const std::string crowd = R"([{"character": "chibi", "instances": [
+        {"position": [2, 0, -1], "yaw_deg": 90, "time_offset": 2.5, "animation": "walk"},
+        {"position": [0, 0, 0], "animation": "turn"}]}])";
+    const std::string colliders = R"("colliders": [{"type": "sphere", "joint": "head", "center": [0, 0.17, 0], "radius": 0.19}], )";
+    auto parsed = parse_scene(chibi_scene(chains, crowd, colliders), "test.json");
+    ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+    const RodScene rods = build(parsed.value());
+    const gltf::Character& ch = *rods.characters[0].rig;
+    ASSERT_EQ(rods.world.chains.size(), 4u);
+    EXPECT_EQ(rods.world.templ(rods.world.chains[0]).chain.joint_count, 8u);  // tail_0..tail_7, to the leaf
+    EXPECT_EQ(rods.world.templ(rods.world.chains[1]).chain.joint_count, 3u);  // "joints": 3
+
+    const int head = node_named(ch, "head");
+    const int tail = node_named(ch, "tail_0");
+    const int bang = node_named(ch, "bang_C_0");
+    gltf::Pose pose;
+    for (const std::uint32_t frame : {0u, 37u, 59u}) {
+        const rods::RodFrame input = rods.frame(frame);
+        for (std::uint32_t c = 0; c < 2; ++c) {
+            const CharacterInstance& inst = rods.instances[c];
+            const gltf::Animation& clip = ch.animations[static_cast<std::size_t>(inst.clip)];
+            // Looping: the clip time is the instance time modulo the clip's length.
+            const double t = static_cast<double>(frame) / 60.0 + static_cast<double>(inst.time_offset);
+            const double d = static_cast<double>(clip.end - clip.start);
+            const auto clip_t = static_cast<float>(static_cast<double>(clip.start) + std::fmod(t - static_cast<double>(clip.start), d));
+            EXPECT_NEAR(rods.clip_time(c, frame), clip_t, 1e-5f);
+            gltf::evaluate(ch, static_cast<std::size_t>(inst.clip), clip_t, pose);
+            const glm::mat4 placement = glm::rotate(glm::translate(glm::mat4(1.0f), inst.placement.position),
+                                                    c == 0 ? glm::radians(90.0f) : 0.0f, glm::vec3(0, 1, 0));
+            const auto world_of = [&](int node) { return gltf::rigid_part(placement * pose.world[static_cast<std::size_t>(node)]); };
+            // 1e-5 m: float matrices of a 1.2 m character, composed a few times.
+            EXPECT_LT(max_difference(input.reference[c].position, world_of(head).position), 1e-5f) << "frame " << frame;
+            EXPECT_LT(max_difference(input.roots[2 * c].position, world_of(tail).position), 1e-5f);
+            EXPECT_LT(max_difference(input.roots[2 * c + 1].position, world_of(bang).position), 1e-5f);
+            EXPECT_GT(std::abs(glm::dot(input.roots[2 * c].rotation, world_of(tail).rotation)), 1.0f - 1e-6f);
+            const rods::Transform h = world_of(head);
+            const glm::vec3 centre = h.position + h.rotation * glm::vec3(0, 0.17f, 0);
+            EXPECT_LT(max_difference(input.colliders[c].a, centre), 1e-5f);
+            EXPECT_FLOAT_EQ(input.colliders[c].radius, 0.19f);
+        }
+    }
+    // Deterministic: the same frame gives the same bits.
+    const rods::RodFrame a = rods.frame(37);
+    const rods::RodFrame b = rods.frame(37);
+    ASSERT_EQ(a.roots.size(), b.roots.size());
+    for (std::size_t i = 0; i < a.roots.size(); ++i) {
+        EXPECT_EQ(a.roots[i].position, b.roots[i].position);
+        EXPECT_EQ(a.roots[i].rotation, b.roots[i].rotation);
+    }
+}
+
+// The base shape is the rest pose in the root's frame: its joints' world positions.
+TEST(RiggedScene, BaseShapeIsTheRestPose) {
+    auto parsed = parse_scene(chibi_scene(R"([{"name": "tail", "nodes": ["tail_0", "tail_1", "tail_2", "tail_3"]}])", "",
+                                          R"("animate": false, )"),
+                              "test.json");
+    ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+    const RodScene rods = build(parsed.value());
+    const gltf::Character& ch = *rods.characters[0].rig;
+    EXPECT_EQ(rods.instances[0].clip, -1);
+    const rods::RestShape rest = rods::rest_shape(rods.world, 0, rods.frame(0));
+    const gltf::Pose pose = gltf::rest_pose(ch);
+    const rods::Transform root = gltf::rigid_part(pose.world[static_cast<std::size_t>(node_named(ch, "tail_0"))]);
+    for (int i = 0; i < 4; ++i) {
+        const glm::vec3 world = glm::vec3(pose.world[static_cast<std::size_t>(node_named(ch, "tail_" + std::to_string(i)))][3]);
+        EXPECT_LT(max_difference(root.position + root.rotation * rest.shape.positions[static_cast<std::size_t>(i)], world), 1e-5f)
+            << "joint " << i;
+    }
+}
+
+TEST(RiggedScene, BadInputNamesTheFileAndPath) {
+    const std::string tail = R"([{"name": "tail", "root": "tail_0"}])";
+    EXPECT_NE(error_of(chibi_scene(R"([{"name": "x", "root": "no_such_node"}])")).find("$.characters[0].chains[0].root"),
+              std::string::npos);
+    EXPECT_NE(error_of(chibi_scene(R"([{"name": "x", "nodes": ["tail_0", "tail_2"]}])")).find("a child of the node before it"),
+              std::string::npos);
+    EXPECT_NE(error_of(chibi_scene(R"([{"name": "x", "root": "tail_0", "joints": 9}])")).find("has 8 single-child joint(s)"),
+              std::string::npos);
+    EXPECT_NE(error_of(chibi_scene(R"([{"name": "a", "root": "tail_0"}, {"name": "b", "root": "tail_3"}])"))
+                  .find("already simulated by chain \"a\""),
+              std::string::npos);
+    EXPECT_NE(error_of(chibi_scene(R"([{"name": "x", "root": "tail_0", "nodes": ["tail_0", "tail_1"]}])"))
+                  .find("exactly one of \"root\" and \"nodes\""),
+              std::string::npos);
+    EXPECT_NE(error_of(chibi_scene(tail, "", R"("animation": "dance", )")).find("\"idle\", \"walk\", \"turn\""),
+              std::string::npos);
+    EXPECT_NE(error_of(chibi_scene(tail, "", R"("animate": false, "animation": "walk", )")).find("\"animate\": false"),
+              std::string::npos);
+    EXPECT_NE(error_of(chibi_scene(tail, "", R"("skeleton": [], )")).find("unknown key"), std::string::npos);
+    EXPECT_NE(error_of(chibi_scene(tail, R"([{"character": "chibi", "count": 2, "animations": ["run"]}])"))
+                  .find("$.crowds[0].animations[0]"),
+              std::string::npos);
+    // A missing file is an I/O error that names the scene, the key and the file.
+    std::string text = chibi_scene(tail);
+    text.replace(text.find("chibi.glb"), 9, "missing.glb");
+    auto missing = parse_scene(text, "test.json");
+    ASSERT_FALSE(missing.ok());
+    EXPECT_EQ(missing.error().kind, Error::Kind::Io);
+    EXPECT_NE(missing.error().message.find("test.json: $.characters[0].gltf"), std::string::npos) << missing.error().message;
+    EXPECT_NE(missing.error().message.find("missing.glb"), std::string::npos);
+    // Clips belong to rigged characters only.
+    const std::string procedural = R"({"format": "kodawari-scene", "version": 2,
+      "characters": [{"name": "b", "skeleton": [{"name": "head"}],
+        "chains": [{"name": "c", "joint": "head", "shape": {"arc": {"joints": 3, "length": 0.2}}}]}],
+      "crowds": [{"character": "b", "count": 1, "animations": ["walk"]}]})";
+    EXPECT_NE(error_of(procedural).find("only rigged characters"), std::string::npos) << error_of(procedural);
+}
+
+// The project's own character simulated for 4 s walking and turning: the strands keep
+// their lengths, stay out of the head, and swing.
+TEST(RiggedScene, ChibiSimulatesOnTheCpu) {
+    const Scene scene = load(kCrowdScene);
+    Scene small = scene;
+    small.crowds[0].count = 3;
+    small.crowds[0].clips = {1, 2, 1};
+    const RodScene rods = build(small);
+    auto backend = make_rod_backend(BackendKind::Cpu, BackendOptions{});
+    ASSERT_TRUE(backend.ok());
+    ASSERT_TRUE(backend.value()->load(rods.world, rods.frame(0)).ok());
+    ChainSnapshot snap;
+    float worst_stretch = 0.0f;
+    float worst_depth = 0.0f;
+    float lag = 0.0f;  // tip's distance from where the rest shape puts it, in chain lengths
+    for (std::uint32_t f = 1; f <= 240; ++f) {
+        const rods::RodFrame input = rods.frame(f);
+        ASSERT_TRUE(backend.value()->step(input).ok());
+        ASSERT_TRUE(backend.value()->read(snap).ok());
+        for (std::size_t c = 0; c < rods.world.chains.size(); ++c) {
+            const rods::ChainInstance& ci = rods.world.chains[c];
+            const rods::Chain& chain = rods.world.templ(ci).chain;
+            for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) {
+                const float length = glm::length(snap.positions[ci.joint_begin + i + 1] - snap.positions[ci.joint_begin + i]);
+                ASSERT_TRUE(std::isfinite(length));
+                worst_stretch = std::max(worst_stretch, std::abs(length / chain.segment_length[i] - 1.0f));
+            }
+            for (std::uint32_t i = 1; i < chain.joint_count; ++i) {
+                const rods::Capsule& head = input.colliders[ci.collider_begin];
+                const float depth = head.radius + chain.thickness - glm::length(snap.positions[ci.joint_begin + i] - head.a);
+                worst_depth = std::max(worst_depth, depth);
+            }
+            const std::uint32_t t = ci.joint_begin + chain.joint_count - 1;
+            float length = 0.0f;
+            for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
+            lag = std::max(lag, glm::length(snap.positions[t] - snap.rest[t]) / length);
+        }
+    }
+    RecordProperty("worst_stretch", std::to_string(worst_stretch));
+    RecordProperty("worst_depth_m", std::to_string(worst_depth));
+    std::printf("chibi x3, 240 frames: worst stretch %.3g, deepest contact %.3g m, largest tip lag %.3g L\n",
+                static_cast<double>(worst_stretch), static_cast<double>(worst_depth), static_cast<double>(lag));
+    // Collisions are projected last (rods/solver.hpp), so a strand pressed into the head
+    // may stretch by a few percent; 5% of a segment is the bound the rods tests measured.
+    EXPECT_LT(worst_stretch, 0.05f);
+    // Colliders are the last projection: joints end each step outside, up to float error.
+    EXPECT_LT(worst_depth, 1e-4f);
+    // Secondary motion: the tips swing off the rest shape the animation carries (a
+    // strand glued to its rest shape would give 0), but stay near it (no blow-up).
+    EXPECT_GT(lag, 0.02f);
+    EXPECT_LT(lag, 0.5f);
+}
+
+// `kodawari rig`'s scene writer on the project's character and every shipped sample:
+// each written scene loads and builds.
+TEST(RiggedScene, RigWritesScenesThatLoad) {
+    TempDir dir;
+    struct Case {
+        std::string file;
+        std::optional<gltf::ChainSearch> search;
+        std::size_t chains;
+        std::uint32_t colliders;
+        std::string source;
+    };
+    gltf::ChainSearch bone;
+    bone.roots = {"Bone"};
+    const std::vector<Case> cases = {
+        {kChibi, std::nullopt, 7, 0, "name patterns"},
+        {kSource + "/tests/assets/vrm-springbone/sphere-collider.gltf", std::nullopt, 1, 1, "VRM 1.0 spring bones"},
+        {kSource + "/tests/assets/vrm-springbone/inside-collider.gltf", std::nullopt, 1, 0, "VRM 1.0 spring bones"},
+        {kSource + "/tests/assets/vrm-springbone/plane-collider.gltf", std::nullopt, 1, 0, "VRM 1.0 spring bones"},
+        {kSource + "/tests/assets/khronos/RiggedSimple.gltf", bone, 1, 0, "named roots"},
+    };
+    for (const Case& c : cases) {
+        SCOPED_TRACE(c.file);
+        gltf::RigOptions options;
+        options.search = c.search;
+        const std::string out = dir.file("scene.json");
+        auto rig = gltf::make_rig_scene(c.file, out, options);
+        ASSERT_TRUE(rig.ok()) << rig.error().message;
+        EXPECT_EQ(rig.value().chains.size(), c.chains);
+        EXPECT_EQ(rig.value().colliders, c.colliders);
+        EXPECT_EQ(rig.value().source, c.source);
+        std::ofstream(out) << rig.value().json;
+        const Scene scene = load(out);
+        const RodScene rods = build(scene);
+        EXPECT_EQ(rods.world.chains.size(), c.chains);
+        EXPECT_EQ(rods.world.collider_count, c.colliders);
+    }
+    // The plane collider's fallback sphere lies 10 km from its node: skipped, with a warning.
+    auto plane = gltf::make_rig_scene(kSource + "/tests/assets/vrm-springbone/plane-collider.gltf", dir.file("p.json"), {});
+    ASSERT_TRUE(plane.ok());
+    const auto& warnings = plane.value().warnings;
+    EXPECT_TRUE(std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) { return w.find("collider 0 skipped") != std::string::npos; }));
+    // No pattern matches RiggedSimple's "Bone": a clear error that says what to do.
+    auto none = gltf::make_rig_scene(kSource + "/tests/assets/khronos/RiggedSimple.gltf", dir.file("r.json"), {});
+    ASSERT_FALSE(none.ok());
+    EXPECT_NE(none.error().message.find("--roots"), std::string::npos) << none.error().message;
+    // A clip that does not exist.
+    gltf::RigOptions dance;
+    dance.clip = "dance";
+    auto bad_clip = gltf::make_rig_scene(kChibi, dir.file("c.json"), dance);
+    ASSERT_FALSE(bad_clip.ok());
+    EXPECT_NE(bad_clip.error().message.find("\"idle\", \"walk\", \"turn\""), std::string::npos) << bad_clip.error().message;
+}
+
+}  // namespace
+}  // namespace kodawari
