@@ -98,5 +98,28 @@ check "validate passes on the bunny" grep -q "validate: PASS" "$work/validate-bu
 "$bin" bench chains --chains 130 --joints 9 --steps 2 --json "$work/bench-chains.json" >/dev/null 2>&1
 check "bench chains json" bash -c "node -e 'const r=require(\"$work/bench-chains.json\"); if (r.benchmark!==\"chains\"||r.results.length!==3||!(r.results[0].per_second>0)) process.exit(1)'"
 
+# Rigged characters (issue 4): `kodawari rig` on the project's character and on every
+# shipped sample writes a scene that `kodawari run` simulates; bad input exits 2.
+for f in scenes/characters/chibi.glb tests/assets/vrm-springbone/sphere-collider.gltf \
+         tests/assets/vrm-springbone/inside-collider.gltf tests/assets/vrm-springbone/plane-collider.gltf; do
+    base=$(basename "$f"); base=${base%.*}
+    "$bin" rig "$f" --out "$work/rig-$base.json" >"$work/rig-$base.out" 2>&1
+    check "rig $base exits 0" test $? -eq 0
+    "$bin" run "$work/rig-$base.json" --frames 30 --out "$work/rig-$base.glb" >"$work/rig-run-$base.out" 2>&1
+    check "rig scene of $base runs" test $? -eq 0
+done
+check "rig prints chains and joints" grep -q "7 chains from name patterns" "$work/rig-chibi.out"
+check "rig prints each chain's joints" grep -q "tail_0 .* 8 joints" "$work/rig-chibi.out"
+check "rig warns about the plane collider" grep -q "warning: .*plane collider" "$work/rig-plane-collider.out"
+"$bin" rig tests/assets/khronos/RiggedSimple.gltf --roots Bone --out "$work/rig-rs.json" >/dev/null 2>&1 &&
+    "$bin" run "$work/rig-rs.json" --frames 30 --out "$work/rig-rs.glb" >/dev/null 2>&1
+check "rig --roots on RiggedSimple runs" test $? -eq 0
+"$bin" rig tests/assets/khronos/RiggedSimple.gltf --out "$work/none.json" >"$work/rig-none.out" 2>&1
+check "rig without chains exits 2 and says what to do" bash -c "test $? -eq 2 && grep -q -- '--roots' '$work/rig-none.out' && test ! -e '$work/none.json'"
+"$bin" rig "$work/missing.glb" --out "$work/m.json" >"$work/rig-missing.out" 2>&1
+check "rig on a missing file fails and names it" bash -c "test $? -ne 0 && grep -q 'missing.glb' '$work/rig-missing.out'"
+"$bin" run scenes/crowd-gltf.json --frames 20 --out "$work/crowd-gltf.glb" >"$work/crowd-gltf.out" 2>&1
+check "crowd-gltf runs" test $? -eq 0
+
 echo "cli: $passed passed, $failed failed"
 test $failed -eq 0
