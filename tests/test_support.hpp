@@ -3,11 +3,14 @@
 
 #include <gtest/gtest.h>
 
+#include <array>
+#include <cstdio>
 #include <filesystem>
 #include <string>
 #include <system_error>
 #include <vector>
 
+#include <sys/wait.h>
 #include <unistd.h>
 
 #include "kodawari/gpu_info.hpp"
@@ -52,6 +55,40 @@ inline std::string no_vulkan_device_reason() {
     if (gpus.ok() && !gpus.value().devices.empty()) return "";
     return "no Vulkan device on this machine (" + (gpus.ok() ? gpus.value().reason : gpus.error().message) +
            "); the GPU tests need one";
+}
+
+/// Runs a command through the shell, returns its exit status (-1 when it did not exit)
+/// and appends its output, stdout and stderr together, to `output`.
+inline int run_command(const std::string& command, std::string& output) {
+    std::FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
+    if (pipe == nullptr) return -1;
+    std::array<char, 4096> chunk{};
+    std::size_t read = 0;
+    while ((read = std::fread(chunk.data(), 1, chunk.size(), pipe)) > 0) output.append(chunk.data(), read);
+    const int status = ::pclose(pipe);
+    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
+}
+
+/// `text` as one single-quoted shell word.
+inline std::string shell_quote(const std::string& text) {
+    std::string quoted = "'";
+    for (const char c : text) {
+        if (c == '\'') {
+            quoted += "'\\''";
+        } else {
+            quoted += c;
+        }
+    }
+    return quoted + "'";
+}
+
+/// The shell command that runs glTF-Validator (tests/tools/validate_gltf.mjs, the npm
+/// package scripts/setup installs) on `path`; it prints "glTF-Validator: N errors, M
+/// warnings, ..." and the first issues.
+inline std::string gltf_validator_command(const std::string& path) {
+    return "KODAWARI_NODE_TOOLS=" + shell_quote(KODAWARI_NODE_TOOLS) + " node " +
+           shell_quote(std::string(KODAWARI_SOURCE_DIR) + "/tests/tools/validate_gltf.mjs") + " --max-issues 20 " +
+           shell_quote(path);
 }
 
 }  // namespace kodawari::testing_support

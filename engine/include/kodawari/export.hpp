@@ -3,15 +3,21 @@
 /// Outputs of a simulation: glTF 2.0 binary files with the animation baked, and JSON
 /// Lines traces (docs/trace-format.md). Both are written atomically.
 
+#include <cstddef>
 #include <cstdint>
 #include <memory>
 #include <span>
 #include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
 
 #include <shared/birds.h>
 
 #include "atomic_file.hpp"
 #include "birds/world.hpp"
+#include "gltf/character.hpp"
 #include "result.hpp"
 #include "rod_backend.hpp"
 #include "rod_scene.hpp"
@@ -32,6 +38,117 @@ namespace kodawari {
 /// scene.world.joint_count world-space entries (ChainSnapshot's), frame-major.
 [[nodiscard]] Result<void> write_chains_glb(const std::string& path, const RodScene& scene, std::uint32_t frames,
                                             std::span<const glm::vec3> positions, std::span<const glm::quat> orientations);
+
+/// One instance of a rigged character in a rigged export.
+struct RiggedInstance {
+    /// The name of the instance's root node and the prefix of its nodes' names. Distinct
+    /// names let re-importers tell the instances apart; they are not checked.
+    std::string name;
+    /// Where the instance stands: the transform of its root node (world space).
+    rods::Transform placement;
+};
+
+/// Writes a crowd of one rigged glTF character as a `.glb` with the simulated motion
+/// baked into one animation, fed frame by frame. Between create() and finish() it holds
+/// the source file's data (once, whatever the number of instances) and the keys of the
+/// animated nodes (40 bytes per animated node, instance and frame), nothing else per
+/// frame.
+///
+/// What the file holds:
+/// - The source's meshes, materials, textures, images, samplers, cameras, lights and
+///   accessors, shared by all instances (not duplicated). All its buffers are merged into
+///   the one GLB buffer; images given by URI (external files or data URIs) are moved into
+///   buffer views, so the `.glb` is self-contained.
+/// - Per instance, in instance order: a root node named after the instance carrying its
+///   placement, then a copy of every node of the file in the file's order (file node n of
+///   instance i is node output_node(i, n)), named "<instance>/<name>" ("<instance>/#<n>"
+///   for a nameless node). The copies of the displayed scene's root nodes are the root
+///   node's children; nodes outside the displayed scene are copied (skins may use them)
+///   but, as in the source, not shown.
+/// - Skinned mesh nodes at the scene root: skinning ignores a skinned mesh node's own
+///   transform and its parents' (§3.7.3), and glTF-Validator warns about them elsewhere
+///   (NODE_SKINNED_MESH_NON_ROOT). A childless, unanimated skinned mesh node that is not
+///   a joint moves there and loses its transform; any other keeps its place in the
+///   hierarchy without its mesh, which moves to an extra scene-root node
+///   "<instance>/<name>/skinned mesh" (after the file's nodes, see output_node()).
+///   Non-skinned mesh nodes stay in the hierarchy.
+/// - Per instance a copy of every skin, named "<instance>/<name>" ("<instance>/skin"
+///   for a nameless one), its joints and skeleton mapped to the instance's nodes; the
+///   inverse bind matrices are shared.
+/// - One scene (the source's displayed one): per instance its root node, then its
+///   skinned mesh nodes.
+/// - One animation named `animation_name` (none when no node is animated); the source's
+///   animations are dropped. Every animated node of every instance gets a LINEAR
+///   translation and rotation channel with a key per frame at time frame / fps, and a
+///   scale channel unless every key equals the node's rest scale exactly (a scale that
+///   never changes is left to the rest pose).
+///   Rotations are normalized and kept in the hemisphere of the previous key, so that
+///   players interpolate the short way. An animated node given by a matrix in the file is
+///   written with the matrix decomposed into TRS (§3.5.3: animated nodes have no matrix;
+///   exact for matrices without shear); other nodes keep their transform as written.
+///   An animated node's rest transform stays the file's (the bind pose importers show).
+/// - Extensions: VRM's (`VRM`, `VRMC_*`) refer to nodes of one character by index and
+///   cannot follow the copies; they are removed from the root, nodes, materials, meshes,
+///   primitives, textures, images and skins, and from extensionsUsed/extensionsRequired
+///   (MToon materials fall back to their glTF PBR values). The VRM `meta` object (author,
+///   license) is kept as `asset.extras.vrmMeta`. Every other extension and every `extras`
+///   is copied as it is (KHR_materials_*, KHR_texture_transform, ...).
+/// - The source's other scenes are dropped. The keys of its animations stay in the
+///   buffer, unreferenced (accessors are kept as they are, since extensions may name
+///   them by index; glTF-Validator reports them as UNUSED_OBJECT infos).
+class RiggedGlbWriter {
+public:
+    /// Loads the character file (.gltf with external or data-URI buffers and images, .glb
+    /// or .vrm) whose data are copied. `character` is the same file loaded by
+    /// gltf::load_character (its node indices are the file's); `animated` has one entry
+    /// per node: true gives the node channels. `fps` > 0 spaces the keys.
+    /// Errors: the file does not load, or does not match `character`; an image it
+    /// references cannot be read (Error::Kind::InvalidInput or Io, naming the file); it
+    /// uses EXT_meshopt_compression (Unsupported: its buffer indices cannot survive the
+    /// merge into one buffer); a placement is not finite (InvalidInput).
+    [[nodiscard]] static Result<RiggedGlbWriter> create(const std::string& source_path, const gltf::Character& character,
+                                                        std::span<const RiggedInstance> instances,
+                                                        std::vector<bool> animated, float fps,
+                                                        std::string animation_name);
+
+    RiggedGlbWriter(RiggedGlbWriter&& other) noexcept;
+    RiggedGlbWriter& operator=(RiggedGlbWriter&& other) noexcept;
+    RiggedGlbWriter(const RiggedGlbWriter&) = delete;
+    RiggedGlbWriter& operator=(const RiggedGlbWriter&) = delete;
+    ~RiggedGlbWriter();
+
+    /// Adds one frame: the local TRS of every node of every instance (instances x nodes,
+    /// instance-major), relative to the node's parent in the file's hierarchy (a root of
+    /// the file: relative to the instance's placement). Only the animated nodes' values
+    /// are used; the spans must hold instances x nodes entries each (asserted). An
+    /// animated node's value that is not finite, or a zero rotation, is an
+    /// Error::Kind::InvalidInput naming the frame, instance and node (the frame is not
+    /// added).
+    [[nodiscard]] Result<void> add_frame(std::span<const glm::vec3> translation, std::span<const glm::quat> rotation,
+                                         std::span<const glm::vec3> scale);
+
+    /// Writes the `.glb` atomically (a temporary file renamed into place; nothing is left
+    /// behind on failure). Needs at least one frame. Call it once: it moves the source's
+    /// data into the file; only a failure to open `path` leaves the writer usable for
+    /// another try. Errors name `path`.
+    [[nodiscard]] Result<void> finish(const std::string& path);
+
+    /// The frames added so far.
+    [[nodiscard]] std::uint32_t frames() const;
+    /// The index in the written file of node `node` of the file for instance `instance`;
+    /// -1 as `node` gives the instance's root node. For a skinned mesh whose node stayed
+    /// in the hierarchy, skinned_mesh_node() gives the node holding the mesh.
+    [[nodiscard]] int output_node(std::size_t instance, int node) const;
+    /// The index in the written file of the node holding file node `node`'s skinned mesh
+    /// for `instance` (the node itself when it moved to the scene root, else its extra
+    /// node); -1 when `node` has no skinned mesh.
+    [[nodiscard]] int skinned_mesh_node(std::size_t instance, int node) const;
+
+private:
+    struct Impl;
+    explicit RiggedGlbWriter(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
 
 /// What the first line of a trace says.
 struct TraceHeader {

@@ -1,0 +1,546 @@
+// glTF 2.0 export of a crowd of one rigged character (export.hpp, RiggedGlbWriter): the
+// source file's own meshes, materials, images and skins, node copies per instance, and
+// one baked animation. The source is loaded with tinygltf and written back with it, so
+// that every property and extension tinygltf knows travels unchanged; only buffers,
+// images, nodes, skins, scenes and animations are rebuilt.
+
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cerrno>
+#include <cmath>
+#include <cstdint>
+#include <cstdio>
+#include <cstring>
+#include <exception>
+#include <filesystem>
+#include <initializer_list>
+#include <limits>
+#include <new>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "export/gltf_common.hpp"
+#include "kodawari/export.hpp"
+
+namespace kodawari {
+namespace {
+
+namespace fs = std::filesystem;
+using namespace gltf;
+
+constexpr std::uint32_t kGlbMagic = 0x46546C67u;  // "glTF"
+
+// tinygltf hands every image's bytes to this callback. Images in buffer views stay
+// there; the bytes of images given by URI (external files, data URIs) are kept as they
+// are, undecoded, to be moved into the GLB buffer (no re-encoding, no image codecs).
+bool keep_image_bytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
+                      const unsigned char* bytes, int size, void*) {
+    if (image->bufferView < 0 && size > 0) image->image.assign(bytes, bytes + size);
+    return true;
+}
+
+// The MIME type of image bytes from their signature, "" when unknown.
+std::string sniff_mime_type(const std::vector<unsigned char>& b) {
+    auto starts = [&](std::initializer_list<unsigned char> magic, std::size_t at = 0) {
+        if (b.size() < at + magic.size()) return false;
+        return std::equal(magic.begin(), magic.end(), b.begin() + static_cast<std::ptrdiff_t>(at));
+    };
+    if (starts({0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A})) return "image/png";
+    if (starts({0xFF, 0xD8, 0xFF})) return "image/jpeg";
+    if (starts({'R', 'I', 'F', 'F'}) && starts({'W', 'E', 'B', 'P'}, 8)) return "image/webp";
+    if (starts({0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, 0x0D, 0x0A, 0x1A, 0x0A})) return "image/ktx2";
+    return "";
+}
+
+// VRM's extensions name nodes of one character by index (humanoid bones, spring bones,
+// constraints, look-at); they cannot describe the copies, so they are not carried.
+bool is_vrm_extension(const std::string& name) { return name == "VRM" || name.rfind("VRMC_", 0) == 0; }
+
+void strip_vrm(tinygltf::ExtensionMap& extensions) {
+    std::erase_if(extensions, [](const auto& entry) { return is_vrm_extension(entry.first); });
+}
+
+void strip_vrm(std::vector<std::string>& names) { std::erase_if(names, is_vrm_extension); }
+
+std::vector<double> to_doubles(const glm::vec3& v) {
+    return {static_cast<double>(v.x), static_cast<double>(v.y), static_cast<double>(v.z)};
+}
+
+// glTF order: x, y, z, w.
+std::vector<double> to_doubles(const glm::quat& q) {
+    return {static_cast<double>(q.x), static_cast<double>(q.y), static_cast<double>(q.z), static_cast<double>(q.w)};
+}
+
+bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
+bool finite(const glm::quat& q) {
+    return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
+}
+
+// One key of one animated node.
+struct Key {
+    glm::vec3 translation;
+    glm::quat rotation;
+    glm::vec3 scale;
+};
+
+}  // namespace
+
+struct RiggedGlbWriter::Impl {
+    std::string source_path;
+    tinygltf::Model model;                          // the source, images' bytes moved out
+    std::vector<std::vector<unsigned char>> image_bytes;  // per image: its bytes when given by URI
+    std::vector<RiggedInstance> instances;
+    float fps = 0.0f;
+    std::string animation_name;
+
+    // Per file node.
+    std::size_t node_count = 0;
+    std::vector<std::string> names;                 // "<name>" or "#<n>"
+    std::vector<int> roots;                         // of the displayed scene
+    std::vector<bool> animated;
+    std::vector<bool> matrix;                       // given by a matrix in the file
+    std::vector<glm::vec3> rest_translation;        // Character's TRS (matrices decomposed)
+    std::vector<glm::quat> rest_rotation;
+    std::vector<glm::vec3> rest_scale;
+    std::vector<bool> skinned;                      // has a mesh and a skin
+    std::vector<bool> moves;                        // skinned mesh node moved to the scene root
+    std::vector<int> extra;                         // index of its extra skinned-mesh node, or -1
+    std::size_t extra_count = 0;
+    std::vector<int> animated_nodes;                // the animated nodes, ascending
+
+    // Keys, frame-major: keys[f * tracks + i * animated_nodes.size() + k].
+    std::vector<Key> keys;
+    std::uint32_t frames = 0;
+    bool finished = false;
+
+    [[nodiscard]] std::size_t stride() const { return 1 + node_count + extra_count; }
+    [[nodiscard]] int out_node(std::size_t instance, int node) const {
+        return static_cast<int>(instance * stride() + 1) + node;
+    }
+    [[nodiscard]] std::size_t tracks() const { return instances.size() * animated_nodes.size(); }
+
+    Result<void> build_and_write(AtomicFile& file);
+};
+
+RiggedGlbWriter::RiggedGlbWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+RiggedGlbWriter::RiggedGlbWriter(RiggedGlbWriter&& other) noexcept = default;
+RiggedGlbWriter& RiggedGlbWriter::operator=(RiggedGlbWriter&& other) noexcept = default;
+RiggedGlbWriter::~RiggedGlbWriter() = default;
+
+namespace {
+
+// Loads the source with tinygltf: .glb/.vrm by their magic, anything else as JSON.
+Result<tinygltf::Model> load_source(const std::string& path) {
+    std::FILE* f = std::fopen(path.c_str(), "rb");
+    if (f == nullptr) return make_error(Error::Kind::Io, path + ": cannot open: " + std::strerror(errno));
+    std::vector<unsigned char> bytes;
+    std::array<unsigned char, 65536> block{};
+    for (;;) {
+        const std::size_t n = std::fread(block.data(), 1, block.size(), f);
+        bytes.insert(bytes.end(), block.begin(), block.begin() + static_cast<std::ptrdiff_t>(n));
+        if (n < block.size()) break;
+    }
+    const bool failed = std::ferror(f) != 0;
+    std::fclose(f);
+    if (failed) return make_error(Error::Kind::Io, path + ": read error");
+    if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
+        return make_error(Error::Kind::Unsupported, path + ": files over 4 GiB are not supported");
+    }
+    std::uint32_t magic = 0;
+    if (bytes.size() >= 4) std::memcpy(&magic, bytes.data(), 4);
+    tinygltf::Model model;
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(&keep_image_bytes, nullptr);
+    std::string err;
+    std::string warn;
+    const std::string dir = fs::path(path).parent_path().string();
+    const bool loaded =
+        magic == kGlbMagic
+            ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()), dir)
+            : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
+                                         static_cast<unsigned int>(bytes.size()), dir);
+    if (!loaded) {
+        while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
+        return make_error(Error::Kind::InvalidInput, path + ": tinygltf: " + (err.empty() ? std::string("cannot load") : err));
+    }
+    return model;
+}
+
+}  // namespace
+
+Result<RiggedGlbWriter> RiggedGlbWriter::create(const std::string& source_path, const gltf::Character& character,
+                                                std::span<const RiggedInstance> instances, std::vector<bool> animated,
+                                                float fps, std::string animation_name) {
+    assert(animated.size() == character.nodes.size() && "one animated flag per node of the character");
+    assert(fps > 0.0f && std::isfinite(fps));
+    auto impl = std::make_unique<Impl>();
+    try {
+        auto loaded = load_source(source_path);
+        if (!loaded) return loaded.error();
+        impl->model = std::move(loaded).value();
+    } catch (const std::bad_alloc&) {
+        return make_error(Error::Kind::InvalidInput, source_path + ": out of memory while loading (a corrupt size?)");
+    } catch (const std::exception& e) {
+        return make_error(Error::Kind::InvalidInput, source_path + ": tinygltf: " + e.what());
+    }
+    tinygltf::Model& model = impl->model;
+    const std::size_t n = character.nodes.size();
+    if (model.nodes.size() != n || model.skins.size() != character.skins.size()) {
+        return make_error(Error::Kind::InvalidInput,
+                          source_path + ": has " + std::to_string(model.nodes.size()) + " nodes and " +
+                              std::to_string(model.skins.size()) + " skins, the character loaded from " +
+                              character.source + " has " + std::to_string(n) + " and " +
+                              std::to_string(character.skins.size()) + " (not the same file?)");
+    }
+
+    // EXT_meshopt_compression names buffers by index, which merging the buffers into one
+    // would break.
+    for (std::size_t v = 0; v < model.bufferViews.size(); ++v) {
+        if (model.bufferViews[v].extensions.count("EXT_meshopt_compression") != 0) {
+            return make_error(Error::Kind::Unsupported, source_path + ": $.bufferViews[" + std::to_string(v) +
+                                                            "]: EXT_meshopt_compression is not supported");
+        }
+    }
+    for (const RiggedInstance& instance : instances) {
+        const glm::quat& q = instance.placement.rotation;
+        if (!finite(instance.placement.position) || !finite(q) || !(glm::length(q) > 0.0f)) {
+            return make_error(Error::Kind::InvalidInput,
+                              "instance " + instance.name + ": the placement is not finite (or a zero rotation)");
+        }
+    }
+
+    // Images given by URI: their bytes, with a MIME type a GLB buffer view needs.
+    impl->image_bytes.resize(model.images.size());
+    for (std::size_t i = 0; i < model.images.size(); ++i) {
+        tinygltf::Image& image = model.images[i];
+        if (image.bufferView >= 0) {
+            image.image.clear();
+            continue;
+        }
+        const std::string where = source_path + ": $.images[" + std::to_string(i) + "]";
+        if (image.image.empty()) {
+            return make_error(Error::Kind::InvalidInput, where + ".uri: cannot read image \"" + image.uri + "\"");
+        }
+        std::string mime = sniff_mime_type(image.image);
+        if (mime.empty() && image.mimeType.rfind("image/", 0) == 0) mime = image.mimeType;
+        if (mime.empty()) {
+            return make_error(Error::Kind::InvalidInput,
+                              where + ": unknown image format (not PNG, JPEG, WebP or KTX2, no image MIME type)");
+        }
+        image.mimeType = mime;
+        impl->image_bytes[i] = std::move(image.image);
+        image.image.clear();
+    }
+
+    impl->source_path = source_path;
+    impl->instances.assign(instances.begin(), instances.end());
+    impl->fps = fps;
+    impl->animation_name = std::move(animation_name);
+    impl->node_count = n;
+    impl->roots = character.roots;
+    impl->animated = std::move(animated);
+
+    std::vector<bool> joint(n, false);
+    for (const gltf::Skin& skin : character.skins) {
+        for (const int j : skin.joints) joint[static_cast<std::size_t>(j)] = true;
+    }
+    std::vector<bool> shown(n, false);  // in the displayed scene
+    std::vector<int> stack(character.roots.begin(), character.roots.end());
+    while (!stack.empty()) {
+        const auto k = static_cast<std::size_t>(stack.back());
+        stack.pop_back();
+        shown[k] = true;
+        stack.insert(stack.end(), character.nodes[k].children.begin(), character.nodes[k].children.end());
+    }
+    impl->moves.assign(n, false);
+    impl->extra.assign(n, -1);
+    for (std::size_t k = 0; k < n; ++k) {
+        const gltf::Node& node = character.nodes[k];
+        impl->names.push_back(node.name.empty() ? "#" + std::to_string(k) : node.name);
+        impl->matrix.push_back(node.matrix.has_value());
+        impl->rest_translation.push_back(node.translation);
+        impl->rest_rotation.push_back(node.rotation);
+        impl->rest_scale.push_back(node.scale);
+        impl->skinned.push_back(node.mesh >= 0 && node.skin >= 0);
+        if (impl->animated[k]) impl->animated_nodes.push_back(static_cast<int>(k));
+        if (!impl->skinned[k] || !shown[k]) continue;
+        if (node.children.empty() && !joint[k] && !impl->animated[k]) {
+            impl->moves[k] = true;
+        } else {
+            impl->extra[k] = static_cast<int>(impl->extra_count++);
+        }
+    }
+    return RiggedGlbWriter(std::move(impl));
+}
+
+Result<void> RiggedGlbWriter::add_frame(std::span<const glm::vec3> translation, std::span<const glm::quat> rotation,
+                                        std::span<const glm::vec3> scale) {
+    Impl& w = *impl_;
+    assert(!w.finished);
+    const std::size_t expected = w.instances.size() * w.node_count;
+    assert(translation.size() == expected && rotation.size() == expected && scale.size() == expected &&
+           "add_frame takes instances x nodes values");
+    (void)expected;
+    const std::size_t tracks = w.tracks();
+    const std::size_t first = w.keys.size();
+    w.keys.resize(first + tracks);
+    for (std::size_t i = 0; i < w.instances.size(); ++i) {
+        for (std::size_t k = 0; k < w.animated_nodes.size(); ++k) {
+            const auto node = static_cast<std::size_t>(w.animated_nodes[k]);
+            const std::size_t at = i * w.node_count + node;
+            glm::quat q = rotation[at];
+            const float length = glm::length(q);
+            if (!finite(translation[at]) || !finite(q) || !finite(scale[at]) || !(length > 0.0f)) {
+                w.keys.resize(first);
+                return make_error(Error::Kind::InvalidInput,
+                                  "frame " + std::to_string(w.frames) + ", instance " + w.instances[i].name + ", node " +
+                                      w.names[node] + ": the transform is not finite (or a zero rotation)");
+            }
+            q /= length;
+            const std::size_t track = i * w.animated_nodes.size() + k;
+            // Consecutive keys in one hemisphere, so that players interpolate the short way.
+            if (w.frames > 0 && glm::dot(w.keys[first - tracks + track].rotation, q) < 0.0f) q = -q;
+            w.keys[first + track] = {translation[at], q, scale[at]};
+        }
+    }
+    ++w.frames;
+    return {};
+}
+
+std::uint32_t RiggedGlbWriter::frames() const { return impl_->frames; }
+
+int RiggedGlbWriter::output_node(std::size_t instance, int node) const {
+    assert(instance < impl_->instances.size() && node >= -1 && node < static_cast<int>(impl_->node_count));
+    return impl_->out_node(instance, node);
+}
+
+int RiggedGlbWriter::skinned_mesh_node(std::size_t instance, int node) const {
+    const Impl& w = *impl_;
+    assert(instance < w.instances.size() && node >= 0 && node < static_cast<int>(w.node_count));
+    if (!w.skinned[static_cast<std::size_t>(node)]) return -1;
+    const int e = w.extra[static_cast<std::size_t>(node)];
+    if (e < 0) return w.out_node(instance, node);
+    return static_cast<int>(instance * w.stride() + 1 + w.node_count) + e;
+}
+
+Result<void> RiggedGlbWriter::Impl::build_and_write(AtomicFile& file) {
+    tinygltf::Model out = std::move(model);
+    finished = true;
+    out.asset.version = "2.0";
+    out.asset.generator = std::string("kodawari ") + KODAWARI_VERSION;
+
+    // VRM: keep the meta object (author, license) before the extensions go.
+    for (const char* name : {"VRMC_vrm", "VRM"}) {
+        const auto it = out.extensions.find(name);
+        if (it == out.extensions.end() || !it->second.IsObject() || !it->second.Has("meta")) continue;
+        tinygltf::Value::Object extras;
+        if (out.asset.extras.IsObject()) extras = out.asset.extras.Get<tinygltf::Value::Object>();
+        extras["vrmMeta"] = it->second.Get("meta");
+        out.asset.extras = tinygltf::Value(std::move(extras));
+        break;
+    }
+    strip_vrm(out.extensions);
+    strip_vrm(out.extensionsUsed);
+    strip_vrm(out.extensionsRequired);
+    for (tinygltf::Material& m : out.materials) strip_vrm(m.extensions);
+    for (tinygltf::Mesh& m : out.meshes) {
+        strip_vrm(m.extensions);
+        for (tinygltf::Primitive& p : m.primitives) strip_vrm(p.extensions);
+    }
+    for (tinygltf::Texture& t : out.textures) strip_vrm(t.extensions);
+    for (tinygltf::Image& i : out.images) strip_vrm(i.extensions);
+
+    // One buffer: the source's buffers back to back (4-byte aligned, which keeps every
+    // accessor's alignment), then the images given by URI, then the keys.
+    std::vector<unsigned char> bytes;
+    std::vector<std::size_t> base(out.buffers.size(), 0);
+    if (!out.buffers.empty()) bytes = std::move(out.buffers[0].data);
+    bytes.resize((bytes.size() + 3) & ~std::size_t{3});
+    BufferWriter writer(bytes);
+    for (std::size_t b = 1; b < out.buffers.size(); ++b) {
+        base[b] = writer.append(out.buffers[b].data.data(), out.buffers[b].data.size());
+        out.buffers[b].data = {};
+    }
+    for (tinygltf::BufferView& view : out.bufferViews) {
+        view.byteOffset += base[static_cast<std::size_t>(view.buffer)];
+        view.buffer = 0;
+    }
+    out.buffers.assign(1, tinygltf::Buffer{});
+    for (std::size_t i = 0; i < out.images.size(); ++i) {
+        std::vector<unsigned char>& data = image_bytes[i];
+        if (data.empty()) continue;
+        tinygltf::Image& image = out.images[i];
+        image.bufferView = add_buffer_view(out, writer.append(data.data(), data.size()), data.size(), 0);
+        image.uri.clear();
+        data = {};
+    }
+
+    // Nodes and skins, instance by instance.
+    std::vector<tinygltf::Node> source_nodes = std::move(out.nodes);
+    std::vector<tinygltf::Skin> source_skins = std::move(out.skins);
+    const int source_scene = out.defaultScene >= 0 ? out.defaultScene : 0;
+    tinygltf::Scene scene;
+    if (static_cast<std::size_t>(source_scene) < out.scenes.size()) scene = out.scenes[static_cast<std::size_t>(source_scene)];
+    scene.nodes.clear();
+    out.nodes.clear();
+    out.nodes.reserve(instances.size() * stride());
+    out.skins.clear();
+    for (std::size_t i = 0; i < instances.size(); ++i) {
+        const RiggedInstance& instance = instances[i];
+        const std::string prefix = instance.name + "/";
+        const int first_skin = static_cast<int>(i * source_skins.size());
+        tinygltf::Node root;
+        root.name = instance.name;
+        root.translation = to_doubles(instance.placement.position);
+        root.rotation = to_doubles(glm::normalize(instance.placement.rotation));
+        for (const int r : roots) {
+            if (!moves[static_cast<std::size_t>(r)]) root.children.push_back(out_node(i, r));
+        }
+        scene.nodes.push_back(static_cast<int>(out.nodes.size()));
+        out.nodes.push_back(std::move(root));
+        std::vector<tinygltf::Node> extras(extra_count);
+        for (std::size_t k = 0; k < node_count; ++k) {
+            tinygltf::Node node = source_nodes[k];
+            node.name = prefix + names[k];
+            strip_vrm(node.extensions);
+            node.children.clear();
+            for (const int c : source_nodes[k].children) {
+                if (!moves[static_cast<std::size_t>(c)]) node.children.push_back(out_node(i, c));
+            }
+            if (node.skin >= 0) node.skin += first_skin;
+            if (animated[k] && matrix[k]) {
+                node.matrix.clear();
+                node.translation = to_doubles(rest_translation[k]);
+                node.rotation = to_doubles(rest_rotation[k]);
+                node.scale = to_doubles(rest_scale[k]);
+            }
+            if (moves[k]) {
+                // Skinning ignores the node's transform (§3.7.3); glTF-Validator warns about
+                // one that is there (NODE_SKINNED_MESH_LOCAL_TRANSFORMS).
+                node.translation.clear();
+                node.rotation.clear();
+                node.scale.clear();
+                node.matrix.clear();
+                scene.nodes.push_back(out_node(i, static_cast<int>(k)));
+            } else if (extra[k] >= 0) {
+                tinygltf::Node& mesh_node = extras[static_cast<std::size_t>(extra[k])];
+                mesh_node.name = node.name + "/skinned mesh";
+                mesh_node.mesh = std::exchange(node.mesh, -1);
+                mesh_node.skin = std::exchange(node.skin, -1);
+                mesh_node.weights = std::exchange(node.weights, {});
+                scene.nodes.push_back(static_cast<int>(i * stride() + 1 + node_count) + extra[k]);
+            }
+            out.nodes.push_back(std::move(node));
+        }
+        for (tinygltf::Node& node : extras) out.nodes.push_back(std::move(node));
+        for (const tinygltf::Skin& source : source_skins) {
+            tinygltf::Skin skin = source;
+            skin.name = prefix + (source.name.empty() ? "skin" : source.name);
+            strip_vrm(skin.extensions);
+            for (int& j : skin.joints) j = out_node(i, j);
+            if (skin.skeleton >= 0) skin.skeleton = out_node(i, skin.skeleton);
+            out.skins.push_back(std::move(skin));
+        }
+    }
+    out.scenes.assign(1, std::move(scene));
+    out.defaultScene = 0;
+
+    // The animation: shared key times, then per track a buffer view holding its
+    // translations, rotations and (when they change) scales.
+    out.animations.clear();
+    if (!animated_nodes.empty()) {
+        std::vector<float> times(frames);
+        for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / fps;
+        const std::size_t time_bytes = times.size() * sizeof(float);
+        const int time_view = add_buffer_view(out, writer.append(times.data(), time_bytes), time_bytes, 0);
+        const int time_accessor = add_accessor(out, time_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_SCALAR);
+        out.accessors[static_cast<std::size_t>(time_accessor)].minValues = {static_cast<double>(times.front())};
+        out.accessors[static_cast<std::size_t>(time_accessor)].maxValues = {static_cast<double>(times.back())};
+
+        tinygltf::Animation animation;
+        animation.name = animation_name;
+        auto add_channel = [&](int node, int accessor, const char* path) {
+            tinygltf::AnimationSampler sampler;
+            sampler.input = time_accessor;
+            sampler.output = accessor;
+            sampler.interpolation = "LINEAR";
+            animation.samplers.push_back(std::move(sampler));
+            tinygltf::AnimationChannel channel;
+            channel.sampler = static_cast<int>(animation.samplers.size() - 1);
+            channel.target_node = node;
+            channel.target_path = path;
+            animation.channels.push_back(std::move(channel));
+        };
+        const std::size_t count = tracks();
+        std::vector<float> values;
+        for (std::size_t i = 0; i < instances.size(); ++i) {
+            for (std::size_t k = 0; k < animated_nodes.size(); ++k) {
+                const std::size_t track = i * animated_nodes.size() + k;
+                const int source_node = animated_nodes[k];
+                const glm::vec3 rest_scale_k = rest_scale[static_cast<std::size_t>(source_node)];
+                bool scaled = false;
+                for (std::uint32_t f = 0; f < frames && !scaled; ++f) scaled = keys[f * count + track].scale != rest_scale_k;
+                values.clear();
+                values.reserve(std::size_t{frames} * (scaled ? 10 : 7));
+                for (std::uint32_t f = 0; f < frames; ++f) {
+                    const glm::vec3& t = keys[f * count + track].translation;
+                    values.insert(values.end(), {t.x, t.y, t.z});
+                }
+                for (std::uint32_t f = 0; f < frames; ++f) {
+                    const glm::quat& r = keys[f * count + track].rotation;
+                    values.insert(values.end(), {r.x, r.y, r.z, r.w});
+                }
+                if (scaled) {
+                    for (std::uint32_t f = 0; f < frames; ++f) {
+                        const glm::vec3& s = keys[f * count + track].scale;
+                        values.insert(values.end(), {s.x, s.y, s.z});
+                    }
+                }
+                const std::size_t size = values.size() * sizeof(float);
+                const int view = add_buffer_view(out, writer.append(values.data(), size), size, 0);
+                const int node = out_node(i, source_node);
+                add_channel(node, add_accessor(out, view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_VEC3),
+                            "translation");
+                add_channel(node,
+                            add_accessor(out, view, std::size_t{frames} * 3 * sizeof(float), TINYGLTF_COMPONENT_TYPE_FLOAT,
+                                         frames, TINYGLTF_TYPE_VEC4),
+                            "rotation");
+                if (scaled) {
+                    add_channel(node,
+                                add_accessor(out, view, std::size_t{frames} * 7 * sizeof(float),
+                                             TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_VEC3),
+                                "scale");
+                }
+            }
+        }
+        keys = {};
+        out.animations.push_back(std::move(animation));
+    }
+    if (bytes.empty()) {
+        out.buffers.clear();  // glTF-Validator rejects an empty buffer
+    } else {
+        out.buffers[0].data = std::move(bytes);
+    }
+    return write_glb(file, out);
+}
+
+Result<void> RiggedGlbWriter::finish(const std::string& path) {
+    Impl& w = *impl_;
+    assert(!w.finished && "finish() once");
+    if (w.frames == 0) return make_error(Error::Kind::InvalidInput, path + ": no frames to write");
+    auto file = AtomicFile::open(path);
+    if (!file) return file.error();
+    // tinygltf reports some failures by throwing (json, allocation); nothing may escape.
+    try {
+        KW_TRY(w.build_and_write(file.value()));
+    } catch (const std::bad_alloc&) {
+        return make_error(Error::Kind::Io, path + ": out of memory while building the glTF file");
+    } catch (const std::exception& e) {
+        return make_error(Error::Kind::Io, path + ": glTF serialization failed (" + e.what() + ")");
+    }
+    return file.value().commit();
+}
+
+}  // namespace kodawari
