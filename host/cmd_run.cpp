@@ -57,7 +57,27 @@ int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<st
             within[rods_scene.instances[c].chain_begin + k] = k;
         }
     }
-    std::vector<glm::vec3> positions(outputs.out_path.empty() ? 0 : std::size_t{frames} * joints);
+    // Rigged characters go back into their own glTF, one file per character template
+    // (the scene's out path when it is the only character); procedural characters (and
+    // then the rigged ones too, as bones) into write_chains_glb's file.
+    const bool any_procedural = std::any_of(rods_scene.characters.begin(), rods_scene.characters.end(),
+                                            [](const CharacterKinematics& k) { return !k.rig; });
+    std::vector<RiggedCrowdExport> rigged;
+    std::vector<std::string> rigged_paths;
+    if (!outputs.out_path.empty()) {
+        const std::string& out = outputs.out_path;
+        const std::string stem = out.substr(0, out.size() - (out.ends_with(".glb") ? 4 : 0));
+        for (std::uint32_t k = 0; k < rods_scene.characters.size(); ++k) {
+            if (!rods_scene.characters[k].rig) continue;
+            auto e = RiggedCrowdExport::create(rods_scene, k);
+            if (!e) return report(e.error());
+            if (e.value().instances().empty()) continue;
+            rigged.push_back(std::move(e).value());
+            rigged_paths.push_back(!any_procedural && rods_scene.characters.size() == 1 ? out
+                                                                                         : stem + "-" + rods_scene.characters[k].name + ".glb");
+        }
+    }
+    std::vector<glm::vec3> positions(outputs.out_path.empty() || !any_procedural ? 0 : std::size_t{frames} * joints);
     std::vector<glm::quat> orientations(positions.size());
     rods::RodFrame frame;
     ChainSnapshot snapshot;
@@ -70,8 +90,11 @@ int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<st
         if (auto r = f == 0 ? backend.load(world, frame) : backend.step(frame); !r) return report(r.error());
         seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (f > 0 && backend.last_gpu_ms() >= 0.0) gpu_ms += backend.last_gpu_ms();
-        if (*outputs.trace || !positions.empty()) {
+        if (*outputs.trace || !positions.empty() || !rigged.empty()) {
             if (auto r = backend.read(snapshot); !r) return report(r.error());
+        }
+        for (RiggedCrowdExport& e : rigged) {
+            if (auto r = e.add_frame(f, snapshot); !r) return report(r.error());
         }
         if (*outputs.trace) {
             (*outputs.trace)->write_chains(f, rods_scene.time(f), world, characters, within, rods_scene.chain_names, snapshot);
@@ -92,12 +115,19 @@ int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<st
         std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", backend.validation_messages());
         return kExitFailure;
     }
+    const auto wrote = [](const std::string& path, const char* what) {
+        std::error_code ec;
+        const auto size = std::filesystem::file_size(path, ec);
+        std::printf("kodawari: wrote %s (%.1f MiB, glTF 2.0 binary%s)\n", path.c_str(), ec ? 0.0 : static_cast<double>(size) / (1 << 20),
+                    what);
+    };
+    for (std::size_t i = 0; i < rigged.size(); ++i) {
+        if (auto r = rigged[i].finish(rigged_paths[i]); !r) return report(r.error());
+        wrote(rigged_paths[i], ", the character's own skeleton and meshes");
+    }
     if (!positions.empty()) {
         if (auto r = write_chains_glb(outputs.out_path, rods_scene, frames, positions, orientations); !r) return report(r.error());
-        std::error_code ec;
-        const auto size = std::filesystem::file_size(outputs.out_path, ec);
-        std::printf("kodawari: wrote %s (%.1f MiB, glTF 2.0 binary)\n", outputs.out_path.c_str(),
-                    ec ? 0.0 : static_cast<double>(size) / (1 << 20));
+        wrote(outputs.out_path, "");
     }
     return kExitOk;
 }

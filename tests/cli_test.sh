@@ -120,6 +120,8 @@ check "rig without chains exits 2 and says what to do" bash -c "test $? -eq 2 &&
 check "rig on a missing file fails and names it" bash -c "test $? -ne 0 && grep -q 'missing.glb' '$work/rig-missing.out'"
 "$bin" run scenes/crowd-gltf.json --frames 20 --out "$work/crowd-gltf.glb" >"$work/crowd-gltf.out" 2>&1
 check "crowd-gltf runs" test $? -eq 0
+check "crowd-gltf exports the character's own skeleton" grep -q "wrote $work/crowd-gltf.glb.*own skeleton" "$work/crowd-gltf.out"
+check "crowd-gltf export passes glTF-Validator" node tests/tools/validate_gltf.mjs "$work/crowd-gltf.glb"
 
 echo "cli: $passed passed, $failed failed"
 test $failed -eq 0

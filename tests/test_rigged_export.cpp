@@ -1,7 +1,7 @@
 // Tests of the rigged crowd export (export.hpp, RiggedGlbWriter): a round trip through
 // our own loader against the source pose computed here independently, glTF-Validator on
-// the outputs, sources with external buffers and images, atomic writes, and (when
-// Blender is installed) Blender's own glTF importer.
+// the outputs, sources with external buffers and images, and atomic writes. The export of
+// a real simulation, and Blender's importer on it, are in test_rigged_scene.cpp.
 
 #include <gtest/gtest.h>
 
@@ -537,55 +537,6 @@ TEST(RiggedExport, NonFiniteFrameIsAnError) {
     const auto written = writer.finish(dir.file("x.glb"));
     ASSERT_FALSE(written.ok());  // no frames
     EXPECT_TRUE(dir.entries().empty());
-}
-
-/// Blender's own glTF importer on a rigged export (tests/tools/blender_check.py), when
-/// Blender is installed (bash scripts/setup --with-blender). One Blender run.
-TEST(Blender, ImportsRiggedExport) {
-    std::string output;
-    if (run_command("command -v blender", output) != 0) {
-        GTEST_SKIP() << "SKIPPED: blender not installed (bash scripts/setup --with-blender installs it)";
-    }
-    const RiggedSimpleCrowd crowd(2);
-    TempDir dir;
-    const std::string path = dir.file("crowd.glb");
-    crowd.write(path, 24);
-
-    output.clear();
-    const std::string command = "blender -b --factory-startup --python-exit-code 1 -P " +
-                                shell_quote(std::string(KODAWARI_SOURCE_DIR) + "/tests/tools/blender_check.py") + " -- " +
-                                shell_quote(path);
-    ASSERT_EQ(run_command(command, output), 0) << output;
-    nlohmann::json report;
-    std::istringstream lines(output);
-    for (std::string line; std::getline(lines, line);) {
-        if (line.rfind("{", 0) != 0) continue;
-        const auto parsed = nlohmann::json::parse(line, nullptr, false);
-        if (parsed.is_object() && parsed.value("check", "") == "kodawari-blender") report = parsed;
-    }
-    ASSERT_TRUE(report.is_object()) << output;
-    std::cout << report.dump() << "\n";
-
-    // Blender 3.4 turns each skin's joints into the bones of one armature object (the
-    // skin's "Armature" node) and makes one action per animated object, bone channels
-    // going to their armature: one action per instance, holding exactly the nodes we
-    // animated.
-    const std::size_t instances = crowd.instances.size();
-    EXPECT_EQ(report.at("actions").get<std::size_t>(), instances);
-    EXPECT_EQ(report.at("armature_count").get<std::size_t>(), instances);
-    EXPECT_EQ(report.at("mesh_objects").get<std::size_t>(), instances);
-    std::set<std::string> expected_bones;
-    std::set<std::string> bones;
-    for (const RiggedInstance& instance : crowd.instances) {
-        for (std::size_t k = 0; k < crowd.nodes(); ++k) {
-            if (crowd.animated[k]) expected_bones.insert(instance.name + "/" + crowd.character.nodes[k].name);
-        }
-    }
-    for (const auto& [armature, animated] : report.at("armatures").items()) {
-        EXPECT_EQ(animated.size(), expected_bones.size() / instances) << armature;
-        for (const auto& bone : animated) bones.insert(bone.get<std::string>());
-    }
-    EXPECT_EQ(bones, expected_bones);
 }
 
 }  // namespace

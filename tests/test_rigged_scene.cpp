@@ -16,6 +16,12 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <iostream>
+#include <sstream>
+
+#include <nlohmann/json.hpp>
+
+#include "kodawari/export.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rod_scene.hpp"
@@ -25,6 +31,9 @@
 namespace kodawari {
 namespace {
 
+using testing_support::gltf_validator_command;
+using testing_support::run_command;
+using testing_support::shell_quote;
 using testing_support::TempDir;
 
 const std::string kSource = KODAWARI_SOURCE_DIR;
@@ -304,6 +313,141 @@ TEST(RiggedScene, RigWritesScenesThatLoad) {
     auto bad_clip = gltf::make_rig_scene(kChibi, dir.file("c.json"), dance);
     ASSERT_FALSE(bad_clip.ok());
     EXPECT_NE(bad_clip.error().message.find("\"idle\", \"walk\", \"turn\""), std::string::npos) << bad_clip.error().message;
+}
+
+
+// The shipped crowd cut to `count` instances, simulated on the CPU for `frames` frames
+// and exported with RiggedCrowdExport; the joints of every frame are kept.
+struct SimulatedChibi {
+    RodScene rods;
+    std::vector<std::vector<glm::vec3>> positions;  // per frame, ChainSnapshot::positions
+    std::vector<std::vector<int>> output_nodes;     // per instance, file node -> exported node
+};
+
+SimulatedChibi simulate_and_export(std::uint32_t count, std::uint32_t frames, const std::string& path) {
+    Scene scene = load(kCrowdScene);
+    scene.crowds[0].count = count;
+    SimulatedChibi out{build(scene), {}, {}};
+    auto backend = make_rod_backend(BackendKind::Cpu, BackendOptions{});
+    EXPECT_TRUE(backend.ok());
+    auto exporter = RiggedCrowdExport::create(out.rods, 0);
+    EXPECT_TRUE(exporter.ok()) << (exporter.ok() ? "" : exporter.error().message);
+    ChainSnapshot snap;
+    for (std::uint32_t f = 0; f < frames; ++f) {
+        const rods::RodFrame input = out.rods.frame(f);
+        EXPECT_TRUE((f == 0 ? backend.value()->load(out.rods.world, input) : backend.value()->step(input)).ok());
+        EXPECT_TRUE(backend.value()->read(snap).ok());
+        out.positions.push_back(snap.positions);
+        EXPECT_TRUE(exporter.value().add_frame(f, snap).ok());
+    }
+    const std::size_t nodes = out.rods.characters[0].rig->nodes.size();
+    for (std::size_t i = 0; i < count; ++i) {
+        std::vector<int> map(nodes);
+        for (std::size_t n = 0; n < nodes; ++n) map[n] = exporter.value().writer().output_node(i, static_cast<int>(n));
+        out.output_nodes.push_back(std::move(map));
+    }
+    const auto finished = exporter.value().finish(path);
+    EXPECT_TRUE(finished.ok()) << (finished.ok() ? "" : finished.error().message);
+    return out;
+}
+
+// Issue 4: re-importing the export of a simulated crowd reproduces the simulated chain
+// joints and the clip-posed skeleton, and glTF-Validator finds nothing wrong.
+TEST(RiggedScene, ExportRoundTripsTheSimulation) {
+    TempDir dir;
+    const std::string path = dir.file("chibi.glb");
+    constexpr std::uint32_t kFrames = 45;
+    const SimulatedChibi sim = simulate_and_export(3, kFrames, path);
+    std::string output;
+    ASSERT_EQ(run_command(gltf_validator_command(path), output), 0) << output;
+    EXPECT_NE(output.find("glTF-Validator: 0 errors, 0 warnings"), std::string::npos) << output;
+
+    auto reloaded = gltf::load_character(path);
+    ASSERT_TRUE(reloaded.ok()) << reloaded.error().message;
+    const gltf::Character& exported = reloaded.value();
+    ASSERT_EQ(exported.animations.size(), 1u);
+    const gltf::Character& source = *sim.rods.characters[0].rig;
+    const int head = node_named(source, "head");
+    gltf::Pose pose;
+    gltf::Pose clip;
+    float worst_chain = 0.0f;
+    float worst_head = 0.0f;
+    for (std::uint32_t f = 0; f < kFrames; ++f) {
+        gltf::evaluate(exported, 0, sim.rods.time(f), pose);
+        for (std::uint32_t c = 0; c < 3; ++c) {
+            const CharacterInstance& inst = sim.rods.instances[c];
+            // Every simulated joint (joint 0 follows the clip) where the solver put it.
+            for (std::size_t k = 0; k < sim.rods.characters[0].chain_nodes.size(); ++k) {
+                const std::vector<int>& nodes = sim.rods.characters[0].chain_nodes[k];
+                const rods::ChainInstance& ci = sim.rods.world.chains[inst.chain_begin + k];
+                for (std::size_t i = 0; i < nodes.size(); ++i) {
+                    const int out_node = sim.output_nodes[c][static_cast<std::size_t>(nodes[i])];
+                    const glm::vec3 got = glm::vec3(pose.world[static_cast<std::size_t>(out_node)][3]);
+                    worst_chain = std::max(worst_chain, glm::length(got - sim.positions[f][ci.joint_begin + i]));
+                }
+            }
+            // The skeleton where the instance's clip puts it.
+            gltf::evaluate(source, static_cast<std::size_t>(inst.clip), sim.rods.clip_time(c, f), clip);
+            const glm::vec3 expected = inst.placement.position + inst.placement.rotation * glm::vec3(clip.world[static_cast<std::size_t>(head)][3]);
+            const int out_head = sim.output_nodes[c][static_cast<std::size_t>(head)];
+            worst_head = std::max(worst_head, glm::length(glm::vec3(pose.world[static_cast<std::size_t>(out_head)][3]) - expected));
+        }
+    }
+    std::printf("re-imported export, 3 chibis x %u frames: chain joints within %.3g m, head within %.3g m\n", kFrames,
+                static_cast<double>(worst_chain), static_cast<double>(worst_head));
+    // 1e-5 m (1e-5 of the character's 1.4 m size, as the issue asks): float32 keys, and
+    // the joints' transforms composed through ~12 parents on re-import.
+    EXPECT_LT(worst_chain, 1e-5f);
+    EXPECT_LT(worst_head, 1e-5f);
+}
+
+// Blender's own glTF importer (tests/tools/blender_check.py) on the export of a
+// simulated crowd, when Blender is installed (bash scripts/setup --with-blender). One
+// Blender run.
+TEST(RiggedScene, BlenderImportsTheExport) {
+    std::string output;
+    if (run_command("command -v blender", output) != 0) {
+        GTEST_SKIP() << "SKIPPED: blender not installed (bash scripts/setup --with-blender installs it)";
+    }
+    TempDir dir;
+    const std::string path = dir.file("chibi.glb");
+    constexpr std::uint32_t kInstances = 2;
+    const SimulatedChibi sim = simulate_and_export(kInstances, 20, path);
+    output.clear();
+    const std::string command = "blender -b --factory-startup --python-exit-code 1 -P " +
+                                shell_quote(kSource + "/tests/tools/blender_check.py") + " -- " + shell_quote(path);
+    ASSERT_EQ(run_command(command, output), 0) << output;
+    nlohmann::json report;
+    std::istringstream lines(output);
+    for (std::string line; std::getline(lines, line);) {
+        if (line.rfind("{", 0) != 0) continue;
+        const auto parsed = nlohmann::json::parse(line, nullptr, false);
+        if (parsed.is_object() && parsed.value("check", "") == "kodawari-blender") report = parsed;
+    }
+    ASSERT_TRUE(report.is_object()) << output;
+    std::cout << report.dump().substr(0, 400) << "...\n";
+
+    // Blender 3.4 makes each skin an armature and one action per animated object, bone
+    // channels going to their armature: one action per instance, whose animated bones
+    // are the nodes the clips animate plus every chain joint.
+    const gltf::Character& source = *sim.rods.characters[0].rig;
+    std::set<int> animated;
+    for (const gltf::Animation& a : source.animations) {
+        for (const gltf::Channel& ch : a.channels) animated.insert(ch.node);
+    }
+    for (const std::vector<int>& nodes : sim.rods.characters[0].chain_nodes) animated.insert(nodes.begin(), nodes.end());
+    EXPECT_EQ(report.at("actions").get<std::size_t>(), kInstances);
+    EXPECT_EQ(report.at("armature_count").get<std::size_t>(), kInstances);
+    std::set<std::string> expected;
+    for (std::uint32_t c = 0; c < kInstances; ++c) {
+        for (const int n : animated) expected.insert(sim.rods.character_names[c] + "/" + source.nodes[static_cast<std::size_t>(n)].name);
+    }
+    std::set<std::string> bones;
+    for (const auto& [armature, names] : report.at("armatures").items()) {
+        EXPECT_EQ(names.size(), animated.size()) << armature;
+        for (const auto& bone : names) bones.insert(bone.get<std::string>());
+    }
+    EXPECT_EQ(bones, expected);
 }
 
 }  // namespace

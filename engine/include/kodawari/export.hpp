@@ -150,6 +150,53 @@ private:
     std::unique_ptr<Impl> impl_;
 };
 
+/// The simulated crowd of one rigged character template of a RodScene, baked into a
+/// RiggedGlbWriter (issue 4): every instance of the template with the file's own
+/// skeleton, skins and meshes; the nodes its clips animate keyed from the clip, and the
+/// simulated chain joints keyed from the simulation, so that the character's own skinned
+/// mesh follows the strands.
+///
+/// A simulated joint i >= 1 of a chain gets the world position the solver computed and
+/// the particle's orientation turned by the shortest arc that points its bone (the rest
+/// direction to joint i + 1, Chain::bone_axis) at the next joint, as write_chains_glb()
+/// does (SPEC A.4's skinning output); the last joint keeps the particle's orientation.
+/// Its local transform is then taken relative to its parent's world matrix (simulated
+/// or animated), with the node's animated local scale kept. Joint 0 follows its clip.
+/// Re-importing the file and evaluating its animation gives these world transforms back
+/// (tests: within 1e-5 of the character's size).
+class RiggedCrowdExport {
+public:
+    /// Prepares the export of RodScene::characters[character] (which must be rigged).
+    /// `scene` must outlive the export. Errors: those of RiggedGlbWriter::create.
+    [[nodiscard]] static Result<RiggedCrowdExport> create(const RodScene& scene, std::uint32_t character);
+
+    /// Adds frame `frame` of the scene: the clip poses at that frame and the chains of
+    /// `snapshot` (the rod backend's state after that frame, for the whole world).
+    [[nodiscard]] Result<void> add_frame(std::uint32_t frame, const ChainSnapshot& snapshot);
+
+    /// Writes the `.glb` atomically (RiggedGlbWriter::finish).
+    [[nodiscard]] Result<void> finish(const std::string& path);
+
+    /// The instances written, in order: indices into RodScene::instances.
+    [[nodiscard]] const std::vector<std::uint32_t>& instances() const { return instances_; }
+    /// The writer (for its node mapping).
+    [[nodiscard]] const RiggedGlbWriter& writer() const { return writer_; }
+
+private:
+    RiggedCrowdExport(const RodScene& scene, std::uint32_t character, std::vector<std::uint32_t> instances,
+                      RiggedGlbWriter writer);
+
+    const RodScene* scene_;
+    std::uint32_t character_;
+    std::vector<std::uint32_t> instances_;
+    RiggedGlbWriter writer_;
+    // Per-frame scratch, instances x nodes.
+    std::vector<glm::vec3> translation_, scale_;
+    std::vector<glm::quat> rotation_;
+    gltf::Pose pose_;
+    std::vector<glm::mat4> world_;
+};
+
 /// What the first line of a trace says.
 struct TraceHeader {
     std::string scene;
