@@ -3,6 +3,7 @@
 #include <cstddef>
 
 #include <shared/birds.h>
+#include <shared/poses.h>
 #include <shared/rods.h>
 
 #include "kodawari/rods/world.hpp"
@@ -50,5 +51,16 @@ static_assert(offsetof(RodChainStateGpu, root) == 0 && offsetof(RodChainStateGpu
 static_assert(sizeof(RodPush) == 48 && offsetof(RodPush, camera_position) == 16 && offsetof(RodPush, camera_forward) == 32);
 static_assert(KW_RODS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 static_assert(KW_RODS_MAX_JOINTS == rods::kMaxChainJoints && KW_RODS_MAX_VIEWS == rods::kMaxViewExamples);
+
+// shared/poses.h
+static_assert(sizeof(PoseNodeGpu) == 80 && offsetof(PoseNodeGpu, local) == 16);
+static_assert(sizeof(PoseClipGpu) == 32 && offsetof(PoseClipGpu, range) == 16);
+static_assert(sizeof(PoseChannelGpu) == 32 && offsetof(PoseChannelGpu, keys) == 16);
+static_assert(sizeof(PoseInstanceGpu) == 96);
+static_assert(offsetof(PoseInstanceGpu, placement) == 0 && offsetof(PoseInstanceGpu, timing) == 64 &&
+              offsetof(PoseInstanceGpu, clip) == 80);
+static_assert(sizeof(PoseMatrixGpu) == 64 && alignof(PoseMatrixGpu) == 16);
+static_assert(sizeof(PosePush) == 32 && offsetof(PosePush, counts) == 16);
+static_assert(KW_POSES_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 
 }  // namespace kodawari::gpu

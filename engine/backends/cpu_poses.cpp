@@ -1,0 +1,94 @@
+// The CPU pose backends: "cpu-reference" evaluates instance after instance on one thread
+// with gltf::evaluate (engine/gltf/animation.cpp, the validation oracle); "cpu" runs the
+// same code on several threads, each over a fixed range of instances, so both produce
+// the same bits.
+#include <cassert>
+#include <cmath>
+#include <string>
+#include <vector>
+
+#include "backends/pose_backends.hpp"
+#include "core/parallel.hpp"
+
+namespace kodawari {
+namespace {
+
+class CpuPoseBackend final : public PoseBackend {
+public:
+    CpuPoseBackend(bool reference, unsigned threads) : reference_(reference), threads_(reference ? 1 : resolve_threads(threads)) {}
+
+    std::string_view name() const override { return reference_ ? "cpu-reference" : "cpu"; }
+    std::string device() const override { return std::to_string(threads_) + (threads_ == 1 ? " thread" : " threads"); }
+
+    Result<void> load(const gltf::Character& character, std::span<const PoseInstance> instances) override {
+        KW_TRY(check_instances(character, instances));
+        character_ = &character;
+        instances_.assign(instances.begin(), instances.end());
+        placements_.resize(instances.size());
+        for (std::size_t i = 0; i < instances.size(); ++i) placements_[i] = placement_matrix(instances[i].placement);
+        // Every rest-pose instance shares one evaluation of the rest pose.
+        rest_ = gltf::rest_pose(character);
+        world_.assign(instances.size() * character.nodes.size(), glm::mat4(0.0f));
+        evaluated_ = false;
+        return {};
+    }
+
+    Result<void> evaluate(float time) override {
+        assert(character_ != nullptr && "load() first");
+        if (!std::isfinite(time)) return make_error(Error::Kind::InvalidInput, "the scene time is not finite");
+        const std::size_t count = instances_.size();
+        if (reference_) {
+            evaluate_range(0, count, time, scratch_);
+        } else {
+            parallel_for(count, threads_, [&](std::size_t begin, std::size_t end) {
+                gltf::Pose scratch;  // one per range: the ranges run in parallel
+                evaluate_range(begin, end, time, scratch);
+            });
+        }
+        evaluated_ = true;
+        return {};
+    }
+
+    Result<void> read(std::vector<glm::mat4>& world) override {
+        assert(character_ != nullptr && evaluated_ && "evaluate() first");
+        world = world_;
+        return {};
+    }
+
+private:
+    // Instances [begin, end): the clip at the instance's clip time (or the rest pose),
+    // then the placement.
+    void evaluate_range(std::size_t begin, std::size_t end, float time, gltf::Pose& scratch) {
+        const gltf::Character& character = *character_;
+        const std::size_t nodes = character.nodes.size();
+        for (std::size_t i = begin; i < end; ++i) {
+            const PoseInstance& instance = instances_[i];
+            const gltf::Pose* pose = &rest_;
+            if (instance.clip >= 0) {
+                const auto clip = static_cast<std::size_t>(instance.clip);
+                gltf::evaluate(character, clip, clip_time(character.animations[clip], instance, time), scratch);
+                pose = &scratch;
+            }
+            glm::mat4* out = world_.data() + i * nodes;
+            for (std::size_t n = 0; n < nodes; ++n) out[n] = placements_[i] * pose->world[n];
+        }
+    }
+
+    bool reference_;
+    unsigned threads_;
+    const gltf::Character* character_ = nullptr;
+    std::vector<PoseInstance> instances_;
+    std::vector<glm::mat4> placements_;
+    gltf::Pose rest_;
+    gltf::Pose scratch_;  // cpu-reference's, reused from evaluation to evaluation
+    std::vector<glm::mat4> world_;
+    bool evaluated_ = false;
+};
+
+}  // namespace
+
+std::unique_ptr<PoseBackend> make_cpu_pose_backend(bool reference, unsigned threads) {
+    return std::make_unique<CpuPoseBackend>(reference, threads);
+}
+
+}  // namespace kodawari

@@ -1,0 +1,243 @@
+// The Vulkan pose backend: one dispatch of shaders/pose_eval.comp per evaluate() poses
+// every instance (see shaders/shared/poses.h for the layout and why). The character and
+// the instances are flattened and uploaded once by load(); evaluate() pushes only the
+// scene time, and the world matrices stay on the device until read() fetches them.
+#include <algorithm>
+#include <array>
+#include <cassert>
+#include <cmath>
+#include <numeric>
+#include <optional>
+
+#include <shared/poses.h>
+
+#include "backends/pose_backends.hpp"
+#include "gpu/compute_pipeline.hpp"
+
+namespace kodawari {
+namespace {
+
+using gpu::GpuBuffer;
+
+gpu::vec4 to_gpu(glm::vec3 v) { return {v.x, v.y, v.z, 0.0f}; }
+gpu::vec4 to_gpu(glm::vec4 v) { return {v.x, v.y, v.z, v.w}; }
+gpu::vec4 to_gpu(glm::quat q) { return {q.x, q.y, q.z, q.w}; }
+
+template <typename T>
+std::span<const std::byte> bytes_of(const std::vector<T>& v) {
+    return std::as_bytes(std::span<const T>(v));
+}
+
+std::uint32_t path_of(gltf::Path path) {
+    switch (path) {
+        case gltf::Path::Translation: return KW_POSES_PATH_TRANSLATION;
+        case gltf::Path::Rotation: return KW_POSES_PATH_ROTATION;
+        case gltf::Path::Scale: return KW_POSES_PATH_SCALE;
+    }
+    return KW_POSES_PATH_TRANSLATION;
+}
+
+std::uint32_t interpolation_of(gltf::Interpolation interpolation) {
+    switch (interpolation) {
+        case gltf::Interpolation::Linear: return KW_POSES_INTERP_LINEAR;
+        case gltf::Interpolation::Step: return KW_POSES_INTERP_STEP;
+        case gltf::Interpolation::CubicSpline: return KW_POSES_INTERP_CUBICSPLINE;
+    }
+    return KW_POSES_INTERP_LINEAR;
+}
+
+// The character as the kernel reads it (shared/poses.h).
+struct FlatCharacter {
+    std::vector<gpu::PoseNodeGpu> nodes;
+    std::vector<gpu::PoseClipGpu> clips;
+    std::vector<gpu::PoseChannelGpu> channels;
+    std::vector<float> times;
+    std::vector<gpu::vec4> values;
+};
+
+FlatCharacter flatten(const gltf::Character& character) {
+    FlatCharacter flat;
+    const std::size_t n = character.nodes.size();
+    assert(character.order.size() == n && "Character::order lists every node");
+    std::vector<std::uint32_t> position(n, static_cast<std::uint32_t>(n));  // n: not walked yet
+    for (std::size_t p = 0; p < n; ++p) {
+        const auto index = static_cast<std::size_t>(character.order[p]);
+        position[index] = static_cast<std::uint32_t>(p);
+        const gltf::Node& node = character.nodes[index];
+        assert((node.parent < 0 || position[static_cast<std::size_t>(node.parent)] < p) && "parents first");
+        gpu::PoseNodeGpu g{};
+        g.ids = {static_cast<std::uint32_t>(index), node.parent >= 0 ? static_cast<std::uint32_t>(node.parent) : KW_POSES_NONE,
+                 node.matrix ? KW_POSES_NODE_MATRIX : KW_POSES_NODE_TRS, 0u};
+        if (node.matrix) {
+            for (int c = 0; c < 4; ++c) g.local[c] = to_gpu((*node.matrix)[c]);
+        } else {
+            g.local[0] = to_gpu(node.translation);
+            g.local[1] = to_gpu(node.rotation);
+            g.local[2] = to_gpu(node.scale);
+        }
+        flat.nodes.push_back(g);
+    }
+    for (const gltf::Animation& clip : character.animations) {
+        // Each sampler's keys once, however many channels use it.
+        std::vector<std::array<std::uint32_t, 2>> keys(clip.samplers.size());
+        for (std::size_t s = 0; s < clip.samplers.size(); ++s) {
+            const gltf::Sampler& sampler = clip.samplers[s];
+            keys[s] = {static_cast<std::uint32_t>(flat.times.size()), static_cast<std::uint32_t>(flat.values.size())};
+            flat.times.insert(flat.times.end(), sampler.times.begin(), sampler.times.end());
+            for (const glm::vec4& v : sampler.values) flat.values.push_back(to_gpu(v));
+        }
+        // Channels in the kernel's walk order; stable, so that of two channels of one
+        // property the file's later one is applied last and wins, as in gltf::evaluate.
+        std::vector<std::size_t> sorted(clip.channels.size());
+        std::iota(sorted.begin(), sorted.end(), std::size_t{0});
+        std::stable_sort(sorted.begin(), sorted.end(), [&](std::size_t a, std::size_t b) {
+            return position[static_cast<std::size_t>(clip.channels[a].node)] <
+                   position[static_cast<std::size_t>(clip.channels[b].node)];
+        });
+        gpu::PoseClipGpu g{};
+        g.channels = {static_cast<std::uint32_t>(flat.channels.size()), static_cast<std::uint32_t>(sorted.size()), 0u, 0u};
+        g.range = {clip.start, clip.end, 0.0f, 0.0f};
+        flat.clips.push_back(g);
+        for (const std::size_t c : sorted) {
+            const gltf::Channel& channel = clip.channels[c];
+            const gltf::Sampler& sampler = clip.samplers[channel.sampler];
+            flat.channels.push_back(
+                {{position[static_cast<std::size_t>(channel.node)], path_of(channel.path), interpolation_of(sampler.interpolation),
+                  static_cast<std::uint32_t>(sampler.times.size())},
+                 {keys[channel.sampler][0], keys[channel.sampler][1], 0u, 0u}});
+        }
+    }
+    return flat;
+}
+
+class VulkanPoseBackend final : public PoseBackend {
+public:
+    explicit VulkanPoseBackend(std::unique_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
+
+    std::string_view name() const override { return "vulkan"; }
+    std::string device() const override { return ctx_->info().name; }
+    double last_gpu_ms() const override { return gpu_ms_; }
+    std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
+
+    Result<void> load(const gltf::Character& character, std::span<const PoseInstance> instances) override {
+        KW_TRY(check_instances(character, instances));
+        const std::uint64_t count = instances.size();
+        const std::uint64_t groups = (count + KW_POSES_WORKGROUP_SIZE - 1) / KW_POSES_WORKGROUP_SIZE;
+        if (groups > ctx_->info().max_workgroup_count[0]) {
+            return make_error(Error::Kind::Unsupported, std::to_string(count) + " instances exceed what one dispatch on " +
+                                                            ctx_->info().name + " can cover");
+        }
+        character_ = nullptr;
+        evaluated_ = false;
+        const FlatCharacter flat = flatten(character);
+        std::vector<gpu::PoseInstanceGpu> per_instance(instances.size());
+        for (std::size_t i = 0; i < instances.size(); ++i) {
+            const PoseInstance& instance = instances[i];
+            const glm::mat4 placement = placement_matrix(instance.placement);
+            gpu::PoseInstanceGpu& g = per_instance[i];
+            for (int c = 0; c < 4; ++c) g.placement[c] = to_gpu(placement[c]);
+            g.timing = {instance.time_offset, 0.0f, 0.0f, 0.0f};
+            g.clip = {instance.clip >= 0 ? static_cast<std::uint32_t>(instance.clip) : KW_POSES_NONE, instance.loop ? 1u : 0u,
+                      0u, 0u};
+        }
+
+        buffers_.clear();
+        const std::uint64_t sizes[KW_POSES_BINDING_COUNT] = {
+            flat.nodes.size() * sizeof(gpu::PoseNodeGpu),
+            flat.clips.size() * sizeof(gpu::PoseClipGpu),
+            flat.channels.size() * sizeof(gpu::PoseChannelGpu),
+            flat.times.size() * sizeof(float),
+            flat.values.size() * sizeof(gpu::vec4),
+            per_instance.size() * sizeof(gpu::PoseInstanceGpu),
+            count * character.nodes.size() * sizeof(gpu::PoseMatrixGpu)};
+        for (std::uint32_t b = 0; b < KW_POSES_BINDING_COUNT; ++b) {
+            if (sizes[b] > ctx_->info().max_storage_buffer_range) {
+                return make_error(Error::Kind::Unsupported,
+                                  "the crowd needs a storage buffer of " + std::to_string(sizes[b]) + " bytes (binding " +
+                                      std::to_string(b) + "); " + ctx_->info().name + " allows " +
+                                      std::to_string(ctx_->info().max_storage_buffer_range));
+            }
+            // Never empty: a character without clips still binds a buffer there.
+            auto buffer = GpuBuffer::create(*ctx_, std::max<std::uint64_t>(sizes[b], 16), GpuBuffer::Kind::Storage);
+            if (!buffer) return buffer.error();
+            buffers_.push_back(std::move(buffer).value());
+        }
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_NODES], bytes_of(flat.nodes)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_CLIPS], bytes_of(flat.clips)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_CHANNELS], bytes_of(flat.channels)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_TIMES], bytes_of(flat.times)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_VALUES], bytes_of(flat.values)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_INSTANCES], bytes_of(per_instance)));
+
+        if (!kernel_) {
+            const std::vector<vk::DescriptorType> types(KW_POSES_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
+            auto created = gpu::ComputePipeline::create(*ctx_, "pose_eval", types, sizeof(gpu::PosePush));
+            if (!created) return created.error();
+            kernel_.emplace(std::move(created).value());
+        }
+        std::vector<const GpuBuffer*> bound;
+        for (const auto& b : buffers_) bound.push_back(&b);
+        kernel_->bind_buffers(*ctx_, bound);
+        character_ = &character;
+        count_ = static_cast<std::uint32_t>(count);
+        return {};
+    }
+
+    Result<void> evaluate(float time) override {
+        assert(character_ != nullptr && "load() first");
+        if (!std::isfinite(time)) return make_error(Error::Kind::InvalidInput, "the scene time is not finite");
+        evaluated_ = true;
+        if (count_ == 0) return {};
+        const gpu::PosePush push{{time, 0.0f, 0.0f, 0.0f},
+                                 {count_, static_cast<std::uint32_t>(character_->nodes.size()), 0u, 0u}};
+        const std::uint32_t groups = (count_ + KW_POSES_WORKGROUP_SIZE - 1) / KW_POSES_WORKGROUP_SIZE;
+        double ms = -1.0;
+        KW_TRY(ctx_->submit(
+            [&](const vk::raii::CommandBuffer& cmd) {
+                // load()'s uploads (copies where memory is not unified) wrote what the kernel
+                // reads, and the last dispatch wrote the matrices this one overwrites.
+                const vk::MemoryBarrier before{
+                    .srcAccessMask = vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferWrite,
+                    .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
+                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
+                                    vk::PipelineStageFlagBits::eComputeShader, {}, before, {}, {});
+                ctx_->write_timestamp(cmd, 0, vk::PipelineStageFlagBits::eTopOfPipe);
+                kernel_->dispatch(cmd, std::as_bytes(std::span(&push, 1)), groups);
+                ctx_->write_timestamp(cmd, 1, vk::PipelineStageFlagBits::eBottomOfPipe);
+                // The host reads the matrices after the fence (mapped, or through a copy).
+                const vk::MemoryBarrier after{.srcAccessMask = vk::AccessFlagBits::eShaderWrite,
+                                              .dstAccessMask = vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead};
+                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
+                                    vk::PipelineStageFlagBits::eHost | vk::PipelineStageFlagBits::eTransfer, {}, after, {}, {});
+            },
+            &ms));
+        gpu_ms_ = ms;
+        return {};
+    }
+
+    Result<void> read(std::vector<glm::mat4>& world) override {
+        assert(character_ != nullptr && evaluated_ && "evaluate() first");
+        static_assert(sizeof(glm::mat4) == sizeof(gpu::PoseMatrixGpu), "four column vec4s on both sides");
+        world.resize(std::size_t{count_} * character_->nodes.size());
+        return gpu::download(*ctx_, buffers_[KW_POSES_BINDING_WORLD], std::as_writable_bytes(std::span(world)));
+    }
+
+private:
+    std::unique_ptr<gpu::VulkanContext> ctx_;
+    std::optional<gpu::ComputePipeline> kernel_;
+    std::vector<GpuBuffer> buffers_;
+    const gltf::Character* character_ = nullptr;
+    std::uint32_t count_ = 0;
+    bool evaluated_ = false;
+    double gpu_ms_ = -1.0;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<PoseBackend>> make_vulkan_pose_backend(const BackendOptions& options) {
+    auto ctx = gpu::VulkanContext::create({.device = options.device, .validation = options.validation});
+    if (!ctx) return ctx.error();
+    return std::unique_ptr<PoseBackend>(std::make_unique<VulkanPoseBackend>(std::move(ctx).value()));
+}
+
+}  // namespace kodawari

@@ -1,0 +1,84 @@
+#pragma once
+/// @file
+/// The narrow interface every pose backend implements (cpu-reference, cpu, vulkan), the
+/// same shape as the rod backends (rod_backend.hpp): a crowd of instances of one rigged
+/// glTF character, each playing one of its animation clips at its own time offset, is
+/// evaluated into world matrices of every node. The same tests run against each.
+
+#include <cstdint>
+#include <memory>
+#include <span>
+#include <string>
+#include <string_view>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include "backend.hpp"
+#include "gltf/character.hpp"
+#include "result.hpp"
+#include "rods/solver.hpp"
+
+namespace kodawari {
+
+/// One instance of a rigged character in a crowd.
+struct PoseInstance {
+    rods::Transform placement;   ///< the instance's transform (world = placement * node world)
+    std::int32_t clip = -1;      ///< index into Character::animations; -1 = rest pose
+    float time_offset = 0.0f;    ///< s, added to the scene time
+    bool loop = true;            ///< wrap the clip time into [start, end] (see clip_time)
+};
+
+/// The time an instance samples its clip at for scene time `time`: t = time + time_offset;
+/// looping: start + (t - start) - d * floor((t - start) / d) with d = end - start
+/// (d == 0: start); not looping: t (gltf::sample() clamps). Exactly this float formula
+/// (IEEE single precision, correctly rounded, evaluated left to right without
+/// contraction) on every backend, so every backend wraps at the same scene times.
+[[nodiscard]] float clip_time(const gltf::Animation& clip, const PoseInstance& instance, float time);
+
+/// The matrix of an instance's placement: translate(position) * mat4_cast(rotation).
+/// Every backend applies this very matrix.
+[[nodiscard]] glm::mat4 placement_matrix(const rods::Transform& placement);
+
+/// Checks instances against a character: every clip is -1 or an animation of it, every
+/// time offset and placement is finite. Errors name the instance ("instance 17: clip 3
+/// does not exist; the character has 1 animation"). Every backend's load() runs it.
+[[nodiscard]] Result<void> check_instances(const gltf::Character& character, std::span<const PoseInstance> instances);
+
+/// Evaluates a crowd of instances of one character at scene times.
+class PoseBackend {
+public:
+    virtual ~PoseBackend() = default;
+    PoseBackend() = default;
+    PoseBackend(const PoseBackend&) = delete;
+    PoseBackend& operator=(const PoseBackend&) = delete;
+
+    /// The backend's name ("vulkan").
+    [[nodiscard]] virtual std::string_view name() const = 0;
+    /// What it runs on ("llvmpipe (LLVM 15.0.6, 256 bits)", "2 threads").
+    [[nodiscard]] virtual std::string device() const = 0;
+
+    /// Uploads the character (nodes, rest TRS, clips) and the instances (check_instances()
+    /// must accept them; no instances is fine). `character` must outlive the backend's use
+    /// of it; `instances` is copied.
+    [[nodiscard]] virtual Result<void> load(const gltf::Character& character, std::span<const PoseInstance> instances) = 0;
+
+    /// Evaluates every instance at scene time `time` (s, finite). load() first.
+    [[nodiscard]] virtual Result<void> evaluate(float time) = 0;
+
+    /// World matrices after the last evaluate(): instances x nodes, instance-major, nodes
+    /// indexed like Character::nodes, each placement_matrix(placement) * the node's glTF
+    /// world matrix (scale included). evaluate() first.
+    [[nodiscard]] virtual Result<void> read(std::vector<glm::mat4>& world) = 0;
+
+    /// GPU time of the last evaluate() in milliseconds, when the device has timestamps.
+    [[nodiscard]] virtual double last_gpu_ms() const { return -1.0; }
+    /// Validation messages seen so far (Vulkan with validation on; 0 otherwise).
+    [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
+};
+
+/// Creates a pose backend; Vulkan fails with a readable reason when no loader, driver or
+/// device is available.
+[[nodiscard]] Result<std::unique_ptr<PoseBackend>> make_pose_backend(BackendKind kind, const BackendOptions& options);
+
+}  // namespace kodawari

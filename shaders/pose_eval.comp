@@ -1,0 +1,241 @@
+#version 450
+// Evaluates glTF animation clips for a crowd of instances of one character: one
+// invocation per instance computes its clip time, walks the nodes parents first, samples
+// the clip's channels of each node (§3.11 Animations, Appendix C Interpolation of the
+// glTF 2.0.1 specification), composes local T * R * S and world = parent world * local
+// (§3.5.3 Transformations) and writes every node's world matrix with the instance's
+// placement applied. Mirrors engine/gltf/animation.cpp (sample, compute_world) and
+// clip_time() in engine/backends/pose_backend.cpp step for step; shared/poses.h has the
+// layout and why.
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/poses.h"
+
+layout(local_size_x = KW_POSES_WORKGROUP_SIZE) in;
+
+layout(std430, binding = KW_POSES_BINDING_NODES) readonly buffer Nodes { PoseNodeGpu nodes[]; };
+layout(std430, binding = KW_POSES_BINDING_CLIPS) readonly buffer Clips { PoseClipGpu clips[]; };
+layout(std430, binding = KW_POSES_BINDING_CHANNELS) readonly buffer Channels { PoseChannelGpu channels[]; };
+layout(std430, binding = KW_POSES_BINDING_TIMES) readonly buffer Times { float times[]; };
+layout(std430, binding = KW_POSES_BINDING_VALUES) readonly buffer Values { vec4 values[]; };
+layout(std430, binding = KW_POSES_BINDING_INSTANCES) readonly buffer Instances { PoseInstanceGpu instances[]; };
+layout(std430, binding = KW_POSES_BINDING_WORLD) buffer World { PoseMatrixGpu world[]; };
+
+layout(push_constant) uniform Push { PosePush push; };
+
+// ---- the clip time, bit for bit as clip_time() ----------------------------------------
+
+// a / b rounded to nearest even as IEEE division does, from integer operations only, for
+// a normal or zero and b normal and positive. The wrap count floor((t - start) / d) of a
+// looping clip is a discrete decision: Vulkan lets x / y be 2.5 ulp off (and a driver may
+// compute a * (1 / b)), and a quotient one ulp below a whole number would wrap one period
+// less than the CPU does (the clip's end instead of its start). Quotients below 2^-126
+// return a value with the same floor (0 or -FLT_MIN) instead of a subnormal; they would
+// need d > 2^24 x, far beyond any clip.
+float div_rn(float a, float b) {
+    if (a == 0.0) return a;
+    const uint ua = floatBitsToUint(a);
+    const uint ub = floatBitsToUint(b);
+    const uint sign = ua & 0x80000000u;
+    uint ma = (ua & 0x007FFFFFu) | 0x00800000u;  // the 24-bit significands
+    const uint mb = (ub & 0x007FFFFFu) | 0x00800000u;
+    int e = int((ua >> 23) & 0xFFu) - int((ub >> 23) & 0xFFu);
+    if (ma < mb) {  // ma / mb in [1, 2) from here on
+        ma <<= 1;
+        e -= 1;
+    }
+    // Long division: 24 bits of significand, then a guard bit; the remainder is sticky.
+    uint q = 0u;
+    uint r = ma;
+    for (int k = 0; k < 25; ++k) {
+        q <<= 1;
+        if (r >= mb) {
+            r -= mb;
+            q |= 1u;
+        }
+        r <<= 1;
+    }
+    uint m = q >> 1;
+    if ((q & 1u) != 0u && (r != 0u || (m & 1u) != 0u)) m += 1u;  // round half to even
+    if (m == 0x01000000u) {
+        m >>= 1;
+        e += 1;
+    }
+    const int biased = e + 127;
+    if (biased <= 0) return sign != 0u ? -1.17549435e-38 : 0.0;
+    if (biased >= 255) return uintBitsToFloat(sign | 0x7F800000u);
+    return uintBitsToFloat(sign | (uint(biased) << 23) | (m & 0x007FFFFFu));
+}
+
+// clip_time(): t = time + offset; looping, start + (t - start) - d * floor((t - start) / d)
+// with d = end - start, evaluated left to right; `precise` keeps every +, -, * separate and
+// correctly rounded (Vulkan requires that of them), as -ffp-contract=off does in C++.
+float clip_time(PoseClipGpu clip, float offset, bool loop, float time) {
+    precise float t = time + offset;
+    if (!loop) return t;
+    const float start = clip.range.x;
+    precise float d = clip.range.y - start;
+    if (d == 0.0) return start;
+    precise float x = t - start;
+    const float wraps = floor(div_rn(x, d));
+    precise float wrapped = start + x - d * wraps;
+    return wrapped;
+}
+
+// ---- sampling (§3.11, Appendix C), as gltf::sample() ------------------------------------
+
+// The key value of key k (CUBICSPLINE stores in-tangent, value, out-tangent per key).
+vec4 key_value(PoseChannelGpu ch, uint k) {
+    return values[ch.keys.y + (ch.target.z == KW_POSES_INTERP_CUBICSPLINE ? 3u * k + 1u : k)];
+}
+
+// sin(x) / x by its Taylor series to x^12: the truncation is below 5e-10 on [0, pi/2].
+float sinc(float x) {
+    const float x2 = x * x;
+    return 1.0 + x2 * (-1.0 / 6.0 + x2 * (1.0 / 120.0 + x2 * (-1.0 / 5040.0 + x2 * (1.0 / 362880.0 +
+           x2 * (-1.0 / 39916800.0 + x2 * (1.0 / 6227020800.0))))));
+}
+
+// Appendix C, spherical linear interpolation along the shorter arc (b's sign flipped when
+// the dot product is negative), as animation.cpp's slerp(), which works in double. Here
+// in float: the angle theta between the quaternions comes from atan(|a - b|, |a + b|)
+// (= theta / 2 for unit a, b), not acos(dot), which loses half its digits for nearby
+// keys; and sin(u theta) / sin(theta) is u sinc(u theta) / sinc(theta), with theta in
+// [0, pi/2] after the flip. That is accurate to float rounding at every angle (GPU sin
+// only bounds the absolute error, useless for small angles), so nearly equal keys need no
+// special case (the CPU's normalized lerp there differs from slerp by O(theta^3) < 1e-13).
+vec4 slerp(vec4 a, vec4 b, float u) {
+    if (dot(a, b) < 0.0) b = -b;
+    const float theta = 2.0 * atan(length(a - b), length(a + b));
+    const float s = sinc(theta);
+    return a * ((1.0 - u) * sinc((1.0 - u) * theta) / s) + b * (u * sinc(u * theta) / s);
+}
+
+vec4 sample_channel(PoseChannelGpu ch, float time) {
+    const uint n = ch.target.w;
+    const uint first = ch.keys.x;
+    const uint interp = ch.target.z;
+    // Outside the keys the first / last value holds (§3.11: clamped, no extrapolation).
+    // `!(time > first)` also sends NaN to the first key.
+    float t_lo = times[first];
+    if (!(time > t_lo)) return key_value(ch, 0u);
+    float t_hi = times[first + n - 1u];
+    if (time >= t_hi) return key_value(ch, n - 1u);
+    // Binary search for k with times[k] <= time < times[k + 1] (std::upper_bound - 1 in
+    // sample(); the times increase strictly), keeping both ends' times.
+    uint lo = 0u;
+    uint hi = n - 1u;
+    while (hi - lo > 1u) {
+        const uint mid = (lo + hi) / 2u;
+        const float t_mid = times[first + mid];
+        if (t_mid <= time) {
+            lo = mid;
+            t_lo = t_mid;
+        } else {
+            hi = mid;
+            t_hi = t_mid;
+        }
+    }
+    if (time == t_lo || interp == KW_POSES_INTERP_STEP) return key_value(ch, lo);
+    const float td = t_hi - t_lo;
+    const float u = (time - t_lo) / td;
+    if (interp == KW_POSES_INTERP_LINEAR) {
+        const vec4 a = values[ch.keys.y + lo];
+        const vec4 b = values[ch.keys.y + lo + 1u];
+        if (ch.target.y == KW_POSES_PATH_ROTATION) return slerp(a, b, u);
+        return a + (b - a) * u;
+    }
+    // Appendix C, cubic spline: Hermite on [t_k, t_k+1] with the key values v_k, v_k+1, the
+    // out-tangent b_k of key k and the in-tangent a_k+1 of key k+1, tangents scaled by the
+    // keyframe delta t_d.
+    const uint v = ch.keys.y + 3u * lo;
+    const vec4 p0 = values[v + 1u];
+    const vec4 m0 = values[v + 2u] * td;
+    const vec4 m1 = values[v + 3u] * td;
+    const vec4 p1 = values[v + 4u];
+    const float u2 = u * u;
+    const float u3 = u2 * u;
+    vec4 r = (2.0 * u3 - 3.0 * u2 + 1.0) * p0 + (u3 - 2.0 * u2 + u) * m0 + (-2.0 * u3 + 3.0 * u2) * p1 + (u3 - u2) * m1;
+    // The spline of unit quaternions leaves the unit sphere; Appendix C normalizes.
+    if (ch.target.y == KW_POSES_PATH_ROTATION) {
+        const float len = length(r);
+        if (len > 0.0) r /= len;
+    }
+    return r;
+}
+
+// ---- composition (§3.5.3) ----------------------------------------------------------------
+
+// T * R * S, with R as glm::mat4_cast computes it.
+mat4 compose(vec3 t, vec4 q, vec3 s) {
+    const float xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
+    const float xz = q.x * q.z, xy = q.x * q.y, yz = q.y * q.z;
+    const float wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
+    return mat4(vec4(vec3(1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy)) * s.x, 0.0),
+                vec4(vec3(2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx)) * s.y, 0.0),
+                vec4(vec3(2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy)) * s.z, 0.0),
+                vec4(t, 1.0));
+}
+
+void main() {
+    const uint i = gl_GlobalInvocationID.x;
+    if (i >= push.counts.x) return;
+    const uint node_count = push.counts.y;
+    const PoseInstanceGpu instance = instances[i];
+    const mat4 placement = mat4(instance.placement[0], instance.placement[1], instance.placement[2], instance.placement[3]);
+
+    // The clip's channels, sorted by node position: [c, c_end), `next` the node position
+    // of channel c. A rest-pose instance has none.
+    uint c = 0u;
+    uint c_end = 0u;
+    float t = 0.0;
+    if (instance.clip.x != KW_POSES_NONE) {
+        const PoseClipGpu clip = clips[instance.clip.x];
+        c = clip.channels.x;
+        c_end = c + clip.channels.y;
+        t = clip_time(clip, instance.timing.x, instance.clip.y != 0u, push.time.x);
+    }
+    uint next = c < c_end ? channels[c].target.x : KW_POSES_NONE;
+
+    const uint base = i * node_count;
+    for (uint p = 0u; p < node_count; ++p) {
+        const uvec4 ids = nodes[p].ids;
+        // The rest TRS with the clip's channels of this node applied in the file's order
+        // (a later channel of the same property wins, as in gltf::evaluate).
+        vec3 translation = nodes[p].local[0].xyz;
+        vec4 rotation = nodes[p].local[1];
+        vec3 scale = nodes[p].local[2].xyz;
+        while (next == p) {
+            const PoseChannelGpu ch = channels[c];
+            const vec4 value = sample_channel(ch, t);
+            if (ch.target.y == KW_POSES_PATH_TRANSLATION) {
+                translation = value.xyz;
+            } else if (ch.target.y == KW_POSES_PATH_ROTATION) {
+                rotation = value;
+            } else {
+                scale = value.xyz;
+            }
+            ++c;
+            next = c < c_end ? channels[c].target.x : KW_POSES_NONE;
+        }
+        mat4 local;
+        if (ids.z == KW_POSES_NODE_MATRIX) {
+            local = mat4(nodes[p].local[0], nodes[p].local[1], nodes[p].local[2], nodes[p].local[3]);
+        } else {
+            local = compose(translation, rotation, scale);
+        }
+        // A root is placed by the instance; a child's parent was written earlier by this
+        // very invocation (parents first), placement included.
+        mat4 parent = placement;
+        if (ids.y != KW_POSES_NONE) {
+            const uint at = base + ids.y;
+            parent = mat4(world[at].columns[0], world[at].columns[1], world[at].columns[2], world[at].columns[3]);
+        }
+        const mat4 w = parent * local;
+        const uint at_node = base + ids.x;
+        world[at_node].columns[0] = w[0];
+        world[at_node].columns[1] = w[1];
+        world[at_node].columns[2] = w[2];
+        world[at_node].columns[3] = w[3];
+    }
+}
