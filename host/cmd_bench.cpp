@@ -1,3 +1,4 @@
+#include <algorithm>
 #include <chrono>
 #include <optional>
 #include <cstdio>
@@ -6,7 +7,9 @@
 
 #include "commands.hpp"
 #include "kodawari/atomic_file.hpp"
+#include "kodawari/crowd_animator.hpp"
 #include "kodawari/rod_backend.hpp"
+#include "kodawari/rod_scene.hpp"
 #include "kodawari/rods/synthetic.hpp"
 #include "kodawari/scene.hpp"
 
@@ -156,18 +159,96 @@ int bench_chains(Args& args, const BackendChoice& choice) {
     return report_results(results, "joint-steps/s", head, json_path);
 }
 
+
+// kodawari bench crowd: every backend on the same crowd of skinned (rigged glTF)
+// characters: per frame the clips of every instance (the pose backend of that kind) and
+// the chains' step (the rod backend of that kind). Frames per second of the two together.
+int bench_crowd(Args& args, const BackendChoice& choice) {
+    const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 100'000).value_or(1000));
+    const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(60));
+    const auto json_path = args.option("json");
+    const std::vector<BackendKind> kinds = read_backends(args);
+    const auto positionals = args.positionals();
+    if (positionals.size() > 2) throw UsageError{"usage: kodawari bench crowd [SCENE] [options]"};
+    const std::string path = positionals.size() == 2 ? positionals[1] : "scenes/crowd-gltf.json";
+    auto loaded = load_scene(path);
+    if (!loaded) return report(loaded.error());
+    Scene scene = std::move(loaded).value();
+    const auto rigged = std::find_if(scene.crowds.begin(), scene.crowds.end(),
+                                     [&](const CrowdSpec& c) { return scene.characters[c.character].rig.has_value(); });
+    if (rigged == scene.crowds.end()) {
+        return report(make_error(Error::Kind::InvalidInput, path + ": bench crowd needs a crowd of a rigged (glTF) character"));
+    }
+    CrowdSpec crowd = *rigged;
+    crowd.count = count;
+    crowd.instances.clear();
+    scene.crowds = {crowd};
+    auto built = build_rod_scene(scene);
+    if (!built) return report(built.error());
+    const RodScene& rods_scene = built.value();
+    const gltf::Character& character = *rods_scene.characters[crowd.character].rig;
+    std::printf("bench crowd: %u instances of %s (%zu nodes, %zu clips), %zu chains, %u joints; %u frames at %g fps after 2 "
+                "warm-up frames per backend (they also compile the kernels)\n",
+                count, character.source.c_str(), character.nodes.size(), character.animations.size(),
+                rods_scene.world.chains.size(), rods_scene.world.joint_count, frames, static_cast<double>(rods_scene.fps));
+    std::fflush(stdout);
+
+    std::vector<Measured> results;
+    rods::RodFrame input;
+    for (BackendKind kind : kinds) {
+        auto backend = make_rod_backend(kind, choice.options);
+        if (!backend) {
+            std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), backend.error().message.c_str());
+            continue;
+        }
+        auto animator = CrowdAnimator::create(rods_scene, kind, choice.options);
+        if (!animator) return report(animator.error());
+        RodBackend& b = *backend.value();
+        if (auto r = animator.value().frame(0, input); !r) return report(r.error());
+        if (auto r = b.load(rods_scene.world, input); !r) return report(r.error());
+        for (std::uint32_t f = 1; f <= 2; ++f) {
+            if (auto r = animator.value().frame(f, input); !r) return report(r.error());
+            if (auto r = b.step(input); !r) return report(r.error());
+        }
+        double pose_ms = 0.0, gpu_ms = 0.0;
+        const auto start = std::chrono::steady_clock::now();
+        for (std::uint32_t f = 3; f < frames + 3; ++f) {
+            if (auto r = animator.value().frame(f, input); !r) return report(r.error());
+            pose_ms += animator.value().last_pose_ms();
+            if (auto r = b.step(input); !r) return report(r.error());
+            gpu_ms += b.last_gpu_ms();
+        }
+        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        if (b.validation_messages() + animator.value().validation_messages() > 0) {
+            std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n",
+                         b.validation_messages() + animator.value().validation_messages());
+            return kExitFailure;
+        }
+        Measured m{std::string(b.name()), b.device(), frames / seconds, 1e3 * seconds / frames,
+                   b.last_gpu_ms() >= 0.0 ? gpu_ms / frames : -1.0};
+        results.push_back(m);
+        std::printf("  %-14s done: %.3g frames/s (clips %.3f ms + chains %.3f ms per frame)\n", m.backend.c_str(), m.per_second,
+                    pose_ms / frames, m.ms_per_frame - pose_ms / frames);
+        std::fflush(stdout);
+    }
+    const std::string head = "{\"benchmark\":\"crowd\",\"instances\":" + std::to_string(count) + ",\"chains\":" +
+                             std::to_string(rods_scene.world.chains.size()) + ",\"frames\":" + std::to_string(frames);
+    return report_results(results, "frames/s", head, json_path);
+}
+
 }  // namespace
 
 int cmd_bench(Args args) {
     BackendChoice choice = read_backend_choice(args);
     if (args.first_word() == "chains") return bench_chains(args, choice);
+    if (args.first_word() == "crowd") return bench_crowd(args, choice);
     const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 4'000'000).value_or(1'000'000));
     const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(30));
     const auto json_path = args.option("json");
     const bool readback = args.flag("readback");
     const auto positionals = args.positionals();
     if (positionals.size() != 1 || positionals[0] != "birds") {
-        throw UsageError{"usage: kodawari bench birds|chains [options]"};
+        throw UsageError{"usage: kodawari bench birds|chains|crowd [options]"};
     }
     const std::vector<BackendKind> kinds = read_backends(args);
 

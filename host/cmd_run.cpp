@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "kodawari/crowd_animator.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/scene.hpp"
@@ -44,6 +45,9 @@ int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<st
     auto opened = open_rod_backend(choice);
     if (!opened) return report(opened.error());
     RodBackend& backend = *opened.value();
+    // Rigged characters' clips are evaluated by the pose backend of the same kind.
+    auto animator = CrowdAnimator::create(rods_scene, parse_backend(std::string(backend.name())).value_or(BackendKind::Cpu), choice.options);
+    if (!animator) return report(animator.error());
     std::printf("kodawari: scene \"%s\" (%s): %u characters, %zu chains, %zu joints, %u frames at %g fps\n",
                 scene.name.c_str(), scene.path.c_str(), world.character_count, world.chains.size(), joints, frames,
                 static_cast<double>(rods_scene.fps));
@@ -84,7 +88,7 @@ int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<st
     const bool show_progress = stderr_is_terminal() && std::uint64_t{frames} * joints >= 2'000'000;
     double seconds = 0.0, gpu_ms = 0.0;
     for (std::uint32_t f = 0; f < frames; ++f) {
-        rods_scene.frame(f, frame);
+        if (auto r = animator.value().frame(f, frame); !r) return report(r.error());
         const auto start = std::chrono::steady_clock::now();
         // Frame 0 is the initial pose; every later frame is one step.
         if (auto r = f == 0 ? backend.load(world, frame) : backend.step(frame); !r) return report(r.error());
@@ -111,8 +115,9 @@ int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<st
                 1e3 * seconds / frames);
     if (backend.name() == "vulkan" && gpu_ms > 0.0) std::printf(" (GPU %.3f ms)", gpu_ms / steps);
     std::printf(", %.3g joint-steps/s\n", static_cast<double>(joints) * steps / std::max(seconds, 1e-9));
-    if (backend.validation_messages() > 0) {
-        std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", backend.validation_messages());
+    if (backend.validation_messages() + animator.value().validation_messages() > 0) {
+        std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n",
+                     backend.validation_messages() + animator.value().validation_messages());
         return kExitFailure;
     }
     const auto wrote = [](const std::string& path, const char* what) {

@@ -18,7 +18,9 @@ commands:
       run a backend and the CPU reference side by side; exit 1 above tolerance
   bench birds [--count N] [--frames F] [--json FILE] [--readback] [--backends LIST]
   bench chains [--chains N] [--joints M] [--iterations K] [--steps S] [--json FILE] [--backends LIST]
-      time every backend on the same birds (or chains: joint-steps per second) and print the ratios
+  bench crowd [SCENE] [--count N] [--frames F] [--json FILE] [--backends LIST]
+      time every backend on the same birds (or chains: joint-steps per second; or a crowd of N skinned
+      characters, default 1000 of scenes/crowd-gltf.json: frames per second) and print the ratios
   rig CHARACTER [--chains PATTERNS|--roots NAMES] [--animation CLIP] [--name NAME] [--out SCENE.json]
       find the chains (VRM spring bones, name patterns or named roots) and colliders of a rigged
       .gltf/.glb/.vrm character and write a scene that simulates it (default ./<character>.json)

@@ -122,6 +122,8 @@ check "rig on a missing file fails and names it" bash -c "test $? -ne 0 && grep 
 check "crowd-gltf runs" test $? -eq 0
 check "crowd-gltf exports the character's own skeleton" grep -q "wrote $work/crowd-gltf.glb.*own skeleton" "$work/crowd-gltf.out"
 check "crowd-gltf export passes glTF-Validator" node tests/tools/validate_gltf.mjs "$work/crowd-gltf.glb"
+"$bin" bench crowd --count 13 --frames 2 --json "$work/bench-crowd.json" >/dev/null 2>&1
+check "bench crowd json" bash -c "node -e 'const r=require(\"$work/bench-crowd.json\"); if (r.benchmark!==\"crowd\"||r.instances!==13||r.results.length!==3||!(r.results[2].per_second>0)) process.exit(1)'"
 
 echo "cli: $passed passed, $failed failed"
 test $failed -eq 0

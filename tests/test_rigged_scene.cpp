@@ -21,6 +21,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "kodawari/crowd_animator.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -399,6 +400,55 @@ TEST(RiggedScene, ExportRoundTripsTheSimulation) {
     // the joints' transforms composed through ~12 parents on re-import.
     EXPECT_LT(worst_chain, 1e-5f);
     EXPECT_LT(worst_head, 1e-5f);
+}
+
+// The frame input with the clips on each pose backend (CrowdAnimator) against
+// RodScene::frame's CPU evaluation: the CPU backends give the same bits; the GPU within
+// 1e-5 m (its interpolation runs in float, in another order: about 1e-6 of the size,
+// test_pose_backends.cpp). 37 instances: not a multiple of the workgroup size.
+TEST(RiggedScene, CrowdAnimatorMatchesTheCpuFrames) {
+    Scene scene = load(kCrowdScene);
+    scene.crowds[0].count = 37;
+    const RodScene rods = build(scene);
+    for (const BackendKind kind : {BackendKind::CpuReference, BackendKind::Cpu, BackendKind::Vulkan}) {
+        SCOPED_TRACE(std::string(backend_name(kind)));
+        if (kind == BackendKind::Vulkan) {
+            if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) {
+                std::printf("SKIPPED the vulkan case: %s\n", why.c_str());
+                continue;
+            }
+        }
+        BackendOptions options;
+        options.validation = true;
+        auto animator = CrowdAnimator::create(rods, kind, options);
+        ASSERT_TRUE(animator.ok()) << animator.error().message;
+        rods::RodFrame got;
+        float worst = 0.0f;
+        for (const std::uint32_t f : {0u, 1u, 61u, 239u, 479u}) {
+            ASSERT_TRUE(animator.value().frame(f, got).ok());
+            const rods::RodFrame expected = rods.frame(f);
+            ASSERT_EQ(got.roots.size(), expected.roots.size());
+            for (std::size_t i = 0; i < got.roots.size(); ++i) {
+                worst = std::max(worst, glm::length(got.roots[i].position - expected.roots[i].position));
+                worst = std::max(worst, glm::length(glm::vec3(got.roots[i].rotation.x, got.roots[i].rotation.y, got.roots[i].rotation.z) -
+                                                    glm::vec3(expected.roots[i].rotation.x, expected.roots[i].rotation.y,
+                                                              expected.roots[i].rotation.z)));
+            }
+            for (std::size_t i = 0; i < got.reference.size(); ++i) {
+                worst = std::max(worst, glm::length(got.reference[i].position - expected.reference[i].position));
+            }
+            for (std::size_t i = 0; i < got.colliders.size(); ++i) {
+                worst = std::max(worst, glm::length(got.colliders[i].a - expected.colliders[i].a));
+            }
+        }
+        std::printf("%s: frame input within %.3g of the CPU's\n", std::string(backend_name(kind)).c_str(), static_cast<double>(worst));
+        if (kind == BackendKind::Vulkan) {
+            EXPECT_LT(worst, 1e-5f);
+            EXPECT_EQ(animator.value().validation_messages(), 0u);
+        } else {
+            EXPECT_EQ(worst, 0.0f);
+        }
+    }
 }
 
 // Blender's own glTF importer (tests/tools/blender_check.py) on the export of a

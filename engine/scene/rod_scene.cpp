@@ -10,6 +10,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
+#include <kodawari/pose_backend.hpp>
 #include <kodawari/rod_scene.hpp>
 
 namespace kodawari {
@@ -27,7 +28,9 @@ rods::RodFrame RodScene::frame(std::uint32_t index) const {
     return out;
 }
 
-void RodScene::frame(std::uint32_t index, rods::RodFrame& out) const {
+void RodScene::frame(std::uint32_t index, rods::RodFrame& out) const { kinematic_frame(index, out, true); }
+
+void RodScene::kinematic_frame(std::uint32_t index, rods::RodFrame& out, bool rigged) const {
     const float t = time(index);
     out.time = t;
     out.dt = static_cast<float>(1.0 / static_cast<double>(fps));
@@ -42,6 +45,7 @@ void RodScene::frame(std::uint32_t index, rods::RodFrame& out) const {
         const CharacterInstance& inst = instances[i];
         const CharacterKinematics& k = characters[inst.character];
         if (k.rig) {
+            if (!rigged) continue;
             rig_world(static_cast<std::uint32_t>(i), index, pose, nodes);
             rigged_frame(static_cast<std::uint32_t>(i), nodes, out);
             continue;
@@ -98,14 +102,11 @@ const std::vector<std::int32_t>& RodScene::joint_parents(std::uint32_t c) const 
 float RodScene::clip_time(std::uint32_t c, std::uint32_t index) const {
     assert(c < instances.size());
     const CharacterInstance& inst = instances[c];
-    const float t = time(index) + inst.time_offset;
     const CharacterKinematics& k = characters[inst.character];
-    if (!k.rig || inst.clip < 0) return t;
-    const gltf::Animation& clip = k.rig->animations[static_cast<std::size_t>(inst.clip)];
-    const float d = clip.end - clip.start;
-    if (!(d > 0.0f)) return clip.start;
-    const float u = t - clip.start;
-    return clip.start + (u - d * std::floor(u / d));
+    if (!k.rig || inst.clip < 0) return time(index) + inst.time_offset;
+    // The pose backends' formula, so that the CPU and GPU paths wrap at the same frames.
+    return kodawari::clip_time(k.rig->animations[static_cast<std::size_t>(inst.clip)],
+                               PoseInstance{inst.placement, inst.clip, inst.time_offset, true}, time(index));
 }
 
 void RodScene::rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose, std::vector<glm::mat4>& nodes) const {
@@ -116,7 +117,7 @@ void RodScene::rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose,
     } else {
         pose = gltf::rest_pose(ch);
     }
-    const glm::mat4 placement = glm::translate(glm::mat4(1.0f), inst.placement.position) * glm::mat4_cast(inst.placement.rotation);
+    const glm::mat4 placement = placement_matrix(inst.placement);
     nodes.resize(pose.world.size());
     for (std::size_t n = 0; n < nodes.size(); ++n) nodes[n] = placement * pose.world[n];
 }

@@ -85,6 +85,9 @@ struct RodScene {
     /// As frame(index), into `out`, reusing its storage (no allocation once it has the
     /// right sizes): the per-frame path for large crowds.
     void frame(std::uint32_t index, rods::RodFrame& out) const;
+    /// As frame(index, out), but with `rigged` false the rigged instances' entries are
+    /// left for the caller to fill with rigged_frame() (a pose backend's poses).
+    void kinematic_frame(std::uint32_t index, rods::RodFrame& out, bool rigged) const;
 
     /// The camera at frame `index` (position, target, forward); with fov_deg it gives a
     /// look-at + perspective projection.
