@@ -41,6 +41,9 @@ constexpr std::size_t kBirds = 67;  // three wing types, and not a multiple of t
 constexpr std::uint32_t kFrames = 12;
 constexpr float kFps = 24.0f;
 
+using testing_support::gltf_validator_command;
+using testing_support::run_command;
+using testing_support::shell_quote;
 using testing_support::TempDir;
 
 birds::BirdWorld make_world() {
@@ -305,29 +308,6 @@ TEST(Export, MeshesAreClosedAndFaceOutward) {
     EXPECT_LE(extent(right).second, 0.0);
 }
 
-/// Runs a command through the shell, returns its exit status and collects its output.
-int run_command(const std::string& command, std::string& output) {
-    std::FILE* pipe = ::popen((command + " 2>&1").c_str(), "r");
-    if (pipe == nullptr) return -1;
-    std::array<char, 4096> chunk{};
-    std::size_t read = 0;
-    while ((read = std::fread(chunk.data(), 1, chunk.size(), pipe)) > 0) output.append(chunk.data(), read);
-    const int status = ::pclose(pipe);
-    return WIFEXITED(status) ? WEXITSTATUS(status) : -1;
-}
-
-std::string shell_quote(const std::string& text) {
-    std::string quoted = "'";
-    for (const char c : text) {
-        if (c == '\'') {
-            quoted += "'\\''";
-        } else {
-            quoted += c;
-        }
-    }
-    return quoted + "'";
-}
-
 TEST(Export, PassesGltfValidator) {
     std::string output;
     // node is a required test tool (scripts/setup installs it): missing is a failure.
@@ -340,10 +320,7 @@ TEST(Export, PassesGltfValidator) {
     ASSERT_TRUE(write_birds_glb(path, world, poses, kFrames).ok());
 
     output.clear();
-    const std::string command = "KODAWARI_NODE_TOOLS=" + shell_quote(KODAWARI_NODE_TOOLS) + " node " +
-                                shell_quote(std::string(KODAWARI_SOURCE_DIR) + "/tests/tools/validate_gltf.mjs") +
-                                " --max-issues 20 " + shell_quote(path);
-    EXPECT_EQ(run_command(command, output), 0) << output;
+    EXPECT_EQ(run_command(gltf_validator_command(path), output), 0) << output;
     EXPECT_NE(output.find("glTF-Validator: 0 errors, 0 warnings"), std::string::npos) << output;
 }
 
@@ -651,10 +628,7 @@ TEST(Export, ChainsPassGltfValidator) {
     const std::string path = dir.file("bunny.glb");
     ASSERT_TRUE(write_chains_glb(path, run.scene, run.frames, run.positions, run.orientations).ok());
     std::string output;
-    const std::string command = "KODAWARI_NODE_TOOLS=" + shell_quote(KODAWARI_NODE_TOOLS) + " node " +
-                                shell_quote(std::string(KODAWARI_SOURCE_DIR) + "/tests/tools/validate_gltf.mjs") +
-                                " --max-issues 20 " + shell_quote(path);
-    EXPECT_EQ(run_command(command, output), 0) << output;
+    EXPECT_EQ(run_command(gltf_validator_command(path), output), 0) << output;
     EXPECT_NE(output.find("glTF-Validator: 0 errors, 0 warnings"), std::string::npos) << output;
 }
 

@@ -20,11 +20,13 @@
 
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
-#include "test_support.hpp"
 #include "kodawari/gltf/character.hpp"
+#include "test_support.hpp"
 
 namespace kodawari {
 namespace {
+
+using testing_support::base64;
 
 namespace fs = std::filesystem;
 using nlohmann::json;
@@ -47,22 +49,6 @@ void write_text(const std::string& path, const std::string& text) {
 std::vector<unsigned char> read_all(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
     return {std::istreambuf_iterator<char>(in), std::istreambuf_iterator<char>()};
-}
-
-std::string base64(const std::vector<unsigned char>& bytes) {
-    static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    for (std::size_t i = 0; i < bytes.size(); i += 3) {
-        const std::uint32_t b0 = bytes[i];
-        const std::uint32_t b1 = i + 1 < bytes.size() ? bytes[i + 1] : 0u;
-        const std::uint32_t b2 = i + 2 < bytes.size() ? bytes[i + 2] : 0u;
-        const std::uint32_t v = (b0 << 16) | (b1 << 8) | b2;
-        out += table[(v >> 18) & 63];
-        out += table[(v >> 12) & 63];
-        out += i + 1 < bytes.size() ? table[(v >> 6) & 63] : '=';
-        out += i + 2 < bytes.size() ? table[v & 63] : '=';
-    }
-    return out;
 }
 
 // A buffer of floats under construction; each add() returns the index of a new

@@ -20,15 +20,17 @@
 
 #include <shared/poses.h>
 
-#include "test_support.hpp"
 #include "kodawari/gltf/character.hpp"
 #include "kodawari/pose_backend.hpp"
+#include "test_support.hpp"
 
 using namespace kodawari;
 using nlohmann::json;
 using testing_support::TempDir;
 
 namespace {
+
+using testing_support::base64;
 
 const std::string kRiggedSimple = std::string(KODAWARI_SOURCE_DIR) + "/tests/assets/khronos/RiggedSimple.gltf";
 
@@ -99,22 +101,6 @@ double max_abs_difference(const glm::mat4& a, const glm::mat4& b) {
 }
 
 // ---- a tiny glTF written by the test ----------------------------------------------------
-
-std::string base64(const std::vector<unsigned char>& bytes) {
-    static const char* table = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    for (std::size_t i = 0; i < bytes.size(); i += 3) {
-        const std::uint32_t b0 = bytes[i];
-        const std::uint32_t b1 = i + 1 < bytes.size() ? bytes[i + 1] : 0u;
-        const std::uint32_t b2 = i + 2 < bytes.size() ? bytes[i + 2] : 0u;
-        const std::uint32_t v = (b0 << 16) | (b1 << 8) | b2;
-        out += table[(v >> 18) & 63];
-        out += table[(v >> 12) & 63];
-        out += i + 1 < bytes.size() ? table[(v >> 6) & 63] : '=';
-        out += i + 2 < bytes.size() ? table[v & 63] : '=';
-    }
-    return out;
-}
 
 // Float accessors in one buffer; add() returns the new accessor's index.
 struct GltfWriter {

@@ -28,6 +28,8 @@
 namespace kodawari {
 namespace {
 
+using testing_support::base64;
+
 namespace fs = std::filesystem;
 using testing_support::gltf_validator_command;
 using testing_support::run_command;
@@ -369,23 +371,6 @@ TEST(RiggedExport, ExternalBinSourceBecomesSelfContainedGlb) {
     EXPECT_EQ(model.nodes.at(static_cast<std::size_t>(writer.output_node(1, 0))).name, "right/Spring A");
     // The non-skinned mesh nodes keep their place in the hierarchy.
     EXPECT_EQ(model.scenes.at(0).nodes, (std::vector<int>{writer.output_node(0, -1), writer.output_node(1, -1)}));
-}
-
-/// Base64 for data URIs.
-std::string base64(const std::vector<unsigned char>& bytes) {
-    static const char* kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
-    std::string out;
-    for (std::size_t i = 0; i < bytes.size(); i += 3) {
-        const std::uint32_t b0 = bytes[i];
-        const std::uint32_t b1 = i + 1 < bytes.size() ? bytes[i + 1] : 0u;
-        const std::uint32_t b2 = i + 2 < bytes.size() ? bytes[i + 2] : 0u;
-        const std::uint32_t v = (b0 << 16) | (b1 << 8) | b2;
-        out += kDigits[(v >> 18) & 63];
-        out += kDigits[(v >> 12) & 63];
-        out += i + 1 < bytes.size() ? kDigits[(v >> 6) & 63] : '=';
-        out += i + 2 < bytes.size() ? kDigits[v & 63] : '=';
-    }
-    return out;
 }
 
 // A 1x1 RGB PNG.

@@ -5,6 +5,7 @@
 
 #include <array>
 #include <cstdio>
+#include <cstdint>
 #include <filesystem>
 #include <string>
 #include <system_error>
@@ -89,6 +90,23 @@ inline std::string gltf_validator_command(const std::string& path) {
     return "KODAWARI_NODE_TOOLS=" + shell_quote(KODAWARI_NODE_TOOLS) + " node " +
            shell_quote(std::string(KODAWARI_SOURCE_DIR) + "/tests/tools/validate_gltf.mjs") + " --max-issues 20 " +
            shell_quote(path);
+}
+
+/// Base64 (RFC 4648, with padding), for the data URIs of glTF files written by tests.
+inline std::string base64(const std::vector<unsigned char>& bytes) {
+    static const char* kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";
+    std::string out;
+    for (std::size_t i = 0; i < bytes.size(); i += 3) {
+        const std::uint32_t b0 = bytes[i];
+        const std::uint32_t b1 = i + 1 < bytes.size() ? bytes[i + 1] : 0u;
+        const std::uint32_t b2 = i + 2 < bytes.size() ? bytes[i + 2] : 0u;
+        const std::uint32_t v = (b0 << 16) | (b1 << 8) | b2;
+        out += kDigits[(v >> 18) & 63];
+        out += kDigits[(v >> 12) & 63];
+        out += i + 1 < bytes.size() ? kDigits[(v >> 6) & 63] : '=';
+        out += i + 2 < bytes.size() ? kDigits[v & 63] : '=';
+    }
+    return out;
 }
 
 }  // namespace kodawari::testing_support

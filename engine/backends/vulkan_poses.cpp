@@ -194,21 +194,7 @@ public:
         double ms = -1.0;
         KW_TRY(ctx_->submit(
             [&](const vk::raii::CommandBuffer& cmd) {
-                // load()'s uploads (copies where memory is not unified) wrote what the kernel
-                // reads, and the last dispatch wrote the matrices this one overwrites.
-                const vk::MemoryBarrier before{
-                    .srcAccessMask = vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferWrite,
-                    .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
-                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
-                                    vk::PipelineStageFlagBits::eComputeShader, {}, before, {}, {});
-                ctx_->write_timestamp(cmd, 0, vk::PipelineStageFlagBits::eTopOfPipe);
-                kernel_->dispatch(cmd, std::as_bytes(std::span(&push, 1)), groups);
-                ctx_->write_timestamp(cmd, 1, vk::PipelineStageFlagBits::eBottomOfPipe);
-                // The host reads the matrices after the fence (mapped, or through a copy).
-                const vk::MemoryBarrier after{.srcAccessMask = vk::AccessFlagBits::eShaderWrite,
-                                              .dstAccessMask = vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead};
-                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
-                                    vk::PipelineStageFlagBits::eHost | vk::PipelineStageFlagBits::eTransfer, {}, after, {}, {});
+                kernel_->dispatch_for_host(*ctx_, cmd, std::as_bytes(std::span(&push, 1)), groups);
             },
             &ms));
         gpu_ms_ = ms;

@@ -216,21 +216,7 @@ public:
         double ms = -1.0;
         KW_TRY(ctx_->submit(
             [&](const vk::raii::CommandBuffer& cmd) {
-                // The last frame's dispatch (or a copy) wrote the state this one reads and
-                // overwrites.
-                const vk::MemoryBarrier before{
-                    .srcAccessMask = vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferWrite,
-                    .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
-                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
-                                    vk::PipelineStageFlagBits::eComputeShader, {}, before, {}, {});
-                ctx_->write_timestamp(cmd, 0, vk::PipelineStageFlagBits::eTopOfPipe);
-                kernel_->dispatch(cmd, std::as_bytes(std::span(&push, 1)), groups);
-                ctx_->write_timestamp(cmd, 1, vk::PipelineStageFlagBits::eBottomOfPipe);
-                // Mapped state is read by the host after the fence.
-                const vk::MemoryBarrier to_host{.srcAccessMask = vk::AccessFlagBits::eShaderWrite,
-                                                .dstAccessMask = vk::AccessFlagBits::eHostRead};
-                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eHost, {}, to_host,
-                                    {}, {});
+                kernel_->dispatch_for_host(*ctx_, cmd, std::as_bytes(std::span(&push, 1)), groups);
             },
             &ms));
         gpu_ms_ = ms;

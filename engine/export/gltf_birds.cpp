@@ -253,16 +253,7 @@ Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, st
     model.accessors.reserve(model.accessors.size() + bird_count * (birds::kPartCount + 1));
 
     auto add_channel = [&](int accessor, int node, const char* path) {
-        tinygltf::AnimationSampler sampler;
-        sampler.input = time_accessor;
-        sampler.output = accessor;
-        sampler.interpolation = "LINEAR";
-        animation.samplers.push_back(std::move(sampler));
-        tinygltf::AnimationChannel channel;
-        channel.sampler = static_cast<int>(animation.samplers.size() - 1);
-        channel.target_node = node;
-        channel.target_path = path;
-        animation.channels.push_back(std::move(channel));
+        add_linear_channel(animation, time_accessor, accessor, node, path);
     };
 
     for (std::size_t b = 0; b < bird_count; ++b) {
@@ -344,17 +335,7 @@ Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& wo
                           path + ": " + std::to_string(poses.size()) + " poses exceed the 4 GiB limit of a .glb");
     }
 
-    auto file = AtomicFile::open(path);
-    if (!file) return file.error();
-    // tinygltf reports some failures by throwing (json, allocation); nothing may escape.
-    try {
-        KW_TRY(build_and_write(file.value(), world, poses, frames));
-    } catch (const std::bad_alloc&) {
-        return make_error(Error::Kind::Io, path + ": out of memory while building the glTF file");
-    } catch (const std::exception& e) {
-        return make_error(Error::Kind::Io, path + ": glTF serialization failed (" + e.what() + ")");
-    }
-    return file.value().commit();
+    return write_file_atomically(path, [&](AtomicFile& file) { return build_and_write(file, world, poses, frames); });
 }
 
 }  // namespace kodawari

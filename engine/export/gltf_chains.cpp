@@ -183,18 +183,8 @@ Result<void> build_and_write(AtomicFile& file, const RodScene& scene, std::uint3
         const int translation = add_accessor(model, view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_VEC3);
         const int rotation = add_accessor(model, view, std::size_t{frames} * sizeof(Vec3), TINYGLTF_COMPONENT_TYPE_FLOAT,
                                           frames, TINYGLTF_TYPE_VEC4);
-        for (const auto& [accessor, path] : {std::pair{translation, "translation"}, std::pair{rotation, "rotation"}}) {
-            tinygltf::AnimationSampler sampler;
-            sampler.input = time_accessor;
-            sampler.output = accessor;
-            sampler.interpolation = "LINEAR";
-            animation.samplers.push_back(sampler);
-            tinygltf::AnimationChannel channel;
-            channel.sampler = static_cast<int>(animation.samplers.size() - 1);
-            channel.target_node = track.node;
-            channel.target_path = path;
-            animation.channels.push_back(channel);
-        }
+        add_linear_channel(animation, time_accessor, translation, track.node, "translation");
+        add_linear_channel(animation, time_accessor, rotation, track.node, "rotation");
         // The first frame's pose as the rest pose, for tools that show the file unanimated.
         tinygltf::Node& node = model.nodes[static_cast<std::size_t>(track.node)];
         Vec3 t;
@@ -226,17 +216,8 @@ Result<void> write_chains_glb(const std::string& path, const RodScene& scene, st
                                                          std::to_string(positions.size()) + " and " +
                                                          std::to_string(orientations.size()));
     }
-    auto file = AtomicFile::open(path);
-    if (!file) return file.error();
-    // tinygltf reports some failures by throwing (json, allocation); nothing may escape.
-    try {
-        KW_TRY(build_and_write(file.value(), scene, frames, positions, orientations));
-    } catch (const std::bad_alloc&) {
-        return make_error(Error::Kind::Io, path + ": out of memory while building the glTF file");
-    } catch (const std::exception& e) {
-        return make_error(Error::Kind::Io, path + ": glTF serialization failed (" + e.what() + ")");
-    }
-    return file.value().commit();
+    return write_file_atomically(
+        path, [&](AtomicFile& file) { return build_and_write(file, scene, frames, positions, orientations); });
 }
 
 }  // namespace kodawari

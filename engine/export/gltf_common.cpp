@@ -186,4 +186,30 @@ Result<void> write_glb(AtomicFile& file, tinygltf::Model& model) {
     return {};
 }
 
+void add_linear_channel(tinygltf::Animation& animation, int input, int output, int node, const char* path) {
+    tinygltf::AnimationSampler sampler;
+    sampler.input = input;
+    sampler.output = output;
+    sampler.interpolation = "LINEAR";
+    animation.samplers.push_back(std::move(sampler));
+    tinygltf::AnimationChannel channel;
+    channel.sampler = static_cast<int>(animation.samplers.size() - 1);
+    channel.target_node = node;
+    channel.target_path = path;
+    animation.channels.push_back(std::move(channel));
+}
+
+Result<void> write_file_atomically(const std::string& path, const std::function<Result<void>(AtomicFile&)>& build) {
+    auto file = AtomicFile::open(path);
+    if (!file) return file.error();
+    try {
+        KW_TRY(build(file.value()));
+    } catch (const std::bad_alloc&) {
+        return make_error(Error::Kind::Io, path + ": out of memory while building the glTF file");
+    } catch (const std::exception& e) {
+        return make_error(Error::Kind::Io, path + ": glTF serialization failed (" + e.what() + ")");
+    }
+    return file.value().commit();
+}
+
 }  // namespace kodawari::gltf

@@ -3,6 +3,7 @@
 // meshes, the model's single buffer, accessors, and streaming a .glb into an AtomicFile.
 
 #include <array>
+#include <functional>
 #include <cstddef>
 #include <cstdint>
 #include <streambuf>
@@ -64,5 +65,14 @@ private:
 /// Serializes `model` as a .glb into `file` (not committed). tinygltf may throw; callers
 /// catch.
 [[nodiscard]] Result<void> write_glb(AtomicFile& file, tinygltf::Model& model);
+
+/// Adds a LINEAR sampler over `input` (key times) and `output` (values) and a channel
+/// driving `path` ("translation", "rotation", "scale") of `node` with it.
+void add_linear_channel(tinygltf::Animation& animation, int input, int output, int node, const char* path);
+
+/// Opens `path` atomically, runs `build` on it (which writes the whole file), and
+/// commits. tinygltf reports some failures (JSON, allocation) by throwing: they become
+/// Error::Kind::Io naming `path`, and nothing is left behind.
+[[nodiscard]] Result<void> write_file_atomically(const std::string& path, const std::function<Result<void>(AtomicFile&)>& build);
 
 }  // namespace kodawari::gltf

@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "core/binary_file.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/export.hpp"
 
@@ -133,18 +134,9 @@ namespace {
 
 // Loads the source with tinygltf: .glb/.vrm by their magic, anything else as JSON.
 Result<tinygltf::Model> load_source(const std::string& path) {
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (f == nullptr) return make_error(Error::Kind::Io, path + ": cannot open: " + std::strerror(errno));
-    std::vector<unsigned char> bytes;
-    std::array<unsigned char, 65536> block{};
-    for (;;) {
-        const std::size_t n = std::fread(block.data(), 1, block.size(), f);
-        bytes.insert(bytes.end(), block.begin(), block.begin() + static_cast<std::ptrdiff_t>(n));
-        if (n < block.size()) break;
-    }
-    const bool failed = std::ferror(f) != 0;
-    std::fclose(f);
-    if (failed) return make_error(Error::Kind::Io, path + ": read error");
+    auto read = core::read_binary_file(path);
+    if (!read) return read.error();
+    std::vector<unsigned char> bytes = std::move(read).value();
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
         return make_error(Error::Kind::Unsupported, path + ": files over 4 GiB are not supported");
     }
@@ -462,16 +454,7 @@ Result<void> RiggedGlbWriter::Impl::build_and_write(AtomicFile& file) {
         tinygltf::Animation animation;
         animation.name = animation_name;
         auto add_channel = [&](int node, int accessor, const char* path) {
-            tinygltf::AnimationSampler sampler;
-            sampler.input = time_accessor;
-            sampler.output = accessor;
-            sampler.interpolation = "LINEAR";
-            animation.samplers.push_back(std::move(sampler));
-            tinygltf::AnimationChannel channel;
-            channel.sampler = static_cast<int>(animation.samplers.size() - 1);
-            channel.target_node = node;
-            channel.target_path = path;
-            animation.channels.push_back(std::move(channel));
+            add_linear_channel(animation, time_accessor, accessor, node, path);
         };
         const std::size_t count = tracks();
         std::vector<float> values;
@@ -530,17 +513,7 @@ Result<void> RiggedGlbWriter::finish(const std::string& path) {
     Impl& w = *impl_;
     assert(!w.finished && "finish() once");
     if (w.frames == 0) return make_error(Error::Kind::InvalidInput, path + ": no frames to write");
-    auto file = AtomicFile::open(path);
-    if (!file) return file.error();
-    // tinygltf reports some failures by throwing (json, allocation); nothing may escape.
-    try {
-        KW_TRY(w.build_and_write(file.value()));
-    } catch (const std::bad_alloc&) {
-        return make_error(Error::Kind::Io, path + ": out of memory while building the glTF file");
-    } catch (const std::exception& e) {
-        return make_error(Error::Kind::Io, path + ": glTF serialization failed (" + e.what() + ")");
-    }
-    return file.value().commit();
+    return write_file_atomically(path, [&](AtomicFile& file) { return w.build_and_write(file); });
 }
 
 }  // namespace kodawari

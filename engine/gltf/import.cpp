@@ -24,6 +24,8 @@
 
 #include "kodawari/gltf/character.hpp"
 
+#include "core/binary_file.hpp"
+
 namespace kodawari::gltf {
 namespace {
 
@@ -69,24 +71,6 @@ std::string printable(const unsigned char* bytes, std::size_t n) {
         }
     }
     return out + "\"";
-}
-
-Result<std::vector<unsigned char>> read_bytes(const std::string& path) {
-    std::error_code ec;
-    if (fs::is_directory(path, ec)) return make_error(Error::Kind::Io, path + ": cannot read: is a directory");
-    std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (f == nullptr) return make_error(Error::Kind::Io, path + ": cannot open: " + std::strerror(errno));
-    std::vector<unsigned char> bytes;
-    std::array<unsigned char, 65536> block{};
-    for (;;) {
-        const std::size_t n = std::fread(block.data(), 1, block.size(), f);
-        bytes.insert(bytes.end(), block.begin(), block.begin() + static_cast<std::ptrdiff_t>(n));
-        if (n < block.size()) break;
-    }
-    const bool failed = std::ferror(f) != 0;
-    std::fclose(f);
-    if (failed) return make_error(Error::Kind::Io, path + ": read error");
-    return bytes;
 }
 
 std::string percent_decode(std::string_view uri) {
@@ -787,7 +771,7 @@ Result<void> load_animations(const Context& ctx, const tinygltf::Model& model, C
 Result<Character> load_character(const std::string& path) {
     try {
         const Context ctx{path};
-        auto bytes = read_bytes(path);
+        auto bytes = core::read_binary_file(path);
         if (!bytes) return bytes.error();
         const fs::path base_dir = fs::path(path).parent_path();
         std::string extensions;

@@ -80,4 +80,19 @@ void ComputePipeline::dispatch(const vk::raii::CommandBuffer& cmd, std::span<con
     cmd.dispatch(groups_x, 1, 1);
 }
 
+void ComputePipeline::dispatch_for_host(const VulkanContext& ctx, const vk::raii::CommandBuffer& cmd,
+                                        std::span<const std::byte> push, std::uint32_t groups_x) const {
+    const vk::MemoryBarrier before{.srcAccessMask = vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferWrite,
+                                   .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
+    cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
+                        vk::PipelineStageFlagBits::eComputeShader, {}, before, {}, {});
+    ctx.write_timestamp(cmd, 0, vk::PipelineStageFlagBits::eTopOfPipe);
+    dispatch(cmd, push, groups_x);
+    ctx.write_timestamp(cmd, 1, vk::PipelineStageFlagBits::eBottomOfPipe);
+    const vk::MemoryBarrier after{.srcAccessMask = vk::AccessFlagBits::eShaderWrite,
+                                  .dstAccessMask = vk::AccessFlagBits::eHostRead | vk::AccessFlagBits::eTransferRead};
+    cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader,
+                        vk::PipelineStageFlagBits::eHost | vk::PipelineStageFlagBits::eTransfer, {}, after, {}, {});
+}
+
 }  // namespace kodawari::gpu

@@ -34,6 +34,14 @@ public:
     /// Binds pipeline and set, pushes constants and dispatches.
     void dispatch(const vk::raii::CommandBuffer& cmd, std::span<const std::byte> push, std::uint32_t groups_x) const;
 
+    /// The one-dispatch step of the rod and pose backends: a barrier after what earlier
+    /// dispatches and copies wrote (the state or output this dispatch reads and
+    /// overwrites), the dispatch between timestamps 0 and 1, then a barrier that makes
+    /// its writes visible to the host (mapped buffers, after the fence) and to copies
+    /// (staged readback).
+    void dispatch_for_host(const VulkanContext& ctx, const vk::raii::CommandBuffer& cmd, std::span<const std::byte> push,
+                           std::uint32_t groups_x) const;
+
 private:
     ComputePipeline() = default;
     vk::raii::DescriptorSetLayout set_layout_{nullptr};

@@ -489,17 +489,7 @@ Result<void> check_template(const JsonReader& r, const JsonNode& node, const Cha
     return {};
 }
 
-Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::Skeleton& skeleton,
-                        const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
-    KW_TRY(r.object(node, {"name", "joint", "offset", "shape", "thickness", "mass", "physics", "collide", "mirror", "views"}));
-    ChainSpec c;
-    c.path = node.path;
-    c.params = defaults;
-    const JsonNode name = r.member(node, "name");
-    KW_SCENE_ASSIGN(c.name, read_name(r, name));
-    KW_SCENE_ASSIGN(c.joint, find_joint(r, r.member(node, "joint"), skeleton));
-    KW_TRY(optional_member(r, node, "offset", c.offset, [&](const JsonNode& n) { return read_transform(r, n); }));
-    KW_SCENE_ASSIGN(c.base, read_shape(r, r.member(node, "shape"), 0));
+Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, ChainSpec& c) {
     KW_TRY(optional_member(r, node, "thickness", c.thickness,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1.0)); }));
     KW_TRY(optional_member(r, node, "mass", c.mass, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
@@ -518,6 +508,21 @@ Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::S
         }
     }
     KW_TRY(check_template(r, node, c));
+    return {};
+}
+
+Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::Skeleton& skeleton,
+                        const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
+    KW_TRY(r.object(node, {"name", "joint", "offset", "shape", "thickness", "mass", "physics", "collide", "mirror", "views"}));
+    ChainSpec c;
+    c.path = node.path;
+    c.params = defaults;
+    const JsonNode name = r.member(node, "name");
+    KW_SCENE_ASSIGN(c.name, read_name(r, name));
+    KW_SCENE_ASSIGN(c.joint, find_joint(r, r.member(node, "joint"), skeleton));
+    KW_TRY(optional_member(r, node, "offset", c.offset, [&](const JsonNode& n) { return read_transform(r, n); }));
+    KW_SCENE_ASSIGN(c.base, read_shape(r, r.member(node, "shape"), 0));
+    KW_TRY(read_chain_settings(r, node, c));
 
     const auto unique = [&](const JsonNode& at, const std::string& candidate) -> Result<void> {
         for (const ChainSpec& other : chains) {

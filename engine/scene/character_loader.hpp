@@ -41,6 +41,9 @@ inline constexpr std::size_t kMaxPerCharacter = 64;
 /// A sphere or capsule on the joint whose index `joint` returns for the `joint` member.
 [[nodiscard]] Result<ColliderSpec> read_collider(const JsonReader& r, const JsonNode& node,
                                                  const std::function<Result<std::uint32_t>(const JsonNode&)>& joint);
+/// A chain's `thickness`, `mass`, `physics`, `collide` and `views` over the values
+/// already in `c` (its base shape set), then check_template().
+[[nodiscard]] Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, ChainSpec& c);
 /// Builds the chain's template once, so that a bad shape is reported where it is written.
 [[nodiscard]] Result<void> check_template(const JsonReader& r, const JsonNode& node, const ChainSpec& chain);
 

@@ -153,24 +153,7 @@ Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const 
     const gltf::PhysicsScale scaled = gltf::scaled_physics(ch, found.value());
     c.thickness = scaled.thickness;
     c.mass = scaled.mass;
-    KW_TRY(optional_member(r, node, "thickness", c.thickness,
-                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1.0)); }));
-    KW_TRY(optional_member(r, node, "mass", c.mass, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
-    const JsonNode physics = r.member(node, "physics");
-    if (physics.present()) KW_TRY(read_physics(r, physics, c.params));
-    KW_TRY(optional_member(r, node, "collide", c.collide, [&](const JsonNode& n) { return r.boolean(n); }));
-    const JsonNode views = r.member(node, "views");
-    if (views.present()) {
-        std::size_t n = 0;
-        KW_SCENE_ASSIGN(n, read_array(r, views, 0, rods::kMaxViewExamples,
-                                      "an array of at most " + std::to_string(rods::kMaxViewExamples) + " view examples"));
-        for (std::size_t k = 0; k < n; ++k) {
-            ViewSpec v;
-            KW_SCENE_ASSIGN(v, read_view(r, r.element(views, k), c.base.positions.size()));
-            c.views.push_back(std::move(v));
-        }
-    }
-    KW_TRY(check_template(r, node, c));
+    KW_TRY(read_chain_settings(r, node, c));
     chains.push_back(std::move(c));
     return {};
 }

@@ -1,0 +1,15 @@
+#pragma once
+// Reading whole files into memory, with errors that name the file.
+
+#include <string>
+#include <vector>
+
+#include "kodawari/result.hpp"
+
+namespace kodawari::core {
+
+/// The bytes of the file at `path`. Error::Kind::Io naming the file when it cannot be
+/// opened (with the system's reason), is a directory, or a read fails.
+[[nodiscard]] Result<std::vector<unsigned char>> read_binary_file(const std::string& path);
+
+}  // namespace kodawari::core
