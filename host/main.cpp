@@ -24,6 +24,12 @@ commands:
   rig CHARACTER [--chains PATTERNS|--roots NAMES] [--animation CLIP] [--name NAME] [--out SCENE.json]
       find the chains (VRM spring bones, name patterns or named roots) and colliders of a rigged
       .gltf/.glb/.vrm character and write a scene that simulates it (default ./<character>.json)
+  sketch SCENE --chain CHARACTER/CHAIN --stroke STROKE.json [--frame N] [--camera EX,EY,EZ,TX,TY,TZ]
+         [--size WxH] [--influence P] [--out SCENE2.json]
+  sketch SCENE --chain CHARACTER/CHAIN --undo [--out SCENE2.json]
+      the chain takes the shape of a stroke drawn in pixels over the view (default: the scene's camera
+      at frame 0, 1280x720) as a new view example for that view direction (docs/sketch.md); --undo
+      removes the last one a sketch added
   info
       version, Vulkan devices and which one is chosen, CPU threads
 
@@ -52,6 +58,7 @@ int main(int argc, char** argv) {
         if (command == "info") return cmd_info(args);
         if (command == "bench") return cmd_bench(args);
         if (command == "rig") return cmd_rig(args);
+        if (command == "sketch") return cmd_sketch(args);
         throw UsageError{"unknown command \"" + command + "\""};
     } catch (const UsageError& e) {
         std::fprintf(stderr, "kodawari: %s\n\n%s", e.message.c_str(), kUsage);

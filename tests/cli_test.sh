@@ -125,5 +125,41 @@ check "crowd-gltf export passes glTF-Validator" node tests/tools/validate_gltf.m
 "$bin" bench crowd --count 13 --frames 2 --json "$work/bench-crowd.json" >/dev/null 2>&1
 check "bench crowd json" bash -c "node -e 'const r=require(\"$work/bench-crowd.json\"); if (r.benchmark!==\"crowd\"||r.instances!==13||r.results.length!==3||!(r.results[2].per_second>0)) process.exit(1)'"
 
+# sketch (SPEC A.6): a stroke becomes a view example of ahoge, reported and loadable;
+# --undo gives the file back byte for byte; bad strokes exit 2 naming file and path.
+cp scenes/ahoge.json "$work/ahoge.json"
+printf '{"points": [[640, 300], [660, 260], [700, 240], [740, 250]]}' >"$work/stroke.json"
+"$bin" sketch "$work/ahoge.json" --chain girl/ahoge --stroke "$work/stroke.json" --influence 30 >"$work/sketch.out" 2>&1
+rc=$?
+cat "$work/sketch.out"
+check "sketch exits 0" test $rc -eq 0
+check "sketch prints the view direction" grep -q "^view direction \[" "$work/sketch.out"
+check "sketch prints the reprojection error" grep -q "^reprojection error " "$work/sketch.out"
+check "sketch names the example" grep -q 'view example [0-9] "sketch 1"' "$work/sketch.out"
+check "sketched scene has the example" grep -q '"name": "sketch 1"' "$work/ahoge.json"
+"$bin" run "$work/ahoge.json" --backend cpu --frames 10 --no-export >/dev/null 2>&1
+check "sketched scene runs" test $? -eq 0
+"$bin" sketch "$work/ahoge.json" --chain girl/ahoge --stroke "$work/stroke.json" --camera 1.2,1.7,0,0,1.62,0 --out "$work/ahoge2.json" >"$work/sketch2.out" 2>&1
+check "sketch --camera --out" bash -c "test $? -eq 0 && grep -q '\"name\": \"sketch 2\"' '$work/ahoge2.json'"
+"$bin" sketch "$work/ahoge2.json" --chain girl/ahoge --undo >/dev/null 2>&1
+check "sketch --undo removes the last sketch" cmp -s "$work/ahoge.json" "$work/ahoge2.json"
+cp scenes/bunny.json "$work/bunny.json"
+"$bin" sketch "$work/bunny.json" --chain bunny/ear_l --stroke "$work/stroke.json" --camera 1.2,2.6,1.2,0,1.65,0 >/dev/null 2>&1
+"$bin" sketch "$work/bunny.json" --chain bunny/ear_l --undo >/dev/null 2>&1
+check "sketch then --undo gives the file back" cmp -s scenes/bunny.json "$work/bunny.json"
+printf '{"points": [[640, 300]]}' >"$work/short.json"
+cp "$work/ahoge.json" "$work/before.json"
+"$bin" sketch "$work/ahoge.json" --chain girl/ahoge --stroke "$work/short.json" >"$work/short.out" 2>&1
+check "sketch with a 1-point stroke exits 2" test $? -eq 2
+check "sketch error names the stroke file and path" grep -q 'short.json: \$.points' "$work/short.out"
+check "failed sketch leaves the scene" cmp -s "$work/ahoge.json" "$work/before.json"
+printf '{"points": [[640, 300], [1, "x"]]}' >"$work/nan.json"
+"$bin" sketch "$work/ahoge.json" --chain girl/ahoge --stroke "$work/nan.json" >"$work/nan.out" 2>&1
+check "sketch with a non-number exits 2" bash -c "test $? -eq 2 && grep -q 'points\[1\]\[1\]' '$work/nan.out'"
+"$bin" sketch "$work/ahoge.json" --chain girl/tail --stroke "$work/stroke.json" >"$work/chain.out" 2>&1
+check "sketch of an unknown chain exits 2" bash -c "test $? -eq 2 && grep -q 'no chain' '$work/chain.out'"
+"$bin" sketch "$work/bunny.json" --chain bunny/ear_r --stroke "$work/stroke.json" >"$work/mirror.out" 2>&1
+check "sketch of a mirrored chain exits 2" bash -c "test $? -eq 2 && grep -q 'mirror' '$work/mirror.out'"
+
 echo "cli: $passed passed, $failed failed"
 test $failed -eq 0

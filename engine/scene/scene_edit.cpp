@@ -1,0 +1,408 @@
+// Editing a scene file's text in place (scene_edit.hpp). nlohmann reads the file to find
+// the chain and its examples; a small scanner finds where they are in the text, and the
+// edit splices only there, so the rest of the file keeps its bytes.
+
+#include "kodawari/scene_edit.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstdio>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include <nlohmann/json.hpp>
+
+#include "kodawari/atomic_file.hpp"
+#include "kodawari/rods/world.hpp"
+
+namespace kodawari {
+namespace {
+
+using Json = nlohmann::ordered_json;
+
+// ---- where values are in the text (the text is valid JSON: nlohmann parsed it first)
+
+struct Span {
+    std::size_t begin = 0, end = 0;  // [begin, end)
+};
+
+struct Member {
+    std::string key;
+    std::size_t key_begin = 0;
+    Span value;
+};
+
+std::size_t skip_ws(const std::string& t, std::size_t i) {
+    while (i < t.size() && (t[i] == ' ' || t[i] == '\t' || t[i] == '\n' || t[i] == '\r')) ++i;
+    return i;
+}
+
+std::size_t value_end(const std::string& t, std::size_t i) {
+    assert(i < t.size());
+    if (t[i] == '"') {
+        ++i;
+        while (i < t.size() && t[i] != '"') i += t[i] == '\\' ? 2 : 1;
+        return i + 1;
+    }
+    if (t[i] == '{' || t[i] == '[') {
+        int depth = 0;
+        while (i < t.size()) {
+            const char c = t[i];
+            if (c == '"') {
+                i = value_end(t, i);
+                continue;
+            }
+            if (c == '{' || c == '[') ++depth;
+            if ((c == '}' || c == ']') && --depth == 0) return i + 1;
+            ++i;
+        }
+        return i;
+    }
+    while (i < t.size() && std::string(",]} \t\n\r").find(t[i]) == std::string::npos) ++i;
+    return i;
+}
+
+// The members of the object at `i` ('{').
+std::vector<Member> members(const std::string& t, std::size_t i) {
+    assert(t[i] == '{');
+    std::vector<Member> out;
+    i = skip_ws(t, i + 1);
+    while (i < t.size() && t[i] != '}') {
+        Member m;
+        m.key_begin = i;
+        const std::size_t key_end = value_end(t, i);
+        m.key = Json::parse(t.substr(i, key_end - i)).get<std::string>();
+        i = skip_ws(t, key_end);
+        assert(t[i] == ':');
+        i = skip_ws(t, i + 1);
+        m.value = {i, value_end(t, i)};
+        out.push_back(m);
+        i = skip_ws(t, m.value.end);
+        if (i < t.size() && t[i] == ',') i = skip_ws(t, i + 1);
+    }
+    return out;
+}
+
+// The elements of the array at `i` ('[').
+std::vector<Span> elements(const std::string& t, std::size_t i) {
+    assert(t[i] == '[');
+    std::vector<Span> out;
+    i = skip_ws(t, i + 1);
+    while (i < t.size() && t[i] != ']') {
+        out.push_back({i, value_end(t, i)});
+        i = skip_ws(t, out.back().end);
+        if (i < t.size() && t[i] == ',') i = skip_ws(t, i + 1);
+    }
+    return out;
+}
+
+const Member* find_member(const std::vector<Member>& ms, const std::string& key) {
+    for (const Member& m : ms) {
+        if (m.key == key) return &m;
+    }
+    return nullptr;
+}
+
+// The white space that starts the line of `pos`, when only white space precedes it there.
+std::optional<std::string> line_indent(const std::string& t, std::size_t pos) {
+    const std::size_t nl = t.rfind('\n', pos == 0 ? 0 : pos - 1);
+    const std::size_t start = nl == std::string::npos ? 0 : nl + 1;
+    const std::string lead = t.substr(start, pos - start);
+    if (lead.find_first_not_of(" \t") != std::string::npos) return std::nullopt;
+    return lead;
+}
+
+// ---- the chain
+
+Error fail(const std::string& path, const std::string& json_path, const std::string& message) {
+    return make_error(Error::Kind::InvalidInput, path + ": " + json_path + ": " + message);
+}
+
+struct ChainPlace {
+    Json chain;             // the chain object as parsed
+    std::string json_path;  // "$.characters[0].chains[1]"
+    std::vector<Member> members;
+    std::optional<std::size_t> views;  // index into members
+    std::vector<Span> view_spans;
+};
+
+Result<ChainPlace> find_chain(const std::string& text, const std::string& path, const std::string& chain_id) {
+    Json root;
+    try {
+        root = Json::parse(text);
+    } catch (const Json::exception& e) {
+        return make_error(Error::Kind::InvalidInput, path + ": not valid JSON: " + e.what());
+    }
+    const std::size_t slash = chain_id.find('/');
+    if (slash == std::string::npos || slash == 0 || slash + 1 == chain_id.size() ||
+        chain_id.find('/', slash + 1) != std::string::npos) {
+        return make_error(Error::Kind::InvalidInput,
+                          "chain \"" + chain_id + "\": expected CHARACTER/CHAIN, e.g. \"bunny/ear_l\"");
+    }
+    const std::string character = chain_id.substr(0, slash);
+    const std::string name = chain_id.substr(slash + 1);
+    if (!root.is_object() || !root.contains("characters") || !root["characters"].is_array()) {
+        return fail(path, "$.characters", "the scene has no characters, so no chain \"" + chain_id + "\"");
+    }
+    const Json& characters = root["characters"];
+    std::vector<std::string> character_names;
+    std::size_t c = 0;
+    for (; c < characters.size(); ++c) {
+        const Json& ch = characters[c];
+        const std::string n = ch.is_object() && ch.contains("name") && ch["name"].is_string() ? ch["name"].get<std::string>() : "";
+        if (n == character) break;
+        character_names.push_back("\"" + n + "\"");
+    }
+    if (c == characters.size()) {
+        std::string list;
+        for (const auto& n : character_names) list += (list.empty() ? "" : ", ") + n;
+        return fail(path, "$.characters", "no character \"" + character + "\" (characters: " + list + ")");
+    }
+    const std::string character_path = "$.characters[" + std::to_string(c) + "]";
+    const Json& chains = characters[c].contains("chains") ? characters[c]["chains"] : Json::array();
+    std::vector<std::string> chain_names;
+    std::size_t j = 0;
+    for (; j < chains.size(); ++j) {
+        const Json& ch = chains[j];
+        const std::string n = ch.is_object() && ch.contains("name") && ch["name"].is_string() ? ch["name"].get<std::string>() : "";
+        if (n == name) break;
+        if (ch.is_object() && ch.contains("mirror") && ch["mirror"].is_string() && ch["mirror"].get<std::string>() == name) {
+            return fail(path, character_path + ".chains[" + std::to_string(j) + "].mirror",
+                        "\"" + name + "\" is the mirrored copy of \"" + n +
+                            "\", which the loader generates from it (with its view examples mirrored); sketch \"" +
+                            character + "/" + n + "\" instead");
+        }
+        chain_names.push_back("\"" + n + "\"");
+    }
+    if (j == chains.size()) {
+        std::string list;
+        for (const auto& n : chain_names) list += (list.empty() ? "" : ", ") + n;
+        return fail(path, character_path + ".chains",
+                    "character \"" + character + "\" has no chain \"" + name + "\" (chains: " + list + ")");
+    }
+
+    ChainPlace place;
+    place.chain = chains[j];
+    place.json_path = character_path + ".chains[" + std::to_string(j) + "]";
+    // The same walk in the text.
+    const std::size_t top = skip_ws(text, text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0);  // after a UTF-8 BOM
+    const auto top_members = members(text, top);
+    const Member* chars = find_member(top_members, "characters");
+    assert(chars != nullptr);
+    const Span ch_span = elements(text, chars->value.begin)[c];
+    const auto ch_members = members(text, ch_span.begin);
+    const Member* chains_member = find_member(ch_members, "chains");
+    assert(chains_member != nullptr);
+    const Span chain_span = elements(text, chains_member->value.begin)[j];
+    place.members = members(text, chain_span.begin);
+    for (std::size_t m = 0; m < place.members.size(); ++m) {
+        if (place.members[m].key == "views") place.views = m;
+    }
+    if (place.views) {
+        const Span v = place.members[*place.views].value;
+        if (text[v.begin] != '[') return fail(path, place.json_path + ".views", "expected an array");
+        place.view_spans = elements(text, v.begin);
+    }
+    return place;
+}
+
+// n of a "sketch <n>" name, or nullopt.
+std::optional<long> sketch_number(const Json& view) {
+    if (!view.is_object() || !view.contains("name") || !view["name"].is_string()) return std::nullopt;
+    const std::string name = view["name"].get<std::string>();
+    const std::string prefix = "sketch ";
+    if (name.rfind(prefix, 0) != 0 || name.size() == prefix.size() || name.size() > prefix.size() + 9) return std::nullopt;
+    const std::string digits = name.substr(prefix.size());
+    if (digits.find_first_not_of("0123456789") != std::string::npos) return std::nullopt;
+    return std::stol(digits);
+}
+
+// ---- writing a view example
+
+// Six significant digits: what a person reads and edits, well inside the loader's
+// tolerances (and only the segment directions of an example matter, SPEC A.2).
+std::string num(double v) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.6g", v);
+    const std::string s(text);
+    return s == "-0" ? "0" : s;
+}
+
+std::string vec(glm::vec3 v) { return "[" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + "]"; }
+
+std::string view_text(const ViewSpec& view, const std::string& name, const std::string& indent) {
+    Json name_json = name;
+    std::string out = "{\"name\": " + name_json.dump() + ", \"direction\": " + vec(glm::normalize(view.view.direction)) +
+                      ", \"influence\": " + num(view.view.influence) + ",\n" + indent + " \"shape\": {\"positions\": [";
+    for (std::size_t i = 0; i < view.shape.positions.size(); ++i) {
+        out += (i ? ", " : "") + (i == 0 ? std::string("[0, 0, 0]") : vec(view.shape.positions[i]));
+    }
+    out += "],\n" + indent + "           \"orientations\": [";
+    for (std::size_t i = 0; i < view.shape.orientations.size(); ++i) {
+        const glm::quat q = view.shape.orientations[i];
+        out += std::string(i ? ", " : "") + "[" + num(q.x) + ", " + num(q.y) + ", " + num(q.z) + ", " + num(q.w) + "]";
+    }
+    return out + "]}}";
+}
+
+}  // namespace
+
+Result<SceneEdit> add_view_example(const std::string& text, const std::string& path, const std::string& chain,
+                                   const ViewSpec& view, float replace_deg) {
+    assert(view.shape.positions.size() >= 2 && view.shape.positions.size() == view.shape.orientations.size());
+    auto found = find_chain(text, path, chain);
+    if (!found) return found.error();
+    const ChainPlace& place = found.value();
+    const Json views = place.chain.contains("views") ? place.chain["views"] : Json::array();
+
+    // The example to replace: the nearest within replace_deg.
+    const glm::vec3 d = glm::normalize(view.view.direction);
+    std::optional<std::size_t> replace;
+    float best = replace_deg;
+    long highest = 0;
+    for (std::size_t k = 0; k < views.size(); ++k) {
+        if (auto n = sketch_number(views[k])) highest = std::max(highest, *n);
+        if (!views[k].is_object() || !views[k].contains("direction")) continue;
+        const Json& dir = views[k]["direction"];
+        if (!dir.is_array() || dir.size() != 3 || !dir[0].is_number() || !dir[1].is_number() || !dir[2].is_number()) continue;
+        const glm::vec3 dk(dir[0].get<float>(), dir[1].get<float>(), dir[2].get<float>());
+        if (!(glm::length(dk) > 0.0f)) continue;
+        const float angle = glm::degrees(std::acos(std::clamp(glm::dot(glm::normalize(dk), d), -1.0f, 1.0f)));
+        if (angle <= best) {
+            best = angle;
+            replace = k;
+        }
+    }
+    if (!replace && views.size() >= rods::kMaxViewExamples) {
+        return fail(path, place.json_path + ".views",
+                    "the chain already has " + std::to_string(views.size()) + " view examples, the most a chain may have (" +
+                        std::to_string(rods::kMaxViewExamples) + "); remove one, or sketch from within " +
+                        num(replace_deg) + " degrees of an example's direction to redraw it");
+    }
+
+    SceneEdit edit;
+    edit.name = "sketch " + std::to_string(highest + 1);
+    edit.text = text;
+    if (replace) {
+        const Span s = place.view_spans[*replace];
+        const std::string indent = line_indent(text, s.begin).value_or("");
+        edit.text.replace(s.begin, s.end - s.begin, view_text(view, edit.name, indent));
+        edit.index = static_cast<std::uint32_t>(*replace);
+        edit.replaced = true;
+        const Json& old = views[*replace];
+        edit.replaced_name = old.contains("name") && old["name"].is_string() ? old["name"].get<std::string>() : "";
+        return edit;
+    }
+    edit.index = static_cast<std::uint32_t>(views.size());
+    if (place.views && !place.view_spans.empty()) {
+        // After the last example, on a line of its own when it sits on one.
+        const Span last = place.view_spans.back();
+        const auto indent = line_indent(text, last.begin);
+        edit.text.insert(last.end, indent ? ",\n" + *indent + view_text(view, edit.name, *indent)
+                                          : ", " + view_text(view, edit.name, ""));
+    } else if (place.views) {
+        edit.text.insert(place.members[*place.views].value.begin + 1, view_text(view, edit.name, ""));
+    } else {
+        // No `views` yet: a new last member of the chain.
+        const Member& last = place.members.back();
+        const auto indent = line_indent(text, last.key_begin);
+        const std::string member = "\"views\": [" + view_text(view, edit.name, indent.value_or("")) + "]";
+        edit.text.insert(last.value.end, indent ? ",\n" + *indent + member : ", " + member);
+    }
+    return edit;
+}
+
+Result<SceneEdit> remove_last_sketch(const std::string& text, const std::string& path, const std::string& chain) {
+    auto found = find_chain(text, path, chain);
+    if (!found) return found.error();
+    const ChainPlace& place = found.value();
+    const Json views = place.chain.contains("views") ? place.chain["views"] : Json::array();
+    std::optional<std::size_t> target;
+    long highest = 0;
+    for (std::size_t k = 0; k < views.size(); ++k) {
+        if (auto n = sketch_number(views[k]); n && *n >= highest) {
+            highest = *n;
+            target = k;
+        }
+    }
+    if (!target) {
+        return fail(path, place.json_path + ".views",
+                    "the chain has no sketched view example (named \"sketch <n>\") to undo");
+    }
+    SceneEdit edit;
+    edit.text = text;
+    edit.index = static_cast<std::uint32_t>(*target);
+    edit.name = views[*target]["name"].get<std::string>();
+    const std::vector<Span>& e = place.view_spans;
+    const std::size_t k = *target;
+    if (e.size() == 1) {
+        // The whole `views` member goes, with the separator before it (or after it when
+        // it is the first member): the exact inverse of adding the first example.
+        const std::size_t mi = *place.views;
+        const Member& v = place.members[mi];
+        if (mi > 0) {
+            const std::size_t from = place.members[mi - 1].value.end;
+            edit.text.erase(from, v.value.end - from);
+        } else if (place.members.size() > 1) {
+            edit.text.erase(v.key_begin, place.members[1].key_begin - v.key_begin);
+        }
+    } else if (k > 0) {
+        edit.text.erase(e[k - 1].end, e[k].end - e[k - 1].end);
+    } else {
+        edit.text.erase(e[0].begin, e[1].begin - e[0].begin);
+    }
+    return edit;
+}
+
+Result<std::vector<glm::dvec2>> parse_stroke(const std::string& text, const std::string& path) {
+    Json root;
+    try {
+        root = Json::parse(text);
+    } catch (const Json::exception& e) {
+        return make_error(Error::Kind::InvalidInput, path + ": not valid JSON: " + e.what());
+    }
+    const std::string what = "an array of at least 2 points [x, y] in pixels";
+    if (!root.is_object()) return fail(path, "$", "expected an object {\"points\": [[x, y], ...]}");
+    for (const auto& item : root.items()) {
+        if (item.key() != "points") return fail(path, "$." + item.key(), "unknown key (expected: points)");
+    }
+    if (!root.contains("points")) return fail(path, "$.points", "expected " + what + ", got nothing (required key missing)");
+    const Json& points = root["points"];
+    if (!points.is_array() || points.size() < 2) return fail(path, "$.points", "expected " + what + ", got " + points.dump());
+    std::vector<glm::dvec2> out;
+    for (std::size_t i = 0; i < points.size(); ++i) {
+        const Json& p = points[i];
+        const std::string at = "$.points[" + std::to_string(i) + "]";
+        if (!p.is_array() || p.size() != 2) return fail(path, at, "expected a point [x, y], got " + p.dump());
+        glm::dvec2 v(0.0);
+        for (std::size_t k = 0; k < 2; ++k) {
+            if (!p[k].is_number() || !std::isfinite(p[k].get<double>())) {
+                return fail(path, at + "[" + std::to_string(k) + "]", "expected a finite number, got " + p[k].dump());
+            }
+            v[static_cast<glm::length_t>(k)] = p[k].get<double>();
+        }
+        out.push_back(v);
+    }
+    return out;
+}
+
+Result<void> write_scene_text(const std::string& path, const std::string& text) {
+    auto check = parse_scene(text, path);
+    if (!check) {
+        return make_error(check.error().kind, "the edited scene does not load, so nothing was written: " + check.error().message);
+    }
+    auto file = AtomicFile::open(path);
+    if (!file) return file.error();
+    file.value().write(text);
+    KW_TRY(file.value().commit());
+    auto reloaded = load_scene(path);
+    if (!reloaded) {
+        return make_error(Error::Kind::Internal, "the scene written to " + path + " does not load back: " +
+                                                     reloaded.error().message);
+    }
+    return {};
+}
+
+}  // namespace kodawari

@@ -1,0 +1,181 @@
+// `kodawari sketch SCENE --chain CHARACTER/CHAIN --stroke STROKE.json`: the sketching tool
+// of SPEC A.6 without a window. The chain takes the stroke's shape, seen from the camera,
+// as a new view example for that view direction, written back into the scene file (which
+// is checked by the loader before and after it is written).
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <optional>
+#include <sstream>
+#include <string>
+
+#include "commands.hpp"
+#include "kodawari/rod_scene.hpp"
+#include "kodawari/rods/sketch.hpp"
+#include "kodawari/scene_edit.hpp"
+
+namespace kodawari::cli {
+namespace {
+
+// The whole file, or an I/O error.
+Result<std::string> read_text(const std::string& path) {
+    std::ifstream in(path, std::ios::binary);
+    if (!in) return make_error(Error::Kind::Io, path + ": cannot open for reading");
+    std::ostringstream text;
+    text << in.rdbuf();
+    if (in.bad()) return make_error(Error::Kind::Io, path + ": read failed");
+    return text.str();
+}
+
+float parse_real(const std::string& option, const std::string& text) {
+    std::size_t used = 0;
+    float value = 0.0f;
+    try {
+        value = std::stof(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used == 0 || used != text.size() || !std::isfinite(value)) {
+        throw UsageError{"--" + option + ": expected a finite number, got \"" + text + "\""};
+    }
+    return value;
+}
+
+std::string vec_text(glm::vec3 v) {
+    char text[96];
+    std::snprintf(text, sizeof(text), "[%.4g, %.4g, %.4g]", static_cast<double>(v.x), static_cast<double>(v.y),
+                  static_cast<double>(v.z));
+    return text;
+}
+
+}  // namespace
+
+int cmd_sketch(Args args) {
+    const auto chain = args.option("chain");
+    const auto stroke_path = args.option("stroke");
+    const auto frame_index = args.count("frame", 0, 1'000'000'000);
+    const auto camera_text = args.option("camera");
+    const auto size_text = args.option("size");
+    const auto influence_text = args.option("influence");
+    const auto out_option = args.option("out");
+    const bool undo = args.flag("undo");
+    const auto positionals = args.positionals();
+    if (positionals.size() != 1) throw UsageError{"sketch needs exactly one SCENE file"};
+    if (!chain) throw UsageError{"sketch needs --chain CHARACTER/CHAIN"};
+    if (undo && (stroke_path || camera_text || size_text || influence_text || frame_index)) {
+        throw UsageError{"sketch --undo takes only SCENE, --chain and --out"};
+    }
+    if (!undo && !stroke_path) throw UsageError{"sketch needs --stroke STROKE.json (or --undo)"};
+    const std::string& scene_path = positionals.front();
+    const std::string out_path = out_option.value_or(scene_path);
+
+    auto text = read_text(scene_path);
+    if (!text) return report(text.error());
+    auto scene = load_scene(scene_path);
+    if (!scene) return report(scene.error());
+
+    if (undo) {
+        auto edit = remove_last_sketch(text.value(), scene_path, *chain);
+        if (!edit) return report(edit.error());
+        if (auto written = write_scene_text(out_path, edit.value().text); !written) return report(written.error());
+        std::printf("removed view example %u \"%s\" of %s; wrote %s\n", edit.value().index, edit.value().name.c_str(),
+                    chain->c_str(), out_path.c_str());
+        return kExitOk;
+    }
+
+    rods::SketchInput input;
+    if (influence_text) {
+        input.influence = parse_real("influence", *influence_text);
+        if (!(input.influence > 0.0f && input.influence <= 1000.0f)) {
+            throw UsageError{"--influence: expected a number in (0, 1000], got \"" + *influence_text + "\""};
+        }
+    }
+    std::uint32_t width = 1280, height = 720;
+    if (size_text) {
+        unsigned w = 0, h = 0;
+        char extra = 0;
+        if (std::sscanf(size_text->c_str(), "%ux%u%c", &w, &h, &extra) != 2 || w == 0 || h == 0 || w > 65536 || h > 65536) {
+            throw UsageError{"--size: expected WIDTHxHEIGHT in pixels (1 to 65536 each), got \"" + *size_text + "\""};
+        }
+        width = w;
+        height = h;
+    }
+
+    auto stroke_text = read_text(*stroke_path);
+    if (!stroke_text) return report(stroke_text.error());
+    auto stroke = parse_stroke(stroke_text.value(), *stroke_path);
+    if (!stroke) return report(stroke.error());
+    input.stroke = stroke.value();
+
+    auto rod_scene = build_rod_scene(scene.value());
+    if (!rod_scene) return report(rod_scene.error());
+    const RodScene& rs = rod_scene.value();
+    const std::uint32_t frame = static_cast<std::uint32_t>(frame_index.value_or(0));
+    if (frame >= rs.frames) {
+        throw UsageError{"--frame: the scene has frames 0 to " + std::to_string(rs.frames - 1) + ", got " +
+                         std::to_string(frame)};
+    }
+    // The chain's first instance shows it (every instance shares the template's examples).
+    std::optional<std::uint32_t> instance;
+    std::string names;
+    for (std::uint32_t t = 0; t < rs.world.templates.size(); ++t) {
+        names += (names.empty() ? "\"" : ", \"") + rs.world.templates[t].name + "\"";
+        if (rs.world.templates[t].name != *chain) continue;
+        for (std::uint32_t c = 0; c < rs.world.chains.size() && !instance; ++c) {
+            if (rs.world.chains[c].template_index == t) instance = c;
+        }
+        if (!instance) {
+            return report(make_error(Error::Kind::InvalidInput, scene_path + ": $.crowds: no instance of the character of " +
+                                                                    *chain + ", so it is never seen"));
+        }
+    }
+    if (!instance) {
+        return report(make_error(Error::Kind::InvalidInput, scene_path + ": $.characters: no chain \"" + *chain +
+                                                                "\" (chains: " + names + ")"));
+    }
+    const rods::ChainInstance& ci = rs.world.chains[*instance];
+    const rods::RodFrame f = rs.frame(frame);
+    rods::CameraPose pose = rs.camera_pose(frame);
+    if (camera_text) {
+        float v[6] = {};
+        char extra = 0;
+        if (std::sscanf(camera_text->c_str(), "%f,%f,%f,%f,%f,%f%c", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &extra) != 6) {
+            throw UsageError{"--camera: expected EYE_X,EYE_Y,EYE_Z,TARGET_X,TARGET_Y,TARGET_Z, got \"" + *camera_text + "\""};
+        }
+        pose.position = {v[0], v[1], v[2]};
+        pose.target = {v[3], v[4], v[5]};
+        if (!(glm::length(pose.target - pose.position) > 1e-6f)) throw UsageError{"--camera: the target equals the eye"};
+        pose.forward = glm::normalize(pose.target - pose.position);
+    }
+    input.camera = rods::ImageCamera::from_pose(pose, rs.fov_deg, width, height);
+    input.root = f.roots[*instance];
+    input.reference = f.reference[ci.character];
+    input.lengths = rs.world.templ(ci).basis.lengths;
+    auto sketched = rods::sketch_view_example(input);
+    if (!sketched) return report(sketched.error());
+    const rods::SketchResult& s = sketched.value();
+
+    ViewSpec view;
+    view.view = s.view;
+    view.shape = s.shape;
+    auto edit = add_view_example(text.value(), scene_path, *chain, view);
+    if (!edit) return report(edit.error());
+    if (auto written = write_scene_text(out_path, edit.value().text); !written) return report(written.error());
+
+    const std::uint32_t joints = static_cast<std::uint32_t>(s.shape.positions.size());
+    std::printf("sketch %s at frame %u: camera %s -> %s, %ux%u px, %s\n", chain->c_str(), frame,
+                vec_text(pose.position).c_str(), vec_text(pose.target).c_str(), width, height,
+                pose.projection == rods::Camera::Projection::Perspective ? "perspective" : "orthographic");
+    std::printf("view direction %s (reference joint's frame), influence %g\n", vec_text(s.view.direction).c_str(),
+                static_cast<double>(s.view.influence));
+    std::printf("stroke moved by (%.1f, %.1f) px to start at the root; %u of %u joints on it, %.0f%% of it used\n",
+                s.stroke_offset.x, s.stroke_offset.y, s.joints_on_stroke, joints, 100.0 * s.stroke_used);
+    std::printf("reprojection error %.3g px (joints past the stroke's end: up to %.3g px from it)\n", s.max_error_px,
+                s.max_overrun_px);
+    const SceneEdit& e = edit.value();
+    std::printf("view example %u \"%s\" %s; wrote %s\n", e.index, e.name.c_str(),
+                e.replaced ? ("replaces \"" + e.replaced_name + "\"").c_str() : "added", out_path.c_str());
+    return kExitOk;
+}
+
+}  // namespace kodawari::cli
