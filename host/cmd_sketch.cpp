@@ -174,7 +174,10 @@ int cmd_sketch(Args args) {
                 s.max_overrun_px);
     const SceneEdit& e = edit.value();
     std::printf("view example %u \"%s\" %s; wrote %s\n", e.index, e.name.c_str(),
-                e.replaced ? ("replaces \"" + e.replaced_name + "\"").c_str() : "added", out_path.c_str());
+                e.replaced ? ("replaces \"" + e.replaced_name + "\" (within " + std::to_string(static_cast<int>(kSketchReplaceDeg)) +
+                              " degrees; --undo will not bring it back)").c_str()
+                           : "added",
+                out_path.c_str());
     return kExitOk;
 }
 

@@ -139,7 +139,7 @@ check "sketch names the example" grep -q 'view example [0-9] "sketch 1"' "$work/
 check "sketched scene has the example" grep -q '"name": "sketch 1"' "$work/ahoge.json"
 "$bin" run "$work/ahoge.json" --backend cpu --frames 10 --no-export >/dev/null 2>&1
 check "sketched scene runs" test $? -eq 0
-"$bin" sketch "$work/ahoge.json" --chain girl/ahoge --stroke "$work/stroke.json" --camera 1.2,1.7,0,0,1.62,0 --out "$work/ahoge2.json" >"$work/sketch2.out" 2>&1
+"$bin" sketch "$work/ahoge.json" --chain girl/ahoge --stroke "$work/stroke.json" --camera 0.85,2.3,0.85,0,1.62,0 --out "$work/ahoge2.json" >"$work/sketch2.out" 2>&1
 check "sketch --camera --out" bash -c "test $? -eq 0 && grep -q '\"name\": \"sketch 2\"' '$work/ahoge2.json'"
 "$bin" sketch "$work/ahoge2.json" --chain girl/ahoge --undo >/dev/null 2>&1
 check "sketch --undo removes the last sketch" cmp -s "$work/ahoge.json" "$work/ahoge2.json"
