@@ -24,6 +24,11 @@ commands:
   rig CHARACTER [--chains PATTERNS|--roots NAMES] [--animation CLIP] [--name NAME] [--out SCENE.json]
       find the chains (VRM spring bones, name patterns or named roots) and colliders of a rigged
       .gltf/.glb/.vrm character and write a scene that simulates it (default ./<character>.json)
+  render [SCENE] --out DIR [--frames A:B[:STEP]|N] [--size WxH] [--contact-sheet FILE.png [--columns N]]
+         [--backend ...] [--device NAME|INDEX] [--validation]
+      simulate a scene as run does and draw frames A, A+STEP, ... below B (B exclusive; default the whole
+      scene) offscreen at WxH (default 1280x720) to DIR/<scene>_<frame, 5 digits>.png (DIR is created);
+      --contact-sheet also writes the frames shrunk into one grid (default min(frames, 4) columns)
   info
       version, Vulkan devices and which one is chosen, CPU threads
 
@@ -52,6 +57,7 @@ int main(int argc, char** argv) {
         if (command == "info") return cmd_info(args);
         if (command == "bench") return cmd_bench(args);
         if (command == "rig") return cmd_rig(args);
+        if (command == "render") return cmd_render(args);
         throw UsageError{"unknown command \"" + command + "\""};
     } catch (const UsageError& e) {
         std::fprintf(stderr, "kodawari: %s\n\n%s", e.message.c_str(), kUsage);
