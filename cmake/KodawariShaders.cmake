@@ -1,9 +1,11 @@
-# kodawari_embed_shaders(TARGET <target> SOURCES <file.comp>... INCLUDE_DIRS <dir>...)
+# kodawari_embed_shaders(TARGET <target> SOURCES <file.comp|.vert|.frag>... INCLUDE_DIRS <dir>...)
 #
-# Compiles each compute shader to SPIR-V at build time with glslangValidator (its
+# Compiles each shader (glslang infers the stage from the extension) to SPIR-V at build time with glslangValidator (its
 # --depfile tracks the #included headers, so editing shaders/shared/*.h rebuilds
 # what uses it) and embeds the words in a C++ source added to <target>:
-# kodawari::gpu::embedded_shader("<name>") returns them.
+# kodawari::gpu::embedded_shader("<name>") returns them. A compute kernel's name is its
+# file name without .comp ("rods_step"); a graphics stage keeps its extension
+# ("render.vert"), since a vertex and a fragment shader usually share a base name.
 function(kodawari_embed_shaders)
   cmake_parse_arguments(ARG "" "TARGET" "SOURCES;INCLUDE_DIRS" ${ARGN})
   set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/spirv)
@@ -16,7 +18,14 @@ function(kodawari_embed_shaders)
   set(includes "")
   set(entries "")
   foreach(src IN LISTS ARG_SOURCES)
-    get_filename_component(name ${src} NAME_WE)
+    get_filename_component(file_name ${src} NAME)
+    get_filename_component(ext ${src} LAST_EXT)
+    if(ext STREQUAL ".comp")
+      get_filename_component(key ${src} NAME_WE)
+    else()
+      set(key ${file_name})
+    endif()
+    string(MAKE_C_IDENTIFIER ${key} name)
     get_filename_component(abs ${src} ABSOLUTE)
     set(header ${out_dir}/${name}.spv.h)
     add_custom_command(
@@ -25,11 +34,11 @@ function(kodawari_embed_shaders)
               --vn kodawari_spirv_${name} --depfile ${header}.d -o ${header} ${abs}
       DEPENDS ${abs}
       DEPFILE ${header}.d
-      COMMENT "glslang ${name}.comp"
+      COMMENT "glslang ${file_name}"
       VERBATIM)
     list(APPEND headers ${header})
     string(APPEND includes "#include \"${name}.spv.h\"\n")
-    string(APPEND entries "    {\"${name}\", std::span<const std::uint32_t>(kodawari_spirv_${name})},\n")
+    string(APPEND entries "    {\"${key}\", std::span<const std::uint32_t>(kodawari_spirv_${name})},\n")
   endforeach()
   set(KODAWARI_SHADER_INCLUDES "${includes}")
   set(KODAWARI_SHADER_ENTRIES "${entries}")

@@ -11,5 +11,6 @@ int cmd_info(Args args);
 int cmd_bench(Args args);
 int cmd_rig(Args args);
 int cmd_sketch(Args args);
+int cmd_render(Args args);
 
 }  // namespace kodawari::cli

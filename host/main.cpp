@@ -30,6 +30,11 @@ commands:
       the chain takes the shape of a stroke drawn in pixels over the view (default: the scene's camera
       at frame 0, 1280x720) as a new view example for that view direction (docs/sketch.md); --undo
       removes the last one a sketch added
+  render [SCENE] --out DIR [--frames A:B[:STEP]|N] [--size WxH] [--contact-sheet FILE.png [--columns N]]
+         [--backend ...] [--device NAME|INDEX] [--validation]
+      simulate a scene as run does and draw frames A, A+STEP, ... below B (B exclusive; default the whole
+      scene) offscreen at WxH (default 1280x720) to DIR/<scene>_<frame, 5 digits>.png (DIR is created);
+      --contact-sheet also writes the frames shrunk into one grid (default min(frames, 4) columns)
   info
       version, Vulkan devices and which one is chosen, CPU threads
 
@@ -59,6 +64,7 @@ int main(int argc, char** argv) {
         if (command == "bench") return cmd_bench(args);
         if (command == "rig") return cmd_rig(args);
         if (command == "sketch") return cmd_sketch(args);
+        if (command == "render") return cmd_render(args);
         throw UsageError{"unknown command \"" + command + "\""};
     } catch (const UsageError& e) {
         std::fprintf(stderr, "kodawari: %s\n\n%s", e.message.c_str(), kUsage);

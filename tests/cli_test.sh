@@ -160,6 +160,21 @@ check "sketch with a non-number exits 2" bash -c "test $? -eq 2 && grep -q 'poin
 check "sketch of an unknown chain exits 2" bash -c "test $? -eq 2 && grep -q 'no chain' '$work/chain.out'"
 "$bin" sketch "$work/bunny.json" --chain bunny/ear_r --stroke "$work/stroke.json" >"$work/mirror.out" 2>&1
 check "sketch of a mirrored chain exits 2" bash -c "test $? -eq 2 && grep -q 'mirror' '$work/mirror.out'"
+# The offscreen renderer (issue 5): PNG files per frame, a contact sheet, bad input exits 2.
+"$bin" render scenes/ahoge.json --frames 10:40:10 --size 161x97 --contact-sheet "$work/render/sheet.png" --columns 2 \
+    --out "$work/render" >"$work/render.out" 2>&1
+check "render exits 0" test $? -eq 0
+check "render writes one PNG per frame (10, 20, 30; 40 is exclusive)" bash -c \
+    "test -s '$work/render/ahoge_00010.png' && test -s '$work/render/ahoge_00020.png' && test -s '$work/render/ahoge_00030.png' && test ! -e '$work/render/ahoge_00040.png'"
+check "render names what it wrote" grep -q "wrote $work/render/ahoge_00030.png" "$work/render.out"
+check "render PNG has the asked size" python3 -c "import struct,sys; d=open(sys.argv[1],'rb').read(24); sys.exit(d[:8]!=b'\\x89PNG\\r\\n\\x1a\\n' or struct.unpack('>II', d[16:24])!=(161, 97))" "$work/render/ahoge_00010.png"
+check "render contact sheet exists" grep -q "wrote contact sheet $work/render/sheet.png" "$work/render.out"
+"$bin" render scenes/ahoge.json --frames 5:5 --out "$work/render-bad" >"$work/render-bad.out" 2>&1
+check "render with an empty --frames range exits 2 and says why" bash -c "test $? -eq 2 && grep -q 'empty' '$work/render-bad.out'"
+"$bin" render scenes/ahoge.json --frames 0:100000 --out "$work/render-bad" >"$work/render-bad2.out" 2>&1
+check "render past the scene's end exits 2" test $? -eq 2
+"$bin" render scenes/ahoge.json --size 0x10 --out "$work/render-bad" >"$work/render-bad3.out" 2>&1
+check "render with a bad --size exits 2" test $? -eq 2
 
 echo "cli: $passed passed, $failed failed"
 test $failed -eq 0

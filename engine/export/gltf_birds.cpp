@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "export/bird_meshes.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/export.hpp"
@@ -336,6 +337,13 @@ Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& wo
     }
 
     return write_file_atomically(path, [&](AtomicFile& file) { return build_and_write(file, world, poses, frames); });
+}
+
+std::array<gltf::MeshData, birds::kPartCount> bird_part_meshes(birds::WingType type) { return part_meshes(type); }
+
+std::array<float, 3> bird_base_color(birds::WingType type) {
+    const auto& c = kColours[static_cast<std::size_t>(type)];
+    return {static_cast<float>(c[0]), static_cast<float>(c[1]), static_cast<float>(c[2])};
 }
 
 }  // namespace kodawari

@@ -27,6 +27,13 @@ Result<GpuBuffer> GpuBuffer::create(const VulkanContext& ctx, vk::DeviceSize siz
             required = Memory::eHostVisible;
             preferred = Memory::eHostCached;
             break;
+        case Kind::Vertex:
+            // Rewritten by the CPU every frame; device-local too where that exists
+            // (unified memory, resizable BAR).
+            usage = Usage::eVertexBuffer;
+            required = Memory::eHostVisible | Memory::eHostCoherent;
+            preferred = Memory::eDeviceLocal;
+            break;
     }
     try {
         out.buffer_ = ctx.device().createBuffer({.size = size, .usage = usage, .sharingMode = vk::SharingMode::eExclusive});

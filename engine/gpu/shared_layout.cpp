@@ -4,6 +4,7 @@
 
 #include <shared/birds.h>
 #include <shared/poses.h>
+#include <shared/render.h>
 #include <shared/rods.h>
 
 #include "kodawari/rods/world.hpp"
@@ -62,5 +63,12 @@ static_assert(offsetof(PoseInstanceGpu, placement) == 0 && offsetof(PoseInstance
 static_assert(sizeof(PoseMatrixGpu) == 64 && alignof(PoseMatrixGpu) == 16);
 static_assert(sizeof(PosePush) == 32 && offsetof(PosePush, counts) == 16);
 static_assert(KW_POSES_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
+
+// shared/render.h: the vertex layout is also the vertex input state (engine/render/).
+static_assert(sizeof(RenderVertex) == 48);
+static_assert(offsetof(RenderVertex, position) == 0 && offsetof(RenderVertex, color) == 16 &&
+              offsetof(RenderVertex, normal) == 32);
+static_assert(sizeof(RenderPush) == 80 && offsetof(RenderPush, light) == 64);
+static_assert(sizeof(RenderPush) <= 128, "Vulkan guarantees 128 bytes of push constants");
 
 }  // namespace kodawari::gpu

@@ -33,8 +33,15 @@ const char* type_name(vk::PhysicalDeviceType type) {
     }
 }
 
-std::optional<std::uint32_t> compute_family(const vk::raii::PhysicalDevice& device) {
+std::optional<std::uint32_t> compute_family(const vk::raii::PhysicalDevice& device, bool graphics = false) {
     const auto families = device.getQueueFamilyProperties();
+    if (graphics) {
+        const auto both = vk::QueueFlagBits::eGraphics | vk::QueueFlagBits::eCompute;
+        for (std::uint32_t i = 0; i < families.size(); ++i) {
+            if ((families[i].queueFlags & both) == both) return i;
+        }
+        return std::nullopt;
+    }
     // A compute-only family first (async compute on GPUs), else any with compute.
     for (std::uint32_t i = 0; i < families.size(); ++i) {
         const auto flags = families[i].queueFlags;
@@ -247,7 +254,11 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
         if (inventory.chosen < 0) return make_error(Error::Kind::Unsupported, inventory.reason);
         ctx->info_ = inventory.devices[static_cast<std::size_t>(inventory.chosen)];
         ctx->physical_ = std::move(devices[ctx->info_.index]);
-        ctx->queue_family_ = *compute_family(ctx->physical_);
+        const auto family = compute_family(ctx->physical_, options.graphics);
+        if (!family) {
+            return make_error(Error::Kind::Unsupported, ctx->info_.name + " has no queue that does graphics and compute");
+        }
+        ctx->queue_family_ = *family;
 
         const float priority = 1.0f;
         const vk::DeviceQueueCreateInfo queue_info{.queueFamilyIndex = ctx->queue_family_, .queueCount = 1, .pQueuePriorities = &priority};

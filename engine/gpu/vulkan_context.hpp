@@ -1,6 +1,6 @@
 #pragma once
 // The Vulkan runtime: instance (validation on request), the chosen device and its
-// compute queue, one-shot submissions with optional timestamps. Every handle is owned
+// compute (or graphics + compute) queue, one-shot submissions with optional timestamps. Every handle is owned
 // by a move-only vk::raii object.
 
 #include <atomic>
@@ -18,6 +18,9 @@ namespace kodawari::gpu {
 struct ContextOptions {
     std::string device;       ///< index or name substring; "" = best (or env KODAWARI_DEVICE)
     bool validation = false;  ///< also on when env KODAWARI_VALIDATION=1
+    /// The queue must do graphics too (the renderer). Compute-only contexts prefer a
+    /// compute-only family (async compute on GPUs), which cannot draw.
+    bool graphics = false;
 };
 
 class VulkanContext {

@@ -1,0 +1,105 @@
+#include "gpu/graphics.hpp"
+
+#include <cassert>
+#include <vector>
+
+#include "gpu/compute_pipeline.hpp"
+
+namespace kodawari::gpu {
+
+Result<GpuImage> GpuImage::create(const VulkanContext& ctx, std::uint32_t width, std::uint32_t height, vk::Format format,
+                                  vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect) {
+    GpuImage out;
+    try {
+        const auto& device = ctx.device();
+        out.image_ = device.createImage({.imageType = vk::ImageType::e2D,
+                                         .format = format,
+                                         .extent = {width, height, 1},
+                                         .mipLevels = 1,
+                                         .arrayLayers = 1,
+                                         .samples = vk::SampleCountFlagBits::e1,
+                                         .tiling = vk::ImageTiling::eOptimal,
+                                         .usage = usage,
+                                         .sharingMode = vk::SharingMode::eExclusive,
+                                         .initialLayout = vk::ImageLayout::eUndefined});
+        const auto needs = out.image_.getMemoryRequirements();
+        auto type = ctx.memory_type(needs.memoryTypeBits, vk::MemoryPropertyFlagBits::eDeviceLocal);
+        if (!type) return type.error();
+        out.memory_ = device.allocateMemory({.allocationSize = needs.size, .memoryTypeIndex = type.value()});
+        out.image_.bindMemory(*out.memory_, 0);
+        out.view_ = device.createImageView({.image = *out.image_,
+                                            .viewType = vk::ImageViewType::e2D,
+                                            .format = format,
+                                            .subresourceRange = {.aspectMask = aspect, .levelCount = 1, .layerCount = 1}});
+    } catch (const std::exception& e) {
+        return vulkan_error("Vulkan image " + std::to_string(width) + "x" + std::to_string(height) + " " + vk::to_string(format), e);
+    }
+    return out;
+}
+
+Result<GraphicsPipeline> GraphicsPipeline::create(const VulkanContext& ctx, vk::RenderPass render_pass, std::string_view vertex,
+                                                  std::string_view fragment, std::uint32_t vertex_stride, std::uint32_t attributes,
+                                                  std::uint32_t push_bytes, const GraphicsPipelineOptions& options) {
+    const auto vertex_code = embedded_shader(vertex);
+    const auto fragment_code = embedded_shader(fragment);
+    assert(!vertex_code.empty() && !fragment_code.empty() && "shader not embedded: add it to shaders/CMakeLists.txt");
+    GraphicsPipeline out;
+    try {
+        const auto& device = ctx.device();
+        const vk::PushConstantRange push{.stageFlags = vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment,
+                                         .offset = 0,
+                                         .size = push_bytes};
+        out.layout_ = device.createPipelineLayout(
+            {.pushConstantRangeCount = push_bytes > 0 ? 1u : 0u, .pPushConstantRanges = &push});
+        out.vertex_ = device.createShaderModule({.codeSize = vertex_code.size_bytes(), .pCode = vertex_code.data()});
+        out.fragment_ = device.createShaderModule({.codeSize = fragment_code.size_bytes(), .pCode = fragment_code.data()});
+        const vk::PipelineShaderStageCreateInfo stages[] = {
+            {.stage = vk::ShaderStageFlagBits::eVertex, .module = *out.vertex_, .pName = "main"},
+            {.stage = vk::ShaderStageFlagBits::eFragment, .module = *out.fragment_, .pName = "main"},
+        };
+        const vk::VertexInputBindingDescription binding{.binding = 0, .stride = vertex_stride, .inputRate = vk::VertexInputRate::eVertex};
+        std::vector<vk::VertexInputAttributeDescription> attribute_list;
+        for (std::uint32_t i = 0; i < attributes; ++i) {
+            attribute_list.push_back({.location = i, .binding = 0, .format = vk::Format::eR32G32B32A32Sfloat, .offset = 16 * i});
+        }
+        const vk::PipelineVertexInputStateCreateInfo vertex_input{.vertexBindingDescriptionCount = 1,
+                                                                   .pVertexBindingDescriptions = &binding,
+                                                                   .vertexAttributeDescriptionCount = attributes,
+                                                                   .pVertexAttributeDescriptions = attribute_list.data()};
+        const vk::PipelineInputAssemblyStateCreateInfo assembly{.topology = options.topology};
+        const vk::PipelineViewportStateCreateInfo viewport{.viewportCount = 1, .scissorCount = 1};
+        const vk::PipelineRasterizationStateCreateInfo raster{.polygonMode = vk::PolygonMode::eFill,
+                                                              .cullMode = vk::CullModeFlagBits::eNone,
+                                                              .frontFace = vk::FrontFace::eCounterClockwise,
+                                                              .lineWidth = 1.0f};
+        const vk::PipelineMultisampleStateCreateInfo multisample{.rasterizationSamples = vk::SampleCountFlagBits::e1};
+        const vk::PipelineDepthStencilStateCreateInfo depth{.depthTestEnable = options.depth,
+                                                            .depthWriteEnable = options.depth,
+                                                            .depthCompareOp = vk::CompareOp::eLess};
+        const vk::PipelineColorBlendAttachmentState blend_attachment{
+            .blendEnable = VK_FALSE,
+            .colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG | vk::ColorComponentFlagBits::eB |
+                              vk::ColorComponentFlagBits::eA};
+        const vk::PipelineColorBlendStateCreateInfo blend{.attachmentCount = 1, .pAttachments = &blend_attachment};
+        const vk::DynamicState dynamic_states[] = {vk::DynamicState::eViewport, vk::DynamicState::eScissor};
+        const vk::PipelineDynamicStateCreateInfo dynamic{.dynamicStateCount = 2, .pDynamicStates = dynamic_states};
+        out.pipeline_ = device.createGraphicsPipeline(nullptr, {.stageCount = 2,
+                                                                .pStages = stages,
+                                                                .pVertexInputState = &vertex_input,
+                                                                .pInputAssemblyState = &assembly,
+                                                                .pViewportState = &viewport,
+                                                                .pRasterizationState = &raster,
+                                                                .pMultisampleState = &multisample,
+                                                                .pDepthStencilState = &depth,
+                                                                .pColorBlendState = &blend,
+                                                                .pDynamicState = &dynamic,
+                                                                .layout = *out.layout_,
+                                                                .renderPass = render_pass,
+                                                                .subpass = 0});
+    } catch (const std::exception& e) {
+        return vulkan_error("Vulkan graphics pipeline " + std::string(vertex) + " + " + std::string(fragment), e);
+    }
+    return out;
+}
+
+}  // namespace kodawari::gpu

@@ -1,0 +1,355 @@
+// The offscreen renderer: one render pass into an RGBA8 colour + depth target, three
+// pipelines of the same shaders (background without depth, lines, triangles), the
+// image copied to a host-visible buffer after the pass.
+
+#include "kodawari/render/renderer.hpp"
+
+#include <algorithm>
+#include <cassert>
+#include <cmath>
+#include <cstring>
+#include <optional>
+
+#include <glm/gtc/matrix_transform.hpp>
+
+#include "gpu/gpu_buffer.hpp"
+#include "gpu/graphics.hpp"
+
+namespace kodawari::render {
+
+namespace {
+
+constexpr glm::vec3 kBackgroundTop{0.60f, 0.70f, 0.84f};
+constexpr glm::vec3 kBackgroundBottom{0.82f, 0.83f, 0.80f};
+// Lambert from above and in front-left, so that a bird's back and its wings' upper sides
+// read lighter than their undersides.
+const glm::vec3 kLight = glm::normalize(glm::vec3(-0.35f, 1.0f, 0.45f));
+constexpr float kAmbient = 0.45f;
+
+gpu::vec4 v4(const glm::vec3& v, float w) { return {v.x, v.y, v.z, w}; }
+gpu::vec4 v4(Rgba8 c, float lit) {
+    return {static_cast<float>(c.r) / 255.0f, static_cast<float>(c.g) / 255.0f, static_cast<float>(c.b) / 255.0f, lit};
+}
+
+}  // namespace
+
+CameraBasis camera_basis(const CameraView& camera) {
+    glm::vec3 forward = camera.target - camera.position;
+    const float length = glm::length(forward);
+    forward = length > 0.0f ? forward / length : glm::vec3(0.0f, 0.0f, -1.0f);
+    // Looking (almost) straight up or down, +Y cannot give "right": take +Z instead.
+    const glm::vec3 world_up = std::abs(forward.y) > 0.999f ? glm::vec3(0.0f, 0.0f, 1.0f) : glm::vec3(0.0f, 1.0f, 0.0f);
+    const glm::vec3 right = glm::normalize(glm::cross(forward, world_up));
+    return {right, glm::cross(right, forward), forward};
+}
+
+glm::mat4 view_projection(const CameraView& camera, float aspect) {
+    const CameraBasis basis = camera_basis(camera);
+    const glm::mat4 view = glm::lookAtRH(camera.position, camera.position + basis.forward, basis.up);
+    glm::mat4 projection = glm::perspectiveRH_ZO(glm::radians(camera.fov_deg), aspect, camera.near, camera.far);
+    projection[1][1] = -projection[1][1];  // Vulkan's clip space has y down
+    return projection * view;
+}
+
+glm::vec3 background_color(float v) { return glm::mix(kBackgroundTop, kBackgroundBottom, std::clamp(v, 0.0f, 1.0f)); }
+
+Rgba8 Image::at(std::uint32_t x, std::uint32_t y) const {
+    assert(x < width && y < height);
+    const std::uint8_t* p = rgba.data() + (std::size_t{y} * width + x) * 4;
+    return {p[0], p[1], p[2], p[3]};
+}
+
+// ---------------------------------------------------------------------------------------
+// DrawList
+
+DrawList::DrawList(const CameraView& camera, std::uint32_t width, std::uint32_t height)
+    : camera_(camera), basis_(camera_basis(camera)), width_(width), height_(height) {
+    assert(width > 0 && height > 0 && camera.near > 0.0f && camera.far > camera.near);
+    pixel_per_depth_ = 2.0f * std::tan(0.5f * glm::radians(camera.fov_deg)) / static_cast<float>(height);
+}
+
+float DrawList::pixel_size_at(const glm::vec3& p) const {
+    const float depth = glm::dot(p - camera_.position, basis_.forward);
+    return depth > camera_.near ? depth * pixel_per_depth_ : 0.0f;
+}
+
+void DrawList::add_line(const glm::vec3& a, const glm::vec3& b, Rgba8 color) {
+    const gpu::vec4 c = v4(color, 0.0f);
+    lines_.push_back({v4(a, 1.0f), c, {0.0f, 0.0f, 0.0f, KW_RENDER_WORLD}});
+    lines_.push_back({v4(b, 1.0f), c, {0.0f, 0.0f, 0.0f, KW_RENDER_WORLD}});
+}
+
+void DrawList::add_lit_triangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, const glm::vec3& normal,
+                                glm::vec3 color) {
+    const gpu::vec4 col{color.x, color.y, color.z, 1.0f};
+    const gpu::vec4 n = v4(normal, KW_RENDER_WORLD);
+    triangles_.push_back({v4(a, 1.0f), col, n});
+    triangles_.push_back({v4(b, 1.0f), col, n});
+    triangles_.push_back({v4(c, 1.0f), col, n});
+}
+
+void DrawList::add_unlit_triangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, Rgba8 color) {
+    const gpu::vec4 col = v4(color, 0.0f);
+    const gpu::vec4 n{0.0f, 0.0f, 0.0f, KW_RENDER_WORLD};
+    triangles_.push_back({v4(a, 1.0f), col, n});
+    triangles_.push_back({v4(b, 1.0f), col, n});
+    triangles_.push_back({v4(c, 1.0f), col, n});
+}
+
+void DrawList::add_segment(const glm::vec3& a, const glm::vec3& b, float width, float min_px, Rgba8 color) {
+    const glm::vec3 along = b - a;
+    // The quad lies in the plane of the segment and the line of sight to its middle.
+    const glm::vec3 side = glm::cross(along, camera_.position - 0.5f * (a + b));
+    const float side_length = glm::length(side);
+    if (!(side_length > 0.0f)) return;  // seen end-on (its dots still show it) or degenerate
+    const glm::vec3 unit = side / side_length;
+    const glm::vec3 ha = 0.5f * std::max(width, min_px * pixel_size_at(a)) * unit;
+    const glm::vec3 hb = 0.5f * std::max(width, min_px * pixel_size_at(b)) * unit;
+    add_unlit_triangle(a - ha, a + ha, b + hb, color);
+    add_unlit_triangle(a - ha, b + hb, b - hb, color);
+}
+
+void DrawList::add_dot(const glm::vec3& p, float radius, float min_px, Rgba8 color) {
+    const float r = std::max(radius, min_px * pixel_size_at(p));
+    constexpr int kSides = 8;
+    constexpr float kStep = 6.28318530718f / kSides;
+    for (int i = 0; i < kSides; ++i) {
+        const float a0 = kStep * static_cast<float>(i), a1 = kStep * static_cast<float>(i + 1);
+        add_unlit_triangle(p, p + r * (std::cos(a0) * basis_.right + std::sin(a0) * basis_.up),
+                           p + r * (std::cos(a1) * basis_.right + std::sin(a1) * basis_.up), color);
+    }
+}
+
+void DrawList::add_circle(const glm::vec3& center, float radius, Rgba8 color) {
+    constexpr int kSides = 24;
+    constexpr float kStep = 6.28318530718f / kSides;
+    for (int i = 0; i < kSides; ++i) {
+        const float a0 = kStep * static_cast<float>(i), a1 = kStep * static_cast<float>(i + 1);
+        add_line(center + radius * (std::cos(a0) * basis_.right + std::sin(a0) * basis_.up),
+                 center + radius * (std::cos(a1) * basis_.right + std::sin(a1) * basis_.up), color);
+    }
+}
+
+// ---------------------------------------------------------------------------------------
+// Renderer
+
+struct Renderer::Impl {
+    std::unique_ptr<gpu::VulkanContext> ctx;
+    std::uint32_t width = 0, height = 0;
+    std::optional<gpu::GpuImage> color, depth;
+    vk::raii::RenderPass pass{nullptr};
+    vk::raii::Framebuffer framebuffer{nullptr};
+    std::optional<gpu::GraphicsPipeline> background, lines, triangles;
+    std::optional<gpu::GpuBuffer> vertices, readback;
+};
+
+Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+Renderer::~Renderer() = default;
+std::uint32_t Renderer::width() const { return impl_->width; }
+std::uint32_t Renderer::height() const { return impl_->height; }
+std::string Renderer::device() const { return impl_->ctx->info().name; }
+std::uint32_t Renderer::validation_messages() const { return impl_->ctx->validation_messages(); }
+
+namespace {
+
+constexpr vk::Format kColorFormat = vk::Format::eR8G8B8A8Unorm;
+
+// The first depth format the device can render to (every device has one of these).
+std::optional<vk::Format> depth_format(const vk::raii::PhysicalDevice& physical) {
+    for (const vk::Format f : {vk::Format::eD32Sfloat, vk::Format::eX8D24UnormPack32, vk::Format::eD16Unorm}) {
+        if (physical.getFormatProperties(f).optimalTilingFeatures & vk::FormatFeatureFlagBits::eDepthStencilAttachment) return f;
+    }
+    return std::nullopt;
+}
+
+}  // namespace
+
+Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& options) {
+    if (options.width < 1 || options.width > 8192 || options.height < 1 || options.height > 8192) {
+        return make_error(Error::Kind::InvalidInput, "image size " + std::to_string(options.width) + "x" +
+                                                         std::to_string(options.height) + " is outside 1x1 .. 8192x8192");
+    }
+    auto impl = std::make_unique<Impl>();
+    auto ctx = gpu::VulkanContext::create({.device = options.device, .validation = options.validation, .graphics = true});
+    if (!ctx) return ctx.error();
+    impl->ctx = std::move(ctx).value();
+    impl->width = options.width;
+    impl->height = options.height;
+    const gpu::VulkanContext& c = *impl->ctx;
+    const auto depth = depth_format(c.physical_device());
+    if (!depth) return make_error(Error::Kind::Unsupported, c.info().name + " has no depth format to render to");
+
+    auto color_image = gpu::GpuImage::create(c, options.width, options.height, kColorFormat,
+                                             vk::ImageUsageFlagBits::eColorAttachment | vk::ImageUsageFlagBits::eTransferSrc,
+                                             vk::ImageAspectFlagBits::eColor);
+    if (!color_image) return color_image.error();
+    impl->color.emplace(std::move(color_image).value());
+    auto depth_image = gpu::GpuImage::create(c, options.width, options.height, *depth,
+                                             vk::ImageUsageFlagBits::eDepthStencilAttachment, vk::ImageAspectFlagBits::eDepth);
+    if (!depth_image) return depth_image.error();
+    impl->depth.emplace(std::move(depth_image).value());
+
+    try {
+        const vk::AttachmentDescription attachments[] = {
+            {.format = kColorFormat,
+             .samples = vk::SampleCountFlagBits::e1,
+             .loadOp = vk::AttachmentLoadOp::eClear,
+             .storeOp = vk::AttachmentStoreOp::eStore,
+             .stencilLoadOp = vk::AttachmentLoadOp::eDontCare,
+             .stencilStoreOp = vk::AttachmentStoreOp::eDontCare,
+             .initialLayout = vk::ImageLayout::eUndefined,
+             .finalLayout = vk::ImageLayout::eTransferSrcOptimal},
+            {.format = *depth,
+             .samples = vk::SampleCountFlagBits::e1,
+             .loadOp = vk::AttachmentLoadOp::eClear,
+             .storeOp = vk::AttachmentStoreOp::eDontCare,
+             .stencilLoadOp = vk::AttachmentLoadOp::eDontCare,
+             .stencilStoreOp = vk::AttachmentStoreOp::eDontCare,
+             .initialLayout = vk::ImageLayout::eUndefined,
+             .finalLayout = vk::ImageLayout::eDepthStencilAttachmentOptimal},
+        };
+        const vk::AttachmentReference color_ref{.attachment = 0, .layout = vk::ImageLayout::eColorAttachmentOptimal};
+        const vk::AttachmentReference depth_ref{.attachment = 1, .layout = vk::ImageLayout::eDepthStencilAttachmentOptimal};
+        const vk::SubpassDescription subpass{.pipelineBindPoint = vk::PipelineBindPoint::eGraphics,
+                                             .colorAttachmentCount = 1,
+                                             .pColorAttachments = &color_ref,
+                                             .pDepthStencilAttachment = &depth_ref};
+        using Stage = vk::PipelineStageFlagBits;
+        using Access = vk::AccessFlagBits;
+        const vk::SubpassDependency dependencies[] = {
+            // The previous frame's copy read the colour image and its depth test used the
+            // depth image before this frame clears them.
+            {.srcSubpass = VK_SUBPASS_EXTERNAL,
+             .dstSubpass = 0,
+             .srcStageMask = Stage::eTransfer | Stage::eLateFragmentTests,
+             .dstStageMask = Stage::eColorAttachmentOutput | Stage::eEarlyFragmentTests | Stage::eLateFragmentTests,
+             .srcAccessMask = Access::eDepthStencilAttachmentWrite,
+             .dstAccessMask = Access::eColorAttachmentWrite | Access::eDepthStencilAttachmentRead |
+                              Access::eDepthStencilAttachmentWrite},
+            // The copy after the pass reads what the pass drew.
+            {.srcSubpass = 0,
+             .dstSubpass = VK_SUBPASS_EXTERNAL,
+             .srcStageMask = Stage::eColorAttachmentOutput,
+             .dstStageMask = Stage::eTransfer,
+             .srcAccessMask = Access::eColorAttachmentWrite,
+             .dstAccessMask = Access::eTransferRead},
+        };
+        impl->pass = c.device().createRenderPass({.attachmentCount = 2,
+                                                  .pAttachments = attachments,
+                                                  .subpassCount = 1,
+                                                  .pSubpasses = &subpass,
+                                                  .dependencyCount = 2,
+                                                  .pDependencies = dependencies});
+        const vk::ImageView views[] = {impl->color->view(), impl->depth->view()};
+        impl->framebuffer = c.device().createFramebuffer({.renderPass = *impl->pass,
+                                                          .attachmentCount = 2,
+                                                          .pAttachments = views,
+                                                          .width = options.width,
+                                                          .height = options.height,
+                                                          .layers = 1});
+    } catch (const std::exception& e) {
+        return gpu::vulkan_error("Vulkan render pass", e);
+    }
+
+    const auto pipeline = [&](vk::PrimitiveTopology topology, bool depth_test) {
+        return gpu::GraphicsPipeline::create(c, *impl->pass, "render.vert", "render.frag", sizeof(gpu::RenderVertex), 3,
+                                             sizeof(gpu::RenderPush), {.topology = topology, .depth = depth_test});
+    };
+    auto background = pipeline(vk::PrimitiveTopology::eTriangleList, false);
+    if (!background) return background.error();
+    impl->background.emplace(std::move(background).value());
+    auto lines = pipeline(vk::PrimitiveTopology::eLineList, true);
+    if (!lines) return lines.error();
+    impl->lines.emplace(std::move(lines).value());
+    auto triangles = pipeline(vk::PrimitiveTopology::eTriangleList, true);
+    if (!triangles) return triangles.error();
+    impl->triangles.emplace(std::move(triangles).value());
+
+    auto readback = gpu::GpuBuffer::create(c, vk::DeviceSize{options.width} * options.height * 4, gpu::GpuBuffer::Kind::Readback);
+    if (!readback) return readback.error();
+    impl->readback.emplace(std::move(readback).value());
+    return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
+}
+
+Result<Image> Renderer::render(const DrawList& list) {
+    assert(list.width() == impl_->width && list.height() == impl_->height && "the draw list is for another size");
+    Impl& r = *impl_;
+    gpu::VulkanContext& c = *r.ctx;
+
+    // The background: two clip-space triangles, top colour at y = -1 (Vulkan: top).
+    const glm::vec3 top = background_color(0.0f), bottom = background_color(1.0f);
+    const auto corner = [](float x, float y, const glm::vec3& col) {
+        return gpu::RenderVertex{{x, y, 0.0f, 1.0f}, {col.x, col.y, col.z, 0.0f}, {0.0f, 0.0f, 0.0f, KW_RENDER_CLIP}};
+    };
+    const gpu::RenderVertex background[6] = {corner(-1, -1, top), corner(1, -1, top),       corner(1, 1, bottom),
+                                             corner(-1, -1, top), corner(1, 1, bottom), corner(-1, 1, bottom)};
+    const std::size_t background_count = 6;
+    const std::size_t count = background_count + list.lines().size() + list.triangles().size();
+    const vk::DeviceSize bytes = count * sizeof(gpu::RenderVertex);
+    // The previous submission has finished (submit waits), so the buffer can be replaced.
+    if (!r.vertices || r.vertices->size() < bytes) {
+        auto grown = gpu::GpuBuffer::create(c, std::max<vk::DeviceSize>(bytes, r.vertices ? 2 * r.vertices->size() : 0),
+                                            gpu::GpuBuffer::Kind::Vertex);
+        if (!grown) return grown.error();
+        r.vertices.reset();
+        r.vertices.emplace(std::move(grown).value());
+    }
+    std::byte* out = r.vertices->mapped();
+    assert(out != nullptr);
+    std::memcpy(out, background, sizeof(background));
+    out += sizeof(background);
+    std::memcpy(out, list.lines().data(), list.lines().size_bytes());
+    out += list.lines().size_bytes();
+    std::memcpy(out, list.triangles().data(), list.triangles().size_bytes());
+
+    gpu::RenderPush push{};
+    const glm::mat4 vp = view_projection(list.camera(), static_cast<float>(r.width) / static_cast<float>(r.height));
+    for (int i = 0; i < 4; ++i) push.view_proj[i] = {vp[i].x, vp[i].y, vp[i].z, vp[i].w};
+    push.light = {kLight.x, kLight.y, kLight.z, kAmbient};
+
+    KW_TRY(c.submit([&](const vk::raii::CommandBuffer& cmd) {
+        const vk::ClearValue clears[] = {
+            vk::ClearValue{.color = vk::ClearColorValue{.float32 = std::array<float, 4>{0.0f, 0.0f, 0.0f, 1.0f}}},
+            vk::ClearValue{.depthStencil = vk::ClearDepthStencilValue{.depth = 1.0f, .stencil = 0}}};
+        // The previous frame's copy into the readback buffer (its fence waited for)
+        // before this frame's copy overwrites it.
+        const vk::MemoryBarrier readback_reuse{.srcAccessMask = vk::AccessFlagBits::eTransferWrite,
+                                               .dstAccessMask = vk::AccessFlagBits::eTransferWrite};
+        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eTransfer, {}, readback_reuse, {}, {});
+        cmd.beginRenderPass({.renderPass = *r.pass,
+                             .framebuffer = *r.framebuffer,
+                             .renderArea = {{0, 0}, {r.width, r.height}},
+                             .clearValueCount = 2,
+                             .pClearValues = clears},
+                            vk::SubpassContents::eInline);
+        cmd.setViewport(0, vk::Viewport{0.0f, 0.0f, static_cast<float>(r.width), static_cast<float>(r.height), 0.0f, 1.0f});
+        cmd.setScissor(0, vk::Rect2D{{0, 0}, {r.width, r.height}});
+        cmd.bindVertexBuffers(0, r.vertices->handle(), vk::DeviceSize{0});
+        const auto draw = [&](const gpu::GraphicsPipeline& pipeline, std::size_t first, std::size_t n) {
+            if (n == 0) return;
+            cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline.handle());
+            cmd.pushConstants<gpu::RenderPush>(pipeline.layout(), vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment,
+                                               0, push);
+            cmd.draw(static_cast<std::uint32_t>(n), 1, static_cast<std::uint32_t>(first), 0);
+        };
+        draw(*r.background, 0, background_count);
+        draw(*r.lines, background_count, list.lines().size());
+        draw(*r.triangles, background_count + list.lines().size(), list.triangles().size());
+        cmd.endRenderPass();
+        cmd.copyImageToBuffer(r.color->handle(), vk::ImageLayout::eTransferSrcOptimal, r.readback->handle(),
+                              vk::BufferImageCopy{.bufferOffset = 0,
+                                                  .imageSubresource = {.aspectMask = vk::ImageAspectFlagBits::eColor, .layerCount = 1},
+                                                  .imageExtent = {r.width, r.height, 1}});
+        const vk::MemoryBarrier to_host{.srcAccessMask = vk::AccessFlagBits::eTransferWrite, .dstAccessMask = vk::AccessFlagBits::eHostRead};
+        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eHost, {}, to_host, {}, {});
+    }));
+    KW_TRY(r.readback->invalidate(c));
+    Image image;
+    image.width = r.width;
+    image.height = r.height;
+    image.rgba.resize(std::size_t{r.width} * r.height * 4);
+    std::memcpy(image.rgba.data(), r.readback->mapped(), image.rgba.size());
+    return image;
+}
+
+}  // namespace kodawari::render

@@ -1,0 +1,154 @@
+#include "kodawari/render/scene_draw.hpp"
+
+#include <algorithm>
+#include <cmath>
+
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "export/bird_meshes.hpp"
+
+namespace kodawari::render {
+
+CameraView scene_camera(const Scene& scene, std::uint32_t frame) {
+    const float fps = scene.fps > 0.0f ? scene.fps : 60.0f;
+    const rods::CameraPose pose = rods::camera_pose(scene.camera.motion, static_cast<float>(frame) / fps);
+    CameraView view;
+    view.position = pose.position;
+    // The pose's forward is what the view weights use; the target may coincide with the
+    // position, so look along forward.
+    view.target = pose.position + pose.forward;
+    view.fov_deg = scene.camera.fov_deg;
+    view.near = std::clamp(0.01f * glm::length(pose.target - pose.position), 0.01f, 1.0f);
+    view.far = 1000.0f * view.near;
+    return view;
+}
+
+void add_ground_grid(DrawList& list, std::span<const glm::vec3> points) {
+    glm::vec2 lo{0.0f}, hi{0.0f};
+    for (const glm::vec3& p : points) {
+        if (!std::isfinite(p.x) || !std::isfinite(p.z)) continue;
+        lo = glm::min(lo, glm::vec2(p.x, p.z));
+        hi = glm::max(hi, glm::vec2(p.x, p.z));
+    }
+    const glm::vec2 center = 0.5f * (lo + hi);
+    const float half = std::max(3.0f, 0.5f * std::max(hi.x - lo.x, hi.y - lo.y) * 1.3f + 2.0f);
+    // A round spacing giving 10 to 25 lines each way.
+    const float rough = 2.0f * half / 10.0f;
+    const float decade = std::pow(10.0f, std::floor(std::log10(rough)));
+    float spacing = decade;
+    for (const float m : {1.0f, 2.0f, 5.0f, 10.0f}) {
+        if (m * decade <= rough) spacing = m * decade;
+    }
+    const float x0 = std::floor((center.x - half) / spacing) * spacing, x1 = std::ceil((center.x + half) / spacing) * spacing;
+    const float z0 = std::floor((center.y - half) / spacing) * spacing, z1 = std::ceil((center.y + half) / spacing) * spacing;
+    const int nx = static_cast<int>(std::lround((x1 - x0) / spacing)), nz = static_cast<int>(std::lround((z1 - z0) / spacing));
+    for (int i = 0; i <= nx; ++i) {
+        const float x = x0 + spacing * static_cast<float>(i);
+        list.add_line({x, 0.0f, z0}, {x, 0.0f, z1}, kGridColor);
+    }
+    for (int i = 0; i <= nz; ++i) {
+        const float z = z0 + spacing * static_cast<float>(i);
+        list.add_line({x0, 0.0f, z}, {x1, 0.0f, z}, kGridColor);
+    }
+}
+
+void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, const ChainSnapshot& snapshot,
+                    const rods::RodFrame* kinematic) {
+    std::vector<rods::Transform> joints;
+    for (std::uint32_t c = 0; c < scene.instances.size(); ++c) {
+        scene.joint_poses(c, frame, joints);
+        const auto& parents = scene.joint_parents(c);
+        for (std::size_t j = 0; j < joints.size() && j < parents.size(); ++j) {
+            if (parents[j] < 0) continue;
+            list.add_segment(joints[static_cast<std::size_t>(parents[j])].position, joints[j].position, 0.012f, 2.0f, kBoneColor);
+        }
+    }
+    if (kinematic != nullptr) {
+        for (const rods::Capsule& capsule : kinematic->colliders) {
+            list.add_circle(capsule.a, capsule.radius, kColliderColor);
+            if (glm::length(capsule.b - capsule.a) > 1e-6f) {
+                list.add_circle(capsule.b, capsule.radius, kColliderColor);
+                list.add_line(capsule.a, capsule.b, kColliderColor);
+            }
+        }
+    }
+    // The minimum sizes are for 720 rows; smaller images get thinner strands.
+    const float scale = std::clamp(static_cast<float>(list.height()) / 720.0f, 0.5f, 2.0f);
+    const rods::RodWorld& world = scene.world;
+    for (const rods::ChainInstance& chain : world.chains) {
+        const rods::Chain& shape = world.templates[chain.template_index].chain;
+        const std::uint32_t n = shape.joint_count;
+        if (std::size_t{chain.joint_begin} + n > snapshot.positions.size()) continue;  // no state for it
+        const glm::vec3* p = snapshot.positions.data() + chain.joint_begin;
+        float length = 0.0f;
+        for (std::uint32_t j = 0; j + 1 < n; ++j) {
+            list.add_segment(p[j], p[j + 1], 2.0f * shape.thickness, scale * kChainMinPixels, kChainColor);
+            length += glm::length(p[j + 1] - p[j]);
+        }
+        // Dots only where they stay apart: a far chain would be one blob of them.
+        const float pixel = list.pixel_size_at(p[0]);
+        if (pixel > 0.0f && length / pixel < 3.0f * scale * kJointDotMinPixels * static_cast<float>(n)) continue;
+        for (std::uint32_t j = 0; j < n; ++j) list.add_dot(p[j], 1.5f * shape.thickness, scale * kJointDotMinPixels, kChainColor);
+    }
+}
+
+void add_birds(DrawList& list, const birds::BirdWorld& world, std::span<const gpu::BirdPose> poses) {
+    std::array<std::array<gltf::MeshData, birds::kPartCount>, birds::kWingTypeCount> meshes;
+    std::array<std::array<std::array<float, 3>, birds::kPartCount>, birds::kWingTypeCount> offsets{};
+    std::array<bool, birds::kWingTypeCount> ready{};
+    const auto quat = [](const gpu::vec4& q) {
+        const glm::quat r(q.w, q.x, q.y, q.z);
+        const float n = glm::length(r);
+        return n > 0.0f ? r / n : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+    };
+    const std::size_t count = std::min(world.birds.size(), poses.size());
+    for (std::size_t b = 0; b < count; ++b) {
+        const std::uint32_t type = world.birds[b].ids.y;
+        if (type >= birds::kWingTypeCount) continue;
+        const auto wing = static_cast<birds::WingType>(type);
+        if (!ready[type]) {
+            meshes[type] = bird_part_meshes(wing);
+            offsets[type] = birds::part_offsets(wing);
+            ready[type] = true;
+        }
+        const gpu::BirdPose& pose = poses[b];
+        const glm::vec3 position{pose.position.x, pose.position.y, pose.position.z};
+        const float pixel = list.pixel_size_at(position);
+        const float span = birds::wing_type_spec(wing).wingspan;
+        const float scale = pixel > 0.0f ? std::max(1.0f, kBirdMinPixels * pixel / span) : 1.0f;
+        std::array<glm::mat4, birds::kPartCount> part{};
+        part[0] = glm::translate(glm::mat4(1.0f), position) * glm::scale(glm::mat4(1.0f), glm::vec3(scale)) *
+                  glm::mat4_cast(quat(pose.rotation[0]));
+        for (std::size_t k = 1; k < birds::kPartCount; ++k) {
+            const auto& o = offsets[type][k];
+            part[k] = part[static_cast<std::size_t>(birds::kPartParents[k])] *
+                      glm::translate(glm::mat4(1.0f), glm::vec3(o[0], o[1], o[2])) * glm::mat4_cast(quat(pose.rotation[k]));
+        }
+        const auto base = bird_base_color(wing);
+        const glm::vec3 color{base[0], base[1], base[2]};
+        for (std::size_t k = 0; k < birds::kPartCount; ++k) {
+            const gltf::MeshData& mesh = meshes[type][k];
+            const auto at = [&](std::uint16_t index) {
+                const auto& v = mesh.positions[index];
+                return glm::vec3(part[k] * glm::vec4(v[0], v[1], v[2], 1.0f));
+            };
+            for (std::size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+                const glm::vec3 a = at(mesh.indices[i]), bb = at(mesh.indices[i + 1]), c = at(mesh.indices[i + 2]);
+                list.add_lit_triangle(a, bb, c, glm::cross(bb - a, c - a), color);
+            }
+        }
+    }
+}
+
+std::vector<glm::vec3> content_points(const RodScene* scene, const ChainSnapshot* snapshot, std::span<const gpu::BirdPose> poses) {
+    std::vector<glm::vec3> points;
+    if (scene != nullptr) {
+        for (const CharacterInstance& instance : scene->instances) points.push_back(instance.placement.position);
+    }
+    if (snapshot != nullptr) points.insert(points.end(), snapshot->positions.begin(), snapshot->positions.end());
+    for (const gpu::BirdPose& pose : poses) points.emplace_back(pose.position.x, pose.position.y, pose.position.z);
+    return points;
+}
+
+}  // namespace kodawari::render

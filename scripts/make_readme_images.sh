@@ -1,0 +1,21 @@
+#!/usr/bin/env bash
+# Makes the README's pictures in docs/images/ with `kodawari render` (build first:
+# cmake --preset release && cmake --build build/release --target kodawari).
+# usage: scripts/make_readme_images.sh [KODAWARI_BINARY]
+set -euo pipefail
+cd "$(dirname "$0")/.."
+bin=${1:-build/release/host/kodawari}
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+mkdir -p docs/images
+
+# The ahoge from the front, its left, the back and its right: the camera orbits once in
+# 12 s (720 frames), so frames 0, 180, 360 and 540.
+"$bin" render scenes/ahoge.json --frames 0:720:180 --size 960x540 --out "$work/ahoge" \
+    --contact-sheet docs/images/ahoge-angles.png --columns 2
+# The flock 3.3 s in, and the crowd 2 s in.
+"$bin" render scenes/flock.json --frames 200 --size 640x360 --out "$work/flock"
+cp "$work/flock/flock_00200.png" docs/images/flock.png
+"$bin" render scenes/crowd.json --frames 120 --size 640x360 --out "$work/crowd"
+cp "$work/crowd/crowd_00120.png" docs/images/crowd.png
+ls -l docs/images

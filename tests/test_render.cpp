@@ -1,0 +1,339 @@
+// The offscreen renderer (issue 5) on whatever Vulkan device exists (lavapipe without a
+// GPU), with validation on under ctest. The image checks project the simulation's own
+// world positions with camera math written here independently of the renderer's, so a
+// wrong camera, projection or draw fails them.
+
+#include <algorithm>
+#include <cmath>
+#include <cstdio>
+#include <fstream>
+#include <iterator>
+#include <memory>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <gtest/gtest.h>
+
+#include <stb/stb_image.h>
+
+#include "kodawari/backend.hpp"
+#include "kodawari/birds/rig.hpp"
+#include "kodawari/render/renderer.hpp"
+#include "kodawari/render/scene_draw.hpp"
+#include "kodawari/rod_backend.hpp"
+#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
+#include "test_support.hpp"
+
+namespace kodawari {
+namespace {
+
+using render::Image;
+using render::Rgba8;
+
+// Odd sizes: row pitch and aspect mistakes show.
+constexpr std::uint32_t kWidth = 317, kHeight = 199;
+
+/// A pinhole camera from first principles: eye, target, vertical fov, +Y up.
+struct Pinhole {
+    glm::vec3 eye, right, up, forward;
+    float tan_half, aspect;
+    float width, height;
+
+    Pinhole(const glm::vec3& e, const glm::vec3& target, float fov_deg, std::uint32_t w, std::uint32_t h)
+        : eye(e), tan_half(std::tan(0.5f * fov_deg * 3.14159265f / 180.0f)), aspect(float(w) / float(h)), width(float(w)),
+          height(float(h)) {
+        forward = glm::normalize(target - e);
+        right = glm::normalize(glm::cross(forward, glm::vec3(0.0f, 1.0f, 0.0f)));
+        up = glm::cross(right, forward);
+    }
+    /// Pixel coordinates (x right, y down; pixel (i, j) covers [i, i+1) x [j, j+1)); false behind the eye.
+    bool project(const glm::vec3& p, glm::vec2& out) const {
+        const glm::vec3 d = p - eye;
+        const float z = glm::dot(d, forward);
+        if (z <= 1e-3f) return false;
+        const float nx = glm::dot(d, right) / (z * tan_half * aspect);
+        const float ny = glm::dot(d, up) / (z * tan_half);
+        out = {(nx + 1.0f) * 0.5f * width, (1.0f - ny) * 0.5f * height};
+        return true;
+    }
+    /// The direction of the ray through the centre of pixel (x, y).
+    glm::vec3 ray(std::uint32_t x, std::uint32_t y) const {
+        const float nx = (float(x) + 0.5f) / width * 2.0f - 1.0f;
+        const float ny = 1.0f - (float(y) + 0.5f) / height * 2.0f;
+        return forward + right * (nx * tan_half * aspect) + up * (ny * tan_half);
+    }
+};
+
+int channel_distance(Rgba8 a, Rgba8 b) {
+    return std::max({std::abs(int(a.r) - int(b.r)), std::abs(int(a.g) - int(b.g)), std::abs(int(a.b) - int(b.b))});
+}
+
+Rgba8 background_at(std::uint32_t y, std::uint32_t height) {
+    const glm::vec3 c = render::background_color((float(y) + 0.5f) / float(height)) * 255.0f;
+    return {std::uint8_t(std::lround(c.x)), std::uint8_t(std::lround(c.y)), std::uint8_t(std::lround(c.z)), 255};
+}
+
+// Smallest colour distance to `color` among the pixels within `radius` of (x, y).
+int nearest_match(const Image& image, glm::vec2 p, int radius, Rgba8 color) {
+    int best = 999;
+    const int cx = int(std::floor(p.x)), cy = int(std::floor(p.y));
+    for (int y = cy - radius; y <= cy + radius; ++y) {
+        for (int x = cx - radius; x <= cx + radius; ++x) {
+            if (x < 0 || y < 0 || x >= int(image.width) || y >= int(image.height)) continue;
+            best = std::min(best, channel_distance(image.at(std::uint32_t(x), std::uint32_t(y)), color));
+        }
+    }
+    return best;
+}
+
+float segment_distance(glm::vec2 p, glm::vec2 a, glm::vec2 b) {
+    const glm::vec2 ab = b - a;
+    const float t = glm::dot(ab, ab) > 0.0f ? std::clamp(glm::dot(p - a, ab) / glm::dot(ab, ab), 0.0f, 1.0f) : 0.0f;
+    return glm::length(p - (a + t * ab));
+}
+
+std::string scene_path(const char* name) { return std::string(KODAWARI_SOURCE_DIR) + "/scenes/" + name; }
+
+std::unique_ptr<render::Renderer> make_renderer(std::uint32_t width, std::uint32_t height) {
+    render::RendererOptions options;
+    options.width = width;
+    options.height = height;
+    auto renderer = render::Renderer::create(options);
+    EXPECT_TRUE(renderer.ok()) << (renderer.ok() ? "" : renderer.error().message);
+    return renderer.ok() ? std::move(renderer).value() : nullptr;
+}
+
+/// The ahoge scene simulated on the CPU up to each requested frame (ascending): per
+/// frame its snapshot.
+struct AhogeRun {
+    Scene scene;
+    RodScene rods;
+    std::vector<ChainSnapshot> snapshots;
+};
+
+AhogeRun simulate_ahoge(const std::vector<std::uint32_t>& frames) {
+    auto scene = load_scene(scene_path("ahoge.json"));
+    EXPECT_TRUE(scene.ok());
+    auto rods = build_rod_scene(scene.value());
+    EXPECT_TRUE(rods.ok());
+    AhogeRun run{std::move(scene).value(), std::move(rods).value(), {}};
+    auto backend = make_rod_backend(BackendKind::Cpu, {});
+    EXPECT_TRUE(backend.ok());
+    std::size_t next = 0;
+    for (std::uint32_t f = 0; next < frames.size(); ++f) {
+        const rods::RodFrame input = run.rods.frame(f);
+        EXPECT_TRUE((f == 0 ? backend.value()->load(run.rods.world, input) : backend.value()->step(input)).ok());
+        if (f == frames[next]) {
+            ChainSnapshot snapshot;
+            EXPECT_TRUE(backend.value()->read(snapshot).ok());
+            run.snapshots.push_back(std::move(snapshot));
+            ++next;
+        }
+    }
+    return run;
+}
+
+render::DrawList ahoge_list(const AhogeRun& run, std::uint32_t frame, const ChainSnapshot& snapshot, std::uint32_t w,
+                            std::uint32_t h) {
+    render::DrawList list(render::scene_camera(run.scene, frame), w, h);
+    render::add_ground_grid(list, render::content_points(&run.rods, &snapshot, {}));
+    render::add_characters(list, run.rods, frame, snapshot, nullptr);
+    return list;
+}
+
+TEST(Render, ChainPixelsAreWhereTheSimulationPutsThem) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    const std::vector<std::uint32_t> frames = {0, 45, 200, 530};
+    const AhogeRun run = simulate_ahoge(frames);
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    for (std::size_t i = 0; i < frames.size(); ++i) {
+        const std::uint32_t f = frames[i];
+        const ChainSnapshot& snapshot = run.snapshots[i];
+        auto image = renderer->render(ahoge_list(run, f, snapshot, kWidth, kHeight));
+        ASSERT_TRUE(image.ok()) << image.error().message;
+        const Image& img = image.value();
+        ASSERT_EQ(img.width, kWidth);
+        ASSERT_EQ(img.height, kHeight);
+
+        // The scene's camera as RodScene gives it (not the renderer's CameraView).
+        const rods::CameraPose pose = run.rods.camera_pose(f);
+        const Pinhole camera(pose.position, pose.target, run.rods.fov_deg, kWidth, kHeight);
+
+        // Every chain joint inside the image has the chain colour at its projection.
+        std::vector<glm::vec2> chain_px;
+        int joints = 0, worst = 0;
+        for (const glm::vec3& p : snapshot.positions) {
+            glm::vec2 q;
+            ASSERT_TRUE(camera.project(p, q));
+            chain_px.push_back(q);
+            if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
+            const int d = nearest_match(img, q, 1, render::kChainColor);
+            worst = std::max(worst, d);
+            EXPECT_LE(d, 2) << "frame " << f << ": no chain colour near the joint projected at (" << q.x << ", " << q.y << ")";
+            ++joints;
+        }
+        EXPECT_GE(joints, 10) << "frame " << f << ": the strand should be in view";
+
+        // Pixels far from the strand and the skeleton whose ray goes up (it cannot meet
+        // the ground grid) show the background gradient.
+        std::vector<std::pair<glm::vec2, glm::vec2>> segments;
+        for (std::size_t j = 0; j + 1 < chain_px.size(); ++j) segments.push_back({chain_px[j], chain_px[j + 1]});
+        const auto bones = run.rods.joint_poses(0, f);
+        const auto& parents = run.rods.joint_parents(0);
+        for (std::size_t j = 0; j < bones.size(); ++j) {
+            glm::vec2 a, b;
+            if (parents[j] < 0) continue;
+            if (camera.project(bones[j].position, a) && camera.project(bones[std::size_t(parents[j])].position, b)) {
+                segments.push_back({a, b});
+            }
+        }
+        int background = 0, background_worst = 0;
+        for (std::uint32_t y = 0; y < kHeight; y += 5) {
+            for (std::uint32_t x = 0; x < kWidth; x += 5) {
+                if (camera.ray(x, y).y <= 0.02f) continue;
+                const glm::vec2 centre{float(x) + 0.5f, float(y) + 0.5f};
+                bool near = false;
+                for (const auto& [a, b] : segments) near = near || segment_distance(centre, a, b) < 12.0f;
+                if (near) continue;
+                const int d = channel_distance(img.at(x, y), background_at(y, kHeight));
+                background_worst = std::max(background_worst, d);
+                EXPECT_LE(d, 2) << "frame " << f << ": pixel (" << x << ", " << y << ") should be background";
+                ++background;
+            }
+        }
+        EXPECT_GE(background, 200) << "frame " << f;
+        std::printf("[ render ] ahoge frame %u: %d joints in chain colour (worst channel distance %d), "
+                    "%d background pixels (worst %d)\n",
+                    f, joints, worst, background, background_worst);
+    }
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
+TEST(Render, SameFrameTwiceGivesTheSameBytesAndThePngReloads) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    const AhogeRun run = simulate_ahoge({30});
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    const render::DrawList list = ahoge_list(run, 30, run.snapshots[0], kWidth, kHeight);
+    auto first = renderer->render(list);
+    auto second = renderer->render(list);
+    ASSERT_TRUE(first.ok() && second.ok());
+    EXPECT_TRUE(first.value().rgba == second.value().rgba) << "two renders of one draw list differ";
+
+    testing_support::TempDir dir;
+    const std::string a = dir.file("a.png"), b = dir.file("b.png");
+    ASSERT_TRUE(render::write_png(a, first.value()).ok());
+    ASSERT_TRUE(render::write_png(b, second.value()).ok());
+    const auto bytes = [](const std::string& path) {
+        std::ifstream in(path, std::ios::binary);
+        return std::vector<char>(std::istreambuf_iterator<char>(in), {});
+    };
+    EXPECT_EQ(bytes(a), bytes(b));
+    EXPECT_EQ(dir.entries().size(), 2u) << "no temporary file is left";
+
+    int w = 0, h = 0, channels = 0;
+    unsigned char* pixels = stbi_load(a.c_str(), &w, &h, &channels, 4);
+    ASSERT_NE(pixels, nullptr) << stbi_failure_reason();
+    EXPECT_EQ(w, int(kWidth));
+    EXPECT_EQ(h, int(kHeight));
+    EXPECT_TRUE(std::equal(pixels, pixels + std::size_t(w) * std::size_t(h) * 4, first.value().rgba.begin()));
+    stbi_image_free(pixels);
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
+TEST(Render, BirdsAreWhereTheyFly) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto scene = load_scene(scene_path("flock.json"));
+    ASSERT_TRUE(scene.ok());
+    auto world = build_bird_world(scene.value());
+    ASSERT_TRUE(world.ok());
+    auto backend = make_bird_backend(BackendKind::Cpu, {});
+    ASSERT_TRUE(backend.ok());
+    ASSERT_TRUE(backend.value()->load(world.value()).ok());
+    constexpr std::uint32_t kFrame = 120;
+    std::vector<gpu::BirdPose> poses(world.value().birds.size());
+    for (std::uint32_t f = 0; f <= kFrame; ++f) ASSERT_TRUE(backend.value()->simulate(1, {.poses = poses, .diag = {}}).ok());
+
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    // Birds only, no grid: any non-background pixel is a bird.
+    render::DrawList list(render::scene_camera(scene.value(), kFrame), kWidth, kHeight);
+    render::add_birds(list, world.value(), poses);
+    auto image = renderer->render(list);
+    ASSERT_TRUE(image.ok());
+    const Image& img = image.value();
+
+    const auto& spec = scene.value().camera;
+    const Pinhole camera(glm::vec3(spec.position[0], spec.position[1], spec.position[2]),
+                         glm::vec3(spec.target[0], spec.target[1], spec.target[2]), spec.fov_deg, kWidth, kHeight);
+    // Per bird in front of the camera: its projection and how far from it the bird may
+    // reach on screen (its wingspan, or the renderer's minimum size, plus a margin).
+    std::vector<std::pair<glm::vec2, float>> birds_px;
+    int visible = 0, found = 0;
+    for (std::size_t b = 0; b < poses.size(); ++b) {
+        const gpu::BirdPose& pose = poses[b];
+        const glm::vec3 p{pose.position.x, pose.position.y, pose.position.z};
+        glm::vec2 q;
+        if (!camera.project(p, q)) continue;
+        const float depth = glm::dot(p - camera.eye, camera.forward);
+        const float span = birds::wing_type_spec(static_cast<birds::WingType>(world.value().birds[b].ids.y)).wingspan;
+        const float span_px = span / (2.0f * depth * camera.tan_half) * float(kHeight);
+        birds_px.push_back({q, 4.0f + std::max(span_px, render::kBirdMinPixels)});
+        if (q.x < 3 || q.y < 3 || q.x > kWidth - 3 || q.y > kHeight - 3) continue;
+        ++visible;
+        bool hit = false;
+        for (int dy = -2; dy <= 2 && !hit; ++dy) {
+            for (int dx = -2; dx <= 2 && !hit; ++dx) {
+                const auto x = std::uint32_t(int(q.x) + dx), y = std::uint32_t(int(q.y) + dy);
+                hit = channel_distance(img.at(x, y), background_at(y, kHeight)) > 8;
+            }
+        }
+        found += hit ? 1 : 0;
+    }
+    // And nothing is drawn far from every bird (the largest bird is a few pixels here).
+    int stray = 0;
+    for (std::uint32_t y = 0; y < kHeight; ++y) {
+        for (std::uint32_t x = 0; x < kWidth; ++x) {
+            if (channel_distance(img.at(x, y), background_at(y, kHeight)) <= 2) continue;
+            const glm::vec2 c{float(x) + 0.5f, float(y) + 0.5f};
+            const bool near = std::any_of(birds_px.begin(), birds_px.end(),
+                                          [&](const std::pair<glm::vec2, float>& b) { return glm::length(c - b.first) < b.second; });
+            stray += near ? 0 : 1;
+        }
+    }
+    std::printf("[ render ] flock frame %u: %d of %d birds in view drawn at their projection, %d stray pixels\n", kFrame, found,
+                visible, stray);
+    EXPECT_GE(visible, 50);
+    EXPECT_EQ(found, visible);
+    EXPECT_EQ(stray, 0);
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
+TEST(Render, ContactSheetAndDownscale) {
+    Image image;
+    image.width = 31;
+    image.height = 17;
+    image.rgba.assign(std::size_t(31) * 17 * 4, 0);
+    for (std::size_t i = 0; i < image.rgba.size(); i += 4) {
+        image.rgba[i] = 200;
+        image.rgba[i + 1] = 100;
+        image.rgba[i + 2] = 50;
+        image.rgba[i + 3] = 255;
+    }
+    const Image small = render::downscale(image, 7, 5);
+    ASSERT_EQ(small.rgba.size(), std::size_t(7) * 5 * 4);
+    EXPECT_EQ(small.at(3, 2), (Rgba8{200, 100, 50, 255}));
+    const std::vector<Image> images(5, image);
+    const Image sheet = render::contact_sheet(images, 3, 10, 6);
+    EXPECT_EQ(sheet.width, 3u * 10 + 4 * 2);
+    EXPECT_EQ(sheet.height, 2u * 6 + 3 * 2);
+    EXPECT_EQ(sheet.at(0, 0), (Rgba8{255, 255, 255, 255}));
+    EXPECT_EQ(sheet.at(2, 2), (Rgba8{200, 100, 50, 255}));
+    EXPECT_EQ(sheet.at(sheet.width - 3, sheet.height - 3), (Rgba8{255, 255, 255, 255})) << "the sixth cell is empty";
+}
+
+}  // namespace
+}  // namespace kodawari
