@@ -34,6 +34,11 @@ using nlohmann::json;
 const std::string kAssets = std::string(KODAWARI_SOURCE_DIR) + "/tests/assets";
 const std::string kRiggedSimple = kAssets + "/khronos/RiggedSimple.gltf";
 
+json read_json(const std::string& path) {
+    std::ifstream in(path);
+    return json::parse(in);
+}
+
 using testing_support::TempDir;
 
 void write_bytes(const std::string& path, const std::vector<unsigned char>& bytes) {
@@ -229,6 +234,25 @@ TEST(GltfImport, RiggedSimpleLoads) {
     EXPECT_EQ(c.nodes[2].skin, 0);
     ASSERT_EQ(c.meshes.size(), 1u);
     EXPECT_EQ(c.meshes[0].primitives, 1u);
+    // The display geometry, against the file's own accessors (read independently here).
+    ASSERT_EQ(c.meshes[0].triangles.size(), 1u);
+    {
+        const json doc = read_json(kRiggedSimple);
+        const json& prim = doc["meshes"][0]["primitives"][0];
+        const auto count = [&](const json& accessor) { return doc["accessors"][accessor.get<std::size_t>()]["count"].get<std::size_t>(); };
+        const gltf::Mesh::Triangles& t = c.meshes[0].triangles[0];
+        EXPECT_EQ(t.positions.size(), count(prim["attributes"]["POSITION"]));
+        EXPECT_EQ(t.normals.size(), t.positions.size());
+        EXPECT_EQ(t.joints.size(), t.positions.size());
+        EXPECT_EQ(t.indices.size(), count(prim["indices"]));
+        float worst = 0.0f;
+        for (std::size_t v = 0; v < t.weights.size(); ++v) {
+            worst = std::max(worst, std::abs(t.weights[v].x + t.weights[v].y + t.weights[v].z + t.weights[v].w - 1.0f));
+            EXPECT_LT(std::max({t.joints[v].x, t.joints[v].y, t.joints[v].z, t.joints[v].w}), 2u);  // the skin has 2 joints
+        }
+        EXPECT_LT(worst, 1e-3f);  // glTF §3.7.3.3: weights sum to 1 (the file stores floats)
+        for (const std::uint32_t i : t.indices) EXPECT_LT(i, t.positions.size());
+    }
     ASSERT_EQ(c.skins.size(), 1u);
     EXPECT_EQ(c.skins[0].joints, (std::vector<int>{3, 4}));
     EXPECT_EQ(c.skins[0].skeleton, 3);

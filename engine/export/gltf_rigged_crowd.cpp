@@ -5,10 +5,7 @@
 #include <cassert>
 #include <cmath>
 
-#include <glm/gtc/matrix_transform.hpp>
-
 #include "kodawari/export.hpp"
-#include "kodawari/rods/shape.hpp"
 
 namespace kodawari {
 
@@ -44,7 +41,6 @@ Result<void> RiggedCrowdExport::add_frame(std::uint32_t frame, const ChainSnapsh
     const RodScene& scene = *scene_;
     const CharacterKinematics& k = scene.characters[character_];
     const gltf::Character& ch = *k.rig;
-    const rods::RodWorld& world = scene.world;
     const std::size_t n = ch.nodes.size();
     translation_.resize(instances_.size() * n);
     rotation_.resize(instances_.size() * n);
@@ -52,40 +48,21 @@ Result<void> RiggedCrowdExport::add_frame(std::uint32_t frame, const ChainSnapsh
     for (std::size_t j = 0; j < instances_.size(); ++j) {
         const std::uint32_t c = instances_[j];
         const CharacterInstance& inst = scene.instances[c];
-        if (inst.clip >= 0) {
-            gltf::evaluate(ch, static_cast<std::size_t>(inst.clip), scene.clip_time(c, frame), pose_);
-        } else {
-            pose_ = gltf::rest_pose(ch);
-        }
+        // World matrices with the simulated joints placed (RodScene::rigged_world); pose_
+        // is left holding the clip's local TRS, which every other node keeps.
+        scene.rigged_world(c, frame, snapshot.positions, snapshot.orientations, pose_, world_);
         std::copy(pose_.translation.begin(), pose_.translation.end(), translation_.begin() + static_cast<std::ptrdiff_t>(j * n));
         std::copy(pose_.rotation.begin(), pose_.rotation.end(), rotation_.begin() + static_cast<std::ptrdiff_t>(j * n));
         std::copy(pose_.scale.begin(), pose_.scale.end(), scale_.begin() + static_cast<std::ptrdiff_t>(j * n));
-        world_ = pose_.world;  // without the placement: the writer's instance root carries it
-        const glm::quat unplace = glm::conjugate(inst.placement.rotation);
-
         for (std::size_t chain_index = 0; chain_index < k.chain_nodes.size(); ++chain_index) {
             const std::vector<int>& nodes = k.chain_nodes[chain_index];
-            const rods::ChainInstance& ci = world.chains[inst.chain_begin + chain_index];
-            const rods::Chain& chain = world.templ(ci).chain;
-            assert(nodes.size() == chain.joint_count);
-            const std::size_t base = ci.joint_begin;
-            for (std::uint32_t i = 1; i < chain.joint_count; ++i) {
-                // SPEC A.4's skinning output: the particle's frame, its bone turned onto
-                // the segment to the next joint.
-                glm::quat q = glm::normalize(snapshot.orientations[base + i]);
-                if (i + 1 < chain.joint_count) {
-                    const glm::vec3 d = snapshot.positions[base + i + 1] - snapshot.positions[base + i];
-                    const float len = glm::length(d);
-                    if (len > 1e-9f) q = glm::normalize(rods::shortest_arc(glm::normalize(q * chain.bone_axis[i]), d / len) * q);
-                }
-                const glm::vec3 p = unplace * (snapshot.positions[base + i] - inst.placement.position);
-                q = unplace * q;
+            for (std::size_t i = 1; i < nodes.size(); ++i) {
+                // The local transform under the parent's world matrix (simulated or animated).
                 const auto node = static_cast<std::size_t>(nodes[i]);
-                const auto parent = static_cast<std::size_t>(nodes[i - 1]);
-                const glm::mat4& parent_world = world_[parent];
-                const glm::vec3 t = glm::vec3(glm::inverse(parent_world) * glm::vec4(p, 1.0f));
-                const glm::quat r = glm::normalize(glm::conjugate(gltf::rigid_part(parent_world).rotation) * q);
-                const glm::vec3 s = pose_.scale[node];
+                const glm::mat4& parent = world_[static_cast<std::size_t>(nodes[i - 1])];
+                const glm::vec3 t = glm::vec3(glm::inverse(parent) * world_[node][3]);
+                const glm::quat r = glm::normalize(glm::conjugate(gltf::rigid_part(parent).rotation) *
+                                                   gltf::rigid_part(world_[node]).rotation);
                 if (!std::isfinite(t.x + t.y + t.z + r.x + r.y + r.z + r.w)) {
                     return make_error(Error::Kind::Internal, scene.chain_names[inst.chain_begin + chain_index] + ", frame " +
                                                                  std::to_string(frame) + ": joint " + std::to_string(i) +
@@ -93,7 +70,6 @@ Result<void> RiggedCrowdExport::add_frame(std::uint32_t frame, const ChainSnapsh
                 }
                 translation_[j * n + node] = t;
                 rotation_[j * n + node] = r;
-                world_[node] = parent_world * glm::translate(glm::mat4(1.0f), t) * glm::mat4_cast(r) * glm::scale(glm::mat4(1.0f), s);
             }
         }
     }

@@ -418,6 +418,140 @@ const tinygltf::Accessor& accessor_of(const tinygltf::Model& model, int index) {
     return model.accessors[static_cast<std::size_t>(index)];
 }
 
+#define KW_GLTF_ASSIGN(lhs, expr)                       \
+    do {                                                \
+        auto kw_gltf_result_ = (expr);                  \
+        if (!kw_gltf_result_.ok()) return kw_gltf_result_.error(); \
+        (lhs) = std::move(kw_gltf_result_).value();     \
+    } while (false)
+
+// Reads an accessor (checked by check_storage) of unsigned integers (UNSIGNED_BYTE,
+// UNSIGNED_SHORT or UNSIGNED_INT, not normalized): indices and JOINTS_0 (§3.7.2.1).
+Result<std::vector<std::uint32_t>> read_uints(const Context& ctx, const tinygltf::Model& model, int index,
+                                              const std::string& where) {
+    if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size()) {
+        return ctx.invalid(where, "accessor " + std::to_string(index) + " does not exist");
+    }
+    const tinygltf::Accessor& accessor = model.accessors[static_cast<std::size_t>(index)];
+    const std::string path = at("$.accessors", static_cast<std::size_t>(index));
+    if (accessor.sparse.isSparse) return ctx.unsupported(path + ".sparse", "sparse accessors are not supported");
+    if (accessor.bufferView < 0) return ctx.unsupported(path, "accessors without a bufferView are not supported");
+    const int ct = accessor.componentType;
+    if ((ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
+         ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT) ||
+        accessor.normalized) {
+        return ctx.invalid(path + ".componentType", where + " needs unsigned integer components, got componentType " +
+                                                        std::to_string(ct));
+    }
+    const tinygltf::BufferView& view = model.bufferViews[static_cast<std::size_t>(accessor.bufferView)];
+    const std::vector<unsigned char>& data = model.buffers[static_cast<std::size_t>(view.buffer)].data;
+    const std::size_t comps = component_count(accessor.type);
+    const std::size_t csize = component_bytes(ct);
+    const std::size_t stride = view.byteStride == 0 ? element_bytes(ct, accessor.type) : view.byteStride;
+    std::vector<std::uint32_t> out;
+    out.reserve(accessor.count * comps);
+    for (std::size_t i = 0; i < accessor.count; ++i) {
+        const unsigned char* element = data.data() + view.byteOffset + accessor.byteOffset + i * stride;
+        for (std::size_t c = 0; c < comps; ++c) {
+            const unsigned char* p = element + c * csize;
+            std::uint32_t value = 0;
+            if (csize == 1) {
+                value = *p;
+            } else if (csize == 2) {
+                std::uint16_t v = 0;
+                std::memcpy(&v, p, 2);
+                value = v;
+            } else {
+                std::memcpy(&value, p, 4);
+            }
+            out.push_back(value);
+        }
+    }
+    return out;
+}
+
+// Mesh geometry for display (§3.7.2): TRIANGLES primitives with POSITION, and NORMAL,
+// JOINTS_0 and WEIGHTS_0 where given.
+Result<void> load_meshes(const Context& ctx, const tinygltf::Model& model, Character& out) {
+    for (std::size_t m = 0; m < model.meshes.size(); ++m) {
+        const tinygltf::Mesh& src = model.meshes[m];
+        Mesh mesh{src.name, src.primitives.size(), {}};
+        for (std::size_t k = 0; k < src.primitives.size(); ++k) {
+            const tinygltf::Primitive& prim = src.primitives[k];
+            const std::string path = at(at("$.meshes", m) + ".primitives", k);
+            if (prim.mode != -1 && prim.mode != TINYGLTF_MODE_TRIANGLES) continue;
+            const auto attribute = [&](const char* name) {
+                const auto it = prim.attributes.find(name);
+                return it == prim.attributes.end() ? -1 : it->second;
+            };
+            if (attribute("POSITION") < 0) return ctx.invalid(path + ".attributes", "a triangle primitive needs POSITION");
+            Mesh::Triangles t;
+            std::vector<float> values;
+            KW_GLTF_ASSIGN(values, read_floats(ctx, model, attribute("POSITION"), path + ".attributes.POSITION", false));
+            if (accessor_of(model, attribute("POSITION")).type != TINYGLTF_TYPE_VEC3) {
+                return ctx.invalid(path + ".attributes.POSITION", "expected a VEC3 accessor");
+            }
+            const std::size_t n = values.size() / 3;
+            for (std::size_t i = 0; i < n; ++i) t.positions.emplace_back(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+            const auto same_count = [&](int accessor, const char* name, int type) -> Result<void> {
+                if (accessor_of(model, accessor).count != n || accessor_of(model, accessor).type != type) {
+                    return ctx.invalid(path + ".attributes." + name,
+                                       "expected " + std::to_string(n) + " elements of type " + type_name(type) + " (as POSITION)");
+                }
+                return {};
+            };
+            if (const int a = attribute("NORMAL"); a >= 0) {
+                KW_TRY(same_count(a, "NORMAL", TINYGLTF_TYPE_VEC3));
+                KW_GLTF_ASSIGN(values, read_floats(ctx, model, a, path + ".attributes.NORMAL", false));
+                for (std::size_t i = 0; i < n; ++i) {
+                    const glm::vec3 v(values[3 * i], values[3 * i + 1], values[3 * i + 2]);
+                    const float len = glm::length(v);
+                    t.normals.push_back(len > 0.0f ? v / len : glm::vec3(0.0f, 1.0f, 0.0f));
+                }
+            }
+            const int joints = attribute("JOINTS_0");
+            const int weights = attribute("WEIGHTS_0");
+            if ((joints >= 0) != (weights >= 0)) {
+                return ctx.invalid(path + ".attributes", "JOINTS_0 and WEIGHTS_0 go together (§3.7.3.3)");
+            }
+            if (joints >= 0) {
+                KW_TRY(same_count(joints, "JOINTS_0", TINYGLTF_TYPE_VEC4));
+                KW_TRY(same_count(weights, "WEIGHTS_0", TINYGLTF_TYPE_VEC4));
+                std::vector<std::uint32_t> ids;
+                KW_GLTF_ASSIGN(ids, read_uints(ctx, model, joints, path + ".attributes.JOINTS_0"));
+                KW_GLTF_ASSIGN(values, read_floats(ctx, model, weights, path + ".attributes.WEIGHTS_0", true));
+                for (std::size_t i = 0; i < n; ++i) {
+                    t.joints.emplace_back(ids[4 * i], ids[4 * i + 1], ids[4 * i + 2], ids[4 * i + 3]);
+                    t.weights.emplace_back(values[4 * i], values[4 * i + 1], values[4 * i + 2], values[4 * i + 3]);
+                }
+            }
+            if (prim.indices >= 0) {
+                if (accessor_of(model, prim.indices).type != TINYGLTF_TYPE_SCALAR) {
+                    return ctx.invalid(path + ".indices", "expected a SCALAR accessor");
+                }
+                KW_GLTF_ASSIGN(t.indices, read_uints(ctx, model, prim.indices, path + ".indices"));
+                for (std::size_t i = 0; i < t.indices.size(); ++i) {
+                    if (t.indices[i] >= n) {
+                        return ctx.invalid(at(path + ".indices", i), "index " + std::to_string(t.indices[i]) + " >= " +
+                                                                         std::to_string(n) + " vertices");
+                    }
+                }
+            } else {
+                for (std::uint32_t i = 0; i < n; ++i) t.indices.push_back(i);
+            }
+            t.indices.resize(t.indices.size() / 3 * 3);
+            if (prim.material >= 0 && static_cast<std::size_t>(prim.material) < model.materials.size()) {
+                const auto& f = model.materials[static_cast<std::size_t>(prim.material)].pbrMetallicRoughness.baseColorFactor;
+                if (f.size() == 4) t.color = glm::vec4(f[0], f[1], f[2], f[3]);
+            }
+            mesh.triangles.push_back(std::move(t));
+        }
+        out.meshes.push_back(std::move(mesh));
+    }
+    return {};
+}
+
+
 bool finite(const std::vector<double>& values) {
     return std::all_of(values.begin(), values.end(), [](double v) { return std::isfinite(v); });
 }
@@ -782,7 +916,7 @@ Result<Character> load_character(const std::string& path) {
         Character character;
         character.source = path;
         character.extensions = std::move(extensions);
-        for (const tinygltf::Mesh& mesh : model.meshes) character.meshes.push_back({mesh.name, mesh.primitives.size()});
+        KW_TRY(load_meshes(ctx, model, character));
         KW_TRY(load_nodes(ctx, model, character));
         KW_TRY(load_skins(ctx, model, character));
         KW_TRY(load_animations(ctx, model, character));

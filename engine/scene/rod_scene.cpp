@@ -7,11 +7,13 @@
 #include <cassert>
 #include <cmath>
 #include <span>
+#include <utility>
 
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <kodawari/pose_backend.hpp>
 #include <kodawari/rod_scene.hpp>
+#include <kodawari/rods/shape.hpp>
 
 namespace kodawari {
 
@@ -120,6 +122,56 @@ void RodScene::rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose,
     const glm::mat4 placement = placement_matrix(inst.placement);
     nodes.resize(pose.world.size());
     for (std::size_t n = 0; n < nodes.size(); ++n) nodes[n] = placement * pose.world[n];
+}
+
+void RodScene::rigged_world(std::uint32_t c, std::uint32_t index, std::span<const glm::vec3> positions,
+                            std::span<const glm::quat> orientations, gltf::Pose& pose, std::vector<glm::mat4>& out) const {
+    assert(c < instances.size());
+    const CharacterInstance& inst = instances[c];
+    const CharacterKinematics& k = characters[inst.character];
+    assert(k.rig);
+    const gltf::Character& ch = *k.rig;
+    std::vector<glm::mat4> placed;
+    rig_world(c, index, pose, placed);
+    // Which chain joint (i >= 1) each node is, if any.
+    std::vector<std::pair<int, int>> simulated(ch.nodes.size(), {-1, -1});
+    for (std::size_t chain = 0; chain < k.chain_nodes.size(); ++chain) {
+        for (std::size_t i = 1; i < k.chain_nodes[chain].size(); ++i) {
+            simulated[static_cast<std::size_t>(k.chain_nodes[chain][i])] = {static_cast<int>(chain), static_cast<int>(i)};
+        }
+    }
+    const glm::mat4 placement = placement_matrix(inst.placement);
+    out.resize(ch.nodes.size());
+    for (const int n : ch.order) {
+        const auto node = static_cast<std::size_t>(n);
+        const gltf::Node& src = ch.nodes[node];
+        const glm::mat4 parent = src.parent >= 0 ? out[static_cast<std::size_t>(src.parent)] : placement;
+        const auto [chain, i] = simulated[node];
+        if (chain < 0) {
+            if (src.parent < 0) {
+                out[node] = placed[node];
+            } else {
+                const glm::mat4 local = src.matrix ? *src.matrix
+                                                   : glm::translate(glm::mat4(1.0f), pose.translation[node]) *
+                                                         glm::mat4_cast(pose.rotation[node]) *
+                                                         glm::scale(glm::mat4(1.0f), pose.scale[node]);
+                out[node] = parent * local;
+            }
+            continue;
+        }
+        const rods::ChainInstance& ci = world.chains[inst.chain_begin + static_cast<std::size_t>(chain)];
+        const rods::Chain& rod = world.templ(ci).chain;
+        const std::size_t base = ci.joint_begin;
+        const auto j = static_cast<std::size_t>(i);
+        glm::quat q = glm::normalize(orientations[base + j]);
+        if (j + 1 < rod.joint_count) {
+            const glm::vec3 d = positions[base + j + 1] - positions[base + j];
+            const float len = glm::length(d);
+            if (len > 1e-9f) q = glm::normalize(rods::shortest_arc(glm::normalize(q * rod.bone_axis[j]), d / len) * q);
+        }
+        out[node] = glm::translate(glm::mat4(1.0f), positions[base + j]) * glm::mat4_cast(q) *
+                      glm::scale(glm::mat4(1.0f), pose.scale[node]);
+    }
 }
 
 void RodScene::rigged_frame(std::uint32_t c, std::span<const glm::mat4> nodes, rods::RodFrame& out) const {

@@ -113,6 +113,18 @@ struct RodScene {
     /// them). frame() does this with gltf::evaluate; a GPU pose backend feeds it too.
     void rigged_frame(std::uint32_t c, std::span<const glm::mat4> nodes, rods::RodFrame& out) const;
 
+    /// Rigged instance `c`'s node world matrices at frame `index` (placement included,
+    /// indexed like its Character::nodes) with the simulated chain joints where the rod
+    /// backend put them: `positions` and `orientations` are a ChainSnapshot's (the whole
+    /// world's joints). A chain joint i >= 1 sits at its simulated position with its
+    /// particle's orientation turned by the shortest arc that points its bone (the rest
+    /// direction to joint i + 1, Chain::bone_axis) at the next joint (SPEC A.4's
+    /// skinning output; the last joint keeps the particle's), and the node's animated
+    /// local scale; every other node follows its parent with its clip pose. `pose` is
+    /// scratch (it ends as the clip pose). What skinning and the rigged export use.
+    void rigged_world(std::uint32_t c, std::uint32_t index, std::span<const glm::vec3> positions,
+                      std::span<const glm::quat> orientations, gltf::Pose& pose, std::vector<glm::mat4>& out) const;
+
 private:
     // Rigged instance c's node world matrices at frame `index` on the CPU, placement
     // included; `pose` is scratch.

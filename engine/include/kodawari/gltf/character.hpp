@@ -9,6 +9,7 @@
 /// (https://registry.khronos.org/glTF/specs/2.0/glTF-2.0.html).
 
 #include <cstddef>
+#include <cstdint>
 #include <optional>
 #include <string>
 #include <vector>
@@ -41,6 +42,17 @@ struct Node {
 struct Mesh {
     std::string name;
     std::size_t primitives = 0;
+    /// The triangle primitives (mode TRIANGLES) with their vertices, for display;
+    /// primitives of other modes are left out.
+    struct Triangles {
+        std::vector<glm::vec3> positions;
+        std::vector<glm::vec3> normals;   ///< unit; empty when the file has none
+        std::vector<glm::uvec4> joints;   ///< JOINTS_0 (indices into the node's skin's joints); empty when unskinned
+        std::vector<glm::vec4> weights;   ///< WEIGHTS_0, one per joints entry
+        std::vector<std::uint32_t> indices;  ///< three per triangle, each < positions.size()
+        glm::vec4 color{0.8f, 0.8f, 0.8f, 1.0f};  ///< the material's baseColorFactor
+    };
+    std::vector<Triangles> triangles;
 };
 
 /// A skin (§3.7.3 Skins).
