@@ -298,9 +298,10 @@ Result<Image> Renderer::render(const DrawList& list) {
     assert(out != nullptr);
     std::memcpy(out, background, sizeof(background));
     out += sizeof(background);
-    std::memcpy(out, list.lines().data(), list.lines().size_bytes());
+    // memcpy from an empty span's null data() is undefined even for 0 bytes.
+    if (!list.lines().empty()) std::memcpy(out, list.lines().data(), list.lines().size_bytes());
     out += list.lines().size_bytes();
-    std::memcpy(out, list.triangles().data(), list.triangles().size_bytes());
+    if (!list.triangles().empty()) std::memcpy(out, list.triangles().data(), list.triangles().size_bytes());
 
     gpu::RenderPush push{};
     const glm::mat4 vp = view_projection(list.camera(), static_cast<float>(r.width) / static_cast<float>(r.height));
