@@ -607,9 +607,10 @@ int cmd_view(Args args) {
         if (auto r = render::write_png(*screenshot, image.value()); !r) return report(r.error());
         std::printf("kodawari: wrote screenshot %s (%ux%u)\n", screenshot->c_str(), width, height);
     }
-    std::printf("kodawari: view ended at frame %u (t %.3f s, %s) after %llu drawn frames%s\n", v.sim->current,
+    std::printf("kodawari: view ended at frame %u (t %.3f s, %s) on backend %s after %llu drawn frames%s\n", v.sim->current,
                 static_cast<double>(v.sim->current) / static_cast<double>(v.sim->scene.fps), v.playing ? "playing" : "paused",
-                static_cast<unsigned long long>(drawn), v.dirty ? "; unsaved sketches discarded" : "");
+                v.sim->backend_name().c_str(), static_cast<unsigned long long>(drawn),
+                v.dirty ? "; unsaved sketches discarded" : "");
     const std::uint32_t messages = renderer.value()->validation_messages() + v.sim->validation_messages();
     if (messages > 0) {
         std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", messages);

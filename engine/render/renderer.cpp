@@ -183,7 +183,17 @@ struct Renderer::Impl {
 };
 
 Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-Renderer::~Renderer() = default;
+Renderer::~Renderer() {
+    // A present may still wait on a frame's semaphore: the queue must be idle before the
+    // window's objects go (the context waits too, but it is destroyed after them).
+    if (impl_ && impl_->window) {
+        try {
+            impl_->ctx->queue().waitIdle();
+        } catch (const std::exception&) {
+            // Device lost: nothing is in flight any more.
+        }
+    }
+}
 std::uint32_t Renderer::width() const { return impl_->width; }
 std::uint32_t Renderer::height() const { return impl_->height; }
 std::string Renderer::device() const { return impl_->ctx->info().name; }
