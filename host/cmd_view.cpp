@@ -8,6 +8,7 @@
 // their own Vulkan devices; the issue wants the backends' buffers shared with the renderer
 // on one device without the CPU round trip.
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <cmath>
 #include <cstdio>
@@ -39,6 +40,12 @@ constexpr render::Rgba8 kPickedColor{40, 200, 250};
 constexpr render::Rgba8 kTextColor{255, 255, 255};
 constexpr render::Rgba8 kTextBackColor{20, 24, 32};
 constexpr double kPickRadiusPx = 30.0;
+
+std::string number(float value) {
+    char text[32];
+    std::snprintf(text, sizeof(text), "%g", static_cast<double>(value));
+    return text;
+}
 
 Result<std::string> read_text(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
@@ -200,6 +207,27 @@ struct Viewer {
         return {x * width / std::max(ww, 1), y * height / std::max(wh, 1)};
     }
 
+    // A sketch / undo / save outcome: on the status line and on stdout (scripts read it).
+    void say(std::string line) {
+        message = std::move(line);
+        std::printf("kodawari: %s\n", message.c_str());
+        std::fflush(stdout);
+    }
+
+    // A scripted stroke (--keys drag:X1:Y1:X2:Y2, image pixels): press at the start (picks
+    // the chain), a straight drag in 16 steps, release (sketches), as the mouse would.
+    void scripted_drag(glm::dvec2 a, glm::dvec2 b) {
+        if (!sketch_mode) {
+            say("drag ignored: not in sketch mode (S)");
+            return;
+        }
+        pick(a);
+        stroke.clear();
+        if (!picked) return;
+        for (int i = 0; i <= 16; ++i) stroke.push_back(glm::mix(a, b, i / 16.0));
+        apply_sketch();
+    }
+
     void fail(Error e) {
         if (!failure) failure = std::move(e);
         quit = true;
@@ -211,20 +239,33 @@ struct Viewer {
 
     // A new simulation of `scene_text` at the current frame (a sketch, an undo, a backend
     // switch): re-simulated from frame 0, the simplest way to rebuild every backend's state.
-    void rebuild(const std::string& scene_text, const std::string& backend_name) {
-        auto scene = parse_scene(scene_text, scene_path);
-        if (!scene) return fail(scene.error());
-        auto world = build_bird_world(scene.value());
-        if (!world) return fail(world.error());
-        const std::uint32_t at = sim->current;
+    // On failure (a backend that cannot open here) the old simulation stays and the status
+    // line says why.
+    [[nodiscard]] bool rebuild(const std::string& scene_text, const std::string& backend_name) {
         auto next = std::make_unique<Simulation>();
+        auto scene = parse_scene(scene_text, scene_path);
+        if (!scene) {
+            say("cannot rebuild the scene: " + scene.error().message);
+            return false;
+        }
+        auto world = build_bird_world(scene.value());
+        if (!world) {
+            say("cannot rebuild the scene: " + world.error().message);
+            return false;
+        }
         next->scene = std::move(scene).value();
         next->world = std::move(world).value();
         next->choice = sim->choice;
         next->choice.backend = backend_name;
-        if (auto r = next->open(); !r) return fail(r.error());
+        if (auto r = next->open(); !r) {
+            say("backend " + backend_name + ": " + r.error().message);
+            return false;
+        }
+        const std::uint32_t at = sim->current;
         sim = std::move(next);
+        picked.reset();  // chain indices may differ in the new scene
         seek(at);
+        return true;
     }
 
     void pick(glm::dvec2 at) {
@@ -245,7 +286,7 @@ struct Viewer {
                 }
             }
         }
-        message = picked ? "picked " + w.templ(w.chains[*picked]).name : "no chain within 30 px";
+        say(picked ? "picked " + w.templ(w.chains[*picked]).name : "no chain within 30 px");
     }
 
     void apply_sketch() {
@@ -263,7 +304,7 @@ struct Viewer {
         stroke.clear();
         auto result = rods::sketch_view_example(input);
         if (!result) {
-            message = "sketch failed: " + result.error().message;
+            say("sketch failed: " + result.error().message);
             return;
         }
         ViewSpec view;
@@ -271,41 +312,43 @@ struct Viewer {
         view.shape = result.value().shape;
         auto edit = add_view_example(text, scene_path, name, view);
         if (!edit) {
-            message = "sketch failed: " + edit.error().message;
+            say("sketch failed: " + edit.error().message);
             return;
         }
+        if (!rebuild(edit.value().text, sim->choice.backend)) return;
         text = edit.value().text;
         dirty = true;
         sketched.push_back(name);
-        message = name + ": \"" + edit.value().name + "\" " + (edit.value().replaced ? "replaced " + edit.value().replaced_name : "added") +
-                  " (unsaved: W saves)";
-        rebuild(text, sim->choice.backend);
+        say("sketch " + name + ": view example \"" + edit.value().name + "\" " +
+            (edit.value().replaced ? "replaces \"" + edit.value().replaced_name + "\"" : "added") + ", influence " +
+            number(influence) + ", " + std::to_string(result.value().joints_on_stroke) +
+            " joints on the stroke (unsaved: W saves)");
     }
 
     void undo() {
         if (sketched.empty()) {
-            message = "nothing to undo";
+            say("nothing to undo");
             return;
         }
         auto edit = remove_last_sketch(text, scene_path, sketched.back());
         if (!edit) {
-            message = "undo failed: " + edit.error().message;
+            say("undo failed: " + edit.error().message);
             return;
         }
-        message = sketched.back() + ": removed \"" + edit.value().name + "\"";
+        if (!rebuild(edit.value().text, sim->choice.backend)) return;
+        say("undo " + sketched.back() + ": removed \"" + edit.value().name + "\"");
         sketched.pop_back();
         text = edit.value().text;
         dirty = true;
-        rebuild(text, sim->choice.backend);
     }
 
     void save() {
         if (auto r = write_scene_text(scene_path, text); !r) {
-            message = "save failed: " + r.error().message;
+            say("save failed: " + r.error().message);
             return;
         }
         dirty = false;
-        message = "saved " + scene_path;
+        say("saved " + scene_path);
     }
 
     void key(int key, int mods) {
@@ -324,9 +367,9 @@ struct Viewer {
             case GLFW_KEY_HOME: seek(0); break;
             case GLFW_KEY_RIGHT_BRACKET: seek(std::min(sim->current + second, last)); break;
             case GLFW_KEY_LEFT_BRACKET: seek(sim->current > second ? sim->current - second : 0); break;
-            case GLFW_KEY_1: rebuild(text, "cpu-reference"); break;
-            case GLFW_KEY_2: rebuild(text, "cpu"); break;
-            case GLFW_KEY_3: rebuild(text, "vulkan"); break;
+            case GLFW_KEY_1: (void)rebuild(text, "cpu-reference"); break;
+            case GLFW_KEY_2: (void)rebuild(text, "cpu"); break;
+            case GLFW_KEY_3: (void)rebuild(text, "vulkan"); break;
             case GLFW_KEY_S:
                 if (mods & GLFW_MOD_CONTROL) {
                     save();
@@ -379,13 +422,18 @@ struct Viewer {
             return;
         }
         if (left) {
-            camera.yaw -= static_cast<float>(dx) * 0.01f;
-            camera.pitch = std::clamp(camera.pitch + static_cast<float>(dy) * 0.01f, -1.55f, 1.55f);
+            orbit(dx, dy);
         } else if (middle) {
             const render::CameraBasis b = render::camera_basis(camera.view());
             const float px = camera.distance * 2.0f * std::tan(0.5f * glm::radians(camera.fov_deg)) / static_cast<float>(height);
             camera.target += px * (-static_cast<float>(dx) * b.right + static_cast<float>(dy) * b.up);
         }
+    }
+
+    // A left drag by (dx, dy) window pixels: 0.01 rad per pixel.
+    void orbit(double dx, double dy) {
+        camera.yaw -= static_cast<float>(dx) * 0.01f;
+        camera.pitch = std::clamp(camera.pitch + static_cast<float>(dy) * 0.01f, -1.55f, 1.55f);
     }
 
     void scroll(double dy) { camera.distance = std::clamp(camera.distance * std::pow(0.9f, static_cast<float>(dy)), 0.01f, 1e4f); }
@@ -449,13 +497,37 @@ int cmd_view(Args args) {
         width = w;
         height = h;
     }
-    std::vector<int> scripted;
+    struct Step {
+        int key = 0;
+        std::optional<std::array<double, 4>> drag;
+        std::optional<std::array<double, 2>> orbit;
+    };
+    std::vector<Step> scripted;
     if (keys_text) {
         std::stringstream list(*keys_text);
         for (std::string name; std::getline(list, name, ',');) {
+            std::array<double, 4> d{};
+            char extra = 0;
+            if (name.starts_with("drag:")) {
+                if (std::sscanf(name.c_str(), "drag:%lf:%lf:%lf:%lf%c", &d[0], &d[1], &d[2], &d[3], &extra) != 4) {
+                    throw UsageError{"--keys: expected drag:X1:Y1:X2:Y2 (image pixels), got \"" + name + "\""};
+                }
+                scripted.push_back({.key = 0, .drag = d, .orbit = std::nullopt});
+                continue;
+            }
+            if (name.starts_with("orbit:")) {
+                if (std::sscanf(name.c_str(), "orbit:%lf:%lf%c", &d[0], &d[1], &extra) != 2) {
+                    throw UsageError{"--keys: expected orbit:DX:DY (a left drag in pixels), got \"" + name + "\""};
+                }
+                scripted.push_back({.key = 0, .drag = std::nullopt, .orbit = std::array<double, 2>{d[0], d[1]}});
+                continue;
+            }
             const auto k = key_by_name(name);
-            if (!k) throw UsageError{"--keys: unknown key \"" + name + "\" (known: space right left home [ ] 1 2 3 s w u + - p q escape)"};
-            scripted.push_back(*k);
+            if (!k) {
+                throw UsageError{"--keys: unknown key \"" + name +
+                                 "\" (known: space right left home [ ] 1 2 3 s w u + - p q escape, drag:X1:Y1:X2:Y2, orbit:DX:DY)"};
+            }
+            scripted.push_back({.key = *k, .drag = std::nullopt, .orbit = std::nullopt});
         }
     }
     // The scene first: a bad scene is reported without opening a window.
@@ -540,7 +612,17 @@ int cmd_view(Args args) {
         const auto start = std::chrono::steady_clock::now();
         glfwPollEvents();
         // One scripted key per frame, before the frame is simulated and drawn.
-        if (next_key < scripted.size()) v.key(scripted[next_key++], 0);
+        if (next_key < scripted.size()) {
+            const Step& step = scripted[next_key++];
+            if (step.drag) {
+                const auto& d = *step.drag;
+                v.scripted_drag({d[0], d[1]}, {d[2], d[3]});
+            } else if (step.orbit) {
+                v.orbit((*step.orbit)[0], (*step.orbit)[1]);
+            } else {
+                v.key(step.key, 0);
+            }
+        }
         if (v.quit) break;
         if (!v.sim->started) {
             v.seek(0);
@@ -573,7 +655,7 @@ int cmd_view(Args args) {
                       s.current, static_cast<double>(s.current) / static_cast<double>(s.scene.fps), v.playing ? "playing" : "paused",
                       s.backend_name().c_str(), frame_ms, s.rod_scene ? static_cast<std::size_t>(s.rod_scene->world.character_count) : 0,
                       s.rod_scene ? s.rod_scene->world.chains.size() : 0, s.world.birds.size(),
-                      v.sketch_mode ? ("  [sketch: influence " + std::to_string(v.influence).substr(0, 5) + "]").c_str() : "",
+                      v.sketch_mode ? ("  [sketch: influence " + number(v.influence) + "]").c_str() : "",
                       v.message.empty() ? "" : ("  " + v.message).c_str());
         add_status(list, status);
         glfwSetWindowTitle(window.w, (std::string("kodawari view - ") + status).c_str());
@@ -592,7 +674,7 @@ int cmd_view(Args args) {
             auto image = renderer.value()->render(list);
             if (!image) return report(image.error());
             if (auto r = render::write_png(name, image.value()); !r) return report(r.error());
-            v.message = std::string("wrote ") + name;
+            v.say(std::string("wrote screenshot ") + name);
         }
         last_list.emplace(std::move(list));
         ++drawn;

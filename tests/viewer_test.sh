@@ -80,6 +80,22 @@ check "playing ends at frame 4" grep -q "view ended at frame 4 (t 0.067 s, playi
 view "$work/quit" scenes/ahoge.json --size 160x120 --frames 50 --keys "space,right,q"
 check "q quits" grep -q "view ended at frame 1 .* after 2 drawn frames" "$work/quit.out"
 
+# Sketching by a scripted drag on a copy of the scene: orbit 0.8 rad round (between the
+# scene's front and side examples, so the sketch adds one instead of replacing one), S
+# (sketch mode, pauses), influence x1.25, a stroke from the strand's root (projected near
+# (109, 104) at 320x240 from there; the press picks the chain within 30 px) up and to the
+# left, W saves. Undoing the saved sketch
+# with `kodawari sketch --undo` gives back the original bytes.
+cp scenes/ahoge.json "$work/ahoge.json"
+view "$work/sketch" "$work/ahoge.json" --size 320x240 --frames 6 --keys "orbit:80:0,s,+,drag:109:104:75:55,w" --screenshot "$work/sketch.png"
+rc=$?
+check "sketch run exits 0" test $rc -eq 0
+check "sketch picks the chain and adds an example" grep -q 'sketch .*: view example "sketch 1" added, influence 5,' "$work/sketch.out"
+check "sketch is saved" bash -c "grep -q 'saved $work/ahoge.json' '$work/sketch.out' && grep -q '\"sketch 1\"' '$work/ahoge.json'"
+chain=$(sed -n 's/^kodawari: sketch \([^:]*\): view example.*/\1/p' "$work/sketch.out" | head -1)
+"$bin" sketch "$work/ahoge.json" --chain "$chain" --undo --out "$work/undone.json" >/dev/null
+check "undoing the saved sketch gives the original bytes" cmp -s "$work/undone.json" scenes/ahoge.json
+
 # What the window shows (not the offscreen copy): an Xvfb whose screen is a file (-fbdir,
 # XWD format), read while the viewer runs until the chain's colour appears there.
 if command -v Xvfb >/dev/null 2>&1; then

@@ -2,8 +2,8 @@
 /// @file
 /// The offscreen renderer (issue 5): draw lists built on the CPU (ground grid, skeletons,
 /// chains, birds) drawn by Vulkan into a WxH RGBA8 + depth target and read back as an
-/// image; PNG output and contact sheets. `kodawari render` uses it; an interactive viewer
-/// will draw the same draw lists into a swapchain image.
+/// image; PNG output and contact sheets. `kodawari render` uses it; `kodawari view`
+/// draws the same draw lists and blits the image into a window's swapchain (present()).
 
 #include <cstdint>
 #include <functional>
@@ -57,8 +57,8 @@ struct Image {
 };
 
 /// What one frame draws, in world space: built on the CPU and uploaded every frame.
-/// (Fine for previews and tests; the viewer will want GPU-resident buffers that the
-/// backends write directly, without the CPU round trip.)
+/// (Fine for previews and tests; the viewer uses them too for now, but wants GPU-resident
+/// buffers that the backends write directly, without the CPU round trip: not done yet.)
 class DrawList {
 public:
     /// `width` x `height` is the image the list is for: segments and dots have minimum
