@@ -497,37 +497,44 @@ int cmd_view(Args args) {
         width = w;
         height = h;
     }
+    // --keys: one step per drawn frame. Besides key names, scripted mouse actions and a
+    // window resize (which remakes the swapchain), so that a test can reach them.
     struct Step {
+        enum class Kind { Key, Drag, Orbit, Resize } kind = Kind::Key;
         int key = 0;
-        std::optional<std::array<double, 4>> drag;
-        std::optional<std::array<double, 2>> orbit;
+        std::array<double, 4> values{};
     };
     std::vector<Step> scripted;
     if (keys_text) {
+        static constexpr const char* kKnown =
+            "space right left home [ ] 1 2 3 s w u + - p q escape, drag:X1:Y1:X2:Y2, orbit:DX:DY, resize:W:H";
         std::stringstream list(*keys_text);
         for (std::string name; std::getline(list, name, ',');) {
-            std::array<double, 4> d{};
+            Step step;
+            auto& d = step.values;
             char extra = 0;
             if (name.starts_with("drag:")) {
+                step.kind = Step::Kind::Drag;
                 if (std::sscanf(name.c_str(), "drag:%lf:%lf:%lf:%lf%c", &d[0], &d[1], &d[2], &d[3], &extra) != 4) {
                     throw UsageError{"--keys: expected drag:X1:Y1:X2:Y2 (image pixels), got \"" + name + "\""};
                 }
-                scripted.push_back({.key = 0, .drag = d, .orbit = std::nullopt});
-                continue;
-            }
-            if (name.starts_with("orbit:")) {
+            } else if (name.starts_with("orbit:")) {
+                step.kind = Step::Kind::Orbit;
                 if (std::sscanf(name.c_str(), "orbit:%lf:%lf%c", &d[0], &d[1], &extra) != 2) {
                     throw UsageError{"--keys: expected orbit:DX:DY (a left drag in pixels), got \"" + name + "\""};
                 }
-                scripted.push_back({.key = 0, .drag = std::nullopt, .orbit = std::array<double, 2>{d[0], d[1]}});
-                continue;
+            } else if (name.starts_with("resize:")) {
+                step.kind = Step::Kind::Resize;
+                if (std::sscanf(name.c_str(), "resize:%lf:%lf%c", &d[0], &d[1], &extra) != 2 || !(d[0] >= 1 && d[0] <= 8192) ||
+                    !(d[1] >= 1 && d[1] <= 8192)) {
+                    throw UsageError{"--keys: expected resize:W:H (window pixels, 1 to 8192), got \"" + name + "\""};
+                }
+            } else {
+                const auto k = key_by_name(name);
+                if (!k) throw UsageError{"--keys: unknown key \"" + name + "\" (known: " + kKnown + ")"};
+                step.key = *k;
             }
-            const auto k = key_by_name(name);
-            if (!k) {
-                throw UsageError{"--keys: unknown key \"" + name +
-                                 "\" (known: space right left home [ ] 1 2 3 s w u + - p q escape, drag:X1:Y1:X2:Y2, orbit:DX:DY)"};
-            }
-            scripted.push_back({.key = *k, .drag = std::nullopt, .orbit = std::nullopt});
+            scripted.push_back(step);
         }
     }
     // The scene first: a bad scene is reported without opening a window.
@@ -614,13 +621,15 @@ int cmd_view(Args args) {
         // One scripted key per frame, before the frame is simulated and drawn.
         if (next_key < scripted.size()) {
             const Step& step = scripted[next_key++];
-            if (step.drag) {
-                const auto& d = *step.drag;
-                v.scripted_drag({d[0], d[1]}, {d[2], d[3]});
-            } else if (step.orbit) {
-                v.orbit((*step.orbit)[0], (*step.orbit)[1]);
-            } else {
-                v.key(step.key, 0);
+            const auto& d = step.values;
+            switch (step.kind) {
+                case Step::Kind::Key: v.key(step.key, 0); break;
+                case Step::Kind::Drag: v.scripted_drag({d[0], d[1]}, {d[2], d[3]}); break;
+                case Step::Kind::Orbit: v.orbit(d[0], d[1]); break;
+                case Step::Kind::Resize:
+                    glfwSetWindowSize(window.w, static_cast<int>(d[0]), static_cast<int>(d[1]));
+                    glfwPollEvents();
+                    break;
             }
         }
         if (v.quit) break;

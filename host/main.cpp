@@ -41,7 +41,7 @@ commands:
       Left/Right step, [ ] -+1 s, Home restart, 1/2/3 backend, S sketch mode, U undo, W save,
       P screenshot, Q quit (README "Viewer"); --frames quits after N drawn frames, --keys applies
       one key per frame first (names: space right left home [ ] 1 2 3 s w u + - p q escape, and
-      drag:X1:Y1:X2:Y2, a stroke in image pixels in sketch mode, orbit:DX:DY, a left drag), --screenshot writes the last frame
+      drag:X1:Y1:X2:Y2, a stroke in image pixels in sketch mode, orbit:DX:DY, a left drag, resize:W:H), --screenshot writes the last frame
   info
       version, Vulkan devices and which one is chosen, CPU threads
 

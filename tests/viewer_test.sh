@@ -74,6 +74,12 @@ rc=$?
 check "scrub exits 0" test $rc -eq 0
 check "scrub ends at frame 59 on the cpu backend" grep -q "view ended at frame 59 (t 0.983 s, paused) on backend cpu" "$work/scrub.out"
 
+# A resized window gets a new swapchain (the image keeps --size, scaled into the window).
+view "$work/resize" scenes/ahoge.json --size 160x120 --frames 8 --keys "resize:300:200,space,resize:120:90" --screenshot "$work/resized.png"
+rc=$?
+check "resize exits 0" test $rc -eq 0
+check "resize keeps the image size" python3 -c "import struct,sys; d=open(sys.argv[1],'rb').read(24); sys.exit(struct.unpack('>II', d[16:24])!=(160, 120))" "$work/resized.png"
+
 # Playing: 5 drawn frames are frames 0 .. 4; Q quits before the limit.
 view "$work/play" scenes/ahoge.json --size 160x120 --frames 5
 check "playing ends at frame 4" grep -q "view ended at frame 4 (t 0.067 s, playing)" "$work/play.out"
