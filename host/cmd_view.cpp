@@ -29,6 +29,7 @@
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_scene.hpp"
+#include "kodawari/rods/kinematics.hpp"
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/scene_edit.hpp"
 
@@ -140,11 +141,15 @@ struct OrbitCamera {
     glm::vec3 target{0.0f};
     float yaw = 0.0f, pitch = 0.0f, distance = 3.0f, fov_deg = 50.0f;
 
-    static OrbitCamera from(const render::CameraView& view) {
+    // The scene camera at frame 0, orbiting its target (scene_camera() looks 1 m along
+    // forward instead, which would make a tiny orbit); a camera whose target is its
+    // position orbits a point 10 m ahead.
+    static OrbitCamera from(const Scene& scene) {
+        const rods::CameraPose pose = rods::camera_pose(scene.camera.motion, 0.0f);
         OrbitCamera c;
-        c.target = view.target;
-        c.fov_deg = view.fov_deg;
-        const glm::vec3 offset = view.position - view.target;
+        c.fov_deg = scene.camera.fov_deg;
+        c.target = glm::length(pose.target - pose.position) > 1e-3f ? pose.target : pose.position + 10.0f * pose.forward;
+        const glm::vec3 offset = pose.position - c.target;
         c.distance = std::max(glm::length(offset), 1e-3f);
         c.pitch = std::asin(std::clamp(offset.y / c.distance, -1.0f, 1.0f));
         c.yaw = std::atan2(offset.x, offset.z);
@@ -158,9 +163,10 @@ struct OrbitCamera {
         v.position = position();
         v.target = target;
         v.fov_deg = fov_deg;
-        // As scene_camera: near 1% of the distance within [0.01, 1] m, far 1000 x near.
+        // Near 1% of the distance within [0.01, 1] m, as scene_camera; far at least 1 km, so
+        // that zooming in on one character keeps the rest of a crowd in view.
         v.near = std::clamp(0.01f * distance, 0.01f, 1.0f);
-        v.far = 1000.0f * v.near;
+        v.far = std::max(1000.0f * v.near, 1000.0f);
         return v;
     }
     [[nodiscard]] rods::ImageCamera image(std::uint32_t w, std::uint32_t h) const {
@@ -551,7 +557,7 @@ int cmd_view(Args args) {
     v.sim->scene = std::move(loaded.value().scene);
     v.sim->world = std::move(loaded.value().world);
     v.sim->choice = choice;
-    v.camera = OrbitCamera::from(render::scene_camera(v.sim->scene, 0));
+    v.camera = OrbitCamera::from(v.sim->scene);
 
     if (glfwInit() != GLFW_TRUE) {
         const char* why = nullptr;

@@ -27,14 +27,9 @@ view() {  # view OUT-PREFIX ARGS...: the viewer in a fresh Xvfb screen
 }
 cd "$src"
 
-# Space pauses before the first step, then two steps: frame 2, paused.
-view "$work/keys" scenes/ahoge.json --size 320x240 --frames 30 --keys "space,right,right" --screenshot "$work/shot.png"
-rc=$?
-check "view exits 0" test $rc -eq 0
-check "view ends at frame 2, paused" grep -q "view ended at frame 2 (t 0.033 s, paused) on backend .* after 30 drawn frames" "$work/keys.out"
-check "screenshot is a 320x240 PNG" python3 -c "import struct,sys; d=open(sys.argv[1],'rb').read(24); sys.exit(d[:8]!=b'\\x89PNG\\r\\n\\x1a\\n' or struct.unpack('>II', d[16:24])!=(320, 240))" "$work/shot.png"
-# The chain is drawn in its exact colour (render::kChainColor) and the status line in white.
-check "screenshot shows the chain and the status line" python3 - "$work/shot.png" <<'PY'
+# png.py FILE R,G,B...: exit 0 when the RGBA8 PNG (as write_png makes them) has a pixel of
+# each colour and more than 10 colours in all (not a blank image).
+cat >"$work/png.py" <<'PY'
 import struct, sys, zlib
 data = open(sys.argv[1], 'rb').read()
 pos, idat, width, height = 8, b'', 0, 0
@@ -64,8 +59,21 @@ for y in range(height):
     rows.append(line)
     prev = line
 pixels = {bytes(r[i:i + 3]) for r in rows for i in range(0, stride, 4)}
-sys.exit(0 if bytes([235, 95, 20]) in pixels and bytes([255, 255, 255]) in pixels and len(pixels) > 10 else 1)
+wanted = [bytes(int(v) for v in arg.split(',')) for arg in sys.argv[2:]]
+missing = [list(w) for w in wanted if w not in pixels]
+if missing or len(pixels) <= 10:
+    print(f"png.py: {sys.argv[1]}: missing colours {missing}, {len(pixels)} colours in all")
+    sys.exit(1)
 PY
+
+# Space pauses before the first step, then two steps: frame 2, paused.
+view "$work/keys" scenes/ahoge.json --size 320x240 --frames 30 --keys "space,right,right" --screenshot "$work/shot.png"
+rc=$?
+check "view exits 0" test $rc -eq 0
+check "view ends at frame 2, paused" grep -q "view ended at frame 2 (t 0.033 s, paused) on backend .* after 30 drawn frames" "$work/keys.out"
+check "screenshot is a 320x240 PNG" python3 -c "import struct,sys; d=open(sys.argv[1],'rb').read(24); sys.exit(d[:8]!=b'\\x89PNG\\r\\n\\x1a\\n' or struct.unpack('>II', d[16:24])!=(320, 240))" "$work/shot.png"
+# The chain is drawn in its exact colour (render::kChainColor) and the status line in white.
+check "screenshot shows the chain and the status line" python3 "$work/png.py" "$work/shot.png" 235,95,20 255,255,255
 
 # Scrubbing: a second forward (60 frames at 60 fps), a step, two steps back (re-simulated
 # from frame 0), then the backend switch to cpu (re-simulated up to the same frame).
@@ -80,6 +88,13 @@ rc=$?
 check "resize exits 0" test $rc -eq 0
 check "resize keeps the image size" python3 -c "import struct,sys; d=open(sys.argv[1],'rb').read(24); sys.exit(struct.unpack('>II', d[16:24])!=(160, 120))" "$work/resized.png"
 
+# The other shipped scenes start at their camera too: the crowd's chains and the ground
+# grid (render::kGridColor); the flock's grid (the birds are lit, no exact colour to look for).
+view "$work/crowd" scenes/crowd.json --size 320x180 --frames 2 --screenshot "$work/crowd.png"
+check "crowd: chains and grid in view" python3 "$work/png.py" "$work/crowd.png" 235,95,20 150,156,168
+view "$work/flock" scenes/flock.json --size 320x180 --frames 2 --screenshot "$work/flock.png"
+check "flock: grid in view" python3 "$work/png.py" "$work/flock.png" 150,156,168
+
 # Playing: 5 drawn frames are frames 0 .. 4; Q quits before the limit.
 view "$work/play" scenes/ahoge.json --size 160x120 --frames 5
 check "playing ends at frame 4" grep -q "view ended at frame 4 (t 0.067 s, playing)" "$work/play.out"
@@ -89,11 +104,11 @@ check "q quits" grep -q "view ended at frame 1 .* after 2 drawn frames" "$work/q
 # Sketching by a scripted drag on a copy of the scene: orbit 0.8 rad round (between the
 # scene's front and side examples, so the sketch adds one instead of replacing one), S
 # (sketch mode, pauses), influence x1.25, a stroke from the strand's root (projected near
-# (109, 104) at 320x240 from there; the press picks the chain within 30 px) up and to the
-# left, W saves. Undoing the saved sketch
+# (160, 100) at 320x240: the orbit turns round the head; the press picks the chain within
+# 30 px) up and to the left, W saves. Undoing the saved sketch
 # with `kodawari sketch --undo` gives back the original bytes.
 cp scenes/ahoge.json "$work/ahoge.json"
-view "$work/sketch" "$work/ahoge.json" --size 320x240 --frames 6 --keys "orbit:80:0,s,+,drag:109:104:75:55,w" --screenshot "$work/sketch.png"
+view "$work/sketch" "$work/ahoge.json" --size 320x240 --frames 6 --keys "orbit:80:0,s,+,drag:160:100:120:50,w" --screenshot "$work/sketch.png"
 rc=$?
 check "sketch run exits 0" test $rc -eq 0
 check "sketch picks the chain and adds an example" grep -q 'sketch .*: view example "sketch 1" added, influence 5,' "$work/sketch.out"
