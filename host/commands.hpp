@@ -12,5 +12,6 @@ int cmd_bench(Args args);
 int cmd_rig(Args args);
 int cmd_sketch(Args args);
 int cmd_render(Args args);
+int cmd_view(Args args);
 
 }  // namespace kodawari::cli

@@ -35,6 +35,13 @@ commands:
       simulate a scene as run does and draw frames A, A+STEP, ... below B (B exclusive; default the whole
       scene) offscreen at WxH (default 1280x720) to DIR/<scene>_<frame, 5 digits>.png (DIR is created);
       --contact-sheet also writes the frames shrunk into one grid (default min(frames, 4) columns)
+  view [SCENE] [--size WxH] [--backend ...] [--device NAME|INDEX] [--validation]
+       [--frames N] [--keys K1,K2,...] [--screenshot FILE.png]
+      an interactive window (GLFW + Vulkan): orbit / pan / zoom with the mouse, Space play/pause,
+      Left/Right step, [ ] -+1 s, Home restart, 1/2/3 backend, S sketch mode, U undo, W save,
+      P screenshot, Q quit (README "Viewer"); --frames quits after N drawn frames, --keys applies
+      one key per frame first (names: space right left home [ ] 1 2 3 s w u + - p q escape, and
+      drag:X1:Y1:X2:Y2, a stroke in image pixels in sketch mode, orbit:DX:DY, a left drag, resize:W:H), --screenshot writes the last frame
   info
       version, Vulkan devices and which one is chosen, CPU threads
 
@@ -65,6 +72,7 @@ int main(int argc, char** argv) {
         if (command == "rig") return cmd_rig(args);
         if (command == "sketch") return cmd_sketch(args);
         if (command == "render") return cmd_render(args);
+        if (command == "view") return cmd_view(args);
         throw UsageError{"unknown command \"" + command + "\""};
     } catch (const UsageError& e) {
         std::fprintf(stderr, "kodawari: %s\n\n%s", e.message.c_str(), kUsage);

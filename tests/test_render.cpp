@@ -312,6 +312,50 @@ TEST(Render, BirdsAreWhereTheyFly) {
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
 
+// The viewer's overlays (stroke, status line): pixel coordinates with the origin at the
+// top-left corner and y down, drawn over the scene whatever the depth there.
+TEST(Render, ScreenOverlaysAreInPixelsAndOnTop) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    const AhogeRun run = simulate_ahoge({0});
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    render::DrawList list = ahoge_list(run, 0, run.snapshots[0], kWidth, kHeight);
+    // Where the strand is: its first joint, projected independently.
+    const render::CameraView camera = render::scene_camera(run.scene, 0);
+    const Pinhole pinhole(camera.position, camera.target, camera.fov_deg, kWidth, kHeight);
+    glm::vec2 root;
+    ASSERT_TRUE(pinhole.project(run.snapshots[0].positions[0], root));
+    const Rgba8 overlay{10, 200, 30};
+    // A 20 x 12 px rectangle over the root, and a horizontal line near the top-left corner.
+    const glm::vec2 a = root - glm::vec2(10.0f, 6.0f), b = root + glm::vec2(10.0f, 6.0f);
+    list.add_screen_triangle(a, {b.x, a.y}, b, overlay);
+    list.add_screen_triangle(a, b, {a.x, b.y}, overlay);
+    list.add_screen_line({5.0f, 7.5f}, {60.0f, 7.5f}, overlay);
+    auto image = renderer->render(list);
+    ASSERT_TRUE(image.ok()) << image.error().message;
+    const Image& img = image.value();
+    const auto px = [&](float x, float y) { return img.at(std::uint32_t(x), std::uint32_t(y)); };
+    EXPECT_EQ(px(root.x, root.y), overlay) << "the overlay covers the strand";
+    EXPECT_EQ(px(a.x + 1.0f, a.y + 1.0f), overlay);
+    EXPECT_EQ(px(b.x - 1.0f, b.y - 1.0f), overlay);
+    EXPECT_NE(px(a.x - 2.0f, root.y), overlay) << "nothing left of the rectangle";
+    EXPECT_NE(px(root.x, b.y + 2.0f), overlay) << "nothing below it";
+    EXPECT_EQ(px(30.0f, 7.0f), overlay) << "the line is on row 7";
+    EXPECT_EQ(px(30.0f, 12.0f), background_at(12, kHeight));
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
+// present() needs a window: an offscreen renderer says so instead of crashing.
+TEST(Render, PresentWithoutAWindowIsAnError) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto renderer = make_renderer(64, 48);
+    ASSERT_TRUE(renderer);
+    const render::DrawList list(render::CameraView{}, 64, 48);
+    auto presented = renderer->present(list, 64, 48);
+    ASSERT_FALSE(presented.ok());
+    EXPECT_NE(presented.error().message.find("window"), std::string::npos) << presented.error().message;
+}
+
 TEST(Render, ContactSheetAndDownscale) {
     Image image;
     image.width = 31;

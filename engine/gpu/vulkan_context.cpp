@@ -141,7 +141,8 @@ std::unique_ptr<vk::raii::Context> open_loader(std::string& error) {
     }
 }
 
-vk::raii::Instance make_instance(const vk::raii::Context& context, bool validation) {
+vk::raii::Instance make_instance(const vk::raii::Context& context, bool validation,
+                                 const std::vector<std::string>& extra_extensions = {}) {
     const std::uint32_t loader_version = context.enumerateInstanceVersion();
     const vk::ApplicationInfo app{.pApplicationName = "kodawari",
                                   .applicationVersion = 1,
@@ -155,6 +156,7 @@ vk::raii::Instance make_instance(const vk::raii::Context& context, bool validati
         layers.push_back("VK_LAYER_KHRONOS_validation");
         extensions.push_back(VK_EXT_DEBUG_UTILS_EXTENSION_NAME);
     }
+    for (const std::string& e : extra_extensions) extensions.push_back(e.c_str());
     const vk::InstanceCreateInfo info{.pNext = validation ? &features : nullptr,
                                       .pApplicationInfo = &app,
                                       .enabledLayerCount = static_cast<std::uint32_t>(layers.size()),
@@ -232,7 +234,7 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
             // (tests/lsan.supp).
             (void)::dlopen("libVkLayer_khronos_validation.so", RTLD_NOW | RTLD_NODELETE);
         }
-        ctx->instance_ = make_instance(*ctx->context_, ctx->validation_);
+        ctx->instance_ = make_instance(*ctx->context_, ctx->validation_, options.instance_extensions);
         if (ctx->validation_) {
             using Severity = vk::DebugUtilsMessageSeverityFlagBitsEXT;
             using Type = vk::DebugUtilsMessageTypeFlagBitsEXT;
@@ -241,6 +243,12 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
                  .messageType = Type::eGeneral | Type::eValidation | Type::ePerformance,
                  .pfnUserCallback = &on_validation_message,
                  .pUserData = ctx->messages_.get()});
+        }
+
+        if (options.create_surface) {
+            auto surface = options.create_surface(*ctx->instance_);
+            if (!surface) return surface.error();
+            ctx->surface_ = vk::raii::SurfaceKHR(ctx->instance_, surface.value());
         }
 
         GpuInventory inventory;
@@ -254,7 +262,21 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
         if (inventory.chosen < 0) return make_error(Error::Kind::Unsupported, inventory.reason);
         ctx->info_ = inventory.devices[static_cast<std::size_t>(inventory.chosen)];
         ctx->physical_ = std::move(devices[ctx->info_.index]);
-        const auto family = compute_family(ctx->physical_, options.graphics);
+        const bool presents = static_cast<VkSurfaceKHR>(*ctx->surface_) != VK_NULL_HANDLE;
+        std::optional<std::uint32_t> family = compute_family(ctx->physical_, options.graphics || presents);
+        if (presents) {
+            // One queue does everything, so it must also present to the window.
+            family.reset();
+            const auto families = ctx->physical_.getQueueFamilyProperties();
+            const auto both = vk::QueueFlagBits::eGraphics | vk::QueueFlagBits::eCompute;
+            for (std::uint32_t i = 0; i < families.size() && !family; ++i) {
+                if ((families[i].queueFlags & both) == both && ctx->physical_.getSurfaceSupportKHR(i, *ctx->surface_)) family = i;
+            }
+            if (!family) {
+                return make_error(Error::Kind::Unsupported,
+                                  ctx->info_.name + " has no queue that does graphics and compute and presents to the window");
+            }
+        }
         if (!family) {
             return make_error(Error::Kind::Unsupported, ctx->info_.name + " has no queue that does graphics and compute");
         }
@@ -262,7 +284,11 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
 
         const float priority = 1.0f;
         const vk::DeviceQueueCreateInfo queue_info{.queueFamilyIndex = ctx->queue_family_, .queueCount = 1, .pQueuePriorities = &priority};
-        ctx->device_ = ctx->physical_.createDevice({.queueCreateInfoCount = 1, .pQueueCreateInfos = &queue_info});
+        const char* swapchain_extension = VK_KHR_SWAPCHAIN_EXTENSION_NAME;
+        ctx->device_ = ctx->physical_.createDevice({.queueCreateInfoCount = 1,
+                                                    .pQueueCreateInfos = &queue_info,
+                                                    .enabledExtensionCount = presents ? 1u : 0u,
+                                                    .ppEnabledExtensionNames = presents ? &swapchain_extension : nullptr});
         ctx->queue_ = ctx->device_.getQueue(ctx->queue_family_, 0);
         ctx->pool_ = ctx->device_.createCommandPool(
             {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer, .queueFamilyIndex = ctx->queue_family_});

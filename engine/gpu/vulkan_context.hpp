@@ -7,6 +7,7 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <vector>
 
 #include <vulkan/vulkan_raii.hpp>
 
@@ -21,6 +22,14 @@ struct ContextOptions {
     /// The queue must do graphics too (the renderer). Compute-only contexts prefer a
     /// compute-only family (async compute on GPUs), which cannot draw.
     bool graphics = false;
+    /// Extra instance extensions (a window system's surface extensions, e.g. what
+    /// glfwGetRequiredInstanceExtensions lists).
+    std::vector<std::string> instance_extensions{};
+    /// When set, called once with the new instance to create the surface of a window
+    /// (the engine knows no window system; the viewer passes glfwCreateWindowSurface).
+    /// The context then owns the surface, picks a queue family that can present to it and
+    /// enables VK_KHR_swapchain.
+    std::function<Result<VkSurfaceKHR>(VkInstance)> create_surface{};
 };
 
 class VulkanContext {
@@ -40,6 +49,12 @@ public:
     [[nodiscard]] bool unified_memory() const { return unified_; }
     [[nodiscard]] std::uint32_t validation_messages() const { return messages_->load(); }
     [[nodiscard]] bool validation_enabled() const { return validation_; }
+    [[nodiscard]] const vk::raii::Instance& instance() const { return instance_; }
+    /// The window surface (null without ContextOptions::create_surface).
+    [[nodiscard]] const vk::raii::SurfaceKHR& surface() const { return surface_; }
+    /// The one queue (graphics, compute and, with a surface, present).
+    [[nodiscard]] const vk::raii::Queue& queue() const { return queue_; }
+    [[nodiscard]] std::uint32_t queue_family() const { return queue_family_; }
 
     /// Records commands with `record`, submits them and waits. When the device has
     /// timestamps, `gpu_ms` receives the time between the two timestamps `record` may
@@ -60,6 +75,7 @@ private:
     std::unique_ptr<vk::raii::Context> context_;  // first: outlives every handle
     vk::raii::Instance instance_{nullptr};
     vk::raii::DebugUtilsMessengerEXT messenger_{nullptr};
+    vk::raii::SurfaceKHR surface_{nullptr};  // after the instance: destroyed before it
     vk::raii::PhysicalDevice physical_{nullptr};
     vk::raii::Device device_{nullptr};
     vk::raii::Queue queue_{nullptr};

@@ -130,6 +130,23 @@ void DrawList::add_circle(const glm::vec3& center, float radius, Rgba8 color) {
     }
 }
 
+void DrawList::add_screen_line(glm::vec2 a, glm::vec2 b, Rgba8 color) {
+    const gpu::vec4 c = v4(color, 0.0f);
+    const auto clip = [&](glm::vec2 p) {
+        return gpu::vec4{2.0f * p.x / static_cast<float>(width_) - 1.0f, 2.0f * p.y / static_cast<float>(height_) - 1.0f, 0.0f, 1.0f};
+    };
+    lines_.push_back({clip(a), c, {0.0f, 0.0f, 0.0f, KW_RENDER_CLIP}});
+    lines_.push_back({clip(b), c, {0.0f, 0.0f, 0.0f, KW_RENDER_CLIP}});
+}
+
+void DrawList::add_screen_triangle(glm::vec2 a, glm::vec2 b, glm::vec2 c, Rgba8 color) {
+    const gpu::vec4 col = v4(color, 0.0f);
+    const auto clip = [&](glm::vec2 p) {
+        return gpu::vec4{2.0f * p.x / static_cast<float>(width_) - 1.0f, 2.0f * p.y / static_cast<float>(height_) - 1.0f, 0.0f, 1.0f};
+    };
+    for (const glm::vec2 p : {a, b, c}) triangles_.push_back({clip(p), col, {0.0f, 0.0f, 0.0f, KW_RENDER_CLIP}});
+}
+
 // ---------------------------------------------------------------------------------------
 // Renderer
 
@@ -141,10 +158,42 @@ struct Renderer::Impl {
     vk::raii::Framebuffer framebuffer{nullptr};
     std::optional<gpu::GraphicsPipeline> background, lines, triangles;
     std::optional<gpu::GpuBuffer> vertices, readback;
+
+    // Presentation (RendererOptions::create_surface): its own command buffer and fence,
+    // because the frame's submission waits on and signals semaphores.
+    struct Window {
+        vk::raii::SwapchainKHR swapchain{nullptr};
+        std::vector<vk::Image> images;
+        vk::Extent2D extent{};     // the swapchain's
+        vk::Extent2D requested{};  // the window's framebuffer size it was made for
+        bool stale = false;        // out of date or suboptimal: remade on the next present()
+        vk::raii::Semaphore acquired{nullptr};
+        // One per swapchain image: a present may still wait on an image's semaphore when
+        // the next frame starts, so it is reused only when that image comes back.
+        std::vector<vk::raii::Semaphore> finished;
+        vk::raii::CommandPool pool{nullptr};
+        vk::raii::CommandBuffer cmd{nullptr};
+        vk::raii::Fence fence{nullptr};
+    };
+    std::optional<Window> window;
+
+    [[nodiscard]] Result<void> upload(const DrawList& list);
+    void record_pass(const vk::raii::CommandBuffer& cmd, const DrawList& list) const;
+    [[nodiscard]] Result<void> make_swapchain(std::uint32_t width, std::uint32_t height);
 };
 
 Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
-Renderer::~Renderer() = default;
+Renderer::~Renderer() {
+    // A present may still wait on a frame's semaphore: the queue must be idle before the
+    // window's objects go (the context waits too, but it is destroyed after them).
+    if (impl_ && impl_->window) {
+        try {
+            impl_->ctx->queue().waitIdle();
+        } catch (const std::exception&) {
+            // Device lost: nothing is in flight any more.
+        }
+    }
+}
 std::uint32_t Renderer::width() const { return impl_->width; }
 std::uint32_t Renderer::height() const { return impl_->height; }
 std::string Renderer::device() const { return impl_->ctx->info().name; }
@@ -170,7 +219,11 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
                                                          std::to_string(options.height) + " is outside 1x1 .. 8192x8192");
     }
     auto impl = std::make_unique<Impl>();
-    auto ctx = gpu::VulkanContext::create({.device = options.device, .validation = options.validation, .graphics = true});
+    auto ctx = gpu::VulkanContext::create({.device = options.device,
+                                           .validation = options.validation,
+                                           .graphics = true,
+                                           .instance_extensions = options.instance_extensions,
+                                           .create_surface = options.create_surface});
     if (!ctx) return ctx.error();
     impl->ctx = std::move(ctx).value();
     impl->width = options.width;
@@ -271,72 +324,84 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
 }
 
-Result<Image> Renderer::render(const DrawList& list) {
-    assert(list.width() == impl_->width && list.height() == impl_->height && "the draw list is for another size");
-    Impl& r = *impl_;
-    gpu::VulkanContext& c = *r.ctx;
+namespace {
+constexpr std::size_t kBackgroundVertices = 6;
+}  // namespace
 
+Result<void> Renderer::Impl::upload(const DrawList& list) {
+    gpu::VulkanContext& c = *ctx;
     // The background: two clip-space triangles, top colour at y = -1 (Vulkan: top).
     const glm::vec3 top = background_color(0.0f), bottom = background_color(1.0f);
     const auto corner = [](float x, float y, const glm::vec3& col) {
         return gpu::RenderVertex{{x, y, 0.0f, 1.0f}, {col.x, col.y, col.z, 0.0f}, {0.0f, 0.0f, 0.0f, KW_RENDER_CLIP}};
     };
-    const gpu::RenderVertex background[6] = {corner(-1, -1, top), corner(1, -1, top),       corner(1, 1, bottom),
-                                             corner(-1, -1, top), corner(1, 1, bottom), corner(-1, 1, bottom)};
-    const std::size_t background_count = 6;
-    const std::size_t count = background_count + list.lines().size() + list.triangles().size();
+    const gpu::RenderVertex quad[kBackgroundVertices] = {corner(-1, -1, top),  corner(1, -1, top),  corner(1, 1, bottom),
+                                                         corner(-1, -1, top),  corner(1, 1, bottom), corner(-1, 1, bottom)};
+    const std::size_t count = kBackgroundVertices + list.lines().size() + list.triangles().size();
     const vk::DeviceSize bytes = count * sizeof(gpu::RenderVertex);
-    // The previous submission has finished (submit waits), so the buffer can be replaced.
-    if (!r.vertices || r.vertices->size() < bytes) {
-        auto grown = gpu::GpuBuffer::create(c, std::max<vk::DeviceSize>(bytes, r.vertices ? 2 * r.vertices->size() : 0),
+    // The previous submission has finished (every submission is waited for), so the
+    // buffer can be replaced.
+    if (!vertices || vertices->size() < bytes) {
+        auto grown = gpu::GpuBuffer::create(c, std::max<vk::DeviceSize>(bytes, vertices ? 2 * vertices->size() : 0),
                                             gpu::GpuBuffer::Kind::Vertex);
         if (!grown) return grown.error();
-        r.vertices.reset();
-        r.vertices.emplace(std::move(grown).value());
+        vertices.reset();
+        vertices.emplace(std::move(grown).value());
     }
-    std::byte* out = r.vertices->mapped();
+    std::byte* out = vertices->mapped();
     assert(out != nullptr);
-    std::memcpy(out, background, sizeof(background));
-    out += sizeof(background);
+    std::memcpy(out, quad, sizeof(quad));
+    out += sizeof(quad);
     // memcpy from an empty span's null data() is undefined even for 0 bytes.
     if (!list.lines().empty()) std::memcpy(out, list.lines().data(), list.lines().size_bytes());
     out += list.lines().size_bytes();
     if (!list.triangles().empty()) std::memcpy(out, list.triangles().data(), list.triangles().size_bytes());
+    return {};
+}
 
+// The render pass; the colour image ends in TransferSrcOptimal.
+void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawList& list) const {
     gpu::RenderPush push{};
-    const glm::mat4 vp = view_projection(list.camera(), static_cast<float>(r.width) / static_cast<float>(r.height));
+    const glm::mat4 vp = view_projection(list.camera(), static_cast<float>(width) / static_cast<float>(height));
     for (int i = 0; i < 4; ++i) push.view_proj[i] = {vp[i].x, vp[i].y, vp[i].z, vp[i].w};
     push.light = {kLight.x, kLight.y, kLight.z, kAmbient};
+    const vk::ClearValue clears[] = {
+        vk::ClearValue{.color = vk::ClearColorValue{.float32 = std::array<float, 4>{0.0f, 0.0f, 0.0f, 1.0f}}},
+        vk::ClearValue{.depthStencil = vk::ClearDepthStencilValue{.depth = 1.0f, .stencil = 0}}};
+    cmd.beginRenderPass({.renderPass = *pass,
+                         .framebuffer = *framebuffer,
+                         .renderArea = {{0, 0}, {width, height}},
+                         .clearValueCount = 2,
+                         .pClearValues = clears},
+                        vk::SubpassContents::eInline);
+    cmd.setViewport(0, vk::Viewport{0.0f, 0.0f, static_cast<float>(width), static_cast<float>(height), 0.0f, 1.0f});
+    cmd.setScissor(0, vk::Rect2D{{0, 0}, {width, height}});
+    cmd.bindVertexBuffers(0, vertices->handle(), vk::DeviceSize{0});
+    const auto draw = [&](const gpu::GraphicsPipeline& pipeline, std::size_t first, std::size_t n) {
+        if (n == 0) return;
+        cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline.handle());
+        cmd.pushConstants<gpu::RenderPush>(pipeline.layout(), vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment,
+                                           0, push);
+        cmd.draw(static_cast<std::uint32_t>(n), 1, static_cast<std::uint32_t>(first), 0);
+    };
+    draw(*background, 0, kBackgroundVertices);
+    draw(*lines, kBackgroundVertices, list.lines().size());
+    draw(*triangles, kBackgroundVertices + list.lines().size(), list.triangles().size());
+    cmd.endRenderPass();
+}
 
+Result<Image> Renderer::render(const DrawList& list) {
+    assert(list.width() == impl_->width && list.height() == impl_->height && "the draw list is for another size");
+    Impl& r = *impl_;
+    gpu::VulkanContext& c = *r.ctx;
+    KW_TRY(r.upload(list));
     KW_TRY(c.submit([&](const vk::raii::CommandBuffer& cmd) {
-        const vk::ClearValue clears[] = {
-            vk::ClearValue{.color = vk::ClearColorValue{.float32 = std::array<float, 4>{0.0f, 0.0f, 0.0f, 1.0f}}},
-            vk::ClearValue{.depthStencil = vk::ClearDepthStencilValue{.depth = 1.0f, .stencil = 0}}};
         // The previous frame's copy into the readback buffer (its fence waited for)
         // before this frame's copy overwrites it.
         const vk::MemoryBarrier readback_reuse{.srcAccessMask = vk::AccessFlagBits::eTransferWrite,
                                                .dstAccessMask = vk::AccessFlagBits::eTransferWrite};
         cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eTransfer, {}, readback_reuse, {}, {});
-        cmd.beginRenderPass({.renderPass = *r.pass,
-                             .framebuffer = *r.framebuffer,
-                             .renderArea = {{0, 0}, {r.width, r.height}},
-                             .clearValueCount = 2,
-                             .pClearValues = clears},
-                            vk::SubpassContents::eInline);
-        cmd.setViewport(0, vk::Viewport{0.0f, 0.0f, static_cast<float>(r.width), static_cast<float>(r.height), 0.0f, 1.0f});
-        cmd.setScissor(0, vk::Rect2D{{0, 0}, {r.width, r.height}});
-        cmd.bindVertexBuffers(0, r.vertices->handle(), vk::DeviceSize{0});
-        const auto draw = [&](const gpu::GraphicsPipeline& pipeline, std::size_t first, std::size_t n) {
-            if (n == 0) return;
-            cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline.handle());
-            cmd.pushConstants<gpu::RenderPush>(pipeline.layout(), vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment,
-                                               0, push);
-            cmd.draw(static_cast<std::uint32_t>(n), 1, static_cast<std::uint32_t>(first), 0);
-        };
-        draw(*r.background, 0, background_count);
-        draw(*r.lines, background_count, list.lines().size());
-        draw(*r.triangles, background_count + list.lines().size(), list.triangles().size());
-        cmd.endRenderPass();
+        r.record_pass(cmd, list);
         cmd.copyImageToBuffer(r.color->handle(), vk::ImageLayout::eTransferSrcOptimal, r.readback->handle(),
                               vk::BufferImageCopy{.bufferOffset = 0,
                                                   .imageSubresource = {.aspectMask = vk::ImageAspectFlagBits::eColor, .layerCount = 1},
@@ -351,6 +416,156 @@ Result<Image> Renderer::render(const DrawList& list) {
     image.rgba.resize(std::size_t{r.width} * r.height * 4);
     std::memcpy(image.rgba.data(), r.readback->mapped(), image.rgba.size());
     return image;
+}
+
+Result<void> Renderer::Impl::make_swapchain(std::uint32_t w, std::uint32_t h) {
+    const gpu::VulkanContext& c = *ctx;
+    const vk::raii::SurfaceKHR& surface = c.surface();
+    if (!window) {
+        window.emplace();
+        window->acquired = c.device().createSemaphore({});
+        window->pool = c.device().createCommandPool(
+            {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer, .queueFamilyIndex = c.queue_family()});
+        window->cmd = std::move(c.device().allocateCommandBuffers(
+            {.commandPool = *window->pool, .level = vk::CommandBufferLevel::ePrimary, .commandBufferCount = 1})[0]);
+        window->fence = c.device().createFence({});
+    }
+    c.device().waitIdle();  // the old swapchain's images are no longer in use
+    const auto caps = c.physical_device().getSurfaceCapabilitiesKHR(*surface);
+    if (!(caps.supportedUsageFlags & vk::ImageUsageFlagBits::eTransferDst)) {
+        return make_error(Error::Kind::Unsupported, c.info().name + ": the window's images cannot be blitted to");
+    }
+    vk::Extent2D extent = caps.currentExtent;
+    if (extent.width == UINT32_MAX) {
+        extent = vk::Extent2D{.width = std::clamp(w, caps.minImageExtent.width, caps.maxImageExtent.width),
+                              .height = std::clamp(h, caps.minImageExtent.height, caps.maxImageExtent.height)};
+    }
+    window->extent = extent;
+    window->requested = vk::Extent2D{w, h};
+    window->stale = false;
+    window->images.clear();
+    window->finished.clear();
+    if (extent.width == 0 || extent.height == 0) return {};  // minimized: try again later
+    // A UNORM format: the renderer's colours are sRGB values already (an _SRGB swapchain
+    // would encode them a second time).
+    const auto formats = c.physical_device().getSurfaceFormatsKHR(*surface);
+    vk::SurfaceFormatKHR format = formats.front();
+    for (const auto& f : formats) {
+        if ((f.format == vk::Format::eB8G8R8A8Unorm || f.format == vk::Format::eR8G8B8A8Unorm) &&
+            f.colorSpace == vk::ColorSpaceKHR::eSrgbNonlinear) {
+            format = f;
+            break;
+        }
+    }
+    std::uint32_t image_count = caps.minImageCount + 1;
+    if (caps.maxImageCount > 0) image_count = std::min(image_count, caps.maxImageCount);
+    vk::raii::SwapchainKHR old = std::move(window->swapchain);
+    window->swapchain = c.device().createSwapchainKHR({.surface = *surface,
+                                                       .minImageCount = image_count,
+                                                       .imageFormat = format.format,
+                                                       .imageColorSpace = format.colorSpace,
+                                                       .imageExtent = extent,
+                                                       .imageArrayLayers = 1,
+                                                       .imageUsage = vk::ImageUsageFlagBits::eTransferDst,
+                                                       .imageSharingMode = vk::SharingMode::eExclusive,
+                                                       .preTransform = caps.currentTransform,
+                                                       .compositeAlpha = vk::CompositeAlphaFlagBitsKHR::eOpaque,
+                                                       .presentMode = vk::PresentModeKHR::eFifo,
+                                                       .clipped = VK_TRUE,
+                                                       .oldSwapchain = *old});
+    window->images = window->swapchain.getImages();
+    for (std::size_t i = 0; i < window->images.size(); ++i) window->finished.push_back(c.device().createSemaphore({}));
+    return {};
+}
+
+Result<bool> Renderer::present(const DrawList& list, std::uint32_t window_width, std::uint32_t window_height) {
+    assert(list.width() == impl_->width && list.height() == impl_->height && "the draw list is for another size");
+    Impl& r = *impl_;
+    gpu::VulkanContext& c = *r.ctx;
+    if (static_cast<VkSurfaceKHR>(*c.surface()) == VK_NULL_HANDLE) {
+        return make_error(Error::Kind::Unsupported, "present() needs a renderer made with a window surface");
+    }
+    try {
+        if (!r.window || r.window->stale || r.window->requested != vk::Extent2D{window_width, window_height}) {
+            KW_TRY(r.make_swapchain(window_width, window_height));
+        }
+        if (r.window->images.empty()) return false;  // minimized
+        Impl::Window& w = *r.window;
+        std::uint32_t index = 0;
+        try {
+            const auto [result, i] = w.swapchain.acquireNextImage(UINT64_MAX, *w.acquired);
+            if (result != vk::Result::eSuccess && result != vk::Result::eSuboptimalKHR) return false;
+            index = i;
+        } catch (const vk::OutOfDateKHRError&) {
+            w.stale = true;
+            return false;
+        }
+        KW_TRY(r.upload(list));
+        w.cmd.reset();
+        w.cmd.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
+        r.record_pass(w.cmd, list);
+        const vk::ImageSubresourceRange range{.aspectMask = vk::ImageAspectFlagBits::eColor, .levelCount = 1, .layerCount = 1};
+        // The acquire semaphore is waited for at the transfer stage; the image's old
+        // contents are not needed.
+        const vk::ImageMemoryBarrier to_transfer{.srcAccessMask = {},
+                                                 .dstAccessMask = vk::AccessFlagBits::eTransferWrite,
+                                                 .oldLayout = vk::ImageLayout::eUndefined,
+                                                 .newLayout = vk::ImageLayout::eTransferDstOptimal,
+                                                 .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+                                                 .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+                                                 .image = w.images[index],
+                                                 .subresourceRange = range};
+        w.cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eTransfer, {}, {}, {}, to_transfer);
+        const vk::ImageSubresourceLayers layers{.aspectMask = vk::ImageAspectFlagBits::eColor, .layerCount = 1};
+        const vk::ImageBlit blit{.srcSubresource = layers,
+                                 .srcOffsets = std::array<vk::Offset3D, 2>{vk::Offset3D{0, 0, 0},
+                                                                           vk::Offset3D{static_cast<std::int32_t>(r.width),
+                                                                                        static_cast<std::int32_t>(r.height), 1}},
+                                 .dstSubresource = layers,
+                                 .dstOffsets = std::array<vk::Offset3D, 2>{
+                                     vk::Offset3D{0, 0, 0}, vk::Offset3D{static_cast<std::int32_t>(w.extent.width),
+                                                                         static_cast<std::int32_t>(w.extent.height), 1}}};
+        w.cmd.blitImage(r.color->handle(), vk::ImageLayout::eTransferSrcOptimal, w.images[index],
+                        vk::ImageLayout::eTransferDstOptimal, blit, vk::Filter::eLinear);
+        const vk::ImageMemoryBarrier to_present{.srcAccessMask = vk::AccessFlagBits::eTransferWrite,
+                                                .dstAccessMask = {},
+                                                .oldLayout = vk::ImageLayout::eTransferDstOptimal,
+                                                .newLayout = vk::ImageLayout::ePresentSrcKHR,
+                                                .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+                                                .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
+                                                .image = w.images[index],
+                                                .subresourceRange = range};
+        w.cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eBottomOfPipe, {}, {}, {}, to_present);
+        w.cmd.end();
+        c.device().resetFences(*w.fence);
+        const vk::PipelineStageFlags wait_stage = vk::PipelineStageFlagBits::eTransfer;
+        const vk::CommandBuffer cmd = *w.cmd;
+        const vk::Semaphore wait = *w.acquired, signal = *w.finished[index];
+        c.queue().submit(vk::SubmitInfo{.waitSemaphoreCount = 1,
+                                        .pWaitSemaphores = &wait,
+                                        .pWaitDstStageMask = &wait_stage,
+                                        .commandBufferCount = 1,
+                                        .pCommandBuffers = &cmd,
+                                        .signalSemaphoreCount = 1,
+                                        .pSignalSemaphores = &signal},
+                         *w.fence);
+        // One frame at a time: the vertex buffer and the offscreen image are reused.
+        constexpr std::uint64_t kTimeoutNs = 600ull * 1000 * 1000 * 1000;
+        if (c.device().waitForFences(*w.fence, VK_TRUE, kTimeoutNs) != vk::Result::eSuccess) {
+            return make_error(Error::Kind::Vulkan, "the GPU did not finish a frame within 600 s");
+        }
+        const vk::SwapchainKHR swapchain = *w.swapchain;
+        try {
+            const vk::Result presented = c.queue().presentKHR(
+                {.waitSemaphoreCount = 1, .pWaitSemaphores = &signal, .swapchainCount = 1, .pSwapchains = &swapchain, .pImageIndices = &index});
+            if (presented == vk::Result::eSuboptimalKHR) w.stale = true;
+        } catch (const vk::OutOfDateKHRError&) {
+            w.stale = true;
+        }
+        return true;
+    } catch (const std::exception& e) {
+        return gpu::vulkan_error("Vulkan presentation", e);
+    }
 }
 
 }  // namespace kodawari::render

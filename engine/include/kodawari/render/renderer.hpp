@@ -2,16 +2,18 @@
 /// @file
 /// The offscreen renderer (issue 5): draw lists built on the CPU (ground grid, skeletons,
 /// chains, birds) drawn by Vulkan into a WxH RGBA8 + depth target and read back as an
-/// image; PNG output and contact sheets. `kodawari render` uses it; an interactive viewer
-/// will draw the same draw lists into a swapchain image.
+/// image; PNG output and contact sheets. `kodawari render` uses it; `kodawari view`
+/// draws the same draw lists and blits the image into a window's swapchain (present()).
 
 #include <cstdint>
+#include <functional>
 #include <memory>
 #include <span>
 #include <string>
 #include <vector>
 
 #include <glm/glm.hpp>
+#include <vulkan/vulkan_core.h>
 
 #include <shared/render.h>
 
@@ -55,8 +57,8 @@ struct Image {
 };
 
 /// What one frame draws, in world space: built on the CPU and uploaded every frame.
-/// (Fine for previews and tests; the viewer will want GPU-resident buffers that the
-/// backends write directly, without the CPU round trip.)
+/// (Fine for previews and tests; the viewer uses them too for now, but wants GPU-resident
+/// buffers that the backends write directly, without the CPU round trip: not done yet.)
 class DrawList {
 public:
     /// `width` x `height` is the image the list is for: segments and dots have minimum
@@ -80,6 +82,10 @@ public:
     void add_dot(const glm::vec3& p, float radius, float min_px, Rgba8 color);
     /// A circle outline of 1-pixel lines facing the camera (colliders).
     void add_circle(const glm::vec3& center, float radius, Rgba8 color);
+    /// Overlays (the viewer's stroke and status line): in pixels of the image (origin
+    /// top-left, y down), unlit, drawn over everything (depth 0, the near plane).
+    void add_screen_line(glm::vec2 a, glm::vec2 b, Rgba8 color);
+    void add_screen_triangle(glm::vec2 a, glm::vec2 b, glm::vec2 c, Rgba8 color);
 
     [[nodiscard]] std::span<const gpu::RenderVertex> triangles() const { return triangles_; }
     [[nodiscard]] std::span<const gpu::RenderVertex> lines() const { return lines_; }
@@ -99,6 +105,11 @@ struct RendererOptions {
     std::uint32_t width = 1280, height = 720;  ///< in [1, 8192]
     std::string device;       ///< Vulkan device name substring or index ("" = best; env KODAWARI_DEVICE)
     bool validation = false;  ///< Khronos validation + synchronization validation (also KODAWARI_VALIDATION=1)
+    /// A window to present to (the viewer): the instance extensions its surface needs and
+    /// a function that creates the surface on the renderer's instance. Empty = offscreen
+    /// only. The renderer owns the surface and, from the first present(), a swapchain.
+    std::vector<std::string> instance_extensions{};
+    std::function<Result<VkSurfaceKHR>(VkInstance)> create_surface{};
 };
 
 /// Draws draw lists offscreen on a Vulkan device with a graphics queue.
@@ -115,6 +126,14 @@ public:
     /// reads the image back. `list` must be for this renderer's size. Deterministic: the
     /// same list gives the same bytes.
     [[nodiscard]] Result<Image> render(const DrawList& list);
+
+    /// Draws `list` as render() does into the offscreen image, then blits it (scaled,
+    /// linear filter) into the window's next swapchain image and presents it; no read
+    /// back. `window_width` x `window_height` is the window's framebuffer size in pixels:
+    /// the swapchain is (re)made when it changes or the surface reports it out of date.
+    /// Returns false when nothing was presented (a minimized window, a swapchain just
+    /// remade). Waits for the frame to finish. Needs RendererOptions::create_surface.
+    [[nodiscard]] Result<bool> present(const DrawList& list, std::uint32_t window_width, std::uint32_t window_height);
 
     [[nodiscard]] std::uint32_t width() const;
     [[nodiscard]] std::uint32_t height() const;

@@ -2,8 +2,8 @@
 /// @file
 /// Draw lists of a scene's content for the renderer (renderer.hpp): the scene camera,
 /// a ground grid, characters (skeleton bones, colliders, chains with joint dots) and
-/// birds (their seven part meshes, flat shaded). Shared by `kodawari render` and, later,
-/// the viewer.
+/// birds (their seven part meshes, flat shaded). Shared by `kodawari render` and `kodawari
+/// view`.
 
 #include <cstdint>
 #include <span>

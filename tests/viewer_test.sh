@@ -1,0 +1,169 @@
+#!/usr/bin/env bash
+# `kodawari view` in a real window under Xvfb: a scripted key sequence (one key per drawn
+# frame), the frame it ends on, and a screenshot of the last frame. Exits 77 (CTest:
+# skipped) where xvfb-run is not installed.
+# usage: viewer_test.sh KODAWARI_BINARY SOURCE_DIR
+set -uo pipefail
+bin=$1
+src=$2
+if ! command -v xvfb-run >/dev/null 2>&1; then
+    echo "SKIPPED: no X server (xvfb-run not installed; scripts/setup installs xvfb)"
+    exit 77
+fi
+work=$(mktemp -d)
+trap 'rm -rf "$work"' EXIT
+passed=0
+failed=0
+check() {  # check NAME CONDITION-COMMAND...
+    local name=$1; shift
+    if "$@"; then passed=$((passed + 1)); echo "ok   $name"; else failed=$((failed + 1)); echo "FAIL $name"; fi
+}
+view() {  # view OUT-PREFIX ARGS...: the viewer in a fresh Xvfb screen
+    local out=$1; shift
+    xvfb-run -a -s "-screen 0 1024x768x24" "$bin" view "$@" >"$out.out" 2>"$out.err"
+    local rc=$?
+    cat "$out.out" "$out.err"
+    return $rc
+}
+cd "$src"
+
+# png.py FILE R,G,B...: exit 0 when the RGBA8 PNG (as write_png makes them) has a pixel of
+# each colour and more than 10 colours in all (not a blank image).
+cat >"$work/png.py" <<'PY'
+import struct, sys, zlib
+data = open(sys.argv[1], 'rb').read()
+pos, idat, width, height = 8, b'', 0, 0
+while pos < len(data):
+    n, kind = struct.unpack('>I4s', data[pos:pos + 8])
+    body = data[pos + 8:pos + 8 + n]
+    if kind == b'IHDR':
+        width, height, depth, ctype = struct.unpack('>IIBB', body[:10])
+        assert depth == 8 and ctype == 6, (depth, ctype)
+    elif kind == b'IDAT':
+        idat += body
+    pos += 12 + n
+raw, stride, rows, prev = zlib.decompress(idat), width * 4, [], bytearray(width * 4)
+for y in range(height):
+    f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+    for i in range(stride):
+        a = line[i - 4] if i >= 4 else 0
+        b = prev[i]
+        c = prev[i - 4] if i >= 4 else 0
+        if f == 1: line[i] = (line[i] + a) & 255
+        elif f == 2: line[i] = (line[i] + b) & 255
+        elif f == 3: line[i] = (line[i] + (a + b) // 2) & 255
+        elif f == 4:
+            p = a + b - c
+            pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+            line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+    rows.append(line)
+    prev = line
+pixels = {bytes(r[i:i + 3]) for r in rows for i in range(0, stride, 4)}
+wanted = [bytes(int(v) for v in arg.split(',')) for arg in sys.argv[2:]]
+missing = [list(w) for w in wanted if w not in pixels]
+if missing or len(pixels) <= 10:
+    print(f"png.py: {sys.argv[1]}: missing colours {missing}, {len(pixels)} colours in all")
+    sys.exit(1)
+PY
+
+# Space pauses before the first step, then two steps: frame 2, paused.
+view "$work/keys" scenes/ahoge.json --size 320x240 --frames 30 --keys "space,right,right" --screenshot "$work/shot.png"
+rc=$?
+check "view exits 0" test $rc -eq 0
+check "view ends at frame 2, paused" grep -q "view ended at frame 2 (t 0.033 s, paused) on backend .* after 30 drawn frames" "$work/keys.out"
+check "screenshot is a 320x240 PNG" python3 -c "import struct,sys; d=open(sys.argv[1],'rb').read(24); sys.exit(d[:8]!=b'\\x89PNG\\r\\n\\x1a\\n' or struct.unpack('>II', d[16:24])!=(320, 240))" "$work/shot.png"
+# The chain is drawn in its exact colour (render::kChainColor) and the status line in white.
+check "screenshot shows the chain and the status line" python3 "$work/png.py" "$work/shot.png" 235,95,20 255,255,255
+
+# Scrubbing: a second forward (60 frames at 60 fps), a step, two steps back (re-simulated
+# from frame 0), then the backend switch to cpu (re-simulated up to the same frame).
+view "$work/scrub" scenes/ahoge.json --size 160x120 --frames 8 --keys "space,],right,left,left,2"
+rc=$?
+check "scrub exits 0" test $rc -eq 0
+check "scrub ends at frame 59 on the cpu backend" grep -q "view ended at frame 59 (t 0.983 s, paused) on backend cpu" "$work/scrub.out"
+
+# A resized window gets a new swapchain (the image keeps --size, scaled into the window).
+view "$work/resize" scenes/ahoge.json --size 160x120 --frames 8 --keys "resize:300:200,space,resize:120:90" --screenshot "$work/resized.png"
+rc=$?
+check "resize exits 0" test $rc -eq 0
+check "resize keeps the image size" python3 -c "import struct,sys; d=open(sys.argv[1],'rb').read(24); sys.exit(struct.unpack('>II', d[16:24])!=(160, 120))" "$work/resized.png"
+
+# The other shipped scenes start at their camera too: the crowd's chains and the ground
+# grid (render::kGridColor); the flock's grid (the birds are lit, no exact colour to look for).
+view "$work/crowd" scenes/crowd.json --size 320x180 --frames 2 --screenshot "$work/crowd.png"
+check "crowd: chains and grid in view" python3 "$work/png.py" "$work/crowd.png" 235,95,20 150,156,168
+view "$work/flock" scenes/flock.json --size 320x180 --frames 2 --screenshot "$work/flock.png"
+check "flock: grid in view" python3 "$work/png.py" "$work/flock.png" 150,156,168
+
+# Playing: 5 drawn frames are frames 0 .. 4; Q quits before the limit.
+view "$work/play" scenes/ahoge.json --size 160x120 --frames 5
+check "playing ends at frame 4" grep -q "view ended at frame 4 (t 0.067 s, playing)" "$work/play.out"
+view "$work/quit" scenes/ahoge.json --size 160x120 --frames 50 --keys "space,right,q"
+check "q quits" grep -q "view ended at frame 1 .* after 2 drawn frames" "$work/quit.out"
+
+# Sketching by a scripted drag on a copy of the scene: orbit 0.8 rad round (between the
+# scene's front and side examples, so the sketch adds one instead of replacing one), S
+# (sketch mode, pauses), influence x1.25, a stroke from the strand's root (projected near
+# (160, 100) at 320x240: the orbit turns round the head; the press picks the chain within
+# 30 px) up and to the left, W saves. Undoing the saved sketch
+# with `kodawari sketch --undo` gives back the original bytes.
+cp scenes/ahoge.json "$work/ahoge.json"
+view "$work/sketch" "$work/ahoge.json" --size 320x240 --frames 6 --keys "orbit:80:0,s,+,drag:160:100:120:50,w" --screenshot "$work/sketch.png"
+rc=$?
+check "sketch run exits 0" test $rc -eq 0
+check "sketch picks the chain and adds an example" grep -q 'sketch .*: view example "sketch 1" added, influence 5,' "$work/sketch.out"
+check "sketch is saved" bash -c "grep -q 'saved $work/ahoge.json' '$work/sketch.out' && grep -q '\"sketch 1\"' '$work/ahoge.json'"
+chain=$(sed -n 's/^kodawari: sketch \([^:]*\): view example.*/\1/p' "$work/sketch.out" | head -1)
+"$bin" sketch "$work/ahoge.json" --chain "$chain" --undo --out "$work/undone.json" >/dev/null
+check "undoing the saved sketch gives the original bytes" cmp -s "$work/undone.json" scenes/ahoge.json
+
+# What the window shows (not the offscreen copy): an Xvfb whose screen is a file (-fbdir,
+# XWD format), read while the viewer runs until the chain's colour appears there.
+if command -v Xvfb >/dev/null 2>&1; then
+    mkdir -p "$work/fb"
+    exec 3>"$work/display"
+    Xvfb -displayfd 3 -screen 0 640x480x24 -fbdir "$work/fb" >/dev/null 2>&1 &
+    xvfb_pid=$!
+    exec 3>&-
+    for _ in $(seq 50); do test -s "$work/display" && break; sleep 0.2; done
+    DISPLAY=":$(cat "$work/display")" "$bin" view scenes/ahoge.json --size 400x300 --frames 100000 >"$work/live.out" 2>"$work/live.err" &
+    view_pid=$!
+    check "the window shows the chain" python3 - "$work/fb/Xvfb_screen0" <<'PY'
+import struct, sys, time
+deadline = time.time() + 60
+while time.time() < deadline:
+    time.sleep(0.5)
+    try:
+        d = open(sys.argv[1], 'rb').read()
+    except OSError:
+        continue
+    v = struct.unpack('>25I', d[:100])  # XWD header: size, ..., width, height, ..., bytes per line, ..., colours
+    off, width, height, bpl = v[0] + v[19] * 12, v[4], v[5], v[12]
+    px = {d[off + y * bpl + 4 * x:off + y * bpl + 4 * x + 3] for y in range(height) for x in range(width)}
+    if bytes([20, 95, 235]) in px:  # kChainColor (235, 95, 20) as B, G, R
+        sys.exit(0)
+sys.exit(1)
+PY
+    kill "$view_pid" 2>/dev/null
+    wait "$view_pid" 2>/dev/null
+    kill "$xvfb_pid" 2>/dev/null
+    wait "$xvfb_pid" 2>/dev/null
+fi
+
+# A bad scene is reported (exit 2) before any window: no display is needed to see it.
+printf '{"name": "broken",' >"$work/bad.json"
+env -u DISPLAY -u WAYLAND_DISPLAY "$bin" view "$work/bad.json" >"$work/bad.out" 2>"$work/bad.err"
+rc=$?
+cat "$work/bad.err"
+check "bad scene exits 2" test $rc -eq 2
+# Without a display server the viewer says so (exit 1) instead of crashing.
+env -u DISPLAY -u WAYLAND_DISPLAY "$bin" view scenes/ahoge.json --frames 1 >"$work/nodisplay.out" 2>"$work/nodisplay.err"
+rc=$?
+cat "$work/nodisplay.err"
+check "no display exits 1 with a reason" bash -c "test $rc -eq 1 && grep -q 'cannot open a window' '$work/nodisplay.err'"
+# KODAWARI_VALIDATION=1 (CTest): Khronos + synchronization validation, teardown included.
+check "no validation messages in any window run" bash -c "! cat '$work'/*.err | grep -q '\[vulkan validation\]'"
+check "unknown key name is a usage error" bash -c "'$bin' view scenes/ahoge.json --keys space,bogus >/dev/null 2>&1; test \$? -eq 2"
+
+echo "viewer: $passed passed, $failed failed"
+test "$failed" -eq 0
