@@ -137,4 +137,14 @@ void progress(const char* what, std::uint64_t done, std::uint64_t total) {
     std::fflush(stderr);
 }
 
+std::pair<std::uint32_t, std::uint32_t> image_size(const std::optional<std::string>& text) {
+    if (!text) return {1280u, 720u};
+    unsigned w = 0, h = 0;
+    char extra = 0;
+    if (std::sscanf(text->c_str(), "%ux%u%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > 8192 || h > 8192) {
+        throw UsageError{"--size: expected WxH in pixels with W and H in [1, 8192], e.g. 1280x720; got \"" + *text + "\""};
+    }
+    return {w, h};
+}
+
 }  // namespace kodawari::cli

@@ -4,6 +4,7 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "kodawari/backend.hpp"
@@ -45,6 +46,10 @@ public:
 private:
     std::vector<std::string> args_;
 };
+
+/// The value of `--size WxH` (an image in pixels, each in [1, 8192]); (1280, 720) when
+/// the option is absent. A bad value is a UsageError that names it.
+std::pair<std::uint32_t, std::uint32_t> image_size(const std::optional<std::string>& text);
 
 /// Options common to commands that run a simulation.
 struct BackendChoice {

@@ -22,7 +22,6 @@ namespace kodawari::cli {
 
 namespace {
 
-constexpr std::uint32_t kMaxSize = 8192;
 
 // Frames first, first + step, ... below end: [first, end), end exclusive.
 struct FrameRange {
@@ -68,17 +67,6 @@ Result<FrameRange> parse_frames(const std::string& text, std::uint32_t scene_fra
     return range;
 }
 
-Result<std::pair<std::uint32_t, std::uint32_t>> parse_size(const std::string& text) {
-    const std::size_t x = text.find('x');
-    const auto w = x == std::string::npos ? std::nullopt : parse_u32(std::string_view(text).substr(0, x));
-    const auto h = x == std::string::npos ? std::nullopt : parse_u32(std::string_view(text).substr(x + 1));
-    if (!w || !h || *w < 1 || *h < 1 || *w > kMaxSize || *h > kMaxSize) {
-        return make_error(Error::Kind::InvalidInput,
-                          "--size " + text + ": expected WxH with W and H in [1, " + std::to_string(kMaxSize) + "], e.g. 1280x720");
-    }
-    return std::pair{*w, *h};
-}
-
 std::string frame_file(const std::string& dir, const std::string& scene, std::uint32_t frame) {
     char number[16];
     std::snprintf(number, sizeof(number), "%05u", frame);
@@ -90,18 +78,12 @@ std::string frame_file(const std::string& dir, const std::string& scene, std::ui
 int cmd_render(Args args) {
     const BackendChoice choice = read_backend_choice(args);
     const auto frames_text = args.option("frames");
-    const auto size_text = args.option("size");
     const auto out_dir = args.option("out");
     const auto sheet_path = args.option("contact-sheet");
     const auto columns_option = args.count("columns", 1, 64);
     if (!out_dir) throw UsageError{"render needs --out DIR (the directory of the PNG files; created when missing)"};
     if (columns_option && !sheet_path) throw UsageError{"--columns goes with --contact-sheet"};
-    std::uint32_t width = 1280, height = 720;
-    if (size_text) {
-        auto size = parse_size(*size_text);
-        if (!size) return report(size.error());
-        std::tie(width, height) = size.value();
-    }
+    const auto [width, height] = image_size(args.option("size"));
     auto loaded = load_scene_arguments(args.positionals(), "render", std::nullopt);
     if (!loaded) return report(loaded.error());
     const Scene& scene = loaded.value().scene;

@@ -56,6 +56,7 @@ int cmd_sketch(Args args) {
     const auto frame_index = args.count("frame", 0, 1'000'000'000);
     const auto camera_text = args.option("camera");
     const auto size_text = args.option("size");
+    const auto [width, height] = image_size(size_text);
     const auto influence_text = args.option("influence");
     const auto out_option = args.option("out");
     const bool undo = args.flag("undo");
@@ -89,16 +90,6 @@ int cmd_sketch(Args args) {
         if (!(input.influence > 0.0f && input.influence <= 1000.0f)) {
             throw UsageError{"--influence: expected a number in (0, 1000], got \"" + *influence_text + "\""};
         }
-    }
-    std::uint32_t width = 1280, height = 720;
-    if (size_text) {
-        unsigned w = 0, h = 0;
-        char extra = 0;
-        if (std::sscanf(size_text->c_str(), "%ux%u%c", &w, &h, &extra) != 2 || w == 0 || h == 0 || w > 65536 || h > 65536) {
-            throw UsageError{"--size: expected WIDTHxHEIGHT in pixels (1 to 65536 each), got \"" + *size_text + "\""};
-        }
-        width = w;
-        height = h;
     }
 
     auto stroke_text = read_text(*stroke_path);

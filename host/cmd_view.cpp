@@ -489,20 +489,10 @@ void add_status(render::DrawList& list, const std::string& line) {
 
 int cmd_view(Args args) {
     BackendChoice choice = read_backend_choice(args);
-    const auto size_text = args.option("size");
     const auto max_frames = args.count("frames", 1, 100'000'000);
     const auto screenshot = args.option("screenshot");
     const auto keys_text = args.option("keys");
-    std::uint32_t width = 1280, height = 720;
-    if (size_text) {
-        unsigned w = 0, h = 0;
-        char extra = 0;
-        if (std::sscanf(size_text->c_str(), "%ux%u%c", &w, &h, &extra) != 2 || w == 0 || h == 0 || w > 8192 || h > 8192) {
-            throw UsageError{"--size: expected WxH with W and H in [1, 8192], got \"" + *size_text + "\""};
-        }
-        width = w;
-        height = h;
-    }
+    auto [width, height] = image_size(args.option("size"));
     // --keys: one step per drawn frame. Besides key names, scripted mouse actions and a
     // window resize (which remakes the swapchain), so that a test can reach them.
     struct Step {
