@@ -17,16 +17,6 @@
 namespace kodawari::cli {
 namespace {
 
-// The whole file, or an I/O error.
-Result<std::string> read_text(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return make_error(Error::Kind::Io, path + ": cannot open for reading");
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) return make_error(Error::Kind::Io, path + ": read failed");
-    return text.str();
-}
-
 float parse_real(const std::string& option, const std::string& text) {
     std::size_t used = 0;
     float value = 0.0f;
@@ -70,7 +60,7 @@ int cmd_sketch(Args args) {
     const std::string& scene_path = positionals.front();
     const std::string out_path = out_option.value_or(scene_path);
 
-    auto text = read_text(scene_path);
+    auto text = read_text_file(scene_path);
     if (!text) return report(text.error());
     auto scene = load_scene(scene_path);
     if (!scene) return report(scene.error());
@@ -92,7 +82,7 @@ int cmd_sketch(Args args) {
         }
     }
 
-    auto stroke_text = read_text(*stroke_path);
+    auto stroke_text = read_text_file(*stroke_path);
     if (!stroke_text) return report(stroke_text.error());
     auto stroke = parse_stroke(stroke_text.value(), *stroke_path);
     if (!stroke) return report(stroke.error());

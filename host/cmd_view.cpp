@@ -48,15 +48,6 @@ std::string number(float value) {
     return text;
 }
 
-Result<std::string> read_text(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    if (!in) return make_error(Error::Kind::Io, path + ": cannot open for reading");
-    std::ostringstream text;
-    text << in.rdbuf();
-    if (in.bad()) return make_error(Error::Kind::Io, path + ": read failed");
-    return text.str();
-}
-
 // The scene and its simulation at one frame. Never moved: the rod scene and the backends
 // are built from `scene` and `world` in place.
 struct Simulation {
@@ -538,7 +529,7 @@ int cmd_view(Args args) {
     if (!loaded) return report(loaded.error());
     Viewer v;
     v.scene_path = loaded.value().scene.path;
-    auto text = read_text(v.scene_path);
+    auto text = read_text_file(v.scene_path);
     if (!text) return report(text.error());
     v.text = std::move(text).value();
     v.width = width;

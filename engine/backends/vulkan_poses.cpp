@@ -150,18 +150,9 @@ public:
             flat.values.size() * sizeof(gpu::vec4),
             per_instance.size() * sizeof(gpu::PoseInstanceGpu),
             count * character.nodes.size() * sizeof(gpu::PoseMatrixGpu)};
-        for (std::uint32_t b = 0; b < KW_POSES_BINDING_COUNT; ++b) {
-            if (sizes[b] > ctx_->info().max_storage_buffer_range) {
-                return make_error(Error::Kind::Unsupported,
-                                  "the crowd needs a storage buffer of " + std::to_string(sizes[b]) + " bytes (binding " +
-                                      std::to_string(b) + "); " + ctx_->info().name + " allows " +
-                                      std::to_string(ctx_->info().max_storage_buffer_range));
-            }
-            // Never empty: a character without clips still binds a buffer there.
-            auto buffer = GpuBuffer::create(*ctx_, std::max<std::uint64_t>(sizes[b], 16), GpuBuffer::Kind::Storage);
-            if (!buffer) return buffer.error();
-            buffers_.push_back(std::move(buffer).value());
-        }
+        auto storage = gpu::create_storage_buffers(*ctx_, sizes, "the crowd");
+        if (!storage) return storage.error();
+        buffers_ = std::move(storage).value();
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_NODES], bytes_of(flat.nodes)));
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_CLIPS], bytes_of(flat.clips)));
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_CHANNELS], bytes_of(flat.channels)));

@@ -156,17 +156,9 @@ public:
             motion.size() * sizeof(gpu::RodJointMotionGpu),
             spin.size() * sizeof(gpu::RodJointSpinGpu),
             chain_states.size() * sizeof(gpu::RodChainStateGpu)};
-        for (std::uint32_t b = 0; b < KW_RODS_BINDING_COUNT; ++b) {
-            if (sizes[b] > ctx_->info().max_storage_buffer_range) {
-                return make_error(Error::Kind::Unsupported,
-                                  "the rod world needs a storage buffer of " + std::to_string(sizes[b]) + " bytes (binding " +
-                                      std::to_string(b) + "); " + ctx_->info().name + " allows " +
-                                      std::to_string(ctx_->info().max_storage_buffer_range));
-            }
-            auto buffer = GpuBuffer::create(*ctx_, std::max<std::uint64_t>(sizes[b], 16), GpuBuffer::Kind::Storage);
-            if (!buffer) return buffer.error();
-            buffers_.push_back(std::move(buffer).value());
-        }
+        auto storage = gpu::create_storage_buffers(*ctx_, sizes, "the rod world");
+        if (!storage) return storage.error();
+        buffers_ = std::move(storage).value();
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_TEMPLATE_JOINTS], bytes_of(tjoints)));
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_SHAPES], bytes_of(shapes)));
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAINS], bytes_of(chains)));

@@ -350,10 +350,17 @@ Result<void> check_storage(const Context& ctx, const tinygltf::Model& model) {
     return {};
 }
 
-// Reads an accessor (checked by check_storage) as floats, normalized integers mapped as
-// in §3.11's table (signed: max(c / max, -1)).
-Result<std::vector<float>> read_floats(const Context& ctx, const tinygltf::Model& model, int index,
-                                       const std::string& where, bool allow_normalized) {
+#define KW_GLTF_ASSIGN(lhs, expr)                       \
+    do {                                                \
+        auto kw_gltf_result_ = (expr);                  \
+        if (!kw_gltf_result_.ok()) return kw_gltf_result_.error(); \
+        (lhs) = std::move(kw_gltf_result_).value();     \
+    } while (false)
+
+// The accessor `index` if it exists and its data is a plain buffer-view range (no sparse
+// accessors, no bufferView-less zeros), as the readers below need.
+Result<const tinygltf::Accessor*> dense_accessor(const Context& ctx, const tinygltf::Model& model, int index,
+                                                 const std::string& where) {
     if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size()) {
         return ctx.invalid(where, "accessor " + std::to_string(index) + " does not exist");
     }
@@ -361,6 +368,31 @@ Result<std::vector<float>> read_floats(const Context& ctx, const tinygltf::Model
     const std::string path = at("$.accessors", static_cast<std::size_t>(index));
     if (accessor.sparse.isSparse) return ctx.unsupported(path + ".sparse", "sparse accessors are not supported");
     if (accessor.bufferView < 0) return ctx.unsupported(path, "accessors without a bufferView are not supported");
+    return &accessor;
+}
+
+// Where an accessor's elements are (check_storage has checked they fit).
+struct Elements {
+    const unsigned char* first = nullptr;
+    std::size_t components = 0, component_bytes = 0, stride = 0;
+};
+
+Elements elements_of(const tinygltf::Model& model, const tinygltf::Accessor& accessor) {
+    const tinygltf::BufferView& view = model.bufferViews[static_cast<std::size_t>(accessor.bufferView)];
+    const std::vector<unsigned char>& data = model.buffers[static_cast<std::size_t>(view.buffer)].data;
+    const int ct = accessor.componentType;
+    return {data.data() + view.byteOffset + accessor.byteOffset, component_count(accessor.type), component_bytes(ct),
+            view.byteStride == 0 ? element_bytes(ct, accessor.type) : view.byteStride};
+}
+
+// Reads an accessor (checked by check_storage) as floats, normalized integers mapped as
+// in §3.11's table (signed: max(c / max, -1)).
+Result<std::vector<float>> read_floats(const Context& ctx, const tinygltf::Model& model, int index,
+                                       const std::string& where, bool allow_normalized) {
+    const tinygltf::Accessor* found = nullptr;
+    KW_GLTF_ASSIGN(found, dense_accessor(ctx, model, index, where));
+    const tinygltf::Accessor& accessor = *found;
+    const std::string path = at("$.accessors", static_cast<std::size_t>(index));
     const int ct = accessor.componentType;
     const bool is_float = ct == TINYGLTF_COMPONENT_TYPE_FLOAT;
     const bool is_norm = accessor.normalized && ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT && !is_float;
@@ -369,15 +401,12 @@ Result<std::vector<float>> read_floats(const Context& ctx, const tinygltf::Model
                                                         std::string(allow_normalized ? " or normalized integer" : "") +
                                                         " components, got componentType " + std::to_string(ct));
     }
-    const tinygltf::BufferView& view = model.bufferViews[static_cast<std::size_t>(accessor.bufferView)];
-    const std::vector<unsigned char>& data = model.buffers[static_cast<std::size_t>(view.buffer)].data;
-    const std::size_t comps = component_count(accessor.type);
-    const std::size_t csize = component_bytes(ct);
-    const std::size_t stride = view.byteStride == 0 ? element_bytes(ct, accessor.type) : view.byteStride;
+    const Elements elements = elements_of(model, accessor);
+    const std::size_t comps = elements.components, csize = elements.component_bytes, stride = elements.stride;
     std::vector<float> out;
     out.reserve(accessor.count * comps);
     for (std::size_t i = 0; i < accessor.count; ++i) {
-        const unsigned char* element = data.data() + view.byteOffset + accessor.byteOffset + i * stride;
+        const unsigned char* element = elements.first + i * stride;
         for (std::size_t c = 0; c < comps; ++c) {
             const unsigned char* p = element + c * csize;
             float value = 0.0f;
@@ -418,24 +447,14 @@ const tinygltf::Accessor& accessor_of(const tinygltf::Model& model, int index) {
     return model.accessors[static_cast<std::size_t>(index)];
 }
 
-#define KW_GLTF_ASSIGN(lhs, expr)                       \
-    do {                                                \
-        auto kw_gltf_result_ = (expr);                  \
-        if (!kw_gltf_result_.ok()) return kw_gltf_result_.error(); \
-        (lhs) = std::move(kw_gltf_result_).value();     \
-    } while (false)
-
 // Reads an accessor (checked by check_storage) of unsigned integers (UNSIGNED_BYTE,
 // UNSIGNED_SHORT or UNSIGNED_INT, not normalized): indices and JOINTS_0 (§3.7.2.1).
 Result<std::vector<std::uint32_t>> read_uints(const Context& ctx, const tinygltf::Model& model, int index,
                                               const std::string& where) {
-    if (index < 0 || static_cast<std::size_t>(index) >= model.accessors.size()) {
-        return ctx.invalid(where, "accessor " + std::to_string(index) + " does not exist");
-    }
-    const tinygltf::Accessor& accessor = model.accessors[static_cast<std::size_t>(index)];
+    const tinygltf::Accessor* found = nullptr;
+    KW_GLTF_ASSIGN(found, dense_accessor(ctx, model, index, where));
+    const tinygltf::Accessor& accessor = *found;
     const std::string path = at("$.accessors", static_cast<std::size_t>(index));
-    if (accessor.sparse.isSparse) return ctx.unsupported(path + ".sparse", "sparse accessors are not supported");
-    if (accessor.bufferView < 0) return ctx.unsupported(path, "accessors without a bufferView are not supported");
     const int ct = accessor.componentType;
     if ((ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE && ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_SHORT &&
          ct != TINYGLTF_COMPONENT_TYPE_UNSIGNED_INT) ||
@@ -443,15 +462,12 @@ Result<std::vector<std::uint32_t>> read_uints(const Context& ctx, const tinygltf
         return ctx.invalid(path + ".componentType", where + " needs unsigned integer components, got componentType " +
                                                         std::to_string(ct));
     }
-    const tinygltf::BufferView& view = model.bufferViews[static_cast<std::size_t>(accessor.bufferView)];
-    const std::vector<unsigned char>& data = model.buffers[static_cast<std::size_t>(view.buffer)].data;
-    const std::size_t comps = component_count(accessor.type);
-    const std::size_t csize = component_bytes(ct);
-    const std::size_t stride = view.byteStride == 0 ? element_bytes(ct, accessor.type) : view.byteStride;
+    const Elements elements = elements_of(model, accessor);
+    const std::size_t comps = elements.components, csize = elements.component_bytes, stride = elements.stride;
     std::vector<std::uint32_t> out;
     out.reserve(accessor.count * comps);
     for (std::size_t i = 0; i < accessor.count; ++i) {
-        const unsigned char* element = data.data() + view.byteOffset + accessor.byteOffset + i * stride;
+        const unsigned char* element = elements.first + i * stride;
         for (std::size_t c = 0; c < comps; ++c) {
             const unsigned char* p = element + c * csize;
             std::uint32_t value = 0;

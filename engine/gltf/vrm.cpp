@@ -69,23 +69,22 @@ private:
     void warn(const std::string& path, const std::string& what) { out_.warnings.push_back(c_.source + ": " + path + ": " + what); }
 
     // Fields. Absent optional fields take `fallback`; present ones must have the type.
-    Result<const json*> object(const json& parent, const std::string& key, const std::string& path, bool required) {
+    // A member of JSON type `is` (an object, an array); nullptr when absent and optional.
+    Result<const json*> member(const json& parent, const std::string& key, const std::string& path, bool required,
+                               bool (json::*is)() const noexcept, const char* what) {
         const auto it = parent.find(key);
         if (it == parent.end()) {
             if (required) return invalid(path, "missing \"" + key + "\"");
             return static_cast<const json*>(nullptr);
         }
-        if (!it->is_object()) return invalid(path + "." + key, "expected an object");
+        if (!((*it).*is)()) return invalid(path + "." + key, std::string("expected ") + what);
         return &*it;
     }
+    Result<const json*> object(const json& parent, const std::string& key, const std::string& path, bool required) {
+        return member(parent, key, path, required, &json::is_object, "an object");
+    }
     Result<const json*> array(const json& parent, const std::string& key, const std::string& path, bool required) {
-        const auto it = parent.find(key);
-        if (it == parent.end()) {
-            if (required) return invalid(path, "missing \"" + key + "\"");
-            return static_cast<const json*>(nullptr);
-        }
-        if (!it->is_array()) return invalid(path + "." + key, "expected an array");
-        return &*it;
+        return member(parent, key, path, required, &json::is_array, "an array");
     }
     Result<float> number(const json& parent, const std::string& key, const std::string& path, float fallback) {
         const auto it = parent.find(key);

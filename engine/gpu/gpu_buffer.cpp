@@ -1,5 +1,6 @@
 #include "gpu/gpu_buffer.hpp"
 
+#include <algorithm>
 #include <cassert>
 #include <cstring>
 
@@ -109,6 +110,23 @@ Result<void> download(VulkanContext& ctx, const GpuBuffer& buffer, std::span<std
     KW_TRY(staging.value().invalidate(ctx));
     std::memcpy(bytes.data(), staging.value().mapped(), bytes.size());
     return {};
+}
+
+Result<std::vector<GpuBuffer>> create_storage_buffers(const VulkanContext& ctx, std::span<const std::uint64_t> sizes,
+                                                      const std::string& what) {
+    std::vector<GpuBuffer> out;
+    out.reserve(sizes.size());
+    for (std::size_t b = 0; b < sizes.size(); ++b) {
+        if (sizes[b] > ctx.info().max_storage_buffer_range) {
+            return make_error(Error::Kind::Unsupported, what + " needs a storage buffer of " + std::to_string(sizes[b]) +
+                                                            " bytes (binding " + std::to_string(b) + "); " + ctx.info().name +
+                                                            " allows " + std::to_string(ctx.info().max_storage_buffer_range));
+        }
+        auto buffer = GpuBuffer::create(ctx, std::max<std::uint64_t>(sizes[b], 16), GpuBuffer::Kind::Storage);
+        if (!buffer) return buffer.error();
+        out.push_back(std::move(buffer).value());
+    }
+    return out;
 }
 
 }  // namespace kodawari::gpu

@@ -4,6 +4,8 @@
 
 #include <cstddef>
 #include <span>
+#include <string>
+#include <vector>
 
 #include "gpu/vulkan_context.hpp"
 
@@ -41,6 +43,14 @@ private:
     std::byte* mapped_ = nullptr;
     bool coherent_ = true;
 };
+
+/// One Storage buffer per entry of `sizes` (bytes; at least 16 each, so that an empty
+/// array still has a buffer to bind). A size over the device's storage-buffer range is an
+/// Unsupported error: "<what> needs a storage buffer of N bytes (binding b); <device>
+/// allows M".
+[[nodiscard]] Result<std::vector<GpuBuffer>> create_storage_buffers(const VulkanContext& ctx,
+                                                                    std::span<const std::uint64_t> sizes,
+                                                                    const std::string& what);
 
 /// Writes `bytes` into a Storage buffer: by memcpy when mapped, else through a
 /// temporary staging buffer and a copy on the queue.

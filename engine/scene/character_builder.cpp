@@ -116,6 +116,13 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
             world.templates.push_back(std::move(t.value()));
             k.chains.push_back(ChainAttachment{chain.joint, chain.offset, chain.collide});
             k.chain_nodes.push_back(chain.nodes);
+            if (ch.rig) {
+                k.simulated_joint.resize(ch.rig->character->nodes.size(), {-1, -1});
+                for (std::size_t i = 1; i < chain.nodes.size(); ++i) {
+                    k.simulated_joint[static_cast<std::size_t>(chain.nodes[i])] = {static_cast<int>(k.chains.size() - 1),
+                                                                                   static_cast<int>(i)};
+                }
+            }
         }
         for (const ColliderSpec& c : ch.colliders) k.colliders.push_back(ColliderAttachment{c.joint, c.a, c.b, c.radius});
         out.characters.push_back(std::move(k));

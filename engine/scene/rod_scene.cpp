@@ -111,7 +111,7 @@ float RodScene::clip_time(std::uint32_t c, std::uint32_t index) const {
                                PoseInstance{inst.placement, inst.clip, inst.time_offset, true}, time(index));
 }
 
-void RodScene::rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose, std::vector<glm::mat4>& nodes) const {
+void RodScene::clip_pose(std::uint32_t c, std::uint32_t index, gltf::Pose& pose) const {
     const CharacterInstance& inst = instances[c];
     const gltf::Character& ch = *characters[inst.character].rig;
     if (inst.clip >= 0) {
@@ -119,7 +119,11 @@ void RodScene::rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose,
     } else {
         pose = gltf::rest_pose(ch);
     }
-    const glm::mat4 placement = placement_matrix(inst.placement);
+}
+
+void RodScene::rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose, std::vector<glm::mat4>& nodes) const {
+    clip_pose(c, index, pose);
+    const glm::mat4 placement = placement_matrix(instances[c].placement);
     nodes.resize(pose.world.size());
     for (std::size_t n = 0; n < nodes.size(); ++n) nodes[n] = placement * pose.world[n];
 }
@@ -131,32 +135,23 @@ void RodScene::rigged_world(std::uint32_t c, std::uint32_t index, std::span<cons
     const CharacterKinematics& k = characters[inst.character];
     assert(k.rig);
     const gltf::Character& ch = *k.rig;
-    std::vector<glm::mat4> placed;
-    rig_world(c, index, pose, placed);
-    // Which chain joint (i >= 1) each node is, if any.
-    std::vector<std::pair<int, int>> simulated(ch.nodes.size(), {-1, -1});
-    for (std::size_t chain = 0; chain < k.chain_nodes.size(); ++chain) {
-        for (std::size_t i = 1; i < k.chain_nodes[chain].size(); ++i) {
-            simulated[static_cast<std::size_t>(k.chain_nodes[chain][i])] = {static_cast<int>(chain), static_cast<int>(i)};
-        }
-    }
+    // The clip's local transforms; world matrices are composed once, below, with the
+    // simulated joints put in on the way down.
+    clip_pose(c, index, pose);
     const glm::mat4 placement = placement_matrix(inst.placement);
     out.resize(ch.nodes.size());
     for (const int n : ch.order) {
         const auto node = static_cast<std::size_t>(n);
         const gltf::Node& src = ch.nodes[node];
         const glm::mat4 parent = src.parent >= 0 ? out[static_cast<std::size_t>(src.parent)] : placement;
-        const auto [chain, i] = simulated[node];
+        const auto [chain, i] = k.simulated_joint[node];
         if (chain < 0) {
-            if (src.parent < 0) {
-                out[node] = placed[node];
-            } else {
-                const glm::mat4 local = src.matrix ? *src.matrix
-                                                   : glm::translate(glm::mat4(1.0f), pose.translation[node]) *
-                                                         glm::mat4_cast(pose.rotation[node]) *
-                                                         glm::scale(glm::mat4(1.0f), pose.scale[node]);
-                out[node] = parent * local;
-            }
+            // A root's world is the clip's (a root has no parent to compose with).
+            out[node] = src.parent < 0 ? placement * pose.world[node]
+                                       : parent * (src.matrix ? *src.matrix
+                                                              : glm::translate(glm::mat4(1.0f), pose.translation[node]) *
+                                                                    glm::mat4_cast(pose.rotation[node]) *
+                                                                    glm::scale(glm::mat4(1.0f), pose.scale[node]));
             continue;
         }
         const rods::ChainInstance& ci = world.chains[inst.chain_begin + static_cast<std::size_t>(chain)];

@@ -16,6 +16,7 @@
 
 #include "kodawari/atomic_file.hpp"
 #include "kodawari/rods/world.hpp"
+#include "scene/json_reader.hpp"
 
 namespace kodawari {
 namespace {
@@ -404,5 +405,7 @@ Result<void> write_scene_text(const std::string& path, const std::string& text) 
     }
     return {};
 }
+
+Result<std::string> read_text_file(const std::string& path) { return scene_detail::read_text_file(path); }
 
 }  // namespace kodawari

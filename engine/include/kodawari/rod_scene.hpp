@@ -9,6 +9,7 @@
 #include <memory>
 #include <span>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "gltf/character.hpp"
@@ -44,6 +45,9 @@ struct CharacterKinematics {
     rods::CharacterMotion motion;
     std::shared_ptr<const gltf::Character> rig;
     std::vector<std::vector<int>> chain_nodes;  ///< rigged: per chain its nodes, root first
+    /// Rigged: per node, (chain, joint) when it is a simulated joint (joint >= 1) of one of
+    /// the chains, else (-1, -1).
+    std::vector<std::pair<int, int>> simulated_joint;
     std::vector<ChainAttachment> chains;        ///< chain k uses RodWorld template first_template + k
     std::vector<ColliderAttachment> colliders;
     std::uint32_t first_template = 0;
@@ -126,6 +130,8 @@ struct RodScene {
                       std::span<const glm::quat> orientations, gltf::Pose& pose, std::vector<glm::mat4>& out) const;
 
 private:
+    // Rigged instance c's clip pose (local TRS and unplaced world) at frame `index`.
+    void clip_pose(std::uint32_t c, std::uint32_t index, gltf::Pose& pose) const;
     // Rigged instance c's node world matrices at frame `index` on the CPU, placement
     // included; `pose` is scratch.
     void rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose, std::vector<glm::mat4>& nodes) const;

@@ -57,6 +57,10 @@ struct SceneEdit {
 /// back from the file with load_scene to prove it.
 [[nodiscard]] Result<void> write_scene_text(const std::string& path, const std::string& text);
 
+/// The whole text of a scene or stroke file (the scene loader's reader): an I/O error
+/// naming the file when it cannot be read.
+[[nodiscard]] Result<std::string> read_text_file(const std::string& path);
+
 /// Reads a stroke file (docs/sketch.md): `{"points": [[x, y], ...]}`, pixels with the
 /// origin at the image's top-left corner and y down, at least 2 points, finite numbers;
 /// no other keys. `path` is only for messages, which name it and the JSON path.
