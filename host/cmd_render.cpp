@@ -76,7 +76,7 @@ std::string frame_file(const std::string& dir, const std::string& scene, std::ui
 }  // namespace
 
 int cmd_render(Args args) {
-    const BackendChoice choice = read_backend_choice(args);
+    BackendChoice choice = read_backend_choice(args);
     const auto frames_text = args.option("frames");
     const auto out_dir = args.option("out");
     const auto sheet_path = args.option("contact-sheet");
@@ -105,6 +105,9 @@ int cmd_render(Args args) {
     auto renderer = render::Renderer::create(
         {.width = width, .height = height, .device = choice.options.device, .validation = choice.options.validation});
     if (!renderer) return report(renderer.error());
+    // The vulkan backends run on the renderer's device, which draws their chains and
+    // birds from their own buffers.
+    choice.options.context = renderer.value()->device_context();
 
     // The simulation, as `run` steps it: birds by the bird backend, characters by the rod
     // backend with the crowd animator's kinematic input.
@@ -115,6 +118,7 @@ int cmd_render(Args args) {
         if (!opened) return report(opened.error());
         birds = std::move(opened).value();
         if (auto r = birds->load(bird_world); !r) return report(r.error());
+        if (auto r = renderer.value()->set_birds(&bird_world); !r) return report(r.error());
     }
     std::optional<RodScene> rod_scene;
     std::unique_ptr<RodBackend> rods;
@@ -130,7 +134,11 @@ int cmd_render(Args args) {
                                              choice.options);
         if (!created) return report(created.error());
         animator.emplace(std::move(created).value());
+        if (auto r = renderer.value()->set_chains(&rod_scene->world); !r) return report(r.error());
     }
+    // A vulkan bird backend made on the renderer's device: its poses are drawn where they
+    // are; the others' are read back each drawn frame.
+    const bool birds_on_device = birds && birds->name() == "vulkan";
     const std::uint32_t count = (range.end - range.first + range.step - 1) / range.step;
     std::printf("kodawari: rendering scene \"%s\" (%s): %u frames of [%u, %u) step %u at %ux%u on %s\n", scene.name.c_str(),
                 scene.path.c_str(), count, range.first, range.end, range.step, width, height, renderer.value()->device().c_str());
@@ -146,8 +154,13 @@ int cmd_render(Args args) {
     double render_seconds = 0.0;
     const bool show_progress = stderr_is_terminal() && range.end > 100;
     for (std::uint32_t f = 0; f < range.end; ++f) {
+        const bool drawn = f >= range.first && (f - range.first) % range.step == 0;
         if (birds) {
-            if (auto r = birds->simulate(1, {.poses = poses, .diag = {}}); !r) return report(r.error());
+            // Poses on the host only where a drawn frame needs them (the CPU backends').
+            const bool want_poses = drawn && !birds_on_device;
+            if (auto r = birds->simulate(1, {.poses = want_poses ? std::span(poses) : std::span<gpu::BirdPose>(), .diag = {}}); !r) {
+                return report(r.error());
+            }
         }
         if (rods) {
             if (auto r = animator->frame(f, frame); !r) return report(r.error());
@@ -155,21 +168,30 @@ int cmd_render(Args args) {
             if (auto r = f == 0 ? rods->load(rod_scene->world, frame) : rods->step(frame); !r) return report(r.error());
         }
         if (show_progress) progress("simulating", f + 1, range.end);
-        if (f < range.first || (f - range.first) % range.step != 0) continue;
+        if (!drawn) continue;
         if (rods) {
-            if (auto r = rods->read(snapshot); !r) return report(r.error());
+            // The snapshot for skinned meshes (their hair follows the chains); the chains
+            // themselves are drawn from the backend (Renderer::chains_from).
+            if (render::needs_snapshot(*rod_scene)) {
+                if (auto r = rods->read(snapshot); !r) return report(r.error());
+            }
+            if (auto r = renderer.value()->chains_from(*rods); !r) return report(r.error());
+        }
+        if (birds) {
+            if (auto r = birds_on_device ? renderer.value()->birds_from(*birds) : renderer.value()->birds_from(poses); !r) {
+                return report(r.error());
+            }
         }
         const auto start = std::chrono::steady_clock::now();
         render::DrawList list(render::scene_camera(scene, f), width, height);
         // The grid covers where the content is at the first drawn frame and then stays put,
         // so that it does not jump from frame to frame.
         if (grid_points.empty()) {
-            grid_points = render::content_points(rod_scene ? &*rod_scene : nullptr, rods ? &snapshot : nullptr, poses);
+            grid_points = render::content_points(rod_scene ? &*rod_scene : nullptr, rods ? &frame : nullptr, birds ? &bird_world : nullptr);
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
         }
         render::add_ground_grid(list, grid_points);
-        if (rods) render::add_characters(list, *rod_scene, f, snapshot, &frame);
-        if (birds) render::add_birds(list, bird_world, poses);
+        if (rods) render::add_characters(list, *rod_scene, f, render::needs_snapshot(*rod_scene) ? &snapshot : nullptr, &frame);
         auto image = renderer.value()->render(list);
         if (!image) return report(image.error());
         render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -186,8 +208,8 @@ int cmd_render(Args args) {
         std::printf("kodawari: wrote contact sheet %s (%u frames, %u columns, %ux%u)\n", sheet_path->c_str(), count, columns,
                     sheet.width, sheet.height);
     }
-    const std::uint32_t messages = renderer.value()->validation_messages() + (birds ? birds->validation_messages() : 0) +
-                                   (rods ? rods->validation_messages() + animator->validation_messages() : 0);
+    // The vulkan backends share the renderer's device and so its count of messages.
+    const std::uint32_t messages = renderer.value()->validation_messages();
     if (messages > 0) {
         std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", messages);
         return kExitFailure;

@@ -1,12 +1,11 @@
 // `kodawari view SCENE`: the interactive viewer (issue 5). A GLFW window presented with
-// Vulkan on the renderer's own instance and device: each frame is simulated as `render`
-// does (rod backend + crowd animator, bird backend), drawn by the offscreen renderer and
-// blitted into the window's swapchain image (Renderer::present; no read back).
-//
-// Not done yet (honest list, also in the README): the draw lists are still built on the
-// CPU from state the backends read back every frame, and the simulation backends run on
-// their own Vulkan devices; the issue wants the backends' buffers shared with the renderer
-// on one device without the CPU round trip.
+// Vulkan: each frame is simulated as `render` does (rod backend + crowd animator, bird
+// backend), drawn by the renderer and blitted into the window's swapchain image
+// (Renderer::present). The simulation runs on the renderer's device, and the chains and
+// birds are drawn from the vulkan backends' own buffers: nothing is read back per frame
+// (the end line and the status line say how much was). Still read back: the chains of
+// rigged characters with meshes (skinned on the CPU, their hair following the chains),
+// and the picked chain while sketching.
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -59,8 +58,9 @@ struct Simulation {
     std::unique_ptr<RodBackend> rods;
     std::optional<CrowdAnimator> animator;
     rods::RodFrame frame;
-    ChainSnapshot snapshot;
+    ChainSnapshot snapshot;     // read only when needed (see simulate(), read_chains())
     std::vector<gpu::BirdPose> poses;
+    bool birds_on_device = false;  // a vulkan bird backend on the renderer's device: poses stay there
     std::uint32_t current = 0;  // the frame simulated last
     bool started = false;       // frame 0 has been simulated
 
@@ -73,6 +73,7 @@ struct Simulation {
             auto opened = open_backend(choice);
             if (!opened) return opened.error();
             birds = std::move(opened).value();
+            birds_on_device = birds->name() == "vulkan" && choice.options.context != nullptr;
         }
         if (!scene.characters.empty()) {
             if (!rod_scene) {
@@ -95,12 +96,16 @@ struct Simulation {
     // Simulates frame `f` (0 restarts); the chains' view direction comes from `camera`.
     [[nodiscard]] Result<void> simulate(std::uint32_t f, const rods::Camera& camera) {
         if (f == 0 && birds) KW_TRY(birds->load(world));
-        if (birds) KW_TRY(birds->simulate(1, {.poses = poses, .diag = {}}));
+        if (birds) {
+            KW_TRY(birds->simulate(1, {.poses = birds_on_device ? std::span<gpu::BirdPose>() : std::span(poses), .diag = {}}));
+        }
         if (rods) {
             KW_TRY(animator->frame(f, frame));
             frame.camera = camera;  // the viewer's camera drives the view-dependent shapes
             KW_TRY(f == 0 ? rods->load(rod_scene->world, frame) : rods->step(frame));
-            KW_TRY(rods->read(snapshot));
+            // Skinned meshes follow the chains on the CPU; other chains are drawn from the
+            // backend (Renderer::chains_from).
+            if (render::needs_snapshot(*rod_scene)) KW_TRY(rods->read(snapshot));
         }
         current = f;
         started = true;
@@ -116,9 +121,20 @@ struct Simulation {
         return {};
     }
 
-    [[nodiscard]] std::uint32_t validation_messages() const {
-        return (birds ? birds->validation_messages() : 0) +
-               (rods ? rods->validation_messages() + animator->validation_messages() : 0);
+    // The chains' state of the current frame on the host (picking, sketching).
+    [[nodiscard]] Result<void> read_chains() { return rods ? rods->read(snapshot) : Result<void>{}; }
+
+    // What the renderer draws of this simulation from now on.
+    [[nodiscard]] Result<void> show_on(render::Renderer& renderer) const {
+        KW_TRY(renderer.set_chains(rod_scene && rods ? &rod_scene->world : nullptr));
+        return renderer.set_birds(birds ? &world : nullptr);
+    }
+
+    // This frame's chains and birds, where they are.
+    [[nodiscard]] Result<void> draw_on(render::Renderer& renderer) {
+        if (rods) KW_TRY(renderer.chains_from(*rods));
+        if (birds) KW_TRY(birds_on_device ? renderer.birds_from(*birds) : renderer.birds_from(poses));
+        return {};
     }
     [[nodiscard]] std::string backend_name() const {
         if (rods) return std::string(rods->name());
@@ -182,6 +198,7 @@ struct Viewer {
     bool playing = true;
     bool quit = false;
     bool screenshot_now = false;
+    render::Renderer* renderer = nullptr;
     std::string backend;  // what 1/2/3 chose last
     // Mouse.
     bool left = false, middle = false;
@@ -261,6 +278,10 @@ struct Viewer {
         const std::uint32_t at = sim->current;
         sim = std::move(next);
         picked.reset();  // chain indices may differ in the new scene
+        if (auto r = sim->show_on(*renderer); !r) {
+            fail(r.error());
+            return false;
+        }
         seek(at);
         return true;
     }
@@ -268,6 +289,10 @@ struct Viewer {
     void pick(glm::dvec2 at) {
         picked.reset();
         if (!sim->rod_scene) return;
+        if (auto r = sim->read_chains(); !r) {
+            fail(r.error());
+            return;
+        }
         const rods::ImageCamera cam = camera.image(width, height);
         const rods::RodWorld& w = sim->rod_scene->world;
         double best = kPickRadiusPx;
@@ -582,7 +607,11 @@ int cmd_view(Args args) {
     // The renderer owns the surface; it is destroyed (with the renderer) before the window.
     auto renderer = render::Renderer::create(options);
     if (!renderer) return report(renderer.error());
+    v.renderer = renderer.value().get();
+    // One device: the vulkan backends run on the renderer's, which draws from their buffers.
+    v.sim->choice.options.context = renderer.value()->device_context();
     if (auto r = v.sim->open(); !r) return report(r.error());
+    if (auto r = v.sim->show_on(*renderer.value()); !r) return report(r.error());
 
     glfwSetWindowUserPointer(window.w, &v);
     glfwSetKeyCallback(window.w, [](GLFWwindow* w, int key, int, int action, int mods) {
@@ -601,6 +630,9 @@ int cmd_view(Args args) {
     std::optional<render::DrawList> last_list;
     std::uint64_t drawn = 0, screenshots = 0;
     double frame_ms = 0.0;
+    // Simulation state read back to the host: in all, and over the last frame.
+    const std::uint64_t read_back_start = renderer.value()->read_back_bytes();
+    std::uint64_t read_back_before = read_back_start, read_back_frame = 0;
     std::size_t next_key = 0;
     while (!v.quit && glfwWindowShouldClose(window.w) == GLFW_FALSE) {
         const auto start = std::chrono::steady_clock::now();
@@ -631,13 +663,19 @@ int cmd_view(Args args) {
 
         render::DrawList list(v.camera.view(), width, height);
         if (grid_points.empty()) {
-            grid_points = render::content_points(s.rod_scene ? &*s.rod_scene : nullptr, s.rods ? &s.snapshot : nullptr, s.poses);
+            grid_points = render::content_points(s.rod_scene ? &*s.rod_scene : nullptr, s.rods ? &s.frame : nullptr,
+                                                 s.birds ? &s.world : nullptr);
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
         }
         render::add_ground_grid(list, grid_points);
-        if (s.rods) render::add_characters(list, *s.rod_scene, s.current, s.snapshot, &s.frame);
-        if (s.birds) render::add_birds(list, s.world, s.poses);
+        if (s.rods) {
+            render::add_characters(list, *s.rod_scene, s.current, render::needs_snapshot(*s.rod_scene) ? &s.snapshot : nullptr,
+                                   &s.frame);
+        }
+        if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
         if (v.sketch_mode && v.picked && s.rod_scene) {
+            // The picked chain's joints on the host while sketching (it may have been stepped).
+            if (auto r = s.read_chains(); !r) return report(r.error());
             const auto& ci = s.rod_scene->world.chains[*v.picked];
             const std::size_t joints = s.rod_scene->world.templ(ci).basis.lengths.size() + 1;
             for (std::size_t j = 0; j < joints; ++j) {
@@ -646,10 +684,14 @@ int cmd_view(Args args) {
         }
         for (std::size_t i = 1; i < v.stroke.size(); ++i) list.add_screen_line(glm::vec2(v.stroke[i - 1]), glm::vec2(v.stroke[i]), kStrokeColor);
 
+        read_back_frame = renderer.value()->read_back_bytes() - read_back_before;
+        read_back_before = renderer.value()->read_back_bytes();
         char status[512];
-        std::snprintf(status, sizeof(status), "frame %u  t %.2f s  %s  backend %s  %.1f ms/frame  %zu characters %zu chains %zu birds%s%s",
+        std::snprintf(status, sizeof(status),
+                      "frame %u  t %.2f s  %s  backend %s  %.1f ms/frame  %llu B read back  %zu characters %zu chains %zu birds%s%s",
                       s.current, static_cast<double>(s.current) / static_cast<double>(s.scene.fps), v.playing ? "playing" : "paused",
-                      s.backend_name().c_str(), frame_ms, s.rod_scene ? static_cast<std::size_t>(s.rod_scene->world.character_count) : 0,
+                      s.backend_name().c_str(), frame_ms, static_cast<unsigned long long>(read_back_frame),
+                      s.rod_scene ? static_cast<std::size_t>(s.rod_scene->world.character_count) : 0,
                       s.rod_scene ? s.rod_scene->world.chains.size() : 0, s.world.birds.size(),
                       v.sketch_mode ? ("  [sketch: influence " + number(v.influence) + "]").c_str() : "",
                       v.message.empty() ? "" : ("  " + v.message).c_str());
@@ -689,7 +731,12 @@ int cmd_view(Args args) {
                 static_cast<double>(v.sim->current) / static_cast<double>(v.sim->scene.fps), v.playing ? "playing" : "paused",
                 v.sim->backend_name().c_str(), static_cast<unsigned long long>(drawn),
                 v.dirty ? "; unsaved sketches discarded" : "");
-    const std::uint32_t messages = renderer.value()->validation_messages() + v.sim->validation_messages();
+    std::printf("kodawari: simulation and drawing on one device (%s); %llu bytes of simulation state read back in %llu frames\n",
+                renderer.value()->device().c_str(),
+                static_cast<unsigned long long>(renderer.value()->read_back_bytes() - read_back_start),
+                static_cast<unsigned long long>(drawn));
+    // The vulkan backends share the renderer's device and so its count of messages.
+    const std::uint32_t messages = renderer.value()->validation_messages();
     if (messages > 0) {
         std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", messages);
         return kExitFailure;

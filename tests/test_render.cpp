@@ -9,6 +9,7 @@
 #include <fstream>
 #include <iterator>
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -135,11 +136,14 @@ AhogeRun simulate_ahoge(const std::vector<std::uint32_t>& frames) {
     return run;
 }
 
-render::DrawList ahoge_list(const AhogeRun& run, std::uint32_t frame, const ChainSnapshot& snapshot, std::uint32_t w,
-                            std::uint32_t h) {
-    render::DrawList list(render::scene_camera(run.scene, frame), w, h);
-    render::add_ground_grid(list, render::content_points(&run.rods, &snapshot, {}));
-    render::add_characters(list, run.rods, frame, snapshot, nullptr);
+// The frame's draw list (grid, skeleton) and, on the renderer, its chains from `snapshot`.
+render::DrawList ahoge_frame(render::Renderer& renderer, const AhogeRun& run, std::uint32_t frame, const ChainSnapshot& snapshot) {
+    render::DrawList list(render::scene_camera(run.scene, frame), renderer.width(), renderer.height());
+    const rods::RodFrame input = run.rods.frame(frame);
+    render::add_ground_grid(list, render::content_points(&run.rods, &input, nullptr));
+    render::add_characters(list, run.rods, frame, nullptr, nullptr);
+    EXPECT_TRUE(renderer.set_chains(&run.rods.world).ok());
+    EXPECT_TRUE(renderer.chains_from(snapshot).ok());
     return list;
 }
 
@@ -152,7 +156,7 @@ TEST(Render, ChainPixelsAreWhereTheSimulationPutsThem) {
     for (std::size_t i = 0; i < frames.size(); ++i) {
         const std::uint32_t f = frames[i];
         const ChainSnapshot& snapshot = run.snapshots[i];
-        auto image = renderer->render(ahoge_list(run, f, snapshot, kWidth, kHeight));
+        auto image = renderer->render(ahoge_frame(*renderer, run, f, snapshot));
         ASSERT_TRUE(image.ok()) << image.error().message;
         const Image& img = image.value();
         ASSERT_EQ(img.width, kWidth);
@@ -217,7 +221,7 @@ TEST(Render, SameFrameTwiceGivesTheSameBytesAndThePngReloads) {
     const AhogeRun run = simulate_ahoge({30});
     auto renderer = make_renderer(kWidth, kHeight);
     ASSERT_TRUE(renderer);
-    const render::DrawList list = ahoge_list(run, 30, run.snapshots[0], kWidth, kHeight);
+    const render::DrawList list = ahoge_frame(*renderer, run, 30, run.snapshots[0]);
     auto first = renderer->render(list);
     auto second = renderer->render(list);
     ASSERT_TRUE(first.ok() && second.ok());
@@ -260,8 +264,9 @@ TEST(Render, BirdsAreWhereTheyFly) {
     auto renderer = make_renderer(kWidth, kHeight);
     ASSERT_TRUE(renderer);
     // Birds only, no grid: any non-background pixel is a bird.
-    render::DrawList list(render::scene_camera(scene.value(), kFrame), kWidth, kHeight);
-    render::add_birds(list, world.value(), poses);
+    const render::DrawList list(render::scene_camera(scene.value(), kFrame), kWidth, kHeight);
+    ASSERT_TRUE(renderer->set_birds(&world.value()).ok());
+    ASSERT_TRUE(renderer->birds_from(poses).ok());
     auto image = renderer->render(list);
     ASSERT_TRUE(image.ok());
     const Image& img = image.value();
@@ -319,7 +324,7 @@ TEST(Render, ScreenOverlaysAreInPixelsAndOnTop) {
     const AhogeRun run = simulate_ahoge({0});
     auto renderer = make_renderer(kWidth, kHeight);
     ASSERT_TRUE(renderer);
-    render::DrawList list = ahoge_list(run, 0, run.snapshots[0], kWidth, kHeight);
+    render::DrawList list = ahoge_frame(*renderer, run, 0, run.snapshots[0]);
     // Where the strand is: its first joint, projected independently.
     const render::CameraView camera = render::scene_camera(run.scene, 0);
     const Pinhole pinhole(camera.position, camera.target, camera.fov_deg, kWidth, kHeight);
@@ -342,6 +347,115 @@ TEST(Render, ScreenOverlaysAreInPixelsAndOnTop) {
     EXPECT_NE(px(root.x, b.y + 2.0f), overlay) << "nothing below it";
     EXPECT_EQ(px(30.0f, 7.0f), overlay) << "the line is on row 7";
     EXPECT_EQ(px(30.0f, 12.0f), background_at(12, kHeight));
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
+// The viewer's path (issue 5: one device, buffers shared, no copy back per frame): the
+// vulkan rod backend runs on the renderer's device and the chains are drawn from its
+// state buffers. The image must be the very one drawn from the snapshot read back from
+// those buffers (the same positions, bit for bit, through the same shader), and drawing
+// 20 frames that way must read nothing back.
+TEST(Render, ChainsDrawnFromTheVulkanBackendsBuffersNeedNoReadBack) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto scene = load_scene(scene_path("ahoge.json"));
+    ASSERT_TRUE(scene.ok());
+    auto rods = build_rod_scene(scene.value());
+    ASSERT_TRUE(rods.ok());
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    BackendOptions options;
+    options.context = renderer->device_context();
+    auto backend = make_rod_backend(BackendKind::Vulkan, options);
+    ASSERT_TRUE(backend.ok()) << backend.error().message;
+    RodBackend& vulkan = *backend.value();
+    ASSERT_TRUE(renderer->set_chains(&rods.value().world).ok());
+    constexpr std::uint32_t kFrames = 60;
+    const std::uint64_t before = renderer->read_back_bytes();
+    std::optional<render::DrawList> list;
+    Image from_device;
+    for (std::uint32_t f = 0; f <= kFrames; ++f) {
+        const rods::RodFrame input = rods.value().frame(f);
+        ASSERT_TRUE((f == 0 ? vulkan.load(rods.value().world, input) : vulkan.step(input)).ok());
+        if (f + 20 <= kFrames) continue;
+        ASSERT_TRUE(renderer->chains_from(vulkan).ok());
+        ASSERT_TRUE(renderer->chains_on_device());
+        list.emplace(render::scene_camera(scene.value(), f), kWidth, kHeight);
+        auto image = renderer->render(*list);
+        ASSERT_TRUE(image.ok()) << image.error().message;
+        from_device = std::move(image).value();
+    }
+    const std::uint64_t read_back = renderer->read_back_bytes() - before;
+    EXPECT_EQ(read_back, 0u) << "drawing from the backend's buffers read state back";
+
+    ChainSnapshot snapshot;
+    ASSERT_TRUE(vulkan.read(snapshot).ok());
+    EXPECT_GT(renderer->read_back_bytes() - before, 0u) << "read() is counted: the check above can fail";
+    ASSERT_TRUE(renderer->chains_from(snapshot).ok());
+    EXPECT_FALSE(renderer->chains_on_device());
+    auto from_host = renderer->render(*list);
+    ASSERT_TRUE(from_host.ok());
+    int chain_pixels = 0;
+    for (std::size_t i = 0; i < from_device.rgba.size(); i += 4) {
+        chain_pixels += Rgba8{from_device.rgba[i], from_device.rgba[i + 1], from_device.rgba[i + 2], 255} == render::kChainColor;
+    }
+    std::printf("[ render ] device-drawn chains: %d chain pixels, %llu bytes read back over 20 frames\n", chain_pixels,
+                static_cast<unsigned long long>(read_back));
+    EXPECT_GE(chain_pixels, 50) << "the strand is in view";
+    EXPECT_TRUE(from_device.rgba == from_host.value().rgba) << "the device-drawn chains differ from the uploaded snapshot's";
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
+// The same for birds: the vulkan bird backend's pose ring drawn where it is, against the
+// same poses read back by a second backend on the same device.
+TEST(Render, BirdsDrawnFromTheVulkanBackendsRingNeedNoReadBack) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto scene = load_scene(scene_path("flock.json"));
+    ASSERT_TRUE(scene.ok());
+    auto world = build_bird_world(scene.value());
+    ASSERT_TRUE(world.ok());
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    BackendOptions options;
+    options.context = renderer->device_context();
+    auto shared = make_bird_backend(BackendKind::Vulkan, options);
+    auto reading = make_bird_backend(BackendKind::Vulkan, options);
+    ASSERT_TRUE(shared.ok() && reading.ok());
+    ASSERT_TRUE(shared.value()->load(world.value()).ok());
+    ASSERT_TRUE(reading.value()->load(world.value()).ok());
+    ASSERT_TRUE(renderer->set_birds(&world.value()).ok());
+    constexpr std::uint32_t kFrame = 120;
+    const render::DrawList list(render::scene_camera(scene.value(), kFrame), kWidth, kHeight);
+    const std::uint64_t before = renderer->read_back_bytes();
+    Image from_device;
+    for (std::uint32_t f = 0; f <= kFrame; ++f) {
+        ASSERT_TRUE(shared.value()->simulate(1, {}).ok());
+        if (f + 10 <= kFrame) continue;
+        ASSERT_TRUE(renderer->birds_from(*shared.value()).ok());
+        auto image = renderer->render(list);
+        ASSERT_TRUE(image.ok());
+        from_device = std::move(image).value();
+    }
+    const std::uint64_t read_back = renderer->read_back_bytes() - before;
+    EXPECT_EQ(read_back, 0u);
+
+    std::vector<gpu::BirdPose> poses(world.value().birds.size());
+    for (std::uint32_t f = 0; f <= kFrame; ++f) ASSERT_TRUE(reading.value()->simulate(1, {.poses = poses, .diag = {}}).ok());
+    EXPECT_GT(renderer->read_back_bytes() - before, 0u) << "pose read back is counted: the check above can fail";
+    ASSERT_TRUE(renderer->birds_from(poses).ok());
+    auto from_host = renderer->render(list);
+    ASSERT_TRUE(from_host.ok());
+    int drawn = 0;
+    for (std::uint32_t y = 0; y < kHeight; ++y) {
+        for (std::uint32_t x = 0; x < kWidth; ++x) drawn += channel_distance(from_device.at(x, y), background_at(y, kHeight)) > 8;
+    }
+    std::printf("[ render ] device-drawn flock: %d bird pixels, %llu bytes read back over 10 frames\n", drawn,
+                static_cast<unsigned long long>(read_back));
+    EXPECT_GE(drawn, 100);
+    EXPECT_TRUE(from_device.rgba == from_host.value().rgba) << "the device-drawn birds differ from the read-back poses'";
+    // A CPU backend has no poses on the device: an error, not a silent empty frame.
+    auto cpu = make_bird_backend(BackendKind::Cpu, {});
+    ASSERT_TRUE(cpu.ok());
+    EXPECT_FALSE(renderer->birds_from(*cpu.value()).ok());
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
 

@@ -10,6 +10,7 @@
 
 #include "backends/backends.hpp"
 #include "gpu/compute_pipeline.hpp"
+#include "gpu/device_state.hpp"
 #include "kodawari/birds/flight.hpp"
 
 namespace kodawari {
@@ -47,7 +48,7 @@ std::span<const std::byte> bytes_of(const std::vector<T>& v) {
 
 class VulkanBirdBackend final : public BirdBackend {
 public:
-    explicit VulkanBirdBackend(std::unique_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
+    explicit VulkanBirdBackend(std::shared_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
 
     /// The kernel specialized for this world's rules, with or without diagnostics; built
     /// on first use (lavapipe compiles it at its first dispatch) and kept.
@@ -71,6 +72,7 @@ public:
     std::string device() const override { return ctx_->info().name; }
     double last_gpu_ms() const override { return gpu_ms_; }
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
+    const gpu::BirdDevicePoses* device_poses() const override { return frame_ > 0 ? &device_poses_ : nullptr; }
 
     Result<void> load(const birds::BirdWorld& world) override {
         const std::size_t count = world.birds.size();
@@ -181,6 +183,7 @@ public:
                 &ms));
             gpu_ms_ = ms;
             frame_ += frames;
+            note_last_frame((frames - 1) % slots_);
             return {};
         }
 
@@ -197,6 +200,7 @@ public:
                 &ms));
             if (ms >= 0.0) gpu_ms_ += ms;
             const std::size_t pose_count = std::size_t{n} * count_;
+            ctx_->count_read_back(pose_count * ((want_poses ? sizeof(gpu::BirdPoseGpu) : 0) + (want_diag ? sizeof(gpu::BirdDiag) : 0)));
             const std::byte* poses = readback_ ? readback_->mapped() : buffers_[KW_BIRDS_BINDING_POSES].mapped();
             const std::byte* diags = readback_ ? readback_->mapped() + buffers_[KW_BIRDS_BINDING_POSES].size()
                                                : buffers_[KW_BIRDS_BINDING_DIAGNOSTICS].mapped();
@@ -210,11 +214,17 @@ public:
             done += n;
         }
         frame_ += frames;
+        note_last_frame((frames - 1) % slots_);  // the last chunk started at slot 0
         return {};
     }
 
 private:
-    std::unique_ptr<gpu::VulkanContext> ctx_;
+    // The k-th frame of a dispatch goes to ring slot k % slots_ (shaders/birds_flap.comp).
+    void note_last_frame(std::uint32_t slot) {
+        device_poses_ = {.context = ctx_.get(), .poses = buffers_[KW_BIRDS_BINDING_POSES].handle(), .first = slot * count_};
+    }
+
+    std::shared_ptr<gpu::VulkanContext> ctx_;
     std::vector<const GpuBuffer*> bound_buffers() const {
         std::vector<const GpuBuffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
@@ -229,13 +239,14 @@ private:
     std::uint32_t count_ = 0;
     std::uint32_t slots_ = 1;
     std::uint32_t frame_ = 0;
+    gpu::BirdDevicePoses device_poses_;
     double gpu_ms_ = -1.0;
 };
 
 }  // namespace
 
 Result<std::unique_ptr<BirdBackend>> make_vulkan_bird_backend(const BackendOptions& options) {
-    auto ctx = gpu::VulkanContext::create({.device = options.device, .validation = options.validation});
+    auto ctx = gpu::backend_context(options);
     if (!ctx) return ctx.error();
     auto backend = std::make_unique<VulkanBirdBackend>(std::move(ctx).value());
     // The default variant now, so a broken shader or driver shows up at creation.

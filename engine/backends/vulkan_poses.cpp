@@ -112,7 +112,7 @@ FlatCharacter flatten(const gltf::Character& character) {
 
 class VulkanPoseBackend final : public PoseBackend {
 public:
-    explicit VulkanPoseBackend(std::unique_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
+    explicit VulkanPoseBackend(std::shared_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
 
     std::string_view name() const override { return "vulkan"; }
     std::string device() const override { return ctx_->info().name; }
@@ -200,7 +200,7 @@ public:
     }
 
 private:
-    std::unique_ptr<gpu::VulkanContext> ctx_;
+    std::shared_ptr<gpu::VulkanContext> ctx_;
     std::optional<gpu::ComputePipeline> kernel_;
     std::vector<GpuBuffer> buffers_;
     const gltf::Character* character_ = nullptr;
@@ -212,7 +212,7 @@ private:
 }  // namespace
 
 Result<std::unique_ptr<PoseBackend>> make_vulkan_pose_backend(const BackendOptions& options) {
-    auto ctx = gpu::VulkanContext::create({.device = options.device, .validation = options.validation});
+    auto ctx = gpu::backend_context(options);
     if (!ctx) return ctx.error();
     return std::unique_ptr<PoseBackend>(std::make_unique<VulkanPoseBackend>(std::move(ctx).value()));
 }

@@ -13,6 +13,7 @@
 #include "backends/backends.hpp"
 #include "core/parallel.hpp"
 #include "gpu/compute_pipeline.hpp"
+#include "gpu/device_state.hpp"
 
 namespace kodawari {
 namespace {
@@ -48,7 +49,7 @@ void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
 
 class VulkanRodBackend final : public RodBackend {
 public:
-    explicit VulkanRodBackend(std::unique_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
+    explicit VulkanRodBackend(std::shared_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
 
     using Variant = std::array<std::uint32_t, KW_RODS_SPEC_COUNT>;
 
@@ -69,6 +70,7 @@ public:
     std::string device() const override { return ctx_->info().name; }
     double last_gpu_ms() const override { return gpu_ms_; }
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
+    const gpu::RodDeviceState* device_state() const override { return world_ != nullptr ? &device_state_ : nullptr; }
 
     Result<void> load(const rods::RodWorld& world, const rods::RodFrame& initial) override {
         KW_TRY(rods::check_frame(world, initial));
@@ -175,6 +177,9 @@ public:
         std::vector<const GpuBuffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
         kernel_->bind_buffers(*ctx_, bound);
+        device_state_ = {.context = ctx_.get(),
+                         .chain_states = buffers_[KW_RODS_BINDING_CHAIN_STATE].handle(),
+                         .motion = buffers_[KW_RODS_BINDING_MOTION].handle()};
         return {};
     }
 
@@ -288,12 +293,13 @@ private:
         return {};
     }
 
-    std::unique_ptr<gpu::VulkanContext> ctx_;
+    std::shared_ptr<gpu::VulkanContext> ctx_;
     // A few variants at most (one per kind of world): a vector is the simplest map.
     std::vector<std::pair<Variant, gpu::ComputePipeline>> pipelines_;
     const gpu::ComputePipeline* kernel_ = nullptr;
     const rods::RodWorld* world_ = nullptr;
     std::vector<GpuBuffer> buffers_;
+    gpu::RodDeviceState device_state_;
     std::vector<gpu::RodTemplateGpu> templates_;
     float dt_ = -1.0f;
     double gpu_ms_ = -1.0;
@@ -308,7 +314,7 @@ private:
 }  // namespace
 
 Result<std::unique_ptr<RodBackend>> make_vulkan_rod_backend(const BackendOptions& options) {
-    auto ctx = gpu::VulkanContext::create({.device = options.device, .validation = options.validation});
+    auto ctx = gpu::backend_context(options);
     if (!ctx) return ctx.error();
     return std::unique_ptr<RodBackend>(std::make_unique<VulkanRodBackend>(std::move(ctx).value()));
 }

@@ -90,6 +90,7 @@ namespace kodawari::gpu {
 Result<void> download(VulkanContext& ctx, const GpuBuffer& buffer, std::span<std::byte> bytes) {
     assert(bytes.size() <= buffer.size());
     if (bytes.empty()) return {};
+    ctx.count_read_back(bytes.size());
     if (buffer.mapped() != nullptr) {
         KW_TRY(buffer.invalidate(ctx));
         std::memcpy(bytes.data(), buffer.mapped(), bytes.size());

@@ -49,8 +49,23 @@ Result<GraphicsPipeline> GraphicsPipeline::create(const VulkanContext& ctx, vk::
         const vk::PushConstantRange push{.stageFlags = vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment,
                                          .offset = 0,
                                          .size = push_bytes};
-        out.layout_ = device.createPipelineLayout(
-            {.pushConstantRangeCount = push_bytes > 0 ? 1u : 0u, .pPushConstantRanges = &push});
+        std::vector<vk::DescriptorSetLayoutBinding> bindings;
+        for (std::uint32_t b = 0; b < options.storage_buffers; ++b) {
+            bindings.push_back({.binding = b,
+                                .descriptorType = vk::DescriptorType::eStorageBuffer,
+                                .descriptorCount = 1,
+                                .stageFlags = vk::ShaderStageFlagBits::eVertex});
+        }
+        out.storage_buffers_ = options.storage_buffers;
+        if (!bindings.empty()) {
+            out.set_layout_ = device.createDescriptorSetLayout(
+                {.bindingCount = static_cast<std::uint32_t>(bindings.size()), .pBindings = bindings.data()});
+        }
+        const vk::DescriptorSetLayout set_layout = *out.set_layout_;
+        out.layout_ = device.createPipelineLayout({.setLayoutCount = bindings.empty() ? 0u : 1u,
+                                                   .pSetLayouts = &set_layout,
+                                                   .pushConstantRangeCount = push_bytes > 0 ? 1u : 0u,
+                                                   .pPushConstantRanges = &push});
         out.vertex_ = device.createShaderModule({.codeSize = vertex_code.size_bytes(), .pCode = vertex_code.data()});
         out.fragment_ = device.createShaderModule({.codeSize = fragment_code.size_bytes(), .pCode = fragment_code.data()});
         const vk::PipelineShaderStageCreateInfo stages[] = {
@@ -62,7 +77,7 @@ Result<GraphicsPipeline> GraphicsPipeline::create(const VulkanContext& ctx, vk::
         for (std::uint32_t i = 0; i < attributes; ++i) {
             attribute_list.push_back({.location = i, .binding = 0, .format = vk::Format::eR32G32B32A32Sfloat, .offset = 16 * i});
         }
-        const vk::PipelineVertexInputStateCreateInfo vertex_input{.vertexBindingDescriptionCount = 1,
+        const vk::PipelineVertexInputStateCreateInfo vertex_input{.vertexBindingDescriptionCount = attributes > 0 ? 1u : 0u,
                                                                    .pVertexBindingDescriptions = &binding,
                                                                    .vertexAttributeDescriptionCount = attributes,
                                                                    .pVertexAttributeDescriptions = attribute_list.data()};
@@ -100,6 +115,38 @@ Result<GraphicsPipeline> GraphicsPipeline::create(const VulkanContext& ctx, vk::
         return vulkan_error("Vulkan graphics pipeline " + std::string(vertex) + " + " + std::string(fragment), e);
     }
     return out;
+}
+
+Result<BufferSet> BufferSet::create(const VulkanContext& ctx, const GraphicsPipeline& pipeline) {
+    assert(pipeline.storage_buffers() > 0 && "the pipeline has no storage buffers");
+    BufferSet out;
+    out.count_ = pipeline.storage_buffers();
+    try {
+        const vk::DescriptorPoolSize size{.type = vk::DescriptorType::eStorageBuffer, .descriptorCount = out.count_};
+        out.pool_ = ctx.device().createDescriptorPool(
+            {.flags = vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, .maxSets = 1, .poolSizeCount = 1, .pPoolSizes = &size});
+        const vk::DescriptorSetLayout layout = pipeline.set_layout();
+        out.set_ = std::move(ctx.device().allocateDescriptorSets({.descriptorPool = *out.pool_, .descriptorSetCount = 1, .pSetLayouts = &layout})[0]);
+    } catch (const std::exception& e) {
+        return vulkan_error("Vulkan descriptor set", e);
+    }
+    return out;
+}
+
+void BufferSet::bind(const VulkanContext& ctx, std::span<const BufferRange> buffers) {
+    assert(buffers.size() == count_ && "one buffer per binding");
+    std::vector<vk::DescriptorBufferInfo> infos;
+    std::vector<vk::WriteDescriptorSet> writes;
+    infos.reserve(buffers.size());
+    for (const BufferRange& b : buffers) infos.push_back({.buffer = b.buffer, .offset = b.offset, .range = b.size});
+    for (std::uint32_t i = 0; i < count_; ++i) {
+        writes.push_back({.dstSet = *set_,
+                          .dstBinding = i,
+                          .descriptorCount = 1,
+                          .descriptorType = vk::DescriptorType::eStorageBuffer,
+                          .pBufferInfo = &infos[i]});
+    }
+    ctx.device().updateDescriptorSets(writes, {});
 }
 
 }  // namespace kodawari::gpu

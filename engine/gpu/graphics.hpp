@@ -3,6 +3,7 @@
 // and pipelines of the embedded vertex + fragment shaders with one vertex layout.
 
 #include <cstdint>
+#include <span>
 #include <string_view>
 
 #include "gpu/vulkan_context.hpp"
@@ -35,12 +36,16 @@ private:
 struct GraphicsPipelineOptions {
     vk::PrimitiveTopology topology = vk::PrimitiveTopology::eTriangleList;
     bool depth = true;  ///< depth test (less) and write; off: drawn over what is there
+    /// Storage buffers the vertex shader reads, at set 0, bindings 0..n-1 (the layers
+    /// drawn from device buffers); bound with a BufferSet.
+    std::uint32_t storage_buffers = 0;
 };
 
 /// A pipeline of the embedded `vertex` and `fragment` shaders for `render_pass`
 /// subpass 0: one vertex buffer of `vertex_stride`-byte vertices whose attributes are
-/// `attributes` vec4s at locations 0.. (offsets 0, 16, ...), no culling, `push_bytes`
-/// of push constants seen by both stages, viewport and scissor dynamic.
+/// `attributes` vec4s at locations 0.. (offsets 0, 16, ...; none: no vertex buffer), no
+/// culling, `push_bytes` of push constants seen by both stages, viewport and scissor
+/// dynamic.
 class GraphicsPipeline {
 public:
     [[nodiscard]] static Result<GraphicsPipeline> create(const VulkanContext& ctx, vk::RenderPass render_pass,
@@ -56,13 +61,48 @@ public:
 
     [[nodiscard]] vk::Pipeline handle() const { return *pipeline_; }
     [[nodiscard]] vk::PipelineLayout layout() const { return *layout_; }
+    /// The layout of set 0 (GraphicsPipelineOptions::storage_buffers; null without).
+    [[nodiscard]] vk::DescriptorSetLayout set_layout() const { return *set_layout_; }
+    [[nodiscard]] std::uint32_t storage_buffers() const { return storage_buffers_; }
 
 private:
     GraphicsPipeline() = default;
+    vk::raii::DescriptorSetLayout set_layout_{nullptr};
     vk::raii::PipelineLayout layout_{nullptr};
     vk::raii::ShaderModule vertex_{nullptr};
     vk::raii::ShaderModule fragment_{nullptr};
     vk::raii::Pipeline pipeline_{nullptr};
+    std::uint32_t storage_buffers_ = 0;
+};
+
+/// A range of a buffer bound to a storage binding.
+struct BufferRange {
+    vk::Buffer buffer;
+    vk::DeviceSize offset = 0;
+    vk::DeviceSize size = VK_WHOLE_SIZE;
+};
+
+/// A descriptor set of a graphics pipeline's storage buffers (its own pool).
+class BufferSet {
+public:
+    [[nodiscard]] static Result<BufferSet> create(const VulkanContext& ctx, const GraphicsPipeline& pipeline);
+
+    BufferSet(BufferSet&&) noexcept = default;
+    BufferSet& operator=(BufferSet&&) noexcept = default;
+    BufferSet(const BufferSet&) = delete;
+    BufferSet& operator=(const BufferSet&) = delete;
+    ~BufferSet() = default;
+
+    /// Points binding i at buffers[i]: one per binding of the pipeline. Only between
+    /// frames (no submission that uses the set may be pending).
+    void bind(const VulkanContext& ctx, std::span<const BufferRange> buffers);
+    [[nodiscard]] vk::DescriptorSet handle() const { return *set_; }
+
+private:
+    BufferSet() = default;
+    vk::raii::DescriptorPool pool_{nullptr};
+    vk::raii::DescriptorSet set_{nullptr};
+    std::uint32_t count_ = 0;
 };
 
 }  // namespace kodawari::gpu

@@ -68,7 +68,13 @@ static_assert(KW_POSES_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup 
 static_assert(sizeof(RenderVertex) == 48);
 static_assert(offsetof(RenderVertex, position) == 0 && offsetof(RenderVertex, color) == 16 &&
               offsetof(RenderVertex, normal) == 32);
-static_assert(sizeof(RenderPush) == 80 && offsetof(RenderPush, light) == 64);
+static_assert(sizeof(RenderPush) == 128 && offsetof(RenderPush, light) == 64 && offsetof(RenderPush, eye) == 80 &&
+              offsetof(RenderPush, forward) == 96 && offsetof(RenderPush, draw) == 112);
+static_assert(sizeof(ChainDrawInfo) == 32 && offsetof(ChainDrawInfo, size) == 16);
+static_assert(sizeof(BirdDrawVertex) == 32 && offsetof(BirdDrawVertex, normal) == 16);
+static_assert(sizeof(BirdDrawType) == 128 && offsetof(BirdDrawType, color) == 112);
+static_assert(KW_CHAIN_DOT_VERTICES == 3 * KW_CHAIN_DOT_SIDES);
+static_assert(KW_PART_COUNT == 7, "BirdDrawType::parts has one entry per bird part");
 static_assert(sizeof(RenderPush) <= 128, "Vulkan guarantees 128 bytes of push constants");
 
 }  // namespace kodawari::gpu

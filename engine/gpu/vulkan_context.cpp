@@ -175,6 +175,13 @@ bool has_validation_layer(const vk::raii::Context& context) {
 
 }  // namespace
 
+Result<std::shared_ptr<VulkanContext>> backend_context(const BackendOptions& options) {
+    if (options.context) return options.context;
+    auto created = VulkanContext::create({.device = options.device, .validation = options.validation});
+    if (!created) return created.error();
+    return std::shared_ptr<VulkanContext>(std::move(created).value());
+}
+
 Error vulkan_error(const std::string& what, const std::exception& e) {
     // The loader answers "incompatible driver" when it found no usable driver at all.
     if (dynamic_cast<const vk::IncompatibleDriverError*>(&e) != nullptr) {

@@ -11,6 +11,7 @@
 
 #include <vulkan/vulkan_raii.hpp>
 
+#include "kodawari/backend.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/result.hpp"
 
@@ -65,6 +66,12 @@ public:
     /// Writes timestamp 0 (begin) or 1 (end) into the submission's query pool.
     void write_timestamp(const vk::raii::CommandBuffer& cmd, std::uint32_t which, vk::PipelineStageFlagBits stage) const;
 
+    /// Bytes of kernel output read back to the host so far (download(), the bird
+    /// backend's pose read back): what the viewer keeps at 0 per frame by drawing from
+    /// the buffers where they are.
+    [[nodiscard]] std::uint64_t read_back_bytes() const { return read_back_bytes_; }
+    void count_read_back(std::uint64_t bytes) { read_back_bytes_ += bytes; }
+
     /// Index of a memory type with all `required` flags, preferring `preferred` too.
     [[nodiscard]] Result<std::uint32_t> memory_type(std::uint32_t type_bits, vk::MemoryPropertyFlags required,
                                                     vk::MemoryPropertyFlags preferred = {}) const;
@@ -88,11 +95,16 @@ private:
     float timestamp_period_ns_ = 0.0f;
     std::uint64_t timestamp_mask_ = 0;
     std::uint32_t queue_family_ = 0;
+    std::uint64_t read_back_bytes_ = 0;
     bool unified_ = false;
     bool validation_ = false;
     // Heap-allocated so the callback's pointer stays valid when the context moves.
     std::unique_ptr<std::atomic<std::uint32_t>> messages_ = std::make_unique<std::atomic<std::uint32_t>>(0);
 };
+
+/// The context a vulkan backend runs on: `options.context` when set (shared with a
+/// renderer), else a new compute context for `options.device` and `options.validation`.
+[[nodiscard]] Result<std::shared_ptr<VulkanContext>> backend_context(const BackendOptions& options);
 
 /// Turns an exception from vulkan.hpp into an Error.
 [[nodiscard]] Error vulkan_error(const std::string& what, const std::exception& e);

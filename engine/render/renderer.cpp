@@ -1,6 +1,7 @@
-// The offscreen renderer: one render pass into an RGBA8 colour + depth target, three
-// pipelines of the same shaders (background without depth, lines, triangles), the
-// image copied to a host-visible buffer after the pass.
+// The renderer: one render pass into an RGBA8 colour + depth target; three pipelines of
+// the draw list's shaders (background without depth, lines, triangles), then the chain
+// and bird layers drawn from device buffers (device_layers.hpp); the image copied to a
+// host-visible buffer after the pass, or blitted into a swapchain image.
 
 #include "kodawari/render/renderer.hpp"
 
@@ -14,6 +15,7 @@
 
 #include "gpu/gpu_buffer.hpp"
 #include "gpu/graphics.hpp"
+#include "render/device_layers.hpp"
 
 namespace kodawari::render {
 
@@ -151,13 +153,15 @@ void DrawList::add_screen_triangle(glm::vec2 a, glm::vec2 b, glm::vec2 c, Rgba8 
 // Renderer
 
 struct Renderer::Impl {
-    std::unique_ptr<gpu::VulkanContext> ctx;
+    std::shared_ptr<gpu::VulkanContext> ctx;
     std::uint32_t width = 0, height = 0;
     std::optional<gpu::GpuImage> color, depth;
     vk::raii::RenderPass pass{nullptr};
     vk::raii::Framebuffer framebuffer{nullptr};
     std::optional<gpu::GraphicsPipeline> background, lines, triangles;
     std::optional<gpu::GpuBuffer> vertices, readback;
+    std::optional<ChainLayer> chains;
+    std::optional<BirdLayer> birds;
 
     // Presentation (RendererOptions::create_surface): its own command buffer and fence,
     // because the frame's submission waits on and signals semaphores.
@@ -198,6 +202,18 @@ std::uint32_t Renderer::width() const { return impl_->width; }
 std::uint32_t Renderer::height() const { return impl_->height; }
 std::string Renderer::device() const { return impl_->ctx->info().name; }
 std::uint32_t Renderer::validation_messages() const { return impl_->ctx->validation_messages(); }
+std::shared_ptr<gpu::VulkanContext> Renderer::device_context() const { return impl_->ctx; }
+std::uint64_t Renderer::read_back_bytes() const { return impl_->ctx->read_back_bytes(); }
+
+Result<void> Renderer::set_chains(const rods::RodWorld* world, const ChainStyle& style) {
+    return impl_->chains->set_world(*impl_->ctx, world, style);
+}
+Result<void> Renderer::chains_from(RodBackend& backend) { return impl_->chains->from_backend(*impl_->ctx, backend); }
+Result<void> Renderer::chains_from(const ChainSnapshot& snapshot) { return impl_->chains->from_snapshot(*impl_->ctx, snapshot); }
+bool Renderer::chains_on_device() const { return impl_->chains->on_device(); }
+Result<void> Renderer::set_birds(const birds::BirdWorld* world) { return impl_->birds->set_world(*impl_->ctx, world, kBirdMinPixels); }
+Result<void> Renderer::birds_from(const BirdBackend& backend) { return impl_->birds->from_backend(*impl_->ctx, backend); }
+Result<void> Renderer::birds_from(std::span<const gpu::BirdPose> poses) { return impl_->birds->from_poses(*impl_->ctx, poses); }
 
 namespace {
 
@@ -317,6 +333,12 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     auto triangles = pipeline(vk::PrimitiveTopology::eTriangleList, true);
     if (!triangles) return triangles.error();
     impl->triangles.emplace(std::move(triangles).value());
+    auto chains = ChainLayer::create(c, *impl->pass);
+    if (!chains) return chains.error();
+    impl->chains.emplace(std::move(chains).value());
+    auto birds = BirdLayer::create(c, *impl->pass);
+    if (!birds) return birds.error();
+    impl->birds.emplace(std::move(birds).value());
 
     auto readback = gpu::GpuBuffer::create(c, vk::DeviceSize{options.width} * options.height * 4, gpu::GpuBuffer::Kind::Readback);
     if (!readback) return readback.error();
@@ -362,9 +384,21 @@ Result<void> Renderer::Impl::upload(const DrawList& list) {
 // The render pass; the colour image ends in TransferSrcOptimal.
 void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawList& list) const {
     gpu::RenderPush push{};
-    const glm::mat4 vp = view_projection(list.camera(), static_cast<float>(width) / static_cast<float>(height));
+    const CameraView& camera = list.camera();
+    const glm::mat4 vp = view_projection(camera, static_cast<float>(width) / static_cast<float>(height));
     for (int i = 0; i < 4; ++i) push.view_proj[i] = {vp[i].x, vp[i].y, vp[i].z, vp[i].w};
     push.light = {kLight.x, kLight.y, kLight.z, kAmbient};
+    const CameraBasis basis = camera_basis(camera);
+    push.eye = v4(camera.position, camera.near);
+    push.forward = v4(basis.forward, list.pixel_per_depth());
+    using Stage = vk::PipelineStageFlagBits;
+    using Access = vk::AccessFlagBits;
+    // The layers' vertex shaders read what kernels, copies and the host wrote before
+    // (the simulation's state on a shared device, uploads).
+    const vk::MemoryBarrier layer_inputs{.srcAccessMask = Access::eShaderWrite | Access::eTransferWrite | Access::eHostWrite,
+                                         .dstAccessMask = Access::eShaderRead | Access::eVertexAttributeRead};
+    cmd.pipelineBarrier(Stage::eComputeShader | Stage::eTransfer | Stage::eHost, Stage::eVertexShader | Stage::eVertexInput, {},
+                        layer_inputs, {}, {});
     const vk::ClearValue clears[] = {
         vk::ClearValue{.color = vk::ClearColorValue{.float32 = std::array<float, 4>{0.0f, 0.0f, 0.0f, 1.0f}}},
         vk::ClearValue{.depthStencil = vk::ClearDepthStencilValue{.depth = 1.0f, .stencil = 0}}};
@@ -387,7 +421,12 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     draw(*background, 0, kBackgroundVertices);
     draw(*lines, kBackgroundVertices, list.lines().size());
     draw(*triangles, kBackgroundVertices + list.lines().size(), list.triangles().size());
+    // The minimum sizes are for 720 rows; smaller images get thinner strands.
+    chains->record(cmd, push, std::clamp(static_cast<float>(height) / 720.0f, 0.5f, 2.0f));
+    birds->record(cmd, push);
     cmd.endRenderPass();
+    // The next frame's kernels and uploads overwrite what the vertex shaders read.
+    cmd.pipelineBarrier(Stage::eVertexShader, Stage::eComputeShader | Stage::eTransfer, {}, {}, {}, {});
 }
 
 Result<Image> Renderer::render(const DrawList& list) {

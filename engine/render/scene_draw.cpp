@@ -6,7 +6,6 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "export/bird_meshes.hpp"
 
 namespace kodawari::render {
 
@@ -55,17 +54,20 @@ void add_ground_grid(DrawList& list, std::span<const glm::vec3> points) {
 
 namespace {
 
+bool has_mesh(const gltf::Character& character) {
+    return std::any_of(character.nodes.begin(), character.nodes.end(), [&](const gltf::Node& n) {
+        return n.mesh >= 0 && !character.meshes[static_cast<std::size_t>(n.mesh)].triangles.empty();
+    });
+}
+
 // A rigged instance's own meshes, skinned on the CPU (glTF §3.7.3: each vertex moved by
 // the weighted joint matrices world(joint) x inverseBindMatrix), flat shaded. Returns
 // false when the character has no mesh to show (then its bones are drawn).
 bool add_skinned_meshes(DrawList& list, const RodScene& scene, std::uint32_t c, std::uint32_t frame,
-                        const ChainSnapshot& snapshot, gltf::Pose& pose, std::vector<glm::mat4>& world) {
+                        const ChainSnapshot* snapshot, gltf::Pose& pose, std::vector<glm::mat4>& world) {
     const gltf::Character& ch = *scene.characters[scene.instances[c].character].rig;
-    const bool any = std::any_of(ch.nodes.begin(), ch.nodes.end(), [&](const gltf::Node& n) {
-        return n.mesh >= 0 && !ch.meshes[static_cast<std::size_t>(n.mesh)].triangles.empty();
-    });
-    if (!any || snapshot.positions.size() < scene.world.joint_count) return false;
-    scene.rigged_world(c, frame, snapshot.positions, snapshot.orientations, pose, world);
+    if (!has_mesh(ch) || snapshot == nullptr || snapshot->positions.size() < scene.world.joint_count) return false;
+    scene.rigged_world(c, frame, snapshot->positions, snapshot->orientations, pose, world);
     std::vector<glm::mat4> joint_matrices;
     std::vector<glm::vec3> skinned;
     for (std::size_t n = 0; n < ch.nodes.size(); ++n) {
@@ -111,7 +113,7 @@ bool add_skinned_meshes(DrawList& list, const RodScene& scene, std::uint32_t c, 
 
 }  // namespace
 
-void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, const ChainSnapshot& snapshot,
+void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, const ChainSnapshot* snapshot,
                     const rods::RodFrame* kinematic) {
     std::vector<rods::Transform> joints;
     gltf::Pose pose;
@@ -138,81 +140,27 @@ void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, 
             }
         }
     }
-    // The minimum sizes are for 720 rows; smaller images get thinner strands.
-    const float scale = std::clamp(static_cast<float>(list.height()) / 720.0f, 0.5f, 2.0f);
-    const rods::RodWorld& world = scene.world;
-    for (const rods::ChainInstance& chain : world.chains) {
-        const rods::Chain& shape = world.templates[chain.template_index].chain;
-        const std::uint32_t n = shape.joint_count;
-        if (std::size_t{chain.joint_begin} + n > snapshot.positions.size()) continue;  // no state for it
-        const glm::vec3* p = snapshot.positions.data() + chain.joint_begin;
-        float length = 0.0f;
-        for (std::uint32_t j = 0; j + 1 < n; ++j) {
-            list.add_segment(p[j], p[j + 1], 2.0f * shape.thickness, scale * kChainMinPixels, kChainColor);
-            length += glm::length(p[j + 1] - p[j]);
-        }
-        // Dots only where they stay apart: a far chain would be one blob of them.
-        const float pixel = list.pixel_size_at(p[0]);
-        if (pixel > 0.0f && length / pixel < 3.0f * scale * kJointDotMinPixels * static_cast<float>(n)) continue;
-        for (std::uint32_t j = 0; j < n; ++j) list.add_dot(p[j], 1.5f * shape.thickness, scale * kJointDotMinPixels, kChainColor);
-    }
 }
 
-void add_birds(DrawList& list, const birds::BirdWorld& world, std::span<const gpu::BirdPose> poses) {
-    std::array<std::array<gltf::MeshData, birds::kPartCount>, birds::kWingTypeCount> meshes;
-    std::array<std::array<std::array<float, 3>, birds::kPartCount>, birds::kWingTypeCount> offsets{};
-    std::array<bool, birds::kWingTypeCount> ready{};
-    const auto quat = [](const gpu::vec4& q) {
-        const glm::quat r(q.w, q.x, q.y, q.z);
-        const float n = glm::length(r);
-        return n > 0.0f ? r / n : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
-    };
-    const std::size_t count = std::min(world.birds.size(), poses.size());
-    for (std::size_t b = 0; b < count; ++b) {
-        const std::uint32_t type = world.birds[b].ids.y;
-        if (type >= birds::kWingTypeCount) continue;
-        const auto wing = static_cast<birds::WingType>(type);
-        if (!ready[type]) {
-            meshes[type] = bird_part_meshes(wing);
-            offsets[type] = birds::part_offsets(wing);
-            ready[type] = true;
-        }
-        const gpu::BirdPose& pose = poses[b];
-        const glm::vec3 position{pose.position.x, pose.position.y, pose.position.z};
-        const float pixel = list.pixel_size_at(position);
-        const float span = birds::wing_type_spec(wing).wingspan;
-        const float scale = pixel > 0.0f ? std::max(1.0f, kBirdMinPixels * pixel / span) : 1.0f;
-        std::array<glm::mat4, birds::kPartCount> part{};
-        part[0] = glm::translate(glm::mat4(1.0f), position) * glm::scale(glm::mat4(1.0f), glm::vec3(scale)) *
-                  glm::mat4_cast(quat(pose.rotation[0]));
-        for (std::size_t k = 1; k < birds::kPartCount; ++k) {
-            const auto& o = offsets[type][k];
-            part[k] = part[static_cast<std::size_t>(birds::kPartParents[k])] *
-                      glm::translate(glm::mat4(1.0f), glm::vec3(o[0], o[1], o[2])) * glm::mat4_cast(quat(pose.rotation[k]));
-        }
-        const auto base = bird_base_color(wing);
-        const glm::vec3 color{base[0], base[1], base[2]};
-        for (std::size_t k = 0; k < birds::kPartCount; ++k) {
-            const gltf::MeshData& mesh = meshes[type][k];
-            const auto at = [&](std::uint16_t index) {
-                const auto& v = mesh.positions[index];
-                return glm::vec3(part[k] * glm::vec4(v[0], v[1], v[2], 1.0f));
-            };
-            for (std::size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
-                const glm::vec3 a = at(mesh.indices[i]), bb = at(mesh.indices[i + 1]), c = at(mesh.indices[i + 2]);
-                list.add_lit_triangle(a, bb, c, glm::cross(bb - a, c - a), color);
-            }
-        }
+bool needs_snapshot(const RodScene& scene) {
+    for (const CharacterInstance& instance : scene.instances) {
+        const auto& rig = scene.characters[instance.character].rig;
+        if (rig && has_mesh(*rig)) return true;
     }
+    return false;
 }
 
-std::vector<glm::vec3> content_points(const RodScene* scene, const ChainSnapshot* snapshot, std::span<const gpu::BirdPose> poses) {
+std::vector<glm::vec3> content_points(const RodScene* scene, const rods::RodFrame* frame, const birds::BirdWorld* birds) {
     std::vector<glm::vec3> points;
     if (scene != nullptr) {
         for (const CharacterInstance& instance : scene->instances) points.push_back(instance.placement.position);
     }
-    if (snapshot != nullptr) points.insert(points.end(), snapshot->positions.begin(), snapshot->positions.end());
-    for (const gpu::BirdPose& pose : poses) points.emplace_back(pose.position.x, pose.position.y, pose.position.z);
+    if (frame != nullptr) {
+        for (const rods::Transform& root : frame->roots) points.push_back(root.position);
+    }
+    if (birds != nullptr) {
+        for (const gpu::vec4& p : birds->control_points) points.emplace_back(p.x, p.y, p.z);
+    }
     return points;
 }
 

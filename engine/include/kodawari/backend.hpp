@@ -15,6 +15,11 @@
 
 namespace kodawari {
 
+namespace gpu {
+class VulkanContext;
+struct BirdDevicePoses;
+}
+
 /// Which implementation runs the simulation.
 enum class BackendKind { CpuReference, Cpu, Vulkan };
 
@@ -26,6 +31,11 @@ struct BackendOptions {
     std::string device;        ///< Vulkan device name substring or index ("" = best; env KODAWARI_DEVICE)
     bool validation = false;   ///< Khronos validation + synchronization validation (also KODAWARI_VALIDATION=1)
     unsigned threads = 0;      ///< cpu backend threads (0 = hardware concurrency)
+    /// A Vulkan device to run on instead of opening one: a renderer's
+    /// (render::Renderer::device_context()), so that the renderer draws straight from the
+    /// backends' buffers on the same device. `device` and `validation` are then the
+    /// context's. Null: each vulkan backend opens its own.
+    std::shared_ptr<gpu::VulkanContext> context{};
 };
 
 /// Where simulated frames go. Empty spans: the backend still does all the work but
@@ -60,6 +70,11 @@ public:
 
     /// Validation messages seen so far (Vulkan with validation on; 0 otherwise).
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
+
+    /// Where the last simulated frame's poses live on a Vulkan device (the vulkan backend
+    /// after simulate(); null otherwise), also when simulate() was given no output:
+    /// render::Renderer draws the birds from them without reading them back.
+    [[nodiscard]] virtual const gpu::BirdDevicePoses* device_poses() const { return nullptr; }
 };
 
 /// Creates a backend. Vulkan fails with a readable reason when no loader, driver or

@@ -15,6 +15,10 @@
 
 namespace kodawari {
 
+namespace gpu {
+struct RodDeviceState;
+}
+
 /// What a caller reads back after a frame. Per-joint arrays hold RodWorld::joint_count
 /// entries, chain c's joints from chains[c].joint_begin.
 struct ChainSnapshot {
@@ -57,6 +61,10 @@ public:
     [[nodiscard]] virtual double last_gpu_ms() const { return -1.0; }
     /// Validation messages seen so far (Vulkan with validation on; 0 otherwise).
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
+
+    /// Where the state lives on a Vulkan device (the vulkan backend after load(); null
+    /// otherwise): render::Renderer draws the chains from it without reading it back.
+    [[nodiscard]] virtual const gpu::RodDeviceState* device_state() const { return nullptr; }
 };
 
 /// Creates a rod backend; Vulkan fails with a readable reason when no loader, driver or

@@ -1,9 +1,11 @@
 #pragma once
 /// @file
-/// The offscreen renderer (issue 5): draw lists built on the CPU (ground grid, skeletons,
-/// chains, birds) drawn by Vulkan into a WxH RGBA8 + depth target and read back as an
-/// image; PNG output and contact sheets. `kodawari render` uses it; `kodawari view`
-/// draws the same draw lists and blits the image into a window's swapchain (present()).
+/// The renderer (issue 5): Vulkan draws into a WxH RGBA8 + depth target, read back as an
+/// image (render(); PNG output and contact sheets) or blitted into a window's swapchain
+/// (present(), the viewer). A frame is a draw list built on the CPU (ground grid,
+/// skeletons, skinned meshes, overlays) plus the chains and birds, which are drawn from
+/// buffers on the device: the vulkan backends' own when they share the renderer's device
+/// (BackendOptions::context = device_context(); nothing read back), else uploaded.
 
 #include <cstdint>
 #include <functional>
@@ -17,7 +19,9 @@
 
 #include <shared/render.h>
 
+#include "kodawari/backend.hpp"
 #include "kodawari/result.hpp"
+#include "kodawari/rod_backend.hpp"
 
 namespace kodawari::render {
 
@@ -25,6 +29,26 @@ namespace kodawari::render {
 struct Rgba8 {
     std::uint8_t r = 0, g = 0, b = 0, a = 255;
     friend bool operator==(const Rgba8&, const Rgba8&) = default;
+};
+
+/// Chains and their joint dots: one exact, unlit colour (tests look for it).
+inline constexpr Rgba8 kChainColor{235, 95, 20};
+/// At 720 rows (scaled by rows / 720 within [0.5, 2]), a chain is drawn at least this
+/// many pixels wide and its joint dots at least this radius, so that a strand a few
+/// millimetres thick reads in a preview. A chain too short on screen for its dots to
+/// stay apart (its length under 3 dot radii per joint) gets none.
+inline constexpr float kChainMinPixels = 4.0f;
+inline constexpr float kJointDotMinPixels = 3.0f;
+/// Birds smaller than this wingspan in pixels are drawn scaled up to it, so that a far
+/// flock stays visible (a preview aid: the birds' positions are exact, their size not).
+inline constexpr float kBirdMinPixels = 6.0f;
+
+/// How chains are drawn: camera-facing strands 2 x thickness wide with a dot of radius
+/// 1.5 x thickness at each joint, in one unlit colour, with minimum sizes in pixels.
+struct ChainStyle {
+    Rgba8 color = kChainColor;
+    float min_width_px = kChainMinPixels;  ///< at 720 rows
+    float min_dot_px = kJointDotMinPixels; ///< at 720 rows
 };
 
 /// A perspective look-at camera. Up is world +Y (+Z when looking straight up or down).
@@ -56,9 +80,8 @@ struct Image {
     [[nodiscard]] Rgba8 at(std::uint32_t x, std::uint32_t y) const;
 };
 
-/// What one frame draws, in world space: built on the CPU and uploaded every frame.
-/// (Fine for previews and tests; the viewer uses them too for now, but wants GPU-resident
-/// buffers that the backends write directly, without the CPU round trip: not done yet.)
+/// What one frame draws besides the chains and birds, in world space: built on the CPU
+/// and uploaded every frame.
 class DrawList {
 public:
     /// `width` x `height` is the image the list is for: segments and dots have minimum
@@ -70,6 +93,8 @@ public:
     [[nodiscard]] std::uint32_t height() const { return height_; }
     /// The world size of one pixel at the depth of `p` (0 behind the near plane).
     [[nodiscard]] float pixel_size_at(const glm::vec3& p) const;
+    /// The world size of one pixel at depth 1 m.
+    [[nodiscard]] float pixel_per_depth() const { return pixel_per_depth_; }
 
     /// A 1-pixel line.
     void add_line(const glm::vec3& a, const glm::vec3& b, Rgba8 color);
@@ -122,8 +147,8 @@ public:
     Renderer(const Renderer&) = delete;
     Renderer& operator=(const Renderer&) = delete;
 
-    /// Draws the background, then `list`'s lines and triangles (depth tested), waits and
-    /// reads the image back. `list` must be for this renderer's size. Deterministic: the
+    /// Draws the background, then `list`'s lines and triangles and the chain and bird
+    /// layers (depth tested), waits and reads the image back. `list` must be for this renderer's size. Deterministic: the
     /// same list gives the same bytes.
     [[nodiscard]] Result<Image> render(const DrawList& list);
 
@@ -139,6 +164,34 @@ public:
     [[nodiscard]] std::uint32_t height() const;
     /// The device it draws on ("llvmpipe (LLVM 15.0.6, 256 bits)").
     [[nodiscard]] std::string device() const;
+    /// The renderer's Vulkan device, to run the simulation on (BackendOptions::context):
+    /// the vulkan backends then keep their state where the chain and bird layers draw it.
+    [[nodiscard]] std::shared_ptr<gpu::VulkanContext> device_context() const;
+    /// Bytes of kernel output read back to the host on this device so far (the
+    /// simulation's, when it shares the device): the viewer's per-frame figure.
+    [[nodiscard]] std::uint64_t read_back_bytes() const;
+
+    /// Draws the chains of `world` in every following frame (null: none), their state
+    /// set per frame by chains_from(). `world` must outlive its use here.
+    [[nodiscard]] Result<void> set_chains(const rods::RodWorld* world, const ChainStyle& style = {});
+    /// This frame's chain state: a backend whose state lives on this renderer's device
+    /// (the vulkan one made with device_context()) is drawn from its own buffers, nothing
+    /// read back; any other is read (RodBackend::read) and uploaded.
+    [[nodiscard]] Result<void> chains_from(RodBackend& backend);
+    /// This frame's chain state from a snapshot (joint positions, uploaded).
+    [[nodiscard]] Result<void> chains_from(const ChainSnapshot& snapshot);
+    /// Whether the last chains_from() drew the backend's own buffers.
+    [[nodiscard]] bool chains_on_device() const;
+
+    /// Draws the birds of `world` (their part meshes, lit, in the wing type's colour) in
+    /// every following frame (null: none), their poses set per frame by birds_from().
+    [[nodiscard]] Result<void> set_birds(const birds::BirdWorld* world);
+    /// This frame's bird poses where a vulkan bird backend made with device_context()
+    /// keeps them (BirdBackend::device_poses(): simulate() need not read them back). An
+    /// error for a backend on another device or on the CPU: pass its poses instead.
+    [[nodiscard]] Result<void> birds_from(const BirdBackend& backend);
+    /// This frame's bird poses, one per bird, uploaded.
+    [[nodiscard]] Result<void> birds_from(std::span<const gpu::BirdPose> poses);
     /// Validation messages seen so far (with validation on).
     [[nodiscard]] std::uint32_t validation_messages() const;
 

@@ -1,0 +1,27 @@
+#pragma once
+// Where the vulkan backends keep what the renderer draws (issue 5: the viewer draws from
+// the simulation's buffers on the device they were computed on, with no copy back).
+
+#include <cstdint>
+
+#include <vulkan/vulkan.hpp>
+
+namespace kodawari::gpu {
+
+class VulkanContext;
+
+/// The vulkan rod backend's state after its last load() or step().
+struct RodDeviceState {
+    const VulkanContext* context = nullptr;  ///< the device the buffers live on
+    vk::Buffer chain_states;                 ///< RodChainStateGpu per chain (root.position)
+    vk::Buffer motion;                       ///< RodJointMotionGpu per joint (x, relative to the root)
+};
+
+/// The vulkan bird backend's poses of the last simulated frame.
+struct BirdDevicePoses {
+    const VulkanContext* context = nullptr;
+    vk::Buffer poses;        ///< BirdPoseGpu, the backend's ring of frame slots
+    std::uint32_t first = 0; ///< index of bird 0's pose of that frame
+};
+
+}  // namespace kodawari::gpu

@@ -1,0 +1,276 @@
+#include "render/device_layers.hpp"
+
+#include <algorithm>
+#include <bit>
+#include <cassert>
+#include <cstring>
+
+#include <glm/gtc/packing.hpp>
+
+#include "export/bird_meshes.hpp"
+#include "gpu/device_state.hpp"
+
+namespace kodawari::render {
+
+namespace {
+
+template <typename T>
+std::span<const std::byte> bytes_of(const std::vector<T>& v) {
+    return std::as_bytes(std::span<const T>(v));
+}
+
+// A storage buffer of at least 16 bytes (an empty world still binds one) filled with `bytes`.
+Result<gpu::GpuBuffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes) {
+    auto buffer = gpu::GpuBuffer::create(ctx, std::max<std::uint64_t>(bytes.size(), 16), gpu::GpuBuffer::Kind::Storage);
+    if (!buffer) return buffer.error();
+    KW_TRY(gpu::upload(ctx, buffer.value(), bytes));
+    return buffer;
+}
+
+std::uint32_t bits(float value) { return std::bit_cast<std::uint32_t>(value); }
+
+}  // namespace
+
+// ---------------------------------------------------------------------------------------
+// Chains
+
+Result<ChainLayer> ChainLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
+    ChainLayer layer;
+    auto pipeline = gpu::GraphicsPipeline::create(ctx, pass, "chains.vert", "render.frag", 0, 0, sizeof(gpu::RenderPush),
+                                                  {.topology = vk::PrimitiveTopology::eTriangleList,
+                                                   .depth = true,
+                                                   .storage_buffers = KW_CHAINS_BINDING_COUNT});
+    if (!pipeline) return pipeline.error();
+    layer.pipeline_.emplace(std::move(pipeline).value());
+    auto set = gpu::BufferSet::create(ctx, *layer.pipeline_);
+    if (!set) return set.error();
+    layer.set_.emplace(std::move(set).value());
+    return layer;
+}
+
+Result<void> ChainLayer::set_world(gpu::VulkanContext& ctx, const rods::RodWorld* world, const ChainStyle& style) {
+    world_ = world;
+    style_ = style;
+    bound_ = on_device_ = false;
+    info_.reset();
+    joint_chain_.reset();
+    host_states_.reset();
+    host_motion_.reset();
+    if (world == nullptr || world->joint_count == 0) return {};
+    std::vector<gpu::ChainDrawInfo> info;
+    std::vector<std::uint32_t> joint_chain(world->joint_count, 0u);
+    const std::uint32_t color = glm::packUnorm4x8(glm::vec4(style.color.r, style.color.g, style.color.b, style.color.a) / 255.0f);
+    for (std::uint32_t c = 0; c < world->chains.size(); ++c) {
+        const rods::ChainInstance& chain = world->chains[c];
+        const rods::Chain& shape = world->templ(chain).chain;
+        info.push_back({{chain.joint_begin, shape.joint_count, color, 0u}, {shape.thickness, 0.0f, 0.0f, 0.0f}});
+        std::fill_n(joint_chain.begin() + chain.joint_begin, shape.joint_count, c);
+    }
+    auto info_buffer = storage_with(ctx, bytes_of(info));
+    if (!info_buffer) return info_buffer.error();
+    info_.emplace(std::move(info_buffer).value());
+    auto joint_buffer = storage_with(ctx, bytes_of(joint_chain));
+    if (!joint_buffer) return joint_buffer.error();
+    joint_chain_.emplace(std::move(joint_buffer).value());
+    return {};
+}
+
+Result<void> ChainLayer::from_backend(gpu::VulkanContext& ctx, RodBackend& backend) {
+    assert(world_ != nullptr && "set_world() first");
+    const gpu::RodDeviceState* state = backend.device_state();
+    if (state == nullptr || state->context != &ctx) {
+        KW_TRY(backend.read(scratch_));
+        return from_snapshot(ctx, scratch_);
+    }
+    const gpu::BufferRange ranges[KW_CHAINS_BINDING_COUNT] = {
+        {info_->handle()}, {joint_chain_->handle()}, {state->chain_states}, {state->motion}};
+    set_->bind(ctx, ranges);
+    bound_ = on_device_ = true;
+    return {};
+}
+
+Result<void> ChainLayer::from_snapshot(gpu::VulkanContext& ctx, const ChainSnapshot& snapshot) {
+    assert(world_ != nullptr && "set_world() first");
+    if (snapshot.positions.size() != world_->joint_count) {
+        return make_error(Error::Kind::InvalidInput, "the snapshot has " + std::to_string(snapshot.positions.size()) +
+                                                         " joints; the world has " + std::to_string(world_->joint_count));
+    }
+    // The backend's layout with every root at the origin: x is then the world position.
+    if (!host_states_) {
+        const std::vector<gpu::RodChainStateGpu> zero(world_->chains.size(), gpu::RodChainStateGpu{});
+        auto states = storage_with(ctx, bytes_of(zero));
+        if (!states) return states.error();
+        host_states_.emplace(std::move(states).value());
+        auto motion = gpu::GpuBuffer::create(ctx, std::max<std::uint64_t>(world_->joint_count * sizeof(gpu::RodJointMotionGpu), 16),
+                                             gpu::GpuBuffer::Kind::Storage);
+        if (!motion) return motion.error();
+        host_motion_.emplace(std::move(motion).value());
+    }
+    motion_.resize(world_->joint_count);
+    for (std::size_t j = 0; j < motion_.size(); ++j) {
+        const glm::vec3& p = snapshot.positions[j];
+        motion_[j] = {{p.x, p.y, p.z, 0.0f}, {0.0f, 0.0f, 0.0f, 0.0f}};
+    }
+    KW_TRY(gpu::upload(ctx, *host_motion_, bytes_of(motion_)));
+    if (on_device_ || !bound_) {
+        const gpu::BufferRange ranges[KW_CHAINS_BINDING_COUNT] = {
+            {info_->handle()}, {joint_chain_->handle()}, {host_states_->handle()}, {host_motion_->handle()}};
+        set_->bind(ctx, ranges);
+    }
+    bound_ = true;
+    on_device_ = false;
+    return {};
+}
+
+void ChainLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push, float rows_scale) const {
+    if (!bound_ || world_ == nullptr || world_->joint_count == 0) return;
+    cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline_->handle());
+    cmd.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, pipeline_->layout(), 0, set_->handle(), {});
+    const auto stages = vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment;
+    push.draw = {KW_CHAINS_DRAW_SEGMENTS, bits(rows_scale * style_.min_width_px), bits(rows_scale * style_.min_dot_px), 0u};
+    cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), stages, 0, push);
+    cmd.draw(KW_CHAIN_SEGMENT_VERTICES, world_->joint_count, 0, 0);
+    push.draw.x = KW_CHAINS_DRAW_DOTS;
+    cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), stages, 0, push);
+    cmd.draw(KW_CHAIN_DOT_VERTICES, world_->joint_count, 0, 0);
+}
+
+// ---------------------------------------------------------------------------------------
+// Birds
+
+Result<BirdLayer> BirdLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
+    BirdLayer layer;
+    auto pipeline = gpu::GraphicsPipeline::create(ctx, pass, "birds.vert", "render.frag", sizeof(gpu::BirdDrawVertex), 2,
+                                                  sizeof(gpu::RenderPush),
+                                                  {.topology = vk::PrimitiveTopology::eTriangleList,
+                                                   .depth = true,
+                                                   .storage_buffers = KW_BIRDS_DRAW_BINDING_COUNT});
+    if (!pipeline) return pipeline.error();
+    layer.pipeline_.emplace(std::move(pipeline).value());
+    auto set = gpu::BufferSet::create(ctx, *layer.pipeline_);
+    if (!set) return set.error();
+    layer.set_.emplace(std::move(set).value());
+    return layer;
+}
+
+Result<void> BirdLayer::set_world(gpu::VulkanContext& ctx, const birds::BirdWorld* world, float min_wingspan_px) {
+    count_ = 0;
+    bound_ = false;
+    ranges_ = {};
+    min_wingspan_px_ = min_wingspan_px;
+    vertices_.reset();
+    types_.reset();
+    order_.reset();
+    host_poses_.reset();
+    if (world == nullptr || world->birds.empty()) return {};
+    count_ = world->birds.size();
+
+    // The birds grouped by wing type (one instanced draw per type); unknown types are not drawn.
+    std::vector<std::uint32_t> order;
+    std::vector<gpu::BirdDrawVertex> vertices;
+    std::vector<gpu::BirdDrawType> types(birds::kWingTypeCount);
+    for (std::uint32_t t = 0; t < birds::kWingTypeCount; ++t) {
+        TypeRange& range = ranges_[t];
+        range.first_bird = static_cast<std::uint32_t>(order.size());
+        for (std::uint32_t b = 0; b < world->birds.size(); ++b) {
+            if (world->birds[b].ids.y == t) order.push_back(b);
+        }
+        range.birds = static_cast<std::uint32_t>(order.size()) - range.first_bird;
+        if (range.birds == 0) continue;
+        const auto wing = static_cast<birds::WingType>(t);
+        const auto meshes = bird_part_meshes(wing);
+        const auto offsets = birds::part_offsets(wing);
+        const auto color = bird_base_color(wing);
+        gpu::BirdDrawType& type = types[t];
+        for (std::size_t k = 0; k < birds::kPartCount; ++k) {
+            type.parts[k] = {offsets[k][0], offsets[k][1], offsets[k][2], static_cast<float>(birds::kPartParents[k])};
+        }
+        type.color = {color[0], color[1], color[2], birds::wing_type_spec(wing).wingspan};
+        range.first_vertex = static_cast<std::uint32_t>(vertices.size());
+        for (std::size_t k = 0; k < birds::kPartCount; ++k) {
+            const gltf::MeshData& mesh = meshes[k];
+            const auto at = [&](std::uint16_t i) {
+                const auto& v = mesh.positions[i];
+                return glm::vec3(v[0], v[1], v[2]);
+            };
+            for (std::size_t i = 0; i + 2 < mesh.indices.size(); i += 3) {
+                const glm::vec3 a = at(mesh.indices[i]), b = at(mesh.indices[i + 1]), c = at(mesh.indices[i + 2]);
+                const glm::vec3 n = glm::cross(b - a, c - a);
+                for (const glm::vec3& p : {a, b, c}) {
+                    vertices.push_back({{p.x, p.y, p.z, static_cast<float>(k)}, {n.x, n.y, n.z, 0.0f}});
+                }
+            }
+        }
+        range.vertices = static_cast<std::uint32_t>(vertices.size()) - range.first_vertex;
+    }
+    auto vertex_buffer = gpu::GpuBuffer::create(ctx, std::max<std::uint64_t>(vertices.size() * sizeof(gpu::BirdDrawVertex), 16),
+                                                gpu::GpuBuffer::Kind::Vertex);
+    if (!vertex_buffer) return vertex_buffer.error();
+    vertices_.emplace(std::move(vertex_buffer).value());
+    if (!vertices.empty()) std::memcpy(vertices_->mapped(), vertices.data(), vertices.size() * sizeof(gpu::BirdDrawVertex));
+    auto type_buffer = storage_with(ctx, bytes_of(types));
+    if (!type_buffer) return type_buffer.error();
+    types_.emplace(std::move(type_buffer).value());
+    auto order_buffer = storage_with(ctx, bytes_of(order));
+    if (!order_buffer) return order_buffer.error();
+    order_.emplace(std::move(order_buffer).value());
+    return {};
+}
+
+Result<void> BirdLayer::from_backend(gpu::VulkanContext& ctx, const BirdBackend& backend) {
+    if (count_ == 0) return {};
+    const gpu::BirdDevicePoses* poses = backend.device_poses();
+    if (poses == nullptr || poses->context != &ctx) {
+        return make_error(Error::Kind::InvalidInput, "the " + std::string(backend.name()) +
+                                                         " bird backend has no poses on the renderer's device: pass its poses");
+    }
+    const gpu::BufferRange ranges[KW_BIRDS_DRAW_BINDING_COUNT] = {{types_->handle()}, {order_->handle()}, {poses->poses}};
+    set_->bind(ctx, ranges);
+    first_pose_ = poses->first;
+    bound_ = true;
+    return {};
+}
+
+Result<void> BirdLayer::from_poses(gpu::VulkanContext& ctx, std::span<const gpu::BirdPose> poses) {
+    if (count_ == 0) return {};
+    if (poses.size() != count_) {
+        return make_error(Error::Kind::InvalidInput,
+                          std::to_string(poses.size()) + " bird poses for " + std::to_string(count_) + " birds");
+    }
+    // The kernel's layout (shared/birds.h, BirdPoseGpu): the moving parts only; the shader
+    // puts Head and Tail at rest and mirrors the left wing, as every backend poses them.
+    packed_.resize(count_);
+    for (std::size_t b = 0; b < count_; ++b) {
+        const gpu::BirdPose& p = poses[b];
+        packed_[b] = {p.position, p.rotation[KW_PART_BODY], p.rotation[KW_PART_LEFT_ARM1], p.rotation[KW_PART_LEFT_ARM2]};
+    }
+    if (!host_poses_) {
+        auto buffer = gpu::GpuBuffer::create(ctx, count_ * sizeof(gpu::BirdPoseGpu), gpu::GpuBuffer::Kind::Storage);
+        if (!buffer) return buffer.error();
+        host_poses_.emplace(std::move(buffer).value());
+        bound_ = false;
+    }
+    KW_TRY(gpu::upload(ctx, *host_poses_, bytes_of(packed_)));
+    const gpu::BufferRange ranges[KW_BIRDS_DRAW_BINDING_COUNT] = {{types_->handle()}, {order_->handle()}, {host_poses_->handle()}};
+    set_->bind(ctx, ranges);
+    first_pose_ = 0;
+    bound_ = true;
+    return {};
+}
+
+void BirdLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push) const {
+    if (!bound_ || count_ == 0) return;
+    cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline_->handle());
+    cmd.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, pipeline_->layout(), 0, set_->handle(), {});
+    cmd.bindVertexBuffers(0, vertices_->handle(), vk::DeviceSize{0});
+    for (std::uint32_t t = 0; t < birds::kWingTypeCount; ++t) {
+        const TypeRange& r = ranges_[t];
+        if (r.birds == 0 || r.vertices == 0) continue;
+        push.draw = {t, first_pose_, bits(min_wingspan_px_), 0u};
+        cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment,
+                                           0, push);
+        cmd.draw(r.vertices, r.birds, r.first_vertex, r.first_bird);
+    }
+}
+
+}  // namespace kodawari::render

@@ -1,0 +1,87 @@
+#pragma once
+// What the renderer draws from device buffers rather than from a DrawList (issue 5: the
+// viewer draws the simulation where it was computed): the chains (shaders/chains.vert)
+// from rod state and the birds (shaders/birds.vert) from their poses. Each layer binds
+// either the vulkan backend's own buffers (same device: nothing is read back) or buffers
+// of the same layout it fills from host data (the CPU backends, other devices).
+
+#include <array>
+#include <cstdint>
+#include <optional>
+#include <span>
+
+#include <shared/birds.h>
+#include <shared/render.h>
+#include <shared/rods.h>
+
+#include "gpu/gpu_buffer.hpp"
+#include "gpu/graphics.hpp"
+#include "kodawari/birds/world.hpp"
+#include "kodawari/render/renderer.hpp"
+#include "kodawari/rod_backend.hpp"
+
+namespace kodawari::render {
+
+/// The chains of a RodWorld.
+class ChainLayer {
+public:
+    /// The pipeline for `pass` (shared by every world drawn).
+    [[nodiscard]] static Result<ChainLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+
+    /// The chains of `world` (null: none) in `style`; static per-chain data is uploaded.
+    [[nodiscard]] Result<void> set_world(gpu::VulkanContext& ctx, const rods::RodWorld* world, const ChainStyle& style);
+    /// The state to draw: the vulkan backend's buffers when on `ctx`, else read and uploaded.
+    [[nodiscard]] Result<void> from_backend(gpu::VulkanContext& ctx, RodBackend& backend);
+    /// Joint positions (world) uploaded.
+    [[nodiscard]] Result<void> from_snapshot(gpu::VulkanContext& ctx, const ChainSnapshot& snapshot);
+    /// Whether the last from_*() bound the backend's own buffers.
+    [[nodiscard]] bool on_device() const { return on_device_; }
+
+    /// Records the draws (inside the render pass; `push` has the camera).
+    void record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push, float rows_scale) const;
+
+private:
+    ChainLayer() = default;
+    std::optional<gpu::GraphicsPipeline> pipeline_;
+    std::optional<gpu::BufferSet> set_;
+    const rods::RodWorld* world_ = nullptr;
+    ChainStyle style_;
+    std::optional<gpu::GpuBuffer> info_, joint_chain_, host_states_, host_motion_;
+    ChainSnapshot scratch_;
+    std::vector<gpu::RodJointMotionGpu> motion_;
+    bool bound_ = false, on_device_ = false;
+};
+
+/// The birds of a BirdWorld.
+class BirdLayer {
+public:
+    [[nodiscard]] static Result<BirdLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+
+    /// The birds of `world` (null: none): the part meshes of its wing types and the
+    /// order of its birds by wing type are uploaded.
+    [[nodiscard]] Result<void> set_world(gpu::VulkanContext& ctx, const birds::BirdWorld* world, float min_wingspan_px);
+    /// The last simulated frame's poses where the vulkan backend keeps them, on `ctx`;
+    /// an error for any other backend.
+    [[nodiscard]] Result<void> from_backend(gpu::VulkanContext& ctx, const BirdBackend& backend);
+    /// One pose per bird uploaded.
+    [[nodiscard]] Result<void> from_poses(gpu::VulkanContext& ctx, std::span<const gpu::BirdPose> poses);
+
+    void record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push) const;
+
+private:
+    BirdLayer() = default;
+    struct TypeRange {
+        std::uint32_t first_vertex = 0, vertices = 0, first_bird = 0, birds = 0;
+    };
+    std::optional<gpu::GraphicsPipeline> pipeline_;
+    std::optional<gpu::BufferSet> set_;
+    std::size_t count_ = 0;
+    float min_wingspan_px_ = 0.0f;
+    std::array<TypeRange, birds::kWingTypeCount> ranges_{};
+    std::optional<gpu::GpuBuffer> vertices_, types_, order_, host_poses_;
+    std::vector<gpu::BirdPoseGpu> packed_;
+    std::uint32_t first_pose_ = 0;
+    bool bound_ = false;
+};
+
+}  // namespace kodawari::render
