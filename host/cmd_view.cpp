@@ -93,15 +93,16 @@ struct Simulation {
         return {};
     }
 
-    // Simulates frame `f` (0 restarts); the chains' view direction comes from `camera`.
-    [[nodiscard]] Result<void> simulate(std::uint32_t f, const rods::Camera& camera) {
+    // Simulates frame `f` (0 restarts); the chains' view direction comes from `camera`, or
+    // from the scene's camera at that frame when there is none.
+    [[nodiscard]] Result<void> simulate(std::uint32_t f, const std::optional<rods::Camera>& camera) {
         if (f == 0 && birds) KW_TRY(birds->load(world));
         if (birds) {
             KW_TRY(birds->simulate(1, {.poses = birds_on_device ? std::span<gpu::BirdPose>() : std::span(poses), .diag = {}}));
         }
         if (rods) {
             KW_TRY(animator->frame(f, frame));
-            frame.camera = camera;  // the viewer's camera drives the view-dependent shapes
+            if (camera) frame.camera = *camera;  // the viewer's camera drives the view-dependent shapes
             KW_TRY(f == 0 ? rods->load(rod_scene->world, frame) : rods->step(frame));
             // Skinned meshes follow the chains on the CPU; other chains are drawn from the
             // backend (Renderer::chains_from).
@@ -113,7 +114,7 @@ struct Simulation {
     }
 
     // Frame `target`: forwards from the current one, or from frame 0 when going back.
-    [[nodiscard]] Result<void> seek(std::uint32_t target, const rods::Camera& camera) {
+    [[nodiscard]] Result<void> seek(std::uint32_t target, const std::optional<rods::Camera>& camera) {
         target = std::min(target, scene.frame_count() - 1);
         std::uint32_t f = started && target >= current ? current + 1 : 0;
         if (started && target == current) return {};
@@ -147,13 +148,15 @@ struct Simulation {
 struct OrbitCamera {
     glm::vec3 target{0.0f};
     float yaw = 0.0f, pitch = 0.0f, distance = 3.0f, fov_deg = 50.0f;
+    bool orthographic = false;  // as tall as the perspective frustum at the target (rods::ImageCamera)
 
-    // The scene camera at frame 0, orbiting its target (scene_camera() looks 1 m along
-    // forward instead, which would make a tiny orbit); a camera whose target is its
-    // position orbits a point 10 m ahead.
-    static OrbitCamera from(const Scene& scene) {
-        const rods::CameraPose pose = rods::camera_pose(scene.camera.motion, 0.0f);
+    // The scene camera at `time` (s), orbiting its target (scene_camera() looks 1 m along
+    // forward instead, which would make a tiny orbit), with its projection; a camera whose
+    // target is its position orbits a point 10 m ahead.
+    static OrbitCamera from(const Scene& scene, float time = 0.0f) {
+        const rods::CameraPose pose = rods::camera_pose(scene.camera.motion, time);
         OrbitCamera c;
+        c.orthographic = pose.projection == rods::Camera::Projection::Orthographic;
         c.fov_deg = scene.camera.fov_deg;
         c.target = glm::length(pose.target - pose.position) > 1e-3f ? pose.target : pose.position + 10.0f * pose.forward;
         const glm::vec3 offset = pose.position - c.target;
@@ -174,10 +177,13 @@ struct OrbitCamera {
         // that zooming in on one character keeps the rest of a crowd in view.
         v.near = std::clamp(0.01f * distance, 0.01f, 1.0f);
         v.far = std::max(1000.0f * v.near, 1000.0f);
+        v.orthographic = orthographic;
+        v.ortho_height = 2.0f * distance * std::tan(0.5f * glm::radians(fov_deg));
         return v;
     }
     [[nodiscard]] rods::ImageCamera image(std::uint32_t w, std::uint32_t h) const {
         rods::ImageCamera c;
+        c.projection = orthographic ? rods::Camera::Projection::Orthographic : rods::Camera::Projection::Perspective;
         c.position = position();
         c.target = target;
         c.fov_deg = fov_deg;
@@ -212,7 +218,24 @@ struct Viewer {
     std::string message;                // the last sketch/save outcome, shown on the status line
     std::optional<Error> failure;       // a simulation error ends the loop
 
-    [[nodiscard]] rods::Camera rod_camera() const { return camera.image(width, height).view_camera(); }
+    bool follow_scene = false;  // C: the scene's camera (its motion and projection) instead of the orbit camera
+
+    // The camera of the current frame: the orbit camera, or the scene's at that frame.
+    [[nodiscard]] rods::ImageCamera image_camera() const {
+        if (!follow_scene) return camera.image(width, height);
+        const float fps = sim->scene.fps > 0.0f ? sim->scene.fps : 60.0f;
+        const rods::CameraPose pose = rods::camera_pose(sim->scene.camera.motion, static_cast<float>(sim->current) / fps);
+        return rods::ImageCamera::from_pose(pose, sim->scene.camera.fov_deg, width, height);
+    }
+    [[nodiscard]] render::CameraView view() const {
+        return follow_scene ? render::scene_camera(sim->scene, sim->current) : camera.view();
+    }
+    // What drives the view-dependent shapes of the frames simulated next: the orbit
+    // camera, or (none) the scene's camera at each frame, as `run` and `render` have it.
+    [[nodiscard]] std::optional<rods::Camera> rod_camera() const {
+        if (follow_scene) return std::nullopt;
+        return camera.image(width, height).view_camera();
+    }
 
     // Window coordinates to image pixels (the window may have been resized).
     [[nodiscard]] glm::dvec2 to_image(double x, double y) const {
@@ -293,7 +316,7 @@ struct Viewer {
             fail(r.error());
             return;
         }
-        const rods::ImageCamera cam = camera.image(width, height);
+        const rods::ImageCamera cam = image_camera();
         const rods::RodWorld& w = sim->rod_scene->world;
         double best = kPickRadiusPx;
         for (std::uint32_t c = 0; c < w.chains.size(); ++c) {
@@ -317,7 +340,7 @@ struct Viewer {
         const rods::ChainInstance& ci = w.chains[*picked];
         const std::string name = w.templ(ci).name;
         rods::SketchInput input;
-        input.camera = camera.image(width, height);
+        input.camera = image_camera();
         input.root = sim->frame.roots[*picked];
         input.reference = sim->frame.reference[ci.character];
         input.lengths = w.templ(ci).basis.lengths;
@@ -402,6 +425,15 @@ struct Viewer {
                 }
                 break;
             case GLFW_KEY_W: save(); break;
+            case GLFW_KEY_C:
+                follow_scene = !follow_scene;
+                say(follow_scene ? "camera: the scene's (its motion and projection drive the view-dependent shapes)"
+                                 : "camera: orbit");
+                break;
+            case GLFW_KEY_O:
+                camera.orthographic = !camera.orthographic;
+                say(camera.orthographic ? "orbit camera: orthographic" : "orbit camera: perspective");
+                break;
             case GLFW_KEY_U: undo(); break;
             case GLFW_KEY_EQUAL:
             case GLFW_KEY_KP_ADD: influence = std::min(influence * 1.25f, 1000.0f); break;
@@ -446,6 +478,7 @@ struct Viewer {
         if (left) {
             orbit(dx, dy);
         } else if (middle) {
+            take_camera();
             const render::CameraBasis b = render::camera_basis(camera.view());
             const float px = camera.distance * 2.0f * std::tan(0.5f * glm::radians(camera.fov_deg)) / static_cast<float>(height);
             camera.target += px * (-static_cast<float>(dx) * b.right + static_cast<float>(dy) * b.up);
@@ -454,11 +487,25 @@ struct Viewer {
 
     // A left drag by (dx, dy) window pixels: 0.01 rad per pixel.
     void orbit(double dx, double dy) {
+        take_camera();
         camera.yaw -= static_cast<float>(dx) * 0.01f;
         camera.pitch = std::clamp(camera.pitch + static_cast<float>(dy) * 0.01f, -1.55f, 1.55f);
     }
 
-    void scroll(double dy) { camera.distance = std::clamp(camera.distance * std::pow(0.9f, static_cast<float>(dy)), 0.01f, 1e4f); }
+    void scroll(double dy) {
+        take_camera();
+        camera.distance = std::clamp(camera.distance * std::pow(0.9f, static_cast<float>(dy)), 0.01f, 1e4f);
+    }
+
+    // Orbiting, panning or zooming while following the scene's camera takes over from
+    // where that camera is now.
+    void take_camera() {
+        if (!follow_scene) return;
+        follow_scene = false;
+        const float fps = sim->scene.fps > 0.0f ? sim->scene.fps : 60.0f;
+        camera = OrbitCamera::from(sim->scene, static_cast<float>(sim->current) / fps);
+        say("camera: orbit, from the scene camera's pose");
+    }
 };
 
 Viewer* from(GLFWwindow* w) { return static_cast<Viewer*>(glfwGetWindowUserPointer(w)); }
@@ -468,6 +515,7 @@ std::optional<int> key_by_name(const std::string& name) {
         {"space", GLFW_KEY_SPACE}, {"right", GLFW_KEY_RIGHT}, {"left", GLFW_KEY_LEFT},   {"home", GLFW_KEY_HOME},
         {"[", GLFW_KEY_LEFT_BRACKET}, {"]", GLFW_KEY_RIGHT_BRACKET}, {"1", GLFW_KEY_1},  {"2", GLFW_KEY_2},
         {"3", GLFW_KEY_3},         {"s", GLFW_KEY_S},         {"w", GLFW_KEY_W},         {"u", GLFW_KEY_U},
+        {"c", GLFW_KEY_C},         {"o", GLFW_KEY_O},
         {"+", GLFW_KEY_EQUAL},     {"-", GLFW_KEY_MINUS},     {"p", GLFW_KEY_P},         {"q", GLFW_KEY_Q},
         {"escape", GLFW_KEY_ESCAPE}};
     for (const auto& [n, k] : kNames) {
@@ -519,7 +567,7 @@ int cmd_view(Args args) {
     std::vector<Step> scripted;
     if (keys_text) {
         static constexpr const char* kKnown =
-            "space right left home [ ] 1 2 3 s w u + - p q escape, drag:X1:Y1:X2:Y2, orbit:DX:DY, resize:W:H";
+            "space right left home [ ] 1 2 3 s w u c o + - p q escape, drag:X1:Y1:X2:Y2, orbit:DX:DY, resize:W:H";
         std::stringstream list(*keys_text);
         for (std::string name; std::getline(list, name, ',');) {
             Step step;
@@ -661,7 +709,7 @@ int cmd_view(Args args) {
         if (v.failure) break;
         Simulation& s = *v.sim;
 
-        render::DrawList list(v.camera.view(), width, height);
+        render::DrawList list(v.view(), width, height);
         if (grid_points.empty()) {
             grid_points = render::content_points(s.rod_scene ? &*s.rod_scene : nullptr, s.rods ? &s.frame : nullptr,
                                                  s.birds ? &s.world : nullptr);
@@ -688,9 +736,10 @@ int cmd_view(Args args) {
         read_back_before = renderer.value()->read_back_bytes();
         char status[512];
         std::snprintf(status, sizeof(status),
-                      "frame %u  t %.2f s  %s  backend %s  %.1f ms/frame  %llu B read back  %zu characters %zu chains %zu birds%s%s",
+                      "frame %u  t %.2f s  %s  backend %s  %.1f ms/frame  %llu B read back  camera %s %s  %zu characters %zu chains %zu birds%s%s",
                       s.current, static_cast<double>(s.current) / static_cast<double>(s.scene.fps), v.playing ? "playing" : "paused",
                       s.backend_name().c_str(), frame_ms, static_cast<unsigned long long>(read_back_frame),
+                      v.follow_scene ? "scene" : "orbit", list.camera().orthographic ? "ortho" : "persp",
                       s.rod_scene ? static_cast<std::size_t>(s.rod_scene->world.character_count) : 0,
                       s.rod_scene ? s.rod_scene->world.chains.size() : 0, s.world.birds.size(),
                       v.sketch_mode ? ("  [sketch: influence " + number(v.influence) + "]").c_str() : "",

@@ -54,7 +54,7 @@ void main() {
     // A far flock stays visible: birds smaller than the minimum wingspan in pixels are
     // drawn scaled up to it (their positions stay exact).
     float depth = dot(position - push.eye.xyz, push.forward.xyz);
-    float pixel = depth > push.eye.w ? depth * push.forward.w : 0.0;
+    float pixel = push.draw.w == KW_RENDER_ORTHOGRAPHIC ? push.forward.w : depth > push.eye.w ? depth * push.forward.w : 0.0;
     float scale = pixel > 0.0 ? max(1.0, uintBitsToFloat(push.draw.z) * pixel / type.color.w) : 1.0;
     vec3 world = position + scale * rotate(body, p);
     mat4 view_proj = mat4(push.view_proj[0], push.view_proj[1], push.view_proj[2], push.view_proj[3]);

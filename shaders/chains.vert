@@ -21,11 +21,16 @@ layout(location = 1) flat out vec3 out_normal;
 // World position of joint j of chain c: the backend stores it relative to the root.
 vec3 joint_position(uint c, uint j) { return states[c].root.position.xyz + motion[j].x.xyz; }
 
-// The world size of one pixel at the depth of p; 0 at or behind the near plane.
+// The world size of one pixel at the depth of p; 0 at or behind the near plane
+// (orthographic: the same everywhere).
 float pixel_size_at(vec3 p) {
+    if (push.draw.w == KW_RENDER_ORTHOGRAPHIC) return push.forward.w;
     float depth = dot(p - push.eye.xyz, push.forward.xyz);
     return depth > push.eye.w ? depth * push.forward.w : 0.0;
 }
+
+// From p towards the viewer (DrawList::towards_viewer).
+vec3 towards_viewer(vec3 p) { return push.draw.w == KW_RENDER_ORTHOGRAPHIC ? -push.forward.xyz : push.eye.xyz - p; }
 
 // Nothing to draw: every vertex of the primitive at one point makes it degenerate.
 void emit_nothing() {
@@ -52,7 +57,7 @@ void main() {
         }
         vec3 b = joint_position(c, j + 1);
         // The quad lies in the plane of the segment and the line of sight to its middle.
-        vec3 side = cross(b - p, push.eye.xyz - 0.5 * (p + b));
+        vec3 side = cross(b - p, towards_viewer(0.5 * (p + b)));
         float side_length = length(side);
         if (!(side_length > 0.0)) {  // seen end-on (its dots still show it) or degenerate
             emit_nothing();

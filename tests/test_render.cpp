@@ -350,6 +350,70 @@ TEST(Render, ScreenOverlaysAreInPixelsAndOnTop) {
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
 
+// An orthographic scene camera is drawn orthographic: the strand's joints are where an
+// orthographic projection (written here: the view as tall as the perspective frustum at
+// the target) puts them. The target is 5 m away, behind and to the side of the character,
+// so a perspective drawing would put them far off (checked: the test can tell the two
+// apart).
+TEST(Render, OrthographicSceneCameraIsDrawnOrthographic) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto scene = load_scene(scene_path("ahoge.json"));
+    ASSERT_TRUE(scene.ok());
+    rods::CameraMotion& motion = scene.value().camera.motion;
+    motion = rods::CameraMotion{};
+    motion.projection = rods::Camera::Projection::Orthographic;
+    motion.position = {0.0f, 1.7f, 1.5f};
+    motion.target = {1.2f, 1.55f, -3.5f};
+    auto rods = build_rod_scene(scene.value());
+    ASSERT_TRUE(rods.ok());
+    auto backend = make_rod_backend(BackendKind::Cpu, {});
+    ASSERT_TRUE(backend.ok());
+    constexpr std::uint32_t kFrame = 30;
+    for (std::uint32_t f = 0; f <= kFrame; ++f) {
+        const rods::RodFrame input = rods.value().frame(f);
+        ASSERT_TRUE((f == 0 ? backend.value()->load(rods.value().world, input) : backend.value()->step(input)).ok());
+    }
+    ChainSnapshot snapshot;
+    ASSERT_TRUE(backend.value()->read(snapshot).ok());
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    const render::CameraView view = render::scene_camera(scene.value(), kFrame);
+    EXPECT_TRUE(view.orthographic);
+    render::DrawList list(view, kWidth, kHeight);
+    render::add_characters(list, rods.value(), kFrame, nullptr, nullptr);
+    ASSERT_TRUE(renderer->set_chains(&rods.value().world).ok());
+    ASSERT_TRUE(renderer->chains_from(snapshot).ok());
+    auto image = renderer->render(list);
+    ASSERT_TRUE(image.ok()) << image.error().message;
+
+    const Pinhole pinhole(motion.position, motion.target, scene.value().camera.fov_deg, kWidth, kHeight);
+    const float height_m = 2.0f * glm::length(motion.target - motion.position) * pinhole.tan_half;
+    const auto ortho = [&](const glm::vec3& p) {
+        const glm::vec3 d = p - motion.position;
+        return glm::vec2(0.5f * float(kWidth) + glm::dot(d, pinhole.right) / height_m * float(kHeight),
+                         0.5f * float(kHeight) - glm::dot(d, pinhole.up) / height_m * float(kHeight));
+    };
+    int joints = 0, worst = 0;
+    float apart = 0.0f;
+    for (const glm::vec3& p : snapshot.positions) {
+        const glm::vec2 q = ortho(p);
+        glm::vec2 perspective;
+        ASSERT_TRUE(pinhole.project(p, perspective));
+        apart = std::max(apart, glm::length(perspective - q));
+        if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
+        const int d = nearest_match(image.value(), q, 1, render::kChainColor);
+        worst = std::max(worst, d);
+        EXPECT_LE(d, 2) << "no chain colour near the joint projected at (" << q.x << ", " << q.y << ")";
+        ++joints;
+    }
+    std::printf("[ render ] orthographic: %d joints in chain colour (worst channel distance %d); perspective would put "
+                "them up to %.0f px away\n",
+                joints, worst, double(apart));
+    EXPECT_GE(joints, 10);
+    EXPECT_GT(apart, 20.0f) << "the scene does not tell orthographic from perspective";
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
 // The viewer's path (issue 5: one device, buffers shared, no copy back per frame): the
 // vulkan rod backend runs on the renderer's device and the chains are drawn from its
 // state buffers. The image must be the very one drawn from the snapshot read back from

@@ -127,7 +127,7 @@ void ChainLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push
     cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline_->handle());
     cmd.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, pipeline_->layout(), 0, set_->handle(), {});
     const auto stages = vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment;
-    push.draw = {KW_CHAINS_DRAW_SEGMENTS, bits(rows_scale * style_.min_width_px), bits(rows_scale * style_.min_dot_px), 0u};
+    push.draw = {KW_CHAINS_DRAW_SEGMENTS, bits(rows_scale * style_.min_width_px), bits(rows_scale * style_.min_dot_px), push.draw.w};
     cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), stages, 0, push);
     cmd.draw(KW_CHAIN_SEGMENT_VERTICES, world_->joint_count, 0, 0);
     push.draw.x = KW_CHAINS_DRAW_DOTS;
@@ -266,7 +266,7 @@ void BirdLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push)
     for (std::uint32_t t = 0; t < birds::kWingTypeCount; ++t) {
         const TypeRange& r = ranges_[t];
         if (r.birds == 0 || r.vertices == 0) continue;
-        push.draw = {t, first_pose_, bits(min_wingspan_px_), 0u};
+        push.draw = {t, first_pose_, bits(min_wingspan_px_), push.draw.w};
         cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment,
                                            0, push);
         cmd.draw(r.vertices, r.birds, r.first_vertex, r.first_bird);

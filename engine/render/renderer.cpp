@@ -48,7 +48,10 @@ CameraBasis camera_basis(const CameraView& camera) {
 glm::mat4 view_projection(const CameraView& camera, float aspect) {
     const CameraBasis basis = camera_basis(camera);
     const glm::mat4 view = glm::lookAtRH(camera.position, camera.position + basis.forward, basis.up);
-    glm::mat4 projection = glm::perspectiveRH_ZO(glm::radians(camera.fov_deg), aspect, camera.near, camera.far);
+    const float half_h = 0.5f * camera.ortho_height, half_w = half_h * aspect;
+    glm::mat4 projection = camera.orthographic
+                               ? glm::orthoRH_ZO(-half_w, half_w, -half_h, half_h, camera.near, camera.far)
+                               : glm::perspectiveRH_ZO(glm::radians(camera.fov_deg), aspect, camera.near, camera.far);
     projection[1][1] = -projection[1][1];  // Vulkan's clip space has y down
     return projection * view;
 }
@@ -67,12 +70,19 @@ Rgba8 Image::at(std::uint32_t x, std::uint32_t y) const {
 DrawList::DrawList(const CameraView& camera, std::uint32_t width, std::uint32_t height)
     : camera_(camera), basis_(camera_basis(camera)), width_(width), height_(height) {
     assert(width > 0 && height > 0 && camera.near > 0.0f && camera.far > camera.near);
-    pixel_per_depth_ = 2.0f * std::tan(0.5f * glm::radians(camera.fov_deg)) / static_cast<float>(height);
+    assert(!camera.orthographic || camera.ortho_height > 0.0f);
+    pixel_per_depth_ = camera.orthographic ? camera.ortho_height / static_cast<float>(height)
+                                           : 2.0f * std::tan(0.5f * glm::radians(camera.fov_deg)) / static_cast<float>(height);
 }
 
 float DrawList::pixel_size_at(const glm::vec3& p) const {
+    if (camera_.orthographic) return pixel_per_depth_;
     const float depth = glm::dot(p - camera_.position, basis_.forward);
     return depth > camera_.near ? depth * pixel_per_depth_ : 0.0f;
+}
+
+glm::vec3 DrawList::towards_viewer(const glm::vec3& p) const {
+    return camera_.orthographic ? -basis_.forward : camera_.position - p;
 }
 
 void DrawList::add_line(const glm::vec3& a, const glm::vec3& b, Rgba8 color) {
@@ -101,7 +111,7 @@ void DrawList::add_unlit_triangle(const glm::vec3& a, const glm::vec3& b, const 
 void DrawList::add_segment(const glm::vec3& a, const glm::vec3& b, float width, float min_px, Rgba8 color) {
     const glm::vec3 along = b - a;
     // The quad lies in the plane of the segment and the line of sight to its middle.
-    const glm::vec3 side = glm::cross(along, camera_.position - 0.5f * (a + b));
+    const glm::vec3 side = glm::cross(along, towards_viewer(0.5f * (a + b)));
     const float side_length = glm::length(side);
     if (!(side_length > 0.0f)) return;  // seen end-on (its dots still show it) or degenerate
     const glm::vec3 unit = side / side_length;
@@ -391,6 +401,7 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     const CameraBasis basis = camera_basis(camera);
     push.eye = v4(camera.position, camera.near);
     push.forward = v4(basis.forward, list.pixel_per_depth());
+    push.draw.w = camera.orthographic ? KW_RENDER_ORTHOGRAPHIC : KW_RENDER_PERSPECTIVE;
     using Stage = vk::PipelineStageFlagBits;
     using Access = vk::AccessFlagBits;
     // The layers' vertex shaders read what kernels, copies and the host wrote before

@@ -18,8 +18,18 @@ CameraView scene_camera(const Scene& scene, std::uint32_t frame) {
     // position, so look along forward.
     view.target = pose.position + pose.forward;
     view.fov_deg = scene.camera.fov_deg;
-    view.near = std::clamp(0.01f * glm::length(pose.target - pose.position), 0.01f, 1.0f);
+    const float distance = glm::length(pose.target - pose.position);
+    view.near = std::clamp(0.01f * distance, 0.01f, 1.0f);
     view.far = 1000.0f * view.near;
+    // Orthographic: as tall as the perspective frustum at the target (rods::ImageCamera's
+    // convention, which `kodawari sketch` uses too), 1 m where the target is the eye.
+    view.orthographic = pose.projection == rods::Camera::Projection::Orthographic;
+    view.ortho_height = distance > 1e-6f ? 2.0f * distance * std::tan(0.5f * glm::radians(view.fov_deg)) : 1.0f;
+    if (view.orthographic) {
+        // Depth is linear: a deep range costs no precision near the eye.
+        view.near = 0.01f;
+        view.far = 1e4f;
+    }
     return view;
 }
 

@@ -25,9 +25,13 @@ struct RenderPush {
     vec4 view_proj[4];  // columns of projection * view (Vulkan clip space: y down, depth 0..1)
     vec4 light;         // xyz: unit direction towards the light (world), w: ambient fraction
     vec4 eye;           // xyz: camera position (world), w: near plane distance
-    vec4 forward;       // xyz: unit view direction, w: world size of a pixel at depth 1
-    uvec4 draw;         // layer-specific, see KW_CHAINS_DRAW_* and KW_BIRDS_DRAW_*
+    vec4 forward;       // xyz: unit view direction, w: world size of a pixel at depth 1 (orthographic: everywhere)
+    uvec4 draw;         // xyz: layer-specific, see KW_CHAINS_DRAW_* and KW_BIRDS_DRAW_*; w: the projection
 };
+
+// RenderPush.draw.w, for every layer.
+#define KW_RENDER_PERSPECTIVE 0u
+#define KW_RENDER_ORTHOGRAPHIC 1u
 
 // ---------------------------------------------------------------------------------------
 // The chain layer (chains.vert): chains drawn from rod state in device buffers, either
@@ -44,7 +48,7 @@ struct RenderPush {
 #define KW_CHAIN_DOT_SIDES 8
 #define KW_CHAIN_DOT_VERTICES 24  // 3 x KW_CHAIN_DOT_SIDES
 // RenderPush.draw for chains: x: KW_CHAINS_DRAW_SEGMENTS or _DOTS, y: minimum segment
-// width in pixels, z: minimum dot radius in pixels (float bits), w: unused.
+// width in pixels, z: minimum dot radius in pixels (float bits).
 #define KW_CHAINS_DRAW_SEGMENTS 0u
 #define KW_CHAINS_DRAW_DOTS 1u
 
@@ -63,7 +67,7 @@ struct ChainDrawInfo {
 #define KW_BIRDS_DRAW_BINDING_COUNT 3
 // RenderPush.draw for birds: x: wing type, y: index of the first bird's pose in the
 // poses buffer (a frame slot of the backend's ring), z: minimum wingspan in pixels
-// (float bits), w: unused.
+// (float bits).
 
 struct BirdDrawVertex {
     vec4 position;  // xyz: in its part's frame, w: the part (KW_PART_*)

@@ -51,13 +51,16 @@ struct ChainStyle {
     float min_dot_px = kJointDotMinPixels; ///< at 720 rows
 };
 
-/// A perspective look-at camera. Up is world +Y (+Z when looking straight up or down).
+/// A look-at camera, perspective or orthographic. Up is world +Y (+Z when looking
+/// straight up or down).
 struct CameraView {
     glm::vec3 position{0.0f, 1.5f, 3.0f};
     glm::vec3 target{0.0f, 1.5f, 0.0f};
-    float fov_deg = 50.0f;  ///< vertical field of view
+    float fov_deg = 50.0f;  ///< vertical field of view (perspective)
     float near = 0.05f;     ///< m, > 0
     float far = 1000.0f;    ///< m, > near
+    bool orthographic = false;
+    float ortho_height = 1.0f;  ///< m, > 0: the height of the view (orthographic)
 };
 
 /// The camera's orthonormal basis: right, up, forward (towards the target).
@@ -67,7 +70,8 @@ struct CameraBasis {
 [[nodiscard]] CameraBasis camera_basis(const CameraView& camera);
 
 /// projection * view in Vulkan's clip space (x right, y down, depth 0 at near .. 1 at
-/// far) for an image of aspect width / height.
+/// far) for an image of aspect width / height; orthographic: ortho_height tall, centred
+/// on the line of sight.
 [[nodiscard]] glm::mat4 view_projection(const CameraView& camera, float aspect);
 
 /// The background gradient at `v` (0 = top row, 1 = bottom row), rgb in [0, 1].
@@ -91,10 +95,14 @@ public:
     [[nodiscard]] const CameraView& camera() const { return camera_; }
     [[nodiscard]] std::uint32_t width() const { return width_; }
     [[nodiscard]] std::uint32_t height() const { return height_; }
-    /// The world size of one pixel at the depth of `p` (0 behind the near plane).
+    /// The world size of one pixel at the depth of `p` (0 behind the near plane);
+    /// orthographic: the same everywhere.
     [[nodiscard]] float pixel_size_at(const glm::vec3& p) const;
-    /// The world size of one pixel at depth 1 m.
+    /// The world size of one pixel at depth 1 m (perspective), or everywhere (orthographic).
     [[nodiscard]] float pixel_per_depth() const { return pixel_per_depth_; }
+    /// The direction from `p` towards the viewer: towards the eye, or against the line of
+    /// sight (orthographic).
+    [[nodiscard]] glm::vec3 towards_viewer(const glm::vec3& p) const;
 
     /// A 1-pixel line.
     void add_line(const glm::vec3& a, const glm::vec3& b, Rgba8 color);

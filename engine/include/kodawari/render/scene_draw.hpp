@@ -20,8 +20,10 @@ inline constexpr Rgba8 kBoneColor{50, 60, 80};
 inline constexpr Rgba8 kColliderColor{110, 120, 140};
 inline constexpr Rgba8 kGridColor{150, 156, 168};
 /// The scene camera at `frame` (time = frame / fps) as scene.camera.motion gives it, the
-/// same pose RodScene::camera_pose gives characters. Near and far planes follow the
-/// distance to the target: near = 1% of it (within [0.01, 1] m), far = 1000 x near.
+/// same pose RodScene::camera_pose gives characters, and its projection: an orthographic
+/// camera is as tall as the perspective frustum at its target (rods::ImageCamera's
+/// convention). Perspective near and far planes follow the distance to the target:
+/// near = 1% of it (within [0.01, 1] m), far = 1000 x near; orthographic: 0.01 to 10 km.
 [[nodiscard]] CameraView scene_camera(const Scene& scene, std::uint32_t frame);
 
 /// A square grid on the ground (y = 0) covering the points' horizontal extent plus a
