@@ -12,6 +12,7 @@ Result<CrowdAnimator> CrowdAnimator::create(const RodScene& scene, BackendKind k
         const CharacterKinematics& character = scene.characters[k];
         if (!character.rig) continue;
         Rig rig;
+        rig.character = k;
         std::vector<PoseInstance> instances;
         for (std::uint32_t c = 0; c < scene.instances.size(); ++c) {
             const CharacterInstance& inst = scene.instances[c];
@@ -43,6 +44,12 @@ Result<void> CrowdAnimator::frame(std::uint32_t index, rods::RodFrame& out) {
     }
     last_pose_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return {};
+}
+
+std::vector<CrowdAnimator::PosedCharacter> CrowdAnimator::posed_characters() const {
+    std::vector<PosedCharacter> out;
+    for (const Rig& rig : rigs_) out.push_back({rig.character, rig.instances, rig.backend.get()});
+    return out;
 }
 
 std::uint32_t CrowdAnimator::validation_messages() const {

@@ -13,6 +13,7 @@
 
 #include "backends/pose_backends.hpp"
 #include "gpu/compute_pipeline.hpp"
+#include "gpu/device_state.hpp"
 
 namespace kodawari {
 namespace {
@@ -178,6 +179,10 @@ public:
         assert(character_ != nullptr && "load() first");
         if (!std::isfinite(time)) return make_error(Error::Kind::InvalidInput, "the scene time is not finite");
         evaluated_ = true;
+        device_world_ = {.context = ctx_.get(),
+                         .world = buffers_[KW_POSES_BINDING_WORLD].handle(),
+                         .instances = count_,
+                         .nodes = static_cast<std::uint32_t>(character_->nodes.size())};
         if (count_ == 0) return {};
         const gpu::PosePush push{{time, 0.0f, 0.0f, 0.0f},
                                  {count_, static_cast<std::uint32_t>(character_->nodes.size()), 0u, 0u}};
@@ -192,6 +197,8 @@ public:
         return {};
     }
 
+    const gpu::PoseDeviceWorld* device_world() const override { return evaluated_ ? &device_world_ : nullptr; }
+
     Result<void> read(std::vector<glm::mat4>& world) override {
         assert(character_ != nullptr && evaluated_ && "evaluate() first");
         static_assert(sizeof(glm::mat4) == sizeof(gpu::PoseMatrixGpu), "four column vec4s on both sides");
@@ -201,6 +208,7 @@ public:
 
 private:
     std::shared_ptr<gpu::VulkanContext> ctx_;
+    gpu::PoseDeviceWorld device_world_;
     std::optional<gpu::ComputePipeline> kernel_;
     std::vector<GpuBuffer> buffers_;
     const gltf::Character* character_ = nullptr;

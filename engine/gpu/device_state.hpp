@@ -17,6 +17,14 @@ struct RodDeviceState {
     vk::Buffer motion;                       ///< RodJointMotionGpu per joint (x, relative to the root)
 };
 
+/// The vulkan pose backend's world matrices after its last evaluate().
+struct PoseDeviceWorld {
+    const VulkanContext* context = nullptr;
+    vk::Buffer world;              ///< PoseMatrixGpu, instances x nodes, instance-major
+    std::uint32_t instances = 0;
+    std::uint32_t nodes = 0;
+};
+
 /// The vulkan bird backend's poses of the last simulated frame.
 struct BirdDevicePoses {
     const VulkanContext* context = nullptr;

@@ -8,6 +8,7 @@
 
 #include <cstdint>
 #include <memory>
+#include <span>
 #include <vector>
 
 #include "pose_backend.hpp"
@@ -33,8 +34,18 @@ public:
     /// Validation messages of the pose backends so far.
     [[nodiscard]] std::uint32_t validation_messages() const;
 
+    /// A rigged character template's instances and the pose backend that evaluates them.
+    struct PosedCharacter {
+        std::uint32_t character;                  ///< RodScene::characters index
+        std::span<const std::uint32_t> instances; ///< RodScene::instances indices, in the backend's instance order
+        const PoseBackend* backend;
+    };
+    /// One per rigged character template with instances (valid while the animator lives).
+    [[nodiscard]] std::vector<PosedCharacter> posed_characters() const;
+
 private:
     struct Rig {
+        std::uint32_t character = 0;
         std::unique_ptr<PoseBackend> backend;
         std::vector<std::uint32_t> instances;  // RodScene::instances indices, in backend order
         std::size_t nodes = 0;

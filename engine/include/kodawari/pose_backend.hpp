@@ -21,6 +21,10 @@
 
 namespace kodawari {
 
+namespace gpu {
+struct PoseDeviceWorld;
+}
+
 /// One instance of a rigged character in a crowd.
 struct PoseInstance {
     rods::Transform placement;   ///< the instance's transform (world = placement * node world)
@@ -75,6 +79,10 @@ public:
     [[nodiscard]] virtual double last_gpu_ms() const { return -1.0; }
     /// Validation messages seen so far (Vulkan with validation on; 0 otherwise).
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
+
+    /// Where the world matrices live on a Vulkan device (the vulkan backend after
+    /// evaluate(); null otherwise), for kernels and shaders that use them there.
+    [[nodiscard]] virtual const gpu::PoseDeviceWorld* device_world() const { return nullptr; }
 };
 
 /// Creates a pose backend; Vulkan fails with a readable reason when no loader, driver or
