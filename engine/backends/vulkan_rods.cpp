@@ -179,7 +179,8 @@ public:
         kernel_->bind_buffers(*ctx_, bound);
         device_state_ = {.context = ctx_.get(),
                          .chain_states = buffers_[KW_RODS_BINDING_CHAIN_STATE].handle(),
-                         .motion = buffers_[KW_RODS_BINDING_MOTION].handle()};
+                         .motion = buffers_[KW_RODS_BINDING_MOTION].handle(),
+                         .spin = buffers_[KW_RODS_BINDING_SPIN].handle()};
         return {};
     }
 

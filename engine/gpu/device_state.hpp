@@ -15,6 +15,7 @@ struct RodDeviceState {
     const VulkanContext* context = nullptr;  ///< the device the buffers live on
     vk::Buffer chain_states;                 ///< RodChainStateGpu per chain (root.position)
     vk::Buffer motion;                       ///< RodJointMotionGpu per joint (x, relative to the root)
+    vk::Buffer spin;                         ///< RodJointSpinGpu per joint (q, the particle's orientation)
 };
 
 /// The vulkan pose backend's world matrices after its last evaluate().
