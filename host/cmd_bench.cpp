@@ -8,6 +8,8 @@
 #include "commands.hpp"
 #include "kodawari/atomic_file.hpp"
 #include "kodawari/crowd_animator.hpp"
+#include "kodawari/render/renderer.hpp"
+#include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/rods/synthetic.hpp"
@@ -236,19 +238,166 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
     return report_results(results, "frames/s", head, json_path);
 }
 
+// kodawari bench view: what a viewer frame costs (simulate, then draw offscreen and wait;
+// no image read back, no blit) with the simulation's state drawn where it is computed
+// (the vulkan backends on the renderer's device, issue 5), against the same device with
+// the state read back and uploaded again (what a renderer on its own device must do),
+// and against the cpu backends (uploaded). The three run interleaved, 10 frames at a time,
+// so that a noisy machine slows them alike.
+int bench_view(Args& args, BackendChoice choice) {
+    const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(120));
+    const auto [width, height] = image_size(args.option("size"));
+    const auto json_path = args.option("json");
+    auto positionals = args.positionals();
+    if (positionals.size() > 2) throw UsageError{"usage: kodawari bench view [SCENE] [options]"};
+    positionals.erase(positionals.begin());
+    if (positionals.empty()) positionals.push_back("scenes/crowd.json");
+    auto loaded = load_scene_arguments(positionals, "bench view", std::nullopt);
+    if (!loaded) return report(loaded.error());
+    const Scene& scene = loaded.value().scene;
+    const birds::BirdWorld& bird_world = loaded.value().world;
+    std::optional<RodScene> rod_scene;
+    if (!scene.characters.empty()) {
+        auto built = build_rod_scene(scene);
+        if (!built) return report(built.error());
+        rod_scene.emplace(std::move(built).value());
+    }
+    const std::uint32_t last = scene.frame_count() - 1;
+    auto renderer = render::Renderer::create({.width = width, .height = height, .device = choice.options.device,
+                                              .validation = choice.options.validation});
+    if (!renderer) return report(renderer.error());
+    render::Renderer& r = *renderer.value();
+    choice.options.context = r.device_context();
+    if (rod_scene) {
+        if (auto s = r.set_chains(&rod_scene->world); !s) return report(s.error());
+    }
+    if (!bird_world.birds.empty()) {
+        if (auto s = r.set_birds(&bird_world); !s) return report(s.error());
+    }
+
+    struct Run {
+        const char* name;
+        BackendKind kind;
+        bool read_back;
+        std::unique_ptr<BirdBackend> birds;
+        std::unique_ptr<RodBackend> rods;
+        std::optional<CrowdAnimator> animator;
+        rods::RodFrame frame;
+        ChainSnapshot snapshot;
+        std::vector<gpu::BirdPose> poses;
+        double seconds = 0.0;
+        std::uint64_t read_back_bytes = 0;
+    };
+    std::vector<Run> runs;
+    runs.push_back({"vulkan shared", BackendKind::Vulkan, false, {}, {}, {}, {}, {}, {}});
+    runs.push_back({"vulkan readback", BackendKind::Vulkan, true, {}, {}, {}, {}, {}, {}});
+    runs.push_back({"cpu", BackendKind::Cpu, true, {}, {}, {}, {}, {}, {}});
+    for (Run& run : runs) {
+        if (!bird_world.birds.empty()) {
+            auto b = make_bird_backend(run.kind, choice.options);
+            if (!b) return report(b.error());
+            run.birds = std::move(b).value();
+            if (auto s = run.birds->load(bird_world); !s) return report(s.error());
+            run.poses.resize(bird_world.birds.size());
+        }
+        if (rod_scene) {
+            auto b = make_rod_backend(run.kind, choice.options);
+            if (!b) return report(b.error());
+            run.rods = std::move(b).value();
+            auto a = CrowdAnimator::create(*rod_scene, run.kind, choice.options);
+            if (!a) return report(a.error());
+            run.animator.emplace(std::move(a).value());
+        }
+    }
+    const std::vector<glm::vec3> grid = render::content_points(rod_scene ? &*rod_scene : nullptr, nullptr, &bird_world);
+    const bool snapshot_needed = rod_scene && render::needs_snapshot(*rod_scene);
+    std::printf("bench view: scene \"%s\": %zu chains, %zu birds, %ux%u, %u frames per configuration after 2 warm-up frames, "
+                "interleaved 10 at a time, on %s\n",
+                scene.name.c_str(), rod_scene ? rod_scene->world.chains.size() : std::size_t{0}, bird_world.birds.size(), width,
+                height, frames, r.device().c_str());
+    std::fflush(stdout);
+
+    // One frame of a configuration: simulate, give the renderer the state, draw.
+    const auto frame = [&](Run& run, std::uint32_t f) -> Result<void> {
+        const std::uint64_t before = r.read_back_bytes();
+        if (run.birds) {
+            KW_TRY(run.birds->simulate(1, {.poses = run.read_back ? std::span(run.poses) : std::span<gpu::BirdPose>(), .diag = {}}));
+            KW_TRY(run.read_back ? r.birds_from(run.poses) : r.birds_from(*run.birds));
+        }
+        if (run.rods) {
+            KW_TRY(run.animator->frame(f, run.frame));
+            KW_TRY(f == 0 ? run.rods->load(rod_scene->world, run.frame) : run.rods->step(run.frame));
+            if (run.read_back || snapshot_needed) KW_TRY(run.rods->read(run.snapshot));
+            KW_TRY(run.read_back ? r.chains_from(run.snapshot) : r.chains_from(*run.rods));
+        }
+        render::DrawList list(render::scene_camera(scene, f), width, height);
+        render::add_ground_grid(list, grid);
+        if (rod_scene) render::add_characters(list, *rod_scene, f, snapshot_needed ? &run.snapshot : nullptr, &run.frame);
+        KW_TRY(r.draw(list));
+        if (f >= 2) run.read_back_bytes += r.read_back_bytes() - before;
+        return {};
+    };
+    for (std::uint32_t f = 0; f < 2; ++f) {
+        for (Run& run : runs) {
+            if (auto s = frame(run, f); !s) return report(s.error());
+        }
+    }
+    for (std::uint32_t done = 0; done < frames;) {
+        const std::uint32_t n = std::min(10u, frames - done);
+        for (Run& run : runs) {
+            const auto start = std::chrono::steady_clock::now();
+            for (std::uint32_t k = 0; k < n; ++k) {
+                if (auto s = frame(run, std::min(2 + done + k, last)); !s) return report(s.error());
+            }
+            run.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        }
+        done += n;
+    }
+    if (r.validation_messages() > 0) {
+        std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", r.validation_messages());
+        return kExitFailure;
+    }
+    const double baseline = frames / runs[1].seconds;
+    std::printf("\n%-16s %12s %12s %22s %18s\n", "configuration", "frames/s", "ms/frame", "read back B/frame", "vs vulkan readback");
+    std::string json = "{\"benchmark\":\"view\",\"scene\":\"" + json_escape(scene.name) + "\",\"frames\":" +
+                       std::to_string(frames) + ",\"results\":[";
+    for (std::size_t i = 0; i < runs.size(); ++i) {
+        const Run& run = runs[i];
+        const double fps = frames / run.seconds;
+        // The cpu backends' state is on the host already: nothing to read back from a device.
+        char bytes[32] = "-";
+        if (run.kind == BackendKind::Vulkan) std::snprintf(bytes, sizeof bytes, "%.0f", static_cast<double>(run.read_back_bytes) / frames);
+        std::printf("%-16s %12.4g %12.3f %22s %17.2fx\n", run.name, fps, 1e3 * run.seconds / frames, bytes, fps / baseline);
+        char numbers[200];
+        std::snprintf(numbers, sizeof numbers, "\"per_second\":%.6g,\"ms_per_frame\":%.6g,\"read_back_bytes_per_frame\":%.6g", fps,
+                      1e3 * run.seconds / frames, static_cast<double>(run.read_back_bytes) / frames);
+        json += (i ? "," : "") + std::string("{\"configuration\":\"") + run.name + "\"," + numbers + "}";
+    }
+    json += "]}\n";
+    if (json_path) {
+        auto file = AtomicFile::open(*json_path);
+        if (!file) return report(file.error());
+        file.value().write(json);
+        if (auto s = file.value().commit(); !s) return report(s.error());
+        std::printf("wrote %s\n", json_path->c_str());
+    }
+    return kExitOk;
+}
+
 }  // namespace
 
 int cmd_bench(Args args) {
     BackendChoice choice = read_backend_choice(args);
     if (args.first_word() == "chains") return bench_chains(args, choice);
     if (args.first_word() == "crowd") return bench_crowd(args, choice);
+    if (args.first_word() == "view") return bench_view(args, choice);
     const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 4'000'000).value_or(1'000'000));
     const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(30));
     const auto json_path = args.option("json");
     const bool readback = args.flag("readback");
     const auto positionals = args.positionals();
     if (positionals.size() != 1 || positionals[0] != "birds") {
-        throw UsageError{"usage: kodawari bench birds|chains|crowd [options]"};
+        throw UsageError{"usage: kodawari bench birds|chains|crowd|view [options]"};
     }
     const std::vector<BackendKind> kinds = read_backends(args);
 

@@ -209,6 +209,7 @@ struct Viewer {
     // Mouse.
     bool left = false, middle = false;
     double last_x = 0.0, last_y = 0.0;
+    bool cursor_seen = false;  // a motion event has set last_x, last_y
     // Sketching.
     bool sketch_mode = false;
     std::optional<std::uint32_t> picked;  // chain instance
@@ -447,7 +448,11 @@ struct Viewer {
 
     void mouse_button(int button, int action, int mods) {
         const bool down = action == GLFW_PRESS;
-        glfwGetCursorPos(window, &last_x, &last_y);
+        // Where the pointer was when the button went down: the last motion event before it.
+        // glfwGetCursorPos asks the X server where the pointer is now, which after a fast
+        // drag handled in one poll is the end of the drag (the orbit would add up to nothing
+        // and a sketch would pick at the stroke's end); it serves before any motion event.
+        if (!cursor_seen) glfwGetCursorPos(window, &last_x, &last_y);
         if (button == GLFW_MOUSE_BUTTON_LEFT) {
             left = down;
             if (sketch_mode) {
@@ -468,6 +473,11 @@ struct Viewer {
     }
 
     void cursor(double x, double y) {
+        if (!cursor_seen) {
+            cursor_seen = true;
+            last_x = x;
+            last_y = y;
+        }
         const double dx = x - last_x, dy = y - last_y;
         last_x = x;
         last_y = y;

@@ -468,6 +468,13 @@ Result<Image> Renderer::render(const DrawList& list) {
     return image;
 }
 
+Result<void> Renderer::draw(const DrawList& list) {
+    assert(list.width() == impl_->width && list.height() == impl_->height && "the draw list is for another size");
+    Impl& r = *impl_;
+    KW_TRY(r.upload(list));
+    return r.ctx->submit([&](const vk::raii::CommandBuffer& cmd) { r.record_pass(cmd, list); });
+}
+
 Result<void> Renderer::Impl::make_swapchain(std::uint32_t w, std::uint32_t h) {
     const gpu::VulkanContext& c = *ctx;
     const vk::raii::SurfaceKHR& surface = c.surface();

@@ -160,6 +160,10 @@ public:
     /// same list gives the same bytes.
     [[nodiscard]] Result<Image> render(const DrawList& list);
 
+    /// Draws as render() does and waits, without reading the image back (benchmarks:
+    /// what a window's frame costs without the blit).
+    [[nodiscard]] Result<void> draw(const DrawList& list);
+
     /// Draws `list` as render() does into the offscreen image, then blits it (scaled,
     /// linear filter) into the window's next swapchain image and presents it; no read
     /// back. `window_width` x `window_height` is the window's framebuffer size in pixels:
