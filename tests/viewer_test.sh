@@ -1,7 +1,8 @@
 #!/usr/bin/env bash
 # `kodawari view` in a real window under Xvfb: a scripted key sequence (one key per drawn
-# frame), the frame it ends on, and a screenshot of the last frame. Exits 77 (CTest:
-# skipped) where xvfb-run is not installed.
+# frame), the frame it ends on, and a screenshot of the last frame; then real X input
+# (xdotool) to live viewers. Exits 77 (CTest: skipped) where xvfb-run is not installed; the
+# real input checks are skipped where xdotool is not.
 # usage: viewer_test.sh KODAWARI_BINARY SOURCE_DIR
 set -uo pipefail
 bin=$1
@@ -28,42 +29,51 @@ view() {  # view OUT-PREFIX ARGS...: the viewer in a fresh Xvfb screen
 cd "$src"
 
 # png.py FILE R,G,B...: exit 0 when the RGBA8 PNG (as write_png makes them) has a pixel of
-# each colour and more than 10 colours in all (not a blank image).
+# each colour and more than 10 colours in all (not a blank image). Its read() decodes one
+# (pngcmp.py below uses it too).
 cat >"$work/png.py" <<'PY'
 import struct, sys, zlib
-data = open(sys.argv[1], 'rb').read()
-pos, idat, width, height = 8, b'', 0, 0
-while pos < len(data):
-    n, kind = struct.unpack('>I4s', data[pos:pos + 8])
-    body = data[pos + 8:pos + 8 + n]
-    if kind == b'IHDR':
-        width, height, depth, ctype = struct.unpack('>IIBB', body[:10])
-        assert depth == 8 and ctype == 6, (depth, ctype)
-    elif kind == b'IDAT':
-        idat += body
-    pos += 12 + n
-raw, stride, rows, prev = zlib.decompress(idat), width * 4, [], bytearray(width * 4)
-for y in range(height):
-    f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
-    for i in range(stride):
-        a = line[i - 4] if i >= 4 else 0
-        b = prev[i]
-        c = prev[i - 4] if i >= 4 else 0
-        if f == 1: line[i] = (line[i] + a) & 255
-        elif f == 2: line[i] = (line[i] + b) & 255
-        elif f == 3: line[i] = (line[i] + (a + b) // 2) & 255
-        elif f == 4:
-            p = a + b - c
-            pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-            line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-    rows.append(line)
-    prev = line
-pixels = {bytes(r[i:i + 3]) for r in rows for i in range(0, stride, 4)}
-wanted = [bytes(int(v) for v in arg.split(',')) for arg in sys.argv[2:]]
-missing = [list(w) for w in wanted if w not in pixels]
-if missing or len(pixels) <= 10:
-    print(f"png.py: {sys.argv[1]}: missing colours {missing}, {len(pixels)} colours in all")
-    sys.exit(1)
+
+
+def read(path):  # -> width, height, rows of RGBA bytes
+    data = open(path, 'rb').read()
+    pos, idat, width, height = 8, b'', 0, 0
+    while pos < len(data):
+        n, kind = struct.unpack('>I4s', data[pos:pos + 8])
+        body = data[pos + 8:pos + 8 + n]
+        if kind == b'IHDR':
+            width, height, depth, ctype = struct.unpack('>IIBB', body[:10])
+            assert depth == 8 and ctype == 6, (depth, ctype)
+        elif kind == b'IDAT':
+            idat += body
+        pos += 12 + n
+    raw, stride, rows, prev = zlib.decompress(idat), width * 4, [], bytearray(width * 4)
+    for y in range(height):
+        f, line = raw[y * (stride + 1)], bytearray(raw[y * (stride + 1) + 1:(y + 1) * (stride + 1)])
+        for i in range(stride):
+            a = line[i - 4] if i >= 4 else 0
+            b = prev[i]
+            c = prev[i - 4] if i >= 4 else 0
+            if f == 1: line[i] = (line[i] + a) & 255
+            elif f == 2: line[i] = (line[i] + b) & 255
+            elif f == 3: line[i] = (line[i] + (a + b) // 2) & 255
+            elif f == 4:
+                p = a + b - c
+                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
+                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
+        rows.append(line)
+        prev = line
+    return width, height, rows
+
+
+if __name__ == '__main__':
+    width, height, rows = read(sys.argv[1])
+    pixels = {bytes(r[i:i + 3]) for r in rows for i in range(0, width * 4, 4)}
+    wanted = [bytes(int(v) for v in arg.split(',')) for arg in sys.argv[2:]]
+    missing = [list(w) for w in wanted if w not in pixels]
+    if missing or len(pixels) <= 10:
+        print(f"png.py: {sys.argv[1]}: missing colours {missing}, {len(pixels)} colours in all")
+        sys.exit(1)
 PY
 
 # Space pauses before the first step, then two steps: frame 2, paused.
@@ -202,6 +212,127 @@ PY
     wait "$view_pid" 2>/dev/null
     kill "$xvfb_pid" 2>/dev/null
     wait "$xvfb_pid" 2>/dev/null
+fi
+
+# Real input through the X server, not --keys: xdotool sends key presses and mouse moves and
+# buttons with XTEST, as a keyboard and a mouse do (key and mousedown/mouseup without
+# --window: with it xdotool would use XSendEvent, synthetic events straight to the window),
+# to viewers on an Xvfb of their own. No window manager there: the window takes the focus
+# itself and windowfocus makes sure. Each step waits for what the viewer shows (its window
+# title is `kodawari view - STATUS LINE`) or prints (picks, sketches, screenshots), polling
+# with one 60 s deadline per viewer. The viewers run in $work/x, where P's screenshots land.
+# A press must reach the viewer before the drag's moves do: it reads the pointer's position
+# now (glfwGetCursorPos) at the press, so a press and moves handled in one glfwPollEvents
+# would lose the drag (seen here). The steps wait for the press's effect (a screenshot taken
+# with the button down, or the pick) before moving.
+if ! command -v xdotool >/dev/null 2>&1 || ! command -v Xvfb >/dev/null 2>&1; then
+    echo "SKIPPED: real X input (xdotool or Xvfb not installed; scripts/setup installs both)"
+else
+    # pngcmp.py same|differ A B: exit 0 when the two screenshots are the same (differ) above
+    # the status band (its 14 bottom rows show ms/frame, which changes from frame to frame).
+    cat >"$work/pngcmp.py" <<'PY'
+import sys
+from png import read
+wa, ha, a = read(sys.argv[2])
+wb, hb, b = read(sys.argv[3])
+assert (wa, ha) == (wb, hb), ((wa, ha), (wb, hb))
+changed = sum(a[y][4 * x:4 * x + 3] != b[y][4 * x:4 * x + 3] for y in range(ha - 14) for x in range(wa))
+if (changed == 0) != (sys.argv[1] == 'same'):
+    print(f"pngcmp.py: {changed} pixels of {wa}x{ha - 14} differ between {sys.argv[2]} and {sys.argv[3]}")
+    sys.exit(1)
+PY
+    real_bin=$(realpath "$bin")
+    mkdir -p "$work/x"
+    exec 3>"$work/x-display"
+    Xvfb -displayfd 3 -screen 0 640x480x24 >/dev/null 2>&1 &
+    x_xvfb_pid=$!
+    exec 3>&-
+    for _ in $(seq 50); do test -s "$work/x-display" && break; sleep 0.2; done
+    xdisplay=":$(cat "$work/x-display")"
+    x() { DISPLAY=$xdisplay xdotool "$@"; }
+    wait_for() {  # wait_for CMD...: until CMD succeeds; fails at the deadline or once the viewer has exited
+        until "$@"; do
+            if ((SECONDS >= deadline)) || ! kill -0 "$live_pid" 2>/dev/null; then "$@"; return; fi
+            sleep 0.05
+        done
+    }
+    title_has() { x getwindowname "$win" 2>/dev/null | grep -q -- "$1"; }
+    printed() { grep -Eq -- "$1" "$live_out"; }
+    screenshots() { test "$(grep -c '^kodawari: wrote screenshot ' "$live_out")" -ge "$1"; }
+    screenshot() { echo "$work/x/$(sed -n 's/^kodawari: wrote screenshot //p' "$live_out" | sed -n "$1p")"; }
+    live_start() {  # live_start NAME ARGS...: a viewer in the background, its window found and focused
+        local name=$1; shift
+        live_out=$work/$name.out
+        live_err=$work/$name.err
+        (cd "$work/x" && DISPLAY=$xdisplay exec "$real_bin" view "$@" >"$live_out" 2>"$live_err") &
+        live_pid=$!
+        deadline=$((SECONDS + 60))
+        win=
+        find_window() { win=$(x search --onlyvisible --name '^kodawari view' 2>/dev/null | head -1) && test -n "$win"; }
+        wait_for find_window && timeout 10 env DISPLAY="$xdisplay" xdotool windowfocus --sync "$win"
+    }
+    live_quit() {  # Q, then the viewer's output and exit status (killed after 10 s: 124)
+        local end=$((SECONDS + 10)) rc
+        x key q
+        while kill -0 "$live_pid" 2>/dev/null && ((SECONDS < end)); do sleep 0.05; done
+        if kill -0 "$live_pid" 2>/dev/null; then
+            kill "$live_pid"
+            wait "$live_pid"
+            rc=124
+        else
+            wait "$live_pid"
+            rc=$?
+        fi
+        cat "$live_out" "$live_err"
+        return $rc
+    }
+
+    # 1. Space pauses; 2. a left drag orbits: a screenshot (P) before the drag, one with the
+    # button pressed but not moved yet (same camera, paused: the same picture, the renderer
+    # is deterministic), one after dragging 80 px to the right (another picture).
+    x_start=$SECONDS
+    live_start x-orbit "$PWD/scenes/ahoge.json" --size 320x240 --frames 100000
+    check "real input: the window plays" wait_for title_has '  playing  '
+    x key space
+    check "real input: Space pauses (the window title says so)" wait_for title_has '  paused  '
+    x key p
+    wait_for screenshots 1
+    x mousemove --window "$win" 100 120 mousedown 1 key p
+    wait_for screenshots 2
+    x mousemove --window "$win" 120 120 mousemove --window "$win" 140 120 mousemove --window "$win" 160 120 \
+        mousemove --window "$win" 180 120 mouseup 1 key p
+    wait_for screenshots 3
+    check "real input: P twice with no drag between, the same picture" python3 "$work/pngcmp.py" same "$(screenshot 1)" "$(screenshot 2)"
+    check "real input: a left drag orbits (another picture)" python3 "$work/pngcmp.py" differ "$(screenshot 2)" "$(screenshot 3)"
+    live_quit
+    rc=$?
+    check "real input: Q quits the orbit run (exit 0)" test $rc -eq 0
+
+    # 3. Sketching on a copy of the scene with a real stroke: the orbit of the scripted sketch
+    # test above by --keys (applied on the first frame), then S, a press on the strand's root
+    # (near (160, 100): window pixels are image pixels at the window's first size), a drag up
+    # and to the left to (120, 50) in 8 moves, the release (sketches), W (saves).
+    cp scenes/ahoge.json "$work/x/ahoge.json"
+    live_start x-sketch "$work/x/ahoge.json" --size 320x240 --frames 100000 --keys orbit:80:0
+    wait_for title_has '  playing  '
+    x key s
+    check "real input: S sketches over a still frame" wait_for title_has '  paused  .*\[sketch: influence 4\]'
+    x mousemove --window "$win" 160 100 mousedown 1
+    wait_for printed '^kodawari: (picked|no chain)'
+    check "real input: the press picks the chain" printed '^kodawari: picked '
+    moves=()
+    for i in 1 2 3 4 5 6 7 8; do moves+=(mousemove --window "$win" $((160 - 5 * i)) $((100 - 50 * i / 8))); done
+    x "${moves[@]}" mouseup 1
+    check "real input: the stroke adds a view example" wait_for printed '^kodawari: sketch [^:]*: view example "sketch 1" added, influence 4,'
+    x key w
+    wait_for printed '^kodawari: saved '
+    check "real input: W saves it" grep -q '"sketch 1"' "$work/x/ahoge.json"
+    live_quit
+    rc=$?
+    check "real input: Q quits the sketch run (exit 0)" test $rc -eq 0
+    echo "real input: $((SECONDS - x_start)) s"
+    kill "$x_xvfb_pid" 2>/dev/null
+    wait "$x_xvfb_pid" 2>/dev/null
 fi
 
 # A bad scene is reported (exit 2) before any window: no display is needed to see it.
