@@ -76,6 +76,19 @@ if __name__ == '__main__':
         sys.exit(1)
 PY
 
+# pngcmp.py same|differ A B: exit 0 when the two screenshots are the same (differ) above
+# the status band (its 14 bottom rows show ms/frame, which changes from frame to frame).
+cat >"$work/pngcmp.py" <<'PY'
+import sys
+from png import read
+wa, ha, a = read(sys.argv[2])
+wb, hb, b = read(sys.argv[3])
+assert (wa, ha) == (wb, hb), ((wa, ha), (wb, hb))
+changed = sum(a[y][4 * x:4 * x + 3] != b[y][4 * x:4 * x + 3] for y in range(ha - 14) for x in range(wa))
+print(f"pngcmp.py: {changed} pixels of {wa}x{ha - 14} differ between {sys.argv[2]} and {sys.argv[3]}")
+sys.exit(0 if (changed == 0) == (sys.argv[1] == 'same') else 1)
+PY
+
 # Space pauses before the first step, then two steps: frame 2, paused.
 view "$work/keys" scenes/ahoge.json --size 320x240 --frames 30 --keys "space,right,right" --screenshot "$work/shot.png"
 rc=$?
@@ -121,43 +134,13 @@ check "rigged crowd on vulkan: its chains are read back (the counter works)" gre
 # frame 29, pixel for pixel above the status band (14 rows at this size). Without C the
 # orbit camera stays where the scene camera was at frame 0 (ahoge's orbits): they differ.
 # O makes the orbit camera orthographic: the picture changes.
-cat >"$work/same.py" <<'PY'
-import struct, sys, zlib
-def load(path):
-    d, pos, idat = open(path, 'rb').read(), 8, b''
-    while pos < len(d):
-        n, kind = struct.unpack('>I4s', d[pos:pos + 8])
-        if kind == b'IHDR': w, h = struct.unpack('>II', d[pos + 8:pos + 16])
-        if kind == b'IDAT': idat += d[pos + 8:pos + 8 + n]
-        pos += 12 + n
-    raw, st, rows, prev = zlib.decompress(idat), w * 4, [], bytearray(w * 4)
-    for y in range(h):
-        f, line = raw[y * (st + 1)], bytearray(raw[y * (st + 1) + 1:(y + 1) * (st + 1)])
-        for i in range(st):
-            a, b, c = (line[i - 4] if i >= 4 else 0), prev[i], (prev[i - 4] if i >= 4 else 0)
-            if f == 1: line[i] = (line[i] + a) & 255
-            elif f == 2: line[i] = (line[i] + b) & 255
-            elif f == 3: line[i] = (line[i] + (a + b) // 2) & 255
-            elif f == 4:
-                p = a + b - c
-                pa, pb, pc = abs(p - a), abs(p - b), abs(p - c)
-                line[i] = (line[i] + (a if pa <= pb and pa <= pc else b if pb <= pc else c)) & 255
-        rows.append(bytes(line))
-        prev = line
-    return w, h, rows
-(w, h, a), (w2, h2, b) = load(sys.argv[1]), load(sys.argv[2])
-band = int(sys.argv[4])
-diff = sum(a[y][4 * x:4 * x + 3] != b[y][4 * x:4 * x + 3] for y in range(min(h, h2) - band) for x in range(min(w, w2)))
-print(f"same.py: {diff} pixels differ above the bottom {band} rows")
-sys.exit(0 if (w, h) == (w2, h2) and (diff == 0) == (sys.argv[3] == 'same') else 1)
-PY
 view "$work/follow" scenes/ahoge.json --backend vulkan --size 200x150 --frames 30 --keys c --screenshot "$work/follow.png"
 view "$work/orbit" scenes/ahoge.json --backend vulkan --size 200x150 --frames 30 --screenshot "$work/orbit.png"
 view "$work/ortho" scenes/ahoge.json --backend vulkan --size 200x150 --frames 30 --keys o --screenshot "$work/ortho.png"
 "$bin" render scenes/ahoge.json --backend vulkan --size 200x150 --frames 0:30 --out "$work/frames" >/dev/null
-check "C: the window shows what render shows" python3 "$work/same.py" "$work/follow.png" "$work/frames/ahoge_00029.png" same 14
-check "without C: the orbit camera shows another view" python3 "$work/same.py" "$work/orbit.png" "$work/frames/ahoge_00029.png" differ 14
-check "O: the orthographic orbit camera shows another picture" python3 "$work/same.py" "$work/ortho.png" "$work/orbit.png" differ 14
+check "C: the window shows what render shows" python3 "$work/pngcmp.py" same "$work/follow.png" "$work/frames/ahoge_00029.png"
+check "without C: the orbit camera shows another view" python3 "$work/pngcmp.py" differ "$work/orbit.png" "$work/frames/ahoge_00029.png"
+check "O: the orthographic orbit camera shows another picture" python3 "$work/pngcmp.py" differ "$work/ortho.png" "$work/orbit.png"
 
 # Playing: 5 drawn frames are frames 0 .. 4; Q quits before the limit.
 view "$work/play" scenes/ahoge.json --size 160x120 --frames 5
@@ -228,19 +211,6 @@ fi
 if ! command -v xdotool >/dev/null 2>&1 || ! command -v Xvfb >/dev/null 2>&1; then
     echo "SKIPPED: real X input (xdotool or Xvfb not installed; scripts/setup installs both)"
 else
-    # pngcmp.py same|differ A B: exit 0 when the two screenshots are the same (differ) above
-    # the status band (its 14 bottom rows show ms/frame, which changes from frame to frame).
-    cat >"$work/pngcmp.py" <<'PY'
-import sys
-from png import read
-wa, ha, a = read(sys.argv[2])
-wb, hb, b = read(sys.argv[3])
-assert (wa, ha) == (wb, hb), ((wa, ha), (wb, hb))
-changed = sum(a[y][4 * x:4 * x + 3] != b[y][4 * x:4 * x + 3] for y in range(ha - 14) for x in range(wa))
-if (changed == 0) != (sys.argv[1] == 'same'):
-    print(f"pngcmp.py: {changed} pixels of {wa}x{ha - 14} differ between {sys.argv[2]} and {sys.argv[3]}")
-    sys.exit(1)
-PY
     real_bin=$(realpath "$bin")
     mkdir -p "$work/x"
     exec 3>"$work/x-display"
