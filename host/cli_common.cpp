@@ -101,6 +101,11 @@ Result<std::unique_ptr<RodBackend>> open_rod_backend(const BackendChoice& choice
     return make_rod_backend(BackendKind::Cpu, choice.options);
 }
 
+void share_one_device(BackendChoice& choice) {
+    if (choice.options.context || (choice.backend != "auto" && choice.backend != "vulkan")) return;
+    if (auto device = open_shared_device(choice.options)) choice.options.context = std::move(device).value();
+}
+
 std::string resolved_backend_name(const BackendChoice& choice) {
     if (choice.backend != "auto") return choice.backend;
     auto gpus = list_gpus(choice.options.device);

@@ -65,6 +65,12 @@ BackendChoice read_backend_choice(Args& args);
 /// The rod backend of `choice`, with the same "auto" rule.
 [[nodiscard]] Result<std::unique_ptr<RodBackend>> open_rod_backend(const BackendChoice& choice);
 
+/// For "auto" and "vulkan": one Vulkan device for every backend made from `choice` from
+/// now on (BackendOptions::context), so that the pose backends' matrices feed the rod
+/// backend on the device (CrowdAnimator::write_inputs_on). Without a device nothing
+/// changes (open_*backend then say why, or fall back to the CPU).
+void share_one_device(BackendChoice& choice);
+
 /// The backend "auto" resolves to on this machine ("vulkan" when a Vulkan device exists,
 /// else "cpu"), or the chosen one.
 [[nodiscard]] std::string resolved_backend_name(const BackendChoice& choice);

@@ -197,17 +197,39 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
 
     std::vector<Measured> results;
     rods::RodFrame input;
+    // Vulkan twice: the pose matrices read back and the rod input made on the host, then
+    // (one device for both backends) the rod input written on the device.
+    struct Variant {
+        BackendKind kind;
+        bool device_input;
+    };
+    std::vector<Variant> variants;
     for (BackendKind kind : kinds) {
-        auto backend = make_rod_backend(kind, choice.options);
+        variants.push_back({kind, false});
+        if (kind == BackendKind::Vulkan) variants.push_back({kind, true});
+    }
+    for (const auto [kind, device_input] : variants) {
+        BackendOptions options = choice.options;
+        if (device_input) {
+            auto device = open_shared_device(options);
+            if (!device) return report(device.error());
+            options.context = std::move(device).value();
+        }
+        auto backend = make_rod_backend(kind, options);
         if (!backend) {
             std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), backend.error().message.c_str());
             continue;
         }
-        auto animator = CrowdAnimator::create(rods_scene, kind, choice.options);
+        auto animator = CrowdAnimator::create(rods_scene, kind, options);
         if (!animator) return report(animator.error());
         RodBackend& b = *backend.value();
         if (auto r = animator.value().frame(0, input); !r) return report(r.error());
         if (auto r = b.load(rods_scene.world, input); !r) return report(r.error());
+        if (device_input) {
+            auto took = animator.value().write_inputs_on(b);
+            if (!took) return report(took.error());
+            if (!took.value()) return report(make_error(Error::Kind::Internal, "the rod input could not go on the device"));
+        }
         for (std::uint32_t f = 1; f <= 2; ++f) {
             if (auto r = animator.value().frame(f, input); !r) return report(r.error());
             if (auto r = b.step(input); !r) return report(r.error());
@@ -221,13 +243,14 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
             gpu_ms += b.last_gpu_ms();
         }
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (b.validation_messages() + animator.value().validation_messages() > 0) {
-            std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n",
-                         b.validation_messages() + animator.value().validation_messages());
+        // One device shared: both count the same messages.
+        const std::uint32_t messages = std::max(b.validation_messages(), animator.value().validation_messages());
+        if (messages > 0) {
+            std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", messages);
             return kExitFailure;
         }
-        Measured m{std::string(b.name()), b.device(), frames / seconds, 1e3 * seconds / frames,
-                   b.last_gpu_ms() >= 0.0 ? gpu_ms / frames : -1.0};
+        Measured m{std::string(b.name()) + (kind == BackendKind::Vulkan ? (device_input ? "/dev-in" : "/host-in") : ""), b.device(),
+                   frames / seconds, 1e3 * seconds / frames, b.last_gpu_ms() >= 0.0 ? gpu_ms / frames : -1.0};
         results.push_back(m);
         std::printf("  %-14s done: %.3g frames/s (clips %.3f ms + chains %.3f ms per frame)\n", m.backend.c_str(), m.per_second,
                     pose_ms / frames, m.ms_per_frame - pose_ms / frames);

@@ -149,7 +149,7 @@ int cmd_render(Args args) {
     std::vector<render::Image> cells;
     std::vector<glm::vec3> grid_points;
     std::vector<gpu::BirdPose> poses(bird_count);
-    rods::RodFrame frame;
+    rods::RodFrame frame, drawn_input;
     ChainSnapshot snapshot;
     double render_seconds = 0.0;
     const bool show_progress = stderr_is_terminal() && range.end > 100;
@@ -166,6 +166,10 @@ int cmd_render(Args args) {
             if (auto r = animator->frame(f, frame); !r) return report(r.error());
             // Frame 0 is the initial pose; every later frame is one step.
             if (auto r = f == 0 ? rods->load(rod_scene->world, frame) : rods->step(frame); !r) return report(r.error());
+            if (f == 0) {
+                // On one device the rigged characters' input is written where the chains step.
+                if (auto r = animator->write_inputs_on(*rods); !r) return report(r.error());
+            }
         }
         if (show_progress) progress("simulating", f + 1, range.end);
         if (!drawn) continue;
@@ -182,16 +186,23 @@ int cmd_render(Args args) {
                 return report(r.error());
             }
         }
+        // The input drawn (colliders, the grid's extent) is this frame's: with the rigged
+        // characters' part written on the device, it is read back for the drawn frames.
+        const rods::RodFrame* kinematic = rods ? &frame : nullptr;
+        if (rods && animator->writes_inputs_on_device()) {
+            if (auto r = animator->host_frame(f, drawn_input); !r) return report(r.error());
+            kinematic = &drawn_input;
+        }
         const auto start = std::chrono::steady_clock::now();
         render::DrawList list(render::scene_camera(scene, f), width, height);
         // The grid covers where the content is at the first drawn frame and then stays put,
         // so that it does not jump from frame to frame.
         if (grid_points.empty()) {
-            grid_points = render::content_points(rod_scene ? &*rod_scene : nullptr, rods ? &frame : nullptr, birds ? &bird_world : nullptr);
+            grid_points = render::content_points(rod_scene ? &*rod_scene : nullptr, kinematic, birds ? &bird_world : nullptr);
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
         }
         render::add_ground_grid(list, grid_points);
-        if (rods) render::add_characters(list, *rod_scene, f, render::needs_snapshot(*rod_scene) ? &snapshot : nullptr, &frame);
+        if (rods) render::add_characters(list, *rod_scene, f, render::needs_snapshot(*rod_scene) ? &snapshot : nullptr, kinematic);
         auto image = renderer.value()->render(list);
         if (!image) return report(image.error());
         render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -25,7 +25,7 @@ struct RunOutputs {
 int run_birds(const Scene& scene, birds::BirdWorld& world, const BackendChoice& choice, const std::string& out_path,
               std::optional<TraceWriter>& trace);
 
-int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<std::uint64_t> frames_option,
+int run_chains(const Scene& scene, BackendChoice choice, std::optional<std::uint64_t> frames_option,
                const RunOutputs& outputs) {
     auto built = build_rod_scene(scene);
     if (!built) return report(built.error());
@@ -42,6 +42,7 @@ int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<st
                                                                     " MiB; use --frames or --no-export"));
         }
     }
+    share_one_device(choice);
     auto opened = open_rod_backend(choice);
     if (!opened) return report(opened.error());
     RodBackend& backend = *opened.value();
@@ -92,6 +93,10 @@ int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<st
         const auto start = std::chrono::steady_clock::now();
         // Frame 0 is the initial pose; every later frame is one step.
         if (auto r = f == 0 ? backend.load(world, frame) : backend.step(frame); !r) return report(r.error());
+        if (f == 0) {
+            // From now on the rigged characters' input is written where the chains step.
+            if (auto r = animator.value().write_inputs_on(backend); !r) return report(r.error());
+        }
         seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         if (f > 0 && backend.last_gpu_ms() >= 0.0) gpu_ms += backend.last_gpu_ms();
         if (*outputs.trace || !positions.empty() || !rigged.empty()) {
@@ -114,10 +119,12 @@ int run_chains(const Scene& scene, const BackendChoice& choice, std::optional<st
     std::printf("kodawari: backend %s on %s: %.3f ms per frame", std::string(backend.name()).c_str(), backend.device().c_str(),
                 1e3 * seconds / frames);
     if (backend.name() == "vulkan" && gpu_ms > 0.0) std::printf(" (GPU %.3f ms)", gpu_ms / steps);
-    std::printf(", %.3g joint-steps/s\n", static_cast<double>(joints) * steps / std::max(seconds, 1e-9));
-    if (backend.validation_messages() + animator.value().validation_messages() > 0) {
+    std::printf(", %.3g joint-steps/s%s\n", static_cast<double>(joints) * steps / std::max(seconds, 1e-9),
+                animator.value().writes_inputs_on_device() ? "; rigged characters' rod input written on the device" : "");
+    // One device shared: both count the same messages.
+    if (std::max(backend.validation_messages(), animator.value().validation_messages()) > 0) {
         std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n",
-                     backend.validation_messages() + animator.value().validation_messages());
+                     std::max(backend.validation_messages(), animator.value().validation_messages()));
         return kExitFailure;
     }
     const auto wrote = [](const std::string& path, const char* what) {

@@ -59,6 +59,8 @@ struct Simulation {
     std::optional<CrowdAnimator> animator;
     rods::RodFrame frame;
     ChainSnapshot snapshot;     // read only when needed (see simulate(), read_chains())
+    rods::RodFrame host;        // see host_input()
+    std::optional<std::uint32_t> host_input_frame;
     std::vector<gpu::BirdPose> poses;
     bool birds_on_device = false;  // a vulkan bird backend on the renderer's device: poses stay there
     std::uint32_t current = 0;  // the frame simulated last
@@ -104,6 +106,8 @@ struct Simulation {
             KW_TRY(animator->frame(f, frame));
             if (camera) frame.camera = *camera;  // the viewer's camera drives the view-dependent shapes
             KW_TRY(f == 0 ? rods->load(rod_scene->world, frame) : rods->step(frame));
+            // On one device the rigged characters' input is written where the chains step.
+            if (f == 0) KW_TRY(animator->write_inputs_on(*rods));
             // Skinned meshes follow the chains on the CPU; other chains are drawn from the
             // backend (Renderer::chains_from).
             if (render::needs_snapshot(*rod_scene)) KW_TRY(rods->read(snapshot));
@@ -124,6 +128,20 @@ struct Simulation {
 
     // The chains' state of the current frame on the host (picking, sketching).
     [[nodiscard]] Result<void> read_chains() { return rods ? rods->read(snapshot) : Result<void>{}; }
+
+    // The current frame's kinematic input with every entry on the host (colliders to
+    // draw, a sketch's root): `frame`, unless the rigged characters' part is written on
+    // the device, then read back once per frame asked for.
+    [[nodiscard]] Result<const rods::RodFrame*> host_input() {
+        if (!animator || !animator->writes_inputs_on_device()) return &frame;
+        if (host_input_frame != current) {
+            KW_TRY(animator->host_frame(current, host));
+            host.camera = frame.camera;
+            host_input_frame = current;
+        }
+        return &host;
+    }
+    [[nodiscard]] bool input_on_device() const { return animator && animator->writes_inputs_on_device(); }
 
     // What the renderer draws of this simulation from now on.
     [[nodiscard]] Result<void> show_on(render::Renderer& renderer) const {
@@ -342,8 +360,13 @@ struct Viewer {
         const std::string name = w.templ(ci).name;
         rods::SketchInput input;
         input.camera = image_camera();
-        input.root = sim->frame.roots[*picked];
-        input.reference = sim->frame.reference[ci.character];
+        auto kinematic = sim->host_input();
+        if (!kinematic) {
+            say("sketch failed: " + kinematic.error().message);
+            return;
+        }
+        input.root = kinematic.value()->roots[*picked];
+        input.reference = kinematic.value()->reference[ci.character];
         input.lengths = w.templ(ci).basis.lengths;
         input.stroke = stroke;
         input.influence = influence;
@@ -727,8 +750,20 @@ int cmd_view(Args args) {
         }
         render::add_ground_grid(list, grid_points);
         if (s.rods) {
+            // Colliders: with the rigged characters' input on the device, theirs are known on
+            // the host only when read back, which a paused frame does once; while playing,
+            // none are drawn rather than stale ones.
+            const rods::RodFrame* kinematic = &s.frame;
+            if (s.input_on_device()) {
+                kinematic = nullptr;
+                if (!v.playing) {
+                    auto host = s.host_input();
+                    if (!host) return report(host.error());
+                    kinematic = host.value();
+                }
+            }
             render::add_characters(list, *s.rod_scene, s.current, render::needs_snapshot(*s.rod_scene) ? &s.snapshot : nullptr,
-                                   &s.frame);
+                                   kinematic);
         }
         if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
         if (v.sketch_mode && v.picked && s.rod_scene) {

@@ -123,7 +123,10 @@ check "crowd-gltf runs" test $? -eq 0
 check "crowd-gltf exports the character's own skeleton" grep -q "wrote $work/crowd-gltf.glb.*own skeleton" "$work/crowd-gltf.out"
 check "crowd-gltf export passes glTF-Validator" node tests/tools/validate_gltf.mjs "$work/crowd-gltf.glb"
 "$bin" bench crowd --count 13 --frames 2 --json "$work/bench-crowd.json" >/dev/null 2>&1
-check "bench crowd json" bash -c "node -e 'const r=require(\"$work/bench-crowd.json\"); if (r.benchmark!==\"crowd\"||r.instances!==13||r.results.length!==3||!(r.results[2].per_second>0)) process.exit(1)'"
+# Vulkan twice: the rod input made on the host, then written on the device.
+check "bench crowd json" bash -c "node -e 'const r=require(\"$work/bench-crowd.json\"); if (r.benchmark!==\"crowd\"||r.instances!==13||r.results.length!==4||r.results[3].backend!==\"vulkan/dev-in\"||!(r.results[3].per_second>0)) process.exit(1)'"
+"$bin" bench view scenes/ahoge.json --frames 3 --size 64x48 --json "$work/bench-view.json" >"$work/bench-view.out" 2>&1
+check "bench view: three configurations, nothing read back when shared" bash -c "node -e 'const r=require(\"$work/bench-view.json\"); if (r.benchmark!==\"view\"||r.results.length!==3||r.results[0].configuration!==\"vulkan shared\"||r.results[0].read_back_bytes_per_frame!==0||!(r.results[1].read_back_bytes_per_frame>0)) process.exit(1)'"
 
 # sketch (SPEC A.6): a stroke becomes a view example of ahoge, reported and loadable;
 # --undo gives the file back byte for byte; bad strokes exit 2 naming file and path.

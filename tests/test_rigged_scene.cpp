@@ -451,6 +451,86 @@ TEST(RiggedScene, CrowdAnimatorMatchesTheCpuFrames) {
     }
 }
 
+// The rigged characters' rod input written on the device (CrowdAnimator::write_inputs_on,
+// shaders/rod_inputs.comp) against the same input computed on the host from the same
+// pose matrices read back: the vulkan rod backend stepped 60 frames both ways from the
+// same start must end in nearly the same state. The two inputs differ by float rounding
+// only (rigid_part in GLSL against glm, about 1e-7 m), which the solver carries: 1e-5 m
+// (the project's bound for GPU against CPU poses) is far below a visible difference (a
+// joint is 1 to 3 cm from the next) and far below what a wrong or stale root or collider
+// gives (millimetres to centimetres). The
+// device run must read nothing back after frame 0. 37 instances: not a multiple of the
+// workgroup size.
+TEST(RiggedScene, RodInputWrittenOnTheDeviceMatchesTheHosts) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    Scene scene = load(kCrowdScene);
+    scene.crowds[0].count = 37;
+    const RodScene rods = build(scene);
+    BackendOptions options;
+    options.validation = true;
+    auto device = open_shared_device(options);
+    ASSERT_TRUE(device.ok()) << device.error().message;
+    options.context = device.value();
+    struct Run {
+        std::unique_ptr<RodBackend> rods;
+        std::optional<CrowdAnimator> animator;
+        rods::RodFrame frame;
+    };
+    Run host, on_device;
+    for (Run* run : {&host, &on_device}) {
+        auto backend = make_rod_backend(BackendKind::Vulkan, options);
+        ASSERT_TRUE(backend.ok()) << backend.error().message;
+        run->rods = std::move(backend).value();
+        auto animator = CrowdAnimator::create(rods, BackendKind::Vulkan, options);
+        ASSERT_TRUE(animator.ok()) << animator.error().message;
+        run->animator.emplace(std::move(animator).value());
+        ASSERT_TRUE(run->animator->frame(0, run->frame).ok());
+        ASSERT_TRUE(run->rods->load(rods.world, run->frame).ok());
+    }
+    auto took = on_device.animator->write_inputs_on(*on_device.rods);
+    ASSERT_TRUE(took.ok()) << took.error().message;
+    ASSERT_TRUE(took.value()) << "the pose and rod backends share the device";
+    EXPECT_TRUE(on_device.animator->writes_inputs_on_device());
+    EXPECT_FALSE(host.animator->writes_inputs_on_device());
+    // A CPU rod backend cannot take device input.
+    auto cpu = make_rod_backend(BackendKind::Cpu, {});
+    ASSERT_TRUE(cpu.ok());
+    auto cpu_animator = CrowdAnimator::create(rods, BackendKind::Vulkan, options);
+    ASSERT_TRUE(cpu_animator.ok());
+    auto refused = cpu_animator.value().write_inputs_on(*cpu.value());
+    ASSERT_TRUE(refused.ok());
+    EXPECT_FALSE(refused.value());
+
+    constexpr std::uint32_t kFrames = 60;
+    std::uint64_t device_read_back = 0;
+    for (std::uint32_t f = 1; f <= kFrames; ++f) {
+        ASSERT_TRUE(host.animator->frame(f, host.frame).ok());
+        ASSERT_TRUE(host.rods->step(host.frame).ok());
+        const std::uint64_t before = read_back_bytes(*device.value());
+        ASSERT_TRUE(on_device.animator->frame(f, on_device.frame).ok());
+        ASSERT_TRUE(on_device.rods->step(on_device.frame).ok());
+        device_read_back += read_back_bytes(*device.value()) - before;
+    }
+    std::vector<rods::ChainState> a, b;
+    ASSERT_TRUE(host.rods->read_states(a).ok());
+    ASSERT_TRUE(on_device.rods->read_states(b).ok());
+    ASSERT_EQ(a.size(), b.size());
+    float worst = 0.0f;
+    for (std::size_t c = 0; c < a.size(); ++c) {
+        const std::uint32_t n = rods.world.templ(rods.world.chains[c]).chain.joint_count;
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const glm::vec3 pa = a[c].root.position + a[c].x[i], pb = b[c].root.position + b[c].x[i];
+            worst = std::max(worst, glm::length(pa - pb));
+        }
+    }
+    std::printf("rod input on the device, 37 chibis x %u frames: chain joints within %.3g m of the host-input run; "
+                "%llu bytes read back\n",
+                kFrames, static_cast<double>(worst), static_cast<unsigned long long>(device_read_back));
+    EXPECT_LT(worst, 1e-5f);
+    EXPECT_EQ(device_read_back, 0u);
+    EXPECT_EQ(validation_messages(*device.value()), 0u);
+}
+
 // Blender's own glTF importer (tests/tools/blender_check.py) on the export of a
 // simulated crowd, when Blender is installed (bash scripts/setup --with-blender). One
 // Blender run.

@@ -1,4 +1,5 @@
 #include "backends/backends.hpp"
+#include "gpu/vulkan_context.hpp"
 
 namespace kodawari {
 
@@ -10,6 +11,16 @@ std::string_view backend_name(BackendKind kind) {
     }
     return "cpu-reference";
 }
+
+Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options) {
+    BackendOptions own = options;
+    own.context.reset();
+    return gpu::backend_context(own);
+}
+
+std::uint64_t read_back_bytes(const gpu::VulkanContext& device) { return device.read_back_bytes(); }
+
+std::uint32_t validation_messages(const gpu::VulkanContext& device) { return device.validation_messages(); }
 
 Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options) {
     switch (kind) {

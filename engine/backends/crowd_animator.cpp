@@ -1,13 +1,61 @@
-// CrowdAnimator: RodScene frames with the rigged characters posed by pose backends.
-
-#include <chrono>
+// CrowdAnimator: RodScene frames with the rigged characters posed by pose backends, and
+// optionally the rigged part of the rod input written on the device (rod_inputs.comp).
 
 #include "kodawari/crowd_animator.hpp"
 
+#include <chrono>
+#include <optional>
+
+#include <shared/rod_inputs.h>
+
+#include "gpu/compute_pipeline.hpp"
+#include "gpu/device_state.hpp"
+
 namespace kodawari {
+
+/// Records shaders/rod_inputs.comp for every rigged character template: its instances'
+/// reference joints, chain roots and colliders from the pose backend's world matrices into
+/// the rod backend's input buffers (what RodScene::rigged_frame computes on the host).
+class DeviceInputWriter final : public gpu::RodInputWriter {
+public:
+    struct Rig {
+        std::shared_ptr<PoseBackend> backend;  // keeps its world buffer alive
+        gpu::ComputePipeline kernel;
+        gpu::GpuBuffer instances, attachments;
+        gpu::RodInputPush push;
+    };
+
+    DeviceInputWriter(std::shared_ptr<gpu::VulkanContext> ctx, std::vector<Rig> rigs) : ctx_(std::move(ctx)), rigs_(std::move(rigs)) {}
+
+    void record(const vk::raii::CommandBuffer& cmd, const gpu::RodDeviceState& state) const override {
+        // The pose kernel wrote the world matrices in an earlier submission.
+        const vk::MemoryBarrier poses{.srcAccessMask = vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferWrite,
+                                      .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
+        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
+                            vk::PipelineStageFlagBits::eComputeShader, {}, poses, {}, {});
+        for (const Rig& rig : rigs_) {
+            // Never null: write_inputs_on() evaluated every pose backend once.
+            const gpu::PoseDeviceWorld* world = rig.backend->device_world();
+            if (world == nullptr) continue;
+            // The rod backend's buffers change with each load(); the set is not in use here
+            // (every submission is waited for).
+            const gpu::BufferRange ranges[KW_ROD_INPUTS_BINDING_COUNT] = {
+                {world->world}, {rig.instances.handle()}, {rig.attachments.handle()},
+                {state.reference}, {state.roots}, {state.colliders}};
+            rig.kernel.bind(*ctx_, ranges);
+            const std::uint32_t groups = (rig.push.counts.x + KW_ROD_INPUTS_WORKGROUP_SIZE - 1) / KW_ROD_INPUTS_WORKGROUP_SIZE;
+            rig.kernel.dispatch(cmd, std::as_bytes(std::span(&rig.push, 1)), groups);
+        }
+    }
+
+private:
+    std::shared_ptr<gpu::VulkanContext> ctx_;
+    std::vector<Rig> rigs_;
+};
 
 Result<CrowdAnimator> CrowdAnimator::create(const RodScene& scene, BackendKind kind, const BackendOptions& options) {
     CrowdAnimator out(scene);
+    out.options_ = options;
     for (std::uint32_t k = 0; k < scene.characters.size(); ++k) {
         const CharacterKinematics& character = scene.characters[k];
         if (!character.rig) continue;
@@ -32,6 +80,17 @@ Result<CrowdAnimator> CrowdAnimator::create(const RodScene& scene, BackendKind k
 }
 
 Result<void> CrowdAnimator::frame(std::uint32_t index, rods::RodFrame& out) {
+    if (!writer_) return host_frame(index, out);
+    const RodScene& scene = *scene_;
+    // The rigged entries are written on the device at the rod backend's step.
+    scene.kinematic_frame(index, out, /*rigged=*/false);
+    const auto start = std::chrono::steady_clock::now();
+    for (Rig& rig : rigs_) KW_TRY(rig.backend->evaluate(scene.time(index)));
+    last_pose_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
+    return {};
+}
+
+Result<void> CrowdAnimator::host_frame(std::uint32_t index, rods::RodFrame& out) {
     const RodScene& scene = *scene_;
     scene.kinematic_frame(index, out, /*rigged=*/rigs_.empty());
     const auto start = std::chrono::steady_clock::now();
@@ -44,6 +103,50 @@ Result<void> CrowdAnimator::frame(std::uint32_t index, rods::RodFrame& out) {
     }
     last_pose_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return {};
+}
+
+Result<bool> CrowdAnimator::write_inputs_on(RodBackend& rods) {
+    if (rigs_.empty() || !options_.context) return false;
+    const gpu::RodDeviceState* state = rods.device_state();
+    if (state == nullptr || state->context != options_.context.get()) return false;
+    for (Rig& rig : rigs_) {
+        // The world buffer exists once evaluated; its device must be the rod backend's.
+        KW_TRY(rig.backend->evaluate(scene_->time(0)));
+        const gpu::PoseDeviceWorld* world = rig.backend->device_world();
+        if (world == nullptr || world->context != state->context) return false;
+    }
+    gpu::VulkanContext& ctx = *options_.context;
+    std::vector<DeviceInputWriter::Rig> rigs;
+    for (const Rig& rig : rigs_) {
+        const CharacterKinematics& k = scene_->characters[rig.character];
+        std::vector<gpu::RodInputInstanceGpu> instances;
+        for (const std::uint32_t c : rig.instances) {
+            const CharacterInstance& inst = scene_->instances[c];
+            instances.push_back({{c, inst.chain_begin, inst.collider_begin, 0u}});
+        }
+        std::vector<gpu::RodInputAttachmentGpu> attachments;
+        for (const ChainAttachment& a : k.chains) attachments.push_back({{a.joint, 0u, 0u, 0u}, {}, {}});
+        for (const ColliderAttachment& a : k.colliders) {
+            attachments.push_back({{a.joint, 0u, 0u, 0u}, {a.a.x, a.a.y, a.a.z, a.radius}, {a.b.x, a.b.y, a.b.z, 0.0f}});
+        }
+        const std::uint64_t sizes[] = {instances.size() * sizeof(gpu::RodInputInstanceGpu),
+                                       attachments.size() * sizeof(gpu::RodInputAttachmentGpu)};
+        auto buffers = gpu::create_storage_buffers(ctx, sizes, "the rigged characters' rod input");
+        if (!buffers) return buffers.error();
+        KW_TRY(gpu::upload(ctx, buffers.value()[0], std::as_bytes(std::span(instances))));
+        KW_TRY(gpu::upload(ctx, buffers.value()[1], std::as_bytes(std::span(attachments))));
+        const std::vector<vk::DescriptorType> types(KW_ROD_INPUTS_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
+        auto kernel = gpu::ComputePipeline::create(ctx, "rod_inputs", types, sizeof(gpu::RodInputPush));
+        if (!kernel) return kernel.error();
+        const gpu::RodInputPush push{{static_cast<std::uint32_t>(instances.size()), static_cast<std::uint32_t>(rig.nodes),
+                                      k.skeleton.reference, static_cast<std::uint32_t>(k.chains.size())},
+                                     {static_cast<std::uint32_t>(k.colliders.size()), 0u, 0u, 0u}};
+        rigs.push_back({rig.backend, std::move(kernel).value(), std::move(buffers.value()[0]), std::move(buffers.value()[1]), push});
+    }
+    auto writer = std::make_shared<const DeviceInputWriter>(options_.context, std::move(rigs));
+    if (!rods.set_input_writer(writer)) return false;
+    writer_ = std::move(writer);
+    return true;
 }
 
 std::vector<CrowdAnimator::PosedCharacter> CrowdAnimator::posed_characters() const {

@@ -71,6 +71,10 @@ public:
     double last_gpu_ms() const override { return gpu_ms_; }
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
     const gpu::RodDeviceState* device_state() const override { return world_ != nullptr ? &device_state_ : nullptr; }
+    bool set_input_writer(std::shared_ptr<const gpu::RodInputWriter> writer) override {
+        input_writer_ = std::move(writer);
+        return true;
+    }
 
     Result<void> load(const rods::RodWorld& world, const rods::RodFrame& initial) override {
         KW_TRY(rods::check_frame(world, initial));
@@ -180,7 +184,10 @@ public:
         device_state_ = {.context = ctx_.get(),
                          .chain_states = buffers_[KW_RODS_BINDING_CHAIN_STATE].handle(),
                          .motion = buffers_[KW_RODS_BINDING_MOTION].handle(),
-                         .spin = buffers_[KW_RODS_BINDING_SPIN].handle()};
+                         .spin = buffers_[KW_RODS_BINDING_SPIN].handle(),
+                         .reference = buffers_[KW_RODS_BINDING_REFERENCE].handle(),
+                         .roots = buffers_[KW_RODS_BINDING_ROOTS].handle(),
+                         .colliders = buffers_[KW_RODS_BINDING_COLLIDERS].handle()};
         return {};
     }
 
@@ -214,6 +221,9 @@ public:
         double ms = -1.0;
         KW_TRY(ctx_->submit(
             [&](const vk::raii::CommandBuffer& cmd) {
+                // After the uploads above; dispatch_for_host's barrier orders its writes
+                // before the step reads them.
+                if (input_writer_) input_writer_->record(cmd, device_state_);
                 kernel_->dispatch_for_host(*ctx_, cmd, std::as_bytes(std::span(&push, 1)), groups);
             },
             &ms));
@@ -301,6 +311,7 @@ private:
     const rods::RodWorld* world_ = nullptr;
     std::vector<GpuBuffer> buffers_;
     gpu::RodDeviceState device_state_;
+    std::shared_ptr<const gpu::RodInputWriter> input_writer_;
     std::vector<gpu::RodTemplateGpu> templates_;
     float dt_ = -1.0f;
     double gpu_ms_ = -1.0;

@@ -56,11 +56,18 @@ Result<ComputePipeline> ComputePipeline::create(const VulkanContext& ctx, std::s
 }
 
 void ComputePipeline::bind_buffers(const VulkanContext& ctx, std::span<const GpuBuffer* const> buffers) const {
-    assert(buffers.size() == types_.size());
-    std::vector<vk::DescriptorBufferInfo> infos(buffers.size());
-    std::vector<vk::WriteDescriptorSet> writes(buffers.size());
-    for (std::uint32_t i = 0; i < buffers.size(); ++i) {
-        infos[i] = vk::DescriptorBufferInfo{.buffer = buffers[i]->handle(), .offset = 0, .range = VK_WHOLE_SIZE};
+    std::vector<BufferRange> ranges;
+    ranges.reserve(buffers.size());
+    for (const GpuBuffer* b : buffers) ranges.push_back({b->handle()});
+    bind(ctx, ranges);
+}
+
+void ComputePipeline::bind(const VulkanContext& ctx, std::span<const BufferRange> ranges) const {
+    assert(ranges.size() == types_.size());
+    std::vector<vk::DescriptorBufferInfo> infos(ranges.size());
+    std::vector<vk::WriteDescriptorSet> writes(ranges.size());
+    for (std::uint32_t i = 0; i < ranges.size(); ++i) {
+        infos[i] = vk::DescriptorBufferInfo{.buffer = ranges[i].buffer, .offset = ranges[i].offset, .range = ranges[i].size};
         writes[i] = vk::WriteDescriptorSet{.dstSet = *set_,
                      .dstBinding = i,
                      .descriptorCount = 1,

@@ -30,6 +30,8 @@ public:
 
     /// Points binding i at buffers[i] (whole buffer).
     void bind_buffers(const VulkanContext& ctx, std::span<const GpuBuffer* const> buffers) const;
+    /// Points binding i at ranges[i]. Only while no pending submission uses the set.
+    void bind(const VulkanContext& ctx, std::span<const BufferRange> ranges) const;
 
     /// Binds pipeline and set, pushes constants and dispatches.
     void dispatch(const vk::raii::CommandBuffer& cmd, std::span<const std::byte> push, std::uint32_t groups_x) const;

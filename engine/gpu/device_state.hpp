@@ -3,8 +3,9 @@
 // the simulation's buffers on the device they were computed on, with no copy back).
 
 #include <cstdint>
+#include <memory>
 
-#include <vulkan/vulkan.hpp>
+#include <vulkan/vulkan_raii.hpp>
 
 namespace kodawari::gpu {
 
@@ -16,6 +17,18 @@ struct RodDeviceState {
     vk::Buffer chain_states;                 ///< RodChainStateGpu per chain (root.position)
     vk::Buffer motion;                       ///< RodJointMotionGpu per joint (x, relative to the root)
     vk::Buffer spin;                         ///< RodJointSpinGpu per joint (q, the particle's orientation)
+    vk::Buffer reference;                    ///< RodTransformGpu per character: this frame's input
+    vk::Buffer roots;                        ///< RodTransformGpu per chain: this frame's input
+    vk::Buffer colliders;                    ///< RodColliderGpu: this frame's input
+};
+
+/// Records kernels that write part of a step's kinematic input where the vulkan rod
+/// backend keeps it (RodBackend::set_input_writer): after the frame's input has been
+/// uploaded, before the step's dispatch, in the same submission.
+class RodInputWriter {
+public:
+    virtual ~RodInputWriter() = default;
+    virtual void record(const vk::raii::CommandBuffer& cmd, const RodDeviceState& state) const = 0;
 };
 
 /// The vulkan pose backend's world matrices after its last evaluate().

@@ -11,6 +11,13 @@
 
 namespace kodawari::gpu {
 
+/// A range of a buffer bound to a storage binding (a GpuBuffer's, or another owner's).
+struct BufferRange {
+    vk::Buffer buffer;
+    vk::DeviceSize offset = 0;
+    vk::DeviceSize size = VK_WHOLE_SIZE;
+};
+
 class GpuBuffer {
 public:
     enum class Kind {

@@ -6,7 +6,7 @@
 #include <span>
 #include <string_view>
 
-#include "gpu/vulkan_context.hpp"
+#include "gpu/gpu_buffer.hpp"
 
 namespace kodawari::gpu {
 
@@ -73,13 +73,6 @@ private:
     vk::raii::ShaderModule fragment_{nullptr};
     vk::raii::Pipeline pipeline_{nullptr};
     std::uint32_t storage_buffers_ = 0;
-};
-
-/// A range of a buffer bound to a storage binding.
-struct BufferRange {
-    vk::Buffer buffer;
-    vk::DeviceSize offset = 0;
-    vk::DeviceSize size = VK_WHOLE_SIZE;
 };
 
 /// A descriptor set of a graphics pipeline's storage buffers (its own pool).

@@ -5,6 +5,7 @@
 #include <shared/birds.h>
 #include <shared/poses.h>
 #include <shared/render.h>
+#include <shared/rod_inputs.h>
 #include <shared/rods.h>
 
 #include "kodawari/rods/world.hpp"
@@ -75,6 +76,10 @@ static_assert(sizeof(BirdDrawVertex) == 32 && offsetof(BirdDrawVertex, normal) =
 static_assert(sizeof(BirdDrawType) == 128 && offsetof(BirdDrawType, color) == 112);
 static_assert(KW_CHAIN_DOT_VERTICES == 3 * KW_CHAIN_DOT_SIDES);
 static_assert(KW_PART_COUNT == 7, "BirdDrawType::parts has one entry per bird part");
+static_assert(sizeof(RodInputInstanceGpu) == 16);
+static_assert(sizeof(RodInputAttachmentGpu) == 48 && offsetof(RodInputAttachmentGpu, a) == 16 &&
+              offsetof(RodInputAttachmentGpu, b) == 32);
+static_assert(sizeof(RodInputPush) == 32 && offsetof(RodInputPush, more) == 16);
 static_assert(sizeof(RenderPush) <= 128, "Vulkan guarantees 128 bytes of push constants");
 
 }  // namespace kodawari::gpu

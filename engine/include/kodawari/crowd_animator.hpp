@@ -4,7 +4,9 @@
 /// by a pose backend (issue 4: crowds of skinned characters animated on the GPU, each
 /// instance at its own time offset): one PoseBackend per rigged character template,
 /// feeding RodScene::rigged_frame(); procedural characters are posed on the CPU as
-/// RodScene::frame() does.
+/// RodScene::frame() does. With the vulkan pose and rod backends on one device, the rigged
+/// characters' part of the input can be written there instead (write_inputs_on()), so
+/// that their poses never come back to the host.
 
 #include <cstdint>
 #include <memory>
@@ -12,9 +14,12 @@
 #include <vector>
 
 #include "pose_backend.hpp"
+#include "rod_backend.hpp"
 #include "rod_scene.hpp"
 
 namespace kodawari {
+
+class DeviceInputWriter;  // engine/backends/crowd_animator.cpp
 
 /// Produces RodFrames of a RodScene, its rigged characters posed by pose backends.
 class CrowdAnimator {
@@ -28,6 +33,22 @@ public:
     /// gives it up to the pose backend's rounding (the vulkan backend: about 1e-6 of a
     /// character's size; cpu and cpu-reference: the same bits).
     [[nodiscard]] Result<void> frame(std::uint32_t index, rods::RodFrame& out);
+
+    /// From now on the rigged characters' reference joints, chain roots and colliders are
+    /// written on the device by shaders/rod_inputs.comp straight into `rods`'s input
+    /// buffers at each of its steps (RodBackend::set_input_writer), and frame() evaluates
+    /// their clips without reading them back: those entries of its RodFrame are then not
+    /// this frame's (they keep what `out` held; host_frame() gives them). Needs the vulkan
+    /// pose backends and `rods` (the vulkan rod backend, loaded) on the one device of
+    /// BackendOptions::context; false (nothing changed) otherwise, or without rigged
+    /// characters. Frame 0 (load) still comes from frame(): load() uses it on the host.
+    [[nodiscard]] Result<bool> write_inputs_on(RodBackend& rods);
+    /// Whether write_inputs_on() took effect.
+    [[nodiscard]] bool writes_inputs_on_device() const { return writer_ != nullptr; }
+    /// The input of frame `index` with every entry on the host (the pose matrices read
+    /// back), whatever write_inputs_on() did: for a viewer's paused frame (colliders to
+    /// draw, a sketch's root).
+    [[nodiscard]] Result<void> host_frame(std::uint32_t index, rods::RodFrame& out);
 
     /// Milliseconds the pose backends spent in the last frame() (evaluate + read).
     [[nodiscard]] double last_pose_ms() const { return last_pose_ms_; }
@@ -46,14 +67,16 @@ public:
 private:
     struct Rig {
         std::uint32_t character = 0;
-        std::unique_ptr<PoseBackend> backend;
+        std::shared_ptr<PoseBackend> backend;  // shared with the input writer
         std::vector<std::uint32_t> instances;  // RodScene::instances indices, in backend order
         std::size_t nodes = 0;
     };
     explicit CrowdAnimator(const RodScene& scene) : scene_(&scene) {}
 
     const RodScene* scene_;
+    BackendOptions options_;
     std::vector<Rig> rigs_;
+    std::shared_ptr<const DeviceInputWriter> writer_;  // also held by the rod backend
     std::vector<glm::mat4> world_;
     double last_pose_ms_ = 0.0;
 };

@@ -17,6 +17,7 @@ namespace kodawari {
 
 namespace gpu {
 struct RodDeviceState;
+class RodInputWriter;
 }
 
 /// What a caller reads back after a frame. Per-joint arrays hold RodWorld::joint_count
@@ -65,6 +66,15 @@ public:
     /// Where the state lives on a Vulkan device (the vulkan backend after load(); null
     /// otherwise): render::Renderer draws the chains from it without reading it back.
     [[nodiscard]] virtual const gpu::RodDeviceState* device_state() const { return nullptr; }
+
+    /// Part of each step's kinematic input written on the device instead of taken from
+    /// the frame (CrowdAnimator::write_inputs_on: rigged characters posed on the GPU); null
+    /// removes it. The vulkan backend only: false elsewhere. The backend shares ownership,
+    /// so the writer and what it reads stay alive while the backend may step.
+    [[nodiscard]] virtual bool set_input_writer(std::shared_ptr<const gpu::RodInputWriter> writer) {
+        (void)writer;
+        return false;
+    }
 };
 
 /// Creates a rod backend; Vulkan fails with a readable reason when no loader, driver or

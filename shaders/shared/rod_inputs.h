@@ -1,0 +1,45 @@
+// GPU-shared data of the rod-input kernel (shaders/rod_inputs.comp): the kinematic input of
+// the rod kernel (shared/rods.h: reference joints, chain roots, colliders) written on the
+// device from a pose backend's world matrices (shared/poses.h), so that a crowd of rigged
+// characters animated on the GPU feeds its chains without its poses coming back to the
+// host (CrowdAnimator::write_inputs_on, engine/backends/crowd_animator.cpp). Layout:
+// std430, only vec4/uvec4 members (see glsl_types.h); sizes and offsets are checked in
+// engine/gpu/shared_layout.cpp.
+#ifndef KODAWARI_SHADERS_SHARED_ROD_INPUTS_H
+#define KODAWARI_SHADERS_SHARED_ROD_INPUTS_H
+
+#include "glsl_types.h"
+
+#define KW_ROD_INPUTS_WORKGROUP_SIZE 64
+
+#define KW_ROD_INPUTS_BINDING_WORLD 0        // PoseMatrixGpu: the pose backend's, instances x nodes
+#define KW_ROD_INPUTS_BINDING_INSTANCES 1    // RodInputInstanceGpu, per posed instance
+#define KW_ROD_INPUTS_BINDING_ATTACHMENTS 2  // RodInputAttachmentGpu: the character's chain roots, then its colliders
+#define KW_ROD_INPUTS_BINDING_REFERENCE 3    // RodTransformGpu, per character instance: the rod backend's
+#define KW_ROD_INPUTS_BINDING_ROOTS 4        // RodTransformGpu, per chain: the rod backend's
+#define KW_ROD_INPUTS_BINDING_COLLIDERS 5    // RodColliderGpu: the rod backend's
+#define KW_ROD_INPUTS_BINDING_COUNT 6
+
+KW_NAMESPACE_BEGIN
+
+// Where one posed instance's input goes in the rod world.
+struct RodInputInstanceGpu {
+    uvec4 ids;  // x: its RodScene instance (its reference joint's entry), y: its first chain, z: its first collider, w: unused
+};
+
+// A node the rod input comes from: a chain's root joint, or a collider's joint with the
+// capsule in that joint's frame.
+struct RodInputAttachmentGpu {
+    uvec4 node;  // x: the node (Character::nodes index), yzw: unused
+    vec4 a;      // collider: xyz end a in the joint's frame (m), w: radius (m)
+    vec4 b;      // collider: xyz end b, w: unused
+};
+
+struct RodInputPush {
+    uvec4 counts;  // x: posed instances, y: nodes per instance, z: the reference node, w: chains per instance
+    uvec4 more;    // x: colliders per instance, yzw: unused
+};
+
+KW_NAMESPACE_END
+
+#endif
