@@ -56,11 +56,17 @@ Result<ComputePipeline> ComputePipeline::create(const VulkanContext& ctx, std::s
 }
 
 void ComputePipeline::bind_buffers(const VulkanContext& ctx, std::span<const GpuBuffer* const> buffers) const {
+    std::vector<vk::Buffer> handles(buffers.size());
+    for (std::size_t i = 0; i < buffers.size(); ++i) handles[i] = buffers[i]->handle();
+    bind_buffers(ctx, std::span<const vk::Buffer>(handles));
+}
+
+void ComputePipeline::bind_buffers(const VulkanContext& ctx, std::span<const vk::Buffer> buffers) const {
     assert(buffers.size() == types_.size());
     std::vector<vk::DescriptorBufferInfo> infos(buffers.size());
     std::vector<vk::WriteDescriptorSet> writes(buffers.size());
     for (std::uint32_t i = 0; i < buffers.size(); ++i) {
-        infos[i] = vk::DescriptorBufferInfo{.buffer = buffers[i]->handle(), .offset = 0, .range = VK_WHOLE_SIZE};
+        infos[i] = vk::DescriptorBufferInfo{.buffer = buffers[i], .offset = 0, .range = VK_WHOLE_SIZE};
         writes[i] = vk::WriteDescriptorSet{.dstSet = *set_,
                      .dstBinding = i,
                      .descriptorCount = 1,

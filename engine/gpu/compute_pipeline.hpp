@@ -30,6 +30,9 @@ public:
 
     /// Points binding i at buffers[i] (whole buffer).
     void bind_buffers(const VulkanContext& ctx, std::span<const GpuBuffer* const> buffers) const;
+    /// Points binding i at buffers[i] (whole buffer): for buffers another owner keeps,
+    /// such as a backend's state bound by the renderer.
+    void bind_buffers(const VulkanContext& ctx, std::span<const vk::Buffer> buffers) const;
 
     /// Binds pipeline and set, pushes constants and dispatches.
     void dispatch(const vk::raii::CommandBuffer& cmd, std::span<const std::byte> push, std::uint32_t groups_x) const;

@@ -6,6 +6,7 @@
 #include <shared/poses.h>
 #include <shared/render.h>
 #include <shared/rods.h>
+#include <shared/skin.h>
 
 #include "kodawari/rods/world.hpp"
 
@@ -76,5 +77,14 @@ static_assert(sizeof(BirdDrawType) == 128 && offsetof(BirdDrawType, color) == 11
 static_assert(KW_CHAIN_DOT_VERTICES == 3 * KW_CHAIN_DOT_SIDES);
 static_assert(KW_PART_COUNT == 7, "BirdDrawType::parts has one entry per bird part");
 static_assert(sizeof(RenderPush) <= 128, "Vulkan guarantees 128 bytes of push constants");
+
+// shared/skin.h
+static_assert(sizeof(SkinNodeGpu) == 48 && offsetof(SkinNodeGpu, joint) == 16 && offsetof(SkinNodeGpu, axis) == 32);
+static_assert(sizeof(SkinChainGpu) == 16);
+static_assert(sizeof(SkinPush) == 16);
+static_assert(sizeof(SkinJointGpu) == 80 && offsetof(SkinJointGpu, inverse_bind) == 16);
+static_assert(sizeof(SkinnedVertexGpu) == 64 && offsetof(SkinnedVertexGpu, joints) == 16 &&
+              offsetof(SkinnedVertexGpu, weights) == 32 && offsetof(SkinnedVertexGpu, color) == 48);
+static_assert(KW_SKIN_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 
 }  // namespace kodawari::gpu
