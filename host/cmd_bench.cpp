@@ -293,6 +293,7 @@ int bench_view(Args& args, BackendChoice choice) {
     choice.options.context = r.device_context();
     if (rod_scene) {
         if (auto s = r.set_chains(&rod_scene->world); !s) return report(s.error());
+        if (auto s = r.set_skinned(&*rod_scene); !s) return report(s.error());
     }
     if (!bird_world.birds.empty()) {
         if (auto s = r.set_birds(&bird_world); !s) return report(s.error());
@@ -333,7 +334,6 @@ int bench_view(Args& args, BackendChoice choice) {
         }
     }
     const std::vector<glm::vec3> grid = render::content_points(rod_scene ? &*rod_scene : nullptr, nullptr, &bird_world);
-    const bool snapshot_needed = rod_scene && render::needs_snapshot(*rod_scene);
     std::printf("bench view: scene \"%s\": %zu chains, %zu birds, %ux%u, %u frames per configuration after 2 warm-up frames, "
                 "interleaved 10 at a time, on %s\n",
                 scene.name.c_str(), rod_scene ? rod_scene->world.chains.size() : std::size_t{0}, bird_world.birds.size(), width,
@@ -350,12 +350,21 @@ int bench_view(Args& args, BackendChoice choice) {
         if (run.rods) {
             KW_TRY(run.animator->frame(f, run.frame));
             KW_TRY(f == 0 ? run.rods->load(rod_scene->world, run.frame) : run.rods->step(run.frame));
-            if (run.read_back || snapshot_needed) KW_TRY(run.rods->read(run.snapshot));
-            KW_TRY(run.read_back ? r.chains_from(run.snapshot) : r.chains_from(*run.rods));
+            // The viewer's way: rigged characters' rod input written on the device too.
+            if (f == 0 && !run.read_back) KW_TRY(run.animator->write_inputs_on(*run.rods));
+            if (run.read_back) {
+                KW_TRY(run.rods->read(run.snapshot));
+                KW_TRY(r.chains_from(run.snapshot));
+                KW_TRY(r.skinned_from(run.snapshot, f));
+            } else {
+                KW_TRY(r.chains_from(*run.rods));
+                KW_TRY(r.skinned_from(*run.animator, *run.rods, f));
+            }
         }
         render::DrawList list(render::scene_camera(scene, f), width, height);
         render::add_ground_grid(list, grid);
-        if (rod_scene) render::add_characters(list, *rod_scene, f, snapshot_needed ? &run.snapshot : nullptr, &run.frame);
+        // Colliders are not drawn: with the rigged input on the device they are not on the host.
+        if (rod_scene) render::add_characters(list, *rod_scene, f, nullptr);
         KW_TRY(r.draw(list));
         if (f >= 2) run.read_back_bytes += r.read_back_bytes() - before;
         return {};

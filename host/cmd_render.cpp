@@ -135,6 +135,7 @@ int cmd_render(Args args) {
         if (!created) return report(created.error());
         animator.emplace(std::move(created).value());
         if (auto r = renderer.value()->set_chains(&rod_scene->world); !r) return report(r.error());
+        if (auto r = renderer.value()->set_skinned(&*rod_scene); !r) return report(r.error());
     }
     // A vulkan bird backend made on the renderer's device: its poses are drawn where they
     // are; the others' are read back each drawn frame.
@@ -150,7 +151,6 @@ int cmd_render(Args args) {
     std::vector<glm::vec3> grid_points;
     std::vector<gpu::BirdPose> poses(bird_count);
     rods::RodFrame frame, drawn_input;
-    ChainSnapshot snapshot;
     double render_seconds = 0.0;
     const bool show_progress = stderr_is_terminal() && range.end > 100;
     for (std::uint32_t f = 0; f < range.end; ++f) {
@@ -174,12 +174,10 @@ int cmd_render(Args args) {
         if (show_progress) progress("simulating", f + 1, range.end);
         if (!drawn) continue;
         if (rods) {
-            // The snapshot for skinned meshes (their hair follows the chains); the chains
-            // themselves are drawn from the backend (Renderer::chains_from).
-            if (render::needs_snapshot(*rod_scene)) {
-                if (auto r = rods->read(snapshot); !r) return report(r.error());
-            }
+            // The chains and the skinned meshes (their hair bones follow the chains) drawn
+            // from the backends' buffers where they share the renderer's device.
             if (auto r = renderer.value()->chains_from(*rods); !r) return report(r.error());
+            if (auto r = renderer.value()->skinned_from(*animator, *rods, f); !r) return report(r.error());
         }
         if (birds) {
             if (auto r = birds_on_device ? renderer.value()->birds_from(*birds) : renderer.value()->birds_from(poses); !r) {
@@ -202,7 +200,7 @@ int cmd_render(Args args) {
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
         }
         render::add_ground_grid(list, grid_points);
-        if (rods) render::add_characters(list, *rod_scene, f, render::needs_snapshot(*rod_scene) ? &snapshot : nullptr, kinematic);
+        if (rods) render::add_characters(list, *rod_scene, f, kinematic);
         auto image = renderer.value()->render(list);
         if (!image) return report(image.error());
         render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -1,11 +1,11 @@
 // `kodawari view SCENE`: the interactive viewer (issue 5). A GLFW window presented with
 // Vulkan: each frame is simulated as `render` does (rod backend + crowd animator, bird
 // backend), drawn by the renderer and blitted into the window's swapchain image
-// (Renderer::present). The simulation runs on the renderer's device, and the chains and
-// birds are drawn from the vulkan backends' own buffers: nothing is read back per frame
-// (the end line and the status line say how much was). Still read back: the chains of
-// rigged characters with meshes (skinned on the CPU, their hair following the chains),
-// and the picked chain while sketching.
+// (Renderer::present). The simulation runs on the renderer's device, and the chains,
+// birds and rigged characters' skinned meshes are drawn from the vulkan backends' own
+// buffers: nothing is read back per frame for drawing (the end line and the status line
+// say how much was). Still read back: rigged characters' pose matrices for the rod input
+// (CrowdAnimator::frame), and the picked chain while sketching.
 #include <algorithm>
 #include <array>
 #include <chrono>
@@ -58,7 +58,7 @@ struct Simulation {
     std::unique_ptr<RodBackend> rods;
     std::optional<CrowdAnimator> animator;
     rods::RodFrame frame;
-    ChainSnapshot snapshot;     // read only when needed (see simulate(), read_chains())
+    ChainSnapshot snapshot;     // read only when needed (read_chains(): picking, sketching)
     rods::RodFrame host;        // see host_input()
     std::optional<std::uint32_t> host_input_frame;
     std::vector<gpu::BirdPose> poses;
@@ -108,9 +108,6 @@ struct Simulation {
             KW_TRY(f == 0 ? rods->load(rod_scene->world, frame) : rods->step(frame));
             // On one device the rigged characters' input is written where the chains step.
             if (f == 0) KW_TRY(animator->write_inputs_on(*rods));
-            // Skinned meshes follow the chains on the CPU; other chains are drawn from the
-            // backend (Renderer::chains_from).
-            if (render::needs_snapshot(*rod_scene)) KW_TRY(rods->read(snapshot));
         }
         current = f;
         started = true;
@@ -146,12 +143,14 @@ struct Simulation {
     // What the renderer draws of this simulation from now on.
     [[nodiscard]] Result<void> show_on(render::Renderer& renderer) const {
         KW_TRY(renderer.set_chains(rod_scene && rods ? &rod_scene->world : nullptr));
+        KW_TRY(renderer.set_skinned(rod_scene && rods ? &*rod_scene : nullptr));
         return renderer.set_birds(birds ? &world : nullptr);
     }
 
-    // This frame's chains and birds, where they are.
+    // This frame's chains, skinned meshes and birds, where they are.
     [[nodiscard]] Result<void> draw_on(render::Renderer& renderer) {
         if (rods) KW_TRY(renderer.chains_from(*rods));
+        if (rods) KW_TRY(renderer.skinned_from(*animator, *rods, current));
         if (birds) KW_TRY(birds_on_device ? renderer.birds_from(*birds) : renderer.birds_from(poses));
         return {};
     }
@@ -762,8 +761,7 @@ int cmd_view(Args args) {
                     kinematic = host.value();
                 }
             }
-            render::add_characters(list, *s.rod_scene, s.current, render::needs_snapshot(*s.rod_scene) ? &s.snapshot : nullptr,
-                                   kinematic);
+            render::add_characters(list, *s.rod_scene, s.current, kinematic);
         }
         if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
         if (v.sketch_mode && v.picked && s.rod_scene) {

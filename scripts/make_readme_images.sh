@@ -18,7 +18,7 @@ mkdir -p docs/images
 cp "$work/flock/flock_00200.png" docs/images/flock.png
 "$bin" render scenes/crowd.json --frames 120 --size 640x360 --out "$work/crowd"
 cp "$work/crowd/crowd_00120.png" docs/images/crowd.png
-# The rigged crowd (64 of scenes/characters/chibi.glb, skinned on the CPU) 2 s in.
+# The rigged crowd (64 of scenes/characters/chibi.glb, skinned in the vertex shader) 2 s in.
 "$bin" render scenes/crowd-gltf.json --frames 120 --size 640x360 --out "$work/crowd-gltf"
 cp "$work/crowd-gltf/crowd-gltf_00120.png" docs/images/crowd-gltf.png
 ls -l docs/images

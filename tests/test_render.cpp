@@ -141,7 +141,7 @@ render::DrawList ahoge_frame(render::Renderer& renderer, const AhogeRun& run, st
     render::DrawList list(render::scene_camera(run.scene, frame), renderer.width(), renderer.height());
     const rods::RodFrame input = run.rods.frame(frame);
     render::add_ground_grid(list, render::content_points(&run.rods, &input, nullptr));
-    render::add_characters(list, run.rods, frame, nullptr, nullptr);
+    render::add_characters(list, run.rods, frame, nullptr);
     EXPECT_TRUE(renderer.set_chains(&run.rods.world).ok());
     EXPECT_TRUE(renderer.chains_from(snapshot).ok());
     return list;
@@ -380,7 +380,7 @@ TEST(Render, OrthographicSceneCameraIsDrawnOrthographic) {
     const render::CameraView view = render::scene_camera(scene.value(), kFrame);
     EXPECT_TRUE(view.orthographic);
     render::DrawList list(view, kWidth, kHeight);
-    render::add_characters(list, rods.value(), kFrame, nullptr, nullptr);
+    render::add_characters(list, rods.value(), kFrame, nullptr);
     ASSERT_TRUE(renderer->set_chains(&rods.value().world).ok());
     ASSERT_TRUE(renderer->chains_from(snapshot).ok());
     auto image = renderer->render(list);

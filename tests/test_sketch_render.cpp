@@ -201,11 +201,14 @@ TEST(SketchRender, RiggedCharacterIsDrawnAsItsSkinnedMesh) {
         EXPECT_TRUE(backend.value()->read(snapshot).ok());
         const render::CameraView view = render::scene_camera(scene, kLast);
         render::DrawList list(view, kWidth, kHeight);
-        render::add_characters(list, rs, kLast, &snapshot, nullptr);
+        render::add_characters(list, rs, kLast, nullptr);
         EXPECT_TRUE(renderer.value()->set_chains(&rs.world).ok());
         EXPECT_TRUE(renderer.value()->chains_from(snapshot).ok());
+        EXPECT_TRUE(renderer.value()->set_skinned(&rs).ok());
+        EXPECT_TRUE(renderer.value()->skinned_from(snapshot, kLast).ok());
         auto image = renderer.value()->render(list);
         EXPECT_TRUE(renderer.value()->set_chains(nullptr).ok());  // rs goes out of scope
+        EXPECT_TRUE(renderer.value()->set_skinned(nullptr).ok());
         EXPECT_TRUE(image.ok());
         return {std::move(image).value(), rs.frame(kLast).reference[0], view};
     };

@@ -31,7 +31,7 @@ Result<GpuBuffer> GpuBuffer::create(const VulkanContext& ctx, vk::DeviceSize siz
         case Kind::Vertex:
             // Rewritten by the CPU every frame; device-local too where that exists
             // (unified memory, resizable BAR).
-            usage = Usage::eVertexBuffer;
+            usage = Usage::eVertexBuffer | Usage::eIndexBuffer;
             required = Memory::eHostVisible | Memory::eHostCoherent;
             preferred = Memory::eDeviceLocal;
             break;

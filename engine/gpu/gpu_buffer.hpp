@@ -24,7 +24,7 @@ public:
         Storage,   ///< read/written by kernels (storage or uniform); mapped when memory is unified
         Upload,    ///< host-visible source of copies
         Readback,  ///< host-visible (cached when possible) destination of copies
-        Vertex,    ///< host-visible, coherent and mapped vertex buffer written by the CPU every frame
+        Vertex,    ///< host-visible, coherent and mapped vertex (or index) buffer written by the CPU
     };
 
     [[nodiscard]] static Result<GpuBuffer> create(const VulkanContext& ctx, vk::DeviceSize size, Kind kind);

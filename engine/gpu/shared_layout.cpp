@@ -7,6 +7,7 @@
 #include <shared/render.h>
 #include <shared/rod_inputs.h>
 #include <shared/rods.h>
+#include <shared/skin.h>
 
 #include "kodawari/rods/world.hpp"
 
@@ -81,5 +82,14 @@ static_assert(sizeof(RodInputAttachmentGpu) == 48 && offsetof(RodInputAttachment
               offsetof(RodInputAttachmentGpu, b) == 32);
 static_assert(sizeof(RodInputPush) == 32 && offsetof(RodInputPush, more) == 16);
 static_assert(sizeof(RenderPush) <= 128, "Vulkan guarantees 128 bytes of push constants");
+
+// shared/skin.h
+static_assert(sizeof(SkinNodeGpu) == 48 && offsetof(SkinNodeGpu, joint) == 16 && offsetof(SkinNodeGpu, axis) == 32);
+static_assert(sizeof(SkinChainGpu) == 16);
+static_assert(sizeof(SkinPush) == 16);
+static_assert(sizeof(SkinJointGpu) == 80 && offsetof(SkinJointGpu, inverse_bind) == 16);
+static_assert(sizeof(SkinnedVertexGpu) == 64 && offsetof(SkinnedVertexGpu, joints) == 16 &&
+              offsetof(SkinnedVertexGpu, weights) == 32 && offsetof(SkinnedVertexGpu, color) == 48);
+static_assert(KW_SKIN_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 
 }  // namespace kodawari::gpu

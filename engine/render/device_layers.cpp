@@ -19,17 +19,16 @@ std::span<const std::byte> bytes_of(const std::vector<T>& v) {
     return std::as_bytes(std::span<const T>(v));
 }
 
-// A storage buffer of at least 16 bytes (an empty world still binds one) filled with `bytes`.
+std::uint32_t bits(float value) { return std::bit_cast<std::uint32_t>(value); }
+
+}  // namespace
+
 Result<gpu::GpuBuffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes) {
     auto buffer = gpu::GpuBuffer::create(ctx, std::max<std::uint64_t>(bytes.size(), 16), gpu::GpuBuffer::Kind::Storage);
     if (!buffer) return buffer.error();
     KW_TRY(gpu::upload(ctx, buffer.value(), bytes));
     return buffer;
 }
-
-std::uint32_t bits(float value) { return std::bit_cast<std::uint32_t>(value); }
-
-}  // namespace
 
 // ---------------------------------------------------------------------------------------
 // Chains

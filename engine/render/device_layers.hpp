@@ -22,6 +22,9 @@
 
 namespace kodawari::render {
 
+/// A storage buffer of at least 16 bytes (an empty world still binds one) filled with `bytes`.
+[[nodiscard]] Result<gpu::GpuBuffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes);
+
 /// The chains of a RodWorld.
 class ChainLayer {
 public:

@@ -1,7 +1,8 @@
 // The renderer: one render pass into an RGBA8 colour + depth target; three pipelines of
-// the draw list's shaders (background without depth, lines, triangles), then the chain
-// and bird layers drawn from device buffers (device_layers.hpp); the image copied to a
-// host-visible buffer after the pass, or blitted into a swapchain image.
+// the draw list's shaders (background without depth, lines, triangles), then the chain,
+// bird and skinned-mesh layers drawn from device buffers (device_layers.hpp,
+// skinned_layer.hpp); the image copied to a host-visible buffer after the pass, or
+// blitted into a swapchain image.
 
 #include "kodawari/render/renderer.hpp"
 
@@ -16,6 +17,7 @@
 #include "gpu/gpu_buffer.hpp"
 #include "gpu/graphics.hpp"
 #include "render/device_layers.hpp"
+#include "render/skinned_layer.hpp"
 
 namespace kodawari::render {
 
@@ -172,6 +174,7 @@ struct Renderer::Impl {
     std::optional<gpu::GpuBuffer> vertices, readback;
     std::optional<ChainLayer> chains;
     std::optional<BirdLayer> birds;
+    std::optional<SkinnedLayer> skinned;
 
     // Presentation (RendererOptions::create_surface): its own command buffer and fence,
     // because the frame's submission waits on and signals semaphores.
@@ -224,6 +227,14 @@ bool Renderer::chains_on_device() const { return impl_->chains->on_device(); }
 Result<void> Renderer::set_birds(const birds::BirdWorld* world) { return impl_->birds->set_world(*impl_->ctx, world, kBirdMinPixels); }
 Result<void> Renderer::birds_from(const BirdBackend& backend) { return impl_->birds->from_backend(*impl_->ctx, backend); }
 Result<void> Renderer::birds_from(std::span<const gpu::BirdPose> poses) { return impl_->birds->from_poses(*impl_->ctx, poses); }
+Result<void> Renderer::set_skinned(const RodScene* scene) { return impl_->skinned->set_scene(*impl_->ctx, scene); }
+Result<void> Renderer::skinned_from(const CrowdAnimator& animator, RodBackend& rods, std::uint32_t frame) {
+    return impl_->skinned->from_backends(*impl_->ctx, animator, rods, frame);
+}
+Result<void> Renderer::skinned_from(const ChainSnapshot& snapshot, std::uint32_t frame) {
+    return impl_->skinned->from_snapshot(*impl_->ctx, snapshot, frame);
+}
+bool Renderer::skinned_on_device() const { return impl_->skinned->on_device(); }
 
 namespace {
 
@@ -349,6 +360,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     auto birds = BirdLayer::create(c, *impl->pass);
     if (!birds) return birds.error();
     impl->birds.emplace(std::move(birds).value());
+    auto skinned = SkinnedLayer::create(c, *impl->pass);
+    if (!skinned) return skinned.error();
+    impl->skinned.emplace(std::move(skinned).value());
 
     auto readback = gpu::GpuBuffer::create(c, vk::DeviceSize{options.width} * options.height * 4, gpu::GpuBuffer::Kind::Readback);
     if (!readback) return readback.error();
@@ -404,6 +418,9 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     push.draw.w = camera.orthographic ? KW_RENDER_ORTHOGRAPHIC : KW_RENDER_PERSPECTIVE;
     using Stage = vk::PipelineStageFlagBits;
     using Access = vk::AccessFlagBits;
+    // The skinned meshes' node matrices, composed on the device (before the barrier below,
+    // which makes them visible to the vertex shaders).
+    skinned->record_kernels(cmd);
     // The layers' vertex shaders read what kernels, copies and the host wrote before
     // (the simulation's state on a shared device, uploads).
     const vk::MemoryBarrier layer_inputs{.srcAccessMask = Access::eShaderWrite | Access::eTransferWrite | Access::eHostWrite,
@@ -435,6 +452,7 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     // The minimum sizes are for 720 rows; smaller images get thinner strands.
     chains->record(cmd, push, std::clamp(static_cast<float>(height) / 720.0f, 0.5f, 2.0f));
     birds->record(cmd, push);
+    skinned->record(cmd, push);
     cmd.endRenderPass();
     // The next frame's kernels and uploads overwrite what the vertex shaders read.
     cmd.pipelineBarrier(Stage::eVertexShader, Stage::eComputeShader | Stage::eTransfer, {}, {}, {}, {});

@@ -62,78 +62,18 @@ void add_ground_grid(DrawList& list, std::span<const glm::vec3> points) {
     }
 }
 
-namespace {
-
-bool has_mesh(const gltf::Character& character) {
+bool draws_skinned(const gltf::Character& character) {
     return std::any_of(character.nodes.begin(), character.nodes.end(), [&](const gltf::Node& n) {
         return n.mesh >= 0 && !character.meshes[static_cast<std::size_t>(n.mesh)].triangles.empty();
     });
 }
 
-// A rigged instance's own meshes, skinned on the CPU (glTF §3.7.3: each vertex moved by
-// the weighted joint matrices world(joint) x inverseBindMatrix), flat shaded. Returns
-// false when the character has no mesh to show (then its bones are drawn).
-bool add_skinned_meshes(DrawList& list, const RodScene& scene, std::uint32_t c, std::uint32_t frame,
-                        const ChainSnapshot* snapshot, gltf::Pose& pose, std::vector<glm::mat4>& world) {
-    const gltf::Character& ch = *scene.characters[scene.instances[c].character].rig;
-    if (!has_mesh(ch) || snapshot == nullptr || snapshot->positions.size() < scene.world.joint_count) return false;
-    scene.rigged_world(c, frame, snapshot->positions, snapshot->orientations, pose, world);
-    std::vector<glm::mat4> joint_matrices;
-    std::vector<glm::vec3> skinned;
-    for (std::size_t n = 0; n < ch.nodes.size(); ++n) {
-        const gltf::Node& node = ch.nodes[n];
-        if (node.mesh < 0) continue;
-        const gltf::Skin* skin = node.skin >= 0 ? &ch.skins[static_cast<std::size_t>(node.skin)] : nullptr;
-        joint_matrices.clear();
-        if (skin != nullptr) {
-            for (std::size_t j = 0; j < skin->joints.size(); ++j) {
-                joint_matrices.push_back(world[static_cast<std::size_t>(skin->joints[j])] * skin->inverse_bind_matrices[j]);
-            }
-        }
-        for (const gltf::Mesh::Triangles& t : ch.meshes[static_cast<std::size_t>(node.mesh)].triangles) {
-            skinned.resize(t.positions.size());
-            for (std::size_t v = 0; v < t.positions.size(); ++v) {
-                const glm::vec4 p(t.positions[v], 1.0f);
-                if (skin == nullptr || t.joints.empty()) {
-                    skinned[v] = glm::vec3(world[n] * p);
-                    continue;
-                }
-                glm::vec3 sum(0.0f);
-                float total = 0.0f;
-                for (int k = 0; k < 4; ++k) {
-                    const float w = t.weights[v][k];
-                    const std::uint32_t j = t.joints[v][k];
-                    if (w <= 0.0f || j >= joint_matrices.size()) continue;
-                    sum += w * glm::vec3(joint_matrices[j] * p);
-                    total += w;
-                }
-                skinned[v] = total > 0.0f ? sum / total : glm::vec3(world[n] * p);
-            }
-            const glm::vec3 color(t.color);
-            for (std::size_t i = 0; i + 2 < t.indices.size(); i += 3) {
-                const glm::vec3& a = skinned[t.indices[i]];
-                const glm::vec3& b = skinned[t.indices[i + 1]];
-                const glm::vec3& d = skinned[t.indices[i + 2]];
-                list.add_lit_triangle(a, b, d, glm::cross(b - a, d - a), color);
-            }
-        }
-    }
-    return true;
-}
-
-}  // namespace
-
-void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, const ChainSnapshot* snapshot,
-                    const rods::RodFrame* kinematic) {
+void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, const rods::RodFrame* kinematic) {
     std::vector<rods::Transform> joints;
-    gltf::Pose pose;
-    std::vector<glm::mat4> world_matrices;
     for (std::uint32_t c = 0; c < scene.instances.size(); ++c) {
-        // Skinned meshes where the character has them, otherwise bones.
-        if (scene.characters[scene.instances[c].character].rig &&
-            add_skinned_meshes(list, scene, c, frame, snapshot, pose, world_matrices)) {
-            continue;
-        }
+        // Rigged characters with meshes are the renderer's skinned-mesh layer.
+        const auto& rig = scene.characters[scene.instances[c].character].rig;
+        if (rig && draws_skinned(*rig)) continue;
         scene.joint_poses(c, frame, joints);
         const auto& parents = scene.joint_parents(c);
         for (std::size_t j = 0; j < joints.size() && j < parents.size(); ++j) {
@@ -150,14 +90,6 @@ void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, 
             }
         }
     }
-}
-
-bool needs_snapshot(const RodScene& scene) {
-    for (const CharacterInstance& instance : scene.instances) {
-        const auto& rig = scene.characters[instance.character].rig;
-        if (rig && has_mesh(*rig)) return true;
-    }
-    return false;
 }
 
 std::vector<glm::vec3> content_points(const RodScene* scene, const rods::RodFrame* frame, const birds::BirdWorld* birds) {

@@ -3,9 +3,10 @@
 /// The renderer (issue 5): Vulkan draws into a WxH RGBA8 + depth target, read back as an
 /// image (render(); PNG output and contact sheets) or blitted into a window's swapchain
 /// (present(), the viewer). A frame is a draw list built on the CPU (ground grid,
-/// skeletons, skinned meshes, overlays) plus the chains and birds, which are drawn from
-/// buffers on the device: the vulkan backends' own when they share the renderer's device
-/// (BackendOptions::context = device_context(); nothing read back), else uploaded.
+/// skeletons, colliders, overlays) plus the chains, birds and rigged characters' skinned
+/// meshes, which are drawn from buffers on the device: the vulkan backends' own when they
+/// share the renderer's device (BackendOptions::context = device_context(); nothing read
+/// back), else uploaded.
 
 #include <cstdint>
 #include <functional>
@@ -22,6 +23,11 @@
 #include "kodawari/backend.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/rod_backend.hpp"
+
+namespace kodawari {
+class CrowdAnimator;
+struct RodScene;
+}  // namespace kodawari
 
 namespace kodawari::render {
 
@@ -84,8 +90,8 @@ struct Image {
     [[nodiscard]] Rgba8 at(std::uint32_t x, std::uint32_t y) const;
 };
 
-/// What one frame draws besides the chains and birds, in world space: built on the CPU
-/// and uploaded every frame.
+/// What one frame draws besides the chains, birds and skinned meshes, in world space:
+/// built on the CPU and uploaded every frame.
 class DrawList {
 public:
     /// `width` x `height` is the image the list is for: segments and dots have minimum
@@ -155,8 +161,8 @@ public:
     Renderer(const Renderer&) = delete;
     Renderer& operator=(const Renderer&) = delete;
 
-    /// Draws the background, then `list`'s lines and triangles and the chain and bird
-    /// layers (depth tested), waits and reads the image back. `list` must be for this renderer's size. Deterministic: the
+    /// Draws the background, then `list`'s lines and triangles and the chain, bird and
+    /// skinned-mesh layers (depth tested), waits and reads the image back. `list` must be for this renderer's size. Deterministic: the
     /// same list gives the same bytes.
     [[nodiscard]] Result<Image> render(const DrawList& list);
 
@@ -177,7 +183,7 @@ public:
     /// The device it draws on ("llvmpipe (LLVM 15.0.6, 256 bits)").
     [[nodiscard]] std::string device() const;
     /// The renderer's Vulkan device, to run the simulation on (BackendOptions::context):
-    /// the vulkan backends then keep their state where the chain and bird layers draw it.
+    /// the vulkan backends then keep their state where the layers draw it.
     [[nodiscard]] std::shared_ptr<gpu::VulkanContext> device_context() const;
     /// Bytes of kernel output read back to the host on this device so far (the
     /// simulation's, when it shares the device): the viewer's per-frame figure.
@@ -204,6 +210,25 @@ public:
     [[nodiscard]] Result<void> birds_from(const BirdBackend& backend);
     /// This frame's bird poses, one per bird, uploaded.
     [[nodiscard]] Result<void> birds_from(std::span<const gpu::BirdPose> poses);
+
+    /// Draws the rigged characters of `scene` that have meshes as their skinned meshes
+    /// (glTF §3.7.3; flat shaded, lit) in every following frame (null: none), posed per
+    /// frame by skinned_from(). `scene` must outlive its use here.
+    [[nodiscard]] Result<void> set_skinned(const RodScene* scene);
+    /// Frame `frame`'s poses: the clip's with the hair bones where `rods` simulated them
+    /// (RodScene::rigged_world). When the animator's pose backends and `rods` keep their
+    /// buffers on this renderer's device (the vulkan ones made with device_context()), a
+    /// kernel composes the node matrices there, nothing read back; the animator's last
+    /// frame() and `rods`' state must then be frame `frame`'s. Otherwise `rods` is read
+    /// and the matrices are composed on the CPU and uploaded. `animator` must be made from
+    /// the scene given to set_skinned().
+    [[nodiscard]] Result<void> skinned_from(const CrowdAnimator& animator, RodBackend& rods, std::uint32_t frame);
+    /// Frame `frame`'s poses from a snapshot of the chains at that frame, composed on the
+    /// CPU (RodScene::rigged_world) and uploaded.
+    [[nodiscard]] Result<void> skinned_from(const ChainSnapshot& snapshot, std::uint32_t frame);
+    /// Whether the last skinned_from() composed the poses on the device.
+    [[nodiscard]] bool skinned_on_device() const;
+
     /// Validation messages seen so far (with validation on).
     [[nodiscard]] std::uint32_t validation_messages() const;
 

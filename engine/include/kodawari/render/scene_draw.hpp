@@ -1,9 +1,9 @@
 #pragma once
 /// @file
 /// Draw lists of a scene's content for the renderer (renderer.hpp): the scene camera,
-/// a ground grid, characters (skinned meshes or skeleton bones, colliders). The chains and
-/// birds are the renderer's layers (Renderer::set_chains, set_birds). Shared by
-/// `kodawari render` and `kodawari view`.
+/// a ground grid, characters (skeleton bones, colliders). The chains, birds and skinned
+/// meshes are the renderer's layers (Renderer::set_chains, set_birds, set_skinned).
+/// Shared by `kodawari render` and `kodawari view`.
 
 #include <cstdint>
 #include <span>
@@ -30,17 +30,15 @@ inline constexpr Rgba8 kGridColor{150, 156, 168};
 /// margin, with about 10 to 25 lines each way (spacing 1, 2 or 5 x 10^k m).
 void add_ground_grid(DrawList& list, std::span<const glm::vec3> points);
 
-/// Every character instance of `scene` at `frame`: rigged characters with meshes as
-/// their skinned meshes, posed by the clip and by the chains of `snapshot` (the backend's
-/// state at that frame; without it, or without meshes, they get bones), the others as
-/// skeleton bones from RodScene::joint_poses; colliders of `kinematic` (that frame's
-/// input; may be null) as circles. The chains themselves are the renderer's chain layer.
-void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, const ChainSnapshot* snapshot,
-                    const rods::RodFrame* kinematic);
+/// Whether a rigged character is drawn as its skinned mesh (the renderer's skinned-mesh
+/// layer, Renderer::set_skinned) rather than as bones: some node has a mesh with triangles.
+[[nodiscard]] bool draws_skinned(const gltf::Character& character);
 
-/// Whether add_characters() needs the chains' snapshot: some instance is a rigged
-/// character with a mesh (its hair bones follow the chains).
-[[nodiscard]] bool needs_snapshot(const RodScene& scene);
+/// Every character instance of `scene` at `frame` that is not a skinned mesh (those are
+/// the renderer's skinned-mesh layer, Renderer::set_skinned) as skeleton bones from
+/// RodScene::joint_poses, and the colliders of `kinematic` (that frame's input; may be
+/// null) as circles. The chains themselves are the renderer's chain layer.
+void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, const rods::RodFrame* kinematic);
 
 /// Where the content is, for add_ground_grid, from the scene alone (no simulation state,
 /// so that nothing needs reading back): character instances' placements, the chain roots

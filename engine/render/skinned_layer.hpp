@@ -1,0 +1,71 @@
+#pragma once
+// The renderer's skinned-mesh layer: rigged characters drawn as their glTF meshes,
+// skinned in a vertex shader (shaders/skinned.vert) with node world matrices that live in
+// a buffer of the layer. Those are composed on the device by shaders/skin_nodes.comp from
+// the pose and rod backends' buffers when both are on the renderer's device (nothing
+// read back), or on the CPU by RodScene::rigged_world() from a snapshot and uploaded in
+// the same layout; one vertex shader draws both.
+
+#include <cstdint>
+#include <optional>
+#include <vector>
+
+#include <shared/poses.h>
+#include <shared/render.h>
+
+#include "gpu/compute_pipeline.hpp"
+#include "gpu/gpu_buffer.hpp"
+#include "gpu/graphics.hpp"
+#include "kodawari/crowd_animator.hpp"
+#include "kodawari/rod_backend.hpp"
+#include "kodawari/rod_scene.hpp"
+
+namespace kodawari::render {
+
+class SkinnedLayer {
+public:
+    [[nodiscard]] static Result<SkinnedLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+
+    /// The rigged characters of `scene` that have meshes (null: none): per character
+    /// template its expanded triangles, skin joints, node walk and instances' chains are
+    /// uploaded once.
+    [[nodiscard]] Result<void> set_scene(gpu::VulkanContext& ctx, const RodScene* scene);
+    /// Frame `frame`'s matrices: composed on the device when the animator's pose backends
+    /// and `rods` keep their buffers on `ctx`, else from `rods`' snapshot on the CPU.
+    [[nodiscard]] Result<void> from_backends(gpu::VulkanContext& ctx, const CrowdAnimator& animator, RodBackend& rods,
+                                             std::uint32_t frame);
+    /// Frame `frame`'s matrices by RodScene::rigged_world() from `snapshot`, uploaded.
+    [[nodiscard]] Result<void> from_snapshot(gpu::VulkanContext& ctx, const ChainSnapshot& snapshot, std::uint32_t frame);
+    /// Whether the last from_*() composed the matrices on the device.
+    [[nodiscard]] bool on_device() const { return on_device_; }
+
+    /// Records the kernels that compose the matrices (outside the render pass; the
+    /// renderer's barrier to the vertex shaders follows).
+    void record_kernels(const vk::raii::CommandBuffer& cmd) const;
+    /// Records the draws (inside the render pass; `push` has the camera and the light).
+    void record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push) const;
+
+private:
+    SkinnedLayer() = default;
+    // A rigged character template with a mesh and instances.
+    struct Character {
+        std::uint32_t character = 0;           // RodScene::characters index
+        std::vector<std::uint32_t> instances;  // RodScene::instances indices, ascending (CrowdAnimator's order)
+        std::uint32_t nodes = 0, chains = 0, indices = 0;
+        std::optional<gpu::GpuBuffer> vertex_buffer, index_buffer, joints, walk, instance_chains, world;
+        std::optional<gpu::BufferSet> set;
+        std::optional<gpu::ComputePipeline> kernel;  // made on the first device frame
+        bool filled = false;                         // world holds a frame's matrices
+        bool dispatch = false;                       // the kernel composes them each frame drawn
+    };
+    std::optional<gpu::GraphicsPipeline> pipeline_;
+    const RodScene* scene_ = nullptr;
+    std::vector<Character> characters_;
+    std::vector<gpu::PoseMatrixGpu> packed_;
+    gltf::Pose pose_;
+    std::vector<glm::mat4> matrices_;
+    ChainSnapshot scratch_;
+    bool on_device_ = false;
+};
+
+}  // namespace kodawari::render

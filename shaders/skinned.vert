@@ -1,0 +1,49 @@
+#version 450
+// The skinned-mesh layer: a rigged character's indexed triangles instanced
+// per character instance, each vertex skinned with its instance's node world matrices
+// (skin_nodes.comp's output, or rigged_world()'s uploaded): glTF §3.7.3, the weighted
+// sum of world(joint) * inverseBindMatrix * position, divided by the sum of the weights
+// used (the CPU path's normalization); a vertex without weights follows its mesh node.
+#extension GL_GOOGLE_include_directive : require
+#include "shared/poses.h"
+#include "shared/render.h"
+#include "shared/skin.h"
+
+layout(location = 0) in vec4 in_position;
+layout(location = 1) in vec4 in_joints;
+layout(location = 2) in vec4 in_weights;
+layout(location = 3) in vec4 in_color;
+
+layout(push_constant, std430) uniform Push { RenderPush push; };
+layout(std430, set = 0, binding = KW_SKINNED_BINDING_JOINTS) readonly buffer Joints { SkinJointGpu joints[]; };
+layout(std430, set = 0, binding = KW_SKINNED_BINDING_WORLD) readonly buffer World { PoseMatrixGpu world[]; };
+
+layout(location = 0) out vec4 out_color;
+layout(location = 1) out vec3 out_from_eye;
+
+mat4 world_matrix(uint node) {
+    const PoseMatrixGpu m = world[gl_InstanceIndex * push.draw.x + node];
+    return mat4(m.columns[0], m.columns[1], m.columns[2], m.columns[3]);
+}
+
+void main() {
+    const vec4 p = vec4(in_position.xyz, 1.0);
+    vec3 sum = vec3(0.0);
+    float total = 0.0;
+    for (int k = 0; k < 4; ++k) {
+        const float w = in_weights[k];
+        if (w <= 0.0) continue;
+        const SkinJointGpu joint = joints[uint(in_joints[k])];
+        const mat4 inverse_bind = mat4(joint.inverse_bind[0], joint.inverse_bind[1], joint.inverse_bind[2], joint.inverse_bind[3]);
+        // world * (inverse bind * p): two matrix-vector products instead of a matrix product.
+        sum += w * (world_matrix(joint.ids.x) * (inverse_bind * p)).xyz;
+        total += w;
+    }
+    const vec3 skinned = total > 0.0 ? sum / total : (world_matrix(uint(in_position.w)) * p).xyz;
+    const mat4 view_proj = mat4(push.view_proj[0], push.view_proj[1], push.view_proj[2], push.view_proj[3]);
+    gl_Position = view_proj * vec4(skinned, 1.0);
+    out_color = vec4(in_color.rgb, 1.0);
+    // Relative to the eye: the fragment shader's derivatives of it then keep their
+    // precision far from the origin.
+    out_from_eye = skinned - push.eye.xyz;
+}
