@@ -70,6 +70,16 @@ std::vector<BackendKind> read_backends(Args& args) {
 }
 
 // The table and the --json file, the same shape for every benchmark.
+// Writes a benchmark's JSON atomically and says so.
+int write_json(const std::string& path, const std::string& text) {
+    auto file = AtomicFile::open(path);
+    if (!file) return report(file.error());
+    file.value().write(text);
+    if (auto r = file.value().commit(); !r) return report(r.error());
+    std::printf("wrote %s\n", path.c_str());
+    return kExitOk;
+}
+
 int report_results(const std::vector<Measured>& results, const char* unit, const std::string& json_head,
                    const std::optional<std::string>& json_path) {
     double reference = 0.0;
@@ -95,11 +105,7 @@ int report_results(const std::vector<Measured>& results, const char* unit, const
                     numbers + "}";
         }
         text += "]}\n";
-        auto file = AtomicFile::open(*json_path);
-        if (!file) return report(file.error());
-        file.value().write(text);
-        if (auto r = file.value().commit(); !r) return report(r.error());
-        std::printf("wrote %s\n", json_path->c_str());
+        return write_json(*json_path, text);
     }
     return kExitOk;
 }
@@ -406,14 +412,7 @@ int bench_view(Args& args, BackendChoice choice) {
         json += (i ? "," : "") + std::string("{\"configuration\":\"") + run.name + "\"," + numbers + "}";
     }
     json += "]}\n";
-    if (json_path) {
-        auto file = AtomicFile::open(*json_path);
-        if (!file) return report(file.error());
-        file.value().write(json);
-        if (auto s = file.value().commit(); !s) return report(s.error());
-        std::printf("wrote %s\n", json_path->c_str());
-    }
-    return kExitOk;
+    return json_path ? write_json(*json_path, json) : kExitOk;
 }
 
 }  // namespace

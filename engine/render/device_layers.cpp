@@ -19,6 +19,14 @@ std::span<const std::byte> bytes_of(const std::vector<T>& v) {
     return std::as_bytes(std::span<const T>(v));
 }
 
+// `slot` becomes a storage buffer holding `bytes`.
+Result<void> store(gpu::VulkanContext& ctx, std::optional<gpu::GpuBuffer>& slot, std::span<const std::byte> bytes) {
+    auto buffer = storage_with(ctx, bytes);
+    if (!buffer) return buffer.error();
+    slot.emplace(std::move(buffer).value());
+    return {};
+}
+
 std::uint32_t bits(float value) { return std::bit_cast<std::uint32_t>(value); }
 
 }  // namespace
@@ -33,17 +41,32 @@ Result<gpu::GpuBuffer> storage_with(gpu::VulkanContext& ctx, std::span<const std
 // ---------------------------------------------------------------------------------------
 // Chains
 
+Result<gpu::GraphicsPipeline> layer_pipeline(const gpu::VulkanContext& ctx, vk::RenderPass pass, std::string_view vertex,
+                                             std::string_view fragment, std::uint32_t vertex_stride, std::uint32_t attributes,
+                                             std::uint32_t storage_buffers) {
+    return gpu::GraphicsPipeline::create(ctx, pass, vertex, fragment, vertex_stride, attributes, sizeof(gpu::RenderPush),
+                                         {.topology = vk::PrimitiveTopology::eTriangleList, .depth = true, .storage_buffers = storage_buffers});
+}
+
+namespace {
+
+// A created pipeline and a descriptor set of it, into `pipeline` and `set`.
+Result<void> with_set(const gpu::VulkanContext& ctx, Result<gpu::GraphicsPipeline> created, std::optional<gpu::GraphicsPipeline>& pipeline,
+                      std::optional<gpu::BufferSet>& set) {
+    if (!created) return created.error();
+    pipeline.emplace(std::move(created).value());
+    auto made = gpu::BufferSet::create(ctx, *pipeline);
+    if (!made) return made.error();
+    set.emplace(std::move(made).value());
+    return {};
+}
+
+}  // namespace
+
 Result<ChainLayer> ChainLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
     ChainLayer layer;
-    auto pipeline = gpu::GraphicsPipeline::create(ctx, pass, "chains.vert", "render.frag", 0, 0, sizeof(gpu::RenderPush),
-                                                  {.topology = vk::PrimitiveTopology::eTriangleList,
-                                                   .depth = true,
-                                                   .storage_buffers = KW_CHAINS_BINDING_COUNT});
-    if (!pipeline) return pipeline.error();
-    layer.pipeline_.emplace(std::move(pipeline).value());
-    auto set = gpu::BufferSet::create(ctx, *layer.pipeline_);
-    if (!set) return set.error();
-    layer.set_.emplace(std::move(set).value());
+    KW_TRY(with_set(ctx, layer_pipeline(ctx, pass, "chains.vert", "render.frag", 0, 0, KW_CHAINS_BINDING_COUNT), layer.pipeline_,
+                    layer.set_));
     return layer;
 }
 
@@ -65,13 +88,8 @@ Result<void> ChainLayer::set_world(gpu::VulkanContext& ctx, const rods::RodWorld
         info.push_back({{chain.joint_begin, shape.joint_count, color, 0u}, {shape.thickness, 0.0f, 0.0f, 0.0f}});
         std::fill_n(joint_chain.begin() + chain.joint_begin, shape.joint_count, c);
     }
-    auto info_buffer = storage_with(ctx, bytes_of(info));
-    if (!info_buffer) return info_buffer.error();
-    info_.emplace(std::move(info_buffer).value());
-    auto joint_buffer = storage_with(ctx, bytes_of(joint_chain));
-    if (!joint_buffer) return joint_buffer.error();
-    joint_chain_.emplace(std::move(joint_buffer).value());
-    return {};
+    KW_TRY(store(ctx, info_, bytes_of(info)));
+    return store(ctx, joint_chain_, bytes_of(joint_chain));
 }
 
 Result<void> ChainLayer::from_backend(gpu::VulkanContext& ctx, RodBackend& backend) {
@@ -97,9 +115,7 @@ Result<void> ChainLayer::from_snapshot(gpu::VulkanContext& ctx, const ChainSnaps
     // The backend's layout with every root at the origin: x is then the world position.
     if (!host_states_) {
         const std::vector<gpu::RodChainStateGpu> zero(world_->chains.size(), gpu::RodChainStateGpu{});
-        auto states = storage_with(ctx, bytes_of(zero));
-        if (!states) return states.error();
-        host_states_.emplace(std::move(states).value());
+        KW_TRY(store(ctx, host_states_, bytes_of(zero)));
         auto motion = gpu::GpuBuffer::create(ctx, std::max<std::uint64_t>(world_->joint_count * sizeof(gpu::RodJointMotionGpu), 16),
                                              gpu::GpuBuffer::Kind::Storage);
         if (!motion) return motion.error();
@@ -139,16 +155,8 @@ void ChainLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push
 
 Result<BirdLayer> BirdLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
     BirdLayer layer;
-    auto pipeline = gpu::GraphicsPipeline::create(ctx, pass, "birds.vert", "render.frag", sizeof(gpu::BirdDrawVertex), 2,
-                                                  sizeof(gpu::RenderPush),
-                                                  {.topology = vk::PrimitiveTopology::eTriangleList,
-                                                   .depth = true,
-                                                   .storage_buffers = KW_BIRDS_DRAW_BINDING_COUNT});
-    if (!pipeline) return pipeline.error();
-    layer.pipeline_.emplace(std::move(pipeline).value());
-    auto set = gpu::BufferSet::create(ctx, *layer.pipeline_);
-    if (!set) return set.error();
-    layer.set_.emplace(std::move(set).value());
+    KW_TRY(with_set(ctx, layer_pipeline(ctx, pass, "birds.vert", "render.frag", sizeof(gpu::BirdDrawVertex), 2, KW_BIRDS_DRAW_BINDING_COUNT),
+                    layer.pipeline_, layer.set_));
     return layer;
 }
 
@@ -207,13 +215,8 @@ Result<void> BirdLayer::set_world(gpu::VulkanContext& ctx, const birds::BirdWorl
     if (!vertex_buffer) return vertex_buffer.error();
     vertices_.emplace(std::move(vertex_buffer).value());
     if (!vertices.empty()) std::memcpy(vertices_->mapped(), vertices.data(), vertices.size() * sizeof(gpu::BirdDrawVertex));
-    auto type_buffer = storage_with(ctx, bytes_of(types));
-    if (!type_buffer) return type_buffer.error();
-    types_.emplace(std::move(type_buffer).value());
-    auto order_buffer = storage_with(ctx, bytes_of(order));
-    if (!order_buffer) return order_buffer.error();
-    order_.emplace(std::move(order_buffer).value());
-    return {};
+    KW_TRY(store(ctx, types_, bytes_of(types)));
+    return store(ctx, order_, bytes_of(order));
 }
 
 Result<void> BirdLayer::from_backend(gpu::VulkanContext& ctx, const BirdBackend& backend) {

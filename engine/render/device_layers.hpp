@@ -9,6 +9,7 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <string_view>
 
 #include <shared/birds.h>
 #include <shared/render.h>
@@ -24,6 +25,13 @@ namespace kodawari::render {
 
 /// A storage buffer of at least 16 bytes (an empty world still binds one) filled with `bytes`.
 [[nodiscard]] Result<gpu::GpuBuffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes);
+
+/// A layer's pipeline: triangle lists, depth tested, the renderer's push constants, and
+/// `storage_buffers` read by the vertex shader.
+[[nodiscard]] Result<gpu::GraphicsPipeline> layer_pipeline(const gpu::VulkanContext& ctx, vk::RenderPass pass,
+                                                           std::string_view vertex, std::string_view fragment,
+                                                           std::uint32_t vertex_stride, std::uint32_t attributes,
+                                                           std::uint32_t storage_buffers);
 
 /// The chains of a RodWorld.
 class ChainLayer {

@@ -28,11 +28,7 @@ gpu::PoseMatrixGpu packed(const glm::mat4& m) { return {{v4(m[0]), v4(m[1]), v4(
 
 Result<SkinnedLayer> SkinnedLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
     SkinnedLayer layer;
-    auto pipeline = gpu::GraphicsPipeline::create(ctx, pass, "skinned.vert", "skinned.frag", sizeof(gpu::SkinnedVertexGpu), 4,
-                                                  sizeof(gpu::RenderPush),
-                                                  {.topology = vk::PrimitiveTopology::eTriangleList,
-                                                   .depth = true,
-                                                   .storage_buffers = KW_SKINNED_BINDING_COUNT});
+    auto pipeline = layer_pipeline(ctx, pass, "skinned.vert", "skinned.frag", sizeof(gpu::SkinnedVertexGpu), 4, KW_SKINNED_BINDING_COUNT);
     if (!pipeline) return pipeline.error();
     layer.pipeline_.emplace(std::move(pipeline).value());
     return layer;
