@@ -162,8 +162,9 @@ public:
     Renderer& operator=(const Renderer&) = delete;
 
     /// Draws the background, then `list`'s lines and triangles and the chain, bird and
-    /// skinned-mesh layers (depth tested), waits and reads the image back. `list` must be for this renderer's size. Deterministic: the
-    /// same list gives the same bytes.
+    /// skinned-mesh layers (depth tested), waits and reads the image back. `list` must be
+    /// for this renderer's size. Deterministic: the same list and layer state give the
+    /// same bytes.
     [[nodiscard]] Result<Image> render(const DrawList& list);
 
     /// Draws as render() does and waits, without reading the image back (benchmarks:
