@@ -369,8 +369,10 @@ int bench_view(Args& args, BackendChoice choice) {
         }
         render::DrawList list(render::scene_camera(scene, f), width, height);
         render::add_ground_grid(list, grid);
-        // Colliders are not drawn: with the rigged input on the device they are not on the host.
-        if (rod_scene) render::add_characters(list, *rod_scene, f, nullptr);
+        if (rod_scene) {
+            KW_TRY(r.colliders_from(*run.rods, run.frame));
+            render::add_characters(list, *rod_scene, f);
+        }
         KW_TRY(r.draw(list));
         if (f >= 2) run.read_back_bytes += r.read_back_bytes() - before;
         return {};

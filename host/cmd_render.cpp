@@ -150,7 +150,7 @@ int cmd_render(Args args) {
     std::vector<render::Image> cells;
     std::vector<glm::vec3> grid_points;
     std::vector<gpu::BirdPose> poses(bird_count);
-    rods::RodFrame frame, drawn_input;
+    rods::RodFrame frame;
     double render_seconds = 0.0;
     const bool show_progress = stderr_is_terminal() && range.end > 100;
     for (std::uint32_t f = 0; f < range.end; ++f) {
@@ -178,29 +178,23 @@ int cmd_render(Args args) {
             // from the backends' buffers where they share the renderer's device.
             if (auto r = renderer.value()->chains_from(*rods); !r) return report(r.error());
             if (auto r = renderer.value()->skinned_from(*animator, *rods, f); !r) return report(r.error());
+            if (auto r = renderer.value()->colliders_from(*rods, frame); !r) return report(r.error());
         }
         if (birds) {
             if (auto r = birds_on_device ? renderer.value()->birds_from(*birds) : renderer.value()->birds_from(poses); !r) {
                 return report(r.error());
             }
         }
-        // The input drawn (colliders, the grid's extent) is this frame's: with the rigged
-        // characters' part written on the device, it is read back for the drawn frames.
-        const rods::RodFrame* kinematic = rods ? &frame : nullptr;
-        if (rods && animator->writes_inputs_on_device()) {
-            if (auto r = animator->host_frame(f, drawn_input); !r) return report(r.error());
-            kinematic = &drawn_input;
-        }
         const auto start = std::chrono::steady_clock::now();
         render::DrawList list(render::scene_camera(scene, f), width, height);
         // The grid covers where the content is at the first drawn frame and then stays put,
         // so that it does not jump from frame to frame.
         if (grid_points.empty()) {
-            grid_points = render::content_points(rod_scene ? &*rod_scene : nullptr, kinematic, birds ? &bird_world : nullptr);
+            grid_points = render::content_points(rod_scene ? &*rod_scene : nullptr, rods ? &frame : nullptr, birds ? &bird_world : nullptr);
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
         }
         render::add_ground_grid(list, grid_points);
-        if (rods) render::add_characters(list, *rod_scene, f, kinematic);
+        if (rods) render::add_characters(list, *rod_scene, f);
         auto image = renderer.value()->render(list);
         if (!image) return report(image.error());
         render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

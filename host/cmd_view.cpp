@@ -126,9 +126,9 @@ struct Simulation {
     // The chains' state of the current frame on the host (picking, sketching).
     [[nodiscard]] Result<void> read_chains() { return rods ? rods->read(snapshot) : Result<void>{}; }
 
-    // The current frame's kinematic input with every entry on the host (colliders to
-    // draw, a sketch's root): `frame`, unless the rigged characters' part is written on
-    // the device, then read back once per frame asked for.
+    // The current frame's kinematic input with every entry on the host (a sketch's root
+    // and reference joint): `frame`, unless the rigged characters' part is written on the
+    // device, then read back once per frame asked for.
     [[nodiscard]] Result<const rods::RodFrame*> host_input() {
         if (!animator || !animator->writes_inputs_on_device()) return &frame;
         if (host_input_frame != current) {
@@ -138,7 +138,6 @@ struct Simulation {
         }
         return &host;
     }
-    [[nodiscard]] bool input_on_device() const { return animator && animator->writes_inputs_on_device(); }
 
     // What the renderer draws of this simulation from now on.
     [[nodiscard]] Result<void> show_on(render::Renderer& renderer) const {
@@ -149,7 +148,10 @@ struct Simulation {
 
     // This frame's chains, skinned meshes and birds, where they are.
     [[nodiscard]] Result<void> draw_on(render::Renderer& renderer) {
-        if (rods) KW_TRY(renderer.chains_from(*rods));
+        if (rods) {
+            KW_TRY(renderer.chains_from(*rods));
+            KW_TRY(renderer.colliders_from(*rods, frame));
+        }
         if (rods) KW_TRY(renderer.skinned_from(*animator, *rods, current));
         if (birds) KW_TRY(birds_on_device ? renderer.birds_from(*birds) : renderer.birds_from(poses));
         return {};
@@ -749,19 +751,7 @@ int cmd_view(Args args) {
         }
         render::add_ground_grid(list, grid_points);
         if (s.rods) {
-            // Colliders: with the rigged characters' input on the device, theirs are known on
-            // the host only when read back, which a paused frame does once; while playing,
-            // none are drawn rather than stale ones.
-            const rods::RodFrame* kinematic = &s.frame;
-            if (s.input_on_device()) {
-                kinematic = nullptr;
-                if (!v.playing) {
-                    auto host = s.host_input();
-                    if (!host) return report(host.error());
-                    kinematic = host.value();
-                }
-            }
-            render::add_characters(list, *s.rod_scene, s.current, kinematic);
+            render::add_characters(list, *s.rod_scene, s.current);
         }
         if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
         if (v.sketch_mode && v.picked && s.rod_scene) {

@@ -20,6 +20,7 @@
 
 #include "kodawari/backend.hpp"
 #include "kodawari/birds/rig.hpp"
+#include "kodawari/crowd_animator.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -141,7 +142,7 @@ render::DrawList ahoge_frame(render::Renderer& renderer, const AhogeRun& run, st
     render::DrawList list(render::scene_camera(run.scene, frame), renderer.width(), renderer.height());
     const rods::RodFrame input = run.rods.frame(frame);
     render::add_ground_grid(list, render::content_points(&run.rods, &input, nullptr));
-    render::add_characters(list, run.rods, frame, nullptr);
+    render::add_characters(list, run.rods, frame);
     EXPECT_TRUE(renderer.set_chains(&run.rods.world).ok());
     EXPECT_TRUE(renderer.chains_from(snapshot).ok());
     return list;
@@ -380,7 +381,7 @@ TEST(Render, OrthographicSceneCameraIsDrawnOrthographic) {
     const render::CameraView view = render::scene_camera(scene.value(), kFrame);
     EXPECT_TRUE(view.orthographic);
     render::DrawList list(view, kWidth, kHeight);
-    render::add_characters(list, rods.value(), kFrame, nullptr);
+    render::add_characters(list, rods.value(), kFrame);
     ASSERT_TRUE(renderer->set_chains(&rods.value().world).ok());
     ASSERT_TRUE(renderer->chains_from(snapshot).ok());
     auto image = renderer->render(list);
@@ -520,6 +521,85 @@ TEST(Render, BirdsDrawnFromTheVulkanBackendsRingNeedNoReadBack) {
     auto cpu = make_bird_backend(BackendKind::Cpu, {});
     ASSERT_TRUE(cpu.ok());
     EXPECT_FALSE(renderer->birds_from(*cpu.value()).ok());
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
+// Colliders are drawn from the rod input where it is: on one device the rigged
+// characters' colliders are written there by the rod-input kernel
+// (CrowdAnimator::write_inputs_on) and the collider layer reads them from the rod
+// backend's input buffer, nothing read back. Checked against the same frame's colliders
+// computed on the host (CrowdAnimator::host_frame) and uploaded: each collider's circle
+// passes where the host's capsule projects, and the two images differ by at most 1% of
+// the collider pixels (the inputs differ by float rounding, about 1e-7 m: a line pixel
+// can flip). 5 chibis: not a multiple of any workgroup size.
+TEST(Render, CollidersDrawnFromTheRodInputOnTheDevice) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto scene = load_scene(scene_path("crowd-gltf.json"));
+    ASSERT_TRUE(scene.ok());
+    scene.value().crowds[0].count = 5;
+    auto built = build_rod_scene(scene.value());
+    ASSERT_TRUE(built.ok());
+    const RodScene& rods = built.value();
+    ASSERT_GT(rods.world.collider_count, 0u);
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    BackendOptions options;
+    options.context = renderer->device_context();
+    auto backend = make_rod_backend(BackendKind::Vulkan, options);
+    ASSERT_TRUE(backend.ok());
+    auto animator = CrowdAnimator::create(rods, BackendKind::Vulkan, options);
+    ASSERT_TRUE(animator.ok());
+    constexpr std::uint32_t kFrame = 40;
+    rods::RodFrame input;
+    for (std::uint32_t f = 0; f <= kFrame; ++f) {
+        ASSERT_TRUE(animator.value().frame(f, input).ok());
+        ASSERT_TRUE((f == 0 ? backend.value()->load(rods.world, input) : backend.value()->step(input)).ok());
+        if (f == 0) {
+            auto took = animator.value().write_inputs_on(*backend.value());
+            ASSERT_TRUE(took.ok() && took.value());
+        }
+    }
+    ASSERT_TRUE(renderer->set_chains(&rods.world).ok());  // the colliders' world; no chain state given: none drawn
+    const render::CameraView view = render::scene_camera(scene.value(), kFrame);
+    const render::DrawList list(view, kWidth, kHeight);
+    const std::uint64_t before = renderer->read_back_bytes();
+    ASSERT_TRUE(renderer->colliders_from(*backend.value(), input).ok());
+    auto from_device = renderer->render(list);
+    ASSERT_TRUE(from_device.ok());
+    EXPECT_EQ(renderer->read_back_bytes() - before, 0u);
+
+    rods::RodFrame host;
+    ASSERT_TRUE(animator.value().host_frame(kFrame, host).ok());
+    auto cpu = make_rod_backend(BackendKind::Cpu, {});  // no device state: its frame's colliders are uploaded
+    ASSERT_TRUE(cpu.ok());
+    ASSERT_TRUE(renderer->colliders_from(*cpu.value(), host).ok());
+    auto from_host = renderer->render(list);
+    ASSERT_TRUE(from_host.ok());
+
+    const Pinhole camera(view.position, view.target, view.fov_deg, kWidth, kHeight);
+    int circles = 0, found = 0;
+    for (const rods::Capsule& c : host.colliders) {
+        glm::vec2 q;
+        if (!camera.project(c.a + c.radius * camera.up, q)) continue;
+        if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
+        ++circles;
+        found += nearest_match(from_device.value(), q, 2, render::kColliderColor) == 0 ? 1 : 0;
+    }
+    int collider_pixels = 0, differ = 0;
+    for (std::uint32_t y = 0; y < kHeight; ++y) {
+        for (std::uint32_t x = 0; x < kWidth; ++x) {
+            const bool a = from_device.value().at(x, y) == render::kColliderColor, b = from_host.value().at(x, y) == render::kColliderColor;
+            collider_pixels += a ? 1 : 0;
+            differ += a != b ? 1 : 0;
+        }
+    }
+    std::printf("[ render ] colliders from the device: %d of %d circle tops in collider colour, %d collider pixels, %d differ from "
+                "the host's\n",
+                found, circles, collider_pixels, differ);
+    EXPECT_GE(circles, 3);
+    EXPECT_EQ(found, circles);
+    EXPECT_GE(collider_pixels, 50);
+    EXPECT_LE(differ, collider_pixels / 100);
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
 

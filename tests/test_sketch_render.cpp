@@ -201,7 +201,7 @@ TEST(SketchRender, RiggedCharacterIsDrawnAsItsSkinnedMesh) {
         EXPECT_TRUE(backend.value()->read(snapshot).ok());
         const render::CameraView view = render::scene_camera(scene, kLast);
         render::DrawList list(view, kWidth, kHeight);
-        render::add_characters(list, rs, kLast, nullptr);
+        render::add_characters(list, rs, kLast);
         EXPECT_TRUE(renderer.value()->set_chains(&rs.world).ok());
         EXPECT_TRUE(renderer.value()->chains_from(snapshot).ok());
         EXPECT_TRUE(renderer.value()->set_skinned(&rs).ok());

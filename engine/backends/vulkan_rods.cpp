@@ -171,6 +171,9 @@ public:
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_MOTION], bytes_of(motion)));
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_SPIN], bytes_of(spin)));
         KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], bytes_of(chain_states)));
+        // The input buffers hold the initial frame's input until the first step (what a
+        // renderer drawing the colliders from them sees at frame 0).
+        KW_TRY(upload_input(initial));
 
         const std::uint32_t suppression = all_none   ? KW_RODS_SUPPRESSION_NONE
                                           : all_full ? KW_RODS_SUPPRESSION_FULL
@@ -199,18 +202,7 @@ public:
             KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_TEMPLATES], bytes_of(templates_)));
             dt_ = frame.dt;
         }
-        reference_.resize(frame.reference.size());
-        std::transform(frame.reference.begin(), frame.reference.end(), reference_.begin(),
-                       [](const rods::Transform& t) { return to_gpu(t); });
-        roots_.resize(frame.roots.size());
-        std::transform(frame.roots.begin(), frame.roots.end(), roots_.begin(), [](const rods::Transform& t) { return to_gpu(t); });
-        colliders_.resize(frame.colliders.size());
-        std::transform(frame.colliders.begin(), frame.colliders.end(), colliders_.begin(), [](const rods::Capsule& c) {
-            return gpu::RodColliderGpu{to_gpu(c.a, c.radius), to_gpu(c.b)};
-        });
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_REFERENCE], bytes_of(reference_)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_ROOTS], bytes_of(roots_)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_COLLIDERS], bytes_of(colliders_)));
+        KW_TRY(upload_input(frame));
 
         const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
         const gpu::RodPush push{{static_cast<std::uint32_t>(world_->chains.size()), 0u, 0u, 0u},
@@ -284,6 +276,22 @@ public:
     }
 
 private:
+    // The frame's kinematic input into the input buffers.
+    Result<void> upload_input(const rods::RodFrame& frame) {
+        reference_.resize(frame.reference.size());
+        std::transform(frame.reference.begin(), frame.reference.end(), reference_.begin(),
+                       [](const rods::Transform& t) { return to_gpu(t); });
+        roots_.resize(frame.roots.size());
+        std::transform(frame.roots.begin(), frame.roots.end(), roots_.begin(), [](const rods::Transform& t) { return to_gpu(t); });
+        colliders_.resize(frame.colliders.size());
+        std::transform(frame.colliders.begin(), frame.colliders.end(), colliders_.begin(), [](const rods::Capsule& c) {
+            return gpu::RodColliderGpu{to_gpu(c.a, c.radius), to_gpu(c.b)};
+        });
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_REFERENCE], bytes_of(reference_)));
+        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_ROOTS], bytes_of(roots_)));
+        return gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_COLLIDERS], bytes_of(colliders_));
+    }
+
     // The rest shape of chain c's last frame from its weights (SPEC A.2), as the kernel
     // blends it; the GPU keeps only the weights.
     rods::ChainShape rest_of(std::uint32_t c) const {

@@ -43,9 +43,9 @@ Result<gpu::GpuBuffer> storage_with(gpu::VulkanContext& ctx, std::span<const std
 
 Result<gpu::GraphicsPipeline> layer_pipeline(const gpu::VulkanContext& ctx, vk::RenderPass pass, std::string_view vertex,
                                              std::string_view fragment, std::uint32_t vertex_stride, std::uint32_t attributes,
-                                             std::uint32_t storage_buffers) {
+                                             std::uint32_t storage_buffers, vk::PrimitiveTopology topology) {
     return gpu::GraphicsPipeline::create(ctx, pass, vertex, fragment, vertex_stride, attributes, sizeof(gpu::RenderPush),
-                                         {.topology = vk::PrimitiveTopology::eTriangleList, .depth = true, .storage_buffers = storage_buffers});
+                                         {.topology = topology, .depth = true, .storage_buffers = storage_buffers});
 }
 
 namespace {
@@ -148,6 +148,63 @@ void ChainLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push
     push.draw.x = KW_CHAINS_DRAW_DOTS;
     cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), stages, 0, push);
     cmd.draw(KW_CHAIN_DOT_VERTICES, world_->joint_count, 0, 0);
+}
+
+// ---------------------------------------------------------------------------------------
+// Colliders
+
+Result<ColliderLayer> ColliderLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
+    ColliderLayer layer;
+    KW_TRY(with_set(ctx,
+                    layer_pipeline(ctx, pass, "colliders.vert", "render.frag", 0, 0, KW_COLLIDERS_BINDING_COUNT,
+                                   vk::PrimitiveTopology::eLineList),
+                    layer.pipeline_, layer.set_));
+    return layer;
+}
+
+void ColliderLayer::set_world(const rods::RodWorld* world) {
+    count_ = world != nullptr ? world->collider_count : 0;
+    host_.reset();
+    bound_ = false;
+}
+
+Result<void> ColliderLayer::from(gpu::VulkanContext& ctx, const RodBackend& backend, const rods::RodFrame& input) {
+    if (count_ == 0) return {};
+    const gpu::RodDeviceState* state = backend.device_state();
+    if (state != nullptr && state->context == &ctx) {
+        const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{state->colliders}};
+        set_->bind(ctx, ranges);
+        bound_ = true;
+        return {};
+    }
+    if (input.colliders.size() != count_) {
+        return make_error(Error::Kind::InvalidInput, "the frame has " + std::to_string(input.colliders.size()) +
+                                                         " colliders; the world has " + std::to_string(count_));
+    }
+    packed_.resize(count_);
+    std::transform(input.colliders.begin(), input.colliders.end(), packed_.begin(), [](const rods::Capsule& c) {
+        return gpu::RodColliderGpu{{c.a.x, c.a.y, c.a.z, c.radius}, {c.b.x, c.b.y, c.b.z, 0.0f}};
+    });
+    if (!host_) {
+        auto buffer = gpu::GpuBuffer::create(ctx, count_ * sizeof(gpu::RodColliderGpu), gpu::GpuBuffer::Kind::Storage);
+        if (!buffer) return buffer.error();
+        host_.emplace(std::move(buffer).value());
+    }
+    KW_TRY(gpu::upload(ctx, *host_, bytes_of(packed_)));
+    const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{host_->handle()}};
+    set_->bind(ctx, ranges);
+    bound_ = true;
+    return {};
+}
+
+void ColliderLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push, Rgba8 color) const {
+    if (!bound_ || count_ == 0) return;
+    cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline_->handle());
+    cmd.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, pipeline_->layout(), 0, set_->handle(), {});
+    push.draw = {glm::packUnorm4x8(glm::vec4(color.r, color.g, color.b, color.a) / 255.0f), 0u, 0u, push.draw.w};
+    cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment, 0,
+                                       push);
+    cmd.draw(KW_COLLIDER_VERTICES, count_, 0, 0);
 }
 
 // ---------------------------------------------------------------------------------------

@@ -31,7 +31,8 @@ namespace kodawari::render {
 [[nodiscard]] Result<gpu::GraphicsPipeline> layer_pipeline(const gpu::VulkanContext& ctx, vk::RenderPass pass,
                                                            std::string_view vertex, std::string_view fragment,
                                                            std::uint32_t vertex_stride, std::uint32_t attributes,
-                                                           std::uint32_t storage_buffers);
+                                                           std::uint32_t storage_buffers,
+                                                           vk::PrimitiveTopology topology = vk::PrimitiveTopology::eTriangleList);
 
 /// The chains of a RodWorld.
 class ChainLayer {
@@ -61,6 +62,29 @@ private:
     ChainSnapshot scratch_;
     std::vector<gpu::RodJointMotionGpu> motion_;
     bool bound_ = false, on_device_ = false;
+};
+
+/// The colliders of a RodWorld's input.
+class ColliderLayer {
+public:
+    [[nodiscard]] static Result<ColliderLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+
+    /// The colliders of `world` (null: none).
+    void set_world(const rods::RodWorld* world);
+    /// This frame's colliders: the vulkan rod backend's input buffer when on `ctx` (rigged
+    /// characters' colliders are written there on the device), else `input`'s uploaded.
+    [[nodiscard]] Result<void> from(gpu::VulkanContext& ctx, const RodBackend& backend, const rods::RodFrame& input);
+
+    void record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push, Rgba8 color) const;
+
+private:
+    ColliderLayer() = default;
+    std::optional<gpu::GraphicsPipeline> pipeline_;
+    std::optional<gpu::BufferSet> set_;
+    std::uint32_t count_ = 0;
+    std::optional<gpu::GpuBuffer> host_;
+    std::vector<gpu::RodColliderGpu> packed_;
+    bool bound_ = false;
 };
 
 /// The birds of a BirdWorld.

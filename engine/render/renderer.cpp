@@ -134,16 +134,6 @@ void DrawList::add_dot(const glm::vec3& p, float radius, float min_px, Rgba8 col
     }
 }
 
-void DrawList::add_circle(const glm::vec3& center, float radius, Rgba8 color) {
-    constexpr int kSides = 24;
-    constexpr float kStep = 6.28318530718f / kSides;
-    for (int i = 0; i < kSides; ++i) {
-        const float a0 = kStep * static_cast<float>(i), a1 = kStep * static_cast<float>(i + 1);
-        add_line(center + radius * (std::cos(a0) * basis_.right + std::sin(a0) * basis_.up),
-                 center + radius * (std::cos(a1) * basis_.right + std::sin(a1) * basis_.up), color);
-    }
-}
-
 void DrawList::add_screen_line(glm::vec2 a, glm::vec2 b, Rgba8 color) {
     const gpu::vec4 c = v4(color, 0.0f);
     const auto clip = [&](glm::vec2 p) {
@@ -173,6 +163,7 @@ struct Renderer::Impl {
     std::optional<gpu::GraphicsPipeline> background, lines, triangles;
     std::optional<gpu::GpuBuffer> vertices, readback;
     std::optional<ChainLayer> chains;
+    std::optional<ColliderLayer> colliders;
     std::optional<BirdLayer> birds;
     std::optional<SkinnedLayer> skinned;
 
@@ -219,11 +210,15 @@ std::shared_ptr<gpu::VulkanContext> Renderer::device_context() const { return im
 std::uint64_t Renderer::read_back_bytes() const { return impl_->ctx->read_back_bytes(); }
 
 Result<void> Renderer::set_chains(const rods::RodWorld* world, const ChainStyle& style) {
+    impl_->colliders->set_world(world);
     return impl_->chains->set_world(*impl_->ctx, world, style);
 }
 Result<void> Renderer::chains_from(RodBackend& backend) { return impl_->chains->from_backend(*impl_->ctx, backend); }
 Result<void> Renderer::chains_from(const ChainSnapshot& snapshot) { return impl_->chains->from_snapshot(*impl_->ctx, snapshot); }
 bool Renderer::chains_on_device() const { return impl_->chains->on_device(); }
+Result<void> Renderer::colliders_from(const RodBackend& backend, const rods::RodFrame& input) {
+    return impl_->colliders->from(*impl_->ctx, backend, input);
+}
 Result<void> Renderer::set_birds(const birds::BirdWorld* world) { return impl_->birds->set_world(*impl_->ctx, world, kBirdMinPixels); }
 Result<void> Renderer::birds_from(const BirdBackend& backend) { return impl_->birds->from_backend(*impl_->ctx, backend); }
 Result<void> Renderer::birds_from(std::span<const gpu::BirdPose> poses) { return impl_->birds->from_poses(*impl_->ctx, poses); }
@@ -354,6 +349,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     auto triangles = pipeline(vk::PrimitiveTopology::eTriangleList, true);
     if (!triangles) return triangles.error();
     impl->triangles.emplace(std::move(triangles).value());
+    auto colliders = ColliderLayer::create(c, *impl->pass);
+    if (!colliders) return colliders.error();
+    impl->colliders.emplace(std::move(colliders).value());
     auto chains = ChainLayer::create(c, *impl->pass);
     if (!chains) return chains.error();
     impl->chains.emplace(std::move(chains).value());
@@ -451,6 +449,7 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     draw(*triangles, kBackgroundVertices + list.lines().size(), list.triangles().size());
     // The minimum sizes are for 720 rows; smaller images get thinner strands.
     chains->record(cmd, push, std::clamp(static_cast<float>(height) / 720.0f, 0.5f, 2.0f));
+    colliders->record(cmd, push, kColliderColor);
     birds->record(cmd, push);
     skinned->record(cmd, push);
     cmd.endRenderPass();

@@ -68,7 +68,7 @@ bool draws_skinned(const gltf::Character& character) {
     });
 }
 
-void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, const rods::RodFrame* kinematic) {
+void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame) {
     std::vector<rods::Transform> joints;
     for (std::uint32_t c = 0; c < scene.instances.size(); ++c) {
         // Rigged characters with meshes are the renderer's skinned-mesh layer.
@@ -79,15 +79,6 @@ void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, 
         for (std::size_t j = 0; j < joints.size() && j < parents.size(); ++j) {
             if (parents[j] < 0) continue;
             list.add_segment(joints[static_cast<std::size_t>(parents[j])].position, joints[j].position, 0.012f, 2.0f, kBoneColor);
-        }
-    }
-    if (kinematic != nullptr) {
-        for (const rods::Capsule& capsule : kinematic->colliders) {
-            list.add_circle(capsule.a, capsule.radius, kColliderColor);
-            if (glm::length(capsule.b - capsule.a) > 1e-6f) {
-                list.add_circle(capsule.b, capsule.radius, kColliderColor);
-                list.add_line(capsule.a, capsule.b, kColliderColor);
-            }
         }
     }
 }

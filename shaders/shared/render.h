@@ -58,6 +58,17 @@ struct ChainDrawInfo {
 };
 
 // ---------------------------------------------------------------------------------------
+// The collider layer (colliders.vert): the colliders of the rod input (RodColliderGpu,
+// shared/rods.h), the vulkan rod backend's input buffer or the same layout uploaded from a
+// frame, as 1-pixel lines: a camera-facing circle of KW_COLLIDER_SIDES segments round each
+// end of a capsule and the segment between them (one circle for a sphere). Instanced per
+// collider, no vertex buffer; RenderPush.draw.x: the colour (packUnorm4x8).
+#define KW_COLLIDERS_BINDING_COLLIDERS 0
+#define KW_COLLIDERS_BINDING_COUNT 1
+#define KW_COLLIDER_SIDES 24
+#define KW_COLLIDER_VERTICES 98  // 2 circles x KW_COLLIDER_SIDES lines x 2 vertices + the segment
+
+// ---------------------------------------------------------------------------------------
 // The bird layer (birds.vert): the seven part meshes of each wing type in one vertex
 // buffer (BirdDrawVertex, triangle lists), instanced per bird from BirdPoseGpu poses in
 // device buffers: the vulkan bird backend's pose ring or the same layout uploaded.

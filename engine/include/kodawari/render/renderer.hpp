@@ -39,6 +39,8 @@ struct Rgba8 {
 
 /// Chains and their joint dots: one exact, unlit colour (tests look for it).
 inline constexpr Rgba8 kChainColor{235, 95, 20};
+/// Colliders (1-pixel circles and segments), unlit.
+inline constexpr Rgba8 kColliderColor{110, 120, 140};
 /// At 720 rows (scaled by rows / 720 within [0.5, 2]), a chain is drawn at least this
 /// many pixels wide and its joint dots at least this radius, so that a strand a few
 /// millimetres thick reads in a preview. A chain too short on screen for its dots to
@@ -119,8 +121,6 @@ public:
     void add_segment(const glm::vec3& a, const glm::vec3& b, float width, float min_px, Rgba8 color);
     /// A dot facing the camera (an octagon), `radius` m but at least `min_px` pixels.
     void add_dot(const glm::vec3& p, float radius, float min_px, Rgba8 color);
-    /// A circle outline of 1-pixel lines facing the camera (colliders).
-    void add_circle(const glm::vec3& center, float radius, Rgba8 color);
     /// Overlays (the viewer's stroke and status line): in pixels of the image (origin
     /// top-left, y down), unlit, drawn over everything (depth 0, the near plane).
     void add_screen_line(glm::vec2 a, glm::vec2 b, Rgba8 color);
@@ -201,6 +201,11 @@ public:
     [[nodiscard]] Result<void> chains_from(const ChainSnapshot& snapshot);
     /// Whether the last chains_from() drew the backend's own buffers.
     [[nodiscard]] bool chains_on_device() const;
+    /// This frame's colliders of the world given to set_chains() (drawn in
+    /// kColliderColor): the vulkan rod backend's input buffer when it lives on this
+    /// renderer's device (rigged characters' colliders are written there on the device),
+    /// otherwise those of `input` (the frame given to the backend's step), uploaded.
+    [[nodiscard]] Result<void> colliders_from(const RodBackend& backend, const rods::RodFrame& input);
 
     /// Draws the birds of `world` (their part meshes, lit, in the wing type's colour) in
     /// every following frame (null: none), their poses set per frame by birds_from().

@@ -17,7 +17,6 @@
 namespace kodawari::render {
 
 inline constexpr Rgba8 kBoneColor{50, 60, 80};
-inline constexpr Rgba8 kColliderColor{110, 120, 140};
 inline constexpr Rgba8 kGridColor{150, 156, 168};
 /// The scene camera at `frame` (time = frame / fps) as scene.camera.motion gives it, the
 /// same pose RodScene::camera_pose gives characters, and its projection: an orthographic
@@ -34,11 +33,10 @@ void add_ground_grid(DrawList& list, std::span<const glm::vec3> points);
 /// layer, Renderer::set_skinned) rather than as bones: some node has a mesh with triangles.
 [[nodiscard]] bool draws_skinned(const gltf::Character& character);
 
-/// Every character instance of `scene` at `frame` that is not a skinned mesh (those are
-/// the renderer's skinned-mesh layer, Renderer::set_skinned) as skeleton bones from
-/// RodScene::joint_poses, and the colliders of `kinematic` (that frame's input; may be
-/// null) as circles. The chains themselves are the renderer's chain layer.
-void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame, const rods::RodFrame* kinematic);
+/// Every character instance of `scene` at `frame` that is not drawn as a skinned mesh
+/// (Renderer::set_skinned): skeleton bones from RodScene::joint_poses. The colliders are
+/// the renderer's (Renderer::colliders_from).
+void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame);
 
 /// Where the content is, for add_ground_grid, from the scene alone (no simulation state,
 /// so that nothing needs reading back): character instances' placements, the chain roots
