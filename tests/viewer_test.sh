@@ -175,7 +175,7 @@ check "undoing the saved sketch gives the original bytes" cmp -s "$work/undone.j
 if command -v Xvfb >/dev/null 2>&1; then
     mkdir -p "$work/fb"
     exec 3>"$work/display"
-    Xvfb -displayfd 3 -screen 0 640x480x24 -fbdir "$work/fb" >/dev/null 2>&1 &
+    Xvfb -displayfd 3 -noreset -screen 0 640x480x24 -fbdir "$work/fb" >/dev/null 2>&1 &
     xvfb_pid=$!
     exec 3>&-
     for _ in $(seq 50); do test -s "$work/display" && break; sleep 0.2; done
@@ -220,7 +220,9 @@ else
     real_bin=$(realpath "$bin")
     mkdir -p "$work/x"
     exec 3>"$work/x-display"
-    Xvfb -displayfd 3 -screen 0 640x480x24 >/dev/null 2>&1 &
+    # -noreset: when its last client leaves, an X server resets and refuses connections for
+    # a moment; the next viewer or xdotool call could come then.
+    Xvfb -displayfd 3 -noreset -screen 0 640x480x24 >/dev/null 2>&1 &
     x_xvfb_pid=$!
     exec 3>&-
     for _ in $(seq 50); do test -s "$work/x-display" && break; sleep 0.2; done
