@@ -19,17 +19,16 @@ std::span<const std::byte> bytes_of(const std::vector<T>& v) {
     return std::as_bytes(std::span<const T>(v));
 }
 
-// `slot` becomes a storage buffer holding `bytes`.
+std::uint32_t bits(float value) { return std::bit_cast<std::uint32_t>(value); }
+
+}  // namespace
+
 Result<void> store(gpu::VulkanContext& ctx, std::optional<gpu::GpuBuffer>& slot, std::span<const std::byte> bytes) {
     auto buffer = storage_with(ctx, bytes);
     if (!buffer) return buffer.error();
     slot.emplace(std::move(buffer).value());
     return {};
 }
-
-std::uint32_t bits(float value) { return std::bit_cast<std::uint32_t>(value); }
-
-}  // namespace
 
 Result<gpu::GpuBuffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes) {
     auto buffer = gpu::GpuBuffer::create(ctx, std::max<std::uint64_t>(bytes.size(), 16), gpu::GpuBuffer::Kind::Storage);

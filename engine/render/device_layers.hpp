@@ -25,6 +25,8 @@ namespace kodawari::render {
 
 /// A storage buffer of at least 16 bytes (an empty world still binds one) filled with `bytes`.
 [[nodiscard]] Result<gpu::GpuBuffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes);
+/// `slot` becomes a storage buffer holding `bytes` (storage_with).
+[[nodiscard]] Result<void> store(gpu::VulkanContext& ctx, std::optional<gpu::GpuBuffer>& slot, std::span<const std::byte> bytes);
 
 /// A layer's pipeline: triangle lists, depth tested, the renderer's push constants, and
 /// `storage_buffers` read by the vertex shader.

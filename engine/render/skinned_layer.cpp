@@ -1,6 +1,7 @@
 #include "render/skinned_layer.hpp"
 
 #include <algorithm>
+#include <array>
 #include <cassert>
 #include <cstring>
 #include <string>
@@ -111,15 +112,16 @@ Result<void> SkinnedLayer::set_scene(gpu::VulkanContext& ctx, const RodScene* sc
                     const glm::vec3& p = t.positions[v];
                     gpu::SkinnedVertexGpu out{{p.x, p.y, p.z, static_cast<float>(n)}, {}, {}, {t.color.r, t.color.g, t.color.b, 1.0f}};
                     if (skin != nullptr && !t.joints.empty()) {
-                        float* joint_out = &out.joints.x;
-                        float* weight_out = &out.weights.x;
+                        std::array<float, 4> joint_out{}, weight_out{};
                         for (int k2 = 0; k2 < 4; ++k2) {
                             const std::uint32_t j = t.joints[v][k2];
                             const float w = t.weights[v][k2];
                             if (!(w > 0.0f) || j >= skin->joints.size()) continue;
-                            joint_out[k2] = static_cast<float>(skin_first[static_cast<std::size_t>(node.skin)] + j);
-                            weight_out[k2] = w;
+                            joint_out[static_cast<std::size_t>(k2)] = static_cast<float>(skin_first[static_cast<std::size_t>(node.skin)] + j);
+                            weight_out[static_cast<std::size_t>(k2)] = w;
                         }
+                        out.joints = {joint_out[0], joint_out[1], joint_out[2], joint_out[3]};
+                        out.weights = {weight_out[0], weight_out[1], weight_out[2], weight_out[3]};
                     }
                     vertices.push_back(out);
                 }
@@ -130,15 +132,9 @@ Result<void> SkinnedLayer::set_scene(gpu::VulkanContext& ctx, const RodScene* sc
         }
         ch.indices = static_cast<std::uint32_t>(indices.size());
 
-        auto walk_buffer = storage_with(ctx, bytes_of(walk));
-        if (!walk_buffer) return walk_buffer.error();
-        ch.walk.emplace(std::move(walk_buffer).value());
-        auto chain_buffer = storage_with(ctx, bytes_of(chains));
-        if (!chain_buffer) return chain_buffer.error();
-        ch.instance_chains.emplace(std::move(chain_buffer).value());
-        auto joint_buffer = storage_with(ctx, bytes_of(joints));
-        if (!joint_buffer) return joint_buffer.error();
-        ch.joints.emplace(std::move(joint_buffer).value());
+        KW_TRY(store(ctx, ch.walk, bytes_of(walk)));
+        KW_TRY(store(ctx, ch.instance_chains, bytes_of(chains)));
+        KW_TRY(store(ctx, ch.joints, bytes_of(joints)));
         // One storage buffer of every instance's node matrices (range-checked).
         const std::uint64_t world_bytes[] = {std::uint64_t{ch.nodes} * ch.instances.size() * sizeof(gpu::PoseMatrixGpu)};
         auto world = gpu::create_storage_buffers(ctx, world_bytes, "the skinned meshes of " + rig.source);
