@@ -340,27 +340,19 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
         return gpu::GraphicsPipeline::create(c, *impl->pass, "render.vert", "render.frag", sizeof(gpu::RenderVertex), 3,
                                              sizeof(gpu::RenderPush), {.topology = topology, .depth = depth_test});
     };
-    auto background = pipeline(vk::PrimitiveTopology::eTriangleList, false);
-    if (!background) return background.error();
-    impl->background.emplace(std::move(background).value());
-    auto lines = pipeline(vk::PrimitiveTopology::eLineList, true);
-    if (!lines) return lines.error();
-    impl->lines.emplace(std::move(lines).value());
-    auto triangles = pipeline(vk::PrimitiveTopology::eTriangleList, true);
-    if (!triangles) return triangles.error();
-    impl->triangles.emplace(std::move(triangles).value());
-    auto colliders = ColliderLayer::create(c, *impl->pass);
-    if (!colliders) return colliders.error();
-    impl->colliders.emplace(std::move(colliders).value());
-    auto chains = ChainLayer::create(c, *impl->pass);
-    if (!chains) return chains.error();
-    impl->chains.emplace(std::move(chains).value());
-    auto birds = BirdLayer::create(c, *impl->pass);
-    if (!birds) return birds.error();
-    impl->birds.emplace(std::move(birds).value());
-    auto skinned = SkinnedLayer::create(c, *impl->pass);
-    if (!skinned) return skinned.error();
-    impl->skinned.emplace(std::move(skinned).value());
+    // Each created piece into its slot, or the first error.
+    const auto keep = [](auto& slot, auto created) -> Result<void> {
+        if (!created) return created.error();
+        slot.emplace(std::move(created).value());
+        return {};
+    };
+    KW_TRY(keep(impl->background, pipeline(vk::PrimitiveTopology::eTriangleList, false)));
+    KW_TRY(keep(impl->lines, pipeline(vk::PrimitiveTopology::eLineList, true)));
+    KW_TRY(keep(impl->triangles, pipeline(vk::PrimitiveTopology::eTriangleList, true)));
+    KW_TRY(keep(impl->colliders, ColliderLayer::create(c, *impl->pass)));
+    KW_TRY(keep(impl->chains, ChainLayer::create(c, *impl->pass)));
+    KW_TRY(keep(impl->birds, BirdLayer::create(c, *impl->pass)));
+    KW_TRY(keep(impl->skinned, SkinnedLayer::create(c, *impl->pass)));
 
     auto readback = gpu::GpuBuffer::create(c, vk::DeviceSize{options.width} * options.height * 4, gpu::GpuBuffer::Kind::Readback);
     if (!readback) return readback.error();
