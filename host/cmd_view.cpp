@@ -1,11 +1,13 @@
 // `kodawari view SCENE`: the interactive viewer (issue 5). A GLFW window presented with
 // Vulkan: each frame is simulated as `render` does (rod backend + crowd animator, bird
 // backend), drawn by the renderer and blitted into the window's swapchain image
-// (Renderer::present). The simulation runs on the renderer's device, and the chains,
+// (Renderer::present). The simulation runs on the renderer's device: the chains, colliders,
 // birds and rigged characters' skinned meshes are drawn from the vulkan backends' own
-// buffers: nothing is read back per frame for drawing (the end line and the status line
-// say how much was). Still read back: rigged characters' pose matrices for the rod input
-// (CrowdAnimator::frame), and the picked chain while sketching.
+// buffers, and the rigged characters' rod input is written from their poses there
+// (CrowdAnimator::write_inputs_on), so nothing is read back per frame (the end line and
+// the status line say how much was). Read back: a rigged crowd's frame 0 (the rod
+// backend's load() takes it on the host), and on demand the picked chain and the sketched
+// frame's input while sketching.
 #include <algorithm>
 #include <array>
 #include <chrono>
