@@ -101,6 +101,12 @@ Result<std::unique_ptr<RodBackend>> open_rod_backend(const BackendChoice& choice
     return make_rod_backend(BackendKind::Cpu, choice.options);
 }
 
+bool validation_failed(std::uint32_t messages) {
+    if (messages == 0) return false;
+    std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", messages);
+    return true;
+}
+
 void share_one_device(BackendChoice& choice) {
     if (choice.options.context || (choice.backend != "auto" && choice.backend != "vulkan")) return;
     if (auto device = open_shared_device(choice.options)) choice.options.context = std::move(device).value();

@@ -65,6 +65,11 @@ BackendChoice read_backend_choice(Args& args);
 /// The rod backend of `choice`, with the same "auto" rule.
 [[nodiscard]] Result<std::unique_ptr<RodBackend>> open_rod_backend(const BackendChoice& choice);
 
+/// True (after saying so on stderr) when Vulkan validation reported messages: the
+/// command then exits kExitFailure. Backends sharing one device share its count, so a
+/// caller passes that count once (or the largest of theirs).
+[[nodiscard]] bool validation_failed(std::uint32_t messages);
+
 /// For "auto" and "vulkan": one Vulkan device for every backend made from `choice` from
 /// now on (BackendOptions::context), so that the pose backends' matrices feed the rod
 /// backend on the device (CrowdAnimator::write_inputs_on). Without a device nothing

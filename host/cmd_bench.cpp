@@ -153,10 +153,7 @@ int bench_chains(Args& args, const BackendChoice& choice) {
         Measured m{std::string(b.name()), b.device(),
                    static_cast<double>(options.chains) * options.joints * steps / seconds, 1e3 * seconds / steps,
                    b.last_gpu_ms() >= 0.0 ? gpu_ms / steps : -1.0};
-        if (b.validation_messages() > 0) {
-            std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", b.validation_messages());
-            return kExitFailure;
-        }
+        if (validation_failed(b.validation_messages())) return kExitFailure;
         results.push_back(m);
         std::printf("  %-14s done: %.3g joint-steps/s\n", m.backend.c_str(), m.per_second);
         std::fflush(stdout);
@@ -250,11 +247,7 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
         }
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         // One device shared: both count the same messages.
-        const std::uint32_t messages = std::max(b.validation_messages(), animator.value().validation_messages());
-        if (messages > 0) {
-            std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", messages);
-            return kExitFailure;
-        }
+        if (validation_failed(std::max(b.validation_messages(), animator.value().validation_messages()))) return kExitFailure;
         Measured m{std::string(b.name()) + (kind == BackendKind::Vulkan ? (device_input ? "/dev-in" : "/host-in") : ""), b.device(),
                    frames / seconds, 1e3 * seconds / frames, b.last_gpu_ms() >= 0.0 ? gpu_ms / frames : -1.0};
         results.push_back(m);
@@ -393,10 +386,7 @@ int bench_view(Args& args, BackendChoice choice) {
         }
         done += n;
     }
-    if (r.validation_messages() > 0) {
-        std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", r.validation_messages());
-        return kExitFailure;
-    }
+    if (validation_failed(r.validation_messages())) return kExitFailure;
     const double baseline = frames / runs[1].seconds;
     std::printf("\n%-16s %12s %12s %22s %18s\n", "configuration", "frames/s", "ms/frame", "read back B/frame", "vs vulkan readback");
     std::string json = "{\"benchmark\":\"view\",\"scene\":\"" + json_escape(scene.name) + "\",\"frames\":" +
@@ -467,10 +457,7 @@ int cmd_bench(Args args) {
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         Measured m{std::string(b.name()), b.device(), static_cast<double>(count) * frames / seconds, 1e3 * seconds / frames,
                    b.last_gpu_ms() >= 0.0 ? gpu_ms / frames : -1.0};
-        if (b.validation_messages() > 0) {
-            std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", b.validation_messages());
-            return kExitFailure;
-        }
+        if (validation_failed(b.validation_messages())) return kExitFailure;
         results.push_back(m);
         std::printf("  %-14s done: %.3g bird-frames/s\n", m.backend.c_str(), m.per_second);
         std::fflush(stdout);

@@ -122,9 +122,7 @@ int run_chains(const Scene& scene, BackendChoice choice, std::optional<std::uint
     std::printf(", %.3g joint-steps/s%s\n", static_cast<double>(joints) * steps / std::max(seconds, 1e-9),
                 animator.value().writes_inputs_on_device() ? "; rigged characters' rod input written on the device" : "");
     // One device shared: both count the same messages.
-    if (std::max(backend.validation_messages(), animator.value().validation_messages()) > 0) {
-        std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n",
-                     std::max(backend.validation_messages(), animator.value().validation_messages()));
+    if (validation_failed(std::max(backend.validation_messages(), animator.value().validation_messages()))) {
         return kExitFailure;
     }
     const auto wrote = [](const std::string& path, const char* what) {
@@ -263,10 +261,7 @@ int run_birds(const Scene& scene, birds::BirdWorld& world, const BackendChoice& 
     if (have_gpu_time && backend.name() == "vulkan") std::printf(" (GPU %.3f ms)", gpu_ms / frames);
     std::printf(", %.3g bird-frames/s\n", static_cast<double>(count) * frames / std::max(seconds, 1e-9));
 
-    if (backend.validation_messages() > 0) {
-        std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", backend.validation_messages());
-        return kExitFailure;
-    }
+    if (validation_failed(backend.validation_messages())) return kExitFailure;
     if (!no_export) {
         if (auto r = write_birds_glb(out_path, world, poses, frames); !r) return report(r.error());
         std::error_code ec;

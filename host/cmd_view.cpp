@@ -820,12 +820,7 @@ int cmd_view(Args args) {
                 static_cast<unsigned long long>(renderer.value()->read_back_bytes() - read_back_start),
                 static_cast<unsigned long long>(drawn));
     // The vulkan backends share the renderer's device and so its count of messages.
-    const std::uint32_t messages = renderer.value()->validation_messages();
-    if (messages > 0) {
-        std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", messages);
-        return kExitFailure;
-    }
-    return kExitOk;
+    return validation_failed(renderer.value()->validation_messages()) ? kExitFailure : kExitOk;
 }
 
 }  // namespace kodawari::cli

@@ -157,6 +157,19 @@ float max_abs_difference(const glm::mat4& a, const glm::mat4& b) {
     return worst;
 }
 
+// Reads back a GLB we wrote (image bytes kept undecoded: the tests look at the glTF
+// structure); false, after a test failure saying why, when tinygltf cannot.
+bool load_glb(const std::string& path, tinygltf::Model& model) {
+    tinygltf::TinyGLTF loader;
+    loader.SetImageLoader(
+        [](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) { return true; },
+        nullptr);
+    std::string error, warning;
+    const bool ok = loader.LoadBinaryFromFile(&model, &error, &warning, path);
+    EXPECT_TRUE(ok) << path << ": " << error;
+    return ok;
+}
+
 void expect_validates(const std::string& path) {
     std::string output;
     // node is a required test tool (scripts/setup installs it): missing is a failure.
@@ -268,10 +281,7 @@ TEST(RiggedExport, PassesGltfValidator) {
 
     // The source's VRM-free, data-URI buffer ends up as the one GLB buffer.
     tinygltf::Model model;
-    tinygltf::TinyGLTF loader;
-    std::string error;
-    std::string warning;
-    ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, path)) << error;
+    ASSERT_TRUE(load_glb(path, model));
     ASSERT_EQ(model.buffers.size(), 1u);
     EXPECT_TRUE(model.buffers[0].uri.empty());
     EXPECT_EQ(model.materials.size(), 1u);
@@ -358,10 +368,7 @@ TEST(RiggedExport, ExternalBinSourceBecomesSelfContainedGlb) {
     expect_validates(path);
 
     tinygltf::Model model;
-    tinygltf::TinyGLTF loader;
-    std::string error;
-    std::string warning;
-    ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, path)) << error;
+    ASSERT_TRUE(load_glb(path, model));
     ASSERT_EQ(model.buffers.size(), 1u);
     EXPECT_TRUE(model.buffers[0].uri.empty());  // the BIN chunk: no sphere_mesh.bin needed
     EXPECT_EQ(model.extensions.count("VRMC_springBone"), 0u);
@@ -441,13 +448,7 @@ TEST(RiggedExport, ImagesByUriMoveIntoTheGlb) {
     expect_validates(path);
 
     tinygltf::Model model;
-    tinygltf::TinyGLTF loader;
-    loader.SetImageLoader(
-        [](tinygltf::Image*, const int, std::string*, std::string*, int, int, const unsigned char*, int, void*) { return true; },
-        nullptr);
-    std::string error;
-    std::string warning;
-    ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, path)) << error;
+    ASSERT_TRUE(load_glb(path, model));
     ASSERT_EQ(model.images.size(), 2u);
     for (const tinygltf::Image& image : model.images) {
         EXPECT_TRUE(image.uri.empty());

@@ -11,14 +11,7 @@ if ! command -v xvfb-run >/dev/null 2>&1; then
     echo "SKIPPED: no X server (xvfb-run not installed; scripts/setup installs xvfb)"
     exit 77
 fi
-work=$(mktemp -d)
-trap 'rm -rf "$work"' EXIT
-passed=0
-failed=0
-check() {  # check NAME CONDITION-COMMAND...
-    local name=$1; shift
-    if "$@"; then passed=$((passed + 1)); echo "ok   $name"; else failed=$((failed + 1)); echo "FAIL $name"; fi
-}
+source "$(dirname "${BASH_SOURCE[0]}")/check.sh"
 view() {  # view OUT-PREFIX ARGS...: the viewer in a fresh Xvfb screen
     local out=$1; shift
     xvfb-run -a -s "-screen 0 1024x768x24" "$bin" view "$@" >"$out.out" 2>"$out.err"

@@ -75,6 +75,15 @@ std::string quoted_list(const std::vector<std::string>& names) {
     return out;
 }
 
+Result<std::uint32_t> find_name(const JsonReader& r, const JsonNode& node, const std::vector<std::string>& names,
+                                const std::string& what) {
+    std::string name;
+    KW_SCENE_ASSIGN(name, r.string(node));
+    const auto found = std::find(names.begin(), names.end(), name);
+    if (found != names.end()) return static_cast<std::uint32_t>(found - names.begin());
+    return r.expected(node, what + " (" + quoted_list(names) + ")");
+}
+
 // An array of at most `max` elements; `what` describes a valid one.
 Result<std::size_t> read_array(const JsonReader& r, const JsonNode& node, std::size_t min, std::size_t max,
                                const std::string& what) {
@@ -239,14 +248,9 @@ Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::Solve
 
 // The index of the joint called `name`, or an error at `node` listing the joints.
 Result<std::uint32_t> find_joint(const JsonReader& r, const JsonNode& node, const rods::Skeleton& skeleton) {
-    std::string name;
-    KW_SCENE_ASSIGN(name, r.string(node));
     std::vector<std::string> names;
-    for (std::size_t j = 0; j < skeleton.joints.size(); ++j) {
-        if (skeleton.joints[j].name == name) return static_cast<std::uint32_t>(j);
-        names.push_back(skeleton.joints[j].name);
-    }
-    return r.expected(node, "the name of a joint of this character's skeleton (" + quoted_list(names) + ")");
+    for (const auto& joint : skeleton.joints) names.push_back(joint.name);
+    return find_name(r, node, names, "the name of a joint of this character's skeleton");
 }
 
 // The skeleton: joints in any order, each naming its parent; exactly one root. Stored
@@ -432,6 +436,9 @@ Result<void> read_motion(const JsonReader& r, const JsonNode& node, const rods::
     return {};
 }
 
+namespace {
+
+// A sphere or capsule on the joint whose index `joint` returns for the `joint` member.
 Result<ColliderSpec> read_collider(const JsonReader& r, const JsonNode& node,
                                   const std::function<Result<std::uint32_t>(const JsonNode&)>& joint) {
     if (!node.present() || !node.value->is_object()) {
@@ -452,6 +459,26 @@ Result<ColliderSpec> read_collider(const JsonReader& r, const JsonNode& node,
     }
     KW_SCENE_ASSIGN(c.radius, r.real(r.member(node, "radius"), NumberRange::left_open(0.0, kMaxLocal)));
     return c;
+}
+
+}  // namespace
+
+Result<std::vector<ColliderSpec>> read_colliders(const JsonReader& r, const JsonNode& node,
+                                                 const std::function<Result<std::uint32_t>(const JsonNode&)>& joint) {
+    std::vector<ColliderSpec> out;
+    const JsonNode colliders = r.member(node, "colliders");
+    if (!colliders.present()) return out;
+    // Every colliding chain of the character touches all of them, and one chain may touch
+    // at most rods::kMaxChainColliders (the GPU keeps them in fixed arrays).
+    std::size_t n = 0;
+    KW_SCENE_ASSIGN(n, read_array(r, colliders, 0, rods::kMaxChainColliders,
+                                  "an array of colliders (at most " + std::to_string(rods::kMaxChainColliders) + ")"));
+    for (std::size_t i = 0; i < n; ++i) {
+        ColliderSpec c;
+        KW_SCENE_ASSIGN(c, read_collider(r, r.element(colliders, i), joint));
+        out.push_back(c);
+    }
+    return out;
 }
 
 Result<ViewSpec> read_view(const JsonReader& r, const JsonNode& node, std::size_t joints) {
@@ -584,20 +611,7 @@ Result<CharacterSpec> read_character(const JsonReader& r, const JsonNode& node) 
         KW_SCENE_ASSIGN(n, read_array(r, motions, 0, kMaxPerCharacter, "an array of motions" + per));
         for (std::size_t i = 0; i < n; ++i) KW_TRY(read_motion(r, r.element(motions, i), ch.skeleton, ch.motion));
     }
-    const JsonNode colliders = r.member(node, "colliders");
-    if (colliders.present()) {
-        // Every colliding chain of the character touches all of them, and one chain may
-        // touch at most rods::kMaxChainColliders (the GPU keeps them in fixed arrays).
-        std::size_t n = 0;
-        KW_SCENE_ASSIGN(n, read_array(r, colliders, 0, rods::kMaxChainColliders,
-                                      "an array of colliders (at most " + std::to_string(rods::kMaxChainColliders) + ")"));
-        for (std::size_t i = 0; i < n; ++i) {
-            ColliderSpec c;
-            KW_SCENE_ASSIGN(c, read_collider(r, r.element(colliders, i),
-                                             [&](const JsonNode& j) { return find_joint(r, j, ch.skeleton); }));
-            ch.colliders.push_back(c);
-        }
-    }
+    KW_SCENE_ASSIGN(ch.colliders, read_colliders(r, node, [&](const JsonNode& j) { return find_joint(r, j, ch.skeleton); }));
     rods::SolverParams defaults;
     const JsonNode physics = r.member(node, "physics");
     if (physics.present()) KW_TRY(read_physics(r, physics, defaults));
@@ -614,19 +628,12 @@ Result<CharacterSpec> read_character(const JsonReader& r, const JsonNode& node) 
 
 // A clip of a rigged character by name; procedural characters have none.
 Result<std::int32_t> read_clip(const JsonReader& r, const JsonNode& node, const CharacterSpec& character) {
-    std::string name;
-    KW_SCENE_ASSIGN(name, r.string(node));
+    KW_TRY(r.string(node));
     if (!character.rig) {
         return r.fail(node.path, "only rigged characters (with \"gltf\") play animation clips; \"" + character.name +
                                      "\" moves by its \"motions\"");
     }
-    std::vector<std::string> names;
-    const auto& clips = character.rig->character->animations;
-    for (std::size_t i = 0; i < clips.size(); ++i) {
-        if (clips[i].name == name) return static_cast<std::int32_t>(i);
-        names.push_back(clips[i].name);
-    }
-    return r.expected(node, "the name of an animation of " + character.rig->file + " (" + quoted_list(names) + ")");
+    return find_clip(r, node, *character.rig->character);
 }
 
 Result<InstanceSpec> read_instance(const JsonReader& r, const JsonNode& node, const CharacterSpec& character) {
@@ -649,19 +656,9 @@ Result<CrowdSpec> read_crowd(const JsonReader& r, const JsonNode& node, std::siz
     CrowdSpec c;
     c.name = "crowd" + std::to_string(index);
     KW_TRY(optional_member(r, node, "name", c.name, [&](const JsonNode& n) { return read_name(r, n); }));
-    const JsonNode character = r.member(node, "character");
-    std::string name;
-    KW_SCENE_ASSIGN(name, r.string(character));
     std::vector<std::string> names;
-    bool found = false;
-    for (std::size_t k = 0; k < scene.characters.size() && !found; ++k) {
-        if (scene.characters[k].name == name) {
-            c.character = static_cast<std::uint32_t>(k);
-            found = true;
-        }
-        names.push_back(scene.characters[k].name);
-    }
-    if (!found) return r.expected(character, "the name of a character of this scene (" + quoted_list(names) + ")");
+    for (const CharacterSpec& k : scene.characters) names.push_back(k.name);
+    KW_SCENE_ASSIGN(c.character, find_name(r, r.member(node, "character"), names, "the name of a character of this scene"));
 
     const JsonNode count = r.member(node, "count");
     if (count.present()) {

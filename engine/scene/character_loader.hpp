@@ -34,13 +34,22 @@ inline constexpr std::size_t kMaxPerCharacter = 64;
                                              const std::string& what);
 /// `"a", "b", "c"`, for messages that list the valid names.
 [[nodiscard]] std::string quoted_list(const std::vector<std::string>& names);
+/// The index in `names` of the string at `node`; otherwise an error at `node` expecting
+/// `what` and listing the names.
+[[nodiscard]] Result<std::uint32_t> find_name(const JsonReader& r, const JsonNode& node, const std::vector<std::string>& names,
+                                              const std::string& what);
+/// The index of the animation of `character` named by the string at `node`
+/// (rigged_character_loader.cpp).
+[[nodiscard]] Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const gltf::Character& character);
 /// The `physics` object, over the values already in `p`.
 [[nodiscard]] Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::SolverParams& p);
 /// A view example whose shape has `joints` joints.
 [[nodiscard]] Result<ViewSpec> read_view(const JsonReader& r, const JsonNode& node, std::size_t joints);
-/// A sphere or capsule on the joint whose index `joint` returns for the `joint` member.
-[[nodiscard]] Result<ColliderSpec> read_collider(const JsonReader& r, const JsonNode& node,
-                                                 const std::function<Result<std::uint32_t>(const JsonNode&)>& joint);
+/// The optional `colliders` member of a character `node`: at most
+/// rods::kMaxChainColliders spheres or capsules, each on the joint whose index `joint`
+/// returns for its `joint` member.
+[[nodiscard]] Result<std::vector<ColliderSpec>> read_colliders(const JsonReader& r, const JsonNode& node,
+                                                               const std::function<Result<std::uint32_t>(const JsonNode&)>& joint);
 /// A chain's `thickness`, `mass`, `physics`, `collide` and `views` over the values
 /// already in `c` (its base shape set), then check_template().
 [[nodiscard]] Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, ChainSpec& c);

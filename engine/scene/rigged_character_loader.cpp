@@ -63,18 +63,6 @@ Result<int> default_reference(const JsonReader& r, const JsonNode& at, const glt
                                "are measured in (\"reference_joint\")");
 }
 
-Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
-    std::string name;
-    KW_SCENE_ASSIGN(name, r.string(node));
-    std::vector<std::string> names;
-    for (std::size_t i = 0; i < ch.animations.size(); ++i) {
-        if (ch.animations[i].name == name) return static_cast<std::int32_t>(i);
-        names.push_back(ch.animations[i].name);
-    }
-    if (names.empty()) return r.expected(node, "no animation: " + ch.source + " has no animation clips");
-    return r.expected(node, "the name of an animation of " + ch.source + " (" + quoted_list(names) + ")");
-}
-
 // A chain's nodes: "nodes" (each the child of the one before) or "root" walked down
 // single children (docs: at most "joints" of them).
 Result<std::vector<int>> read_chain_nodes(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
@@ -160,6 +148,19 @@ Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const 
 
 }  // namespace
 
+Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
+    if (ch.animations.empty()) {
+        // Still a string, or that is the error.
+        KW_TRY(r.string(node));
+        return r.expected(node, "no animation: " + ch.source + " has no animation clips");
+    }
+    std::vector<std::string> names;
+    for (const gltf::Animation& clip : ch.animations) names.push_back(clip.name);
+    std::uint32_t clip = 0;
+    KW_SCENE_ASSIGN(clip, find_name(r, node, names, "the name of an animation of " + ch.source));
+    return static_cast<std::int32_t>(clip);
+}
+
 Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode& node) {
     KW_TRY(r.object(node, {"name", "gltf", "reference_joint", "animation", "animate", "colliders", "physics", "chains"}));
     CharacterSpec out;
@@ -203,17 +204,7 @@ Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode&
         KW_SCENE_ASSIGN(index, find_node(r, n, ch));
         return static_cast<std::uint32_t>(index);
     };
-    const JsonNode colliders = r.member(node, "colliders");
-    if (colliders.present()) {
-        std::size_t n = 0;
-        KW_SCENE_ASSIGN(n, read_array(r, colliders, 0, rods::kMaxChainColliders,
-                                      "an array of colliders (at most " + std::to_string(rods::kMaxChainColliders) + ")"));
-        for (std::size_t i = 0; i < n; ++i) {
-            ColliderSpec c;
-            KW_SCENE_ASSIGN(c, read_collider(r, r.element(colliders, i), node_index));
-            out.colliders.push_back(c);
-        }
-    }
+    KW_SCENE_ASSIGN(out.colliders, read_colliders(r, node, node_index));
 
     rods::SolverParams defaults;
     const JsonNode physics = r.member(node, "physics");
