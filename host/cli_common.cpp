@@ -68,9 +68,10 @@ std::string Args::first_word() const {
 
 BackendChoice read_backend_choice(Args& args) {
     BackendChoice choice;
-    if (auto b = args.option("backend")) choice.backend = *b;
-    if (choice.backend != "auto" && !parse_backend(choice.backend)) {
-        throw UsageError{"--backend: expected auto, vulkan, cpu or cpu-reference, got \"" + choice.backend + "\""};
+    if (auto b = args.option("backend")) {
+        auto parsed = parse_backend_choice(*b);
+        if (!parsed) throw UsageError{"--" + parsed.error().message};
+        choice.backend = parsed.value();
     }
     if (auto d = args.option("device")) choice.options.device = *d;
     if (auto t = args.count("threads", 1, 1024)) choice.options.threads = static_cast<unsigned>(*t);
@@ -78,55 +79,32 @@ BackendChoice read_backend_choice(Args& args) {
     return choice;
 }
 
-std::optional<BackendKind> parse_backend(const std::string& name) {
-    for (BackendKind kind : {BackendKind::CpuReference, BackendKind::Cpu, BackendKind::Vulkan}) {
-        if (backend_name(kind) == name) return kind;
+Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendChoice& choice, std::optional<std::uint64_t> frames) {
+    SimulationOptions options{.backend = choice.backend, .options = choice.options};
+    if (frames) options.frames = static_cast<std::uint32_t>(*frames);
+    auto sim = Simulation::create(std::move(scene), options);
+    if (sim && !sim.value()->fallback_reason().empty()) {
+        std::fprintf(stderr, "kodawari: Vulkan unavailable (%s); running on the CPU\n", sim.value()->fallback_reason().c_str());
     }
-    return std::nullopt;
+    return sim;
 }
 
-Result<std::unique_ptr<BirdBackend>> open_backend(const BackendChoice& choice) {
-    if (choice.backend != "auto") return make_bird_backend(*parse_backend(choice.backend), choice.options);
-    auto vulkan = make_bird_backend(BackendKind::Vulkan, choice.options);
-    if (vulkan) return vulkan;
-    std::fprintf(stderr, "kodawari: Vulkan unavailable (%s); running on the CPU\n", vulkan.error().message.c_str());
-    return make_bird_backend(BackendKind::Cpu, choice.options);
+Result<std::unique_ptr<Simulation>> open_simulation(const std::string& path, const BackendChoice& choice,
+                                                    std::optional<std::uint64_t> frames) {
+    auto scene = load_scene(path);
+    if (!scene) return scene.error();
+    return make_simulation(std::move(scene).value(), choice, frames);
 }
 
-Result<std::unique_ptr<RodBackend>> open_rod_backend(const BackendChoice& choice) {
-    if (choice.backend != "auto") return make_rod_backend(*parse_backend(choice.backend), choice.options);
-    auto vulkan = make_rod_backend(BackendKind::Vulkan, choice.options);
-    if (vulkan) return vulkan;
-    std::fprintf(stderr, "kodawari: Vulkan unavailable (%s); running on the CPU\n", vulkan.error().message.c_str());
-    return make_rod_backend(BackendKind::Cpu, choice.options);
+std::string scene_argument(const std::vector<std::string>& positionals, const char* command) {
+    if (positionals.size() > 1) throw UsageError{std::string(command) + " takes one scene file"};
+    return positionals.empty() ? std::string(kDefaultScene) : positionals[0];
 }
 
 bool validation_failed(std::uint32_t messages) {
     if (messages == 0) return false;
     std::fprintf(stderr, "kodawari: error: Vulkan validation reported %u messages\n", messages);
     return true;
-}
-
-void share_one_device(BackendChoice& choice) {
-    if (choice.options.context || (choice.backend != "auto" && choice.backend != "vulkan")) return;
-    if (auto device = open_shared_device(choice.options)) choice.options.context = std::move(device).value();
-}
-
-std::string resolved_backend_name(const BackendChoice& choice) {
-    if (choice.backend != "auto") return choice.backend;
-    auto gpus = list_gpus(choice.options.device);
-    return gpus.ok() && !gpus.value().devices.empty() ? "vulkan" : "cpu";
-}
-
-Result<LoadedScene> load_scene_arguments(const std::vector<std::string>& positionals, const char* command,
-                                         std::optional<std::uint64_t> frames) {
-    if (positionals.size() > 1) throw UsageError{std::string(command) + " takes one scene file"};
-    auto scene = load_scene(positionals.empty() ? std::string(kDefaultScene) : positionals[0]);
-    if (!scene) return scene.error();
-    auto world = build_bird_world(scene.value());
-    if (!world) return world.error();
-    if (frames) world.value().frames = static_cast<std::uint32_t>(*frames);
-    return LoadedScene{std::move(scene).value(), std::move(world).value()};
 }
 
 int report(const Error& error) {

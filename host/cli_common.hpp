@@ -11,6 +11,7 @@
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/scene.hpp"
+#include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
 
@@ -53,46 +54,26 @@ std::pair<std::uint32_t, std::uint32_t> image_size(const std::optional<std::stri
 
 /// Options common to commands that run a simulation.
 struct BackendChoice {
-    std::string backend = "auto";  ///< auto | vulkan | cpu | cpu-reference
+    std::optional<BackendKind> backend;  ///< none: auto (vulkan when a device opens, else cpu)
     BackendOptions options;
 };
 BackendChoice read_backend_choice(Args& args);
 
-/// Creates the backend. "auto" takes Vulkan when a device exists, else the CPU (saying
-/// why in one line on stderr).
-[[nodiscard]] Result<std::unique_ptr<BirdBackend>> open_backend(const BackendChoice& choice);
+/// The Simulation of a scene file (`command` names the command in usage errors) or of a
+/// parsed scene, on the backends of `choice`, `frames` long (none: the scene's). When
+/// "auto" falls back to the CPU it says why in one line on stderr.
+[[nodiscard]] Result<std::unique_ptr<Simulation>> open_simulation(const std::string& path, const BackendChoice& choice,
+                                                                  std::optional<std::uint64_t> frames);
+[[nodiscard]] Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendChoice& choice,
+                                                                  std::optional<std::uint64_t> frames);
 
-/// The rod backend of `choice`, with the same "auto" rule.
-[[nodiscard]] Result<std::unique_ptr<RodBackend>> open_rod_backend(const BackendChoice& choice);
+/// The one scene file among a command's positionals (kDefaultScene when none).
+[[nodiscard]] std::string scene_argument(const std::vector<std::string>& positionals, const char* command);
 
 /// True (after saying so on stderr) when Vulkan validation reported messages: the
 /// command then exits kExitFailure. Backends sharing one device share its count, so a
 /// caller passes that count once (or the largest of theirs).
 [[nodiscard]] bool validation_failed(std::uint32_t messages);
-
-/// For "auto" and "vulkan": one Vulkan device for every backend made from `choice` from
-/// now on (BackendOptions::context), so that the pose backends' matrices feed the rod
-/// backend on the device (CrowdAnimator::write_inputs_on). Without a device nothing
-/// changes (open_*backend then say why, or fall back to the CPU).
-void share_one_device(BackendChoice& choice);
-
-/// The backend "auto" resolves to on this machine ("vulkan" when a Vulkan device exists,
-/// else "cpu"), or the chosen one.
-[[nodiscard]] std::string resolved_backend_name(const BackendChoice& choice);
-
-/// Parses a backend name.
-[[nodiscard]] std::optional<BackendKind> parse_backend(const std::string& name);
-
-/// A scene and the birds built from it.
-struct LoadedScene {
-    Scene scene;
-    birds::BirdWorld world;
-};
-
-/// Loads the scene of a command's positionals (default kDefaultScene; `command` names it
-/// in usage errors), builds its birds and applies --frames.
-[[nodiscard]] Result<LoadedScene> load_scene_arguments(const std::vector<std::string>& positionals, const char* command,
-                                                       std::optional<std::uint64_t> frames);
 
 /// Prints an error and returns its exit code.
 int report(const Error& error);

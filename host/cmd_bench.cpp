@@ -7,13 +7,13 @@
 
 #include "commands.hpp"
 #include "kodawari/atomic_file.hpp"
-#include "kodawari/crowd_animator.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/rods/synthetic.hpp"
 #include "kodawari/scene.hpp"
+#include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
 namespace {
@@ -62,9 +62,9 @@ std::vector<BackendKind> read_backends(Args& args) {
     std::vector<BackendKind> kinds;
     std::stringstream names(args.option("backends").value_or("cpu-reference,cpu,vulkan"));
     for (std::string name; std::getline(names, name, ',');) {
-        auto kind = parse_backend(name);
-        if (!kind) throw UsageError{"--backends: unknown backend \"" + name + "\""};
-        kinds.push_back(*kind);
+        auto kind = parse_backend_choice(name);
+        if (!kind || !kind.value()) throw UsageError{"--backends: unknown backend \"" + name + "\""};
+        kinds.push_back(*kind.value());
     }
     return kinds;
 }
@@ -188,6 +188,7 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
     crowd.count = count;
     crowd.instances.clear();
     scene.crowds = {crowd};
+    // The scene as each backend's Simulation builds it, for the header line.
     auto built = build_rod_scene(scene);
     if (!built) return report(built.error());
     const RodScene& rods_scene = built.value();
@@ -199,7 +200,6 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
     std::fflush(stdout);
 
     std::vector<Measured> results;
-    rods::RodFrame input;
     // Vulkan twice: the pose matrices read back and the rod input made on the host, then
     // (one device for both backends) the rod input written on the device.
     struct Variant {
@@ -212,44 +212,29 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
         if (kind == BackendKind::Vulkan) variants.push_back({kind, true});
     }
     for (const auto [kind, device_input] : variants) {
-        BackendOptions options = choice.options;
-        if (device_input) {
-            auto device = open_shared_device(options);
-            if (!device) return report(device.error());
-            options.context = std::move(device).value();
-        }
-        auto backend = make_rod_backend(kind, options);
-        if (!backend) {
-            std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), backend.error().message.c_str());
+        // Frame 0 (load) and 2 warm-up steps, then the timed frames.
+        auto made = Simulation::create(scene, {.backend = kind, .options = choice.options, .frames = frames + 3,
+                                               .rod_inputs_on_device = device_input});
+        if (!made) {
+            std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), made.error().message.c_str());
             continue;
         }
-        auto animator = CrowdAnimator::create(rods_scene, kind, options);
-        if (!animator) return report(animator.error());
-        RodBackend& b = *backend.value();
-        if (auto r = animator.value().frame(0, input); !r) return report(r.error());
-        if (auto r = b.load(rods_scene.world, input); !r) return report(r.error());
-        if (device_input) {
-            auto took = animator.value().write_inputs_on(b);
-            if (!took) return report(took.error());
-            if (!took.value()) return report(make_error(Error::Kind::Internal, "the rod input could not go on the device"));
+        Simulation& sim = *made.value();
+        if (auto r = sim.step(3); !r) return report(r.error());
+        if (device_input && !sim.rod_inputs_on_device()) {
+            return report(make_error(Error::Kind::Internal, "the rod input could not go on the device"));
         }
-        for (std::uint32_t f = 1; f <= 2; ++f) {
-            if (auto r = animator.value().frame(f, input); !r) return report(r.error());
-            if (auto r = b.step(input); !r) return report(r.error());
-        }
-        double pose_ms = 0.0, gpu_ms = 0.0;
+        const SimulationTiming before = sim.timing();
         const auto start = std::chrono::steady_clock::now();
-        for (std::uint32_t f = 3; f < frames + 3; ++f) {
-            if (auto r = animator.value().frame(f, input); !r) return report(r.error());
-            pose_ms += animator.value().last_pose_ms();
-            if (auto r = b.step(input); !r) return report(r.error());
-            gpu_ms += b.last_gpu_ms();
+        for (std::uint32_t f = 0; f < frames; ++f) {
+            if (auto r = sim.step(); !r) return report(r.error());
         }
         const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        // One device shared: both count the same messages.
-        if (validation_failed(std::max(b.validation_messages(), animator.value().validation_messages()))) return kExitFailure;
-        Measured m{std::string(b.name()) + (kind == BackendKind::Vulkan ? (device_input ? "/dev-in" : "/host-in") : ""), b.device(),
-                   frames / seconds, 1e3 * seconds / frames, b.last_gpu_ms() >= 0.0 ? gpu_ms / frames : -1.0};
+        if (validation_failed(sim.validation_messages())) return kExitFailure;
+        const double pose_ms = sim.timing().pose_ms - before.pose_ms;
+        const double gpu_ms = sim.timing().chain_gpu_ms - before.chain_gpu_ms;
+        Measured m{std::string(backend_name(kind)) + (kind == BackendKind::Vulkan ? (device_input ? "/dev-in" : "/host-in") : ""),
+                   sim.device(), frames / seconds, 1e3 * seconds / frames, gpu_ms > 0.0 ? gpu_ms / frames : -1.0};
         results.push_back(m);
         std::printf("  %-14s done: %.3g frames/s (clips %.3f ms + chains %.3f ms per frame)\n", m.backend.c_str(), m.per_second,
                     pose_ms / frames, m.ms_per_frame - pose_ms / frames);
@@ -274,113 +259,71 @@ int bench_view(Args& args, BackendChoice choice) {
     if (positionals.size() > 2) throw UsageError{"usage: kodawari bench view [SCENE] [options]"};
     positionals.erase(positionals.begin());
     if (positionals.empty()) positionals.push_back("scenes/crowd.json");
-    auto loaded = load_scene_arguments(positionals, "bench view", std::nullopt);
+    (void)scene_argument(positionals, "bench view");
+    auto loaded = load_scene(positionals[0]);
     if (!loaded) return report(loaded.error());
-    const Scene& scene = loaded.value().scene;
-    const birds::BirdWorld& bird_world = loaded.value().world;
-    std::optional<RodScene> rod_scene;
-    if (!scene.characters.empty()) {
-        auto built = build_rod_scene(scene);
-        if (!built) return report(built.error());
-        rod_scene.emplace(std::move(built).value());
-    }
-    const std::uint32_t last = scene.frame_count() - 1;
+    const Scene& scene = loaded.value();
     auto renderer = render::Renderer::create({.width = width, .height = height, .device = choice.options.device,
                                               .validation = choice.options.validation});
     if (!renderer) return report(renderer.error());
     render::Renderer& r = *renderer.value();
     choice.options.context = r.device_context();
-    if (rod_scene) {
-        if (auto s = r.set_chains(&rod_scene->world); !s) return report(s.error());
-        if (auto s = r.set_skinned(&*rod_scene); !s) return report(s.error());
-    }
-    if (!bird_world.birds.empty()) {
-        if (auto s = r.set_birds(&bird_world); !s) return report(s.error());
-    }
 
     struct Run {
         const char* name;
         BackendKind kind;
-        bool read_back;
-        std::unique_ptr<BirdBackend> birds;
-        std::unique_ptr<RodBackend> rods;
-        std::optional<CrowdAnimator> animator;
-        rods::RodFrame frame;
-        ChainSnapshot snapshot;
-        std::vector<gpu::BirdPose> poses;
+        Simulation::DrawSource source;
+        std::unique_ptr<Simulation> sim;
         double seconds = 0.0;
         std::uint64_t read_back_bytes = 0;
     };
     std::vector<Run> runs;
-    runs.push_back({"vulkan shared", BackendKind::Vulkan, false, {}, {}, {}, {}, {}, {}});
-    runs.push_back({"vulkan readback", BackendKind::Vulkan, true, {}, {}, {}, {}, {}, {}});
-    runs.push_back({"cpu", BackendKind::Cpu, true, {}, {}, {}, {}, {}, {}});
+    runs.push_back({"vulkan shared", BackendKind::Vulkan, Simulation::DrawSource::Device, {}});
+    runs.push_back({"vulkan readback", BackendKind::Vulkan, Simulation::DrawSource::ReadBack, {}});
+    runs.push_back({"cpu", BackendKind::Cpu, Simulation::DrawSource::Device, {}});
     for (Run& run : runs) {
-        if (!bird_world.birds.empty()) {
-            auto b = make_bird_backend(run.kind, choice.options);
-            if (!b) return report(b.error());
-            run.birds = std::move(b).value();
-            if (auto s = run.birds->load(bird_world); !s) return report(s.error());
-            run.poses.resize(bird_world.birds.size());
-        }
-        if (rod_scene) {
-            auto b = make_rod_backend(run.kind, choice.options);
-            if (!b) return report(b.error());
-            run.rods = std::move(b).value();
-            auto a = CrowdAnimator::create(*rod_scene, run.kind, choice.options);
-            if (!a) return report(a.error());
-            run.animator.emplace(std::move(a).value());
-        }
+        // The read-back configuration makes the rigged characters' rod input on the host too.
+        auto made = Simulation::create(scene, {.backend = run.kind, .options = choice.options, .frames = 2 + frames,
+                                               .rod_inputs_on_device = run.source == Simulation::DrawSource::Device});
+        if (!made) return report(made.error());
+        run.sim = std::move(made).value();
+        run.sim->keep_bird_poses(run.source == Simulation::DrawSource::ReadBack);
     }
-    const std::vector<glm::vec3> grid = render::content_points(rod_scene ? &*rod_scene : nullptr, nullptr, &bird_world);
+    const Simulation& first = *runs.front().sim;
+    const std::vector<glm::vec3> grid = render::content_points(first.rod_scene(), nullptr, &first.bird_world());
     std::printf("bench view: scene \"%s\": %zu chains, %zu birds, %ux%u, %u frames per configuration after 2 warm-up frames, "
                 "interleaved 10 at a time, on %s\n",
-                scene.name.c_str(), rod_scene ? rod_scene->world.chains.size() : std::size_t{0}, bird_world.birds.size(), width,
-                height, frames, r.device().c_str());
+                scene.name.c_str(), first.rod_scene() ? first.rod_scene()->world.chains.size() : std::size_t{0},
+                first.bird_world().birds.size(), width, height, frames, r.device().c_str());
     std::fflush(stdout);
 
     // One frame of a configuration: simulate, give the renderer the state, draw.
-    const auto frame = [&](Run& run, std::uint32_t f) -> Result<void> {
+    const auto frame = [&](Run& run) -> Result<void> {
         const std::uint64_t before = r.read_back_bytes();
-        if (run.birds) {
-            KW_TRY(run.birds->simulate(1, {.poses = run.read_back ? std::span(run.poses) : std::span<gpu::BirdPose>(), .diag = {}}));
-            KW_TRY(run.read_back ? r.birds_from(run.poses) : r.birds_from(*run.birds));
-        }
-        if (run.rods) {
-            KW_TRY(run.animator->frame(f, run.frame));
-            KW_TRY(f == 0 ? run.rods->load(rod_scene->world, run.frame) : run.rods->step(run.frame));
-            // The viewer's way: rigged characters' rod input written on the device too.
-            if (f == 0 && !run.read_back) KW_TRY(run.animator->write_inputs_on(*run.rods));
-            if (run.read_back) {
-                KW_TRY(run.rods->read(run.snapshot));
-                KW_TRY(r.chains_from(run.snapshot));
-                KW_TRY(r.skinned_from(run.snapshot, f));
-            } else {
-                KW_TRY(r.chains_from(*run.rods));
-                KW_TRY(r.skinned_from(*run.animator, *run.rods, f));
-            }
-        }
+        KW_TRY(run.sim->step());
+        KW_TRY(run.sim->draw_on(r, run.source));
+        const std::uint32_t f = *run.sim->frame();
         render::DrawList list(render::scene_camera(scene, f), width, height);
         render::add_ground_grid(list, grid);
-        if (rod_scene) {
-            KW_TRY(r.colliders_from(*run.rods, run.frame));
-            render::add_characters(list, *rod_scene, f);
-        }
+        if (run.sim->rod_scene()) render::add_characters(list, *run.sim->rod_scene(), f);
         KW_TRY(r.draw(list));
         if (f >= 2) run.read_back_bytes += r.read_back_bytes() - before;
         return {};
     };
-    for (std::uint32_t f = 0; f < 2; ++f) {
-        for (Run& run : runs) {
-            if (auto s = frame(run, f); !s) return report(s.error());
+    for (Run& run : runs) {
+        if (auto s = run.sim->show_on(r); !s) return report(s.error());
+        for (std::uint32_t f = 0; f < 2; ++f) {
+            if (auto s = frame(run); !s) return report(s.error());
         }
     }
     for (std::uint32_t done = 0; done < frames;) {
         const std::uint32_t n = std::min(10u, frames - done);
         for (Run& run : runs) {
+            // Each configuration's own scene for the renderer's layers.
+            if (auto s = run.sim->show_on(r); !s) return report(s.error());
             const auto start = std::chrono::steady_clock::now();
             for (std::uint32_t k = 0; k < n; ++k) {
-                if (auto s = frame(run, std::min(2 + done + k, last)); !s) return report(s.error());
+                if (auto s = frame(run); !s) return report(s.error());
             }
             run.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         }

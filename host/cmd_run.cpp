@@ -1,145 +1,218 @@
+// `kodawari run SCENE`: bakes a scene (Simulation, kodawari/simulation.hpp) into glTF
+// and optionally a JSON Lines trace. I/O around the engine's frame protocol.
 #include <algorithm>
-#include <chrono>
 #include <cstdio>
 #include <filesystem>
 #include <optional>
 #include <vector>
 
 #include "commands.hpp"
-#include "kodawari/crowd_animator.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/scene.hpp"
+#include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
 
 namespace {
 
-// Where a run's outputs go and what it reports.
-struct RunOutputs {
-    bool no_export = false;
-    std::string out_path;  // "" when not exporting
-    std::optional<TraceWriter>* trace = nullptr;
-};
+void print_wrote(const std::string& path, const char* what) {
+    std::error_code ec;
+    const auto size = std::filesystem::file_size(path, ec);
+    std::printf("kodawari: wrote %s (%.1f MiB, glTF 2.0 binary%s)\n", path.c_str(), ec ? 0.0 : static_cast<double>(size) / (1 << 20),
+                what);
+}
 
-int run_birds(const Scene& scene, birds::BirdWorld& world, const BackendChoice& choice, const std::string& out_path,
-              std::optional<TraceWriter>& trace);
+// Baking more than this in memory is refused (the bake is held whole until written).
+constexpr std::uint64_t kBakeLimitBytes = 6ull << 30;
 
-int run_chains(const Scene& scene, BackendChoice choice, std::optional<std::uint64_t> frames_option,
-               const RunOutputs& outputs) {
-    auto built = build_rod_scene(scene);
-    if (!built) return report(built.error());
-    const RodScene& rods_scene = built.value();
-    const rods::RodWorld& world = rods_scene.world;
-    const std::uint32_t frames = frames_option ? static_cast<std::uint32_t>(*frames_option) : rods_scene.frames;
-    const std::size_t joints = world.joint_count;
-    if (!outputs.out_path.empty()) {
-        const std::uint64_t bytes = std::uint64_t{frames} * joints * (sizeof(glm::vec3) + sizeof(glm::quat));
-        if (bytes > (6ull << 30)) {
-            return report(make_error(Error::Kind::InvalidInput, "baking " + std::to_string(joints) + " joints x " +
-                                                                    std::to_string(frames) + " frames needs " +
-                                                                    std::to_string(bytes >> 20) +
-                                                                    " MiB; use --frames or --no-export"));
-        }
-    }
-    share_one_device(choice);
-    auto opened = open_rod_backend(choice);
-    if (!opened) return report(opened.error());
-    RodBackend& backend = *opened.value();
-    // Rigged characters' clips are evaluated by the pose backend of the same kind.
-    auto animator = CrowdAnimator::create(rods_scene, parse_backend(std::string(backend.name())).value_or(BackendKind::Cpu), choice.options);
-    if (!animator) return report(animator.error());
-    std::printf("kodawari: scene \"%s\" (%s): %u characters, %zu chains, %zu joints, %u frames at %g fps\n",
-                scene.name.c_str(), scene.path.c_str(), world.character_count, world.chains.size(), joints, frames,
-                static_cast<double>(rods_scene.fps));
-    std::fflush(stdout);
-
-    // Per chain, its character and its index within the character (trace records).
-    std::vector<std::uint32_t> characters(world.chains.size()), within(world.chains.size());
-    for (std::uint32_t c = 0; c < world.character_count; ++c) {
-        for (std::uint32_t k = 0; k < rods_scene.chain_count(c); ++k) {
-            characters[rods_scene.instances[c].chain_begin + k] = c;
-            within[rods_scene.instances[c].chain_begin + k] = k;
-        }
-    }
-    // Rigged characters go back into their own glTF, one file per character template
-    // (the scene's out path when it is the only character); procedural characters (and
-    // then the rigged ones too, as bones) into write_chains_glb's file.
-    const bool any_procedural = std::any_of(rods_scene.characters.begin(), rods_scene.characters.end(),
-                                            [](const CharacterKinematics& k) { return !k.rig; });
+// What a bake keeps of the characters' chains: per frame the snapshot into the trace, the
+// rigged characters' own glTF and the procedural characters' bones.
+struct ChainBake {
+    Simulation& sim;
+    const RodScene& rods_scene;
+    std::string out_path;
+    std::vector<std::uint32_t> characters, within;  // per chain: its character, its index there
     std::vector<RiggedCrowdExport> rigged;
     std::vector<std::string> rigged_paths;
-    if (!outputs.out_path.empty()) {
-        const std::string& out = outputs.out_path;
-        const std::string stem = out.substr(0, out.size() - (out.ends_with(".glb") ? 4 : 0));
-        for (std::uint32_t k = 0; k < rods_scene.characters.size(); ++k) {
-            if (!rods_scene.characters[k].rig) continue;
-            auto e = RiggedCrowdExport::create(rods_scene, k);
-            if (!e) return report(e.error());
-            if (e.value().instances().empty()) continue;
-            rigged.push_back(std::move(e).value());
-            rigged_paths.push_back(!any_procedural && rods_scene.characters.size() == 1 ? out
-                                                                                         : stem + "-" + rods_scene.characters[k].name + ".glb");
-        }
-    }
-    std::vector<glm::vec3> positions(outputs.out_path.empty() || !any_procedural ? 0 : std::size_t{frames} * joints);
-    std::vector<glm::quat> orientations(positions.size());
-    rods::RodFrame frame;
+    std::vector<glm::vec3> positions;
+    std::vector<glm::quat> orientations;
     ChainSnapshot snapshot;
-    const bool show_progress = stderr_is_terminal() && std::uint64_t{frames} * joints >= 2'000'000;
-    double seconds = 0.0, gpu_ms = 0.0;
-    for (std::uint32_t f = 0; f < frames; ++f) {
-        if (auto r = animator.value().frame(f, frame); !r) return report(r.error());
-        const auto start = std::chrono::steady_clock::now();
-        // Frame 0 is the initial pose; every later frame is one step.
-        if (auto r = f == 0 ? backend.load(world, frame) : backend.step(frame); !r) return report(r.error());
-        if (f == 0) {
-            // From now on the rigged characters' input is written where the chains step.
-            if (auto r = animator.value().write_inputs_on(backend); !r) return report(r.error());
+
+    [[nodiscard]] Result<void> begin() {
+        const rods::RodWorld& world = rods_scene.world;
+        const Scene& scene = sim.scene();
+        std::printf("kodawari: scene \"%s\" (%s): %u characters, %zu chains, %zu joints, %u frames at %g fps\n",
+                    scene.name.c_str(), scene.path.c_str(), world.character_count, world.chains.size(),
+                    std::size_t{world.joint_count}, sim.frame_count(), static_cast<double>(rods_scene.fps));
+        std::fflush(stdout);
+        characters.resize(world.chains.size());
+        within.resize(world.chains.size());
+        for (std::uint32_t c = 0; c < world.character_count; ++c) {
+            for (std::uint32_t k = 0; k < rods_scene.chain_count(c); ++k) {
+                characters[rods_scene.instances[c].chain_begin + k] = c;
+                within[rods_scene.instances[c].chain_begin + k] = k;
+            }
         }
-        seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (f > 0 && backend.last_gpu_ms() >= 0.0) gpu_ms += backend.last_gpu_ms();
-        if (*outputs.trace || !positions.empty() || !rigged.empty()) {
-            if (auto r = backend.read(snapshot); !r) return report(r.error());
+        // Rigged characters go back into their own glTF, one file per character template
+        // (the scene's out path when it is the only character); procedural characters (and
+        // then the rigged ones too, as bones) into write_chains_glb's file.
+        const bool any_procedural = std::any_of(rods_scene.characters.begin(), rods_scene.characters.end(),
+                                                [](const CharacterKinematics& k) { return !k.rig; });
+        if (!out_path.empty()) {
+            const std::string stem = out_path.substr(0, out_path.size() - (out_path.ends_with(".glb") ? 4 : 0));
+            for (std::uint32_t k = 0; k < rods_scene.characters.size(); ++k) {
+                if (!rods_scene.characters[k].rig) continue;
+                auto e = RiggedCrowdExport::create(rods_scene, k);
+                if (!e) return e.error();
+                if (e.value().instances().empty()) continue;
+                rigged.push_back(std::move(e).value());
+                rigged_paths.push_back(!any_procedural && rods_scene.characters.size() == 1
+                                           ? out_path
+                                           : stem + "-" + rods_scene.characters[k].name + ".glb");
+            }
         }
-        for (RiggedCrowdExport& e : rigged) {
-            if (auto r = e.add_frame(f, snapshot); !r) return report(r.error());
+        positions.resize(out_path.empty() || !any_procedural ? 0 : std::size_t{sim.frame_count()} * world.joint_count);
+        orientations.resize(positions.size());
+        return {};
+    }
+
+    [[nodiscard]] Result<void> frame(std::uint32_t f, std::optional<TraceWriter>& trace) {
+        if (trace || !positions.empty() || !rigged.empty()) KW_TRY(sim.read_chains(snapshot));
+        for (RiggedCrowdExport& e : rigged) KW_TRY(e.add_frame(f, snapshot));
+        if (trace) trace->write_chains(f, rods_scene.time(f), rods_scene.world, characters, within, rods_scene.chain_names, snapshot);
+        if (!positions.empty()) {
+            const auto at = static_cast<std::ptrdiff_t>(std::size_t{f} * rods_scene.world.joint_count);
+            std::copy(snapshot.positions.begin(), snapshot.positions.end(), positions.begin() + at);
+            std::copy(snapshot.orientations.begin(), snapshot.orientations.end(), orientations.begin() + at);
         }
-        if (*outputs.trace) {
-            (*outputs.trace)->write_chains(f, rods_scene.time(f), world, characters, within, rods_scene.chain_names, snapshot);
+        return {};
+    }
+
+    void print_timing() const {
+        const SimulationTiming& timing = sim.timing();
+        const std::uint32_t frames = sim.frame_count();
+        const std::uint32_t steps = std::max(frames, 2u) - 1;
+        std::printf("kodawari: backend %s on %s: %.3f ms per frame", std::string(backend_name(sim.backend())).c_str(),
+                    sim.device().c_str(), 1e3 * timing.chain_seconds / frames);
+        if (timing.chain_gpu_ms > 0.0) std::printf(" (GPU %.3f ms)", timing.chain_gpu_ms / steps);
+        std::printf(", %.3g joint-steps/s%s\n",
+                    static_cast<double>(rods_scene.world.joint_count) * steps / std::max(timing.chain_seconds, 1e-9),
+                    sim.rod_inputs_on_device() ? "; rigged characters' rod input written on the device" : "");
+    }
+
+    [[nodiscard]] Result<void> finish() {
+        for (std::size_t i = 0; i < rigged.size(); ++i) {
+            KW_TRY(rigged[i].finish(rigged_paths[i]));
+            print_wrote(rigged_paths[i], ", the character's own skeleton and meshes");
         }
         if (!positions.empty()) {
-            std::copy(snapshot.positions.begin(), snapshot.positions.end(), positions.begin() + static_cast<std::ptrdiff_t>(f * joints));
-            std::copy(snapshot.orientations.begin(), snapshot.orientations.end(),
-                      orientations.begin() + static_cast<std::ptrdiff_t>(f * joints));
+            KW_TRY(write_chains_glb(out_path, rods_scene, sim.frame_count(), positions, orientations));
+            print_wrote(out_path, "");
         }
-        if (show_progress) progress("simulating", f + 1, frames);
+        return {};
     }
-    const std::uint32_t steps = std::max(frames, 2u) - 1;
-    std::printf("kodawari: backend %s on %s: %.3f ms per frame", std::string(backend.name()).c_str(), backend.device().c_str(),
-                1e3 * seconds / frames);
-    if (backend.name() == "vulkan" && gpu_ms > 0.0) std::printf(" (GPU %.3f ms)", gpu_ms / steps);
-    std::printf(", %.3g joint-steps/s%s\n", static_cast<double>(joints) * steps / std::max(seconds, 1e-9),
-                animator.value().writes_inputs_on_device() ? "; rigged characters' rod input written on the device" : "");
-    // One device shared: both count the same messages.
-    if (validation_failed(std::max(backend.validation_messages(), animator.value().validation_messages()))) {
-        return kExitFailure;
+};
+
+// What a bake keeps of the birds: every frame's poses for the glTF, and the trace.
+struct BirdBake {
+    Simulation& sim;
+    std::string out_path;
+    std::vector<gpu::BirdPose> poses;  // frames x birds, for the export
+    std::vector<gpu::BirdPose> chunk_poses;
+    std::vector<gpu::BirdDiag> chunk_diag;
+
+    [[nodiscard]] std::size_t count() const { return sim.bird_world().birds.size(); }
+
+    void begin() {
+        const Scene& scene = sim.scene();
+        std::printf("kodawari: scene \"%s\" (%s): %zu birds, %u frames at %g fps\n", scene.name.c_str(), scene.path.c_str(),
+                    count(), sim.frame_count(), static_cast<double>(sim.bird_world().fps));
+        std::fflush(stdout);
+        poses.resize(out_path.empty() ? 0 : std::size_t{sim.frame_count()} * count());
     }
-    const auto wrote = [](const std::string& path, const char* what) {
-        std::error_code ec;
-        const auto size = std::filesystem::file_size(path, ec);
-        std::printf("kodawari: wrote %s (%.1f MiB, glTF 2.0 binary%s)\n", path.c_str(), ec ? 0.0 : static_cast<double>(size) / (1 << 20),
-                    what);
-    };
-    for (std::size_t i = 0; i < rigged.size(); ++i) {
-        if (auto r = rigged[i].finish(rigged_paths[i]); !r) return report(r.error());
-        wrote(rigged_paths[i], ", the character's own skeleton and meshes");
+
+    // Where the next `n` frames from `done` go.
+    StepOutput output(std::uint32_t done, std::uint32_t n, bool tracing) {
+        StepOutput out;
+        if (!poses.empty()) out.bird_poses = std::span(poses).subspan(std::size_t{done} * count(), std::size_t{n} * count());
+        if (tracing) {
+            if (poses.empty()) {
+                chunk_poses.resize(std::size_t{n} * count());
+                out.bird_poses = chunk_poses;
+            }
+            chunk_diag.resize(std::size_t{n} * count());
+            out.bird_diag = chunk_diag;
+        }
+        return out;
     }
-    if (!positions.empty()) {
-        if (auto r = write_chains_glb(outputs.out_path, rods_scene, frames, positions, orientations); !r) return report(r.error());
-        wrote(outputs.out_path, "");
+
+    void trace_frames(std::uint32_t done, std::uint32_t n, const StepOutput& out, TraceWriter& trace) const {
+        for (std::uint32_t k = 0; k < n; ++k) {
+            trace.write_frame(done + k, sim.bird_world(), out.bird_poses.subspan(std::size_t{k} * count(), count()),
+                              out.bird_diag.subspan(std::size_t{k} * count(), count()));
+        }
     }
-    return kExitOk;
+
+    void print_timing() const {
+        const SimulationTiming& timing = sim.timing();
+        const std::uint32_t frames = sim.frame_count();
+        std::printf("kodawari: backend %s on %s: %.3f ms per frame", std::string(backend_name(sim.backend())).c_str(),
+                    sim.device().c_str(), 1e3 * timing.bird_seconds / frames);
+        if (timing.bird_gpu_timed) std::printf(" (GPU %.3f ms)", timing.bird_gpu_ms / frames);
+        std::printf(", %.3g bird-frames/s\n", static_cast<double>(count()) * frames / std::max(timing.bird_seconds, 1e-9));
+    }
+
+    [[nodiscard]] Result<void> finish() {
+        if (poses.empty()) return {};
+        KW_TRY(write_birds_glb(out_path, sim.bird_world(), poses, sim.frame_count()));
+        print_wrote(out_path, "");
+        return {};
+    }
+};
+
+// Every frame of the simulation into the bakes; birds in chunks of frames (one step each)
+// when there are no chains to read per frame.
+Result<void> bake(Simulation& sim, std::optional<BirdBake>& birds, std::optional<ChainBake>& chains,
+                  std::optional<TraceWriter>& trace) {
+    const std::uint32_t frames = sim.frame_count();
+    if (birds) birds->begin();
+    if (chains) KW_TRY(chains->begin());
+    const std::size_t count = sim.bird_world().birds.size();
+    const std::size_t per_frame = count + (sim.rod_scene() ? sim.rod_scene()->world.joint_count : 0);
+    // Chunks bound the memory of traces and let the progress bar move.
+    const std::uint32_t chunk = chains ? 1u
+                                       : static_cast<std::uint32_t>(
+                                             std::clamp<std::size_t>((1u << 20) / std::max<std::size_t>(count, 1), 1, 120));
+    const bool show_progress = stderr_is_terminal() && std::uint64_t{frames} * per_frame >= 2'000'000;
+    for (std::uint32_t done = 0; done < frames;) {
+        const std::uint32_t n = std::min(chunk, frames - done);
+        const StepOutput out = birds ? birds->output(done, n, trace.has_value()) : StepOutput{};
+        KW_TRY(sim.step(n, out));
+        if (birds && trace) birds->trace_frames(done, n, out, *trace);
+        if (chains) KW_TRY(chains->frame(done, trace));
+        done += n;
+        if (show_progress) progress("simulating", done, frames);
+    }
+    if (birds) birds->print_timing();
+    if (chains) chains->print_timing();
+    if (validation_failed(sim.validation_messages())) return make_error(Error::Kind::Vulkan, "");
+    if (birds) KW_TRY(birds->finish());
+    if (chains) KW_TRY(chains->finish());
+    return {};
+}
+
+// A bake held whole in memory must fit (issue 15 streams it instead).
+Result<void> check_bake_size(const Scene& scene, std::uint32_t frames) {
+    std::uint64_t birds = 0;
+    for (const auto& flock : scene.flocks) birds += flock.count;
+    const std::uint64_t bird_bytes = std::uint64_t{frames} * birds * sizeof(gpu::BirdPose);
+    if (bird_bytes > kBakeLimitBytes) {
+        return make_error(Error::Kind::InvalidInput, "baking " + std::to_string(birds) + " birds x " + std::to_string(frames) +
+                                                         " frames needs " + std::to_string(bird_bytes >> 20) +
+                                                         " MiB of poses; use --frames or --no-export");
+    }
+    return {};
 }
 
 }  // namespace
@@ -151,14 +224,25 @@ int cmd_run(Args args) {
     const bool no_export = args.flag("no-export");
     const auto trace_path = args.option("trace");
     if (no_export && out_option) throw UsageError{"--out and --no-export exclude each other"};
-    auto loaded = load_scene_arguments(args.positionals(), "run", frames_option);
-    if (!loaded) return report(loaded.error());
-    const Scene& scene = loaded.value().scene;
-    birds::BirdWorld& world = loaded.value().world;
-    const std::uint32_t frames = world.frames;
-    const std::size_t count = world.birds.size();
-    const bool has_birds = count > 0;
-    const bool has_chains = !scene.characters.empty();
+    auto opened = open_simulation(scene_argument(args.positionals(), "run"), choice, frames_option);
+    if (!opened) return report(opened.error());
+    Simulation& sim = *opened.value();
+    const Scene& scene = sim.scene();
+    const bool has_birds = !sim.bird_world().birds.empty();
+    const bool has_chains = sim.rod_scene() != nullptr;
+    if (!no_export) {
+        if (auto r = check_bake_size(scene, sim.frame_count()); !r) return report(r.error());
+        if (has_chains) {
+            const std::uint64_t joints = sim.rod_scene()->world.joint_count;
+            const std::uint64_t bytes = std::uint64_t{sim.frame_count()} * joints * (sizeof(glm::vec3) + sizeof(glm::quat));
+            if (bytes > kBakeLimitBytes) {
+                return report(make_error(Error::Kind::InvalidInput, "baking " + std::to_string(joints) + " joints x " +
+                                                                        std::to_string(sim.frame_count()) + " frames needs " +
+                                                                        std::to_string(bytes >> 20) +
+                                                                        " MiB; use --frames or --no-export"));
+            }
+        }
+    }
     if (!no_export && !out_option) {
         std::error_code ec;
         std::filesystem::create_directories("out", ec);
@@ -174,20 +258,18 @@ int cmd_run(Args args) {
 
     std::optional<TraceWriter> trace;
     if (trace_path) {
-        auto t = TraceWriter::open(*trace_path, {scene.name, world.fps, frames,
-                                                 resolved_backend_name(choice)});
+        auto t = TraceWriter::open(*trace_path, {scene.name, sim.bird_world().fps, sim.frame_count(),
+                                                 std::string(backend_name(sim.backend()))});
         if (!t) return report(t.error());
         trace.emplace(std::move(t).value());
     }
-    if (has_birds) {
-        if (const int code = run_birds(scene, world, choice, no_export ? std::string() : base_out, trace); code != kExitOk) {
-            return code;
-        }
-    }
-    if (has_chains) {
-        if (const int code = run_chains(scene, choice, frames_option, {no_export, chains_out, &trace}); code != kExitOk) {
-            return code;
-        }
+    std::optional<BirdBake> birds;
+    std::optional<ChainBake> chains;
+    if (has_birds) birds.emplace(BirdBake{sim, no_export ? std::string() : base_out, {}, {}, {}});
+    if (has_chains) chains.emplace(ChainBake{sim, *sim.rod_scene(), chains_out, {}, {}, {}, {}, {}, {}, {}});
+    if (auto r = bake(sim, birds, chains, trace); !r) {
+        // Validation has said why already.
+        return r.error().message.empty() ? kExitFailure : report(r.error());
     }
     if (trace) {
         if (auto r = trace->finish(); !r) return report(r.error());
@@ -195,83 +277,5 @@ int cmd_run(Args args) {
     }
     return kExitOk;
 }
-
-namespace {
-
-int run_birds(const Scene& scene, birds::BirdWorld& world, const BackendChoice& choice, const std::string& out_path,
-              std::optional<TraceWriter>& trace) {
-    const bool no_export = out_path.empty();
-    const std::uint32_t frames = world.frames;
-    const std::size_t count = world.birds.size();
-    if (!no_export) {
-        const std::uint64_t bytes = std::uint64_t{frames} * count * sizeof(gpu::BirdPose);
-        if (bytes > (6ull << 30)) {
-            return report(make_error(Error::Kind::InvalidInput,
-                                     "baking " + std::to_string(count) + " birds x " + std::to_string(frames) +
-                                         " frames needs " + std::to_string(bytes >> 20) +
-                                         " MiB of poses; use --frames or --no-export"));
-        }
-    }
-
-    auto opened = open_backend(choice);
-    if (!opened) return report(opened.error());
-    BirdBackend& backend = *opened.value();
-    if (auto r = backend.load(world); !r) return report(r.error());
-
-    std::printf("kodawari: scene \"%s\" (%s): %zu birds, %u frames at %g fps\n", scene.name.c_str(),
-                scene.path.c_str(), count, frames, static_cast<double>(world.fps));
-    std::fflush(stdout);
-
-    std::vector<gpu::BirdPose> poses(no_export ? 0 : std::size_t{frames} * count);
-    // Chunks bound the memory of traces and let the progress bar move.
-    const std::uint32_t chunk = static_cast<std::uint32_t>(std::clamp<std::size_t>((1u << 20) / std::max<std::size_t>(count, 1), 1, 120));
-    std::vector<gpu::BirdPose> chunk_poses;
-    std::vector<gpu::BirdDiag> chunk_diag;
-    const bool show_progress = stderr_is_terminal() && std::uint64_t{frames} * count >= 2'000'000;
-    double seconds = 0.0, gpu_ms = 0.0;
-    bool have_gpu_time = true;
-    for (std::uint32_t done = 0; done < frames;) {
-        const std::uint32_t n = std::min(chunk, frames - done);
-        FrameOutput out;
-        if (!no_export) out.poses = std::span(poses).subspan(std::size_t{done} * count, std::size_t{n} * count);
-        if (trace) {
-            if (no_export) {
-                chunk_poses.resize(std::size_t{n} * count);
-                out.poses = chunk_poses;
-            }
-            chunk_diag.resize(std::size_t{n} * count);
-            out.diag = chunk_diag;
-        }
-        const auto start = std::chrono::steady_clock::now();
-        if (auto r = backend.simulate(n, out); !r) return report(r.error());
-        seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (backend.last_gpu_ms() >= 0.0) gpu_ms += backend.last_gpu_ms(); else have_gpu_time = false;
-        if (trace) {
-            for (std::uint32_t k = 0; k < n; ++k) {
-                trace->write_frame(done + k, world, out.poses.subspan(std::size_t{k} * count, count),
-                                   std::span<const gpu::BirdDiag>(chunk_diag).subspan(std::size_t{k} * count, count));
-            }
-        }
-        done += n;
-        if (show_progress) progress("simulating", done, frames);
-    }
-
-    std::printf("kodawari: backend %s on %s: %.3f ms per frame", std::string(backend.name()).c_str(), backend.device().c_str(),
-                1e3 * seconds / frames);
-    if (have_gpu_time && backend.name() == "vulkan") std::printf(" (GPU %.3f ms)", gpu_ms / frames);
-    std::printf(", %.3g bird-frames/s\n", static_cast<double>(count) * frames / std::max(seconds, 1e-9));
-
-    if (validation_failed(backend.validation_messages())) return kExitFailure;
-    if (!no_export) {
-        if (auto r = write_birds_glb(out_path, world, poses, frames); !r) return report(r.error());
-        std::error_code ec;
-        const auto size = std::filesystem::file_size(out_path, ec);
-        std::printf("kodawari: wrote %s (%.1f MiB, glTF 2.0 binary)\n", out_path.c_str(),
-                    ec ? 0.0 : static_cast<double>(size) / (1 << 20));
-    }
-    return kExitOk;
-}
-
-}  // namespace
 
 }  // namespace kodawari::cli

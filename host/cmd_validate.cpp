@@ -61,7 +61,7 @@ bool validate_chains(const Scene& scene, const BackendChoice& choice, std::optio
     const RodScene& rods_scene = built.value();
     const rods::RodWorld& world = rods_scene.world;
     const std::uint32_t frames = frames_option ? static_cast<std::uint32_t>(*frames_option) : rods_scene.frames;
-    auto tested = open_rod_backend(choice);
+    auto tested = make_rod_backend(*choice.backend, choice.options);
     auto reference = make_rod_backend(BackendKind::CpuReference, {});
     if (!tested || !reference) {
         report(!tested ? tested.error() : reference.error());
@@ -157,20 +157,24 @@ bool validate_chains(const Scene& scene, const BackendChoice& choice, std::optio
 
 int cmd_validate(Args args) {
     BackendChoice choice = read_backend_choice(args);
-    if (choice.backend == "auto") choice.backend = "vulkan";
-    if (choice.backend == "cpu-reference") throw UsageError{"validate compares a backend against cpu-reference; choose vulkan or cpu"};
+    // validate compares one backend with the reference: "auto" means the GPU's.
+    if (!choice.backend) choice.backend = BackendKind::Vulkan;
+    if (choice.backend == BackendKind::CpuReference) throw UsageError{"validate compares a backend against cpu-reference; choose vulkan or cpu"};
     const auto frames_option = args.count("frames", 1, 10'000'000);
-    auto loaded = load_scene_arguments(args.positionals(), "validate", frames_option);
+    auto loaded = load_scene(scene_argument(args.positionals(), "validate"));
     if (!loaded) return report(loaded.error());
-    const Scene& scene = loaded.value().scene;
-    birds::BirdWorld& world = loaded.value().world;
+    const Scene& scene = loaded.value();
+    auto built = build_bird_world(scene);
+    if (!built) return report(built.error());
+    birds::BirdWorld& world = built.value();
+    if (frames_option) world.frames = static_cast<std::uint32_t>(*frames_option);
     if (world.birds.empty()) {
         const bool ok = validate_chains(scene, choice, frames_option);
         std::printf("%s\n", ok ? "validate: PASS" : "validate: FAIL");
         return ok ? kExitOk : kExitFailure;
     }
 
-    auto tested = open_backend(choice);
+    auto tested = make_bird_backend(*choice.backend, choice.options);
     if (!tested) return report(tested.error());
     auto reference = make_bird_backend(BackendKind::CpuReference, {});
     if (!reference) return report(reference.error());

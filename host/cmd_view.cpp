@@ -26,7 +26,6 @@
 #include <stb/stb_easy_font.h>
 
 #include "commands.hpp"
-#include "kodawari/crowd_animator.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_scene.hpp"
@@ -48,122 +47,6 @@ std::string number(float value) {
     std::snprintf(text, sizeof(text), "%g", static_cast<double>(value));
     return text;
 }
-
-// The scene and its simulation at one frame. Never moved: the rod scene and the backends
-// are built from `scene` and `world` in place.
-struct Simulation {
-    Scene scene;
-    birds::BirdWorld world;
-    BackendChoice choice;
-    std::unique_ptr<BirdBackend> birds;
-    std::optional<RodScene> rod_scene;
-    std::unique_ptr<RodBackend> rods;
-    std::optional<CrowdAnimator> animator;
-    rods::RodFrame frame;
-    ChainSnapshot snapshot;     // read only when needed (read_chains(): picking, sketching)
-    rods::RodFrame host;        // see host_input()
-    std::optional<std::uint32_t> host_input_frame;
-    std::vector<gpu::BirdPose> poses;
-    bool birds_on_device = false;  // a vulkan bird backend on the renderer's device: poses stay there
-    std::uint32_t current = 0;  // the frame simulated last
-    bool started = false;       // frame 0 has been simulated
-
-    [[nodiscard]] Result<void> open() {
-        birds.reset();
-        rods.reset();
-        animator.reset();
-        started = false;
-        if (!world.birds.empty()) {
-            auto opened = open_backend(choice);
-            if (!opened) return opened.error();
-            birds = std::move(opened).value();
-            birds_on_device = birds->name() == "vulkan" && choice.options.context != nullptr;
-        }
-        if (!scene.characters.empty()) {
-            if (!rod_scene) {
-                auto built = build_rod_scene(scene);
-                if (!built) return built.error();
-                rod_scene.emplace(std::move(built).value());
-            }
-            auto opened = open_rod_backend(choice);
-            if (!opened) return opened.error();
-            rods = std::move(opened).value();
-            auto created = CrowdAnimator::create(*rod_scene, parse_backend(std::string(rods->name())).value_or(BackendKind::Cpu),
-                                                 choice.options);
-            if (!created) return created.error();
-            animator.emplace(std::move(created).value());
-        }
-        poses.assign(world.birds.size(), gpu::BirdPose{});
-        return {};
-    }
-
-    // Simulates frame `f` (0 restarts); the chains' view direction comes from `camera`, or
-    // from the scene's camera at that frame when there is none.
-    [[nodiscard]] Result<void> simulate(std::uint32_t f, const std::optional<rods::Camera>& camera) {
-        if (f == 0 && birds) KW_TRY(birds->load(world));
-        if (birds) {
-            KW_TRY(birds->simulate(1, {.poses = birds_on_device ? std::span<gpu::BirdPose>() : std::span(poses), .diag = {}}));
-        }
-        if (rods) {
-            KW_TRY(animator->frame(f, frame));
-            if (camera) frame.camera = *camera;  // the viewer's camera drives the view-dependent shapes
-            KW_TRY(f == 0 ? rods->load(rod_scene->world, frame) : rods->step(frame));
-            // On one device the rigged characters' input is written where the chains step.
-            if (f == 0) KW_TRY(animator->write_inputs_on(*rods));
-        }
-        current = f;
-        started = true;
-        return {};
-    }
-
-    // Frame `target`: forwards from the current one, or from frame 0 when going back.
-    [[nodiscard]] Result<void> seek(std::uint32_t target, const std::optional<rods::Camera>& camera) {
-        target = std::min(target, scene.frame_count() - 1);
-        std::uint32_t f = started && target >= current ? current + 1 : 0;
-        if (started && target == current) return {};
-        for (; f <= target; ++f) KW_TRY(simulate(f, camera));
-        return {};
-    }
-
-    // The chains' state of the current frame on the host (picking, sketching).
-    [[nodiscard]] Result<void> read_chains() { return rods ? rods->read(snapshot) : Result<void>{}; }
-
-    // The current frame's kinematic input with every entry on the host (a sketch's root
-    // and reference joint): `frame`, unless the rigged characters' part is written on the
-    // device, then read back once per frame asked for.
-    [[nodiscard]] Result<const rods::RodFrame*> host_input() {
-        if (!animator || !animator->writes_inputs_on_device()) return &frame;
-        if (host_input_frame != current) {
-            KW_TRY(animator->host_frame(current, host));
-            host.camera = frame.camera;
-            host_input_frame = current;
-        }
-        return &host;
-    }
-
-    // What the renderer draws of this simulation from now on.
-    [[nodiscard]] Result<void> show_on(render::Renderer& renderer) const {
-        KW_TRY(renderer.set_chains(rod_scene && rods ? &rod_scene->world : nullptr));
-        KW_TRY(renderer.set_skinned(rod_scene && rods ? &*rod_scene : nullptr));
-        return renderer.set_birds(birds ? &world : nullptr);
-    }
-
-    // This frame's chains, skinned meshes and birds, where they are.
-    [[nodiscard]] Result<void> draw_on(render::Renderer& renderer) {
-        if (rods) {
-            KW_TRY(renderer.chains_from(*rods));
-            KW_TRY(renderer.colliders_from(*rods, frame));
-        }
-        if (rods) KW_TRY(renderer.skinned_from(*animator, *rods, current));
-        if (birds) KW_TRY(birds_on_device ? renderer.birds_from(*birds) : renderer.birds_from(poses));
-        return {};
-    }
-    [[nodiscard]] std::string backend_name() const {
-        if (rods) return std::string(rods->name());
-        if (birds) return std::string(birds->name());
-        return choice.backend;
-    }
-};
 
 // An orbit camera around a target: yaw about +Y, pitch above the horizon, distance.
 struct OrbitCamera {
@@ -219,6 +102,7 @@ struct Viewer {
     std::string text;  // the scene file's text with the sketches so far (saved by W / Ctrl+S)
     bool dirty = false;
     std::unique_ptr<Simulation> sim;
+    BackendChoice choice;  // the backend 1/2/3 chose last (none: auto)
     OrbitCamera camera;
     std::uint32_t width = 0, height = 0;  // the renderer's image
     GLFWwindow* window = nullptr;
@@ -226,7 +110,6 @@ struct Viewer {
     bool quit = false;
     bool screenshot_now = false;
     render::Renderer* renderer = nullptr;
-    std::string backend;  // what 1/2/3 chose last
     // Mouse.
     bool left = false, middle = false;
     double last_x = 0.0, last_y = 0.0;
@@ -239,18 +122,20 @@ struct Viewer {
     std::vector<std::string> sketched;  // chain names, for undo
     std::string message;                // the last sketch/save outcome, shown on the status line
     std::optional<Error> failure;       // a simulation error ends the loop
+    ChainSnapshot snapshot;             // the chains read back for picking and sketching
 
     bool follow_scene = false;  // C: the scene's camera (its motion and projection) instead of the orbit camera
 
     // The camera of the current frame: the orbit camera, or the scene's at that frame.
     [[nodiscard]] rods::ImageCamera image_camera() const {
         if (!follow_scene) return camera.image(width, height);
-        const float fps = sim->scene.fps > 0.0f ? sim->scene.fps : 60.0f;
-        const rods::CameraPose pose = rods::camera_pose(sim->scene.camera.motion, static_cast<float>(sim->current) / fps);
-        return rods::ImageCamera::from_pose(pose, sim->scene.camera.fov_deg, width, height);
+        const Scene& scene = sim->scene();
+        const float fps = scene.fps > 0.0f ? scene.fps : 60.0f;
+        const rods::CameraPose pose = rods::camera_pose(scene.camera.motion, static_cast<float>(current()) / fps);
+        return rods::ImageCamera::from_pose(pose, scene.camera.fov_deg, width, height);
     }
     [[nodiscard]] render::CameraView view() const {
-        return follow_scene ? render::scene_camera(sim->scene, sim->current) : camera.view();
+        return follow_scene ? render::scene_camera(sim->scene(), current()) : camera.view();
     }
     // What drives the view-dependent shapes of the frames simulated next: the orbit
     // camera, or (none) the scene's camera at each frame, as `run` and `render` have it.
@@ -292,36 +177,35 @@ struct Viewer {
         quit = true;
     }
 
+    // The frame shown: the one simulated last.
+    [[nodiscard]] std::uint32_t current() const { return sim->frame().value_or(0); }
+
     void seek(std::uint32_t f) {
-        if (auto r = sim->seek(f, rod_camera()); !r) fail(r.error());
+        // The frames simulated from now on take their view from the camera shown.
+        sim->set_view_camera(rod_camera());
+        if (auto r = sim->seek(f); !r) fail(r.error());
     }
 
     // A new simulation of `scene_text` at the current frame (a sketch, an undo, a backend
     // switch): re-simulated from frame 0, the simplest way to rebuild every backend's state.
     // On failure (a backend that cannot open here) the old simulation stays and the status
     // line says why.
-    [[nodiscard]] bool rebuild(const std::string& scene_text, const std::string& backend_name) {
-        auto next = std::make_unique<Simulation>();
+    [[nodiscard]] bool rebuild(const std::string& scene_text, std::optional<BackendKind> backend) {
         auto scene = parse_scene(scene_text, scene_path);
         if (!scene) {
             say("cannot rebuild the scene: " + scene.error().message);
             return false;
         }
-        auto world = build_bird_world(scene.value());
-        if (!world) {
-            say("cannot rebuild the scene: " + world.error().message);
+        BackendChoice next_choice = choice;
+        next_choice.backend = backend;
+        auto next = make_simulation(std::move(scene).value(), next_choice, std::nullopt);
+        if (!next) {
+            say("backend " + std::string(backend ? backend_name(*backend) : "auto") + ": " + next.error().message);
             return false;
         }
-        next->scene = std::move(scene).value();
-        next->world = std::move(world).value();
-        next->choice = sim->choice;
-        next->choice.backend = backend_name;
-        if (auto r = next->open(); !r) {
-            say("backend " + backend_name + ": " + r.error().message);
-            return false;
-        }
-        const std::uint32_t at = sim->current;
-        sim = std::move(next);
+        const std::uint32_t at = current();
+        sim = std::move(next).value();
+        choice = next_choice;
         picked.reset();  // chain indices may differ in the new scene
         if (auto r = sim->show_on(*renderer); !r) {
             fail(r.error());
@@ -333,18 +217,18 @@ struct Viewer {
 
     void pick(glm::dvec2 at) {
         picked.reset();
-        if (!sim->rod_scene) return;
-        if (auto r = sim->read_chains(); !r) {
+        if (!sim->rod_scene()) return;
+        if (auto r = sim->read_chains(snapshot); !r) {
             fail(r.error());
             return;
         }
         const rods::ImageCamera cam = image_camera();
-        const rods::RodWorld& w = sim->rod_scene->world;
+        const rods::RodWorld& w = sim->rod_scene()->world;
         double best = kPickRadiusPx;
         for (std::uint32_t c = 0; c < w.chains.size(); ++c) {
             const auto& ci = w.chains[c];
             for (std::uint32_t j = 0; j < w.templ(ci).basis.lengths.size() + 1; ++j) {
-                const glm::dvec3 p = rods::project_to_pixels(cam, glm::dvec3(sim->snapshot.positions[ci.joint_begin + j]));
+                const glm::dvec3 p = rods::project_to_pixels(cam, glm::dvec3(snapshot.positions[ci.joint_begin + j]));
                 if (p.z <= 0.0) continue;
                 const double d = glm::length(glm::dvec2(p) - at);
                 if (d < best) {
@@ -358,12 +242,12 @@ struct Viewer {
 
     void apply_sketch() {
         if (!picked || stroke.size() < 2) return;
-        const rods::RodWorld& w = sim->rod_scene->world;
+        const rods::RodWorld& w = sim->rod_scene()->world;
         const rods::ChainInstance& ci = w.chains[*picked];
         const std::string name = w.templ(ci).name;
         rods::SketchInput input;
         input.camera = image_camera();
-        auto kinematic = sim->host_input();
+        auto kinematic = sim->host_chain_input();
         if (!kinematic) {
             say("sketch failed: " + kinematic.error().message);
             return;
@@ -387,7 +271,7 @@ struct Viewer {
             say("sketch failed: " + edit.error().message);
             return;
         }
-        if (!rebuild(edit.value().text, sim->choice.backend)) return;
+        if (!rebuild(edit.value().text, choice.backend)) return;
         text = edit.value().text;
         dirty = true;
         sketched.push_back(name);
@@ -407,7 +291,7 @@ struct Viewer {
             say("undo failed: " + edit.error().message);
             return;
         }
-        if (!rebuild(edit.value().text, sim->choice.backend)) return;
+        if (!rebuild(edit.value().text, choice.backend)) return;
         say("undo " + sketched.back() + ": removed \"" + edit.value().name + "\"");
         sketched.pop_back();
         text = edit.value().text;
@@ -424,24 +308,25 @@ struct Viewer {
     }
 
     void key(int key, int mods) {
-        const std::uint32_t last = sim->scene.frame_count() - 1;
-        const std::uint32_t second = static_cast<std::uint32_t>(std::lround(sim->scene.fps));
+        const std::uint32_t last = sim->frame_count() - 1;
+        const std::uint32_t second = static_cast<std::uint32_t>(std::lround(sim->scene().fps));
+        const std::uint32_t now = current();
         switch (key) {
             case GLFW_KEY_ESCAPE:
             case GLFW_KEY_Q: quit = true; break;
             case GLFW_KEY_SPACE: playing = !playing; break;
             case GLFW_KEY_RIGHT:
-                if (!playing) seek(std::min(sim->current + 1, last));
+                if (!playing) seek(std::min(now + 1, last));
                 break;
             case GLFW_KEY_LEFT:
-                if (!playing && sim->current > 0) seek(sim->current - 1);
+                if (!playing && now > 0) seek(now - 1);
                 break;
             case GLFW_KEY_HOME: seek(0); break;
-            case GLFW_KEY_RIGHT_BRACKET: seek(std::min(sim->current + second, last)); break;
-            case GLFW_KEY_LEFT_BRACKET: seek(sim->current > second ? sim->current - second : 0); break;
-            case GLFW_KEY_1: (void)rebuild(text, "cpu-reference"); break;
-            case GLFW_KEY_2: (void)rebuild(text, "cpu"); break;
-            case GLFW_KEY_3: (void)rebuild(text, "vulkan"); break;
+            case GLFW_KEY_RIGHT_BRACKET: seek(std::min(now + second, last)); break;
+            case GLFW_KEY_LEFT_BRACKET: seek(now > second ? now - second : 0); break;
+            case GLFW_KEY_1: (void)rebuild(text, BackendKind::CpuReference); break;
+            case GLFW_KEY_2: (void)rebuild(text, BackendKind::Cpu); break;
+            case GLFW_KEY_3: (void)rebuild(text, BackendKind::Vulkan); break;
             case GLFW_KEY_S:
                 if (mods & GLFW_MOD_CONTROL) {
                     save();
@@ -538,8 +423,8 @@ struct Viewer {
     void take_camera() {
         if (!follow_scene) return;
         follow_scene = false;
-        const float fps = sim->scene.fps > 0.0f ? sim->scene.fps : 60.0f;
-        camera = OrbitCamera::from(sim->scene, static_cast<float>(sim->current) / fps);
+        const float fps = sim->scene().fps > 0.0f ? sim->scene().fps : 60.0f;
+        camera = OrbitCamera::from(sim->scene(), static_cast<float>(current()) / fps);
         say("camera: orbit, from the scene camera's pose");
     }
 };
@@ -634,20 +519,17 @@ int cmd_view(Args args) {
         }
     }
     // The scene first: a bad scene is reported without opening a window.
-    auto loaded = load_scene_arguments(args.positionals(), "view", std::nullopt);
+    auto loaded = load_scene(scene_argument(args.positionals(), "view"));
     if (!loaded) return report(loaded.error());
     Viewer v;
-    v.scene_path = loaded.value().scene.path;
+    v.scene_path = loaded.value().path;
     auto text = read_text_file(v.scene_path);
     if (!text) return report(text.error());
     v.text = std::move(text).value();
     v.width = width;
     v.height = height;
-    v.sim = std::make_unique<Simulation>();
-    v.sim->scene = std::move(loaded.value().scene);
-    v.sim->world = std::move(loaded.value().world);
-    v.sim->choice = choice;
-    v.camera = OrbitCamera::from(v.sim->scene);
+    v.choice = choice;
+    v.camera = OrbitCamera::from(loaded.value());
 
     if (glfwInit() != GLFW_TRUE) {
         const char* why = nullptr;
@@ -693,8 +575,10 @@ int cmd_view(Args args) {
     if (!renderer) return report(renderer.error());
     v.renderer = renderer.value().get();
     // One device: the vulkan backends run on the renderer's, which draws from their buffers.
-    v.sim->choice.options.context = renderer.value()->device_context();
-    if (auto r = v.sim->open(); !r) return report(r.error());
+    v.choice.options.context = renderer.value()->device_context();
+    auto made = make_simulation(std::move(loaded).value(), v.choice, std::nullopt);
+    if (!made) return report(made.error());
+    v.sim = std::move(made).value();
     if (auto r = v.sim->show_on(*renderer.value()); !r) return report(r.error());
 
     glfwSetWindowUserPointer(window.w, &v);
@@ -705,8 +589,8 @@ int cmd_view(Args args) {
     glfwSetCursorPosCallback(window.w, [](GLFWwindow* w, double x, double y) { from(w)->cursor(x, y); });
     glfwSetScrollCallback(window.w, [](GLFWwindow* w, double, double dy) { from(w)->scroll(dy); });
 
-    std::printf("kodawari: viewing scene \"%s\" (%s), %u frames at %g fps, %ux%u on %s\n", v.sim->scene.name.c_str(),
-                v.scene_path.c_str(), v.sim->scene.frame_count(), static_cast<double>(v.sim->scene.fps), width, height,
+    std::printf("kodawari: viewing scene \"%s\" (%s), %u frames at %g fps, %ux%u on %s\n", v.sim->scene().name.c_str(),
+                v.scene_path.c_str(), v.sim->frame_count(), static_cast<double>(v.sim->scene().fps), width, height,
                 renderer.value()->device().c_str());
     std::fflush(stdout);
 
@@ -736,33 +620,31 @@ int cmd_view(Args args) {
             }
         }
         if (v.quit) break;
-        if (!v.sim->started) {
+        if (!v.sim->frame()) {
             v.seek(0);
         } else if (v.playing) {
             // Playing past the last frame starts again.
-            v.seek(v.sim->current + 1 < v.sim->scene.frame_count() ? v.sim->current + 1 : 0);
+            v.seek(v.current() + 1 < v.sim->frame_count() ? v.current() + 1 : 0);
         }
         if (v.failure) break;
         Simulation& s = *v.sim;
 
         render::DrawList list(v.view(), width, height);
         if (grid_points.empty()) {
-            grid_points = render::content_points(s.rod_scene ? &*s.rod_scene : nullptr, s.rods ? &s.frame : nullptr,
-                                                 s.birds ? &s.world : nullptr);
+            grid_points = render::content_points(s.rod_scene(), s.rod_scene() ? &s.chain_input() : nullptr,
+                                                 s.bird_world().birds.empty() ? nullptr : &s.bird_world());
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
         }
         render::add_ground_grid(list, grid_points);
-        if (s.rods) {
-            render::add_characters(list, *s.rod_scene, s.current);
-        }
+        if (s.rod_scene()) render::add_characters(list, *s.rod_scene(), v.current());
         if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
-        if (v.sketch_mode && v.picked && s.rod_scene) {
+        if (v.sketch_mode && v.picked && s.rod_scene()) {
             // The picked chain's joints on the host while sketching (it may have been stepped).
-            if (auto r = s.read_chains(); !r) return report(r.error());
-            const auto& ci = s.rod_scene->world.chains[*v.picked];
-            const std::size_t joints = s.rod_scene->world.templ(ci).basis.lengths.size() + 1;
+            if (auto r = s.read_chains(v.snapshot); !r) return report(r.error());
+            const auto& ci = s.rod_scene()->world.chains[*v.picked];
+            const std::size_t joints = s.rod_scene()->world.templ(ci).basis.lengths.size() + 1;
             for (std::size_t j = 0; j < joints; ++j) {
-                list.add_dot(s.snapshot.positions[ci.joint_begin + j], 0.0f, 5.0f, kPickedColor);
+                list.add_dot(v.snapshot.positions[ci.joint_begin + j], 0.0f, 5.0f, kPickedColor);
             }
         }
         for (std::size_t i = 1; i < v.stroke.size(); ++i) list.add_screen_line(glm::vec2(v.stroke[i - 1]), glm::vec2(v.stroke[i]), kStrokeColor);
@@ -772,11 +654,11 @@ int cmd_view(Args args) {
         char status[512];
         std::snprintf(status, sizeof(status),
                       "frame %u  t %.2f s  %s  backend %s  %.1f ms/frame  %llu B read back  camera %s %s  %zu characters %zu chains %zu birds%s%s",
-                      s.current, static_cast<double>(s.current) / static_cast<double>(s.scene.fps), v.playing ? "playing" : "paused",
-                      s.backend_name().c_str(), frame_ms, static_cast<unsigned long long>(read_back_frame),
+                      v.current(), static_cast<double>(v.current()) / static_cast<double>(s.scene().fps), v.playing ? "playing" : "paused",
+                      std::string(backend_name(s.backend())).c_str(), frame_ms, static_cast<unsigned long long>(read_back_frame),
                       v.follow_scene ? "scene" : "orbit", list.camera().orthographic ? "ortho" : "persp",
-                      s.rod_scene ? static_cast<std::size_t>(s.rod_scene->world.character_count) : 0,
-                      s.rod_scene ? s.rod_scene->world.chains.size() : 0, s.world.birds.size(),
+                      s.rod_scene() ? static_cast<std::size_t>(s.rod_scene()->world.character_count) : 0,
+                      s.rod_scene() ? s.rod_scene()->world.chains.size() : 0, s.bird_world().birds.size(),
                       v.sketch_mode ? ("  [sketch: influence " + number(v.influence) + "]").c_str() : "",
                       v.message.empty() ? "" : ("  " + v.message).c_str());
         add_status(list, status);
@@ -792,7 +674,7 @@ int cmd_view(Args args) {
         if (v.screenshot_now) {
             v.screenshot_now = false;
             char name[64];
-            std::snprintf(name, sizeof(name), "kodawari_view_%05u_%llu.png", s.current, static_cast<unsigned long long>(screenshots++));
+            std::snprintf(name, sizeof(name), "kodawari_view_%05u_%llu.png", v.current(), static_cast<unsigned long long>(screenshots++));
             auto image = renderer.value()->render(list);
             if (!image) return report(image.error());
             if (auto r = render::write_png(name, image.value()); !r) return report(r.error());
@@ -811,9 +693,9 @@ int cmd_view(Args args) {
         if (auto r = render::write_png(*screenshot, image.value()); !r) return report(r.error());
         std::printf("kodawari: wrote screenshot %s (%ux%u)\n", screenshot->c_str(), width, height);
     }
-    std::printf("kodawari: view ended at frame %u (t %.3f s, %s) on backend %s after %llu drawn frames%s\n", v.sim->current,
-                static_cast<double>(v.sim->current) / static_cast<double>(v.sim->scene.fps), v.playing ? "playing" : "paused",
-                v.sim->backend_name().c_str(), static_cast<unsigned long long>(drawn),
+    std::printf("kodawari: view ended at frame %u (t %.3f s, %s) on backend %s after %llu drawn frames%s\n", v.current(),
+                static_cast<double>(v.current()) / static_cast<double>(v.sim->scene().fps), v.playing ? "playing" : "paused",
+                std::string(backend_name(v.sim->backend())).c_str(), static_cast<unsigned long long>(drawn),
                 v.dirty ? "; unsaved sketches discarded" : "");
     std::printf("kodawari: simulation and drawing on one device (%s); %llu bytes of simulation state read back in %llu frames\n",
                 renderer.value()->device().c_str(),
