@@ -1,6 +1,7 @@
 #include <cstdio>
 #include <thread>
 
+#include "kodawari/version.hpp"
 #include "commands.hpp"
 #include "kodawari/gpu_info.hpp"
 
@@ -10,7 +11,7 @@ int cmd_info(Args args) {
     std::string device;
     if (auto d = args.option("device")) device = *d;
     if (!args.positionals().empty()) throw UsageError{"info takes no arguments"};
-    std::printf("kodawari %s\n", KODAWARI_VERSION);
+    std::printf("kodawari %s\n", std::string(version()).c_str());
     std::printf("CPU threads: %u (the cpu backend's default)\n", std::thread::hardware_concurrency());
     auto inventory = list_gpus(device);
     if (!inventory) {

@@ -4,6 +4,7 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/version.hpp"
 #include "commands.hpp"
 
 namespace {
@@ -59,7 +60,7 @@ int main(int argc, char** argv) {
         return args.empty() ? kExitBadInput : kExitOk;
     }
     if (args[0] == "--version") {
-        std::printf("kodawari %s\n", KODAWARI_VERSION);
+        std::printf("kodawari %s\n", std::string(kodawari::version()).c_str());
         return kExitOk;
     }
     const std::string command = args[0];

@@ -25,6 +25,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
+#include "kodawari/version.hpp"
 #include "test_support.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/birds/world.hpp"
@@ -139,7 +140,7 @@ TEST(Export, GlbRoundTrip) {
     tinygltf::Model model;
     ASSERT_TRUE(load_glb(path, model));
     EXPECT_EQ(model.asset.version, "2.0");
-    EXPECT_EQ(model.asset.generator, std::string("kodawari ") + KODAWARI_VERSION);
+    EXPECT_EQ(model.asset.generator, "kodawari " + std::string(version()));
     EXPECT_EQ(model.buffers.size(), 1u);
     ASSERT_EQ(model.nodes.size(), 1 + birds::kPartCount * kBirds);
     EXPECT_EQ(model.nodes[0].name, "Birds");

@@ -18,6 +18,7 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/version.hpp"
 #include "export/bird_meshes.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/birds/rig.hpp"
@@ -148,7 +149,7 @@ Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, st
     const std::size_t bird_count = world.birds.size();
     tinygltf::Model model;
     model.asset.version = "2.0";
-    model.asset.generator = std::string("kodawari ") + KODAWARI_VERSION;
+    model.asset.generator = "kodawari " + std::string(version());
     model.buffers.emplace_back();
     std::vector<unsigned char>& bytes = model.buffers[0].data;
     BufferWriter writer(bytes);

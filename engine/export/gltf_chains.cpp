@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/version.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/rods/shape.hpp"
@@ -42,7 +43,7 @@ Result<void> build_and_write(AtomicFile& file, const RodScene& scene, std::uint3
     const rods::RodWorld& world = scene.world;
     tinygltf::Model model;
     model.asset.version = "2.0";
-    model.asset.generator = std::string("kodawari ") + KODAWARI_VERSION;
+    model.asset.generator = "kodawari " + std::string(version());
     model.buffers.emplace_back();
     std::vector<unsigned char>& bytes = model.buffers[0].data;
     BufferWriter writer(bytes);

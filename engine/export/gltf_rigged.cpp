@@ -21,6 +21,7 @@
 #include <utility>
 #include <vector>
 
+#include "kodawari/version.hpp"
 #include "core/binary_file.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/export.hpp"
@@ -321,7 +322,7 @@ Result<void> RiggedGlbWriter::Impl::build_and_write(AtomicFile& file) {
     tinygltf::Model out = std::move(model);
     finished = true;
     out.asset.version = "2.0";
-    out.asset.generator = std::string("kodawari ") + KODAWARI_VERSION;
+    out.asset.generator = "kodawari " + std::string(version());
 
     // VRM: keep the meta object (author, license) before the extensions go.
     for (const char* name : {"VRMC_vrm", "VRM"}) {

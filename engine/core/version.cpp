@@ -1,0 +1,8 @@
+// The library's version, compiled in from the generated header.
+#include "kodawari/version.hpp"
+
+namespace kodawari {
+
+std::string_view version() { return kHeaderVersion; }
+
+}  // namespace kodawari
