@@ -1,7 +1,14 @@
 #include "backends/backends.hpp"
-#include "gpu/vulkan_context.hpp"
+#include "backends/device_backends.hpp"
 
 namespace kodawari {
+
+Result<std::shared_ptr<compute::Device>> backend_context(const BackendOptions& options) {
+    if (options.context) return options.context;
+    auto created = compute::Device::create({.device = options.device, .validation = options.validation});
+    if (!created) return created.error();
+    return std::shared_ptr<compute::Device>(std::move(created).value());
+}
 
 std::string_view backend_name(BackendKind kind) {
     switch (kind) {
@@ -15,7 +22,7 @@ std::string_view backend_name(BackendKind kind) {
 Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options) {
     BackendOptions own = options;
     own.context.reset();
-    return gpu::backend_context(own);
+    return backend_context(own);
 }
 
 std::uint64_t read_back_bytes(const gpu::VulkanContext& device) { return device.read_back_bytes(); }

@@ -8,48 +8,45 @@
 
 #include <shared/rod_inputs.h>
 
-#include "gpu/compute_pipeline.hpp"
-#include "gpu/device_state.hpp"
+#include "backends/device_backends.hpp"
 
 namespace kodawari {
 
 /// Records shaders/rod_inputs.comp for every rigged character template: its instances'
 /// reference joints, chain roots and colliders from the pose backend's world matrices into
 /// the rod backend's input buffers (what RodScene::rigged_frame computes on the host).
-class DeviceInputWriter final : public gpu::RodInputWriter {
+class DeviceInputWriter final : public RodInputWriter {
 public:
     struct Rig {
         std::shared_ptr<PoseBackend> backend;  // keeps its world buffer alive
-        gpu::ComputePipeline kernel;
-        gpu::GpuBuffer instances, attachments;
+        compute::Kernel kernel;
+        compute::Buffer instances, attachments;
         gpu::RodInputPush push;
     };
 
-    DeviceInputWriter(std::shared_ptr<gpu::VulkanContext> ctx, std::vector<Rig> rigs) : ctx_(std::move(ctx)), rigs_(std::move(rigs)) {}
+    DeviceInputWriter(std::shared_ptr<compute::Device> ctx, std::vector<Rig> rigs) : ctx_(std::move(ctx)), rigs_(std::move(rigs)) {}
 
-    void record(const vk::raii::CommandBuffer& cmd, const gpu::RodDeviceState& state) const override {
+    void record(compute::Recording& recording, const DeviceData& rods) const override {
         // The pose kernel wrote the world matrices in an earlier submission.
-        const vk::MemoryBarrier poses{.srcAccessMask = vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferWrite,
-                                      .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
-        cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
-                            vk::PipelineStageFlagBits::eComputeShader, {}, poses, {}, {});
+        compute::barrier(recording, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
         for (const Rig& rig : rigs_) {
             // Never null: write_inputs_on() evaluated every pose backend once.
-            const gpu::PoseDeviceWorld* world = rig.backend->device_world();
-            if (world == nullptr) continue;
+            const DeviceData* poses = rig.backend->device_data();
+            if (poses == nullptr) continue;
             // The rod backend's buffers change with each load(); the set is not in use here
-            // (every submission is waited for).
-            const gpu::BufferRange ranges[KW_ROD_INPUTS_BINDING_COUNT] = {
-                {world->world}, {rig.instances.handle()}, {rig.attachments.handle()},
-                {state.reference}, {state.roots}, {state.colliders}};
-            rig.kernel.bind(*ctx_, ranges);
+            // (the previous submission that used it has been waited for).
+            const compute::BufferView views[KW_ROD_INPUTS_BINDING_COUNT] = {
+                {poses->buffer(DeviceBuffer::PoseWorld).buffer}, {&rig.instances}, {&rig.attachments},
+                {rods.buffer(DeviceBuffer::RodReference).buffer}, {rods.buffer(DeviceBuffer::RodRoots).buffer},
+                {rods.buffer(DeviceBuffer::RodColliders).buffer}};
+            rig.kernel.bind(views);
             const std::uint32_t groups = (rig.push.counts.x + KW_ROD_INPUTS_WORKGROUP_SIZE - 1) / KW_ROD_INPUTS_WORKGROUP_SIZE;
-            rig.kernel.dispatch(cmd, std::as_bytes(std::span(&rig.push, 1)), groups);
+            rig.kernel.dispatch(recording, std::as_bytes(std::span(&rig.push, 1)), groups);
         }
     }
 
 private:
-    std::shared_ptr<gpu::VulkanContext> ctx_;
+    std::shared_ptr<compute::Device> ctx_;  // outlives the kernels and buffers
     std::vector<Rig> rigs_;
 };
 
@@ -107,15 +104,16 @@ Result<void> CrowdAnimator::host_frame(std::uint32_t index, rods::RodFrame& out)
 
 Result<bool> CrowdAnimator::write_inputs_on(RodBackend& rods) {
     if (rigs_.empty() || !options_.context) return false;
-    const gpu::RodDeviceState* state = rods.device_state();
-    if (state == nullptr || state->context != options_.context.get()) return false;
+    auto* device_rods = dynamic_cast<DeviceRodBackend*>(&rods);
+    const DeviceData* state = rods.device_data();
+    if (device_rods == nullptr || state == nullptr || &state->context() != options_.context.get()) return false;
     for (Rig& rig : rigs_) {
         // The world buffer exists once evaluated; its device must be the rod backend's.
         KW_TRY(rig.backend->evaluate(scene_->time(0)));
-        const gpu::PoseDeviceWorld* world = rig.backend->device_world();
-        if (world == nullptr || world->context != state->context) return false;
+        const DeviceData* world = rig.backend->device_data();
+        if (world == nullptr || &world->context() != &state->context()) return false;
     }
-    gpu::VulkanContext& ctx = *options_.context;
+    compute::Device& ctx = *options_.context;
     std::vector<DeviceInputWriter::Rig> rigs;
     for (const Rig& rig : rigs_) {
         const CharacterKinematics& k = scene_->characters[rig.character];
@@ -131,12 +129,12 @@ Result<bool> CrowdAnimator::write_inputs_on(RodBackend& rods) {
         }
         const std::uint64_t sizes[] = {instances.size() * sizeof(gpu::RodInputInstanceGpu),
                                        attachments.size() * sizeof(gpu::RodInputAttachmentGpu)};
-        auto buffers = gpu::create_storage_buffers(ctx, sizes, "the rigged characters' rod input");
+        auto buffers = compute::create_storage_buffers(ctx, sizes, "the rigged characters' rod input");
         if (!buffers) return buffers.error();
-        KW_TRY(gpu::upload(ctx, buffers.value()[0], std::as_bytes(std::span(instances))));
-        KW_TRY(gpu::upload(ctx, buffers.value()[1], std::as_bytes(std::span(attachments))));
-        const std::vector<vk::DescriptorType> types(KW_ROD_INPUTS_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
-        auto kernel = gpu::ComputePipeline::create(ctx, "rod_inputs", types, sizeof(gpu::RodInputPush));
+        KW_TRY(compute::upload(ctx, buffers.value()[0], std::as_bytes(std::span(instances))));
+        KW_TRY(compute::upload(ctx, buffers.value()[1], std::as_bytes(std::span(attachments))));
+        const std::vector<compute::Binding> types(KW_ROD_INPUTS_BINDING_COUNT, compute::Binding::Storage);
+        auto kernel = compute::Kernel::create(ctx, "rod_inputs", types, sizeof(gpu::RodInputPush));
         if (!kernel) return kernel.error();
         const gpu::RodInputPush push{{static_cast<std::uint32_t>(instances.size()), static_cast<std::uint32_t>(rig.nodes),
                                       k.skeleton.reference, static_cast<std::uint32_t>(k.chains.size())},
@@ -144,7 +142,7 @@ Result<bool> CrowdAnimator::write_inputs_on(RodBackend& rods) {
         rigs.push_back({rig.backend, std::move(kernel).value(), std::move(buffers.value()[0]), std::move(buffers.value()[1]), push});
     }
     auto writer = std::make_shared<const DeviceInputWriter>(options_.context, std::move(rigs));
-    if (!rods.set_input_writer(writer)) return false;
+    device_rods->set_input_writer(writer);
     writer_ = std::move(writer);
     return true;
 }

@@ -9,14 +9,13 @@
 #include <optional>
 
 #include "backends/backends.hpp"
-#include "gpu/compute_pipeline.hpp"
-#include "gpu/device_state.hpp"
+#include "backends/device_backends.hpp"
 #include "kodawari/birds/flight.hpp"
 
 namespace kodawari {
 namespace {
 
-using gpu::GpuBuffer;
+using compute::Buffer;
 
 // Upper bound of the pose + diagnostics ring: many frames per dispatch for small
 // flocks, one frame per dispatch for a million birds.
@@ -46,25 +45,25 @@ std::span<const std::byte> bytes_of(const std::vector<T>& v) {
     return std::as_bytes(std::span<const T>(v));
 }
 
-class VulkanBirdBackend final : public BirdBackend {
+class VulkanBirdBackend final : public BirdBackend, public DeviceBirdBackend, public DeviceData {
 public:
-    explicit VulkanBirdBackend(std::shared_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
+    explicit VulkanBirdBackend(std::shared_ptr<compute::Device> ctx) : ctx_(std::move(ctx)) {}
 
     /// The kernel specialized for this world's rules, with or without diagnostics; built
     /// on first use (lavapipe compiles it at its first dispatch) and kept.
-    Result<const gpu::ComputePipeline*> pipeline(bool diagnostics) {
+    Result<const compute::Kernel*> pipeline(bool diagnostics) {
         const std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT> spec = {rules_.x, rules_.y, diagnostics ? 1u : 0u};
         for (const auto& [key, p] : pipelines_) {
             if (key == spec) return &p;
         }
-        std::vector<vk::DescriptorType> types(KW_BIRDS_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
+        std::vector<compute::Binding> types(KW_BIRDS_BINDING_COUNT, compute::Binding::Storage);
         // Read by every invocation many times: a uniform buffer, which lavapipe loads once
         // for all lanes instead of lane by lane.
-        types[KW_BIRDS_BINDING_UNIFORMS] = vk::DescriptorType::eUniformBuffer;
-        auto created = gpu::ComputePipeline::create(*ctx_, "birds_flap", types, sizeof(gpu::BirdPush), spec);
+        types[KW_BIRDS_BINDING_UNIFORMS] = compute::Binding::Uniform;
+        auto created = compute::Kernel::create(*ctx_, "birds_flap", types, sizeof(gpu::BirdPush), spec);
         if (!created) return created.error();
         pipelines_.emplace_back(spec, std::move(created).value());
-        if (!buffers_.empty()) pipelines_.back().second.bind_buffers(*ctx_, bound_buffers());
+        if (!buffers_.empty()) pipelines_.back().second.bind(bound_buffers());
         return &pipelines_.back().second;
     }
 
@@ -72,7 +71,23 @@ public:
     std::string device() const override { return ctx_->info().name; }
     double last_gpu_ms() const override { return gpu_ms_; }
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
-    const gpu::BirdDevicePoses* device_poses() const override { return frame_ > 0 ? &device_poses_ : nullptr; }
+    const DeviceData* device_data() const override { return frame_ > 0 ? this : nullptr; }
+    const gpu::VulkanContext& context() const override { return *ctx_; }
+    DeviceSpan buffer(DeviceBuffer name) const override {
+        if (name != DeviceBuffer::BirdPoses || frame_ == 0) return {};
+        return {.buffer = &buffers_[KW_BIRDS_BINDING_POSES], .first = std::uint64_t{last_slot_} * count_, .items = count_};
+    }
+
+    Result<void> record_simulate(compute::Recording& recording, std::uint32_t frames) override {
+        assert(count_ > 0 && "load() first");
+        assert(&recording.device() == ctx_.get() && "a recording of the backend's device");
+        auto kernel = pipeline(false);
+        if (!kernel) return kernel.error();
+        record_frames(recording, *kernel.value(), frame_, frames);
+        frame_ += frames;
+        last_slot_ = (frames - 1) % slots_;
+        return {};
+    }
 
     Result<void> load(const birds::BirdWorld& world) override {
         const std::size_t count = world.birds.size();
@@ -106,20 +121,20 @@ public:
             contents[5].size(), std::uint64_t{slots_} * count * sizeof(gpu::BirdPoseGpu),
             std::uint64_t{slots_} * count * sizeof(gpu::BirdDiag)};
         for (std::uint32_t b = 0; b < KW_BIRDS_BINDING_COUNT; ++b) {
-            auto buffer = GpuBuffer::create(*ctx_, std::max<std::uint64_t>(sizes[b], 16), GpuBuffer::Kind::Storage);
+            auto buffer = Buffer::create(*ctx_, std::max<std::uint64_t>(sizes[b], 16), Buffer::Kind::Storage);
             if (!buffer) return buffer.error();
-            KW_TRY(gpu::upload(*ctx_, buffer.value(), contents[b]));
+            KW_TRY(compute::upload(*ctx_, buffer.value(), contents[b]));
             buffers_.push_back(std::move(buffer).value());
         }
         readback_.reset();
         if (!ctx_->unified_memory()) {
-            auto readback = GpuBuffer::create(*ctx_, sizes[KW_BIRDS_BINDING_POSES] + sizes[KW_BIRDS_BINDING_DIAGNOSTICS],
-                                              GpuBuffer::Kind::Readback);
+            auto readback = Buffer::create(*ctx_, sizes[KW_BIRDS_BINDING_POSES] + sizes[KW_BIRDS_BINDING_DIAGNOSTICS],
+                                              Buffer::Kind::Readback);
             if (!readback) return readback.error();
             readback_.emplace(std::move(readback).value());
         }
         rules_ = uniforms.rules;
-        for (auto& [key, p] : pipelines_) p.bind_buffers(*ctx_, bound_buffers());
+        for (auto& [key, p] : pipelines_) p.bind(bound_buffers());
         return {};
     }
 
@@ -131,73 +146,38 @@ public:
         const bool want_diag = !out.diag.empty();
         auto kernel = pipeline(want_diag);
         if (!kernel) return kernel.error();
-        const std::uint32_t groups = (count_ + KW_BIRDS_WORKGROUP_SIZE - 1) / KW_BIRDS_WORKGROUP_SIZE;
         gpu_ms_ = 0.0;
 
-        // Records the dispatches of frames [first, first + n) in chunks of at most slots_.
-        auto record_chunk = [&](const vk::raii::CommandBuffer& cmd, std::uint32_t first, std::uint32_t n) {
-            // The previous dispatch (this or an earlier submission) wrote the states and
-            // the ring; this one reads and overwrites them.
-            const vk::MemoryBarrier before{.srcAccessMask = vk::AccessFlagBits::eShaderWrite | vk::AccessFlagBits::eTransferRead,
-                                           .dstAccessMask = vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
-            cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader | vk::PipelineStageFlagBits::eTransfer,
-                                vk::PipelineStageFlagBits::eComputeShader, {}, before, {}, {});
-            const gpu::BirdPush push{{first, n, slots_, 0u}};
-            kernel.value()->dispatch(cmd, std::as_bytes(std::span(&push, 1)), groups);
-        };
-        auto record_readback = [&](const vk::raii::CommandBuffer& cmd, std::uint32_t n) {
-            if (readback_) {
-                const vk::MemoryBarrier to_copy{.srcAccessMask = vk::AccessFlagBits::eShaderWrite,
-                                                .dstAccessMask = vk::AccessFlagBits::eTransferRead};
-                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eTransfer, {}, to_copy,
-                                    {}, {});
-                const vk::DeviceSize pose_bytes = vk::DeviceSize{n} * count_ * sizeof(gpu::BirdPoseGpu);
-                const vk::DeviceSize diag_bytes = vk::DeviceSize{n} * count_ * sizeof(gpu::BirdDiag);
-                cmd.copyBuffer(buffers_[KW_BIRDS_BINDING_POSES].handle(), readback_->handle(),
-                               vk::BufferCopy{.srcOffset = 0, .dstOffset = 0, .size = pose_bytes});
-                if (want_diag) {
-                    cmd.copyBuffer(buffers_[KW_BIRDS_BINDING_DIAGNOSTICS].handle(), readback_->handle(),
-                                   vk::BufferCopy{.srcOffset = 0, .dstOffset = buffers_[KW_BIRDS_BINDING_POSES].size(), .size = diag_bytes});
-                }
-                const vk::MemoryBarrier to_host{.srcAccessMask = vk::AccessFlagBits::eTransferWrite,
-                                                .dstAccessMask = vk::AccessFlagBits::eHostRead};
-                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eHost, {}, to_host, {}, {});
-            } else {
-                const vk::MemoryBarrier to_host{.srcAccessMask = vk::AccessFlagBits::eShaderWrite,
-                                                .dstAccessMask = vk::AccessFlagBits::eHostRead};
-                cmd.pipelineBarrier(vk::PipelineStageFlagBits::eComputeShader, vk::PipelineStageFlagBits::eHost, {}, to_host, {},
-                                    {});
-            }
-        };
-
+        const compute::Queue queue(*ctx_);
         if (!want_poses && !want_diag) {
             // Nothing read back (benchmarks): one dispatch runs every frame; each frame's
             // poses still go to the ring, whose slots are reused.
+            auto recording = queue.begin();
+            if (!recording) return recording.error();
+            recording.value().timestamp(compute::Timestamp::Begin);
+            KW_TRY(record_simulate(recording.value(), frames));
+            recording.value().timestamp(compute::Timestamp::End);
+            auto submission = queue.submit(std::move(recording).value());
+            if (!submission) return submission.error();
             double ms = -1.0;
-            KW_TRY(ctx_->submit(
-                [&](const vk::raii::CommandBuffer& cmd) {
-                    ctx_->write_timestamp(cmd, 0, vk::PipelineStageFlagBits::eTopOfPipe);
-                    record_chunk(cmd, frame_, frames);
-                    ctx_->write_timestamp(cmd, 1, vk::PipelineStageFlagBits::eBottomOfPipe);
-                },
-                &ms));
+            KW_TRY(submission.value().wait(&ms));
             gpu_ms_ = ms;
-            frame_ += frames;
-            note_last_frame((frames - 1) % slots_);
             return {};
         }
 
         for (std::uint32_t done = 0; done < frames;) {
             const std::uint32_t n = std::min(slots_, frames - done);
+            auto recording = queue.begin();
+            if (!recording) return recording.error();
+            compute::Recording& rec = recording.value();
+            rec.timestamp(compute::Timestamp::Begin);
+            record_frames(rec, *kernel.value(), frame_ + done, n);
+            rec.timestamp(compute::Timestamp::End);
+            record_readback(rec, n, want_diag);
+            auto submission = queue.submit(std::move(recording).value());
+            if (!submission) return submission.error();
             double ms = -1.0;
-            KW_TRY(ctx_->submit(
-                [&](const vk::raii::CommandBuffer& cmd) {
-                    ctx_->write_timestamp(cmd, 0, vk::PipelineStageFlagBits::eTopOfPipe);
-                    record_chunk(cmd, frame_ + done, n);
-                    ctx_->write_timestamp(cmd, 1, vk::PipelineStageFlagBits::eBottomOfPipe);
-                    record_readback(cmd, n);
-                },
-                &ms));
+            KW_TRY(submission.value().wait(&ms));
             if (ms >= 0.0) gpu_ms_ += ms;
             const std::size_t pose_count = std::size_t{n} * count_;
             ctx_->count_read_back(pose_count * ((want_poses ? sizeof(gpu::BirdPoseGpu) : 0) + (want_diag ? sizeof(gpu::BirdDiag) : 0)));
@@ -214,39 +194,62 @@ public:
             done += n;
         }
         frame_ += frames;
-        note_last_frame((frames - 1) % slots_);  // the last chunk started at slot 0
+        last_slot_ = (frames - 1) % slots_;  // the last chunk started at slot 0
         return {};
     }
 
 private:
-    // The k-th frame of a dispatch goes to ring slot k % slots_ (shaders/birds_flap.comp).
-    void note_last_frame(std::uint32_t slot) {
-        device_poses_ = {.context = ctx_.get(), .poses = buffers_[KW_BIRDS_BINDING_POSES].handle(), .first = slot * count_};
+    // The dispatch of frames [first, first + n) (at most slots_ when read back).
+    void record_frames(compute::Recording& recording, const compute::Kernel& kernel, std::uint32_t first, std::uint32_t n) const {
+        // The previous dispatch (this or an earlier submission) wrote the states and the
+        // ring, and a copy may have read the ring; this one reads and overwrites them.
+        compute::barrier(recording, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
+        const gpu::BirdPush push{{first, n, slots_, 0u}};
+        const std::uint32_t groups = (count_ + KW_BIRDS_WORKGROUP_SIZE - 1) / KW_BIRDS_WORKGROUP_SIZE;
+        kernel.dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
     }
 
-    std::shared_ptr<gpu::VulkanContext> ctx_;
-    std::vector<const GpuBuffer*> bound_buffers() const {
-        std::vector<const GpuBuffer*> bound;
+    // The poses (and diagnostics) of the dispatch's n frames to where the host reads them.
+    void record_readback(compute::Recording& recording, std::uint32_t n, bool want_diag) const {
+        if (!readback_) {
+            compute::barrier(recording, compute::Stage::Compute, compute::Stage::Host);
+            return;
+        }
+        compute::barrier(recording, compute::Stage::Compute, compute::Stage::Transfer);
+        const std::uint64_t pose_bytes = std::uint64_t{n} * count_ * sizeof(gpu::BirdPoseGpu);
+        const std::uint64_t diag_bytes = std::uint64_t{n} * count_ * sizeof(gpu::BirdDiag);
+        compute::copy(recording, buffers_[KW_BIRDS_BINDING_POSES], 0, *readback_, 0, pose_bytes);
+        if (want_diag) {
+            compute::copy(recording, buffers_[KW_BIRDS_BINDING_DIAGNOSTICS], 0, *readback_, buffers_[KW_BIRDS_BINDING_POSES].size(),
+                          diag_bytes);
+        }
+        compute::barrier(recording, compute::Stage::Transfer, compute::Stage::Host);
+    }
+
+    // The k-th frame of a dispatch goes to ring slot k % slots_ (shaders/birds_flap.comp).
+    std::shared_ptr<compute::Device> ctx_;
+    std::vector<const Buffer*> bound_buffers() const {
+        std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
         return bound;
     }
 
     // A handful of variants at most (rules x diagnostics): a vector is the simplest map.
-    std::vector<std::pair<std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT>, gpu::ComputePipeline>> pipelines_;
+    std::vector<std::pair<std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT>, compute::Kernel>> pipelines_;
     gpu::uvec4 rules_{};
-    std::vector<GpuBuffer> buffers_;
-    std::optional<GpuBuffer> readback_;
+    std::vector<Buffer> buffers_;
+    std::optional<Buffer> readback_;
     std::uint32_t count_ = 0;
     std::uint32_t slots_ = 1;
     std::uint32_t frame_ = 0;
-    gpu::BirdDevicePoses device_poses_;
+    std::uint32_t last_slot_ = 0;  // the ring slot of the last simulated frame
     double gpu_ms_ = -1.0;
 };
 
 }  // namespace
 
 Result<std::unique_ptr<BirdBackend>> make_vulkan_bird_backend(const BackendOptions& options) {
-    auto ctx = gpu::backend_context(options);
+    auto ctx = backend_context(options);
     if (!ctx) return ctx.error();
     auto backend = std::make_unique<VulkanBirdBackend>(std::move(ctx).value());
     // The default variant now, so a broken shader or driver shows up at creation.

@@ -11,14 +11,13 @@
 
 #include <shared/poses.h>
 
+#include "backends/device_backends.hpp"
 #include "backends/pose_backends.hpp"
-#include "gpu/compute_pipeline.hpp"
-#include "gpu/device_state.hpp"
 
 namespace kodawari {
 namespace {
 
-using gpu::GpuBuffer;
+using compute::Buffer;
 
 gpu::vec4 to_gpu(glm::vec3 v) { return {v.x, v.y, v.z, 0.0f}; }
 gpu::vec4 to_gpu(glm::vec4 v) { return {v.x, v.y, v.z, v.w}; }
@@ -111,9 +110,9 @@ FlatCharacter flatten(const gltf::Character& character) {
     return flat;
 }
 
-class VulkanPoseBackend final : public PoseBackend {
+class VulkanPoseBackend final : public PoseBackend, public DeviceData {
 public:
-    explicit VulkanPoseBackend(std::shared_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
+    explicit VulkanPoseBackend(std::shared_ptr<compute::Device> ctx) : ctx_(std::move(ctx)) {}
 
     std::string_view name() const override { return "vulkan"; }
     std::string device() const override { return ctx_->info().name; }
@@ -151,25 +150,25 @@ public:
             flat.values.size() * sizeof(gpu::vec4),
             per_instance.size() * sizeof(gpu::PoseInstanceGpu),
             count * character.nodes.size() * sizeof(gpu::PoseMatrixGpu)};
-        auto storage = gpu::create_storage_buffers(*ctx_, sizes, "the crowd");
+        auto storage = compute::create_storage_buffers(*ctx_, sizes, "the crowd");
         if (!storage) return storage.error();
         buffers_ = std::move(storage).value();
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_NODES], bytes_of(flat.nodes)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_CLIPS], bytes_of(flat.clips)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_CHANNELS], bytes_of(flat.channels)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_TIMES], bytes_of(flat.times)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_VALUES], bytes_of(flat.values)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_POSES_BINDING_INSTANCES], bytes_of(per_instance)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_NODES], bytes_of(flat.nodes)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_CLIPS], bytes_of(flat.clips)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_CHANNELS], bytes_of(flat.channels)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_TIMES], bytes_of(flat.times)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_VALUES], bytes_of(flat.values)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_INSTANCES], bytes_of(per_instance)));
 
         if (!kernel_) {
-            const std::vector<vk::DescriptorType> types(KW_POSES_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
-            auto created = gpu::ComputePipeline::create(*ctx_, "pose_eval", types, sizeof(gpu::PosePush));
+            const std::vector<compute::Binding> types(KW_POSES_BINDING_COUNT, compute::Binding::Storage);
+            auto created = compute::Kernel::create(*ctx_, "pose_eval", types, sizeof(gpu::PosePush));
             if (!created) return created.error();
             kernel_.emplace(std::move(created).value());
         }
-        std::vector<const GpuBuffer*> bound;
+        std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
-        kernel_->bind_buffers(*ctx_, bound);
+        kernel_->bind(bound);
         character_ = &character;
         count_ = static_cast<std::uint32_t>(count);
         return {};
@@ -179,38 +178,50 @@ public:
         assert(character_ != nullptr && "load() first");
         if (!std::isfinite(time)) return make_error(Error::Kind::InvalidInput, "the scene time is not finite");
         evaluated_ = true;
-        device_world_ = {.context = ctx_.get(),
-                         .world = buffers_[KW_POSES_BINDING_WORLD].handle(),
-                         .instances = count_,
-                         .nodes = static_cast<std::uint32_t>(character_->nodes.size())};
         if (count_ == 0) return {};
         const gpu::PosePush push{{time, 0.0f, 0.0f, 0.0f},
                                  {count_, static_cast<std::uint32_t>(character_->nodes.size()), 0u, 0u}};
         const std::uint32_t groups = (count_ + KW_POSES_WORKGROUP_SIZE - 1) / KW_POSES_WORKGROUP_SIZE;
+        const compute::Queue queue(*ctx_);
+        auto recording = queue.begin();
+        if (!recording) return recording.error();
+        compute::Recording& rec = recording.value();
+        // The previous evaluate's matrices were read (by a copy or kernels of earlier
+        // submissions) before this dispatch overwrites them.
+        compute::barrier(rec, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
+        rec.timestamp(compute::Timestamp::Begin);
+        kernel_->dispatch(rec, std::as_bytes(std::span(&push, 1)), groups);
+        rec.timestamp(compute::Timestamp::End);
+        compute::barrier(rec, compute::Stage::Compute, compute::Stage::Host | compute::Stage::Transfer);
+        auto submission = queue.submit(std::move(recording).value());
+        if (!submission) return submission.error();
         double ms = -1.0;
-        KW_TRY(ctx_->submit(
-            [&](const vk::raii::CommandBuffer& cmd) {
-                kernel_->dispatch_for_host(*ctx_, cmd, std::as_bytes(std::span(&push, 1)), groups);
-            },
-            &ms));
+        KW_TRY(submission.value().wait(&ms));
         gpu_ms_ = ms;
         return {};
     }
 
-    const gpu::PoseDeviceWorld* device_world() const override { return evaluated_ ? &device_world_ : nullptr; }
+    const DeviceData* device_data() const override { return evaluated_ ? this : nullptr; }
+    const gpu::VulkanContext& context() const override { return *ctx_; }
+    DeviceSpan buffer(DeviceBuffer name) const override {
+        if (name != DeviceBuffer::PoseWorld || !evaluated_) return {};
+        return {.buffer = &buffers_[KW_POSES_BINDING_WORLD],
+                .first = 0,
+                .items = count_,
+                .per_item = static_cast<std::uint32_t>(character_->nodes.size())};
+    }
 
     Result<void> read(std::vector<glm::mat4>& world) override {
         assert(character_ != nullptr && evaluated_ && "evaluate() first");
         static_assert(sizeof(glm::mat4) == sizeof(gpu::PoseMatrixGpu), "four column vec4s on both sides");
         world.resize(std::size_t{count_} * character_->nodes.size());
-        return gpu::download(*ctx_, buffers_[KW_POSES_BINDING_WORLD], std::as_writable_bytes(std::span(world)));
+        return compute::download(*ctx_, buffers_[KW_POSES_BINDING_WORLD], std::as_writable_bytes(std::span(world)));
     }
 
 private:
-    std::shared_ptr<gpu::VulkanContext> ctx_;
-    gpu::PoseDeviceWorld device_world_;
-    std::optional<gpu::ComputePipeline> kernel_;
-    std::vector<GpuBuffer> buffers_;
+    std::shared_ptr<compute::Device> ctx_;
+    std::optional<compute::Kernel> kernel_;
+    std::vector<Buffer> buffers_;
     const gltf::Character* character_ = nullptr;
     std::uint32_t count_ = 0;
     bool evaluated_ = false;
@@ -220,7 +231,7 @@ private:
 }  // namespace
 
 Result<std::unique_ptr<PoseBackend>> make_vulkan_pose_backend(const BackendOptions& options) {
-    auto ctx = gpu::backend_context(options);
+    auto ctx = backend_context(options);
     if (!ctx) return ctx.error();
     return std::unique_ptr<PoseBackend>(std::make_unique<VulkanPoseBackend>(std::move(ctx).value()));
 }

@@ -11,14 +11,16 @@
 #include <shared/rods.h>
 
 #include "backends/backends.hpp"
+#include "backends/device_backends.hpp"
 #include "core/parallel.hpp"
-#include "gpu/compute_pipeline.hpp"
-#include "gpu/device_state.hpp"
 
 namespace kodawari {
 namespace {
 
-using gpu::GpuBuffer;
+// The kernel's fixed-size arrays hold what the rod world allows.
+static_assert(KW_RODS_MAX_JOINTS == rods::kMaxChainJoints && KW_RODS_MAX_VIEWS == rods::kMaxViewExamples);
+
+using compute::Buffer;
 
 gpu::vec4 to_gpu(glm::vec3 v, float w = 0.0f) { return {v.x, v.y, v.z, w}; }
 gpu::vec4 to_gpu(glm::quat q) { return {q.x, q.y, q.z, q.w}; }
@@ -47,20 +49,20 @@ void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
     g.physics.y = 1.0f - std::pow(1.0f - p.rest_stiffness, 1.0f / static_cast<float>(p.iterations));
 }
 
-class VulkanRodBackend final : public RodBackend {
+class VulkanRodBackend final : public RodBackend, public DeviceRodBackend, public DeviceData {
 public:
-    explicit VulkanRodBackend(std::shared_ptr<gpu::VulkanContext> ctx) : ctx_(std::move(ctx)) {}
+    explicit VulkanRodBackend(std::shared_ptr<compute::Device> ctx) : ctx_(std::move(ctx)) {}
 
     using Variant = std::array<std::uint32_t, KW_RODS_SPEC_COUNT>;
 
     /// The kernel specialized for a world (shared/rods.h, KW_RODS_SPEC_*); built on first
     /// use and kept.
-    Result<const gpu::ComputePipeline*> pipeline(const Variant& spec) {
+    Result<const compute::Kernel*> pipeline(const Variant& spec) {
         for (const auto& [key, p] : pipelines_) {
             if (key == spec) return &p;
         }
-        const std::vector<vk::DescriptorType> types(KW_RODS_BINDING_COUNT, vk::DescriptorType::eStorageBuffer);
-        auto created = gpu::ComputePipeline::create(*ctx_, "rods_step", types, sizeof(gpu::RodPush), spec);
+        const std::vector<compute::Binding> types(KW_RODS_BINDING_COUNT, compute::Binding::Storage);
+        auto created = compute::Kernel::create(*ctx_, "rods_step", types, sizeof(gpu::RodPush), spec);
         if (!created) return created.error();
         pipelines_.emplace_back(spec, std::move(created).value());
         return &pipelines_.back().second;
@@ -70,11 +72,24 @@ public:
     std::string device() const override { return ctx_->info().name; }
     double last_gpu_ms() const override { return gpu_ms_; }
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
-    const gpu::RodDeviceState* device_state() const override { return world_ != nullptr ? &device_state_ : nullptr; }
-    bool set_input_writer(std::shared_ptr<const gpu::RodInputWriter> writer) override {
-        input_writer_ = std::move(writer);
-        return true;
+    const DeviceData* device_data() const override { return world_ != nullptr ? this : nullptr; }
+    const gpu::VulkanContext& context() const override { return *ctx_; }
+    DeviceSpan buffer(DeviceBuffer name) const override {
+        if (world_ == nullptr) return {};
+        auto span = [&](std::uint32_t binding, std::size_t items) {
+            return DeviceSpan{.buffer = &buffers_[binding], .first = 0, .items = static_cast<std::uint32_t>(items)};
+        };
+        switch (name) {
+            case DeviceBuffer::RodChainStates: return span(KW_RODS_BINDING_CHAIN_STATE, world_->chains.size());
+            case DeviceBuffer::RodMotion: return span(KW_RODS_BINDING_MOTION, world_->joint_count);
+            case DeviceBuffer::RodSpin: return span(KW_RODS_BINDING_SPIN, world_->joint_count);
+            case DeviceBuffer::RodReference: return span(KW_RODS_BINDING_REFERENCE, world_->character_count);
+            case DeviceBuffer::RodRoots: return span(KW_RODS_BINDING_ROOTS, world_->chains.size());
+            case DeviceBuffer::RodColliders: return span(KW_RODS_BINDING_COLLIDERS, world_->collider_count);
+            default: return {};
+        }
     }
+    void set_input_writer(std::shared_ptr<const RodInputWriter> writer) override { input_writer_ = std::move(writer); }
 
     Result<void> load(const rods::RodWorld& world, const rods::RodFrame& initial) override {
         KW_TRY(rods::check_frame(world, initial));
@@ -162,18 +177,18 @@ public:
             motion.size() * sizeof(gpu::RodJointMotionGpu),
             spin.size() * sizeof(gpu::RodJointSpinGpu),
             chain_states.size() * sizeof(gpu::RodChainStateGpu)};
-        auto storage = gpu::create_storage_buffers(*ctx_, sizes, "the rod world");
+        auto storage = compute::create_storage_buffers(*ctx_, sizes, "the rod world");
         if (!storage) return storage.error();
         buffers_ = std::move(storage).value();
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_TEMPLATE_JOINTS], bytes_of(tjoints)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_SHAPES], bytes_of(shapes)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAINS], bytes_of(chains)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_MOTION], bytes_of(motion)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_SPIN], bytes_of(spin)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], bytes_of(chain_states)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_TEMPLATE_JOINTS], bytes_of(tjoints)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_SHAPES], bytes_of(shapes)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAINS], bytes_of(chains)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_MOTION], bytes_of(motion)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_SPIN], bytes_of(spin)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], bytes_of(chain_states)));
         // The input buffers hold the initial frame's input until the first step (what a
         // renderer drawing the colliders from them sees at frame 0).
-        KW_TRY(upload_input(initial));
+        KW_TRY(upload_input(*ctx_, initial));
 
         const std::uint32_t suppression = all_none   ? KW_RODS_SUPPRESSION_NONE
                                           : all_full ? KW_RODS_SUPPRESSION_FULL
@@ -181,46 +196,29 @@ public:
         auto kernel = pipeline({max_joints, max_views, suppression});
         if (!kernel) return kernel.error();
         kernel_ = kernel.value();
-        std::vector<const GpuBuffer*> bound;
+        std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
-        kernel_->bind_buffers(*ctx_, bound);
-        device_state_ = {.context = ctx_.get(),
-                         .chain_states = buffers_[KW_RODS_BINDING_CHAIN_STATE].handle(),
-                         .motion = buffers_[KW_RODS_BINDING_MOTION].handle(),
-                         .spin = buffers_[KW_RODS_BINDING_SPIN].handle(),
-                         .reference = buffers_[KW_RODS_BINDING_REFERENCE].handle(),
-                         .roots = buffers_[KW_RODS_BINDING_ROOTS].handle(),
-                         .colliders = buffers_[KW_RODS_BINDING_COLLIDERS].handle()};
+        kernel_->bind(bound);
         return {};
     }
 
     Result<void> step(const rods::RodFrame& frame) override {
-        assert(world_ != nullptr && "load() first");
-        KW_TRY(rods::check_frame(*world_, frame));
-        if (frame.dt != dt_) {
-            for (std::size_t t = 0; t < templates_.size(); ++t) set_step(templates_[t], world_->templates[t].params, frame.dt);
-            KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_TEMPLATES], bytes_of(templates_)));
-            dt_ = frame.dt;
-        }
-        KW_TRY(upload_input(frame));
-
-        const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
-        const gpu::RodPush push{{static_cast<std::uint32_t>(world_->chains.size()), 0u, 0u, 0u},
-                                to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f),
-                                to_gpu(frame.camera.forward)};
-        const std::uint32_t groups =
-            static_cast<std::uint32_t>((world_->chains.size() + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE);
+        const compute::Queue queue(*ctx_);
+        auto recording = queue.begin();
+        if (!recording) return recording.error();
+        KW_TRY(record(recording.value(), frame, true));
+        auto submission = queue.submit(std::move(recording).value());
+        if (!submission) return submission.error();
         double ms = -1.0;
-        KW_TRY(ctx_->submit(
-            [&](const vk::raii::CommandBuffer& cmd) {
-                // After the uploads above; dispatch_for_host's barrier orders its writes
-                // before the step reads them.
-                if (input_writer_) input_writer_->record(cmd, device_state_);
-                kernel_->dispatch_for_host(*ctx_, cmd, std::as_bytes(std::span(&push, 1)), groups);
-            },
-            &ms));
+        KW_TRY(submission.value().wait(&ms));
         gpu_ms_ = ms;
         return {};
+    }
+
+    Result<void> record_step(compute::Recording& recording, const rods::RodFrame& frame) override {
+        assert(&recording.device() == ctx_.get() && "a recording of the backend's device");
+        // Untimed: the timestamps are the caller's submission's.
+        return record(recording, frame, false);
     }
 
     Result<void> read(ChainSnapshot& out) override {
@@ -276,8 +274,41 @@ public:
     }
 
 private:
+    // The step of `frame`: its input (and, when dt changed, the templates' step sizes)
+    // written, the input writer's kernels, then the step's dispatch between the
+    // timestamps when `timed`, its writes made visible to the host and to copies.
+    Result<void> record(compute::Recording& recording, const rods::RodFrame& frame, bool timed) {
+        assert(world_ != nullptr && "load() first");
+        KW_TRY(rods::check_frame(*world_, frame));
+        if (frame.dt != dt_) {
+            for (std::size_t t = 0; t < templates_.size(); ++t) set_step(templates_[t], world_->templates[t].params, frame.dt);
+            KW_TRY(compute::upload(recording, buffers_[KW_RODS_BINDING_TEMPLATES], bytes_of(templates_)));
+            dt_ = frame.dt;
+        }
+        KW_TRY(upload_input(recording, frame));
+        if (input_writer_) input_writer_->record(recording, *this);
+
+        const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
+        const gpu::RodPush push{{static_cast<std::uint32_t>(world_->chains.size()), 0u, 0u, 0u},
+                                to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f),
+                                to_gpu(frame.camera.forward)};
+        const std::uint32_t groups =
+            static_cast<std::uint32_t>((world_->chains.size() + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE);
+        // What earlier dispatches and copies wrote (the state this dispatch reads and
+        // overwrites, the input) before the step.
+        compute::barrier(recording, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
+        if (timed) recording.timestamp(compute::Timestamp::Begin);
+        kernel_->dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
+        if (timed) recording.timestamp(compute::Timestamp::End);
+        // The host reads mapped state after the fence; staged reads copy it.
+        compute::barrier(recording, compute::Stage::Compute, compute::Stage::Host | compute::Stage::Transfer);
+        return {};
+    }
+
     // The frame's kinematic input into the input buffers.
-    Result<void> upload_input(const rods::RodFrame& frame) {
+    // `target`: the device (a submission of its own) or a recording (compute::upload).
+    template <typename Target>
+    Result<void> upload_input(Target& target, const rods::RodFrame& frame) {
         reference_.resize(frame.reference.size());
         std::transform(frame.reference.begin(), frame.reference.end(), reference_.begin(),
                        [](const rods::Transform& t) { return to_gpu(t); });
@@ -287,9 +318,9 @@ private:
         std::transform(frame.colliders.begin(), frame.colliders.end(), colliders_.begin(), [](const rods::Capsule& c) {
             return gpu::RodColliderGpu{to_gpu(c.a, c.radius), to_gpu(c.b)};
         });
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_REFERENCE], bytes_of(reference_)));
-        KW_TRY(gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_ROOTS], bytes_of(roots_)));
-        return gpu::upload(*ctx_, buffers_[KW_RODS_BINDING_COLLIDERS], bytes_of(colliders_));
+        KW_TRY(compute::upload(target, buffers_[KW_RODS_BINDING_REFERENCE], bytes_of(reference_)));
+        KW_TRY(compute::upload(target, buffers_[KW_RODS_BINDING_ROOTS], bytes_of(roots_)));
+        return compute::upload(target, buffers_[KW_RODS_BINDING_COLLIDERS], bytes_of(colliders_));
     }
 
     // The rest shape of chain c's last frame from its weights (SPEC A.2), as the kernel
@@ -306,20 +337,19 @@ private:
         motion_.resize(world_->joint_count);
         spin_.resize(world_->joint_count);
         chain_states_.resize(world_->chains.size());
-        KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_MOTION], writable_bytes_of(motion_)));
-        KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_SPIN], writable_bytes_of(spin_)));
-        KW_TRY(gpu::download(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], writable_bytes_of(chain_states_)));
+        KW_TRY(compute::download(*ctx_, buffers_[KW_RODS_BINDING_MOTION], writable_bytes_of(motion_)));
+        KW_TRY(compute::download(*ctx_, buffers_[KW_RODS_BINDING_SPIN], writable_bytes_of(spin_)));
+        KW_TRY(compute::download(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], writable_bytes_of(chain_states_)));
         return {};
     }
 
-    std::shared_ptr<gpu::VulkanContext> ctx_;
+    std::shared_ptr<compute::Device> ctx_;
     // A few variants at most (one per kind of world): a vector is the simplest map.
-    std::vector<std::pair<Variant, gpu::ComputePipeline>> pipelines_;
-    const gpu::ComputePipeline* kernel_ = nullptr;
+    std::vector<std::pair<Variant, compute::Kernel>> pipelines_;
+    const compute::Kernel* kernel_ = nullptr;
     const rods::RodWorld* world_ = nullptr;
-    std::vector<GpuBuffer> buffers_;
-    gpu::RodDeviceState device_state_;
-    std::shared_ptr<const gpu::RodInputWriter> input_writer_;
+    std::vector<Buffer> buffers_;
+    std::shared_ptr<const RodInputWriter> input_writer_;
     std::vector<gpu::RodTemplateGpu> templates_;
     float dt_ = -1.0f;
     double gpu_ms_ = -1.0;
@@ -334,7 +364,7 @@ private:
 }  // namespace
 
 Result<std::unique_ptr<RodBackend>> make_vulkan_rod_backend(const BackendOptions& options) {
-    auto ctx = gpu::backend_context(options);
+    auto ctx = backend_context(options);
     if (!ctx) return ctx.error();
     return std::unique_ptr<RodBackend>(std::make_unique<VulkanRodBackend>(std::move(ctx).value()));
 }

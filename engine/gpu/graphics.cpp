@@ -3,7 +3,7 @@
 #include <cassert>
 #include <vector>
 
-#include "gpu/compute_pipeline.hpp"
+#include "compute/kernel.hpp"
 
 namespace kodawari::gpu {
 

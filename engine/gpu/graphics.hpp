@@ -6,7 +6,7 @@
 #include <span>
 #include <string_view>
 
-#include "gpu/gpu_buffer.hpp"
+#include "compute/buffer.hpp"
 
 namespace kodawari::gpu {
 

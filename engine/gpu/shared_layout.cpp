@@ -1,4 +1,6 @@
 // The C++ side of every GPU-shared struct must match GLSL's std430 layout exactly.
+// (The domains' own constants that must match these are checked where the domain is:
+// e.g. KW_RODS_MAX_JOINTS in backends/vulkan_rods.cpp.)
 // Only vec4/uvec4 members are used, so size = 16 x member count and offsets follow.
 #include <cstddef>
 
@@ -9,7 +11,6 @@
 #include <shared/rods.h>
 #include <shared/skin.h>
 
-#include "kodawari/rods/world.hpp"
 
 namespace kodawari::gpu {
 
@@ -53,7 +54,6 @@ static_assert(offsetof(RodChainStateGpu, root) == 0 && offsetof(RodChainStateGpu
               offsetof(RodChainStateGpu, weights) == 48);
 static_assert(sizeof(RodPush) == 48 && offsetof(RodPush, camera_position) == 16 && offsetof(RodPush, camera_forward) == 32);
 static_assert(KW_RODS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
-static_assert(KW_RODS_MAX_JOINTS == rods::kMaxChainJoints && KW_RODS_MAX_VIEWS == rods::kMaxViewExamples);
 
 // shared/poses.h
 static_assert(sizeof(PoseNodeGpu) == 80 && offsetof(PoseNodeGpu, local) == 16);

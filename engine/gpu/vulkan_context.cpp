@@ -1,5 +1,7 @@
 #include "gpu/vulkan_context.hpp"
 
+#include "compute/queue.hpp"
+
 #include <algorithm>
 #include <cctype>
 #include <cstdio>
@@ -122,6 +124,25 @@ void choose(GpuInventory& inventory, std::string request) {
     inventory.reason = "no Vulkan device has a compute queue";
 }
 
+// Why choose() passed over each device (vk-bootstrap keeps these too): for the Error of a
+// failed selection.
+std::vector<std::string> rejections(const GpuInventory& inventory, std::string request) {
+    if (request.empty()) {
+        if (const char* env = std::getenv("KODAWARI_DEVICE")) request = env;
+    }
+    const bool numeric = !request.empty() && std::all_of(request.begin(), request.end(), [](unsigned char c) { return std::isdigit(c); });
+    std::vector<std::string> out;
+    for (const GpuDeviceInfo& d : inventory.devices) {
+        if (!d.has_compute_queue) {
+            out.push_back(d.name + ": no compute queue");
+        } else if (!request.empty() && !(numeric ? std::to_string(d.index) == request
+                                                 : lower(d.name).find(lower(request)) != std::string::npos)) {
+            out.push_back(d.name + ": does not match \"" + request + "\"");
+        }
+    }
+    return out;
+}
+
 VKAPI_ATTR VkBool32 VKAPI_CALL on_validation_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
                                                      VkDebugUtilsMessageTypeFlagsEXT,
                                                      const VkDebugUtilsMessengerCallbackDataEXT* data, void* user) {
@@ -175,20 +196,17 @@ bool has_validation_layer(const vk::raii::Context& context) {
 
 }  // namespace
 
-Result<std::shared_ptr<VulkanContext>> backend_context(const BackendOptions& options) {
-    if (options.context) return options.context;
-    auto created = VulkanContext::create({.device = options.device, .validation = options.validation});
-    if (!created) return created.error();
-    return std::shared_ptr<VulkanContext>(std::move(created).value());
-}
-
 Error vulkan_error(const std::string& what, const std::exception& e) {
     // The loader answers "incompatible driver" when it found no usable driver at all.
     if (dynamic_cast<const vk::IncompatibleDriverError*>(&e) != nullptr) {
         return make_error(Error::Kind::Unsupported,
                           "no Vulkan driver found (install Mesa's lavapipe, Debian package mesa-vulkan-drivers, or a GPU driver)");
     }
-    return make_error(Error::Kind::Vulkan, what + ": " + e.what());
+    Error error = make_error(Error::Kind::Vulkan, what + ": " + e.what());
+    if (const auto* system = dynamic_cast<const vk::SystemError*>(&e); system != nullptr) {
+        error.vk_result = system->code().value();  // vk::Result's error category: the VkResult itself
+    }
+    return error;
 }
 
 }  // namespace kodawari::gpu
@@ -266,7 +284,11 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
                               "no Vulkan device: the loader found no driver (install Mesa's lavapipe: mesa-vulkan-drivers)");
         }
         choose(inventory, options.device);
-        if (inventory.chosen < 0) return make_error(Error::Kind::Unsupported, inventory.reason);
+        if (inventory.chosen < 0) {
+            Error none = make_error(Error::Kind::Unsupported, inventory.reason);
+            none.rejected_devices = rejections(inventory, options.device);
+            return none;
+        }
         ctx->info_ = inventory.devices[static_cast<std::size_t>(inventory.chosen)];
         ctx->physical_ = std::move(devices[ctx->info_.index]);
         const bool presents = static_cast<VkSurfaceKHR>(*ctx->surface_) != VK_NULL_HANDLE;
@@ -299,9 +321,6 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
         ctx->queue_ = ctx->device_.getQueue(ctx->queue_family_, 0);
         ctx->pool_ = ctx->device_.createCommandPool(
             {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer, .queueFamilyIndex = ctx->queue_family_});
-        ctx->command_buffer_ = std::move(ctx->device_.allocateCommandBuffers(
-            {.commandPool = *ctx->pool_, .level = vk::CommandBufferLevel::ePrimary, .commandBufferCount = 1})[0]);
-        ctx->fence_ = ctx->device_.createFence({});
 
         const auto props = ctx->physical_.getProperties();
         ctx->memory_ = ctx->physical_.getMemoryProperties();
@@ -329,36 +348,42 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
     return ctx;
 }
 
-Result<void> VulkanContext::submit(const std::function<void(const vk::raii::CommandBuffer&)>& record, double* gpu_ms) {
-    try {
-        command_buffer_.reset();
-        command_buffer_.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
-        if (static_cast<VkQueryPool>(*timestamps_) != VK_NULL_HANDLE) command_buffer_.resetQueryPool(*timestamps_, 0, 2);
-        record(command_buffer_);
-        command_buffer_.end();
-        device_.resetFences(*fence_);
-        const vk::CommandBuffer cmd = *command_buffer_;
-        queue_.submit(vk::SubmitInfo{.commandBufferCount = 1, .pCommandBuffers = &cmd}, *fence_);
-        // A generous bound: a hung device must not hang the program.
-        constexpr std::uint64_t kTimeoutNs = 600ull * 1000 * 1000 * 1000;
-        if (device_.waitForFences(*fence_, VK_TRUE, kTimeoutNs) != vk::Result::eSuccess) {
-            return make_error(Error::Kind::Vulkan, "the GPU did not finish within 600 s");
-        }
-        if (gpu_ms != nullptr) {
-            *gpu_ms = -1.0;
-            if (static_cast<VkQueryPool>(*timestamps_) != VK_NULL_HANDLE) {
-                auto [result, stamps] = timestamps_.getResults<std::uint64_t>(
-                    0, 2, 2 * sizeof(std::uint64_t), sizeof(std::uint64_t), vk::QueryResultFlagBits::e64);
-                if (result == vk::Result::eSuccess) {
-                    const std::uint64_t ticks = (stamps[1] - stamps[0]) & timestamp_mask_;
-                    *gpu_ms = static_cast<double>(ticks) * static_cast<double>(timestamp_period_ns_) * 1e-6;
-                }
-            }
-        }
-    } catch (const std::exception& e) {
-        return vulkan_error("Vulkan submission", e);
+Result<CommandSlot> VulkanContext::acquire_slot() {
+    if (!free_slots_.empty()) {
+        CommandSlot slot = std::move(free_slots_.back());
+        free_slots_.pop_back();
+        return slot;
     }
-    return {};
+    return compute::guard("Vulkan command buffer", [&]() -> Result<CommandSlot> {
+        CommandSlot slot;
+        slot.cmd = std::move(device_.allocateCommandBuffers(
+            {.commandPool = *pool_, .level = vk::CommandBufferLevel::ePrimary, .commandBufferCount = 1})[0]);
+        slot.fence = device_.createFence({});
+        return slot;
+    });
+}
+
+void VulkanContext::release_slot(CommandSlot slot) {
+    if (static_cast<VkCommandBuffer>(*slot.cmd) != VK_NULL_HANDLE) free_slots_.push_back(std::move(slot));
+}
+
+double VulkanContext::timestamp_ms() const {
+    if (static_cast<VkQueryPool>(*timestamps_) == VK_NULL_HANDLE) return -1.0;
+    auto [result, stamps] = timestamps_.getResults<std::uint64_t>(0, 2, 2 * sizeof(std::uint64_t), sizeof(std::uint64_t),
+                                                                 vk::QueryResultFlagBits::e64);
+    if (result != vk::Result::eSuccess) return -1.0;
+    const std::uint64_t ticks = (stamps[1] - stamps[0]) & timestamp_mask_;
+    return static_cast<double>(ticks) * static_cast<double>(timestamp_period_ns_) * 1e-6;
+}
+
+Result<void> VulkanContext::submit(const std::function<void(const vk::raii::CommandBuffer&)>& record, double* gpu_ms) {
+    const compute::Queue queue(*this);
+    auto recording = queue.begin();
+    if (!recording) return recording.error();
+    record(recording.value().vulkan());
+    auto submission = queue.submit(std::move(recording).value());
+    if (!submission) return submission.error();
+    return submission.value().wait(gpu_ms);
 }
 
 void VulkanContext::write_timestamp(const vk::raii::CommandBuffer& cmd, std::uint32_t which,

@@ -11,7 +11,6 @@
 
 #include <vulkan/vulkan_raii.hpp>
 
-#include "kodawari/backend.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/result.hpp"
 
@@ -31,6 +30,14 @@ struct ContextOptions {
     /// The context then owns the surface, picks a queue family that can present to it and
     /// enables VK_KHR_swapchain.
     std::function<Result<VkSurfaceKHR>(VkInstance)> create_surface{};
+};
+
+/// A command buffer and the fence of its submission: what a compute::Recording records
+/// into and a compute::Submission waits on. Recycled by the context (acquire_slot,
+/// release_slot) so that a frame allocates nothing.
+struct CommandSlot {
+    vk::raii::CommandBuffer cmd{nullptr};
+    vk::raii::Fence fence{nullptr};
 };
 
 class VulkanContext {
@@ -57,11 +64,21 @@ public:
     [[nodiscard]] const vk::raii::Queue& queue() const { return queue_; }
     [[nodiscard]] std::uint32_t queue_family() const { return queue_family_; }
 
-    /// Records commands with `record`, submits them and waits. When the device has
-    /// timestamps, `gpu_ms` receives the time between the two timestamps `record` may
-    /// write with write_timestamp().
+    /// Records commands with `record`, submits them and waits (compute::Queue's begin,
+    /// submit and wait in one call). When the device has timestamps, `gpu_ms` receives the
+    /// time between the two timestamps `record` may write with write_timestamp().
     [[nodiscard]] Result<void> submit(const std::function<void(const vk::raii::CommandBuffer&)>& record,
                                       double* gpu_ms = nullptr);
+
+    /// A free command buffer and fence (compute::Queue::begin), new when none is free.
+    [[nodiscard]] Result<CommandSlot> acquire_slot();
+    /// Gives a slot back once its submission completed (or it was never submitted).
+    void release_slot(CommandSlot slot);
+    /// The submission timestamps' pool (null without timestamps).
+    [[nodiscard]] const vk::raii::QueryPool& timestamp_pool() const { return timestamps_; }
+    /// Milliseconds between timestamps 0 and 1 of the last completed submission that
+    /// wrote both; -1 when the device has no timestamps or they are not written.
+    [[nodiscard]] double timestamp_ms() const;
 
     /// Writes timestamp 0 (begin) or 1 (end) into the submission's query pool.
     void write_timestamp(const vk::raii::CommandBuffer& cmd, std::uint32_t which, vk::PipelineStageFlagBits stage) const;
@@ -87,8 +104,7 @@ private:
     vk::raii::Device device_{nullptr};
     vk::raii::Queue queue_{nullptr};
     vk::raii::CommandPool pool_{nullptr};
-    vk::raii::CommandBuffer command_buffer_{nullptr};
-    vk::raii::Fence fence_{nullptr};
+    std::vector<CommandSlot> free_slots_;  // after the pool: freed before it
     vk::raii::QueryPool timestamps_{nullptr};
     GpuDeviceInfo info_;
     vk::PhysicalDeviceMemoryProperties memory_{};
@@ -102,11 +118,8 @@ private:
     std::unique_ptr<std::atomic<std::uint32_t>> messages_ = std::make_unique<std::atomic<std::uint32_t>>(0);
 };
 
-/// The context a vulkan backend runs on: `options.context` when set (shared with a
-/// renderer), else a new compute context for `options.device` and `options.validation`.
-[[nodiscard]] Result<std::shared_ptr<VulkanContext>> backend_context(const BackendOptions& options);
-
-/// Turns an exception from vulkan.hpp into an Error.
+/// Turns an exception from vulkan.hpp into an Error that keeps its VkResult
+/// (Error::vk_result). Called by compute::guard, the one boundary where they are caught.
 [[nodiscard]] Error vulkan_error(const std::string& what, const std::exception& e);
 
 }  // namespace kodawari::gpu

@@ -8,7 +8,7 @@
 #include <glm/gtc/packing.hpp>
 
 #include "export/bird_meshes.hpp"
-#include "gpu/device_state.hpp"
+#include "compute/compute.hpp"
 
 namespace kodawari::render {
 
@@ -23,17 +23,17 @@ std::uint32_t bits(float value) { return std::bit_cast<std::uint32_t>(value); }
 
 }  // namespace
 
-Result<void> store(gpu::VulkanContext& ctx, std::optional<gpu::GpuBuffer>& slot, std::span<const std::byte> bytes) {
+Result<void> store(gpu::VulkanContext& ctx, std::optional<compute::Buffer>& slot, std::span<const std::byte> bytes) {
     auto buffer = storage_with(ctx, bytes);
     if (!buffer) return buffer.error();
     slot.emplace(std::move(buffer).value());
     return {};
 }
 
-Result<gpu::GpuBuffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes) {
-    auto buffer = gpu::GpuBuffer::create(ctx, std::max<std::uint64_t>(bytes.size(), 16), gpu::GpuBuffer::Kind::Storage);
+Result<compute::Buffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes) {
+    auto buffer = compute::Buffer::create(ctx, std::max<std::uint64_t>(bytes.size(), 16), compute::Usage::Storage);
     if (!buffer) return buffer.error();
-    KW_TRY(gpu::upload(ctx, buffer.value(), bytes));
+    KW_TRY(compute::upload(ctx, buffer.value(), bytes));
     return buffer;
 }
 
@@ -93,13 +93,15 @@ Result<void> ChainLayer::set_world(gpu::VulkanContext& ctx, const rods::RodWorld
 
 Result<void> ChainLayer::from_backend(gpu::VulkanContext& ctx, RodBackend& backend) {
     assert(world_ != nullptr && "set_world() first");
-    const gpu::RodDeviceState* state = backend.device_state();
-    if (state == nullptr || state->context != &ctx) {
+    const DeviceData* state = backend.device_data();
+    if (state == nullptr || &state->context() != &ctx) {
         KW_TRY(backend.read(scratch_));
         return from_snapshot(ctx, scratch_);
     }
-    const gpu::BufferRange ranges[KW_CHAINS_BINDING_COUNT] = {
-        {info_->handle()}, {joint_chain_->handle()}, {state->chain_states}, {state->motion}};
+    const gpu::BufferRange ranges[KW_CHAINS_BINDING_COUNT] = {{info_->handle()},
+                                                              {joint_chain_->handle()},
+                                                              {state->buffer(DeviceBuffer::RodChainStates).buffer->handle()},
+                                                              {state->buffer(DeviceBuffer::RodMotion).buffer->handle()}};
     set_->bind(ctx, ranges);
     bound_ = on_device_ = true;
     return {};
@@ -115,8 +117,8 @@ Result<void> ChainLayer::from_snapshot(gpu::VulkanContext& ctx, const ChainSnaps
     if (!host_states_) {
         const std::vector<gpu::RodChainStateGpu> zero(world_->chains.size(), gpu::RodChainStateGpu{});
         KW_TRY(store(ctx, host_states_, bytes_of(zero)));
-        auto motion = gpu::GpuBuffer::create(ctx, std::max<std::uint64_t>(world_->joint_count * sizeof(gpu::RodJointMotionGpu), 16),
-                                             gpu::GpuBuffer::Kind::Storage);
+        auto motion = compute::Buffer::create(ctx, std::max<std::uint64_t>(world_->joint_count * sizeof(gpu::RodJointMotionGpu), 16),
+                                             compute::Usage::Storage);
         if (!motion) return motion.error();
         host_motion_.emplace(std::move(motion).value());
     }
@@ -125,7 +127,7 @@ Result<void> ChainLayer::from_snapshot(gpu::VulkanContext& ctx, const ChainSnaps
         const glm::vec3& p = snapshot.positions[j];
         motion_[j] = {{p.x, p.y, p.z, 0.0f}, {0.0f, 0.0f, 0.0f, 0.0f}};
     }
-    KW_TRY(gpu::upload(ctx, *host_motion_, bytes_of(motion_)));
+    KW_TRY(compute::upload(ctx, *host_motion_, bytes_of(motion_)));
     if (on_device_ || !bound_) {
         const gpu::BufferRange ranges[KW_CHAINS_BINDING_COUNT] = {
             {info_->handle()}, {joint_chain_->handle()}, {host_states_->handle()}, {host_motion_->handle()}};
@@ -169,9 +171,9 @@ void ColliderLayer::set_world(const rods::RodWorld* world) {
 
 Result<void> ColliderLayer::from(gpu::VulkanContext& ctx, const RodBackend& backend, const rods::RodFrame& input) {
     if (count_ == 0) return {};
-    const gpu::RodDeviceState* state = backend.device_state();
-    if (state != nullptr && state->context == &ctx) {
-        const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{state->colliders}};
+    const DeviceData* state = backend.device_data();
+    if (state != nullptr && &state->context() == &ctx) {
+        const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{state->buffer(DeviceBuffer::RodColliders).buffer->handle()}};
         set_->bind(ctx, ranges);
         bound_ = true;
         return {};
@@ -185,11 +187,11 @@ Result<void> ColliderLayer::from(gpu::VulkanContext& ctx, const RodBackend& back
         return gpu::RodColliderGpu{{c.a.x, c.a.y, c.a.z, c.radius}, {c.b.x, c.b.y, c.b.z, 0.0f}};
     });
     if (!host_) {
-        auto buffer = gpu::GpuBuffer::create(ctx, count_ * sizeof(gpu::RodColliderGpu), gpu::GpuBuffer::Kind::Storage);
+        auto buffer = compute::Buffer::create(ctx, count_ * sizeof(gpu::RodColliderGpu), compute::Usage::Storage);
         if (!buffer) return buffer.error();
         host_.emplace(std::move(buffer).value());
     }
-    KW_TRY(gpu::upload(ctx, *host_, bytes_of(packed_)));
+    KW_TRY(compute::upload(ctx, *host_, bytes_of(packed_)));
     const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{host_->handle()}};
     set_->bind(ctx, ranges);
     bound_ = true;
@@ -266,8 +268,8 @@ Result<void> BirdLayer::set_world(gpu::VulkanContext& ctx, const birds::BirdWorl
         }
         range.vertices = static_cast<std::uint32_t>(vertices.size()) - range.first_vertex;
     }
-    auto vertex_buffer = gpu::GpuBuffer::create(ctx, std::max<std::uint64_t>(vertices.size() * sizeof(gpu::BirdDrawVertex), 16),
-                                                gpu::GpuBuffer::Kind::Vertex);
+    auto vertex_buffer = compute::Buffer::create(ctx, std::max<std::uint64_t>(vertices.size() * sizeof(gpu::BirdDrawVertex), 16),
+                                                compute::Usage::Vertex);
     if (!vertex_buffer) return vertex_buffer.error();
     vertices_.emplace(std::move(vertex_buffer).value());
     if (!vertices.empty()) std::memcpy(vertices_->mapped(), vertices.data(), vertices.size() * sizeof(gpu::BirdDrawVertex));
@@ -277,14 +279,15 @@ Result<void> BirdLayer::set_world(gpu::VulkanContext& ctx, const birds::BirdWorl
 
 Result<void> BirdLayer::from_backend(gpu::VulkanContext& ctx, const BirdBackend& backend) {
     if (count_ == 0) return {};
-    const gpu::BirdDevicePoses* poses = backend.device_poses();
-    if (poses == nullptr || poses->context != &ctx) {
+    const DeviceData* data = backend.device_data();
+    const DeviceSpan poses = data != nullptr ? data->buffer(DeviceBuffer::BirdPoses) : DeviceSpan{};
+    if (data == nullptr || &data->context() != &ctx || poses.buffer == nullptr) {
         return make_error(Error::Kind::InvalidInput, "the " + std::string(backend.name()) +
                                                          " bird backend has no poses on the renderer's device: pass its poses");
     }
-    const gpu::BufferRange ranges[KW_BIRDS_DRAW_BINDING_COUNT] = {{types_->handle()}, {order_->handle()}, {poses->poses}};
+    const gpu::BufferRange ranges[KW_BIRDS_DRAW_BINDING_COUNT] = {{types_->handle()}, {order_->handle()}, {poses.buffer->handle()}};
     set_->bind(ctx, ranges);
-    first_pose_ = poses->first;
+    first_pose_ = static_cast<std::uint32_t>(poses.first);
     bound_ = true;
     return {};
 }
@@ -303,12 +306,12 @@ Result<void> BirdLayer::from_poses(gpu::VulkanContext& ctx, std::span<const gpu:
         packed_[b] = {p.position, p.rotation[KW_PART_BODY], p.rotation[KW_PART_LEFT_ARM1], p.rotation[KW_PART_LEFT_ARM2]};
     }
     if (!host_poses_) {
-        auto buffer = gpu::GpuBuffer::create(ctx, count_ * sizeof(gpu::BirdPoseGpu), gpu::GpuBuffer::Kind::Storage);
+        auto buffer = compute::Buffer::create(ctx, count_ * sizeof(gpu::BirdPoseGpu), compute::Usage::Storage);
         if (!buffer) return buffer.error();
         host_poses_.emplace(std::move(buffer).value());
         bound_ = false;
     }
-    KW_TRY(gpu::upload(ctx, *host_poses_, bytes_of(packed_)));
+    KW_TRY(compute::upload(ctx, *host_poses_, bytes_of(packed_)));
     const gpu::BufferRange ranges[KW_BIRDS_DRAW_BINDING_COUNT] = {{types_->handle()}, {order_->handle()}, {host_poses_->handle()}};
     set_->bind(ctx, ranges);
     first_pose_ = 0;

@@ -15,7 +15,7 @@
 #include <shared/render.h>
 #include <shared/rods.h>
 
-#include "gpu/gpu_buffer.hpp"
+#include "compute/buffer.hpp"
 #include "gpu/graphics.hpp"
 #include "kodawari/birds/world.hpp"
 #include "kodawari/render/renderer.hpp"
@@ -24,9 +24,9 @@
 namespace kodawari::render {
 
 /// A storage buffer of at least 16 bytes (an empty world still binds one) filled with `bytes`.
-[[nodiscard]] Result<gpu::GpuBuffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes);
+[[nodiscard]] Result<compute::Buffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes);
 /// `slot` becomes a storage buffer holding `bytes` (storage_with).
-[[nodiscard]] Result<void> store(gpu::VulkanContext& ctx, std::optional<gpu::GpuBuffer>& slot, std::span<const std::byte> bytes);
+[[nodiscard]] Result<void> store(gpu::VulkanContext& ctx, std::optional<compute::Buffer>& slot, std::span<const std::byte> bytes);
 
 /// A layer's pipeline: triangle lists, depth tested, the renderer's push constants, and
 /// `storage_buffers` read by the vertex shader.
@@ -60,7 +60,7 @@ private:
     std::optional<gpu::BufferSet> set_;
     const rods::RodWorld* world_ = nullptr;
     ChainStyle style_;
-    std::optional<gpu::GpuBuffer> info_, joint_chain_, host_states_, host_motion_;
+    std::optional<compute::Buffer> info_, joint_chain_, host_states_, host_motion_;
     ChainSnapshot scratch_;
     std::vector<gpu::RodJointMotionGpu> motion_;
     bool bound_ = false, on_device_ = false;
@@ -84,7 +84,7 @@ private:
     std::optional<gpu::GraphicsPipeline> pipeline_;
     std::optional<gpu::BufferSet> set_;
     std::uint32_t count_ = 0;
-    std::optional<gpu::GpuBuffer> host_;
+    std::optional<compute::Buffer> host_;
     std::vector<gpu::RodColliderGpu> packed_;
     bool bound_ = false;
 };
@@ -115,7 +115,7 @@ private:
     std::size_t count_ = 0;
     float min_wingspan_px_ = 0.0f;
     std::array<TypeRange, birds::kWingTypeCount> ranges_{};
-    std::optional<gpu::GpuBuffer> vertices_, types_, order_, host_poses_;
+    std::optional<compute::Buffer> vertices_, types_, order_, host_poses_;
     std::vector<gpu::BirdPoseGpu> packed_;
     std::uint32_t first_pose_ = 0;
     bool bound_ = false;

@@ -14,7 +14,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "gpu/gpu_buffer.hpp"
+#include "compute/buffer.hpp"
 #include "gpu/graphics.hpp"
 #include "render/device_layers.hpp"
 #include "render/skinned_layer.hpp"
@@ -161,7 +161,7 @@ struct Renderer::Impl {
     vk::raii::RenderPass pass{nullptr};
     vk::raii::Framebuffer framebuffer{nullptr};
     std::optional<gpu::GraphicsPipeline> background, lines, triangles;
-    std::optional<gpu::GpuBuffer> vertices, readback;
+    std::optional<compute::Buffer> vertices, readback;
     std::optional<ChainLayer> chains;
     std::optional<ColliderLayer> colliders;
     std::optional<BirdLayer> birds;
@@ -354,7 +354,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     KW_TRY(keep(impl->birds, BirdLayer::create(c, *impl->pass)));
     KW_TRY(keep(impl->skinned, SkinnedLayer::create(c, *impl->pass)));
 
-    auto readback = gpu::GpuBuffer::create(c, vk::DeviceSize{options.width} * options.height * 4, gpu::GpuBuffer::Kind::Readback);
+    auto readback = compute::Buffer::create(c, vk::DeviceSize{options.width} * options.height * 4, compute::Usage::Readback);
     if (!readback) return readback.error();
     impl->readback.emplace(std::move(readback).value());
     return std::unique_ptr<Renderer>(new Renderer(std::move(impl)));
@@ -378,8 +378,8 @@ Result<void> Renderer::Impl::upload(const DrawList& list) {
     // The previous submission has finished (every submission is waited for), so the
     // buffer can be replaced.
     if (!vertices || vertices->size() < bytes) {
-        auto grown = gpu::GpuBuffer::create(c, std::max<vk::DeviceSize>(bytes, vertices ? 2 * vertices->size() : 0),
-                                            gpu::GpuBuffer::Kind::Vertex);
+        auto grown = compute::Buffer::create(c, std::max<vk::DeviceSize>(bytes, vertices ? 2 * vertices->size() : 0),
+                                            compute::Usage::Vertex);
         if (!grown) return grown.error();
         vertices.reset();
         vertices.emplace(std::move(grown).value());

@@ -8,7 +8,7 @@
 
 #include <shared/skin.h>
 
-#include "gpu/device_state.hpp"
+#include "compute/compute.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "render/device_layers.hpp"
 
@@ -137,16 +137,16 @@ Result<void> SkinnedLayer::set_scene(gpu::VulkanContext& ctx, const RodScene* sc
         KW_TRY(store(ctx, ch.joints, bytes_of(joints)));
         // One storage buffer of every instance's node matrices (range-checked).
         const std::uint64_t world_bytes[] = {std::uint64_t{ch.nodes} * ch.instances.size() * sizeof(gpu::PoseMatrixGpu)};
-        auto world = gpu::create_storage_buffers(ctx, world_bytes, "the skinned meshes of " + rig.source);
+        auto world = compute::create_storage_buffers(ctx, world_bytes, "the skinned meshes of " + rig.source);
         if (!world) return world.error();
         ch.world.emplace(std::move(world.value()[0]));
-        auto vertex_buffer = gpu::GpuBuffer::create(
-            ctx, std::max<std::uint64_t>(vertices.size() * sizeof(gpu::SkinnedVertexGpu), 16), gpu::GpuBuffer::Kind::Vertex);
+        auto vertex_buffer = compute::Buffer::create(
+            ctx, std::max<std::uint64_t>(vertices.size() * sizeof(gpu::SkinnedVertexGpu), 16), compute::Usage::Vertex);
         if (!vertex_buffer) return vertex_buffer.error();
         ch.vertex_buffer.emplace(std::move(vertex_buffer).value());
         if (!vertices.empty()) std::memcpy(ch.vertex_buffer->mapped(), vertices.data(), vertices.size() * sizeof(gpu::SkinnedVertexGpu));
         auto index_buffer =
-            gpu::GpuBuffer::create(ctx, std::max<std::uint64_t>(indices.size() * sizeof(std::uint32_t), 16), gpu::GpuBuffer::Kind::Vertex);
+            compute::Buffer::create(ctx, std::max<std::uint64_t>(indices.size() * sizeof(std::uint32_t), 16), compute::Usage::Vertex);
         if (!index_buffer) return index_buffer.error();
         ch.index_buffer.emplace(std::move(index_buffer).value());
         if (!indices.empty()) std::memcpy(ch.index_buffer->mapped(), indices.data(), indices.size() * sizeof(std::uint32_t));
@@ -164,10 +164,10 @@ Result<void> SkinnedLayer::from_backends(gpu::VulkanContext& ctx, const CrowdAni
                                          std::uint32_t frame) {
     assert(scene_ != nullptr && "set_scene() first");
     if (characters_.empty()) return {};
-    const gpu::RodDeviceState* state = rods.device_state();
-    bool device = state != nullptr && state->context == &ctx;
+    const DeviceData* state = rods.device_data();
+    bool device = state != nullptr && &state->context() == &ctx;
     const std::vector<CrowdAnimator::PosedCharacter> posed = animator.posed_characters();
-    std::vector<const gpu::PoseDeviceWorld*> worlds;
+    std::vector<DeviceSpan> worlds;
     for (const Character& ch : characters_) {
         const auto it = std::find_if(posed.begin(), posed.end(), [&](const auto& p) { return p.character == ch.character; });
         if (it == posed.end() || !std::ranges::equal(it->instances, ch.instances)) {
@@ -175,9 +175,10 @@ Result<void> SkinnedLayer::from_backends(gpu::VulkanContext& ctx, const CrowdAni
                                                              scene_->characters[ch.character].name +
                                                              " the renderer draws: make it from the scene given to set_skinned()");
         }
-        const gpu::PoseDeviceWorld* world = it->backend->device_world();
-        device = device && world != nullptr && world->context == &ctx && world->instances == ch.instances.size() &&
-                 world->nodes == ch.nodes;
+        const DeviceData* poses = it->backend->device_data();
+        const DeviceSpan world = poses != nullptr ? poses->buffer(DeviceBuffer::PoseWorld) : DeviceSpan{};
+        device = device && world.buffer != nullptr && &poses->context() == &ctx && world.items == ch.instances.size() &&
+                 world.per_item == ch.nodes;
         worlds.push_back(world);
     }
     if (!device) {
@@ -187,20 +188,20 @@ Result<void> SkinnedLayer::from_backends(gpu::VulkanContext& ctx, const CrowdAni
     for (std::size_t k = 0; k < characters_.size(); ++k) {
         Character& ch = characters_[k];
         if (!ch.kernel) {
-            const vk::DescriptorType types[KW_SKIN_BINDING_COUNT] = {
-                vk::DescriptorType::eStorageBuffer, vk::DescriptorType::eStorageBuffer, vk::DescriptorType::eStorageBuffer,
-                vk::DescriptorType::eStorageBuffer, vk::DescriptorType::eStorageBuffer, vk::DescriptorType::eStorageBuffer,
-                vk::DescriptorType::eStorageBuffer};
-            auto kernel = gpu::ComputePipeline::create(ctx, "skin_nodes", types, sizeof(gpu::SkinPush));
+            const std::vector<compute::Binding> types(KW_SKIN_BINDING_COUNT, compute::Binding::Storage);
+            auto kernel = compute::Kernel::create(ctx, "skin_nodes", types, sizeof(gpu::SkinPush));
             if (!kernel) return kernel.error();
             ch.kernel.emplace(std::move(kernel).value());
         }
         // Bound every frame: a backend may replace its buffers (load()).
-        const gpu::BufferRange buffers[KW_SKIN_BINDING_COUNT] = {{ch.walk->handle()},   {ch.instance_chains->handle()},
-                                                                 {worlds[k]->world},     {state->chain_states},
-                                                                 {state->motion},        {state->spin},
-                                                                 {ch.world->handle()}};
-        ch.kernel->bind(ctx, buffers);
+        const compute::BufferView buffers[KW_SKIN_BINDING_COUNT] = {{&*ch.walk},
+                                                                    {&*ch.instance_chains},
+                                                                    {worlds[k].buffer},
+                                                                    {state->buffer(DeviceBuffer::RodChainStates).buffer},
+                                                                    {state->buffer(DeviceBuffer::RodMotion).buffer},
+                                                                    {state->buffer(DeviceBuffer::RodSpin).buffer},
+                                                                    {&*ch.world}};
+        ch.kernel->bind(buffers);
         ch.filled = ch.dispatch = true;
     }
     on_device_ = true;
@@ -221,7 +222,7 @@ Result<void> SkinnedLayer::from_snapshot(gpu::VulkanContext& ctx, const ChainSna
             scene_->rigged_world(ch.instances[i], frame, snapshot.positions, snapshot.orientations, pose_, matrices_);
             for (std::size_t n = 0; n < ch.nodes; ++n) packed_[i * ch.nodes + n] = packed(matrices_[n]);
         }
-        KW_TRY(gpu::upload(ctx, *ch.world, bytes_of(packed_)));
+        KW_TRY(compute::upload(ctx, *ch.world, bytes_of(packed_)));
         ch.filled = true;
         ch.dispatch = false;
     }

@@ -13,8 +13,8 @@
 #include <shared/poses.h>
 #include <shared/render.h>
 
-#include "gpu/compute_pipeline.hpp"
-#include "gpu/gpu_buffer.hpp"
+#include "compute/kernel.hpp"
+#include "compute/buffer.hpp"
 #include "gpu/graphics.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -52,9 +52,9 @@ private:
         std::uint32_t character = 0;           // RodScene::characters index
         std::vector<std::uint32_t> instances;  // RodScene::instances indices, ascending (CrowdAnimator's order)
         std::uint32_t nodes = 0, chains = 0, indices = 0;
-        std::optional<gpu::GpuBuffer> vertex_buffer, index_buffer, joints, walk, instance_chains, world;
+        std::optional<compute::Buffer> vertex_buffer, index_buffer, joints, walk, instance_chains, world;
         std::optional<gpu::BufferSet> set;
-        std::optional<gpu::ComputePipeline> kernel;  // made on the first device frame
+        std::optional<compute::Kernel> kernel;  // made on the first device frame
         bool filled = false;                         // world holds a frame's matrices
         bool dispatch = false;                       // the kernel composes them each frame drawn
     };

@@ -18,7 +18,7 @@ Result<ChainTemplate> make_chain_template(std::string name, const ChainShape& ba
                                           std::span<const ViewExample> views, float thickness, float mass,
                                           const SolverParams& params) {
     const std::string where = "chain '" + name + "': ";
-    auto with_name = [&](const Error& e) { return Error{e.kind, where + e.message}; };
+    auto with_name = [&](const Error& e) { return make_error(e.kind, where + e.message); };
     if (example_shapes.size() != views.size()) {
         return bad(where + "expected one shape per view example");
     }

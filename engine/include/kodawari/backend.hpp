@@ -11,13 +11,13 @@
 #include <vector>
 
 #include "birds/world.hpp"
+#include "device_data.hpp"
 #include "result.hpp"
 
 namespace kodawari {
 
 namespace gpu {
 class VulkanContext;
-struct BirdDevicePoses;
 }
 
 /// Which implementation runs the simulation.
@@ -71,10 +71,11 @@ public:
     /// Validation messages seen so far (Vulkan with validation on; 0 otherwise).
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
 
-    /// Where the last simulated frame's poses live on a Vulkan device (the vulkan backend
-    /// after simulate(); null otherwise), also when simulate() was given no output:
-    /// render::Renderer draws the birds from them without reading them back.
-    [[nodiscard]] virtual const gpu::BirdDevicePoses* device_poses() const { return nullptr; }
+    /// The backend's data on its device (the vulkan backend; null otherwise): after
+    /// simulate(), DeviceBuffer::BirdPoses holds the last simulated frame's poses, also
+    /// when simulate() was given no output; render::Renderer draws the birds from them
+    /// without reading them back.
+    [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }
 };
 
 /// Opens a Vulkan device (`options.device`, `options.validation`) to share between

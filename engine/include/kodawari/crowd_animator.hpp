@@ -36,7 +36,7 @@ public:
 
     /// From now on the rigged characters' reference joints, chain roots and colliders are
     /// written on the device by shaders/rod_inputs.comp straight into `rods`'s input
-    /// buffers at each of its steps (RodBackend::set_input_writer), and frame() evaluates
+    /// buffers at each of its steps (the vulkan rod backend's input writer), and frame() evaluates
     /// their clips without reading them back: those entries of its RodFrame are then not
     /// this frame's (they keep what `out` held; host_frame() gives them). Needs the vulkan
     /// pose backends and `rods` (the vulkan rod backend, loaded) on the one device of

@@ -21,10 +21,6 @@
 
 namespace kodawari {
 
-namespace gpu {
-struct PoseDeviceWorld;
-}
-
 /// One instance of a rigged character in a crowd.
 struct PoseInstance {
     rods::Transform placement;   ///< the instance's transform (world = placement * node world)
@@ -80,9 +76,10 @@ public:
     /// Validation messages seen so far (Vulkan with validation on; 0 otherwise).
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
 
-    /// Where the world matrices live on a Vulkan device (the vulkan backend after
-    /// evaluate(); null otherwise), for kernels and shaders that use them there.
-    [[nodiscard]] virtual const gpu::PoseDeviceWorld* device_world() const { return nullptr; }
+    /// The backend's data on its device (the vulkan backend; null otherwise): after
+    /// evaluate(), DeviceBuffer::PoseWorld holds the world matrices, for kernels and
+    /// shaders that use them there.
+    [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }
 };
 
 /// Creates a pose backend; Vulkan fails with a readable reason when no loader, driver or

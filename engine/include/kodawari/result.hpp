@@ -8,6 +8,7 @@
 #include <string>
 #include <utility>
 #include <variant>
+#include <vector>
 
 namespace kodawari {
 
@@ -18,11 +19,22 @@ struct Error {
     enum class Kind { InvalidInput, Io, Vulkan, Unsupported, Internal };
     Kind kind = Kind::Internal;
     std::string message;
+    /// The VkResult a Vulkan call returned (0, VK_SUCCESS, when the error did not come from
+    /// one), as an int so that this header names no Vulkan type: a caller can tell
+    /// VK_ERROR_OUT_OF_DEVICE_MEMORY (-2) from VK_ERROR_DEVICE_LOST (-4) without parsing
+    /// the message, as vk-bootstrap's errors allow.
+    int vk_result = 0;
+    /// When no device could be chosen: why each one was passed over
+    /// ("llvmpipe (LLVM 15.0.6, 256 bits): no compute queue").
+    std::vector<std::string> rejected_devices{};
 };
 
 /// Builds an Error of the given kind.
 [[nodiscard]] inline Error make_error(Error::Kind kind, std::string message) {
-    return Error{kind, std::move(message)};
+    Error error;
+    error.kind = kind;
+    error.message = std::move(message);
+    return error;
 }
 
 /// A value or an Error. Check with `ok()` (or `if (result)`) before `value()`.

@@ -15,11 +15,6 @@
 
 namespace kodawari {
 
-namespace gpu {
-struct RodDeviceState;
-class RodInputWriter;
-}
-
 /// What a caller reads back after a frame. Per-joint arrays hold RodWorld::joint_count
 /// entries, chain c's joints from chains[c].joint_begin.
 struct ChainSnapshot {
@@ -63,18 +58,10 @@ public:
     /// Validation messages seen so far (Vulkan with validation on; 0 otherwise).
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
 
-    /// Where the state lives on a Vulkan device (the vulkan backend after load(); null
-    /// otherwise): render::Renderer draws the chains from it without reading it back.
-    [[nodiscard]] virtual const gpu::RodDeviceState* device_state() const { return nullptr; }
-
-    /// Part of each step's kinematic input written on the device instead of taken from
-    /// the frame (CrowdAnimator::write_inputs_on: rigged characters posed on the GPU); null
-    /// removes it. The vulkan backend only: false elsewhere. The backend shares ownership,
-    /// so the writer and what it reads stay alive while the backend may step.
-    [[nodiscard]] virtual bool set_input_writer(std::shared_ptr<const gpu::RodInputWriter> writer) {
-        (void)writer;
-        return false;
-    }
+    /// The backend's data on its device (the vulkan backend; null otherwise): after
+    /// load(), the Rod* buffers of DeviceBuffer (state and this frame's input);
+    /// render::Renderer draws the chains from them without reading them back.
+    [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }
 };
 
 /// Creates a rod backend; Vulkan fails with a readable reason when no loader, driver or

@@ -1,0 +1,55 @@
+#pragma once
+// The vulkan backends' engine-internal side, written against the compute layer: the
+// device they run on, recording a step into a caller's recording (so that several
+// domains' work goes into one submission), and kinematic input written on the device.
+
+#include <cstdint>
+#include <memory>
+
+#include "compute/compute.hpp"
+#include "kodawari/backend.hpp"
+#include "kodawari/rod_backend.hpp"
+
+namespace kodawari {
+
+/// The device a vulkan backend runs on: `options.context` when set (shared with a
+/// renderer; never destroyed by the backend while others hold it), else a new compute
+/// device for `options.device` and `options.validation`.
+[[nodiscard]] Result<std::shared_ptr<compute::Device>> backend_context(const BackendOptions& options);
+
+/// Records kernels that write part of a step's kinematic input where the vulkan rod
+/// backend keeps it: after the frame's input has been written, before the step's
+/// dispatch, in the same recording. `rods` is the rod backend's device data.
+class RodInputWriter {
+public:
+    virtual ~RodInputWriter() = default;
+    virtual void record(compute::Recording& recording, const DeviceData& rods) const = 0;
+};
+
+/// What the vulkan rod backend adds to RodBackend inside the engine.
+class DeviceRodBackend {
+public:
+    virtual ~DeviceRodBackend() = default;
+    /// Part of each step's kinematic input written on the device instead of taken from
+    /// the frame (CrowdAnimator::write_inputs_on); null removes it. Shared ownership: the
+    /// writer and what it reads stay alive while the backend may step.
+    virtual void set_input_writer(std::shared_ptr<const RodInputWriter> writer) = 0;
+    /// step() without submitting or waiting: records the frame's input writes and the
+    /// step's dispatch into `recording` (a recording of this backend's device). Where the
+    /// input buffers are mapped, the input is written now, so the recording must be
+    /// submitted (and complete) before the next record_step or step. The state is the
+    /// new frame's once the caller's submission completed.
+    [[nodiscard]] virtual Result<void> record_step(compute::Recording& recording, const rods::RodFrame& frame) = 0;
+};
+
+/// What the vulkan bird backend adds to BirdBackend inside the engine.
+class DeviceBirdBackend {
+public:
+    virtual ~DeviceBirdBackend() = default;
+    /// simulate(frames, {}) without submitting or waiting: records the dispatch of the
+    /// next `frames` frames into `recording` (a recording of this backend's device);
+    /// DeviceBuffer::BirdPoses is the last of them once the caller's submission completed.
+    [[nodiscard]] virtual Result<void> record_simulate(compute::Recording& recording, std::uint32_t frames) = 0;
+};
+
+}  // namespace kodawari

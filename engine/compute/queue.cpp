@@ -1,0 +1,206 @@
+#include "compute/queue.hpp"
+
+#include <cassert>
+#include <cstring>
+
+namespace kodawari::compute {
+namespace {
+
+struct Access {
+    vk::PipelineStageFlags stages;
+    vk::AccessFlags access;
+};
+
+Access source(Stage s) {
+    Access a;
+    if (has(s, Stage::Compute)) a = {a.stages | vk::PipelineStageFlagBits::eComputeShader, a.access | vk::AccessFlagBits::eShaderWrite};
+    if (has(s, Stage::Transfer)) a = {a.stages | vk::PipelineStageFlagBits::eTransfer, a.access | vk::AccessFlagBits::eTransferWrite};
+    if (has(s, Stage::Host)) a = {a.stages | vk::PipelineStageFlagBits::eHost, a.access | vk::AccessFlagBits::eHostWrite};
+    // Reads only: later writes wait for them (an execution dependency, no access).
+    if (has(s, Stage::Vertex)) a.stages |= vk::PipelineStageFlagBits::eVertexShader;
+    return a;
+}
+
+Access destination(Stage s) {
+    Access a;
+    if (has(s, Stage::Compute)) {
+        a = {a.stages | vk::PipelineStageFlagBits::eComputeShader,
+             a.access | vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
+    }
+    if (has(s, Stage::Transfer)) {
+        a = {a.stages | vk::PipelineStageFlagBits::eTransfer, a.access | vk::AccessFlagBits::eTransferRead | vk::AccessFlagBits::eTransferWrite};
+    }
+    if (has(s, Stage::Host)) a = {a.stages | vk::PipelineStageFlagBits::eHost, a.access | vk::AccessFlagBits::eHostRead};
+    if (has(s, Stage::Vertex)) a = {a.stages | vk::PipelineStageFlagBits::eVertexShader, a.access | vk::AccessFlagBits::eShaderRead};
+    return a;
+}
+
+}  // namespace
+
+Recording::Recording(Recording&& other) noexcept
+    : device_(std::exchange(other.device_, nullptr)), slot_(std::move(other.slot_)), kept_(std::move(other.kept_)) {}
+
+Recording& Recording::operator=(Recording&& other) noexcept {
+    if (this != &other) {
+        release();
+        device_ = std::exchange(other.device_, nullptr);
+        slot_ = std::move(other.slot_);
+        kept_ = std::move(other.kept_);
+    }
+    return *this;
+}
+
+Recording::~Recording() { release(); }
+
+void Recording::release() {
+    // Never submitted: nothing runs, the command buffer is reset at its next begin().
+    if (device_ != nullptr) device_->release_slot(std::move(slot_));
+    device_ = nullptr;
+    kept_.clear();
+}
+
+void Recording::timestamp(Timestamp which) {
+    device_->write_timestamp(slot_.cmd, which == Timestamp::Begin ? 0 : 1,
+                             which == Timestamp::Begin ? vk::PipelineStageFlagBits::eTopOfPipe
+                                                       : vk::PipelineStageFlagBits::eBottomOfPipe);
+}
+
+Submission::Submission(Recording recording)
+    : device_(std::exchange(recording.device_, nullptr)), slot_(std::move(recording.slot_)), kept_(std::move(recording.kept_)) {}
+
+Submission::Submission(Submission&& other) noexcept
+    : device_(std::exchange(other.device_, nullptr)), slot_(std::move(other.slot_)), kept_(std::move(other.kept_)) {}
+
+Submission& Submission::operator=(Submission&& other) noexcept {
+    if (this != &other) {
+        (void)wait();
+        device_ = std::exchange(other.device_, nullptr);
+        slot_ = std::move(other.slot_);
+        kept_ = std::move(other.kept_);
+    }
+    return *this;
+}
+
+Submission::~Submission() { (void)wait(); }
+
+Result<void> Submission::wait(double* gpu_ms) {
+    if (gpu_ms != nullptr) *gpu_ms = -1.0;
+    if (device_ == nullptr) return {};
+    Device& device = *device_;
+    auto waited = guard("Vulkan submission", [&]() -> Result<void> {
+        constexpr std::uint64_t kTimeoutNs = 600ull * 1000 * 1000 * 1000;
+        if (device.device().waitForFences(*slot_.fence, VK_TRUE, kTimeoutNs) != vk::Result::eSuccess) {
+            Error error = make_error(Error::Kind::Vulkan, "the GPU did not finish within 600 s");
+            error.vk_result = static_cast<int>(vk::Result::eTimeout);
+            return error;
+        }
+        if (gpu_ms != nullptr) *gpu_ms = device.timestamp_ms();
+        return {};
+    });
+    if (!waited) return waited;  // still pending: the destructor must not free what runs
+    device_ = nullptr;
+    device.release_slot(std::move(slot_));
+    kept_.clear();
+    return {};
+}
+
+Result<Recording> Queue::begin() const {
+    auto slot = device_->acquire_slot();
+    if (!slot) return slot.error();
+    Recording recording(*device_, std::move(slot).value());
+    return guard("Vulkan recording", [&]() -> Result<Recording> {
+        recording.slot_.cmd.reset();
+        recording.slot_.cmd.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
+        if (const auto& pool = device_->timestamp_pool(); static_cast<VkQueryPool>(*pool) != VK_NULL_HANDLE) {
+            recording.slot_.cmd.resetQueryPool(*pool, 0, 2);
+        }
+        return std::move(recording);
+    });
+}
+
+Result<Submission> Queue::submit(Recording recording) const {
+    assert(recording.device_ == device_ && "a recording of this queue's device");
+    return guard("Vulkan submission", [&]() -> Result<Submission> {
+        recording.slot_.cmd.end();
+        device_->device().resetFences(*recording.slot_.fence);
+        const vk::CommandBuffer cmd = *recording.slot_.cmd;
+        device_->queue().submit(vk::SubmitInfo{.commandBufferCount = 1, .pCommandBuffers = &cmd}, *recording.slot_.fence);
+        return Submission(std::move(recording));
+    });
+}
+
+void barrier(Recording& recording, Stage before, Stage after) {
+    const Access src = source(before);
+    const Access dst = destination(after);
+    const vk::MemoryBarrier memory{.srcAccessMask = src.access, .dstAccessMask = dst.access};
+    recording.vulkan().pipelineBarrier(src.stages, dst.stages, {}, memory, {}, {});
+}
+
+void copy(Recording& recording, const Buffer& source, std::uint64_t source_offset, const Buffer& target,
+          std::uint64_t target_offset, std::uint64_t bytes) {
+    recording.vulkan().copyBuffer(source.handle(), target.handle(),
+                                  vk::BufferCopy{.srcOffset = source_offset, .dstOffset = target_offset, .size = bytes});
+}
+
+Result<void> upload(Recording& recording, const Buffer& buffer, std::span<const std::byte> bytes) {
+    assert(bytes.size() <= buffer.size());
+    if (bytes.empty()) return {};
+    if (buffer.mapped() != nullptr) {
+        std::memcpy(buffer.mapped(), bytes.data(), bytes.size());
+        return {};
+    }
+    auto staging = Buffer::create(recording.device(), bytes.size(), Usage::Upload);
+    if (!staging) return staging.error();
+    std::memcpy(staging.value().mapped(), bytes.data(), bytes.size());
+    // Earlier kernels of this recording may still read (or write) the buffer.
+    barrier(recording, Stage::Compute, Stage::Transfer);
+    copy(recording, staging.value(), 0, buffer, 0, bytes.size());
+    // The kernels read what the copy wrote.
+    barrier(recording, Stage::Transfer, Stage::Compute);
+    recording.keep(std::move(staging).value());
+    return {};
+}
+
+Result<void> upload(Device& device, const Buffer& buffer, std::span<const std::byte> bytes) {
+    if (bytes.empty()) return {};
+    if (buffer.mapped() != nullptr) {
+        assert(bytes.size() <= buffer.size());
+        std::memcpy(buffer.mapped(), bytes.data(), bytes.size());
+        return {};
+    }
+    const Queue queue(device);
+    auto recording = queue.begin();
+    if (!recording) return recording.error();
+    KW_TRY(upload(recording.value(), buffer, bytes));
+    auto submission = queue.submit(std::move(recording).value());
+    if (!submission) return submission.error();
+    return submission.value().wait();
+}
+
+Result<void> download(Device& device, const Buffer& buffer, std::span<std::byte> bytes) {
+    assert(bytes.size() <= buffer.size());
+    if (bytes.empty()) return {};
+    device.count_read_back(bytes.size());
+    if (buffer.mapped() != nullptr) {
+        KW_TRY(buffer.invalidate(device));
+        std::memcpy(bytes.data(), buffer.mapped(), bytes.size());
+        return {};
+    }
+    auto staging = Buffer::create(device, bytes.size(), Usage::Readback);
+    if (!staging) return staging.error();
+    const Queue queue(device);
+    auto recording = queue.begin();
+    if (!recording) return recording.error();
+    // The kernels wrote what the copy reads; the host then reads the copy.
+    barrier(recording.value(), Stage::Compute, Stage::Transfer);
+    copy(recording.value(), buffer, 0, staging.value(), 0, bytes.size());
+    barrier(recording.value(), Stage::Transfer, Stage::Host);
+    auto submission = queue.submit(std::move(recording).value());
+    if (!submission) return submission.error();
+    KW_TRY(submission.value().wait());
+    KW_TRY(staging.value().invalidate(device));
+    std::memcpy(bytes.data(), staging.value().mapped(), bytes.size());
+    return {};
+}
+
+}  // namespace kodawari::compute
