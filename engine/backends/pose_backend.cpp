@@ -1,30 +1,13 @@
-// What every pose backend shares: the clip time, the placement matrix, the checks of the
-// instances, and the choice of backend.
+// What every pose backend shares: the checks of the instances and the choice of backend
+// (the clip time and the placement matrix: gltf/pose_instance.cpp).
 #include <algorithm>
 #include <cmath>
 #include <iterator>
 #include <string>
 
-#include <glm/gtc/matrix_transform.hpp>
-
 #include "backends/pose_backends.hpp"
 
 namespace kodawari {
-
-float clip_time(const gltf::Animation& clip, const PoseInstance& instance, float time) {
-    const float t = time + instance.time_offset;
-    if (!instance.loop) return t;
-    const float d = clip.end - clip.start;
-    if (d == 0.0f) return clip.start;
-    // shaders/pose_eval.comp computes the same expression with the same roundings (its
-    // division in integer arithmetic, correctly rounded like this one); this library
-    // builds with -ffp-contract=off, so d * floor(...) is not fused into the subtraction.
-    return clip.start + (t - clip.start) - d * std::floor((t - clip.start) / d);
-}
-
-glm::mat4 placement_matrix(const rods::Transform& placement) {
-    return glm::translate(glm::mat4(1.0f), placement.position) * glm::mat4_cast(placement.rotation);
-}
 
 Result<void> check_instances(const gltf::Character& character, std::span<const PoseInstance> instances) {
     const std::size_t clips = character.animations.size();

@@ -1,6 +1,6 @@
 #pragma once
-// Pieces shared by the glTF writers (gltf_birds.cpp, gltf_chains.cpp): simple flat-shaded
-// meshes, the model's single buffer, accessors, and streaming a .glb into an AtomicFile.
+// Pieces shared by the glTF writers (gltf_birds.cpp, gltf_chains.cpp): meshes, the
+// model's single buffer, accessors, and streaming a .glb into an AtomicFile.
 
 #include <array>
 #include <functional>
@@ -11,6 +11,7 @@
 
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
+#include "core/flat_mesh.hpp"
 #include "kodawari/atomic_file.hpp"
 #include "kodawari/result.hpp"
 
@@ -22,23 +23,10 @@ using Quat = std::array<float, 4>;
 inline constexpr int kArrayBuffer = TINYGLTF_TARGET_ARRAY_BUFFER;
 inline constexpr int kElementArrayBuffer = TINYGLTF_TARGET_ELEMENT_ARRAY_BUFFER;
 
-/// A triangle mesh with one normal per triangle (flat shading: each triangle has its
-/// own three vertices).
-struct MeshData {
-    std::vector<Vec3> positions;
-    std::vector<Vec3> normals;
-    std::vector<std::uint16_t> indices;
-};
-
-/// Adds the triangles of a convex solid, each turned so that its normal points away
-/// from the solid's centre.
-void add_convex_triangles(MeshData& mesh, const std::vector<Vec3>& corners, const std::vector<std::array<int, 3>>& triangles);
-
-/// A hexahedron from its 8 corners, indexed x + 2y + 4z (bit set = the "high" side).
-[[nodiscard]] MeshData hexahedron(const std::array<Vec3, 8>& c);
-
-/// An axis-aligned box from its lower and upper corner.
-[[nodiscard]] MeshData box(const Vec3& lo, const Vec3& hi);
+// The meshes the writers add are the flat meshes of core/flat_mesh.hpp (shared with the
+// birds' part geometry and the renderer).
+using core::MeshData;
+using core::box;
 
 /// Writes into the one buffer of the model; every block starts 4-byte aligned.
 class BufferWriter {

@@ -7,7 +7,7 @@
 
 #include <glm/gtc/packing.hpp>
 
-#include "export/bird_meshes.hpp"
+#include "birds/bird_meshes.hpp"
 #include "compute/compute.hpp"
 
 namespace kodawari::render {
@@ -253,7 +253,7 @@ Result<void> BirdLayer::set_world(gpu::VulkanContext& ctx, const birds::BirdWorl
         type.color = {color[0], color[1], color[2], birds::wing_type_spec(wing).wingspan};
         range.first_vertex = static_cast<std::uint32_t>(vertices.size());
         for (std::size_t k = 0; k < birds::kPartCount; ++k) {
-            const gltf::MeshData& mesh = meshes[k];
+            const core::MeshData& mesh = meshes[k];
             const auto at = [&](std::uint16_t i) {
                 const auto& v = mesh.positions[i];
                 return glm::vec3(v[0], v[1], v[2]);

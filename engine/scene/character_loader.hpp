@@ -4,7 +4,9 @@
 /// and the moving camera. Used by scene_loader.cpp; errors follow its style (file, JSON
 /// path, what was expected).
 
+#include <array>
 #include <functional>
+#include <numbers>
 #include <string>
 #include <vector>
 
@@ -21,12 +23,30 @@ inline constexpr std::uint64_t kMaxChainInstances = 1'000'000;
 /// The most joints, chains and motions of one character (colliders:
 /// rods::kMaxChainColliders).
 inline constexpr std::size_t kMaxPerCharacter = 64;
+/// The ranges of the values the loaders read (shared so that every file checks alike).
+inline constexpr double kDegToRad = std::numbers::pi / 180.0;
+inline constexpr double kMaxCoordinate = 1e6;  // world positions (m), as the bird loader
+inline constexpr double kMaxLocal = 1000.0;    // offsets inside a character (m)
+inline constexpr double kMaxShape = 100.0;     // chain shape coordinates (m)
+inline constexpr double kMaxTime = 1e5;        // motion times (s)
 
 // Readers shared by the procedural characters (character_loader.cpp) and the rigged
 // ones (rigged_character_loader.cpp); each reports errors at the node's JSON path.
 
+/// A point as the scene stores it (CameraSpec's arrays) as a vector.
+[[nodiscard]] glm::vec3 to_vec(const std::array<float, 3>& a);
 /// [x, y, z], each coordinate in [-limit, limit].
 [[nodiscard]] Result<glm::vec3> read_point(const JsonReader& r, const JsonNode& node, double limit);
+/// A direction: any finite non-zero vector, normalized.
+[[nodiscard]] Result<glm::vec3> read_direction(const JsonReader& r, const JsonNode& node);
+/// An angle in degrees within `range`, returned in radians.
+[[nodiscard]] Result<float> read_degrees(const JsonReader& r, const JsonNode& node, const NumberRange& range);
+/// A time in s, in [0, kMaxTime].
+[[nodiscard]] Result<float> read_time(const JsonReader& r, const JsonNode& node);
+/// {"position": [x, y, z], "rotation": {"axis": [...], "angle_deg": a}}, both optional.
+[[nodiscard]] Result<rods::Transform> read_transform(const JsonReader& r, const JsonNode& node);
+/// The index of the joint called `name`, or an error at `node` listing the joints.
+[[nodiscard]] Result<std::uint32_t> find_joint(const JsonReader& r, const JsonNode& node, const rods::Skeleton& skeleton);
 /// A name that may become part of "bunny#12/ear_l": non-empty, no '#' or '/'.
 [[nodiscard]] Result<std::string> read_name(const JsonReader& r, const JsonNode& node);
 /// An array of min..max elements; `what` describes a valid one.
@@ -56,6 +76,12 @@ inline constexpr std::size_t kMaxPerCharacter = 64;
 /// Builds the chain's template once, so that a bad shape is reported where it is written.
 [[nodiscard]] Result<void> check_template(const JsonReader& r, const JsonNode& node, const ChainSpec& chain);
 
+/// A chain of a procedural character on a joint of `skeleton`, its physics over
+/// `defaults`; appended to `chains`, with its mirrored copy when it names one
+/// (chain_loader.cpp).
+[[nodiscard]] Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::Skeleton& skeleton,
+                                      const rods::SolverParams& defaults, std::vector<ChainSpec>& chains);
+
 /// A character with `gltf` (docs/scene-format.md, "Rigged characters"): the file loaded
 /// relative to the scene's folder, chains by node names with base shapes from its rest
 /// pose, colliders on its nodes.
@@ -67,7 +93,8 @@ inline constexpr std::size_t kMaxPerCharacter = 64;
                                            Scene& scene);
 
 /// Reads the camera's version-2 keys (`projection`, `orbit`, `path`, `keyframes`) into
-/// camera.motion, after read_camera has read `position`, `target` and `fov_deg`.
+/// camera.motion, after read_camera has read `position`, `target` and `fov_deg`
+/// (camera_loader.cpp).
 [[nodiscard]] Result<void> read_camera_motion(const JsonReader& r, const JsonNode& node, CameraSpec& camera);
 
 }  // namespace kodawari::scene_detail

@@ -11,7 +11,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include <kodawari/pose_backend.hpp>
+#include <kodawari/gltf/pose_instance.hpp>
 #include <kodawari/rod_scene.hpp>
 #include <kodawari/rods/shape.hpp>
 

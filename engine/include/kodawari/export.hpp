@@ -19,8 +19,8 @@
 #include "birds/world.hpp"
 #include "gltf/character.hpp"
 #include "result.hpp"
-#include "rod_backend.hpp"
 #include "rod_scene.hpp"
+#include "rods/chain_snapshot.hpp"
 
 namespace kodawari {
 

@@ -16,29 +16,12 @@
 
 #include "backend.hpp"
 #include "gltf/character.hpp"
+#include "gltf/pose_instance.hpp"
 #include "result.hpp"
 #include "rods/solver.hpp"
 
 namespace kodawari {
 
-/// One instance of a rigged character in a crowd.
-struct PoseInstance {
-    rods::Transform placement;   ///< the instance's transform (world = placement * node world)
-    std::int32_t clip = -1;      ///< index into Character::animations; -1 = rest pose
-    float time_offset = 0.0f;    ///< s, added to the scene time
-    bool loop = true;            ///< wrap the clip time into [start, end] (see clip_time)
-};
-
-/// The time an instance samples its clip at for scene time `time`: t = time + time_offset;
-/// looping: start + (t - start) - d * floor((t - start) / d) with d = end - start
-/// (d == 0: start); not looping: t (gltf::sample() clamps). Exactly this float formula
-/// (IEEE single precision, correctly rounded, evaluated left to right without
-/// contraction) on every backend, so every backend wraps at the same scene times.
-[[nodiscard]] float clip_time(const gltf::Animation& clip, const PoseInstance& instance, float time);
-
-/// The matrix of an instance's placement: translate(position) * mat4_cast(rotation).
-/// Every backend applies this very matrix.
-[[nodiscard]] glm::mat4 placement_matrix(const rods::Transform& placement);
 
 /// Checks instances against a character: every clip is -1 or an animation of it, every
 /// time offset and placement is finite. Errors name the instance ("instance 17: clip 3

@@ -11,20 +11,11 @@
 
 #include "backend.hpp"
 #include "result.hpp"
+#include "rods/chain_snapshot.hpp"
 #include "rods/world.hpp"
 
 namespace kodawari {
 
-/// What a caller reads back after a frame. Per-joint arrays hold RodWorld::joint_count
-/// entries, chain c's joints from chains[c].joint_begin.
-struct ChainSnapshot {
-    std::vector<glm::vec3> positions;        ///< world
-    std::vector<glm::quat> orientations;     ///< world, the particles' own
-    std::vector<glm::vec3> rest;             ///< the blended rest shape of the frame, placed by the chain root (world)
-    std::vector<glm::vec3> view_directions;  ///< per chain: d, in its reference joint's frame (SPEC A.3)
-    /// Per chain, rods::kMaxViewExamples + 1 entries: w_0 (the base's) .. w_m, then zeros.
-    std::vector<float> weights;
-};
 
 /// Simulates a RodWorld frame after frame.
 class RodBackend {

@@ -405,7 +405,7 @@ TEST(RiggedScene, ExportRoundTripsTheSimulation) {
 // The frame input with the clips on each pose backend (CrowdAnimator) against
 // RodScene::frame's CPU evaluation: the CPU backends give the same bits; the GPU within
 // 1e-5 m (its interpolation runs in float, in another order: about 1e-6 of the size,
-// test_pose_backends.cpp). 37 instances: not a multiple of the workgroup size.
+// backends/test_pose_backends.cpp). 37 instances: not a multiple of the workgroup size.
 TEST(RiggedScene, CrowdAnimatorMatchesTheCpuFrames) {
     Scene scene = load(kCrowdScene);
     scene.crowds[0].count = 37;

@@ -1,7 +1,7 @@
 // Tests of the rigged crowd export (export.hpp, RiggedGlbWriter): a round trip through
 // our own loader against the source pose computed here independently, glTF-Validator on
 // the outputs, sources with external buffers and images, and atomic writes. The export of
-// a real simulation, and Blender's importer on it, are in test_rigged_scene.cpp.
+// a real simulation, and Blender's importer on it, are in scene/test_rigged_scene.cpp.
 
 #include <gtest/gtest.h>
 

@@ -1,0 +1,26 @@
+#pragma once
+// The part meshes and colours of the birds, shared by the glTF export
+// (engine/export/gltf_birds.cpp) and the renderer (engine/render/device_layers.cpp) so
+// that both show the same birds.
+
+#include <array>
+
+#include "core/flat_mesh.hpp"
+#include "kodawari/birds/rig.hpp"
+
+namespace kodawari::birds {
+
+/// The seven meshes of a wing type in part order, each in its part's frame.
+[[nodiscard]] std::array<core::MeshData, kPartCount> bird_part_meshes(WingType type);
+
+/// Base colours per wing type: pigeon grey-blue, gull white, hawk brown.
+inline constexpr std::array<std::array<double, 4>, kWingTypeCount> kBirdColours = {{
+    {0.42, 0.45, 0.55, 1.0},
+    {0.92, 0.92, 0.90, 1.0},
+    {0.48, 0.30, 0.16, 1.0},
+}};
+
+/// The base colour of a wing type (linear RGB in [0, 1]).
+[[nodiscard]] std::array<float, 3> bird_base_color(WingType type);
+
+}  // namespace kodawari::birds

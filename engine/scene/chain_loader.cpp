@@ -1,0 +1,251 @@
+// The chains of a procedural character: their shapes (points or arcs), physics, view examples and mirrored copies.
+#include "scene/character_loader.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include <kodawari/rods/world.hpp>
+
+namespace kodawari::scene_detail {
+
+using Vec3 = glm::vec3;
+
+// The default orientations of a shape (docs: each joint's local +Y along its segment,
+// the last joint along the last segment, by the shortest arc from +Y), as in the rod
+// tests' shape_from.
+void default_orientations(rods::ChainShape& shape) {
+    const std::size_t n = shape.positions.size();
+    shape.orientations.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t seg = std::min(i, n - 2);
+        const Vec3 dir = glm::normalize(shape.positions[seg + 1] - shape.positions[seg]);
+        shape.orientations[i] = rods::shortest_arc(Vec3(0.0f, 1.0f, 0.0f), dir);
+    }
+}
+
+// {"arc": {...}}: a strand on a circular arc of arc length `length` that leaves the root
+// tangent to `direction` and turns by `curl_deg` in all about `bend_axis`. Joint i sits
+// on the circle; segment i points along the tangent at its middle, (i + 1/2) steps of
+// curl / (joints - 1) from `direction`, and every segment is length / (joints - 1) long.
+Result<rods::ChainShape> read_arc(const JsonReader& r, const JsonNode& node) {
+    KW_TRY(r.object(node, {"joints", "length", "direction", "bend_axis", "curl_deg"}));
+    std::uint64_t joints = 0;
+    KW_SCENE_ASSIGN(joints, r.integer(r.member(node, "joints"), 2, rods::kMaxChainJoints));
+    float length = 0.0f;
+    KW_SCENE_ASSIGN(length, r.real(r.member(node, "length"), NumberRange::left_open(0.0, kMaxShape)));
+    Vec3 direction(0.0f, 1.0f, 0.0f);
+    Vec3 axis(0.0f, 0.0f, 1.0f);
+    KW_TRY(optional_member(r, node, "direction", direction, [&](const JsonNode& n) { return read_direction(r, n); }));
+    KW_TRY(optional_member(r, node, "bend_axis", axis, [&](const JsonNode& n) { return read_direction(r, n); }));
+    float curl = 0.0f;
+    KW_TRY(optional_member(r, node, "curl_deg", curl,
+                           [&](const JsonNode& n) { return read_degrees(r, n, NumberRange::closed(-1080.0, 1080.0)); }));
+    if (curl != 0.0f && glm::length(glm::cross(direction, axis)) < 1e-3f) {
+        return r.expected(r.member(node, "bend_axis"), "a vector not parallel to \"direction\" (the arc bends about it)");
+    }
+    const auto segments = static_cast<float>(joints - 1);
+    const float step = curl / segments;
+    rods::ChainShape shape;
+    shape.positions.push_back(Vec3(0.0f));
+    for (std::uint64_t i = 0; i + 1 < joints; ++i) {
+        const Vec3 dir = glm::angleAxis((static_cast<float>(i) + 0.5f) * step, axis) * direction;
+        shape.positions.push_back(shape.positions.back() + (length / segments) * glm::normalize(dir));
+    }
+    default_orientations(shape);
+    return shape;
+}
+
+// A shape: {"positions": [...], "orientations": [...]} or {"arc": {...}}. `joints` is
+// the required joint count (0: any in 2..32, for a base shape).
+Result<rods::ChainShape> read_shape(const JsonReader& r, const JsonNode& node, std::size_t joints) {
+    KW_TRY(r.object(node, {"positions", "orientations", "arc"}));
+    const JsonNode positions = r.member(node, "positions");
+    const JsonNode orientations = r.member(node, "orientations");
+    const JsonNode arc = r.member(node, "arc");
+    if (positions.present() == arc.present()) {
+        return r.fail(node.path, std::string("expected exactly one of \"positions\" and \"arc\", got ") +
+                                     (arc.present() ? "both" : "neither"));
+    }
+    const std::string count_what =
+        joints == 0 ? "2 to " + std::to_string(rods::kMaxChainJoints) + " joints"
+                    : std::to_string(joints) + " joints (as many as the chain's base shape)";
+    rods::ChainShape shape;
+    if (arc.present()) {
+        if (orientations.present()) return r.fail(orientations.path, "not used with \"arc\" (an arc makes its own orientations)");
+        KW_SCENE_ASSIGN(shape, read_arc(r, arc));
+        if (joints != 0 && shape.positions.size() != joints) {
+            return r.expected(r.member(arc, "joints"), count_what);
+        }
+        return shape;
+    }
+    const std::string what =
+        "an array of " +
+        (joints == 0 ? "2 to " + std::to_string(rods::kMaxChainJoints) + " joint positions"
+                     : std::to_string(joints) + " joint positions (as many as the chain's base shape)") +
+        " [x, y, z], the first [0, 0, 0]";
+    std::size_t n = 0;
+    KW_SCENE_ASSIGN(n, read_array(r, positions, joints == 0 ? 2 : joints, joints == 0 ? rods::kMaxChainJoints : joints, what));
+    shape.positions.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const JsonNode p = r.element(positions, i);
+        KW_SCENE_ASSIGN(shape.positions[i], read_point(r, p, kMaxShape));
+        if (i == 0 && shape.positions[0] != Vec3(0.0f)) {
+            return r.expected(p, "[0, 0, 0] (joint 0 sits at the chain root; move the chain with \"offset\")");
+        }
+        // rods::make_basis's limit: a shorter segment has no direction.
+        if (i > 0 && !(glm::length(shape.positions[i] - shape.positions[i - 1]) >= 1e-6f)) {
+            return r.expected(p, "a point at least 1e-6 m from the previous joint");
+        }
+    }
+    if (!orientations.present()) {
+        default_orientations(shape);
+        return shape;
+    }
+    const std::string quat_what = "an array of " + std::to_string(n) + " unit quaternions [x, y, z, w], one per position";
+    std::size_t m = 0;
+    KW_SCENE_ASSIGN(m, read_array(r, orientations, n, n, quat_what));
+    shape.orientations.resize(m);
+    for (std::size_t i = 0; i < m; ++i) {
+        const JsonNode q = r.element(orientations, i);
+        constexpr std::string_view kQuat = "a unit quaternion [x, y, z, w] (length within 1e-3 of 1)";
+        std::size_t four = 0;
+        KW_SCENE_ASSIGN(four, r.array(q, kQuat));
+        if (four != 4) return r.expected(q, kQuat);
+        std::array<float, 4> c{};
+        for (std::size_t k = 0; k < 4; ++k) KW_SCENE_ASSIGN(c[k], r.real(r.element(q, k), NumberRange::closed(-2.0, 2.0)));
+        const glm::quat value(c[3], c[0], c[1], c[2]);
+        if (!(std::abs(glm::length(value) - 1.0f) < 1e-3f)) return r.expected(q, kQuat);
+        shape.orientations[i] = glm::normalize(value);
+    }
+    return shape;
+}
+
+Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::SolverParams& p) {
+    KW_TRY(r.object(node, {"stiffness", "rest_stiffness", "damping", "iterations", "max_substep", "gravity", "wind",
+                           "momentum_suppression"}));
+    KW_TRY(optional_member(r, node, "stiffness", p.stiffness,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0)); }));
+    KW_TRY(optional_member(r, node, "rest_stiffness", p.rest_stiffness,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0)); }));
+    KW_TRY(optional_member(r, node, "damping", p.damping,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1000.0)); }));
+    const JsonNode iterations = r.member(node, "iterations");
+    if (iterations.present()) {
+        std::uint64_t value = 0;
+        KW_SCENE_ASSIGN(value, r.integer(iterations, 1, 64));
+        p.iterations = static_cast<std::uint32_t>(value);
+    }
+    KW_TRY(optional_member(r, node, "max_substep", p.max_substep,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 0.05)); }));
+    const auto accel = [&](const JsonNode& n) { return read_point(r, n, 1000.0); };
+    KW_TRY(optional_member(r, node, "gravity", p.gravity, accel));
+    KW_TRY(optional_member(r, node, "wind", p.wind, accel));
+    KW_TRY(optional_member(r, node, "momentum_suppression", p.momentum_suppression,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0)); }));
+    return {};
+}
+
+Result<ViewSpec> read_view(const JsonReader& r, const JsonNode& node, std::size_t joints) {
+    KW_TRY(r.object(node, {"name", "direction", "influence", "shape"}));
+    ViewSpec v;
+    KW_TRY(optional_member(r, node, "name", v.name, [&](const JsonNode& n) { return r.string(n); }));
+    KW_SCENE_ASSIGN(v.view.direction, read_direction(r, r.member(node, "direction")));
+    KW_TRY(optional_member(r, node, "influence", v.view.influence,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+    KW_SCENE_ASSIGN(v.shape, read_shape(r, r.member(node, "shape"), joints));
+    return v;
+}
+
+// The mirror image of a chain across the X = 0 plane of its joint's frame (and of the
+// reference joint's frame for the view directions): x -> -x for points and directions,
+// and for a rotation M R M (M = diag(-1, 1, 1)), which is the quaternion (w, x, -y, -z).
+glm::quat mirror(glm::quat q) { return glm::quat(q.w, q.x, -q.y, -q.z); }
+Vec3 mirror(Vec3 v) { return Vec3(-v.x, v.y, v.z); }
+rods::ChainShape mirror(const rods::ChainShape& s) {
+    rods::ChainShape out = s;
+    for (Vec3& p : out.positions) p = mirror(p);
+    for (glm::quat& q : out.orientations) q = mirror(q);
+    return out;
+}
+
+Result<void> check_template(const JsonReader& r, const JsonNode& node, const ChainSpec& chain) {
+    std::vector<rods::ChainShape> shapes;
+    std::vector<rods::ViewExample> views;
+    for (const ViewSpec& v : chain.views) {
+        shapes.push_back(v.shape);
+        views.push_back(v.view);
+    }
+    auto t = rods::make_chain_template(chain.name, chain.base, shapes, views, chain.thickness, chain.mass, chain.params);
+    if (!t) return r.fail(node.path, t.error().message);
+    return {};
+}
+
+Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, ChainSpec& c) {
+    KW_TRY(optional_member(r, node, "thickness", c.thickness,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1.0)); }));
+    KW_TRY(optional_member(r, node, "mass", c.mass, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+    const JsonNode physics = r.member(node, "physics");
+    if (physics.present()) KW_TRY(read_physics(r, physics, c.params));
+    KW_TRY(optional_member(r, node, "collide", c.collide, [&](const JsonNode& n) { return r.boolean(n); }));
+    const JsonNode views = r.member(node, "views");
+    if (views.present()) {
+        const std::string what = "an array of at most " + std::to_string(rods::kMaxViewExamples) + " view examples";
+        std::size_t n = 0;
+        KW_SCENE_ASSIGN(n, read_array(r, views, 0, rods::kMaxViewExamples, what));
+        for (std::size_t k = 0; k < n; ++k) {
+            ViewSpec v;
+            KW_SCENE_ASSIGN(v, read_view(r, r.element(views, k), c.base.positions.size()));
+            c.views.push_back(std::move(v));
+        }
+    }
+    KW_TRY(check_template(r, node, c));
+    return {};
+}
+
+Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::Skeleton& skeleton,
+                        const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
+    KW_TRY(r.object(node, {"name", "joint", "offset", "shape", "thickness", "mass", "physics", "collide", "mirror", "views"}));
+    ChainSpec c;
+    c.path = node.path;
+    c.params = defaults;
+    const JsonNode name = r.member(node, "name");
+    KW_SCENE_ASSIGN(c.name, read_name(r, name));
+    KW_SCENE_ASSIGN(c.joint, find_joint(r, r.member(node, "joint"), skeleton));
+    KW_TRY(optional_member(r, node, "offset", c.offset, [&](const JsonNode& n) { return read_transform(r, n); }));
+    KW_SCENE_ASSIGN(c.base, read_shape(r, r.member(node, "shape"), 0));
+    KW_TRY(read_chain_settings(r, node, c));
+
+    const auto unique = [&](const JsonNode& at, const std::string& candidate) -> Result<void> {
+        for (const ChainSpec& other : chains) {
+            if (other.name == candidate) {
+                return r.expected(at, "a chain name this character does not use yet (\"" + candidate + "\" is taken)");
+            }
+        }
+        return {};
+    };
+    KW_TRY(unique(name, c.name));
+    const JsonNode mirror_node = r.member(node, "mirror");
+    std::string mirror_name;
+    KW_TRY(optional_member(r, node, "mirror", mirror_name, [&](const JsonNode& n) { return read_name(r, n); }));
+    chains.push_back(c);
+    if (mirror_name.empty()) return {};
+    if (mirror_name == c.name) return r.expected(mirror_node, "a name other than the chain's own");
+    KW_TRY(unique(mirror_node, mirror_name));
+    ChainSpec m = std::move(c);
+    m.name = mirror_name;
+    m.path = mirror_node.path;
+    m.offset.position = mirror(m.offset.position);
+    m.offset.rotation = mirror(m.offset.rotation);
+    m.base = mirror(m.base);
+    for (ViewSpec& v : m.views) {
+        v.view.direction = mirror(v.view.direction);
+        v.shape = mirror(v.shape);
+    }
+    chains.push_back(std::move(m));
+    return {};
+}
+
+}  // namespace kodawari::scene_detail
