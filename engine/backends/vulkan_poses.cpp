@@ -9,7 +9,7 @@
 #include <numeric>
 #include <optional>
 
-#include <shared/poses.h>
+#include <kodawari/shared/poses.h>
 
 #include "backends/pose_backends.hpp"
 #include "gpu/compute_pipeline.hpp"

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string>
 
-#include <shared/skin.h>
+#include <kodawari/shared/skin.h>
 
 #include "gpu/device_state.hpp"
 #include "kodawari/render/scene_draw.hpp"
