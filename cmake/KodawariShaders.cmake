@@ -1,8 +1,9 @@
 # kodawari_embed_shaders(TARGET <target> SOURCES <file.comp|.vert|.frag>... INCLUDE_DIRS <dir>...)
 #
 # Compiles each shader (glslang infers the stage from the extension) to SPIR-V at build time with glslangValidator (its
-# --depfile tracks the #included headers, so editing shaders/shared/*.h rebuilds
-# what uses it) and embeds the words in a C++ source added to <target>:
+# --depfile tracks the #included files, so editing shaders/shared/*.h or the GLSL library
+# shaders/lib/*.glsl rebuilds what uses it; both are reached as "shared/..." and "lib/..."
+# from the shader directory in INCLUDE_DIRS) and embeds the words in a C++ source added to <target>:
 # kodawari::gpu::embedded_shader("<name>") returns them. A compute kernel's name is its
 # file name without .comp ("rods_step"); a graphics stage keeps its extension
 # ("render.vert"), since a vertex and a fragment shader usually share a base name.

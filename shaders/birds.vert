@@ -8,6 +8,9 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shared/birds.h"
 #include "shared/render.h"
+#include "lib/camera.glsl"
+#include "lib/matrix.glsl"
+#include "lib/quat.glsl"
 
 layout(location = 0) in vec4 in_position;
 layout(location = 1) in vec4 in_normal;
@@ -19,8 +22,6 @@ layout(std430, set = 0, binding = KW_BIRDS_DRAW_BINDING_POSES) readonly buffer P
 
 layout(location = 0) out vec4 out_color;
 layout(location = 1) flat out vec3 out_normal;
-
-vec3 rotate(vec4 q, vec3 v) { return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v); }
 
 vec4 unit_quat(vec4 q) {
     float n = length(q);
@@ -53,12 +54,10 @@ void main() {
     vec3 position = pose.position.xyz;
     // A far flock stays visible: birds smaller than the minimum wingspan in pixels are
     // drawn scaled up to it (their positions stay exact).
-    float depth = dot(position - push.eye.xyz, push.forward.xyz);
-    float pixel = push.draw.w == KW_RENDER_ORTHOGRAPHIC ? push.forward.w : depth > push.eye.w ? depth * push.forward.w : 0.0;
+    float pixel = pixel_size_at(push, position);
     float scale = pixel > 0.0 ? max(1.0, uintBitsToFloat(push.draw.z) * pixel / type.color.w) : 1.0;
     vec3 world = position + scale * rotate(body, p);
-    mat4 view_proj = mat4(push.view_proj[0], push.view_proj[1], push.view_proj[2], push.view_proj[3]);
-    gl_Position = view_proj * vec4(world, 1.0);
+    gl_Position = mat4_columns(push.view_proj) * vec4(world, 1.0);
     out_color = vec4(type.color.rgb, 1.0);  // lit
     out_normal = rotate(body, n);
 }

@@ -6,6 +6,7 @@
 #extension GL_GOOGLE_include_directive : require
 
 #include "shared/birds.h"
+#include "lib/quat.glsl"
 
 layout(local_size_x = KW_BIRDS_WORKGROUP_SIZE) in;
 
@@ -31,10 +32,6 @@ const float PI = 3.14159265358979;
 const float TWO_PI = 6.28318530717959;
 const float HALF_PI = 1.57079632679490;
 
-vec4 quat_mul(vec4 a, vec4 b) {
-    return vec4(a.w * b.x + a.x * b.w + a.y * b.z - a.z * b.y, a.w * b.y - a.x * b.z + a.y * b.w + a.z * b.x,
-                a.w * b.z + a.x * b.y - a.y * b.x + a.z * b.w, a.w * b.w - a.x * b.x - a.y * b.y - a.z * b.z);
-}
 vec4 quat_y(float a) { return vec4(0.0, sin(0.5 * a), 0.0, cos(0.5 * a)); }
 vec4 quat_z(float a) { return vec4(0.0, 0.0, sin(0.5 * a), cos(0.5 * a)); }
 
@@ -264,7 +261,7 @@ vec4 body_rotation(vec3 v, vec3 a) {
         }
     }
     vec2 b = half_angle(bc, bs);
-    return quat_mul(quat_mul(yaw, pitch), vec4(0.0, 0.0, b.y, b.x));
+    return qmul_flight(qmul_flight(yaw, pitch), vec4(0.0, 0.0, b.y, b.x));
 }
 
 uint next_mode(uint previous, RouteSample r) {

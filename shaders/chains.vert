@@ -8,6 +8,8 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shared/render.h"
 #include "shared/rods.h"
+#include "lib/camera.glsl"
+#include "lib/matrix.glsl"
 
 layout(push_constant, std430) uniform Push { RenderPush push; };
 layout(std430, set = 0, binding = KW_CHAINS_BINDING_INFO) readonly buffer Info { ChainDrawInfo info[]; };
@@ -20,14 +22,6 @@ layout(location = 1) flat out vec3 out_normal;
 
 // World position of joint j of chain c: the backend stores it relative to the root.
 vec3 joint_position(uint c, uint j) { return states[c].root.position.xyz + motion[j].x.xyz; }
-
-// The world size of one pixel at the depth of p; 0 at or behind the near plane
-// (orthographic: the same everywhere).
-float pixel_size_at(vec3 p) {
-    if (push.draw.w == KW_RENDER_ORTHOGRAPHIC) return push.forward.w;
-    float depth = dot(p - push.eye.xyz, push.forward.xyz);
-    return depth > push.eye.w ? depth * push.forward.w : 0.0;
-}
 
 // From p towards the viewer (DrawList::towards_viewer).
 vec3 towards_viewer(vec3 p) { return push.draw.w == KW_RENDER_ORTHOGRAPHIC ? -push.forward.xyz : push.eye.xyz - p; }
@@ -45,7 +39,7 @@ void main() {
     ChainDrawInfo chain = info[c];
     uint first = chain.joints.x, n = chain.joints.y;
     vec3 p = joint_position(c, j);
-    mat4 view_proj = mat4(push.view_proj[0], push.view_proj[1], push.view_proj[2], push.view_proj[3]);
+    mat4 view_proj = mat4_columns(push.view_proj);
     out_color = vec4(unpackUnorm4x8(chain.joints.z).rgb, 0.0);  // a = 0: unlit, the exact colour
     out_normal = vec3(0.0);
     uint v = gl_VertexIndex;
@@ -65,8 +59,8 @@ void main() {
         }
         vec3 unit = side / side_length;
         float width = 2.0 * chain.size.x, min_px = uintBitsToFloat(push.draw.y);
-        vec3 ha = 0.5 * max(width, min_px * pixel_size_at(p)) * unit;
-        vec3 hb = 0.5 * max(width, min_px * pixel_size_at(b)) * unit;
+        vec3 ha = 0.5 * max(width, min_px * pixel_size_at(push, p)) * unit;
+        vec3 hb = 0.5 * max(width, min_px * pixel_size_at(push, b)) * unit;
         // Triangles (a - ha, a + ha, b + hb) and (a - ha, b + hb, b - hb).
         vec3 corners[KW_CHAIN_SEGMENT_VERTICES] = vec3[](p - ha, p + ha, b + hb, p - ha, b + hb, b - hb);
         gl_Position = view_proj * vec4(corners[v], 1.0);
@@ -77,17 +71,14 @@ void main() {
     float min_px = uintBitsToFloat(push.draw.z);
     float length_sum = 0.0;
     for (uint k = first; k + 1 < first + n; ++k) length_sum += length(joint_position(c, k + 1) - joint_position(c, k));
-    float pixel = pixel_size_at(joint_position(c, first));
+    float pixel = pixel_size_at(push, joint_position(c, first));
     if (pixel > 0.0 && length_sum / pixel < 3.0 * min_px * float(n)) {
         emit_nothing();
         return;
     }
-    float r = max(1.5 * chain.size.x, min_px * pixel_size_at(p));
-    // The camera basis of render::camera_basis().
-    vec3 forward = push.forward.xyz;
-    vec3 world_up = abs(forward.y) > 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(0.0, 1.0, 0.0);
-    vec3 right = normalize(cross(forward, world_up));
-    vec3 up = cross(right, forward);
+    float r = max(1.5 * chain.size.x, min_px * pixel_size_at(push, p));
+    vec3 right, up;
+    camera_basis(push.forward.xyz, right, up);
     uint corner = v % 3u, side_index = v / 3u;
     if (corner == 0u) {
         gl_Position = view_proj * vec4(p, 1.0);

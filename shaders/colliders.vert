@@ -7,6 +7,8 @@
 #extension GL_GOOGLE_include_directive : require
 #include "shared/render.h"
 #include "shared/rods.h"
+#include "lib/camera.glsl"
+#include "lib/matrix.glsl"
 
 layout(push_constant, std430) uniform Push { RenderPush push; };
 layout(std430, set = 0, binding = KW_COLLIDERS_BINDING_COLLIDERS) readonly buffer Colliders { RodColliderGpu colliders[]; };
@@ -31,15 +33,12 @@ void main() {
     if (v >= 2u * circle) {
         p = v == 2u * circle ? a : b;
     } else {
-        vec3 forward = push.forward.xyz;
-        vec3 world_up = abs(forward.y) > 0.999 ? vec3(0.0, 0.0, 1.0) : vec3(0.0, 1.0, 0.0);
-        vec3 right = normalize(cross(forward, world_up));
-        vec3 up = cross(right, forward);
+        vec3 right, up;
+        camera_basis(push.forward.xyz, right, up);
         uint k = v % circle;  // line k / 2 of the circle, from corner k / 2 to the next
         const float step = 6.28318530718 / float(KW_COLLIDER_SIDES);
         float angle = step * float(k / 2u + k % 2u);
         p = (v < circle ? a : b) + radius * (cos(angle) * right + sin(angle) * up);
     }
-    mat4 view_proj = mat4(push.view_proj[0], push.view_proj[1], push.view_proj[2], push.view_proj[3]);
-    gl_Position = view_proj * vec4(p, 1.0);
+    gl_Position = mat4_columns(push.view_proj) * vec4(p, 1.0);
 }

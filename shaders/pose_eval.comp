@@ -10,6 +10,8 @@
 #extension GL_GOOGLE_include_directive : require
 
 #include "shared/poses.h"
+#include "lib/matrix.glsl"
+#include "lib/quat.glsl"
 
 layout(local_size_x = KW_POSES_WORKGROUP_SIZE) in;
 
@@ -166,15 +168,10 @@ vec4 sample_channel(PoseChannelGpu ch, float time) {
 
 // ---- composition (§3.5.3) ----------------------------------------------------------------
 
-// T * R * S, with R as glm::mat4_cast computes it.
+// T * R * S, with R as glm::mat4_cast computes it (its upper 3x3 is glm::mat3_cast's).
 mat4 compose(vec3 t, vec4 q, vec3 s) {
-    const float xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
-    const float xz = q.x * q.z, xy = q.x * q.y, yz = q.y * q.z;
-    const float wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
-    return mat4(vec4(vec3(1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy)) * s.x, 0.0),
-                vec4(vec3(2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx)) * s.y, 0.0),
-                vec4(vec3(2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy)) * s.z, 0.0),
-                vec4(t, 1.0));
+    const mat3 r = mat3_cast(q);
+    return mat4(vec4(r[0] * s.x, 0.0), vec4(r[1] * s.y, 0.0), vec4(r[2] * s.z, 0.0), vec4(t, 1.0));
 }
 
 void main() {
@@ -182,7 +179,7 @@ void main() {
     if (i >= push.counts.x) return;
     const uint node_count = push.counts.y;
     const PoseInstanceGpu instance = instances[i];
-    const mat4 placement = mat4(instance.placement[0], instance.placement[1], instance.placement[2], instance.placement[3]);
+    const mat4 placement = mat4_columns(instance.placement);
 
     // The clip's channels, sorted by node position: [c, c_end), `next` the node position
     // of channel c. A rest-pose instance has none.
@@ -220,7 +217,7 @@ void main() {
         }
         mat4 local;
         if (ids.z == KW_POSES_NODE_MATRIX) {
-            local = mat4(nodes[p].local[0], nodes[p].local[1], nodes[p].local[2], nodes[p].local[3]);
+            local = mat4_columns(nodes[p].local);
         } else {
             local = compose(translation, rotation, scale);
         }
@@ -229,7 +226,7 @@ void main() {
         mat4 parent = placement;
         if (ids.y != KW_POSES_NONE) {
             const uint at = base + ids.y;
-            parent = mat4(world[at].columns[0], world[at].columns[1], world[at].columns[2], world[at].columns[3]);
+            parent = mat4_columns(world[at].columns);
         }
         const mat4 w = parent * local;
         const uint at_node = base + ids.x;

@@ -3,6 +3,7 @@
 // positions (the background) as they are.
 #extension GL_GOOGLE_include_directive : require
 #include "shared/render.h"
+#include "lib/matrix.glsl"
 
 layout(location = 0) in vec4 in_position;
 layout(location = 1) in vec4 in_color;
@@ -17,8 +18,7 @@ void main() {
     if (in_normal.w > 0.5) {
         gl_Position = vec4(in_position.xy, 0.0, 1.0);
     } else {
-        const mat4 view_proj = mat4(push.view_proj[0], push.view_proj[1], push.view_proj[2], push.view_proj[3]);
-        gl_Position = view_proj * vec4(in_position.xyz, 1.0);
+        gl_Position = mat4_columns(push.view_proj) * vec4(in_position.xyz, 1.0);
     }
     out_color = in_color;
     out_normal = in_normal.xyz;

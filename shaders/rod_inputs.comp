@@ -11,6 +11,7 @@
 #include "shared/poses.h"
 #include "shared/rod_inputs.h"
 #include "shared/rods.h"
+#include "lib/quat.glsl"
 
 layout(local_size_x = KW_ROD_INPUTS_WORKGROUP_SIZE) in;
 
@@ -22,8 +23,6 @@ layout(std430, binding = KW_ROD_INPUTS_BINDING_ROOTS) writeonly buffer Roots { R
 layout(std430, binding = KW_ROD_INPUTS_BINDING_COLLIDERS) writeonly buffer Colliders { RodColliderGpu colliders[]; };
 
 layout(push_constant) uniform Push { RodInputPush push; };
-
-vec3 rotate(vec4 q, vec3 v) { return v + 2.0 * cross(q.xyz, cross(q.xyz, v) + q.w * v); }
 
 // glm::quat_cast of a rotation matrix (m[column][row]): the largest of 4w^2-1, 4x^2-1,
 // 4y^2-1, 4z^2-1 (in that order of preference) gives the best-conditioned component.

@@ -8,6 +8,7 @@
 #extension GL_EXT_control_flow_attributes : require
 
 #include "shared/rods.h"
+#include "lib/quat.glsl"
 
 layout(local_size_x = KW_RODS_WORKGROUP_SIZE) in;
 
@@ -40,32 +41,9 @@ const vec4 IDENTITY = vec4(0.0, 0.0, 0.0, 1.0);
 const float ROOT_SHAPE_WEIGHT = 10.0;  // solver.cpp kRootShapeWeight
 const int EXTRACT_ITERATIONS = 1;      // solver.cpp kExtractIterations
 
-// ---- quaternions, as glm computes them -------------------------------------------------
+// ---- quaternions (lib/quat.glsl holds the ones shared with other kernels) --------------
 
-vec4 qmul(vec4 p, vec4 q) {
-    return vec4(p.w * q.x + p.x * q.w + p.y * q.z - p.z * q.y, p.w * q.y + p.y * q.w + p.z * q.x - p.x * q.z,
-                p.w * q.z + p.z * q.w + p.x * q.y - p.y * q.x, p.w * q.w - p.x * q.x - p.y * q.y - p.z * q.z);
-}
-vec4 qconj(vec4 q) { return vec4(-q.xyz, q.w); }
-vec3 qrot(vec4 q, vec3 v) {
-    const vec3 uv = cross(q.xyz, v);
-    const vec3 uuv = cross(q.xyz, uv);
-    return v + ((uv * q.w) + uuv) * 2.0;
-}
-vec4 qnormalize(vec4 q) {
-    const float len = length(q);
-    if (len <= 0.0) return IDENTITY;
-    return q * (1.0 / len);
-}
 vec4 positive_w(vec4 q) { return q.w < 0.0 ? -q : q; }
-mat3 mat3_cast(vec4 q) {
-    const float xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
-    const float xz = q.x * q.z, xy = q.x * q.y, yz = q.y * q.z;
-    const float wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
-    return mat3(vec3(1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy)),
-                vec3(2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx)),
-                vec3(2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy)));
-}
 // solver.cpp partial(): the rotation by `fraction` of q's angle, the short way.
 vec4 partial_turn(vec4 q, float fraction) {
     if (fraction >= 1.0) return q;
@@ -78,18 +56,6 @@ vec4 partial_turn(vec4 q, float fraction) {
 }
 // solver.cpp interpolate().
 vec4 interpolate(vec4 a, vec4 b, float t) { return qnormalize(qmul(a, partial_turn(qmul(qconj(a), b), t))); }
-// shape.cpp shortest_arc().
-vec4 shortest_arc(vec3 from, vec3 to) {
-    const vec3 h = from + to;
-    const float h_len = length(h);
-    if (h_len < 1e-6) {
-        const vec3 a = abs(from);
-        const vec3 other = (a.x <= a.y && a.x <= a.z) ? vec3(1, 0, 0) : (a.y <= a.z) ? vec3(0, 1, 0) : vec3(0, 0, 1);
-        return vec4(normalize(cross(from, other)), 0.0);
-    }
-    const vec3 hn = h / h_len;
-    return qnormalize(vec4(cross(from, hn), dot(from, hn)));
-}
 // solver.cpp extract_rotation(): Mueller et al. 2016, Algorithm 1, warm-started, with
 // the first-order turn.
 vec4 extract_rotation(mat3 a, vec4 q) {

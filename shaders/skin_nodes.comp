@@ -9,6 +9,8 @@
 #include "shared/poses.h"
 #include "shared/rods.h"
 #include "shared/skin.h"
+#include "lib/matrix.glsl"
+#include "lib/quat.glsl"
 
 layout(local_size_x = KW_SKIN_WORKGROUP_SIZE) in;
 
@@ -21,46 +23,6 @@ layout(std430, binding = KW_SKIN_BINDING_SPIN) readonly buffer Spin { RodJointSp
 layout(std430, binding = KW_SKIN_BINDING_WORLD) buffer World { PoseMatrixGpu world[]; };
 
 layout(push_constant) uniform Push { SkinPush push; };
-
-// ---- quaternions, as glm and rods_step.comp compute them --------------------------------
-
-vec4 qmul(vec4 p, vec4 q) {
-    return vec4(p.w * q.x + p.x * q.w + p.y * q.z - p.z * q.y, p.w * q.y + p.y * q.w + p.z * q.x - p.x * q.z,
-                p.w * q.z + p.z * q.w + p.x * q.y - p.y * q.x, p.w * q.w - p.x * q.x - p.y * q.y - p.z * q.z);
-}
-vec3 qrot(vec4 q, vec3 v) {
-    const vec3 uv = cross(q.xyz, v);
-    const vec3 uuv = cross(q.xyz, uv);
-    return v + ((uv * q.w) + uuv) * 2.0;
-}
-vec4 qnormalize(vec4 q) {
-    const float len = length(q);
-    if (len <= 0.0) return vec4(0.0, 0.0, 0.0, 1.0);
-    return q * (1.0 / len);
-}
-// glm::mat3_cast.
-mat3 mat3_cast(vec4 q) {
-    const float xx = q.x * q.x, yy = q.y * q.y, zz = q.z * q.z;
-    const float xz = q.x * q.z, xy = q.x * q.y, yz = q.y * q.z;
-    const float wx = q.w * q.x, wy = q.w * q.y, wz = q.w * q.z;
-    return mat3(vec3(1.0 - 2.0 * (yy + zz), 2.0 * (xy + wz), 2.0 * (xz - wy)),
-                vec3(2.0 * (xy - wz), 1.0 - 2.0 * (xx + zz), 2.0 * (yz + wx)),
-                vec3(2.0 * (xz + wy), 2.0 * (yz - wx), 1.0 - 2.0 * (xx + yy)));
-}
-// shape.cpp shortest_arc().
-vec4 shortest_arc(vec3 from, vec3 to) {
-    const vec3 h = from + to;
-    const float h_len = length(h);
-    if (h_len < 1e-6) {
-        const vec3 a = abs(from);
-        const vec3 other = (a.x <= a.y && a.x <= a.z) ? vec3(1, 0, 0) : (a.y <= a.z) ? vec3(0, 1, 0) : vec3(0, 0, 1);
-        return vec4(normalize(cross(from, other)), 0.0);
-    }
-    const vec3 hn = h / h_len;
-    return qnormalize(vec4(cross(from, hn), dot(from, hn)));
-}
-
-mat4 load(PoseMatrixGpu m) { return mat4(m.columns[0], m.columns[1], m.columns[2], m.columns[3]); }
 
 // The clip's local transform of a node, inverse(parent) * node for affine matrices, with
 // the translations subtracted first: a crowd's placements put both far from the origin,
@@ -79,15 +41,15 @@ void main() {
     for (uint k = 0; k < node_count; ++k) {
         const SkinNodeGpu node = nodes[k];
         const uint n = node.ids.x, parent = node.ids.y, kind = node.ids.z;
-        const mat4 clip = load(clip_world[base + n]);
+        const mat4 clip = mat4_columns(clip_world[base + n].columns);
         if (kind == KW_SKIN_NODE_CLIP) {
             world[base + n].columns = clip_world[base + n].columns;
             continue;
         }
         // The clip's local transform (a root's: its world, the placement being rigid).
-        const mat4 local = parent == KW_SKIN_NONE ? clip : local_of(load(clip_world[base + parent]), clip);
+        const mat4 local = parent == KW_SKIN_NONE ? clip : local_of(mat4_columns(clip_world[base + parent].columns), clip);
         if (kind == KW_SKIN_NODE_BELOW) {
-            const mat4 w = load(world[base + parent]) * local;
+            const mat4 w = mat4_columns(world[base + parent].columns) * local;
             world[base + n].columns = vec4[4](w[0], w[1], w[2], w[3]);
             continue;
         }

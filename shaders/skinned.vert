@@ -8,6 +8,7 @@
 #include "shared/poses.h"
 #include "shared/render.h"
 #include "shared/skin.h"
+#include "lib/matrix.glsl"
 
 layout(location = 0) in vec4 in_position;
 layout(location = 1) in vec4 in_joints;
@@ -22,8 +23,7 @@ layout(location = 0) out vec4 out_color;
 layout(location = 1) out vec3 out_from_eye;
 
 mat4 world_matrix(uint node) {
-    const PoseMatrixGpu m = world[gl_InstanceIndex * push.draw.x + node];
-    return mat4(m.columns[0], m.columns[1], m.columns[2], m.columns[3]);
+    return mat4_columns(world[gl_InstanceIndex * push.draw.x + node].columns);
 }
 
 void main() {
@@ -34,14 +34,13 @@ void main() {
         const float w = in_weights[k];
         if (w <= 0.0) continue;
         const SkinJointGpu joint = joints[uint(in_joints[k])];
-        const mat4 inverse_bind = mat4(joint.inverse_bind[0], joint.inverse_bind[1], joint.inverse_bind[2], joint.inverse_bind[3]);
+        const mat4 inverse_bind = mat4_columns(joint.inverse_bind);
         // world * (inverse bind * p): two matrix-vector products instead of a matrix product.
         sum += w * (world_matrix(joint.ids.x) * (inverse_bind * p)).xyz;
         total += w;
     }
     const vec3 skinned = total > 0.0 ? sum / total : (world_matrix(uint(in_position.w)) * p).xyz;
-    const mat4 view_proj = mat4(push.view_proj[0], push.view_proj[1], push.view_proj[2], push.view_proj[3]);
-    gl_Position = view_proj * vec4(skinned, 1.0);
+    gl_Position = mat4_columns(push.view_proj) * vec4(skinned, 1.0);
     out_color = vec4(in_color.rgb, 1.0);
     // Relative to the eye: the fragment shader's derivatives of it then keep their
     // precision far from the origin.

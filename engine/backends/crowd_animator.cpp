@@ -6,7 +6,7 @@
 #include <chrono>
 #include <optional>
 
-#include <shared/rod_inputs.h>
+#include <kodawari/shared/rod_inputs.h>
 
 #include "backends/device_backends.hpp"
 

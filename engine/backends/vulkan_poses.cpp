@@ -9,7 +9,7 @@
 #include <numeric>
 #include <optional>
 
-#include <shared/poses.h>
+#include <kodawari/shared/poses.h>
 
 #include "backends/device_backends.hpp"
 #include "backends/pose_backends.hpp"

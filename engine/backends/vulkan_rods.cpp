@@ -8,7 +8,7 @@
 #include <cmath>
 #include <cstring>
 
-#include <shared/rods.h>
+#include <kodawari/shared/rods.h>
 
 #include "backends/backends.hpp"
 #include "backends/device_backends.hpp"

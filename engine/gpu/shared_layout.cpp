@@ -4,12 +4,12 @@
 // Only vec4/uvec4 members are used, so size = 16 x member count and offsets follow.
 #include <cstddef>
 
-#include <shared/birds.h>
-#include <shared/poses.h>
-#include <shared/render.h>
-#include <shared/rod_inputs.h>
-#include <shared/rods.h>
-#include <shared/skin.h>
+#include <kodawari/shared/birds.h>
+#include <kodawari/shared/poses.h>
+#include <kodawari/shared/render.h>
+#include <kodawari/shared/rod_inputs.h>
+#include <kodawari/shared/rods.h>
+#include <kodawari/shared/skin.h>
 
 
 namespace kodawari::gpu {

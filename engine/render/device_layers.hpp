@@ -11,9 +11,9 @@
 #include <span>
 #include <string_view>
 
-#include <shared/birds.h>
-#include <shared/render.h>
-#include <shared/rods.h>
+#include <kodawari/shared/birds.h>
+#include <kodawari/shared/render.h>
+#include <kodawari/shared/rods.h>
 
 #include "compute/buffer.hpp"
 #include "gpu/graphics.hpp"

@@ -6,7 +6,7 @@
 #include <cstring>
 #include <string>
 
-#include <shared/skin.h>
+#include <kodawari/shared/skin.h>
 
 #include "compute/compute.hpp"
 #include "kodawari/render/scene_draw.hpp"

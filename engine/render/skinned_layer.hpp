@@ -10,8 +10,8 @@
 #include <optional>
 #include <vector>
 
-#include <shared/poses.h>
-#include <shared/render.h>
+#include <kodawari/shared/poses.h>
+#include <kodawari/shared/render.h>
 
 #include "compute/kernel.hpp"
 #include "compute/buffer.hpp"

@@ -2,6 +2,10 @@
 // In C++ the GLSL vector types become 16-byte aligned PODs with the same layout as
 // std430 vec4/uvec4; the structs that use them must only contain vec4, uvec4 and
 // arrays of those, so no std430 rule can disagree with the C++ ABI.
+// GLSL includes this directory's headers as "shared/NAME.h"; C++ as
+// <kodawari/shared/NAME.h>, through the link engine/include/kodawari/shared, so the
+// engine's public headers name no path into the shader tree and the one definition
+// travels with them.
 #ifndef KODAWARI_SHADERS_SHARED_GLSL_TYPES_H
 #define KODAWARI_SHADERS_SHARED_GLSL_TYPES_H
 

@@ -18,7 +18,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <nlohmann/json.hpp>
 
-#include <shared/poses.h>
+#include <kodawari/shared/poses.h>
 
 #include "kodawari/gltf/character.hpp"
 #include "kodawari/pose_backend.hpp"

@@ -8,7 +8,7 @@
 #include <cstring>
 #include <vector>
 
-#include <shared/rods.h>
+#include <kodawari/shared/rods.h>
 
 #include "test_support.hpp"
 #include "kodawari/gpu_info.hpp"

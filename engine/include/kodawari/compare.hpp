@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include <shared/birds.h>
+#include <kodawari/shared/birds.h>
 
 #include "birds/world.hpp"
 

@@ -13,7 +13,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include <shared/birds.h>
+#include <kodawari/shared/birds.h>
 
 #include "atomic_file.hpp"
 #include "birds/world.hpp"

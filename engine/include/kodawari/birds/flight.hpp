@@ -6,7 +6,7 @@
 
 #include <array>
 
-#include <shared/birds.h>
+#include <kodawari/shared/birds.h>
 
 #include "wingbeat.hpp"
 #include "world.hpp"

@@ -8,7 +8,7 @@
 #include <optional>
 #include <string_view>
 
-#include <shared/birds.h>
+#include <kodawari/shared/birds.h>
 
 namespace kodawari::birds {
 

@@ -5,7 +5,7 @@
 
 #include <cstdint>
 
-#include <shared/birds.h>
+#include <kodawari/shared/birds.h>
 
 namespace kodawari::birds {
 

@@ -10,7 +10,7 @@
 #include <string>
 #include <vector>
 
-#include <shared/birds.h>
+#include <kodawari/shared/birds.h>
 
 #include "../result.hpp"
 #include "rig.hpp"

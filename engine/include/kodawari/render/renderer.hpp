@@ -18,7 +18,7 @@
 #include <glm/glm.hpp>
 #include <vulkan/vulkan_core.h>
 
-#include <shared/render.h>
+#include <kodawari/shared/render.h>
 
 #include "kodawari/backend.hpp"
 #include "kodawari/result.hpp"
