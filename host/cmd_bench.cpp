@@ -263,8 +263,7 @@ int bench_view(Args& args, BackendChoice choice) {
     auto loaded = load_scene(positionals[0]);
     if (!loaded) return report(loaded.error());
     const Scene& scene = loaded.value();
-    auto renderer = render::Renderer::create({.width = width, .height = height, .device = choice.options.device,
-                                              .validation = choice.options.validation});
+    auto renderer = render::Renderer::create(renderer_options(choice, width, height));
     if (!renderer) return report(renderer.error());
     render::Renderer& r = *renderer.value();
     choice.options.context = r.device_context();

@@ -15,11 +15,6 @@ VULKAN_HPP_DEFAULT_DISPATCH_LOADER_DYNAMIC_STORAGE
 namespace kodawari::gpu {
 namespace {
 
-bool env_flag(const char* name) {
-    const char* value = std::getenv(name);
-    return value != nullptr && std::strcmp(value, "") != 0 && std::strcmp(value, "0") != 0;
-}
-
 std::string version_text(std::uint32_t v) {
     return std::to_string(VK_API_VERSION_MAJOR(v)) + "." + std::to_string(VK_API_VERSION_MINOR(v)) + "." +
            std::to_string(VK_API_VERSION_PATCH(v));
@@ -91,10 +86,7 @@ std::string lower(std::string text) {
 }
 
 // Picks a device: by index or name substring when asked, else the best type.
-void choose(GpuInventory& inventory, std::string request) {
-    if (request.empty()) {
-        if (const char* env = std::getenv("KODAWARI_DEVICE")) request = env;
-    }
+void choose(GpuInventory& inventory, const std::string& request) {
     auto& devices = inventory.devices;
     if (!request.empty()) {
         const bool numeric = std::all_of(request.begin(), request.end(), [](unsigned char c) { return std::isdigit(c); });
@@ -126,10 +118,7 @@ void choose(GpuInventory& inventory, std::string request) {
 
 // Why choose() passed over each device (vk-bootstrap keeps these too): for the Error of a
 // failed selection.
-std::vector<std::string> rejections(const GpuInventory& inventory, std::string request) {
-    if (request.empty()) {
-        if (const char* env = std::getenv("KODAWARI_DEVICE")) request = env;
-    }
+std::vector<std::string> rejections(const GpuInventory& inventory, const std::string& request) {
     const bool numeric = !request.empty() && std::all_of(request.begin(), request.end(), [](unsigned char c) { return std::isdigit(c); });
     std::vector<std::string> out;
     for (const GpuDeviceInfo& d : inventory.devices) {
@@ -246,7 +235,7 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
     std::string error;
     ctx->context_ = open_loader(error);
     if (!ctx->context_) return make_error(Error::Kind::Unsupported, error);
-    ctx->validation_ = options.validation || env_flag("KODAWARI_VALIDATION");
+    ctx->validation_ = options.validation;
     try {
         if (ctx->validation_ && !has_validation_layer(*ctx->context_)) {
             return make_error(Error::Kind::Unsupported,
@@ -332,7 +321,7 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
         }
         // Unified memory: the device shares the host's RAM and exposes it as
         // device-local + host-visible + coherent, so mapping beats staging copies.
-        // KODAWARI_FORCE_STAGING=1 takes the discrete-GPU path anyway (tests use it).
+        // ContextOptions::force_staging takes the discrete-GPU path anyway (tests use it).
         const bool shares_ram = props.deviceType == vk::PhysicalDeviceType::eIntegratedGpu ||
                                 props.deviceType == vk::PhysicalDeviceType::eCpu;
         const auto unified_flags = vk::MemoryPropertyFlagBits::eDeviceLocal | vk::MemoryPropertyFlagBits::eHostVisible |
@@ -341,7 +330,7 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
         for (std::uint32_t i = 0; i < ctx->memory_.memoryTypeCount; ++i) {
             if ((ctx->memory_.memoryTypes[i].propertyFlags & unified_flags) == unified_flags) has_unified_type = true;
         }
-        ctx->unified_ = shares_ram && has_unified_type && !env_flag("KODAWARI_FORCE_STAGING");
+        ctx->unified_ = shares_ram && has_unified_type && !options.force_staging;
     } catch (const std::exception& e) {
         return vulkan_error("Vulkan device setup", e);
     }

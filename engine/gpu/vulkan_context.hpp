@@ -17,8 +17,11 @@
 namespace kodawari::gpu {
 
 struct ContextOptions {
-    std::string device;       ///< index or name substring; "" = best (or env KODAWARI_DEVICE)
-    bool validation = false;  ///< also on when env KODAWARI_VALIDATION=1
+    std::string device;       ///< index or name substring; "" = best
+    bool validation = false;  ///< Khronos validation + synchronization validation
+    /// Staging copies even where the device shares the host's memory (the discrete-GPU
+    /// path, for tests on an integrated or CPU device).
+    bool force_staging = false;
     /// The queue must do graphics too (the renderer). Compute-only contexts prefer a
     /// compute-only family (async compute on GPUs), which cannot draw.
     bool graphics = false;
