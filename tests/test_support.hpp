@@ -64,6 +64,18 @@ inline BackendOptions gpu_options() {
     return options;
 }
 
+/// Every backend kind, for the suites that run one body per backend
+/// (INSTANTIATE_TEST_SUITE_P(All, Suite, all_backend_kinds(), backend_test_name)).
+inline auto all_backend_kinds() { return ::testing::Values(BackendKind::CpuReference, BackendKind::Cpu, BackendKind::Vulkan); }
+/// The backend's name as a test name: "cpu_reference", "cpu", "vulkan".
+inline std::string backend_test_name(const ::testing::TestParamInfo<BackendKind>& info) {
+    std::string name(backend_name(info.param));
+    for (char& c : name) {
+        if (c == '-') c = '_';
+    }
+    return name;
+}
+
 /// Why the GPU tests cannot run here ("" when a Vulkan device exists). The GPU tests skip
 /// only when there is no Vulkan device at all, and say why; any other failure fails.
 inline std::string no_vulkan_device_reason() {

@@ -187,12 +187,7 @@ TEST_P(BirdBackends, OutputWithoutReadbackStillAdvances) {
               0);
 }
 
-INSTANTIATE_TEST_SUITE_P(All, BirdBackends, ::testing::Values(BackendKind::CpuReference, BackendKind::Cpu, BackendKind::Vulkan),
-                         [](const auto& param_info) {
-                             std::string name(backend_name(param_info.param));
-                             for (char& c : name) if (c == '-') c = '_';
-                             return name;
-                         });
+INSTANTIATE_TEST_SUITE_P(All, BirdBackends, testing_support::all_backend_kinds(), testing_support::backend_test_name);
 
 TEST(VulkanStaging, DiscreteGpuPathMatchesTheReference) {
     // lavapipe has unified memory; force the staging-copy path a discrete GPU takes.

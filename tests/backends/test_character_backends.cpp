@@ -122,13 +122,5 @@ TEST_P(CharacterBackends, CrowdLoadsAndSteps) {
                 backend_->device().c_str(), rs.world.chains.size(), 1e3 * seconds);
 }
 
-INSTANTIATE_TEST_SUITE_P(All, CharacterBackends,
-                         ::testing::Values(kodawari::BackendKind::CpuReference, kodawari::BackendKind::Cpu,
-                                           kodawari::BackendKind::Vulkan),
-                         [](const auto& param_info) {
-                             std::string n(kodawari::backend_name(param_info.param));
-                             for (char& ch : n) {
-                                 if (ch == '-') ch = '_';
-                             }
-                             return n;
-                         });
+INSTANTIATE_TEST_SUITE_P(All, CharacterBackends, kodawari::testing_support::all_backend_kinds(),
+                         kodawari::testing_support::backend_test_name);

@@ -419,15 +419,7 @@ TEST_P(PoseBackends, NoInstancesIsFine) {
     EXPECT_TRUE(world.empty());
 }
 
-INSTANTIATE_TEST_SUITE_P(All, PoseBackends,
-                         ::testing::Values(BackendKind::CpuReference, BackendKind::Cpu, BackendKind::Vulkan),
-                         [](const auto& param_info) {
-                             std::string n(backend_name(param_info.param));
-                             for (char& ch : n) {
-                                 if (ch == '-') ch = '_';
-                             }
-                             return n;
-                         });
+INSTANTIATE_TEST_SUITE_P(All, PoseBackends, testing_support::all_backend_kinds(), testing_support::backend_test_name);
 
 // clip_time (pose_backend.hpp) on exact values: d = 2, so every step below is exact.
 TEST(PoseClipTime, WrapsLoopsAndPassesOthersThrough) {

@@ -197,12 +197,4 @@ TEST_P(RodBackends, RejectsAFrameThatDoesNotFitTheWorld) {
     EXPECT_FALSE(backend_->step(frame).ok());
 }
 
-INSTANTIATE_TEST_SUITE_P(All, RodBackends,
-                         ::testing::Values(BackendKind::CpuReference, BackendKind::Cpu, BackendKind::Vulkan),
-                         [](const auto& param_info) {
-                             std::string n(backend_name(param_info.param));
-                             for (char& ch : n) {
-                                 if (ch == '-') ch = '_';
-                             }
-                             return n;
-                         });
+INSTANTIATE_TEST_SUITE_P(All, RodBackends, testing_support::all_backend_kinds(), testing_support::backend_test_name);

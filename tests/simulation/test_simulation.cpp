@@ -149,15 +149,7 @@ TEST_P(Simulations, MisuseIsAnErrorThatNamesTheArgument) {
     EXPECT_NE(missing.error().message.find("no-such-scene.json"), std::string::npos) << missing.error().message;
 }
 
-INSTANTIATE_TEST_SUITE_P(All, Simulations,
-                         ::testing::Values(BackendKind::CpuReference, BackendKind::Cpu, BackendKind::Vulkan),
-                         [](const auto& param_info) {
-                             std::string n(backend_name(param_info.param));
-                             for (char& ch : n) {
-                                 if (ch == '-') ch = '_';
-                             }
-                             return n;
-                         });
+INSTANTIATE_TEST_SUITE_P(All, Simulations, testing_support::all_backend_kinds(), testing_support::backend_test_name);
 
 // A scene built in code (no file): the embedder's way in.
 TEST(Simulation, RunsASceneBuiltInCode) {
