@@ -7,6 +7,7 @@
 
 #include "commands.hpp"
 #include "kodawari/atomic_file.hpp"
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"

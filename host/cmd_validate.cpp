@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/compare.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rod_scene.hpp"

@@ -1,15 +1,9 @@
+// The CPU kinds' factories (kodawari::sim); make_bird_backend() and the others, which also
+// make vulkan backends, are in backend_factory.cpp (kodawari::vulkan).
 #include "backends/backends.hpp"
-#include "backends/device_backends.hpp"
+#include "backends/pose_backends.hpp"
 
 namespace kodawari {
-
-Result<std::shared_ptr<compute::Device>> backend_context(const BackendOptions& options) {
-    if (options.context) return options.context;
-    auto created = compute::Device::create(
-        {.device = options.device, .validation = options.validation, .force_staging = options.force_staging});
-    if (!created) return created.error();
-    return std::shared_ptr<compute::Device>(std::move(created).value());
-}
 
 std::string_view backend_name(BackendKind kind) {
     switch (kind) {
@@ -20,30 +14,40 @@ std::string_view backend_name(BackendKind kind) {
     return "cpu-reference";
 }
 
-Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options) {
-    BackendOptions own = options;
-    own.context.reset();
-    return backend_context(own);
+namespace {
+
+Error no_vulkan(std::string_view family) {
+    return make_error(Error::Kind::InvalidInput,
+                      "the vulkan " + std::string(family) +
+                          " backend is in kodawari::vulkan: link it and call make_" + std::string(family) +
+                          "_backend() (kodawari/backend_factory.hpp)");
 }
 
-std::uint64_t read_back_bytes(const gpu::VulkanContext& device) { return device.read_back_bytes(); }
+}  // namespace
 
-std::uint32_t validation_messages(const gpu::VulkanContext& device) { return device.validation_messages(); }
-
-Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options) {
+Result<std::unique_ptr<BirdBackend>> make_cpu_bird_backend(BackendKind kind, const BackendOptions& options) {
     switch (kind) {
-        case BackendKind::CpuReference: return make_cpu_bird_backend(true, 1);
-        case BackendKind::Cpu: return make_cpu_bird_backend(false, options.threads);
-        case BackendKind::Vulkan: return make_vulkan_bird_backend(options);
+        case BackendKind::CpuReference: return new_cpu_bird_backend(true, 1);
+        case BackendKind::Cpu: return new_cpu_bird_backend(false, options.threads);
+        case BackendKind::Vulkan: return no_vulkan("bird");
     }
     return make_error(Error::Kind::Internal, "unknown backend");
 }
 
-Result<std::unique_ptr<RodBackend>> make_rod_backend(BackendKind kind, const BackendOptions& options) {
+Result<std::unique_ptr<RodBackend>> make_cpu_rod_backend(BackendKind kind, const BackendOptions& options) {
     switch (kind) {
-        case BackendKind::CpuReference: return make_cpu_rod_backend(true, 1);
-        case BackendKind::Cpu: return make_cpu_rod_backend(false, options.threads);
-        case BackendKind::Vulkan: return make_vulkan_rod_backend(options);
+        case BackendKind::CpuReference: return new_cpu_rod_backend(true, 1);
+        case BackendKind::Cpu: return new_cpu_rod_backend(false, options.threads);
+        case BackendKind::Vulkan: return no_vulkan("rod");
+    }
+    return make_error(Error::Kind::Internal, "unknown backend");
+}
+
+Result<std::unique_ptr<PoseBackend>> make_cpu_pose_backend(BackendKind kind, const BackendOptions& options) {
+    switch (kind) {
+        case BackendKind::CpuReference: return new_cpu_pose_backend(true, 1);
+        case BackendKind::Cpu: return new_cpu_pose_backend(false, options.threads);
+        case BackendKind::Vulkan: return no_vulkan("pose");
     }
     return make_error(Error::Kind::Internal, "unknown backend");
 }

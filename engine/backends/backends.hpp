@@ -1,5 +1,6 @@
 #pragma once
-// Constructors of the concrete backends, used by make_bird_backend() and make_rod_backend().
+// Constructors of the CPU backends (kodawari::sim), used by make_cpu_bird_backend() and
+// make_cpu_rod_backend(); the vulkan ones are in device_backends.hpp.
 
 #include <memory>
 
@@ -8,9 +9,7 @@
 
 namespace kodawari {
 
-[[nodiscard]] std::unique_ptr<BirdBackend> make_cpu_bird_backend(bool reference, unsigned threads);
-[[nodiscard]] Result<std::unique_ptr<BirdBackend>> make_vulkan_bird_backend(const BackendOptions& options);
-[[nodiscard]] std::unique_ptr<RodBackend> make_cpu_rod_backend(bool reference, unsigned threads);
-[[nodiscard]] Result<std::unique_ptr<RodBackend>> make_vulkan_rod_backend(const BackendOptions& options);
+[[nodiscard]] std::unique_ptr<BirdBackend> new_cpu_bird_backend(bool reference, unsigned threads);
+[[nodiscard]] std::unique_ptr<RodBackend> new_cpu_rod_backend(bool reference, unsigned threads);
 
 }  // namespace kodawari

@@ -67,7 +67,7 @@ private:
 
 }  // namespace
 
-std::unique_ptr<BirdBackend> make_cpu_bird_backend(bool reference, unsigned threads) {
+std::unique_ptr<BirdBackend> new_cpu_bird_backend(bool reference, unsigned threads) {
     return std::make_unique<CpuBirdBackend>(reference, threads);
 }
 

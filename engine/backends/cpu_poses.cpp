@@ -87,7 +87,7 @@ private:
 
 }  // namespace
 
-std::unique_ptr<PoseBackend> make_cpu_pose_backend(bool reference, unsigned threads) {
+std::unique_ptr<PoseBackend> new_cpu_pose_backend(bool reference, unsigned threads) {
     return std::make_unique<CpuPoseBackend>(reference, threads);
 }
 

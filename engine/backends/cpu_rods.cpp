@@ -117,7 +117,7 @@ private:
 
 }  // namespace
 
-std::unique_ptr<RodBackend> make_cpu_rod_backend(bool reference, unsigned threads) {
+std::unique_ptr<RodBackend> new_cpu_rod_backend(bool reference, unsigned threads) {
     return std::make_unique<CpuRodBackend>(reference, threads);
 }
 

@@ -9,6 +9,7 @@
 #include <kodawari/shared/rod_inputs.h>
 
 #include "backends/device_backends.hpp"
+#include "kodawari/backend_factory.hpp"
 
 namespace kodawari {
 

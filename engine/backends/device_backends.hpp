@@ -8,6 +8,7 @@
 
 #include "compute/compute.hpp"
 #include "kodawari/backend.hpp"
+#include "kodawari/pose_backend.hpp"
 #include "kodawari/rod_backend.hpp"
 
 namespace kodawari {
@@ -16,6 +17,11 @@ namespace kodawari {
 /// renderer; never destroyed by the backend while others hold it), else a new compute
 /// device for `options.device` and `options.validation`.
 [[nodiscard]] Result<std::shared_ptr<compute::Device>> backend_context(const BackendOptions& options);
+
+/// The vulkan backends, made by make_bird_backend() and the others (backend_factory.cpp).
+[[nodiscard]] Result<std::unique_ptr<BirdBackend>> make_vulkan_bird_backend(const BackendOptions& options);
+[[nodiscard]] Result<std::unique_ptr<RodBackend>> make_vulkan_rod_backend(const BackendOptions& options);
+[[nodiscard]] Result<std::unique_ptr<PoseBackend>> make_vulkan_pose_backend(const BackendOptions& options);
 
 /// Records kernels that write part of a step's kinematic input where the vulkan rod
 /// backend keeps it: after the frame's input has been written, before the step's

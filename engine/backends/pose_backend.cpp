@@ -1,5 +1,6 @@
-// What every pose backend shares: the checks of the instances and the choice of backend
-// (the clip time and the placement matrix: gltf/pose_instance.cpp).
+// What every pose backend shares: the checks of the instances (the clip time and the
+// placement matrix: gltf/pose_instance.cpp; the choice of backend: backend.cpp and
+// backend_factory.cpp).
 #include <algorithm>
 #include <cmath>
 #include <iterator>
@@ -31,15 +32,6 @@ Result<void> check_instances(const gltf::Character& character, std::span<const P
         }
     }
     return {};
-}
-
-Result<std::unique_ptr<PoseBackend>> make_pose_backend(BackendKind kind, const BackendOptions& options) {
-    switch (kind) {
-        case BackendKind::CpuReference: return make_cpu_pose_backend(true, 1);
-        case BackendKind::Cpu: return make_cpu_pose_backend(false, options.threads);
-        case BackendKind::Vulkan: return make_vulkan_pose_backend(options);
-    }
-    return make_error(Error::Kind::Internal, "unknown backend");
 }
 
 }  // namespace kodawari

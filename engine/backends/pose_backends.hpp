@@ -1,5 +1,6 @@
 #pragma once
-// Constructors of the concrete pose backends, used by make_pose_backend().
+// The constructor of the CPU pose backends (kodawari::sim), used by make_cpu_pose_backend();
+// the vulkan one is in device_backends.hpp.
 
 #include <memory>
 
@@ -7,7 +8,6 @@
 
 namespace kodawari {
 
-[[nodiscard]] std::unique_ptr<PoseBackend> make_cpu_pose_backend(bool reference, unsigned threads);
-[[nodiscard]] Result<std::unique_ptr<PoseBackend>> make_vulkan_pose_backend(const BackendOptions& options);
+[[nodiscard]] std::unique_ptr<PoseBackend> new_cpu_pose_backend(bool reference, unsigned threads);
 
 }  // namespace kodawari

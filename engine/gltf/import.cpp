@@ -12,7 +12,7 @@
 #include <utility>
 #include <vector>
 
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/gltf/import.hpp"
 
 #include "core/binary_file.hpp"
 #include "gltf/import_detail.hpp"

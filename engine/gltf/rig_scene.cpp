@@ -2,6 +2,7 @@
 // structure of an imported character): chains and colliders found in a glTF / VRM file,
 // written as a scene that the scene loader reads back with the same rules.
 
+#include "kodawari/gltf/import.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
 
 #include <algorithm>

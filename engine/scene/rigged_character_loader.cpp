@@ -15,6 +15,7 @@
 #include <vector>
 
 #include <kodawari/gltf/chains.hpp>
+#include <kodawari/gltf/import.hpp>
 #include <kodawari/gltf/vrm.hpp>
 #include <kodawari/rods/world.hpp>
 

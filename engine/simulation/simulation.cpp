@@ -1,5 +1,6 @@
 // The Simulation facade (kodawari/simulation.hpp): the frame protocol that `run`,
 // `render`, `view` and `bench` each sequenced on their own before (issue 19), in one place.
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/simulation.hpp"
 
 #include <algorithm>

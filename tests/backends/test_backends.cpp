@@ -9,6 +9,7 @@
 
 #include "test_support.hpp"
 #include "kodawari/backend.hpp"
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/compare.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/scene.hpp"

@@ -16,6 +16,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <kodawari/backend_factory.hpp>
 #include <kodawari/gpu_info.hpp>
 #include <kodawari/rod_backend.hpp>
 

@@ -20,7 +20,9 @@
 
 #include <kodawari/shared/poses.h>
 
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/gltf/character.hpp"
+#include "kodawari/gltf/import.hpp"
 #include "kodawari/pose_backend.hpp"
 #include "test_support.hpp"
 

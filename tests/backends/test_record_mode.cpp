@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "backends/device_backends.hpp"
+#include "kodawari/backend_factory.hpp"
 #include "compute/compute.hpp"
 #include "kodawari/rods/synthetic.hpp"
 #include "kodawari/scene.hpp"

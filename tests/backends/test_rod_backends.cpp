@@ -11,6 +11,7 @@
 #include <kodawari/shared/rods.h>
 
 #include "test_support.hpp"
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rods/synthetic.hpp"

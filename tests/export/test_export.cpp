@@ -25,6 +25,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/version.hpp"
 #include "test_support.hpp"
 #include "kodawari/birds/rig.hpp"

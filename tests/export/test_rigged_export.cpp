@@ -23,6 +23,7 @@
 
 #include "kodawari/export.hpp"
 #include "kodawari/gltf/character.hpp"
+#include "kodawari/gltf/import.hpp"
 #include "test_support.hpp"
 
 namespace kodawari {

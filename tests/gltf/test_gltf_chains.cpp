@@ -13,6 +13,7 @@
 #include <nlohmann/json.hpp>
 
 #include "kodawari/gltf/chains.hpp"
+#include "kodawari/gltf/import.hpp"
 #include "kodawari/rods/solver.hpp"
 
 namespace kodawari {

@@ -21,6 +21,7 @@
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
 #include "kodawari/gltf/character.hpp"
+#include "kodawari/gltf/import.hpp"
 #include "test_support.hpp"
 
 namespace kodawari {

@@ -16,6 +16,7 @@
 #include <nlohmann/json.hpp>
 
 #include "test_support.hpp"
+#include "kodawari/gltf/import.hpp"
 #include "kodawari/gltf/vrm.hpp"
 #include "kodawari/rods/solver.hpp"
 

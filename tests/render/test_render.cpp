@@ -19,6 +19,7 @@
 #include <stb/stb_image.h>
 
 #include "kodawari/backend.hpp"
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/render/renderer.hpp"

@@ -17,6 +17,7 @@
 
 #include <stb/stb_image.h>
 
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"

@@ -19,6 +19,7 @@
 #include <gtest/gtest.h>
 
 #include "kodawari/backend.hpp"
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"

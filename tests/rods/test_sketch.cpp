@@ -10,6 +10,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/rods/sketch.hpp"

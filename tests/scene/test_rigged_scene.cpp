@@ -21,8 +21,10 @@
 
 #include <nlohmann/json.hpp>
 
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/export.hpp"
+#include "kodawari/gltf/import.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rod_scene.hpp"

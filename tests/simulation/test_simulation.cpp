@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"

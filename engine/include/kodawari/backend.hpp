@@ -81,19 +81,9 @@ public:
     [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }
 };
 
-/// Opens a Vulkan device (`options.device`, `options.validation`) to share between
-/// backends through BackendOptions::context, so that their buffers meet on one device:
-/// e.g. the pose backends' matrices feed the rod backend's input there
-/// (CrowdAnimator::write_inputs_on). A renderer has its own (Renderer::device_context()).
-[[nodiscard]] Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options);
-/// Bytes of kernel output read back to the host on `device` so far (every download and
-/// pose read back): how a caller checks that a pipeline keeps its data on the device.
-[[nodiscard]] std::uint64_t read_back_bytes(const gpu::VulkanContext& device);
-/// Validation messages on `device` so far (every backend sharing it).
-[[nodiscard]] std::uint32_t validation_messages(const gpu::VulkanContext& device);
-
-/// Creates a backend. Vulkan fails with a readable reason when no loader, driver or
-/// device is available.
-[[nodiscard]] Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options);
+/// Creates a cpu-reference or cpu bird backend (kodawari::sim). BackendKind::Vulkan is an
+/// InvalidInput error naming kodawari::vulkan, whose make_bird_backend() makes every kind
+/// (kodawari/backend_factory.hpp).
+[[nodiscard]] Result<std::unique_ptr<BirdBackend>> make_cpu_bird_backend(BackendKind kind, const BackendOptions& options);
 
 }  // namespace kodawari

@@ -15,7 +15,7 @@
 
 #include "pose_backend.hpp"
 #include "rod_backend.hpp"
-#include "rod_scene.hpp"
+#include "rods/rod_scene.hpp"
 
 namespace kodawari {
 

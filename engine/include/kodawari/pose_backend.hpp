@@ -65,8 +65,8 @@ public:
     [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }
 };
 
-/// Creates a pose backend; Vulkan fails with a readable reason when no loader, driver or
-/// device is available.
-[[nodiscard]] Result<std::unique_ptr<PoseBackend>> make_pose_backend(BackendKind kind, const BackendOptions& options);
+/// Creates a cpu-reference or cpu pose backend (kodawari::sim); BackendKind::Vulkan is an
+/// error, as for make_cpu_bird_backend().
+[[nodiscard]] Result<std::unique_ptr<PoseBackend>> make_cpu_pose_backend(BackendKind kind, const BackendOptions& options);
 
 }  // namespace kodawari

@@ -55,9 +55,9 @@ public:
     [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }
 };
 
-/// Creates a rod backend; Vulkan fails with a readable reason when no loader, driver or
-/// device is available.
-[[nodiscard]] Result<std::unique_ptr<RodBackend>> make_rod_backend(BackendKind kind, const BackendOptions& options);
+/// Creates a cpu-reference or cpu rod backend (kodawari::sim); BackendKind::Vulkan is an
+/// error, as for make_cpu_bird_backend().
+[[nodiscard]] Result<std::unique_ptr<RodBackend>> make_cpu_rod_backend(BackendKind kind, const BackendOptions& options);
 
 /// One chain's frame with the CPU reference (SPEC A.3, A.2, A.5, A.4): its rest shape
 /// from `frame`, then rods::step. What every backend computes; exposed for tests.

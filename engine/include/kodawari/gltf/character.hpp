@@ -1,9 +1,9 @@
 #pragma once
 /// @file
 /// Rigged glTF 2.0 characters on the CPU (SPEC A.7, issue 4): the node hierarchy, skins,
-/// animations and a per-node mesh reference, loaded from `.gltf` or `.glb` and checked
-/// before use, and the evaluation of an animation into a pose (local TRS and world
-/// matrices of every node).
+/// animations and a per-node mesh reference, and the evaluation of an animation into a
+/// pose (local TRS and world matrices of every node): kodawari::sim. Loading one from
+/// `.gltf` or `.glb` is gltf/import.hpp (kodawari::io).
 ///
 /// Section numbers refer to the glTF 2.0 specification, version 2.0.1
 /// (https://registry.khronos.org/glTF/specs/2.0/glTF-2.0.html).
@@ -119,13 +119,6 @@ struct Pose {
     std::vector<glm::vec3> scale;
     std::vector<glm::mat4> world;
 };
-
-/// Loads a `.gltf` (JSON, external or data-URI buffers) or `.glb` (binary) character.
-/// Errors name the file and the glTF path of the problem ("a.gltf: $.skins[0].joints[3]:
-/// node 17 does not exist"); Error::Kind::Io when the file cannot be read,
-/// InvalidInput for everything wrong inside it (including external buffers that are
-/// missing). Never throws.
-[[nodiscard]] Result<Character> load_character(const std::string& path);
 
 /// The value of `sampler` at `time` (s), for a property on `path`. Times before the first
 /// key or after the last take that key's value; a time equal to a key returns the key's

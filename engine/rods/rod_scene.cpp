@@ -12,7 +12,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include <kodawari/gltf/pose_instance.hpp>
-#include <kodawari/rod_scene.hpp>
+#include <kodawari/rods/rod_scene.hpp>
 #include <kodawari/rods/shape.hpp>
 
 namespace kodawari {

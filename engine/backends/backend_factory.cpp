@@ -1,0 +1,42 @@
+// The factories of every backend kind (kodawari/backend_factory.hpp says why they live in
+// the vulkan target): the CPU kinds come from kodawari::sim.
+#include "kodawari/backend_factory.hpp"
+
+#include "backends/device_backends.hpp"
+
+namespace kodawari {
+
+Result<std::shared_ptr<compute::Device>> backend_context(const BackendOptions& options) {
+    if (options.context) return options.context;
+    auto created = compute::Device::create(
+        {.device = options.device, .validation = options.validation, .force_staging = options.force_staging});
+    if (!created) return created.error();
+    return std::shared_ptr<compute::Device>(std::move(created).value());
+}
+
+Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options) {
+    BackendOptions own = options;
+    own.context.reset();
+    return backend_context(own);
+}
+
+std::uint64_t read_back_bytes(const gpu::VulkanContext& device) { return device.read_back_bytes(); }
+
+std::uint32_t validation_messages(const gpu::VulkanContext& device) { return device.validation_messages(); }
+
+Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options) {
+    if (kind == BackendKind::Vulkan) return make_vulkan_bird_backend(options);
+    return make_cpu_bird_backend(kind, options);
+}
+
+Result<std::unique_ptr<RodBackend>> make_rod_backend(BackendKind kind, const BackendOptions& options) {
+    if (kind == BackendKind::Vulkan) return make_vulkan_rod_backend(options);
+    return make_cpu_rod_backend(kind, options);
+}
+
+Result<std::unique_ptr<PoseBackend>> make_pose_backend(BackendKind kind, const BackendOptions& options) {
+    if (kind == BackendKind::Vulkan) return make_vulkan_pose_backend(options);
+    return make_cpu_pose_backend(kind, options);
+}
+
+}  // namespace kodawari

@@ -1,0 +1,44 @@
+#pragma once
+/// @file
+/// Backends of every kind, and the Vulkan device they can share (kodawari::vulkan).
+///
+/// The kind-dispatching factories live in the vulkan target, not in kodawari::sim with a
+/// registry the vulkan target fills at static initialization: a static library drops
+/// object files nothing references, so such a registration silently disappears from a
+/// link, and whether make_bird_backend(Vulkan) worked would depend on link flags. Here
+/// the dependency is a symbol: whoever calls these links kodawari::vulkan, and a program
+/// that links kodawari::sim alone calls make_cpu_bird_backend() and friends (backend.hpp,
+/// rod_backend.hpp, pose_backend.hpp), which make the CPU kinds.
+
+#include <cstdint>
+#include <memory>
+
+#include "kodawari/backend.hpp"
+#include "kodawari/pose_backend.hpp"
+#include "kodawari/result.hpp"
+#include "kodawari/rod_backend.hpp"
+
+namespace kodawari {
+
+/// Creates a bird backend. Vulkan fails with a readable reason when no loader, driver or
+/// device is available.
+[[nodiscard]] Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options);
+/// Creates a rod backend; Vulkan fails with a readable reason when no loader, driver or
+/// device is available.
+[[nodiscard]] Result<std::unique_ptr<RodBackend>> make_rod_backend(BackendKind kind, const BackendOptions& options);
+/// Creates a pose backend; Vulkan fails with a readable reason when no loader, driver or
+/// device is available.
+[[nodiscard]] Result<std::unique_ptr<PoseBackend>> make_pose_backend(BackendKind kind, const BackendOptions& options);
+
+/// Opens a Vulkan device (`options.device`, `options.validation`) to share between
+/// backends through BackendOptions::context, so that their buffers meet on one device:
+/// e.g. the pose backends' matrices feed the rod backend's input there
+/// (CrowdAnimator::write_inputs_on). A renderer has its own (Renderer::device_context()).
+[[nodiscard]] Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options);
+/// Bytes of kernel output read back to the host on `device` so far (every download and
+/// pose read back): how a caller checks that a pipeline keeps its data on the device.
+[[nodiscard]] std::uint64_t read_back_bytes(const gpu::VulkanContext& device);
+/// Validation messages on `device` so far (every backend sharing it).
+[[nodiscard]] std::uint32_t validation_messages(const gpu::VulkanContext& device);
+
+}  // namespace kodawari
