@@ -66,6 +66,24 @@ std::string Args::first_word() const {
     return "";
 }
 
+std::string env_text(const char* name) {
+    const char* value = std::getenv(name);
+    return value != nullptr ? value : "";
+}
+
+bool env_flag(const char* name) {
+    const std::string value = env_text(name);
+    return !value.empty() && value != "0";
+}
+
+render::RendererOptions renderer_options(const BackendChoice& choice, std::uint32_t width, std::uint32_t height) {
+    return {.width = width,
+            .height = height,
+            .device = choice.options.device,
+            .validation = choice.options.validation,
+            .force_staging = choice.options.force_staging};
+}
+
 BackendChoice read_backend_choice(Args& args) {
     BackendChoice choice;
     if (auto b = args.option("backend")) {
@@ -73,9 +91,12 @@ BackendChoice read_backend_choice(Args& args) {
         if (!parsed) throw UsageError{"--" + parsed.error().message};
         choice.backend = parsed.value();
     }
+    // The environment is read here and only here; the library takes options.
+    choice.options.device = env_text("KODAWARI_DEVICE");
     if (auto d = args.option("device")) choice.options.device = *d;
     if (auto t = args.count("threads", 1, 1024)) choice.options.threads = static_cast<unsigned>(*t);
-    choice.options.validation = args.flag("validation");
+    choice.options.validation = args.flag("validation") || env_flag("KODAWARI_VALIDATION");
+    choice.options.force_staging = env_flag("KODAWARI_FORCE_STAGING");
     return choice;
 }
 

@@ -11,6 +11,7 @@
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/scene.hpp"
+#include "kodawari/render/renderer.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
@@ -57,7 +58,17 @@ struct BackendChoice {
     std::optional<BackendKind> backend;  ///< none: auto (vulkan when a device opens, else cpu)
     BackendOptions options;
 };
+/// --backend, --device, --threads, --validation; and the environment, which only the
+/// command line reads (the library takes options): KODAWARI_DEVICE (the device when no
+/// --device), KODAWARI_VALIDATION=1 (as --validation), KODAWARI_FORCE_STAGING=1.
 BackendChoice read_backend_choice(Args& args);
+
+/// The value of an environment variable ("" when unset); a flag is set unless "" or "0".
+[[nodiscard]] std::string env_text(const char* name);
+[[nodiscard]] bool env_flag(const char* name);
+
+/// A renderer of width x height on the device, validation and staging of `choice`.
+[[nodiscard]] render::RendererOptions renderer_options(const BackendChoice& choice, std::uint32_t width, std::uint32_t height);
 
 /// The Simulation of a scene file (`command` names the command in usage errors) or of a
 /// parsed scene, on the backends of `choice`, `frames` long (none: the scene's). When

@@ -263,42 +263,46 @@ int bench_view(Args& args, BackendChoice choice) {
     auto loaded = load_scene(positionals[0]);
     if (!loaded) return report(loaded.error());
     const Scene& scene = loaded.value();
-    auto renderer = render::Renderer::create({.width = width, .height = height, .device = choice.options.device,
-                                              .validation = choice.options.validation});
-    if (!renderer) return report(renderer.error());
-    render::Renderer& r = *renderer.value();
-    choice.options.context = r.device_context();
-
+    // A renderer per configuration, so that each keeps its simulation's layers set up
+    // (show_on) and the interleaving costs nothing; the vulkan ones simulate on it.
     struct Run {
         const char* name;
         BackendKind kind;
         Simulation::DrawSource source;
+        std::unique_ptr<render::Renderer> renderer;
         std::unique_ptr<Simulation> sim;
         double seconds = 0.0;
         std::uint64_t read_back_bytes = 0;
     };
     std::vector<Run> runs;
-    runs.push_back({"vulkan shared", BackendKind::Vulkan, Simulation::DrawSource::Device, {}});
-    runs.push_back({"vulkan readback", BackendKind::Vulkan, Simulation::DrawSource::ReadBack, {}});
-    runs.push_back({"cpu", BackendKind::Cpu, Simulation::DrawSource::Device, {}});
+    runs.push_back({"vulkan shared", BackendKind::Vulkan, Simulation::DrawSource::Device, {}, {}});
+    runs.push_back({"vulkan readback", BackendKind::Vulkan, Simulation::DrawSource::ReadBack, {}, {}});
+    runs.push_back({"cpu", BackendKind::Cpu, Simulation::DrawSource::Device, {}, {}});
     for (Run& run : runs) {
+        auto renderer = render::Renderer::create(renderer_options(choice, width, height));
+        if (!renderer) return report(renderer.error());
+        run.renderer = std::move(renderer).value();
+        BackendOptions options = choice.options;
+        options.context = run.renderer->device_context();
         // The read-back configuration makes the rigged characters' rod input on the host too.
-        auto made = Simulation::create(scene, {.backend = run.kind, .options = choice.options, .frames = 2 + frames,
+        auto made = Simulation::create(scene, {.backend = run.kind, .options = options, .frames = 2 + frames,
                                                .rod_inputs_on_device = run.source == Simulation::DrawSource::Device});
         if (!made) return report(made.error());
         run.sim = std::move(made).value();
         run.sim->keep_bird_poses(run.source == Simulation::DrawSource::ReadBack);
+        if (auto s = run.sim->show_on(*run.renderer); !s) return report(s.error());
     }
     const Simulation& first = *runs.front().sim;
     const std::vector<glm::vec3> grid = render::content_points(first.rod_scene(), nullptr, &first.bird_world());
     std::printf("bench view: scene \"%s\": %zu chains, %zu birds, %ux%u, %u frames per configuration after 2 warm-up frames, "
                 "interleaved 10 at a time, on %s\n",
                 scene.name.c_str(), first.rod_scene() ? first.rod_scene()->world.chains.size() : std::size_t{0},
-                first.bird_world().birds.size(), width, height, frames, r.device().c_str());
+                first.bird_world().birds.size(), width, height, frames, runs.front().renderer->device().c_str());
     std::fflush(stdout);
 
     // One frame of a configuration: simulate, give the renderer the state, draw.
     const auto frame = [&](Run& run) -> Result<void> {
+        render::Renderer& r = *run.renderer;
         const std::uint64_t before = r.read_back_bytes();
         KW_TRY(run.sim->step());
         KW_TRY(run.sim->draw_on(r, run.source));
@@ -311,7 +315,6 @@ int bench_view(Args& args, BackendChoice choice) {
         return {};
     };
     for (Run& run : runs) {
-        if (auto s = run.sim->show_on(r); !s) return report(s.error());
         for (std::uint32_t f = 0; f < 2; ++f) {
             if (auto s = frame(run); !s) return report(s.error());
         }
@@ -319,8 +322,6 @@ int bench_view(Args& args, BackendChoice choice) {
     for (std::uint32_t done = 0; done < frames;) {
         const std::uint32_t n = std::min(10u, frames - done);
         for (Run& run : runs) {
-            // Each configuration's own scene for the renderer's layers.
-            if (auto s = run.sim->show_on(r); !s) return report(s.error());
             const auto start = std::chrono::steady_clock::now();
             for (std::uint32_t k = 0; k < n; ++k) {
                 if (auto s = frame(run); !s) return report(s.error());
@@ -329,7 +330,9 @@ int bench_view(Args& args, BackendChoice choice) {
         }
         done += n;
     }
-    if (validation_failed(r.validation_messages())) return kExitFailure;
+    for (const Run& run : runs) {
+        if (validation_failed(run.renderer->validation_messages())) return kExitFailure;
+    }
     const double baseline = frames / runs[1].seconds;
     std::printf("\n%-16s %12s %12s %22s %18s\n", "configuration", "frames/s", "ms/frame", "read back B/frame", "vs vulkan readback");
     std::string json = "{\"benchmark\":\"view\",\"scene\":\"" + json_escape(scene.name) + "\",\"frames\":" +

@@ -8,7 +8,7 @@
 namespace kodawari::cli {
 
 int cmd_info(Args args) {
-    std::string device;
+    std::string device = env_text("KODAWARI_DEVICE");
     if (auto d = args.option("device")) device = *d;
     if (!args.positionals().empty()) throw UsageError{"info takes no arguments"};
     std::printf("kodawari %s\n", std::string(version()).c_str());

@@ -100,8 +100,7 @@ int cmd_render(Args args) {
                                                       (ec ? " (" + ec.message() + ")" : std::string(" (a file is in the way)"))));
     }
 
-    auto renderer = render::Renderer::create(
-        {.width = width, .height = height, .device = choice.options.device, .validation = choice.options.validation});
+    auto renderer = render::Renderer::create(renderer_options(choice, width, height));
     if (!renderer) return report(renderer.error());
     render::Renderer& r = *renderer.value();
     // The simulation runs on the renderer's device, which then draws the vulkan backends'

@@ -116,20 +116,18 @@ int cmd_view(Args args) {
 
     std::uint32_t extension_count = 0;
     const char** extensions = glfwGetRequiredInstanceExtensions(&extension_count);
-    render::RendererOptions options{.width = width,
-                                    .height = height,
-                                    .device = choice.options.device,
-                                    .validation = choice.options.validation,
-                                    .instance_extensions = std::vector<std::string>(extensions, extensions + extension_count),
-                                    .create_surface = [&](VkInstance instance) -> Result<VkSurfaceKHR> {
-                                        VkSurfaceKHR surface = VK_NULL_HANDLE;
-                                        const VkResult r = glfwCreateWindowSurface(instance, window.w, nullptr, &surface);
-                                        if (r != VK_SUCCESS) {
-                                            return make_error(Error::Kind::Vulkan, "glfwCreateWindowSurface failed (VkResult " +
-                                                                                       std::to_string(static_cast<int>(r)) + ")");
-                                        }
-                                        return surface;
-                                    }};
+    render::RendererOptions options = renderer_options(choice, width, height);
+    options.instance_extensions = std::vector<std::string>(extensions, extensions + extension_count);
+    options.create_surface = [&](VkInstance instance) -> Result<VkSurfaceKHR> {
+        VkSurfaceKHR surface = VK_NULL_HANDLE;
+        const VkResult r = glfwCreateWindowSurface(instance, window.w, nullptr, &surface);
+        if (r != VK_SUCCESS) {
+            Error e = make_error(Error::Kind::Vulkan, "glfwCreateWindowSurface failed (VkResult " + std::to_string(static_cast<int>(r)) + ")");
+            e.vk_result = static_cast<int>(r);
+            return e;
+        }
+        return surface;
+    };
     // The renderer owns the surface; it is destroyed (with the renderer) before the window.
     auto renderer = render::Renderer::create(options);
     if (!renderer) return report(renderer.error());

@@ -6,6 +6,7 @@
 #include <array>
 #include <cstdio>
 #include <cstdint>
+#include <cstdlib>
 #include <filesystem>
 #include <string>
 #include <system_error>
@@ -14,6 +15,7 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
+#include "kodawari/backend.hpp"
 #include "kodawari/gpu_info.hpp"
 
 namespace kodawari::testing_support {
@@ -48,6 +50,19 @@ public:
 private:
     std::filesystem::path path_;
 };
+
+/// The options of the GPU tests' devices: validation (with synchronization validation)
+/// when ctest sets KODAWARI_VALIDATION=1. The library reads no environment variable;
+/// the tests, like the `kodawari` command, pass what the environment says.
+inline bool validation_requested() {
+    const char* value = std::getenv("KODAWARI_VALIDATION");
+    return value != nullptr && std::string(value) != "" && std::string(value) != "0";
+}
+inline BackendOptions gpu_options() {
+    BackendOptions options;
+    options.validation = validation_requested();
+    return options;
+}
 
 /// Why the GPU tests cannot run here ("" when a Vulkan device exists). The GPU tests skip
 /// only when there is no Vulkan device at all, and say why; any other failure fails.

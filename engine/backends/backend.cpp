@@ -5,7 +5,8 @@ namespace kodawari {
 
 Result<std::shared_ptr<compute::Device>> backend_context(const BackendOptions& options) {
     if (options.context) return options.context;
-    auto created = compute::Device::create({.device = options.device, .validation = options.validation});
+    auto created = compute::Device::create(
+        {.device = options.device, .validation = options.validation, .force_staging = options.force_staging});
     if (!created) return created.error();
     return std::shared_ptr<compute::Device>(std::move(created).value());
 }

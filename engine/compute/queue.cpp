@@ -125,6 +125,7 @@ Result<Submission> Queue::submit(Recording recording) const {
         device_->device().resetFences(*recording.slot_.fence);
         const vk::CommandBuffer cmd = *recording.slot_.cmd;
         device_->queue().submit(vk::SubmitInfo{.commandBufferCount = 1, .pCommandBuffers = &cmd}, *recording.slot_.fence);
+        device_->count_submission();
         return Submission(std::move(recording));
     });
 }

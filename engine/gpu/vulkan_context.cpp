@@ -16,11 +16,6 @@ VULKAN_HPP_DEFAULT_DISPATCH_LOADER_DYNAMIC_STORAGE
 namespace kodawari::gpu {
 namespace {
 
-bool env_flag(const char* name) {
-    const char* value = std::getenv(name);
-    return value != nullptr && std::strcmp(value, "") != 0 && std::strcmp(value, "0") != 0;
-}
-
 std::string version_text(std::uint32_t v) {
     return std::to_string(VK_API_VERSION_MAJOR(v)) + "." + std::to_string(VK_API_VERSION_MINOR(v)) + "." +
            std::to_string(VK_API_VERSION_PATCH(v));
@@ -122,10 +117,7 @@ std::string none_because(const GpuInventory& inventory, const std::string& why) 
 // Picks a device among those not rejected (GpuDeviceInfo::rejected): by index or name
 // substring when asked, else the best type. A request marks each device it passes over
 // with why, so that a failed selection names every device and its reason.
-void choose(GpuInventory& inventory, std::string request) {
-    if (request.empty()) {
-        if (const char* env = std::getenv("KODAWARI_DEVICE")) request = env;
-    }
+void choose(GpuInventory& inventory, const std::string& request) {
     auto& devices = inventory.devices;
     if (!request.empty()) {
         const bool numeric = std::all_of(request.begin(), request.end(), [](unsigned char c) { return std::isdigit(c); });
@@ -280,7 +272,7 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
     auto loader = open_loader();
     if (!loader) return loader.error();
     ctx->context_ = std::move(loader).value();
-    ctx->validation_ = options.validation || env_flag("KODAWARI_VALIDATION");
+    ctx->validation_ = options.validation;
     KW_TRY(guard("Vulkan instance", [&]() -> Result<void> {
         if (ctx->validation_ && !has_validation_layer(*ctx->context_)) {
             return make_error(Error::Kind::Unsupported,
@@ -364,7 +356,7 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
         }
         // Unified memory: the device shares the host's RAM and exposes it as
         // device-local + host-visible + coherent, so mapping beats staging copies.
-        // KODAWARI_FORCE_STAGING=1 takes the discrete-GPU path anyway (tests use it).
+        // ContextOptions::force_staging takes the discrete-GPU path anyway (tests use it).
         const bool shares_ram = props.deviceType == vk::PhysicalDeviceType::eIntegratedGpu ||
                                 props.deviceType == vk::PhysicalDeviceType::eCpu;
         const auto unified_flags = vk::MemoryPropertyFlagBits::eDeviceLocal | vk::MemoryPropertyFlagBits::eHostVisible |
@@ -373,7 +365,7 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
         for (std::uint32_t i = 0; i < ctx->memory_.memoryTypeCount; ++i) {
             if ((ctx->memory_.memoryTypes[i].propertyFlags & unified_flags) == unified_flags) has_unified_type = true;
         }
-        ctx->unified_ = shares_ram && has_unified_type && !env_flag("KODAWARI_FORCE_STAGING");
+        ctx->unified_ = shares_ram && has_unified_type && !options.force_staging;
         return {};
     }));
     return ctx;

@@ -19,8 +19,11 @@
 namespace kodawari::gpu {
 
 struct ContextOptions {
-    std::string device;       ///< index or name substring; "" = best (or env KODAWARI_DEVICE)
-    bool validation = false;  ///< also on when env KODAWARI_VALIDATION=1
+    std::string device;       ///< index or name substring; "" = best
+    bool validation = false;  ///< Khronos validation + synchronization validation
+    /// Staging copies even where the device shares the host's memory (the discrete-GPU
+    /// path, for tests on an integrated or CPU device).
+    bool force_staging = false;
     /// The queue must do graphics too (the renderer). Compute-only contexts prefer a
     /// compute-only family (async compute on GPUs), which cannot draw.
     bool graphics = false;
@@ -90,6 +93,9 @@ public:
     /// the buffers where they are.
     [[nodiscard]] std::uint64_t read_back_bytes() const { return read_back_bytes_; }
     void count_read_back(std::uint64_t bytes) { read_back_bytes_ += bytes; }
+    /// Submissions to the queue so far: how a test checks that recording submits nothing.
+    [[nodiscard]] std::uint64_t submissions() const { return submissions_; }
+    void count_submission() { ++submissions_; }
 
     /// Index of a memory type with all `required` flags, preferring `preferred` too.
     [[nodiscard]] Result<std::uint32_t> memory_type(std::uint32_t type_bits, vk::MemoryPropertyFlags required,
@@ -114,6 +120,7 @@ private:
     std::uint64_t timestamp_mask_ = 0;
     std::uint32_t queue_family_ = 0;
     std::uint64_t read_back_bytes_ = 0;
+    std::uint64_t submissions_ = 0;
     bool unified_ = false;
     bool validation_ = false;
     // Heap-allocated so the callback's pointer stays valid when the context moves.

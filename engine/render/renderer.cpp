@@ -258,6 +258,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     auto impl = std::make_unique<Impl>();
     auto ctx = gpu::VulkanContext::create({.device = options.device,
                                            .validation = options.validation,
+                                           .force_staging = options.force_staging,
                                            .graphics = true,
                                            .instance_extensions = options.instance_extensions,
                                            .create_surface = options.create_surface});

@@ -78,7 +78,7 @@ protected:
         if (GetParam() == BackendKind::Vulkan) {
             if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
         }
-        auto made = make_bird_backend(GetParam(), {});
+        auto made = make_bird_backend(GetParam(), testing_support::gpu_options());
         ASSERT_TRUE(made.ok()) << made.error().message;
         backend_ = std::move(made).value();
         reference_ = std::move(make_bird_backend(BackendKind::CpuReference, {})).value();
@@ -197,9 +197,9 @@ INSTANTIATE_TEST_SUITE_P(All, BirdBackends, ::testing::Values(BackendKind::CpuRe
 TEST(VulkanStaging, DiscreteGpuPathMatchesTheReference) {
     // lavapipe has unified memory; force the staging-copy path a discrete GPU takes.
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
-    ::setenv("KODAWARI_FORCE_STAGING", "1", 1);
-    auto made = make_bird_backend(BackendKind::Vulkan, {});
-    ::unsetenv("KODAWARI_FORCE_STAGING");
+    BackendOptions staging = testing_support::gpu_options();
+    staging.force_staging = true;
+    auto made = make_bird_backend(BackendKind::Vulkan, staging);
     ASSERT_TRUE(made.ok()) << made.error().message;
     auto reference = std::move(make_bird_backend(BackendKind::CpuReference, {})).value();
     const birds::BirdWorld world = small_world(257);

@@ -18,6 +18,8 @@
 
 #include <kodawari/gpu_info.hpp>
 #include <kodawari/rod_backend.hpp>
+
+#include "test_support.hpp"
 #include <kodawari/rod_scene.hpp>
 #include <kodawari/rods/kinematics.hpp>
 #include <kodawari/rods/solver.hpp>
@@ -42,7 +44,7 @@ protected:
                 GTEST_SKIP() << why;
             }
         }
-        auto made = kodawari::make_rod_backend(GetParam(), {});
+        auto made = kodawari::make_rod_backend(GetParam(), kodawari::testing_support::gpu_options());
         ASSERT_TRUE(made.ok()) << made.error().message;
         backend_ = std::move(made).value();
     }

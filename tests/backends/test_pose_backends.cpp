@@ -226,7 +226,7 @@ protected:
         if (GetParam() == BackendKind::Vulkan) {
             if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
         }
-        auto made = make_pose_backend(GetParam(), {});
+        auto made = make_pose_backend(GetParam(), testing_support::gpu_options());
         ASSERT_TRUE(made.ok()) << made.error().message;
         backend_ = std::move(made).value();
     }

@@ -102,6 +102,7 @@ std::unique_ptr<render::Renderer> make_renderer(std::uint32_t width, std::uint32
     render::RendererOptions options;
     options.width = width;
     options.height = height;
+    options.validation = testing_support::validation_requested();
     auto renderer = render::Renderer::create(options);
     EXPECT_TRUE(renderer.ok()) << (renderer.ok() ? "" : renderer.error().message);
     return renderer.ok() ? std::move(renderer).value() : nullptr;

@@ -166,6 +166,7 @@ TEST(SketchRender, RiggedCharacterIsDrawnAsItsSkinnedMesh) {
     render::RendererOptions options;
     options.width = kWidth;
     options.height = kHeight;
+    options.validation = testing_support::validation_requested();
     auto renderer = render::Renderer::create(options);
     ASSERT_TRUE(renderer.ok()) << renderer.error().message;
     constexpr std::uint32_t kLast = 30;  // 0.5 s

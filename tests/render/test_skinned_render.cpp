@@ -134,6 +134,7 @@ Result<std::unique_ptr<render::Renderer>> make_renderer() {
     render::RendererOptions options;
     options.width = kWidth;
     options.height = kHeight;
+    options.validation = testing_support::validation_requested();
     return render::Renderer::create(options);
 }
 

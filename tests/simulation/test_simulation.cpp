@@ -30,7 +30,7 @@ protected:
         }
     }
     [[nodiscard]] SimulationOptions options(std::uint32_t frames) const {
-        return {.backend = GetParam(), .options = {}, .frames = frames};
+        return {.backend = GetParam(), .options = testing_support::gpu_options(), .frames = frames};
     }
 };
 
@@ -48,9 +48,9 @@ TEST_P(Simulations, ChainsAreTheBackendsSequencedByHand) {
 
     // By hand, on backends of the same kind (vulkan: on one device, the rigged characters'
     // rod input written there from frame 1 on, as the protocol says).
-    BackendOptions by_hand;
+    BackendOptions by_hand = testing_support::gpu_options();
     if (GetParam() == BackendKind::Vulkan) {
-        auto device = open_shared_device({});
+        auto device = open_shared_device(testing_support::gpu_options());
         ASSERT_TRUE(device.ok()) << device.error().message;
         by_hand.context = std::move(device).value();
     }

@@ -28,8 +28,11 @@ enum class BackendKind { CpuReference, Cpu, Vulkan };
 
 /// Options for creating backends.
 struct BackendOptions {
-    std::string device;        ///< Vulkan device name substring or index ("" = best; env KODAWARI_DEVICE)
-    bool validation = false;   ///< Khronos validation + synchronization validation (also KODAWARI_VALIDATION=1)
+    std::string device;        ///< Vulkan device name substring or index ("" = best)
+    bool validation = false;   ///< Khronos validation + synchronization validation
+    /// Staging copies even where the device shares the host's memory (the discrete-GPU
+    /// path; for tests on an integrated or CPU device).
+    bool force_staging = false;
     unsigned threads = 0;      ///< cpu backend threads (0 = hardware concurrency)
     /// A Vulkan device to run on instead of opening one: a renderer's
     /// (render::Renderer::device_context()), so that the renderer draws straight from the

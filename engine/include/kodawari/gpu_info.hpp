@@ -39,7 +39,8 @@ struct GpuInventory {
 };
 
 /// Lists the Vulkan devices. `request` is a device index or a name substring ("" = the
-/// best: discrete > integrated > virtual > cpu; env KODAWARI_DEVICE overrides "").
+/// best: discrete > integrated > virtual > cpu). The library reads no environment variable:
+/// the `kodawari` command passes KODAWARI_DEVICE here.
 /// Fails when there is no Vulkan loader or driver.
 [[nodiscard]] Result<GpuInventory> list_gpus(const std::string& request);
 

@@ -142,8 +142,9 @@ private:
 /// Where the renderer runs.
 struct RendererOptions {
     std::uint32_t width = 1280, height = 720;  ///< in [1, 8192]
-    std::string device;       ///< Vulkan device name substring or index ("" = best; env KODAWARI_DEVICE)
-    bool validation = false;  ///< Khronos validation + synchronization validation (also KODAWARI_VALIDATION=1)
+    std::string device;       ///< Vulkan device name substring or index ("" = best)
+    bool validation = false;  ///< Khronos validation + synchronization validation
+    bool force_staging = false;  ///< staging copies even on shared memory (BackendOptions::force_staging)
     /// A window to present to (the viewer): the instance extensions its surface needs and
     /// a function that creates the surface on the renderer's instance. Empty = offscreen
     /// only. The renderer owns the surface and, from the first present(), a swapchain.

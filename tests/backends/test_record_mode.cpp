@@ -1,0 +1,100 @@
+// The vulkan backends' record mode (engine/backends/device_backends.hpp, issue 19): a rod
+// step and a bird frame recorded into the caller's one recording submit nothing and wait
+// for nothing until the caller submits, and give the very state step() and simulate()
+// give. White-box: the engine's internal headers, as an embedding layer inside the
+// engine uses them. Lavapipe where there is no GPU, validation on (ctest).
+#include <gtest/gtest.h>
+
+#include <cstring>
+#include <vector>
+
+#include "backends/device_backends.hpp"
+#include "compute/compute.hpp"
+#include "kodawari/rods/synthetic.hpp"
+#include "kodawari/scene.hpp"
+#include "test_support.hpp"
+
+using namespace kodawari;
+
+namespace {
+
+birds::BirdWorld bird_world() {
+    auto scene = parse_scene(R"({"format": "kodawari-scene", "version": 1, "name": "record", "fps": 60, "duration": 1,
+        "flocks": [{"name": "f", "wing_type": "hawk", "count": 37,
+                    "route": {"points": [[0, 10, 0], [10, 20, 0], [30, 0, 10], [40, 10, 0]]}}]})",
+                             "(test)");
+    EXPECT_TRUE(scene.ok()) << scene.error().message;
+    auto world = build_bird_world(scene.value());
+    EXPECT_TRUE(world.ok());
+    return std::move(world).value();
+}
+
+TEST(RecordMode, RodsAndBirdsRecordIntoOneSubmission) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto opened = open_shared_device(testing_support::gpu_options());
+    ASSERT_TRUE(opened.ok()) << opened.error().message;
+    compute::Device& device = *opened.value();
+    BackendOptions options = testing_support::gpu_options();
+    options.context = opened.value();
+
+    // 203 chains of 13 joints: not a multiple of the workgroup size.
+    rods::SyntheticOptions o;
+    o.chains = 203;
+    o.joints = 13;
+    o.views = 2;
+    auto made = rods::SyntheticScene::make(o);
+    ASSERT_TRUE(made.ok()) << made.error().message;
+    const rods::SyntheticScene& scene = made.value();
+    const birds::BirdWorld birds = bird_world();
+
+    auto recorded_rods = make_rod_backend(BackendKind::Vulkan, options);
+    auto stepped_rods = make_rod_backend(BackendKind::Vulkan, options);
+    auto recorded_birds = make_bird_backend(BackendKind::Vulkan, options);
+    auto simulated_birds = make_bird_backend(BackendKind::Vulkan, options);
+    ASSERT_TRUE(recorded_rods.ok() && stepped_rods.ok() && recorded_birds.ok() && simulated_birds.ok());
+    auto* rods_recorder = dynamic_cast<DeviceRodBackend*>(recorded_rods.value().get());
+    auto* birds_recorder = dynamic_cast<DeviceBirdBackend*>(recorded_birds.value().get());
+    ASSERT_NE(rods_recorder, nullptr);
+    ASSERT_NE(birds_recorder, nullptr);
+
+    constexpr float kDt = 1.0f / 60.0f;
+    rods::RodFrame frame;
+    scene.frame(0, kDt, frame);
+    ASSERT_TRUE(recorded_rods.value()->load(scene.world(), frame).ok());
+    ASSERT_TRUE(stepped_rods.value()->load(scene.world(), frame).ok());
+    ASSERT_TRUE(recorded_birds.value()->load(birds).ok());
+    ASSERT_TRUE(simulated_birds.value()->load(birds).ok());
+
+    const compute::Queue queue(device);
+    ChainSnapshot expected, actual;
+    for (std::uint32_t f = 1; f <= 6; ++f) {
+        scene.frame(f, kDt, frame);
+        ASSERT_TRUE(stepped_rods.value()->step(frame).ok());
+        ASSERT_TRUE(simulated_birds.value()->simulate(1, {}).ok());
+
+        const std::uint64_t before = device.submissions();
+        auto recording = queue.begin();
+        ASSERT_TRUE(recording.ok()) << recording.error().message;
+        ASSERT_TRUE(rods_recorder->record_step(recording.value(), frame).ok());
+        ASSERT_TRUE(birds_recorder->record_simulate(recording.value(), 1).ok());
+        EXPECT_EQ(device.submissions(), before) << "recording submitted work (frame " << f << ")";
+        auto submission = queue.submit(std::move(recording).value());
+        ASSERT_TRUE(submission.ok()) << submission.error().message;
+        EXPECT_EQ(device.submissions(), before + 1) << "one submission for both domains";
+        ASSERT_TRUE(submission.value().wait().ok());
+
+        ASSERT_TRUE(stepped_rods.value()->read(expected).ok());
+        ASSERT_TRUE(recorded_rods.value()->read(actual).ok());
+        ASSERT_EQ(expected.positions.size(), actual.positions.size());
+        EXPECT_EQ(std::memcmp(expected.positions.data(), actual.positions.data(), expected.positions.size() * sizeof(glm::vec3)), 0)
+            << "frame " << f;
+    }
+    // The birds' states agree too: their next frame is the same poses.
+    std::vector<gpu::BirdPose> a(birds.birds.size()), b(birds.birds.size());
+    ASSERT_TRUE(recorded_birds.value()->simulate(1, {a, {}}).ok());
+    ASSERT_TRUE(simulated_birds.value()->simulate(1, {b, {}}).ok());
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(gpu::BirdPose)), 0);
+    EXPECT_EQ(validation_messages(device), 0u);
+}
+
+}  // namespace
