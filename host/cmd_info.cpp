@@ -30,6 +30,9 @@ int cmd_info(Args args) {
         std::printf("      storage buffer range %.1f MiB, push constants %u B, device-local memory %.1f GiB\n",
                     static_cast<double>(d.max_storage_buffer_range) / (1 << 20), d.max_push_constants,
                     static_cast<double>(d.device_local_bytes) / (1 << 30));
+        // Why it cannot be chosen (an old driver, no compute queue, not the one asked
+        // for), so that "chosen: none" is not the only clue.
+        if (!d.rejected.empty()) std::printf("      passed over: %s\n", d.rejected.c_str());
     }
     if (inv.chosen >= 0) {
         std::printf("chosen: [%u] %s, because %s\n", inv.devices[static_cast<std::size_t>(inv.chosen)].index,

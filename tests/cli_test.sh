@@ -64,6 +64,14 @@ check "no driver: --backend vulkan fails clearly" bash -c "test $rc -eq 1 && gre
 cat "$work/info.out"
 check "info names the chosen device" grep -q "^chosen: " "$work/info.out"
 
+# A device request that matches nothing: info and a run name each device and why it was
+# passed over (Error::rejected_devices, GpuDeviceInfo::rejected), not just "none".
+"$bin" info --device no-such-device >"$work/info-none.out" 2>&1
+check "info: no device matches, says why for each" bash -c "grep -q '^chosen: none: no usable Vulkan device matches \"no-such-device\" (passed over: .*: does not match \"no-such-device\"' '$work/info-none.out' && grep -q '^      passed over: ' '$work/info-none.out'"
+"$bin" run scenes/flock.json --frames 10 --no-export --backend vulkan --device no-such-device >/dev/null 2>"$work/nomatch.err"
+rc=$?
+check "run: no device matches, fails naming the devices" bash -c "test $rc -eq 1 && grep -q 'kodawari: error: no usable Vulkan device matches \"no-such-device\" (passed over: .*: does not match' '$work/nomatch.err'"
+
 # The same input on the same backend gives the same bits.
 "$bin" run scenes/flock.json --backend vulkan --frames 30 --out "$work/a.glb" >/dev/null 2>&1
 "$bin" run scenes/flock.json --backend vulkan --frames 30 --out "$work/b.glb" >/dev/null 2>&1

@@ -6,10 +6,6 @@
 // which is Vulkan by nature, keeps using it directly, while the compute vocabulary
 // (Device, Buffer, Kernel, Queue, Recording, Submission) lives here.
 
-#include <string_view>
-#include <type_traits>
-#include <utility>
-
 #include "gpu/vulkan_context.hpp"
 
 namespace kodawari::compute {
@@ -19,16 +15,9 @@ namespace kodawari::compute {
 /// instead); shared between backends and the renderer through std::shared_ptr.
 using Device = gpu::VulkanContext;
 
-/// The one place where exceptions from vulkan.hpp become Errors: runs `body` (which
-/// returns a Result) and turns a vk::SystemError into an Error of kind Vulkan that keeps
-/// the VkResult (Error::vk_result), naming `what` was being done.
-template <typename F>
-[[nodiscard]] auto guard(std::string_view what, F&& body) -> std::invoke_result_t<F&> {
-    try {
-        return body();
-    } catch (const std::exception& e) {
-        return gpu::vulkan_error(std::string(what), e);
-    }
-}
+/// The boundary where exceptions from vulkan.hpp become Errors: gpu::guard itself, named
+/// here so that the compute layer's code reads in its own vocabulary; one definition, so
+/// that the compute path, device setup and the renderer map failures the same way.
+using gpu::guard;
 
 }  // namespace kodawari::compute

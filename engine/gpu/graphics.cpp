@@ -10,7 +10,7 @@ namespace kodawari::gpu {
 Result<GpuImage> GpuImage::create(const VulkanContext& ctx, std::uint32_t width, std::uint32_t height, vk::Format format,
                                   vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect) {
     GpuImage out;
-    try {
+    KW_TRY(guard("Vulkan image " + std::to_string(width) + "x" + std::to_string(height) + " " + vk::to_string(format), [&]() -> Result<void> {
         const auto& device = ctx.device();
         out.image_ = device.createImage({.imageType = vk::ImageType::e2D,
                                          .format = format,
@@ -31,9 +31,8 @@ Result<GpuImage> GpuImage::create(const VulkanContext& ctx, std::uint32_t width,
                                             .viewType = vk::ImageViewType::e2D,
                                             .format = format,
                                             .subresourceRange = {.aspectMask = aspect, .levelCount = 1, .layerCount = 1}});
-    } catch (const std::exception& e) {
-        return vulkan_error("Vulkan image " + std::to_string(width) + "x" + std::to_string(height) + " " + vk::to_string(format), e);
-    }
+        return {};
+    }));
     return out;
 }
 
@@ -44,7 +43,7 @@ Result<GraphicsPipeline> GraphicsPipeline::create(const VulkanContext& ctx, vk::
     const auto fragment_code = embedded_shader(fragment);
     assert(!vertex_code.empty() && !fragment_code.empty() && "shader not embedded: add it to shaders/CMakeLists.txt");
     GraphicsPipeline out;
-    try {
+    KW_TRY(guard("Vulkan graphics pipeline " + std::string(vertex) + " + " + std::string(fragment), [&]() -> Result<void> {
         const auto& device = ctx.device();
         const vk::PushConstantRange push{.stageFlags = vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment,
                                          .offset = 0,
@@ -111,9 +110,8 @@ Result<GraphicsPipeline> GraphicsPipeline::create(const VulkanContext& ctx, vk::
                                                                 .layout = *out.layout_,
                                                                 .renderPass = render_pass,
                                                                 .subpass = 0});
-    } catch (const std::exception& e) {
-        return vulkan_error("Vulkan graphics pipeline " + std::string(vertex) + " + " + std::string(fragment), e);
-    }
+        return {};
+    }));
     return out;
 }
 
@@ -121,15 +119,14 @@ Result<BufferSet> BufferSet::create(const VulkanContext& ctx, const GraphicsPipe
     assert(pipeline.storage_buffers() > 0 && "the pipeline has no storage buffers");
     BufferSet out;
     out.count_ = pipeline.storage_buffers();
-    try {
+    KW_TRY(guard("Vulkan descriptor set", [&]() -> Result<void> {
         const vk::DescriptorPoolSize size{.type = vk::DescriptorType::eStorageBuffer, .descriptorCount = out.count_};
         out.pool_ = ctx.device().createDescriptorPool(
             {.flags = vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet, .maxSets = 1, .poolSizeCount = 1, .pPoolSizes = &size});
         const vk::DescriptorSetLayout layout = pipeline.set_layout();
         out.set_ = std::move(ctx.device().allocateDescriptorSets({.descriptorPool = *out.pool_, .descriptorSetCount = 1, .pSetLayouts = &layout})[0]);
-    } catch (const std::exception& e) {
-        return vulkan_error("Vulkan descriptor set", e);
-    }
+        return {};
+    }));
     return out;
 }
 

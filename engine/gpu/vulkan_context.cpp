@@ -3,6 +3,7 @@
 #include "compute/queue.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cctype>
 #include <cstdio>
 #include <cstdlib>
@@ -63,6 +64,14 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& device, std::uint32_t ind
     info.api_version = version_text(props.apiVersion);
     const auto family = compute_family(device);
     info.has_compute_queue = family.has_value();
+    // The engine's own needs, whatever the context is for: its kernels are SPIR-V for
+    // Vulkan 1.1 (cmake/KodawariShaders.cmake's --target-env) and run on a compute queue.
+    if (props.apiVersion < VK_API_VERSION_1_1) {
+        info.rejected = "Vulkan " + std::to_string(VK_API_VERSION_MAJOR(props.apiVersion)) + "." +
+                        std::to_string(VK_API_VERSION_MINOR(props.apiVersion)) + " < 1.1 needed";
+    } else if (!family) {
+        info.rejected = "no queue family with compute";
+    }
     if (family) {
         info.timestamps = props.limits.timestampPeriod > 0.0f &&
                           device.getQueueFamilyProperties()[*family].timestampValidBits > 0;
@@ -85,7 +94,29 @@ std::string lower(std::string text) {
     return text;
 }
 
-// Picks a device: by index or name substring when asked, else the best type.
+// "name: reason" for each device passed over (vk-bootstrap keeps these too): for
+// Error::rejected_devices and the messages of a failed selection.
+std::vector<std::string> rejections(const GpuInventory& inventory) {
+    std::vector<std::string> out;
+    for (const GpuDeviceInfo& d : inventory.devices) {
+        if (!d.rejected.empty()) out.push_back(d.name + ": " + d.rejected);
+    }
+    return out;
+}
+
+// Why no device was chosen, followed by each device's reason, so that one line of a
+// message says what to change (a driver, the request).
+std::string none_because(const GpuInventory& inventory, const std::string& why) {
+    std::string text = why;
+    const auto reasons = rejections(inventory);
+    for (std::size_t i = 0; i < reasons.size(); ++i) text += (i == 0 ? " (passed over: " : "; ") + reasons[i];
+    if (!reasons.empty()) text += ")";
+    return text;
+}
+
+// Picks a device among those not rejected (GpuDeviceInfo::rejected): by index or name
+// substring when asked, else the best type. A request marks each device it passes over
+// with why, so that a failed selection names every device and its reason.
 void choose(GpuInventory& inventory, const std::string& request) {
     auto& devices = inventory.devices;
     if (!request.empty()) {
@@ -93,19 +124,24 @@ void choose(GpuInventory& inventory, const std::string& request) {
         for (std::size_t i = 0; i < devices.size(); ++i) {
             const bool match = numeric ? std::to_string(devices[i].index) == request
                                        : lower(devices[i].name).find(lower(request)) != std::string::npos;
-            if (match && devices[i].has_compute_queue) {
+            if (!devices[i].rejected.empty()) continue;  // its own reason says more than the request
+            if (!match) {
+                devices[i].rejected = numeric ? "is device " + std::to_string(devices[i].index) + ", not " + request
+                                              : "does not match \"" + request + "\"";
+            } else if (inventory.chosen < 0) {
                 inventory.chosen = static_cast<int>(i);
                 inventory.reason = "asked for \"" + request + "\"";
-                return;
             }
         }
-        inventory.reason = "no Vulkan device with a compute queue matches \"" + request + "\"";
+        if (inventory.chosen < 0) {
+            inventory.reason = none_because(inventory, "no usable Vulkan device matches \"" + request + "\"");
+        }
         return;
     }
     static constexpr const char* kOrder[] = {"discrete", "integrated", "virtual", "cpu", "other"};
     for (const char* type : kOrder) {
         for (std::size_t i = 0; i < devices.size(); ++i) {
-            if (devices[i].type == type && devices[i].has_compute_queue) {
+            if (devices[i].type == type && devices[i].rejected.empty()) {
                 inventory.chosen = static_cast<int>(i);
                 inventory.reason = std::string("the first ") + type +
                                    " device (preference: discrete > integrated > virtual > cpu)";
@@ -113,23 +149,7 @@ void choose(GpuInventory& inventory, const std::string& request) {
             }
         }
     }
-    inventory.reason = "no Vulkan device has a compute queue";
-}
-
-// Why choose() passed over each device (vk-bootstrap keeps these too): for the Error of a
-// failed selection.
-std::vector<std::string> rejections(const GpuInventory& inventory, const std::string& request) {
-    const bool numeric = !request.empty() && std::all_of(request.begin(), request.end(), [](unsigned char c) { return std::isdigit(c); });
-    std::vector<std::string> out;
-    for (const GpuDeviceInfo& d : inventory.devices) {
-        if (!d.has_compute_queue) {
-            out.push_back(d.name + ": no compute queue");
-        } else if (!request.empty() && !(numeric ? std::to_string(d.index) == request
-                                                 : lower(d.name).find(lower(request)) != std::string::npos)) {
-            out.push_back(d.name + ": does not match \"" + request + "\"");
-        }
-    }
-    return out;
+    inventory.reason = none_because(inventory, "no Vulkan device is usable");
 }
 
 VKAPI_ATTR VkBool32 VKAPI_CALL on_validation_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity,
@@ -142,13 +162,31 @@ VKAPI_ATTR VkBool32 VKAPI_CALL on_validation_message(VkDebugUtilsMessageSeverity
     return VK_FALSE;
 }
 
-std::unique_ptr<vk::raii::Context> open_loader(std::string& error) {
-    try {
-        return std::make_unique<vk::raii::Context>();
-    } catch (const std::exception& e) {
-        error = std::string("no Vulkan loader (libvulkan.so.1): ") + e.what();
-        return nullptr;
+Result<std::unique_ptr<vk::raii::Context>> open_loader() {
+    auto context = guard("no Vulkan loader (libvulkan.so.1)",
+                         []() -> Result<std::unique_ptr<vk::raii::Context>> { return std::make_unique<vk::raii::Context>(); });
+    if (!context && context.error().vk_result == 0) {
+        // No VkResult: the library itself is missing, which is the machine's setup (the
+        // command line falls back to the CPU), not a Vulkan call that failed.
+        Error missing = context.error();
+        missing.kind = Error::Kind::Unsupported;
+        return missing;
     }
+    return context;
+}
+
+// The queue family this context uses on `device`: one that draws (and, with a surface,
+// presents to it) when asked, else compute_family's choice.
+std::optional<std::uint32_t> usable_family(const vk::raii::PhysicalDevice& device, bool graphics,
+                                          const vk::raii::SurfaceKHR& surface) {
+    if (static_cast<VkSurfaceKHR>(*surface) == VK_NULL_HANDLE) return compute_family(device, graphics);
+    // One queue does everything, so it must also present to the window.
+    const auto families = device.getQueueFamilyProperties();
+    const auto both = vk::QueueFlagBits::eGraphics | vk::QueueFlagBits::eCompute;
+    for (std::uint32_t i = 0; i < families.size(); ++i) {
+        if ((families[i].queueFlags & both) == both && device.getSurfaceSupportKHR(i, *surface)) return i;
+    }
+    return std::nullopt;
 }
 
 vk::raii::Instance make_instance(const vk::raii::Context& context, bool validation,
@@ -188,8 +226,10 @@ bool has_validation_layer(const vk::raii::Context& context) {
 Error vulkan_error(const std::string& what, const std::exception& e) {
     // The loader answers "incompatible driver" when it found no usable driver at all.
     if (dynamic_cast<const vk::IncompatibleDriverError*>(&e) != nullptr) {
-        return make_error(Error::Kind::Unsupported,
-                          "no Vulkan driver found (install Mesa's lavapipe, Debian package mesa-vulkan-drivers, or a GPU driver)");
+        Error none = make_error(Error::Kind::Unsupported,
+                                "no Vulkan driver found (install Mesa's lavapipe, Debian package mesa-vulkan-drivers, or a GPU driver)");
+        none.vk_result = VK_ERROR_INCOMPATIBLE_DRIVER;
+        return none;
     }
     Error error = make_error(Error::Kind::Vulkan, what + ": " + e.what());
     if (const auto* system = dynamic_cast<const vk::SystemError*>(&e); system != nullptr) {
@@ -203,11 +243,10 @@ Error vulkan_error(const std::string& what, const std::exception& e) {
 namespace kodawari {
 
 Result<GpuInventory> list_gpus(const std::string& request) {
-    std::string error;
-    auto context = gpu::open_loader(error);
-    if (!context) return make_error(Error::Kind::Unsupported, error);
-    try {
-        const vk::raii::Instance instance = gpu::make_instance(*context, false);
+    auto context = gpu::open_loader();
+    if (!context) return context.error();
+    return gpu::guard("Vulkan instance", [&]() -> Result<GpuInventory> {
+        const vk::raii::Instance instance = gpu::make_instance(*context.value(), false);
         GpuInventory inventory;
         const vk::raii::PhysicalDevices devices(instance);
         for (std::uint32_t i = 0; i < devices.size(); ++i) inventory.devices.push_back(gpu::describe(devices[i], i));
@@ -217,9 +256,7 @@ Result<GpuInventory> list_gpus(const std::string& request) {
             gpu::choose(inventory, request);
         }
         return inventory;
-    } catch (const std::exception& e) {
-        return gpu::vulkan_error("Vulkan instance", e);
-    }
+    });
 }
 
 }  // namespace kodawari
@@ -232,11 +269,11 @@ VulkanContext::~VulkanContext() {
 
 Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOptions& options) {
     std::unique_ptr<VulkanContext> ctx(new VulkanContext());
-    std::string error;
-    ctx->context_ = open_loader(error);
-    if (!ctx->context_) return make_error(Error::Kind::Unsupported, error);
+    auto loader = open_loader();
+    if (!loader) return loader.error();
+    ctx->context_ = std::move(loader).value();
     ctx->validation_ = options.validation;
-    try {
+    KW_TRY(guard("Vulkan instance", [&]() -> Result<void> {
         if (ctx->validation_ && !has_validation_layer(*ctx->context_)) {
             return make_error(Error::Kind::Unsupported,
                               "validation was asked for but VK_LAYER_KHRONOS_validation is not installed "
@@ -264,7 +301,10 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
             if (!surface) return surface.error();
             ctx->surface_ = vk::raii::SurfaceKHR(ctx->instance_, surface.value());
         }
+        return {};
+    }));
 
+    KW_TRY(guard("Vulkan device setup", [&]() -> Result<void> {
         GpuInventory inventory;
         vk::raii::PhysicalDevices devices(ctx->instance_);
         for (std::uint32_t i = 0; i < devices.size(); ++i) inventory.devices.push_back(describe(devices[i], i));
@@ -272,32 +312,27 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
             return make_error(Error::Kind::Unsupported,
                               "no Vulkan device: the loader found no driver (install Mesa's lavapipe: mesa-vulkan-drivers)");
         }
+        const bool presents = static_cast<VkSurfaceKHR>(*ctx->surface_) != VK_NULL_HANDLE;
+        const bool graphics = options.graphics || presents;
+        // This context's needs beyond the engine's own (describe()): a queue that draws
+        // and presents, so that a device that cannot is passed over, not chosen and failed.
+        for (GpuDeviceInfo& d : inventory.devices) {
+            if (d.rejected.empty() && graphics && !usable_family(devices[d.index], graphics, ctx->surface_)) {
+                d.rejected = presents ? "no queue family that does graphics and compute and presents to the window"
+                                      : "no queue family that does graphics and compute";
+            }
+        }
         choose(inventory, options.device);
         if (inventory.chosen < 0) {
+            // No Vulkan call failed (vk_result stays 0): every device was passed over.
             Error none = make_error(Error::Kind::Unsupported, inventory.reason);
-            none.rejected_devices = rejections(inventory, options.device);
+            none.rejected_devices = rejections(inventory);
             return none;
         }
         ctx->info_ = inventory.devices[static_cast<std::size_t>(inventory.chosen)];
         ctx->physical_ = std::move(devices[ctx->info_.index]);
-        const bool presents = static_cast<VkSurfaceKHR>(*ctx->surface_) != VK_NULL_HANDLE;
-        std::optional<std::uint32_t> family = compute_family(ctx->physical_, options.graphics || presents);
-        if (presents) {
-            // One queue does everything, so it must also present to the window.
-            family.reset();
-            const auto families = ctx->physical_.getQueueFamilyProperties();
-            const auto both = vk::QueueFlagBits::eGraphics | vk::QueueFlagBits::eCompute;
-            for (std::uint32_t i = 0; i < families.size() && !family; ++i) {
-                if ((families[i].queueFlags & both) == both && ctx->physical_.getSurfaceSupportKHR(i, *ctx->surface_)) family = i;
-            }
-            if (!family) {
-                return make_error(Error::Kind::Unsupported,
-                                  ctx->info_.name + " has no queue that does graphics and compute and presents to the window");
-            }
-        }
-        if (!family) {
-            return make_error(Error::Kind::Unsupported, ctx->info_.name + " has no queue that does graphics and compute");
-        }
+        const std::optional<std::uint32_t> family = usable_family(ctx->physical_, graphics, ctx->surface_);
+        assert(family && "choose() passes over devices without the queue family");
         ctx->queue_family_ = *family;
 
         const float priority = 1.0f;
@@ -331,9 +366,8 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
             if ((ctx->memory_.memoryTypes[i].propertyFlags & unified_flags) == unified_flags) has_unified_type = true;
         }
         ctx->unified_ = shares_ram && has_unified_type && !options.force_staging;
-    } catch (const std::exception& e) {
-        return vulkan_error("Vulkan device setup", e);
-    }
+        return {};
+    }));
     return ctx;
 }
 
@@ -343,7 +377,7 @@ Result<CommandSlot> VulkanContext::acquire_slot() {
         free_slots_.pop_back();
         return slot;
     }
-    return compute::guard("Vulkan command buffer", [&]() -> Result<CommandSlot> {
+    return guard("Vulkan command buffer", [&]() -> Result<CommandSlot> {
         CommandSlot slot;
         slot.cmd = std::move(device_.allocateCommandBuffers(
             {.commandPool = *pool_, .level = vk::CommandBufferLevel::ePrimary, .commandBufferCount = 1})[0]);

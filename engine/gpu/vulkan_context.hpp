@@ -7,6 +7,8 @@
 #include <functional>
 #include <memory>
 #include <string>
+#include <string_view>
+#include <type_traits>
 #include <vector>
 
 #include <vulkan/vulkan_raii.hpp>
@@ -126,7 +128,22 @@ private:
 };
 
 /// Turns an exception from vulkan.hpp into an Error that keeps its VkResult
-/// (Error::vk_result). Called by compute::guard, the one boundary where they are caught.
+/// (Error::vk_result). Called by guard(), the one boundary where they are caught.
 [[nodiscard]] Error vulkan_error(const std::string& what, const std::exception& e);
+
+/// The one place where exceptions from vulkan.hpp become Errors (compute::guard is this
+/// function too): runs `body`, which returns a Result, and turns what it throws into an
+/// Error of kind Vulkan that keeps the VkResult (Error::vk_result) and names `what` was
+/// being done. Callers that treat a result as control flow (a swapchain out of date)
+/// check Error::vk_result instead of catching, so no other catch of vulkan.hpp's
+/// exceptions is needed.
+template <typename F>
+[[nodiscard]] auto guard(std::string_view what, F&& body) -> std::invoke_result_t<F&> {
+    try {
+        return body();
+    } catch (const std::exception& e) {
+        return vulkan_error(std::string(what), e);
+    }
+}
 
 }  // namespace kodawari::gpu

@@ -195,11 +195,12 @@ Renderer::~Renderer() {
     // A present may still wait on a frame's semaphore: the queue must be idle before the
     // window's objects go (the context waits too, but it is destroyed after them).
     if (impl_ && impl_->window) {
-        try {
+        // A failure here (device lost) means nothing is in flight any more, and a
+        // destructor has no one to report it to: the Error is dropped on purpose.
+        (void)gpu::guard("Vulkan queue idle", [&]() -> Result<void> {
             impl_->ctx->queue().waitIdle();
-        } catch (const std::exception&) {
-            // Device lost: nothing is in flight any more.
-        }
+            return {};
+        });
     }
 }
 std::uint32_t Renderer::width() const { return impl_->width; }
@@ -234,6 +235,10 @@ bool Renderer::skinned_on_device() const { return impl_->skinned->on_device(); }
 namespace {
 
 constexpr vk::Format kColorFormat = vk::Format::eR8G8B8A8Unorm;
+
+// The window changed size under the swapchain: control flow (remake it on the next
+// present()), not a failure, told apart by the VkResult that guard() keeps.
+bool out_of_date(const Error& error) { return error.vk_result == static_cast<int>(vk::Result::eErrorOutOfDateKHR); }
 
 // The first depth format the device can render to (every device has one of these).
 std::optional<vk::Format> depth_format(const vk::raii::PhysicalDevice& physical) {
@@ -275,7 +280,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     if (!depth_image) return depth_image.error();
     impl->depth.emplace(std::move(depth_image).value());
 
-    try {
+    KW_TRY(gpu::guard("Vulkan render pass", [&]() -> Result<void> {
         const vk::AttachmentDescription attachments[] = {
             {.format = kColorFormat,
              .samples = vk::SampleCountFlagBits::e1,
@@ -333,9 +338,8 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
                                                           .width = options.width,
                                                           .height = options.height,
                                                           .layers = 1});
-    } catch (const std::exception& e) {
-        return gpu::vulkan_error("Vulkan render pass", e);
-    }
+        return {};
+    }));
 
     const auto pipeline = [&](vk::PrimitiveTopology topology, bool depth_test) {
         return gpu::GraphicsPipeline::create(c, *impl->pass, "render.vert", "render.frag", sizeof(gpu::RenderVertex), 3,
@@ -552,21 +556,25 @@ Result<bool> Renderer::present(const DrawList& list, std::uint32_t window_width,
     if (static_cast<VkSurfaceKHR>(*c.surface()) == VK_NULL_HANDLE) {
         return make_error(Error::Kind::Unsupported, "present() needs a renderer made with a window surface");
     }
-    try {
+    return gpu::guard("Vulkan presentation", [&]() -> Result<bool> {
         if (!r.window || r.window->stale || r.window->requested != vk::Extent2D{window_width, window_height}) {
             KW_TRY(r.make_swapchain(window_width, window_height));
         }
         if (r.window->images.empty()) return false;  // minimized
         Impl::Window& w = *r.window;
-        std::uint32_t index = 0;
-        try {
+        // No image (a timeout) is not an error: the frame is skipped.
+        auto acquired = gpu::guard("Vulkan swapchain image", [&]() -> Result<std::optional<std::uint32_t>> {
             const auto [result, i] = w.swapchain.acquireNextImage(UINT64_MAX, *w.acquired);
-            if (result != vk::Result::eSuccess && result != vk::Result::eSuboptimalKHR) return false;
-            index = i;
-        } catch (const vk::OutOfDateKHRError&) {
+            if (result != vk::Result::eSuccess && result != vk::Result::eSuboptimalKHR) return std::optional<std::uint32_t>{};
+            return std::optional<std::uint32_t>{i};
+        });
+        if (!acquired) {
+            if (!out_of_date(acquired.error())) return acquired.error();
             w.stale = true;
             return false;
         }
+        if (!acquired.value()) return false;
+        const std::uint32_t index = *acquired.value();
         KW_TRY(r.upload(list));
         w.cmd.reset();
         w.cmd.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
@@ -619,20 +627,24 @@ Result<bool> Renderer::present(const DrawList& list, std::uint32_t window_width,
         // One frame at a time: the vertex buffer and the offscreen image are reused.
         constexpr std::uint64_t kTimeoutNs = 600ull * 1000 * 1000 * 1000;
         if (c.device().waitForFences(*w.fence, VK_TRUE, kTimeoutNs) != vk::Result::eSuccess) {
-            return make_error(Error::Kind::Vulkan, "the GPU did not finish a frame within 600 s");
+            // As compute::Submission::wait does: the code tells a hang from a failure.
+            Error error = make_error(Error::Kind::Vulkan, "the GPU did not finish a frame within 600 s");
+            error.vk_result = static_cast<int>(vk::Result::eTimeout);
+            return error;
         }
         const vk::SwapchainKHR swapchain = *w.swapchain;
-        try {
-            const vk::Result presented = c.queue().presentKHR(
+        auto presented = gpu::guard("Vulkan present", [&]() -> Result<void> {
+            const vk::Result result = c.queue().presentKHR(
                 {.waitSemaphoreCount = 1, .pWaitSemaphores = &signal, .swapchainCount = 1, .pSwapchains = &swapchain, .pImageIndices = &index});
-            if (presented == vk::Result::eSuboptimalKHR) w.stale = true;
-        } catch (const vk::OutOfDateKHRError&) {
-            w.stale = true;
+            if (result == vk::Result::eSuboptimalKHR) w.stale = true;
+            return {};
+        });
+        if (!presented) {
+            if (!out_of_date(presented.error())) return presented.error();
+            w.stale = true;  // shown or not, the next present() remakes the swapchain
         }
         return true;
-    } catch (const std::exception& e) {
-        return gpu::vulkan_error("Vulkan presentation", e);
-    }
+    });
 }
 
 }  // namespace kodawari::render

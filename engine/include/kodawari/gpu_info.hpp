@@ -26,13 +26,16 @@ struct GpuDeviceInfo {
     std::uint64_t max_storage_buffer_range = 0;
     std::uint32_t max_push_constants = 0;
     std::uint64_t device_local_bytes = 0;
+    /// Why this device was passed over ("no queue family with compute", "Vulkan 1.0 < 1.1
+    /// needed", "does not match \"nvidia\""); "" when it can be chosen.
+    std::string rejected;
 };
 
 /// All devices, which one would be chosen and why.
 struct GpuInventory {
     std::vector<GpuDeviceInfo> devices;
     int chosen = -1;      ///< index into devices, -1 when none fits
-    std::string reason;   ///< why that one (or why none)
+    std::string reason;   ///< why that one (or why none, naming each device's reason)
 };
 
 /// Lists the Vulkan devices. `request` is a device index or a name substring ("" = the

@@ -25,7 +25,8 @@ struct Error {
     /// the message, as vk-bootstrap's errors allow.
     int vk_result = 0;
     /// When no device could be chosen: why each one was passed over
-    /// ("llvmpipe (LLVM 15.0.6, 256 bits): no compute queue").
+    /// ("llvmpipe (LLVM 15.0.6, 256 bits): no queue family with compute"). vk_result is then
+    /// 0: no Vulkan call failed.
     std::vector<std::string> rejected_devices{};
 };
 
