@@ -1,54 +1,133 @@
 #!/usr/bin/env python3
-"""Layering of the engine's component targets (engine/CMakeLists.txt, issue 19): no
-target's sources include, directly or through other headers, a header of a target it does
-not link, or a third-party header it does not link. A header belongs to the target that
-defines what it declares (the table below); a new header needs an entry, so that its
+"""Layering of the engine's component targets (engine/CMakeLists.txt, issue 19).
+
+No target's sources include, directly or through other headers, a header of a target it
+does not link, or a third-party header it does not link. A header belongs to the target
+that defines what it declares (OWNERS below); a new header needs an entry, so that its
 layer is a decision. The link test (tests/consumers/sim_only.cpp) cannot see header-only
-libraries such as nlohmann-json; this can. Usage: check_layers.py SOURCE_DIR"""
-import re,pathlib,sys
-root=pathlib.Path(sys.argv[1] if len(sys.argv)>1 else '.')/'engine'
-cm=(root/'CMakeLists.txt').read_text()
-targets={}
-for m in re.finditer(r'kodawari_component\((\w+)\n(.*?)\)',cm,re.S):
-    targets[m.group(1)]=m.group(2).split()
+libraries such as nlohmann-json; this can.
+
+Usage: check_layers.py SOURCE_DIR
+"""
+import pathlib
+import re
+import sys
+
+ENGINE = (pathlib.Path(sys.argv[1] if len(sys.argv) > 1 else ".") / "engine").resolve()
+
 # What each target links (itself included), as engine/CMakeLists.txt says.
-links={'sim':{'sim'},'vulkan':{'vulkan','sim'},'io':{'io','sim'},'render':{'render','vulkan','io','sim'},'engine':{'engine','render','vulkan','io','sim'}}
-# The third-party headers each may include (a prefix of the include).
-third={'sim':set(),'vulkan':{'vulkan'},'io':{'tiny_gltf','nlohmann'},'render':{'vulkan','stb'},'engine':{'vulkan'}}
-# owner of each public/internal header: the target that defines what it declares
-own={}
-def o(pat,t):
-    for f in root.glob(pat): own[str(f.relative_to(root))]=t
-for pat,t in [('include/kodawari/*.hpp','sim'),('include/kodawari/birds/*.hpp','sim'),('include/kodawari/rods/*.hpp','sim'),('core/*.hpp','sim'),('birds/*.hpp','sim'),
-              ('backends/backends.hpp','sim'),('backends/pose_backends.hpp','sim'),('backends/device_backends.hpp','vulkan'),('compute/*.hpp','vulkan'),('gpu/*.hpp','vulkan'),
-              ('scene/*.hpp','io'),('export/*.hpp','io'),('gltf/*.hpp','io'),('render/*.hpp','render'),('include/kodawari/render/*.hpp','render')]:
-    o(pat,t)
-for h,t in {'gltf/character.hpp':'sim','gltf/pose_instance.hpp':'sim','gltf/chains.hpp':'io','gltf/vrm.hpp':'io','gltf/rig_scene.hpp':'io','gltf/import.hpp':'io',
-            'backend_factory.hpp':'vulkan','crowd_animator.hpp':'vulkan','gpu_info.hpp':'vulkan','scene.hpp':'io','rod_scene.hpp':'io','export.hpp':'io','scene_edit.hpp':'io','simulation.hpp':'engine'}.items():
-    own['include/kodawari/'+h]=t
-def resolve(inc,src):
-    for base in [root/'include', root, src.parent]:
-        p=base/inc
-        if p.exists(): return str(p.resolve().relative_to(root.resolve())) if str(p.resolve()).startswith(str(root.resolve())) else None
+LINKS = {
+    "sim": {"sim"},
+    "vulkan": {"vulkan", "sim"},
+    "io": {"io", "sim"},
+    "render": {"render", "vulkan", "io", "sim"},
+    "engine": {"engine", "render", "vulkan", "io", "sim"},
+}
+# The third-party headers each target may include (prefixes of the include path).
+THIRD_PARTY = {"tiny_gltf", "nlohmann", "vulkan/", "stb/"}
+ALLOWED_THIRD_PARTY = {
+    "sim": set(),
+    "vulkan": {"vulkan"},
+    "io": {"tiny_gltf", "nlohmann"},
+    "render": {"vulkan", "stb"},
+    "engine": {"vulkan"},
+}
+# Which target owns each header: folders first, then the public headers one by one.
+OWNER_PATTERNS = [
+    ("include/kodawari/*.hpp", "sim"),
+    ("include/kodawari/birds/*.hpp", "sim"),
+    ("include/kodawari/rods/*.hpp", "sim"),
+    ("core/*.hpp", "sim"),
+    ("birds/*.hpp", "sim"),
+    ("backends/backends.hpp", "sim"),
+    ("backends/pose_backends.hpp", "sim"),
+    ("backends/device_backends.hpp", "vulkan"),
+    ("compute/*.hpp", "vulkan"),
+    ("gpu/*.hpp", "vulkan"),
+    ("scene/*.hpp", "io"),
+    ("export/*.hpp", "io"),
+    ("gltf/*.hpp", "io"),
+    ("render/*.hpp", "render"),
+    ("include/kodawari/render/*.hpp", "render"),
+]
+PUBLIC_OWNERS = {
+    "gltf/character.hpp": "sim",
+    "gltf/pose_instance.hpp": "sim",
+    "gltf/chains.hpp": "io",
+    "gltf/vrm.hpp": "io",
+    "gltf/rig_scene.hpp": "io",
+    "gltf/import.hpp": "io",
+    "backend_factory.hpp": "vulkan",
+    "crowd_animator.hpp": "vulkan",
+    "gpu_info.hpp": "vulkan",
+    "scene.hpp": "io",
+    "rod_scene.hpp": "io",
+    "export.hpp": "io",
+    "scene_edit.hpp": "io",
+    "simulation.hpp": "engine",
+}
+
+
+def owners():
+    table = {}
+    for pattern, target in OWNER_PATTERNS:
+        for path in ENGINE.glob(pattern):
+            table[str(path.relative_to(ENGINE))] = target
+    for header, target in PUBLIC_OWNERS.items():
+        table["include/kodawari/" + header] = target
+    return table
+
+
+def targets():
+    """Each target's sources, from the kodawari_component() calls."""
+    text = (ENGINE / "CMakeLists.txt").read_text()
+    return {m.group(1): m.group(2).split() for m in re.finditer(r"kodawari_component\((\w+)\n(.*?)\)", text, re.S)}
+
+
+def resolve(include, source):
+    """The engine header an include names (relative to engine/), or None outside the engine."""
+    for base in (ENGINE / "include", ENGINE, source.parent):
+        path = (base / include).resolve()
+        if path.exists():
+            return str(path.relative_to(ENGINE)) if str(path).startswith(str(ENGINE)) else None
     return None
-bad=0
-def scan(f,t,seen):
-    global bad
-    if f in seen: return
-    seen.add(f)
-    for inc in re.findall(r'#include\s*[<"]([^>"]+)[>"]',f.read_text()):
-        if any(inc.startswith(x) for x in third[t]) or inc.startswith(('tiny_gltf','nlohmann','vulkan/','stb/')):
-            if not any(inc.startswith(x) for x in third[t]): print(f'{t}: {f} includes {inc}'); bad+=1
-            continue
-        if inc.startswith('kodawari/shared/'): continue
-        r=resolve(inc,f)
-        if r is None: continue
-        ow=own.get(r)
-        if ow is None: print('unowned',r); bad+=1; continue
-        if ow not in links[t]: print(f'{t}: {f} includes {inc} ({ow})'); bad+=1
-        scan(root/r,t,seen)
-for t,srcs in targets.items():
-    for s in srcs:
-        if s.endswith('.cpp'): scan(root/s,t,set())
-print('checked',{t:len(s) for t,s in targets.items()},'problems',bad)
-sys.exit(1 if bad else 0)
+
+
+def check():
+    owner = owners()
+    problems = []
+
+    def scan(source, target, seen):
+        if source in seen:
+            return
+        seen.add(source)
+        for include in re.findall(r'#include\s*[<"]([^>"]+)[>"]', source.read_text()):
+            if include.startswith(tuple(THIRD_PARTY)):
+                if not include.startswith(tuple(ALLOWED_THIRD_PARTY[target])):
+                    problems.append(f"{target}: {source} includes {include}")
+                continue
+            if include.startswith("kodawari/shared/"):
+                continue  # the GPU-shared structs: plain data, every layer may use them
+            header = resolve(include, source)
+            if header is None:
+                continue  # the standard library, glm
+            if header not in owner:
+                problems.append(f"{header}: no owner in check_layers.py")
+                continue
+            if owner[header] not in LINKS[target]:
+                problems.append(f"{target}: {source} includes {include} ({owner[header]})")
+            scan(ENGINE / header, target, seen)
+
+    found = targets()
+    for target, sources in found.items():
+        for source in sources:
+            if source.endswith(".cpp"):
+                scan(ENGINE / source, target, set())
+    for line in problems:
+        print(line)
+    print("checked", {t: len(s) for t, s in found.items()}, "problems", len(problems))
+    return 1 if problems else 0
+
+
+if __name__ == "__main__":
+    sys.exit(check())
