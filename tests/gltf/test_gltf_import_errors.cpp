@@ -11,10 +11,7 @@
 namespace kodawari {
 namespace {
 
-using namespace gltf_import_test;
-using testing_support::TempDir;
-using nlohmann::json;
-namespace fs = std::filesystem;
+using namespace gltf_import_test;  // its helpers, TempDir, json and fs
 
 // --- bad input -------------------------------------------------------------------------
 
