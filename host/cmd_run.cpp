@@ -203,16 +203,18 @@ Result<void> bake(Simulation& sim, std::optional<BirdBake>& birds, std::optional
 }
 
 // A bake held whole in memory must fit (issue 15 streams it instead).
-Result<void> check_bake_size(const Scene& scene, std::uint32_t frames) {
-    std::uint64_t birds = 0;
-    for (const auto& flock : scene.flocks) birds += flock.count;
-    const std::uint64_t bird_bytes = std::uint64_t{frames} * birds * sizeof(gpu::BirdPose);
-    if (bird_bytes > kBakeLimitBytes) {
-        return make_error(Error::Kind::InvalidInput, "baking " + std::to_string(birds) + " birds x " + std::to_string(frames) +
-                                                         " frames needs " + std::to_string(bird_bytes >> 20) +
-                                                         " MiB of poses; use --frames or --no-export");
-    }
-    return {};
+Result<void> check_bake_size(const Simulation& sim) {
+    const std::uint64_t frames = sim.frame_count();
+    const auto refuse = [&](std::uint64_t count, const char* what, std::uint64_t bytes, const char* of) -> Result<void> {
+        if (bytes <= kBakeLimitBytes) return {};
+        return make_error(Error::Kind::InvalidInput, "baking " + std::to_string(count) + " " + what + " x " + std::to_string(frames) +
+                                                         " frames needs " + std::to_string(bytes >> 20) + " MiB" + of +
+                                                         "; use --frames or --no-export");
+    };
+    const std::uint64_t birds = sim.bird_world().birds.size();
+    KW_TRY(refuse(birds, "birds", frames * birds * sizeof(gpu::BirdPose), " of poses"));
+    const std::uint64_t joints = sim.rod_scene() ? sim.rod_scene()->world.joint_count : 0;
+    return refuse(joints, "joints", frames * joints * (sizeof(glm::vec3) + sizeof(glm::quat)), "");
 }
 
 }  // namespace
@@ -231,17 +233,7 @@ int cmd_run(Args args) {
     const bool has_birds = !sim.bird_world().birds.empty();
     const bool has_chains = sim.rod_scene() != nullptr;
     if (!no_export) {
-        if (auto r = check_bake_size(scene, sim.frame_count()); !r) return report(r.error());
-        if (has_chains) {
-            const std::uint64_t joints = sim.rod_scene()->world.joint_count;
-            const std::uint64_t bytes = std::uint64_t{sim.frame_count()} * joints * (sizeof(glm::vec3) + sizeof(glm::quat));
-            if (bytes > kBakeLimitBytes) {
-                return report(make_error(Error::Kind::InvalidInput, "baking " + std::to_string(joints) + " joints x " +
-                                                                        std::to_string(sim.frame_count()) + " frames needs " +
-                                                                        std::to_string(bytes >> 20) +
-                                                                        " MiB; use --frames or --no-export"));
-            }
-        }
+        if (auto r = check_bake_size(sim); !r) return report(r.error());
     }
     if (!no_export && !out_option) {
         std::error_code ec;
