@@ -24,9 +24,9 @@ LINKS = {
     "engine": {"engine", "render", "vulkan", "io", "sim"},
 }
 # The third-party headers each target may include (prefixes of the include path).
-THIRD_PARTY = {"tiny_gltf", "nlohmann", "vulkan/", "stb/"}
+THIRD_PARTY = {"tiny_gltf", "nlohmann", "vulkan/", "stb/", "hwy/"}
 ALLOWED_THIRD_PARTY = {
-    "sim": set(),
+    "sim": {"hwy"},
     "vulkan": {"vulkan"},
     "io": {"tiny_gltf", "nlohmann"},
     "render": {"vulkan", "stb"},
@@ -41,6 +41,8 @@ OWNER_PATTERNS = [
     ("birds/*.hpp", "sim"),
     ("backends/backends.hpp", "sim"),
     ("backends/pose_backends.hpp", "sim"),
+    ("simd/*.hpp", "sim"),
+    ("simd/*-inl.h", "sim"),
     ("backends/device_backends.hpp", "vulkan"),
     ("compute/*.hpp", "vulkan"),
     ("gpu/*.hpp", "vulkan"),

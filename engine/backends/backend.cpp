@@ -2,6 +2,7 @@
 // make vulkan backends, are in backend_factory.cpp (kodawari::vulkan).
 #include "backends/backends.hpp"
 #include "backends/pose_backends.hpp"
+#include "core/parallel.hpp"
 
 namespace kodawari {
 
@@ -13,6 +14,8 @@ std::string_view backend_name(BackendKind kind) {
     }
     return "cpu-reference";
 }
+
+unsigned cpu_backend_threads(const BackendOptions& options) { return resolve_threads(options.threads); }
 
 namespace {
 
@@ -27,8 +30,12 @@ Error no_vulkan(std::string_view family) {
 
 Result<std::unique_ptr<BirdBackend>> make_cpu_bird_backend(BackendKind kind, const BackendOptions& options) {
     switch (kind) {
-        case BackendKind::CpuReference: return new_cpu_bird_backend(true, 1);
-        case BackendKind::Cpu: return new_cpu_bird_backend(false, options.threads);
+        case BackendKind::CpuReference: return new_reference_bird_backend();
+        case BackendKind::Cpu: {
+            auto isa = simd::choose_isa(options.isa);
+            if (!isa) return isa.error();
+            return new_simd_bird_backend(std::move(isa).value(), cpu_backend_threads(options));
+        }
         case BackendKind::Vulkan: return no_vulkan("bird");
     }
     return make_error(Error::Kind::Internal, "unknown backend");
@@ -36,8 +43,12 @@ Result<std::unique_ptr<BirdBackend>> make_cpu_bird_backend(BackendKind kind, con
 
 Result<std::unique_ptr<RodBackend>> make_cpu_rod_backend(BackendKind kind, const BackendOptions& options) {
     switch (kind) {
-        case BackendKind::CpuReference: return new_cpu_rod_backend(true, 1);
-        case BackendKind::Cpu: return new_cpu_rod_backend(false, options.threads);
+        case BackendKind::CpuReference: return new_reference_rod_backend();
+        case BackendKind::Cpu: {
+            auto isa = simd::choose_isa(options.isa);
+            if (!isa) return isa.error();
+            return new_simd_rod_backend(std::move(isa).value(), cpu_backend_threads(options));
+        }
         case BackendKind::Vulkan: return no_vulkan("rod");
     }
     return make_error(Error::Kind::Internal, "unknown backend");
@@ -45,8 +56,12 @@ Result<std::unique_ptr<RodBackend>> make_cpu_rod_backend(BackendKind kind, const
 
 Result<std::unique_ptr<PoseBackend>> make_cpu_pose_backend(BackendKind kind, const BackendOptions& options) {
     switch (kind) {
-        case BackendKind::CpuReference: return new_cpu_pose_backend(true, 1);
-        case BackendKind::Cpu: return new_cpu_pose_backend(false, options.threads);
+        case BackendKind::CpuReference: return new_reference_pose_backend();
+        case BackendKind::Cpu: {
+            auto isa = simd::choose_isa(options.isa);
+            if (!isa) return isa.error();
+            return new_simd_pose_backend(std::move(isa).value(), cpu_backend_threads(options));
+        }
         case BackendKind::Vulkan: return no_vulkan("pose");
     }
     return make_error(Error::Kind::Internal, "unknown backend");

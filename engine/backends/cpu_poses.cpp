@@ -1,24 +1,20 @@
-// The CPU pose backends: "cpu-reference" evaluates instance after instance on one thread
-// with gltf::evaluate (engine/gltf/animation.cpp, the validation oracle); "cpu" runs the
-// same code on several threads, each over a fixed range of instances, so both produce
-// the same bits.
+// The cpu-reference pose backend: instance after instance on one thread with
+// gltf::evaluate (engine/gltf/animation.cpp), the validation oracle. (The cpu backend is
+// simd_poses.cpp.)
 #include <cassert>
 #include <cmath>
 #include <string>
 #include <vector>
 
 #include "backends/pose_backends.hpp"
-#include "core/parallel.hpp"
 
 namespace kodawari {
 namespace {
 
 class CpuPoseBackend final : public PoseBackend {
 public:
-    CpuPoseBackend(bool reference, unsigned threads) : reference_(reference), threads_(reference ? 1 : resolve_threads(threads)) {}
-
-    std::string_view name() const override { return reference_ ? "cpu-reference" : "cpu"; }
-    std::string device() const override { return std::to_string(threads_) + (threads_ == 1 ? " thread" : " threads"); }
+    std::string_view name() const override { return "cpu-reference"; }
+    std::string device() const override { return "1 thread"; }
 
     Result<void> load(const gltf::Character& character, std::span<const PoseInstance> instances) override {
         KW_TRY(check_instances(character, instances));
@@ -36,15 +32,7 @@ public:
     Result<void> evaluate(float time) override {
         assert(character_ != nullptr && "load() first");
         if (!std::isfinite(time)) return make_error(Error::Kind::InvalidInput, "the scene time is not finite");
-        const std::size_t count = instances_.size();
-        if (reference_) {
-            evaluate_range(0, count, time, scratch_);
-        } else {
-            parallel_for(count, threads_, [&](std::size_t begin, std::size_t end) {
-                gltf::Pose scratch;  // one per range: the ranges run in parallel
-                evaluate_range(begin, end, time, scratch);
-            });
-        }
+        evaluate_range(0, instances_.size(), time, scratch_);
         evaluated_ = true;
         return {};
     }
@@ -74,21 +62,17 @@ private:
         }
     }
 
-    bool reference_;
-    unsigned threads_;
     const gltf::Character* character_ = nullptr;
     std::vector<PoseInstance> instances_;
     std::vector<glm::mat4> placements_;
     gltf::Pose rest_;
-    gltf::Pose scratch_;  // cpu-reference's, reused from evaluation to evaluation
+    gltf::Pose scratch_;  // reused from evaluation to evaluation
     std::vector<glm::mat4> world_;
     bool evaluated_ = false;
 };
 
 }  // namespace
 
-std::unique_ptr<PoseBackend> new_cpu_pose_backend(bool reference, unsigned threads) {
-    return std::make_unique<CpuPoseBackend>(reference, threads);
-}
+std::unique_ptr<PoseBackend> new_reference_pose_backend() { return std::make_unique<CpuPoseBackend>(); }
 
 }  // namespace kodawari

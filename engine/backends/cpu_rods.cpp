@@ -1,12 +1,10 @@
-// The CPU rod backends: "cpu-reference" runs engine/rods (world.cpp, solver.cpp) chain
-// after chain on one thread (the validation oracle); "cpu" runs the same code on several
-// threads, each over a fixed range of chains, so both produce the same bits.
+// The cpu-reference rod backend: engine/rods (world.cpp, solver.cpp) chain after chain on
+// one thread, the validation oracle. (The cpu backend is simd_rods.cpp.)
 #include <algorithm>
 #include <string>
 #include <vector>
 
 #include "backends/backends.hpp"
-#include "core/parallel.hpp"
 
 namespace kodawari {
 
@@ -26,10 +24,8 @@ constexpr std::size_t kWeights = rods::kMaxViewExamples + 1;
 
 class CpuRodBackend final : public RodBackend {
 public:
-    CpuRodBackend(bool reference, unsigned threads) : reference_(reference), threads_(reference ? 1 : resolve_threads(threads)) {}
-
-    std::string_view name() const override { return reference_ ? "cpu-reference" : "cpu"; }
-    std::string device() const override { return std::to_string(threads_) + (threads_ == 1 ? " thread" : " threads"); }
+    std::string_view name() const override { return "cpu-reference"; }
+    std::string device() const override { return "1 thread"; }
 
     Result<void> load(const rods::RodWorld& world, const rods::RodFrame& initial) override {
         KW_TRY(rods::check_frame(world, initial));
@@ -84,15 +80,7 @@ public:
 private:
     template <typename Fn>
     void run(Fn&& fn) {
-        const std::size_t count = world_->chains.size();
-        auto range = [&](std::size_t begin, std::size_t end) {
-            for (std::size_t c = begin; c < end; ++c) fn(static_cast<std::uint32_t>(c));
-        };
-        if (reference_) {
-            range(0, count);
-        } else {
-            parallel_for(count, threads_, range);
-        }
+        for (std::size_t c = 0; c < world_->chains.size(); ++c) fn(static_cast<std::uint32_t>(c));
     }
 
     // What read() reports besides the state: the frame's view, weights and rest shape.
@@ -106,8 +94,6 @@ private:
         }
     }
 
-    bool reference_;
-    unsigned threads_;
     const rods::RodWorld* world_ = nullptr;
     std::vector<rods::ChainState> states_;
     std::vector<glm::vec3> view_;
@@ -117,8 +103,6 @@ private:
 
 }  // namespace
 
-std::unique_ptr<RodBackend> new_cpu_rod_backend(bool reference, unsigned threads) {
-    return std::make_unique<CpuRodBackend>(reference, threads);
-}
+std::unique_ptr<RodBackend> new_reference_rod_backend() { return std::make_unique<CpuRodBackend>(); }
 
 }  // namespace kodawari

@@ -1,13 +1,15 @@
 #pragma once
-// The constructor of the CPU pose backends (kodawari::sim), used by make_cpu_pose_backend();
+// The constructors of the CPU pose backends (cpu-reference: cpu_poses.cpp; cpu: simd_poses.cpp) (kodawari::sim), used by make_cpu_pose_backend();
 // the vulkan one is in device_backends.hpp.
 
 #include <memory>
 
 #include "kodawari/pose_backend.hpp"
+#include "simd/isa.hpp"
 
 namespace kodawari {
 
-[[nodiscard]] std::unique_ptr<PoseBackend> new_cpu_pose_backend(bool reference, unsigned threads);
+[[nodiscard]] std::unique_ptr<PoseBackend> new_reference_pose_backend();
+[[nodiscard]] std::unique_ptr<PoseBackend> new_simd_pose_backend(simd::Isa isa, unsigned threads);
 
 }  // namespace kodawari

@@ -34,6 +34,10 @@ struct BackendOptions {
     /// path; for tests on an integrated or CPU device).
     bool force_staging = false;
     unsigned threads = 0;      ///< cpu backend threads (0 = hardware concurrency)
+    /// The cpu backend's SIMD instruction set: "" = the widest this machine runs, or one
+    /// of available_simd_isas() ("avx512", "avx2", "sse4", "scalar"; kodawari/simd.hpp).
+    /// A name it cannot use makes make_cpu_*_backend() fail with InvalidInput.
+    std::string isa;
     /// A Vulkan device to run on instead of opening one: a renderer's
     /// (render::Renderer::device_context()), so that the renderer draws straight from the
     /// backends' buffers on the same device. `device` and `validation` are then the
@@ -80,6 +84,10 @@ public:
     /// without reading them back.
     [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }
 };
+
+/// The threads a cpu backend made with `options` runs on: BackendOptions::threads, or the
+/// hardware concurrency for 0.
+[[nodiscard]] unsigned cpu_backend_threads(const BackendOptions& options);
 
 /// Creates a cpu-reference or cpu bird backend (kodawari::sim). BackendKind::Vulkan is an
 /// InvalidInput error naming kodawari::vulkan, whose make_bird_backend() makes every kind

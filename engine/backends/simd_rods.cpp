@@ -1,0 +1,300 @@
+// The cpu rod backend: engine/simd/rods_simd.cpp's kernel on every core. It keeps the
+// chains in its own structure-of-arrays layout (simd/rods_simd.hpp: batches of 16 chains
+// of one template), gathers each frame's input into it, and converts back only when the
+// state is read. Threads take contiguous ranges of whole batches, balanced by their cost,
+// so no two threads write the same cache line and the result never depends on the split.
+#include <algorithm>
+#include <cmath>
+#include <numeric>
+#include <string>
+#include <vector>
+
+#include <hwy/aligned_allocator.h>
+
+#include "backends/backends.hpp"
+#include "core/parallel.hpp"
+#include "simd/rods_simd.hpp"
+
+namespace kodawari {
+namespace {
+
+using simd::kBatchLanes;
+
+constexpr std::size_t kWeightCount = rods::kMaxViewExamples + 1;
+constexpr float kRootShapeWeight = 10.0f;  // solver.cpp's
+
+std::array<float, 4> xyzw(glm::quat q) { return {q.x, q.y, q.z, q.w}; }
+
+// A template's constants, with engine/rods' own expressions (solver.cpp step, shape.cpp).
+simd::RodTemplateConsts template_consts(const rods::ChainTemplate& t) {
+    simd::RodTemplateConsts k;
+    const rods::Chain& chain = t.chain;
+    const std::uint32_t n = chain.joint_count;
+    k.joints = n;
+    k.views = static_cast<std::uint32_t>(t.views.size());
+    k.iterations = t.params.iterations;
+    k.thickness = chain.thickness;
+    k.b2 = chain.thickness * chain.thickness;
+    k.suppression = t.params.momentum_suppression;
+    k.first_direction = {t.basis.first_direction.x, t.basis.first_direction.y, t.basis.first_direction.z};
+    for (std::uint32_t j = 0; j < n; ++j) {
+        k.weight[j] = j == 0 ? kRootShapeWeight * chain.mass[0] : chain.mass[j];
+        k.weight5[j] = k.weight[j] / 5.0f;
+        const float a2 = chain.half_length[j] * chain.half_length[j];
+        k.ab[j] = a2 - k.b2;
+        k.segment[j] = chain.segment_length[j];
+        k.bone_axis[j] = {chain.bone_axis[j].x, chain.bone_axis[j].y, chain.bone_axis[j].z};
+        if (j + 1 < n) k.lengths[j] = t.basis.lengths[j];
+    }
+    for (std::uint32_t i = 0; i < n; ++i) {
+        const std::uint32_t lo = i == 0 ? 0 : i - 1;
+        const std::uint32_t hi = std::min(i + 1, n - 1);
+        float mass = 0.0f;
+        for (std::uint32_t j = lo; j <= hi; ++j) mass += k.weight[j];
+        k.group_mass[i] = mass;
+    }
+    for (std::size_t v = 0; v < t.views.size(); ++v) {
+        k.view_direction[v] = {t.views[v].direction.x, t.views[v].direction.y, t.views[v].direction.z};
+        k.influence[v] = t.views[v].influence;
+    }
+    const rods::RotationShape& base = t.shapes[0];
+    for (const rods::RotationShape& s : t.shapes) {
+        for (std::uint32_t i = 0; i < n; ++i) {
+            const glm::quat r = i + 1 < n ? s.rotations[i] : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+            const glm::quat r0 = i + 1 < n ? base.rotations[i] : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+            k.rotation.push_back(xyzw(r));
+            k.orientation.push_back(xyzw(s.orientations[i]));
+            // shape.cpp blend_one's hemisphere test.
+            k.rotation_sign.push_back(glm::dot(r, r0) < 0.0f ? -1.0f : 1.0f);
+            k.orientation_sign.push_back(glm::dot(s.orientations[i], base.orientations[i]) < 0.0f ? -1.0f : 1.0f);
+        }
+    }
+    if (t.views.empty()) {
+        const rods::ChainShape rest = rods::to_positions(t.basis, rods::blend(t.shapes, rods::view_weights({}, {})));
+        for (std::uint32_t i = 0; i < n; ++i) {
+            k.fixed_rest_position.push_back({rest.positions[i].x, rest.positions[i].y, rest.positions[i].z});
+            k.fixed_rest_orientation.push_back(xyzw(rest.orientations[i]));
+        }
+    }
+    return k;
+}
+
+// The step sizes of a frame of `dt`, as rods::step computes them.
+void set_step(simd::RodTemplateConsts& k, const rods::SolverParams& p, float dt) {
+    k.substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / p.max_substep)));
+    k.h = dt / static_cast<float>(k.substeps);
+    k.k_iter = 1.0f - std::pow(1.0f - p.stiffness, 1.0f / static_cast<float>(p.iterations));
+    k.k_rest = 1.0f - std::pow(1.0f - p.rest_stiffness, 1.0f / static_cast<float>(p.iterations));
+    k.decay = std::exp(-p.damping * k.h);
+    const glm::vec3 h_acceleration = k.h * (p.gravity + p.wind);
+    k.h_acceleration = {h_acceleration.x, h_acceleration.y, h_acceleration.z};
+    k.half_h = 0.5f * k.h;
+    k.two_over_h = 2.0f / k.h;
+}
+
+class SimdRodBackend final : public RodBackend {
+public:
+    SimdRodBackend(simd::Isa isa, unsigned threads)
+        : isa_(std::move(isa)), threads_(threads), kernels_(simd::rod_kernels(isa_.target)) {}
+
+    std::string_view name() const override { return "cpu"; }
+    std::string device() const override {
+        return std::to_string(threads_) + (threads_ == 1 ? " thread, " : " threads, ") + isa_.name;
+    }
+
+    Result<void> load(const rods::RodWorld& world, const rods::RodFrame& initial) override {
+        KW_TRY(rods::check_frame(world, initial));
+        world_ = &world;
+        dt_ = -1.0f;
+        templates_.clear();
+        for (const rods::ChainTemplate& t : world.templates) templates_.push_back(template_consts(t));
+
+        // Batches: each template's chains in world order, 16 at a time.
+        batches_.clear();
+        std::vector<std::vector<std::uint32_t>> by_template(world.templates.size());
+        for (std::uint32_t c = 0; c < world.chains.size(); ++c) by_template[world.chains[c].template_index].push_back(c);
+        std::size_t floats = 0;
+        lane_of_.assign(world.chains.size(), {});
+        for (std::uint32_t t = 0; t < by_template.size(); ++t) {
+            const std::vector<std::uint32_t>& chains = by_template[t];
+            for (std::size_t first = 0; first < chains.size(); first += kBatchLanes) {
+                simd::RodBatch b;
+                b.templ = t;
+                b.count = static_cast<std::uint32_t>(std::min(kBatchLanes, chains.size() - first));
+                for (std::size_t l = 0; l < kBatchLanes; ++l) {
+                    b.chain[l] = chains[first + (l < b.count ? l : 0)];
+                    b.colliders = std::max(b.colliders, world.chains[b.chain[l]].collider_count);
+                }
+                for (std::uint32_t l = 0; l < b.count; ++l) lane_of_[b.chain[l]] = {batches_.size(), l};
+                b.offset = floats;
+                floats += simd::rod_block_floats(templates_[t].joints);
+                batches_.push_back(b);
+            }
+        }
+        storage_ = hwy::AllocateAligned<float>(std::max<std::size_t>(floats, 1));
+        split_threads();
+
+        // Every chain at rest on its initial rest shape, by engine/rods itself (as the other
+        // backends start), padding lanes as copies of their batch's first chain.
+        parallel_for(batches_.size(), threads_, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t b = begin; b < end; ++b) {
+                const simd::RodBatch& batch = batches_[b];
+                for (std::size_t l = 0; l < kBatchLanes; ++l) {
+                    const std::uint32_t c = batch.chain[l];
+                    const rods::RestShape rest = rods::rest_shape(world, c, initial);
+                    const rods::ChainState s = rods::initial_state(world.templ(world.chains[c]).chain, initial.roots[c], rest.shape);
+                    put_state(batch, l, s);
+                    float* chain = chain_rows(batch);
+                    const float view[3] = {rest.view_direction.x, rest.view_direction.y, rest.view_direction.z};
+                    for (std::size_t r = 0; r < 3; ++r) chain[(simd::kView + r) * kBatchLanes + l] = view[r];
+                    for (std::size_t k = 0; k < kWeightCount; ++k) {
+                        chain[(simd::kWeights + k) * kBatchLanes + l] = k < rest.weights.size() ? rest.weights[k] : 0.0f;
+                    }
+                }
+            }
+        });
+        return {};
+    }
+
+    Result<void> step(const rods::RodFrame& frame) override {
+        assert(world_ != nullptr && "load() first");
+        KW_TRY(rods::check_frame(*world_, frame));
+        if (frame.dt != dt_) {
+            for (std::size_t t = 0; t < templates_.size(); ++t) set_step(templates_[t], world_->templates[t].params, frame.dt);
+            dt_ = frame.dt;
+        }
+        const simd::RodStepArgs args{templates_.data(), batches_.data(), storage_.get(), &frame, world_->chains.data()};
+        const std::size_t parts = split_.size() - 1;
+        parallel_for(parts, static_cast<unsigned>(parts), [&](std::size_t begin, std::size_t end) {
+            for (std::size_t p = begin; p < end; ++p) kernels_.step(args, split_[p], split_[p + 1]);
+        });
+        return {};
+    }
+
+    Result<void> read(ChainSnapshot& out) override {
+        assert(world_ != nullptr && "load() first");
+        const std::size_t count = world_->chains.size();
+        out.positions.resize(world_->joint_count);
+        out.orientations.resize(world_->joint_count);
+        out.rest.resize(world_->joint_count);
+        out.view_directions.resize(count);
+        out.weights.assign(count * kWeightCount, 0.0f);
+        parallel_for(count, threads_, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t c = begin; c < end; ++c) {
+                const rods::ChainState s = state(static_cast<std::uint32_t>(c));
+                const rods::ChainInstance& chain = world_->chains[c];
+                const auto [b, l] = lane_of_[c];
+                const float* rows = chain_rows(batches_[b]);
+                out.view_directions[c] = {rows[simd::kView * kBatchLanes + l], rows[(simd::kView + 1) * kBatchLanes + l],
+                                          rows[(simd::kView + 2) * kBatchLanes + l]};
+                const std::size_t m = world_->templ(chain).views.size();
+                for (std::size_t k = 0; k <= m; ++k) out.weights[c * kWeightCount + k] = rows[(simd::kWeights + k) * kBatchLanes + l];
+                for (std::uint32_t i = 0; i < world_->templ(chain).chain.joint_count; ++i) {
+                    out.positions[chain.joint_begin + i] = rods::position(s, i);
+                    out.orientations[chain.joint_begin + i] = s.q[i];
+                    // cpu-reference's keep(): the rest shape placed by the root.
+                    out.rest[chain.joint_begin + i] = s.root.position + s.root.rotation * s.rest_position[i];
+                }
+            }
+        });
+        return {};
+    }
+
+    Result<void> read_states(std::vector<rods::ChainState>& out) override {
+        assert(world_ != nullptr && "load() first");
+        out.resize(world_->chains.size());
+        parallel_for(out.size(), threads_, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t c = begin; c < end; ++c) out[c] = state(static_cast<std::uint32_t>(c));
+        });
+        return {};
+    }
+
+private:
+    float* block(const simd::RodBatch& b) const { return storage_.get() + b.offset; }
+    float* chain_rows(const simd::RodBatch& b) const {
+        return block(b) + std::size_t{templates_[b.templ].joints} * simd::kJointRows * kBatchLanes;
+    }
+
+    // A chain's state to and from its lane.
+    void put_state(const simd::RodBatch& b, std::size_t l, const rods::ChainState& s) {
+        float* rows = block(b);
+        auto put = [&](std::size_t row, float v) { rows[row * kBatchLanes + l] = v; };
+        for (std::uint32_t i = 0; i < templates_[b.templ].joints; ++i) {
+            const std::size_t r = std::size_t{i} * simd::kJointRows;
+            const float joint[simd::kJointRows] = {
+                s.x[i].x, s.x[i].y, s.x[i].z, s.v[i].x, s.v[i].y, s.v[i].z, s.q[i].x, s.q[i].y, s.q[i].z, s.q[i].w,
+                s.omega[i].x, s.omega[i].y, s.omega[i].z, s.rest_position[i].x, s.rest_position[i].y, s.rest_position[i].z,
+                s.rest_orientation[i].x, s.rest_orientation[i].y, s.rest_orientation[i].z, s.rest_orientation[i].w};
+            for (std::size_t f = 0; f < simd::kJointRows; ++f) put(r + f, joint[f]);
+        }
+        float* chain = chain_rows(b);
+        const float root[7] = {s.root.position.x, s.root.position.y, s.root.position.z, s.root.rotation.x,
+                               s.root.rotation.y, s.root.rotation.z, s.root.rotation.w};
+        for (std::size_t f = 0; f < 7; ++f) chain[(simd::kRootP + f) * kBatchLanes + l] = root[f];
+    }
+
+    rods::ChainState state(std::uint32_t c) const {
+        const auto [b, l] = lane_of_[c];
+        const simd::RodBatch& batch = batches_[b];
+        const float* rows = block(batch);
+        auto get = [&](std::size_t row) { return rows[row * kBatchLanes + l]; };
+        rods::ChainState s;
+        for (std::uint32_t i = 0; i < templates_[batch.templ].joints; ++i) {
+            const std::size_t r = std::size_t{i} * simd::kJointRows;
+            s.x[i] = {get(r + simd::kX), get(r + simd::kX + 1), get(r + simd::kX + 2)};
+            s.v[i] = {get(r + simd::kV), get(r + simd::kV + 1), get(r + simd::kV + 2)};
+            s.q[i] = glm::quat(get(r + simd::kQ + 3), get(r + simd::kQ), get(r + simd::kQ + 1), get(r + simd::kQ + 2));
+            s.omega[i] = {get(r + simd::kOmega), get(r + simd::kOmega + 1), get(r + simd::kOmega + 2)};
+            s.rest_position[i] = {get(r + simd::kRestP), get(r + simd::kRestP + 1), get(r + simd::kRestP + 2)};
+            s.rest_orientation[i] = glm::quat(get(r + simd::kRestO + 3), get(r + simd::kRestO), get(r + simd::kRestO + 1),
+                                              get(r + simd::kRestO + 2));
+        }
+        const float* chain = chain_rows(batch);
+        auto at = [&](std::size_t row) { return chain[row * kBatchLanes + l]; };
+        s.root.position = {at(simd::kRootP), at(simd::kRootP + 1), at(simd::kRootP + 2)};
+        s.root.rotation = glm::quat(at(simd::kRootQ + 3), at(simd::kRootQ), at(simd::kRootQ + 1), at(simd::kRootQ + 2));
+        return s;
+    }
+
+    // Contiguous batch ranges of about equal cost, one per thread: a batch's work grows
+    // with its joints times its projection work (iterations and colliders) and its
+    // vectors (lanes in use, rounded up to whole vectors of the instruction set).
+    void split_threads() {
+        std::vector<double> cost(batches_.size());
+        for (std::size_t b = 0; b < batches_.size(); ++b) {
+            const simd::RodBatch& batch = batches_[b];
+            const simd::RodTemplateConsts& t = templates_[batch.templ];
+            const double vectors = std::ceil(static_cast<double>(batch.count) / isa_.lanes);
+            cost[b] = vectors * t.joints * (2.0 + t.iterations * (4.0 + batch.colliders));
+        }
+        const double total = std::accumulate(cost.begin(), cost.end(), 0.0);
+        const std::size_t parts = std::max<std::size_t>(1, std::min<std::size_t>(threads_, batches_.size()));
+        split_.assign(parts + 1, batches_.size());
+        split_[0] = 0;
+        double done = 0.0;
+        std::size_t p = 1;
+        for (std::size_t b = 0; b < batches_.size() && p < parts; ++b) {
+            done += cost[b];
+            while (p < parts && done >= total * static_cast<double>(p) / static_cast<double>(parts)) split_[p++] = b + 1;
+        }
+    }
+
+    simd::Isa isa_;
+    unsigned threads_;
+    simd::RodKernels kernels_;
+    const rods::RodWorld* world_ = nullptr;
+    float dt_ = -1.0f;
+    std::vector<simd::RodTemplateConsts> templates_;
+    std::vector<simd::RodBatch> batches_;
+    std::vector<std::pair<std::size_t, std::uint32_t>> lane_of_;  // chain -> (batch, lane)
+    std::vector<std::size_t> split_;                              // thread p: batches [split_[p], split_[p + 1])
+    hwy::AlignedFreeUniquePtr<float[]> storage_;
+};
+
+}  // namespace
+
+std::unique_ptr<RodBackend> new_simd_rod_backend(simd::Isa isa, unsigned threads) {
+    return std::make_unique<SimdRodBackend>(std::move(isa), threads);
+}
+
+}  // namespace kodawari

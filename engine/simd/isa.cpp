@@ -1,0 +1,90 @@
+// The instruction sets of the cpu backends (kodawari/simd.hpp): what this build compiled
+// (HWY_TARGETS) and this machine runs (hwy::SupportedTargets(), which also checks that the
+// operating system saves the wide registers).
+#include "simd/isa.hpp"
+
+#include <hwy/highway.h>
+#include <hwy/targets.h>
+
+#include "kodawari/backend.hpp"
+#include "kodawari/simd.hpp"
+
+namespace kodawari::simd {
+namespace {
+
+struct Known {
+    const char* name;
+    std::int64_t target;
+    unsigned lanes;
+};
+
+// Widest first; the fallback last. Only the targets this build compiles.
+constexpr Known kKnown[] = {
+#if HWY_TARGETS & HWY_AVX3
+    {"avx512", HWY_AVX3, 16},
+#endif
+#if HWY_TARGETS & HWY_AVX2
+    {"avx2", HWY_AVX2, 8},
+#endif
+#if HWY_TARGETS & HWY_SSE4
+    {"sse4", HWY_SSE4, 4},
+#endif
+#if HWY_TARGETS & HWY_EMU128
+    {"emu128", HWY_EMU128, 4},
+#endif
+#if HWY_TARGETS & HWY_SCALAR
+    {"scalar", HWY_SCALAR, 1},
+#endif
+};
+
+bool runs_here(const Known& k) {
+    // The portable fallback runs anywhere; hwy::SupportedTargets() lists it too, but
+    // saying so here keeps "always available" independent of that detail.
+    return k.target == HWY_SCALAR || k.target == HWY_EMU128 || (hwy::SupportedTargets() & k.target) != 0;
+}
+
+}  // namespace
+
+Result<Isa> choose_isa(std::string_view requested) {
+    for (const Known& k : kKnown) {
+        if (!runs_here(k)) continue;
+        if (requested.empty() || requested == k.name) return Isa{k.target, k.name, k.lanes};
+    }
+    std::string available;
+    for (const std::string& name : available_simd_isas()) available += (available.empty() ? "" : ", ") + name;
+    std::string known;
+    for (const Known& k : kKnown) known += (known.empty() ? "" : ", ") + std::string(k.name);
+    bool is_known = false;
+    for (const Known& k : kKnown) is_known = is_known || requested == k.name;
+    return make_error(Error::Kind::InvalidInput,
+                      "SIMD instruction set \"" + std::string(requested) + "\" " +
+                          (is_known ? "is not supported by this CPU" : "is unknown (known: " + known + ")") +
+                          "; available here: " + available);
+}
+
+}  // namespace kodawari::simd
+
+namespace kodawari {
+
+std::vector<std::string> available_simd_isas() {
+    std::vector<std::string> out;
+    for (const simd::Known& k : simd::kKnown) {
+        if (simd::runs_here(k)) out.emplace_back(k.name);
+    }
+    return out;
+}
+
+Result<std::string> simd_isa(std::string_view requested) {
+    auto isa = simd::choose_isa(requested);
+    if (!isa) return isa.error();
+    return isa.value().name;
+}
+
+unsigned simd_lanes(std::string_view isa) {
+    for (const simd::Known& k : simd::kKnown) {
+        if (isa == k.name) return k.lanes;
+    }
+    return 0;
+}
+
+}  // namespace kodawari

@@ -1,0 +1,374 @@
+// The rods kernel of the cpu backend (SPEC A.2-A.5), vectorized across the chains of a
+// batch (rods_simd.hpp: layout, and why every lane gets cpu-reference's bits). Compiled
+// once per instruction set by Highway's foreach_target.h. Each step below cites the
+// function of engine/rods whose expressions it repeats; the SPEC sections and papers are
+// cited there.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "simd/rods_simd.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include "simd/rods_simd.hpp"
+#include "simd/scalar_math.hpp"
+#include "simd/vecmath-inl.h"
+
+HWY_BEFORE_NAMESPACE();
+namespace kodawari::simd {
+namespace HWY_NAMESPACE {
+namespace {
+
+constexpr std::size_t kMaxJ = rods::kMaxChainJoints;
+constexpr std::size_t kMaxK = rods::kMaxChainColliders;
+
+// This frame's input of a batch's 16 lanes, gathered from the frame's per-chain arrays.
+enum InputRow : std::uint32_t { kRefP = 0, kRefQ = 3, kToP = 7, kToQ = 10, kInputRows = 14 };
+// Per collider: a (3), b (3), radius + thickness, 1 where the lane's chain has it.
+enum ColliderRow : std::uint32_t { kCapA = 0, kCapB = 3, kCapR = 6, kCapOn = 7, kColliderRows = 8 };
+
+struct Inputs {
+    HWY_ALIGN float rows[kInputRows * kBatchLanes];
+    HWY_ALIGN float colliders[kMaxK * kColliderRows * kBatchLanes];
+};
+
+void gather_inputs(const RodStepArgs& args, const RodBatch& batch, const RodTemplateConsts& t, Inputs& in) {
+    const rods::RodFrame& frame = *args.frame;
+    for (std::size_t l = 0; l < kBatchLanes; ++l) {
+        const std::uint32_t c = batch.chain[l];
+        const rods::ChainInstance& chain = args.chains[c];
+        const rods::Transform& ref = frame.reference[chain.character];
+        const rods::Transform& to = frame.roots[c];
+        const float values[kInputRows] = {ref.position.x, ref.position.y, ref.position.z, ref.rotation.x, ref.rotation.y,
+                                          ref.rotation.z, ref.rotation.w, to.position.x,  to.position.y,  to.position.z,
+                                          to.rotation.x,  to.rotation.y,  to.rotation.z,  to.rotation.w};
+        for (std::size_t r = 0; r < kInputRows; ++r) in.rows[r * kBatchLanes + l] = values[r];
+        for (std::uint32_t k = 0; k < batch.colliders; ++k) {
+            float* rows = in.colliders + k * kColliderRows * kBatchLanes;
+            float cap[kColliderRows] = {};
+            if (k < chain.collider_count) {
+                const rods::Capsule& cs = frame.colliders[chain.collider_begin + k];
+                // solver.cpp: each capsule's radius plus the chain's thickness.
+                const float r[kColliderRows] = {cs.a.x, cs.a.y, cs.a.z, cs.b.x, cs.b.y, cs.b.z, cs.radius + t.thickness, 1.0f};
+                for (std::size_t i = 0; i < kColliderRows; ++i) cap[i] = r[i];
+            }
+            for (std::size_t r = 0; r < kColliderRows; ++r) rows[r * kBatchLanes + l] = cap[r];
+        }
+    }
+}
+
+// A quaternion through scalar_math.cpp's partial() lane by lane (solver.cpp partial()).
+Q4 partial(const Q4& q, float fraction) {
+    if (fraction >= 1.0f) return q;  // partial() returns q itself
+    HWY_ALIGN float rows[4 * kBatchLanes];
+    store4(q, rows, 0, 0);
+    partial_lanes(rows, kBatchLanes, fraction, hn::Lanes(D()));
+    return load4(rows, 0, 0);
+}
+
+// shape.cpp shortest_arc(), both of its cases computed and one chosen per lane.
+Q4 shortest_arc(const V3& from, const V3& to) {
+    const V3 h = add(from, to);
+    const V h_len = length(h);
+    const V3 hn_ = div(h, h_len);
+    const V3 c = cross(from, hn_);
+    const Q4 regular = qnormalize(Q4{c.x, c.y, c.z, dot(from, hn_)});
+    // Opposite vectors: a half turn about the axis from the least aligned coordinate axis.
+    const V ax = hn::Abs(from.x), ay = hn::Abs(from.y), az = hn::Abs(from.z);
+    const M use_x = hn::And(hn::Le(ax, ay), hn::Le(ax, az));
+    const M use_y = hn::AndNot(use_x, hn::Le(ay, az));
+    const M use_z = hn::Not(hn::Or(use_x, use_y));
+    const V one = S(1.0f);
+    const V3 other{hn::IfThenElseZero(use_x, one), hn::IfThenElseZero(use_y, one), hn::IfThenElseZero(use_z, one)};
+    const V3 axis = normalize(cross(from, other));
+    return select(hn::Lt(h_len, S(1e-6f)), Q4{axis.x, axis.y, axis.z, Z()}, regular);
+}
+
+// solver.cpp extract_rotation() (one step: kExtractIterations).
+Q4 extract_rotation(const M3& a, const Q4& q) {
+    const M3 r = mat3_cast(q);
+    const V3 torque = add(add(cross(r.c[0], a.c[0]), cross(r.c[1], a.c[1])), cross(r.c[2], a.c[2]));
+    const V alignment = hn::Abs(hn::Add(hn::Add(dot(r.c[0], a.c[0]), dot(r.c[1], a.c[1])), dot(r.c[2], a.c[2])));
+    const V3 half_omega = mul(hn::Div(S(0.5f), hn::Add(alignment, S(1e-9f))), torque);
+    return turn(q, half_omega);
+}
+
+// solver.cpp closest_on_segment() and push_out(), for the lanes in `on`.
+void collide(V3& p, const V3& a, const V3& b, V radius, M on) {
+    const V3 ab = sub(b, a);
+    const V len2 = dot(ab, ab);
+    V t = hn::Div(dot(sub(p, a), ab), len2);
+    t = hn::IfThenElse(hn::Lt(t, Z()), Z(), hn::IfThenElse(hn::Lt(S(1.0f), t), S(1.0f), t));  // std::clamp
+    const V3 center = select(hn::Le(len2, Z()), a, add(a, mul(t, ab)));
+    const V3 d = sub(p, center);
+    const V d2 = dot(d, d);
+    const M inside = hn::And(on, hn::Not(hn::Ge(d2, hn::Mul(radius, radius))));
+    const V len = hn::Sqrt(d2);
+    const V3 n = select(hn::Gt(len, S(1e-9f)), div(d, len), V3{Z(), S(1.0f), Z()});
+    p = select(inside, add(center, mul(radius, n)), p);
+}
+
+// shape.cpp blend_one(): the normalized weighted sum of shape k's quaternion i (k = 0..m,
+// each flipped into the base's hemisphere).
+Q4 blend_one(const std::array<float, 4>* shapes, const float* signs, std::size_t n, std::size_t i, const V* w, std::size_t m) {
+    Q4 sum{Z(), Z(), Z(), Z()};
+    for (std::size_t k = 0; k <= m; ++k) {
+        const V s = hn::Mul(S(signs[k * n + i]), w[k]);
+        const float* q = shapes[k * n + i].data();
+        sum = qadd(sum, Q4{hn::Mul(S(q[0]), s), hn::Mul(S(q[1]), s), hn::Mul(S(q[2]), s), hn::Mul(S(q[3]), s)});
+    }
+    const V len = hn::Sqrt(qdot(sum, sum));
+    const Q4 normalized{hn::Div(sum.x, len), hn::Div(sum.y, len), hn::Div(sum.z, len), hn::Div(sum.w, len)};
+    return select(hn::Gt(len, S(1e-12f)), normalized, splat4(shapes[i].data()));
+}
+
+// One frame of the lanes [off, off + Lanes) of a batch.
+void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in, std::size_t off) {
+    const RodTemplateConsts& t = args.templates[batch.templ];
+    const rods::RodFrame& frame = *args.frame;
+    const std::size_t n = t.joints;
+    const std::size_t m = t.views;
+    float* block = args.storage + batch.offset;
+    float* chain_rows = block + n * kJointRows * kBatchLanes;
+    auto joint_row = [](std::size_t i, std::uint32_t field) { return i * kJointRows + field; };
+
+    // ---- SPEC A.3: view direction (view.cpp view_direction) and weights (view_weights) ----
+    const V3 ref_p = load3(in.rows, kRefP, off);
+    const Q4 to_reference = conj(load4(in.rows, kRefQ, off));
+    const float back[3] = {-frame.camera.forward.x, -frame.camera.forward.y, -frame.camera.forward.z};
+    V3 d = normalize(rotate(to_reference, splat3(back)));
+    if (frame.camera.projection == rods::Camera::Projection::Perspective) {
+        const float eye[3] = {frame.camera.position.x, frame.camera.position.y, frame.camera.position.z};
+        const V3 offset = sub(splat3(eye), ref_p);
+        const V len = length(offset);
+        d = select(hn::Ge(len, S(1e-6f)), rotate(to_reference, div(offset, len)), d);
+    }
+    V w[rods::kMaxViewExamples + 1];
+    {
+        V sum = Z();
+        HWY_ALIGN float lanes[kBatchLanes];
+        for (std::size_t k = 0; k < m; ++k) {
+            const V s = hn::Mul(hn::Add(dot(splat3(t.view_direction[k].data()), d), S(1.0f)), S(0.5f));
+            hn::Store(hn::IfThenElse(hn::Lt(s, Z()), Z(), hn::IfThenElse(hn::Lt(S(1.0f), s), S(1.0f), s)), D(), lanes);
+            pow_lanes(lanes, t.influence[k], lanes, hn::Lanes(D()));
+            w[k + 1] = hn::Load(D(), lanes);
+            sum = hn::Add(sum, w[k + 1]);
+        }
+        const M whole = hn::Ge(sum, S(1.0f));
+        for (std::size_t k = 1; k <= m; ++k) w[k] = hn::IfThenElse(whole, hn::Div(w[k], sum), w[k]);
+        w[0] = hn::Sub(S(1.0f), hn::IfThenElse(whole, S(1.0f), sum));
+    }
+
+    // ---- SPEC A.2: the blend and forward kinematics (shape.cpp blend, to_positions) ----
+    V3 rest_p[kMaxJ];
+    Q4 rest_o[kMaxJ];
+    if (m == 0) {  // the base shape, blended at load
+        for (std::size_t i = 0; i < n; ++i) {
+            rest_p[i] = splat3(t.fixed_rest_position[i].data());
+            rest_o[i] = splat4(t.fixed_rest_orientation[i].data());
+        }
+    } else {
+        for (std::size_t i = 0; i < n; ++i) rest_o[i] = blend_one(t.orientation.data(), t.orientation_sign.data(), n, i, w, m);
+        V3 dir = splat3(t.first_direction.data());
+        rest_p[0] = zero3();
+        for (std::size_t i = 0; i + 1 < n; ++i) {
+            const Q4 r = blend_one(t.rotation.data(), t.rotation_sign.data(), n, i, w, m);
+            // Renormalized every segment (shape.cpp).
+            dir = normalize(rotate(r, dir));
+            rest_p[i + 1] = add(rest_p[i], mul(S(t.lengths[i]), dir));
+        }
+    }
+
+    // ---- the state ----
+    V3 x[kMaxJ], v[kMaxJ], omega[kMaxJ];
+    Q4 q[kMaxJ];
+    for (std::size_t i = 0; i < n; ++i) {
+        x[i] = load3(block, joint_row(i, kX), off);
+        v[i] = load3(block, joint_row(i, kV), off);
+        q[i] = load4(block, joint_row(i, kQ), off);
+        omega[i] = load3(block, joint_row(i, kOmega), off);
+    }
+    const V3 from_p = load3(chain_rows, kRootP, off);
+    const Q4 from_q = load4(chain_rows, kRootQ, off);
+
+    // ---- SPEC A.5: momentum suppression (solver.cpp suppress_momentum) ----
+    if (t.suppression > 0.0f) {
+        const Q4 root_inv = conj(from_q);
+        V3 previous_old = x[0];
+        V3 old_next = load3(block, joint_row(0, kRestP), off);
+        for (std::size_t i = 0; i + 1 < n; ++i) {
+            const V3 old_here = old_next;
+            old_next = load3(block, joint_row(i + 1, kRestP), off);
+            const V3 old_dir = normalize(sub(old_next, old_here));
+            const V3 new_dir = normalize(sub(rest_p[i + 1], rest_p[i]));
+            const Q4 turn_by = partial(qmul(qmul(from_q, shortest_arc(old_dir, new_dir)), root_inv), t.suppression);
+            const V3 segment = sub(x[i + 1], previous_old);
+            previous_old = x[i + 1];
+            x[i + 1] = add(x[i], rotate(turn_by, segment));
+        }
+        for (std::size_t i = 1; i < n; ++i) {
+            const Q4 change = positive_w(qmul(rest_o[i], conj(load4(block, joint_row(i, kRestO), off))));
+            q[i] = qnormalize(qmul(partial(qmul(qmul(from_q, change), root_inv), t.suppression), q[i]));
+        }
+    }
+
+    // ---- SPEC A.4: the substeps (solver.cpp step) ----
+    // Solved relative to the previous root position; colliders likewise.
+    const V3 to_p = load3(in.rows, kToP, off);
+    const Q4 to_q = load4(in.rows, kToQ, off);
+    const V3 travel = sub(to_p, from_p);
+    V3 cap_a[kMaxK], cap_b[kMaxK];
+    V cap_r[kMaxK];
+    M cap_on[kMaxK];
+    for (std::size_t k = 0; k < batch.colliders; ++k) {
+        const float* rows = in.colliders + k * kColliderRows * kBatchLanes;
+        cap_a[k] = sub(load3(rows, kCapA, off), from_p);
+        cap_b[k] = sub(load3(rows, kCapB, off), from_p);
+        cap_r[k] = load(rows, kCapR, off);
+        cap_on[k] = hn::Gt(load(rows, kCapOn, off), Z());
+    }
+    const Q4 relative_root = qmul(conj(from_q), to_q);  // interpolate(): a^-1 b
+    V3 p[kMaxJ], xbar[kMaxJ], obar_axis[kMaxJ], goal_sum[kMaxJ];
+    Q4 qs[kMaxJ], obar[kMaxJ], q_new[kMaxJ];
+    M3 ellipsoid[kMaxJ];
+    for (std::uint32_t sub_step = 1; sub_step <= t.substeps; ++sub_step) {
+        const float f = static_cast<float>(sub_step) / static_cast<float>(t.substeps);
+        const V3 r_p = mul(S(f), travel);
+        const Q4 r_q = qnormalize(qmul(from_q, partial(relative_root, f)));
+
+        // 1-2. Kinematic root and the rest shape placed by the root.
+        for (std::size_t i = 0; i < n; ++i) {
+            xbar[i] = add(r_p, rotate(r_q, rest_p[i]));
+            obar[i] = qnormalize(qmul(r_q, rest_o[i]));
+            obar_axis[i] = rotate(obar[i], splat3(t.bone_axis[i].data()));
+        }
+        p[0] = xbar[0];
+        qs[0] = obar[0];
+
+        // 4. Predict.
+        const V3 h_acceleration = splat3(t.h_acceleration.data());
+        for (std::size_t i = 1; i < n; ++i) {
+            v[i] = mul(S(t.decay), add(v[i], h_acceleration));
+            omega[i] = mul(S(t.decay), omega[i]);
+            p[i] = add(x[i], mul(S(t.h), v[i]));
+            qs[i] = turn(q[i], mul(S(t.half_h), omega[i]));
+        }
+
+        // 5. Project.
+        for (std::uint32_t it = 0; it < t.iterations; ++it) {
+            // The ellipsoid terms A_j, once per particle.
+            for (std::size_t j = 0; j < n; ++j) {
+                const M3 rel = mat3_cast(qmul(qs[j], conj(obar[j])));
+                const V3 u = rotate(qs[j], splat3(t.bone_axis[j].data()));
+                const V3& ob = obar_axis[j];
+                const V uc[3] = {u.x, u.y, u.z};
+                const V oc[3] = {ob.x, ob.y, ob.z};
+                const V b2 = S(t.b2), ab = S(t.ab[j]), w5 = S(t.weight5[j]);
+                for (int col = 0; col < 3; ++col) {
+                    const V rc[3] = {rel.c[col].x, rel.c[col].y, rel.c[col].z};
+                    V e[3];
+                    for (int row = 0; row < 3; ++row) {
+                        e[row] = hn::Mul(w5, hn::Add(hn::Mul(b2, rc[row]), hn::Mul(ab, hn::Mul(uc[row], oc[col]))));
+                    }
+                    ellipsoid[j].c[col] = {e[0], e[1], e[2]};
+                }
+                goal_sum[j] = zero3();
+            }
+            // Shape matching over G_i = {i-1, i, i+1}, clipped at the ends.
+            for (std::size_t i = 0; i < n; ++i) {
+                const std::size_t lo = i == 0 ? 0 : i - 1;
+                const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
+                V3 c = zero3(), cbar = zero3();
+                for (std::size_t j = lo; j <= hi; ++j) {
+                    c = add(c, mul(S(t.weight[j]), p[j]));
+                    cbar = add(cbar, mul(S(t.weight[j]), xbar[j]));
+                }
+                c = div(c, S(t.group_mass[i]));
+                cbar = div(cbar, S(t.group_mass[i]));
+                M3 a{{zero3(), zero3(), zero3()}};
+                for (std::size_t j = lo; j <= hi; ++j) {
+                    const V3 u = sub(p[j], c), ub = sub(xbar[j], cbar);
+                    const V uc[3] = {u.x, u.y, u.z};
+                    const V bc[3] = {ub.x, ub.y, ub.z};
+                    const V wj = S(t.weight[j]);
+                    for (int col = 0; col < 3; ++col) {
+                        V* ac[3] = {&a.c[col].x, &a.c[col].y, &a.c[col].z};
+                        const V ec[3] = {ellipsoid[j].c[col].x, ellipsoid[j].c[col].y, ellipsoid[j].c[col].z};
+                        for (int row = 0; row < 3; ++row) {
+                            *ac[row] = hn::Add(hn::Add(*ac[row], hn::Mul(wj, hn::Mul(uc[row], bc[col]))), ec[row]);
+                        }
+                    }
+                }
+                const Q4 rot = extract_rotation(a, qmul(qs[i], conj(obar[i])));
+                for (std::size_t j = lo; j <= hi; ++j) goal_sum[j] = add(goal_sum[j], add(c, rotate(rot, sub(xbar[j], cbar))));
+                q_new[i] = qnormalize(qmul(rot, obar[i]));
+            }
+            for (std::size_t i = 1; i < n; ++i) {
+                const V count = S(i + 1 == n ? 2.0f : 3.0f);
+                p[i] = add(p[i], mul(S(t.k_iter), sub(div(goal_sum[i], count), p[i])));
+                qs[i] = q_new[i];
+            }
+            // Rest-pose attraction.
+            for (std::size_t i = 1; i < n; ++i) p[i] = add(p[i], mul(S(t.k_rest), sub(xbar[i], p[i])));
+            // Distance constraints, follow-the-leader.
+            for (std::size_t i = 0; i + 1 < n; ++i) {
+                const V3 dd = sub(p[i + 1], p[i]);
+                const V len = length(dd);
+                p[i + 1] = select(hn::Gt(len, S(1e-9f)), add(p[i], mul(hn::Div(S(t.segment[i]), len), dd)), p[i + 1]);
+            }
+            // Collisions, collider by collider.
+            for (std::size_t k = 0; k < batch.colliders; ++k) {
+                for (std::size_t i = 1; i < n; ++i) collide(p[i], cap_a[k], cap_b[k], cap_r[k], cap_on[k]);
+            }
+        }
+
+        // 6. Update.
+        for (std::size_t i = 0; i < n; ++i) {
+            v[i] = div(sub(p[i], x[i]), S(t.h));
+            const Q4 dq = positive_w(qmul(qs[i], conj(q[i])));
+            omega[i] = mul(S(t.two_over_h), V3{dq.x, dq.y, dq.z});
+            x[i] = p[i];
+            q[i] = qs[i];
+        }
+    }
+
+    // ---- store: the state relative to the new root, this frame's rest shape, view, weights ----
+    for (std::size_t i = 0; i < n; ++i) {
+        store3(sub(x[i], travel), block, joint_row(i, kX), off);
+        store3(v[i], block, joint_row(i, kV), off);
+        store4(q[i], block, joint_row(i, kQ), off);
+        store3(omega[i], block, joint_row(i, kOmega), off);
+        store3(rest_p[i], block, joint_row(i, kRestP), off);
+        store4(rest_o[i], block, joint_row(i, kRestO), off);
+    }
+    store3(to_p, chain_rows, kRootP, off);
+    store4(to_q, chain_rows, kRootQ, off);
+    store3(d, chain_rows, kView, off);
+    for (std::size_t k = 0; k <= rods::kMaxViewExamples; ++k) store(k <= m ? w[k] : Z(), chain_rows, kWeights + k, off);
+}
+
+void step_batches(const RodStepArgs& args, std::size_t begin, std::size_t end) {
+    const std::size_t lanes = hn::Lanes(D());
+    Inputs in;
+    for (std::size_t b = begin; b < end; ++b) {
+        const RodBatch& batch = args.batches[b];
+        gather_inputs(args, batch, args.templates[batch.templ], in);
+        for (std::size_t off = 0; off < batch.count; off += lanes) step_lanes(args, batch, in, off);
+    }
+}
+
+}  // namespace
+
+RodKernels rod_kernels() { return {&step_batches}; }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace kodawari::simd
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include "simd/dispatch.hpp"
+
+namespace kodawari::simd {
+
+RodKernels rod_kernels(std::int64_t target) { KW_SIMD_SELECT(target, rod_kernels) }
+
+}  // namespace kodawari::simd
+#endif
