@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <ostream>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -17,6 +18,7 @@
 
 #include "kodawari/backend.hpp"
 #include "kodawari/gpu_info.hpp"
+#include "kodawari/simd.hpp"
 
 namespace kodawari::testing_support {
 
@@ -64,12 +66,44 @@ inline BackendOptions gpu_options() {
     return options;
 }
 
-/// Every backend kind, for the suites that run one body per backend
-/// (INSTANTIATE_TEST_SUITE_P(All, Suite, all_backend_kinds(), backend_test_name)).
-inline auto all_backend_kinds() { return ::testing::Values(BackendKind::CpuReference, BackendKind::Cpu, BackendKind::Vulkan); }
-/// The backend's name as a test name: "cpu_reference", "cpu", "vulkan".
-inline std::string backend_test_name(const ::testing::TestParamInfo<BackendKind>& info) {
-    std::string name(backend_name(info.param));
+/// One configuration of the shared backend test bodies: a backend kind and, for the cpu
+/// backend, the SIMD instruction set it is made with (BackendOptions::isa). Converts to
+/// its kind, so that a body asks `GetParam() == BackendKind::Vulkan`.
+struct BackendCase {
+    BackendKind kind = BackendKind::CpuReference;
+    std::string isa;
+    // NOLINTNEXTLINE(google-explicit-constructor): the bodies compare the case with kinds
+    operator BackendKind() const { return kind; }
+};
+/// "cpu-reference", "cpu/avx512", "vulkan": what the measured lines of the bodies say.
+inline std::string case_name(const BackendCase& c) {
+    return std::string(backend_name(c.kind)) + (c.isa.empty() ? "" : "/") + c.isa;
+}
+inline void PrintTo(const BackendCase& c, std::ostream* os) { *os << case_name(c); }
+
+/// The options of a case's backends: gpu_options() with the case's instruction set.
+inline BackendOptions backend_options(const BackendCase& c) {
+    BackendOptions options = gpu_options();
+    options.isa = c.isa;
+    return options;
+}
+
+/// Every backend configuration, for the suites that run one body per backend
+/// (INSTANTIATE_TEST_SUITE_P(All, Suite, all_backend_kinds(), backend_test_name)):
+/// cpu-reference, the cpu backend at every instruction set this machine runs (so at least
+/// two: the widest and Highway's scalar fallback; on this project's machines avx512,
+/// avx2, sse4 and scalar, i.e. 16, 8, 4 and 1 lanes), and vulkan.
+inline std::vector<BackendCase> backend_cases() {
+    std::vector<BackendCase> cases{{BackendKind::CpuReference, ""}};
+    for (const std::string& isa : available_simd_isas()) cases.push_back({BackendKind::Cpu, isa});
+    cases.push_back({BackendKind::Vulkan, ""});
+    return cases;
+}
+inline auto all_backend_kinds() { return ::testing::ValuesIn(backend_cases()); }
+/// The configuration as a test name: "cpu_reference", "cpu_avx512", "cpu_sse4", "vulkan".
+inline std::string backend_test_name(const ::testing::TestParamInfo<BackendCase>& info) {
+    std::string name(backend_name(info.param.kind));
+    if (!info.param.isa.empty()) name += "_" + info.param.isa;
     for (char& c : name) {
         if (c == '-') c = '_';
     }

@@ -37,7 +37,7 @@ using namespace kodawari::testing_support::characters;  // the character suites'
 
 namespace {
 
-class CharacterBackends : public ::testing::TestWithParam<kodawari::BackendKind> {
+class CharacterBackends : public ::testing::TestWithParam<kodawari::testing_support::BackendCase> {
 protected:
     void SetUp() override {
         if (GetParam() == kodawari::BackendKind::Vulkan) {
@@ -45,7 +45,7 @@ protected:
                 GTEST_SKIP() << why;
             }
         }
-        auto made = kodawari::make_rod_backend(GetParam(), kodawari::testing_support::gpu_options());
+        auto made = kodawari::make_rod_backend(GetParam(), kodawari::testing_support::backend_options(GetParam()));
         ASSERT_TRUE(made.ok()) << made.error().message;
         backend_ = std::move(made).value();
     }
@@ -95,7 +95,7 @@ TEST_P(CharacterBackends, ShippedScenesMatchTheReference) {
             }
         }
         std::printf("[ measured ] %s on %s, %u frames: max %.3g of the chain length from the reference\n", file,
-                    std::string(backend_->name()).c_str(), frames - 1, static_cast<double>(worst / length));
+                    kodawari::testing_support::case_name(GetParam()).c_str(), frames - 1, static_cast<double>(worst / length));
         if (GetParam() == kodawari::BackendKind::Vulkan) {
             EXPECT_LT(worst, 1e-3f * length) << file;
         } else {
@@ -119,7 +119,7 @@ TEST_P(CharacterBackends, CrowdLoadsAndSteps) {
     const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
     ASSERT_EQ(snap.positions.size(), rs.world.joint_count);
     for (const glm::vec3& p : snap.positions) ASSERT_TRUE(std::isfinite(glm::dot(p, p)));
-    std::printf("[ measured ] crowd on %s (%s): one frame of %zu chains in %.1f ms\n", std::string(backend_->name()).c_str(),
+    std::printf("[ measured ] crowd on %s (%s): one frame of %zu chains in %.1f ms\n", kodawari::testing_support::case_name(GetParam()).c_str(),
                 backend_->device().c_str(), rs.world.chains.size(), 1e3 * seconds);
 }
 

@@ -222,13 +222,13 @@ glm::mat4 trs(glm::vec3 t, glm::quat r, glm::vec3 s) {
     return glm::translate(glm::mat4(1.0f), t) * glm::mat4_cast(r) * glm::scale(glm::mat4(1.0f), s);
 }
 
-class PoseBackends : public ::testing::TestWithParam<BackendKind> {
+class PoseBackends : public ::testing::TestWithParam<testing_support::BackendCase> {
 protected:
     void SetUp() override {
         if (GetParam() == BackendKind::Vulkan) {
             if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
         }
-        auto made = make_pose_backend(GetParam(), testing_support::gpu_options());
+        auto made = make_pose_backend(GetParam(), testing_support::backend_options(GetParam()));
         ASSERT_TRUE(made.ok()) << made.error().message;
         backend_ = std::move(made).value();
     }
@@ -282,7 +282,7 @@ protected:
             worst = std::max(worst, at_t);
         }
         std::printf("[ measured ] %s, %s: %zu instances x %zu nodes at %zu times: max %.3g of the size (%.3g)\n",
-                    std::string(backend_->name()).c_str(), what, instances.size(), c.nodes.size(), times.size(), worst, size);
+                    testing_support::case_name(GetParam()).c_str(), what, instances.size(), c.nodes.size(), times.size(), worst, size);
     }
 
     std::unique_ptr<PoseBackend> backend_;

@@ -1,4 +1,5 @@
-// The same test bodies against every rod backend: cpu-reference, cpu and vulkan (on
+// The same test bodies against every rod backend: cpu-reference, cpu (at every SIMD
+// instruction set of the machine: test_support.hpp) and vulkan (on
 // lavapipe where there is no GPU, with validation and synchronization validation on:
 // ctest sets KODAWARI_VALIDATION=1 and any message fails the test).
 #include <gtest/gtest.h>
@@ -40,13 +41,13 @@ float max_distance(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>
     return e;
 }
 
-class RodBackends : public ::testing::TestWithParam<BackendKind> {
+class RodBackends : public ::testing::TestWithParam<testing_support::BackendCase> {
 protected:
     void SetUp() override {
         if (GetParam() == BackendKind::Vulkan) {
             if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
         }
-        auto made = make_rod_backend(GetParam(), testing_support::gpu_options());
+        auto made = make_rod_backend(GetParam(), testing_support::backend_options(GetParam()));
         ASSERT_TRUE(made.ok()) << made.error().message;
         backend_ = std::move(made).value();
     }
@@ -105,7 +106,7 @@ TEST_P(RodBackends, KeepsSegmentLengthsAndReportsWeights) {
     }
     // 0.5% of a segment: the inextensibility bound.
     EXPECT_LT(worst, 0.005f);
-    std::printf("[ measured ] %s: max stretch %.3g of a segment\n", std::string(backend_->name()).c_str(),
+    std::printf("[ measured ] %s: max stretch %.3g of a segment\n", testing_support::case_name(GetParam()).c_str(),
                 static_cast<double>(worst));
 }
 
@@ -138,10 +139,12 @@ TEST_P(RodBackends, OneStepMatchesTheReferenceFromTheSameState) {
         }
         EXPECT_LT(worst, 1e-5f * length) << "after " << k << " frames";
         if (GetParam() != BackendKind::Vulkan) {
-            EXPECT_EQ(worst, 0.0f) << "the CPU backends run the same code";
+            // The cpu backend repeats the reference's arithmetic operation for operation
+            // (simd/rods_simd.hpp), at every instruction set.
+            EXPECT_EQ(worst, 0.0f) << "the CPU backends compute the reference's bits";
         }
         std::printf("[ measured ] %s, one frame from frame %u: max %.3g of the chain length\n",
-                    std::string(backend_->name()).c_str(), k, static_cast<double>(worst / length));
+                    testing_support::case_name(GetParam()).c_str(), k, static_cast<double>(worst / length));
     }
 }
 
@@ -166,7 +169,7 @@ TEST_P(RodBackends, ThreeHundredFramesMatchTheReference) {
     if (GetParam() != BackendKind::Vulkan) {
         EXPECT_EQ(std::memcmp(want.positions.data(), got.positions.data(), want.positions.size() * sizeof(glm::vec3)), 0);
     }
-    std::printf("[ measured ] %s, 300 frames: max %.3g of the chain length\n", std::string(backend_->name()).c_str(),
+    std::printf("[ measured ] %s, 300 frames: max %.3g of the chain length\n", testing_support::case_name(GetParam()).c_str(),
                 static_cast<double>(worst / length));
 }
 

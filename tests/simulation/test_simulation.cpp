@@ -23,7 +23,7 @@ bool same_bits(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>& b)
     return a.size() == b.size() && std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::vec3)) == 0;
 }
 
-class Simulations : public ::testing::TestWithParam<BackendKind> {
+class Simulations : public ::testing::TestWithParam<testing_support::BackendCase> {
 protected:
     void SetUp() override {
         if (GetParam() == BackendKind::Vulkan) {
@@ -31,7 +31,7 @@ protected:
         }
     }
     [[nodiscard]] SimulationOptions options(std::uint32_t frames) const {
-        return {.backend = GetParam(), .options = testing_support::gpu_options(), .frames = frames};
+        return {.backend = GetParam(), .options = testing_support::backend_options(GetParam()), .frames = frames};
     }
 };
 
@@ -49,7 +49,7 @@ TEST_P(Simulations, ChainsAreTheBackendsSequencedByHand) {
 
     // By hand, on backends of the same kind (vulkan: on one device, the rigged characters'
     // rod input written there from frame 1 on, as the protocol says).
-    BackendOptions by_hand = testing_support::gpu_options();
+    BackendOptions by_hand = testing_support::backend_options(GetParam());
     if (GetParam() == BackendKind::Vulkan) {
         auto device = open_shared_device(testing_support::gpu_options());
         ASSERT_TRUE(device.ok()) << device.error().message;

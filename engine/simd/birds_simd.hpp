@@ -1,0 +1,73 @@
+#pragma once
+// The vectorized bird kernel (SPEC B.2-B.6) and the structure-of-arrays layout it shares
+// with the cpu bird backend (backends/simd_birds.cpp).
+//
+// Layout. Birds are grouped by route into batches of kBatchLanes (16), in world order
+// within a route, so that a batch's route (timing, looping, segment count, tables) is
+// uniform and one vector instruction advances 16 (AVX-512), 8 (AVX2) or 4 (SSE4) birds.
+// A batch's block holds rows of 16 floats: the birds' constants, their state (blend,
+// phase, mode) and, for frames simulated without an output, the moving parts' pose (the
+// GPU's BirdPoseGpu: position, Body, LeftArm1, LeftArm2), which still goes to memory, as
+// on the GPU. Padding lanes repeat the batch's first bird and are never written out.
+//
+// Exactness. Everything the flight modes, transitions and the phase depend on, the
+// position and the Body rotation are flight.cpp's expressions, operation for operation
+// (+, -, *, /, sqrt, floor: correctly rounded on every instruction set, no contraction),
+// so those are cpu-reference's bits; the seed's bank rule and the diagnostics' angles
+// (atan2, sin, cos of the attitude) come from flight.cpp itself lane by lane
+// (scalar_math.hpp). Only the wing rotations use Highway's vector sin and cos (a few ulp
+// from the C library's), far inside compare.hpp's 1e-4 rad.
+
+#include <array>
+#include <cstddef>
+#include <cstdint>
+
+#include <kodawari/shared/birds.h>
+
+#include "simd/isa.hpp"
+
+namespace kodawari::simd {
+
+/// Rows of a batch block.
+enum BirdRow : std::uint32_t {
+    kBirdOffset = 0,   // BirdParams::offset (xyz: m, w: time offset)
+    kBirdMotion = 4,   // BirdParams::motion (speed, frequency, amplitude, initial phase)
+    kBirdBlend = 8,    // BirdState::blend
+    kBirdPhase = 12,   // BirdState::phase.x
+    kBirdMode = 13,    // BirdState::mode.x as a float; -1 = KW_MODE_UNSET
+    kBirdPose = 14,    // position (4), Body (4), LeftArm1 (4), LeftArm2 (4): the last frame without an output
+    kBirdRows = 30,
+};
+
+/// A batch of up to kBatchLanes birds on one route.
+struct BirdBatch {
+    std::uint32_t route = 0;
+    std::uint32_t count = 0;                       // valid lanes
+    std::array<std::uint32_t, kBatchLanes> bird{};  // bird index per lane (padding: lane 0's)
+};
+
+/// What one simulate() call reads and writes.
+struct BirdStepArgs {
+    gpu::FlightUniforms uniforms{};
+    const gpu::RouteHeader* routes = nullptr;
+    const gpu::vec4* control_points = nullptr;
+    const gpu::ArcSample* arc_samples = nullptr;
+    const BirdBatch* batches = nullptr;
+    float* storage = nullptr;        // kBirdRows x kBatchLanes floats per batch
+    gpu::BirdPose* poses = nullptr;  // frames x birds, frame-major, or null
+    gpu::BirdDiag* diag = nullptr;   // likewise
+    std::size_t birds = 0;
+    std::uint32_t first_frame = 0, frames = 0;
+};
+
+/// Simulates `frames` frames of batches [begin, end).
+using BirdStepFn = void (*)(const BirdStepArgs& args, std::size_t begin, std::size_t end);
+
+struct BirdKernels {
+    BirdStepFn simulate = nullptr;
+};
+
+/// The kernels of a Highway target (isa.hpp).
+[[nodiscard]] BirdKernels bird_kernels(std::int64_t target);
+
+}  // namespace kodawari::simd
