@@ -14,7 +14,6 @@
 #include "simd/birds_simd.hpp"
 #include "simd/scalar_math.hpp"
 #include "simd/vecmath-inl.h"
-#include "hwy/contrib/math/math-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace kodawari::simd {
@@ -246,11 +245,44 @@ Wings wing_angles(int mode, V t, V sin_t, V amplitude) {
             hn::Mul(w.arm2_heading, amplitude)};
 }
 
+// sin x and cos x: Cody-Waite reduction by multiples of pi/2 and Cephes' single-precision
+// polynomials (a few ulp from the C library's for the wings' |x| < 10). Only +, -, *,
+// conversions and bit operations, no fused multiply-add: the same bits on every
+// instruction set (Highway's own Sin and Cos fuse where the ISA has FMA), so the cpu
+// backend's birds are one result wherever it runs and exports stay byte-identical.
+void sin_cos(V x, V& sin_x, V& cos_x) {
+    const DI di;
+    const V ax = hn::Abs(x);
+    VI j = hn::ConvertTo(di, hn::Mul(ax, S(1.27323954473516f)));  // 4 / pi
+    j = hn::And(hn::Add(j, hn::Set(di, 1)), hn::Set(di, ~1));
+    const V y = hn::ConvertTo(D(), j);
+    const V r = hn::Sub(hn::Sub(hn::Sub(ax, hn::Mul(y, S(0.78515625f))), hn::Mul(y, S(2.4187564849853515625e-4f))),
+                        hn::Mul(y, S(3.77489497744594108e-8f)));
+    const V z = hn::Mul(r, r);
+    const V sin_r = hn::Add(
+        hn::Mul(hn::Mul(hn::Sub(hn::Mul(hn::Add(hn::Mul(S(-1.9515295891e-4f), z), S(8.3321608736e-3f)), z), S(1.6666654611e-1f)), z), r),
+        r);
+    const V cos_r = hn::Add(
+        hn::Sub(hn::Mul(hn::Mul(hn::Add(hn::Mul(hn::Sub(hn::Mul(S(2.443315711809948e-5f), z), S(1.388731625493765e-3f)), z),
+                                        S(4.166664568298827e-2f)),
+                                z),
+                        z),
+                hn::Mul(S(0.5f), z)),
+        S(1.0f));
+    const VI q = hn::ShiftRight<1>(j);  // quadrant of ax
+    const M swap = hn::RebindMask(D(), hn::Ne(hn::And(q, hn::Set(di, 1)), hn::Zero(di)));
+    const M sin_negative = hn::RebindMask(D(), hn::Ne(hn::And(q, hn::Set(di, 2)), hn::Zero(di)));
+    const M cos_negative = hn::RebindMask(D(), hn::Ne(hn::And(hn::Add(q, hn::Set(di, 1)), hn::Set(di, 2)), hn::Zero(di)));
+    const V s = hn::IfThenElse(swap, cos_r, sin_r), c = hn::IfThenElse(swap, sin_r, cos_r);
+    sin_x = hn::IfThenElse(hn::Xor(sin_negative, hn::Lt(x, Z())), hn::Neg(s), s);
+    cos_x = hn::IfThenElse(cos_negative, hn::Neg(c), c);
+}
+
 // arm_rotation(pitch, heading) = quat_z(pitch) quat_y(heading), one of which is zero in
 // every mode: a turn about z (pitch) or y (heading) by `angle`.
 Q4 arm_rotation(V angle, M about_y) {
-    const V half = hn::Mul(S(0.5f), angle);
-    const V s = hn::Sin(D(), half), c = hn::Cos(D(), half);
+    V s, c;
+    sin_cos(hn::Mul(S(0.5f), angle), s, c);
     return {Z(), hn::IfThenElseZero(about_y, s), hn::IfThenElse(about_y, Z(), s), c};
 }
 
@@ -329,7 +361,8 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
         // SPEC B.2: the wings at phase t; all three modes' poses only while some lane blends.
         V t = hn::Mul(phase, S(kTwoPi));
         t = hn::IfThenElse(hn::Ge(t, S(kTwoPi)), Z(), t);
-        const V sin_t = hn::Sin(D(), t);
+        V sin_t, cos_t;
+        sin_cos(t, sin_t, cos_t);
         const V alpha = blend_state.w;
         const Wings w[3] = {wing_angles(KW_MODE_LEVEL, t, sin_t, motion.z), wing_angles(KW_MODE_ASCEND, t, sin_t, motion.z),
                             wing_angles(KW_MODE_DESCEND, t, sin_t, motion.z)};

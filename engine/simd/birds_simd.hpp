@@ -15,8 +15,9 @@
 // (+, -, *, /, sqrt, floor: correctly rounded on every instruction set, no contraction),
 // so those are cpu-reference's bits; the seed's bank rule and the diagnostics' angles
 // (atan2, sin, cos of the attitude) come from flight.cpp itself lane by lane
-// (scalar_math.hpp). Only the wing rotations use Highway's vector sin and cos (a few ulp
-// from the C library's), far inside compare.hpp's 1e-4 rad.
+// (scalar_math.hpp). Only the wing rotations use a vector sin and cos of their own (a few
+// ulp from the C library's, far inside compare.hpp's 1e-4 rad), without fused
+// multiply-add, so that they too are the same bits on every instruction set.
 
 #include <array>
 #include <cstddef>
