@@ -1,6 +1,7 @@
 #include "cli_common.hpp"
 
 #include "kodawari/gpu_info.hpp"
+#include "kodawari/simd.hpp"
 
 #include <cstdio>
 #include <unistd.h>
@@ -95,6 +96,17 @@ BackendChoice read_backend_choice(Args& args) {
     choice.options.device = env_text("KODAWARI_DEVICE");
     if (auto d = args.option("device")) choice.options.device = *d;
     if (auto t = args.count("threads", 1, 1024)) choice.options.threads = static_cast<unsigned>(*t);
+    // The cpu backend's instruction set: --isa, else KODAWARI_ISA, else the widest (the
+    // backend factories reject a name this machine cannot run, naming the ones it can).
+    choice.options.isa = env_text("KODAWARI_ISA");
+    const char* isa_from = "KODAWARI_ISA";
+    if (auto isa = args.option("isa")) {
+        choice.options.isa = *isa;
+        isa_from = "--isa";
+    }
+    if (!choice.options.isa.empty()) {
+        if (auto checked = simd_isa(choice.options.isa); !checked) throw UsageError{std::string(isa_from) + ": " + checked.error().message};
+    }
     choice.options.validation = args.flag("validation") || env_flag("KODAWARI_VALIDATION");
     choice.options.force_staging = env_flag("KODAWARI_FORCE_STAGING");
     return choice;

@@ -58,9 +58,10 @@ struct BackendChoice {
     std::optional<BackendKind> backend;  ///< none: auto (vulkan when a device opens, else cpu)
     BackendOptions options;
 };
-/// --backend, --device, --threads, --validation; and the environment, which only the
+/// --backend, --device, --threads, --isa, --validation; and the environment, which only the
 /// command line reads (the library takes options): KODAWARI_DEVICE (the device when no
-/// --device), KODAWARI_VALIDATION=1 (as --validation), KODAWARI_FORCE_STAGING=1.
+/// --device), KODAWARI_ISA (the cpu backend's SIMD instruction set when no --isa),
+/// KODAWARI_VALIDATION=1 (as --validation), KODAWARI_FORCE_STAGING=1.
 BackendChoice read_backend_choice(Args& args);
 
 /// The value of an environment variable ("" when unset); a flag is set unless "" or "0".

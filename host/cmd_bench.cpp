@@ -1,5 +1,6 @@
 #include <algorithm>
 #include <chrono>
+#include <functional>
 #include <optional>
 #include <cstdio>
 #include <sstream>
@@ -14,6 +15,7 @@
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/rods/synthetic.hpp"
 #include "kodawari/scene.hpp"
+#include "kodawari/simd.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
@@ -45,9 +47,32 @@ Scene bench_scene(std::uint32_t count, std::uint32_t frames) {
     return scene;
 }
 
+// One backend's figures: a rate per repetition (bird-frames, joint-steps or frames per
+// second) and what it ran on.
 struct Measured {
     std::string backend, device;
-    double per_second = 0, ms_per_frame = 0, gpu_ms_per_frame = -1;
+    std::string isa;       // the cpu backend's SIMD instruction set, "" for the others
+    unsigned threads = 0;  // CPU threads of the cpu kinds, 0 for vulkan (lavapipe has its own)
+    std::vector<double> per_second, ms_per_frame;
+    double gpu_ms = 0.0;   // summed over the repetitions' frames; < 0 when the backend has no timestamps
+    std::uint64_t frames = 0;
+
+    [[nodiscard]] static double median(std::vector<double> v) {
+        if (v.empty()) return 0.0;
+        std::sort(v.begin(), v.end());
+        const std::size_t n = v.size();
+        return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
+    }
+    [[nodiscard]] double rate() const { return median(per_second); }
+    [[nodiscard]] double min() const { return per_second.empty() ? 0.0 : *std::min_element(per_second.begin(), per_second.end()); }
+    [[nodiscard]] double max() const { return per_second.empty() ? 0.0 : *std::max_element(per_second.begin(), per_second.end()); }
+};
+
+// A backend set up and warmed up, and one timed repetition of it: returns the seconds it
+// took and adds the GPU milliseconds it measured (or makes them negative).
+struct Contender {
+    Measured measured;
+    std::function<Result<double>(double& gpu_ms)> repetition;
 };
 
 std::string json_escape(const std::string& s) {
@@ -70,7 +95,46 @@ std::vector<BackendKind> read_backends(Args& args) {
     return kinds;
 }
 
-// The table and the --json file, the same shape for every benchmark.
+// --repetitions: how many timed runs of every backend the medians come from.
+std::uint32_t read_repetitions(Args& args) {
+    return static_cast<std::uint32_t>(args.count("repetitions", 3, 1000).value_or(3));
+}
+
+// The ISA and threads a backend of `kind` runs with (what the table and the JSON say).
+void describe(Measured& m, BackendKind kind, const BackendOptions& options) {
+    if (kind == BackendKind::Cpu) {
+        auto isa = simd_isa(options.isa);
+        m.isa = isa ? isa.value() : "";
+        m.threads = cpu_backend_threads(options);
+    } else if (kind == BackendKind::CpuReference) {
+        m.threads = 1;
+    }
+}
+
+// The repetitions, interleaved (repetition r of every backend, then r + 1) so that a
+// noisy machine slows them alike.
+Result<void> run_repetitions(std::vector<Contender>& contenders, std::uint32_t repetitions, std::uint64_t frames_per_repetition,
+                             double work_per_frame) {
+    for (std::uint32_t r = 0; r < repetitions; ++r) {
+        for (Contender& c : contenders) {
+            double gpu_ms = 0.0;
+            auto seconds = c.repetition(gpu_ms);
+            if (!seconds) return seconds.error();
+            Measured& m = c.measured;
+            m.per_second.push_back(work_per_frame * static_cast<double>(frames_per_repetition) / seconds.value());
+            m.ms_per_frame.push_back(1e3 * seconds.value() / static_cast<double>(frames_per_repetition));
+            m.gpu_ms = gpu_ms < 0.0 || m.gpu_ms < 0.0 ? -1.0 : m.gpu_ms + gpu_ms;
+            m.frames += frames_per_repetition;
+        }
+    }
+    for (const Contender& c : contenders) {
+        std::printf("  %-14s done: %.4g (min %.4g, max %.4g)\n", c.measured.backend.c_str(), c.measured.rate(), c.measured.min(),
+                    c.measured.max());
+    }
+    std::fflush(stdout);
+    return {};
+}
+
 // Writes a benchmark's JSON atomically and says so.
 int write_json(const std::string& path, const std::string& text) {
     auto file = AtomicFile::open(path);
@@ -81,34 +145,54 @@ int write_json(const std::string& path, const std::string& text) {
     return kExitOk;
 }
 
-int report_results(const std::vector<Measured>& results, const char* unit, const std::string& json_head,
-                   const std::optional<std::string>& json_path) {
-    double reference = 0.0;
-    for (const auto& m : results) {
-        if (m.backend == "cpu-reference") reference = m.per_second;
+// The table and the --json file, the same shape for every benchmark: each backend's median
+// rate with its min and max over the repetitions, its ratio to cpu-reference and to cpu
+// (medians of the same run), the ISA and the threads.
+int report_results(const std::vector<Contender>& contenders, const char* unit, std::uint32_t repetitions,
+                   const BackendOptions& options, const std::string& json_head, const std::optional<std::string>& json_path) {
+    double reference = 0.0, cpu = 0.0;
+    for (const auto& c : contenders) {
+        if (c.measured.backend == "cpu-reference") reference = c.measured.rate();
+        if (c.measured.backend == "cpu") cpu = c.measured.rate();
     }
-    std::printf("\n%-14s %-40s %16s %12s %12s %16s\n", "backend", "device", unit, "ms/frame", "GPU ms/frame", "vs cpu-reference");
-    for (const auto& m : results) {
+    auto ratio = [](double value, double base) {
+        char text[32] = "-";
+        if (base > 0.0) std::snprintf(text, sizeof text, "%.2fx", value / base);
+        return std::string(text);
+    };
+    auto isa = simd_isa(options.isa);
+    const std::string cpu_isa = isa ? isa.value() : "";
+    const unsigned cpu_threads = cpu_backend_threads(options);
+    std::printf("\nmedians of %u repetitions (min and max beside them), after warm-up; cpu: %s, %u threads\n", repetitions,
+                cpu_isa.c_str(), cpu_threads);
+    std::printf("%-14s %-36s %14s %11s %11s %10s %12s %9s %7s %-7s %7s\n", "backend", "device", unit, "min", "max", "ms/frame",
+                "GPU ms/frame", "vs c-ref", "vs cpu", "isa", "threads");
+    for (const auto& c : contenders) {
+        const Measured& m = c.measured;
         char gpu[32] = "-";
-        if (m.gpu_ms_per_frame >= 0.0) std::snprintf(gpu, sizeof gpu, "%.3f", m.gpu_ms_per_frame);
-        char ratio[32] = "-";
-        if (reference > 0.0) std::snprintf(ratio, sizeof ratio, "%.2fx", m.per_second / reference);
-        std::printf("%-14s %-40s %16.4g %12.3f %12s %16s\n", m.backend.c_str(), m.device.c_str(), m.per_second, m.ms_per_frame, gpu,
-                    ratio);
+        if (m.gpu_ms >= 0.0 && m.frames > 0) std::snprintf(gpu, sizeof gpu, "%.3f", m.gpu_ms / static_cast<double>(m.frames));
+        std::printf("%-14s %-36s %14.4g %11.4g %11.4g %10.3f %12s %9s %7s %-7s %7s\n", m.backend.c_str(), m.device.c_str(), m.rate(),
+                    m.min(), m.max(), Measured::median(m.ms_per_frame), gpu, ratio(m.rate(), reference).c_str(),
+                    ratio(m.rate(), cpu).c_str(), m.isa.empty() ? "-" : m.isa.c_str(),
+                    m.threads == 0 ? "-" : std::to_string(m.threads).c_str());
     }
-    if (json_path) {
-        std::string text = json_head + ",\"results\":[";
-        for (std::size_t i = 0; i < results.size(); ++i) {
-            const auto& m = results[i];
-            char numbers[160];
-            std::snprintf(numbers, sizeof numbers, "\"per_second\":%.6g,\"ms_per_frame\":%.6g", m.per_second, m.ms_per_frame);
-            text += (i ? "," : "") + std::string("{\"backend\":\"") + m.backend + "\",\"device\":\"" + json_escape(m.device) + "\"," +
-                    numbers + "}";
-        }
-        text += "]}\n";
-        return write_json(*json_path, text);
+    if (!json_path) return kExitOk;
+    std::string text = json_head + ",\"isa\":\"" + json_escape(cpu_isa) + "\",\"threads\":" + std::to_string(cpu_threads) +
+                       ",\"repetitions\":" + std::to_string(repetitions) + ",\"results\":[";
+    for (std::size_t i = 0; i < contenders.size(); ++i) {
+        const Measured& m = contenders[i].measured;
+        char numbers[320];
+        std::snprintf(numbers, sizeof numbers,
+                      "\"per_second\":%.6g,\"min\":%.6g,\"max\":%.6g,\"ms_per_frame\":%.6g,\"vs_cpu_reference\":%s,\"vs_cpu\":%s",
+                      m.rate(), m.min(), m.max(), Measured::median(m.ms_per_frame),
+                      reference > 0.0 ? std::to_string(m.rate() / reference).c_str() : "null",
+                      cpu > 0.0 ? std::to_string(m.rate() / cpu).c_str() : "null");
+        text += (i ? "," : "") + std::string("{\"backend\":\"") + m.backend + "\",\"device\":\"" + json_escape(m.device) + "\"," +
+                numbers + ",\"isa\":" + (m.isa.empty() ? "null" : "\"" + m.isa + "\"") +
+                ",\"threads\":" + (m.threads == 0 ? "null" : std::to_string(m.threads)) + "}";
     }
-    return kExitOk;
+    text += "]}\n";
+    return write_json(*json_path, text);
 }
 
 // kodawari bench chains: every backend on the same procedural chains (rods/synthetic.hpp),
@@ -118,7 +202,8 @@ int bench_chains(Args& args, const BackendChoice& choice) {
     options.chains = static_cast<std::uint32_t>(args.count("chains", 1, 2'000'000).value_or(100'000));
     options.joints = static_cast<std::uint32_t>(args.count("joints", 2, rods::kMaxChainJoints).value_or(16));
     options.iterations = static_cast<std::uint32_t>(args.count("iterations", 1, 64).value_or(4));
-    const std::uint32_t steps = static_cast<std::uint32_t>(args.count("steps", 1, 100'000).value_or(20));
+    const std::uint32_t steps = static_cast<std::uint32_t>(args.count("steps", 1, 100'000).value_or(10));
+    const std::uint32_t repetitions = read_repetitions(args);
     const auto json_path = args.option("json");
     const std::vector<BackendKind> kinds = read_backends(args);
     if (args.positionals().size() != 1) throw UsageError{"usage: kodawari bench chains [options]"};
@@ -126,15 +211,17 @@ int bench_chains(Args& args, const BackendChoice& choice) {
     if (!made) return report(made.error());
     const rods::SyntheticScene& scene = made.value();
     const float dt = rods::SolverParams{}.max_substep;  // one substep per step
-    std::printf("bench chains: %u chains x %u joints, %u iterations, %u view examples, a head collider each; %u steps of "
-                "1/120 s after 1 warm-up step per backend (it also compiles the kernel)\n",
-                options.chains, options.joints, options.iterations, options.views, steps);
+    std::printf("bench chains: %u chains x %u joints, %u iterations, %u view examples, a head collider each; %u repetitions "
+                "of %u steps of 1/120 s per backend, interleaved, after 1 warm-up step each (it also compiles the kernel)\n",
+                options.chains, options.joints, options.iterations, options.views, repetitions, steps);
     std::fflush(stdout);
     // The kinematic input of every step, made before timing: it is the caller's work.
-    std::vector<rods::RodFrame> frames(steps + 2);
+    std::vector<rods::RodFrame> frames(std::size_t{steps} * repetitions + 2);
     for (std::uint32_t f = 0; f < frames.size(); ++f) scene.frame(f, dt, frames[f]);
 
-    std::vector<Measured> results;
+    std::vector<std::unique_ptr<RodBackend>> backends;
+    std::vector<std::size_t> next;  // per contender: the next frame to step
+    std::vector<Contender> contenders;
     for (BackendKind kind : kinds) {
         auto backend = make_rod_backend(kind, choice.options);
         if (!backend) {
@@ -144,25 +231,34 @@ int bench_chains(Args& args, const BackendChoice& choice) {
         RodBackend& b = *backend.value();
         if (auto r = b.load(scene.world(), frames[0]); !r) return report(r.error());
         if (auto r = b.step(frames[1]); !r) return report(r.error());
-        double gpu_ms = 0.0;
-        const auto start = std::chrono::steady_clock::now();
-        for (std::uint32_t f = 0; f < steps; ++f) {
-            if (auto r = b.step(frames[f + 2]); !r) return report(r.error());
-            gpu_ms += b.last_gpu_ms();
-        }
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        Measured m{std::string(b.name()), b.device(),
-                   static_cast<double>(options.chains) * options.joints * steps / seconds, 1e3 * seconds / steps,
-                   b.last_gpu_ms() >= 0.0 ? gpu_ms / steps : -1.0};
-        if (validation_failed(b.validation_messages())) return kExitFailure;
-        results.push_back(m);
-        std::printf("  %-14s done: %.3g joint-steps/s\n", m.backend.c_str(), m.per_second);
-        std::fflush(stdout);
+        const std::size_t index = backends.size();
+        backends.push_back(std::move(backend).value());
+        next.push_back(2);
+        Contender c;
+        c.measured.backend = std::string(b.name());
+        c.measured.device = b.device();
+        describe(c.measured, kind, choice.options);
+        c.repetition = [&, index, steps](double& gpu_ms) -> Result<double> {
+            RodBackend& rb = *backends[index];
+            const auto start = std::chrono::steady_clock::now();
+            for (std::uint32_t f = 0; f < steps; ++f) {
+                KW_TRY(rb.step(frames[next[index]++]));
+                gpu_ms = rb.last_gpu_ms() < 0.0 || gpu_ms < 0.0 ? -1.0 : gpu_ms + rb.last_gpu_ms();
+            }
+            return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        };
+        contenders.push_back(std::move(c));
+    }
+    if (auto r = run_repetitions(contenders, repetitions, steps, static_cast<double>(options.chains) * options.joints); !r) {
+        return report(r.error());
+    }
+    for (const auto& b : backends) {
+        if (validation_failed(b->validation_messages())) return kExitFailure;
     }
     const std::string head = "{\"benchmark\":\"chains\",\"chains\":" + std::to_string(options.chains) +
                              ",\"joints\":" + std::to_string(options.joints) + ",\"iterations\":" +
                              std::to_string(options.iterations) + ",\"steps\":" + std::to_string(steps);
-    return report_results(results, "joint-steps/s", head, json_path);
+    return report_results(contenders, "joint-steps/s", repetitions, choice.options, head, json_path);
 }
 
 
@@ -172,6 +268,7 @@ int bench_chains(Args& args, const BackendChoice& choice) {
 int bench_crowd(Args& args, const BackendChoice& choice) {
     const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 100'000).value_or(1000));
     const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(60));
+    const std::uint32_t repetitions = read_repetitions(args);
     const auto json_path = args.option("json");
     const std::vector<BackendKind> kinds = read_backends(args);
     const auto positionals = args.positionals();
@@ -194,13 +291,13 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
     if (!built) return report(built.error());
     const RodScene& rods_scene = built.value();
     const gltf::Character& character = *rods_scene.characters[crowd.character].rig;
-    std::printf("bench crowd: %u instances of %s (%zu nodes, %zu clips), %zu chains, %u joints; %u frames at %g fps after 2 "
-                "warm-up frames per backend (they also compile the kernels)\n",
+    std::printf("bench crowd: %u instances of %s (%zu nodes, %zu clips), %zu chains, %u joints; %u repetitions of %u frames at "
+                "%g fps per backend, interleaved, after 2 warm-up frames each (they also compile the kernels)\n",
                 count, character.source.c_str(), character.nodes.size(), character.animations.size(),
-                rods_scene.world.chains.size(), rods_scene.world.joint_count, frames, static_cast<double>(rods_scene.fps));
+                rods_scene.world.chains.size(), rods_scene.world.joint_count, repetitions, frames,
+                static_cast<double>(rods_scene.fps));
     std::fflush(stdout);
 
-    std::vector<Measured> results;
     // Vulkan twice: the pose matrices read back and the rod input made on the host, then
     // (one device for both backends) the rod input written on the device.
     struct Variant {
@@ -212,9 +309,12 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
         variants.push_back({kind, false});
         if (kind == BackendKind::Vulkan) variants.push_back({kind, true});
     }
+    std::vector<std::unique_ptr<Simulation>> sims;
+    std::vector<Contender> contenders;
+    std::vector<double> clip_ms(variants.size(), 0.0);  // per contender, summed over its timed frames
     for (const auto [kind, device_input] : variants) {
         // Frame 0 (load) and 2 warm-up steps, then the timed frames.
-        auto made = Simulation::create(scene, {.backend = kind, .options = choice.options, .frames = frames + 3,
+        auto made = Simulation::create(scene, {.backend = kind, .options = choice.options, .frames = frames * repetitions + 3,
                                                .rod_inputs_on_device = device_input});
         if (!made) {
             std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), made.error().message.c_str());
@@ -225,25 +325,43 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
         if (device_input && !sim.rod_inputs_on_device()) {
             return report(make_error(Error::Kind::Internal, "the rod input could not go on the device"));
         }
-        const SimulationTiming before = sim.timing();
-        const auto start = std::chrono::steady_clock::now();
-        for (std::uint32_t f = 0; f < frames; ++f) {
-            if (auto r = sim.step(); !r) return report(r.error());
-        }
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        if (validation_failed(sim.validation_messages())) return kExitFailure;
-        const double pose_ms = sim.timing().pose_ms - before.pose_ms;
-        const double gpu_ms = sim.timing().chain_gpu_ms - before.chain_gpu_ms;
-        Measured m{std::string(backend_name(kind)) + (kind == BackendKind::Vulkan ? (device_input ? "/dev-in" : "/host-in") : ""),
-                   sim.device(), frames / seconds, 1e3 * seconds / frames, gpu_ms > 0.0 ? gpu_ms / frames : -1.0};
-        results.push_back(m);
-        std::printf("  %-14s done: %.3g frames/s (clips %.3f ms + chains %.3f ms per frame)\n", m.backend.c_str(), m.per_second,
-                    pose_ms / frames, m.ms_per_frame - pose_ms / frames);
-        std::fflush(stdout);
+        const std::size_t index = sims.size();
+        sims.push_back(std::move(made).value());
+        Contender c;
+        c.measured.backend =
+            std::string(backend_name(kind)) + (kind == BackendKind::Vulkan ? (device_input ? "/dev-in" : "/host-in") : "");
+        c.measured.device = sim.device();
+        describe(c.measured, kind, choice.options);
+        c.repetition = [&, index, frames](double& gpu_ms) -> Result<double> {
+            Simulation& s = *sims[index];
+            const SimulationTiming before = s.timing();
+            const auto start = std::chrono::steady_clock::now();
+            for (std::uint32_t f = 0; f < frames; ++f) KW_TRY(s.step());
+            const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double chain_gpu = s.timing().chain_gpu_ms - before.chain_gpu_ms;
+            gpu_ms = chain_gpu > 0.0 ? chain_gpu : -1.0;
+            clip_ms[index] += s.timing().pose_ms - before.pose_ms;
+            return seconds;
+        };
+        contenders.push_back(std::move(c));
+    }
+    if (auto r = run_repetitions(contenders, repetitions, frames, 1.0); !r) return report(r.error());
+    // Where a frame's time goes (means over every timed frame): the clips (the pose backend,
+    // and for host-in the matrices read back and the rod input made from them) and the rest.
+    for (std::size_t i = 0; i < contenders.size(); ++i) {
+        const Measured& m = contenders[i].measured;
+        double total_ms = 0.0;
+        for (const double ms : m.ms_per_frame) total_ms += ms * frames;
+        const double clips = clip_ms[i] / static_cast<double>(m.frames);
+        std::printf("  %-14s clips %.3f ms + chains %.3f ms per frame (means)\n", m.backend.c_str(), clips,
+                    total_ms / static_cast<double>(m.frames) - clips);
+    }
+    for (const auto& s : sims) {
+        if (validation_failed(s->validation_messages())) return kExitFailure;
     }
     const std::string head = "{\"benchmark\":\"crowd\",\"instances\":" + std::to_string(count) + ",\"chains\":" +
                              std::to_string(rods_scene.world.chains.size()) + ",\"frames\":" + std::to_string(frames);
-    return report_results(results, "frames/s", head, json_path);
+    return report_results(contenders, "frames/s", repetitions, choice.options, head, json_path);
 }
 
 // kodawari bench view: what a viewer frame costs (simulate, then draw offscreen and wait;
@@ -363,23 +481,26 @@ int cmd_bench(Args args) {
     if (args.first_word() == "view") return bench_view(args, choice);
     const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 4'000'000).value_or(1'000'000));
     const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(30));
+    const std::uint32_t repetitions = read_repetitions(args);
     const auto json_path = args.option("json");
     const bool readback = args.flag("readback");
+    const std::vector<BackendKind> kinds = read_backends(args);
     const auto positionals = args.positionals();
     if (positionals.size() != 1 || positionals[0] != "birds") {
         throw UsageError{"usage: kodawari bench birds|chains|crowd|view [options]"};
     }
-    const std::vector<BackendKind> kinds = read_backends(args);
 
-    auto built = build_bird_world(bench_scene(count, frames));
+    auto built = build_bird_world(bench_scene(count, frames * repetitions + 1));
     if (!built) return report(built.error());
     const birds::BirdWorld& world = built.value();
-    std::printf("bench birds: %u birds (pigeon, gull, hawk), %u frames at 60 fps after 1 warm-up frame per backend, %s\n", count,
-                frames, readback ? "poses read back every frame" : "no readback");
+    std::printf("bench birds: %u birds (pigeon, gull, hawk), %u repetitions of %u frames at 60 fps per backend, interleaved, "
+                "after 1 warm-up frame each, %s\n",
+                count, repetitions, frames, readback ? "poses read back every frame" : "no readback");
     std::fflush(stdout);
 
     std::vector<gpu::BirdPose> poses(readback ? std::size_t{count} : 0);
-    std::vector<Measured> results;
+    std::vector<std::unique_ptr<BirdBackend>> backends;
+    std::vector<Contender> contenders;
     for (BackendKind kind : kinds) {
         auto backend = make_bird_backend(kind, choice.options);
         if (!backend) {
@@ -390,29 +511,35 @@ int cmd_bench(Args args) {
         if (auto r = b.load(world); !r) return report(r.error());
         // Warm-up: lavapipe compiles the kernel at its first dispatch.
         if (auto r = b.simulate(1, {poses, {}}); !r) return report(r.error());
-        double gpu_ms = 0.0;
-        const auto start = std::chrono::steady_clock::now();
-        if (readback) {
-            for (std::uint32_t f = 0; f < frames; ++f) {
-                if (auto r = b.simulate(1, {poses, {}}); !r) return report(r.error());
-                gpu_ms += b.last_gpu_ms();
+        const std::size_t index = backends.size();
+        backends.push_back(std::move(backend).value());
+        Contender c;
+        c.measured.backend = std::string(b.name());
+        c.measured.device = b.device();
+        describe(c.measured, kind, choice.options);
+        c.repetition = [&, index, frames, readback](double& gpu_ms) -> Result<double> {
+            BirdBackend& bb = *backends[index];
+            const auto start = std::chrono::steady_clock::now();
+            if (readback) {
+                for (std::uint32_t f = 0; f < frames; ++f) {
+                    KW_TRY(bb.simulate(1, {poses, {}}));
+                    gpu_ms = bb.last_gpu_ms() < 0.0 || gpu_ms < 0.0 ? -1.0 : gpu_ms + bb.last_gpu_ms();
+                }
+            } else {
+                KW_TRY(bb.simulate(frames, {}));
+                gpu_ms = bb.last_gpu_ms();
             }
-        } else {
-            if (auto r = b.simulate(frames, {}); !r) return report(r.error());
-            gpu_ms = b.last_gpu_ms();
-        }
-        const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        Measured m{std::string(b.name()), b.device(), static_cast<double>(count) * frames / seconds, 1e3 * seconds / frames,
-                   b.last_gpu_ms() >= 0.0 ? gpu_ms / frames : -1.0};
-        if (validation_failed(b.validation_messages())) return kExitFailure;
-        results.push_back(m);
-        std::printf("  %-14s done: %.3g bird-frames/s\n", m.backend.c_str(), m.per_second);
-        std::fflush(stdout);
+            return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        };
+        contenders.push_back(std::move(c));
     }
-
+    if (auto r = run_repetitions(contenders, repetitions, frames, static_cast<double>(count)); !r) return report(r.error());
+    for (const auto& b : backends) {
+        if (validation_failed(b->validation_messages())) return kExitFailure;
+    }
     const std::string head = "{\"benchmark\":\"birds\",\"count\":" + std::to_string(count) + ",\"frames\":" +
                              std::to_string(frames) + ",\"readback\":" + (readback ? "true" : "false");
-    return report_results(results, "bird-frames/s", head, json_path);
+    return report_results(contenders, "bird-frames/s", repetitions, choice.options, head, json_path);
 }
 
 }  // namespace kodawari::cli

@@ -4,15 +4,27 @@
 #include "kodawari/version.hpp"
 #include "commands.hpp"
 #include "kodawari/gpu_info.hpp"
+#include "kodawari/simd.hpp"
 
 namespace kodawari::cli {
 
 int cmd_info(Args args) {
     std::string device = env_text("KODAWARI_DEVICE");
     if (auto d = args.option("device")) device = *d;
+    std::string requested_isa = env_text("KODAWARI_ISA");
+    if (auto i = args.option("isa")) requested_isa = *i;
     if (!args.positionals().empty()) throw UsageError{"info takes no arguments"};
     std::printf("kodawari %s\n", std::string(version()).c_str());
     std::printf("CPU threads: %u (the cpu backend's default)\n", std::thread::hardware_concurrency());
+    std::string available;
+    for (const std::string& name : available_simd_isas()) available += (available.empty() ? "" : ", ") + name;
+    const auto isa = simd_isa(requested_isa);
+    if (isa) {
+        std::printf("SIMD: %s (the cpu backend's, %u floats per vector%s); available: %s\n", isa.value().c_str(),
+                    simd_lanes(isa.value()), requested_isa.empty() ? ", the widest" : ", as asked", available.c_str());
+    } else {
+        std::printf("SIMD: %s\n", isa.error().message.c_str());
+    }
     auto inventory = list_gpus(device);
     if (!inventory) {
         std::printf("Vulkan: unavailable: %s\n", inventory.error().message.c_str());

@@ -13,15 +13,17 @@ constexpr const char* kUsage = R"(usage: kodawari <command> [options]
 
 commands:
   run [SCENE] [--backend auto|vulkan|cpu|cpu-reference] [--frames N] [--out FILE.glb] [--no-export]
-              [--trace FILE.jsonl] [--device NAME|INDEX] [--threads N] [--validation]
+              [--trace FILE.jsonl] [--device NAME|INDEX] [--threads N] [--isa NAME] [--validation]
       simulate a scene (default )" "scenes/flock.json" R"() and bake it to glTF (default out/<scene>.glb)
   validate [SCENE] [--backend vulkan|cpu] [--frames N]
       run a backend and the CPU reference side by side; exit 1 above tolerance
-  bench birds [--count N] [--frames F] [--json FILE] [--readback] [--backends LIST]
-  bench chains [--chains N] [--joints M] [--iterations K] [--steps S] [--json FILE] [--backends LIST]
-  bench crowd [SCENE] [--count N] [--frames F] [--json FILE] [--backends LIST]
+  bench birds [--count N] [--frames F] [--json FILE] [--readback] [--backends LIST] [--repetitions R]
+  bench chains [--chains N] [--joints M] [--iterations K] [--steps S] [--json FILE] [--backends LIST] [--repetitions R]
+  bench crowd [SCENE] [--count N] [--frames F] [--json FILE] [--backends LIST] [--repetitions R]
       time every backend on the same birds (or chains: joint-steps per second; or a crowd of N skinned
-      characters, default 1000 of scenes/crowd-gltf.json: frames per second) and print the ratios
+      characters, default 1000 of scenes/crowd-gltf.json: frames per second), R >= 3 interleaved
+      repetitions after warm-up (default 3), and print medians, min, max, the ratios to cpu-reference
+      and cpu, the cpu backend's SIMD instruction set and threads (--threads N, --isa NAME)
   rig CHARACTER [--chains PATTERNS|--roots NAMES] [--animation CLIP] [--name NAME] [--out SCENE.json]
       find the chains (VRM spring bones, name patterns or named roots) and colliders of a rigged
       .gltf/.glb/.vrm character and write a scene that simulates it (default ./<character>.json)
@@ -44,9 +46,10 @@ commands:
       one key per frame first (names: space right left home [ ] 1 2 3 s w u + - p q escape, and
       drag:X1:Y1:X2:Y2, a stroke in image pixels in sketch mode, orbit:DX:DY, a left drag, resize:W:H), --screenshot writes the last frame
   info
-      version, Vulkan devices and which one is chosen, CPU threads
+      version, Vulkan devices and which one is chosen, CPU threads and SIMD instruction sets
 
-environment: KODAWARI_DEVICE (device choice), KODAWARI_VALIDATION=1 (Khronos validation
+environment: KODAWARI_DEVICE (device choice), KODAWARI_ISA (the cpu backend's SIMD instruction set:
+avx512, avx2, sse4 or scalar; default the widest, as --isa), KODAWARI_VALIDATION=1 (Khronos validation
 + synchronization validation), KODAWARI_FORCE_STAGING=1 (staging copies even on unified memory)
 )";
 

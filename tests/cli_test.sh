@@ -76,9 +76,22 @@ check "run: no device matches, fails naming the devices" bash -c "test $rc -eq 1
 "$bin" run scenes/flock.json --backend vulkan --frames 30 --out "$work/a.glb" >/dev/null 2>&1
 "$bin" run scenes/flock.json --backend vulkan --frames 30 --out "$work/b.glb" >/dev/null 2>&1
 check "vulkan runs are deterministic" cmp -s "$work/a.glb" "$work/b.glb"
-"$bin" run scenes/flock.json --backend cpu --frames 30 --out "$work/c.glb" >/dev/null 2>&1
-"$bin" run scenes/flock.json --backend cpu-reference --frames 30 --out "$work/d.glb" >/dev/null 2>&1
-check "cpu equals cpu-reference bit for bit" cmp -s "$work/c.glb" "$work/d.glb"
+# The vectorized cpu backend: chains are cpu-reference's bits; birds are within the
+# reference's tolerances (the wings' sines are its own) and the same bits on every SIMD
+# instruction set (KODAWARI_ISA or --isa forces a narrower one).
+"$bin" run scenes/ahoge.json --backend cpu --frames 30 --out "$work/c.glb" >/dev/null 2>&1
+"$bin" run scenes/ahoge.json --backend cpu-reference --frames 30 --out "$work/d.glb" >/dev/null 2>&1
+check "cpu chains equal cpu-reference bit for bit" cmp -s "$work/c.glb" "$work/d.glb"
+"$bin" run scenes/flock.json --backend cpu --frames 30 --out "$work/e.glb" >/dev/null 2>&1
+KODAWARI_ISA=sse4 "$bin" run scenes/flock.json --backend cpu --frames 30 --out "$work/f.glb" >/dev/null 2>&1
+check "cpu birds: the same bits on sse4 as on the widest instruction set" cmp -s "$work/e.glb" "$work/f.glb"
+"$bin" validate scenes/flock.json --backend cpu --frames 300 >"$work/validate-cpu.out" 2>&1
+check "validate: the cpu backend's birds pass against the reference" grep -q "validate: PASS" "$work/validate-cpu.out"
+"$bin" info >"$work/info-simd.out" 2>&1
+check "info names the SIMD instruction set and the available ones" grep -q '^SIMD: [a-z0-9]* (.*); available: .*scalar' "$work/info-simd.out"
+KODAWARI_ISA=avx1024 "$bin" bench birds --count 10 --frames 1 --backends cpu >/dev/null 2>"$work/isa.err"
+rc=$?
+check "an unknown KODAWARI_ISA exits 2 naming it and the available ones" bash -c "test $rc -eq 2 && grep -q 'KODAWARI_ISA: SIMD instruction set \"avx1024\" is unknown.*available here: .*scalar' '$work/isa.err'"
 
 # bench writes the documented JSON.
 "$bin" bench birds --count 1001 --frames 3 --json "$work/bench.json" >"$work/bench.out" 2>&1
@@ -98,6 +111,8 @@ check "rod export passes glTF-Validator" node tests/tools/validate_gltf.mjs "$wo
 check "validate passes on the bunny" grep -q "validate: PASS" "$work/validate-bunny.out"
 "$bin" bench chains --chains 130 --joints 9 --steps 2 --json "$work/bench-chains.json" >/dev/null 2>&1
 check "bench chains json" bash -c "node -e 'const r=require(\"$work/bench-chains.json\"); if (r.benchmark!==\"chains\"||r.results.length!==3||!(r.results[0].per_second>0)) process.exit(1)'"
+KODAWARI_ISA=sse4 "$bin" bench chains --chains 130 --joints 9 --steps 2 --threads 2 --backends cpu-reference,cpu --json "$work/bench-isa.json" >"$work/bench-isa.out" 2>&1
+check "bench: medians of 3 repetitions with min, max, ratios, the ISA and threads" bash -c "node -e 'const r=require(\"$work/bench-isa.json\"); const c=r.results[1]; if (r.isa!==\"sse4\"||r.threads!==2||r.repetitions!==3||c.backend!==\"cpu\"||c.isa!==\"sse4\"||c.threads!==2||!(c.min<=c.per_second&&c.per_second<=c.max)||!(c.vs_cpu_reference>0)||c.vs_cpu!==1||r.results[0].threads!==1||r.results[0].isa!==null) process.exit(1)' && grep -q 'cpu  *2 threads, sse4 .* sse4  *2\$' '$work/bench-isa.out'"
 
 # Rigged characters (issue 4): `kodawari rig` on the project's character and on every
 # shipped sample writes a scene that `kodawari run` simulates; bad input exits 2.
