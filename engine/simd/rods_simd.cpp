@@ -292,11 +292,14 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
                 }
                 goal_sum[j] = zero3();
             }
-            // Shape matching over G_i = {i-1, i, i+1}, clipped at the ends.
-            for (std::size_t i = 0; i < n; ++i) {
+            // Shape matching over G_i = {i-1, i, i+1}, clipped at the ends: the goal centre c
+            // and rotation of group i, then its goals added to its members' sums, in group
+            // order. Two groups at a time, so that the processor overlaps their long chains
+            // of dependent operations (the sums still take the groups in order).
+            auto group = [&](std::size_t i, V3& c, Q4& rot) HWY_ATTR {
                 const std::size_t lo = i == 0 ? 0 : i - 1;
                 const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
-                V3 c = zero3();
+                c = zero3();
                 for (std::size_t j = lo; j <= hi; ++j) c = add(c, mul(S(t.weight[j]), p[j]));
                 c = div(c, S(t.group_mass[i]));
                 M3 a{{zero3(), zero3(), zero3()}};
@@ -313,9 +316,28 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
                         }
                     }
                 }
-                const Q4 rot = extract_rotation(a, relative[i], mat3_cast(relative[i]));
+                rot = extract_rotation(a, relative[i], mat3_cast(relative[i]));
+            };
+            auto goals = [&](std::size_t i, const V3& c, const Q4& rot) HWY_ATTR {
+                const std::size_t lo = i == 0 ? 0 : i - 1;
+                const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
                 for (std::size_t j = lo; j <= hi; ++j) goal_sum[j] = add(goal_sum[j], add(c, rotate(rot, sub(xbar[j], cbar[i]))));
                 q_new[i] = qnormalize(qmul(rot, obar[i]));
+            };
+            std::size_t g = 0;
+            for (; g + 1 < n; g += 2) {
+                V3 c0, c1;
+                Q4 r0, r1;
+                group(g, c0, r0);
+                group(g + 1, c1, r1);
+                goals(g, c0, r0);
+                goals(g + 1, c1, r1);
+            }
+            if (g < n) {
+                V3 c0;
+                Q4 r0;
+                group(g, c0, r0);
+                goals(g, c0, r0);
             }
             for (std::size_t i = 1; i < n; ++i) {
                 const V count = S(i + 1 == n ? 2.0f : 3.0f);
