@@ -43,21 +43,39 @@ struct Bezier {
     V3 p, d1, d2;
 };
 
+// What the lanes read of their route last frame, kept from frame to frame: a bird moves a
+// little along its route each frame, so its Bezier segment and arc-length interval rarely
+// change, and gathering them again (and the binary search) is most of the route's cost.
+// The values are the same as read afresh, so the results do not change (the GPU kernel
+// keeps the same cache).
+struct RouteCache {
+    bool segment_valid = false;
+    VI segment;
+    V3 b[4];
+    bool interval_valid = false;
+    VI lo;          // the interval [lo, lo + 1] of the arc-length samples
+    V ax, ay, aw, next, bx, by, bz;
+};
+
 // flight.cpp bezier_global() and bezier(): segment min(u, n - 1) of the route at u.
-Bezier bezier(const BirdStepArgs& a, const gpu::RouteHeader& route, V u) {
+Bezier bezier(const BirdStepArgs& a, const gpu::RouteHeader& route, V u, RouteCache& cache) {
     const DI di;
     const VI seg = hn::Min(hn::ConvertTo(di, hn::IfThenElse(hn::Lt(u, Z()), Z(), u)),
                            hn::Set(di, static_cast<std::int32_t>(route.extent.y) - 1));
     u = hn::Sub(u, hn::ConvertTo(D(), seg));
-    const float* points = &a.control_points[0].x;
-    const VI first = hn::Mul(hn::Add(hn::Set(di, static_cast<std::int32_t>(route.extent.x)), hn::Mul(seg, hn::Set(di, 3))),
-                             hn::Set(di, 4));
-    V3 b[4];
-    for (int j = 0; j < 4; ++j) {
-        const VI at = hn::Add(first, hn::Set(di, 4 * j));
-        b[j] = {hn::GatherIndex(D(), points, at), hn::GatherIndex(D(), points, hn::Add(at, hn::Set(di, 1))),
-                hn::GatherIndex(D(), points, hn::Add(at, hn::Set(di, 2)))};
+    if (!cache.segment_valid || !hn::AllTrue(di, hn::Eq(seg, cache.segment))) {
+        const float* points = &a.control_points[0].x;
+        const VI first = hn::Mul(hn::Add(hn::Set(di, static_cast<std::int32_t>(route.extent.x)), hn::Mul(seg, hn::Set(di, 3))),
+                                 hn::Set(di, 4));
+        for (int j = 0; j < 4; ++j) {
+            const VI at = hn::Add(first, hn::Set(di, 4 * j));
+            cache.b[j] = {hn::GatherIndex(D(), points, at), hn::GatherIndex(D(), points, hn::Add(at, hn::Set(di, 1))),
+                          hn::GatherIndex(D(), points, hn::Add(at, hn::Set(di, 2)))};
+        }
+        cache.segment = seg;
+        cache.segment_valid = true;
     }
+    const V3* b = cache.b;
     const V v = hn::Sub(S(1.0f), u);
     const V three_u = hn::Mul(S(3.0f), u);
     Bezier r;
@@ -70,25 +88,61 @@ Bezier bezier(const BirdStepArgs& a, const gpu::RouteHeader& route, V u) {
     return r;
 }
 
-// flight.cpp route_parameter_at(): the binary search over the arc-length samples, lane by
-// lane in step, then the cubic Hermite interpolation of u(s).
-V route_parameter_at(const BirdStepArgs& a, const gpu::RouteHeader& route, V s) {
+// flight.cpp route_parameter_at(): the interval a binary search over the arc-length
+// samples finds (the last lo with s_lo <= s, at most last - 1), then the cubic Hermite
+// interpolation of u(s). The cached interval is that one while s stays in it; the next
+// one is the usual answer when it does not; the search, lane by lane in step, otherwise.
+V route_parameter_at(const BirdStepArgs& a, const gpu::RouteHeader& route, V s, RouteCache& cache) {
     const DI di;
     const float* table = &a.arc_samples[route.extent.z].s_u_duds.x;
     constexpr int kStride = sizeof(gpu::ArcSample) / sizeof(float);
-    VI lo = hn::Zero(di), hi = hn::Set(di, static_cast<std::int32_t>(route.extent.w) - 1);
-    for (;;) {
-        const auto active = hn::Gt(hn::Sub(hi, lo), hn::Set(di, 1));
-        if (hn::AllFalse(di, active)) break;
-        const VI mid = hn::ShiftRight<1>(hn::Add(lo, hi));
-        const auto below = hn::RebindMask(di, hn::Le(hn::GatherIndex(D(), table, hn::Mul(mid, hn::Set(di, kStride))), s));
-        lo = hn::IfThenElse(hn::And(active, below), mid, lo);
-        hi = hn::IfThenElse(hn::AndNot(below, active), mid, hi);
+    const VI last = hn::Set(di, static_cast<std::int32_t>(route.extent.w) - 1), one = hn::Set(di, 1);
+    auto s_at = [&](const VI& index) { return hn::GatherIndex(D(), table, hn::Mul(index, hn::Set(di, kStride))); };
+    bool fresh = true;
+    VI lo = hn::Zero(di);
+    if (cache.interval_valid) {
+        const M last_interval = hn::RebindMask(D(), hn::Eq(hn::Add(cache.lo, one), last));
+        const M still = hn::And(hn::Le(cache.ax, s), hn::Or(hn::Lt(s, cache.bx), last_interval));
+        if (hn::AllTrue(D(), still)) {
+            fresh = false;
+        } else {
+            // Forward flight: the next interval, where it holds s.
+            const VI lo2 = hn::Min(hn::Add(cache.lo, hn::Set(di, 2)), last);
+            const M next_is_last = hn::RebindMask(D(), hn::Eq(hn::Add(cache.lo, hn::Set(di, 2)), last));
+            const M can_step = hn::RebindMask(D(), hn::Lt(hn::Add(cache.lo, one), last));  // lo + 2 <= last
+            const M forward = hn::And(hn::And(can_step, hn::Le(cache.bx, s)), hn::Or(hn::Lt(s, s_at(lo2)), next_is_last));
+            if (hn::AllTrue(D(), hn::Or(still, forward))) {
+                lo = hn::IfThenElse(hn::RebindMask(di, forward), hn::Add(cache.lo, one), cache.lo);
+            } else {
+                cache.interval_valid = false;
+            }
+        }
     }
-    const VI at_lo = hn::Mul(lo, hn::Set(di, kStride)), at_hi = hn::Mul(hi, hn::Set(di, kStride));
-    auto field = [&](const VI& at, int k) { return hn::GatherIndex(D(), table, hn::Add(at, hn::Set(di, k))); };
-    const V ax = field(at_lo, 0), ay = field(at_lo, 1), aw = field(at_lo, 3), next = field(at_lo, 4);
-    const V bx = field(at_hi, 0), by = field(at_hi, 1), bz = field(at_hi, 2);
+    if (!cache.interval_valid) {
+        VI hi = last;
+        for (;;) {
+            const auto active = hn::Gt(hn::Sub(hi, lo), one);
+            if (hn::AllFalse(di, active)) break;
+            const VI mid = hn::ShiftRight<1>(hn::Add(lo, hi));
+            const auto below = hn::RebindMask(di, hn::Le(s_at(mid), s));
+            lo = hn::IfThenElse(hn::And(active, below), mid, lo);
+            hi = hn::IfThenElse(hn::AndNot(below, active), mid, hi);
+        }
+    }
+    if (fresh) {
+        const VI at_lo = hn::Mul(lo, hn::Set(di, kStride)), at_hi = hn::Add(at_lo, hn::Set(di, kStride));
+        auto field = [&](const VI& at, int k) { return hn::GatherIndex(D(), table, hn::Add(at, hn::Set(di, k))); };
+        cache.lo = lo;
+        cache.ax = field(at_lo, 0);
+        cache.ay = field(at_lo, 1);
+        cache.aw = field(at_lo, 3);
+        cache.next = field(at_lo, 4);
+        cache.bx = field(at_hi, 0);
+        cache.by = field(at_hi, 1);
+        cache.bz = field(at_hi, 2);
+        cache.interval_valid = true;
+    }
+    const V ax = cache.ax, ay = cache.ay, aw = cache.aw, next = cache.next, bx = cache.bx, by = cache.by, bz = cache.bz;
     const V h = hn::Sub(bx, ax);
     const V t = clamp01(hn::Mul(hn::Sub(s, ax), next));
     const V t2 = hn::Mul(t, t), t3 = hn::Mul(t2, t);
@@ -105,7 +159,7 @@ struct Sample {
 };
 
 // flight.cpp sample_route(): both ends' cases and the inside computed, one chosen per lane.
-Sample sample_route(const BirdStepArgs& a, const gpu::RouteHeader& route, V time, V speed) {
+Sample sample_route(const BirdStepArgs& a, const gpu::RouteHeader& route, V time, V speed, RouteCache& cache) {
     const bool loop = (route.flags.x & KW_ROUTE_LOOP) != 0;
     const V n = S(static_cast<float>(route.extent.y));
     Sample out;
@@ -125,7 +179,7 @@ Sample sample_route(const BirdStepArgs& a, const gpu::RouteHeader& route, V time
         }
         const M outside = hn::Or(hn::Lt(u, Z()), hn::Gt(u, n));
         const V end = hn::IfThenElse(hn::Lt(u, Z()), Z(), n);
-        const Bezier e = bezier(a, route, hn::IfThenElse(outside, end, u));
+        const Bezier e = bezier(a, route, hn::IfThenElse(outside, end, u), cache);
         out.position = select(outside, add(e.p, mul(hn::Sub(u, end), e.d1)), e.p);
         out.velocity = mul(S(route.info.w), e.d1);
         out.acceleration = select(outside, zero3(), mul(S(route.info.w * route.info.w), e.d2));
@@ -140,8 +194,8 @@ Sample sample_route(const BirdStepArgs& a, const gpu::RouteHeader& route, V time
     const M before = hn::Lt(s, Z());
     const M outside = hn::Or(before, hn::Gt(s, S(total)));
     const V clamped = hn::IfThenElse(before, Z(), hn::IfThenElse(hn::Gt(s, S(total)), S(total), s));
-    const V u = hn::IfThenElse(outside, hn::IfThenElse(before, Z(), n), route_parameter_at(a, route, clamped));
-    const Bezier e = bezier(a, route, u);
+    const V u = hn::IfThenElse(outside, hn::IfThenElse(before, Z(), n), route_parameter_at(a, route, clamped, cache));
+    const Bezier e = bezier(a, route, u, cache);
     const V d1_len = length(e.d1);
     const V3 tangent = mul(hn::Div(S(1.0f), d1_len), e.d1);
     const V end_s = hn::IfThenElse(before, Z(), S(total));
@@ -331,13 +385,14 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
     const V level = S(KW_MODE_LEVEL), ascend = S(KW_MODE_ASCEND), descend = S(KW_MODE_DESCEND);
     auto one_hot = [&](V mode, V which) { return hn::IfThenElse(hn::Eq(mode, which), S(1.0f), Z()); };
 
+    RouteCache cache;
     for (std::uint32_t k = 0; k < a.frames; ++k) {
         const std::uint32_t frame = a.first_frame + k;
         const M first = hn::Lt(mode_state, Z());  // KW_MODE_UNSET
         phase = hn::IfThenElse(first, motion.w, hn::Add(phase, hn::Mul(motion.y, dt)));
         phase = hn::Sub(phase, hn::Floor(phase));
         const V time = hn::Add(hn::Mul(S(static_cast<float>(frame)), dt), offset.w);
-        const Sample sample = sample_route(a, route, time, motion.x);
+        const Sample sample = sample_route(a, route, time, motion.x, cache);
 
         // SPEC B.5, B.6: mode and transition.
         const V mode = next_mode(u, mode_state, sample);
