@@ -72,6 +72,8 @@ Q4 shortest_arc(const V3& from, const V3& to) {
     const V3 hn_ = div(h, h_len);
     const V3 c = cross(from, hn_);
     const Q4 regular = qnormalize(Q4{c.x, c.y, c.z, dot(from, hn_)});
+    const M opposite = hn::Lt(h_len, S(1e-6f));
+    if (hn::AllFalse(D(), opposite)) return regular;  // the usual case: no lane needs the other
     // Opposite vectors: a half turn about the axis from the least aligned coordinate axis.
     const V ax = hn::Abs(from.x), ay = hn::Abs(from.y), az = hn::Abs(from.z);
     const M use_x = hn::And(hn::Le(ax, ay), hn::Le(ax, az));
@@ -80,7 +82,7 @@ Q4 shortest_arc(const V3& from, const V3& to) {
     const V one = S(1.0f);
     const V3 other{hn::IfThenElseZero(use_x, one), hn::IfThenElseZero(use_y, one), hn::IfThenElseZero(use_z, one)};
     const V3 axis = normalize(cross(from, other));
-    return select(hn::Lt(h_len, S(1e-6f)), Q4{axis.x, axis.y, axis.z, Z()}, regular);
+    return select(opposite, Q4{axis.x, axis.y, axis.z, Z()}, regular);
 }
 
 // solver.cpp extract_rotation() (one step: kExtractIterations), given the warm start q and
@@ -92,10 +94,9 @@ Q4 extract_rotation(const M3& a, const Q4& q, const M3& r) {
     return turn(q, half_omega);
 }
 
-// solver.cpp closest_on_segment() and push_out(), for the lanes in `on`.
-void collide(V3& p, const V3& a, const V3& b, V radius, M on) {
-    const V3 ab = sub(b, a);
-    const V len2 = dot(ab, ab);
+// solver.cpp closest_on_segment() and push_out(), for the lanes in `on`; ab = b - a and
+// len2 = dot(ab, ab), the same for every joint, computed once per collider.
+void collide(V3& p, const V3& a, const V3& ab, V len2, V radius, M on) {
     V t = hn::Div(dot(sub(p, a), ab), len2);
     t = hn::IfThenElse(hn::Lt(t, Z()), Z(), hn::IfThenElse(hn::Lt(S(1.0f), t), S(1.0f), t));  // std::clamp
     const V3 center = select(hn::Le(len2, Z()), a, add(a, mul(t, ab)));
@@ -220,13 +221,14 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
     const V3 to_p = load3(in.rows, kToP, off);
     const Q4 to_q = load4(in.rows, kToQ, off);
     const V3 travel = sub(to_p, from_p);
-    V3 cap_a[kMaxK], cap_b[kMaxK];
-    V cap_r[kMaxK];
+    V3 cap_a[kMaxK], cap_ab[kMaxK];
+    V cap_r[kMaxK], cap_len2[kMaxK];
     M cap_on[kMaxK];
     for (std::size_t k = 0; k < batch.colliders; ++k) {
         const float* rows = in.colliders + k * kColliderRows * kBatchLanes;
         cap_a[k] = sub(load3(rows, kCapA, off), from_p);
-        cap_b[k] = sub(load3(rows, kCapB, off), from_p);
+        cap_ab[k] = sub(sub(load3(rows, kCapB, off), from_p), cap_a[k]);
+        cap_len2[k] = dot(cap_ab[k], cap_ab[k]);
         cap_r[k] = load(rows, kCapR, off);
         cap_on[k] = hn::Gt(load(rows, kCapOn, off), Z());
     }
@@ -354,7 +356,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
             }
             // Collisions, collider by collider.
             for (std::size_t k = 0; k < batch.colliders; ++k) {
-                for (std::size_t i = 1; i < n; ++i) collide(p[i], cap_a[k], cap_b[k], cap_r[k], cap_on[k]);
+                for (std::size_t i = 1; i < n; ++i) collide(p[i], cap_a[k], cap_ab[k], cap_len2[k], cap_r[k], cap_on[k]);
             }
         }
 
