@@ -181,19 +181,26 @@ public:
         out.weights.assign(count * kWeightCount, 0.0f);
         parallel_for(count, threads_, [&](std::size_t begin, std::size_t end) {
             for (std::size_t c = begin; c < end; ++c) {
-                const rods::ChainState s = state(static_cast<std::uint32_t>(c));
                 const rods::ChainInstance& chain = world_->chains[c];
                 const auto [b, l] = lane_of_[c];
+                const float* joints = block(batches_[b]);
                 const float* rows = chain_rows(batches_[b]);
-                out.view_directions[c] = {rows[simd::kView * kBatchLanes + l], rows[(simd::kView + 1) * kBatchLanes + l],
-                                          rows[(simd::kView + 2) * kBatchLanes + l]};
+                auto at = [&](const float* base, std::size_t row) { return base[row * kBatchLanes + l]; };
+                const glm::vec3 root_p(at(rows, simd::kRootP), at(rows, simd::kRootP + 1), at(rows, simd::kRootP + 2));
+                const glm::quat root_q(at(rows, simd::kRootQ + 3), at(rows, simd::kRootQ), at(rows, simd::kRootQ + 1),
+                                       at(rows, simd::kRootQ + 2));
+                out.view_directions[c] = {at(rows, simd::kView), at(rows, simd::kView + 1), at(rows, simd::kView + 2)};
                 const std::size_t m = world_->templ(chain).views.size();
-                for (std::size_t k = 0; k <= m; ++k) out.weights[c * kWeightCount + k] = rows[(simd::kWeights + k) * kBatchLanes + l];
+                for (std::size_t k = 0; k <= m; ++k) out.weights[c * kWeightCount + k] = at(rows, simd::kWeights + k);
                 for (std::uint32_t i = 0; i < world_->templ(chain).chain.joint_count; ++i) {
-                    out.positions[chain.joint_begin + i] = rods::position(s, i);
-                    out.orientations[chain.joint_begin + i] = s.q[i];
-                    // cpu-reference's keep(): the rest shape placed by the root.
-                    out.rest[chain.joint_begin + i] = s.root.position + s.root.rotation * s.rest_position[i];
+                    const std::size_t r = std::size_t{i} * simd::kJointRows;
+                    const glm::vec3 x(at(joints, r + simd::kX), at(joints, r + simd::kX + 1), at(joints, r + simd::kX + 2));
+                    const glm::vec3 rest(at(joints, r + simd::kRestP), at(joints, r + simd::kRestP + 1), at(joints, r + simd::kRestP + 2));
+                    // rods::position(), and cpu-reference's keep(): the rest shape placed by the root.
+                    out.positions[chain.joint_begin + i] = root_p + x;
+                    out.orientations[chain.joint_begin + i] = glm::quat(at(joints, r + simd::kQ + 3), at(joints, r + simd::kQ),
+                                                                        at(joints, r + simd::kQ + 1), at(joints, r + simd::kQ + 2));
+                    out.rest[chain.joint_begin + i] = root_p + root_q * rest;
                 }
             }
         });
