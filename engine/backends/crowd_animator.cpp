@@ -9,6 +9,7 @@
 #include <kodawari/shared/rod_inputs.h>
 
 #include "backends/device_backends.hpp"
+#include "core/parallel.hpp"
 #include "kodawari/backend_factory.hpp"
 
 namespace kodawari {
@@ -54,6 +55,7 @@ private:
 Result<CrowdAnimator> CrowdAnimator::create(const RodScene& scene, BackendKind kind, const BackendOptions& options) {
     CrowdAnimator out(scene);
     out.options_ = options;
+    out.host_threads_ = kind == BackendKind::Cpu ? cpu_backend_threads(options) : 1u;
     for (std::uint32_t k = 0; k < scene.characters.size(); ++k) {
         const CharacterKinematics& character = scene.characters[k];
         if (!character.rig) continue;
@@ -95,9 +97,12 @@ Result<void> CrowdAnimator::host_frame(std::uint32_t index, rods::RodFrame& out)
     for (Rig& rig : rigs_) {
         KW_TRY(rig.backend->evaluate(scene.time(index)));
         KW_TRY(rig.backend->read(world_));
-        for (std::size_t j = 0; j < rig.instances.size(); ++j) {
-            scene.rigged_frame(rig.instances[j], std::span<const glm::mat4>(world_).subspan(j * rig.nodes, rig.nodes), out);
-        }
+        // Each instance writes its own entries of `out` (sized by kinematic_frame).
+        parallel_for(rig.instances.size(), host_threads_, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t j = begin; j < end; ++j) {
+                scene.rigged_frame(rig.instances[j], std::span<const glm::mat4>(world_).subspan(j * rig.nodes, rig.nodes), out);
+            }
+        });
     }
     last_pose_ms_ = std::chrono::duration<double, std::milli>(std::chrono::steady_clock::now() - start).count();
     return {};

@@ -78,6 +78,10 @@ private:
     std::vector<Rig> rigs_;
     std::shared_ptr<const DeviceInputWriter> writer_;  // also held by the rod backend
     std::vector<glm::mat4> world_;
+    // Threads that make the rigged characters' rod input from their matrices on the host:
+    // the cpu kind's (its pipeline uses every core), one for the others, so that
+    // cpu-reference stays the single-threaded yardstick.
+    unsigned host_threads_ = 1;
     double last_pose_ms_ = 0.0;
 };
 
