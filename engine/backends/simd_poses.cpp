@@ -5,6 +5,7 @@
 // writing each instance's own rows of the output.
 #include <algorithm>
 #include <cmath>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -117,7 +118,10 @@ public:
                 for (std::size_t r = 0; r < 16; ++r) placements_[(b * 16 + r) * kBatchLanes + l] = m[r];
             }
         }
-        world_.assign(instances.size() * character.nodes.size(), glm::mat4(0.0f));
+        // 64-byte aligned: an instance's matrices are whole cache lines (64 bytes each), so
+        // threads writing neighbouring instances never share a line.
+        matrices_ = instances.size() * character.nodes.size();
+        world_ = hwy::AllocateAligned<float>(std::max<std::size_t>(matrices_, 1) * 16);
         evaluated_ = false;
         return {};
     }
@@ -132,7 +136,7 @@ public:
         args.placements = placements_.get();
         args.values = values_.get();
         args.value_offset = value_offset_.data();
-        args.world = reinterpret_cast<float*>(world_.data());  // glm::mat4: 16 floats, column-major
+        args.world = world_.get();
         args.nodes = nodes;
         parallel_for(batches_.size(), threads_, [&](std::size_t begin, std::size_t end) {
             auto scratch = hwy::AllocateAligned<float>(std::max<std::size_t>(nodes, 1) * 16 * kBatchLanes);
@@ -149,7 +153,8 @@ public:
 
     Result<void> read(std::vector<glm::mat4>& world) override {
         assert(character_ != nullptr && evaluated_ && "evaluate() first");
-        world = world_;
+        world.resize(matrices_);
+        std::memcpy(static_cast<void*>(world.data()), world_.get(), matrices_ * sizeof(glm::mat4));  // glm::mat4: 16 floats, column-major
         return {};
     }
 
@@ -180,7 +185,8 @@ private:
     std::vector<simd::PoseBatch> batches_;
     std::vector<std::size_t> value_offset_;
     hwy::AlignedFreeUniquePtr<float[]> values_, placements_;
-    std::vector<glm::mat4> world_;
+    hwy::AlignedFreeUniquePtr<float[]> world_;  // instances x nodes matrices, instance-major
+    std::size_t matrices_ = 0;
     bool evaluated_ = false;
 };
 
