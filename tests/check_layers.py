@@ -59,6 +59,7 @@ PUBLIC_OWNERS = {
     "gltf/import.hpp": "io",
     "backend_factory.hpp": "vulkan",
     "crowd_animator.hpp": "vulkan",
+    "vulkan_embed.hpp": "vulkan",
     "gpu_info.hpp": "vulkan",
     "scene.hpp": "io",
     "rod_scene.hpp": "io",

@@ -26,11 +26,13 @@ enum class Binding {
     Uniform,  ///< std140 uniform buffer, read by every invocation (lavapipe loads it once for all lanes)
 };
 
-/// A range of a Buffer bound to a binding (the whole buffer by default).
+/// A range of a Buffer bound to a binding (the whole buffer by default). `foreign`: a
+/// buffer the compute layer does not own (an application's, issue 11), when `buffer` is null.
 struct BufferView {
     const Buffer* buffer = nullptr;
     std::uint64_t offset = 0;
     std::uint64_t size = VK_WHOLE_SIZE;
+    vk::Buffer foreign{};
 };
 
 class Kernel {

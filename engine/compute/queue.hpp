@@ -25,6 +25,9 @@ enum class Stage : std::uint32_t {
     Transfer = 2,  ///< buffer copies
     Host = 4,      ///< the host's reads and writes of mapped memory
     Vertex = 8,    ///< vertex shaders of the renderer (reads)
+    /// An application's draws reading the module's buffers: vertex input, vertex and
+    /// fragment shaders (reads; only on a queue family that draws).
+    Draw = 16,
 };
 [[nodiscard]] constexpr Stage operator|(Stage a, Stage b) {
     return static_cast<Stage>(static_cast<std::uint32_t>(a) | static_cast<std::uint32_t>(b));
@@ -35,6 +38,7 @@ enum class Stage : std::uint32_t {
 enum class Timestamp { Begin, End };
 
 class Queue;
+class StagingRing;
 
 /// Commands being recorded: move-only; owns its command buffer until submitted (then the
 /// Submission owns it) or destroyed unsubmitted (given back, nothing runs).
@@ -46,12 +50,24 @@ public:
     Recording& operator=(const Recording&) = delete;
     ~Recording();
 
+    /// Records into a command buffer the application owns, began and will submit (issue 11):
+    /// nothing is submitted, waited for or freed here. Uploads go through `staging`'s
+    /// current slot (never straight into mapped buffers, which frames still in flight may
+    /// read; null: the recording uploads nothing); keep() is not available, there being
+    /// no submission to tie a buffer to.
+    [[nodiscard]] static Recording borrow(Device& device, VkCommandBuffer cmd, StagingRing* staging);
+
     [[nodiscard]] Device& device() const { return *device_; }
-    /// Writes a submission timestamp (where the device has them).
+    /// Writes a submission timestamp (where the device has them; not in a borrowed
+    /// command buffer, whose queries are the application's).
     void timestamp(Timestamp which);
     /// Keeps `buffer` (a staging buffer a recorded copy reads or writes) alive until the
     /// submission completes.
-    void keep(Buffer buffer) { kept_.push_back(std::move(buffer)); }
+    void keep(Buffer buffer);
+    /// The command buffer is the application's (borrow()).
+    [[nodiscard]] bool borrowed() const { return borrowed_; }
+    /// The ring a borrowed recording's uploads go through.
+    [[nodiscard]] StagingRing* staging() const { return staging_; }
     /// The Vulkan command buffer (the implementation's; for the renderer's graphics commands).
     [[nodiscard]] const vk::raii::CommandBuffer& vulkan() const { return slot_.cmd; }
 
@@ -64,6 +80,32 @@ private:
     Device* device_;
     gpu::CommandSlot slot_;
     std::vector<Buffer> kept_;
+    StagingRing* staging_ = nullptr;
+    bool borrowed_ = false;
+};
+
+/// Host-visible upload buffers, one slot per frame in flight (Device::frames_in_flight):
+/// the frame being recorded writes its input into its slot while the GPU may still read
+/// the slots of the frames before it. The application's contract (docs/embedding.md):
+/// when it records frame k, frame k - frames_in_flight has completed.
+class StagingRing {
+public:
+    /// `bytes_per_frame`: the most one frame uploads (each upload rounded up to 16 bytes).
+    [[nodiscard]] static Result<StagingRing> create(const Device& device, std::uint64_t bytes_per_frame, std::uint32_t frames);
+
+    /// Moves to the next frame's slot (the oldest) and empties it.
+    void next_frame();
+    /// Copies `bytes` into the current slot: the buffer and offset a copy reads them from;
+    /// an error when the slot is full (the frame uploads more than create() was told).
+    [[nodiscard]] Result<std::pair<const Buffer*, std::uint64_t>> write(std::span<const std::byte> bytes);
+    [[nodiscard]] std::uint64_t bytes_per_frame() const { return bytes_per_frame_; }
+
+private:
+    StagingRing() = default;
+    std::vector<Buffer> slots_;
+    std::uint64_t bytes_per_frame_ = 0;
+    std::uint64_t used_ = 0;
+    std::uint32_t current_ = 0;
 };
 
 /// Work submitted to the queue. wait() blocks until it completed; destroying an unwaited
@@ -84,6 +126,7 @@ public:
 
 private:
     friend class Queue;
+class StagingRing;
     explicit Submission(Recording recording);
 
     Device* device_ = nullptr;  // null once waited (or moved from)

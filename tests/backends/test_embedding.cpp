@@ -1,0 +1,301 @@
+// Kodawari on an application's own Vulkan device and command buffers (issue 11,
+// kodawari/vulkan_embed.hpp), black-box: the test plays the application, with its own
+// instance, device, command pool and fences (validation with synchronization validation on
+// when ctest asks for it), and checks that
+//   - steps recorded into its command buffers give the very bits step() gives on a device
+//     of the module's own, with several frames in flight;
+//   - every entry point rejects bad arguments with a message naming them, and a rejected
+//     call leaves the backend as it was;
+//   - the module destroys nothing of the application's.
+#include <gtest/gtest.h>
+
+#include <array>
+#include <cstring>
+#include <vector>
+
+#include <limits>
+
+#include <vulkan/vulkan.h>
+
+#include <kodawari/shared/rods.h>
+
+#include "kodawari/backend_factory.hpp"
+#include "kodawari/rods/synthetic.hpp"
+#include "kodawari/vulkan_embed.hpp"
+#include "test_support.hpp"
+
+using namespace kodawari;
+
+namespace {
+
+std::uint32_t messages = 0;
+VKAPI_ATTR VkBool32 VKAPI_CALL on_message(VkDebugUtilsMessageSeverityFlagBitsEXT severity, VkDebugUtilsMessageTypeFlagsEXT,
+                                          const VkDebugUtilsMessengerCallbackDataEXT* data, void*) {
+    if (severity >= VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT) {
+        ++messages;
+        ADD_FAILURE() << "validation: " << data->pMessage;
+    }
+    return VK_FALSE;
+}
+
+// The application: an instance and a device with one compute queue, plain Vulkan.
+class Application {
+public:
+    Application() {
+        const bool validation = testing_support::validation_requested();
+        const VkApplicationInfo app{VK_STRUCTURE_TYPE_APPLICATION_INFO, nullptr, "test", 1, "test", 1, VK_API_VERSION_1_1};
+        const char* layer = "VK_LAYER_KHRONOS_validation";
+        const char* extension = VK_EXT_DEBUG_UTILS_EXTENSION_NAME;
+        const VkValidationFeatureEnableEXT sync = VK_VALIDATION_FEATURE_ENABLE_SYNCHRONIZATION_VALIDATION_EXT;
+        const VkValidationFeaturesEXT features{VK_STRUCTURE_TYPE_VALIDATION_FEATURES_EXT, nullptr, 1, &sync, 0, nullptr};
+        const VkInstanceCreateInfo info{VK_STRUCTURE_TYPE_INSTANCE_CREATE_INFO, validation ? &features : nullptr, 0, &app,
+                                        validation ? 1u : 0u, &layer, validation ? 1u : 0u, &extension};
+        if (vkCreateInstance(&info, nullptr, &instance) != VK_SUCCESS) return;
+        if (validation) {
+            auto make = reinterpret_cast<PFN_vkCreateDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(instance, "vkCreateDebugUtilsMessengerEXT"));
+            const VkDebugUtilsMessengerCreateInfoEXT m{VK_STRUCTURE_TYPE_DEBUG_UTILS_MESSENGER_CREATE_INFO_EXT, nullptr, 0,
+                                                       VK_DEBUG_UTILS_MESSAGE_SEVERITY_WARNING_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_SEVERITY_ERROR_BIT_EXT,
+                                                       VK_DEBUG_UTILS_MESSAGE_TYPE_GENERAL_BIT_EXT | VK_DEBUG_UTILS_MESSAGE_TYPE_VALIDATION_BIT_EXT,
+                                                       &on_message, nullptr, };
+            make(instance, &m, nullptr, &messenger);
+        }
+        std::uint32_t count = 1;
+        if (vkEnumeratePhysicalDevices(instance, &count, &physical) < 0 || count == 0) return;
+        std::uint32_t n = 0;
+        vkGetPhysicalDeviceQueueFamilyProperties(physical, &n, nullptr);
+        std::vector<VkQueueFamilyProperties> families(n);
+        vkGetPhysicalDeviceQueueFamilyProperties(physical, &n, families.data());
+        for (family = 0; family < n && !(families[family].queueFlags & VK_QUEUE_COMPUTE_BIT); ++family) {
+        }
+        const float priority = 1.0f;
+        const VkDeviceQueueCreateInfo queue_info{VK_STRUCTURE_TYPE_DEVICE_QUEUE_CREATE_INFO, nullptr, 0, family, 1, &priority};
+        const VkDeviceCreateInfo device_info{VK_STRUCTURE_TYPE_DEVICE_CREATE_INFO, nullptr, 0, 1, &queue_info, 0, nullptr, 0, nullptr, nullptr};
+        if (vkCreateDevice(physical, &device_info, nullptr, &device) != VK_SUCCESS) return;
+        vkGetDeviceQueue(device, family, 0, &queue);
+        const VkCommandPoolCreateInfo pool_info{VK_STRUCTURE_TYPE_COMMAND_POOL_CREATE_INFO, nullptr,
+                                                VK_COMMAND_POOL_CREATE_RESET_COMMAND_BUFFER_BIT, family};
+        vkCreateCommandPool(device, &pool_info, nullptr, &pool);
+        const VkCommandBufferAllocateInfo alloc{VK_STRUCTURE_TYPE_COMMAND_BUFFER_ALLOCATE_INFO, nullptr, pool,
+                                                VK_COMMAND_BUFFER_LEVEL_PRIMARY, kInFlight};
+        vkAllocateCommandBuffers(device, &alloc, cmds.data());
+        for (VkFence& f : fences) {
+            const VkFenceCreateInfo fence{VK_STRUCTURE_TYPE_FENCE_CREATE_INFO, nullptr, VK_FENCE_CREATE_SIGNALED_BIT};
+            vkCreateFence(device, &fence, nullptr, &f);
+        }
+    }
+    Application(const Application&) = delete;
+    Application& operator=(const Application&) = delete;
+    ~Application() {
+        if (device != VK_NULL_HANDLE) {
+            vkDeviceWaitIdle(device);
+            for (VkFence f : fences) vkDestroyFence(device, f, nullptr);
+            vkDestroyCommandPool(device, pool, nullptr);
+            vkDestroyDevice(device, nullptr);  // still valid: the module destroyed nothing of ours
+        }
+        if (messenger != VK_NULL_HANDLE) {
+            auto destroy = reinterpret_cast<PFN_vkDestroyDebugUtilsMessengerEXT>(vkGetInstanceProcAddr(instance, "vkDestroyDebugUtilsMessengerEXT"));
+            destroy(instance, messenger, nullptr);
+        }
+        if (instance != VK_NULL_HANDLE) vkDestroyInstance(instance, nullptr);
+    }
+
+    [[nodiscard]] bool ok() const { return device != VK_NULL_HANDLE && pool != VK_NULL_HANDLE; }
+    [[nodiscard]] VulkanDeviceHandles handles() const {
+        return {.instance = instance,
+                .physical_device = physical,
+                .device = device,
+                .queue_family = family,
+                .queue_index = 0,
+                .get_instance_proc_addr = vkGetInstanceProcAddr,
+                .allocator = nullptr,
+                .api_version = VK_API_VERSION_1_1,
+                .frames_in_flight = kInFlight};
+    }
+    // Frame k's command buffer, once the GPU finished frame k - kInFlight (its fence).
+    VkCommandBuffer begin(std::uint32_t k) {
+        const std::uint32_t slot = k % kInFlight;
+        vkWaitForFences(device, 1, &fences[slot], VK_TRUE, UINT64_MAX);
+        vkResetFences(device, 1, &fences[slot]);
+        vkResetCommandBuffer(cmds[slot], 0);
+        const VkCommandBufferBeginInfo begin{VK_STRUCTURE_TYPE_COMMAND_BUFFER_BEGIN_INFO, nullptr, VK_COMMAND_BUFFER_USAGE_ONE_TIME_SUBMIT_BIT, nullptr};
+        vkBeginCommandBuffer(cmds[slot], &begin);
+        return cmds[slot];
+    }
+    void submit(std::uint32_t k) {
+        const std::uint32_t slot = k % kInFlight;
+        vkEndCommandBuffer(cmds[slot]);
+        const VkSubmitInfo submit{VK_STRUCTURE_TYPE_SUBMIT_INFO, nullptr, 0, nullptr, nullptr, 1, &cmds[slot], 0, nullptr};
+        ASSERT_EQ(vkQueueSubmit(queue, 1, &submit, fences[slot]), VK_SUCCESS);
+    }
+    void wait_all() { vkWaitForFences(device, kInFlight, fences.data(), VK_TRUE, UINT64_MAX); }
+
+    static constexpr std::uint32_t kInFlight = 3;
+    VkInstance instance = VK_NULL_HANDLE;
+    VkDebugUtilsMessengerEXT messenger = VK_NULL_HANDLE;
+    VkPhysicalDevice physical = VK_NULL_HANDLE;
+    VkDevice device = VK_NULL_HANDLE;
+    std::uint32_t family = 0;
+    VkQueue queue = VK_NULL_HANDLE;
+    VkCommandPool pool = VK_NULL_HANDLE;
+    std::array<VkCommandBuffer, kInFlight> cmds{};
+    std::array<VkFence, kInFlight> fences{};
+};
+
+class Embedding : public ::testing::Test {
+protected:
+    void SetUp() override {
+        if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+        app_ = std::make_unique<Application>();
+        ASSERT_TRUE(app_->ok()) << "the test's own Vulkan device could not be created";
+        messages = 0;
+    }
+    std::unique_ptr<Application> app_;
+};
+
+// 101 chains (not a multiple of the kernel's 64), 9 joints, views and a collider.
+rods::SyntheticScene scene() {
+    auto made = rods::SyntheticScene::make({.chains = 101, .joints = 9, .iterations = 3, .chains_per_character = 6, .views = 3});
+    EXPECT_TRUE(made.ok());
+    return std::move(made).value();
+}
+
+void expect_same_bits(const std::vector<rods::ChainState>& a, const std::vector<rods::ChainState>& b) {
+    ASSERT_EQ(a.size(), b.size());
+    for (std::size_t c = 0; c < a.size(); ++c) {
+        ASSERT_EQ(std::memcmp(&a[c].x, &b[c].x, sizeof(a[c].x)), 0) << "chain " << c << " positions";
+        ASSERT_EQ(std::memcmp(&a[c].q, &b[c].q, sizeof(a[c].q)), 0) << "chain " << c << " orientations";
+        ASSERT_EQ(std::memcmp(&a[c].v, &b[c].v, sizeof(a[c].v)), 0) << "chain " << c << " velocities";
+    }
+}
+
+TEST_F(Embedding, RecordedStepsInFlightGiveTheBitsOfStep) {
+    const rods::SyntheticScene synthetic = scene();
+    constexpr float dt = 1.0f / 60.0f;
+    rods::RodFrame frame;
+    synthetic.frame(0, dt, frame);
+
+    auto device = adopt_vulkan_device(app_->handles());
+    ASSERT_TRUE(device.ok()) << device.error().message;
+    BackendOptions embedded;
+    embedded.context = device.value();
+    auto rods = make_rod_backend(BackendKind::Vulkan, embedded);
+    ASSERT_TRUE(rods.ok()) << rods.error().message;
+    ASSERT_TRUE(rods.value()->load(synthetic.world(), frame).ok());
+    auto own = make_rod_backend(BackendKind::Vulkan, testing_support::gpu_options());
+    ASSERT_TRUE(own.ok()) << own.error().message;
+    ASSERT_TRUE(own.value()->load(synthetic.world(), frame).ok());
+
+    // 10 frames recorded three in flight, against 10 steps; a dt change at frame 6 (the
+    // templates' step sizes go through the ring too).
+    constexpr std::uint32_t kFrames = 10;
+    for (std::uint32_t k = 1; k <= kFrames; ++k) {
+        synthetic.frame(k, dt, frame);
+        if (k >= 6) frame.dt = 1.0f / 30.0f;
+        VkCommandBuffer cmd = app_->begin(k);
+        const auto recorded = record_step(*rods.value(), cmd, frame);
+        ASSERT_TRUE(recorded.ok()) << recorded.error().message;
+        app_->submit(k);
+        ASSERT_TRUE(own.value()->step(frame).ok());
+    }
+    app_->wait_all();
+    std::vector<rods::ChainState> a, b;
+    ASSERT_TRUE(rods.value()->read_states(a).ok());
+    ASSERT_TRUE(own.value()->read_states(b).ok());
+    expect_same_bits(a, b);
+
+    // The output ranges name the module's buffers with the shared structs' strides.
+    const auto motion = vulkan_buffer(*rods.value()->device_data(), DeviceBuffer::RodMotion);
+    ASSERT_TRUE(motion.ok()) << motion.error().message;
+    EXPECT_NE(motion.value().buffer, VK_NULL_HANDLE);
+    EXPECT_EQ(motion.value().count, synthetic.world().joint_count);
+    EXPECT_EQ(motion.value().stride, sizeof(gpu::RodJointMotionGpu));
+    EXPECT_EQ(motion.value().range, VkDeviceSize{motion.value().count} * motion.value().stride);
+    EXPECT_FALSE(vulkan_buffer(*rods.value()->device_data(), DeviceBuffer::BirdPoses).ok());
+    EXPECT_EQ(messages, 0u);
+}
+
+TEST_F(Embedding, AdoptRejectsBadHandlesNamingTheField) {
+    struct Case {
+        const char* field;
+        VulkanDeviceHandles handles;
+    };
+    VulkanDeviceHandles good = app_->handles();
+    std::vector<Case> cases;
+    cases.push_back({"instance", good});
+    cases.back().handles.instance = VK_NULL_HANDLE;
+    cases.push_back({"physical_device", good});
+    cases.back().handles.physical_device = VK_NULL_HANDLE;
+    cases.push_back({"device", good});
+    cases.back().handles.device = VK_NULL_HANDLE;
+    cases.push_back({"get_instance_proc_addr", good});
+    cases.back().handles.get_instance_proc_addr = nullptr;
+    cases.push_back({"api_version", good});
+    cases.back().handles.api_version = VK_API_VERSION_1_0;
+    cases.push_back({"frames_in_flight", good});
+    cases.back().handles.frames_in_flight = 0;
+    cases.push_back({"queue_family", good});
+    cases.back().handles.queue_family = 99;
+    cases.push_back({"queue_index", good});
+    cases.back().handles.queue_index = 7;
+    for (const Case& c : cases) {
+        const auto adopted = adopt_vulkan_device(c.handles);
+        ASSERT_FALSE(adopted.ok()) << c.field;
+        EXPECT_NE(adopted.error().message.find(std::string("VulkanDeviceHandles::") + c.field), std::string::npos)
+            << adopted.error().message;
+    }
+    EXPECT_TRUE(adopt_vulkan_device(good).ok());
+}
+
+TEST_F(Embedding, RecordRejectsBadCallsAndLeavesTheStateAsItWas) {
+    const rods::SyntheticScene synthetic = scene();
+    rods::RodFrame frame;
+    synthetic.frame(0, 1.0f / 60.0f, frame);
+    auto device = adopt_vulkan_device(app_->handles());
+    ASSERT_TRUE(device.ok()) << device.error().message;
+    BackendOptions embedded;
+    embedded.context = device.value();
+    auto rods = std::move(make_rod_backend(BackendKind::Vulkan, embedded)).value();
+    VkCommandBuffer cmd = app_->begin(1);
+
+    // Before load(): nothing to record.
+    auto before = record_step(*rods, cmd, frame);
+    ASSERT_FALSE(before.ok());
+    EXPECT_NE(before.error().message.find("load()"), std::string::npos) << before.error().message;
+
+    ASSERT_TRUE(rods->load(synthetic.world(), frame).ok());
+    std::vector<rods::ChainState> loaded, after;
+    ASSERT_TRUE(rods->read_states(loaded).ok());
+
+    auto null_cmd = record_step(*rods, VK_NULL_HANDLE, frame);
+    ASSERT_FALSE(null_cmd.ok());
+    EXPECT_NE(null_cmd.error().message.find("cmd is null"), std::string::npos) << null_cmd.error().message;
+
+    rods::RodFrame short_frame = frame;
+    short_frame.roots.pop_back();
+    auto wrong = record_step(*rods, cmd, short_frame);
+    ASSERT_FALSE(wrong.ok());
+    EXPECT_NE(wrong.error().message.find("roots"), std::string::npos) << wrong.error().message;
+
+    rods::RodFrame nan_frame = frame;
+    nan_frame.dt = std::numeric_limits<float>::quiet_NaN();
+    EXPECT_FALSE(record_step(*rods, cmd, nan_frame).ok());
+
+    auto cpu = std::move(make_rod_backend(BackendKind::Cpu, {})).value();
+    auto not_vulkan = record_step(*cpu, cmd, frame);
+    ASSERT_FALSE(not_vulkan.ok());
+    EXPECT_NE(not_vulkan.error().message.find("vulkan"), std::string::npos) << not_vulkan.error().message;
+
+    auto birds = std::move(make_bird_backend(BackendKind::Vulkan, embedded)).value();
+    auto unloaded = record_simulate(*birds, cmd, 1);
+    ASSERT_FALSE(unloaded.ok());
+    EXPECT_NE(unloaded.error().message.find("load()"), std::string::npos) << unloaded.error().message;
+
+    // Nothing was recorded: the command buffer submits empty and the state is load()'s.
+    app_->submit(1);
+    app_->wait_all();
+    ASSERT_TRUE(rods->read_states(after).ok());
+    expect_same_bits(loaded, after);
+    EXPECT_EQ(messages, 0u);
+}
+
+}  // namespace
