@@ -9,6 +9,9 @@
 //   - the module destroys nothing of the application's.
 #include <gtest/gtest.h>
 
+#include <glm/gtc/matrix_transform.hpp>
+#include <glm/gtc/quaternion.hpp>
+
 #include <array>
 #include <cstring>
 #include <vector>
@@ -295,6 +298,134 @@ TEST_F(Embedding, RecordRejectsBadCallsAndLeavesTheStateAsItWas) {
     app_->wait_all();
     ASSERT_TRUE(rods->read_states(after).ok());
     expect_same_bits(loaded, after);
+    EXPECT_EQ(messages, 0u);
+}
+
+// A host-visible storage buffer of the application's.
+struct AppBuffer {
+    VkDevice device = VK_NULL_HANDLE;
+    VkBuffer buffer = VK_NULL_HANDLE;
+    VkDeviceMemory memory = VK_NULL_HANDLE;
+    void* mapped = nullptr;
+    AppBuffer(const Application& app, VkDeviceSize size) : device(app.device) {
+        const VkBufferCreateInfo info{VK_STRUCTURE_TYPE_BUFFER_CREATE_INFO, nullptr, 0, size, VK_BUFFER_USAGE_STORAGE_BUFFER_BIT,
+                                      VK_SHARING_MODE_EXCLUSIVE, 0, nullptr};
+        vkCreateBuffer(device, &info, nullptr, &buffer);
+        VkMemoryRequirements needs;
+        vkGetBufferMemoryRequirements(device, buffer, &needs);
+        VkPhysicalDeviceMemoryProperties props;
+        vkGetPhysicalDeviceMemoryProperties(app.physical, &props);
+        const VkMemoryPropertyFlags want = VK_MEMORY_PROPERTY_HOST_VISIBLE_BIT | VK_MEMORY_PROPERTY_HOST_COHERENT_BIT;
+        std::uint32_t type = 0;
+        while (type < props.memoryTypeCount && !((needs.memoryTypeBits >> type & 1u) && (props.memoryTypes[type].propertyFlags & want) == want)) ++type;
+        const VkMemoryAllocateInfo alloc{VK_STRUCTURE_TYPE_MEMORY_ALLOCATE_INFO, nullptr, needs.size, type};
+        vkAllocateMemory(device, &alloc, nullptr, &memory);
+        vkBindBufferMemory(device, buffer, memory, 0);
+        vkMapMemory(device, memory, 0, VK_WHOLE_SIZE, 0, &mapped);
+    }
+    AppBuffer(const AppBuffer&) = delete;
+    AppBuffer& operator=(const AppBuffer&) = delete;
+    ~AppBuffer() {
+        vkDestroyBuffer(device, buffer, nullptr);
+        vkFreeMemory(device, memory, nullptr);
+    }
+};
+
+glm::mat4 matrix_of(const rods::Transform& t) { return glm::translate(glm::mat4(1.0f), t.position) * glm::mat4_cast(t.rotation); }
+
+// The characters' input from the application's world matrices on the device gives what the
+// same transforms passed in the RodFrame give, though the frame given with it is wrong in
+// every entry the matrices name (so they must be overwritten).
+TEST_F(Embedding, MatrixInputFeedsRootsReferencesAndColliders) {
+    constexpr std::uint32_t kPerCharacter = 6, kCharacters = 17;
+    auto made = rods::SyntheticScene::make({.chains = kPerCharacter * kCharacters, .joints = 9, .iterations = 3,
+                                            .chains_per_character = kPerCharacter, .views = 3});
+    ASSERT_TRUE(made.ok());
+    const rods::SyntheticScene& synthetic = made.value();
+    const rods::RodWorld& world = synthetic.world();
+    ASSERT_EQ(world.character_count, kCharacters);
+    ASSERT_EQ(world.collider_count, kCharacters);  // a head sphere each
+    constexpr float dt = 1.0f / 60.0f;
+    rods::RodFrame frame;
+    synthetic.frame(0, dt, frame);
+
+    auto device = adopt_vulkan_device(app_->handles());
+    ASSERT_TRUE(device.ok()) << device.error().message;
+    BackendOptions embedded;
+    embedded.context = device.value();
+    auto by_matrix = std::move(make_rod_backend(BackendKind::Vulkan, embedded)).value();
+    auto by_frame = std::move(make_rod_backend(BackendKind::Vulkan, embedded)).value();
+    ASSERT_TRUE(by_matrix->load(world, frame).ok());
+    ASSERT_TRUE(by_frame->load(world, frame).ok());
+
+    // Node 0: the head (reference joint, carrying the collider); nodes 1..6: the chain roots.
+    constexpr std::uint32_t kNodes = 1 + kPerCharacter;
+    AppBuffer matrices(*app_, VkDeviceSize{kCharacters} * kNodes * sizeof(glm::mat4));
+    MatrixInput input;
+    input.buffer = matrices.buffer;
+    input.instances = kCharacters;
+    input.nodes = kNodes;
+    input.reference_node = 0;
+    for (std::uint32_t j = 0; j < kPerCharacter; ++j) input.chain_nodes.push_back(1 + j);
+    const rods::Capsule head = frame.colliders[0];
+    const rods::Transform ref = frame.reference[0];
+    const glm::vec3 a = glm::inverse(ref.rotation) * (head.a - ref.position), b = glm::inverse(ref.rotation) * (head.b - ref.position);
+    input.colliders.push_back({.node = 0, .a = {a.x, a.y, a.z}, .b = {b.x, b.y, b.z}, .radius = head.radius});
+    for (std::uint32_t i = 0; i < kCharacters; ++i) {
+        ASSERT_EQ(world.chains[i * kPerCharacter].character, i);
+        input.targets.push_back({.character = i, .first_chain = i * kPerCharacter, .first_collider = world.chains[i * kPerCharacter].collider_begin});
+    }
+    const auto set = set_matrix_input(*by_matrix, input);
+    ASSERT_TRUE(set.ok()) << set.error().message;
+
+    for (std::uint32_t k = 1; k <= 8; ++k) {
+        synthetic.frame(k, dt, frame);
+        app_->wait_all();  // the matrices are rewritten by the host: no frame may still read them
+        auto* m = static_cast<glm::mat4*>(matrices.mapped);
+        for (std::uint32_t i = 0; i < kCharacters; ++i) {
+            m[i * kNodes] = matrix_of(frame.reference[i]);
+            for (std::uint32_t j = 0; j < kPerCharacter; ++j) m[i * kNodes + 1 + j] = matrix_of(frame.roots[i * kPerCharacter + j]);
+        }
+        rods::RodFrame wrong = frame;
+        for (rods::Transform& t : wrong.reference) t.position += glm::vec3(1.0f);
+        for (rods::Transform& t : wrong.roots) t.position += glm::vec3(1.0f);
+        for (rods::Capsule& c : wrong.colliders) c.radius *= 2.0f;
+        VkCommandBuffer cmd = app_->begin(k);
+        ASSERT_TRUE(record_step(*by_matrix, cmd, wrong).ok());
+        ASSERT_TRUE(record_step(*by_frame, cmd, frame).ok());
+        app_->submit(k);
+    }
+    app_->wait_all();
+    ChainSnapshot got, want;
+    ASSERT_TRUE(by_matrix->read(got).ok());
+    ASSERT_TRUE(by_frame->read(want).ok());
+    // The rotation comes back from a matrix (quat_cast of float columns): within 1e-5 of the
+    // chain length, the backends' parity tolerance.
+    const float tolerance = 1e-5f * synthetic.chain_length();
+    ASSERT_EQ(got.positions.size(), want.positions.size());
+    float worst = 0.0f;
+    for (std::size_t j = 0; j < got.positions.size(); ++j) worst = std::max(worst, glm::length(got.positions[j] - want.positions[j]));
+    EXPECT_LE(worst, tolerance);
+
+    // Bad input: named, and the backend keeps its writer.
+    MatrixInput bad = input;
+    bad.chain_nodes[2] = kNodes;
+    auto rejected = set_matrix_input(*by_matrix, bad);
+    ASSERT_FALSE(rejected.ok());
+    EXPECT_NE(rejected.error().message.find("chain_nodes[2]"), std::string::npos) << rejected.error().message;
+    bad = input;
+    bad.targets[16].first_chain = kPerCharacter * kCharacters - 1;
+    rejected = set_matrix_input(*by_matrix, bad);
+    ASSERT_FALSE(rejected.ok());
+    EXPECT_NE(rejected.error().message.find("targets[16].first_chain"), std::string::npos) << rejected.error().message;
+    bad = input;
+    bad.targets.pop_back();
+    EXPECT_FALSE(set_matrix_input(*by_matrix, bad).ok());
+    bad = input;
+    bad.buffer = VK_NULL_HANDLE;
+    EXPECT_FALSE(set_matrix_input(*by_matrix, bad).ok());
+    auto cpu = std::move(make_rod_backend(BackendKind::Cpu, {})).value();
+    EXPECT_FALSE(set_matrix_input(*cpu, input).ok());
     EXPECT_EQ(messages, 0u);
 }
 
