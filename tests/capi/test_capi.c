@@ -209,6 +209,14 @@ static float distance3(const float* a, const float* b) {
     return sqrtf(d[0] * d[0] + d[1] * d[1] + d[2] * d[2]);
 }
 
+/* Quaternion (x, y, z, w) times vector. */
+static void rotate(const float* q, const float* v, float* out) {
+    const float t[3] = {2.0f * (q[1] * v[2] - q[2] * v[1]), 2.0f * (q[2] * v[0] - q[0] * v[2]), 2.0f * (q[0] * v[1] - q[1] * v[0])};
+    out[0] = v[0] + q[3] * t[0] + (q[1] * t[2] - q[2] * t[1]);
+    out[1] = v[1] + q[3] * t[1] + (q[2] * t[0] - q[0] * t[2]);
+    out[2] = v[2] + q[3] * t[2] + (q[0] * t[1] - q[1] * t[0]);
+}
+
 static kodawari_chain_world* create_ahoge(kodawari_backend backend) {
     ahoge a;
     frame_data f;
@@ -302,6 +310,39 @@ static void test_ahoge(kodawari_backend backend, const char* name) {
     kodawari_chain_world_destroy(world);
 }
 
+/* Orientations come out as (x, y, z, w): without view examples, at rest, each joint's
+ * local +Y runs along its segment (the default orientations, here placed by a root turned
+ * half a turn about +Y), so the quaternion turns +Y onto the segment's direction. */
+static void test_orientations(void) {
+    ahoge a;
+    frame_data f;
+    kodawari_chain_world* world = NULL;
+    chain_state s;
+    int i, k;
+    make_ahoge(&a, KODAWARI_BACKEND_CPU_REFERENCE);
+    a.templ.view_count = 0;
+    make_frame(&f, 0);
+    f.root.rotation[1] = 1.0f;
+    f.root.rotation[3] = 0.0f;
+    EXPECT_OK(kodawari_chain_world_create(&a.desc, &f.frame, &world));
+    if (world == NULL) return;
+    EXPECT_OK(read_state(world, &s));
+    for (i = 0; i < kJoints; ++i) {
+        const int seg = i < kJoints - 1 ? i : kJoints - 2;
+        const float y[3] = {0.0f, 1.0f, 0.0f};
+        const float l = distance3(s.positions + 3 * seg + 3, s.positions + 3 * seg);
+        float axis[3];
+        rotate(s.orientations + 4 * i, y, axis);
+        for (k = 0; k < 3; ++k) {
+            const float expected = (s.positions[3 * seg + 3 + k] - s.positions[3 * seg + k]) / l;
+            CHECK(fabsf(axis[k] - expected) < 1e-5f, "joint %d: its +Y is %g along axis %d, its segment %g", i, axis[k], k, expected);
+        }
+    }
+    /* The strand curls towards +X in the root's frame, so towards -X in the world. */
+    CHECK(s.positions[3 * (kJoints - 1)] < -0.05f, "the tip at x = %g", s.positions[3 * (kJoints - 1)]);
+    kodawari_chain_world_destroy(world);
+}
+
 /* cpu-reference and cpu: the same bits, frame after frame; reset gives create's bits. */
 static void test_backends_agree(void) {
     kodawari_chain_world* a = create_ahoge(KODAWARI_BACKEND_CPU_REFERENCE);
@@ -326,6 +367,75 @@ static void test_backends_agree(void) {
     CHECK(memcmp(&sa, &first, sizeof sa) == 0, "reset did not give create's state");
     kodawari_chain_world_destroy(a);
     kodawari_chain_world_destroy(b);
+}
+
+/* A collider attached to the reference joint rides on it: with the head turned half a turn
+ * about +Y (a rotation whose arithmetic is exact: (x, y, z) -> (-x, y, -z)), a sphere
+ * attached next to joint 6 gives the bits of the same sphere given in world space every
+ * frame, and it pushes the strand out. */
+static void test_attached_colliders(void) {
+    ahoge a;
+    frame_data f;
+    kodawari_chain_world *attached = NULL, *given = NULL, *free_strand = NULL;
+    chain_state s, sg, sf;
+    kodawari_capsule world_sphere;
+    float local[3];
+    const float radius = 0.02f;
+    int frame, i, k;
+
+    /* Where joint 6 rests with the head turned and no collider. */
+    make_ahoge(&a, KODAWARI_BACKEND_CPU_REFERENCE);
+    a.chain.collider_count = 0;
+    a.desc.collider_count = 0;
+    a.desc.colliders = NULL;
+    make_frame(&f, 0);
+    f.head.rotation[1] = 1.0f;
+    f.head.rotation[3] = 0.0f;
+    memcpy(f.root.rotation, f.head.rotation, sizeof f.root.rotation);
+    EXPECT_OK(kodawari_chain_world_create(&a.desc, &f.frame, &free_strand));
+    if (free_strand == NULL) return;
+    EXPECT_OK(read_state(free_strand, &s));
+    /* The sphere's centre 1 cm above joint 6, in the head's frame. */
+    local[0] = -(s.positions[18] - kHead[0]);
+    local[1] = s.positions[19] + 0.01f - kHead[1];
+    local[2] = -(s.positions[20] - kHead[2]);
+    memcpy(a.head_sphere.local.a, local, sizeof local);
+    memcpy(a.head_sphere.local.b, local, sizeof local);
+    a.head_sphere.local.radius = radius;
+    a.chain.collider_count = 1;
+    a.desc.collider_count = 1;
+    a.desc.colliders = &a.head_sphere;
+    EXPECT_OK(kodawari_chain_world_create(&a.desc, &f.frame, &attached));
+    a.desc.colliders = NULL;
+    for (k = 0; k < 3; ++k) world_sphere.a[k] = world_sphere.b[k] = kHead[k] + (k == 1 ? local[k] : -local[k]);
+    world_sphere.radius = radius;
+    f.frame.colliders = &world_sphere;
+    f.frame.collider_count = 1;
+    EXPECT_OK(kodawari_chain_world_create(&a.desc, &f.frame, &given));
+    if (attached == NULL || given == NULL) return;
+    for (frame = 1; frame <= 60; ++frame) {
+        make_frame(&f, frame * 3);
+        f.head.rotation[1] = 1.0f;
+        f.head.rotation[3] = 0.0f;
+        memcpy(f.root.rotation, f.head.rotation, sizeof f.root.rotation);
+        EXPECT_OK(kodawari_chain_world_step(attached, &f.frame));
+        EXPECT_OK(kodawari_chain_world_step(free_strand, &f.frame));
+        f.frame.colliders = &world_sphere;
+        f.frame.collider_count = 1;
+        EXPECT_OK(kodawari_chain_world_step(given, &f.frame));
+    }
+    EXPECT_OK(read_state(attached, &s));
+    EXPECT_OK(read_state(given, &sg));
+    EXPECT_OK(read_state(free_strand, &sf));
+    CHECK(memcmp(&s, &sg, sizeof s) == 0, "an attached collider differs from the same collider in world space");
+    CHECK(memcmp(s.positions, sf.positions, sizeof s.positions) != 0, "the collider changed nothing");
+    for (i = 1; i < kJoints; ++i) {
+        const float d = distance3(s.positions + 3 * i, world_sphere.a);
+        CHECK(d > 0.9f * radius, "joint %d is %g m inside the sphere of radius %g", i, radius - d, radius);
+    }
+    kodawari_chain_world_destroy(attached);
+    kodawari_chain_world_destroy(given);
+    kodawari_chain_world_destroy(free_strand);
 }
 
 /* ---- Bad input ------------------------------------------------------------------------- */
@@ -712,14 +822,6 @@ static void make_flock(flock* f, kodawari_backend backend) {
     f->desc.backend.backend = backend;
 }
 
-/* Quaternion (x, y, z, w) times vector. */
-static void rotate(const float* q, const float* v, float* out) {
-    const float t[3] = {2.0f * (q[1] * v[2] - q[2] * v[1]), 2.0f * (q[2] * v[0] - q[0] * v[2]), 2.0f * (q[0] * v[1] - q[1] * v[0])};
-    out[0] = v[0] + q[3] * t[0] + (q[1] * t[2] - q[2] * t[1]);
-    out[1] = v[1] + q[3] * t[1] + (q[2] * t[0] - q[0] * t[2]);
-    out[2] = v[2] + q[3] * t[2] + (q[0] * t[1] - q[1] * t[0]);
-}
-
 static void test_birds(void) {
     enum { kFrames = 61, kBirds = kPigeons + kGulls, kFloats = kFrames * kBirds * KODAWARI_BIRD_PARTS * KODAWARI_TRANSFORM_FLOATS };
     static float local[kFloats], global[kFloats], again[kFloats];
@@ -902,7 +1004,9 @@ int main(void) {
     test_camera_from_view_matrix();
     test_ahoge(KODAWARI_BACKEND_CPU_REFERENCE, "cpu-reference");
     test_ahoge(KODAWARI_BACKEND_CPU, "cpu");
+    test_orientations();
     test_backends_agree();
+    test_attached_colliders();
     test_chain_create_rejects();
     test_chain_calls_reject();
     test_vulkan();

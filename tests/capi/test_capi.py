@@ -164,10 +164,10 @@ class ChainWorldInputs:
         for t in ref["templates"]:
             views = (ViewExample * max(1, len(t["views"])))()
             for k, v in enumerate(t["views"]):
-                views[k] = ViewExample(Float3(*v["direction"]), v["influence"], self.shape(v["shape"]))
+                views[k] = ViewExample(direction=Float3(*v["direction"]), influence=v["influence"], shape=self.shape(v["shape"]))
             s = t["solver"]
-            solver = SolverParams(s["max_substep"], s["iterations"], s["stiffness"], s["rest_stiffness"], s["damping"],
-                                  Float3(*s["gravity"]), Float3(*s["wind"]), s["momentum_suppression"])
+            solver = SolverParams(**{name: Float3(*s[name]) if name in ("gravity", "wind") else s[name]
+                                     for name, _ in SolverParams._fields_})
             self.keep.append(views)
             templates.append(ChainTemplateDesc(len(t["base"]["positions"]), self.shape(t["base"]), views, len(t["views"]),
                                                t["thickness"], t["mass"], solver))
