@@ -1,7 +1,6 @@
 /* Kodawari's CPU path from C (kodawari.h, libkodawari.so), no scene file: three strands on a
  * character that walks to the side for a second. main.cpp does the same in C++. */
 #include <stdio.h>
-#include <string.h>
 
 #include <kodawari/kodawari.h>
 
