@@ -2,6 +2,7 @@
 // checks, and the mapping of engine errors to status codes.
 #include "capi/capi_common.hpp"
 
+#include <algorithm>
 #include <array>
 #include <charconv>
 #include <cmath>

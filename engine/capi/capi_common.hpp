@@ -8,9 +8,9 @@
 
 #include <cstddef>
 #include <cstdint>
-#include <memory>
+#include <exception>
+#include <new>
 #include <string>
-#include <string_view>
 
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
