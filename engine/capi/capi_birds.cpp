@@ -51,7 +51,7 @@ struct kodawari_bird_world {
 namespace {
 
 birds::WingType read_wing_type(kodawari_wing_type type, const std::string& what) {
-    const auto value = static_cast<std::int64_t>(type);
+    const std::int64_t value = enum_value(type);
     if (value < 0 || value >= static_cast<std::int64_t>(birds::kWingTypeCount)) {
         invalid(what, std::to_string(value) + "; expected KODAWARI_WING_PIGEON (0), _GULL (1) or _HAWK (2)");
     }

@@ -171,8 +171,7 @@ kodawari_backend backend_enum(BackendKind kind) {
 }
 
 void require_backend_options(const kodawari_backend_options& options, const std::string& what) {
-    // Read as an integer: a C caller can put any value in an enum field.
-    const auto backend = static_cast<std::int64_t>(options.backend);
+    const std::int64_t backend = enum_value(options.backend);
     if (backend < KODAWARI_BACKEND_AUTO || backend > KODAWARI_BACKEND_VULKAN) {
         invalid(what + ".backend", std::to_string(backend) +
                                        "; expected KODAWARI_BACKEND_AUTO (0), _CPU_REFERENCE (1), _CPU (2) or _VULKAN (3)");
@@ -221,7 +220,7 @@ KODAWARI_C_API int kodawari_version_minor(void) { return KODAWARI_VERSION_MINOR;
 KODAWARI_C_API int kodawari_version_patch(void) { return KODAWARI_VERSION_PATCH; }
 
 KODAWARI_C_API const char* kodawari_status_name(kodawari_status status) {
-    switch (status) {
+    switch (capi::enum_value(status)) {
         case KODAWARI_OK: return "KODAWARI_OK";
         case KODAWARI_INVALID_ARGUMENT: return "KODAWARI_INVALID_ARGUMENT";
         case KODAWARI_BUFFER_TOO_SMALL: return "KODAWARI_BUFFER_TOO_SMALL";

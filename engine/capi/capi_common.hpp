@@ -8,6 +8,7 @@
 
 #include <cstddef>
 #include <cstdint>
+#include <cstring>
 #include <exception>
 #include <new>
 #include <string>
@@ -103,6 +104,17 @@ void require_transform(const kodawari_transform& t, const std::string& what);
 void require_capsule(const kodawari_capsule& c, double limit, const std::string& what);
 /// A camera: a perspective/orthographic flag, position within 1e6 m, non-zero forward.
 void require_camera(const kodawari_camera& camera, const std::string& what);
+
+/// The value a C caller put in an enum field, read as its 32 bits: C lets any int into an
+/// enum, but in C++ loading a value outside the enumerators' range is undefined (UBSan's
+/// -fsanitize=enum), so the checks read the bits, never the enum.
+template <typename Enum>
+std::int64_t enum_value(const Enum& value) {
+    static_assert(sizeof(Enum) == sizeof(std::int32_t), "kodawari.h's enums are 32-bit (their *_MAX_ENUM)");
+    std::int32_t bits = 0;
+    std::memcpy(&bits, &value, sizeof bits);
+    return bits;
+}
 
 // ---- Conversions (after the checks).
 

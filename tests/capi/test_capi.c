@@ -962,7 +962,7 @@ static void test_birds_reject(void) {
     f.desc.flight.seed_mode_rule = 9;
     REJECT("desc->flight.seed_mode_rule: 9");
     f.desc.backend.backend = (kodawari_backend)(-1);
-    REJECT("desc->backend.backend: 4294967295");
+    REJECT("desc->backend.backend: -1");
 #undef REJECT
     EXPECT_FAIL(kodawari_flock_desc_default((kodawari_wing_type)9, 1, &flock_desc), KODAWARI_INVALID_ARGUMENT, "wing_type: 9");
     EXPECT_FAIL(kodawari_flock_desc_default(KODAWARI_WING_HAWK, 1, NULL), KODAWARI_INVALID_ARGUMENT, "out: is NULL");
