@@ -22,6 +22,7 @@ LINKS = {
     "io": {"io", "sim"},
     "render": {"render", "vulkan", "io", "sim"},
     "engine": {"engine", "render", "vulkan", "io", "sim"},
+    "c": {"c", "vulkan", "sim"},
 }
 # The third-party headers each target may include (prefixes of the include path).
 THIRD_PARTY = {"tiny_gltf", "nlohmann", "vulkan/", "stb/"}
@@ -31,6 +32,7 @@ ALLOWED_THIRD_PARTY = {
     "io": {"tiny_gltf", "nlohmann"},
     "render": {"vulkan", "stb"},
     "engine": {"vulkan"},
+    "c": set(),
 }
 # Which target owns each header: folders first, then the public headers one by one.
 OWNER_PATTERNS = [
@@ -49,6 +51,7 @@ OWNER_PATTERNS = [
     ("gltf/*.hpp", "io"),
     ("render/*.hpp", "render"),
     ("include/kodawari/render/*.hpp", "render"),
+    ("capi/*.hpp", "c"),
 ]
 PUBLIC_OWNERS = {
     "gltf/character.hpp": "sim",
@@ -66,6 +69,7 @@ PUBLIC_OWNERS = {
     "export.hpp": "io",
     "scene_edit.hpp": "io",
     "simulation.hpp": "engine",
+    "kodawari.h": "c",
 }
 
 
@@ -80,9 +84,13 @@ def owners():
 
 
 def targets():
-    """Each target's sources, from the kodawari_component() calls."""
+    """Each target's sources, from the kodawari_component() calls and the C API's shared
+    library (add_library(kodawari_c SHARED ...))."""
     text = (ENGINE / "CMakeLists.txt").read_text()
-    return {m.group(1): m.group(2).split() for m in re.finditer(r"kodawari_component\((\w+)\n(.*?)\)", text, re.S)}
+    found = {m.group(1): m.group(2).split() for m in re.finditer(r"kodawari_component\((\w+)\n(.*?)\)", text, re.S)}
+    for m in re.finditer(r"add_library\(kodawari_(\w+) SHARED\n(.*?)\)", text, re.S):
+        found[m.group(1)] = m.group(2).split()
+    return found
 
 
 def resolve(include, source):

@@ -47,6 +47,12 @@ struct RotationShape {
 /// non-unit orientation.
 [[nodiscard]] Result<ShapeBasis> make_basis(const ChainShape& base);
 
+/// Sets `shape.orientations` to the default of the scene files and the C API: each joint's
+/// local +Y along its segment (the last joint's along the last segment), by the shortest
+/// arc from +Y. Needs at least 2 positions, consecutive ones apart (a segment of zero
+/// length has no direction).
+void default_orientations(ChainShape& shape);
+
 /// The shortest-arc rotation taking unit vector `from` to unit vector `to`. For exactly
 /// or nearly opposite vectors (where the arc is not unique) it is the half turn about
 /// an axis perpendicular to `from`, chosen deterministically.
