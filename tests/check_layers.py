@@ -32,7 +32,9 @@ ALLOWED_THIRD_PARTY = {
     "io": {"tiny_gltf", "nlohmann"},
     "render": {"vulkan", "stb"},
     "engine": {"vulkan"},
-    "c": set(),
+    # The C API's device embedding converts the application's handles (vulkan_core.h's C
+    # types) for kodawari/vulkan_embed.hpp; kodawari.h itself names no Vulkan type.
+    "c": {"vulkan"},
 }
 # Which target owns each header: folders first, then the public headers one by one.
 OWNER_PATTERNS = [

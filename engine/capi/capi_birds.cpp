@@ -14,6 +14,7 @@
 #include <vector>
 
 #include "capi/capi_common.hpp"
+#include "kodawari/vulkan_embed.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/birds/world.hpp"
@@ -172,7 +173,7 @@ void read_world(const kodawari_bird_world_desc& desc, birds::BirdWorld& world) {
 
 void open_backend(kodawari_bird_world& w, const kodawari_backend_options& options) {
     const BackendOptions engine_options = backend_options(options);
-    if (options.backend == KODAWARI_BACKEND_AUTO) {
+    if (effective_backend(options) == KODAWARI_BACKEND_AUTO) {
         auto vulkan = make_bird_backend(BackendKind::Vulkan, engine_options);
         if (vulkan.ok()) {
             w.backend = std::move(vulkan).value();
@@ -182,7 +183,7 @@ void open_backend(kodawari_bird_world& w, const kodawari_backend_options& option
         w.fallback_reason = vulkan.error().message;
         w.kind = BackendKind::Cpu;
     } else {
-        w.kind = backend_kind(options.backend);
+        w.kind = backend_kind(effective_backend(options));
     }
     auto made = make_bird_backend(w.kind, engine_options);
     check(made);
@@ -292,6 +293,32 @@ KODAWARI_C_API kodawari_status kodawari_bird_world_rewind(kodawari_bird_world* w
         require_world(world);
         check(world->backend->load(world->world));
         world->next_frame = 0;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_bird_world_record_simulate(kodawari_bird_world* world, void* command_buffer,
+                                                                   uint32_t frames) {
+    return guard("kodawari_bird_world_record_simulate", world ? &world->message : nullptr, [&] {
+        require_world(world);
+        require_pointer(command_buffer, "command_buffer");
+        if (world->kind != BackendKind::Vulkan) {
+            invalid("world", "runs on the " + std::string(world->backend->name()) +
+                                 " backend; recording needs a vulkan world (backend options with vulkan_device)");
+        }
+        if (frames > std::numeric_limits<std::uint32_t>::max() - world->next_frame) {
+            invalid("frames", std::to_string(frames) + " frames after frame " + std::to_string(world->next_frame) +
+                                  " pass the last frame a world counts; rewind first");
+        }
+        check(record_simulate(*world->backend, static_cast<VkCommandBuffer>(command_buffer), frames));
+        world->next_frame += frames;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_bird_world_buffer(kodawari_bird_world* world, kodawari_device_buffer which,
+                                                          kodawari_buffer_range* out) {
+    return guard("kodawari_bird_world_buffer", world ? &world->message : nullptr, [&] {
+        require_world(world);
+        fill_range(world->backend->device_data(), which, out, false);
     });
 }
 

@@ -1,6 +1,7 @@
 // The C API's shared parts: version, status names, the last-error messages, the argument
 // checks, and the mapping of engine errors to status codes.
 #include "capi/capi_common.hpp"
+#include "kodawari/vulkan_embed.hpp"
 
 #include <algorithm>
 #include <array>
@@ -180,6 +181,46 @@ void require_backend_options(const kodawari_backend_options& options, const std:
     if (options.threads > 1024) {
         invalid(what + ".threads", std::to_string(options.threads) + "; expected 0 (one per hardware thread) to 1024");
     }
+    if (options.vulkan_device != nullptr) {
+        if (backend != KODAWARI_BACKEND_AUTO && backend != KODAWARI_BACKEND_VULKAN) {
+            invalid(what + ".vulkan_device", "set with a CPU backend; the application's device runs KODAWARI_BACKEND_VULKAN");
+        }
+        if ((options.device != nullptr && options.device[0] != '\0') || options.validation != 0) {
+            invalid(what + ".vulkan_device", "set together with device or validation, which are then the application's choice");
+        }
+    }
+}
+
+kodawari_backend effective_backend(const kodawari_backend_options& options) {
+    return options.vulkan_device != nullptr ? KODAWARI_BACKEND_VULKAN : options.backend;
+}
+
+void fill_range(const DeviceData* data, kodawari_device_buffer which, kodawari_buffer_range* out, bool chains) {
+    require_pointer(out, "out");
+    const std::int64_t value = enum_value(which);
+    DeviceBuffer name = DeviceBuffer::BirdPoses;
+    switch (value) {
+        case KODAWARI_BUFFER_CHAIN_STATES: name = DeviceBuffer::RodChainStates; break;
+        case KODAWARI_BUFFER_JOINT_MOTION: name = DeviceBuffer::RodMotion; break;
+        case KODAWARI_BUFFER_JOINT_SPIN: name = DeviceBuffer::RodSpin; break;
+        case KODAWARI_BUFFER_BIRD_POSES: name = DeviceBuffer::BirdPoses; break;
+        default: invalid("which", std::to_string(value) + "; expected a kodawari_device_buffer (0 to 3)");
+    }
+    if (chains == (name == DeviceBuffer::BirdPoses)) {
+        invalid("which", chains ? "BIRD_POSES is a bird world's buffer" : "a chain world's buffer; a bird world has BIRD_POSES");
+    }
+    if (data == nullptr) {
+        reject(KODAWARI_INVALID_ARGUMENT, "world: not on a Vulkan device (or, for birds, no frame simulated yet); its buffers are on the host");
+    }
+    auto range = vulkan_buffer(*data, name);
+    check(range);
+    kodawari_buffer_range r{};
+    r.buffer = reinterpret_cast<std::uint64_t>(range.value().buffer);
+    r.offset = range.value().offset;
+    r.range = range.value().range;
+    r.count = range.value().count;
+    r.stride = range.value().stride;
+    *out = r;
 }
 
 BackendOptions backend_options(const kodawari_backend_options& options) {
@@ -187,6 +228,7 @@ BackendOptions backend_options(const kodawari_backend_options& options) {
     out.device = options.device != nullptr ? options.device : "";
     out.validation = options.validation != 0;
     out.threads = options.threads;
+    if (options.vulkan_device != nullptr) out.context = options.vulkan_device->context;
     return out;
 }
 

@@ -10,6 +10,7 @@
 #include <cstdint>
 #include <cstring>
 #include <exception>
+#include <memory>
 #include <new>
 #include <string>
 
@@ -19,6 +20,12 @@
 #include "kodawari/backend.hpp"
 #include "kodawari/kodawari.h"
 #include "kodawari/result.hpp"
+
+/// kodawari_vulkan_device_adopt's handle: the application's device, wrapped
+/// (kodawari::adopt_vulkan_device); shared with the worlds made on it.
+struct kodawari_vulkan_device {
+    std::shared_ptr<kodawari::gpu::VulkanContext> context;
+};
 
 namespace kodawari::capi {
 
@@ -123,6 +130,10 @@ inline glm::quat quat(const float* p) { return {p[3], p[0], p[1], p[2]}; }  // g
 
 // ---- Backends.
 
+/// The backend `options` make: AUTO on the application's device is VULKAN.
+kodawari_backend effective_backend(const kodawari_backend_options& options);
+/// Where a device buffer is, in C (`what` names the argument in errors).
+void fill_range(const DeviceData* data, kodawari_device_buffer which, kodawari_buffer_range* out, bool chains);
 /// The engine's kind of an explicit kodawari_backend (not AUTO).
 BackendKind backend_kind(kodawari_backend backend);
 kodawari_backend backend_enum(BackendKind kind);

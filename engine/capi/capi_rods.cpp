@@ -11,6 +11,7 @@
 #include <vector>
 
 #include "capi/capi_common.hpp"
+#include "kodawari/vulkan_embed.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rods/world.hpp"
@@ -249,7 +250,7 @@ void fill_frame(const kodawari_chain_world& w, const kodawari_chain_frame& f, fl
 // The backend `options` ask for; AUTO takes vulkan when it opens, else cpu (and says why).
 void open_backend(kodawari_chain_world& w, const kodawari_backend_options& options) {
     const BackendOptions engine_options = backend_options(options);
-    if (options.backend == KODAWARI_BACKEND_AUTO) {
+    if (effective_backend(options) == KODAWARI_BACKEND_AUTO) {
         auto vulkan = make_rod_backend(BackendKind::Vulkan, engine_options);
         if (vulkan.ok()) {
             w.backend = std::move(vulkan).value();
@@ -259,7 +260,7 @@ void open_backend(kodawari_chain_world& w, const kodawari_backend_options& optio
         w.fallback_reason = vulkan.error().message;
         w.kind = BackendKind::Cpu;
     } else {
-        w.kind = backend_kind(options.backend);
+        w.kind = backend_kind(effective_backend(options));
     }
     auto made = make_rod_backend(w.kind, engine_options);
     check(made);
@@ -336,6 +337,31 @@ KODAWARI_C_API kodawari_status kodawari_chain_world_step(kodawari_chain_world* w
         fill_frame(*world, *frame, frame->dt, time, world->frame);
         check(world->backend->step(world->frame));
         world->time = time;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_chain_world_record_step(kodawari_chain_world* world, void* command_buffer,
+                                                                const kodawari_chain_frame* frame) {
+    return guard("kodawari_chain_world_record_step", world ? &world->message : nullptr, [&] {
+        require_world(world);
+        require_pointer(command_buffer, "command_buffer");
+        if (world->backend->device_data() == nullptr) {
+            invalid("world", "runs on the " + std::string(world->backend->name()) +
+                                 " backend; recording needs a vulkan world (backend options with vulkan_device)");
+        }
+        check_frame_args(*world, frame, "frame", true);
+        const double time = world->time + static_cast<double>(frame->dt);
+        fill_frame(*world, *frame, frame->dt, time, world->frame);
+        check(record_step(*world->backend, static_cast<VkCommandBuffer>(command_buffer), world->frame));
+        world->time = time;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_chain_world_buffer(kodawari_chain_world* world, kodawari_device_buffer which,
+                                                           kodawari_buffer_range* out) {
+    return guard("kodawari_chain_world_buffer", world ? &world->message : nullptr, [&] {
+        require_world(world);
+        fill_range(world->backend->device_data(), which, out, true);
     });
 }
 

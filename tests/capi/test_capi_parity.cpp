@@ -22,6 +22,7 @@
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/scene.hpp"
 #include "test_support.hpp"
+#include "vulkan_app_support.hpp"
 
 using namespace kodawari;
 
@@ -444,4 +445,101 @@ TEST(CApiBackends, AMissingDeviceIsUnavailableAndAutoFallsBack) {
     EXPECT_EQ(info.backend, KODAWARI_BACKEND_CPU);
     EXPECT_NE(std::string(info.fallback_reason), "");
     kodawari_chain_world_destroy(world);
+}
+
+// The C API on the application's own device (kodawari.h, "Device embedding"): the crowd's
+// chains recorded into the application's command buffers three frames in flight give the
+// bits of kodawari_chain_world_step on a world of the module's own device; the buffer
+// ranges name the module's buffers; bad calls are refused naming the argument.
+TEST(CApiEmbedding, RecordedStepsOnTheApplicationsDeviceGiveTheStepsBits) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    testing_support::Application app;
+    ASSERT_TRUE(app.ok());
+    testing_support::messages = 0;
+    const VulkanDeviceHandles h = app.handles();
+    const kodawari_vulkan_device_desc desc{h.instance, h.physical_device, h.device, h.queue_family, h.queue_index,
+                                           reinterpret_cast<void*>(h.get_instance_proc_addr), nullptr, h.api_version,
+                                           h.frames_in_flight};
+    kodawari_vulkan_device* device = nullptr;
+    ASSERT_EQ(kodawari_vulkan_device_adopt(&desc, &device), KODAWARI_OK) << kodawari_last_error();
+
+    Scene scene = load("crowd.json");
+    scene.crowds[0].count = 13;  // 104 chains: a full workgroup of 64 and a partial one
+    auto built = build_rod_scene(scene);
+    ASSERT_TRUE(built.ok()) << built.error().message;
+    const RodScene& rods = built.value();
+    CWorld embedded(scene, rods, BackendKind::Vulkan);
+    embedded.desc.backend.validation = 0;
+    embedded.desc.backend.vulkan_device = device;
+    CWorld own(scene, rods, BackendKind::Vulkan);
+    rods::RodFrame frame = rods.frame(0);
+    const CFrame initial(frame);
+    kodawari_chain_world* a = nullptr;
+    kodawari_chain_world* b = nullptr;
+    ASSERT_EQ(kodawari_chain_world_create(&embedded.desc, &initial.frame, &a), KODAWARI_OK) << kodawari_last_error();
+    ASSERT_EQ(kodawari_chain_world_create(&own.desc, &initial.frame, &b), KODAWARI_OK) << kodawari_last_error();
+    // The worlds hold the device: the wrapper can go now.
+    kodawari_vulkan_device_release(device);
+
+    for (std::uint32_t k = 1; k <= 9; ++k) {
+        rods.frame(k, frame);
+        const CFrame input(frame);
+        VkCommandBuffer cmd = app.begin(k);
+        ASSERT_EQ(kodawari_chain_world_record_step(a, cmd, &input.frame), KODAWARI_OK) << kodawari_last_error();
+        app.submit(k);
+        ASSERT_EQ(kodawari_chain_world_step(b, &input.frame), KODAWARI_OK) << kodawari_last_error();
+    }
+    app.wait_all();
+    CRead ra(rods.world.joint_count, rods.world.chains.size()), rb(rods.world.joint_count, rods.world.chains.size());
+    ASSERT_EQ(ra.read(a), KODAWARI_OK) << kodawari_last_error();
+    ASSERT_EQ(rb.read(b), KODAWARI_OK) << kodawari_last_error();
+    EXPECT_EQ(std::memcmp(ra.positions.data(), rb.positions.data(), ra.positions.size() * sizeof(float)), 0);
+    EXPECT_EQ(std::memcmp(ra.orientations.data(), rb.orientations.data(), ra.orientations.size() * sizeof(float)), 0);
+
+    kodawari_buffer_range range{};
+    ASSERT_EQ(kodawari_chain_world_buffer(a, KODAWARI_BUFFER_JOINT_MOTION, &range), KODAWARI_OK) << kodawari_last_error();
+    EXPECT_NE(range.buffer, 0u);
+    EXPECT_EQ(range.count, rods.world.joint_count);
+    EXPECT_EQ(range.stride, 32u);  // RodJointMotionGpu: x, v
+    EXPECT_EQ(range.range, std::uint64_t{range.count} * range.stride);
+    EXPECT_EQ(kodawari_chain_world_buffer(a, KODAWARI_BUFFER_BIRD_POSES, &range), KODAWARI_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(kodawari_last_error()).find("which"), std::string::npos) << kodawari_last_error();
+
+    // Bad calls: named, nothing recorded, the world unchanged.
+    const CFrame input(frame);
+    EXPECT_EQ(kodawari_chain_world_record_step(a, nullptr, &input.frame), KODAWARI_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(kodawari_last_error()).find("command_buffer"), std::string::npos) << kodawari_last_error();
+    CWorld cpu(scene, rods, BackendKind::Cpu);
+    kodawari_chain_world* c = nullptr;
+    ASSERT_EQ(kodawari_chain_world_create(&cpu.desc, &initial.frame, &c), KODAWARI_OK) << kodawari_last_error();
+    VkCommandBuffer cmd = app.begin(10);
+    EXPECT_EQ(kodawari_chain_world_record_step(c, cmd, &input.frame), KODAWARI_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(kodawari_last_error()).find("vulkan"), std::string::npos) << kodawari_last_error();
+    EXPECT_EQ(kodawari_chain_world_buffer(c, KODAWARI_BUFFER_JOINT_MOTION, &range), KODAWARI_INVALID_ARGUMENT);
+    app.submit(10);
+    app.wait_all();
+    CRead after(rods.world.joint_count, rods.world.chains.size());
+    ASSERT_EQ(after.read(a), KODAWARI_OK);
+    EXPECT_EQ(std::memcmp(after.positions.data(), ra.positions.data(), ra.positions.size() * sizeof(float)), 0);
+
+    kodawari_vulkan_device_desc bad = desc;
+    bad.device = nullptr;
+    kodawari_vulkan_device* none = nullptr;
+    EXPECT_EQ(kodawari_vulkan_device_adopt(&bad, &none), KODAWARI_INVALID_ARGUMENT);
+    EXPECT_EQ(none, nullptr);
+    EXPECT_NE(std::string(kodawari_last_error()).find("VulkanDeviceHandles::device"), std::string::npos) << kodawari_last_error();
+    kodawari_backend_options cpu_on_device = own.desc.backend;
+    cpu_on_device.backend = KODAWARI_BACKEND_CPU;
+    cpu_on_device.validation = 0;
+    cpu_on_device.vulkan_device = reinterpret_cast<kodawari_vulkan_device*>(&bad);  // never dereferenced: refused first
+    kodawari_chain_world_desc cpu_desc = own.desc;
+    cpu_desc.backend = cpu_on_device;
+    kodawari_chain_world* refused = nullptr;
+    EXPECT_EQ(kodawari_chain_world_create(&cpu_desc, &initial.frame, &refused), KODAWARI_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(kodawari_last_error()).find("vulkan_device"), std::string::npos) << kodawari_last_error();
+
+    kodawari_chain_world_destroy(c);
+    kodawari_chain_world_destroy(b);
+    kodawari_chain_world_destroy(a);  // the last holder of the adopted device
+    EXPECT_EQ(testing_support::messages, 0u);
 }

@@ -158,6 +158,10 @@ typedef struct kodawari_backend_options {
     uint32_t validation;
     /// cpu: worker threads, 0 = one per hardware thread; at most 1024.
     uint32_t threads;
+    /// vulkan: the application's own device (kodawari_vulkan_device_adopt); NULL = a device
+    /// of the world's own. When set, `backend` must be AUTO or VULKAN (and means VULKAN),
+    /// and `device` and `validation` are the application's business (0 / NULL).
+    struct kodawari_vulkan_device* vulkan_device;
 } kodawari_backend_options;
 
 /* ------------------------------------------------------------------------------------ */
@@ -579,12 +583,75 @@ KODAWARI_C_API kodawari_status kodawari_bird_world_get_info(kodawari_bird_world*
                                                             kodawari_bird_world_info* out);
 
 /* ------------------------------------------------------------------------------------ */
-/* Device embedding: see issue 11 section 2                                             */
+/* Device embedding: the application's Vulkan device and command buffers                */
 /* ------------------------------------------------------------------------------------ */
-/* Not there yet. To come on top of the C++ embedding API: worlds created on the
- * application's VkInstance / VkPhysicalDevice / VkDevice / queue family (and its
- * vkGetInstanceProcAddr), a step recorded into the application's VkCommandBuffer, and the
- * VkBuffer, offset and range of the joints and bird parts for its own shaders. */
+/* The C form of kodawari/vulkan_embed.hpp (docs/embedding.md has the frame loop, the
+ * synchronization the module records and the lifetimes). Vulkan handles travel as void*
+ * (dispatchable: VkInstance, VkPhysicalDevice, VkDevice, VkCommandBuffer) and uint64_t
+ * (non-dispatchable: VkBuffer), so that this header needs no Vulkan header. */
+
+/// The application's Vulkan objects (what VulkanDeviceHandles holds in C++). The module
+/// creates only its own objects on the device, with `allocator`, calls Vulkan through
+/// `get_instance_proc_addr`, and destroys neither the instance nor the device.
+typedef struct kodawari_vulkan_device_desc {
+    void* instance;                /* VkInstance */
+    void* physical_device;         /* VkPhysicalDevice */
+    void* device;                  /* VkDevice */
+    uint32_t queue_family;         /* of the command buffers passed to *_record_*; must do compute */
+    uint32_t queue_index;          /* the queue creation and read-back submit to (and wait on) */
+    void* get_instance_proc_addr;  /* PFN_vkGetInstanceProcAddr */
+    const void* allocator;         /* const VkAllocationCallbacks*, or NULL */
+    uint32_t api_version;          /* the instance's VkApplicationInfo::apiVersion, >= 1.1 */
+    uint32_t frames_in_flight;     /* 1 to 16: the depth of the per-frame input rings */
+} kodawari_vulkan_device_desc;
+
+typedef struct kodawari_vulkan_device kodawari_vulkan_device;
+
+/// Wraps the application's device for kodawari_backend_options::vulkan_device. Every
+/// field is checked before the first call through a handle (KODAWARI_INVALID_ARGUMENT
+/// naming it; KODAWARI_UNAVAILABLE when the device lacks what the kernels need).
+KODAWARI_C_API kodawari_status kodawari_vulkan_device_adopt(const kodawari_vulkan_device_desc* desc,
+                                                            kodawari_vulkan_device** out);
+/// Releases the wrapper (NULL is fine). Worlds made on it keep what they need until they
+/// are destroyed; destroy them all, once the GPU finished their work, before destroying
+/// the VkDevice.
+KODAWARI_C_API void kodawari_vulkan_device_release(kodawari_vulkan_device* device);
+
+/// Records one step of a world on the application's device (backend options with
+/// vulkan_device) into `command_buffer` (a VkCommandBuffer of the device's queue family,
+/// recording): the frame's input through the world's staging ring, the step, and the
+/// barriers docs/embedding.md lists; nothing submitted or waited for. The frame is checked
+/// as kodawari_chain_world_step checks it, before anything is recorded.
+KODAWARI_C_API kodawari_status kodawari_chain_world_record_step(kodawari_chain_world* world, void* command_buffer,
+                                                                const kodawari_chain_frame* frame);
+/// Records the next `frames` frames of a flock on the application's device.
+KODAWARI_C_API kodawari_status kodawari_bird_world_record_simulate(kodawari_bird_world* world, void* command_buffer,
+                                                                   uint32_t frames);
+
+/// The module's buffers, for the application's shaders. Element layouts: the std430
+/// structs of <kodawari/shared/rods.h> and <kodawari/shared/birds.h> (GLSL and C++).
+typedef enum kodawari_device_buffer {
+    KODAWARI_BUFFER_CHAIN_STATES = 0,  /* RodChainStateGpu per chain: root.position, root.rotation */
+    KODAWARI_BUFFER_JOINT_MOTION = 1,  /* RodJointMotionGpu per joint: x relative to the chain's root */
+    KODAWARI_BUFFER_JOINT_SPIN = 2,    /* RodJointSpinGpu per joint: q (x, y, z, w) */
+    KODAWARI_BUFFER_BIRD_POSES = 3,    /* BirdPoseGpu per bird: the last simulated frame */
+    KODAWARI_BUFFER_MAX_ENUM = 0x7FFFFFFF
+} kodawari_device_buffer;
+
+typedef struct kodawari_buffer_range {
+    uint64_t buffer;  /* VkBuffer */
+    uint64_t offset;  /* bytes to the first element */
+    uint64_t range;   /* bytes: count x stride */
+    uint32_t count;   /* elements */
+    uint32_t stride;  /* bytes per element */
+} kodawari_buffer_range;
+
+/// Where a chain world's buffer is (a vulkan world; CHAIN_STATES, JOINT_MOTION, JOINT_SPIN).
+KODAWARI_C_API kodawari_status kodawari_chain_world_buffer(kodawari_chain_world* world, kodawari_device_buffer which,
+                                                           kodawari_buffer_range* out);
+/// Where a bird world's buffer is (a vulkan world, after a frame; BIRD_POSES).
+KODAWARI_C_API kodawari_status kodawari_bird_world_buffer(kodawari_bird_world* world, kodawari_device_buffer which,
+                                                          kodawari_buffer_range* out);
 
 #ifdef __cplusplus
 }
