@@ -7,6 +7,8 @@ that defines what it declares (OWNERS below); a new header needs an entry, so th
 layer is a decision. The link test (tests/consumers/sim_only.cpp) cannot see header-only
 libraries such as nlohmann-json; this can.
 
+Generated headers (api.hpp, version.hpp) are their .in templates here.
+
 Usage: check_layers.py SOURCE_DIR
 """
 import pathlib
@@ -35,6 +37,7 @@ ALLOWED_THIRD_PARTY = {
 # Which target owns each header: folders first, then the public headers one by one.
 OWNER_PATTERNS = [
     ("include/kodawari/*.hpp", "sim"),
+    ("include/kodawari/*.hpp.in", "sim"),
     ("include/kodawari/birds/*.hpp", "sim"),
     ("include/kodawari/rods/*.hpp", "sim"),
     ("core/*.hpp", "sim"),
@@ -68,11 +71,16 @@ PUBLIC_OWNERS = {
 }
 
 
+def generated(path):
+    """A generated header's name: its template's without .in."""
+    return path[: -len(".in")] if path.endswith(".in") else path
+
+
 def owners():
     table = {}
     for pattern, target in OWNER_PATTERNS:
         for path in ENGINE.glob(pattern):
-            table[str(path.relative_to(ENGINE))] = target
+            table[generated(str(path.relative_to(ENGINE)))] = target
     for header, target in PUBLIC_OWNERS.items():
         table["include/kodawari/" + header] = target
     return table
@@ -88,9 +96,15 @@ def resolve(include, source):
     """The engine header an include names (relative to engine/), or None outside the engine."""
     for base in (ENGINE / "include", ENGINE, source.parent):
         path = (base / include).resolve()
-        if path.exists():
+        if path.exists() or path.with_name(path.name + ".in").exists():
             return str(path.relative_to(ENGINE)) if str(path).startswith(str(ENGINE)) else None
     return None
+
+
+def source_file(header):
+    """The file to read for an engine header: the header, or its template."""
+    path = ENGINE / header
+    return path if path.exists() else path.with_name(path.name + ".in")
 
 
 def check():
@@ -116,7 +130,7 @@ def check():
                 continue
             if owner[header] not in LINKS[target]:
                 problems.append(f"{target}: {source} includes {include} ({owner[header]})")
-            scan(ENGINE / header, target, seen)
+            scan(source_file(header), target, seen)
 
     found = targets()
     for target, sources in found.items():
