@@ -5,7 +5,7 @@
 #   P/lib/cmake/kodawari/kodawariConfigVersion.cmake  which requested versions this one satisfies
 #   P/lib/cmake/kodawari/kodawariTargets*.cmake       the export set kodawariTargets
 #   P/lib/pkgconfig/kodawari.pc                       pkg-config --cflags --libs kodawari
-#   P/share/doc/kodawari/                             README.md
+#   P/share/doc/kodawari/                             README.md, CHANGELOG.md
 #
 # tests/package/ installs a build into a temporary prefix and builds programs against it.
 include(CMakePackageConfigHelpers)
@@ -73,5 +73,5 @@ endif()
 configure_file(${CMAKE_CURRENT_LIST_DIR}/kodawari.pc.in ${PROJECT_BINARY_DIR}/package/kodawari.pc @ONLY)
 install(FILES ${PROJECT_BINARY_DIR}/package/kodawari.pc DESTINATION ${pkgconfig_dir})
 
-install(FILES ${PROJECT_SOURCE_DIR}/README.md
+install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/CHANGELOG.md
   DESTINATION ${CMAKE_INSTALL_DOCDIR})
