@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "compute/queue.hpp"
+#include "core/internal_api.hpp"
 
 namespace kodawari::gpu {
 /// SPIR-V of shaders/<name>, compiled at build time (empty when unknown;
@@ -35,7 +36,7 @@ struct BufferView {
     vk::Buffer foreign{};
 };
 
-class Kernel {
+class KODAWARI_INTERNAL Kernel {
 public:
     /// Buffers at bindings 0..n-1 of `bindings`' kinds, `push_bytes` of push constants,
     /// and 32-bit specialization constants with ids 0..m-1.

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "compute/buffer.hpp"
+#include "core/internal_api.hpp"
 
 namespace kodawari::compute {
 
@@ -42,7 +43,7 @@ class StagingRing;
 
 /// Commands being recorded: move-only; owns its command buffer until submitted (then the
 /// Submission owns it) or destroyed unsubmitted (given back, nothing runs).
-class Recording {
+class KODAWARI_INTERNAL Recording {
 public:
     Recording(Recording&& other) noexcept;
     Recording& operator=(Recording&& other) noexcept;
@@ -110,7 +111,7 @@ private:
 
 /// Work submitted to the queue. wait() blocks until it completed; destroying an unwaited
 /// Submission waits too, so that nothing it uses is freed while the device runs it.
-class Submission {
+class KODAWARI_INTERNAL Submission {
 public:
     Submission(Submission&& other) noexcept;
     Submission& operator=(Submission&& other) noexcept;
@@ -135,7 +136,7 @@ class StagingRing;
 };
 
 /// The device's one queue.
-class Queue {
+class KODAWARI_INTERNAL Queue {
 public:
     explicit Queue(Device& device) : device_(&device) {}
 
@@ -150,21 +151,22 @@ private:
 
 /// Orders the memory accesses of `before` (writes, and reads that later writes must not
 /// overtake) before those of `after`, making the writes visible to them.
-void barrier(Recording& recording, Stage before, Stage after);
+KODAWARI_INTERNAL void barrier(Recording& recording, Stage before, Stage after);
 
 /// Records a copy of `bytes` bytes from `source` at `source_offset` to `target` at
 /// `target_offset` (order it with barrier()).
-void copy(Recording& recording, const Buffer& source, std::uint64_t source_offset, const Buffer& target,
-          std::uint64_t target_offset, std::uint64_t bytes);
+KODAWARI_INTERNAL void copy(Recording& recording, const Buffer& source, std::uint64_t source_offset, const Buffer& target,
+                            std::uint64_t target_offset, std::uint64_t bytes);
 
 /// Writes `bytes` into a Storage buffer within `recording`: by memcpy now when the buffer
 /// is mapped (so not while earlier, unfinished work reads it), else by a copy from a
 /// staging buffer the recording keeps, ordered after earlier kernels and before later ones.
-[[nodiscard]] Result<void> upload(Recording& recording, const Buffer& buffer, std::span<const std::byte> bytes);
+[[nodiscard]] KODAWARI_INTERNAL Result<void> upload(Recording& recording, const Buffer& buffer,
+                                                    std::span<const std::byte> bytes);
 /// upload() in a submission of its own, waited for (nothing to do when mapped).
-[[nodiscard]] Result<void> upload(Device& device, const Buffer& buffer, std::span<const std::byte> bytes);
+[[nodiscard]] KODAWARI_INTERNAL Result<void> upload(Device& device, const Buffer& buffer, std::span<const std::byte> bytes);
 /// Reads the first bytes.size() bytes of a Storage buffer that kernels wrote in earlier,
 /// completed submissions: by memcpy when mapped, else through a readback buffer.
-[[nodiscard]] Result<void> download(Device& device, const Buffer& buffer, std::span<std::byte> bytes);
+[[nodiscard]] KODAWARI_INTERNAL Result<void> download(Device& device, const Buffer& buffer, std::span<std::byte> bytes);
 
 }  // namespace kodawari::compute

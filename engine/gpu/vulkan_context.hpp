@@ -13,6 +13,7 @@
 
 #include <vulkan/vulkan_raii.hpp>
 
+#include "core/internal_api.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/result.hpp"
 
@@ -59,7 +60,7 @@ struct CommandSlot {
     vk::raii::Fence fence{nullptr};
 };
 
-class VulkanContext {
+class KODAWARI_INTERNAL VulkanContext {
 public:
     /// Opens the loader, creates the instance and the device. Errors say what is missing.
     [[nodiscard]] static Result<std::unique_ptr<VulkanContext>> create(const ContextOptions& options);
@@ -163,7 +164,7 @@ private:
 
 /// Turns an exception from vulkan.hpp into an Error that keeps its VkResult
 /// (Error::vk_result). Called by guard(), the one boundary where they are caught.
-[[nodiscard]] Error vulkan_error(const std::string& what, const std::exception& e);
+[[nodiscard]] KODAWARI_INTERNAL Error vulkan_error(const std::string& what, const std::exception& e);
 
 /// The one place where exceptions from vulkan.hpp become Errors (compute::guard is this
 /// function too): runs `body`, which returns a Result, and turns what it throws into an

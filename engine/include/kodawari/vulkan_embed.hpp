@@ -25,6 +25,7 @@
 
 #include <vulkan/vulkan_core.h>
 
+#include "kodawari/api.hpp"
 #include "kodawari/backend.hpp"
 #include "kodawari/device_data.hpp"
 #include "kodawari/pose_backend.hpp"
@@ -69,7 +70,7 @@ struct VulkanRequirements {
     VkQueueFlags queue_flags = VK_QUEUE_COMPUTE_BIT;
     std::uint32_t device_extension_count = 0;  ///< none
 };
-[[nodiscard]] VulkanRequirements vulkan_requirements();
+[[nodiscard]] KODAWARI_API VulkanRequirements vulkan_requirements();
 
 /// Wraps the application's device for BackendOptions::context: every vulkan backend made
 /// with it (make_rod_backend, make_bird_backend, make_pose_backend) runs there. Errors
@@ -77,7 +78,7 @@ struct VulkanRequirements {
 /// device lacks) are returned before any call through a handle that could be bad. The
 /// returned object must be released (with every backend made on it) before the
 /// application destroys its device, and once the GPU finished the work recorded with it.
-[[nodiscard]] Result<std::shared_ptr<gpu::VulkanContext>> adopt_vulkan_device(const VulkanDeviceHandles& handles);
+[[nodiscard]] KODAWARI_API Result<std::shared_ptr<gpu::VulkanContext>> adopt_vulkan_device(const VulkanDeviceHandles& handles);
 
 /// A range of a buffer the module writes, to bind in the application's shaders. The
 /// element layout is the std430 struct named for each DeviceBuffer (device_data.hpp),
@@ -94,7 +95,7 @@ struct VulkanBufferRange {
 /// birds and poses); InvalidInput when the backend keeps no such buffer. Ranges stay
 /// valid until the backend's next load() (BirdPoses: until the next record_simulate,
 /// which may use another slot of its ring).
-[[nodiscard]] Result<VulkanBufferRange> vulkan_buffer(const DeviceData& data, DeviceBuffer name);
+[[nodiscard]] KODAWARI_API Result<VulkanBufferRange> vulkan_buffer(const DeviceData& data, DeviceBuffer name);
 
 /// Records one frame of `rods` (a vulkan rod backend, loaded) into `cmd`, a command buffer
 /// of VulkanDeviceHandles::queue_family in the recording state: the frame's input copied
@@ -103,15 +104,15 @@ struct VulkanBufferRange {
 /// buffers once the application's submission completed. `frame` is checked
 /// (rods::check_frame) before anything is recorded: on error, `cmd` and the backend are
 /// as they were.
-[[nodiscard]] Result<void> record_step(RodBackend& rods, VkCommandBuffer cmd, const rods::RodFrame& frame);
+[[nodiscard]] KODAWARI_API Result<void> record_step(RodBackend& rods, VkCommandBuffer cmd, const rods::RodFrame& frame);
 
 /// Records the next `frames` frames of `birds` (a vulkan bird backend, loaded) into `cmd`;
 /// DeviceBuffer::BirdPoses then holds the last of them.
-[[nodiscard]] Result<void> record_simulate(BirdBackend& birds, VkCommandBuffer cmd, std::uint32_t frames);
+[[nodiscard]] KODAWARI_API Result<void> record_simulate(BirdBackend& birds, VkCommandBuffer cmd, std::uint32_t frames);
 
 /// Records the evaluation of every instance of `poses` (a vulkan pose backend, loaded) at
 /// scene time `time` into `cmd`; DeviceBuffer::PoseWorld then holds the world matrices.
-[[nodiscard]] Result<void> record_evaluate(PoseBackend& poses, VkCommandBuffer cmd, float time);
+[[nodiscard]] KODAWARI_API Result<void> record_evaluate(PoseBackend& poses, VkCommandBuffer cmd, float time);
 
 /// A collider of a matrix-driven character: a capsule (a sphere when a == b) in a node's frame.
 struct MatrixCollider {
@@ -154,9 +155,9 @@ struct MatrixInput {
 /// as usual (those it names are overwritten). The buffer must outlive the backend's
 /// steps. Call again after each load(). Checked in full first (InvalidInput naming the
 /// field and index; the backend unchanged on error).
-[[nodiscard]] Result<void> set_matrix_input(RodBackend& rods, const MatrixInput& input);
+[[nodiscard]] KODAWARI_API Result<void> set_matrix_input(RodBackend& rods, const MatrixInput& input);
 /// Back to the RodFrame's entries alone.
-[[nodiscard]] Result<void> clear_matrix_input(RodBackend& rods);
+[[nodiscard]] KODAWARI_API Result<void> clear_matrix_input(RodBackend& rods);
 
 // Synchronization (docs/embedding.md). Each record_*() call records, in `cmd`:
 //   1. a memory barrier from the application's earlier reads of the module's buffers —
