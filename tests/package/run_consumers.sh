@@ -18,11 +18,14 @@
 #      BUILD/tests/package/add_subdirectory, so that a second run rebuilds only what
 #      changed (the first builds the library once more).
 #
-#   bash tests/package/run_consumers.sh BUILD SOURCE CXX LAUNCHER SHARED GENERATOR BUILD_TYPE
+#   bash tests/package/run_consumers.sh BUILD SOURCE CXX LAUNCHER SHARED GENERATOR BUILD_TYPE \
+#        [CXX_FLAGS [EXE_LINKER_FLAGS]]
 #
 # CXX is the compiler and LAUNCHER the compiler launcher (ccache, or "") of the build,
-# SHARED its BUILD_SHARED_LIBS (ON/OFF). ctest runs it as the test `package` (LABELS
-# package). JOBS (default 2) is the parallelism of the consumer builds.
+# SHARED its BUILD_SHARED_LIBS (ON/OFF), CXX_FLAGS and EXE_LINKER_FLAGS its
+# CMAKE_CXX_FLAGS and CMAKE_EXE_LINKER_FLAGS, which the programs are built with too (the
+# asan preset's libraries need the sanitizers' runtime). ctest runs it as the test
+# `package` (LABELS package). JOBS (default 2) is the parallelism of the consumer builds.
 set -euo pipefail
 build="$(cd "$1" && pwd)"
 src="$(cd "$2" && pwd)"
@@ -31,6 +34,8 @@ launcher="$4"
 shared="$5"
 generator="$6"
 build_type="${7:-Release}"
+cxx_flags="${8:-}"
+exe_linker_flags="${9:-}"
 jobs="${JOBS:-2}"
 here="$src/tests/package"
 
@@ -64,7 +69,8 @@ is_on() {
 configure() {  # configure SOURCE BINARY ARGS...
   local s="$1" b="$2"
   shift 2
-  local args=(-G "$generator" -DCMAKE_BUILD_TYPE="$build_type" -DCMAKE_CXX_COMPILER="$cxx")
+  local args=(-G "$generator" -DCMAKE_BUILD_TYPE="$build_type" -DCMAKE_CXX_COMPILER="$cxx"
+    -DCMAKE_CXX_FLAGS="$cxx_flags" -DCMAKE_EXE_LINKER_FLAGS="$exe_linker_flags")
   [[ -n "$launcher" ]] && args+=(-DCMAKE_CXX_COMPILER_LAUNCHER="$launcher")
   quiet cmake -S "$s" -B "$b" "${args[@]}" "$@"
 }
@@ -135,7 +141,8 @@ fi
 echo "package: pkg-config --cflags --libs $pc_libs kodawari: $(pkg-config --cflags --libs $pc_libs kodawari)"
 compiler="$cxx"
 [[ -n "$launcher" ]] && compiler="$launcher $cxx"
-quiet make -C "$here/pkg_config" OUT="$work" CXX="$compiler" PKG_CONFIG_LIBS="$pc_libs" LDFLAGS="$ldflags"
+quiet make -C "$here/pkg_config" OUT="$work" CXX="$compiler" PKG_CONFIG_LIBS="$pc_libs" CXXFLAGS="$cxx_flags" \
+  LDFLAGS="$exe_linker_flags $ldflags"
 "$work/consumer" "$src" "$out" || fail "the pkg-config consumer"
 done_step "pkg-config consumer"
 
