@@ -7,6 +7,11 @@ that defines what it declares (OWNERS below); a new header needs an entry, so th
 layer is a decision. The link test (tests/consumers/sim_only.cpp) cannot see header-only
 libraries such as nlohmann-json; this can.
 
+The public headers are also what `cmake --install` copies (kodawari_headers() in
+engine/CMakeLists.txt): every header under include/kodawari/ is listed there once, under
+the target that owns it, so that a new public header is installed and an internal one is
+not. Generated headers (api.hpp, version.hpp) are their .in templates here.
+
 Usage: check_layers.py SOURCE_DIR
 """
 import pathlib
@@ -22,6 +27,7 @@ LINKS = {
     "io": {"io", "sim"},
     "render": {"render", "vulkan", "io", "sim"},
     "engine": {"engine", "render", "vulkan", "io", "sim"},
+    "c": {"c", "vulkan", "sim"},
 }
 # The third-party headers each target may include (prefixes of the include path).
 THIRD_PARTY = {"tiny_gltf", "nlohmann", "vulkan/", "stb/", "hwy/"}
@@ -31,10 +37,15 @@ ALLOWED_THIRD_PARTY = {
     "io": {"tiny_gltf", "nlohmann"},
     "render": {"vulkan", "stb"},
     "engine": {"vulkan"},
+    # The C API's device embedding converts the application's handles (vulkan_core.h's C
+    # types) for kodawari/vulkan_embed.hpp; kodawari.h itself names no Vulkan type.
+    "c": {"vulkan"},
 }
 # Which target owns each header: folders first, then the public headers one by one.
 OWNER_PATTERNS = [
     ("include/kodawari/*.hpp", "sim"),
+    ("include/kodawari/*.hpp.in", "sim"),
+    ("include/kodawari/shared/*.h", "sim"),
     ("include/kodawari/birds/*.hpp", "sim"),
     ("include/kodawari/rods/*.hpp", "sim"),
     ("core/*.hpp", "sim"),
@@ -51,6 +62,7 @@ OWNER_PATTERNS = [
     ("gltf/*.hpp", "io"),
     ("render/*.hpp", "render"),
     ("include/kodawari/render/*.hpp", "render"),
+    ("capi/*.hpp", "c"),
 ]
 PUBLIC_OWNERS = {
     "gltf/character.hpp": "sim",
@@ -61,38 +73,81 @@ PUBLIC_OWNERS = {
     "gltf/import.hpp": "io",
     "backend_factory.hpp": "vulkan",
     "crowd_animator.hpp": "vulkan",
+    "vulkan_embed.hpp": "vulkan",
     "gpu_info.hpp": "vulkan",
     "scene.hpp": "io",
     "rod_scene.hpp": "io",
     "export.hpp": "io",
     "scene_edit.hpp": "io",
     "simulation.hpp": "engine",
+    "kodawari.h": "c",
 }
+
+
+def generated(path):
+    """A generated header's name: its template's without .in."""
+    return path[: -len(".in")] if path.endswith(".in") else path
 
 
 def owners():
     table = {}
     for pattern, target in OWNER_PATTERNS:
         for path in ENGINE.glob(pattern):
-            table[str(path.relative_to(ENGINE))] = target
+            table[generated(str(path.relative_to(ENGINE)))] = target
     for header, target in PUBLIC_OWNERS.items():
         table["include/kodawari/" + header] = target
     return table
 
 
 def targets():
-    """Each target's sources, from the kodawari_component() calls."""
+    """Each target's sources, from the kodawari_component() calls and the C API's shared
+    library (add_library(kodawari_c SHARED ...))."""
     text = (ENGINE / "CMakeLists.txt").read_text()
-    return {m.group(1): m.group(2).split() for m in re.finditer(r"kodawari_component\((\w+)\n(.*?)\)", text, re.S)}
+    found = {m.group(1): m.group(2).split() for m in re.finditer(r"kodawari_component\((\w+)\n(.*?)\)", text, re.S)}
+    for m in re.finditer(r"add_library\(kodawari_(\w+) SHARED\n(.*?)\)", text, re.S):
+        found[m.group(1)] = m.group(2).split()
+    return found
 
 
 def resolve(include, source):
     """The engine header an include names (relative to engine/), or None outside the engine."""
     for base in (ENGINE / "include", ENGINE, source.parent):
         path = (base / include).resolve()
-        if path.exists():
+        if path.exists() or path.with_name(path.name + ".in").exists():
             return str(path.relative_to(ENGINE)) if str(path).startswith(str(ENGINE)) else None
     return None
+
+
+def source_file(header):
+    """The file to read for an engine header: the header, or its template."""
+    path = ENGINE / header
+    return path if path.exists() else path.with_name(path.name + ".in")
+
+
+def installed_headers():
+    """Each target's public headers, from the kodawari_headers() calls (under include/)."""
+    text = (ENGINE / "CMakeLists.txt").read_text()
+    return {m.group(1): ["include/kodawari/" + h for h in m.group(2).split()]
+            for m in re.finditer(r"kodawari_headers\((\w+)\n(.*?)\)", text, re.S)}
+
+
+def check_installed(owner):
+    """Every public header installed once, by its owner; nothing else installed."""
+    problems = []
+    listed = {}
+    for target, headers in installed_headers().items():
+        for header in headers:
+            if header in listed:
+                problems.append(f"{header}: installed by both {listed[header]} and {target}")
+            listed[header] = target
+            if header not in owner or not header.startswith("include/"):
+                problems.append(f"{header}: installed by {target} but not a public header")
+            elif owner[header] != target:
+                problems.append(f"{header}: installed by {target}, owned by {owner[header]}")
+    for header in sorted(h for h in owner if h.startswith("include/")):
+        if header not in listed:
+            problems.append(f"{header}: a public header that kodawari_headers() does not install")
+    return problems, len(listed)
 
 
 def check():
@@ -118,16 +173,18 @@ def check():
                 continue
             if owner[header] not in LINKS[target]:
                 problems.append(f"{target}: {source} includes {include} ({owner[header]})")
-            scan(ENGINE / header, target, seen)
+            scan(source_file(header), target, seen)
 
     found = targets()
     for target, sources in found.items():
         for source in sources:
             if source.endswith(".cpp"):
                 scan(ENGINE / source, target, set())
+    installed, count = check_installed(owner)
+    problems += installed
     for line in problems:
         print(line)
-    print("checked", {t: len(s) for t, s in found.items()}, "problems", len(problems))
+    print("checked", {t: len(s) for t, s in found.items()}, "installed headers", count, "problems", len(problems))
     return 1 if problems else 0
 
 

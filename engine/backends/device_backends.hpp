@@ -32,6 +32,14 @@ public:
     virtual void record(compute::Recording& recording, const DeviceData& rods) const = 0;
 };
 
+/// Who reads what the module writes, in an application's command buffer: its kernels,
+/// copies and, on a queue family that draws, its draws (docs/embedding.md,
+/// "Synchronization"). The barriers around an embedded step name these stages.
+[[nodiscard]] inline compute::Stage embedding_consumers(const compute::Device& device) {
+    using compute::Stage;
+    return device.graphics_queue() ? Stage::Compute | Stage::Transfer | Stage::Draw : Stage::Compute | Stage::Transfer;
+}
+
 /// What the vulkan rod backend adds to RodBackend inside the engine.
 class DeviceRodBackend {
 public:
@@ -40,12 +48,20 @@ public:
     /// the frame (CrowdAnimator::write_inputs_on); null removes it. Shared ownership: the
     /// writer and what it reads stay alive while the backend may step.
     virtual void set_input_writer(std::shared_ptr<const RodInputWriter> writer) = 0;
+    /// The loaded world (null before load()).
+    [[nodiscard]] virtual const rods::RodWorld* world() const = 0;
+    /// The device it runs on (kernels that feed it are created there).
+    [[nodiscard]] virtual compute::Device& compute_device() const = 0;
     /// step() without submitting or waiting: records the frame's input writes and the
     /// step's dispatch into `recording` (a recording of this backend's device). Where the
     /// input buffers are mapped, the input is written now, so the recording must be
     /// submitted (and complete) before the next record_step or step. The state is the
     /// new frame's once the caller's submission completed.
     [[nodiscard]] virtual Result<void> record_step(compute::Recording& recording, const rods::RodFrame& frame) = 0;
+    /// record_step into the application's command buffer (kodawari/vulkan_embed.hpp):
+    /// the input through a ring of Device::frames_in_flight() staging slots, the barriers
+    /// of embedding_consumers() before and after. Checks everything before recording.
+    [[nodiscard]] virtual Result<void> record_external(VkCommandBuffer cmd, const rods::RodFrame& frame) = 0;
 };
 
 /// What the vulkan bird backend adds to BirdBackend inside the engine.
@@ -56,6 +72,18 @@ public:
     /// next `frames` frames into `recording` (a recording of this backend's device);
     /// DeviceBuffer::BirdPoses is the last of them once the caller's submission completed.
     [[nodiscard]] virtual Result<void> record_simulate(compute::Recording& recording, std::uint32_t frames) = 0;
+    /// record_simulate into the application's command buffer, between the barriers of
+    /// embedding_consumers().
+    [[nodiscard]] virtual Result<void> record_external(VkCommandBuffer cmd, std::uint32_t frames) = 0;
+};
+
+/// What the vulkan pose backend adds to PoseBackend inside the engine.
+class DevicePoseBackend {
+public:
+    virtual ~DevicePoseBackend() = default;
+    /// evaluate(time) recorded into the application's command buffer, between the
+    /// barriers of embedding_consumers().
+    [[nodiscard]] virtual Result<void> record_external(VkCommandBuffer cmd, float time) = 0;
 };
 
 }  // namespace kodawari

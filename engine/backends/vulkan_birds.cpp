@@ -89,6 +89,20 @@ public:
         return {};
     }
 
+    Result<void> record_external(VkCommandBuffer cmd, std::uint32_t frames) override {
+        if (count_ == 0) return make_error(Error::Kind::InvalidInput, "record_simulate: the backend has no flock; load() one first");
+        if (frames == 0 || frames > slots_) {
+            return make_error(Error::Kind::InvalidInput, "record_simulate: frames is " + std::to_string(frames) + "; expected 1 to " +
+                                                             std::to_string(slots_) + " (the pose ring's slots for this flock)");
+        }
+        // No per-frame input: nothing to stage.
+        auto recording = compute::Recording::borrow(*ctx_, cmd, nullptr);
+        compute::barrier(recording, embedding_consumers(*ctx_), compute::Stage::Compute);
+        KW_TRY(record_simulate(recording, frames));
+        compute::barrier(recording, compute::Stage::Compute, embedding_consumers(*ctx_));
+        return {};
+    }
+
     Result<void> load(const birds::BirdWorld& world) override {
         const std::size_t count = world.birds.size();
         if (count == 0) return make_error(Error::Kind::InvalidInput, "the world has no birds");

@@ -110,7 +110,7 @@ FlatCharacter flatten(const gltf::Character& character) {
     return flat;
 }
 
-class VulkanPoseBackend final : public PoseBackend, public DeviceData {
+class VulkanPoseBackend final : public PoseBackend, public DevicePoseBackend, public DeviceData {
 public:
     explicit VulkanPoseBackend(std::shared_ptr<compute::Device> ctx) : ctx_(std::move(ctx)) {}
 
@@ -174,14 +174,23 @@ public:
         return {};
     }
 
+    Result<void> record_external(VkCommandBuffer cmd, float time) override {
+        if (character_ == nullptr) return make_error(Error::Kind::InvalidInput, "record_evaluate: the backend has no character; load() one first");
+        if (!std::isfinite(time)) return make_error(Error::Kind::InvalidInput, "record_evaluate: time is not finite");
+        evaluated_ = true;
+        if (count_ == 0) return {};
+        auto recording = compute::Recording::borrow(*ctx_, cmd, nullptr);
+        compute::barrier(recording, embedding_consumers(*ctx_), compute::Stage::Compute);
+        kernel_->dispatch(recording, push_bytes(time), groups());
+        compute::barrier(recording, compute::Stage::Compute, embedding_consumers(*ctx_));
+        return {};
+    }
+
     Result<void> evaluate(float time) override {
         assert(character_ != nullptr && "load() first");
         if (!std::isfinite(time)) return make_error(Error::Kind::InvalidInput, "the scene time is not finite");
         evaluated_ = true;
         if (count_ == 0) return {};
-        const gpu::PosePush push{{time, 0.0f, 0.0f, 0.0f},
-                                 {count_, static_cast<std::uint32_t>(character_->nodes.size()), 0u, 0u}};
-        const std::uint32_t groups = (count_ + KW_POSES_WORKGROUP_SIZE - 1) / KW_POSES_WORKGROUP_SIZE;
         const compute::Queue queue(*ctx_);
         auto recording = queue.begin();
         if (!recording) return recording.error();
@@ -190,7 +199,7 @@ public:
         // submissions) before this dispatch overwrites them.
         compute::barrier(rec, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
         rec.timestamp(compute::Timestamp::Begin);
-        kernel_->dispatch(rec, std::as_bytes(std::span(&push, 1)), groups);
+        kernel_->dispatch(rec, push_bytes(time), groups());
         rec.timestamp(compute::Timestamp::End);
         compute::barrier(rec, compute::Stage::Compute, compute::Stage::Host | compute::Stage::Transfer);
         auto submission = queue.submit(std::move(recording).value());
@@ -219,7 +228,14 @@ public:
     }
 
 private:
+    std::span<const std::byte> push_bytes(float time) {
+        push_ = {{time, 0.0f, 0.0f, 0.0f}, {count_, static_cast<std::uint32_t>(character_->nodes.size()), 0u, 0u}};
+        return std::as_bytes(std::span(&push_, 1));
+    }
+    std::uint32_t groups() const { return (count_ + KW_POSES_WORKGROUP_SIZE - 1) / KW_POSES_WORKGROUP_SIZE; }
+
     std::shared_ptr<compute::Device> ctx_;
+    gpu::PosePush push_{};
     std::optional<compute::Kernel> kernel_;
     std::vector<Buffer> buffers_;
     const gltf::Character* character_ = nullptr;

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <optional>
 
 #include <kodawari/shared/rods.h>
 
@@ -90,6 +91,8 @@ public:
         }
     }
     void set_input_writer(std::shared_ptr<const RodInputWriter> writer) override { input_writer_ = std::move(writer); }
+    const rods::RodWorld* world() const override { return world_; }
+    compute::Device& compute_device() const override { return *ctx_; }
 
     Result<void> load(const rods::RodWorld& world, const rods::RodFrame& initial) override {
         KW_TRY(rods::check_frame(world, initial));
@@ -102,6 +105,7 @@ public:
         }
         world_ = &world;
         dt_ = -1.0f;
+        ring_.reset();  // sized for the world
 
         // Constants: templates, their joints and shapes.
         std::uint32_t max_joints = 2, max_views = 0;
@@ -219,6 +223,30 @@ public:
         assert(&recording.device() == ctx_.get() && "a recording of the backend's device");
         // Untimed: the timestamps are the caller's submission's.
         return record(recording, frame, false);
+    }
+
+    Result<void> record_external(VkCommandBuffer cmd, const rods::RodFrame& frame) override {
+        if (world_ == nullptr) return make_error(Error::Kind::InvalidInput, "record_step: the backend has no world; load() one first");
+        KW_TRY(rods::check_frame(*world_, frame));
+        if (!ring_) {
+            // The most one frame uploads: the templates (when dt changes) and the input.
+            auto rounded = [](std::uint64_t bytes) { return (bytes + 15) / 16 * 16; };
+            const std::uint64_t bytes = rounded(templates_.size() * sizeof(gpu::RodTemplateGpu)) +
+                                        rounded(std::uint64_t{world_->character_count} * sizeof(gpu::RodTransformGpu)) +
+                                        rounded(world_->chains.size() * sizeof(gpu::RodTransformGpu)) +
+                                        rounded(std::uint64_t{world_->collider_count} * sizeof(gpu::RodColliderGpu));
+            auto ring = compute::StagingRing::create(*ctx_, bytes, ctx_->frames_in_flight());
+            if (!ring) return ring.error();
+            ring_.emplace(std::move(ring).value());
+        }
+        ring_->next_frame();
+        auto recording = compute::Recording::borrow(*ctx_, cmd, &*ring_);
+        // The application's reads of the previous frame's state and input (draws, its
+        // kernels, copies) before this frame's copies and dispatch overwrite them.
+        compute::barrier(recording, embedding_consumers(*ctx_), compute::Stage::Transfer | compute::Stage::Compute);
+        KW_TRY(record(recording, frame, false));
+        compute::barrier(recording, compute::Stage::Compute, embedding_consumers(*ctx_));
+        return {};
     }
 
     Result<void> read(ChainSnapshot& out) override {
@@ -350,6 +378,7 @@ private:
     const rods::RodWorld* world_ = nullptr;
     std::vector<Buffer> buffers_;
     std::shared_ptr<const RodInputWriter> input_writer_;
+    std::optional<compute::StagingRing> ring_;  // record_external's input uploads
     std::vector<gpu::RodTemplateGpu> templates_;
     float dt_ = -1.0f;
     double gpu_ms_ = -1.0;

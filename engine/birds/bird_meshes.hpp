@@ -6,12 +6,13 @@
 #include <array>
 
 #include "core/flat_mesh.hpp"
+#include "core/internal_api.hpp"
 #include "kodawari/birds/rig.hpp"
 
 namespace kodawari::birds {
 
 /// The seven meshes of a wing type in part order, each in its part's frame.
-[[nodiscard]] std::array<core::MeshData, kPartCount> bird_part_meshes(WingType type);
+[[nodiscard]] KODAWARI_INTERNAL std::array<core::MeshData, kPartCount> bird_part_meshes(WingType type);
 
 /// Base colours per wing type: pigeon grey-blue, gull white, hawk brown.
 inline constexpr std::array<std::array<double, 4>, kWingTypeCount> kBirdColours = {{
@@ -21,6 +22,6 @@ inline constexpr std::array<std::array<double, 4>, kWingTypeCount> kBirdColours 
 }};
 
 /// The base colour of a wing type (linear RGB in [0, 1]).
-[[nodiscard]] std::array<float, 3> bird_base_color(WingType type);
+[[nodiscard]] KODAWARI_INTERNAL std::array<float, 3> bird_base_color(WingType type);
 
 }  // namespace kodawari::birds

@@ -36,11 +36,11 @@ Result<Buffer> Buffer::create(const Device& device, std::uint64_t size, Usage us
             break;
     }
     return guard("Vulkan buffer of " + std::to_string(size) + " bytes", [&]() -> Result<Buffer> {
-        out.buffer_ = device.device().createBuffer({.size = size, .usage = flags, .sharingMode = vk::SharingMode::eExclusive});
+        out.buffer_ = device.device().createBuffer({.size = size, .usage = flags, .sharingMode = vk::SharingMode::eExclusive}, device.allocator());
         const auto needs = out.buffer_.getMemoryRequirements();
         auto type = device.memory_type(needs.memoryTypeBits, required, preferred);
         if (!type) return type.error();
-        out.memory_ = device.device().allocateMemory({.allocationSize = needs.size, .memoryTypeIndex = type.value()});
+        out.memory_ = device.device().allocateMemory({.allocationSize = needs.size, .memoryTypeIndex = type.value()}, device.allocator());
         out.buffer_.bindMemory(*out.memory_, 0);
         const auto properties = device.physical_device().getMemoryProperties().memoryTypes[type.value()].propertyFlags;
         if (properties & Memory::eHostVisible) {

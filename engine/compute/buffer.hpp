@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "compute/device.hpp"
+#include "core/internal_api.hpp"
 
 namespace kodawari::compute {
 
@@ -21,7 +22,7 @@ enum class Usage {
 };
 
 /// A buffer and its memory, owned (move-only; freeing the memory unmaps it).
-class Buffer {
+class KODAWARI_INTERNAL Buffer {
 public:
     using Kind = Usage;  // the renderer's older name
 
@@ -57,8 +58,9 @@ private:
 /// array still has a buffer to bind). A size over the device's storage-buffer range is an
 /// Unsupported error: "<what> needs a storage buffer of N bytes (binding b); <device>
 /// allows M".
-[[nodiscard]] Result<std::vector<Buffer>> create_storage_buffers(const Device& device, std::span<const std::uint64_t> sizes,
-                                                                 const std::string& what);
+[[nodiscard]] KODAWARI_INTERNAL Result<std::vector<Buffer>> create_storage_buffers(const Device& device,
+                                                                                   std::span<const std::uint64_t> sizes,
+                                                                                   const std::string& what);
 
 }  // namespace kodawari::compute
 

@@ -24,14 +24,14 @@ Result<Kernel> Kernel::create(const Device& device, std::string_view shader, std
                                                       .descriptorCount = 1,
                                                       .stageFlags = vk::ShaderStageFlagBits::eCompute};
         }
-        out.set_layout_ = vk_device.createDescriptorSetLayout({.bindingCount = count, .pBindings = slots.data()});
+        out.set_layout_ = vk_device.createDescriptorSetLayout({.bindingCount = count, .pBindings = slots.data()}, device.allocator());
         const vk::PushConstantRange push{.stageFlags = vk::ShaderStageFlagBits::eCompute, .offset = 0, .size = push_bytes};
         const vk::DescriptorSetLayout set_layout = *out.set_layout_;
         out.layout_ = vk_device.createPipelineLayout({.setLayoutCount = 1,
                                                       .pSetLayouts = &set_layout,
                                                       .pushConstantRangeCount = push_bytes > 0 ? 1u : 0u,
-                                                      .pPushConstantRanges = &push});
-        out.module_ = vk_device.createShaderModule({.codeSize = code.size_bytes(), .pCode = code.data()});
+                                                      .pPushConstantRanges = &push}, device.allocator());
+        out.module_ = vk_device.createShaderModule({.codeSize = code.size_bytes(), .pCode = code.data()}, device.allocator());
         std::vector<vk::SpecializationMapEntry> entries;
         for (std::uint32_t i = 0; i < specialization.size(); ++i) {
             entries.push_back({.constantID = i, .offset = i * 4u, .size = 4});
@@ -45,13 +45,13 @@ Result<Kernel> Kernel::create(const Device& device, std::string_view shader, std
                                 .module = *out.module_,
                                 .pName = "main",
                                 .pSpecializationInfo = specialization.empty() ? nullptr : &spec},
-                      .layout = *out.layout_});
+                      .layout = *out.layout_}, device.allocator());
         std::vector<vk::DescriptorPoolSize> sizes;
         for (const vk::DescriptorType type : out.types_) sizes.push_back({.type = type, .descriptorCount = 1});
         out.pool_ = vk_device.createDescriptorPool({.flags = vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet,
                                                     .maxSets = 1,
                                                     .poolSizeCount = static_cast<std::uint32_t>(sizes.size()),
-                                                    .pPoolSizes = sizes.data()});
+                                                    .pPoolSizes = sizes.data()}, device.allocator());
         out.set_ = std::move(vk_device.allocateDescriptorSets(
             {.descriptorPool = *out.pool_, .descriptorSetCount = 1, .pSetLayouts = &set_layout})[0]);
         return std::move(out);
@@ -70,7 +70,8 @@ void Kernel::bind(std::span<const BufferView> views) const {
     std::vector<vk::DescriptorBufferInfo> infos(views.size());
     std::vector<vk::WriteDescriptorSet> writes(views.size());
     for (std::uint32_t i = 0; i < views.size(); ++i) {
-        infos[i] = vk::DescriptorBufferInfo{.buffer = views[i].buffer->handle(), .offset = views[i].offset, .range = views[i].size};
+        const vk::Buffer buffer = views[i].buffer != nullptr ? views[i].buffer->handle() : views[i].foreign;
+        infos[i] = vk::DescriptorBufferInfo{.buffer = buffer, .offset = views[i].offset, .range = views[i].size};
         writes[i] = vk::WriteDescriptorSet{.dstSet = *set_,
                                            .dstBinding = i,
                                            .descriptorCount = 1,

@@ -9,6 +9,7 @@
 #include <vector>
 
 #include "compute/queue.hpp"
+#include "core/internal_api.hpp"
 
 namespace kodawari::gpu {
 /// SPIR-V of shaders/<name>, compiled at build time (empty when unknown;
@@ -26,14 +27,16 @@ enum class Binding {
     Uniform,  ///< std140 uniform buffer, read by every invocation (lavapipe loads it once for all lanes)
 };
 
-/// A range of a Buffer bound to a binding (the whole buffer by default).
+/// A range of a Buffer bound to a binding (the whole buffer by default). `foreign`: a
+/// buffer the compute layer does not own (an application's, issue 11), when `buffer` is null.
 struct BufferView {
     const Buffer* buffer = nullptr;
     std::uint64_t offset = 0;
     std::uint64_t size = VK_WHOLE_SIZE;
+    vk::Buffer foreign{};
 };
 
-class Kernel {
+class KODAWARI_INTERNAL Kernel {
 public:
     /// Buffers at bindings 0..n-1 of `bindings`' kinds, `push_bytes` of push constants,
     /// and 32-bit specialization constants with ids 0..m-1.

@@ -1,6 +1,7 @@
 #include "compute/queue.hpp"
 
 #include <cassert>
+#include <algorithm>
 #include <cstring>
 
 namespace kodawari::compute {
@@ -18,6 +19,10 @@ Access source(Stage s) {
     if (has(s, Stage::Host)) a = {a.stages | vk::PipelineStageFlagBits::eHost, a.access | vk::AccessFlagBits::eHostWrite};
     // Reads only: later writes wait for them (an execution dependency, no access).
     if (has(s, Stage::Vertex)) a.stages |= vk::PipelineStageFlagBits::eVertexShader;
+    if (has(s, Stage::Draw)) {
+        a.stages |= vk::PipelineStageFlagBits::eVertexInput | vk::PipelineStageFlagBits::eVertexShader |
+                    vk::PipelineStageFlagBits::eFragmentShader;
+    }
     return a;
 }
 
@@ -32,13 +37,22 @@ Access destination(Stage s) {
     }
     if (has(s, Stage::Host)) a = {a.stages | vk::PipelineStageFlagBits::eHost, a.access | vk::AccessFlagBits::eHostRead};
     if (has(s, Stage::Vertex)) a = {a.stages | vk::PipelineStageFlagBits::eVertexShader, a.access | vk::AccessFlagBits::eShaderRead};
+    if (has(s, Stage::Draw)) {
+        a = {a.stages | vk::PipelineStageFlagBits::eVertexInput | vk::PipelineStageFlagBits::eVertexShader |
+                 vk::PipelineStageFlagBits::eFragmentShader,
+             a.access | vk::AccessFlagBits::eVertexAttributeRead | vk::AccessFlagBits::eShaderRead};
+    }
     return a;
 }
 
 }  // namespace
 
 Recording::Recording(Recording&& other) noexcept
-    : device_(std::exchange(other.device_, nullptr)), slot_(std::move(other.slot_)), kept_(std::move(other.kept_)) {}
+    : device_(std::exchange(other.device_, nullptr)),
+      slot_(std::move(other.slot_)),
+      kept_(std::move(other.kept_)),
+      staging_(std::exchange(other.staging_, nullptr)),
+      borrowed_(std::exchange(other.borrowed_, false)) {}
 
 Recording& Recording::operator=(Recording&& other) noexcept {
     if (this != &other) {
@@ -46,20 +60,45 @@ Recording& Recording::operator=(Recording&& other) noexcept {
         device_ = std::exchange(other.device_, nullptr);
         slot_ = std::move(other.slot_);
         kept_ = std::move(other.kept_);
+        staging_ = std::exchange(other.staging_, nullptr);
+        borrowed_ = std::exchange(other.borrowed_, false);
     }
     return *this;
 }
 
 Recording::~Recording() { release(); }
 
+Recording Recording::borrow(Device& device, VkCommandBuffer cmd, StagingRing* staging) {
+    gpu::CommandSlot slot;
+    // No pool: the command buffer is let go of, never freed (release()).
+    slot.cmd = vk::raii::CommandBuffer(device.device(), cmd, VK_NULL_HANDLE);
+    Recording out(device, std::move(slot));
+    out.staging_ = staging;
+    out.borrowed_ = true;
+    return out;
+}
+
 void Recording::release() {
+    if (borrowed_) {
+        (void)slot_.cmd.release();  // the application's
+        staging_ = nullptr;
+        borrowed_ = false;
+        device_ = nullptr;
+        return;
+    }
     // Never submitted: nothing runs, the command buffer is reset at its next begin().
     if (device_ != nullptr) device_->release_slot(std::move(slot_));
     device_ = nullptr;
     kept_.clear();
 }
 
+void Recording::keep(Buffer buffer) {
+    assert(!borrowed_ && "a borrowed command buffer has no submission to keep a buffer for");
+    kept_.push_back(std::move(buffer));
+}
+
 void Recording::timestamp(Timestamp which) {
+    if (borrowed_) return;
     device_->write_timestamp(slot_.cmd, which == Timestamp::Begin ? 0 : 1,
                              which == Timestamp::Begin ? vk::PipelineStageFlagBits::eTopOfPipe
                                                        : vk::PipelineStageFlagBits::eBottomOfPipe);
@@ -120,6 +159,7 @@ Result<Recording> Queue::begin() const {
 
 Result<Submission> Queue::submit(Recording recording) const {
     assert(recording.device_ == device_ && "a recording of this queue's device");
+    assert(!recording.borrowed_ && "a borrowed command buffer is the application's to submit");
     return guard("Vulkan submission", [&]() -> Result<Submission> {
         recording.slot_.cmd.end();
         device_->device().resetFences(*recording.slot_.fence);
@@ -143,9 +183,49 @@ void copy(Recording& recording, const Buffer& source, std::uint64_t source_offse
                                   vk::BufferCopy{.srcOffset = source_offset, .dstOffset = target_offset, .size = bytes});
 }
 
+Result<StagingRing> StagingRing::create(const Device& device, std::uint64_t bytes_per_frame, std::uint32_t frames) {
+    assert(frames >= 1);
+    StagingRing ring;
+    ring.bytes_per_frame_ = std::max<std::uint64_t>(bytes_per_frame, 16);
+    for (std::uint32_t f = 0; f < frames; ++f) {
+        auto slot = Buffer::create(device, ring.bytes_per_frame_, Usage::Upload);
+        if (!slot) return slot.error();
+        ring.slots_.push_back(std::move(slot).value());
+    }
+    return ring;
+}
+
+void StagingRing::next_frame() {
+    current_ = (current_ + 1) % static_cast<std::uint32_t>(slots_.size());
+    used_ = 0;
+}
+
+Result<std::pair<const Buffer*, std::uint64_t>> StagingRing::write(std::span<const std::byte> bytes) {
+    const std::uint64_t rounded = (bytes.size() + 15) / 16 * 16;
+    if (used_ + rounded > bytes_per_frame_) {
+        return make_error(Error::Kind::InvalidInput, "a frame uploads more than the " + std::to_string(bytes_per_frame_) +
+                                                         " bytes of input its staging slot holds");
+    }
+    const Buffer& slot = slots_[current_];
+    std::memcpy(slot.mapped() + used_, bytes.data(), bytes.size());
+    const std::uint64_t offset = used_;
+    used_ += rounded;
+    return std::pair<const Buffer*, std::uint64_t>{&slot, offset};
+}
+
 Result<void> upload(Recording& recording, const Buffer& buffer, std::span<const std::byte> bytes) {
     assert(bytes.size() <= buffer.size());
     if (bytes.empty()) return {};
+    if (recording.borrowed()) {
+        // Frames in flight may still read the buffer: write it on the GPU, in order.
+        assert(recording.staging() != nullptr && "a borrowed recording that uploads needs a staging ring");
+        auto source = recording.staging()->write(bytes);
+        if (!source) return source.error();
+        barrier(recording, Stage::Compute | Stage::Transfer, Stage::Transfer);
+        copy(recording, *source.value().first, source.value().second, buffer, 0, bytes.size());
+        barrier(recording, Stage::Transfer, Stage::Compute);
+        return {};
+    }
     if (buffer.mapped() != nullptr) {
         std::memcpy(buffer.mapped(), bytes.data(), bytes.size());
         return {};

@@ -16,6 +16,7 @@
 #include <vector>
 
 #include "compute/buffer.hpp"
+#include "core/internal_api.hpp"
 
 namespace kodawari::compute {
 
@@ -25,6 +26,9 @@ enum class Stage : std::uint32_t {
     Transfer = 2,  ///< buffer copies
     Host = 4,      ///< the host's reads and writes of mapped memory
     Vertex = 8,    ///< vertex shaders of the renderer (reads)
+    /// An application's draws reading the module's buffers: vertex input, vertex and
+    /// fragment shaders (reads; only on a queue family that draws).
+    Draw = 16,
 };
 [[nodiscard]] constexpr Stage operator|(Stage a, Stage b) {
     return static_cast<Stage>(static_cast<std::uint32_t>(a) | static_cast<std::uint32_t>(b));
@@ -35,10 +39,11 @@ enum class Stage : std::uint32_t {
 enum class Timestamp { Begin, End };
 
 class Queue;
+class StagingRing;
 
 /// Commands being recorded: move-only; owns its command buffer until submitted (then the
 /// Submission owns it) or destroyed unsubmitted (given back, nothing runs).
-class Recording {
+class KODAWARI_INTERNAL Recording {
 public:
     Recording(Recording&& other) noexcept;
     Recording& operator=(Recording&& other) noexcept;
@@ -46,12 +51,24 @@ public:
     Recording& operator=(const Recording&) = delete;
     ~Recording();
 
+    /// Records into a command buffer the application owns, began and will submit (issue 11):
+    /// nothing is submitted, waited for or freed here. Uploads go through `staging`'s
+    /// current slot (never straight into mapped buffers, which frames still in flight may
+    /// read; null: the recording uploads nothing); keep() is not available, there being
+    /// no submission to tie a buffer to.
+    [[nodiscard]] static Recording borrow(Device& device, VkCommandBuffer cmd, StagingRing* staging);
+
     [[nodiscard]] Device& device() const { return *device_; }
-    /// Writes a submission timestamp (where the device has them).
+    /// Writes a submission timestamp (where the device has them; not in a borrowed
+    /// command buffer, whose queries are the application's).
     void timestamp(Timestamp which);
     /// Keeps `buffer` (a staging buffer a recorded copy reads or writes) alive until the
     /// submission completes.
-    void keep(Buffer buffer) { kept_.push_back(std::move(buffer)); }
+    void keep(Buffer buffer);
+    /// The command buffer is the application's (borrow()).
+    [[nodiscard]] bool borrowed() const { return borrowed_; }
+    /// The ring a borrowed recording's uploads go through.
+    [[nodiscard]] StagingRing* staging() const { return staging_; }
     /// The Vulkan command buffer (the implementation's; for the renderer's graphics commands).
     [[nodiscard]] const vk::raii::CommandBuffer& vulkan() const { return slot_.cmd; }
 
@@ -64,11 +81,37 @@ private:
     Device* device_;
     gpu::CommandSlot slot_;
     std::vector<Buffer> kept_;
+    StagingRing* staging_ = nullptr;
+    bool borrowed_ = false;
+};
+
+/// Host-visible upload buffers, one slot per frame in flight (Device::frames_in_flight):
+/// the frame being recorded writes its input into its slot while the GPU may still read
+/// the slots of the frames before it. The application's contract (docs/embedding.md):
+/// when it records frame k, frame k - frames_in_flight has completed.
+class StagingRing {
+public:
+    /// `bytes_per_frame`: the most one frame uploads (each upload rounded up to 16 bytes).
+    [[nodiscard]] static Result<StagingRing> create(const Device& device, std::uint64_t bytes_per_frame, std::uint32_t frames);
+
+    /// Moves to the next frame's slot (the oldest) and empties it.
+    void next_frame();
+    /// Copies `bytes` into the current slot: the buffer and offset a copy reads them from;
+    /// an error when the slot is full (the frame uploads more than create() was told).
+    [[nodiscard]] Result<std::pair<const Buffer*, std::uint64_t>> write(std::span<const std::byte> bytes);
+    [[nodiscard]] std::uint64_t bytes_per_frame() const { return bytes_per_frame_; }
+
+private:
+    StagingRing() = default;
+    std::vector<Buffer> slots_;
+    std::uint64_t bytes_per_frame_ = 0;
+    std::uint64_t used_ = 0;
+    std::uint32_t current_ = 0;
 };
 
 /// Work submitted to the queue. wait() blocks until it completed; destroying an unwaited
 /// Submission waits too, so that nothing it uses is freed while the device runs it.
-class Submission {
+class KODAWARI_INTERNAL Submission {
 public:
     Submission(Submission&& other) noexcept;
     Submission& operator=(Submission&& other) noexcept;
@@ -84,6 +127,7 @@ public:
 
 private:
     friend class Queue;
+class StagingRing;
     explicit Submission(Recording recording);
 
     Device* device_ = nullptr;  // null once waited (or moved from)
@@ -92,7 +136,7 @@ private:
 };
 
 /// The device's one queue.
-class Queue {
+class KODAWARI_INTERNAL Queue {
 public:
     explicit Queue(Device& device) : device_(&device) {}
 
@@ -107,21 +151,22 @@ private:
 
 /// Orders the memory accesses of `before` (writes, and reads that later writes must not
 /// overtake) before those of `after`, making the writes visible to them.
-void barrier(Recording& recording, Stage before, Stage after);
+KODAWARI_INTERNAL void barrier(Recording& recording, Stage before, Stage after);
 
 /// Records a copy of `bytes` bytes from `source` at `source_offset` to `target` at
 /// `target_offset` (order it with barrier()).
-void copy(Recording& recording, const Buffer& source, std::uint64_t source_offset, const Buffer& target,
-          std::uint64_t target_offset, std::uint64_t bytes);
+KODAWARI_INTERNAL void copy(Recording& recording, const Buffer& source, std::uint64_t source_offset, const Buffer& target,
+                            std::uint64_t target_offset, std::uint64_t bytes);
 
 /// Writes `bytes` into a Storage buffer within `recording`: by memcpy now when the buffer
 /// is mapped (so not while earlier, unfinished work reads it), else by a copy from a
 /// staging buffer the recording keeps, ordered after earlier kernels and before later ones.
-[[nodiscard]] Result<void> upload(Recording& recording, const Buffer& buffer, std::span<const std::byte> bytes);
+[[nodiscard]] KODAWARI_INTERNAL Result<void> upload(Recording& recording, const Buffer& buffer,
+                                                    std::span<const std::byte> bytes);
 /// upload() in a submission of its own, waited for (nothing to do when mapped).
-[[nodiscard]] Result<void> upload(Device& device, const Buffer& buffer, std::span<const std::byte> bytes);
+[[nodiscard]] KODAWARI_INTERNAL Result<void> upload(Device& device, const Buffer& buffer, std::span<const std::byte> bytes);
 /// Reads the first bytes.size() bytes of a Storage buffer that kernels wrote in earlier,
 /// completed submissions: by memcpy when mapped, else through a readback buffer.
-[[nodiscard]] Result<void> download(Device& device, const Buffer& buffer, std::span<std::byte> bytes);
+[[nodiscard]] KODAWARI_INTERNAL Result<void> download(Device& device, const Buffer& buffer, std::span<std::byte> bytes);
 
 }  // namespace kodawari::compute

@@ -6,6 +6,8 @@
 #include <cstdint>
 #include <vector>
 
+#include "core/internal_api.hpp"
+
 namespace kodawari::core {
 
 using Vec3 = std::array<float, 3>;
@@ -20,12 +22,13 @@ struct MeshData {
 
 /// Adds the triangles of a convex solid, each turned so that its normal points away
 /// from the solid's centre.
-void add_convex_triangles(MeshData& mesh, const std::vector<Vec3>& corners, const std::vector<std::array<int, 3>>& triangles);
+KODAWARI_INTERNAL void add_convex_triangles(MeshData& mesh, const std::vector<Vec3>& corners,
+                                            const std::vector<std::array<int, 3>>& triangles);
 
 /// A hexahedron from its 8 corners, indexed x + 2y + 4z (bit set = the "high" side).
-[[nodiscard]] MeshData hexahedron(const std::array<Vec3, 8>& c);
+[[nodiscard]] KODAWARI_INTERNAL MeshData hexahedron(const std::array<Vec3, 8>& c);
 
 /// An axis-aligned box from its lower and upper corner.
-[[nodiscard]] MeshData box(const Vec3& lo, const Vec3& hi);
+[[nodiscard]] KODAWARI_INTERNAL MeshData box(const Vec3& lo, const Vec3& hi);
 
 }  // namespace kodawari::core

@@ -5,12 +5,15 @@
 #include <cstddef>
 #include <functional>
 
+#include "core/internal_api.hpp"
+
 namespace kodawari {
 
 /// Threads to use for `requested` (0 = hardware concurrency, at least 1).
-[[nodiscard]] unsigned resolve_threads(unsigned requested);
+[[nodiscard]] KODAWARI_INTERNAL unsigned resolve_threads(unsigned requested);
 
 /// Calls fn(begin, end) for `threads` ranges covering [0, n), in parallel, and waits.
-void parallel_for(std::size_t n, unsigned threads, const std::function<void(std::size_t, std::size_t)>& fn);
+KODAWARI_INTERNAL void parallel_for(std::size_t n, unsigned threads, const std::function<void(std::size_t,
+                                    std::size_t)>& fn);
 
 }  // namespace kodawari

@@ -7,11 +7,12 @@
 #include <string_view>
 
 #include "compute/buffer.hpp"
+#include "core/internal_api.hpp"
 
 namespace kodawari::gpu {
 
 /// A 2D image in device-local memory with one view of it.
-class GpuImage {
+class KODAWARI_INTERNAL GpuImage {
 public:
     [[nodiscard]] static Result<GpuImage> create(const VulkanContext& ctx, std::uint32_t width, std::uint32_t height,
                                                  vk::Format format, vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect);
@@ -46,7 +47,7 @@ struct GraphicsPipelineOptions {
 /// `attributes` vec4s at locations 0.. (offsets 0, 16, ...; none: no vertex buffer), no
 /// culling, `push_bytes` of push constants seen by both stages, viewport and scissor
 /// dynamic.
-class GraphicsPipeline {
+class KODAWARI_INTERNAL GraphicsPipeline {
 public:
     [[nodiscard]] static Result<GraphicsPipeline> create(const VulkanContext& ctx, vk::RenderPass render_pass,
                                                          std::string_view vertex, std::string_view fragment,
@@ -76,7 +77,7 @@ private:
 };
 
 /// A descriptor set of a graphics pipeline's storage buffers (its own pool).
-class BufferSet {
+class KODAWARI_INTERNAL BufferSet {
 public:
     [[nodiscard]] static Result<BufferSet> create(const VulkanContext& ctx, const GraphicsPipeline& pipeline);
 

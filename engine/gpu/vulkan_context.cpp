@@ -163,16 +163,23 @@ VKAPI_ATTR VkBool32 VKAPI_CALL on_validation_message(VkDebugUtilsMessageSeverity
 }
 
 Result<std::unique_ptr<vk::raii::Context>> open_loader() {
-    auto context = guard("no Vulkan loader (libvulkan.so.1)",
-                         []() -> Result<std::unique_ptr<vk::raii::Context>> { return std::make_unique<vk::raii::Context>(); });
-    if (!context && context.error().vk_result == 0) {
-        // No VkResult: the library itself is missing, which is the machine's setup (the
-        // command line falls back to the CPU), not a Vulkan call that failed.
-        Error missing = context.error();
-        missing.kind = Error::Kind::Unsupported;
-        return missing;
+    // Opened once and kept for the process (never closed: instances of several contexts,
+    // and the validation layer, may live until exit).
+    static void* const library = [] {
+        void* lib = ::dlopen("libvulkan.so.1", RTLD_NOW | RTLD_LOCAL);
+        return lib != nullptr ? lib : ::dlopen("libvulkan.so", RTLD_NOW | RTLD_LOCAL);
+    }();
+    if (library == nullptr) {
+        // The machine's setup (the command line falls back to the CPU), not a Vulkan call
+        // that failed: no VkResult.
+        return make_error(Error::Kind::Unsupported,
+                          "no Vulkan loader (libvulkan.so.1; Debian package libvulkan1, which scripts/setup installs)");
     }
-    return context;
+    auto* const entry = reinterpret_cast<PFN_vkGetInstanceProcAddr>(::dlsym(library, "vkGetInstanceProcAddr"));
+    if (entry == nullptr) return make_error(Error::Kind::Unsupported, "the Vulkan loader has no vkGetInstanceProcAddr");
+    return guard("Vulkan loader", [&]() -> Result<std::unique_ptr<vk::raii::Context>> {
+        return std::make_unique<vk::raii::Context>(entry);
+    });
 }
 
 // The queue family this context uses on `device`: one that draws (and, with a surface,
@@ -264,7 +271,21 @@ Result<GpuInventory> list_gpus(const std::string& request) {
 namespace kodawari::gpu {
 
 VulkanContext::~VulkanContext() {
-    if (static_cast<VkDevice>(*device_) != VK_NULL_HANDLE) device_.waitIdle();
+    if (!adopted_) {
+        if (static_cast<VkDevice>(*device_) != VK_NULL_HANDLE) device_.waitIdle();
+        return;
+    }
+    // The application's device and instance: its own submissions are its to wait for
+    // (docs/embedding.md: destroy the backends once the GPU finished their work); ours
+    // were waited for. Our objects go first, while the device's dispatcher exists, then
+    // the handles are let go of without being destroyed.
+    timestamps_ = nullptr;
+    free_slots_.clear();
+    pool_ = nullptr;
+    queue_ = nullptr;
+    (void)device_.release();
+    physical_ = nullptr;
+    (void)instance_.release();
 }
 
 Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOptions& options) {
@@ -342,30 +363,97 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
                                                     .pQueueCreateInfos = &queue_info,
                                                     .enabledExtensionCount = presents ? 1u : 0u,
                                                     .ppEnabledExtensionNames = presents ? &swapchain_extension : nullptr});
-        ctx->queue_ = ctx->device_.getQueue(ctx->queue_family_, 0);
-        ctx->pool_ = ctx->device_.createCommandPool(
-            {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer, .queueFamilyIndex = ctx->queue_family_});
+        ctx->finish_setup(options.force_staging);
+        return {};
+    }));
+    return ctx;
+}
 
-        const auto props = ctx->physical_.getProperties();
-        ctx->memory_ = ctx->physical_.getMemoryProperties();
-        if (ctx->info_.timestamps) {
-            ctx->timestamp_period_ns_ = props.limits.timestampPeriod;
-            const std::uint32_t bits = ctx->physical_.getQueueFamilyProperties()[ctx->queue_family_].timestampValidBits;
-            ctx->timestamp_mask_ = bits >= 64 ? ~0ull : ((1ull << bits) - 1);
-            ctx->timestamps_ = ctx->device_.createQueryPool({.queryType = vk::QueryType::eTimestamp, .queryCount = 2});
+void VulkanContext::finish_setup(bool force_staging, std::uint32_t queue_index) {
+    queue_ = device_.getQueue(queue_family_, queue_index);
+    pool_ = device_.createCommandPool(
+        {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer, .queueFamilyIndex = queue_family_}, allocator_);
+    const auto families = physical_.getQueueFamilyProperties();
+    graphics_queue_ = static_cast<bool>(families[queue_family_].queueFlags & vk::QueueFlagBits::eGraphics);
+    const auto props = physical_.getProperties();
+    memory_ = physical_.getMemoryProperties();
+    if (info_.timestamps) {
+        timestamp_period_ns_ = props.limits.timestampPeriod;
+        const std::uint32_t bits = families[queue_family_].timestampValidBits;
+        timestamp_mask_ = bits >= 64 ? ~0ull : ((1ull << bits) - 1);
+        timestamps_ = device_.createQueryPool({.queryType = vk::QueryType::eTimestamp, .queryCount = 2}, allocator_);
+    }
+    // Unified memory: the device shares the host's RAM and exposes it as
+    // device-local + host-visible + coherent, so mapping beats staging copies.
+    // force_staging takes the discrete-GPU path anyway (tests use it).
+    const bool shares_ram = props.deviceType == vk::PhysicalDeviceType::eIntegratedGpu ||
+                            props.deviceType == vk::PhysicalDeviceType::eCpu;
+    const auto unified_flags = vk::MemoryPropertyFlagBits::eDeviceLocal | vk::MemoryPropertyFlagBits::eHostVisible |
+                               vk::MemoryPropertyFlagBits::eHostCoherent;
+    bool has_unified_type = false;
+    for (std::uint32_t i = 0; i < memory_.memoryTypeCount; ++i) {
+        if ((memory_.memoryTypes[i].propertyFlags & unified_flags) == unified_flags) has_unified_type = true;
+    }
+    unified_ = shares_ram && has_unified_type && !force_staging;
+}
+
+Result<std::unique_ptr<VulkanContext>> VulkanContext::adopt(const AdoptOptions& options) {
+    // Every check before the first call through the application's handles: a bad handle
+    // is an error here, not a crash in the driver.
+    if (options.instance == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "VulkanDeviceHandles::instance is null");
+    if (options.physical_device == VK_NULL_HANDLE) {
+        return make_error(Error::Kind::InvalidInput, "VulkanDeviceHandles::physical_device is null");
+    }
+    if (options.device == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "VulkanDeviceHandles::device is null");
+    if (options.get_instance_proc_addr == nullptr) {
+        return make_error(Error::Kind::InvalidInput,
+                          "VulkanDeviceHandles::get_instance_proc_addr is null (pass the application's vkGetInstanceProcAddr)");
+    }
+    if (options.api_version < VK_API_VERSION_1_1) {
+        return make_error(Error::Kind::InvalidInput, "VulkanDeviceHandles::api_version is " + version_text(options.api_version) +
+                                                         "; the kernels need an instance created for Vulkan 1.1 or later");
+    }
+    if (options.frames_in_flight < 1 || options.frames_in_flight > 16) {
+        return make_error(Error::Kind::InvalidInput, "VulkanDeviceHandles::frames_in_flight is " +
+                                                         std::to_string(options.frames_in_flight) + "; expected 1 to 16");
+    }
+    std::unique_ptr<VulkanContext> ctx(new VulkanContext());
+    ctx->adopted_ = true;
+    ctx->frames_in_flight_ = options.frames_in_flight;
+    ctx->allocator_ = reinterpret_cast<const vk::AllocationCallbacks*>(options.allocator);
+    KW_TRY(guard("the application's Vulkan device", [&]() -> Result<void> {
+        ctx->context_ = std::make_unique<vk::raii::Context>(options.get_instance_proc_addr);
+        ctx->instance_ = vk::raii::Instance(*ctx->context_, options.instance, ctx->allocator_);
+        ctx->physical_ = vk::raii::PhysicalDevice(ctx->instance_, options.physical_device);
+        // The index among the instance's devices, for messages and `kodawari info`.
+        std::uint32_t index = 0;
+        const vk::raii::PhysicalDevices devices(ctx->instance_);
+        for (std::uint32_t i = 0; i < devices.size(); ++i) {
+            if (static_cast<VkPhysicalDevice>(*devices[i]) == options.physical_device) index = i;
         }
-        // Unified memory: the device shares the host's RAM and exposes it as
-        // device-local + host-visible + coherent, so mapping beats staging copies.
-        // ContextOptions::force_staging takes the discrete-GPU path anyway (tests use it).
-        const bool shares_ram = props.deviceType == vk::PhysicalDeviceType::eIntegratedGpu ||
-                                props.deviceType == vk::PhysicalDeviceType::eCpu;
-        const auto unified_flags = vk::MemoryPropertyFlagBits::eDeviceLocal | vk::MemoryPropertyFlagBits::eHostVisible |
-                                   vk::MemoryPropertyFlagBits::eHostCoherent;
-        bool has_unified_type = false;
-        for (std::uint32_t i = 0; i < ctx->memory_.memoryTypeCount; ++i) {
-            if ((ctx->memory_.memoryTypes[i].propertyFlags & unified_flags) == unified_flags) has_unified_type = true;
+        ctx->info_ = describe(ctx->physical_, index);
+        if (!ctx->info_.rejected.empty()) {
+            return make_error(Error::Kind::Unsupported, ctx->info_.name + " cannot run the kernels: " + ctx->info_.rejected);
         }
-        ctx->unified_ = shares_ram && has_unified_type && !options.force_staging;
+        const auto families = ctx->physical_.getQueueFamilyProperties();
+        if (options.queue_family >= families.size()) {
+            return make_error(Error::Kind::InvalidInput, "VulkanDeviceHandles::queue_family is " + std::to_string(options.queue_family) +
+                                                             "; " + ctx->info_.name + " has " + std::to_string(families.size()) +
+                                                             " queue families");
+        }
+        if (!(families[options.queue_family].queueFlags & vk::QueueFlagBits::eCompute)) {
+            return make_error(Error::Kind::InvalidInput, "VulkanDeviceHandles::queue_family " + std::to_string(options.queue_family) +
+                                                             " has no compute; the module records compute dispatches");
+        }
+        if (options.queue_index >= families[options.queue_family].queueCount) {
+            return make_error(Error::Kind::InvalidInput, "VulkanDeviceHandles::queue_index is " + std::to_string(options.queue_index) +
+                                                             "; the family has " +
+                                                             std::to_string(families[options.queue_family].queueCount) + " queues");
+        }
+        ctx->info_.timestamps = ctx->info_.timestamps && families[options.queue_family].timestampValidBits > 0;
+        ctx->queue_family_ = options.queue_family;
+        ctx->device_ = vk::raii::Device(ctx->physical_, options.device, ctx->allocator_);
+        ctx->finish_setup(false, options.queue_index);
         return {};
     }));
     return ctx;
@@ -381,7 +469,7 @@ Result<CommandSlot> VulkanContext::acquire_slot() {
         CommandSlot slot;
         slot.cmd = std::move(device_.allocateCommandBuffers(
             {.commandPool = *pool_, .level = vk::CommandBufferLevel::ePrimary, .commandBufferCount = 1})[0]);
-        slot.fence = device_.createFence({});
+        slot.fence = device_.createFence({}, allocator_);
         return slot;
     });
 }

@@ -13,6 +13,7 @@
 
 #include <vulkan/vulkan_raii.hpp>
 
+#include "core/internal_api.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/result.hpp"
 
@@ -37,6 +38,20 @@ struct ContextOptions {
     std::function<Result<VkSurfaceKHR>(VkInstance)> create_surface{};
 };
 
+/// A device the application created (issue 11): Kodawari runs on it and never destroys
+/// it (kodawari/vulkan_embed.hpp's VulkanDeviceHandles is the public form).
+struct AdoptOptions {
+    VkInstance instance = VK_NULL_HANDLE;
+    VkPhysicalDevice physical_device = VK_NULL_HANDLE;
+    VkDevice device = VK_NULL_HANDLE;
+    std::uint32_t queue_family = 0;
+    std::uint32_t queue_index = 0;
+    PFN_vkGetInstanceProcAddr get_instance_proc_addr = nullptr;
+    const VkAllocationCallbacks* allocator = nullptr;
+    std::uint32_t api_version = 0;
+    std::uint32_t frames_in_flight = 2;
+};
+
 /// A command buffer and the fence of its submission: what a compute::Recording records
 /// into and a compute::Submission waits on. Recycled by the context (acquire_slot,
 /// release_slot) so that a frame allocates nothing.
@@ -45,10 +60,14 @@ struct CommandSlot {
     vk::raii::Fence fence{nullptr};
 };
 
-class VulkanContext {
+class KODAWARI_INTERNAL VulkanContext {
 public:
     /// Opens the loader, creates the instance and the device. Errors say what is missing.
     [[nodiscard]] static Result<std::unique_ptr<VulkanContext>> create(const ContextOptions& options);
+    /// Runs on the application's instance and device: creates only its own objects on them
+    /// (a command pool for load() and read(), buffers, pipelines) with the application's
+    /// allocation callbacks, and destroys neither. Errors name what the device lacks.
+    [[nodiscard]] static Result<std::unique_ptr<VulkanContext>> adopt(const AdoptOptions& options);
 
     VulkanContext(const VulkanContext&) = delete;
     VulkanContext& operator=(const VulkanContext&) = delete;
@@ -68,6 +87,16 @@ public:
     /// The one queue (graphics, compute and, with a surface, present).
     [[nodiscard]] const vk::raii::Queue& queue() const { return queue_; }
     [[nodiscard]] std::uint32_t queue_family() const { return queue_family_; }
+    /// The queue family also draws: barriers may name the vertex and fragment stages.
+    [[nodiscard]] bool graphics_queue() const { return graphics_queue_; }
+    /// The instance and device are the application's (adopt()).
+    [[nodiscard]] bool adopted() const { return adopted_; }
+    /// Frames the application may have in flight (adopt(); 1 for the engine's own devices,
+    /// which wait for each submission): the depth of the per-frame input rings.
+    [[nodiscard]] std::uint32_t frames_in_flight() const { return frames_in_flight_; }
+    /// The application's allocation callbacks for every object created on the device
+    /// (null: the driver's).
+    [[nodiscard]] const vk::AllocationCallbacks* allocator() const { return allocator_; }
 
     /// Records commands with `record`, submits them and waits (compute::Queue's begin,
     /// submit and wait in one call). When the device has timestamps, `gpu_ms` receives the
@@ -103,6 +132,8 @@ public:
 
 private:
     VulkanContext() = default;
+    // The queue, command pool, timestamps and memory facts, once device_ exists.
+    void finish_setup(bool force_staging, std::uint32_t queue_index = 0);
 
     std::unique_ptr<vk::raii::Context> context_;  // first: outlives every handle
     vk::raii::Instance instance_{nullptr};
@@ -123,13 +154,17 @@ private:
     std::uint64_t submissions_ = 0;
     bool unified_ = false;
     bool validation_ = false;
+    bool graphics_queue_ = false;
+    bool adopted_ = false;
+    std::uint32_t frames_in_flight_ = 1;
+    const vk::AllocationCallbacks* allocator_ = nullptr;
     // Heap-allocated so the callback's pointer stays valid when the context moves.
     std::unique_ptr<std::atomic<std::uint32_t>> messages_ = std::make_unique<std::atomic<std::uint32_t>>(0);
 };
 
 /// Turns an exception from vulkan.hpp into an Error that keeps its VkResult
 /// (Error::vk_result). Called by guard(), the one boundary where they are caught.
-[[nodiscard]] Error vulkan_error(const std::string& what, const std::exception& e);
+[[nodiscard]] KODAWARI_INTERNAL Error vulkan_error(const std::string& what, const std::exception& e);
 
 /// The one place where exceptions from vulkan.hpp become Errors (compute::guard is this
 /// function too): runs `body`, which returns a Result, and turns what it throws into an

@@ -1,6 +1,8 @@
 // Chain shapes as segment rotations, and their blending (SPEC A.2).
 #include "kodawari/rods/shape.hpp"
 
+#include <algorithm>
+#include <cassert>
 #include <cmath>
 #include <string>
 
@@ -75,6 +77,17 @@ glm::quat shortest_arc(glm::vec3 from, glm::vec3 to) {
     const glm::vec3 hn = h / h_len;
     const glm::vec3 c = glm::cross(from, hn);
     return glm::normalize(glm::quat(glm::dot(from, hn), c.x, c.y, c.z));
+}
+
+void default_orientations(ChainShape& shape) {
+    const std::size_t n = shape.positions.size();
+    assert(n >= 2);
+    shape.orientations.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        const std::size_t seg = std::min(i, n - 2);
+        const glm::vec3 dir = glm::normalize(shape.positions[seg + 1] - shape.positions[seg]);
+        shape.orientations[i] = shortest_arc(glm::vec3(0.0f, 1.0f, 0.0f), dir);
+    }
 }
 
 Result<RotationShape> to_rotations(const ShapeBasis& basis, const ChainShape& shape) {

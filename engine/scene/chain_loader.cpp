@@ -13,19 +13,6 @@ namespace kodawari::scene_detail {
 
 using Vec3 = glm::vec3;
 
-// The default orientations of a shape (docs: each joint's local +Y along its segment,
-// the last joint along the last segment, by the shortest arc from +Y), as in the rod
-// tests' shape_from.
-void default_orientations(rods::ChainShape& shape) {
-    const std::size_t n = shape.positions.size();
-    shape.orientations.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        const std::size_t seg = std::min(i, n - 2);
-        const Vec3 dir = glm::normalize(shape.positions[seg + 1] - shape.positions[seg]);
-        shape.orientations[i] = rods::shortest_arc(Vec3(0.0f, 1.0f, 0.0f), dir);
-    }
-}
-
 // {"arc": {...}}: a strand on a circular arc of arc length `length` that leaves the root
 // tangent to `direction` and turns by `curl_deg` in all about `bend_axis`. Joint i sits
 // on the circle; segment i points along the tangent at its middle, (i + 1/2) steps of
@@ -54,7 +41,7 @@ Result<rods::ChainShape> read_arc(const JsonReader& r, const JsonNode& node) {
         const Vec3 dir = glm::angleAxis((static_cast<float>(i) + 0.5f) * step, axis) * direction;
         shape.positions.push_back(shape.positions.back() + (length / segments) * glm::normalize(dir));
     }
-    default_orientations(shape);
+    rods::default_orientations(shape);
     return shape;
 }
 
@@ -101,7 +88,7 @@ Result<rods::ChainShape> read_shape(const JsonReader& r, const JsonNode& node, s
         }
     }
     if (!orientations.present()) {
-        default_orientations(shape);
+        rods::default_orientations(shape);
         return shape;
     }
     const std::string quat_what = "an array of " + std::to_string(n) + " unit quaternions [x, y, z, w], one per position";

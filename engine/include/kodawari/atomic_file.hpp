@@ -6,13 +6,14 @@
 #include <cstdio>
 #include <string>
 
+#include "kodawari/api.hpp"
 #include "result.hpp"
 
 namespace kodawari {
 
 /// A file being written. commit() renames it into place; destruction without commit()
 /// removes the temporary file.
-class AtomicFile {
+class KODAWARI_API AtomicFile {
 public:
     /// Opens `<path>.tmp-<pid>` for binary writing.
     [[nodiscard]] static Result<AtomicFile> open(const std::string& path);

@@ -10,6 +10,7 @@
 #include <string_view>
 #include <vector>
 
+#include "kodawari/api.hpp"
 #include "birds/world.hpp"
 #include "device_data.hpp"
 #include "result.hpp"
@@ -24,7 +25,7 @@ class VulkanContext;
 enum class BackendKind { CpuReference, Cpu, Vulkan };
 
 /// "cpu-reference", "cpu", "vulkan".
-[[nodiscard]] std::string_view backend_name(BackendKind kind);
+[[nodiscard]] KODAWARI_API std::string_view backend_name(BackendKind kind);
 
 /// Options for creating backends.
 struct BackendOptions {
@@ -53,7 +54,7 @@ struct FrameOutput {
 };
 
 /// Simulates a BirdWorld frame after frame.
-class BirdBackend {
+class KODAWARI_API BirdBackend {
 public:
     virtual ~BirdBackend() = default;
     BirdBackend() = default;
@@ -92,6 +93,7 @@ public:
 /// Creates a cpu-reference or cpu bird backend (kodawari::sim). BackendKind::Vulkan is an
 /// InvalidInput error naming kodawari::vulkan, whose make_bird_backend() makes every kind
 /// (kodawari/backend_factory.hpp).
-[[nodiscard]] Result<std::unique_ptr<BirdBackend>> make_cpu_bird_backend(BackendKind kind, const BackendOptions& options);
+[[nodiscard]] KODAWARI_API Result<std::unique_ptr<BirdBackend>> make_cpu_bird_backend(BackendKind kind,
+                                                                                      const BackendOptions& options);
 
 }  // namespace kodawari

@@ -13,6 +13,7 @@
 #include <cstdint>
 #include <memory>
 
+#include "kodawari/api.hpp"
 #include "kodawari/backend.hpp"
 #include "kodawari/pose_backend.hpp"
 #include "kodawari/result.hpp"
@@ -22,23 +23,26 @@ namespace kodawari {
 
 /// Creates a bird backend. Vulkan fails with a readable reason when no loader, driver or
 /// device is available.
-[[nodiscard]] Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options);
+[[nodiscard]] KODAWARI_API Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind,
+                                                                                  const BackendOptions& options);
 /// Creates a rod backend; Vulkan fails with a readable reason when no loader, driver or
 /// device is available.
-[[nodiscard]] Result<std::unique_ptr<RodBackend>> make_rod_backend(BackendKind kind, const BackendOptions& options);
+[[nodiscard]] KODAWARI_API Result<std::unique_ptr<RodBackend>> make_rod_backend(BackendKind kind,
+                                                                                const BackendOptions& options);
 /// Creates a pose backend; Vulkan fails with a readable reason when no loader, driver or
 /// device is available.
-[[nodiscard]] Result<std::unique_ptr<PoseBackend>> make_pose_backend(BackendKind kind, const BackendOptions& options);
+[[nodiscard]] KODAWARI_API Result<std::unique_ptr<PoseBackend>> make_pose_backend(BackendKind kind,
+                                                                                  const BackendOptions& options);
 
 /// Opens a Vulkan device (`options.device`, `options.validation`) to share between
 /// backends through BackendOptions::context, so that their buffers meet on one device:
 /// e.g. the pose backends' matrices feed the rod backend's input there
 /// (CrowdAnimator::write_inputs_on). A renderer has its own (Renderer::device_context()).
-[[nodiscard]] Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options);
+[[nodiscard]] KODAWARI_API Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options);
 /// Bytes of kernel output read back to the host on `device` so far (every download and
 /// pose read back): how a caller checks that a pipeline keeps its data on the device.
-[[nodiscard]] std::uint64_t read_back_bytes(const gpu::VulkanContext& device);
+[[nodiscard]] KODAWARI_API std::uint64_t read_back_bytes(const gpu::VulkanContext& device);
 /// Validation messages on `device` so far (every backend sharing it).
-[[nodiscard]] std::uint32_t validation_messages(const gpu::VulkanContext& device);
+[[nodiscard]] KODAWARI_API std::uint32_t validation_messages(const gpu::VulkanContext& device);
 
 }  // namespace kodawari

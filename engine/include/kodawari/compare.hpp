@@ -10,6 +10,7 @@
 
 #include <kodawari/shared/birds.h>
 
+#include "kodawari/api.hpp"
 #include "birds/world.hpp"
 
 namespace kodawari {
@@ -39,7 +40,7 @@ struct BirdTolerances {
 };
 
 /// Accumulates deviations frame chunk after chunk.
-class BirdComparison {
+class KODAWARI_API BirdComparison {
 public:
     explicit BirdComparison(const birds::BirdWorld& world, BirdTolerances tolerances = {});
 
@@ -69,6 +70,6 @@ private:
 };
 
 /// Angle (rad) of the rotation between two unit quaternions, either sign.
-[[nodiscard]] double quaternion_angle(const gpu::vec4& a, const gpu::vec4& b);
+[[nodiscard]] KODAWARI_API double quaternion_angle(const gpu::vec4& a, const gpu::vec4& b);
 
 }  // namespace kodawari

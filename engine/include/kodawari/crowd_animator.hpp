@@ -13,6 +13,7 @@
 #include <span>
 #include <vector>
 
+#include "kodawari/api.hpp"
 #include "pose_backend.hpp"
 #include "rod_backend.hpp"
 #include "rods/rod_scene.hpp"
@@ -22,7 +23,7 @@ namespace kodawari {
 class DeviceInputWriter;  // engine/backends/crowd_animator.cpp
 
 /// Produces RodFrames of a RodScene, its rigged characters posed by pose backends.
-class CrowdAnimator {
+class KODAWARI_API CrowdAnimator {
 public:
     /// Loads every rigged character template that has instances into a pose backend of
     /// `kind`. `scene` must outlive the animator. Errors: those of make_pose_backend and

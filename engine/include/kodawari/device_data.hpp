@@ -7,6 +7,8 @@
 
 #include <cstdint>
 
+#include "kodawari/api.hpp"
+
 namespace kodawari {
 
 namespace gpu {
@@ -37,7 +39,7 @@ struct DeviceSpan {
 };
 
 /// A backend's data on its device (BirdBackend, RodBackend, PoseBackend::device_data()).
-class DeviceData {
+class KODAWARI_API DeviceData {
 public:
     virtual ~DeviceData() = default;
     /// The device the buffers live on: compare with a renderer's before drawing from them.

@@ -15,6 +15,7 @@
 
 #include <kodawari/shared/birds.h>
 
+#include "kodawari/api.hpp"
 #include "atomic_file.hpp"
 #include "birds/world.hpp"
 #include "gltf/character.hpp"
@@ -27,8 +28,8 @@ namespace kodawari {
 /// Writes a `.glb`: per bird a node hierarchy of the 7 parts (a simple mesh per part,
 /// shared by all birds of a wing type) and one animation with TRS channels sampled at
 /// every frame. `poses` holds `frames` x birds entries, frame-major.
-[[nodiscard]] Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
-                                           std::span<const gpu::BirdPose> poses, std::uint32_t frames);
+[[nodiscard]] KODAWARI_API Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
+                                                        std::span<const gpu::BirdPose> poses, std::uint32_t frames);
 
 /// Writes a `.glb` of a rod scene: per character instance its skeleton as a node
 /// hierarchy and, under each chain's attachment joint, the chain's joints as a
@@ -36,8 +37,9 @@ namespace kodawari {
 /// (SPEC A.4's skinning output); one animation with translation and rotation channels
 /// on every node, one key per frame. `positions` and `orientations` hold frames x
 /// scene.world.joint_count world-space entries (ChainSnapshot's), frame-major.
-[[nodiscard]] Result<void> write_chains_glb(const std::string& path, const RodScene& scene, std::uint32_t frames,
-                                            std::span<const glm::vec3> positions, std::span<const glm::quat> orientations);
+[[nodiscard]] KODAWARI_API Result<void> write_chains_glb(const std::string& path, const RodScene& scene, std::uint32_t frames,
+                                                         std::span<const glm::vec3> positions,
+                                                         std::span<const glm::quat> orientations);
 
 /// One instance of a rigged character in a rigged export.
 struct RiggedInstance {
@@ -96,7 +98,7 @@ struct RiggedInstance {
 /// - The source's other scenes are dropped. The keys of its animations stay in the
 ///   buffer, unreferenced (accessors are kept as they are, since extensions may name
 ///   them by index; glTF-Validator reports them as UNUSED_OBJECT infos).
-class RiggedGlbWriter {
+class KODAWARI_API RiggedGlbWriter {
 public:
     /// Loads the character file (.gltf with external or data-URI buffers and images, .glb
     /// or .vrm) whose data are copied. `character` is the same file loaded by
@@ -164,7 +166,7 @@ private:
 /// or animated), with the node's animated local scale kept. Joint 0 follows its clip.
 /// Re-importing the file and evaluating its animation gives these world transforms back
 /// (tests: within 1e-5 of the character's size).
-class RiggedCrowdExport {
+class KODAWARI_API RiggedCrowdExport {
 public:
     /// Prepares the export of RodScene::characters[character] (which must be rigged).
     /// `scene` must outlive the export. Errors: those of RiggedGlbWriter::create.
@@ -206,7 +208,7 @@ struct TraceHeader {
 };
 
 /// Streams a JSON Lines trace: a header line, then one line per bird and frame.
-class TraceWriter {
+class KODAWARI_API TraceWriter {
 public:
     /// Opens the (temporary) file and writes the header line.
     [[nodiscard]] static Result<TraceWriter> open(const std::string& path, const TraceHeader& header);

@@ -7,6 +7,7 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/api.hpp"
 #include "result.hpp"
 
 namespace kodawari {
@@ -42,6 +43,6 @@ struct GpuInventory {
 /// best: discrete > integrated > virtual > cpu). The library reads no environment variable:
 /// the `kodawari` command passes KODAWARI_DEVICE here.
 /// Fails when there is no Vulkan loader or driver.
-[[nodiscard]] Result<GpuInventory> list_gpus(const std::string& request);
+[[nodiscard]] KODAWARI_API Result<GpuInventory> list_gpus(const std::string& request);
 
 }  // namespace kodawari

@@ -14,6 +14,7 @@
 
 #include <glm/glm.hpp>
 
+#include "kodawari/api.hpp"
 #include "backend.hpp"
 #include "gltf/character.hpp"
 #include "gltf/pose_instance.hpp"
@@ -26,10 +27,11 @@ namespace kodawari {
 /// Checks instances against a character: every clip is -1 or an animation of it, every
 /// time offset and placement is finite. Errors name the instance ("instance 17: clip 3
 /// does not exist; the character has 1 animation"). Every backend's load() runs it.
-[[nodiscard]] Result<void> check_instances(const gltf::Character& character, std::span<const PoseInstance> instances);
+[[nodiscard]] KODAWARI_API Result<void> check_instances(const gltf::Character& character,
+                                                        std::span<const PoseInstance> instances);
 
 /// Evaluates a crowd of instances of one character at scene times.
-class PoseBackend {
+class KODAWARI_API PoseBackend {
 public:
     virtual ~PoseBackend() = default;
     PoseBackend() = default;
@@ -67,6 +69,7 @@ public:
 
 /// Creates a cpu-reference or cpu pose backend (kodawari::sim); BackendKind::Vulkan is an
 /// error, as for make_cpu_bird_backend().
-[[nodiscard]] Result<std::unique_ptr<PoseBackend>> make_cpu_pose_backend(BackendKind kind, const BackendOptions& options);
+[[nodiscard]] KODAWARI_API Result<std::unique_ptr<PoseBackend>> make_cpu_pose_backend(BackendKind kind,
+                                                                                      const BackendOptions& options);
 
 }  // namespace kodawari

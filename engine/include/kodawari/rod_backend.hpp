@@ -9,6 +9,7 @@
 #include <string_view>
 #include <vector>
 
+#include "kodawari/api.hpp"
 #include "backend.hpp"
 #include "result.hpp"
 #include "rods/chain_snapshot.hpp"
@@ -18,7 +19,7 @@ namespace kodawari {
 
 
 /// Simulates a RodWorld frame after frame.
-class RodBackend {
+class KODAWARI_API RodBackend {
 public:
     virtual ~RodBackend() = default;
     RodBackend() = default;
@@ -57,11 +58,12 @@ public:
 
 /// Creates a cpu-reference or cpu rod backend (kodawari::sim); BackendKind::Vulkan is an
 /// error, as for make_cpu_bird_backend().
-[[nodiscard]] Result<std::unique_ptr<RodBackend>> make_cpu_rod_backend(BackendKind kind, const BackendOptions& options);
+[[nodiscard]] KODAWARI_API Result<std::unique_ptr<RodBackend>> make_cpu_rod_backend(BackendKind kind,
+                                                                                    const BackendOptions& options);
 
 /// One chain's frame with the CPU reference (SPEC A.3, A.2, A.5, A.4): its rest shape
 /// from `frame`, then rods::step. What every backend computes; exposed for tests.
-void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
-                          rods::ChainState& state, rods::RestShape* rest_out = nullptr);
+KODAWARI_API void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
+                                       rods::ChainState& state, rods::RestShape* rest_out = nullptr);
 
 }  // namespace kodawari

@@ -10,6 +10,7 @@
 #include <utility>
 #include <vector>
 
+#include "kodawari/api.hpp"
 #include "gltf/character.hpp"
 #include "result.hpp"
 #include "rods/kinematics.hpp"
@@ -23,6 +24,6 @@ namespace kodawari {
 /// gives the same bits (on the same build and platform: the motions use the C library's
 /// sin and cos). A scene without characters gives an empty RodScene (no chains).
 /// Errors (InvalidInput) name the file and the JSON path.
-[[nodiscard]] Result<RodScene> build_rod_scene(const Scene& scene);
+[[nodiscard]] KODAWARI_API Result<RodScene> build_rod_scene(const Scene& scene);
 
 }  // namespace kodawari

@@ -12,6 +12,7 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/api.hpp"
 #include "birds/world.hpp"
 #include "gltf/character.hpp"
 #include "result.hpp"
@@ -168,7 +169,7 @@ struct CrowdSpec {
 };
 
 /// A whole scene file.
-struct Scene {
+struct KODAWARI_API Scene {
     std::string path;  ///< where it was loaded from (for messages)
     std::string name;
     std::uint32_t version = 1;  ///< 1: birds only; 2: characters, crowds and camera motion too
@@ -188,13 +189,13 @@ struct Scene {
 
 /// Reads and checks a scene file. Errors name the file, the JSON path and what was
 /// expected (Error::Kind::InvalidInput), or the I/O failure.
-[[nodiscard]] Result<Scene> load_scene(const std::string& path);
+[[nodiscard]] KODAWARI_API Result<Scene> load_scene(const std::string& path);
 
 /// Parses scene text; `path` is only used in messages.
-[[nodiscard]] Result<Scene> parse_scene(const std::string& text, const std::string& path);
+[[nodiscard]] KODAWARI_API Result<Scene> parse_scene(const std::string& text, const std::string& path);
 
 /// Builds the backends' data: routes, arc-length tables and every bird's constants.
 /// Deterministic: the same scene gives the same bits.
-[[nodiscard]] Result<birds::BirdWorld> build_bird_world(const Scene& scene);
+[[nodiscard]] KODAWARI_API Result<birds::BirdWorld> build_bird_world(const Scene& scene);
 
 }  // namespace kodawari

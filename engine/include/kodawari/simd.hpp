@@ -13,20 +13,21 @@
 #include <string_view>
 #include <vector>
 
+#include "kodawari/api.hpp"
 #include "result.hpp"
 
 namespace kodawari {
 
 /// The instruction sets the cpu backends can use on this machine, widest first; "scalar"
 /// is always the last.
-[[nodiscard]] std::vector<std::string> available_simd_isas();
+[[nodiscard]] KODAWARI_API std::vector<std::string> available_simd_isas();
 
 /// The instruction set a cpu backend made with BackendOptions::isa == `requested` uses:
 /// the widest available for "", else `requested` itself. An unknown name, or one this
 /// machine cannot run, is an InvalidInput error that names it and the available ones.
-[[nodiscard]] Result<std::string> simd_isa(std::string_view requested = {});
+[[nodiscard]] KODAWARI_API Result<std::string> simd_isa(std::string_view requested = {});
 
 /// Floats per vector of an instruction set named as above (16, 8, 4, 1); 0 for another name.
-[[nodiscard]] unsigned simd_lanes(std::string_view isa);
+[[nodiscard]] KODAWARI_API unsigned simd_lanes(std::string_view isa);
 
 }  // namespace kodawari

@@ -24,6 +24,7 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/api.hpp"
 #include "backend.hpp"
 #include "birds/world.hpp"
 #include "result.hpp"
@@ -72,7 +73,7 @@ struct SimulationTiming {
 };
 
 /// A scene simulated frame after frame on backends of one kind.
-class Simulation {
+class KODAWARI_API Simulation {
 public:
     /// Loads the scene file at `path` (SCENE.json) and opens its backends.
     [[nodiscard]] static Result<std::unique_ptr<Simulation>> open(const std::string& path, const SimulationOptions& options);
@@ -149,6 +150,6 @@ private:
 };
 
 /// "auto" and the backends' names: "cpu-reference", "cpu", "vulkan"; none for auto.
-[[nodiscard]] Result<std::optional<BackendKind>> parse_backend_choice(std::string_view name);
+[[nodiscard]] KODAWARI_API Result<std::optional<BackendKind>> parse_backend_choice(std::string_view name);
 
 }  // namespace kodawari

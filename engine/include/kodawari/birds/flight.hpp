@@ -8,6 +8,7 @@
 
 #include <kodawari/shared/birds.h>
 
+#include "kodawari/api.hpp"
 #include "wingbeat.hpp"
 #include "world.hpp"
 
@@ -32,24 +33,25 @@ struct RouteSample {
 
 /// Position, velocity and acceleration of a bird flying `route` at `speed` for
 /// `time` seconds (arc-length timing), or at the route's parametric timing.
-[[nodiscard]] RouteSample sample_route(const BirdWorld& world, std::uint32_t route, float time, float speed);
+[[nodiscard]] KODAWARI_API RouteSample sample_route(const BirdWorld& world, std::uint32_t route, float time, float speed);
 
 /// Route parameter u (segment index + local parameter) at arc length s in [0, length].
-[[nodiscard]] float route_parameter_at(const BirdWorld& world, std::uint32_t route, float s);
+[[nodiscard]] KODAWARI_API float route_parameter_at(const BirdWorld& world, std::uint32_t route, float s);
 
 /// Body attitude (SPEC B.4): yaw from the horizontal velocity, pitch = climb angle,
 /// bank by the chosen rule. Radians; bank > 0 = right wing down.
 struct Attitude {
     float yaw = 0, pitch = 0, bank = 0;
 };
-[[nodiscard]] Attitude attitude(const gpu::FlightUniforms& uniforms, const RouteSample& sample);
+[[nodiscard]] KODAWARI_API Attitude attitude(const gpu::FlightUniforms& uniforms, const RouteSample& sample);
 
 /// The Body's world rotation for `attitude()`: yaw about +Y, then nose up by the climb
 /// angle (about -X), then bank about +Z (positive = right wing down).
-[[nodiscard]] gpu::vec4 body_rotation(const gpu::FlightUniforms& uniforms, const RouteSample& sample);
+[[nodiscard]] KODAWARI_API gpu::vec4 body_rotation(const gpu::FlightUniforms& uniforms, const RouteSample& sample);
 
 /// The next flight mode (SPEC B.5) given the previous one (KW_MODE_UNSET on frame 0).
-[[nodiscard]] std::uint32_t next_mode(const gpu::FlightUniforms& uniforms, std::uint32_t previous, const RouteSample& sample);
+[[nodiscard]] KODAWARI_API std::uint32_t next_mode(const gpu::FlightUniforms& uniforms, std::uint32_t previous,
+                                                   const RouteSample& sample);
 
 /// Everything about one bird in one frame.
 struct BirdFrame {
@@ -60,10 +62,10 @@ struct BirdFrame {
 /// Advances `state` to frame `frame` and evaluates the bird. Frames must be visited in
 /// order from 0 (the state carries hysteresis, transition and phase).
 /// `uniforms` = world.uniforms(), passed in so a loop over birds computes it once.
-[[nodiscard]] BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
-                                  const gpu::BirdParams& bird, gpu::BirdState& state, std::uint32_t frame);
+[[nodiscard]] KODAWARI_API BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
+                                               const gpu::BirdParams& bird, gpu::BirdState& state, std::uint32_t frame);
 
 /// A state before frame 0.
-[[nodiscard]] gpu::BirdState initial_state();
+[[nodiscard]] KODAWARI_API gpu::BirdState initial_state();
 
 }  // namespace kodawari::birds

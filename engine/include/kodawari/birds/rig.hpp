@@ -10,6 +10,8 @@
 
 #include <kodawari/shared/birds.h>
 
+#include "kodawari/api.hpp"
+
 namespace kodawari::birds {
 
 /// The three wing types of the seed, by aspect ratio.
@@ -50,12 +52,12 @@ struct WingTypeSpec {
 };
 
 /// The spec of a wing type.
-[[nodiscard]] const WingTypeSpec& wing_type_spec(WingType type);
+[[nodiscard]] KODAWARI_API const WingTypeSpec& wing_type_spec(WingType type);
 
 /// Parses "pigeon", "gull" or "hawk".
-[[nodiscard]] std::optional<WingType> parse_wing_type(std::string_view name);
+[[nodiscard]] KODAWARI_API std::optional<WingType> parse_wing_type(std::string_view name);
 
 /// Rest translation of every part relative to its parent (Body: zero), metres.
-[[nodiscard]] std::array<std::array<float, 3>, kPartCount> part_offsets(WingType type);
+[[nodiscard]] KODAWARI_API std::array<std::array<float, 3>, kPartCount> part_offsets(WingType type);
 
 }  // namespace kodawari::birds

@@ -12,6 +12,7 @@
 
 #include <kodawari/shared/birds.h>
 
+#include "kodawari/api.hpp"
 #include "../result.hpp"
 #include "rig.hpp"
 
@@ -53,7 +54,7 @@ struct RouteSpec {
 inline constexpr std::uint32_t kArcIntervalsPerSegment = 32;
 
 /// The bird data of a scene, GPU layout.
-struct BirdWorld {
+struct KODAWARI_API BirdWorld {
     float fps = 60.0f;
     std::uint32_t frames = 0;
     FlightSettings settings;

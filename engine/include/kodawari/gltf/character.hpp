@@ -17,6 +17,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "kodawari/api.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/rods/solver.hpp"
 
@@ -124,22 +125,22 @@ struct Pose {
 /// key or after the last take that key's value; a time equal to a key returns the key's
 /// value unchanged. LINEAR rotations are slerped along the shorter arc; rotations are
 /// normalized after CUBICSPLINE (Appendix C).
-[[nodiscard]] glm::vec4 sample(const Sampler& sampler, Path path, float time);
+[[nodiscard]] KODAWARI_API glm::vec4 sample(const Sampler& sampler, Path path, float time);
 
 /// The rest pose: every node's own TRS (or matrix), with world matrices.
-[[nodiscard]] Pose rest_pose(const Character& character);
+[[nodiscard]] KODAWARI_API Pose rest_pose(const Character& character);
 
 /// Sets `pose` to `character`'s animation `animation` at `time` (s): the rest pose with
 /// every channel's value applied, then the world matrices. `animation` must be an index
 /// into Character::animations. Reuses `pose`'s storage.
-void evaluate(const Character& character, std::size_t animation, float time, Pose& pose);
+KODAWARI_API void evaluate(const Character& character, std::size_t animation, float time, Pose& pose);
 
 /// Recomputes `pose.world` from its local TRS, parents first. A node given by a matrix
 /// uses that matrix (load_character rejects animations of such nodes, §3.5.3).
-void compute_world(const Character& character, Pose& pose);
+KODAWARI_API void compute_world(const Character& character, Pose& pose);
 
 /// The rigid part of a world matrix: its translation and the rotation of its columns
 /// with the scale divided out (exact for matrices without shear).
-[[nodiscard]] rods::Transform rigid_part(const glm::mat4& world);
+[[nodiscard]] KODAWARI_API rods::Transform rigid_part(const glm::mat4& world);
 
 }  // namespace kodawari::gltf

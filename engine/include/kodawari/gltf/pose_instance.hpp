@@ -9,6 +9,7 @@
 
 #include <glm/glm.hpp>
 
+#include "kodawari/api.hpp"
 #include "kodawari/gltf/character.hpp"
 #include "kodawari/rods/solver.hpp"
 
@@ -27,10 +28,10 @@ struct PoseInstance {
 /// (d == 0: start); not looping: t (gltf::sample() clamps). Exactly this float formula
 /// (IEEE single precision, correctly rounded, evaluated left to right without
 /// contraction) on every backend, so every backend wraps at the same scene times.
-[[nodiscard]] float clip_time(const gltf::Animation& clip, const PoseInstance& instance, float time);
+[[nodiscard]] KODAWARI_API float clip_time(const gltf::Animation& clip, const PoseInstance& instance, float time);
 
 /// The matrix of an instance's placement: translate(position) * mat4_cast(rotation).
 /// Every backend applies this very matrix.
-[[nodiscard]] glm::mat4 placement_matrix(const rods::Transform& placement);
+[[nodiscard]] KODAWARI_API glm::mat4 placement_matrix(const rods::Transform& placement);
 
 }  // namespace kodawari

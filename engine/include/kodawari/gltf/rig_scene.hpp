@@ -19,6 +19,7 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/api.hpp"
 #include "kodawari/gltf/chains.hpp"
 #include "kodawari/result.hpp"
 
@@ -58,7 +59,7 @@ struct RigScene {
 /// the caller will write it). Errors: the file does not load, no chain is found, a
 /// chain node has no unique name (the scene refers to nodes by name), the clip does not
 /// exist. The scene has one instance at the origin and a camera orbiting the head.
-[[nodiscard]] Result<RigScene> make_rig_scene(const std::string& character_path, const std::string& scene_path,
-                                              const RigOptions& options);
+[[nodiscard]] KODAWARI_API Result<RigScene> make_rig_scene(const std::string& character_path, const std::string& scene_path,
+                                                           const RigOptions& options);
 
 }  // namespace kodawari::gltf

@@ -70,6 +70,7 @@
 
 #include <glm/glm.hpp>
 
+#include "kodawari/api.hpp"
 #include "kodawari/gltf/chains.hpp"
 #include "kodawari/gltf/character.hpp"
 #include "kodawari/result.hpp"
@@ -129,12 +130,12 @@ struct VrmSprings {
 /// "$.extensions.VRMC_springBone.springs[1].joints[2]"): a missing or mistyped required
 /// field, a node or collider (group) index out of range, a 1.0 joint that is not the
 /// child of the joint before it, a negative radius, and the errors of make_found_chain().
-[[nodiscard]] Result<VrmSprings> read_vrm_springs(const Character& character);
+[[nodiscard]] KODAWARI_API Result<VrmSprings> read_vrm_springs(const Character& character);
 
 /// The node of a VRM humanoid bone ("head", "hips", ...): VRMC_vrm 1.0's
 /// `humanoid.humanBones.<bone>.node`, else VRM 0.x's `humanoid.humanBones[i]` whose
 /// `bone` is `bone`. -1 when the file has neither or does not map that bone (or maps it
 /// to a node out of range).
-[[nodiscard]] int vrm_humanoid_bone(const Character& character, std::string_view bone);
+[[nodiscard]] KODAWARI_API int vrm_humanoid_bone(const Character& character, std::string_view bone);
 
 }  // namespace kodawari::gltf

@@ -20,6 +20,7 @@
 
 #include <kodawari/shared/render.h>
 
+#include "kodawari/api.hpp"
 #include "kodawari/backend.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -75,18 +76,18 @@ struct CameraView {
 struct CameraBasis {
     glm::vec3 right, up, forward;
 };
-[[nodiscard]] CameraBasis camera_basis(const CameraView& camera);
+[[nodiscard]] KODAWARI_API CameraBasis camera_basis(const CameraView& camera);
 
 /// projection * view in Vulkan's clip space (x right, y down, depth 0 at near .. 1 at
 /// far) for an image of aspect width / height; orthographic: ortho_height tall, centred
 /// on the line of sight.
-[[nodiscard]] glm::mat4 view_projection(const CameraView& camera, float aspect);
+[[nodiscard]] KODAWARI_API glm::mat4 view_projection(const CameraView& camera, float aspect);
 
 /// The background gradient at `v` (0 = top row, 1 = bottom row), rgb in [0, 1].
-[[nodiscard]] glm::vec3 background_color(float v);
+[[nodiscard]] KODAWARI_API glm::vec3 background_color(float v);
 
 /// An RGBA8 image, rows top to bottom.
-struct Image {
+struct KODAWARI_API Image {
     std::uint32_t width = 0, height = 0;
     std::vector<std::uint8_t> rgba;  ///< width x height x 4 bytes
     [[nodiscard]] Rgba8 at(std::uint32_t x, std::uint32_t y) const;
@@ -94,7 +95,7 @@ struct Image {
 
 /// What one frame draws besides the chains, birds and skinned meshes, in world space:
 /// built on the CPU and uploaded every frame.
-class DrawList {
+class KODAWARI_API DrawList {
 public:
     /// `width` x `height` is the image the list is for: segments and dots have minimum
     /// sizes in pixels.
@@ -153,7 +154,7 @@ struct RendererOptions {
 };
 
 /// Draws draw lists offscreen on a Vulkan device with a graphics queue.
-class Renderer {
+class KODAWARI_API Renderer {
 public:
     /// Creates the device, the targets and the pipelines. Fails with a readable reason
     /// when there is no Vulkan device or it cannot draw.
@@ -246,16 +247,17 @@ private:
 };
 
 /// Writes `image` as a PNG, atomically (a temporary file renamed into place).
-[[nodiscard]] Result<void> write_png(const std::string& path, const Image& image);
+[[nodiscard]] KODAWARI_API Result<void> write_png(const std::string& path, const Image& image);
 
 /// `image` scaled to `width` x `height` by averaging the source pixels under each
 /// target pixel (a box filter; for shrinking).
-[[nodiscard]] Image downscale(const Image& image, std::uint32_t width, std::uint32_t height);
+[[nodiscard]] KODAWARI_API Image downscale(const Image& image, std::uint32_t width, std::uint32_t height);
 
 /// A grid of `images` (all the same size), `columns` per row, each shrunk to
 /// `cell_width` x `cell_height`, in order left to right, top to bottom, separated by
 /// 2-pixel white gutters.
-[[nodiscard]] Image contact_sheet(std::span<const Image> images, std::uint32_t columns, std::uint32_t cell_width,
-                                  std::uint32_t cell_height);
+[[nodiscard]] KODAWARI_API Image contact_sheet(std::span<const Image> images, std::uint32_t columns,
+                                               std::uint32_t cell_width,
+                                               std::uint32_t cell_height);
 
 }  // namespace kodawari::render

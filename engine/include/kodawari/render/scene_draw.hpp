@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <span>
 
+#include "kodawari/api.hpp"
 #include "kodawari/birds/world.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -23,26 +24,26 @@ inline constexpr Rgba8 kGridColor{150, 156, 168};
 /// camera is as tall as the perspective frustum at its target (rods::ImageCamera's
 /// convention). Perspective near and far planes follow the distance to the target:
 /// near = 1% of it (within [0.01, 1] m), far = 1000 x near; orthographic: 0.01 to 10 km.
-[[nodiscard]] CameraView scene_camera(const Scene& scene, std::uint32_t frame);
+[[nodiscard]] KODAWARI_API CameraView scene_camera(const Scene& scene, std::uint32_t frame);
 
 /// A square grid on the ground (y = 0) covering the points' horizontal extent plus a
 /// margin, with about 10 to 25 lines each way (spacing 1, 2 or 5 x 10^k m).
-void add_ground_grid(DrawList& list, std::span<const glm::vec3> points);
+KODAWARI_API void add_ground_grid(DrawList& list, std::span<const glm::vec3> points);
 
 /// Whether a rigged character is drawn as its skinned mesh (the renderer's skinned-mesh
 /// layer, Renderer::set_skinned) rather than as bones: some node has a mesh with triangles.
-[[nodiscard]] bool draws_skinned(const gltf::Character& character);
+[[nodiscard]] KODAWARI_API bool draws_skinned(const gltf::Character& character);
 
 /// Every character instance of `scene` at `frame` that is not drawn as a skinned mesh
 /// (Renderer::set_skinned): skeleton bones from RodScene::joint_poses. The colliders are
 /// the renderer's (Renderer::colliders_from).
-void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame);
+KODAWARI_API void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame);
 
 /// Where the content is, for add_ground_grid, from the scene alone (no simulation state,
 /// so that nothing needs reading back): character instances' placements, the chain roots
 /// of `frame` (a RodScene frame's kinematic input; may be null), the control points of
 /// the birds' routes.
-[[nodiscard]] std::vector<glm::vec3> content_points(const RodScene* scene, const rods::RodFrame* frame,
-                                                    const birds::BirdWorld* birds);
+[[nodiscard]] KODAWARI_API std::vector<glm::vec3> content_points(const RodScene* scene, const rods::RodFrame* frame,
+                                                                 const birds::BirdWorld* birds);
 
 }  // namespace kodawari::render

@@ -15,6 +15,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "kodawari/api.hpp"
 #include "solver.hpp"
 #include "view.hpp"
 
@@ -90,7 +91,7 @@ struct CharacterMotion {
 };
 
 /// The envelope e(t) of a locomotion, in [0, 1].
-[[nodiscard]] float locomotion_envelope(const Locomotion& motion, float time);
+[[nodiscard]] KODAWARI_API float locomotion_envelope(const Locomotion& motion, float time);
 
 /// Where the locomotions have taken the character at time t, relative to its placement.
 struct LocomotionPose {
@@ -100,19 +101,20 @@ struct LocomotionPose {
 };
 
 /// All locomotions of a character at time t (composed in list order).
-[[nodiscard]] LocomotionPose evaluate_locomotion(std::span<const Locomotion> motions, float time);
+[[nodiscard]] KODAWARI_API LocomotionPose evaluate_locomotion(std::span<const Locomotion> motions, float time);
 
 /// The angle of an oscillation at time t, rad.
-[[nodiscard]] float oscillation_angle(const Oscillation& motion, float time);
+[[nodiscard]] KODAWARI_API float oscillation_angle(const Oscillation& motion, float time);
 
 /// `parent` then `local`: world = parent.position + parent.rotation * local.position.
-[[nodiscard]] Transform compose(const Transform& parent, const Transform& local);
+[[nodiscard]] KODAWARI_API Transform compose(const Transform& parent, const Transform& local);
 
 /// The world pose of every joint of `skeleton` at `time`, for a character placed at
 /// `placement` (its instance transform) and moved by `motion`. `out` must hold at least
 /// skeleton.joints.size() entries (at most kMaxSkeletonJoints). Allocates nothing.
-void pose_skeleton(const Skeleton& skeleton, const CharacterMotion& motion, const Transform& placement, float time,
-                   std::span<Transform> out);
+KODAWARI_API void pose_skeleton(const Skeleton& skeleton, const CharacterMotion& motion, const Transform& placement,
+                                float time,
+                                std::span<Transform> out);
 
 /// How a keyframed camera moves between its keys.
 enum class Interpolation {
@@ -166,6 +168,6 @@ struct CameraPose {
 };
 
 /// The camera at `time` seconds.
-[[nodiscard]] CameraPose camera_pose(const CameraMotion& motion, float time);
+[[nodiscard]] KODAWARI_API CameraPose camera_pose(const CameraMotion& motion, float time);
 
 }  // namespace kodawari::rods

@@ -16,6 +16,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "kodawari/api.hpp"
 #include "kodawari/gltf/character.hpp"
 #include "kodawari/rods/kinematics.hpp"
 #include "kodawari/rods/world.hpp"
@@ -68,7 +69,7 @@ struct CharacterInstance {
 };
 
 /// The characters of a scene, ready for the rod backends.
-struct RodScene {
+struct KODAWARI_API RodScene {
     /// Templates (one per character chain, "bunny/ear_l"), chains (one per chain per
     /// instance, instance by instance), counts finalized.
     rods::RodWorld world;

@@ -11,6 +11,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "kodawari/api.hpp"
 #include "kodawari/result.hpp"
 
 namespace kodawari::rods {
@@ -45,21 +46,27 @@ struct RotationShape {
 /// The basis of a chain from its base shape C_0. Fails on fewer than 2 or more than
 /// kMaxChainJoints joints, mismatched array sizes, a segment shorter than 1e-6 m, or a
 /// non-unit orientation.
-[[nodiscard]] Result<ShapeBasis> make_basis(const ChainShape& base);
+[[nodiscard]] KODAWARI_API Result<ShapeBasis> make_basis(const ChainShape& base);
+
+/// Sets `shape.orientations` to the default of the scene files and the C API: each joint's
+/// local +Y along its segment (the last joint's along the last segment), by the shortest
+/// arc from +Y. Needs at least 2 positions, consecutive ones apart (a segment of zero
+/// length has no direction).
+KODAWARI_API void default_orientations(ChainShape& shape);
 
 /// The shortest-arc rotation taking unit vector `from` to unit vector `to`. For exactly
 /// or nearly opposite vectors (where the arc is not unique) it is the half turn about
 /// an axis perpendicular to `from`, chosen deterministically.
-[[nodiscard]] glm::quat shortest_arc(glm::vec3 from, glm::vec3 to);
+[[nodiscard]] KODAWARI_API glm::quat shortest_arc(glm::vec3 from, glm::vec3 to);
 
 /// Positions -> rotations (SPEC A.2). Only segment directions are used: a shape whose
 /// segment lengths differ from the basis' comes back with the basis' lengths from
 /// to_positions(). Fails on a size mismatch with `basis` or a segment shorter than 1e-6 m.
-[[nodiscard]] Result<RotationShape> to_rotations(const ShapeBasis& basis, const ChainShape& shape);
+[[nodiscard]] KODAWARI_API Result<RotationShape> to_rotations(const ShapeBasis& basis, const ChainShape& shape);
 
 /// Rotations -> positions by forward kinematics (SPEC A.2): x_0 = 0, dir_0 = r_0 e,
 /// dir_i = r_i dir_{i-1}, x_{i+1} = x_i + l_i dir_i. Orientations are copied.
-[[nodiscard]] ChainShape to_positions(const ShapeBasis& basis, const RotationShape& shape);
+[[nodiscard]] KODAWARI_API ChainShape to_positions(const ShapeBasis& basis, const RotationShape& shape);
 
 /// The blend sum_k w_k C_k (SPEC A.2): for every r_i and o_i, the normalized weighted sum
 /// of the shapes' quaternions, each first negated if needed into the hemisphere of the
@@ -67,6 +74,6 @@ struct RotationShape {
 /// they are expected to sum to 1 (view_weights() does) but only their ratios matter.
 /// Where a weighted sum cancels out (possible only with w_0 = 0 and examples half a turn
 /// apart) the base's quaternion is used.
-[[nodiscard]] RotationShape blend(std::span<const RotationShape> shapes, std::span<const float> weights);
+[[nodiscard]] KODAWARI_API RotationShape blend(std::span<const RotationShape> shapes, std::span<const float> weights);
 
 }  // namespace kodawari::rods

@@ -17,6 +17,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "kodawari/api.hpp"
 #include "../result.hpp"
 #include "kinematics.hpp"
 #include "shape.hpp"
@@ -29,7 +30,7 @@ namespace kodawari::rods {
 /// onto a W x H image. Its up vector is world +Y (the renderer's convention), except when
 /// the camera looks straight up or down, where world -Z is used (the picture's up is then
 /// the scene's back).
-struct ImageCamera {
+struct KODAWARI_API ImageCamera {
     Camera::Projection projection = Camera::Projection::Perspective;
     glm::vec3 position{0.0f, 0.0f, 1.0f};  ///< eye, world
     glm::vec3 target{0.0f};                ///< point looked at; must differ from position
@@ -50,10 +51,10 @@ struct ImageCamera {
 
 /// `world` projected to pixels (origin top-left, y down), and its depth along the camera's
 /// forward axis (m; > 0 in front of a perspective camera). Asserts a valid camera.
-[[nodiscard]] glm::dvec3 project_to_pixels(const ImageCamera& camera, glm::dvec3 world);
+[[nodiscard]] KODAWARI_API glm::dvec3 project_to_pixels(const ImageCamera& camera, glm::dvec3 world);
 
 /// The distance in pixels from `point` to the polyline `stroke` (>= 1 point).
-[[nodiscard]] double distance_to_polyline(glm::dvec2 point, std::span<const glm::dvec2> stroke);
+[[nodiscard]] KODAWARI_API double distance_to_polyline(glm::dvec2 point, std::span<const glm::dvec2> stroke);
 
 /// What the sketch needs (SPEC A.6).
 struct SketchInput {
@@ -121,6 +122,6 @@ struct SketchResult {
 /// length, no segment lengths or more than kMaxChainJoints joints, a non-positive or
 /// non-finite length or influence, an invalid camera (size 0, fov outside (0, 180),
 /// position = target), or a root behind (or on) a perspective camera's image plane.
-[[nodiscard]] Result<SketchResult> sketch_view_example(const SketchInput& input);
+[[nodiscard]] KODAWARI_API Result<SketchResult> sketch_view_example(const SketchInput& input);
 
 }  // namespace kodawari::rods

@@ -40,6 +40,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "kodawari/api.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/rods/shape.hpp"
 
@@ -96,7 +97,7 @@ struct SolverParams {
 };
 
 /// Checks every SolverParams range above.
-[[nodiscard]] Result<void> validate(const SolverParams& params);
+[[nodiscard]] KODAWARI_API Result<void> validate(const SolverParams& params);
 
 /// One chain's constant description, built from its base shape by make_chain().
 struct Chain {
@@ -110,7 +111,7 @@ struct Chain {
 
 /// A chain from its base shape (SPEC A.1), with `thickness` > 0 m and every particle of
 /// `mass` > 0 kg. Fails on a base shape make_basis() rejects or a bad thickness or mass.
-[[nodiscard]] Result<Chain> make_chain(const ChainShape& base, float thickness, float mass);
+[[nodiscard]] KODAWARI_API Result<Chain> make_chain(const ChainShape& base, float thickness, float mass);
 
 /// Everything a chain carries from one step to the next. Joint 0 is kinematic.
 struct ChainState {
@@ -128,7 +129,7 @@ struct ChainState {
 
 /// A chain at rest: the rest shape `rest` (root frame, e.g. a blend from A.2) placed by
 /// `root`, zero velocities.
-[[nodiscard]] ChainState initial_state(const Chain& chain, const Transform& root, const ChainShape& rest);
+[[nodiscard]] KODAWARI_API ChainState initial_state(const Chain& chain, const Transform& root, const ChainShape& rest);
 
 /// Advances `state` by a frame of `dt` > 0 seconds (SPEC A.4). `root` is the root
 /// transform at the end of the frame; within the frame the substeps interpolate it from
@@ -136,8 +137,8 @@ struct ChainState {
 /// this frame's rest shape in the root frame (positions and orientations, joint_count
 /// each); the solver places it by the interpolated root in every substep. Colliders are
 /// taken as fixed during the frame; at most kMaxChainColliders of each.
-void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
-          std::span<const Sphere> spheres, std::span<const Capsule> capsules, float dt, ChainState& state);
+KODAWARI_API void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
+                       std::span<const Sphere> spheres, std::span<const Capsule> capsules, float dt, ChainState& state);
 
 /// What a renderer or a skinned mesh needs from a chain.
 struct ChainPose {
@@ -151,12 +152,12 @@ struct ChainPose {
 };
 
 /// The pose of `state` (SPEC A.4, output).
-[[nodiscard]] ChainPose pose(const Chain& chain, const ChainState& state);
+[[nodiscard]] KODAWARI_API ChainPose pose(const Chain& chain, const ChainState& state);
 
 /// World position of a joint: root.position + x[joint].
-[[nodiscard]] glm::vec3 position(const ChainState& state, std::uint32_t joint);
+[[nodiscard]] KODAWARI_API glm::vec3 position(const ChainState& state, std::uint32_t joint);
 
 /// Kinetic energy of the simulated particles (all but joint 0), J. For tests and tools.
-[[nodiscard]] float kinetic_energy(const Chain& chain, const ChainState& state);
+[[nodiscard]] KODAWARI_API float kinetic_energy(const Chain& chain, const ChainState& state);
 
 }  // namespace kodawari::rods

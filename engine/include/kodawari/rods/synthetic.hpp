@@ -7,6 +7,7 @@
 
 #include <cstdint>
 
+#include "kodawari/api.hpp"
 #include "world.hpp"
 
 namespace kodawari::rods {
@@ -22,7 +23,7 @@ struct SyntheticOptions {
 };
 
 /// The world and its kinematics.
-class SyntheticScene {
+class KODAWARI_API SyntheticScene {
 public:
     [[nodiscard]] static Result<SyntheticScene> make(const SyntheticOptions& options);
 

@@ -8,6 +8,8 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
+#include "kodawari/api.hpp"
+
 namespace kodawari::rods {
 
 /// One view example's direction and influence (SPEC A.1); its shape is kept alongside
@@ -30,13 +32,13 @@ struct Camera {
 /// d = -R_ref^T camera_forward for an orthographic camera. A perspective camera sitting
 /// on the reference joint (closer than 1e-6 m) has no direction from it; the
 /// orthographic formula is used there so that d is always a unit vector.
-[[nodiscard]] glm::vec3 view_direction(const Camera& camera, glm::vec3 reference_position,
-                                       glm::quat reference_rotation);
+[[nodiscard]] KODAWARI_API glm::vec3 view_direction(const Camera& camera, glm::vec3 reference_position,
+                                                    glm::quat reference_rotation);
 
 /// The weights w_0 .. w_m (SPEC A.3, exactly the seed's algorithm): s_k = (d_k . d + 1)/2,
 /// w_k = s_k^p_k, S = sum w_k; if S >= 1 all w_k /= S and S = 1; w_0 = 1 - S.
 /// Returns m + 1 weights, w_0 (the base shape's) first; they sum to 1 and lie in [0, 1].
 /// Asserts every influence > 0.
-[[nodiscard]] std::vector<float> view_weights(glm::vec3 d, std::span<const ViewExample> examples);
+[[nodiscard]] KODAWARI_API std::vector<float> view_weights(glm::vec3 d, std::span<const ViewExample> examples);
 
 }  // namespace kodawari::rods

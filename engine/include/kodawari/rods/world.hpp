@@ -11,6 +11,7 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/api.hpp"
 #include "../result.hpp"
 #include "shape.hpp"
 #include "solver.hpp"
@@ -38,10 +39,10 @@ struct ChainTemplate {
 /// 1e-6 m), an influence is not > 0, a direction is not finite and non-zero (it is
 /// normalized), there are more than kMaxViewExamples examples, or the parameters or the
 /// chain's thickness and mass are out of range.
-[[nodiscard]] Result<ChainTemplate> make_chain_template(std::string name, const ChainShape& base,
-                                                        std::span<const ChainShape> example_shapes,
-                                                        std::span<const ViewExample> views, float thickness,
-                                                        float mass, const SolverParams& params);
+[[nodiscard]] KODAWARI_API Result<ChainTemplate> make_chain_template(std::string name, const ChainShape& base,
+                                                                     std::span<const ChainShape> example_shapes,
+                                                                     std::span<const ViewExample> views, float thickness,
+                                                                     float mass, const SolverParams& params);
 
 /// One simulated chain: a template attached to one character instance.
 struct ChainInstance {
@@ -53,7 +54,7 @@ struct ChainInstance {
 };
 
 /// The chains of a scene.
-struct RodWorld {
+struct KODAWARI_API RodWorld {
     std::vector<ChainTemplate> templates;
     std::vector<ChainInstance> chains;
     std::uint32_t character_count = 0;  ///< character instances (RodFrame::reference entries)
@@ -77,7 +78,7 @@ struct RodFrame {
 };
 
 /// Checks that `frame` fits `world` (sizes, dt > 0, finite values).
-[[nodiscard]] Result<void> check_frame(const RodWorld& world, const RodFrame& frame);
+[[nodiscard]] KODAWARI_API Result<void> check_frame(const RodWorld& world, const RodFrame& frame);
 
 /// The view direction, weights and blended rest shape of one chain (SPEC A.3, A.2).
 struct RestShape {
@@ -88,6 +89,6 @@ struct RestShape {
 
 /// SPEC A.3 then A.2 for `chain` under `frame`: d from the camera and the chain's
 /// character's reference joint, the weights, the blend and forward kinematics.
-[[nodiscard]] RestShape rest_shape(const RodWorld& world, std::uint32_t chain, const RodFrame& frame);
+[[nodiscard]] KODAWARI_API RestShape rest_shape(const RodWorld& world, std::uint32_t chain, const RodFrame& frame);
 
 }  // namespace kodawari::rods

@@ -1,0 +1,156 @@
+#!/usr/bin/env bash
+# The package as an application meets it (issue 11), the way vk-bootstrap tests itself:
+# installs the built tree into a temporary prefix, then builds and runs programs against
+# it. Any missing header, dependency or symbol fails a step.
+#
+#   1. `cmake --install BUILD --prefix TMP`; the installed tree has the libraries, the
+#      headers as files (shared/ too, not a link), the package and kodawari.pc, and the
+#      installed command prints the version.
+#   2. kodawariConfigVersion.cmake accepts 0.2 requests only (check_version.cmake).
+#   3. headers/: every installed header compiles alone against the prefix, -Werror.
+#   4. find_package/: find_package(kodawari 0.2 CONFIG REQUIRED), kodawari::engine,
+#      consumer.cpp (every component used, a real run of each).
+#   5. find_package_sim/: COMPONENTS sim, tests/consumers/sim_only.cpp on kodawari::sim alone.
+#   6. pkg_config/: make and `pkg-config --cflags --libs kodawari` (--static for a static
+#      build), consumer.cpp again.
+#   7. add_subdirectory/: the source tree as a subproject (its tests, command and
+#      install rules off), consumer.cpp again. Its build folder is kept in
+#      BUILD/tests/package/add_subdirectory, so that a second run rebuilds only what
+#      changed (the first builds the library once more).
+#
+#   bash tests/package/run_consumers.sh BUILD SOURCE CXX LAUNCHER SHARED GENERATOR BUILD_TYPE \
+#        [CXX_FLAGS [EXE_LINKER_FLAGS]]
+#
+# CXX is the compiler and LAUNCHER the compiler launcher (ccache, or "") of the build,
+# SHARED its BUILD_SHARED_LIBS (ON/OFF), CXX_FLAGS and EXE_LINKER_FLAGS its
+# CMAKE_CXX_FLAGS and CMAKE_EXE_LINKER_FLAGS, which the programs are built with too (the
+# asan preset's libraries need the sanitizers' runtime). ctest runs it as the test
+# `package` (LABELS package). JOBS (default 2) is the parallelism of the consumer builds.
+set -euo pipefail
+build="$(cd "$1" && pwd)"
+src="$(cd "$2" && pwd)"
+cxx="$3"
+launcher="$4"
+shared="$5"
+generator="$6"
+build_type="${7:-Release}"
+cxx_flags="${8:-}"
+exe_linker_flags="${9:-}"
+jobs="${JOBS:-2}"
+here="$src/tests/package"
+
+work="$(mktemp -d)"
+trap 'rm -rf "$work"' EXIT
+prefix="$work/prefix"
+out="$work/out"
+mkdir -p "$out"
+start=$SECONDS
+step_start=$SECONDS
+
+fail() {
+  echo "package: FAILED: $*" >&2
+  exit 1
+}
+# Runs a command with its output in a log, shown only when it fails.
+quiet() {
+  local log="$work/log"
+  if ! "$@" >"$log" 2>&1; then
+    cat "$log" >&2
+    fail "$*"
+  fi
+}
+done_step() {
+  echo "package: $1 ($((SECONDS - step_start)) s)"
+  step_start=$SECONDS
+}
+is_on() {
+  case "${1^^}" in ON | 1 | TRUE | YES | Y) return 0 ;; *) return 1 ;; esac
+}
+configure() {  # configure SOURCE BINARY ARGS...
+  local s="$1" b="$2"
+  shift 2
+  local args=(-G "$generator" -DCMAKE_BUILD_TYPE="$build_type" -DCMAKE_CXX_COMPILER="$cxx"
+    -DCMAKE_CXX_FLAGS="$cxx_flags" -DCMAKE_EXE_LINKER_FLAGS="$exe_linker_flags")
+  [[ -n "$launcher" ]] && args+=(-DCMAKE_CXX_COMPILER_LAUNCHER="$launcher")
+  quiet cmake -S "$s" -B "$b" "${args[@]}" "$@"
+}
+
+# 1. Install.
+quiet cmake --install "$build" --prefix "$prefix"
+libdir="$(cd "$prefix" && ls -d lib* | head -1)"
+for f in include/kodawari/simulation.hpp include/kodawari/api.hpp include/kodawari/version.hpp \
+  include/kodawari/shared/birds.h "$libdir/cmake/kodawari/kodawariConfig.cmake" \
+  "$libdir/cmake/kodawari/kodawariConfigVersion.cmake" "$libdir/cmake/kodawari/kodawariTargets.cmake" \
+  "$libdir/pkgconfig/kodawari.pc"; do
+  [[ -f "$prefix/$f" ]] || fail "$f not installed"
+done
+links="$(find "$prefix/include" -type l)"
+[[ -z "$links" ]] || fail "links installed instead of headers: $links"
+# No internal header: every installed header is one of the source tree's public ones.
+while IFS= read -r header; do
+  rel="${header#"$prefix/include/"}"
+  [[ -f "$src/engine/include/$rel" || -f "$src/engine/include/$rel.in" ]] || fail "$rel is installed but not a public header"
+done < <(find "$prefix/include" -type f)
+for component in sim vulkan io render engine; do
+  if is_on "$shared"; then
+    ls "$prefix/$libdir/libkodawari_$component.so".* >/dev/null 2>&1 || fail "libkodawari_$component.so.* not installed"
+  else
+    [[ -f "$prefix/$libdir/libkodawari_$component.a" ]] || fail "libkodawari_$component.a not installed"
+  fi
+done
+if [[ -x "$prefix/bin/kodawari" ]]; then
+  version="$("$prefix/bin/kodawari" --version)"
+  echo "package: installed command: $version"
+fi
+echo "package: installed into a temporary prefix: $(find "$prefix" -type f | wc -l) files," \
+  "$(find "$prefix/include" -type f | wc -l) headers, libraries in $libdir"
+done_step "install"
+
+# 2. The version file.
+quiet cmake -DVERSION_FILE="$prefix/$libdir/cmake/kodawari/kodawariConfigVersion.cmake" -P "$here/check_version.cmake"
+grep -o 'kodawari .*' "$work/log" | sed 's/^/package: /'
+done_step "version file"
+
+# 3. Each installed header alone.
+configure "$here/headers" "$work/headers" -DCMAKE_PREFIX_PATH="$prefix"
+quiet cmake --build "$work/headers" -j "$jobs"
+echo "package: $(find "$work/headers" -name '*.o' | wc -l) installed headers compiled alone, -Wall -Wextra -Wpedantic -Werror"
+done_step "headers alone"
+
+# 4. find_package.
+configure "$here/find_package" "$work/find_package" -DCMAKE_PREFIX_PATH="$prefix"
+quiet cmake --build "$work/find_package" -j "$jobs"
+"$work/find_package/consumer" "$src" "$out" || fail "the find_package consumer"
+done_step "find_package consumer"
+
+# 5. find_package, COMPONENTS sim.
+configure "$here/find_package_sim" "$work/find_package_sim" -DCMAKE_PREFIX_PATH="$prefix"
+quiet cmake --build "$work/find_package_sim" -j "$jobs"
+"$work/find_package_sim/sim_only" || fail "the sim-only consumer"
+done_step "find_package COMPONENTS sim consumer"
+
+# 6. pkg-config.
+export PKG_CONFIG_PATH="$prefix/$libdir/pkgconfig"
+if is_on "$shared"; then
+  pc_libs=""
+  ldflags="-Wl,-rpath,$prefix/$libdir"
+else
+  pc_libs="--static"
+  ldflags=""
+fi
+echo "package: pkg-config --cflags --libs $pc_libs kodawari: $(pkg-config --cflags --libs $pc_libs kodawari)"
+compiler="$cxx"
+[[ -n "$launcher" ]] && compiler="$launcher $cxx"
+quiet make -C "$here/pkg_config" OUT="$work" CXX="$compiler" PKG_CONFIG_LIBS="$pc_libs" CXXFLAGS="$cxx_flags" \
+  LDFLAGS="$exe_linker_flags $ldflags"
+"$work/consumer" "$src" "$out" || fail "the pkg-config consumer"
+done_step "pkg-config consumer"
+
+# 7. add_subdirectory, in a build folder kept between runs.
+sub="$build/tests/package/add_subdirectory"
+configure "$here/add_subdirectory" "$sub" -DKODAWARI_SOURCE_DIR="$src" -DBUILD_SHARED_LIBS="$shared"
+quiet nice cmake --build "$sub" -j "$jobs"
+"$sub/consumer" "$src" "$out" || fail "the add_subdirectory consumer"
+done_step "add_subdirectory consumer"
+
+echo "package: ok: installed, found with find_package and pkg-config, built with add_subdirectory ($((SECONDS - start)) s)"
