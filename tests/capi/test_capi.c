@@ -592,6 +592,11 @@ static void test_chain_create_rejects(void) {
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->backend.validation: 2; expected 0 or 1");
     a.desc.backend.threads = 5000;
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->backend.threads: 5000");
+    a.desc.backend.backend = KODAWARI_BACKEND_CPU;
+    a.desc.backend.isa = "avx9";
+    REJECT(KODAWARI_INVALID_ARGUMENT, "desc->backend.isa", "avx9", "scalar");
+    a.desc.backend.isa = "scalar";
+    REJECT(KODAWARI_INVALID_ARGUMENT, "desc->backend.isa: \"scalar\" with a backend other than KODAWARI_BACKEND_CPU");
     initial.reference_count = 2;
     REJECT(KODAWARI_INVALID_ARGUMENT, "initial->reference_count: 2; expected 1 (one per character)");
     f.root.rotation[3] = 0.0f;
