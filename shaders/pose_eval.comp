@@ -1,12 +1,13 @@
 #version 450
 // Evaluates glTF animation clips for a crowd of instances of one character: one
-// invocation per instance computes its clip time, walks the nodes parents first, samples
-// the clip's channels of each node (§3.11 Animations, Appendix C Interpolation of the
-// glTF 2.0.1 specification), composes local T * R * S and world = parent world * local
-// (§3.5.3 Transformations) and writes every node's world matrix with the instance's
-// placement applied. Mirrors engine/gltf/animation.cpp (sample, compute_world) and
-// clip_time() in engine/backends/pose_backend.cpp step for step; shared/poses.h has the
-// layout and why.
+// invocation per instance computes its clip time, walks the anchors (the animated nodes)
+// parents first, samples the clip's channels of each (§3.11 Animations, Appendix C
+// Interpolation of the glTF 2.0.1 specification), composes local T * R * S and world =
+// parent world * local (§3.5.3 Transformations), then writes every node's world matrix,
+// its anchor's times the node's constant rest transform relative to it, with the
+// instance's placement applied. Mirrors engine/gltf/animation.cpp (sample, compute_world)
+// and clip_time() in engine/backends/pose_backend.cpp; shared/poses.h has the layout and
+// why.
 #extension GL_GOOGLE_include_directive : require
 
 #include "shared/poses.h"
@@ -22,6 +23,9 @@ layout(std430, binding = KW_POSES_BINDING_TIMES) readonly buffer Times { float t
 layout(std430, binding = KW_POSES_BINDING_VALUES) readonly buffer Values { vec4 values[]; };
 layout(std430, binding = KW_POSES_BINDING_INSTANCES) readonly buffer Instances { PoseInstanceGpu instances[]; };
 layout(std430, binding = KW_POSES_BINDING_WORLD) buffer World { PoseMatrixGpu world[]; };
+layout(std430, binding = KW_POSES_BINDING_ANCHORS) readonly buffer Anchors { PoseAnchorGpu anchors[]; };
+
+layout(constant_id = KW_POSES_SPEC_SLOTS) const uint SLOTS = 1u;
 
 layout(push_constant) uniform Push { PosePush push; };
 
@@ -178,11 +182,11 @@ void main() {
     const uint i = gl_GlobalInvocationID.x;
     if (i >= push.counts.x) return;
     const uint node_count = push.counts.y;
+    const uint anchor_count = push.counts.z;
     const PoseInstanceGpu instance = instances[i];
-    const mat4 placement = mat4_columns(instance.placement);
 
-    // The clip's channels, sorted by node position: [c, c_end), `next` the node position
-    // of channel c. A rest-pose instance has none.
+    // The clip's channels, sorted by anchor: [c, c_end), `next` the anchor of channel c.
+    // A rest-pose instance has none.
     uint c = 0u;
     uint c_end = 0u;
     float t = 0.0;
@@ -194,15 +198,17 @@ void main() {
     }
     uint next = c < c_end ? channels[c].target.x : KW_POSES_NONE;
 
-    const uint base = i * node_count;
-    for (uint p = 0u; p < node_count; ++p) {
-        const uvec4 ids = nodes[p].ids;
-        // The rest TRS with the clip's channels of this node applied in the file's order
+    // The placed world matrices of the anchors, parents first, in registers: nothing is
+    // read back from the output.
+    mat4 slots[SLOTS];
+    slots[0] = mat4_columns(instance.placement);
+    for (uint a = 0u; a < anchor_count; ++a) {
+        // The rest TRS with the clip's channels of this anchor applied in the file's order
         // (a later channel of the same property wins, as in gltf::evaluate).
-        vec3 translation = nodes[p].local[0].xyz;
-        vec4 rotation = nodes[p].local[1];
-        vec3 scale = nodes[p].local[2].xyz;
-        while (next == p) {
+        vec3 translation = anchors[a].rest[0].xyz;
+        vec4 rotation = anchors[a].rest[1];
+        vec3 scale = anchors[a].rest[2].xyz;
+        while (next == a) {
             const PoseChannelGpu ch = channels[c];
             const vec4 value = sample_channel(ch, t);
             if (ch.target.y == KW_POSES_PATH_TRANSLATION) {
@@ -215,24 +221,16 @@ void main() {
             ++c;
             next = c < c_end ? channels[c].target.x : KW_POSES_NONE;
         }
-        mat4 local;
-        if (ids.z == KW_POSES_NODE_MATRIX) {
-            local = mat4_columns(nodes[p].local);
-        } else {
-            local = compose(translation, rotation, scale);
-        }
-        // A root is placed by the instance; a child's parent was written earlier by this
-        // very invocation (parents first), placement included.
-        mat4 parent = placement;
-        if (ids.y != KW_POSES_NONE) {
-            const uint at = base + ids.y;
-            parent = mat4_columns(world[at].columns);
-        }
-        const mat4 w = parent * local;
-        const uint at_node = base + ids.x;
-        world[at_node].columns[0] = w[0];
-        world[at_node].columns[1] = w[1];
-        world[at_node].columns[2] = w[2];
-        world[at_node].columns[3] = w[3];
+        const mat4 parent = slots[anchors[a].ids.x] * mat4_columns(anchors[a].link);
+        slots[a + 1u] = parent * compose(translation, rotation, scale);
+    }
+
+    const uint base = i * node_count;
+    for (uint n = 0u; n < node_count; ++n) {
+        const mat4 w = slots[nodes[n].ids.x] * mat4_columns(nodes[n].relative);
+        world[base + n].columns[0] = w[0];
+        world[base + n].columns[1] = w[1];
+        world[base + n].columns[2] = w[2];
+        world[base + n].columns[3] = w[3];
     }
 }
