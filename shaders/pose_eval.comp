@@ -16,7 +16,8 @@
 
 layout(local_size_x = KW_POSES_WORKGROUP_SIZE) in;
 
-layout(std430, binding = KW_POSES_BINDING_NODES) readonly buffer Nodes { PoseNodeGpu nodes[]; };
+layout(std140, binding = KW_POSES_BINDING_NODES) uniform Nodes { PoseNodeGpu nodes[KW_POSES_UNIFORM_NODES]; };
+layout(std430, binding = KW_POSES_BINDING_MORE_NODES) readonly buffer MoreNodes { PoseNodeGpu more_nodes[]; };
 layout(std430, binding = KW_POSES_BINDING_CLIPS) readonly buffer Clips { PoseClipGpu clips[]; };
 layout(std430, binding = KW_POSES_BINDING_CHANNELS) readonly buffer Channels { PoseChannelGpu channels[]; };
 layout(std430, binding = KW_POSES_BINDING_TIMES) readonly buffer Times { float times[]; };
@@ -178,6 +179,13 @@ mat4 compose(vec3 t, vec4 q, vec3 s) {
     return mat4(vec4(r[0] * s.x, 0.0), vec4(r[1] * s.y, 0.0), vec4(r[2] * s.z, 0.0), vec4(t, 1.0));
 }
 
+void store(uint at, mat4 w) {
+    world[at].columns[0] = w[0];
+    world[at].columns[1] = w[1];
+    world[at].columns[2] = w[2];
+    world[at].columns[3] = w[3];
+}
+
 void main() {
     const uint i = gl_GlobalInvocationID.x;
     if (i >= push.counts.x) return;
@@ -226,11 +234,12 @@ void main() {
     }
 
     const uint base = i * node_count;
-    for (uint n = 0u; n < node_count; ++n) {
-        const mat4 w = slots[nodes[n].ids.x] * mat4_columns(nodes[n].relative);
-        world[base + n].columns[0] = w[0];
-        world[base + n].columns[1] = w[1];
-        world[base + n].columns[2] = w[2];
-        world[base + n].columns[3] = w[3];
+    const uint uniform_nodes = min(node_count, KW_POSES_UNIFORM_NODES);
+    for (uint n = 0u; n < uniform_nodes; ++n) {
+        store(base + n, slots[nodes[n].ids.x] * mat4_columns(nodes[n].relative));
+    }
+    for (uint n = uniform_nodes; n < node_count; ++n) {
+        const uint m = n - KW_POSES_UNIFORM_NODES;
+        store(base + n, slots[more_nodes[m].ids.x] * mat4_columns(more_nodes[m].relative));
     }
 }

@@ -181,19 +181,26 @@ public:
         }
 
         buffers_.clear();
+        const std::size_t first_nodes = std::min<std::size_t>(flat.nodes.size(), KW_POSES_UNIFORM_NODES);
         const std::uint64_t sizes[KW_POSES_BINDING_COUNT] = {
-            flat.nodes.size() * sizeof(gpu::PoseNodeGpu),
+            KW_POSES_UNIFORM_NODES * sizeof(gpu::PoseNodeGpu),
             flat.clips.size() * sizeof(gpu::PoseClipGpu),
             flat.channels.size() * sizeof(gpu::PoseChannelGpu),
             flat.times.size() * sizeof(float),
             flat.values.size() * sizeof(gpu::vec4),
             per_instance.size() * sizeof(gpu::PoseInstanceGpu),
             count * character.nodes.size() * sizeof(gpu::PoseMatrixGpu),
-            flat.anchors.size() * sizeof(gpu::PoseAnchorGpu)};
+            flat.anchors.size() * sizeof(gpu::PoseAnchorGpu),
+            (flat.nodes.size() - first_nodes) * sizeof(gpu::PoseNodeGpu)};
         auto storage = compute::create_storage_buffers(*ctx_, sizes, "the crowd");
         if (!storage) return storage.error();
         buffers_ = std::move(storage).value();
-        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_NODES], bytes_of(flat.nodes)));
+        // The uniform block is KW_POSES_UNIFORM_NODES records whatever the character.
+        std::vector<gpu::PoseNodeGpu> uniform_nodes(KW_POSES_UNIFORM_NODES);
+        std::copy_n(flat.nodes.begin(), first_nodes, uniform_nodes.begin());
+        const std::vector<gpu::PoseNodeGpu> more_nodes(flat.nodes.begin() + static_cast<std::ptrdiff_t>(first_nodes), flat.nodes.end());
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_NODES], bytes_of(uniform_nodes)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_MORE_NODES], bytes_of(more_nodes)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_CLIPS], bytes_of(flat.clips)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_CHANNELS], bytes_of(flat.channels)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_TIMES], bytes_of(flat.times)));
@@ -206,7 +213,8 @@ public:
         const std::uint32_t slots = static_cast<std::uint32_t>(flat.anchors.size()) + 1u;
         if (!kernel_ || slots != slots_) {
             kernel_.reset();
-            const std::vector<compute::Binding> types(KW_POSES_BINDING_COUNT, compute::Binding::Storage);
+            std::vector<compute::Binding> types(KW_POSES_BINDING_COUNT, compute::Binding::Storage);
+            types[KW_POSES_BINDING_NODES] = compute::Binding::Uniform;
             const std::uint32_t specialization[] = {slots};
             auto created = compute::Kernel::create(*ctx_, "pose_eval", types, sizeof(gpu::PosePush), specialization);
             if (!created) return created.error();
