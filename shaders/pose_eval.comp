@@ -91,11 +91,6 @@ float clip_time(PoseClipGpu clip, float offset, bool loop, float time) {
 
 // ---- sampling (§3.11, Appendix C), as gltf::sample() ------------------------------------
 
-// The key value of key k (CUBICSPLINE stores in-tangent, value, out-tangent per key).
-vec4 key_value(PoseChannelGpu ch, uint k) {
-    return values[ch.keys.y + (ch.target.z == KW_POSES_INTERP_CUBICSPLINE ? 3u * k + 1u : k)];
-}
-
 // sin(x) / x by its Taylor series to x^12: the truncation is below 5e-10 on [0, pi/2].
 float sinc(float x) {
     const float x2 = x * x;
@@ -118,48 +113,66 @@ vec4 slerp(vec4 a, vec4 b, float u) {
     return a * ((1.0 - u) * sinc((1.0 - u) * theta) / s) + b * (u * sinc(u * theta) / s);
 }
 
+// lavapipe runs every load instruction (a loop over the lanes) whichever branch a lane
+// takes, so the four values any interpolation needs are loaded once, at indices that
+// depend on the case, instead of in each case's own branch (nine loads before).
 vec4 sample_channel(PoseChannelGpu ch, float time) {
     const uint n = ch.target.w;
     const uint first = ch.keys.x;
-    const uint interp = ch.target.z;
-    // Outside the keys the first / last value holds (§3.11: clamped, no extrapolation).
-    // `!(time > first)` also sends NaN to the first key.
+    const bool cubic = ch.target.z == KW_POSES_INTERP_CUBICSPLINE;
     float t_lo = times[first];
-    if (!(time > t_lo)) return key_value(ch, 0u);
     float t_hi = times[first + n - 1u];
-    if (time >= t_hi) return key_value(ch, n - 1u);
-    // Binary search for k with times[k] <= time < times[k + 1] (std::upper_bound - 1 in
-    // sample(); the times increase strictly), keeping both ends' times.
-    uint lo = 0u;
-    uint hi = n - 1u;
-    while (hi - lo > 1u) {
-        const uint mid = (lo + hi) / 2u;
-        const float t_mid = times[first + mid];
-        if (t_mid <= time) {
-            lo = mid;
-            t_lo = t_mid;
-        } else {
-            hi = mid;
-            t_hi = t_mid;
+    // `hold`: key k's value unchanged. Outside the keys the first / last value holds
+    // (§3.11: clamped, no extrapolation); `!(time > first)` also sends NaN to the first key.
+    uint k;
+    bool hold = true;
+    if (!(time > t_lo)) {
+        k = 0u;
+    } else if (time >= t_hi) {
+        k = n - 1u;
+    } else {
+        // Binary search for k with times[k] <= time < times[k + 1] (std::upper_bound - 1
+        // in sample(); the times increase strictly), keeping both ends' times.
+        uint lo = 0u;
+        uint hi = n - 1u;
+        while (hi - lo > 1u) {
+            const uint mid = (lo + hi) / 2u;
+            const float t_mid = times[first + mid];
+            if (t_mid <= time) {
+                lo = mid;
+                t_lo = t_mid;
+            } else {
+                hi = mid;
+                t_hi = t_mid;
+            }
         }
+        k = lo;
+        hold = time == t_lo || ch.target.z == KW_POSES_INTERP_STEP;
     }
-    if (time == t_lo || interp == KW_POSES_INTERP_STEP) return key_value(ch, lo);
+    // Key k's value, then key k + 1's and, for CUBICSPLINE (in-tangent, value, out-tangent
+    // per key), the out-tangent b_k and in-tangent a_k+1 between them; a held key reads
+    // its own value again, never past the channel's keys.
+    const uint stride = cubic ? 3u : 1u;
+    const uint v = ch.keys.y + stride * k + (cubic ? 1u : 0u);
+    const bool between = !hold;
+    const vec4 a = values[v];
+    const vec4 b = values[between ? v + stride : v];
+    const vec4 out_tangent = values[between && cubic ? v + 1u : v];
+    const vec4 in_tangent = values[between && cubic ? v + 2u : v];
+    if (hold) return a;
     const float td = t_hi - t_lo;
     const float u = (time - t_lo) / td;
-    if (interp == KW_POSES_INTERP_LINEAR) {
-        const vec4 a = values[ch.keys.y + lo];
-        const vec4 b = values[ch.keys.y + lo + 1u];
+    if (!cubic) {
         if (ch.target.y == KW_POSES_PATH_ROTATION) return slerp(a, b, u);
         return a + (b - a) * u;
     }
     // Appendix C, cubic spline: Hermite on [t_k, t_k+1] with the key values v_k, v_k+1, the
     // out-tangent b_k of key k and the in-tangent a_k+1 of key k+1, tangents scaled by the
     // keyframe delta t_d.
-    const uint v = ch.keys.y + 3u * lo;
-    const vec4 p0 = values[v + 1u];
-    const vec4 m0 = values[v + 2u] * td;
-    const vec4 m1 = values[v + 3u] * td;
-    const vec4 p1 = values[v + 4u];
+    const vec4 p0 = a;
+    const vec4 m0 = out_tangent * td;
+    const vec4 m1 = in_tangent * td;
+    const vec4 p1 = b;
     const float u2 = u * u;
     const float u3 = u2 * u;
     vec4 r = (2.0 * u3 - 3.0 * u2 + 1.0) * p0 + (u3 - 2.0 * u2 + u) * m0 + (-2.0 * u3 + 3.0 * u2) * p1 + (u3 - u2) * m1;
@@ -204,7 +217,10 @@ void main() {
         c_end = c + clip.channels.y;
         t = clip_time(clip, instance.timing.x, instance.clip.y != 0u, push.time.x);
     }
-    uint next = c < c_end ? channels[c].target.x : KW_POSES_NONE;
+    // The next channel, loaded once (its target says which anchor it belongs to).
+    PoseChannelGpu ch;
+    if (c < c_end) ch = channels[c];
+    uint next = c < c_end ? ch.target.x : KW_POSES_NONE;
 
     // The placed world matrices of the anchors, parents first, in registers: nothing is
     // read back from the output.
@@ -217,7 +233,6 @@ void main() {
         vec4 rotation = anchors[a].rest[1];
         vec3 scale = anchors[a].rest[2].xyz;
         while (next == a) {
-            const PoseChannelGpu ch = channels[c];
             const vec4 value = sample_channel(ch, t);
             if (ch.target.y == KW_POSES_PATH_TRANSLATION) {
                 translation = value.xyz;
@@ -227,7 +242,8 @@ void main() {
                 scale = value.xyz;
             }
             ++c;
-            next = c < c_end ? channels[c].target.x : KW_POSES_NONE;
+            if (c < c_end) ch = channels[c];
+            next = c < c_end ? ch.target.x : KW_POSES_NONE;
         }
         const mat4 parent = slots[anchors[a].ids.x] * mat4_columns(anchors[a].link);
         slots[a + 1u] = parent * compose(translation, rotation, scale);
