@@ -24,9 +24,11 @@ layout(std430, binding = KW_POSES_BINDING_TIMES) readonly buffer Times { float t
 layout(std430, binding = KW_POSES_BINDING_VALUES) readonly buffer Values { vec4 values[]; };
 layout(std430, binding = KW_POSES_BINDING_INSTANCES) readonly buffer Instances { PoseInstanceGpu instances[]; };
 layout(std430, binding = KW_POSES_BINDING_WORLD) buffer World { PoseMatrixGpu world[]; };
+layout(std430, binding = KW_POSES_BINDING_WORLD) buffer WorldColumns { PoseColumnGpu world_columns[]; };
 layout(std430, binding = KW_POSES_BINDING_ANCHORS) readonly buffer Anchors { PoseAnchorGpu anchors[]; };
 
 layout(constant_id = KW_POSES_SPEC_SLOTS) const uint SLOTS = 1u;
+layout(constant_id = KW_POSES_SPEC_AFFINE) const bool AFFINE = false;
 
 layout(push_constant) uniform Push { PosePush push; };
 
@@ -192,11 +194,22 @@ mat4 compose(vec3 t, vec4 q, vec3 s) {
     return mat4(vec4(r[0] * s.x, 0.0), vec4(r[1] * s.y, 0.0), vec4(r[2] * s.z, 0.0), vec4(t, 1.0));
 }
 
+// Affine: the bottom row is (0, 0, 0, 1) exactly (every factor has it, so every product
+// does for finite entries), load() wrote it, and only the upper three rows are stored, as
+// whole vec3 members: lavapipe stores each float lane by lane, and a swizzled .xyz store
+// of a vec4 member would be three stores.
 void store(uint at, mat4 w) {
-    world[at].columns[0] = w[0];
-    world[at].columns[1] = w[1];
-    world[at].columns[2] = w[2];
-    world[at].columns[3] = w[3];
+    if (AFFINE) {
+        world_columns[4u * at].xyz = w[0].xyz;
+        world_columns[4u * at + 1u].xyz = w[1].xyz;
+        world_columns[4u * at + 2u].xyz = w[2].xyz;
+        world_columns[4u * at + 3u].xyz = w[3].xyz;
+    } else {
+        world[at].columns[0] = w[0];
+        world[at].columns[1] = w[1];
+        world[at].columns[2] = w[2];
+        world[at].columns[3] = w[3];
+    }
 }
 
 void main() {

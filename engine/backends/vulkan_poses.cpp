@@ -55,11 +55,14 @@ struct FlatCharacter {
     std::vector<gpu::PoseChannelGpu> channels;
     std::vector<float> times;
     std::vector<gpu::vec4> values;
+    bool affine = true;  // every relative and link has the bottom row (0, 0, 0, 1)
 };
 
 void set_columns(gpu::vec4 (&out)[4], const glm::mat4& m) {
     for (int c = 0; c < 4; ++c) out[c] = to_gpu(m[c]);
 }
+
+bool bottom_row_is_0001(const glm::mat4& m) { return m[0][3] == 0.0f && m[1][3] == 0.0f && m[2][3] == 0.0f && m[3][3] == 1.0f; }
 
 FlatCharacter flatten(const gltf::Character& character) {
     FlatCharacter flat;
@@ -97,6 +100,7 @@ FlatCharacter flatten(const gltf::Character& character) {
             a.rest[1] = to_gpu(node.rotation);
             a.rest[2] = to_gpu(node.scale);
             set_columns(a.link, has_parent ? relative[parent] : glm::mat4(1.0f));
+            flat.affine = flat.affine && (!has_parent || bottom_row_is_0001(relative[parent]));
             flat.anchors.push_back(a);
             anchor_of_slot.push_back(static_cast<std::uint32_t>(i));
             slot[i] = static_cast<std::uint32_t>(flat.anchors.size());
@@ -113,6 +117,7 @@ FlatCharacter flatten(const gltf::Character& character) {
     flat.nodes.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
         flat.nodes[i].ids = {slot[i], 0u, 0u, 0u};
+        flat.affine = flat.affine && bottom_row_is_0001(relative[i]);
         set_columns(flat.nodes[i].relative, relative[i]);
     }
     for (const gltf::Animation& clip : character.animations) {
@@ -208,18 +213,27 @@ public:
         KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_INSTANCES], bytes_of(per_instance)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_ANCHORS], bytes_of(flat.anchors)));
 
-        // The slot array is sized by a specialization constant: a new pipeline (compiled at
-        // its first dispatch) only for a character with another number of anchors.
+        // The bottom row of every output matrix, written once (KW_POSES_SPEC_AFFINE).
+        const bool affine = flat.affine;
+        if (affine) {
+            gpu::PoseMatrixGpu m{};
+            m.columns[3].w = 1.0f;
+            const std::vector<gpu::PoseMatrixGpu> rows(count * character.nodes.size(), m);
+            KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_WORLD], bytes_of(rows)));
+        }
+        // The specialization constants: a new pipeline (compiled at its first dispatch)
+        // only for a character with another number of anchors or bottom row.
         const std::uint32_t slots = static_cast<std::uint32_t>(flat.anchors.size()) + 1u;
-        if (!kernel_ || slots != slots_) {
+        if (!kernel_ || slots != slots_ || affine != affine_) {
             kernel_.reset();
             std::vector<compute::Binding> types(KW_POSES_BINDING_COUNT, compute::Binding::Storage);
             types[KW_POSES_BINDING_NODES] = compute::Binding::Uniform;
-            const std::uint32_t specialization[] = {slots};
+            const std::uint32_t specialization[] = {slots, affine ? 1u : 0u};
             auto created = compute::Kernel::create(*ctx_, "pose_eval", types, sizeof(gpu::PosePush), specialization);
             if (!created) return created.error();
             kernel_.emplace(std::move(created).value());
             slots_ = slots;
+            affine_ = affine;
         }
         std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
@@ -293,6 +307,7 @@ private:
     gpu::PosePush push_{};
     std::optional<compute::Kernel> kernel_;
     std::uint32_t slots_ = 0;  // the kernel's KW_POSES_SPEC_SLOTS
+    bool affine_ = false;      // and KW_POSES_SPEC_AFFINE
     std::vector<Buffer> buffers_;
     const gltf::Character* character_ = nullptr;
     std::uint32_t count_ = 0;

@@ -57,6 +57,10 @@
 // Specialization constant: the number of slots (anchors + 1), the size of the kernel's
 // array of placed anchor matrices.
 #define KW_POSES_SPEC_SLOTS 0
+// Specialization constant: 1 when every node's relative transform and anchor link has the
+// bottom row (0, 0, 0, 1), as TRS nodes always do: then every output matrix has it too,
+// load() writes it once and the kernel stores only the upper three rows.
+#define KW_POSES_SPEC_AFFINE 1
 
 #define KW_POSES_NONE 0xFFFFFFFFu     // no parent; no clip (rest pose)
 
@@ -107,6 +111,16 @@ struct PoseInstanceGpu {
 struct PoseMatrixGpu {
     vec4 columns[4];
 };
+
+#ifndef __cplusplus
+// The kernel's view of one column of a PoseMatrixGpu when it stores only xyz
+// (KW_POSES_SPEC_AFFINE): in std430 a vec3 and a float are the same 16 bytes as a vec4.
+// GLSL only: C++ sees the columns as PoseMatrixGpu's vec4s.
+struct PoseColumnGpu {
+    vec3 xyz;
+    float w;
+};
+#endif
 
 struct PosePush {
     vec4 time;       // x: scene time (s), y, z, w: unused

@@ -349,6 +349,19 @@ TEST_P(PoseBackends, ManyNodesMatchTheReference) {
     expect_matches_reference(c, crowd(c, kInstances, 3), times, "RiggedSimple with many nodes");
 }
 
+// A matrix node whose bottom row is not (0, 0, 0, 1) (glTF wants matrices that decompose
+// to TRS, §3.5.3; the importer does not check): the Vulkan kernel then stores every row
+// instead of relying on the constant one it writes at load.
+TEST_P(PoseBackends, NonAffineMatrixNodeMatchesTheReference) {
+    const TempDir dir;
+    gltf::Character c = load(write_tiny(dir));
+    ASSERT_TRUE(c.nodes[0].matrix.has_value());
+    (*c.nodes[0].matrix)[0][3] = 0.01f;  // row 3, column 0
+    (*c.nodes[0].matrix)[3][3] = 1.5f;
+    const std::vector<float> times = {-1.0f, 0.3f, 1.0f, 2.2f, 4.5f};
+    expect_matches_reference(c, crowd(c, kInstances, 4), times, "tiny with a non-affine matrix");
+}
+
 // Values worked out by hand, so that cpu-reference itself can fail (the other tests only
 // compare the backends with it).
 TEST_P(PoseBackends, TinyCharacterHasTheHandComputedPose) {
