@@ -198,6 +198,13 @@ mat4 compose(vec3 t, vec4 q, vec3 s) {
 // does for finite entries), load() wrote it, and only the upper three rows are stored, as
 // whole vec3 members: lavapipe stores each float lane by lane, and a swizzled .xyz store
 // of a vec4 member would be three stores.
+// A relative transform or link; affine, its bottom row is known and only xyz is loaded
+// (each loaded float is a gather or a loop over the lanes on lavapipe).
+mat4 constant_columns(vec4 c[4]) {
+    if (AFFINE) return mat4(vec4(c[0].xyz, 0.0), vec4(c[1].xyz, 0.0), vec4(c[2].xyz, 0.0), vec4(c[3].xyz, 1.0));
+    return mat4_columns(c);
+}
+
 void store(uint at, mat4 w) {
     if (AFFINE) {
         world_columns[4u * at].xyz = w[0].xyz;
@@ -258,17 +265,17 @@ void main() {
             if (c < c_end) ch = channels[c];
             next = c < c_end ? ch.target.x : KW_POSES_NONE;
         }
-        const mat4 parent = slots[anchors[a].ids.x] * mat4_columns(anchors[a].link);
+        const mat4 parent = slots[anchors[a].ids.x] * constant_columns(anchors[a].link);
         slots[a + 1u] = parent * compose(translation, rotation, scale);
     }
 
     const uint base = i * node_count;
     const uint uniform_nodes = min(node_count, KW_POSES_UNIFORM_NODES);
     for (uint n = 0u; n < uniform_nodes; ++n) {
-        store(base + n, slots[nodes[n].ids.x] * mat4_columns(nodes[n].relative));
+        store(base + n, slots[nodes[n].ids.x] * constant_columns(nodes[n].relative));
     }
     for (uint n = uniform_nodes; n < node_count; ++n) {
         const uint m = n - KW_POSES_UNIFORM_NODES;
-        store(base + n, slots[more_nodes[m].ids.x] * mat4_columns(more_nodes[m].relative));
+        store(base + n, slots[more_nodes[m].ids.x] * constant_columns(more_nodes[m].relative));
     }
 }
