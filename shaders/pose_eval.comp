@@ -133,10 +133,23 @@ vec4 sample_channel(PoseChannelGpu ch, float time) {
     } else if (time >= t_hi) {
         k = n - 1u;
     } else {
-        // Binary search for k with times[k] <= time < times[k + 1] (std::upper_bound - 1
-        // in sample(); the times increase strictly), keeping both ends' times.
+        // k with times[k] <= time < times[k + 1] (std::upper_bound - 1 in sample(); the
+        // times increase strictly), keeping both ends' times. First a guess from the keys'
+        // mean spacing, right for evenly spaced keys (which baked clips have) and checked
+        // against the two keys around it; the binary search runs only where it missed. Two
+        // loads instead of log2(n), each a loop over the lanes on lavapipe.
+        const float per_second = uintBitsToFloat(ch.keys.z);
+        const uint guess = uint(min((time - t_lo) * per_second, float(n - 2u)));
+        const float t_guess = times[first + guess];
+        const float t_next = times[first + guess + 1u];
         uint lo = 0u;
         uint hi = n - 1u;
+        if (t_guess <= time && time < t_next) {
+            lo = guess;
+            hi = guess + 1u;
+            t_lo = t_guess;
+            t_hi = t_next;
+        }
         while (hi - lo > 1u) {
             const uint mid = (lo + hi) / 2u;
             const float t_mid = times[first + mid];

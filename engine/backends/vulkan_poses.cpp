@@ -6,6 +6,7 @@
 #include <array>
 #include <cassert>
 #include <cmath>
+#include <cstring>
 #include <optional>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -60,6 +61,17 @@ struct FlatCharacter {
 
 void set_columns(gpu::vec4 (&out)[4], const glm::mat4& m) {
     for (int c = 0; c < 4; ++c) out[c] = to_gpu(m[c]);
+}
+
+// The kernel's first guess of a key index: keys per second over the sampler's span, as
+// float bits (PoseChannelGpu::keys.z); only a guess, so its rounding does not matter.
+std::uint32_t per_second(const gltf::Sampler& sampler) {
+    const std::size_t n = sampler.times.size();
+    const float span = n >= 2 ? sampler.times.back() - sampler.times.front() : 0.0f;
+    const float rate = span > 0.0f ? static_cast<float>(n - 1) / span : 0.0f;
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &rate, sizeof bits);
+    return bits;
 }
 
 bool bottom_row_is_0001(const glm::mat4& m) { return m[0][3] == 0.0f && m[1][3] == 0.0f && m[2][3] == 0.0f && m[3][3] == 1.0f; }
@@ -148,7 +160,7 @@ FlatCharacter flatten(const gltf::Character& character) {
             const gltf::Sampler& sampler = clip.samplers[channel.sampler];
             flat.channels.push_back({{anchor(channel), path_of(channel.path), interpolation_of(sampler.interpolation),
                                       static_cast<std::uint32_t>(sampler.times.size())},
-                                     {keys[channel.sampler][0], keys[channel.sampler][1], 0u, 0u}});
+                                     {keys[channel.sampler][0], keys[channel.sampler][1], per_second(sampler), 0u}});
         }
     }
     return flat;

@@ -99,7 +99,8 @@ struct PoseClipGpu {
 struct PoseChannelGpu {
     uvec4 target;    // x: anchor index, y: KW_POSES_PATH_*,
                      // z: KW_POSES_INTERP_*, w: key count (>= 1)
-    uvec4 keys;      // x: first key time (index into times), y: first key value (index into values), z, w: unused
+    uvec4 keys;      // x: first key time (index into times), y: first key value (index into values),
+                     // z: float bits of (count - 1) / (last time - first time), 0 for one key; w: unused
 };
 
 struct PoseInstanceGpu {
