@@ -1,6 +1,7 @@
 // GPU-shared data of the pose kernel (glTF animation of crowds): every struct, binding
 // index and the workgroup size, defined once for shaders/pose_eval.comp and the C++
-// backend (engine/backends/vulkan_poses.cpp). Layout: std430, only vec4/uvec4 members
+// backend (engine/backends/vulkan_poses.cpp). Layout: std430 (the node records also as a
+// std140 uniform block, the same bytes for vec4-only structs), only vec4/uvec4 members
 // (see glsl_types.h); sizes and offsets are checked in engine/gpu/shared_layout.cpp.
 //
 // Why this layout. One invocation evaluates one whole instance. Most of a character
@@ -10,25 +11,29 @@
 // constant, the node's rest transform relative to that anchor (the product of the rest
 // local matrices below the anchor, §3.5.3), or relative to the instance's placement when
 // no ancestor is animated. Per instance the kernel first poses the few anchors, keeping
-// their placed world matrices in registers (slot 0 is the placement, slot a + 1 anchor a),
-// then writes every node as slot x constant: one 80-byte record and no parent read-back
-// per node. Each clip's channels are sorted by anchor, so the invocation consumes them
-// with one cursor as it walks the anchors. Key times are plain floats (the binary search
-// touches a few of them), key values vec4s (lavapipe executes each storage access lane by
-// lane, shared/PERF-NOTES.md: one vec4 costs what one float does). Everything but the
-// output is written at load; evaluate() pushes only the time. Quaternions are
-// vec4(x, y, z, w); matrices are four column vec4s, like glm::mat4.
+// their placed world matrices in a local array (slot 0 is the placement, slot a + 1
+// anchor a), then writes every node as slot x constant: one record and no parent
+// read-back per node. Each clip's channels are sorted by anchor, so the invocation
+// consumes them with one cursor as it walks the anchors. Key times are plain floats (a
+// guess from the keys per second, and a binary search where it misses, touch two or a
+// few), key values vec4s. On lavapipe every storage-buffer load and store is a loop over
+// the lanes with a branch per float (shared/PERF-NOTES.md), so the kernel loads as few
+// floats as it can and, for affine characters, stores only the upper three rows of each
+// matrix: the output stores are still about 70% of its time (0.56 of 0.74 ms for 1000
+// chibi instances). Everything but the output is written at load; evaluate() pushes only
+// the time. Quaternions are vec4(x, y, z, w); matrices are four column vec4s, like
+// glm::mat4.
 //
 // On a discrete GPU: the slots (16 floats each, 7 for the chibi) are indexed by a slot
 // number read from memory, so the compiler keeps them in per-thread local memory (L1
 // cached) rather than registers; the rest needs a few dozen registers, so occupancy is
-// not what limits it. Every invocation reads the same node and anchor records (one cached
-// broadcast per warp). What bounds it is the output, instances x nodes x 64 bytes:
-// instance-major, the lanes of a warp store 16-byte pieces nodes x 64 bytes apart, one
-// cache line per lane and instruction (each line is filled by the same lane's next three
-// stores, so L2 still writes whole lines); a node-major output would coalesce the stores,
-// a change of the consumers' layout that lavapipe, which stores lane by lane, would not
-// repay.
+// not what limits it. Every invocation of a warp reads the same node record at the same
+// time, which the uniform buffer serves as one constant-cache broadcast. What bounds it
+// is the output, instances x nodes x 64 bytes: instance-major, the lanes of a warp store
+// 12- or 16-byte pieces nodes x 64 bytes apart, one cache line per lane and instruction
+// (each line is completed by the same lane's next stores, so L2 still writes whole
+// lines); a node-major output would coalesce the stores, a change of the consumers'
+// layout that lavapipe, which stores lane by lane, would not repay.
 #ifndef KODAWARI_SHADERS_SHARED_POSES_H
 #define KODAWARI_SHADERS_SHARED_POSES_H
 
