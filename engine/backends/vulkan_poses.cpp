@@ -6,8 +6,10 @@
 #include <array>
 #include <cassert>
 #include <cmath>
-#include <numeric>
+#include <cstring>
 #include <optional>
+
+#include <glm/gtc/matrix_transform.hpp>
 
 #include <kodawari/shared/poses.h>
 
@@ -49,33 +51,86 @@ std::uint32_t interpolation_of(gltf::Interpolation interpolation) {
 // The character as the kernel reads it (shared/poses.h).
 struct FlatCharacter {
     std::vector<gpu::PoseNodeGpu> nodes;
+    std::vector<gpu::PoseAnchorGpu> anchors;
     std::vector<gpu::PoseClipGpu> clips;
     std::vector<gpu::PoseChannelGpu> channels;
     std::vector<float> times;
     std::vector<gpu::vec4> values;
+    bool affine = true;  // every relative and link has the bottom row (0, 0, 0, 1)
 };
+
+void set_columns(gpu::vec4 (&out)[4], const glm::mat4& m) {
+    for (int c = 0; c < 4; ++c) out[c] = to_gpu(m[c]);
+}
+
+// The kernel's first guess of a key index: keys per second over the sampler's span, as
+// float bits (PoseChannelGpu::keys.z); only a guess, so its rounding does not matter.
+std::uint32_t per_second(const gltf::Sampler& sampler) {
+    const std::size_t n = sampler.times.size();
+    const float span = n >= 2 ? sampler.times.back() - sampler.times.front() : 0.0f;
+    const float rate = span > 0.0f ? static_cast<float>(n - 1) / span : 0.0f;
+    std::uint32_t bits = 0;
+    std::memcpy(&bits, &rate, sizeof bits);
+    return bits;
+}
+
+bool bottom_row_is_0001(const glm::mat4& m) { return m[0][3] == 0.0f && m[1][3] == 0.0f && m[2][3] == 0.0f && m[3][3] == 1.0f; }
 
 FlatCharacter flatten(const gltf::Character& character) {
     FlatCharacter flat;
     const std::size_t n = character.nodes.size();
     assert(character.order.size() == n && "Character::order lists every node");
-    std::vector<std::uint32_t> position(n, static_cast<std::uint32_t>(n));  // n: not walked yet
-    for (std::size_t p = 0; p < n; ++p) {
-        const auto index = static_cast<std::size_t>(character.order[p]);
-        position[index] = static_cast<std::uint32_t>(p);
-        const gltf::Node& node = character.nodes[index];
-        assert((node.parent < 0 || position[static_cast<std::size_t>(node.parent)] < p) && "parents first");
-        gpu::PoseNodeGpu g{};
-        g.ids = {static_cast<std::uint32_t>(index), node.parent >= 0 ? static_cast<std::uint32_t>(node.parent) : KW_POSES_NONE,
-                 node.matrix ? KW_POSES_NODE_MATRIX : KW_POSES_NODE_TRS, 0u};
-        if (node.matrix) {
-            for (int c = 0; c < 4; ++c) g.local[c] = to_gpu((*node.matrix)[c]);
-        } else {
-            g.local[0] = to_gpu(node.translation);
-            g.local[1] = to_gpu(node.rotation);
-            g.local[2] = to_gpu(node.scale);
+    // The anchors: every node that some clip animates. A node with a matrix keeps it
+    // whatever its channels say (compute_world; the importer rejects such channels,
+    // §3.5.3, a Character built in code may still have them), so it is no anchor and its
+    // channels are dropped below.
+    std::vector<bool> animated(n, false);
+    for (const gltf::Animation& clip : character.animations) {
+        for (const gltf::Channel& channel : clip.channels) {
+            const auto i = static_cast<std::size_t>(channel.node);
+            animated[i] = !character.nodes[i].matrix;
         }
-        flat.nodes.push_back(g);
+    }
+    // Parents first: each node's slot (its anchor's) and its rest transform relative to
+    // that anchor, multiplied in compute_world's order below the anchor, so that a node
+    // with no animated ancestor gets compute_world's rest world matrix bit for bit.
+    std::vector<std::uint32_t> slot(n, 0u);
+    std::vector<glm::mat4> relative(n, glm::mat4(1.0f));
+    std::vector<std::uint32_t> anchor_of_slot;  // node index of anchor slot - 1
+    std::vector<bool> walked(n, false);
+    for (const int index : character.order) {
+        const auto i = static_cast<std::size_t>(index);
+        const gltf::Node& node = character.nodes[i];
+        const bool has_parent = node.parent >= 0;
+        const auto parent = static_cast<std::size_t>(has_parent ? node.parent : 0);
+        assert((!has_parent || walked[parent]) && "parents first");
+        walked[i] = true;
+        if (animated[i]) {
+            gpu::PoseAnchorGpu a{};
+            a.ids = {has_parent ? slot[parent] : 0u, 0u, 0u, 0u};
+            a.rest[0] = to_gpu(node.translation);
+            a.rest[1] = to_gpu(node.rotation);
+            a.rest[2] = to_gpu(node.scale);
+            set_columns(a.link, has_parent ? relative[parent] : glm::mat4(1.0f));
+            flat.affine = flat.affine && (!has_parent || bottom_row_is_0001(relative[parent]));
+            flat.anchors.push_back(a);
+            anchor_of_slot.push_back(static_cast<std::uint32_t>(i));
+            slot[i] = static_cast<std::uint32_t>(flat.anchors.size());
+            relative[i] = glm::mat4(1.0f);
+            continue;
+        }
+        // compute_world's local matrix of the rest TRS.
+        const glm::mat4 local = node.matrix ? *node.matrix
+                                            : glm::translate(glm::mat4(1.0f), node.translation) * glm::mat4_cast(node.rotation) *
+                                                  glm::scale(glm::mat4(1.0f), node.scale);
+        slot[i] = has_parent ? slot[parent] : 0u;
+        relative[i] = has_parent ? relative[parent] * local : local;
+    }
+    flat.nodes.resize(n);
+    for (std::size_t i = 0; i < n; ++i) {
+        flat.nodes[i].ids = {slot[i], 0u, 0u, 0u};
+        flat.affine = flat.affine && bottom_row_is_0001(relative[i]);
+        set_columns(flat.nodes[i].relative, relative[i]);
     }
     for (const gltf::Animation& clip : character.animations) {
         // Each sampler's keys once, however many channels use it.
@@ -86,14 +141,16 @@ FlatCharacter flatten(const gltf::Character& character) {
             flat.times.insert(flat.times.end(), sampler.times.begin(), sampler.times.end());
             for (const glm::vec4& v : sampler.values) flat.values.push_back(to_gpu(v));
         }
-        // Channels in the kernel's walk order; stable, so that of two channels of one
-        // property the file's later one is applied last and wins, as in gltf::evaluate.
-        std::vector<std::size_t> sorted(clip.channels.size());
-        std::iota(sorted.begin(), sorted.end(), std::size_t{0});
-        std::stable_sort(sorted.begin(), sorted.end(), [&](std::size_t a, std::size_t b) {
-            return position[static_cast<std::size_t>(clip.channels[a].node)] <
-                   position[static_cast<std::size_t>(clip.channels[b].node)];
-        });
+        // Channels in the kernel's walk order of the anchors; stable, so that of two
+        // channels of one property the file's later one is applied last and wins, as in
+        // gltf::evaluate.
+        const auto anchor = [&](const gltf::Channel& channel) { return slot[static_cast<std::size_t>(channel.node)] - 1u; };
+        std::vector<std::size_t> sorted;
+        for (std::size_t c = 0; c < clip.channels.size(); ++c) {
+            if (animated[static_cast<std::size_t>(clip.channels[c].node)]) sorted.push_back(c);
+        }
+        std::stable_sort(sorted.begin(), sorted.end(),
+                         [&](std::size_t a, std::size_t b) { return anchor(clip.channels[a]) < anchor(clip.channels[b]); });
         gpu::PoseClipGpu g{};
         g.channels = {static_cast<std::uint32_t>(flat.channels.size()), static_cast<std::uint32_t>(sorted.size()), 0u, 0u};
         g.range = {clip.start, clip.end, 0.0f, 0.0f};
@@ -101,10 +158,9 @@ FlatCharacter flatten(const gltf::Character& character) {
         for (const std::size_t c : sorted) {
             const gltf::Channel& channel = clip.channels[c];
             const gltf::Sampler& sampler = clip.samplers[channel.sampler];
-            flat.channels.push_back(
-                {{position[static_cast<std::size_t>(channel.node)], path_of(channel.path), interpolation_of(sampler.interpolation),
-                  static_cast<std::uint32_t>(sampler.times.size())},
-                 {keys[channel.sampler][0], keys[channel.sampler][1], 0u, 0u}});
+            flat.channels.push_back({{anchor(channel), path_of(channel.path), interpolation_of(sampler.interpolation),
+                                      static_cast<std::uint32_t>(sampler.times.size())},
+                                     {keys[channel.sampler][0], keys[channel.sampler][1], per_second(sampler), 0u}});
         }
     }
     return flat;
@@ -142,29 +198,54 @@ public:
         }
 
         buffers_.clear();
+        const std::size_t first_nodes = std::min<std::size_t>(flat.nodes.size(), KW_POSES_UNIFORM_NODES);
         const std::uint64_t sizes[KW_POSES_BINDING_COUNT] = {
-            flat.nodes.size() * sizeof(gpu::PoseNodeGpu),
+            KW_POSES_UNIFORM_NODES * sizeof(gpu::PoseNodeGpu),
             flat.clips.size() * sizeof(gpu::PoseClipGpu),
             flat.channels.size() * sizeof(gpu::PoseChannelGpu),
             flat.times.size() * sizeof(float),
             flat.values.size() * sizeof(gpu::vec4),
             per_instance.size() * sizeof(gpu::PoseInstanceGpu),
-            count * character.nodes.size() * sizeof(gpu::PoseMatrixGpu)};
+            count * character.nodes.size() * sizeof(gpu::PoseMatrixGpu),
+            flat.anchors.size() * sizeof(gpu::PoseAnchorGpu),
+            (flat.nodes.size() - first_nodes) * sizeof(gpu::PoseNodeGpu)};
         auto storage = compute::create_storage_buffers(*ctx_, sizes, "the crowd");
         if (!storage) return storage.error();
         buffers_ = std::move(storage).value();
-        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_NODES], bytes_of(flat.nodes)));
+        // The uniform block is KW_POSES_UNIFORM_NODES records whatever the character.
+        std::vector<gpu::PoseNodeGpu> uniform_nodes(KW_POSES_UNIFORM_NODES);
+        std::copy_n(flat.nodes.begin(), first_nodes, uniform_nodes.begin());
+        const std::vector<gpu::PoseNodeGpu> more_nodes(flat.nodes.begin() + static_cast<std::ptrdiff_t>(first_nodes), flat.nodes.end());
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_NODES], bytes_of(uniform_nodes)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_MORE_NODES], bytes_of(more_nodes)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_CLIPS], bytes_of(flat.clips)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_CHANNELS], bytes_of(flat.channels)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_TIMES], bytes_of(flat.times)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_VALUES], bytes_of(flat.values)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_INSTANCES], bytes_of(per_instance)));
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_ANCHORS], bytes_of(flat.anchors)));
 
-        if (!kernel_) {
-            const std::vector<compute::Binding> types(KW_POSES_BINDING_COUNT, compute::Binding::Storage);
-            auto created = compute::Kernel::create(*ctx_, "pose_eval", types, sizeof(gpu::PosePush));
+        // The bottom row of every output matrix, written once (KW_POSES_SPEC_AFFINE).
+        const bool affine = flat.affine;
+        if (affine) {
+            gpu::PoseMatrixGpu m{};
+            m.columns[3].w = 1.0f;
+            const std::vector<gpu::PoseMatrixGpu> rows(count * character.nodes.size(), m);
+            KW_TRY(compute::upload(*ctx_, buffers_[KW_POSES_BINDING_WORLD], bytes_of(rows)));
+        }
+        // The specialization constants: a new pipeline (compiled at its first dispatch)
+        // only for a character with another number of anchors or bottom row.
+        const std::uint32_t slots = static_cast<std::uint32_t>(flat.anchors.size()) + 1u;
+        if (!kernel_ || slots != slots_ || affine != affine_) {
+            kernel_.reset();
+            std::vector<compute::Binding> types(KW_POSES_BINDING_COUNT, compute::Binding::Storage);
+            types[KW_POSES_BINDING_NODES] = compute::Binding::Uniform;
+            const std::uint32_t specialization[] = {slots, affine ? 1u : 0u};
+            auto created = compute::Kernel::create(*ctx_, "pose_eval", types, sizeof(gpu::PosePush), specialization);
             if (!created) return created.error();
             kernel_.emplace(std::move(created).value());
+            slots_ = slots;
+            affine_ = affine;
         }
         std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
@@ -229,7 +310,7 @@ public:
 
 private:
     std::span<const std::byte> push_bytes(float time) {
-        push_ = {{time, 0.0f, 0.0f, 0.0f}, {count_, static_cast<std::uint32_t>(character_->nodes.size()), 0u, 0u}};
+        push_ = {{time, 0.0f, 0.0f, 0.0f}, {count_, static_cast<std::uint32_t>(character_->nodes.size()), slots_ - 1u, 0u}};
         return std::as_bytes(std::span(&push_, 1));
     }
     std::uint32_t groups() const { return (count_ + KW_POSES_WORKGROUP_SIZE - 1) / KW_POSES_WORKGROUP_SIZE; }
@@ -237,6 +318,8 @@ private:
     std::shared_ptr<compute::Device> ctx_;
     gpu::PosePush push_{};
     std::optional<compute::Kernel> kernel_;
+    std::uint32_t slots_ = 0;  // the kernel's KW_POSES_SPEC_SLOTS
+    bool affine_ = false;      // and KW_POSES_SPEC_AFFINE
     std::vector<Buffer> buffers_;
     const gltf::Character* character_ = nullptr;
     std::uint32_t count_ = 0;

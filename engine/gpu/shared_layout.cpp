@@ -56,7 +56,9 @@ static_assert(sizeof(RodPush) == 48 && offsetof(RodPush, camera_position) == 16 
 static_assert(KW_RODS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 
 // shared/poses.h
-static_assert(sizeof(PoseNodeGpu) == 80 && offsetof(PoseNodeGpu, local) == 16);
+static_assert(sizeof(PoseNodeGpu) == 80 && offsetof(PoseNodeGpu, relative) == 16);
+static_assert(sizeof(PoseAnchorGpu) == 128 && offsetof(PoseAnchorGpu, rest) == 16 && offsetof(PoseAnchorGpu, link) == 64);
+static_assert(KW_POSES_UNIFORM_NODES * sizeof(PoseNodeGpu) <= 16384, "the uniform buffer range every Vulkan device allows");
 static_assert(sizeof(PoseClipGpu) == 32 && offsetof(PoseClipGpu, range) == 16);
 static_assert(sizeof(PoseChannelGpu) == 32 && offsetof(PoseChannelGpu, keys) == 16);
 static_assert(sizeof(PoseInstanceGpu) == 96);

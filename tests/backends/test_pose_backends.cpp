@@ -320,6 +320,48 @@ TEST_P(PoseBackends, StepAndCubicSplineMatchTheReference) {
     expect_matches_reference(c, crowd(c, kInstances, 2), times, "tiny STEP/CUBICSPLINE");
 }
 
+// More nodes than the kernel's uniform block holds (KW_POSES_UNIFORM_NODES): RiggedSimple
+// with short chains added below its animated bone and below its root, so that nodes
+// past the block are read from the storage buffer, animated ancestors and all.
+TEST_P(PoseBackends, ManyNodesMatchTheReference) {
+    gltf::Character c = load(kRiggedSimple);
+    ASSERT_EQ(c.animations.size(), 1u);
+    const int animated = c.animations[0].channels[0].node;
+    const int root = c.order[0];
+    const int added = static_cast<int>(KW_POSES_UNIFORM_NODES) + 40;
+    for (int k = 0; k < added; ++k) {
+        const int index = static_cast<int>(c.nodes.size());
+        gltf::Node node;
+        node.name = "added_" + std::to_string(k);
+        // Chains of 3: a fresh start below the bone (or, every 4th chain, the root), then
+        // below the node added just before.
+        node.parent = k % 3 != 0 ? index - 1 : (k % 12 == 0 ? root : animated);
+        node.translation = {0.01f * static_cast<float>(k % 5), 0.02f, -0.01f};
+        node.rotation = glm::angleAxis(0.05f * static_cast<float>(k % 7), glm::normalize(glm::vec3(1.0f, static_cast<float>(k % 3), 0.5f)));
+        node.scale = glm::vec3(1.0f + 0.01f * static_cast<float>(k % 4));
+        c.nodes[static_cast<std::size_t>(node.parent)].children.push_back(index);
+        c.nodes.push_back(node);
+        c.order.push_back(index);
+    }
+    ASSERT_GT(c.nodes.size(), std::size_t{KW_POSES_UNIFORM_NODES});
+    const gltf::Animation& clip = c.animations[0];
+    const std::vector<float> times = {-5.0f, clip.start, 0.3f, 0.77f, 1.5f, clip.end, 10.0f};
+    expect_matches_reference(c, crowd(c, kInstances, 3), times, "RiggedSimple with many nodes");
+}
+
+// A matrix node whose bottom row is not (0, 0, 0, 1) (glTF wants matrices that decompose
+// to TRS, §3.5.3; the importer does not check): the Vulkan kernel then stores every row
+// instead of relying on the constant one it writes at load.
+TEST_P(PoseBackends, NonAffineMatrixNodeMatchesTheReference) {
+    const TempDir dir;
+    gltf::Character c = load(write_tiny(dir));
+    ASSERT_TRUE(c.nodes[0].matrix.has_value());
+    (*c.nodes[0].matrix)[0][3] = 0.01f;  // row 3, column 0
+    (*c.nodes[0].matrix)[3][3] = 1.5f;
+    const std::vector<float> times = {-1.0f, 0.3f, 1.0f, 2.2f, 4.5f};
+    expect_matches_reference(c, crowd(c, kInstances, 4), times, "tiny with a non-affine matrix");
+}
+
 // Values worked out by hand, so that cpu-reference itself can fail (the other tests only
 // compare the backends with it).
 TEST_P(PoseBackends, TinyCharacterHasTheHandComputedPose) {
