@@ -131,18 +131,37 @@ public:
                 tjoints.push_back({to_gpu(t.chain.bone_axis[i], t.chain.mass[i]),
                                    {t.chain.segment_length[i], t.chain.half_length[i], 0.0f, 0.0f}});
             }
+            const rods::RotationShape& base = t.shapes[0];
             for (const rods::RotationShape& s : t.shapes) {
                 for (std::uint32_t i = 0; i < n; ++i) {
-                    const glm::quat r = i + 1 < n ? s.rotations[i] : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
-                    shapes.push_back({to_gpu(r), to_gpu(s.orientations[i])});
+                    const glm::quat identity(1.0f, 0.0f, 0.0f, 0.0f);
+                    glm::quat r = i + 1 < n ? s.rotations[i] : identity;
+                    glm::quat o = s.orientations[i];
+                    // The blend's hemisphere flip (rods::blend), once here (see RodShapeJointGpu).
+                    if (glm::dot(r, i + 1 < n ? base.rotations[i] : identity) < 0.0f) r = -r;
+                    if (glm::dot(o, base.orientations[i]) < 0.0f) o = -o;
+                    shapes.push_back({to_gpu(r), to_gpu(o)});
                 }
             }
         }
+        // The chains listed by template: each template's run is one GROUPED dispatch.
+        std::vector<std::uint32_t> order(count);
+        for (std::uint32_t c = 0; c < count; ++c) order[c] = c;
+        std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+            return world.chains[a].template_index < world.chains[b].template_index;
+        });
         std::vector<gpu::RodChainGpu> chains(count);
-        for (std::size_t c = 0; c < count; ++c) {
+        groups_.clear();
+        for (std::uint32_t e = 0; e < count; ++e) {
+            const std::uint32_t c = order[e];
             const rods::ChainInstance& ch = world.chains[c];
-            chains[c] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, 0u, 0u, 0u}};
+            chains[e] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, c, 0u, 0u}};
+            if (groups_.empty() || groups_.back().template_index != ch.template_index) {
+                groups_.push_back({ch.template_index, e, 0u});
+            }
+            ++groups_.back().count;
         }
+        grouped_ = groups_.size() <= KW_RODS_MAX_GROUPS;
 
         // The initial state, from the CPU reference's initial_state (so all backends start
         // from the same bits).
@@ -197,7 +216,7 @@ public:
         const std::uint32_t suppression = all_none   ? KW_RODS_SUPPRESSION_NONE
                                           : all_full ? KW_RODS_SUPPRESSION_FULL
                                                      : KW_RODS_SUPPRESSION_PARTIAL;
-        auto kernel = pipeline({max_joints, max_views, suppression});
+        auto kernel = pipeline({max_joints, max_views, suppression, grouped_ ? 1u : 0u});
         if (!kernel) return kernel.error();
         kernel_ = kernel.value();
         std::vector<const Buffer*> bound;
@@ -317,16 +336,29 @@ private:
         if (input_writer_) input_writer_->record(recording, *this);
 
         const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
-        const gpu::RodPush push{{static_cast<std::uint32_t>(world_->chains.size()), 0u, 0u, 0u},
-                                to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f),
-                                to_gpu(frame.camera.forward)};
-        const std::uint32_t groups =
-            static_cast<std::uint32_t>((world_->chains.size() + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE);
+        gpu::RodPush push{{}, {}, to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f), to_gpu(frame.camera.forward)};
+        auto dispatch = [&](std::uint32_t first, std::uint32_t chains) {
+            push.counts.x = chains;
+            push.counts.y = first;
+            const std::uint32_t groups = (chains + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE;
+            kernel_->dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
+        };
         // What earlier dispatches and copies wrote (the state this dispatch reads and
         // overwrites, the input) before the step.
         compute::barrier(recording, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
         if (timed) recording.timestamp(compute::Timestamp::Begin);
-        kernel_->dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
+        if (grouped_) {
+            // Disjoint chains: the dispatches need no barrier between them.
+            for (const Group& g : groups_) {
+                const gpu::RodTemplateGpu& t = templates_[g.template_index];
+                push.counts.z = t.counts.z;
+                push.counts.w = t.counts.w;
+                push.group = {g.template_index, t.counts.x, t.counts.y, 0u};
+                dispatch(g.first, g.count);
+            }
+        } else {
+            dispatch(0u, static_cast<std::uint32_t>(world_->chains.size()));
+        }
         if (timed) recording.timestamp(compute::Timestamp::End);
         // The host reads mapped state after the fence; staged reads copy it.
         compute::barrier(recording, compute::Stage::Compute, compute::Stage::Host | compute::Stage::Transfer);
@@ -380,6 +412,12 @@ private:
     std::shared_ptr<const RodInputWriter> input_writer_;
     std::optional<compute::StagingRing> ring_;  // record_external's input uploads
     std::vector<gpu::RodTemplateGpu> templates_;
+    // The runs of RodChainGpu that share a template, and whether each is a dispatch of its own.
+    struct Group {
+        std::uint32_t template_index, first, count;
+    };
+    std::vector<Group> groups_;
+    bool grouped_ = false;
     float dt_ = -1.0f;
     double gpu_ms_ = -1.0;
     // Per-frame staging on the host, kept to avoid reallocating every frame.

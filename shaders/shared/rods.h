@@ -39,7 +39,12 @@
 #define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the world: sizes the register arrays
 #define KW_RODS_SPEC_MAX_VIEWS 1   // the most view examples of a chain of the world
 #define KW_RODS_SPEC_SUPPRESSION 2 // KW_RODS_SUPPRESSION_*: what the world's chains need of SPEC A.5
-#define KW_RODS_SPEC_COUNT 3
+#define KW_RODS_SPEC_GROUPED 3     // 1: one dispatch per template, its constants named by RodPush (see there)
+#define KW_RODS_SPEC_COUNT 4
+
+// Worlds of at most this many templates are stepped one dispatch per template (GROUPED);
+// each dispatch costs tens of microseconds on lavapipe, so more templates take one.
+#define KW_RODS_MAX_GROUPS 32
 
 #define KW_RODS_SUPPRESSION_NONE 0u     // every chain has momentum_suppression 0
 #define KW_RODS_SUPPRESSION_FULL 1u     // every chain has momentum_suppression 1
@@ -65,14 +70,17 @@ struct RodTemplateJointGpu {
 };
 
 // Per joint of one shape of a template (shape 0 = base, k = view example k), SPEC A.2.
+// A view's quaternions are uploaded negated where their dot with the base's is negative
+// (the blend's hemisphere flip done once; negation is exact, so the blend's bits are the CPU's).
 struct RodShapeJointGpu {
     vec4 rotation;     // r_i (identity for the last joint, which has no segment)
     vec4 orientation;  // o_i
 };
 
+// Listed by template (the groups of GROUPED dispatches), so joints.y names the chain.
 struct RodChainGpu {
     uvec4 ids;     // x: template, y: character, z: first collider, w: collider count
-    uvec4 joints;  // x: first joint in the per-joint buffers, y, z, w: unused
+    uvec4 joints;  // x: first joint in the per-joint buffers, y: the chain's index in the per-chain buffers, z, w: unused
 };
 
 struct RodTransformGpu {
@@ -104,8 +112,12 @@ struct RodChainStateGpu {
                            // storing it per joint (loads and stores are the costly part)
 };
 
+// One dispatch's: its chains are RodChainGpu counts.y .. counts.y + counts.x - 1. In a
+// GROUPED dispatch they share template group.x, whose constants are found from these
+// push constants alone (so lavapipe loads them once for all lanes).
 struct RodPush {
-    uvec4 counts;           // x: chain count, y, z, w: unused
+    uvec4 counts;           // x: chains, y: first RodChainGpu, z: first RodTemplateJointGpu, w: first RodShapeJointGpu (GROUPED)
+    uvec4 group;            // GROUPED: x: template, y: joint count n, z: view examples m, w: unused
     vec4 camera_position;   // xyz, w: 1 = orthographic
     vec4 camera_forward;    // xyz, w: unused
 };
