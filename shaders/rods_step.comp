@@ -28,6 +28,9 @@ layout(constant_id = KW_RODS_SPEC_SUPPRESSION) const uint SUPPRESSION = KW_RODS_
 // all lanes, but only outside every branch, so they are loaded before the guard below.
 // Otherwise (worlds of many templates) each chain finds its template itself.
 layout(constant_id = KW_RODS_SPEC_GROUPED) const bool GROUPED = true;
+// Chains of exactly MAX_J joints and MAX_VIEWS views: the counts become constants and the
+// `if (i < n)` masks of every unrolled loop fold away (lavapipe evaluates them per lane).
+layout(constant_id = KW_RODS_SPEC_EXACT) const bool EXACT = false;
 
 layout(std430, binding = KW_RODS_BINDING_TEMPLATES) readonly buffer Templates { RodTemplateGpu templates[]; };
 layout(std430, binding = KW_RODS_BINDING_TEMPLATE_JOINTS) readonly buffer TemplateJoints { RodTemplateJointGpu tjoints[]; };
@@ -120,7 +123,7 @@ void main() {
     RodTemplateGpu t;
     if (GROUPED) {
         t = templates[push.group.x];
-        load_constants(push.group.y, push.group.z, push.counts.z, push.counts.w, tc);
+        load_constants(EXACT ? MAX_J : push.group.y, EXACT ? MAX_VIEWS : push.group.z, push.counts.z, push.counts.w, tc);
     }
     const uint e = gl_GlobalInvocationID.x;
     if (e >= push.counts.x) return;
@@ -129,8 +132,8 @@ void main() {
     // The chain's index in the per-chain buffers (the chains are listed by template).
     const uint c = chain.joints.y;
     if (!GROUPED) t = templates[chain.ids.x];
-    const uint n = t.counts.x;
-    const uint m = t.counts.y;
+    const uint n = EXACT ? MAX_J : t.counts.x;
+    const uint m = EXACT ? MAX_VIEWS : t.counts.y;
     if (!GROUPED) load_constants(n, m, t.counts.z, t.counts.w, tc);
     const uint j0 = chain.joints.x;
 

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <deque>
 #include <optional>
 
 #include <kodawari/shared/rods.h>
@@ -157,7 +158,7 @@ public:
             const rods::ChainInstance& ch = world.chains[c];
             chains[e] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, c, 0u, 0u}};
             if (groups_.empty() || groups_.back().template_index != ch.template_index) {
-                groups_.push_back({ch.template_index, e, 0u});
+                groups_.push_back({ch.template_index, e, 0u, false});
             }
             ++groups_.back().count;
         }
@@ -216,12 +217,28 @@ public:
         const std::uint32_t suppression = all_none   ? KW_RODS_SUPPRESSION_NONE
                                           : all_full ? KW_RODS_SUPPRESSION_FULL
                                                      : KW_RODS_SUPPRESSION_PARTIAL;
-        auto kernel = pipeline({max_joints, max_views, suppression, grouped_ ? 1u : 0u});
-        if (!kernel) return kernel.error();
-        kernel_ = kernel.value();
+        // A run whose chains all have max_joints joints and max_views views gets the kernel
+        // with those counts as constants (no per-joint masks); the others the general one.
+        auto exact = [&](std::uint32_t t) {
+            return templates_[t].counts.x == max_joints && templates_[t].counts.y == max_views;
+        };
+        bool all_exact = true, any_exact = false;
+        for (Group& g : groups_) {
+            g.exact = grouped_ && exact(g.template_index);
+            all_exact = all_exact && exact(g.template_index);
+            any_exact = any_exact || g.exact;
+        }
         std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
-        kernel_->bind(bound);
+        kernel_ = kernel_exact_ = nullptr;
+        for (const bool e : {false, true}) {
+            const bool needed = e ? (grouped_ ? any_exact : all_exact) : !all_exact;
+            if (!needed) continue;
+            auto kernel = pipeline({max_joints, max_views, suppression, grouped_ ? 1u : 0u, e ? 1u : 0u});
+            if (!kernel) return kernel.error();
+            kernel.value()->bind(bound);
+            (e ? kernel_exact_ : kernel_) = kernel.value();
+        }
         return {};
     }
 
@@ -337,11 +354,11 @@ private:
 
         const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
         gpu::RodPush push{{}, {}, to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f), to_gpu(frame.camera.forward)};
-        auto dispatch = [&](std::uint32_t first, std::uint32_t chains) {
+        auto dispatch = [&](const compute::Kernel* kernel, std::uint32_t first, std::uint32_t chains) {
             push.counts.x = chains;
             push.counts.y = first;
             const std::uint32_t groups = (chains + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE;
-            kernel_->dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
+            kernel->dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
         };
         // What earlier dispatches and copies wrote (the state this dispatch reads and
         // overwrites, the input) before the step.
@@ -354,10 +371,10 @@ private:
                 push.counts.z = t.counts.z;
                 push.counts.w = t.counts.w;
                 push.group = {g.template_index, t.counts.x, t.counts.y, 0u};
-                dispatch(g.first, g.count);
+                dispatch(g.exact ? kernel_exact_ : kernel_, g.first, g.count);
             }
         } else {
-            dispatch(0u, static_cast<std::uint32_t>(world_->chains.size()));
+            dispatch(kernel_exact_ != nullptr ? kernel_exact_ : kernel_, 0u, static_cast<std::uint32_t>(world_->chains.size()));
         }
         if (timed) recording.timestamp(compute::Timestamp::End);
         // The host reads mapped state after the fence; staged reads copy it.
@@ -405,8 +422,10 @@ private:
 
     std::shared_ptr<compute::Device> ctx_;
     // A few variants at most (one per kind of world): a vector is the simplest map.
-    std::vector<std::pair<Variant, compute::Kernel>> pipelines_;
-    const compute::Kernel* kernel_ = nullptr;
+    // (A deque: kernel_ and kernel_exact_ point into it.)
+    std::deque<std::pair<Variant, compute::Kernel>> pipelines_;
+    const compute::Kernel* kernel_ = nullptr;        // KW_RODS_SPEC_EXACT 0
+    const compute::Kernel* kernel_exact_ = nullptr;  // KW_RODS_SPEC_EXACT 1
     const rods::RodWorld* world_ = nullptr;
     std::vector<Buffer> buffers_;
     std::shared_ptr<const RodInputWriter> input_writer_;
@@ -415,6 +434,7 @@ private:
     // The runs of RodChainGpu that share a template, and whether each is a dispatch of its own.
     struct Group {
         std::uint32_t template_index, first, count;
+        bool exact;  // dispatched with kernel_exact_
     };
     std::vector<Group> groups_;
     bool grouped_ = false;

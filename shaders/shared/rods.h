@@ -40,7 +40,8 @@
 #define KW_RODS_SPEC_MAX_VIEWS 1   // the most view examples of a chain of the world
 #define KW_RODS_SPEC_SUPPRESSION 2 // KW_RODS_SUPPRESSION_*: what the world's chains need of SPEC A.5
 #define KW_RODS_SPEC_GROUPED 3     // 1: one dispatch per template, its constants named by RodPush (see there)
-#define KW_RODS_SPEC_COUNT 4
+#define KW_RODS_SPEC_EXACT 4       // 1: every chain of the dispatch has MAX_J joints and MAX_VIEWS views
+#define KW_RODS_SPEC_COUNT 5
 
 // Worlds of at most this many templates are stepped one dispatch per template (GROUPED);
 // each dispatch costs tens of microseconds on lavapipe, so more templates take one.
