@@ -14,6 +14,25 @@
 // frame can recompute from per-chain data is stored per joint: the shape-matching warm
 // start comes from the orientations, last frame's rest shape from last frame's weights.
 // Quaternions are vec4(x, y, z, w).
+//
+// The template constants (RodTemplateGpu, RodTemplateJointGpu, RodShapeJointGpu) are
+// shared by every chain of a template: chains are listed by template and, in worlds of
+// few templates, each template's run is its own dispatch whose push constants (RodPush)
+// name the template, so every lane reads the same addresses (KW_RODS_SPEC_GROUPED).
+//
+// On a discrete GPU. The same mapping is sound but not what a GPU is best at: one
+// invocation holds a whole chain, so with MAX_J = 16 its live set (positions, velocities,
+// orientations, rest shape, the shape-matching terms: some 40 floats per joint) is several
+// hundred registers, beyond the 255 VGPRs of AMD or NVIDIA; the compiler spills to
+// scratch (or keeps the arrays in local memory) and occupancy is one or two waves per
+// SIMD. The per-joint state is contiguous per chain, so neighbouring lanes read addresses
+// MAX_J x 32 bytes apart: each vec4 load touches its own 32-byte sector (uncoalesced;
+// a joint's two vec4 of a struct share that sector). The template constants of a
+// GROUPED dispatch are uniform, so they go through the scalar/constant cache. A
+// GPU-first kernel would map a subgroup (or workgroup) to a chain and an invocation to a
+// joint, exchanging the group's neighbours by subgroup shuffles or shared memory:
+// coalesced, few registers, but lavapipe pays per invocation and per shuffle, which is
+// why this one does not.
 #ifndef KODAWARI_SHADERS_SHARED_RODS_H
 #define KODAWARI_SHADERS_SHARED_RODS_H
 
