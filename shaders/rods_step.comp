@@ -118,6 +118,30 @@ void load_constants(uint n, uint m, uint tj, uint shape0, out Constants tc) {
     }
 }
 
+// Steps of one projection iteration (solver.cpp), as macros so that every array index
+// stays a constant of the unrolled loop.
+// The ellipsoid term A_j of particle j.
+#define KW_ELLIPSOID(j)                                                                                       \
+    {                                                                                                         \
+        const float a2 = tc.half_len[j] * tc.half_len[j];                                                     \
+        const mat3 relative = mat3_cast(qmul(qs[j], qconj(obar[j])));                                         \
+        a_j[j] = (tc.weight[j] / 5.0) *                                                                       \
+                 (b2 * relative + (a2 - b2) * outerProduct(qrot(qs[j], tc.axis[j]), obar_axis[j]));           \
+        goal_sum[j] = vec3(0.0);                                                                              \
+    }
+// Particle j (>= 1) after its last group: toward the mean of its goals, then rest-pose
+// attraction (Han & Harada 2012, global shape constraint), then the distance constraint to
+// its (already final) parent, follow-the-leader.
+#define KW_SETTLE(j, groups)                                                                                  \
+    {                                                                                                         \
+        p[j] += k_iter * (goal_sum[j] / (groups) - p[j]);                                                     \
+        qs[j] = q_new[j];                                                                                     \
+        p[j] += k_rest * (xbar[j] - p[j]);                                                                    \
+        const vec3 dd = p[j] - p[(j) - 1];                                                                    \
+        const float len = length(dd);                                                                         \
+        if (len > 1e-9) p[j] = p[(j) - 1] + (tc.seg_len[(j) - 1] / len) * dd;                                 \
+    }
+
 void main() {
     Constants tc;
     RodTemplateGpu t;
@@ -301,19 +325,21 @@ void main() {
         }
 
         for (uint it = 0; it < iterations; ++it) {
-            // The ellipsoid terms A_j (solver.cpp), once per particle per iteration.
-            [[unroll]] for (uint j = 0; j < MAX_J; ++j) {
-                if (j < n) {
-                    const float a2 = tc.half_len[j] * tc.half_len[j];
-                    const mat3 relative = mat3_cast(qmul(qs[j], qconj(obar[j])));
-                    a_j[j] = (tc.weight[j] / 5.0) *
-                             (b2 * relative + (a2 - b2) * outerProduct(qrot(qs[j], tc.axis[j]), obar_axis[j]));
-                    goal_sum[j] = vec3(0.0);
-                }
-            }
-            // Shape matching over G_i = {i-1, i, i+1}, clipped at the ends.
+            // One pass over the groups that also finishes each joint as soon as its last
+            // group is done: A_j right before its first group, a joint's goal average,
+            // rest-pose attraction and distance constraint right after its last. The same
+            // operations on the same values as the phase-by-phase order of solver.cpp (so the
+            // same bits), with far fewer values alive at once (lavapipe spills the rest).
             [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
                 if (i < n) {
+                    // The ellipsoid terms A_j (solver.cpp), once per particle per iteration.
+                    if (i == 0) {
+                        KW_ELLIPSOID(0);
+                        KW_ELLIPSOID(1);
+                    } else if (i + 1 < MAX_J && i + 1 < n) {
+                        KW_ELLIPSOID(i + 1);
+                    }
+                    // Shape matching over G_i = {i-1, i, i+1}, clipped at the ends.
                     const uint lo = i == 0 ? 0 : i - 1;
                     const bool has_next = i + 1 < MAX_J && i + 1 < n && i != 0;
                     // Group 0 is {0, 1}: its "previous" member is joint 0 itself.
@@ -350,28 +376,9 @@ void main() {
                     if (i != 0) goal_sum[i] += cm + qrot(rot, xbar[i] - cbar);
                     if (i == 0 || has_next) goal_sum[hi] += cm + qrot(rot, xbar[hi] - cbar);
                     q_new[i] = qnormalize(qmul(rot, obar[i]));
-                }
-            }
-            [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
-                if (i < n) {
-                    // Groups containing joint i: 2 at either end, 3 inside.
-                    const float count = (i + 1 == n) ? 2.0 : 3.0;
-                    p[i] += k_iter * (goal_sum[i] / count - p[i]);
-                    qs[i] = q_new[i];
-                }
-            }
-
-            // Rest-pose attraction (solver.cpp; Han & Harada 2012, global shape constraint).
-            [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
-                if (i < n) p[i] += k_rest * (xbar[i] - p[i]);
-            }
-
-            // Distance constraints, follow-the-leader (solver.cpp).
-            [[unroll]] for (uint i = 0; i + 1 < MAX_J; ++i) {
-                if (i + 1 < n) {
-                    const vec3 dd = p[i + 1] - p[i];
-                    const float len = length(dd);
-                    if (len > 1e-9) p[i + 1] = p[i] + (tc.seg_len[i] / len) * dd;
+                    // Joint i-1's last group was this one (2 groups hold either end, 3 the others).
+                    if (i >= 2) KW_SETTLE(i - 1, 3.0);
+                    if (i >= 1 && i + 1 == n) KW_SETTLE(i, 2.0);
                 }
             }
 
