@@ -12,18 +12,19 @@
 
 layout(local_size_x = KW_RODS_WORKGROUP_SIZE) in;
 
-// Sizes the per-chain register arrays: the longest chain of the world, not
+// Sizes the per-chain register arrays: the longest chain of the dispatch, not
 // KW_RODS_MAX_JOINTS, so short chains do not pay for 32-joint arrays. Every loop over
 // joints (and view examples) is unrolled to this bound with `if (i < n)` guards, so every
 // array index is a constant and the arrays live in registers: with a loop index, lavapipe
 // keeps them in scratch memory and accesses it lane by lane (several times slower).
 layout(constant_id = KW_RODS_SPEC_MAX_JOINTS) const uint MAX_J = 16;
-// The most view examples of any chain of the world, and how its chains suppress momentum
-// (KW_RODS_SUPPRESSION_*): lavapipe executes both sides of every branch, even uniform
-// ones, so only a constant removes the blending of unused examples or A.5's turns.
+// The most view examples of any chain of the dispatch, and how the world's chains
+// suppress momentum (KW_RODS_SUPPRESSION_*): lavapipe executes both sides of every
+// branch, even uniform ones, so only a constant removes the blending of unused examples
+// or A.5's turns.
 layout(constant_id = KW_RODS_SPEC_MAX_VIEWS) const uint MAX_VIEWS = KW_RODS_MAX_VIEWS;
 layout(constant_id = KW_RODS_SPEC_SUPPRESSION) const uint SUPPRESSION = KW_RODS_SUPPRESSION_PARTIAL;
-// One dispatch per template (KW_RODS_GROUPED) reads the template's constants at indices
+// One dispatch per template (KW_RODS_SPEC_GROUPED) reads the template's constants at indices
 // that come from push constants only: lavapipe turns such a load into one scalar load for
 // all lanes, but only outside every branch, so they are loaded before the guard below.
 // Otherwise (worlds of many templates) each chain finds its template itself.

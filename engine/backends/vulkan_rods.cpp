@@ -158,7 +158,7 @@ public:
             const rods::ChainInstance& ch = world.chains[c];
             chains[e] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, c, 0u, 0u}};
             if (groups_.empty() || groups_.back().template_index != ch.template_index) {
-                groups_.push_back({ch.template_index, e, 0u, false});
+                groups_.push_back({ch.template_index, e, 0u, nullptr});
             }
             ++groups_.back().count;
         }
@@ -217,27 +217,40 @@ public:
         const std::uint32_t suppression = all_none   ? KW_RODS_SUPPRESSION_NONE
                                           : all_full ? KW_RODS_SUPPRESSION_FULL
                                                      : KW_RODS_SUPPRESSION_PARTIAL;
-        // A run whose chains all have max_joints joints and max_views views gets the kernel
-        // with those counts as constants (no per-joint masks); the others the general one.
-        auto exact = [&](std::uint32_t t) {
-            return templates_[t].counts.x == max_joints && templates_[t].counts.y == max_views;
-        };
-        bool all_exact = true, any_exact = false;
-        for (Group& g : groups_) {
-            g.exact = grouped_ && exact(g.template_index);
-            all_exact = all_exact && exact(g.template_index);
-            any_exact = any_exact || g.exact;
+        // Each kernel is specialized to chains of exactly MAX_J joints and MAX_VIEWS views
+        // where it can be (KW_RODS_SPEC_EXACT: no per-joint masks, no code for absent
+        // joints). GROUPED: one variant per distinct (n, m) of the templates, when there are
+        // few (each is a compilation); otherwise the world's longest for the runs that have
+        // it and the general kernel for the rest.
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> shapes_of_runs;
+        for (const Group& g : groups_) {
+            const std::pair<std::uint32_t, std::uint32_t> nm{templates_[g.template_index].counts.x,
+                                                              templates_[g.template_index].counts.y};
+            if (std::find(shapes_of_runs.begin(), shapes_of_runs.end(), nm) == shapes_of_runs.end()) shapes_of_runs.push_back(nm);
         }
+        const bool per_shape = grouped_ && shapes_of_runs.size() <= KW_RODS_MAX_VARIANTS;
         std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
-        kernel_ = kernel_exact_ = nullptr;
-        for (const bool e : {false, true}) {
-            const bool needed = e ? (grouped_ ? any_exact : all_exact) : !all_exact;
-            if (!needed) continue;
-            auto kernel = pipeline({max_joints, max_views, suppression, grouped_ ? 1u : 0u, e ? 1u : 0u});
+        auto kernel_for = [&](std::uint32_t n, std::uint32_t m, bool exact) -> Result<const compute::Kernel*> {
+            auto kernel = pipeline({n, m, suppression, grouped_ ? 1u : 0u, exact ? 1u : 0u});
             if (!kernel) return kernel.error();
-            kernel.value()->bind(bound);
-            (e ? kernel_exact_ : kernel_) = kernel.value();
+            kernel.value()->bind(bound);  // (again for a shared one: the same bindings)
+            return kernel.value();
+        };
+        bool all_exact = true;
+        for (Group& g : groups_) {
+            const std::uint32_t n = templates_[g.template_index].counts.x, m = templates_[g.template_index].counts.y;
+            all_exact = all_exact && n == max_joints && m == max_views;
+            if (!grouped_) continue;
+            auto kernel = per_shape ? kernel_for(n, m, true)
+                                    : kernel_for(max_joints, max_views, n == max_joints && m == max_views);
+            if (!kernel) return kernel.error();
+            g.kernel = kernel.value();
+        }
+        if (!grouped_) {
+            auto kernel = kernel_for(max_joints, max_views, all_exact);
+            if (!kernel) return kernel.error();
+            kernel_ = kernel.value();
         }
         return {};
     }
@@ -371,10 +384,10 @@ private:
                 push.counts.z = t.counts.z;
                 push.counts.w = t.counts.w;
                 push.group = {g.template_index, t.counts.x, t.counts.y, 0u};
-                dispatch(g.exact ? kernel_exact_ : kernel_, g.first, g.count);
+                dispatch(g.kernel, g.first, g.count);
             }
         } else {
-            dispatch(kernel_exact_ != nullptr ? kernel_exact_ : kernel_, 0u, static_cast<std::uint32_t>(world_->chains.size()));
+            dispatch(kernel_, 0u, static_cast<std::uint32_t>(world_->chains.size()));
         }
         if (timed) recording.timestamp(compute::Timestamp::End);
         // The host reads mapped state after the fence; staged reads copy it.
@@ -422,10 +435,9 @@ private:
 
     std::shared_ptr<compute::Device> ctx_;
     // A few variants at most (one per kind of world): a vector is the simplest map.
-    // (A deque: kernel_ and kernel_exact_ point into it.)
+    // (A deque: kernel_ and the groups' kernels point into it.)
     std::deque<std::pair<Variant, compute::Kernel>> pipelines_;
-    const compute::Kernel* kernel_ = nullptr;        // KW_RODS_SPEC_EXACT 0
-    const compute::Kernel* kernel_exact_ = nullptr;  // KW_RODS_SPEC_EXACT 1
+    const compute::Kernel* kernel_ = nullptr;  // the one dispatch's when not grouped_
     const rods::RodWorld* world_ = nullptr;
     std::vector<Buffer> buffers_;
     std::shared_ptr<const RodInputWriter> input_writer_;
@@ -434,7 +446,7 @@ private:
     // The runs of RodChainGpu that share a template, and whether each is a dispatch of its own.
     struct Group {
         std::uint32_t template_index, first, count;
-        bool exact;  // dispatched with kernel_exact_
+        const compute::Kernel* kernel;  // its variant (grouped_)
     };
     std::vector<Group> groups_;
     bool grouped_ = false;

@@ -55,8 +55,8 @@
 #define KW_RODS_BINDING_COUNT 10
 
 // Specialization constant ids of rods_step.comp.
-#define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the world: sizes the register arrays
-#define KW_RODS_SPEC_MAX_VIEWS 1   // the most view examples of a chain of the world
+#define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the dispatch: sizes the register arrays
+#define KW_RODS_SPEC_MAX_VIEWS 1   // the most view examples of a chain of the dispatch
 #define KW_RODS_SPEC_SUPPRESSION 2 // KW_RODS_SUPPRESSION_*: what the world's chains need of SPEC A.5
 #define KW_RODS_SPEC_GROUPED 3     // 1: one dispatch per template, its constants named by RodPush (see there)
 #define KW_RODS_SPEC_EXACT 4       // 1: every chain of the dispatch has MAX_J joints and MAX_VIEWS views
@@ -65,6 +65,9 @@
 // Worlds of at most this many templates are stepped one dispatch per template (GROUPED);
 // each dispatch costs tens of microseconds on lavapipe, so more templates take one.
 #define KW_RODS_MAX_GROUPS 32
+// GROUPED worlds get a kernel per distinct (joints, views) of their templates when they
+// have at most this many (each variant is a compilation: 0.1-2 s on lavapipe, then cached).
+#define KW_RODS_MAX_VARIANTS 4
 
 #define KW_RODS_SUPPRESSION_NONE 0u     // every chain has momentum_suppression 0
 #define KW_RODS_SUPPRESSION_FULL 1u     // every chain has momentum_suppression 1
