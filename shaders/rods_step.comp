@@ -12,17 +12,26 @@
 
 layout(local_size_x = KW_RODS_WORKGROUP_SIZE) in;
 
-// Sizes the per-chain register arrays: the longest chain of the world, not
+// Sizes the per-chain register arrays: the longest chain of the dispatch, not
 // KW_RODS_MAX_JOINTS, so short chains do not pay for 32-joint arrays. Every loop over
 // joints (and view examples) is unrolled to this bound with `if (i < n)` guards, so every
 // array index is a constant and the arrays live in registers: with a loop index, lavapipe
 // keeps them in scratch memory and accesses it lane by lane (several times slower).
 layout(constant_id = KW_RODS_SPEC_MAX_JOINTS) const uint MAX_J = 16;
-// The most view examples of any chain of the world, and how its chains suppress momentum
-// (KW_RODS_SUPPRESSION_*): lavapipe executes both sides of every branch, even uniform
-// ones, so only a constant removes the blending of unused examples or A.5's turns.
+// The most view examples of any chain of the dispatch, and how the world's chains
+// suppress momentum (KW_RODS_SUPPRESSION_*): lavapipe executes both sides of every
+// branch, even uniform ones, so only a constant removes the blending of unused examples
+// or A.5's turns.
 layout(constant_id = KW_RODS_SPEC_MAX_VIEWS) const uint MAX_VIEWS = KW_RODS_MAX_VIEWS;
 layout(constant_id = KW_RODS_SPEC_SUPPRESSION) const uint SUPPRESSION = KW_RODS_SUPPRESSION_PARTIAL;
+// One dispatch per template (KW_RODS_SPEC_GROUPED) reads the template's constants at indices
+// that come from push constants only: lavapipe turns such a load into one scalar load for
+// all lanes, but only outside every branch, so they are loaded before the guard below.
+// Otherwise (worlds of many templates) each chain finds its template itself.
+layout(constant_id = KW_RODS_SPEC_GROUPED) const bool GROUPED = true;
+// Chains of exactly MAX_J joints and MAX_VIEWS views: the counts become constants and the
+// `if (i < n)` masks of every unrolled loop fold away (lavapipe evaluates them per lane).
+layout(constant_id = KW_RODS_SPEC_EXACT) const bool EXACT = false;
 
 layout(std430, binding = KW_RODS_BINDING_TEMPLATES) readonly buffer Templates { RodTemplateGpu templates[]; };
 layout(std430, binding = KW_RODS_BINDING_TEMPLATE_JOINTS) readonly buffer TemplateJoints { RodTemplateJointGpu tjoints[]; };
@@ -84,31 +93,74 @@ vec3 closest_on_segment(vec3 p, vec3 a, vec3 b) {
     return a + t * ab;
 }
 
-void main() {
-    const uint c = gl_GlobalInvocationID.x;
-    if (c >= push.counts.x) return;
-
-    const RodChainGpu chain = chains[c];
-    const RodTemplateGpu t = templates[chain.ids.x];
-    const uint n = t.counts.x;
-    const uint m = t.counts.y;
-    const uint tj = t.counts.z;
-    const uint shape0 = t.counts.w;
-    const uint j0 = chain.joints.x;
-
-    // Per-joint constants, loaded once.
+// A template's constants, each loaded once: template joint i of tj + i, and its shapes
+// (shape0 + k * n + i, views pre-signed into the base's hemisphere at upload, SPEC A.2).
+// Indices are clamped instead of guarded so that no load sits in a branch (see GROUPED);
+// entries past n and m are never read by the solver.
+struct Constants {
     float mass[MAX_J], weight[MAX_J], seg_len[MAX_J], half_len[MAX_J];
     vec3 axis[MAX_J];
+    vec4 rotation[MAX_VIEWS + 1][MAX_J], orientation[MAX_VIEWS + 1][MAX_J];
+};
+void load_constants(uint n, uint m, uint tj, uint shape0, out Constants tc) {
     [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
-        if (i < n) {
-            const RodTemplateJointGpu tjoint = tjoints[tj + i];
-            axis[i] = tjoint.axis_mass.xyz;
-            mass[i] = tjoint.axis_mass.w;
-            weight[i] = i == 0 ? ROOT_SHAPE_WEIGHT * mass[i] : mass[i];
-            seg_len[i] = tjoint.lengths.x;
-            half_len[i] = tjoint.lengths.y;
+        const uint ic = min(i, n - 1);
+        const RodTemplateJointGpu tjoint = tjoints[tj + ic];
+        tc.axis[i] = tjoint.axis_mass.xyz;
+        tc.mass[i] = tjoint.axis_mass.w;
+        tc.weight[i] = i == 0 ? ROOT_SHAPE_WEIGHT * tc.mass[i] : tc.mass[i];
+        tc.seg_len[i] = tjoint.lengths.x;
+        tc.half_len[i] = tjoint.lengths.y;
+        [[unroll]] for (uint v = 0; v <= MAX_VIEWS; ++v) {
+            const RodShapeJointGpu s = shapes[shape0 + min(v, m) * n + ic];
+            tc.rotation[v][i] = s.rotation;
+            tc.orientation[v][i] = s.orientation;
         }
     }
+}
+
+// Steps of one projection iteration (solver.cpp), as macros so that every array index
+// stays a constant of the unrolled loop.
+// The ellipsoid term A_j of particle j.
+#define KW_ELLIPSOID(j)                                                                                       \
+    {                                                                                                         \
+        const float a2 = tc.half_len[j] * tc.half_len[j];                                                     \
+        const mat3 relative = mat3_cast(qmul(qs[j], qconj(obar[j])));                                         \
+        a_j[j] = (tc.weight[j] / 5.0) *                                                                       \
+                 (b2 * relative + (a2 - b2) * outerProduct(qrot(qs[j], tc.axis[j]), obar_axis[j]));           \
+        goal_sum[j] = vec3(0.0);                                                                              \
+    }
+// Particle j (>= 1) after its last group: toward the mean of its goals, then rest-pose
+// attraction (Han & Harada 2012, global shape constraint), then the distance constraint to
+// its (already final) parent, follow-the-leader.
+#define KW_SETTLE(j, groups)                                                                                  \
+    {                                                                                                         \
+        p[j] += k_iter * (goal_sum[j] / (groups) - p[j]);                                                     \
+        qs[j] = q_new[j];                                                                                     \
+        p[j] += k_rest * (xbar[j] - p[j]);                                                                    \
+        const vec3 dd = p[j] - p[(j) - 1];                                                                    \
+        const float len = length(dd);                                                                         \
+        if (len > 1e-9) p[j] = p[(j) - 1] + (tc.seg_len[(j) - 1] / len) * dd;                                 \
+    }
+
+void main() {
+    Constants tc;
+    RodTemplateGpu t;
+    if (GROUPED) {
+        t = templates[push.group.x];
+        load_constants(EXACT ? MAX_J : push.group.y, EXACT ? MAX_VIEWS : push.group.z, push.counts.z, push.counts.w, tc);
+    }
+    const uint e = gl_GlobalInvocationID.x;
+    if (e >= push.counts.x) return;
+
+    const RodChainGpu chain = chains[push.counts.y + e];
+    // The chain's index in the per-chain buffers (the chains are listed by template).
+    const uint c = chain.joints.y;
+    if (!GROUPED) t = templates[chain.ids.x];
+    const uint n = EXACT ? MAX_J : t.counts.x;
+    const uint m = EXACT ? MAX_VIEWS : t.counts.y;
+    if (!GROUPED) load_constants(n, m, t.counts.z, t.counts.w, tc);
+    const uint j0 = chain.joints.x;
 
     // ---- A.3: view direction and weights (world.cpp rest_shape, view.cpp) ----
     const RodTransformGpu ref = reference[chain.ids.y];
@@ -165,30 +217,26 @@ void main() {
         old_rest_p[0] = vec3(0.0);
         [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
             if (i < n) {
-                // Shape 0 is the base: its quaternions decide the hemisphere of the others.
-                const RodShapeJointGpu base = shapes[shape0 + i];
-                vec4 r_sum = w[0] * base.rotation, o_sum = w[0] * base.orientation;
-                vec4 r_old = w_old[0] * base.rotation, o_old = w_old[0] * base.orientation;
-                [[unroll]] for (uint k = 1; k <= MAX_VIEWS; ++k) {
-                    if (k <= m) {
-                        const RodShapeJointGpu s = shapes[shape0 + k * n + i];
-                        const float r_sign = dot(s.rotation, base.rotation) < 0.0 ? -1.0 : 1.0;
-                        const float o_sign = dot(s.orientation, base.orientation) < 0.0 ? -1.0 : 1.0;
-                        r_sum += (r_sign * w[k]) * s.rotation;
-                        o_sum += (o_sign * w[k]) * s.orientation;
-                        r_old += (r_sign * w_old[k]) * s.rotation;
-                        o_old += (o_sign * w_old[k]) * s.orientation;
+                // Shape 0 is the base; the views were flipped into its hemisphere at upload.
+                vec4 r_sum = w[0] * tc.rotation[0][i], o_sum = w[0] * tc.orientation[0][i];
+                vec4 r_old = w_old[0] * tc.rotation[0][i], o_old = w_old[0] * tc.orientation[0][i];
+                [[unroll]] for (uint v = 1; v <= MAX_VIEWS; ++v) {
+                    if (v <= m) {
+                        r_sum += w[v] * tc.rotation[v][i];
+                        o_sum += w[v] * tc.orientation[v][i];
+                        r_old += w_old[v] * tc.rotation[v][i];
+                        o_old += w_old[v] * tc.orientation[v][i];
                     }
                 }
-                rest_o[i] = length(o_sum) > 1e-12 ? o_sum / length(o_sum) : base.orientation;
-                old_rest_o[i] = length(o_old) > 1e-12 ? o_old / length(o_old) : base.orientation;
+                rest_o[i] = length(o_sum) > 1e-12 ? o_sum / length(o_sum) : tc.orientation[0][i];
+                old_rest_o[i] = length(o_old) > 1e-12 ? o_old / length(o_old) : tc.orientation[0][i];
                 if (i + 1 < MAX_J && i + 1 < n) {
-                    const vec4 r = length(r_sum) > 1e-12 ? r_sum / length(r_sum) : base.rotation;
-                    const vec4 ro = length(r_old) > 1e-12 ? r_old / length(r_old) : base.rotation;
+                    const vec4 r = length(r_sum) > 1e-12 ? r_sum / length(r_sum) : tc.rotation[0][i];
+                    const vec4 ro = length(r_old) > 1e-12 ? r_old / length(r_old) : tc.rotation[0][i];
                     dir = normalize(qrot(r, dir));
                     old_dir = normalize(qrot(ro, old_dir));
-                    rest_p[i + 1] = rest_p[i] + seg_len[i] * dir;
-                    old_rest_p[i + 1] = old_rest_p[i] + seg_len[i] * old_dir;
+                    rest_p[i + 1] = rest_p[i] + tc.seg_len[i] * dir;
+                    old_rest_p[i + 1] = old_rest_p[i] + tc.seg_len[i] * old_dir;
                 }
             }
         }
@@ -261,7 +309,7 @@ void main() {
             if (i < n) {
                 xbar[i] = r_pos + qrot(r_rot, rest_p[i]);
                 obar[i] = qnormalize(qmul(r_rot, rest_o[i]));
-                obar_axis[i] = qrot(obar[i], axis[i]);
+                obar_axis[i] = qrot(obar[i], tc.axis[i]);
             }
         }
         p[0] = xbar[0];
@@ -278,47 +326,49 @@ void main() {
         }
 
         for (uint it = 0; it < iterations; ++it) {
-            // The ellipsoid terms A_j (solver.cpp), once per particle per iteration.
-            [[unroll]] for (uint j = 0; j < MAX_J; ++j) {
-                if (j < n) {
-                    const float a2 = half_len[j] * half_len[j];
-                    const mat3 relative = mat3_cast(qmul(qs[j], qconj(obar[j])));
-                    a_j[j] = (weight[j] / 5.0) *
-                             (b2 * relative + (a2 - b2) * outerProduct(qrot(qs[j], axis[j]), obar_axis[j]));
-                    goal_sum[j] = vec3(0.0);
-                }
-            }
-            // Shape matching over G_i = {i-1, i, i+1}, clipped at the ends.
+            // One pass over the groups that also finishes each joint as soon as its last
+            // group is done: A_j right before its first group, a joint's goal average,
+            // rest-pose attraction and distance constraint right after its last. The same
+            // operations on the same values as the phase-by-phase order of solver.cpp (so the
+            // same bits), with far fewer values alive at once (lavapipe spills the rest).
             [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
                 if (i < n) {
+                    // The ellipsoid terms A_j (solver.cpp), once per particle per iteration.
+                    if (i == 0) {
+                        KW_ELLIPSOID(0);
+                        KW_ELLIPSOID(1);
+                    } else if (i + 1 < MAX_J && i + 1 < n) {
+                        KW_ELLIPSOID(i + 1);
+                    }
+                    // Shape matching over G_i = {i-1, i, i+1}, clipped at the ends.
                     const uint lo = i == 0 ? 0 : i - 1;
                     const bool has_next = i + 1 < MAX_J && i + 1 < n && i != 0;
                     // Group 0 is {0, 1}: its "previous" member is joint 0 itself.
                     const uint hi = i == 0 ? 1 : i + 1;
-                    float group_mass = weight[lo];
-                    vec3 cm = weight[lo] * p[lo];
-                    vec3 cbar = weight[lo] * xbar[lo];
+                    float group_mass = tc.weight[lo];
+                    vec3 cm = tc.weight[lo] * p[lo];
+                    vec3 cbar = tc.weight[lo] * xbar[lo];
                     if (i != 0) {
-                        group_mass += weight[i];
-                        cm += weight[i] * p[i];
-                        cbar += weight[i] * xbar[i];
+                        group_mass += tc.weight[i];
+                        cm += tc.weight[i] * p[i];
+                        cbar += tc.weight[i] * xbar[i];
                     }
                     if (i == 0 || has_next) {
-                        group_mass += weight[hi];
-                        cm += weight[hi] * p[hi];
-                        cbar += weight[hi] * xbar[hi];
+                        group_mass += tc.weight[hi];
+                        cm += tc.weight[hi] * p[hi];
+                        cbar += tc.weight[hi] * xbar[hi];
                     }
                     cm /= group_mass;
                     cbar /= group_mass;
                     mat3 a = mat3(0.0);
-                    a += weight[lo] * outerProduct(p[lo] - cm, xbar[lo] - cbar);
+                    a += tc.weight[lo] * outerProduct(p[lo] - cm, xbar[lo] - cbar);
                     a += a_j[lo];
                     if (i != 0) {
-                        a += weight[i] * outerProduct(p[i] - cm, xbar[i] - cbar);
+                        a += tc.weight[i] * outerProduct(p[i] - cm, xbar[i] - cbar);
                         a += a_j[i];
                     }
                     if (i == 0 || has_next) {
-                        a += weight[hi] * outerProduct(p[hi] - cm, xbar[hi] - cbar);
+                        a += tc.weight[hi] * outerProduct(p[hi] - cm, xbar[hi] - cbar);
                         a += a_j[hi];
                     }
                     // Warm start from the centre's orientation (solver.cpp).
@@ -327,28 +377,9 @@ void main() {
                     if (i != 0) goal_sum[i] += cm + qrot(rot, xbar[i] - cbar);
                     if (i == 0 || has_next) goal_sum[hi] += cm + qrot(rot, xbar[hi] - cbar);
                     q_new[i] = qnormalize(qmul(rot, obar[i]));
-                }
-            }
-            [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
-                if (i < n) {
-                    // Groups containing joint i: 2 at either end, 3 inside.
-                    const float count = (i + 1 == n) ? 2.0 : 3.0;
-                    p[i] += k_iter * (goal_sum[i] / count - p[i]);
-                    qs[i] = q_new[i];
-                }
-            }
-
-            // Rest-pose attraction (solver.cpp; Han & Harada 2012, global shape constraint).
-            [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
-                if (i < n) p[i] += k_rest * (xbar[i] - p[i]);
-            }
-
-            // Distance constraints, follow-the-leader (solver.cpp).
-            [[unroll]] for (uint i = 0; i + 1 < MAX_J; ++i) {
-                if (i + 1 < n) {
-                    const vec3 dd = p[i + 1] - p[i];
-                    const float len = length(dd);
-                    if (len > 1e-9) p[i + 1] = p[i] + (seg_len[i] / len) * dd;
+                    // Joint i-1's last group was this one (2 groups hold either end, 3 the others).
+                    if (i >= 2) KW_SETTLE(i - 1, 3.0);
+                    if (i >= 1 && i + 1 == n) KW_SETTLE(i, 2.0);
                 }
             }
 

@@ -7,6 +7,7 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <deque>
 #include <optional>
 
 #include <kodawari/shared/rods.h>
@@ -131,18 +132,37 @@ public:
                 tjoints.push_back({to_gpu(t.chain.bone_axis[i], t.chain.mass[i]),
                                    {t.chain.segment_length[i], t.chain.half_length[i], 0.0f, 0.0f}});
             }
+            const rods::RotationShape& base = t.shapes[0];
             for (const rods::RotationShape& s : t.shapes) {
                 for (std::uint32_t i = 0; i < n; ++i) {
-                    const glm::quat r = i + 1 < n ? s.rotations[i] : glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
-                    shapes.push_back({to_gpu(r), to_gpu(s.orientations[i])});
+                    const glm::quat identity(1.0f, 0.0f, 0.0f, 0.0f);
+                    glm::quat r = i + 1 < n ? s.rotations[i] : identity;
+                    glm::quat o = s.orientations[i];
+                    // The blend's hemisphere flip (rods::blend), once here (see RodShapeJointGpu).
+                    if (glm::dot(r, i + 1 < n ? base.rotations[i] : identity) < 0.0f) r = -r;
+                    if (glm::dot(o, base.orientations[i]) < 0.0f) o = -o;
+                    shapes.push_back({to_gpu(r), to_gpu(o)});
                 }
             }
         }
+        // The chains listed by template: each template's run is one GROUPED dispatch.
+        std::vector<std::uint32_t> order(count);
+        for (std::uint32_t c = 0; c < count; ++c) order[c] = c;
+        std::stable_sort(order.begin(), order.end(), [&](std::uint32_t a, std::uint32_t b) {
+            return world.chains[a].template_index < world.chains[b].template_index;
+        });
         std::vector<gpu::RodChainGpu> chains(count);
-        for (std::size_t c = 0; c < count; ++c) {
+        groups_.clear();
+        for (std::uint32_t e = 0; e < count; ++e) {
+            const std::uint32_t c = order[e];
             const rods::ChainInstance& ch = world.chains[c];
-            chains[c] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, 0u, 0u, 0u}};
+            chains[e] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, c, 0u, 0u}};
+            if (groups_.empty() || groups_.back().template_index != ch.template_index) {
+                groups_.push_back({ch.template_index, e, 0u, nullptr});
+            }
+            ++groups_.back().count;
         }
+        grouped_ = groups_.size() <= KW_RODS_MAX_GROUPS;
 
         // The initial state, from the CPU reference's initial_state (so all backends start
         // from the same bits).
@@ -197,12 +217,41 @@ public:
         const std::uint32_t suppression = all_none   ? KW_RODS_SUPPRESSION_NONE
                                           : all_full ? KW_RODS_SUPPRESSION_FULL
                                                      : KW_RODS_SUPPRESSION_PARTIAL;
-        auto kernel = pipeline({max_joints, max_views, suppression});
-        if (!kernel) return kernel.error();
-        kernel_ = kernel.value();
+        // Each kernel is specialized to chains of exactly MAX_J joints and MAX_VIEWS views
+        // where it can be (KW_RODS_SPEC_EXACT: no per-joint masks, no code for absent
+        // joints). GROUPED: one variant per distinct (n, m) of the templates, when there are
+        // few (each is a compilation); otherwise the world's longest for the runs that have
+        // it and the general kernel for the rest.
+        std::vector<std::pair<std::uint32_t, std::uint32_t>> shapes_of_runs;
+        for (const Group& g : groups_) {
+            const std::pair<std::uint32_t, std::uint32_t> nm{templates_[g.template_index].counts.x,
+                                                              templates_[g.template_index].counts.y};
+            if (std::find(shapes_of_runs.begin(), shapes_of_runs.end(), nm) == shapes_of_runs.end()) shapes_of_runs.push_back(nm);
+        }
+        const bool per_shape = grouped_ && shapes_of_runs.size() <= KW_RODS_MAX_VARIANTS;
         std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
-        kernel_->bind(bound);
+        auto kernel_for = [&](std::uint32_t n, std::uint32_t m, bool exact) -> Result<const compute::Kernel*> {
+            auto kernel = pipeline({n, m, suppression, grouped_ ? 1u : 0u, exact ? 1u : 0u});
+            if (!kernel) return kernel.error();
+            kernel.value()->bind(bound);  // (again for a shared one: the same bindings)
+            return kernel.value();
+        };
+        bool all_exact = true;
+        for (Group& g : groups_) {
+            const std::uint32_t n = templates_[g.template_index].counts.x, m = templates_[g.template_index].counts.y;
+            all_exact = all_exact && n == max_joints && m == max_views;
+            if (!grouped_) continue;
+            auto kernel = per_shape ? kernel_for(n, m, true)
+                                    : kernel_for(max_joints, max_views, n == max_joints && m == max_views);
+            if (!kernel) return kernel.error();
+            g.kernel = kernel.value();
+        }
+        if (!grouped_) {
+            auto kernel = kernel_for(max_joints, max_views, all_exact);
+            if (!kernel) return kernel.error();
+            kernel_ = kernel.value();
+        }
         return {};
     }
 
@@ -317,16 +366,29 @@ private:
         if (input_writer_) input_writer_->record(recording, *this);
 
         const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
-        const gpu::RodPush push{{static_cast<std::uint32_t>(world_->chains.size()), 0u, 0u, 0u},
-                                to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f),
-                                to_gpu(frame.camera.forward)};
-        const std::uint32_t groups =
-            static_cast<std::uint32_t>((world_->chains.size() + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE);
+        gpu::RodPush push{{}, {}, to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f), to_gpu(frame.camera.forward)};
+        auto dispatch = [&](const compute::Kernel* kernel, std::uint32_t first, std::uint32_t chains) {
+            push.counts.x = chains;
+            push.counts.y = first;
+            const std::uint32_t groups = (chains + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE;
+            kernel->dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
+        };
         // What earlier dispatches and copies wrote (the state this dispatch reads and
         // overwrites, the input) before the step.
         compute::barrier(recording, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
         if (timed) recording.timestamp(compute::Timestamp::Begin);
-        kernel_->dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
+        if (grouped_) {
+            // Disjoint chains: the dispatches need no barrier between them.
+            for (const Group& g : groups_) {
+                const gpu::RodTemplateGpu& t = templates_[g.template_index];
+                push.counts.z = t.counts.z;
+                push.counts.w = t.counts.w;
+                push.group = {g.template_index, t.counts.x, t.counts.y, 0u};
+                dispatch(g.kernel, g.first, g.count);
+            }
+        } else {
+            dispatch(kernel_, 0u, static_cast<std::uint32_t>(world_->chains.size()));
+        }
         if (timed) recording.timestamp(compute::Timestamp::End);
         // The host reads mapped state after the fence; staged reads copy it.
         compute::barrier(recording, compute::Stage::Compute, compute::Stage::Host | compute::Stage::Transfer);
@@ -373,13 +435,21 @@ private:
 
     std::shared_ptr<compute::Device> ctx_;
     // A few variants at most (one per kind of world): a vector is the simplest map.
-    std::vector<std::pair<Variant, compute::Kernel>> pipelines_;
-    const compute::Kernel* kernel_ = nullptr;
+    // (A deque: kernel_ and the groups' kernels point into it.)
+    std::deque<std::pair<Variant, compute::Kernel>> pipelines_;
+    const compute::Kernel* kernel_ = nullptr;  // the one dispatch's when not grouped_
     const rods::RodWorld* world_ = nullptr;
     std::vector<Buffer> buffers_;
     std::shared_ptr<const RodInputWriter> input_writer_;
     std::optional<compute::StagingRing> ring_;  // record_external's input uploads
     std::vector<gpu::RodTemplateGpu> templates_;
+    // The runs of RodChainGpu that share a template, and whether each is a dispatch of its own.
+    struct Group {
+        std::uint32_t template_index, first, count;
+        const compute::Kernel* kernel;  // its variant (grouped_)
+    };
+    std::vector<Group> groups_;
+    bool grouped_ = false;
     float dt_ = -1.0f;
     double gpu_ms_ = -1.0;
     // Per-frame staging on the host, kept to avoid reallocating every frame.

@@ -14,6 +14,25 @@
 // frame can recompute from per-chain data is stored per joint: the shape-matching warm
 // start comes from the orientations, last frame's rest shape from last frame's weights.
 // Quaternions are vec4(x, y, z, w).
+//
+// The template constants (RodTemplateGpu, RodTemplateJointGpu, RodShapeJointGpu) are
+// shared by every chain of a template: chains are listed by template and, in worlds of
+// few templates, each template's run is its own dispatch whose push constants (RodPush)
+// name the template, so every lane reads the same addresses (KW_RODS_SPEC_GROUPED).
+//
+// On a discrete GPU. The same mapping is sound but not what a GPU is best at: one
+// invocation holds a whole chain, so with MAX_J = 16 its live set (positions, velocities,
+// orientations, rest shape, the shape-matching terms: some 40 floats per joint) is several
+// hundred registers, beyond the 255 VGPRs of AMD or NVIDIA; the compiler spills to
+// scratch (or keeps the arrays in local memory) and occupancy is one or two waves per
+// SIMD. The per-joint state is contiguous per chain, so neighbouring lanes read addresses
+// MAX_J x 32 bytes apart: each vec4 load touches its own 32-byte sector (uncoalesced;
+// a joint's two vec4 of a struct share that sector). The template constants of a
+// GROUPED dispatch are uniform, so they go through the scalar/constant cache. A
+// GPU-first kernel would map a subgroup (or workgroup) to a chain and an invocation to a
+// joint, exchanging the group's neighbours by subgroup shuffles or shared memory:
+// coalesced, few registers, but lavapipe pays per invocation and per shuffle, which is
+// why this one does not.
 #ifndef KODAWARI_SHADERS_SHARED_RODS_H
 #define KODAWARI_SHADERS_SHARED_RODS_H
 
@@ -36,10 +55,19 @@
 #define KW_RODS_BINDING_COUNT 10
 
 // Specialization constant ids of rods_step.comp.
-#define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the world: sizes the register arrays
-#define KW_RODS_SPEC_MAX_VIEWS 1   // the most view examples of a chain of the world
+#define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the dispatch: sizes the register arrays
+#define KW_RODS_SPEC_MAX_VIEWS 1   // the most view examples of a chain of the dispatch
 #define KW_RODS_SPEC_SUPPRESSION 2 // KW_RODS_SUPPRESSION_*: what the world's chains need of SPEC A.5
-#define KW_RODS_SPEC_COUNT 3
+#define KW_RODS_SPEC_GROUPED 3     // 1: one dispatch per template, its constants named by RodPush (see there)
+#define KW_RODS_SPEC_EXACT 4       // 1: every chain of the dispatch has MAX_J joints and MAX_VIEWS views
+#define KW_RODS_SPEC_COUNT 5
+
+// Worlds of at most this many templates are stepped one dispatch per template (GROUPED);
+// each dispatch costs tens of microseconds on lavapipe, so more templates take one.
+#define KW_RODS_MAX_GROUPS 32
+// GROUPED worlds get a kernel per distinct (joints, views) of their templates when they
+// have at most this many (each variant is a compilation: 0.1-2 s on lavapipe, then cached).
+#define KW_RODS_MAX_VARIANTS 4
 
 #define KW_RODS_SUPPRESSION_NONE 0u     // every chain has momentum_suppression 0
 #define KW_RODS_SUPPRESSION_FULL 1u     // every chain has momentum_suppression 1
@@ -65,14 +93,17 @@ struct RodTemplateJointGpu {
 };
 
 // Per joint of one shape of a template (shape 0 = base, k = view example k), SPEC A.2.
+// A view's quaternions are uploaded negated where their dot with the base's is negative
+// (the blend's hemisphere flip done once; negation is exact, so the blend's bits are the CPU's).
 struct RodShapeJointGpu {
     vec4 rotation;     // r_i (identity for the last joint, which has no segment)
     vec4 orientation;  // o_i
 };
 
+// Listed by template (the groups of GROUPED dispatches), so joints.y names the chain.
 struct RodChainGpu {
     uvec4 ids;     // x: template, y: character, z: first collider, w: collider count
-    uvec4 joints;  // x: first joint in the per-joint buffers, y, z, w: unused
+    uvec4 joints;  // x: first joint in the per-joint buffers, y: the chain's index in the per-chain buffers, z, w: unused
 };
 
 struct RodTransformGpu {
@@ -104,8 +135,12 @@ struct RodChainStateGpu {
                            // storing it per joint (loads and stores are the costly part)
 };
 
+// One dispatch's: its chains are RodChainGpu counts.y .. counts.y + counts.x - 1. In a
+// GROUPED dispatch they share template group.x, whose constants are found from these
+// push constants alone (so lavapipe loads them once for all lanes).
 struct RodPush {
-    uvec4 counts;           // x: chain count, y, z, w: unused
+    uvec4 counts;           // x: chains, y: first RodChainGpu, z: first RodTemplateJointGpu, w: first RodShapeJointGpu (GROUPED)
+    uvec4 group;            // GROUPED: x: template, y: joint count n, z: view examples m, w: unused
     vec4 camera_position;   // xyz, w: 1 = orthographic
     vec4 camera_forward;    // xyz, w: unused
 };
