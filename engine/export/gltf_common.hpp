@@ -54,6 +54,13 @@ private:
 /// catch.
 [[nodiscard]] Result<void> write_glb(AtomicFile& file, tinygltf::Model& model);
 
+/// Serializes `model` as a .glb into `file` (not committed) whose one buffer is
+/// model.buffers[0].data followed by `tail_bytes` more that `write_tail` appends to
+/// `file`: the bytes write_glb() would write with the tail in the buffer, without holding
+/// the tail in memory. tinygltf may throw; callers catch.
+[[nodiscard]] Result<void> write_glb_with_tail(AtomicFile& file, tinygltf::Model& model, std::uint64_t tail_bytes,
+                                               const std::function<Result<void>()>& write_tail);
+
 /// Adds a LINEAR sampler over `input` (key times) and `output` (values) and a channel
 /// driving `path` ("translation", "rotation", "scale") of `node` with it.
 void add_linear_channel(tinygltf::Animation& animation, int input, int output, int node, const char* path);

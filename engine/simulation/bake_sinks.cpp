@@ -11,8 +11,8 @@ namespace kodawari {
 
 namespace {
 
-// A sink that holds its whole bake in memory refuses more than this (the birds' and the
-// procedural chains' writers still take every frame at once).
+// A sink that holds its whole bake in memory refuses more than this (the procedural
+// chains' writer still takes every frame at once).
 constexpr std::uint64_t kHeldLimitBytes = 6ull << 30;
 
 Result<void> check_held(const std::string& path, std::uint64_t count, const char* what, std::uint32_t frames,
@@ -23,6 +23,7 @@ Result<void> check_held(const std::string& path, std::uint64_t count, const char
                                                      " MiB; bake fewer frames");
 }
 
+// Streams: memory stays BirdGlbWriter's, whatever the frames.
 class BirdsGlbSink final : public BakeSink {
 public:
     explicit BirdsGlbSink(std::string path) : path_(std::move(path)) {}
@@ -30,30 +31,26 @@ public:
     BakeNeeds needs() const override { return {.bird_poses = true}; }
 
     Result<void> begin(const BakeWorld& world) override {
-        world_ = world.birds;
-        frames_ = world.frames;
-        const std::uint64_t count = world_->birds.size();
-        KW_TRY(check_held(path_, count, "birds", frames_, std::uint64_t{frames_} * count * sizeof(gpu::BirdPose)));
-        poses_.reserve(std::size_t{frames_} * count);
+        if (world.birds->birds.empty()) return {};
+        auto writer = BirdGlbWriter::create(path_, *world.birds, world.frames);
+        if (!writer) return writer.error();
+        writer_.emplace(std::move(writer).value());
         return {};
     }
 
     Result<void> consume(const BakeFrames& frames) override {
-        poses_.insert(poses_.end(), frames.bird_poses.begin(), frames.bird_poses.end());
-        return {};
+        return writer_ ? writer_->add_frames(frames.bird_poses) : Result<void>{};
     }
 
     Result<std::vector<BakeOutput>> finish() override {
-        if (world_->birds.empty()) return std::vector<BakeOutput>{};
-        KW_TRY(write_birds_glb(path_, *world_, poses_, frames_));
+        if (!writer_) return std::vector<BakeOutput>{};
+        KW_TRY(writer_->finish());
         return std::vector<BakeOutput>{{path_, BakeOutput::Format::Glb, ""}};
     }
 
 private:
     std::string path_;
-    const birds::BirdWorld* world_ = nullptr;
-    std::uint32_t frames_ = 0;
-    std::vector<gpu::BirdPose> poses_;
+    std::optional<BirdGlbWriter> writer_;
 };
 
 class ChainsGlbSink final : public BakeSink {

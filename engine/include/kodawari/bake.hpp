@@ -90,7 +90,8 @@ struct BakeOptions {
 [[nodiscard]] KODAWARI_API Result<std::vector<BakeOutput>> bake(Simulation& sim, std::span<BakeSink* const> sinks,
                                                                 const BakeOptions& options = {});
 
-/// The flock as a `.glb` (write_birds_glb's file) at `path`.
+/// The flock as a `.glb` (write_birds_glb()'s file) at `path`, streamed (BirdGlbWriter):
+/// its memory does not grow with the frames.
 [[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path);
 
 /// The characters as `.glb` files: the procedural characters (and then the rigged ones

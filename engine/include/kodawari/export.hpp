@@ -31,6 +31,46 @@ namespace kodawari {
 [[nodiscard]] KODAWARI_API Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
                                                         std::span<const gpu::BirdPose> poses, std::uint32_t frames);
 
+/// Streams write_birds_glb()'s file (the same bytes) frame by frame, so that memory does
+/// not grow with frames x birds. Each frame's keys go to a temporary file beside `path`
+/// (removed from the directory as soon as it is opened, so nothing is left behind);
+/// finish() copies them into the `.glb`'s channels, channel after channel, through two
+/// buffers of kTransposeBytes (more only when one bird's keys over all frames are more).
+/// Besides that, it holds 128 bytes per bird (the first and the previous frame's keys),
+/// one frame's keys while adding, and the glTF model (JSON) while finishing.
+class KODAWARI_API BirdGlbWriter {
+public:
+    /// The size of each of the two buffers that reorder the keys from frame-major to
+    /// channel-major.
+    static constexpr std::size_t kTransposeBytes = std::size_t{32} << 20;
+
+    /// Prepares `path` for `frames` frames of `world` (which must outlive the writer).
+    /// Errors (naming `path`): no frames, fps not positive, more than a .glb can hold,
+    /// a bird of unknown wing type (InvalidInput), the temporary file (Io).
+    [[nodiscard]] static Result<BirdGlbWriter> create(const std::string& path, const birds::BirdWorld& world,
+                                                      std::uint32_t frames);
+
+    BirdGlbWriter(BirdGlbWriter&& other) noexcept;
+    BirdGlbWriter& operator=(BirdGlbWriter&& other) noexcept;
+    BirdGlbWriter(const BirdGlbWriter&) = delete;
+    BirdGlbWriter& operator=(const BirdGlbWriter&) = delete;
+    ~BirdGlbWriter();
+
+    /// Adds the next frames: `poses` holds whole frames of every bird, frame-major. A
+    /// position that is not finite or a rotation that is not a quaternion is an
+    /// Error::Kind::Internal naming the bird and frame; more frames than announced, or a
+    /// partial frame, InvalidInput.
+    [[nodiscard]] Result<void> add_frames(std::span<const gpu::BirdPose> poses);
+
+    /// Writes the `.glb` atomically once every frame has been added. Call it once.
+    [[nodiscard]] Result<void> finish();
+
+private:
+    struct Impl;
+    explicit BirdGlbWriter(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
+
 /// Writes a `.glb` of a rod scene: per character instance its skeleton as a node
 /// hierarchy and, under each chain's attachment joint, the chain's joints as a
 /// hierarchy (joint i the child of joint i-1) whose bones point at the next joint
