@@ -8,7 +8,6 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
-#include <cstdio>
 #include <cstring>
 #include <exception>
 #include <memory>
@@ -17,8 +16,6 @@
 #include <utility>
 #include <string>
 #include <vector>
-
-#include <unistd.h>
 
 #include "kodawari/version.hpp"
 #include "birds/bird_meshes.hpp"
@@ -73,23 +70,6 @@ bool normalized(const gpu::vec4& q, Quat& out) {
 constexpr std::size_t kRecordFloats = 3 + 4 * birds::kPartCount;
 constexpr std::size_t kRecordBytes = kRecordFloats * sizeof(float);
 
-// The key file: unlinked once open, so that it disappears with the process whatever
-// happens; beside the output, on the disk meant to hold that much.
-struct KeyFile {
-    std::FILE* file = nullptr;
-    std::string path;
-    KeyFile() = default;
-    KeyFile(KeyFile&& other) noexcept : file(std::exchange(other.file, nullptr)), path(std::move(other.path)) {}
-    KeyFile& operator=(KeyFile&& other) noexcept {
-        std::swap(file, other.file);
-        std::swap(path, other.path);
-        return *this;
-    }
-    ~KeyFile() {
-        if (file != nullptr) std::fclose(file);
-    }
-};
-
 }  // namespace
 
 struct BirdGlbWriter::Impl {
@@ -97,7 +77,7 @@ struct BirdGlbWriter::Impl {
     const birds::BirdWorld* world = nullptr;
     std::uint32_t frames = 0;
     std::uint32_t added = 0;
-    KeyFile keys;
+    SpillFile keys;  // frames x birds records
     std::vector<float> first;     // birds x record: frame 0, the rest pose
     std::vector<float> previous;  // birds x record: the last frame added (rotation hemispheres)
     std::vector<float> row;       // birds x record being written
@@ -138,12 +118,9 @@ Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds
     impl->path = path;
     impl->world = &world;
     impl->frames = frames;
-    impl->keys.path = path + ".keys-" + std::to_string(static_cast<long>(::getpid()));
-    impl->keys.file = std::fopen(impl->keys.path.c_str(), "w+b");
-    if (impl->keys.file == nullptr) {
-        return make_error(Error::Kind::Io, impl->keys.path + ": cannot create the temporary key file of " + path);
-    }
-    std::remove(impl->keys.path.c_str());
+    auto keys = SpillFile::open(path);
+    if (!keys) return keys.error();
+    impl->keys = std::move(keys).value();
     impl->row.resize(bird_count * kRecordFloats);
     return BirdGlbWriter(std::move(impl));
 }
@@ -191,10 +168,7 @@ Result<void> BirdGlbWriter::Impl::add_frame(std::span<const gpu::BirdPose> poses
             std::memcpy(record + 3 + 4 * part, q.data(), sizeof(Quat));
         }
     }
-    if (std::fwrite(row.data(), sizeof(float), row.size(), keys.file) != row.size()) {
-        return make_error(Error::Kind::Io, path + ": cannot write the keys of frame " + std::to_string(f) +
-                                               " to the temporary file beside it");
-    }
+    KW_TRY(keys.append(row.data(), row.size() * sizeof(float)));
     if (f == 0) first = row;
     previous.swap(row);
     row.resize(previous.size());
@@ -211,15 +185,11 @@ Result<void> BirdGlbWriter::Impl::copy_channels(AtomicFile& file) {
     const std::size_t group = std::max<std::size_t>(1, BirdGlbWriter::kTransposeBytes / per_bird);
     std::vector<float> in(std::min(group, bird_count) * std::size_t{frames} * kRecordFloats);
     std::vector<float> out(in.size());
-    if (std::fflush(keys.file) != 0) return make_error(Error::Kind::Io, path + ": cannot flush its temporary key file");
     for (std::size_t begin = 0; begin < bird_count; begin += group) {
         const std::size_t n = std::min(group, bird_count - begin);
         for (std::uint32_t f = 0; f < frames; ++f) {
-            const auto offset = static_cast<off_t>((std::size_t{f} * bird_count + begin) * kRecordBytes);
-            if (::fseeko(keys.file, offset, SEEK_SET) != 0 ||
-                std::fread(in.data() + std::size_t{f} * n * kRecordFloats, kRecordBytes, n, keys.file) != n) {
-                return make_error(Error::Kind::Io, path + ": cannot read back its temporary key file");
-            }
+            KW_TRY(keys.read((std::uint64_t{f} * bird_count + begin) * kRecordBytes, in.data() + std::size_t{f} * n * kRecordFloats,
+                             n * kRecordBytes));
         }
         float* o = out.data();
         for (std::size_t b = 0; b < n; ++b) {

@@ -4,10 +4,14 @@
 #include <cassert>
 #include <cmath>
 #include <cstring>
+#include <filesystem>
 #include <limits>
 #include <ostream>
 #include <sstream>
 #include <string>
+#include <utility>
+
+#include <unistd.h>
 
 namespace kodawari::gltf {
 namespace {
@@ -33,6 +37,31 @@ protected:
 private:
     AtomicFile& file_;
 };
+// Where the root object's member `key` starts in compact JSON (its opening quote), or npos.
+std::size_t root_member(const std::string& json, const std::string& key) {
+    const std::string quoted = "\"" + key + "\":";
+    int depth = 0;
+    bool in_string = false;
+    for (std::size_t i = 0; i < json.size(); ++i) {
+        const char c = json[i];
+        if (in_string) {
+            if (c == '\\') {
+                ++i;
+            } else if (c == '"') {
+                in_string = false;
+            }
+        } else if (c == '"') {
+            if (depth == 1 && json.compare(i, quoted.size(), quoted) == 0) return i;
+            in_string = true;
+        } else if (c == '{' || c == '[') {
+            ++depth;
+        } else if (c == '}' || c == ']') {
+            --depth;
+        }
+    }
+    return std::string::npos;
+}
+
 }  // namespace
 
 std::size_t BufferWriter::allocate(std::size_t size) {
@@ -137,9 +166,10 @@ Result<void> write_glb_with_tail(AtomicFile& file, tinygltf::Model& model, std::
     std::string json = glb.substr(20, json_chunk);
     while (!json.empty() && json.back() == ' ') json.pop_back();
     std::vector<unsigned char>().swap(model.buffers[0].data);
+    // The root object's "buffers" member (an asset's extras may hold one of their own).
     const std::string written = "\"buffers\":[{\"byteLength\":" + std::to_string(head_bytes) + "}]";
-    const std::size_t at = json.find(written);
-    if (at == std::string::npos || json.find(written, at + 1) != std::string::npos) {
+    const std::size_t at = root_member(json, "buffers");
+    if (at == std::string::npos || json.compare(at, written.size(), written) != 0) {
         return make_error(Error::Kind::Internal, file.path() + ": the buffer's length is not where it was expected in the JSON");
     }
     const std::uint64_t bin_bytes = head_bytes + tail_bytes;
@@ -171,6 +201,47 @@ Result<void> write_glb_with_tail(AtomicFile& file, tinygltf::Model& model, std::
         KW_TRY(write_tail());
         const char zeros[4] = {};
         file.write(zeros, padding(bin_bytes));
+    }
+    return {};
+}
+
+Result<SpillFile> SpillFile::open(const std::string& beside) {
+    SpillFile spill;
+    const std::string base =
+        beside.empty() ? (std::filesystem::temp_directory_path() / "kodawari").string() : beside;
+    spill.path_ = base + ".keys-" + std::to_string(static_cast<long>(::getpid()));
+    spill.file_ = std::fopen(spill.path_.c_str(), "w+b");
+    if (spill.file_ == nullptr) return make_error(Error::Kind::Io, spill.path_ + ": cannot create this temporary file");
+    std::remove(spill.path_.c_str());
+    return spill;
+}
+
+SpillFile::SpillFile(SpillFile&& other) noexcept
+    : file_(std::exchange(other.file_, nullptr)), path_(std::move(other.path_)), reading_(other.reading_) {}
+
+SpillFile& SpillFile::operator=(SpillFile&& other) noexcept {
+    std::swap(file_, other.file_);
+    std::swap(path_, other.path_);
+    std::swap(reading_, other.reading_);
+    return *this;
+}
+
+SpillFile::~SpillFile() {
+    if (file_ != nullptr) std::fclose(file_);
+}
+
+Result<void> SpillFile::append(const void* data, std::size_t size) {
+    if (reading_ || std::fwrite(data, 1, size, file_) != size) {
+        return make_error(Error::Kind::Io, path_ + ": cannot write this temporary file (disk full?)");
+    }
+    return {};
+}
+
+Result<void> SpillFile::read(std::uint64_t offset, void* data, std::size_t size) {
+    if (!reading_ && std::fflush(file_) != 0) return make_error(Error::Kind::Io, path_ + ": cannot write this temporary file");
+    reading_ = true;
+    if (::fseeko(file_, static_cast<off_t>(offset), SEEK_SET) != 0 || std::fread(data, 1, size, file_) != size) {
+        return make_error(Error::Kind::Io, path_ + ": cannot read back this temporary file");
     }
     return {};
 }

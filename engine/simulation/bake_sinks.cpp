@@ -72,12 +72,12 @@ public:
         const std::string stem = path_.substr(0, path_.size() - (path_.ends_with(".glb") ? 4 : 0));
         for (std::uint32_t k = 0; k < rods.characters.size(); ++k) {
             if (!rods.characters[k].rig) continue;
-            auto e = RiggedCrowdExport::create(rods, k);
+            std::string path = !any_procedural && rods.characters.size() == 1 ? path_ : stem + "-" + rods.characters[k].name + ".glb";
+            auto e = RiggedCrowdExport::create(rods, k, path);
             if (!e) return e.error();
             if (e.value().instances().empty()) continue;
             rigged_.push_back(std::move(e).value());
-            rigged_paths_.push_back(!any_procedural && rods.characters.size() == 1 ? path_
-                                                                                   : stem + "-" + rods.characters[k].name + ".glb");
+            rigged_paths_.push_back(std::move(path));
         }
         if (any_procedural) {
             const std::uint64_t joints = rods.world.joint_count;

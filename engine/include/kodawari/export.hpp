@@ -92,9 +92,12 @@ struct RiggedInstance {
 
 /// Writes a crowd of one rigged glTF character as a `.glb` with the simulated motion
 /// baked into one animation, fed frame by frame. Between create() and finish() it holds
-/// the source file's data (once, whatever the number of instances) and the keys of the
-/// animated nodes (40 bytes per animated node, instance and frame), nothing else per
-/// frame.
+/// the source file's data (once, whatever the number of instances) and 17 bytes per
+/// animated node and instance; the keys (40 bytes per animated node, instance and frame)
+/// wait in a temporary file (SpillFile: beside the output when create() is told where,
+/// unlinked at once, so nothing is left behind) and finish() copies them into the
+/// `.glb` through two buffers of about kTransposeBytes (more only when one node's keys
+/// over all frames are more).
 ///
 /// What the file holds:
 /// - The source's meshes, materials, textures, images, samplers, cameras, lights and
@@ -148,10 +151,16 @@ public:
     /// references cannot be read (Error::Kind::InvalidInput or Io, naming the file); it
     /// uses EXT_meshopt_compression (Unsupported: its buffer indices cannot survive the
     /// merge into one buffer); a placement is not finite (InvalidInput).
+    /// `spill_beside`: the output's path, beside which the keys wait (empty: the
+    /// system's temporary directory); a failure to create that file is an Io error of
+    /// the first add_frame().
     [[nodiscard]] static Result<RiggedGlbWriter> create(const std::string& source_path, const gltf::Character& character,
                                                         std::span<const RiggedInstance> instances,
                                                         std::vector<bool> animated, float fps,
-                                                        std::string animation_name);
+                                                        std::string animation_name, std::string spill_beside = {});
+
+    /// The size of the buffer that reorders the keys from frame-major to per node.
+    static constexpr std::size_t kTransposeBytes = std::size_t{32} << 20;
 
     RiggedGlbWriter(RiggedGlbWriter&& other) noexcept;
     RiggedGlbWriter& operator=(RiggedGlbWriter&& other) noexcept;
@@ -209,8 +218,11 @@ private:
 class KODAWARI_API RiggedCrowdExport {
 public:
     /// Prepares the export of RodScene::characters[character] (which must be rigged).
-    /// `scene` must outlive the export. Errors: those of RiggedGlbWriter::create.
-    [[nodiscard]] static Result<RiggedCrowdExport> create(const RodScene& scene, std::uint32_t character);
+    /// `scene` must outlive the export. `output`: the path finish() will be given, beside
+    /// which the keys wait (RiggedGlbWriter::create's `spill_beside`). Errors: those of
+    /// RiggedGlbWriter::create.
+    [[nodiscard]] static Result<RiggedCrowdExport> create(const RodScene& scene, std::uint32_t character,
+                                                          const std::string& output = {});
 
     /// Adds frame `frame` of the scene: the clip poses at that frame and the chains of
     /// `snapshot` (the rod backend's state after that frame, for the whole world).
