@@ -12,8 +12,9 @@ namespace kodawari {
 
 namespace {
 // Bird poses read back per step when birds go in chunks: bounds the chunk buffers
-// (2^20 x 128 bytes of poses, as much of diagnostics) while amortizing the step calls.
-constexpr std::size_t kChunkPoses = std::size_t{1} << 20;
+// (2^18 x 128 bytes = 32 MiB of poses, as much of diagnostics) while amortizing the
+// step calls.
+constexpr std::size_t kChunkPoses = std::size_t{1} << 18;
 }  // namespace
 
 Result<std::vector<BakeOutput>> bake(Simulation& sim, std::span<BakeSink* const> sinks, const BakeOptions& options) {

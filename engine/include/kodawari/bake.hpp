@@ -84,7 +84,7 @@ struct BakeOptions {
 
 /// Runs `sim` (not stepped yet) over its frame_count() frames and hands each to every
 /// sink, then finishes the sinks in order. Birds are stepped several frames per call
-/// when the scene has no chains (at most 2^20 bird poses per call, which bounds the
+/// when the scene has no chains (at most 2^18 bird poses per call, which bounds the
 /// memory of the frames handed over); with chains, one frame per call. Errors: the
 /// simulation's and the sinks' (the first one stops the bake).
 [[nodiscard]] KODAWARI_API Result<std::vector<BakeOutput>> bake(Simulation& sim, std::span<BakeSink* const> sinks,
