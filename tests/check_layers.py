@@ -80,6 +80,7 @@ PUBLIC_OWNERS = {
     "export.hpp": "io",
     "scene_edit.hpp": "io",
     "simulation.hpp": "engine",
+    "bake.hpp": "engine",
     "kodawari.h": "c",
 }
 

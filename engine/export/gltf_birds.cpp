@@ -1,20 +1,19 @@
 // glTF 2.0 export of a bird simulation (SPEC C): one node hierarchy per bird, a small
 // closed mesh per part shared by every bird of a wing type, and one animation whose
-// channels hold every simulated frame.
+// channels hold every simulated frame. Streamed (BirdGlbWriter): keys arrive frame by
+// frame but glTF keeps each channel's keys together, so they wait in a temporary file.
 
 #include <algorithm>
 #include <array>
-#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
 #include <cstring>
 #include <exception>
-#include <limits>
+#include <memory>
 #include <new>
 #include <span>
-#include <ostream>
-#include <streambuf>
+#include <utility>
 #include <string>
 #include <vector>
 
@@ -67,9 +66,149 @@ bool normalized(const gpu::vec4& q, Quat& out) {
 }
 
 
-Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, std::span<const gpu::BirdPose> poses,
-                             std::uint32_t frames) {
+// One bird's keys of one frame: the Body translation, then the parts' rotations.
+constexpr std::size_t kRecordFloats = 3 + 4 * birds::kPartCount;
+constexpr std::size_t kRecordBytes = kRecordFloats * sizeof(float);
+
+}  // namespace
+
+struct BirdGlbWriter::Impl {
+    std::string path;
+    const birds::BirdWorld* world = nullptr;
+    std::uint32_t frames = 0;
+    std::uint32_t added = 0;
+    SpillFile keys;  // frames x birds records
+    std::vector<float> first;     // birds x record: frame 0, the rest pose
+    std::vector<float> previous;  // birds x record: the last frame added (rotation hemispheres)
+    std::vector<float> row;       // birds x record being written
+
+    [[nodiscard]] std::size_t count() const { return world->birds.size(); }
+    [[nodiscard]] Result<void> add_frame(std::span<const gpu::BirdPose> poses);
+    [[nodiscard]] Result<void> build_and_write(AtomicFile& file);
+    [[nodiscard]] Result<void> copy_channels(AtomicFile& file);
+};
+
+BirdGlbWriter::BirdGlbWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+BirdGlbWriter::BirdGlbWriter(BirdGlbWriter&& other) noexcept = default;
+BirdGlbWriter& BirdGlbWriter::operator=(BirdGlbWriter&& other) noexcept = default;
+BirdGlbWriter::~BirdGlbWriter() = default;
+
+Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds::BirdWorld& world, std::uint32_t frames) {
     const std::size_t bird_count = world.birds.size();
+    if (frames == 0) {
+        return make_error(Error::Kind::InvalidInput, path + ": cannot write an animation of 0 frames");
+    }
+    if (!(world.fps > 0.0f) || !std::isfinite(world.fps)) {
+        return make_error(Error::Kind::InvalidInput, path + ": fps must be positive, got " + std::to_string(world.fps));
+    }
+    // A GLB's length field is 32 bits.
+    const double poses = static_cast<double>(frames) * static_cast<double>(bird_count);
+    if (poses * static_cast<double>(kRecordBytes) > 4.0e9) {
+        return make_error(Error::Kind::InvalidInput, path + ": " + std::to_string(std::uint64_t{frames} * bird_count) +
+                                                         " poses exceed the 4 GiB limit of a .glb");
+    }
+    for (std::size_t b = 0; b < bird_count; ++b) {
+        const std::uint32_t type = world.birds[b].ids.y;
+        if (type >= birds::kWingTypeCount) {
+            return make_error(Error::Kind::InvalidInput,
+                              path + ": bird " + std::to_string(b) + " has unknown wing type " + std::to_string(type));
+        }
+    }
+    auto impl = std::make_unique<Impl>();
+    impl->path = path;
+    impl->world = &world;
+    impl->frames = frames;
+    auto keys = SpillFile::open(path);
+    if (!keys) return keys.error();
+    impl->keys = std::move(keys).value();
+    impl->row.resize(bird_count * kRecordFloats);
+    return BirdGlbWriter(std::move(impl));
+}
+
+Result<void> BirdGlbWriter::add_frames(std::span<const gpu::BirdPose> poses) {
+    Impl& w = *impl_;
+    const std::size_t count = w.count();
+    if (count == 0) return {};  // no keys: the file holds the key times alone
+    if (poses.size() % count != 0 || w.added + poses.size() / count > w.frames) {
+        return make_error(Error::Kind::InvalidInput, w.path + ": " + std::to_string(poses.size()) + " poses are not whole frames of " +
+                                                         std::to_string(count) + " birds within the " +
+                                                         std::to_string(w.frames) + " frames announced");
+    }
+    for (std::size_t at = 0; at < poses.size(); at += count) KW_TRY(w.add_frame(poses.subspan(at, count)));
+    return {};
+}
+
+Result<void> BirdGlbWriter::Impl::add_frame(std::span<const gpu::BirdPose> poses) {
+    const std::uint32_t f = added;
+    for (std::size_t b = 0; b < poses.size(); ++b) {
+        const gpu::BirdPose& pose = poses[b];
+        float* record = row.data() + b * kRecordFloats;
+        const Vec3 position = {pose.position.x, pose.position.y, pose.position.z};
+        if (!std::isfinite(position[0]) || !std::isfinite(position[1]) || !std::isfinite(position[2])) {
+            return make_error(Error::Kind::Internal,
+                              "bird " + std::to_string(b) + ", frame " + std::to_string(f) + ": position is not finite");
+        }
+        std::memcpy(record, position.data(), sizeof(Vec3));
+        for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+            Quat q;
+            if (!normalized(pose.rotation[part], q)) {
+                return make_error(Error::Kind::Internal, "bird " + std::to_string(b) + ", frame " + std::to_string(f) + ": " +
+                                                             std::string(birds::kPartNames[part]) +
+                                                             " rotation is not a quaternion");
+            }
+            // q and -q are the same rotation, but LINEAR (slerp) interpolation between
+            // keys in opposite hemispheres would spin the long way round.
+            if (f > 0) {
+                const float* p = previous.data() + b * kRecordFloats + 3 + 4 * part;
+                const float dot = p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3];
+                if (dot < 0.0f) {
+                    for (float& v : q) v = -v;
+                }
+            }
+            std::memcpy(record + 3 + 4 * part, q.data(), sizeof(Quat));
+        }
+    }
+    KW_TRY(keys.append(row.data(), row.size() * sizeof(float)));
+    if (f == 0) first = row;
+    previous.swap(row);
+    row.resize(previous.size());
+    ++added;
+    return {};
+}
+
+// The key file holds frames x birds records; the .glb per bird its translations over all
+// frames, then each part's rotations. A group of birds at a time: read its records of
+// every frame (one contiguous run per frame), write its channels.
+Result<void> BirdGlbWriter::Impl::copy_channels(AtomicFile& file) {
+    const std::size_t bird_count = count();
+    const std::size_t per_bird = std::size_t{frames} * kRecordBytes;
+    const std::size_t group = std::max<std::size_t>(1, BirdGlbWriter::kTransposeBytes / per_bird);
+    std::vector<float> in(std::min(group, bird_count) * std::size_t{frames} * kRecordFloats);
+    std::vector<float> out(in.size());
+    for (std::size_t begin = 0; begin < bird_count; begin += group) {
+        const std::size_t n = std::min(group, bird_count - begin);
+        for (std::uint32_t f = 0; f < frames; ++f) {
+            KW_TRY(keys.read((std::uint64_t{f} * bird_count + begin) * kRecordBytes, in.data() + std::size_t{f} * n * kRecordFloats,
+                             n * kRecordBytes));
+        }
+        float* o = out.data();
+        for (std::size_t b = 0; b < n; ++b) {
+            for (std::uint32_t f = 0; f < frames; ++f, o += 3) {
+                std::memcpy(o, in.data() + (std::size_t{f} * n + b) * kRecordFloats, sizeof(Vec3));
+            }
+            for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+                for (std::uint32_t f = 0; f < frames; ++f, o += 4) {
+                    std::memcpy(o, in.data() + (std::size_t{f} * n + b) * kRecordFloats + 3 + 4 * part, sizeof(Quat));
+                }
+            }
+        }
+        file.write(out.data(), n * per_bird);
+    }
+    return {};
+}
+
+Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
+    const std::size_t bird_count = count();
     tinygltf::Model model;
     model.asset.version = "2.0";
     model.asset.generator = "kodawari " + std::string(version());
@@ -80,14 +219,7 @@ Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, st
     // Meshes first, only for the wing types that occur.
     std::array<std::array<int, birds::kPartCount>, birds::kWingTypeCount> type_meshes{};
     std::array<bool, birds::kWingTypeCount> used{};
-    for (std::size_t b = 0; b < bird_count; ++b) {
-        const std::uint32_t type = world.birds[b].ids.y;
-        if (type >= birds::kWingTypeCount) {
-            return make_error(Error::Kind::InvalidInput,
-                              "bird " + std::to_string(b) + " has unknown wing type " + std::to_string(type));
-        }
-        used[type] = true;
-    }
+    for (std::size_t b = 0; b < bird_count; ++b) used[world->birds[b].ids.y] = true;
     std::array<std::array<std::array<float, 3>, birds::kPartCount>, birds::kWingTypeCount> offsets{};
     for (std::size_t t = 0; t < birds::kWingTypeCount; ++t) {
         if (!used[t]) continue;
@@ -95,19 +227,16 @@ Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, st
         offsets[t] = birds::part_offsets(static_cast<birds::WingType>(t));
     }
 
-    // Animation data: the shared key times, then per bird its Body translation and the
-    // rotations of its parts, each channel contiguous over the frames.
+    // Animation data: the shared key times (in memory), then per bird its Body
+    // translation and the rotations of its parts, each channel contiguous over the frames
+    // (the tail, copied from the key file).
     const std::size_t time_bytes = frames * sizeof(float);
     const std::size_t translation_bytes = frames * 3 * sizeof(float);
     const std::size_t rotation_bytes = frames * 4 * sizeof(float);
     const std::size_t per_bird = translation_bytes + birds::kPartCount * rotation_bytes;
-    const std::size_t animation_start = bytes.size();
-    bytes.reserve(animation_start + time_bytes + bird_count * per_bird);
-    writer.allocate(time_bytes + bird_count * per_bird);
-    const std::size_t animation_bytes = bytes.size() - animation_start;
-    const int animation_view = add_buffer_view(model, animation_start, animation_bytes, 0);
-
-    const float fps = world.fps;
+    const std::size_t animation_start = writer.allocate(time_bytes);
+    const int animation_view = add_buffer_view(model, animation_start, time_bytes + bird_count * per_bird, 0);
+    const float fps = world->fps;
     for (std::uint32_t f = 0; f < frames; ++f) {
         const float time = static_cast<float>(f) / fps;
         std::memcpy(bytes.data() + animation_start + f * sizeof(float), &time, sizeof(float));
@@ -116,54 +245,6 @@ Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, st
         add_accessor(model, animation_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_SCALAR);
     model.accessors[time_accessor].minValues = {0.0};
     model.accessors[time_accessor].maxValues = {static_cast<double>(static_cast<float>(frames - 1) / fps)};
-
-    auto bird_offset = [&](std::size_t b) { return animation_start + time_bytes + b * per_bird; };
-    auto translation_key = [&](std::size_t b, std::size_t f) {
-        return bytes.data() + bird_offset(b) + f * sizeof(Vec3);
-    };
-    auto rotation_key = [&](std::size_t b, std::size_t part, std::size_t f) {
-        return bytes.data() + bird_offset(b) + translation_bytes + part * rotation_bytes + f * sizeof(Quat);
-    };
-
-    // Frame-major input, channel-major output. Going through the birds in small groups,
-    // all frames of a group at a time, keeps the group's 8 x kGroup output streams in
-    // cache; a whole row of 12 000 birds at a time missed the cache on every key.
-    constexpr std::size_t kGroup = 32;
-    for (std::size_t first = 0; first < bird_count; first += kGroup) {
-        const std::size_t last = std::min(first + kGroup, bird_count);
-        for (std::uint32_t f = 0; f < frames; ++f) {
-            const gpu::BirdPose* row = poses.data() + static_cast<std::size_t>(f) * bird_count;
-            for (std::size_t b = first; b < last; ++b) {
-                const gpu::BirdPose& pose = row[b];
-                const Vec3 position = {pose.position.x, pose.position.y, pose.position.z};
-                if (!std::isfinite(position[0]) || !std::isfinite(position[1]) || !std::isfinite(position[2])) {
-                    return make_error(Error::Kind::Internal, "bird " + std::to_string(b) + ", frame " +
-                                                                 std::to_string(f) + ": position is not finite");
-                }
-                std::memcpy(translation_key(b, f), position.data(), sizeof(Vec3));
-                for (std::size_t part = 0; part < birds::kPartCount; ++part) {
-                    Quat q;
-                    if (!normalized(pose.rotation[part], q)) {
-                        return make_error(Error::Kind::Internal,
-                                          "bird " + std::to_string(b) + ", frame " + std::to_string(f) + ": " +
-                                              std::string(birds::kPartNames[part]) + " rotation is not a quaternion");
-                    }
-                    // q and -q are the same rotation, but LINEAR (slerp) interpolation between
-                    // keys in opposite hemispheres would spin the long way round.
-                    if (f > 0) {
-                        Quat previous;
-                        std::memcpy(previous.data(), rotation_key(b, part, f - 1), sizeof(Quat));
-                        const float dot =
-                            previous[0] * q[0] + previous[1] * q[1] + previous[2] * q[2] + previous[3] * q[3];
-                        if (dot < 0.0f) {
-                            for (float& v : q) v = -v;
-                        }
-                    }
-                    std::memcpy(rotation_key(b, part, f), q.data(), sizeof(Quat));
-                }
-            }
-        }
-    }
 
     // Nodes: the root, then 7 per bird (Body first, so bird b's part k is 1 + 7b + k).
     model.nodes.reserve(1 + bird_count * birds::kPartCount);
@@ -177,14 +258,11 @@ Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, st
     animation.samplers.reserve(bird_count * (birds::kPartCount + 1));
     model.accessors.reserve(model.accessors.size() + bird_count * (birds::kPartCount + 1));
 
-    auto add_channel = [&](int accessor, int node, const char* path) {
-        add_linear_channel(animation, time_accessor, accessor, node, path);
-    };
-
     for (std::size_t b = 0; b < bird_count; ++b) {
-        const std::uint32_t type = world.birds[b].ids.y;
+        const std::uint32_t type = world->birds[b].ids.y;
         const std::string suffix = "_" + std::to_string(b);
         const int body_node = static_cast<int>(model.nodes.size());
+        const float* rest = first.data() + b * kRecordFloats;
         model.nodes[0].children.push_back(body_node);
         for (std::size_t part = 0; part < birds::kPartCount; ++part) {
             tinygltf::Node node;
@@ -193,15 +271,11 @@ Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, st
             node.mesh = type_meshes[type][part];
             // The rest pose is frame 0, so a viewer that ignores the animation still
             // shows the flock where it starts.
-            Quat q0;
-            std::memcpy(q0.data(), rotation_key(b, part, 0), sizeof(Quat));
+            const float* q0 = rest + 3 + 4 * part;
             node.rotation = {static_cast<double>(q0[0]), static_cast<double>(q0[1]), static_cast<double>(q0[2]),
                              static_cast<double>(q0[3])};
             if (part == KW_PART_BODY) {
-                Vec3 t0;
-                std::memcpy(t0.data(), translation_key(b, 0), sizeof(Vec3));
-                node.translation = {static_cast<double>(t0[0]), static_cast<double>(t0[1]),
-                                    static_cast<double>(t0[2])};
+                node.translation = {static_cast<double>(rest[0]), static_cast<double>(rest[1]), static_cast<double>(rest[2])};
             } else {
                 const auto& o = offsets[type][part];
                 node.translation = {static_cast<double>(o[0]), static_cast<double>(o[1]), static_cast<double>(o[2])};
@@ -213,15 +287,14 @@ Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, st
             model.nodes[body_node + parent].children.push_back(body_node + static_cast<int>(part));
         }
 
-        const std::size_t base = bird_offset(b) - animation_start;
+        const std::size_t base = time_bytes + b * per_bird;
         const int translation = add_accessor(model, animation_view, base, TINYGLTF_COMPONENT_TYPE_FLOAT, frames,
                                              TINYGLTF_TYPE_VEC3);
-        add_channel(translation, body_node, "translation");
+        add_linear_channel(animation, time_accessor, translation, body_node, "translation");
         for (std::size_t part = 0; part < birds::kPartCount; ++part) {
-            const int rotation =
-                add_accessor(model, animation_view, base + translation_bytes + part * rotation_bytes,
-                             TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_VEC4);
-            add_channel(rotation, body_node + static_cast<int>(part), "rotation");
+            const int rotation = add_accessor(model, animation_view, base + translation_bytes + part * rotation_bytes,
+                                              TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_VEC4);
+            add_linear_channel(animation, time_accessor, rotation, body_node + static_cast<int>(part), "rotation");
         }
     }
     // An animation without channels is invalid glTF: a world without birds gets none.
@@ -233,33 +306,31 @@ Result<void> build_and_write(AtomicFile& file, const birds::BirdWorld& world, st
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
 
-    return write_glb(file, model);
+    return write_glb_with_tail(file, model, std::uint64_t{bird_count} * per_bird, [&] { return copy_channels(file); });
 }
 
-}  // namespace
+Result<void> BirdGlbWriter::finish() {
+    Impl& w = *impl_;
+    if (w.count() > 0 && w.added != w.frames) {
+        return make_error(Error::Kind::InvalidInput, w.path + ": " + std::to_string(w.added) + " of " +
+                                                         std::to_string(w.frames) + " frames added");
+    }
+    return write_file_atomically(w.path, [&](AtomicFile& file) { return w.build_and_write(file); });
+}
 
 Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
                              std::span<const gpu::BirdPose> poses, std::uint32_t frames) {
     const std::size_t bird_count = world.birds.size();
-    if (frames == 0) {
-        return make_error(Error::Kind::InvalidInput, path + ": cannot write an animation of 0 frames");
-    }
     if (poses.size() != static_cast<std::size_t>(frames) * bird_count) {
         return make_error(Error::Kind::InvalidInput,
                           path + ": expected " + std::to_string(frames) + " frames x " + std::to_string(bird_count) +
                               " birds = " + std::to_string(static_cast<std::size_t>(frames) * bird_count) +
                               " poses, got " + std::to_string(poses.size()));
     }
-    if (!(world.fps > 0.0f) || !std::isfinite(world.fps)) {
-        return make_error(Error::Kind::InvalidInput, path + ": fps must be positive, got " + std::to_string(world.fps));
-    }
-    // A GLB's length field is 32 bits.
-    const double estimated = static_cast<double>(poses.size()) * static_cast<double>(3 + 4 * birds::kPartCount) * 4.0;
-    if (estimated > 4.0e9) {
-        return make_error(Error::Kind::InvalidInput,
-                          path + ": " + std::to_string(poses.size()) + " poses exceed the 4 GiB limit of a .glb");
-    }
-
-    return write_file_atomically(path, [&](AtomicFile& file) { return build_and_write(file, world, poses, frames); });
+    auto writer = BirdGlbWriter::create(path, world, frames);
+    if (!writer) return writer.error();
+    KW_TRY(writer.value().add_frames(poses));
+    return writer.value().finish();
 }
+
 }  // namespace kodawari

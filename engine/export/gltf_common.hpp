@@ -6,6 +6,8 @@
 #include <functional>
 #include <cstddef>
 #include <cstdint>
+#include <cstdio>
+#include <string>
 #include <streambuf>
 #include <vector>
 
@@ -53,6 +55,38 @@ private:
 /// Serializes `model` as a .glb into `file` (not committed). tinygltf may throw; callers
 /// catch.
 [[nodiscard]] Result<void> write_glb(AtomicFile& file, tinygltf::Model& model);
+
+/// Serializes `model` as a .glb into `file` (not committed) whose one buffer is
+/// model.buffers[0].data followed by `tail_bytes` more that `write_tail` appends to
+/// `file`: the bytes write_glb() would write with the tail in the buffer, without holding
+/// the tail in memory. tinygltf may throw; callers catch.
+[[nodiscard]] Result<void> write_glb_with_tail(AtomicFile& file, tinygltf::Model& model, std::uint64_t tail_bytes,
+                                               const std::function<Result<void>()>& write_tail);
+
+/// Data that arrives in another order than a file wants it (keys frame by frame, a
+/// .glb's channels each contiguous) wait here: a file beside the output, on the disk
+/// meant to hold that much, unlinked as soon as it is open so that it goes with the
+/// process whatever happens.
+class SpillFile {
+public:
+    /// Creates `<beside>.keys-<pid>`; `beside` empty: in the system's temporary directory.
+    [[nodiscard]] static Result<SpillFile> open(const std::string& beside);
+    SpillFile() = default;
+    SpillFile(SpillFile&& other) noexcept;
+    SpillFile& operator=(SpillFile&& other) noexcept;
+    SpillFile(const SpillFile&) = delete;
+    SpillFile& operator=(const SpillFile&) = delete;
+    ~SpillFile();
+
+    [[nodiscard]] Result<void> append(const void* data, std::size_t size);
+    /// Reads back `size` bytes at `offset` (after the appends).
+    [[nodiscard]] Result<void> read(std::uint64_t offset, void* data, std::size_t size);
+
+private:
+    std::FILE* file_ = nullptr;
+    std::string path_;
+    bool reading_ = false;
+};
 
 /// Adds a LINEAR sampler over `input` (key times) and `output` (values) and a channel
 /// driving `path` ("translation", "rotation", "scale") of `node` with it.

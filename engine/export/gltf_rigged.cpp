@@ -17,6 +17,7 @@
 #include <initializer_list>
 #include <limits>
 #include <new>
+#include <optional>
 #include <string>
 #include <utility>
 #include <vector>
@@ -112,8 +113,14 @@ struct RiggedGlbWriter::Impl {
     std::size_t extra_count = 0;
     std::vector<int> animated_nodes;                // the animated nodes, ascending
 
-    // Keys, frame-major: keys[f * tracks + i * animated_nodes.size() + k].
-    std::vector<Key> keys;
+    // Keys, frame-major in the spill file: frame f's key of track i * animated_nodes.size()
+    // + k at (f * tracks + track) * sizeof(Key). Per track in memory: the last rotation
+    // (hemispheres) and whether the scale ever left the rest scale.
+    std::string spill_beside;
+    std::optional<SpillFile> keys;
+    std::vector<Key> row;
+    std::vector<glm::quat> previous;
+    std::vector<bool> scaled;
     std::uint32_t frames = 0;
     bool finished = false;
 
@@ -124,6 +131,7 @@ struct RiggedGlbWriter::Impl {
     [[nodiscard]] std::size_t tracks() const { return instances.size() * animated_nodes.size(); }
 
     Result<void> build_and_write(AtomicFile& file);
+    [[nodiscard]] Result<void> copy_tracks(AtomicFile& file);
 };
 
 RiggedGlbWriter::RiggedGlbWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -165,7 +173,7 @@ Result<tinygltf::Model> load_source(const std::string& path) {
 
 Result<RiggedGlbWriter> RiggedGlbWriter::create(const std::string& source_path, const gltf::Character& character,
                                                 std::span<const RiggedInstance> instances, std::vector<bool> animated,
-                                                float fps, std::string animation_name) {
+                                                float fps, std::string animation_name, std::string spill_beside) {
     assert(animated.size() == character.nodes.size() && "one animated flag per node of the character");
     assert(fps > 0.0f && std::isfinite(fps));
     auto impl = std::make_unique<Impl>();
@@ -231,6 +239,7 @@ Result<RiggedGlbWriter> RiggedGlbWriter::create(const std::string& source_path, 
     impl->instances.assign(instances.begin(), instances.end());
     impl->fps = fps;
     impl->animation_name = std::move(animation_name);
+    impl->spill_beside = std::move(spill_beside);
     impl->node_count = n;
     impl->roots = character.roots;
     impl->animated = std::move(animated);
@@ -277,8 +286,14 @@ Result<void> RiggedGlbWriter::add_frame(std::span<const glm::vec3> translation, 
            "add_frame takes instances x nodes values");
     (void)expected;
     const std::size_t tracks = w.tracks();
-    const std::size_t first = w.keys.size();
-    w.keys.resize(first + tracks);
+    if (!w.keys) {
+        auto keys = SpillFile::open(w.spill_beside);
+        if (!keys) return keys.error();
+        w.keys.emplace(std::move(keys).value());
+        w.row.resize(tracks);
+        w.previous.resize(tracks);
+        w.scaled.assign(tracks, false);
+    }
     for (std::size_t i = 0; i < w.instances.size(); ++i) {
         for (std::size_t k = 0; k < w.animated_nodes.size(); ++k) {
             const auto node = static_cast<std::size_t>(w.animated_nodes[k]);
@@ -286,7 +301,6 @@ Result<void> RiggedGlbWriter::add_frame(std::span<const glm::vec3> translation, 
             glm::quat q = rotation[at];
             const float length = glm::length(q);
             if (!finite(translation[at]) || !finite(q) || !finite(scale[at]) || !(length > 0.0f)) {
-                w.keys.resize(first);
                 return make_error(Error::Kind::InvalidInput,
                                   "frame " + std::to_string(w.frames) + ", instance " + w.instances[i].name + ", node " +
                                       w.names[node] + ": the transform is not finite (or a zero rotation)");
@@ -294,9 +308,15 @@ Result<void> RiggedGlbWriter::add_frame(std::span<const glm::vec3> translation, 
             q /= length;
             const std::size_t track = i * w.animated_nodes.size() + k;
             // Consecutive keys in one hemisphere, so that players interpolate the short way.
-            if (w.frames > 0 && glm::dot(w.keys[first - tracks + track].rotation, q) < 0.0f) q = -q;
-            w.keys[first + track] = {translation[at], q, scale[at]};
+            if (w.frames > 0 && glm::dot(w.previous[track], q) < 0.0f) q = -q;
+            w.row[track] = {translation[at], q, scale[at]};
         }
+    }
+    KW_TRY(w.keys->append(w.row.data(), w.row.size() * sizeof(Key)));
+    for (std::size_t track = 0; track < tracks; ++track) {
+        w.previous[track] = w.row[track].rotation;
+        const auto node = static_cast<std::size_t>(w.animated_nodes[track % w.animated_nodes.size()]);
+        if (w.row[track].scale != w.rest_scale[node]) w.scaled[track] = true;
     }
     ++w.frames;
     return {};
@@ -457,41 +477,23 @@ Result<void> RiggedGlbWriter::Impl::build_and_write(AtomicFile& file) {
         auto add_channel = [&](int node, int accessor, const char* path) {
             add_linear_channel(animation, time_accessor, accessor, node, path);
         };
-        const std::size_t count = tracks();
-        std::vector<float> values;
+        // The tracks' views follow the buffer's head (the source's data, the images, the
+        // times) back to back; their bytes come from the spill file as the file is written.
+        std::size_t offset = bytes.size();
         for (std::size_t i = 0; i < instances.size(); ++i) {
             for (std::size_t k = 0; k < animated_nodes.size(); ++k) {
-                const std::size_t track = i * animated_nodes.size() + k;
-                const int source_node = animated_nodes[k];
-                const glm::vec3 rest_scale_k = rest_scale[static_cast<std::size_t>(source_node)];
-                bool scaled = false;
-                for (std::uint32_t f = 0; f < frames && !scaled; ++f) scaled = keys[f * count + track].scale != rest_scale_k;
-                values.clear();
-                values.reserve(std::size_t{frames} * (scaled ? 10 : 7));
-                for (std::uint32_t f = 0; f < frames; ++f) {
-                    const glm::vec3& t = keys[f * count + track].translation;
-                    values.insert(values.end(), {t.x, t.y, t.z});
-                }
-                for (std::uint32_t f = 0; f < frames; ++f) {
-                    const glm::quat& r = keys[f * count + track].rotation;
-                    values.insert(values.end(), {r.x, r.y, r.z, r.w});
-                }
-                if (scaled) {
-                    for (std::uint32_t f = 0; f < frames; ++f) {
-                        const glm::vec3& s = keys[f * count + track].scale;
-                        values.insert(values.end(), {s.x, s.y, s.z});
-                    }
-                }
-                const std::size_t size = values.size() * sizeof(float);
-                const int view = add_buffer_view(out, writer.append(values.data(), size), size, 0);
-                const int node = out_node(i, source_node);
+                const bool scale_keys = scaled[i * animated_nodes.size() + k];
+                const std::size_t size = std::size_t{frames} * (scale_keys ? 10 : 7) * sizeof(float);
+                const int view = add_buffer_view(out, offset, size, 0);
+                offset += size;
+                const int node = out_node(i, animated_nodes[k]);
                 add_channel(node, add_accessor(out, view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_VEC3),
                             "translation");
                 add_channel(node,
                             add_accessor(out, view, std::size_t{frames} * 3 * sizeof(float), TINYGLTF_COMPONENT_TYPE_FLOAT,
                                          frames, TINYGLTF_TYPE_VEC4),
                             "rotation");
-                if (scaled) {
+                if (scale_keys) {
                     add_channel(node,
                                 add_accessor(out, view, std::size_t{frames} * 7 * sizeof(float),
                                              TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_VEC3),
@@ -499,8 +501,10 @@ Result<void> RiggedGlbWriter::Impl::build_and_write(AtomicFile& file) {
                 }
             }
         }
-        keys = {};
         out.animations.push_back(std::move(animation));
+        const std::uint64_t tail = offset - bytes.size();
+        out.buffers[0].data = std::move(bytes);
+        return write_glb_with_tail(file, out, tail, [&] { return copy_tracks(file); });
     }
     if (bytes.empty()) {
         out.buffers.clear();  // glTF-Validator rejects an empty buffer
@@ -508,6 +512,42 @@ Result<void> RiggedGlbWriter::Impl::build_and_write(AtomicFile& file) {
         out.buffers[0].data = std::move(bytes);
     }
     return write_glb(file, out);
+}
+
+// The spill file holds frames x tracks keys; the .glb per track its translations over
+// all frames, then its rotations, then its scales when they change. A group of tracks at
+// a time: read its keys of every frame (one contiguous run per frame), write its views.
+Result<void> RiggedGlbWriter::Impl::copy_tracks(AtomicFile& file) {
+    const std::size_t count = tracks();
+    const std::size_t group = std::max<std::size_t>(1, RiggedGlbWriter::kTransposeBytes / (std::size_t{frames} * sizeof(Key)));
+    std::vector<Key> in(std::min(group, count) * frames);
+    std::vector<float> values;
+    values.reserve(in.size() * 10);
+    for (std::size_t begin = 0; begin < count; begin += group) {
+        const std::size_t n = std::min(group, count - begin);
+        for (std::uint32_t f = 0; f < frames; ++f) {
+            KW_TRY(keys->read((std::uint64_t{f} * count + begin) * sizeof(Key), in.data() + std::size_t{f} * n, n * sizeof(Key)));
+        }
+        values.clear();
+        for (std::size_t t = 0; t < n; ++t) {
+            for (std::uint32_t f = 0; f < frames; ++f) {
+                const glm::vec3& v = in[std::size_t{f} * n + t].translation;
+                values.insert(values.end(), {v.x, v.y, v.z});
+            }
+            for (std::uint32_t f = 0; f < frames; ++f) {
+                const glm::quat& r = in[std::size_t{f} * n + t].rotation;
+                values.insert(values.end(), {r.x, r.y, r.z, r.w});
+            }
+            if (scaled[begin + t]) {
+                for (std::uint32_t f = 0; f < frames; ++f) {
+                    const glm::vec3& v = in[std::size_t{f} * n + t].scale;
+                    values.insert(values.end(), {v.x, v.y, v.z});
+                }
+            }
+        }
+        file.write(values.data(), values.size() * sizeof(float));
+    }
+    return {};
 }
 
 Result<void> RiggedGlbWriter::finish(const std::string& path) {

@@ -13,7 +13,7 @@ RiggedCrowdExport::RiggedCrowdExport(const RodScene& scene, std::uint32_t charac
                                      RiggedGlbWriter writer)
     : scene_(&scene), character_(character), instances_(std::move(instances)), writer_(std::move(writer)) {}
 
-Result<RiggedCrowdExport> RiggedCrowdExport::create(const RodScene& scene, std::uint32_t character) {
+Result<RiggedCrowdExport> RiggedCrowdExport::create(const RodScene& scene, std::uint32_t character, const std::string& output) {
     assert(character < scene.characters.size() && scene.characters[character].rig);
     const CharacterKinematics& k = scene.characters[character];
     const gltf::Character& ch = *k.rig;
@@ -32,7 +32,7 @@ Result<RiggedCrowdExport> RiggedCrowdExport::create(const RodScene& scene, std::
     for (const std::vector<int>& nodes : k.chain_nodes) {
         for (const int n : nodes) animated[static_cast<std::size_t>(n)] = true;
     }
-    auto writer = RiggedGlbWriter::create(ch.source, ch, placed, std::move(animated), scene.fps, "simulation");
+    auto writer = RiggedGlbWriter::create(ch.source, ch, placed, std::move(animated), scene.fps, "simulation", output);
     if (!writer) return writer.error();
     return RiggedCrowdExport(scene, character, std::move(instances), std::move(writer).value());
 }

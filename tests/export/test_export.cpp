@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+
 #include "export_support.hpp"
 
 namespace kodawari {
@@ -263,6 +265,53 @@ TEST(Export, PoseCountMismatchIsAnError) {
 
     const auto too_many = write_birds_glb(path, world, poses, 2);
     EXPECT_FALSE(too_many.ok());
+    EXPECT_TRUE(dir.entries().empty());
+}
+
+TEST(Export, StreamedFramesGiveTheBytesOfOneCall) {
+    // Frames arriving one at a time or in uneven chunks (a bake's steps) end in the same
+    // file; the keys wait in a temporary file that is never seen in the directory.
+    TempDir dir;
+    const auto world = make_world();
+    constexpr std::uint32_t kStreamed = 7;
+    auto poses = make_poses(world, kStreamed);
+    const std::string whole = dir.file("whole.glb");
+    ASSERT_TRUE(write_birds_glb(whole, world, poses, kStreamed).ok());
+    const std::string streamed = dir.file("streamed.glb");
+    auto writer = BirdGlbWriter::create(streamed, world, kStreamed);
+    ASSERT_TRUE(writer.ok()) << writer.error().message;
+    const std::size_t birds = world.birds.size();
+    for (const std::uint32_t frames : {1u, 3u, 1u, 2u}) {
+        ASSERT_TRUE(writer.value().add_frames(std::span(poses).first(frames * birds)).ok());
+        poses.erase(poses.begin(), poses.begin() + static_cast<std::ptrdiff_t>(frames * birds));
+        EXPECT_EQ(dir.entries(), std::vector<std::string>{"whole.glb"});
+    }
+    ASSERT_TRUE(writer.value().finish().ok());
+    const auto bytes = [](const std::string& path) {
+        std::ifstream in(path, std::ios::binary | std::ios::ate);
+        std::string data(static_cast<std::size_t>(in.tellg()), '\0');
+        in.seekg(0);
+        in.read(data.data(), static_cast<std::streamsize>(data.size()));
+        return data;
+    };
+    EXPECT_EQ(bytes(whole), bytes(streamed));
+}
+
+TEST(Export, StreamEndedEarlyWritesNothing) {
+    TempDir dir;
+    const auto world = make_world();
+    const auto poses = make_poses(world, 3);
+    const std::string path = dir.file("flock.glb");
+    {
+        auto writer = BirdGlbWriter::create(path, world, 3);
+        ASSERT_TRUE(writer.ok());
+        ASSERT_TRUE(writer.value().add_frames(std::span(poses).first(world.birds.size())).ok());
+        const auto early = writer.value().finish();
+        ASSERT_FALSE(early.ok());
+        EXPECT_EQ(early.error().kind, Error::Kind::InvalidInput);
+        EXPECT_NE(early.error().message.find("1 of 3 frames"), std::string::npos) << early.error().message;
+        EXPECT_FALSE(writer.value().add_frames(std::span(poses).first(world.birds.size() + 1)).ok());
+    }
     EXPECT_TRUE(dir.entries().empty());
 }
 

@@ -31,6 +31,46 @@ namespace kodawari {
 [[nodiscard]] KODAWARI_API Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
                                                         std::span<const gpu::BirdPose> poses, std::uint32_t frames);
 
+/// Streams write_birds_glb()'s file (the same bytes) frame by frame, so that memory does
+/// not grow with frames x birds. Each frame's keys go to a temporary file beside `path`
+/// (removed from the directory as soon as it is opened, so nothing is left behind);
+/// finish() copies them into the `.glb`'s channels, channel after channel, through two
+/// buffers of kTransposeBytes (more only when one bird's keys over all frames are more).
+/// Besides that, it holds 128 bytes per bird (the first and the previous frame's keys),
+/// one frame's keys while adding, and the glTF model (JSON) while finishing.
+class KODAWARI_API BirdGlbWriter {
+public:
+    /// The size of each of the two buffers that reorder the keys from frame-major to
+    /// channel-major.
+    static constexpr std::size_t kTransposeBytes = std::size_t{32} << 20;
+
+    /// Prepares `path` for `frames` frames of `world` (which must outlive the writer).
+    /// Errors (naming `path`): no frames, fps not positive, more than a .glb can hold,
+    /// a bird of unknown wing type (InvalidInput), the temporary file (Io).
+    [[nodiscard]] static Result<BirdGlbWriter> create(const std::string& path, const birds::BirdWorld& world,
+                                                      std::uint32_t frames);
+
+    BirdGlbWriter(BirdGlbWriter&& other) noexcept;
+    BirdGlbWriter& operator=(BirdGlbWriter&& other) noexcept;
+    BirdGlbWriter(const BirdGlbWriter&) = delete;
+    BirdGlbWriter& operator=(const BirdGlbWriter&) = delete;
+    ~BirdGlbWriter();
+
+    /// Adds the next frames: `poses` holds whole frames of every bird, frame-major. A
+    /// position that is not finite or a rotation that is not a quaternion is an
+    /// Error::Kind::Internal naming the bird and frame; more frames than announced, or a
+    /// partial frame, InvalidInput.
+    [[nodiscard]] Result<void> add_frames(std::span<const gpu::BirdPose> poses);
+
+    /// Writes the `.glb` atomically once every frame has been added. Call it once.
+    [[nodiscard]] Result<void> finish();
+
+private:
+    struct Impl;
+    explicit BirdGlbWriter(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
+
 /// Writes a `.glb` of a rod scene: per character instance its skeleton as a node
 /// hierarchy and, under each chain's attachment joint, the chain's joints as a
 /// hierarchy (joint i the child of joint i-1) whose bones point at the next joint
@@ -52,9 +92,12 @@ struct RiggedInstance {
 
 /// Writes a crowd of one rigged glTF character as a `.glb` with the simulated motion
 /// baked into one animation, fed frame by frame. Between create() and finish() it holds
-/// the source file's data (once, whatever the number of instances) and the keys of the
-/// animated nodes (40 bytes per animated node, instance and frame), nothing else per
-/// frame.
+/// the source file's data (once, whatever the number of instances) and 17 bytes per
+/// animated node and instance; the keys (40 bytes per animated node, instance and frame)
+/// wait in a temporary file (SpillFile: beside the output when create() is told where,
+/// unlinked at once, so nothing is left behind) and finish() copies them into the
+/// `.glb` through two buffers of about kTransposeBytes (more only when one node's keys
+/// over all frames are more).
 ///
 /// What the file holds:
 /// - The source's meshes, materials, textures, images, samplers, cameras, lights and
@@ -108,10 +151,16 @@ public:
     /// references cannot be read (Error::Kind::InvalidInput or Io, naming the file); it
     /// uses EXT_meshopt_compression (Unsupported: its buffer indices cannot survive the
     /// merge into one buffer); a placement is not finite (InvalidInput).
+    /// `spill_beside`: the output's path, beside which the keys wait (empty: the
+    /// system's temporary directory); a failure to create that file is an Io error of
+    /// the first add_frame().
     [[nodiscard]] static Result<RiggedGlbWriter> create(const std::string& source_path, const gltf::Character& character,
                                                         std::span<const RiggedInstance> instances,
                                                         std::vector<bool> animated, float fps,
-                                                        std::string animation_name);
+                                                        std::string animation_name, std::string spill_beside = {});
+
+    /// The size of the buffer that reorders the keys from frame-major to per node.
+    static constexpr std::size_t kTransposeBytes = std::size_t{32} << 20;
 
     RiggedGlbWriter(RiggedGlbWriter&& other) noexcept;
     RiggedGlbWriter& operator=(RiggedGlbWriter&& other) noexcept;
@@ -169,8 +218,11 @@ private:
 class KODAWARI_API RiggedCrowdExport {
 public:
     /// Prepares the export of RodScene::characters[character] (which must be rigged).
-    /// `scene` must outlive the export. Errors: those of RiggedGlbWriter::create.
-    [[nodiscard]] static Result<RiggedCrowdExport> create(const RodScene& scene, std::uint32_t character);
+    /// `scene` must outlive the export. `output`: the path finish() will be given, beside
+    /// which the keys wait (RiggedGlbWriter::create's `spill_beside`). Errors: those of
+    /// RiggedGlbWriter::create.
+    [[nodiscard]] static Result<RiggedCrowdExport> create(const RodScene& scene, std::uint32_t character,
+                                                          const std::string& output = {});
 
     /// Adds frame `frame` of the scene: the clip poses at that frame and the chains of
     /// `snapshot` (the rod backend's state after that frame, for the whole world).

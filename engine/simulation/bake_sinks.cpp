@@ -1,0 +1,188 @@
+// The bake's sinks (kodawari/bake.hpp): the glTF writers and the trace, fed frame by frame.
+#include <algorithm>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "kodawari/bake.hpp"
+#include "kodawari/export.hpp"
+
+namespace kodawari {
+
+namespace {
+
+// A sink that holds its whole bake in memory refuses more than this (the procedural
+// chains' writer still takes every frame at once).
+constexpr std::uint64_t kHeldLimitBytes = 6ull << 30;
+
+Result<void> check_held(const std::string& path, std::uint64_t count, const char* what, std::uint32_t frames,
+                        std::uint64_t bytes) {
+    if (bytes <= kHeldLimitBytes) return {};
+    return make_error(Error::Kind::InvalidInput, path + ": baking " + std::to_string(count) + " " + what + " x " +
+                                                     std::to_string(frames) + " frames needs " + std::to_string(bytes >> 20) +
+                                                     " MiB; bake fewer frames");
+}
+
+// Streams: memory stays BirdGlbWriter's, whatever the frames.
+class BirdsGlbSink final : public BakeSink {
+public:
+    explicit BirdsGlbSink(std::string path) : path_(std::move(path)) {}
+
+    BakeNeeds needs() const override { return {.bird_poses = true}; }
+
+    Result<void> begin(const BakeWorld& world) override {
+        if (world.birds->birds.empty()) return {};
+        auto writer = BirdGlbWriter::create(path_, *world.birds, world.frames);
+        if (!writer) return writer.error();
+        writer_.emplace(std::move(writer).value());
+        return {};
+    }
+
+    Result<void> consume(const BakeFrames& frames) override {
+        return writer_ ? writer_->add_frames(frames.bird_poses) : Result<void>{};
+    }
+
+    Result<std::vector<BakeOutput>> finish() override {
+        if (!writer_) return std::vector<BakeOutput>{};
+        KW_TRY(writer_->finish());
+        return std::vector<BakeOutput>{{path_, BakeOutput::Format::Glb, ""}};
+    }
+
+private:
+    std::string path_;
+    std::optional<BirdGlbWriter> writer_;
+};
+
+class ChainsGlbSink final : public BakeSink {
+public:
+    explicit ChainsGlbSink(std::string path) : path_(std::move(path)) {}
+
+    BakeNeeds needs() const override { return {.chains = true}; }
+
+    Result<void> begin(const BakeWorld& world) override {
+        scene_ = world.rods;
+        frames_ = world.frames;
+        if (scene_ == nullptr) return {};
+        const RodScene& rods = *scene_;
+        // Rigged characters go back into their own glTF, one file per character template
+        // (the path itself when it is the only character); procedural characters (and
+        // then the rigged ones too, as bones) into write_chains_glb's file.
+        const bool any_procedural =
+            std::any_of(rods.characters.begin(), rods.characters.end(), [](const CharacterKinematics& k) { return !k.rig; });
+        const std::string stem = path_.substr(0, path_.size() - (path_.ends_with(".glb") ? 4 : 0));
+        for (std::uint32_t k = 0; k < rods.characters.size(); ++k) {
+            if (!rods.characters[k].rig) continue;
+            std::string path = !any_procedural && rods.characters.size() == 1 ? path_ : stem + "-" + rods.characters[k].name + ".glb";
+            auto e = RiggedCrowdExport::create(rods, k, path);
+            if (!e) return e.error();
+            if (e.value().instances().empty()) continue;
+            rigged_.push_back(std::move(e).value());
+            rigged_paths_.push_back(std::move(path));
+        }
+        if (any_procedural) {
+            const std::uint64_t joints = rods.world.joint_count;
+            KW_TRY(check_held(path_, joints, "joints", frames_,
+                              std::uint64_t{frames_} * joints * (sizeof(glm::vec3) + sizeof(glm::quat))));
+            positions_.reserve(std::size_t{frames_} * joints);
+            orientations_.reserve(positions_.capacity());
+            procedural_ = true;
+        }
+        return {};
+    }
+
+    Result<void> consume(const BakeFrames& frames) override {
+        if (scene_ == nullptr) return {};
+        const ChainSnapshot& snapshot = *frames.chains;
+        for (RiggedCrowdExport& e : rigged_) KW_TRY(e.add_frame(frames.first, snapshot));
+        if (procedural_) {
+            positions_.insert(positions_.end(), snapshot.positions.begin(), snapshot.positions.end());
+            orientations_.insert(orientations_.end(), snapshot.orientations.begin(), snapshot.orientations.end());
+        }
+        return {};
+    }
+
+    Result<std::vector<BakeOutput>> finish() override {
+        std::vector<BakeOutput> written;
+        for (std::size_t i = 0; i < rigged_.size(); ++i) {
+            KW_TRY(rigged_[i].finish(rigged_paths_[i]));
+            written.push_back({rigged_paths_[i], BakeOutput::Format::Glb, "the character's own skeleton and meshes"});
+        }
+        if (procedural_) {
+            KW_TRY(write_chains_glb(path_, *scene_, frames_, positions_, orientations_));
+            written.push_back({path_, BakeOutput::Format::Glb, ""});
+        }
+        return written;
+    }
+
+private:
+    std::string path_;
+    const RodScene* scene_ = nullptr;
+    std::uint32_t frames_ = 0;
+    std::vector<RiggedCrowdExport> rigged_;
+    std::vector<std::string> rigged_paths_;
+    bool procedural_ = false;
+    std::vector<glm::vec3> positions_;
+    std::vector<glm::quat> orientations_;
+};
+
+class TraceSink final : public BakeSink {
+public:
+    explicit TraceSink(std::string path) : path_(std::move(path)) {}
+
+    BakeNeeds needs() const override { return {.bird_poses = true, .bird_diag = true, .chains = true}; }
+
+    Result<void> begin(const BakeWorld& world) override {
+        world_ = world;
+        auto t = TraceWriter::open(path_, {world.scene->name, world.birds->fps, world.frames, world.backend});
+        if (!t) return t.error();
+        trace_.emplace(std::move(t).value());
+        if (world.rods != nullptr) {
+            // Per chain: its character instance and its index there (the trace's records).
+            const RodScene& rods = *world.rods;
+            characters_.resize(rods.world.chains.size());
+            within_.resize(rods.world.chains.size());
+            for (std::uint32_t c = 0; c < rods.world.character_count; ++c) {
+                for (std::uint32_t k = 0; k < rods.chain_count(c); ++k) {
+                    characters_[rods.instances[c].chain_begin + k] = c;
+                    within_[rods.instances[c].chain_begin + k] = k;
+                }
+            }
+        }
+        return {};
+    }
+
+    Result<void> consume(const BakeFrames& frames) override {
+        const std::size_t count = world_.birds->birds.size();
+        if (count > 0) {
+            for (std::uint32_t k = 0; k < frames.count; ++k) {
+                trace_->write_frame(frames.first + k, *world_.birds, frames.bird_poses.subspan(std::size_t{k} * count, count),
+                                    frames.bird_diag.subspan(std::size_t{k} * count, count));
+            }
+        }
+        if (frames.chains != nullptr) {
+            const RodScene& rods = *world_.rods;
+            trace_->write_chains(frames.first, rods.time(frames.first), rods.world, characters_, within_, rods.chain_names,
+                                 *frames.chains);
+        }
+        return {};
+    }
+
+    Result<std::vector<BakeOutput>> finish() override {
+        KW_TRY(trace_->finish());
+        return std::vector<BakeOutput>{{path_, BakeOutput::Format::Trace, ""}};
+    }
+
+private:
+    std::string path_;
+    BakeWorld world_;
+    std::optional<TraceWriter> trace_;
+    std::vector<std::uint32_t> characters_, within_;
+};
+
+}  // namespace
+
+std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path) { return std::make_unique<BirdsGlbSink>(std::move(path)); }
+std::unique_ptr<BakeSink> make_chains_glb_sink(std::string path) { return std::make_unique<ChainsGlbSink>(std::move(path)); }
+std::unique_ptr<BakeSink> make_trace_sink(std::string path) { return std::make_unique<TraceSink>(std::move(path)); }
+
+}  // namespace kodawari
