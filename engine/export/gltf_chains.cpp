@@ -1,13 +1,17 @@
 // glTF 2.0 export of a rod scene (SPEC A, C): every character instance's kinematic
 // skeleton and, under each chain's attachment joint, the chain's joints as a hierarchy
 // whose bones point at the next joint (the skinning rotation of SPEC A.4's output), with
-// one animation holding every simulated frame.
+// one animation holding every simulated frame. Streamed (ChainsGlbWriter): keys arrive
+// frame by frame but glTF keeps each channel's keys together, so they wait in a
+// temporary file.
 
 #include <algorithm>
 #include <cmath>
 #include <cstring>
 #include <exception>
+#include <memory>
 #include <new>
+#include <span>
 #include <string>
 #include <vector>
 
@@ -32,21 +36,42 @@ Local relative(glm::vec3 parent_t, glm::quat parent_r, glm::vec3 child_t, glm::q
     return {inv * (child_t - parent_t), glm::normalize(inv * child_r)};
 }
 
-// One animated node's keys: translation then rotation, frame after frame.
-struct Track {
-    int node = 0;
-    std::size_t offset = 0;  // of the translations in the buffer; rotations follow
+// One animated node's keys of one frame: translation, then rotation.
+constexpr std::size_t kRecordFloats = 7;
+constexpr std::size_t kRecordBytes = kRecordFloats * sizeof(float);
+
+}  // namespace
+
+struct ChainsGlbWriter::Impl {
+    std::string path;
+    const RodScene* scene = nullptr;
+    std::uint32_t frames = 0;
+    std::uint32_t added = 0;
+    // Meshes and nodes are known before the first frame; the animation's accessors
+    // follow them at finish(), in the order the file has always had.
+    tinygltf::Model model;
+    std::vector<int> track_nodes;  // per track, in buffer order
+    std::vector<std::vector<std::size_t>> joint_tracks, chain_tracks;  // per character
+    SpillFile keys;             // frames x tracks records
+    std::vector<float> first;     // tracks x record: frame 0, the rest pose
+    std::vector<float> previous;  // tracks x record: the last frame added (rotation hemispheres)
+    std::vector<float> row;       // tracks x record being written
+    std::vector<rods::Transform> joints;
+    std::vector<glm::quat> bones;
+
+    [[nodiscard]] std::size_t key_bytes() const { return std::size_t{frames} * kRecordBytes; }
+    void build_nodes();
+    [[nodiscard]] Result<void> add_frame(std::span<const glm::vec3> positions, std::span<const glm::quat> orientations);
+    [[nodiscard]] Result<void> build_and_write(AtomicFile& file);
+    [[nodiscard]] Result<void> copy_channels(AtomicFile& file);
 };
 
-Result<void> build_and_write(AtomicFile& file, const RodScene& scene, std::uint32_t frames,
-                             std::span<const glm::vec3> positions, std::span<const glm::quat> orientations) {
-    const rods::RodWorld& world = scene.world;
-    tinygltf::Model model;
+void ChainsGlbWriter::Impl::build_nodes() {
+    const rods::RodWorld& world = scene->world;
     model.asset.version = "2.0";
     model.asset.generator = "kodawari " + std::string(version());
     model.buffers.emplace_back();
-    std::vector<unsigned char>& bytes = model.buffers[0].data;
-    BufferWriter writer(bytes);
+    BufferWriter writer(model.buffers[0].data);
 
     tinygltf::Material skin;
     skin.name = "skeleton";
@@ -65,9 +90,6 @@ Result<void> build_and_write(AtomicFile& file, const RodScene& scene, std::uint3
         chain_meshes.push_back(add_mesh(model, writer, box({-s, -s, -s}, {s, s, s}), 1, t.name));
     }
 
-    // Nodes, and the tracks that animate them.
-    std::vector<Track> tracks;
-    const std::size_t key_bytes = std::size_t{frames} * (sizeof(Vec3) + sizeof(Quat));
     tinygltf::Node root_node;
     root_node.name = "characters";
     model.nodes.push_back(root_node);
@@ -78,122 +100,210 @@ Result<void> build_and_write(AtomicFile& file, const RodScene& scene, std::uint3
         model.nodes.push_back(std::move(node));
         const int index = static_cast<int>(model.nodes.size() - 1);
         model.nodes[static_cast<std::size_t>(parent)].children.push_back(index);
-        tracks.push_back({index, writer.allocate(key_bytes)});
+        track_nodes.push_back(index);
         return index;
     };
-    auto write_key = [&](const Track& track, std::uint32_t f, const Local& l) {
-        const Vec3 t = {l.t.x, l.t.y, l.t.z};
-        Quat r = {l.r.x, l.r.y, l.r.z, l.r.w};
-        unsigned char* rotations = bytes.data() + track.offset + std::size_t{frames} * sizeof(Vec3);
-        if (f > 0) {
-            // Consecutive keys in one hemisphere, so that players interpolate the short way.
-            Quat previous;
-            std::memcpy(previous.data(), rotations + (f - 1) * sizeof(Quat), sizeof(Quat));
-            if (previous[0] * r[0] + previous[1] * r[1] + previous[2] * r[2] + previous[3] * r[3] < 0.0f) {
-                for (float& v : r) v = -v;
-            }
-        }
-        std::memcpy(bytes.data() + track.offset + f * sizeof(Vec3), t.data(), sizeof(Vec3));
-        std::memcpy(rotations + f * sizeof(Quat), r.data(), sizeof(Quat));
-    };
-
-    std::vector<rods::Transform> joints;
-    std::vector<glm::quat> bones;
+    joint_tracks.resize(world.character_count);
+    chain_tracks.resize(world.character_count);
     for (std::uint32_t c = 0; c < world.character_count; ++c) {
-        const CharacterInstance& instance = scene.instances[c];
-        const CharacterKinematics& kind = scene.characters[instance.character];
-        const auto& names = scene.joint_names(c);
-        const auto& parents = scene.joint_parents(c);
+        const CharacterInstance& instance = scene->instances[c];
+        const CharacterKinematics& kind = scene->characters[instance.character];
+        const auto& names = scene->joint_names(c);
+        const auto& parents = scene->joint_parents(c);
         // Parents first: a rigged character's joints are its glTF nodes in file order,
         // where a child may come before its parent. Tracks stay in joint order.
         std::vector<int> joint_nodes(names.size(), -1);
-        std::vector<std::size_t> joint_tracks(names.size());
+        joint_tracks[c].resize(names.size());
         for (std::size_t placed = 0; placed < names.size();) {
             for (std::size_t j = 0; j < names.size(); ++j) {
                 if (joint_nodes[j] >= 0) continue;
                 const int p = parents[j];
                 if (p >= 0 && joint_nodes[static_cast<std::size_t>(p)] < 0) continue;
                 const int parent = p < 0 ? 0 : joint_nodes[static_cast<std::size_t>(p)];
-                joint_tracks[j] = tracks.size();
-                joint_nodes[j] = add_node(scene.character_names[c] + "/" + names[j], joint_mesh, parent);
+                joint_tracks[c][j] = track_nodes.size();
+                joint_nodes[j] = add_node(scene->character_names[c] + "/" + names[j], joint_mesh, parent);
                 ++placed;
             }
         }
-        const std::uint32_t chain_count = scene.chain_count(c);
-        std::vector<std::size_t> chain_tracks(chain_count);
+        const std::uint32_t chain_count = scene->chain_count(c);
+        chain_tracks[c].resize(chain_count);
         for (std::uint32_t k = 0; k < chain_count; ++k) {
             const std::uint32_t chain = instance.chain_begin + k;
             const rods::ChainInstance& ci = world.chains[chain];
             int parent = joint_nodes[kind.chains[k].joint];
-            chain_tracks[k] = tracks.size();
+            chain_tracks[c][k] = track_nodes.size();
             for (std::uint32_t i = 0; i < world.templ(ci).chain.joint_count; ++i) {
-                parent = add_node(scene.chain_names[chain] + "/" + std::to_string(i), chain_meshes[ci.template_index], parent);
-            }
-        }
-        for (std::uint32_t f = 0; f < frames; ++f) {
-            scene.joint_poses(c, f, joints);
-            for (std::size_t j = 0; j < joints.size(); ++j) {
-                const Local l = parents[j] < 0 ? Local{joints[j].position, joints[j].rotation}
-                                               : relative(joints[static_cast<std::size_t>(parents[j])].position,
-                                                          joints[static_cast<std::size_t>(parents[j])].rotation,
-                                                          joints[j].position, joints[j].rotation);
-                write_key(tracks[joint_tracks[j]], f, l);
-            }
-            for (std::uint32_t k = 0; k < chain_count; ++k) {
-                const std::uint32_t chain = instance.chain_begin + k;
-                const rods::ChainInstance& ci = world.chains[chain];
-                const rods::Chain& ch = world.templ(ci).chain;
-                const std::size_t base = std::size_t{f} * world.joint_count + ci.joint_begin;
-                // SPEC A.4 output: each bone turned so that its axis points at the next joint.
-                bones.resize(ch.joint_count);
-                for (std::uint32_t i = 0; i < ch.joint_count; ++i) {
-                    const glm::quat q = glm::normalize(orientations[base + i]);
-                    bones[i] = q;
-                    if (i + 1 < ch.joint_count) {
-                        const glm::vec3 d = positions[base + i + 1] - positions[base + i];
-                        const float len = glm::length(d);
-                        if (len > 1e-9f) bones[i] = glm::normalize(rods::shortest_arc(glm::normalize(q * ch.bone_axis[i]), d / len) * q);
-                    }
-                }
-                const rods::Transform& attach = joints[kind.chains[k].joint];
-                for (std::uint32_t i = 0; i < ch.joint_count; ++i) {
-                    const Local l = i == 0 ? relative(attach.position, attach.rotation, positions[base], bones[0])
-                                           : relative(positions[base + i - 1], bones[i - 1], positions[base + i], bones[i]);
-                    if (!std::isfinite(l.t.x + l.t.y + l.t.z + l.r.x + l.r.y + l.r.z + l.r.w)) {
-                        return make_error(Error::Kind::Internal, scene.chain_names[chain] + ", frame " + std::to_string(f) +
-                                                                     ": joint " + std::to_string(i) + " is not finite");
-                    }
-                    write_key(tracks[chain_tracks[k] + i], f, l);
-                }
+                parent = add_node(scene->chain_names[chain] + "/" + std::to_string(i), chain_meshes[ci.template_index], parent);
             }
         }
     }
+}
 
-    // Times, then one sampler and two channels per track.
+ChainsGlbWriter::ChainsGlbWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
+ChainsGlbWriter::ChainsGlbWriter(ChainsGlbWriter&& other) noexcept = default;
+ChainsGlbWriter& ChainsGlbWriter::operator=(ChainsGlbWriter&& other) noexcept = default;
+ChainsGlbWriter::~ChainsGlbWriter() = default;
+
+Result<ChainsGlbWriter> ChainsGlbWriter::create(const std::string& path, const RodScene& scene, std::uint32_t frames) {
+    if (frames == 0) return make_error(Error::Kind::InvalidInput, path + ": cannot write an animation of 0 frames");
+    auto impl = std::make_unique<Impl>();
+    impl->path = path;
+    impl->scene = &scene;
+    impl->frames = frames;
+    impl->build_nodes();
+    // Refused here rather than after the whole simulation has run: a GLB's length field
+    // is 32 bits. The JSON is not counted yet; write_glb_with_tail checks the exact total.
+    const std::uint64_t bytes = impl->model.buffers[0].data.size() +
+                                impl->track_nodes.size() * (std::uint64_t{frames} * kRecordBytes) +
+                                std::uint64_t{frames} * sizeof(float);
+    if (bytes > 0xFFFFFFFFull) {
+        return make_error(Error::Kind::InvalidInput, path + ": " + std::to_string(impl->track_nodes.size()) + " nodes x " +
+                                                         std::to_string(frames) + " frames need " + std::to_string(bytes) +
+                                                         " bytes, past the 4 GiB limit of a .glb; bake fewer frames");
+    }
+    auto keys = SpillFile::open(path);
+    if (!keys) return keys.error();
+    impl->keys = std::move(keys).value();
+    impl->row.resize(impl->track_nodes.size() * kRecordFloats);
+    return ChainsGlbWriter(std::move(impl));
+}
+
+Result<void> ChainsGlbWriter::add_frame(std::span<const glm::vec3> positions, std::span<const glm::quat> orientations) {
+    Impl& w = *impl_;
+    const std::size_t joints = w.scene->world.joint_count;
+    if (positions.size() != joints || orientations.size() != joints || w.added >= w.frames) {
+        return make_error(Error::Kind::InvalidInput, w.path + ": frame " + std::to_string(w.added) + " of " +
+                                                         std::to_string(w.frames) + " announced, with " +
+                                                         std::to_string(positions.size()) + " positions and " +
+                                                         std::to_string(orientations.size()) + " orientations for " +
+                                                         std::to_string(joints) + " joints");
+    }
+    return w.add_frame(positions, orientations);
+}
+
+Result<void> ChainsGlbWriter::Impl::add_frame(std::span<const glm::vec3> positions, std::span<const glm::quat> orientations) {
+    const rods::RodWorld& world = scene->world;
+    const std::uint32_t f = added;
+    auto write_key = [&](std::size_t track, const Local& l) {
+        float* record = row.data() + track * kRecordFloats;
+        Quat r = {l.r.x, l.r.y, l.r.z, l.r.w};
+        if (f > 0) {
+            // Consecutive keys in one hemisphere, so that players interpolate the short way.
+            const float* p = previous.data() + track * kRecordFloats + 3;
+            if (p[0] * r[0] + p[1] * r[1] + p[2] * r[2] + p[3] * r[3] < 0.0f) {
+                for (float& v : r) v = -v;
+            }
+        }
+        const Vec3 t = {l.t.x, l.t.y, l.t.z};
+        std::memcpy(record, t.data(), sizeof(Vec3));
+        std::memcpy(record + 3, r.data(), sizeof(Quat));
+    };
+    for (std::uint32_t c = 0; c < world.character_count; ++c) {
+        const CharacterInstance& instance = scene->instances[c];
+        const CharacterKinematics& kind = scene->characters[instance.character];
+        const auto& parents = scene->joint_parents(c);
+        scene->joint_poses(c, f, joints);
+        for (std::size_t j = 0; j < joints.size(); ++j) {
+            const Local l = parents[j] < 0 ? Local{joints[j].position, joints[j].rotation}
+                                           : relative(joints[static_cast<std::size_t>(parents[j])].position,
+                                                      joints[static_cast<std::size_t>(parents[j])].rotation,
+                                                      joints[j].position, joints[j].rotation);
+            write_key(joint_tracks[c][j], l);
+        }
+        const std::uint32_t chain_count = scene->chain_count(c);
+        for (std::uint32_t k = 0; k < chain_count; ++k) {
+            const std::uint32_t chain = instance.chain_begin + k;
+            const rods::ChainInstance& ci = world.chains[chain];
+            const rods::Chain& ch = world.templ(ci).chain;
+            const std::size_t base = ci.joint_begin;
+            // SPEC A.4 output: each bone turned so that its axis points at the next joint.
+            bones.resize(ch.joint_count);
+            for (std::uint32_t i = 0; i < ch.joint_count; ++i) {
+                const glm::quat q = glm::normalize(orientations[base + i]);
+                bones[i] = q;
+                if (i + 1 < ch.joint_count) {
+                    const glm::vec3 d = positions[base + i + 1] - positions[base + i];
+                    const float len = glm::length(d);
+                    if (len > 1e-9f) bones[i] = glm::normalize(rods::shortest_arc(glm::normalize(q * ch.bone_axis[i]), d / len) * q);
+                }
+            }
+            const rods::Transform& attach = joints[kind.chains[k].joint];
+            for (std::uint32_t i = 0; i < ch.joint_count; ++i) {
+                const Local l = i == 0 ? relative(attach.position, attach.rotation, positions[base], bones[0])
+                                       : relative(positions[base + i - 1], bones[i - 1], positions[base + i], bones[i]);
+                if (!std::isfinite(l.t.x + l.t.y + l.t.z + l.r.x + l.r.y + l.r.z + l.r.w)) {
+                    return make_error(Error::Kind::Internal, path + ": " + scene->chain_names[chain] + ", frame " +
+                                                                 std::to_string(f) + ": joint " + std::to_string(i) +
+                                                                 " is not finite");
+                }
+                write_key(chain_tracks[c][k] + i, l);
+            }
+        }
+    }
+    KW_TRY(keys.append(row.data(), row.size() * sizeof(float)));
+    if (f == 0) first = row;
+    previous.swap(row);
+    row.resize(previous.size());
+    ++added;
+    return {};
+}
+
+// The key file holds frames x tracks records; the .glb per track its translations over
+// all frames, then its rotations, then the key times. A group of tracks at a time: read
+// its records of every frame (one contiguous run per frame), write its channels.
+Result<void> ChainsGlbWriter::Impl::copy_channels(AtomicFile& file) {
+    const std::size_t count = track_nodes.size();
+    const std::size_t group = std::max<std::size_t>(1, ChainsGlbWriter::kTransposeBytes / key_bytes());
+    std::vector<float> in(std::min(group, count) * std::size_t{frames} * kRecordFloats);
+    std::vector<float> out(in.size());
+    for (std::size_t begin = 0; begin < count; begin += group) {
+        const std::size_t n = std::min(group, count - begin);
+        for (std::uint32_t f = 0; f < frames; ++f) {
+            KW_TRY(keys.read((std::uint64_t{f} * count + begin) * kRecordBytes, in.data() + std::size_t{f} * n * kRecordFloats,
+                             n * kRecordBytes));
+        }
+        float* o = out.data();
+        for (std::size_t t = 0; t < n; ++t) {
+            for (std::uint32_t f = 0; f < frames; ++f, o += 3) {
+                std::memcpy(o, in.data() + (std::size_t{f} * n + t) * kRecordFloats, sizeof(Vec3));
+            }
+            for (std::uint32_t f = 0; f < frames; ++f, o += 4) {
+                std::memcpy(o, in.data() + (std::size_t{f} * n + t) * kRecordFloats + 3, sizeof(Quat));
+            }
+        }
+        file.write(out.data(), n * key_bytes());
+    }
     std::vector<float> times(frames);
-    for (std::uint32_t f = 0; f < frames; ++f) times[f] = scene.time(f);
-    const std::size_t time_offset = writer.append(times.data(), times.size() * sizeof(float));
-    const int time_view = add_buffer_view(model, time_offset, times.size() * sizeof(float), 0);
+    for (std::uint32_t f = 0; f < frames; ++f) times[f] = scene->time(f);
+    file.write(times.data(), times.size() * sizeof(float));
+    return {};
+}
+
+Result<void> ChainsGlbWriter::Impl::build_and_write(AtomicFile& file) {
+    // The buffer: meshes (in memory), then each track's keys, then the key times (the
+    // tail, streamed by copy_channels).
+    const std::size_t head = model.buffers[0].data.size();
+    const std::size_t keys_bytes = track_nodes.size() * key_bytes();
+    const std::size_t time_bytes = std::size_t{frames} * sizeof(float);
+    const int time_view = add_buffer_view(model, head + keys_bytes, time_bytes, 0);
     const int time_accessor = add_accessor(model, time_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_SCALAR);
-    model.accessors[static_cast<std::size_t>(time_accessor)].minValues = {static_cast<double>(times.front())};
-    model.accessors[static_cast<std::size_t>(time_accessor)].maxValues = {static_cast<double>(times.back())};
+    model.accessors[static_cast<std::size_t>(time_accessor)].minValues = {static_cast<double>(scene->time(0))};
+    model.accessors[static_cast<std::size_t>(time_accessor)].maxValues = {static_cast<double>(scene->time(frames - 1))};
     tinygltf::Animation animation;
     animation.name = "simulation";
-    for (const Track& track : tracks) {
-        const int view = add_buffer_view(model, track.offset, key_bytes, 0);
+    for (std::size_t t = 0; t < track_nodes.size(); ++t) {
+        const int node_index = track_nodes[t];
+        const int view = add_buffer_view(model, head + t * key_bytes(), key_bytes(), 0);
         const int translation = add_accessor(model, view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_VEC3);
         const int rotation = add_accessor(model, view, std::size_t{frames} * sizeof(Vec3), TINYGLTF_COMPONENT_TYPE_FLOAT,
                                           frames, TINYGLTF_TYPE_VEC4);
-        add_linear_channel(animation, time_accessor, translation, track.node, "translation");
-        add_linear_channel(animation, time_accessor, rotation, track.node, "rotation");
+        add_linear_channel(animation, time_accessor, translation, node_index, "translation");
+        add_linear_channel(animation, time_accessor, rotation, node_index, "rotation");
         // The first frame's pose as the rest pose, for tools that show the file unanimated.
-        tinygltf::Node& node = model.nodes[static_cast<std::size_t>(track.node)];
-        Vec3 t;
-        Quat r;
-        std::memcpy(t.data(), bytes.data() + track.offset, sizeof(Vec3));
-        std::memcpy(r.data(), bytes.data() + track.offset + std::size_t{frames} * sizeof(Vec3), sizeof(Quat));
-        node.translation = {t[0], t[1], t[2]};
-        node.rotation = {r[0], r[1], r[2], r[3]};
+        tinygltf::Node& node = model.nodes[static_cast<std::size_t>(node_index)];
+        const float* rest = first.data() + t * kRecordFloats;
+        node.translation = {rest[0], rest[1], rest[2]};
+        node.rotation = {rest[3], rest[4], rest[5], rest[6]};
     }
     if (!animation.channels.empty()) model.animations.push_back(std::move(animation));
 
@@ -202,14 +312,22 @@ Result<void> build_and_write(AtomicFile& file, const RodScene& scene, std::uint3
     gltf_scene.nodes.push_back(0);
     model.scenes.push_back(std::move(gltf_scene));
     model.defaultScene = 0;
-    return write_glb(file, model);
+    return write_glb_with_tail(file, model, keys_bytes + time_bytes, [&] { return copy_channels(file); });
 }
 
-}  // namespace
+Result<void> ChainsGlbWriter::finish() {
+    Impl& w = *impl_;
+    if (w.added != w.frames) {
+        return make_error(Error::Kind::InvalidInput, w.path + ": " + std::to_string(w.added) + " of " +
+                                                         std::to_string(w.frames) + " frames added");
+    }
+    return write_file_atomically(w.path, [&](AtomicFile& file) { return w.build_and_write(file); });
+}
 
 Result<void> write_chains_glb(const std::string& path, const RodScene& scene, std::uint32_t frames,
                               std::span<const glm::vec3> positions, std::span<const glm::quat> orientations) {
-    const std::size_t expected = std::size_t{frames} * scene.world.joint_count;
+    const std::size_t joints = scene.world.joint_count;
+    const std::size_t expected = std::size_t{frames} * joints;
     if (frames == 0) return make_error(Error::Kind::InvalidInput, path + ": cannot write an animation of 0 frames");
     if (positions.size() != expected || orientations.size() != expected) {
         return make_error(Error::Kind::InvalidInput, path + ": expected " + std::to_string(expected) +
@@ -217,8 +335,13 @@ Result<void> write_chains_glb(const std::string& path, const RodScene& scene, st
                                                          std::to_string(positions.size()) + " and " +
                                                          std::to_string(orientations.size()));
     }
-    return write_file_atomically(
-        path, [&](AtomicFile& file) { return build_and_write(file, scene, frames, positions, orientations); });
+    auto writer = ChainsGlbWriter::create(path, scene, frames);
+    if (!writer) return writer.error();
+    for (std::uint32_t f = 0; f < frames; ++f) {
+        KW_TRY(writer.value().add_frame(positions.subspan(std::size_t{f} * joints, joints),
+                                        orientations.subspan(std::size_t{f} * joints, joints)));
+    }
+    return writer.value().finish();
 }
 
 }  // namespace kodawari

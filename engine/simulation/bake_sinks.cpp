@@ -11,18 +11,6 @@ namespace kodawari {
 
 namespace {
 
-// A sink that holds its whole bake in memory refuses more than this (the procedural
-// chains' writer still takes every frame at once).
-constexpr std::uint64_t kHeldLimitBytes = 6ull << 30;
-
-Result<void> check_held(const std::string& path, std::uint64_t count, const char* what, std::uint32_t frames,
-                        std::uint64_t bytes) {
-    if (bytes <= kHeldLimitBytes) return {};
-    return make_error(Error::Kind::InvalidInput, path + ": baking " + std::to_string(count) + " " + what + " x " +
-                                                     std::to_string(frames) + " frames needs " + std::to_string(bytes >> 20) +
-                                                     " MiB; bake fewer frames");
-}
-
 // Streams: memory stays BirdGlbWriter's, whatever the frames.
 class BirdsGlbSink final : public BakeSink {
 public:
@@ -66,7 +54,7 @@ public:
         const RodScene& rods = *scene_;
         // Rigged characters go back into their own glTF, one file per character template
         // (the path itself when it is the only character); procedural characters (and
-        // then the rigged ones too, as bones) into write_chains_glb's file.
+        // then the rigged ones too, as bones) into ChainsGlbWriter's file.
         const bool any_procedural =
             std::any_of(rods.characters.begin(), rods.characters.end(), [](const CharacterKinematics& k) { return !k.rig; });
         const std::string stem = path_.substr(0, path_.size() - (path_.ends_with(".glb") ? 4 : 0));
@@ -80,12 +68,9 @@ public:
             rigged_paths_.push_back(std::move(path));
         }
         if (any_procedural) {
-            const std::uint64_t joints = rods.world.joint_count;
-            KW_TRY(check_held(path_, joints, "joints", frames_,
-                              std::uint64_t{frames_} * joints * (sizeof(glm::vec3) + sizeof(glm::quat))));
-            positions_.reserve(std::size_t{frames_} * joints);
-            orientations_.reserve(positions_.capacity());
-            procedural_ = true;
+            auto writer = ChainsGlbWriter::create(path_, rods, frames_);
+            if (!writer) return writer.error();
+            procedural_.emplace(std::move(writer).value());
         }
         return {};
     }
@@ -94,10 +79,7 @@ public:
         if (scene_ == nullptr) return {};
         const ChainSnapshot& snapshot = *frames.chains;
         for (RiggedCrowdExport& e : rigged_) KW_TRY(e.add_frame(frames.first, snapshot));
-        if (procedural_) {
-            positions_.insert(positions_.end(), snapshot.positions.begin(), snapshot.positions.end());
-            orientations_.insert(orientations_.end(), snapshot.orientations.begin(), snapshot.orientations.end());
-        }
+        if (procedural_) KW_TRY(procedural_->add_frame(snapshot.positions, snapshot.orientations));
         return {};
     }
 
@@ -108,7 +90,7 @@ public:
             written.push_back({rigged_paths_[i], BakeOutput::Format::Glb, "the character's own skeleton and meshes"});
         }
         if (procedural_) {
-            KW_TRY(write_chains_glb(path_, *scene_, frames_, positions_, orientations_));
+            KW_TRY(procedural_->finish());
             written.push_back({path_, BakeOutput::Format::Glb, ""});
         }
         return written;
@@ -120,9 +102,7 @@ private:
     std::uint32_t frames_ = 0;
     std::vector<RiggedCrowdExport> rigged_;
     std::vector<std::string> rigged_paths_;
-    bool procedural_ = false;
-    std::vector<glm::vec3> positions_;
-    std::vector<glm::quat> orientations_;
+    std::optional<ChainsGlbWriter> procedural_;  // streams: memory does not grow with the frames
 };
 
 class TraceSink final : public BakeSink {

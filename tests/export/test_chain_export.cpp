@@ -3,6 +3,10 @@
 
 #include <gtest/gtest.h>
 
+#include <fstream>
+#include <limits>
+#include <span>
+
 #include "export_support.hpp"
 
 namespace kodawari {
@@ -123,6 +127,73 @@ TEST(Export, ChainsRejectMismatchedSizes) {
     ASSERT_FALSE(written.ok());
     EXPECT_EQ(written.error().kind, Error::Kind::InvalidInput);
     EXPECT_FALSE(fs::exists(dir.file("x.glb")));
+}
+
+std::string bytes_of(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    std::string data(static_cast<std::size_t>(in.tellg()), '\0');
+    in.seekg(0);
+    in.read(data.data(), static_cast<std::streamsize>(data.size()));
+    return data;
+}
+
+// Frames one at a time (a bake's sink) end in write_chains_glb's file (whose bytes
+// export_identity pins to those of the writer that held every frame); the keys wait in
+// a temporary file that is never seen in the directory.
+TEST(Export, ChainsStreamedGiveTheBytesOfOneCall) {
+    const RodRun run = run_bunny(9);
+    const std::size_t joints = run.scene.world.joint_count;
+    TempDir dir;
+    ASSERT_TRUE(write_chains_glb(dir.file("whole.glb"), run.scene, run.frames, run.positions, run.orientations).ok());
+    auto writer = ChainsGlbWriter::create(dir.file("streamed.glb"), run.scene, run.frames);
+    ASSERT_TRUE(writer.ok()) << writer.error().message;
+    for (std::uint32_t f = 0; f < run.frames; ++f) {
+        ASSERT_TRUE(writer.value()
+                        .add_frame(std::span(run.positions).subspan(f * joints, joints),
+                                   std::span(run.orientations).subspan(f * joints, joints))
+                        .ok());
+        EXPECT_EQ(dir.entries(), std::vector<std::string>{"whole.glb"});
+    }
+    ASSERT_TRUE(writer.value().finish().ok());
+    EXPECT_EQ(bytes_of(dir.file("whole.glb")), bytes_of(dir.file("streamed.glb")));
+}
+
+TEST(Export, ChainsStreamFailuresLeaveNoFile) {
+    RodRun run = run_bunny(3);
+    const std::size_t joints = run.scene.world.joint_count;
+    TempDir dir;
+    const std::string path = dir.file("x.glb");
+    {
+        auto writer = ChainsGlbWriter::create(path, run.scene, 3);
+        ASSERT_TRUE(writer.ok());
+        ASSERT_TRUE(writer.value().add_frame(std::span(run.positions).first(joints), std::span(run.orientations).first(joints)).ok());
+        const auto early = writer.value().finish();
+        ASSERT_FALSE(early.ok());
+        EXPECT_EQ(early.error().kind, Error::Kind::InvalidInput);
+        EXPECT_NE(early.error().message.find("1 of 3 frames"), std::string::npos) << early.error().message;
+        EXPECT_FALSE(writer.value().add_frame(std::span(run.positions).first(joints - 1), std::span(run.orientations).first(joints)).ok());
+    }
+    EXPECT_TRUE(dir.entries().empty());
+    // A joint the solver lost: the frame is refused, nothing is written.
+    run.positions[joints + 1] = glm::vec3(std::numeric_limits<float>::quiet_NaN());
+    const auto lost = write_chains_glb(path, run.scene, run.frames, run.positions, run.orientations);
+    ASSERT_FALSE(lost.ok());
+    EXPECT_EQ(lost.error().kind, Error::Kind::Internal);
+    EXPECT_NE(lost.error().message.find("frame 1"), std::string::npos) << lost.error().message;
+    EXPECT_TRUE(dir.entries().empty());
+}
+
+// Past glb's 32-bit length, refused before any frame is simulated, naming file and size.
+TEST(Export, ChainsPastFourGibAreRefusedAtOnce) {
+    const RodRun run = run_bunny(1);
+    TempDir dir;
+    const std::string path = dir.file("x.glb");
+    const auto writer = ChainsGlbWriter::create(path, run.scene, 1u << 30);
+    ASSERT_FALSE(writer.ok());
+    EXPECT_EQ(writer.error().kind, Error::Kind::InvalidInput);
+    EXPECT_NE(writer.error().message.find(path), std::string::npos) << writer.error().message;
+    EXPECT_NE(writer.error().message.find("4 GiB"), std::string::npos) << writer.error().message;
+    EXPECT_TRUE(dir.entries().empty());
 }
 
 }  // namespace

@@ -70,6 +70,33 @@ TEST(Bake, BirdsGlbIsTheWritersFileOfTheSteppedPoses) {
     EXPECT_EQ(bytes_of(dir.file("baked.glb")), bytes_of(dir.file("stepped.glb")));
 }
 
+// The procedural characters' sink streams its keys: its file is write_chains_glb's of
+// the snapshots a simulation gives frame by frame.
+TEST(Bake, ChainsGlbIsTheWritersFileOfTheSnapshots) {
+    constexpr std::uint32_t kFrames = 12;
+    testing_support::TempDir dir;
+    auto baked = open("bunny.json", kFrames);
+    ASSERT_NE(baked, nullptr);
+    auto sink = make_chains_glb_sink(dir.file("baked.glb"));
+    BakeSink* sinks[] = {sink.get()};
+    auto written = bake(*baked, sinks);
+    ASSERT_TRUE(written.ok()) << written.error().message;
+
+    auto stepped = open("bunny.json", kFrames);
+    ASSERT_NE(stepped, nullptr);
+    std::vector<glm::vec3> positions;
+    std::vector<glm::quat> orientations;
+    ChainSnapshot snapshot;
+    for (std::uint32_t f = 0; f < kFrames; ++f) {
+        ASSERT_TRUE(stepped->step().ok());
+        ASSERT_TRUE(stepped->read_chains(snapshot).ok());
+        positions.insert(positions.end(), snapshot.positions.begin(), snapshot.positions.end());
+        orientations.insert(orientations.end(), snapshot.orientations.begin(), snapshot.orientations.end());
+    }
+    ASSERT_TRUE(write_chains_glb(dir.file("stepped.glb"), *stepped->rod_scene(), kFrames, positions, orientations).ok());
+    EXPECT_EQ(bytes_of(dir.file("baked.glb")), bytes_of(dir.file("stepped.glb")));
+}
+
 TEST(Bake, AFailureLeavesNoFile) {
     testing_support::TempDir dir;
     auto sim = open("crowd-gltf.json", 12);

@@ -95,9 +95,10 @@ struct BakeOptions {
 [[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path);
 
 /// The characters as `.glb` files: the procedural characters (and then the rigged ones
-/// too, as bones) in write_chains_glb's file at `path`; each rigged character template
-/// in its own file (RiggedCrowdExport), `path` itself when it is the scene's only
-/// character, else `<path without .glb>-<character>.glb`.
+/// too, as bones) in write_chains_glb's file at `path`, streamed (ChainsGlbWriter); each
+/// rigged character template in its own file (RiggedCrowdExport), `path` itself when it
+/// is the scene's only character, else `<path without .glb>-<character>.glb`. Its memory
+/// does not grow with the frames.
 [[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_chains_glb_sink(std::string path);
 
 /// A JSON Lines trace (docs/trace-format.md) of birds and chains at `path`.

@@ -81,6 +81,43 @@ private:
                                                          std::span<const glm::vec3> positions,
                                                          std::span<const glm::quat> orientations);
 
+/// Streams write_chains_glb()'s file (the same bytes) frame by frame, so that memory does
+/// not grow with frames x joints: each frame's keys wait in a temporary file beside
+/// `path` (SpillFile, unlinked at once, so nothing is left behind) and finish() copies
+/// them into the `.glb`'s channels through two buffers of about kTransposeBytes (more
+/// only when one node's keys over all frames are more). Besides that, it holds the glTF
+/// model without its keys (nodes, meshes) and 84 bytes per animated node.
+class KODAWARI_API ChainsGlbWriter {
+public:
+    /// The size of each of the two buffers that reorder the keys from frame-major to
+    /// channel-major.
+    static constexpr std::size_t kTransposeBytes = std::size_t{32} << 20;
+
+    /// Prepares `path` for `frames` frames of `scene` (which must outlive the writer).
+    /// Errors (naming `path`): no frames, more keys than a .glb can hold (InvalidInput,
+    /// with the size), the temporary file (Io).
+    [[nodiscard]] static Result<ChainsGlbWriter> create(const std::string& path, const RodScene& scene, std::uint32_t frames);
+
+    ChainsGlbWriter(ChainsGlbWriter&& other) noexcept;
+    ChainsGlbWriter& operator=(ChainsGlbWriter&& other) noexcept;
+    ChainsGlbWriter(const ChainsGlbWriter&) = delete;
+    ChainsGlbWriter& operator=(const ChainsGlbWriter&) = delete;
+    ~ChainsGlbWriter();
+
+    /// Adds the next frame: scene.world.joint_count world-space positions and
+    /// orientations (a ChainSnapshot's). Wrong sizes or more frames than announced:
+    /// InvalidInput; a joint that comes out not finite: Internal, naming chain and frame.
+    [[nodiscard]] Result<void> add_frame(std::span<const glm::vec3> positions, std::span<const glm::quat> orientations);
+
+    /// Writes the `.glb` atomically once every frame has been added. Call it once.
+    [[nodiscard]] Result<void> finish();
+
+private:
+    struct Impl;
+    explicit ChainsGlbWriter(std::unique_ptr<Impl> impl);
+    std::unique_ptr<Impl> impl_;
+};
+
 /// One instance of a rigged character in a rigged export.
 struct RiggedInstance {
     /// The name of the instance's root node and the prefix of its nodes' names. Distinct
