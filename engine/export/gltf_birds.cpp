@@ -180,31 +180,10 @@ Result<void> BirdGlbWriter::Impl::add_frame(std::span<const gpu::BirdPose> poses
 // frames, then each part's rotations. A group of birds at a time: read its records of
 // every frame (one contiguous run per frame), write its channels.
 Result<void> BirdGlbWriter::Impl::copy_channels(AtomicFile& file) {
-    const std::size_t bird_count = count();
-    const std::size_t per_bird = std::size_t{frames} * kRecordBytes;
-    const std::size_t group = std::max<std::size_t>(1, BirdGlbWriter::kTransposeBytes / per_bird);
-    std::vector<float> in(std::min(group, bird_count) * std::size_t{frames} * kRecordFloats);
-    std::vector<float> out(in.size());
-    for (std::size_t begin = 0; begin < bird_count; begin += group) {
-        const std::size_t n = std::min(group, bird_count - begin);
-        for (std::uint32_t f = 0; f < frames; ++f) {
-            KW_TRY(keys.read((std::uint64_t{f} * bird_count + begin) * kRecordBytes, in.data() + std::size_t{f} * n * kRecordFloats,
-                             n * kRecordBytes));
-        }
-        float* o = out.data();
-        for (std::size_t b = 0; b < n; ++b) {
-            for (std::uint32_t f = 0; f < frames; ++f, o += 3) {
-                std::memcpy(o, in.data() + (std::size_t{f} * n + b) * kRecordFloats, sizeof(Vec3));
-            }
-            for (std::size_t part = 0; part < birds::kPartCount; ++part) {
-                for (std::uint32_t f = 0; f < frames; ++f, o += 4) {
-                    std::memcpy(o, in.data() + (std::size_t{f} * n + b) * kRecordFloats + 3 + 4 * part, sizeof(Quat));
-                }
-            }
-        }
-        file.write(out.data(), n * per_bird);
-    }
-    return {};
+    std::array<std::size_t, 1 + birds::kPartCount> fields{};
+    fields.fill(4);
+    fields[0] = 3;
+    return copy_item_major(keys, file, count(), frames, fields, BirdGlbWriter::kTransposeBytes);
 }
 
 Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {

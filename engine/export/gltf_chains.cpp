@@ -6,6 +6,7 @@
 // temporary file.
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstring>
 #include <exception>
@@ -252,27 +253,8 @@ Result<void> ChainsGlbWriter::Impl::add_frame(std::span<const glm::vec3> positio
 // all frames, then its rotations, then the key times. A group of tracks at a time: read
 // its records of every frame (one contiguous run per frame), write its channels.
 Result<void> ChainsGlbWriter::Impl::copy_channels(AtomicFile& file) {
-    const std::size_t count = track_nodes.size();
-    const std::size_t group = std::max<std::size_t>(1, ChainsGlbWriter::kTransposeBytes / key_bytes());
-    std::vector<float> in(std::min(group, count) * std::size_t{frames} * kRecordFloats);
-    std::vector<float> out(in.size());
-    for (std::size_t begin = 0; begin < count; begin += group) {
-        const std::size_t n = std::min(group, count - begin);
-        for (std::uint32_t f = 0; f < frames; ++f) {
-            KW_TRY(keys.read((std::uint64_t{f} * count + begin) * kRecordBytes, in.data() + std::size_t{f} * n * kRecordFloats,
-                             n * kRecordBytes));
-        }
-        float* o = out.data();
-        for (std::size_t t = 0; t < n; ++t) {
-            for (std::uint32_t f = 0; f < frames; ++f, o += 3) {
-                std::memcpy(o, in.data() + (std::size_t{f} * n + t) * kRecordFloats, sizeof(Vec3));
-            }
-            for (std::uint32_t f = 0; f < frames; ++f, o += 4) {
-                std::memcpy(o, in.data() + (std::size_t{f} * n + t) * kRecordFloats + 3, sizeof(Quat));
-            }
-        }
-        file.write(out.data(), n * key_bytes());
-    }
+    constexpr std::array<std::size_t, 2> kFields = {3, 4};
+    KW_TRY(copy_item_major(keys, file, track_nodes.size(), frames, kFields, ChainsGlbWriter::kTransposeBytes));
     std::vector<float> times(frames);
     for (std::uint32_t f = 0; f < frames; ++f) times[f] = scene->time(f);
     file.write(times.data(), times.size() * sizeof(float));

@@ -1,6 +1,7 @@
 // Pieces shared by the glTF writers.
 #include "export/gltf_common.hpp"
 
+#include <algorithm>
 #include <cassert>
 #include <cmath>
 #include <cstring>
@@ -10,6 +11,7 @@
 #include <sstream>
 #include <string>
 #include <utility>
+#include <vector>
 
 #include <unistd.h>
 
@@ -270,6 +272,40 @@ Result<void> write_file_atomically(const std::string& path, const std::function<
         return make_error(Error::Kind::Io, path + ": glTF serialization failed (" + e.what() + ")");
     }
     return file.value().commit();
+}
+
+Result<void> copy_item_major(SpillFile& keys, AtomicFile& file, std::size_t count, std::uint32_t frames,
+                             std::span<const std::size_t> fields, std::size_t group_bytes,
+                             const std::function<bool(std::size_t item, std::size_t field)>& keep) {
+    std::size_t record_floats = 0;
+    for (const std::size_t n : fields) record_floats += n;
+    const std::size_t record_bytes = record_floats * sizeof(float);
+    const std::size_t group = std::max<std::size_t>(1, group_bytes / (std::size_t{frames} * record_bytes));
+    std::vector<float> in(std::min(group, count) * std::size_t{frames} * record_floats);
+    std::vector<float> out(in.size());
+    for (std::size_t begin = 0; begin < count; begin += group) {
+        const std::size_t n = std::min(group, count - begin);
+        // One contiguous run per frame: the group's records of that frame.
+        for (std::uint32_t f = 0; f < frames; ++f) {
+            KW_TRY(keys.read((std::uint64_t{f} * count + begin) * record_bytes, in.data() + std::size_t{f} * n * record_floats,
+                             n * record_bytes));
+        }
+        float* o = out.data();
+        for (std::size_t item = 0; item < n; ++item) {
+            std::size_t offset = 0;
+            for (std::size_t field = 0; field < fields.size(); ++field) {
+                const std::size_t width = fields[field];
+                if (!keep || keep(begin + item, field)) {
+                    for (std::uint32_t f = 0; f < frames; ++f, o += width) {
+                        std::memcpy(o, in.data() + (std::size_t{f} * n + item) * record_floats + offset, width * sizeof(float));
+                    }
+                }
+                offset += width;
+            }
+        }
+        file.write(out.data(), static_cast<std::size_t>(o - out.data()) * sizeof(float));
+    }
+    return {};
 }
 
 }  // namespace kodawari::gltf

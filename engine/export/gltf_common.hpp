@@ -7,6 +7,7 @@
 #include <cstddef>
 #include <cstdint>
 #include <cstdio>
+#include <span>
 #include <string>
 #include <streambuf>
 #include <vector>
@@ -87,6 +88,16 @@ private:
     std::string path_;
     bool reading_ = false;
 };
+
+/// Copies `keys`, frames x `count` records of float fields (`fields`: each field's float
+/// count, in record order), frame-major as a simulation produces them, to `file`
+/// item-major as a .glb's channels want them: per item, each field's values over all
+/// frames, field after field. `keep(item, field)` false leaves a field out (an unscaled
+/// node's scale). Works through groups of items of about `group_bytes` (at least one
+/// item), so memory does not grow with the frames x items.
+[[nodiscard]] Result<void> copy_item_major(SpillFile& keys, AtomicFile& file, std::size_t count, std::uint32_t frames,
+                                           std::span<const std::size_t> fields, std::size_t group_bytes,
+                                           const std::function<bool(std::size_t item, std::size_t field)>& keep = {});
 
 /// Adds a LINEAR sampler over `input` (key times) and `output` (values) and a channel
 /// driving `path` ("translation", "rotation", "scale") of `node` with it.

@@ -518,36 +518,12 @@ Result<void> RiggedGlbWriter::Impl::build_and_write(AtomicFile& file) {
 // all frames, then its rotations, then its scales when they change. A group of tracks at
 // a time: read its keys of every frame (one contiguous run per frame), write its views.
 Result<void> RiggedGlbWriter::Impl::copy_tracks(AtomicFile& file) {
-    const std::size_t count = tracks();
-    const std::size_t group = std::max<std::size_t>(1, RiggedGlbWriter::kTransposeBytes / (std::size_t{frames} * sizeof(Key)));
-    std::vector<Key> in(std::min(group, count) * frames);
-    std::vector<float> values;
-    values.reserve(in.size() * 10);
-    for (std::size_t begin = 0; begin < count; begin += group) {
-        const std::size_t n = std::min(group, count - begin);
-        for (std::uint32_t f = 0; f < frames; ++f) {
-            KW_TRY(keys->read((std::uint64_t{f} * count + begin) * sizeof(Key), in.data() + std::size_t{f} * n, n * sizeof(Key)));
-        }
-        values.clear();
-        for (std::size_t t = 0; t < n; ++t) {
-            for (std::uint32_t f = 0; f < frames; ++f) {
-                const glm::vec3& v = in[std::size_t{f} * n + t].translation;
-                values.insert(values.end(), {v.x, v.y, v.z});
-            }
-            for (std::uint32_t f = 0; f < frames; ++f) {
-                const glm::quat& r = in[std::size_t{f} * n + t].rotation;
-                values.insert(values.end(), {r.x, r.y, r.z, r.w});
-            }
-            if (scaled[begin + t]) {
-                for (std::uint32_t f = 0; f < frames; ++f) {
-                    const glm::vec3& v = in[std::size_t{f} * n + t].scale;
-                    values.insert(values.end(), {v.x, v.y, v.z});
-                }
-            }
-        }
-        file.write(values.data(), values.size() * sizeof(float));
-    }
-    return {};
+    // A Key is translation, rotation (x, y, z, w), scale: ten floats; the scale only of
+    // the nodes whose clips scale them.
+    static_assert(sizeof(Key) == 10 * sizeof(float));
+    constexpr std::array<std::size_t, 3> kFields = {3, 4, 3};
+    return copy_item_major(*keys, file, tracks(), frames, kFields, RiggedGlbWriter::kTransposeBytes,
+                           [&](std::size_t track, std::size_t field) { return field != 2 || scaled[track]; });
 }
 
 Result<void> RiggedGlbWriter::finish(const std::string& path) {
