@@ -14,7 +14,13 @@ constexpr const char* kUsage = R"(usage: kodawari <command> [options]
 commands:
   run [SCENE] [--backend auto|vulkan|cpu|cpu-reference] [--frames N] [--out FILE.glb] [--no-export]
               [--trace FILE.jsonl] [--device NAME|INDEX] [--threads N] [--isa NAME] [--validation]
-      simulate a scene (default )" "scenes/flock.json" R"() and bake it to glTF (default out/<scene>.glb)
+              [--shard I/N]
+      simulate a scene (default )" "scenes/flock.json" R"() and bake it to glTF (default out/<scene>.glb);
+      --shard I/N simulates only shard I of N (birds and characters [I*n/N, (I+1)*n/N)) and writes
+      a part file (default out/<scene>.shard-I-of-N.kwpart) for merge
+  merge PARTS... [--out FILE.glb] [--scene SCENE.json]
+      join the part files of every shard of one bake into the files one run writes, byte for byte
+      (--scene: the scene file, when it moved since; its bytes must be unchanged)
   validate [SCENE] [--backend vulkan|cpu] [--frames N]
       run a backend and the CPU reference side by side; exit 1 above tolerance
   bench birds [--count N] [--frames F] [--json FILE] [--readback] [--backends LIST] [--repetitions R]
@@ -70,6 +76,7 @@ int main(int argc, char** argv) {
     args.erase(args.begin());
     try {
         if (command == "run") return cmd_run(args);
+        if (command == "merge") return cmd_merge(args);
         if (command == "validate") return cmd_validate(args);
         if (command == "info") return cmd_info(args);
         if (command == "bench") return cmd_bench(args);

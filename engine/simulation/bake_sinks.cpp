@@ -109,7 +109,7 @@ class TraceSink final : public BakeSink {
 public:
     explicit TraceSink(std::string path) : path_(std::move(path)) {}
 
-    BakeNeeds needs() const override { return {.bird_poses = true, .bird_diag = true, .chains = true}; }
+    BakeNeeds needs() const override { return {.bird_poses = true, .bird_diag = true, .chains = true, .chain_shapes = true}; }
 
     Result<void> begin(const BakeWorld& world) override {
         world_ = world;
