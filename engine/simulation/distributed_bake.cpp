@@ -119,13 +119,16 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
     const std::uint32_t frames = sim.frame_count();
     const std::uint32_t chunk = source->chunk_frames();  // the whole scene's, the same on every rank
     std::vector<std::byte> payload;
+    // Rank 0 writes chunk k while the others simulate chunk k + 1: its status for chunk k
+    // joins the agreement on chunk k + 1's steps (and the last one is agreed after the
+    // loop), so that no rank waits for the writer before stepping on.
+    Result<void> consumed;
     for (std::uint32_t done = 0; done < frames;) {
         const std::uint32_t n = std::min(chunk, frames - done);
         auto stepped = source->next(done, n, needs);
-        KW_TRY(comm.agree(stepped ? Result<void>{} : Result<void>{stepped.error()}));
+        KW_TRY(comm.agree(!consumed ? consumed : stepped ? Result<void>{} : Result<void>{stepped.error()}));
         detail::encode_frames(stepped.value(), content, payload);
         comm.gather(payload, all, sizes);
-        Result<void> consumed;
         if (root) {
             std::vector<std::span<const std::byte>> parts;
             std::size_t at = 0;
@@ -144,10 +147,10 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
                 consumed = whole.error();
             }
         }
-        KW_TRY(comm.agree(consumed));
         done += n;
         if (root && options.bake.progress) options.bake.progress(done, frames);
     }
+    KW_TRY(comm.agree(consumed));
     KW_TRY(comm.agree(options.bake.simulated ? options.bake.simulated() : Result<void>{}));
 
     std::vector<BakeOutput> written;
