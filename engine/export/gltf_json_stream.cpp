@@ -18,7 +18,7 @@
 
 #include <algorithm>
 #include <cstring>
-#include <optional>
+#include <string_view>
 #include <sstream>
 #include <string>
 #include <utility>
