@@ -357,6 +357,14 @@ Result<void> write_streamed_glb(AtomicFile& file, tinygltf::Model& model, const 
         if (!root.contains(key)) root[key] = nullptr;
     }
 
+    const auto too_large = [&](std::uint64_t total) {
+        return make_error(Error::Kind::InvalidInput,
+                          path + ": " + std::to_string(total) + " bytes exceed the 4 GiB limit of a .glb");
+    };
+    const std::uint64_t bin_length = bin_bytes + padding(bin_bytes);
+    const std::uint64_t bin_chunk = bin_bytes > 0 ? 8 + bin_length : 0;
+    if (12 + 8 + bin_chunk > 0xFFFFFFFFull) return too_large(12 + 8 + bin_chunk);  // before writing any JSON
+
     auto spill = SpillFile::open(path);
     if (!spill) return spill.error();
     JsonSink sink(spill.value());
@@ -396,12 +404,8 @@ Result<void> write_streamed_glb(AtomicFile& file, tinygltf::Model& model, const 
 
     const std::uint64_t json_bytes = sink.size();
     const std::uint64_t json_length = json_bytes + padding(json_bytes);
-    const std::uint64_t bin_length = bin_bytes + padding(bin_bytes);
-    const std::uint64_t total = 12 + 8 + json_length + (bin_bytes > 0 ? 8 + bin_length : 0);
-    if (total > 0xFFFFFFFFull) {
-        return make_error(Error::Kind::InvalidInput,
-                          path + ": " + std::to_string(total) + " bytes exceed the 4 GiB limit of a .glb");
-    }
+    const std::uint64_t total = 12 + 8 + json_length + bin_chunk;
+    if (total > 0xFFFFFFFFull) return too_large(total);
     // The container as tinygltf frames it (WriteBinaryGltfStream): JSON padded with
     // spaces, the buffer with zeros, no BIN chunk for an empty buffer.
     const auto word = [&](std::uint32_t value) { file.write(&value, sizeof value); };
