@@ -36,8 +36,10 @@ namespace kodawari {
 /// (removed from the directory as soon as it is opened, so nothing is left behind);
 /// finish() copies them into the `.glb`'s channels, channel after channel, through two
 /// buffers of kTransposeBytes (more only when one bird's keys over all frames are more).
-/// Besides that, it holds 128 bytes per bird (the first and the previous frame's keys),
-/// one frame's keys while adding, and the glTF model (JSON) while finishing.
+/// Besides that, it holds 128 bytes per bird (the first and the previous frame's keys)
+/// and one frame's keys while adding; while finishing, the glTF model without the birds:
+/// their nodes, accessors and animation channels are made one bird at a time while the
+/// JSON is written to another temporary file beside `path`.
 class KODAWARI_API BirdGlbWriter {
 public:
     /// The size of each of the two buffers that reorder the keys from frame-major to
