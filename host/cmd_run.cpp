@@ -58,6 +58,11 @@ void print_timing(const Simulation& sim) {
     }
 }
 
+void print_shard(const ShardInfo& info, const std::string& what) {
+    std::printf("kodawari: %s: birds [%u, %u) of %u, characters [%u, %u) of %u\n", what.c_str(), info.birds.begin,
+                info.birds.end, info.scene_birds, info.characters.begin, info.characters.end, info.scene_characters);
+}
+
 Shard parse_shard(const std::string& text) {
     const auto slash = text.find('/');
     const auto number = [&](const std::string& part) -> std::uint64_t {
@@ -92,7 +97,7 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
         opened = &sim;
         if (!root) return;
         print_scene(sim);
-        std::printf("kodawari: %d MPI ranks, one shard each; rank 0 writes\n", comm.size());
+        print_shard(sim.shard(), "rank 0 of " + std::to_string(comm.size()) + " (one shard per rank; rank 0 writes)");
         std::fflush(stdout);
     };
     options.make_sinks = [&](const BakeWorld& world) {
@@ -161,12 +166,7 @@ int cmd_run(Args args) {
     if (trace_path) owned.push_back(make_trace_sink(*trace_path));
 
     print_scene(sim);
-    if (shard_option) {
-        const ShardInfo& info = sim.shard();
-        std::printf("kodawari: shard %u of %u: birds [%u, %u) of %u, characters [%u, %u) of %u\n", shard.index, shard.count,
-                    info.birds.begin, info.birds.end, info.scene_birds, info.characters.begin, info.characters.end,
-                    info.scene_characters);
-    }
+    if (shard_option) print_shard(sim.shard(), "shard " + std::to_string(shard.index) + " of " + std::to_string(shard.count));
     const std::size_t per_frame = sim.bird_world().birds.size() + (has_chains ? sim.rod_scene()->world.joint_count : 0);
     BakeOptions options;
     if (stderr_is_terminal() && std::uint64_t{sim.frame_count()} * per_frame >= 2'000'000) {
