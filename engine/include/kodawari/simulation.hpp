@@ -39,7 +39,6 @@ namespace render {
 class Renderer;
 }
 
-/// How a Simulation runs.
 /// One of `count` parts of a scene's instances, for baking a scene over several processes
 /// or machines (issue 15; kodawari/shards.hpp). Shard `index` holds birds
 /// [index * n / count, (index + 1) * n / count) of the scene's n birds and the character
@@ -84,6 +83,7 @@ struct SceneWorlds {
 /// the scene's (a route, a character), or frames == 0 (InvalidInput).
 [[nodiscard]] KODAWARI_API Result<SceneWorlds> build_scene_worlds(const Scene& scene, std::optional<std::uint32_t> frames);
 
+/// How a Simulation runs.
 struct SimulationOptions {
     /// The backends' kind; none: "auto", vulkan when a Vulkan device opens, else cpu
     /// (Simulation::fallback_reason() then says why).
