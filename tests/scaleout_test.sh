@@ -3,7 +3,7 @@
 # with real Open MPI, each compared byte for byte with a single-process run of a bird
 # scene and a rigged crowd; a rank that fails (a device index it does not have) and a
 # writing rank that fails (an output it cannot create) end every rank with the message and
-# leave no file. Vulkan runs under validation (ctest sets KODAWARI_VALIDATION=1).
+# leave no file; traces under MPI too. Vulkan runs under validation (ctest sets KODAWARI_VALIDATION=1).
 # usage: scaleout_test.sh KODAWARI_BINARY SOURCE_DIR WITH_MPI(0|1)
 set -uo pipefail
 bin=$1
@@ -59,6 +59,14 @@ check "only rank 0 writes and says so" test "$(grep -c 'wrote ' "$work/mpi.out")
 check "MPI flock (3 ranks, vulkan) = single run, byte for byte" cmp "$work/flock-vulkan.glb" "$work/mpi-flock-vk.glb"
 "${mpi[@]}" -np 3 "$bin" run scenes/crowd-gltf.json --backend cpu --threads 1 --frames 8 --mpi --out "$work/mpi-crowd.glb" >"$work/mpi.out" 2>&1
 check "MPI rigged crowd (3 ranks) = single run, byte for byte" cmp "$work/crowd.glb" "$work/mpi-crowd.glb"
+
+# Traces too (the ranks send the chains' rest shapes and the birds' diagnostics then).
+"$bin" run scenes/crowd.json --backend cpu --frames 3 --no-export --trace "$work/crowd-1.jsonl" >/dev/null 2>&1
+"${mpi[@]}" -np 2 "$bin" run scenes/crowd.json --backend cpu --threads 1 --frames 3 --mpi --no-export --trace "$work/crowd-2.jsonl" >/dev/null 2>&1
+check "MPI trace of crowd.json (2 ranks) = single run's, byte for byte" cmp "$work/crowd-1.jsonl" "$work/crowd-2.jsonl"
+"$bin" run scenes/flock.json --backend cpu --frames 20 --no-export --trace "$work/flock-1.jsonl" >/dev/null 2>&1
+"${mpi[@]}" -np 3 "$bin" run scenes/flock.json --backend cpu --threads 1 --frames 20 --mpi --no-export --trace "$work/flock-3.jsonl" >/dev/null 2>&1
+check "MPI trace of flock.json (3 ranks) = single run's, byte for byte" cmp "$work/flock-1.jsonl" "$work/flock-3.jsonl"
 
 # Rank 1 asks for a device it does not have: every rank stops, rank 1's message, no file.
 "${mpi[@]}" -np 1 "$bin" run scenes/flock.json --backend vulkan --frames 30 --mpi --out "$work/failed.glb" : \
