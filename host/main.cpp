@@ -1,4 +1,5 @@
 // kodawari: the command line of the crowd simulator.
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -13,8 +14,13 @@ constexpr const char* kUsage = R"(usage: kodawari <command> [options]
 
 commands:
   run [SCENE] [--backend auto|vulkan|cpu|cpu-reference] [--frames N] [--out FILE.glb] [--no-export]
-              [--trace FILE.jsonl] [--device NAME|INDEX] [--threads N] [--isa NAME] [--validation]
-      simulate a scene (default )" "scenes/flock.json" R"() and bake it to glTF (default out/<scene>.glb)
+              [--compact[=METRES[,RADIANS]]] [--trace FILE.jsonl] [--device NAME|INDEX] [--threads N]
+              [--isa NAME] [--validation]
+      simulate a scene (default )" "scenes/flock.json" R"() and bake it to glTF (default out/<scene>.glb);
+      --compact drops the animation keys that linear interpolation reproduces within METRES (default
+      0.001) for translations and RADIANS (default METRES, i.e. 0.001) for rotations and, relative, for
+      scales, writes rotations as 16-bit integers, and prints the keys kept, the size ratio and the
+      largest error (README "Compact files")
   validate [SCENE] [--backend vulkan|cpu] [--frames N]
       run a backend and the CPU reference side by side; exit 1 above tolerance
   bench birds [--count N] [--frames F] [--json FILE] [--readback] [--backends LIST] [--repetitions R]
@@ -68,6 +74,11 @@ int main(int argc, char** argv) {
     }
     const std::string command = args[0];
     args.erase(args.begin());
+    // `kodawari COMMAND --help`: the same usage.
+    if (std::find(args.begin(), args.end(), "--help") != args.end()) {
+        std::fputs(kUsage, stdout);
+        return kExitOk;
+    }
     try {
         if (command == "run") return cmd_run(args);
         if (command == "validate") return cmd_validate(args);
