@@ -125,8 +125,9 @@ BackendChoice read_backend_choice(Args& args) {
     return choice;
 }
 
-Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendChoice& choice, std::optional<std::uint64_t> frames) {
-    SimulationOptions options{.backend = choice.backend, .options = choice.options};
+Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendChoice& choice, std::optional<std::uint64_t> frames,
+                                                    Shard shard) {
+    SimulationOptions options{.backend = choice.backend, .options = choice.options, .shard = shard};
     if (frames) options.frames = static_cast<std::uint32_t>(*frames);
     auto sim = Simulation::create(std::move(scene), options);
     if (sim && !sim.value()->fallback_reason().empty()) {
@@ -136,10 +137,10 @@ Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendCh
 }
 
 Result<std::unique_ptr<Simulation>> open_simulation(const std::string& path, const BackendChoice& choice,
-                                                    std::optional<std::uint64_t> frames) {
+                                                    std::optional<std::uint64_t> frames, Shard shard) {
     auto scene = load_scene(path);
     if (!scene) return scene.error();
-    return make_simulation(std::move(scene).value(), choice, frames);
+    return make_simulation(std::move(scene).value(), choice, frames, shard);
 }
 
 std::string scene_argument(const std::vector<std::string>& positionals, const char* command) {

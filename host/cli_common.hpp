@@ -78,10 +78,11 @@ BackendChoice read_backend_choice(Args& args);
 /// The Simulation of a scene file (`command` names the command in usage errors) or of a
 /// parsed scene, on the backends of `choice`, `frames` long (none: the scene's). When
 /// "auto" falls back to the CPU it says why in one line on stderr.
+/// `shard`: the part of the scene's instances to simulate (default: all).
 [[nodiscard]] Result<std::unique_ptr<Simulation>> open_simulation(const std::string& path, const BackendChoice& choice,
-                                                                  std::optional<std::uint64_t> frames);
+                                                                  std::optional<std::uint64_t> frames, Shard shard = {});
 [[nodiscard]] Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendChoice& choice,
-                                                                  std::optional<std::uint64_t> frames);
+                                                                  std::optional<std::uint64_t> frames, Shard shard = {});
 
 /// The one scene file among a command's positionals (kDefaultScene when none).
 [[nodiscard]] std::string scene_argument(const std::vector<std::string>& positionals, const char* command);

@@ -1,89 +1,21 @@
 // `kodawari run SCENE`: bakes a scene (kodawari/bake.hpp) into glTF and optionally a
 // JSON Lines trace. Arguments and messages around the engine's bake pipeline.
 #include <algorithm>
-#include <cctype>
-#include <cmath>
 #include <cstdio>
-#include <cstdlib>
-#include <filesystem>
 #include <memory>
-#include <string>
 #include <vector>
 
+#include "bake_outputs.hpp"
 #include "commands.hpp"
 #include "kodawari/bake.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/scene.hpp"
+#include "kodawari/shards.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
 
 namespace {
-
-// `--compact[=ERROR]`: ERROR is METRES or METRES,RADIANS (README "Compact files"). One
-// number bounds all three kinds as the displacement of a point 1 m from the joint: a
-// rotation of E rad, or a scale off by E relative, moves it E m, as a translation error
-// of E m does. A second number sets the rotation (and scale) bound on its own.
-GlbCompaction read_compaction(Args& args) {
-    const auto option = args.flag_or_value("compact");
-    GlbCompaction compaction;
-    if (!option) return compaction;
-    compaction.enabled = true;
-    if (!*option) return compaction;
-    const std::string& text = **option;
-    const auto fail = [&]() -> UsageError {
-        return UsageError{"--compact: expected --compact, --compact=METRES or --compact=METRES,RADIANS (numbers >= 0, e.g. "
-                          "--compact=0.001 or --compact=0.002,0.005), got \"" + text + "\""};
-    };
-    const auto number = [&](const std::string& part) {
-        char* end = nullptr;
-        const double v = part.empty() || part[0] == '-' || part[0] == '+' || std::isspace(static_cast<unsigned char>(part[0]))
-                             ? -1.0
-                             : std::strtod(part.c_str(), &end);
-        if (end == nullptr || *end != '\0' || !std::isfinite(v) || v < 0.0 || v > 1e6) throw fail();
-        return static_cast<float>(v);
-    };
-    const std::size_t comma = text.find(',');
-    compaction.position_m = number(text.substr(0, comma));
-    compaction.rotation_rad = comma == std::string::npos ? compaction.position_m : number(text.substr(comma + 1));
-    compaction.scale_rel = compaction.rotation_rad;
-    return compaction;
-}
-
-void print_compaction(const GlbCompactionStats& s) {
-    const auto size = [](std::uint64_t bytes) {
-        char text[32];
-        const double b = static_cast<double>(bytes);
-        if (bytes >= (1u << 20)) {
-            std::snprintf(text, sizeof text, "%.1f MiB", b / (1 << 20));
-        } else {
-            std::snprintf(text, sizeof text, "%.1f KiB", b / (1 << 10));
-        }
-        return std::string(text);
-    };
-    std::printf("kodawari:   compact: %llu of %llu keys kept (%.1f%%), animation data %s -> %s (%.1fx); "
-                "largest error %.4g mm, %.4g mrad",
-                static_cast<unsigned long long>(s.kept), static_cast<unsigned long long>(s.keys),
-                s.keys > 0 ? 100.0 * static_cast<double>(s.kept) / static_cast<double>(s.keys) : 100.0,
-                size(s.bytes_before).c_str(), size(s.bytes_after).c_str(),
-                s.bytes_after > 0 ? static_cast<double>(s.bytes_before) / static_cast<double>(s.bytes_after) : 1.0,
-                1e3 * s.position_m, 1e3 * s.rotation_rad);
-    if (s.scale_rel > 0.0) std::printf(", scale %.4g%%", 100.0 * s.scale_rel);
-    std::printf("\n");
-}
-
-void print_wrote(const BakeOutput& file) {
-    if (file.format == BakeOutput::Format::Trace) {
-        std::printf("kodawari: wrote trace %s\n", file.path.c_str());
-        return;
-    }
-    std::error_code ec;
-    const auto size = std::filesystem::file_size(file.path, ec);
-    std::printf("kodawari: wrote %s (%.1f MiB, glTF 2.0 binary%s%s)\n", file.path.c_str(),
-                ec ? 0.0 : static_cast<double>(size) / (1 << 20), file.description.empty() ? "" : ", ",
-                file.description.c_str());
-    if (file.compaction) print_compaction(*file.compaction);
-}
 
 void print_scene(const Simulation& sim) {
     const Scene& scene = sim.scene();
@@ -122,6 +54,23 @@ void print_timing(const Simulation& sim) {
     }
 }
 
+Shard parse_shard(const std::string& text) {
+    const auto slash = text.find('/');
+    const auto number = [&](const std::string& part) -> std::uint64_t {
+        if (part.empty() || part.size() > 6 || part.find_first_not_of("0123456789") != std::string::npos) {
+            throw UsageError{"--shard: expected I/N with 0 <= I < N <= 100000 (shard I of N), got \"" + text + "\""};
+        }
+        return std::stoull(part);
+    };
+    if (slash == std::string::npos) number("");
+    const std::uint64_t index = number(text.substr(0, slash));
+    const std::uint64_t count = number(text.substr(slash + 1));
+    if (count == 0 || count > 100000 || index >= count) {
+        throw UsageError{"--shard: expected I/N with 0 <= I < N <= 100000 (shard I of N), got \"" + text + "\""};
+    }
+    return {static_cast<std::uint32_t>(index), static_cast<std::uint32_t>(count)};
+}
+
 }  // namespace
 
 int cmd_run(Args args) {
@@ -130,34 +79,41 @@ int cmd_run(Args args) {
     const auto out_option = args.option("out");
     const bool no_export = args.flag("no-export");
     const auto trace_path = args.option("trace");
+    const auto shard_option = args.option("shard");
     const GlbCompaction compaction = read_compaction(args);
     if (no_export && out_option) throw UsageError{"--out and --no-export exclude each other"};
     if (no_export && compaction.enabled) throw UsageError{"--compact and --no-export exclude each other"};
-    auto opened = open_simulation(scene_argument(args.positionals(), "run"), choice, frames_option);
+    if (shard_option && compaction.enabled) {
+        throw UsageError{"--shard writes a part file with every key: give --compact to `kodawari merge` instead"};
+    }
+    if (shard_option && (no_export || trace_path)) {
+        throw UsageError{"--shard writes a part file for `kodawari merge` (at --out): it takes neither --no-export nor --trace"};
+    }
+    const Shard shard = shard_option ? parse_shard(*shard_option) : Shard{};
+    auto opened = open_simulation(scene_argument(args.positionals(), "run"), choice, frames_option, shard);
     if (!opened) return report(opened.error());
     Simulation& sim = *opened.value();
     const Scene& scene = sim.scene();
     const bool has_birds = !sim.bird_world().birds.empty();
     const bool has_chains = sim.rod_scene() != nullptr;
-    if (!no_export && !out_option) {
-        std::error_code ec;
-        std::filesystem::create_directories("out", ec);
-    }
-    // One file per kind of content; a scene with both writes <out> for the birds and
-    // <out without .glb>-characters.glb for the characters.
-    const std::string base_out = out_option ? *out_option : "out/" + scene.name + ".glb";
     std::vector<std::unique_ptr<BakeSink>> owned;
-    if (!no_export && has_birds) owned.push_back(make_birds_glb_sink(base_out));
-    if (!no_export && has_chains) {
-        owned.push_back(make_chains_glb_sink(
-            has_birds ? base_out.substr(0, base_out.size() - (base_out.ends_with(".glb") ? 4 : 0)) + "-characters.glb" : base_out,
-            compaction));
+    if (shard_option) {
+        const std::string part = out_option ? *out_option
+                                            : default_output(scene.name, ".shard-" + std::to_string(shard.index) + "-of-" +
+                                                                            std::to_string(shard.count) + ".kwpart");
+        owned.push_back(make_part_sink(part, sim.shard()));
+    } else if (!no_export) {
+        owned = glb_sinks(out_option ? *out_option : default_output(scene.name), has_birds, has_chains, compaction);
     }
     if (trace_path) owned.push_back(make_trace_sink(*trace_path));
-    std::vector<BakeSink*> sinks;
-    for (const auto& sink : owned) sinks.push_back(sink.get());
 
     print_scene(sim);
+    if (shard_option) {
+        const ShardInfo& info = sim.shard();
+        std::printf("kodawari: shard %u of %u: birds [%u, %u) of %u, characters [%u, %u) of %u\n", shard.index, shard.count,
+                    info.birds.begin, info.birds.end, info.scene_birds, info.characters.begin, info.characters.end,
+                    info.scene_characters);
+    }
     const std::size_t per_frame = sim.bird_world().birds.size() + (has_chains ? sim.rod_scene()->world.joint_count : 0);
     BakeOptions options;
     if (stderr_is_terminal() && std::uint64_t{sim.frame_count()} * per_frame >= 2'000'000) {
@@ -169,7 +125,7 @@ int cmd_run(Args args) {
         if (validation_failed(sim.validation_messages())) return make_error(Error::Kind::Vulkan, "");
         return {};
     };
-    auto written = bake(sim, sinks, options);
+    auto written = bake(sim, sink_pointers(owned), options);
     if (!written) return written.error().message.empty() ? kExitFailure : report(written.error());
     for (const BakeOutput& file : written.value()) print_wrote(file);
     return kExitOk;

@@ -6,6 +6,7 @@
 namespace kodawari::cli {
 
 int cmd_run(Args args);
+int cmd_merge(Args args);
 int cmd_validate(Args args);
 int cmd_info(Args args);
 int cmd_bench(Args args);

@@ -15,12 +15,17 @@ constexpr const char* kUsage = R"(usage: kodawari <command> [options]
 commands:
   run [SCENE] [--backend auto|vulkan|cpu|cpu-reference] [--frames N] [--out FILE.glb] [--no-export]
               [--compact[=METRES[,RADIANS]]] [--trace FILE.jsonl] [--device NAME|INDEX] [--threads N]
-              [--isa NAME] [--validation]
+              [--isa NAME] [--validation] [--shard I/N]
       simulate a scene (default )" "scenes/flock.json" R"() and bake it to glTF (default out/<scene>.glb);
       --compact drops the animation keys that linear interpolation reproduces within METRES (default
       0.001) for translations and RADIANS (default METRES, i.e. 0.001) for rotations and, relative, for
       scales, writes rotations as 16-bit integers, and prints the keys kept, the size ratio and the
-      largest error (README "Compact files")
+      largest error (README "Compact files");
+      --shard I/N simulates only shard I of N (birds and characters [I*n/N, (I+1)*n/N)) and writes
+      a part file (default out/<scene>.shard-I-of-N.kwpart) for merge
+  merge PARTS... [--out FILE.glb] [--scene SCENE.json] [--compact[=METRES[,RADIANS]]]
+      join the part files of every shard of one bake into the files one run writes, byte for byte
+      (--scene: the scene file, when it moved since; its bytes must be unchanged; --compact as run's)
   validate [SCENE] [--backend vulkan|cpu] [--frames N]
       run a backend and the CPU reference side by side; exit 1 above tolerance
   bench birds [--count N] [--frames F] [--json FILE] [--readback] [--backends LIST] [--repetitions R]
@@ -81,6 +86,7 @@ int main(int argc, char** argv) {
     }
     try {
         if (command == "run") return cmd_run(args);
+        if (command == "merge") return cmd_merge(args);
         if (command == "validate") return cmd_validate(args);
         if (command == "info") return cmd_info(args);
         if (command == "bench") return cmd_bench(args);

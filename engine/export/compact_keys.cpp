@@ -99,14 +99,24 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
                     shorts.resize(channel.size());
                     quantize_rotations(channel, shorts);
                     r = reduce_rotations(times, channel, shorts, bounds.rotation_rad);
-                    out.stats_.rotation_rad = std::max(out.stats_.rotation_rad, r.max_error);
-                } else if (kind == ChannelKind::Translation) {
-                    r = reduce_vec3(times, channel, bounds.position_m, VectorMetric::Distance);
-                    out.stats_.position_m = std::max(out.stats_.position_m, r.max_error);
                 } else {
-                    r = reduce_vec3(times, channel, bounds.scale_rel, VectorMetric::Relative);
-                    out.stats_.scale_rel = std::max(out.stats_.scale_rel, r.max_error);
+                    r = reduce_vec3(times, channel, kind == ChannelKind::Translation ? bounds.position_m : bounds.scale_rel,
+                                    kind == ChannelKind::Translation ? VectorMetric::Distance : VectorMetric::Relative);
                 }
+                // A channel that keeps most of its keys is smaller keeping all of them: its
+                // values without key times of its own (they share every frame's). Exact
+                // then, but for the rotations' rounding.
+                const std::size_t value_bytes = kind == ChannelKind::Rotation ? 4 * sizeof(std::int16_t) : 3 * sizeof(float);
+                if (r.kept.size() < frames && r.kept.size() > 2 &&
+                    r.kept.size() * (value_bytes + sizeof(float)) >= std::size_t{frames} * value_bytes) {
+                    r.kept.resize(frames);
+                    for (std::uint32_t f = 0; f < frames; ++f) r.kept[f] = f;
+                    r.max_error = kind == ChannelKind::Rotation ? rounding_error(channel, shorts) : 0.0;
+                }
+                double& worst = kind == ChannelKind::Rotation      ? out.stats_.rotation_rad
+                                : kind == ChannelKind::Translation ? out.stats_.position_m
+                                                                   : out.stats_.scale_rel;
+                worst = std::max(worst, r.max_error);
                 Channel c;
                 c.kind = kind;
                 c.keys = static_cast<std::uint32_t>(r.kept.size());

@@ -12,6 +12,7 @@
 #include <exception>
 #include <memory>
 #include <new>
+#include <optional>
 #include <span>
 #include <utility>
 #include <string>
@@ -19,6 +20,7 @@
 
 #include "kodawari/version.hpp"
 #include "birds/bird_meshes.hpp"
+#include "export/compact_keys.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/export.hpp"
@@ -81,6 +83,8 @@ struct BirdGlbWriter::Impl {
     std::vector<float> first;     // birds x record: frame 0, the rest pose
     std::vector<float> previous;  // birds x record: the last frame added (rotation hemispheres)
     std::vector<float> row;       // birds x record being written
+    GlbCompaction compaction;
+    GlbCompactionStats stats;
 
     [[nodiscard]] std::size_t count() const { return world->birds.size(); }
     [[nodiscard]] Result<void> add_frame(std::span<const gpu::BirdPose> poses);
@@ -93,8 +97,10 @@ BirdGlbWriter::BirdGlbWriter(BirdGlbWriter&& other) noexcept = default;
 BirdGlbWriter& BirdGlbWriter::operator=(BirdGlbWriter&& other) noexcept = default;
 BirdGlbWriter::~BirdGlbWriter() = default;
 
-Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds::BirdWorld& world, std::uint32_t frames) {
+Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds::BirdWorld& world, std::uint32_t frames,
+                                            const GlbCompaction& compaction) {
     const std::size_t bird_count = world.birds.size();
+    KW_TRY(check_compaction(path, compaction));
     if (frames == 0) {
         return make_error(Error::Kind::InvalidInput, path + ": cannot write an animation of 0 frames");
     }
@@ -118,6 +124,7 @@ Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds
     impl->path = path;
     impl->world = &world;
     impl->frames = frames;
+    impl->compaction = compaction;
     auto keys = SpillFile::open(path);
     if (!keys) return keys.error();
     impl->keys = std::move(keys).value();
@@ -208,22 +215,38 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
 
     // Animation data: the shared key times (in memory), then per bird its Body
     // translation and the rotations of its parts, each channel contiguous over the frames
-    // (the tail, copied from the key file).
+    // (the tail, copied from the key file). Compacted (GlbCompaction), the tail is
+    // CompactKeys' instead, key times included, in one buffer view after the meshes.
     const std::size_t time_bytes = frames * sizeof(float);
     const std::size_t translation_bytes = frames * 3 * sizeof(float);
     const std::size_t rotation_bytes = frames * 4 * sizeof(float);
     const std::size_t per_bird = translation_bytes + birds::kPartCount * rotation_bytes;
-    const std::size_t animation_start = writer.allocate(time_bytes);
-    const int animation_view = add_buffer_view(model, animation_start, time_bytes + bird_count * per_bird, 0);
     const float fps = world->fps;
-    for (std::uint32_t f = 0; f < frames; ++f) {
-        const float time = static_cast<float>(f) / fps;
-        std::memcpy(bytes.data() + animation_start + f * sizeof(float), &time, sizeof(float));
+    std::optional<CompactKeys> compact;
+    int animation_view = -1;
+    int time_accessor = -1;
+    if (compaction.enabled) {
+        std::vector<float> times(frames);
+        for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / fps;
+        std::array<ChannelKind, 1 + birds::kPartCount> fields{};
+        fields.fill(ChannelKind::Rotation);
+        fields[0] = ChannelKind::Translation;
+        auto built = CompactKeys::build(keys, path, bird_count, fields, times, compaction, BirdGlbWriter::kTransposeBytes);
+        if (!built) return built.error();
+        compact.emplace(std::move(built).value());
+        stats = compact->stats();
+        animation_view = add_buffer_view(model, bytes.size(), compact->bytes(), 0);
+    } else {
+        const std::size_t animation_start = writer.allocate(time_bytes);
+        animation_view = add_buffer_view(model, animation_start, time_bytes + bird_count * per_bird, 0);
+        for (std::uint32_t f = 0; f < frames; ++f) {
+            const float time = static_cast<float>(f) / fps;
+            std::memcpy(bytes.data() + animation_start + f * sizeof(float), &time, sizeof(float));
+        }
+        time_accessor = add_accessor(model, animation_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_SCALAR);
+        model.accessors[time_accessor].minValues = {0.0};
+        model.accessors[time_accessor].maxValues = {static_cast<double>(static_cast<float>(frames - 1) / fps)};
     }
-    const int time_accessor =
-        add_accessor(model, animation_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_SCALAR);
-    model.accessors[time_accessor].minValues = {0.0};
-    model.accessors[time_accessor].maxValues = {static_cast<double>(static_cast<float>(frames - 1) / fps)};
 
     // Nodes: the root, then 7 per bird (Body first, so bird b's part k is 1 + 7b + k).
     model.nodes.reserve(1 + bird_count * birds::kPartCount);
@@ -266,6 +289,15 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
             model.nodes[body_node + parent].children.push_back(body_node + static_cast<int>(part));
         }
 
+        if (compact) {
+            const auto translation = compact->add_next_channel(model, animation_view);
+            add_linear_channel(animation, translation.first, translation.second, body_node, "translation");
+            for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+                const auto rotation = compact->add_next_channel(model, animation_view);
+                add_linear_channel(animation, rotation.first, rotation.second, body_node + static_cast<int>(part), "rotation");
+            }
+            continue;
+        }
         const std::size_t base = time_bytes + b * per_bird;
         const int translation = add_accessor(model, animation_view, base, TINYGLTF_COMPONENT_TYPE_FLOAT, frames,
                                              TINYGLTF_TYPE_VEC3);
@@ -285,6 +317,7 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
 
+    if (compact) return write_glb_with_tail(file, model, compact->bytes(), [&] { return compact->write(file); });
     return write_glb_with_tail(file, model, std::uint64_t{bird_count} * per_bird, [&] { return copy_channels(file); });
 }
 
@@ -297,8 +330,10 @@ Result<void> BirdGlbWriter::finish() {
     return write_file_atomically(w.path, [&](AtomicFile& file) { return w.build_and_write(file); });
 }
 
+const GlbCompactionStats& BirdGlbWriter::compaction_stats() const { return impl_->stats; }
+
 Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
-                             std::span<const gpu::BirdPose> poses, std::uint32_t frames) {
+                             std::span<const gpu::BirdPose> poses, std::uint32_t frames, const GlbCompaction& compaction) {
     const std::size_t bird_count = world.birds.size();
     if (poses.size() != static_cast<std::size_t>(frames) * bird_count) {
         return make_error(Error::Kind::InvalidInput,
@@ -306,7 +341,7 @@ Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& wo
                               " birds = " + std::to_string(static_cast<std::size_t>(frames) * bird_count) +
                               " poses, got " + std::to_string(poses.size()));
     }
-    auto writer = BirdGlbWriter::create(path, world, frames);
+    auto writer = BirdGlbWriter::create(path, world, frames, compaction);
     if (!writer) return writer.error();
     KW_TRY(writer.value().add_frames(poses));
     return writer.value().finish();

@@ -151,6 +151,21 @@ double rotation_angle(const double a[4], const double b[4]) {
     return 4.0 * std::atan2(std::sqrt(minus), std::sqrt(plus));
 }
 
+double rounding_error(std::span<const float> xyzw, std::span<const std::int16_t> quantized) {
+    assert(quantized.size() == xyzw.size());
+    double worst = 0.0;
+    for (std::size_t k = 0; k + 4 <= xyzw.size(); k += 4) {
+        double q[4];
+        double o[4];
+        for (std::size_t c = 0; c < 4; ++c) {
+            q[c] = dequantize_unit(quantized[k + c]);
+            o[c] = xyzw[k + c];
+        }
+        worst = std::max(worst, rotation_angle(q, o));
+    }
+    return worst;
+}
+
 Reduction reduce_rotations(std::span<const float> times, std::span<const float> xyzw, std::span<const std::int16_t> quantized,
                            double bound) {
     const auto frames = static_cast<std::uint32_t>(times.size());

@@ -80,6 +80,10 @@ KODAWARI_INTERNAL void quantize_rotations(std::span<const float> xyzw, std::span
 [[nodiscard]] KODAWARI_INTERNAL Reduction reduce_rotations(std::span<const float> times, std::span<const float> xyzw,
                                                            std::span<const std::int16_t> quantized, double bound);
 
+/// The largest angle (radians) by which rounding to shorts turned a key: the error of a
+/// rotation channel that keeps every key.
+[[nodiscard]] KODAWARI_INTERNAL double rounding_error(std::span<const float> xyzw, std::span<const std::int16_t> quantized);
+
 /// The spec's slerp (Appendix C: along the short arc) between unit quaternions a and b
 /// at t in [0, 1]; lerp where they are nearly equal.
 KODAWARI_INTERNAL void slerp(const double a[4], const double b[4], double t, double out[4]);

@@ -186,6 +186,48 @@ void RodScene::rigged_frame(std::uint32_t c, std::span<const glm::mat4> nodes, r
     }
 }
 
+RodScene RodScene::slice(std::uint32_t begin, std::uint32_t end) const {
+    assert(begin <= end && end <= instances.size());
+    RodScene out;
+    out.fps = fps;
+    out.frames = frames;
+    out.characters = characters;
+    out.camera = camera;
+    out.fov_deg = fov_deg;
+    out.world.templates = world.templates;
+    if (begin == end) return out;
+    // Instances own contiguous runs of chains and colliders (build_rod_scene lays them out
+    // instance by instance), so a range of instances is a range of each, rebased to 0.
+    const std::uint32_t chain_first = instances[begin].chain_begin;
+    const std::uint32_t collider_first = instances[begin].collider_begin;
+    std::uint32_t chain_last = chain_first;
+    std::uint32_t collider_last = collider_first;
+    for (std::uint32_t c = begin; c < end; ++c) {
+        CharacterInstance inst = instances[c];
+        const CharacterKinematics& k = characters[inst.character];
+        assert(inst.chain_begin == chain_last && inst.collider_begin == collider_last);
+        chain_last = inst.chain_begin + static_cast<std::uint32_t>(k.chains.size());
+        collider_last = inst.collider_begin + static_cast<std::uint32_t>(k.colliders.size());
+        inst.chain_begin -= chain_first;
+        inst.collider_begin -= collider_first;
+        out.instances.push_back(inst);
+        out.character_names.push_back(character_names[c]);
+    }
+    for (std::uint32_t k = chain_first; k < chain_last; ++k) {
+        rods::ChainInstance chain = world.chains[k];
+        chain.character -= begin;
+        chain.collider_begin -= collider_first;
+        out.world.chains.push_back(chain);
+        out.chain_names.push_back(chain_names[k]);
+    }
+    out.world.character_count = end - begin;
+    out.world.collider_count = collider_last - collider_first;
+    // Only recomputes joint_begin and joint_count: the ranges were checked for the whole.
+    [[maybe_unused]] const auto finalized = out.world.finalize();
+    assert(finalized);
+    return out;
+}
+
 std::uint32_t RodScene::chain_count(std::uint32_t c) const {
     assert(c < instances.size());
     return static_cast<std::uint32_t>(characters[instances[c].character].chains.size());

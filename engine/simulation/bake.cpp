@@ -1,5 +1,5 @@
-// The bake loop (kodawari/bake.hpp): one frame order for every output, so that `run`
-// and embedders write the same bytes.
+// The bake loop (kodawari/bake.hpp): one frame order for every output, so that `run`,
+// `merge`, a distributed bake and embedders write the same bytes.
 #include "kodawari/bake.hpp"
 
 #include <algorithm>
@@ -11,56 +11,78 @@
 namespace kodawari {
 
 namespace {
+
 // Bird poses read back per step when birds go in chunks: bounds the chunk buffers
 // (2^18 x 128 bytes = 32 MiB of poses, as much of diagnostics) while amortizing the
 // step calls.
 constexpr std::size_t kChunkPoses = std::size_t{1} << 18;
+
+// A Simulation's frames, read back into buffers reused from chunk to chunk.
+class SimulationSource final : public BakeSource {
+public:
+    explicit SimulationSource(Simulation& sim) : sim_(sim) {}
+
+    BakeWorld world() const override {
+        return {&sim_.scene(), &sim_.bird_world(), sim_.rod_scene(), sim_.frame_count(),
+                std::string(backend_name(sim_.backend()))};
+    }
+
+    std::uint32_t chunk_frames() const override {
+        // The whole scene's birds, so that a shard steps in the chunks of the whole.
+        return bake_chunk_frames(sim_.shard().scene_birds, sim_.rod_scene() != nullptr);
+    }
+
+    Result<BakeFrames> next(std::uint32_t first, std::uint32_t count, const BakeNeeds& needs) override {
+        const std::size_t birds = sim_.bird_world().birds.size();
+        StepOutput out;
+        if (birds > 0 && (needs.bird_poses || needs.bird_diag)) {
+            // Diagnostics come with the poses they describe.
+            poses_.resize(std::size_t{count} * birds);
+            out.bird_poses = poses_;
+            if (needs.bird_diag) {
+                diag_.resize(std::size_t{count} * birds);
+                out.bird_diag = diag_;
+            }
+        }
+        KW_TRY(sim_.step(count, out));
+        const bool chains = needs.chains && sim_.rod_scene() != nullptr;
+        if (chains) KW_TRY(sim_.read_chains(snapshot_));
+        return BakeFrames{first, count, out.bird_poses, out.bird_diag, chains ? &snapshot_ : nullptr};
+    }
+
+private:
+    Simulation& sim_;
+    std::vector<gpu::BirdPose> poses_;
+    std::vector<gpu::BirdDiag> diag_;
+    ChainSnapshot snapshot_;
+};
+
 }  // namespace
 
-Result<std::vector<BakeOutput>> bake(Simulation& sim, std::span<BakeSink* const> sinks, const BakeOptions& options) {
-    if (sim.frame()) {
-        return make_error(Error::Kind::InvalidInput, sim.scene().path + ": bake needs a simulation that has not stepped yet");
-    }
-    const std::uint32_t frames = sim.frame_count();
+std::uint32_t bake_chunk_frames(std::size_t scene_birds, bool has_chains) {
+    if (has_chains) return 1;
+    return static_cast<std::uint32_t>(std::clamp<std::size_t>(kChunkPoses / std::max<std::size_t>(scene_birds, 1), 1, 120));
+}
+
+Result<std::vector<BakeOutput>> bake(BakeSource& source, std::span<BakeSink* const> sinks, const BakeOptions& options) {
+    const BakeWorld world = source.world();
     BakeNeeds needs;
     for (BakeSink* sink : sinks) {
         const BakeNeeds n = sink->needs();
         needs.bird_poses |= n.bird_poses;
         needs.bird_diag |= n.bird_diag;
         needs.chains |= n.chains;
+        needs.chain_shapes |= n.chain_shapes;
     }
-    const BakeWorld world{&sim.scene(), &sim.bird_world(), sim.rod_scene(), frames, std::string(backend_name(sim.backend()))};
     for (BakeSink* sink : sinks) KW_TRY(sink->begin(world));
-
-    const std::size_t count = sim.bird_world().birds.size();
-    const bool birds_read = count > 0 && (needs.bird_poses || needs.bird_diag);
-    const bool chains_read = needs.chains && sim.rod_scene() != nullptr;
-    // Chains are read back after every frame; birds alone go several frames per step.
-    const std::uint32_t chunk =
-        sim.rod_scene() != nullptr
-            ? 1u
-            : static_cast<std::uint32_t>(std::clamp<std::size_t>(kChunkPoses / std::max<std::size_t>(count, 1), 1, 120));
-    std::vector<gpu::BirdPose> poses;
-    std::vector<gpu::BirdDiag> diag;
-    ChainSnapshot snapshot;
-    for (std::uint32_t done = 0; done < frames;) {
-        const std::uint32_t n = std::min(chunk, frames - done);
-        StepOutput out;
-        if (birds_read) {
-            // Diagnostics come with the poses they describe.
-            poses.resize(std::size_t{n} * count);
-            out.bird_poses = poses;
-            if (needs.bird_diag) {
-                diag.resize(std::size_t{n} * count);
-                out.bird_diag = diag;
-            }
-        }
-        KW_TRY(sim.step(n, out));
-        if (chains_read) KW_TRY(sim.read_chains(snapshot));
-        const BakeFrames handed{done, n, out.bird_poses, out.bird_diag, chains_read ? &snapshot : nullptr};
-        for (BakeSink* sink : sinks) KW_TRY(sink->consume(handed));
+    const std::uint32_t chunk = source.chunk_frames();
+    for (std::uint32_t done = 0; done < world.frames;) {
+        const std::uint32_t n = std::min(chunk, world.frames - done);
+        auto frames = source.next(done, n, needs);
+        if (!frames) return frames.error();
+        for (BakeSink* sink : sinks) KW_TRY(sink->consume(frames.value()));
         done += n;
-        if (options.progress) options.progress(done, frames);
+        if (options.progress) options.progress(done, world.frames);
     }
     if (options.simulated) KW_TRY(options.simulated());
     std::vector<BakeOutput> written;
@@ -70,6 +92,14 @@ Result<std::vector<BakeOutput>> bake(Simulation& sim, std::span<BakeSink* const>
         for (BakeOutput& file : files.value()) written.push_back(std::move(file));
     }
     return written;
+}
+
+Result<std::vector<BakeOutput>> bake(Simulation& sim, std::span<BakeSink* const> sinks, const BakeOptions& options) {
+    if (sim.frame()) {
+        return make_error(Error::Kind::InvalidInput, sim.scene().path + ": bake needs a simulation that has not stepped yet");
+    }
+    SimulationSource source(sim);
+    return bake(source, sinks, options);
 }
 
 }  // namespace kodawari

@@ -14,13 +14,13 @@ namespace {
 // Streams: memory stays BirdGlbWriter's, whatever the frames.
 class BirdsGlbSink final : public BakeSink {
 public:
-    explicit BirdsGlbSink(std::string path) : path_(std::move(path)) {}
+    BirdsGlbSink(std::string path, const GlbCompaction& compaction) : path_(std::move(path)), compaction_(compaction) {}
 
     BakeNeeds needs() const override { return {.bird_poses = true}; }
 
     Result<void> begin(const BakeWorld& world) override {
         if (world.birds->birds.empty()) return {};
-        auto writer = BirdGlbWriter::create(path_, *world.birds, world.frames);
+        auto writer = BirdGlbWriter::create(path_, *world.birds, world.frames, compaction_);
         if (!writer) return writer.error();
         writer_.emplace(std::move(writer).value());
         return {};
@@ -33,11 +33,14 @@ public:
     Result<std::vector<BakeOutput>> finish() override {
         if (!writer_) return std::vector<BakeOutput>{};
         KW_TRY(writer_->finish());
-        return std::vector<BakeOutput>{{path_, BakeOutput::Format::Glb, "", {}}};
+        std::optional<GlbCompactionStats> stats;
+        if (compaction_.enabled) stats = writer_->compaction_stats();
+        return std::vector<BakeOutput>{{path_, BakeOutput::Format::Glb, "", stats}};
     }
 
 private:
     std::string path_;
+    GlbCompaction compaction_;
     std::optional<BirdGlbWriter> writer_;
 };
 
@@ -116,7 +119,7 @@ class TraceSink final : public BakeSink {
 public:
     explicit TraceSink(std::string path) : path_(std::move(path)) {}
 
-    BakeNeeds needs() const override { return {.bird_poses = true, .bird_diag = true, .chains = true}; }
+    BakeNeeds needs() const override { return {.bird_poses = true, .bird_diag = true, .chains = true, .chain_shapes = true}; }
 
     Result<void> begin(const BakeWorld& world) override {
         world_ = world;
@@ -168,7 +171,9 @@ private:
 
 }  // namespace
 
-std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path) { return std::make_unique<BirdsGlbSink>(std::move(path)); }
+std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path, const GlbCompaction& compaction) {
+    return std::make_unique<BirdsGlbSink>(std::move(path), compaction);
+}
 std::unique_ptr<BakeSink> make_chains_glb_sink(std::string path, const GlbCompaction& compaction) {
     return std::make_unique<ChainsGlbSink>(std::move(path), compaction);
 }

@@ -4,6 +4,7 @@
 #include "kodawari/simulation.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <chrono>
 
 #include "kodawari/crowd_animator.hpp"
@@ -27,6 +28,7 @@ struct Simulation::Impl {
     BackendKind kind = BackendKind::Cpu;
     std::string fallback_reason;
     std::uint32_t frames = 1;
+    ShardInfo shard;
 
     std::unique_ptr<BirdBackend> birds;
     std::unique_ptr<RodBackend> rods;
@@ -51,7 +53,8 @@ struct Simulation::Impl {
             birds = std::move(made).value();
             KW_TRY(birds->load(bird_world));
         }
-        if (rod_scene) {
+        // A shard may hold none of the characters: nothing to step then.
+        if (rod_scene && !rod_scene->instances.empty()) {
             auto made = make_rod_backend(kind, options.options);
             if (!made) return made.error();
             rods = std::move(made).value();
@@ -126,22 +129,63 @@ Result<std::unique_ptr<Simulation>> Simulation::open(const std::string& path, co
     return create(std::move(scene).value(), options);
 }
 
-Result<std::unique_ptr<Simulation>> Simulation::create(Scene scene, const SimulationOptions& options) {
-    if (options.frames && *options.frames == 0) {
+InstanceRange shard_range(std::uint32_t n, Shard shard) {
+    assert(shard.count >= 1 && shard.index < shard.count);
+    const auto at = [&](std::uint32_t i) {
+        return static_cast<std::uint32_t>(std::uint64_t{n} * i / shard.count);
+    };
+    return {at(shard.index), at(shard.index + 1)};
+}
+
+Result<SceneWorlds> build_scene_worlds(const Scene& scene, std::optional<std::uint32_t> frames) {
+    if (frames && *frames == 0) {
         return make_error(Error::Kind::InvalidInput, "SimulationOptions::frames: expected at least 1 frame, got 0");
     }
+    SceneWorlds worlds;
+    auto birds = build_bird_world(scene);
+    if (!birds) return birds.error();
+    worlds.birds = std::move(birds).value();
+    worlds.frames = frames.value_or(scene.frame_count());
+    worlds.birds.frames = worlds.frames;
+    if (!scene.characters.empty()) {
+        auto built = build_rod_scene(scene);
+        if (!built) return built.error();
+        worlds.rods.emplace(std::move(built).value());
+    }
+    return worlds;
+}
+
+Result<std::unique_ptr<Simulation>> Simulation::create(Scene scene, const SimulationOptions& options) {
+    if (options.shard.count == 0 || options.shard.index >= options.shard.count) {
+        return make_error(Error::Kind::InvalidInput, "SimulationOptions::shard: expected index < count, got " +
+                                                         std::to_string(options.shard.index) + " of " +
+                                                         std::to_string(options.shard.count));
+    }
+    auto worlds = build_scene_worlds(scene, options.frames);
+    if (!worlds) return worlds.error();
     auto impl = std::make_unique<Impl>();
     impl->options = options;
-    auto world = build_bird_world(scene);
-    if (!world) return world.error();
-    impl->bird_world = std::move(world).value();
+    impl->frames = worlds.value().frames;
+    impl->bird_world = std::move(worlds.value().birds);
     impl->scene = std::move(scene);
-    impl->frames = options.frames.value_or(impl->scene.frame_count());
-    impl->bird_world.frames = impl->frames;
-    if (!impl->scene.characters.empty()) {
-        auto built = build_rod_scene(impl->scene);
-        if (!built) return built.error();
-        impl->rod_scene.emplace(std::move(built).value());
+    // Cut after building: the random draws are the whole scene's (Shard).
+    ShardInfo& shard = impl->shard;
+    shard.shard = options.shard;
+    shard.scene_birds = static_cast<std::uint32_t>(impl->bird_world.birds.size());
+    shard.birds = shard_range(shard.scene_birds, options.shard);
+    if (options.shard.count > 1) {
+        auto& birds = impl->bird_world.birds;
+        birds.erase(birds.begin() + shard.birds.end, birds.end());
+        birds.erase(birds.begin(), birds.begin() + shard.birds.begin);
+    }
+    if (auto& rods = worlds.value().rods) {
+        shard.scene_characters = static_cast<std::uint32_t>(rods->instances.size());
+        shard.characters = shard_range(shard.scene_characters, options.shard);
+        if (options.shard.count > 1) {
+            impl->rod_scene.emplace(rods->slice(shard.characters.begin, shard.characters.end));
+        } else {
+            impl->rod_scene.emplace(std::move(*rods));
+        }
     }
 
     // One Vulkan device for every backend, so that their buffers meet there (the pose
@@ -165,6 +209,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(Scene scene, const Simula
 
 const Scene& Simulation::scene() const { return impl_->scene; }
 const birds::BirdWorld& Simulation::bird_world() const { return impl_->bird_world; }
+const ShardInfo& Simulation::shard() const { return impl_->shard; }
 const RodScene* Simulation::rod_scene() const { return impl_->rod_scene ? &*impl_->rod_scene : nullptr; }
 BackendKind Simulation::backend() const { return impl_->kind; }
 const std::string& Simulation::fallback_reason() const { return impl_->fallback_reason; }

@@ -245,6 +245,37 @@ TEST(CompactExport, RiggedWithinBoundsWhenReimported) {
     expect_valid(path);
 }
 
+// 67 birds (three wing types; bird 4's tail flips hemisphere every other frame in the
+// input), 90 frames: the birds' writer.
+TEST(CompactExport, BirdsWithinBoundsWhenReimported) {
+    const birds::BirdWorld world = make_world();
+    const std::uint32_t frames = 90;
+    const std::vector<gpu::BirdPose> poses = make_poses(world, frames);
+    TempDir dir;
+    const std::string full = dir.file("full.glb");
+    const std::string path = dir.file("compact.glb");
+    ASSERT_TRUE(write_birds_glb(full, world, poses, frames).ok());
+    const GlbCompaction bounds{true, 0.001f, 0.001f, 0.001f};
+    auto writer = BirdGlbWriter::create(path, world, frames, bounds);
+    ASSERT_TRUE(writer.ok()) << writer.error().message;
+    ASSERT_TRUE(writer.value().add_frames(poses).ok());
+    ASSERT_TRUE(writer.value().finish().ok());
+    const GlbCompactionStats& stats = writer.value().compaction_stats();
+    const Measured m = compare(full, path);
+    EXPECT_LE(m.position_m, static_cast<double>(bounds.position_m) + kFloat);
+    EXPECT_LE(m.rotation_rad, static_cast<double>(bounds.rotation_rad) + kFloat);
+    EXPECT_NEAR(stats.position_m, m.position_m, kFloat);
+    EXPECT_NEAR(stats.rotation_rad, m.rotation_rad, kFloat);
+    EXPECT_EQ(stats.keys, m.keys);
+    EXPECT_EQ(stats.kept, m.kept);
+    EXPECT_EQ(m.keys, std::size_t{kBirds} * 8 * frames);
+    EXPECT_LT(m.kept, m.keys / 4);
+    EXPECT_LT(fs::file_size(path) * 2, fs::file_size(full));
+    expect_compact_accessors(path);
+    expect_valid(path);
+    EXPECT_EQ(dir.entries().size(), 2u);
+}
+
 // Compaction off is the uncompacted writer, byte for byte (export_identity pins those
 // bytes for the shipped scenes); bad bounds are refused, naming the file.
 TEST(CompactExport, OffIsTheUncompactedFileAndBadBoundsAreRefused) {

@@ -51,11 +51,14 @@ struct BakeNeeds {
     bool bird_poses = false;
     bool bird_diag = false;
     bool chains = false;
+    /// With chains: their blended rest shapes, view directions and weights too (traces);
+    /// part files and ranks hand them over only when asked.
+    bool chain_shapes = false;
 };
 
 /// A file a sink wrote.
 struct BakeOutput {
-    enum class Format { Glb, Trace };
+    enum class Format { Glb, Trace, Part };
     std::string path;
     Format format = Format::Glb;
     std::string description;  ///< what it holds beyond the format, for messages (may be empty)
@@ -86,17 +89,43 @@ struct BakeOptions {
     std::function<Result<void>()> simulated;
 };
 
+/// Frames handed over per call: with chains one (they are read back after each frame),
+/// else as many as keep a call at most 2^18 bird poses (1 to 120), which bounds the memory
+/// of the frames in flight. Every source of a bake uses the scene's whole counts, so that
+/// shards and ranks step in the same chunks as a single process.
+[[nodiscard]] KODAWARI_API std::uint32_t bake_chunk_frames(std::size_t scene_birds, bool has_chains);
+
+/// Where a bake's frames come from: a Simulation (bake(Simulation&, ...)), the part files
+/// of a sharded bake (kodawari/shards.hpp), or the ranks of a distributed bake
+/// (kodawari/distributed.hpp).
+class KODAWARI_API BakeSource {
+public:
+    virtual ~BakeSource() = default;
+    /// The whole scene's world, as sinks are told it.
+    [[nodiscard]] virtual BakeWorld world() const = 0;
+    /// Frames per next() (bake_chunk_frames of the scene).
+    [[nodiscard]] virtual std::uint32_t chunk_frames() const = 0;
+    /// The next `count` frames from `first` (called in order, each frame once), with what
+    /// `needs` asks for; the spans stay valid until the next call.
+    [[nodiscard]] virtual Result<BakeFrames> next(std::uint32_t first, std::uint32_t count, const BakeNeeds& needs) = 0;
+};
+
+/// Hands every frame of `source` to every sink, then finishes the sinks in order. Errors:
+/// the source's and the sinks' (the first one stops the bake; sinks leave no file).
+[[nodiscard]] KODAWARI_API Result<std::vector<BakeOutput>> bake(BakeSource& source, std::span<BakeSink* const> sinks,
+                                                                const BakeOptions& options = {});
+
 /// Runs `sim` (not stepped yet) over its frame_count() frames and hands each to every
-/// sink, then finishes the sinks in order. Birds are stepped several frames per call
-/// when the scene has no chains (at most 2^18 bird poses per call, which bounds the
-/// memory of the frames handed over); with chains, one frame per call. Errors: the
+/// sink, then finishes the sinks in order, in chunks of bake_chunk_frames(). Errors: the
 /// simulation's and the sinks' (the first one stops the bake).
 [[nodiscard]] KODAWARI_API Result<std::vector<BakeOutput>> bake(Simulation& sim, std::span<BakeSink* const> sinks,
                                                                 const BakeOptions& options = {});
 
 /// The flock as a `.glb` (write_birds_glb()'s file) at `path`, streamed (BirdGlbWriter):
-/// its memory does not grow with the frames.
-[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path);
+/// its memory does not grow with the frames. `compaction`: its keys compacted (default:
+/// not).
+[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path,
+                                                                         const GlbCompaction& compaction = {});
 
 /// The characters as `.glb` files: the procedural characters (and then the rigged ones
 /// too, as bones) in write_chains_glb's file at `path`, streamed (ChainsGlbWriter); each

@@ -68,7 +68,8 @@ struct GlbCompactionStats {
 /// shared by all birds of a wing type) and one animation with TRS channels sampled at
 /// every frame. `poses` holds `frames` x birds entries, frame-major.
 [[nodiscard]] KODAWARI_API Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
-                                                        std::span<const gpu::BirdPose> poses, std::uint32_t frames);
+                                                        std::span<const gpu::BirdPose> poses, std::uint32_t frames,
+                                                        const GlbCompaction& compaction = {});
 
 /// Streams write_birds_glb()'s file (the same bytes) frame by frame, so that memory does
 /// not grow with frames x birds. Each frame's keys go to a temporary file beside `path`
@@ -83,11 +84,12 @@ public:
     /// channel-major.
     static constexpr std::size_t kTransposeBytes = std::size_t{32} << 20;
 
-    /// Prepares `path` for `frames` frames of `world` (which must outlive the writer).
-    /// Errors (naming `path`): no frames, fps not positive, more than a .glb can hold,
-    /// a bird of unknown wing type (InvalidInput), the temporary file (Io).
+    /// Prepares `path` for `frames` frames of `world` (which must outlive the writer),
+    /// its keys compacted as `compaction` says (default: not). Errors (naming `path`): no
+    /// frames, fps not positive, more than a .glb can hold uncompacted, a bird of unknown
+    /// wing type, bad compaction bounds (InvalidInput), the temporary file (Io).
     [[nodiscard]] static Result<BirdGlbWriter> create(const std::string& path, const birds::BirdWorld& world,
-                                                      std::uint32_t frames);
+                                                      std::uint32_t frames, const GlbCompaction& compaction = {});
 
     BirdGlbWriter(BirdGlbWriter&& other) noexcept;
     BirdGlbWriter& operator=(BirdGlbWriter&& other) noexcept;
@@ -103,6 +105,9 @@ public:
 
     /// Writes the `.glb` atomically once every frame has been added. Call it once.
     [[nodiscard]] Result<void> finish();
+
+    /// What compaction did, once finish() has written a compacted file (zeros else).
+    [[nodiscard]] const GlbCompactionStats& compaction_stats() const;
 
 private:
     struct Impl;

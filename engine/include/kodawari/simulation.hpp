@@ -40,6 +40,50 @@ class Renderer;
 }
 
 /// How a Simulation runs.
+/// One of `count` parts of a scene's instances, for baking a scene over several processes
+/// or machines (issue 15; kodawari/shards.hpp). Shard `index` holds birds
+/// [index * n / count, (index + 1) * n / count) of the scene's n birds and the character
+/// instances of the same formula: contiguous ranges, in the scene's order, that cover it
+/// once. The scene is built whole (every random draw made) before it is cut, so an
+/// instance's frames do not depend on `count`.
+struct Shard {
+    std::uint32_t index = 0;
+    std::uint32_t count = 1;  ///< 1: the whole scene
+};
+
+/// Instances [begin, end) of a scene.
+struct InstanceRange {
+    std::uint32_t begin = 0;
+    std::uint32_t end = 0;
+    [[nodiscard]] std::uint32_t size() const { return end - begin; }
+};
+
+/// The range shard `shard` holds of `n` instances (asserts index < count).
+[[nodiscard]] KODAWARI_API InstanceRange shard_range(std::uint32_t n, Shard shard);
+
+/// Which of a scene's instances a Simulation runs: bird_world() holds the scene's birds
+/// `birds`, rod_scene() its character instances `characters`.
+struct ShardInfo {
+    Shard shard;
+    InstanceRange birds;
+    InstanceRange characters;
+    std::uint32_t scene_birds = 0;       ///< the whole scene's
+    std::uint32_t scene_characters = 0;  ///< the whole scene's
+};
+
+/// What a scene simulates, built from it with every random draw made but no backend:
+/// the whole scene, as Simulation builds it before cutting out a shard. What a merge of
+/// shards and the rank that writes a distributed bake's output hand to the outputs.
+struct SceneWorlds {
+    birds::BirdWorld birds;        ///< its frames set to `frames`
+    std::optional<RodScene> rods;  ///< none without characters
+    std::uint32_t frames = 1;
+};
+
+/// Builds the worlds of `scene` for `frames` frames (none: the scene's; >= 1). Errors:
+/// the scene's (a route, a character), or frames == 0 (InvalidInput).
+[[nodiscard]] KODAWARI_API Result<SceneWorlds> build_scene_worlds(const Scene& scene, std::optional<std::uint32_t> frames);
+
 struct SimulationOptions {
     /// The backends' kind; none: "auto", vulkan when a Vulkan device opens, else cpu
     /// (Simulation::fallback_reason() then says why).
@@ -53,6 +97,8 @@ struct SimulationOptions {
     /// from its poses there (nothing read back per frame); false keeps it on the host
     /// (benchmarks compare the two).
     bool rod_inputs_on_device = true;
+    /// Simulate this part of the scene's instances only (the default: all of them).
+    Shard shard{};
 };
 
 /// What step() hands back of the frames it simulates. Empty spans: nothing read back.
@@ -87,6 +133,8 @@ public:
     [[nodiscard]] const Scene& scene() const;
     /// The birds (empty without flocks).
     [[nodiscard]] const birds::BirdWorld& bird_world() const;
+    /// The part of the scene this simulation runs (SimulationOptions::shard).
+    [[nodiscard]] const ShardInfo& shard() const;
     /// The characters' chains and kinematics; null without characters.
     [[nodiscard]] const RodScene* rod_scene() const;
     /// The kind every backend is of ("auto" resolved).

@@ -82,6 +82,12 @@ struct KODAWARI_API RodScene {
     rods::CameraMotion camera;
     float fov_deg = 50.0f;  ///< vertical field of view, for renderers and projections
 
+    /// The character instances [begin, end) alone, with their chains and colliders, the
+    /// same templates, camera and timing: what one shard of a bake simulates (issue 15).
+    /// Each instance keeps its placement, time offset and clip, so its frames are those
+    /// of the whole scene bit for bit; the sliced instance i is this scene's begin + i.
+    /// Asserts begin <= end <= instances.size().
+    [[nodiscard]] RodScene slice(std::uint32_t begin, std::uint32_t end) const;
     /// The time of frame `index`: index / fps, s.
     [[nodiscard]] float time(std::uint32_t index) const;
 
