@@ -126,7 +126,7 @@ def main():
     units = {"translation": ("mm", 1e3), "rotation": ("mrad", 1e3), "scale": ("%", 1e2)}
     for path in sorted(worst):
         unit, factor = units[path]
-        print(f"  largest {path} error: {worst[path] * factor:.4g} {unit}")
+        print(f"  largest {path} error: {worst[path] * factor:.6g} {unit}")
 
 
 if __name__ == "__main__":
