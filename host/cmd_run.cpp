@@ -8,9 +8,13 @@
 #include "bake_outputs.hpp"
 #include "commands.hpp"
 #include "kodawari/bake.hpp"
+#include "kodawari/distributed.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/shards.hpp"
+#ifdef KODAWARI_WITH_MPI
+#include "mpi_communicator.hpp"
+#endif
 #include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
@@ -71,6 +75,59 @@ Shard parse_shard(const std::string& text) {
     return {static_cast<std::uint32_t>(index), static_cast<std::uint32_t>(count)};
 }
 
+// `run --mpi`: one shard per rank, rank 0 writes (kodawari/distributed.hpp).
+int run_distributed(const std::string& scene_path, const BackendChoice& choice, std::optional<std::uint64_t> frames,
+                    const std::optional<std::string>& out, const std::optional<std::string>& trace, bool no_export,
+                    const GlbCompaction& compaction) {
+#ifdef KODAWARI_WITH_MPI
+    auto job = open_mpi_world();
+    if (!job) return report(job.error());
+    Communicator& comm = *job.value();
+    const bool root = comm.rank() == 0;
+    DistributedBakeOptions options;
+    options.simulation.backend = choice.backend;
+    options.simulation.options = choice.options;
+    if (frames) options.simulation.frames = static_cast<std::uint32_t>(*frames);
+    const Simulation* opened = nullptr;
+    options.opened = [&](const Simulation& sim) {
+        opened = &sim;
+        if (!root) return;
+        print_scene(sim);
+        std::printf("kodawari: %d MPI ranks, one shard each; rank 0 writes\n", comm.size());
+        std::fflush(stdout);
+    };
+    options.make_sinks = [&](const BakeWorld& world) {
+        std::vector<std::unique_ptr<BakeSink>> sinks;
+        if (!no_export) {
+            sinks = glb_sinks(out ? *out : default_output(world.scene->name), !world.birds->birds.empty(), world.rods != nullptr,
+                              compaction);
+        }
+        if (trace) sinks.push_back(make_trace_sink(*trace));
+        return sinks;
+    };
+    options.bake.simulated = [&]() -> Result<void> {
+        if (root) print_timing(*opened);
+        if (opened->validation_messages() > 0) {
+            return make_error(Error::Kind::Vulkan, "Vulkan validation reported " + std::to_string(opened->validation_messages()) +
+                                                       " messages");
+        }
+        return {};
+    };
+    if (root && stderr_is_terminal()) {
+        options.bake.progress = [](std::uint32_t done, std::uint32_t total) { progress("simulating", done, total); };
+    }
+    auto written = bake_distributed(comm, scene_path, options);
+    // Every rank has the same error; rank 0 says it.
+    if (!written) return root ? report(written.error()) : (written.error().kind == Error::Kind::InvalidInput ? kExitBadInput : kExitFailure);
+    for (const BakeOutput& file : written.value()) print_wrote(file);
+    return kExitOk;
+#else
+    (void)scene_path, (void)choice, (void)frames, (void)out, (void)trace, (void)no_export, (void)compaction;
+    return report(make_error(Error::Kind::Unsupported,
+                             "--mpi: this kodawari was built without MPI (bash scripts/setup installs OpenMPI; then rebuild)"));
+#endif
+}
+
 }  // namespace
 
 int cmd_run(Args args) {
@@ -81,10 +138,19 @@ int cmd_run(Args args) {
     const auto trace_path = args.option("trace");
     const auto shard_option = args.option("shard");
     const GlbCompaction compaction = read_compaction(args);
+    const bool mpi = args.flag("mpi");
+    if (mpi && shard_option) throw UsageError{"--mpi and --shard exclude each other (--mpi runs one shard per rank)"};
     if (no_export && out_option) throw UsageError{"--out and --no-export exclude each other"};
     if (no_export && compaction.enabled) throw UsageError{"--compact and --no-export exclude each other"};
+    // A part keeps every key: compacting a shard's keys apart would make the merged file
+    // depend on N, so compaction happens once, at merge, over the joined keys.
     if (shard_option && compaction.enabled) {
-        throw UsageError{"--shard writes a part file with every key: give --compact to `kodawari merge` instead"};
+        throw UsageError{"--shard writes a part file with every key, and compaction happens at merge: give --compact to "
+                         "`kodawari merge` instead"};
+    }
+    if (mpi) {
+        return run_distributed(scene_argument(args.positionals(), "run"), choice, frames_option, out_option, trace_path, no_export,
+                               compaction);
     }
     if (shard_option && (no_export || trace_path)) {
         throw UsageError{"--shard writes a part file for `kodawari merge` (at --out): it takes neither --no-export nor --trace"};

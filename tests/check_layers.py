@@ -36,7 +36,8 @@ ALLOWED_THIRD_PARTY = {
     "vulkan": {"vulkan"},
     "io": {"tiny_gltf", "nlohmann"},
     "render": {"vulkan", "stb"},
-    "engine": {"vulkan"},
+    # Part files' JSON header (simulation/shards.cpp).
+    "engine": {"vulkan", "nlohmann"},
     # The C API's device embedding converts the application's handles (vulkan_core.h's C
     # types) for kodawari/vulkan_embed.hpp; kodawari.h itself names no Vulkan type.
     "c": {"vulkan"},
@@ -63,6 +64,7 @@ OWNER_PATTERNS = [
     ("render/*.hpp", "render"),
     ("include/kodawari/render/*.hpp", "render"),
     ("capi/*.hpp", "c"),
+    ("simulation/*.hpp", "engine"),
 ]
 PUBLIC_OWNERS = {
     "gltf/character.hpp": "sim",
@@ -81,6 +83,8 @@ PUBLIC_OWNERS = {
     "scene_edit.hpp": "io",
     "simulation.hpp": "engine",
     "bake.hpp": "engine",
+    "shards.hpp": "engine",
+    "distributed.hpp": "engine",
     "kodawari.h": "c",
 }
 

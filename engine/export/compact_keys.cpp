@@ -33,6 +33,18 @@ void append_bytes(std::vector<unsigned char>& out, const T* data, std::size_t co
     std::memcpy(out.data() + at, data, count * sizeof(T));
 }
 
+// A channel that keeps most of its keys is smaller keeping all of them: its values
+// without key times of its own (they share every frame's). Exact then, but for the
+// rotations' rounding (`rounding()`).
+template <class Rounding>
+void keep_all_if_smaller(Reduction& r, std::size_t value_bytes, std::uint32_t frames, const Rounding& rounding) {
+    if (r.kept.size() < frames && r.kept.size() > 2 && r.kept.size() * (value_bytes + sizeof(float)) >= std::size_t{frames} * value_bytes) {
+        r.kept.resize(frames);
+        for (std::uint32_t f = 0; f < frames; ++f) r.kept[f] = f;
+        r.max_error = rounding();
+    }
+}
+
 }  // namespace
 
 Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& beside, std::size_t count,
@@ -52,6 +64,7 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
     append_bytes(block, times.data(), times.size());
     const std::uint64_t all_frames = 0;
     const std::uint64_t ends = block.size();
+    out.ends_ = frames > 1 ? ends : 0;
     if (frames > 1) {
         const float pair[2] = {times.front(), times.back()};
         append_bytes(block, pair, 2);
@@ -71,6 +84,9 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
     std::vector<float> kept_times;
     std::vector<float> kept_floats;
     std::vector<std::int16_t> kept_shorts;
+    std::uint64_t accessors = 0;  // streamed: accessors of the items so far
+    out.item_channels_.reserve(count + 1);
+    out.item_accessors_.reserve(count + 1);
     // The kept frames of the current item's channels and where their times went, to
     // share them between its channels.
     std::vector<std::pair<std::vector<std::uint32_t>, std::uint64_t>> item_times;
@@ -79,6 +95,8 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
         KW_TRY(read_item_group(keys, count, frames, record_floats, begin, n, in.data()));
         block.clear();
         for (std::size_t item = 0; item < n; ++item) {
+            out.item_channels_.push_back(out.channels_.size());
+            out.item_accessors_.push_back(accessors);
             item_times.clear();
             std::size_t offset = 0;
             for (std::size_t field = 0; field < fields.size(); ++field) {
@@ -94,24 +112,17 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
                                 in.data() + (std::size_t{f} * n + item) * record_floats + offset, w * sizeof(float));
                 }
                 offset += w;
+                const std::size_t value_bytes = kind == ChannelKind::Rotation ? 4 * sizeof(std::int16_t) : 3 * sizeof(float);
                 Reduction r;
                 if (kind == ChannelKind::Rotation) {
                     shorts.resize(channel.size());
                     quantize_rotations(channel, shorts);
                     r = reduce_rotations(times, channel, shorts, bounds.rotation_rad);
+                    keep_all_if_smaller(r, value_bytes, frames, [&] { return rounding_error(channel, shorts); });
                 } else {
                     r = reduce_vec3(times, channel, kind == ChannelKind::Translation ? bounds.position_m : bounds.scale_rel,
                                     kind == ChannelKind::Translation ? VectorMetric::Distance : VectorMetric::Relative);
-                }
-                // A channel that keeps most of its keys is smaller keeping all of them: its
-                // values without key times of its own (they share every frame's). Exact
-                // then, but for the rotations' rounding.
-                const std::size_t value_bytes = kind == ChannelKind::Rotation ? 4 * sizeof(std::int16_t) : 3 * sizeof(float);
-                if (r.kept.size() < frames && r.kept.size() > 2 &&
-                    r.kept.size() * (value_bytes + sizeof(float)) >= std::size_t{frames} * value_bytes) {
-                    r.kept.resize(frames);
-                    for (std::uint32_t f = 0; f < frames; ++f) r.kept[f] = f;
-                    r.max_error = kind == ChannelKind::Rotation ? rounding_error(channel, shorts) : 0.0;
+                    keep_all_if_smaller(r, value_bytes, frames, [] { return 0.0; });
                 }
                 double& worst = kind == ChannelKind::Rotation      ? out.stats_.rotation_rad
                                 : kind == ChannelKind::Translation ? out.stats_.position_m
@@ -135,6 +146,7 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
                         for (const std::uint32_t f : r.kept) kept_times.push_back(times[f]);
                         append_bytes(block, kept_times.data(), kept_times.size());
                         item_times.emplace_back(r.kept, c.times);
+                        ++accessors;
                     }
                 }
                 c.values = out.bytes_ + block.size();
@@ -148,6 +160,7 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
                     append_bytes(block, kept_floats.data(), kept_floats.size());
                 }
                 out.channels_.push_back(c);
+                ++accessors;
                 out.stats_.keys += frames;
                 out.stats_.kept += c.keys;
                 out.stats_.bytes_before += std::uint64_t{frames} * w * sizeof(float);
@@ -156,8 +169,40 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
         KW_TRY(out.data_.append(block.data(), block.size()));
         out.bytes_ += block.size();
     }
+    out.item_channels_.push_back(out.channels_.size());
+    out.item_accessors_.push_back(accessors);
     out.stats_.bytes_after = out.bytes_;
     return out;
+}
+
+tinygltf::Accessor CompactKeys::time_accessor(int view, const Channel& c) const {
+    // Key times are float seconds with min and max, as §3.11 requires of sampler inputs;
+    // every channel keeps the first and the last frame.
+    tinygltf::Accessor accessor;
+    accessor.bufferView = view;
+    accessor.byteOffset = c.times;
+    accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    accessor.count = c.keys;
+    accessor.type = TINYGLTF_TYPE_SCALAR;
+    accessor.minValues = {first_time_};
+    accessor.maxValues = {last_time_};
+    return accessor;
+}
+
+tinygltf::Accessor CompactKeys::value_accessor(int view, const Channel& c) {
+    tinygltf::Accessor accessor;
+    accessor.bufferView = view;
+    accessor.byteOffset = c.values;
+    accessor.count = c.keys;
+    if (c.kind == ChannelKind::Rotation) {
+        accessor.componentType = TINYGLTF_COMPONENT_TYPE_SHORT;
+        accessor.normalized = true;
+        accessor.type = TINYGLTF_TYPE_VEC4;
+    } else {
+        accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+        accessor.type = TINYGLTF_TYPE_VEC3;
+    }
+    return accessor;
 }
 
 std::pair<int, int> CompactKeys::add_next_channel(tinygltf::Model& model, int view) {
@@ -166,20 +211,58 @@ std::pair<int, int> CompactKeys::add_next_channel(tinygltf::Model& model, int vi
     if (const auto it = time_accessors_.find(c.times); it != time_accessors_.end()) {
         input = it->second;
     } else {
-        // Key times are float seconds with min and max, as §3.11 requires of sampler inputs.
-        input = add_accessor(model, view, c.times, TINYGLTF_COMPONENT_TYPE_FLOAT, c.keys, TINYGLTF_TYPE_SCALAR);
-        model.accessors[static_cast<std::size_t>(input)].minValues = {first_time_};
-        model.accessors[static_cast<std::size_t>(input)].maxValues = {last_time_};
+        model.accessors.push_back(time_accessor(view, c));
+        input = static_cast<int>(model.accessors.size() - 1);
         time_accessors_.emplace(c.times, input);
     }
-    int output = -1;
-    if (c.kind == ChannelKind::Rotation) {
-        output = add_accessor(model, view, c.values, TINYGLTF_COMPONENT_TYPE_SHORT, c.keys, TINYGLTF_TYPE_VEC4);
-        model.accessors[static_cast<std::size_t>(output)].normalized = true;
-    } else {
-        output = add_accessor(model, view, c.values, TINYGLTF_COMPONENT_TYPE_FLOAT, c.keys, TINYGLTF_TYPE_VEC3);
+    model.accessors.push_back(value_accessor(view, c));
+    return {input, static_cast<int>(model.accessors.size() - 1)};
+}
+
+void CompactKeys::add_shared_times(tinygltf::Model& model, int view) {
+    // Only those some channel uses: an accessor nothing refers to is an unused object to
+    // glTF-Validator.
+    for (const Channel& c : channels_) {
+        int& shared = c.times == 0 ? all_frames_accessor_ : ends_accessor_;
+        if (!shared_times(c) || shared >= 0) continue;
+        model.accessors.push_back(time_accessor(view, c));
+        shared = static_cast<int>(model.accessors.size() - 1);
+        if (all_frames_accessor_ >= 0 && (ends_ == 0 || ends_accessor_ >= 0)) break;
     }
-    return {input, output};
+}
+
+void CompactKeys::item_accessors(std::size_t item, int view, std::vector<tinygltf::Accessor>& out) const {
+    // The same walk as item_channels(): a channel's own times come before its values,
+    // once per item (channels of one item with the same kept frames share them).
+    const std::uint64_t end = item_channels_.at(item + 1);
+    for (std::uint64_t k = item_channels_.at(item); k < end; ++k) {
+        const Channel& c = channels_[k];
+        if (!shared_times(c)) {
+            bool seen = false;
+            for (std::uint64_t j = item_channels_[item]; j < k && !seen; ++j) seen = channels_[j].times == c.times;
+            if (!seen) out.push_back(time_accessor(view, c));
+        }
+        out.push_back(value_accessor(view, c));
+    }
+}
+
+void CompactKeys::item_channels(std::size_t item, int first, std::vector<std::pair<int, int>>& out) const {
+    const std::uint64_t begin = item_channels_.at(item);
+    const std::uint64_t end = item_channels_.at(item + 1);
+    const std::size_t at = out.size();
+    int next = first;
+    for (std::uint64_t k = begin; k < end; ++k) {
+        const Channel& c = channels_[k];
+        int input = c.times == 0 ? all_frames_accessor_ : ends_accessor_;
+        if (!shared_times(c)) {
+            input = -1;
+            for (std::uint64_t j = begin; j < k && input < 0; ++j) {
+                if (channels_[j].times == c.times) input = out[at + (j - begin)].first;
+            }
+            if (input < 0) input = next++;
+        }
+        out.emplace_back(input, next++);
+    }
 }
 
 Result<void> CompactKeys::write(AtomicFile& file) {

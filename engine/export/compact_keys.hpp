@@ -16,6 +16,11 @@
 // normalized: glTF 2.0 §3.11, "Animations", allows them for rotation outputs). Every
 // block is a multiple of 4 bytes, so every accessor is aligned to its component size
 // (§3.6.2.4).
+//
+// Two ways to get the accessors: add_next_channel() adds them to a tinygltf model
+// (the chains' and the rigged writers); item_accessors() and item_channels() make an
+// item's on demand (the birds' writer, whose JSON is streamed: gltf_json_stream.hpp), so
+// that nothing per channel is held but its 24-byte record.
 
 #include <cstddef>
 #include <cstdint>
@@ -57,6 +62,19 @@ public:
     /// times are (one per distinct offset). Returns {input, output}.
     [[nodiscard]] std::pair<int, int> add_next_channel(tinygltf::Model& model, int view);
 
+    /// Streamed use, instead of add_next_channel(). First: adds to `model` the shared
+    /// key-time accessors (every frame's, the ends) that some channel uses, within `view`.
+    void add_shared_times(tinygltf::Model& model, int view);
+    /// How many accessors item_accessors() makes for the items before `item` (item =
+    /// count: for all of them).
+    [[nodiscard]] std::uint64_t accessors_before(std::size_t item) const { return item_accessors_.at(item); }
+    /// Appends `item`'s accessors to `out`: per channel its own key times (where no
+    /// earlier channel of the item or the shared ones have them) and its values.
+    void item_accessors(std::size_t item, int view, std::vector<tinygltf::Accessor>& out) const;
+    /// Appends {input, output} of each of `item`'s channels to `out`, its accessors
+    /// numbered from `first`.
+    void item_channels(std::size_t item, int first, std::vector<std::pair<int, int>>& out) const;
+
     /// Appends the tail to `file`.
     [[nodiscard]] Result<void> write(AtomicFile& file);
 
@@ -67,13 +85,23 @@ private:
         std::uint32_t keys = 0;
         ChannelKind kind = ChannelKind::Translation;
     };
+    [[nodiscard]] tinygltf::Accessor time_accessor(int view, const Channel& c) const;
+    [[nodiscard]] static tinygltf::Accessor value_accessor(int view, const Channel& c);
+    [[nodiscard]] bool shared_times(const Channel& c) const { return c.times == 0 || (ends_ != 0 && c.times == ends_); }
     SpillFile data_;
     std::uint64_t bytes_ = 0;
     std::vector<Channel> channels_;
     std::size_t next_ = 0;
     double first_time_ = 0.0;
     double last_time_ = 0.0;
+    std::uint64_t ends_ = 0;  // offset of the shared first and last times (0: none)
     std::unordered_map<std::uint64_t, int> time_accessors_;  // by offset
+    // Per item (count + 1 entries): its first channel, and how many accessors the items
+    // before it make (streamed use).
+    std::vector<std::uint64_t> item_channels_;
+    std::vector<std::uint64_t> item_accessors_;
+    int all_frames_accessor_ = -1;
+    int ends_accessor_ = -1;
     GlbCompactionStats stats_;
 };
 

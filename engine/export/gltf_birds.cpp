@@ -22,6 +22,7 @@
 #include "birds/bird_meshes.hpp"
 #include "export/compact_keys.hpp"
 #include "export/gltf_common.hpp"
+#include "export/gltf_json_stream.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/export.hpp"
 
@@ -90,6 +91,14 @@ struct BirdGlbWriter::Impl {
     [[nodiscard]] Result<void> add_frame(std::span<const gpu::BirdPose> poses);
     [[nodiscard]] Result<void> build_and_write(AtomicFile& file);
     [[nodiscard]] Result<void> copy_channels(AtomicFile& file);
+
+    // The JSON's per-bird elements, made while it is written (build_and_write()).
+    struct Layout;
+    void root_node(std::vector<tinygltf::Node>& out) const;
+    void bird_nodes(const Layout& layout, std::size_t b, std::vector<tinygltf::Node>& out) const;
+    void bird_accessors(const Layout& layout, std::size_t b, std::vector<tinygltf::Accessor>& out) const;
+    void bird_samplers(const Layout& layout, std::size_t b, std::vector<tinygltf::AnimationSampler>& out) const;
+    void bird_channels(std::size_t b, std::vector<tinygltf::AnimationChannel>& out) const;
 };
 
 BirdGlbWriter::BirdGlbWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -107,9 +116,11 @@ Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds
     if (!(world.fps > 0.0f) || !std::isfinite(world.fps)) {
         return make_error(Error::Kind::InvalidInput, path + ": fps must be positive, got " + std::to_string(world.fps));
     }
-    // A GLB's length field is 32 bits.
+    // A GLB's length field is 32 bits. Refused here, before the simulation runs, when the
+    // keys are written as they are; compacted, their size is known only once they are
+    // reduced, and write_streamed_glb() refuses a buffer past 4 GiB then, before any JSON.
     const double poses = static_cast<double>(frames) * static_cast<double>(bird_count);
-    if (poses * static_cast<double>(kRecordBytes) > 4.0e9) {
+    if (!compaction.enabled && poses * static_cast<double>(kRecordBytes) > 4.0e9) {
         return make_error(Error::Kind::InvalidInput, path + ": " + std::to_string(std::uint64_t{frames} * bird_count) +
                                                          " poses exceed the 4 GiB limit of a .glb");
     }
@@ -193,6 +204,119 @@ Result<void> BirdGlbWriter::Impl::copy_channels(AtomicFile& file) {
     return copy_item_major(keys, file, count(), frames, fields, BirdGlbWriter::kTransposeBytes);
 }
 
+// Where bird b's elements go, as build_and_write() laid out the model: nodes 1 + 7b + part
+// (Body first), accessors first_accessor + 8b + k and the samplers and channels 8b + k of
+// animation 0 (k = 0: the Body's translation, 1 + part: the part's rotation), the keys in
+// the animation view at time_bytes + b x per_bird.
+struct BirdGlbWriter::Impl::Layout {
+    std::array<std::array<int, birds::kPartCount>, birds::kWingTypeCount> meshes{};
+    std::array<std::array<std::array<float, 3>, birds::kPartCount>, birds::kWingTypeCount> offsets{};
+    int animation_view = -1;
+    int time_accessor = -1;
+    int first_accessor = -1;
+    std::size_t time_bytes = 0;
+    std::size_t translation_bytes = 0;
+    std::size_t rotation_bytes = 0;
+    std::size_t per_bird = 0;
+    // Compacted: the channels' accessors and their key times come from `compact` (the
+    // buffer view `animation_view` holds its tail), bird b's from first_accessor +
+    // compact->accessors_before(b) on.
+    const CompactKeys* compact = nullptr;
+
+    static constexpr std::size_t kChannels = 1 + birds::kPartCount;
+    [[nodiscard]] static int body_node(std::size_t b) { return static_cast<int>(1 + b * birds::kPartCount); }
+};
+
+// The root, parent of every bird's Body.
+void BirdGlbWriter::Impl::root_node(std::vector<tinygltf::Node>& out) const {
+    tinygltf::Node& root = out.emplace_back();
+    root.name = "Birds";
+    root.children.reserve(count());
+    for (std::size_t b = 0; b < count(); ++b) root.children.push_back(Layout::body_node(b));
+}
+
+void BirdGlbWriter::Impl::bird_nodes(const Layout& layout, std::size_t b, std::vector<tinygltf::Node>& out) const {
+    const std::uint32_t type = world->birds[b].ids.y;
+    const std::string suffix = "_" + std::to_string(b);
+    const int body = Layout::body_node(b);
+    const float* rest = first.data() + b * kRecordFloats;
+    for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+        tinygltf::Node& node = out.emplace_back();
+        node.name = part == KW_PART_BODY ? std::string(birds::wing_type_spec(static_cast<birds::WingType>(type)).name) + suffix
+                                         : std::string(birds::kPartNames[part]) + suffix;
+        node.mesh = layout.meshes[type][part];
+        // The rest pose is frame 0, so a viewer that ignores the animation still shows
+        // the flock where it starts.
+        const float* q0 = rest + 3 + 4 * part;
+        node.rotation = {static_cast<double>(q0[0]), static_cast<double>(q0[1]), static_cast<double>(q0[2]),
+                         static_cast<double>(q0[3])};
+        if (part == KW_PART_BODY) {
+            node.translation = {static_cast<double>(rest[0]), static_cast<double>(rest[1]), static_cast<double>(rest[2])};
+        } else {
+            const auto& o = layout.offsets[type][part];
+            node.translation = {static_cast<double>(o[0]), static_cast<double>(o[1]), static_cast<double>(o[2])};
+        }
+        for (std::size_t child = 1; child < birds::kPartCount; ++child) {
+            if (birds::kPartParents[child] == static_cast<int>(part)) node.children.push_back(body + static_cast<int>(child));
+        }
+    }
+}
+
+// Bird b's keys: the Body's translations, then each part's rotations, over all frames;
+// compacted, each channel's kept keys and, where not shared, their times.
+void BirdGlbWriter::Impl::bird_accessors(const Layout& layout, std::size_t b, std::vector<tinygltf::Accessor>& out) const {
+    if (layout.compact) {
+        layout.compact->item_accessors(b, layout.animation_view, out);
+        return;
+    }
+    const auto add = [&](std::size_t offset, int type) {
+        tinygltf::Accessor& accessor = out.emplace_back();
+        accessor.bufferView = layout.animation_view;
+        accessor.byteOffset = offset;
+        accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+        accessor.count = frames;
+        accessor.type = type;
+    };
+    const std::size_t base = layout.time_bytes + b * layout.per_bird;
+    add(base, TINYGLTF_TYPE_VEC3);
+    for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+        add(base + layout.translation_bytes + part * layout.rotation_bytes, TINYGLTF_TYPE_VEC4);
+    }
+}
+
+void BirdGlbWriter::Impl::bird_samplers(const Layout& layout, std::size_t b,
+                                        std::vector<tinygltf::AnimationSampler>& out) const {
+    if (layout.compact) {
+        std::vector<std::pair<int, int>> io;
+        layout.compact->item_channels(b, layout.first_accessor + static_cast<int>(layout.compact->accessors_before(b)), io);
+        for (const auto& [input, output] : io) {
+            tinygltf::AnimationSampler& sampler = out.emplace_back();
+            sampler.input = input;
+            sampler.output = output;
+            sampler.interpolation = "LINEAR";
+        }
+        return;
+    }
+    for (std::size_t k = 0; k < Layout::kChannels; ++k) {
+        tinygltf::AnimationSampler& sampler = out.emplace_back();
+        sampler.input = layout.time_accessor;
+        sampler.output = layout.first_accessor + static_cast<int>(b * Layout::kChannels + k);
+        sampler.interpolation = "LINEAR";
+    }
+}
+
+void BirdGlbWriter::Impl::bird_channels(std::size_t b, std::vector<tinygltf::AnimationChannel>& out) const {
+    for (std::size_t k = 0; k < Layout::kChannels; ++k) {
+        tinygltf::AnimationChannel& channel = out.emplace_back();
+        channel.sampler = static_cast<int>(b * Layout::kChannels + k);
+        channel.target_node = Layout::body_node(b) + static_cast<int>(k == 0 ? 0 : k - 1);
+        channel.target_path = k == 0 ? "translation" : "rotation";
+    }
+}
+
+// The model holds what does not grow with the flock (meshes, materials, the key times);
+// the birds' nodes, accessors, channels and samplers are made one bird at a time while
+// the JSON is written (write_streamed_glb), and their keys copied from the key file.
 Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     const std::size_t bird_count = count();
     tinygltf::Model model;
@@ -201,115 +325,80 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     model.buffers.emplace_back();
     std::vector<unsigned char>& bytes = model.buffers[0].data;
     BufferWriter writer(bytes);
+    Layout layout;
 
     // Meshes first, only for the wing types that occur.
-    std::array<std::array<int, birds::kPartCount>, birds::kWingTypeCount> type_meshes{};
     std::array<bool, birds::kWingTypeCount> used{};
     for (std::size_t b = 0; b < bird_count; ++b) used[world->birds[b].ids.y] = true;
-    std::array<std::array<std::array<float, 3>, birds::kPartCount>, birds::kWingTypeCount> offsets{};
     for (std::size_t t = 0; t < birds::kWingTypeCount; ++t) {
         if (!used[t]) continue;
-        type_meshes[t] = add_wing_type_meshes(model, writer, static_cast<birds::WingType>(t));
-        offsets[t] = birds::part_offsets(static_cast<birds::WingType>(t));
+        layout.meshes[t] = add_wing_type_meshes(model, writer, static_cast<birds::WingType>(t));
+        layout.offsets[t] = birds::part_offsets(static_cast<birds::WingType>(t));
     }
 
     // Animation data: the shared key times (in memory), then per bird its Body
     // translation and the rotations of its parts, each channel contiguous over the frames
     // (the tail, copied from the key file). Compacted (GlbCompaction), the tail is
     // CompactKeys' instead, key times included, in one buffer view after the meshes.
-    const std::size_t time_bytes = frames * sizeof(float);
-    const std::size_t translation_bytes = frames * 3 * sizeof(float);
-    const std::size_t rotation_bytes = frames * 4 * sizeof(float);
-    const std::size_t per_bird = translation_bytes + birds::kPartCount * rotation_bytes;
+    layout.time_bytes = frames * sizeof(float);
+    layout.translation_bytes = frames * 3 * sizeof(float);
+    layout.rotation_bytes = frames * 4 * sizeof(float);
+    layout.per_bird = layout.translation_bytes + birds::kPartCount * layout.rotation_bytes;
     const float fps = world->fps;
     std::optional<CompactKeys> compact;
-    int animation_view = -1;
-    int time_accessor = -1;
     if (compaction.enabled) {
         std::vector<float> times(frames);
         for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / fps;
-        std::array<ChannelKind, 1 + birds::kPartCount> fields{};
+        std::array<ChannelKind, Layout::kChannels> fields{};
         fields.fill(ChannelKind::Rotation);
         fields[0] = ChannelKind::Translation;
         auto built = CompactKeys::build(keys, path, bird_count, fields, times, compaction, BirdGlbWriter::kTransposeBytes);
         if (!built) return built.error();
         compact.emplace(std::move(built).value());
         stats = compact->stats();
-        animation_view = add_buffer_view(model, bytes.size(), compact->bytes(), 0);
-    } else {
-        const std::size_t animation_start = writer.allocate(time_bytes);
-        animation_view = add_buffer_view(model, animation_start, time_bytes + bird_count * per_bird, 0);
+        layout.compact = &*compact;
+        layout.animation_view = add_buffer_view(model, bytes.size(), compact->bytes(), 0);
+        compact->add_shared_times(model, layout.animation_view);
+        layout.first_accessor = static_cast<int>(model.accessors.size());
+    }
+    const std::size_t animation_start = compact ? 0 : writer.allocate(layout.time_bytes);
+    if (!compact) {
+        layout.animation_view =
+            add_buffer_view(model, animation_start, layout.time_bytes + bird_count * layout.per_bird, 0);
         for (std::uint32_t f = 0; f < frames; ++f) {
             const float time = static_cast<float>(f) / fps;
             std::memcpy(bytes.data() + animation_start + f * sizeof(float), &time, sizeof(float));
         }
-        time_accessor = add_accessor(model, animation_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_SCALAR);
-        model.accessors[time_accessor].minValues = {0.0};
-        model.accessors[time_accessor].maxValues = {static_cast<double>(static_cast<float>(frames - 1) / fps)};
+        layout.time_accessor =
+            add_accessor(model, layout.animation_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_SCALAR);
+        model.accessors[layout.time_accessor].minValues = {0.0};
+        model.accessors[layout.time_accessor].maxValues = {static_cast<double>(static_cast<float>(frames - 1) / fps)};
+        layout.first_accessor = static_cast<int>(model.accessors.size());
     }
 
-    // Nodes: the root, then 7 per bird (Body first, so bird b's part k is 1 + 7b + k).
-    model.nodes.reserve(1 + bird_count * birds::kPartCount);
-    tinygltf::Node root;
-    root.name = "Birds";
-    root.children.reserve(bird_count);
-    model.nodes.push_back(std::move(root));
-    tinygltf::Animation animation;
-    animation.name = "flight";
-    animation.channels.reserve(bird_count * (birds::kPartCount + 1));
-    animation.samplers.reserve(bird_count * (birds::kPartCount + 1));
-    model.accessors.reserve(model.accessors.size() + bird_count * (birds::kPartCount + 1));
-
-    for (std::size_t b = 0; b < bird_count; ++b) {
-        const std::uint32_t type = world->birds[b].ids.y;
-        const std::string suffix = "_" + std::to_string(b);
-        const int body_node = static_cast<int>(model.nodes.size());
-        const float* rest = first.data() + b * kRecordFloats;
-        model.nodes[0].children.push_back(body_node);
-        for (std::size_t part = 0; part < birds::kPartCount; ++part) {
-            tinygltf::Node node;
-            node.name = part == KW_PART_BODY ? std::string(birds::wing_type_spec(static_cast<birds::WingType>(type)).name) + suffix
-                                             : std::string(birds::kPartNames[part]) + suffix;
-            node.mesh = type_meshes[type][part];
-            // The rest pose is frame 0, so a viewer that ignores the animation still
-            // shows the flock where it starts.
-            const float* q0 = rest + 3 + 4 * part;
-            node.rotation = {static_cast<double>(q0[0]), static_cast<double>(q0[1]), static_cast<double>(q0[2]),
-                             static_cast<double>(q0[3])};
-            if (part == KW_PART_BODY) {
-                node.translation = {static_cast<double>(rest[0]), static_cast<double>(rest[1]), static_cast<double>(rest[2])};
-            } else {
-                const auto& o = offsets[type][part];
-                node.translation = {static_cast<double>(o[0]), static_cast<double>(o[1]), static_cast<double>(o[2])};
-            }
-            model.nodes.push_back(std::move(node));
+    StreamedElements streamed;
+    // Node 0 is the root, then each bird's 7 nodes.
+    streamed.nodes.groups = 1 + bird_count;
+    streamed.nodes.fill = [&](std::size_t group, std::vector<tinygltf::Node>& out) {
+        if (group == 0) {
+            root_node(out);
+        } else {
+            bird_nodes(layout, group - 1, out);
         }
-        for (std::size_t part = 1; part < birds::kPartCount; ++part) {
-            const int parent = birds::kPartParents[part];
-            model.nodes[body_node + parent].children.push_back(body_node + static_cast<int>(part));
-        }
-
-        if (compact) {
-            const auto translation = compact->add_next_channel(model, animation_view);
-            add_linear_channel(animation, translation.first, translation.second, body_node, "translation");
-            for (std::size_t part = 0; part < birds::kPartCount; ++part) {
-                const auto rotation = compact->add_next_channel(model, animation_view);
-                add_linear_channel(animation, rotation.first, rotation.second, body_node + static_cast<int>(part), "rotation");
-            }
-            continue;
-        }
-        const std::size_t base = time_bytes + b * per_bird;
-        const int translation = add_accessor(model, animation_view, base, TINYGLTF_COMPONENT_TYPE_FLOAT, frames,
-                                             TINYGLTF_TYPE_VEC3);
-        add_linear_channel(animation, time_accessor, translation, body_node, "translation");
-        for (std::size_t part = 0; part < birds::kPartCount; ++part) {
-            const int rotation = add_accessor(model, animation_view, base + translation_bytes + part * rotation_bytes,
-                                              TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_VEC4);
-            add_linear_channel(animation, time_accessor, rotation, body_node + static_cast<int>(part), "rotation");
-        }
-    }
+    };
+    streamed.accessors.groups = bird_count;
+    streamed.accessors.fill = [&](std::size_t b, std::vector<tinygltf::Accessor>& out) { bird_accessors(layout, b, out); };
     // An animation without channels is invalid glTF: a world without birds gets none.
-    if (!animation.channels.empty()) model.animations.push_back(std::move(animation));
+    if (bird_count > 0) {
+        tinygltf::Animation& animation = model.animations.emplace_back();
+        animation.name = "flight";
+        streamed.channels.groups = bird_count;
+        streamed.channels.fill = [&](std::size_t b, std::vector<tinygltf::AnimationChannel>& out) { bird_channels(b, out); };
+        streamed.samplers.groups = bird_count;
+        streamed.samplers.fill = [&](std::size_t b, std::vector<tinygltf::AnimationSampler>& out) {
+            bird_samplers(layout, b, out);
+        };
+    }
 
     tinygltf::Scene scene;
     scene.name = "flock";
@@ -317,8 +406,9 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
 
-    if (compact) return write_glb_with_tail(file, model, compact->bytes(), [&] { return compact->write(file); });
-    return write_glb_with_tail(file, model, std::uint64_t{bird_count} * per_bird, [&] { return copy_channels(file); });
+    if (compact) return write_streamed_glb(file, model, streamed, compact->bytes(), [&] { return compact->write(file); });
+    return write_streamed_glb(file, model, streamed, std::uint64_t{bird_count} * layout.per_bird,
+                              [&] { return copy_channels(file); });
 }
 
 Result<void> BirdGlbWriter::finish() {
@@ -327,6 +417,10 @@ Result<void> BirdGlbWriter::finish() {
         return make_error(Error::Kind::InvalidInput, w.path + ": " + std::to_string(w.added) + " of " +
                                                          std::to_string(w.frames) + " frames added");
     }
+    // Only frame 0 (the rest pose) is read from here on: the last frames' rows go before
+    // the copy buffers come (47 MB for 100 000 birds).
+    std::vector<float>().swap(w.previous);
+    std::vector<float>().swap(w.row);
     return write_file_atomically(w.path, [&](AtomicFile& file) { return w.build_and_write(file); });
 }
 

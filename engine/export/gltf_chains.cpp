@@ -162,10 +162,12 @@ Result<ChainsGlbWriter> ChainsGlbWriter::create(const std::string& path, const R
     impl->build_nodes();
     // Refused here rather than after the whole simulation has run: a GLB's length field
     // is 32 bits. The JSON is not counted yet; write_glb_with_tail checks the exact total.
+    // Compacted, the keys' size is known only once they are reduced: write_glb_with_tail
+    // refuses then, before writing.
     const std::uint64_t bytes = impl->model.buffers[0].data.size() +
                                 impl->track_nodes.size() * (std::uint64_t{frames} * kRecordBytes) +
                                 std::uint64_t{frames} * sizeof(float);
-    if (bytes > 0xFFFFFFFFull) {
+    if (!compaction.enabled && bytes > 0xFFFFFFFFull) {
         return make_error(Error::Kind::InvalidInput, path + ": " + std::to_string(impl->track_nodes.size()) + " nodes x " +
                                                          std::to_string(frames) + " frames need " + std::to_string(bytes) +
                                                          " bytes, past the 4 GiB limit of a .glb; bake fewer frames");

@@ -102,4 +102,6 @@ Result<std::vector<BakeOutput>> bake(Simulation& sim, std::span<BakeSink* const>
     return bake(source, sinks, options);
 }
 
+std::unique_ptr<BakeSource> make_simulation_source(Simulation& sim) { return std::make_unique<SimulationSource>(sim); }
+
 }  // namespace kodawari

@@ -276,6 +276,20 @@ TEST(CompactExport, BirdsWithinBoundsWhenReimported) {
     EXPECT_EQ(dir.entries().size(), 2u);
 }
 
+// The 4 GiB limit of a .glb: uncompacted, keys past it are refused before the simulation
+// runs; compacted, their size is known only once reduced, so create() takes them (and
+// finish() refuses a BIN chunk past 4 GiB before writing any JSON).
+TEST(CompactExport, TheLimitIsTheCompactedSize) {
+    const birds::BirdWorld world = make_world();
+    // 124 bytes per bird and frame uncompacted: just past 4e9 bytes.
+    const auto frames = static_cast<std::uint32_t>(4.0e9 / (124.0 * kBirds)) + 1;
+    TempDir dir;
+    const auto refused = BirdGlbWriter::create(dir.file("full.glb"), world, frames);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_NE(refused.error().message.find("4 GiB"), std::string::npos) << refused.error().message;
+    EXPECT_TRUE(BirdGlbWriter::create(dir.file("compact.glb"), world, frames, GlbCompaction{true, 0.001f, 0.001f, 0.001f}).ok());
+}
+
 // Compaction off is the uncompacted writer, byte for byte (export_identity pins those
 // bytes for the shipped scenes); bad bounds are refused, naming the file.
 TEST(CompactExport, OffIsTheUncompactedFileAndBadBoundsAreRefused) {

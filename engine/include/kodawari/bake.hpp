@@ -115,6 +115,10 @@ public:
 [[nodiscard]] KODAWARI_API Result<std::vector<BakeOutput>> bake(BakeSource& source, std::span<BakeSink* const> sinks,
                                                                 const BakeOptions& options = {});
 
+/// `sim`'s frames as a source (what bake(Simulation&, ...) uses): each next() steps it.
+/// `sim` must outlive the source.
+[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSource> make_simulation_source(Simulation& sim);
+
 /// Runs `sim` (not stepped yet) over its frame_count() frames and hands each to every
 /// sink, then finishes the sinks in order, in chunks of bake_chunk_frames(). Errors: the
 /// simulation's and the sinks' (the first one stops the bake).

@@ -76,8 +76,10 @@ struct GlbCompactionStats {
 /// (removed from the directory as soon as it is opened, so nothing is left behind);
 /// finish() copies them into the `.glb`'s channels, channel after channel, through two
 /// buffers of kTransposeBytes (more only when one bird's keys over all frames are more).
-/// Besides that, it holds 128 bytes per bird (the first and the previous frame's keys),
-/// one frame's keys while adding, and the glTF model (JSON) while finishing.
+/// Besides that, it holds 128 bytes per bird (the first and the previous frame's keys)
+/// and one frame's keys while adding; while finishing, the glTF model without the birds:
+/// their nodes, accessors and animation channels are made one bird at a time while the
+/// JSON is written to another temporary file beside `path`.
 class KODAWARI_API BirdGlbWriter {
 public:
     /// The size of each of the two buffers that reorder the keys from frame-major to
@@ -86,8 +88,10 @@ public:
 
     /// Prepares `path` for `frames` frames of `world` (which must outlive the writer),
     /// its keys compacted as `compaction` says (default: not). Errors (naming `path`): no
-    /// frames, fps not positive, more than a .glb can hold uncompacted, a bird of unknown
-    /// wing type, bad compaction bounds (InvalidInput), the temporary file (Io).
+    /// frames, fps not positive, more keys than a .glb can hold when not compacting (a
+    /// compacted file's size is known only at finish(), which refuses one past 4 GiB
+    /// before writing it), a bird of unknown wing type, bad compaction bounds
+    /// (InvalidInput), the temporary file (Io).
     [[nodiscard]] static Result<BirdGlbWriter> create(const std::string& path, const birds::BirdWorld& world,
                                                       std::uint32_t frames, const GlbCompaction& compaction = {});
 

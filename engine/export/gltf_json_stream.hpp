@@ -1,0 +1,54 @@
+#pragma once
+// A .glb whose JSON is written element by element: the big arrays of a large export
+// (a node, accessors, channels and samplers per bird) come from generators and are
+// serialized one element at a time, so neither the model's nlohmann DOM nor its JSON
+// text is ever held whole. The bytes are the ones tinygltf writes for the same model
+// with the generated elements inside it (tests/export/test_json_stream.cpp).
+
+#include <cstddef>
+#include <cstdint>
+#include <functional>
+#include <string>
+#include <vector>
+
+#include <tiny_gltf.h>  // a system header: its warnings are not ours
+
+#include "core/internal_api.hpp"
+#include "kodawari/atomic_file.hpp"
+#include "kodawari/result.hpp"
+
+namespace kodawari::gltf {
+
+/// Elements appended to one of the model's arrays: `groups` calls of `fill(group, out)`,
+/// in order, each appending any number of elements to `out` (which the writer empties
+/// before each call). A group is whatever the caller counts in (a bird's 8 accessors), so
+/// that a group's size may differ from one to the next.
+template <typename T>
+struct ElementSource {
+    std::size_t groups = 0;
+    std::function<void(std::size_t group, std::vector<T>& out)> fill;
+};
+
+/// What is appended to the model's arrays while they are written.
+struct StreamedElements {
+    ElementSource<tinygltf::Node> nodes;          // after model.nodes
+    ElementSource<tinygltf::Accessor> accessors;  // after model.accessors
+    // After model.animations[0]'s channels and samplers; the model must then have an
+    // animation (an animation without channels is left out by tinygltf, so its name,
+    // extras and place come from the model even when every channel is streamed).
+    ElementSource<tinygltf::AnimationChannel> channels;
+    ElementSource<tinygltf::AnimationSampler> samplers;
+};
+
+/// Writes into `file` (not committed) the .glb that tinygltf (write_glb(), binary, compact
+/// JSON) writes for `model` with `streamed`'s elements appended to its arrays and
+/// `tail_bytes` more bytes at the end of buffer 0, which `write_tail` appends to `file`.
+/// The JSON waits in a temporary file beside `file` (its length comes first in the .glb).
+/// Buffer 0 must be embedded (no uri) when there is one; without buffers the tail must be
+/// empty. tinygltf and nlohmann may throw; callers catch (write_file_atomically()).
+[[nodiscard]] KODAWARI_INTERNAL Result<void> write_streamed_glb(AtomicFile& file, tinygltf::Model& model,
+                                                                const StreamedElements& streamed,
+                                                                std::uint64_t tail_bytes,
+                                                                const std::function<Result<void>()>& write_tail);
+
+}  // namespace kodawari::gltf

@@ -1,0 +1,170 @@
+// A bake over the ranks of a job (kodawari/distributed.hpp). Every step is collective and
+// followed by agree(), so that a failure anywhere ends every rank at the same point
+// instead of leaving the others waiting in a gather.
+#include "kodawari/distributed.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <optional>
+
+#include "kodawari/gpu_info.hpp"
+#include "simulation/frame_payload.hpp"
+
+namespace kodawari {
+
+namespace {
+
+// The ranks on one machine take different devices when it has several of the kind the
+// engine would pick (never a CPU device beside a GPU).
+void choose_device_by_local_rank(SimulationOptions& options, int local_rank) {
+    if (!options.options.device.empty() || options.options.context) return;
+    if (options.backend && *options.backend != BackendKind::Vulkan) return;
+    auto gpus = list_gpus("");
+    if (!gpus || gpus.value().chosen < 0) return;
+    const GpuInventory& inventory = gpus.value();
+    const std::string& type = inventory.devices[static_cast<std::size_t>(inventory.chosen)].type;
+    std::vector<std::uint32_t> candidates;
+    for (const GpuDeviceInfo& d : inventory.devices) {
+        if (d.rejected.empty() && d.type == type) candidates.push_back(d.index);
+    }
+    if (candidates.size() < 2) return;
+    options.options.device = std::to_string(candidates[static_cast<std::size_t>(local_rank) % candidates.size()]);
+}
+
+// A rank's part: its counts, sent to rank 0 once.
+struct PartCounts {
+    std::uint32_t birds = 0, joints = 0, chains = 0;
+};
+
+std::vector<std::byte> bytes_of(const void* data, std::size_t size) {
+    std::vector<std::byte> out(size);
+    std::memcpy(out.data(), data, size);
+    return out;
+}
+
+}  // namespace
+
+Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::string& scene_path,
+                                                 const DistributedBakeOptions& options) {
+    const bool root = comm.rank() == 0;
+    SimulationOptions sim_options = options.simulation;
+    sim_options.shard = {static_cast<std::uint32_t>(comm.rank()), static_cast<std::uint32_t>(comm.size())};
+    choose_device_by_local_rank(sim_options, comm.local_rank());
+    auto opened = Simulation::open(scene_path, sim_options);
+    KW_TRY(comm.agree(opened ? Result<void>{} : Result<void>{opened.error()}));
+    Simulation& sim = *opened.value();
+    if (options.opened) options.opened(sim);
+
+    // Rank 0: the whole scene's world (built, not simulated) and the sinks.
+    std::optional<SceneWorlds> worlds;
+    std::vector<std::unique_ptr<BakeSink>> sinks;
+    BakeNeeds needs;
+    Result<void> setup;
+    if (root) {
+        auto built = build_scene_worlds(sim.scene(), sim.frame_count());
+        if (built) {
+            worlds.emplace(std::move(built).value());
+            const BakeWorld world{&sim.scene(), &worlds->birds, worlds->rods ? &*worlds->rods : nullptr, sim.frame_count(),
+                                  std::string(backend_name(sim.backend()))};
+            sinks = options.make_sinks(world);
+            for (const auto& sink : sinks) {
+                const BakeNeeds n = sink->needs();
+                needs.bird_poses |= n.bird_poses;
+                needs.bird_diag |= n.bird_diag;
+                needs.chains |= n.chains;
+                needs.chain_shapes |= n.chain_shapes;
+            }
+            for (const auto& sink : sinks) {
+                setup = sink->begin(world);
+                if (!setup) break;
+            }
+        } else {
+            setup = built.error();
+        }
+    }
+    KW_TRY(comm.agree(setup));
+
+    // What every rank sends: rank 0's needs, to all; every rank's counts, to rank 0.
+    std::vector<std::byte> wanted = bytes_of(&needs, sizeof needs);
+    comm.broadcast(wanted);
+    std::memcpy(&needs, wanted.data(), sizeof needs);
+    const PartCounts mine{static_cast<std::uint32_t>(sim.bird_world().birds.size()),
+                          sim.rod_scene() ? sim.rod_scene()->world.joint_count : 0,
+                          sim.rod_scene() ? static_cast<std::uint32_t>(sim.rod_scene()->world.chains.size()) : 0};
+    std::vector<std::byte> all;
+    std::vector<std::size_t> sizes;
+    comm.gather(std::span(reinterpret_cast<const std::byte*>(&mine), sizeof mine), all, sizes);
+    detail::PayloadLayout content = detail::payload_content(needs);
+    content.birds = mine.birds;
+    content.joints = mine.joints;
+    content.chains = mine.chains;
+    std::optional<detail::FrameAssembler> assembler;
+    std::vector<std::string> names;
+    if (root) {
+        std::vector<detail::PayloadLayout> layouts;
+        for (int r = 0; r < comm.size(); ++r) {
+            PartCounts counts;
+            std::memcpy(&counts, all.data() + static_cast<std::size_t>(r) * sizeof counts, sizeof counts);
+            detail::PayloadLayout layout = content;
+            layout.birds = counts.birds;
+            layout.joints = counts.joints;
+            layout.chains = counts.chains;
+            layouts.push_back(layout);
+            names.push_back("rank " + std::to_string(r));
+        }
+        assembler.emplace(std::move(layouts));
+    }
+
+    auto source = make_simulation_source(sim);
+    const std::uint32_t frames = sim.frame_count();
+    const std::uint32_t chunk = source->chunk_frames();  // the whole scene's, the same on every rank
+    std::vector<std::byte> payload;
+    // Rank 0 writes chunk k while the others simulate chunk k + 1: its status for chunk k
+    // joins the agreement on chunk k + 1's steps (and the last one is agreed after the
+    // loop), so that no rank waits for the writer before stepping on.
+    Result<void> consumed;
+    for (std::uint32_t done = 0; done < frames;) {
+        const std::uint32_t n = std::min(chunk, frames - done);
+        auto stepped = source->next(done, n, needs);
+        KW_TRY(comm.agree(!consumed ? consumed : stepped ? Result<void>{} : Result<void>{stepped.error()}));
+        detail::encode_frames(stepped.value(), content, payload);
+        comm.gather(payload, all, sizes);
+        if (root) {
+            std::vector<std::span<const std::byte>> parts;
+            std::size_t at = 0;
+            for (std::size_t size : sizes) {
+                parts.emplace_back(all.data() + at, size);
+                at += size;
+            }
+            auto whole = assembler->assemble(done, n, parts, names);
+            if (whole) {
+                if (!worlds->rods) whole.value().chains = nullptr;
+                for (const auto& sink : sinks) {
+                    consumed = sink->consume(whole.value());
+                    if (!consumed) break;
+                }
+            } else {
+                consumed = whole.error();
+            }
+        }
+        done += n;
+        if (root && options.bake.progress) options.bake.progress(done, frames);
+    }
+    KW_TRY(comm.agree(consumed));
+    KW_TRY(comm.agree(options.bake.simulated ? options.bake.simulated() : Result<void>{}));
+
+    std::vector<BakeOutput> written;
+    Result<void> finished;
+    for (const auto& sink : sinks) {
+        auto files = sink->finish();
+        if (!files) {
+            finished = files.error();
+            break;
+        }
+        for (BakeOutput& file : files.value()) written.push_back(std::move(file));
+    }
+    KW_TRY(comm.agree(finished));
+    return written;
+}
+
+}  // namespace kodawari
