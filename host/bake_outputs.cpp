@@ -72,6 +72,10 @@ void print_compaction(const GlbCompactionStats& s) {
                 s.bytes_after > 0 ? static_cast<double>(s.bytes_before) / static_cast<double>(s.bytes_after) : 1.0,
                 1e3 * s.position_m, 1e3 * s.rotation_rad);
     if (s.scale_rel > 0.0) std::printf(", scale %.4g%%", 100.0 * s.scale_rel);
+    if (s.byte_rotations > 0) {
+        std::printf("; %llu of %llu rotation channels at 8 bits", static_cast<unsigned long long>(s.byte_rotations),
+                    static_cast<unsigned long long>(s.rotations));
+    }
     std::printf("\n");
 }
 

@@ -19,8 +19,9 @@ commands:
       simulate a scene (default )" "scenes/flock.json" R"() and bake it to glTF (default out/<scene>.glb);
       --compact drops the animation keys that linear interpolation reproduces within METRES (default
       0.001) for translations and RADIANS (default METRES, i.e. 0.001) for rotations and, relative, for
-      scales, writes rotations as 16-bit integers, and prints the keys kept, the size ratio and the
-      largest error (README "Compact files");
+      scales, writes rotations as 16-bit integers (8-bit where RADIANS absorbs their rounding, up
+      to 0.0158 rad), and prints the keys kept, the size ratio and the largest error (README
+      "Compact files");
       --shard I/N simulates only shard I of N (birds and characters [I*n/N, (I+1)*n/N)) and writes
       a part file (default out/<scene>.shard-I-of-N.kwpart) for merge, every key kept (give
       --compact to merge); under mpirun, --mpi runs one shard per rank and rank 0 writes

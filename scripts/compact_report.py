@@ -3,8 +3,8 @@
 compaction did (docs/compact.md): file sizes and their ratio, keys kept per channel kind
 (and per node-name group with --groups), and the largest error of every kind, measured by
 evaluating the compact file's LINEAR samplers (lerp; slerp along the short arc on the
-rotations decoded from normalized shorts as max(c / 32767, -1), glTF 2.0 Appendix C) at
-every key time of the uncompacted file. Pure Python (no numpy), so it runs anywhere.
+rotations decoded from normalized shorts as max(c / 32767, -1) or bytes as max(c / 127,
+-1), glTF 2.0 §3.11 and Appendix C) at every key time of the uncompacted file. Pure Python (no numpy), so it runs anywhere.
 
     python3 scripts/compact_report.py FULL.glb COMPACT.glb [--groups]
 """
@@ -42,6 +42,8 @@ def accessor(gltf, binary, index):
     values = struct.unpack_from(f"<{a['count'] * n}{code}", binary, start)
     if a.get("normalized") and code == "h":
         values = [max(v / 32767.0, -1.0) for v in values]
+    elif a.get("normalized") and code == "b":
+        values = [max(v / 127.0, -1.0) for v in values]
     return [tuple(values[i * n:(i + 1) * n]) for i in range(a["count"])]
 
 

@@ -12,10 +12,12 @@
 // every frame), the first and the last time (shared by the channels that keep only
 // those), then channel after channel its own key times (unless they equal those of an
 // earlier channel of the same item, or one of the shared ones) and its values: floats
-// for translations and scales, normalized shorts for rotations (componentType 5122,
-// normalized: glTF 2.0 §3.11, "Animations", allows them for rotation outputs). Every
-// block is a multiple of 4 bytes, so every accessor is aligned to its component size
-// (§3.6.2.4).
+// for translations and scales, normalized shorts (componentType 5122) or bytes (5120)
+// for rotations (glTF 2.0 §3.11, "Animations", allows both for rotation outputs). A
+// rotation channel is stored in bytes when the bound absorbs their rounding (every key's
+// within it; always so from worst_rounding(Byte), 0.0158 rad, up) and that is smaller
+// than shorts: bytes halve the values but keep more keys. Every block is a multiple of
+// 4 bytes, so every accessor is aligned to its component size (§3.6.2.4).
 //
 // Two ways to get the accessors: add_next_channel() adds them to a tinygltf model
 // (the chains' and the rigged writers); item_accessors() and item_channels() make an
@@ -84,6 +86,7 @@ private:
         std::uint64_t values = 0;  // byte offset of its values
         std::uint32_t keys = 0;
         ChannelKind kind = ChannelKind::Translation;
+        bool bytes = false;  // a rotation in normalized bytes, not shorts
     };
     [[nodiscard]] tinygltf::Accessor time_accessor(int view, const Channel& c) const;
     [[nodiscard]] static tinygltf::Accessor value_accessor(int view, const Channel& c);

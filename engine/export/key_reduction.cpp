@@ -68,6 +68,10 @@ Reduction reduce(std::uint32_t frames, double bound, const SpanError& span_error
     return r;
 }
 
+// The least dot product of two consecutive kept rotations (unit quaternions): 1e-4 is
+// 0.0002 rad short of a half turn, far above a float player's rounding of the dot.
+constexpr double kMinKeyDot = 1e-4;
+
 double dot4(const double a[4], const double b[4]) { return a[0] * b[0] + a[1] * b[1] + a[2] * b[2] + a[3] * b[3]; }
 
 void normalize4(double q[4]) {
@@ -107,14 +111,16 @@ Reduction reduce_vec3(std::span<const float> times, std::span<const float> value
     return reduce(frames, bound, span_error, [](std::uint32_t) { return 0.0; });
 }
 
-std::int16_t quantize_unit(float value) {
+double worst_rounding(RotationBits bits) { return 2.0 * std::asin(1.0 / unit_scale(bits)); }
+
+std::int16_t quantize_unit(float value, RotationBits bits) {
     const double v = std::clamp(static_cast<double>(value), -1.0, 1.0);
-    return static_cast<std::int16_t>(std::lround(v * 32767.0));
+    return static_cast<std::int16_t>(std::lround(v * unit_scale(bits)));
 }
 
-void quantize_rotations(std::span<const float> xyzw, std::span<std::int16_t> out) {
+void quantize_rotations(std::span<const float> xyzw, std::span<std::int16_t> out, RotationBits bits) {
     assert(out.size() == xyzw.size());
-    for (std::size_t i = 0; i < xyzw.size(); ++i) out[i] = quantize_unit(xyzw[i]);
+    for (std::size_t i = 0; i < xyzw.size(); ++i) out[i] = quantize_unit(xyzw[i], bits);
 }
 
 void slerp(const double a[4], const double b[4], double t, double out[4]) {
@@ -151,14 +157,14 @@ double rotation_angle(const double a[4], const double b[4]) {
     return 4.0 * std::atan2(std::sqrt(minus), std::sqrt(plus));
 }
 
-double rounding_error(std::span<const float> xyzw, std::span<const std::int16_t> quantized) {
+double rounding_error(std::span<const float> xyzw, std::span<const std::int16_t> quantized, RotationBits bits) {
     assert(quantized.size() == xyzw.size());
     double worst = 0.0;
     for (std::size_t k = 0; k + 4 <= xyzw.size(); k += 4) {
         double q[4];
         double o[4];
         for (std::size_t c = 0; c < 4; ++c) {
-            q[c] = dequantize_unit(quantized[k + c]);
+            q[c] = dequantize_unit(quantized[k + c], bits);
             o[c] = xyzw[k + c];
         }
         worst = std::max(worst, rotation_angle(q, o));
@@ -167,11 +173,11 @@ double rounding_error(std::span<const float> xyzw, std::span<const std::int16_t>
 }
 
 Reduction reduce_rotations(std::span<const float> times, std::span<const float> xyzw, std::span<const std::int16_t> quantized,
-                           double bound) {
+                           double bound, RotationBits bits) {
     const auto frames = static_cast<std::uint32_t>(times.size());
     assert(xyzw.size() == std::size_t{frames} * 4 && quantized.size() == xyzw.size());
     const auto decoded = [&](std::uint32_t k, double q[4]) {
-        for (std::size_t c = 0; c < 4; ++c) q[c] = dequantize_unit(quantized[k * 4 + c]);
+        for (std::size_t c = 0; c < 4; ++c) q[c] = dequantize_unit(quantized[k * 4 + c], bits);
         normalize4(q);
     };
     const auto original = [&](std::uint32_t k, double q[4]) {
@@ -189,7 +195,11 @@ Reduction reduce_rotations(std::span<const float> times, std::span<const float> 
         double qb[4];
         decoded(a, qa);
         decoded(b, qb);
-        if (dot4(qa, qb) < 0.0) return std::numeric_limits<double>::infinity();
+        // Not across hemispheres, nor at their border: keys a half turn apart (dot 0,
+        // which rounding to integers makes exact) leave the direction to each player's
+        // arithmetic (the spec's "negate when negative" meets a dot of -0 or 1e-17), so
+        // a span must be clearly within one hemisphere.
+        if (dot4(qa, qb) < kMinKeyDot) return std::numeric_limits<double>::infinity();
         double worst = 0.0;
         for (std::uint32_t i = a + 1; i < b; ++i) {
             double q[4];

@@ -55,34 +55,53 @@ struct Reduction {
 [[nodiscard]] KODAWARI_INTERNAL Reduction reduce_vec3(std::span<const float> times, std::span<const float> values,
                                                       double bound, VectorMetric metric);
 
-/// A glTF normalized signed short (§3.11, accessors with normalized true: f = max(c /
-/// 32767, -1)) nearest to `value` in [-1, 1].
-[[nodiscard]] KODAWARI_INTERNAL std::int16_t quantize_unit(float value);
-[[nodiscard]] inline double dequantize_unit(std::int16_t value) {
-    const double v = static_cast<double>(value) / 32767.0;
+/// How rotation components are stored: glTF 2.0 §3.11 ("Animations", the table of
+/// channel outputs) allows rotation outputs as floats or as normalized signed bytes
+/// (componentType 5120) and shorts (5122), decoded as §3.11 gives: f = max(c / 127, -1)
+/// and f = max(c / 32767, -1).
+enum class RotationBits : std::uint8_t { Short = 16, Byte = 8 };
+
+/// The largest code of a normalized signed component of `bits`: 32767 or 127.
+[[nodiscard]] constexpr int unit_scale(RotationBits bits) { return bits == RotationBits::Byte ? 127 : 32767; }
+
+/// The worst-case angle (radians) by which rounding a unit quaternion's components to
+/// `bits` turns the rotation: each of the four components off by at most half a step,
+/// 1 / (2 x scale), the error vector is at most 1 / scale long, so the quaternion turns by
+/// at most asin(1 / scale) and the rotation, twice that: 6.1e-5 rad for shorts, 0.01575
+/// rad (0.90 degrees) for bytes. (Normalizing the decoded quaternion does not turn it.)
+[[nodiscard]] KODAWARI_INTERNAL double worst_rounding(RotationBits bits);
+
+/// A glTF normalized signed component of `bits` (§3.11, accessors with normalized true:
+/// f = max(c / scale, -1)) nearest to `value` in [-1, 1], held in an int16 either way.
+[[nodiscard]] KODAWARI_INTERNAL std::int16_t quantize_unit(float value, RotationBits bits = RotationBits::Short);
+[[nodiscard]] inline double dequantize_unit(std::int16_t value, RotationBits bits = RotationBits::Short) {
+    const double v = static_cast<double>(value) / unit_scale(bits);
     return v < -1.0 ? -1.0 : v;
 }
 
-/// Rounds unit quaternions (x, y, z, w per frame) to normalized shorts, component by
-/// component. Rounding keeps each component's sign, so keys kept in one hemisphere stay
-/// there. The rounding turns a rotation by at most about 6.1e-5 rad (each of four
-/// components off by half of 1/32767).
-KODAWARI_INTERNAL void quantize_rotations(std::span<const float> xyzw, std::span<std::int16_t> out);
+/// Rounds unit quaternions (x, y, z, w per frame) to normalized components of `bits`,
+/// component by component. Rounding keeps each component's sign, so keys kept in one
+/// hemisphere stay there. The rounding turns a rotation by at most worst_rounding(bits).
+KODAWARI_INTERNAL void quantize_rotations(std::span<const float> xyzw, std::span<std::int16_t> out,
+                                          RotationBits bits = RotationBits::Short);
 
 /// Reduces a rotation channel: `xyzw` the original unit quaternions (4 floats per frame,
-/// consecutive ones in one hemisphere), `quantized` quantize_rotations() of them, as
-/// written. Between kept keys a player slerps the decoded shorts; the error is the angle
-/// between that (normalized) and the original rotation, kept keys' rounding included,
-/// so max_error is at least the rounding. Two consecutive kept keys are in one
-/// hemisphere (their dot product is not negative), so that players which slerp without
-/// taking the short way (not as the spec's Appendix C does) turn the same way.
-/// `bound` >= 0 radians; a bound below the rounding keeps every key rounding changes.
+/// consecutive ones in one hemisphere), `quantized` quantize_rotations() of them at
+/// `bits`, as written. Between kept keys a player slerps the decoded components; the
+/// error is the angle between that (normalized) and the original rotation, kept keys'
+/// rounding included, so max_error is at least the rounding. Two consecutive kept keys
+/// are in one hemisphere (their dot product is at least 1e-4, so never a half turn
+/// apart, where the short way is ambiguous), so that players which
+/// slerp without taking the short way (not as the spec's Appendix C does) turn the same
+/// way. `bound` >= 0 radians; a bound below the rounding keeps every key rounding changes.
 [[nodiscard]] KODAWARI_INTERNAL Reduction reduce_rotations(std::span<const float> times, std::span<const float> xyzw,
-                                                           std::span<const std::int16_t> quantized, double bound);
+                                                           std::span<const std::int16_t> quantized, double bound,
+                                                           RotationBits bits = RotationBits::Short);
 
-/// The largest angle (radians) by which rounding to shorts turned a key: the error of a
+/// The largest angle (radians) by which rounding to `bits` turned a key: the error of a
 /// rotation channel that keeps every key.
-[[nodiscard]] KODAWARI_INTERNAL double rounding_error(std::span<const float> xyzw, std::span<const std::int16_t> quantized);
+[[nodiscard]] KODAWARI_INTERNAL double rounding_error(std::span<const float> xyzw, std::span<const std::int16_t> quantized,
+                                                      RotationBits bits = RotationBits::Short);
 
 /// The spec's slerp (Appendix C: along the short arc) between unit quaternions a and b
 /// at t in [0, 1]; lerp where they are nearly equal.

@@ -1,10 +1,10 @@
 // Compact .glb files (GlbCompaction, docs/compact.md), checked by re-importing: the
 // uncompacted and the compacted file of the same simulation are loaded with tinygltf, and
 // every channel of the compacted one, interpolated here (lerp; glm's slerp in double on
-// the rotations decoded as max(c / 32767, -1)), is evaluated at every frame time of the
-// uncompacted one and compared with its key: within the bound (+1e-6 for float
-// rounding). Also: the file's accessors (shorts, shared key times), glTF-Validator, and
-// fewer keys and bytes.
+// the rotations decoded as max(c / 32767, -1) or, bytes, max(c / 127, -1)), is evaluated
+// at every frame time of the uncompacted one and compared with its key: within the bound
+// (+1e-6 for float rounding). Also: the file's accessors (shorts or bytes, shared key
+// times), glTF-Validator, and fewer keys and bytes.
 
 #include <gtest/gtest.h>
 
@@ -41,15 +41,22 @@ Track read_track(const tinygltf::Model& model, const tinygltf::AnimationSampler&
         for (const float v : read_floats(model, sampler.output)) track.values.push_back(v);
         return track;
     }
-    // Normalized shorts (glTF 2.0 §3.11: rotation outputs only).
-    EXPECT_EQ(out.componentType, TINYGLTF_COMPONENT_TYPE_SHORT);
+    // Normalized shorts or bytes (glTF 2.0 §3.11: rotation outputs only).
+    EXPECT_TRUE(out.componentType == TINYGLTF_COMPONENT_TYPE_SHORT || out.componentType == TINYGLTF_COMPONENT_TYPE_BYTE);
     EXPECT_TRUE(out.normalized);
     EXPECT_EQ(track.width, 4u);
     const tinygltf::BufferView& view = model.bufferViews.at(static_cast<std::size_t>(out.bufferView));
     const std::size_t offset = view.byteOffset + out.byteOffset;
+    const unsigned char* data = model.buffers[0].data.data() + offset;
+    if (out.componentType == TINYGLTF_COMPONENT_TYPE_BYTE) {
+        std::vector<std::int8_t> bytes(out.count * 4);
+        std::memcpy(bytes.data(), data, bytes.size());
+        for (const std::int8_t c : bytes) track.values.push_back(std::max(static_cast<double>(c) / 127.0, -1.0));
+        return track;
+    }
     EXPECT_EQ(offset % 2, 0u);
     std::vector<std::int16_t> shorts(out.count * 4);
-    std::memcpy(shorts.data(), model.buffers[0].data.data() + offset, shorts.size() * sizeof(std::int16_t));
+    std::memcpy(shorts.data(), data, shorts.size() * sizeof(std::int16_t));
     for (const std::int16_t c : shorts) track.values.push_back(std::max(static_cast<double>(c) / 32767.0, -1.0));
     return track;
 }
@@ -146,10 +153,13 @@ Measured compare(const std::string& full_path, const std::string& compact_path) 
     return m;
 }
 
-// The rotation outputs are shorts and every key-time accessor has min and max.
-void expect_compact_accessors(const std::string& path) {
+// The rotation outputs are normalized shorts or bytes, the others floats, and every
+// key-time accessor has min and max. Returns how many rotation outputs are bytes.
+std::size_t expect_compact_accessors(const std::string& path) {
     tinygltf::Model model;
-    ASSERT_TRUE(load_glb(path, model));
+    EXPECT_TRUE(load_glb(path, model));
+    if (model.animations.empty()) return 0;
+    std::size_t bytes = 0;
     for (const auto& sampler : model.animations.at(0).samplers) {
         const auto& input = model.accessors.at(static_cast<std::size_t>(sampler.input));
         EXPECT_EQ(input.minValues.size(), 1u);
@@ -157,8 +167,18 @@ void expect_compact_accessors(const std::string& path) {
     }
     for (const auto& channel : model.animations[0].channels) {
         const auto& out = model.accessors.at(static_cast<std::size_t>(model.animations[0].samplers.at(static_cast<std::size_t>(channel.sampler)).output));
-        EXPECT_EQ(out.componentType, channel.target_path == "rotation" ? TINYGLTF_COMPONENT_TYPE_SHORT : TINYGLTF_COMPONENT_TYPE_FLOAT);
+        if (channel.target_path != "rotation") {
+            EXPECT_EQ(out.componentType, TINYGLTF_COMPONENT_TYPE_FLOAT);
+            continue;
+        }
+        EXPECT_TRUE(out.normalized);
+        if (out.componentType == TINYGLTF_COMPONENT_TYPE_BYTE) {
+            ++bytes;
+        } else {
+            EXPECT_EQ(out.componentType, TINYGLTF_COMPONENT_TYPE_SHORT);
+        }
     }
+    return bytes;
 }
 
 void expect_valid(const std::string& path) {
@@ -203,7 +223,12 @@ TEST(CompactExport, ChainsWithinBoundsWhenReimported) {
         // a large part of these small files, so the keys' bytes are what is compared.
         EXPECT_LT(stats.bytes_after * 2, stats.bytes_before);
         EXPECT_LT(fs::file_size(path), fs::file_size(full));
-        expect_compact_accessors(path);
+        const std::size_t bytes = expect_compact_accessors(path);
+        EXPECT_EQ(bytes, stats.byte_rotations);
+        // 20 mrad absorbs 8-bit rounding (at most 15.7 mrad): most rotations take bytes.
+        if (bounds.rotation_rad >= 0.02f) {
+            EXPECT_GT(bytes * 2, stats.rotations);
+        }
         expect_valid(path);
         EXPECT_EQ(dir.entries().size(), 3u);  // crowd.json, full.glb, compact.glb: no spill file left
     }
@@ -241,7 +266,7 @@ TEST(CompactExport, RiggedWithinBoundsWhenReimported) {
     EXPECT_EQ(stats.kept, m.kept);
     EXPECT_LT(m.kept, m.keys / 2);
     EXPECT_LT(stats.bytes_after * 3, stats.bytes_before);
-    expect_compact_accessors(path);
+    EXPECT_EQ(expect_compact_accessors(path), stats.byte_rotations);
     expect_valid(path);
 }
 
@@ -255,25 +280,33 @@ TEST(CompactExport, BirdsWithinBoundsWhenReimported) {
     const std::string full = dir.file("full.glb");
     const std::string path = dir.file("compact.glb");
     ASSERT_TRUE(write_birds_glb(full, world, poses, frames).ok());
-    const GlbCompaction bounds{true, 0.001f, 0.001f, 0.001f};
-    auto writer = BirdGlbWriter::create(path, world, frames, bounds);
-    ASSERT_TRUE(writer.ok()) << writer.error().message;
-    ASSERT_TRUE(writer.value().add_frames(poses).ok());
-    ASSERT_TRUE(writer.value().finish().ok());
-    const GlbCompactionStats& stats = writer.value().compaction_stats();
-    const Measured m = compare(full, path);
-    EXPECT_LE(m.position_m, static_cast<double>(bounds.position_m) + kFloat);
-    EXPECT_LE(m.rotation_rad, static_cast<double>(bounds.rotation_rad) + kFloat);
-    EXPECT_NEAR(stats.position_m, m.position_m, kFloat);
-    EXPECT_NEAR(stats.rotation_rad, m.rotation_rad, kFloat);
-    EXPECT_EQ(stats.keys, m.keys);
-    EXPECT_EQ(stats.kept, m.kept);
-    EXPECT_EQ(m.keys, std::size_t{kBirds} * 8 * frames);
-    EXPECT_LT(m.kept, m.keys / 4);
-    EXPECT_LT(fs::file_size(path) * 2, fs::file_size(full));
-    expect_compact_accessors(path);
-    expect_valid(path);
-    EXPECT_EQ(dir.entries().size(), 2u);
+    for (const GlbCompaction bounds : {GlbCompaction{true, 0.001f, 0.001f, 0.001f}, GlbCompaction{true, 0.005f, 0.02f, 0.02f}}) {
+        SCOPED_TRACE(std::to_string(bounds.position_m) + " m, " + std::to_string(bounds.rotation_rad) + " rad");
+        auto writer = BirdGlbWriter::create(path, world, frames, bounds);
+        ASSERT_TRUE(writer.ok()) << writer.error().message;
+        ASSERT_TRUE(writer.value().add_frames(poses).ok());
+        ASSERT_TRUE(writer.value().finish().ok());
+        const GlbCompactionStats& stats = writer.value().compaction_stats();
+        const Measured m = compare(full, path);
+        EXPECT_LE(m.position_m, static_cast<double>(bounds.position_m) + kFloat);
+        EXPECT_LE(m.rotation_rad, static_cast<double>(bounds.rotation_rad) + kFloat);
+        EXPECT_NEAR(stats.position_m, m.position_m, kFloat);
+        EXPECT_NEAR(stats.rotation_rad, m.rotation_rad, kFloat);
+        EXPECT_EQ(stats.keys, m.keys);
+        EXPECT_EQ(stats.kept, m.kept);
+        EXPECT_EQ(m.keys, std::size_t{kBirds} * 8 * frames);
+        EXPECT_LT(m.kept, m.keys / 4);
+        EXPECT_LT(fs::file_size(path) * 2, fs::file_size(full));
+        const std::size_t bytes = expect_compact_accessors(path);
+        EXPECT_EQ(bytes, stats.byte_rotations);
+        EXPECT_EQ(stats.rotations, std::size_t{kBirds} * 7);
+        if (bounds.rotation_rad >= 0.02f) {
+            EXPECT_GT(bytes * 2, stats.rotations);
+            EXPECT_GT(m.rotation_rad, 1e-3);  // the bound is used, not only the 16-bit floor
+        }
+        expect_valid(path);
+        EXPECT_EQ(dir.entries().size(), 2u);
+    }
 }
 
 // The 4 GiB limit of a .glb: uncompacted, keys past it are refused before the simulation

@@ -1,8 +1,8 @@
 // The key reducer of compact .glb files (engine/export/key_reduction.hpp): every dropped
 // key is reproduced within the bound by interpolating the kept ones, evaluated here
-// independently (glm's slerp in double on the decoded shorts, lerp on the floats); first
-// and last frames kept; constant channels; hemispheres; the 16-bit rounding counted;
-// bound 0; long channels in O(frames log span).
+// independently (glm's slerp in double on the decoded shorts or bytes, lerp on the
+// floats); first and last frames kept; constant channels; hemispheres; the 16-bit and
+// 8-bit rounding counted, and its worst case; bound 0; long channels in O(frames log span).
 
 #include <gtest/gtest.h>
 
@@ -10,6 +10,7 @@
 #include <chrono>
 #include <cmath>
 #include <cstdint>
+#include <cstdio>
 #include <random>
 #include <vector>
 
@@ -67,8 +68,11 @@ double vec3_error(const Reduction& r, const std::vector<float>& times, const std
     return worst;
 }
 
-glm::dquat decoded(const std::vector<std::int16_t>& s, std::uint32_t k) {
-    auto c = [&](int i) { return std::max(static_cast<double>(s[k * 4 + static_cast<std::uint32_t>(i)]) / 32767.0, -1.0); };
+using gltf::RotationBits;
+
+glm::dquat decoded(const std::vector<std::int16_t>& s, std::uint32_t k, RotationBits bits = RotationBits::Short) {
+    const double scale = bits == RotationBits::Byte ? 127.0 : 32767.0;  // §3.11: max(c / scale, -1)
+    auto c = [&](int i) { return std::max(static_cast<double>(s[k * 4 + static_cast<std::uint32_t>(i)]) / scale, -1.0); };
     return glm::normalize(glm::dquat(c(3), c(0), c(1), c(2)));  // glm: w first
 }
 
@@ -79,13 +83,13 @@ double angle_between(const glm::dquat& a, const glm::dquat& b) {
 // The largest error of a reduced rotation channel: glm's slerp (short path) of the
 // decoded kept shorts against the original floats.
 double rotation_error(const Reduction& r, const std::vector<float>& times, const std::vector<float>& q,
-                      const std::vector<std::int16_t>& s) {
+                      const std::vector<std::int16_t>& s, RotationBits bits = RotationBits::Short) {
     double worst = 0.0;
     for (std::uint32_t f = 0; f < times.size(); ++f) {
         const auto [a, b] = segment(r, f);
         const double ta = times[a];
         const double t = a == b ? 0.0 : (static_cast<double>(times[f]) - ta) / (static_cast<double>(times[b]) - ta);
-        const glm::dquat value = glm::slerp(decoded(s, a), decoded(s, b), t);
+        const glm::dquat value = glm::slerp(decoded(s, a, bits), decoded(s, b, bits), t);
         const glm::dquat original(q[f * 4 + 3], q[f * 4], q[f * 4 + 1], q[f * 4 + 2]);
         worst = std::max(worst, angle_between(value, original));
     }
@@ -129,9 +133,9 @@ std::vector<float> rotation_channel(std::uint32_t frames, float noise, std::uint
     return q;
 }
 
-std::vector<std::int16_t> quantized(const std::vector<float>& q) {
+std::vector<std::int16_t> quantized(const std::vector<float>& q, RotationBits bits = RotationBits::Short) {
     std::vector<std::int16_t> s(q.size());
-    gltf::quantize_rotations(q, s);
+    gltf::quantize_rotations(q, s, bits);
     return s;
 }
 
@@ -243,6 +247,64 @@ TEST(KeyReduction, QuantizationCountsInTheBound) {
     EXPECT_EQ(gltf::dequantize_unit(-32768), -1.0);
 }
 
+// 8-bit rotations (normalized signed bytes, glTF 2.0 §3.11): codes and decoding, and the
+// worst case of rounding a unit quaternion, 2 asin(1/127) = 0.01575 rad (0.90 degrees),
+// bounds what a million random ones and the worst axis-aligned ones measure; 16-bit,
+// 2 asin(1/32767) = 6.1e-5 rad.
+TEST(KeyReduction, ByteRoundingStaysWithinItsWorstCase) {
+    EXPECT_EQ(gltf::quantize_unit(1.0f, RotationBits::Byte), 127);
+    EXPECT_EQ(gltf::quantize_unit(-1.0f, RotationBits::Byte), -127);
+    EXPECT_EQ(gltf::quantize_unit(2.0f, RotationBits::Byte), 127);
+    EXPECT_EQ(gltf::quantize_unit(0.5f, RotationBits::Byte), 64);
+    EXPECT_EQ(gltf::dequantize_unit(-128, RotationBits::Byte), -1.0);
+    EXPECT_EQ(gltf::dequantize_unit(127, RotationBits::Byte), 1.0);
+    const double worst8 = gltf::worst_rounding(RotationBits::Byte);
+    const double worst16 = gltf::worst_rounding(RotationBits::Short);
+    EXPECT_NEAR(worst8, 0.015749, 1e-6);
+    EXPECT_NEAR(worst16, 6.1037e-5, 1e-9);
+    std::mt19937 rng(7);
+    std::normal_distribution<float> n(0.0f, 1.0f);
+    std::vector<float> q(std::size_t{1'000'000} * 4);
+    for (std::size_t k = 0; k < q.size(); k += 4) {
+        const glm::vec4 v = glm::normalize(glm::vec4(n(rng), n(rng), n(rng), n(rng)));
+        for (int c = 0; c < 4; ++c) q[k + static_cast<std::size_t>(c)] = v[c];
+    }
+    const double measured8 = gltf::rounding_error(q, quantized(q, RotationBits::Byte), RotationBits::Byte);
+    const double measured16 = gltf::rounding_error(q, quantized(q), RotationBits::Short);
+    std::printf("rounding of 1e6 random unit quaternions: 8-bit %.6f rad (worst case %.6f), 16-bit %.3g rad (worst case %.3g)\n",
+                measured8, worst8, measured16, worst16);
+    EXPECT_LE(measured8, worst8);
+    EXPECT_GT(measured8, 0.5 * worst8);
+    EXPECT_LE(measured16, worst16);
+    EXPECT_GT(measured16, 0.5 * worst16);
+}
+
+// A channel stored in bytes: the bound holds on the decoded bytes, the rounding counted;
+// the keys' rounding alone is above 1 mrad, so a 1 mrad bound keeps every key and is
+// exceeded (the writers store such channels in shorts).
+TEST(KeyReduction, ByteRotationBoundHolds) {
+    const std::uint32_t frames = 601;
+    const auto times = times_of(frames);
+    for (const float noise : {0.0f, 2e-3f}) {
+        const auto q = rotation_channel(frames, noise, 13);
+        const auto b = quantized(q, RotationBits::Byte);
+        const double rounding = gltf::rounding_error(q, b, RotationBits::Byte);
+        EXPECT_GT(rounding, 1e-3);
+        EXPECT_LE(rounding, gltf::worst_rounding(RotationBits::Byte));
+        for (const double bound : {0.02, 0.05, 0.2}) {
+            SCOPED_TRACE("noise " + std::to_string(noise) + ", bound " + std::to_string(bound));
+            const Reduction r = gltf::reduce_rotations(times, q, b, bound, RotationBits::Byte);
+            expect_well_formed(r, frames);
+            const double error = rotation_error(r, times, q, b, RotationBits::Byte);
+            EXPECT_LE(error, bound + 1e-9);
+            EXPECT_NEAR(r.max_error, error, 1e-9);
+            EXPECT_GE(r.max_error, 0.0);
+        }
+        const Reduction tight = gltf::reduce_rotations(times, q, b, 1e-3, RotationBits::Byte);
+        EXPECT_GT(tight.max_error, 1e-3);
+    }
+}
+
 // A spin of two full turns: the quaternion crosses hemispheres, the writers' keys follow
 // it by sign. With a loose bound kept neighbours are still in one hemisphere, so a
 // player that does not take the short way turns the same way.
@@ -268,6 +330,35 @@ TEST(KeyReduction, KeptRotationsStayInOneHemisphere) {
         EXPECT_GE(glm::dot(decoded(s, r.kept[k - 1]), decoded(s, r.kept[k])), 0.0) << "keys " << k - 1 << ", " << k;
     }
     EXPECT_LE(rotation_error(r, times, q, s), 0.5 + 1e-9);
+}
+
+// A steady spin of pi/20 per frame: slerp reproduces any span of it, but keys exactly a
+// half turn apart (20 frames) round to bytes whose dot product is exactly 0, where the
+// short way is either way: no kept span reaches that far.
+TEST(KeyReduction, NoSpanIsAHalfTurn) {
+    const std::uint32_t frames = 81;
+    const auto times = times_of(frames);
+    std::vector<float> q(std::size_t{frames} * 4);
+    glm::quat previous(1.0f, 0.0f, 0.0f, 0.0f);
+    for (std::uint32_t f = 0; f < frames; ++f) {
+        glm::quat r = glm::angleAxis(3.14159265f / 20.0f * static_cast<float>(f), glm::vec3(0.0f, 0.0f, 1.0f));
+        if (glm::dot(previous, r) < 0.0f) r = -r;
+        previous = r;
+        q[f * 4] = r.x;
+        q[f * 4 + 1] = r.y;
+        q[f * 4 + 2] = r.z;
+        q[f * 4 + 3] = r.w;
+    }
+    for (const RotationBits bits : {RotationBits::Short, RotationBits::Byte}) {
+        const auto s = quantized(q, bits);
+        const Reduction r = gltf::reduce_rotations(times, q, s, 0.05, bits);
+        expect_well_formed(r, frames);
+        for (std::size_t k = 1; k < r.kept.size(); ++k) {
+            EXPECT_LT(r.kept[k] - r.kept[k - 1], 20u);
+            EXPECT_GT(glm::dot(decoded(s, r.kept[k - 1], bits), decoded(s, r.kept[k], bits)), 1e-4);
+        }
+        EXPECT_LE(rotation_error(r, times, q, s, bits), 0.05 + 1e-9);
+    }
 }
 
 // Long channels: a span is at most kMaxSpan frames and each check costs its span, so

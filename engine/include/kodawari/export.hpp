@@ -28,8 +28,9 @@ namespace kodawari {
 /// Compact animation keys (`kodawari run --compact`, docs/compact.md): per channel, the
 /// keys that LINEAR interpolation between the kept ones reproduces within a bound are
 /// dropped (first and last kept; glTF 2.0 Appendix C's lerp and slerp), and rotations are
-/// written as normalized signed 16-bit integers (§3.11 allows them for rotation outputs;
-/// translations and scales stay floats, as the core spec requires). Each reduced channel
+/// written as normalized signed 16-bit integers, or 8-bit ones where the rotation bound
+/// absorbs their rounding (up to 0.0158 rad) and that is smaller (§3.11 allows both for
+/// rotation outputs; translations and scales stay floats, as the core spec requires). Each reduced channel
 /// gets its own key times; channels keeping every frame, or only the first and the last,
 /// share one accessor. Off by default: the file is then the uncompacted one, byte for
 /// byte. The bounds, each >= 0 and finite: a point 1 m from a joint moves by at most
@@ -39,7 +40,7 @@ struct GlbCompaction {
     /// The distance between a dropped translation key and the interpolated one (metres).
     float position_m = 0.001f;
     /// The angle between a dropped rotation key and the interpolated one (radians),
-    /// 16-bit rounding included (which alone is up to 6.1e-5 rad).
+    /// the rounding included (which alone is up to 6.1e-5 rad at 16 bits, 0.0158 rad at 8).
     float rotation_rad = 0.001f;
     /// A dropped scale key's difference from the interpolated one, per axis, relative to
     /// the key.
@@ -58,6 +59,9 @@ struct GlbCompactionStats {
     double position_m = 0.0;
     double rotation_rad = 0.0;
     double scale_rel = 0.0;
+    /// Rotation channels, and those of them written as 8-bit integers.
+    std::uint64_t rotations = 0;
+    std::uint64_t byte_rotations = 0;
 };
 
 /// InvalidInput naming `path` unless every bound of an enabled compaction is finite and
