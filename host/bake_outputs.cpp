@@ -1,21 +1,85 @@
 // The outputs of a bake (bake_outputs.hpp).
 #include "bake_outputs.hpp"
 
+#include <cctype>
+#include <cmath>
 #include <cstdio>
+#include <cstdlib>
 #include <filesystem>
 
 namespace kodawari::cli {
 
-std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains) {
+std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains,
+                                                 const GlbCompaction& compaction) {
     // One file per kind of content.
     std::vector<std::unique_ptr<BakeSink>> sinks;
-    if (has_birds) sinks.push_back(make_birds_glb_sink(out));
+    if (has_birds) sinks.push_back(make_birds_glb_sink(out, compaction));
     if (has_chains) {
         sinks.push_back(make_chains_glb_sink(
-            has_birds ? out.substr(0, out.size() - (out.ends_with(".glb") ? 4 : 0)) + "-characters.glb" : out));
+            has_birds ? out.substr(0, out.size() - (out.ends_with(".glb") ? 4 : 0)) + "-characters.glb" : out, compaction));
     }
     return sinks;
 }
+
+// ERROR is METRES or METRES,RADIANS. One number bounds all three kinds as the
+// displacement of a point 1 m from the joint: a rotation of E rad, or a scale off by E
+// relative, moves it E m, as a translation error of E m does. A second number sets the
+// rotation (and scale) bound on its own.
+GlbCompaction read_compaction(Args& args) {
+    const auto option = args.flag_or_value("compact");
+    GlbCompaction compaction;
+    if (!option) return compaction;
+    compaction.enabled = true;
+    if (!*option) return compaction;
+    const std::string& text = **option;
+    const auto fail = [&]() -> UsageError {
+        return UsageError{"--compact: expected --compact, --compact=METRES or --compact=METRES,RADIANS (numbers >= 0, e.g. "
+                          "--compact=0.001 or --compact=0.002,0.005), got \"" + text + "\""};
+    };
+    const auto number = [&](const std::string& part) {
+        char* end = nullptr;
+        const double v = part.empty() || part[0] == '-' || part[0] == '+' || std::isspace(static_cast<unsigned char>(part[0]))
+                             ? -1.0
+                             : std::strtod(part.c_str(), &end);
+        if (end == nullptr || *end != '\0' || !std::isfinite(v) || v < 0.0 || v > 1e6) throw fail();
+        return static_cast<float>(v);
+    };
+    const std::size_t comma = text.find(',');
+    compaction.position_m = number(text.substr(0, comma));
+    compaction.rotation_rad = comma == std::string::npos ? compaction.position_m : number(text.substr(comma + 1));
+    compaction.scale_rel = compaction.rotation_rad;
+    return compaction;
+}
+
+namespace {
+
+void print_compaction(const GlbCompactionStats& s) {
+    const auto size = [](std::uint64_t bytes) {
+        char text[32];
+        const double b = static_cast<double>(bytes);
+        if (bytes >= (1u << 20)) {
+            std::snprintf(text, sizeof text, "%.1f MiB", b / (1 << 20));
+        } else {
+            std::snprintf(text, sizeof text, "%.1f KiB", b / (1 << 10));
+        }
+        return std::string(text);
+    };
+    std::printf("kodawari:   compact: %llu of %llu keys kept (%.1f%%), animation data %s -> %s (%.1fx); "
+                "largest error %.4g mm, %.4g mrad",
+                static_cast<unsigned long long>(s.kept), static_cast<unsigned long long>(s.keys),
+                s.keys > 0 ? 100.0 * static_cast<double>(s.kept) / static_cast<double>(s.keys) : 100.0,
+                size(s.bytes_before).c_str(), size(s.bytes_after).c_str(),
+                s.bytes_after > 0 ? static_cast<double>(s.bytes_before) / static_cast<double>(s.bytes_after) : 1.0,
+                1e3 * s.position_m, 1e3 * s.rotation_rad);
+    if (s.scale_rel > 0.0) std::printf(", scale %.4g%%", 100.0 * s.scale_rel);
+    if (s.byte_rotations > 0) {
+        std::printf("; %llu of %llu rotation channels at 8 bits", static_cast<unsigned long long>(s.byte_rotations),
+                    static_cast<unsigned long long>(s.rotations));
+    }
+    std::printf("\n");
+}
+
+}  // namespace
 
 std::string default_output(const std::string& scene_name, const std::string& extension) {
     std::error_code ec;
@@ -33,6 +97,7 @@ void print_wrote(const BakeOutput& file) {
     std::printf("kodawari: wrote %s (%.1f MiB, %s%s%s)\n", file.path.c_str(), ec ? 0.0 : static_cast<double>(size) / (1 << 20),
                 file.format == BakeOutput::Format::Part ? "kodawari part file" : "glTF 2.0 binary",
                 file.description.empty() ? "" : ", ", file.description.c_str());
+    if (file.compaction) print_compaction(*file.compaction);
 }
 
 std::vector<BakeSink*> sink_pointers(const std::vector<std::unique_ptr<BakeSink>>& sinks) {

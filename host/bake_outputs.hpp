@@ -6,18 +6,25 @@
 #include <string>
 #include <vector>
 
+#include "cli_common.hpp"
 #include "kodawari/bake.hpp"
 
 namespace kodawari::cli {
 
 /// The `.glb` sinks of a scene: the birds at `out`; the characters at `out` too when
-/// there are no birds, else at `<out without .glb>-characters.glb`.
-[[nodiscard]] std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains);
+/// there are no birds, else at `<out without .glb>-characters.glb`; their keys compacted
+/// as `compaction` says.
+[[nodiscard]] std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains,
+                                                               const GlbCompaction& compaction);
+
+/// `--compact[=METRES[,RADIANS]]` (README "Compact files"), removed from `args`; not
+/// enabled when absent. A bad value is a UsageError naming --compact.
+[[nodiscard]] GlbCompaction read_compaction(Args& args);
 
 /// `out/<scene name>.glb`, creating `out/` (the default output).
 [[nodiscard]] std::string default_output(const std::string& scene_name, const std::string& extension = ".glb");
 
-/// "kodawari: wrote FILE (N MiB, ...)".
+/// "kodawari: wrote FILE (N MiB, ...)", and for a compacted file what compaction did.
 void print_wrote(const BakeOutput& file);
 
 /// Pointers to the sinks, for bake().

@@ -36,6 +36,19 @@ bool Args::flag(const std::string& name) {
     return false;
 }
 
+std::optional<std::optional<std::string>> Args::flag_or_value(const std::string& name) {
+    const std::string flag_text = "--" + name;
+    for (std::size_t i = 0; i < args_.size(); ++i) {
+        if (args_[i] == flag_text || args_[i].rfind(flag_text + "=", 0) == 0) {
+            std::optional<std::string> value;
+            if (args_[i].size() > flag_text.size()) value = args_[i].substr(flag_text.size() + 1);
+            args_.erase(args_.begin() + static_cast<std::ptrdiff_t>(i));
+            return value;
+        }
+    }
+    return std::nullopt;
+}
+
 std::optional<std::uint64_t> Args::count(const std::string& name, std::uint64_t min, std::uint64_t max) {
     auto text = option(name);
     if (!text) return std::nullopt;

@@ -38,6 +38,10 @@ public:
     std::optional<std::string> option(const std::string& name);
     /// Presence of `--name`, removed from the list.
     bool flag(const std::string& name);
+    /// `--name` (gives an empty optional) or `--name=VALUE` (gives VALUE, maybe ""),
+    /// removed from the list; nullopt when absent. An option whose value is optional, so
+    /// never taken from the next argument.
+    std::optional<std::optional<std::string>> flag_or_value(const std::string& name);
     /// Unsigned integer option with a range check.
     std::optional<std::uint64_t> count(const std::string& name, std::uint64_t min, std::uint64_t max);
     /// What is left; unknown `--options` are usage errors.

@@ -82,7 +82,8 @@ Shard parse_shard(const std::string& text) {
 
 // `run --mpi`: one shard per rank, rank 0 writes (kodawari/distributed.hpp).
 int run_distributed(const std::string& scene_path, const BackendChoice& choice, std::optional<std::uint64_t> frames,
-                    const std::optional<std::string>& out, const std::optional<std::string>& trace, bool no_export) {
+                    const std::optional<std::string>& out, const std::optional<std::string>& trace, bool no_export,
+                    const GlbCompaction& compaction) {
 #ifdef KODAWARI_WITH_MPI
     auto job = open_mpi_world();
     if (!job) return report(job.error());
@@ -103,7 +104,8 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
     options.make_sinks = [&](const BakeWorld& world) {
         std::vector<std::unique_ptr<BakeSink>> sinks;
         if (!no_export) {
-            sinks = glb_sinks(out ? *out : default_output(world.scene->name), !world.birds->birds.empty(), world.rods != nullptr);
+            sinks = glb_sinks(out ? *out : default_output(world.scene->name), !world.birds->birds.empty(), world.rods != nullptr,
+                              compaction);
         }
         if (trace) sinks.push_back(make_trace_sink(*trace));
         return sinks;
@@ -125,7 +127,7 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
     for (const BakeOutput& file : written.value()) print_wrote(file);
     return kExitOk;
 #else
-    (void)scene_path, (void)choice, (void)frames, (void)out, (void)trace, (void)no_export;
+    (void)scene_path, (void)choice, (void)frames, (void)out, (void)trace, (void)no_export, (void)compaction;
     return report(make_error(Error::Kind::Unsupported,
                              "--mpi: this kodawari was built without MPI (bash scripts/setup installs OpenMPI; then rebuild)"));
 #endif
@@ -140,10 +142,21 @@ int cmd_run(Args args) {
     const bool no_export = args.flag("no-export");
     const auto trace_path = args.option("trace");
     const auto shard_option = args.option("shard");
+    const GlbCompaction compaction = read_compaction(args);
     const bool mpi = args.flag("mpi");
     if (mpi && shard_option) throw UsageError{"--mpi and --shard exclude each other (--mpi runs one shard per rank)"};
-    if (mpi) return run_distributed(scene_argument(args.positionals(), "run"), choice, frames_option, out_option, trace_path, no_export);
     if (no_export && out_option) throw UsageError{"--out and --no-export exclude each other"};
+    if (no_export && compaction.enabled) throw UsageError{"--compact and --no-export exclude each other"};
+    // A part keeps every key: compacting a shard's keys apart would make the merged file
+    // depend on N, so compaction happens once, at merge, over the joined keys.
+    if (shard_option && compaction.enabled) {
+        throw UsageError{"--shard writes a part file with every key, and compaction happens at merge: give --compact to "
+                         "`kodawari merge` instead"};
+    }
+    if (mpi) {
+        return run_distributed(scene_argument(args.positionals(), "run"), choice, frames_option, out_option, trace_path, no_export,
+                               compaction);
+    }
     if (shard_option && (no_export || trace_path)) {
         throw UsageError{"--shard writes a part file for `kodawari merge` (at --out): it takes neither --no-export nor --trace"};
     }
@@ -161,7 +174,7 @@ int cmd_run(Args args) {
                                                                             std::to_string(shard.count) + ".kwpart");
         owned.push_back(make_part_sink(part, sim.shard()));
     } else if (!no_export) {
-        owned = glb_sinks(out_option ? *out_option : default_output(scene.name), has_birds, has_chains);
+        owned = glb_sinks(out_option ? *out_option : default_output(scene.name), has_birds, has_chains, compaction);
     }
     if (trace_path) owned.push_back(make_trace_sink(*trace_path));
 

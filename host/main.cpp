@@ -1,4 +1,5 @@
 // kodawari: the command line of the crowd simulator.
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <string>
@@ -13,14 +14,20 @@ constexpr const char* kUsage = R"(usage: kodawari <command> [options]
 
 commands:
   run [SCENE] [--backend auto|vulkan|cpu|cpu-reference] [--frames N] [--out FILE.glb] [--no-export]
-              [--trace FILE.jsonl] [--device NAME|INDEX] [--threads N] [--isa NAME] [--validation]
-              [--shard I/N]
+              [--compact[=METRES[,RADIANS]]] [--trace FILE.jsonl] [--device NAME|INDEX] [--threads N]
+              [--isa NAME] [--validation] [--shard I/N | --mpi]
       simulate a scene (default )" "scenes/flock.json" R"() and bake it to glTF (default out/<scene>.glb);
+      --compact drops the animation keys that linear interpolation reproduces within METRES (default
+      0.001) for translations and RADIANS (default METRES, i.e. 0.001) for rotations and, relative, for
+      scales, writes rotations as 16-bit integers (8-bit where RADIANS absorbs their rounding, up
+      to 0.0158 rad), and prints the keys kept, the size ratio and the largest error (README
+      "Compact files");
       --shard I/N simulates only shard I of N (birds and characters [I*n/N, (I+1)*n/N)) and writes
-      a part file (default out/<scene>.shard-I-of-N.kwpart) for merge
-  merge PARTS... [--out FILE.glb] [--scene SCENE.json]
+      a part file (default out/<scene>.shard-I-of-N.kwpart) for merge, every key kept (give
+      --compact to merge); under mpirun, --mpi runs one shard per rank and rank 0 writes
+  merge PARTS... [--out FILE.glb] [--scene SCENE.json] [--compact[=METRES[,RADIANS]]]
       join the part files of every shard of one bake into the files one run writes, byte for byte
-      (--scene: the scene file, when it moved since; its bytes must be unchanged)
+      (--scene: the scene file, when it moved since; its bytes must be unchanged; --compact as run's)
   validate [SCENE] [--backend vulkan|cpu] [--frames N]
       run a backend and the CPU reference side by side; exit 1 above tolerance
   bench birds [--count N] [--frames F] [--json FILE] [--readback] [--backends LIST] [--repetitions R]
@@ -74,6 +81,11 @@ int main(int argc, char** argv) {
     }
     const std::string command = args[0];
     args.erase(args.begin());
+    // `kodawari COMMAND --help`: the same usage.
+    if (std::find(args.begin(), args.end(), "--help") != args.end()) {
+        std::fputs(kUsage, stdout);
+        return kExitOk;
+    }
     try {
         if (command == "run") return cmd_run(args);
         if (command == "merge") return cmd_merge(args);

@@ -138,6 +138,24 @@ check "rig on a missing file fails and names it" bash -c "test $? -ne 0 && grep 
 check "crowd-gltf runs" test $? -eq 0
 check "crowd-gltf exports the character's own skeleton" grep -q "wrote $work/crowd-gltf.glb.*own skeleton" "$work/crowd-gltf.out"
 check "crowd-gltf export passes glTF-Validator" node tests/tools/validate_gltf.mjs "$work/crowd-gltf.glb"
+
+# --compact (README "Compact files"): the same scenes compacted at the default bounds are
+# smaller, say what compaction did, and pass glTF-Validator (0 errors, 0 warnings); bad
+# bounds exit 2 naming --compact and write nothing.
+"$bin" run scenes/crowd-gltf.json --frames 20 --compact --out "$work/crowd-gltf-compact.glb" >"$work/crowd-gltf-compact.out" 2>&1
+check "crowd-gltf --compact runs" test $? -eq 0
+check "crowd-gltf --compact reports keys kept and the largest error" grep -q "compact: .* keys kept .*largest error .* mm, .* mrad" "$work/crowd-gltf-compact.out"
+check "crowd-gltf --compact is smaller" test "$(stat -c %s "$work/crowd-gltf-compact.glb")" -lt "$(stat -c %s "$work/crowd-gltf.glb")"
+check "crowd-gltf --compact passes glTF-Validator" bash -c "node tests/tools/validate_gltf.mjs '$work/crowd-gltf-compact.glb' | grep -q '0 errors, 0 warnings'"
+"$bin" run scenes/flock.json --backend cpu --frames 120 --compact=0.002,0.005 --out "$work/flock-compact.glb" >"$work/flock-compact.out" 2>&1
+check "flock --compact=0.002,0.005 runs" test $? -eq 0
+check "flock --compact passes glTF-Validator" bash -c "node tests/tools/validate_gltf.mjs '$work/flock-compact.glb' | grep -q '0 errors, 0 warnings'"
+"$bin" run scenes/ahoge.json --frames 30 --compact --out "$work/ahoge-compact.glb" >/dev/null 2>&1
+check "ahoge --compact passes glTF-Validator" bash -c "node tests/tools/validate_gltf.mjs '$work/ahoge-compact.glb' | grep -q '0 errors, 0 warnings'"
+for bad in "--compact=abc" "--compact=-1" "--compact=0.001,x" "--compact="; do
+    "$bin" run scenes/ahoge.json --frames 3 "$bad" --out "$work/bad-compact.glb" >"$work/bad-compact.out" 2>&1
+    check "run $bad exits 2 naming --compact" bash -c "test $? -eq 2 && grep -q -- '--compact: expected' '$work/bad-compact.out' && test ! -e '$work/bad-compact.glb'"
+done
 "$bin" bench crowd --count 13 --frames 2 --json "$work/bench-crowd.json" >/dev/null 2>&1
 # Vulkan twice: the rod input made on the host, then written on the device.
 check "bench crowd json" bash -c "node -e 'const r=require(\"$work/bench-crowd.json\"); if (r.benchmark!==\"crowd\"||r.instances!==13||r.results.length!==4||r.results[3].backend!==\"vulkan/dev-in\"||!(r.results[3].per_second>0)) process.exit(1)'"

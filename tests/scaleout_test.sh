@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Scale-out end to end (issue 15): `run --shard I/N` + `merge`, and `mpirun ... run --mpi`
 # with real Open MPI, each compared byte for byte with a single-process run of a bird
-# scene and a rigged crowd; a rank that fails (a device index it does not have) and a
+# scene and a rigged crowd, compacted (--compact, at merge and on rank 0) or not; a rank that fails (a device index it does not have) and a
 # writing rank that fails (an output it cannot create) end every rank with the message and
 # leave no file; traces under MPI too. Vulkan runs under validation (ctest sets KODAWARI_VALIDATION=1).
 # usage: scaleout_test.sh KODAWARI_BINARY SOURCE_DIR WITH_MPI(0|1)
@@ -29,6 +29,21 @@ done
 for i in 0 1 2; do "$bin" run scenes/crowd-gltf.json --backend cpu --frames 8 --shard $i/3 --out "$work/crowd.$i.kwpart" >/dev/null 2>&1; done
 "$bin" merge "$work"/crowd.*.kwpart --out "$work/crowd-merged.glb" >/dev/null 2>&1
 check "merged rigged crowd = single run, byte for byte" cmp "$work/crowd.glb" "$work/crowd-merged.glb"
+
+# --compact: parts keep every key and merge compacts the joined ones, so merge --compact
+# writes the bytes of run --compact; run --shard refuses it, saying where it goes.
+"$bin" run scenes/flock.json --backend cpu --frames 130 --compact --out "$work/flock-compact.glb" >/dev/null 2>&1
+"$bin" merge "$work"/flock-cpu.{0,1,2,3}.kwpart --compact --out "$work/merged-compact.glb" >"$work/merge.out" 2>&1
+check "merge --compact exits 0" test $? -eq 0
+check "merge --compact says what compaction did" grep -q "compact: .* keys kept" "$work/merge.out"
+check "merged --compact flock = run --compact, byte for byte" cmp "$work/flock-compact.glb" "$work/merged-compact.glb"
+"$bin" run scenes/crowd-gltf.json --backend cpu --frames 8 --compact=0.005,0.02 --out "$work/crowd-compact.glb" >/dev/null 2>&1
+"$bin" merge "$work"/crowd.*.kwpart --compact=0.005,0.02 --out "$work/crowd-merged-compact.glb" >/dev/null 2>&1
+check "merged --compact rigged crowd = run --compact, byte for byte" cmp "$work/crowd-compact.glb" "$work/crowd-merged-compact.glb"
+"$bin" run scenes/flock.json --frames 3 --shard 0/2 --compact --out "$work/refused.kwpart" >"$work/bad.out" 2>&1
+check "--shard with --compact exits 2" test $? -eq 2
+check "--shard with --compact says compaction happens at merge" grep -q "compaction happens at merge" "$work/bad.out"
+check "--shard with --compact writes nothing" test ! -e "$work/refused.kwpart"
 
 # Bad shards and parts: exit 2, what is wrong named, nothing written.
 "$bin" run scenes/flock.json --shard 4/4 >"$work/bad.out" 2>&1
@@ -63,6 +78,13 @@ check "only rank 0 writes and says so" test "$(grep -c 'wrote ' "$work/mpi.out")
 check "MPI flock (3 ranks, vulkan) = single run, byte for byte" cmp "$work/flock-vulkan.glb" "$work/mpi-flock-vk.glb"
 "${mpi[@]}" -np 3 "$bin" run scenes/crowd-gltf.json --backend cpu --threads 1 --frames 8 --mpi --out "$work/mpi-crowd.glb" >"$work/mpi.out" 2>&1
 check "MPI rigged crowd (3 ranks) = single run, byte for byte" cmp "$work/crowd.glb" "$work/mpi-crowd.glb"
+# Rank 0 compacts what it gathers: the bytes of run --compact.
+"${mpi[@]}" -np 2 "$bin" run scenes/flock.json --backend cpu --threads 1 --frames 130 --mpi --compact --out "$work/mpi-flock-compact.glb" >"$work/mpi.out" 2>&1
+check "mpirun --compact exits 0" test $? -eq 0
+check "MPI --compact flock (2 ranks) = run --compact, byte for byte" cmp "$work/flock-compact.glb" "$work/mpi-flock-compact.glb"
+check "MPI --compact says what compaction did, once" test "$(grep -c 'compact: .* keys kept' "$work/mpi.out")" -eq 1
+"${mpi[@]}" -np 3 "$bin" run scenes/crowd-gltf.json --backend cpu --threads 1 --frames 8 --mpi --compact=0.005,0.02 --out "$work/mpi-crowd-compact.glb" >"$work/mpi.out" 2>&1
+check "MPI --compact rigged crowd (3 ranks) = run --compact, byte for byte" cmp "$work/crowd-compact.glb" "$work/mpi-crowd-compact.glb"
 
 # Traces too (the ranks send the chains' rest shapes and the birds' diagnostics then).
 "$bin" run scenes/crowd.json --backend cpu --frames 3 --no-export --trace "$work/crowd-1.jsonl" >/dev/null 2>&1

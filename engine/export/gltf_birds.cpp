@@ -12,6 +12,7 @@
 #include <exception>
 #include <memory>
 #include <new>
+#include <optional>
 #include <span>
 #include <utility>
 #include <string>
@@ -19,6 +20,7 @@
 
 #include "kodawari/version.hpp"
 #include "birds/bird_meshes.hpp"
+#include "export/compact_keys.hpp"
 #include "export/gltf_common.hpp"
 #include "export/gltf_json_stream.hpp"
 #include "kodawari/birds/rig.hpp"
@@ -82,6 +84,8 @@ struct BirdGlbWriter::Impl {
     std::vector<float> first;     // birds x record: frame 0, the rest pose
     std::vector<float> previous;  // birds x record: the last frame added (rotation hemispheres)
     std::vector<float> row;       // birds x record being written
+    GlbCompaction compaction;
+    GlbCompactionStats stats;
 
     [[nodiscard]] std::size_t count() const { return world->birds.size(); }
     [[nodiscard]] Result<void> add_frame(std::span<const gpu::BirdPose> poses);
@@ -102,17 +106,21 @@ BirdGlbWriter::BirdGlbWriter(BirdGlbWriter&& other) noexcept = default;
 BirdGlbWriter& BirdGlbWriter::operator=(BirdGlbWriter&& other) noexcept = default;
 BirdGlbWriter::~BirdGlbWriter() = default;
 
-Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds::BirdWorld& world, std::uint32_t frames) {
+Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds::BirdWorld& world, std::uint32_t frames,
+                                            const GlbCompaction& compaction) {
     const std::size_t bird_count = world.birds.size();
+    KW_TRY(check_compaction(path, compaction));
     if (frames == 0) {
         return make_error(Error::Kind::InvalidInput, path + ": cannot write an animation of 0 frames");
     }
     if (!(world.fps > 0.0f) || !std::isfinite(world.fps)) {
         return make_error(Error::Kind::InvalidInput, path + ": fps must be positive, got " + std::to_string(world.fps));
     }
-    // A GLB's length field is 32 bits.
+    // A GLB's length field is 32 bits. Refused here, before the simulation runs, when the
+    // keys are written as they are; compacted, their size is known only once they are
+    // reduced, and write_streamed_glb() refuses a buffer past 4 GiB then, before any JSON.
     const double poses = static_cast<double>(frames) * static_cast<double>(bird_count);
-    if (poses * static_cast<double>(kRecordBytes) > 4.0e9) {
+    if (!compaction.enabled && poses * static_cast<double>(kRecordBytes) > 4.0e9) {
         return make_error(Error::Kind::InvalidInput, path + ": " + std::to_string(std::uint64_t{frames} * bird_count) +
                                                          " poses exceed the 4 GiB limit of a .glb");
     }
@@ -127,6 +135,7 @@ Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds
     impl->path = path;
     impl->world = &world;
     impl->frames = frames;
+    impl->compaction = compaction;
     auto keys = SpillFile::open(path);
     if (!keys) return keys.error();
     impl->keys = std::move(keys).value();
@@ -209,6 +218,10 @@ struct BirdGlbWriter::Impl::Layout {
     std::size_t translation_bytes = 0;
     std::size_t rotation_bytes = 0;
     std::size_t per_bird = 0;
+    // Compacted: the channels' accessors and their key times come from `compact` (the
+    // buffer view `animation_view` holds its tail), bird b's from first_accessor +
+    // compact->accessors_before(b) on.
+    const CompactKeys* compact = nullptr;
 
     static constexpr std::size_t kChannels = 1 + birds::kPartCount;
     [[nodiscard]] static int body_node(std::size_t b) { return static_cast<int>(1 + b * birds::kPartCount); }
@@ -249,8 +262,13 @@ void BirdGlbWriter::Impl::bird_nodes(const Layout& layout, std::size_t b, std::v
     }
 }
 
-// Bird b's keys: the Body's translations, then each part's rotations, over all frames.
+// Bird b's keys: the Body's translations, then each part's rotations, over all frames;
+// compacted, each channel's kept keys and, where not shared, their times.
 void BirdGlbWriter::Impl::bird_accessors(const Layout& layout, std::size_t b, std::vector<tinygltf::Accessor>& out) const {
+    if (layout.compact) {
+        layout.compact->item_accessors(b, layout.animation_view, out);
+        return;
+    }
     const auto add = [&](std::size_t offset, int type) {
         tinygltf::Accessor& accessor = out.emplace_back();
         accessor.bufferView = layout.animation_view;
@@ -268,6 +286,17 @@ void BirdGlbWriter::Impl::bird_accessors(const Layout& layout, std::size_t b, st
 
 void BirdGlbWriter::Impl::bird_samplers(const Layout& layout, std::size_t b,
                                         std::vector<tinygltf::AnimationSampler>& out) const {
+    if (layout.compact) {
+        std::vector<std::pair<int, int>> io;
+        layout.compact->item_channels(b, layout.first_accessor + static_cast<int>(layout.compact->accessors_before(b)), io);
+        for (const auto& [input, output] : io) {
+            tinygltf::AnimationSampler& sampler = out.emplace_back();
+            sampler.input = input;
+            sampler.output = output;
+            sampler.interpolation = "LINEAR";
+        }
+        return;
+    }
     for (std::size_t k = 0; k < Layout::kChannels; ++k) {
         tinygltf::AnimationSampler& sampler = out.emplace_back();
         sampler.input = layout.time_accessor;
@@ -309,24 +338,43 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
 
     // Animation data: the shared key times (in memory), then per bird its Body
     // translation and the rotations of its parts, each channel contiguous over the frames
-    // (the tail, copied from the key file).
+    // (the tail, copied from the key file). Compacted (GlbCompaction), the tail is
+    // CompactKeys' instead, key times included, in one buffer view after the meshes.
     layout.time_bytes = frames * sizeof(float);
     layout.translation_bytes = frames * 3 * sizeof(float);
     layout.rotation_bytes = frames * 4 * sizeof(float);
     layout.per_bird = layout.translation_bytes + birds::kPartCount * layout.rotation_bytes;
-    const std::size_t animation_start = writer.allocate(layout.time_bytes);
-    layout.animation_view =
-        add_buffer_view(model, animation_start, layout.time_bytes + bird_count * layout.per_bird, 0);
     const float fps = world->fps;
-    for (std::uint32_t f = 0; f < frames; ++f) {
-        const float time = static_cast<float>(f) / fps;
-        std::memcpy(bytes.data() + animation_start + f * sizeof(float), &time, sizeof(float));
+    std::optional<CompactKeys> compact;
+    if (compaction.enabled) {
+        std::vector<float> times(frames);
+        for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / fps;
+        std::array<ChannelKind, Layout::kChannels> fields{};
+        fields.fill(ChannelKind::Rotation);
+        fields[0] = ChannelKind::Translation;
+        auto built = CompactKeys::build(keys, path, bird_count, fields, times, compaction, BirdGlbWriter::kTransposeBytes);
+        if (!built) return built.error();
+        compact.emplace(std::move(built).value());
+        stats = compact->stats();
+        layout.compact = &*compact;
+        layout.animation_view = add_buffer_view(model, bytes.size(), compact->bytes(), 0);
+        compact->add_shared_times(model, layout.animation_view);
+        layout.first_accessor = static_cast<int>(model.accessors.size());
     }
-    layout.time_accessor =
-        add_accessor(model, layout.animation_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_SCALAR);
-    model.accessors[layout.time_accessor].minValues = {0.0};
-    model.accessors[layout.time_accessor].maxValues = {static_cast<double>(static_cast<float>(frames - 1) / fps)};
-    layout.first_accessor = static_cast<int>(model.accessors.size());
+    const std::size_t animation_start = compact ? 0 : writer.allocate(layout.time_bytes);
+    if (!compact) {
+        layout.animation_view =
+            add_buffer_view(model, animation_start, layout.time_bytes + bird_count * layout.per_bird, 0);
+        for (std::uint32_t f = 0; f < frames; ++f) {
+            const float time = static_cast<float>(f) / fps;
+            std::memcpy(bytes.data() + animation_start + f * sizeof(float), &time, sizeof(float));
+        }
+        layout.time_accessor =
+            add_accessor(model, layout.animation_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, frames, TINYGLTF_TYPE_SCALAR);
+        model.accessors[layout.time_accessor].minValues = {0.0};
+        model.accessors[layout.time_accessor].maxValues = {static_cast<double>(static_cast<float>(frames - 1) / fps)};
+        layout.first_accessor = static_cast<int>(model.accessors.size());
+    }
 
     StreamedElements streamed;
     // Node 0 is the root, then each bird's 7 nodes.
@@ -358,6 +406,7 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
 
+    if (compact) return write_streamed_glb(file, model, streamed, compact->bytes(), [&] { return compact->write(file); });
     return write_streamed_glb(file, model, streamed, std::uint64_t{bird_count} * layout.per_bird,
                               [&] { return copy_channels(file); });
 }
@@ -375,8 +424,10 @@ Result<void> BirdGlbWriter::finish() {
     return write_file_atomically(w.path, [&](AtomicFile& file) { return w.build_and_write(file); });
 }
 
+const GlbCompactionStats& BirdGlbWriter::compaction_stats() const { return impl_->stats; }
+
 Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
-                             std::span<const gpu::BirdPose> poses, std::uint32_t frames) {
+                             std::span<const gpu::BirdPose> poses, std::uint32_t frames, const GlbCompaction& compaction) {
     const std::size_t bird_count = world.birds.size();
     if (poses.size() != static_cast<std::size_t>(frames) * bird_count) {
         return make_error(Error::Kind::InvalidInput,
@@ -384,7 +435,7 @@ Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& wo
                               " birds = " + std::to_string(static_cast<std::size_t>(frames) * bird_count) +
                               " poses, got " + std::to_string(poses.size()));
     }
-    auto writer = BirdGlbWriter::create(path, world, frames);
+    auto writer = BirdGlbWriter::create(path, world, frames, compaction);
     if (!writer) return writer.error();
     KW_TRY(writer.value().add_frames(poses));
     return writer.value().finish();

@@ -17,6 +17,7 @@
 #include <vector>
 
 #include "kodawari/version.hpp"
+#include "export/compact_keys.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/rods/shape.hpp"
@@ -59,12 +60,16 @@ struct ChainsGlbWriter::Impl {
     std::vector<float> row;       // tracks x record being written
     std::vector<rods::Transform> joints;
     std::vector<glm::quat> bones;
+    GlbCompaction compaction;
+    GlbCompactionStats stats;
 
     [[nodiscard]] std::size_t key_bytes() const { return std::size_t{frames} * kRecordBytes; }
     void build_nodes();
     [[nodiscard]] Result<void> add_frame(std::span<const glm::vec3> positions, std::span<const glm::quat> orientations);
     [[nodiscard]] Result<void> build_and_write(AtomicFile& file);
     [[nodiscard]] Result<void> copy_channels(AtomicFile& file);
+    [[nodiscard]] Result<void> build_and_write_compact(AtomicFile& file);
+    void add_scene();
 };
 
 void ChainsGlbWriter::Impl::build_nodes() {
@@ -145,19 +150,24 @@ ChainsGlbWriter::ChainsGlbWriter(ChainsGlbWriter&& other) noexcept = default;
 ChainsGlbWriter& ChainsGlbWriter::operator=(ChainsGlbWriter&& other) noexcept = default;
 ChainsGlbWriter::~ChainsGlbWriter() = default;
 
-Result<ChainsGlbWriter> ChainsGlbWriter::create(const std::string& path, const RodScene& scene, std::uint32_t frames) {
+Result<ChainsGlbWriter> ChainsGlbWriter::create(const std::string& path, const RodScene& scene, std::uint32_t frames,
+                                                const GlbCompaction& compaction) {
     if (frames == 0) return make_error(Error::Kind::InvalidInput, path + ": cannot write an animation of 0 frames");
+    KW_TRY(check_compaction(path, compaction));
     auto impl = std::make_unique<Impl>();
+    impl->compaction = compaction;
     impl->path = path;
     impl->scene = &scene;
     impl->frames = frames;
     impl->build_nodes();
     // Refused here rather than after the whole simulation has run: a GLB's length field
     // is 32 bits. The JSON is not counted yet; write_glb_with_tail checks the exact total.
+    // Compacted, the keys' size is known only once they are reduced: write_glb_with_tail
+    // refuses then, before writing.
     const std::uint64_t bytes = impl->model.buffers[0].data.size() +
                                 impl->track_nodes.size() * (std::uint64_t{frames} * kRecordBytes) +
                                 std::uint64_t{frames} * sizeof(float);
-    if (bytes > 0xFFFFFFFFull) {
+    if (!compaction.enabled && bytes > 0xFFFFFFFFull) {
         return make_error(Error::Kind::InvalidInput, path + ": " + std::to_string(impl->track_nodes.size()) + " nodes x " +
                                                          std::to_string(frames) + " frames need " + std::to_string(bytes) +
                                                          " bytes, past the 4 GiB limit of a .glb; bake fewer frames");
@@ -288,13 +298,46 @@ Result<void> ChainsGlbWriter::Impl::build_and_write(AtomicFile& file) {
         node.rotation = {rest[3], rest[4], rest[5], rest[6]};
     }
     if (!animation.channels.empty()) model.animations.push_back(std::move(animation));
+    add_scene();
+    return write_glb_with_tail(file, model, keys_bytes + time_bytes, [&] { return copy_channels(file); });
+}
 
+void ChainsGlbWriter::Impl::add_scene() {
     tinygltf::Scene gltf_scene;
     gltf_scene.name = "characters";
     gltf_scene.nodes.push_back(0);
     model.scenes.push_back(std::move(gltf_scene));
     model.defaultScene = 0;
-    return write_glb_with_tail(file, model, keys_bytes + time_bytes, [&] { return copy_channels(file); });
+}
+
+// GlbCompaction: the keys are reduced first (compact_keys.hpp), into a second temporary
+// file whose bytes, after the meshes, are the buffer's tail: one buffer view holds them,
+// and each channel's key times and values are accessors into it.
+Result<void> ChainsGlbWriter::Impl::build_and_write_compact(AtomicFile& file) {
+    std::vector<float> times(frames);
+    for (std::uint32_t f = 0; f < frames; ++f) times[f] = scene->time(f);
+    constexpr std::array<ChannelKind, 2> kFields = {ChannelKind::Translation, ChannelKind::Rotation};
+    auto compacted = CompactKeys::build(keys, path, track_nodes.size(), kFields, times, compaction, ChainsGlbWriter::kTransposeBytes);
+    if (!compacted) return compacted.error();
+    CompactKeys& keys_out = compacted.value();
+    stats = keys_out.stats();
+    const int view = add_buffer_view(model, model.buffers[0].data.size(), keys_out.bytes(), 0);
+    tinygltf::Animation animation;
+    animation.name = "simulation";
+    for (std::size_t t = 0; t < track_nodes.size(); ++t) {
+        const int node_index = track_nodes[t];
+        const auto translation = keys_out.add_next_channel(model, view);
+        add_linear_channel(animation, translation.first, translation.second, node_index, "translation");
+        const auto rotation = keys_out.add_next_channel(model, view);
+        add_linear_channel(animation, rotation.first, rotation.second, node_index, "rotation");
+        tinygltf::Node& node = model.nodes[static_cast<std::size_t>(node_index)];
+        const float* rest = first.data() + t * kRecordFloats;
+        node.translation = {rest[0], rest[1], rest[2]};
+        node.rotation = {rest[3], rest[4], rest[5], rest[6]};
+    }
+    if (!animation.channels.empty()) model.animations.push_back(std::move(animation));
+    add_scene();
+    return write_glb_with_tail(file, model, keys_out.bytes(), [&] { return keys_out.write(file); });
 }
 
 Result<void> ChainsGlbWriter::finish() {
@@ -303,11 +346,16 @@ Result<void> ChainsGlbWriter::finish() {
         return make_error(Error::Kind::InvalidInput, w.path + ": " + std::to_string(w.added) + " of " +
                                                          std::to_string(w.frames) + " frames added");
     }
-    return write_file_atomically(w.path, [&](AtomicFile& file) { return w.build_and_write(file); });
+    return write_file_atomically(w.path, [&](AtomicFile& file) {
+        return w.compaction.enabled ? w.build_and_write_compact(file) : w.build_and_write(file);
+    });
 }
 
+const GlbCompactionStats& ChainsGlbWriter::compaction_stats() const { return impl_->stats; }
+
 Result<void> write_chains_glb(const std::string& path, const RodScene& scene, std::uint32_t frames,
-                              std::span<const glm::vec3> positions, std::span<const glm::quat> orientations) {
+                              std::span<const glm::vec3> positions, std::span<const glm::quat> orientations,
+                              const GlbCompaction& compaction) {
     const std::size_t joints = scene.world.joint_count;
     const std::size_t expected = std::size_t{frames} * joints;
     if (frames == 0) return make_error(Error::Kind::InvalidInput, path + ": cannot write an animation of 0 frames");
@@ -317,7 +365,7 @@ Result<void> write_chains_glb(const std::string& path, const RodScene& scene, st
                                                          std::to_string(positions.size()) + " and " +
                                                          std::to_string(orientations.size()));
     }
-    auto writer = ChainsGlbWriter::create(path, scene, frames);
+    auto writer = ChainsGlbWriter::create(path, scene, frames, compaction);
     if (!writer) return writer.error();
     for (std::uint32_t f = 0; f < frames; ++f) {
         KW_TRY(writer.value().add_frame(positions.subspan(std::size_t{f} * joints, joints),

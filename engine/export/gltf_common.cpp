@@ -274,6 +274,17 @@ Result<void> write_file_atomically(const std::string& path, const std::function<
     return file.value().commit();
 }
 
+Result<void> read_item_group(SpillFile& keys, std::size_t count, std::uint32_t frames, std::size_t record_floats,
+                             std::size_t begin, std::size_t n, float* in) {
+    const std::size_t record_bytes = record_floats * sizeof(float);
+    // One contiguous run per frame: the group's records of that frame.
+    for (std::uint32_t f = 0; f < frames; ++f) {
+        KW_TRY(keys.read((std::uint64_t{f} * count + begin) * record_bytes, in + std::size_t{f} * n * record_floats,
+                         n * record_bytes));
+    }
+    return {};
+}
+
 Result<void> copy_item_major(SpillFile& keys, AtomicFile& file, std::size_t count, std::uint32_t frames,
                              std::span<const std::size_t> fields, std::size_t group_bytes,
                              const std::function<bool(std::size_t item, std::size_t field)>& keep) {
@@ -285,11 +296,7 @@ Result<void> copy_item_major(SpillFile& keys, AtomicFile& file, std::size_t coun
     std::vector<float> out(in.size());
     for (std::size_t begin = 0; begin < count; begin += group) {
         const std::size_t n = std::min(group, count - begin);
-        // One contiguous run per frame: the group's records of that frame.
-        for (std::uint32_t f = 0; f < frames; ++f) {
-            KW_TRY(keys.read((std::uint64_t{f} * count + begin) * record_bytes, in.data() + std::size_t{f} * n * record_floats,
-                             n * record_bytes));
-        }
+        KW_TRY(read_item_group(keys, count, frames, record_floats, begin, n, in.data()));
         float* o = out.data();
         for (std::size_t item = 0; item < n; ++item) {
             std::size_t offset = 0;

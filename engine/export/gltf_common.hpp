@@ -89,6 +89,12 @@ private:
     bool reading_ = false;
 };
 
+/// Reads items [begin, begin + n) of every frame of `keys` (frames x `count` records of
+/// `record_floats` floats, frame-major) into `in`: frame f's n records at
+/// in + f * n * record_floats.
+[[nodiscard]] Result<void> read_item_group(SpillFile& keys, std::size_t count, std::uint32_t frames, std::size_t record_floats,
+                                           std::size_t begin, std::size_t n, float* in);
+
 /// Copies `keys`, frames x `count` records of float fields (`fields`: each field's float
 /// count, in record order), frame-major as a simulation produces them, to `file`
 /// item-major as a .glb's channels want them: per item, each field's values over all

@@ -24,6 +24,7 @@
 
 #include "kodawari/version.hpp"
 #include "core/binary_file.hpp"
+#include "export/compact_keys.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/export.hpp"
 
@@ -123,6 +124,8 @@ struct RiggedGlbWriter::Impl {
     std::vector<bool> scaled;
     std::uint32_t frames = 0;
     bool finished = false;
+    GlbCompaction compaction;
+    GlbCompactionStats stats;
 
     [[nodiscard]] std::size_t stride() const { return 1 + node_count + extra_count; }
     [[nodiscard]] int out_node(std::size_t instance, int node) const {
@@ -132,6 +135,7 @@ struct RiggedGlbWriter::Impl {
 
     Result<void> build_and_write(AtomicFile& file);
     [[nodiscard]] Result<void> copy_tracks(AtomicFile& file);
+    [[nodiscard]] Result<void> write_compact(AtomicFile& file, tinygltf::Model& out, std::vector<unsigned char>& bytes);
 };
 
 RiggedGlbWriter::RiggedGlbWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -173,10 +177,13 @@ Result<tinygltf::Model> load_source(const std::string& path) {
 
 Result<RiggedGlbWriter> RiggedGlbWriter::create(const std::string& source_path, const gltf::Character& character,
                                                 std::span<const RiggedInstance> instances, std::vector<bool> animated,
-                                                float fps, std::string animation_name, std::string spill_beside) {
+                                                float fps, std::string animation_name, std::string spill_beside,
+                                                const GlbCompaction& compaction) {
     assert(animated.size() == character.nodes.size() && "one animated flag per node of the character");
     assert(fps > 0.0f && std::isfinite(fps));
+    KW_TRY(check_compaction(spill_beside.empty() ? source_path : spill_beside, compaction));
     auto impl = std::make_unique<Impl>();
+    impl->compaction = compaction;
     try {
         auto loaded = load_source(source_path);
         if (!loaded) return loaded.error();
@@ -324,6 +331,8 @@ Result<void> RiggedGlbWriter::add_frame(std::span<const glm::vec3> translation, 
 
 std::uint32_t RiggedGlbWriter::frames() const { return impl_->frames; }
 
+const GlbCompactionStats& RiggedGlbWriter::compaction_stats() const { return impl_->stats; }
+
 int RiggedGlbWriter::output_node(std::size_t instance, int node) const {
     assert(instance < impl_->instances.size() && node >= -1 && node < static_cast<int>(impl_->node_count));
     return impl_->out_node(instance, node);
@@ -463,6 +472,7 @@ Result<void> RiggedGlbWriter::Impl::build_and_write(AtomicFile& file) {
     // The animation: shared key times, then per track a buffer view holding its
     // translations, rotations and (when they change) scales.
     out.animations.clear();
+    if (!animated_nodes.empty() && compaction.enabled) return write_compact(file, out, bytes);
     if (!animated_nodes.empty()) {
         std::vector<float> times(frames);
         for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / fps;
@@ -512,6 +522,41 @@ Result<void> RiggedGlbWriter::Impl::build_and_write(AtomicFile& file) {
         out.buffers[0].data = std::move(bytes);
     }
     return write_glb(file, out);
+}
+
+// GlbCompaction: the keys are reduced first (compact_keys.hpp) into a second temporary
+// file whose bytes follow the buffer's head (the source's data and images) as its tail,
+// one buffer view; each channel's key times and values are accessors into it. A scale
+// channel only for the nodes whose scale leaves the rest scale, as uncompacted.
+Result<void> RiggedGlbWriter::Impl::write_compact(AtomicFile& file, tinygltf::Model& out, std::vector<unsigned char>& bytes) {
+    std::vector<float> times(frames);
+    for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / fps;
+    static_assert(sizeof(Key) == 10 * sizeof(float));
+    constexpr std::array<ChannelKind, 3> kFields = {ChannelKind::Translation, ChannelKind::Rotation, ChannelKind::Scale};
+    auto compacted = CompactKeys::build(*keys, spill_beside, tracks(), kFields, times, compaction, RiggedGlbWriter::kTransposeBytes,
+                                        [&](std::size_t track, std::size_t field) { return field != 2 || scaled[track]; });
+    if (!compacted) return compacted.error();
+    CompactKeys& keys_out = compacted.value();
+    stats = keys_out.stats();
+    const int view = add_buffer_view(out, bytes.size(), keys_out.bytes(), 0);
+    tinygltf::Animation animation;
+    animation.name = animation_name;
+    for (std::size_t i = 0; i < instances.size(); ++i) {
+        for (std::size_t k = 0; k < animated_nodes.size(); ++k) {
+            const int node = out_node(i, animated_nodes[k]);
+            const auto translation = keys_out.add_next_channel(out, view);
+            add_linear_channel(animation, translation.first, translation.second, node, "translation");
+            const auto rotation = keys_out.add_next_channel(out, view);
+            add_linear_channel(animation, rotation.first, rotation.second, node, "rotation");
+            if (scaled[i * animated_nodes.size() + k]) {
+                const auto scale = keys_out.add_next_channel(out, view);
+                add_linear_channel(animation, scale.first, scale.second, node, "scale");
+            }
+        }
+    }
+    out.animations.push_back(std::move(animation));
+    out.buffers[0].data = std::move(bytes);
+    return write_glb_with_tail(file, out, keys_out.bytes(), [&] { return keys_out.write(file); });
 }
 
 // The spill file holds frames x tracks keys; the .glb per track its translations over

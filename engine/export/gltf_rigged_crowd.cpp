@@ -13,7 +13,8 @@ RiggedCrowdExport::RiggedCrowdExport(const RodScene& scene, std::uint32_t charac
                                      RiggedGlbWriter writer)
     : scene_(&scene), character_(character), instances_(std::move(instances)), writer_(std::move(writer)) {}
 
-Result<RiggedCrowdExport> RiggedCrowdExport::create(const RodScene& scene, std::uint32_t character, const std::string& output) {
+Result<RiggedCrowdExport> RiggedCrowdExport::create(const RodScene& scene, std::uint32_t character, const std::string& output,
+                                                    const GlbCompaction& compaction) {
     assert(character < scene.characters.size() && scene.characters[character].rig);
     const CharacterKinematics& k = scene.characters[character];
     const gltf::Character& ch = *k.rig;
@@ -32,7 +33,7 @@ Result<RiggedCrowdExport> RiggedCrowdExport::create(const RodScene& scene, std::
     for (const std::vector<int>& nodes : k.chain_nodes) {
         for (const int n : nodes) animated[static_cast<std::size_t>(n)] = true;
     }
-    auto writer = RiggedGlbWriter::create(ch.source, ch, placed, std::move(animated), scene.fps, "simulation", output);
+    auto writer = RiggedGlbWriter::create(ch.source, ch, placed, std::move(animated), scene.fps, "simulation", output, compaction);
     if (!writer) return writer.error();
     return RiggedCrowdExport(scene, character, std::move(instances), std::move(writer).value());
 }

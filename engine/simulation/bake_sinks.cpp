@@ -14,13 +14,13 @@ namespace {
 // Streams: memory stays BirdGlbWriter's, whatever the frames.
 class BirdsGlbSink final : public BakeSink {
 public:
-    explicit BirdsGlbSink(std::string path) : path_(std::move(path)) {}
+    BirdsGlbSink(std::string path, const GlbCompaction& compaction) : path_(std::move(path)), compaction_(compaction) {}
 
     BakeNeeds needs() const override { return {.bird_poses = true}; }
 
     Result<void> begin(const BakeWorld& world) override {
         if (world.birds->birds.empty()) return {};
-        auto writer = BirdGlbWriter::create(path_, *world.birds, world.frames);
+        auto writer = BirdGlbWriter::create(path_, *world.birds, world.frames, compaction_);
         if (!writer) return writer.error();
         writer_.emplace(std::move(writer).value());
         return {};
@@ -33,17 +33,20 @@ public:
     Result<std::vector<BakeOutput>> finish() override {
         if (!writer_) return std::vector<BakeOutput>{};
         KW_TRY(writer_->finish());
-        return std::vector<BakeOutput>{{path_, BakeOutput::Format::Glb, ""}};
+        std::optional<GlbCompactionStats> stats;
+        if (compaction_.enabled) stats = writer_->compaction_stats();
+        return std::vector<BakeOutput>{{path_, BakeOutput::Format::Glb, "", stats}};
     }
 
 private:
     std::string path_;
+    GlbCompaction compaction_;
     std::optional<BirdGlbWriter> writer_;
 };
 
 class ChainsGlbSink final : public BakeSink {
 public:
-    explicit ChainsGlbSink(std::string path) : path_(std::move(path)) {}
+    ChainsGlbSink(std::string path, const GlbCompaction& compaction) : path_(std::move(path)), compaction_(compaction) {}
 
     BakeNeeds needs() const override { return {.chains = true}; }
 
@@ -61,14 +64,14 @@ public:
         for (std::uint32_t k = 0; k < rods.characters.size(); ++k) {
             if (!rods.characters[k].rig) continue;
             std::string path = !any_procedural && rods.characters.size() == 1 ? path_ : stem + "-" + rods.characters[k].name + ".glb";
-            auto e = RiggedCrowdExport::create(rods, k, path);
+            auto e = RiggedCrowdExport::create(rods, k, path, compaction_);
             if (!e) return e.error();
             if (e.value().instances().empty()) continue;
             rigged_.push_back(std::move(e).value());
             rigged_paths_.push_back(std::move(path));
         }
         if (any_procedural) {
-            auto writer = ChainsGlbWriter::create(path_, rods, frames_);
+            auto writer = ChainsGlbWriter::create(path_, rods, frames_, compaction_);
             if (!writer) return writer.error();
             procedural_.emplace(std::move(writer).value());
         }
@@ -87,17 +90,24 @@ public:
         std::vector<BakeOutput> written;
         for (std::size_t i = 0; i < rigged_.size(); ++i) {
             KW_TRY(rigged_[i].finish(rigged_paths_[i]));
-            written.push_back({rigged_paths_[i], BakeOutput::Format::Glb, "the character's own skeleton and meshes"});
+            written.push_back({rigged_paths_[i], BakeOutput::Format::Glb, "the character's own skeleton and meshes",
+                               stats(rigged_[i].writer().compaction_stats())});
         }
         if (procedural_) {
             KW_TRY(procedural_->finish());
-            written.push_back({path_, BakeOutput::Format::Glb, ""});
+            written.push_back({path_, BakeOutput::Format::Glb, "", stats(procedural_->compaction_stats())});
         }
         return written;
     }
 
 private:
+    [[nodiscard]] std::optional<GlbCompactionStats> stats(const GlbCompactionStats& s) const {
+        if (!compaction_.enabled) return std::nullopt;
+        return s;
+    }
+
     std::string path_;
+    GlbCompaction compaction_;
     const RodScene* scene_ = nullptr;
     std::uint32_t frames_ = 0;
     std::vector<RiggedCrowdExport> rigged_;
@@ -149,7 +159,7 @@ public:
 
     Result<std::vector<BakeOutput>> finish() override {
         KW_TRY(trace_->finish());
-        return std::vector<BakeOutput>{{path_, BakeOutput::Format::Trace, ""}};
+        return std::vector<BakeOutput>{{path_, BakeOutput::Format::Trace, "", {}}};
     }
 
 private:
@@ -161,8 +171,12 @@ private:
 
 }  // namespace
 
-std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path) { return std::make_unique<BirdsGlbSink>(std::move(path)); }
-std::unique_ptr<BakeSink> make_chains_glb_sink(std::string path) { return std::make_unique<ChainsGlbSink>(std::move(path)); }
+std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path, const GlbCompaction& compaction) {
+    return std::make_unique<BirdsGlbSink>(std::move(path), compaction);
+}
+std::unique_ptr<BakeSink> make_chains_glb_sink(std::string path, const GlbCompaction& compaction) {
+    return std::make_unique<ChainsGlbSink>(std::move(path), compaction);
+}
 std::unique_ptr<BakeSink> make_trace_sink(std::string path) { return std::make_unique<TraceSink>(std::move(path)); }
 
 }  // namespace kodawari

@@ -109,7 +109,8 @@ public:
         file_->write(std::string(kEndMark));
         KW_TRY(file_->commit());
         return std::vector<BakeOutput>{{path_, BakeOutput::Format::Part,
-                                        "shard " + std::to_string(shard_.shard.index) + " of " + std::to_string(shard_.shard.count)}};
+                                        "shard " + std::to_string(shard_.shard.index) + " of " + std::to_string(shard_.shard.count),
+                                        {}}};
     }
 
 private:

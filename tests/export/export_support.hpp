@@ -131,4 +131,52 @@ inline const tinygltf::AnimationChannel* find_channel(const tinygltf::Animation&
 }
 
 
+/// A rod scene simulated on the CPU reference: every frame's snapshot, frame-major.
+struct RodRun {
+    RodScene scene;
+    std::uint32_t frames = 0;
+    std::vector<glm::vec3> positions;
+    std::vector<glm::quat> orientations;
+};
+
+/// A rod scene file, `frames` frames on the CPU reference.
+inline RodRun run_rod_scene(const std::string& path, std::uint32_t frames) {
+    RodRun run;
+    auto scene = load_scene(path);
+    EXPECT_TRUE(scene.ok()) << scene.error().message;
+    auto built = build_rod_scene(scene.value());
+    EXPECT_TRUE(built.ok());
+    run.scene = std::move(built).value();
+    run.frames = frames;
+    auto backend = std::move(make_rod_backend(BackendKind::CpuReference, {})).value();
+    rods::RodFrame frame;
+    ChainSnapshot snap;
+    for (std::uint32_t f = 0; f < frames; ++f) {
+        run.scene.frame(f, frame);
+        EXPECT_TRUE((f == 0 ? backend->load(run.scene.world, frame) : backend->step(frame)).ok());
+        EXPECT_TRUE(backend->read(snap).ok());
+        run.positions.insert(run.positions.end(), snap.positions.begin(), snap.positions.end());
+        run.orientations.insert(run.orientations.end(), snap.orientations.begin(), snap.orientations.end());
+    }
+    return run;
+}
+
+/// The bunny scene, `frames` frames on the CPU reference.
+inline RodRun run_bunny(std::uint32_t frames) { return run_rod_scene(std::string(KODAWARI_SOURCE_DIR) + "/scenes/bunny.json", frames); }
+
+/// A copy in `dir` of the shipped scene `name` (scenes/<name>.json) whose crowds have
+/// `count` characters each, its character files named by absolute path.
+inline std::string scene_with_count(const TempDir& dir, const std::string& name, int count) {
+    const std::string source_dir = std::string(KODAWARI_SOURCE_DIR) + "/scenes/";
+    std::ifstream in(source_dir + name + ".json");
+    nlohmann::json scene = nlohmann::json::parse(in);
+    for (auto& crowd : scene["crowds"]) crowd["count"] = count;
+    for (auto& character : scene["characters"]) {
+        if (character.contains("gltf")) character["gltf"] = source_dir + character["gltf"].get<std::string>();
+    }
+    const std::string path = dir.file(name + ".json");
+    std::ofstream(path) << scene.dump(1);
+    return path;
+}
+
 }  // namespace kodawari::export_test

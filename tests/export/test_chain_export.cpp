@@ -17,35 +17,6 @@ using namespace export_test;
 // ---------------------------------------------------------------------------------------
 // Rod scenes: the chains' export.
 
-struct RodRun {
-    RodScene scene;
-    std::uint32_t frames = 0;
-    std::vector<glm::vec3> positions;
-    std::vector<glm::quat> orientations;
-};
-
-// The bunny scene, `frames` frames on the CPU reference.
-RodRun run_bunny(std::uint32_t frames) {
-    RodRun run;
-    auto scene = load_scene(std::string(KODAWARI_SOURCE_DIR) + "/scenes/bunny.json");
-    EXPECT_TRUE(scene.ok());
-    auto built = build_rod_scene(scene.value());
-    EXPECT_TRUE(built.ok());
-    run.scene = std::move(built).value();
-    run.frames = frames;
-    auto backend = std::move(make_rod_backend(BackendKind::CpuReference, {})).value();
-    rods::RodFrame frame;
-    ChainSnapshot snap;
-    for (std::uint32_t f = 0; f < frames; ++f) {
-        run.scene.frame(f, frame);
-        EXPECT_TRUE((f == 0 ? backend->load(run.scene.world, frame) : backend->step(frame)).ok());
-        EXPECT_TRUE(backend->read(snap).ok());
-        run.positions.insert(run.positions.end(), snap.positions.begin(), snap.positions.end());
-        run.orientations.insert(run.orientations.end(), snap.orientations.begin(), snap.orientations.end());
-    }
-    return run;
-}
-
 glm::mat4 node_matrix(const tinygltf::Node& n) {
     glm::mat4 m(1.0f);
     if (n.translation.size() == 3) {

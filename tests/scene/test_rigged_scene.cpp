@@ -327,13 +327,14 @@ struct SimulatedChibi {
     std::vector<std::vector<int>> output_nodes;     // per instance, file node -> exported node
 };
 
-SimulatedChibi simulate_and_export(std::uint32_t count, std::uint32_t frames, const std::string& path) {
+SimulatedChibi simulate_and_export(std::uint32_t count, std::uint32_t frames, const std::string& path,
+                                   const GlbCompaction& compaction = {}) {
     Scene scene = load(kCrowdScene);
     scene.crowds[0].count = count;
     SimulatedChibi out{build(scene), {}, {}};
     auto backend = make_rod_backend(BackendKind::Cpu, BackendOptions{});
     EXPECT_TRUE(backend.ok());
-    auto exporter = RiggedCrowdExport::create(out.rods, 0);
+    auto exporter = RiggedCrowdExport::create(out.rods, 0, {}, compaction);
     EXPECT_TRUE(exporter.ok()) << (exporter.ok() ? "" : exporter.error().message);
     ChainSnapshot snap;
     for (std::uint32_t f = 0; f < frames; ++f) {
@@ -534,52 +535,56 @@ TEST(RiggedScene, RodInputWrittenOnTheDeviceMatchesTheHosts) {
 }
 
 // Blender's own glTF importer (tests/tools/blender_check.py) on the export of a
-// simulated crowd, when Blender is installed (bash scripts/setup --with-blender). One
-// Blender run.
+// simulated crowd, when Blender is installed (bash scripts/setup --with-blender), and on
+// its compact export (--compact: fewer keys, rotations as shorts) with the same counts.
+// Two Blender runs.
 TEST(RiggedScene, BlenderImportsTheExport) {
     std::string output;
     if (run_command("command -v blender", output) != 0) {
         GTEST_SKIP() << "SKIPPED: blender not installed (bash scripts/setup --with-blender installs it)";
     }
-    TempDir dir;
-    const std::string path = dir.file("chibi.glb");
-    constexpr std::uint32_t kInstances = 2;
-    const SimulatedChibi sim = simulate_and_export(kInstances, 20, path);
-    output.clear();
-    const std::string command = "blender -b --factory-startup --python-exit-code 1 -P " +
-                                shell_quote(kSource + "/tests/tools/blender_check.py") + " -- " + shell_quote(path);
-    ASSERT_EQ(run_command(command, output), 0) << output;
-    nlohmann::json report;
-    std::istringstream lines(output);
-    for (std::string line; std::getline(lines, line);) {
-        if (line.rfind("{", 0) != 0) continue;
-        const auto parsed = nlohmann::json::parse(line, nullptr, false);
-        if (parsed.is_object() && parsed.value("check", "") == "kodawari-blender") report = parsed;
-    }
-    ASSERT_TRUE(report.is_object()) << output;
-    std::cout << report.dump().substr(0, 400) << "...\n";
+    for (const bool compact : {false, true}) {
+        SCOPED_TRACE(compact ? "compact" : "uncompacted");
+        TempDir dir;
+        const std::string path = dir.file("chibi.glb");
+        constexpr std::uint32_t kInstances = 2;
+        const SimulatedChibi sim = simulate_and_export(kInstances, 20, path, GlbCompaction{.enabled = compact});
+        output.clear();
+        const std::string command = "blender -b --factory-startup --python-exit-code 1 -P " +
+                                    shell_quote(kSource + "/tests/tools/blender_check.py") + " -- " + shell_quote(path);
+        ASSERT_EQ(run_command(command, output), 0) << output;
+        nlohmann::json report;
+        std::istringstream lines(output);
+        for (std::string line; std::getline(lines, line);) {
+            if (line.rfind("{", 0) != 0) continue;
+            const auto parsed = nlohmann::json::parse(line, nullptr, false);
+            if (parsed.is_object() && parsed.value("check", "") == "kodawari-blender") report = parsed;
+        }
+        ASSERT_TRUE(report.is_object()) << output;
+        std::cout << report.dump().substr(0, 400) << "...\n";
 
-    // Blender 3.4 makes each skin an armature and one action per animated object, bone
-    // channels going to their armature: one action per instance, whose animated bones
-    // are the nodes the clips animate plus every chain joint.
-    const gltf::Character& source = *sim.rods.characters[0].rig;
-    std::set<int> animated;
-    for (const gltf::Animation& a : source.animations) {
-        for (const gltf::Channel& ch : a.channels) animated.insert(ch.node);
+        // Blender 3.4 makes each skin an armature and one action per animated object, bone
+        // channels going to their armature: one action per instance, whose animated bones
+        // are the nodes the clips animate plus every chain joint.
+        const gltf::Character& source = *sim.rods.characters[0].rig;
+        std::set<int> animated;
+        for (const gltf::Animation& a : source.animations) {
+            for (const gltf::Channel& ch : a.channels) animated.insert(ch.node);
+        }
+        for (const std::vector<int>& nodes : sim.rods.characters[0].chain_nodes) animated.insert(nodes.begin(), nodes.end());
+        EXPECT_EQ(report.at("actions").get<std::size_t>(), kInstances);
+        EXPECT_EQ(report.at("armature_count").get<std::size_t>(), kInstances);
+        std::set<std::string> expected;
+        for (std::uint32_t c = 0; c < kInstances; ++c) {
+            for (const int n : animated) expected.insert(sim.rods.character_names[c] + "/" + source.nodes[static_cast<std::size_t>(n)].name);
+        }
+        std::set<std::string> bones;
+        for (const auto& [armature, names] : report.at("armatures").items()) {
+            EXPECT_EQ(names.size(), animated.size()) << armature;
+            for (const auto& bone : names) bones.insert(bone.get<std::string>());
+        }
+        EXPECT_EQ(bones, expected);
     }
-    for (const std::vector<int>& nodes : sim.rods.characters[0].chain_nodes) animated.insert(nodes.begin(), nodes.end());
-    EXPECT_EQ(report.at("actions").get<std::size_t>(), kInstances);
-    EXPECT_EQ(report.at("armature_count").get<std::size_t>(), kInstances);
-    std::set<std::string> expected;
-    for (std::uint32_t c = 0; c < kInstances; ++c) {
-        for (const int n : animated) expected.insert(sim.rods.character_names[c] + "/" + source.nodes[static_cast<std::size_t>(n)].name);
-    }
-    std::set<std::string> bones;
-    for (const auto& [armature, names] : report.at("armatures").items()) {
-        EXPECT_EQ(names.size(), animated.size()) << armature;
-        for (const auto& bone : names) bones.insert(bone.get<std::string>());
-    }
-    EXPECT_EQ(bones, expected);
 }
 
 }  // namespace

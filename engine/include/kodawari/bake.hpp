@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <functional>
 #include <memory>
+#include <optional>
 #include <span>
 #include <string>
 #include <vector>
@@ -15,6 +16,7 @@
 
 #include "kodawari/api.hpp"
 #include "birds/world.hpp"
+#include "export.hpp"
 #include "result.hpp"
 #include "rod_scene.hpp"
 #include "rods/chain_snapshot.hpp"
@@ -60,6 +62,8 @@ struct BakeOutput {
     std::string path;
     Format format = Format::Glb;
     std::string description;  ///< what it holds beyond the format, for messages (may be empty)
+    /// A .glb written with GlbCompaction: what compaction did.
+    std::optional<GlbCompactionStats> compaction;
 };
 
 /// One output of a bake, fed frame by frame. A sink writes its files atomically: nothing
@@ -122,15 +126,19 @@ public:
                                                                 const BakeOptions& options = {});
 
 /// The flock as a `.glb` (write_birds_glb()'s file) at `path`, streamed (BirdGlbWriter):
-/// its memory does not grow with the frames.
-[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path);
+/// its memory does not grow with the frames. `compaction`: its keys compacted (default:
+/// not).
+[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path,
+                                                                         const GlbCompaction& compaction = {});
 
 /// The characters as `.glb` files: the procedural characters (and then the rigged ones
 /// too, as bones) in write_chains_glb's file at `path`, streamed (ChainsGlbWriter); each
 /// rigged character template in its own file (RiggedCrowdExport), `path` itself when it
 /// is the scene's only character, else `<path without .glb>-<character>.glb`. Its memory
-/// does not grow with the frames.
-[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_chains_glb_sink(std::string path);
+/// does not grow with the frames. `compaction`: every file's keys compacted (default:
+/// not).
+[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_chains_glb_sink(std::string path,
+                                                                          const GlbCompaction& compaction = {});
 
 /// A JSON Lines trace (docs/trace-format.md) of birds and chains at `path`.
 [[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_trace_sink(std::string path);

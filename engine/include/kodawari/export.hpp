@@ -25,11 +25,55 @@
 
 namespace kodawari {
 
+/// Compact animation keys (`kodawari run --compact`, docs/compact.md): per channel, the
+/// keys that LINEAR interpolation between the kept ones reproduces within a bound are
+/// dropped (first and last kept; glTF 2.0 Appendix C's lerp and slerp), and rotations are
+/// written as normalized signed 16-bit integers, or 8-bit ones where the rotation bound
+/// absorbs their rounding (up to 0.0158 rad) and that is smaller (§3.11 allows both for
+/// rotation outputs; translations and scales stay floats, as the core spec requires). Each reduced channel
+/// gets its own key times; channels keeping every frame, or only the first and the last,
+/// share one accessor. Off by default: the file is then the uncompacted one, byte for
+/// byte. The bounds, each >= 0 and finite: a point 1 m from a joint moves by at most
+/// position_m + rotation_rad + scale_rel metres.
+struct GlbCompaction {
+    bool enabled = false;
+    /// The distance between a dropped translation key and the interpolated one (metres).
+    float position_m = 0.001f;
+    /// The angle between a dropped rotation key and the interpolated one (radians),
+    /// the rounding included (which alone is up to 6.1e-5 rad at 16 bits, 0.0158 rad at 8).
+    float rotation_rad = 0.001f;
+    /// A dropped scale key's difference from the interpolated one, per axis, relative to
+    /// the key.
+    float scale_rel = 0.001f;
+};
+
+/// What compaction did to one file: keys over all channels before and after, the
+/// animation data's bytes (keys and key times) before and after, and the largest error
+/// it introduced per kind (what re-importing and interpolating gives back, compared with
+/// the uncompacted keys).
+struct GlbCompactionStats {
+    std::uint64_t keys = 0;
+    std::uint64_t kept = 0;
+    std::uint64_t bytes_before = 0;
+    std::uint64_t bytes_after = 0;
+    double position_m = 0.0;
+    double rotation_rad = 0.0;
+    double scale_rel = 0.0;
+    /// Rotation channels, and those of them written as 8-bit integers.
+    std::uint64_t rotations = 0;
+    std::uint64_t byte_rotations = 0;
+};
+
+/// InvalidInput naming `path` unless every bound of an enabled compaction is finite and
+/// >= 0.
+[[nodiscard]] KODAWARI_API Result<void> check_compaction(const std::string& path, const GlbCompaction& compaction);
+
 /// Writes a `.glb`: per bird a node hierarchy of the 7 parts (a simple mesh per part,
 /// shared by all birds of a wing type) and one animation with TRS channels sampled at
 /// every frame. `poses` holds `frames` x birds entries, frame-major.
 [[nodiscard]] KODAWARI_API Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
-                                                        std::span<const gpu::BirdPose> poses, std::uint32_t frames);
+                                                        std::span<const gpu::BirdPose> poses, std::uint32_t frames,
+                                                        const GlbCompaction& compaction = {});
 
 /// Streams write_birds_glb()'s file (the same bytes) frame by frame, so that memory does
 /// not grow with frames x birds. Each frame's keys go to a temporary file beside `path`
@@ -46,11 +90,14 @@ public:
     /// channel-major.
     static constexpr std::size_t kTransposeBytes = std::size_t{32} << 20;
 
-    /// Prepares `path` for `frames` frames of `world` (which must outlive the writer).
-    /// Errors (naming `path`): no frames, fps not positive, more than a .glb can hold,
-    /// a bird of unknown wing type (InvalidInput), the temporary file (Io).
+    /// Prepares `path` for `frames` frames of `world` (which must outlive the writer),
+    /// its keys compacted as `compaction` says (default: not). Errors (naming `path`): no
+    /// frames, fps not positive, more keys than a .glb can hold when not compacting (a
+    /// compacted file's size is known only at finish(), which refuses one past 4 GiB
+    /// before writing it), a bird of unknown wing type, bad compaction bounds
+    /// (InvalidInput), the temporary file (Io).
     [[nodiscard]] static Result<BirdGlbWriter> create(const std::string& path, const birds::BirdWorld& world,
-                                                      std::uint32_t frames);
+                                                      std::uint32_t frames, const GlbCompaction& compaction = {});
 
     BirdGlbWriter(BirdGlbWriter&& other) noexcept;
     BirdGlbWriter& operator=(BirdGlbWriter&& other) noexcept;
@@ -67,6 +114,9 @@ public:
     /// Writes the `.glb` atomically once every frame has been added. Call it once.
     [[nodiscard]] Result<void> finish();
 
+    /// What compaction did, once finish() has written a compacted file (zeros else).
+    [[nodiscard]] const GlbCompactionStats& compaction_stats() const;
+
 private:
     struct Impl;
     explicit BirdGlbWriter(std::unique_ptr<Impl> impl);
@@ -81,7 +131,8 @@ private:
 /// scene.world.joint_count world-space entries (ChainSnapshot's), frame-major.
 [[nodiscard]] KODAWARI_API Result<void> write_chains_glb(const std::string& path, const RodScene& scene, std::uint32_t frames,
                                                          std::span<const glm::vec3> positions,
-                                                         std::span<const glm::quat> orientations);
+                                                         std::span<const glm::quat> orientations,
+                                                         const GlbCompaction& compaction = {});
 
 /// Streams write_chains_glb()'s file (the same bytes) frame by frame, so that memory does
 /// not grow with frames x joints: each frame's keys wait in a temporary file beside
@@ -95,10 +146,12 @@ public:
     /// channel-major.
     static constexpr std::size_t kTransposeBytes = std::size_t{32} << 20;
 
-    /// Prepares `path` for `frames` frames of `scene` (which must outlive the writer).
-    /// Errors (naming `path`): no frames, more keys than a .glb can hold (InvalidInput,
-    /// with the size), the temporary file (Io).
-    [[nodiscard]] static Result<ChainsGlbWriter> create(const std::string& path, const RodScene& scene, std::uint32_t frames);
+    /// Prepares `path` for `frames` frames of `scene` (which must outlive the writer),
+    /// its keys compacted as `compaction` says (default: not). Errors (naming `path`): no
+    /// frames, more keys than a .glb can hold uncompacted (InvalidInput, with the size),
+    /// bad compaction bounds (InvalidInput), the temporary file (Io).
+    [[nodiscard]] static Result<ChainsGlbWriter> create(const std::string& path, const RodScene& scene, std::uint32_t frames,
+                                                        const GlbCompaction& compaction = {});
 
     ChainsGlbWriter(ChainsGlbWriter&& other) noexcept;
     ChainsGlbWriter& operator=(ChainsGlbWriter&& other) noexcept;
@@ -113,6 +166,9 @@ public:
 
     /// Writes the `.glb` atomically once every frame has been added. Call it once.
     [[nodiscard]] Result<void> finish();
+
+    /// What compaction did, once finish() has written a compacted file (zeros else).
+    [[nodiscard]] const GlbCompactionStats& compaction_stats() const;
 
 private:
     struct Impl;
@@ -192,11 +248,13 @@ public:
     /// merge into one buffer); a placement is not finite (InvalidInput).
     /// `spill_beside`: the output's path, beside which the keys wait (empty: the
     /// system's temporary directory); a failure to create that file is an Io error of
-    /// the first add_frame().
+    /// the first add_frame(). `compaction`: the keys compacted (default: not; bad
+    /// bounds are InvalidInput).
     [[nodiscard]] static Result<RiggedGlbWriter> create(const std::string& source_path, const gltf::Character& character,
                                                         std::span<const RiggedInstance> instances,
                                                         std::vector<bool> animated, float fps,
-                                                        std::string animation_name, std::string spill_beside = {});
+                                                        std::string animation_name, std::string spill_beside = {},
+                                                        const GlbCompaction& compaction = {});
 
     /// The size of the buffer that reorders the keys from frame-major to per node.
     static constexpr std::size_t kTransposeBytes = std::size_t{32} << 20;
@@ -225,6 +283,8 @@ public:
 
     /// The frames added so far.
     [[nodiscard]] std::uint32_t frames() const;
+    /// What compaction did, once finish() has written a compacted file (zeros else).
+    [[nodiscard]] const GlbCompactionStats& compaction_stats() const;
     /// The index in the written file of node `node` of the file for instance `instance`;
     /// -1 as `node` gives the instance's root node. For a skinned mesh whose node stayed
     /// in the hierarchy, skinned_mesh_node() gives the node holding the mesh.
@@ -258,10 +318,11 @@ class KODAWARI_API RiggedCrowdExport {
 public:
     /// Prepares the export of RodScene::characters[character] (which must be rigged).
     /// `scene` must outlive the export. `output`: the path finish() will be given, beside
-    /// which the keys wait (RiggedGlbWriter::create's `spill_beside`). Errors: those of
-    /// RiggedGlbWriter::create.
+    /// which the keys wait (RiggedGlbWriter::create's `spill_beside`). `compaction`: the
+    /// keys compacted (default: not). Errors: those of RiggedGlbWriter::create.
     [[nodiscard]] static Result<RiggedCrowdExport> create(const RodScene& scene, std::uint32_t character,
-                                                          const std::string& output = {});
+                                                          const std::string& output = {},
+                                                          const GlbCompaction& compaction = {});
 
     /// Adds frame `frame` of the scene: the clip poses at that frame and the chains of
     /// `snapshot` (the rod backend's state after that frame, for the whole world).

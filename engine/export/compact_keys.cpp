@@ -1,0 +1,315 @@
+// Compact animation keys for the streamed .glb writers: see compact_keys.hpp.
+#include "export/compact_keys.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+
+#include "export/key_reduction.hpp"
+
+namespace kodawari {
+
+Result<void> check_compaction(const std::string& path, const GlbCompaction& compaction) {
+    if (!compaction.enabled) return {};
+    const auto bad = [](float v) { return !std::isfinite(v) || v < 0.0f; };
+    if (bad(compaction.position_m) || bad(compaction.rotation_rad) || bad(compaction.scale_rel)) {
+        return make_error(Error::Kind::InvalidInput,
+                          path + ": compaction bounds must be finite and >= 0, got " + std::to_string(compaction.position_m) +
+                              " m, " + std::to_string(compaction.rotation_rad) + " rad, " +
+                              std::to_string(compaction.scale_rel) + " (relative scale)");
+    }
+    return {};
+}
+
+namespace gltf {
+namespace {
+
+std::size_t width(ChannelKind kind) { return kind == ChannelKind::Rotation ? 4 : 3; }
+
+template <class T>
+void append_bytes(std::vector<unsigned char>& out, const T* data, std::size_t count) {
+    const std::size_t at = out.size();
+    out.resize(at + count * sizeof(T));
+    std::memcpy(out.data() + at, data, count * sizeof(T));
+}
+
+// A channel that keeps most of its keys is smaller keeping all of them: its values
+// without key times of its own (they share every frame's). Exact then, but for the
+// rotations' rounding (`rounding()`).
+template <class Rounding>
+void keep_all_if_smaller(Reduction& r, std::size_t value_bytes, std::uint32_t frames, const Rounding& rounding) {
+    if (r.kept.size() < frames && r.kept.size() > 2 && r.kept.size() * (value_bytes + sizeof(float)) >= std::size_t{frames} * value_bytes) {
+        r.kept.resize(frames);
+        for (std::uint32_t f = 0; f < frames; ++f) r.kept[f] = f;
+        r.max_error = rounding();
+    }
+}
+
+// A channel's bytes in the tail: its values, and its key times unless shared (every
+// frame's, or the ends'); sharing with another channel of its item is not counted.
+std::uint64_t cost(const Reduction& r, std::size_t value_bytes, std::uint32_t frames) {
+    const std::uint64_t kept = r.kept.size();
+    return kept * value_bytes + (kept == frames || kept == 2 ? 0 : kept * sizeof(float));
+}
+
+}  // namespace
+
+Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& beside, std::size_t count,
+                                       std::span<const ChannelKind> fields, std::span<const float> times,
+                                       const GlbCompaction& bounds, std::size_t group_bytes,
+                                       const std::function<bool(std::size_t item, std::size_t field)>& keep) {
+    CompactKeys out;
+    auto spill = SpillFile::open(beside);
+    if (!spill) return spill.error();
+    out.data_ = std::move(spill).value();
+    const auto frames = static_cast<std::uint32_t>(times.size());
+    out.first_time_ = frames > 0 ? static_cast<double>(times.front()) : 0.0;
+    out.last_time_ = frames > 0 ? static_cast<double>(times.back()) : 0.0;
+
+    // The shared key times: every frame's, then the first and the last.
+    std::vector<unsigned char> block;
+    append_bytes(block, times.data(), times.size());
+    const std::uint64_t all_frames = 0;
+    const std::uint64_t ends = block.size();
+    out.ends_ = frames > 1 ? ends : 0;
+    if (frames > 1) {
+        const float pair[2] = {times.front(), times.back()};
+        append_bytes(block, pair, 2);
+    }
+    KW_TRY(out.data_.append(block.data(), block.size()));
+    out.bytes_ = block.size();
+    out.stats_.bytes_before = std::uint64_t{frames} * sizeof(float);
+
+    std::size_t record_floats = 0;
+    for (const ChannelKind kind : fields) record_floats += width(kind);
+    const std::size_t record_bytes = record_floats * sizeof(float);
+    const std::size_t group =
+        std::max<std::size_t>(1, group_bytes / std::max<std::size_t>(1, std::size_t{frames} * record_bytes));
+    std::vector<float> in(std::min(group, count) * std::size_t{frames} * record_floats);
+    std::vector<float> channel;
+    std::vector<std::int16_t> shorts;
+    std::vector<float> kept_times;
+    std::vector<float> kept_floats;
+    std::vector<std::int16_t> narrow;  // the rotations rounded to bytes (held in shorts)
+    std::vector<std::int16_t> kept_shorts;
+    std::vector<std::int8_t> kept_bytes;
+    std::uint64_t accessors = 0;  // streamed: accessors of the items so far
+    out.item_channels_.reserve(count + 1);
+    out.item_accessors_.reserve(count + 1);
+    // The kept frames of the current item's channels and where their times went, to
+    // share them between its channels.
+    std::vector<std::pair<std::vector<std::uint32_t>, std::uint64_t>> item_times;
+    for (std::size_t begin = 0; begin < count; begin += group) {
+        const std::size_t n = std::min(group, count - begin);
+        KW_TRY(read_item_group(keys, count, frames, record_floats, begin, n, in.data()));
+        block.clear();
+        for (std::size_t item = 0; item < n; ++item) {
+            out.item_channels_.push_back(out.channels_.size());
+            out.item_accessors_.push_back(accessors);
+            item_times.clear();
+            std::size_t offset = 0;
+            for (std::size_t field = 0; field < fields.size(); ++field) {
+                const ChannelKind kind = fields[field];
+                const std::size_t w = width(kind);
+                if (keep && !keep(begin + item, field)) {
+                    offset += w;
+                    continue;
+                }
+                channel.resize(std::size_t{frames} * w);
+                for (std::uint32_t f = 0; f < frames; ++f) {
+                    std::memcpy(channel.data() + std::size_t{f} * w,
+                                in.data() + (std::size_t{f} * n + item) * record_floats + offset, w * sizeof(float));
+                }
+                offset += w;
+                const std::size_t value_bytes = kind == ChannelKind::Rotation ? 4 * sizeof(std::int16_t) : 3 * sizeof(float);
+                Reduction r;
+                bool bytes = false;
+                if (kind == ChannelKind::Rotation) {
+                    shorts.resize(channel.size());
+                    quantize_rotations(channel, shorts);
+                    r = reduce_rotations(times, channel, shorts, bounds.rotation_rad);
+                    keep_all_if_smaller(r, value_bytes, frames, [&] { return rounding_error(channel, shorts); });
+                    // Bytes where the bound absorbs their rounding at every key (then every
+                    // kept key is within it and reduce_rotations keeps the spans within it)
+                    // and they come out smaller: half the bytes per key, but more keys.
+                    narrow.resize(channel.size());
+                    quantize_rotations(channel, narrow, RotationBits::Byte);
+                    if (rounding_error(channel, narrow, RotationBits::Byte) <= static_cast<double>(bounds.rotation_rad)) {
+                        Reduction r8 = reduce_rotations(times, channel, narrow, bounds.rotation_rad, RotationBits::Byte);
+                        keep_all_if_smaller(r8, value_bytes / 2, frames,
+                                            [&] { return rounding_error(channel, narrow, RotationBits::Byte); });
+                        if (r8.max_error <= static_cast<double>(bounds.rotation_rad) &&
+                            cost(r8, value_bytes / 2, frames) < cost(r, value_bytes, frames)) {
+                            r = std::move(r8);
+                            bytes = true;
+                            shorts.swap(narrow);
+                        }
+                    }
+                } else {
+                    r = reduce_vec3(times, channel, kind == ChannelKind::Translation ? bounds.position_m : bounds.scale_rel,
+                                    kind == ChannelKind::Translation ? VectorMetric::Distance : VectorMetric::Relative);
+                    keep_all_if_smaller(r, value_bytes, frames, [] { return 0.0; });
+                }
+                double& worst = kind == ChannelKind::Rotation      ? out.stats_.rotation_rad
+                                : kind == ChannelKind::Translation ? out.stats_.position_m
+                                                                   : out.stats_.scale_rel;
+                worst = std::max(worst, r.max_error);
+                Channel c;
+                c.kind = kind;
+                c.keys = static_cast<std::uint32_t>(r.kept.size());
+                c.bytes = bytes;
+                if (r.kept.size() == frames) {
+                    c.times = all_frames;
+                } else if (r.kept.size() == 2) {
+                    c.times = ends;  // first and last, always kept
+                } else {
+                    const auto same = std::find_if(item_times.begin(), item_times.end(),
+                                                   [&](const auto& entry) { return entry.first == r.kept; });
+                    if (same != item_times.end()) {
+                        c.times = same->second;
+                    } else {
+                        c.times = out.bytes_ + block.size();
+                        kept_times.clear();
+                        for (const std::uint32_t f : r.kept) kept_times.push_back(times[f]);
+                        append_bytes(block, kept_times.data(), kept_times.size());
+                        item_times.emplace_back(r.kept, c.times);
+                        ++accessors;
+                    }
+                }
+                c.values = out.bytes_ + block.size();
+                if (kind == ChannelKind::Rotation && bytes) {
+                    kept_bytes.clear();
+                    for (const std::uint32_t f : r.kept) {
+                        for (std::size_t k = 0; k < 4; ++k) kept_bytes.push_back(static_cast<std::int8_t>(shorts[f * 4 + k]));
+                    }
+                    append_bytes(block, kept_bytes.data(), kept_bytes.size());
+                    ++out.stats_.byte_rotations;
+                } else if (kind == ChannelKind::Rotation) {
+                    kept_shorts.clear();
+                    for (const std::uint32_t f : r.kept) kept_shorts.insert(kept_shorts.end(), &shorts[f * 4], &shorts[f * 4] + 4);
+                    append_bytes(block, kept_shorts.data(), kept_shorts.size());
+                } else {
+                    kept_floats.clear();
+                    for (const std::uint32_t f : r.kept) kept_floats.insert(kept_floats.end(), &channel[f * 3], &channel[f * 3] + 3);
+                    append_bytes(block, kept_floats.data(), kept_floats.size());
+                }
+                if (kind == ChannelKind::Rotation) ++out.stats_.rotations;
+                out.channels_.push_back(c);
+                ++accessors;
+                out.stats_.keys += frames;
+                out.stats_.kept += c.keys;
+                out.stats_.bytes_before += std::uint64_t{frames} * w * sizeof(float);
+            }
+        }
+        KW_TRY(out.data_.append(block.data(), block.size()));
+        out.bytes_ += block.size();
+    }
+    out.item_channels_.push_back(out.channels_.size());
+    out.item_accessors_.push_back(accessors);
+    out.stats_.bytes_after = out.bytes_;
+    return out;
+}
+
+tinygltf::Accessor CompactKeys::time_accessor(int view, const Channel& c) const {
+    // Key times are float seconds with min and max, as §3.11 requires of sampler inputs;
+    // every channel keeps the first and the last frame.
+    tinygltf::Accessor accessor;
+    accessor.bufferView = view;
+    accessor.byteOffset = c.times;
+    accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+    accessor.count = c.keys;
+    accessor.type = TINYGLTF_TYPE_SCALAR;
+    accessor.minValues = {first_time_};
+    accessor.maxValues = {last_time_};
+    return accessor;
+}
+
+tinygltf::Accessor CompactKeys::value_accessor(int view, const Channel& c) {
+    tinygltf::Accessor accessor;
+    accessor.bufferView = view;
+    accessor.byteOffset = c.values;
+    accessor.count = c.keys;
+    if (c.kind == ChannelKind::Rotation) {
+        accessor.componentType = c.bytes ? TINYGLTF_COMPONENT_TYPE_BYTE : TINYGLTF_COMPONENT_TYPE_SHORT;
+        accessor.normalized = true;
+        accessor.type = TINYGLTF_TYPE_VEC4;
+    } else {
+        accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
+        accessor.type = TINYGLTF_TYPE_VEC3;
+    }
+    return accessor;
+}
+
+std::pair<int, int> CompactKeys::add_next_channel(tinygltf::Model& model, int view) {
+    const Channel& c = channels_.at(next_++);
+    int input = -1;
+    if (const auto it = time_accessors_.find(c.times); it != time_accessors_.end()) {
+        input = it->second;
+    } else {
+        model.accessors.push_back(time_accessor(view, c));
+        input = static_cast<int>(model.accessors.size() - 1);
+        time_accessors_.emplace(c.times, input);
+    }
+    model.accessors.push_back(value_accessor(view, c));
+    return {input, static_cast<int>(model.accessors.size() - 1)};
+}
+
+void CompactKeys::add_shared_times(tinygltf::Model& model, int view) {
+    // Only those some channel uses: an accessor nothing refers to is an unused object to
+    // glTF-Validator.
+    for (const Channel& c : channels_) {
+        int& shared = c.times == 0 ? all_frames_accessor_ : ends_accessor_;
+        if (!shared_times(c) || shared >= 0) continue;
+        model.accessors.push_back(time_accessor(view, c));
+        shared = static_cast<int>(model.accessors.size() - 1);
+        if (all_frames_accessor_ >= 0 && (ends_ == 0 || ends_accessor_ >= 0)) break;
+    }
+}
+
+void CompactKeys::item_accessors(std::size_t item, int view, std::vector<tinygltf::Accessor>& out) const {
+    // The same walk as item_channels(): a channel's own times come before its values,
+    // once per item (channels of one item with the same kept frames share them).
+    const std::uint64_t end = item_channels_.at(item + 1);
+    for (std::uint64_t k = item_channels_.at(item); k < end; ++k) {
+        const Channel& c = channels_[k];
+        if (!shared_times(c)) {
+            bool seen = false;
+            for (std::uint64_t j = item_channels_[item]; j < k && !seen; ++j) seen = channels_[j].times == c.times;
+            if (!seen) out.push_back(time_accessor(view, c));
+        }
+        out.push_back(value_accessor(view, c));
+    }
+}
+
+void CompactKeys::item_channels(std::size_t item, int first, std::vector<std::pair<int, int>>& out) const {
+    const std::uint64_t begin = item_channels_.at(item);
+    const std::uint64_t end = item_channels_.at(item + 1);
+    const std::size_t at = out.size();
+    int next = first;
+    for (std::uint64_t k = begin; k < end; ++k) {
+        const Channel& c = channels_[k];
+        int input = c.times == 0 ? all_frames_accessor_ : ends_accessor_;
+        if (!shared_times(c)) {
+            input = -1;
+            for (std::uint64_t j = begin; j < k && input < 0; ++j) {
+                if (channels_[j].times == c.times) input = out[at + (j - begin)].first;
+            }
+            if (input < 0) input = next++;
+        }
+        out.emplace_back(input, next++);
+    }
+}
+
+Result<void> CompactKeys::write(AtomicFile& file) {
+    constexpr std::size_t kChunk = std::size_t{8} << 20;
+    std::vector<unsigned char> buffer(static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, bytes_)));
+    for (std::uint64_t at = 0; at < bytes_; at += buffer.size()) {
+        const auto size = static_cast<std::size_t>(std::min<std::uint64_t>(buffer.size(), bytes_ - at));
+        KW_TRY(data_.read(at, buffer.data(), size));
+        file.write(buffer.data(), size);
+    }
+    return {};
+}
+
+}  // namespace gltf
+}  // namespace kodawari
