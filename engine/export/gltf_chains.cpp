@@ -9,6 +9,8 @@
 #include <array>
 #include <cmath>
 #include <cstring>
+#include <optional>
+#include <mutex>
 #include <exception>
 #include <memory>
 #include <new>
@@ -18,6 +20,7 @@
 
 #include "kodawari/version.hpp"
 #include "export/compact_keys.hpp"
+#include "core/parallel.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/rods/shape.hpp"
@@ -58,8 +61,6 @@ struct ChainsGlbWriter::Impl {
     std::vector<float> first;     // tracks x record: frame 0, the rest pose
     std::vector<float> previous;  // tracks x record: the last frame added (rotation hemispheres)
     std::vector<float> row;       // tracks x record being written
-    std::vector<rods::Transform> joints;
-    std::vector<glm::quat> bones;
     GlbCompaction compaction;
     GlbCompactionStats stats;
 
@@ -209,48 +210,62 @@ Result<void> ChainsGlbWriter::Impl::add_frame(std::span<const glm::vec3> positio
         std::memcpy(record, t.data(), sizeof(Vec3));
         std::memcpy(record + 3, r.data(), sizeof(Quat));
     };
-    for (std::uint32_t c = 0; c < world.character_count; ++c) {
-        const CharacterInstance& instance = scene->instances[c];
-        const CharacterKinematics& kind = scene->characters[instance.character];
-        const auto& parents = scene->joint_parents(c);
-        scene->joint_poses(c, f, joints);
-        for (std::size_t j = 0; j < joints.size(); ++j) {
-            const Local l = parents[j] < 0 ? Local{joints[j].position, joints[j].rotation}
-                                           : relative(joints[static_cast<std::size_t>(parents[j])].position,
-                                                      joints[static_cast<std::size_t>(parents[j])].rotation,
-                                                      joints[j].position, joints[j].rotation);
-            write_key(joint_tracks[c][j], l);
-        }
-        const std::uint32_t chain_count = scene->chain_count(c);
-        for (std::uint32_t k = 0; k < chain_count; ++k) {
-            const std::uint32_t chain = instance.chain_begin + k;
-            const rods::ChainInstance& ci = world.chains[chain];
-            const rods::Chain& ch = world.templ(ci).chain;
-            const std::size_t base = ci.joint_begin;
-            // SPEC A.4 output: each bone turned so that its axis points at the next joint.
-            bones.resize(ch.joint_count);
-            for (std::uint32_t i = 0; i < ch.joint_count; ++i) {
-                const glm::quat q = glm::normalize(orientations[base + i]);
-                bones[i] = q;
-                if (i + 1 < ch.joint_count) {
-                    const glm::vec3 d = positions[base + i + 1] - positions[base + i];
-                    const float len = glm::length(d);
-                    if (len > 1e-9f) bones[i] = glm::normalize(rods::shortest_arc(glm::normalize(q * ch.bone_axis[i]), d / len) * q);
+    // Characters are independent and each writes only its own tracks' rows: posing their
+    // skeletons (CPU kinematics) is most of a frame's cost, so it runs on every core.
+    // The first error in character order wins, whatever the threads.
+    std::mutex failed_lock;
+    std::optional<std::pair<std::uint32_t, Error>> failed;
+    parallel_for(world.character_count, resolve_threads(0), [&](std::size_t begin, std::size_t end) {
+        std::vector<rods::Transform> joints;
+        std::vector<glm::quat> bones;
+        for (auto c = static_cast<std::uint32_t>(begin); c < end; ++c) {
+            const CharacterInstance& instance = scene->instances[c];
+            const CharacterKinematics& kind = scene->characters[instance.character];
+            const auto& parents = scene->joint_parents(c);
+            scene->joint_poses(c, f, joints);
+            for (std::size_t j = 0; j < joints.size(); ++j) {
+                const Local l = parents[j] < 0 ? Local{joints[j].position, joints[j].rotation}
+                                               : relative(joints[static_cast<std::size_t>(parents[j])].position,
+                                                          joints[static_cast<std::size_t>(parents[j])].rotation,
+                                                          joints[j].position, joints[j].rotation);
+                write_key(joint_tracks[c][j], l);
+            }
+            const std::uint32_t chain_count = scene->chain_count(c);
+            for (std::uint32_t k = 0; k < chain_count; ++k) {
+                const std::uint32_t chain = instance.chain_begin + k;
+                const rods::ChainInstance& ci = world.chains[chain];
+                const rods::Chain& ch = world.templ(ci).chain;
+                const std::size_t base = ci.joint_begin;
+                // SPEC A.4 output: each bone turned so that its axis points at the next joint.
+                bones.resize(ch.joint_count);
+                for (std::uint32_t i = 0; i < ch.joint_count; ++i) {
+                    const glm::quat q = glm::normalize(orientations[base + i]);
+                    bones[i] = q;
+                    if (i + 1 < ch.joint_count) {
+                        const glm::vec3 d = positions[base + i + 1] - positions[base + i];
+                        const float len = glm::length(d);
+                        if (len > 1e-9f) bones[i] = glm::normalize(rods::shortest_arc(glm::normalize(q * ch.bone_axis[i]), d / len) * q);
+                    }
+                }
+                const rods::Transform& attach = joints[kind.chains[k].joint];
+                for (std::uint32_t i = 0; i < ch.joint_count; ++i) {
+                    const Local l = i == 0 ? relative(attach.position, attach.rotation, positions[base], bones[0])
+                                           : relative(positions[base + i - 1], bones[i - 1], positions[base + i], bones[i]);
+                    if (!std::isfinite(l.t.x + l.t.y + l.t.z + l.r.x + l.r.y + l.r.z + l.r.w)) {
+                        const std::lock_guard lock(failed_lock);
+                        if (!failed || failed->first > c) {
+                            failed.emplace(c, Error{Error::Kind::Internal, path + ": " + scene->chain_names[chain] + ", frame " +
+                                                                              std::to_string(f) + ": joint " +
+                                                                              std::to_string(i) + " is not finite"});
+                        }
+                        return;
+                    }
+                    write_key(chain_tracks[c][k] + i, l);
                 }
             }
-            const rods::Transform& attach = joints[kind.chains[k].joint];
-            for (std::uint32_t i = 0; i < ch.joint_count; ++i) {
-                const Local l = i == 0 ? relative(attach.position, attach.rotation, positions[base], bones[0])
-                                       : relative(positions[base + i - 1], bones[i - 1], positions[base + i], bones[i]);
-                if (!std::isfinite(l.t.x + l.t.y + l.t.z + l.r.x + l.r.y + l.r.z + l.r.w)) {
-                    return make_error(Error::Kind::Internal, path + ": " + scene->chain_names[chain] + ", frame " +
-                                                                 std::to_string(f) + ": joint " + std::to_string(i) +
-                                                                 " is not finite");
-                }
-                write_key(chain_tracks[c][k] + i, l);
-            }
         }
-    }
+    });
+    if (failed) return failed->second;
     KW_TRY(keys.append(row.data(), row.size() * sizeof(float)));
     if (f == 0) first = row;
     previous.swap(row);

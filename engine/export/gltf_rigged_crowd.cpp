@@ -4,7 +4,11 @@
 
 #include <cassert>
 #include <cmath>
+#include <mutex>
+#include <optional>
+#include <utility>
 
+#include "core/parallel.hpp"
 #include "kodawari/export.hpp"
 
 namespace kodawari {
@@ -46,34 +50,48 @@ Result<void> RiggedCrowdExport::add_frame(std::uint32_t frame, const ChainSnapsh
     translation_.resize(instances_.size() * n);
     rotation_.resize(instances_.size() * n);
     scale_.resize(instances_.size() * n);
-    for (std::size_t j = 0; j < instances_.size(); ++j) {
-        const std::uint32_t c = instances_[j];
-        const CharacterInstance& inst = scene.instances[c];
-        // World matrices with the simulated joints placed (RodScene::rigged_world); pose_
-        // is left holding the clip's local TRS, which every other node keeps.
-        scene.rigged_world(c, frame, snapshot.positions, snapshot.orientations, pose_, world_);
-        std::copy(pose_.translation.begin(), pose_.translation.end(), translation_.begin() + static_cast<std::ptrdiff_t>(j * n));
-        std::copy(pose_.rotation.begin(), pose_.rotation.end(), rotation_.begin() + static_cast<std::ptrdiff_t>(j * n));
-        std::copy(pose_.scale.begin(), pose_.scale.end(), scale_.begin() + static_cast<std::ptrdiff_t>(j * n));
-        for (std::size_t chain_index = 0; chain_index < k.chain_nodes.size(); ++chain_index) {
-            const std::vector<int>& nodes = k.chain_nodes[chain_index];
-            for (std::size_t i = 1; i < nodes.size(); ++i) {
-                // The local transform under the parent's world matrix (simulated or animated).
-                const auto node = static_cast<std::size_t>(nodes[i]);
-                const glm::mat4& parent = world_[static_cast<std::size_t>(nodes[i - 1])];
-                const glm::vec3 t = glm::vec3(glm::inverse(parent) * world_[node][3]);
-                const glm::quat r = glm::normalize(glm::conjugate(gltf::rigid_part(parent).rotation) *
-                                                   gltf::rigid_part(world_[node]).rotation);
-                if (!std::isfinite(t.x + t.y + t.z + r.x + r.y + r.z + r.w)) {
-                    return make_error(Error::Kind::Internal, scene.chain_names[inst.chain_begin + chain_index] + ", frame " +
-                                                                 std::to_string(frame) + ": joint " + std::to_string(i) +
-                                                                 " is not finite");
+    // Instances are independent and each fills only its own slice: posing them (the
+    // clip's CPU evaluation, RodScene::rigged_world) is most of a frame's cost, so it
+    // runs on every core. The first error in instance order wins, whatever the threads.
+    std::mutex failed_lock;
+    std::optional<std::pair<std::size_t, Error>> failed;
+    parallel_for(instances_.size(), resolve_threads(0), [&](std::size_t begin, std::size_t end) {
+        gltf::Pose pose;
+        std::vector<glm::mat4> world;
+        for (std::size_t j = begin; j < end; ++j) {
+            const std::uint32_t c = instances_[j];
+            const CharacterInstance& inst = scene.instances[c];
+            // World matrices with the simulated joints placed (RodScene::rigged_world); pose
+            // is left holding the clip's local TRS, which every other node keeps.
+            scene.rigged_world(c, frame, snapshot.positions, snapshot.orientations, pose, world);
+            std::copy(pose.translation.begin(), pose.translation.end(), translation_.begin() + static_cast<std::ptrdiff_t>(j * n));
+            std::copy(pose.rotation.begin(), pose.rotation.end(), rotation_.begin() + static_cast<std::ptrdiff_t>(j * n));
+            std::copy(pose.scale.begin(), pose.scale.end(), scale_.begin() + static_cast<std::ptrdiff_t>(j * n));
+            for (std::size_t chain_index = 0; chain_index < k.chain_nodes.size(); ++chain_index) {
+                const std::vector<int>& nodes = k.chain_nodes[chain_index];
+                for (std::size_t i = 1; i < nodes.size(); ++i) {
+                    // The local transform under the parent's world matrix (simulated or animated).
+                    const auto node = static_cast<std::size_t>(nodes[i]);
+                    const glm::mat4& parent = world[static_cast<std::size_t>(nodes[i - 1])];
+                    const glm::vec3 t = glm::vec3(glm::inverse(parent) * world[node][3]);
+                    const glm::quat r = glm::normalize(glm::conjugate(gltf::rigid_part(parent).rotation) *
+                                                       gltf::rigid_part(world[node]).rotation);
+                    if (!std::isfinite(t.x + t.y + t.z + r.x + r.y + r.z + r.w)) {
+                        const std::lock_guard lock(failed_lock);
+                        if (!failed || failed->first > j) {
+                            failed.emplace(j, Error{Error::Kind::Internal, scene.chain_names[inst.chain_begin + chain_index] +
+                                                                               ", frame " + std::to_string(frame) + ": joint " +
+                                                                               std::to_string(i) + " is not finite"});
+                        }
+                        return;
+                    }
+                    translation_[j * n + node] = t;
+                    rotation_[j * n + node] = r;
                 }
-                translation_[j * n + node] = t;
-                rotation_[j * n + node] = r;
             }
         }
-    }
+    });
+    if (failed) return failed->second;
     return writer_.add_frame(translation_, rotation_, scale_);
 }
 

@@ -347,8 +347,6 @@ private:
     // Per-frame scratch, instances x nodes.
     std::vector<glm::vec3> translation_, scale_;
     std::vector<glm::quat> rotation_;
-    gltf::Pose pose_;
-    std::vector<glm::mat4> world_;
 };
 
 /// What the first line of a trace says.
