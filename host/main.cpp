@@ -5,6 +5,7 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/atomic_file.hpp"
 #include "kodawari/version.hpp"
 #include "commands.hpp"
 
@@ -70,6 +71,8 @@ avx512, avx2, sse4 or scalar; default the widest, as --isa), KODAWARI_VALIDATION
 
 int main(int argc, char** argv) {
     using namespace kodawari::cli;
+    // Ctrl-C, a scheduler's SIGTERM, a closed terminal: no temporary output stays behind.
+    kodawari::remove_temporary_files_on_signals();
     std::vector<std::string> args(argv + 1, argv + argc);
     if (args.empty() || args[0] == "--help" || args[0] == "-h" || args[0] == "help") {
         std::fputs(kUsage, args.empty() ? stderr : stdout);

@@ -3,6 +3,8 @@
 // every rank; errors of the bake itself travel through agree().
 #include "mpi_communicator.hpp"
 
+#include "kodawari/atomic_file.hpp"
+
 #include <climits>
 #include <cstdio>
 #include <cstdint>
@@ -96,6 +98,9 @@ Result<std::unique_ptr<Communicator>> open_mpi_world() {
     if (!initialized && MPI_Init(nullptr, nullptr) != MPI_SUCCESS) {
         return make_error(Error::Kind::Io, "--mpi: MPI_Init failed");
     }
+    // MPI_Init may take SIGINT and SIGTERM for itself: ours come back, so that a rank
+    // ended by mpirun's SIGTERM still removes its temporary outputs.
+    remove_temporary_files_on_signals();
     return std::unique_ptr<Communicator>(std::make_unique<MpiWorld>());
 }
 

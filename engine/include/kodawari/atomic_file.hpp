@@ -15,7 +15,8 @@ namespace kodawari {
 /// removes the temporary file.
 class KODAWARI_API AtomicFile {
 public:
-    /// Opens `<path>.tmp-<pid>` for binary writing.
+    /// Opens a file for binary writing that has no name until commit() (O_TMPFILE in
+    /// `path`'s directory; where the file system cannot, `<path>.tmp-<pid>`).
     [[nodiscard]] static Result<AtomicFile> open(const std::string& path);
 
     AtomicFile(AtomicFile&& other) noexcept;
@@ -41,6 +42,16 @@ private:
     std::string temp_;
     std::FILE* file_ = nullptr;
     bool failed_ = false;
+    int slot_ = -1;          // its entry among the temporaries removed on a signal
+    bool unnamed_ = false;   // O_TMPFILE: no name until commit()
 };
+
+/// Installs handlers for SIGINT, SIGTERM and SIGHUP that remove the temporary file of
+/// every AtomicFile still open in the process (up to 64 at once) and then end it as the
+/// signal would have, so that an interrupted bake leaves nothing behind (its spilled keys
+/// are unlinked from the start). A signal the process was started ignoring stays
+/// ignored (nohup). For programs: a library does not install handlers on its
+/// own; the `kodawari` command calls this first thing.
+KODAWARI_API void remove_temporary_files_on_signals();
 
 }  // namespace kodawari
