@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # An interrupted bake leaves nothing behind (issue 16's first fault): SIGINT while a
 # trace is being written, SIGTERM while the .glb is being assembled, and SIGINT to mpirun
-# (which passes SIGTERM on to its ranks) while rank 0 writes. Each run must end by that
-# signal within seconds, and neither the output nor any `*.tmp-<pid>` file may remain,
-# nor the unnamed file the output is written to before it is complete.
+# (which passes SIGTERM on to its ranks) while rank 0 writes; and two runs writing one
+# output at once leave one whole run's file. Each interrupted run must end by that signal
+# within seconds, and neither the output nor any `*.tmp-<pid>` file may remain, nor the
+# unnamed file the output is written to before it is complete.
 # usage: interrupt_test.sh KODAWARI_BINARY SOURCE_DIR WITH_MPI(0|1)
 set -uo pipefail
 # Job control: background jobs of a shell without it start with SIGINT ignored, and the
@@ -56,6 +57,16 @@ check "the .glb is being written" wait_for "[k]odawari run .*--backend cpu --out
 stop $pid TERM
 check "SIGTERM while assembling the .glb ends the run by SIGTERM (status 143)" test "$rc" -eq 143
 check "SIGTERM leaves neither output nor temporary file" nothing_left
+
+# Two runs writing one output at once: the file is one whole run's, never a mix.
+"$bin" run "$src/scenes/flock.json" --backend cpu --frames 100 --out "$work/a.glb" >/dev/null 2>&1
+"$bin" run "$src/scenes/flock.json" --backend cpu --frames 200 --out "$work/b.glb" >/dev/null 2>&1
+"$bin" run "$src/scenes/flock.json" --backend cpu --frames 100 --out "$work/same.glb" >/dev/null 2>&1 &
+first=$!
+"$bin" run "$src/scenes/flock.json" --backend cpu --frames 200 --out "$work/same.glb" >/dev/null 2>&1
+wait $first
+check "two runs on one output leave one whole run's file" bash -c "cmp -s '$work/same.glb' '$work/a.glb' || cmp -s '$work/same.glb' '$work/b.glb'"
+check "two runs on one output leave no temporary file" bash -c "! ls '$work' | grep -q tmp"
 
 if [[ "$with_mpi" == 1 ]]; then
   export OMPI_ALLOW_RUN_AS_ROOT=1 OMPI_ALLOW_RUN_AS_ROOT_CONFIRM=1
