@@ -1,9 +1,10 @@
 #!/usr/bin/env bash
 # Scale-out end to end (issue 15): `run --shard I/N` + `merge`, and `mpirun ... run --mpi`
 # with real Open MPI, each compared byte for byte with a single-process run of a bird
-# scene and a rigged crowd, compacted (--compact, at merge and on rank 0) or not; a rank that fails (a device index it does not have) and a
-# writing rank that fails (an output it cannot create) end every rank with the message and
-# leave no file; traces under MPI too. Vulkan runs under validation (ctest sets KODAWARI_VALIDATION=1).
+# scene and a rigged crowd, compacted (--compact, at merge and on rank 0) or not, and
+# traces under MPI. A rank that fails (a device index it does not have) and a writing rank
+# that fails (an output it cannot create) end every rank with the message and leave no
+# file. Vulkan runs under validation (ctest sets KODAWARI_VALIDATION=1).
 # usage: scaleout_test.sh KODAWARI_BINARY SOURCE_DIR WITH_MPI(0|1)
 set -uo pipefail
 bin=$1
