@@ -71,6 +71,7 @@ struct ChainsGlbWriter::Impl {
     [[nodiscard]] Result<void> copy_channels(AtomicFile& file);
     [[nodiscard]] Result<void> build_and_write_compact(AtomicFile& file);
     void add_scene();
+    void set_rest_pose(std::size_t track, int node_index);
 };
 
 void ChainsGlbWriter::Impl::build_nodes() {
@@ -306,15 +307,19 @@ Result<void> ChainsGlbWriter::Impl::build_and_write(AtomicFile& file) {
                                           frames, TINYGLTF_TYPE_VEC4);
         add_linear_channel(animation, time_accessor, translation, node_index, "translation");
         add_linear_channel(animation, time_accessor, rotation, node_index, "rotation");
-        // The first frame's pose as the rest pose, for tools that show the file unanimated.
-        tinygltf::Node& node = model.nodes[static_cast<std::size_t>(node_index)];
-        const float* rest = first.data() + t * kRecordFloats;
-        node.translation = {rest[0], rest[1], rest[2]};
-        node.rotation = {rest[3], rest[4], rest[5], rest[6]};
+        set_rest_pose(t, node_index);
     }
     if (!animation.channels.empty()) model.animations.push_back(std::move(animation));
     add_scene();
     return write_glb_with_tail(file, model, keys_bytes + time_bytes, [&] { return copy_channels(file); });
+}
+
+// The first frame's pose as the rest pose, for tools that show the file unanimated.
+void ChainsGlbWriter::Impl::set_rest_pose(std::size_t track, int node_index) {
+    tinygltf::Node& node = model.nodes[static_cast<std::size_t>(node_index)];
+    const float* rest = first.data() + track * kRecordFloats;
+    node.translation = {rest[0], rest[1], rest[2]};
+    node.rotation = {rest[3], rest[4], rest[5], rest[6]};
 }
 
 void ChainsGlbWriter::Impl::add_scene() {
@@ -345,10 +350,7 @@ Result<void> ChainsGlbWriter::Impl::build_and_write_compact(AtomicFile& file) {
         add_linear_channel(animation, translation.first, translation.second, node_index, "translation");
         const auto rotation = keys_out.add_next_channel(model, view);
         add_linear_channel(animation, rotation.first, rotation.second, node_index, "rotation");
-        tinygltf::Node& node = model.nodes[static_cast<std::size_t>(node_index)];
-        const float* rest = first.data() + t * kRecordFloats;
-        node.translation = {rest[0], rest[1], rest[2]};
-        node.rotation = {rest[3], rest[4], rest[5], rest[6]};
+        set_rest_pose(t, node_index);
     }
     if (!animation.channels.empty()) model.animations.push_back(std::move(animation));
     add_scene();

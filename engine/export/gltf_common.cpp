@@ -1,5 +1,6 @@
 // Pieces shared by the glTF writers.
 #include "export/gltf_common.hpp"
+#include "export/gltf_json_stream.hpp"
 
 #include <algorithm>
 #include <cassert>
@@ -8,7 +9,6 @@
 #include <filesystem>
 #include <limits>
 #include <ostream>
-#include <sstream>
 #include <string>
 #include <utility>
 #include <vector>
@@ -39,31 +39,6 @@ protected:
 private:
     AtomicFile& file_;
 };
-// Where the root object's member `key` starts in compact JSON (its opening quote), or npos.
-std::size_t root_member(const std::string& json, const std::string& key) {
-    const std::string quoted = "\"" + key + "\":";
-    int depth = 0;
-    bool in_string = false;
-    for (std::size_t i = 0; i < json.size(); ++i) {
-        const char c = json[i];
-        if (in_string) {
-            if (c == '\\') {
-                ++i;
-            } else if (c == '"') {
-                in_string = false;
-            }
-        } else if (c == '"') {
-            if (depth == 1 && json.compare(i, quoted.size(), quoted) == 0) return i;
-            in_string = true;
-        } else if (c == '{' || c == '[') {
-            ++depth;
-        } else if (c == '}' || c == ']') {
-            --depth;
-        }
-    }
-    return std::string::npos;
-}
-
 }  // namespace
 
 std::size_t BufferWriter::allocate(std::size_t size) {
@@ -152,59 +127,9 @@ Result<void> write_glb(AtomicFile& file, tinygltf::Model& model) {
 
 Result<void> write_glb_with_tail(AtomicFile& file, tinygltf::Model& model, std::uint64_t tail_bytes,
                                  const std::function<Result<void>()>& write_tail) {
-    // tinygltf frames the JSON and a buffer it holds whole, so it is given the head of the
-    // buffer only; its JSON then says the head's length, which is put right here, and the
-    // container is framed again as tinygltf frames it (WriteBinaryGltfStream).
-    const std::uint64_t head_bytes = model.buffers.at(0).data.size();
-    std::ostringstream stream;
-    tinygltf::TinyGLTF writer;
-    if (!writer.WriteGltfSceneToStream(&model, stream, false, true) || !stream) {
-        return make_error(Error::Kind::Io, file.path() + ": glTF serialization failed");
-    }
-    std::string glb = std::move(stream).str();
-    std::uint32_t json_chunk = 0;
-    if (glb.size() < 20) return make_error(Error::Kind::Internal, file.path() + ": tinygltf wrote no GLB header");
-    std::memcpy(&json_chunk, glb.data() + 12, 4);
-    std::string json = glb.substr(20, json_chunk);
-    while (!json.empty() && json.back() == ' ') json.pop_back();
-    std::vector<unsigned char>().swap(model.buffers[0].data);
-    // The root object's "buffers" member (an asset's extras may hold one of their own).
-    const std::string written = "\"buffers\":[{\"byteLength\":" + std::to_string(head_bytes) + "}]";
-    const std::size_t at = root_member(json, "buffers");
-    if (at == std::string::npos || json.compare(at, written.size(), written) != 0) {
-        return make_error(Error::Kind::Internal, file.path() + ": the buffer's length is not where it was expected in the JSON");
-    }
-    const std::uint64_t bin_bytes = head_bytes + tail_bytes;
-    json.replace(at, written.size(), "\"buffers\":[{\"byteLength\":" + std::to_string(bin_bytes) + "}]");
-
-    const auto padding = [](std::uint64_t size) { return static_cast<std::uint32_t>((4 - size % 4) % 4); };
-    const std::uint64_t json_length = json.size() + padding(json.size());
-    const std::uint64_t bin_length = bin_bytes + padding(bin_bytes);
-    const std::uint64_t total = 12 + 8 + json_length + (bin_bytes > 0 ? 8 + bin_length : 0);
-    if (total > 0xFFFFFFFFull) {
-        return make_error(Error::Kind::InvalidInput, file.path() + ": " + std::to_string(total) +
-                                                         " bytes exceed the 4 GiB limit of a .glb");
-    }
-    const auto word = [&](std::uint32_t value) { file.write(&value, sizeof value); };
-    file.write("glTF", 4);
-    word(2);
-    word(static_cast<std::uint32_t>(total));
-    word(static_cast<std::uint32_t>(json_length));
-    word(0x4E4F534Au);
-    file.write(json);
-    file.write(std::string(padding(json.size()), ' '));
-    if (bin_bytes > 0) {
-        word(static_cast<std::uint32_t>(bin_length));
-        word(0x004E4942u);
-        // The head is the serialized buffer tinygltf wrote after its own BIN chunk header.
-        file.write(glb.data() + glb.size() - (head_bytes + padding(head_bytes)), head_bytes);
-        glb.clear();
-        glb.shrink_to_fit();
-        KW_TRY(write_tail());
-        const char zeros[4] = {};
-        file.write(zeros, padding(bin_bytes));
-    }
-    return {};
+    // The streamed writer with nothing streamed: one framing of the container, and the
+    // JSON never held twice (tinygltf's DOM and string of a large model).
+    return write_streamed_glb(file, model, StreamedElements{}, tail_bytes, write_tail);
 }
 
 Result<SpillFile> SpillFile::open(const std::string& beside) {

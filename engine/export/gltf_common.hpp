@@ -60,7 +60,8 @@ private:
 /// Serializes `model` as a .glb into `file` (not committed) whose one buffer is
 /// model.buffers[0].data followed by `tail_bytes` more that `write_tail` appends to
 /// `file`: the bytes write_glb() would write with the tail in the buffer, without holding
-/// the tail in memory. tinygltf may throw; callers catch.
+/// the tail in memory (write_streamed_glb() with nothing streamed: the JSON waits in a
+/// temporary file beside `file`). tinygltf may throw; callers catch.
 [[nodiscard]] Result<void> write_glb_with_tail(AtomicFile& file, tinygltf::Model& model, std::uint64_t tail_bytes,
                                                const std::function<Result<void>()>& write_tail);
 
