@@ -8,6 +8,7 @@
 #include <cstdint>
 #include <cstdlib>
 #include <filesystem>
+#include <fstream>
 #include <ostream>
 #include <string>
 #include <system_error>
@@ -52,6 +53,16 @@ public:
 private:
     std::filesystem::path path_;
 };
+
+/// The bytes of the file at `path` ("" when it cannot be read).
+inline std::string file_bytes(const std::string& path) {
+    std::ifstream in(path, std::ios::binary | std::ios::ate);
+    if (!in) return {};
+    std::string data(static_cast<std::size_t>(in.tellg()), '\0');
+    in.seekg(0);
+    in.read(data.data(), static_cast<std::streamsize>(data.size()));
+    return data;
+}
 
 /// The options of the GPU tests' devices: validation (with synchronization validation)
 /// when ctest sets KODAWARI_VALIDATION=1. The library reads no environment variable;

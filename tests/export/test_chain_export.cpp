@@ -100,14 +100,6 @@ TEST(Export, ChainsRejectMismatchedSizes) {
     EXPECT_FALSE(fs::exists(dir.file("x.glb")));
 }
 
-std::string bytes_of(const std::string& path) {
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    std::string data(static_cast<std::size_t>(in.tellg()), '\0');
-    in.seekg(0);
-    in.read(data.data(), static_cast<std::streamsize>(data.size()));
-    return data;
-}
-
 // Frames one at a time (a bake's sink) end in write_chains_glb's file (whose bytes
 // export_identity pins to those of the writer that held every frame); the keys wait in
 // a temporary file that is never seen in the directory.
@@ -126,7 +118,7 @@ TEST(Export, ChainsStreamedGiveTheBytesOfOneCall) {
         EXPECT_EQ(dir.entries(), std::vector<std::string>{"whole.glb"});
     }
     ASSERT_TRUE(writer.value().finish().ok());
-    EXPECT_EQ(bytes_of(dir.file("whole.glb")), bytes_of(dir.file("streamed.glb")));
+    EXPECT_EQ(testing_support::file_bytes(dir.file("whole.glb")), testing_support::file_bytes(dir.file("streamed.glb")));
 }
 
 TEST(Export, ChainsStreamFailuresLeaveNoFile) {

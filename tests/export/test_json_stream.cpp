@@ -210,13 +210,6 @@ std::string tinygltf_glb(tinygltf::Model& model) {
     return std::move(stream).str();
 }
 
-std::string read_file(const std::string& path) {
-    std::string bytes(static_cast<std::size_t>(std::filesystem::file_size(path)), '\0');
-    std::ifstream in(path, std::ios::binary);
-    in.read(bytes.data(), static_cast<std::streamsize>(bytes.size()));
-    return bytes;
-}
-
 // Moves `all`'s elements from `keep` on into a source of groups of 0 to 3.
 template <typename T>
 gltf::ElementSource<T> split(Random& r, std::vector<T>& all, std::size_t keep,
@@ -282,7 +275,7 @@ void check_identical(std::uint32_t seed, int nodes, int accessors, int channels,
         ASSERT_TRUE(written.ok()) << written.error().message;
         ASSERT_TRUE(file.value().commit().ok());
     }
-    const std::string actual = read_file(path);
+    const std::string actual = testing_support::file_bytes(path);
     ASSERT_EQ(actual.size(), expected.size());
     EXPECT_TRUE(actual == expected) << "first difference at byte "
                                     << std::distance(actual.begin(), std::mismatch(actual.begin(), actual.end(), expected.begin()).first);
@@ -344,7 +337,7 @@ TEST(JsonStream, AccessorOffsetsPast2GiB) {
     ASSERT_TRUE(file.ok());
     ASSERT_TRUE(gltf::write_streamed_glb(file.value(), model, streamed, 0, {}).ok());
     ASSERT_TRUE(file.value().commit().ok());
-    const std::string glb = read_file(dir.file("big.glb"));
+    const std::string glb = testing_support::file_bytes(dir.file("big.glb"));
     std::uint32_t json_length = 0;
     std::memcpy(&json_length, glb.data() + 12, 4);
     const auto json = nlohmann::json::parse(glb.substr(20, json_length));

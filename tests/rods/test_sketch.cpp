@@ -27,13 +27,6 @@ using Json = nlohmann::ordered_json;
 
 constexpr double kPi = 3.14159265358979323846;
 
-std::string read_file(const std::string& path) {
-    std::ifstream in(path, std::ios::binary);
-    std::ostringstream s;
-    s << in.rdbuf();
-    return s.str();
-}
-
 std::string ahoge_path() { return std::string(KODAWARI_SOURCE_DIR) + "/scenes/ahoge.json"; }
 
 // A chain of 9 joints, 2 cm segments, at a head-like height, turned, seen from 2 m.
@@ -256,7 +249,7 @@ ViewSpec some_view(glm::vec3 direction) {
 const ChainSpec& ahoge_chain(const Scene& scene) { return scene.characters.at(0).chains.at(0); }
 
 TEST(SketchSave, AppendsAViewExampleAndUndoGivesTheFileBack) {
-    const std::string text = read_file(ahoge_path());
+    const std::string text = testing_support::file_bytes(ahoge_path());
     const ViewSpec view = some_view({1.0f, 1.0f, 1.0f});  // 55 degrees from every example
     auto edit = add_view_example(text, "ahoge.json", "girl/ahoge", view);
     ASSERT_TRUE(edit.ok()) << edit.error().message;
@@ -306,7 +299,7 @@ TEST(SketchSave, AppendsAViewExampleAndUndoGivesTheFileBack) {
 }
 
 TEST(SketchSave, ReplacesAnExampleForNearlyTheSameView) {
-    const std::string text = read_file(ahoge_path());
+    const std::string text = testing_support::file_bytes(ahoge_path());
     auto edit = add_view_example(text, "ahoge.json", "girl/ahoge", some_view({0.0f, 0.2f, 1.0f}));  // 11 deg from "front"
     ASSERT_TRUE(edit.ok()) << edit.error().message;
     EXPECT_TRUE(edit.value().replaced);
@@ -320,7 +313,7 @@ TEST(SketchSave, ReplacesAnExampleForNearlyTheSameView) {
 }
 
 TEST(SketchSave, AChainWithoutViewsGetsAViewsArrayAndUndoRemovesIt) {
-    Json scene = Json::parse(read_file(ahoge_path()));
+    Json scene = Json::parse(testing_support::file_bytes(ahoge_path()));
     scene["characters"][0]["chains"][0].erase("views");
     const std::string text = scene.dump(2) + "\n";
     auto edit = add_view_example(text, "plain.json", "girl/ahoge", some_view({0.0f, 0.0f, 1.0f}));
@@ -335,7 +328,7 @@ TEST(SketchSave, AChainWithoutViewsGetsAViewsArrayAndUndoRemovesIt) {
 }
 
 TEST(SketchSave, RefusesAMirrorAnUnknownChainAndAFullChain) {
-    const std::string bunny = read_file(std::string(KODAWARI_SOURCE_DIR) + "/scenes/bunny.json");
+    const std::string bunny = testing_support::file_bytes(std::string(KODAWARI_SOURCE_DIR) + "/scenes/bunny.json");
     auto mirror = add_view_example(bunny, "bunny.json", "bunny/ear_r", some_view({0.0f, 0.0f, 1.0f}));
     ASSERT_FALSE(mirror.ok());
     EXPECT_NE(mirror.error().message.find("mirror"), std::string::npos) << mirror.error().message;
@@ -343,7 +336,7 @@ TEST(SketchSave, RefusesAMirrorAnUnknownChainAndAFullChain) {
     EXPECT_NE(mirror.error().message.find("bunny.json: $.characters[0].chains["), std::string::npos)
         << mirror.error().message;
 
-    const std::string text = read_file(ahoge_path());
+    const std::string text = testing_support::file_bytes(ahoge_path());
     auto unknown = add_view_example(text, "ahoge.json", "girl/tail", some_view({0.0f, 0.0f, 1.0f}));
     ASSERT_FALSE(unknown.ok());
     EXPECT_NE(unknown.error().message.find("ahoge.json: $.characters[0].chains: character \"girl\" has no chain \"tail\""),
@@ -371,11 +364,11 @@ TEST(SketchSave, RefusesAMirrorAnUnknownChainAndAFullChain) {
 TEST(SketchSave, WritesOnlyAValidScene) {
     const testing_support::TempDir dir;
     const std::string path = dir.file("scene.json");
-    const std::string text = read_file(ahoge_path());
+    const std::string text = testing_support::file_bytes(ahoge_path());
     auto edit = add_view_example(text, path, "girl/ahoge", some_view({1.0f, 1.0f, 1.0f}));
     ASSERT_TRUE(edit.ok());
     ASSERT_TRUE(write_scene_text(path, edit.value().text).ok());
-    EXPECT_EQ(read_file(path), edit.value().text);
+    EXPECT_EQ(testing_support::file_bytes(path), edit.value().text);
     auto loaded = load_scene(path);
     ASSERT_TRUE(loaded.ok()) << loaded.error().message;
     EXPECT_EQ(ahoge_chain(loaded.value()).views.size(), 6u);
@@ -386,7 +379,7 @@ TEST(SketchSave, WritesOnlyAValidScene) {
     auto refused = write_scene_text(path, broken);
     ASSERT_FALSE(refused.ok());
     EXPECT_NE(refused.error().message.find("nothing was written"), std::string::npos) << refused.error().message;
-    EXPECT_EQ(read_file(path), edit.value().text);
+    EXPECT_EQ(testing_support::file_bytes(path), edit.value().text);
     EXPECT_EQ(dir.entries().size(), 1u);  // no temporary file left
 }
 
@@ -440,7 +433,7 @@ TEST(SketchEndToEnd, TheRestShapeSeenFromTheCameraFollowsTheStroke) {
     // weight is ((d_back . d + 1) / 2)^4 < 1e-6, so after the sketch (influence 50, weight
     // 1 at its own direction) the blend is the sketched shape up to that weight, the 6
     // written digits (1e-6 m on 0.14 m) and float rounding: far below 0.5 px.
-    Json json = Json::parse(read_file(ahoge_path()));
+    Json json = Json::parse(testing_support::file_bytes(ahoge_path()));
     Json& views = json["characters"][0]["chains"][0]["views"];
     views = Json::array({views[1]});
     const std::string text = json.dump(2) + "\n";

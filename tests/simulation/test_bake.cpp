@@ -18,14 +18,6 @@ namespace {
 
 std::string scene_path(const char* name) { return std::string(KODAWARI_SOURCE_DIR) + "/scenes/" + name; }
 
-std::string bytes_of(const std::string& path) {
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    std::string data(static_cast<std::size_t>(in.tellg()), '\0');
-    in.seekg(0);
-    in.read(data.data(), static_cast<std::streamsize>(data.size()));
-    return data;
-}
-
 std::unique_ptr<Simulation> open(const char* scene, std::uint32_t frames) {
     auto made = Simulation::open(scene_path(scene), {.backend = BackendKind::Cpu, .frames = frames});
     EXPECT_TRUE(made.ok()) << made.error().message;
@@ -67,7 +59,7 @@ TEST(Bake, BirdsGlbIsTheWritersFileOfTheSteppedPoses) {
     std::vector<gpu::BirdPose> poses(std::size_t{kFrames} * stepped->bird_world().birds.size());
     ASSERT_TRUE(stepped->step(kFrames, {.bird_poses = poses, .bird_diag = {}}).ok());
     ASSERT_TRUE(write_birds_glb(dir.file("stepped.glb"), stepped->bird_world(), poses, kFrames).ok());
-    EXPECT_EQ(bytes_of(dir.file("baked.glb")), bytes_of(dir.file("stepped.glb")));
+    EXPECT_EQ(testing_support::file_bytes(dir.file("baked.glb")), testing_support::file_bytes(dir.file("stepped.glb")));
 }
 
 // The procedural characters' sink streams its keys: its file is write_chains_glb's of
@@ -94,7 +86,7 @@ TEST(Bake, ChainsGlbIsTheWritersFileOfTheSnapshots) {
         orientations.insert(orientations.end(), snapshot.orientations.begin(), snapshot.orientations.end());
     }
     ASSERT_TRUE(write_chains_glb(dir.file("stepped.glb"), *stepped->rod_scene(), kFrames, positions, orientations).ok());
-    EXPECT_EQ(bytes_of(dir.file("baked.glb")), bytes_of(dir.file("stepped.glb")));
+    EXPECT_EQ(testing_support::file_bytes(dir.file("baked.glb")), testing_support::file_bytes(dir.file("stepped.glb")));
 }
 
 TEST(Bake, AFailureLeavesNoFile) {

@@ -23,15 +23,6 @@ namespace {
 
 std::string scene_path(const char* name) { return std::string(KODAWARI_SOURCE_DIR) + "/scenes/" + name; }
 
-std::string bytes_of(const std::string& path) {
-    std::ifstream in(path, std::ios::binary | std::ios::ate);
-    if (!in) return {};
-    std::string data(static_cast<std::size_t>(in.tellg()), '\0');
-    in.seekg(0);
-    in.read(data.data(), static_cast<std::streamsize>(data.size()));
-    return data;
-}
-
 template <class T>
 bool same_bits(const T& a, const T& b) {
     return std::memcmp(&a, &b, sizeof(T)) == 0;
@@ -91,9 +82,9 @@ void expect_merge_is_single_bake(const char* scene_name, std::uint32_t frames, s
     auto merged_sinks = glb_sinks(source.value()->world(), dir.file("merged.glb"));
     auto merged = bake(*source.value(), pointers(merged_sinks));
     ASSERT_TRUE(merged.ok()) << merged.error().message;
-    const std::string a = bytes_of(dir.file("single.glb"));
+    const std::string a = testing_support::file_bytes(dir.file("single.glb"));
     EXPECT_FALSE(a.empty());
-    EXPECT_TRUE(a == bytes_of(dir.file("merged.glb"))) << scene_name << ": the merged file differs from the single bake's";
+    EXPECT_TRUE(a == testing_support::file_bytes(dir.file("merged.glb"))) << scene_name << ": the merged file differs from the single bake's";
 }
 
 }  // namespace
@@ -251,7 +242,7 @@ TEST(Shards, MergeRefusesPartsOfOtherBakes) {
         refused({"p0", "not-a-part", "p2"}, "not a kodawari part file");
     }
     {
-        const std::string data = bytes_of(dir.file("p1"));
+        const std::string data = testing_support::file_bytes(dir.file("p1"));
         std::ofstream(dir.file("cut"), std::ios::binary) << data.substr(0, data.size() - 100);
         auto source = open_parts(std::vector<std::string>{dir.file("p0"), dir.file("cut"), dir.file("p2")});
         ASSERT_TRUE(source.ok()) << source.error().message;  // the header is whole: found while reading
