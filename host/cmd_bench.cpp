@@ -372,7 +372,9 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
 // so that a noisy machine slows them alike.
 int bench_view(Args& args, BackendChoice choice) {
     const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(120));
-    const auto [width, height] = image_size(args.option("size"));
+    const auto size = image_size(args.option("size"));  // not bound: a lambda below uses them (clang < 16)
+    const auto width = size.first;
+    const auto height = size.second;
     const auto json_path = args.option("json");
     auto positionals = args.positionals();
     if (positionals.size() > 2) throw UsageError{"usage: kodawari bench view [SCENE] [options]"};

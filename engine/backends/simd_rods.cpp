@@ -182,7 +182,8 @@ public:
         parallel_for(count, threads_, [&](std::size_t begin, std::size_t end) {
             for (std::size_t c = begin; c < end; ++c) {
                 const rods::ChainInstance& chain = world_->chains[c];
-                const auto [b, l] = lane_of_[c];
+                const std::size_t b = lane_of_[c].first;  // not a structured binding: lambdas below use l (clang < 16)
+                const std::uint32_t l = lane_of_[c].second;
                 const float* joints = block(batches_[b]);
                 const float* rows = chain_rows(batches_[b]);
                 auto at = [&](const float* base, std::size_t row) { return base[row * kBatchLanes + l]; };
@@ -241,7 +242,8 @@ private:
     }
 
     rods::ChainState state(std::uint32_t c) const {
-        const auto [b, l] = lane_of_[c];
+        const std::size_t b = lane_of_[c].first;  // not a structured binding: lambdas below use l (clang < 16)
+        const std::uint32_t l = lane_of_[c].second;
         const simd::RodBatch& batch = batches_[b];
         const float* rows = block(batch);
         auto get = [&](std::size_t row) { return rows[row * kBatchLanes + l]; };

@@ -154,6 +154,28 @@ void DrawList::add_screen_triangle(glm::vec2 a, glm::vec2 b, glm::vec2 c, Rgba8 
 // ---------------------------------------------------------------------------------------
 // Renderer
 
+namespace {
+// Presentation (RendererOptions::create_surface): the swapchain and its own command buffer
+// and fence, because the frame's submission waits on and signals semaphores. At namespace
+// scope, not nested in Impl: clang (< 16) does not see a nested struct's default member
+// initializers while the enclosing class is incomplete, and std::optional::emplace() then
+// finds no default constructor.
+struct PresentTarget {
+    vk::raii::SwapchainKHR swapchain{nullptr};
+    std::vector<vk::Image> images;
+    vk::Extent2D extent{};     // the swapchain's
+    vk::Extent2D requested{};  // the window's framebuffer size it was made for
+    bool stale = false;        // out of date or suboptimal: remade on the next present()
+    vk::raii::Semaphore acquired{nullptr};
+    // One per swapchain image: a present may still wait on an image's semaphore when
+    // the next frame starts, so it is reused only when that image comes back.
+    std::vector<vk::raii::Semaphore> finished;
+    vk::raii::CommandPool pool{nullptr};
+    vk::raii::CommandBuffer cmd{nullptr};
+    vk::raii::Fence fence{nullptr};
+};
+}  // namespace
+
 struct Renderer::Impl {
     std::shared_ptr<gpu::VulkanContext> ctx;
     std::uint32_t width = 0, height = 0;
@@ -167,23 +189,8 @@ struct Renderer::Impl {
     std::optional<BirdLayer> birds;
     std::optional<SkinnedLayer> skinned;
 
-    // Presentation (RendererOptions::create_surface): its own command buffer and fence,
-    // because the frame's submission waits on and signals semaphores.
-    struct Window {
-        vk::raii::SwapchainKHR swapchain{nullptr};
-        std::vector<vk::Image> images;
-        vk::Extent2D extent{};     // the swapchain's
-        vk::Extent2D requested{};  // the window's framebuffer size it was made for
-        bool stale = false;        // out of date or suboptimal: remade on the next present()
-        vk::raii::Semaphore acquired{nullptr};
-        // One per swapchain image: a present may still wait on an image's semaphore when
-        // the next frame starts, so it is reused only when that image comes back.
-        std::vector<vk::raii::Semaphore> finished;
-        vk::raii::CommandPool pool{nullptr};
-        vk::raii::CommandBuffer cmd{nullptr};
-        vk::raii::Fence fence{nullptr};
-    };
-    std::optional<Window> window;
+    // Presentation, when the renderer has a surface (PresentTarget above).
+    std::optional<PresentTarget> window;
 
     [[nodiscard]] Result<void> upload(const DrawList& list);
     void record_pass(const vk::raii::CommandBuffer& cmd, const DrawList& list) const;
@@ -561,7 +568,7 @@ Result<bool> Renderer::present(const DrawList& list, std::uint32_t window_width,
             KW_TRY(r.make_swapchain(window_width, window_height));
         }
         if (r.window->images.empty()) return false;  // minimized
-        Impl::Window& w = *r.window;
+        PresentTarget& w = *r.window;
         // No image (a timeout) is not an error: the frame is skipped.
         auto acquired = gpu::guard("Vulkan swapchain image", [&]() -> Result<std::optional<std::uint32_t>> {
             const auto [result, i] = w.swapchain.acquireNextImage(UINT64_MAX, *w.acquired);
