@@ -1,0 +1,338 @@
+// Fuzz target: the C API's world-building calls (kodawari.h), as a binding in another
+// language would drive them: the input decodes into a chain world's description (its
+// templates, view examples, chains, colliders) and three frames, and into a bird world's
+// (routes, flocks, flight settings), with values that are often out of range, non-finite
+// or inconsistent (an index past its array, a route with a cusp). Array lengths always
+// match what the description says: a caller who lies about a pointer's size is outside
+// any C API's reach. The cpu backend with one thread runs what is created.
+//
+// Invariants: every call returns a status from the header's list, with a message when it
+// is not KODAWARI_OK; a world that is created steps, and its outputs are finite.
+#include <cstdint>
+#include <cstdio>
+#include <cstdlib>
+#include <string>
+#include <vector>
+
+#include "fuzz_support.hpp"
+#include "kodawari/kodawari.h"
+
+namespace {
+
+using kodawari::fuzz::ByteReader;
+using kodawari::fuzz::finding;
+
+void check(kodawari_status s, const char* call, const char* message) {
+    if (s < KODAWARI_OK || s > KODAWARI_INTERNAL) finding(std::string(call) + " returned an unknown status");
+    if (s == KODAWARI_INTERNAL) finding(std::string(call) + " reported an internal error: " + message);
+    if (s != KODAWARI_OK && (message == nullptr || message[0] == '\0')) {
+        finding(std::string(call) + " failed without a message");
+    }
+}
+
+void transform(ByteReader& in, kodawari_transform& t) {
+    for (float& p : t.position) p = in.number(5.0f);
+    for (float& q : t.rotation) q = in.number(1.0f);
+    if (in.flag()) t.rotation[0] = t.rotation[1] = t.rotation[2] = 0.0f, t.rotation[3] = 1.0f;
+}
+
+void camera(ByteReader& in, kodawari_camera& c) {
+    c.orthographic = in.upto(1);
+    for (float& p : c.position) p = in.number(10.0f);
+    for (float& f : c.forward) f = in.number(1.0f);
+}
+
+struct ShapeData {
+    std::vector<float> positions;
+    std::vector<float> orientations;
+};
+
+void shape(ByteReader& in, std::uint32_t joints, ShapeData& out, kodawari_chain_shape& s) {
+    out.positions.assign(std::size_t{joints} * 3, 0.0f);
+    for (std::uint32_t j = 1; j < joints; ++j) {
+        out.positions[j * 3 + 0] = out.positions[(j - 1) * 3 + 0] + in.number(0.05f);
+        out.positions[j * 3 + 1] = out.positions[(j - 1) * 3 + 1] + 0.05f + in.number(0.05f);
+        out.positions[j * 3 + 2] = out.positions[(j - 1) * 3 + 2] + in.number(0.05f);
+    }
+    s.positions = out.positions.data();
+    s.orientations = nullptr;
+    if (in.flag()) {
+        out.orientations.assign(std::size_t{joints} * 4, 0.0f);
+        for (float& q : out.orientations) q = in.number(1.0f);
+        s.orientations = out.orientations.data();
+    }
+}
+
+void chain_world(ByteReader& in) {
+    const std::uint32_t template_count = 1 + in.upto(2);
+    const std::uint32_t character_count = 1 + in.upto(2);
+    const std::uint32_t chain_count = 1 + in.upto(5);
+    const std::uint32_t collider_count = in.upto(3);
+
+    std::vector<kodawari_chain_template_desc> templates(template_count);
+    std::vector<ShapeData> shapes;
+    std::vector<std::vector<kodawari_view_example>> views(template_count);
+    shapes.reserve(template_count * (1 + KODAWARI_MAX_VIEW_EXAMPLES));
+    for (std::uint32_t t = 0; t < template_count; ++t) {
+        kodawari_chain_template_desc& d = templates[t];
+        d.joint_count = in.upto(9);  // 0 and 1 are errors
+        const std::uint32_t joints = d.joint_count < 2 ? 2 : d.joint_count;
+        shape(in, joints, shapes.emplace_back(), d.base);
+        views[t].resize(in.upto(3));
+        for (kodawari_view_example& v : views[t]) {
+            for (float& c : v.direction) c = in.number(1.0f);
+            v.influence = in.number(10.0f);
+            shape(in, joints, shapes.emplace_back(), v.shape);
+        }
+        d.views = views[t].empty() ? nullptr : views[t].data();
+        d.view_count = static_cast<std::uint32_t>(views[t].size());
+        d.thickness = in.number(0.05f);
+        d.mass = in.number(0.01f);
+        kodawari_solver_params_default(&d.solver);
+        if (in.flag()) {
+            d.solver.max_substep = in.number(0.05f);
+            d.solver.iterations = in.upto(70);
+            d.solver.stiffness = in.number(1.0f);
+            d.solver.rest_stiffness = in.number(1.0f);
+            d.solver.damping = in.number(50.0f);
+            d.solver.gravity[1] = in.number(50.0f);
+            d.solver.wind[0] = in.number(50.0f);
+            d.solver.momentum_suppression = in.number(1.0f);
+        }
+    }
+    std::vector<kodawari_chain_desc> chains(chain_count);
+    for (kodawari_chain_desc& c : chains) {
+        c.template_index = in.upto(template_count);  // one past the end is an error
+        c.character = in.upto(character_count);
+        c.collider_begin = in.upto(collider_count);
+        c.collider_count = in.upto(collider_count);
+    }
+    std::vector<kodawari_collider_desc> attached(collider_count);
+    for (kodawari_collider_desc& c : attached) {
+        c.character = in.upto(character_count);
+        for (float& v : c.local.a) v = in.number(0.5f);
+        for (float& v : c.local.b) v = in.number(0.5f);
+        c.local.radius = in.number(0.2f);
+    }
+
+    kodawari_chain_world_desc desc{};
+    desc.templates = templates.data();
+    desc.template_count = template_count;
+    desc.chains = chains.data();
+    desc.chain_count = chain_count;
+    desc.character_count = character_count;
+    desc.collider_count = collider_count;
+    desc.colliders = collider_count > 0 && in.flag() ? attached.data() : nullptr;
+    desc.backend.backend = KODAWARI_BACKEND_CPU;
+    desc.backend.threads = 1;
+
+    std::vector<kodawari_transform> references(character_count);
+    std::vector<kodawari_transform> roots(chain_count);
+    std::vector<kodawari_capsule> world_colliders(collider_count);
+    const auto next_frame = [&](kodawari_chain_frame& f) {
+        f = {};
+        f.dt = in.flag() ? 1.0f / 60.0f : in.number(1.0f);
+        camera(in, f.camera);
+        for (auto& r : references) transform(in, r);
+        for (auto& r : roots) transform(in, r);
+        for (auto& c : world_colliders) {
+            for (float& v : c.a) v = in.number(5.0f);
+            for (float& v : c.b) v = in.number(5.0f);
+            c.radius = in.number(0.3f);
+        }
+        f.references = references.data();
+        f.reference_count = character_count;
+        f.roots = roots.data();
+        f.root_count = chain_count;
+        if (desc.colliders == nullptr && collider_count > 0) {
+            f.colliders = world_colliders.data();
+            f.collider_count = collider_count;
+        }
+    };
+
+    const bool verbose = std::getenv("KODAWARI_FUZZ_VERBOSE") != nullptr;  // what a finding's input decodes to
+    const auto dump_frame = [&](const kodawari_chain_frame& f) {
+        if (!verbose) return;
+        std::fprintf(stderr, "frame: dt %g, camera %u (%g %g %g) fwd (%g %g %g)\n", double{f.dt}, f.camera.orthographic,
+                     double{f.camera.position[0]}, double{f.camera.position[1]}, double{f.camera.position[2]},
+                     double{f.camera.forward[0]}, double{f.camera.forward[1]}, double{f.camera.forward[2]});
+        for (std::uint32_t k = 0; k < f.reference_count + f.root_count; ++k) {
+            const kodawari_transform& t = k < f.reference_count ? f.references[k] : f.roots[k - f.reference_count];
+            std::fprintf(stderr, "  %s %u: (%g %g %g) q (%g %g %g %g)\n", k < f.reference_count ? "reference" : "root",
+                         k < f.reference_count ? k : k - f.reference_count, double{t.position[0]}, double{t.position[1]},
+                         double{t.position[2]}, double{t.rotation[0]}, double{t.rotation[1]}, double{t.rotation[2]},
+                         double{t.rotation[3]});
+        }
+        for (std::uint32_t k = 0; k < f.collider_count; ++k) {
+            std::fprintf(stderr, "  collider %u: (%g %g %g)-(%g %g %g) r %g\n", k, double{f.colliders[k].a[0]},
+                         double{f.colliders[k].a[1]}, double{f.colliders[k].a[2]}, double{f.colliders[k].b[0]},
+                         double{f.colliders[k].b[1]}, double{f.colliders[k].b[2]}, double{f.colliders[k].radius});
+        }
+    };
+    if (verbose) {
+        for (const kodawari_chain_template_desc& d : templates) {
+            const kodawari_solver_params& p = d.solver;
+            std::fprintf(stderr, "template: %u joints, %u views, thickness %g, mass %g, substep %g, %u iterations, stiffness %g,"
+                         " rest %g, damping %g, gravity %g, wind %g, suppression %g\n", d.joint_count, d.view_count,
+                         double{d.thickness}, double{d.mass}, double{p.max_substep}, p.iterations, double{p.stiffness},
+                         double{p.rest_stiffness}, double{p.damping}, double{p.gravity[1]}, double{p.wind[0]},
+                         double{p.momentum_suppression});
+            const std::uint32_t n = d.joint_count < 2 ? 2 : d.joint_count;
+            for (std::uint32_t j = 0; j < n; ++j) {
+                std::fprintf(stderr, "  base %u: (%g %g %g)%s\n", j, double{d.base.positions[j * 3]},
+                             double{d.base.positions[j * 3 + 1]}, double{d.base.positions[j * 3 + 2]},
+                             d.base.orientations ? " (orientations given)" : "");
+            }
+            for (std::uint32_t v = 0; v < d.view_count; ++v) {
+                std::fprintf(stderr, "  view %u: (%g %g %g) influence %g\n", v, double{d.views[v].direction[0]},
+                             double{d.views[v].direction[1]}, double{d.views[v].direction[2]}, double{d.views[v].influence});
+            }
+        }
+        for (const kodawari_chain_desc& c : chains) {
+            std::fprintf(stderr, "chain: template %u, character %u, colliders [%u, +%u)\n", c.template_index, c.character,
+                         c.collider_begin, c.collider_count);
+        }
+        std::fprintf(stderr, "%u characters, %u colliders%s\n", character_count, collider_count,
+                     desc.colliders ? " (attached)" : "");
+    }
+    kodawari_chain_frame frame;
+    next_frame(frame);
+    dump_frame(frame);
+    kodawari_chain_world* world = nullptr;
+    const kodawari_status created = kodawari_chain_world_create(&desc, &frame, &world);
+    check(created, "kodawari_chain_world_create", kodawari_last_error());
+    if (created != KODAWARI_OK) {
+        if (world != nullptr) finding("a failed create set *out");
+        return;
+    }
+    kodawari_chain_world_info info{};
+    check(kodawari_chain_world_get_info(world, &info), "kodawari_chain_world_get_info", kodawari_chain_world_last_error(world));
+    std::vector<float> positions(std::size_t{info.joint_count} * 3);
+    std::vector<float> weights(std::size_t{chain_count} * KODAWARI_WEIGHTS_PER_CHAIN);
+    kodawari_chain_output out{};
+    out.positions = positions.data();
+    out.positions_capacity = positions.size();
+    out.weights = weights.data();
+    out.weights_capacity = weights.size();
+    for (int f = 0; f < 3; ++f) {
+        next_frame(frame);
+        dump_frame(frame);
+        const kodawari_status s = kodawari_chain_world_step(world, &frame);
+        check(s, "kodawari_chain_world_step", kodawari_chain_world_last_error(world));
+        if (s != KODAWARI_OK) continue;  // a frame with bad values is refused; the world stays
+        const kodawari_status r = kodawari_chain_world_read(world, &out);
+        check(r, "kodawari_chain_world_read", kodawari_chain_world_last_error(world));
+        if (r != KODAWARI_OK) finding("reading a world that stepped failed");
+        for (float p : positions) kodawari::fuzz::require_finite(p, "a chain joint position");
+        for (float w : weights) kodawari::fuzz::require_finite(w, "a view weight");
+    }
+    kodawari_chain_world_destroy(world);
+}
+
+void bird_world(ByteReader& in) {
+    const std::uint32_t route_count = 1 + in.upto(1);
+    std::vector<std::vector<float>> points(route_count);
+    std::vector<kodawari_route_desc> routes(route_count);
+    for (std::uint32_t r = 0; r < route_count; ++r) {
+        const std::uint32_t segments = 1 + in.upto(3);
+        points[r].resize((3 * segments + 1) * 3);
+        for (std::size_t k = 0; k < points[r].size(); ++k) points[r][k] = static_cast<float>(k) * 3.0f + in.number(20.0f);
+        routes[r].points = points[r].data();
+        routes[r].point_count = static_cast<std::uint32_t>(points[r].size() / 3) - in.upto(1);  // 3n+1, or not
+        routes[r].loop = in.upto(1);
+        routes[r].parametric = in.upto(1);
+        routes[r].segment_duration = in.number(5.0f);
+    }
+    const std::uint32_t flock_count = 1 + in.upto(1);
+    std::vector<kodawari_flock_desc> flocks(flock_count);
+    std::vector<std::vector<float>> offsets(flock_count), phases(flock_count);
+    std::uint32_t birds = 0;
+    for (std::uint32_t k = 0; k < flock_count; ++k) {
+        kodawari_flock_desc& f = flocks[k];
+        const auto wing = static_cast<kodawari_wing_type>(in.upto(3));  // 3 is not a wing type
+        const std::uint32_t count = 1 + in.upto(20);
+        check(kodawari_flock_desc_default(wing, count, &f), "kodawari_flock_desc_default", kodawari_last_error());
+        f.route = in.upto(route_count);
+        if (in.flag()) {
+            f.speed = in.number(40.0f);
+            f.frequency = in.number(10.0f);
+            f.amplitude = in.number(3.0f);
+        }
+        if (in.flag()) {
+            offsets[k].resize(std::size_t{count} * 4);
+            for (float& v : offsets[k]) v = in.number(10.0f);
+            f.offsets = offsets[k].data();
+        }
+        if (in.flag()) {
+            phases[k].resize(count);
+            for (float& v : phases[k]) v = in.number(1.0f);
+            f.phases = phases[k].data();
+        }
+        f.count = count;
+        birds += count;
+    }
+    kodawari_bird_world_desc desc{};
+    desc.routes = routes.data();
+    desc.route_count = route_count;
+    desc.flocks = flocks.data();
+    desc.flock_count = flock_count;
+    desc.fps = in.flag() ? 60.0f : in.number(240.0f);
+    kodawari_flight_settings_default(&desc.flight);
+    if (in.flag()) {
+        desc.flight.gravity = in.number(20.0f);
+        desc.flight.max_bank = in.number(1.6f);
+        desc.flight.seed_bank_rule = in.upto(1);
+        desc.flight.seed_mode_rule = in.upto(1);
+        desc.flight.ascend_enter = in.number(1.6f);
+        desc.flight.ascend_exit = in.number(1.6f);
+        desc.flight.descend_enter = in.number(1.6f);
+        desc.flight.descend_exit = in.number(1.6f);
+        for (float& r : desc.flight.blend_rates) r = in.number(1.0f);
+    }
+    desc.backend.backend = KODAWARI_BACKEND_CPU;
+    desc.backend.threads = 1;
+    if (std::getenv("KODAWARI_FUZZ_VERBOSE") != nullptr) {  // what a finding's input decodes to
+        for (std::uint32_t r = 0; r < route_count; ++r) {
+            std::fprintf(stderr, "route %u: %u points, loop %u, parametric %u, %g s per segment:", r, routes[r].point_count,
+                         routes[r].loop, routes[r].parametric, double{routes[r].segment_duration});
+            for (std::uint32_t k = 0; k < routes[r].point_count * 3; ++k) std::fprintf(stderr, " %g", double{points[r][k]});
+            std::fprintf(stderr, "\n");
+        }
+        for (const kodawari_flock_desc& f : flocks) {
+            std::fprintf(stderr, "flock: route %u, wing %d, %u birds, speed %g, frequency %g, amplitude %g, offsets %s, phases %s\n",
+                         f.route, static_cast<int>(f.wing_type), f.count, double{f.speed}, double{f.frequency},
+                         double{f.amplitude}, f.offsets ? "yes" : "no", f.phases ? "yes" : "no");
+        }
+        std::fprintf(stderr, "fps %g, gravity %g, max_bank %g, rules %u %u, climb %g %g %g %g, blend %g %g %g\n",
+                     double{desc.fps}, double{desc.flight.gravity}, double{desc.flight.max_bank}, desc.flight.seed_bank_rule,
+                     desc.flight.seed_mode_rule, double{desc.flight.ascend_enter}, double{desc.flight.ascend_exit},
+                     double{desc.flight.descend_enter}, double{desc.flight.descend_exit}, double{desc.flight.blend_rates[0]},
+                     double{desc.flight.blend_rates[1]}, double{desc.flight.blend_rates[2]});
+    }
+    kodawari_bird_world* world = nullptr;
+    const kodawari_status created = kodawari_bird_world_create(&desc, &world);
+    check(created, "kodawari_bird_world_create", kodawari_last_error());
+    if (created != KODAWARI_OK) return;
+    constexpr std::uint32_t kFrames = 3;
+    std::vector<float> world_transforms(std::size_t{kFrames} * birds * KODAWARI_BIRD_PARTS * KODAWARI_TRANSFORM_FLOATS);
+    kodawari_bird_output out{};
+    out.world_transforms = world_transforms.data();
+    out.world_transforms_capacity = world_transforms.size();
+    const kodawari_status s = kodawari_bird_world_simulate(world, kFrames, &out);
+    check(s, "kodawari_bird_world_simulate", kodawari_bird_world_last_error(world));
+    if (s != KODAWARI_OK) finding("a bird world that was created failed to simulate");
+    for (float v : world_transforms) kodawari::fuzz::require_finite(v, "a bird transform");
+    kodawari_bird_world_destroy(world);
+}
+
+}  // namespace
+
+extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
+    ByteReader in(data, size);
+    if (in.flag()) {
+        chain_world(in);
+    } else {
+        bird_world(in);
+    }
+    return 0;
+}
