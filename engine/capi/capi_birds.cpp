@@ -103,7 +103,7 @@ void read_route(const kodawari_route_desc& r, const std::string& what, birds::Bi
     require_pointer(r.points, what + ".points");
     require_flag(r.loop, what + ".loop");
     require_flag(r.parametric, what + ".parametric");
-    if (r.parametric) require_range(r.segment_duration, 0.0, 3600.0, what + ".segment_duration", true);
+    if (r.parametric) require_range(r.segment_duration, 0.001, 3600.0, what + ".segment_duration");  // t / it finite
     birds::RouteSpec spec;
     spec.points.resize(r.point_count);
     for (std::uint32_t i = 0; i < r.point_count; ++i) spec.points[i] = {r.points[3 * i], r.points[3 * i + 1], r.points[3 * i + 2]};
@@ -158,7 +158,7 @@ void read_world(const kodawari_bird_world_desc& desc, birds::BirdWorld& world) {
     require_array(desc.routes, desc.route_count, "desc->routes", "desc->route_count");
     if (desc.flock_count == 0) invalid("desc->flock_count", "0; expected at least one flock");
     require_array(desc.flocks, desc.flock_count, "desc->flocks", "desc->flock_count");
-    require_range(desc.fps, 0.0, 1000.0, "desc->fps", true);
+    require_range(desc.fps, 0.01, 1000.0, "desc->fps");  // f / fps finite for any f
     world.fps = desc.fps;
     // The vulkan backend sizes its ring of output frames by this (bounded by its own byte
     // budget); the C API does not know how many frames a caller asks for at once.

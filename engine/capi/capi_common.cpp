@@ -99,9 +99,13 @@ void require_flag(std::uint32_t value, const std::string& what) {
 }
 
 void require_range(float value, double low, double high, const std::string& what, bool low_open, bool high_open) {
+    // Against the bounds as floats: the caller's 0.05f (0.0500000007) is "0.05", and a
+    // bound that only the double can hold would turn away the float nearest to it.
     const double v = value;
-    const bool above = low_open ? v > low : v >= low;
-    const bool below = high_open ? v < high : v <= high;
+    const double lo = static_cast<float>(low);
+    const double hi = static_cast<float>(high);
+    const bool above = low_open ? v > lo : v >= lo;
+    const bool below = high_open ? v < hi : v <= hi;
     if (finite(value) && above && below) return;
     invalid(what, number(v) + "; expected a number in " + (low_open ? "(" : "[") + number(low) + ", " + number(high) +
                       (high_open ? ")" : "]"));

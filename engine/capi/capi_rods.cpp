@@ -123,8 +123,8 @@ rods::ChainTemplate read_template(const kodawari_chain_template_desc& t, const s
         shapes.push_back(read_shape(v.shape, t.joint_count, view + ".shape"));
         views.push_back(rods::ViewExample{vec3(v.direction), v.influence});
     }
-    require_range(t.thickness, 0.0, 1.0, what + ".thickness", true);
-    require_range(t.mass, 0.0, 1000.0, what + ".mass", true);
+    require_range(t.thickness, rods::kMinThickness, 1.0, what + ".thickness");
+    require_range(t.mass, rods::kMinMass, 1000.0, what + ".mass");
     const rods::SolverParams params = read_solver(t.solver, what + ".solver");
     auto made = rods::make_chain_template(what, base, shapes, views, t.thickness, t.mass, params);
     check(made);
@@ -190,7 +190,7 @@ void check_frame_args(const kodawari_chain_world& w, const kodawari_chain_frame*
     require_pointer(frame, what);
     const kodawari_chain_frame& f = *frame;
     // At most 1 s: with max_substep >= 1e-4 s a frame runs at most 10,000 substeps.
-    if (uses_dt) require_range(f.dt, 0.0, 1.0, what + "->dt", true);
+    if (uses_dt) require_range(f.dt, rods::kMinFrameDt, 1.0, what + "->dt");
     require_camera(f.camera, what + "->camera");
     const auto count = [&](std::uint32_t given, std::uint32_t expected, const std::string& name, const std::string& per) {
         if (given != expected) {

@@ -142,11 +142,14 @@ Result<void> validate(const SolverParams& p) {
 Result<Chain> make_chain(const ChainShape& base, float thickness, float mass) {
     auto basis = make_basis(base);
     if (!basis) return basis.error();
-    if (!(thickness > 0.0f && std::isfinite(thickness))) {
-        return make_error(Error::Kind::InvalidInput, "rods chain: thickness must be > 0 m");
+    // Lower bounds, not just > 0: the inertia m r^2 of a denormal mass or radius is 0 in
+    // float and its inverse infinite (found by fuzzing the C API). 10 um and 1 ug are
+    // below a single hair's width and a segment's mass.
+    if (!(thickness >= kMinThickness && std::isfinite(thickness))) {
+        return make_error(Error::Kind::InvalidInput, "rods chain: thickness must be >= 1e-5 m");
     }
-    if (!(mass > 0.0f && std::isfinite(mass))) {
-        return make_error(Error::Kind::InvalidInput, "rods chain: mass must be > 0 kg");
+    if (!(mass >= kMinMass && std::isfinite(mass))) {
+        return make_error(Error::Kind::InvalidInput, "rods chain: mass must be >= 1e-9 kg");
     }
     Chain chain;
     chain.joint_count = basis.value().joint_count();

@@ -83,7 +83,8 @@ Result<void> RodWorld::finalize() {
 }
 
 Result<void> check_frame(const RodWorld& world, const RodFrame& frame) {
-    if (!(frame.dt > 0.0f && std::isfinite(frame.dt))) return bad("rod frame: dt must be > 0 s");
+    // >= 10 us: velocities are displacements / dt, infinite for a denormal dt (fuzzing).
+    if (!(frame.dt >= kMinFrameDt && std::isfinite(frame.dt))) return bad("rod frame: dt must be >= 1e-5 s");
     if (frame.reference.size() != world.character_count || frame.roots.size() != world.chains.size() ||
         frame.colliders.size() != world.collider_count) {
         return bad("rod frame: expected " + std::to_string(world.character_count) + " reference poses, " +

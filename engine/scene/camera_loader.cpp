@@ -49,8 +49,8 @@ Result<void> read_path(const JsonReader& r, const JsonNode& node, rods::CameraMo
     Vec3 target{};
     KW_SCENE_ASSIGN(target, read_point(r, r.member(node, "target"), kMaxCoordinate));
     float segment = 1.0f;
-    KW_TRY(optional_member(r, node, "segment_duration", segment,
-                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 3600.0)); }));
+    KW_TRY(optional_member(r, node, "segment_duration", segment,  // >= 1 ms: time / segment finite
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.001, 3600.0)); }));
     const JsonNode interpolation = r.member(node, "interpolation");
     if (interpolation.present()) KW_TRY(read_interpolation(r, interpolation, m.interpolation));
     KW_TRY(optional_member(r, node, "loop", m.loop, [&](const JsonNode& n) { return r.boolean(n); }));

@@ -172,8 +172,9 @@ Result<void> check_template(const JsonReader& r, const JsonNode& node, const Cha
 
 Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, ChainSpec& c) {
     KW_TRY(optional_member(r, node, "thickness", c.thickness,
-                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1.0)); }));
-    KW_TRY(optional_member(r, node, "mass", c.mass, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(1e-5, 1.0)); }));
+    KW_TRY(optional_member(r, node, "mass", c.mass,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(1e-9, 1000.0)); }));
     const JsonNode physics = r.member(node, "physics");
     if (physics.present()) KW_TRY(read_physics(r, physics, c.params));
     KW_TRY(optional_member(r, node, "collide", c.collide, [&](const JsonNode& n) { return r.boolean(n); }));

@@ -152,8 +152,9 @@ Result<void> read_route(const JsonReader& r, const JsonNode& node, birds::RouteS
         return r.expected(r.element(points, count - 1),
                           "the same point as points[0] (a looping route ends where it starts)");
     }
+    // At least a millisecond: time / segment_duration stays finite (found by fuzzing).
     KW_TRY(optional_member(r, node, "segment_duration", route.segment_duration,
-                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 3600.0)); }));
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.001, 3600.0)); }));
     return {};
 }
 
@@ -289,8 +290,10 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
     scene.name = std::filesystem::path(path).stem().string();
     if (scene.name.empty()) scene.name = "scene";
     KW_TRY(optional_member(r, root, "name", scene.name, [&](const JsonNode& n) { return r.string(n); }));
+    // At least 0.01 (a frame per 100 s): frame times f / fps stay finite for any frame
+    // count (a denormal rate made them infinite, found by fuzzing).
     KW_TRY(optional_member(r, root, "fps", scene.fps,
-                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.01, 1000.0)); }));
     KW_TRY(optional_member(r, root, "duration", scene.duration,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 3600.0)); }));
     const JsonNode camera = r.member(root, "camera");

@@ -553,7 +553,7 @@ static void test_chain_create_rejects(void) {
     a.views[4].influence = (float)NAN;
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].views[4].influence: nan");
     a.templ.thickness = 0.0f;
-    REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].thickness: 0; expected a number in (0, 1]");
+    REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].thickness: 0; expected a number in [1e-05, 1]");
     a.templ.mass = (float)INFINITY;
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].mass: inf");
     a.templ.solver.iterations = 0;
@@ -653,7 +653,7 @@ static void test_chain_calls_reject(void) {
     } while (0)
     make_frame(&bad, 300);
     bad.frame.dt = 0.0f;
-    REJECT_STEP("frame->dt: 0; expected a number in (0, 1]");
+    REJECT_STEP("frame->dt: 0; expected a number in [1e-05, 1]");
     bad.frame.dt = (float)NAN;
     REJECT_STEP("frame->dt: nan");
     bad.frame.dt = 2.0f;
@@ -920,7 +920,7 @@ static void test_birds_reject(void) {
     f.desc.flocks = NULL;
     REJECT("desc->flocks: is NULL, but desc->flock_count is 2");
     f.desc.fps = 0.0f;
-    REJECT("desc->fps: 0; expected a number in (0, 1000]");
+    REJECT("desc->fps: 0; expected a number in [0.01, 1000]");
     f.routes[1].point_count = 5;
     REJECT("desc->routes[1].point_count: 5; expected 3n + 1");
     f.routes[0].points = NULL;

@@ -310,7 +310,7 @@ TEST(CharacterScene, BadPhysicsAndMotions) {
     json thickness = valid_character_scene();
     chain0(thickness)["thickness"] = -0.01;
     EXPECT_EQ(parse_error(thickness),
-              "test.json: $.characters[0].chains[0].thickness: expected a finite number in (0, 1], got -0.01");
+              "test.json: $.characters[0].chains[0].thickness: expected a finite number in [1e-05, 1], got -0.01");
     json end = valid_character_scene();
     end["characters"][0]["motions"][0]["start"] = 2;
     end["characters"][0]["motions"][0]["end"] = 1;

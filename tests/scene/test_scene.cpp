@@ -220,7 +220,7 @@ TEST(SceneFormat, UnknownKey) {
 TEST(SceneFormat, WrongType) {
     json doc = valid_scene();
     doc["fps"] = "sixty";
-    EXPECT_EQ(parse_error(doc), "test.json: $.fps: expected a finite number in (0, 1000], got \"sixty\"");
+    EXPECT_EQ(parse_error(doc), "test.json: $.fps: expected a finite number in [0.01, 1000], got \"sixty\"");
     json loop = valid_scene();
     loop["flocks"][0]["route"]["loop"] = 1;
     EXPECT_EQ(parse_error(loop), "test.json: $.flocks[0].route.loop: expected true or false, got 1");

@@ -277,10 +277,10 @@ typedef struct kodawari_chain_template_desc {
     const kodawari_view_example* views;
     /// 0 .. KODAWARI_MAX_VIEW_EXAMPLES.
     uint32_t view_count;
-    /// Particle thickness, m, in (0, 1]: ellipsoid radii across the segment and the
+    /// Particle thickness, m, in [1e-5, 1]: ellipsoid radii across the segment and the
     /// collision radius.
     float thickness;
-    /// Mass of every particle, kg, in (0, 1000].
+    /// Mass of every particle, kg, in [1e-9, 1000].
     float mass;
     kodawari_solver_params solver;
 } kodawari_chain_template_desc;
@@ -325,7 +325,7 @@ typedef struct kodawari_chain_world_desc {
 
 /// One frame's kinematic input, world space, at the end of the frame.
 typedef struct kodawari_chain_frame {
-    /// Frame length, s, in (0, 1]; ignored by create and reset.
+    /// Frame length, s, in [1e-5, 1]; ignored by create and reset.
     float dt;
     kodawari_camera camera;
     /// Per character: its reference joint's pose (SPEC A.3), reference_count ==
@@ -461,7 +461,7 @@ typedef struct kodawari_route_desc {
     /// 0: flown at each bird's speed by arc length (default); 1: the seed's parametric
     /// timing, u driven by time, `segment_duration` seconds per segment.
     uint32_t parametric;
-    /// s per segment, > 0, for parametric timing; ignored otherwise.
+    /// s per segment, in [0.001, 3600], for parametric timing; ignored otherwise.
     float segment_duration;
 } kodawari_route_desc;
 
@@ -526,7 +526,7 @@ typedef struct kodawari_bird_world_desc {
     uint32_t route_count;  ///< >= 1
     const kodawari_flock_desc* flocks;
     uint32_t flock_count;  ///< >= 1
-    /// Frames per second, in (0, 1000]: frame f is at time f / fps.
+    /// Frames per second, in [0.01, 1000]: frame f is at time f / fps.
     float fps;
     kodawari_flight_settings flight;
     kodawari_backend_options backend;

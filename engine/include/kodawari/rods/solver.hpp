@@ -54,6 +54,13 @@ struct Transform {
 
 /// The most colliders of each kind one chain may touch.
 inline constexpr std::uint32_t kMaxChainColliders = 16;
+/// The smallest particle thickness (m), particle mass (kg) and frame length (s) a chain
+/// takes: above zero by margins that keep inertias, inverse masses and velocities
+/// (displacement / dt) finite in float; below a hair's width, a segment's mass, a
+/// 100 kHz step.
+inline constexpr float kMinThickness = 1e-5f;
+inline constexpr float kMinMass = 1e-9f;
+inline constexpr float kMinFrameDt = 1e-5f;
 
 /// A kinematic sphere collider, world space.
 struct Sphere {
