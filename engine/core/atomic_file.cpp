@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace kodawari {
@@ -67,6 +68,23 @@ void remove_temporary_files_on_signals() {
 }
 
 Result<AtomicFile> AtomicFile::open(const std::string& path) {
+    // A device or a pipe (/dev/null, /dev/stdout, a FIFO) is written as it is: a file
+    // renamed over it would replace the device node (as root, /dev/full with a regular
+    // file), and being whole at once means nothing for a stream. Anything else that is
+    // not a regular file (a directory, a block device) is refused, never replaced.
+    struct stat existing {};
+    if (::stat(path.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode)) {
+        if (!S_ISCHR(existing.st_mode) && !S_ISFIFO(existing.st_mode)) {
+            return make_error(Error::Kind::Io, path + ": cannot write (" +
+                                                   (S_ISDIR(existing.st_mode) ? "a directory" : "not a regular file") +
+                                                   " is in the way)");
+        }
+        std::FILE* file = std::fopen(path.c_str(), "wb");
+        if (file == nullptr) return make_error(Error::Kind::Io, path + ": cannot write (" + std::strerror(errno) + ")");
+        AtomicFile opened(path, std::string(), file);
+        opened.direct_ = true;
+        return opened;
+    }
     std::string temp = path + ".tmp-" + std::to_string(::getpid());
     // Unnamed while it is written (Linux's O_TMPFILE, in the output's directory so that
     // commit() can give it a name there): whatever ends the process, SIGKILL and OOM
@@ -94,7 +112,7 @@ Result<AtomicFile> AtomicFile::open(const std::string& path) {
 
 AtomicFile::AtomicFile(AtomicFile&& other) noexcept
     : path_(std::move(other.path_)), temp_(std::move(other.temp_)), file_(other.file_), failed_(other.failed_),
-      slot_(other.slot_), unnamed_(other.unnamed_) {
+      slot_(other.slot_), unnamed_(other.unnamed_), direct_(other.direct_) {
     other.file_ = nullptr;
     other.slot_ = -1;
 }
@@ -108,6 +126,7 @@ AtomicFile& AtomicFile::operator=(AtomicFile&& other) noexcept {
         failed_ = other.failed_;
         slot_ = other.slot_;
         unnamed_ = other.unnamed_;
+        direct_ = other.direct_;
         other.file_ = nullptr;
         other.slot_ = -1;
     }
@@ -119,7 +138,7 @@ AtomicFile::~AtomicFile() { discard(); }
 void AtomicFile::discard() {
     if (file_ != nullptr) {
         std::fclose(file_);
-        if (!unnamed_) std::remove(temp_.c_str());
+        if (!unnamed_ && !direct_) std::remove(temp_.c_str());
         file_ = nullptr;
     }
     unregister_temp(slot_);
@@ -133,6 +152,15 @@ void AtomicFile::write(const void* data, std::size_t size) {
 
 Result<void> AtomicFile::commit() {
     assert(file_ != nullptr && "commit() twice or after a move");
+    if (direct_) {
+        // A device or a pipe: nothing to sync or rename.
+        bool ok = !failed_ && std::fflush(file_) == 0;
+        const int saved = errno;
+        ok = (std::fclose(file_) == 0) && ok;
+        file_ = nullptr;
+        if (!ok) return make_error(Error::Kind::Io, path_ + ": write failed (" + std::strerror(saved) + ")");
+        return {};
+    }
     bool ok = !failed_ && std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
     int saved = errno;
     if (ok && unnamed_) {
