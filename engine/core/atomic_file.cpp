@@ -112,7 +112,7 @@ Result<AtomicFile> AtomicFile::open(const std::string& path) {
 
 AtomicFile::AtomicFile(AtomicFile&& other) noexcept
     : path_(std::move(other.path_)), temp_(std::move(other.temp_)), file_(other.file_), failed_(other.failed_),
-      slot_(other.slot_), unnamed_(other.unnamed_), direct_(other.direct_) {
+      error_(other.error_), slot_(other.slot_), unnamed_(other.unnamed_), direct_(other.direct_) {
     other.file_ = nullptr;
     other.slot_ = -1;
 }
@@ -124,6 +124,7 @@ AtomicFile& AtomicFile::operator=(AtomicFile&& other) noexcept {
         temp_ = std::move(other.temp_);
         file_ = other.file_;
         failed_ = other.failed_;
+        error_ = other.error_;
         slot_ = other.slot_;
         unnamed_ = other.unnamed_;
         direct_ = other.direct_;
@@ -147,7 +148,10 @@ void AtomicFile::discard() {
 
 void AtomicFile::write(const void* data, std::size_t size) {
     if (file_ == nullptr || failed_ || size == 0) return;
-    if (std::fwrite(data, 1, size, file_) != size) failed_ = true;
+    if (std::fwrite(data, 1, size, file_) != size) {
+        failed_ = true;
+        error_ = errno;  // why, for commit()'s message (later calls may change errno)
+    }
 }
 
 Result<void> AtomicFile::commit() {
@@ -155,14 +159,14 @@ Result<void> AtomicFile::commit() {
     if (direct_) {
         // A device or a pipe: nothing to sync or rename.
         bool ok = !failed_ && std::fflush(file_) == 0;
-        const int saved = errno;
+        const int saved = failed_ ? error_ : errno;
         ok = (std::fclose(file_) == 0) && ok;
         file_ = nullptr;
         if (!ok) return make_error(Error::Kind::Io, path_ + ": write failed (" + std::strerror(saved) + ")");
         return {};
     }
     bool ok = !failed_ && std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
-    int saved = errno;
+    int saved = failed_ ? error_ : errno;
     if (ok && unnamed_) {
         // The unnamed file gets the temporary name, then the rename below puts it in
         // place atomically (linkat() cannot replace an existing file). Registered first,
@@ -173,10 +177,14 @@ Result<void> AtomicFile::commit() {
         ok = ::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, temp_.c_str(), AT_SYMLINK_FOLLOW) == 0;
         saved = errno;
     }
-    ok = (std::fclose(file_) == 0) && ok;
+    const bool linked = ok && unnamed_;  // the unnamed file has its temporary name now
+    if (std::fclose(file_) != 0 && ok) {
+        ok = false;
+        saved = errno;
+    }
     file_ = nullptr;
     if (!ok) {
-        if (!unnamed_) std::remove(temp_.c_str());
+        if (!unnamed_ || linked) std::remove(temp_.c_str());
         unregister_temp(slot_);
         slot_ = -1;
         return make_error(Error::Kind::Io, path_ + ": write failed (" + std::strerror(saved) + ")");

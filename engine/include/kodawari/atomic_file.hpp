@@ -44,6 +44,7 @@ private:
     std::string temp_;
     std::FILE* file_ = nullptr;
     bool failed_ = false;
+    int error_ = 0;          // errno of the first failed write
     int slot_ = -1;          // its entry among the temporaries removed on a signal
     bool unnamed_ = false;   // O_TMPFILE: no name until commit()
     bool direct_ = false;    // a device or a FIFO, written in place
