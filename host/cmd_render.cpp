@@ -73,6 +73,56 @@ std::string frame_file(const std::string& dir, const std::string& scene, std::ui
     return (std::filesystem::path(dir) / (scene + "_" + number + ".png")).string();
 }
 
+// What one render writes: the frames (and contact sheet) and the directories it created.
+// Unless keep() is called, destruction removes them, so a render that fails part-way (a
+// full disk, a device lost at frame 40, a validation message) leaves nothing of its own
+// behind: the files it wrote (one of which may have replaced an earlier run's frame), then
+// its directories, deepest first, when they are empty.
+class RenderOutputs {
+public:
+    RenderOutputs() = default;
+    RenderOutputs(const RenderOutputs&) = delete;
+    RenderOutputs& operator=(const RenderOutputs&) = delete;
+    ~RenderOutputs() {
+        if (kept_) return;
+        std::error_code ec;
+        for (const std::string& file : files_) std::filesystem::remove(file, ec);
+        if (!files_.empty()) {
+            std::fprintf(stderr, "kodawari: render failed: removed the %zu file%s it wrote\n", files_.size(),
+                         files_.size() == 1 ? "" : "s");
+        }
+        for (auto dir = created_.rbegin(); dir != created_.rend(); ++dir) std::filesystem::remove(*dir, ec);
+    }
+
+    // Creates `dir` and its missing parents, remembering which were missing.
+    Result<void> create_directory(const std::string& dir) {
+        std::vector<std::filesystem::path> missing;
+        std::error_code ec;
+        for (std::filesystem::path p = std::filesystem::path(dir).lexically_normal(); !p.empty() && p != p.parent_path();
+             p = p.parent_path()) {
+            if (std::filesystem::exists(std::filesystem::symlink_status(p, ec))) break;
+            missing.push_back(p);
+        }
+        ec.clear();
+        std::filesystem::create_directories(dir, ec);
+        for (auto p = missing.rbegin(); p != missing.rend(); ++p) {
+            if (std::filesystem::is_directory(*p)) created_.push_back(p->string());
+        }
+        if (ec || !std::filesystem::is_directory(dir)) {
+            return make_error(Error::Kind::Io, "--out " + dir + ": cannot create the directory" +
+                                                   (ec ? " (" + ec.message() + ")" : std::string(" (a file is in the way)")));
+        }
+        return {};
+    }
+    void wrote(const std::string& file) { files_.push_back(file); }
+    void keep() { kept_ = true; }
+
+private:
+    std::vector<std::string> files_;
+    std::vector<std::string> created_;  // outermost first
+    bool kept_ = false;
+};
+
 }  // namespace
 
 int cmd_render(Args args) {
@@ -93,13 +143,6 @@ int cmd_render(Args args) {
         if (!parsed) return report(parsed.error());
         range = parsed.value();
     }
-    std::error_code ec;
-    std::filesystem::create_directories(*out_dir, ec);
-    if (ec || !std::filesystem::is_directory(*out_dir)) {
-        return report(make_error(Error::Kind::Io, "--out " + *out_dir + ": cannot create the directory" +
-                                                      (ec ? " (" + ec.message() + ")" : std::string(" (a file is in the way)"))));
-    }
-
     auto renderer = render::Renderer::create(renderer_options(choice, width, height));
     if (!renderer) return report(renderer.error());
     render::Renderer& r = *renderer.value();
@@ -115,6 +158,10 @@ int cmd_render(Args args) {
     std::printf("kodawari: rendering scene \"%s\" (%s): %u frames of [%u, %u) step %u at %ux%u on %s\n", scene.name.c_str(),
                 scene.path.c_str(), count, range.first, range.end, range.step, width, height, r.device().c_str());
     std::fflush(stdout);
+    // The directory only now that the renderer and the simulation are open: a run that
+    // cannot start (no Vulkan device, a bad scene) creates nothing.
+    RenderOutputs outputs;
+    if (auto made_dir = outputs.create_directory(*out_dir); !made_dir) return report(made_dir.error());
 
     const std::uint32_t columns = columns_option ? static_cast<std::uint32_t>(*columns_option) : std::min(count, 4u);
     const std::uint32_t cell_width = std::max(1u, width / columns), cell_height = std::max(1u, height / columns);
@@ -144,6 +191,7 @@ int cmd_render(Args args) {
         render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         const std::string path = frame_file(*out_dir, scene.name, f);
         if (auto s = render::write_png(path, image.value()); !s) return report(s.error());
+        outputs.wrote(path);
         if (show_progress) std::fputc('\n', stderr);
         std::printf("kodawari: wrote %s\n", path.c_str());
         if (sheet_path) cells.push_back(render::downscale(image.value(), cell_width, cell_height));
@@ -152,11 +200,14 @@ int cmd_render(Args args) {
     if (sheet_path) {
         const render::Image sheet = render::contact_sheet(cells, columns, cell_width, cell_height);
         if (auto s = render::write_png(*sheet_path, sheet); !s) return report(s.error());
+        outputs.wrote(*sheet_path);
         std::printf("kodawari: wrote contact sheet %s (%u frames, %u columns, %ux%u)\n", sheet_path->c_str(), count, columns,
                     sheet.width, sheet.height);
     }
     // The vulkan backends share the renderer's device and so its count of messages.
-    return validation_failed(r.validation_messages()) ? kExitFailure : kExitOk;
+    if (validation_failed(r.validation_messages())) return kExitFailure;
+    outputs.keep();
+    return kExitOk;
 }
 
 }  // namespace kodawari::cli

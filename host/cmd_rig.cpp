@@ -66,15 +66,9 @@ int cmd_rig(Args args) {
         return kExitFailure;
     }
     auto file = AtomicFile::open(out_path);
-    if (!file) {
-        std::fprintf(stderr, "kodawari: %s\n", file.error().message.c_str());
-        return kExitFailure;
-    }
+    if (!file) return report(file.error());
     file.value().write(r.json);
-    if (auto done = file.value().commit(); !done) {
-        std::fprintf(stderr, "kodawari: %s\n", done.error().message.c_str());
-        return kExitFailure;
-    }
+    if (auto done = file.value().commit(); !done) return report(done.error());
 
     std::printf("%s: %zu chain%s from %s, %u collider%s, size %.3g m, reference joint \"%s\", %s\n", character.c_str(),
                 r.chains.size(), r.chains.size() == 1 ? "" : "s", r.source.c_str(), r.colliders, r.colliders == 1 ? "" : "s",

@@ -119,9 +119,21 @@ public:
         const std::uint64_t per_frame = std::uint64_t{count} * (sizeof(gpu::BirdPoseGpu) + sizeof(gpu::BirdDiag));
         slots_ = static_cast<std::uint32_t>(std::clamp<std::uint64_t>(kRingBytes / per_frame, 1, std::max(world.frames, 1u)));
         const std::uint64_t max_range = ctx_->info().max_storage_buffer_range;
+        // A storage buffer larger than maxStorageBufferRange cannot be bound (undefined
+        // behaviour, a crash or a lost device on some drivers): each is checked here, and
+        // the error names the buffer and both sizes (Unsupported: backend "auto" then runs
+        // the scene on the CPU). The pose ring holds fewer frames rather than fail; one
+        // frame of poses is its floor.
+        const auto too_large = [&](const char* buffer, std::uint64_t bytes, const std::string& why) {
+            return make_error(Error::Kind::Unsupported, ctx_->info().name + " cannot hold " + std::to_string(count) + " birds: the " +
+                                                            buffer + " need a storage buffer of " + std::to_string(bytes) + " bytes (" +
+                                                            why + "); the device allows " + std::to_string(max_range) +
+                                                            " (maxStorageBufferRange)");
+        };
         while (slots_ > 1 && std::uint64_t{slots_} * count * sizeof(gpu::BirdPoseGpu) > max_range) --slots_;
         if (std::uint64_t{count} * sizeof(gpu::BirdPoseGpu) > max_range) {
-            return make_error(Error::Kind::Unsupported, std::to_string(count) + " birds' poses exceed the device's storage buffer range");
+            return too_large("poses", std::uint64_t{count} * sizeof(gpu::BirdPoseGpu),
+                             std::to_string(sizeof(gpu::BirdPoseGpu)) + " bytes per bird, one frame");
         }
 
         const gpu::FlightUniforms uniforms = world.uniforms();
@@ -134,6 +146,12 @@ public:
             sizeof(uniforms), contents[1].size(), contents[2].size(), contents[3].size(), contents[4].size(),
             contents[5].size(), std::uint64_t{slots_} * count * sizeof(gpu::BirdPoseGpu),
             std::uint64_t{slots_} * count * sizeof(gpu::BirdDiag)};
+        static constexpr const char* kBindingNames[KW_BIRDS_BINDING_COUNT] = {
+            "uniforms", "routes", "route control points", "route arc samples", "bird parameters", "bird states",
+            "poses", "diagnostics"};
+        for (std::uint32_t b = 0; b < KW_BIRDS_BINDING_COUNT; ++b) {
+            if (sizes[b] > max_range) return too_large(kBindingNames[b], sizes[b], "binding " + std::to_string(b));
+        }
         for (std::uint32_t b = 0; b < KW_BIRDS_BINDING_COUNT; ++b) {
             auto buffer = Buffer::create(*ctx_, std::max<std::uint64_t>(sizes[b], 16), Buffer::Kind::Storage);
             if (!buffer) return buffer.error();

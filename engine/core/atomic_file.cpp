@@ -8,6 +8,7 @@
 #include <filesystem>
 
 #include <fcntl.h>
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace kodawari {
@@ -67,6 +68,23 @@ void remove_temporary_files_on_signals() {
 }
 
 Result<AtomicFile> AtomicFile::open(const std::string& path) {
+    // A device or a pipe (/dev/null, /dev/stdout, a FIFO) is written as it is: a file
+    // renamed over it would replace the device node (as root, /dev/full with a regular
+    // file), and being whole at once means nothing for a stream. Anything else that is
+    // not a regular file (a directory, a block device) is refused, never replaced.
+    struct stat existing {};
+    if (::stat(path.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode)) {
+        if (!S_ISCHR(existing.st_mode) && !S_ISFIFO(existing.st_mode)) {
+            return make_error(Error::Kind::Io, path + ": cannot write (" +
+                                                   (S_ISDIR(existing.st_mode) ? "a directory" : "not a regular file") +
+                                                   " is in the way)");
+        }
+        std::FILE* file = std::fopen(path.c_str(), "wb");
+        if (file == nullptr) return make_error(Error::Kind::Io, path + ": cannot write (" + std::strerror(errno) + ")");
+        AtomicFile opened(path, std::string(), file);
+        opened.direct_ = true;
+        return opened;
+    }
     std::string temp = path + ".tmp-" + std::to_string(::getpid());
     // Unnamed while it is written (Linux's O_TMPFILE, in the output's directory so that
     // commit() can give it a name there): whatever ends the process, SIGKILL and OOM
@@ -94,7 +112,7 @@ Result<AtomicFile> AtomicFile::open(const std::string& path) {
 
 AtomicFile::AtomicFile(AtomicFile&& other) noexcept
     : path_(std::move(other.path_)), temp_(std::move(other.temp_)), file_(other.file_), failed_(other.failed_),
-      slot_(other.slot_), unnamed_(other.unnamed_) {
+      error_(other.error_), slot_(other.slot_), unnamed_(other.unnamed_), direct_(other.direct_) {
     other.file_ = nullptr;
     other.slot_ = -1;
 }
@@ -106,8 +124,10 @@ AtomicFile& AtomicFile::operator=(AtomicFile&& other) noexcept {
         temp_ = std::move(other.temp_);
         file_ = other.file_;
         failed_ = other.failed_;
+        error_ = other.error_;
         slot_ = other.slot_;
         unnamed_ = other.unnamed_;
+        direct_ = other.direct_;
         other.file_ = nullptr;
         other.slot_ = -1;
     }
@@ -119,7 +139,7 @@ AtomicFile::~AtomicFile() { discard(); }
 void AtomicFile::discard() {
     if (file_ != nullptr) {
         std::fclose(file_);
-        if (!unnamed_) std::remove(temp_.c_str());
+        if (!unnamed_ && !direct_) std::remove(temp_.c_str());
         file_ = nullptr;
     }
     unregister_temp(slot_);
@@ -128,13 +148,25 @@ void AtomicFile::discard() {
 
 void AtomicFile::write(const void* data, std::size_t size) {
     if (file_ == nullptr || failed_ || size == 0) return;
-    if (std::fwrite(data, 1, size, file_) != size) failed_ = true;
+    if (std::fwrite(data, 1, size, file_) != size) {
+        failed_ = true;
+        error_ = errno;  // why, for commit()'s message (later calls may change errno)
+    }
 }
 
 Result<void> AtomicFile::commit() {
     assert(file_ != nullptr && "commit() twice or after a move");
+    if (direct_) {
+        // A device or a pipe: nothing to sync or rename.
+        bool ok = !failed_ && std::fflush(file_) == 0;
+        const int saved = failed_ ? error_ : errno;
+        ok = (std::fclose(file_) == 0) && ok;
+        file_ = nullptr;
+        if (!ok) return make_error(Error::Kind::Io, path_ + ": write failed (" + std::strerror(saved) + ")");
+        return {};
+    }
     bool ok = !failed_ && std::fflush(file_) == 0 && ::fsync(::fileno(file_)) == 0;
-    int saved = errno;
+    int saved = failed_ ? error_ : errno;
     if (ok && unnamed_) {
         // The unnamed file gets the temporary name, then the rename below puts it in
         // place atomically (linkat() cannot replace an existing file). Registered first,
@@ -145,10 +177,14 @@ Result<void> AtomicFile::commit() {
         ok = ::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, temp_.c_str(), AT_SYMLINK_FOLLOW) == 0;
         saved = errno;
     }
-    ok = (std::fclose(file_) == 0) && ok;
+    const bool linked = ok && unnamed_;  // the unnamed file has its temporary name now
+    if (std::fclose(file_) != 0 && ok) {
+        ok = false;
+        saved = errno;
+    }
     file_ = nullptr;
     if (!ok) {
-        if (!unnamed_) std::remove(temp_.c_str());
+        if (!unnamed_ || linked) std::remove(temp_.c_str());
         unregister_temp(slot_);
         slot_ = -1;
         return make_error(Error::Kind::Io, path_ + ": write failed (" + std::strerror(saved) + ")");

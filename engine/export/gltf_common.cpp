@@ -4,6 +4,7 @@
 
 #include <algorithm>
 #include <cassert>
+#include <cerrno>
 #include <cmath>
 #include <cstring>
 #include <filesystem>
@@ -13,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include <sys/stat.h>
 #include <unistd.h>
 
 namespace kodawari::gltf {
@@ -134,21 +136,29 @@ Result<void> write_glb_with_tail(AtomicFile& file, tinygltf::Model& model, std::
 
 Result<SpillFile> SpillFile::open(const std::string& beside) {
     SpillFile spill;
+    // Beside the output, on the disk meant to hold it; in the temporary directory when
+    // there is no output path or the output is a device or a pipe (no files in /dev).
+    struct stat existing {};
+    const bool regular = beside.empty() || ::stat(beside.c_str(), &existing) != 0 || S_ISREG(existing.st_mode);
     const std::string base =
-        beside.empty() ? (std::filesystem::temp_directory_path() / "kodawari").string() : beside;
+        beside.empty() || !regular ? (std::filesystem::temp_directory_path() / "kodawari").string() : beside;
     spill.path_ = base + ".keys-" + std::to_string(static_cast<long>(::getpid()));
+    // Errors name the output the file serves (the file itself never has a name for long).
+    spill.serves_ = beside;
     spill.file_ = std::fopen(spill.path_.c_str(), "w+b");
-    if (spill.file_ == nullptr) return make_error(Error::Kind::Io, spill.path_ + ": cannot create this temporary file");
+    if (spill.file_ == nullptr) return make_error(Error::Kind::Io, spill.spill_error("cannot create", std::strerror(errno)));
     std::remove(spill.path_.c_str());
     return spill;
 }
 
 SpillFile::SpillFile(SpillFile&& other) noexcept
-    : file_(std::exchange(other.file_, nullptr)), path_(std::move(other.path_)), reading_(other.reading_) {}
+    : file_(std::exchange(other.file_, nullptr)), path_(std::move(other.path_)), serves_(std::move(other.serves_)),
+      reading_(other.reading_) {}
 
 SpillFile& SpillFile::operator=(SpillFile&& other) noexcept {
     std::swap(file_, other.file_);
     std::swap(path_, other.path_);
+    std::swap(serves_, other.serves_);
     std::swap(reading_, other.reading_);
     return *this;
 }
@@ -158,19 +168,25 @@ SpillFile::~SpillFile() {
 }
 
 Result<void> SpillFile::append(const void* data, std::size_t size) {
-    if (reading_ || std::fwrite(data, 1, size, file_) != size) {
-        return make_error(Error::Kind::Io, path_ + ": cannot write this temporary file (disk full?)");
-    }
+    if (reading_) return make_error(Error::Kind::Internal, spill_error("cannot write", "appended to after reading"));
+    if (std::fwrite(data, 1, size, file_) != size) return make_error(Error::Kind::Io, spill_error("cannot write", std::strerror(errno)));
     return {};
 }
 
 Result<void> SpillFile::read(std::uint64_t offset, void* data, std::size_t size) {
-    if (!reading_ && std::fflush(file_) != 0) return make_error(Error::Kind::Io, path_ + ": cannot write this temporary file");
+    if (!reading_ && std::fflush(file_) != 0) return make_error(Error::Kind::Io, spill_error("cannot write", std::strerror(errno)));
     reading_ = true;
-    if (::fseeko(file_, static_cast<off_t>(offset), SEEK_SET) != 0 || std::fread(data, 1, size, file_) != size) {
-        return make_error(Error::Kind::Io, path_ + ": cannot read back this temporary file");
+    if (::fseeko(file_, static_cast<off_t>(offset), SEEK_SET) != 0) {
+        return make_error(Error::Kind::Io, spill_error("cannot read back", std::strerror(errno)));
+    }
+    if (std::fread(data, 1, size, file_) != size) {
+        return make_error(Error::Kind::Io, spill_error("cannot read back", std::ferror(file_) ? std::strerror(errno) : "it is shorter than written"));
     }
     return {};
+}
+
+std::string SpillFile::spill_error(const std::string& what, const std::string& why) const {
+    return (serves_.empty() ? what + " the" : serves_ + ": " + what + " its") + " temporary file " + path_ + " (" + why + ")";
 }
 
 void add_linear_channel(tinygltf::Animation& animation, int input, int output, int node, const char* path) {

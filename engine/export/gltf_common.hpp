@@ -71,7 +71,8 @@ private:
 /// process whatever happens.
 class SpillFile {
 public:
-    /// Creates `<beside>.keys-<pid>`; `beside` empty: in the system's temporary directory.
+    /// Creates `<beside>.keys-<pid>`; `beside` empty, or a device or a pipe: in the
+    /// system's temporary directory. Errors name `beside` and the temporary file.
     [[nodiscard]] static Result<SpillFile> open(const std::string& beside);
     SpillFile() = default;
     SpillFile(SpillFile&& other) noexcept;
@@ -85,8 +86,11 @@ public:
     [[nodiscard]] Result<void> read(std::uint64_t offset, void* data, std::size_t size);
 
 private:
+    [[nodiscard]] std::string spill_error(const std::string& what, const std::string& why) const;
+
     std::FILE* file_ = nullptr;
     std::string path_;
+    std::string serves_;  // the output it is beside, named in errors
     bool reading_ = false;
 };
 

@@ -203,7 +203,20 @@ Result<std::unique_ptr<Simulation>> Simulation::create(Scene scene, const Simula
             return device.error();
         }
     }
-    KW_TRY(impl->open_backends());
+    if (auto opened = impl->open_backends(); !opened) {
+        // "auto" also falls back when a device opened but cannot run this scene (a buffer
+        // larger than it can bind: Unsupported, naming the buffer and the sizes); the CPU
+        // backends have no such limit. Any other error (a lost device, a bug) is reported.
+        const bool automatic = !options.backend && impl->kind == BackendKind::Vulkan && !options.options.context;
+        if (!automatic || opened.error().kind != Error::Kind::Unsupported) return opened.error();
+        impl->animator.reset();
+        impl->rods.reset();
+        impl->birds.reset();
+        impl->options.options.context = nullptr;
+        impl->kind = BackendKind::Cpu;
+        impl->fallback_reason = opened.error().message;
+        KW_TRY(impl->open_backends());
+    }
     return std::unique_ptr<Simulation>(new Simulation(std::move(impl)));
 }
 

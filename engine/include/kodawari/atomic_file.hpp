@@ -16,7 +16,9 @@ namespace kodawari {
 class KODAWARI_API AtomicFile {
 public:
     /// Opens a file for binary writing that has no name until commit() (O_TMPFILE in
-    /// `path`'s directory; where the file system cannot, `<path>.tmp-<pid>`).
+    /// `path`'s directory; where the file system cannot, `<path>.tmp-<pid>`). A character
+    /// device or a FIFO at `path` (/dev/null, /dev/stdout) is written directly instead,
+    /// never replaced; any other file there that is not a regular file is an error.
     [[nodiscard]] static Result<AtomicFile> open(const std::string& path);
 
     AtomicFile(AtomicFile&& other) noexcept;
@@ -42,8 +44,10 @@ private:
     std::string temp_;
     std::FILE* file_ = nullptr;
     bool failed_ = false;
+    int error_ = 0;          // errno of the first failed write
     int slot_ = -1;          // its entry among the temporaries removed on a signal
     bool unnamed_ = false;   // O_TMPFILE: no name until commit()
+    bool direct_ = false;    // a device or a FIFO, written in place
 };
 
 /// Installs handlers for SIGINT, SIGTERM and SIGHUP that remove the temporary file of

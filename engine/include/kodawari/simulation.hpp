@@ -85,7 +85,8 @@ struct SceneWorlds {
 
 /// How a Simulation runs.
 struct SimulationOptions {
-    /// The backends' kind; none: "auto", vulkan when a Vulkan device opens, else cpu
+    /// The backends' kind; none: "auto", vulkan when a Vulkan device opens and can hold
+    /// the scene (its buffers within the device's limits), else cpu
     /// (Simulation::fallback_reason() then says why).
     std::optional<BackendKind> backend{};
     /// Device, validation, cpu threads, and a device to run on (a renderer's); without
