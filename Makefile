@@ -16,8 +16,9 @@ FUZZ_TARGETS := fuzz_scene fuzz_gltf fuzz_stroke fuzz_scene_edit fuzz_capi
 # The asan lane: the tests whose bodies are the project's code, with the sanitizers on and
 # lavapipe kept loaded (LD_PRELOAD) so that a leak in driver objects is attributed rather
 # than reported as "<unknown module>" after the loader unloads it (tests/lsan.supp).
-# Left out: `package` (it builds the library again, with the consumers' compiler flags)
-# and `export_identity` (its hashes are gcc's release bytes).
+# Left out: `package` (it builds the library again, with the consumers' compiler flags),
+# `export_identity` (its hashes are gcc's release bytes) and the soak (the release lane
+# runs it; ten minutes under ASan for steps the shorter tests already cover).
 ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:verify_asan_link_order=0 \
             LD_PRELOAD=$(firstword $(wildcard /usr/lib/*/libvulkan_lvp.so))
 
@@ -41,7 +42,7 @@ test: build
 asan: setup
 	@cmake --preset asan >/dev/null
 	@cmake --build build/asan -j $(JOBS)
-	@$(ASAN_ENV) ctest --preset asan -j $(JOBS) --timeout 900 -E '^(package|export_identity)$$'
+	@$(ASAN_ENV) ctest --preset asan -j $(JOBS) --timeout 900 -E '^(package|export_identity|viewer_soak)$$|/Soak\.'
 
 fuzz: setup
 	@cmake --preset asan >/dev/null
