@@ -13,14 +13,13 @@ FUZZ_TIME ?= 60
 FUZZ_JOBS ?= 1
 FUZZ_TARGETS := fuzz_scene fuzz_gltf fuzz_stroke fuzz_scene_edit fuzz_capi
 
-# The asan lane: the tests whose bodies are the project's code, with the sanitizers on and
-# lavapipe kept loaded (LD_PRELOAD) so that a leak in driver objects is attributed rather
-# than reported as "<unknown module>" after the loader unloads it (tests/lsan.supp).
+# The asan lane: the test suite with the sanitizers on, and the Vulkan driver and layer
+# kept loaded (tests/tools/asan_keep_loaded.c, preloaded) so that a leak in their objects
+# is attributed rather than reported as "<unknown module>" once the loader unloads them.
 # Left out: `package` (it builds the library again, with the consumers' compiler flags),
 # `export_identity` (its hashes are gcc's release bytes) and the soak (the release lane
 # runs it; ten minutes under ASan for steps the shorter tests already cover).
-ASAN_ENV := ASAN_OPTIONS=detect_leaks=1:verify_asan_link_order=0 \
-            LD_PRELOAD=$(firstword $(wildcard /usr/lib/*/libvulkan_lvp.so))
+ASAN_ENV := ASAN_OPTIONS=detect_leaks=1 LD_PRELOAD=$(CURDIR)/build/asan/tests/libkodawari_asan_keep_loaded.so
 
 .PHONY: run test build setup configure clean bench asan fuzz
 

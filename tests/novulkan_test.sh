@@ -87,7 +87,10 @@ fi
 
 # view: the window cannot open a device; a clear error, no hang.
 if command -v xvfb-run >/dev/null; then
-  timeout 60 xvfb-run -a "$bin" view scenes/flock.json >"$work/view.out" 2>&1
+  # A preload (`make asan`'s) is the viewer's business, not xvfb-run's helpers' (under
+  # the sanitizer lane its cleanup failed, exit 5, with the preload in every process).
+  timeout 60 env -u LD_PRELOAD xvfb-run -a env ${LD_PRELOAD:+LD_PRELOAD="$LD_PRELOAD"} "$bin" view scenes/flock.json \
+    >"$work/view.out" 2>&1
   rc=$?
   cat "$work/view.out"
   check "view exits 1 naming the missing driver" bash -c "test $rc -eq 1 && grep -q 'kodawari: error: .*$missing_driver' '$work/view.out'"
