@@ -119,6 +119,9 @@ Result<SketchResult> sketch_view_example(const SketchInput& input) {
         if (!std::isfinite(input.stroke[i].x) || !std::isfinite(input.stroke[i].y)) {
             return invalid("stroke point " + std::to_string(i) + " is not finite");
         }
+        if (std::abs(input.stroke[i].x) > kMaxStrokePixels || std::abs(input.stroke[i].y) > kMaxStrokePixels) {
+            return invalid("stroke point " + std::to_string(i) + " lies more than 1e6 px from the image");
+        }
     }
 
     const ImageCamera& cam = input.camera;

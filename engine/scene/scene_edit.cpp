@@ -15,6 +15,7 @@
 #include <nlohmann/json.hpp>
 
 #include "kodawari/atomic_file.hpp"
+#include "kodawari/rods/sketch.hpp"
 #include "kodawari/rods/world.hpp"
 #include "scene/json_reader.hpp"
 
@@ -379,8 +380,10 @@ Result<std::vector<glm::dvec2>> parse_stroke(const std::string& text, const std:
         if (!p.is_array() || p.size() != 2) return fail(path, at, "expected a point [x, y], got " + p.dump());
         glm::dvec2 v(0.0);
         for (std::size_t k = 0; k < 2; ++k) {
-            if (!p[k].is_number() || !std::isfinite(p[k].get<double>())) {
-                return fail(path, at + "[" + std::to_string(k) + "]", "expected a finite number, got " + p[k].dump());
+            if (!p[k].is_number() || !std::isfinite(p[k].get<double>()) ||
+                std::abs(p[k].get<double>()) > rods::kMaxStrokePixels) {
+                return fail(path, at + "[" + std::to_string(k) + "]",
+                            "expected a finite number in [-1e6, 1e6] (pixels), got " + p[k].dump());
             }
             v[static_cast<glm::length_t>(k)] = p[k].get<double>();
         }

@@ -30,6 +30,11 @@ namespace kodawari::rods {
 /// onto a W x H image. Its up vector is world +Y (the renderer's convention), except when
 /// the camera looks straight up or down, where world -Z is used (the picture's up is then
 /// the scene's back).
+/// The farthest a stroke point may lie from the image's origin, pixels, in x and in y: far
+/// past any image (8192 px at most), near enough that its ray's meeting with the sketch
+/// plane stays finite (a stroke at 7e160 px made the joints infinite; found by fuzzing).
+inline constexpr double kMaxStrokePixels = 1e6;
+
 struct KODAWARI_API ImageCamera {
     Camera::Projection projection = Camera::Projection::Perspective;
     glm::vec3 position{0.0f, 0.0f, 1.0f};  ///< eye, world
