@@ -3,7 +3,8 @@
 #   make test  installs what is missing, builds and runs every test through ctest
 # and for development (README, Development):
 #   make asan  the `asan` preset (clang, ASan + UBSan, leaks on) over the test suite
-#   make fuzz  each libFuzzer target for FUZZ_TIME seconds (FUZZ_JOBS processes each)
+#   make fuzz  each libFuzzer target for FUZZ_TIME seconds (FUZZ_JOBS processes each),
+#              or for FUZZ_RUNS executions from seed FUZZ_SEED (reproducible: CI's lane)
 PRESET ?= release
 BUILD  := build/$(PRESET)
 SCENE  ?= scenes/flock.json
@@ -11,6 +12,8 @@ JOBS   ?= $(shell nproc 2>/dev/null || echo 2)
 
 FUZZ_TIME ?= 60
 FUZZ_JOBS ?= 1
+FUZZ_RUNS ?= 0
+FUZZ_SEED ?= 1
 FUZZ_TARGETS := fuzz_scene fuzz_gltf fuzz_stroke fuzz_scene_edit fuzz_capi
 
 # The asan lane: the test suite with the sanitizers on, and the Vulkan driver and layer
@@ -46,7 +49,7 @@ asan: setup
 fuzz: setup
 	@cmake --preset asan >/dev/null
 	@cmake --build build/asan -j $(JOBS) --target $(FUZZ_TARGETS)
-	@bash scripts/fuzz --time $(FUZZ_TIME) --jobs $(FUZZ_JOBS)
+	@bash scripts/fuzz --time $(FUZZ_TIME) --jobs $(FUZZ_JOBS) --runs $(FUZZ_RUNS) --seed $(FUZZ_SEED)
 
 bench: build
 	@$(BUILD)/host/kodawari bench birds

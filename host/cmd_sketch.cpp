@@ -77,7 +77,7 @@ int cmd_sketch(Args args) {
     rods::SketchInput input;
     if (influence_text) {
         input.influence = parse_real("influence", *influence_text);
-        if (!(input.influence > 0.0f && input.influence <= 1000.0f)) {
+        if (!(input.influence > 0.0f && input.influence <= rods::kMaxInfluence)) {
             throw UsageError{"--influence: expected a number in (0, 1000], got \"" + *influence_text + "\""};
         }
     }

@@ -119,12 +119,12 @@ rods::ChainTemplate read_template(const kodawari_chain_template_desc& t, const s
         const kodawari_view_example& v = t.views[k];
         const std::string view = at(what + ".views", k);
         require_direction(v.direction, view + ".direction");
-        require_range(v.influence, 0.0, 1000.0, view + ".influence", true);
+        require_range(v.influence, 0.0, rods::kMaxInfluence, view + ".influence", true);
         shapes.push_back(read_shape(v.shape, t.joint_count, view + ".shape"));
         views.push_back(rods::ViewExample{vec3(v.direction), v.influence});
     }
-    require_range(t.thickness, rods::kMinThickness, 1.0, what + ".thickness");
-    require_range(t.mass, rods::kMinMass, 1000.0, what + ".mass");
+    require_range(t.thickness, rods::kMinThickness, rods::kMaxThickness, what + ".thickness");
+    require_range(t.mass, rods::kMinMass, rods::kMaxMass, what + ".mass");
     const rods::SolverParams params = read_solver(t.solver, what + ".solver");
     auto made = rods::make_chain_template(what, base, shapes, views, t.thickness, t.mass, params);
     check(made);

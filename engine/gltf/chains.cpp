@@ -178,10 +178,14 @@ PhysicsScale scaled_physics(const Character& character, const FoundChain& chain)
     physics.thickness = std::min(std::max(kThicknessPerSize * character_size(character), kMinThickness), 0.5f * shortest);
     const float mean_segment = chain.length / static_cast<float>(chain.base.positions.size() - 1);
     physics.mass = kLockDensity * std::numbers::pi_v<float> * physics.thickness * physics.thickness * mean_segment;
-    // A chain of micrometre segments still gets what the loader accepts (its rig scene
-    // must load: fuzz_gltf's invariant).
-    physics.thickness = std::max(physics.thickness, rods::kMinThickness);
-    physics.mass = std::max(physics.mass, rods::kMinMass);
+    return clamped(physics);
+}
+
+PhysicsScale clamped(PhysicsScale physics) {
+    // A chain of micrometre or kilometre segments still gets what the loader accepts (its
+    // rig scene must load: fuzz_gltf's invariant).
+    physics.thickness = std::clamp(physics.thickness, rods::kMinThickness, rods::kMaxThickness);
+    physics.mass = std::clamp(physics.mass, rods::kMinMass, rods::kMaxMass);
     return physics;
 }
 

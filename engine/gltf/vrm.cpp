@@ -278,6 +278,7 @@ private:
             // Same cylinder mass as scaled_physics(), at the new thickness.
             spring.physics.mass *= (thickness * thickness) / (spring.physics.thickness * spring.physics.thickness);
             spring.physics.thickness = thickness;
+            spring.physics = clamped(spring.physics);
         }
         std::sort(colliders.begin(), colliders.end());
         colliders.erase(std::unique(colliders.begin(), colliders.end()), colliders.end());

@@ -111,7 +111,9 @@ Result<SketchResult> sketch_view_example(const SketchInput& input) {
     for (float l : input.lengths) {
         if (!(std::isfinite(l) && l > 0.0f)) return invalid("segment lengths must be finite and > 0");
     }
-    if (!(std::isfinite(input.influence) && input.influence > 0.0f)) return invalid("the influence must be finite and > 0");
+    if (!(input.influence > 0.0f && input.influence <= kMaxInfluence)) {
+        return invalid("the influence must be in (0, " + std::to_string(static_cast<int>(kMaxInfluence)) + "]");
+    }
     if (input.stroke.size() < 2) {
         return invalid("the stroke needs at least 2 points, got " + std::to_string(input.stroke.size()));
     }

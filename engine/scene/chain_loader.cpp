@@ -141,7 +141,7 @@ Result<ViewSpec> read_view(const JsonReader& r, const JsonNode& node, std::size_
     KW_TRY(optional_member(r, node, "name", v.name, [&](const JsonNode& n) { return r.string(n); }));
     KW_SCENE_ASSIGN(v.view.direction, read_direction(r, r.member(node, "direction")));
     KW_TRY(optional_member(r, node, "influence", v.view.influence,
-                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, rods::kMaxInfluence)); }));
     KW_SCENE_ASSIGN(v.shape, read_shape(r, r.member(node, "shape"), joints));
     return v;
 }
@@ -169,6 +169,11 @@ Result<void> check_template(const JsonReader& r, const JsonNode& node, const Cha
     if (!t) return r.fail(node.path, t.error().message);
     return {};
 }
+
+// The solver's bounds (rods/solver.hpp) as decimals that messages print as written; any
+// double in them converts to a float in the solver's.
+static_assert(static_cast<float>(1e-5) == rods::kMinThickness && static_cast<float>(1.0) == rods::kMaxThickness);
+static_assert(static_cast<float>(1e-9) == rods::kMinMass && static_cast<float>(1000.0) == rods::kMaxMass);
 
 Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, ChainSpec& c) {
     KW_TRY(optional_member(r, node, "thickness", c.thickness,

@@ -17,6 +17,7 @@
 #include "kodawari/atomic_file.hpp"
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/rods/world.hpp"
+#include "scene/character_loader.hpp"
 #include "scene/json_reader.hpp"
 
 namespace kodawari {
@@ -243,10 +244,46 @@ std::string view_text(const ViewSpec& view, const std::string& name, const std::
     }
     out += "],\n" + indent + "           \"orientations\": [";
     for (std::size_t i = 0; i < view.shape.orientations.size(); ++i) {
-        const glm::quat q = view.shape.orientations[i];
+        // Normalized, so that 6 digits stay within the loader's 1e-3 of unit length.
+        const glm::quat q = glm::normalize(view.shape.orientations[i]);
         out += std::string(i ? ", " : "") + "[" + num(q.x) + ", " + num(q.y) + ", " + num(q.z) + ", " + num(q.w) + "]";
     }
     return out + "]}}";
+}
+
+// The view as the scene loader would take it back (chain_loader.cpp's read_view): a
+// finite non-zero direction, an influence in (0, kMaxInfluence], joint positions within
+// kMaxShape and at least 1e-6 m apart, non-zero orientations. The caller's numbers, so
+// the message names the argument rather than a JSON path.
+Result<void> check_view(const std::string& path, const std::string& chain, const ViewSpec& view) {
+    const std::string what = path + ": the sketch for chain \"" + chain + "\": ";
+    const auto bad = [&](const std::string& m) { return make_error(Error::Kind::InvalidInput, what + m); };
+    const glm::vec3 d = view.view.direction;
+    if (!(std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z) && glm::length(d) > 1e-6f)) {
+        return bad("direction: expected a finite non-zero vector, got " + vec(d));
+    }
+    if (!(view.view.influence > 0.0f && view.view.influence <= rods::kMaxInfluence)) {
+        return bad("influence: expected a number in (0, " + num(rods::kMaxInfluence) + "], got " + num(view.view.influence));
+    }
+    const auto& p = view.shape.positions;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const std::string at = "shape joint " + std::to_string(i) + ": ";
+        for (int k = 0; k < 3; ++k) {
+            if (!(static_cast<double>(std::abs(p[i][k])) <= scene_detail::kMaxShape)) {
+                return bad(at + "expected coordinates in [-" + num(scene_detail::kMaxShape) + ", " +
+                           num(scene_detail::kMaxShape) + "] m, got " + vec(p[i]));
+            }
+        }
+        if (i > 0 && !(glm::length(p[i] - p[i - 1]) >= 1e-6f)) return bad(at + "expected a point at least 1e-6 m from the previous joint");
+    }
+    for (std::size_t i = 0; i < view.shape.orientations.size(); ++i) {
+        const glm::quat q = view.shape.orientations[i];
+        const float length = glm::length(q);
+        if (!(std::isfinite(length) && length > 1e-6f)) {
+            return bad("shape joint " + std::to_string(i) + ": expected a non-zero finite orientation quaternion");
+        }
+    }
+    return {};
 }
 
 }  // namespace
@@ -254,6 +291,7 @@ std::string view_text(const ViewSpec& view, const std::string& name, const std::
 Result<SceneEdit> add_view_example(const std::string& text, const std::string& path, const std::string& chain,
                                    const ViewSpec& view, float replace_deg) {
     assert(view.shape.positions.size() >= 2 && view.shape.positions.size() == view.shape.orientations.size());
+    KW_TRY(check_view(path, chain, view));
     auto found = find_chain(text, path, chain);
     if (!found) return found.error();
     const ChainPlace& place = found.value();

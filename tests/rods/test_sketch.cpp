@@ -4,6 +4,7 @@
 
 #include <cmath>
 #include <fstream>
+#include <limits>
 #include <sstream>
 #include <string>
 #include <vector>
@@ -359,6 +360,43 @@ TEST(SketchSave, RefusesAMirrorAnUnknownChainAndAFullChain) {
     auto near = add_view_example(seven.value().text, "ahoge.json", "girl/ahoge", some_view({0.0f, 0.1f, -1.0f}));
     ASSERT_TRUE(near.ok()) << near.error().message;
     EXPECT_EQ(near.value().replaced_name, "back");
+}
+
+// What the loader would refuse is refused before it reaches the text, naming the file, the
+// chain and the value (fuzz_scene_edit found a negative influence written back).
+TEST(SketchSave, RefusesAViewTheLoaderWouldNotTake) {
+    const std::string text = testing_support::file_bytes(ahoge_path());
+    const auto refused = [&](ViewSpec view, const std::string& expected) {
+        auto edit = add_view_example(text, "ahoge.json", "girl/ahoge", view);
+        ASSERT_FALSE(edit.ok()) << expected;
+        EXPECT_NE(edit.error().message.find("ahoge.json: the sketch for chain \"girl/ahoge\": " + expected), std::string::npos)
+            << edit.error().message;
+    };
+    ViewSpec v = some_view({1.0f, 0.0f, 0.0f});
+    v.view.influence = -4.19f;
+    refused(v, "influence: expected a number in (0, 1000], got -4.19");
+    v.view.influence = 1001.0f;
+    refused(v, "influence: expected a number in (0, 1000], got 1001");
+    v.view.influence = std::numeric_limits<float>::quiet_NaN();
+    refused(v, "influence: expected a number in (0, 1000], got nan");
+    v = some_view({1.0f, 0.0f, 0.0f});
+    v.view.direction = glm::vec3(0.0f);
+    refused(v, "direction: expected a finite non-zero vector, got [0, 0, 0]");
+    v = some_view({1.0f, 0.0f, 0.0f});
+    v.shape.positions[5].y = 1e3f;
+    refused(v, "shape joint 5: expected coordinates in [-100, 100] m");
+    v = some_view({1.0f, 0.0f, 0.0f});
+    v.shape.positions[3] = v.shape.positions[2];
+    refused(v, "shape joint 3: expected a point at least 1e-6 m from the previous joint");
+    v = some_view({1.0f, 0.0f, 0.0f});
+    v.shape.orientations[4] = glm::quat(0.0f, 0.0f, 0.0f, 0.0f);
+    refused(v, "shape joint 4: expected a non-zero finite orientation quaternion");
+    // The bounds themselves are taken, and load back.
+    v = some_view({1.0f, 0.0f, 0.0f});
+    v.view.influence = 1000.0f;
+    auto edit = add_view_example(text, "ahoge.json", "girl/ahoge", v);
+    ASSERT_TRUE(edit.ok()) << edit.error().message;
+    EXPECT_TRUE(parse_scene(edit.value().text, "ahoge.json").ok());
 }
 
 TEST(SketchSave, WritesOnlyAValidScene) {

@@ -111,7 +111,14 @@ struct PhysicsScale {
 ///   hair lock. So mass grows as size^3, as real mass does. Within one chain every joint
 ///   has the same mass and the solver uses masses only as ratios, so this value matters
 ///   only where chains interact with forces in newtons later.
+///
+/// Both are then clamped() to what the solver takes, so a chain of micrometre or
+/// kilometre segments still loads.
 [[nodiscard]] KODAWARI_API PhysicsScale scaled_physics(const Character& character, const FoundChain& chain);
+
+/// `physics` with thickness in [rods::kMinThickness, rods::kMaxThickness] and mass in
+/// [rods::kMinMass, rods::kMaxMass].
+[[nodiscard]] KODAWARI_API PhysicsScale clamped(PhysicsScale physics);
 
 /// Thickness per metre of character size (see scaled_physics()).
 inline constexpr float kThicknessPerSize = 0.006f;

@@ -61,6 +61,11 @@ inline constexpr std::uint32_t kMaxChainColliders = 16;
 inline constexpr float kMinThickness = 1e-5f;
 inline constexpr float kMinMass = 1e-9f;
 inline constexpr float kMinFrameDt = 1e-5f;
+/// The largest particle thickness (m) and mass (kg) a chain takes: a metre-thick,
+/// tonne-heavy particle is already no hair, ear or antenna; the bounds keep inertias
+/// (m t^2) far from float's range.
+inline constexpr float kMaxThickness = 1.0f;
+inline constexpr float kMaxMass = 1000.0f;
 
 /// A kinematic sphere collider, world space.
 struct Sphere {

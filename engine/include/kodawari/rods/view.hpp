@@ -19,6 +19,11 @@ struct ViewExample {
     float influence = 1.0f;                 ///< p_k > 0: small reaches far, large stays local
 };
 
+/// The largest influence p_k scenes, the C API and sketches take: at 1000 an example's
+/// weight s^p is below 1e-30 for every view more than 21 degrees off its direction, so a
+/// larger one gives nothing a person could tell apart.
+inline constexpr float kMaxInfluence = 1000.0f;
+
 /// The camera, in world space.
 struct Camera {
     enum class Projection { Perspective, Orthographic };
