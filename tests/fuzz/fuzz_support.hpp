@@ -68,8 +68,14 @@ private:
 /// removed at exit.
 inline const std::filesystem::path& scratch_dir() {
     static const std::filesystem::path dir = [] {
-        std::filesystem::path base = std::filesystem::temp_directory_path() /
-                                     ("kodawari-fuzz-" + std::to_string(::getpid()));
+        // KODAWARI_FUZZ_SCRATCH: a fixed folder for scripts/fuzz --runs, whose runs must
+        // repeat exactly (the path reaches messages and so comparisons libFuzzer learns
+        // from); otherwise one per process, as fork mode runs several at once.
+        const char* fixed = std::getenv("KODAWARI_FUZZ_SCRATCH");
+        std::filesystem::path base = fixed != nullptr && *fixed != '\0'
+                                         ? std::filesystem::path(fixed)
+                                         : std::filesystem::temp_directory_path() /
+                                               ("kodawari-fuzz-" + std::to_string(::getpid()));
         std::filesystem::create_directories(base);
         std::atexit([] {
             std::error_code ec;
