@@ -171,16 +171,27 @@ void read_world(const kodawari_bird_world_desc& desc, birds::BirdWorld& world) {
     }
 }
 
-void open_backend(kodawari_bird_world& w, const kodawari_backend_options& options) {
+// Opens the backend `options` ask for and loads the world into it. AUTO takes vulkan when
+// a device opens and can hold the world, else cpu and says why, as Simulation::create
+// does: a world larger than the device can bind is Unsupported, which the CPU backends
+// do not know. A device the caller lent is always used (effective_backend).
+void open_and_load(kodawari_bird_world& w, const kodawari_backend_options& options) {
     const BackendOptions engine_options = backend_options(options);
     if (effective_backend(options) == KODAWARI_BACKEND_AUTO) {
         auto vulkan = make_bird_backend(BackendKind::Vulkan, engine_options);
         if (vulkan.ok()) {
-            w.backend = std::move(vulkan).value();
-            w.kind = BackendKind::Vulkan;
-            return;
+            auto backend = std::move(vulkan).value();
+            auto loaded = backend->load(w.world);
+            if (loaded.ok()) {
+                w.backend = std::move(backend);
+                w.kind = BackendKind::Vulkan;
+                return;
+            }
+            if (loaded.error().kind != Error::Kind::Unsupported) check(loaded);
+            w.fallback_reason = loaded.error().message;
+        } else {
+            w.fallback_reason = vulkan.error().message;
         }
-        w.fallback_reason = vulkan.error().message;
         w.kind = BackendKind::Cpu;
     } else {
         w.kind = backend_kind(effective_backend(options));
@@ -188,6 +199,7 @@ void open_backend(kodawari_bird_world& w, const kodawari_backend_options& option
     auto made = make_bird_backend(w.kind, engine_options);
     check(made);
     w.backend = std::move(made).value();
+    check(w.backend->load(w.world));
 }
 
 glm::quat rotation(const gpu::vec4& q) { return {q.w, q.x, q.y, q.z}; }
@@ -276,8 +288,7 @@ KODAWARI_C_API kodawari_status kodawari_bird_world_create(const kodawari_bird_wo
         auto w = std::make_unique<kodawari_bird_world>();
         read_world(*desc, w->world);
         for (std::size_t t = 0; t < birds::kWingTypeCount; ++t) w->offsets[t] = birds::part_offsets(static_cast<birds::WingType>(t));
-        open_backend(*w, desc->backend);
-        check(w->backend->load(w->world));
+        open_and_load(*w, desc->backend);
         *out = w.release();
     });
 }

@@ -247,17 +247,27 @@ void fill_frame(const kodawari_chain_world& w, const kodawari_chain_frame& f, fl
     check(rods::check_frame(w.world, out));
 }
 
-// The backend `options` ask for; AUTO takes vulkan when it opens, else cpu (and says why).
-void open_backend(kodawari_chain_world& w, const kodawari_backend_options& options) {
+// Opens the backend `options` ask for and loads the world into it. AUTO takes vulkan when
+// a device opens and can hold the world, else cpu and says why, as Simulation::create
+// does: a world larger than the device can bind is Unsupported, which the CPU backends
+// do not know. A device the caller lent is always used (effective_backend).
+void open_and_load(kodawari_chain_world& w, const kodawari_backend_options& options) {
     const BackendOptions engine_options = backend_options(options);
     if (effective_backend(options) == KODAWARI_BACKEND_AUTO) {
         auto vulkan = make_rod_backend(BackendKind::Vulkan, engine_options);
         if (vulkan.ok()) {
-            w.backend = std::move(vulkan).value();
-            w.kind = BackendKind::Vulkan;
-            return;
+            auto backend = std::move(vulkan).value();
+            auto loaded = backend->load(w.world, w.frame);
+            if (loaded.ok()) {
+                w.backend = std::move(backend);
+                w.kind = BackendKind::Vulkan;
+                return;
+            }
+            if (loaded.error().kind != Error::Kind::Unsupported) check(loaded);
+            w.fallback_reason = loaded.error().message;
+        } else {
+            w.fallback_reason = vulkan.error().message;
         }
-        w.fallback_reason = vulkan.error().message;
         w.kind = BackendKind::Cpu;
     } else {
         w.kind = backend_kind(effective_backend(options));
@@ -265,6 +275,7 @@ void open_backend(kodawari_chain_world& w, const kodawari_backend_options& optio
     auto made = make_rod_backend(w.kind, engine_options);
     check(made);
     w.backend = std::move(made).value();
+    check(w.backend->load(w.world, w.frame));
 }
 
 void require_world(const kodawari_chain_world* world) { require_pointer(world, "world"); }
@@ -304,8 +315,7 @@ KODAWARI_C_API kodawari_status kodawari_chain_world_create(const kodawari_chain_
         read_world(*desc, w->world, w->attachments);
         check_frame_args(*w, initial, "initial", false);
         fill_frame(*w, *initial, 1.0f / 60.0f, 0.0, w->frame);
-        open_backend(*w, desc->backend);
-        check(w->backend->load(w->world, w->frame));
+        open_and_load(*w, desc->backend);
         *out = w.release();
     });
 }

@@ -18,6 +18,7 @@
 #include <kodawari/kodawari.h>
 
 #include "kodawari/backend_factory.hpp"
+#include "kodawari/gpu_info.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/scene.hpp"
@@ -453,6 +454,58 @@ TEST(CApiBackends, AMissingDeviceIsUnavailableAndAutoFallsBack) {
     EXPECT_EQ(info.backend, KODAWARI_BACKEND_CPU);
     EXPECT_NE(std::string(info.fallback_reason), "");
     kodawari_chain_world_destroy(world);
+}
+
+// A bird world whose poses of one frame (64 bytes a bird) exceed the device's
+// maxStorageBufferRange (lavapipe: 128 MiB, 2.1 million birds, about 0.1 GB host-side):
+// VULKAN is refused as unavailable, naming the buffer and both sizes; AUTO runs it on the
+// CPU and says why, as `kodawari run` does (faults_test.sh).
+TEST(CApiBackends, AWorldTooLargeForTheDeviceIsUnavailableAndAutoFallsBack) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto gpus = list_gpus("");
+    ASSERT_TRUE(gpus.ok()) << gpus.error().message;
+    ASSERT_GE(gpus.value().chosen, 0) << gpus.value().reason;
+    const std::uint64_t range = gpus.value().devices[static_cast<std::size_t>(gpus.value().chosen)].max_storage_buffer_range;
+    const std::uint64_t birds = range / 64 + 1;
+    if (birds > 10'000'000) {
+        GTEST_SKIP() << "this device's storage buffer range (" << range << " bytes) holds the largest world (10 million birds)";
+    }
+    const float points[] = {0, 20, 0, 30, 20, 0, 60, 25, 0, 90, 20, 0};
+    kodawari_route_desc route{};
+    route.points = points;
+    route.point_count = 4;
+    kodawari_flock_desc flock{};
+    flock.count = static_cast<std::uint32_t>(birds);
+    flock.speed = 10.0f;
+    flock.frequency = 4.0f;
+    flock.amplitude = 0.5f;
+    kodawari_bird_world_desc desc{};
+    desc.routes = &route;
+    desc.route_count = 1;
+    desc.flocks = &flock;
+    desc.flock_count = 1;
+    desc.fps = 30.0f;
+    ASSERT_EQ(kodawari_flight_settings_default(&desc.flight), KODAWARI_OK) << kodawari_last_error();
+    desc.backend.backend = KODAWARI_BACKEND_VULKAN;
+
+    kodawari_bird_world* world = nullptr;
+    EXPECT_EQ(kodawari_bird_world_create(&desc, &world), KODAWARI_UNAVAILABLE);
+    EXPECT_EQ(world, nullptr);
+    const std::string message = kodawari_last_error();
+    const std::string sizes = "cannot hold " + std::to_string(birds) + " birds: the poses need a storage buffer of " +
+                              std::to_string(birds * 64) + " bytes";
+    EXPECT_NE(message.find("kodawari_bird_world_create: "), std::string::npos) << message;
+    EXPECT_NE(message.find(sizes), std::string::npos) << message;
+    EXPECT_NE(message.find("the device allows " + std::to_string(range)), std::string::npos) << message;
+
+    desc.backend.backend = KODAWARI_BACKEND_AUTO;
+    ASSERT_EQ(kodawari_bird_world_create(&desc, &world), KODAWARI_OK) << kodawari_last_error();
+    const std::unique_ptr<kodawari_bird_world, void (*)(kodawari_bird_world*)> owner(world, kodawari_bird_world_destroy);
+    kodawari_bird_world_info info{};
+    ASSERT_EQ(kodawari_bird_world_get_info(world, &info), KODAWARI_OK);
+    EXPECT_EQ(info.backend, KODAWARI_BACKEND_CPU);
+    EXPECT_NE(std::string(info.fallback_reason).find(sizes), std::string::npos) << info.fallback_reason;
+    std::printf("[ measured ] auto, %llu birds: %s\n", static_cast<unsigned long long>(birds), info.fallback_reason);
 }
 
 // The C API on the application's own device (kodawari.h, "Device embedding"): the crowd's
