@@ -217,6 +217,20 @@ TEST(SceneFormat, UnknownKey) {
     EXPECT_TRUE(contains(parse_error(top), "test.json: $[\"odd key\"]: unknown key (expected one of: format, version"));
 }
 
+// "$schema" points editors at docs/scene.schema.json; the loader takes it and ignores its
+// value, but still wants the string an editor can follow.
+TEST(SceneFormat, SchemaKey) {
+    json doc = valid_scene();
+    doc["$schema"] = "../docs/scene.schema.json";
+    const auto scene = kodawari::parse_scene(doc.dump(), "test.json");
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    doc["$schema"] = 1;
+    EXPECT_EQ(parse_error(doc), "test.json: $[\"$schema\"]: expected a non-empty string, got 1");
+    json nested = valid_scene();
+    nested["flocks"][0]["$schema"] = "../docs/scene.schema.json";
+    EXPECT_TRUE(contains(parse_error(nested), "test.json: $.flocks[0][\"$schema\"]: unknown key"));
+}
+
 TEST(SceneFormat, WrongType) {
     json doc = valid_scene();
     doc["fps"] = "sixty";
