@@ -244,6 +244,19 @@ TEST(SceneFormat, WrongType) {
               "test.json: $.flocks[0].route.points[4][1]: expected a finite number in [-1000000, 1000000], got \"a\"");
 }
 
+// Values are stored as floats; a bound written as itself (0.01, 1e-5) is not a float, and
+// must load all the same (found by the schema test's boundary scenes).
+TEST(SceneFormat, DecimalBoundsAreInside) {
+    json doc = valid_scene();
+    doc["fps"] = 0.01;
+    const auto scene = kodawari::parse_scene(doc.dump(), "test.json");
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    EXPECT_EQ(scene.value().fps, 0.01f);
+    json tiny = valid_scene();
+    tiny["duration"] = 1e-50;  // inside (0, 3600] as a double, 0 as a float
+    EXPECT_EQ(parse_error(tiny), "test.json: $.duration: expected a finite number in (0, 3600] (as a 32-bit float), got 1e-50");
+}
+
 TEST(SceneFormat, OutOfRange) {
     json doc = valid_scene();
     doc["flocks"][0]["count"] = -3;
