@@ -82,7 +82,15 @@ for (const dir of sceneDirs) {
   }
 }
 check(shipped > 0, 'no shipped scenes found');
-console.log(`shipped scenes: ${shipped} valid under the schema`);
+// The scene examples of docs/scene-format.md (its ```json blocks; the loader's test loads them).
+const formatDoc = readFileSync(path.join(sourceDir, 'docs', 'scene-format.md'), 'utf8');
+let examples = 0;
+for (const m of formatDoc.matchAll(/```json\n([\s\S]*?)```/g)) {
+  examples += 1;
+  check(validate(JSON.parse(m[1])), `docs/scene-format.md example ${examples} is not valid under the schema: ${schemaErrors()}`);
+}
+check(examples >= 2, `docs/scene-format.md: ${examples} scene examples found, expected at least 2`);
+console.log(`shipped scenes: ${shipped}, and ${examples} examples of docs/scene-format.md, valid under the schema`);
 
 // 2. Bad scenes and their good variants.
 const cases = JSON.parse(readFileSync(path.join(sourceDir, 'tests', 'schema', 'cases.json'), 'utf8'));
