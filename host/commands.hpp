@@ -14,5 +14,6 @@ int cmd_rig(Args args);
 int cmd_sketch(Args args);
 int cmd_render(Args args);
 int cmd_view(Args args);
+int cmd_schema(Args args);
 
 }  // namespace kodawari::cli

@@ -61,6 +61,9 @@ commands:
       drag:X1:Y1:X2:Y2, a stroke in image pixels in sketch mode, orbit:DX:DY, a left drag, resize:W:H), --screenshot writes the last frame
   info
       version, Vulkan devices and which one is chosen, CPU threads and SIMD instruction sets
+  schema
+      print the JSON Schema of the scene format (docs/scene.schema.json, draft 2020-12), for editors
+      and validators; a scene names it with "$schema"
 
 environment: KODAWARI_DEVICE (device choice), KODAWARI_ISA (the cpu backend's SIMD instruction set:
 avx512, avx2, sse4 or scalar; default the widest, as --isa), KODAWARI_VALIDATION=1 (Khronos validation
@@ -99,6 +102,7 @@ int main(int argc, char** argv) {
         if (command == "sketch") return cmd_sketch(args);
         if (command == "render") return cmd_render(args);
         if (command == "view") return cmd_view(args);
+        if (command == "schema") return cmd_schema(args);
         throw UsageError{"unknown command \"" + command + "\""};
     } catch (const UsageError& e) {
         std::fprintf(stderr, "kodawari: %s\n\n%s", e.message.c_str(), kUsage);

@@ -212,7 +212,11 @@ def crowd():
 
 
 def dump(path, doc):
-    text = json.dumps(doc, indent=2)
+    # "$schema" first, relative to the output folder, so an editor that opens the scene
+    # finds docs/scene.schema.json from wherever the scene was written.
+    schema = os.path.join(os.path.dirname(os.path.abspath(__file__)), "..", "docs", "scene.schema.json")
+    reference = os.path.relpath(schema, os.path.dirname(os.path.abspath(path))).replace(os.sep, "/")
+    text = json.dumps({"$schema": reference, **doc}, indent=2)
 
     # Short arrays and small objects on one line each.
     def collapse(m):

@@ -347,7 +347,12 @@ Result<float> JsonReader::real(const JsonNode& node, const NumberRange& range) c
     double v = 0.0;
     KW_SCENE_ASSIGN(v, number(node, range));
     const auto f = static_cast<float>(v);
-    if (!std::isfinite(f) || !range.contains(static_cast<double>(f))) {
+    // Against the bounds rounded to float as well: a bound such as 0.01 or 1e-5, written
+    // as itself, rounds to a float just below the decimal and must still be inside
+    // [0.01, ...] (the solver compares floats too), while 1e-50 must not pass (0, ...] as 0.
+    const NumberRange bounds{static_cast<double>(static_cast<float>(range.min)), static_cast<double>(static_cast<float>(range.max)),
+                             range.min_open, range.max_open};
+    if (!std::isfinite(f) || !bounds.contains(static_cast<double>(f))) {
         return expected(node, range.describe() + " (as a 32-bit float)");
     }
     return f;

@@ -271,7 +271,12 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
 
 Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, const std::string& path) {
     const JsonNode root{&document, "$"};
-    KW_TRY(r.object(root, {"format", "version", "name", "fps", "duration", "camera", "flight", "flocks", "characters", "crowds"}));
+    KW_TRY(r.object(root, {"format", "version", "name", "fps", "duration", "camera", "flight", "flocks", "characters", "crowds",
+                           "$schema"}));
+    // Editors find the JSON Schema (docs/scene.schema.json) through "$schema"; the loader
+    // checks the same rules itself, so only the key's type matters here.
+    const JsonNode schema = r.member(root, "$schema");
+    if (schema.present()) KW_TRY(r.string(schema));
 
     const JsonNode format = r.member(root, "format");
     if (!format.present() || !format.value->is_string() || *format.value != "kodawari-scene") {

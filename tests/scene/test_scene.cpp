@@ -217,6 +217,20 @@ TEST(SceneFormat, UnknownKey) {
     EXPECT_TRUE(contains(parse_error(top), "test.json: $[\"odd key\"]: unknown key (expected one of: format, version"));
 }
 
+// "$schema" points editors at docs/scene.schema.json; the loader takes it and ignores its
+// value, but still wants the string an editor can follow.
+TEST(SceneFormat, SchemaKey) {
+    json doc = valid_scene();
+    doc["$schema"] = "../docs/scene.schema.json";
+    const auto scene = kodawari::parse_scene(doc.dump(), "test.json");
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    doc["$schema"] = 1;
+    EXPECT_EQ(parse_error(doc), "test.json: $[\"$schema\"]: expected a non-empty string, got 1");
+    json nested = valid_scene();
+    nested["flocks"][0]["$schema"] = "../docs/scene.schema.json";
+    EXPECT_TRUE(contains(parse_error(nested), "test.json: $.flocks[0][\"$schema\"]: unknown key"));
+}
+
 TEST(SceneFormat, WrongType) {
     json doc = valid_scene();
     doc["fps"] = "sixty";
@@ -228,6 +242,19 @@ TEST(SceneFormat, WrongType) {
     point["flocks"][0]["route"]["points"][4][1] = "a";
     EXPECT_EQ(parse_error(point),
               "test.json: $.flocks[0].route.points[4][1]: expected a finite number in [-1000000, 1000000], got \"a\"");
+}
+
+// Values are stored as floats; a bound written as itself (0.01, 1e-5) is not a float, and
+// must load all the same (found by the schema test's boundary scenes).
+TEST(SceneFormat, DecimalBoundsAreInside) {
+    json doc = valid_scene();
+    doc["fps"] = 0.01;
+    const auto scene = kodawari::parse_scene(doc.dump(), "test.json");
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    EXPECT_EQ(scene.value().fps, 0.01f);
+    json tiny = valid_scene();
+    tiny["duration"] = 1e-50;  // inside (0, 3600] as a double, 0 as a float
+    EXPECT_EQ(parse_error(tiny), "test.json: $.duration: expected a finite number in (0, 3600] (as a 32-bit float), got 1e-50");
 }
 
 TEST(SceneFormat, OutOfRange) {
