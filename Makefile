@@ -1,7 +1,7 @@
 # The two commands of the README:
 #   make run   installs what is missing, builds (Release) and bakes the default scene
 #   make test  installs what is missing, builds and runs every test through ctest
-# and for development (README, Development):
+# and for development (docs/development.md):
 #   make asan  the `asan` preset (clang, ASan + UBSan, leaks on) over the test suite
 #   make fuzz  each libFuzzer target for FUZZ_TIME seconds (FUZZ_JOBS processes each),
 #              or for FUZZ_RUNS executions from seed FUZZ_SEED (reproducible: CI's lane)

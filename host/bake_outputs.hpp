@@ -17,7 +17,7 @@ namespace kodawari::cli {
 [[nodiscard]] std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains,
                                                                const GlbCompaction& compaction);
 
-/// `--compact[=METRES[,RADIANS]]` (README "Compact files"), removed from `args`; not
+/// `--compact[=METRES[,RADIANS]]` (docs/compact.md), removed from `args`; not
 /// enabled when absent. A bad value is a UsageError naming --compact.
 [[nodiscard]] GlbCompaction read_compaction(Args& args);
 

@@ -21,8 +21,8 @@ commands:
       --compact drops the animation keys that linear interpolation reproduces within METRES (default
       0.001) for translations and RADIANS (default METRES, i.e. 0.001) for rotations and, relative, for
       scales, writes rotations as 16-bit integers (8-bit where RADIANS absorbs their rounding, up
-      to 0.0158 rad), and prints the keys kept, the size ratio and the largest error (README
-      "Compact files");
+      to 0.0158 rad), and prints the keys kept, the size ratio and the largest error
+      (docs/compact.md);
       --shard I/N simulates only shard I of N (birds and characters [I*n/N, (I+1)*n/N)) and writes
       a part file (default out/<scene>.shard-I-of-N.kwpart) for merge, every key kept (give
       --compact to merge); under mpirun, --mpi runs one shard per rank and rank 0 writes
@@ -56,7 +56,7 @@ commands:
        [--frames N] [--keys K1,K2,...] [--screenshot FILE.png]
       an interactive window (GLFW + Vulkan): orbit / pan / zoom with the mouse, Space play/pause,
       Left/Right step, [ ] -+1 s, Home restart, 1/2/3 backend, S sketch mode, U undo, W save,
-      P screenshot, Q quit (README "Viewer"); --frames quits after N drawn frames, --keys applies
+      P screenshot, Q quit (docs/viewer.md); --frames quits after N drawn frames, --keys applies
       one key per frame first (names: space right left home [ ] 1 2 3 s w u + - p q escape, and
       drag:X1:Y1:X2:Y2, a stroke in image pixels in sketch mode, orbit:DX:DY, a left drag, resize:W:H), --screenshot writes the last frame
   info

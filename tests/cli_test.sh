@@ -139,7 +139,7 @@ check "crowd-gltf runs" test $? -eq 0
 check "crowd-gltf exports the character's own skeleton" grep -q "wrote $work/crowd-gltf.glb.*own skeleton" "$work/crowd-gltf.out"
 check "crowd-gltf export passes glTF-Validator" node tests/tools/validate_gltf.mjs "$work/crowd-gltf.glb"
 
-# --compact (README "Compact files"): the same scenes compacted at the default bounds are
+# --compact (docs/compact.md): the same scenes compacted at the default bounds are
 # smaller, say what compaction did, and pass glTF-Validator (0 errors, 0 warnings); bad
 # bounds exit 2 naming --compact and write nothing.
 "$bin" run scenes/crowd-gltf.json --frames 20 --compact --out "$work/crowd-gltf-compact.glb" >"$work/crowd-gltf-compact.out" 2>&1

@@ -7,7 +7,7 @@
 /// or the one BackendOptions::isa names. Names: "avx512" (16 floats per vector), "avx2"
 /// (8), "sse4" (4) and "scalar" (Highway's portable one-lane fallback, always available).
 /// The cpu backends give the same results on every one of them where they are exact
-/// (chains and poses: the bits of cpu-reference); see README, "Backends".
+/// (chains and poses: the bits of cpu-reference); see docs/backends.md.
 
 #include <string>
 #include <string_view>
