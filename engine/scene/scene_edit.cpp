@@ -237,7 +237,7 @@ std::string vec(glm::vec3 v) { return "[" + num(v.x) + ", " + num(v.y) + ", " + 
 
 std::string view_text(const ViewSpec& view, const std::string& name, const std::string& indent) {
     Json name_json = name;
-    std::string out = "{\"name\": " + name_json.dump() + ", \"direction\": " + vec(glm::normalize(view.view.direction)) +
+    std::string out = "{\"name\": " + name_json.dump() + ", \"direction\": " + vec(glm::vec3(glm::normalize(glm::dvec3(view.view.direction)))) +
                       ", \"influence\": " + num(view.view.influence) + ",\n" + indent + " \"shape\": {\"positions\": [";
     for (std::size_t i = 0; i < view.shape.positions.size(); ++i) {
         out += (i ? ", " : "") + (i == 0 ? std::string("[0, 0, 0]") : vec(view.shape.positions[i]));
@@ -259,7 +259,8 @@ Result<void> check_view(const std::string& path, const std::string& chain, const
     const std::string what = path + ": the sketch for chain \"" + chain + "\": ";
     const auto bad = [&](const std::string& m) { return make_error(Error::Kind::InvalidInput, what + m); };
     const glm::vec3 d = view.view.direction;
-    if (!(std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z) && glm::length(d) > 1e-6f)) {
+    // In double: the float length of (1e30, 1e30, 0) is infinite and normalizes to zeros.
+    if (!(std::isfinite(d.x) && std::isfinite(d.y) && std::isfinite(d.z) && glm::length(glm::dvec3(d)) > 1e-6)) {
         return bad("direction: expected a finite non-zero vector, got " + vec(d));
     }
     if (!(view.view.influence > 0.0f && view.view.influence <= rods::kMaxInfluence)) {
