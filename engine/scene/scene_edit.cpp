@@ -378,11 +378,19 @@ Result<SceneEdit> remove_last_sketch(const std::string& text, const std::string&
     edit.name = views[*target]["name"].get<std::string>();
     const std::vector<Span>& e = place.view_spans;
     const std::size_t k = *target;
-    if (e.size() == 1) {
+    assert(place.views);
+    const std::size_t mi = *place.views;
+    const Member& v = place.members[mi];
+    const bool only_element_in_brackets = e.size() == 1 && e[0].begin == v.value.begin + 1 && e[0].end + 1 == v.value.end;
+    if (e.size() == 1 && !only_element_in_brackets) {
+        // The chain had a `views` array with only whitespace in it (add_view_example
+        // inserts right after its `[`): the example goes, the whitespace stays.
+        edit.text.erase(v.value.begin + 1, e[0].end - (v.value.begin + 1));
+    } else if (e.size() == 1) {
         // The whole `views` member goes, with the separator before it (or after it when
-        // it is the first member): the exact inverse of adding the first example.
-        const std::size_t mi = *place.views;
-        const Member& v = place.members[mi];
+        // it is the first member): the exact inverse of adding the first example to a
+        // chain without `views`. A chain that had an empty `"views": []` loses it too (the
+        // same scene, one member shorter): the two texts after the add are the same.
         if (mi > 0) {
             const std::size_t from = place.members[mi - 1].value.end;
             edit.text.erase(from, v.value.end - from);

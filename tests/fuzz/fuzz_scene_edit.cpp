@@ -7,15 +7,32 @@
 // - any text is edited or refused with a message naming the file;
 // - when the text loads as a scene and the edit succeeds, the edited text loads too;
 // - undoing an appended (not replacing) sketch gives back the text from before it, byte
-//   for byte (scene_edit.hpp promises this).
+//   for byte, but for an empty `"views": []`, which goes with it (scene_edit.hpp promises
+//   this).
 #include <cstdint>
 #include <string>
 #include <utility>
 #include <vector>
 
+#include <nlohmann/json.hpp>
+
 #include "fuzz_support.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/scene_edit.hpp"
+
+namespace {
+
+nlohmann::json without_empty_views(nlohmann::json j) {
+    if (j.is_object()) {
+        if (j.contains("views") && j["views"].is_array() && j["views"].empty()) j.erase("views");
+        for (auto& [key, value] : j.items()) value = without_empty_views(value);
+    } else if (j.is_array()) {
+        for (auto& value : j) value = without_empty_views(value);
+    }
+    return j;
+}
+
+}  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     using namespace kodawari;
@@ -64,7 +81,13 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     auto undone = remove_last_sketch(edit.value().text, path, chain);
     if (!undone) fuzz::finding("the sketch just added cannot be removed: " + undone.error().message);
     if (!edit.value().replaced && undone.value().text != text) {
-        fuzz::finding("undoing an appended sketch did not give back the text before it");
+        // The one documented exception: an empty `"views": []` goes with the first sketch,
+        // so the undone text is shorter and, as JSON, the same but for empty `views`.
+        if (!(undone.value().text.size() < text.size() &&
+              without_empty_views(nlohmann::json::parse(text)) ==
+                  without_empty_views(nlohmann::json::parse(undone.value().text)))) {
+            fuzz::finding("undoing an appended sketch did not give back the text before it");
+        }
     }
     return 0;
 }

@@ -6,6 +6,7 @@
 #include <fstream>
 #include <limits>
 #include <sstream>
+#include <regex>
 #include <string>
 #include <vector>
 
@@ -326,6 +327,29 @@ TEST(SketchSave, AChainWithoutViewsGetsAViewsArrayAndUndoRemovesIt) {
     auto undo = remove_last_sketch(edit.value().text, "plain.json", "girl/ahoge");
     ASSERT_TRUE(undo.ok()) << undo.error().message;
     EXPECT_EQ(undo.value().text, text);
+}
+
+// A fuzzing finding: with `"views": [` blank lines `]`, undo removed the whole member.
+TEST(SketchSave, AnEmptyViewsArrayKeepsItsWhitespaceThroughAnUndo) {
+    Json scene = Json::parse(testing_support::file_bytes(ahoge_path()));
+    scene["characters"][0]["chains"][0]["views"] = Json::array();
+    const std::string compact = scene.dump(2) + "\n";  // nlohmann writes "views": []
+    const std::string spaced = std::regex_replace(compact, std::regex("\"views\": \\[\\]"), "\"views\": [\n\n      ]");
+    ASSERT_NE(spaced, compact);
+    auto edit = add_view_example(spaced, "spaced.json", "girl/ahoge", some_view({0.0f, 0.0f, 1.0f}));
+    ASSERT_TRUE(edit.ok()) << edit.error().message;
+    auto undo = remove_last_sketch(edit.value().text, "spaced.json", "girl/ahoge");
+    ASSERT_TRUE(undo.ok()) << undo.error().message;
+    EXPECT_EQ(undo.value().text, spaced);  // byte for byte
+
+    // `[]` with nothing inside: after the add, the text is the same as for a chain without
+    // `views`, so the undo takes the member (documented in scene_edit.hpp).
+    auto edit2 = add_view_example(compact, "compact.json", "girl/ahoge", some_view({0.0f, 0.0f, 1.0f}));
+    ASSERT_TRUE(edit2.ok()) << edit2.error().message;
+    auto undo2 = remove_last_sketch(edit2.value().text, "compact.json", "girl/ahoge");
+    ASSERT_TRUE(undo2.ok()) << undo2.error().message;
+    scene["characters"][0]["chains"][0].erase("views");
+    EXPECT_EQ(undo2.value().text, scene.dump(2) + "\n");
 }
 
 TEST(SketchSave, RefusesAMirrorAnUnknownChainAndAFullChain) {

@@ -50,8 +50,11 @@ struct SceneEdit {
                                                               float replace_deg = kSketchReplaceDeg);
 
 /// Removes the chain's view example with the highest "sketch <n>" name (the last one a
-/// sketch added). Undoing an append gives back the text from before it, byte for byte;
-/// an example that a sketch replaced is not brought back. Fails as add_view_example does,
+/// sketch added). Undoing an append gives back the text from before it, byte for byte,
+/// with one exception: a chain's empty `"views": []` (nothing between the brackets) is
+/// removed with the first sketch, since after it the two cannot be told apart (the scene
+/// loads the same). An example that a sketch replaced is
+/// not brought back. Fails as add_view_example does,
 /// and when the chain has no sketched example.
 [[nodiscard]] KODAWARI_API Result<SceneEdit> remove_last_sketch(const std::string& text, const std::string& path,
                                                                 const std::string& chain);
