@@ -21,17 +21,27 @@ std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool ha
     return sinks;
 }
 
+CLI::Option* add_compaction_option(CLI::App& app, std::optional<std::string>& into) {
+    // A flag, whose value comes only after "=": `--compact SCENE` leaves SCENE a positional.
+    static const std::string description =
+        "drop the animation keys that linear interpolation reproduces within METRES (translations) and RADIANS "
+        "(rotations, relative scales), 16/8-bit rotations (docs/compact.md) (default: off; --compact alone: 0.001)";
+    return app.add_flag("--compact", description)
+        ->each([&into](const std::string& value) { into = value; })
+        ->option_text("[=METRES[,RADIANS]]");
+}
+
 // ERROR is METRES or METRES,RADIANS. One number bounds all three kinds as the
 // displacement of a point 1 m from the joint: a rotation of E rad, or a scale off by E
 // relative, moves it E m, as a translation error of E m does. A second number sets the
 // rotation (and scale) bound on its own.
-GlbCompaction read_compaction(Args& args) {
-    const auto option = args.flag_or_value("compact");
+GlbCompaction read_compaction(const std::optional<std::string>& option) {
     GlbCompaction compaction;
     if (!option) return compaction;
     compaction.enabled = true;
-    if (!*option) return compaction;
-    const std::string& text = **option;
+    // CLI11 gives a flag without a value as "true".
+    if (*option == "true") return compaction;
+    const std::string& text = *option;
     const auto fail = [&]() -> UsageError {
         return UsageError{"--compact: expected --compact, --compact=METRES or --compact=METRES,RADIANS (numbers >= 0, e.g. "
                           "--compact=0.001 or --compact=0.002,0.005), got \"" + text + "\""};

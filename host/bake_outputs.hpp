@@ -17,9 +17,11 @@ namespace kodawari::cli {
 [[nodiscard]] std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains,
                                                                const GlbCompaction& compaction);
 
-/// `--compact[=METRES[,RADIANS]]` (docs/compact.md), removed from `args`; not
-/// enabled when absent. A bad value is a UsageError naming --compact.
-[[nodiscard]] GlbCompaction read_compaction(Args& args);
+/// Adds `--compact[=METRES[,RADIANS]]` (docs/compact.md); `into` holds its value.
+CLI::Option* add_compaction_option(CLI::App& app, std::optional<std::string>& into);
+/// The compaction `--compact` asks for; not enabled when absent. A bad value is a
+/// UsageError naming --compact.
+[[nodiscard]] GlbCompaction read_compaction(const std::optional<std::string>& option);
 
 /// `out/<scene name>.glb`, creating `out/` (the default output).
 [[nodiscard]] std::string default_output(const std::string& scene_name, const std::string& extension = ".glb");

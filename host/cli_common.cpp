@@ -8,76 +8,65 @@
 
 namespace kodawari::cli {
 
-std::optional<std::string> Args::option(const std::string& name) {
-    const std::string flag_text = "--" + name;
-    for (std::size_t i = 0; i < args_.size(); ++i) {
-        if (args_[i] == flag_text) {
-            if (i + 1 >= args_.size()) throw UsageError{flag_text + " needs a value"};
-            std::string value = args_[i + 1];
-            args_.erase(args_.begin() + static_cast<std::ptrdiff_t>(i), args_.begin() + static_cast<std::ptrdiff_t>(i) + 2);
-            return value;
-        }
-        if (args_[i].rfind(flag_text + "=", 0) == 0) {
-            std::string value = args_[i].substr(flag_text.size() + 1);
-            args_.erase(args_.begin() + static_cast<std::ptrdiff_t>(i));
-            return value;
-        }
-    }
-    return std::nullopt;
-}
+namespace {
 
-bool Args::flag(const std::string& name) {
-    for (std::size_t i = 0; i < args_.size(); ++i) {
-        if (args_[i] == "--" + name) {
-            args_.erase(args_.begin() + static_cast<std::ptrdiff_t>(i));
-            return true;
-        }
-    }
-    return false;
-}
-
-std::optional<std::optional<std::string>> Args::flag_or_value(const std::string& name) {
-    const std::string flag_text = "--" + name;
-    for (std::size_t i = 0; i < args_.size(); ++i) {
-        if (args_[i] == flag_text || args_[i].rfind(flag_text + "=", 0) == 0) {
-            std::optional<std::string> value;
-            if (args_[i].size() > flag_text.size()) value = args_[i].substr(flag_text.size() + 1);
-            args_.erase(args_.begin() + static_cast<std::ptrdiff_t>(i));
-            return value;
-        }
-    }
-    return std::nullopt;
-}
-
-std::optional<std::uint64_t> Args::count(const std::string& name, std::uint64_t min, std::uint64_t max) {
-    auto text = option(name);
-    if (!text) return std::nullopt;
-    std::size_t used = 0;
-    unsigned long long value = 0;
-    try {
-        value = std::stoull(*text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used != text->size() || text->empty() || (*text)[0] == '-' || value < min || value > max) {
-        throw UsageError{"--" + name + ": expected an integer in [" + std::to_string(min) + ", " + std::to_string(max) +
-                         "], got \"" + *text + "\""};
-    }
+// An unsigned integer in [min, max]; nullopt when `text` is not one.
+std::optional<std::uint64_t> parse_count(const std::string& text, std::uint64_t min, std::uint64_t max) {
+    if (text.empty() || text.find_first_not_of("0123456789") != std::string::npos || text.size() > 19) return std::nullopt;
+    const std::uint64_t value = std::stoull(text);
+    if (value < min || value > max) return std::nullopt;
     return value;
 }
 
-std::vector<std::string> Args::positionals() const {
-    for (const auto& a : args_) {
-        if (a.rfind("--", 0) == 0) throw UsageError{"unknown option " + a};
-    }
-    return args_;
+}  // namespace
+
+CLI::Option* add_text(CLI::App& app, const std::string& names, std::optional<std::string>& into, const std::string& value_name,
+                      const std::string& description) {
+    return app.add_option_function<std::string>(names, [&into](const std::string& value) { into = value; }, description)
+        ->type_name(value_name);
 }
 
-std::string Args::first_word() const {
-    for (const auto& a : args_) {
-        if (a.rfind("--", 0) != 0) return a;
-    }
-    return "";
+CLI::Option* add_count(CLI::App& app, const std::string& names, std::optional<std::uint64_t>& into, std::uint64_t min,
+                       std::uint64_t max, const std::string& description) {
+    // The check runs before the callback, and its message (CLI11 puts the option's name
+    // before it) says the range, as every count option of the command line does.
+    const CLI::Validator range(
+        [min, max](std::string& text) -> std::string {
+            if (parse_count(text, min, max)) return "";
+            return "expected an integer in [" + std::to_string(min) + ", " + std::to_string(max) + "], got \"" + text + "\"";
+        },
+        "");
+    return app
+        .add_option_function<std::string>(
+            names, [&into, min, max](const std::string& text) { into = parse_count(text, min, max); }, description)
+        ->type_name("N")
+        ->check(range);
+}
+
+CLI::Option* add_switch(CLI::App& app, const std::string& names, bool& into, const std::string& description) {
+    return app.add_flag(names, into, description);
+}
+
+CLI::Option* add_size(CLI::App& app, std::optional<std::string>& into, const std::string& what) {
+    return add_text(app, "--size", into, "WxH", what + ", W and H in [1, 8192] pixels (default: 1280x720)");
+}
+
+CLI::Option* add_scene(CLI::App& app, std::optional<std::string>& into, const std::string& default_scene) {
+    return add_text(app, "scene", into, "SCENE", "the scene file (default: " + default_scene + ")");
+}
+
+void add_backend_options(CLI::App& app, BackendFlags& flags) {
+    add_text(app, "--backend", flags.backend, "auto|vulkan|cpu|cpu-reference",
+             "the simulation's backend (default: auto, vulkan when a device opens, else cpu)");
+    add_text(app, "--device", flags.device, "NAME|INDEX",
+             "the Vulkan device, a name or an index as `kodawari info` lists them (default: $KODAWARI_DEVICE, else "
+             "the one `kodawari info` chooses)");
+    add_count(app, "--threads", flags.threads, 1, 1024, "the cpu backend's threads (default: one per hardware thread)");
+    add_text(app, "--isa", flags.isa, "avx512|avx2|sse4|scalar",
+             "the cpu backend's SIMD instruction set (default: $KODAWARI_ISA, else the widest this CPU runs)");
+    add_switch(app, "--validation", flags.validation,
+               "Khronos validation and synchronization validation; messages fail the command (default: off, or "
+               "$KODAWARI_VALIDATION=1)");
 }
 
 std::string env_text(const char* name) {
@@ -98,29 +87,24 @@ render::RendererOptions renderer_options(const BackendChoice& choice, std::uint3
             .force_staging = choice.options.force_staging};
 }
 
-BackendChoice read_backend_choice(Args& args) {
+BackendChoice read_backend_choice(const BackendFlags& flags) {
     BackendChoice choice;
-    if (auto b = args.option("backend")) {
-        auto parsed = parse_backend_choice(*b);
+    if (flags.backend) {
+        auto parsed = parse_backend_choice(*flags.backend);
         if (!parsed) throw UsageError{"--" + parsed.error().message};
         choice.backend = parsed.value();
     }
     // The environment is read here and only here; the library takes options.
-    choice.options.device = env_text("KODAWARI_DEVICE");
-    if (auto d = args.option("device")) choice.options.device = *d;
-    if (auto t = args.count("threads", 1, 1024)) choice.options.threads = static_cast<unsigned>(*t);
+    choice.options.device = flags.device.value_or(env_text("KODAWARI_DEVICE"));
+    if (flags.threads) choice.options.threads = static_cast<unsigned>(*flags.threads);
     // The cpu backend's instruction set: --isa, else KODAWARI_ISA, else the widest (the
     // backend factories reject a name this machine cannot run, naming the ones it can).
-    choice.options.isa = env_text("KODAWARI_ISA");
-    const char* isa_from = "KODAWARI_ISA";
-    if (auto isa = args.option("isa")) {
-        choice.options.isa = *isa;
-        isa_from = "--isa";
-    }
+    choice.options.isa = flags.isa.value_or(env_text("KODAWARI_ISA"));
+    const char* isa_from = flags.isa ? "--isa" : "KODAWARI_ISA";
     if (!choice.options.isa.empty()) {
         if (auto checked = simd_isa(choice.options.isa); !checked) throw UsageError{std::string(isa_from) + ": " + checked.error().message};
     }
-    choice.options.validation = args.flag("validation") || env_flag("KODAWARI_VALIDATION");
+    choice.options.validation = flags.validation || env_flag("KODAWARI_VALIDATION");
     choice.options.force_staging = env_flag("KODAWARI_FORCE_STAGING");
     return choice;
 }
@@ -141,11 +125,6 @@ Result<std::unique_ptr<Simulation>> open_simulation(const std::string& path, con
     auto scene = load_scene(path);
     if (!scene) return scene.error();
     return make_simulation(std::move(scene).value(), choice, frames, shard);
-}
-
-std::string scene_argument(const std::vector<std::string>& positionals, const char* command) {
-    if (positionals.size() > 1) throw UsageError{std::string(command) + " takes one scene file"};
-    return positionals.empty() ? std::string(kDefaultScene) : positionals[0];
 }
 
 bool validation_failed(std::uint32_t messages) {

@@ -1,11 +1,14 @@
 #pragma once
-// Shared pieces of the command line: argument reading, backend choice, exit codes.
+// Shared pieces of the command line: option definitions (CLI11), backend choice, exit codes.
 
+#include <cstdio>
 #include <memory>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <CLI/CLI.hpp>
 
 #include "kodawari/backend.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -25,37 +28,54 @@ inline constexpr int kExitBadInput = 2;
 /// The scene `make run` and a bare `kodawari run` use.
 inline constexpr const char* kDefaultScene = "scenes/flock.json";
 
-/// Thrown for usage errors; main() prints it with the usage and exits 2.
+/// Thrown for usage errors that CLI11 cannot check (options that exclude each other, a value
+/// checked against the scene); main() prints it with a pointer to --help and exits 2.
 struct UsageError {
     std::string message;
 };
 
-/// A simple argument reader: `--name value` options, flags and positionals.
-class Args {
-public:
-    Args(std::vector<std::string> args) : args_(std::move(args)) {}  // NOLINT
-    /// Value of `--name VALUE` (or --name=VALUE), removed from the list.
-    std::optional<std::string> option(const std::string& name);
-    /// Presence of `--name`, removed from the list.
-    bool flag(const std::string& name);
-    /// `--name` (gives an empty optional) or `--name=VALUE` (gives VALUE, maybe ""),
-    /// removed from the list; nullopt when absent. An option whose value is optional, so
-    /// never taken from the next argument.
-    std::optional<std::optional<std::string>> flag_or_value(const std::string& name);
-    /// Unsigned integer option with a range check.
-    std::optional<std::uint64_t> count(const std::string& name, std::uint64_t min, std::uint64_t max);
-    /// What is left; unknown `--options` are usage errors.
-    std::vector<std::string> positionals() const;
-    /// The first argument that is not an `--option` ("" when none), without checking the rest.
-    std::string first_word() const;
+/// The options of a command are bound to a CLI11 App; the helpers below give every command
+/// the same spelling, value names and messages for the same things. A description says the
+/// default in "(default: ...)" so that `--help` lists it.
 
-private:
-    std::vector<std::string> args_;
-};
+/// `--name VALUE`: `into` holds the value when given.
+CLI::Option* add_text(CLI::App& app, const std::string& names, std::optional<std::string>& into, const std::string& value_name,
+                      const std::string& description);
+/// `--name N`: an integer in [min, max] (a bad value is a usage error naming the option and
+/// the range).
+CLI::Option* add_count(CLI::App& app, const std::string& names, std::optional<std::uint64_t>& into, std::uint64_t min,
+                       std::uint64_t max, const std::string& description);
+/// `--name`, a flag.
+CLI::Option* add_switch(CLI::App& app, const std::string& names, bool& into, const std::string& description);
+/// `--size WxH` (image_size() reads it).
+CLI::Option* add_size(CLI::App& app, std::optional<std::string>& into, const std::string& what);
+/// `NAME`, an optional positional scene file (kDefaultScene when absent unless `default_scene` says otherwise).
+CLI::Option* add_scene(CLI::App& app, std::optional<std::string>& into, const std::string& default_scene = kDefaultScene);
+
+/// A renamed option's old spelling, kept for one release: `old_value` is its value; says on
+/// stderr that it is deprecated and gives it to `value` (a usage error when both are given).
+template <typename T>
+void take_alias(std::optional<T>& value, const std::optional<T>& old_value, const std::string& old_name, const std::string& name) {
+    if (!old_value) return;
+    if (value) throw UsageError{old_name + " is the old spelling of " + name + ": give one of them"};
+    std::fprintf(stderr, "kodawari: %s is deprecated (it goes in the next release); use %s\n", old_name.c_str(), name.c_str());
+    value = old_value;
+}
 
 /// The value of `--size WxH` (an image in pixels, each in [1, 8192]); (1280, 720) when
 /// the option is absent. A bad value is a UsageError that names it.
 std::pair<std::uint32_t, std::uint32_t> image_size(const std::optional<std::string>& text);
+
+/// The backend options as given: --backend, --device, --threads, --isa, --validation.
+struct BackendFlags {
+    std::optional<std::string> backend;
+    std::optional<std::string> device;
+    std::optional<std::uint64_t> threads;
+    std::optional<std::string> isa;
+    bool validation = false;
+};
+/// Adds the backend options to a command that runs a simulation.
+void add_backend_options(CLI::App& app, BackendFlags& flags);
 
 /// Options common to commands that run a simulation.
 struct BackendChoice {
@@ -66,7 +86,7 @@ struct BackendChoice {
 /// command line reads (the library takes options): KODAWARI_DEVICE (the device when no
 /// --device), KODAWARI_ISA (the cpu backend's SIMD instruction set when no --isa),
 /// KODAWARI_VALIDATION=1 (as --validation), KODAWARI_FORCE_STAGING=1.
-BackendChoice read_backend_choice(Args& args);
+BackendChoice read_backend_choice(const BackendFlags& flags);
 
 /// The value of an environment variable ("" when unset); a flag is set unless "" or "0".
 [[nodiscard]] std::string env_text(const char* name);
@@ -83,9 +103,6 @@ BackendChoice read_backend_choice(Args& args);
                                                                   std::optional<std::uint64_t> frames, Shard shard = {});
 [[nodiscard]] Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendChoice& choice,
                                                                   std::optional<std::uint64_t> frames, Shard shard = {});
-
-/// The one scene file among a command's positionals (kDefaultScene when none).
-[[nodiscard]] std::string scene_argument(const std::vector<std::string>& positionals, const char* command);
 
 /// True (after saying so on stderr) when Vulkan validation reported messages: the
 /// command then exits kExitFailure. Backends sharing one device share its count, so a

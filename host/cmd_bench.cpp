@@ -6,6 +6,7 @@
 #include <sstream>
 #include <vector>
 
+#include "bench_common.hpp"
 #include "commands.hpp"
 #include "kodawari/atomic_file.hpp"
 #include "kodawari/backend_factory.hpp"
@@ -19,6 +20,26 @@
 #include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
+
+std::string json_escape(const std::string& s) {
+    std::string out;
+    for (char c : s) {
+        if (c == '"' || c == '\\') out += '\\';
+        if (static_cast<unsigned char>(c) >= 0x20) out += c;
+    }
+    return out;
+}
+
+// Writes a benchmark's JSON atomically and says so.
+int write_json(const std::string& path, const std::string& text) {
+    auto file = AtomicFile::open(path);
+    if (!file) return report(file.error());
+    file.value().write(text);
+    if (auto r = file.value().commit(); !r) return report(r.error());
+    std::printf("wrote %s\n", path.c_str());
+    return kExitOk;
+}
+
 namespace {
 
 // The benchmark flock: the three wing types in equal shares over generated looping
@@ -75,18 +96,19 @@ struct Contender {
     std::function<Result<double>(double& gpu_ms)> repetition;
 };
 
-std::string json_escape(const std::string& s) {
-    std::string out;
-    for (char c : s) {
-        if (c == '"' || c == '\\') out += '\\';
-        if (static_cast<unsigned char>(c) >= 0x20) out += c;
-    }
-    return out;
-}
 
-std::vector<BackendKind> read_backends(Args& args) {
+// What every benchmark takes: the backend options, the backends to time, how often, where
+// the JSON goes.
+struct BenchCommon {
+    BackendFlags backend;
+    std::optional<std::string> backends;
+    std::optional<std::uint64_t> repetitions;
+    std::optional<std::string> json;
+};
+
+std::vector<BackendKind> read_backends(const BenchCommon& o) {
     std::vector<BackendKind> kinds;
-    std::stringstream names(args.option("backends").value_or("cpu-reference,cpu,vulkan"));
+    std::stringstream names(o.backends.value_or("cpu-reference,cpu,vulkan"));
     for (std::string name; std::getline(names, name, ',');) {
         auto kind = parse_backend_choice(name);
         if (!kind || !kind.value()) throw UsageError{"--backends: unknown backend \"" + name + "\""};
@@ -96,9 +118,7 @@ std::vector<BackendKind> read_backends(Args& args) {
 }
 
 // --repetitions: how many timed runs of every backend the medians come from.
-std::uint32_t read_repetitions(Args& args) {
-    return static_cast<std::uint32_t>(args.count("repetitions", 3, 1000).value_or(3));
-}
+std::uint32_t read_repetitions(const BenchCommon& o) { return static_cast<std::uint32_t>(o.repetitions.value_or(3)); }
 
 // The ISA and threads a backend of `kind` runs with (what the table and the JSON say).
 void describe(Measured& m, BackendKind kind, const BackendOptions& options) {
@@ -135,15 +155,6 @@ Result<void> run_repetitions(std::vector<Contender>& contenders, std::uint32_t r
     return {};
 }
 
-// Writes a benchmark's JSON atomically and says so.
-int write_json(const std::string& path, const std::string& text) {
-    auto file = AtomicFile::open(path);
-    if (!file) return report(file.error());
-    file.value().write(text);
-    if (auto r = file.value().commit(); !r) return report(r.error());
-    std::printf("wrote %s\n", path.c_str());
-    return kExitOk;
-}
 
 // The table and the --json file, the same shape for every benchmark: each backend's median
 // rate with its min and max over the repetitions, its ratio to cpu-reference and to cpu
@@ -197,16 +208,30 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
 
 // kodawari bench chains: every backend on the same procedural chains (rods/synthetic.hpp),
 // one solver substep per step, joint-steps per second = chains x joints x steps / s.
-int bench_chains(Args& args, const BackendChoice& choice) {
+struct ChainsOptions {
+    BenchCommon common;
+    std::optional<std::uint64_t> count;
+    std::optional<std::uint64_t> chains;  // the old spelling of --count
+    std::optional<std::uint64_t> joints;
+    std::optional<std::uint64_t> iterations;
+    std::optional<std::uint64_t> frames;
+    std::optional<std::uint64_t> steps;  // the old spelling of --frames
+};
+
+int bench_chains(ChainsOptions o) {
+    // --chains and --steps were this benchmark's own names for what every other command
+    // calls --count and --frames (and rig's --chains is something else).
+    take_alias(o.count, o.chains, "bench chains --chains", "--count");
+    take_alias(o.frames, o.steps, "bench chains --steps", "--frames");
+    const BackendChoice choice = read_backend_choice(o.common.backend);
     rods::SyntheticOptions options;
-    options.chains = static_cast<std::uint32_t>(args.count("chains", 1, 2'000'000).value_or(100'000));
-    options.joints = static_cast<std::uint32_t>(args.count("joints", 2, rods::kMaxChainJoints).value_or(16));
-    options.iterations = static_cast<std::uint32_t>(args.count("iterations", 1, 64).value_or(4));
-    const std::uint32_t steps = static_cast<std::uint32_t>(args.count("steps", 1, 100'000).value_or(10));
-    const std::uint32_t repetitions = read_repetitions(args);
-    const auto json_path = args.option("json");
-    const std::vector<BackendKind> kinds = read_backends(args);
-    if (args.positionals().size() != 1) throw UsageError{"usage: kodawari bench chains [options]"};
+    options.chains = static_cast<std::uint32_t>(o.count.value_or(100'000));
+    options.joints = static_cast<std::uint32_t>(o.joints.value_or(16));
+    options.iterations = static_cast<std::uint32_t>(o.iterations.value_or(4));
+    const std::uint32_t steps = static_cast<std::uint32_t>(o.frames.value_or(10));
+    const std::uint32_t repetitions = read_repetitions(o.common);
+    const auto& json_path = o.common.json;
+    const std::vector<BackendKind> kinds = read_backends(o.common);
     auto made = rods::SyntheticScene::make(options);
     if (!made) return report(made.error());
     const rods::SyntheticScene& scene = made.value();
@@ -265,15 +290,21 @@ int bench_chains(Args& args, const BackendChoice& choice) {
 // kodawari bench crowd: every backend on the same crowd of skinned (rigged glTF)
 // characters: per frame the clips of every instance (the pose backend of that kind) and
 // the chains' step (the rod backend of that kind). Frames per second of the two together.
-int bench_crowd(Args& args, const BackendChoice& choice) {
-    const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 100'000).value_or(1000));
-    const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(60));
-    const std::uint32_t repetitions = read_repetitions(args);
-    const auto json_path = args.option("json");
-    const std::vector<BackendKind> kinds = read_backends(args);
-    const auto positionals = args.positionals();
-    if (positionals.size() > 2) throw UsageError{"usage: kodawari bench crowd [SCENE] [options]"};
-    const std::string path = positionals.size() == 2 ? positionals[1] : "scenes/crowd-gltf.json";
+struct CrowdOptions {
+    BenchCommon common;
+    std::optional<std::string> scene;
+    std::optional<std::uint64_t> count;
+    std::optional<std::uint64_t> frames;
+};
+
+int bench_crowd(const CrowdOptions& o) {
+    const BackendChoice choice = read_backend_choice(o.common.backend);
+    const std::uint32_t count = static_cast<std::uint32_t>(o.count.value_or(1000));
+    const std::uint32_t frames = static_cast<std::uint32_t>(o.frames.value_or(60));
+    const std::uint32_t repetitions = read_repetitions(o.common);
+    const auto& json_path = o.common.json;
+    const std::vector<BackendKind> kinds = read_backends(o.common);
+    const std::string path = o.scene.value_or("scenes/crowd-gltf.json");
     auto loaded = load_scene(path);
     if (!loaded) return report(loaded.error());
     Scene scene = std::move(loaded).value();
@@ -364,133 +395,22 @@ int bench_crowd(Args& args, const BackendChoice& choice) {
     return report_results(contenders, "frames/s", repetitions, choice.options, head, json_path);
 }
 
-// kodawari bench view: what a viewer frame costs (simulate, then draw offscreen and wait;
-// no image read back, no blit) with the simulation's state drawn where it is computed
-// (the vulkan backends on the renderer's device, issue 5), against the same device with
-// the state read back and uploaded again (what a renderer on its own device must do),
-// and against the cpu backends (uploaded). The three run interleaved, 10 frames at a time,
-// so that a noisy machine slows them alike.
-int bench_view(Args& args, BackendChoice choice) {
-    const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(120));
-    const auto size = image_size(args.option("size"));  // not bound: a lambda below uses them (clang < 16)
-    const auto width = size.first;
-    const auto height = size.second;
-    const auto json_path = args.option("json");
-    auto positionals = args.positionals();
-    if (positionals.size() > 2) throw UsageError{"usage: kodawari bench view [SCENE] [options]"};
-    positionals.erase(positionals.begin());
-    if (positionals.empty()) positionals.push_back("scenes/crowd.json");
-    (void)scene_argument(positionals, "bench view");
-    auto loaded = load_scene(positionals[0]);
-    if (!loaded) return report(loaded.error());
-    const Scene& scene = loaded.value();
-    // A renderer per configuration, so that each keeps its simulation's layers set up
-    // (show_on) and the interleaving costs nothing; the vulkan ones simulate on it.
-    struct Run {
-        const char* name;
-        BackendKind kind;
-        Simulation::DrawSource source;
-        std::unique_ptr<render::Renderer> renderer;
-        std::unique_ptr<Simulation> sim;
-        double seconds = 0.0;
-        std::uint64_t read_back_bytes = 0;
-    };
-    std::vector<Run> runs;
-    runs.push_back({"vulkan shared", BackendKind::Vulkan, Simulation::DrawSource::Device, {}, {}});
-    runs.push_back({"vulkan readback", BackendKind::Vulkan, Simulation::DrawSource::ReadBack, {}, {}});
-    runs.push_back({"cpu", BackendKind::Cpu, Simulation::DrawSource::Device, {}, {}});
-    for (Run& run : runs) {
-        auto renderer = render::Renderer::create(renderer_options(choice, width, height));
-        if (!renderer) return report(renderer.error());
-        run.renderer = std::move(renderer).value();
-        BackendOptions options = choice.options;
-        options.context = run.renderer->device_context();
-        // The read-back configuration makes the rigged characters' rod input on the host too.
-        auto made = Simulation::create(scene, {.backend = run.kind, .options = options, .frames = 2 + frames,
-                                               .rod_inputs_on_device = run.source == Simulation::DrawSource::Device});
-        if (!made) return report(made.error());
-        run.sim = std::move(made).value();
-        run.sim->keep_bird_poses(run.source == Simulation::DrawSource::ReadBack);
-        if (auto s = run.sim->show_on(*run.renderer); !s) return report(s.error());
-    }
-    const Simulation& first = *runs.front().sim;
-    const std::vector<glm::vec3> grid = render::content_points(first.rod_scene(), nullptr, &first.bird_world());
-    std::printf("bench view: scene \"%s\": %zu chains, %zu birds, %ux%u, %u frames per configuration after 2 warm-up frames, "
-                "interleaved 10 at a time, on %s\n",
-                scene.name.c_str(), first.rod_scene() ? first.rod_scene()->world.chains.size() : std::size_t{0},
-                first.bird_world().birds.size(), width, height, frames, runs.front().renderer->device().c_str());
-    std::fflush(stdout);
 
-    // One frame of a configuration: simulate, give the renderer the state, draw.
-    const auto frame = [&](Run& run) -> Result<void> {
-        render::Renderer& r = *run.renderer;
-        const std::uint64_t before = r.read_back_bytes();
-        KW_TRY(run.sim->step());
-        KW_TRY(run.sim->draw_on(r, run.source));
-        const std::uint32_t f = *run.sim->frame();
-        render::DrawList list(render::scene_camera(scene, f), width, height);
-        render::add_ground_grid(list, grid);
-        if (run.sim->rod_scene()) render::add_characters(list, *run.sim->rod_scene(), f);
-        KW_TRY(r.draw(list));
-        if (f >= 2) run.read_back_bytes += r.read_back_bytes() - before;
-        return {};
-    };
-    for (Run& run : runs) {
-        for (std::uint32_t f = 0; f < 2; ++f) {
-            if (auto s = frame(run); !s) return report(s.error());
-        }
-    }
-    for (std::uint32_t done = 0; done < frames;) {
-        const std::uint32_t n = std::min(10u, frames - done);
-        for (Run& run : runs) {
-            const auto start = std::chrono::steady_clock::now();
-            for (std::uint32_t k = 0; k < n; ++k) {
-                if (auto s = frame(run); !s) return report(s.error());
-            }
-            run.seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-        }
-        done += n;
-    }
-    for (const Run& run : runs) {
-        if (validation_failed(run.renderer->validation_messages())) return kExitFailure;
-    }
-    const double baseline = frames / runs[1].seconds;
-    std::printf("\n%-16s %12s %12s %22s %18s\n", "configuration", "frames/s", "ms/frame", "read back B/frame", "vs vulkan readback");
-    std::string json = "{\"benchmark\":\"view\",\"scene\":\"" + json_escape(scene.name) + "\",\"frames\":" +
-                       std::to_string(frames) + ",\"results\":[";
-    for (std::size_t i = 0; i < runs.size(); ++i) {
-        const Run& run = runs[i];
-        const double fps = frames / run.seconds;
-        // The cpu backends' state is on the host already: nothing to read back from a device.
-        char bytes[32] = "-";
-        if (run.kind == BackendKind::Vulkan) std::snprintf(bytes, sizeof bytes, "%.0f", static_cast<double>(run.read_back_bytes) / frames);
-        std::printf("%-16s %12.4g %12.3f %22s %17.2fx\n", run.name, fps, 1e3 * run.seconds / frames, bytes, fps / baseline);
-        char numbers[200];
-        std::snprintf(numbers, sizeof numbers, "\"per_second\":%.6g,\"ms_per_frame\":%.6g,\"read_back_bytes_per_frame\":%.6g", fps,
-                      1e3 * run.seconds / frames, static_cast<double>(run.read_back_bytes) / frames);
-        json += (i ? "," : "") + std::string("{\"configuration\":\"") + run.name + "\"," + numbers + "}";
-    }
-    json += "]}\n";
-    return json_path ? write_json(*json_path, json) : kExitOk;
-}
+struct BirdsOptions {
+    BenchCommon common;
+    std::optional<std::uint64_t> count;
+    std::optional<std::uint64_t> frames;
+    bool readback = false;
+};
 
-}  // namespace
-
-int cmd_bench(Args args) {
-    BackendChoice choice = read_backend_choice(args);
-    if (args.first_word() == "chains") return bench_chains(args, choice);
-    if (args.first_word() == "crowd") return bench_crowd(args, choice);
-    if (args.first_word() == "view") return bench_view(args, choice);
-    const std::uint32_t count = static_cast<std::uint32_t>(args.count("count", 1, 4'000'000).value_or(1'000'000));
-    const std::uint32_t frames = static_cast<std::uint32_t>(args.count("frames", 1, 100'000).value_or(30));
-    const std::uint32_t repetitions = read_repetitions(args);
-    const auto json_path = args.option("json");
-    const bool readback = args.flag("readback");
-    const std::vector<BackendKind> kinds = read_backends(args);
-    const auto positionals = args.positionals();
-    if (positionals.size() != 1 || positionals[0] != "birds") {
-        throw UsageError{"usage: kodawari bench birds|chains|crowd|view [options]"};
-    }
+int bench_birds(const BirdsOptions& o) {
+    const BackendChoice choice = read_backend_choice(o.common.backend);
+    const std::uint32_t count = static_cast<std::uint32_t>(o.count.value_or(1'000'000));
+    const std::uint32_t frames = static_cast<std::uint32_t>(o.frames.value_or(30));
+    const std::uint32_t repetitions = read_repetitions(o.common);
+    const auto& json_path = o.common.json;
+    const bool readback = o.readback;
+    const std::vector<BackendKind> kinds = read_backends(o.common);
 
     auto built = build_bird_world(bench_scene(count, frames * repetitions + 1));
     if (!built) return report(built.error());
@@ -542,6 +462,54 @@ int cmd_bench(Args args) {
     const std::string head = "{\"benchmark\":\"birds\",\"count\":" + std::to_string(count) + ",\"frames\":" +
                              std::to_string(frames) + ",\"readback\":" + (readback ? "true" : "false");
     return report_results(contenders, "bird-frames/s", repetitions, choice.options, head, json_path);
+}
+
+void add_common(CLI::App& c, BenchCommon& o) {
+    add_text(c, "--backends", o.backends, "LIST", "the backends to time, comma-separated (default: cpu-reference,cpu,vulkan)");
+    add_count(c, "--repetitions", o.repetitions, 3, 1000, "timed runs of every backend, interleaved (default: 3)");
+    add_text(c, "--json", o.json, "FILE.json", "also write the results as JSON (default: none)");
+    add_backend_options(c, o.backend);
+}
+
+}  // namespace
+
+Command add_bench(CLI::App& app) {
+    CLI::App* bench = app.add_subcommand("bench", "time every backend on the same work after warm-up: medians, min, max and the "
+                                                  "ratios to cpu-reference and cpu (docs/performance.md)");
+    bench->require_subcommand(1);
+    auto birds = std::make_shared<BirdsOptions>();
+    CLI::App* b = bench->add_subcommand("birds", "bird-frames per second on a flock of N birds");
+    add_count(*b, "--count", birds->count, 1, 4'000'000, "birds (default: 1000000)");
+    add_count(*b, "--frames", birds->frames, 1, 100'000, "frames per repetition (default: 30)");
+    add_switch(*b, "--readback", birds->readback, "read the poses back every frame (default: off)");
+    add_common(*b, birds->common);
+
+    auto chains = std::make_shared<ChainsOptions>();
+    CLI::App* ch = bench->add_subcommand("chains", "joint-steps per second on procedural chains, one solver substep per frame");
+    add_count(*ch, "--count", chains->count, 1, 2'000'000, "chains (default: 100000)");
+    add_count(*ch, "--chains", chains->chains, 1, 2'000'000, "deprecated: the old spelling of --count, for one release");
+    add_count(*ch, "--joints", chains->joints, 2, rods::kMaxChainJoints, "joints per chain (default: 16)");
+    add_count(*ch, "--iterations", chains->iterations, 1, 64, "solver iterations per substep (default: 4)");
+    add_count(*ch, "--frames", chains->frames, 1, 100'000, "frames (steps of 1/120 s) per repetition (default: 10)");
+    add_count(*ch, "--steps", chains->steps, 1, 100'000, "deprecated: the old spelling of --frames, for one release");
+    add_common(*ch, chains->common);
+
+    auto crowd = std::make_shared<CrowdOptions>();
+    CLI::App* cr = bench->add_subcommand("crowd", "frames per second of a crowd of N skinned characters: clips and chains");
+    add_scene(*cr, crowd->scene, "scenes/crowd-gltf.json");
+    add_count(*cr, "--count", crowd->count, 1, 100'000, "characters (default: 1000)");
+    add_count(*cr, "--frames", crowd->frames, 1, 100'000, "frames per repetition (default: 60)");
+    add_common(*cr, crowd->common);
+
+    std::function<int()> run_view;
+    add_bench_view(*bench, run_view);
+
+    return {bench, [=] {
+                if (b->parsed()) return bench_birds(*birds);
+                if (ch->parsed()) return bench_chains(*chains);
+                if (cr->parsed()) return bench_crowd(*crowd);
+                return run_view();
+            }};
 }
 
 }  // namespace kodawari::cli

@@ -8,12 +8,16 @@
 
 namespace kodawari::cli {
 
-int cmd_info(Args args) {
-    std::string device = env_text("KODAWARI_DEVICE");
-    if (auto d = args.option("device")) device = *d;
-    std::string requested_isa = env_text("KODAWARI_ISA");
-    if (auto i = args.option("isa")) requested_isa = *i;
-    if (!args.positionals().empty()) throw UsageError{"info takes no arguments"};
+namespace {
+
+struct InfoOptions {
+    std::optional<std::string> device;
+    std::optional<std::string> isa;
+};
+
+int cmd_info(const InfoOptions& o) {
+    const std::string device = o.device.value_or(env_text("KODAWARI_DEVICE"));
+    const std::string requested_isa = o.isa.value_or(env_text("KODAWARI_ISA"));
     std::printf("kodawari %s\n", std::string(version()).c_str());
     std::printf("CPU threads: %u (the cpu backend's default)\n", std::thread::hardware_concurrency());
     std::string available;
@@ -54,6 +58,18 @@ int cmd_info(Args args) {
         std::printf("chosen: none: %s\nbackend auto: cpu\n", inv.reason.c_str());
     }
     return kExitOk;
+}
+
+}  // namespace
+
+Command add_info(CLI::App& app) {
+    auto o = std::make_shared<InfoOptions>();
+    CLI::App* c = app.add_subcommand("info", "version, Vulkan devices and which one is chosen, CPU threads and SIMD instruction sets");
+    add_text(*c, "--device", o->device, "NAME|INDEX",
+             "the device to choose, as the simulating commands' --device (default: $KODAWARI_DEVICE)");
+    add_text(*c, "--isa", o->isa, "avx512|avx2|sse4|scalar",
+             "the SIMD instruction set to describe, as the simulating commands' --isa (default: $KODAWARI_ISA, else the widest)");
+    return {c, [o] { return cmd_info(*o); }};
 }
 
 }  // namespace kodawari::cli

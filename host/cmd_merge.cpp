@@ -8,12 +8,21 @@
 
 namespace kodawari::cli {
 
-int cmd_merge(Args args) {
-    const auto out_option = args.option("out");
+namespace {
+
+struct MergeArguments {
+    std::vector<std::string> parts;
+    std::optional<std::string> out;
+    std::optional<std::string> scene;
+    std::optional<std::string> compact;
+};
+
+int cmd_merge(const MergeArguments& o) {
+    const auto& out_option = o.out;
     MergeOptions options;
-    if (auto scene = args.option("scene")) options.scene = *scene;
-    const GlbCompaction compaction = read_compaction(args);
-    const std::vector<std::string> parts = args.positionals();
+    if (o.scene) options.scene = *o.scene;
+    const GlbCompaction compaction = read_compaction(o.compact);
+    const std::vector<std::string>& parts = o.parts;
     if (parts.empty()) throw UsageError{"merge takes the part files of every shard (written by `run --shard I/N`)"};
     auto source = open_parts(parts, options);
     if (!source) return report(source.error());
@@ -29,6 +38,19 @@ int cmd_merge(Args args) {
     if (!written) return report(written.error());
     for (const BakeOutput& file : written.value()) print_wrote(file);
     return kExitOk;
+}
+
+}  // namespace
+
+Command add_merge(CLI::App& app) {
+    auto o = std::make_shared<MergeArguments>();
+    CLI::App* c = app.add_subcommand("merge", "join the part files of every shard of one bake into the files one run writes");
+    c->add_option("parts", o->parts, "the part files of every shard (written by `run --shard I/N`)")->type_name("PART");
+    add_text(*c, "--out", o->out, "FILE.glb", "the glTF file (default: out/<scene>.glb)");
+    add_text(*c, "--scene", o->scene, "SCENE.json",
+             "the scene file, when it moved since the bake; its bytes must be unchanged (default: the path in the parts)");
+    add_compaction_option(*c, o->compact);
+    return {c, [o] { return cmd_merge(*o); }};
 }
 
 }  // namespace kodawari::cli

@@ -123,18 +123,28 @@ private:
     bool kept_ = false;
 };
 
-}  // namespace
 
-int cmd_render(Args args) {
-    BackendChoice choice = read_backend_choice(args);
-    const auto frames_text = args.option("frames");
-    const auto out_dir = args.option("out");
-    const auto sheet_path = args.option("contact-sheet");
-    const auto columns_option = args.count("columns", 1, 64);
+// The options as given; add_render() defines them.
+struct RenderOptions {
+    std::optional<std::string> scene;
+    BackendFlags backend;
+    std::optional<std::string> frames;
+    std::optional<std::string> out;
+    std::optional<std::string> contact_sheet;
+    std::optional<std::uint64_t> columns;
+    std::optional<std::string> size;
+};
+
+int cmd_render(const RenderOptions& o) {
+    BackendChoice choice = read_backend_choice(o.backend);
+    const auto& frames_text = o.frames;
+    const auto& out_dir = o.out;
+    const auto& sheet_path = o.contact_sheet;
+    const auto& columns_option = o.columns;
     if (!out_dir) throw UsageError{"render needs --out DIR (the directory of the PNG files; created when missing)"};
     if (columns_option && !sheet_path) throw UsageError{"--columns goes with --contact-sheet"};
-    const auto [width, height] = image_size(args.option("size"));
-    auto loaded = load_scene(scene_argument(args.positionals(), "render"));
+    const auto [width, height] = image_size(o.size);
+    auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
     const std::uint32_t scene_frames = loaded.value().frame_count();
     FrameRange range{0, scene_frames, 1};
@@ -208,6 +218,23 @@ int cmd_render(Args args) {
     if (validation_failed(r.validation_messages())) return kExitFailure;
     outputs.keep();
     return kExitOk;
+}
+
+}  // namespace
+
+Command add_render(CLI::App& app) {
+    auto o = std::make_shared<RenderOptions>();
+    CLI::App* c = app.add_subcommand("render", "simulate a scene as run does and draw frames offscreen to PNG files "
+                                               "DIR/<scene>_<frame, 5 digits>.png (docs/command-line.md)");
+    add_scene(*c, o->scene);
+    add_text(*c, "--out", o->out, "DIR", "the directory of the PNG files, created when missing (required)");
+    add_text(*c, "--frames", o->frames, "A:B[:STEP]|N",
+             "frames A, A+STEP, ... below B (B exclusive), or the first N (default: the whole scene)");
+    add_size(*c, o->size, "the images");
+    add_text(*c, "--contact-sheet", o->contact_sheet, "FILE.png", "also the frames shrunk into one grid (default: none)");
+    add_count(*c, "--columns", o->columns, 1, 64, "the contact sheet's columns (default: min(frames, 4))");
+    add_backend_options(*c, o->backend);
+    return {c, [o] { return cmd_render(*o); }};
 }
 
 }  // namespace kodawari::cli

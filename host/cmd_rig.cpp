@@ -23,12 +23,20 @@ std::vector<std::string> split_list(const std::string& text) {
     return out;
 }
 
-}  // namespace
 
-int cmd_rig(Args args) {
+struct RigArguments {
+    std::optional<std::string> character;
+    std::optional<std::string> chains;
+    std::optional<std::string> roots;
+    std::optional<std::string> animation;
+    std::optional<std::string> name;
+    std::optional<std::string> out;
+};
+
+int cmd_rig(const RigArguments& o) {
     gltf::RigOptions options;
-    const auto chains = args.option("chains");
-    const auto roots = args.option("roots");
+    const auto& chains = o.chains;
+    const auto& roots = o.roots;
     if (chains && roots) throw UsageError{"rig: give --chains or --roots, not both"};
     if (chains) {
         gltf::ChainSearch search;
@@ -42,12 +50,11 @@ int cmd_rig(Args args) {
         if (search.roots.empty()) throw UsageError{"rig: --roots needs one or more node names, comma-separated"};
         options.search = search;
     }
-    if (auto clip = args.option("animation")) options.clip = *clip;
-    if (auto name = args.option("name")) options.name = *name;
-    std::string out_path = args.option("out").value_or("");
-    const auto positionals = args.positionals();
-    if (positionals.size() != 1) throw UsageError{"rig needs exactly one CHARACTER file (.gltf, .glb or .vrm)"};
-    const std::string& character = positionals.front();
+    if (o.animation) options.clip = *o.animation;
+    if (o.name) options.name = *o.name;
+    std::string out_path = o.out.value_or("");
+    if (!o.character) throw UsageError{"rig needs exactly one CHARACTER file (.gltf, .glb or .vrm)"};
+    const std::string& character = *o.character;
     if (out_path.empty()) out_path = std::filesystem::path(character).stem().string() + ".json";
 
     auto rig = gltf::make_rig_scene(character, out_path, options);
@@ -80,6 +87,22 @@ int cmd_rig(Args args) {
     }
     std::printf("wrote %s (kodawari run %s)\n", out_path.c_str(), out_path.c_str());
     return kExitOk;
+}
+
+}  // namespace
+
+Command add_rig(CLI::App& app) {
+    auto o = std::make_shared<RigArguments>();
+    CLI::App* c = app.add_subcommand("rig", "find the chains and colliders of a rigged .gltf/.glb/.vrm character and write a scene "
+                                            "that simulates it (docs/rigged-characters.md)");
+    add_text(*c, "character", o->character, "CHARACTER", "the character file (.gltf, .glb or .vrm)");
+    add_text(*c, "--chains", o->chains, "PATTERNS",
+             "find the chains by node name patterns, comma-separated (default: VRM spring bones, else the built-in patterns)");
+    add_text(*c, "--roots", o->roots, "NAMES", "the chains' root nodes by name, comma-separated, instead of --chains");
+    add_text(*c, "--animation", o->animation, "CLIP", "the animation clip the instances play (default: the file's first, else the rest pose)");
+    add_text(*c, "--name", o->name, "NAME", "the scene's and the character's name (default: the file's stem)");
+    add_text(*c, "--out", o->out, "SCENE.json", "the scene file to write (default: ./<character>.json)");
+    return {c, [o] { return cmd_rig(*o); }};
 }
 
 }  // namespace kodawari::cli

@@ -133,17 +133,28 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
 #endif
 }
 
-}  // namespace
+struct RunOptions {
+    std::optional<std::string> scene;
+    BackendFlags backend;
+    std::optional<std::uint64_t> frames;
+    std::optional<std::string> out;
+    bool no_export = false;
+    std::optional<std::string> trace;
+    std::optional<std::string> shard;
+    std::optional<std::string> compact;
+    bool mpi = false;
+};
 
-int cmd_run(Args args) {
-    const BackendChoice choice = read_backend_choice(args);
-    const auto frames_option = args.count("frames", 1, 10'000'000);
-    const auto out_option = args.option("out");
-    const bool no_export = args.flag("no-export");
-    const auto trace_path = args.option("trace");
-    const auto shard_option = args.option("shard");
-    const GlbCompaction compaction = read_compaction(args);
-    const bool mpi = args.flag("mpi");
+int cmd_run(const RunOptions& o) {
+    const BackendChoice choice = read_backend_choice(o.backend);
+    const auto& frames_option = o.frames;
+    const auto& out_option = o.out;
+    const bool no_export = o.no_export;
+    const auto& trace_path = o.trace;
+    const auto& shard_option = o.shard;
+    const GlbCompaction compaction = read_compaction(o.compact);
+    const bool mpi = o.mpi;
+    const std::string scene_path = o.scene.value_or(kDefaultScene);
     if (mpi && shard_option) throw UsageError{"--mpi and --shard exclude each other (--mpi runs one shard per rank)"};
     if (no_export && out_option) throw UsageError{"--out and --no-export exclude each other"};
     if (no_export && compaction.enabled) throw UsageError{"--compact and --no-export exclude each other"};
@@ -154,14 +165,14 @@ int cmd_run(Args args) {
                          "`kodawari merge` instead"};
     }
     if (mpi) {
-        return run_distributed(scene_argument(args.positionals(), "run"), choice, frames_option, out_option, trace_path, no_export,
+        return run_distributed(scene_path, choice, frames_option, out_option, trace_path, no_export,
                                compaction);
     }
     if (shard_option && (no_export || trace_path)) {
         throw UsageError{"--shard writes a part file for `kodawari merge` (at --out): it takes neither --no-export nor --trace"};
     }
     const Shard shard = shard_option ? parse_shard(*shard_option) : Shard{};
-    auto opened = open_simulation(scene_argument(args.positionals(), "run"), choice, frames_option, shard);
+    auto opened = open_simulation(scene_path, choice, frames_option, shard);
     if (!opened) return report(opened.error());
     Simulation& sim = *opened.value();
     const Scene& scene = sim.scene();
@@ -195,6 +206,24 @@ int cmd_run(Args args) {
     if (!written) return written.error().message.empty() ? kExitFailure : report(written.error());
     for (const BakeOutput& file : written.value()) print_wrote(file);
     return kExitOk;
+}
+
+}  // namespace
+
+Command add_run(CLI::App& app) {
+    auto o = std::make_shared<RunOptions>();
+    CLI::App* c = app.add_subcommand("run", "simulate a scene and bake it to glTF (docs/command-line.md)");
+    add_scene(*c, o->scene);
+    add_count(*c, "--frames", o->frames, 1, 10'000'000, "frames to simulate (default: the scene's)");
+    add_text(*c, "--out", o->out, "FILE.glb",
+             "the glTF file (default: out/<scene>.glb; with --shard out/<scene>.shard-I-of-N.kwpart)");
+    add_switch(*c, "--no-export", o->no_export, "simulate (and trace) without writing glTF");
+    add_compaction_option(*c, o->compact);
+    add_text(*c, "--trace", o->trace, "FILE.jsonl", "also write every frame's state as JSON Lines (default: none)");
+    add_text(*c, "--shard", o->shard, "I/N", "simulate only shard I of N and write a part file for `kodawari merge` (default: all)");
+    add_switch(*c, "--mpi", o->mpi, "under mpirun: one shard per rank, rank 0 writes (default: off)");
+    add_backend_options(*c, o->backend);
+    return {c, [o] { return cmd_run(*o); }};
 }
 
 }  // namespace kodawari::cli

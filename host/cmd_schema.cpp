@@ -14,8 +14,9 @@ std::string_view scene_schema();
 
 namespace kodawari::cli {
 
-int cmd_schema(Args args) {
-    if (!args.positionals().empty()) throw UsageError{"schema takes no arguments"};
+namespace {
+
+int cmd_schema() {
     const std::string_view schema = embedded::scene_schema();
     // Byte for byte: the test compares the output with the file, and a redirect to a full
     // disk must not pass for success.
@@ -26,6 +27,14 @@ int cmd_schema(Args args) {
         return kExitFailure;
     }
     return kExitOk;
+}
+
+}  // namespace
+
+Command add_schema(CLI::App& app) {
+    CLI::App* c = app.add_subcommand(
+        "schema", "print the JSON Schema (draft 2020-12) of the scene format, docs/scene.schema.json, for editors and validators");
+    return {c, [] { return cmd_schema(); }};
 }
 
 }  // namespace kodawari::cli

@@ -38,26 +38,36 @@ std::string vec_text(glm::vec3 v) {
     return text;
 }
 
-}  // namespace
 
-int cmd_sketch(Args args) {
-    const auto chain = args.option("chain");
-    const auto stroke_path = args.option("stroke");
-    const auto frame_index = args.count("frame", 0, 1'000'000'000);
-    const auto camera_text = args.option("camera");
-    const auto size_text = args.option("size");
+struct SketchOptions {
+    std::optional<std::string> scene;
+    std::optional<std::string> chain;
+    std::optional<std::string> stroke;
+    std::optional<std::uint64_t> frame;
+    std::optional<std::string> camera;
+    std::optional<std::string> size;
+    std::optional<std::string> influence;
+    std::optional<std::string> out;
+    bool undo = false;
+};
+
+int cmd_sketch(const SketchOptions& o) {
+    const auto& chain = o.chain;
+    const auto& stroke_path = o.stroke;
+    const auto& frame_index = o.frame;
+    const auto& camera_text = o.camera;
+    const auto& size_text = o.size;
     const auto [width, height] = image_size(size_text);
-    const auto influence_text = args.option("influence");
-    const auto out_option = args.option("out");
-    const bool undo = args.flag("undo");
-    const auto positionals = args.positionals();
-    if (positionals.size() != 1) throw UsageError{"sketch needs exactly one SCENE file"};
+    const auto& influence_text = o.influence;
+    const auto& out_option = o.out;
+    const bool undo = o.undo;
+    if (!o.scene) throw UsageError{"sketch needs exactly one SCENE file"};
     if (!chain) throw UsageError{"sketch needs --chain CHARACTER/CHAIN"};
     if (undo && (stroke_path || camera_text || size_text || influence_text || frame_index)) {
         throw UsageError{"sketch --undo takes only SCENE, --chain and --out"};
     }
     if (!undo && !stroke_path) throw UsageError{"sketch needs --stroke STROKE.json (or --undo)"};
-    const std::string& scene_path = positionals.front();
+    const std::string& scene_path = *o.scene;
     const std::string out_path = out_option.value_or(scene_path);
 
     auto text = read_text_file(scene_path);
@@ -160,6 +170,24 @@ int cmd_sketch(Args args) {
                            : "added",
                 out_path.c_str());
     return kExitOk;
+}
+
+}  // namespace
+
+Command add_sketch(CLI::App& app) {
+    auto o = std::make_shared<SketchOptions>();
+    CLI::App* c = app.add_subcommand("sketch", "the chain takes the shape of a stroke drawn over the view, as a new view example "
+                                               "(docs/sketch.md); --undo removes the last one a sketch added");
+    add_text(*c, "scene", o->scene, "SCENE", "the scene file to edit");
+    add_text(*c, "--chain", o->chain, "CHARACTER/CHAIN", "the chain to shape (required)");
+    add_text(*c, "--stroke", o->stroke, "STROKE.json", "the stroke, points in image pixels (required unless --undo)");
+    add_count(*c, "--frame", o->frame, 0, 1'000'000'000, "the frame whose pose the stroke is drawn over (default: 0)");
+    add_text(*c, "--camera", o->camera, "EX,EY,EZ,TX,TY,TZ", "the camera's eye and target in metres (default: the scene's camera)");
+    add_size(*c, o->size, "the image the stroke's pixels are in");
+    add_text(*c, "--influence", o->influence, "P", "the example's influence, in (0, 1000] (default: 4)");
+    add_text(*c, "--out", o->out, "SCENE2.json", "the scene file to write (default: SCENE, in place)");
+    add_switch(*c, "--undo", o->undo, "remove the last view example a sketch added to the chain");
+    return {c, [o] { return cmd_sketch(*o); }};
 }
 
 }  // namespace kodawari::cli

@@ -154,15 +154,20 @@ bool validate_chains(const Scene& scene, const BackendChoice& choice, std::optio
     return one_step_ok && weights_ok && messages == 0;
 }
 
-}  // namespace
 
-int cmd_validate(Args args) {
-    BackendChoice choice = read_backend_choice(args);
+struct ValidateOptions {
+    std::optional<std::string> scene;
+    BackendFlags backend;
+    std::optional<std::uint64_t> frames;
+};
+
+int cmd_validate(const ValidateOptions& o) {
+    BackendChoice choice = read_backend_choice(o.backend);
     // validate compares one backend with the reference: "auto" means the GPU's.
     if (!choice.backend) choice.backend = BackendKind::Vulkan;
     if (choice.backend == BackendKind::CpuReference) throw UsageError{"validate compares a backend against cpu-reference; choose vulkan or cpu"};
-    const auto frames_option = args.count("frames", 1, 10'000'000);
-    auto loaded = load_scene(scene_argument(args.positionals(), "validate"));
+    const auto& frames_option = o.frames;
+    auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
     const Scene& scene = loaded.value();
     auto built = build_bird_world(scene);
@@ -211,6 +216,18 @@ int cmd_validate(Args args) {
     if (!scene.characters.empty()) ok = validate_chains(scene, choice, frames_option) && ok;
     std::printf("%s\n", ok ? "validate: PASS" : "validate: FAIL");
     return ok ? kExitOk : kExitFailure;
+}
+
+}  // namespace
+
+Command add_validate(CLI::App& app) {
+    auto o = std::make_shared<ValidateOptions>();
+    CLI::App* c = app.add_subcommand(
+        "validate", "run a backend and the CPU reference side by side; exit 1 above tolerance (docs/command-line.md)");
+    add_scene(*c, o->scene);
+    add_count(*c, "--frames", o->frames, 1, 10'000'000, "frames to compare (default: the scene's)");
+    add_backend_options(*c, o->backend);
+    return {c, [o] { return cmd_validate(*o); }};
 }
 
 }  // namespace kodawari::cli

@@ -30,14 +30,22 @@ namespace {
 
 Viewer* from(GLFWwindow* w) { return static_cast<Viewer*>(glfwGetWindowUserPointer(w)); }
 
-}  // namespace
 
-int cmd_view(Args args) {
-    BackendChoice choice = read_backend_choice(args);
-    const auto max_frames = args.count("frames", 1, 100'000'000);
-    const auto screenshot = args.option("screenshot");
-    const auto keys_text = args.option("keys");
-    auto [width, height] = image_size(args.option("size"));
+struct ViewOptions {
+    std::optional<std::string> scene;
+    BackendFlags backend;
+    std::optional<std::uint64_t> frames;
+    std::optional<std::string> screenshot;
+    std::optional<std::string> keys;
+    std::optional<std::string> size;
+};
+
+int cmd_view(const ViewOptions& o) {
+    BackendChoice choice = read_backend_choice(o.backend);
+    const auto& max_frames = o.frames;
+    const auto& screenshot = o.screenshot;
+    const auto& keys_text = o.keys;
+    auto [width, height] = image_size(o.size);
     // --keys: one step per drawn frame. Besides key names, scripted mouse actions and a
     // window resize (which remakes the swapchain), so that a test can reach them.
     struct Step {
@@ -79,7 +87,7 @@ int cmd_view(Args args) {
         }
     }
     // The scene first: a bad scene is reported without opening a window.
-    auto loaded = load_scene(scene_argument(args.positionals(), "view"));
+    auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
     Viewer v;
     v.scene_path = loaded.value().path;
@@ -261,6 +269,23 @@ int cmd_view(Args args) {
                 static_cast<unsigned long long>(drawn));
     // The vulkan backends share the renderer's device and so its count of messages.
     return validation_failed(renderer.value()->validation_messages()) ? kExitFailure : kExitOk;
+}
+
+}  // namespace
+
+Command add_view(CLI::App& app) {
+    auto o = std::make_shared<ViewOptions>();
+    CLI::App* c = app.add_subcommand("view", "an interactive window (GLFW + Vulkan): orbit, pan, zoom, play, step, sketch "
+                                             "(docs/viewer.md)");
+    add_scene(*c, o->scene);
+    add_size(*c, o->size, "the window");
+    add_count(*c, "--frames", o->frames, 1, 100'000'000, "quit after N drawn frames (default: run until closed)");
+    add_text(*c, "--keys", o->keys, "K1,K2,...",
+             "one key per drawn frame first: space right left home [ ] 1 2 3 s w u c o + - p q escape, drag:X1:Y1:X2:Y2, "
+             "orbit:DX:DY, resize:W:H (default: none)");
+    add_text(*c, "--screenshot", o->screenshot, "FILE.png", "write the last drawn frame (default: none)");
+    add_backend_options(*c, o->backend);
+    return {c, [o] { return cmd_view(*o); }};
 }
 
 }  // namespace kodawari::cli

@@ -43,6 +43,36 @@ check "missing scene fails" test $? -ne 0
 check "bad option exits 2" test $? -eq 2
 "$bin" run scenes/flock.json --backend warp >/dev/null 2>&1
 check "unknown backend exits 2" test $? -eq 2
+"$bin" run scenes/flock.json --frames 0 >/dev/null 2>"$work/range.err"
+check "a count out of range exits 2 naming the option and the range" bash -c "test $? -eq 2 && grep -q -- '--frames: expected an integer in \[1, 10000000\], got \"0\"' '$work/range.err'"
+"$bin" run scenes/flock.json --frobnicate >/dev/null 2>"$work/unknown.err"
+check "an unknown option exits 2 naming it" bash -c "test $? -eq 2 && grep -q -- '--frobnicate' '$work/unknown.err'"
+"$bin" frobnicate >/dev/null 2>"$work/unknown-cmd.err"
+check "an unknown command exits 2 naming it" bash -c "test $? -eq 2 && grep -q 'frobnicate' '$work/unknown-cmd.err'"
+"$bin" run scenes/flock.json --frames >/dev/null 2>"$work/novalue.err"
+check "an option without its value exits 2 naming it" bash -c "test $? -eq 2 && grep -q -- '--frames' '$work/novalue.err'"
+"$bin" run scenes/flock.json --out= >/dev/null 2>"$work/empty.err"
+check "--out= (an empty value) exits 2 naming it" bash -c "test $? -eq 2 && grep -q -- '--out: expected a value' '$work/empty.err'"
+"$bin" >/dev/null 2>&1
+check "no command exits 2" test $? -eq 2
+
+# --help: the commands, and each command's options with their defaults; --version.
+"$bin" --help >"$work/help.out" 2>&1
+check "--help exits 0 and lists the commands" bash -c "test $? -eq 0 && grep -q '^  bench ' '$work/help.out' && grep -q '^  completion ' '$work/help.out' && grep -q '^  run ' '$work/help.out'"
+"$bin" --version >"$work/version.out" 2>&1
+check "--version" bash -c "test $? -eq 0 && grep -q '^kodawari [0-9]' '$work/version.out'"
+"$bin" render --help >"$work/render-help.out" 2>&1
+check "render --help lists --size with its default" bash -c "test $? -eq 0 && grep -q -- '--size WxH.*(default: 1280x720)' '$work/render-help.out'"
+"$bin" bench chains --help >"$work/chains-help.out" 2>&1
+check "bench chains --help: --frames with its default, --steps documented as the old spelling" bash -c \
+    "grep -q -- '--frames N.*(default: 10)' '$work/chains-help.out' && grep -q -- '--steps N.*old spelling of --frames' '$work/chains-help.out'"
+for command in run merge validate "bench birds" "bench chains" "bench crowd" "bench view" rig sketch render view info schema completion; do
+    # shellcheck disable=SC2086
+    "$bin" $command --help >"$work/cmd-help.out" 2>&1
+    check "$command --help: every option says its default" bash -c "test $? -eq 0 && ! grep -- '^  --' '$work/cmd-help.out' | grep -v -e 'default' -e '^  --help' -e 'old spelling' -e 'required' -e 'instead of' -e '--undo' -e '--no-export'"
+done
+"$bin" help run >"$work/help-run.out" 2>&1
+check "help run is run --help" bash -c "test $? -eq 0 && grep -q -- '--frames' '$work/help-run.out'"
 
 # An output that cannot be written: an error naming it, no partial file.
 "$bin" run scenes/flock.json --backend cpu --frames 5 --out "$work/no/such/dir/x.glb" >"$work/io.out" 2>&1
@@ -109,9 +139,14 @@ check "rod trace records have the documented fields" bash -c "sed -n 2p '$work/a
 check "rod export passes glTF-Validator" node tests/tools/validate_gltf.mjs "$work/ahoge.glb"
 "$bin" validate scenes/bunny.json --frames 120 >"$work/validate-bunny.out" 2>&1
 check "validate passes on the bunny" grep -q "validate: PASS" "$work/validate-bunny.out"
-"$bin" bench chains --chains 130 --joints 9 --steps 2 --json "$work/bench-chains.json" >/dev/null 2>&1
+"$bin" bench chains --count 130 --joints 9 --frames 2 --json "$work/bench-chains.json" >/dev/null 2>&1
 check "bench chains json" bash -c "node -e 'const r=require(\"$work/bench-chains.json\"); if (r.benchmark!==\"chains\"||r.results.length!==3||!(r.results[0].per_second>0)) process.exit(1)'"
-KODAWARI_ISA=sse4 "$bin" bench chains --chains 130 --joints 9 --steps 2 --threads 2 --backends cpu-reference,cpu --json "$work/bench-isa.json" >"$work/bench-isa.out" 2>&1
+# The old spellings --chains and --steps still work for one release, saying so on stderr.
+"$bin" bench chains --chains 130 --joints 9 --steps 2 --backends cpu --json "$work/bench-steps.json" >/dev/null 2>"$work/bench-steps.err"
+check "bench chains --steps and --chains still work, deprecated" bash -c "test $? -eq 0 && grep -q -- '--steps is deprecated.*use --frames' '$work/bench-steps.err' && grep -q -- '--chains is deprecated.*use --count' '$work/bench-steps.err' && node -e 'const r=require(\"$work/bench-steps.json\"); if (r.chains!==130||r.steps!==2) process.exit(1)'"
+"$bin" bench chains --steps 2 --frames 3 --backends cpu >/dev/null 2>"$work/bench-both.err"
+check "bench chains --steps with --frames exits 2" bash -c "test $? -eq 2 && grep -q -- '--steps' '$work/bench-both.err'"
+KODAWARI_ISA=sse4 "$bin" bench chains --count 130 --joints 9 --frames 2 --threads 2 --backends cpu-reference,cpu --json "$work/bench-isa.json" >"$work/bench-isa.out" 2>&1
 check "bench: medians of 3 repetitions with min, max, ratios, the ISA and threads" bash -c "node -e 'const r=require(\"$work/bench-isa.json\"); const c=r.results[1]; if (r.isa!==\"sse4\"||r.threads!==2||r.repetitions!==3||c.backend!==\"cpu\"||c.isa!==\"sse4\"||c.threads!==2||!(c.min<=c.per_second&&c.per_second<=c.max)||!(c.vs_cpu_reference>0)||c.vs_cpu!==1||r.results[0].threads!==1||r.results[0].isa!==null) process.exit(1)' && grep -q 'cpu  *2 threads, sse4 .* sse4  *2\$' '$work/bench-isa.out'"
 
 # Rigged characters (issue 4): `kodawari rig` on the project's character and on every
