@@ -17,7 +17,10 @@ ValueKind value_kind(const CLI::Option& option) {
     const std::string type = option.get_type_name();
     if (type == "DIR") return ValueKind::Directory;
     if (type.find('.') != std::string::npos || type == "SCENE" || type == "CHARACTER" || type == "PART") return ValueKind::File;
-    if (type.find('|') != std::string::npos && type.find_first_of("[:") == std::string::npos) return ValueKind::Choice;
+    // A value name in lower case lists the words themselves (auto|vulkan|cpu, bash).
+    if (!type.empty() && type.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-|") == std::string::npos) {
+        return ValueKind::Choice;
+    }
     return ValueKind::Word;
 }
 
@@ -42,6 +45,7 @@ void describe(const CLI::App& app, const std::string& path, std::string& childre
     for (const CLI::Option* option : app.get_options()) {
         if (option->get_positional()) {
             positional_files = positional_files || value_kind(*option) == ValueKind::File;
+            if (value_kind(*option) == ValueKind::Choice) subcommands += (subcommands.empty() ? "" : " ") + choices(*option);
             continue;
         }
         for (const std::string& name : option->get_lnames()) {
@@ -109,7 +113,9 @@ Command add_completion(CLI::App& app) {
     auto o = std::make_shared<CompletionOptions>();
     CLI::App* c = app.add_subcommand("completion", "print a shell completion script: kodawari completion bash > "
                                                    "~/.local/share/bash-completion/completions/kodawari");
-    c->add_option("shell", o->shell, "the shell (bash)")->required()->check(CLI::IsMember({"bash"}));
+    const CLI::Validator shells(
+        [](std::string& shell) -> std::string { return shell == "bash" ? "" : "expected bash, got \"" + shell + "\""; }, "");
+    c->add_option("shell", o->shell, "the shell")->required()->check(shells)->type_name("bash");
     const CLI::App* root = &app;
     return {c, [root] {
                 const std::string script = bash_completion(*root);

@@ -55,7 +55,7 @@ int main(int argc, char** argv) {
     app.set_version_flag("--version", "kodawari " + std::string(kodawari::version()), "print the version and exit");
     app.require_subcommand(1);
     app.footer(kEnvironment);
-    app.get_formatter()->column_width(36);
+    app.get_formatter()->column_width(42);
     const std::vector<Command> commands = {add_run(app),    add_merge(app),  add_validate(app), add_bench(app),
                                            add_rig(app),    add_sketch(app), add_render(app),   add_view(app),
                                            add_info(app),   add_schema(app), add_completion(app)};
