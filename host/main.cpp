@@ -68,6 +68,9 @@ int main(int argc, char** argv) {
     if (words[0] == "help") words.push_back("--help"), words.erase(words.begin());
     try {
         refuse_empty_values(argc, argv);
+        // CLI11 would only say that a command is required.
+        const auto named = app.get_subcommands([&](const CLI::App* sub) { return sub->get_name() == words[0]; });
+        if (!words[0].starts_with("-") && named.empty()) throw UsageError{"unknown command \"" + words[0] + "\""};
         std::vector<std::string> reversed(words.rbegin(), words.rend());
         app.parse(reversed);
         for (const Command& command : commands) {
