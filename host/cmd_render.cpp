@@ -10,9 +10,11 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "commands.hpp"
+#include "kodawari/render/apng.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_scene.hpp"
@@ -123,6 +125,20 @@ private:
     bool kept_ = false;
 };
 
+// --animation-size WxH, for a README preview smaller than the frames; by default the
+// frames' own size.
+std::pair<std::uint32_t, std::uint32_t> parse_animation_size(const std::optional<std::string>& text, std::uint32_t width,
+                                                             std::uint32_t height) {
+    if (!text) return {width, height};
+    unsigned w = 0, h = 0;
+    char extra = 0;
+    if (std::sscanf(text->c_str(), "%ux%u%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > width || h > height) {
+        throw UsageError{"--animation-size: expected WxH in pixels, at least 1x1 and at most the frames' --size " +
+                         std::to_string(width) + "x" + std::to_string(height) + "; got \"" + *text + "\""};
+    }
+    return {w, h};
+}
+
 }  // namespace
 
 int cmd_render(Args args) {
@@ -134,6 +150,10 @@ int cmd_render(Args args) {
     if (!out_dir) throw UsageError{"render needs --out DIR (the directory of the PNG files; created when missing)"};
     if (columns_option && !sheet_path) throw UsageError{"--columns goes with --contact-sheet"};
     const auto [width, height] = image_size(args.option("size"));
+    const auto animation_path = args.option("animation");
+    const auto animation_size_text = args.option("animation-size");
+    if (animation_size_text && !animation_path) throw UsageError{"--animation-size goes with --animation"};
+    const auto animation_size = parse_animation_size(animation_size_text, width, height);
     auto loaded = load_scene(scene_argument(args.positionals(), "render"));
     if (!loaded) return report(loaded.error());
     const std::uint32_t scene_frames = loaded.value().frame_count();
@@ -162,6 +182,14 @@ int cmd_render(Args args) {
     // cannot start (no Vulkan device, a bad scene) creates nothing.
     RenderOutputs outputs;
     if (auto made_dir = outputs.create_directory(*out_dir); !made_dir) return report(made_dir.error());
+    // Frames go into the animation as they are drawn; only its frame count is needed now.
+    std::optional<render::ApngWriter> animation;
+    if (animation_path) {
+        auto opened = render::ApngWriter::open(
+            *animation_path, {animation_size.first, animation_size.second, count, render::frame_delay(range.step, scene.fps), 0});
+        if (!opened) return report(opened.error());
+        animation.emplace(std::move(opened).value());
+    }
 
     const std::uint32_t columns = columns_option ? static_cast<std::uint32_t>(*columns_option) : std::min(count, 4u);
     const std::uint32_t cell_width = std::max(1u, width / columns), cell_height = std::max(1u, height / columns);
@@ -195,6 +223,12 @@ int cmd_render(Args args) {
         if (show_progress) std::fputc('\n', stderr);
         std::printf("kodawari: wrote %s\n", path.c_str());
         if (sheet_path) cells.push_back(render::downscale(image.value(), cell_width, cell_height));
+        if (animation) {
+            auto added = animation_size == std::pair{width, height}
+                             ? animation->add_frame(image.value())
+                             : animation->add_frame(render::downscale(image.value(), animation_size.first, animation_size.second));
+            if (!added) return report(added.error());
+        }
     }
     std::printf("kodawari: %.1f ms per frame to draw and read back\n", 1e3 * render_seconds / count);
     if (sheet_path) {
@@ -203,6 +237,13 @@ int cmd_render(Args args) {
         outputs.wrote(*sheet_path);
         std::printf("kodawari: wrote contact sheet %s (%u frames, %u columns, %ux%u)\n", sheet_path->c_str(), count, columns,
                     sheet.width, sheet.height);
+    }
+    if (animation) {
+        if (auto s = animation->commit(); !s) return report(s.error());
+        outputs.wrote(*animation_path);
+        const render::FrameDelay delay = render::frame_delay(range.step, scene.fps);
+        std::printf("kodawari: wrote animation %s (%u frames, %ux%u, %u/%u s each, looping)\n", animation_path->c_str(), count,
+                    animation_size.first, animation_size.second, delay.numerator, delay.denominator);
     }
     // The vulkan backends share the renderer's device and so its count of messages.
     if (validation_failed(r.validation_messages())) return kExitFailure;

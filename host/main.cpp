@@ -48,10 +48,12 @@ commands:
       at frame 0, 1280x720) as a new view example for that view direction (docs/sketch.md); --undo
       removes the last one a sketch added
   render [SCENE] --out DIR [--frames A:B[:STEP]|N] [--size WxH] [--contact-sheet FILE.png [--columns N]]
-         [--backend ...] [--device NAME|INDEX] [--validation]
+         [--animation FILE.png [--animation-size WxH]] [--backend ...] [--device NAME|INDEX] [--validation]
       simulate a scene as run does and draw frames A, A+STEP, ... below B (B exclusive; default the whole
       scene) offscreen at WxH (default 1280x720) to DIR/<scene>_<frame, 5 digits>.png (DIR is created);
-      --contact-sheet also writes the frames shrunk into one grid (default min(frames, 4) columns)
+      --contact-sheet also writes the frames shrunk into one grid (default min(frames, 4) columns);
+      --animation also writes them as one looping animated PNG at the scene's fps / STEP (default the
+      frames' size)
   view [SCENE] [--size WxH] [--backend ...] [--device NAME|INDEX] [--validation]
        [--frames N] [--keys K1,K2,...] [--screenshot FILE.png]
       an interactive window (GLFW + Vulkan): orbit / pan / zoom with the mouse, Space play/pause,
