@@ -10,9 +10,11 @@
 #include <filesystem>
 #include <optional>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "commands.hpp"
+#include "kodawari/render/apng.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_scene.hpp"
@@ -123,6 +125,20 @@ private:
     bool kept_ = false;
 };
 
+// --animation-size WxH, for a README preview smaller than the frames; by default the
+// frames' own size.
+std::pair<std::uint32_t, std::uint32_t> parse_animation_size(const std::optional<std::string>& text, std::uint32_t width,
+                                                             std::uint32_t height) {
+    if (!text) return {width, height};
+    unsigned w = 0, h = 0;
+    char extra = 0;
+    if (std::sscanf(text->c_str(), "%ux%u%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > width || h > height) {
+        throw UsageError{"--animation-size: expected WxH in pixels, at least 1x1 and at most the frames' --size " +
+                         std::to_string(width) + "x" + std::to_string(height) + "; got \"" + *text + "\""};
+    }
+    return {w, h};
+}
+
 
 // The options as given; add_render() defines them.
 struct RenderOptions {
@@ -133,6 +149,8 @@ struct RenderOptions {
     std::optional<std::string> contact_sheet;
     std::optional<std::uint64_t> columns;
     std::optional<std::string> size;
+    std::optional<std::string> animation;
+    std::optional<std::string> animation_size;
 };
 
 int cmd_render(const RenderOptions& o) {
@@ -144,6 +162,9 @@ int cmd_render(const RenderOptions& o) {
     if (!out_dir) throw UsageError{"render needs --out DIR (the directory of the PNG files; created when missing)"};
     if (columns_option && !sheet_path) throw UsageError{"--columns goes with --contact-sheet"};
     const auto [width, height] = image_size(o.size);
+    const auto& animation_path = o.animation;
+    if (o.animation_size && !animation_path) throw UsageError{"--animation-size goes with --animation"};
+    const auto animation_size = parse_animation_size(o.animation_size, width, height);
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
     const std::uint32_t scene_frames = loaded.value().frame_count();
@@ -172,6 +193,14 @@ int cmd_render(const RenderOptions& o) {
     // cannot start (no Vulkan device, a bad scene) creates nothing.
     RenderOutputs outputs;
     if (auto made_dir = outputs.create_directory(*out_dir); !made_dir) return report(made_dir.error());
+    // Frames go into the animation as they are drawn; only its frame count is needed now.
+    std::optional<render::ApngWriter> animation;
+    if (animation_path) {
+        auto opened = render::ApngWriter::open(
+            *animation_path, {animation_size.first, animation_size.second, count, render::frame_delay(range.step, scene.fps), 0});
+        if (!opened) return report(opened.error());
+        animation.emplace(std::move(opened).value());
+    }
 
     const std::uint32_t columns = columns_option ? static_cast<std::uint32_t>(*columns_option) : std::min(count, 4u);
     const std::uint32_t cell_width = std::max(1u, width / columns), cell_height = std::max(1u, height / columns);
@@ -205,6 +234,12 @@ int cmd_render(const RenderOptions& o) {
         if (show_progress) std::fputc('\n', stderr);
         std::printf("kodawari: wrote %s\n", path.c_str());
         if (sheet_path) cells.push_back(render::downscale(image.value(), cell_width, cell_height));
+        if (animation) {
+            auto added = animation_size == std::pair{width, height}
+                             ? animation->add_frame(image.value())
+                             : animation->add_frame(render::downscale(image.value(), animation_size.first, animation_size.second));
+            if (!added) return report(added.error());
+        }
     }
     std::printf("kodawari: %.1f ms per frame to draw and read back\n", 1e3 * render_seconds / count);
     if (sheet_path) {
@@ -213,6 +248,13 @@ int cmd_render(const RenderOptions& o) {
         outputs.wrote(*sheet_path);
         std::printf("kodawari: wrote contact sheet %s (%u frames, %u columns, %ux%u)\n", sheet_path->c_str(), count, columns,
                     sheet.width, sheet.height);
+    }
+    if (animation) {
+        if (auto s = animation->commit(); !s) return report(s.error());
+        outputs.wrote(*animation_path);
+        const render::FrameDelay delay = render::frame_delay(range.step, scene.fps);
+        std::printf("kodawari: wrote animation %s (%u frames, %ux%u, %u/%u s each, looping)\n", animation_path->c_str(), count,
+                    animation_size.first, animation_size.second, delay.numerator, delay.denominator);
     }
     // The vulkan backends share the renderer's device and so its count of messages.
     if (validation_failed(r.validation_messages())) return kExitFailure;
@@ -229,10 +271,14 @@ Command add_render(CLI::App& app) {
     add_scene(*c, o->scene);
     add_text(*c, "--out", o->out, "DIR", "the directory of the PNG files, created when missing (required)");
     add_text(*c, "--frames", o->frames, "A:B[:STEP]|N",
-             "frames A, A+STEP, ... below B (B exclusive), or the first N (default: the whole scene)");
+             "frames A, A+STEP, ... below B (B exclusive), or the one frame N (default: the whole scene)");
     add_size(*c, o->size, "the images");
     add_text(*c, "--contact-sheet", o->contact_sheet, "FILE.png", "also the frames shrunk into one grid (default: none)");
     add_count(*c, "--columns", o->columns, 1, 64, "the contact sheet's columns (default: min(frames, 4))");
+    add_text(*c, "--animation", o->animation, "FILE.png",
+             "also the frames as one looping animated PNG at the scene's fps / STEP (default: none)");
+    add_text(*c, "--animation-size", o->animation_size, "WxH",
+             "the animation's size, at most --size (default: the frames' own size)");
     add_backend_options(*c, o->backend);
     return {c, [o] { return cmd_render(*o); }};
 }

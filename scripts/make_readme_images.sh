@@ -13,6 +13,10 @@ mkdir -p docs/images
 # 12 s (720 frames), so frames 0, 180, 360 and 540.
 "$bin" render scenes/ahoge.json --frames 0:720:180 --size 960x540 --out "$work/ahoge" \
     --contact-sheet docs/images/ahoge-angles.png --columns 2
+# The ahoge as the camera orbits it, animated (APNG): the first third of the orbit, every
+# 4th frame, so 60 frames at 15 per second.
+"$bin" render scenes/ahoge.json --frames 0:240:4 --size 480x360 --out "$work/orbit" \
+    --animation docs/images/ahoge-orbit.png
 # The flock 3.3 s in, and the crowd 2 s in.
 "$bin" render scenes/flock.json --frames 200 --size 640x360 --out "$work/flock"
 cp "$work/flock/flock_00200.png" docs/images/flock.png

@@ -248,5 +248,26 @@ check "render past the scene's end exits 2" test $? -eq 2
 "$bin" render scenes/ahoge.json --size 0x10 --out "$work/render-bad" >"$work/render-bad3.out" 2>&1
 check "render with a bad --size exits 2" test $? -eq 2
 
+# --animation (an APNG of the drawn frames; tests/render/test_apng.cpp decodes it frame by
+# frame): here what the command line adds, the signature and acTL (5 frames, forever),
+# and the failures.
+"$bin" render scenes/ahoge.json --frames 0:50:10 --size 64x40 --out "$work/anim" --animation "$work/anim.png" \
+    --animation-size 32x20 >"$work/anim.out" 2>&1
+check "render --animation exits 0" test $? -eq 0
+check "render --animation names the file, frames, size and delay" \
+    grep -q "wrote animation $work/anim.png (5 frames, 32x20, 1/6 s each, looping)" "$work/anim.out"
+check "render --animation writes an APNG of 5 frames that loops" python3 -c "import struct,sys; d=open(sys.argv[1],'rb').read(); \
+i=d.find(b'acTL'); sys.exit(d[:8]!=b'\\x89PNG\\r\\n\\x1a\\n' or i!=37 or struct.unpack('>II', d[i+4:i+12])!=(5, 0))" "$work/anim.png"
+"$bin" render scenes/ahoge.json --frames 0:50:10 --size 64x40 --out "$work/anim-bad" --animation "$work/no-such-dir/a.png" \
+    >"$work/anim-bad.out" 2>&1
+check "render --animation into a missing directory exits 1" test $? -eq 1
+check "render --animation names the file it cannot write" grep -q "$work/no-such-dir/a.png: cannot write" "$work/anim-bad.out"
+check "render --animation that fails leaves no frames directory" test ! -e "$work/anim-bad"
+"$bin" render scenes/ahoge.json --frames 0 --out "$work/anim-bad" --animation-size 32x20 >"$work/anim-bad2.out" 2>&1
+check "--animation-size without --animation exits 2" bash -c "test $? -eq 2 && grep -q 'goes with --animation' '$work/anim-bad2.out'"
+"$bin" render scenes/ahoge.json --frames 0 --size 64x40 --out "$work/anim-bad" --animation "$work/a.png" --animation-size 65x20 \
+    >"$work/anim-bad3.out" 2>&1
+check "--animation-size larger than --size exits 2" bash -c "test $? -eq 2 && grep -q 'animation-size' '$work/anim-bad3.out'"
+
 echo "cli: $passed passed, $failed failed"
 test $failed -eq 0
