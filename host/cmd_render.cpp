@@ -3,6 +3,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cmath>
 #include <cstdint>
 #include <charconv>
 #include <chrono>
@@ -125,6 +126,32 @@ private:
     bool kept_ = false;
 };
 
+// --zoom F: the scene camera's field of view narrowed F times about its target. Only the
+// picture changes: the camera stays where the scene puts it, so the view directions that
+// blend the chains' rest shapes (SPEC A) are the scene's own.
+float parse_zoom(const std::optional<std::string>& text) {
+    if (!text) return 1.0f;
+    std::size_t used = 0;
+    float value = 0.0f;
+    try {
+        value = std::stof(*text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used == 0 || used != text->size() || !(value >= 0.1f && value <= 100.0f)) {
+        throw UsageError{"--zoom: expected a number in [0.1, 100], got \"" + *text + "\""};
+    }
+    return value;
+}
+
+render::CameraView zoomed(render::CameraView camera, float zoom) {
+    constexpr float kHalfTurnDeg = 180.0f, kPi = 3.14159265358979f;
+    const float half = 0.5f * camera.fov_deg * kPi / kHalfTurnDeg;
+    camera.fov_deg = 2.0f * std::atan(std::tan(half) / zoom) * kHalfTurnDeg / kPi;
+    camera.ortho_height /= zoom;
+    return camera;
+}
+
 // --animation-size WxH, for a README preview smaller than the frames; by default the
 // frames' own size.
 std::pair<std::uint32_t, std::uint32_t> parse_animation_size(const std::optional<std::string>& text, std::uint32_t width,
@@ -151,6 +178,7 @@ struct RenderOptions {
     std::optional<std::string> size;
     std::optional<std::string> animation;
     std::optional<std::string> animation_size;
+    std::optional<std::string> zoom;
 };
 
 int cmd_render(const RenderOptions& o) {
@@ -165,6 +193,7 @@ int cmd_render(const RenderOptions& o) {
     const auto& animation_path = o.animation;
     if (o.animation_size && !animation_path) throw UsageError{"--animation-size goes with --animation"};
     const auto animation_size = parse_animation_size(o.animation_size, width, height);
+    const float zoom = parse_zoom(o.zoom);
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
     const std::uint32_t scene_frames = loaded.value().frame_count();
@@ -215,7 +244,7 @@ int cmd_render(const RenderOptions& o) {
         if (!drawn) continue;
         if (auto s = sim.draw_on(r); !s) return report(s.error());
         const auto start = std::chrono::steady_clock::now();
-        render::DrawList list(render::scene_camera(scene, f), width, height);
+        render::DrawList list(zoomed(render::scene_camera(scene, f), zoom), width, height);
         // The grid covers where the content is at the first drawn frame and then stays put,
         // so that it does not jump from frame to frame.
         if (grid_points.empty()) {
@@ -275,6 +304,9 @@ Command add_render(CLI::App& app) {
     add_size(*c, o->size, "the images");
     add_text(*c, "--contact-sheet", o->contact_sheet, "FILE.png", "also the frames shrunk into one grid (default: none)");
     add_count(*c, "--columns", o->columns, 1, 64, "the contact sheet's columns (default: min(frames, 4))");
+    add_text(*c, "--zoom", o->zoom, "F",
+             "narrow the scene camera's field of view F times about its target, in [0.1, 100]; the camera "
+             "and so the view-dependent shapes stay the scene's (default: 1)");
     add_text(*c, "--animation", o->animation, "FILE.png",
              "also the frames as one looping animated PNG at the scene's fps / STEP (default: none)");
     add_text(*c, "--animation-size", o->animation_size, "WxH",

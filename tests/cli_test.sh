@@ -248,6 +248,14 @@ check "render past the scene's end exits 2" test $? -eq 2
 "$bin" render scenes/ahoge.json --size 0x10 --out "$work/render-bad" >"$work/render-bad3.out" 2>&1
 check "render with a bad --size exits 2" test $? -eq 2
 
+# --zoom: the scene camera's field of view narrowed about its target; a different picture
+# of the same frame, and a bad value is a usage error.
+"$bin" render scenes/ahoge.json --frames 0 --size 64x40 --out "$work/zoom1" >/dev/null 2>&1
+"$bin" render scenes/ahoge.json --frames 0 --size 64x40 --out "$work/zoom2" --zoom 2 >/dev/null 2>&1
+check "render --zoom 2 draws a different picture of the frame" bash -c "test -s '$work/zoom2/ahoge_00000.png' && ! cmp -s '$work/zoom1/ahoge_00000.png' '$work/zoom2/ahoge_00000.png'"
+"$bin" render scenes/ahoge.json --frames 0 --out "$work/zoom3" --zoom 0 >"$work/zoom-bad.out" 2>&1
+check "render --zoom 0 exits 2 naming the option and the range" bash -c "test $? -eq 2 && grep -q -- '--zoom: expected a number in \\[0.1, 100\\]' '$work/zoom-bad.out'"
+
 # --animation (an APNG of the drawn frames; tests/render/test_apng.cpp decodes it frame by
 # frame): here what the command line adds, the signature and acTL (5 frames, forever),
 # and the failures.
