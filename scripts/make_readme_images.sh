@@ -10,13 +10,21 @@ trap 'rm -rf "$work"' EXIT
 mkdir -p docs/images
 
 # The ahoge from the front, its left, the back and its right: the camera orbits once in
-# 12 s (720 frames), so frames 0, 180, 360 and 540.
-"$bin" render scenes/ahoge.json --frames 0:720:180 --size 960x540 --out "$work/ahoge" \
+# 12 s (720 frames), so frames 0, 180, 360 and 540; --zoom 1.7 brings the curl close
+# without moving the camera (whose position blends the strand's rest shape).
+"$bin" render scenes/ahoge.json --frames 0:720:180 --size 960x540 --zoom 1.7 --out "$work/ahoge" \
     --contact-sheet docs/images/ahoge-angles.png --columns 2
 # The ahoge as the camera orbits it, animated (APNG): the first third of the orbit, every
 # 4th frame, so 60 frames at 15 per second.
-"$bin" render scenes/ahoge.json --frames 0:240:4 --size 480x360 --out "$work/orbit" \
+"$bin" render scenes/ahoge.json --frames 0:240:4 --size 480x360 --zoom 1.5 --out "$work/orbit" \
     --animation docs/images/ahoge-orbit.png
+# The bangs from the front (parted off the eyes), 45 degrees to its left, its left and
+# 135 degrees: frames 0, 90, 180 and 270 of the 12 s orbit.
+"$bin" render scenes/bangs.json --frames 0:360:90 --size 480x360 --zoom 1.3 --out "$work/bangs" \
+    --contact-sheet docs/images/bangs.png --columns 4
+# The three wing types mid-wingbeat, the camera flying with them (frame 60 of 240).
+"$bin" render scenes/birds-closeup.json --frames 60 --size 640x360 --out "$work/birds"
+cp "$work/birds/birds-closeup_00060.png" docs/images/birds-closeup.png
 # The flock 3.3 s in, and the crowd 2 s in.
 "$bin" render scenes/flock.json --frames 200 --size 640x360 --out "$work/flock"
 cp "$work/flock/flock_00200.png" docs/images/flock.png
