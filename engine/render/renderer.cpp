@@ -28,7 +28,6 @@ constexpr glm::vec3 kBackgroundBottom{0.82f, 0.83f, 0.80f};
 // Lambert from above and in front-left, so that a bird's back and its wings' upper sides
 // read lighter than their undersides.
 const glm::vec3 kLight = glm::normalize(glm::vec3(-0.35f, 1.0f, 0.45f));
-constexpr float kAmbient = 0.45f;
 
 gpu::vec4 v4(const glm::vec3& v, float w) { return {v.x, v.y, v.z, w}; }
 gpu::vec4 v4(Rgba8 c, float lit) {
@@ -179,6 +178,7 @@ struct PresentTarget {
 struct Renderer::Impl {
     std::shared_ptr<gpu::VulkanContext> ctx;
     std::uint32_t width = 0, height = 0;
+    bool joints = false;  // RendererOptions::joints
     std::optional<gpu::GpuImage> color, depth;
     vk::raii::RenderPass pass{nullptr};
     vk::raii::Framebuffer framebuffer{nullptr};
@@ -230,7 +230,10 @@ Result<void> Renderer::colliders_from(const RodBackend& backend, const rods::Rod
 Result<void> Renderer::set_birds(const birds::BirdWorld* world) { return impl_->birds->set_world(*impl_->ctx, world, kBirdMinPixels); }
 Result<void> Renderer::birds_from(const BirdBackend& backend) { return impl_->birds->from_backend(*impl_->ctx, backend); }
 Result<void> Renderer::birds_from(std::span<const gpu::BirdPose> poses) { return impl_->birds->from_poses(*impl_->ctx, poses); }
-Result<void> Renderer::set_skinned(const RodScene* scene) { return impl_->skinned->set_scene(*impl_->ctx, scene); }
+Result<void> Renderer::set_skinned(const RodScene* scene) {
+    impl_->colliders->set_skinned(scene);
+    return impl_->skinned->set_scene(*impl_->ctx, scene);
+}
 Result<void> Renderer::skinned_from(const CrowdAnimator& animator, RodBackend& rods, std::uint32_t frame) {
     return impl_->skinned->from_backends(*impl_->ctx, animator, rods, frame);
 }
@@ -273,6 +276,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     impl->ctx = std::move(ctx).value();
     impl->width = options.width;
     impl->height = options.height;
+    impl->joints = options.joints;
     const gpu::VulkanContext& c = *impl->ctx;
     const auto depth = depth_format(c.physical_device());
     if (!depth) return make_error(Error::Kind::Unsupported, c.info().name + " has no depth format to render to");
@@ -413,7 +417,7 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     const CameraView& camera = list.camera();
     const glm::mat4 vp = view_projection(camera, static_cast<float>(width) / static_cast<float>(height));
     for (int i = 0; i < 4; ++i) push.view_proj[i] = {vp[i].x, vp[i].y, vp[i].z, vp[i].w};
-    push.light = {kLight.x, kLight.y, kLight.z, kAmbient};
+    push.light = {kLight.x, kLight.y, kLight.z, kAmbientLight};
     const CameraBasis basis = camera_basis(camera);
     push.eye = v4(camera.position, camera.near);
     push.forward = v4(basis.forward, list.pixel_per_depth());
@@ -452,7 +456,7 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     draw(*lines, kBackgroundVertices, list.lines().size());
     draw(*triangles, kBackgroundVertices + list.lines().size(), list.triangles().size());
     // The minimum sizes are for 720 rows; smaller images get thinner strands.
-    chains->record(cmd, push, std::clamp(static_cast<float>(height) / 720.0f, 0.5f, 2.0f));
+    chains->record(cmd, push, std::clamp(static_cast<float>(height) / 720.0f, 0.5f, 2.0f), joints);
     colliders->record(cmd, push, kColliderColor);
     birds->record(cmd, push);
     skinned->record(cmd, push);

@@ -31,7 +31,8 @@ TEST(Render, ChainPixelsAreWhereTheSimulationPutsThem) {
         const rods::CameraPose pose = run.rods.camera_pose(f);
         const Pinhole camera(pose.position, pose.target, run.rods.fov_deg, kWidth, kHeight);
 
-        // Every chain joint inside the image has the chain colour at its projection.
+        // Every chain joint inside the image has a lit shade of the chain colour at its
+        // projection (within a pixel: the tube is at least 2 pixels wide here).
         std::vector<glm::vec2> chain_px;
         int joints = 0, worst = 0;
         for (const glm::vec3& p : snapshot.positions) {
@@ -39,7 +40,7 @@ TEST(Render, ChainPixelsAreWhereTheSimulationPutsThem) {
             ASSERT_TRUE(camera.project(p, q));
             chain_px.push_back(q);
             if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
-            const int d = nearest_match(img, q, 1, render::kChainColor);
+            const int d = nearest_lit_match(img, q, 1, render::kChainColor);
             worst = std::max(worst, d);
             EXPECT_LE(d, 2) << "frame " << f << ": no chain colour near the joint projected at (" << q.x << ", " << q.y << ")";
             ++joints;
@@ -266,7 +267,7 @@ TEST(Render, OrthographicSceneCameraIsDrawnOrthographic) {
         ASSERT_TRUE(pinhole.project(p, perspective));
         apart = std::max(apart, glm::length(perspective - q));
         if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
-        const int d = nearest_match(image.value(), q, 1, render::kChainColor);
+        const int d = nearest_lit_match(image.value(), q, 1, render::kChainColor);
         worst = std::max(worst, d);
         EXPECT_LE(d, 2) << "no chain colour near the joint projected at (" << q.x << ", " << q.y << ")";
         ++joints;
@@ -277,6 +278,52 @@ TEST(Render, OrthographicSceneCameraIsDrawnOrthographic) {
     EXPECT_GE(joints, 10);
     EXPECT_GT(apart, 20.0f) << "the scene does not tell orthographic from perspective";
     EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
+// Joint dots only on request (RendererOptions::joints): unlit, the chain's exact colour at
+// every joint in view; without them the lit tube alone, whose pixels reach the exact
+// colour only where the light factor rounds to 1.
+TEST(Render, JointDotsOnlyWhenAskedFor) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    constexpr std::uint32_t kFrame = 45;
+    const AhogeRun run = simulate_ahoge({kFrame});
+    const ChainSnapshot& snapshot = run.snapshots[0];
+    // 720 rows: the strand is long enough on screen for its dots to stay apart (at the
+    // suite's 199 rows the dot rule leaves them out).
+    constexpr std::uint32_t kW = 1280, kH = 720;
+    int exact[2] = {0, 0}, joints = 0, dotted = 0;
+    for (const bool with_joints : {false, true}) {
+        render::RendererOptions options;
+        options.width = kW;
+        options.height = kH;
+        options.validation = testing_support::validation_requested();
+        options.joints = with_joints;
+        auto renderer = render::Renderer::create(options);
+        ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+        auto image = renderer.value()->render(ahoge_frame(*renderer.value(), run, kFrame, snapshot));
+        ASSERT_TRUE(image.ok()) << image.error().message;
+        const Image& img = image.value();
+        for (std::uint32_t y = 0; y < kH; ++y) {
+            for (std::uint32_t x = 0; x < kW; ++x) exact[with_joints] += img.at(x, y) == render::kChainColor;
+        }
+        if (with_joints) {
+            const rods::CameraPose pose = run.rods.camera_pose(kFrame);
+            const Pinhole camera(pose.position, pose.target, run.rods.fov_deg, kW, kH);
+            for (const glm::vec3& p : snapshot.positions) {
+                glm::vec2 q;
+                if (!camera.project(p, q) || q.x < 2 || q.y < 2 || q.x > kW - 2 || q.y > kH - 2) continue;
+                ++joints;
+                dotted += nearest_match(img, q, 1, render::kChainColor) == 0;
+            }
+        }
+        EXPECT_EQ(renderer.value()->validation_messages(), 0u);
+    }
+    std::printf("[ render ] joint dots: %d of %d joints dotted; exact chain-colour pixels %d without dots, %d with\n", dotted, joints,
+                exact[0], exact[1]);
+    EXPECT_GE(joints, 10);
+    EXPECT_EQ(dotted, joints);
+    EXPECT_GE(exact[1], 3 * joints) << "each dot is several pixels";
+    EXPECT_LE(exact[0], exact[1] / 4) << "dots drawn without RendererOptions::joints";
 }
 
 TEST(Render, PresentWithoutAWindowIsAnError) {
