@@ -43,9 +43,9 @@ Result<compute::Buffer> storage_with(gpu::VulkanContext& ctx, std::span<const st
 
 Result<gpu::GraphicsPipeline> layer_pipeline(const gpu::VulkanContext& ctx, vk::RenderPass pass, std::string_view vertex,
                                              std::string_view fragment, std::uint32_t vertex_stride, std::uint32_t attributes,
-                                             std::uint32_t storage_buffers, vk::PrimitiveTopology topology) {
+                                             std::uint32_t storage_buffers, vk::SampleCountFlagBits samples, vk::PrimitiveTopology topology) {
     return gpu::GraphicsPipeline::create(ctx, pass, vertex, fragment, vertex_stride, attributes, sizeof(gpu::RenderPush),
-                                         {.topology = topology, .depth = true, .storage_buffers = storage_buffers});
+                                         {.topology = topology, .depth = true, .samples = samples, .storage_buffers = storage_buffers});
 }
 
 namespace {
@@ -63,9 +63,9 @@ Result<void> with_set(const gpu::VulkanContext& ctx, Result<gpu::GraphicsPipelin
 
 }  // namespace
 
-Result<ChainLayer> ChainLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
+Result<ChainLayer> ChainLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples) {
     ChainLayer layer;
-    KW_TRY(with_set(ctx, layer_pipeline(ctx, pass, "chains.vert", "lit.frag", 0, 0, KW_CHAINS_BINDING_COUNT), layer.pipeline_,
+    KW_TRY(with_set(ctx, layer_pipeline(ctx, pass, "chains.vert", "lit.frag", 0, 0, KW_CHAINS_BINDING_COUNT, samples), layer.pipeline_,
                     layer.set_));
     return layer;
 }
@@ -158,10 +158,10 @@ void ChainLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push
 // ---------------------------------------------------------------------------------------
 // Colliders
 
-Result<ColliderLayer> ColliderLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
+Result<ColliderLayer> ColliderLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples) {
     ColliderLayer layer;
     KW_TRY(with_set(ctx,
-                    layer_pipeline(ctx, pass, "colliders.vert", "lit.frag", 0, 0, KW_COLLIDERS_BINDING_COUNT),
+                    layer_pipeline(ctx, pass, "colliders.vert", "lit.frag", 0, 0, KW_COLLIDERS_BINDING_COUNT, samples),
                     layer.pipeline_, layer.set_));
     return layer;
 }
@@ -242,9 +242,9 @@ void ColliderLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush p
 // ---------------------------------------------------------------------------------------
 // Birds
 
-Result<BirdLayer> BirdLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
+Result<BirdLayer> BirdLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples) {
     BirdLayer layer;
-    KW_TRY(with_set(ctx, layer_pipeline(ctx, pass, "birds.vert", "render.frag", sizeof(gpu::BirdDrawVertex), 2, KW_BIRDS_DRAW_BINDING_COUNT),
+    KW_TRY(with_set(ctx, layer_pipeline(ctx, pass, "birds.vert", "render.frag", sizeof(gpu::BirdDrawVertex), 2, KW_BIRDS_DRAW_BINDING_COUNT, samples),
                     layer.pipeline_, layer.set_));
     return layer;
 }

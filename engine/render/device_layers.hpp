@@ -36,14 +36,14 @@ namespace kodawari::render {
 [[nodiscard]] Result<gpu::GraphicsPipeline> layer_pipeline(const gpu::VulkanContext& ctx, vk::RenderPass pass,
                                                            std::string_view vertex, std::string_view fragment,
                                                            std::uint32_t vertex_stride, std::uint32_t attributes,
-                                                           std::uint32_t storage_buffers,
+                                                           std::uint32_t storage_buffers, vk::SampleCountFlagBits samples,
                                                            vk::PrimitiveTopology topology = vk::PrimitiveTopology::eTriangleList);
 
 /// The chains of a RodWorld.
 class ChainLayer {
 public:
-    /// The pipeline for `pass` (shared by every world drawn).
-    [[nodiscard]] static Result<ChainLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+    /// The pipeline for `pass` with `samples` per pixel (shared by every world drawn).
+    [[nodiscard]] static Result<ChainLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples);
 
     /// The chains of `world` (null: none) in `style`; static per-chain data is uploaded.
     [[nodiscard]] Result<void> set_world(gpu::VulkanContext& ctx, const rods::RodWorld* world, const ChainStyle& style);
@@ -75,7 +75,7 @@ private:
 /// body; solid capsules would poke through it).
 class ColliderLayer {
 public:
-    [[nodiscard]] static Result<ColliderLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+    [[nodiscard]] static Result<ColliderLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples);
 
     /// The colliders of `world` (null: none).
     void set_world(const rods::RodWorld* world);
@@ -106,7 +106,7 @@ private:
 /// The birds of a BirdWorld.
 class BirdLayer {
 public:
-    [[nodiscard]] static Result<BirdLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+    [[nodiscard]] static Result<BirdLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples);
 
     /// The birds of `world` (null: none): the part meshes of its wing types and the
     /// order of its birds by wing type are uploaded.

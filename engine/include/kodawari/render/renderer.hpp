@@ -1,6 +1,7 @@
 #pragma once
 /// @file
-/// The renderer (issue 5): Vulkan draws into a WxH RGBA8 + depth target, read back as an
+/// The renderer (issue 5): Vulkan draws into a WxH RGBA8 + depth target (4x multisampled
+/// where the device can, resolved: anti-aliased edges), read back as an
 /// image (render(); PNG output and contact sheets) or blitted into a window's swapchain
 /// (present(), the viewer). A frame is a draw list built on the CPU (ground grid,
 /// skeletons, colliders, overlays) plus the chains, birds and rigged characters' skinned
