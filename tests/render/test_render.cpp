@@ -326,6 +326,33 @@ TEST(Render, JointDotsOnlyWhenAskedFor) {
     EXPECT_LE(exact[0], exact[1] / 4) << "dots drawn without RendererOptions::joints";
 }
 
+// Anti-aliasing (a multisampled target, resolved): the strand's edges blend into the
+// background, so pixels next to it are neither the background nor a lit shade of the
+// chain. Without it every pixel is one or the other (only the chain is drawn here).
+TEST(Render, StrandEdgesAreAntiAliased) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    constexpr std::uint32_t kFrame = 45;
+    const AhogeRun run = simulate_ahoge({kFrame});
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    ASSERT_TRUE(renderer->set_chains(&run.rods.world).ok());
+    ASSERT_TRUE(renderer->chains_from(run.snapshots[0]).ok());
+    auto image = renderer->render(render::DrawList(render::scene_camera(run.scene, kFrame), kWidth, kHeight));
+    ASSERT_TRUE(image.ok()) << image.error().message;
+    int shade = 0, blend = 0;
+    for (std::uint32_t y = 0; y < kHeight; ++y) {
+        for (std::uint32_t x = 0; x < kWidth; ++x) {
+            const Rgba8 c = image.value().at(x, y);
+            if (channel_distance(c, background_at(y, kHeight)) <= 2) continue;
+            (lit_distance(c, render::kChainColor) <= 2 ? shade : blend) += 1;
+        }
+    }
+    std::printf("[ render ] anti-aliasing: %d strand pixels of a pure shade, %d blended with the background\n", shade, blend);
+    EXPECT_GE(shade, 30);
+    EXPECT_GE(blend, shade / 2) << "no blended edge pixels: the target is not multisampled";
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
 TEST(Render, PresentWithoutAWindowIsAnError) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
     auto renderer = make_renderer(64, 48);
