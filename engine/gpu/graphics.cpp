@@ -88,10 +88,16 @@ Result<GraphicsPipeline> GraphicsPipeline::create(const VulkanContext& ctx, vk::
                                                               .lineWidth = 1.0f};
         const vk::PipelineMultisampleStateCreateInfo multisample{.rasterizationSamples = options.samples};
         const vk::PipelineDepthStencilStateCreateInfo depth{.depthTestEnable = options.depth,
-                                                            .depthWriteEnable = options.depth,
+                                                            .depthWriteEnable = options.depth && !options.blend,
                                                             .depthCompareOp = vk::CompareOp::eLess};
         const vk::PipelineColorBlendAttachmentState blend_attachment{
-            .blendEnable = VK_FALSE,
+            .blendEnable = options.blend ? VK_TRUE : VK_FALSE,
+            .srcColorBlendFactor = vk::BlendFactor::eSrcAlpha,
+            .dstColorBlendFactor = vk::BlendFactor::eOneMinusSrcAlpha,
+            .colorBlendOp = vk::BlendOp::eAdd,
+            .srcAlphaBlendFactor = vk::BlendFactor::eZero,
+            .dstAlphaBlendFactor = vk::BlendFactor::eOne,
+            .alphaBlendOp = vk::BlendOp::eAdd,
             .colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG | vk::ColorComponentFlagBits::eB |
                               vk::ColorComponentFlagBits::eA};
         const vk::PipelineColorBlendStateCreateInfo blend{.attachmentCount = 1, .pAttachments = &blend_attachment};

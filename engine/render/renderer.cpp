@@ -134,6 +134,27 @@ void DrawList::add_dot(const glm::vec3& p, float radius, float min_px, Rgba8 col
     }
 }
 
+void DrawList::add_ground_shadow(const glm::vec3& center, float radius, float opacity) {
+    // Just above the ground: the grid lines (y = 0) lie under it, not through it.
+    constexpr float kLift = 1e-3f;
+    constexpr int kSides = 24;
+    constexpr float kStep = 6.28318530718f / kSides;
+    const gpu::vec4 n{0.0f, 1.0f, 0.0f, KW_RENDER_WORLD};
+    const gpu::vec4 middle{center.x, kLift, center.z, 1.0f};
+    // shadow.frag: r the opacity, a the way in from the rim.
+    const float o = std::clamp(opacity, 0.0f, 1.0f);
+    const gpu::vec4 dark{o, 0.0f, 0.0f, 1.0f}, clear{o, 0.0f, 0.0f, 0.0f};
+    const auto rim = [&](int i) {
+        const float a = kStep * static_cast<float>(i);
+        return gpu::vec4{center.x + radius * std::cos(a), kLift, center.z + radius * std::sin(a), 1.0f};
+    };
+    for (int i = 0; i < kSides; ++i) {
+        shadows_.push_back({middle, dark, n});
+        shadows_.push_back({rim(i), clear, n});
+        shadows_.push_back({rim(i + 1), clear, n});
+    }
+}
+
 void DrawList::add_screen_line(glm::vec2 a, glm::vec2 b, Rgba8 color) {
     const gpu::vec4 c = v4(color, 0.0f);
     const auto clip = [&](glm::vec2 p) {
@@ -186,7 +207,7 @@ struct Renderer::Impl {
     std::optional<gpu::GpuImage> color, msaa_color, depth;
     vk::raii::RenderPass pass{nullptr};
     vk::raii::Framebuffer framebuffer{nullptr};
-    std::optional<gpu::GraphicsPipeline> background, lines, triangles;
+    std::optional<gpu::GraphicsPipeline> background, lines, triangles, shadows;
     std::optional<compute::Buffer> vertices, readback;
     std::optional<ChainLayer> chains;
     std::optional<ColliderLayer> colliders;
@@ -404,6 +425,9 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     KW_TRY(keep(impl->background, pipeline(vk::PrimitiveTopology::eTriangleList, false)));
     KW_TRY(keep(impl->lines, pipeline(vk::PrimitiveTopology::eLineList, true)));
     KW_TRY(keep(impl->triangles, pipeline(vk::PrimitiveTopology::eTriangleList, true)));
+    KW_TRY(keep(impl->shadows, gpu::GraphicsPipeline::create(c, *impl->pass, "render.vert", "shadow.frag", sizeof(gpu::RenderVertex), 3,
+                                                             sizeof(gpu::RenderPush),
+                                                             {.depth = true, .samples = impl->samples, .blend = true})));
     KW_TRY(keep(impl->colliders, ColliderLayer::create(c, *impl->pass, impl->samples)));
     KW_TRY(keep(impl->chains, ChainLayer::create(c, *impl->pass, impl->samples)));
     KW_TRY(keep(impl->birds, BirdLayer::create(c, *impl->pass, impl->samples)));
@@ -428,7 +452,7 @@ Result<void> Renderer::Impl::upload(const DrawList& list) {
     };
     const gpu::RenderVertex quad[kBackgroundVertices] = {corner(-1, -1, top),  corner(1, -1, top),  corner(1, 1, bottom),
                                                          corner(-1, -1, top),  corner(1, 1, bottom), corner(-1, 1, bottom)};
-    const std::size_t count = kBackgroundVertices + list.lines().size() + list.triangles().size();
+    const std::size_t count = kBackgroundVertices + list.lines().size() + list.triangles().size() + list.shadows().size();
     const vk::DeviceSize bytes = count * sizeof(gpu::RenderVertex);
     // The previous submission has finished (every submission is waited for), so the
     // buffer can be replaced.
@@ -447,6 +471,8 @@ Result<void> Renderer::Impl::upload(const DrawList& list) {
     if (!list.lines().empty()) std::memcpy(out, list.lines().data(), list.lines().size_bytes());
     out += list.lines().size_bytes();
     if (!list.triangles().empty()) std::memcpy(out, list.triangles().data(), list.triangles().size_bytes());
+    out += list.triangles().size_bytes();
+    if (!list.shadows().empty()) std::memcpy(out, list.shadows().data(), list.shadows().size_bytes());
     return {};
 }
 
@@ -499,6 +525,9 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     colliders->record(cmd, push, kColliderColor);
     birds->record(cmd, push);
     skinned->record(cmd, push);
+    // Translucent, after everything opaque: what stands on the shadow hides it.
+    cmd.bindVertexBuffers(0, vertices->handle(), vk::DeviceSize{0});
+    draw(*shadows, kBackgroundVertices + list.lines().size() + list.triangles().size(), list.shadows().size());
     cmd.endRenderPass();
     // The next frame's kernels and uploads overwrite what the vertex shaders read.
     cmd.pipelineBarrier(Stage::eVertexShader, Stage::eComputeShader | Stage::eTransfer, {}, {}, {}, {});

@@ -353,6 +353,46 @@ TEST(Render, StrandEdgesAreAntiAliased) {
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
 
+// A ground contact shadow darkens the ground where it is put, most in its middle (by
+// its opacity: black blended at that alpha) and not at all past its rim.
+TEST(Render, GroundShadowIsUnderItsCentre) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    render::CameraView view;
+    view.position = {0.0f, 2.0f, 2.5f};
+    view.target = {0.0f, 0.0f, 0.0f};
+    render::DrawList list(view, kWidth, kHeight);
+    const glm::vec3 centre{0.6f, 0.0f, 0.2f};
+    constexpr float kRadius = 0.3f, kOpacity = 0.35f;
+    list.add_ground_shadow(centre, kRadius, kOpacity);
+    auto image = renderer->render(list);
+    ASSERT_TRUE(image.ok()) << image.error().message;
+    const Pinhole camera(view.position, view.target, view.fov_deg, kWidth, kHeight);
+    const auto pixel = [&](const glm::vec3& p) {
+        glm::vec2 q{0.0f, 0.0f};
+        EXPECT_TRUE(camera.project(p, q));
+        const auto x = std::uint32_t(q.x), y = std::uint32_t(q.y);
+        return std::pair{image.value().at(x, y), background_at(y, kHeight)};
+    };
+    // The middle: the background times 1 - opacity (within 3 per channel: 8-bit
+    // rounding, and the pixel centre is a little off the disc's middle, where the fade
+    // has begun).
+    const auto [middle, behind] = pixel(centre);
+    const Rgba8 expected{std::uint8_t(std::lround(behind.r * (1.0f - kOpacity))), std::uint8_t(std::lround(behind.g * (1.0f - kOpacity))),
+                         std::uint8_t(std::lround(behind.b * (1.0f - kOpacity))), 255};
+    EXPECT_LE(channel_distance(middle, expected), 3) << "middle (" << int(middle.r) << ", " << int(middle.g) << ", " << int(middle.b) << ")";
+    // Past the rim, and mirrored across the origin: the background.
+    for (const glm::vec3& p : {centre + glm::vec3(1.5f * kRadius, 0.0f, 0.0f), centre - glm::vec3(0.0f, 0.0f, 1.5f * kRadius),
+                               glm::vec3(-centre.x, 0.0f, centre.z)}) {
+        const auto [c, bg] = pixel(p);
+        EXPECT_EQ(channel_distance(c, bg), 0) << "shadow at (" << p.x << ", " << p.z << ")";
+    }
+    std::printf("[ render ] ground shadow: middle (%d, %d, %d) over background (%d, %d, %d)\n", middle.r, middle.g, middle.b, behind.r,
+                behind.g, behind.b);
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
 TEST(Render, PresentWithoutAWindowIsAnError) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
     auto renderer = make_renderer(64, 48);

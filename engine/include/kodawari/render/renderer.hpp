@@ -140,9 +140,15 @@ public:
     /// top-left, y down), unlit, drawn over everything (depth 0, the near plane).
     void add_screen_line(glm::vec2 a, glm::vec2 b, Rgba8 color);
     void add_screen_triangle(glm::vec2 a, glm::vec2 b, glm::vec2 c, Rgba8 color);
+    /// A soft contact shadow on the ground (y = 0): a dark disc of `radius` m round
+    /// `center`'s foot, `opacity` (in [0, 1]) at the middle fading to none at the rim,
+    /// blended over what is drawn (after the opaque geometry; depth tested, not written).
+    void add_ground_shadow(const glm::vec3& center, float radius, float opacity);
 
     [[nodiscard]] std::span<const gpu::RenderVertex> triangles() const { return triangles_; }
     [[nodiscard]] std::span<const gpu::RenderVertex> lines() const { return lines_; }
+    /// Ground shadows: triangles whose colour's r is the opacity, a the way in from the rim (shadow.frag).
+    [[nodiscard]] std::span<const gpu::RenderVertex> shadows() const { return shadows_; }
 
 private:
     void add_unlit_triangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, Rgba8 color);
@@ -151,7 +157,7 @@ private:
     CameraBasis basis_;
     std::uint32_t width_, height_;
     float pixel_per_depth_;  // world size of a pixel at depth 1
-    std::vector<gpu::RenderVertex> triangles_, lines_;
+    std::vector<gpu::RenderVertex> triangles_, lines_, shadows_;
 };
 
 /// Where the renderer runs.
