@@ -69,9 +69,9 @@ struct ChainDrawInfo {
 // no vertex buffer, triangle lists; RenderPush.draw.x: the colour (packUnorm4x8).
 #define KW_COLLIDERS_BINDING_COLLIDERS 0
 #define KW_COLLIDERS_BINDING_COUNT 1
-#define KW_COLLIDER_SIDES 16
-#define KW_COLLIDER_RINGS 4
-#define KW_COLLIDER_VERTICES 864  // (2 x KW_COLLIDER_RINGS + 1) bands x KW_COLLIDER_SIDES quads x 6 vertices
+#define KW_COLLIDER_SIDES 24
+#define KW_COLLIDER_RINGS 6
+#define KW_COLLIDER_VERTICES 1872  // (2 x KW_COLLIDER_RINGS + 1) bands x KW_COLLIDER_SIDES quads x 6 vertices
 
 // ---------------------------------------------------------------------------------------
 // The bird layer (birds.vert): the seven part meshes of each wing type in one vertex
