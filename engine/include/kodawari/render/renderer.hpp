@@ -62,7 +62,7 @@ inline constexpr float kChainMinPixels = 4.0f;
 inline constexpr float kJointDotMinPixels = 3.0f;
 /// Birds smaller than this wingspan in pixels are drawn scaled up to it, so that a far
 /// flock stays visible (a preview aid: the birds' positions are exact, their size not).
-inline constexpr float kBirdMinPixels = 6.0f;
+inline constexpr float kBirdMinPixels = 8.0f;
 
 /// How chains are drawn: lit tubes (camera-facing ribbons shaded as cylinders) 2 x
 /// thickness wide at the root, tapering to 40% of that at the tip, with minimum widths in
