@@ -8,7 +8,7 @@
 namespace kodawari::gpu {
 
 Result<GpuImage> GpuImage::create(const VulkanContext& ctx, std::uint32_t width, std::uint32_t height, vk::Format format,
-                                  vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect) {
+                                  vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect, vk::SampleCountFlagBits samples) {
     GpuImage out;
     KW_TRY(guard("Vulkan image " + std::to_string(width) + "x" + std::to_string(height) + " " + vk::to_string(format), [&]() -> Result<void> {
         const auto& device = ctx.device();
@@ -17,7 +17,7 @@ Result<GpuImage> GpuImage::create(const VulkanContext& ctx, std::uint32_t width,
                                          .extent = {width, height, 1},
                                          .mipLevels = 1,
                                          .arrayLayers = 1,
-                                         .samples = vk::SampleCountFlagBits::e1,
+                                         .samples = samples,
                                          .tiling = vk::ImageTiling::eOptimal,
                                          .usage = usage,
                                          .sharingMode = vk::SharingMode::eExclusive,
@@ -86,12 +86,18 @@ Result<GraphicsPipeline> GraphicsPipeline::create(const VulkanContext& ctx, vk::
                                                               .cullMode = vk::CullModeFlagBits::eNone,
                                                               .frontFace = vk::FrontFace::eCounterClockwise,
                                                               .lineWidth = 1.0f};
-        const vk::PipelineMultisampleStateCreateInfo multisample{.rasterizationSamples = vk::SampleCountFlagBits::e1};
+        const vk::PipelineMultisampleStateCreateInfo multisample{.rasterizationSamples = options.samples};
         const vk::PipelineDepthStencilStateCreateInfo depth{.depthTestEnable = options.depth,
-                                                            .depthWriteEnable = options.depth,
+                                                            .depthWriteEnable = options.depth && !options.blend,
                                                             .depthCompareOp = vk::CompareOp::eLess};
         const vk::PipelineColorBlendAttachmentState blend_attachment{
-            .blendEnable = VK_FALSE,
+            .blendEnable = options.blend ? VK_TRUE : VK_FALSE,
+            .srcColorBlendFactor = vk::BlendFactor::eSrcAlpha,
+            .dstColorBlendFactor = vk::BlendFactor::eOneMinusSrcAlpha,
+            .colorBlendOp = vk::BlendOp::eAdd,
+            .srcAlphaBlendFactor = vk::BlendFactor::eZero,
+            .dstAlphaBlendFactor = vk::BlendFactor::eOne,
+            .alphaBlendOp = vk::BlendOp::eAdd,
             .colorWriteMask = vk::ColorComponentFlagBits::eR | vk::ColorComponentFlagBits::eG | vk::ColorComponentFlagBits::eB |
                               vk::ColorComponentFlagBits::eA};
         const vk::PipelineColorBlendStateCreateInfo blend{.attachmentCount = 1, .pAttachments = &blend_attachment};

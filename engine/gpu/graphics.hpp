@@ -15,7 +15,8 @@ namespace kodawari::gpu {
 class KODAWARI_INTERNAL GpuImage {
 public:
     [[nodiscard]] static Result<GpuImage> create(const VulkanContext& ctx, std::uint32_t width, std::uint32_t height,
-                                                 vk::Format format, vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect);
+                                                 vk::Format format, vk::ImageUsageFlags usage, vk::ImageAspectFlags aspect,
+                                                 vk::SampleCountFlagBits samples = vk::SampleCountFlagBits::e1);
 
     GpuImage(GpuImage&&) noexcept = default;
     GpuImage& operator=(GpuImage&&) noexcept = default;
@@ -37,6 +38,11 @@ private:
 struct GraphicsPipelineOptions {
     vk::PrimitiveTopology topology = vk::PrimitiveTopology::eTriangleList;
     bool depth = true;  ///< depth test (less) and write; off: drawn over what is there
+    /// Samples per pixel: the render pass's attachments' (multisampled: anti-aliased edges).
+    vk::SampleCountFlagBits samples = vk::SampleCountFlagBits::e1;
+    /// Alpha blending (source alpha over what is there) and no depth writes: translucent
+    /// overlays such as ground shadows, drawn after the opaque geometry.
+    bool blend = false;
     /// Storage buffers the vertex shader reads, at set 0, bindings 0..n-1 (the layers
     /// drawn from device buffers); bound with a BufferSet.
     std::uint32_t storage_buffers = 0;

@@ -81,7 +81,7 @@ static_assert(sizeof(BirdDrawVertex) == 32 && offsetof(BirdDrawVertex, normal) =
 static_assert(sizeof(BirdDrawType) == 128 && offsetof(BirdDrawType, color) == 112);
 static_assert(KW_CHAIN_DOT_VERTICES == 3 * KW_CHAIN_DOT_SIDES);
 static_assert(KW_PART_COUNT == 7, "BirdDrawType::parts has one entry per bird part");
-static_assert(KW_COLLIDER_VERTICES == 4 * KW_COLLIDER_SIDES + 2);
+static_assert(KW_COLLIDER_VERTICES == (2 * KW_COLLIDER_RINGS + 1) * KW_COLLIDER_SIDES * 6);
 static_assert(sizeof(RodInputInstanceGpu) == 16);
 static_assert(sizeof(RodInputAttachmentGpu) == 48 && offsetof(RodInputAttachmentGpu, a) == 16 &&
               offsetof(RodInputAttachmentGpu, b) == 32);

@@ -9,6 +9,7 @@
 
 #include "birds/bird_meshes.hpp"
 #include "compute/compute.hpp"
+#include "kodawari/render/scene_draw.hpp"
 
 namespace kodawari::render {
 
@@ -42,9 +43,9 @@ Result<compute::Buffer> storage_with(gpu::VulkanContext& ctx, std::span<const st
 
 Result<gpu::GraphicsPipeline> layer_pipeline(const gpu::VulkanContext& ctx, vk::RenderPass pass, std::string_view vertex,
                                              std::string_view fragment, std::uint32_t vertex_stride, std::uint32_t attributes,
-                                             std::uint32_t storage_buffers, vk::PrimitiveTopology topology) {
+                                             std::uint32_t storage_buffers, vk::SampleCountFlagBits samples, vk::PrimitiveTopology topology) {
     return gpu::GraphicsPipeline::create(ctx, pass, vertex, fragment, vertex_stride, attributes, sizeof(gpu::RenderPush),
-                                         {.topology = topology, .depth = true, .storage_buffers = storage_buffers});
+                                         {.topology = topology, .depth = true, .samples = samples, .storage_buffers = storage_buffers});
 }
 
 namespace {
@@ -62,9 +63,9 @@ Result<void> with_set(const gpu::VulkanContext& ctx, Result<gpu::GraphicsPipelin
 
 }  // namespace
 
-Result<ChainLayer> ChainLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
+Result<ChainLayer> ChainLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples) {
     ChainLayer layer;
-    KW_TRY(with_set(ctx, layer_pipeline(ctx, pass, "chains.vert", "render.frag", 0, 0, KW_CHAINS_BINDING_COUNT), layer.pipeline_,
+    KW_TRY(with_set(ctx, layer_pipeline(ctx, pass, "chains.vert", "lit.frag", 0, 0, KW_CHAINS_BINDING_COUNT, samples), layer.pipeline_,
                     layer.set_));
     return layer;
 }
@@ -80,8 +81,10 @@ Result<void> ChainLayer::set_world(gpu::VulkanContext& ctx, const rods::RodWorld
     if (world == nullptr || world->joint_count == 0) return {};
     std::vector<gpu::ChainDrawInfo> info;
     std::vector<std::uint32_t> joint_chain(world->joint_count, 0u);
-    const std::uint32_t color = glm::packUnorm4x8(glm::vec4(style.color.r, style.color.g, style.color.b, style.color.a) / 255.0f);
+    assert(!style.colors.empty());
     for (std::uint32_t c = 0; c < world->chains.size(); ++c) {
+        const Rgba8 rgba = style.colors[c % style.colors.size()];
+        const std::uint32_t color = glm::packUnorm4x8(glm::vec4(rgba.r, rgba.g, rgba.b, rgba.a) / 255.0f);
         const rods::ChainInstance& chain = world->chains[c];
         const rods::Chain& shape = world->templ(chain).chain;
         info.push_back({{chain.joint_begin, shape.joint_count, color, 0u}, {shape.thickness, 0.0f, 0.0f, 0.0f}});
@@ -138,7 +141,7 @@ Result<void> ChainLayer::from_snapshot(gpu::VulkanContext& ctx, const ChainSnaps
     return {};
 }
 
-void ChainLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push, float rows_scale) const {
+void ChainLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push, float rows_scale, bool joints) const {
     if (!bound_ || world_ == nullptr || world_->joint_count == 0) return;
     cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline_->handle());
     cmd.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, pipeline_->layout(), 0, set_->handle(), {});
@@ -146,6 +149,7 @@ void ChainLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push
     push.draw = {KW_CHAINS_DRAW_SEGMENTS, bits(rows_scale * style_.min_width_px), bits(rows_scale * style_.min_dot_px), push.draw.w};
     cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), stages, 0, push);
     cmd.draw(KW_CHAIN_SEGMENT_VERTICES, world_->joint_count, 0, 0);
+    if (!joints) return;
     push.draw.x = KW_CHAINS_DRAW_DOTS;
     cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), stages, 0, push);
     cmd.draw(KW_CHAIN_DOT_VERTICES, world_->joint_count, 0, 0);
@@ -154,19 +158,46 @@ void ChainLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push
 // ---------------------------------------------------------------------------------------
 // Colliders
 
-Result<ColliderLayer> ColliderLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
+Result<ColliderLayer> ColliderLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples) {
     ColliderLayer layer;
     KW_TRY(with_set(ctx,
-                    layer_pipeline(ctx, pass, "colliders.vert", "render.frag", 0, 0, KW_COLLIDERS_BINDING_COUNT,
-                                   vk::PrimitiveTopology::eLineList),
+                    layer_pipeline(ctx, pass, "colliders.vert", "lit.frag", 0, 0, KW_COLLIDERS_BINDING_COUNT, samples),
                     layer.pipeline_, layer.set_));
     return layer;
 }
 
 void ColliderLayer::set_world(const rods::RodWorld* world) {
+    world_ = world;
     count_ = world != nullptr ? world->collider_count : 0;
     host_.reset();
     bound_ = false;
+    update_ranges();
+}
+
+void ColliderLayer::set_skinned(const RodScene* scene) {
+    skinned_ = scene;
+    update_ranges();
+}
+
+void ColliderLayer::update_ranges() {
+    ranges_.clear();
+    std::vector<bool> drawn(count_, true);
+    if (world_ != nullptr && skinned_ != nullptr && &skinned_->world == world_) {
+        for (const rods::ChainInstance& chain : world_->chains) {
+            if (chain.character >= skinned_->instances.size()) continue;
+            const auto& rig = skinned_->characters[skinned_->instances[chain.character].character].rig;
+            if (!rig || !draws_skinned(*rig)) continue;
+            for (std::uint32_t k = chain.collider_begin; k < chain.collider_begin + chain.collider_count && k < count_; ++k) drawn[k] = false;
+        }
+    }
+    for (std::uint32_t k = 0; k < count_; ++k) {
+        if (!drawn[k]) continue;
+        if (!ranges_.empty() && ranges_.back().first + ranges_.back().second == k) {
+            ++ranges_.back().second;
+        } else {
+            ranges_.emplace_back(k, 1u);
+        }
+    }
 }
 
 Result<void> ColliderLayer::from(gpu::VulkanContext& ctx, const RodBackend& backend, const rods::RodFrame& input) {
@@ -205,15 +236,15 @@ void ColliderLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush p
     push.draw = {glm::packUnorm4x8(glm::vec4(color.r, color.g, color.b, color.a) / 255.0f), 0u, 0u, push.draw.w};
     cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment, 0,
                                        push);
-    cmd.draw(KW_COLLIDER_VERTICES, count_, 0, 0);
+    for (const auto& [first, n] : ranges_) cmd.draw(KW_COLLIDER_VERTICES, n, 0, first);
 }
 
 // ---------------------------------------------------------------------------------------
 // Birds
 
-Result<BirdLayer> BirdLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
+Result<BirdLayer> BirdLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples) {
     BirdLayer layer;
-    KW_TRY(with_set(ctx, layer_pipeline(ctx, pass, "birds.vert", "render.frag", sizeof(gpu::BirdDrawVertex), 2, KW_BIRDS_DRAW_BINDING_COUNT),
+    KW_TRY(with_set(ctx, layer_pipeline(ctx, pass, "birds.vert", "render.frag", sizeof(gpu::BirdDrawVertex), 2, KW_BIRDS_DRAW_BINDING_COUNT, samples),
                     layer.pipeline_, layer.set_));
     return layer;
 }

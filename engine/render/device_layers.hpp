@@ -9,6 +9,8 @@
 #include <cstdint>
 #include <optional>
 #include <span>
+#include <utility>
+#include <vector>
 #include <string_view>
 
 #include <kodawari/shared/birds.h>
@@ -20,6 +22,7 @@
 #include "kodawari/birds/world.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/rod_backend.hpp"
+#include "kodawari/rod_scene.hpp"
 
 namespace kodawari::render {
 
@@ -33,14 +36,14 @@ namespace kodawari::render {
 [[nodiscard]] Result<gpu::GraphicsPipeline> layer_pipeline(const gpu::VulkanContext& ctx, vk::RenderPass pass,
                                                            std::string_view vertex, std::string_view fragment,
                                                            std::uint32_t vertex_stride, std::uint32_t attributes,
-                                                           std::uint32_t storage_buffers,
+                                                           std::uint32_t storage_buffers, vk::SampleCountFlagBits samples,
                                                            vk::PrimitiveTopology topology = vk::PrimitiveTopology::eTriangleList);
 
 /// The chains of a RodWorld.
 class ChainLayer {
 public:
-    /// The pipeline for `pass` (shared by every world drawn).
-    [[nodiscard]] static Result<ChainLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+    /// The pipeline for `pass` with `samples` per pixel (shared by every world drawn).
+    [[nodiscard]] static Result<ChainLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples);
 
     /// The chains of `world` (null: none) in `style`; static per-chain data is uploaded.
     [[nodiscard]] Result<void> set_world(gpu::VulkanContext& ctx, const rods::RodWorld* world, const ChainStyle& style);
@@ -51,8 +54,9 @@ public:
     /// Whether the last from_*() bound the backend's own buffers.
     [[nodiscard]] bool on_device() const { return on_device_; }
 
-    /// Records the draws (inside the render pass; `push` has the camera).
-    void record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push, float rows_scale) const;
+    /// Records the draws (inside the render pass; `push` has the camera): the tubes, and
+    /// with `joints` the joint dots.
+    void record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push, float rows_scale, bool joints) const;
 
 private:
     ChainLayer() = default;
@@ -66,13 +70,18 @@ private:
     bool bound_ = false, on_device_ = false;
 };
 
-/// The colliders of a RodWorld's input.
+/// The colliders of a RodWorld's input, as lit capsules: the procedural characters'
+/// bodies. Those of characters drawn as skinned meshes are left out (the mesh is their
+/// body; solid capsules would poke through it).
 class ColliderLayer {
 public:
-    [[nodiscard]] static Result<ColliderLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+    [[nodiscard]] static Result<ColliderLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples);
 
     /// The colliders of `world` (null: none).
     void set_world(const rods::RodWorld* world);
+    /// The scene whose characters with meshes (draws_skinned) are drawn by the skinned
+    /// layer (null: none): their colliders are not drawn.
+    void set_skinned(const RodScene* scene);
     /// This frame's colliders: the vulkan rod backend's input buffer when on `ctx` (rigged
     /// characters' colliders are written there on the device), else `input`'s uploaded.
     [[nodiscard]] Result<void> from(gpu::VulkanContext& ctx, const RodBackend& backend, const rods::RodFrame& input);
@@ -81,9 +90,14 @@ public:
 
 private:
     ColliderLayer() = default;
+    // The runs of colliders drawn, [first, first + count), from world_ and skinned_.
+    void update_ranges();
     std::optional<gpu::GraphicsPipeline> pipeline_;
     std::optional<gpu::BufferSet> set_;
+    const rods::RodWorld* world_ = nullptr;
+    const RodScene* skinned_ = nullptr;
     std::uint32_t count_ = 0;
+    std::vector<std::pair<std::uint32_t, std::uint32_t>> ranges_;
     std::optional<compute::Buffer> host_;
     std::vector<gpu::RodColliderGpu> packed_;
     bool bound_ = false;
@@ -92,7 +106,7 @@ private:
 /// The birds of a BirdWorld.
 class BirdLayer {
 public:
-    [[nodiscard]] static Result<BirdLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+    [[nodiscard]] static Result<BirdLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples);
 
     /// The birds of `world` (null: none): the part meshes of its wing types and the
     /// order of its birds by wing type are uploaded.

@@ -1,4 +1,5 @@
-// The renderer: one render pass into an RGBA8 colour + depth target; three pipelines of
+// The renderer: one render pass into an RGBA8 colour + depth target (multisampled and
+// resolved into the single-sample colour image at the end of the pass); three pipelines of
 // the draw list's shaders (background without depth, lines, triangles), then the chain,
 // bird and skinned-mesh layers drawn from device buffers (device_layers.hpp,
 // skinned_layer.hpp); the image copied to a host-visible buffer after the pass, or
@@ -28,12 +29,8 @@ constexpr glm::vec3 kBackgroundBottom{0.82f, 0.83f, 0.80f};
 // Lambert from above and in front-left, so that a bird's back and its wings' upper sides
 // read lighter than their undersides.
 const glm::vec3 kLight = glm::normalize(glm::vec3(-0.35f, 1.0f, 0.45f));
-constexpr float kAmbient = 0.45f;
 
 gpu::vec4 v4(const glm::vec3& v, float w) { return {v.x, v.y, v.z, w}; }
-gpu::vec4 v4(Rgba8 c, float lit) {
-    return {static_cast<float>(c.r) / 255.0f, static_cast<float>(c.g) / 255.0f, static_cast<float>(c.b) / 255.0f, lit};
-}
 
 }  // namespace
 
@@ -67,91 +64,6 @@ Rgba8 Image::at(std::uint32_t x, std::uint32_t y) const {
 }
 
 // ---------------------------------------------------------------------------------------
-// DrawList
-
-DrawList::DrawList(const CameraView& camera, std::uint32_t width, std::uint32_t height)
-    : camera_(camera), basis_(camera_basis(camera)), width_(width), height_(height) {
-    assert(width > 0 && height > 0 && camera.near > 0.0f && camera.far > camera.near);
-    assert(!camera.orthographic || camera.ortho_height > 0.0f);
-    pixel_per_depth_ = camera.orthographic ? camera.ortho_height / static_cast<float>(height)
-                                           : 2.0f * std::tan(0.5f * glm::radians(camera.fov_deg)) / static_cast<float>(height);
-}
-
-float DrawList::pixel_size_at(const glm::vec3& p) const {
-    if (camera_.orthographic) return pixel_per_depth_;
-    const float depth = glm::dot(p - camera_.position, basis_.forward);
-    return depth > camera_.near ? depth * pixel_per_depth_ : 0.0f;
-}
-
-glm::vec3 DrawList::towards_viewer(const glm::vec3& p) const {
-    return camera_.orthographic ? -basis_.forward : camera_.position - p;
-}
-
-void DrawList::add_line(const glm::vec3& a, const glm::vec3& b, Rgba8 color) {
-    const gpu::vec4 c = v4(color, 0.0f);
-    lines_.push_back({v4(a, 1.0f), c, {0.0f, 0.0f, 0.0f, KW_RENDER_WORLD}});
-    lines_.push_back({v4(b, 1.0f), c, {0.0f, 0.0f, 0.0f, KW_RENDER_WORLD}});
-}
-
-void DrawList::add_lit_triangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, const glm::vec3& normal,
-                                glm::vec3 color) {
-    const gpu::vec4 col{color.x, color.y, color.z, 1.0f};
-    const gpu::vec4 n = v4(normal, KW_RENDER_WORLD);
-    triangles_.push_back({v4(a, 1.0f), col, n});
-    triangles_.push_back({v4(b, 1.0f), col, n});
-    triangles_.push_back({v4(c, 1.0f), col, n});
-}
-
-void DrawList::add_unlit_triangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, Rgba8 color) {
-    const gpu::vec4 col = v4(color, 0.0f);
-    const gpu::vec4 n{0.0f, 0.0f, 0.0f, KW_RENDER_WORLD};
-    triangles_.push_back({v4(a, 1.0f), col, n});
-    triangles_.push_back({v4(b, 1.0f), col, n});
-    triangles_.push_back({v4(c, 1.0f), col, n});
-}
-
-void DrawList::add_segment(const glm::vec3& a, const glm::vec3& b, float width, float min_px, Rgba8 color) {
-    const glm::vec3 along = b - a;
-    // The quad lies in the plane of the segment and the line of sight to its middle.
-    const glm::vec3 side = glm::cross(along, towards_viewer(0.5f * (a + b)));
-    const float side_length = glm::length(side);
-    if (!(side_length > 0.0f)) return;  // seen end-on (its dots still show it) or degenerate
-    const glm::vec3 unit = side / side_length;
-    const glm::vec3 ha = 0.5f * std::max(width, min_px * pixel_size_at(a)) * unit;
-    const glm::vec3 hb = 0.5f * std::max(width, min_px * pixel_size_at(b)) * unit;
-    add_unlit_triangle(a - ha, a + ha, b + hb, color);
-    add_unlit_triangle(a - ha, b + hb, b - hb, color);
-}
-
-void DrawList::add_dot(const glm::vec3& p, float radius, float min_px, Rgba8 color) {
-    const float r = std::max(radius, min_px * pixel_size_at(p));
-    constexpr int kSides = 8;
-    constexpr float kStep = 6.28318530718f / kSides;
-    for (int i = 0; i < kSides; ++i) {
-        const float a0 = kStep * static_cast<float>(i), a1 = kStep * static_cast<float>(i + 1);
-        add_unlit_triangle(p, p + r * (std::cos(a0) * basis_.right + std::sin(a0) * basis_.up),
-                           p + r * (std::cos(a1) * basis_.right + std::sin(a1) * basis_.up), color);
-    }
-}
-
-void DrawList::add_screen_line(glm::vec2 a, glm::vec2 b, Rgba8 color) {
-    const gpu::vec4 c = v4(color, 0.0f);
-    const auto clip = [&](glm::vec2 p) {
-        return gpu::vec4{2.0f * p.x / static_cast<float>(width_) - 1.0f, 2.0f * p.y / static_cast<float>(height_) - 1.0f, 0.0f, 1.0f};
-    };
-    lines_.push_back({clip(a), c, {0.0f, 0.0f, 0.0f, KW_RENDER_CLIP}});
-    lines_.push_back({clip(b), c, {0.0f, 0.0f, 0.0f, KW_RENDER_CLIP}});
-}
-
-void DrawList::add_screen_triangle(glm::vec2 a, glm::vec2 b, glm::vec2 c, Rgba8 color) {
-    const gpu::vec4 col = v4(color, 0.0f);
-    const auto clip = [&](glm::vec2 p) {
-        return gpu::vec4{2.0f * p.x / static_cast<float>(width_) - 1.0f, 2.0f * p.y / static_cast<float>(height_) - 1.0f, 0.0f, 1.0f};
-    };
-    for (const glm::vec2 p : {a, b, c}) triangles_.push_back({clip(p), col, {0.0f, 0.0f, 0.0f, KW_RENDER_CLIP}});
-}
-
-// ---------------------------------------------------------------------------------------
 // Renderer
 
 namespace {
@@ -179,10 +91,14 @@ struct PresentTarget {
 struct Renderer::Impl {
     std::shared_ptr<gpu::VulkanContext> ctx;
     std::uint32_t width = 0, height = 0;
-    std::optional<gpu::GpuImage> color, depth;
+    bool joints = false;  // RendererOptions::joints
+    vk::SampleCountFlagBits samples = vk::SampleCountFlagBits::e1;
+    // color: the image read back or blitted; multisampled: msaa_color is drawn into and
+    // resolved into color at the end of the pass.
+    std::optional<gpu::GpuImage> color, msaa_color, depth;
     vk::raii::RenderPass pass{nullptr};
     vk::raii::Framebuffer framebuffer{nullptr};
-    std::optional<gpu::GraphicsPipeline> background, lines, triangles;
+    std::optional<gpu::GraphicsPipeline> background, lines, triangles, shadows;
     std::optional<compute::Buffer> vertices, readback;
     std::optional<ChainLayer> chains;
     std::optional<ColliderLayer> colliders;
@@ -230,7 +146,10 @@ Result<void> Renderer::colliders_from(const RodBackend& backend, const rods::Rod
 Result<void> Renderer::set_birds(const birds::BirdWorld* world) { return impl_->birds->set_world(*impl_->ctx, world, kBirdMinPixels); }
 Result<void> Renderer::birds_from(const BirdBackend& backend) { return impl_->birds->from_backend(*impl_->ctx, backend); }
 Result<void> Renderer::birds_from(std::span<const gpu::BirdPose> poses) { return impl_->birds->from_poses(*impl_->ctx, poses); }
-Result<void> Renderer::set_skinned(const RodScene* scene) { return impl_->skinned->set_scene(*impl_->ctx, scene); }
+Result<void> Renderer::set_skinned(const RodScene* scene) {
+    impl_->colliders->set_skinned(scene);
+    return impl_->skinned->set_scene(*impl_->ctx, scene);
+}
 Result<void> Renderer::skinned_from(const CrowdAnimator& animator, RodBackend& rods, std::uint32_t frame) {
     return impl_->skinned->from_backends(*impl_->ctx, animator, rods, frame);
 }
@@ -246,6 +165,18 @@ constexpr vk::Format kColorFormat = vk::Format::eR8G8B8A8Unorm;
 // The window changed size under the swapchain: control flow (remake it on the next
 // present()), not a failure, told apart by the VkResult that guard() keeps.
 bool out_of_date(const Error& error) { return error.vk_result == static_cast<int>(vk::Result::eErrorOutOfDateKHR); }
+
+// Anti-aliasing: 4 samples per pixel, or the most the device has for colour and depth
+// together if fewer. Fixed sample positions (the standard ones): the same input gives the
+// same bits on one device.
+vk::SampleCountFlagBits sample_count(const vk::raii::PhysicalDevice& physical) {
+    const vk::PhysicalDeviceLimits limits = physical.getProperties().limits;
+    const vk::SampleCountFlags both = limits.framebufferColorSampleCounts & limits.framebufferDepthSampleCounts;
+    for (const auto s : {vk::SampleCountFlagBits::e4, vk::SampleCountFlagBits::e2}) {
+        if (both & s) return s;
+    }
+    return vk::SampleCountFlagBits::e1;
+}
 
 // The first depth format the device can render to (every device has one of these).
 std::optional<vk::Format> depth_format(const vk::raii::PhysicalDevice& physical) {
@@ -273,6 +204,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     impl->ctx = std::move(ctx).value();
     impl->width = options.width;
     impl->height = options.height;
+    impl->joints = options.joints;
     const gpu::VulkanContext& c = *impl->ctx;
     const auto depth = depth_format(c.physical_device());
     if (!depth) return make_error(Error::Kind::Unsupported, c.info().name + " has no depth format to render to");
@@ -282,46 +214,68 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
                                              vk::ImageAspectFlagBits::eColor);
     if (!color_image) return color_image.error();
     impl->color.emplace(std::move(color_image).value());
+    impl->samples = sample_count(c.physical_device());
+    const bool msaa = impl->samples != vk::SampleCountFlagBits::e1;
+    if (msaa) {
+        auto drawn = gpu::GpuImage::create(c, options.width, options.height, kColorFormat, vk::ImageUsageFlagBits::eColorAttachment,
+                                           vk::ImageAspectFlagBits::eColor, impl->samples);
+        if (!drawn) return drawn.error();
+        impl->msaa_color.emplace(std::move(drawn).value());
+    }
     auto depth_image = gpu::GpuImage::create(c, options.width, options.height, *depth,
-                                             vk::ImageUsageFlagBits::eDepthStencilAttachment, vk::ImageAspectFlagBits::eDepth);
+                                             vk::ImageUsageFlagBits::eDepthStencilAttachment, vk::ImageAspectFlagBits::eDepth,
+                                             impl->samples);
     if (!depth_image) return depth_image.error();
     impl->depth.emplace(std::move(depth_image).value());
 
     KW_TRY(gpu::guard("Vulkan render pass", [&]() -> Result<void> {
+        // Multisampled: attachment 0 is drawn (its samples not kept) and resolved into
+        // attachment 2, the image read back.
         const vk::AttachmentDescription attachments[] = {
             {.format = kColorFormat,
-             .samples = vk::SampleCountFlagBits::e1,
+             .samples = impl->samples,
              .loadOp = vk::AttachmentLoadOp::eClear,
-             .storeOp = vk::AttachmentStoreOp::eStore,
+             .storeOp = msaa ? vk::AttachmentStoreOp::eDontCare : vk::AttachmentStoreOp::eStore,
              .stencilLoadOp = vk::AttachmentLoadOp::eDontCare,
              .stencilStoreOp = vk::AttachmentStoreOp::eDontCare,
              .initialLayout = vk::ImageLayout::eUndefined,
-             .finalLayout = vk::ImageLayout::eTransferSrcOptimal},
+             .finalLayout = msaa ? vk::ImageLayout::eColorAttachmentOptimal : vk::ImageLayout::eTransferSrcOptimal},
             {.format = *depth,
-             .samples = vk::SampleCountFlagBits::e1,
+             .samples = impl->samples,
              .loadOp = vk::AttachmentLoadOp::eClear,
              .storeOp = vk::AttachmentStoreOp::eDontCare,
              .stencilLoadOp = vk::AttachmentLoadOp::eDontCare,
              .stencilStoreOp = vk::AttachmentStoreOp::eDontCare,
              .initialLayout = vk::ImageLayout::eUndefined,
              .finalLayout = vk::ImageLayout::eDepthStencilAttachmentOptimal},
+            {.format = kColorFormat,
+             .samples = vk::SampleCountFlagBits::e1,
+             .loadOp = vk::AttachmentLoadOp::eDontCare,
+             .storeOp = vk::AttachmentStoreOp::eStore,
+             .stencilLoadOp = vk::AttachmentLoadOp::eDontCare,
+             .stencilStoreOp = vk::AttachmentStoreOp::eDontCare,
+             .initialLayout = vk::ImageLayout::eUndefined,
+             .finalLayout = vk::ImageLayout::eTransferSrcOptimal},
         };
         const vk::AttachmentReference color_ref{.attachment = 0, .layout = vk::ImageLayout::eColorAttachmentOptimal};
         const vk::AttachmentReference depth_ref{.attachment = 1, .layout = vk::ImageLayout::eDepthStencilAttachmentOptimal};
+        const vk::AttachmentReference resolve_ref{.attachment = 2, .layout = vk::ImageLayout::eColorAttachmentOptimal};
         const vk::SubpassDescription subpass{.pipelineBindPoint = vk::PipelineBindPoint::eGraphics,
                                              .colorAttachmentCount = 1,
                                              .pColorAttachments = &color_ref,
+                                             .pResolveAttachments = msaa ? &resolve_ref : nullptr,
                                              .pDepthStencilAttachment = &depth_ref};
         using Stage = vk::PipelineStageFlagBits;
         using Access = vk::AccessFlagBits;
         const vk::SubpassDependency dependencies[] = {
-            // The previous frame's copy read the colour image and its depth test used the
-            // depth image before this frame clears them.
+            // The previous frame's copy read the colour image, and its drawing and depth
+            // test wrote the (multisampled) colour and depth images, before this frame
+            // clears them.
             {.srcSubpass = VK_SUBPASS_EXTERNAL,
              .dstSubpass = 0,
-             .srcStageMask = Stage::eTransfer | Stage::eLateFragmentTests,
+             .srcStageMask = Stage::eTransfer | Stage::eColorAttachmentOutput | Stage::eLateFragmentTests,
              .dstStageMask = Stage::eColorAttachmentOutput | Stage::eEarlyFragmentTests | Stage::eLateFragmentTests,
-             .srcAccessMask = Access::eDepthStencilAttachmentWrite,
+             .srcAccessMask = Access::eColorAttachmentWrite | Access::eDepthStencilAttachmentWrite,
              .dstAccessMask = Access::eColorAttachmentWrite | Access::eDepthStencilAttachmentRead |
                               Access::eDepthStencilAttachmentWrite},
             // The copy after the pass reads what the pass drew.
@@ -332,15 +286,16 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
              .srcAccessMask = Access::eColorAttachmentWrite,
              .dstAccessMask = Access::eTransferRead},
         };
-        impl->pass = c.device().createRenderPass({.attachmentCount = 2,
+        impl->pass = c.device().createRenderPass({.attachmentCount = msaa ? 3u : 2u,
                                                   .pAttachments = attachments,
                                                   .subpassCount = 1,
                                                   .pSubpasses = &subpass,
                                                   .dependencyCount = 2,
                                                   .pDependencies = dependencies});
-        const vk::ImageView views[] = {impl->color->view(), impl->depth->view()};
+        const vk::ImageView views[] = {msaa ? impl->msaa_color->view() : impl->color->view(), impl->depth->view(),
+                                       impl->color->view()};
         impl->framebuffer = c.device().createFramebuffer({.renderPass = *impl->pass,
-                                                          .attachmentCount = 2,
+                                                          .attachmentCount = msaa ? 3u : 2u,
                                                           .pAttachments = views,
                                                           .width = options.width,
                                                           .height = options.height,
@@ -350,7 +305,7 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
 
     const auto pipeline = [&](vk::PrimitiveTopology topology, bool depth_test) {
         return gpu::GraphicsPipeline::create(c, *impl->pass, "render.vert", "render.frag", sizeof(gpu::RenderVertex), 3,
-                                             sizeof(gpu::RenderPush), {.topology = topology, .depth = depth_test});
+                                             sizeof(gpu::RenderPush), {.topology = topology, .depth = depth_test, .samples = impl->samples});
     };
     // Each created piece into its slot, or the first error.
     const auto keep = [](auto& slot, auto created) -> Result<void> {
@@ -361,10 +316,13 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     KW_TRY(keep(impl->background, pipeline(vk::PrimitiveTopology::eTriangleList, false)));
     KW_TRY(keep(impl->lines, pipeline(vk::PrimitiveTopology::eLineList, true)));
     KW_TRY(keep(impl->triangles, pipeline(vk::PrimitiveTopology::eTriangleList, true)));
-    KW_TRY(keep(impl->colliders, ColliderLayer::create(c, *impl->pass)));
-    KW_TRY(keep(impl->chains, ChainLayer::create(c, *impl->pass)));
-    KW_TRY(keep(impl->birds, BirdLayer::create(c, *impl->pass)));
-    KW_TRY(keep(impl->skinned, SkinnedLayer::create(c, *impl->pass)));
+    KW_TRY(keep(impl->shadows, gpu::GraphicsPipeline::create(c, *impl->pass, "render.vert", "shadow.frag", sizeof(gpu::RenderVertex), 3,
+                                                             sizeof(gpu::RenderPush),
+                                                             {.depth = true, .samples = impl->samples, .blend = true})));
+    KW_TRY(keep(impl->colliders, ColliderLayer::create(c, *impl->pass, impl->samples)));
+    KW_TRY(keep(impl->chains, ChainLayer::create(c, *impl->pass, impl->samples)));
+    KW_TRY(keep(impl->birds, BirdLayer::create(c, *impl->pass, impl->samples)));
+    KW_TRY(keep(impl->skinned, SkinnedLayer::create(c, *impl->pass, impl->samples)));
 
     auto readback = compute::Buffer::create(c, vk::DeviceSize{options.width} * options.height * 4, compute::Usage::Readback);
     if (!readback) return readback.error();
@@ -385,7 +343,7 @@ Result<void> Renderer::Impl::upload(const DrawList& list) {
     };
     const gpu::RenderVertex quad[kBackgroundVertices] = {corner(-1, -1, top),  corner(1, -1, top),  corner(1, 1, bottom),
                                                          corner(-1, -1, top),  corner(1, 1, bottom), corner(-1, 1, bottom)};
-    const std::size_t count = kBackgroundVertices + list.lines().size() + list.triangles().size();
+    const std::size_t count = kBackgroundVertices + list.lines().size() + list.triangles().size() + list.shadows().size();
     const vk::DeviceSize bytes = count * sizeof(gpu::RenderVertex);
     // The previous submission has finished (every submission is waited for), so the
     // buffer can be replaced.
@@ -404,6 +362,8 @@ Result<void> Renderer::Impl::upload(const DrawList& list) {
     if (!list.lines().empty()) std::memcpy(out, list.lines().data(), list.lines().size_bytes());
     out += list.lines().size_bytes();
     if (!list.triangles().empty()) std::memcpy(out, list.triangles().data(), list.triangles().size_bytes());
+    out += list.triangles().size_bytes();
+    if (!list.shadows().empty()) std::memcpy(out, list.shadows().data(), list.shadows().size_bytes());
     return {};
 }
 
@@ -413,7 +373,7 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     const CameraView& camera = list.camera();
     const glm::mat4 vp = view_projection(camera, static_cast<float>(width) / static_cast<float>(height));
     for (int i = 0; i < 4; ++i) push.view_proj[i] = {vp[i].x, vp[i].y, vp[i].z, vp[i].w};
-    push.light = {kLight.x, kLight.y, kLight.z, kAmbient};
+    push.light = {kLight.x, kLight.y, kLight.z, kAmbientLight};
     const CameraBasis basis = camera_basis(camera);
     push.eye = v4(camera.position, camera.near);
     push.forward = v4(basis.forward, list.pixel_per_depth());
@@ -452,10 +412,13 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     draw(*lines, kBackgroundVertices, list.lines().size());
     draw(*triangles, kBackgroundVertices + list.lines().size(), list.triangles().size());
     // The minimum sizes are for 720 rows; smaller images get thinner strands.
-    chains->record(cmd, push, std::clamp(static_cast<float>(height) / 720.0f, 0.5f, 2.0f));
+    chains->record(cmd, push, std::clamp(static_cast<float>(height) / 720.0f, 0.5f, 2.0f), joints);
     colliders->record(cmd, push, kColliderColor);
     birds->record(cmd, push);
     skinned->record(cmd, push);
+    // Translucent, after everything opaque: what stands on the shadow hides it.
+    cmd.bindVertexBuffers(0, vertices->handle(), vk::DeviceSize{0});
+    draw(*shadows, kBackgroundVertices + list.lines().size() + list.triangles().size(), list.shadows().size());
     cmd.endRenderPass();
     // The next frame's kernels and uploads overwrite what the vertex shaders read.
     cmd.pipelineBarrier(Stage::eVertexShader, Stage::eComputeShader | Stage::eTransfer, {}, {}, {}, {});

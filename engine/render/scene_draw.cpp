@@ -68,13 +68,31 @@ bool draws_skinned(const gltf::Character& character) {
     });
 }
 
+void add_contact_shadow(DrawList& list, std::span<const rods::Transform> joints) {
+    if (joints.empty()) return;
+    float low = joints[0].position.y, high = low;
+    for (const rods::Transform& j : joints) {
+        low = std::min(low, j.position.y);
+        high = std::max(high, j.position.y);
+    }
+    // As wide as a body of the skeleton's height is, fading out as the lowest joint
+    // rises off the ground by that height (the skeleton's joints, not its surface: the
+    // feet or hips are a few centimetres to a few decimetres up).
+    const float height = std::max(high - std::max(low, 0.0f), 0.1f);
+    const float lift = std::max(low, 0.0f);
+    const float opacity = kShadowOpacity * std::clamp(1.0f - lift / height, 0.0f, 1.0f);
+    if (!(opacity > 0.0f) || !std::isfinite(joints[0].position.x) || !std::isfinite(joints[0].position.z)) return;
+    list.add_ground_shadow(joints[0].position, std::clamp(0.3f * height, 0.1f, 1.5f), opacity);
+}
+
 void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame) {
     std::vector<rods::Transform> joints;
     for (std::uint32_t c = 0; c < scene.instances.size(); ++c) {
+        scene.joint_poses(c, frame, joints);
+        add_contact_shadow(list, joints);
         // Rigged characters with meshes are the renderer's skinned-mesh layer.
         const auto& rig = scene.characters[scene.instances[c].character].rig;
         if (rig && draws_skinned(*rig)) continue;
-        scene.joint_poses(c, frame, joints);
         const auto& parents = scene.joint_parents(c);
         for (std::size_t j = 0; j < joints.size() && j < parents.size(); ++j) {
             if (parents[j] < 0) continue;

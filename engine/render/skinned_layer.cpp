@@ -27,9 +27,9 @@ gpu::PoseMatrixGpu packed(const glm::mat4& m) { return {{v4(m[0]), v4(m[1]), v4(
 
 }  // namespace
 
-Result<SkinnedLayer> SkinnedLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass) {
+Result<SkinnedLayer> SkinnedLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples) {
     SkinnedLayer layer;
-    auto pipeline = layer_pipeline(ctx, pass, "skinned.vert", "skinned.frag", sizeof(gpu::SkinnedVertexGpu), 4, KW_SKINNED_BINDING_COUNT);
+    auto pipeline = layer_pipeline(ctx, pass, "skinned.vert", "skinned.frag", sizeof(gpu::SkinnedVertexGpu), 4, KW_SKINNED_BINDING_COUNT, samples);
     if (!pipeline) return pipeline.error();
     layer.pipeline_.emplace(std::move(pipeline).value());
     return layer;

@@ -24,7 +24,7 @@ namespace kodawari::render {
 
 class SkinnedLayer {
 public:
-    [[nodiscard]] static Result<SkinnedLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass);
+    [[nodiscard]] static Result<SkinnedLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples);
 
     /// The rigged characters of `scene` that have meshes (null: none): per character
     /// template its expanded triangles, skin joints, node walk and instances' chains are

@@ -93,6 +93,30 @@ inline int nearest_match(const Image& image, glm::vec2 p, int radius, Rgba8 colo
     return best;
 }
 
+// How far `c` is from every lit shade of `base`: the chain and collider layers draw
+// f x base with the light factor f in [kAmbientLight, 1] (lit.frag), rounded to 8 bits.
+// f by least squares, clamped to that range; the distance is the largest channel error
+// (0 or 1 for a shade, rounding; a few units where an anti-aliased edge pixel blends).
+inline int lit_distance(Rgba8 c, Rgba8 base) {
+    const glm::vec3 x(c.r, c.g, c.b), b(base.r, base.g, base.b);
+    const float f = std::clamp(glm::dot(x, b) / glm::dot(b, b), render::kAmbientLight, 1.0f);
+    const glm::vec3 e = glm::abs(x - f * b);
+    return int(std::lround(std::max({e.x, e.y, e.z})));
+}
+
+// Smallest lit_distance() to `base` among the pixels within `radius` of (x, y).
+inline int nearest_lit_match(const Image& image, glm::vec2 p, int radius, Rgba8 base) {
+    int best = 999;
+    const int cx = int(std::floor(p.x)), cy = int(std::floor(p.y));
+    for (int y = cy - radius; y <= cy + radius; ++y) {
+        for (int x = cx - radius; x <= cx + radius; ++x) {
+            if (x < 0 || y < 0 || x >= int(image.width) || y >= int(image.height)) continue;
+            best = std::min(best, lit_distance(image.at(std::uint32_t(x), std::uint32_t(y)), base));
+        }
+    }
+    return best;
+}
+
 inline float segment_distance(glm::vec2 p, glm::vec2 a, glm::vec2 b) {
     const glm::vec2 ab = b - a;
     const float t = glm::dot(ab, ab) > 0.0f ? std::clamp(glm::dot(p - a, ab) / glm::dot(ab, ab), 0.0f, 1.0f) : 0.0f;

@@ -57,11 +57,13 @@ TEST(Render, ChainsDrawnFromTheVulkanBackendsBuffersNeedNoReadBack) {
     ASSERT_TRUE(from_host.ok());
     int chain_pixels = 0;
     for (std::size_t i = 0; i < from_device.rgba.size(); i += 4) {
-        chain_pixels += Rgba8{from_device.rgba[i], from_device.rgba[i + 1], from_device.rgba[i + 2], 255} == render::kChainColor;
+        chain_pixels += lit_distance(Rgba8{from_device.rgba[i], from_device.rgba[i + 1], from_device.rgba[i + 2], 255}, render::kChainColor) <= 2;
     }
     std::printf("[ render ] device-drawn chains: %d chain pixels, %llu bytes read back over 20 frames\n", chain_pixels,
                 static_cast<unsigned long long>(read_back));
-    EXPECT_GE(chain_pixels, 50) << "the strand is in view";
+    // The strand is about 60 pixels long and 2 wide here; anti-aliasing blends its edges
+    // with the background, so about one pixel per row of it keeps a pure lit shade.
+    EXPECT_GE(chain_pixels, 30) << "the strand is in view";
     EXPECT_TRUE(from_device.rgba == from_host.value().rgba) << "the device-drawn chains differ from the uploaded snapshot's";
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
@@ -173,29 +175,41 @@ TEST(Render, CollidersDrawnFromTheRodInputOnTheDevice) {
     ASSERT_TRUE(from_host.ok());
 
     const Pinhole camera(view.position, view.target, view.fov_deg, kWidth, kHeight);
-    int circles = 0, found = 0;
+    int shapes = 0, found = 0;
     for (const rods::Capsule& c : host.colliders) {
         glm::vec2 q;
-        if (!camera.project(c.a + c.radius * camera.up, q)) continue;
+        if (!camera.project(0.5f * (c.a + c.b), q)) continue;
         if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
-        ++circles;
-        found += nearest_match(from_device.value(), q, 2, render::kColliderColor) == 0 ? 1 : 0;
+        ++shapes;
+        found += nearest_lit_match(from_device.value(), q, 1, render::kColliderColor) <= 2 ? 1 : 0;
     }
+    const auto body = [](const Image& image, std::uint32_t x, std::uint32_t y) {
+        return lit_distance(image.at(x, y), render::kColliderColor) <= 2;
+    };
     int collider_pixels = 0, differ = 0;
     for (std::uint32_t y = 0; y < kHeight; ++y) {
         for (std::uint32_t x = 0; x < kWidth; ++x) {
-            const bool a = from_device.value().at(x, y) == render::kColliderColor, b = from_host.value().at(x, y) == render::kColliderColor;
-            collider_pixels += a ? 1 : 0;
-            differ += a != b ? 1 : 0;
+            collider_pixels += body(from_device.value(), x, y) ? 1 : 0;
+            differ += channel_distance(from_device.value().at(x, y), from_host.value().at(x, y)) > 2 ? 1 : 0;
         }
     }
-    std::printf("[ render ] colliders from the device: %d of %d circle tops in collider colour, %d collider pixels, %d differ from "
-                "the host's\n",
-                found, circles, collider_pixels, differ);
-    EXPECT_GE(circles, 3);
-    EXPECT_EQ(found, circles);
+    std::printf("[ render ] colliders from the device: %d of %d capsule middles in a lit collider colour, %d collider pixels, %d "
+                "differ from the host's\n",
+                found, shapes, collider_pixels, differ);
+    EXPECT_GE(shapes, 3);
+    EXPECT_EQ(found, shapes);
     EXPECT_GE(collider_pixels, 50);
     EXPECT_LE(differ, collider_pixels / 100);
+
+    // With the meshes drawn by the skinned layer, no capsule shows (none posed: no mesh either).
+    ASSERT_TRUE(renderer->set_skinned(&rods).ok());
+    auto hidden = renderer->render(list);
+    ASSERT_TRUE(hidden.ok());
+    int hidden_pixels = 0;
+    for (std::uint32_t y = 0; y < kHeight; ++y) {
+        for (std::uint32_t x = 0; x < kWidth; ++x) hidden_pixels += body(hidden.value(), x, y) ? 1 : 0;
+    }
+    EXPECT_EQ(hidden_pixels, 0) << "the colliders of characters drawn as meshes are drawn";
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
 

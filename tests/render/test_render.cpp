@@ -31,7 +31,8 @@ TEST(Render, ChainPixelsAreWhereTheSimulationPutsThem) {
         const rods::CameraPose pose = run.rods.camera_pose(f);
         const Pinhole camera(pose.position, pose.target, run.rods.fov_deg, kWidth, kHeight);
 
-        // Every chain joint inside the image has the chain colour at its projection.
+        // Every chain joint inside the image has a lit shade of the chain colour at its
+        // projection (within a pixel: the tube is at least 2 pixels wide here).
         std::vector<glm::vec2> chain_px;
         int joints = 0, worst = 0;
         for (const glm::vec3& p : snapshot.positions) {
@@ -39,7 +40,7 @@ TEST(Render, ChainPixelsAreWhereTheSimulationPutsThem) {
             ASSERT_TRUE(camera.project(p, q));
             chain_px.push_back(q);
             if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
-            const int d = nearest_match(img, q, 1, render::kChainColor);
+            const int d = nearest_lit_match(img, q, 1, render::kChainColor);
             worst = std::max(worst, d);
             EXPECT_LE(d, 2) << "frame " << f << ": no chain colour near the joint projected at (" << q.x << ", " << q.y << ")";
             ++joints;
@@ -266,7 +267,7 @@ TEST(Render, OrthographicSceneCameraIsDrawnOrthographic) {
         ASSERT_TRUE(pinhole.project(p, perspective));
         apart = std::max(apart, glm::length(perspective - q));
         if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
-        const int d = nearest_match(image.value(), q, 1, render::kChainColor);
+        const int d = nearest_lit_match(image.value(), q, 1, render::kChainColor);
         worst = std::max(worst, d);
         EXPECT_LE(d, 2) << "no chain colour near the joint projected at (" << q.x << ", " << q.y << ")";
         ++joints;
@@ -276,6 +277,119 @@ TEST(Render, OrthographicSceneCameraIsDrawnOrthographic) {
                 joints, worst, double(apart));
     EXPECT_GE(joints, 10);
     EXPECT_GT(apart, 20.0f) << "the scene does not tell orthographic from perspective";
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
+// Joint dots only on request (RendererOptions::joints): unlit, the chain's exact colour at
+// every joint in view; without them the lit tube alone, whose pixels reach the exact
+// colour only where the light factor rounds to 1.
+TEST(Render, JointDotsOnlyWhenAskedFor) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    constexpr std::uint32_t kFrame = 45;
+    const AhogeRun run = simulate_ahoge({kFrame});
+    const ChainSnapshot& snapshot = run.snapshots[0];
+    // 720 rows: the strand is long enough on screen for its dots to stay apart (at the
+    // suite's 199 rows the dot rule leaves them out).
+    constexpr std::uint32_t kW = 1280, kH = 720;
+    int exact[2] = {0, 0}, joints = 0, dotted = 0;
+    for (const bool with_joints : {false, true}) {
+        render::RendererOptions options;
+        options.width = kW;
+        options.height = kH;
+        options.validation = testing_support::validation_requested();
+        options.joints = with_joints;
+        auto renderer = render::Renderer::create(options);
+        ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+        auto image = renderer.value()->render(ahoge_frame(*renderer.value(), run, kFrame, snapshot));
+        ASSERT_TRUE(image.ok()) << image.error().message;
+        const Image& img = image.value();
+        for (std::uint32_t y = 0; y < kH; ++y) {
+            for (std::uint32_t x = 0; x < kW; ++x) exact[with_joints] += img.at(x, y) == render::kChainColor;
+        }
+        if (with_joints) {
+            const rods::CameraPose pose = run.rods.camera_pose(kFrame);
+            const Pinhole camera(pose.position, pose.target, run.rods.fov_deg, kW, kH);
+            for (const glm::vec3& p : snapshot.positions) {
+                glm::vec2 q;
+                if (!camera.project(p, q) || q.x < 2 || q.y < 2 || q.x > kW - 2 || q.y > kH - 2) continue;
+                ++joints;
+                dotted += nearest_match(img, q, 1, render::kChainColor) == 0;
+            }
+        }
+        EXPECT_EQ(renderer.value()->validation_messages(), 0u);
+    }
+    std::printf("[ render ] joint dots: %d of %d joints dotted; exact chain-colour pixels %d without dots, %d with\n", dotted, joints,
+                exact[0], exact[1]);
+    EXPECT_GE(joints, 10);
+    EXPECT_EQ(dotted, joints);
+    EXPECT_GE(exact[1], 3 * joints) << "each dot is several pixels";
+    EXPECT_LE(exact[0], exact[1] / 4) << "dots drawn without RendererOptions::joints";
+}
+
+// Anti-aliasing (a multisampled target, resolved): the strand's edges blend into the
+// background, so pixels next to it are neither the background nor a lit shade of the
+// chain. Without it every pixel is one or the other (only the chain is drawn here).
+TEST(Render, StrandEdgesAreAntiAliased) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    constexpr std::uint32_t kFrame = 45;
+    const AhogeRun run = simulate_ahoge({kFrame});
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    ASSERT_TRUE(renderer->set_chains(&run.rods.world).ok());
+    ASSERT_TRUE(renderer->chains_from(run.snapshots[0]).ok());
+    auto image = renderer->render(render::DrawList(render::scene_camera(run.scene, kFrame), kWidth, kHeight));
+    ASSERT_TRUE(image.ok()) << image.error().message;
+    int shade = 0, blend = 0;
+    for (std::uint32_t y = 0; y < kHeight; ++y) {
+        for (std::uint32_t x = 0; x < kWidth; ++x) {
+            const Rgba8 c = image.value().at(x, y);
+            if (channel_distance(c, background_at(y, kHeight)) <= 2) continue;
+            (lit_distance(c, render::kChainColor) <= 2 ? shade : blend) += 1;
+        }
+    }
+    std::printf("[ render ] anti-aliasing: %d strand pixels of a pure shade, %d blended with the background\n", shade, blend);
+    EXPECT_GE(shade, 30);
+    EXPECT_GE(blend, shade / 2) << "no blended edge pixels: the target is not multisampled";
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
+// A ground contact shadow darkens the ground where it is put, most in its middle (by
+// its opacity: black blended at that alpha) and not at all past its rim.
+TEST(Render, GroundShadowIsUnderItsCentre) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    render::CameraView view;
+    view.position = {0.0f, 2.0f, 2.5f};
+    view.target = {0.0f, 0.0f, 0.0f};
+    render::DrawList list(view, kWidth, kHeight);
+    const glm::vec3 centre{0.6f, 0.0f, 0.2f};
+    constexpr float kRadius = 0.3f, kOpacity = 0.35f;
+    list.add_ground_shadow(centre, kRadius, kOpacity);
+    auto image = renderer->render(list);
+    ASSERT_TRUE(image.ok()) << image.error().message;
+    const Pinhole camera(view.position, view.target, view.fov_deg, kWidth, kHeight);
+    const auto pixel = [&](const glm::vec3& p) {
+        glm::vec2 q{0.0f, 0.0f};
+        EXPECT_TRUE(camera.project(p, q));
+        const auto x = std::uint32_t(q.x), y = std::uint32_t(q.y);
+        return std::pair{image.value().at(x, y), background_at(y, kHeight)};
+    };
+    // The middle: the background times 1 - opacity (within 3 per channel: 8-bit
+    // rounding, and the pixel centre is a little off the disc's middle, where the fade
+    // has begun).
+    const auto [middle, behind] = pixel(centre);
+    const Rgba8 expected{std::uint8_t(std::lround(behind.r * (1.0f - kOpacity))), std::uint8_t(std::lround(behind.g * (1.0f - kOpacity))),
+                         std::uint8_t(std::lround(behind.b * (1.0f - kOpacity))), 255};
+    EXPECT_LE(channel_distance(middle, expected), 3) << "middle (" << int(middle.r) << ", " << int(middle.g) << ", " << int(middle.b) << ")";
+    // Past the rim, and mirrored across the origin: the background.
+    for (const glm::vec3& p : {centre + glm::vec3(1.5f * kRadius, 0.0f, 0.0f), centre - glm::vec3(0.0f, 0.0f, 1.5f * kRadius),
+                               glm::vec3(-centre.x, 0.0f, centre.z)}) {
+        const auto [c, bg] = pixel(p);
+        EXPECT_EQ(channel_distance(c, bg), 0) << "shadow at (" << p.x << ", " << p.z << ")";
+    }
+    std::printf("[ render ] ground shadow: middle (%d, %d, %d) over background (%d, %d, %d)\n", middle.r, middle.g, middle.b, behind.r,
+                behind.g, behind.b);
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
 

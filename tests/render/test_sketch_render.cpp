@@ -23,6 +23,7 @@
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/scene.hpp"
+#include "render_support.hpp"
 #include "test_support.hpp"
 
 namespace kodawari {
@@ -56,14 +57,13 @@ Png load_png(const std::string& path) {
     return out;
 }
 
-// Whether a pixel within `radius` of p has the chain colour (within 2 per channel).
+// Whether a pixel within `radius` of p has a lit shade of the chain colour (within 2 per
+// channel of f x kChainColor, f in [kAmbientLight, 1]: render_support.hpp's lit_distance).
 bool chain_near(const Png& image, glm::vec2 p, int radius) {
     for (int y = static_cast<int>(p.y) - radius; y <= static_cast<int>(p.y) + radius; ++y) {
         for (int x = static_cast<int>(p.x) - radius; x <= static_cast<int>(p.x) + radius; ++x) {
             if (x < 0 || y < 0 || x >= image.width || y >= image.height) continue;
-            const render::Rgba8 c = image.at(x, y);
-            const render::Rgba8 k = render::kChainColor;
-            if (std::abs(c.r - k.r) <= 2 && std::abs(c.g - k.g) <= 2 && std::abs(c.b - k.b) <= 2) return true;
+            if (render_test::lit_distance(image.at(x, y), render::kChainColor) <= 2) return true;
         }
     }
     return false;

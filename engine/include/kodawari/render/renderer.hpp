@@ -1,6 +1,7 @@
 #pragma once
 /// @file
-/// The renderer (issue 5): Vulkan draws into a WxH RGBA8 + depth target, read back as an
+/// The renderer (issue 5): Vulkan draws into a WxH RGBA8 + depth target (4x multisampled
+/// where the device can, resolved: anti-aliased edges), read back as an
 /// image (render(); PNG output and contact sheets) or blitted into a window's swapchain
 /// (present(), the viewer). A frame is a draw list built on the CPU (ground grid,
 /// skeletons, colliders, overlays) plus the chains, birds and rigged characters' skinned
@@ -8,6 +9,7 @@
 /// share the renderer's device (BackendOptions::context = device_context(); nothing read
 /// back), else uploaded.
 
+#include <array>
 #include <cstdint>
 #include <functional>
 #include <memory>
@@ -38,10 +40,20 @@ struct Rgba8 {
     friend bool operator==(const Rgba8&, const Rgba8&) = default;
 };
 
-/// Chains and their joint dots: one exact, unlit colour (tests look for it).
+/// The first chain's colour (chain 0 of every world: the one tests look for). Chains are
+/// lit (ChainStyle), so a pixel of a chain is this colour scaled by a light factor in
+/// [kAmbientLight, 1]; joint dots are unlit, exactly this colour.
 inline constexpr Rgba8 kChainColor{235, 95, 20};
-/// Colliders (1-pixel circles and segments), unlit.
-inline constexpr Rgba8 kColliderColor{110, 120, 140};
+/// The colours chains cycle through (chain c: kChainPalette[c % size]): distinct hues, so
+/// that neighbouring strands read apart, the same for the same world every time.
+inline constexpr std::array<Rgba8, 6> kChainPalette{
+    kChainColor, Rgba8{40, 150, 160}, Rgba8{150, 85, 205}, Rgba8{225, 180, 40}, Rgba8{205, 45, 80}, Rgba8{60, 115, 215}};
+/// The renderer's light: the fraction of a lit colour that faces turned away from the
+/// light keep (the rest is Lambert from one directional light).
+inline constexpr float kAmbientLight = 0.45f;
+/// Colliders: the procedural characters' bodies, solid capsules and spheres lit as the
+/// chains are (f x this, f in [kAmbientLight, 1]). A muted clay.
+inline constexpr Rgba8 kColliderColor{196, 172, 150};
 /// At 720 rows (scaled by rows / 720 within [0.5, 2]), a chain is drawn at least this
 /// many pixels wide and its joint dots at least this radius, so that a strand a few
 /// millimetres thick reads in a preview. A chain too short on screen for its dots to
@@ -50,12 +62,14 @@ inline constexpr float kChainMinPixels = 4.0f;
 inline constexpr float kJointDotMinPixels = 3.0f;
 /// Birds smaller than this wingspan in pixels are drawn scaled up to it, so that a far
 /// flock stays visible (a preview aid: the birds' positions are exact, their size not).
-inline constexpr float kBirdMinPixels = 6.0f;
+inline constexpr float kBirdMinPixels = 8.0f;
 
-/// How chains are drawn: camera-facing strands 2 x thickness wide with a dot of radius
-/// 1.5 x thickness at each joint, in one unlit colour, with minimum sizes in pixels.
+/// How chains are drawn: lit tubes (camera-facing ribbons shaded as cylinders) 2 x
+/// thickness wide at the root, tapering to 40% of that at the tip, with minimum widths in
+/// pixels; chain c in colors[c % colors.size()]. With RendererOptions::joints, a dot of
+/// radius 1.5 x thickness at each joint, unlit in the chain's exact colour.
 struct ChainStyle {
-    Rgba8 color = kChainColor;
+    std::vector<Rgba8> colors{kChainPalette.begin(), kChainPalette.end()};  ///< not empty
     float min_width_px = kChainMinPixels;  ///< at 720 rows
     float min_dot_px = kJointDotMinPixels; ///< at 720 rows
 };
@@ -126,9 +140,15 @@ public:
     /// top-left, y down), unlit, drawn over everything (depth 0, the near plane).
     void add_screen_line(glm::vec2 a, glm::vec2 b, Rgba8 color);
     void add_screen_triangle(glm::vec2 a, glm::vec2 b, glm::vec2 c, Rgba8 color);
+    /// A soft contact shadow on the ground (y = 0): a dark disc of `radius` m round
+    /// `center`'s foot, `opacity` (in [0, 1]) at the middle fading to none at the rim,
+    /// blended over what is drawn (after the opaque geometry; depth tested, not written).
+    void add_ground_shadow(const glm::vec3& center, float radius, float opacity);
 
     [[nodiscard]] std::span<const gpu::RenderVertex> triangles() const { return triangles_; }
     [[nodiscard]] std::span<const gpu::RenderVertex> lines() const { return lines_; }
+    /// Ground shadows: triangles whose colour's r is the opacity, a the way in from the rim (shadow.frag).
+    [[nodiscard]] std::span<const gpu::RenderVertex> shadows() const { return shadows_; }
 
 private:
     void add_unlit_triangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, Rgba8 color);
@@ -137,7 +157,7 @@ private:
     CameraBasis basis_;
     std::uint32_t width_, height_;
     float pixel_per_depth_;  // world size of a pixel at depth 1
-    std::vector<gpu::RenderVertex> triangles_, lines_;
+    std::vector<gpu::RenderVertex> triangles_, lines_, shadows_;
 };
 
 /// Where the renderer runs.
@@ -146,6 +166,9 @@ struct RendererOptions {
     std::string device;       ///< Vulkan device name substring or index ("" = best)
     bool validation = false;  ///< Khronos validation + synchronization validation
     bool force_staging = false;  ///< staging copies even on shared memory (BackendOptions::force_staging)
+    /// Dots at the chains' joints (ChainStyle; a debugging aid: where the simulation's
+    /// joints are). Off: the strands alone.
+    bool joints = false;
     /// A window to present to (the viewer): the instance extensions its surface needs and
     /// a function that creates the surface on the renderer's instance. Empty = offscreen
     /// only. The renderer owns the surface and, from the first present(), a swapchain.
@@ -203,8 +226,8 @@ public:
     [[nodiscard]] Result<void> chains_from(const ChainSnapshot& snapshot);
     /// Whether the last chains_from() drew the backend's own buffers.
     [[nodiscard]] bool chains_on_device() const;
-    /// This frame's colliders of the world given to set_chains() (drawn in
-    /// kColliderColor): the vulkan rod backend's input buffer when it lives on this
+    /// This frame's colliders of the world given to set_chains() (drawn as lit capsules in
+    /// kColliderColor; not those of characters set_skinned() draws as meshes): the vulkan rod backend's input buffer when it lives on this
     /// renderer's device (rigged characters' colliders are written there on the device),
     /// otherwise those of `input` (the frame given to the backend's step), uploaded.
     [[nodiscard]] Result<void> colliders_from(const RodBackend& backend, const rods::RodFrame& input);

@@ -34,9 +34,17 @@ KODAWARI_API void add_ground_grid(DrawList& list, std::span<const glm::vec3> poi
 /// layer, Renderer::set_skinned) rather than as bones: some node has a mesh with triangles.
 [[nodiscard]] KODAWARI_API bool draws_skinned(const gltf::Character& character);
 
-/// Every character instance of `scene` at `frame` that is not drawn as a skinned mesh
-/// (Renderer::set_skinned): skeleton bones from RodScene::joint_poses. The colliders are
-/// the renderer's (Renderer::colliders_from).
+/// The darkest a contact shadow gets (a character whose lowest joint is on the ground).
+inline constexpr float kShadowOpacity = 0.35f;
+
+/// A soft contact shadow on the ground under a character posed as `joints` (root first):
+/// a disc under the root about as wide as the body (0.3 x the skeleton's height), fading
+/// as the character rises off the ground (kShadowOpacity when it stands on it).
+KODAWARI_API void add_contact_shadow(DrawList& list, std::span<const rods::Transform> joints);
+
+/// Every character instance of `scene` at `frame`: its contact shadow (add_contact_shadow)
+/// and, unless it is drawn as a skinned mesh (Renderer::set_skinned), its skeleton bones
+/// from RodScene::joint_poses. The colliders are the renderer's (Renderer::colliders_from).
 KODAWARI_API void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame);
 
 /// Where the content is, for add_ground_grid, from the scene alone (no simulation state,
