@@ -179,6 +179,7 @@ struct RenderOptions {
     std::optional<std::string> animation;
     std::optional<std::string> animation_size;
     std::optional<std::string> zoom;
+    bool joints = false;
 };
 
 int cmd_render(const RenderOptions& o) {
@@ -203,7 +204,9 @@ int cmd_render(const RenderOptions& o) {
         if (!parsed) return report(parsed.error());
         range = parsed.value();
     }
-    auto renderer = render::Renderer::create(renderer_options(choice, width, height));
+    render::RendererOptions renderer_settings = renderer_options(choice, width, height);
+    renderer_settings.joints = o.joints;
+    auto renderer = render::Renderer::create(renderer_settings);
     if (!renderer) return report(renderer.error());
     render::Renderer& r = *renderer.value();
     // The simulation runs on the renderer's device, which then draws the vulkan backends'
@@ -302,6 +305,7 @@ Command add_render(CLI::App& app) {
     add_text(*c, "--frames", o->frames, "A:B[:STEP]|N",
              "frames A, A+STEP, ... below B (B exclusive), or the one frame N (default: the whole scene)");
     add_size(*c, o->size, "the images");
+    add_switch(*c, "--joints", o->joints, "a dot at every simulated joint of the strands (default: off, the strands alone)");
     add_text(*c, "--contact-sheet", o->contact_sheet, "FILE.png", "also the frames shrunk into one grid (default: none)");
     add_count(*c, "--columns", o->columns, 1, 64, "the contact sheet's columns (default: min(frames, 4))");
     add_text(*c, "--zoom", o->zoom, "F",

@@ -38,6 +38,7 @@ struct ViewOptions {
     std::optional<std::string> screenshot;
     std::optional<std::string> keys;
     std::optional<std::string> size;
+    bool joints = false;
 };
 
 int cmd_view(const ViewOptions& o) {
@@ -125,6 +126,7 @@ int cmd_view(const ViewOptions& o) {
     std::uint32_t extension_count = 0;
     const char** extensions = glfwGetRequiredInstanceExtensions(&extension_count);
     render::RendererOptions options = renderer_options(choice, width, height);
+    options.joints = o.joints;
     options.instance_extensions = std::vector<std::string>(extensions, extensions + extension_count);
     options.create_surface = [&](VkInstance instance) -> Result<VkSurfaceKHR> {
         VkSurfaceKHR surface = VK_NULL_HANDLE;
@@ -279,6 +281,7 @@ Command add_view(CLI::App& app) {
                                              "(docs/viewer.md)");
     add_scene(*c, o->scene);
     add_size(*c, o->size, "the window");
+    add_switch(*c, "--joints", o->joints, "a dot at every simulated joint of the strands (default: off, the strands alone)");
     add_count(*c, "--frames", o->frames, 1, 100'000'000, "quit after N drawn frames (default: run until closed)");
     add_text(*c, "--keys", o->keys, "K1,K2,...",
              "one key per drawn frame first: space right left home [ ] 1 2 3 s w u c o + - p q escape, drag:X1:Y1:X2:Y2, "

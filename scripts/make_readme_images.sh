@@ -19,14 +19,15 @@ mkdir -p docs/images
 "$bin" render scenes/ahoge.json --frames 0:240:4 --size 480x360 --zoom 1.5 --out "$work/orbit" \
     --animation docs/images/ahoge-orbit.png
 # The bangs from the front (parted off the eyes), 45 degrees to its left, its left and
-# 135 degrees: frames 0, 90, 180 and 270 of the 12 s orbit.
-"$bin" render scenes/bangs.json --frames 0:360:90 --size 480x360 --zoom 1.3 --out "$work/bangs" \
+# 135 degrees: frames 0, 90, 180 and 270 of the 12 s orbit (the sheet shrinks each frame
+# by its 4 columns, so 480x360 cells).
+"$bin" render scenes/bangs.json --frames 0:360:90 --size 1920x1440 --zoom 1.7 --out "$work/bangs" \
     --contact-sheet docs/images/bangs.png --columns 4
 # The three wing types mid-wingbeat, the camera flying with them (frame 60 of 240).
 "$bin" render scenes/birds-closeup.json --frames 60 --size 640x360 --out "$work/birds"
 cp "$work/birds/birds-closeup_00060.png" docs/images/birds-closeup.png
 # The flock 3.3 s in, and the crowd 2 s in.
-"$bin" render scenes/flock.json --frames 200 --size 640x360 --out "$work/flock"
+"$bin" render scenes/flock.json --frames 200 --size 640x360 --zoom 2.2 --out "$work/flock"
 cp "$work/flock/flock_00200.png" docs/images/flock.png
 "$bin" render scenes/crowd.json --frames 120 --size 640x360 --out "$work/crowd"
 cp "$work/crowd/crowd_00120.png" docs/images/crowd.png
