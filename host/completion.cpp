@@ -117,7 +117,9 @@ Command add_completion(CLI::App& app) {
         [](std::string& shell) -> std::string { return shell == "bash" ? "" : "expected bash, got \"" + shell + "\""; }, "");
     c->add_option("shell", o->shell, "the shell")->required()->check(shells)->type_name("bash");
     const CLI::App* root = &app;
-    return {c, [root] {
+    // The option writes into *o when the command line is parsed, after this returns: the
+    // command holds it.
+    return {c, [root, o] {
                 const std::string script = bash_completion(*root);
                 const bool written = std::fwrite(script.data(), 1, script.size(), stdout) == script.size();
                 return written && std::fflush(stdout) == 0 ? kExitOk : kExitFailure;
