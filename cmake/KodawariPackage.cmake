@@ -5,7 +5,7 @@
 #   P/lib/cmake/kodawari/kodawariConfigVersion.cmake  which requested versions this one satisfies
 #   P/lib/cmake/kodawari/kodawariTargets*.cmake       the export set kodawariTargets
 #   P/lib/pkgconfig/kodawari.pc                       pkg-config --cflags --libs kodawari
-#   P/share/doc/kodawari/                             README.md, CHANGELOG.md
+#   P/share/doc/kodawari/                             README.md, CHANGELOG.md, docs/ (the reference)
 #
 # tests/package/ installs a build into a temporary prefix and builds programs against it.
 include(CMakePackageConfigHelpers)
@@ -75,3 +75,7 @@ install(FILES ${PROJECT_BINARY_DIR}/package/kodawari.pc DESTINATION ${pkgconfig_
 
 install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/CHANGELOG.md
   DESTINATION ${CMAKE_INSTALL_DOCDIR})
+# The reference pages the README links to, next to it so that its relative links
+# (docs/embedding.md, docs/images/...) resolve in the installed copy too; the scene schema
+# among them, for editors.
+install(DIRECTORY ${PROJECT_SOURCE_DIR}/docs DESTINATION ${CMAKE_INSTALL_DOCDIR})

@@ -81,7 +81,8 @@ libdir="$(cd "$prefix" && ls -d lib* | head -1)"
 for f in include/kodawari/simulation.hpp include/kodawari/api.hpp include/kodawari/version.hpp \
   include/kodawari/shared/birds.h "$libdir/cmake/kodawari/kodawariConfig.cmake" \
   "$libdir/cmake/kodawari/kodawariConfigVersion.cmake" "$libdir/cmake/kodawari/kodawariTargets.cmake" \
-  "$libdir/pkgconfig/kodawari.pc"; do
+  "$libdir/pkgconfig/kodawari.pc" share/doc/kodawari/README.md share/doc/kodawari/docs/embedding.md \
+  share/doc/kodawari/docs/scene.schema.json share/doc/kodawari/docs/images/crowd-gltf.png; do
   [[ -f "$prefix/$f" ]] || fail "$f not installed"
 done
 links="$(find "$prefix/include" -type l)"
