@@ -3,7 +3,9 @@
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/simd.hpp"
 
+#include <cmath>
 #include <cstdio>
+#include <exception>
 #include <unistd.h>
 
 namespace kodawari::cli {
@@ -152,14 +154,33 @@ void progress(const char* what, std::uint64_t done, std::uint64_t total) {
     std::fflush(stderr);
 }
 
-std::pair<std::uint32_t, std::uint32_t> image_size(const std::optional<std::string>& text) {
-    if (!text) return {1280u, 720u};
+std::pair<std::uint32_t, std::uint32_t> parse_image_size(const std::string& option, const std::string& text,
+                                                         std::uint32_t max_width, std::uint32_t max_height) {
     unsigned w = 0, h = 0;
     char extra = 0;
-    if (std::sscanf(text->c_str(), "%ux%u%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > 8192 || h > 8192) {
-        throw UsageError{"--size: expected WxH in pixels with W and H in [1, 8192], e.g. 1280x720; got \"" + *text + "\""};
+    if (std::sscanf(text.c_str(), "%ux%u%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > max_width || h > max_height) {
+        throw UsageError{option + ": expected WxH in pixels with W in [1, " + std::to_string(max_width) + "] and H in [1, " +
+                         std::to_string(max_height) + "]; got \"" + text + "\""};
     }
     return {w, h};
+}
+
+std::pair<std::uint32_t, std::uint32_t> image_size(const std::optional<std::string>& text) {
+    return text ? parse_image_size("--size", *text, 8192, 8192) : std::pair{1280u, 720u};
+}
+
+float parse_real(const std::string& option, const std::string& text) {
+    std::size_t used = 0;
+    float value = 0.0f;
+    try {
+        value = std::stof(text, &used);
+    } catch (const std::exception&) {
+        used = 0;
+    }
+    if (used == 0 || used != text.size() || !std::isfinite(value)) {
+        throw UsageError{option + ": expected a finite number, got \"" + text + "\""};
+    }
+    return value;
 }
 
 }  // namespace kodawari::cli

@@ -65,6 +65,12 @@ void take_alias(std::optional<T>& value, const std::optional<T>& old_value, cons
 /// The value of `--size WxH` (an image in pixels, each in [1, 8192]); (1280, 720) when
 /// the option is absent. A bad value is a UsageError that names it.
 std::pair<std::uint32_t, std::uint32_t> image_size(const std::optional<std::string>& text);
+/// `option`'s value WxH, each in [1, max]: a UsageError naming the option and the bounds
+/// otherwise.
+std::pair<std::uint32_t, std::uint32_t> parse_image_size(const std::string& option, const std::string& text,
+                                                         std::uint32_t max_width, std::uint32_t max_height);
+/// `option`'s value as a finite number: a UsageError naming the option otherwise.
+float parse_real(const std::string& option, const std::string& text);
 
 /// The backend options as given: --backend, --device, --threads, --isa, --validation.
 struct BackendFlags {

@@ -131,41 +131,16 @@ private:
 // blend the chains' rest shapes (SPEC A) are the scene's own.
 float parse_zoom(const std::optional<std::string>& text) {
     if (!text) return 1.0f;
-    std::size_t used = 0;
-    float value = 0.0f;
-    try {
-        value = std::stof(*text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used == 0 || used != text->size() || !(value >= 0.1f && value <= 100.0f)) {
-        throw UsageError{"--zoom: expected a number in [0.1, 100], got \"" + *text + "\""};
-    }
+    const float value = parse_real("--zoom", *text);
+    if (!(value >= 0.1f && value <= 100.0f)) throw UsageError{"--zoom: expected a number in [0.1, 100], got \"" + *text + "\""};
     return value;
 }
 
 render::CameraView zoomed(render::CameraView camera, float zoom) {
-    constexpr float kHalfTurnDeg = 180.0f, kPi = 3.14159265358979f;
-    const float half = 0.5f * camera.fov_deg * kPi / kHalfTurnDeg;
-    camera.fov_deg = 2.0f * std::atan(std::tan(half) / zoom) * kHalfTurnDeg / kPi;
+    camera.fov_deg = 2.0f * glm::degrees(std::atan(std::tan(glm::radians(0.5f * camera.fov_deg)) / zoom));
     camera.ortho_height /= zoom;
     return camera;
 }
-
-// --animation-size WxH, for a README preview smaller than the frames; by default the
-// frames' own size.
-std::pair<std::uint32_t, std::uint32_t> parse_animation_size(const std::optional<std::string>& text, std::uint32_t width,
-                                                             std::uint32_t height) {
-    if (!text) return {width, height};
-    unsigned w = 0, h = 0;
-    char extra = 0;
-    if (std::sscanf(text->c_str(), "%ux%u%c", &w, &h, &extra) != 2 || w < 1 || h < 1 || w > width || h > height) {
-        throw UsageError{"--animation-size: expected WxH in pixels, at least 1x1 and at most the frames' --size " +
-                         std::to_string(width) + "x" + std::to_string(height) + "; got \"" + *text + "\""};
-    }
-    return {w, h};
-}
-
 
 // The options as given; add_render() defines them.
 struct RenderOptions {
@@ -193,7 +168,9 @@ int cmd_render(const RenderOptions& o) {
     const auto [width, height] = image_size(o.size);
     const auto& animation_path = o.animation;
     if (o.animation_size && !animation_path) throw UsageError{"--animation-size goes with --animation"};
-    const auto animation_size = parse_animation_size(o.animation_size, width, height);
+    // By default the frames' own size; smaller for a README preview.
+    const auto animation_size =
+        o.animation_size ? parse_image_size("--animation-size", *o.animation_size, width, height) : std::pair{width, height};
     const float zoom = parse_zoom(o.zoom);
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());

@@ -17,20 +17,6 @@
 namespace kodawari::cli {
 namespace {
 
-float parse_real(const std::string& option, const std::string& text) {
-    std::size_t used = 0;
-    float value = 0.0f;
-    try {
-        value = std::stof(text, &used);
-    } catch (const std::exception&) {
-        used = 0;
-    }
-    if (used == 0 || used != text.size() || !std::isfinite(value)) {
-        throw UsageError{"--" + option + ": expected a finite number, got \"" + text + "\""};
-    }
-    return value;
-}
-
 std::string vec_text(glm::vec3 v) {
     char text[96];
     std::snprintf(text, sizeof(text), "[%.4g, %.4g, %.4g]", static_cast<double>(v.x), static_cast<double>(v.y),
@@ -86,7 +72,7 @@ int cmd_sketch(const SketchOptions& o) {
 
     rods::SketchInput input;
     if (influence_text) {
-        input.influence = parse_real("influence", *influence_text);
+        input.influence = parse_real("--influence", *influence_text);
         if (!(input.influence > 0.0f && input.influence <= rods::kMaxInfluence)) {
             throw UsageError{"--influence: expected a number in (0, 1000], got \"" + *influence_text + "\""};
         }
