@@ -92,13 +92,18 @@ bool validate_chains(const Scene& scene, const BackendChoice& choice, std::optio
     rods::RodFrame frame;
     ChainSnapshot want, got;
     std::vector<rods::ChainState> states, got_states, before;
+    // The keys measure the input alone, so the reference keeps its own (keyed-examples.md).
+    std::vector<rods::KeyState> keys(world.chains.size());
     for (std::uint32_t f = 0; f < frames; ++f) {
         rods_scene.frame(f, frame);
+        if (f == 0) {
+            for (std::uint32_t c = 0; c < world.chains.size(); ++c) keys[c] = rods::initial_key_state(world, c, frame);
+        }
         if (f > 0) {
             // The reference's step from the tested backend's own state.
             if (!tested.value()->read_states(states)) return false;
             before = states;
-            for (std::uint32_t c = 0; c < world.chains.size(); ++c) step_chain_reference(world, c, frame, states[c]);
+            for (std::uint32_t c = 0; c < world.chains.size(); ++c) step_chain_reference(world, c, frame, states[c], keys[c]);
         }
         for (RodBackend* b : {tested.value().get(), reference.value().get()}) {
             if (auto r = f == 0 ? b->load(world, frame) : b->step(frame); !r) {

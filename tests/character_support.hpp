@@ -68,6 +68,7 @@ public:
         for (std::uint32_t c = 0; c < count_; ++c) {
             const rods::RestShape rest = rods::rest_shape(scene_.world, c, frame_);
             states_.push_back(rods::initial_state(scene_.world.templ(scene_.world.chains[c]).chain, frame_.roots[c], rest.shape));
+            keys_.push_back(rods::initial_key_state(scene_.world, c, frame_));
         }
     }
 
@@ -76,7 +77,7 @@ public:
     /// solver step (A.4), as every rod backend does.
     void step(std::uint32_t index) {
         scene_.frame(index, frame_);
-        for (std::uint32_t c = 0; c < count_; ++c) kodawari::step_chain_reference(scene_.world, c, frame_, states_[c]);
+        for (std::uint32_t c = 0; c < count_; ++c) kodawari::step_chain_reference(scene_.world, c, frame_, states_[c], keys_[c]);
     }
 
     /// World position of joint `i` of chain `c`.
@@ -89,6 +90,7 @@ private:
     std::uint32_t count_;
     rods::RodFrame frame_;
     std::vector<rods::ChainState> states_;
+    std::vector<rods::KeyState> keys_;
 };
 
 // A look-at + perspective camera on a 1920 x 1080 picture, +Y up: what a viewer shows.

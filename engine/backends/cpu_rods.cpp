@@ -9,10 +9,10 @@
 namespace kodawari {
 
 void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
-                          rods::ChainState& state, rods::RestShape* rest_out) {
+                          rods::ChainState& state, rods::KeyState& keys, rods::RestShape* rest_out) {
     const rods::ChainInstance& c = world.chains[chain];
     const rods::ChainTemplate& t = world.templ(c);
-    rods::RestShape rest = rods::rest_shape(world, chain, frame);
+    rods::RestShape rest = rods::rest_shape(world, chain, frame, rods::measure_keys(world, chain, frame, keys));
     const std::span<const rods::Capsule> colliders(frame.colliders.data() + c.collider_begin, c.collider_count);
     rods::step(t.chain, t.params, frame.roots[chain], rest.shape, {}, colliders, frame.dt, state);
     if (rest_out != nullptr) *rest_out = std::move(rest);
@@ -32,12 +32,14 @@ public:
         world_ = &world;
         const std::size_t count = world.chains.size();
         states_.resize(count);
+        keys_.resize(count);
         view_.assign(count, glm::vec3(0.0f));
         weights_.assign(count * kWeights, 0.0f);
         rest_.assign(world.joint_count, glm::vec3(0.0f));
         run([&](std::uint32_t c) {
             const rods::RestShape rest = rods::rest_shape(world, c, initial);
             states_[c] = rods::initial_state(world.templ(world.chains[c]).chain, initial.roots[c], rest.shape);
+            keys_[c] = rods::initial_key_state(world, c, initial);
             keep(c, rest);
         });
         return {};
@@ -48,7 +50,7 @@ public:
         KW_TRY(rods::check_frame(*world_, frame));
         run([&](std::uint32_t c) {
             rods::RestShape rest;
-            step_chain_reference(*world_, c, frame, states_[c], &rest);
+            step_chain_reference(*world_, c, frame, states_[c], keys_[c], &rest);
             keep(c, rest);
         });
         return {};
@@ -96,6 +98,7 @@ private:
 
     const rods::RodWorld* world_ = nullptr;
     std::vector<rods::ChainState> states_;
+    std::vector<rods::KeyState> keys_;
     std::vector<glm::vec3> view_;
     std::vector<float> weights_;
     std::vector<glm::vec3> rest_;

@@ -1,7 +1,10 @@
 // Chain templates, the rod world's bookkeeping and the per-chain rest shape (SPEC A.2, A.3).
 #include "kodawari/rods/world.hpp"
 
+#include <algorithm>
+#include <cassert>
 #include <cmath>
+#include <limits>
 
 namespace kodawari::rods {
 namespace {
@@ -63,8 +66,83 @@ Result<ChainTemplate> make_chain_template(std::string name, const ChainShape& ba
     return t;
 }
 
+Result<void> add_keyed_examples(ChainTemplate& t, std::span<const KeySourceKind> sources,
+                                std::span<const ChainShape> shapes, std::span<const KeyedExample> keyed) {
+    const std::string where = "chain '" + t.name + "': ";
+    assert(t.keyed.empty() && t.key_sources.empty() && "add_keyed_examples once per template");
+    if (shapes.size() != keyed.size()) return bad(where + "expected one shape per keyed example");
+    if (sources.size() > kMaxKeySources) {
+        return bad(where + "at most " + std::to_string(kMaxKeySources) + " key sources, got " +
+                   std::to_string(sources.size()));
+    }
+    if (keyed.size() > kMaxKeyedExamples) {
+        return bad(where + "at most " + std::to_string(kMaxKeyedExamples) + " keyed examples, got " +
+                   std::to_string(keyed.size()));
+    }
+    if (t.views.size() + keyed.size() > kMaxViewExamples) {
+        return bad(where + "at most " + std::to_string(kMaxViewExamples) + " examples in all (views and keyed), got " +
+                   std::to_string(t.views.size() + keyed.size()));
+    }
+    for (std::size_t j = 0; j < keyed.size(); ++j) {
+        const KeyedExample& e = keyed[j];
+        const std::string example = "keyed example " + std::to_string(j) + ": ";
+        if (!(e.influence > 0.0f && std::isfinite(e.influence))) return bad(where + example + "influence must be > 0");
+        if (e.kind == KeyKind::Motion) {
+            if (!(e.smoothing >= 0.0f && e.smoothing <= kMaxSmoothing)) {
+                return bad(where + example + "smoothing must be in [0, " + std::to_string(int(kMaxSmoothing)) + "] s");
+            }
+            if (e.source >= sources.size() || sources[e.source] != KeySourceKind::Motion) {
+                return bad(where + example + "source must be a motion key source");
+            }
+            if (!finite(e.value)) return bad(where + example + "the key must be finite");
+            if (e.frame == MotionFrame::Magnitude && !(e.value.x >= 0.0f)) {
+                return bad(where + example + "a magnitude key must be >= 0");
+            }
+        } else {
+            if (e.source_mask == 0 || e.source_mask >= (1u << sources.size())) {
+                return bad(where + example + "a pose key needs at least one pose key source");
+            }
+            for (std::uint32_t s = 0; s < sources.size(); ++s) {
+                if ((e.source_mask & (1u << s)) == 0) continue;
+                if (sources[s] != KeySourceKind::Pose) return bad(where + example + "its sources must be pose key sources");
+                if (!finite(e.rotations[s]) || !(std::abs(glm::length(e.rotations[s]) - 1.0f) < 1e-3f)) {
+                    return bad(where + example + "key rotations must be unit quaternions");
+                }
+            }
+        }
+        for (const glm::quat& o : shapes[j].orientations) {
+            if (!finite(o) || !(std::abs(glm::length(o) - 1.0f) < 1e-3f)) {
+                return bad(where + example + "orientations must be unit quaternions");
+            }
+        }
+    }
+    std::vector<RotationShape> rotations;
+    for (std::size_t j = 0; j < keyed.size(); ++j) {
+        auto rot = to_rotations(t.basis, shapes[j]);
+        if (!rot) return bad(where + "keyed example " + std::to_string(j) + ": " + rot.error().message);
+        rotations.push_back(std::move(rot.value()));
+    }
+    t.key_sources.assign(sources.begin(), sources.end());
+    t.keyed.assign(keyed.begin(), keyed.end());
+    for (KeyedExample& e : t.keyed) {
+        e.saturation = std::numeric_limits<float>::infinity();
+        if (e.kind != KeyKind::Motion || e.frame != MotionFrame::Magnitude) continue;
+        float top = 0.0f;  // K.2: the largest key of the same source and measure
+        for (const KeyedExample& o : t.keyed) {
+            if (o.kind == KeyKind::Motion && o.frame == MotionFrame::Magnitude && o.source == e.source &&
+                o.measure == e.measure) {
+                top = std::max(top, o.value.x);
+            }
+        }
+        e.saturation = top;
+    }
+    for (RotationShape& r : rotations) t.shapes.push_back(std::move(r));
+    return {};
+}
+
 Result<void> RodWorld::finalize() {
     joint_count = 0;
+    key_count = 0;
     for (std::size_t c = 0; c < chains.size(); ++c) {
         ChainInstance& chain = chains[c];
         const std::string where = "rod world: chain " + std::to_string(c) + ": ";
@@ -78,6 +156,8 @@ Result<void> RodWorld::finalize() {
         }
         chain.joint_begin = joint_count;
         joint_count += templates[chain.template_index].chain.joint_count;
+        chain.key_begin = key_count;
+        key_count += static_cast<std::uint32_t>(templates[chain.template_index].key_sources.size());
     }
     return {};
 }
@@ -86,10 +166,13 @@ Result<void> check_frame(const RodWorld& world, const RodFrame& frame) {
     // >= 10 us: velocities are displacements / dt, infinite for a denormal dt (fuzzing).
     if (!(frame.dt >= kMinFrameDt && std::isfinite(frame.dt))) return bad("rod frame: dt must be >= 1e-5 s");
     if (frame.reference.size() != world.character_count || frame.roots.size() != world.chains.size() ||
-        frame.colliders.size() != world.collider_count) {
+        frame.colliders.size() != world.collider_count || frame.keys.size() != world.key_count) {
         return bad("rod frame: expected " + std::to_string(world.character_count) + " reference poses, " +
-                   std::to_string(world.chains.size()) + " roots and " + std::to_string(world.collider_count) +
-                   " colliders");
+                   std::to_string(world.chains.size()) + " roots, " + std::to_string(world.collider_count) +
+                   " colliders and " + std::to_string(world.key_count) + " key sources");
+    }
+    for (const Transform& t : frame.keys) {
+        if (!finite(t.position) || !finite(t.rotation)) return bad("rod frame: non-finite key source");
     }
     for (const Transform& t : frame.reference) {
         if (!finite(t.position) || !finite(t.rotation)) return bad("rod frame: non-finite reference pose");
@@ -104,15 +187,35 @@ Result<void> check_frame(const RodWorld& world, const RodFrame& frame) {
     return {};
 }
 
-RestShape rest_shape(const RodWorld& world, std::uint32_t chain, const RodFrame& frame) {
+RestShape rest_shape(const RodWorld& world, std::uint32_t chain, const RodFrame& frame, const KeyedWeights& keyed) {
     const ChainInstance& c = world.chains[chain];
     const ChainTemplate& t = world.templ(c);
     const Transform& ref = frame.reference[c.character];
     RestShape out;
     out.view_direction = view_direction(frame.camera, ref.position, ref.rotation);  // SPEC A.3
     out.weights = view_weights(out.view_direction, t.views);                         // SPEC A.3
-    out.shape = to_positions(t.basis, blend(t.shapes, out.weights));                 // SPEC A.2
+    if (!t.keyed.empty()) {  // keyed-examples.md K.4
+        const std::vector<float> view = std::move(out.weights);
+        out.weights.assign(view.size() + t.keyed.size(), 0.0f);
+        combine_weights(view, std::span<const float>(keyed.data(), t.keyed.size()), out.weights);
+    }
+    out.shape = to_positions(t.basis, blend(t.shapes, out.weights));  // SPEC A.2
     return out;
+}
+
+std::span<const Transform> chain_keys(const RodWorld& world, std::uint32_t chain, const RodFrame& frame) {
+    const ChainInstance& c = world.chains[chain];
+    return std::span<const Transform>(frame.keys).subspan(c.key_begin, world.templ(c).key_sources.size());
+}
+
+KeyState initial_key_state(const RodWorld& world, std::uint32_t chain, const RodFrame& frame) {
+    return initial_key_state(chain_keys(world, chain, frame));
+}
+
+KeyedWeights measure_keys(const RodWorld& world, std::uint32_t chain, const RodFrame& frame, KeyState& keys) {
+    const ChainTemplate& t = world.templ(world.chains[chain]);
+    if (t.keyed.empty()) return {};
+    return keyed_weights(t.keyed, t.key_sources, chain_keys(world, chain, frame), frame.dt, keys);
 }
 
 }  // namespace kodawari::rods

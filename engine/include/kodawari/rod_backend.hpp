@@ -61,9 +61,12 @@ public:
 [[nodiscard]] KODAWARI_API Result<std::unique_ptr<RodBackend>> make_cpu_rod_backend(BackendKind kind,
                                                                                     const BackendOptions& options);
 
-/// One chain's frame with the CPU reference (SPEC A.3, A.2, A.5, A.4): its rest shape
-/// from `frame`, then rods::step. What every backend computes; exposed for tests.
+/// One chain's frame with the CPU reference (SPEC A.3, A.2, A.5, A.4, and
+/// docs/keyed-examples.md): its keyed weights (advancing `keys`, which start as
+/// rods::initial_key_state), its rest shape from `frame`, then rods::step. What every
+/// backend computes; exposed for tests and `kodawari validate`.
 KODAWARI_API void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
-                                       rods::ChainState& state, rods::RestShape* rest_out = nullptr);
+                                       rods::ChainState& state, rods::KeyState& keys,
+                                       rods::RestShape* rest_out = nullptr);
 
 }  // namespace kodawari

@@ -13,14 +13,16 @@
 
 #include "kodawari/api.hpp"
 #include "../result.hpp"
+#include "keyed.hpp"
 #include "shape.hpp"
 #include "solver.hpp"
 #include "view.hpp"
 
 namespace kodawari::rods {
 
-/// The most view examples one chain may have (m, SPEC A.1). Fixed so that the GPU keeps
-/// the weights in registers.
+/// The most view examples one chain may have (m, SPEC A.1), and the most examples of
+/// every kind together (view and keyed, docs/keyed-examples.md K.1). Fixed so that the GPU
+/// keeps the weights in registers.
 inline constexpr std::uint32_t kMaxViewExamples = 7;
 
 /// A chain's constant description: shape basis, base and example shapes in the blending
@@ -29,8 +31,12 @@ struct ChainTemplate {
     std::string name;
     Chain chain;
     ShapeBasis basis;
-    std::vector<RotationShape> shapes;  ///< shapes[0] = base C_0, shapes[k] = example k
+    /// shapes[0] = base C_0, shapes[k] = view example k (1 .. m), then the keyed examples
+    /// (shapes[m + j] = keyed example j, docs/keyed-examples.md).
+    std::vector<RotationShape> shapes;
     std::vector<ViewExample> views;     ///< views[k-1] belongs to shapes[k]
+    std::vector<KeySourceKind> key_sources;  ///< what each key source of its chains is (K.1)
+    std::vector<KeyedExample> keyed;         ///< keyed[j-1] belongs to shapes[m + j]
     SolverParams params;
 };
 
@@ -44,6 +50,20 @@ struct ChainTemplate {
                                                                      std::span<const ViewExample> views, float thickness,
                                                                      float mass, const SolverParams& params);
 
+/// Adds keyed examples (docs/keyed-examples.md K.1) to `t`, after its view examples:
+/// `sources` are the kinds of the key sources its chains read (RodFrame::keys), `shapes`
+/// one shape per example in the chain root's frame. Fails (InvalidInput, naming the
+/// template and the example) when the counts do not match, there are more than
+/// kMaxKeySources sources or kMaxKeyedExamples keyed examples or kMaxViewExamples
+/// examples in all, an influence is not finite and > 0, a smoothing time is not in
+/// [0, kMaxSmoothing], a motion example's source is not a motion source, a pose example
+/// names no source or a source that is not a pose source, a key is not finite or a key
+/// rotation is not a unit quaternion, or a shape does not fit the base. Sets each
+/// magnitude example's saturation (K.2). Called at most once per template.
+[[nodiscard]] KODAWARI_API Result<void> add_keyed_examples(ChainTemplate& t, std::span<const KeySourceKind> sources,
+                                                           std::span<const ChainShape> shapes,
+                                                           std::span<const KeyedExample> keyed);
+
 /// One simulated chain: a template attached to one character instance.
 struct ChainInstance {
     std::uint32_t template_index = 0;
@@ -51,6 +71,9 @@ struct ChainInstance {
     std::uint32_t collider_begin = 0;  ///< its colliders: RodFrame::colliders[begin, begin + count)
     std::uint32_t collider_count = 0;
     std::uint32_t joint_begin = 0;     ///< its joints in flat per-joint arrays (set by RodWorld::finalize)
+    /// Its key sources: RodFrame::keys[key_begin, key_begin + the template's key_sources
+    /// count) (set by RodWorld::finalize).
+    std::uint32_t key_begin = 0;
 };
 
 /// The chains of a scene.
@@ -60,8 +83,9 @@ struct KODAWARI_API RodWorld {
     std::uint32_t character_count = 0;  ///< character instances (RodFrame::reference entries)
     std::uint32_t collider_count = 0;   ///< RodFrame::colliders entries
     std::uint32_t joint_count = 0;      ///< sum of the chains' joints (set by finalize)
+    std::uint32_t key_count = 0;        ///< sum of the chains' key sources (set by finalize)
 
-    /// Checks every index and range and sets joint_begin and joint_count.
+    /// Checks every index and range and sets joint_begin, key_begin, joint_count and key_count.
     [[nodiscard]] Result<void> finalize();
     [[nodiscard]] const ChainTemplate& templ(const ChainInstance& c) const { return templates[c.template_index]; }
 };
@@ -75,6 +99,9 @@ struct RodFrame {
     std::vector<Transform> roots;      ///< per chain: the chain root's frame (joint 0 follows it)
     /// Kinematic colliders; a sphere is a capsule with a == b.
     std::vector<Capsule> colliders;
+    /// Per chain, its key sources (ChainInstance::key_begin): a Motion source's world
+    /// pose, a Pose source's rotation relative to its parent (position 0).
+    std::vector<Transform> keys;
 };
 
 /// Checks that `frame` fits `world` (sizes, dt > 0, finite values).
@@ -83,12 +110,28 @@ struct RodFrame {
 /// The view direction, weights and blended rest shape of one chain (SPEC A.3, A.2).
 struct RestShape {
     glm::vec3 view_direction{0.0f, 0.0f, 1.0f};  ///< d, the reference joint's frame
-    std::vector<float> weights;                  ///< w_0 .. w_m
+    std::vector<float> weights;                  ///< W_0 .. W_{m+J} (keyed-examples.md K.4)
     ChainShape shape;                            ///< root frame
 };
 
 /// SPEC A.3 then A.2 for `chain` under `frame`: d from the camera and the chain's
-/// character's reference joint, the weights, the blend and forward kinematics.
-[[nodiscard]] KODAWARI_API RestShape rest_shape(const RodWorld& world, std::uint32_t chain, const RodFrame& frame);
+/// character's reference joint, the weights, the blend and forward kinematics. `keyed`
+/// are the chain's raw keyed weights this frame (measure_keys(); all 0 for a chain
+/// without keyed examples), combined with the view weights by keyed-examples.md K.4.
+[[nodiscard]] KODAWARI_API RestShape rest_shape(const RodWorld& world, std::uint32_t chain, const RodFrame& frame,
+                                                const KeyedWeights& keyed = {});
+
+/// This frame's key sources of `chain`: frame.keys[key_begin, key_begin + count).
+[[nodiscard]] KODAWARI_API std::span<const Transform> chain_keys(const RodWorld& world, std::uint32_t chain,
+                                                                 const RodFrame& frame);
+
+/// `chain`'s key state at the start, from the first frame (initial_key_state).
+[[nodiscard]] KODAWARI_API KeyState initial_key_state(const RodWorld& world, std::uint32_t chain,
+                                                      const RodFrame& frame);
+
+/// `chain`'s raw keyed weights this frame (keyed_weights), advancing `keys`; all 0 for a
+/// chain without keyed examples.
+[[nodiscard]] KODAWARI_API KeyedWeights measure_keys(const RodWorld& world, std::uint32_t chain, const RodFrame& frame,
+                                                     KeyState& keys);
 
 }  // namespace kodawari::rods
