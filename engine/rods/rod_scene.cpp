@@ -16,6 +16,17 @@
 #include <kodawari/rods/shape.hpp>
 
 namespace kodawari {
+namespace {
+
+// A key source's entry of RodFrame::keys (keyed-examples.md K.1) from world poses.
+rods::Transform key_entry(const KeyJoint& key, const rods::Transform& joint, const rods::Transform* parent) {
+    if (key.kind == rods::KeySourceKind::Motion) return joint;
+    rods::Transform out;
+    out.rotation = parent != nullptr ? glm::normalize(glm::conjugate(parent->rotation) * joint.rotation) : joint.rotation;
+    return out;
+}
+
+}  // namespace
 
 float RodScene::time(std::uint32_t index) const {
     // In double, so that frame n is n / fps rounded once, not n times 1/fps rounded twice.
@@ -40,6 +51,7 @@ void RodScene::kinematic_frame(std::uint32_t index, rods::RodFrame& out, bool ri
     out.reference.resize(world.character_count);
     out.roots.resize(world.chains.size());
     out.colliders.resize(world.collider_count);
+    out.keys.resize(world.key_count);
     std::array<rods::Transform, rods::kMaxSkeletonJoints> poses;
     gltf::Pose pose;
     std::vector<glm::mat4> nodes;
@@ -59,6 +71,11 @@ void RodScene::kinematic_frame(std::uint32_t index, rods::RodFrame& out, bool ri
             rods::Transform root = rods::compose(poses[a.joint], a.offset);
             root.rotation = glm::normalize(root.rotation);
             out.roots[inst.chain_begin + c] = root;
+            const std::uint32_t key_begin = world.chains[inst.chain_begin + c].key_begin;
+            for (std::size_t s = 0; s < a.keys.size(); ++s) {
+                const KeyJoint& key = a.keys[s];
+                out.keys[key_begin + s] = key_entry(key, poses[key.joint], key.parent >= 0 ? &poses[key.parent] : nullptr);
+            }
         }
         for (std::size_t c = 0; c < k.colliders.size(); ++c) {
             const ColliderAttachment& a = k.colliders[c];
@@ -177,6 +194,12 @@ void RodScene::rigged_frame(std::uint32_t c, std::span<const glm::mat4> nodes, r
     out.reference[c] = gltf::rigid_part(nodes[k.skeleton.reference]);
     for (std::size_t i = 0; i < k.chains.size(); ++i) {
         out.roots[inst.chain_begin + i] = gltf::rigid_part(nodes[k.chains[i].joint]);
+        const std::uint32_t key_begin = world.chains[inst.chain_begin + i].key_begin;
+        for (std::size_t s = 0; s < k.chains[i].keys.size(); ++s) {
+            const KeyJoint& key = k.chains[i].keys[s];
+            const rods::Transform parent = key.parent >= 0 ? gltf::rigid_part(nodes[key.parent]) : rods::Transform{};
+            out.keys[key_begin + s] = key_entry(key, gltf::rigid_part(nodes[key.joint]), key.parent >= 0 ? &parent : nullptr);
+        }
     }
     for (std::size_t i = 0; i < k.colliders.size(); ++i) {
         const ColliderAttachment& a = k.colliders[i];

@@ -114,7 +114,7 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
                                                chain.mass, chain.params);
             if (!t) return make_error(Error::Kind::InvalidInput, scene.path + ": " + chain.path + ": " + t.error().message);
             world.templates.push_back(std::move(t.value()));
-            k.chains.push_back(ChainAttachment{chain.joint, chain.offset, chain.collide});
+            k.chains.push_back(ChainAttachment{chain.joint, chain.offset, chain.collide, {}});
             k.chain_nodes.push_back(chain.nodes);
             if (ch.rig) {
                 k.simulated_joint.resize(ch.rig->character->nodes.size(), {-1, -1});

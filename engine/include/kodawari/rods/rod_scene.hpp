@@ -23,11 +23,21 @@
 
 namespace kodawari {
 
+/// A key source of a chain (docs/keyed-examples.md K.1): a joint of its character, read
+/// every frame as its world pose (Motion) or as its rotation relative to `parent` (Pose).
+struct KeyJoint {
+    std::uint32_t joint = 0;    ///< skeleton joint (rigged: node)
+    std::int32_t parent = -1;   ///< Pose: the joint (node) it is measured against; -1: the world
+    rods::KeySourceKind kind = rods::KeySourceKind::Motion;
+};
+
 /// A chain of a character template: where its root sits on the skeleton.
 struct ChainAttachment {
     std::uint32_t joint = 0;  ///< skeleton joint
     rods::Transform offset;   ///< the chain root's frame in the joint's frame
     bool collide = true;      ///< false: the chain instance gets no colliders
+    /// Its key sources, in its template's key_sources order (RodFrame::keys).
+    std::vector<KeyJoint> keys;
 };
 
 /// A collider of a character template, in its joint's frame.
