@@ -32,6 +32,7 @@ simd::RodTemplateConsts template_consts(const rods::ChainTemplate& t) {
     const std::uint32_t n = chain.joint_count;
     k.joints = n;
     k.views = static_cast<std::uint32_t>(t.views.size());
+    k.keyed = static_cast<std::uint32_t>(t.keyed.size());
     k.iterations = t.params.iterations;
     k.thickness = chain.thickness;
     k.b2 = chain.thickness * chain.thickness;
@@ -69,7 +70,7 @@ simd::RodTemplateConsts template_consts(const rods::ChainTemplate& t) {
             k.orientation_sign.push_back(glm::dot(s.orientations[i], base.orientations[i]) < 0.0f ? -1.0f : 1.0f);
         }
     }
-    if (t.views.empty()) {
+    if (t.views.empty() && t.keyed.empty()) {
         const rods::ChainShape rest = rods::to_positions(t.basis, rods::blend(t.shapes, rods::view_weights({}, {})));
         for (std::uint32_t i = 0; i < n; ++i) {
             k.fixed_rest_position.push_back({rest.positions[i].x, rest.positions[i].y, rest.positions[i].z});
@@ -132,6 +133,14 @@ public:
             }
         }
         storage_ = hwy::AllocateAligned<float>(std::max<std::size_t>(floats, 1));
+        // keyed-examples.md K.6: the keys are measured per chain by engine/rods itself.
+        keyed_chains_.clear();
+        for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
+            if (!world.templ(world.chains[c]).keyed.empty()) keyed_chains_.push_back(c);
+        }
+        key_states_.assign(world.chains.size(), {});
+        for (const std::uint32_t c : keyed_chains_) key_states_[c] = rods::initial_key_state(world, c, initial);
+        keyed_.assign(keyed_chains_.empty() ? 0 : world.chains.size() * rods::kMaxKeyedExamples, 0.0f);
         split_threads();
 
         // Every chain at rest on its initial rest shape, by engine/rods itself (as the other
@@ -163,7 +172,15 @@ public:
             for (std::size_t t = 0; t < templates_.size(); ++t) set_step(templates_[t], world_->templates[t].params, frame.dt);
             dt_ = frame.dt;
         }
-        const simd::RodStepArgs args{templates_.data(), batches_.data(), storage_.get(), &frame, world_->chains.data()};
+        parallel_for(keyed_chains_.size(), threads_, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) {
+                const std::uint32_t c = keyed_chains_[i];
+                const rods::KeyedWeights u = rods::measure_keys(*world_, c, frame, key_states_[c]);
+                std::copy(u.begin(), u.end(), keyed_.begin() + static_cast<std::ptrdiff_t>(c * rods::kMaxKeyedExamples));
+            }
+        });
+        const simd::RodStepArgs args{templates_.data(), batches_.data(), storage_.get(), &frame, world_->chains.data(),
+                                     keyed_.data()};
         const std::size_t parts = split_.size() - 1;
         parallel_for(parts, static_cast<unsigned>(parts), [&](std::size_t begin, std::size_t end) {
             for (std::size_t p = begin; p < end; ++p) kernels_.step(args, split_[p], split_[p + 1]);
@@ -191,7 +208,7 @@ public:
                 const glm::quat root_q(at(rows, simd::kRootQ + 3), at(rows, simd::kRootQ), at(rows, simd::kRootQ + 1),
                                        at(rows, simd::kRootQ + 2));
                 out.view_directions[c] = {at(rows, simd::kView), at(rows, simd::kView + 1), at(rows, simd::kView + 2)};
-                const std::size_t m = world_->templ(chain).views.size();
+                const std::size_t m = world_->templ(chain).views.size() + world_->templ(chain).keyed.size();
                 for (std::size_t k = 0; k <= m; ++k) out.weights[c * kWeightCount + k] = at(rows, simd::kWeights + k);
                 for (std::uint32_t i = 0; i < world_->templ(chain).chain.joint_count; ++i) {
                     const std::size_t r = std::size_t{i} * simd::kJointRows;
@@ -297,6 +314,9 @@ private:
     std::vector<simd::RodBatch> batches_;
     std::vector<std::pair<std::size_t, std::uint32_t>> lane_of_;  // chain -> (batch, lane)
     std::vector<std::size_t> split_;                              // thread p: batches [split_[p], split_[p + 1])
+    std::vector<std::uint32_t> keyed_chains_;                     // the chains with keyed examples
+    std::vector<rods::KeyState> key_states_;                      // per chain (keyed ones only used)
+    std::vector<float> keyed_;                                    // per chain, kMaxKeyedExamples raw weights
     hwy::AlignedFreeUniquePtr<float[]> storage_;
 };
 

@@ -95,19 +95,20 @@ Result<rods::ChainShape> read_shape(const JsonReader& r, const JsonNode& node, s
     std::size_t m = 0;
     KW_SCENE_ASSIGN(m, read_array(r, orientations, n, n, quat_what));
     shape.orientations.resize(m);
-    for (std::size_t i = 0; i < m; ++i) {
-        const JsonNode q = r.element(orientations, i);
-        constexpr std::string_view kQuat = "a unit quaternion [x, y, z, w] (length within 1e-3 of 1)";
-        std::size_t four = 0;
-        KW_SCENE_ASSIGN(four, r.array(q, kQuat));
-        if (four != 4) return r.expected(q, kQuat);
-        std::array<float, 4> c{};
-        for (std::size_t k = 0; k < 4; ++k) KW_SCENE_ASSIGN(c[k], r.real(r.element(q, k), NumberRange::closed(-2.0, 2.0)));
-        const glm::quat value(c[3], c[0], c[1], c[2]);
-        if (!(std::abs(glm::length(value) - 1.0f) < 1e-3f)) return r.expected(q, kQuat);
-        shape.orientations[i] = glm::normalize(value);
-    }
+    for (std::size_t i = 0; i < m; ++i) KW_SCENE_ASSIGN(shape.orientations[i], read_unit_quat(r, r.element(orientations, i)));
     return shape;
+}
+
+Result<glm::quat> read_unit_quat(const JsonReader& r, const JsonNode& q) {
+    constexpr std::string_view kQuat = "a unit quaternion [x, y, z, w] (length within 1e-3 of 1)";
+    std::size_t four = 0;
+    KW_SCENE_ASSIGN(four, r.array(q, kQuat));
+    if (four != 4) return r.expected(q, kQuat);
+    std::array<float, 4> c{};
+    for (std::size_t k = 0; k < 4; ++k) KW_SCENE_ASSIGN(c[k], r.real(r.element(q, k), NumberRange::closed(-2.0, 2.0)));
+    const glm::quat value(c[3], c[0], c[1], c[2]);
+    if (!(std::abs(glm::length(value) - 1.0f) < 1e-3f)) return r.expected(q, kQuat);
+    return glm::normalize(value);
 }
 
 Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::SolverParams& p) {
@@ -158,14 +159,29 @@ rods::ChainShape mirror(const rods::ChainShape& s) {
     return out;
 }
 
-Result<void> check_template(const JsonReader& r, const JsonNode& node, const ChainSpec& chain) {
+Result<rods::ChainTemplate> make_template(const std::string& name, const ChainSpec& chain) {
     std::vector<rods::ChainShape> shapes;
     std::vector<rods::ViewExample> views;
     for (const ViewSpec& v : chain.views) {
         shapes.push_back(v.shape);
         views.push_back(v.view);
     }
-    auto t = rods::make_chain_template(chain.name, chain.base, shapes, views, chain.thickness, chain.mass, chain.params);
+    auto t = rods::make_chain_template(name, chain.base, shapes, views, chain.thickness, chain.mass, chain.params);
+    if (!t || chain.keyed.empty()) return t;
+    std::vector<rods::KeySourceKind> sources;
+    for (const rods::KeyJoint& k : chain.key_sources) sources.push_back(k.kind);
+    std::vector<rods::ChainShape> keyed_shapes;
+    std::vector<rods::KeyedExample> keyed;
+    for (const KeyedSpec& k : chain.keyed) {
+        keyed_shapes.push_back(k.shape);
+        keyed.push_back(k.example);
+    }
+    KW_TRY(rods::add_keyed_examples(t.value(), sources, keyed_shapes, keyed));
+    return t;
+}
+
+Result<void> check_template(const JsonReader& r, const JsonNode& node, const ChainSpec& chain) {
+    auto t = make_template(chain.name, chain);
     if (!t) return r.fail(node.path, t.error().message);
     return {};
 }
@@ -175,7 +191,7 @@ Result<void> check_template(const JsonReader& r, const JsonNode& node, const Cha
 static_assert(static_cast<float>(1e-5) == rods::kMinThickness && static_cast<float>(1.0) == rods::kMaxThickness);
 static_assert(static_cast<float>(1e-9) == rods::kMinMass && static_cast<float>(1000.0) == rods::kMaxMass);
 
-Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, ChainSpec& c) {
+Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, const JointLookup& joints, ChainSpec& c) {
     KW_TRY(optional_member(r, node, "thickness", c.thickness,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(1e-5, 1.0)); }));
     KW_TRY(optional_member(r, node, "mass", c.mass,
@@ -194,13 +210,16 @@ Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, Chai
             c.views.push_back(std::move(v));
         }
     }
+    const JsonNode keyed = r.member(node, "keyed");
+    if (keyed.present()) KW_TRY(read_keyed(r, keyed, joints, c));
     KW_TRY(check_template(r, node, c));
     return {};
 }
 
 Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::Skeleton& skeleton,
                         const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
-    KW_TRY(r.object(node, {"name", "joint", "offset", "shape", "thickness", "mass", "physics", "collide", "mirror", "views"}));
+    KW_TRY(r.object(node, {"name", "joint", "offset", "shape", "thickness", "mass", "physics", "collide", "mirror", "views",
+                           "keyed"}));
     ChainSpec c;
     c.path = node.path;
     c.params = defaults;
@@ -209,7 +228,13 @@ Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::S
     KW_SCENE_ASSIGN(c.joint, find_joint(r, r.member(node, "joint"), skeleton));
     KW_TRY(optional_member(r, node, "offset", c.offset, [&](const JsonNode& n) { return read_transform(r, n); }));
     KW_SCENE_ASSIGN(c.base, read_shape(r, r.member(node, "shape"), 0));
-    KW_TRY(read_chain_settings(r, node, c));
+    JointLookup joints;
+    joints.find = [&](const JsonNode& n) { return find_joint(r, n, skeleton); };
+    joints.parent = [&](std::uint32_t j) { return skeleton.joints[j].parent; };
+    // A procedural joint's rotation relative to its parent is its local one (pose_skeleton).
+    joints.rest_rotation = [&](std::uint32_t j) { return skeleton.joints[j].rest.rotation; };
+    joints.reference = skeleton.reference;
+    KW_TRY(read_chain_settings(r, node, joints, c));
 
     const auto unique = [&](const JsonNode& at, const std::string& candidate) -> Result<void> {
         for (const ChainSpec& other : chains) {
@@ -236,6 +261,17 @@ Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::S
     for (ViewSpec& v : m.views) {
         v.view.direction = mirror(v.view.direction);
         v.shape = mirror(v.shape);
+    }
+    // The mirror chain's keys are the mirror images too: a head turn to the left keys the
+    // left strand as a turn to the right keys the right one. Magnitudes do not change.
+    for (KeyedSpec& k : m.keyed) {
+        k.shape = mirror(k.shape);
+        if (k.example.kind == rods::KeyKind::Motion && k.example.frame == rods::MotionFrame::Joint) {
+            // A velocity is a vector, an angular velocity a pseudovector (mirrored: -M w).
+            k.example.value = k.example.measure == rods::MotionMeasure::AngularSpeed ? -mirror(k.example.value)
+                                                                                     : mirror(k.example.value);
+        }
+        for (glm::quat& q : k.example.rotations) q = mirror(q);
     }
     chains.push_back(std::move(m));
     return {};

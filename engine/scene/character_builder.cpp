@@ -14,6 +14,7 @@
 
 #include <kodawari/rod_scene.hpp>
 
+#include "scene/character_loader.hpp"
 #include "scene/seeded_random.hpp"
 
 namespace kodawari {
@@ -104,17 +105,10 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
             }
         }
         for (const ChainSpec& chain : ch.chains) {
-            std::vector<rods::ChainShape> shapes;
-            std::vector<rods::ViewExample> views;
-            for (const ViewSpec& v : chain.views) {
-                shapes.push_back(v.shape);
-                views.push_back(v.view);
-            }
-            auto t = rods::make_chain_template(ch.name + "/" + chain.name, chain.base, shapes, views, chain.thickness,
-                                               chain.mass, chain.params);
+            auto t = scene_detail::make_template(ch.name + "/" + chain.name, chain);
             if (!t) return make_error(Error::Kind::InvalidInput, scene.path + ": " + chain.path + ": " + t.error().message);
             world.templates.push_back(std::move(t.value()));
-            k.chains.push_back(ChainAttachment{chain.joint, chain.offset, chain.collide, {}});
+            k.chains.push_back(ChainAttachment{chain.joint, chain.offset, chain.collide, chain.key_sources});
             k.chain_nodes.push_back(chain.nodes);
             if (ch.rig) {
                 k.simulated_joint.resize(ch.rig->character->nodes.size(), {-1, -1});

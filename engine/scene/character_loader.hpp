@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include <kodawari/rods/world.hpp>
 #include <kodawari/scene.hpp>
 
 #include "scene/json_reader.hpp"
@@ -70,9 +71,28 @@ inline constexpr double kMaxTime = 1e5;        // motion times (s)
 /// returns for its `joint` member.
 [[nodiscard]] Result<std::vector<ColliderSpec>> read_colliders(const JsonReader& r, const JsonNode& node,
                                                                const std::function<Result<std::uint32_t>(const JsonNode&)>& joint);
-/// A chain's `thickness`, `mass`, `physics`, `collide` and `views` over the values
-/// already in `c` (its base shape set), then check_template().
-[[nodiscard]] Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, ChainSpec& c);
+/// What keyed examples need of a character's joints (skeleton joints or glTF nodes).
+struct JointLookup {
+    std::function<Result<std::uint32_t>(const JsonNode&)> find;  ///< the joint a name at the node names
+    std::function<std::int32_t(std::uint32_t)> parent;          ///< -1 for a root
+    /// In the rest pose, relative to the parent, as a Pose key source measures it.
+    std::function<glm::quat(std::uint32_t)> rest_rotation;
+    std::uint32_t reference = 0;  ///< the character's reference joint (motion keys' default)
+};
+/// A shape: {"positions": [...], "orientations": [...]} or {"arc": {...}}, of `joints`
+/// joints (0: any in 2..32, for a base shape) (chain_loader.cpp).
+[[nodiscard]] Result<rods::ChainShape> read_shape(const JsonReader& r, const JsonNode& node, std::size_t joints);
+/// A unit quaternion [x, y, z, w] (length within 1e-3 of 1), normalized.
+[[nodiscard]] Result<glm::quat> read_unit_quat(const JsonReader& r, const JsonNode& node);
+/// A chain's `thickness`, `mass`, `physics`, `collide`, `views` and `keyed` over the
+/// values already in `c` (its base shape set), then check_template().
+[[nodiscard]] Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, const JointLookup& joints,
+                                               ChainSpec& c);
+/// A chain's `keyed` array (docs/keyed-examples.md, keyed_loader.cpp): its keyed examples
+/// and the key sources they read, into `c`.
+[[nodiscard]] Result<void> read_keyed(const JsonReader& r, const JsonNode& node, const JointLookup& joints, ChainSpec& c);
+/// The chain's template (views and keyed examples), named `name`.
+[[nodiscard]] Result<rods::ChainTemplate> make_template(const std::string& name, const ChainSpec& chain);
 /// Builds the chain's template once, so that a bad shape is reported where it is written.
 [[nodiscard]] Result<void> check_template(const JsonReader& r, const JsonNode& node, const ChainSpec& chain);
 

@@ -116,8 +116,8 @@ Result<std::vector<int>> read_chain_nodes(const JsonReader& r, const JsonNode& n
 }
 
 Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const gltf::Character& ch, const gltf::Pose& rest,
-                               const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
-    KW_TRY(r.object(node, {"name", "root", "nodes", "joints", "thickness", "mass", "physics", "collide", "views"}));
+                               std::uint32_t reference, const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
+    KW_TRY(r.object(node, {"name", "root", "nodes", "joints", "thickness", "mass", "physics", "collide", "views", "keyed"}));
     ChainSpec c;
     c.path = node.path;
     c.params = defaults;
@@ -142,7 +142,22 @@ Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const 
     const gltf::PhysicsScale scaled = gltf::scaled_physics(ch, found.value());
     c.thickness = scaled.thickness;
     c.mass = scaled.mass;
-    KW_TRY(read_chain_settings(r, node, c));
+    JointLookup joints;
+    joints.find = [&](const JsonNode& n) -> Result<std::uint32_t> {
+        int index = 0;
+        KW_SCENE_ASSIGN(index, find_node(r, n, ch));
+        return static_cast<std::uint32_t>(index);
+    };
+    joints.parent = [&](std::uint32_t n) { return static_cast<std::int32_t>(ch.nodes[n].parent); };
+    // As RodScene::rigged_frame measures it: from the rest pose's world matrices, scale removed.
+    joints.rest_rotation = [&](std::uint32_t n) {
+        const glm::quat world = gltf::rigid_part(rest.world[n]).rotation;
+        const int parent = ch.nodes[n].parent;
+        if (parent < 0) return world;
+        return glm::normalize(glm::conjugate(gltf::rigid_part(rest.world[static_cast<std::size_t>(parent)]).rotation) * world);
+    };
+    joints.reference = reference;
+    KW_TRY(read_chain_settings(r, node, joints, c));
     chains.push_back(std::move(c));
     return {};
 }
@@ -215,7 +230,7 @@ Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode&
     std::size_t n = 0;
     KW_SCENE_ASSIGN(n, read_array(r, chains, 1, kMaxPerCharacter,
                                   "a non-empty array of chains (at most " + std::to_string(kMaxPerCharacter) + ")"));
-    for (std::size_t i = 0; i < n; ++i) KW_TRY(read_rigged_chain(r, r.element(chains, i), ch, rest, defaults, out.chains));
+    for (std::size_t i = 0; i < n; ++i) KW_TRY(read_rigged_chain(r, r.element(chains, i), ch, rest, out.skeleton.reference, defaults, out.chains));
 
     rig.character = std::move(character);
     out.rig = std::move(rig);

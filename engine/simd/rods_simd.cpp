@@ -22,7 +22,8 @@ constexpr std::size_t kMaxJ = rods::kMaxChainJoints;
 constexpr std::size_t kMaxK = rods::kMaxChainColliders;
 
 // This frame's input of a batch's 16 lanes, gathered from the frame's per-chain arrays.
-enum InputRow : std::uint32_t { kRefP = 0, kRefQ = 3, kToP = 7, kToQ = 10, kInputRows = 14 };
+// kKeyed: the chain's raw keyed weights u_1 .. u_4 (keyed-examples.md K.2, K.3).
+enum InputRow : std::uint32_t { kRefP = 0, kRefQ = 3, kToP = 7, kToQ = 10, kKeyed = 14, kInputRows = 18 };
 // Per collider: a (3), b (3), radius + thickness, 1 where the lane's chain has it.
 enum ColliderRow : std::uint32_t { kCapA = 0, kCapB = 3, kCapR = 6, kCapOn = 7, kColliderRows = 8 };
 
@@ -41,7 +42,10 @@ void gather_inputs(const RodStepArgs& args, const RodBatch& batch, const RodTemp
         const float values[kInputRows] = {ref.position.x, ref.position.y, ref.position.z, ref.rotation.x, ref.rotation.y,
                                           ref.rotation.z, ref.rotation.w, to.position.x,  to.position.y,  to.position.z,
                                           to.rotation.x,  to.rotation.y,  to.rotation.z,  to.rotation.w};
-        for (std::size_t r = 0; r < kInputRows; ++r) in.rows[r * kBatchLanes + l] = values[r];
+        for (std::size_t r = 0; r < kKeyed; ++r) in.rows[r * kBatchLanes + l] = values[r];
+        for (std::size_t j = 0; j < rods::kMaxKeyedExamples; ++j) {
+            in.rows[(kKeyed + j) * kBatchLanes + l] = t.keyed > 0 ? args.keyed[c * rods::kMaxKeyedExamples + j] : 0.0f;
+        }
         for (std::uint32_t k = 0; k < batch.colliders; ++k) {
             float* rows = in.colliders + k * kColliderRows * kBatchLanes;
             float cap[kColliderRows] = {};
@@ -162,21 +166,36 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         for (std::size_t k = 1; k <= m; ++k) w[k] = hn::IfThenElse(whole, hn::Div(w[k], sum), w[k]);
         w[0] = hn::Sub(S(1.0f), hn::IfThenElse(whole, S(1.0f), sum));
     }
+    // keyed-examples.md K.4, keyed.cpp combine_weights(): the keyed examples take their
+    // share from the view weights.
+    const std::size_t mk = m + t.keyed;
+    if (t.keyed > 0) {
+        V u[rods::kMaxKeyedExamples];
+        V sum = Z();
+        for (std::size_t j = 0; j < t.keyed; ++j) {
+            u[j] = load(in.rows, kKeyed + j, off);
+            sum = hn::Add(sum, u[j]);
+        }
+        const M whole = hn::Ge(sum, S(1.0f));
+        const V rest = hn::Sub(S(1.0f), hn::IfThenElse(whole, S(1.0f), sum));
+        for (std::size_t k = 0; k <= m; ++k) w[k] = hn::Mul(rest, w[k]);
+        for (std::size_t j = 0; j < t.keyed; ++j) w[m + 1 + j] = hn::IfThenElse(whole, hn::Div(u[j], sum), u[j]);
+    }
 
     // ---- SPEC A.2: the blend and forward kinematics (shape.cpp blend, to_positions) ----
     V3 rest_p[kMaxJ];
     Q4 rest_o[kMaxJ];
-    if (m == 0) {  // the base shape, blended at load
+    if (mk == 0) {  // the base shape, blended at load
         for (std::size_t i = 0; i < n; ++i) {
             rest_p[i] = splat3(t.fixed_rest_position[i].data());
             rest_o[i] = splat4(t.fixed_rest_orientation[i].data());
         }
     } else {
-        for (std::size_t i = 0; i < n; ++i) rest_o[i] = blend_one(t.orientation.data(), t.orientation_sign.data(), n, i, w, m);
+        for (std::size_t i = 0; i < n; ++i) rest_o[i] = blend_one(t.orientation.data(), t.orientation_sign.data(), n, i, w, mk);
         V3 dir = splat3(t.first_direction.data());
         rest_p[0] = zero3();
         for (std::size_t i = 0; i + 1 < n; ++i) {
-            const Q4 r = blend_one(t.rotation.data(), t.rotation_sign.data(), n, i, w, m);
+            const Q4 r = blend_one(t.rotation.data(), t.rotation_sign.data(), n, i, w, mk);
             // Renormalized every segment (shape.cpp).
             dir = normalize(rotate(r, dir));
             rest_p[i + 1] = add(rest_p[i], mul(S(t.lengths[i]), dir));
@@ -382,7 +401,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
     store3(to_p, chain_rows, kRootP, off);
     store4(to_q, chain_rows, kRootQ, off);
     store3(d, chain_rows, kView, off);
-    for (std::size_t k = 0; k <= rods::kMaxViewExamples; ++k) store(k <= m ? w[k] : Z(), chain_rows, kWeights + k, off);
+    for (std::size_t k = 0; k <= rods::kMaxViewExamples; ++k) store(k <= mk ? w[k] : Z(), chain_rows, kWeights + k, off);
 }
 
 void step_batches(const RodStepArgs& args, std::size_t begin, std::size_t end) {

@@ -38,6 +38,7 @@ enum ChainRow : std::uint32_t { kRootP = 0, kRootQ = 3, kView = 7, kWeights = 10
 /// by the backend with rods::step's own expressions.
 struct RodTemplateConsts {
     std::uint32_t joints = 0, views = 0, iterations = 0;
+    std::uint32_t keyed = 0;         // keyed examples J (docs/keyed-examples.md), shapes m+1 .. m+J
     float thickness = 0.0f;
     float b2 = 0.0f;                 // thickness^2
     float suppression = 0.0f;        // SPEC A.5 coefficient
@@ -56,7 +57,7 @@ struct RodTemplateConsts {
     // hemisphere (+1 or -1; exact, as shape.cpp's dot test).
     std::vector<std::array<float, 4>> rotation, orientation;
     std::vector<float> rotation_sign, orientation_sign;
-    // With no view examples the rest shape is the same every frame: blended once at load
+    // With no examples the rest shape is the same every frame: blended once at load
     // by engine/rods itself (n positions, n orientations).
     std::vector<std::array<float, 3>> fixed_rest_position;
     std::vector<std::array<float, 4>> fixed_rest_orientation;
@@ -88,6 +89,9 @@ struct RodStepArgs {
     float* storage = nullptr;
     const rods::RodFrame* frame = nullptr;
     const rods::ChainInstance* chains = nullptr;
+    /// Per chain, its raw keyed weights this frame (rods::measure_keys, kMaxKeyedExamples
+    /// each): measured by the backend, since they are a few scalars per chain.
+    const float* keyed = nullptr;
 };
 
 /// Advances batches [begin, end) by one frame (SPEC A.3, A.2, A.5, A.4).

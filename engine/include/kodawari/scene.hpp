@@ -17,6 +17,7 @@
 #include "gltf/character.hpp"
 #include "result.hpp"
 #include "rods/kinematics.hpp"
+#include "rods/keyed.hpp"
 #include "rods/shape.hpp"
 #include "rods/solver.hpp"
 #include "rods/view.hpp"
@@ -89,6 +90,14 @@ struct ViewSpec {
     rods::ChainShape shape;  ///< chain root frame, the base shape's joint count
 };
 
+/// One keyed example of a chain (docs/keyed-examples.md K.1): its key, influence and
+/// smoothing (its sources index ChainSpec::key_sources), and its shape.
+struct KeyedSpec {
+    std::string name;              ///< for people ("sprint"); may be empty
+    rods::KeyedExample example;
+    rods::ChainShape shape;        ///< chain root frame, the base shape's joint count
+};
+
 /// One joint chain of a character (SPEC A.1), after mirroring: a mirrored pair is two
 /// ChainSpecs.
 struct ChainSpec {
@@ -97,6 +106,8 @@ struct ChainSpec {
     rods::Transform offset;   ///< the chain root's frame in that joint's frame
     rods::ChainShape base;    ///< the base shape C_0 in the chain root's frame
     std::vector<ViewSpec> views;
+    std::vector<rods::KeyJoint> key_sources;  ///< the joints its keyed examples read
+    std::vector<KeyedSpec> keyed;             ///< keyed examples (docs/keyed-examples.md)
     float thickness = 0.005f;  ///< m
     float mass = 0.002f;       ///< kg per joint
     rods::SolverParams params;

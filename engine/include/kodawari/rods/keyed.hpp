@@ -36,6 +36,16 @@ enum class KeySourceKind : std::uint32_t {
     Pose = 1,    ///< the joint's rotation relative to its parent's (position unused) (K.3)
 };
 
+/// A key source of a scene's chain: a joint of its character, read every frame as its
+/// world pose (Motion) or as its rotation relative to `parent` (Pose); RodScene fills
+/// RodFrame::keys from it.
+struct KeyJoint {
+    std::uint32_t joint = 0;    ///< skeleton joint (rigged characters: node)
+    std::int32_t parent = -1;   ///< Pose: the joint (node) it is measured against; -1: the world
+    KeySourceKind kind = KeySourceKind::Motion;
+    bool operator==(const KeyJoint&) const = default;
+};
+
 /// A keyed example's kind.
 enum class KeyKind : std::uint32_t { Motion = 0, Pose = 1 };
 /// What a motion key measures of its source joint (K.2).

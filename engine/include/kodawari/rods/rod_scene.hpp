@@ -23,13 +23,7 @@
 
 namespace kodawari {
 
-/// A key source of a chain (docs/keyed-examples.md K.1): a joint of its character, read
-/// every frame as its world pose (Motion) or as its rotation relative to `parent` (Pose).
-struct KeyJoint {
-    std::uint32_t joint = 0;    ///< skeleton joint (rigged: node)
-    std::int32_t parent = -1;   ///< Pose: the joint (node) it is measured against; -1: the world
-    rods::KeySourceKind kind = rods::KeySourceKind::Motion;
-};
+using KeyJoint = rods::KeyJoint;
 
 /// A chain of a character template: where its root sits on the skeleton.
 struct ChainAttachment {
