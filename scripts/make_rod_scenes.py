@@ -1,5 +1,5 @@
 #!/usr/bin/env python3
-"""Writes scenes/bunny.json, scenes/bangs.json and scenes/crowd.json (scenes/README.md
+"""Writes scenes/bunny.json, bangs.json, crowd.json, ponytail.json and nod.json (scenes/README.md
 says what they show; docs/scene-format.md defines the keys). Their shapes are computed
 here (strands that hug the head sphere, sampled at equal arc length), so edit this
 script and rerun it rather than the JSON:
@@ -211,6 +211,75 @@ def crowd():
          "yaw_jitter_deg": 20, "position_jitter": 0.2, "time_offset": 1.5, "seed": 7}])
 
 
+def envelope(t, start, end, ramp_in, ramp_out):
+    """A locomotion's trapezoid envelope e(t) (rods::locomotion_envelope)."""
+    if t <= start or t >= end:
+        return 0.0
+    e = 1.0
+    if ramp_in > 0:
+        e = min(e, (t - start) / ramp_in)
+    if ramp_out > 0:
+        e = min(e, (end - t) / ramp_out)
+    return e
+
+
+def travelled(t, walks, step=1e-3):
+    """How far straight locomotions have taken the character by time t (m)."""
+    n = int(round(t / step))
+    return sum(w["speed"] * step * envelope((i + 0.5) * step, w["start"], w["end"], w["ramp_in"], w["ramp_out"])
+               for i in range(n) for w in walks)
+
+
+def ponytail():
+    """Seed A's first wish, "when the character moves violently": a ponytail that hangs at
+    rest and streams behind in a sprint, from a motion example keyed by the head's speed."""
+    walks = [
+        {"speed": 1.4, "start": 0.5, "end": 6.5, "ramp_in": 0.5, "ramp_out": 0.4},  # walk, then stop
+        {"speed": 4.6, "start": 3.0, "end": 6.5, "ramp_in": 0.8, "ramp_out": 0.4},  # the sprint on top
+    ]
+    motions = [{"type": "walk", **w, "bob": 0.03, "step_frequency": 2} for w in walks[:1]]
+    motions += [{"type": "walk", **walks[1], "bob": 0.02, "step_frequency": 1.2, "roll_deg": 0}]
+    tail = {
+        "name": "ponytail", "joint": "head", "offset": {"position": [0, 0.16, -0.1]},
+        "thickness": 0.012, "mass": 0.002,
+        "shape": arc(10, 0.32, [0, 0.3, -1], [1, 0, 0], -150),
+        "keyed": [{
+            "name": "sprint", "key": "motion", "measure": "speed", "value": 6, "influence": 1.5, "smoothing": 0.3,
+            "shape": arc(10, 0.32, [0, 0.2, -1], [1, 0, 0], -22),
+        }],
+    }
+    # The camera keeps level with the head on the character's left, 2.2 m off its path.
+    keys = []
+    for i in range(0, 41):
+        t = i * 0.25
+        z = round(travelled(t, walks), 3)
+        keys.append({"time": t, "position": [2.2, 1.5, z], "target": [0, 1.45, z]})
+    return scene("ponytail", 60, 10, {"fov_deg": 30, "keyframes": {"keys": keys, "interpolation": "linear"}}, [
+        character("runner", motions, {"stiffness": 0.5, "damping": 2, "iterations": 4}, [tail])])
+
+
+def nod():
+    """Seed A's second wish, "when the character takes a particular pose": bangs that fall
+    over the eyes when she looks down (a pose example keyed by the head's pitch against the
+    neck) and part off them when she looks up (the front view example of bangs.json)."""
+    chains = [bang(f"bang_l{k + 1}", f"bang_r{k + 1}", 0.12, az, 10, 0.13, 52 + 6 * k) for k, az in enumerate([7, 21, 35])]
+    for k, az in enumerate([7, 21, 35]):
+        # Looking down, the strands fall forward off the brow and hang over the eyes.
+        root = on_sphere(0.12, az, 40)
+        down = sample(sphere_path(0.135, (az, 40), (az * 0.7, 5), (az * 0.6, -60)), 10, 0.13)
+        rel = [r3([p[m] - root[m] for m in range(3)], 4) for p in down]
+        rel[0] = [0, 0, 0]
+        chains[k]["keyed"] = [{"name": "look_down", "key": "pose", "pose": [{"joint": "head", "axis": [1, 0, 0], "angle_deg": 30}],
+                               "influence": 12, "shape": {"positions": rel}}]
+    return scene("nod", 60, 12, {"fov_deg": 30, "position": [0, 1.62, 1.0], "target": [0, 1.57, 0]}, [
+        character("girl", [
+            {"type": "sway", "joint": "body", "axis": [0, 0, 1], "amplitude_deg": 2, "frequency": 0.3},
+            # Looks down (+X turns the face down), holds, looks up, holds: 8 s a nod.
+            {"type": "sway", "joint": "head", "axis": [1, 0, 0], "amplitude_deg": 30, "frequency": 0.125, "sharpness": 3,
+             "start": 1, "fade": 0.5},
+        ], {"stiffness": 0.6, "damping": 3, "iterations": 4}, chains)])
+
+
 def dump(path, doc):
     # "$schema" first, relative to the output folder, so an editor that opens the scene
     # finds docs/scene.schema.json from wherever the scene was written.
@@ -237,5 +306,5 @@ def dump(path, doc):
 
 if __name__ == "__main__":
     out = sys.argv[1] if len(sys.argv) > 1 else os.path.join(os.path.dirname(__file__), "..", "scenes")
-    for name, make in (("bunny", bunny), ("bangs", bangs), ("crowd", crowd)):
+    for name, make in (("bunny", bunny), ("bangs", bangs), ("crowd", crowd), ("ponytail", ponytail), ("nod", nod)):
         dump(os.path.join(out, name + ".json"), make())

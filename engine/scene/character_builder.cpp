@@ -108,7 +108,9 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
             auto t = scene_detail::make_template(ch.name + "/" + chain.name, chain);
             if (!t) return make_error(Error::Kind::InvalidInput, scene.path + ": " + chain.path + ": " + t.error().message);
             world.templates.push_back(std::move(t.value()));
-            k.chains.push_back(ChainAttachment{chain.joint, chain.offset, chain.collide, chain.key_sources});
+            // Key sources only with keyed examples to read them (make_template adds both or neither).
+            k.chains.push_back(ChainAttachment{chain.joint, chain.offset, chain.collide,
+                                               chain.keyed.empty() ? std::vector<rods::KeyJoint>{} : chain.key_sources});
             k.chain_nodes.push_back(chain.nodes);
             if (ch.rig) {
                 k.simulated_joint.resize(ch.rig->character->nodes.size(), {-1, -1});
