@@ -200,7 +200,8 @@ void TraceWriter::write_chains(std::uint32_t frame, float time, const rods::RodW
     for (std::size_t c = 0; c < world.chains.size(); ++c) {
         const rods::ChainInstance& chain = world.chains[c];
         const std::uint32_t n = world.templ(chain).chain.joint_count;
-        const std::size_t m = world.templ(chain).views.size();
+        // Views, then keyed examples (docs/keyed-examples.md K.4).
+        const std::size_t m = world.templ(chain).views.size() + world.templ(chain).keyed.size();
         out += "{\"kind\":\"chain\",\"frame\":";
         append_integer(out, frame);
         out += ",\"time\":";
