@@ -356,3 +356,84 @@ TEST(KeyedScenes, TheRiggedCrowdsWalkRaisesItsTails) {
     std::printf("[ measured ] %d walkers of %zu instances\n", walkers, rs.instances.size());
     EXPECT_GT(walkers, 0);
 }
+
+namespace {
+
+json keyed_scene(const json& keyed) {
+    json doc = valid_character_scene();
+    doc["characters"][0]["chains"][0]["keyed"] = keyed;
+    return doc;
+}
+
+const json kSprint = json::parse(R"({"name": "sprint", "key": "motion", "value": 3, "influence": 1,
+                                      "shape": {"arc": {"joints": 8, "length": 0.2, "curl_deg": -40}}})");
+
+}  // namespace
+
+// The scene format's keyed examples: a motion and a pose key load into the template with
+// their key sources; the mirrored chain gets mirrored pose keys.
+TEST(KeyedScenes, TheSceneFormatReadsMotionAndPoseKeys) {
+    json pose = kSprint;
+    pose.erase("value");
+    pose["key"] = "pose";
+    pose["pose"] = json::parse(R"([{"joint": "head", "axis": [0, 1, 0], "angle_deg": 30}])");
+    pose["influence"] = 15;
+    const auto loaded = kodawari::parse_scene(keyed_scene(json::array({kSprint, pose})).dump(), "test.json");
+    ASSERT_TRUE(loaded.ok()) << loaded.error().message;
+    const RodScene rs = build(loaded.value());
+    const rods::ChainTemplate& t = rs.world.templates[0];
+    ASSERT_EQ(t.keyed.size(), 2u);
+    ASSERT_EQ(t.key_sources.size(), 2u);
+    EXPECT_EQ(t.shapes.size(), 1u + t.views.size() + 2u);
+    EXPECT_EQ(t.keyed[0].value.x, 3.0f);
+    EXPECT_EQ(t.keyed[0].smoothing, 0.25f);  // the documented default
+    EXPECT_NEAR(t.keyed[1].influence, glm::radians(15.0f), 1e-7f);
+    // The head turned 30 degrees about its own +Y; the mirror chain's key turns the other way.
+    const glm::quat key = t.keyed[1].rotations[1];
+    EXPECT_NEAR(glm::degrees(glm::angle(key)), 30.0f, 1e-3f);
+    const glm::quat mirrored = rs.world.templates[1].keyed[1].rotations[1];
+    EXPECT_NEAR(glm::dot(glm::axis(key), glm::axis(mirrored)), -1.0f, 1e-5f);
+    EXPECT_EQ(rs.world.key_count, 4u);  // 2 sources x 2 chains
+    EXPECT_TRUE(rods::check_frame(rs.world, rs.frame(0)).ok());
+}
+
+// Bad keyed examples name the file, the JSON path and what was expected.
+TEST(KeyedScenes, BadKeyedExamplesNameThePathAndWhatWasExpected) {
+    struct Case {
+        json keyed;
+        std::string path, part;
+    };
+    auto with = [](const char* key, json value) {
+        json k = kSprint;
+        if (value.is_null()) {
+            k.erase(key);
+        } else {
+            k[key] = std::move(value);
+        }
+        return json::array({k});
+    };
+    json pose = kSprint;
+    pose.erase("value");
+    pose["key"] = "pose";
+    pose["pose"] = json::parse(R"([{"joint": "tail", "axis": [1, 0, 0], "angle_deg": 10}])");
+    const std::vector<Case> cases = {
+        {with("key", "wiggle"), "keyed[0].key", "a key kind (\"motion\", \"pose\")"},
+        {with("influence", -1), "keyed[0].influence", ""},
+        {with("influence", 0), "keyed[0].influence", ""},
+        {with("smoothing", -0.5), "keyed[0].smoothing", ""},
+        {with("smoothing", 1000), "keyed[0].smoothing", ""},
+        {with("measure", "jerk"), "keyed[0].measure", "a motion measure"},
+        {with("joint", "tail"), "keyed[0].joint", "the name of a joint"},
+        {with("value", nullptr), "keyed[0].value", ""},
+        {json::array({pose}), "keyed[0].pose[0].joint", "the name of a joint"},
+        {json::array({kSprint, kSprint, kSprint, kSprint, kSprint}), "keyed", "at most"},
+    };
+    for (const Case& c : cases) {
+        const auto loaded = kodawari::parse_scene(keyed_scene(c.keyed).dump(), "test.json");
+        ASSERT_FALSE(loaded.ok()) << c.keyed.dump();
+        const std::string& m = loaded.error().message;
+        EXPECT_TRUE(contains(m, "test.json")) << m;
+        EXPECT_TRUE(contains(m, c.path)) << m;
+        EXPECT_TRUE(contains(m, c.part)) << m;
+    }
+}
