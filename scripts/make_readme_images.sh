@@ -23,6 +23,12 @@ mkdir -p docs/images
 # by its 4 columns, so 480x360 cells).
 "$bin" render scenes/bangs.json --frames 0:360:90 --size 1920x1440 --zoom 1.7 --out "$work/bangs" \
     --contact-sheet docs/images/bangs.png --columns 4
+# Keyed examples: the ponytail standing, walking, sprinting and stopped (0, 2.5, 5 and
+# 7.5 s), and the bangs held looking down (3 s) and looking up (7 s).
+"$bin" render scenes/ponytail.json --frames 0:600:150 --size 960x540 --zoom 1.6 --out "$work/ponytail" \
+    --contact-sheet docs/images/ponytail.png --columns 2
+"$bin" render scenes/nod.json --frames 180:421:240 --size 960x720 --zoom 1.4 --out "$work/nod" \
+    --contact-sheet docs/images/nod.png --columns 2
 # The three wing types mid-wingbeat, the camera flying with them (frame 60 of 240).
 "$bin" render scenes/birds-closeup.json --frames 60 --size 640x360 --out "$work/birds"
 cp "$work/birds/birds-closeup_00060.png" docs/images/birds-closeup.png
