@@ -26,6 +26,7 @@ std::uint32_t element_bytes(DeviceBuffer name) {
         case DeviceBuffer::RodRoots: return sizeof(gpu::RodTransformGpu);
         case DeviceBuffer::RodColliders: return sizeof(gpu::RodColliderGpu);
         case DeviceBuffer::PoseWorld: return sizeof(gpu::PoseMatrixGpu);
+        case DeviceBuffer::RodKeys: return sizeof(gpu::RodTransformGpu);
     }
     return 0;
 }
