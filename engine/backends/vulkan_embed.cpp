@@ -50,7 +50,9 @@ public:
              .foreign = input.buffer},
             {&instances_}, {&attachments_},
             {rods.buffer(DeviceBuffer::RodReference).buffer}, {rods.buffer(DeviceBuffer::RodRoots).buffer},
-            {rods.buffer(DeviceBuffer::RodColliders).buffer}};
+            {rods.buffer(DeviceBuffer::RodColliders).buffer},
+            // MatrixInput names no key sources (more.y = 0): they come from the RodFrame.
+            {rods.buffer(DeviceBuffer::RodKeys).buffer}};
         kernel_.bind(views);
     }
 
