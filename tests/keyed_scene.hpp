@@ -42,6 +42,8 @@ inline rods::ChainShape keyed_strand(std::uint32_t joints, float length, glm::ve
 // one without keyed examples. With `templates` = 5, two more (a runner and a plain one of
 // other joint counts): more distinct (joints, views, keyed) than KW_RODS_MAX_VARIANTS, so
 // the Vulkan backend runs its general, not exact, kernel with keyed examples compiled in.
+// Past 5 the five repeat; over KW_RODS_MAX_GROUPS (32) templates the Vulkan backend runs
+// one dispatch for all chains, each finding its template itself.
 inline constexpr float kKeyedDt = 1.0f / 60.0f;
 
 class KeyedScene {
@@ -55,22 +57,23 @@ public:
         const std::uint32_t joints[5] = {9, 7, 6, 8, 5};
         const Kind kinds[5] = {Runner, Nodder, Plain, Runner, Plain};
         for (std::uint32_t t = 0; t < templates; ++t) {
-            const std::uint32_t n = joints[t];
+            const std::uint32_t n = joints[t % 5];
+            const Kind kind = kinds[t % 5];
             const rods::ChainShape base = keyed_strand(n, kLength, glm::vec3(1, 0, 0), 0.05f);
             std::vector<rods::ChainShape> shapes;
             std::vector<rods::ViewExample> views;
             shapes.push_back(keyed_strand(n, kLength, glm::vec3(0, 0, 1), 0.25f));
             views.push_back({glm::vec3(1, 0, 0), 2.0f});
-            if (kinds[t] != Nodder) {
+            if (kind != Nodder) {
                 shapes.push_back(keyed_strand(n, kLength, glm::vec3(0, 0, 1), -0.25f));
                 views.push_back({glm::vec3(-1, 0, 0), 3.0f});
             }
             rods::SolverParams params;
-            params.momentum_suppression = kinds[t] == Runner ? 1.0f : 0.5f;  // both of SPEC A.5's cases (K.5)
+            params.momentum_suppression = kind == Runner ? 1.0f : 0.5f;  // both of SPEC A.5's cases (K.5)
             auto made = rods::make_chain_template("keyed" + std::to_string(t), base, shapes, views, 0.003f, 0.002f, params);
             EXPECT_TRUE(made.ok()) << made.error().message;
             rods::ChainTemplate tpl = std::move(made).value();
-            if (kinds[t] == Runner) {
+            if (kind == Runner) {
                 const rods::KeySourceKind sources[] = {rods::KeySourceKind::Motion};
                 // Streaming back (+Z is forward) when sprinting; swung sideways when turning.
                 const rods::ChainShape keyed_shapes[] = {keyed_strand(n, kLength, glm::vec3(1, 0, 0), -0.3f),
@@ -93,7 +96,7 @@ public:
                 turn.smoothing = 0.05f;
                 const rods::KeyedExample keyed[] = {sprint, turn};
                 EXPECT_TRUE(rods::add_keyed_examples(tpl, sources, keyed_shapes, keyed).ok());
-            } else if (kinds[t] == Nodder) {
+            } else if (kind == Nodder) {
                 const rods::KeySourceKind sources[] = {rods::KeySourceKind::Pose, rods::KeySourceKind::Pose};
                 const rods::ChainShape keyed_shapes[] = {keyed_strand(n, kLength, glm::vec3(1, 0, 0), 0.35f)};
                 rods::KeyedExample nod;
@@ -106,7 +109,7 @@ public:
                 EXPECT_TRUE(rods::add_keyed_examples(tpl, sources, keyed_shapes, keyed).ok());
             }
             out.world_.templates.push_back(std::move(tpl));
-            out.kinds_.push_back(kinds[t]);
+            out.kinds_.push_back(kind);
         }
         constexpr std::uint32_t kPerCharacter = 3;
         out.world_.character_count = (chains + kPerCharacter - 1) / kPerCharacter;

@@ -211,7 +211,8 @@ TEST_P(RodBackends, RejectsAFrameThatDoesNotFitTheWorld) {
 
 // Keyed examples (docs/keyed-examples.md K.2-K.5) on every backend against the CPU
 // reference, over a sprint, a stop, a turn and a nod: 67 chains of 3 templates (the
-// Vulkan backend's exact kernels, one per template) and 131 of 5 (its general kernel).
+// Vulkan backend's exact kernels, one per template), 131 of 5 (its general kernel) and
+// 131 of 34 (one dispatch for all templates).
 // Tolerances. Combined weights W: 1e-4 absolute (measured on lavapipe: 3e-5). Both sides
 // measure the same float keys with the same expressions (the smoothing factors alpha are
 // even computed on the host); what differs is GLSL's exp, atan and pow (the view weights)
@@ -230,7 +231,7 @@ TEST_P(RodBackends, KeyedExamplesMatchTheReference) {
         GTEST_SKIP() << "the cpu (SIMD) backend does not implement keyed examples yet (its combined weights of keyed "
                         "examples read 0; docs/keyed-examples.md K.6 is being added to it separately)";
     }
-    for (const auto& [chains, templates] : {std::pair{67u, 3u}, std::pair{131u, 5u}}) {
+    for (const auto& [chains, templates] : {std::pair{67u, 3u}, std::pair{131u, 5u}, std::pair{131u, 34u}}) {
         SCOPED_TRACE(std::to_string(chains) + " chains of " + std::to_string(templates) + " templates");
         const KeyedScene scene = KeyedScene::make(chains, templates);
         const rods::RodWorld& world = scene.world();
