@@ -1,6 +1,7 @@
 #version 450
 // The rod kernel's kinematic input of rigged characters, written on the device: for each
-// posed instance (one invocation), its reference joint, its chain roots and its colliders
+// posed instance (one invocation), its reference joint, its chain roots, its colliders
+// and its chains' key sources (docs/keyed-examples.md K.1; engine/rods/rod_scene.cpp key_entry)
 // from the pose backend's world matrices, exactly as RodScene::rigged_frame computes them
 // on the host (engine/scene/rod_scene.cpp) with gltf::rigid_part (engine/gltf/animation.cpp:
 // the translation, and the rotation of the matrix's columns normalized, a mirror turned
@@ -21,6 +22,7 @@ layout(std430, binding = KW_ROD_INPUTS_BINDING_ATTACHMENTS) readonly buffer Atta
 layout(std430, binding = KW_ROD_INPUTS_BINDING_REFERENCE) writeonly buffer Reference { RodTransformGpu reference[]; };
 layout(std430, binding = KW_ROD_INPUTS_BINDING_ROOTS) writeonly buffer Roots { RodTransformGpu roots[]; };
 layout(std430, binding = KW_ROD_INPUTS_BINDING_COLLIDERS) writeonly buffer Colliders { RodColliderGpu colliders[]; };
+layout(std430, binding = KW_ROD_INPUTS_BINDING_KEYS) writeonly buffer Keys { RodTransformGpu keys[]; };
 
 layout(push_constant) uniform Push { RodInputPush push; };
 
@@ -70,5 +72,18 @@ void main() {
         RodTransformGpu joint = rigid_part(i, a.node.x);
         colliders[ids.z + k].a = vec4(joint.position.xyz + rotate(joint.rotation, a.a.xyz), a.a.w);
         colliders[ids.z + k].b = vec4(joint.position.xyz + rotate(joint.rotation, a.b.xyz), 0.0);
+    }
+    // rod_scene.cpp key_entry: a motion source's world pose; a pose source's rotation
+    // relative to its parent's (the world's when it has none), position 0.
+    for (uint k = 0u; k < push.more.y; ++k) {
+        RodInputAttachmentGpu a = attachments[push.counts.w + push.more.x + k];
+        RodTransformGpu joint = rigid_part(i, a.node.x);
+        if (a.node.z == 0u) {  // rods::KeySourceKind::Motion
+            keys[ids.w + k] = joint;
+        } else {
+            vec4 rotation = joint.rotation;
+            if (a.node.y != KW_ROD_INPUTS_NO_PARENT) rotation = qnormalize(qmul(qconj(rigid_part(i, a.node.y).rotation), joint.rotation));
+            keys[ids.w + k] = RodTransformGpu(vec4(0.0), rotation);
+        }
     }
 }

@@ -1,6 +1,8 @@
 #version 450
 // One frame of the view-dependent rods (SPEC part A) for every chain: one invocation per
-// chain computes the view direction and weights (A.3), blends the rest shape (A.2),
+// chain computes the view direction and weights (A.3), combines them with its keyed
+// examples' raw weights (docs/keyed-examples.md K.4; rod_keys.comp measured them just
+// before), blends the rest shape (A.2),
 // applies momentum suppression (A.5) and runs every substep and projection iteration of
 // the oriented-particles solver (A.4) in registers. Mirrors engine/rods/world.cpp,
 // shape.cpp and solver.cpp step for step; the equations' sources are cited there.
@@ -29,9 +31,18 @@ layout(constant_id = KW_RODS_SPEC_SUPPRESSION) const uint SUPPRESSION = KW_RODS_
 // all lanes, but only outside every branch, so they are loaded before the guard below.
 // Otherwise (worlds of many templates) each chain finds its template itself.
 layout(constant_id = KW_RODS_SPEC_GROUPED) const bool GROUPED = true;
-// Chains of exactly MAX_J joints and MAX_VIEWS views: the counts become constants and the
-// `if (i < n)` masks of every unrolled loop fold away (lavapipe evaluates them per lane).
+// Chains of exactly MAX_J joints, MAX_VIEWS views and MAX_KEYED keyed examples: the counts
+// become constants and the `if (i < n)` masks of every unrolled loop fold away (lavapipe
+// evaluates them per lane).
 layout(constant_id = KW_RODS_SPEC_EXACT) const bool EXACT = false;
+// The most keyed examples of any chain of the dispatch (K.4). 0, the default and every
+// world without keyed examples: their load, the combination and their shapes' blending
+// are compiled out, so such worlds run the kernel they ran before keyed examples existed.
+layout(constant_id = KW_RODS_SPEC_MAX_KEYED) const uint MAX_KEYED = 0;
+// The examples the blend sums past the base: views, then keyed ones (shapes 1 .. m + J).
+// A chain has at most KW_RODS_MAX_VIEWS in all (rods::add_keyed_examples), which caps the
+// sum of two dispatch-wide maxima that may come from different templates.
+const uint MAX_EXAMPLES = MAX_VIEWS + MAX_KEYED > KW_RODS_MAX_VIEWS ? KW_RODS_MAX_VIEWS : MAX_VIEWS + MAX_KEYED;
 
 layout(std430, binding = KW_RODS_BINDING_TEMPLATES) readonly buffer Templates { RodTemplateGpu templates[]; };
 layout(std430, binding = KW_RODS_BINDING_TEMPLATE_JOINTS) readonly buffer TemplateJoints { RodTemplateJointGpu tjoints[]; };
@@ -43,6 +54,7 @@ layout(std430, binding = KW_RODS_BINDING_COLLIDERS) readonly buffer Colliders { 
 layout(std430, binding = KW_RODS_BINDING_MOTION) buffer Motion { RodJointMotionGpu motion[]; };
 layout(std430, binding = KW_RODS_BINDING_SPIN) buffer Spin { RodJointSpinGpu spin[]; };
 layout(std430, binding = KW_RODS_BINDING_CHAIN_STATE) buffer ChainStates { RodChainStateGpu chain_states[]; };
+layout(std430, binding = KW_RODS_BINDING_KEYED) readonly buffer Keyed { vec4 keyed[]; };
 
 layout(push_constant) uniform Push { RodPush push; };
 
@@ -94,15 +106,15 @@ vec3 closest_on_segment(vec3 p, vec3 a, vec3 b) {
 }
 
 // A template's constants, each loaded once: template joint i of tj + i, and its shapes
-// (shape0 + k * n + i, views pre-signed into the base's hemisphere at upload, SPEC A.2).
+// (shape0 + k * n + i, examples pre-signed into the base's hemisphere at upload, SPEC A.2).
 // Indices are clamped instead of guarded so that no load sits in a branch (see GROUPED);
-// entries past n and m are never read by the solver.
+// entries past n and m (the examples: views and keyed) are never read by the solver.
 struct Constants {
     float mass[MAX_J], weight[MAX_J], seg_len[MAX_J], half_len[MAX_J];
     vec3 axis[MAX_J];
-    vec4 rotation[MAX_VIEWS + 1][MAX_J], orientation[MAX_VIEWS + 1][MAX_J];
+    vec4 rotation[MAX_EXAMPLES + 1][MAX_J], orientation[MAX_EXAMPLES + 1][MAX_J];
 };
-void load_constants(uint n, uint m, uint tj, uint shape0, out Constants tc) {
+void load_constants(uint n, uint examples, uint tj, uint shape0, out Constants tc) {
     [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
         const uint ic = min(i, n - 1);
         const RodTemplateJointGpu tjoint = tjoints[tj + ic];
@@ -111,8 +123,8 @@ void load_constants(uint n, uint m, uint tj, uint shape0, out Constants tc) {
         tc.weight[i] = i == 0 ? ROOT_SHAPE_WEIGHT * tc.mass[i] : tc.mass[i];
         tc.seg_len[i] = tjoint.lengths.x;
         tc.half_len[i] = tjoint.lengths.y;
-        [[unroll]] for (uint v = 0; v <= MAX_VIEWS; ++v) {
-            const RodShapeJointGpu s = shapes[shape0 + min(v, m) * n + ic];
+        [[unroll]] for (uint v = 0; v <= MAX_EXAMPLES; ++v) {
+            const RodShapeJointGpu s = shapes[shape0 + min(v, examples) * n + ic];
             tc.rotation[v][i] = s.rotation;
             tc.orientation[v][i] = s.orientation;
         }
@@ -148,7 +160,8 @@ void main() {
     RodTemplateGpu t;
     if (GROUPED) {
         t = templates[push.group.x];
-        load_constants(EXACT ? MAX_J : push.group.y, EXACT ? MAX_VIEWS : push.group.z, push.counts.z, push.counts.w, tc);
+        load_constants(EXACT ? MAX_J : push.group.y, EXACT ? MAX_VIEWS + MAX_KEYED : push.group.z + push.group.w, push.counts.z,
+                       push.counts.w, tc);
     }
     const uint e = gl_GlobalInvocationID.x;
     if (e >= push.counts.x) return;
@@ -159,7 +172,9 @@ void main() {
     if (!GROUPED) t = templates[chain.ids.x];
     const uint n = EXACT ? MAX_J : t.counts.x;
     const uint m = EXACT ? MAX_VIEWS : t.counts.y;
-    if (!GROUPED) load_constants(n, m, t.counts.z, t.counts.w, tc);
+    // Keyed examples J (K.4), 0 where compiled out.
+    const uint nk = MAX_KEYED == 0 ? 0 : EXACT ? MAX_KEYED : t.solver.z;
+    if (!GROUPED) load_constants(n, m + nk, t.counts.z, t.counts.w, tc);
     const uint j0 = chain.joints.x;
 
     // ---- A.3: view direction and weights (world.cpp rest_shape, view.cpp) ----
@@ -193,6 +208,25 @@ void main() {
         }
         w[0] = 1.0 - sum;
     }
+    if (MAX_KEYED > 0) {
+        // K.4 (keyed.cpp combine_weights): the keyed examples take their share U of the view
+        // weights, W_k = (1 - U) w_k, W_{m+j} = u_j, normalized when U >= 1. Entries of u
+        // past J are 0 (rod_keys.comp, or never written for a chain without keyed
+        // examples), so summing all four adds exact zeros to the CPU's sum of J.
+        const vec4 u = keyed[c];
+        const float sum = u.x + u.y + u.z + u.w;
+        const bool whole = sum >= 1.0;
+        const float rest = 1.0 - (whole ? 1.0 : sum);
+        [[unroll]] for (uint k = 0; k <= MAX_EXAMPLES; ++k) {
+            const uint j = k - m - 1;  // keyed example j + 1 has shape m + 1 + j
+            const float uj = j == 0 ? u.x : j == 1 ? u.y : j == 2 ? u.z : u.w;
+            if (k <= m) {
+                w[k] = rest * w[k];
+            } else if (k <= m + nk) {
+                w[k] = whole ? uj / sum : uj;
+            }
+        }
+    }
 
     // ---- A.2: blend, then forward kinematics (shape.cpp blend, to_positions), for this
     // frame's weights and, for A.5, last frame's (the same arithmetic gives back the
@@ -217,11 +251,11 @@ void main() {
         old_rest_p[0] = vec3(0.0);
         [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
             if (i < n) {
-                // Shape 0 is the base; the views were flipped into its hemisphere at upload.
+                // Shape 0 is the base; the examples were flipped into its hemisphere at upload.
                 vec4 r_sum = w[0] * tc.rotation[0][i], o_sum = w[0] * tc.orientation[0][i];
                 vec4 r_old = w_old[0] * tc.rotation[0][i], o_old = w_old[0] * tc.orientation[0][i];
-                [[unroll]] for (uint v = 1; v <= MAX_VIEWS; ++v) {
-                    if (v <= m) {
+                [[unroll]] for (uint v = 1; v <= MAX_EXAMPLES; ++v) {
+                    if (v <= m + nk) {
                         r_sum += w[v] * tc.rotation[v][i];
                         o_sum += w[v] * tc.orientation[v][i];
                         r_old += w_old[v] * tc.rotation[v][i];

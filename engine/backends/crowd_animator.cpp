@@ -14,8 +14,11 @@
 
 namespace kodawari {
 
+// rod_inputs.comp tells a motion key source by kind 0.
+static_assert(static_cast<std::uint32_t>(rods::KeySourceKind::Motion) == 0u);
+
 /// Records shaders/rod_inputs.comp for every rigged character template: its instances'
-/// reference joints, chain roots and colliders from the pose backend's world matrices into
+/// reference joints, chain roots, colliders and key sources from the pose backend's world matrices into
 /// the rod backend's input buffers (what RodScene::rigged_frame computes on the host).
 class DeviceInputWriter final : public RodInputWriter {
 public:
@@ -40,7 +43,7 @@ public:
             const compute::BufferView views[KW_ROD_INPUTS_BINDING_COUNT] = {
                 {poses->buffer(DeviceBuffer::PoseWorld).buffer}, {&rig.instances}, {&rig.attachments},
                 {rods.buffer(DeviceBuffer::RodReference).buffer}, {rods.buffer(DeviceBuffer::RodRoots).buffer},
-                {rods.buffer(DeviceBuffer::RodColliders).buffer}};
+                {rods.buffer(DeviceBuffer::RodColliders).buffer}, {rods.buffer(DeviceBuffer::RodKeys).buffer}};
             rig.kernel.bind(views);
             const std::uint32_t groups = (rig.push.counts.x + KW_ROD_INPUTS_WORKGROUP_SIZE - 1) / KW_ROD_INPUTS_WORKGROUP_SIZE;
             rig.kernel.dispatch(recording, std::as_bytes(std::span(&rig.push, 1)), groups);
@@ -126,12 +129,22 @@ Result<bool> CrowdAnimator::write_inputs_on(RodBackend& rods) {
         std::vector<gpu::RodInputInstanceGpu> instances;
         for (const std::uint32_t c : rig.instances) {
             const CharacterInstance& inst = scene_->instances[c];
-            instances.push_back({{c, inst.chain_begin, inst.collider_begin, 0u}});
+            // Its chains' key sources follow each other (RodWorld::finalize, chain by chain).
+            const std::uint32_t first_key = k.chains.empty() ? 0u : scene_->world.chains[inst.chain_begin].key_begin;
+            instances.push_back({{c, inst.chain_begin, inst.collider_begin, first_key}});
         }
         std::vector<gpu::RodInputAttachmentGpu> attachments;
         for (const ChainAttachment& a : k.chains) attachments.push_back({{a.joint, 0u, 0u, 0u}, {}, {}});
         for (const ColliderAttachment& a : k.colliders) {
             attachments.push_back({{a.joint, 0u, 0u, 0u}, {a.a.x, a.a.y, a.a.z, a.radius}, {a.b.x, a.b.y, a.b.z, 0.0f}});
+        }
+        std::uint32_t keys = 0;
+        for (const ChainAttachment& a : k.chains) {
+            for (const KeyJoint& key : a.keys) {
+                const std::uint32_t parent = key.parent >= 0 ? static_cast<std::uint32_t>(key.parent) : KW_ROD_INPUTS_NO_PARENT;
+                attachments.push_back({{key.joint, parent, static_cast<std::uint32_t>(key.kind), 0u}, {}, {}});
+                ++keys;
+            }
         }
         const std::uint64_t sizes[] = {instances.size() * sizeof(gpu::RodInputInstanceGpu),
                                        attachments.size() * sizeof(gpu::RodInputAttachmentGpu)};
@@ -144,7 +157,7 @@ Result<bool> CrowdAnimator::write_inputs_on(RodBackend& rods) {
         if (!kernel) return kernel.error();
         const gpu::RodInputPush push{{static_cast<std::uint32_t>(instances.size()), static_cast<std::uint32_t>(rig.nodes),
                                       k.skeleton.reference, static_cast<std::uint32_t>(k.chains.size())},
-                                     {static_cast<std::uint32_t>(k.colliders.size()), 0u, 0u, 0u}};
+                                     {static_cast<std::uint32_t>(k.colliders.size()), keys, 0u, 0u}};
         rigs.push_back({rig.backend, std::move(kernel).value(), std::move(buffers.value()[0]), std::move(buffers.value()[1]), push});
     }
     auto writer = std::make_shared<const DeviceInputWriter>(options_.context, std::move(rigs));

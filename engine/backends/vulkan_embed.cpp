@@ -26,6 +26,7 @@ std::uint32_t element_bytes(DeviceBuffer name) {
         case DeviceBuffer::RodRoots: return sizeof(gpu::RodTransformGpu);
         case DeviceBuffer::RodColliders: return sizeof(gpu::RodColliderGpu);
         case DeviceBuffer::PoseWorld: return sizeof(gpu::PoseMatrixGpu);
+        case DeviceBuffer::RodKeys: return sizeof(gpu::RodTransformGpu);
     }
     return 0;
 }
@@ -49,7 +50,9 @@ public:
              .foreign = input.buffer},
             {&instances_}, {&attachments_},
             {rods.buffer(DeviceBuffer::RodReference).buffer}, {rods.buffer(DeviceBuffer::RodRoots).buffer},
-            {rods.buffer(DeviceBuffer::RodColliders).buffer}};
+            {rods.buffer(DeviceBuffer::RodColliders).buffer},
+            // MatrixInput names no key sources (more.y = 0): they come from the RodFrame.
+            {rods.buffer(DeviceBuffer::RodKeys).buffer}};
         kernel_.bind(views);
     }
 

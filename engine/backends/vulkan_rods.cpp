@@ -1,8 +1,10 @@
 // The Vulkan rod backend: one dispatch of shaders/rods_step.comp per frame advances every
 // chain (view weights, blend, suppression, all substeps and iterations in registers; see
-// shaders/shared/rods.h for the layout and why). Per frame the host writes only the
-// kinematic input (reference joints, chain roots, colliders) and, when dt changes, the
-// templates' step sizes; state stays on the device until the caller reads it.
+// shaders/shared/rods.h for the layout and why), after one of shaders/rod_keys.comp for
+// the chains with keyed examples (docs/keyed-examples.md K.6). Per frame the host writes
+// only the kinematic input (reference joints, chain roots, colliders, key sources) and,
+// when dt changes, the templates' step sizes and smoothing factors; state stays on the
+// device until the caller reads it.
 #include <algorithm>
 #include <array>
 #include <cmath>
@@ -10,6 +12,7 @@
 #include <deque>
 #include <optional>
 
+#include <kodawari/shared/rod_keys.h>
 #include <kodawari/shared/rods.h>
 
 #include "backends/backends.hpp"
@@ -21,6 +24,16 @@ namespace {
 
 // The kernel's fixed-size arrays hold what the rod world allows.
 static_assert(KW_RODS_MAX_JOINTS == rods::kMaxChainJoints && KW_RODS_MAX_VIEWS == rods::kMaxViewExamples);
+static_assert(KW_ROD_KEYS_MAX_SOURCES == rods::kMaxKeySources && KW_ROD_KEYS_MAX_EXAMPLES == rods::kMaxKeyedExamples);
+// rods_step.comp keeps u_1 .. u_4 in one vec4 and the combined weights in 8 floats.
+static_assert(rods::kMaxKeyedExamples == 4 && rods::kMaxViewExamples + 1 == 8);
+static_assert(KW_ROD_KEYS_KIND_MOTION == std::uint32_t(rods::KeyKind::Motion) &&
+              KW_ROD_KEYS_KIND_POSE == std::uint32_t(rods::KeyKind::Pose));
+static_assert(KW_ROD_KEYS_MEASURE_SPEED == std::uint32_t(rods::MotionMeasure::Speed) &&
+              KW_ROD_KEYS_MEASURE_ACCELERATION == std::uint32_t(rods::MotionMeasure::Acceleration) &&
+              KW_ROD_KEYS_MEASURE_ANGULAR_SPEED == std::uint32_t(rods::MotionMeasure::AngularSpeed));
+static_assert(KW_ROD_KEYS_FRAME_MAGNITUDE == std::uint32_t(rods::MotionFrame::Magnitude) &&
+              KW_ROD_KEYS_FRAME_JOINT == std::uint32_t(rods::MotionFrame::Joint));
 
 using compute::Buffer;
 
@@ -45,10 +58,41 @@ std::span<std::byte> writable_bytes_of(std::vector<T>& v) {
 void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
     const std::uint32_t substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / p.max_substep)));
     const float h = dt / static_cast<float>(substeps);
-    g.solver = {p.iterations, substeps, 0u, 0u};
+    g.solver = {p.iterations, substeps, g.solver.z, 0u};  // z: the keyed examples, set at load
     g.step = {h, std::exp(-p.damping * h),
               1.0f - std::pow(1.0f - p.stiffness, 1.0f / static_cast<float>(p.iterations)), p.momentum_suppression};
     g.physics.y = 1.0f - std::pow(1.0f - p.rest_stiffness, 1.0f / static_cast<float>(p.iterations));
+}
+
+// The smoothing factors alpha_j of a template's motion keys for a frame of `dt` (K.2),
+// the expression of rods::keyed_weights, so both sides smooth with the same bits.
+void set_smoothing(gpu::RodKeyTemplateGpu& g, std::span<const rods::KeyedExample> keyed, float dt) {
+    for (std::size_t j = 0; j < keyed.size(); ++j) {
+        const rods::KeyedExample& e = keyed[j];
+        g.smoothing[j].z = e.smoothing > 0.0f ? 1.0f - std::exp(-dt / e.smoothing) : 1.0f;
+    }
+}
+
+// A template's keyed examples (shared/rod_keys.h), alpha left for set_smoothing.
+gpu::RodKeyTemplateGpu key_template(const rods::ChainTemplate& t) {
+    gpu::RodKeyTemplateGpu g{};
+    std::uint32_t motion = 0;
+    for (std::size_t s = 0; s < t.key_sources.size(); ++s) {
+        if (t.key_sources[s] == rods::KeySourceKind::Motion) motion |= 1u << s;
+    }
+    g.counts = {static_cast<std::uint32_t>(t.key_sources.size()), static_cast<std::uint32_t>(t.keyed.size()), motion, 0u};
+    for (std::size_t j = 0; j < t.keyed.size(); ++j) {
+        const rods::KeyedExample& e = t.keyed[j];
+        const bool pose = e.kind == rods::KeyKind::Pose;
+        g.examples[j] = {static_cast<std::uint32_t>(e.kind), pose ? e.source_mask : e.source, static_cast<std::uint32_t>(e.measure),
+                         static_cast<std::uint32_t>(e.frame)};
+        g.keys[j] = to_gpu(e.value, e.influence);
+        g.smoothing[j] = {e.smoothing, e.saturation, 1.0f, 0.0f};
+        for (std::size_t s = 0; s < rods::kMaxKeySources; ++s) {
+            g.rotations[j * KW_ROD_KEYS_MAX_SOURCES + s] = to_gpu(e.rotations[s]);
+        }
+    }
+    return g;
 }
 
 class VulkanRodBackend final : public RodBackend, public DeviceRodBackend, public DeviceData {
@@ -88,6 +132,8 @@ public:
             case DeviceBuffer::RodReference: return span(KW_RODS_BINDING_REFERENCE, world_->character_count);
             case DeviceBuffer::RodRoots: return span(KW_RODS_BINDING_ROOTS, world_->chains.size());
             case DeviceBuffer::RodColliders: return span(KW_RODS_BINDING_COLLIDERS, world_->collider_count);
+            case DeviceBuffer::RodKeys:
+                return DeviceSpan{.buffer = &key_buffers_[KW_ROD_KEYS_BINDING_KEYS], .first = 0, .items = world_->key_count};
             default: return {};
         }
     }
@@ -109,25 +155,29 @@ public:
         ring_.reset();  // sized for the world
 
         // Constants: templates, their joints and shapes.
-        std::uint32_t max_joints = 2, max_views = 0;
+        std::uint32_t max_joints = 2, max_views = 0, max_keyed = 0;
         bool all_none = true, all_full = true;
         templates_.clear();
+        key_templates_.clear();
         std::vector<gpu::RodTemplateJointGpu> tjoints;
         std::vector<gpu::RodShapeJointGpu> shapes;
         for (const rods::ChainTemplate& t : world.templates) {
             const std::uint32_t n = t.chain.joint_count;
             max_joints = std::max(max_joints, n);
             max_views = std::max(max_views, static_cast<std::uint32_t>(t.views.size()));
+            max_keyed = std::max(max_keyed, static_cast<std::uint32_t>(t.keyed.size()));
             all_none = all_none && t.params.momentum_suppression == 0.0f;
             all_full = all_full && t.params.momentum_suppression == 1.0f;
             gpu::RodTemplateGpu g{};
             g.counts = {n, static_cast<std::uint32_t>(t.views.size()), static_cast<std::uint32_t>(tjoints.size()),
                         static_cast<std::uint32_t>(shapes.size())};
+            g.solver.z = static_cast<std::uint32_t>(t.keyed.size());
             g.physics = {t.chain.thickness, 0.0f, 0.0f, 0.0f};
             g.accel = to_gpu(t.params.gravity + t.params.wind);
             g.first_dir = to_gpu(t.basis.first_direction);
             for (std::size_t k = 0; k < t.views.size(); ++k) g.views[k] = to_gpu(t.views[k].direction, t.views[k].influence);
             templates_.push_back(g);
+            key_templates_.push_back(key_template(t));
             for (std::uint32_t i = 0; i < n; ++i) {
                 tjoints.push_back({to_gpu(t.chain.bone_axis[i], t.chain.mass[i]),
                                    {t.chain.segment_length[i], t.chain.half_length[i], 0.0f, 0.0f}});
@@ -163,6 +213,28 @@ public:
             ++groups_.back().count;
         }
         grouped_ = groups_.size() <= KW_RODS_MAX_GROUPS;
+
+        // The chains with keyed examples, listed densely for rod_keys.comp, and their key
+        // state as rods::initial_key_state makes it: every source's last pose the initial
+        // frame's, no velocity yet, every smoothed key 0.
+        std::vector<gpu::RodKeyChainGpu> key_chains;
+        std::vector<gpu::RodKeyStateGpu> key_states;
+        for (std::uint32_t c = 0; c < count; ++c) {
+            const rods::ChainInstance& ch = world.chains[c];
+            if (world.templ(ch).keyed.empty()) continue;
+            key_chains.push_back({{ch.template_index, c, ch.key_begin, 0u}});
+            const rods::KeyState initial_keys = rods::initial_key_state(world, c, initial);
+            gpu::RodKeyStateGpu ks{};
+            for (std::size_t k = 0; k < rods::kMaxKeySources; ++k) {
+                const rods::KeyState::Source& src = initial_keys.sources[k];
+                ks.position[k] = to_gpu(src.last.position, src.has_velocity ? 1.0f : 0.0f);
+                ks.rotation[k] = to_gpu(src.last.rotation);
+                ks.velocity[k] = to_gpu(src.velocity);
+            }
+            for (std::size_t j = 0; j < rods::kMaxKeyedExamples; ++j) ks.smoothed[j] = to_gpu(initial_keys.smoothed[j]);
+            key_states.push_back(ks);
+        }
+        keyed_chains_ = static_cast<std::uint32_t>(key_chains.size());
 
         // The initial state, from the CPU reference's initial_state (so all backends start
         // from the same bits).
@@ -200,7 +272,8 @@ public:
             std::uint64_t{world.collider_count} * sizeof(gpu::RodColliderGpu),
             motion.size() * sizeof(gpu::RodJointMotionGpu),
             spin.size() * sizeof(gpu::RodJointSpinGpu),
-            chain_states.size() * sizeof(gpu::RodChainStateGpu)};
+            chain_states.size() * sizeof(gpu::RodChainStateGpu),
+            count * sizeof(gpu::vec4)};
         auto storage = compute::create_storage_buffers(*ctx_, sizes, "the rod world");
         if (!storage) return storage.error();
         buffers_ = std::move(storage).value();
@@ -210,6 +283,31 @@ public:
         KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_MOTION], bytes_of(motion)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_SPIN], bytes_of(spin)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], bytes_of(chain_states)));
+        // u = 0 for every chain: rod_keys.comp writes those of the chains with keyed
+        // examples before each step; the others' stay 0, which K.4 leaves the view blend.
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_KEYED], bytes_of(std::vector<gpu::vec4>(count, gpu::vec4{}))));
+
+        key_buffers_.clear();
+        const std::uint64_t key_sizes[KW_ROD_KEYS_BINDING_COUNT - 1] = {
+            key_templates_.size() * sizeof(gpu::RodKeyTemplateGpu), key_chains.size() * sizeof(gpu::RodKeyChainGpu),
+            std::uint64_t{world.key_count} * sizeof(gpu::RodTransformGpu), key_states.size() * sizeof(gpu::RodKeyStateGpu)};
+        auto key_storage = compute::create_storage_buffers(*ctx_, key_sizes, "the rod world's keyed examples");
+        if (!key_storage) return key_storage.error();
+        key_buffers_ = std::move(key_storage).value();
+        KW_TRY(compute::upload(*ctx_, key_buffers_[KW_ROD_KEYS_BINDING_CHAINS], bytes_of(key_chains)));
+        KW_TRY(compute::upload(*ctx_, key_buffers_[KW_ROD_KEYS_BINDING_STATE], bytes_of(key_states)));
+        if (keyed_chains_ > 0) {
+            if (!key_kernel_) {
+                const std::vector<compute::Binding> types(KW_ROD_KEYS_BINDING_COUNT, compute::Binding::Storage);
+                auto created = compute::Kernel::create(*ctx_, "rod_keys", types, sizeof(gpu::RodKeyPush));
+                if (!created) return created.error();
+                key_kernel_.emplace(std::move(created).value());
+            }
+            const Buffer* key_bound[KW_ROD_KEYS_BINDING_COUNT] = {
+                &key_buffers_[KW_ROD_KEYS_BINDING_TEMPLATES], &key_buffers_[KW_ROD_KEYS_BINDING_CHAINS],
+                &key_buffers_[KW_ROD_KEYS_BINDING_KEYS], &key_buffers_[KW_ROD_KEYS_BINDING_STATE], &buffers_[KW_RODS_BINDING_KEYED]};
+            key_kernel_->bind(key_bound);
+        }
         // The input buffers hold the initial frame's input until the first step (what a
         // renderer drawing the colliders from them sees at frame 0).
         KW_TRY(upload_input(*ctx_, initial));
@@ -222,33 +320,35 @@ public:
         // joints). GROUPED: one variant per distinct (n, m) of the templates, when there are
         // few (each is a compilation); otherwise the world's longest for the runs that have
         // it and the general kernel for the rest.
-        std::vector<std::pair<std::uint32_t, std::uint32_t>> shapes_of_runs;
+        auto shape_of = [&](std::uint32_t t) {
+            return std::array<std::uint32_t, 3>{templates_[t].counts.x, templates_[t].counts.y, templates_[t].solver.z};
+        };
+        std::vector<std::array<std::uint32_t, 3>> shapes_of_runs;
         for (const Group& g : groups_) {
-            const std::pair<std::uint32_t, std::uint32_t> nm{templates_[g.template_index].counts.x,
-                                                              templates_[g.template_index].counts.y};
-            if (std::find(shapes_of_runs.begin(), shapes_of_runs.end(), nm) == shapes_of_runs.end()) shapes_of_runs.push_back(nm);
+            const auto nmj = shape_of(g.template_index);
+            if (std::find(shapes_of_runs.begin(), shapes_of_runs.end(), nmj) == shapes_of_runs.end()) shapes_of_runs.push_back(nmj);
         }
         const bool per_shape = grouped_ && shapes_of_runs.size() <= KW_RODS_MAX_VARIANTS;
         std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
-        auto kernel_for = [&](std::uint32_t n, std::uint32_t m, bool exact) -> Result<const compute::Kernel*> {
-            auto kernel = pipeline({n, m, suppression, grouped_ ? 1u : 0u, exact ? 1u : 0u});
+        auto kernel_for = [&](std::uint32_t n, std::uint32_t m, std::uint32_t keyed, bool exact) -> Result<const compute::Kernel*> {
+            auto kernel = pipeline({n, m, suppression, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed});
             if (!kernel) return kernel.error();
             kernel.value()->bind(bound);  // (again for a shared one: the same bindings)
             return kernel.value();
         };
         bool all_exact = true;
         for (Group& g : groups_) {
-            const std::uint32_t n = templates_[g.template_index].counts.x, m = templates_[g.template_index].counts.y;
-            all_exact = all_exact && n == max_joints && m == max_views;
+            const auto [n, m, keyed] = shape_of(g.template_index);
+            const bool exact = n == max_joints && m == max_views && keyed == max_keyed;
+            all_exact = all_exact && exact;
             if (!grouped_) continue;
-            auto kernel = per_shape ? kernel_for(n, m, true)
-                                    : kernel_for(max_joints, max_views, n == max_joints && m == max_views);
+            auto kernel = per_shape ? kernel_for(n, m, keyed, true) : kernel_for(max_joints, max_views, max_keyed, exact);
             if (!kernel) return kernel.error();
             g.kernel = kernel.value();
         }
         if (!grouped_) {
-            auto kernel = kernel_for(max_joints, max_views, all_exact);
+            auto kernel = kernel_for(max_joints, max_views, max_keyed, all_exact);
             if (!kernel) return kernel.error();
             kernel_ = kernel.value();
         }
@@ -281,6 +381,8 @@ public:
             // The most one frame uploads: the templates (when dt changes) and the input.
             auto rounded = [](std::uint64_t bytes) { return (bytes + 15) / 16 * 16; };
             const std::uint64_t bytes = rounded(templates_.size() * sizeof(gpu::RodTemplateGpu)) +
+                                        rounded(key_templates_.size() * sizeof(gpu::RodKeyTemplateGpu)) +
+                                        rounded(std::uint64_t{world_->key_count} * sizeof(gpu::RodTransformGpu)) +
                                         rounded(std::uint64_t{world_->character_count} * sizeof(gpu::RodTransformGpu)) +
                                         rounded(world_->chains.size() * sizeof(gpu::RodTransformGpu)) +
                                         rounded(std::uint64_t{world_->collider_count} * sizeof(gpu::RodColliderGpu));
@@ -315,8 +417,9 @@ public:
             out.view_directions[c] = vec3_of(cs.view);
             const float w[8] = {cs.weights[0].x, cs.weights[0].y, cs.weights[0].z, cs.weights[0].w,
                                 cs.weights[1].x, cs.weights[1].y, cs.weights[1].z, cs.weights[1].w};
-            const std::size_t m = world_->templ(ch).views.size();
-            for (std::size_t k = 0; k <= m; ++k) out.weights[c * kWeights + k] = w[k];
+            // W_0 .. W_{m+J} (K.4): the base, the views, the keyed examples.
+            const std::size_t shapes = world_->templ(ch).shapes.size();
+            for (std::size_t k = 0; k < shapes; ++k) out.weights[c * kWeights + k] = w[k];
             const rods::ChainShape rest = rest_of(static_cast<std::uint32_t>(c));
             for (std::uint32_t i = 0; i < world_->templ(ch).chain.joint_count; ++i) {
                 const std::uint32_t j = ch.joint_begin + i;
@@ -360,6 +463,8 @@ private:
         if (frame.dt != dt_) {
             for (std::size_t t = 0; t < templates_.size(); ++t) set_step(templates_[t], world_->templates[t].params, frame.dt);
             KW_TRY(compute::upload(recording, buffers_[KW_RODS_BINDING_TEMPLATES], bytes_of(templates_)));
+            for (std::size_t t = 0; t < key_templates_.size(); ++t) set_smoothing(key_templates_[t], world_->templates[t].keyed, frame.dt);
+            KW_TRY(compute::upload(recording, key_buffers_[KW_ROD_KEYS_BINDING_TEMPLATES], bytes_of(key_templates_)));
             dt_ = frame.dt;
         }
         KW_TRY(upload_input(recording, frame));
@@ -377,13 +482,20 @@ private:
         // overwrites, the input) before the step.
         compute::barrier(recording, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
         if (timed) recording.timestamp(compute::Timestamp::Begin);
+        if (keyed_chains_ > 0) {
+            // K.2, K.3: the raw keyed weights, which the step reads (K.4).
+            const gpu::RodKeyPush key_push{{keyed_chains_, 0u, 0u, 0u}, {frame.dt, 0.0f, 0.0f, 0.0f}};
+            const std::uint32_t key_groups = (keyed_chains_ + KW_ROD_KEYS_WORKGROUP_SIZE - 1) / KW_ROD_KEYS_WORKGROUP_SIZE;
+            key_kernel_->dispatch(recording, std::as_bytes(std::span(&key_push, 1)), key_groups);
+            compute::barrier(recording, compute::Stage::Compute, compute::Stage::Compute);
+        }
         if (grouped_) {
             // Disjoint chains: the dispatches need no barrier between them.
             for (const Group& g : groups_) {
                 const gpu::RodTemplateGpu& t = templates_[g.template_index];
                 push.counts.z = t.counts.z;
                 push.counts.w = t.counts.w;
-                push.group = {g.template_index, t.counts.x, t.counts.y, 0u};
+                push.group = {g.template_index, t.counts.x, t.counts.y, t.solver.z};
                 dispatch(g.kernel, g.first, g.count);
             }
         } else {
@@ -410,6 +522,9 @@ private:
         });
         KW_TRY(compute::upload(target, buffers_[KW_RODS_BINDING_REFERENCE], bytes_of(reference_)));
         KW_TRY(compute::upload(target, buffers_[KW_RODS_BINDING_ROOTS], bytes_of(roots_)));
+        keys_.resize(frame.keys.size());
+        std::transform(frame.keys.begin(), frame.keys.end(), keys_.begin(), [](const rods::Transform& t) { return to_gpu(t); });
+        KW_TRY(compute::upload(target, key_buffers_[KW_ROD_KEYS_BINDING_KEYS], bytes_of(keys_)));
         return compute::upload(target, buffers_[KW_RODS_BINDING_COLLIDERS], bytes_of(colliders_));
     }
 
@@ -443,6 +558,12 @@ private:
     std::shared_ptr<const RodInputWriter> input_writer_;
     std::optional<compute::StagingRing> ring_;  // record_external's input uploads
     std::vector<gpu::RodTemplateGpu> templates_;
+    // Keyed examples (shared/rod_keys.h): per template its constants; the kernel and its
+    // buffers (binding KW_ROD_KEYS_BINDING_WEIGHTS is buffers_[KW_RODS_BINDING_KEYED]).
+    std::vector<gpu::RodKeyTemplateGpu> key_templates_;
+    std::optional<compute::Kernel> key_kernel_;
+    std::vector<Buffer> key_buffers_;
+    std::uint32_t keyed_chains_ = 0;  // chains with keyed examples: rod_keys.comp's invocations
     // The runs of RodChainGpu that share a template, and whether each is a dispatch of its own.
     struct Group {
         std::uint32_t template_index, first, count;
@@ -453,7 +574,7 @@ private:
     float dt_ = -1.0f;
     double gpu_ms_ = -1.0;
     // Per-frame staging on the host, kept to avoid reallocating every frame.
-    std::vector<gpu::RodTransformGpu> reference_, roots_;
+    std::vector<gpu::RodTransformGpu> reference_, roots_, keys_;
     std::vector<gpu::RodColliderGpu> colliders_;
     std::vector<gpu::RodJointMotionGpu> motion_;
     std::vector<gpu::RodJointSpinGpu> spin_;

@@ -8,6 +8,7 @@
 #include <kodawari/shared/poses.h>
 #include <kodawari/shared/render.h>
 #include <kodawari/shared/rod_inputs.h>
+#include <kodawari/shared/rod_keys.h>
 #include <kodawari/shared/rods.h>
 #include <kodawari/shared/skin.h>
 
@@ -56,6 +57,20 @@ static_assert(sizeof(RodPush) == 64 && offsetof(RodPush, group) == 16 && offseto
               offsetof(RodPush, camera_forward) == 48);
 static_assert(sizeof(RodPush) <= 128, "Vulkan guarantees 128 bytes of push constants");
 static_assert(KW_RODS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
+
+// shared/rod_keys.h
+static_assert(sizeof(RodKeyTemplateGpu) == 16 * (1 + 3 * KW_ROD_KEYS_MAX_EXAMPLES + KW_ROD_KEYS_MAX_EXAMPLES * KW_ROD_KEYS_MAX_SOURCES));
+static_assert(offsetof(RodKeyTemplateGpu, counts) == 0 && offsetof(RodKeyTemplateGpu, examples) == 16 &&
+              offsetof(RodKeyTemplateGpu, keys) == 16 + 16 * KW_ROD_KEYS_MAX_EXAMPLES &&
+              offsetof(RodKeyTemplateGpu, smoothing) == 16 + 32 * KW_ROD_KEYS_MAX_EXAMPLES &&
+              offsetof(RodKeyTemplateGpu, rotations) == 16 + 48 * KW_ROD_KEYS_MAX_EXAMPLES);
+static_assert(sizeof(RodKeyChainGpu) == 16);
+static_assert(sizeof(RodKeyStateGpu) == 16 * (3 * KW_ROD_KEYS_MAX_SOURCES + KW_ROD_KEYS_MAX_EXAMPLES));
+static_assert(offsetof(RodKeyStateGpu, position) == 0 && offsetof(RodKeyStateGpu, rotation) == 16 * KW_ROD_KEYS_MAX_SOURCES &&
+              offsetof(RodKeyStateGpu, velocity) == 32 * KW_ROD_KEYS_MAX_SOURCES &&
+              offsetof(RodKeyStateGpu, smoothed) == 48 * KW_ROD_KEYS_MAX_SOURCES);
+static_assert(sizeof(RodKeyPush) == 32 && offsetof(RodKeyPush, frame) == 16);
+static_assert(KW_ROD_KEYS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 
 // shared/poses.h
 static_assert(sizeof(PoseNodeGpu) == 80 && offsetof(PoseNodeGpu, relative) == 16);

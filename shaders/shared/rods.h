@@ -52,15 +52,17 @@
 #define KW_RODS_BINDING_MOTION 7           // RodJointMotionGpu, per joint (state)
 #define KW_RODS_BINDING_SPIN 8             // RodJointSpinGpu, per joint (state)
 #define KW_RODS_BINDING_CHAIN_STATE 9      // RodChainStateGpu, per chain (state and diagnostics)
-#define KW_RODS_BINDING_COUNT 10
+#define KW_RODS_BINDING_KEYED 10           // vec4 per chain: raw keyed weights u_1 .. u_4 (this frame, shared/rod_keys.h)
+#define KW_RODS_BINDING_COUNT 11
 
 // Specialization constant ids of rods_step.comp.
 #define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the dispatch: sizes the register arrays
 #define KW_RODS_SPEC_MAX_VIEWS 1   // the most view examples of a chain of the dispatch
 #define KW_RODS_SPEC_SUPPRESSION 2 // KW_RODS_SUPPRESSION_*: what the world's chains need of SPEC A.5
 #define KW_RODS_SPEC_GROUPED 3     // 1: one dispatch per template, its constants named by RodPush (see there)
-#define KW_RODS_SPEC_EXACT 4       // 1: every chain of the dispatch has MAX_J joints and MAX_VIEWS views
-#define KW_RODS_SPEC_COUNT 5
+#define KW_RODS_SPEC_EXACT 4       // 1: every chain of the dispatch has MAX_J joints, MAX_VIEWS views and MAX_KEYED keyed examples
+#define KW_RODS_SPEC_MAX_KEYED 5   // the most keyed examples of a chain of the dispatch (0: keyed examples compiled out)
+#define KW_RODS_SPEC_COUNT 6
 
 // Worlds of at most this many templates are stepped one dispatch per template (GROUPED);
 // each dispatch costs tens of microseconds on lavapipe, so more templates take one.
@@ -78,7 +80,7 @@ KW_NAMESPACE_BEGIN
 // A chain template's constants (rods::ChainTemplate) and this frame's step sizes.
 struct RodTemplateGpu {
     uvec4 counts;     // x: joint count n, y: view examples m, z: first RodTemplateJointGpu, w: first RodShapeJointGpu
-    uvec4 solver;     // x: projection iterations, y: substeps this frame, z, w: unused
+    uvec4 solver;     // x: projection iterations, y: substeps this frame, z: keyed examples J (shapes m+1 .. m+J), w: unused
     vec4 step;        // x: substep h (s), y: velocity decay exp(-damping h), z: k' per iteration, w: suppression
     vec4 physics;     // x: thickness (m), y: k_rest' per iteration (this frame), z, w: unused
     vec4 accel;       // xyz: gravity + wind (m/s^2), w: unused
@@ -92,9 +94,10 @@ struct RodTemplateJointGpu {
     vec4 lengths;    // x: segment length l_i (0 for the last joint), y: ellipsoid half length a_i, z, w: unused
 };
 
-// Per joint of one shape of a template (shape 0 = base, k = view example k), SPEC A.2.
-// A view's quaternions are uploaded negated where their dot with the base's is negative
-// (the blend's hemisphere flip done once; negation is exact, so the blend's bits are the CPU's).
+// Per joint of one shape of a template (shape 0 = base, k = view example k, m + j = keyed
+// example j; docs/keyed-examples.md K.4), SPEC A.2. An example's quaternions are uploaded
+// negated where their dot with the base's is negative (the blend's hemisphere flip done
+// once; negation is exact, so the blend's bits are the CPU's).
 struct RodShapeJointGpu {
     vec4 rotation;     // r_i (identity for the last joint, which has no segment)
     vec4 orientation;  // o_i
@@ -130,7 +133,7 @@ struct RodJointSpinGpu {
 struct RodChainStateGpu {
     RodTransformGpu root;  // last frame's root frame
     vec4 view;             // xyz: this frame's view direction d (reference joint's frame), w: unused
-    vec4 weights[2];       // w_0 .. w_7 (w_0 = the base's); the next frame blends last
+    vec4 weights[2];       // W_0 .. W_7 (W_0 = the base's; views, then keyed examples, K.4); the next frame blends last
                            // frame's rest shape from them again for SPEC A.5 instead of
                            // storing it per joint (loads and stores are the costly part)
 };
@@ -140,7 +143,7 @@ struct RodChainStateGpu {
 // push constants alone (so lavapipe loads them once for all lanes).
 struct RodPush {
     uvec4 counts;           // x: chains, y: first RodChainGpu, z: first RodTemplateJointGpu, w: first RodShapeJointGpu (GROUPED)
-    uvec4 group;            // GROUPED: x: template, y: joint count n, z: view examples m, w: unused
+    uvec4 group;            // GROUPED: x: template, y: joint count n, z: view examples m, w: keyed examples J
     vec4 camera_position;   // xyz, w: 1 = orthographic
     vec4 camera_forward;    // xyz, w: unused
 };

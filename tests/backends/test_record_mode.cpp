@@ -5,6 +5,7 @@
 // engine uses them. Lavapipe where there is no GPU, validation on (ctest).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <vector>
 
@@ -13,6 +14,7 @@
 #include "compute/compute.hpp"
 #include "kodawari/rods/synthetic.hpp"
 #include "kodawari/scene.hpp"
+#include "keyed_scene.hpp"
 #include "test_support.hpp"
 
 using namespace kodawari;
@@ -95,6 +97,57 @@ TEST(RecordMode, RodsAndBirdsRecordIntoOneSubmission) {
     ASSERT_TRUE(recorded_birds.value()->simulate(1, {a, {}}).ok());
     ASSERT_TRUE(simulated_birds.value()->simulate(1, {b, {}}).ok());
     EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(gpu::BirdPose)), 0);
+    EXPECT_EQ(validation_messages(device), 0u);
+}
+
+// Keyed examples in record mode (docs/keyed-examples.md K.6): the recorded step measures
+// the keys (rod_keys.comp) before the rod step in the caller's recording, as step() does
+// in its own, so both give the same bits (positions and the combined weights W) over a
+// sprint, a stop, a turn and a nod. 67 chains: not a multiple of the workgroup size.
+TEST(RecordMode, KeyedExamplesRecordAsTheyStep) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto opened = open_shared_device(testing_support::gpu_options());
+    ASSERT_TRUE(opened.ok()) << opened.error().message;
+    compute::Device& device = *opened.value();
+    BackendOptions options = testing_support::gpu_options();
+    options.context = opened.value();
+    const testing_support::KeyedScene scene = testing_support::KeyedScene::make(67, 3);
+    auto recorded = make_rod_backend(BackendKind::Vulkan, options);
+    auto stepped = make_rod_backend(BackendKind::Vulkan, options);
+    ASSERT_TRUE(recorded.ok() && stepped.ok());
+    auto* recorder = dynamic_cast<DeviceRodBackend*>(recorded.value().get());
+    ASSERT_NE(recorder, nullptr);
+    rods::RodFrame frame;
+    scene.frame(0, frame);
+    ASSERT_TRUE(recorded.value()->load(scene.world(), frame).ok());
+    ASSERT_TRUE(stepped.value()->load(scene.world(), frame).ok());
+    const compute::Queue queue(device);
+    ChainSnapshot expected, actual;
+    float most_keyed = 0.0f;
+    for (std::uint32_t f = 1; f <= testing_support::KeyedScene::kFrames; f += 1) {
+        scene.frame(f, frame);
+        ASSERT_TRUE(stepped.value()->step(frame).ok());
+        auto recording = queue.begin();
+        ASSERT_TRUE(recording.ok()) << recording.error().message;
+        ASSERT_TRUE(recorder->record_step(recording.value(), frame).ok());
+        auto submission = queue.submit(std::move(recording).value());
+        ASSERT_TRUE(submission.ok()) << submission.error().message;
+        ASSERT_TRUE(submission.value().wait().ok());
+        if (f % 15 != 0) continue;
+        ASSERT_TRUE(stepped.value()->read(expected).ok());
+        ASSERT_TRUE(recorded.value()->read(actual).ok());
+        EXPECT_EQ(std::memcmp(expected.positions.data(), actual.positions.data(), expected.positions.size() * sizeof(glm::vec3)), 0)
+            << "frame " << f;
+        EXPECT_EQ(expected.weights, actual.weights) << "frame " << f;
+        const rods::RodWorld& world = scene.world();
+        for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
+            const rods::ChainTemplate& t = world.templ(world.chains[c]);
+            for (std::size_t j = 1; j <= t.keyed.size(); ++j) {
+                most_keyed = std::max(most_keyed, actual.weights[c * (rods::kMaxViewExamples + 1) + t.views.size() + j]);
+            }
+        }
+    }
+    EXPECT_GT(most_keyed, 0.5f) << "the keyed examples took part";
     EXPECT_EQ(validation_messages(device), 0u);
 }
 

@@ -534,6 +534,153 @@ TEST(RiggedScene, RodInputWrittenOnTheDeviceMatchesTheHosts) {
     EXPECT_EQ(validation_messages(*device.value()), 0u);
 }
 
+// The key sources of keyed examples (docs/keyed-examples.md K.1) written on the device
+// with the rest of the rigged input (rod_inputs.comp) against RodScene::rigged_frame's on
+// the host: each chain of the crowd's chibis reads its head's world pose (motion), the
+// head's rotation relative to its parent node and its root node's world rotation (pose,
+// the second with no parent: KeyJoint::parent -1). The scene format cannot say so yet, so
+// the key joints and keyed examples are set by hand on the built scene: a speed example
+// (key 0 m/s, so its weight follows the walk) and a pose example keyed on instance 0's
+// first-frame pose. The combined weights W of every chain (ChainSnapshot::weights), which
+// depend on every key source through the smoothed measures, must agree within 1e-4
+// between the two runs every 10 frames (the inputs differ by rigid_part's rounding, about
+// 1e-7, which the weights' slopes of order 1 keep far below that; a missing, stale or
+// mis-parented key moves a weight by 0.1 or more), and the chains within 1e-5 m after 60
+// frames, the bound of the test above. The keyed weights must move, or a key left at its
+// first value would pass. 37 instances: not a multiple of the workgroup size.
+TEST(RiggedScene, KeySourcesWrittenOnTheDeviceMatchTheHosts) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    Scene scene = load(kCrowdScene);
+    scene.crowds[0].count = 37;
+    RodScene rods = build(scene);
+    std::vector<std::uint32_t> keyed_templates;
+    for (CharacterKinematics& k : rods.characters) {
+        if (!k.rig) continue;
+        const std::uint32_t head = k.skeleton.reference;
+        const int head_parent = k.rig->nodes[head].parent;
+        ASSERT_GE(head_parent, 0);
+        for (std::size_t c = 0; c < k.chains.size(); ++c) {
+            ChainAttachment& a = k.chains[c];
+            a.keys = {KeyJoint{head, -1, rods::KeySourceKind::Motion}, KeyJoint{head, head_parent, rods::KeySourceKind::Pose},
+                      KeyJoint{a.joint, -1, rods::KeySourceKind::Pose}};
+            const std::uint32_t t = k.first_template + static_cast<std::uint32_t>(c);
+            if (std::find(keyed_templates.begin(), keyed_templates.end(), t) != keyed_templates.end()) continue;
+            keyed_templates.push_back(t);
+            rods::ChainTemplate& tpl = rods.world.templates[t];
+            // Keyed shapes: the base turned about X, one way and the other (same segment lengths).
+            const rods::ChainShape base = rods::to_positions(tpl.basis, tpl.shapes[0]);
+            auto turned = [&](float angle) {
+                rods::ChainShape s = base;
+                const glm::quat r = glm::angleAxis(angle, glm::vec3(1, 0, 0));
+                for (glm::vec3& p : s.positions) p = r * p;
+                for (glm::quat& o : s.orientations) o = glm::normalize(r * o);
+                return s;
+            };
+            const rods::KeySourceKind sources[] = {rods::KeySourceKind::Motion, rods::KeySourceKind::Pose, rods::KeySourceKind::Pose};
+            const rods::ChainShape shapes[] = {turned(0.6f), turned(-0.6f)};
+            rods::KeyedExample still;
+            still.kind = rods::KeyKind::Motion;
+            still.source = 0;
+            still.measure = rods::MotionMeasure::Speed;
+            still.value = glm::vec3(0.0f);
+            still.influence = 0.5f;
+            still.smoothing = 0.1f;
+            rods::KeyedExample pose;  // key rotations set below, from the first frame
+            pose.kind = rods::KeyKind::Pose;
+            pose.source_mask = 0b110;
+            pose.influence = 0.15f;
+            pose.rotations[1] = pose.rotations[2] = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
+            const rods::KeyedExample keyed[] = {still, pose};
+            ASSERT_LE(tpl.views.size() + 2, rods::kMaxViewExamples);
+            const auto added = rods::add_keyed_examples(tpl, sources, shapes, keyed);
+            ASSERT_TRUE(added.ok()) << added.error().message;
+        }
+    }
+    ASSERT_FALSE(keyed_templates.empty());
+    ASSERT_TRUE(rods.world.finalize().ok());
+    {
+        // The pose example's key: instance 0's pose at frame 0 (so its weight starts near 1
+        // there and moves as the clips play).
+        const rods::RodFrame first = rods.frame(0);
+        std::vector<bool> done(rods.world.templates.size(), false);
+        for (std::size_t c = 0; c < rods.world.chains.size(); ++c) {
+            const std::uint32_t t = rods.world.chains[c].template_index;
+            rods::ChainTemplate& tpl = rods.world.templates[t];
+            if (tpl.keyed.size() != 2 || done[t]) continue;
+            done[t] = true;
+            const std::uint32_t k = rods.world.chains[c].key_begin;
+            tpl.keyed[1].rotations[1] = first.keys[k + 1].rotation;
+            tpl.keyed[1].rotations[2] = first.keys[k + 2].rotation;
+        }
+    }
+    BackendOptions options;
+    options.validation = true;
+    auto device = open_shared_device(options);
+    ASSERT_TRUE(device.ok()) << device.error().message;
+    options.context = device.value();
+    struct Run {
+        std::unique_ptr<RodBackend> rods;
+        std::optional<CrowdAnimator> animator;
+        rods::RodFrame frame;
+    };
+    Run host, on_device;
+    for (Run* run : {&host, &on_device}) {
+        auto backend = make_rod_backend(BackendKind::Vulkan, options);
+        ASSERT_TRUE(backend.ok()) << backend.error().message;
+        run->rods = std::move(backend).value();
+        auto animator = CrowdAnimator::create(rods, BackendKind::Vulkan, options);
+        ASSERT_TRUE(animator.ok()) << animator.error().message;
+        run->animator.emplace(std::move(animator).value());
+        ASSERT_TRUE(run->animator->frame(0, run->frame).ok());
+        ASSERT_TRUE(run->rods->load(rods.world, run->frame).ok());
+    }
+    auto took = on_device.animator->write_inputs_on(*on_device.rods);
+    ASSERT_TRUE(took.ok()) << took.error().message;
+    ASSERT_TRUE(took.value());
+
+    constexpr std::uint32_t kFrames = 60;
+    constexpr std::size_t kWeights = rods::kMaxViewExamples + 1;
+    float worst_weight = 0.0f, low = 1.0f, high = 0.0f;
+    for (std::uint32_t f = 1; f <= kFrames; ++f) {
+        ASSERT_TRUE(host.animator->frame(f, host.frame).ok());
+        ASSERT_TRUE(host.rods->step(host.frame).ok());
+        ASSERT_TRUE(on_device.animator->frame(f, on_device.frame).ok());
+        ASSERT_TRUE(on_device.rods->step(on_device.frame).ok());
+        if (f % 10 != 0) continue;
+        ChainSnapshot a, b;
+        ASSERT_TRUE(host.rods->read(a).ok());
+        ASSERT_TRUE(on_device.rods->read(b).ok());
+        ASSERT_EQ(a.weights.size(), b.weights.size());
+        for (std::size_t k = 0; k < a.weights.size(); ++k) worst_weight = std::max(worst_weight, std::abs(a.weights[k] - b.weights[k]));
+        for (std::size_t c = 0; c < rods.world.chains.size(); ++c) {
+            const rods::ChainTemplate& tpl = rods.world.templ(rods.world.chains[c]);
+            for (std::size_t j = 1; j <= tpl.keyed.size(); ++j) {
+                const float w = a.weights[c * kWeights + tpl.views.size() + j];
+                low = std::min(low, w);
+                high = std::max(high, w);
+            }
+        }
+    }
+    std::vector<rods::ChainState> a, b;
+    ASSERT_TRUE(host.rods->read_states(a).ok());
+    ASSERT_TRUE(on_device.rods->read_states(b).ok());
+    float worst = 0.0f;
+    for (std::size_t c = 0; c < a.size(); ++c) {
+        const std::uint32_t n = rods.world.templ(rods.world.chains[c]).chain.joint_count;
+        for (std::uint32_t i = 0; i < n; ++i) {
+            worst = std::max(worst, glm::length((a[c].root.position + a[c].x[i]) - (b[c].root.position + b[c].x[i])));
+        }
+    }
+    std::printf("key sources on the device, 37 chibis x %u frames: W within %.3g of the host-input run (keyed W from %.3f "
+                "to %.3f), chain joints within %.3g m\n",
+                kFrames, static_cast<double>(worst_weight), static_cast<double>(low), static_cast<double>(high),
+                static_cast<double>(worst));
+    EXPECT_GT(high - low, 0.2f) << "the keyed weights must move";
+    EXPECT_LT(worst_weight, 1e-4f);
+    EXPECT_LT(worst, 1e-5f);
+    EXPECT_EQ(validation_messages(*device.value()), 0u);
+}
+
 // Blender's own glTF importer (tests/tools/blender_check.py) on the export of a
 // simulated crowd, when Blender is installed (bash scripts/setup --with-blender), and on
 // its compact export (--compact: fewer keys, rotations as shorts) with the same counts.
