@@ -227,10 +227,6 @@ TEST_P(RodBackends, RejectsAFrameThatDoesNotFitTheWorld) {
 // and the dynamics (damping, shape matching) keep the differences bounded as in that test
 // (measured: 6e-5). The cpu backends must give the reference's bits (K.6).
 TEST_P(RodBackends, KeyedExamplesMatchTheReference) {
-    if (GetParam() == BackendKind::Cpu) {
-        GTEST_SKIP() << "the cpu (SIMD) backend does not implement keyed examples yet (its combined weights of keyed "
-                        "examples read 0; docs/keyed-examples.md K.6 is being added to it separately)";
-    }
     for (const auto& [chains, templates] : {std::pair{67u, 3u}, std::pair{131u, 5u}, std::pair{131u, 34u}}) {
         SCOPED_TRACE(std::to_string(chains) + " chains of " + std::to_string(templates) + " templates");
         const KeyedScene scene = KeyedScene::make(chains, templates);
