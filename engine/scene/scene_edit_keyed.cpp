@@ -33,10 +33,12 @@ std::string keyed_text(const KeyedSketch& k, const std::string& name, const std:
                measure_name(k.measure) + "\", \"frame\": \"magnitude\", \"value\": " + num(k.value) +
                ", \"influence\": " + num(k.influence) + ", \"smoothing\": " + num(k.smoothing);
     } else {
-        // Normalized, so that 6 digits stay within the loader's 1e-3 of unit length.
+        // Normalized, so that 6 digits stay within the loader's 1e-3 of unit length;
+        // float noise under the sixth digit (a pitch's y and z of 1e-9) written as 0.
         const glm::quat q = glm::normalize(k.rotation);
-        out += ", \"key\": \"pose\", \"pose\": [{\"joint\": " + joint_json.dump() + ", \"rotation\": [" + num(q.x) + ", " +
-               num(q.y) + ", " + num(q.z) + ", " + num(q.w) + "]}], \"influence\": " + num(k.influence);
+        const auto c = [](float v) { return num(std::abs(v) < 5e-7f ? 0.0 : static_cast<double>(v)); };
+        out += ", \"key\": \"pose\", \"pose\": [{\"joint\": " + joint_json.dump() + ", \"rotation\": [" + c(q.x) + ", " +
+               c(q.y) + ", " + c(q.z) + ", " + c(q.w) + "]}], \"influence\": " + num(k.influence);
     }
     return out + ",\n" + indent + " " + shape_text(k.shape, indent) + "}";
 }
