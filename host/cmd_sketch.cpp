@@ -276,7 +276,7 @@ Command add_sketch(CLI::App& app) {
     add_switch(*c, "--undo", o->undo, "remove the last example (view or keyed) a sketch added to the chain");
     add_text(*c, "--key", o->key, "motion|pose",
              "make a keyed example instead of a view example, keyed by the character's motion or a joint's pose at --frame "
-             "(docs/keyed-examples.md)");
+             "(docs/keyed-examples.md) (default: a view example)");
     add_text(*c, "--joint", o->joint, "NAME",
              "with --key: the joint (skeleton joint or glTF node) measured (default: the character's reference joint)");
     add_text(*c, "--measure", o->measure, "speed|acceleration|angular_speed",
