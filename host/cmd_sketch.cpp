@@ -1,7 +1,9 @@
 // `kodawari sketch SCENE --chain CHARACTER/CHAIN --stroke STROKE.json`: the sketching tool
 // of SPEC A.6 without a window. The chain takes the stroke's shape, seen from the camera,
-// as a new view example for that view direction, written back into the scene file (which
-// is checked by the loader before and after it is written).
+// as a new view example for that view direction, or with --key as a keyed example keyed by
+// the character's motion or pose at that frame (docs/keyed-examples.md), written back into
+// the scene file (which is checked by the loader before and after it is written).
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <fstream>
@@ -13,6 +15,7 @@
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/scene_edit.hpp"
+#include "kodawari/sketch_key.hpp"
 
 namespace kodawari::cli {
 namespace {
@@ -35,7 +38,60 @@ struct SketchOptions {
     std::optional<std::string> influence;
     std::optional<std::string> out;
     bool undo = false;
+    std::optional<std::string> key;
+    std::optional<std::string> joint;
+    std::optional<std::string> measure;
+    std::optional<std::string> smoothing;
 };
+
+// What --key and its options ask for; none without --key (a view example).
+std::optional<SketchKeyOptions> key_options(const SketchOptions& o) {
+    if (!o.key) {
+        if (o.joint || o.measure || o.smoothing) throw UsageError{"--joint, --measure and --smoothing need --key motion|pose"};
+        return std::nullopt;
+    }
+    SketchKeyOptions k;
+    if (*o.key == "motion") {
+        k.kind = rods::KeyKind::Motion;
+    } else if (*o.key == "pose") {
+        k.kind = rods::KeyKind::Pose;
+        if (o.measure || o.smoothing) throw UsageError{"--measure and --smoothing need --key motion (a pose key has neither)"};
+    } else {
+        throw UsageError{"--key: expected motion or pose, got \"" + *o.key + "\""};
+    }
+    if (o.joint) {
+        if (o.joint->empty()) throw UsageError{"--joint: expected a joint name, got \"\""};
+        k.joint = *o.joint;
+    }
+    if (o.measure) {
+        if (*o.measure == "speed") {
+            k.measure = rods::MotionMeasure::Speed;
+        } else if (*o.measure == "acceleration") {
+            k.measure = rods::MotionMeasure::Acceleration;
+        } else if (*o.measure == "angular_speed") {
+            k.measure = rods::MotionMeasure::AngularSpeed;
+        } else {
+            throw UsageError{"--measure: expected speed, acceleration or angular_speed, got \"" + *o.measure + "\""};
+        }
+    }
+    if (o.smoothing) {
+        k.smoothing = parse_real("--smoothing", *o.smoothing);
+        if (!(k.smoothing >= 0.0f && k.smoothing <= rods::kMaxSmoothing)) {
+            throw UsageError{"--smoothing: expected seconds in [0, 60], got \"" + *o.smoothing + "\""};
+        }
+    }
+    if (o.influence) {
+        const float p = parse_real("--influence", *o.influence);
+        const bool pose = k.kind == rods::KeyKind::Pose;
+        if (!(p > 0.0f && p <= (pose ? 360.0f : 1e4f))) {
+            throw UsageError{std::string("--influence: expected ") +
+                             (pose ? "degrees in (0, 360]" : "a number in (0, 1e4] in the measure's units") + ", got \"" +
+                             *o.influence + "\""};
+        }
+        k.influence = p;
+    }
+    return k;
+}
 
 int cmd_sketch(const SketchOptions& o) {
     const auto& chain = o.chain;
@@ -49,7 +105,8 @@ int cmd_sketch(const SketchOptions& o) {
     const bool undo = o.undo;
     if (!o.scene) throw UsageError{"sketch needs exactly one SCENE file"};
     if (!chain) throw UsageError{"sketch needs --chain CHARACTER/CHAIN"};
-    if (undo && (stroke_path || camera_text || size_text || influence_text || frame_index)) {
+    if (undo && (stroke_path || camera_text || size_text || influence_text || frame_index || o.key || o.joint ||
+                 o.measure || o.smoothing)) {
         throw UsageError{"sketch --undo takes only SCENE, --chain and --out"};
     }
     if (!undo && !stroke_path) throw UsageError{"sketch needs --stroke STROKE.json (or --undo)"};
@@ -65,13 +122,14 @@ int cmd_sketch(const SketchOptions& o) {
         auto edit = remove_last_sketch(text.value(), scene_path, *chain);
         if (!edit) return report(edit.error());
         if (auto written = write_scene_text(out_path, edit.value().text); !written) return report(written.error());
-        std::printf("removed view example %u \"%s\" of %s; wrote %s\n", edit.value().index, edit.value().name.c_str(),
-                    chain->c_str(), out_path.c_str());
+        std::printf("removed %s example %u \"%s\" of %s; wrote %s\n", edit.value().keyed ? "keyed" : "view",
+                    edit.value().index, edit.value().name.c_str(), chain->c_str(), out_path.c_str());
         return kExitOk;
     }
 
+    const std::optional<SketchKeyOptions> keyed = key_options(o);
     rods::SketchInput input;
-    if (influence_text) {
+    if (influence_text && !keyed) {
         input.influence = parse_real("--influence", *influence_text);
         if (!(input.influence > 0.0f && input.influence <= rods::kMaxInfluence)) {
             throw UsageError{"--influence: expected a number in (0, 1000], got \"" + *influence_text + "\""};
@@ -131,6 +189,52 @@ int cmd_sketch(const SketchOptions& o) {
     auto sketched = rods::sketch_view_example(input);
     if (!sketched) return report(sketched.error());
     const rods::SketchResult& s = sketched.value();
+    const std::uint32_t joints = static_cast<std::uint32_t>(s.shape.positions.size());
+    const auto print_camera = [&] {
+        std::printf("sketch %s at frame %u: camera %s -> %s, %ux%u px, %s\n", chain->c_str(), frame,
+                    vec_text(pose.position).c_str(), vec_text(pose.target).c_str(), width, height,
+                    pose.projection == rods::Camera::Projection::Perspective ? "perspective" : "orthographic");
+    };
+    const auto print_stroke = [&] {
+        std::printf("stroke moved by (%.1f, %.1f) px to start at the root; %u of %u joints on it, %.0f%% of it used\n",
+                    s.stroke_offset.x, s.stroke_offset.y, s.joints_on_stroke, joints, 100.0 * s.stroke_used);
+        std::printf("reprojection error %.3g px (joints past the stroke's end: up to %.3g px from it)\n", s.max_error_px,
+                    s.max_overrun_px);
+    };
+
+    if (keyed) {
+        auto key = measure_sketch_key(rs, ci.character, frame, *keyed);
+        if (!key) {
+            const Error& e = key.error();
+            // The joint is the user's word: a usage error naming the option.
+            if (keyed->joint.size() && e.message.rfind("joint \"", 0) == 0) throw UsageError{"--joint: " + e.message};
+            return report(make_error(e.kind, scene_path + ": " + e.message));
+        }
+        KeyedSketch k = key.value();
+        k.shape = s.shape;
+        auto edit = add_keyed_example(text.value(), scene_path, *chain, k);
+        if (!edit) return report(edit.error());
+        if (auto written = write_scene_text(out_path, edit.value().text); !written) return report(written.error());
+        print_camera();
+        if (k.kind == rods::KeyKind::Motion) {
+            std::printf("motion key: %s %s %.6g %s (magnitude, smoothed over %g s), influence %.6g %s\n", k.joint.c_str(),
+                        measure_name(k.measure), static_cast<double>(k.value), measure_unit(k.measure),
+                        static_cast<double>(k.smoothing), static_cast<double>(k.influence), measure_unit(k.measure));
+        } else {
+            const glm::quat n = glm::normalize(k.rotation);
+            const auto snap = [](float v) { return std::abs(v) < 5e-7f ? 0.0f : v; };  // as written (scene_edit_keyed.cpp)
+            const glm::quat q(snap(n.w), snap(n.x), snap(n.y), snap(n.z));
+            std::printf("pose key: %s rotation [%.4g, %.4g, %.4g, %.4g] relative to its parent (a turn of %.1f degrees), "
+                        "influence %g degrees\n",
+                        k.joint.c_str(), static_cast<double>(q.x), static_cast<double>(q.y), static_cast<double>(q.z),
+                        static_cast<double>(q.w), glm::degrees(2.0 * std::acos(std::min(1.0, std::abs(static_cast<double>(q.w))))),
+                        static_cast<double>(k.influence));
+        }
+        print_stroke();
+        std::printf("keyed example %u \"%s\" added; wrote %s\n", edit.value().index, edit.value().name.c_str(),
+                    out_path.c_str());
+        return kExitOk;
+    }
 
     ViewSpec view;
     view.view = s.view;
@@ -139,16 +243,10 @@ int cmd_sketch(const SketchOptions& o) {
     if (!edit) return report(edit.error());
     if (auto written = write_scene_text(out_path, edit.value().text); !written) return report(written.error());
 
-    const std::uint32_t joints = static_cast<std::uint32_t>(s.shape.positions.size());
-    std::printf("sketch %s at frame %u: camera %s -> %s, %ux%u px, %s\n", chain->c_str(), frame,
-                vec_text(pose.position).c_str(), vec_text(pose.target).c_str(), width, height,
-                pose.projection == rods::Camera::Projection::Perspective ? "perspective" : "orthographic");
+    print_camera();
     std::printf("view direction %s (reference joint's frame), influence %g\n", vec_text(s.view.direction).c_str(),
                 static_cast<double>(s.view.influence));
-    std::printf("stroke moved by (%.1f, %.1f) px to start at the root; %u of %u joints on it, %.0f%% of it used\n",
-                s.stroke_offset.x, s.stroke_offset.y, s.joints_on_stroke, joints, 100.0 * s.stroke_used);
-    std::printf("reprojection error %.3g px (joints past the stroke's end: up to %.3g px from it)\n", s.max_error_px,
-                s.max_overrun_px);
+    print_stroke();
     const SceneEdit& e = edit.value();
     std::printf("view example %u \"%s\" %s; wrote %s\n", e.index, e.name.c_str(),
                 e.replaced ? ("replaces \"" + e.replaced_name + "\" (within " + std::to_string(static_cast<int>(kSketchReplaceDeg)) +
@@ -162,17 +260,29 @@ int cmd_sketch(const SketchOptions& o) {
 
 Command add_sketch(CLI::App& app) {
     auto o = std::make_shared<SketchOptions>();
-    CLI::App* c = app.add_subcommand("sketch", "the chain takes the shape of a stroke drawn over the view, as a new view example "
-                                               "(docs/sketch.md); --undo removes the last one a sketch added");
+    CLI::App* c = app.add_subcommand("sketch", "the chain takes the shape of a stroke drawn over the view, as a new view example, "
+                                               "or with --key as a keyed example (docs/sketch.md); --undo removes the last "
+                                               "one a sketch added");
     add_text(*c, "scene", o->scene, "SCENE", "the scene file to edit");
     add_text(*c, "--chain", o->chain, "CHARACTER/CHAIN", "the chain to shape (required)");
     add_text(*c, "--stroke", o->stroke, "STROKE.json", "the stroke, points in image pixels (required unless --undo)");
     add_count(*c, "--frame", o->frame, 0, 1'000'000'000, "the frame whose pose the stroke is drawn over (default: 0)");
     add_text(*c, "--camera", o->camera, "EX,EY,EZ,TX,TY,TZ", "the camera's eye and target in metres (default: the scene's camera)");
     add_size(*c, o->size, "the image the stroke's pixels are in");
-    add_text(*c, "--influence", o->influence, "P", "the example's influence, in (0, 1000] (default: 4)");
+    add_text(*c, "--influence", o->influence, "P",
+             "the example's influence: a view example's in (0, 1000] (default: 4); with --key motion in the measure's "
+             "units (default: a quarter of the measured key), with --key pose in degrees (default: 20)");
     add_text(*c, "--out", o->out, "SCENE2.json", "the scene file to write (default: SCENE, in place)");
-    add_switch(*c, "--undo", o->undo, "remove the last view example a sketch added to the chain");
+    add_switch(*c, "--undo", o->undo, "remove the last example (view or keyed) a sketch added to the chain");
+    add_text(*c, "--key", o->key, "motion|pose",
+             "make a keyed example instead of a view example, keyed by the character's motion or a joint's pose at --frame "
+             "(docs/keyed-examples.md) (default: a view example)");
+    add_text(*c, "--joint", o->joint, "NAME",
+             "with --key: the joint (skeleton joint or glTF node) measured (default: the character's reference joint)");
+    add_text(*c, "--measure", o->measure, "speed|acceleration|angular_speed",
+             "with --key motion: what is measured of the joint (default: speed)");
+    add_text(*c, "--smoothing", o->smoothing, "S",
+             "with --key motion: the measure's smoothing time constant in s, in [0, 60] (default: 0.25)");
     return {c, [o] { return cmd_sketch(*o); }};
 }
 

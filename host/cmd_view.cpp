@@ -57,7 +57,7 @@ int cmd_view(const ViewOptions& o) {
     std::vector<Step> scripted;
     if (keys_text) {
         static constexpr const char* kKnown =
-            "space right left home [ ] 1 2 3 s w u c o + - p q escape, drag:X1:Y1:X2:Y2, orbit:DX:DY, resize:W:H";
+            "space right left home [ ] 1 2 3 s k w u c o + - p q escape, drag:X1:Y1:X2:Y2, orbit:DX:DY, resize:W:H";
         std::stringstream list(*keys_text);
         for (std::string name; std::getline(list, name, ',');) {
             Step step;
@@ -227,7 +227,7 @@ int cmd_view(const ViewOptions& o) {
                       v.follow_scene ? "scene" : "orbit", list.camera().orthographic ? "ortho" : "persp",
                       s.rod_scene() ? static_cast<std::size_t>(s.rod_scene()->world.character_count) : 0,
                       s.rod_scene() ? s.rod_scene()->world.chains.size() : 0, s.bird_world().birds.size(),
-                      v.sketch_mode ? ("  [sketch: influence " + number(v.influence) + "]").c_str() : "",
+                      v.sketch_mode ? ("  [sketch: " + v.sketch_status() + "]").c_str() : "",
                       v.message.empty() ? "" : ("  " + v.message).c_str());
         add_status(list, status);
         glfwSetWindowTitle(window.w, (std::string("kodawari view - ") + status).c_str());
@@ -284,7 +284,7 @@ Command add_view(CLI::App& app) {
     add_switch(*c, "--joints", o->joints, "a dot at every simulated joint of the strands (default: off, the strands alone)");
     add_count(*c, "--frames", o->frames, 1, 100'000'000, "quit after N drawn frames (default: run until closed)");
     add_text(*c, "--keys", o->keys, "K1,K2,...",
-             "one key per drawn frame first: space right left home [ ] 1 2 3 s w u c o + - p q escape, drag:X1:Y1:X2:Y2, "
+             "one key per drawn frame first: space right left home [ ] 1 2 3 s k w u c o + - p q escape, drag:X1:Y1:X2:Y2, "
              "orbit:DX:DY, resize:W:H (default: none)");
     add_text(*c, "--screenshot", o->screenshot, "FILE.png", "write the last drawn frame (default: none)");
     add_backend_options(*c, o->backend);

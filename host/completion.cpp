@@ -18,7 +18,7 @@ ValueKind value_kind(const CLI::Option& option) {
     if (type == "DIR") return ValueKind::Directory;
     if (type.find('.') != std::string::npos || type == "SCENE" || type == "CHARACTER" || type == "PART") return ValueKind::File;
     // A value name in lower case lists the words themselves (auto|vulkan|cpu, bash).
-    if (!type.empty() && type.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-|") == std::string::npos) {
+    if (!type.empty() && type.find_first_not_of("abcdefghijklmnopqrstuvwxyz0123456789-_|") == std::string::npos) {
         return ValueKind::Choice;
     }
     return ValueKind::Word;

@@ -81,6 +81,7 @@ PUBLIC_OWNERS = {
     "rod_scene.hpp": "io",
     "export.hpp": "io",
     "scene_edit.hpp": "io",
+    "sketch_key.hpp": "io",
     "simulation.hpp": "engine",
     "bake.hpp": "engine",
     "shards.hpp": "engine",

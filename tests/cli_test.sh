@@ -69,7 +69,9 @@ check "bench chains --help: --frames with its default, --steps documented as the
 for command in run merge validate "bench birds" "bench chains" "bench crowd" "bench view" rig sketch render view info schema completion; do
     # shellcheck disable=SC2086
     "$bin" $command --help >"$work/cmd-help.out" 2>&1
-    check "$command --help: every option says its default" bash -c "test $? -eq 0 && ! grep -- '^  --' '$work/cmd-help.out' | grep -v -e 'default' -e '^  --help' -e 'old spelling' -e 'required' -e 'instead of' -e '--undo' -e '--no-export'"
+    # An option whose value name is longer than the column (--measure's choices) has its
+    # description on the next line: joined to it first.
+    check "$command --help: every option says its default" bash -c "test $? -eq 0 && ! sed -e :a -e '\$!N;s/\n   \{10,\}/ /;ta' -e 'P;D' '$work/cmd-help.out' | grep -- '^  --' | grep -v -e 'default' -e '^  --help' -e 'old spelling' -e 'required' -e 'instead of' -e '--undo' -e '--no-export'"
 done
 "$bin" help run >"$work/help-run.out" 2>&1
 check "help run is run --help" bash -c "test $? -eq 0 && grep -q -- '--frames' '$work/help-run.out'"
@@ -232,6 +234,60 @@ check "sketch with a non-number exits 2" bash -c "test $? -eq 2 && grep -q 'poin
 check "sketch of an unknown chain exits 2" bash -c "test $? -eq 2 && grep -q 'no chain' '$work/chain.out'"
 "$bin" sketch "$work/bunny.json" --chain bunny/ear_r --stroke "$work/stroke.json" >"$work/mirror.out" 2>&1
 check "sketch of a mirrored chain exits 2" bash -c "test $? -eq 2 && grep -q 'mirror' '$work/mirror.out'"
+# Keyed sketches (docs/sketch.md): --key motion at the ponytail's sprint writes the head's
+# measured speed; --key pose on nod's bangs the head's rotation; --undo takes the keyed
+# example back out, byte for byte; bad options and the limits exit 2, writing nothing.
+cp scenes/ponytail.json "$work/ponytail.json"
+"$bin" sketch "$work/ponytail.json" --chain runner/ponytail --stroke "$work/stroke.json" --frame 330 --key motion >"$work/kmotion.out" 2>&1
+rc=$?
+cat "$work/kmotion.out"
+check "sketch --key motion exits 0" test $rc -eq 0
+check "sketch --key motion prints the measured speed" grep -Eq '^motion key: head speed [4-9][.0-9]* m/s \(magnitude, smoothed over 0.25 s\), influence ' "$work/kmotion.out"
+check "sketch --key motion names the keyed example" grep -q '^keyed example 1 "sketch 1" added' "$work/kmotion.out"
+check "the motion example is in the chain's keyed array" grep -q '"name": "sketch 1", "key": "motion", "joint": "head", "measure": "speed", "frame": "magnitude", "value": ' "$work/ponytail.json"
+"$bin" run "$work/ponytail.json" --backend cpu --frames 10 --no-export >/dev/null 2>&1
+check "the scene with the motion example runs" test $? -eq 0
+"$bin" sketch "$work/ponytail.json" --chain runner/ponytail --undo >"$work/kundo.out" 2>&1
+check "sketch --undo says it removed the keyed example" grep -q '^removed keyed example 1 "sketch 1" of runner/ponytail' "$work/kundo.out"
+check "sketch --key motion then --undo gives the file back" cmp -s scenes/ponytail.json "$work/ponytail.json"
+cp scenes/nod.json "$work/nod.json"
+"$bin" sketch "$work/nod.json" --chain girl/bang_l1 --stroke "$work/stroke.json" --frame 150 --key pose --influence 15 >"$work/kpose.out" 2>&1
+rc=$?
+cat "$work/kpose.out"
+check "sketch --key pose exits 0" test $rc -eq 0
+check "sketch --key pose prints the rotation" grep -q '^pose key: head rotation \[.*influence 15 degrees' "$work/kpose.out"
+check "the pose example is written with a rotation" grep -q '"key": "pose", "pose": \[{"joint": "head", "rotation": \[' "$work/nod.json"
+"$bin" sketch "$work/nod.json" --chain girl/bang_l1 --undo >/dev/null 2>&1
+check "sketch --key pose then --undo gives the file back" cmp -s scenes/nod.json "$work/nod.json"
+cp "$work/ponytail.json" "$work/pony-before.json"
+kbad() {  # kbad NAME EXPECTED-MESSAGE ARGS...: exit 2, the message, the scene untouched
+    local name=$1 expected=$2; shift 2
+    "$bin" sketch "$work/ponytail.json" --chain runner/ponytail --stroke "$work/stroke.json" "$@" >"$work/kbad.out" 2>&1
+    local rc=$?
+    check "sketch $name exits 2" test $rc -eq 2
+    check "sketch $name says: $expected" grep -qF -- "$expected" "$work/kbad.out"
+    check "sketch $name writes nothing" cmp -s "$work/ponytail.json" "$work/pony-before.json"
+}
+kbad "--key sideways" '--key: expected motion or pose, got "sideways"' --key sideways
+kbad "--measure jerk" '--measure: expected speed, acceleration or angular_speed, got "jerk"' --frame 330 --key motion --measure jerk
+kbad "--joint tail" '--joint: joint "tail": character "runner" has no such joint' --frame 330 --key motion --joint tail
+kbad "--influence nan" '--influence: expected a finite number, got "nan"' --frame 330 --key motion --influence nan
+kbad "--influence -1" '--influence: expected a number in (0, 1e4]' --frame 330 --key motion --influence -1
+kbad "--smoothing -0.5" '--smoothing: expected seconds in [0, 60], got "-0.5"' --frame 330 --key motion --smoothing -0.5
+kbad "--smoothing nan" '--smoothing: expected a finite number, got "nan"' --frame 330 --key motion --smoothing nan
+kbad "--measure without --key" '--joint, --measure and --smoothing need --key motion|pose' --measure speed
+kbad "--key motion at rest" 'character "runner" does not move at frame 0' --key motion
+kbad "--key pose --smoothing" '--measure and --smoothing need --key motion' --key pose --smoothing 1
+# The limits: a chain with 4 keyed examples takes no fifth (exit 2, naming file and chain).
+for i in 1 2 3; do
+    "$bin" sketch "$work/ponytail.json" --chain runner/ponytail --stroke "$work/stroke.json" --frame $((200 + 40 * i)) --key motion >/dev/null 2>&1
+done
+check "three more keyed sketches fill the ponytail" test "$(grep -c '"key": "motion"' "$work/ponytail.json")" -eq 4
+cp "$work/ponytail.json" "$work/pony-full.json"
+"$bin" sketch "$work/ponytail.json" --chain runner/ponytail --stroke "$work/stroke.json" --frame 330 --key pose >"$work/kfull.out" 2>&1
+check "a fifth keyed sketch exits 2" test $? -eq 2
+check "the limit names the file, the chain and the most" grep -qF "ponytail.json: \$.characters[0].chains[0].keyed: chain \"runner/ponytail\" already has 4 keyed examples, the most a chain may have (4)" "$work/kfull.out"
+check "the refused sketch writes nothing" cmp -s "$work/ponytail.json" "$work/pony-full.json"
 # The offscreen renderer (issue 5): PNG files per frame, a contact sheet, bad input exits 2.
 "$bin" render scenes/ahoge.json --frames 10:40:10 --size 161x97 --contact-sheet "$work/render/sheet.png" --columns 2 \
     --out "$work/render" >"$work/render.out" 2>&1

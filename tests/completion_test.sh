@@ -42,6 +42,9 @@ check "render --out completes directories" offers "$work/files/sub" kodawari ren
 check "run --frames offers nothing (a number)" offers "" kodawari run --frames ''
 check "the options of info" offers "--device" kodawari info --d
 check "completion's shell" offers "bash" kodawari completion b
+check "sketch --key -> motion pose" offers "motion pose" kodawari sketch --key ''
+check "sketch --measure -> the three measures" offers "acceleration angular_speed speed" kodawari sketch --measure ''
+check "sketch --sm -> --smoothing" offers "--smoothing" kodawari sketch --sm
 
 echo "completion: $passed passed, $failed failed"
 test $failed -eq 0

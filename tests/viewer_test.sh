@@ -174,6 +174,21 @@ chain=$(sed -n 's/^kodawari: sketch \([^:]*\): view example.*/\1/p' "$work/sketc
 "$bin" sketch "$work/ahoge.json" --chain "$chain" --undo --out "$work/undone.json" >/dev/null
 check "undoing the saved sketch gives the original bytes" cmp -s "$work/undone.json" scenes/ahoge.json
 
+# K cycles what the next sketch makes (view, motion, pose example); the same drag after K K
+# adds a pose example keyed by the head's pose at the frame shown (docs/sketch.md, "Keyed
+# sketches"), saved with W; the command's --undo takes it back out, byte for byte.
+cp scenes/ahoge.json "$work/ahoge-k.json"
+view "$work/ksketch" "$work/ahoge-k.json" --size 320x240 --frames 8 --keys "orbit:80:0,s,k,k,drag:160:100:120:50,w"
+rc=$?
+check "keyed sketch run exits 0" test $rc -eq 0
+check "K says the next sketch makes a motion example" grep -q 'the next sketch makes a motion example' "$work/ksketch.out"
+check "K again: a pose example" grep -q 'the next sketch makes a pose example' "$work/ksketch.out"
+check "the drag adds a pose example" grep -q 'sketch .*: pose example "sketch 1" added, head as now, influence 20 degrees' "$work/ksketch.out"
+check "the pose example is saved" grep -q '"key": "pose", "pose": \[{"joint": "head"' "$work/ahoge-k.json"
+kchain=$(sed -n 's/^kodawari: sketch \([^:]*\): pose example.*/\1/p' "$work/ksketch.out" | head -1)
+"$bin" sketch "$work/ahoge-k.json" --chain "$kchain" --undo --out "$work/kundone.json" >/dev/null
+check "undoing the keyed sketch gives the original bytes" cmp -s "$work/kundone.json" scenes/ahoge.json
+
 # What the window shows (not the offscreen copy): an Xvfb whose screen is a file (-fbdir,
 # XWD format), read while the viewer runs until the chain's colour appears there.
 if command -v Xvfb >/dev/null 2>&1; then

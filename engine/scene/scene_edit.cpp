@@ -8,6 +8,7 @@
 #include <cassert>
 #include <cmath>
 #include <cstdio>
+#include <functional>
 #include <optional>
 #include <string>
 #include <vector>
@@ -19,23 +20,12 @@
 #include "kodawari/rods/world.hpp"
 #include "scene/character_loader.hpp"
 #include "scene/json_reader.hpp"
+#include "scene/scene_edit_text.hpp"
 
-namespace kodawari {
+namespace kodawari::scene_edit_detail {
 namespace {
 
-using Json = nlohmann::ordered_json;
-
 // ---- where values are in the text (the text is valid JSON: nlohmann parsed it first)
-
-struct Span {
-    std::size_t begin = 0, end = 0;  // [begin, end)
-};
-
-struct Member {
-    std::string key;
-    std::size_t key_begin = 0;
-    Span value;
-};
 
 std::size_t skip_ws(const std::string& t, std::size_t i) {
     while (i < t.size() && (t[i] == ' ' || t[i] == '\t' || t[i] == '\n' || t[i] == '\r')) ++i;
@@ -117,19 +107,13 @@ std::optional<std::string> line_indent(const std::string& t, std::size_t pos) {
     return lead;
 }
 
+}  // namespace
+
 // ---- the chain
 
 Error fail(const std::string& path, const std::string& json_path, const std::string& message) {
     return make_error(Error::Kind::InvalidInput, path + ": " + json_path + ": " + message);
 }
-
-struct ChainPlace {
-    Json chain;             // the chain object as parsed
-    std::string json_path;  // "$.characters[0].chains[1]"
-    std::vector<Member> members;
-    std::optional<std::size_t> views;  // index into members
-    std::vector<Span> view_spans;
-};
 
 Result<ChainPlace> find_chain(const std::string& text, const std::string& path, const std::string& chain_id) {
     Json root;
@@ -189,6 +173,7 @@ Result<ChainPlace> find_chain(const std::string& text, const std::string& path, 
     ChainPlace place;
     place.chain = chains[j];
     place.json_path = character_path + ".chains[" + std::to_string(j) + "]";
+    place.character = c;
     // The same walk in the text.
     const std::size_t top = skip_ws(text, text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0);  // after a UTF-8 BOM
     const auto top_members = members(text, top);
@@ -201,25 +186,85 @@ Result<ChainPlace> find_chain(const std::string& text, const std::string& path, 
     const Span chain_span = elements(text, chains_member->value.begin)[j];
     place.members = members(text, chain_span.begin);
     for (std::size_t m = 0; m < place.members.size(); ++m) {
-        if (place.members[m].key == "views") place.views = m;
-    }
-    if (place.views) {
-        const Span v = place.members[*place.views].value;
-        if (text[v.begin] != '[') return fail(path, place.json_path + ".views", "expected an array");
-        place.view_spans = elements(text, v.begin);
+        ArrayPlace* a = place.members[m].key == "views" ? &place.views : place.members[m].key == "keyed" ? &place.keyed : nullptr;
+        if (a == nullptr) continue;
+        const Span v = place.members[m].value;
+        if (text[v.begin] != '[') return fail(path, place.json_path + "." + place.members[m].key, "expected an array");
+        a->member = m;
+        a->spans = elements(text, v.begin);
     }
     return place;
 }
 
-// n of a "sketch <n>" name, or nullopt.
-std::optional<long> sketch_number(const Json& view) {
-    if (!view.is_object() || !view.contains("name") || !view["name"].is_string()) return std::nullopt;
-    const std::string name = view["name"].get<std::string>();
+std::optional<long> sketch_number(const Json& example) {
+    if (!example.is_object() || !example.contains("name") || !example["name"].is_string()) return std::nullopt;
+    const std::string name = example["name"].get<std::string>();
     const std::string prefix = "sketch ";
     if (name.rfind(prefix, 0) != 0 || name.size() == prefix.size() || name.size() > prefix.size() + 9) return std::nullopt;
     const std::string digits = name.substr(prefix.size());
     if (digits.find_first_not_of("0123456789") != std::string::npos) return std::nullopt;
     return std::stol(digits);
+}
+
+long highest_sketch(const Json& chain) {
+    long highest = 0;
+    for (const char* key : {"views", "keyed"}) {
+        if (!chain.contains(key) || !chain[key].is_array()) continue;
+        for (const Json& e : chain[key]) {
+            if (auto n = sketch_number(e)) highest = std::max(highest, *n);
+        }
+    }
+    return highest;
+}
+
+std::string append_element(const std::string& text, const ChainPlace& place, const ArrayPlace& a, const std::string& key,
+                           const std::function<std::string(const std::string& indent)>& element) {
+    std::string out = text;
+    if (a.member && !a.spans.empty()) {
+        // After the last example, on a line of its own when it sits on one.
+        const Span last = a.spans.back();
+        const auto indent = line_indent(text, last.begin);
+        out.insert(last.end, indent ? ",\n" + *indent + element(*indent) : ", " + element(""));
+    } else if (a.member) {
+        out.insert(place.members[*a.member].value.begin + 1, element(""));
+    } else {
+        // No such array yet: a new last member of the chain.
+        const Member& last = place.members.back();
+        const auto indent = line_indent(text, last.key_begin);
+        const std::string member = "\"" + key + "\": [" + element(indent.value_or("")) + "]";
+        out.insert(last.value.end, indent ? ",\n" + *indent + member : ", " + member);
+    }
+    return out;
+}
+
+std::string erase_element(const std::string& text, const ChainPlace& place, const ArrayPlace& a, std::size_t k) {
+    assert(a.member && k < a.spans.size());
+    std::string out = text;
+    const std::vector<Span>& e = a.spans;
+    const std::size_t mi = *a.member;
+    const Member& v = place.members[mi];
+    const bool only_element_in_brackets = e.size() == 1 && e[0].begin == v.value.begin + 1 && e[0].end + 1 == v.value.end;
+    if (e.size() == 1 && !only_element_in_brackets) {
+        // The chain had the array with only whitespace in it (append_element inserts
+        // right after its `[`): the example goes, the whitespace stays.
+        out.erase(v.value.begin + 1, e[0].end - (v.value.begin + 1));
+    } else if (e.size() == 1) {
+        // The whole member goes, with the separator before it (or after it when it is the
+        // first member): the exact inverse of adding the first example to a chain without
+        // the array. A chain that had an empty `"views": []` loses it too (the same scene,
+        // one member shorter): the two texts after the add are the same.
+        if (mi > 0) {
+            const std::size_t from = place.members[mi - 1].value.end;
+            out.erase(from, v.value.end - from);
+        } else if (place.members.size() > 1) {
+            out.erase(v.key_begin, place.members[1].key_begin - v.key_begin);
+        }
+    } else if (k > 0) {
+        out.erase(e[k - 1].end, e[k].end - e[k - 1].end);
+    } else {
+        out.erase(e[0].begin, e[1].begin - e[0].begin);
+    }
+    return out;
 }
 
 // ---- writing a view example
@@ -235,20 +280,53 @@ std::string num(double v) {
 
 std::string vec(glm::vec3 v) { return "[" + num(v.x) + ", " + num(v.y) + ", " + num(v.z) + "]"; }
 
-std::string view_text(const ViewSpec& view, const std::string& name, const std::string& indent) {
-    Json name_json = name;
-    std::string out = "{\"name\": " + name_json.dump() + ", \"direction\": " + vec(glm::vec3(glm::normalize(glm::dvec3(view.view.direction)))) +
-                      ", \"influence\": " + num(view.view.influence) + ",\n" + indent + " \"shape\": {\"positions\": [";
-    for (std::size_t i = 0; i < view.shape.positions.size(); ++i) {
-        out += (i ? ", " : "") + (i == 0 ? std::string("[0, 0, 0]") : vec(view.shape.positions[i]));
+std::string shape_text(const rods::ChainShape& shape, const std::string& indent) {
+    std::string out = "\"shape\": {\"positions\": [";
+    for (std::size_t i = 0; i < shape.positions.size(); ++i) {
+        out += (i ? ", " : "") + (i == 0 ? std::string("[0, 0, 0]") : vec(shape.positions[i]));
     }
     out += "],\n" + indent + "           \"orientations\": [";
-    for (std::size_t i = 0; i < view.shape.orientations.size(); ++i) {
+    for (std::size_t i = 0; i < shape.orientations.size(); ++i) {
         // Normalized, so that 6 digits stay within the loader's 1e-3 of unit length.
-        const glm::quat q = glm::normalize(view.shape.orientations[i]);
+        const glm::quat q = glm::normalize(shape.orientations[i]);
         out += std::string(i ? ", " : "") + "[" + num(q.x) + ", " + num(q.y) + ", " + num(q.z) + ", " + num(q.w) + "]";
     }
-    return out + "]}}";
+    return out + "]}";
+}
+
+Result<void> check_shape(const rods::ChainShape& shape, const std::function<Error(const std::string&)>& bad) {
+    const auto& p = shape.positions;
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const std::string at = "shape joint " + std::to_string(i) + ": ";
+        for (int k = 0; k < 3; ++k) {
+            if (!(static_cast<double>(std::abs(p[i][k])) <= scene_detail::kMaxShape)) {
+                return bad(at + "expected coordinates in [-" + num(scene_detail::kMaxShape) + ", " +
+                           num(scene_detail::kMaxShape) + "] m, got " + vec(p[i]));
+            }
+        }
+        if (i > 0 && !(glm::length(p[i] - p[i - 1]) >= 1e-6f)) return bad(at + "expected a point at least 1e-6 m from the previous joint");
+    }
+    for (std::size_t i = 0; i < shape.orientations.size(); ++i) {
+        const glm::quat q = shape.orientations[i];
+        const float length = glm::length(q);
+        if (!(std::isfinite(length) && length > 1e-6f)) {
+            return bad("shape joint " + std::to_string(i) + ": expected a non-zero finite orientation quaternion");
+        }
+    }
+    return {};
+}
+
+}  // namespace kodawari::scene_edit_detail
+
+namespace kodawari {
+namespace {
+
+using namespace scene_edit_detail;
+
+std::string view_text(const ViewSpec& view, const std::string& name, const std::string& indent) {
+    Json name_json = name;
+    return "{\"name\": " + name_json.dump() + ", \"direction\": " + vec(glm::vec3(glm::normalize(glm::dvec3(view.view.direction)))) +
+           ", \"influence\": " + num(view.view.influence) + ",\n" + indent + " " + shape_text(view.shape, indent) + "}";
 }
 
 // The view as the scene loader would take it back (chain_loader.cpp's read_view): a
@@ -266,25 +344,7 @@ Result<void> check_view(const std::string& path, const std::string& chain, const
     if (!(view.view.influence > 0.0f && view.view.influence <= rods::kMaxInfluence)) {
         return bad("influence: expected a number in (0, " + num(rods::kMaxInfluence) + "], got " + num(view.view.influence));
     }
-    const auto& p = view.shape.positions;
-    for (std::size_t i = 0; i < p.size(); ++i) {
-        const std::string at = "shape joint " + std::to_string(i) + ": ";
-        for (int k = 0; k < 3; ++k) {
-            if (!(static_cast<double>(std::abs(p[i][k])) <= scene_detail::kMaxShape)) {
-                return bad(at + "expected coordinates in [-" + num(scene_detail::kMaxShape) + ", " +
-                           num(scene_detail::kMaxShape) + "] m, got " + vec(p[i]));
-            }
-        }
-        if (i > 0 && !(glm::length(p[i] - p[i - 1]) >= 1e-6f)) return bad(at + "expected a point at least 1e-6 m from the previous joint");
-    }
-    for (std::size_t i = 0; i < view.shape.orientations.size(); ++i) {
-        const glm::quat q = view.shape.orientations[i];
-        const float length = glm::length(q);
-        if (!(std::isfinite(length) && length > 1e-6f)) {
-            return bad("shape joint " + std::to_string(i) + ": expected a non-zero finite orientation quaternion");
-        }
-    }
-    return {};
+    return check_shape(view.shape, bad);
 }
 
 }  // namespace
@@ -296,15 +356,14 @@ Result<SceneEdit> add_view_example(const std::string& text, const std::string& p
     auto found = find_chain(text, path, chain);
     if (!found) return found.error();
     const ChainPlace& place = found.value();
-    const Json views = place.chain.contains("views") ? place.chain["views"] : Json::array();
+    const Json views = place.views.member ? place.chain["views"] : Json::array();
+    const std::size_t keyed = place.keyed.member ? place.chain["keyed"].size() : 0;
 
     // The example to replace: the nearest within replace_deg.
     const glm::vec3 d = glm::normalize(view.view.direction);
     std::optional<std::size_t> replace;
     float best = replace_deg;
-    long highest = 0;
     for (std::size_t k = 0; k < views.size(); ++k) {
-        if (auto n = sketch_number(views[k])) highest = std::max(highest, *n);
         if (!views[k].is_object() || !views[k].contains("direction")) continue;
         const Json& dir = views[k]["direction"];
         if (!dir.is_array() || dir.size() != 3 || !dir[0].is_number() || !dir[1].is_number() || !dir[2].is_number()) continue;
@@ -316,18 +375,22 @@ Result<SceneEdit> add_view_example(const std::string& text, const std::string& p
             replace = k;
         }
     }
-    if (!replace && views.size() >= rods::kMaxViewExamples) {
+    // K.1: view and keyed examples share the limit of kMaxViewExamples.
+    if (!replace && views.size() + keyed >= rods::kMaxViewExamples) {
+        const std::string has = keyed == 0 ? std::to_string(views.size()) + " view examples"
+                                           : std::to_string(views.size()) + " view examples and " + std::to_string(keyed) +
+                                                 " keyed examples";
         return fail(path, place.json_path + ".views",
-                    "the chain already has " + std::to_string(views.size()) + " view examples, the most a chain may have (" +
-                        std::to_string(rods::kMaxViewExamples) + "); remove one, or sketch from within " +
-                        num(replace_deg) + " degrees of an example's direction to redraw it");
+                    "chain \"" + chain + "\" already has " + has + ", the most a chain may have (" +
+                        std::to_string(rods::kMaxViewExamples) + " in all); remove one, or sketch from within " +
+                        num(replace_deg) + " degrees of a view example's direction to redraw it");
     }
 
     SceneEdit edit;
-    edit.name = "sketch " + std::to_string(highest + 1);
-    edit.text = text;
+    edit.name = "sketch " + std::to_string(highest_sketch(place.chain) + 1);
     if (replace) {
-        const Span s = place.view_spans[*replace];
+        edit.text = text;
+        const Span s = place.views.spans[*replace];
         const std::string indent = line_indent(text, s.begin).value_or("");
         edit.text.replace(s.begin, s.end - s.begin, view_text(view, edit.name, indent));
         edit.index = static_cast<std::uint32_t>(*replace);
@@ -337,21 +400,8 @@ Result<SceneEdit> add_view_example(const std::string& text, const std::string& p
         return edit;
     }
     edit.index = static_cast<std::uint32_t>(views.size());
-    if (place.views && !place.view_spans.empty()) {
-        // After the last example, on a line of its own when it sits on one.
-        const Span last = place.view_spans.back();
-        const auto indent = line_indent(text, last.begin);
-        edit.text.insert(last.end, indent ? ",\n" + *indent + view_text(view, edit.name, *indent)
-                                          : ", " + view_text(view, edit.name, ""));
-    } else if (place.views) {
-        edit.text.insert(place.members[*place.views].value.begin + 1, view_text(view, edit.name, ""));
-    } else {
-        // No `views` yet: a new last member of the chain.
-        const Member& last = place.members.back();
-        const auto indent = line_indent(text, last.key_begin);
-        const std::string member = "\"views\": [" + view_text(view, edit.name, indent.value_or("")) + "]";
-        edit.text.insert(last.value.end, indent ? ",\n" + *indent + member : ", " + member);
-    }
+    edit.text = append_element(text, place, place.views, "views",
+                               [&](const std::string& indent) { return view_text(view, edit.name, indent); });
     return edit;
 }
 
@@ -359,49 +409,33 @@ Result<SceneEdit> remove_last_sketch(const std::string& text, const std::string&
     auto found = find_chain(text, path, chain);
     if (!found) return found.error();
     const ChainPlace& place = found.value();
-    const Json views = place.chain.contains("views") ? place.chain["views"] : Json::array();
+    // The last example a sketch added is the one with the highest "sketch <n>", in either
+    // array (add_view_example and add_keyed_example number them together).
     std::optional<std::size_t> target;
+    bool in_keyed = false;
     long highest = 0;
-    for (std::size_t k = 0; k < views.size(); ++k) {
-        if (auto n = sketch_number(views[k]); n && *n >= highest) {
-            highest = *n;
-            target = k;
+    for (const bool keyed : {false, true}) {
+        const char* key = keyed ? "keyed" : "views";
+        if (!(keyed ? place.keyed : place.views).member) continue;
+        const Json& examples = place.chain[key];
+        for (std::size_t k = 0; k < examples.size(); ++k) {
+            if (auto n = sketch_number(examples[k]); n && *n >= highest) {
+                highest = *n;
+                target = k;
+                in_keyed = keyed;
+            }
         }
     }
     if (!target) {
         return fail(path, place.json_path + ".views",
-                    "the chain has no sketched view example (named \"sketch <n>\") to undo");
+                    "the chain has no sketched view or keyed example (named \"sketch <n>\") to undo");
     }
+    const ArrayPlace& a = in_keyed ? place.keyed : place.views;
     SceneEdit edit;
-    edit.text = text;
     edit.index = static_cast<std::uint32_t>(*target);
-    edit.name = views[*target]["name"].get<std::string>();
-    const std::vector<Span>& e = place.view_spans;
-    const std::size_t k = *target;
-    assert(place.views);
-    const std::size_t mi = *place.views;
-    const Member& v = place.members[mi];
-    const bool only_element_in_brackets = e.size() == 1 && e[0].begin == v.value.begin + 1 && e[0].end + 1 == v.value.end;
-    if (e.size() == 1 && !only_element_in_brackets) {
-        // The chain had a `views` array with only whitespace in it (add_view_example
-        // inserts right after its `[`): the example goes, the whitespace stays.
-        edit.text.erase(v.value.begin + 1, e[0].end - (v.value.begin + 1));
-    } else if (e.size() == 1) {
-        // The whole `views` member goes, with the separator before it (or after it when
-        // it is the first member): the exact inverse of adding the first example to a
-        // chain without `views`. A chain that had an empty `"views": []` loses it too (the
-        // same scene, one member shorter): the two texts after the add are the same.
-        if (mi > 0) {
-            const std::size_t from = place.members[mi - 1].value.end;
-            edit.text.erase(from, v.value.end - from);
-        } else if (place.members.size() > 1) {
-            edit.text.erase(v.key_begin, place.members[1].key_begin - v.key_begin);
-        }
-    } else if (k > 0) {
-        edit.text.erase(e[k - 1].end, e[k].end - e[k - 1].end);
-    } else {
-        edit.text.erase(e[0].begin, e[1].begin - e[0].begin);
-    }
+    edit.keyed = in_keyed;
+    edit.name = place.chain[in_keyed ? "keyed" : "views"][*target]["name"].get<std::string>();
+    edit.text = erase_element(text, place, a, *target);
     return edit;
 }
 

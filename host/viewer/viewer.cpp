@@ -1,5 +1,6 @@
 // What the user does in the viewer: frames, cameras, picking and sketching a chain's view
-// example (SPEC A.6), undo and save of the scene text, backend switches.
+// example (SPEC A.6) or keyed example (docs/keyed-examples.md), undo and save of the scene
+// text, backend switches.
 #include "viewer.hpp"
 
 #include <algorithm>
@@ -9,6 +10,7 @@
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/scene_edit.hpp"
+#include "kodawari/sketch_key.hpp"
 
 namespace kodawari::cli {
 
@@ -147,6 +149,10 @@ void Viewer::apply_sketch() {
         say("sketch failed: " + result.error().message);
         return;
     }
+    if (sketch_kind != SketchKind::View) {
+        apply_keyed_sketch(name, ci.character, result.value().shape);
+        return;
+    }
     ViewSpec view;
     view.view = result.value().view;
     view.shape = result.value().shape;
@@ -163,6 +169,45 @@ void Viewer::apply_sketch() {
         (edit.value().replaced ? "replaces \"" + edit.value().replaced_name + "\"" : "added") + ", influence " +
         number(influence) + ", " + std::to_string(result.value().joints_on_stroke) +
         " joints on the stroke (unsaved: W saves)");
+}
+
+void Viewer::apply_keyed_sketch(const std::string& name, std::uint32_t character, const rods::ChainShape& shape) {
+    // The command's engine code (cmd_sketch.cpp), with its defaults: the reference joint,
+    // speed smoothed as the scene format does, the default influences.
+    SketchKeyOptions options;
+    options.kind = sketch_kind == SketchKind::Pose ? rods::KeyKind::Pose : rods::KeyKind::Motion;
+    auto key = measure_sketch_key(*sim->rod_scene(), character, current(), options);
+    if (!key) {
+        say("sketch failed: " + key.error().message);
+        return;
+    }
+    KeyedSketch k = std::move(key).value();
+    k.shape = shape;
+    auto edit = add_keyed_example(text, scene_path, name, k);
+    if (!edit) {
+        say("sketch failed: " + edit.error().message);
+        return;
+    }
+    if (!rebuild(edit.value().text, choice.backend)) return;
+    text = edit.value().text;
+    dirty = true;
+    sketched.push_back(name);
+    const std::string what = k.kind == rods::KeyKind::Motion
+                                 ? "motion example \"" + edit.value().name + "\" added, " + k.joint + " " +
+                                       measure_name(k.measure) + " " + number(k.value) + " " + measure_unit(k.measure) +
+                                       ", influence " + number(k.influence)
+                                 : "pose example \"" + edit.value().name + "\" added, " + k.joint + " as now, influence " +
+                                       number(k.influence) + " degrees";
+    say("sketch " + name + ": " + what + " (unsaved: W saves)");
+}
+
+std::string Viewer::sketch_status() const {
+    switch (sketch_kind) {
+        case SketchKind::View: return "influence " + number(influence);
+        case SketchKind::Motion: return "motion example";
+        case SketchKind::Pose: return "pose example";
+    }
+    return "";
 }
 
 void Viewer::undo() {
@@ -221,6 +266,16 @@ void Viewer::key(int key, int mods) {
             }
             break;
         case GLFW_KEY_W: save(); break;
+        case GLFW_KEY_K:
+            sketch_kind = sketch_kind == SketchKind::View     ? SketchKind::Motion
+                          : sketch_kind == SketchKind::Motion ? SketchKind::Pose
+                                                              : SketchKind::View;
+            say("the next sketch makes a " + std::string(sketch_kind == SketchKind::View     ? "view example"
+                                                         : sketch_kind == SketchKind::Motion ? "motion example (keyed by the "
+                                                                                               "reference joint's speed)"
+                                                                                             : "pose example (keyed by the "
+                                                                                               "reference joint's pose)"));
+            break;
         case GLFW_KEY_C:
             follow_scene = !follow_scene;
             say(follow_scene ? "camera: the scene's (its motion and projection drive the view-dependent shapes)"
@@ -313,7 +368,7 @@ std::optional<int> key_by_name(const std::string& name) {
     static const std::pair<const char*, int> kNames[] = {
         {"space", GLFW_KEY_SPACE}, {"right", GLFW_KEY_RIGHT}, {"left", GLFW_KEY_LEFT},   {"home", GLFW_KEY_HOME},
         {"[", GLFW_KEY_LEFT_BRACKET}, {"]", GLFW_KEY_RIGHT_BRACKET}, {"1", GLFW_KEY_1},  {"2", GLFW_KEY_2},
-        {"3", GLFW_KEY_3},         {"s", GLFW_KEY_S},         {"w", GLFW_KEY_W},         {"u", GLFW_KEY_U},
+        {"3", GLFW_KEY_3},         {"s", GLFW_KEY_S},         {"k", GLFW_KEY_K},         {"w", GLFW_KEY_W},         {"u", GLFW_KEY_U},
         {"c", GLFW_KEY_C},         {"o", GLFW_KEY_O},
         {"+", GLFW_KEY_EQUAL},     {"-", GLFW_KEY_MINUS},     {"p", GLFW_KEY_P},         {"q", GLFW_KEY_Q},
         {"escape", GLFW_KEY_ESCAPE}};

@@ -43,7 +43,9 @@ struct Viewer {
     bool sketch_mode = false;
     std::optional<std::uint32_t> picked;  // chain instance
     std::vector<glm::dvec2> stroke;       // image pixels
-    float influence = 4.0f;
+    float influence = 4.0f;             // a view example's; keyed examples take sketch_key.hpp's defaults
+    // K: what the next sketch makes (docs/sketch.md, "Keyed sketches").
+    enum class SketchKind { View, Motion, Pose } sketch_kind = SketchKind::View;
     std::vector<std::string> sketched;  // chain names, for undo
     std::string message;                // the last sketch/save outcome, shown on the status line
     std::optional<Error> failure;       // a simulation error ends the loop
@@ -84,6 +86,13 @@ struct Viewer {
     void pick(glm::dvec2 at);
 
     void apply_sketch();
+
+    // A sketch that makes a keyed example of chain `name` (of character instance
+    // `character`) with the stroke's `shape`, keyed at the frame shown.
+    void apply_keyed_sketch(const std::string& name, std::uint32_t character, const rods::ChainShape& shape);
+
+    // The status line's sketch mode: what the next sketch makes, with its influence.
+    [[nodiscard]] std::string sketch_status() const;
 
     void undo();
 

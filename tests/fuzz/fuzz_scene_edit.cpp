@@ -1,14 +1,18 @@
 // Fuzz target: the scene editor behind `kodawari sketch` and the viewer's sketch mode
-// (engine/scene/scene_edit.cpp), which splices a view example into scene text and takes
-// the last one out again. The input is a 24-byte header (which chain, the example's
-// direction, influence and shape offsets; see below) followed by the scene text.
+// (engine/scene/scene_edit.cpp, scene_edit_keyed.cpp), which splices a view or keyed
+// example into scene text and takes the last one out again. The input is a 24-byte header
+// (which chain, the example's direction, influence and shape offsets, then what is keyed
+// and by which joint; see below) followed by the scene text.
 //
 // Invariants:
 // - any text is edited or refused with a message naming the file;
 // - when the text loads as a scene and the edit succeeds, the edited text loads too;
 // - undoing an appended (not replacing) sketch gives back the text from before it, byte
-//   for byte, but for an empty `"views": []`, which goes with it (scene_edit.hpp promises
-//   this).
+//   for byte, but for an empty `"views": []` (or `"keyed": []`), which goes with it
+//   (scene_edit.hpp promises this);
+// - the same for a keyed example (motion or pose, of one of the character's joints), added
+//   after the view example was undone; undo takes it, not a view example.
+#include <cmath>
 #include <cstdint>
 #include <string>
 #include <utility>
@@ -24,7 +28,9 @@ namespace {
 
 nlohmann::json without_empty_views(nlohmann::json j) {
     if (j.is_object()) {
-        if (j.contains("views") && j["views"].is_array() && j["views"].empty()) j.erase("views");
+        for (const char* key : {"views", "keyed"}) {
+            if (j.contains(key) && j[key].is_array() && j[key].empty()) j.erase(key);
+        }
         for (auto& [key, value] : j.items()) value = without_empty_views(value);
     } else if (j.is_array()) {
         for (auto& value : j) value = without_empty_views(value);
@@ -43,6 +49,7 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     view.view.direction = {head.number(1.5f), head.number(1.5f), head.number(1.5f)};
     view.view.influence = head.number(20.0f);
     const float bend = head.number(0.1f);
+    const std::uint8_t key_pick = head.byte();
     const std::string text = size > kHeader ? std::string(reinterpret_cast<const char*>(data) + kHeader, size - kHeader)
                                             : std::string();
     const std::string path = "fuzz-scene.json";
@@ -51,14 +58,32 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     // the editor has to refuse.
     std::string chain = "character/chain";
     std::vector<std::pair<std::string, const ChainSpec*>> chains;
+    std::vector<const CharacterSpec*> owners;
     auto scene = parse_scene(text, path);
     if (scene) {
         for (const CharacterSpec& c : scene.value().characters) {
-            for (const ChainSpec& s : c.chains) chains.emplace_back(c.name + "/" + s.name, &s);
+            for (const ChainSpec& s : c.chains) {
+                chains.emplace_back(c.name + "/" + s.name, &s);
+                owners.push_back(&c);
+            }
         }
     }
+    KeyedSketch keyed;
+    keyed.joint = "joint";
+    keyed.reference_joint = "joint";
+    keyed.kind = (key_pick & 1) != 0 ? rods::KeyKind::Pose : rods::KeyKind::Motion;
+    keyed.measure = static_cast<rods::MotionMeasure>((key_pick >> 1) % 3);
+    keyed.value = std::abs(view.view.direction.x) * 4.0f;
+    keyed.influence = view.view.influence;
+    keyed.smoothing = std::abs(view.view.direction.y);
+    keyed.rotation = glm::quat(view.view.direction.z, view.view.direction.x, view.view.direction.y, 1.0f);
     if (!chains.empty()) {
         const auto& [name, spec] = chains[pick % chains.size()];
+        const rods::Skeleton& skeleton = owners[pick % chains.size()]->skeleton;
+        if (!skeleton.joints.empty()) {
+            keyed.joint = skeleton.joints[(key_pick >> 3) % skeleton.joints.size()].name;
+            keyed.reference_joint = skeleton.joints[skeleton.reference].name;
+        }
         chain = name;
         view.shape = spec->base;
         for (std::size_t k = 1; k < view.shape.positions.size(); ++k) view.shape.positions[k].x += bend * static_cast<float>(k);
@@ -88,6 +113,30 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
                   without_empty_views(nlohmann::json::parse(undone.value().text)))) {
             fuzz::finding("undoing an appended sketch did not give back the text before it");
         }
+    }
+
+    keyed.shape = view.shape;
+    auto added = add_keyed_example(text, path, chain, keyed);
+    if (!added) {
+        if (added.error().message.find(path) == std::string::npos) {
+            fuzz::finding("the keyed error does not name the file: " + added.error().message);
+        }
+        return 0;
+    }
+    // A procedural character's joint names are the loader's (rigged ones: node names, not
+    // known here, so a rigged scene's edit need only parse).
+    const bool named = scene && !owners.empty() && !owners[pick % chains.size()]->skeleton.joints.empty();
+    if (named) {
+        auto reloaded = parse_scene(added.value().text, path);
+        if (!reloaded) fuzz::finding("the scene with a keyed sketch does not load: " + reloaded.error().message);
+    }
+    auto taken = remove_last_sketch(added.value().text, path, chain);
+    if (!taken) fuzz::finding("the keyed sketch just added cannot be removed: " + taken.error().message);
+    if (!taken.value().keyed) fuzz::finding("undo took a view example instead of the keyed sketch");
+    if (taken.value().text != text &&
+        !(taken.value().text.size() < text.size() &&
+          without_empty_views(nlohmann::json::parse(text)) == without_empty_views(nlohmann::json::parse(taken.value().text)))) {
+        fuzz::finding("undoing a keyed sketch did not give back the text before it");
     }
     return 0;
 }

@@ -3,8 +3,9 @@
 /// Editing a scene file's text in place (SPEC A.6: a sketched shape is stored as a new view
 /// example). Edits splice the JSON text: everything outside the edited view example keeps
 /// its bytes, formatting and key order, so a person's hand-written scene stays theirs.
-/// Sketched examples are named "sketch <n>" (n = 1, 2, ... per chain) so that an undo can
-/// find the last one.
+/// Sketched examples, view or keyed, are named "sketch <n>" (n = 1, 2, ... per chain,
+/// counted over the chain's `views` and `keyed` together) so that an undo can find the
+/// last one.
 
 #include <cstdint>
 #include <string>
@@ -14,6 +15,7 @@
 
 #include "kodawari/api.hpp"
 #include "result.hpp"
+#include "rods/keyed.hpp"
 #include "scene.hpp"
 
 namespace kodawari {
@@ -26,7 +28,8 @@ inline constexpr float kSketchReplaceDeg = 20.0f;
 /// The result of an edit: the new scene text and what changed.
 struct SceneEdit {
     std::string text;            ///< the whole new file
-    std::uint32_t index = 0;     ///< the view example's index in the chain's `views`
+    std::uint32_t index = 0;     ///< the example's index in the chain's `views` (or `keyed`)
+    bool keyed = false;          ///< the example is in the chain's `keyed` array
     std::string name;            ///< its name ("sketch 3")
     bool replaced = false;       ///< add: an example within kSketchReplaceDeg was overwritten
     std::string replaced_name;   ///< add: that example's name ("" if it had none)
@@ -49,13 +52,46 @@ struct SceneEdit {
                                                               const std::string& chain, const ViewSpec& view,
                                                               float replace_deg = kSketchReplaceDeg);
 
-/// Removes the chain's view example with the highest "sketch <n>" name (the last one a
-/// sketch added). Undoing an append gives back the text from before it, byte for byte,
+/// A keyed example that a sketch adds (docs/sketch.md, "Keyed sketches";
+/// docs/keyed-examples.md K.1): one key source, a magnitude motion key or a pose key of
+/// one joint, and the sketched shape.
+struct KeyedSketch {
+    rods::KeyKind kind = rods::KeyKind::Motion;
+    /// The key source: a skeleton joint's name (a glTF node's, for rigged characters).
+    std::string joint;
+    /// The character's reference joint: a motion example without "joint" reads it, which
+    /// the key-source count needs to know.
+    std::string reference_joint;
+    rods::MotionMeasure measure = rods::MotionMeasure::Speed;  ///< motion
+    float value = 0.0f;          ///< motion: the key, a magnitude in the measure's units
+    float smoothing = 0.25f;     ///< motion: tau, s
+    glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};  ///< pose: the joint's rotation relative to its parent
+    float influence = 1.0f;      ///< motion: in the measure's units; pose: degrees
+    rods::ChainShape shape;      ///< chain root frame
+};
+
+/// Appends `keyed` to the `keyed` array of chain `chain` in scene text `text` (created as
+/// the chain's last member when absent), named "sketch <n>" as add_view_example names
+/// views. A motion key is written with its "joint", "measure", "frame": "magnitude",
+/// "value", "influence" and "smoothing"; a pose key as "pose": [{"joint", "rotation"}]
+/// and "influence" in degrees. Fails as add_view_example does for the text and the chain;
+/// (naming the file, the chain's JSON path and the chain) when the chain already has
+/// rods::kMaxKeyedExamples keyed examples or rods::kMaxViewExamples examples in all, or
+/// the example would make its keyed examples read more than rods::kMaxKeySources key
+/// sources; and (naming the file and the chain) when `keyed` holds what the loader would
+/// refuse (an empty joint, a key outside [0, 1e4], an influence outside (0, 1e4] (motion)
+/// or (0, 360] degrees (pose), a smoothing outside [0, rods::kMaxSmoothing], a rotation
+/// that is not a finite non-zero quaternion, a shape as for add_view_example).
+[[nodiscard]] KODAWARI_API Result<SceneEdit> add_keyed_example(const std::string& text, const std::string& path,
+                                                               const std::string& chain, const KeyedSketch& keyed);
+
+/// Removes the chain's view or keyed example with the highest "sketch <n>" name (the last
+/// one a sketch added). Undoing an append gives back the text from before it, byte for byte,
 /// with one exception: a chain's empty `"views": []` (nothing between the brackets) is
 /// removed with the first sketch, since after it the two cannot be told apart (the scene
 /// loads the same). An example that a sketch replaced is
 /// not brought back. Fails as add_view_example does,
-/// and when the chain has no sketched example.
+/// and when the chain has no sketched example. SceneEdit::keyed says which array it was in.
 [[nodiscard]] KODAWARI_API Result<SceneEdit> remove_last_sketch(const std::string& text, const std::string& path,
                                                                 const std::string& chain);
 
