@@ -99,7 +99,9 @@ int cmd_sketch(const SketchOptions& o) {
     const auto& frame_index = o.frame;
     const auto& camera_text = o.camera;
     const auto& size_text = o.size;
-    const auto [width, height] = image_size(size_text);
+    // Not a structured binding: the lambdas below use them (clang < 16 cannot capture one).
+    const auto image = image_size(size_text);
+    const auto width = image.first, height = image.second;
     const auto& influence_text = o.influence;
     const auto& out_option = o.out;
     const bool undo = o.undo;
