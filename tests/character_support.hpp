@@ -116,6 +116,34 @@ struct Projector {
     [[nodiscard]] float scale(glm::vec3 p) const { return focal_px / -(view * glm::vec4(p, 1.0f)).z; }
 };
 
+// The shared character's eyes (scripts/make_rod_scenes.py: the head sphere of radius
+// 0.11 m, centre 0.1 m above the head joint; eyes 20 degrees either side of the face, 5
+// above): the smallest on-screen distance from either eye to any chain segment of `sim`
+// this frame, in head radii as `cam` shows the head.
+inline float eye_to_strands(const RodScene& rs, const Simulation& sim, const Projector& cam) {
+    const glm::vec3 centre(0.0f, 0.1f, 0.0f);
+    const float radius = 0.11f;
+    const rods::Transform& head = sim.frame().reference[0];
+    const float head_px = radius * cam.scale(head.position + head.rotation * centre);
+    float closest = 1e9f;
+    for (const float side : {-1.0f, 1.0f}) {
+        const float az = side * 20.0f * kPi / 180.0f;
+        const float el = 5.0f * kPi / 180.0f;
+        const glm::vec3 eye_local = centre + radius * glm::vec3(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
+        const glm::vec2 eye = cam.pixel(head.position + head.rotation * eye_local);
+        for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
+            const std::uint32_t n = rs.world.templ(rs.world.chains[c]).chain.joint_count;
+            for (std::uint32_t i = 0; i + 1 < n; ++i) {
+                const glm::vec2 a = cam.pixel(sim.x(c, i)), ab = cam.pixel(sim.x(c, i + 1)) - a;
+                const float len2 = glm::dot(ab, ab);
+                const float t = len2 > 0.0f ? std::clamp(glm::dot(eye - a, ab) / len2, 0.0f, 1.0f) : 0.0f;
+                closest = std::min(closest, glm::length(eye - (a + t * ab)) / head_px);
+            }
+        }
+    }
+    return closest;
+}
+
 // A small valid character scene that the error tests break one key at a time.
 inline json valid_character_scene() {
     return json::parse(R"({

@@ -43,8 +43,9 @@ void gather_inputs(const RodStepArgs& args, const RodBatch& batch, const RodTemp
                                           ref.rotation.z, ref.rotation.w, to.position.x,  to.position.y,  to.position.z,
                                           to.rotation.x,  to.rotation.y,  to.rotation.z,  to.rotation.w};
         for (std::size_t r = 0; r < kKeyed; ++r) in.rows[r * kBatchLanes + l] = values[r];
-        for (std::size_t j = 0; j < rods::kMaxKeyedExamples; ++j) {
-            in.rows[(kKeyed + j) * kBatchLanes + l] = t.keyed > 0 ? args.keyed[c * rods::kMaxKeyedExamples + j] : 0.0f;
+        // Only a keyed template's kernel reads them (step_lanes).
+        for (std::size_t j = 0; j < t.keyed; ++j) {
+            in.rows[(kKeyed + j) * kBatchLanes + l] = args.keyed[c * rods::kMaxKeyedExamples + j];
         }
         for (std::uint32_t k = 0; k < batch.colliders; ++k) {
             float* rows = in.colliders + k * kColliderRows * kBatchLanes;

@@ -161,14 +161,19 @@ void Viewer::apply_sketch() {
         say("sketch failed: " + edit.error().message);
         return;
     }
-    if (!rebuild(edit.value().text, choice.backend)) return;
-    text = edit.value().text;
-    dirty = true;
-    sketched.push_back(name);
+    if (!take_sketch(edit.value().text, name)) return;
     say("sketch " + name + ": view example \"" + edit.value().name + "\" " +
         (edit.value().replaced ? "replaces \"" + edit.value().replaced_name + "\"" : "added") + ", influence " +
         number(influence) + ", " + std::to_string(result.value().joints_on_stroke) +
         " joints on the stroke (unsaved: W saves)");
+}
+
+bool Viewer::take_sketch(const std::string& edited, const std::string& chain) {
+    if (!rebuild(edited, choice.backend)) return false;
+    text = edited;
+    dirty = true;
+    sketched.push_back(chain);
+    return true;
 }
 
 void Viewer::apply_keyed_sketch(const std::string& name, std::uint32_t character, const rods::ChainShape& shape) {
@@ -188,10 +193,7 @@ void Viewer::apply_keyed_sketch(const std::string& name, std::uint32_t character
         say("sketch failed: " + edit.error().message);
         return;
     }
-    if (!rebuild(edit.value().text, choice.backend)) return;
-    text = edit.value().text;
-    dirty = true;
-    sketched.push_back(name);
+    if (!take_sketch(edit.value().text, name)) return;
     const std::string what = k.kind == rods::KeyKind::Motion
                                  ? "motion example \"" + edit.value().name + "\" added, " + k.joint + " " +
                                        measure_name(k.measure) + " " + number(k.value) + " " + measure_unit(k.measure) +

@@ -87,6 +87,9 @@ struct Viewer {
 
     void apply_sketch();
 
+    // The scene text a sketch of `chain` edited: simulated anew, kept (unsaved) and
+    // remembered for undo. False (the old scene stays) when it does not rebuild.
+    bool take_sketch(const std::string& edited, const std::string& chain);
     // A sketch that makes a keyed example of chain `name` (of character instance
     // `character`) with the stroke's `shape`, keyed at the frame shown.
     void apply_keyed_sketch(const std::string& name, std::uint32_t character, const rods::ChainShape& shape);

@@ -117,14 +117,6 @@ TEST(Characters, AhogeReadsSidewaysFromEveryAngle) {
 
 namespace {
 
-// 2D distance from p to the segment [a, b].
-float segment_distance(glm::vec2 p, glm::vec2 a, glm::vec2 b) {
-    const glm::vec2 ab = b - a;
-    const float len2 = glm::dot(ab, ab);
-    const float t = len2 > 0.0f ? std::clamp(glm::dot(p - a, ab) / len2, 0.0f, 1.0f) : 0.0f;
-    return glm::length(p - (a + t * ab));
-}
-
 // Seen from a fixed camera in front of the face, the smallest on-screen distance from
 // either eye to any bang over the last second of a 3 s run, in head radii.
 float eye_clearance(Scene scene) {
@@ -135,26 +127,10 @@ float eye_clearance(Scene scene) {
     const RodScene rs = build(scene);
     Simulation sim(rs);
     float clearance = 1e9f;
-    const glm::vec3 centre(0.0f, 0.1f, 0.0f);
-    const float radius = 0.11f;
     for (std::uint32_t f = 1; f < rs.frames; ++f) {
         sim.step(f);
         if (rs.time(f) < 2.0f) continue;
-        const Projector cam(rs.camera_pose(f), rs.fov_deg);
-        const rods::Transform& head = sim.frame().reference[0];
-        const float head_px = radius * cam.scale(head.position + head.rotation * centre);
-        for (const float side : {-1.0f, 1.0f}) {
-            const float az = side * 20.0f * kPi / 180.0f;
-            const float el = 5.0f * kPi / 180.0f;
-            const glm::vec3 eye_local = centre + radius * glm::vec3(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
-            const glm::vec2 eye = cam.pixel(head.position + head.rotation * eye_local);
-            for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
-                const std::uint32_t n = rs.world.templ(rs.world.chains[c]).chain.joint_count;
-                for (std::uint32_t i = 0; i + 1 < n; ++i) {
-                    clearance = std::min(clearance, segment_distance(eye, cam.pixel(sim.x(c, i)), cam.pixel(sim.x(c, i + 1))) / head_px);
-                }
-            }
-        }
+        clearance = std::min(clearance, eye_to_strands(rs, sim, Projector(rs.camera_pose(f), rs.fov_deg)));
     }
     return clearance;
 }

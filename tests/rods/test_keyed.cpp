@@ -260,8 +260,6 @@ Coverage eye_coverage(const Scene& scene) {
     const RodScene rs = build(scene);
     Simulation sim(rs);
     Coverage out;
-    const glm::vec3 centre(0.0f, 0.1f, 0.0f);
-    const float radius = 0.11f;
     for (std::uint32_t f = 1; f < rs.frames && rs.time(f) < 9.0f; ++f) {
         sim.step(f);
         // The head's pitch against the neck (joints body, neck, head): the pose key's measure.
@@ -270,23 +268,7 @@ Coverage eye_coverage(const Scene& scene) {
         const float pitch = glm::degrees(2.0f * std::atan2(relative.x, relative.w));
         if (std::abs(pitch) < 25.0f) continue;
         float& worst = pitch > 0.0f ? out.down : out.up;
-        const Projector cam(rs.camera_pose(f), rs.fov_deg);
-        const rods::Transform& head = sim.frame().reference[0];
-        const float head_px = radius * cam.scale(head.position + head.rotation * centre);
-        for (const float side : {-1.0f, 1.0f}) {
-            const float az = glm::radians(side * 20.0f), el = glm::radians(5.0f);
-            const glm::vec3 eye_local = centre + radius * glm::vec3(std::cos(el) * std::sin(az), std::sin(el), std::cos(el) * std::cos(az));
-            const glm::vec2 eye = cam.pixel(head.position + head.rotation * eye_local);
-            for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
-                const std::uint32_t n = rs.world.templ(rs.world.chains[c]).chain.joint_count;
-                for (std::uint32_t i = 0; i + 1 < n; ++i) {
-                    const glm::vec2 a = cam.pixel(sim.x(c, i)), b = cam.pixel(sim.x(c, i + 1));
-                    const glm::vec2 ab = b - a;
-                    const float t = std::clamp(glm::dot(eye - a, ab) / std::max(glm::dot(ab, ab), 1e-12f), 0.0f, 1.0f);
-                    worst = std::min(worst, glm::length(eye - (a + t * ab)) / head_px);
-                }
-            }
-        }
+        worst = std::min(worst, eye_to_strands(rs, sim, Projector(rs.camera_pose(f), rs.fov_deg)));
     }
     return out;
 }

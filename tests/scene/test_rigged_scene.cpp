@@ -43,6 +43,57 @@ const std::string kSource = KODAWARI_SOURCE_DIR;
 const std::string kChibi = kSource + "/scenes/characters/chibi.glb";
 const std::string kCrowdScene = kSource + "/scenes/crowd-gltf.json";
 
+// The two runs the device-input tests compare, on one shared device with validation: the
+// vulkan rod backend fed by a CrowdAnimator on the host (`host`), and one whose rigged
+// input the animator writes on the device (`on_device`), both loaded at frame 0.
+struct HostAndDeviceInput {
+    struct Run {
+        std::unique_ptr<RodBackend> rods;
+        std::optional<CrowdAnimator> animator;
+        rods::RodFrame frame;
+    };
+    std::shared_ptr<gpu::VulkanContext> device;
+    BackendOptions options;
+    Run host, on_device;
+
+    void start(const RodScene& scene) {
+        options.validation = true;
+        auto opened = open_shared_device(options);
+        ASSERT_TRUE(opened.ok()) << opened.error().message;
+        device = opened.value();
+        options.context = device;
+        for (Run* run : {&host, &on_device}) {
+            auto backend = make_rod_backend(BackendKind::Vulkan, options);
+            ASSERT_TRUE(backend.ok()) << backend.error().message;
+            run->rods = std::move(backend).value();
+            auto animator = CrowdAnimator::create(scene, BackendKind::Vulkan, options);
+            ASSERT_TRUE(animator.ok()) << animator.error().message;
+            run->animator.emplace(std::move(animator).value());
+            ASSERT_TRUE(run->animator->frame(0, run->frame).ok());
+            ASSERT_TRUE(run->rods->load(scene.world, run->frame).ok());
+        }
+        auto took = on_device.animator->write_inputs_on(*on_device.rods);
+        ASSERT_TRUE(took.ok()) << took.error().message;
+        ASSERT_TRUE(took.value()) << "the pose and rod backends share the device";
+    }
+
+    // The largest distance between a chain joint of one run and the same joint of the other (m).
+    float joint_distance(const RodScene& scene) const {
+        std::vector<rods::ChainState> a, b;
+        EXPECT_TRUE(host.rods->read_states(a).ok());
+        EXPECT_TRUE(on_device.rods->read_states(b).ok());
+        EXPECT_EQ(a.size(), b.size());
+        float worst = 0.0f;
+        for (std::size_t c = 0; c < std::min(a.size(), b.size()); ++c) {
+            const std::uint32_t n = scene.world.templ(scene.world.chains[c]).chain.joint_count;
+            for (std::uint32_t i = 0; i < n; ++i) {
+                worst = std::max(worst, glm::length((a[c].root.position + a[c].x[i]) - (b[c].root.position + b[c].x[i])));
+            }
+        }
+        return worst;
+    }
+};
+
 Scene load(const std::string& path) {
     auto scene = load_scene(path);
     EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.error().message);
@@ -469,30 +520,9 @@ TEST(RiggedScene, RodInputWrittenOnTheDeviceMatchesTheHosts) {
     Scene scene = load(kCrowdScene);
     scene.crowds[0].count = 37;
     const RodScene rods = build(scene);
-    BackendOptions options;
-    options.validation = true;
-    auto device = open_shared_device(options);
-    ASSERT_TRUE(device.ok()) << device.error().message;
-    options.context = device.value();
-    struct Run {
-        std::unique_ptr<RodBackend> rods;
-        std::optional<CrowdAnimator> animator;
-        rods::RodFrame frame;
-    };
-    Run host, on_device;
-    for (Run* run : {&host, &on_device}) {
-        auto backend = make_rod_backend(BackendKind::Vulkan, options);
-        ASSERT_TRUE(backend.ok()) << backend.error().message;
-        run->rods = std::move(backend).value();
-        auto animator = CrowdAnimator::create(rods, BackendKind::Vulkan, options);
-        ASSERT_TRUE(animator.ok()) << animator.error().message;
-        run->animator.emplace(std::move(animator).value());
-        ASSERT_TRUE(run->animator->frame(0, run->frame).ok());
-        ASSERT_TRUE(run->rods->load(rods.world, run->frame).ok());
-    }
-    auto took = on_device.animator->write_inputs_on(*on_device.rods);
-    ASSERT_TRUE(took.ok()) << took.error().message;
-    ASSERT_TRUE(took.value()) << "the pose and rod backends share the device";
+    HostAndDeviceInput runs;
+    ASSERT_NO_FATAL_FAILURE(runs.start(rods));
+    auto& [device, options, host, on_device] = runs;
     EXPECT_TRUE(on_device.animator->writes_inputs_on_device());
     EXPECT_FALSE(host.animator->writes_inputs_on_device());
     // A CPU rod backend cannot take device input.
@@ -509,29 +539,19 @@ TEST(RiggedScene, RodInputWrittenOnTheDeviceMatchesTheHosts) {
     for (std::uint32_t f = 1; f <= kFrames; ++f) {
         ASSERT_TRUE(host.animator->frame(f, host.frame).ok());
         ASSERT_TRUE(host.rods->step(host.frame).ok());
-        const std::uint64_t before = read_back_bytes(*device.value());
+        const std::uint64_t before = read_back_bytes(*device);
         ASSERT_TRUE(on_device.animator->frame(f, on_device.frame).ok());
         ASSERT_TRUE(on_device.rods->step(on_device.frame).ok());
-        device_read_back += read_back_bytes(*device.value()) - before;
+        device_read_back += read_back_bytes(*device) - before;
     }
-    std::vector<rods::ChainState> a, b;
-    ASSERT_TRUE(host.rods->read_states(a).ok());
-    ASSERT_TRUE(on_device.rods->read_states(b).ok());
-    ASSERT_EQ(a.size(), b.size());
     float worst = 0.0f;
-    for (std::size_t c = 0; c < a.size(); ++c) {
-        const std::uint32_t n = rods.world.templ(rods.world.chains[c]).chain.joint_count;
-        for (std::uint32_t i = 0; i < n; ++i) {
-            const glm::vec3 pa = a[c].root.position + a[c].x[i], pb = b[c].root.position + b[c].x[i];
-            worst = std::max(worst, glm::length(pa - pb));
-        }
-    }
+    ASSERT_NO_FATAL_FAILURE(worst = runs.joint_distance(rods));
     std::printf("rod input on the device, 37 chibis x %u frames: chain joints within %.3g m of the host-input run; "
                 "%llu bytes read back\n",
                 kFrames, static_cast<double>(worst), static_cast<unsigned long long>(device_read_back));
     EXPECT_LT(worst, 1e-5f);
     EXPECT_EQ(device_read_back, 0u);
-    EXPECT_EQ(validation_messages(*device.value()), 0u);
+    EXPECT_EQ(validation_messages(*device), 0u);
 }
 
 // The key sources of keyed examples (docs/keyed-examples.md K.1) written on the device
@@ -620,30 +640,9 @@ TEST(RiggedScene, KeySourcesWrittenOnTheDeviceMatchTheHosts) {
             tpl.keyed[1].rotations[2] = first.keys[k + 2].rotation;
         }
     }
-    BackendOptions options;
-    options.validation = true;
-    auto device = open_shared_device(options);
-    ASSERT_TRUE(device.ok()) << device.error().message;
-    options.context = device.value();
-    struct Run {
-        std::unique_ptr<RodBackend> rods;
-        std::optional<CrowdAnimator> animator;
-        rods::RodFrame frame;
-    };
-    Run host, on_device;
-    for (Run* run : {&host, &on_device}) {
-        auto backend = make_rod_backend(BackendKind::Vulkan, options);
-        ASSERT_TRUE(backend.ok()) << backend.error().message;
-        run->rods = std::move(backend).value();
-        auto animator = CrowdAnimator::create(rods, BackendKind::Vulkan, options);
-        ASSERT_TRUE(animator.ok()) << animator.error().message;
-        run->animator.emplace(std::move(animator).value());
-        ASSERT_TRUE(run->animator->frame(0, run->frame).ok());
-        ASSERT_TRUE(run->rods->load(rods.world, run->frame).ok());
-    }
-    auto took = on_device.animator->write_inputs_on(*on_device.rods);
-    ASSERT_TRUE(took.ok()) << took.error().message;
-    ASSERT_TRUE(took.value());
+    HostAndDeviceInput runs;
+    ASSERT_NO_FATAL_FAILURE(runs.start(rods));
+    auto& [device, options, host, on_device] = runs;
 
     constexpr std::uint32_t kFrames = 60;
     constexpr std::size_t kWeights = rods::kMaxViewExamples + 1;
@@ -668,16 +667,8 @@ TEST(RiggedScene, KeySourcesWrittenOnTheDeviceMatchTheHosts) {
             }
         }
     }
-    std::vector<rods::ChainState> a, b;
-    ASSERT_TRUE(host.rods->read_states(a).ok());
-    ASSERT_TRUE(on_device.rods->read_states(b).ok());
     float worst = 0.0f;
-    for (std::size_t c = 0; c < a.size(); ++c) {
-        const std::uint32_t n = rods.world.templ(rods.world.chains[c]).chain.joint_count;
-        for (std::uint32_t i = 0; i < n; ++i) {
-            worst = std::max(worst, glm::length((a[c].root.position + a[c].x[i]) - (b[c].root.position + b[c].x[i])));
-        }
-    }
+    ASSERT_NO_FATAL_FAILURE(worst = runs.joint_distance(rods));
     std::printf("key sources on the device, 37 chibis x %u frames: W within %.3g of the host-input run (keyed W from %.3f "
                 "to %.3f), chain joints within %.3g m\n",
                 kFrames, static_cast<double>(worst_weight), static_cast<double>(low), static_cast<double>(high),
@@ -685,7 +676,7 @@ TEST(RiggedScene, KeySourcesWrittenOnTheDeviceMatchTheHosts) {
     EXPECT_GT(high - low, 0.2f) << "the keyed weights must move";
     EXPECT_LT(worst_weight, 1e-4f);
     EXPECT_LT(worst, 1e-5f);
-    EXPECT_EQ(validation_messages(*device.value()), 0u);
+    EXPECT_EQ(validation_messages(*device), 0u);
 }
 
 // Blender's own glTF importer (tests/tools/blender_check.py) on the export of a
