@@ -8,10 +8,13 @@ namespace {
 // Figures and their sources: docs/wing-types.md. Frequencies of gull and hawk are
 // Pennycuick's (1996) allometric estimate; amplitude is ours (gull and buzzard beat
 // shallower than a pigeon: "fast, stiff, shallow" in field guides).
+// Glide ratios, flap-glide rhythms, hovering and the route limits: docs/wing-types.md.
+constexpr float kDeg = 0.017453292f;
 constexpr WingTypeSpec kSpecs[kWingTypeCount] = {
-    {"pigeon", 0.67f, 0.33f, 0.31f, 0.10f, 5.5f, 19.7f, 1.0f, 0.45f},
-    {"gull", 1.40f, 0.60f, 1.0f, 0.14f, 3.6f, 12.0f, 0.8f, 0.5f},
-    {"hawk", 1.20f, 0.54f, 0.875f, 0.22f, 3.6f, 11.0f, 0.7f, 0.45f},
+    {"pigeon", 0.67f, 0.33f, 0.31f, 0.10f, 5.5f, 19.7f, 1.0f, 0.45f, 7.0f, 0.0f, 0.0f, false, 30 * kDeg, 60 * kDeg, 4.0f},
+    {"gull", 1.40f, 0.60f, 1.0f, 0.14f, 3.6f, 12.0f, 0.8f, 0.5f, 12.0f, 8.0f, 2.5f, false, 20 * kDeg, 50 * kDeg, 2.5f},
+    {"hawk", 1.20f, 0.54f, 0.875f, 0.22f, 3.6f, 11.0f, 0.7f, 0.45f, 10.0f, 5.0f, 4.0f, false, 20 * kDeg, 70 * kDeg, 3.0f},
+    {"hummingbird", 0.11f, 0.09f, 0.0034f, 0.014f, 53.0f, 8.0f, 1.0f, 0.45f, 4.0f, 0.0f, 0.0f, true, 80 * kDeg, 80 * kDeg, 10.0f},
 };
 
 }  // namespace
@@ -27,6 +30,10 @@ std::optional<WingType> parse_wing_type(std::string_view name) {
         if (kSpecs[i].name == name) return static_cast<WingType>(i);
     }
     return std::nullopt;
+}
+
+gpu::vec4 flight_params(const WingTypeSpec& spec) {
+    return {spec.glide_ratio, spec.flap_glide_beats, spec.flap_glide_seconds, spec.can_hover ? 1.0f : 0.0f};
 }
 
 std::array<std::array<float, 3>, kPartCount> part_offsets(WingType type) {

@@ -149,6 +149,7 @@ void read_flock(const kodawari_flock_desc& f, const std::string& what, std::uint
         if (phase >= 1.0f) phase = 0.0f;  // b / count just below 1 can round up to 1.0f: phase 0 of the next cycle
         p.motion = {f.speed, f.frequency, f.amplitude, phase};
         p.ids = {f.route, static_cast<std::uint32_t>(wing), 0u, 0u};
+        p.flight = birds::flight_params(birds::wing_type_spec(wing));
         world.birds.push_back(p);
     }
 }

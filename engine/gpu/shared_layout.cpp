@@ -22,8 +22,9 @@ static_assert(offsetof(FlightUniforms, physics) == 0 && offsetof(FlightUniforms,
 static_assert(sizeof(RouteHeader) == 48);
 static_assert(offsetof(RouteHeader, extent) == 0 && offsetof(RouteHeader, flags) == 16 && offsetof(RouteHeader, info) == 32);
 static_assert(sizeof(ArcSample) == 32 && offsetof(ArcSample, next) == 16);
-static_assert(sizeof(BirdParams) == 48);
-static_assert(offsetof(BirdParams, offset) == 0 && offsetof(BirdParams, motion) == 16 && offsetof(BirdParams, ids) == 32);
+static_assert(sizeof(BirdParams) == 64);
+static_assert(offsetof(BirdParams, offset) == 0 && offsetof(BirdParams, motion) == 16 && offsetof(BirdParams, ids) == 32 &&
+              offsetof(BirdParams, flight) == 48);
 static_assert(sizeof(BirdState) == 48);
 static_assert(offsetof(BirdState, blend) == 0 && offsetof(BirdState, phase) == 16 && offsetof(BirdState, mode) == 32);
 static_assert(sizeof(BirdPose) == 128);

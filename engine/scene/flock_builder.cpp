@@ -374,6 +374,7 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
         p.motion.w = phase;
         p.ids.x = first_route + b % variants;
         p.ids.y = static_cast<std::uint32_t>(flock.wing_type);
+        p.flight = birds::flight_params(wing);
         world.birds.push_back(p);
     }
     return {};

@@ -210,7 +210,7 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
     KW_TRY(optional_member(r, node, "name", flock.name, [&](const JsonNode& n) { return r.string(n); }));
 
     std::size_t wing = 0;
-    KW_SCENE_ASSIGN(wing, r.choice(r.member(node, "wing_type"), {"pigeon", "gull", "hawk"}));
+    KW_SCENE_ASSIGN(wing, r.choice(r.member(node, "wing_type"), {"pigeon", "gull", "hawk", "hummingbird"}));
     flock.wing_type = static_cast<birds::WingType>(wing);
 
     const JsonNode count = r.member(node, "count");

@@ -29,6 +29,11 @@
 #define KW_MODE_LEVEL 0u
 #define KW_MODE_ASCEND 1u
 #define KW_MODE_DESCEND 2u
+#define KW_MODE_GLIDE 3u     // wings held out, no flapping (docs/flight-modes.md)
+#define KW_MODE_TAKEOFF 4u   // crouch, leap, strong low-speed beats, climb-out
+#define KW_MODE_LANDING 5u   // flare and touchdown at zero speed
+#define KW_MODE_HOVER 6u     // figure-eight strokes, hovering types only
+#define KW_MODE_COUNT 7u
 #define KW_MODE_UNSET 0xFFFFFFFFu
 
 #define KW_BANK_COORDINATED 0u
@@ -87,7 +92,8 @@ struct ArcSample {
 struct BirdParams {
     vec4 offset;  // xyz: translation added to the route (m), w: time offset (s)
     vec4 motion;  // x: speed (m/s), y: flap frequency (Hz), z: flap amplitude scale, w: initial phase (cycles)
-    uvec4 ids;    // x: route index, y: wing type, z, w: unused
+    uvec4 ids;    // x: route index, y: bird type (WingType, or a user's model after them), z, w: unused
+    vec4 flight;  // x: glide ratio, y: flap-glide beats (0: none), z: flap-glide glide seconds, w: 1 if it can hover
 };
 
 // Per-bird state carried from frame to frame (mode hysteresis, transitions, phase).
@@ -100,7 +106,7 @@ struct BirdState {
 // Per-bird, per-frame output: the 7 part transforms. Translations other than the
 // body's are constants of the wing type's rig and are not repeated here.
 struct BirdPose {
-    vec4 position;     // xyz: Body world position, w: 0
+    vec4 position;     // xyz: Body world position, w: tail spread s (the Tail's scale along its width, X, is 1 + s)
     vec4 rotation[7];  // local rotations, quaternion (x, y, z, w), KW_PART_* order; Body in world space
 };
 

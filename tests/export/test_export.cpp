@@ -36,18 +36,18 @@ TEST(Export, GlbRoundTrip) {
     EXPECT_EQ(animation.name, "flight");
     ASSERT_EQ(animation.channels.size(), (birds::kPartCount + 1) * kBirds);
 
-    // Bird 17 is a hawk (17 % 3 == 2): its Body node, its parts, their rest offsets.
-    constexpr std::size_t kBird = 17;
+    // Bird 18 is a hawk (18 % 4 == 2): its Body node, its parts, their rest offsets.
+    constexpr std::size_t kBird = 18;
     const int body = model.nodes[0].children[kBird];
     const tinygltf::Node& body_node = model.nodes.at(static_cast<std::size_t>(body));
-    EXPECT_EQ(body_node.name, "hawk_17");
+    EXPECT_EQ(body_node.name, "hawk_18");
     ASSERT_EQ(body_node.children.size(), 4u);  // Head, Tail, LeftArm1, RightArm1
     const auto offsets = birds::part_offsets(birds::WingType::Hawk);
     for (const int child : body_node.children) {
         const tinygltf::Node& part = model.nodes.at(static_cast<std::size_t>(child));
         const auto index = static_cast<std::size_t>(child - body);
         ASSERT_LT(index, birds::kPartCount);
-        EXPECT_EQ(part.name, std::string(birds::kPartNames[index]) + "_17");
+        EXPECT_EQ(part.name, std::string(birds::kPartNames[index]) + "_18");
         ASSERT_EQ(part.translation.size(), 3u);
         for (std::size_t i = 0; i < 3; ++i) {
             EXPECT_FLOAT_EQ(static_cast<float>(part.translation[i]), offsets[index][i]) << part.name;

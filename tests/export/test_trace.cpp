@@ -72,8 +72,8 @@ TEST(Trace, RoundTrip) {
         EXPECT_EQ(lines[i].at("id"), (i - 1) % kBirds);
     }
 
-    // Bird 40 (a gull, mode 40 % 3 = 1: ascend) in frame 1.
-    constexpr std::size_t kBird = 40;
+    // Bird 37 (a gull: 37 % kWingTypeCount = 1; mode 37 % 3 = 1: ascend) in frame 1.
+    constexpr std::size_t kBird = 37;
     const auto& record = lines[1 + kBirds + kBird];
     const std::set<std::string> expected_keys = {"kind",     "frame",    "time",         "id",  "wing_type",
                                                  "mode",     "phase",    "blend",        "position", "velocity",

@@ -426,6 +426,7 @@ typedef enum kodawari_wing_type {
     KODAWARI_WING_PIGEON = 0,  ///< short elliptical wings (woodpecker, pigeon)
     KODAWARI_WING_GULL = 1,    ///< long narrow wings (gull, albatross)
     KODAWARI_WING_HAWK = 2,    ///< broad soaring wings (hawk, eagle)
+    KODAWARI_WING_HUMMINGBIRD = 3,  ///< hovering wings (hummingbird)
     KODAWARI_WING_MAX_ENUM = 0x7FFFFFFF
 } kodawari_wing_type;
 

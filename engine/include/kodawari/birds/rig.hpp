@@ -14,9 +14,9 @@
 
 namespace kodawari::birds {
 
-/// The three wing types of the seed, by aspect ratio.
-enum class WingType : std::uint32_t { Pigeon = 0, Gull = 1, Hawk = 2 };
-inline constexpr std::size_t kWingTypeCount = 3;
+/// The wing types: the seed's three, by aspect ratio, and a hovering type.
+enum class WingType : std::uint32_t { Pigeon = 0, Gull = 1, Hawk = 2, Hummingbird = 3 };
+inline constexpr std::size_t kWingTypeCount = 4;
 
 /// The rig's parts in BirdPose order.
 enum class Part : std::uint32_t {
@@ -49,13 +49,23 @@ struct WingTypeSpec {
     float cruise_speed;            ///< typical flight speed (m/s)
     float amplitude;               ///< default scale of the wingbeat angles (1 = the seed's)
     float arm1_fraction;           ///< share of the half-span taken by arm1 (inner wing)
+    float glide_ratio;             ///< best lift-to-drag ratio in a glide (docs/wing-types.md)
+    float flap_glide_beats;        ///< wingbeats per flap-glide cycle in level flight (0: flaps continuously)
+    float flap_glide_seconds;      ///< glide time per flap-glide cycle (s)
+    bool can_hover;                ///< hovers with figure-eight strokes (docs/flight-modes.md)
+    float max_climb;               ///< steepest sustained climb (rad)
+    float max_dive;                ///< steepest dive (rad, positive)
+    float max_speed_change;        ///< largest tangential acceleration or deceleration (m/s^2)
 };
 
 /// The spec of a wing type.
 [[nodiscard]] KODAWARI_API const WingTypeSpec& wing_type_spec(WingType type);
 
-/// Parses "pigeon", "gull" or "hawk".
+/// Parses "pigeon", "gull", "hawk" or "hummingbird".
 [[nodiscard]] KODAWARI_API std::optional<WingType> parse_wing_type(std::string_view name);
+
+/// BirdParams::flight of a bird with this spec (glide ratio, flap-glide rhythm, hover).
+[[nodiscard]] KODAWARI_API gpu::vec4 flight_params(const WingTypeSpec& spec);
 
 /// Rest translation of every part relative to its parent (Body: zero), metres.
 [[nodiscard]] KODAWARI_API std::array<std::array<float, 3>, kPartCount> part_offsets(WingType type);
