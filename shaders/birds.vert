@@ -4,7 +4,8 @@
 // per bird. The part hierarchy and the pose expansion are those of the glTF export and
 // the Vulkan backend's read back: world(part) = world(parent) * T(offset) * R(rotation),
 // the Body placed at the pose's position and scaled up to a minimum size on screen;
-// Head and Tail at rest; the right wing the mirror of the left, (x, -y, -z, w) (SPEC B.2).
+// the Tail widened by its spread (position.w); the right wing the mirror of the left,
+// (x, -y, -z, w) (SPEC B.2).
 #extension GL_GOOGLE_include_directive : require
 #include "shared/birds.h"
 #include "shared/render.h"
@@ -30,11 +31,13 @@ vec4 unit_quat(vec4 q) {
 
 vec4 part_rotation(BirdPoseGpu pose, int part) {
     if (part == KW_PART_BODY) return pose.body;
+    if (part == KW_PART_HEAD) return pose.head;
+    if (part == KW_PART_TAIL) return pose.tail;
     if (part == KW_PART_LEFT_ARM1) return pose.left_arm1;
     if (part == KW_PART_LEFT_ARM2) return pose.left_arm2;
     if (part == KW_PART_RIGHT_ARM1) return vec4(pose.left_arm1.x, -pose.left_arm1.yz, pose.left_arm1.w);
     if (part == KW_PART_RIGHT_ARM2) return vec4(pose.left_arm2.x, -pose.left_arm2.yz, pose.left_arm2.w);
-    return vec4(0.0, 0.0, 0.0, 1.0);  // Head, Tail
+    return vec4(0.0, 0.0, 0.0, 1.0);
 }
 
 void main() {
@@ -44,6 +47,10 @@ void main() {
     // Up the hierarchy to the Body: into each parent's frame.
     vec3 p = in_position.xyz, n = in_normal.xyz;
     int part = int(in_position.w);
+    if (part == KW_PART_TAIL) {  // the spread widens the tail across (its X)
+        p.x *= 1.0 + pose.position.w;
+        n.x /= 1.0 + pose.position.w;
+    }
     for (int guard = 0; part != KW_PART_BODY && guard < KW_PART_COUNT; ++guard) {
         vec4 q = unit_quat(part_rotation(pose, part));
         p = rotate(q, p) + type.parts[part].xyz;

@@ -45,6 +45,7 @@ struct Bezier { vec3 p; vec3 d1; vec3 d2; };
 struct RouteCache {
     uint segment;  // cached segment, 0xFFFFFFFF = none
     vec3 b0, b1, b2, b3;
+    float segment_mode;  // its mode (shared/birds.h KW_SEGMENT_AUTO or a KW_MODE_*)
     uint lo;       // cached arc-length interval [lo, lo + 1], 0xFFFFFFFF = none
     vec4 a, b;     // its two samples
     float inv_h;
@@ -55,6 +56,7 @@ RouteCache empty_cache() {
     c.segment = 0xFFFFFFFFu;
     c.lo = 0xFFFFFFFFu;
     c.b0 = c.b1 = c.b2 = c.b3 = vec3(0.0);
+    c.segment_mode = KW_SEGMENT_AUTO;
     c.a = c.b = vec4(0.0);
     c.inv_h = 0.0;
     return c;
@@ -64,7 +66,9 @@ Bezier bezier(RouteHeader route, uint seg, float u, inout RouteCache cache) {
     if (cache.segment != seg) {
         uint c = route.extent.x + 3u * seg;
         cache.segment = seg;
-        cache.b0 = control_points[c].xyz;
+        vec4 first = control_points[c];
+        cache.b0 = first.xyz;
+        cache.segment_mode = first.w;
         cache.b1 = control_points[c + 1u].xyz;
         cache.b2 = control_points[c + 2u].xyz;
         cache.b3 = control_points[c + 3u].xyz;
@@ -127,12 +131,20 @@ struct RouteSample {
     vec3 direction;  // P', a positive multiple of the velocity (exact)
     float lift;      // acceleration.y = lift / lift_scale (exact)
     float lift_scale;
+    vec3 attitude_velocity;  // flight.hpp RouteSample::attitude_velocity
+    float segment_mode;      // exact
+    float speed_fraction;    // exact (docs/flight-modes.md F.2)
+    float since_crouch;
+    float since_touchdown;
 };
 
 // One Bezier evaluation per frame: lavapipe runs both sides of a divergent branch, so
 // the timing and end cases only choose the parameter and how the result is used.
 RouteSample sample_route(RouteHeader route, float time, float speed, inout RouteCache cache) {
     bool loop = (route.flags.x & KW_ROUTE_LOOP) != 0u;
+    precise float fraction = 1.0;
+    float along = 0.0;
+    float since_crouch = 1e9, since_touchdown = -1.0;
     bool parametric = (route.flags.x & KW_ROUTE_PARAMETRIC) != 0u;
     float n = float(route.extent.y);
     // Where on the route (u), and how far past an end of an open route (`beyond`: in u
@@ -156,8 +168,49 @@ RouteSample sample_route(RouteHeader route, float time, float speed, inout Route
         }
     } else {
         float total = route.info.x;
-        precise float s = speed * time;  // arc-length timing (SPEC B.3)
-        if (loop) s = s - total * floor(s * route.info.z);
+        precise float s;
+        bool takeoff = (route.flags.x & KW_ROUTE_TAKEOFF) != 0u, landing = (route.flags.x & KW_ROUTE_LANDING) != 0u;
+        if (takeoff || landing) {  // flight.cpp sample_route(): docs/flight-modes.md F.2
+            precise float tau = takeoff ? time - float(KW_CROUCH_SECONDS) : time;
+            precise float d = speed * tau;
+            if (takeoff) since_crouch = tau;
+            precise float two_l0 = 2.0 * route.perch.x;
+            if (takeoff && d < two_l0) {
+                if (d >= 0.0) {
+                    precise float k0 = 0.25 * route.perch.y;
+                    precise float k1 = 0.5 * route.perch.y;
+                    s = d * d * k0;
+                    fraction = d * k1;
+                    along = speed * speed * k1;
+                } else {
+                    s = 0.0;
+                    fraction = 0.0;
+                }
+            } else {
+                s = takeoff ? d - route.perch.x : d;
+            }
+            if (landing) {
+                precise float start = total - route.perch.z;
+                if (s > start) {
+                    precise float dl = s - start;
+                    precise float two_ln = 2.0 * route.perch.z;
+                    if (dl < two_ln) {
+                        precise float kn0 = 0.25 * route.perch.w;
+                        precise float kn1 = 0.5 * route.perch.w;
+                        s = start + dl - dl * dl * kn0;
+                        fraction = 1.0 - dl * kn1;
+                        along = -(speed * speed * kn1);
+                    } else {
+                        s = total;
+                        fraction = 0.0;
+                        since_touchdown = (dl - two_ln) / speed;
+                    }
+                }
+            }
+        } else {
+            s = speed * time;  // arc-length timing (SPEC B.3)
+            if (loop) s = s - total * floor(s * route.info.z);
+        }
         outside = s < 0.0 || s > total;
         float end_s = s < 0.0 ? 0.0 : total;
         u = route_parameter_at(route, clamp(s, 0.0, total), cache);
@@ -172,9 +225,14 @@ RouteSample sample_route(RouteHeader route, float time, float speed, inout Route
     r.acceleration = vec3(0.0);
     r.lift = 0.0;
     r.lift_scale = 1.0;
+    r.segment_mode = cache.segment_mode;
+    r.speed_fraction = fraction;
+    r.since_crouch = since_crouch;
+    r.since_touchdown = since_touchdown;
     if (parametric) {
         r.position = outside ? e.p + beyond * e.d1 : e.p;
         r.velocity = route.info.w * e.d1;
+        r.attitude_velocity = r.velocity;
         if (!outside) {
             r.acceleration = (route.info.w * route.info.w) * e.d2;
             r.lift = e.d2.y;  // a_y = P''_y / D^2
@@ -184,14 +242,16 @@ RouteSample sample_route(RouteHeader route, float time, float speed, inout Route
     } else {
         float d1_len = length(e.d1);
         vec3 tangent = (1.0 / d1_len) * e.d1;
+        precise float now = fraction * speed;
         r.position = outside ? e.p + beyond * tangent : e.p;
-        r.velocity = speed * tangent;
+        r.velocity = (outside ? speed : now) * tangent;
+        r.attitude_velocity = outside ? r.velocity : vec3(speed * tangent.x, now * tangent.y, speed * tangent.z);
         if (!outside) {
             // a = v^2 (P'' - (P''.T)T) / |P'|^2; a_y exactly as lift / lift_scale.
-            r.acceleration = ((speed * speed) / (d1_len * d1_len)) * (e.d2 - dot(e.d2, tangent) * tangent);
+            r.acceleration = ((now * now) / (d1_len * d1_len)) * (e.d2 - dot(e.d2, tangent) * tangent) + along * tangent;
             precise float dd = e.d1.x * e.d1.x + e.d1.y * e.d1.y + e.d1.z * e.d1.z;
             precise float d2d1 = e.d2.x * e.d1.x + e.d2.y * e.d1.y + e.d2.z * e.d1.z;
-            precise float lift = (speed * speed) * (e.d2.y * dd - d2d1 * e.d1.y);
+            precise float lift = (now * now) * (e.d2.y * dd - d2d1 * e.d1.y);
             precise float lift_scale = dd * dd;
             r.lift = lift;
             r.lift_scale = lift_scale;
@@ -225,11 +285,16 @@ vec2 half_angle(float c, float s) {
     return vec2(hc, s / (2.0 * hc));
 }
 
-// engine/birds/flight.cpp body_rotation(): the attitude's rotation without trig.
-vec4 body_rotation(vec3 v, vec3 a) {
+// engine/birds/flight.cpp body_frame(): the attitude's rotation without trig, as its
+// yaw, climb pitch and bank factors.
+struct BodyFrame { vec4 yaw; vec4 pitch; vec4 bank; };
+
+BodyFrame body_frame(vec3 v, vec3 a) {
+    BodyFrame f;
+    f.yaw = f.pitch = f.bank = vec4(0.0, 0.0, 0.0, 1.0);
     float horizontal = sqrt(v.x * v.x + v.z * v.z);
     float speed = sqrt(horizontal * horizontal + v.y * v.y);
-    if (speed <= 0.0) return vec4(0.0, 0.0, 0.0, 1.0);
+    if (speed <= 0.0) return f;
     vec4 yaw = vec4(0.0, 0.0, 0.0, 1.0);
     if (horizontal > 0.0) {
         float c = v.z / horizontal, s = v.x / horizontal;
@@ -261,7 +326,10 @@ vec4 body_rotation(vec3 v, vec3 a) {
         }
     }
     vec2 b = half_angle(bc, bs);
-    return qmul_flight(qmul_flight(yaw, pitch), vec4(0.0, 0.0, b.y, b.x));
+    f.yaw = yaw;
+    f.pitch = pitch;
+    f.bank = vec4(0.0, 0.0, b.y, b.x);
+    return f;
 }
 
 uint next_mode(uint previous, RouteSample r) {
@@ -304,17 +372,91 @@ vec4 wing_angles(uint mode, float t, float s, float amplitude) {
     return a * amplitude;
 }
 
-vec4 blend_quats(vec4 q0, vec4 q1, vec4 q2, vec3 weights, float alpha, uint mode) {
-    vec4 target = mode == KW_MODE_LEVEL ? q0 : mode == KW_MODE_ASCEND ? q1 : q2;
-    vec4 sum = alpha * target;
-    sum += ((1.0 - alpha) * weights.x * (dot(q0, target) < 0.0 ? -1.0 : 1.0)) * q0;
-    sum += ((1.0 - alpha) * weights.y * (dot(q1, target) < 0.0 ? -1.0 : 1.0)) * q1;
-    sum += ((1.0 - alpha) * weights.z * (dot(q2, target) < 0.0 ? -1.0 : 1.0)) * q2;
-    return sum * (1.0 / sqrt(dot(sum, sum)));
+// engine/birds/flight.cpp flight_mode(): docs/flight-modes.md F.1, from exact inputs.
+uint flight_mode(BirdParams bird, BirdState state, RouteSample r, uint climb_mode) {
+    if (r.segment_mode >= 0.0) return uint(r.segment_mode);
+    uint mode = climb_mode;
+    if (bird.flight.w > 0.0 && bird.motion.x < 3.0) return KW_MODE_HOVER;  // flight.hpp kHoverBelowSpeed
+    if (mode == KW_MODE_LEVEL && bird.flight.y > 0.0 && r.direction.y <= 0.0) {
+        bool glide = state.mode.x == KW_MODE_GLIDE ? state.phase.y < bird.flight.z : state.phase.z >= bird.flight.y;
+        if (glide) mode = KW_MODE_GLIDE;
+    }
+    return mode;
 }
 
-vec3 one_hot(uint mode) {
-    return vec3(mode == KW_MODE_LEVEL ? 1.0 : 0.0, mode == KW_MODE_ASCEND ? 1.0 : 0.0, mode == KW_MODE_DESCEND ? 1.0 : 0.0);
+// engine/birds/wingbeat.cpp: the looks of the modes (docs/flight-modes.md F.3, F.5).
+struct Look { vec4 wings; float pitch; float spread; float bob; };
+
+const vec4 FOLDED_WINGS = vec4(-0.2, 0.1, 1.35, 0.25);
+const vec4 GLIDE_WINGS = vec4(0.06, -0.04, 0.08, 0.12);
+const vec4 FLARE_WINGS = vec4(0.45, -0.35, -0.55, 0.25);
+
+float level_arm1(float t) {
+    return t < 0.5 * PI ? 0.0 : t < PI ? -(2.0 / 3.0) * t + PI / 3.0 : t < 1.5 * PI ? -PI / 3.0 : (2.0 / 3.0) * t - (4.0 / 3.0) * PI;
+}
+float level_arm2(float t, float s) { return t < PI ? -(PI / 3.0) * s : -(3.0 / 18.0) * PI * s; }
+
+Look mode_look(uint mode, float t, float sin_t, float cos_t, float amplitude, RouteSample r) {
+    Look l;
+    l.pitch = 0.0;
+    l.spread = 0.0;
+    l.bob = 0.0;
+    if (mode <= KW_MODE_DESCEND) {
+        l.wings = wing_angles(mode, t, sin_t, amplitude);
+        l.spread = mode == KW_MODE_LEVEL ? 0.15 : mode == KW_MODE_ASCEND ? 0.35 : 0.1;
+        l.bob = mode == KW_MODE_DESCEND ? 0.3 : 1.0;
+    } else if (mode == KW_MODE_GLIDE) {
+        l.wings = GLIDE_WINGS;
+        l.spread = 0.25;
+    } else if (mode == KW_MODE_TAKEOFF) {
+        float open = smoothstep(0.0, float(KW_LEAP_SECONDS), r.since_crouch);
+        vec4 beats = vec4(1.3 * amplitude * level_arm1(t), 1.3 * amplitude * level_arm2(t, sin_t), 0.3 * amplitude * cos_t, 0.0);
+        l.wings = mix(FOLDED_WINGS, beats, open);
+        l.pitch = mix(-0.2, 0.45 * (1.0 - r.speed_fraction), open);
+        l.spread = 0.8 * open;
+        l.bob = open;
+    } else if (mode == KW_MODE_LANDING) {
+        float flare = smoothstep(0.4, 1.0, 1.0 - r.speed_fraction);
+        float fold = smoothstep(0.0, float(KW_FOLD_SECONDS), r.since_touchdown);
+        vec4 beats = vec4(0.6 * amplitude * level_arm1(t), 0.6 * amplitude * level_arm2(t, sin_t), -0.25 + 0.25 * amplitude * cos_t, 0.0);
+        l.wings = mix(mix(beats, FLARE_WINGS, flare), FOLDED_WINGS, fold);
+        l.pitch = 0.8 * flare * (1.0 - fold);
+        l.spread = (0.3 + 0.6 * flare) * (1.0 - fold);
+        l.bob = (1.0 - flare) * (1.0 - fold);
+    } else {  // hover: figure-eight strokes
+        l.wings = vec4(0.2 * amplitude * sin(2.0 * t), -0.1 * amplitude * sin_t, 0.95 * amplitude * cos_t, 0.0);
+        l.pitch = 0.6;
+        l.spread = 0.5;
+        l.bob = 0.5;
+    }
+    return l;
+}
+
+// wingbeat.cpp beat_factor(): exact.
+float beat_factor(uint mode, RouteSample r) {
+    if (mode == KW_MODE_GLIDE) return 0.0;
+    if (mode == KW_MODE_TAKEOFF) return r.since_crouch < 0.0 ? 0.0 : 1.25;
+    if (mode == KW_MODE_LANDING) return r.since_touchdown >= 0.0 ? 0.0 : 1.25;
+    return 1.0;
+}
+
+// flight.cpp arm_rotation(): heading about the body's up axis, then pitch about its forward axis.
+vec4 arm_rotation(float pitch, float heading) { return qmul_flight(quat_z(pitch), quat_y(heading)); }
+
+vec4 partial_turn(vec4 q, float k) {
+    vec4 p = vec4(k * q.xyz, (1.0 - k) + k * q.w);
+    return p * (1.0 / sqrt(dot(p, p)));
+}
+vec4 nose_up(float angle) { return vec4(-sin(0.5 * angle), 0.0, 0.0, cos(0.5 * angle)); }
+
+float blend_rate(uint mode) {
+    return mode == KW_MODE_LEVEL ? u.blend_rates.x : mode == KW_MODE_ASCEND ? u.blend_rates.y : mode == KW_MODE_DESCEND ? u.blend_rates.z
+         : mode == KW_MODE_GLIDE ? u.blend_rates2.x : mode == KW_MODE_TAKEOFF ? u.blend_rates2.y : mode == KW_MODE_LANDING ? u.blend_rates2.z
+         : u.blend_rates2.w;
+}
+
+float weight_of(vec4 w0, vec3 w1, uint m) {
+    return m < 4u ? w0[m] : w1[m - 4u];
 }
 
 void main() {
@@ -330,60 +472,128 @@ void main() {
 
     for (uint k = 0u; k < push.frames.y; ++k) {
         uint frame = push.frames.x + k;
-        bool first = state.mode.x == KW_MODE_UNSET;
-        precise float phase = first ? bird.motion.w : state.phase.x + bird.motion.y * dt;
-        phase = phase - floor(phase);
-        state.phase.x = phase;
+        uint previous = state.mode.x;
+        bool first = previous == KW_MODE_UNSET;
 
         precise float time = float(frame) * dt + bird.offset.w;
         RouteSample r = sample_route(route, time, bird.motion.x, cache);
-        vec3 position = r.position, velocity = r.velocity, acceleration = r.acceleration;
 
-        uint mode = next_mode(state.mode.x, r);
+        uint climb_previous = previous <= KW_MODE_DESCEND ? previous : previous == KW_MODE_GLIDE ? KW_MODE_LEVEL : KW_MODE_UNSET;
+        uint mode = flight_mode(bird, state, r, next_mode(climb_previous, r));
+
+        // Transition (SPEC B.6), seven weights: blend.xyzw and blend2.xyz; alpha in blend2.w.
+        vec4 w0 = state.blend;
+        vec3 w1 = state.blend2.xyz;
+        precise float alpha = state.blend2.w;
         if (first) {
-            state.blend = vec4(one_hot(mode), 1.0);
-        } else if (mode != state.mode.x) {
-            float alpha = state.blend.w;
-            precise vec3 weights = (1.0 - alpha) * state.blend.xyz + alpha * one_hot(state.mode.x);
-            state.blend = vec4(weights, 0.0);
-        } else if (state.blend.w < 1.0) {
-            float rate = mode == KW_MODE_LEVEL ? u.blend_rates.x : mode == KW_MODE_ASCEND ? u.blend_rates.y : u.blend_rates.z;
-            precise float alpha = state.blend.w + rate * u.physics.w;
-            state.blend.w = alpha;
-            if (state.blend.w >= 1.0) state.blend = vec4(one_hot(mode), 1.0);
+            w0 = vec4(mode == 0u ? 1.0 : 0.0, mode == 1u ? 1.0 : 0.0, mode == 2u ? 1.0 : 0.0, mode == 3u ? 1.0 : 0.0);
+            w1 = vec3(mode == 4u ? 1.0 : 0.0, mode == 5u ? 1.0 : 0.0, mode == 6u ? 1.0 : 0.0);
+            alpha = 1.0;
+        } else if (mode != previous) {
+            precise vec4 n0 = (1.0 - alpha) * w0 + alpha * vec4(previous == 0u ? 1.0 : 0.0, previous == 1u ? 1.0 : 0.0,
+                                                                  previous == 2u ? 1.0 : 0.0, previous == 3u ? 1.0 : 0.0);
+            precise vec3 n1 = (1.0 - alpha) * w1 + alpha * vec3(previous == 4u ? 1.0 : 0.0, previous == 5u ? 1.0 : 0.0,
+                                                                  previous == 6u ? 1.0 : 0.0);
+            w0 = n0;
+            w1 = n1;
+            alpha = 0.0;
+        } else if (alpha < 1.0) {
+            alpha = alpha + blend_rate(mode) * u.physics.w;
+            if (alpha >= 1.0) {
+                w0 = vec4(mode == 0u ? 1.0 : 0.0, mode == 1u ? 1.0 : 0.0, mode == 2u ? 1.0 : 0.0, mode == 3u ? 1.0 : 0.0);
+                w1 = vec3(mode == 4u ? 1.0 : 0.0, mode == 5u ? 1.0 : 0.0, mode == 6u ? 1.0 : 0.0);
+                alpha = 1.0;
+            }
+        }
+        state.blend = w0;
+        state.blend2 = vec4(w1, alpha);
+
+        // Phase, by the mode's beat factor; completed beats drive the flap-glide rhythm.
+        precise float increment = (bird.motion.y * dt) * beat_factor(mode, r);
+        precise float phase = first ? bird.motion.w : state.phase.x + increment;
+        float whole = floor(phase);
+        phase = phase - whole;
+        state.phase.x = phase;
+        if (mode == KW_MODE_GLIDE) {
+            precise float glided = (previous == KW_MODE_GLIDE ? state.phase.y : 0.0) + dt;
+            state.phase.y = glided;
+            state.phase.z = 0.0;
+        } else {
+            state.phase.y = 0.0;
+            if (!first) {
+                precise float beats = state.phase.z + whole;
+                state.phase.z = beats;
+            }
         }
         state.mode.x = mode;
 
         float t = phase * TWO_PI;
         if (t >= TWO_PI) t = 0.0;
         float amplitude = bird.motion.z;
-        float sin_t = sin(t);
-        // All three mode poses (the transition blends them; outside one the target is
-        // picked): computed once, as lavapipe would run a divergent branch anyway.
-        vec4 a0 = wing_angles(KW_MODE_LEVEL, t, sin_t, amplitude);
-        vec4 a1 = wing_angles(KW_MODE_ASCEND, t, sin_t, amplitude);
-        vec4 a2 = wing_angles(KW_MODE_DESCEND, t, sin_t, amplitude);
-        vec4 level1 = quat_z(a0.x), level2 = quat_z(a0.y);
-        vec4 ascend1 = quat_z(a1.x), ascend2 = quat_z(a1.y);
-        vec4 descend1 = quat_y(a2.z), descend2 = quat_y(a2.w);
-        vec4 target = mode == KW_MODE_LEVEL ? a0 : mode == KW_MODE_ASCEND ? a1 : a2;
-        vec4 left1 = mode == KW_MODE_LEVEL ? level1 : mode == KW_MODE_ASCEND ? ascend1 : descend1;
-        vec4 left2 = mode == KW_MODE_LEVEL ? level2 : mode == KW_MODE_ASCEND ? ascend2 : descend2;
-        if (state.blend.w < 1.0) {  // a transition (SPEC B.6)
-            left1 = blend_quats(level1, ascend1, descend1, state.blend.xyz, state.blend.w, mode);
-            left2 = blend_quats(level2, ascend2, descend2, state.blend.xyz, state.blend.w, mode);
+        float sin_t = sin(t), cos_t = cos(t);
+        Look target_look = mode_look(mode, t, sin_t, cos_t, amplitude, r);
+        vec4 left1 = arm_rotation(target_look.wings.x, target_look.wings.z);
+        vec4 left2 = arm_rotation(target_look.wings.y, target_look.wings.w);
+        float pitch = target_look.pitch, spread = target_look.spread, bob = target_look.bob;
+        if (alpha < 1.0) {  // a transition (SPEC B.6): the modes of the blend source
+            vec4 sum1 = alpha * left1, sum2 = alpha * left2;
+            pitch *= alpha;
+            spread *= alpha;
+            bob *= alpha;
+            for (uint m = 0u; m < KW_MODE_COUNT; ++m) {
+                float w = weight_of(w0, w1, m);
+                if (w == 0.0) continue;
+                Look l = mode_look(m, t, sin_t, cos_t, amplitude, r);
+                vec4 q1 = arm_rotation(l.wings.x, l.wings.z), q2 = arm_rotation(l.wings.y, l.wings.w);
+                float kw = (1.0 - alpha) * w;
+                sum1 += (kw * (dot(q1, left1) < 0.0 ? -1.0 : 1.0)) * q1;
+                sum2 += (kw * (dot(q2, left2) < 0.0 ? -1.0 : 1.0)) * q2;
+                pitch += kw * l.pitch;
+                spread += kw * l.spread;
+                bob += kw * l.bob;
+            }
+            left1 = sum1 * (1.0 / sqrt(dot(sum1, sum1)));
+            left2 = sum2 * (1.0 / sqrt(dot(sum2, sum2)));
         }
 
+        // Body, head and tail: flight.cpp step_bird(), docs/flight-modes.md F.5.
+        vec3 v = r.attitude_velocity, a = r.acceleration;
+        BodyFrame f = body_frame(v, a);
+        vec4 body_base = qmul_flight(qmul_flight(f.yaw, f.pitch), f.bank);
+        if (dot(v, v) <= 0.0) body_base = vec4(0.0, 0.0, 0.0, 1.0);
+        float oscillation = float(KW_BOB_PITCH) * amplitude * sin_t * bob;
+        float extra = pitch + oscillation;
+        vec4 body = qmul_flight(body_base, nose_up(extra));
+        float bob_height = -float(KW_BOB_HEIGHT) * bird.shape.x * amplitude * cos_t * bob;
+        float sin_bank = 2.0 * f.bank.z * f.bank.w;
+        float horizontal = sqrt(v.x * v.x + v.z * v.z);
+        float look = 0.0;
+        if (horizontal > 1e-3) {
+            float lateral = (a.x * -v.z + a.z * v.x) / horizontal;
+            look = clamp(-float(KW_LOOK_AHEAD) * lateral / horizontal, -float(KW_MAX_LOOK), float(KW_MAX_LOOK));
+        }
+        vec4 head = qmul_flight(qmul_flight(qmul_flight(nose_up(-(float(KW_HEAD_PITCH_HOLD) * pitch + float(KW_HEAD_BOB_HOLD) * oscillation)),
+                                                        partial_turn(qconj(f.bank), float(KW_HEAD_BANK_HOLD))),
+                                            partial_turn(qconj(f.pitch), float(KW_HEAD_CLIMB_HOLD))),
+                                quat_y(look));
+        vec4 tail = qmul_flight(qmul_flight(partial_turn(f.pitch, float(KW_TAIL_CLIMB)), nose_up(float(KW_TAIL_PITCH) * pitch)),
+                                partial_turn(f.bank, float(KW_TAIL_BANK)));
+        float tail_spread = spread + float(KW_TAIL_BANK_SPREAD) * abs(sin_bank);
+
         uint slot = (k % push.frames.z) * count + i;
-        poses[slot].position = vec4(position + bird.offset.xyz, 0.0);
-        poses[slot].body = body_rotation(velocity, acceleration);
+        vec3 position = r.position + bird.offset.xyz;
+        poses[slot].position = vec4(position.x, position.y + bob_height, position.z, tail_spread);
+        poses[slot].body = body;
+        poses[slot].head = head;
+        poses[slot].tail = tail;
         poses[slot].left_arm1 = left1;
         poses[slot].left_arm2 = left2;
         if (WRITE_DIAGNOSTICS) {
-            diags[slot].velocity = vec4(velocity, state.blend.w);
-            diags[slot].acceleration = vec4(acceleration, float(mode));
-            diags[slot].angles = target;
-            diags[slot].attitude = vec4(attitude(velocity, acceleration), t);
+            diags[slot].velocity = vec4(r.velocity, alpha);
+            diags[slot].acceleration = vec4(r.acceleration, float(mode));
+            diags[slot].angles = target_look.wings;
+            diags[slot].attitude = vec4(attitude(v, a), t);
+            diags[slot].flight = vec4(r.speed_fraction, extra, tail_spread, state.phase.y);
         }
     }
     states[i] = state;

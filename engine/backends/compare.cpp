@@ -51,6 +51,7 @@ void BirdComparison::add(std::uint32_t first_frame, std::uint32_t frames, std::s
             const gpu::vec4 &p = reference[i].position, &q = tested[i].position;
             const double dx = double{p.x} - double{q.x}, dy = double{p.y} - double{q.y}, dz = double{p.z} - double{q.z};
             position_.add(std::sqrt(dx * dx + dy * dy + dz * dz), b, frame);
+            spread_.add(std::fabs(double{p.w} - double{q.w}), b, frame);
             for (int part = 0; part < KW_PART_COUNT; ++part) {
                 rotation_[part].add(quaternion_angle(reference[i].rotation[part], tested[i].rotation[part]), b, frame);
             }
@@ -71,6 +72,7 @@ std::vector<Deviation> BirdComparison::results() const {
     };
     std::vector<Deviation> out;
     out.push_back(make("position", "m", position_, tol_.position_fraction_of_route * route_length_));
+    out.push_back(make("tail spread", "", spread_, tol_.tail_spread));
     for (std::size_t part = 0; part < KW_PART_COUNT; ++part) {
         out.push_back(make("rotation " + std::string(birds::kPartNames[part]), "rad", rotation_[part], tol_.rotation_rad));
     }

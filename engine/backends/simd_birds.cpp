@@ -52,10 +52,12 @@ public:
             float* rows = storage_.get() + b * simd::kBirdRows * kBatchLanes;
             for (std::size_t l = 0; l < kBatchLanes; ++l) {
                 const gpu::BirdParams& p = world.birds[batches_[b].bird[l]];
-                const float values[simd::kBirdPose] = {p.offset.x,  p.offset.y,  p.offset.z,  p.offset.w,
-                                                       p.motion.x,  p.motion.y,  p.motion.z,  p.motion.w,
-                                                       initial.blend.x, initial.blend.y, initial.blend.z, initial.blend.w,
-                                                       initial.phase.x, -1.0f /* KW_MODE_UNSET */};
+                const float values[simd::kBirdPose] = {
+                    p.offset.x,       p.offset.y,       p.offset.z,       p.offset.w,       p.motion.x,      p.motion.y,
+                    p.motion.z,       p.motion.w,       p.flight.x,       p.flight.y,       p.flight.z,      p.flight.w,
+                    p.shape.x,        initial.blend.x,  initial.blend.y,  initial.blend.z,  initial.blend.w, initial.blend2.x,
+                    initial.blend2.y, initial.blend2.z, initial.blend2.w, initial.phase.x,  initial.phase.y, initial.phase.z,
+                    -1.0f /* KW_MODE_UNSET */};
                 for (std::size_t r = 0; r < simd::kBirdPose; ++r) rows[r * kBatchLanes + l] = values[r];
                 for (std::size_t r = simd::kBirdPose; r < simd::kBirdRows; ++r) rows[r * kBatchLanes + l] = 0.0f;
             }

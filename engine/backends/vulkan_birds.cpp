@@ -21,18 +21,17 @@ using compute::Buffer;
 // flocks, one frame per dispatch for a million birds.
 constexpr std::uint64_t kRingBytes = 256ull << 20;
 
-// The kernel stores the moving parts only (shared/birds.h, BirdPoseGpu); the rest
-// follows from the rig: Head and Tail at rest, the right wing the mirror of the left.
+// The kernel stores the left wing only (shared/birds.h, BirdPoseGpu); the right wing is
+// its mirror.
 void expand(const gpu::BirdPoseGpu* in, std::size_t count, gpu::BirdPose* out) {
-    constexpr gpu::vec4 kIdentity{0.0f, 0.0f, 0.0f, 1.0f};
     auto mirror = [](const gpu::vec4& q) { return gpu::vec4{q.x, -q.y, -q.z, q.w}; };
     for (std::size_t i = 0; i < count; ++i) {
         const gpu::BirdPoseGpu& g = in[i];
         gpu::BirdPose& p = out[i];
         p.position = g.position;
         p.rotation[KW_PART_BODY] = g.body;
-        p.rotation[KW_PART_HEAD] = kIdentity;
-        p.rotation[KW_PART_TAIL] = kIdentity;
+        p.rotation[KW_PART_HEAD] = g.head;
+        p.rotation[KW_PART_TAIL] = g.tail;
         p.rotation[KW_PART_LEFT_ARM1] = g.left_arm1;
         p.rotation[KW_PART_LEFT_ARM2] = g.left_arm2;
         p.rotation[KW_PART_RIGHT_ARM1] = mirror(g.left_arm1);

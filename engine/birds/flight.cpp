@@ -55,9 +55,10 @@ Bezier bezier(const BirdWorld& world, const gpu::RouteHeader& route, std::uint32
     return r;
 }
 
-Bezier bezier_global(const BirdWorld& world, const gpu::RouteHeader& route, float u) {
+Bezier bezier_global(const BirdWorld& world, const gpu::RouteHeader& route, float u, float* segment_mode = nullptr) {
     const std::uint32_t n = route.extent.y;
     const std::uint32_t seg = std::min(static_cast<std::uint32_t>(std::max(u, 0.0f)), n - 1);
+    if (segment_mode != nullptr) *segment_mode = world.control_points[route.extent.x + 3 * seg].w;
     return bezier(world, route, seg, u - static_cast<float>(seg));
 }
 
@@ -97,52 +98,99 @@ RouteSample sample_route(const BirdWorld& world, std::uint32_t route_index, floa
         }
         if (u < 0.0f || u > n) {  // past the ends: fly on straight at the end velocity
             const float end = u < 0.0f ? 0.0f : n;
-            const Bezier e = bezier_global(world, route, end);
+            const Bezier e = bezier_global(world, route, end, &out.segment_mode);
             out.position = e.p + (u - end) * e.d1;
             out.velocity = route.info.w * e.d1;
+            out.attitude_velocity = out.velocity;
             out.direction = e.d1;
             return out;
         }
-        const Bezier e = bezier_global(world, route, u);
+        const Bezier e = bezier_global(world, route, u, &out.segment_mode);
         out.position = e.p;
         out.velocity = route.info.w * e.d1;
+        out.attitude_velocity = out.velocity;
         out.acceleration = (route.info.w * route.info.w) * e.d2;
         out.direction = e.d1;
         out.lift = e.d2.y;  // a_y = P''_y / D^2
         out.lift_scale = duration * duration;
         return out;
     }
-    // Arc-length timing (SPEC B.3): distance = speed * time.
+    // Arc-length timing (SPEC B.3): distance = speed * time, or, on a route that takes
+    // off or lands, the speed profile of docs/flight-modes.md F.2 (constant acceleration
+    // from rest over the take-off segment, to rest over the landing segment). The
+    // distance and the speed fraction decide modes, so only +, -, * here (shared/birds.h).
     const float total = route.info.x;
-    float s = speed * time;
-    if (loop) s = s - total * std::floor(s * route.info.z);
+    const bool takeoff = (route.flags.x & KW_ROUTE_TAKEOFF) != 0, landing = (route.flags.x & KW_ROUTE_LANDING) != 0;
+    float s = 0.0f;
+    float fraction = 1.0f;  // speed / cruise speed
+    float along = 0.0f;     // tangential acceleration (m/s^2)
+    if (takeoff || landing) {
+        const float tau = takeoff ? time - kCrouchSeconds : time;
+        const float d = speed * tau;
+        if (takeoff) out.progress.since_crouch = tau;
+        if (takeoff && d < 2.0f * route.perch.x) {
+            if (d >= 0.0f) {
+                s = d * d * (0.25f * route.perch.y);
+                fraction = d * (0.5f * route.perch.y);
+                along = speed * speed * (0.5f * route.perch.y);
+            } else {
+                fraction = 0.0f;  // crouching on the perch
+            }
+        } else {
+            s = takeoff ? d - route.perch.x : d;
+        }
+        if (landing) {
+            const float start = total - route.perch.z;
+            if (s > start) {
+                const float dl = s - start;
+                const float two_ln = 2.0f * route.perch.z;
+                if (dl < two_ln) {
+                    s = start + dl - dl * dl * (0.25f * route.perch.w);
+                    fraction = 1.0f - dl * (0.5f * route.perch.w);
+                    along = -(speed * speed * (0.5f * route.perch.w));
+                } else {  // on the perch
+                    s = total;
+                    fraction = 0.0f;
+                    out.progress.since_touchdown = (dl - two_ln) / speed;
+                }
+            }
+        }
+    } else {
+        s = speed * time;
+        if (loop) s = s - total * std::floor(s * route.info.z);
+    }
+    out.progress.speed_fraction = fraction;
+    const float now = fraction * speed;
     if (s < 0.0f || s > total) {
         const float end_s = s < 0.0f ? 0.0f : total;
-        const Bezier e = bezier_global(world, route, s < 0.0f ? 0.0f : n);
+        const Bezier e = bezier_global(world, route, s < 0.0f ? 0.0f : n, &out.segment_mode);
         const Vec3 tangent = (1.0f / length(e.d1)) * e.d1;
         out.position = e.p + (s - end_s) * tangent;
         out.velocity = speed * tangent;
+        out.attitude_velocity = out.velocity;
         out.direction = e.d1;
         return out;
     }
-    const Bezier e = bezier_global(world, route, route_parameter_at(world, route_index, s));
+    const Bezier e = bezier_global(world, route, route_parameter_at(world, route_index, s), &out.segment_mode);
     const float d1_len = length(e.d1);
     const Vec3 tangent = (1.0f / d1_len) * e.d1;
     out.position = e.p;
-    out.velocity = speed * tangent;
+    out.velocity = now * tangent;
+    out.attitude_velocity = {speed * tangent.x, now * tangent.y, speed * tangent.z};
     // At constant speed only the normal part of P'' remains: a = v^2 (P'' - (P''.T)T) / |P'|^2.
-    out.acceleration = ((speed * speed) / (d1_len * d1_len)) * (e.d2 - dot(e.d2, tangent) * tangent);
+    out.acceleration = ((now * now) / (d1_len * d1_len)) * (e.d2 - dot(e.d2, tangent) * tangent);
+    if (along != 0.0f) out.acceleration = out.acceleration + along * tangent;
     out.direction = e.d1;
     // The same a_y without square roots: v^2 (P''_y |P'|^2 - (P''.P') P'_y) / |P'|^4.
     const float dd = e.d1.x * e.d1.x + e.d1.y * e.d1.y + e.d1.z * e.d1.z;
     const float d2d1 = e.d2.x * e.d1.x + e.d2.y * e.d1.y + e.d2.z * e.d1.z;
-    out.lift = (speed * speed) * (e.d2.y * dd - d2d1 * e.d1.y);
+    out.lift = (now * now) * (e.d2.y * dd - d2d1 * e.d1.y);
     out.lift_scale = dd * dd;
     return out;
 }
 
 Attitude attitude(const gpu::FlightUniforms& uniforms, const RouteSample& sample) {
-    const Vec3 v = sample.velocity, a = sample.acceleration;
+    const Vec3 v = sample.attitude_velocity, a = sample.acceleration;
     Attitude att;
     const float horizontal = std::sqrt(v.x * v.x + v.z * v.z);
     if (horizontal <= 0.0f && v.y == 0.0f) return att;
@@ -178,14 +226,14 @@ void half_angle(float c, float s, float& half_c, float& half_s) {
 
 }  // namespace
 
-gpu::vec4 body_rotation(const gpu::FlightUniforms& uniforms, const RouteSample& sample) {
+BodyFrame body_frame(const gpu::FlightUniforms& uniforms, const RouteSample& sample) {
     // The rotation of attitude(): yaw about +Y, climb about -X, bank about +Z, built from
     // the sines and cosines the velocity and acceleration give directly (no atan2, sin or
     // cos: the largest arithmetic cost of the kernel).
-    const Vec3 v = sample.velocity, a = sample.acceleration;
+    const Vec3 v = sample.attitude_velocity, a = sample.acceleration;
     const float horizontal = std::sqrt(v.x * v.x + v.z * v.z);
     const float speed = std::sqrt(horizontal * horizontal + v.y * v.y);
-    if (speed <= 0.0f) return {0.0f, 0.0f, 0.0f, 1.0f};
+    if (speed <= 0.0f) return {{0.0f, 0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 0.0f, 1.0f}, {0.0f, 0.0f, 0.0f, 1.0f}, false};
     gpu::vec4 yaw{0.0f, 0.0f, 0.0f, 1.0f};
     if (horizontal > 0.0f) {
         const float c = v.z / horizontal, s = v.x / horizontal;
@@ -217,7 +265,13 @@ gpu::vec4 body_rotation(const gpu::FlightUniforms& uniforms, const RouteSample& 
         }
     }
     half_angle(bc, bs, bank.w, bank.z);
-    return quat_mul(quat_mul(yaw, pitch), bank);
+    return {yaw, pitch, bank, true};
+}
+
+gpu::vec4 body_rotation(const gpu::FlightUniforms& uniforms, const RouteSample& sample) {
+    const BodyFrame f = body_frame(uniforms, sample);
+    if (!f.moving) return {0.0f, 0.0f, 0.0f, 1.0f};
+    return quat_mul(quat_mul(f.yaw, f.pitch), f.bank);
 }
 
 std::uint32_t next_mode(const gpu::FlightUniforms& uniforms, std::uint32_t previous, const RouteSample& sample) {
@@ -247,96 +301,188 @@ std::uint32_t next_mode(const gpu::FlightUniforms& uniforms, std::uint32_t previ
     return mode;
 }
 
+std::uint32_t flight_mode(const gpu::BirdParams& bird, const gpu::BirdState& state, const RouteSample& sample,
+                          std::uint32_t climb_mode) {
+    // docs/flight-modes.md F.1. Every input is exact: the segment's mode (a stored float),
+    // the bird's constants, P'_y, and the rhythm's counters carried in the state.
+    if (sample.segment_mode >= 0.0f) return static_cast<std::uint32_t>(sample.segment_mode);
+    std::uint32_t mode = climb_mode;
+    if (bird.flight.w > 0.0f && bird.motion.x < kHoverBelowSpeed) return KW_MODE_HOVER;
+    // The flap-glide rhythm: after `beats` wingbeats, glide for `seconds` on a level or
+    // descending stretch (a glide on a climb would lose speed).
+    if (mode == KW_MODE_LEVEL && bird.flight.y > 0.0f && sample.direction.y <= 0.0f) {
+        const bool glide = state.mode.x == KW_MODE_GLIDE ? state.phase.y < bird.flight.z : state.phase.z >= bird.flight.y;
+        if (glide) mode = KW_MODE_GLIDE;
+    }
+    return mode;
+}
+
 gpu::BirdState initial_state() {
     gpu::BirdState state{};
-    state.blend = {1.0f, 0.0f, 0.0f, 1.0f};
+    state.blend = {1.0f, 0.0f, 0.0f, 0.0f};
+    state.blend2 = {0.0f, 0.0f, 0.0f, 1.0f};
     state.mode = {KW_MODE_UNSET, 0, 0, 0};
     return state;
 }
 
+namespace {
+
+gpu::vec4 conj(const gpu::vec4& q) { return {-q.x, -q.y, -q.z, q.w}; }
+// nlerp(identity, q, k) for a unit q with q.w >= 0: a fraction k of q's turn, without trig.
+gpu::vec4 partial(const gpu::vec4& q, float k) {
+    return quat_normalize({k * q.x, k * q.y, k * q.z, (1.0f - k) + k * q.w});
+}
+// A turn raising the nose (or lowering the tail) by `angle`: about -X.
+gpu::vec4 nose_up(float angle) { return {-std::sin(0.5f * angle), 0.0f, 0.0f, std::cos(0.5f * angle)}; }
+
+float blend_rate(const gpu::FlightUniforms& u, std::uint32_t mode) {
+    const float rates[KW_MODE_COUNT] = {u.blend_rates.x,  u.blend_rates.y,  u.blend_rates.z, u.blend_rates2.x,
+                                        u.blend_rates2.y, u.blend_rates2.z, u.blend_rates2.w};
+    return rates[mode];
+}
+
+}  // namespace
+
 BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms, const gpu::BirdParams& bird,
                     gpu::BirdState& state, std::uint32_t frame) {
     const float dt = uniforms.physics.z;
-    const bool first = state.mode.x == KW_MODE_UNSET;
-
-    // Wingbeat phase in cycles, advanced per frame at the bird's constant frequency
-    // (SPEC B.2); kept in [0, 1) so its precision does not decay over long runs.
-    float phase = first ? bird.motion.w : state.phase.x + bird.motion.y * dt;
-    phase = phase - std::floor(phase);
-    state.phase.x = phase;
+    const std::uint32_t previous = state.mode.x;
+    const bool first = previous == KW_MODE_UNSET;
 
     const float time = static_cast<float>(frame) * dt + bird.offset.w;
-    RouteSample sample = sample_route(world, bird.ids.x, time, bird.motion.x);
+    const RouteSample sample = sample_route(world, bird.ids.x, time, bird.motion.x);
     const Attitude att = attitude(uniforms, sample);
 
-    // Mode and transition (SPEC B.5, B.6). The blend source is a weighted sum of the
-    // three mode poses, so a change during a transition starts exactly from the
-    // current blended pose.
-    const std::uint32_t mode = next_mode(uniforms, state.mode.x, sample);
+    // Mode (SPEC B.5, docs/flight-modes.md F.1). The climb rule keeps its hysteresis
+    // through a glide (a glide is level flight without beats); after the other modes it
+    // decides afresh.
+    const std::uint32_t climb_previous = previous <= KW_MODE_DESCEND ? previous
+                                         : previous == KW_MODE_GLIDE  ? KW_MODE_LEVEL
+                                                                      : KW_MODE_UNSET;
+    const std::uint32_t mode = flight_mode(bird, state, sample, next_mode(uniforms, climb_previous, sample));
+
+    // Transition (SPEC B.6): the blend source is a weighted sum of the mode poses, so a
+    // change during a transition starts exactly from the current blended pose.
+    float weights[KW_MODE_COUNT] = {state.blend.x,  state.blend.y,  state.blend.z, state.blend.w,
+                                    state.blend2.x, state.blend2.y, state.blend2.z};
+    float alpha = state.blend2.w;
     if (first) {
-        state.blend = {mode == KW_MODE_LEVEL ? 1.0f : 0.0f, mode == KW_MODE_ASCEND ? 1.0f : 0.0f,
-                       mode == KW_MODE_DESCEND ? 1.0f : 0.0f, 1.0f};
-    } else if (mode != state.mode.x) {
-        const float alpha = state.blend.w;
-        const std::uint32_t old = state.mode.x;
-        state.blend = {(1.0f - alpha) * state.blend.x + (old == KW_MODE_LEVEL ? alpha : 0.0f),
-                       (1.0f - alpha) * state.blend.y + (old == KW_MODE_ASCEND ? alpha : 0.0f),
-                       (1.0f - alpha) * state.blend.z + (old == KW_MODE_DESCEND ? alpha : 0.0f), 0.0f};
-    } else if (state.blend.w < 1.0f) {
+        for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) weights[m] = m == mode ? 1.0f : 0.0f;
+        alpha = 1.0f;
+    } else if (mode != previous) {
+        for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) weights[m] = (1.0f - alpha) * weights[m] + (m == previous ? alpha : 0.0f);
+        alpha = 0.0f;
+    } else if (alpha < 1.0f) {
         // The seed's per-frame rates, applied per 1/60 s of simulated time.
-        const float rate = mode == KW_MODE_LEVEL ? uniforms.blend_rates.x
-                           : mode == KW_MODE_ASCEND ? uniforms.blend_rates.y
-                                                    : uniforms.blend_rates.z;
-        state.blend.w += rate * uniforms.physics.w;
-        if (state.blend.w >= 1.0f) {
-            state.blend = {mode == KW_MODE_LEVEL ? 1.0f : 0.0f, mode == KW_MODE_ASCEND ? 1.0f : 0.0f,
-                           mode == KW_MODE_DESCEND ? 1.0f : 0.0f, 1.0f};
+        alpha += blend_rate(uniforms, mode) * uniforms.physics.w;
+        if (alpha >= 1.0f) {
+            for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) weights[m] = m == mode ? 1.0f : 0.0f;
+            alpha = 1.0f;
         }
+    }
+    state.blend = {weights[0], weights[1], weights[2], weights[3]};
+    state.blend2 = {weights[4], weights[5], weights[6], alpha};
+
+    // Wingbeat phase in cycles, advanced per frame at the bird's frequency times the
+    // mode's factor (SPEC B.2; F.3: held wings do not beat); kept in [0, 1) so its
+    // precision does not decay over long runs. Completed beats drive the flap-glide rhythm.
+    const PerchProgress& progress = sample.progress;
+    float phase = first ? bird.motion.w
+                        : state.phase.x + (bird.motion.y * dt) * beat_factor(static_cast<FlightMode>(mode), progress);
+    const float whole = std::floor(phase);
+    phase = phase - whole;
+    state.phase.x = phase;
+    if (mode == KW_MODE_GLIDE) {
+        state.phase.y = (previous == KW_MODE_GLIDE ? state.phase.y : 0.0f) + dt;
+        state.phase.z = 0.0f;
+    } else {
+        state.phase.y = 0.0f;
+        if (!first) state.phase.z = state.phase.z + whole;
     }
     state.mode.x = mode;
 
     float t = phase * kTwoPi;
     if (t >= kTwoPi) t = 0.0f;
     const float amplitude = bird.motion.z;
-    WingAngles poses[3];
-    gpu::vec4 arm1[3], arm2[3];
-    for (std::uint32_t m = 0; m < 3; ++m) {
-        poses[m] = wing_angles(static_cast<FlightMode>(m), t, amplitude);
-        arm1[m] = arm_rotation(poses[m].arm1_pitch, poses[m].arm1_heading);
-        arm2[m] = arm_rotation(poses[m].arm2_pitch, poses[m].arm2_heading);
+    // The looks of the modes that take part: the target, and in a transition every mode
+    // with a weight in the blend source.
+    ModeLook looks[KW_MODE_COUNT];
+    gpu::vec4 arm1[KW_MODE_COUNT], arm2[KW_MODE_COUNT];
+    for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) {
+        if (m != mode && (alpha >= 1.0f || weights[m] == 0.0f)) continue;
+        looks[m] = mode_look(static_cast<FlightMode>(m), t, amplitude, progress);
+        arm1[m] = arm_rotation(looks[m].wings.arm1_pitch, looks[m].wings.arm1_heading);
+        arm2[m] = arm_rotation(looks[m].wings.arm2_pitch, looks[m].wings.arm2_heading);
     }
     // SPEC B.6: Q = ((1-a) Qa + a Qb) / |...|, Qa the blend source, each term flipped
     // into the target's hemisphere. Outside a transition (a = 1) Q is the target pose.
-    const float weights[3] = {state.blend.x, state.blend.y, state.blend.z};
-    const float alpha = state.blend.w;
     auto blend = [&](const gpu::vec4* q) {
         const gpu::vec4& target = q[mode];
         if (alpha >= 1.0f) return target;
         gpu::vec4 sum{alpha * target.x, alpha * target.y, alpha * target.z, alpha * target.w};
-        for (std::uint32_t m = 0; m < 3; ++m) {
+        for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) {
+            if (weights[m] == 0.0f) continue;
             const float w = (1.0f - alpha) * weights[m] * (quat_dot(q[m], target) < 0.0f ? -1.0f : 1.0f);
             sum = {sum.x + w * q[m].x, sum.y + w * q[m].y, sum.z + w * q[m].z, sum.w + w * q[m].w};
         }
         return quat_normalize(sum);
     };
     const gpu::vec4 left1 = blend(arm1), left2 = blend(arm2);
+    // The continuous parts of the look, weighted like the poses (F.5).
+    float pitch = 0.0f, spread = 0.0f, bob = 0.0f;
+    for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) {
+        const float w = (m == mode ? alpha : 0.0f) + (alpha >= 1.0f ? 0.0f : (1.0f - alpha) * weights[m]);
+        if (w == 0.0f) continue;
+        pitch += w * looks[m].pitch;
+        spread += w * looks[m].spread;
+        bob += w * looks[m].bob;
+    }
+
+    // Body (SPEC B.4) with the mode's extra pitch and the wingbeat's pitch oscillation
+    // about its own lateral axis, and the body's bob (F.5).
+    const BodyFrame frame_parts = body_frame(uniforms, sample);
+    const float oscillation = kBobPitch * amplitude * std::sin(t) * bob;
+    const float extra = pitch + oscillation;
+    const gpu::vec4 body = quat_mul(body_rotation(uniforms, sample), nose_up(extra));
+    const float bob_height = -kBobHeight * bird.shape.x * amplitude * std::cos(t) * bob;
+    const float sin_bank = 2.0f * frame_parts.bank.z * frame_parts.bank.w;
+
+    // Head (F.5): levels itself against part of the climb, the bank, the extra pitch and
+    // the oscillation, and looks into the turn by the turn rate times a look-ahead time.
+    const Vec3 v = sample.attitude_velocity, a = sample.acceleration;
+    const float horizontal = std::sqrt(v.x * v.x + v.z * v.z);
+    float look = 0.0f;
+    if (horizontal > 1e-3f) {
+        const float lateral = (a.x * -v.z + a.z * v.x) / horizontal;  // toward the bird's right
+        look = std::clamp(-kLookAhead * lateral / horizontal, -kMaxLook, kMaxLook);
+    }
+    const gpu::vec4 head = quat_mul(quat_mul(quat_mul(nose_up(-(kHeadPitchHold * pitch + kHeadBobHold * oscillation)),
+                                                      partial(conj(frame_parts.bank), kHeadBankHold)),
+                                             partial(conj(frame_parts.pitch), kHeadClimbHold)),
+                                    quat_y(look));
+    // Tail (F.5): lowered with the extra pitch and part of the climb, twisted with part of
+    // the bank; spread by the mode and the bank.
+    const gpu::vec4 tail =
+        quat_mul(quat_mul(partial(frame_parts.pitch, kTailClimb), nose_up(kTailPitch * pitch)), partial(frame_parts.bank, kTailBank));
+    const float tail_spread = spread + kTailBankSpread * std::fabs(sin_bank);
 
     BirdFrame out{};
     const Vec3 position = sample.position + xyz(bird.offset);
-    out.pose.position = {position.x, position.y, position.z, 0.0f};
-    out.pose.rotation[KW_PART_BODY] = body_rotation(uniforms, sample);
-    out.pose.rotation[KW_PART_HEAD] = {0.0f, 0.0f, 0.0f, 1.0f};
-    out.pose.rotation[KW_PART_TAIL] = {0.0f, 0.0f, 0.0f, 1.0f};
+    out.pose.position = {position.x, position.y + bob_height, position.z, tail_spread};
+    out.pose.rotation[KW_PART_BODY] = body;
+    out.pose.rotation[KW_PART_HEAD] = head;
+    out.pose.rotation[KW_PART_TAIL] = tail;
     out.pose.rotation[KW_PART_LEFT_ARM1] = left1;
     out.pose.rotation[KW_PART_LEFT_ARM2] = left2;
     out.pose.rotation[KW_PART_RIGHT_ARM1] = quat_mirror_x(left1);
     out.pose.rotation[KW_PART_RIGHT_ARM2] = quat_mirror_x(left2);
 
-    const WingAngles& target = poses[mode];
+    const WingAngles& target = looks[mode].wings;
     out.diag.velocity = {sample.velocity.x, sample.velocity.y, sample.velocity.z, alpha};
     out.diag.acceleration = {sample.acceleration.x, sample.acceleration.y, sample.acceleration.z, static_cast<float>(mode)};
     out.diag.angles = {target.arm1_pitch, target.arm2_pitch, target.arm1_heading, target.arm2_heading};
     out.diag.attitude = {att.yaw, att.pitch, att.bank, t};
+    out.diag.flight = {progress.speed_fraction, extra, tail_spread, state.phase.y};
     return out;
 }
 

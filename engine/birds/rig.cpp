@@ -36,6 +36,8 @@ gpu::vec4 flight_params(const WingTypeSpec& spec) {
     return {spec.glide_ratio, spec.flap_glide_beats, spec.flap_glide_seconds, spec.can_hover ? 1.0f : 0.0f};
 }
 
+gpu::vec4 shape_params(const WingTypeSpec& spec) { return {spec.body_length, spec.wingspan, 0.0f, 0.0f}; }
+
 std::array<std::array<float, 3>, kPartCount> part_offsets(WingType type) {
     const WingTypeSpec& spec = wing_type_spec(type);
     const float length = spec.body_length;

@@ -36,11 +36,51 @@ double arc_length(const D3* b, double u0, double u1) {
     return half * sum;
 }
 
+Result<void> check_modes(const RouteSpec& route, const std::string& what) {
+    const std::size_t segments = (route.points.size() - 1) / 3;
+    if (route.modes.size() != segments) {
+        return make_error(Error::Kind::InvalidInput, what + ".modes: expected one mode per segment (" + std::to_string(segments) +
+                                                         "), got " + std::to_string(route.modes.size()));
+    }
+    for (std::size_t k = 0; k < segments; ++k) {
+        const SegmentMode m = route.modes[k];
+        const std::string at = what + ".modes[" + std::to_string(k) + "]: ";
+        const bool perch = m == SegmentMode::TakeOff || m == SegmentMode::Landing;
+        if (m == SegmentMode::TakeOff && k != 0) {
+            return make_error(Error::Kind::InvalidInput, at + "\"takeoff\" may only be the first segment (a take-off starts from a perch)");
+        }
+        if (m == SegmentMode::Landing && k + 1 != segments) {
+            return make_error(Error::Kind::InvalidInput,
+                              at + (k == 0 ? "a route cannot start with \"landing\"" : "\"landing\" may only be the last segment") +
+                                  " (a landing ends the route on a perch)");
+        }
+        if (perch && route.loop) {
+            return make_error(Error::Kind::InvalidInput, at + "\"" + segment_mode_name(m) + "\" needs an open route; this one loops");
+        }
+        if (perch && route.timing == RouteTiming::Parametric) {
+            return make_error(Error::Kind::InvalidInput,
+                              at + "\"" + segment_mode_name(m) + "\" sets the speed along the route; expected \"timing\": \"arc-length\"");
+        }
+    }
+    return {};
+}
+
 std::string point_text(const std::array<float, 3>& p) {
     return "[" + std::to_string(p[0]) + ", " + std::to_string(p[1]) + ", " + std::to_string(p[2]) + "]";
 }
 
 }  // namespace
+
+const char* segment_mode_name(SegmentMode mode) {
+    switch (mode) {
+        case SegmentMode::Auto: return "auto";
+        case SegmentMode::Glide: return "glide";
+        case SegmentMode::TakeOff: return "takeoff";
+        case SegmentMode::Landing: return "landing";
+        case SegmentMode::Hover: return "hover";
+    }
+    return "auto";
+}
 
 Result<std::uint32_t> BirdWorld::add_route(const RouteSpec& route, const std::string& what) {
     const auto& pts = route.points;
@@ -60,6 +100,7 @@ Result<std::uint32_t> BirdWorld::add_route(const RouteSpec& route, const std::st
     if (route.timing == RouteTiming::Parametric && !(route.segment_duration > 0.0f && std::isfinite(route.segment_duration))) {
         return make_error(Error::Kind::InvalidInput, what + ".segment_duration: expected a positive number of seconds");
     }
+    if (!route.modes.empty()) KW_TRY(check_modes(route, what));
     if (route.loop && pts.front() != pts.back()) {
         return make_error(Error::Kind::InvalidInput,
                           what + ".loop: a looping route must end where it starts; points[" + std::to_string(pts.size() - 1) +
@@ -123,8 +164,25 @@ Result<std::uint32_t> BirdWorld::add_route(const RouteSpec& route, const std::st
     const auto length = static_cast<float>(s);
     header.info = {length, route.segment_duration, 1.0f / length, 1.0f / route.segment_duration};
 
-    for (const D3& q : p) {
-        control_points.push_back({static_cast<float>(q.x), static_cast<float>(q.y), static_cast<float>(q.z), 0.0f});
+    // The segment's mode rides in the w of its first control point (shared/birds.h).
+    for (std::size_t i = 0; i < p.size(); ++i) {
+        const std::size_t k = i / 3;
+        const float mode = i % 3 == 0 && k < segments && !route.modes.empty() ? static_cast<float>(route.modes[k])
+                           : i % 3 == 0 && k < segments                       ? static_cast<float>(KW_SEGMENT_AUTO)
+                                                                              : 0.0f;
+        control_points.push_back({static_cast<float>(p[i].x), static_cast<float>(p[i].y), static_cast<float>(p[i].z), mode});
+    }
+    // Take-off and landing segments (docs/flight-modes.md F.2): their lengths and
+    // reciprocals, from the table's floats so that every backend uses the same values.
+    if (!route.modes.empty() && route.modes.front() == SegmentMode::TakeOff) {
+        header.flags.x |= KW_ROUTE_TAKEOFF;
+        header.perch.x = samples[kArcIntervalsPerSegment].s_u_duds.x;
+        header.perch.y = 1.0f / header.perch.x;
+    }
+    if (!route.modes.empty() && route.modes.back() == SegmentMode::Landing) {
+        header.flags.x |= KW_ROUTE_LANDING;
+        header.perch.z = length - samples[samples.size() - 1 - kArcIntervalsPerSegment].s_u_duds.x;
+        header.perch.w = 1.0f / header.perch.z;
     }
     arc_samples.insert(arc_samples.end(), samples.begin(), samples.end());
     routes.push_back(header);
@@ -148,6 +206,7 @@ gpu::FlightUniforms BirdWorld::uniforms() const {
     u.rules = {static_cast<std::uint32_t>(f.bank_rule), static_cast<std::uint32_t>(f.mode_rule),
                static_cast<std::uint32_t>(birds.size()), 0};
     u.bank_limit = {static_cast<float>(std::cos(double{f.max_bank})), static_cast<float>(std::sin(double{f.max_bank})), 0.0f, 0.0f};
+    u.blend_rates2 = {f.blend_rates2[0], f.blend_rates2[1], f.blend_rates2[2], f.blend_rates2[3]};
     return u;
 }
 

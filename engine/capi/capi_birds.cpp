@@ -150,6 +150,7 @@ void read_flock(const kodawari_flock_desc& f, const std::string& what, std::uint
         p.motion = {f.speed, f.frequency, f.amplitude, phase};
         p.ids = {f.route, static_cast<std::uint32_t>(wing), 0u, 0u};
         p.flight = birds::flight_params(birds::wing_type_spec(wing));
+        p.shape = birds::shape_params(birds::wing_type_spec(wing));
         world.birds.push_back(p);
     }
 }

@@ -150,6 +150,14 @@ void TraceWriter::write_frame(std::uint32_t frame, const birds::BirdWorld& world
         append_number(out, d.attitude.y);
         out += ",\"bank\":";
         append_number(out, d.attitude.z);
+        out += ",\"speed_fraction\":";
+        append_number(out, d.flight.x);
+        out += ",\"extra_pitch\":";
+        append_number(out, d.flight.y);
+        out += ",\"tail_spread\":";
+        append_number(out, d.flight.z);
+        out += ",\"glided\":";
+        append_number(out, d.flight.w);
         out += ",\"angles\":{\"arm1_pitch\":";
         append_number(out, d.angles.x);
         out += ",\"arm2_pitch\":";

@@ -15,26 +15,28 @@
 
 namespace kodawari::gpu {
 
-static_assert(sizeof(FlightUniforms) == 80);
+static_assert(sizeof(FlightUniforms) == 96);
 static_assert(offsetof(FlightUniforms, physics) == 0 && offsetof(FlightUniforms, climb) == 16 &&
               offsetof(FlightUniforms, blend_rates) == 32 && offsetof(FlightUniforms, rules) == 48 &&
-              offsetof(FlightUniforms, bank_limit) == 64);
-static_assert(sizeof(RouteHeader) == 48);
-static_assert(offsetof(RouteHeader, extent) == 0 && offsetof(RouteHeader, flags) == 16 && offsetof(RouteHeader, info) == 32);
+              offsetof(FlightUniforms, bank_limit) == 64 && offsetof(FlightUniforms, blend_rates2) == 80);
+static_assert(sizeof(RouteHeader) == 64);
+static_assert(offsetof(RouteHeader, extent) == 0 && offsetof(RouteHeader, flags) == 16 && offsetof(RouteHeader, info) == 32 &&
+              offsetof(RouteHeader, perch) == 48);
 static_assert(sizeof(ArcSample) == 32 && offsetof(ArcSample, next) == 16);
-static_assert(sizeof(BirdParams) == 64);
+static_assert(sizeof(BirdParams) == 80);
 static_assert(offsetof(BirdParams, offset) == 0 && offsetof(BirdParams, motion) == 16 && offsetof(BirdParams, ids) == 32 &&
-              offsetof(BirdParams, flight) == 48);
-static_assert(sizeof(BirdState) == 48);
-static_assert(offsetof(BirdState, blend) == 0 && offsetof(BirdState, phase) == 16 && offsetof(BirdState, mode) == 32);
+              offsetof(BirdParams, flight) == 48 && offsetof(BirdParams, shape) == 64);
+static_assert(sizeof(BirdState) == 64);
+static_assert(offsetof(BirdState, blend) == 0 && offsetof(BirdState, blend2) == 16 && offsetof(BirdState, phase) == 32 &&
+              offsetof(BirdState, mode) == 48);
 static_assert(sizeof(BirdPose) == 128);
 static_assert(offsetof(BirdPose, position) == 0 && offsetof(BirdPose, rotation) == 16);
-static_assert(sizeof(BirdPoseGpu) == 64);
-static_assert(offsetof(BirdPoseGpu, position) == 0 && offsetof(BirdPoseGpu, body) == 16 && offsetof(BirdPoseGpu, left_arm1) == 32 &&
-              offsetof(BirdPoseGpu, left_arm2) == 48);
-static_assert(sizeof(BirdDiag) == 64);
+static_assert(sizeof(BirdPoseGpu) == 96);
+static_assert(offsetof(BirdPoseGpu, position) == 0 && offsetof(BirdPoseGpu, body) == 16 && offsetof(BirdPoseGpu, head) == 32 &&
+              offsetof(BirdPoseGpu, tail) == 48 && offsetof(BirdPoseGpu, left_arm1) == 64 && offsetof(BirdPoseGpu, left_arm2) == 80);
+static_assert(sizeof(BirdDiag) == 80);
 static_assert(offsetof(BirdDiag, velocity) == 0 && offsetof(BirdDiag, acceleration) == 16 &&
-              offsetof(BirdDiag, angles) == 32 && offsetof(BirdDiag, attitude) == 48);
+              offsetof(BirdDiag, angles) == 32 && offsetof(BirdDiag, attitude) == 48 && offsetof(BirdDiag, flight) == 64);
 static_assert(sizeof(BirdPush) == 16);
 static_assert(KW_BIRDS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 

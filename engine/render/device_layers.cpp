@@ -329,12 +329,13 @@ Result<void> BirdLayer::from_poses(gpu::VulkanContext& ctx, std::span<const gpu:
         return make_error(Error::Kind::InvalidInput,
                           std::to_string(poses.size()) + " bird poses for " + std::to_string(count_) + " birds");
     }
-    // The kernel's layout (shared/birds.h, BirdPoseGpu): the moving parts only; the shader
-    // puts Head and Tail at rest and mirrors the left wing, as every backend poses them.
+    // The kernel's layout (shared/birds.h, BirdPoseGpu): the shader mirrors the left wing,
+    // as every backend poses it.
     packed_.resize(count_);
     for (std::size_t b = 0; b < count_; ++b) {
         const gpu::BirdPose& p = poses[b];
-        packed_[b] = {p.position, p.rotation[KW_PART_BODY], p.rotation[KW_PART_LEFT_ARM1], p.rotation[KW_PART_LEFT_ARM2]};
+        packed_[b] = {p.position,          p.rotation[KW_PART_BODY],      p.rotation[KW_PART_HEAD],
+                      p.rotation[KW_PART_TAIL], p.rotation[KW_PART_LEFT_ARM1], p.rotation[KW_PART_LEFT_ARM2]};
     }
     if (!host_poses_) {
         auto buffer = compute::Buffer::create(ctx, count_ * sizeof(gpu::BirdPoseGpu), compute::Usage::Storage);

@@ -321,6 +321,14 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
                           scene.path + ": " + flock_path + ": expected exactly one of \"route\" and \"generated_route\", got neither");
     }
     leader.timing = flock.timing;
+    const birds::WingTypeSpec& bird_type = birds::wing_type_spec(flock.wing_type);
+    for (std::size_t k = 0; k < leader.modes.size(); ++k) {
+        if (leader.modes[k] == birds::SegmentMode::Hover && !bird_type.can_hover) {
+            return make_error(Error::Kind::InvalidInput, scene.path + ": " + route_path + ".modes[" + std::to_string(k) +
+                                                             "]: \"hover\" needs a bird that can hover (\"hummingbird\"); a " +
+                                                             std::string(bird_type.name) + " cannot");
+        }
+    }
 
     const std::uint32_t variants = std::max(flock.formation.route_variants, 1u);
     const std::string what = scene.path + ": " + route_path;
@@ -347,6 +355,7 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
     const double amplitude = static_cast<double>(flock.amplitude.value_or(wing.amplitude));
     const std::array<double, 3> spread = to_vec3(flock.formation.spread);
     const auto trail = static_cast<double>(flock.formation.trail);
+    const bool takes_off = !leader.modes.empty() && leader.modes.front() == birds::SegmentMode::TakeOff;
     const auto phase_jitter = static_cast<double>(flock.phase_jitter);
 
     Random offset_rng(flock.seed, Stream::Offset);
@@ -364,7 +373,10 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
         p.offset.x = static_cast<float>(spread[0] * offset_rng.symmetric());
         p.offset.y = static_cast<float>(spread[1] * offset_rng.symmetric());
         p.offset.z = static_cast<float>(spread[2] * offset_rng.symmetric());
+        // On a route that takes off, a bird further back leaves its perch later (a negative
+        // time offset: docs/flight-modes.md F.2); elsewhere it is further along the route.
         p.offset.w = static_cast<float>(trail * time_rng.unit());
+        if (takes_off) p.offset.w = -p.offset.w;
         p.motion.x = jittered(speed, flock.speed_jitter, speed_rng);
         p.motion.y = jittered(frequency, flock.frequency_jitter, frequency_rng);
         p.motion.z = jittered(amplitude, flock.amplitude_jitter, amplitude_rng);
@@ -375,6 +387,7 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
         p.ids.x = first_route + b % variants;
         p.ids.y = static_cast<std::uint32_t>(flock.wing_type);
         p.flight = birds::flight_params(wing);
+        p.shape = birds::shape_params(wing);
         world.birds.push_back(p);
     }
     return {};

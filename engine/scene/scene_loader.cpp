@@ -135,7 +135,7 @@ Result<void> read_flight(const JsonReader& r, const JsonNode& node, birds::Fligh
 }
 
 Result<void> read_route(const JsonReader& r, const JsonNode& node, birds::RouteSpec& route) {
-    KW_TRY(r.object(node, {"points", "loop", "segment_duration"}));
+    KW_TRY(r.object(node, {"points", "loop", "segment_duration", "modes"}));
     const JsonNode points = r.member(node, "points");
     constexpr std::string_view kPointsWhat =
         "an array of 3n+1 control points [x, y, z] (n >= 1 cubic Bezier segments: 4, 7, 10, ... points)";
@@ -155,6 +155,26 @@ Result<void> read_route(const JsonReader& r, const JsonNode& node, birds::RouteS
     // At least a millisecond: time / segment_duration stays finite (found by fuzzing).
     KW_TRY(optional_member(r, node, "segment_duration", route.segment_duration,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.001, 3600.0)); }));
+    // One mode per segment (docs/flight-modes.md F.1); where each may stand is checked by
+    // BirdWorld::add_route, which knows the timing.
+    const JsonNode modes = r.member(node, "modes");
+    if (modes.present()) {
+        const std::size_t segments = (count - 1) / 3;
+        std::size_t n = 0;
+        KW_SCENE_ASSIGN(n, r.array(modes, "an array of one mode per segment"));
+        if (n != segments) {
+            return r.fail(modes.path, "expected one mode per segment (" + std::to_string(segments) + "), got " + std::to_string(n));
+        }
+        route.modes.resize(n);
+        static constexpr birds::SegmentMode kModes[] = {birds::SegmentMode::Auto, birds::SegmentMode::Glide,
+                                                        birds::SegmentMode::TakeOff, birds::SegmentMode::Landing,
+                                                        birds::SegmentMode::Hover};
+        for (std::size_t k = 0; k < n; ++k) {
+            std::size_t which = 0;
+            KW_SCENE_ASSIGN(which, r.choice(r.element(modes, k), {"auto", "glide", "takeoff", "landing", "hover"}));
+            route.modes[k] = kModes[which];
+        }
+    }
     return {};
 }
 

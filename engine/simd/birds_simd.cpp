@@ -11,6 +11,7 @@
 #include <cstring>
 #include <numbers>
 
+#include "kodawari/birds/flight.hpp"
 #include "simd/birds_simd.hpp"
 #include "simd/scalar_math.hpp"
 #include "simd/vecmath-inl.h"
@@ -52,6 +53,7 @@ struct RouteCache {
     bool segment_valid = false;
     VI segment;
     V3 b[4];
+    V segment_mode;  // the w of the segment's first control point (shared/birds.h)
     bool interval_valid = false;
     VI lo;          // the interval [lo, lo + 1] of the arc-length samples
     V ax, ay, aw, next, bx, by, bz;
@@ -72,6 +74,7 @@ Bezier bezier(const BirdStepArgs& a, const gpu::RouteHeader& route, V u, RouteCa
             cache.b[j] = {hn::GatherIndex(D(), points, at), hn::GatherIndex(D(), points, hn::Add(at, hn::Set(di, 1))),
                           hn::GatherIndex(D(), points, hn::Add(at, hn::Set(di, 2)))};
         }
+        cache.segment_mode = hn::GatherIndex(D(), points, hn::Add(first, hn::Set(di, 3)));
         cache.segment = seg;
         cache.segment_valid = true;
     }
@@ -154,8 +157,9 @@ V route_parameter_at(const BirdStepArgs& a, const gpu::RouteHeader& route, V s, 
 }
 
 struct Sample {
-    V3 position, velocity, acceleration, direction;
+    V3 position, velocity, acceleration, direction, attitude_velocity;
     V lift, lift_scale;
+    V segment_mode, speed_fraction, since_crouch, since_touchdown;  // flight.hpp RouteSample
 };
 
 // flight.cpp sample_route(): both ends' cases and the inside computed, one chosen per lane.
@@ -163,6 +167,9 @@ Sample sample_route(const BirdStepArgs& a, const gpu::RouteHeader& route, V time
     const bool loop = (route.flags.x & KW_ROUTE_LOOP) != 0;
     const V n = S(static_cast<float>(route.extent.y));
     Sample out;
+    out.speed_fraction = S(1.0f);
+    out.since_crouch = S(1e9f);
+    out.since_touchdown = S(-1.0f);
     if ((route.flags.x & KW_ROUTE_PARAMETRIC) != 0) {
         V u = hn::Mul(time, S(route.info.w));
         if (loop) {  // u mod n without a division, as the reference: in integers, lane by lane
@@ -182,30 +189,71 @@ Sample sample_route(const BirdStepArgs& a, const gpu::RouteHeader& route, V time
         const Bezier e = bezier(a, route, hn::IfThenElse(outside, end, u), cache);
         out.position = select(outside, add(e.p, mul(hn::Sub(u, end), e.d1)), e.p);
         out.velocity = mul(S(route.info.w), e.d1);
+        out.attitude_velocity = out.velocity;
         out.acceleration = select(outside, zero3(), mul(S(route.info.w * route.info.w), e.d2));
         out.direction = e.d1;
         out.lift = hn::IfThenElse(outside, Z(), e.d2.y);
         out.lift_scale = hn::IfThenElse(outside, S(1.0f), S(route.info.y * route.info.y));
+        out.segment_mode = cache.segment_mode;
         return out;
     }
     const float total = route.info.x;
-    V s = hn::Mul(speed, time);
-    if (loop) s = hn::Sub(s, hn::Mul(S(total), hn::Floor(hn::Mul(s, S(route.info.z)))));
+    const bool takeoff = (route.flags.x & KW_ROUTE_TAKEOFF) != 0, landing = (route.flags.x & KW_ROUTE_LANDING) != 0;
+    V s, fraction = S(1.0f), along = Z();
+    if (takeoff || landing) {  // docs/flight-modes.md F.2, flight.cpp's order of operations
+        const V tau = takeoff ? hn::Sub(time, S(birds::kCrouchSeconds)) : time;
+        const V d = hn::Mul(speed, tau);
+        if (takeoff) out.since_crouch = tau;
+        s = d;
+        if (takeoff) {
+            const M starting = hn::Lt(d, S(2.0f * route.perch.x));
+            const M rest = hn::Lt(d, Z());
+            const V k0 = S(0.25f * route.perch.y), k1 = S(0.5f * route.perch.y);
+            const V accelerating = hn::Mul(hn::Mul(d, d), k0);
+            s = hn::IfThenElse(starting, hn::IfThenElse(rest, Z(), accelerating), hn::Sub(d, S(route.perch.x)));
+            fraction = hn::IfThenElse(starting, hn::IfThenElse(rest, Z(), hn::Mul(d, k1)), fraction);
+            along = hn::IfThenElse(hn::AndNot(rest, starting), hn::Mul(hn::Mul(speed, speed), k1), along);
+        }
+        if (landing) {
+            const float start = total - route.perch.z;
+            const M in_landing = hn::Gt(s, S(start));
+            const V dl = hn::Sub(s, S(start));
+            const V two_ln = S(2.0f * route.perch.z);
+            const M flying = hn::Lt(dl, two_ln);
+            const V kn0 = S(0.25f * route.perch.w), kn1 = S(0.5f * route.perch.w);
+            const V braking = hn::Sub(hn::Add(S(start), dl), hn::Mul(hn::Mul(dl, dl), kn0));
+            s = hn::IfThenElse(in_landing, hn::IfThenElse(flying, braking, S(total)), s);
+            fraction = hn::IfThenElse(in_landing, hn::IfThenElse(flying, hn::Sub(S(1.0f), hn::Mul(dl, kn1)), Z()), fraction);
+            along = hn::IfThenElse(hn::And(in_landing, flying), hn::Neg(hn::Mul(hn::Mul(speed, speed), kn1)), along);
+            out.since_touchdown =
+                hn::IfThenElse(hn::AndNot(flying, in_landing), hn::Div(hn::Sub(dl, two_ln), speed), out.since_touchdown);
+        }
+    } else {
+        s = hn::Mul(speed, time);
+        if (loop) s = hn::Sub(s, hn::Mul(S(total), hn::Floor(hn::Mul(s, S(route.info.z)))));
+    }
+    out.speed_fraction = fraction;
+    const V now = hn::Mul(fraction, speed);
     const M before = hn::Lt(s, Z());
     const M outside = hn::Or(before, hn::Gt(s, S(total)));
     const V clamped = hn::IfThenElse(before, Z(), hn::IfThenElse(hn::Gt(s, S(total)), S(total), s));
     const V u = hn::IfThenElse(outside, hn::IfThenElse(before, Z(), n), route_parameter_at(a, route, clamped, cache));
     const Bezier e = bezier(a, route, u, cache);
+    out.segment_mode = cache.segment_mode;
     const V d1_len = length(e.d1);
     const V3 tangent = mul(hn::Div(S(1.0f), d1_len), e.d1);
     const V end_s = hn::IfThenElse(before, Z(), S(total));
     out.position = select(outside, add(e.p, mul(hn::Sub(s, end_s), tangent)), e.p);
-    out.velocity = mul(speed, tangent);
+    out.velocity = mul(hn::IfThenElse(outside, speed, now), tangent);
+    out.attitude_velocity =
+        select(outside, out.velocity, V3{hn::Mul(speed, tangent.x), hn::Mul(now, tangent.y), hn::Mul(speed, tangent.z)});
     const V3 normal = sub(e.d2, mul(dot(e.d2, tangent), tangent));
-    out.acceleration = select(outside, zero3(), mul(hn::Div(hn::Mul(speed, speed), hn::Mul(d1_len, d1_len)), normal));
+    V3 acceleration = mul(hn::Div(hn::Mul(now, now), hn::Mul(d1_len, d1_len)), normal);
+    if (takeoff || landing) acceleration = select(hn::Eq(along, Z()), acceleration, add(acceleration, mul(along, tangent)));
+    out.acceleration = select(outside, zero3(), acceleration);
     out.direction = e.d1;
     const V dd = dot(e.d1, e.d1), d2d1 = dot(e.d2, e.d1);
-    out.lift = hn::IfThenElse(outside, Z(), hn::Mul(hn::Mul(speed, speed), hn::Sub(hn::Mul(e.d2.y, dd), hn::Mul(d2d1, e.d1.y))));
+    out.lift = hn::IfThenElse(outside, Z(), hn::Mul(hn::Mul(now, now), hn::Sub(hn::Mul(e.d2.y, dd), hn::Mul(d2d1, e.d1.y))));
     out.lift_scale = hn::IfThenElse(outside, S(1.0f), hn::Mul(dd, dd));
     return out;
 }
@@ -216,8 +264,12 @@ HWY_INLINE void half_angle(V c, V s, V& half_c, V& half_s) {
     half_s = hn::Div(s, hn::Mul(S(2.0f), half_c));
 }
 
-// flight.cpp body_rotation() with the coordinated bank (the seed's rule is lane by lane).
-Q4 body_rotation(const gpu::FlightUniforms& uniforms, const V3& v, const V3& a) {
+// flight.cpp body_frame() with the coordinated bank (the seed's rule is lane by lane).
+struct BodyFrame {
+    Q4 yaw, pitch, bank;
+    M moving;
+};
+BodyFrame body_frame(const gpu::FlightUniforms& uniforms, const V3& v, const V3& a) {
     const V horizontal = hn::Sqrt(hn::Add(hn::Mul(v.x, v.x), hn::Mul(v.z, v.z)));
     const V speed = hn::Sqrt(hn::Add(hn::Mul(horizontal, horizontal), hn::Mul(v.y, v.y)));
     const Q4 identity{Z(), Z(), Z(), S(1.0f)};
@@ -250,7 +302,8 @@ Q4 body_rotation(const gpu::FlightUniforms& uniforms, const V3& v, const V3& a) 
     }
     Q4 bank = identity;
     half_angle(bc, bs, bank.w, bank.z);
-    return select(hn::Le(speed, Z()), identity, quat_mul(quat_mul(yaw, pitch), bank));
+    const M moving = hn::Gt(speed, Z());
+    return {select(moving, yaw, identity), select(moving, pitch, identity), select(moving, bank, identity), moving};
 }
 
 // flight.cpp next_mode(), modes as floats (0 level, 1 ascend, 2 descend, -1 unset).
@@ -332,31 +385,113 @@ void sin_cos(V x, V& sin_x, V& cos_x) {
     cos_x = hn::IfThenElse(cos_negative, hn::Neg(c), c);
 }
 
-// arm_rotation(pitch, heading) = quat_z(pitch) quat_y(heading), one of which is zero in
-// every mode: a turn about z (pitch) or y (heading) by `angle`.
-Q4 arm_rotation(V angle, M about_y) {
+// flight.cpp arm_rotation(): quat_z(pitch) quat_y(heading), expanded.
+Q4 arm_rotation(V pitch, V heading) {
+    V sp, cp, sh, ch;
+    sin_cos(hn::Mul(S(0.5f), pitch), sp, cp);
+    sin_cos(hn::Mul(S(0.5f), heading), sh, ch);
+    return quat_mul(Q4{Z(), Z(), sp, cp}, Q4{Z(), sh, Z(), ch});
+}
+
+// flight.cpp flight_mode(): docs/flight-modes.md F.1, exact. Priority: the segment's own
+// mode, then hover, then the flap-glide rhythm.
+V flight_mode(const Q4& flight, V cruise, V previous, V glided, V beats, const Sample& r, V climb_mode) {
+    const M rhythm = hn::And(hn::And(hn::Eq(climb_mode, S(KW_MODE_LEVEL)), hn::Gt(flight.y, Z())), hn::Le(r.direction.y, Z()));
+    const M was_gliding = hn::Eq(previous, S(KW_MODE_GLIDE));
+    const M glide = hn::Or(hn::And(was_gliding, hn::Lt(glided, flight.z)), hn::AndNot(was_gliding, hn::Ge(beats, flight.y)));
+    V mode = hn::IfThenElse(hn::And(rhythm, glide), S(KW_MODE_GLIDE), climb_mode);
+    mode = hn::IfThenElse(hn::And(hn::Gt(flight.w, Z()), hn::Lt(cruise, S(birds::kHoverBelowSpeed))), S(KW_MODE_HOVER), mode);
+    return hn::IfThenElse(hn::Ge(r.segment_mode, Z()), r.segment_mode, mode);
+}
+
+// wingbeat.cpp mode_look(), one mode for all lanes (docs/flight-modes.md F.3, F.5).
+struct Look {
+    Wings wings;
+    V pitch, spread, bob;
+};
+HWY_INLINE V smoothstep(float e0, float e1, V x) {
+    const V u = hn::Min(hn::Max(hn::Div(hn::Sub(x, S(e0)), S(e1 - e0)), Z()), S(1.0f));
+    return hn::Mul(hn::Mul(u, u), hn::Sub(S(3.0f), hn::Mul(S(2.0f), u)));
+}
+HWY_INLINE V mix(V a, V b, V w) { return hn::Add(a, hn::Mul(hn::Sub(b, a), w)); }
+HWY_INLINE Wings mix(const Wings& a, const Wings& b, V w) {
+    return {mix(a.arm1_pitch, b.arm1_pitch, w), mix(a.arm2_pitch, b.arm2_pitch, w), mix(a.arm1_heading, b.arm1_heading, w),
+            mix(a.arm2_heading, b.arm2_heading, w)};
+}
+HWY_INLINE Wings splat(const birds::WingAngles& w) { return {S(w.arm1_pitch), S(w.arm2_pitch), S(w.arm1_heading), S(w.arm2_heading)}; }
+
+Look mode_look(int mode, V t, V sin_t, V cos_t, V amplitude, const Sample& r) {
+    Look l{{Z(), Z(), Z(), Z()}, Z(), Z(), Z()};
+    switch (mode) {
+        case KW_MODE_LEVEL:
+        case KW_MODE_ASCEND:
+        case KW_MODE_DESCEND:
+            l.wings = wing_angles(mode, t, sin_t, amplitude);
+            l.spread = S(mode == KW_MODE_LEVEL ? 0.15f : mode == KW_MODE_ASCEND ? 0.35f : 0.1f);
+            l.bob = S(mode == KW_MODE_DESCEND ? 0.3f : 1.0f);
+            break;
+        case KW_MODE_GLIDE:
+            l.wings = splat(birds::kGlideWings);
+            l.spread = S(0.25f);
+            break;
+        case KW_MODE_TAKEOFF: {
+            const V open = smoothstep(0.0f, birds::kLeapSeconds, r.since_crouch);
+            const Wings level = wing_angles(KW_MODE_LEVEL, t, sin_t, amplitude);
+            const Wings beats{hn::Mul(S(1.3f), level.arm1_pitch), hn::Mul(S(1.3f), level.arm2_pitch),
+                              hn::Mul(hn::Mul(S(0.3f), amplitude), cos_t), Z()};
+            l.wings = mix(splat(birds::kFoldedWings), beats, open);
+            l.pitch = mix(S(-0.2f), hn::Mul(S(0.45f), hn::Sub(S(1.0f), r.speed_fraction)), open);
+            l.spread = hn::Mul(S(0.8f), open);
+            l.bob = open;
+            break;
+        }
+        case KW_MODE_LANDING: {
+            const V flare = smoothstep(0.4f, 1.0f, hn::Sub(S(1.0f), r.speed_fraction));
+            const V fold = smoothstep(0.0f, birds::kFoldSeconds, r.since_touchdown);
+            const Wings level = wing_angles(KW_MODE_LEVEL, t, sin_t, amplitude);
+            const Wings beats{hn::Mul(S(0.6f), level.arm1_pitch), hn::Mul(S(0.6f), level.arm2_pitch),
+                              hn::Add(S(-0.25f), hn::Mul(hn::Mul(S(0.25f), amplitude), cos_t)), Z()};
+            l.wings = mix(mix(beats, splat(birds::kFlareWings), flare), splat(birds::kFoldedWings), fold);
+            const V unfolded = hn::Sub(S(1.0f), fold);
+            l.pitch = hn::Mul(hn::Mul(S(0.8f), flare), unfolded);
+            l.spread = hn::Mul(hn::Add(S(0.3f), hn::Mul(S(0.6f), flare)), unfolded);
+            l.bob = hn::Mul(hn::Sub(S(1.0f), flare), unfolded);
+            break;
+        }
+        default: {  // hover: figure-eight strokes
+            V sin_2t, cos_2t;
+            sin_cos(hn::Add(t, t), sin_2t, cos_2t);
+            l.wings = {hn::Mul(hn::Mul(S(0.2f), amplitude), sin_2t), hn::Mul(hn::Mul(S(-0.1f), amplitude), sin_t),
+                       hn::Mul(hn::Mul(S(0.95f), amplitude), cos_t), Z()};
+            l.pitch = S(0.6f);
+            l.spread = S(0.5f);
+            l.bob = S(0.5f);
+            break;
+        }
+    }
+    return l;
+}
+
+// wingbeat.cpp beat_factor(), exact.
+V beat_factor(V mode, const Sample& r) {
+    V k = S(1.0f);
+    k = hn::IfThenElse(hn::Eq(mode, S(KW_MODE_GLIDE)), Z(), k);
+    k = hn::IfThenElse(hn::Eq(mode, S(KW_MODE_TAKEOFF)), hn::IfThenElse(hn::Lt(r.since_crouch, Z()), Z(), S(1.25f)), k);
+    k = hn::IfThenElse(hn::Eq(mode, S(KW_MODE_LANDING)), hn::IfThenElse(hn::Ge(r.since_touchdown, Z()), Z(), S(1.25f)), k);
+    return k;
+}
+
+HWY_INLINE Q4 partial(const Q4& q, float k) {  // flight.cpp partial()
+    const Q4 p{hn::Mul(S(k), q.x), hn::Mul(S(k), q.y), hn::Mul(S(k), q.z), hn::Add(S(1.0f - k), hn::Mul(S(k), q.w))};
+    const V inv = hn::Div(S(1.0f), hn::Sqrt(quat_dot(p, p)));
+    return {hn::Mul(p.x, inv), hn::Mul(p.y, inv), hn::Mul(p.z, inv), hn::Mul(p.w, inv)};
+}
+HWY_INLINE Q4 nose_up(V angle) {  // flight.cpp nose_up()
     V s, c;
     sin_cos(hn::Mul(S(0.5f), angle), s, c);
-    return {Z(), hn::IfThenElseZero(about_y, s), hn::IfThenElse(about_y, Z(), s), c};
+    return {hn::Neg(s), Z(), Z(), c};
 }
-
-// SPEC B.6 (flight.cpp step_bird's blend): Q = ((1-a) Qa + a Qb) / |...|.
-Q4 blend(const Q4 q[3], const Q4& target, const V weights[3], V alpha) {
-    Q4 sum{hn::Mul(alpha, target.x), hn::Mul(alpha, target.y), hn::Mul(alpha, target.z), hn::Mul(alpha, target.w)};
-    for (int m = 0; m < 3; ++m) {
-        const V sign = hn::IfThenElse(hn::Lt(quat_dot(q[m], target), Z()), S(-1.0f), S(1.0f));
-        const V w = hn::Mul(hn::Mul(hn::Sub(S(1.0f), alpha), weights[m]), sign);
-        sum = {hn::Add(sum.x, hn::Mul(w, q[m].x)), hn::Add(sum.y, hn::Mul(w, q[m].y)), hn::Add(sum.z, hn::Mul(w, q[m].z)),
-               hn::Add(sum.w, hn::Mul(w, q[m].w))};
-    }
-    const V inv = hn::Div(S(1.0f), hn::Sqrt(quat_dot(sum, sum)));
-    const Q4 n{hn::Mul(sum.x, inv), hn::Mul(sum.y, inv), hn::Mul(sum.z, inv), hn::Mul(sum.w, inv)};
-    return select(hn::Ge(alpha, S(1.0f)), target, n);
-}
-
-V pick(V mode, V level, V ascend, V descend) {
-    return hn::IfThenElse(hn::Eq(mode, S(KW_MODE_LEVEL)), level, hn::IfThenElse(hn::Eq(mode, S(KW_MODE_ASCEND)), ascend, descend));
-}
+HWY_INLINE Q4 conj4(const Q4& q) { return {hn::Neg(q.x), hn::Neg(q.y), hn::Neg(q.z), q.w}; }
 
 // Writes quaternion-sized parts of the lanes' birds: `parts` of 4 vectors each, lane l's
 // part p to dst(l) + 4 p floats.
@@ -377,117 +512,186 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
     float* rows = a.storage + (&batch - a.batches) * kBirdRows * kBatchLanes;
     const Q4 offset = load4(rows, kBirdOffset, off);
     const Q4 motion = load4(rows, kBirdMotion, off);  // speed, frequency, amplitude, initial phase
-    Q4 blend_state = load4(rows, kBirdBlend, off);
+    const Q4 flight = load4(rows, kBirdFlight, off);  // glide ratio, flap-glide beats and seconds, hover
+    const V body_length = load(rows, kBirdShape, off);
+    V weights[KW_MODE_COUNT];
+    for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) weights[m] = load(rows, kBirdBlend + m, off);
+    V alpha = load(rows, kBirdAlpha, off);
     V phase = load(rows, kBirdPhase, off);
+    V glided = load(rows, kBirdGlided, off);
+    V beats = load(rows, kBirdBeats, off);
     V mode_state = load(rows, kBirdMode, off);
     const V dt = S(u.physics.z);
     const std::size_t valid = std::min(hn::Lanes(D()), batch.count - off);
-    const V level = S(KW_MODE_LEVEL), ascend = S(KW_MODE_ASCEND), descend = S(KW_MODE_DESCEND);
-    auto one_hot = [&](V mode, V which) { return hn::IfThenElse(hn::Eq(mode, which), S(1.0f), Z()); };
+    const float rates[KW_MODE_COUNT] = {u.blend_rates.x,  u.blend_rates.y,  u.blend_rates.z, u.blend_rates2.x,
+                                        u.blend_rates2.y, u.blend_rates2.z, u.blend_rates2.w};
 
     RouteCache cache;
     for (std::uint32_t k = 0; k < a.frames; ++k) {
         const std::uint32_t frame = a.first_frame + k;
-        const M first = hn::Lt(mode_state, Z());  // KW_MODE_UNSET
-        phase = hn::IfThenElse(first, motion.w, hn::Add(phase, hn::Mul(motion.y, dt)));
-        phase = hn::Sub(phase, hn::Floor(phase));
+        const V previous = mode_state;
+        const M first = hn::Lt(previous, Z());  // KW_MODE_UNSET
         const V time = hn::Add(hn::Mul(S(static_cast<float>(frame)), dt), offset.w);
         const Sample sample = sample_route(a, route, time, motion.x, cache);
 
-        // SPEC B.5, B.6: mode and transition.
-        const V mode = next_mode(u, mode_state, sample);
-        const M changed = hn::AndNot(first, hn::Ne(mode, mode_state));
-        const M steady = hn::AndNot(hn::Or(first, changed), hn::Lt(blend_state.w, S(1.0f)));
-        {
-            const V alpha = blend_state.w, keep = hn::Sub(S(1.0f), alpha);
-            const Q4 from{hn::Add(hn::Mul(keep, blend_state.x), hn::IfThenElseZero(hn::Eq(mode_state, level), alpha)),
-                          hn::Add(hn::Mul(keep, blend_state.y), hn::IfThenElseZero(hn::Eq(mode_state, ascend), alpha)),
-                          hn::Add(hn::Mul(keep, blend_state.z), hn::IfThenElseZero(hn::Eq(mode_state, descend), alpha)), Z()};
-            const V rate = pick(mode, S(u.blend_rates.x), S(u.blend_rates.y), S(u.blend_rates.z));
-            const V advanced = hn::Add(alpha, hn::Mul(rate, S(u.physics.w)));
-            const Q4 settled{one_hot(mode, level), one_hot(mode, ascend), one_hot(mode, descend), S(1.0f)};
-            Q4 next = blend_state;
-            next.w = hn::IfThenElse(steady, advanced, next.w);
-            next = select(hn::Or(first, hn::And(steady, hn::Ge(advanced, S(1.0f)))), settled, next);
-            blend_state = select(changed, from, next);
+        // Mode (SPEC B.5; docs/flight-modes.md F.1): the climb rule keeps its hysteresis
+        // through a glide and decides afresh after the other modes.
+        const V climb_previous = hn::IfThenElse(hn::Le(previous, S(KW_MODE_DESCEND)), previous,
+                                                hn::IfThenElse(hn::Eq(previous, S(KW_MODE_GLIDE)), S(KW_MODE_LEVEL), S(-1.0f)));
+        const V mode = flight_mode(flight, motion.x, previous, glided, beats, sample, next_mode(u, climb_previous, sample));
+
+        // Transition (SPEC B.6) over the seven modes' weights.
+        const M changed = hn::AndNot(first, hn::Ne(mode, previous));
+        const M steady = hn::AndNot(hn::Or(first, changed), hn::Lt(alpha, S(1.0f)));
+        V rate = Z();
+        for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) rate = hn::IfThenElse(hn::Eq(mode, S(static_cast<float>(m))), S(rates[m]), rate);
+        const V advanced = hn::Add(alpha, hn::Mul(rate, S(u.physics.w)));
+        const M settle = hn::Or(first, hn::And(steady, hn::Ge(advanced, S(1.0f))));
+        const V keep = hn::Sub(S(1.0f), alpha);
+        for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) {
+            const V which = S(static_cast<float>(m));
+            const V from = hn::Add(hn::Mul(keep, weights[m]), hn::IfThenElseZero(hn::Eq(previous, which), alpha));
+            const V settled = hn::IfThenElseZero(hn::Eq(mode, which), S(1.0f));
+            weights[m] = hn::IfThenElse(changed, from, hn::IfThenElse(settle, settled, weights[m]));
         }
+        alpha = hn::IfThenElse(changed, Z(), hn::IfThenElse(settle, S(1.0f), hn::IfThenElse(steady, advanced, alpha)));
+
+        // Phase by the mode's beat factor; completed beats drive the flap-glide rhythm.
+        phase = hn::IfThenElse(first, motion.w, hn::Add(phase, hn::Mul(hn::Mul(motion.y, dt), beat_factor(mode, sample))));
+        const V whole = hn::Floor(phase);
+        phase = hn::Sub(phase, whole);
+        const M gliding = hn::Eq(mode, S(KW_MODE_GLIDE));
+        glided = hn::IfThenElse(gliding, hn::Add(hn::IfThenElseZero(hn::Eq(previous, S(KW_MODE_GLIDE)), glided), dt), Z());
+        beats = hn::IfThenElse(gliding, Z(), hn::IfThenElse(first, beats, hn::Add(beats, whole)));
         mode_state = mode;
 
-        // SPEC B.2: the wings at phase t; all three modes' poses only while some lane blends.
+        // The looks of the modes that take part (the target of some lane, or a weight in
+        // some lane's blend source), and the SPEC B.6 blend of the wings.
         V t = hn::Mul(phase, S(kTwoPi));
         t = hn::IfThenElse(hn::Ge(t, S(kTwoPi)), Z(), t);
         V sin_t, cos_t;
         sin_cos(t, sin_t, cos_t);
-        const V alpha = blend_state.w;
-        const Wings w[3] = {wing_angles(KW_MODE_LEVEL, t, sin_t, motion.z), wing_angles(KW_MODE_ASCEND, t, sin_t, motion.z),
-                            wing_angles(KW_MODE_DESCEND, t, sin_t, motion.z)};
-        const M is_descend = hn::Eq(mode, descend);
-        const Wings target{pick(mode, w[0].arm1_pitch, w[1].arm1_pitch, w[2].arm1_pitch),
-                           pick(mode, w[0].arm2_pitch, w[1].arm2_pitch, w[2].arm2_pitch),
-                           pick(mode, w[0].arm1_heading, w[1].arm1_heading, w[2].arm1_heading),
-                           pick(mode, w[0].arm2_heading, w[1].arm2_heading, w[2].arm2_heading)};
-        Q4 left1 = arm_rotation(hn::IfThenElse(is_descend, target.arm1_heading, target.arm1_pitch), is_descend);
-        Q4 left2 = arm_rotation(hn::IfThenElse(is_descend, target.arm2_heading, target.arm2_pitch), is_descend);
-        if (!hn::AllFalse(D(), hn::Lt(alpha, S(1.0f)))) {
-            const M no = hn::FirstN(D(), 0), yes = hn::Not(no);
-            const Q4 arm1[3] = {arm_rotation(w[0].arm1_pitch, no), arm_rotation(w[1].arm1_pitch, no),
-                                arm_rotation(w[2].arm1_heading, yes)};
-            const Q4 arm2[3] = {arm_rotation(w[0].arm2_pitch, no), arm_rotation(w[1].arm2_pitch, no),
-                                arm_rotation(w[2].arm2_heading, yes)};
-            const V weights[3] = {blend_state.x, blend_state.y, blend_state.z};
-            left1 = blend(arm1, left1, weights, alpha);
-            left2 = blend(arm2, left2, weights, alpha);
+        const M blending = hn::Lt(alpha, S(1.0f));
+        const bool any_blending = !hn::AllFalse(D(), blending);
+        Wings target{Z(), Z(), Z(), Z()};
+        Q4 arm1[KW_MODE_COUNT], arm2[KW_MODE_COUNT];
+        Look looks[KW_MODE_COUNT];
+        bool used[KW_MODE_COUNT] = {};
+        Q4 left1{Z(), Z(), Z(), S(1.0f)}, left2 = left1;
+        V pitch = Z(), spread = Z(), bob = Z();
+        for (int m = 0; m < static_cast<int>(KW_MODE_COUNT); ++m) {
+            const M is_target = hn::Eq(mode, S(static_cast<float>(m)));
+            const bool needed = !hn::AllFalse(D(), is_target) ||
+                                (any_blending && !hn::AllFalse(D(), hn::And(blending, hn::Ne(weights[m], Z()))));
+            if (!needed) continue;
+            used[m] = true;
+            looks[m] = mode_look(m, t, sin_t, cos_t, motion.z, sample);
+            arm1[m] = arm_rotation(looks[m].wings.arm1_pitch, looks[m].wings.arm1_heading);
+            arm2[m] = arm_rotation(looks[m].wings.arm2_pitch, looks[m].wings.arm2_heading);
+            target = {hn::IfThenElse(is_target, looks[m].wings.arm1_pitch, target.arm1_pitch),
+                      hn::IfThenElse(is_target, looks[m].wings.arm2_pitch, target.arm2_pitch),
+                      hn::IfThenElse(is_target, looks[m].wings.arm1_heading, target.arm1_heading),
+                      hn::IfThenElse(is_target, looks[m].wings.arm2_heading, target.arm2_heading)};
+            left1 = select(is_target, arm1[m], left1);
+            left2 = select(is_target, arm2[m], left2);
+            const V w = hn::Add(hn::IfThenElseZero(is_target, alpha), hn::IfThenElseZero(blending, hn::Mul(hn::Sub(S(1.0f), alpha), weights[m])));
+            pitch = hn::Add(pitch, hn::Mul(w, looks[m].pitch));
+            spread = hn::Add(spread, hn::Mul(w, looks[m].spread));
+            bob = hn::Add(bob, hn::Mul(w, looks[m].bob));
+        }
+        if (any_blending) {
+            Q4 sum1{hn::Mul(alpha, left1.x), hn::Mul(alpha, left1.y), hn::Mul(alpha, left1.z), hn::Mul(alpha, left1.w)};
+            Q4 sum2{hn::Mul(alpha, left2.x), hn::Mul(alpha, left2.y), hn::Mul(alpha, left2.z), hn::Mul(alpha, left2.w)};
+            const V rest = hn::Sub(S(1.0f), alpha);
+            for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) {
+                if (!used[m]) continue;
+                const V w = hn::Mul(rest, weights[m]);
+                const V s1 = hn::IfThenElse(hn::Lt(quat_dot(arm1[m], left1), Z()), hn::Neg(w), w);
+                const V s2 = hn::IfThenElse(hn::Lt(quat_dot(arm2[m], left2), Z()), hn::Neg(w), w);
+                sum1 = {hn::Add(sum1.x, hn::Mul(s1, arm1[m].x)), hn::Add(sum1.y, hn::Mul(s1, arm1[m].y)),
+                        hn::Add(sum1.z, hn::Mul(s1, arm1[m].z)), hn::Add(sum1.w, hn::Mul(s1, arm1[m].w))};
+                sum2 = {hn::Add(sum2.x, hn::Mul(s2, arm2[m].x)), hn::Add(sum2.y, hn::Mul(s2, arm2[m].y)),
+                        hn::Add(sum2.z, hn::Mul(s2, arm2[m].z)), hn::Add(sum2.w, hn::Mul(s2, arm2[m].w))};
+            }
+            const V inv1 = hn::Div(S(1.0f), hn::Sqrt(quat_dot(sum1, sum1)));
+            const V inv2 = hn::Div(S(1.0f), hn::Sqrt(quat_dot(sum2, sum2)));
+            left1 = select(blending, Q4{hn::Mul(sum1.x, inv1), hn::Mul(sum1.y, inv1), hn::Mul(sum1.z, inv1), hn::Mul(sum1.w, inv1)}, left1);
+            left2 = select(blending, Q4{hn::Mul(sum2.x, inv2), hn::Mul(sum2.y, inv2), hn::Mul(sum2.z, inv2), hn::Mul(sum2.w, inv2)}, left2);
         }
 
-        // Body attitude (SPEC B.4).
-        Q4 body;
+        // Body attitude (SPEC B.4), the mode's extra pitch and the wingbeat's oscillation
+        // and bob, head and tail (docs/flight-modes.md F.5; flight.cpp step_bird()).
+        const V3 v = sample.attitude_velocity, acc = sample.acceleration;
+        BodyFrame frame_parts = body_frame(u, v, acc);
         HWY_ALIGN float kinematics[6 * kBatchLanes];
         const bool seed_bank = u.rules.x == KW_BANK_SEED;
         if (seed_bank || a.diag != nullptr) {
-            store3(sample.velocity, kinematics, 0, 0);
-            store3(sample.acceleration, kinematics, 3, 0);
+            store3(v, kinematics, 0, 0);
+            store3(acc, kinematics, 3, 0);
         }
         if (seed_bank) {
-            HWY_ALIGN float rotation[4 * kBatchLanes];
-            seed_body_rotation_lanes(u, kinematics, kBatchLanes, rotation, hn::Lanes(D()));
-            body = load4(rotation, 0, 0);
-        } else {
-            body = body_rotation(u, sample.velocity, sample.acceleration);
+            HWY_ALIGN float bank[4 * kBatchLanes];
+            seed_bank_lanes(u, kinematics, kBatchLanes, bank, hn::Lanes(D()));
+            frame_parts.bank = load4(bank, 0, 0);
         }
+        const Q4 identity{Z(), Z(), Z(), S(1.0f)};
+        const Q4 body_base =
+            select(frame_parts.moving, quat_mul(quat_mul(frame_parts.yaw, frame_parts.pitch), frame_parts.bank), identity);
+        const V oscillation = hn::Mul(hn::Mul(hn::Mul(S(birds::kBobPitch), motion.z), sin_t), bob);
+        const V extra = hn::Add(pitch, oscillation);
+        const Q4 body = quat_mul(body_base, nose_up(extra));
+        const V bob_height = hn::Mul(hn::Mul(hn::Mul(hn::Mul(S(-birds::kBobHeight), body_length), motion.z), cos_t), bob);
+        const V sin_bank = hn::Mul(hn::Mul(S(2.0f), frame_parts.bank.z), frame_parts.bank.w);
+        const V horizontal = hn::Sqrt(hn::Add(hn::Mul(v.x, v.x), hn::Mul(v.z, v.z)));
+        const V lateral = hn::Div(hn::Add(hn::Mul(acc.x, hn::Neg(v.z)), hn::Mul(acc.z, v.x)), horizontal);
+        V look = hn::Div(hn::Mul(S(-birds::kLookAhead), lateral), horizontal);
+        look = hn::Min(hn::Max(look, S(-birds::kMaxLook)), S(birds::kMaxLook));
+        look = hn::IfThenElseZero(hn::Gt(horizontal, S(1e-3f)), look);
+        V look_s, look_c;
+        sin_cos(hn::Mul(S(0.5f), look), look_s, look_c);
+        const Q4 head = quat_mul(
+            quat_mul(quat_mul(nose_up(hn::Neg(hn::Add(hn::Mul(S(birds::kHeadPitchHold), pitch), hn::Mul(S(birds::kHeadBobHold), oscillation)))),
+                              partial(conj4(frame_parts.bank), birds::kHeadBankHold)),
+                     partial(conj4(frame_parts.pitch), birds::kHeadClimbHold)),
+            Q4{Z(), look_s, Z(), look_c});
+        const Q4 tail = quat_mul(quat_mul(partial(frame_parts.pitch, birds::kTailClimb), nose_up(hn::Mul(S(birds::kTailPitch), pitch))),
+                                 partial(frame_parts.bank, birds::kTailBank));
+        const V tail_spread = hn::Add(spread, hn::Mul(S(birds::kTailBankSpread), hn::Abs(sin_bank)));
 
         // Outputs: BirdPose (right wing mirrored) or, without one, the moving parts' rows.
         const V3 position = add(sample.position, V3{offset.x, offset.y, offset.z});
+        const Q4 placed{position.x, hn::Add(position.y, bob_height), position.z, tail_spread};
         if (a.poses != nullptr) {
-            const Q4 identity{Z(), Z(), Z(), S(1.0f)};
-            const Q4 parts[8] = {{position.x, position.y, position.z, Z()},
-                                 body,
-                                 identity,
-                                 identity,
-                                 left1,
-                                 left2,
+            const Q4 parts[8] = {placed, body, head, tail, left1, left2,
                                  {left1.x, hn::Neg(left1.y), hn::Neg(left1.z), left1.w},
                                  {left2.x, hn::Neg(left2.y), hn::Neg(left2.z), left2.w}};
             gpu::BirdPose* poses = a.poses + std::size_t{k} * a.birds;
             store_parts(parts, 8, valid, [&](std::size_t l) { return &poses[batch.bird[off + l]].position.x; });
         } else {
-            store4({position.x, position.y, position.z, Z()}, rows, kBirdPose, off);
+            store4(placed, rows, kBirdPose, off);
             store4(body, rows, kBirdPose + 4, off);
-            store4(left1, rows, kBirdPose + 8, off);
-            store4(left2, rows, kBirdPose + 12, off);
+            store4(head, rows, kBirdPose + 8, off);
+            store4(tail, rows, kBirdPose + 12, off);
+            store4(left1, rows, kBirdPose + 16, off);
+            store4(left2, rows, kBirdPose + 20, off);
         }
         if (a.diag != nullptr) {
             HWY_ALIGN float angles[3 * kBatchLanes];
             attitude_lanes(u, kinematics, kBatchLanes, angles, hn::Lanes(D()));
-            const Q4 parts[4] = {{sample.velocity.x, sample.velocity.y, sample.velocity.z, alpha},
-                                 {sample.acceleration.x, sample.acceleration.y, sample.acceleration.z, mode},
+            const Q4 parts[5] = {{sample.velocity.x, sample.velocity.y, sample.velocity.z, alpha},
+                                 {acc.x, acc.y, acc.z, mode},
                                  {target.arm1_pitch, target.arm2_pitch, target.arm1_heading, target.arm2_heading},
-                                 {load(angles, 0, 0), load(angles, 1, 0), load(angles, 2, 0), t}};
+                                 {load(angles, 0, 0), load(angles, 1, 0), load(angles, 2, 0), t},
+                                 {sample.speed_fraction, extra, tail_spread, glided}};
             gpu::BirdDiag* diag = a.diag + std::size_t{k} * a.birds;
-            store_parts(parts, 4, valid, [&](std::size_t l) { return &diag[batch.bird[off + l]].velocity.x; });
+            store_parts(parts, 5, valid, [&](std::size_t l) { return &diag[batch.bird[off + l]].velocity.x; });
         }
     }
-    store4(blend_state, rows, kBirdBlend, off);
+    for (std::uint32_t m = 0; m < KW_MODE_COUNT; ++m) store(weights[m], rows, kBirdBlend + m, off);
+    store(alpha, rows, kBirdAlpha, off);
     store(phase, rows, kBirdPhase, off);
+    store(glided, rows, kBirdGlided, off);
+    store(beats, rows, kBirdBeats, off);
     store(mode_state, rows, kBirdMode, off);
 }
 

@@ -7,7 +7,7 @@
 // uniform and one vector instruction advances 16 (AVX-512), 8 (AVX2) or 4 (SSE4) birds.
 // A batch's block holds rows of 16 floats: the birds' constants, their state (blend,
 // phase, mode) and, for frames simulated without an output, the moving parts' pose (the
-// GPU's BirdPoseGpu: position, Body, LeftArm1, LeftArm2), which still goes to memory, as
+// GPU's BirdPoseGpu: position, Body, Head, Tail, LeftArm1, LeftArm2), which still goes to memory, as
 // on the GPU. Padding lanes repeat the batch's first bird and are never written out.
 //
 // Exactness. Everything the flight modes, transitions and the phase depend on, the
@@ -33,11 +33,16 @@ namespace kodawari::simd {
 enum BirdRow : std::uint32_t {
     kBirdOffset = 0,   // BirdParams::offset (xyz: m, w: time offset)
     kBirdMotion = 4,   // BirdParams::motion (speed, frequency, amplitude, initial phase)
-    kBirdBlend = 8,    // BirdState::blend
-    kBirdPhase = 12,   // BirdState::phase.x
-    kBirdMode = 13,    // BirdState::mode.x as a float; -1 = KW_MODE_UNSET
-    kBirdPose = 14,    // position (4), Body (4), LeftArm1 (4), LeftArm2 (4): the last frame without an output
-    kBirdRows = 30,
+    kBirdFlight = 8,   // BirdParams::flight (glide ratio, flap-glide beats and seconds, hover)
+    kBirdShape = 12,   // BirdParams::shape.x (body length)
+    kBirdBlend = 13,   // BirdState::blend and blend2.xyz: the seven modes' weights
+    kBirdAlpha = 20,   // BirdState::blend2.w
+    kBirdPhase = 21,   // BirdState::phase.x
+    kBirdGlided = 22,  // BirdState::phase.y
+    kBirdBeats = 23,   // BirdState::phase.z
+    kBirdMode = 24,    // BirdState::mode.x as a float; -1 = KW_MODE_UNSET
+    kBirdPose = 25,    // BirdPoseGpu (24 floats): the last frame without an output
+    kBirdRows = 49,
 };
 
 /// A batch of up to kBatchLanes birds on one route.

@@ -34,6 +34,7 @@ birds::RouteSample sample_of(const float* motion, std::size_t stride, std::size_
     birds::RouteSample s;
     s.velocity = {motion[0 * stride + i], motion[1 * stride + i], motion[2 * stride + i]};
     s.acceleration = {motion[3 * stride + i], motion[4 * stride + i], motion[5 * stride + i]};
+    s.attitude_velocity = s.velocity;  // the caller passes the attitude velocity
     return s;
 }
 
@@ -49,10 +50,10 @@ void partial_lanes(float* q, std::size_t stride, float fraction, std::size_t cou
     }
 }
 
-void seed_body_rotation_lanes(const gpu::FlightUniforms& uniforms, const float* motion, std::size_t stride, float* rotation,
-                              std::size_t count) {
+void seed_bank_lanes(const gpu::FlightUniforms& uniforms, const float* motion, std::size_t stride, float* rotation,
+                     std::size_t count) {
     for (std::size_t i = 0; i < count; ++i) {
-        const gpu::vec4 r = birds::body_rotation(uniforms, sample_of(motion, stride, i));
+        const gpu::vec4 r = birds::body_frame(uniforms, sample_of(motion, stride, i)).bank;
         rotation[i] = r.x;
         rotation[stride + i] = r.y;
         rotation[2 * stride + i] = r.z;

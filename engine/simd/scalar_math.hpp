@@ -20,10 +20,10 @@ void pow_lanes(const float* base, float exponent, float* out, std::size_t count)
 /// partial() (the rest-shape root interpolation and partial momentum suppression).
 void partial_lanes(float* q, std::size_t stride, float fraction, std::size_t count);
 
-/// The seed's bank rule (SPEC B.4) of birds::body_rotation, lane by lane: velocity and
-/// acceleration as rows of `count` floats (vx, vy, vz, ax, ay, az; stride `stride`) in,
-/// the Body rotation as rows (x, y, z, w) out.
-void seed_body_rotation_lanes(const gpu::FlightUniforms& uniforms, const float* motion, std::size_t stride, float* rotation,
+/// The seed's bank rule (SPEC B.4) of birds::body_frame, lane by lane: attitude velocity
+/// and acceleration as rows of `count` floats (vx, vy, vz, ax, ay, az; stride `stride`)
+/// in, the bank factor as rows (x, y, z, w) out.
+void seed_bank_lanes(const gpu::FlightUniforms& uniforms, const float* motion, std::size_t stride, float* rotation,
                               std::size_t count);
 
 /// birds::attitude() lane by lane (the diagnostics' yaw, climb and bank): rows as above in,

@@ -43,6 +43,12 @@
 
 #define KW_ROUTE_LOOP 1u
 #define KW_ROUTE_PARAMETRIC 2u
+#define KW_ROUTE_TAKEOFF 4u  // the first segment is a take-off from a perch (docs/flight-modes.md)
+#define KW_ROUTE_LANDING 8u  // the last segment is a landing on a perch
+
+// A segment's mode, in the w of its first control point: a KW_MODE_* or this for the
+// climb rule (and the flap-glide rhythm).
+#define KW_SEGMENT_AUTO -1.0
 
 // Parts of the rig (SPEC B.1), the order of BirdPose.rotation.
 #define KW_PART_BODY 0
@@ -54,6 +60,24 @@
 #define KW_PART_RIGHT_ARM2 6
 #define KW_PART_COUNT 7
 
+// Constants of the new modes' looks, docs/flight-modes.md (F.2: take-off and landing
+// timing; F.5: body bob, head and tail), shared by every backend.
+#define KW_CROUCH_SECONDS 0.3      // on the perch before the leap
+#define KW_LEAP_SECONDS 0.2        // the leap opens the folded wings
+#define KW_FOLD_SECONDS 0.5        // folding the wings after touchdown
+#define KW_BOB_HEIGHT 0.05         // body bob, in body lengths per unit amplitude
+#define KW_BOB_PITCH 0.04          // body pitch oscillation (rad per unit amplitude)
+#define KW_LOOK_AHEAD 0.35         // the head turns by the turn rate times this (s)
+#define KW_MAX_LOOK 0.5            // rad
+#define KW_HEAD_PITCH_HOLD 0.8     // share of the extra pitch the head undoes
+#define KW_HEAD_BOB_HOLD 0.9       // share of the pitch oscillation the head undoes
+#define KW_HEAD_BANK_HOLD 0.7      // share of the bank the head undoes
+#define KW_HEAD_CLIMB_HOLD 0.5     // share of the climb the head undoes
+#define KW_TAIL_CLIMB 0.3          // share of the climb the tail adds (lowered)
+#define KW_TAIL_PITCH 0.5          // share of the extra pitch the tail adds
+#define KW_TAIL_BANK 0.5           // share of the bank the tail twists with
+#define KW_TAIL_BANK_SPREAD 0.4    // tail spread per unit sin(bank)
+
 KW_NAMESPACE_BEGIN
 
 // World-wide flight settings, one per dispatch.
@@ -63,6 +87,7 @@ struct FlightUniforms {
     vec4 blend_rates;  // x: into level, y: into ascend, z: into descend (per 1/60 s), w: seed rule's |a_y| threshold
     uvec4 rules;       // x: bank rule, y: mode rule (the kernel takes both as specialization constants), z: bird count, w: unused
     vec4 bank_limit;   // x: cos(max bank), y: sin(max bank), z, w: unused
+    vec4 blend_rates2; // into glide, take-off, landing, hover (per 1/60 s)
 };
 
 // One route: a chain of cubic Bezier segments sharing end points (SPEC B.3).
@@ -70,6 +95,7 @@ struct RouteHeader {
     uvec4 extent;  // x: first control point, y: segment count, z: first arc sample, w: arc samples (intervals + 1)
     uvec4 flags;   // x: KW_ROUTE_* bits
     vec4 info;     // x: arc length L (m), y: seconds per segment D (parametric timing), z: 1/L, w: 1/D
+    vec4 perch;    // take-off and landing segments (docs/flight-modes.md F.2): x: take-off length L0 (m), y: 1/L0, z: landing length Ln, w: 1/Ln (0 without)
 };
 
 // Arc-length table sample: x: s (m from route start), y: u (global parameter: segment +
@@ -94,13 +120,15 @@ struct BirdParams {
     vec4 motion;  // x: speed (m/s), y: flap frequency (Hz), z: flap amplitude scale, w: initial phase (cycles)
     uvec4 ids;    // x: route index, y: bird type (WingType, or a user's model after them), z, w: unused
     vec4 flight;  // x: glide ratio, y: flap-glide beats (0: none), z: flap-glide glide seconds, w: 1 if it can hover
+    vec4 shape;   // x: body length (m), y: wingspan (m), z, w: unused
 };
 
 // Per-bird state carried from frame to frame (mode hysteresis, transitions, phase).
 struct BirdState {
-    vec4 blend;  // xyz: weights of level/ascend/descend poses in the blend source, w: alpha (1 = no transition)
-    vec4 phase;  // x: wingbeat phase in cycles [0, 1), yzw: unused
-    uvec4 mode;  // x: current target mode (KW_MODE_*), yzw: unused
+    vec4 blend;   // weights of the level, ascend, descend and glide poses in the blend source
+    vec4 blend2;  // xyz: weights of the take-off, landing and hover poses, w: alpha (1 = no transition)
+    vec4 phase;   // x: wingbeat phase in cycles [0, 1), y: seconds glided (flap-glide rhythm), z: wingbeats since the last glide, w: unused
+    uvec4 mode;   // x: current target mode (KW_MODE_*), yzw: unused
 };
 
 // Per-bird, per-frame output: the 7 part transforms. Translations other than the
@@ -110,13 +138,14 @@ struct BirdPose {
     vec4 rotation[7];  // local rotations, quaternion (x, y, z, w), KW_PART_* order; Body in world space
 };
 
-// What the kernel stores per bird and frame: the parts that move. Head and Tail keep the
-// rig's rest pose and the right wing mirrors the left (SPEC B.2), so storing them would
-// only double the stores, the largest cost of the kernel on lavapipe; the Vulkan backend
-// expands this to BirdPose when it reads poses back.
+// What the kernel stores per bird and frame: the parts that move. The right wing mirrors
+// the left (SPEC B.2), so storing it would only add stores, the largest cost of the
+// kernel on lavapipe; the Vulkan backend expands this to BirdPose when it reads poses back.
 struct BirdPoseGpu {
-    vec4 position;   // xyz: Body world position, w: 0
+    vec4 position;   // xyz: Body world position, w: tail spread (BirdPose.position.w)
     vec4 body;       // Body world rotation
+    vec4 head;       // Head local rotation
+    vec4 tail;       // Tail local rotation
     vec4 left_arm1;  // LeftArm1 local rotation
     vec4 left_arm2;  // LeftArm2 local rotation
 };
@@ -127,6 +156,7 @@ struct BirdDiag {
     vec4 acceleration;  // xyz (m/s^2), w: mode (as float)
     vec4 angles;        // target pose of the left wing: arm1 pitch, arm2 pitch, arm1 heading, arm2 heading (rad)
     vec4 attitude;      // yaw, pitch (climb), bank, phase (rad)
+    vec4 flight;        // x: speed as a fraction of the cruise speed, y: extra body pitch (rad, nose up), z: tail spread, w: seconds glided
 };
 
 // Push constants of birds_flap.comp.

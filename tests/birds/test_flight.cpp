@@ -27,6 +27,7 @@ Vec3 rotate(const gpu::vec4& q, Vec3 v) {
 RouteSample moving(Vec3 velocity, Vec3 acceleration = {}) {
     RouteSample s;
     s.velocity = velocity;
+    s.attitude_velocity = velocity;
     s.acceleration = acceleration;
     s.direction = velocity;
     s.lift = acceleration.y;
@@ -113,7 +114,14 @@ TEST(Flight, PartsPointWhereTheConventionsSay) {
     // Phase 0.25 + frames: find a frame in the downstroke, where arm1 pitch < 0.
     for (std::uint32_t frame = 0; frame < 40; ++frame) {
         const BirdFrame f = step_bird(world, u, world.birds[0], state, frame);
-        const Vec3 nose = rotate(f.pose.rotation[KW_PART_BODY], {0, 0, 1});
+        // The nose points along the velocity once the mode's extra pitch (diag.flight.y,
+        // docs/flight-modes.md F.4, a turn about the body's own lateral axis) is undone.
+        const float e = f.diag.flight.y;
+        const gpu::vec4& q = f.pose.rotation[KW_PART_BODY];
+        const gpu::vec4 undo{std::sin(0.5f * e), 0.0f, 0.0f, std::cos(0.5f * e)};
+        const gpu::vec4 level{q.w * undo.x + q.x * undo.w, q.y * undo.w + q.z * undo.x, q.z * undo.w - q.y * undo.x,
+                              q.w * undo.w - q.x * undo.x};
+        const Vec3 nose = rotate(level, {0, 0, 1});
         const Vec3 v{f.diag.velocity.x, f.diag.velocity.y, f.diag.velocity.z};
         const float speed = std::sqrt(v.x * v.x + v.y * v.y + v.z * v.z);
         EXPECT_NEAR(nose.x, v.x / speed, 1e-5f);

@@ -18,6 +18,7 @@ std::vector<gpu::BirdDiag> make_diag(std::size_t count, std::uint32_t frame) {
         diag[b].acceleration = {0.5f, -0.5f, 0.125f, static_cast<float>(b % 3)};
         diag[b].angles = {0.1f, 0.2f, 0.3f, 0.4f};
         diag[b].attitude = {1.0f, -0.25f, 0.75f, 1.5f + k};
+        diag[b].flight = {0.5f, 0.125f, 0.375f, 2.0f + k};
     }
     return diag;
 }
@@ -78,7 +79,7 @@ TEST(Trace, RoundTrip) {
     const std::set<std::string> expected_keys = {"kind",     "frame",    "time",         "id",  "wing_type",
                                                  "mode",     "phase",    "blend",        "position", "velocity",
                                                  "acceleration", "yaw",  "pitch",        "bank", "angles",
-                                                 "parts"};
+                                                 "parts", "speed_fraction", "extra_pitch", "tail_spread", "glided"};
     std::set<std::string> keys;
     for (const auto& item : record.items()) keys.insert(item.key());
     EXPECT_EQ(keys, expected_keys);
@@ -97,6 +98,10 @@ TEST(Trace, RoundTrip) {
     EXPECT_EQ(record.at("yaw").get<float>(), 1.0f);
     EXPECT_EQ(record.at("pitch").get<float>(), -0.25f);
     EXPECT_EQ(record.at("bank").get<float>(), 0.75f);
+    EXPECT_EQ(record.at("speed_fraction").get<float>(), 0.5f);
+    EXPECT_EQ(record.at("extra_pitch").get<float>(), 0.125f);
+    EXPECT_EQ(record.at("tail_spread").get<float>(), 0.375f);
+    EXPECT_EQ(record.at("glided").get<float>(), diag.flight.w);
     const auto& angles = record.at("angles");
     EXPECT_EQ(angles.size(), 4u);
     EXPECT_EQ(angles.at("arm1_pitch").get<float>(), 0.1f);

@@ -37,6 +37,7 @@ struct BirdTolerances {
     double position_fraction_of_route = 1e-5;
     double phase_rad = 1e-4;
     double blend = 1e-4;
+    double tail_spread = 1e-4;  ///< BirdPose::position.w, a width scale of the order of 1
 };
 
 /// Accumulates deviations frame chunk after chunk.
@@ -66,7 +67,7 @@ private:
     std::uint32_t birds_ = 0;
     double route_length_ = 1.0;
     BirdTolerances tol_;
-    Acc position_, rotation_[KW_PART_COUNT], phase_, blend_, mode_;
+    Acc position_, spread_, rotation_[KW_PART_COUNT], phase_, blend_, mode_;
 };
 
 /// Angle (rad) of the rotation between two unit quaternions, either sign.

@@ -29,6 +29,14 @@ struct RouteSample {
     Vec3 direction;
     float lift = 0.0f;
     float lift_scale = 1.0f;
+    /// The velocity the Body is aligned with: `velocity`, except on a take-off or landing
+    /// segment, where its climb is scaled by the speed fraction and its length is the
+    /// cruise speed, so that a perched bird sits level and faces along the route.
+    Vec3 attitude_velocity;
+    /// The mode of the segment the bird is on (KW_SEGMENT_AUTO or a KW_MODE_*), exact.
+    float segment_mode = KW_SEGMENT_AUTO;
+    /// Take-off and landing progress (docs/flight-modes.md F.2); speed_fraction is exact.
+    PerchProgress progress;
 };
 
 /// Position, velocity and acceleration of a bird flying `route` at `speed` for
@@ -45,13 +53,30 @@ struct Attitude {
 };
 [[nodiscard]] KODAWARI_API Attitude attitude(const gpu::FlightUniforms& uniforms, const RouteSample& sample);
 
+/// The factors of body_rotation(): yaw, climb pitch and bank (identity when not moving).
+struct BodyFrame {
+    gpu::vec4 yaw{0, 0, 0, 1}, pitch{0, 0, 0, 1}, bank{0, 0, 0, 1};
+    bool moving = false;
+};
+[[nodiscard]] KODAWARI_API BodyFrame body_frame(const gpu::FlightUniforms& uniforms, const RouteSample& sample);
+
 /// The Body's world rotation for `attitude()`: yaw about +Y, then nose up by the climb
 /// angle (about -X), then bank about +Z (positive = right wing down).
 [[nodiscard]] KODAWARI_API gpu::vec4 body_rotation(const gpu::FlightUniforms& uniforms, const RouteSample& sample);
 
-/// The next flight mode (SPEC B.5) given the previous one (KW_MODE_UNSET on frame 0).
+/// The next flight mode of the climb rule (SPEC B.5) given the previous one (KW_MODE_UNSET
+/// on frame 0): level, ascend or descend.
 [[nodiscard]] KODAWARI_API std::uint32_t next_mode(const gpu::FlightUniforms& uniforms, std::uint32_t previous,
                                                    const RouteSample& sample);
+
+/// Below this cruise speed (m/s) a bird that can hover hovers (docs/flight-modes.md F.1).
+inline constexpr float kHoverBelowSpeed = 3.0f;
+
+/// The mode a bird flies (docs/flight-modes.md F.1): the segment's own mode if it has one,
+/// else the climb rule's `climb_mode`, turned into hover for a slow hovering bird and into
+/// glide by the flap-glide rhythm. `state` is the bird's state before this frame.
+[[nodiscard]] KODAWARI_API std::uint32_t flight_mode(const gpu::BirdParams& bird, const gpu::BirdState& state,
+                                                     const RouteSample& sample, std::uint32_t climb_mode);
 
 /// Everything about one bird in one frame.
 struct BirdFrame {

@@ -66,6 +66,8 @@ struct WingTypeSpec {
 
 /// BirdParams::flight of a bird with this spec (glide ratio, flap-glide rhythm, hover).
 [[nodiscard]] KODAWARI_API gpu::vec4 flight_params(const WingTypeSpec& spec);
+/// BirdParams::shape of a bird with this spec (body length, wingspan).
+[[nodiscard]] KODAWARI_API gpu::vec4 shape_params(const WingTypeSpec& spec);
 
 /// Rest translation of every part relative to its parent (Body: zero), metres.
 [[nodiscard]] KODAWARI_API std::array<std::array<float, 3>, kPartCount> part_offsets(WingType type);

@@ -37,7 +37,23 @@ struct FlightSettings {
     float descend_exit = -0.08726646f;      ///< -5 degrees
     float seed_accel_threshold = 0.05f;     ///< the seed's |a_y| threshold (route units/s^2)
     std::array<float, 3> blend_rates = {0.016f, 0.036f, 0.032f};  ///< alpha per 1/60 s into level, ascend, descend
+    /// alpha per 1/60 s into glide, take-off, landing and hover (docs/flight-modes.md F.4):
+    /// a take-off is a burst, so it is entered in about 10 frames; the others in half a second.
+    std::array<float, 4> blend_rates2 = {0.032f, 0.1f, 0.05f, 0.05f};
 };
+
+/// A route segment's flight mode: chosen by the climb rule (SPEC B.5, with the flap-glide
+/// rhythm), or given (docs/flight-modes.md F.1).
+enum class SegmentMode : std::int32_t {
+    Auto = -1,
+    Glide = KW_MODE_GLIDE,
+    TakeOff = KW_MODE_TAKEOFF,
+    Landing = KW_MODE_LANDING,
+    Hover = KW_MODE_HOVER,
+};
+
+/// "auto", "glide", "takeoff", "landing", "hover".
+[[nodiscard]] KODAWARI_API const char* segment_mode_name(SegmentMode mode);
 
 /// A route as given: 3n+1 control points of n cubic Bezier segments (consecutive
 /// segments share an end point).
@@ -46,6 +62,9 @@ struct RouteSpec {
     bool loop = false;                      ///< wrap around at the end (else fly on straight)
     RouteTiming timing = RouteTiming::ArcLength;
     float segment_duration = 2.0f;          ///< seconds per segment, parametric timing only
+    /// One mode per segment, or empty (all Auto). A take-off may only be the first segment and
+    /// a landing only the last, of an open route with arc-length timing (they set its speed).
+    std::vector<SegmentMode> modes;
 };
 
 /// Arc-length intervals per Bezier segment in the table. u(s) is interpolated by cubic
