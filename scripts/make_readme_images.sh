@@ -32,6 +32,10 @@ mkdir -p docs/images
 # The three wing types mid-wingbeat, the camera flying with them (frame 60 of 240).
 "$bin" render scenes/birds-closeup.json --frames 60 --size 640x360 --out "$work/birds"
 cp "$work/birds/birds-closeup_00060.png" docs/images/birds-closeup.png
+# Pigeons crouching and taking off one after another from a roof line, and 30 s later
+# landed on the other, wings folded (scenes/perch.json, docs/flight-modes.md).
+"$bin" render scenes/perch.json --frames 150:1951:1800 --size 1280x720 --zoom 1.8 --out "$work/perch" \
+    --contact-sheet docs/images/perch.png --columns 2
 # The flock 3.3 s in, and the crowd 2 s in.
 "$bin" render scenes/flock.json --frames 200 --size 640x360 --zoom 2.2 --out "$work/flock"
 cp "$work/flock/flock_00200.png" docs/images/flock.png

@@ -80,8 +80,8 @@ void append_vec3(std::string& out, float x, float y, float z) {
 
 const char* mode_of(float value) {
     const long mode = std::lround(value);
-    assert(mode >= 0 && mode <= 2 && "diagnostic mode out of range");
-    if (mode < 0 || mode > 2) return "level";
+    assert(mode >= 0 && mode < static_cast<long>(KW_MODE_COUNT) && "diagnostic mode out of range");
+    if (mode < 0 || mode >= static_cast<long>(KW_MODE_COUNT)) return "level";
     return birds::mode_name(static_cast<birds::FlightMode>(mode));
 }
 
