@@ -167,7 +167,7 @@ if [[ -z "$range_mib" ]]; then
   echo "SKIP: the device-limit cases: no Vulkan device here"
 else
   # Above the printed range (rounded to 0.1 MiB) for sure.
-  birds=$(awk -v r="$range_mib" 'BEGIN { printf "%d", (r + 0.1) * 1048576 / 64 + 1 }')
+  birds=$(awk -v r="$range_mib" 'BEGIN { printf "%d", (r + 0.1) * 1048576 / 96 + 1 }')
   if (( birds > 10000000 )); then
     echo "SKIP: the device-limit cases: this device's storage buffer range ($range_mib MiB) holds the largest scene (10 million birds)"
   else
@@ -179,13 +179,13 @@ scene["flocks"] = scene["flocks"][:1]
 scene["flocks"][0]["count"] = int(sys.argv[2])
 json.dump(scene, open(sys.argv[1], "w"))
 EOF
-    bytes=$((birds * 64))
+    bytes=$((birds * 96))
     "$bin" run "$work/toobig.json" --backend vulkan --frames 1 --no-export >"$work/big.out" 2>"$work/big.err"
     rc=$?
     cat "$work/big.err"
     check "too large for the device, --backend vulkan: exits 1 (no crash, no lost device)" test $rc -eq 1
     check "too large for the device, --backend vulkan: names the buffer and both sizes" grep -q \
-      "kodawari: error: .* cannot hold $birds birds: the poses need a storage buffer of $bytes bytes (64 bytes per bird, one frame); the device allows [0-9]* (maxStorageBufferRange)" \
+      "kodawari: error: .* cannot hold $birds birds: the poses need a storage buffer of $bytes bytes (96 bytes per bird, one frame); the device allows [0-9]* (maxStorageBufferRange)" \
       "$work/big.err"
     "$bin" run "$work/toobig.json" --frames 1 --no-export >"$work/big-auto.out" 2>"$work/big-auto.err"
     rc=$?

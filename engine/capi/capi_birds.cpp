@@ -110,7 +110,18 @@ void read_route(const kodawari_route_desc& r, const std::string& what, birds::Bi
     spec.loop = r.loop != 0;
     spec.timing = r.parametric ? birds::RouteTiming::Parametric : birds::RouteTiming::ArcLength;
     if (r.parametric) spec.segment_duration = r.segment_duration;
-    // Finite points within 1e6 m, loops closed, no coincident points, no cusp; its
+    if (r.modes != nullptr) {
+        const std::uint32_t segments = (r.point_count - 1) / 3;
+        spec.modes.resize(segments);
+        for (std::uint32_t k = 0; k < segments; ++k) {
+            const std::int32_t m = r.modes[k];
+            if (m != KODAWARI_SEGMENT_AUTO && (m < KODAWARI_SEGMENT_GLIDE || m > KODAWARI_SEGMENT_HOVER)) {
+                invalid(at(what + ".modes", k), std::to_string(m) + "; expected a kodawari_segment_mode (-1, or 3 to 6)");
+            }
+            spec.modes[k] = static_cast<birds::SegmentMode>(m);
+        }
+    }
+    // Segment modes where they may stand, finite points within 1e6 m, loops closed, no coincident points, no cusp; its
     // messages start with `what`.
     check(world.add_route(spec, what));
 }
@@ -122,6 +133,16 @@ void read_flock(const kodawari_flock_desc& f, const std::string& what, std::uint
                                      std::to_string(routes) + ")");
     }
     const birds::WingType wing = read_wing_type(f.wing_type, what + ".wing_type");
+    if (!birds::wing_type_spec(wing).can_hover) {
+        // A hover segment's mode is in the w of its first control point (shared/birds.h).
+        const gpu::RouteHeader& route = world.routes[f.route];
+        for (std::uint32_t k = 0; k < route.extent.y; ++k) {
+            if (world.control_points[route.extent.x + 3 * k].w == static_cast<float>(KW_MODE_HOVER)) {
+                invalid(what + ".wing_type", std::string(birds::wing_type_spec(wing).name) + " cannot hover, but its route's segment " +
+                                                 std::to_string(k) + " is KODAWARI_SEGMENT_HOVER");
+            }
+        }
+    }
     if (f.count == 0) invalid(what + ".count", "0; expected at least one bird");
     total += f.count;
     if (total > kMaxBirds) {

@@ -860,7 +860,8 @@ static void test_birds(void) {
                 const float r = sqrtf(g[0] * g[0] + g[2] * g[2]);
                 CHECK(fabsf(r - 20.0f) < 2.0f && fabsf(g[1] - 10.0f) < 1.0f, "pigeon %d frame %d at (%g, %g, %g)", b, frame, g[0], g[1], g[2]);
             } else {
-                CHECK(fabsf(g[1] - 5.0f) < 1e-3f && fabsf(g[2]) < 1e-3f, "gull %d frame %d at (%g, %g, %g)", b, frame, g[0], g[1], g[2]);
+                /* y within the wingbeat's bob, 0.05 body lengths x amplitude (flight-modes.md F.4). */
+                CHECK(fabsf(g[1] - 5.0f) < 0.03f && fabsf(g[2]) < 1e-3f, "gull %d frame %d at (%g, %g, %g)", b, frame, g[0], g[1], g[2]);
             }
             /* World = the locals composed down the rig. */
             for (k = 1; k < KODAWARI_BIRD_PARTS; ++k) {
@@ -870,10 +871,11 @@ static void test_birds(void) {
                 e = fabsf(parent[0] + p[0] - g[7 * k]) + fabsf(parent[1] + p[1] - g[7 * k + 1]) + fabsf(parent[2] + p[2] - g[7 * k + 2]);
                 if (e > worst_compose) worst_compose = e;
             }
-            /* Speed along the route: one frame moves speed / fps (arc-length timing). */
+            /* Speed along the route: one frame moves speed / fps (arc-length timing), measured
+             * across (both routes are level; y carries the bob). */
             if (frame > 0) {
                 const float* previous = global + (size_t)((frame - 1) * kBirds + b) * 49;
-                const float speed = distance3(g, previous) * 60.0f;
+                const float speed = sqrtf((g[0] - previous[0]) * (g[0] - previous[0]) + (g[2] - previous[2]) * (g[2] - previous[2])) * 60.0f;
                 const float expected = f.flocks[b < kPigeons ? 0 : 1].speed;
                 const float e = fabsf(speed - expected) / expected;
                 if (e > worst_speed) worst_speed = e;
@@ -895,6 +897,48 @@ static void test_birds(void) {
     kodawari_bird_world_destroy(world);
 }
 
+/* A take-off and a landing through the C API: a gull sits on the perch at the route's
+ * start, and 0.3 s (crouch) + 2 x 5 s (take-off and landing at 12 m/s over 30 m each)
+ * later sits on the one at its end (docs/flight-modes.md F.2). */
+static void test_birds_perch(void) {
+    enum { kFrames = 700 };
+    static const float points[7 * 3] = {0, 5, 0, 10, 5, 0, 20, 5, 0, 30, 5, 0, 40, 5, 0, 50, 5, 0, 60, 5, 0};
+    static const int32_t modes[2] = {KODAWARI_SEGMENT_TAKEOFF, KODAWARI_SEGMENT_LANDING};
+    static float global[kFrames * KODAWARI_BIRD_PARTS * KODAWARI_TRANSFORM_FLOATS];
+    kodawari_route_desc route;
+    kodawari_flock_desc flock_desc;
+    kodawari_bird_world_desc desc;
+    kodawari_bird_world* world = NULL;
+    kodawari_bird_output out;
+    const float* first;
+    const float* last;
+    memset(&route, 0, sizeof route);
+    route.points = points;
+    route.point_count = 7;
+    route.modes = modes;
+    kodawari_flock_desc_default(KODAWARI_WING_GULL, 1, &flock_desc);
+    flock_desc.speed = 12.0f;
+    memset(&desc, 0, sizeof desc);
+    desc.routes = &route;
+    desc.route_count = 1;
+    desc.flocks = &flock_desc;
+    desc.flock_count = 1;
+    desc.fps = 60.0f;
+    kodawari_flight_settings_default(&desc.flight);
+    desc.backend.backend = KODAWARI_BACKEND_CPU;
+    EXPECT_OK(kodawari_bird_world_create(&desc, &world));
+    if (world == NULL) return;
+    memset(&out, 0, sizeof out);
+    out.world_transforms = global;
+    out.world_transforms_capacity = sizeof global / sizeof global[0];
+    EXPECT_OK(kodawari_bird_world_simulate(world, kFrames, &out));
+    first = global;
+    last = global + (size_t)(kFrames - 1) * KODAWARI_BIRD_PARTS * KODAWARI_TRANSFORM_FLOATS;
+    CHECK(distance3(first, points) < 1e-4f, "frame 0 at (%g, %g, %g), not on the first perch", first[0], first[1], first[2]);
+    CHECK(distance3(last, points + 18) < 1e-3f, "the last frame at (%g, %g, %g), not on the last perch", last[0], last[1], last[2]);
+    kodawari_bird_world_destroy(world);
+}
+
 static void test_birds_reject(void) {
     flock f;
     kodawari_bird_world* world = NULL;
@@ -904,6 +948,7 @@ static void test_birds_reject(void) {
     kodawari_flock_desc flock_desc;
     float buffer[(kPigeons + kGulls) * 49 * 2], twin_buffer[(kPigeons + kGulls) * 49 * 2];
     float phases[kPigeons];
+    static const int32_t bad_modes[1] = {2}, landing_first[1] = {KODAWARI_SEGMENT_LANDING}, hover[1] = {KODAWARI_SEGMENT_HOVER};
 
 #define REJECT(...)                                                                             \
     do {                                                                                        \
@@ -938,6 +983,12 @@ static void test_birds_reject(void) {
     REJECT("desc->routes[1].segment_duration: 0");
     f.flocks[1].route = 2;
     REJECT("desc->flocks[1].route: 2; expected an index below desc->route_count (2)");
+    f.routes[1].modes = bad_modes;
+    REJECT("desc->routes[1].modes[0]: 2; expected a kodawari_segment_mode");
+    f.routes[1].modes = landing_first;
+    REJECT("desc->routes[1].modes[0]: a route cannot start with \"landing\"");
+    f.routes[1].modes = hover;
+    REJECT("desc->flocks[1].wing_type: gull cannot hover, but its route's segment 0 is KODAWARI_SEGMENT_HOVER");
     f.flocks[0].wing_type = (kodawari_wing_type)5;
     REJECT("desc->flocks[0].wing_type: 5");
     f.flocks[1].count = 0;
@@ -1016,6 +1067,7 @@ int main(void) {
     test_chain_calls_reject();
     test_vulkan();
     test_birds();
+    test_birds_perch();
     test_birds_reject();
     printf("test_capi: %d checks, %d failed\n", g_checks, g_failures);
     return g_failures == 0 ? 0 : 1;

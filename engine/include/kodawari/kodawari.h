@@ -465,7 +465,21 @@ typedef struct kodawari_route_desc {
     uint32_t parametric;
     /// s per segment, in [0.001, 3600], for parametric timing; ignored otherwise.
     float segment_duration;
+    /// NULL (every segment KODAWARI_SEGMENT_AUTO) or one kodawari_segment_mode per segment,
+    /// (point_count - 1) / 3 of them: a take-off only first and a landing only last, on an
+    /// open route with arc-length timing; hover only on routes of hovering flocks
+    /// (docs/flight-modes.md F.1).
+    const int32_t* modes;
 } kodawari_route_desc;
+
+/// A route segment's flight mode (docs/flight-modes.md).
+typedef enum kodawari_segment_mode {
+    KODAWARI_SEGMENT_AUTO = -1,    ///< the climb rule and the flap-glide rhythm
+    KODAWARI_SEGMENT_GLIDE = 3,    ///< wings held out
+    KODAWARI_SEGMENT_TAKEOFF = 4,  ///< from rest on a perch at the route's start
+    KODAWARI_SEGMENT_LANDING = 5,  ///< to rest on a perch at the route's end
+    KODAWARI_SEGMENT_HOVER = 6,    ///< figure-eight strokes (hovering wing types only)
+} kodawari_segment_mode;
 
 /// A flock: `count` birds of one wing type on one route. kodawari_flock_desc_default()
 /// fills the wing type's own speed, frequency and amplitude.
