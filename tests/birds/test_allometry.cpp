@@ -119,7 +119,7 @@ TEST(Allometry, LongerWingsGlideFartherAndBiggerBirdsBeatSlower) {
     EXPECT_GT(derive_flight({0.67f, 0.065f, 0.40f, 0.33f}).flap_frequency, derive_flight(kPigeon).flap_frequency);
 }
 
-TEST(AllometryDeathTest, BadMeasuresAreTheCallersBug) {
+TEST(Allometry, BadMeasuresAreTheCallersBug) {
     // Callers validate user input (docs/wing-types.md); a zero span reaching the model is
     // a programmer error, caught by its assert in debug builds.
     EXPECT_DEBUG_DEATH((void)derive_flight({0.0f, 0.065f, 0.31f, 0.33f}), "wingspan");
