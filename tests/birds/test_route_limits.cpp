@@ -167,3 +167,27 @@ TEST(RouteLimits, ShippedScenesAreFlyable) {
         for (const RouteWarning& w : warnings.value()) ADD_FAILURE() << w.message;
     }
 }
+
+TEST(RouteLimits, GeneratedRoutesKeepToTheBirdWhereTheyCan) {
+    // The same generated loop for hawks at 10 m/s (tightest turn 5.9 m: the generator
+    // finds a route within it, and within the hawk's climb and dive) and at 40 m/s
+    // (94 m, more than the 20 m box allows): the scene still builds, on the generator's
+    // own limits, and the check says where the birds cannot follow.
+    const auto scene_at = [](double speed) {
+        const std::string text = R"({"format": "kodawari-scene", "version": 1, "name": "t", "fps": 30, "duration": 1,
+            "flocks": [{"name": "hawks", "wing_type": "hawk", "count": 2, "seed": 3, "speed": )" +
+                                 std::to_string(speed) + R"(, "generated_route": {"seed": 4, "segments": 5,
+                         "center": [0, 40, 0], "extent": [20, 5, 20], "loop": true},
+                         "formation": {"route_variants": 2, "jitter": 0.5}}]})";
+        auto scene = parse_scene(text, "scenes/g.json");
+        EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.error().message);
+        return scene.value();
+    };
+    auto slow = check_routes(scene_at(10.0));
+    ASSERT_TRUE(slow.ok()) << slow.error().message;
+    EXPECT_TRUE(slow.value().empty()) << slow.value().front().message;
+    auto fast = check_routes(scene_at(40.0));
+    ASSERT_TRUE(fast.ok()) << fast.error().message;
+    ASSERT_FALSE(fast.value().empty());
+    EXPECT_EQ(fast.value().front().limit, RouteLimit::TurnRadius) << fast.value().front().message;
+}
