@@ -133,9 +133,10 @@ Result<std::unique_ptr<Simulation>> open_simulation(const std::string& path, con
 
 void add_route_check_options(CLI::App& app, bool& strict, bool& fit) {
     add_switch(app, "--strict", strict,
-               "a route beyond its bird's limits (turn, climb, dive, speed change) is an error, exit 2 (default: a warning)");
+               "a route beyond its bird's limits (turn, climb, dive, speed change) is an error, exit 2 (default: off, a warning)");
     add_switch(app, "--fit-routes", fit,
-               "lower a flock's speed (parametric timing: lengthen its segments) until its turns and speed changes pass");
+               "lower a flock's speed (parametric timing: lengthen its segments) until its turns and speed changes pass "
+               "(default: off)");
 }
 
 std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit) {

@@ -4,6 +4,7 @@
 #include <kodawari/route_check.hpp>
 
 #include <algorithm>
+#include <array>
 #include <cmath>
 #include <cstdio>
 #include <string>
