@@ -1,5 +1,7 @@
 #include "cli_common.hpp"
 
+#include "kodawari/route_check.hpp"
+
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/simd.hpp"
 
@@ -127,6 +129,34 @@ Result<std::unique_ptr<Simulation>> open_simulation(const std::string& path, con
     auto scene = load_scene(path);
     if (!scene) return scene.error();
     return make_simulation(std::move(scene).value(), choice, frames, shard);
+}
+
+void add_route_check_options(CLI::App& app, bool& strict, bool& fit) {
+    add_switch(app, "--strict", strict,
+               "a route beyond its bird's limits (turn, climb, dive, speed change) is an error, exit 2 (default: off, a warning)");
+    add_switch(app, "--fit-routes", fit,
+               "lower a flock's speed (parametric timing: lengthen its segments) until its turns and speed changes pass "
+               "(default: off)");
+}
+
+std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit) {
+    if (scene.flocks.empty()) return std::nullopt;
+    if (fit) {
+        auto changes = fit_routes(scene);
+        if (!changes) return report(changes.error());
+        for (const std::string& line : changes.value()) std::printf("kodawari: fit: %s\n", line.c_str());
+        std::fflush(stdout);
+    }
+    auto warnings = check_routes(scene);
+    if (!warnings) return report(warnings.error());
+    const char* kind = strict ? "error" : "warning";
+    for (const RouteWarning& w : warnings.value()) std::fprintf(stderr, "kodawari: %s: %s\n", kind, w.message.c_str());
+    if (strict && !warnings.value().empty()) {
+        std::fprintf(stderr, "kodawari: error: %zu route limit%s exceeded (--strict; --fit-routes fits turns and speed changes)\n",
+                     warnings.value().size(), warnings.value().size() == 1 ? "" : "s");
+        return kExitBadInput;
+    }
+    return std::nullopt;
 }
 
 bool validation_failed(std::uint32_t messages) {

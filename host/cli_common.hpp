@@ -110,6 +110,16 @@ BackendChoice read_backend_choice(const BackendFlags& flags);
 [[nodiscard]] Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendChoice& choice,
                                                                   std::optional<std::uint64_t> frames, Shard shard = {});
 
+/// --strict and --fit-routes of `run` and `validate`.
+void add_route_check_options(CLI::App& app, bool& strict, bool& fit);
+
+/// The route check of `run` and `validate` (kodawari/route_check.hpp, --strict and
+/// --fit-routes): with `fit`, fits the flocks' timing first and says what changed on
+/// stdout; then warns on stderr about every route that exceeds its bird's limits. Returns
+/// the exit code to stop with (a scene that does not build, or warnings under `strict`),
+/// or none to go on.
+[[nodiscard]] std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit);
+
 /// True (after saying so on stderr) when Vulkan validation reported messages: the
 /// command then exits kExitFailure. Backends sharing one device share its count, so a
 /// caller passes that count once (or the largest of theirs).

@@ -3,6 +3,7 @@
 #include <algorithm>
 #include <cstdio>
 #include <memory>
+#include <utility>
 #include <vector>
 
 #include "bake_outputs.hpp"
@@ -143,6 +144,8 @@ struct RunOptions {
     std::optional<std::string> shard;
     std::optional<std::string> compact;
     bool mpi = false;
+    bool strict = false;
+    bool fit_routes = false;
 };
 
 int cmd_run(const RunOptions& o) {
@@ -164,6 +167,10 @@ int cmd_run(const RunOptions& o) {
         throw UsageError{"--shard writes a part file with every key, and compaction happens at merge: give --compact to "
                          "`kodawari merge` instead"};
     }
+    if (mpi && (o.strict || o.fit_routes)) {
+        throw UsageError{"--strict and --fit-routes check the routes before one simulation; under --mpi run "
+                         "`kodawari validate --strict` (or --fit-routes) first"};
+    }
     if (mpi) {
         return run_distributed(scene_path, choice, frames_option, out_option, trace_path, no_export,
                                compaction);
@@ -172,7 +179,12 @@ int cmd_run(const RunOptions& o) {
         throw UsageError{"--shard writes a part file for `kodawari merge` (at --out): it takes neither --no-export nor --trace"};
     }
     const Shard shard = shard_option ? parse_shard(*shard_option) : Shard{};
-    auto opened = open_simulation(scene_path, choice, frames_option, shard);
+    auto loaded = load_scene(scene_path);
+    if (!loaded) return report(loaded.error());
+    Scene checked = std::move(loaded).value();
+    // Before anything is written: under --strict a route the birds cannot fly stops here.
+    if (auto stop = check_scene_routes(checked, o.strict, o.fit_routes)) return *stop;
+    auto opened = make_simulation(std::move(checked), choice, frames_option, shard);
     if (!opened) return report(opened.error());
     Simulation& sim = *opened.value();
     const Scene& scene = sim.scene();
@@ -222,6 +234,7 @@ Command add_run(CLI::App& app) {
     add_text(*c, "--trace", o->trace, "FILE.jsonl", "also write every frame's state as JSON Lines (default: none)");
     add_text(*c, "--shard", o->shard, "I/N", "simulate only shard I of N and write a part file for `kodawari merge` (default: all)");
     add_switch(*c, "--mpi", o->mpi, "under mpirun: one shard per rank, rank 0 writes (default: off)");
+    add_route_check_options(*c, o->strict, o->fit_routes);
     add_backend_options(*c, o->backend);
     return {c, [o] { return cmd_run(*o); }};
 }

@@ -177,6 +177,8 @@ struct ValidateOptions {
     std::optional<std::string> scene;
     BackendFlags backend;
     std::optional<std::uint64_t> frames;
+    bool strict = false;
+    bool fit_routes = false;
 };
 
 int cmd_validate(const ValidateOptions& o) {
@@ -187,6 +189,7 @@ int cmd_validate(const ValidateOptions& o) {
     const auto& frames_option = o.frames;
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
+    if (auto stop = check_scene_routes(loaded.value(), o.strict, o.fit_routes)) return *stop;
     const Scene& scene = loaded.value();
     auto built = build_bird_world(scene);
     if (!built) return report(built.error());
@@ -244,6 +247,7 @@ Command add_validate(CLI::App& app) {
         "validate", "run a backend and the CPU reference side by side; exit 1 above tolerance (docs/command-line.md)");
     add_scene(*c, o->scene);
     add_count(*c, "--frames", o->frames, 1, 10'000'000, "frames to compare (default: the scene's)");
+    add_route_check_options(*c, o->strict, o->fit_routes);
     add_backend_options(*c, o->backend);
     return {c, [o] { return cmd_validate(*o); }};
 }

@@ -32,6 +32,8 @@ check "kodawari bench -> its four benchmarks" offers "birds chains crowd view" k
 check "bench chains --f -> --frames" offers "--frames" kodawari bench chains --f
 check "bench chains --st -> the deprecated --steps still completes" offers "--steps" kodawari bench chains --st
 check "run --ba -> --backend" offers "--backend" kodawari run --ba
+check "run --fi -> --fit-routes (the route check)" offers "--fit-routes" kodawari run --fi
+check "validate --str -> --strict" offers "--strict" kodawari validate --str
 check "run --backend -> the backends" offers "auto cpu cpu-reference vulkan" kodawari run --backend ''
 check "render --isa -> the instruction sets" offers "avx2 avx512 scalar sse4" kodawari render --isa ''
 mkdir -p "$work/files/sub"

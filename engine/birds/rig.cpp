@@ -5,16 +5,19 @@
 namespace kodawari::birds {
 namespace {
 
-// Figures and their sources: docs/wing-types.md. Frequencies of gull and hawk are
-// Pennycuick's (1996) allometric estimate; amplitude is ours (gull and buzzard beat
-// shallower than a pigeon: "fast, stiff, shallow" in field guides).
-// Glide ratios, flap-glide rhythms, hovering and the route limits: docs/wing-types.md.
+// Figures and their sources: docs/wing-types.md. Span, length, mass, frequency and
+// cruise speed are field figures (frequencies of gull and hawk are Pennycuick's (1996)
+// estimate, as derive_flight gives them); amplitude is ours (gull and buzzard beat
+// shallower than a pigeon: "fast, stiff, shallow" in field guides). Glide ratio,
+// flap-glide rhythm and the route limits are derive_flight's (allometry.hpp) for each
+// type's span, area and mass, to three digits; docs/wing-types.md has the table and
+// tests/birds/test_allometry.cpp holds them to it.
 constexpr float kDeg = 0.017453292f;
 constexpr WingTypeSpec kSpecs[kWingTypeCount] = {
-    {"pigeon", 0.67f, 0.33f, 0.31f, 0.10f, 5.5f, 19.7f, 1.0f, 0.45f, 7.0f, 0.0f, 0.0f, false, 30 * kDeg, 60 * kDeg, 4.0f},
-    {"gull", 1.40f, 0.60f, 1.0f, 0.14f, 3.6f, 12.0f, 0.8f, 0.5f, 12.0f, 8.0f, 2.5f, false, 20 * kDeg, 50 * kDeg, 2.5f},
-    {"hawk", 1.20f, 0.54f, 0.875f, 0.22f, 3.6f, 11.0f, 0.7f, 0.45f, 10.0f, 5.0f, 4.0f, false, 20 * kDeg, 70 * kDeg, 3.0f},
-    {"hummingbird", 0.11f, 0.09f, 0.0034f, 0.014f, 53.0f, 8.0f, 1.0f, 0.45f, 4.0f, 0.0f, 0.0f, true, 80 * kDeg, 80 * kDeg, 10.0f},
+    {"pigeon", 0.67f, 0.33f, 0.31f, 0.10f, 5.5f, 19.7f, 1.0f, 0.45f, 13.1f, 0.0f, 0.0f, false, 20.7f * kDeg, 25.5f * kDeg, 3.47f},
+    {"gull", 1.40f, 0.60f, 1.0f, 0.14f, 3.6f, 12.0f, 0.8f, 0.5f, 16.5f, 7.0f, 2.04f, false, 14.8f * kDeg, 18.5f * kDeg, 2.51f},
+    {"hawk", 1.20f, 0.54f, 0.875f, 0.22f, 3.6f, 11.0f, 0.7f, 0.45f, 12.5f, 7.0f, 1.70f, false, 16.3f * kDeg, 21.1f * kDeg, 2.75f},
+    {"hummingbird", 0.11f, 0.09f, 0.0034f, 0.014f, 53.0f, 8.0f, 1.0f, 0.45f, 12.7f, 0.0f, 0.0f, true, 90.0f * kDeg, 90.0f * kDeg, 9.81f},
 };
 
 }  // namespace

@@ -14,6 +14,7 @@
 #include <utility>
 #include <vector>
 
+#include <kodawari/birds/route_limits.hpp>
 #include <kodawari/scene.hpp>
 
 #include "scene/json_reader.hpp"
@@ -101,13 +102,53 @@ std::array<Vec3, 4> segment_controls(const std::vector<Vec3>& w, std::size_t k, 
 // Limits that make a generated route one a bird could fly (SPEC B.7 lists "routes a
 // real bird could not fly" among the seed's gaps): waypoints apart, no turn sharper
 // than 120 degrees at a waypoint, no chord steeper than 30 degrees, and on the curve no
-// climb or dive steeper than 45 degrees and no tight radius.
+// climb or dive steeper than 45 degrees or the bird's own limits, and no radius below
+// the bird's tightest turn at its speed (FlyableLimits).
 
 // sin and cos of the limits as literals: libm's trigonometry may differ in the last bit
 // between platforms, and a threshold that moves could flip a draw.
 constexpr double kCosMaxTurn = -0.5;                   // cos 120 deg
 constexpr double kSinMaxChordClimb = 0.5;              // sin 30 deg
 constexpr double kSinMaxCurveClimb = 0.70710678118654752;  // sin 45 deg
+
+// sin of an angle in [0, pi/2] by its Taylor series (terms to x^17, error < 1e-15):
+// arithmetic only, so the limits below are the same bits everywhere, as the literals
+// above are.
+double portable_sin(double x) {
+    double term = x;
+    double sum = x;
+    for (int n = 1; n <= 8; ++n) {
+        term = -term * x * x / static_cast<double>((2 * n) * (2 * n + 1));
+        sum += term;
+    }
+    return sum;
+}
+double portable_cos(double x) { return portable_sin(1.5707963267948966 - x); }
+
+// What the flock's bird can fly (docs/wing-types.md "Route limits"): generated routes and
+// route variants are drawn within these, so `kodawari run` has nothing to warn about.
+struct FlyableLimits {
+    double sin_climb = kSinMaxCurveClimb;  // never steeper than the generator's own 45 deg
+    double sin_dive = kSinMaxCurveClimb;
+    double min_radius = 0.0;  // the tightest turn at the flock's fastest speed (arc-length timing)
+};
+
+FlyableLimits flyable_limits(const Scene& scene, const FlockSpec& flock) {
+    const birds::WingTypeSpec& wing = birds::wing_type_spec(flock.wing_type);
+    FlyableLimits limits;
+    limits.sin_climb = std::min(kSinMaxCurveClimb, portable_sin(static_cast<double>(wing.max_climb)));
+    limits.sin_dive = std::min(kSinMaxCurveClimb, portable_sin(static_cast<double>(wing.max_dive)));
+    const double bank = static_cast<double>(scene.flight.max_bank);
+    if (flock.timing == birds::RouteTiming::ArcLength && bank > 0.0) {
+        // r_min = v^2 / (g tan(max bank)) at the fastest bird, 1 % over for the rounding of
+        // the birds' float speeds.
+        const double fastest = static_cast<double>(flock.speed.value_or(wing.cruise_speed)) *
+                               (1.0 + static_cast<double>(flock.speed_jitter));
+        const double capacity = static_cast<double>(scene.flight.gravity) * portable_sin(bank) / portable_cos(bank);
+        limits.min_radius = 1.01 * fastest * fastest / capacity;
+    }
+    return limits;
+}
 
 bool chord_ok(const Vec3& a, const Vec3& b, double min_spacing) {
     const double length = norm(sub(b, a));
@@ -121,14 +162,31 @@ bool turn_ok(const Vec3& a, const Vec3& b, const Vec3& c) {
     return dot(in, out) >= kCosMaxTurn * norm(in) * norm(out);
 }
 
+// Climb, dive and radius of curvature of one segment within the limits, at the samples
+// of the route check (birds/route_limits.hpp), so what passes here passes there.
+bool segment_flyable(const std::array<Vec3, 4>& b, double min_radius, const FlyableLimits& limits) {
+    constexpr int kSamples = static_cast<int>(birds::kRouteCheckSamples);
+    for (int j = 0; j <= kSamples; ++j) {
+        const double u = static_cast<double>(j) / kSamples;
+        const Vec3 d1 = bezier_d1(b, u);
+        const double speed = norm(d1);
+        if (!(d1[1] <= limits.sin_climb * speed) || !(-d1[1] <= limits.sin_dive * speed)) return false;
+        // kappa = |P' x P''| / |P'|^3 with P' = 3 d1 and P'' = 6 d2.
+        const double curvature = 2.0 * norm(cross(d1, bezier_d2(b, u))) / (3.0 * speed * speed * speed);
+        if (!(curvature * min_radius <= 1.0)) return false;
+    }
+    return true;
+}
+
 // Checks one segment of the curve: it never slows to below 5% of its mean |P'| (far
 // from BirdWorld::add_route's cusp limit), no two consecutive control points are close,
 // and climb angle and radius of curvature stay within the limits.
-bool segment_ok(const std::array<Vec3, 4>& b, double min_spacing, double min_radius) {
+bool segment_ok(const std::array<Vec3, 4>& b, double min_spacing, double min_radius, const FlyableLimits& limits) {
     constexpr int kSamples = 32;
     for (std::size_t i = 0; i < 3; ++i) {
         if (!(norm(sub(b[i + 1], b[i])) >= 1e-3 * min_spacing)) return false;
     }
+    if (!segment_flyable(b, min_radius, limits)) return false;
     double min_speed = std::numeric_limits<double>::infinity();
     double mean_speed = 0.0;
     for (int j = 0; j <= kSamples; ++j) {
@@ -137,10 +195,6 @@ bool segment_ok(const std::array<Vec3, 4>& b, double min_spacing, double min_rad
         const double speed = norm(d1);
         min_speed = std::min(min_speed, speed);
         mean_speed += speed / (kSamples + 1);
-        if (!(std::fabs(d1[1]) <= kSinMaxCurveClimb * speed)) return false;
-        // kappa = |P' x P''| / |P'|^3 with P' = 3 d1 and P'' = 6 d2.
-        const double curvature = 2.0 * norm(cross(d1, bezier_d2(b, u))) / (3.0 * speed * speed * speed);
-        if (!(curvature * min_radius <= 1.0)) return false;
     }
     return min_speed >= 0.05 * mean_speed;
 }
@@ -176,7 +230,8 @@ std::array<double, 2> diamond_direction(double a) {
 // exist). A rejected draw is replaced by the next draw of the same stream, and a route
 // that runs into a dead end is started again from the stream's current state, so the
 // result depends on the seed alone.
-Result<birds::RouteSpec> generate_route(const GeneratedRouteSpec& gen, const std::string& file, const std::string& path) {
+Result<birds::RouteSpec> generate_route(const GeneratedRouteSpec& gen, const FlyableLimits& limits, const std::string& file,
+                                        const std::string& path) {
     const std::size_t count = gen.loop ? gen.segments : gen.segments + 1;
     const std::size_t segments = gen.segments;
     const Vec3 center = to_vec3(gen.center);
@@ -185,7 +240,7 @@ Result<birds::RouteSpec> generate_route(const GeneratedRouteSpec& gen, const std
     const double loop_chord = 2.0 * 3.14159265358979323846 * 0.75 * 0.5 * (extent[0] + extent[2]) / static_cast<double>(count);
     const double box_spacing = 0.3 * std::max({extent[0], extent[1], extent[2]});
     const double min_spacing = gen.loop ? std::min(box_spacing, 0.3 * loop_chord) : box_spacing;
-    const double min_radius = 0.5 * min_spacing;
+    const double min_radius = std::max(0.5 * min_spacing, limits.min_radius);
     constexpr int kRouteAttempts = 256;
     constexpr int kPointAttempts = 1000;
 
@@ -207,9 +262,9 @@ Result<birds::RouteSpec> generate_route(const GeneratedRouteSpec& gen, const std
             last = segments;
         }
         for (std::size_t j = first; j < last; ++j) {
-            if (!segment_ok(segment_controls(w, j, gen.loop), min_spacing, min_radius)) return false;
+            if (!segment_ok(segment_controls(w, j, gen.loop), min_spacing, min_radius, limits)) return false;
         }
-        if (gen.loop && k + 1 == count && !segment_ok(segment_controls(w, 0, true), min_spacing, min_radius)) return false;
+        if (gen.loop && k + 1 == count && !segment_ok(segment_controls(w, 0, true), min_spacing, min_radius, limits)) return false;
         return true;
     };
 
@@ -276,8 +331,10 @@ Result<birds::RouteSpec> generate_route(const GeneratedRouteSpec& gen, const std
     return make_error(Error::Kind::InvalidInput,
                       file + ": " + path + ": expected an extent that leaves room for " + std::to_string(count) +
                           " waypoints at least " + scene_detail::format_number(min_spacing) +
-                          " m apart on a smooth route, got none in " + std::to_string(kRouteAttempts) +
-                          " attempts (make extent larger in more than one axis, or use fewer segments)");
+                          " m apart on a smooth route with no turn tighter than " +
+                          scene_detail::format_number(std::round(10.0 * min_radius) / 10.0) +
+                          " m (the bird's at its speed), got none in " + std::to_string(kRouteAttempts) +
+                          " attempts (make extent larger in more than one axis, use fewer segments, or fly slower)");
 }
 
 // A copy of `leader` whose junction points (3k) move by a random vector in
@@ -308,6 +365,7 @@ birds::RouteSpec make_variant(const birds::RouteSpec& leader, double jitter, Ran
 
 Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t flock_index, birds::BirdWorld& world) {
     const std::string flock_path = "$.flocks[" + std::to_string(flock_index) + "]";
+    const FlyableLimits limits = flyable_limits(scene, flock);
     birds::RouteSpec leader;
     std::string route_path;
     if (flock.route) {
@@ -315,7 +373,12 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
         route_path = flock_path + ".route";
     } else if (flock.generated_route) {
         route_path = flock_path + ".generated_route";
-        KW_SCENE_ASSIGN(leader, generate_route(*flock.generated_route, scene.path, route_path));
+        // Within the bird's limits where the box leaves room for such a route; else within
+        // the generator's own (45 degrees, half the waypoint spacing), as before the bird's
+        // limits were known: the scene still builds, and the route check says where.
+        auto generated = generate_route(*flock.generated_route, limits, scene.path, route_path);
+        if (!generated) generated = generate_route(*flock.generated_route, FlyableLimits{}, scene.path, route_path);
+        KW_SCENE_ASSIGN(leader, std::move(generated));
     } else {
         return make_error(Error::Kind::InvalidInput,
                           scene.path + ": " + flock_path + ": expected exactly one of \"route\" and \"generated_route\", got neither");
@@ -334,9 +397,28 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
     const std::string what = scene.path + ": " + route_path;
     const auto first_route = static_cast<std::uint32_t>(world.routes.size());
     Random variant_rng(flock.seed, Stream::Variants);
+    // A variant is redrawn (from the same stream, so the result depends on the seed alone)
+    // until its segments are as flyable as the limits ask; a leader that is not (an
+    // explicit route the author drew too tight) cannot give such variants, and after
+    // kVariantAttempts the first draw stays: the route check then says where.
+    constexpr int kVariantAttempts = 64;
+    const auto flyable = [&](const birds::RouteSpec& r) {
+        for (std::size_t k = 0; 3 * k + 3 < r.points.size(); ++k) {
+            const std::array<Vec3, 4> b = {to_vec3(r.points[3 * k]), to_vec3(r.points[3 * k + 1]),
+                                           to_vec3(r.points[3 * k + 2]), to_vec3(r.points[3 * k + 3])};
+            if (!segment_flyable(b, limits.min_radius, limits)) return false;
+        }
+        return true;
+    };
+    const bool leader_flyable = flyable(leader);
     for (std::uint32_t v = 0; v < variants; ++v) {
-        const birds::RouteSpec route =
-            v == 0 ? leader : make_variant(leader, static_cast<double>(flock.formation.jitter), variant_rng);
+        birds::RouteSpec route = leader;
+        if (v > 0) {
+            route = make_variant(leader, static_cast<double>(flock.formation.jitter), variant_rng);
+            for (int attempt = 1; leader_flyable && attempt < kVariantAttempts && !flyable(route); ++attempt) {
+                route = make_variant(leader, static_cast<double>(flock.formation.jitter), variant_rng);
+            }
+        }
         auto added = world.add_route(route, what);
         if (!added.ok()) {
             Error error = added.error();

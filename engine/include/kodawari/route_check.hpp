@@ -1,0 +1,52 @@
+#pragma once
+/// @file
+/// Routes a bird can fly (issue 14, docs/wing-types.md "Route limits"): every route of
+/// every flock (all its variants) against its wing type's limits and the scene's bank
+/// limit, and a fit that changes the flock's timing until the turns and speed changes
+/// pass. `kodawari run` and `kodawari validate` warn with these messages.
+
+#include <cstddef>
+#include <cstdint>
+#include <string>
+#include <vector>
+
+#include "kodawari/api.hpp"
+#include "result.hpp"
+#include "scene.hpp"
+
+namespace kodawari {
+
+/// Which limit a route exceeds.
+enum class RouteLimit : std::uint32_t { TurnRadius = 0, Climb = 1, Dive = 2, SpeedChange = 3 };
+
+/// The worst point of one (flock, segment, limit) over the flock's route variants.
+struct RouteWarning {
+    std::size_t flock = 0;
+    std::uint32_t segment = 0;
+    RouteLimit limit = RouteLimit::TurnRadius;
+    std::uint32_t variant = 0;  ///< 0: the leader route
+    double u = 0.0;             ///< local parameter of the segment
+    double value = 0.0;         ///< turn radius (m), angle (deg) or speed change (m/s^2)
+    double bound = 0.0;         ///< the limit in the same unit (turn: the minimum radius at `speed`)
+    double speed = 0.0;         ///< m/s at that point
+    /// "scenes/x.json: $.flocks[1] \"gulls\": segment 3 (u = 0.42): turn radius 4.1 m at
+    /// 12 m/s is below the gull's minimum 8.3 m (max bank 60 deg)".
+    std::string message;
+};
+
+/// Checks the routes of `scene` (built into `world` by build_bird_world). Sorted by
+/// flock, segment, limit. Never fails on a built world.
+[[nodiscard]] KODAWARI_API std::vector<RouteWarning> check_routes(const Scene& scene, const birds::BirdWorld& world);
+
+/// Builds the scene's bird world and checks it.
+[[nodiscard]] KODAWARI_API Result<std::vector<RouteWarning>> check_routes(const Scene& scene);
+
+/// Fits the timing of every flock whose turns or speed changes exceed the limits:
+/// arc-length timing lowers the flock's speed (its `speed`, jitter kept) to the largest
+/// that passes; parametric timing lengthens the route's segment_duration (a generated
+/// route is then stored as the explicit route it generates). Climbs and dives do not
+/// depend on the timing and are left to the author. Returns one line per change
+/// ("$.flocks[1] \"gulls\": speed 16 -> 11.9 m/s (turn in segment 3)").
+[[nodiscard]] KODAWARI_API Result<std::vector<std::string>> fit_routes(Scene& scene);
+
+}  // namespace kodawari

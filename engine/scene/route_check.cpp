@@ -1,0 +1,214 @@
+// Routes a bird can fly: the demands of every flock's routes (birds/route_limits.hpp)
+// against its wing type's limits (docs/wing-types.md "Route limits"), and the timing fit
+// of `--fit-routes`.
+#include <kodawari/route_check.hpp>
+
+#include <algorithm>
+#include <array>
+#include <cmath>
+#include <cstdio>
+#include <string>
+#include <vector>
+
+#include <kodawari/birds/route_limits.hpp>
+
+namespace kodawari {
+namespace {
+
+constexpr double kRadToDeg = 57.29577951308232;
+
+// Three significant digits: a warning is read by a person, and the limits themselves
+// are not known to more.
+std::string number(double v) {
+    char text[32];
+    std::snprintf(text, sizeof text, "%.3g", v);
+    return text;
+}
+
+// The routes one flock's birds fly: each used variant with the fastest speed on it.
+struct FlownRoute {
+    std::uint32_t route = 0;
+    std::uint32_t variant = 0;
+    double speed = 0.0;  // the fastest bird on it (m/s; arc-length timing)
+};
+
+// Routes per flock, in flock order. build_bird_world appends each flock's birds in
+// order and gives bird b variant b % variants.
+std::vector<std::vector<FlownRoute>> flown_routes(const Scene& scene, const birds::BirdWorld& world) {
+    std::vector<std::vector<FlownRoute>> out(scene.flocks.size());
+    std::size_t first = 0;
+    for (std::size_t f = 0; f < scene.flocks.size(); ++f) {
+        const FlockSpec& flock = scene.flocks[f];
+        const std::uint32_t variants = std::max(flock.formation.route_variants, 1u);
+        const std::uint32_t used = std::min(variants, flock.count);
+        out[f].resize(used);
+        for (std::uint32_t b = 0; b < flock.count && first + b < world.birds.size(); ++b) {
+            const gpu::BirdParams& p = world.birds[first + b];
+            FlownRoute& r = out[f][b % variants];
+            r.route = p.ids.x;
+            r.variant = b % variants;
+            r.speed = std::max(r.speed, double{p.motion.x});
+        }
+        first += flock.count;
+    }
+    return out;
+}
+
+// g tan(max bank): the largest centripetal acceleration a coordinated turn gives
+// (r_min = v^2 / (g tan(max_bank)), docs/wing-types.md). 0 turns the check off.
+double turn_capacity(const Scene& scene) {
+    return double{scene.flight.gravity} * std::tan(double{scene.flight.max_bank});
+}
+
+// v rounded down (or up) to three significant digits: the fitted figure is then the one
+// printed, which the author can copy into the scene, and still on the safe side.
+double round_3_digits(double v, bool up) {
+    const double scale = std::pow(10.0, 2.0 - std::floor(std::log10(v)));
+    return (up ? std::ceil(v * scale) : std::floor(v * scale)) / scale;
+}
+
+struct Worst {
+    RouteWarning warning;
+    double excess = 0.0;  // value / limit, > 1 when violated
+};
+
+}  // namespace
+
+std::vector<RouteWarning> check_routes(const Scene& scene, const birds::BirdWorld& world) {
+    std::vector<RouteWarning> out;
+    const std::vector<std::vector<FlownRoute>> flown = flown_routes(scene, world);
+    const double capacity = turn_capacity(scene);
+    const double bank_deg = double{scene.flight.max_bank} * kRadToDeg;
+    for (std::size_t f = 0; f < scene.flocks.size(); ++f) {
+        const FlockSpec& flock = scene.flocks[f];
+        const birds::WingTypeSpec& wing = birds::wing_type_spec(flock.wing_type);
+        const std::string who = std::string(wing.name);
+        const std::string prefix = scene.path + ": $.flocks[" + std::to_string(f) + "] \"" + flock.name + "\": ";
+        std::vector<std::array<Worst, 4>> worst;
+        for (const FlownRoute& r : flown[f]) {
+            const std::vector<birds::SegmentDemand> demands = birds::route_demands(world, r.route, static_cast<float>(r.speed));
+            worst.resize(std::max(worst.size(), demands.size()));
+            for (std::uint32_t k = 0; k < demands.size(); ++k) {
+                const birds::SegmentDemand& d = demands[k];
+                const auto consider = [&](RouteLimit limit, double excess, double u, double value, double bound, double speed) {
+                    Worst& w = worst[k][static_cast<std::size_t>(limit)];
+                    if (!(excess > 1.0) || excess <= w.excess) return;
+                    w.excess = excess;
+                    w.warning = {f, k, limit, r.variant, u, value, bound, speed, {}};
+                };
+                if (capacity > 0.0) {
+                    const double minimum = d.turn_speed * d.turn_speed / capacity;
+                    consider(RouteLimit::TurnRadius, d.turn_acceleration / capacity, d.turn_u, d.turn_radius, minimum,
+                             d.turn_speed);
+                }
+                consider(RouteLimit::Climb, d.climb / double{wing.max_climb}, d.climb_u, d.climb * kRadToDeg,
+                         double{wing.max_climb} * kRadToDeg, 0.0);
+                consider(RouteLimit::Dive, d.dive / double{wing.max_dive}, d.dive_u, d.dive * kRadToDeg,
+                         double{wing.max_dive} * kRadToDeg, 0.0);
+                consider(RouteLimit::SpeedChange, d.speed_change / double{wing.max_speed_change}, d.speed_change_u,
+                         d.speed_change, double{wing.max_speed_change}, d.speed_change_speed);
+            }
+        }
+        const std::uint32_t variants = std::max(flock.formation.route_variants, 1u);
+        for (const auto& segment : worst) {
+            for (const Worst& w : segment) {
+                if (w.excess <= 1.0) continue;
+                RouteWarning warning = w.warning;
+                std::string text = prefix + "segment " + std::to_string(warning.segment) + " (u = " + number(warning.u) + "): ";
+                switch (warning.limit) {
+                    case RouteLimit::TurnRadius:
+                        text += "turn radius " + number(warning.value) + " m at " + number(warning.speed) +
+                                " m/s is below the " + who + "'s minimum " + number(warning.bound) + " m (max bank " +
+                                number(bank_deg) + " deg)";
+                        break;
+                    case RouteLimit::Climb:
+                        text += "climb " + number(warning.value) + " deg is above the " + who + "'s maximum " +
+                                number(warning.bound) + " deg";
+                        break;
+                    case RouteLimit::Dive:
+                        text += "dive " + number(warning.value) + " deg is above the " + who + "'s maximum " +
+                                number(warning.bound) + " deg";
+                        break;
+                    case RouteLimit::SpeedChange:
+                        text += "speed change " + number(warning.value) + " m/s^2 at " + number(warning.speed) +
+                                " m/s is above the " + who + "'s maximum " + number(warning.bound) + " m/s^2";
+                        break;
+                }
+                if (warning.variant > 0) {
+                    text += " (in route variant " + std::to_string(warning.variant) + " of " + std::to_string(variants) + ")";
+                }
+                warning.message = std::move(text);
+                out.push_back(std::move(warning));
+            }
+        }
+    }
+    return out;
+}
+
+Result<std::vector<RouteWarning>> check_routes(const Scene& scene) {
+    auto world = build_bird_world(scene);
+    if (!world) return world.error();
+    return check_routes(scene, world.value());
+}
+
+Result<std::vector<std::string>> fit_routes(Scene& scene) {
+    std::vector<std::string> changes;
+    const double capacity = turn_capacity(scene);
+    // Both the turn load v^2 kappa and a speed change over a fixed stretch of route scale
+    // with the square of the speed (with 1 / D^2 under parametric timing), so one factor
+    // sqrt(worst excess) fits both; the margin absorbs the rounding of the birds' float
+    // speeds, and the loop below confirms the result.
+    constexpr double kMargin = 1e-3;
+    for (int pass = 0; pass < 8; ++pass) {
+        auto built = build_bird_world(scene);
+        if (!built) return built.error();
+        const birds::BirdWorld& world = built.value();
+        const std::vector<std::vector<FlownRoute>> flown = flown_routes(scene, world);
+        bool changed = false;
+        for (std::size_t f = 0; f < scene.flocks.size(); ++f) {
+            FlockSpec& flock = scene.flocks[f];
+            const birds::WingTypeSpec& wing = birds::wing_type_spec(flock.wing_type);
+            double excess = 0.0;
+            for (const FlownRoute& r : flown[f]) {
+                for (const birds::SegmentDemand& d : birds::route_demands(world, r.route, static_cast<float>(r.speed))) {
+                    if (capacity > 0.0) excess = std::max(excess, d.turn_acceleration / capacity);
+                    excess = std::max(excess, d.speed_change / double{wing.max_speed_change});
+                }
+            }
+            if (!(excess > 1.0)) continue;
+            const double factor = std::sqrt(excess) * (1.0 + kMargin);
+            const std::string who = scene.path + ": $.flocks[" + std::to_string(f) + "] \"" + flock.name + "\": ";
+            if (flock.timing == birds::RouteTiming::ArcLength) {
+                const double before = flock.speed.value_or(wing.cruise_speed);
+                flock.speed = static_cast<float>(round_3_digits(before / factor, false));
+                changes.push_back(who + "speed " + number(before) + " -> " + number(double{*flock.speed}) +
+                                  " m/s so its turns and speed changes are within the " + std::string(wing.name) + "'s limits");
+            } else {
+                if (!flock.route) {
+                    // The generated leader, as the explicit route it is: the variants are
+                    // made from it with the same seed, so the flock is unchanged but for D.
+                    const gpu::RouteHeader& header = world.routes[flown[f].front().route];
+                    birds::RouteSpec route;
+                    route.loop = (header.flags.x & KW_ROUTE_LOOP) != 0;
+                    route.timing = birds::RouteTiming::Parametric;
+                    for (std::uint32_t i = 0; i <= 3 * header.extent.y; ++i) {
+                        const gpu::vec4& c = world.control_points[header.extent.x + i];
+                        route.points.push_back({c.x, c.y, c.z});
+                    }
+                    flock.route = std::move(route);
+                    flock.generated_route.reset();
+                }
+                const double before = flock.route->segment_duration;
+                flock.route->segment_duration = static_cast<float>(round_3_digits(before * factor, true));
+                changes.push_back(who + "segment_duration " + number(before) + " -> " +
+                                  number(double{flock.route->segment_duration}) +
+                                  " s so its turns and speed changes are within the " + std::string(wing.name) + "'s limits");
+            }
+            changed = true;
+        }
+        if (!changed) return changes;
+    }
+    return changes;
+}
+
+}  // namespace kodawari

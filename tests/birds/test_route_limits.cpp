@@ -1,0 +1,193 @@
+// Routes a bird can fly (issue 14): route demands per segment, the scene-level check
+// with its messages, and the timing fit (docs/wing-types.md "Route limits").
+#include <gtest/gtest.h>
+
+#include <cmath>
+#include <string>
+
+#include "kodawari/birds/route_limits.hpp"
+#include "kodawari/route_check.hpp"
+#include "kodawari/scene.hpp"
+
+using namespace kodawari;
+
+namespace {
+
+// One gull on `route` (JSON control points) at `speed`, timing `timing`.
+Scene flock_scene(const std::string& points, const std::string& timing = "arc-length", double speed = 12.0,
+                  const std::string& extra = "") {
+    const std::string text = R"({"format": "kodawari-scene", "version": 1, "name": "t", "fps": 30, "duration": 1,
+        "flocks": [{"name": "gulls", "wing_type": "gull", "count": 3, "seed": 5, "speed": )" +
+                             std::to_string(speed) + R"(, "speed_jitter": 0.05, "timing": ")" + timing + R"(",
+                     "route": {"points": )" + points + extra + R"(}}]})";
+    auto scene = parse_scene(text, "scenes/x.json");
+    EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.error().message);
+    return scene.value();
+}
+
+// A straight, level first segment, then a hairpin of about 5 m radius (segment 1).
+const std::string kTightTurn = "[[0,20,0],[0,20,20],[0,20,40],[0,20,60],[0,20,68],[10,20,68],[10,20,60],"
+                               "[10,20,40],[10,20,20],[10,20,0]]";
+// Level, then a straight 40 degree climb in segment 1 (a kink at the junction: the
+// check looks at climbs, not at G1).
+const std::string kSteepClimb = "[[0,20,0],[0,20,20],[0,20,40],[0,20,60],[0,36.8,80],[0,53.6,100],[0,70.4,120]]";
+
+}  // namespace
+
+TEST(RouteLimits, DemandsOfAKnownCircle) {
+    // A quarter circle of radius 50 m by the usual cubic (handle 0.5523 r). Its curvature
+    // is not quite constant: 1/50.8 to 1/49.60 m (worked independently at the same 257
+    // samples), so at 10 m/s the largest turn load is 100 / 49.60 = 2.016 m/s^2. The
+    // tolerance, 1e-3 relative, is the float rounding of the control points and nothing
+    // more; level, so no climb or dive; constant speed.
+    birds::BirdWorld world;
+    birds::RouteSpec route;
+    const float h = 0.55228475f * 50.0f;
+    route.points = {{50, 10, 0}, {50, 10, h}, {h, 10, 50}, {0, 10, 50}};
+    ASSERT_TRUE(world.add_route(route, "t").ok());
+    const auto d = birds::route_demands(world, 0, 10.0f);
+    ASSERT_EQ(d.size(), 1u);
+    EXPECT_NEAR(d[0].turn_acceleration, 2.016, 2e-3);
+    EXPECT_NEAR(d[0].turn_radius, 49.60, 0.05);
+    EXPECT_NEAR(d[0].climb, 0.0, 1e-6);
+    EXPECT_LT(d[0].speed_change, 1e-9);
+}
+
+TEST(RouteLimits, ParametricTimingSeesTheSpeedChange) {
+    // A straight line with handles at 1/10 and 9/10 of a 100 m segment, D = 10 s:
+    // P'(u) = 3 [10 (1-u)^2 + 160 u (1-u) + 10 u^2], so the speed runs 3 -> 13.5 -> 3 m/s,
+    // and P''(u) = 420 (1 - 2u): dv/dt = P'' / D^2 is largest at the ends, 4.2 m/s^2. The
+    // first finite difference averages P'' over u in [0, 1/256]: 4.2 (1 - 1/256) = 4.184,
+    // hence the tolerance 0.02.
+    birds::BirdWorld world;
+    birds::RouteSpec route;
+    route.points = {{0, 0, 0}, {0, 0, 10}, {0, 0, 90}, {0, 0, 100}};
+    route.timing = birds::RouteTiming::Parametric;
+    route.segment_duration = 10.0f;
+    ASSERT_TRUE(world.add_route(route, "t").ok());
+    const auto d = birds::route_demands(world, 0, 0.0f);
+    EXPECT_NEAR(d[0].speed_change, 4.2, 0.02);
+    // The same route at arc-length timing: constant speed.
+    birds::BirdWorld arc;
+    route.timing = birds::RouteTiming::ArcLength;
+    ASSERT_TRUE(arc.add_route(route, "t").ok());
+    EXPECT_LT(birds::route_demands(arc, 0, 10.0f)[0].speed_change, 1e-9);
+}
+
+TEST(RouteLimits, TightTurnWarnsNamingSegmentAndLimit) {
+    const Scene scene = flock_scene(kTightTurn);
+    auto warnings = check_routes(scene);
+    ASSERT_TRUE(warnings.ok());
+    ASSERT_EQ(warnings.value().size(), 1u);
+    const RouteWarning& w = warnings.value()[0];
+    EXPECT_EQ(w.segment, 1u);
+    EXPECT_EQ(w.limit, RouteLimit::TurnRadius);
+    // The gull's minimum at its fastest bird's speed (12 m/s +- 5 %) and 60 deg of bank:
+    // v^2 / (9.81 tan 60) = 8.47 to 9.34 m.
+    EXPECT_GT(w.bound, 8.4);
+    EXPECT_LT(w.bound, 9.4);
+    EXPECT_LT(w.value, 8.0);
+    EXPECT_EQ(w.message.rfind("scenes/x.json: $.flocks[0] \"gulls\": segment 1 (u = ", 0), 0u) << w.message;
+    EXPECT_NE(w.message.find("turn radius"), std::string::npos) << w.message;
+    EXPECT_NE(w.message.find("is below the gull's minimum"), std::string::npos) << w.message;
+    EXPECT_NE(w.message.find("(max bank 60 deg)"), std::string::npos) << w.message;
+}
+
+TEST(RouteLimits, SteepClimbWarns) {
+    const Scene scene = flock_scene(kSteepClimb);
+    auto warnings = check_routes(scene);
+    ASSERT_TRUE(warnings.ok());
+    ASSERT_EQ(warnings.value().size(), 1u);
+    const RouteWarning& w = warnings.value()[0];
+    EXPECT_EQ(w.segment, 1u);
+    EXPECT_EQ(w.limit, RouteLimit::Climb);
+    // Segment 1 is a straight line climbing atan(16.8 / 20) = 40.03 deg throughout.
+    EXPECT_NEAR(w.value, 40.03, 0.01);
+    EXPECT_NE(w.message.find("segment 1 (u = "), std::string::npos) << w.message;
+    EXPECT_NE(w.message.find("): climb 40 deg is above the gull's maximum 14.8 deg"), std::string::npos) << w.message;
+}
+
+TEST(RouteLimits, GentleRoutePasses) {
+    // A 200 m wide level loop at the gull's 12 m/s: radius ~100 m >> 9 m.
+    const Scene scene = flock_scene("[[100,20,0],[100,20,55],[55,20,100],[0,20,100],[-55,20,100],[-100,20,55],"
+                                    "[-100,20,0],[-100,20,-55],[-55,20,-100],[0,20,-100],[55,20,-100],[100,20,-55],"
+                                    "[100,20,0]]", "arc-length", 12.0, R"(, "loop": true)");
+    auto warnings = check_routes(scene);
+    ASSERT_TRUE(warnings.ok());
+    EXPECT_TRUE(warnings.value().empty()) << warnings.value().front().message;
+}
+
+TEST(RouteLimits, FitLowersOnlyTheSpeed) {
+    Scene scene = flock_scene(kTightTurn);
+    const Scene before = scene;
+    auto changes = fit_routes(scene);
+    ASSERT_TRUE(changes.ok());
+    ASSERT_EQ(changes.value().size(), 1u);
+    EXPECT_NE(changes.value()[0].find("$.flocks[0] \"gulls\": speed 12 -> "), std::string::npos) << changes.value()[0];
+    ASSERT_TRUE(scene.flocks[0].speed.has_value());
+    EXPECT_LT(*scene.flocks[0].speed, 12.0f);
+    // Nothing else moved: the route and the other flock fields are as they were.
+    EXPECT_EQ(scene.flocks[0].route->points, before.flocks[0].route->points);
+    EXPECT_EQ(scene.flocks[0].speed_jitter, before.flocks[0].speed_jitter);
+    EXPECT_EQ(scene.flocks[0].timing, before.flocks[0].timing);
+    auto warnings = check_routes(scene);
+    ASSERT_TRUE(warnings.ok());
+    EXPECT_TRUE(warnings.value().empty()) << warnings.value().front().message;
+    // The largest speed that passes: 1 % faster fails again (the fit's margin is 0.1 %).
+    Scene faster = scene;
+    *faster.flocks[0].speed *= 1.01f;
+    auto again = check_routes(faster);
+    ASSERT_TRUE(again.ok());
+    EXPECT_EQ(again.value().size(), 1u);
+}
+
+TEST(RouteLimits, FitLengthensParametricSegments) {
+    // Parametric timing at D = 0.5 s per 60-68 m segment: ~100 m/s in a 5 m hairpin.
+    Scene scene = flock_scene(kTightTurn, "parametric", 12.0, R"(, "segment_duration": 0.5)");
+    auto warnings = check_routes(scene);
+    ASSERT_TRUE(warnings.ok());
+    EXPECT_FALSE(warnings.value().empty());
+    auto changes = fit_routes(scene);
+    ASSERT_TRUE(changes.ok());
+    ASSERT_EQ(changes.value().size(), 1u);
+    EXPECT_NE(changes.value()[0].find("segment_duration 0.5 -> "), std::string::npos) << changes.value()[0];
+    EXPECT_GT(scene.flocks[0].route->segment_duration, 0.5f);
+    EXPECT_EQ(*scene.flocks[0].speed, 12.0f);
+    auto after = check_routes(scene);
+    ASSERT_TRUE(after.ok());
+    EXPECT_TRUE(after.value().empty()) << after.value().front().message;
+}
+
+TEST(RouteLimits, ShippedScenesAreFlyable) {
+    for (const char* name : {"birds-closeup.json", "flock.json", "murmuration.json"}) {
+        auto scene = load_scene(std::string(KODAWARI_SOURCE_DIR) + "/scenes/" + name);
+        ASSERT_TRUE(scene.ok()) << scene.error().message;
+        auto warnings = check_routes(scene.value());
+        ASSERT_TRUE(warnings.ok()) << warnings.error().message;
+        for (const RouteWarning& w : warnings.value()) ADD_FAILURE() << w.message;
+    }
+}
+
+TEST(RouteLimits, GeneratedRoutesKeepToTheBirdWhereTheyCan) {
+    // The same generated loop for hawks at 10 m/s (tightest turn 5.9 m: the generator
+    // finds a route within it, and within the hawk's climb and dive) and at 40 m/s
+    // (94 m, more than the 20 m box allows): the scene still builds, on the generator's
+    // own limits, and the check says where the birds cannot follow.
+    const auto scene_at = [](double speed) {
+        const std::string text = R"({"format": "kodawari-scene", "version": 1, "name": "t", "fps": 30, "duration": 1,
+            "flocks": [{"name": "hawks", "wing_type": "hawk", "count": 2, "seed": 3, "speed": )" +
+                                 std::to_string(speed) + R"(, "generated_route": {"seed": 4, "segments": 5,
+                         "center": [0, 40, 0], "extent": [20, 5, 20], "loop": true},
+                         "formation": {"route_variants": 2, "jitter": 0.5}}]})";
+        auto scene = parse_scene(text, "scenes/g.json");
+        EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.error().message);
+        return scene.value();
+    };
+    auto slow = check_routes(scene_at(10.0));
+    ASSERT_TRUE(slow.ok()) << slow.error().message;
+    EXPECT_TRUE(slow.value().empty()) << slow.value().front().message;
+    auto fast = check_routes(scene_at(40.0));
+    ASSERT_TRUE(fast.ok()) << fast.error().message;
+    ASSERT_FALSE(fast.value().empty());
+    EXPECT_EQ(fast.value().front().limit, RouteLimit::TurnRadius) << fast.value().front().message;
+}

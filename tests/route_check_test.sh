@@ -1,0 +1,68 @@
+#!/usr/bin/env bash
+# The route check of `kodawari run` and `validate` (issue 14, docs/command-line.md): a
+# route beyond its bird's limits warns naming the flock, segment and limit; --strict exits
+# 2 and writes nothing; --fit-routes lowers the speed and the run then has nothing to say;
+# the shipped scenes pass without a warning.
+# usage: route_check_test.sh KODAWARI_BINARY SOURCE_DIR
+set -uo pipefail
+bin=$1
+src=$2
+source "$(dirname "${BASH_SOURCE[0]}")/check.sh"
+cd "$src"
+
+# A gull flock at 12 m/s: a straight segment, then a 5 m hairpin (segment 1), then a
+# straight 40 degree climb (segment 4).
+cat >"$work/tight.json" <<'JSON'
+{"format": "kodawari-scene", "version": 1, "name": "tight", "fps": 30, "duration": 1,
+ "flocks": [{"name": "gulls", "wing_type": "gull", "count": 4, "seed": 5, "speed": 12,
+   "route": {"points": [[0,20,0],[0,20,20],[0,20,40],[0,20,60],[0,20,68],[10,20,68],[10,20,60],
+                        [10,20,40],[10,20,20],[10,20,0],[10,20,-20],[10,20,-40],[10,20,-60],
+                        [10,36.8,-80],[10,53.6,-100],[10,70.4,-120]]}}]}
+JSON
+
+"$bin" run "$work/tight.json" --backend cpu-reference --out "$work/tight.glb" >"$work/warn.out" 2>"$work/warn.err"
+rc=$?
+cat "$work/warn.err"
+check "a warning does not stop the run" test $rc -eq 0 -a -s "$work/tight.glb"
+check "the turn warning names file, flock, segment and limit" \
+    grep -q "warning: $work/tight.json: \$.flocks\[0\] \"gulls\": segment 1 (u = [0-9.]*): turn radius [0-9.]* m at 12 m/s is below the gull's minimum 8.47 m (max bank 60 deg)" "$work/warn.err"
+check "the climb warning names segment 4" \
+    grep -q "segment 4 (u = [0-9.]*): climb 40 deg is above the gull's maximum 14.8 deg" "$work/warn.err"
+
+"$bin" run "$work/tight.json" --backend cpu-reference --strict --out "$work/strict.glb" >"$work/strict.out" 2>"$work/strict.err"
+rc=$?
+check "--strict exits 2" test $rc -eq 2
+check "--strict says why" grep -q "error: 2 route limits exceeded (--strict" "$work/strict.err"
+check "--strict writes nothing" bash -c "! ls '$work' | grep -q 'strict.glb\|tmp'"
+"$bin" validate "$work/tight.json" --backend cpu --strict >/dev/null 2>"$work/vstrict.err"
+check "validate --strict exits 2 too" test $? -eq 2
+
+# --fit-routes lowers the speed until the hairpin passes; the climb is the route's shape
+# and still warns.
+"$bin" run "$work/tight.json" --backend cpu-reference --fit-routes --out "$work/fit.glb" >"$work/fit.out" 2>"$work/fit.err"
+rc=$?
+cat "$work/fit.out" "$work/fit.err"
+check "--fit-routes runs" test $rc -eq 0 -a -s "$work/fit.glb"
+check "--fit-routes says what it changed" grep -q "fit: $work/tight.json: \$.flocks\[0\] \"gulls\": speed 12 -> [0-9.]* m/s" "$work/fit.out"
+check "after the fit no turn warns" bash -c "! grep -q 'turn radius' '$work/fit.err'"
+check "after the fit the climb still warns" grep -q "climb 40 deg" "$work/fit.err"
+
+# A flyable copy (the climb removed): the fit makes --strict pass.
+python3 - "$work/tight.json" "$work/level.json" <<'PY'
+import json, sys
+scene = json.load(open(sys.argv[1]))
+points = scene["flocks"][0]["route"]["points"]
+scene["flocks"][0]["route"]["points"] = [[p[0], 20, p[2]] for p in points]
+json.dump(scene, open(sys.argv[2], "w"))
+PY
+"$bin" run "$work/level.json" --backend cpu-reference --strict --fit-routes --no-export >"$work/level.out" 2>"$work/level.err"
+check "--strict --fit-routes passes a route whose only fault was the speed" test $? -eq 0 -a ! -s "$work/level.err"
+
+for scene in scenes/*.json; do
+    grep -q '"flocks"' "$scene" || continue
+    "$bin" run "$scene" --backend cpu-reference --frames 1 --no-export --strict >/dev/null 2>"$work/shipped.err"
+    check "$scene: no route warnings" test $? -eq 0 -a ! -s "$work/shipped.err"
+done
+
+echo "route_check: $passed passed, $failed failed"
+test $failed -eq 0
