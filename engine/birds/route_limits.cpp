@@ -118,6 +118,15 @@ std::vector<SegmentDemand> route_demands(const BirdWorld& world, std::uint32_t r
         const double dt = step_time(a0, a1, h) + step_time(c0, c1, h);
         note_speed_change(out[k], speed_at(c1) - speed_at(a0), dt, 0.0, speed_at(c0));
     }
+    // Take-off and landing segments change the speed uniformly between rest and the
+    // cruise speed (docs/flight-modes.md F.2): v^2 / (2 L) throughout. Their turns are
+    // charged at the cruise speed above, the fastest they are flown.
+    if (!parametric && (route.flags.x & KW_ROUTE_TAKEOFF) != 0) {
+        note_speed_change(out.front(), double{cruise} * double{cruise} * 0.5 * double{route.perch.y}, 1.0, 1.0, double{cruise});
+    }
+    if (!parametric && (route.flags.x & KW_ROUTE_LANDING) != 0) {
+        note_speed_change(out.back(), double{cruise} * double{cruise} * 0.5 * double{route.perch.w}, 1.0, 0.0, double{cruise});
+    }
     return out;
 }
 

@@ -74,6 +74,22 @@ TEST(RouteLimits, ParametricTimingSeesTheSpeedChange) {
     EXPECT_LT(birds::route_demands(arc, 0, 10.0f)[0].speed_change, 1e-9);
 }
 
+TEST(RouteLimits, TakeOffAndLandingAreChargedTheirAcceleration) {
+    // docs/flight-modes.md F.2: from rest to 10 m/s over a 20 m take-off segment is
+    // v^2 / (2 L) = 2.5 m/s^2, and to rest over a 40 m landing 1.25 m/s^2; the cruise
+    // segment between them keeps its speed.
+    birds::BirdWorld world;
+    birds::RouteSpec route;
+    route.points = {{0, 0, 0}, {0, 0, 5}, {0, 0, 15}, {0, 0, 20}, {0, 0, 25}, {0, 0, 35}, {0, 0, 40},
+                    {0, 0, 50}, {0, 0, 70}, {0, 0, 80}};
+    route.modes = {birds::SegmentMode::TakeOff, birds::SegmentMode::Auto, birds::SegmentMode::Landing};
+    ASSERT_TRUE(world.add_route(route, "t").ok());
+    const auto d = birds::route_demands(world, 0, 10.0f);
+    EXPECT_NEAR(d[0].speed_change, 2.5, 1e-4);  // the float arc length of a straight segment
+    EXPECT_LT(d[1].speed_change, 1e-9);
+    EXPECT_NEAR(d[2].speed_change, 1.25, 1e-4);
+}
+
 TEST(RouteLimits, TightTurnWarnsNamingSegmentAndLimit) {
     const Scene scene = flock_scene(kTightTurn);
     auto warnings = check_routes(scene);
