@@ -49,7 +49,8 @@ Result<void> check_modes(const RouteSpec& route, const std::string& what) {
         if (m == SegmentMode::TakeOff && k != 0) {
             return make_error(Error::Kind::InvalidInput, at + "\"takeoff\" may only be the first segment (a take-off starts from a perch)");
         }
-        if (m == SegmentMode::Landing && k + 1 != segments) {
+        // A landing needs a flight before it: a route may not start with one.
+        if (m == SegmentMode::Landing && (k == 0 || k + 1 != segments)) {
             return make_error(Error::Kind::InvalidInput,
                               at + (k == 0 ? "a route cannot start with \"landing\"" : "\"landing\" may only be the last segment") +
                                   " (a landing ends the route on a perch)");
