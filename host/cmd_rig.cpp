@@ -161,7 +161,7 @@ Command add_rig(CLI::App& app) {
     add_text(*c, "--name", o->name, "NAME", "the scene's and the character's name (default: the file's stem)");
     add_text(*c, "--out", o->out, "SCENE.json", "the scene file to write (default: ./<character>.json)");
     c->add_flag("--bird", o->bird, "the file is a rigged bird: map its bones onto the 7-part bird rig, measure its wing and "
-                                   "write a scene with a flock of it (docs/bird-models.md)");
+                                   "write a scene with a flock of it (docs/bird-models.md) (default: the file is a character)");
     add_text(*c, "--map", o->map, "MAP.json",
              "with --bird: a JSON object naming the bone of each part {\"body\": ..., \"left_upper_wing\": ...} (default: "
              "name patterns)");
