@@ -7,6 +7,8 @@
 #include <gtest/gtest.h>
 
 #include <cmath>
+#include <cstring>
+#include <vector>
 #include <filesystem>
 #include <fstream>
 #include <iostream>
@@ -234,6 +236,35 @@ TEST(BirdModel, FlockSimulatesAndExports) {
     EXPECT_EQ(model.materials.size(), 1u);
     ASSERT_EQ(model.animations.size(), 1u);
     EXPECT_EQ(model.animations[0].channels.size(), 5u * 7u * 2u);  // 7 bones, translation and rotation
+    // Bird 0's spine (the Body's bone; its parent "Armature" sits at the origin) is keyed
+    // where the simulation put the bird, frame by frame (float keys: 1e-5 m at 40 m).
+    auto stepped = Simulation::open(scene, {.backend = BackendKind::CpuReference, .frames = 12});
+    ASSERT_TRUE(stepped.ok()) << stepped.error().message;
+    std::vector<gpu::BirdPose> poses(12 * world.birds.size());
+    ASSERT_TRUE(stepped.value()->step(12, {.bird_poses = poses, .bird_diag = {}}).ok());
+    int spine = -1;
+    for (std::size_t n = 0; n < model.nodes.size(); ++n) {
+        if (model.nodes[n].name == "bird_0/spine") spine = static_cast<int>(n);
+    }
+    ASSERT_GE(spine, 0);
+    const tinygltf::Animation& flight = model.animations[0];
+    const tinygltf::AnimationChannel* moved = nullptr;
+    for (const auto& channel : flight.channels) {
+        if (channel.target_node == spine && channel.target_path == "translation") moved = &channel;
+    }
+    ASSERT_NE(moved, nullptr);
+    const tinygltf::Accessor& keys = model.accessors.at(static_cast<std::size_t>(flight.samplers.at(static_cast<std::size_t>(moved->sampler)).output));
+    ASSERT_EQ(keys.count, 12u);
+    const tinygltf::BufferView& view = model.bufferViews.at(static_cast<std::size_t>(keys.bufferView));
+    std::vector<float> values(3 * keys.count);
+    std::memcpy(values.data(), model.buffers[0].data.data() + view.byteOffset + keys.byteOffset, values.size() * sizeof(float));
+    for (std::uint32_t f = 0; f < 12; ++f) {
+        const gpu::BirdPose& pose = poses[f * world.birds.size()];
+        EXPECT_NEAR(values[3 * f], pose.position.x, 1e-5) << "frame " << f;
+        EXPECT_NEAR(values[3 * f + 1], pose.position.y, 1e-5) << "frame " << f;
+        EXPECT_NEAR(values[3 * f + 2], pose.position.z, 1e-5) << "frame " << f;
+    }
+
     tinygltf::Model birds_file;
     ASSERT_TRUE(loader.LoadBinaryFromFile(&birds_file, &error, &warning, dir.file("out.glb"))) << error;
     EXPECT_EQ(birds_file.skins.size(), 3u);  // the pigeons only
