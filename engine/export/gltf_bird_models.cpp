@@ -3,6 +3,7 @@
 // bird; here each frame's 7-part pose becomes the local transforms of the mapped bones.
 
 #include <cmath>
+#include <cstdlib>
 #include <utility>
 
 #include <glm/gtc/matrix_transform.hpp>
@@ -53,6 +54,14 @@ Result<void> BirdModelExport::add_frames(std::span<const gpu::BirdPose> poses) {
     rotation_.resize(birds_.size() * nodes);
     scale_.resize(birds_.size() * nodes);
     const glm::quat body_rest = gltf::rigid_part(gltf::rest_pose(c).world[static_cast<std::size_t>(m.bones[KW_PART_BODY])]).rotation;
+    // The tail's spread s widens the rig's Tail along its X (1 + s); a node scales along
+    // its own axes, so the tail bone's axis nearest the rig's X takes it.
+    const glm::vec3 width = glm::conjugate(m.axes[KW_PART_TAIL]) * glm::vec3(1.0f, 0.0f, 0.0f);
+    glm::length_t width_axis = 0;
+    for (glm::length_t k = 1; k < 3; ++k) {
+        if (std::abs(width[k]) > std::abs(width[width_axis])) width_axis = k;
+    }
+    const auto tail = static_cast<std::size_t>(m.bones[KW_PART_TAIL]);
     for (std::size_t at = 0; at < poses.size(); at += count) {
         for (std::size_t i = 0; i < birds_.size(); ++i) {
             const gpu::BirdPose& pose = poses[at + birds_[i]];
@@ -62,6 +71,7 @@ Result<void> BirdModelExport::add_frames(std::span<const gpu::BirdPose> poses) {
                 scale_[i * nodes + n] = c.nodes[n].scale;
             }
             const auto quat = [](const gpu::vec4& q) { return glm::normalize(glm::quat(q.w, q.x, q.y, q.z)); };
+            scale_[i * nodes + tail][width_axis] *= 1.0f + pose.position.w;
             for (std::size_t part = 0; part < birds::kPartCount; ++part) {
                 const auto bone = static_cast<std::size_t>(m.bones[part]);
                 if (part != KW_PART_BODY) {

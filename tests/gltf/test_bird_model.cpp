@@ -277,5 +277,52 @@ TEST(BirdModel, FlockSimulatesAndExports) {
     }
 }
 
+// The Tail's spread s scales the model's tail bone by 1 + s along its own axis nearest
+// the rig's width (the generator's tail bone keeps X: its scale is (1 + s, 1, 1)), keyed
+// only where the scale moves.
+TEST(BirdModel, TailSpreadScalesTheTailBone) {
+    TempDir dir;
+    make_bird(dir);
+    const std::string scene = dir.file("scene.json");
+    std::ofstream(scene) << R"({"format": "kodawari-scene", "version": 1, "fps": 30, "duration": 1,
+        "flocks": [{"model": "bird.glb", "count": 2,
+                    "generated_route": {"seed": 3, "segments": 4, "center": [0, 40, 0], "extent": [45, 8, 45], "loop": true}}]})";
+    auto sim = Simulation::open(scene, {.backend = BackendKind::CpuReference, .frames = 4});
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    const birds::BirdWorld& world = sim.value()->bird_world();
+    std::vector<gpu::BirdPose> poses(4 * world.birds.size());
+    ASSERT_TRUE(sim.value()->step(4, {.bird_poses = poses, .bird_diag = {}}).ok());
+    for (std::uint32_t f = 0; f < 4; ++f) poses[f * 2 + 1].position.w = 0.1f * static_cast<float>(f);
+    const std::string path = dir.file("spread.glb");
+    auto out = BirdModelExport::create(world, 0, path);
+    ASSERT_TRUE(out.ok()) << out.error().message;
+    ASSERT_TRUE(out.value().add_frames(poses).ok());
+    ASSERT_TRUE(out.value().finish().ok());
+    tinygltf::Model model;
+    tinygltf::TinyGLTF loader;
+    std::string error, warning;
+    ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, path)) << error;
+    const auto scale_keys = [&](const std::string& name) {
+        std::vector<float> values;
+        for (const auto& channel : model.animations.at(0).channels) {
+            if (channel.target_path != "scale" || model.nodes.at(static_cast<std::size_t>(channel.target_node)).name != name) continue;
+            const auto& accessor = model.accessors.at(static_cast<std::size_t>(
+                model.animations[0].samplers.at(static_cast<std::size_t>(channel.sampler)).output));
+            const auto& view = model.bufferViews.at(static_cast<std::size_t>(accessor.bufferView));
+            values.resize(3 * accessor.count);
+            std::memcpy(values.data(), model.buffers[0].data.data() + view.byteOffset + accessor.byteOffset, values.size() * 4);
+        }
+        return values;
+    };
+    EXPECT_TRUE(scale_keys("bird_0/tail").empty());  // bird 0 never spreads
+    const std::vector<float> spread = scale_keys("bird_1/tail");
+    ASSERT_EQ(spread.size(), 12u);
+    for (std::uint32_t f = 0; f < 4; ++f) {
+        EXPECT_FLOAT_EQ(spread[3 * f], 1.0f + 0.1f * static_cast<float>(f)) << "frame " << f;
+        EXPECT_FLOAT_EQ(spread[3 * f + 1], 1.0f);
+        EXPECT_FLOAT_EQ(spread[3 * f + 2], 1.0f);
+    }
+}
+
 }  // namespace
 }  // namespace kodawari

@@ -309,7 +309,8 @@ private:
 /// once and shared, per bird a copy of its node hierarchy (one armature per bird, named
 /// "<model>_<bird index>"), and one animation "flight" keying the 7 mapped bones: the
 /// Body's bone placed in the world by the bird's Body pose, every other mapped bone
-/// turned by its part's rotation carried into the bone's frame (model_bone_rotation);
+/// turned by its part's rotation carried into the bone's frame (model_bone_rotation),
+/// the tail bone scaled by the spread (1 + s along its axis nearest the rig's width);
 /// the other bones stay at rest.
 class KODAWARI_API BirdModelExport {
 public:
