@@ -23,8 +23,8 @@ public:
     // scene's birds are all of one model (docs/bird-models.md).
     Result<void> begin(const BakeWorld& world) override {
         if (world.birds->birds.empty()) return {};
-        const auto& birds = world.birds->birds;
-        const bool built_in = std::any_of(birds.begin(), birds.end(),
+        const auto& params = world.birds->birds;
+        const bool built_in = std::any_of(params.begin(), params.end(),
                                           [](const gpu::BirdParams& p) { return p.ids.y < birds::kWingTypeCount; });
         if (built_in || world.birds->models.empty()) {
             auto writer = BirdGlbWriter::create(path_, *world.birds, world.frames, compaction_);
