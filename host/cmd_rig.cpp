@@ -1,6 +1,7 @@
-// `kodawari rig CHARACTER`: the one-command chain setup of a rigged character (SPEC A.7).
-// The scene is checked by the scene loader before it is written, so what this command
-// writes is a scene `kodawari run` accepts.
+// `kodawari rig CHARACTER`: the one-command chain setup of a rigged character (SPEC A.7);
+// `kodawari rig BIRD --bird`: a user's rigged bird mapped onto the 7-part rig and measured
+// (docs/bird-models.md). The scene is checked by the scene loader before it is written,
+// so what this command writes is a scene `kodawari run` accepts.
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -8,6 +9,7 @@
 
 #include "commands.hpp"
 #include "kodawari/atomic_file.hpp"
+#include "kodawari/gltf/bird_model_import.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
 
 namespace kodawari::cli {
@@ -31,9 +33,65 @@ struct RigArguments {
     std::optional<std::string> animation;
     std::optional<std::string> name;
     std::optional<std::string> out;
+    bool bird = false;
+    std::optional<std::string> map;
 };
 
+// `path` as the scene at `scene` names it: relative to the scene's folder.
+std::string relative_to_scene(const std::string& path, const std::string& scene) {
+    namespace fs = std::filesystem;
+    const fs::path folder = fs::absolute(fs::path(scene)).parent_path();
+    return fs::absolute(fs::path(path)).lexically_normal().lexically_relative(folder.lexically_normal()).generic_string();
+}
+
+int cmd_rig_bird(const RigArguments& o) {
+    if (o.chains || o.roots || o.animation) throw UsageError{"rig --bird: --chains, --roots and --animation are for characters"};
+    if (!o.character) throw UsageError{"rig --bird needs exactly one BIRD file (.gltf or .glb)"};
+    const std::string& file = *o.character;
+    const std::string out_path = o.out.value_or(std::filesystem::path(file).stem().string() + ".json");
+    auto loaded = gltf::load_bird_model(file, o.map.value_or(""));
+    if (!loaded) {
+        std::fprintf(stderr, "kodawari: %s\n", loaded.error().message.c_str());
+        return loaded.error().kind == Error::Kind::Io ? kExitFailure : kExitBadInput;
+    }
+    const birds::BirdModel& m = loaded.value();
+    gltf::BirdSceneOptions scene;
+    scene.name = o.name.value_or(m.name);
+    scene.model_file = relative_to_scene(file, out_path);
+    if (o.map) scene.map_file = relative_to_scene(*o.map, out_path);
+    const std::string json = gltf::bird_scene_json(scene);
+    auto check = parse_scene(json, out_path);
+    if (!check) {
+        std::fprintf(stderr, "kodawari: internal error: the scene written for %s does not load: %s\n", file.c_str(),
+                     check.error().message.c_str());
+        return kExitFailure;
+    }
+    auto out = AtomicFile::open(out_path);
+    if (!out) return report(out.error());
+    out.value().write(json);
+    if (auto done = out.value().commit(); !done) return report(done.error());
+
+    std::printf("%s: a bird, bones mapped by %s\n", file.c_str(), m.mapped_by.c_str());
+    for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+        std::printf("  %-18s %s\n", std::string(birds::kModelPartKeys[part]).c_str(),
+                    m.character.nodes[static_cast<std::size_t>(m.bones[part])].name.c_str());
+    }
+    const birds::DerivedFlight& f = m.flight;
+    std::printf("  wingspan %.3f m, wing area %.4f m^2, mean chord %.3f m, aspect ratio %.2f, body length %.3f m, "
+                "mass %.3g kg (estimated)\n",
+                static_cast<double>(m.measure.wingspan), static_cast<double>(m.measure.wing_area),
+                static_cast<double>(m.mean_chord), static_cast<double>(f.aspect_ratio),
+                static_cast<double>(m.measure.body_length), static_cast<double>(f.mass));
+    std::printf("  flight: wingbeat %.3g Hz, amplitude %.3g, glide ratio %.3g, cruise speed %.3g m/s\n",
+                static_cast<double>(f.flap_frequency), static_cast<double>(f.amplitude), static_cast<double>(f.glide_ratio),
+                static_cast<double>(f.cruise_speed));
+    std::printf("wrote %s (kodawari run %s)\n", out_path.c_str(), out_path.c_str());
+    return kExitOk;
+}
+
 int cmd_rig(const RigArguments& o) {
+    if (o.bird) return cmd_rig_bird(o);
+    if (o.map) throw UsageError{"rig: --map is for --bird"};
     gltf::RigOptions options;
     const auto& chains = o.chains;
     const auto& roots = o.roots;
@@ -102,6 +160,11 @@ Command add_rig(CLI::App& app) {
     add_text(*c, "--animation", o->animation, "CLIP", "the animation clip the instances play (default: the file's first, else the rest pose)");
     add_text(*c, "--name", o->name, "NAME", "the scene's and the character's name (default: the file's stem)");
     add_text(*c, "--out", o->out, "SCENE.json", "the scene file to write (default: ./<character>.json)");
+    c->add_flag("--bird", o->bird, "the file is a rigged bird: map its bones onto the 7-part bird rig, measure its wing and "
+                                   "write a scene with a flock of it (docs/bird-models.md) (default: the file is a character)");
+    add_text(*c, "--map", o->map, "MAP.json",
+             "with --bird: a JSON object naming the bone of each part {\"body\": ..., \"left_upper_wing\": ...} (default: "
+             "name patterns)");
     return {c, [o] { return cmd_rig(*o); }};
 }
 

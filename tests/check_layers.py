@@ -73,6 +73,7 @@ PUBLIC_OWNERS = {
     "gltf/vrm.hpp": "io",
     "gltf/rig_scene.hpp": "io",
     "gltf/import.hpp": "io",
+    "gltf/bird_model_import.hpp": "io",
     "backend_factory.hpp": "vulkan",
     "crowd_animator.hpp": "vulkan",
     "vulkan_embed.hpp": "vulkan",

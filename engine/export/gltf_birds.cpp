@@ -1,7 +1,12 @@
-// glTF 2.0 export of a bird simulation (SPEC C): one node hierarchy per bird, a small
-// closed mesh per part shared by every bird of a wing type, and one animation whose
-// channels hold every simulated frame. Streamed (BirdGlbWriter): keys arrive frame by
-// frame but glTF keeps each channel's keys together, so they wait in a temporary file.
+// glTF 2.0 export of a bird simulation (SPEC C): per bird one armature (a root node named
+// after the bird, the 7 parts as joints), one skin and one mesh node; one skinned mesh
+// per wing type (the parts' closed meshes merged, each vertex rigidly on its part's
+// joint) shared with its inverse bind matrices by every bird of the type; and one
+// animation whose channels hold every simulated frame. As the rigged crowd's export
+// (gltf_rigged.cpp), the channels of one bird drive only its own armature, so Blender's
+// importer makes one armature and one action per bird (issue 14; before, 7 animated
+// objects and 7 actions per bird). Streamed (BirdGlbWriter): keys arrive frame by frame
+// but glTF keeps each channel's keys together, so they wait in a temporary file.
 
 #include <algorithm>
 #include <array>
@@ -31,9 +36,32 @@ namespace {
 
 using namespace gltf;
 
-/// Adds the meshes and the material of one wing type; returns the mesh index per part.
-std::array<int, birds::kPartCount> add_wing_type_meshes(tinygltf::Model& model, BufferWriter& writer,
-                                                         birds::WingType type) {
+/// What the birds of one wing type share in the file.
+struct WingTypeAssets {
+    int mesh = -1;
+    int inverse_bind = -1;  // accessor of the skin's 7 inverse bind matrices
+    std::array<std::array<float, 3>, birds::kPartCount> offsets{};
+};
+
+/// Where each part's joint sits in the bind pose (the rest offsets summed up the chain,
+/// no rotation): the parts' meshes are built in their joints' frames.
+std::array<Vec3, birds::kPartCount> bind_positions(birds::WingType type) {
+    const auto offsets = birds::part_offsets(type);
+    std::array<Vec3, birds::kPartCount> at{};
+    for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+        const int parent = birds::kPartParents[part];
+        for (std::size_t i = 0; i < 3; ++i) {
+            at[part][i] = offsets[part][i] + (parent < 0 ? 0.0f : at[static_cast<std::size_t>(parent)][i]);
+        }
+    }
+    return at;
+}
+
+/// Adds the material, the skinned mesh and the inverse bind matrices of one wing type.
+/// The 7 part meshes are merged into one primitive in the bind pose; JOINTS_0 names each
+/// vertex's part (the skin lists the joints in part order) with weight 1, so the parts
+/// stay rigid as before.
+WingTypeAssets add_wing_type(tinygltf::Model& model, BufferWriter& writer, birds::WingType type) {
     const std::size_t type_index = static_cast<std::size_t>(type);
     const std::string type_name(birds::wing_type_spec(type).name);
 
@@ -46,13 +74,46 @@ std::array<int, birds::kPartCount> add_wing_type_meshes(tinygltf::Model& model, 
     model.materials.push_back(std::move(material));
     const int material_index = static_cast<int>(model.materials.size() - 1);
 
-    std::array<int, birds::kPartCount> mesh_indices{};
-    const auto meshes = birds::bird_part_meshes(type);
+    const auto parts = birds::bird_part_meshes(type);
+    const auto bind = bind_positions(type);
+    MeshData merged;
+    std::vector<std::array<std::uint8_t, 4>> joints;
     for (std::size_t part = 0; part < birds::kPartCount; ++part) {
-        mesh_indices[part] = add_mesh(model, writer, meshes[part], material_index,
-                                      type_name + "_" + std::string(birds::kPartNames[part]));
+        const auto first = static_cast<std::uint16_t>(merged.positions.size());
+        for (const Vec3& p : parts[part].positions) {
+            merged.positions.push_back({p[0] + bind[part][0], p[1] + bind[part][1], p[2] + bind[part][2]});
+            joints.push_back({static_cast<std::uint8_t>(part), 0, 0, 0});
+        }
+        merged.normals.insert(merged.normals.end(), parts[part].normals.begin(), parts[part].normals.end());
+        for (const std::uint16_t i : parts[part].indices) merged.indices.push_back(static_cast<std::uint16_t>(first + i));
     }
-    return mesh_indices;
+    WingTypeAssets assets;
+    assets.mesh = add_mesh(model, writer, merged, material_index, type_name);
+    tinygltf::Primitive& primitive = model.meshes.back().primitives[0];
+    const std::size_t vertices = merged.positions.size();
+    const int joint_view = add_buffer_view(model, writer.append(joints.data(), vertices * 4), vertices * 4, kArrayBuffer);
+    primitive.attributes["JOINTS_0"] =
+        add_accessor(model, joint_view, 0, TINYGLTF_COMPONENT_TYPE_UNSIGNED_BYTE, vertices, TINYGLTF_TYPE_VEC4);
+    std::vector<std::array<float, 4>> weights(vertices, {1.0f, 0.0f, 0.0f, 0.0f});
+    const int weight_view = add_buffer_view(model, writer.append(weights.data(), vertices * 16), vertices * 16, kArrayBuffer);
+    primitive.attributes["WEIGHTS_0"] =
+        add_accessor(model, weight_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, vertices, TINYGLTF_TYPE_VEC4);
+
+    // A joint's bind matrix is the translation to its bind position; its inverse (column
+    // major, glTF 2.0 §3.7.3.2) the translation back.
+    std::vector<float> inverse_bind(16 * birds::kPartCount, 0.0f);
+    for (std::size_t part = 0; part < birds::kPartCount; ++part) {
+        float* m = inverse_bind.data() + 16 * part;
+        m[0] = m[5] = m[10] = m[15] = 1.0f;
+        m[12] = -bind[part][0];
+        m[13] = -bind[part][1];
+        m[14] = -bind[part][2];
+    }
+    const std::size_t ibm_bytes = inverse_bind.size() * sizeof(float);
+    const int ibm_view = add_buffer_view(model, writer.append(inverse_bind.data(), ibm_bytes), ibm_bytes, 0);
+    assets.inverse_bind = add_accessor(model, ibm_view, 0, TINYGLTF_COMPONENT_TYPE_FLOAT, birds::kPartCount, TINYGLTF_TYPE_MAT4);
+    assets.offsets = birds::part_offsets(type);
+    return assets;
 }
 
 /// Unit quaternion from a pose; a zero or non-finite input is a backend bug and is
@@ -69,15 +130,27 @@ bool normalized(const gpu::vec4& q, Quat& out) {
 }
 
 
-// One bird's keys of one frame: the Body translation, then the parts' rotations.
-constexpr std::size_t kRecordFloats = 3 + 4 * birds::kPartCount;
-constexpr std::size_t kRecordBytes = kRecordFloats * sizeof(float);
+// One bird's keys of one frame: the Body translation, the parts' rotations, the Tail's
+// scale (1 + s, 1, 1) from its spread s (BirdPose.position.w). The scale is kept in the
+// key file always but written only when some bird spreads its tail in the run: a flock
+// that never does (every wing type but those the glide and landing modes fan) would
+// otherwise carry a constant channel per bird.
+constexpr std::size_t kRecordFloats = 3 + 4 * birds::kPartCount + 3;
+constexpr std::size_t kTailScaleAt = 3 + 4 * birds::kPartCount;
+constexpr std::size_t kTailScaleField = 1 + birds::kPartCount;  // the record's fields: translation, rotations, scale
+// The bytes a bird's frame takes in the .glb without the tail's scale (the 4 GiB check
+// before the run; with it, write_streamed_glb() checks again before writing).
+constexpr std::size_t kRecordBytes = (kRecordFloats - 3) * sizeof(float);
 
 }  // namespace
 
 struct BirdGlbWriter::Impl {
     std::string path;
     const birds::BirdWorld* world = nullptr;
+    // The birds of the built-in wing types, in world order: a user's model's birds go to
+    // their own file (BirdModelExport, gltf_bird_models.cpp). Bird b of this file is
+    // world->birds[exported[b]].
+    std::vector<std::uint32_t> exported;
     std::uint32_t frames = 0;
     std::uint32_t added = 0;
     SpillFile keys;  // frames x birds records
@@ -86,8 +159,14 @@ struct BirdGlbWriter::Impl {
     std::vector<float> row;       // birds x record being written
     GlbCompaction compaction;
     GlbCompactionStats stats;
+    bool tail_spread = false;  // some bird's tail spread s is not 0 in some frame
 
-    [[nodiscard]] std::size_t count() const { return world->birds.size(); }
+    [[nodiscard]] std::size_t count() const { return exported.size(); }
+    [[nodiscard]] std::uint32_t type_of(std::size_t b) const { return world->birds[exported[b]].ids.y; }
+    [[nodiscard]] std::string name_of(std::size_t b) const {
+        return std::string(birds::wing_type_spec(static_cast<birds::WingType>(type_of(b))).name) + "_" +
+               std::to_string(exported[b]);
+    }
     [[nodiscard]] Result<void> add_frame(std::span<const gpu::BirdPose> poses);
     [[nodiscard]] Result<void> build_and_write(AtomicFile& file);
     [[nodiscard]] Result<void> copy_channels(AtomicFile& file);
@@ -96,9 +175,10 @@ struct BirdGlbWriter::Impl {
     struct Layout;
     void root_node(std::vector<tinygltf::Node>& out) const;
     void bird_nodes(const Layout& layout, std::size_t b, std::vector<tinygltf::Node>& out) const;
+    void bird_skin(const Layout& layout, std::size_t b, std::vector<tinygltf::Skin>& out) const;
     void bird_accessors(const Layout& layout, std::size_t b, std::vector<tinygltf::Accessor>& out) const;
     void bird_samplers(const Layout& layout, std::size_t b, std::vector<tinygltf::AnimationSampler>& out) const;
-    void bird_channels(std::size_t b, std::vector<tinygltf::AnimationChannel>& out) const;
+    void bird_channels(const Layout& layout, std::size_t b, std::vector<tinygltf::AnimationChannel>& out) const;
 };
 
 BirdGlbWriter::BirdGlbWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -124,14 +204,15 @@ Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds
         return make_error(Error::Kind::InvalidInput, path + ": " + std::to_string(std::uint64_t{frames} * bird_count) +
                                                          " poses exceed the 4 GiB limit of a .glb");
     }
+    auto impl = std::make_unique<Impl>();
     for (std::size_t b = 0; b < bird_count; ++b) {
         const std::uint32_t type = world.birds[b].ids.y;
-        if (type >= birds::kWingTypeCount) {
+        if (type >= birds::kWingTypeCount + world.models.size()) {
             return make_error(Error::Kind::InvalidInput,
                               path + ": bird " + std::to_string(b) + " has unknown wing type " + std::to_string(type));
         }
+        if (type < birds::kWingTypeCount) impl->exported.push_back(static_cast<std::uint32_t>(b));
     }
-    auto impl = std::make_unique<Impl>();
     impl->path = path;
     impl->world = &world;
     impl->frames = frames;
@@ -139,13 +220,13 @@ Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds
     auto keys = SpillFile::open(path);
     if (!keys) return keys.error();
     impl->keys = std::move(keys).value();
-    impl->row.resize(bird_count * kRecordFloats);
+    impl->row.resize(impl->exported.size() * kRecordFloats);
     return BirdGlbWriter(std::move(impl));
 }
 
 Result<void> BirdGlbWriter::add_frames(std::span<const gpu::BirdPose> poses) {
     Impl& w = *impl_;
-    const std::size_t count = w.count();
+    const std::size_t count = w.world->birds.size();
     if (count == 0) return {};  // no keys: the file holds the key times alone
     if (poses.size() % count != 0 || w.added + poses.size() / count > w.frames) {
         return make_error(Error::Kind::InvalidInput, w.path + ": " + std::to_string(poses.size()) + " poses are not whole frames of " +
@@ -158,9 +239,10 @@ Result<void> BirdGlbWriter::add_frames(std::span<const gpu::BirdPose> poses) {
 
 Result<void> BirdGlbWriter::Impl::add_frame(std::span<const gpu::BirdPose> poses) {
     const std::uint32_t f = added;
-    for (std::size_t b = 0; b < poses.size(); ++b) {
+    for (std::size_t i = 0; i < exported.size(); ++i) {
+        const std::size_t b = exported[i];
         const gpu::BirdPose& pose = poses[b];
-        float* record = row.data() + b * kRecordFloats;
+        float* record = row.data() + i * kRecordFloats;
         const Vec3 position = {pose.position.x, pose.position.y, pose.position.z};
         if (!std::isfinite(position[0]) || !std::isfinite(position[1]) || !std::isfinite(position[2])) {
             return make_error(Error::Kind::Internal,
@@ -177,7 +259,7 @@ Result<void> BirdGlbWriter::Impl::add_frame(std::span<const gpu::BirdPose> poses
             // q and -q are the same rotation, but LINEAR (slerp) interpolation between
             // keys in opposite hemispheres would spin the long way round.
             if (f > 0) {
-                const float* p = previous.data() + b * kRecordFloats + 3 + 4 * part;
+                const float* p = previous.data() + i * kRecordFloats + 3 + 4 * part;
                 const float dot = p[0] * q[0] + p[1] * q[1] + p[2] * q[2] + p[3] * q[3];
                 if (dot < 0.0f) {
                     for (float& v : q) v = -v;
@@ -185,6 +267,15 @@ Result<void> BirdGlbWriter::Impl::add_frame(std::span<const gpu::BirdPose> poses
             }
             std::memcpy(record + 3 + 4 * part, q.data(), sizeof(Quat));
         }
+        const float spread = pose.position.w;
+        if (!std::isfinite(spread)) {
+            return make_error(Error::Kind::Internal,
+                              "bird " + std::to_string(b) + ", frame " + std::to_string(f) + ": tail spread is not finite");
+        }
+        if (spread != 0.0f) tail_spread = true;
+        record[kTailScaleAt] = 1.0f + spread;
+        record[kTailScaleAt + 1] = 1.0f;
+        record[kTailScaleAt + 2] = 1.0f;
     }
     KW_TRY(keys.append(row.data(), row.size() * sizeof(float)));
     if (f == 0) first = row;
@@ -198,22 +289,26 @@ Result<void> BirdGlbWriter::Impl::add_frame(std::span<const gpu::BirdPose> poses
 // frames, then each part's rotations. A group of birds at a time: read its records of
 // every frame (one contiguous run per frame), write its channels.
 Result<void> BirdGlbWriter::Impl::copy_channels(AtomicFile& file) {
-    std::array<std::size_t, 1 + birds::kPartCount> fields{};
+    std::array<std::size_t, 2 + birds::kPartCount> fields{};
     fields.fill(4);
     fields[0] = 3;
-    return copy_item_major(keys, file, count(), frames, fields, BirdGlbWriter::kTransposeBytes);
+    fields[kTailScaleField] = 3;
+    return copy_item_major(keys, file, count(), frames, fields, BirdGlbWriter::kTransposeBytes,
+                           [&](std::size_t, std::size_t field) { return field != kTailScaleField || tail_spread; });
 }
 
-// Where bird b's elements go, as build_and_write() laid out the model: nodes 1 + 7b + part
-// (Body first), accessors first_accessor + 8b + k and the samplers and channels 8b + k of
-// animation 0 (k = 0: the Body's translation, 1 + part: the part's rotation), the keys in
-// the animation view at time_bytes + b x per_bird.
+// Where bird b's elements go, as build_and_write() laid out the model: node 0 the root
+// of every armature, then per bird kNodesPerBird nodes (its armature's root, the 7 joints
+// in part order, its mesh node), skin b, accessors first_accessor + channels x b + k and
+// the samplers and channels channels x b + k of animation 0 (k = 0: the Body's
+// translation, 1 + part: the part's rotation, 1 + kPartCount: the Tail's scale when
+// written), the keys in the animation view at time_bytes + b x per_bird.
 struct BirdGlbWriter::Impl::Layout {
-    std::array<std::array<int, birds::kPartCount>, birds::kWingTypeCount> meshes{};
-    std::array<std::array<std::array<float, 3>, birds::kPartCount>, birds::kWingTypeCount> offsets{};
+    std::array<WingTypeAssets, birds::kWingTypeCount> types{};
     int animation_view = -1;
     int time_accessor = -1;
     int first_accessor = -1;
+    std::size_t channels = 1 + birds::kPartCount;
     std::size_t time_bytes = 0;
     std::size_t translation_bytes = 0;
     std::size_t rotation_bytes = 0;
@@ -223,28 +318,35 @@ struct BirdGlbWriter::Impl::Layout {
     // compact->accessors_before(b) on.
     const CompactKeys* compact = nullptr;
 
-    static constexpr std::size_t kChannels = 1 + birds::kPartCount;
-    [[nodiscard]] static int body_node(std::size_t b) { return static_cast<int>(1 + b * birds::kPartCount); }
+    static constexpr std::size_t kNodesPerBird = 2 + birds::kPartCount;
+    [[nodiscard]] static int armature_node(std::size_t b) { return static_cast<int>(1 + b * kNodesPerBird); }
+    [[nodiscard]] static int joint_node(std::size_t b, std::size_t part) {
+        return armature_node(b) + 1 + static_cast<int>(part);
+    }
+    [[nodiscard]] static int mesh_node(std::size_t b) { return armature_node(b) + 1 + static_cast<int>(birds::kPartCount); }
 };
 
-// The root, parent of every bird's Body.
+// The root, parent of every bird's armature. The mesh nodes are not under it: a skinned
+// mesh ignores its node's transform, and glTF-Validator warns about one that has a parent
+// (NODE_SKINNED_MESH_NON_ROOT); they are the scene's own roots.
 void BirdGlbWriter::Impl::root_node(std::vector<tinygltf::Node>& out) const {
     tinygltf::Node& root = out.emplace_back();
     root.name = "Birds";
     root.children.reserve(count());
-    for (std::size_t b = 0; b < count(); ++b) root.children.push_back(Layout::body_node(b));
+    for (std::size_t b = 0; b < count(); ++b) root.children.push_back(Layout::armature_node(b));
 }
 
 void BirdGlbWriter::Impl::bird_nodes(const Layout& layout, std::size_t b, std::vector<tinygltf::Node>& out) const {
-    const std::uint32_t type = world->birds[b].ids.y;
-    const std::string suffix = "_" + std::to_string(b);
-    const int body = Layout::body_node(b);
+    const std::uint32_t type = type_of(b);
+    const std::string name = name_of(b);
+    tinygltf::Node& armature = out.emplace_back();
+    armature.name = name;
+    armature.children.push_back(Layout::joint_node(b, KW_PART_BODY));
     const float* rest = first.data() + b * kRecordFloats;
     for (std::size_t part = 0; part < birds::kPartCount; ++part) {
         tinygltf::Node& node = out.emplace_back();
-        node.name = part == KW_PART_BODY ? std::string(birds::wing_type_spec(static_cast<birds::WingType>(type)).name) + suffix
-                                         : std::string(birds::kPartNames[part]) + suffix;
-        node.mesh = layout.meshes[type][part];
+        // Named as the rigged crowd's nodes are, "<instance>/<node>".
+        node.name = name + "/" + std::string(birds::kPartNames[part]);
         // The rest pose is frame 0, so a viewer that ignores the animation still shows
         // the flock where it starts.
         const float* q0 = rest + 3 + 4 * part;
@@ -253,13 +355,29 @@ void BirdGlbWriter::Impl::bird_nodes(const Layout& layout, std::size_t b, std::v
         if (part == KW_PART_BODY) {
             node.translation = {static_cast<double>(rest[0]), static_cast<double>(rest[1]), static_cast<double>(rest[2])};
         } else {
-            const auto& o = layout.offsets[type][part];
+            const auto& o = layout.types[type].offsets[part];
             node.translation = {static_cast<double>(o[0]), static_cast<double>(o[1]), static_cast<double>(o[2])};
         }
+        if (part == KW_PART_TAIL && tail_spread) {
+            const float* s0 = rest + kTailScaleAt;
+            node.scale = {static_cast<double>(s0[0]), static_cast<double>(s0[1]), static_cast<double>(s0[2])};
+        }
         for (std::size_t child = 1; child < birds::kPartCount; ++child) {
-            if (birds::kPartParents[child] == static_cast<int>(part)) node.children.push_back(body + static_cast<int>(child));
+            if (birds::kPartParents[child] == static_cast<int>(part)) node.children.push_back(Layout::joint_node(b, child));
         }
     }
+    tinygltf::Node& mesh = out.emplace_back();
+    mesh.name = name + "/mesh";
+    mesh.mesh = layout.types[type].mesh;
+    mesh.skin = static_cast<int>(b);
+}
+
+void BirdGlbWriter::Impl::bird_skin(const Layout& layout, std::size_t b, std::vector<tinygltf::Skin>& out) const {
+    tinygltf::Skin& skin = out.emplace_back();
+    skin.name = name_of(b);
+    skin.inverseBindMatrices = layout.types[type_of(b)].inverse_bind;
+    skin.skeleton = Layout::armature_node(b);
+    for (std::size_t part = 0; part < birds::kPartCount; ++part) skin.joints.push_back(Layout::joint_node(b, part));
 }
 
 // Bird b's keys: the Body's translations, then each part's rotations, over all frames;
@@ -282,6 +400,7 @@ void BirdGlbWriter::Impl::bird_accessors(const Layout& layout, std::size_t b, st
     for (std::size_t part = 0; part < birds::kPartCount; ++part) {
         add(base + layout.translation_bytes + part * layout.rotation_bytes, TINYGLTF_TYPE_VEC4);
     }
+    if (tail_spread) add(base + layout.translation_bytes + birds::kPartCount * layout.rotation_bytes, TINYGLTF_TYPE_VEC3);
 }
 
 void BirdGlbWriter::Impl::bird_samplers(const Layout& layout, std::size_t b,
@@ -297,20 +416,29 @@ void BirdGlbWriter::Impl::bird_samplers(const Layout& layout, std::size_t b,
         }
         return;
     }
-    for (std::size_t k = 0; k < Layout::kChannels; ++k) {
+    for (std::size_t k = 0; k < layout.channels; ++k) {
         tinygltf::AnimationSampler& sampler = out.emplace_back();
         sampler.input = layout.time_accessor;
-        sampler.output = layout.first_accessor + static_cast<int>(b * Layout::kChannels + k);
+        sampler.output = layout.first_accessor + static_cast<int>(b * layout.channels + k);
         sampler.interpolation = "LINEAR";
     }
 }
 
-void BirdGlbWriter::Impl::bird_channels(std::size_t b, std::vector<tinygltf::AnimationChannel>& out) const {
-    for (std::size_t k = 0; k < Layout::kChannels; ++k) {
+void BirdGlbWriter::Impl::bird_channels(const Layout& layout, std::size_t b,
+                                        std::vector<tinygltf::AnimationChannel>& out) const {
+    for (std::size_t k = 0; k < layout.channels; ++k) {
         tinygltf::AnimationChannel& channel = out.emplace_back();
-        channel.sampler = static_cast<int>(b * Layout::kChannels + k);
-        channel.target_node = Layout::body_node(b) + static_cast<int>(k == 0 ? 0 : k - 1);
-        channel.target_path = k == 0 ? "translation" : "rotation";
+        channel.sampler = static_cast<int>(b * layout.channels + k);
+        if (k == 0) {
+            channel.target_node = Layout::joint_node(b, KW_PART_BODY);
+            channel.target_path = "translation";
+        } else if (k == kTailScaleField) {
+            channel.target_node = Layout::joint_node(b, KW_PART_TAIL);
+            channel.target_path = "scale";
+        } else {
+            channel.target_node = Layout::joint_node(b, k - 1);
+            channel.target_path = "rotation";
+        }
     }
 }
 
@@ -329,12 +457,11 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
 
     // Meshes first, only for the wing types that occur.
     std::array<bool, birds::kWingTypeCount> used{};
-    for (std::size_t b = 0; b < bird_count; ++b) used[world->birds[b].ids.y] = true;
+    for (std::size_t b = 0; b < bird_count; ++b) used[type_of(b)] = true;
     for (std::size_t t = 0; t < birds::kWingTypeCount; ++t) {
-        if (!used[t]) continue;
-        layout.meshes[t] = add_wing_type_meshes(model, writer, static_cast<birds::WingType>(t));
-        layout.offsets[t] = birds::part_offsets(static_cast<birds::WingType>(t));
+        if (used[t]) layout.types[t] = add_wing_type(model, writer, static_cast<birds::WingType>(t));
     }
+    layout.channels = 1 + birds::kPartCount + (tail_spread ? 1 : 0);
 
     // Animation data: the shared key times (in memory), then per bird its Body
     // translation and the rotations of its parts, each channel contiguous over the frames
@@ -343,16 +470,19 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     layout.time_bytes = frames * sizeof(float);
     layout.translation_bytes = frames * 3 * sizeof(float);
     layout.rotation_bytes = frames * 4 * sizeof(float);
-    layout.per_bird = layout.translation_bytes + birds::kPartCount * layout.rotation_bytes;
+    layout.per_bird = layout.translation_bytes + birds::kPartCount * layout.rotation_bytes +
+                      (tail_spread ? layout.translation_bytes : 0);
     const float fps = world->fps;
     std::optional<CompactKeys> compact;
     if (compaction.enabled) {
         std::vector<float> times(frames);
         for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / fps;
-        std::array<ChannelKind, Layout::kChannels> fields{};
+        std::array<ChannelKind, 2 + birds::kPartCount> fields{};
         fields.fill(ChannelKind::Rotation);
         fields[0] = ChannelKind::Translation;
-        auto built = CompactKeys::build(keys, path, bird_count, fields, times, compaction, BirdGlbWriter::kTransposeBytes);
+        fields[kTailScaleField] = ChannelKind::Scale;
+        auto built = CompactKeys::build(keys, path, bird_count, fields, times, compaction, BirdGlbWriter::kTransposeBytes,
+                                        [&](std::size_t, std::size_t field) { return field != kTailScaleField || tail_spread; });
         if (!built) return built.error();
         compact.emplace(std::move(built).value());
         stats = compact->stats();
@@ -377,7 +507,7 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     }
 
     StreamedElements streamed;
-    // Node 0 is the root, then each bird's 7 nodes.
+    // Node 0 is the root, then each bird's armature root, joints and mesh node.
     streamed.nodes.groups = 1 + bird_count;
     streamed.nodes.fill = [&](std::size_t group, std::vector<tinygltf::Node>& out) {
         if (group == 0) {
@@ -386,6 +516,8 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
             bird_nodes(layout, group - 1, out);
         }
     };
+    streamed.skins.groups = bird_count;
+    streamed.skins.fill = [&](std::size_t b, std::vector<tinygltf::Skin>& out) { bird_skin(layout, b, out); };
     streamed.accessors.groups = bird_count;
     streamed.accessors.fill = [&](std::size_t b, std::vector<tinygltf::Accessor>& out) { bird_accessors(layout, b, out); };
     // An animation without channels is invalid glTF: a world without birds gets none.
@@ -393,7 +525,9 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
         tinygltf::Animation& animation = model.animations.emplace_back();
         animation.name = "flight";
         streamed.channels.groups = bird_count;
-        streamed.channels.fill = [&](std::size_t b, std::vector<tinygltf::AnimationChannel>& out) { bird_channels(b, out); };
+        streamed.channels.fill = [&](std::size_t b, std::vector<tinygltf::AnimationChannel>& out) {
+            bird_channels(layout, b, out);
+        };
         streamed.samplers.groups = bird_count;
         streamed.samplers.fill = [&](std::size_t b, std::vector<tinygltf::AnimationSampler>& out) {
             bird_samplers(layout, b, out);
@@ -402,7 +536,9 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
 
     tinygltf::Scene scene;
     scene.name = "flock";
+    scene.nodes.reserve(1 + bird_count);
     scene.nodes.push_back(0);
+    for (std::size_t b = 0; b < bird_count; ++b) scene.nodes.push_back(Layout::mesh_node(b));
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
 
@@ -413,7 +549,7 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
 
 Result<void> BirdGlbWriter::finish() {
     Impl& w = *impl_;
-    if (w.count() > 0 && w.added != w.frames) {
+    if (!w.world->birds.empty() && w.added != w.frames) {
         return make_error(Error::Kind::InvalidInput, w.path + ": " + std::to_string(w.added) + " of " +
                                                          std::to_string(w.frames) + " frames added");
     }

@@ -163,6 +163,16 @@ json accessor_json(const tinygltf::Accessor& accessor) {
     return o;
 }
 
+// tinygltf 2.7's SerializeGltfSkin writes neither extras nor extensions.
+json skin_json(const tinygltf::Skin& skin) {
+    json o;
+    add_numbers(o, "joints", skin.joints);
+    if (skin.inverseBindMatrices >= 0) o["inverseBindMatrices"] = skin.inverseBindMatrices;
+    if (skin.skeleton >= 0) o["skeleton"] = skin.skeleton;
+    if (!skin.name.empty()) o["name"] = string_json(skin.name);
+    return o;
+}
+
 json channel_json(const tinygltf::AnimationChannel& channel) {
     json o;
     o["sampler"] = channel.sampler;
@@ -353,7 +363,7 @@ Result<void> write_streamed_glb(AtomicFile& file, tinygltf::Model& model, const 
     if (!model.buffers.empty()) root.at("buffers").at(0)["byteLength"] = bin_bytes;
     if (stand_in) root.at("animations").at(0).at("channels").erase(0);
     // Members that only streamed elements fill, in their place among the sorted keys.
-    for (const char* key : {"accessors", "nodes"}) {
+    for (const char* key : {"accessors", "nodes", "skins"}) {
         if (!root.contains(key)) root[key] = nullptr;
     }
 
@@ -379,6 +389,9 @@ Result<void> write_streamed_glb(AtomicFile& file, tinygltf::Model& model, const 
         } else if (key == "nodes") {
             ArrayMember member(sink, first, key);
             write_array(member, existing, streamed.nodes, node_json);
+        } else if (key == "skins") {
+            ArrayMember member(sink, first, key);
+            write_array(member, existing, streamed.skins, skin_json);
         } else if (key == "animations" && animated) {
             ArrayMember member(sink, first, key);
             member.open();

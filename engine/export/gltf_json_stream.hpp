@@ -1,6 +1,6 @@
 #pragma once
 // A .glb whose JSON is written element by element: the big arrays of a large export
-// (a node, accessors, channels and samplers per bird) come from generators and are
+// (nodes, accessors, a skin, channels and samplers per bird) come from generators and are
 // serialized one element at a time, so neither the model's nlohmann DOM nor its JSON
 // text is ever held whole. The bytes are the ones tinygltf writes for the same model
 // with the generated elements inside it (tests/export/test_json_stream.cpp).
@@ -33,6 +33,7 @@ struct ElementSource {
 struct StreamedElements {
     ElementSource<tinygltf::Node> nodes;          // after model.nodes
     ElementSource<tinygltf::Accessor> accessors;  // after model.accessors
+    ElementSource<tinygltf::Skin> skins;          // after model.skins (a skin per bird)
     // After model.animations[0]'s channels and samplers; the model must then have an
     // animation (an animation without channels is left out by tinygltf, so its name,
     // extras and place come from the model even when every channel is streamed).

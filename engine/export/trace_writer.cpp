@@ -11,6 +11,7 @@
 #include <span>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/birds/wingbeat.hpp"
@@ -110,10 +111,18 @@ void TraceWriter::write_frame(std::uint32_t frame, const birds::BirdWorld& world
     const std::size_t bird_count = world.birds.size();
     assert(poses.size() == bird_count && diag.size() == bird_count);
 
-    // Per wing type, the constant part of every record's "parts" that is not Body.
-    std::array<std::array<std::array<float, 3>, birds::kPartCount>, birds::kWingTypeCount> offsets{};
-    for (std::size_t t = 0; t < birds::kWingTypeCount; ++t) {
-        offsets[t] = birds::part_offsets(static_cast<birds::WingType>(t));
+    // Per wing type, then per user's model, the constant part of every record's "parts"
+    // that is not Body, and the type's name.
+    std::vector<std::array<std::array<float, 3>, birds::kPartCount>> offsets(birds::kWingTypeCount + world.models.size());
+    std::vector<std::string_view> names(offsets.size());
+    for (std::size_t t = 0; t < offsets.size(); ++t) {
+        if (t < birds::kWingTypeCount) {
+            offsets[t] = birds::part_offsets(static_cast<birds::WingType>(t));
+            names[t] = birds::wing_type_spec(static_cast<birds::WingType>(t)).name;
+        } else {
+            offsets[t] = world.models[t - birds::kWingTypeCount]->offsets;
+            names[t] = world.models[t - birds::kWingTypeCount]->name;
+        }
     }
     const double time = static_cast<double>(frame) / static_cast<double>(world.fps);
 
@@ -122,7 +131,7 @@ void TraceWriter::write_frame(std::uint32_t frame, const birds::BirdWorld& world
         const gpu::BirdPose& pose = poses[b];
         const gpu::BirdDiag& d = diag[b];
         const std::uint32_t type = world.birds[b].ids.y;
-        assert(type < birds::kWingTypeCount);
+        assert(type < offsets.size());
 
         out += "{\"kind\":\"bird\",\"frame\":";
         append_integer(out, frame);
@@ -131,7 +140,7 @@ void TraceWriter::write_frame(std::uint32_t frame, const birds::BirdWorld& world
         out += ",\"id\":";
         append_integer(out, b);
         out += ",\"wing_type\":\"";
-        out += birds::wing_type_spec(static_cast<birds::WingType>(type)).name;
+        out += names[type];
         out += "\",\"mode\":\"";
         out += mode_of(d.acceleration.w);
         out += "\",\"phase\":";

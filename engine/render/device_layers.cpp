@@ -1,6 +1,7 @@
 #include "render/device_layers.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <bit>
 #include <cassert>
 #include <cstring>
@@ -261,7 +262,22 @@ Result<void> BirdLayer::set_world(gpu::VulkanContext& ctx, const birds::BirdWorl
     if (world == nullptr || world->birds.empty()) return {};
     count_ = world->birds.size();
 
-    // The birds grouped by wing type (one instanced draw per type); unknown types are not drawn.
+    // The birds grouped by wing type (one instanced draw per type); unknown types are not
+    // drawn. A user's model's birds (docs/bird-models.md) are drawn with the part meshes
+    // of the built-in type whose wingspan is nearest the model's: the model's own mesh is
+    // the export's, not the renderer's yet.
+    const auto drawn_type = [&](std::uint32_t type) -> std::uint32_t {
+        if (type < birds::kWingTypeCount || type >= birds::kWingTypeCount + world->models.size()) return type;
+        const float span = world->models[type - birds::kWingTypeCount]->measure.wingspan;
+        std::uint32_t best = 0;
+        for (std::uint32_t t = 1; t < birds::kWingTypeCount; ++t) {
+            const auto gap = [&](std::uint32_t k) {
+                return std::abs(birds::wing_type_spec(static_cast<birds::WingType>(k)).wingspan - span);
+            };
+            if (gap(t) < gap(best)) best = t;
+        }
+        return best;
+    };
     std::vector<std::uint32_t> order;
     std::vector<gpu::BirdDrawVertex> vertices;
     std::vector<gpu::BirdDrawType> types(birds::kWingTypeCount);
@@ -269,7 +285,7 @@ Result<void> BirdLayer::set_world(gpu::VulkanContext& ctx, const birds::BirdWorl
         TypeRange& range = ranges_[t];
         range.first_bird = static_cast<std::uint32_t>(order.size());
         for (std::uint32_t b = 0; b < world->birds.size(); ++b) {
-            if (world->birds[b].ids.y == t) order.push_back(b);
+            if (drawn_type(world->birds[b].ids.y) == t) order.push_back(b);
         }
         range.birds = static_cast<std::uint32_t>(order.size()) - range.first_bird;
         if (range.birds == 0) continue;

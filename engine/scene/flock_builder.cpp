@@ -431,10 +431,26 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
         }
     }
 
+    // A user's bird takes the figures derived from its wing (docs/bird-models.md) and the
+    // type after the built-in ones and the models before it.
     const birds::WingTypeSpec& wing = birds::wing_type_spec(flock.wing_type);
-    const double speed = static_cast<double>(flock.speed.value_or(wing.cruise_speed));
-    const double frequency = static_cast<double>(flock.frequency.value_or(wing.flap_frequency));
-    const double amplitude = static_cast<double>(flock.amplitude.value_or(wing.amplitude));
+    std::uint32_t type = static_cast<std::uint32_t>(flock.wing_type);
+    float cruise_speed = wing.cruise_speed, flap_frequency = wing.flap_frequency, wing_amplitude = wing.amplitude;
+    gpu::vec4 flight = birds::flight_params(wing);
+    gpu::vec4 shape = birds::shape_params(wing);
+    if (flock.model) {
+        auto known = std::find(world.models.begin(), world.models.end(), flock.model);
+        if (known == world.models.end()) known = world.models.insert(world.models.end(), flock.model);
+        type = static_cast<std::uint32_t>(birds::kWingTypeCount + static_cast<std::size_t>(known - world.models.begin()));
+        cruise_speed = flock.model->flight.cruise_speed;
+        flap_frequency = flock.model->flight.flap_frequency;
+        wing_amplitude = flock.model->flight.amplitude;
+        flight = birds::model_flight_params(*flock.model);
+        shape = {flock.model->measure.body_length, flock.model->measure.wingspan, 0.0f, 0.0f};
+    }
+    const double speed = static_cast<double>(flock.speed.value_or(cruise_speed));
+    const double frequency = static_cast<double>(flock.frequency.value_or(flap_frequency));
+    const double amplitude = static_cast<double>(flock.amplitude.value_or(wing_amplitude));
     const std::array<double, 3> spread = to_vec3(flock.formation.spread);
     const auto trail = static_cast<double>(flock.formation.trail);
     const bool takes_off = !leader.modes.empty() && leader.modes.front() == birds::SegmentMode::TakeOff;
@@ -467,9 +483,9 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
         if (phase >= 1.0f) phase = 0.0f;
         p.motion.w = phase;
         p.ids.x = first_route + b % variants;
-        p.ids.y = static_cast<std::uint32_t>(flock.wing_type);
-        p.flight = birds::flight_params(wing);
-        p.shape = birds::shape_params(wing);
+        p.ids.y = type;
+        p.flight = flight;
+        p.shape = shape;
         world.birds.push_back(p);
     }
     return {};

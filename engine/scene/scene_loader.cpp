@@ -14,6 +14,7 @@
 
 #include <kodawari/scene.hpp>
 
+#include "kodawari/gltf/bird_model_import.hpp"
 #include "scene/character_loader.hpp"
 #include "scene/json_reader.hpp"
 
@@ -223,15 +224,36 @@ Result<void> read_formation(const JsonReader& r, const JsonNode& node, Formation
 
 Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t index, std::uint64_t& total_birds,
                         FlockSpec& flock) {
-    KW_TRY(r.object(node, {"name", "wing_type", "count", "seed", "speed", "speed_jitter", "frequency", "frequency_jitter",
-                           "amplitude", "amplitude_jitter", "phase_jitter", "timing", "route", "generated_route",
-                           "formation"}));
+    KW_TRY(r.object(node, {"name", "wing_type", "model", "map", "count", "seed", "speed", "speed_jitter", "frequency",
+                           "frequency_jitter", "amplitude", "amplitude_jitter", "phase_jitter", "timing", "route",
+                           "generated_route", "formation"}));
     flock.name = "flock" + std::to_string(index);
     KW_TRY(optional_member(r, node, "name", flock.name, [&](const JsonNode& n) { return r.string(n); }));
 
-    std::size_t wing = 0;
-    KW_SCENE_ASSIGN(wing, r.choice(r.member(node, "wing_type"), {"pigeon", "gull", "hawk", "hummingbird"}));
-    flock.wing_type = static_cast<birds::WingType>(wing);
+    // A built-in wing type, or a user's bird (docs/bird-models.md), loaded here relative
+    // to the scene's folder as a rigged character's file is.
+    const JsonNode model = r.member(node, "model");
+    const JsonNode map = r.member(node, "map");
+    if (model.present()) {
+        if (r.member(node, "wing_type").present()) {
+            return r.fail(model.path, "expected one of \"wing_type\" and \"model\", got both");
+        }
+        KW_SCENE_ASSIGN(flock.model_file, r.string(model));
+        if (flock.model_file.empty()) return r.expected(model, "the path of a rigged bird's .gltf or .glb file");
+        if (map.present()) KW_SCENE_ASSIGN(flock.map_file, r.string(map));
+        const auto resolve = [&](const std::string& file) {
+            const std::filesystem::path given(file);
+            return given.is_absolute() ? file : (std::filesystem::path(r.file()).parent_path() / given).string();
+        };
+        auto loaded = gltf::load_bird_model(resolve(flock.model_file), flock.map_file.empty() ? "" : resolve(flock.map_file));
+        if (!loaded) return make_error(loaded.error().kind, r.file() + ": " + model.path + ": " + loaded.error().message);
+        flock.model = std::make_shared<const birds::BirdModel>(std::move(loaded).value());
+    } else {
+        if (map.present()) return r.fail(map.path, "a mapping file belongs to a \"model\", and this flock has none");
+        std::size_t wing = 0;
+        KW_SCENE_ASSIGN(wing, r.choice(r.member(node, "wing_type"), {"pigeon", "gull", "hawk", "hummingbird"}));
+        flock.wing_type = static_cast<birds::WingType>(wing);
+    }
 
     const JsonNode count = r.member(node, "count");
     std::uint64_t birds_in_flock = 0;

@@ -18,30 +18,58 @@ public:
 
     BakeNeeds needs() const override { return {.bird_poses = true}; }
 
+    // The built-in wing types' birds at `path`; each user's model's birds in its own
+    // glTF beside it, `<path without .glb>-<model>.glb`, or at `path` itself when the
+    // scene's birds are all of one model (docs/bird-models.md).
     Result<void> begin(const BakeWorld& world) override {
         if (world.birds->birds.empty()) return {};
-        auto writer = BirdGlbWriter::create(path_, *world.birds, world.frames, compaction_);
-        if (!writer) return writer.error();
-        writer_.emplace(std::move(writer).value());
+        const auto& params = world.birds->birds;
+        const bool built_in = std::any_of(params.begin(), params.end(),
+                                          [](const gpu::BirdParams& p) { return p.ids.y < birds::kWingTypeCount; });
+        if (built_in || world.birds->models.empty()) {
+            auto writer = BirdGlbWriter::create(path_, *world.birds, world.frames, compaction_);
+            if (!writer) return writer.error();
+            writer_.emplace(std::move(writer).value());
+        }
+        const std::string stem = path_.substr(0, path_.size() - (path_.ends_with(".glb") ? 4 : 0));
+        const bool alone = !built_in && world.birds->models.size() == 1;
+        for (std::size_t k = 0; k < world.birds->models.size(); ++k) {
+            const std::string path = alone ? path_ : stem + "-" + world.birds->models[k]->name + ".glb";
+            auto model = BirdModelExport::create(*world.birds, k, path, compaction_);
+            if (!model) return model.error();
+            models_.push_back(std::move(model).value());
+        }
         return {};
     }
 
     Result<void> consume(const BakeFrames& frames) override {
-        return writer_ ? writer_->add_frames(frames.bird_poses) : Result<void>{};
+        if (writer_) KW_TRY(writer_->add_frames(frames.bird_poses));
+        for (BirdModelExport& model : models_) KW_TRY(model.add_frames(frames.bird_poses));
+        return {};
     }
 
     Result<std::vector<BakeOutput>> finish() override {
-        if (!writer_) return std::vector<BakeOutput>{};
-        KW_TRY(writer_->finish());
-        std::optional<GlbCompactionStats> stats;
-        if (compaction_.enabled) stats = writer_->compaction_stats();
-        return std::vector<BakeOutput>{{path_, BakeOutput::Format::Glb, "", stats}};
+        std::vector<BakeOutput> out;
+        if (writer_) {
+            KW_TRY(writer_->finish());
+            std::optional<GlbCompactionStats> stats;
+            if (compaction_.enabled) stats = writer_->compaction_stats();
+            out.push_back({path_, BakeOutput::Format::Glb, "", stats});
+        }
+        for (BirdModelExport& model : models_) {
+            KW_TRY(model.finish());
+            std::optional<GlbCompactionStats> model_stats;
+            if (compaction_.enabled) model_stats = model.compaction_stats();
+            out.push_back({model.path(), BakeOutput::Format::Glb, "user's bird model", model_stats});
+        }
+        return out;
     }
 
 private:
     std::string path_;
     GlbCompaction compaction_;
     std::optional<BirdGlbWriter> writer_;
+    std::vector<BirdModelExport> models_;
 };
 
 class ChainsGlbSink final : public BakeSink {

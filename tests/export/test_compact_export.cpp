@@ -270,42 +270,50 @@ TEST(CompactExport, RiggedWithinBoundsWhenReimported) {
     expect_valid(path);
 }
 
-// 67 birds (three wing types; bird 4's tail flips hemisphere every other frame in the
-// input), 90 frames: the birds' writer.
+// 67 birds (four wing types; bird 4's tail flips hemisphere every other frame in the
+// input), 90 frames: the birds' writer, without and with the Tail's scale channels (bird
+// 5 spreads its tail from frame 30 on, so every bird gets one).
 TEST(CompactExport, BirdsWithinBoundsWhenReimported) {
     const birds::BirdWorld world = make_world();
     const std::uint32_t frames = 90;
-    const std::vector<gpu::BirdPose> poses = make_poses(world, frames);
-    TempDir dir;
-    const std::string full = dir.file("full.glb");
-    const std::string path = dir.file("compact.glb");
-    ASSERT_TRUE(write_birds_glb(full, world, poses, frames).ok());
-    for (const GlbCompaction bounds : {GlbCompaction{true, 0.001f, 0.001f, 0.001f}, GlbCompaction{true, 0.005f, 0.02f, 0.02f}}) {
-        SCOPED_TRACE(std::to_string(bounds.position_m) + " m, " + std::to_string(bounds.rotation_rad) + " rad");
-        auto writer = BirdGlbWriter::create(path, world, frames, bounds);
-        ASSERT_TRUE(writer.ok()) << writer.error().message;
-        ASSERT_TRUE(writer.value().add_frames(poses).ok());
-        ASSERT_TRUE(writer.value().finish().ok());
-        const GlbCompactionStats& stats = writer.value().compaction_stats();
-        const Measured m = compare(full, path);
-        EXPECT_LE(m.position_m, static_cast<double>(bounds.position_m) + kFloat);
-        EXPECT_LE(m.rotation_rad, static_cast<double>(bounds.rotation_rad) + kFloat);
-        EXPECT_NEAR(stats.position_m, m.position_m, kFloat);
-        EXPECT_NEAR(stats.rotation_rad, m.rotation_rad, kFloat);
-        EXPECT_EQ(stats.keys, m.keys);
-        EXPECT_EQ(stats.kept, m.kept);
-        EXPECT_EQ(m.keys, std::size_t{kBirds} * 8 * frames);
-        EXPECT_LT(m.kept, m.keys / 4);
-        EXPECT_LT(fs::file_size(path) * 2, fs::file_size(full));
-        const std::size_t bytes = expect_compact_accessors(path);
-        EXPECT_EQ(bytes, stats.byte_rotations);
-        EXPECT_EQ(stats.rotations, std::size_t{kBirds} * 7);
-        if (bounds.rotation_rad >= 0.02f) {
-            EXPECT_GT(bytes * 2, stats.rotations);
-            EXPECT_GT(m.rotation_rad, 1e-3);  // the bound is used, not only the 16-bit floor
+    for (const bool spread : {false, true}) {
+        SCOPED_TRACE(spread ? "tail spread" : "no tail spread");
+        std::vector<gpu::BirdPose> poses = make_poses(world, frames);
+        if (spread) {
+            for (std::uint32_t f = 30; f < frames; ++f) poses[f * kBirds + 5].position.w = 0.01f * static_cast<float>(f - 30);
         }
-        expect_valid(path);
-        EXPECT_EQ(dir.entries().size(), 2u);
+        TempDir dir;
+        const std::string full = dir.file("full.glb");
+        const std::string path = dir.file("compact.glb");
+        ASSERT_TRUE(write_birds_glb(full, world, poses, frames).ok());
+        for (const GlbCompaction bounds : {GlbCompaction{true, 0.001f, 0.001f, 0.001f}, GlbCompaction{true, 0.005f, 0.02f, 0.02f}}) {
+            SCOPED_TRACE(std::to_string(bounds.position_m) + " m, " + std::to_string(bounds.rotation_rad) + " rad");
+            auto writer = BirdGlbWriter::create(path, world, frames, bounds);
+            ASSERT_TRUE(writer.ok()) << writer.error().message;
+            ASSERT_TRUE(writer.value().add_frames(poses).ok());
+            ASSERT_TRUE(writer.value().finish().ok());
+            const GlbCompactionStats& stats = writer.value().compaction_stats();
+            const Measured m = compare(full, path);
+            EXPECT_LE(m.position_m, static_cast<double>(bounds.position_m) + kFloat);
+            EXPECT_LE(m.rotation_rad, static_cast<double>(bounds.rotation_rad) + kFloat);
+            EXPECT_NEAR(stats.position_m, m.position_m, kFloat);
+            EXPECT_NEAR(stats.rotation_rad, m.rotation_rad, kFloat);
+            EXPECT_EQ(stats.keys, m.keys);
+            EXPECT_EQ(stats.kept, m.kept);
+            EXPECT_LE(m.scale_rel, static_cast<double>(bounds.scale_rel) + kFloat);
+            EXPECT_EQ(m.keys, std::size_t{kBirds} * (spread ? 9 : 8) * frames);
+            EXPECT_LT(m.kept, m.keys / 4);
+            EXPECT_LT(fs::file_size(path) * 2, fs::file_size(full));
+            const std::size_t bytes = expect_compact_accessors(path);
+            EXPECT_EQ(bytes, stats.byte_rotations);
+            EXPECT_EQ(stats.rotations, std::size_t{kBirds} * 7);
+            if (bounds.rotation_rad >= 0.02f) {
+                EXPECT_GT(bytes * 2, stats.rotations);
+                EXPECT_GT(m.rotation_rad, 1e-3);  // the bound is used, not only the 16-bit floor
+            }
+            expect_valid(path);
+            EXPECT_EQ(dir.entries().size(), 2u);
+        }
     }
 }
 
@@ -314,7 +322,8 @@ TEST(CompactExport, BirdsWithinBoundsWhenReimported) {
 // finish() refuses a BIN chunk past 4 GiB before writing any JSON).
 TEST(CompactExport, TheLimitIsTheCompactedSize) {
     const birds::BirdWorld world = make_world();
-    // 124 bytes per bird and frame uncompacted: just past 4e9 bytes.
+    // 124 bytes per bird and frame uncompacted (without the Tail's scale, written only
+    // when a tail spreads): just past 4e9 bytes.
     const auto frames = static_cast<std::uint32_t>(4.0e9 / (124.0 * kBirds)) + 1;
     TempDir dir;
     const auto refused = BirdGlbWriter::create(dir.file("full.glb"), world, frames);

@@ -160,6 +160,17 @@ tinygltf::Animation random_animation(Random& r, const std::string& name, int cha
     return animation;
 }
 
+// A skin of random joints, with or without inverse bind matrices, skeleton and name.
+tinygltf::Skin random_skin(Random& r, int nodes, int accessors) {
+    tinygltf::Skin skin;
+    const int joints = r.integer(1, 8);
+    for (int j = 0; j < joints; ++j) skin.joints.push_back(r.integer(0, nodes - 1));
+    if (accessors > 0 && r.chance(0.7)) skin.inverseBindMatrices = r.integer(0, accessors - 1);
+    if (r.chance(0.5)) skin.skeleton = r.integer(0, nodes - 1);
+    if (r.chance(0.7)) skin.name = r.name("skin");
+    return skin;
+}
+
 // A whole model: every part a writer uses, and its buffer's bytes.
 tinygltf::Model random_model(Random& r, int nodes, int accessors, int channels, std::size_t buffer_bytes) {
     tinygltf::Model model;
@@ -191,6 +202,8 @@ tinygltf::Model random_model(Random& r, int nodes, int accessors, int channels, 
     model.meshes.push_back(mesh);
     for (int i = 0; i < nodes; ++i) model.nodes.push_back(random_node(r, i, nodes));
     for (int i = 0; i < accessors; ++i) model.accessors.push_back(random_accessor(r, i));
+    const int skins = nodes > 0 ? r.integer(0, 5) : 0;
+    for (int i = 0; i < skins; ++i) model.skins.push_back(random_skin(r, nodes, accessors));
     if (channels > 0) {
         model.animations.push_back(random_animation(r, r.name("flight"), channels, std::max(nodes, 1), std::max(accessors, 1)));
         if (r.chance(0.5)) model.animations.push_back(random_animation(r, "second", r.integer(0, 3), std::max(nodes, 1), std::max(accessors, 1)));
@@ -233,6 +246,7 @@ struct Streamed {
     gltf::StreamedElements elements;
     std::shared_ptr<std::vector<std::vector<tinygltf::Node>>> nodes;
     std::shared_ptr<std::vector<std::vector<tinygltf::Accessor>>> accessors;
+    std::shared_ptr<std::vector<std::vector<tinygltf::Skin>>> skins;
     std::shared_ptr<std::vector<std::vector<tinygltf::AnimationChannel>>> channels;
     std::shared_ptr<std::vector<std::vector<tinygltf::AnimationSampler>>> samplers;
 };
@@ -250,6 +264,8 @@ void check_identical(std::uint32_t seed, int nodes, int accessors, int channels,
     Streamed s;
     s.elements.nodes = split(r, model.nodes, keep(keep_nodes, nodes), s.nodes);
     s.elements.accessors = split(r, model.accessors, keep(keep_accessors, accessors), s.accessors);
+    const int skins = static_cast<int>(model.skins.size());
+    s.elements.skins = split(r, model.skins, keep(keep_nodes >= 0 ? std::min(keep_nodes, skins) : -1, skins), s.skins);
     if (!model.animations.empty()) {
         s.elements.channels = split(r, model.animations[0].channels, keep(keep_channels, channels), s.channels);
         s.elements.samplers = split(r, model.animations[0].samplers, keep(keep_channels, channels), s.samplers);

@@ -209,7 +209,7 @@ TEST(SceneFormat, UnknownKey) {
     json doc = valid_scene();
     doc["flocks"][0]["colour"] = "red";
     EXPECT_EQ(parse_error(doc),
-              "test.json: $.flocks[0].colour: unknown key (expected one of: name, wing_type, count, seed, speed, "
+              "test.json: $.flocks[0].colour: unknown key (expected one of: name, wing_type, model, map, count, seed, speed, "
               "speed_jitter, frequency, frequency_jitter, amplitude, amplitude_jitter, phase_jitter, timing, route, "
               "generated_route, formation)");
     json top = valid_scene();

@@ -68,9 +68,13 @@ struct GlbCompactionStats {
 /// >= 0.
 [[nodiscard]] KODAWARI_API Result<void> check_compaction(const std::string& path, const GlbCompaction& compaction);
 
-/// Writes a `.glb`: per bird a node hierarchy of the 7 parts (a simple mesh per part,
-/// shared by all birds of a wing type) and one animation with TRS channels sampled at
-/// every frame. `poses` holds `frames` x birds entries, frame-major.
+/// Writes a `.glb`: per bird one armature (a root node named after the bird, the 7 parts
+/// as joints), one skin and one mesh node; one skinned mesh per wing type (the parts'
+/// meshes merged, each vertex on its part's joint) shared by every bird of the type; and
+/// one animation sampled at every frame: the Body's translation, every part's rotation
+/// and, when some bird spreads its tail, the Tail's scale (1 + s, 1, 1). Blender imports
+/// one armature and one action per bird. `poses` holds `frames` x birds entries,
+/// frame-major.
 [[nodiscard]] KODAWARI_API Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
                                                         std::span<const gpu::BirdPose> poses, std::uint32_t frames,
                                                         const GlbCompaction& compaction = {});
@@ -80,7 +84,7 @@ struct GlbCompactionStats {
 /// (removed from the directory as soon as it is opened, so nothing is left behind);
 /// finish() copies them into the `.glb`'s channels, channel after channel, through two
 /// buffers of kTransposeBytes (more only when one bird's keys over all frames are more).
-/// Besides that, it holds 128 bytes per bird (the first and the previous frame's keys)
+/// Besides that, it holds 272 bytes per bird (the first and the previous frame's keys)
 /// and one frame's keys while adding; while finishing, the glTF model without the birds:
 /// their nodes, accessors and animation channels are made one bird at a time while the
 /// JSON is written to another temporary file beside `path`.
@@ -298,6 +302,38 @@ private:
     struct Impl;
     explicit RiggedGlbWriter(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
+};
+
+/// The birds of one user's model (BirdWorld::models[model], docs/bird-models.md) baked
+/// into a RiggedGlbWriter: the model's own meshes, materials, textures and skins written
+/// once and shared, per bird a copy of its node hierarchy (one armature per bird, named
+/// "<model>_<bird index>"), and one animation "flight" keying the 7 mapped bones: the
+/// Body's bone placed in the world by the bird's Body pose, every other mapped bone
+/// turned by its part's rotation carried into the bone's frame (model_bone_rotation),
+/// the tail bone scaled by the spread (1 + s along its axis nearest the rig's width);
+/// the other bones stay at rest.
+class KODAWARI_API BirdModelExport {
+public:
+    /// Errors: no bird of the model, the model's file (RiggedGlbWriter::create's).
+    [[nodiscard]] static Result<BirdModelExport> create(const birds::BirdWorld& world, std::size_t model,
+                                                        const std::string& path, const GlbCompaction& compaction = {});
+    /// Whole frames of every bird of the world, frame-major (as BirdGlbWriter takes them).
+    [[nodiscard]] Result<void> add_frames(std::span<const gpu::BirdPose> poses);
+    [[nodiscard]] Result<void> finish();
+    [[nodiscard]] const std::string& path() const { return path_; }
+    [[nodiscard]] const GlbCompactionStats& compaction_stats() const { return writer_.compaction_stats(); }
+
+private:
+    BirdModelExport(const birds::BirdWorld& world, std::size_t model, std::string path, std::vector<std::uint32_t> birds,
+                    RiggedGlbWriter writer);
+    const birds::BirdWorld* world_;
+    std::size_t model_;
+    std::string path_;
+    std::vector<std::uint32_t> birds_;  // the model's birds, world indices
+    RiggedGlbWriter writer_;
+    glm::mat4 body_parent_inverse_{1.0f};  // inverse rest world matrix of the Body bone's parent
+    std::vector<glm::vec3> translation_, scale_;
+    std::vector<glm::quat> rotation_;
 };
 
 /// The simulated crowd of one rigged character template of a RodScene, baked into a

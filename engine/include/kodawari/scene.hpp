@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "kodawari/api.hpp"
+#include "birds/bird_model.hpp"
 #include "birds/world.hpp"
 #include "gltf/character.hpp"
 #include "result.hpp"
@@ -60,6 +61,11 @@ struct FormationSpec {
 struct FlockSpec {
     std::string name;
     birds::WingType wing_type = birds::WingType::Pigeon;
+    /// A user's bird instead of a wing type (`"model"`, docs/bird-models.md): loaded with
+    /// the scene, its bones mapped (by `"map"` when given); null for a built-in type.
+    std::shared_ptr<const birds::BirdModel> model;
+    std::string model_file;  ///< `"model"` as written in the scene
+    std::string map_file;    ///< `"map"` as written (may be empty)
     std::uint32_t count = 1;
     std::uint64_t seed = 1;
     std::optional<float> speed;      ///< m/s; default: the wing type's cruise speed

@@ -6,6 +6,7 @@
 
 #include <array>
 #include <cstdint>
+#include <memory>
 #include <span>
 #include <string>
 #include <vector>
@@ -14,6 +15,7 @@
 
 #include "kodawari/api.hpp"
 #include "../result.hpp"
+#include "bird_model.hpp"
 #include "rig.hpp"
 
 namespace kodawari::birds {
@@ -81,6 +83,10 @@ struct KODAWARI_API BirdWorld {
     std::vector<gpu::vec4> control_points;
     std::vector<gpu::ArcSample> arc_samples;
     std::vector<gpu::BirdParams> birds;
+    /// The users' bird models the birds use (docs/bird-models.md): a bird whose
+    /// BirdParams::ids.y is kWingTypeCount + k is of models[k]. Shared, not copied, by
+    /// the worlds made from one scene (shards, the exporter, the renderer).
+    std::vector<std::shared_ptr<const BirdModel>> models;
 
     /// Adds a route (validated: finite, no coincident consecutive control points, no
     /// cusp) and returns its index. `what` names it in errors ("scene.json: $.flocks[0].route").
