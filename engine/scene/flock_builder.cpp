@@ -384,12 +384,15 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
                           scene.path + ": " + flock_path + ": expected exactly one of \"route\" and \"generated_route\", got neither");
     }
     leader.timing = flock.timing;
+    // A user's model hovers only if it is mapped onto a hovering type, which none is yet.
     const birds::WingTypeSpec& bird_type = birds::wing_type_spec(flock.wing_type);
+    const bool can_hover = !flock.model && bird_type.can_hover;
+    const std::string type_name = flock.model ? flock.model->name : std::string(bird_type.name);
     for (std::size_t k = 0; k < leader.modes.size(); ++k) {
-        if (leader.modes[k] == birds::SegmentMode::Hover && !bird_type.can_hover) {
+        if (leader.modes[k] == birds::SegmentMode::Hover && !can_hover) {
             return make_error(Error::Kind::InvalidInput, scene.path + ": " + route_path + ".modes[" + std::to_string(k) +
                                                              "]: \"hover\" needs a bird that can hover (\"hummingbird\"); a " +
-                                                             std::string(bird_type.name) + " cannot");
+                                                             type_name + " cannot");
         }
     }
 
