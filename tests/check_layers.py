@@ -74,6 +74,7 @@ PUBLIC_OWNERS = {
     "gltf/rig_scene.hpp": "io",
     "gltf/import.hpp": "io",
     "gltf/bird_model_import.hpp": "io",
+    "route_check.hpp": "io",
     "backend_factory.hpp": "vulkan",
     "crowd_animator.hpp": "vulkan",
     "vulkan_embed.hpp": "vulkan",

@@ -466,7 +466,7 @@ TEST(CApiBackends, AWorldTooLargeForTheDeviceIsUnavailableAndAutoFallsBack) {
     ASSERT_TRUE(gpus.ok()) << gpus.error().message;
     ASSERT_GE(gpus.value().chosen, 0) << gpus.value().reason;
     const std::uint64_t range = gpus.value().devices[static_cast<std::size_t>(gpus.value().chosen)].max_storage_buffer_range;
-    const std::uint64_t birds = range / 64 + 1;
+    const std::uint64_t birds = range / sizeof(gpu::BirdPoseGpu) + 1;
     if (birds > 10'000'000) {
         GTEST_SKIP() << "this device's storage buffer range (" << range << " bytes) holds the largest world (10 million birds)";
     }
@@ -493,7 +493,7 @@ TEST(CApiBackends, AWorldTooLargeForTheDeviceIsUnavailableAndAutoFallsBack) {
     EXPECT_EQ(world, nullptr);
     const std::string message = kodawari_last_error();
     const std::string sizes = "cannot hold " + std::to_string(birds) + " birds: the poses need a storage buffer of " +
-                              std::to_string(birds * 64) + " bytes";
+                              std::to_string(birds * sizeof(gpu::BirdPoseGpu)) + " bytes";
     EXPECT_NE(message.find("kodawari_bird_world_create: "), std::string::npos) << message;
     EXPECT_NE(message.find(sizes), std::string::npos) << message;
     EXPECT_NE(message.find("the device allows " + std::to_string(range)), std::string::npos) << message;

@@ -250,7 +250,9 @@ TEST(BirdModel, FlockSimulatesAndExports) {
     EXPECT_EQ(model.skins.size(), 5u);   // one armature per bird
     EXPECT_EQ(model.materials.size(), 1u);
     ASSERT_EQ(model.animations.size(), 1u);
-    EXPECT_EQ(model.animations[0].channels.size(), 5u * 7u * 2u);  // 7 bones, translation and rotation
+    // 7 bones, translation and rotation, and the tail bone's scale: the simulation spreads
+    // the tail (flight-modes.md F.5).
+    EXPECT_EQ(model.animations[0].channels.size(), 5u * (7u * 2u + 1u));
     // Bird 0's spine (the Body's bone; its parent "Armature" sits at the origin) is keyed
     // where the simulation put the bird, frame by frame (float keys: 1e-5 m at 40 m).
     auto stepped = Simulation::open(scene, {.backend = BackendKind::CpuReference, .frames = 12});
@@ -307,7 +309,12 @@ TEST(BirdModel, TailSpreadScalesTheTailBone) {
     const birds::BirdWorld& world = sim.value()->bird_world();
     std::vector<gpu::BirdPose> poses(4 * world.birds.size());
     ASSERT_TRUE(sim.value()->step(4, {.bird_poses = poses, .bird_diag = {}}).ok());
-    for (std::uint32_t f = 0; f < 4; ++f) poses[f * 2 + 1].position.w = 0.1f * static_cast<float>(f);
+    // The simulation spreads every tail a little (flight-modes.md F.5); here bird 0 keeps
+    // its tail furled and bird 1 spreads it by a known amount.
+    for (std::uint32_t f = 0; f < 4; ++f) {
+        poses[f * 2].position.w = 0.0f;
+        poses[f * 2 + 1].position.w = 0.1f * static_cast<float>(f);
+    }
     const std::string path = dir.file("spread.glb");
     auto out = BirdModelExport::create(world, 0, path);
     ASSERT_TRUE(out.ok()) << out.error().message;
