@@ -385,6 +385,14 @@ void sin_cos(V x, V& sin_x, V& cos_x) {
     cos_x = hn::IfThenElse(cos_negative, hn::Neg(c), c);
 }
 
+// flight.cpp arm_rotation() for a mode whose wings only pitch (level, ascend: heading 0)
+// or only sweep (descend: pitch 0): one turn, one sine and cosine instead of two.
+Q4 arm_rotation_about(V angle, bool about_y) {
+    V s, c;
+    sin_cos(hn::Mul(S(0.5f), angle), s, c);
+    return about_y ? Q4{Z(), s, Z(), c} : Q4{Z(), Z(), s, c};
+}
+
 // flight.cpp arm_rotation(): quat_z(pitch) quat_y(heading), expanded.
 Q4 arm_rotation(V pitch, V heading) {
     V sp, cp, sh, ch;
@@ -586,8 +594,14 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
             if (!needed) continue;
             used[m] = true;
             looks[m] = mode_look(m, t, sin_t, cos_t, motion.z, sample);
-            arm1[m] = arm_rotation(looks[m].wings.arm1_pitch, looks[m].wings.arm1_heading);
-            arm2[m] = arm_rotation(looks[m].wings.arm2_pitch, looks[m].wings.arm2_heading);
+            if (m == KW_MODE_LEVEL || m == KW_MODE_ASCEND || m == KW_MODE_DESCEND) {
+                const bool sweep = m == KW_MODE_DESCEND;
+                arm1[m] = arm_rotation_about(sweep ? looks[m].wings.arm1_heading : looks[m].wings.arm1_pitch, sweep);
+                arm2[m] = arm_rotation_about(sweep ? looks[m].wings.arm2_heading : looks[m].wings.arm2_pitch, sweep);
+            } else {
+                arm1[m] = arm_rotation(looks[m].wings.arm1_pitch, looks[m].wings.arm1_heading);
+                arm2[m] = arm_rotation(looks[m].wings.arm2_pitch, looks[m].wings.arm2_heading);
+            }
             target = {hn::IfThenElse(is_target, looks[m].wings.arm1_pitch, target.arm1_pitch),
                       hn::IfThenElse(is_target, looks[m].wings.arm2_pitch, target.arm2_pitch),
                       hn::IfThenElse(is_target, looks[m].wings.arm1_heading, target.arm1_heading),
