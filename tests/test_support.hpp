@@ -164,6 +164,27 @@ inline std::string gltf_validator_command(const std::string& path) {
            shell_quote(path);
 }
 
+/// Imports `path` with Blender's own glTF importer (tests/tools/blender_check.py) and
+/// returns the JSON line it reports ({"check": "kodawari-blender", ...}), or "" when the
+/// import failed or printed no report; `output` holds everything Blender printed.
+inline std::string blender_report_line(const std::string& path, std::string& output) {
+    output.clear();
+    const std::string command = "blender -b --factory-startup --python-exit-code 1 -P " +
+                                shell_quote(std::string(KODAWARI_SOURCE_DIR) + "/tests/tools/blender_check.py") + " -- " +
+                                shell_quote(path);
+    if (run_command(command, output) != 0) return "";
+    std::string report;
+    std::size_t start = 0;
+    while (start < output.size()) {
+        std::size_t end = output.find('\n', start);
+        if (end == std::string::npos) end = output.size();
+        const std::string line = output.substr(start, end - start);
+        if (line.rfind("{\"check\": \"kodawari-blender\"", 0) == 0) report = line;
+        start = end + 1;
+    }
+    return report;
+}
+
 /// Base64 (RFC 4648, with padding), for the data URIs of glTF files written by tests.
 inline std::string base64(const std::vector<unsigned char>& bytes) {
     static const char* kDigits = "ABCDEFGHIJKLMNOPQRSTUVWXYZabcdefghijklmnopqrstuvwxyz0123456789+/";

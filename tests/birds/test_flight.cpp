@@ -7,6 +7,7 @@
 
 #include "kodawari/birds/flight.hpp"
 #include "kodawari/compare.hpp"
+#include "quat_math.hpp"
 
 using namespace kodawari;
 using namespace kodawari::birds;
@@ -15,14 +16,7 @@ namespace {
 
 constexpr float kDeg = std::numbers::pi_v<float> / 180.0f;
 
-Vec3 rotate(const gpu::vec4& q, Vec3 v) {
-    // v' = v + 2 w (q x v) + 2 q x (q x v)
-    const Vec3 u{q.x, q.y, q.z};
-    auto cross = [](Vec3 a, Vec3 b) { return Vec3{a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; };
-    const Vec3 t = cross(u, v);
-    const Vec3 t2 = cross(u, t);
-    return {v.x + 2 * q.w * t.x + 2 * t2.x, v.y + 2 * q.w * t.y + 2 * t2.y, v.z + 2 * q.w * t.z + 2 * t2.z};
-}
+using test_math::rotate;
 
 RouteSample moving(Vec3 velocity, Vec3 acceleration = {}) {
     RouteSample s;

@@ -11,6 +11,7 @@
 
 #include "kodawari/birds/flight.hpp"
 #include "kodawari/scene.hpp"
+#include "quat_math.hpp"
 
 using namespace kodawari;
 using namespace kodawari::birds;
@@ -19,17 +20,8 @@ namespace {
 
 constexpr float kDeg = 0.017453292f;
 
-Vec3 rotate(const gpu::vec4& q, Vec3 v) {
-    const Vec3 u{q.x, q.y, q.z};
-    auto cross = [](Vec3 a, Vec3 b) { return Vec3{a.y * b.z - a.z * b.y, a.z * b.x - a.x * b.z, a.x * b.y - a.y * b.x}; };
-    const Vec3 t = cross(u, v);
-    const Vec3 t2 = cross(u, t);
-    return {v.x + 2 * q.w * t.x + 2 * t2.x, v.y + 2 * q.w * t.y + 2 * t2.y, v.z + 2 * q.w * t.z + 2 * t2.z};
-}
-gpu::vec4 mul(const gpu::vec4& p, const gpu::vec4& q) {
-    return {p.w * q.x + p.x * q.w + p.y * q.z - p.z * q.y, p.w * q.y - p.x * q.z + p.y * q.w + p.z * q.x,
-            p.w * q.z + p.x * q.y - p.y * q.x + p.z * q.w, p.w * q.w - p.x * q.x - p.y * q.y - p.z * q.z};
-}
+using test_math::mul;
+using test_math::rotate;
 
 gpu::BirdParams bird_of(WingType type, float speed) {
     const WingTypeSpec& spec = wing_type_spec(type);

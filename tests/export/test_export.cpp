@@ -372,19 +372,9 @@ TEST(Export, BlenderImportsOneArmatureAndOneActionPerBird) {
     TempDir dir;
     const std::string path = dir.file("flock.glb");
     ASSERT_TRUE(write_birds_glb(path, world, poses, kFrames).ok());
-    output.clear();
-    const std::string command = "blender -b --factory-startup --python-exit-code 1 -P " +
-                                shell_quote(std::string(KODAWARI_SOURCE_DIR) + "/tests/tools/blender_check.py") + " -- " +
-                                shell_quote(path);
-    ASSERT_EQ(run_command(command, output), 0) << output;
-    nlohmann::json report;
-    std::istringstream lines(output);
-    for (std::string line; std::getline(lines, line);) {
-        if (line.rfind("{", 0) != 0) continue;
-        const auto parsed = nlohmann::json::parse(line, nullptr, false);
-        if (parsed.is_object() && parsed.value("check", "") == "kodawari-blender") report = parsed;
-    }
-    ASSERT_TRUE(report.is_object()) << output;
+    const std::string line = testing_support::blender_report_line(path, output);
+    ASSERT_FALSE(line.empty()) << output;
+    const nlohmann::json report = nlohmann::json::parse(line);
     std::cout << report.dump().substr(0, 400) << "...\n";
     EXPECT_EQ(report.at("armature_count").get<std::size_t>(), kFlock);
     EXPECT_EQ(report.at("actions").get<std::size_t>(), kFlock);

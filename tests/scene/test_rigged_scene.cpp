@@ -694,18 +694,9 @@ TEST(RiggedScene, BlenderImportsTheExport) {
         const std::string path = dir.file("chibi.glb");
         constexpr std::uint32_t kInstances = 2;
         const SimulatedChibi sim = simulate_and_export(kInstances, 20, path, GlbCompaction{.enabled = compact});
-        output.clear();
-        const std::string command = "blender -b --factory-startup --python-exit-code 1 -P " +
-                                    shell_quote(kSource + "/tests/tools/blender_check.py") + " -- " + shell_quote(path);
-        ASSERT_EQ(run_command(command, output), 0) << output;
-        nlohmann::json report;
-        std::istringstream lines(output);
-        for (std::string line; std::getline(lines, line);) {
-            if (line.rfind("{", 0) != 0) continue;
-            const auto parsed = nlohmann::json::parse(line, nullptr, false);
-            if (parsed.is_object() && parsed.value("check", "") == "kodawari-blender") report = parsed;
-        }
-        ASSERT_TRUE(report.is_object()) << output;
+        const std::string line = testing_support::blender_report_line(path, output);
+        ASSERT_FALSE(line.empty()) << output;
+        const nlohmann::json report = nlohmann::json::parse(line);
         std::cout << report.dump().substr(0, 400) << "...\n";
 
         // Blender 3.4 makes each skin an armature and one action per animated object, bone
