@@ -559,8 +559,7 @@ void main() {
         // Body, head and tail: flight.cpp step_bird(), docs/flight-modes.md F.5.
         vec3 v = r.attitude_velocity, a = r.acceleration;
         BodyFrame f = body_frame(v, a);
-        vec4 body_base = qmul_flight(qmul_flight(f.yaw, f.pitch), f.bank);
-        if (dot(v, v) <= 0.0) body_base = vec4(0.0, 0.0, 0.0, 1.0);
+        vec4 body_base = qmul_flight(qmul_flight(f.yaw, f.pitch), f.bank);  // identity factors when not moving
         float oscillation = float(KW_BOB_PITCH) * amplitude * sin_t * bob;
         float extra = pitch + oscillation;
         vec4 body = qmul_flight(body_base, nose_up(extra));

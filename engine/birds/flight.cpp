@@ -443,7 +443,10 @@ BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
     const BodyFrame frame_parts = body_frame(uniforms, sample);
     const float oscillation = kBobPitch * amplitude * std::sin(t) * bob;
     const float extra = pitch + oscillation;
-    const gpu::vec4 body = quat_mul(body_rotation(uniforms, sample), nose_up(extra));
+    // body_rotation()'s product, from the factors the head and tail also use.
+    const gpu::vec4 base = frame_parts.moving ? quat_mul(quat_mul(frame_parts.yaw, frame_parts.pitch), frame_parts.bank)
+                                              : gpu::vec4{0.0f, 0.0f, 0.0f, 1.0f};
+    const gpu::vec4 body = quat_mul(base, nose_up(extra));
     const float bob_height = -kBobHeight * bird.shape.x * amplitude * std::cos(t) * bob;
     const float sin_bank = 2.0f * frame_parts.bank.z * frame_parts.bank.w;
 

@@ -91,19 +91,11 @@ ModeLook mode_look(FlightMode mode, float t, float amplitude, const PerchProgres
     ModeLook look;
     switch (mode) {
         case FlightMode::Level:
-            look.wings = wing_angles(mode, t, amplitude);
-            look.spread = 0.15f;
-            look.bob = 1.0f;
-            break;
         case FlightMode::Ascend:
-            look.wings = wing_angles(mode, t, amplitude);
-            look.spread = 0.35f;
-            look.bob = 1.0f;
-            break;
         case FlightMode::Descend:
             look.wings = wing_angles(mode, t, amplitude);
-            look.spread = 0.1f;
-            look.bob = 0.3f;
+            look.spread = mode == FlightMode::Level ? 0.15f : mode == FlightMode::Ascend ? 0.35f : 0.1f;
+            look.bob = mode == FlightMode::Descend ? 0.3f : 1.0f;
             break;
         case FlightMode::Glide:
             look.wings = kGlideWings;

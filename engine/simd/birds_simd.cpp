@@ -68,7 +68,7 @@ BodyFrame body_frame(const gpu::FlightUniforms& uniforms, const V3& v, const V3&
     Q4 pitch = identity;
     half_angle(hn::Div(horizontal, speed), hn::Div(hn::Neg(v.y), speed), pitch.w, pitch.x);
     V bc = S(1.0f), bs = Z();
-    {
+    if (uniforms.rules.x != KW_BANK_SEED) {  // the seed's bank comes lane by lane (seed_bank_lanes)
         const V lateral = hn::Div(hn::Add(hn::Mul(a.x, hn::Neg(v.z)), hn::Mul(a.z, v.x)), horizontal);
         const V g = S(uniforms.physics.x);
         const V norm = hn::Sqrt(hn::Add(hn::Mul(lateral, lateral), hn::Mul(g, g)));

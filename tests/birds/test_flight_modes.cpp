@@ -72,7 +72,9 @@ TEST(FlightModes, TakeOffStartsAtRestAndReachesTheCruiseSpeed) {
         EXPECT_NEAR(f.pose.position.z, expected_s, 1e-3f + 1e-5f * expected_s) << "t " << t;
         const float expected_fraction = tau < 0.0f ? 0.0f : std::min(10.0f * tau / 60.0f, 1.0f);
         EXPECT_NEAR(f.diag.flight.x, expected_fraction, 1e-5f) << "t " << t;
-        EXPECT_EQ(mode_of(f), tau < 6.0f ? KW_MODE_TAKEOFF : mode_of(f)) << "t " << t;
+        if (tau < 6.0f) {
+            EXPECT_EQ(mode_of(f), KW_MODE_TAKEOFF) << "t " << t;
+        }
     }
     // While crouching the wings are folded and still (the phase stops), the bird sits.
     EXPECT_EQ(frames[0].diag.attitude.w, frames[10].diag.attitude.w);
