@@ -25,7 +25,6 @@ std::vector<std::string> split_list(const std::string& text) {
     return out;
 }
 
-
 struct RigArguments {
     std::optional<std::string> character;
     std::optional<std::string> chains;
@@ -44,6 +43,23 @@ std::string relative_to_scene(const std::string& path, const std::string& scene)
     return fs::absolute(fs::path(path)).lexically_normal().lexically_relative(folder.lexically_normal()).generic_string();
 }
 
+// Writes the scene `json` made from `source` to `out_path` (a temporary file renamed),
+// after the scene loader has accepted it: a scene it rejects is our bug, not the user's.
+// kExitOk, or the exit code of what went wrong (reported).
+int write_checked_scene(const std::string& json, const std::string& source, const std::string& out_path) {
+    auto check = parse_scene(json, out_path);
+    if (!check) {
+        std::fprintf(stderr, "kodawari: internal error: the scene written for %s does not load: %s\n", source.c_str(),
+                     check.error().message.c_str());
+        return kExitFailure;
+    }
+    auto out = AtomicFile::open(out_path);
+    if (!out) return report(out.error());
+    out.value().write(json);
+    if (auto done = out.value().commit(); !done) return report(done.error());
+    return kExitOk;
+}
+
 int cmd_rig_bird(const RigArguments& o) {
     if (o.chains || o.roots || o.animation) throw UsageError{"rig --bird: --chains, --roots and --animation are for characters"};
     if (!o.character) throw UsageError{"rig --bird needs exactly one BIRD file (.gltf or .glb)"};
@@ -59,17 +75,7 @@ int cmd_rig_bird(const RigArguments& o) {
     scene.name = o.name.value_or(m.name);
     scene.model_file = relative_to_scene(file, out_path);
     if (o.map) scene.map_file = relative_to_scene(*o.map, out_path);
-    const std::string json = gltf::bird_scene_json(scene);
-    auto check = parse_scene(json, out_path);
-    if (!check) {
-        std::fprintf(stderr, "kodawari: internal error: the scene written for %s does not load: %s\n", file.c_str(),
-                     check.error().message.c_str());
-        return kExitFailure;
-    }
-    auto out = AtomicFile::open(out_path);
-    if (!out) return report(out.error());
-    out.value().write(json);
-    if (auto done = out.value().commit(); !done) return report(done.error());
+    if (const int written = write_checked_scene(gltf::bird_scene_json(scene), file, out_path); written != kExitOk) return written;
 
     std::printf("%s: a bird, bones mapped by %s\n", file.c_str(), m.mapped_by.c_str());
     for (std::size_t part = 0; part < birds::kPartCount; ++part) {
@@ -123,17 +129,7 @@ int cmd_rig(const RigArguments& o) {
     const gltf::RigScene& r = rig.value();
     for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 
-    // The loader must accept what we write; a failure here is our bug, not the user's.
-    auto check = parse_scene(r.json, out_path);
-    if (!check) {
-        std::fprintf(stderr, "kodawari: internal error: the scene written for %s does not load: %s\n", character.c_str(),
-                     check.error().message.c_str());
-        return kExitFailure;
-    }
-    auto file = AtomicFile::open(out_path);
-    if (!file) return report(file.error());
-    file.value().write(r.json);
-    if (auto done = file.value().commit(); !done) return report(done.error());
+    if (const int written = write_checked_scene(r.json, character, out_path); written != kExitOk) return written;
 
     std::printf("%s: %zu chain%s from %s, %u collider%s, size %.3g m, reference joint \"%s\", %s\n", character.c_str(),
                 r.chains.size(), r.chains.size() == 1 ? "" : "s", r.source.c_str(), r.colliders, r.colliders == 1 ? "" : "s",

@@ -15,13 +15,19 @@ Variants, for the bad-input tests: noskin (the same nodes and mesh, no skin), no
 (the skin without any mesh), zerospan (the wing panels flattened onto the wing roots),
 oddnames (bones renamed so that no name pattern finds them: a mapping file is needed).
 
-Deterministic (same arguments, same bytes) and made from nothing but this file: no
-licence question. Standard library only.
+Deterministic (same arguments, same bytes) and made from nothing but this file and the
+project's character generator (its quaternion and glTF writing helpers): no licence
+question. Standard library only.
 """
 import json
-import math
-import struct
+import os
 import sys
+
+# The quaternion helpers and the glTF buffer and GLB writers of the project's character
+# generator, so that both generators write glTF the same way.
+sys.dont_write_bytecode = True  # no __pycache__ in the source tree
+sys.path.insert(0, os.path.join(os.path.dirname(os.path.abspath(__file__)), '..', 'scenes', 'characters'))
+from make_chibi import Gltf, q_axis_angle, q_conj, q_mul, q_rotate, to_glb  # noqa: E402
 
 # The wing planform the tests compare the measurement with.
 KNOWN = {
@@ -33,35 +39,11 @@ KNOWN['mean_chord'] = KNOWN['wing_area'] / KNOWN['wingspan']
 KNOWN['aspect_ratio'] = KNOWN['wingspan'] ** 2 / KNOWN['wing_area']
 
 
-def quat_axis_angle(axis, degrees):
-    half = math.radians(degrees) / 2
-    s = math.sin(half)
-    return (axis[0] * s, axis[1] * s, axis[2] * s, math.cos(half))
-
-
-def quat_mul(a, b):
-    ax, ay, az, aw = a
-    bx, by, bz, bw = b
-    return (aw * bx + ax * bw + ay * bz - az * by,
-            aw * by - ax * bz + ay * bw + az * bx,
-            aw * bz + ax * by - ay * bx + az * bw,
-            aw * bw - ax * bx - ay * by - az * bz)
-
-
-def quat_conj(q):
-    return (-q[0], -q[1], -q[2], q[3])
-
-
-def rotate(q, v):
-    p = quat_mul(quat_mul(q, (v[0], v[1], v[2], 0.0)), quat_conj(q))
-    return (p[0], p[1], p[2])
-
-
 # Bones: name, parent, world rest position, world rest rotation (local +Y along the bone).
-Y_TO_Z = quat_axis_angle((1, 0, 0), 90)      # +Y -> +Z: forward
-Y_TO_MINUS_Z = quat_axis_angle((1, 0, 0), -90)
-Y_TO_X = quat_axis_angle((0, 0, 1), -90)     # +Y -> +X: the bird's left
-Y_TO_MINUS_X = quat_axis_angle((0, 0, 1), 90)
+Y_TO_Z = q_axis_angle((1, 0, 0), 90)      # +Y -> +Z: forward
+Y_TO_MINUS_Z = q_axis_angle((1, 0, 0), -90)
+Y_TO_X = q_axis_angle((0, 0, 1), -90)     # +Y -> +X: the bird's left
+Y_TO_MINUS_X = q_axis_angle((0, 0, 1), 90)
 BONES = [
     ('spine', None, (0.0, 0.0, -0.1), Y_TO_Z),
     ('head', 'spine', (0.0, 0.03, 0.15), Y_TO_Z),
@@ -116,27 +98,6 @@ def mesh_parts(variant):
     ]
 
 
-class Buffer:
-    def __init__(self):
-        self.data = bytearray()
-        self.views = []
-        self.accessors = []
-
-    def add(self, raw, component, count, kind, target=None, bounds=None):
-        while len(self.data) % 4:
-            self.data.append(0)
-        view = {'buffer': 0, 'byteOffset': len(self.data), 'byteLength': len(raw)}
-        if target:
-            view['target'] = target
-        self.data += raw
-        self.views.append(view)
-        accessor = {'bufferView': len(self.views) - 1, 'componentType': component, 'count': count, 'type': kind}
-        if bounds:
-            accessor['min'], accessor['max'] = bounds
-        self.accessors.append(accessor)
-        return len(self.accessors) - 1
-
-
 def build(variant):
     names = {b[0]: (ODD_NAMES[b[0]] if variant == 'oddnames' else b[0]) for b in BONES}
     # Node 0: the armature root; then the bones in BONES order; then the mesh node.
@@ -152,13 +113,13 @@ def build(variant):
         else:
             pp, pr = world[parent]
             d = (position[0] - pp[0], position[1] - pp[1], position[2] - pp[2])
-            t = rotate(quat_conj(pr), d)
-            r = quat_mul(quat_conj(pr), rotation)
+            t = q_rotate(q_conj(pr), d)
+            r = q_mul(q_conj(pr), rotation)
             nodes[index[parent]].setdefault('children', []).append(index[name])
         nodes.append({'name': names[name], 'translation': [round(x, 9) for x in t],
                       'rotation': [round(x, 9) for x in r]})
 
-    buf = Buffer()
+    buf = Gltf()
     gltf = {'asset': {'version': '2.0', 'generator': 'kodawari scripts/make_test_bird.py'},
             'scene': 0, 'scenes': [{'name': 'bird', 'nodes': [0]}], 'nodes': nodes}
     joint_of = {name: SKIN_ORDER.index(name) for name in SKIN_ORDER}
@@ -171,19 +132,14 @@ def build(variant):
             normals += n
             indices += [base + k for k in i]
             joints += [joint_of[bone]] * len(p)
-        lo = [min(p[k] for p in positions) for k in range(3)]
-        hi = [max(p[k] for p in positions) for k in range(3)]
         attributes = {
-            'POSITION': buf.add(b''.join(struct.pack('<3f', *p) for p in positions), 5126, len(positions), 'VEC3',
-                                34962, (lo, hi)),
-            'NORMAL': buf.add(b''.join(struct.pack('<3f', *n) for n in normals), 5126, len(normals), 'VEC3', 34962),
+            'POSITION': buf.accessor('f', positions, 5126, 'VEC3', 34962, bounds=True),
+            'NORMAL': buf.accessor('f', normals, 5126, 'VEC3', 34962),
         }
         if variant != 'noskin':
-            attributes['JOINTS_0'] = buf.add(b''.join(struct.pack('<4B', j, 0, 0, 0) for j in joints), 5121,
-                                             len(joints), 'VEC4', 34962)
-            attributes['WEIGHTS_0'] = buf.add(b''.join(struct.pack('<4f', 1, 0, 0, 0) for _ in joints), 5126,
-                                              len(joints), 'VEC4', 34962)
-        index_accessor = buf.add(b''.join(struct.pack('<H', i) for i in indices), 5123, len(indices), 'SCALAR', 34963)
+            attributes['JOINTS_0'] = buf.accessor('B', [(j, 0, 0, 0) for j in joints], 5121, 'VEC4', 34962)
+            attributes['WEIGHTS_0'] = buf.accessor('f', [(1.0, 0.0, 0.0, 0.0)] * len(joints), 5126, 'VEC4', 34962)
+        index_accessor = buf.accessor('H', indices, 5123, 'SCALAR', 34963)
         gltf['materials'] = [{'name': 'feathers', 'pbrMetallicRoughness': {
             'baseColorFactor': [0.55, 0.35, 0.2, 1.0], 'metallicFactor': 0.0, 'roughnessFactor': 0.9}}]
         gltf['meshes'] = [{'name': 'bird', 'primitives': [{'attributes': attributes, 'indices': index_accessor,
@@ -196,32 +152,24 @@ def build(variant):
     if variant != 'noskin':
         # Inverse bind matrices: the inverse of each joint's world rest transform (a
         # rotation and a translation), column major.
-        ibm = b''
+        ibm = []
         for name in SKIN_ORDER:
             position, rotation = world[name]
-            inv = quat_conj(rotation)
-            cols = [rotate(inv, axis) for axis in ((1, 0, 0), (0, 1, 0), (0, 0, 1))]
-            t = rotate(inv, position)
+            inv = q_conj(rotation)
+            cols = [q_rotate(inv, axis) for axis in ((1, 0, 0), (0, 1, 0), (0, 0, 1))]
+            t = q_rotate(inv, position)
             m = [cols[0][0], cols[0][1], cols[0][2], 0.0,
                  cols[1][0], cols[1][1], cols[1][2], 0.0,
                  cols[2][0], cols[2][1], cols[2][2], 0.0,
                  -t[0], -t[1], -t[2], 1.0]
-            ibm += struct.pack('<16f', *m)
+            ibm.append(tuple(m))
         gltf['skins'] = [{'name': 'bird_skin', 'skeleton': 0,
                           'joints': [index[name] for name in SKIN_ORDER],
-                          'inverseBindMatrices': buf.add(ibm, 5126, len(SKIN_ORDER), 'MAT4')}]
-    if buf.data:
-        while len(buf.data) % 4:
-            buf.data.append(0)
-        gltf['buffers'] = [{'byteLength': len(buf.data)}]
-        gltf['bufferViews'] = buf.views
-        gltf['accessors'] = buf.accessors
-    text = json.dumps(gltf, sort_keys=True, separators=(',', ':')).encode()
-    text += b' ' * ((4 - len(text) % 4) % 4)
-    chunks = struct.pack('<II', len(text), 0x4E4F534A) + text
-    if buf.data:
-        chunks += struct.pack('<II', len(buf.data), 0x004E4942) + bytes(buf.data)
-    return struct.pack('<4sII', b'glTF', 2, 12 + len(chunks)) + chunks
+                          'inverseBindMatrices': buf.accessor('f', ibm, 5126, 'MAT4')}]
+    gltf['buffers'] = [{'byteLength': len(buf.bin)}]
+    gltf['bufferViews'] = buf.views
+    gltf['accessors'] = buf.accessors
+    return to_glb(gltf, bytes(buf.bin))
 
 
 def main(argv):

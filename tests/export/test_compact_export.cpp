@@ -189,6 +189,18 @@ void expect_valid(const std::string& path) {
 
 constexpr double kFloat = 1e-6;  // float rounding of the re-importer's own arithmetic
 
+// What re-importing measures lies within the bounds, and is what the writer says it
+// introduced (its stats).
+void expect_within_bounds_as_reported(const Measured& m, const GlbCompactionStats& stats, const GlbCompaction& bounds) {
+    EXPECT_LE(m.position_m, static_cast<double>(bounds.position_m) + kFloat);
+    EXPECT_LE(m.rotation_rad, static_cast<double>(bounds.rotation_rad) + kFloat);
+    EXPECT_LE(m.scale_rel, static_cast<double>(bounds.scale_rel) + kFloat);
+    EXPECT_NEAR(stats.position_m, m.position_m, kFloat);
+    EXPECT_NEAR(stats.rotation_rad, m.rotation_rad, kFloat);
+    EXPECT_EQ(stats.keys, m.keys);
+    EXPECT_EQ(stats.kept, m.kept);
+}
+
 // Five procedural characters of crowd.json (ears, tails, arms), 90 frames: the chains'
 // writer at the default bounds and at loose ones.
 TEST(CompactExport, ChainsWithinBoundsWhenReimported) {
@@ -211,13 +223,7 @@ TEST(CompactExport, ChainsWithinBoundsWhenReimported) {
         ASSERT_TRUE(writer.value().finish().ok());
         const GlbCompactionStats& stats = writer.value().compaction_stats();
         const Measured m = compare(full, path);
-        EXPECT_LE(m.position_m, static_cast<double>(bounds.position_m) + kFloat);
-        EXPECT_LE(m.rotation_rad, static_cast<double>(bounds.rotation_rad) + kFloat);
-        // What the writer says it introduced is what re-importing measures.
-        EXPECT_NEAR(stats.position_m, m.position_m, kFloat);
-        EXPECT_NEAR(stats.rotation_rad, m.rotation_rad, kFloat);
-        EXPECT_EQ(stats.keys, m.keys);
-        EXPECT_EQ(stats.kept, m.kept);
+        expect_within_bounds_as_reported(m, stats, bounds);
         EXPECT_LT(m.kept, m.keys / 2);
         // 90 frames: the JSON (the nodes' names, a time accessor per reduced channel) is
         // a large part of these small files, so the keys' bytes are what is compared.
@@ -259,11 +265,7 @@ TEST(CompactExport, RiggedWithinBoundsWhenReimported) {
     const GlbCompaction bounds{true, 0.001f, 0.001f, 0.001f};
     const GlbCompactionStats stats = bake(path, bounds);
     const Measured m = compare(full, path);
-    EXPECT_LE(m.position_m, static_cast<double>(bounds.position_m) + kFloat);
-    EXPECT_LE(m.rotation_rad, static_cast<double>(bounds.rotation_rad) + kFloat);
-    EXPECT_LE(m.scale_rel, static_cast<double>(bounds.scale_rel) + kFloat);
-    EXPECT_NEAR(stats.rotation_rad, m.rotation_rad, kFloat);
-    EXPECT_EQ(stats.kept, m.kept);
+    expect_within_bounds_as_reported(m, stats, bounds);
     EXPECT_LT(m.kept, m.keys / 2);
     EXPECT_LT(stats.bytes_after * 3, stats.bytes_before);
     EXPECT_EQ(expect_compact_accessors(path), stats.byte_rotations);
@@ -294,13 +296,7 @@ TEST(CompactExport, BirdsWithinBoundsWhenReimported) {
             ASSERT_TRUE(writer.value().finish().ok());
             const GlbCompactionStats& stats = writer.value().compaction_stats();
             const Measured m = compare(full, path);
-            EXPECT_LE(m.position_m, static_cast<double>(bounds.position_m) + kFloat);
-            EXPECT_LE(m.rotation_rad, static_cast<double>(bounds.rotation_rad) + kFloat);
-            EXPECT_NEAR(stats.position_m, m.position_m, kFloat);
-            EXPECT_NEAR(stats.rotation_rad, m.rotation_rad, kFloat);
-            EXPECT_EQ(stats.keys, m.keys);
-            EXPECT_EQ(stats.kept, m.kept);
-            EXPECT_LE(m.scale_rel, static_cast<double>(bounds.scale_rel) + kFloat);
+            expect_within_bounds_as_reported(m, stats, bounds);
             EXPECT_EQ(m.keys, std::size_t{kBirds} * (spread ? 9 : 8) * frames);
             EXPECT_LT(m.kept, m.keys / 4);
             EXPECT_LT(fs::file_size(path) * 2, fs::file_size(full));
