@@ -49,13 +49,9 @@ bool in_contact(const rods::RodWorld& world, std::uint32_t c, const rods::RodFra
     const rods::ChainInstance& ch = world.chains[c];
     const rods::ChainTemplate& t = world.templ(ch);
     for (std::uint32_t k = 0; k < ch.collider_count; ++k) {
-        const rods::Capsule& cap = frame.colliders[ch.collider_begin + k];
+        const rods::Collider& collider = frame.colliders[ch.collider_begin + k];
         for (std::uint32_t i = 1; i < t.chain.joint_count; ++i) {
-            const glm::vec3 p = rods::position(s, i);
-            const glm::vec3 ab = cap.b - cap.a;
-            const float len2 = glm::dot(ab, ab);
-            const float u = len2 > 0.0f ? std::clamp(glm::dot(p - cap.a, ab) / len2, 0.0f, 1.0f) : 0.0f;
-            if (glm::length(p - (cap.a + u * ab)) < cap.radius + t.chain.thickness + 1e-3f) return true;
+            if (rods::collider_gap(collider, rods::position(s, i), t.chain.thickness) < 1e-3f) return true;
         }
     }
     return false;

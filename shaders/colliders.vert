@@ -20,6 +20,15 @@ layout(location = 2) out vec3 out_facing;  // lit.frag: unused by meshes (zero)
 
 void main() {
     RodColliderGpu c = colliders[gl_InstanceIndex];
+    // Outside colliders only: an inside one would hide the strands it holds, and a plane
+    // has no extent to draw. The others' vertices are all clipped (w = 0).
+    if (c.b.w != float(KW_RODS_COLLIDER_OUTSIDE)) {
+        gl_Position = vec4(0.0);
+        out_color = vec4(0.0);
+        out_across = vec3(0.0, 1.0, 0.0);
+        out_facing = vec3(0.0);
+        return;
+    }
     vec3 a = c.a.xyz, b = c.b.xyz;
     float radius = c.a.w;
     vec3 along = b - a;

@@ -1,7 +1,7 @@
 #version 450
 // The rod kernel's kinematic input of rigged characters, written on the device: for each
-// posed instance (one invocation), its reference joint, its chain roots, its colliders
-// and its chains' key sources (docs/keyed-examples.md K.1; engine/rods/rod_scene.cpp key_entry)
+// posed instance (one invocation), its reference joint, its chain roots, its colliders,
+// its chains' key sources and center frames (docs/keyed-examples.md K.1; engine/rods/rod_scene.cpp key_entry)
 // from the pose backend's world matrices, exactly as RodScene::rigged_frame computes them
 // on the host (engine/scene/rod_scene.cpp) with gltf::rigid_part (engine/gltf/animation.cpp:
 // the translation, and the rotation of the matrix's columns normalized, a mirror turned
@@ -23,6 +23,7 @@ layout(std430, binding = KW_ROD_INPUTS_BINDING_REFERENCE) writeonly buffer Refer
 layout(std430, binding = KW_ROD_INPUTS_BINDING_ROOTS) writeonly buffer Roots { RodTransformGpu roots[]; };
 layout(std430, binding = KW_ROD_INPUTS_BINDING_COLLIDERS) writeonly buffer Colliders { RodColliderGpu colliders[]; };
 layout(std430, binding = KW_ROD_INPUTS_BINDING_KEYS) writeonly buffer Keys { RodTransformGpu keys[]; };
+layout(std430, binding = KW_ROD_INPUTS_BINDING_CENTERS) writeonly buffer Centers { RodTransformGpu centers[]; };
 
 layout(push_constant) uniform Push { RodInputPush push; };
 
@@ -71,7 +72,7 @@ void main() {
         RodInputAttachmentGpu a = attachments[push.counts.w + k];
         RodTransformGpu joint = rigid_part(i, a.node.x);
         colliders[ids.z + k].a = vec4(joint.position.xyz + rotate(joint.rotation, a.a.xyz), a.a.w);
-        colliders[ids.z + k].b = vec4(joint.position.xyz + rotate(joint.rotation, a.b.xyz), 0.0);
+        colliders[ids.z + k].b = vec4(joint.position.xyz + rotate(joint.rotation, a.b.xyz), a.b.w);
     }
     // rod_scene.cpp key_entry: a motion source's world pose; a pose source's rotation
     // relative to its parent's (the world's when it has none), position 0.
@@ -86,4 +87,7 @@ void main() {
             keys[ids.w + k] = RodTransformGpu(vec4(0.0), rotation);
         }
     }
+    // rod_scene.cpp rigged_frame: a center frame is its node's rigid part.
+    const uint first_center = push.counts.w + push.more.x + push.more.y;
+    for (uint k = 0u; k < push.more.z; ++k) centers[instances[i].more.x + k] = rigid_part(i, attachments[first_center + k].node.x);
 }

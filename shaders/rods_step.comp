@@ -55,6 +55,8 @@ layout(std430, binding = KW_RODS_BINDING_MOTION) buffer Motion { RodJointMotionG
 layout(std430, binding = KW_RODS_BINDING_SPIN) buffer Spin { RodJointSpinGpu spin[]; };
 layout(std430, binding = KW_RODS_BINDING_CHAIN_STATE) buffer ChainStates { RodChainStateGpu chain_states[]; };
 layout(std430, binding = KW_RODS_BINDING_KEYED) readonly buffer Keyed { vec4 keyed[]; };
+layout(std430, binding = KW_RODS_BINDING_CENTERS) readonly buffer Centers { RodTransformGpu centers[]; };
+layout(std430, binding = KW_RODS_BINDING_CENTER_STATE) buffer CenterStates { RodTransformGpu center_states[]; };
 
 layout(push_constant) uniform Push { RodPush push; };
 
@@ -96,6 +98,12 @@ void push_out(inout vec3 p, vec3 center, float radius) {
     const float len = sqrt(len2);
     const vec3 n = len > 1e-9 ? d / len : vec3(0.0, 1.0, 0.0);
     p = center + radius * n;
+}
+void pull_in(inout vec3 p, vec3 center, float radius) {
+    const vec3 d = p - center;
+    const float len2 = dot(d, d);
+    if (len2 <= radius * radius) return;
+    p = center + radius * (d / sqrt(len2));
 }
 vec3 closest_on_segment(vec3 p, vec3 a, vec3 b) {
     const vec3 ab = b - a;
@@ -289,8 +297,27 @@ void main() {
             omega[i] = sp.omega.xyz;
         }
     }
-    const RodTransformGpu from = chain_states[c].root;
+    RodTransformGpu from = chain_states[c].root;
     const RodTransformGpu to = roots[c];
+
+    // ---- the chain carried by its center frame's motion (solver.cpp follow_center) ----
+    const uint center = chain.joints.z;
+    if (center != KW_RODS_NO_CENTER) {
+        const RodTransformGpu was = center_states[center];
+        const RodTransformGpu now = centers[center];
+        const vec4 r = qnormalize(qmul(now.rotation, qconj(was.rotation)));
+        [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
+            if (i < n) {
+                x[i] = qrot(r, x[i]);
+                v[i] = qrot(r, v[i]);
+                q[i] = qnormalize(qmul(r, q[i]));
+                omega[i] = qrot(r, omega[i]);
+            }
+        }
+        from.position = vec4(now.position.xyz + qrot(r, from.position.xyz - was.position.xyz), 0.0);
+        from.rotation = qnormalize(qmul(r, from.rotation));
+        center_states[center] = now;
+    }
 
     // ---- A.5: momentum suppression (solver.cpp suppress_momentum) ----
     const float suppression = SUPPRESSION == KW_RODS_SUPPRESSION_FULL ? 1.0 : t.step.w;
@@ -421,9 +448,25 @@ void main() {
             for (uint ci = cbegin; ci < cend; ++ci) {
                 const RodColliderGpu col = colliders[ci];
                 const vec3 ca = col.a.xyz - from.position.xyz, cb = col.b.xyz - from.position.xyz;
-                const float radius = col.a.w + thickness;
-                [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
-                    if (i < n) push_out(p[i], closest_on_segment(p[i], ca, cb), radius);
+                // solver.cpp collide(), with rods::collider_reach()'s distance for each kind.
+                if (col.b.w == float(KW_RODS_COLLIDER_PLANE)) {
+                    const vec3 normal = cb - ca;
+                    [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
+                        if (i < n) {
+                            const float s = dot(p[i] - ca, normal);
+                            if (s < thickness) p[i] += (thickness - s) * normal;
+                        }
+                    }
+                } else if (col.b.w == float(KW_RODS_COLLIDER_INSIDE)) {
+                    const float radius = max(col.a.w - thickness, 0.0);
+                    [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
+                        if (i < n) pull_in(p[i], closest_on_segment(p[i], ca, cb), radius);
+                    }
+                } else {
+                    const float radius = col.a.w + thickness;
+                    [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
+                        if (i < n) push_out(p[i], closest_on_segment(p[i], ca, cb), radius);
+                    }
                 }
             }
         }

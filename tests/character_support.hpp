@@ -66,8 +66,7 @@ public:
         : scene_(scene), count_(std::min<std::uint32_t>(limit, static_cast<std::uint32_t>(scene.world.chains.size()))) {
         scene_.frame(0, frame_);
         for (std::uint32_t c = 0; c < count_; ++c) {
-            const rods::RestShape rest = rods::rest_shape(scene_.world, c, frame_);
-            states_.push_back(rods::initial_state(scene_.world.templ(scene_.world.chains[c]).chain, frame_.roots[c], rest.shape));
+            states_.push_back(rods::initial_chain_state(scene_.world, c, frame_));
             keys_.push_back(rods::initial_key_state(scene_.world, c, frame_));
         }
     }

@@ -13,8 +13,12 @@ void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, cons
     const rods::ChainInstance& c = world.chains[chain];
     const rods::ChainTemplate& t = world.templ(c);
     rods::RestShape rest = rods::rest_shape(world, chain, frame, rods::measure_keys(world, chain, frame, keys));
-    const std::span<const rods::Capsule> colliders(frame.colliders.data() + c.collider_begin, c.collider_count);
-    rods::step(t.chain, t.params, frame.roots[chain], rest.shape, {}, colliders, frame.dt, state);
+    if (c.center != rods::kNoCenter) {
+        rods::follow_center(state.center, frame.centers[c.center], state);
+        state.center = frame.centers[c.center];
+    }
+    const std::span<const rods::Collider> colliders(frame.colliders.data() + c.collider_begin, c.collider_count);
+    rods::step(t.chain, t.params, frame.roots[chain], rest.shape, colliders, frame.dt, state);
     if (rest_out != nullptr) *rest_out = std::move(rest);
 }
 
@@ -39,6 +43,7 @@ public:
         run([&](std::uint32_t c) {
             const rods::RestShape rest = rods::rest_shape(world, c, initial);
             states_[c] = rods::initial_state(world.templ(world.chains[c]).chain, initial.roots[c], rest.shape);
+            if (const std::uint32_t center = world.chains[c].center; center != rods::kNoCenter) states_[c].center = initial.centers[center];
             keys_[c] = rods::initial_key_state(world, c, initial);
             keep(c, rest);
         });

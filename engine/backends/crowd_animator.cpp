@@ -43,7 +43,8 @@ public:
             const compute::BufferView views[KW_ROD_INPUTS_BINDING_COUNT] = {
                 {poses->buffer(DeviceBuffer::PoseWorld).buffer}, {&rig.instances}, {&rig.attachments},
                 {rods.buffer(DeviceBuffer::RodReference).buffer}, {rods.buffer(DeviceBuffer::RodRoots).buffer},
-                {rods.buffer(DeviceBuffer::RodColliders).buffer}, {rods.buffer(DeviceBuffer::RodKeys).buffer}};
+                {rods.buffer(DeviceBuffer::RodColliders).buffer}, {rods.buffer(DeviceBuffer::RodKeys).buffer},
+                {rods.buffer(DeviceBuffer::RodCenters).buffer}};
             rig.kernel.bind(views);
             const std::uint32_t groups = (rig.push.counts.x + KW_ROD_INPUTS_WORKGROUP_SIZE - 1) / KW_ROD_INPUTS_WORKGROUP_SIZE;
             rig.kernel.dispatch(recording, std::as_bytes(std::span(&rig.push, 1)), groups);
@@ -131,12 +132,12 @@ Result<bool> CrowdAnimator::write_inputs_on(RodBackend& rods) {
             const CharacterInstance& inst = scene_->instances[c];
             // Its chains' key sources follow each other (RodWorld::finalize, chain by chain).
             const std::uint32_t first_key = k.chains.empty() ? 0u : scene_->world.chains[inst.chain_begin].key_begin;
-            instances.push_back({{c, inst.chain_begin, inst.collider_begin, first_key}});
+            instances.push_back({{c, inst.chain_begin, inst.collider_begin, first_key}, {inst.center_begin, 0u, 0u, 0u}});
         }
         std::vector<gpu::RodInputAttachmentGpu> attachments;
         for (const ChainAttachment& a : k.chains) attachments.push_back({{a.joint, 0u, 0u, 0u}, {}, {}});
         for (const ColliderAttachment& a : k.colliders) {
-            attachments.push_back({{a.joint, 0u, 0u, 0u}, {a.a.x, a.a.y, a.a.z, a.radius}, {a.b.x, a.b.y, a.b.z, 0.0f}});
+            attachments.push_back({{a.joint, 0u, 0u, 0u}, {a.a.x, a.a.y, a.a.z, a.radius}, {a.b.x, a.b.y, a.b.z, static_cast<float>(a.kind)}});
         }
         std::uint32_t keys = 0;
         for (const ChainAttachment& a : k.chains) {
@@ -145,6 +146,12 @@ Result<bool> CrowdAnimator::write_inputs_on(RodBackend& rods) {
                 attachments.push_back({{key.joint, parent, static_cast<std::uint32_t>(key.kind), 0u}, {}, {}});
                 ++keys;
             }
+        }
+        std::uint32_t centers = 0;
+        for (const ChainAttachment& a : k.chains) {
+            if (a.center < 0) continue;
+            attachments.push_back({{static_cast<std::uint32_t>(a.center), 0u, 0u, 0u}, {}, {}});
+            ++centers;
         }
         const std::uint64_t sizes[] = {instances.size() * sizeof(gpu::RodInputInstanceGpu),
                                        attachments.size() * sizeof(gpu::RodInputAttachmentGpu)};
@@ -157,7 +164,7 @@ Result<bool> CrowdAnimator::write_inputs_on(RodBackend& rods) {
         if (!kernel) return kernel.error();
         const gpu::RodInputPush push{{static_cast<std::uint32_t>(instances.size()), static_cast<std::uint32_t>(rig.nodes),
                                       k.skeleton.reference, static_cast<std::uint32_t>(k.chains.size())},
-                                     {static_cast<std::uint32_t>(k.colliders.size()), keys, 0u, 0u}};
+                                     {static_cast<std::uint32_t>(k.colliders.size()), keys, centers, 0u}};
         rigs.push_back({rig.backend, std::move(kernel).value(), std::move(buffers.value()[0]), std::move(buffers.value()[1]), push});
     }
     auto writer = std::make_shared<const DeviceInputWriter>(options_.context, std::move(rigs));

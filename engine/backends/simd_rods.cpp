@@ -141,6 +141,11 @@ public:
         key_states_.assign(world.chains.size(), {});
         for (const std::uint32_t c : keyed_chains_) key_states_[c] = rods::initial_key_state(world, c, initial);
         keyed_.assign(keyed_chains_.empty() ? 0 : world.chains.size() * rods::kMaxKeyedExamples, 0.0f);
+        center_chains_.clear();
+        for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
+            if (world.chains[c].center != rods::kNoCenter) center_chains_.push_back(c);
+        }
+        centers_ = initial.centers;
         split_threads();
 
         // Every chain at rest on its initial rest shape, by engine/rods itself (as the other
@@ -179,6 +184,19 @@ public:
                 std::copy(u.begin(), u.end(), keyed_.begin() + static_cast<std::ptrdiff_t>(c * rods::kMaxKeyedExamples));
             }
         });
+        // Chains with a center frame are carried by its motion first, by engine/rods itself
+        // (cpu-reference's step_chain_reference), lane by lane: they are few (a VRM
+        // avatar's springs that name a center), and the result keeps the reference's bits.
+        parallel_for(center_chains_.size(), threads_, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) {
+                const std::uint32_t c = center_chains_[i];
+                const std::uint32_t center = world_->chains[c].center;
+                rods::ChainState s = state(c);
+                rods::follow_center(centers_[center], frame.centers[center], s);
+                put_state(batches_[lane_of_[c].first], lane_of_[c].second, s);
+            }
+        });
+        centers_ = frame.centers;
         const simd::RodStepArgs args{templates_.data(), batches_.data(), storage_.get(), &frame, world_->chains.data(),
                                      keyed_.data()};
         const std::size_t parts = split_.size() - 1;
@@ -279,6 +297,7 @@ private:
         auto at = [&](std::size_t row) { return chain[row * kBatchLanes + l]; };
         s.root.position = {at(simd::kRootP), at(simd::kRootP + 1), at(simd::kRootP + 2)};
         s.root.rotation = glm::quat(at(simd::kRootQ + 3), at(simd::kRootQ), at(simd::kRootQ + 1), at(simd::kRootQ + 2));
+        if (const std::uint32_t center = world_->chains[c].center; center != rods::kNoCenter) s.center = centers_[center];
         return s;
     }
 
@@ -317,6 +336,8 @@ private:
     std::vector<std::uint32_t> keyed_chains_;                     // the chains with keyed examples
     std::vector<rods::KeyState> key_states_;                      // per chain (keyed ones only used)
     std::vector<float> keyed_;                                    // per chain, kMaxKeyedExamples raw weights
+    std::vector<std::uint32_t> center_chains_;                    // the chains with a center frame
+    std::vector<rods::Transform> centers_;                        // the last frame's center frames (RodFrame::centers)
     hwy::AlignedFreeUniquePtr<float[]> storage_;
 };
 

@@ -27,6 +27,7 @@ std::uint32_t element_bytes(DeviceBuffer name) {
         case DeviceBuffer::RodColliders: return sizeof(gpu::RodColliderGpu);
         case DeviceBuffer::PoseWorld: return sizeof(gpu::PoseMatrixGpu);
         case DeviceBuffer::RodKeys: return sizeof(gpu::RodTransformGpu);
+        case DeviceBuffer::RodCenters: return sizeof(gpu::RodTransformGpu);
     }
     return 0;
 }
@@ -52,7 +53,9 @@ public:
             {rods.buffer(DeviceBuffer::RodReference).buffer}, {rods.buffer(DeviceBuffer::RodRoots).buffer},
             {rods.buffer(DeviceBuffer::RodColliders).buffer},
             // MatrixInput names no key sources (more.y = 0): they come from the RodFrame.
-            {rods.buffer(DeviceBuffer::RodKeys).buffer}};
+            {rods.buffer(DeviceBuffer::RodKeys).buffer},
+            // Nor centers (more.z = 0; set_matrix_input refuses worlds that have them).
+            {rods.buffer(DeviceBuffer::RodCenters).buffer}};
         kernel_.bind(views);
     }
 
@@ -134,9 +137,13 @@ Result<void> set_matrix_input(RodBackend& rods, const MatrixInput& input) {
     if (data == nullptr || world == nullptr) return bad_input("the backend has no world; load() one first");
     compute::Device& device = device_rods->compute_device();
     KW_TRY(check_matrix_input(input, *world, device));
+    if (world->center_count > 0) {
+        return bad_input("the world has chains with a center frame (RodFrame::centers), which MatrixInput does not write; "
+                         "step it with RodFrame input instead");
+    }
 
     std::vector<gpu::RodInputInstanceGpu> instances;
-    for (const MatrixTarget& t : input.targets) instances.push_back({{t.character, t.first_chain, t.first_collider, 0u}});
+    for (const MatrixTarget& t : input.targets) instances.push_back({{t.character, t.first_chain, t.first_collider, 0u}, {}});
     std::vector<gpu::RodInputAttachmentGpu> attachments;
     for (const std::uint32_t node : input.chain_nodes) attachments.push_back({{node, 0u, 0u, 0u}, {}, {}});
     for (const MatrixCollider& m : input.colliders) {

@@ -132,6 +132,7 @@ public:
             case DeviceBuffer::RodReference: return span(KW_RODS_BINDING_REFERENCE, world_->character_count);
             case DeviceBuffer::RodRoots: return span(KW_RODS_BINDING_ROOTS, world_->chains.size());
             case DeviceBuffer::RodColliders: return span(KW_RODS_BINDING_COLLIDERS, world_->collider_count);
+            case DeviceBuffer::RodCenters: return span(KW_RODS_BINDING_CENTERS, world_->center_count);
             case DeviceBuffer::RodKeys:
                 return DeviceSpan{.buffer = &key_buffers_[KW_ROD_KEYS_BINDING_KEYS], .first = 0, .items = world_->key_count};
             default: return {};
@@ -206,7 +207,8 @@ public:
         for (std::uint32_t e = 0; e < count; ++e) {
             const std::uint32_t c = order[e];
             const rods::ChainInstance& ch = world.chains[c];
-            chains[e] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, c, 0u, 0u}};
+            static_assert(rods::kNoCenter == KW_RODS_NO_CENTER);
+            chains[e] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, c, ch.center, 0u}};
             if (groups_.empty() || groups_.back().template_index != ch.template_index) {
                 groups_.push_back({ch.template_index, e, 0u, nullptr});
             }
@@ -273,7 +275,9 @@ public:
             motion.size() * sizeof(gpu::RodJointMotionGpu),
             spin.size() * sizeof(gpu::RodJointSpinGpu),
             chain_states.size() * sizeof(gpu::RodChainStateGpu),
-            count * sizeof(gpu::vec4)};
+            count * sizeof(gpu::vec4),
+            std::uint64_t{world.center_count} * sizeof(gpu::RodTransformGpu),
+            std::uint64_t{world.center_count} * sizeof(gpu::RodTransformGpu)};
         auto storage = compute::create_storage_buffers(*ctx_, sizes, "the rod world");
         if (!storage) return storage.error();
         buffers_ = std::move(storage).value();
@@ -283,6 +287,10 @@ public:
         KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_MOTION], bytes_of(motion)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_SPIN], bytes_of(spin)));
         KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], bytes_of(chain_states)));
+        // The centers' last frame: the initial one (rods::initial_chain_state).
+        std::vector<gpu::RodTransformGpu> centers(initial.centers.size());
+        std::transform(initial.centers.begin(), initial.centers.end(), centers.begin(), [](const rods::Transform& t) { return to_gpu(t); });
+        KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_CENTER_STATE], bytes_of(centers)));
         // u = 0 for every chain: rod_keys.comp writes those of the chains with keyed
         // examples before each step; the others' stay 0, which K.4 leaves the view blend.
         KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_KEYED], bytes_of(std::vector<gpu::vec4>(count, gpu::vec4{}))));
@@ -385,7 +393,8 @@ public:
                                         rounded(std::uint64_t{world_->key_count} * sizeof(gpu::RodTransformGpu)) +
                                         rounded(std::uint64_t{world_->character_count} * sizeof(gpu::RodTransformGpu)) +
                                         rounded(world_->chains.size() * sizeof(gpu::RodTransformGpu)) +
-                                        rounded(std::uint64_t{world_->collider_count} * sizeof(gpu::RodColliderGpu));
+                                        rounded(std::uint64_t{world_->collider_count} * sizeof(gpu::RodColliderGpu)) +
+                                        rounded(std::uint64_t{world_->center_count} * sizeof(gpu::RodTransformGpu));
             auto ring = compute::StagingRing::create(*ctx_, bytes, ctx_->frames_in_flight());
             if (!ring) return ring.error();
             ring_.emplace(std::move(ring).value());
@@ -439,6 +448,7 @@ public:
             const rods::ChainInstance& ch = world_->chains[c];
             rods::ChainState& s = out[c];
             s.root = transform_of(chain_states_[c].root);
+            if (ch.center != rods::kNoCenter) s.center = transform_of(center_states_[ch.center]);
             const rods::ChainShape rest = rest_of(static_cast<std::uint32_t>(c));
             for (std::uint32_t i = 0; i < world_->templ(ch).chain.joint_count; ++i) {
                 const std::uint32_t j = ch.joint_begin + i;
@@ -517,9 +527,12 @@ private:
         roots_.resize(frame.roots.size());
         std::transform(frame.roots.begin(), frame.roots.end(), roots_.begin(), [](const rods::Transform& t) { return to_gpu(t); });
         colliders_.resize(frame.colliders.size());
-        std::transform(frame.colliders.begin(), frame.colliders.end(), colliders_.begin(), [](const rods::Capsule& c) {
-            return gpu::RodColliderGpu{to_gpu(c.a, c.radius), to_gpu(c.b)};
+        std::transform(frame.colliders.begin(), frame.colliders.end(), colliders_.begin(), [](const rods::Collider& c) {
+            return gpu::RodColliderGpu{to_gpu(c.a, c.radius), to_gpu(c.b, static_cast<float>(c.kind))};  // KW_RODS_COLLIDER_* (shared_layout.cpp)
         });
+        centers_.resize(frame.centers.size());
+        std::transform(frame.centers.begin(), frame.centers.end(), centers_.begin(), [](const rods::Transform& t) { return to_gpu(t); });
+        KW_TRY(compute::upload(target, buffers_[KW_RODS_BINDING_CENTERS], bytes_of(centers_)));
         KW_TRY(compute::upload(target, buffers_[KW_RODS_BINDING_REFERENCE], bytes_of(reference_)));
         KW_TRY(compute::upload(target, buffers_[KW_RODS_BINDING_ROOTS], bytes_of(roots_)));
         keys_.resize(frame.keys.size());
@@ -545,6 +558,8 @@ private:
         KW_TRY(compute::download(*ctx_, buffers_[KW_RODS_BINDING_MOTION], writable_bytes_of(motion_)));
         KW_TRY(compute::download(*ctx_, buffers_[KW_RODS_BINDING_SPIN], writable_bytes_of(spin_)));
         KW_TRY(compute::download(*ctx_, buffers_[KW_RODS_BINDING_CHAIN_STATE], writable_bytes_of(chain_states_)));
+        center_states_.resize(world_->center_count);
+        KW_TRY(compute::download(*ctx_, buffers_[KW_RODS_BINDING_CENTER_STATE], writable_bytes_of(center_states_)));
         return {};
     }
 
@@ -574,11 +589,12 @@ private:
     float dt_ = -1.0f;
     double gpu_ms_ = -1.0;
     // Per-frame staging on the host, kept to avoid reallocating every frame.
-    std::vector<gpu::RodTransformGpu> reference_, roots_, keys_;
+    std::vector<gpu::RodTransformGpu> reference_, roots_, keys_, centers_;
     std::vector<gpu::RodColliderGpu> colliders_;
     std::vector<gpu::RodJointMotionGpu> motion_;
     std::vector<gpu::RodJointSpinGpu> spin_;
     std::vector<gpu::RodChainStateGpu> chain_states_;
+    std::vector<gpu::RodTransformGpu> center_states_;
 };
 
 }  // namespace

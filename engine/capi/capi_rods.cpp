@@ -234,13 +234,13 @@ void fill_frame(const kodawari_chain_world& w, const kodawari_chain_frame& f, fl
     for (std::uint32_t i = 0; i < w.world.collider_count; ++i) {
         if (f.colliders != nullptr) {
             const kodawari_capsule& c = f.colliders[i];
-            out.colliders[i] = rods::Capsule{vec3(c.a), vec3(c.b), c.radius};
+            out.colliders[i] = rods::Collider{vec3(c.a), vec3(c.b), c.radius};
             continue;
         }
         // Rides on its character's reference joint (kodawari_collider_desc).
         const kodawari_collider_desc& a = w.attachments[i];
         const rods::Transform& ref = out.reference[a.character];
-        out.colliders[i] = rods::Capsule{ref.position + ref.rotation * vec3(a.local.a),
+        out.colliders[i] = rods::Collider{ref.position + ref.rotation * vec3(a.local.a),
                                          ref.position + ref.rotation * vec3(a.local.b), a.local.radius};
     }
     // The engine's own check, behind ours.

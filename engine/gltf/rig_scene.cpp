@@ -81,21 +81,57 @@ std::string scene_name(std::string s) {
     return s.empty() ? std::string("chain") : s;
 }
 
-// Nodes the scene can name: a non-empty name no other node has.
-std::vector<bool> nameable(const Character& ch) {
-    std::vector<bool> out(ch.nodes.size(), false);
+// How the scene names each node (the scene loader's find_node): its name where no other
+// node has it; else its path of names from a root ("Armature/Hips/Hair") where each step
+// is unique among its siblings and holds no '/'; else its index.
+std::vector<Json> node_refs(const Character& ch) {
+    const auto unique_name = [&](std::size_t i) {
+        return !ch.nodes[i].name.empty() &&
+               std::count_if(ch.nodes.begin(), ch.nodes.end(), [&](const Node& n) { return n.name == ch.nodes[i].name; }) == 1;
+    };
+    std::vector<Json> out(ch.nodes.size());
     for (std::size_t i = 0; i < ch.nodes.size(); ++i) {
-        if (ch.nodes[i].name.empty()) continue;
-        out[i] = std::count_if(ch.nodes.begin(), ch.nodes.end(), [&](const Node& n) { return n.name == ch.nodes[i].name; }) == 1;
+        if (unique_name(i) && ch.nodes[i].name.find('/') == std::string::npos) {
+            out[i] = ch.nodes[i].name;
+            continue;
+        }
+        std::string path;
+        bool ok = true;
+        for (int n = static_cast<int>(i); n >= 0 && ok; n = ch.nodes[static_cast<std::size_t>(n)].parent) {
+            const Node& node = ch.nodes[static_cast<std::size_t>(n)];
+            const int parent = node.parent;
+            const auto same = [&](int other) { return other != n && ch.nodes[static_cast<std::size_t>(other)].name == node.name; };
+            bool clash = false;
+            if (parent >= 0) {
+                const std::vector<int>& siblings = ch.nodes[static_cast<std::size_t>(parent)].children;
+                clash = std::any_of(siblings.begin(), siblings.end(), same);
+            } else {
+                for (std::size_t r = 0; r < ch.nodes.size() && !clash; ++r) {
+                    clash = ch.nodes[r].parent < 0 && same(static_cast<int>(r));
+                }
+            }
+            ok = !node.name.empty() && node.name.find('/') == std::string::npos && !clash;
+            path = path.empty() ? node.name : node.name + "/" + path;
+        }
+        // A path that is itself some node's name would be read as that name.
+        ok = ok && std::none_of(ch.nodes.begin(), ch.nodes.end(), [&](const Node& n) { return n.name == path; });
+        out[i] = ok ? Json(path) : Json(i);
     }
     return out;
+}
+
+// A node's name for messages: its name, or "node <index>".
+std::string node_label(const Character& ch, int n) {
+    const std::string& name = ch.nodes[static_cast<std::size_t>(n)].name;
+    return name.empty() ? "node " + std::to_string(n) : "\"" + name + "\"";
 }
 
 struct Candidate {
     FoundChain chain;
     PhysicsScale physics;
     std::optional<rods::SolverParams> params;  // VRM's mapped parameters
-    std::size_t colliders_used = 0;            // VRM: how many colliders the spring had
+    std::vector<std::size_t> colliders;        // VRM: the spring's colliders (VrmSprings::colliders indices)
+    int center = -1;                           // VRM: its center node
 };
 
 float max_scale(const glm::mat4& m) {
@@ -110,7 +146,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
     const Character& ch = loaded.value();
     RigScene out;
     out.size = character_size(ch);
-    const std::vector<bool> named = nameable(ch);
+    const std::vector<Json> refs = node_refs(ch);
     const Pose rest = rest_pose(ch);
 
     // The chains, by the first rule that applies (see the header).
@@ -143,7 +179,8 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
                 k.chain = std::move(s.chain);
                 k.physics = s.physics;
                 k.params = s.params;
-                k.colliders_used = s.colliders.size();
+                k.colliders = s.colliders;
+                k.center = s.center;
                 candidates.push_back(std::move(k));
             }
             vrm_colliders = std::move(vrm.colliders);
@@ -157,19 +194,13 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
     Json chains = Json::array();
     std::set<int> used_nodes;
     std::set<std::string> used_names;
-    std::size_t min_colliders_used = SIZE_MAX;
+    std::vector<const Candidate*> written;  // per chain of `chains`
     for (const Candidate& k : candidates) {
         const FoundChain& c = k.chain;
-        const auto unnamed = std::find_if(c.nodes.begin(), c.nodes.end(), [&](int n) { return !named[static_cast<std::size_t>(n)]; });
-        if (unnamed != c.nodes.end()) {
-            out.warnings.push_back(ch.source + ": chain \"" + c.name + "\" skipped: node " + std::to_string(*unnamed) +
-                                   " has no name of its own, and scenes refer to nodes by name");
-            continue;
-        }
         const auto shared = std::find_if(c.nodes.begin(), c.nodes.end(), [&](int n) { return used_nodes.count(n) != 0; });
         if (shared != c.nodes.end()) {
-            out.warnings.push_back(ch.source + ": chain \"" + c.name + "\" skipped: node \"" +
-                                   ch.nodes[static_cast<std::size_t>(*shared)].name + "\" is in a chain already");
+            out.warnings.push_back(ch.source + ": chain \"" + c.name + "\" skipped: node " + node_label(ch, *shared) +
+                                   " is in a chain already");
             continue;
         }
         if (chains.size() == 64) {
@@ -190,11 +221,11 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
             walk = walk && n.children.size() == 1 && n.children.front() == c.nodes[i + 1];
         }
         if (walk) {
-            j["root"] = ch.nodes[static_cast<std::size_t>(c.nodes.front())].name;
+            j["root"] = refs[static_cast<std::size_t>(c.nodes.front())];
             j["joints"] = c.nodes.size();
         } else {
             Json list = Json::array();
-            for (const int n : c.nodes) list.push_back(ch.nodes[static_cast<std::size_t>(n)].name);
+            for (const int n : c.nodes) list.push_back(refs[static_cast<std::size_t>(n)]);
             j["nodes"] = list;
         }
         j["thickness"] = num(k.physics.thickness);
@@ -205,10 +236,13 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
             physics["rest_stiffness"] = num(k.params->rest_stiffness);
             physics["damping"] = num(k.params->damping);
             j["physics"] = physics;
-            min_colliders_used = std::min(min_colliders_used, k.colliders_used);
         }
+        if (k.center >= 0) j["center"] = refs[static_cast<std::size_t>(k.center)];
         chains.push_back(j);
-        out.chains.push_back(RigChain{name, ch.nodes[static_cast<std::size_t>(c.nodes.front())].name,
+        written.push_back(&k);
+        out.chains.push_back(RigChain{name, ch.nodes[static_cast<std::size_t>(c.nodes.front())].name.empty()
+                                                ? "node " + std::to_string(c.nodes.front())
+                                                : ch.nodes[static_cast<std::size_t>(c.nodes.front())].name,
                                       static_cast<std::uint32_t>(c.nodes.size()), c.length, k.physics.thickness});
     }
     if (chains.empty()) {
@@ -217,25 +251,22 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
                               "); name the roots with --roots or the name patterns with --chains");
     }
 
-    // Colliders, in their node's rigid frame at rest (docs/scene-format.md), metres.
+    // Colliders, in their node's rigid frame at rest (docs/scene-format.md), metres, named
+    // by their index in the file ("collider3") for the chains' lists.
     Json colliders = Json::array();
+    std::vector<std::string> collider_name(vrm_colliders.size());  // "" for one skipped
     for (std::size_t i = 0; i < vrm_colliders.size(); ++i) {
         const VrmCollider& c = vrm_colliders[i];
         const std::string what = ch.source + ": collider " + std::to_string(i);
-        if (c.inside) continue;  // read_vrm_springs() has warned
-        if (!named[static_cast<std::size_t>(c.node)]) {
-            out.warnings.push_back(what + " skipped: its node " + std::to_string(c.node) + " has no name of its own");
-            continue;
-        }
         const glm::mat4& world = rest.world[static_cast<std::size_t>(c.node)];
         const float radius = c.radius * max_scale(world);
-        if (!(radius > 0.0f)) {
+        if (c.kind != rods::ColliderKind::Plane && !(radius > 0.0f)) {
             out.warnings.push_back(what + " skipped: radius 0");
             continue;
         }
-        if (colliders.size() == rods::kMaxChainColliders) {
-            out.warnings.push_back(what + " and later ones skipped: a chain collides with at most " +
-                                   std::to_string(rods::kMaxChainColliders) + " colliders");
+        if (colliders.size() == rods::kMaxCharacterColliders) {
+            out.warnings.push_back(what + " and later ones skipped: a character has at most " +
+                                   std::to_string(rods::kMaxCharacterColliders) + " colliders");
             break;
         }
         const rods::Transform frame = rigid_part(world);
@@ -250,39 +281,69 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
             continue;
         }
         Json j;
-        j["type"] = c.capsule ? "capsule" : "sphere";
-        j["joint"] = ch.nodes[static_cast<std::size_t>(c.node)].name;
-        if (c.capsule) {
-            j["a"] = vec(a);
-            j["b"] = vec(b);
+        collider_name[i] = "collider" + std::to_string(i);
+        j["name"] = collider_name[i];
+        j["joint"] = refs[static_cast<std::size_t>(c.node)];
+        if (c.kind == rods::ColliderKind::Plane) {
+            // A normal turns by the inverse transpose of the node's linear part (exact under
+            // non-uniform scale), then into the rigid frame.
+            const glm::vec3 n = glm::normalize(glm::transpose(glm::inverse(glm::mat3(world))) * c.normal);
+            j["type"] = "plane";
+            j["point"] = vec(a);
+            j["normal"] = vec(glm::normalize(inverse * n));
         } else {
-            j["center"] = vec(a);
+            j["type"] = c.capsule ? "capsule" : "sphere";
+            if (c.capsule) {
+                j["a"] = vec(a);
+                j["b"] = vec(b);
+            } else {
+                j["center"] = vec(a);
+            }
+            j["radius"] = num(radius);
+            if (c.kind == rods::ColliderKind::Inside) j["inside"] = true;
         }
-        j["radius"] = num(radius);
         colliders.push_back(j);
     }
     out.colliders = static_cast<std::uint32_t>(colliders.size());
-    if (min_colliders_used < colliders.size()) {
-        out.warnings.push_back(ch.source + ": every chain collides with all " + std::to_string(colliders.size()) +
-                               " colliders; some VRM springs used only " + std::to_string(min_colliders_used) +
-                               " (per-spring collider groups are not kept)");
+    // Each VRM spring collides with its own collider groups; a chain lists its colliders
+    // unless it has all of them (and that many fit one chain).
+    for (std::size_t i = 0; i < written.size(); ++i) {
+        const Candidate& k = *written[i];
+        if (!k.params) continue;  // found by name patterns: all colliders, as before
+        Json list = Json::array();
+        for (const std::size_t c : k.colliders) {
+            if (collider_name[c].empty()) continue;
+            if (list.size() == rods::kMaxChainColliders) {
+                out.warnings.push_back(ch.source + ": chain \"" + chains[i]["name"].get<std::string>() + "\" keeps the first " +
+                                       std::to_string(rods::kMaxChainColliders) + " of its " + std::to_string(k.colliders.size()) +
+                                       " colliders (one chain touches at most that many)");
+                break;
+            }
+            list.push_back(collider_name[c]);
+        }
+        if (list.size() != colliders.size() || colliders.size() > rods::kMaxChainColliders) {
+            if (list.empty()) {
+                chains[i]["collide"] = false;
+            } else {
+                chains[i]["colliders"] = list;
+            }
+        }
     }
 
     // The reference joint: "head", the VRM humanoid head, else what the first chain hangs from.
     int reference = -1;
     for (std::size_t i = 0; i < ch.nodes.size() && reference < 0; ++i) {
-        if (named[i] && lower(ch.nodes[i].name) == "head") reference = static_cast<int>(i);
+        if (lower(ch.nodes[i].name) == "head" && refs[i].is_string()) reference = static_cast<int>(i);
     }
     if (reference < 0) {
         const int head = vrm_humanoid_bone(ch, "head");
-        if (head >= 0 && named[static_cast<std::size_t>(head)]) reference = head;
+        if (head >= 0) reference = head;
     }
     if (reference < 0) {
         const FoundChain& first = candidates.front().chain;
-        reference = first.parent >= 0 && named[static_cast<std::size_t>(first.parent)] ? first.parent : first.nodes.front();
-        out.warnings.push_back(ch.source + ": no \"head\" node and no VRM humanoid head: view directions are measured in \"" +
-                               ch.nodes[static_cast<std::size_t>(reference)].name +
-                               "\" (change \"reference_joint\" in the scene if that is wrong)");
+        reference = first.parent >= 0 ? first.parent : first.nodes.front();
+        out.warnings.push_back(ch.source + ": no \"head\" node and no VRM humanoid head: view directions are measured in " +
+                               node_label(ch, reference) + " (change \"reference_joint\" in the scene if that is wrong)");
     }
     out.reference = ch.nodes[static_cast<std::size_t>(reference)].name;
 
@@ -309,7 +370,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
     Json character;
     character["name"] = name;
     character["gltf"] = file;
-    character["reference_joint"] = out.reference;
+    character["reference_joint"] = refs[static_cast<std::size_t>(reference)];
     if (!out.clip.empty()) {
         character["animation"] = out.clip;
     } else {

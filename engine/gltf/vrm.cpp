@@ -162,7 +162,9 @@ private:
         return s;
     }
 
-    // A collider shape object {sphere: {...}} or {capsule: {...}} (VRM 1.0 and extended).
+    // A collider shape object {sphere: {...}}, {capsule: {...}} (VRM 1.0 and extended) or,
+    // in the extended collider only, {plane: {offset, normal}}. `inside` is read only
+    // from the extended collider (VRMC_springBone_extended_collider 1.0's shapes).
     Result<bool> shape(const json& shape_obj, const std::string& path, VrmCollider& out, bool extended) {
         if (const auto it = shape_obj.find("sphere"); it != shape_obj.end() && it->is_object()) {
             const std::string p = path + ".sphere";
@@ -173,7 +175,9 @@ private:
             out.capsule = false;
             out.offset = out.tail = offset.value();
             out.radius = r.value();
-            out.inside = extended && it->value("inside", false);
+            auto inside = flag(*it, "inside", p, extended);
+            if (!inside) return inside.error();
+            out.kind = inside.value() ? rods::ColliderKind::Inside : rods::ColliderKind::Outside;
             return true;
         }
         if (const auto it = shape_obj.find("capsule"); it != shape_obj.end() && it->is_object()) {
@@ -188,10 +192,39 @@ private:
             out.offset = offset.value();
             out.tail = tail.value();
             out.radius = r.value();
-            out.inside = extended && it->value("inside", false);
+            auto inside = flag(*it, "inside", p, extended);
+            if (!inside) return inside.error();
+            out.kind = inside.value() ? rods::ColliderKind::Inside : rods::ColliderKind::Outside;
+            return true;
+        }
+        if (const auto it = shape_obj.find("plane"); extended && it != shape_obj.end() && it->is_object()) {
+            const std::string p = path + ".plane";
+            auto offset = vec3(*it, "offset", p, glm::vec3(0.0f));
+            auto normal = vec3(*it, "normal", p, glm::vec3(0.0f, 0.0f, 1.0f));  // the extension's default
+            if (!offset) return offset.error();
+            if (!normal) return normal.error();
+            const float length = glm::length(normal.value());
+            if (!(length > 1e-6f)) {
+                return invalid(p + ".normal", "a plane's normal must be a non-zero vector (got [" + std::to_string(normal.value().x) +
+                                                  ", " + std::to_string(normal.value().y) + ", " + std::to_string(normal.value().z) + "])");
+            }
+            out.capsule = false;
+            out.kind = rods::ColliderKind::Plane;
+            out.offset = offset.value();
+            out.normal = normal.value() / length;
+            out.tail = out.offset + out.normal;
+            out.radius = 0.0f;
             return true;
         }
         return false;
+    }
+    // An optional boolean member, read only when `read` (else false).
+    Result<bool> flag(const json& parent, const std::string& key, const std::string& path, bool read) {
+        if (!read) return false;
+        const auto it = parent.find(key);
+        if (it == parent.end()) return false;
+        if (!it->is_boolean()) return invalid(path + "." + key, "expected true or false");
+        return it->get<bool>();
     }
 
     Result<void> read_collider_1(const json& collider, const std::string& path) {
@@ -215,11 +248,9 @@ private:
                 auto ok = shape(ext["shape"], ext_path, extended, true);
                 if (!ok) return ok.error();
                 if (ok.value()) {
-                    out = extended;
-                    if (out.inside) warn(ext_path, "inside collider: kept with inside = true, the solver has none");
+                    out = extended;  // the extension's shape replaces the base one, its fallback
                 } else {
-                    warn(ext_path, ext["shape"].contains("plane") ? "plane collider: not supported, the base shape is used"
-                                                                  : "unknown shape: the base shape is used");
+                    warn(ext_path, "unknown shape: the base shape is used");
                 }
             }
         }
@@ -229,7 +260,7 @@ private:
 
     // The chain of `nodes` with `bones` (the settings of each bone: every joint but the
     // tail), truncated and checked, added to out_. `path` names the spring.
-    Result<void> add_chain(std::vector<int> nodes, std::vector<Settings> bones, std::vector<std::size_t> colliders,
+    Result<void> add_chain(std::vector<int> nodes, std::vector<Settings> bones, std::vector<std::size_t> colliders, int center,
                            const std::string& path) {
         if (nodes.size() < 2) {
             warn(path, "a spring of " + std::to_string(nodes.size()) + " joint(s) has no bone; skipped");
@@ -283,6 +314,7 @@ private:
         std::sort(colliders.begin(), colliders.end());
         colliders.erase(std::unique(colliders.begin(), colliders.end()), colliders.end());
         spring.colliders = std::move(colliders);
+        spring.center = center;
         out_.springs.push_back(std::move(spring));
         return {};
     }
@@ -356,8 +388,13 @@ private:
                     members.insert(members.end(), groups[g.value()].begin(), groups[g.value()].end());
                 }
             }
-            if (spring.contains("center")) warn(sp + ".center", "a center node is not supported; ignored");
-            KW_TRY(add_chain(std::move(nodes), std::move(bones), std::move(members), sp));
+            int center = -1;
+            if (spring.contains("center")) {
+                auto c = index(spring, "center", sp, c_.nodes.size(), "node");
+                if (!c) return c.error();
+                center = static_cast<int>(c.value());
+            }
+            KW_TRY(add_chain(std::move(nodes), std::move(bones), std::move(members), center, sp));
         }
         return {};
     }
@@ -417,9 +454,12 @@ private:
                 if (!g) return g.error();
                 members.insert(members.end(), groups[g.value()].begin(), groups[g.value()].end());
             }
-            if (const auto center = group.find("center"); center != group.end() && center->is_number_integer() &&
-                                                          center->get<long long>() >= 0) {
-                warn(bp + ".center", "a center node is not supported; ignored");
+            // UniVRM 0.x writes -1 for "no center".
+            int center = -1;
+            if (const auto it = group.find("center"); it != group.end() && !(it->is_number_integer() && it->get<long long>() == -1)) {
+                auto c = index_value(*it, bp + ".center", c_.nodes.size(), "node");
+                if (!c) return c.error();
+                center = static_cast<int>(c.value());
             }
             auto bones = array(group, "bones", bp, false);
             if (!bones) return bones.error();
@@ -445,7 +485,7 @@ private:
                     starts.insert(starts.end(), branch.rbegin(), branch.rend());  // file order, first child first
                     for (const int node : nodes) claimed[static_cast<std::size_t>(node)] = true;
                     std::vector<Settings> per_bone(nodes.size() > 1 ? nodes.size() - 1 : 0, s.value());
-                    KW_TRY(add_chain(std::move(nodes), std::move(per_bone), members,
+                    KW_TRY(add_chain(std::move(nodes), std::move(per_bone), members, center,
                                      rp + " (chain from node " + std::to_string(start) + ")"));
                 }
             }

@@ -3,6 +3,7 @@
 // e.g. KW_RODS_MAX_JOINTS in backends/vulkan_rods.cpp.)
 // Only vec4/uvec4 members are used, so size = 16 x member count and offsets follow.
 #include <cstddef>
+#include <cstdint>
 
 #include <kodawari/shared/birds.h>
 #include <kodawari/shared/poses.h>
@@ -12,6 +13,7 @@
 #include <kodawari/shared/rods.h>
 #include <kodawari/shared/skin.h>
 
+#include "kodawari/rods/solver.hpp"
 
 namespace kodawari::gpu {
 
@@ -51,6 +53,10 @@ static_assert(sizeof(RodShapeJointGpu) == 32 && offsetof(RodShapeJointGpu, orien
 static_assert(sizeof(RodChainGpu) == 32 && offsetof(RodChainGpu, joints) == 16);
 static_assert(sizeof(RodTransformGpu) == 32 && offsetof(RodTransformGpu, rotation) == 16);
 static_assert(sizeof(RodColliderGpu) == 32 && offsetof(RodColliderGpu, b) == 16);
+// RodColliderGpu.b.w is a rods::ColliderKind as a float.
+static_assert(static_cast<std::uint32_t>(rods::ColliderKind::Outside) == KW_RODS_COLLIDER_OUTSIDE &&
+              static_cast<std::uint32_t>(rods::ColliderKind::Inside) == KW_RODS_COLLIDER_INSIDE &&
+              static_cast<std::uint32_t>(rods::ColliderKind::Plane) == KW_RODS_COLLIDER_PLANE);
 static_assert(sizeof(RodJointMotionGpu) == 32 && offsetof(RodJointMotionGpu, v) == 16);
 static_assert(sizeof(RodJointSpinGpu) == 32 && offsetof(RodJointSpinGpu, omega) == 16);
 static_assert(sizeof(RodChainStateGpu) == 80);
@@ -100,7 +106,7 @@ static_assert(sizeof(BirdDrawType) == 128 && offsetof(BirdDrawType, color) == 11
 static_assert(KW_CHAIN_DOT_VERTICES == 3 * KW_CHAIN_DOT_SIDES);
 static_assert(KW_PART_COUNT == 7, "BirdDrawType::parts has one entry per bird part");
 static_assert(KW_COLLIDER_VERTICES == (2 * KW_COLLIDER_RINGS + 1) * KW_COLLIDER_SIDES * 6);
-static_assert(sizeof(RodInputInstanceGpu) == 16);
+static_assert(sizeof(RodInputInstanceGpu) == 32 && offsetof(RodInputInstanceGpu, more) == 16);
 static_assert(sizeof(RodInputAttachmentGpu) == 48 && offsetof(RodInputAttachmentGpu, a) == 16 &&
               offsetof(RodInputAttachmentGpu, b) == 32);
 static_assert(sizeof(RodInputPush) == 32 && offsetof(RodInputPush, more) == 16);

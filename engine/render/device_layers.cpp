@@ -215,8 +215,8 @@ Result<void> ColliderLayer::from(gpu::VulkanContext& ctx, const RodBackend& back
                                                          " colliders; the world has " + std::to_string(count_));
     }
     packed_.resize(count_);
-    std::transform(input.colliders.begin(), input.colliders.end(), packed_.begin(), [](const rods::Capsule& c) {
-        return gpu::RodColliderGpu{{c.a.x, c.a.y, c.a.z, c.radius}, {c.b.x, c.b.y, c.b.z, 0.0f}};
+    std::transform(input.colliders.begin(), input.colliders.end(), packed_.begin(), [](const rods::Collider& c) {
+        return gpu::RodColliderGpu{{c.a.x, c.a.y, c.a.z, c.radius}, {c.b.x, c.b.y, c.b.z, static_cast<float>(c.kind)}};
     });
     if (!host_) {
         auto buffer = compute::Buffer::create(ctx, count_ * sizeof(gpu::RodColliderGpu), compute::Usage::Storage);

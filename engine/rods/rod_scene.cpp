@@ -18,6 +18,12 @@
 namespace kodawari {
 namespace {
 
+// A collider of a character template placed by its joint's pose: both points move
+// rigidly (a plane's b = a + n keeps its unit normal).
+rods::Collider place(const ColliderAttachment& a, const rods::Transform& joint) {
+    return rods::Collider{joint.position + joint.rotation * a.a, joint.position + joint.rotation * a.b, a.radius, a.kind};
+}
+
 // A key source's entry of RodFrame::keys (keyed-examples.md K.1) from world poses.
 rods::Transform key_entry(const KeyJoint& key, const rods::Transform& joint, const rods::Transform* parent) {
     if (key.kind == rods::KeySourceKind::Motion) return joint;
@@ -52,6 +58,7 @@ void RodScene::kinematic_frame(std::uint32_t index, rods::RodFrame& out, bool ri
     out.roots.resize(world.chains.size());
     out.colliders.resize(world.collider_count);
     out.keys.resize(world.key_count);
+    out.centers.resize(world.center_count);
     std::array<rods::Transform, rods::kMaxSkeletonJoints> poses;
     gltf::Pose pose;
     std::vector<glm::mat4> nodes;
@@ -78,10 +85,11 @@ void RodScene::kinematic_frame(std::uint32_t index, rods::RodFrame& out, bool ri
             }
         }
         for (std::size_t c = 0; c < k.colliders.size(); ++c) {
-            const ColliderAttachment& a = k.colliders[c];
-            const rods::Transform& joint = poses[a.joint];
-            out.colliders[inst.collider_begin + c] =
-                rods::Capsule{joint.position + joint.rotation * a.a, joint.position + joint.rotation * a.b, a.radius};
+            out.colliders[inst.collider_begin + c] = place(k.colliders[c], poses[k.colliders[c].joint]);
+        }
+        for (std::size_t c = 0; c < k.chains.size(); ++c) {
+            const std::uint32_t center = world.chains[inst.chain_begin + c].center;
+            if (center != rods::kNoCenter) out.centers[center] = poses[static_cast<std::size_t>(k.chains[c].center)];
         }
     }
 }
@@ -202,10 +210,11 @@ void RodScene::rigged_frame(std::uint32_t c, std::span<const glm::mat4> nodes, r
         }
     }
     for (std::size_t i = 0; i < k.colliders.size(); ++i) {
-        const ColliderAttachment& a = k.colliders[i];
-        const rods::Transform joint = gltf::rigid_part(nodes[a.joint]);
-        out.colliders[inst.collider_begin + i] =
-            rods::Capsule{joint.position + joint.rotation * a.a, joint.position + joint.rotation * a.b, a.radius};
+        out.colliders[inst.collider_begin + i] = place(k.colliders[i], gltf::rigid_part(nodes[k.colliders[i].joint]));
+    }
+    for (std::size_t i = 0; i < k.chains.size(); ++i) {
+        const std::uint32_t center = world.chains[inst.chain_begin + i].center;
+        if (center != rods::kNoCenter) out.centers[center] = gltf::rigid_part(nodes[static_cast<std::size_t>(k.chains[i].center)]);
     }
 }
 
@@ -223,16 +232,21 @@ RodScene RodScene::slice(std::uint32_t begin, std::uint32_t end) const {
     // instance by instance), so a range of instances is a range of each, rebased to 0.
     const std::uint32_t chain_first = instances[begin].chain_begin;
     const std::uint32_t collider_first = instances[begin].collider_begin;
+    const std::uint32_t center_first = instances[begin].center_begin;
     std::uint32_t chain_last = chain_first;
     std::uint32_t collider_last = collider_first;
+    std::uint32_t center_last = center_first;
     for (std::uint32_t c = begin; c < end; ++c) {
         CharacterInstance inst = instances[c];
         const CharacterKinematics& k = characters[inst.character];
         assert(inst.chain_begin == chain_last && inst.collider_begin == collider_last);
         chain_last = inst.chain_begin + static_cast<std::uint32_t>(k.chains.size());
         collider_last = inst.collider_begin + static_cast<std::uint32_t>(k.colliders.size());
+        assert(inst.center_begin == center_last);
+        for (const ChainAttachment& a : k.chains) center_last += a.center >= 0 ? 1u : 0u;
         inst.chain_begin -= chain_first;
         inst.collider_begin -= collider_first;
+        inst.center_begin -= center_first;
         out.instances.push_back(inst);
         out.character_names.push_back(character_names[c]);
     }
@@ -240,11 +254,13 @@ RodScene RodScene::slice(std::uint32_t begin, std::uint32_t end) const {
         rods::ChainInstance chain = world.chains[k];
         chain.character -= begin;
         chain.collider_begin -= collider_first;
+        if (chain.center != rods::kNoCenter) chain.center -= center_first;
         out.world.chains.push_back(chain);
         out.chain_names.push_back(chain_names[k]);
     }
     out.world.character_count = end - begin;
     out.world.collider_count = collider_last - collider_first;
+    out.world.center_count = center_last - center_first;
     // Only recomputes joint_begin and joint_count: the ranges were checked for the whole.
     [[maybe_unused]] const auto finalized = out.world.finalize();
     assert(finalized);

@@ -95,6 +95,36 @@ void push_out(glm::vec3& p, glm::vec3 center, float radius) {
     p = center + radius * n;
 }
 
+// Keeps p within `radius` of `center` (an inside collider; VRMC_springBone_extended_collider
+// 1.0: the joint's sphere of hitRadius stays inside the collider's, so `radius` is the
+// collider's minus the particle's, at least 0).
+void pull_in(glm::vec3& p, glm::vec3 center, float radius) {
+    const glm::vec3 d = p - center;
+    const float len2 = glm::dot(d, d);
+    if (len2 <= radius * radius) return;
+    const float len = std::sqrt(len2);
+    p = center + radius * (d / len);  // len > radius >= 0: a direction exists
+}
+
+// One collider on one particle of radius `thickness` (SPEC A.4, collisions; the kinds of
+// solver.hpp ColliderKind). `a` and `ab` = b - a are the collider's, relative to the
+// frame's origin; `reach` is what the kind keeps: radius + thickness outside,
+// max(radius - thickness, 0) inside, thickness for a plane (collider_reach()).
+void collide(glm::vec3& p, glm::vec3 a, glm::vec3 b, float reach, ColliderKind kind) {
+    if (kind == ColliderKind::Plane) {
+        const glm::vec3 n = b - a;  // unit
+        const float s = glm::dot(p - a, n);
+        if (s < reach) p += (reach - s) * n;
+        return;
+    }
+    const glm::vec3 c = closest_on_segment(p, a, b);
+    if (kind == ColliderKind::Inside) {
+        pull_in(p, c, reach);
+    } else {
+        push_out(p, c, reach);
+    }
+}
+
 // A.5 momentum suppression: the change of rest shape since the last step, applied
 // kinematically. Each segment of the current chain is turned by `suppression` of the
 // turn that takes its old rest direction to its new one (both placed by the current
@@ -180,8 +210,36 @@ ChainState initial_state(const Chain& chain, const Transform& root, const ChainS
     return s;
 }
 
+float collider_reach(const Collider& c, float thickness) {
+    switch (c.kind) {
+        case ColliderKind::Inside: return std::max(c.radius - thickness, 0.0f);
+        case ColliderKind::Plane: return thickness;
+        case ColliderKind::Outside: break;
+    }
+    return c.radius + thickness;
+}
+
+float collider_gap(const Collider& c, glm::vec3 p, float thickness) {
+    const float reach = collider_reach(c, thickness);
+    if (c.kind == ColliderKind::Plane) return glm::dot(p - c.a, c.b - c.a) - reach;
+    const float distance = glm::length(p - closest_on_segment(p, c.a, c.b));
+    return c.kind == ColliderKind::Inside ? reach - distance : distance - reach;
+}
+
+void follow_center(const Transform& from, const Transform& to, ChainState& s) {
+    const glm::quat r = glm::normalize(to.rotation * glm::conjugate(from.rotation));
+    for (std::uint32_t i = 0; i < kMaxChainJoints; ++i) {
+        s.x[i] = r * s.x[i];
+        s.v[i] = r * s.v[i];
+        s.q[i] = glm::normalize(r * s.q[i]);
+        s.omega[i] = r * s.omega[i];
+    }
+    s.root.position = to.position + r * (s.root.position - from.position);
+    s.root.rotation = glm::normalize(r * s.root.rotation);
+}
+
 void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
-          std::span<const Sphere> spheres, std::span<const Capsule> capsules, float dt, ChainState& s) {
+          std::span<const Collider> colliders, float dt, ChainState& s) {
     assert(validate(params).ok());
     assert(dt > 0.0f && std::isfinite(dt));
     const std::uint32_t n = chain.joint_count;
@@ -210,17 +268,14 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
     // ~1e-6 m at 10 m, as coarse as the solver's own corrections on a small strand.
     const Transform from = s.root;
     const glm::vec3 travel = root.position - from.position;
-    std::array<Sphere, kMaxChainColliders> local_spheres{};
-    std::array<Capsule, kMaxChainColliders> local_capsules{};
-    assert(spheres.size() <= local_spheres.size() && capsules.size() <= local_capsules.size());
-    for (std::size_t k = 0; k < spheres.size(); ++k) {
-        local_spheres[k] = Sphere{spheres[k].center - from.position, spheres[k].radius};
+    std::array<glm::vec3, kMaxChainColliders> collider_a{}, collider_b{};
+    std::array<float, kMaxChainColliders> collider_reach_of{};
+    assert(colliders.size() <= kMaxChainColliders);
+    for (std::size_t k = 0; k < colliders.size(); ++k) {
+        collider_a[k] = colliders[k].a - from.position;
+        collider_b[k] = colliders[k].b - from.position;
+        collider_reach_of[k] = collider_reach(colliders[k], chain.thickness);
     }
-    for (std::size_t k = 0; k < capsules.size(); ++k) {
-        local_capsules[k] = Capsule{capsules[k].a - from.position, capsules[k].b - from.position, capsules[k].radius};
-    }
-    spheres = std::span<const Sphere>(local_spheres.data(), spheres.size());
-    capsules = std::span<const Capsule>(local_capsules.data(), capsules.size());
     std::array<glm::vec3, kMaxChainJoints> p{}, xbar{}, goal_sum{}, obar_axis{};
     const float b2 = chain.thickness * chain.thickness;
     std::array<glm::quat, kMaxChainJoints> qs{}, obar{}, q_new{};
@@ -329,12 +384,9 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
 
             // Collisions: the particle's radius is the chain's thickness. Collider by
             // collider, so the GPU loads each collider once per iteration.
-            for (const Sphere& sphere : spheres) {
-                for (std::uint32_t i = 1; i < n; ++i) push_out(p[i], sphere.center, sphere.radius + chain.thickness);
-            }
-            for (const Capsule& cap : capsules) {
+            for (std::size_t k = 0; k < colliders.size(); ++k) {
                 for (std::uint32_t i = 1; i < n; ++i) {
-                    push_out(p[i], closest_on_segment(p[i], cap.a, cap.b), cap.radius + chain.thickness);
+                    collide(p[i], collider_a[k], collider_b[k], collider_reach_of[k], colliders[k].kind);
                 }
             }
         }

@@ -111,7 +111,7 @@ void SyntheticScene::frame(std::uint32_t index, float dt, RodFrame& out) const {
         if (options_.colliders) {
             // Inside the roots, as a scalp collider must be: a root inside its collider
             // would fight the collision pass for the first segment.
-            out.colliders[c] = Capsule{out.reference[c].position, out.reference[c].position, 0.8f * kHeadRadius};
+            out.colliders[c] = Collider{out.reference[c].position, out.reference[c].position, 0.8f * kHeadRadius};
         }
     }
     for (std::size_t k = 0; k < world_.chains.size(); ++k) {

@@ -143,6 +143,7 @@ Result<void> add_keyed_examples(ChainTemplate& t, std::span<const KeySourceKind>
 Result<void> RodWorld::finalize() {
     joint_count = 0;
     key_count = 0;
+    std::vector<bool> center_taken(center_count, false);
     for (std::size_t c = 0; c < chains.size(); ++c) {
         ChainInstance& chain = chains[c];
         const std::string where = "rod world: chain " + std::to_string(c) + ": ";
@@ -153,6 +154,11 @@ Result<void> RodWorld::finalize() {
         }
         if (chain.collider_count > kMaxChainColliders) {
             return bad(where + "at most " + std::to_string(kMaxChainColliders) + " colliders per chain");
+        }
+        if (chain.center != kNoCenter) {
+            if (chain.center >= center_count) return bad(where + "center index out of range");
+            if (center_taken[chain.center]) return bad(where + "center " + std::to_string(chain.center) + " belongs to another chain");
+            center_taken[chain.center] = true;
         }
         chain.joint_begin = joint_count;
         joint_count += templates[chain.template_index].chain.joint_count;
@@ -166,10 +172,15 @@ Result<void> check_frame(const RodWorld& world, const RodFrame& frame) {
     // >= 10 us: velocities are displacements / dt, infinite for a denormal dt (fuzzing).
     if (!(frame.dt >= kMinFrameDt && std::isfinite(frame.dt))) return bad("rod frame: dt must be >= 1e-5 s");
     if (frame.reference.size() != world.character_count || frame.roots.size() != world.chains.size() ||
-        frame.colliders.size() != world.collider_count || frame.keys.size() != world.key_count) {
+        frame.colliders.size() != world.collider_count || frame.keys.size() != world.key_count ||
+        frame.centers.size() != world.center_count) {
         return bad("rod frame: expected " + std::to_string(world.character_count) + " reference poses, " +
                    std::to_string(world.chains.size()) + " roots, " + std::to_string(world.collider_count) +
-                   " colliders and " + std::to_string(world.key_count) + " key sources");
+                   " colliders, " + std::to_string(world.key_count) + " key sources and " +
+                   std::to_string(world.center_count) + " centers");
+    }
+    for (const Transform& t : frame.centers) {
+        if (!finite(t.position) || !finite(t.rotation)) return bad("rod frame: non-finite center");
     }
     for (const Transform& t : frame.keys) {
         if (!finite(t.position) || !finite(t.rotation)) return bad("rod frame: non-finite key source");
@@ -180,8 +191,17 @@ Result<void> check_frame(const RodWorld& world, const RodFrame& frame) {
     for (const Transform& t : frame.roots) {
         if (!finite(t.position) || !finite(t.rotation)) return bad("rod frame: non-finite chain root");
     }
-    for (const Capsule& c : frame.colliders) {
+    for (const Collider& c : frame.colliders) {
         if (!finite(c.a) || !finite(c.b) || !(c.radius >= 0.0f)) return bad("rod frame: bad collider");
+        switch (c.kind) {
+            case ColliderKind::Outside:
+            case ColliderKind::Inside: break;
+            case ColliderKind::Plane:
+                // The normal b - a is a unit vector (to rounding: a rigid transform of both points keeps it).
+                if (std::abs(glm::length(c.b - c.a) - 1.0f) > 1e-3f) return bad("rod frame: a plane collider's normal b - a is not a unit vector");
+                break;
+            default: return bad("rod frame: unknown collider kind");
+        }
     }
     if (!finite(frame.camera.position) || !finite(frame.camera.forward)) return bad("rod frame: non-finite camera");
     return {};
@@ -201,6 +221,13 @@ RestShape rest_shape(const RodWorld& world, std::uint32_t chain, const RodFrame&
     }
     out.shape = to_positions(t.basis, blend(t.shapes, out.weights));  // SPEC A.2
     return out;
+}
+
+ChainState initial_chain_state(const RodWorld& world, std::uint32_t chain, const RodFrame& frame) {
+    const ChainInstance& c = world.chains[chain];
+    ChainState s = initial_state(world.templ(c).chain, frame.roots[chain], rest_shape(world, chain, frame).shape);
+    if (c.center != kNoCenter) s.center = frame.centers[c.center];
+    return s;
 }
 
 std::span<const Transform> chain_keys(const RodWorld& world, std::uint32_t chain, const RodFrame& frame) {

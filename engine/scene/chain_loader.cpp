@@ -191,6 +191,56 @@ Result<void> check_template(const JsonReader& r, const JsonNode& node, const Cha
 static_assert(static_cast<float>(1e-5) == rods::kMinThickness && static_cast<float>(1.0) == rods::kMaxThickness);
 static_assert(static_cast<float>(1e-9) == rods::kMinMass && static_cast<float>(1000.0) == rods::kMaxMass);
 
+std::vector<std::string> collider_names(const std::vector<ColliderSpec>& colliders) {
+    std::vector<std::string> out;
+    for (const ColliderSpec& c : colliders) out.push_back(c.name);
+    return out;
+}
+
+namespace {
+
+// A chain's `colliders` (VRM's per-spring collider groups): names of its character's
+// colliders, each once; without the list, all of them, which one chain can take only up
+// to rods::kMaxChainColliders.
+Result<void> read_chain_colliders(const JsonReader& r, const JsonNode& node, const JointLookup& joints, ChainSpec& c) {
+    const JsonNode list = r.member(node, "colliders");
+    const std::size_t total = joints.colliders.size();
+    if (!list.present()) {
+        if (c.collide && total > rods::kMaxChainColliders) {
+            return r.fail(node.path, "collides with all " + std::to_string(total) + " colliders of its character, and one "
+                                     "chain may touch at most " + std::to_string(rods::kMaxChainColliders) +
+                                     "; give it a \"colliders\" list of collider names");
+        }
+        return {};
+    }
+    std::size_t n = 0;
+    KW_SCENE_ASSIGN(n, read_array(r, list, 0, rods::kMaxChainColliders,
+                                  "an array of at most " + std::to_string(rods::kMaxChainColliders) + " collider names"));
+    std::vector<std::string> named;
+    for (const std::string& name : joints.colliders) {
+        if (!name.empty()) named.push_back(name);
+    }
+    c.all_colliders = false;
+    for (std::size_t k = 0; k < n; ++k) {
+        const JsonNode entry = r.element(list, k);
+        std::string name;
+        KW_SCENE_ASSIGN(name, r.string(entry));
+        const auto it = std::find(joints.colliders.begin(), joints.colliders.end(), name);
+        if (name.empty() || it == joints.colliders.end()) {
+            return r.expected(entry, named.empty() ? std::string("the name of a collider (this character's colliders have no names)")
+                                                   : "the name of a collider of this character: " + quoted_list(named));
+        }
+        const auto index = static_cast<std::uint32_t>(it - joints.colliders.begin());
+        if (std::find(c.colliders.begin(), c.colliders.end(), index) != c.colliders.end()) {
+            return r.expected(entry, "a collider not listed before (\"" + name + "\" is)");
+        }
+        c.colliders.push_back(index);
+    }
+    return {};
+}
+
+}  // namespace
+
 Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, const JointLookup& joints, ChainSpec& c) {
     KW_TRY(optional_member(r, node, "thickness", c.thickness,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(1e-5, 1.0)); }));
@@ -199,6 +249,13 @@ Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, cons
     const JsonNode physics = r.member(node, "physics");
     if (physics.present()) KW_TRY(read_physics(r, physics, c.params));
     KW_TRY(optional_member(r, node, "collide", c.collide, [&](const JsonNode& n) { return r.boolean(n); }));
+    KW_TRY(read_chain_colliders(r, node, joints, c));
+    const JsonNode center = r.member(node, "center");
+    if (center.present()) {
+        std::uint32_t joint = 0;
+        KW_SCENE_ASSIGN(joint, joints.find(center));
+        c.center = static_cast<std::int32_t>(joint);
+    }
     const JsonNode views = r.member(node, "views");
     if (views.present()) {
         const std::string what = "an array of at most " + std::to_string(rods::kMaxViewExamples) + " view examples";
@@ -217,9 +274,10 @@ Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, cons
 }
 
 Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::Skeleton& skeleton,
-                        const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
-    KW_TRY(r.object(node, {"name", "joint", "offset", "shape", "thickness", "mass", "physics", "collide", "mirror", "views",
-                           "keyed"}));
+                        const std::vector<ColliderSpec>& colliders, const rods::SolverParams& defaults,
+                        std::vector<ChainSpec>& chains) {
+    KW_TRY(r.object(node, {"name", "joint", "offset", "shape", "thickness", "mass", "physics", "collide", "colliders",
+                           "center", "mirror", "views", "keyed"}));
     ChainSpec c;
     c.path = node.path;
     c.params = defaults;
@@ -234,6 +292,7 @@ Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::S
     // A procedural joint's rotation relative to its parent is its local one (pose_skeleton).
     joints.rest_rotation = [&](std::uint32_t j) { return skeleton.joints[j].rest.rotation; };
     joints.reference = skeleton.reference;
+    joints.colliders = collider_names(colliders);
     KW_TRY(read_chain_settings(r, node, joints, c));
 
     const auto unique = [&](const JsonNode& at, const std::string& candidate) -> Result<void> {

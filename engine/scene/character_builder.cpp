@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstdint>
 #include <numbers>
+#include <numeric>
 #include <random>
 #include <string>
 #include <utility>
@@ -75,6 +76,29 @@ std::vector<InstanceSpec> generate(const CrowdSpec& crowd) {
     return out;
 }
 
+// Where the chain colliding with the colliders `set` (indices into `specs`) finds them in
+// its template's collider list `out`: the run of an earlier chain with the same set, or a
+// new run appended. Each chain's colliders are one contiguous run (RodFrame::colliders
+// [begin, begin + count)), so overlapping sets (VRM's per-spring collider groups) repeat
+// the colliders they share. Returns (begin, count).
+std::pair<std::uint32_t, std::uint32_t> collider_run(std::vector<std::vector<std::uint32_t>>& runs,
+                                                     const std::vector<std::uint32_t>& set,
+                                                     const std::vector<ColliderSpec>& specs,
+                                                     std::vector<ColliderAttachment>& out) {
+    if (set.empty()) return {0u, 0u};
+    std::uint32_t begin = 0;
+    for (const std::vector<std::uint32_t>& run : runs) {
+        if (run == set) return {begin, static_cast<std::uint32_t>(set.size())};
+        begin += static_cast<std::uint32_t>(run.size());
+    }
+    runs.push_back(set);
+    for (const std::uint32_t i : set) {
+        const ColliderSpec& c = specs[i];
+        out.push_back(ColliderAttachment{c.joint, c.a, c.b, c.radius, c.kind});
+    }
+    return {begin, static_cast<std::uint32_t>(set.size())};
+}
+
 }  // namespace
 
 Result<RodScene> build_rod_scene(const Scene& scene) {
@@ -92,6 +116,14 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
         k.skeleton = ch.skeleton;
         k.motion = ch.motion;
         k.first_template = static_cast<std::uint32_t>(world.templates.size());
+        // The collider sets laid out so far, in k.colliders order: first all of them as
+        // written (what every chain without a `colliders` list uses, and what renderers draw).
+        std::vector<std::vector<std::uint32_t>> runs;
+        if (!ch.colliders.empty()) {
+            std::vector<std::uint32_t> all(ch.colliders.size());
+            std::iota(all.begin(), all.end(), 0u);
+            collider_run(runs, all, ch.colliders, k.colliders);
+        }
         for (const rods::SkeletonJoint& j : ch.skeleton.joints) {
             k.joint_names.push_back(j.name);
             k.joint_parents.push_back(j.parent);
@@ -109,8 +141,23 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
             if (!t) return make_error(Error::Kind::InvalidInput, scene.path + ": " + chain.path + ": " + t.error().message);
             world.templates.push_back(std::move(t.value()));
             // Key sources only with keyed examples to read them (make_template adds both or neither).
-            k.chains.push_back(ChainAttachment{chain.joint, chain.offset, chain.collide,
-                                               chain.keyed.empty() ? std::vector<rods::KeyJoint>{} : chain.key_sources});
+            ChainAttachment attachment;
+            attachment.joint = chain.joint;
+            attachment.offset = chain.offset;
+            attachment.collide = chain.collide;
+            attachment.center = chain.center;
+            attachment.keys = chain.keyed.empty() ? std::vector<rods::KeyJoint>{} : chain.key_sources;
+            if (chain.collide) {
+                std::vector<std::uint32_t> set = chain.colliders;
+                if (chain.all_colliders) {
+                    set.resize(ch.colliders.size());
+                    std::iota(set.begin(), set.end(), 0u);
+                }
+                const auto [begin, count] = collider_run(runs, set, ch.colliders, k.colliders);
+                attachment.collider_begin = begin;
+                attachment.collider_count = count;
+            }
+            k.chains.push_back(std::move(attachment));
             k.chain_nodes.push_back(chain.nodes);
             if (ch.rig) {
                 k.simulated_joint.resize(ch.rig->character->nodes.size(), {-1, -1});
@@ -120,7 +167,6 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
                 }
             }
         }
-        for (const ColliderSpec& c : ch.colliders) k.colliders.push_back(ColliderAttachment{c.joint, c.a, c.b, c.radius});
         out.characters.push_back(std::move(k));
     }
 
@@ -140,14 +186,16 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
             }
             inst.chain_begin = static_cast<std::uint32_t>(world.chains.size());
             inst.collider_begin = world.collider_count;
+            inst.center_begin = world.center_count;
             const auto index = static_cast<std::uint32_t>(out.instances.size());
             const std::string name = k.name + "#" + std::to_string(per_character[crowd.character]++);
             for (std::size_t c = 0; c < k.chains.size(); ++c) {
                 rods::ChainInstance chain;
                 chain.template_index = k.first_template + static_cast<std::uint32_t>(c);
                 chain.character = index;
-                chain.collider_begin = inst.collider_begin;
-                chain.collider_count = k.chains[c].collide ? static_cast<std::uint32_t>(k.colliders.size()) : 0u;
+                chain.collider_begin = inst.collider_begin + k.chains[c].collider_begin;
+                chain.collider_count = k.chains[c].collider_count;
+                if (k.chains[c].center >= 0) chain.center = world.center_count++;
                 world.chains.push_back(chain);
                 out.chain_names.push_back(name + "/" + scene.characters[crowd.character].chains[c].name);
             }

@@ -295,26 +295,40 @@ Result<void> read_motion(const JsonReader& r, const JsonNode& node, const rods::
 
 namespace {
 
-// A sphere or capsule on the joint whose index `joint` returns for the `joint` member.
+// A sphere, capsule or plane on the joint whose index `joint` returns for the `joint`
+// member (rods::ColliderKind says what each keeps).
 Result<ColliderSpec> read_collider(const JsonReader& r, const JsonNode& node,
                                   const std::function<Result<std::uint32_t>(const JsonNode&)>& joint) {
     if (!node.present() || !node.value->is_object()) {
-        return r.expected(node, "an object with \"type\": \"sphere\" or \"capsule\"");
+        return r.expected(node, "an object with \"type\": \"sphere\", \"capsule\" or \"plane\"");
     }
     std::size_t type = 0;
-    KW_SCENE_ASSIGN(type, r.choice(r.member(node, "type"), {"sphere", "capsule"}));
+    KW_SCENE_ASSIGN(type, r.choice(r.member(node, "type"), {"sphere", "capsule", "plane"}));
     ColliderSpec c;
     KW_SCENE_ASSIGN(c.joint, joint(r.member(node, "joint")));
-    if (type == 0) {
-        KW_TRY(r.object(node, {"type", "joint", "center", "radius"}));
-        KW_TRY(optional_member(r, node, "center", c.a, [&](const JsonNode& n) { return read_point(r, n, kMaxLocal); }));
-        c.b = c.a;
+    if (type == 2) {
+        KW_TRY(r.object(node, {"name", "type", "joint", "point", "normal"}));
+        KW_TRY(optional_member(r, node, "point", c.a, [&](const JsonNode& n) { return read_point(r, n, kMaxLocal); }));
+        glm::vec3 normal{0.0f};
+        KW_SCENE_ASSIGN(normal, read_direction(r, r.member(node, "normal")));
+        c.b = c.a + normal;
+        c.kind = rods::ColliderKind::Plane;
     } else {
-        KW_TRY(r.object(node, {"type", "joint", "a", "b", "radius"}));
-        KW_SCENE_ASSIGN(c.a, read_point(r, r.member(node, "a"), kMaxLocal));
-        KW_SCENE_ASSIGN(c.b, read_point(r, r.member(node, "b"), kMaxLocal));
+        if (type == 0) {
+            KW_TRY(r.object(node, {"name", "type", "joint", "center", "radius", "inside"}));
+            KW_TRY(optional_member(r, node, "center", c.a, [&](const JsonNode& n) { return read_point(r, n, kMaxLocal); }));
+            c.b = c.a;
+        } else {
+            KW_TRY(r.object(node, {"name", "type", "joint", "a", "b", "radius", "inside"}));
+            KW_SCENE_ASSIGN(c.a, read_point(r, r.member(node, "a"), kMaxLocal));
+            KW_SCENE_ASSIGN(c.b, read_point(r, r.member(node, "b"), kMaxLocal));
+        }
+        KW_SCENE_ASSIGN(c.radius, r.real(r.member(node, "radius"), NumberRange::left_open(0.0, kMaxLocal)));
+        bool inside = false;
+        KW_TRY(optional_member(r, node, "inside", inside, [&](const JsonNode& n) { return r.boolean(n); }));
+        if (inside) c.kind = rods::ColliderKind::Inside;
     }
-    KW_SCENE_ASSIGN(c.radius, r.real(r.member(node, "radius"), NumberRange::left_open(0.0, kMaxLocal)));
+    KW_TRY(optional_member(r, node, "name", c.name, [&](const JsonNode& n) { return read_name(r, n); }));
     return c;
 }
 
@@ -325,14 +339,18 @@ Result<std::vector<ColliderSpec>> read_colliders(const JsonReader& r, const Json
     std::vector<ColliderSpec> out;
     const JsonNode colliders = r.member(node, "colliders");
     if (!colliders.present()) return out;
-    // Every colliding chain of the character touches all of them, and one chain may touch
-    // at most rods::kMaxChainColliders (the GPU keeps them in fixed arrays).
     std::size_t n = 0;
-    KW_SCENE_ASSIGN(n, read_array(r, colliders, 0, rods::kMaxChainColliders,
-                                  "an array of colliders (at most " + std::to_string(rods::kMaxChainColliders) + ")"));
+    KW_SCENE_ASSIGN(n, read_array(r, colliders, 0, kMaxCharacterColliders,
+                                  "an array of colliders (at most " + std::to_string(kMaxCharacterColliders) + ")"));
     for (std::size_t i = 0; i < n; ++i) {
+        const JsonNode element = r.element(colliders, i);
         ColliderSpec c;
-        KW_SCENE_ASSIGN(c, read_collider(r, r.element(colliders, i), joint));
+        KW_SCENE_ASSIGN(c, read_collider(r, element, joint));
+        for (const ColliderSpec& other : out) {
+            if (!c.name.empty() && other.name == c.name) {
+                return r.expected(r.member(element, "name"), "a collider name this character does not use yet (\"" + c.name + "\" is taken)");
+            }
+        }
         out.push_back(c);
     }
     return out;
@@ -376,7 +394,7 @@ Result<CharacterSpec> read_character(const JsonReader& r, const JsonNode& node) 
     std::size_t n = 0;
     const std::string chains_what = "a non-empty array of chains" + per;
     KW_SCENE_ASSIGN(n, read_array(r, chains, 1, kMaxPerCharacter, chains_what));
-    for (std::size_t i = 0; i < n; ++i) KW_TRY(read_chain(r, r.element(chains, i), ch.skeleton, defaults, ch.chains));
+    for (std::size_t i = 0; i < n; ++i) KW_TRY(read_chain(r, r.element(chains, i), ch.skeleton, ch.colliders, defaults, ch.chains));
     if (ch.chains.size() > kMaxPerCharacter) {
         return r.expected(chains, chains_what + ", counting mirrored copies; got " + std::to_string(ch.chains.size()));
     }

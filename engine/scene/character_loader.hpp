@@ -21,9 +21,11 @@ namespace kodawari::scene_detail {
 /// memory of the rod state: about 3.5 kB per chain).
 inline constexpr std::uint64_t kMaxCharacterInstances = 100'000;
 inline constexpr std::uint64_t kMaxChainInstances = 1'000'000;
-/// The most joints, chains and motions of one character (colliders:
-/// rods::kMaxChainColliders).
+/// The most joints, chains and motions of one character.
 inline constexpr std::size_t kMaxPerCharacter = 64;
+/// The most colliders of one character; one chain touches at most rods::kMaxChainColliders
+/// of them (its `colliders` list, or all of them).
+inline constexpr std::size_t kMaxCharacterColliders = rods::kMaxCharacterColliders;
 /// The ranges of the values the loaders read (shared so that every file checks alike).
 inline constexpr double kDegToRad = std::numbers::pi / 180.0;
 inline constexpr double kMaxCoordinate = 1e6;  // world positions (m), as the bird loader
@@ -66,26 +68,30 @@ inline constexpr double kMaxTime = 1e5;        // motion times (s)
 [[nodiscard]] Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::SolverParams& p);
 /// A view example whose shape has `joints` joints.
 [[nodiscard]] Result<ViewSpec> read_view(const JsonReader& r, const JsonNode& node, std::size_t joints);
-/// The optional `colliders` member of a character `node`: at most
-/// rods::kMaxChainColliders spheres or capsules, each on the joint whose index `joint`
-/// returns for its `joint` member.
+/// The optional `colliders` member of a character `node`: at most kMaxCharacterColliders
+/// spheres, capsules (outside or `inside`) and planes, each on the joint whose index
+/// `joint` returns for its `joint` member, names unique.
 [[nodiscard]] Result<std::vector<ColliderSpec>> read_colliders(const JsonReader& r, const JsonNode& node,
                                                                const std::function<Result<std::uint32_t>(const JsonNode&)>& joint);
-/// What keyed examples need of a character's joints (skeleton joints or glTF nodes).
+/// What a chain's settings need of its character: its joints (skeleton joints or glTF
+/// nodes) for keyed examples and `center`, its colliders' names for `colliders`.
 struct JointLookup {
     std::function<Result<std::uint32_t>(const JsonNode&)> find;  ///< the joint a name at the node names
     std::function<std::int32_t(std::uint32_t)> parent;          ///< -1 for a root
     /// In the rest pose, relative to the parent, as a Pose key source measures it.
     std::function<glm::quat(std::uint32_t)> rest_rotation;
     std::uint32_t reference = 0;  ///< the character's reference joint (motion keys' default)
+    std::vector<std::string> colliders;  ///< the character's colliders' names, in order ("" unnamed)
 };
+/// JointLookup::colliders of `colliders`.
+[[nodiscard]] std::vector<std::string> collider_names(const std::vector<ColliderSpec>& colliders);
 /// A shape: {"positions": [...], "orientations": [...]} or {"arc": {...}}, of `joints`
 /// joints (0: any in 2..32, for a base shape) (chain_loader.cpp).
 [[nodiscard]] Result<rods::ChainShape> read_shape(const JsonReader& r, const JsonNode& node, std::size_t joints);
 /// A unit quaternion [x, y, z, w] (length within 1e-3 of 1), normalized.
 [[nodiscard]] Result<glm::quat> read_unit_quat(const JsonReader& r, const JsonNode& node);
-/// A chain's `thickness`, `mass`, `physics`, `collide`, `views` and `keyed` over the
-/// values already in `c` (its base shape set), then check_template().
+/// A chain's `thickness`, `mass`, `physics`, `collide`, `colliders`, `center`, `views`
+/// and `keyed` over the values already in `c` (its base shape set), then check_template().
 [[nodiscard]] Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, const JointLookup& joints,
                                                ChainSpec& c);
 /// A chain's `keyed` array (docs/keyed-examples.md, keyed_loader.cpp): its keyed examples
@@ -100,7 +106,8 @@ struct JointLookup {
 /// `defaults`; appended to `chains`, with its mirrored copy when it names one
 /// (chain_loader.cpp).
 [[nodiscard]] Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::Skeleton& skeleton,
-                                      const rods::SolverParams& defaults, std::vector<ChainSpec>& chains);
+                                      const std::vector<ColliderSpec>& colliders, const rods::SolverParams& defaults,
+                                      std::vector<ChainSpec>& chains);
 
 /// A character with `gltf` (docs/scene-format.md, "Rigged characters"): the file loaded
 /// relative to the scene's folder, chains by node names with base shapes from its rest

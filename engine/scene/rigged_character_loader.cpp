@@ -29,21 +29,61 @@ std::string lower(std::string s) {
     return s;
 }
 
-// The node called `name`: exactly one must have it.
+// A node as the scene names it: its index in the file (an integer), the name that exactly
+// one node has, or, where names repeat, its path of names from a root node of the file
+// ("Armature/Hips/Hair_01": each name a child of the one before, unique among its
+// siblings).
 Result<int> find_node(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
+    if (node.present() && node.value->is_number_integer()) {
+        std::uint64_t index = 0;
+        KW_SCENE_ASSIGN(index, r.integer(node, 0, ch.nodes.size() - 1));
+        return static_cast<int>(index);
+    }
     std::string name;
     KW_SCENE_ASSIGN(name, r.string(node));
-    int found = -1;
+    std::vector<int> found;
     for (std::size_t i = 0; i < ch.nodes.size(); ++i) {
-        if (ch.nodes[i].name != name) continue;
-        if (found >= 0) {
-            return r.fail(node.path, "\"" + name + "\" names two nodes of " + ch.source + " (" + std::to_string(found) +
-                                         " and " + std::to_string(i) + "); rename one in the file");
-        }
-        found = static_cast<int>(i);
+        if (ch.nodes[i].name == name) found.push_back(static_cast<int>(i));
     }
-    if (found < 0) return r.expected(node, "the name of a node of " + ch.source);
-    return found;
+    if (found.size() == 1) return found.front();
+    if (found.size() > 1) {
+        return r.fail(node.path, "\"" + name + "\" names " + std::to_string(found.size()) + " nodes of " + ch.source + " (" +
+                                     std::to_string(found[0]) + " and " + std::to_string(found[1]) +
+                                     "); name the node by its index or by its path from a root (\"Root/Hips/" + name + "\")");
+    }
+    if (name.find('/') == std::string::npos) return r.expected(node, "the name, path or index of a node of " + ch.source);
+    // A path: one step a name.
+    int at = -1;
+    std::size_t begin = 0;
+    while (begin <= name.size()) {
+        const std::size_t end = std::min(name.find('/', begin), name.size());
+        const std::string step = name.substr(begin, end - begin);
+        std::vector<int> candidates;
+        if (at < 0) {
+            for (std::size_t i = 0; i < ch.nodes.size(); ++i) {
+                if (ch.nodes[i].parent < 0) candidates.push_back(static_cast<int>(i));
+            }
+        } else {
+            candidates = ch.nodes[static_cast<std::size_t>(at)].children;
+        }
+        int next = -1;
+        for (const int c : candidates) {
+            if (ch.nodes[static_cast<std::size_t>(c)].name != step) continue;
+            if (next >= 0) {
+                return r.fail(node.path, "path \"" + name + "\": two " + (at < 0 ? std::string("root nodes") : "children of \"" + ch.nodes[static_cast<std::size_t>(at)].name + "\"") +
+                                             " of " + ch.source + " are called \"" + step + "\" (" + std::to_string(next) +
+                                             " and " + std::to_string(c) + "); name the node by its index");
+            }
+            next = c;
+        }
+        if (next < 0) {
+            return r.expected(node, "the name, path or index of a node of " + ch.source + " (path step \"" + step + "\" is not " +
+                                        (at < 0 ? std::string("a root node") : "a child of \"" + ch.nodes[static_cast<std::size_t>(at)].name + "\"") + ")");
+        }
+        at = next;
+        begin = end + 1;
+    }
+    return at;
 }
 
 // The reference joint when the scene names none: a node called "head" (any case), else
@@ -116,8 +156,10 @@ Result<std::vector<int>> read_chain_nodes(const JsonReader& r, const JsonNode& n
 }
 
 Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const gltf::Character& ch, const gltf::Pose& rest,
-                               std::uint32_t reference, const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
-    KW_TRY(r.object(node, {"name", "root", "nodes", "joints", "thickness", "mass", "physics", "collide", "views", "keyed"}));
+                               std::uint32_t reference, const std::vector<ColliderSpec>& colliders,
+                               const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
+    KW_TRY(r.object(node, {"name", "root", "nodes", "joints", "thickness", "mass", "physics", "collide", "colliders", "center",
+                           "views", "keyed"}));
     ChainSpec c;
     c.path = node.path;
     c.params = defaults;
@@ -157,6 +199,7 @@ Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const 
         return glm::normalize(glm::conjugate(gltf::rigid_part(rest.world[static_cast<std::size_t>(parent)]).rotation) * world);
     };
     joints.reference = reference;
+    joints.colliders = collider_names(colliders);
     KW_TRY(read_chain_settings(r, node, joints, c));
     chains.push_back(std::move(c));
     return {};
@@ -230,7 +273,7 @@ Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode&
     std::size_t n = 0;
     KW_SCENE_ASSIGN(n, read_array(r, chains, 1, kMaxPerCharacter,
                                   "a non-empty array of chains (at most " + std::to_string(kMaxPerCharacter) + ")"));
-    for (std::size_t i = 0; i < n; ++i) KW_TRY(read_rigged_chain(r, r.element(chains, i), ch, rest, out.skeleton.reference, defaults, out.chains));
+    for (std::size_t i = 0; i < n; ++i) KW_TRY(read_rigged_chain(r, r.element(chains, i), ch, rest, out.skeleton.reference, out.colliders, defaults, out.chains));
 
     rig.character = std::move(character);
     out.rig = std::move(rig);

@@ -24,8 +24,11 @@ constexpr std::size_t kMaxK = rods::kMaxChainColliders;
 // This frame's input of a batch's 16 lanes, gathered from the frame's per-chain arrays.
 // kKeyed: the chain's raw keyed weights u_1 .. u_4 (keyed-examples.md K.2, K.3).
 enum InputRow : std::uint32_t { kRefP = 0, kRefQ = 3, kToP = 7, kToQ = 10, kKeyed = 14, kInputRows = 18 };
-// Per collider: a (3), b (3), radius + thickness, 1 where the lane's chain has it.
-enum ColliderRow : std::uint32_t { kCapA = 0, kCapB = 3, kCapR = 6, kCapOn = 7, kColliderRows = 8 };
+// Per collider: a (3), b (3), its reach (rods::collider_reach), and 1 in the row of its
+// kind (outside, inside, plane) where the lane's chain has it.
+enum ColliderRow : std::uint32_t {
+    kCapA = 0, kCapB = 3, kCapR = 6, kCapOutside = 7, kCapInside = 8, kCapPlane = 9, kColliderRows = 10
+};
 
 struct Inputs {
     HWY_ALIGN float rows[kInputRows * kBatchLanes];
@@ -51,10 +54,12 @@ void gather_inputs(const RodStepArgs& args, const RodBatch& batch, const RodTemp
             float* rows = in.colliders + k * kColliderRows * kBatchLanes;
             float cap[kColliderRows] = {};
             if (k < chain.collider_count) {
-                const rods::Capsule& cs = frame.colliders[chain.collider_begin + k];
-                // solver.cpp: each capsule's radius plus the chain's thickness.
-                const float r[kColliderRows] = {cs.a.x, cs.a.y, cs.a.z, cs.b.x, cs.b.y, cs.b.z, cs.radius + t.thickness, 1.0f};
-                for (std::size_t i = 0; i < kColliderRows; ++i) cap[i] = r[i];
+                const rods::Collider& cs = frame.colliders[chain.collider_begin + k];
+                const float r[kCapOutside] = {cs.a.x, cs.a.y, cs.a.z, cs.b.x, cs.b.y, cs.b.z, rods::collider_reach(cs, t.thickness)};
+                for (std::size_t i = 0; i < kCapOutside; ++i) cap[i] = r[i];
+                cap[cs.kind == rods::ColliderKind::Plane    ? kCapPlane
+                    : cs.kind == rods::ColliderKind::Inside ? kCapInside
+                                                            : kCapOutside] = 1.0f;
             }
             for (std::size_t r = 0; r < kColliderRows; ++r) rows[r * kBatchLanes + l] = cap[r];
         }
@@ -99,18 +104,38 @@ Q4 extract_rotation(const M3& a, const Q4& q, const M3& r) {
     return turn(q, half_omega);
 }
 
-// solver.cpp closest_on_segment() and push_out(), for the lanes in `on`; ab = b - a and
-// len2 = dot(ab, ab), the same for every joint, computed once per collider.
-void collide(V3& p, const V3& a, const V3& ab, V len2, V radius, M on) {
-    V t = hn::Div(dot(sub(p, a), ab), len2);
-    t = hn::IfThenElse(hn::Lt(t, Z()), Z(), hn::IfThenElse(hn::Lt(S(1.0f), t), S(1.0f), t));  // std::clamp
-    const V3 center = select(hn::Le(len2, Z()), a, add(a, mul(t, ab)));
-    const V3 d = sub(p, center);
-    const V d2 = dot(d, d);
-    const M inside = hn::And(on, hn::Not(hn::Ge(d2, hn::Mul(radius, radius))));
-    const V len = hn::Sqrt(d2);
-    const V3 n = select(hn::Gt(len, S(1e-9f)), div(d, len), V3{Z(), S(1.0f), Z()});
-    p = select(inside, add(center, mul(radius, n)), p);
+// One collider of a batch: its points relative to the frame's origin, ab = b - a and
+// len2 = dot(ab, ab) (the same for every joint, computed once), its reach, and the lanes
+// whose chain has it as each kind.
+struct CollidersK {
+    V3 a, ab;
+    V len2, reach;
+    M outside, inside, plane;
+    bool any_capsule, any_plane;  // some lane has it as a capsule (outside or inside), as a plane
+};
+
+// solver.cpp collide(): closest_on_segment() then push_out() (outside lanes) or pull_in()
+// (inside lanes), and the plane's half-space (plane lanes), each kind's expressions as
+// the reference writes them.
+void collide(V3& p, const CollidersK& c) {
+    if (c.any_capsule) {
+        V t = hn::Div(dot(sub(p, c.a), c.ab), c.len2);
+        t = hn::IfThenElse(hn::Lt(t, Z()), Z(), hn::IfThenElse(hn::Lt(S(1.0f), t), S(1.0f), t));  // std::clamp
+        const V3 center = select(hn::Le(c.len2, Z()), c.a, add(c.a, mul(t, c.ab)));
+        const V3 d = sub(p, center);
+        const V d2 = dot(d, d);
+        const V r2 = hn::Mul(c.reach, c.reach);
+        const M push = hn::And(c.outside, hn::Not(hn::Ge(d2, r2)));
+        const M pull = hn::And(c.inside, hn::Not(hn::Le(d2, r2)));
+        const V len = hn::Sqrt(d2);
+        const V3 out_n = select(hn::Gt(len, S(1e-9f)), div(d, len), V3{Z(), S(1.0f), Z()});
+        p = select(hn::Or(push, pull), add(center, mul(c.reach, select(push, out_n, div(d, len)))), p);
+    }
+    if (c.any_plane) {
+        const V s = dot(sub(p, c.a), c.ab);
+        const M below = hn::And(c.plane, hn::Lt(s, c.reach));
+        p = select(below, add(p, mul(hn::Sub(c.reach, s), c.ab)), p);
+    }
 }
 
 // shape.cpp blend_one(): the normalized weighted sum of shape k's quaternion i (k = 0..m,
@@ -241,16 +266,19 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
     const V3 to_p = load3(in.rows, kToP, off);
     const Q4 to_q = load4(in.rows, kToQ, off);
     const V3 travel = sub(to_p, from_p);
-    V3 cap_a[kMaxK], cap_ab[kMaxK];
-    V cap_r[kMaxK], cap_len2[kMaxK];
-    M cap_on[kMaxK];
+    CollidersK colliders[kMaxK];
     for (std::size_t k = 0; k < batch.colliders; ++k) {
         const float* rows = in.colliders + k * kColliderRows * kBatchLanes;
-        cap_a[k] = sub(load3(rows, kCapA, off), from_p);
-        cap_ab[k] = sub(sub(load3(rows, kCapB, off), from_p), cap_a[k]);
-        cap_len2[k] = dot(cap_ab[k], cap_ab[k]);
-        cap_r[k] = load(rows, kCapR, off);
-        cap_on[k] = hn::Gt(load(rows, kCapOn, off), Z());
+        CollidersK& c = colliders[k];
+        c.a = sub(load3(rows, kCapA, off), from_p);
+        c.ab = sub(sub(load3(rows, kCapB, off), from_p), c.a);
+        c.len2 = dot(c.ab, c.ab);
+        c.reach = load(rows, kCapR, off);
+        c.outside = hn::Gt(load(rows, kCapOutside, off), Z());
+        c.inside = hn::Gt(load(rows, kCapInside, off), Z());
+        c.plane = hn::Gt(load(rows, kCapPlane, off), Z());
+        c.any_capsule = !hn::AllFalse(D(), hn::Or(c.outside, c.inside));
+        c.any_plane = !hn::AllFalse(D(), c.plane);
     }
     const Q4 relative_root = qmul(conj(from_q), to_q);  // interpolate(): a^-1 b
     V3 p[kMaxJ], xbar[kMaxJ], obar_axis[kMaxJ], goal_sum[kMaxJ];
@@ -376,7 +404,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
             }
             // Collisions, collider by collider.
             for (std::size_t k = 0; k < batch.colliders; ++k) {
-                for (std::size_t i = 1; i < n; ++i) collide(p[i], cap_a[k], cap_ab[k], cap_len2[k], cap_r[k], cap_on[k]);
+                for (std::size_t i = 1; i < n; ++i) collide(p[i], colliders[k]);
             }
         }
 

@@ -20,7 +20,8 @@
 #define KW_ROD_INPUTS_BINDING_ROOTS 4        // RodTransformGpu, per chain: the rod backend's
 #define KW_ROD_INPUTS_BINDING_COLLIDERS 5    // RodColliderGpu: the rod backend's
 #define KW_ROD_INPUTS_BINDING_KEYS 6         // RodTransformGpu, per key source: the rod backend's (RodFrame::keys)
-#define KW_ROD_INPUTS_BINDING_COUNT 7
+#define KW_ROD_INPUTS_BINDING_CENTERS 7      // RodTransformGpu, per center frame: the rod backend's (RodFrame::centers)
+#define KW_ROD_INPUTS_BINDING_COUNT 8
 
 // RodInputAttachmentGpu.node.y of a pose key source measured against the world (KeyJoint::parent -1).
 #define KW_ROD_INPUTS_NO_PARENT 0xFFFFFFFFu
@@ -31,20 +32,22 @@ KW_NAMESPACE_BEGIN
 struct RodInputInstanceGpu {
     uvec4 ids;  // x: its RodScene instance (its reference joint's entry), y: its first chain, z: its first collider,
                 // w: its first key source (its chains' key sources are consecutive, chain by chain)
+    uvec4 more; // x: its first center frame (its chains' centers are consecutive, chain by chain), yzw: unused
 };
 
 // A node the rod input comes from: a chain's root joint, a collider's joint with the
-// capsule in that joint's frame, or a key source's joint (K.1).
+// collider in that joint's frame, a key source's joint (K.1), or a chain's center node.
 struct RodInputAttachmentGpu {
     uvec4 node;  // x: the node (Character::nodes index); key source: y: the pose source's parent node
                  // (KW_ROD_INPUTS_NO_PARENT: the world), z: rods::KeySourceKind; w: unused
     vec4 a;      // collider: xyz end a in the joint's frame (m), w: radius (m)
-    vec4 b;      // collider: xyz end b, w: unused
+    vec4 b;      // collider: xyz end b, w: its kind (KW_RODS_COLLIDER_*)
 };
 
 struct RodInputPush {
     uvec4 counts;  // x: posed instances, y: nodes per instance, z: the reference node, w: chains per instance
-    uvec4 more;    // x: colliders per instance, y: key sources per instance (after the colliders' attachments), zw: unused
+    uvec4 more;    // x: colliders per instance, y: key sources per instance (after the colliders' attachments),
+                   // z: center frames per instance (after the key sources' attachments), w: unused
 };
 
 KW_NAMESPACE_END

@@ -53,7 +53,17 @@
 #define KW_RODS_BINDING_SPIN 8             // RodJointSpinGpu, per joint (state)
 #define KW_RODS_BINDING_CHAIN_STATE 9      // RodChainStateGpu, per chain (state and diagnostics)
 #define KW_RODS_BINDING_KEYED 10           // vec4 per chain: raw keyed weights u_1 .. u_4 (this frame, shared/rod_keys.h)
-#define KW_RODS_BINDING_COUNT 11
+#define KW_RODS_BINDING_CENTERS 11         // RodTransformGpu, per center (RodFrame::centers, this frame)
+#define KW_RODS_BINDING_CENTER_STATE 12    // RodTransformGpu, per center: the last frame's (state)
+#define KW_RODS_BINDING_COUNT 13
+
+// RodChainGpu.joints.z of a chain without a center frame (rods::kNoCenter).
+#define KW_RODS_NO_CENTER 0xFFFFFFFFu
+
+// RodColliderGpu.b.w: the collider's kind (rods::ColliderKind), stored as a float.
+#define KW_RODS_COLLIDER_OUTSIDE 0
+#define KW_RODS_COLLIDER_INSIDE 1
+#define KW_RODS_COLLIDER_PLANE 2
 
 // Specialization constant ids of rods_step.comp.
 #define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the dispatch: sizes the register arrays
@@ -106,7 +116,8 @@ struct RodShapeJointGpu {
 // Listed by template (the groups of GROUPED dispatches), so joints.y names the chain.
 struct RodChainGpu {
     uvec4 ids;     // x: template, y: character, z: first collider, w: collider count
-    uvec4 joints;  // x: first joint in the per-joint buffers, y: the chain's index in the per-chain buffers, z, w: unused
+    uvec4 joints;  // x: first joint in the per-joint buffers, y: the chain's index in the per-chain buffers,
+                   // z: its center (KW_RODS_BINDING_CENTERS index, KW_RODS_NO_CENTER: none), w: unused
 };
 
 struct RodTransformGpu {
@@ -114,10 +125,10 @@ struct RodTransformGpu {
     vec4 rotation;  // quaternion
 };
 
-// A capsule; a sphere has a == b.
+// A capsule (a sphere has a == b) or a plane (through a, unit normal b - a): rods::Collider.
 struct RodColliderGpu {
     vec4 a;  // xyz, w: radius (m)
-    vec4 b;  // xyz, w: unused
+    vec4 b;  // xyz, w: kind (KW_RODS_COLLIDER_*)
 };
 
 struct RodJointMotionGpu {

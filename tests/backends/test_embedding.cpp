@@ -257,7 +257,7 @@ TEST_F(Embedding, MatrixInputFeedsRootsReferencesAndColliders) {
     input.nodes = kNodes;
     input.reference_node = 0;
     for (std::uint32_t j = 0; j < kPerCharacter; ++j) input.chain_nodes.push_back(1 + j);
-    const rods::Capsule head = frame.colliders[0];
+    const rods::Collider head = frame.colliders[0];
     const rods::Transform ref = frame.reference[0];
     const glm::vec3 a = glm::inverse(ref.rotation) * (head.a - ref.position), b = glm::inverse(ref.rotation) * (head.b - ref.position);
     input.colliders.push_back({.node = 0, .a = {a.x, a.y, a.z}, .b = {b.x, b.y, b.z}, .radius = head.radius});
@@ -279,7 +279,7 @@ TEST_F(Embedding, MatrixInputFeedsRootsReferencesAndColliders) {
         rods::RodFrame wrong = frame;
         for (rods::Transform& t : wrong.reference) t.position += glm::vec3(1.0f);
         for (rods::Transform& t : wrong.roots) t.position += glm::vec3(1.0f);
-        for (rods::Capsule& c : wrong.colliders) c.radius *= 2.0f;
+        for (rods::Collider& c : wrong.colliders) c.radius *= 2.0f;
         VkCommandBuffer cmd = app_->begin(k);
         ASSERT_TRUE(record_step(*by_matrix, cmd, wrong).ok());
         ASSERT_TRUE(record_step(*by_frame, cmd, frame).ok());

@@ -145,7 +145,7 @@ struct CFrame {
         };
         for (const rods::Transform& t : f.reference) references.push_back(transform(t));
         for (const rods::Transform& t : f.roots) roots.push_back(transform(t));
-        for (const rods::Capsule& c : f.colliders) {
+        for (const rods::Collider& c : f.colliders) {
             kodawari_capsule out{};
             put3(out.a, c.a);
             put3(out.b, c.b);

@@ -155,7 +155,7 @@ int main(int argc, char** argv) {
         w.raw(",\"roots\":");
         w.list(frame.roots, [&](const rods::Transform& t) { w.transform(t); });
         w.raw(",\"colliders\":");
-        w.list(frame.colliders, [&](const rods::Capsule& c) {
+        w.list(frame.colliders, [&](const rods::Collider& c) {
             const float v[7] = {c.a.x, c.a.y, c.a.z, c.b.x, c.b.y, c.b.z, c.radius};
             w.floats(v, 7);
         });

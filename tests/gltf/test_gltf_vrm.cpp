@@ -79,39 +79,35 @@ TEST(GltfVrm, SamplesYieldTheSpringsAndCollidersTheyDeclare) {
         EXPECT_EQ(vrm.version, 2);
 
         ASSERT_EQ(vrm.colliders.size(), ext["colliders"].size());
-        bool plane = false, inside = false;
         for (std::size_t i = 0; i < vrm.colliders.size(); ++i) {
             const json& c = ext["colliders"][i];
-            // The extended shape wins unless it is a plane (then the base shape stays).
+            // The extended shape, when present, replaces the base one (its fallback).
             json shape = c["shape"];
             bool extended = false;
             if (c.contains("extensions") && c["extensions"].contains("VRMC_springBone_extended_collider")) {
-                const json& es = c["extensions"]["VRMC_springBone_extended_collider"]["shape"];
-                if (es.contains("plane")) {
-                    plane = true;
-                } else {
-                    shape = es;
-                    extended = true;
-                }
+                shape = c["extensions"]["VRMC_springBone_extended_collider"]["shape"];
+                extended = true;
             }
             const gltf::VrmCollider& got = vrm.colliders[i];
             EXPECT_EQ(got.node, c["node"].get<int>());
+            if (shape.contains("plane")) {
+                const json& p = shape["plane"];
+                EXPECT_EQ(got.kind, rods::ColliderKind::Plane);
+                expect_near(got.offset, p.contains("offset") ? vec3(p["offset"]) : glm::vec3(0.0f), 0.0f);
+                expect_near(got.normal, glm::normalize(vec3(p["normal"])), 1e-7f);
+                expect_near(got.tail, got.offset + got.normal, 1e-7f);
+                continue;
+            }
             const bool capsule = shape.contains("capsule");
             const json& s = capsule ? shape["capsule"] : shape["sphere"];
             EXPECT_EQ(got.capsule, capsule);
             EXPECT_FLOAT_EQ(got.radius, s["radius"].get<float>());
             expect_near(got.offset, s.contains("offset") ? vec3(s["offset"]) : glm::vec3(0.0f), 0.0f);
             const bool is_inside = extended && s.value("inside", false);
-            EXPECT_EQ(got.inside, is_inside);
-            inside = inside || is_inside;
+            EXPECT_EQ(got.kind, is_inside ? rods::ColliderKind::Inside : rods::ColliderKind::Outside);
         }
-        // One warning per unmapped kind, none otherwise.
-        EXPECT_EQ(vrm.warnings.size(), static_cast<std::size_t>(plane) + static_cast<std::size_t>(inside));
-        for (const std::string& w : vrm.warnings) {
-            EXPECT_NE(w.find(path), std::string::npos) << w;
-            EXPECT_NE(w.find("$.extensions.VRMC_springBone.colliders[0]"), std::string::npos) << w;
-            EXPECT_NE(w.find(plane ? "plane" : "inside"), std::string::npos) << w;
-        }
+        // Every shape maps: no warnings.
+        EXPECT_TRUE(vrm.warnings.empty()) << vrm.warnings.front();
 
         ASSERT_EQ(vrm.springs.size(), ext["springs"].size());
         for (std::size_t s = 0; s < vrm.springs.size(); ++s) {
@@ -242,6 +238,65 @@ TEST(GltfVrm, ColliderGroupOutOfRangeIsAnError) {
     ASSERT_FALSE(vrm.ok());
     EXPECT_NE(vrm.error().message.find("$.extensions.VRMC_springBone.springs[0].colliderGroups[0]"), std::string::npos)
         << vrm.error().message;
+}
+
+// The bad input of issue 18: a collider group naming a collider the file lacks, and a
+// plane whose normal is zero. Each names the file and the JSON path.
+TEST(GltfVrm, MissingColliderAndZeroNormalAreErrors) {
+    const TempDir dir;
+    fs::copy_file(kSpringDir + "/plane_mesh.bin", dir.file("plane_mesh.bin"));
+    json doc = read_json(kSpringDir + "/plane-collider.gltf");
+    json missing = doc;
+    missing["extensions"]["VRMC_springBone"]["colliderGroups"][0]["colliders"][0] = 1;  // one collider: index 0
+    write_text(dir.file("missing.gltf"), missing.dump());
+    const auto a = gltf::read_vrm_springs(load(dir.file("missing.gltf")));
+    ASSERT_FALSE(a.ok());
+    EXPECT_NE(a.error().message.find(dir.file("missing.gltf")), std::string::npos) << a.error().message;
+    EXPECT_NE(a.error().message.find("$.extensions.VRMC_springBone.colliderGroups[0].colliders[0]"), std::string::npos)
+        << a.error().message;
+    EXPECT_NE(a.error().message.find("collider 1 does not exist"), std::string::npos) << a.error().message;
+
+    json zero = doc;
+    zero["extensions"]["VRMC_springBone"]["colliders"][0]["extensions"]["VRMC_springBone_extended_collider"]["shape"]["plane"]
+        ["normal"] = json::array({0, 0, 0});
+    write_text(dir.file("zero.gltf"), zero.dump());
+    const auto b = gltf::read_vrm_springs(load(dir.file("zero.gltf")));
+    ASSERT_FALSE(b.ok());
+    EXPECT_NE(b.error().message.find(
+                  "$.extensions.VRMC_springBone.colliders[0].extensions.VRMC_springBone_extended_collider.shape.plane.normal"),
+              std::string::npos)
+        << b.error().message;
+    EXPECT_NE(b.error().message.find("non-zero"), std::string::npos) << b.error().message;
+}
+
+// `center`: VRM 1.0's node index and VRM 0.x's (where -1 is none) become VrmSpring::center;
+// an index out of range is an error at its path.
+TEST(GltfVrm, CenterNodesAreRead) {
+    const TempDir dir;
+    fs::copy_file(kSpringDir + "/sphere_mesh.bin", dir.file("sphere_mesh.bin"));
+    json doc = read_json(kSpringDir + "/sphere-collider.gltf");
+    doc["extensions"]["VRMC_springBone"]["springs"][0]["center"] = 5;
+    write_text(dir.file("center.gltf"), doc.dump());
+    const gltf::VrmSprings vrm = read(load(dir.file("center.gltf")));
+    ASSERT_EQ(vrm.springs.size(), 1u);
+    EXPECT_EQ(vrm.springs[0].center, 5);
+    EXPECT_TRUE(vrm.warnings.empty());
+
+    doc["extensions"]["VRMC_springBone"]["springs"][0]["center"] = 6;
+    write_text(dir.file("far.gltf"), doc.dump());
+    const auto far = gltf::read_vrm_springs(load(dir.file("far.gltf")));
+    ASSERT_FALSE(far.ok());
+    EXPECT_NE(far.error().message.find("$.extensions.VRMC_springBone.springs[0].center"), std::string::npos) << far.error().message;
+
+    write_text(dir.file("vrm0.gltf"), kVrm0);
+    EXPECT_EQ(read(load(dir.file("vrm0.gltf"))).springs[0].center, -1);
+    json vrm0 = json::parse(kVrm0);
+    vrm0["extensions"]["VRM"]["secondaryAnimation"]["boneGroups"][0]["center"] = 0;
+    write_text(dir.file("vrm0-center.gltf"), vrm0.dump());
+    const gltf::VrmSprings with_center = read(load(dir.file("vrm0-center.gltf")));
+    ASSERT_EQ(with_center.springs.size(), 2u);
+    EXPECT_EQ(with_center.springs[0].center, 0);
+    EXPECT_EQ(with_center.springs[1].center, 0);
 }
 
 TEST(GltfVrm, FileWithoutVrmIsVersionZero) {

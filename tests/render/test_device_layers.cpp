@@ -176,7 +176,7 @@ TEST(Render, CollidersDrawnFromTheRodInputOnTheDevice) {
 
     const Pinhole camera(view.position, view.target, view.fov_deg, kWidth, kHeight);
     int shapes = 0, found = 0;
-    for (const rods::Capsule& c : host.colliders) {
+    for (const rods::Collider& c : host.colliders) {
         glm::vec2 q;
         if (!camera.project(0.5f * (c.a + c.b), q)) continue;
         if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;

@@ -8,6 +8,7 @@
 #include <algorithm>
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <fstream>
 #include <optional>
 #include <set>
@@ -263,6 +264,46 @@ TEST(RiggedScene, BadInputNamesTheFileAndPath) {
     EXPECT_NE(error_of(procedural).find("only rigged characters"), std::string::npos) << error_of(procedural);
 }
 
+// Where node names repeat (issue 18: exporters other than VRoid reuse names), the scene
+// names a node by its path from a root or by its index; the repeated name alone is an
+// error that says so. Built on three-vrm's sphere sample with "Spring B" renamed to
+// "Spring A" (node 1, the child of node 0).
+TEST(RiggedScene, NodesByPathOrIndexWhereNamesRepeat) {
+    TempDir dir;
+    std::ifstream in(kSource + "/tests/assets/vrm-springbone/sphere-collider.gltf");
+    nlohmann::json doc = nlohmann::json::parse(in);
+    doc["nodes"][1]["name"] = "Spring A";
+    std::ofstream(dir.file("twins.gltf")) << doc.dump();
+    std::filesystem::copy_file(kSource + "/tests/assets/vrm-springbone/sphere_mesh.bin", dir.file("sphere_mesh.bin"));
+    const auto scene_with = [&](const std::string& chain) {
+        return R"({"format": "kodawari-scene", "version": 2, "fps": 60, "duration": 1,
+          "camera": {"position": [0, 1, 3], "target": [0, 1, 0]},
+          "characters": [{"name": "s", "gltf": ")" + dir.file("twins.gltf") + R"(", "reference_joint": 5,
+            "colliders": [{"name": "ball", "type": "sphere", "joint": "Collider", "radius": 0.5}],
+            "chains": [)" + chain + "]}]}";
+    };
+    const std::string twice = error_of(scene_with(R"({"name": "c", "root": "Spring A"})"));
+    EXPECT_NE(twice.find("\"Spring A\" names 2 nodes"), std::string::npos) << twice;
+    EXPECT_NE(twice.find("by its index or by its path"), std::string::npos) << twice;
+    EXPECT_NE(twice.find("$.characters[0].chains[0].root"), std::string::npos) << twice;
+    for (const std::string& root : {std::string(R"("Spring A/Spring A")"), std::string("1")}) {
+        SCOPED_TRACE(root);
+        auto parsed = parse_scene(scene_with(R"({"name": "c", "root": )" + root + R"(, "colliders": ["ball"], "center": 0})"), "t.json");
+        ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+        const ChainSpec& chain = parsed.value().characters[0].chains[0];
+        EXPECT_EQ(chain.nodes, (std::vector<int>{1, 2, 3, 4}));
+        EXPECT_EQ(chain.center, 0);
+        EXPECT_EQ(chain.colliders, (std::vector<std::uint32_t>{0}));
+        EXPECT_EQ(parsed.value().characters[0].skeleton.reference, 5u);
+    }
+    // A path step that is not there, an index past the last node, a collider name that is not there.
+    EXPECT_NE(error_of(scene_with(R"({"name": "c", "root": "Spring A/Spring C"})")).find("path step \"Spring C\""), std::string::npos);
+    EXPECT_NE(error_of(scene_with(R"({"name": "c", "root": 6})")).find("$.characters[0].chains[0].root"), std::string::npos);
+    const std::string unknown = error_of(scene_with(R"({"name": "c", "root": 1, "colliders": ["bal"]})"));
+    EXPECT_NE(unknown.find("$.characters[0].chains[0].colliders[0]"), std::string::npos) << unknown;
+    EXPECT_NE(unknown.find("\"ball\""), std::string::npos) << unknown;
+}
+
 // The project's own character simulated for 4 s walking and turning: the strands keep
 // their lengths, stay out of the head, and swing.
 TEST(RiggedScene, ChibiSimulatesOnTheCpu) {
@@ -291,7 +332,7 @@ TEST(RiggedScene, ChibiSimulatesOnTheCpu) {
                 worst_stretch = std::max(worst_stretch, std::abs(length / chain.segment_length[i] - 1.0f));
             }
             for (std::uint32_t i = 1; i < chain.joint_count; ++i) {
-                const rods::Capsule& head = input.colliders[ci.collider_begin];
+                const rods::Collider& head = input.colliders[ci.collider_begin];
                 const float depth = head.radius + chain.thickness - glm::length(snap.positions[ci.joint_begin + i] - head.a);
                 worst_depth = std::max(worst_depth, depth);
             }
@@ -332,8 +373,8 @@ TEST(RiggedScene, RigWritesScenesThatLoad) {
     const std::vector<Case> cases = {
         {kChibi, std::nullopt, 7, 0, "name patterns"},
         {kSource + "/tests/assets/vrm-springbone/sphere-collider.gltf", std::nullopt, 1, 1, "VRM 1.0 spring bones"},
-        {kSource + "/tests/assets/vrm-springbone/inside-collider.gltf", std::nullopt, 1, 0, "VRM 1.0 spring bones"},
-        {kSource + "/tests/assets/vrm-springbone/plane-collider.gltf", std::nullopt, 1, 0, "VRM 1.0 spring bones"},
+        {kSource + "/tests/assets/vrm-springbone/inside-collider.gltf", std::nullopt, 1, 1, "VRM 1.0 spring bones"},
+        {kSource + "/tests/assets/vrm-springbone/plane-collider.gltf", std::nullopt, 1, 1, "VRM 1.0 spring bones"},
         {kSource + "/tests/assets/khronos/RiggedSimple.gltf", bone, 1, 0, "named roots"},
     };
     for (const Case& c : cases) {
@@ -352,11 +393,22 @@ TEST(RiggedScene, RigWritesScenesThatLoad) {
         EXPECT_EQ(rods.world.chains.size(), c.chains);
         EXPECT_EQ(rods.world.collider_count, c.colliders);
     }
-    // The plane collider's fallback sphere lies 10 km from its node: skipped, with a warning.
+    // The extended colliders replace their fallback shapes (the plane's is a sphere 10 km
+    // away): a plane through the collider node with its normal, and an inside sphere, both
+    // without warnings. The collider node "Collider" is at (0, 1, 0), scale 1.
     auto plane = gltf::make_rig_scene(kSource + "/tests/assets/vrm-springbone/plane-collider.gltf", dir.file("p.json"), {});
-    ASSERT_TRUE(plane.ok());
-    const auto& warnings = plane.value().warnings;
-    EXPECT_TRUE(std::any_of(warnings.begin(), warnings.end(), [](const std::string& w) { return w.find("collider 0 skipped") != std::string::npos; }));
+    ASSERT_TRUE(plane.ok()) << plane.error().message;
+    EXPECT_TRUE(plane.value().warnings.empty()) << plane.value().warnings.front();
+    const auto plane_json = nlohmann::json::parse(plane.value().json)["characters"][0]["colliders"][0];
+    EXPECT_EQ(plane_json["type"], "plane");
+    EXPECT_EQ(plane_json["normal"], nlohmann::json::array({0, 0, 1}));
+    EXPECT_EQ(plane_json["point"], nlohmann::json::array({0, 0, 0}));
+    auto inside = gltf::make_rig_scene(kSource + "/tests/assets/vrm-springbone/inside-collider.gltf", dir.file("i.json"), {});
+    ASSERT_TRUE(inside.ok()) << inside.error().message;
+    const auto inside_json = nlohmann::json::parse(inside.value().json)["characters"][0]["colliders"][0];
+    EXPECT_EQ(inside_json["type"], "sphere");
+    EXPECT_EQ(inside_json["inside"], true);
+    EXPECT_EQ(inside_json["radius"], 1.25);
     // No pattern matches RiggedSimple's "Bone": a clear error that says what to do.
     auto none = gltf::make_rig_scene(kSource + "/tests/assets/khronos/RiggedSimple.gltf", dir.file("r.json"), {});
     ASSERT_FALSE(none.ok());

@@ -29,6 +29,7 @@ enum class DeviceBuffer : std::uint8_t {
     RodColliders,    ///< RodColliderGpu: this frame's input
     PoseWorld,       ///< PoseMatrixGpu, items (instances) x per_item (nodes), instance-major
     RodKeys,         ///< RodTransformGpu per key source (RodFrame::keys): this frame's input
+    RodCenters,      ///< RodTransformGpu per center frame (RodFrame::centers): this frame's input
 };
 
 /// Where a named buffer's current data is.

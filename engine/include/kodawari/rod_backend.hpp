@@ -63,7 +63,8 @@ public:
 
 /// One chain's frame with the CPU reference (SPEC A.3, A.2, A.5, A.4, and
 /// docs/keyed-examples.md): its keyed weights (advancing `keys`, which start as
-/// rods::initial_key_state), its rest shape from `frame`, then rods::step. What every
+/// rods::initial_key_state), its rest shape from `frame`, the chain carried by its center's
+/// motion (rods::follow_center from ChainState::center, which it updates), then rods::step. What every
 /// backend computes; exposed for tests and `kodawari validate`.
 KODAWARI_API void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
                                        rods::ChainState& state, rods::KeyState& keys,

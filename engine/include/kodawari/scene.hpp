@@ -82,11 +82,13 @@ struct FlockSpec {
 };
 
 /// One kinematic collider of a character, in its joint's frame (a sphere is a capsule
-/// with a == b).
+/// with a == b; a plane has a on it and b = a + its unit normal; rods::Collider).
 struct ColliderSpec {
+    std::string name;         ///< for chains' `colliders` lists; may be empty
     std::uint32_t joint = 0;  ///< index into CharacterSpec::skeleton.joints
     glm::vec3 a{0.0f}, b{0.0f};
-    float radius = 0.0f;  ///< m, > 0
+    float radius = 0.0f;  ///< m, > 0 (0 for a plane)
+    rods::ColliderKind kind = rods::ColliderKind::Outside;
 };
 
 /// One view example of a chain (SPEC A.1): direction and influence, and its shape.
@@ -117,7 +119,14 @@ struct ChainSpec {
     float thickness = 0.005f;  ///< m
     float mass = 0.002f;       ///< kg per joint
     rods::SolverParams params;
-    bool collide = true;  ///< against all of its character's colliders
+    bool collide = true;  ///< false: against none of its character's colliders
+    /// The colliders it collides with, indices into CharacterSpec::colliders in the
+    /// scene's order (VRM's per-spring collider groups); empty with `all_colliders`.
+    std::vector<std::uint32_t> colliders;
+    bool all_colliders = true;  ///< no `colliders` list: all of its character's
+    /// The joint (a rigged character's node) whose space its inertia is measured in
+    /// (`center`, rods::follow_center), -1 for the world.
+    std::int32_t center = -1;
     std::string path;     ///< its JSON path (for messages from the builder)
     /// A rigged (glTF) character's chain: its joints' node indices, root first. Then
     /// `joint` is nodes[0], `offset` the identity, and the chain root's frame is the

@@ -9,10 +9,12 @@
 /// 2. The file has VRM spring bones (read_vrm_springs()): one chain per spring, with its
 ///    mapped physics, and the springs' sphere and capsule colliders.
 /// 3. Otherwise find_chains() with the default name patterns.
-/// Colliders in the scene are in their node's rigid frame (rest pose, metres). Every
-/// colliding chain of a scene character collides with all of its colliders (at most
-/// rods::kMaxChainColliders): VRM's per-spring collider groups are merged, and a
-/// warning says so when a spring used fewer colliders than the character has.
+/// Colliders in the scene are in their node's rigid frame (rest pose, metres), named
+/// "collider<i>" after their index in the file, with their kind (outside, `inside`,
+/// plane). Each VRM spring's chain lists the colliders of its own collider groups (at most
+/// rods::kMaxChainColliders; a warning when a spring had more) and its `center`; chains
+/// found by name patterns collide with all colliders. Nodes are named by name where it
+/// is unique, else by their path of names from a root, else by index.
 
 #include <cstdint>
 #include <optional>
@@ -56,9 +58,8 @@ struct RigScene {
 
 /// Loads `character_path` and writes the text of a scene that simulates it; the scene
 /// refers to the character by its path relative to the folder of `scene_path` (where
-/// the caller will write it). Errors: the file does not load, no chain is found, a
-/// chain node has no unique name (the scene refers to nodes by name), the clip does not
-/// exist. The scene has one instance at the origin and a camera orbiting the head.
+/// the caller will write it). Errors: the file does not load, no chain is found, the
+/// clip does not exist. The scene has one instance at the origin and a camera orbiting the head.
 [[nodiscard]] KODAWARI_API Result<RigScene> make_rig_scene(const std::string& character_path, const std::string& scene_path,
                                                            const RigOptions& options);
 

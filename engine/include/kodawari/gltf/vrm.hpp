@@ -51,17 +51,20 @@
 /// - VRM 1.0 parameters are per joint; a chain has one set, so they are averaged over
 ///   the chain's bones (every joint but the tail, whose parameters VRM 1.0 does not use).
 ///   VRM 0.x parameters are per bone group.
-/// - VRM 1.0 `center` and VRM 0.x `center` (a moving reference frame for inertia) are not
-///   supported: a warning, and the chain hangs from its parent as usual.
+/// - VRM 1.0 `center` and VRM 0.x `center` (a node whose space the spring's inertia is
+///   measured in; UniVRM and three-vrm keep the previous and current tail positions in
+///   it) become VrmSpring::center, which the scene's chain `center` makes the solver
+///   honour by carrying the chain rigidly with that node's motion before each step
+///   (rods::follow_center). VRM 0.x's -1 means none.
 ///
-/// Colliders. Sphere and capsule become VrmCollider in their node's local frame. The
-/// extended collider's shape replaces the base shape when present: its spheres and
-/// capsules, `inside` ones included (kept with VrmCollider::inside set, and a warning,
-/// because rods::step() has only outside colliders), map; a plane cannot (the solver has
-/// no planes), so the base shape stays, which the extension defines as the fallback for
-/// readers without it, and a warning says so. VRM 0.x collider offsets are stored with z
-/// negated (UniVRM 0.x wrote Unity's frame), so z is negated back here; its gravityDir is
-/// not.
+/// Colliders. Sphere and capsule become VrmCollider in their node's local frame, each
+/// spring keeping its own collider groups (VrmSpring::colliders). The extended collider
+/// (VRMC_springBone_extended_collider 1.0) replaces the base shape when present, as the
+/// extension defines it (the base shape is the fallback of readers without it): its
+/// spheres and capsules, outside or `inside` (the joint is kept inside the shape), and its
+/// planes (offset on the plane, unit normal; the joint is kept on the normal's side), each
+/// a rods::ColliderKind. VRM 0.x collider offsets are stored with z negated (UniVRM 0.x
+/// wrote Unity's frame), so z is negated back here; its gravityDir is not.
 
 #include <cstddef>
 #include <string>
@@ -93,23 +96,26 @@ struct VrmSpring {
     float hit_radius = 0.0f;
     /// Thickness (from hit_radius, see the file comment) and mass for rods::make_chain().
     PhysicsScale physics;
-    /// The colliders this spring collides with, indices into VrmSprings::colliders,
-    /// ascending, without repeats.
+    /// The colliders this spring collides with (its collider groups' colliders), indices
+    /// into VrmSprings::colliders, ascending, without repeats.
     std::vector<std::size_t> colliders;
+    /// The node whose space its inertia is measured in (`center`), -1 for none.
+    int center = -1;
 };
 
-/// A sphere or capsule collider, in the frame of its node: the node's world matrix maps
-/// offset and tail to the world, and radius is in the node's local units (multiply by
-/// the node's world scale, the largest axis, for metres).
+/// A sphere, capsule or plane collider, in the frame of its node: the node's world matrix
+/// maps offset and tail to the world, and radius is in the node's local units (multiply
+/// by the node's world scale, the largest axis, for metres).
 struct VrmCollider {
     int node = -1;
     bool capsule = false;
-    glm::vec3 offset{0.0f};  ///< the sphere's centre, or the capsule's first end
-    glm::vec3 tail{0.0f};    ///< the capsule's second end (equal to offset for a sphere)
-    float radius = 0.0f;     ///< >= 0
-    /// The spring's joints are kept *inside* it (extended collider); rods::step() does
-    /// not support that yet, so a caller must skip these colliders.
-    bool inside = false;
+    glm::vec3 offset{0.0f};  ///< the sphere's centre, the capsule's first end, a point of the plane
+    glm::vec3 tail{0.0f};    ///< the capsule's second end (offset for a sphere, offset + normal for a plane)
+    glm::vec3 normal{0.0f};  ///< a plane's unit normal (node frame)
+    float radius = 0.0f;     ///< >= 0 (0 for a plane)
+    /// What it keeps the spring's joints from: outside it, inside it (extended collider
+    /// `inside`), or behind the plane.
+    rods::ColliderKind kind = rods::ColliderKind::Outside;
 };
 
 /// What read_vrm_springs() found.
@@ -129,7 +135,8 @@ struct VrmSprings {
 /// error). Errors (InvalidInput, naming Character::source and the JSON path, e.g.
 /// "$.extensions.VRMC_springBone.springs[1].joints[2]"): a missing or mistyped required
 /// field, a node or collider (group) index out of range, a 1.0 joint that is not the
-/// child of the joint before it, a negative radius, and the errors of make_found_chain().
+/// child of the joint before it, a negative radius, a plane whose normal is zero, and the
+/// errors of make_found_chain().
 [[nodiscard]] KODAWARI_API Result<VrmSprings> read_vrm_springs(const Character& character);
 
 /// The node of a VRM humanoid bone ("head", "hips", ...): VRMC_vrm 1.0's

@@ -30,15 +30,23 @@ struct ChainAttachment {
     std::uint32_t joint = 0;  ///< skeleton joint
     rods::Transform offset;   ///< the chain root's frame in the joint's frame
     bool collide = true;      ///< false: the chain instance gets no colliders
+    /// Its colliders: CharacterKinematics::colliders[collider_begin, collider_begin +
+    /// collider_count) (each chain's set is one run there; chains with the same set share it).
+    std::uint32_t collider_begin = 0;
+    std::uint32_t collider_count = 0;
+    /// The joint whose space its inertia is measured in (rods::follow_center), -1 for none.
+    std::int32_t center = -1;
     /// Its key sources, in its template's key_sources order (RodFrame::keys).
     std::vector<KeyJoint> keys;
 };
 
-/// A collider of a character template, in its joint's frame.
+/// A collider of a character template, in its joint's frame (rods::Collider's meaning of
+/// a, b and radius for its kind).
 struct ColliderAttachment {
     std::uint32_t joint = 0;
     glm::vec3 a{0.0f}, b{0.0f};
     float radius = 0.0f;
+    rods::ColliderKind kind = rods::ColliderKind::Outside;
 };
 
 /// The kinematic model of one character template: a procedural skeleton and motions,
@@ -70,6 +78,7 @@ struct CharacterInstance {
     std::int32_t clip = -1;       ///< rigged characters: the clip it plays (looping), -1 = rest pose
     std::uint32_t chain_begin = 0;     ///< its chains: RodWorld::chains[begin, begin + chain count)
     std::uint32_t collider_begin = 0;  ///< its colliders: RodFrame::colliders[begin, begin + collider count)
+    std::uint32_t center_begin = 0;    ///< its chains' centers: RodFrame::centers[begin, ...), chain by chain
 };
 
 /// The characters of a scene, ready for the rod backends.

@@ -52,8 +52,10 @@ struct Transform {
     glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};
 };
 
-/// The most colliders of each kind one chain may touch.
+/// The most colliders one chain may touch (the GPU keeps them in fixed arrays), and the
+/// most one character template may have (its chains touch subsets of them).
 inline constexpr std::uint32_t kMaxChainColliders = 16;
+inline constexpr std::uint32_t kMaxCharacterColliders = 256;
 /// The smallest particle thickness (m), particle mass (kg) and frame length (s) a chain
 /// takes: above zero by margins that keep inertias, inverse masses and velocities
 /// (displacement / dt) finite in float; below a hair's width, a segment's mass, a
@@ -67,17 +69,37 @@ inline constexpr float kMinFrameDt = 1e-5f;
 inline constexpr float kMaxThickness = 1.0f;
 inline constexpr float kMaxMass = 1000.0f;
 
-/// A kinematic sphere collider, world space.
-struct Sphere {
-    glm::vec3 center{0.0f};
-    float radius = 0.0f;  ///< m, >= 0
+/// What a collider keeps a chain's particles from (VRMC_springBone 1.0 and its
+/// VRMC_springBone_extended_collider 1.0 define the three).
+enum class ColliderKind : std::uint32_t {
+    /// Outside the capsule (a sphere when a == b): the distance of a particle's centre to
+    /// the segment ab is kept >= radius + thickness.
+    Outside = 0,
+    /// Inside the capsule or sphere: the distance is kept <= max(radius - thickness, 0).
+    Inside = 1,
+    /// On the positive side of a plane through a with unit normal b - a: the signed
+    /// distance dot(p - a, b - a) is kept >= thickness. `radius` is unused.
+    Plane = 2,
 };
 
-/// A kinematic capsule collider (a segment swept by a sphere), world space.
-struct Capsule {
+/// A kinematic collider, world space. A plane stores its normal as the second point
+/// b = a + n so that a rigid transform of both points moves the plane.
+struct Collider {
     glm::vec3 a{0.0f}, b{0.0f};
     float radius = 0.0f;  ///< m, >= 0
+    ColliderKind kind = ColliderKind::Outside;
 };
+
+/// The distance a collider keeps for a particle of `thickness`: radius + thickness
+/// outside, max(radius - thickness, 0) inside, thickness from a plane. Every backend
+/// takes this value, so that their collisions agree to the bit.
+[[nodiscard]] KODAWARI_API float collider_reach(const Collider& collider, float thickness);
+
+/// How far a particle of `thickness` at `p` is from what `collider` forbids, m: positive
+/// when it is free, 0 on the boundary, negative by the depth it violates it (outside: the
+/// distance to the segment ab minus radius + thickness; inside: max(radius - thickness,
+/// 0) minus that distance; plane: the signed distance along the normal minus thickness).
+[[nodiscard]] KODAWARI_API float collider_gap(const Collider& collider, glm::vec3 p, float thickness);
 
 /// Solver settings, shared by all chains of a character. Ranges are checked by
 /// validate(); step() asserts them.
@@ -135,6 +157,8 @@ struct ChainState {
     std::array<glm::quat, kMaxChainJoints> q{};      ///< orientations, world
     std::array<glm::vec3, kMaxChainJoints> omega{};  ///< angular velocities, rad/s, world
     Transform root;                                          ///< the last step's root transform
+    /// The last step's center frame (follow_center()), for a chain that has one.
+    Transform center;
     std::array<glm::vec3, kMaxChainJoints> rest_position{};  ///< the last step's rest shape, root frame
     std::array<glm::quat, kMaxChainJoints> rest_orientation{};
 };
@@ -148,9 +172,20 @@ struct ChainState {
 /// the previous one (linearly, and by slerp), so a fast root does not jump. `rest` is
 /// this frame's rest shape in the root frame (positions and orientations, joint_count
 /// each); the solver places it by the interpolated root in every substep. Colliders are
-/// taken as fixed during the frame; at most kMaxChainColliders of each.
+/// taken as fixed during the frame and applied in order after every projection
+/// iteration; at most kMaxChainColliders.
 KODAWARI_API void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
-                       std::span<const Sphere> spheres, std::span<const Capsule> capsules, float dt, ChainState& state);
+                       std::span<const Collider> colliders, float dt, ChainState& state);
+
+/// Carries `state` rigidly by the motion of a *center* frame from `from` to `to` (the
+/// spring's `center` of VRMC_springBone 1.0 and VRM 0.x): UniVRM and three-vrm keep a
+/// spring's previous and current tail positions in the center node's space, so its
+/// inertia is measured relative to that node. With M = to * from^-1 (rotation R), every
+/// particle's world position P becomes M P, its velocity R v, orientation R q and angular
+/// velocity R omega, and the last root transform (state.root) moves by M as well, so the
+/// next step() interpolates the root from where the carried chain hangs. Call it before
+/// step() with the center's transforms at the previous and this frame.
+KODAWARI_API void follow_center(const Transform& from, const Transform& to, ChainState& state);
 
 /// What a renderer or a skinned mesh needs from a chain.
 struct ChainPose {

@@ -64,6 +64,9 @@ struct ChainTemplate {
                                                            std::span<const ChainShape> shapes,
                                                            std::span<const KeyedExample> keyed);
 
+/// ChainInstance::center of a chain without a center frame.
+inline constexpr std::uint32_t kNoCenter = 0xFFFFFFFFu;
+
 /// One simulated chain: a template attached to one character instance.
 struct ChainInstance {
     std::uint32_t template_index = 0;
@@ -74,6 +77,9 @@ struct ChainInstance {
     /// Its key sources: RodFrame::keys[key_begin, key_begin + the template's key_sources
     /// count) (set by RodWorld::finalize).
     std::uint32_t key_begin = 0;
+    /// Its center frame (follow_center()): an index into RodFrame::centers that no other
+    /// chain uses, or kNoCenter for a chain whose inertia is measured in the world.
+    std::uint32_t center = kNoCenter;
 };
 
 /// The chains of a scene.
@@ -82,10 +88,12 @@ struct KODAWARI_API RodWorld {
     std::vector<ChainInstance> chains;
     std::uint32_t character_count = 0;  ///< character instances (RodFrame::reference entries)
     std::uint32_t collider_count = 0;   ///< RodFrame::colliders entries
+    std::uint32_t center_count = 0;     ///< RodFrame::centers entries
     std::uint32_t joint_count = 0;      ///< sum of the chains' joints (set by finalize)
     std::uint32_t key_count = 0;        ///< sum of the chains' key sources (set by finalize)
 
-    /// Checks every index and range and sets joint_begin, key_begin, joint_count and key_count.
+    /// Checks every index and range (a center belongs to one chain) and sets joint_begin,
+    /// key_begin, joint_count and key_count.
     [[nodiscard]] Result<void> finalize();
     [[nodiscard]] const ChainTemplate& templ(const ChainInstance& c) const { return templates[c.template_index]; }
 };
@@ -97,8 +105,12 @@ struct RodFrame {
     Camera camera;
     std::vector<Transform> reference;  ///< per character instance: the reference joint's pose (SPEC A.3)
     std::vector<Transform> roots;      ///< per chain: the chain root's frame (joint 0 follows it)
-    /// Kinematic colliders; a sphere is a capsule with a == b.
-    std::vector<Capsule> colliders;
+    /// Kinematic colliders (ChainInstance::collider_begin / collider_count pick each
+    /// chain's); a sphere is a capsule with a == b.
+    std::vector<Collider> colliders;
+    /// The center frames (ChainInstance::center): the pose of the node whose space a
+    /// chain's inertia is measured in.
+    std::vector<Transform> centers;
     /// Per chain, its key sources (ChainInstance::key_begin): a Motion source's world
     /// pose, a Pose source's rotation relative to its parent (position 0).
     std::vector<Transform> keys;
@@ -106,6 +118,11 @@ struct RodFrame {
 
 /// Checks that `frame` fits `world` (sizes, dt > 0, finite values).
 [[nodiscard]] KODAWARI_API Result<void> check_frame(const RodWorld& world, const RodFrame& frame);
+
+/// `chain` at rest at `frame` (its first): initial_state() on the rest shape of
+/// rest_shape(world, chain, frame), with its center frame (ChainState::center) from
+/// frame.centers when it has one.
+[[nodiscard]] KODAWARI_API ChainState initial_chain_state(const RodWorld& world, std::uint32_t chain, const RodFrame& frame);
 
 /// The view direction, weights and blended rest shape of one chain (SPEC A.3, A.2).
 struct RestShape {
