@@ -291,9 +291,12 @@ private:
         const float h = spring.params.max_substep;
         const float a = kVrmFrameRate * h * h * (mean.stiffness / n);
         spring.params.rest_stiffness = a / (a + segment);
-        spring.params.gravity = kVrmFrameRate * mean.gravity_dir / n;
+        spring.params.stiffness = 0.0f;  // VRM has no shape matching (vrm.hpp)
         const float drag = std::clamp(mean.drag / n, 0.0f, kMaxDragForce);
         spring.params.damping = -std::log(1.0f - drag) * kVrmFrameRate;
+        // The solver damps the velocity after adding gravity: the equilibrium sag carries
+        // a factor exp(-damping h) = (1 - drag)^(60 h) that VRM's does not (vrm.hpp).
+        spring.params.gravity = kVrmFrameRate * mean.gravity_dir / n / std::exp(-spring.params.damping * h);
         spring.hit_radius = mean.hit_radius / n;
 
         spring.physics = scaled_physics(c_, spring.chain);

@@ -68,6 +68,10 @@ float expected_rest(float stiffness, float segment, float h) {
     return a / (a + segment);
 }
 float expected_damping(float drag) { return -std::log(1.0f - drag) * 60.0f; }
+// gravity = 60 p dir / exp(-damping h), and exp(-damping h) = (1 - drag)^(60 h).
+glm::vec3 expected_gravity(float power, glm::vec3 dir, float drag, float h) {
+    return 60.0f * power * dir / std::pow(1.0f - drag, 60.0f * h);
+}
 
 TEST(GltfVrm, SamplesYieldTheSpringsAndCollidersTheyDeclare) {
     for (const std::string& name : kSpringFiles) {
@@ -145,7 +149,7 @@ TEST(GltfVrm, MappedParametersFollowTheDocumentedFormulas) {
     EXPECT_NEAR(spring.params.damping, expected_damping(joint["dragForce"].get<float>()), 1e-4f);
     EXPECT_NEAR(spring.params.damping, 30.649f, 1e-2f);  // -ln(0.6) * 60
     expect_near(spring.params.gravity, glm::vec3(0.0f), 0.0f);
-    EXPECT_FLOAT_EQ(spring.params.stiffness, defaults.stiffness);
+    EXPECT_EQ(spring.params.stiffness, 0.0f);  // VRM has no shape matching
     EXPECT_FLOAT_EQ(spring.hit_radius, joint["hitRadius"].get<float>());
     EXPECT_NEAR(spring.physics.thickness, 0.25f * 0.25f, 1e-6f);  // hitRadius times the root's world scale
     EXPECT_GT(spring.physics.mass, 0.0f);
@@ -204,7 +208,9 @@ TEST(GltfVrm, Vrm0BoneGroupsBecomeChains) {
         EXPECT_EQ(spring.colliders, (std::vector<std::size_t>{0}));
         EXPECT_NEAR(spring.params.rest_stiffness, expected_rest(2.0f, segments[s], defaults.max_substep), 1e-6f);
         EXPECT_NEAR(spring.params.damping, expected_damping(0.2f), 1e-4f);
-        expect_near(spring.params.gravity, glm::vec3(0.0f, -30.0f, 0.0f), 1e-5f);  // 60 * 0.5 * (0, -1, 0)
+        // 60 * 0.5 * (0, -1, 0) / 0.8^0.5 = (0, -33.541, 0)
+        expect_near(spring.params.gravity, expected_gravity(0.5f, glm::vec3(0.0f, -1.0f, 0.0f), 0.2f, defaults.max_substep), 1e-4f);
+        EXPECT_NEAR(spring.params.gravity.y, -33.541f, 1e-3f);
         EXPECT_FLOAT_EQ(spring.hit_radius, 0.01f);
         EXPECT_NEAR(spring.physics.thickness, 0.01f, 1e-7f);
         EXPECT_TRUE(rods::make_chain(spring.chain.base, spring.physics.thickness, spring.physics.mass).ok());
@@ -245,6 +251,7 @@ TEST(GltfVrm, ColliderGroupOutOfRangeIsAnError) {
 TEST(GltfVrm, MissingColliderAndZeroNormalAreErrors) {
     const TempDir dir;
     fs::copy_file(kSpringDir + "/plane_mesh.bin", dir.file("plane_mesh.bin"));
+    fs::copy_file(kSpringDir + "/sphere_mesh.bin", dir.file("sphere_mesh.bin"));
     json doc = read_json(kSpringDir + "/plane-collider.gltf");
     json missing = doc;
     missing["extensions"]["VRMC_springBone"]["colliderGroups"][0]["colliders"][0] = 1;  // one collider: index 0

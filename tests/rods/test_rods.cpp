@@ -459,7 +459,7 @@ TEST(RodSolver, CollidersKeepParticlesOut) {
             for (std::uint32_t i = 1; i < rig.chain.joint_count; ++i) {
                 float gap;
                 if (which == 0) {
-                    gap = glm::length(position(s, i) - sphere.center) - sphere.radius - thickness;
+                    gap = glm::length(position(s, i) - sphere.a) - sphere.radius - thickness;
                 } else {
                     const glm::vec3 ab = capsule.b - capsule.a;
                     const float u = std::clamp(glm::dot(position(s, i) - capsule.a, ab) / glm::dot(ab, ab), 0.0f, 1.0f);

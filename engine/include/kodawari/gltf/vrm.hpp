@@ -25,11 +25,14 @@
 /// the feel of one bone (its sag under gravity and its swing frequency at VRM's 60 Hz
 /// reference), not the trajectory. The formulas (h = SolverParams::max_substep, L = the
 /// chain's mean segment length in metres, kVrmFrameRate = 60):
-/// - gravity = kVrmFrameRate * mean over the chain's bones of gravityPower * gravityDir,
-///   m/s^2. VRM's terms are displacements per frame scaled by dt, and the inertia term
-///   carries them over frames, so a constant term p acts as an acceleration p / dt =
-///   60 p at 60 Hz: gravityPower 1 is about 6 g, not 1 g. (VRM's response therefore
-///   depends on the frame rate; ours does not.)
+/// - gravity = kVrmFrameRate * mean over the chain's bones of gravityPower * gravityDir
+///   / exp(-damping h), m/s^2. VRM's terms are displacements per frame scaled by dt, and
+///   the inertia term carries them over frames, so a constant term p acts as an
+///   acceleration p / dt = 60 p at 60 Hz: gravityPower 1 is about 6 g, not 1 g. (VRM's
+///   response therefore depends on the frame rate; ours does not.) Our solver damps the
+///   velocity after adding gravity, so its equilibrium sag is exp(-damping h) of VRM's
+///   (0.775 at dragForce 0.4, measured against three-vrm); dividing by that factor gives
+///   one bone VRM's sag.
 /// - rest_stiffness = a s / (a s + L) with a = kVrmFrameRate h^2 and s = mean stiffness.
 ///   For a horizontal rest bone, VRM's equilibrium sag angle is atan(gravityPower /
 ///   stiffness), independent of the bone; a particle held by our rest attraction k sags
@@ -39,7 +42,10 @@
 ///   about k / h^2, equal for small k. Limits: VRM's sag accumulates bone by bone along a
 ///   chain and ours does not, so long VRM chains droop more than ours; and the same VRM
 ///   stiffness gives a weaker rest attraction on longer segments, as it does in VRM.
-/// - stiffness (shape matching) stays at SolverParams' default: VRM has no such term.
+/// - stiffness (shape matching) = 0: VRM has no such term, and at SolverParams' default
+///   (0.5) it acts like a rest attraction some 27 times the mapped one, so a bone rang 5x
+///   faster and sagged 1/40 as much as three-vrm's (docs/rigged-characters.md, "Measured
+///   against three-vrm"). The rest-pose attraction alone holds the chain's shape.
 /// - damping = -ln(1 - dragForce) * kVrmFrameRate, 1/s: dragForce is the fraction of
 ///   velocity lost per 60 Hz frame. dragForce is clamped to [0, kMaxDragForce] first, as
 ///   1 would be an infinite rate.
