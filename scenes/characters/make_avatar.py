@@ -11,7 +11,7 @@ Files (paths relative to the repository root):
 - scenes/characters/avatar.vrm: a VRM 1.0 avatar (GLB with VRMC_vrm and VRMC_springBone 1.0),
   structured as VRoid Studio exports one: a `Root` node above `J_Bip_C_Hips`, humanoid bones
   named J_Bip_* / J_Adj_*, spring joints J_Sec_*, every node with identity rotation (a
-  T-pose facing +Z, +Y up, metres, 1.49 m to the top of the hair). 24 hair springs
+  T-pose facing +Z, +Y up, metres, 1.48 m to the top of the hair). 24 hair springs
   (J_Sec_Hair<joint>_<strand>) rooted on J_Bip_C_Head, 6 skirt springs on the hips, 2 bust
   springs on the upper chest; 16 colliders in 4 groups (Head, Body, Arms, Legs); one skinned
   mesh (body capsules, head sphere, hair ribbons and skirt panels skinned along their joints).
