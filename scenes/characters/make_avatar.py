@@ -44,7 +44,6 @@ Standard library only; the glTF, quaternion and mesh helpers are the character g
 (CC0 1.0): no third-party asset or code.
 """
 import argparse
-import json
 import math
 import os
 import sys
@@ -998,8 +997,8 @@ def verify_avatar(data, version):
         for a, b in zip(chain, chain[1:]):
             d = normalize(sub(b, a))
             assert abs(d[0] - s * left) < 1e-6, "%s arm is not along X" % side
-        legs = [p[side + b] for b in ("UpperLeg", "LowerLeg", "Foot")]
-        for a, b in zip(legs, legs[1:]):
+        leg = [p[side + b] for b in ("UpperLeg", "LowerLeg", "Foot")]
+        for a, b in zip(leg, leg[1:]):
             assert abs(normalize(sub(b, a))[1] + 1.0) < 1e-6, "%s leg is not vertical" % side
         assert (p[side + "Toes"][2] - p[side + "Foot"][2]) * forward > 0.05, "%s foot does not point forward" % side
         assert p[side + "UpperArm"][0] * left * s > 0.0
@@ -1214,14 +1213,14 @@ def verify_vrma(data, clip):
     if clip == "walk":
         pose, _ = pose_fn(0.0, period)  # left heel strike: left leg forward, left arm back
 
-        def limb_end(root, bones_, offsets):
+        def limb_end(bones_, offsets):
             q, pos = IDENTITY_Q, (0.0, 0.0, 0.0)
             for b, o in zip(bones_, offsets):
                 q = q_mul(q, pose[b])
                 pos = add(pos, q_rotate(q, o))
             return pos
         for side, s in (("left", 1.0), ("right", -1.0)):
-            hand = limb_end(None, ["hips", "spine", "chest", "upperChest", side + "Shoulder", side + "UpperArm"],
+            hand = limb_end(["hips", "spine", "chest", "upperChest", side + "Shoulder", side + "UpperArm"],
                             [(0, 0, 0)] * 5 + [(s * 0.24, 0.0, 0.0)])
             assert hand[1] < -0.15, "%s arm does not hang" % side
             assert (hand[2] < 0.0) == (side == "left"), "%s arm swings with its leg" % side
