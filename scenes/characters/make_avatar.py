@@ -1,8 +1,8 @@
 #!/usr/bin/env python3
-"""Writes Kodawari's own VRoid-class test avatar (VRM 1.0 and VRM 0.x) and two VRM Animation clips.
+"""Writes Kodawari's own VRoid-class test avatar (VRM 1.0 and VRM 0.x) and three VRM Animation clips.
 
-    python3 scenes/characters/make_avatar.py                  # generate, verify, write the four files
-    python3 scenes/characters/make_avatar.py --out-dir DIR    # the same four files, flat into DIR
+    python3 scenes/characters/make_avatar.py                  # generate, verify, write the five files
+    python3 scenes/characters/make_avatar.py --out-dir DIR    # the same five files, flat into DIR
     python3 scenes/characters/make_avatar.py --check          # verify the committed files only
     python3 scenes/characters/make_avatar.py --variant NAME --out FILE   # one bad-input file
 
@@ -18,8 +18,11 @@ Files (paths relative to the repository root):
 - scenes/characters/avatar-vrm0.vrm: the same avatar as VRM 0.x (extensions.VRM), laid out as
   UniVRM 0.x writes it: the model faces -Z in glTF space, collider offsets in Unity's
   left-handed frame (see vrm0_offset below), capsules as runs of spheres.
-- scenes/motions/walk.vrma (1.1 s walk cycle in place) and scenes/motions/idle.vrma (4 s
-  breathing, sway, head turn): VRMC_vrm_animation 1.0 on a skeleton of its own -- a taller,
+- scenes/motions/walk.vrma (1.1 s walk cycle in place), scenes/motions/walk-turn.vrma (the
+  same walk, 8 cycles = 8.8 s, travelling once round a circle of radius 1.681 m at 1.2 m/s
+  with the hips translating and turning along it: root motion that closes the loop) and
+  scenes/motions/idle.vrma (4 s breathing, sway, head turn): VRMC_vrm_animation 1.0 on a
+  skeleton of its own -- a taller,
   longer-legged rig named like a motion-capture export ("mocap:Hips", ...), whose rest
   rotations are NOT identity (bones point along their local +Y), so that a reader has to
   retarget (normalise the rotations, scale the hips translation by 0.78 / 1.00).
@@ -65,6 +68,7 @@ OUTPUTS = [  # (file name, path in the repository)
     ("avatar.vrm", os.path.join("scenes", "characters", "avatar.vrm")),
     ("avatar-vrm0.vrm", os.path.join("scenes", "characters", "avatar-vrm0.vrm")),
     ("walk.vrma", os.path.join("scenes", "motions", "walk.vrma")),
+    ("walk-turn.vrma", os.path.join("scenes", "motions", "walk-turn.vrma")),
     ("idle.vrma", os.path.join("scenes", "motions", "idle.vrma")),
 ]
 VARIANTS = ["vrma-no-humanoid", "vrma-jaw", "vrma-missing-node", "vrm-missing-collider", "vrm-zero-plane"]
@@ -789,6 +793,35 @@ def walk_pose(t, period=1.1):
     return pose, hips_t
 
 
+# walk-turn: the walk's stride cycle, 8 of them, while the hips go once round a circle to
+# the left (the centre TURN_RADIUS along +X, the avatar's left, from where the clip starts)
+# at TURN_SPEED: the circumference is the distance walked, so the loop closes exactly.
+WALK_CYCLE = 1.1
+TURN_CYCLES = 8
+TURN_PERIOD = TURN_CYCLES * WALK_CYCLE  # 8.8 s
+TURN_SPEED = 1.2  # m/s, in the clip's (the mocap rig's) metres
+TURN_RADIUS = TURN_SPEED * TURN_PERIOD / (2.0 * math.pi)  # 1.6807 m
+
+
+def turn_of(t, period):
+    """(yaw quaternion, heading angle rad, hips' path point (x, z)) of walk-turn at time t:
+    the heading is the circle's tangent, turning left at a constant rate."""
+    a = 2.0 * math.pi * t / period
+    return q_y(math.degrees(a)), a, (TURN_RADIUS * (1.0 - math.cos(a)), TURN_RADIUS * math.sin(a))
+
+
+def walk_turn_pose(t, period=TURN_PERIOD):
+    """The walk (same stride, same legs and arms) carried round the circle: the hips' rotation
+    and their sway, bob and surge turn with the heading, and the path's point is added to the
+    hips' translation. The head's local rotation is the walk's: its world rotation is then
+    the heading's yaw alone, level and facing along the walk."""
+    pose, (sx, hy, sz) = walk_pose(t, WALK_CYCLE)
+    yaw, _, (px, pz) = turn_of(t, period)
+    pose["hips"] = q_mul(yaw, pose["hips"])  # the legs' and spine's local rotations are relative to it
+    off = q_rotate(yaw, (sx, 0.0, sz))
+    return pose, (px + off[0], hy, pz + off[2])
+
+
 def idle_pose(t, period=4.0):
     p = 2.0 * math.pi * t / period
     breath = math.sin(2.0 * p)  # two breaths per loop
@@ -814,6 +847,7 @@ def idle_pose(t, period=4.0):
 
 CLIPS = {  # name: (pose function, period s, keys, blink times s)
     "walk": (walk_pose, 1.1, 33, [0.55]),
+    "walk-turn": (walk_turn_pose, TURN_PERIOD, 264, [1.6, 4.5, 7.4]),
     "idle": (idle_pose, 4.0, 120, [1.3, 3.1]),
 }
 
@@ -836,7 +870,7 @@ def positive(q):
 
 
 def build_vrma(clip, variant=None):
-    """The GLB bytes of one VRM Animation clip ("walk" or "idle")."""
+    """The GLB bytes of one VRM Animation clip ("walk", "walk-turn" or "idle")."""
     design = vrma_design(jaw=(variant == "vrma-jaw"))
     rest = vrma_rest(design)
     by_name = {d[0]: d for d in design}
@@ -872,8 +906,15 @@ def build_vrma(clip, variant=None):
             if values and dot(q[:3], values[-1][:3]) + q[3] * values[-1][3] < 0.0:
                 q = tuple(-c for c in q)  # keep the keys on one side, for LINEAR (slerp) between them
             values.append(q if values else positive(q))
-        assert dot(values[-1][:3], values[0][:3]) + values[-1][3] * values[0][3] > 0.0
-        channel(node, "rotation", values + [values[0]])
+        # The last key is the first one's rotation. The hips of walk-turn turn by a whole turn,
+        # which brings their quaternion round to minus the first key: that one, so that the
+        # keys stay on one side all the way (the same rotation, exactly, for any reader).
+        if dot(values[-1][:3], values[0][:3]) + values[-1][3] * values[0][3] > 0.0:
+            last = values[0]
+        else:
+            assert clip == "walk-turn" and bone == "hips", "%s: the loop's last step turns by over half a turn" % bone
+            last = tuple(-c for c in values[0])
+        channel(node, "rotation", values + [last])
     translations = [tuple(clean(c, 7) for c in hips_t) for _, hips_t in poses]
     channel(bone_node["hips"], "translation", translations + [translations[0]])
 
@@ -1174,8 +1215,18 @@ def verify_vrma(data, clip):
         values = read_accessor(doc, binary, s["output"])
         assert s["interpolation"] == "LINEAR" and times[0] == 0.0 and abs(times[-1] - period) < 1e-6
         assert all(b > a for a, b in zip(times, times[1:]))
-        assert tuple(values[0]) == tuple(values[-1]), "%s %s does not loop" % (names[node], path)
+        first, last = tuple(values[0]), tuple(values[-1])
+        if clip == "walk-turn" and names[node] == "mocap:Hips" and path == "rotation":
+            last = tuple(-c for c in last)  # a whole turn: minus the first key, the same rotation
+        assert first == last, "%s %s does not loop" % (names[node], path)
         assert path in ("rotation", "translation"), "a humanoid animation never scales"
+        # Seamless: the step from the last-but-one key round to the first (the loop's wrap) is
+        # a step like the others: at most 1.5 times the largest inside the loop.
+        if path == "rotation":
+            steps = [q_angle(q_normalize(tuple(a)), q_normalize(tuple(b))) for a, b in zip(values, values[1:])]
+        else:
+            steps = [length(sub(tuple(b), tuple(a))) for a, b in zip(values, values[1:])]
+        assert steps[-1] <= 1.5 * max(steps[:-1]) + 1e-6, "%s %s jumps at the loop" % (names[node], path)
         if path == "translation" and node not in (bones["hips"],):
             assert names[node] == "expression:blink", "translation on a bone other than the hips"
             assert all(0.0 <= v[0] <= 1.0 for v in values)
@@ -1191,9 +1242,12 @@ def verify_vrma(data, clip):
     worst = 0.0
     keys = CLIPS[clip][2]
     assert len(times) == keys + 1
+    walking = clip in ("walk", "walk-turn")
+    path_points = []
     for k in range(keys):
         assert abs(times[k] - period * k / keys) < 1e-6
         design, hips_t = pose_fn(period * k / keys, period)  # the key's exact time (the file's is float32)
+        heading = turn_of(period * k / keys, period)[0] if clip == "walk-turn" else IDENTITY_Q
         normalised = {}
         for bone, i in bones.items():
             if (i, "rotation") not in tracks:
@@ -1203,15 +1257,40 @@ def verify_vrma(data, clip):
             n = q_mul(q_mul(q_mul(w, q_conj(lq)), q), q_conj(w))
             normalised[bone] = n
             worst = max(worst, q_angle(n, design[bone]))
-        assert near(tuple(tracks[(bones["hips"], "translation")][1][k]), hips_t, 1e-6)
-        if clip == "walk":
+        hips_key = tuple(tracks[(bones["hips"], "translation")][1][k])
+        assert near(hips_key, hips_t, 1e-6)
+        path_points.append(hips_key)
+        if walking:  # the head's world rotation is the heading's: level, facing along the walk
             chain = IDENTITY_Q
             for b in ("hips", "spine", "chest", "upperChest", "neck", "head"):
                 chain = q_mul(chain, normalised[b])
-            assert length(chain[:3]) < 1e-6, "the head turns in the world"
+            assert q_angle(chain, heading) < 1e-6, "the head turns in the world"
+            # the hips face along the walk, give or take the stride's twist (5 degrees)
+            assert q_angle(q_mul(q_conj(heading), normalised["hips"]), q_euler(pitch=2.0)) < math.radians(6.0)
     assert worst < 1e-6, "normalised rotations differ from the design by %g rad" % worst
-    if clip == "walk":
-        pose, _ = pose_fn(0.0, period)  # left heel strike: left leg forward, left arm back
+    if clip == "walk-turn":
+        # The hips' keys go once round the circle: each stride cycle's mean is the mean of the
+        # circle's points at the same times (the sway and surge, turning with the hips, average
+        # out within 3 mm), the angle round the centre grows by a whole turn, and the distance
+        # walked (the circumference) is TURN_SPEED * period.
+        per = keys // TURN_CYCLES
+        assert per * TURN_CYCLES == keys
+        for c in range(TURN_CYCLES):
+            pts = path_points[c * per:(c + 1) * per]
+            ring = [turn_of(period * k / keys, period)[2] for k in range(c * per, (c + 1) * per)]
+            off = (sum(q[0] for q in pts) / per - sum(q[0] for q in ring) / per,
+                   sum(q[2] for q in pts) / per - sum(q[1] for q in ring) / per)
+            assert math.hypot(*off) < 3e-3, "stride cycle %d: off the circle by %.4f m" % (c, math.hypot(*off))
+        turned = 0.0
+        for a, b in zip(path_points, path_points[1:] + path_points[:1]):
+            ang = [math.atan2(q[2], TURN_RADIUS - q[0]) for q in (a, b)]
+            d = (ang[1] - ang[0] + math.pi) % (2.0 * math.pi) - math.pi
+            assert d > 0.0, "the hips go back round the circle"
+            turned += d
+        assert abs(turned - 2.0 * math.pi) < 1e-9, "the path does not close after one turn"
+        assert abs(2.0 * math.pi * TURN_RADIUS - TURN_SPEED * period) < 1e-9
+    if walking:
+        pose, _ = pose_fn(0.0, period)  # left heel strike: left leg forward, left arm back (heading +Z)
 
         def limb_end(bones_, offsets):
             q, pos = IDENTITY_Q, (0.0, 0.0, 0.0)
@@ -1224,12 +1303,13 @@ def verify_vrma(data, clip):
                             [(0, 0, 0)] * 5 + [(s * 0.24, 0.0, 0.0)])
             assert hand[1] < -0.15, "%s arm does not hang" % side
             assert (hand[2] < 0.0) == (side == "left"), "%s arm swings with its leg" % side
-        for t in [period * k / 44 for k in range(44)]:  # knees bend backwards: the ankle behind the knee
-            pose, _ = pose_fn(t, period)
+        for t in [period * k / (44 * round(period / WALK_CYCLE)) for k in range(44 * round(period / WALK_CYCLE))]:
+            pose, _ = pose_fn(t, period)  # knees bend backwards: the ankle behind the knee (the body's frame)
+            body = q_mul(q_conj(turn_of(t, period)[0]), pose["hips"]) if clip == "walk-turn" else pose["hips"]
             for side in ("left", "right"):
-                q = q_mul(q_mul(pose["hips"], pose[side + "UpperLeg"]), pose[side + "LowerLeg"])
+                q = q_mul(q_mul(body, pose[side + "UpperLeg"]), pose[side + "LowerLeg"])
                 shin = q_rotate(q, (0.0, -0.33, 0.0))
-                thigh_q = q_mul(pose["hips"], pose[side + "UpperLeg"])
+                thigh_q = q_mul(body, pose[side + "UpperLeg"])
                 thigh_dir = q_rotate(thigh_q, (0.0, -1.0, 0.0))
                 assert dot(cross(thigh_dir, normalize(shin)), X_AXIS) >= -1e-9, "%s knee bends forwards" % side
     return {"nodes": len(nodes), "bones": len(bones), "channels": len(anim["channels"]), "keys": len(times),
@@ -1256,7 +1336,8 @@ def write_atomic(path, data):
 
 def build(name):
     return {"avatar.vrm": lambda: build_avatar(1), "avatar-vrm0.vrm": lambda: build_avatar(0),
-            "walk.vrma": lambda: build_vrma("walk"), "idle.vrma": lambda: build_vrma("idle")}[name]()
+            "walk.vrma": lambda: build_vrma("walk"), "walk-turn.vrma": lambda: build_vrma("walk-turn"),
+            "idle.vrma": lambda: build_vrma("idle")}[name]()
 
 
 def verify(name, data):
@@ -1281,7 +1362,7 @@ def main(argv):
     parser = argparse.ArgumentParser(
         description=__doc__.split("\n\n")[0], formatter_class=argparse.RawDescriptionHelpFormatter,
         epilog="variants (--variant NAME --out FILE):\n" + __doc__.split("one defect:\n\n")[1].split("\n\n")[0])
-    parser.add_argument("--out-dir", help="write the four files flat into this folder instead of the repository")
+    parser.add_argument("--out-dir", help="write the five files flat into this folder instead of the repository")
     parser.add_argument("--check", action="store_true", help="only verify the committed files")
     parser.add_argument("--variant", choices=VARIANTS, help="write one bad-input file (needs --out)")
     parser.add_argument("--out", help="the variant's output path")
