@@ -107,11 +107,14 @@ TEST_P(CharacterBackends, ShippedScenesMatchTheReference) {
 // VRM's collider model on every backend (issue 18): a walking, turning crowd of 37
 // characters (148 chains: not a multiple of the batch or workgroup size) whose chains
 // each have their own collider set (outside spheres and capsules, an inside sphere, an
-// inside capsule, a plane; one chain all of them) and half of which measure their inertia in the body's space
+// inside capsule, a plane; one chain all of them, the insides wide enough for it to keep
+// to both at once: conflicting constraints make a chain chaotic, and any rounding then
+// grows to centimetres) and half of which measure their inertia in the body's space
 // (`center`). Bounds as ShippedScenesMatchTheReference: the CPU backends the reference's
 // bits, Vulkan within 1e-3 of the chain length. Also checks, on the reference run, that
 // each chain kept to its own colliders (gap >= -1e-5 m: the projection leaves a particle
-// on the bound, to rounding) and touched one, so the collider sets are really in play.
+// on the bound, to rounding) and that chains a, b and c touched theirs, so the collider
+// sets are really in play.
 TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
     const std::string text = R"({
       "format": "kodawari-scene", "version": 2, "name": "colliders", "fps": 60, "duration": 2,
@@ -129,15 +132,15 @@ TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
         "colliders": [
           {"name": "skull", "type": "sphere", "joint": "head", "center": [0, 0.05, 0], "radius": 0.1},
           {"name": "torso", "type": "capsule", "joint": "body", "a": [0, 0.1, 0], "b": [0, 0.45, 0], "radius": 0.14},
-          {"name": "cage", "type": "sphere", "joint": "head", "center": [0, 0.1, 0.1], "radius": 0.22, "inside": true},
-          {"name": "tube", "type": "capsule", "joint": "head", "a": [-0.1, 0, -0.05], "b": [0.1, 0, -0.05], "radius": 0.2, "inside": true},
+          {"name": "cage", "type": "sphere", "joint": "head", "center": [0, 0.1, 0.1], "radius": 0.35, "inside": true},
+          {"name": "tube", "type": "capsule", "joint": "head", "a": [-0.1, 0, -0.05], "b": [0.1, 0, -0.05], "radius": 0.35, "inside": true},
           {"name": "floor", "type": "plane", "joint": "body", "point": [0, 0.2, 0], "normal": [0, 1, 0.3]}
         ],
         "chains": [
           {"name": "a", "joint": "head", "offset": {"position": [0.05, 0.1, 0.1]}, "colliders": ["skull", "cage"],
-           "shape": {"arc": {"joints": 7, "length": 0.3, "direction": [0, -1, 0.2], "bend_axis": [1, 0, 0], "curl_deg": 20}}},
+           "shape": {"arc": {"joints": 7, "length": 0.45, "direction": [0, -1, 0.2], "bend_axis": [1, 0, 0], "curl_deg": 20}}},
           {"name": "b", "joint": "head", "offset": {"position": [-0.05, 0.1, -0.1]}, "colliders": ["tube", "skull"], "center": "body",
-           "shape": {"arc": {"joints": 9, "length": 0.35, "direction": [0, -1, -0.3], "bend_axis": [1, 0, 0], "curl_deg": 10}}},
+           "shape": {"arc": {"joints": 9, "length": 0.5, "direction": [0, -1, -0.3], "bend_axis": [1, 0, 0], "curl_deg": 10}}},
           {"name": "c", "joint": "body", "offset": {"position": [0.1, 0.3, 0.15]}, "colliders": ["floor", "torso"], "center": "body",
            "shape": {"arc": {"joints": 6, "length": 0.5, "direction": [0.3, -1, 0.2], "bend_axis": [0, 0, 1], "curl_deg": 5}}},
           {"name": "d", "joint": "head", "offset": {"position": [0, 0.12, 0]},
@@ -166,7 +169,6 @@ TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
         ASSERT_TRUE(stepped.ok()) << stepped.error().message;
         sim.step(f);
         for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
-            if (c % 4 == 3) continue;  // chain d: all five, two of them insides it cannot keep to at once
             const rods::ChainInstance& ch = rs.world.chains[c];
             const rods::Chain& chain = rs.world.templ(ch).chain;
             for (std::uint32_t k = 0; k < ch.collider_count; ++k) {
@@ -182,17 +184,20 @@ TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
     for (std::uint32_t c = 0; c < 3; ++c) EXPECT_LT(nearest[c], 1e-4f) << "chain " << c << " never touched its colliders";
     kodawari::ChainSnapshot snap;
     ASSERT_TRUE(backend_->read(snap).ok());
-    float worst = 0.0f;
+    float worst = 0.0f;  // of the chain's length
     for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
         const rods::ChainInstance& ch = rs.world.chains[c];
-        for (std::uint32_t i = 0; i < rs.world.templ(ch).chain.joint_count; ++i) {
-            worst = std::max(worst, glm::length(sim.x(c, i) - snap.positions[ch.joint_begin + i]));
+        const rods::Chain& chain = rs.world.templ(ch).chain;
+        float length = 0.0f;
+        for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
+        for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
+            worst = std::max(worst, glm::length(sim.x(c, i) - snap.positions[ch.joint_begin + i]) / length);
         }
     }
-    std::printf("[ measured ] collider kinds, groups and centers on %s: max %.3g m from the reference\n",
+    std::printf("[ measured ] collider kinds, groups and centers on %s: max %.3g of the chain length from the reference\n",
                 kodawari::testing_support::case_name(GetParam()).c_str(), static_cast<double>(worst));
     if (GetParam() == kodawari::BackendKind::Vulkan) {
-        EXPECT_LT(worst, 1e-3f * 0.2f);  // the shortest chain is 0.2 m
+        EXPECT_LT(worst, 1e-3f);
     } else {
         EXPECT_EQ(worst, 0.0f) << "the CPU backends run the reference's code";
     }
