@@ -205,7 +205,8 @@ Result<Retargeted> retarget(const Character& source, std::size_t clip_index, con
             if (next == keys.end()) break;
             const double a = *it;
             const double gap = static_cast<double>(*next) - a;
-            const auto pieces = static_cast<std::size_t>(std::ceil(gap / kMotionKeyGap - 1e-9));
+            // 1e-3: a gap that float rounding made a hair longer than kMotionKeyGap is not split.
+            const auto pieces = static_cast<std::size_t>(std::ceil(gap / kMotionKeyGap - 1e-3));
             for (std::size_t k = 1; k < pieces; ++k) {
                 const auto t = static_cast<float>(a + gap * static_cast<double>(k) / static_cast<double>(pieces));
                 if (t > times.back() && t < *next) times.push_back(t);
