@@ -140,6 +140,11 @@ void add_route_check_options(CLI::App& app, bool& strict, bool& fit) {
 }
 
 std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit) {
+    // What the characters' motions could not use (gltf/motion.hpp): notes, never errors.
+    for (const CharacterSpec& c : scene.characters) {
+        if (!c.rig) continue;
+        for (const std::string& w : c.rig->warnings) std::fprintf(stderr, "kodawari: warning: %s\n", w.c_str());
+    }
     if (scene.flocks.empty()) return std::nullopt;
     if (fit) {
         auto changes = fit_routes(scene);

@@ -117,7 +117,7 @@ void add_route_check_options(CLI::App& app, bool& strict, bool& fit);
 /// --fit-routes): with `fit`, fits the flocks' timing first and says what changed on
 /// stdout; then warns on stderr about every route that exceeds its bird's limits. Returns
 /// the exit code to stop with (a scene that does not build, or warnings under `strict`),
-/// or none to go on.
+/// or none to go on. Also prints the rigged characters' warnings (RigSpec::warnings).
 [[nodiscard]] std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit);
 
 /// True (after saying so on stderr) when Vulkan validation reported messages: the

@@ -6,6 +6,7 @@
 #include <filesystem>
 #include <sstream>
 #include <string>
+#include <vector>
 
 #include "commands.hpp"
 #include "kodawari/atomic_file.hpp"
@@ -34,6 +35,8 @@ struct RigArguments {
     std::optional<std::string> out;
     bool bird = false;
     std::optional<std::string> map;
+    std::vector<std::string> motions;
+    std::optional<std::string> motion_map;
 };
 
 // `path` as the scene at `scene` names it: relative to the scene's folder.
@@ -61,7 +64,9 @@ int write_checked_scene(const std::string& json, const std::string& source, cons
 }
 
 int cmd_rig_bird(const RigArguments& o) {
-    if (o.chains || o.roots || o.animation) throw UsageError{"rig --bird: --chains, --roots and --animation are for characters"};
+    if (o.chains || o.roots || o.animation || !o.motions.empty() || o.motion_map) {
+        throw UsageError{"rig --bird: --chains, --roots, --animation, --motion and --motion-map are for characters"};
+    }
     if (!o.character) throw UsageError{"rig --bird needs exactly one BIRD file (.gltf or .glb)"};
     const std::string& file = *o.character;
     const std::string out_path = o.out.value_or(std::filesystem::path(file).stem().string() + ".json");
@@ -115,6 +120,9 @@ int cmd_rig(const RigArguments& o) {
         options.search = search;
     }
     if (o.animation) options.clip = *o.animation;
+    if (o.motion_map && o.motions.empty()) throw UsageError{"rig: --motion-map is the map of --motion files; give --motion"};
+    options.motions = o.motions;
+    options.motion_map = o.motion_map.value_or("");
     if (o.name) options.name = *o.name;
     std::string out_path = o.out.value_or("");
     if (!o.character) throw UsageError{"rig needs exactly one CHARACTER file (.gltf, .glb or .vrm)"};
@@ -135,6 +143,12 @@ int cmd_rig(const RigArguments& o) {
                 r.chains.size(), r.chains.size() == 1 ? "" : "s", r.source.c_str(), r.colliders, r.colliders == 1 ? "" : "s",
                 static_cast<double>(r.size), r.reference.c_str(),
                 r.clip.empty() ? "rest pose (no animation)" : ("animation \"" + r.clip + "\"").c_str());
+    for (const gltf::RigMotion& m : r.motions) {
+        char hips[64] = "";
+        if (m.hips) std::snprintf(hips, sizeof(hips), ", hips displacement x%.3g", static_cast<double>(m.leg_ratio));
+        std::printf("  motion %-17s %s: %zu bones, %zu keys, %.3g s%s%s\n", ("\"" + m.name + "\"").c_str(), m.file.c_str(),
+                    m.bones, m.keys, static_cast<double>(m.duration), hips, m.mapped ? " (through --motion-map)" : "");
+    }
     for (const gltf::RigChain& c : r.chains) {
         std::printf("  %-24s root %-24s %2u joints  %.3f m  thickness %.2g m\n", c.name.c_str(), c.root.c_str(), c.joints,
                     static_cast<double>(c.length), static_cast<double>(c.thickness));
@@ -153,7 +167,17 @@ Command add_rig(CLI::App& app) {
     add_text(*c, "--chains", o->chains, "PATTERNS",
              "find the chains by node name patterns, comma-separated (default: VRM spring bones, else the built-in patterns)");
     add_text(*c, "--roots", o->roots, "NAMES", "the chains' root nodes by name, comma-separated, instead of --chains");
-    add_text(*c, "--animation", o->animation, "CLIP", "the animation clip the instances play (default: the file's first, else the rest pose)");
+    add_text(*c, "--animation", o->animation, "CLIP",
+             "the animation clip the instances play, a --motion's name too (default: the first --motion, else the file's first "
+             "clip, else the rest pose)");
+    c->add_option("--motion", o->motions,
+                  "a clip for another skeleton to retarget onto the character: a VRM Animation (.vrma), or a .gltf/.glb clip with "
+                  "--motion-map; repeatable, each a clip named after its file (docs/motions.md) (default: none)")
+        ->type_name("MOTION.vrma")
+        ->allow_extra_args(false);
+    add_text(*c, "--motion-map", o->motion_map, "MAP.json",
+             "the humanoid bone -> node name map of the --motion files that are not VRM Animations {\"hips\": ..., "
+             "\"spine\": ...} (default: none; such a file must then be a VRM model)");
     add_text(*c, "--name", o->name, "NAME", "the scene's and the character's name (default: the file's stem)");
     add_text(*c, "--out", o->out, "SCENE.json", "the scene file to write (default: ./<character>.json)");
     c->add_flag("--bird", o->bird, "the file is a rigged bird: map its bones onto the 7-part bird rig, measure its wing and "

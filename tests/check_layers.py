@@ -71,6 +71,7 @@ PUBLIC_OWNERS = {
     "gltf/pose_instance.hpp": "sim",
     "gltf/chains.hpp": "io",
     "gltf/vrm.hpp": "io",
+    "gltf/motion.hpp": "io",
     "gltf/rig_scene.hpp": "io",
     "gltf/import.hpp": "io",
     "gltf/bird_model_import.hpp": "io",

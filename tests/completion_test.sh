@@ -47,6 +47,8 @@ check "completion's shell" offers "bash" kodawari completion b
 check "sketch --key -> motion pose" offers "motion pose" kodawari sketch --key ''
 check "sketch --measure -> the three measures" offers "acceleration angular_speed speed" kodawari sketch --measure ''
 check "sketch --sm -> --smoothing" offers "--smoothing" kodawari sketch --sm
+check "rig --mo -> --motion --motion-map" offers "--motion --motion-map" kodawari rig --mo
+check "rig --motion completes file names" offers "$work/files/scene-a.json $work/files/scene-b.json" kodawari rig --motion "$work/files/scene-"
 
 echo "completion: $passed passed, $failed failed"
 test $failed -eq 0

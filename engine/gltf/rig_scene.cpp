@@ -17,6 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
+#include "kodawari/gltf/motion.hpp"
 #include "kodawari/gltf/vrm.hpp"
 #include "kodawari/rods/world.hpp"
 
@@ -143,8 +144,51 @@ float max_scale(const glm::mat4& m) {
 Result<RigScene> make_rig_scene(const std::string& character_path, const std::string& scene_path, const RigOptions& options) {
     auto loaded = load_character(character_path);
     if (!loaded) return loaded.error();
-    const Character& ch = loaded.value();
+    Character& ch = loaded.value();
     RigScene out;
+    namespace fs = std::filesystem;
+    const fs::path scene_dir = fs::absolute(fs::path(scene_path)).parent_path();
+    const auto scene_relative = [&](const std::string& path) {
+        return fs::absolute(fs::path(path)).lexically_normal().lexically_relative(scene_dir.lexically_normal()).generic_string();
+    };
+
+    // Motions first, so that --animation may name one: each retargeted here (its errors
+    // are the user's, exit 2) and appended to the clips the way the scene loader will.
+    Json motions = Json::array();
+    for (const std::string& file : options.motions) {
+        MotionRequest request;
+        request.file = file;
+        std::string name = fs::path(file).stem().string();
+        if (name.empty()) name = "motion";
+        const auto taken = [&](const std::string& n) {
+            return std::any_of(ch.animations.begin(), ch.animations.end(), [&](const Animation& a) { return a.name == n; });
+        };
+        request.name = name;
+        for (int suffix = 2; taken(request.name); ++suffix) request.name = name + "_" + std::to_string(suffix);
+        bool mapped = false;
+        if (!options.motion_map.empty()) {
+            // The map is for the motions that are not VRM Animations.
+            auto source = load_character(file);
+            if (!source) return source.error();
+            mapped = source.value().extensions.empty() ||
+                     !nlohmann::json::parse(source.value().extensions, nullptr, false).contains("VRMC_vrm_animation");
+            if (mapped) request.map = options.motion_map;
+        }
+        auto motion = load_motion(request, ch);
+        if (!motion) return motion.error();
+        Retargeted& m = motion.value();
+        out.warnings.insert(out.warnings.end(), m.warnings.begin(), m.warnings.end());
+        const bool hips = std::any_of(m.animation.channels.begin(), m.animation.channels.end(),
+                                      [](const Channel& c) { return c.path == Path::Translation; });
+        out.motions.push_back(
+            RigMotion{request.name, file, m.bones, m.keys, m.animation.end - m.animation.start, hips, m.leg_ratio, mapped});
+        Json j;
+        j["name"] = request.name;
+        j["file"] = scene_relative(file);
+        if (mapped) j["map"] = scene_relative(options.motion_map);
+        motions.push_back(j);
+        ch.animations.push_back(std::move(m.animation));
+    }
     out.size = character_size(ch);
     const std::vector<Json> refs = node_refs(ch);
     const Pose rest = rest_pose(ch);
@@ -356,13 +400,13 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
                                                              (names.empty() ? std::string("the file has none") : names) + ")");
         }
         out.clip = options.clip;
+    } else if (!out.motions.empty()) {
+        out.clip = out.motions.front().name;
     } else if (!ch.animations.empty()) {
         out.clip = ch.animations.front().name;
     }
 
     // The scene: the character once at the origin, the camera orbiting its head.
-    namespace fs = std::filesystem;
-    const fs::path scene_dir = fs::absolute(fs::path(scene_path)).parent_path();
     const std::string file = fs::absolute(fs::path(character_path)).lexically_relative(scene_dir).generic_string();
     const std::string stem = fs::path(character_path).stem().string();
     const std::string name = scene_name(options.name.empty() ? stem : options.name);
@@ -376,6 +420,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
     } else {
         character["animate"] = false;
     }
+    if (!motions.empty()) character["motions"] = motions;
     if (!colliders.empty()) character["colliders"] = colliders;
     character["chains"] = chains;
     Json scene;

@@ -16,6 +16,7 @@
 
 #include <kodawari/gltf/chains.hpp>
 #include <kodawari/gltf/import.hpp>
+#include <kodawari/gltf/motion.hpp>
 #include <kodawari/gltf/vrm.hpp>
 #include <kodawari/rods/world.hpp>
 
@@ -205,6 +206,61 @@ Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const 
     return {};
 }
 
+// A path in the scene, relative to the scene file's folder unless absolute.
+std::string scene_relative(const JsonReader& r, const std::string& given) {
+    const std::filesystem::path p(given);
+    return p.is_absolute() ? given : (std::filesystem::path(r.file()).parent_path() / p).string();
+}
+
+// The `motions` of a rigged character (docs/scene-format.md, "Motions"): each a clip made
+// for another skeleton, retargeted onto `ch` (gltf/motion.hpp) and appended to its clips.
+Result<void> read_motions(const JsonReader& r, const JsonNode& motions, gltf::Character& ch, std::vector<std::string>& warnings) {
+    std::size_t n = 0;
+    KW_SCENE_ASSIGN(n, read_array(r, motions, 1, kMaxPerCharacter,
+                                  "a non-empty array of motions (at most " + std::to_string(kMaxPerCharacter) + ")"));
+    const std::size_t file_clips = ch.animations.size();
+    for (std::size_t i = 0; i < n; ++i) {
+        const JsonNode m = r.element(motions, i);
+        KW_TRY(r.object(m, {"name", "file", "clip", "map", "target_map"}));
+        gltf::MotionRequest request;
+        const JsonNode name = r.member(m, "name");
+        KW_SCENE_ASSIGN(request.name, r.string(name));
+        for (std::size_t c = 0; c < ch.animations.size(); ++c) {
+            if (ch.animations[c].name != request.name) continue;
+            return r.fail(name.path, "\"" + request.name + "\" is already " +
+                                         (c < file_clips ? "a clip of " + ch.source : std::string("the name of an earlier motion")) +
+                                         "; give the motion another name");
+        }
+        const JsonNode file = r.member(m, "file");
+        KW_SCENE_ASSIGN(request.file, r.string(file));
+        request.file = scene_relative(r, request.file);
+        const JsonNode clip = r.member(m, "clip");
+        if (clip.present()) KW_SCENE_ASSIGN(request.clip, r.string(clip));
+        const JsonNode map = r.member(m, "map");
+        if (map.present()) {
+            KW_SCENE_ASSIGN(request.map, r.string(map));
+            request.map = scene_relative(r, request.map);
+        }
+        const JsonNode target_map = r.member(m, "target_map");
+        if (target_map.present()) {
+            KW_SCENE_ASSIGN(request.target_map, r.string(target_map));
+            request.target_map = scene_relative(r, request.target_map);
+        }
+        gltf::MotionKey key = gltf::MotionKey::File;
+        auto motion = gltf::load_motion(request, ch, &key);
+        if (!motion) {
+            const JsonNode& at = key == gltf::MotionKey::Clip ? clip
+                                 : key == gltf::MotionKey::Map ? map
+                                 : key == gltf::MotionKey::TargetMap ? (target_map.present() ? target_map : m)
+                                                                     : file;
+            return make_error(motion.error().kind, r.file() + ": " + at.path + ": " + motion.error().message);
+        }
+        for (const std::string& w : motion.value().warnings) warnings.push_back(r.file() + ": " + m.path + ": " + w);
+        ch.animations.push_back(std::move(motion.value().animation));
+    }
+    return {};
+}
+
 }  // namespace
 
 Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
@@ -221,7 +277,7 @@ Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const 
 }
 
 Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode& node) {
-    KW_TRY(r.object(node, {"name", "gltf", "reference_joint", "animation", "animate", "colliders", "physics", "chains"}));
+    KW_TRY(r.object(node, {"name", "gltf", "reference_joint", "animation", "animate", "motions", "colliders", "physics", "chains"}));
     CharacterSpec out;
     out.path = node.path;
     KW_SCENE_ASSIGN(out.name, read_name(r, r.member(node, "name")));
@@ -235,6 +291,9 @@ Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode&
     auto loaded = gltf::load_character(rig.resolved);
     if (!loaded) {
         return make_error(loaded.error().kind, r.file() + ": " + file.path + ": " + loaded.error().message);
+    }
+    if (const JsonNode motions = r.member(node, "motions"); motions.present()) {
+        KW_TRY(read_motions(r, motions, loaded.value(), rig.warnings));
     }
     auto character = std::make_shared<const gltf::Character>(std::move(loaded.value()));
     const gltf::Character& ch = *character;

@@ -97,6 +97,8 @@ const cases = JSON.parse(readFileSync(path.join(sourceDir, 'tests', 'schema', 'c
 const work = mkdtempSync(path.join(os.tmpdir(), 'kodawari-schema-'));
 // Rigged bases name "characters/chibi.glb" relative to the scene, as scenes/crowd-gltf.json.
 symlinkSync(path.join(sourceDir, 'scenes', 'characters'), path.join(work, 'characters'));
+// Motions' name maps (docs/motions.md) as "motions/chibi-humanoid.json".
+symlinkSync(path.join(sourceDir, 'tests', 'assets', 'motion'), path.join(work, 'motions'));
 
 function pointer(p) {
   return p.split('/').slice(1).map((k) => k.replace(/~1/g, '/').replace(/~0/g, '~'));

@@ -143,6 +143,9 @@ struct RigSpec {
     /// The clip instances play unless their crowd says otherwise: an index into
     /// character->animations, or -1 for the rest pose.
     std::int32_t clip = -1;
+    /// What the character's `motions` could not use (gltf/motion.hpp), each naming the
+    /// scene, the motion's JSON path, and the file and JSON path of the problem.
+    std::vector<std::string> warnings;
 };
 
 /// A character template: skeleton, motions, colliders and chains (SPEC A.1). A rigged

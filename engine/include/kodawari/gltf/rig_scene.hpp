@@ -16,6 +16,7 @@
 /// found by name patterns collide with all colliders. Nodes are named by name where it
 /// is unique, else by their path of names from a root, else by index.
 
+#include <cstddef>
 #include <cstdint>
 #include <optional>
 #include <string>
@@ -33,6 +34,24 @@ struct RigOptions {
     std::string clip;                   ///< the animation to play; "": the file's first (or the rest pose)
     std::string name;                   ///< the scene character's name; "": from the file name
     float duration = 10.0f;             ///< s, the scene's
+    /// Clips made for other skeletons (`--motion`, gltf/motion.hpp): each file's first
+    /// clip retargeted onto the character, named after the file's stem (made unique),
+    /// listed under the character's `motions`; with no `clip`, the first one plays.
+    std::vector<std::string> motions;
+    /// A name map for the motions that are not VRM Animations (`--motion-map`); "": none.
+    std::string motion_map;
+};
+
+/// One retargeted motion in the written scene.
+struct RigMotion {
+    std::string name;
+    std::string file;           ///< as given
+    std::size_t bones = 0;      ///< humanoid bones it rotates
+    std::size_t keys = 0;       ///< keys per channel
+    float duration = 0.0f;      ///< s
+    bool hips = false;          ///< whether it moves the hips
+    float leg_ratio = 1.0f;     ///< the hips displacement's scale
+    bool mapped = false;        ///< through motion_map (else its VRM Animation humanoid)
 };
 
 /// One chain in the written scene.
@@ -51,6 +70,7 @@ struct RigScene {
     std::string reference;  ///< the reference joint's node name
     std::string clip;       ///< the clip instances play, "" for the rest pose
     std::vector<RigChain> chains;
+    std::vector<RigMotion> motions;
     std::uint32_t colliders = 0;
     float size = 0.0f;  ///< character_size(), m
     std::vector<std::string> warnings;  ///< what could not be used, each naming the file
@@ -59,7 +79,8 @@ struct RigScene {
 /// Loads `character_path` and writes the text of a scene that simulates it; the scene
 /// refers to the character by its path relative to the folder of `scene_path` (where
 /// the caller will write it). Errors: the file does not load, no chain is found, the
-/// clip does not exist. The scene has one instance at the origin and a camera orbiting the head.
+/// clip does not exist, a motion does not retarget (load_motion()'s errors). The scene
+/// has one instance at the origin and a camera orbiting the head.
 [[nodiscard]] KODAWARI_API Result<RigScene> make_rig_scene(const std::string& character_path, const std::string& scene_path,
                                                            const RigOptions& options);
 
