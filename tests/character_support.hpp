@@ -45,11 +45,13 @@ inline bool contains(const std::string& text, const std::string& part) { return 
 
 inline std::string source_path(const std::string& relative) { return std::string(KODAWARI_SOURCE_DIR) + "/" + relative; }
 
-inline Scene load(const std::string& relative) {
-    auto scene = kodawari::load_scene(source_path(relative));
+inline Scene load_file(const std::string& path) {
+    auto scene = kodawari::load_scene(path);
     EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.error().message);
     return scene.ok() ? scene.value() : Scene{};
 }
+
+inline Scene load(const std::string& relative) { return load_file(source_path(relative)); }
 
 inline RodScene build(const Scene& scene) {
     auto built = kodawari::build_rod_scene(scene);

@@ -95,5 +95,18 @@ bad_scene "a name clashing with a clip" "\$.characters[0].motions[1].name: \"wal
 bad_scene "a missing motion file" "\$.characters[0].motions[0].file: gone.vrma: no such file" \
     avatar.vrm '[{"name": "walk", "file": "gone.vrma"}]'
 
+# The VRM collider model's bad input (issue 18), in the generated VRoid-class avatar's
+# variants (scenes/characters/make_avatar.py --variant): a collider group naming a
+# collider the file lacks, a plane collider with a zero normal. rig exits 2, names the
+# file and the JSON path, and writes nothing.
+for variant in vrm-missing-collider vrm-zero-plane; do
+    python3 "$src/scenes/characters/make_avatar.py" --variant $variant --out $variant.vrm >/dev/null ||
+        { echo "FAIL make_avatar.py --variant $variant"; exit 1; }
+done
+bad_rig "a collider group naming a missing collider"     "vrm-missing-collider.vrm: \$.extensions.VRMC_springBone.colliderGroups[" vrm-missing-collider.vrm
+check "  ...and says which collider" grep -q "collider 16 does not exist (16 of them)" bad.out
+bad_rig "a plane with a zero normal"     ".shape.plane.normal: a plane's normal must be a non-zero vector" vrm-zero-plane.vrm
+check "  ...and names the file" grep -q "vrm-zero-plane.vrm: \$.extensions.VRMC_springBone.colliders\[" bad.out
+
 echo "motion cli: $passed passed, $failed failed"
 test $failed -eq 0

@@ -81,8 +81,13 @@ void add_contact_shadow(DrawList& list, std::span<const rods::Transform> joints)
     const float height = std::max(high - std::max(low, 0.0f), 0.1f);
     const float lift = std::max(low, 0.0f);
     const float opacity = kShadowOpacity * std::clamp(1.0f - lift / height, 0.0f, 1.0f);
-    if (!(opacity > 0.0f) || !std::isfinite(joints[0].position.x) || !std::isfinite(joints[0].position.z)) return;
-    list.add_ground_shadow(joints[0].position, std::clamp(0.3f * height, 0.1f, 1.5f), opacity);
+    // Under the joints' centroid, not the root joint: a rigged character's root node
+    // stays where it was placed while a clip with root motion (a walk round a circle)
+    // carries the hips and everything else away from it.
+    glm::vec3 centre(0.0f);
+    for (const rods::Transform& j : joints) centre += j.position / static_cast<float>(joints.size());
+    if (!(opacity > 0.0f) || !std::isfinite(centre.x) || !std::isfinite(centre.z)) return;
+    list.add_ground_shadow(centre, std::clamp(0.3f * height, 0.1f, 1.5f), opacity);
 }
 
 void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame) {

@@ -568,11 +568,25 @@ TEST(RiggedScene, CrowdAnimatorMatchesTheCpuFrames) {
 // gives (millimetres to centimetres). The
 // device run must read nothing back after frame 0. 37 instances: not a multiple of the
 // workgroup size.
+void check_rod_input_on_device(const RodScene& rods, const char* what);
+
 TEST(RiggedScene, RodInputWrittenOnTheDeviceMatchesTheHosts) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
     Scene scene = load(kCrowdScene);
     scene.crowds[0].count = 37;
-    const RodScene rods = build(scene);
+    check_rod_input_on_device(build(scene), "37 chibis");
+    // Issue 18's avatars: per-chain collider runs and a chain with a center frame, whose
+    // pose rod_inputs.comp writes too (RodFrame::centers).
+    Scene avatars = load(kSource + "/scenes/avatars.json");
+    avatars.crowds[0].count = 12;
+    avatars.crowds[1].count = 11;
+    const RodScene avatar_rods = build(avatars);
+    ASSERT_GT(avatar_rods.world.center_count, 0u);
+    check_rod_input_on_device(avatar_rods, "23 avatars");
+}
+
+void check_rod_input_on_device(const RodScene& rods, const char* what) {
+    SCOPED_TRACE(what);
     HostAndDeviceInput runs;
     ASSERT_NO_FATAL_FAILURE(runs.start(rods));
     auto& [device, options, host, on_device] = runs;
@@ -599,9 +613,9 @@ TEST(RiggedScene, RodInputWrittenOnTheDeviceMatchesTheHosts) {
     }
     float worst = 0.0f;
     ASSERT_NO_FATAL_FAILURE(worst = runs.joint_distance(rods));
-    std::printf("rod input on the device, 37 chibis x %u frames: chain joints within %.3g m of the host-input run; "
+    std::printf("rod input on the device, %s x %u frames: chain joints within %.3g m of the host-input run; "
                 "%llu bytes read back\n",
-                kFrames, static_cast<double>(worst), static_cast<unsigned long long>(device_read_back));
+                what, kFrames, static_cast<double>(worst), static_cast<unsigned long long>(device_read_back));
     EXPECT_LT(worst, 1e-5f);
     EXPECT_EQ(device_read_back, 0u);
     EXPECT_EQ(validation_messages(*device), 0u);

@@ -38,7 +38,7 @@ KODAWARI_API void add_ground_grid(DrawList& list, std::span<const glm::vec3> poi
 inline constexpr float kShadowOpacity = 0.35f;
 
 /// A soft contact shadow on the ground under a character posed as `joints` (root first):
-/// a disc under the root about as wide as the body (0.3 x the skeleton's height), fading
+/// a disc under the joints' centroid about as wide as the body (0.3 x the skeleton's height), fading
 /// as the character rises off the ground (kShadowOpacity when it stands on it).
 KODAWARI_API void add_contact_shadow(DrawList& list, std::span<const rods::Transform> joints);
 
