@@ -277,6 +277,9 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
         if (k.params) {
             Json physics;
             physics["gravity"] = vec(k.params->gravity);
+            // Every parameter the mapping sets: a member left out reads as SolverParams'
+            // default, and stiffness's (0.5) is shape matching VRM does not have (vrm.hpp).
+            physics["stiffness"] = num(k.params->stiffness);
             physics["rest_stiffness"] = num(k.params->rest_stiffness);
             physics["damping"] = num(k.params->damping);
             j["physics"] = physics;

@@ -392,6 +392,11 @@ TEST(RiggedScene, RigWritesScenesThatLoad) {
         const RodScene rods = build(scene);
         EXPECT_EQ(rods.world.chains.size(), c.chains);
         EXPECT_EQ(rods.world.collider_count, c.colliders);
+        if (c.source == "VRM 1.0 spring bones") {
+            // The mapping's parameters reach the scene whole: shape matching off (vrm.hpp),
+            // not the loader's default 0.5 that a scene without `stiffness` gets.
+            for (const auto& t : rods.world.templates) EXPECT_EQ(t.params.stiffness, 0.0f);
+        }
     }
     // The extended colliders replace their fallback shapes (the plane's is a sphere 10 km
     // away): a plane through the collider node with its normal, and an inside sphere, both

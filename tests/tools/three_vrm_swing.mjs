@@ -100,10 +100,10 @@ export function modify(json, options) {
       if (options.gravityPower !== undefined) joint.gravityPower = options.gravityPower;
     }
     if (options.joints !== undefined) spring.joints = spring.joints.slice(0, options.joints);
+    if (options.noColliders) delete spring.colliderGroups;
   }
   if (options.colliderScale !== undefined) {
     for (const collider of ext.colliders || []) out.nodes[collider.node].scale = [1, 1, 1].map(() => options.colliderScale);
-    if (options.noColliders) delete spring.colliderGroups;
   }
   if (options.horizontal) {
     const root = out.nodes[ext.springs[0].joints[0].node];
