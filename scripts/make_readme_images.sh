@@ -44,4 +44,8 @@ cp "$work/crowd/crowd_00120.png" docs/images/crowd.png
 # The rigged crowd (64 of scenes/characters/chibi.glb, skinned in the vertex shader) 2 s in.
 "$bin" render scenes/crowd-gltf.json --frames 120 --size 640x360 --out "$work/crowd-gltf"
 cp "$work/crowd-gltf/crowd-gltf_00120.png" docs/images/crowd-gltf.png
+# VRM avatars (issue 18) walking circles and idling with retargeted VRM Animation clips,
+# 2.5 s and 7.5 s in.
+"$bin" render scenes/avatars.json --frames 150:451:300 --size 1920x1080 --zoom 2.0 --out "$work/avatars" \
+    --contact-sheet docs/images/avatars.png --columns 2
 ls -l docs/images

@@ -163,7 +163,8 @@ for f in scenes/characters/chibi.glb tests/assets/vrm-springbone/sphere-collider
 done
 check "rig prints chains and joints" grep -q "7 chains from name patterns" "$work/rig-chibi.out"
 check "rig prints each chain's joints" grep -q "tail_0 .* 8 joints" "$work/rig-chibi.out"
-check "rig warns about the plane collider" grep -q "warning: .*plane collider" "$work/rig-plane-collider.out"
+check "rig writes the plane collider (VRMC_springBone_extended_collider)" grep -q '"type": "plane"' "$work/rig-plane-collider.json"
+check "rig writes the inside collider" grep -q '"inside": true' "$work/rig-inside-collider.json"
 "$bin" rig tests/assets/khronos/RiggedSimple.gltf --roots Bone --out "$work/rig-rs.json" >/dev/null 2>&1 &&
     "$bin" run "$work/rig-rs.json" --frames 30 --out "$work/rig-rs.glb" >/dev/null 2>&1
 check "rig --roots on RiggedSimple runs" test $? -eq 0

@@ -60,7 +60,7 @@ from make_chibi import (  # noqa: E402
     ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER, FLOAT, IDENTITY_Q, UBYTE, USHORT, X_AXIS, Y_AXIS, Z_AXIS,
     Gltf, Primitive, add, capsule, catmull_rom, clean, cross, dot, ellipsoid, lathe, length, mat_inverse, mat_mul, mat_trs,
     normalize, parse_glb, q_axis_angle, q_conj, q_euler, q_mul, q_normalize, q_rotate, q_shortest_arc,
-    read_accessor, scale, sub, to_glb, world_matrices)
+    read_accessor, scale, strand_samples, sub, to_glb, world_matrices)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
 ROOT = os.path.normpath(os.path.join(HERE, "..", ".."))
@@ -340,17 +340,7 @@ def ribbon(prim, joints, pts, w_root, w_tip, center, per_segment=4):
     away from `center`, its width tapering from w_root to w_tip. A vertex pair at fraction f
     of segment i is weighted (1 - f) to joint i and f to joint i + 1."""
     n = len(pts)
-    samples = []
-    for i in range(n - 1):
-        p0 = pts[i - 1] if i > 0 else sub(scale(pts[0], 2.0), pts[1])
-        p3 = pts[i + 2] if i + 2 < n else sub(scale(pts[-1], 2.0), pts[-2])
-        for s in range(per_segment):
-            f = s / per_segment
-            pos, der = catmull_rom(p0, pts[i], pts[i + 1], p3, f)
-            samples.append((pos if s else pts[i], normalize(der), [(joints[i], 1.0 - f), (joints[i + 1], f)]))
-    _, der = catmull_rom(pts[-3] if n > 2 else sub(scale(pts[0], 2.0), pts[1]), pts[-2], pts[-1],
-                         sub(scale(pts[-1], 2.0), pts[-2]), 1.0)
-    samples.append((pts[-1], normalize(der), [(joints[-1], 1.0)]))
+    samples = strand_samples(pts, joints, per_segment)
     pairs = []
     for k, (pos, t, influences) in enumerate(samples):
         out = normalize(sub(pos, center))

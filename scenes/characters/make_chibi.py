@@ -452,13 +452,12 @@ def catmull_rom(p0, p1, p2, p3, f):
     return tuple(pos), tuple(der)
 
 
-def strand_tube(prim, joints, pts, r_root, r_tip, sides, bulge, per_segment=4):
-    """A tapered tube along a smooth curve through the strand's joint positions `pts`
-    (world, rest pose). A ring at fraction f of segment i is weighted (1 - f) to joint i
-    and f to joint i+1. Frames are rotation-minimizing (double reflection), so the tube
-    does not twist; the root end gets a small dome, the tip a point."""
+def strand_samples(pts, joints, per_segment):
+    """Points along a Catmull-Rom spline through the joints `pts`, `per_segment` a segment,
+    each (position, unit tangent, influences): at fraction f of segment i, weighted
+    (1 - f) to joint i and f to joint i + 1; the last joint alone at the tip."""
     n = len(pts)
-    samples = []  # (position, tangent, influences)
+    samples = []
     for i in range(n - 1):
         p0 = pts[i - 1] if i > 0 else sub(scale(pts[0], 2.0), pts[1])
         p3 = pts[i + 2] if i + 2 < n else sub(scale(pts[-1], 2.0), pts[-2])
@@ -469,6 +468,16 @@ def strand_tube(prim, joints, pts, r_root, r_tip, sides, bulge, per_segment=4):
     _, der = catmull_rom(pts[-3] if n > 2 else sub(scale(pts[0], 2.0), pts[1]), pts[-2], pts[-1],
                          sub(scale(pts[-1], 2.0), pts[-2]), 1.0)
     samples.append((pts[-1], normalize(der), [(joints[-1], 1.0)]))
+    return samples
+
+
+def strand_tube(prim, joints, pts, r_root, r_tip, sides, bulge, per_segment=4):
+    """A tapered tube along a smooth curve through the strand's joint positions `pts`
+    (world, rest pose). A ring at fraction f of segment i is weighted (1 - f) to joint i
+    and f to joint i+1. Frames are rotation-minimizing (double reflection), so the tube
+    does not twist; the root end gets a small dome, the tip a point."""
+    n = len(pts)
+    samples = strand_samples(pts, joints, per_segment)
 
     arc = [0.0]
     for k in range(1, len(samples)):

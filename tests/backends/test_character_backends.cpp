@@ -57,6 +57,22 @@ protected:
     std::unique_ptr<kodawari::RodBackend> backend_;
 };
 
+// The largest distance of a joint of `snap` from the reference run `sim`, in its chain's
+// lengths.
+float worst_of_length(const RodScene& rs, const Simulation& sim, const kodawari::ChainSnapshot& snap) {
+    float worst = 0.0f;
+    for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
+        const rods::ChainInstance& ch = rs.world.chains[c];
+        const rods::Chain& chain = rs.world.templ(ch).chain;
+        float length = 0.0f;
+        for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
+        for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
+            worst = std::max(worst, glm::length(sim.x(c, i) - snap.positions[ch.joint_begin + i]) / length);
+        }
+    }
+    return worst;
+}
+
 }  // namespace
 
 // The first 2 s of each small scene (120 frames: lavapipe takes 2 to 40 ms a frame on a
@@ -184,16 +200,7 @@ TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
     for (std::uint32_t c = 0; c < 3; ++c) EXPECT_LT(nearest[c], 1e-4f) << "chain " << c << " never touched its colliders";
     kodawari::ChainSnapshot snap;
     ASSERT_TRUE(backend_->read(snap).ok());
-    float worst = 0.0f;  // of the chain's length
-    for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
-        const rods::ChainInstance& ch = rs.world.chains[c];
-        const rods::Chain& chain = rs.world.templ(ch).chain;
-        float length = 0.0f;
-        for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
-        for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
-            worst = std::max(worst, glm::length(sim.x(c, i) - snap.positions[ch.joint_begin + i]) / length);
-        }
-    }
+    const float worst = worst_of_length(rs, sim, snap);
     std::printf("[ measured ] collider kinds, groups and centers on %s: max %.3g of the chain length from the reference\n",
                 kodawari::testing_support::case_name(GetParam()).c_str(), static_cast<double>(worst));
     if (GetParam() == kodawari::BackendKind::Vulkan) {
@@ -229,16 +236,7 @@ TEST_P(CharacterBackends, AvatarCrowdOf200MatchesTheReference) {
     }
     kodawari::ChainSnapshot snap;
     ASSERT_TRUE(backend_->read(snap).ok());
-    float worst = 0.0f;  // of the chain's length
-    for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
-        const rods::ChainInstance& ch = rs.world.chains[c];
-        const rods::Chain& chain = rs.world.templ(ch).chain;
-        float length = 0.0f;
-        for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
-        for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
-            worst = std::max(worst, glm::length(sim.x(c, i) - snap.positions[ch.joint_begin + i]) / length);
-        }
-    }
+    const float worst = worst_of_length(rs, sim, snap);
     std::printf("[ measured ] avatar crowd, %zu chains x 60 frames on %s: max %.3g of the chain length from the reference\n",
                 rs.world.chains.size(), kodawari::testing_support::case_name(GetParam()).c_str(), static_cast<double>(worst));
     if (GetParam() == kodawari::BackendKind::Vulkan) {

@@ -160,7 +160,7 @@ TEST(CharacterScene, UnknownKeys) {
     chain0(chain)["stiffness"] = 0.5;
     EXPECT_EQ(parse_error(chain),
               "test.json: $.characters[0].chains[0].stiffness: unknown key (expected one of: name, joint, offset, shape, "
-              "thickness, mass, physics, collide, mirror, views, keyed)");
+              "thickness, mass, physics, collide, colliders, center, mirror, views, keyed)");
     // Keys depend on the motion's and the collider's type.
     json motion = valid_character_scene();
     motion["characters"][0]["motions"][1]["axis"] = {0, 1, 0};
@@ -174,7 +174,7 @@ TEST(CharacterScene, UnknownKeys) {
     json collider = valid_character_scene();
     collider["characters"][0]["colliders"][0]["a"] = {0, 0, 0};
     EXPECT_EQ(parse_error(collider),
-              "test.json: $.characters[0].colliders[0].a: unknown key (expected one of: type, joint, center, radius)");
+              "test.json: $.characters[0].colliders[0].a: unknown key (expected one of: name, type, joint, center, radius, inside)");
 }
 
 TEST(CharacterScene, BadShapes) {
@@ -334,10 +334,21 @@ TEST(CharacterScene, BadPhysicsAndMotions) {
     json nan = valid_character_scene();
     nan["characters"][0]["motions"][0]["frequency"] = "NaN";
     EXPECT_EQ(parse_error(nan), "test.json: $.characters[0].motions[0].frequency: expected a finite number in [0, 100], got \"NaN\"");
+    // A character may have 256 colliders, a chain touch 16: one without a `colliders`
+    // list takes all of them, which is an error at the chain past 16.
     json many = valid_character_scene();
     for (int k = 0; k < 16; ++k) many["characters"][0]["colliders"].push_back(many["characters"][0]["colliders"][0]);
     EXPECT_EQ(parse_error(many),
-              "test.json: $.characters[0].colliders: expected an array of colliders (at most 16), got an array of 17 elements");
+              "test.json: $.characters[0].chains[0]: collides with all 17 colliders of its character, and one chain may "
+              "touch at most 16; give it a \"colliders\" list of collider names");
+    json too_many = valid_character_scene();
+    for (int k = 0; k < 256; ++k) too_many["characters"][0]["colliders"].push_back(too_many["characters"][0]["colliders"][0]);
+    EXPECT_EQ(parse_error(too_many),
+              "test.json: $.characters[0].colliders: expected an array of colliders (at most 256), got an array of 257 elements");
+    json listed = many;
+    listed["characters"][0]["colliders"][16]["name"] = "last";
+    for (json& c : listed["characters"][0]["chains"]) c["colliders"] = json::array({"last"});
+    EXPECT_EQ(parse_error(listed), "(no error)");
     json collider = valid_character_scene();
     collider["characters"][0]["colliders"][0]["radius"] = 0;
     EXPECT_EQ(parse_error(collider),
