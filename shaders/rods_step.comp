@@ -39,6 +39,9 @@ layout(constant_id = KW_RODS_SPEC_EXACT) const bool EXACT = false;
 // world without keyed examples: their load, the combination and their shapes' blending
 // are compiled out, so such worlds run the kernel they ran before keyed examples existed.
 layout(constant_id = KW_RODS_SPEC_MAX_KEYED) const uint MAX_KEYED = 0;
+// The world's KW_RODS_FEATURE_*: centers and inside and plane colliders are compiled out
+// of worlds that have none (lavapipe would run their code masked for every chain).
+layout(constant_id = KW_RODS_SPEC_FEATURES) const uint FEATURES = KW_RODS_FEATURE_ALL;
 // The examples the blend sums past the base: views, then keyed ones (shapes 1 .. m + J).
 // A chain has at most KW_RODS_MAX_VIEWS in all (rods::add_keyed_examples), which caps the
 // sum of two dispatch-wide maxima that may come from different templates.
@@ -302,7 +305,7 @@ void main() {
 
     // ---- the chain carried by its center frame's motion (solver.cpp follow_center) ----
     const uint center = chain.joints.z;
-    if (center != KW_RODS_NO_CENTER) {
+    if ((FEATURES & KW_RODS_FEATURE_CENTERS) != 0u && center != KW_RODS_NO_CENTER) {
         const RodTransformGpu was = center_states[center];
         const RodTransformGpu now = centers[center];
         const vec4 r = qnormalize(qmul(now.rotation, qconj(was.rotation)));
@@ -449,7 +452,7 @@ void main() {
                 const RodColliderGpu col = colliders[ci];
                 const vec3 ca = col.a.xyz - from.position.xyz, cb = col.b.xyz - from.position.xyz;
                 // solver.cpp collide(), with rods::collider_reach()'s distance for each kind.
-                if (col.b.w == float(KW_RODS_COLLIDER_PLANE)) {
+                if ((FEATURES & KW_RODS_FEATURE_PLANE) != 0u && col.b.w == float(KW_RODS_COLLIDER_PLANE)) {
                     const vec3 normal = cb - ca;
                     [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
                         if (i < n) {
@@ -457,7 +460,7 @@ void main() {
                             if (s < thickness) p[i] += (thickness - s) * normal;
                         }
                     }
-                } else if (col.b.w == float(KW_RODS_COLLIDER_INSIDE)) {
+                } else if ((FEATURES & KW_RODS_FEATURE_INSIDE) != 0u && col.b.w == float(KW_RODS_COLLIDER_INSIDE)) {
                     const float radius = max(col.a.w - thickness, 0.0);
                     [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
                         if (i < n) pull_in(p[i], closest_on_segment(p[i], ca, cb), radius);

@@ -39,6 +39,15 @@ using compute::Buffer;
 
 gpu::vec4 to_gpu(glm::vec3 v, float w = 0.0f) { return {v.x, v.y, v.z, w}; }
 gpu::vec4 to_gpu(glm::quat q) { return {q.x, q.y, q.z, q.w}; }
+// The KW_RODS_FEATURE_* a collider kind needs (0: outside colliders are always compiled in).
+std::uint32_t feature_of(rods::ColliderKind kind) {
+    switch (kind) {
+        case rods::ColliderKind::Inside: return KW_RODS_FEATURE_INSIDE;
+        case rods::ColliderKind::Plane: return KW_RODS_FEATURE_PLANE;
+        case rods::ColliderKind::Outside: break;
+    }
+    return 0u;
+}
 glm::vec3 vec3_of(const gpu::vec4& v) { return {v.x, v.y, v.z}; }
 glm::quat quat_of(const gpu::vec4& v) { return glm::quat(v.w, v.x, v.y, v.z); }
 gpu::RodTransformGpu to_gpu(const rods::Transform& t) { return {to_gpu(t.position), to_gpu(t.rotation)}; }
@@ -320,6 +329,9 @@ public:
         // renderer drawing the colliders from them sees at frame 0).
         KW_TRY(upload_input(*ctx_, initial));
 
+        // The kinds of collider and the centers the world uses, the rest compiled out.
+        features_ = world.center_count > 0 ? KW_RODS_FEATURE_CENTERS : 0u;
+        for (const rods::Collider& c : initial.colliders) features_ |= feature_of(c.kind);
         const std::uint32_t suppression = all_none   ? KW_RODS_SUPPRESSION_NONE
                                           : all_full ? KW_RODS_SUPPRESSION_FULL
                                                      : KW_RODS_SUPPRESSION_PARTIAL;
@@ -340,7 +352,7 @@ public:
         std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
         auto kernel_for = [&](std::uint32_t n, std::uint32_t m, std::uint32_t keyed, bool exact) -> Result<const compute::Kernel*> {
-            auto kernel = pipeline({n, m, suppression, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed});
+            auto kernel = pipeline({n, m, suppression, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed, features_});
             if (!kernel) return kernel.error();
             kernel.value()->bind(bound);  // (again for a shared one: the same bindings)
             return kernel.value();
@@ -477,6 +489,13 @@ private:
             KW_TRY(compute::upload(recording, key_buffers_[KW_ROD_KEYS_BINDING_TEMPLATES], bytes_of(key_templates_)));
             dt_ = frame.dt;
         }
+        for (const rods::Collider& c : frame.colliders) {
+            if ((feature_of(c.kind) & ~features_) != 0u) {
+                return make_error(Error::Kind::InvalidInput,
+                                  "rod frame: a collider of a kind (inside or plane) the world's first frame did not have; "
+                                  "the kernel is specialized to the kinds it loaded with: load() the world again");
+            }
+        }
         KW_TRY(upload_input(recording, frame));
         if (input_writer_) input_writer_->record(recording, *this);
 
@@ -586,6 +605,7 @@ private:
     };
     std::vector<Group> groups_;
     bool grouped_ = false;
+    std::uint32_t features_ = KW_RODS_FEATURE_ALL;  // KW_RODS_SPEC_FEATURES of the loaded world
     float dt_ = -1.0f;
     double gpu_ms_ = -1.0;
     // Per-frame staging on the host, kept to avoid reallocating every frame.

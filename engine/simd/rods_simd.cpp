@@ -111,7 +111,7 @@ struct CollidersK {
     V3 a, ab;
     V len2, reach;
     M outside, inside, plane;
-    bool any_capsule, any_plane;  // some lane has it as a capsule (outside or inside), as a plane
+    bool any_capsule, any_inside, any_plane;  // some lane has it as a capsule (outside or inside), inside, a plane
 };
 
 // solver.cpp collide(): closest_on_segment() then push_out() (outside lanes) or pull_in()
@@ -126,10 +126,15 @@ void collide(V3& p, const CollidersK& c) {
         const V d2 = dot(d, d);
         const V r2 = hn::Mul(c.reach, c.reach);
         const M push = hn::And(c.outside, hn::Not(hn::Ge(d2, r2)));
-        const M pull = hn::And(c.inside, hn::Not(hn::Le(d2, r2)));
         const V len = hn::Sqrt(d2);
-        const V3 out_n = select(hn::Gt(len, S(1e-9f)), div(d, len), V3{Z(), S(1.0f), Z()});
-        p = select(hn::Or(push, pull), add(center, mul(c.reach, select(push, out_n, div(d, len)))), p);
+        const V3 unit = div(d, len);
+        const V3 out_n = select(hn::Gt(len, S(1e-9f)), unit, V3{Z(), S(1.0f), Z()});
+        if (c.any_inside) {
+            const M pull = hn::And(c.inside, hn::Not(hn::Le(d2, r2)));
+            p = select(hn::Or(push, pull), add(center, mul(c.reach, select(push, out_n, unit))), p);
+        } else {
+            p = select(push, add(center, mul(c.reach, out_n)), p);
+        }
     }
     if (c.any_plane) {
         const V s = dot(sub(p, c.a), c.ab);
@@ -278,6 +283,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         c.inside = hn::Gt(load(rows, kCapInside, off), Z());
         c.plane = hn::Gt(load(rows, kCapPlane, off), Z());
         c.any_capsule = !hn::AllFalse(D(), hn::Or(c.outside, c.inside));
+        c.any_inside = !hn::AllFalse(D(), c.inside);
         c.any_plane = !hn::AllFalse(D(), c.plane);
     }
     const Q4 relative_root = qmul(conj(from_q), to_q);  // interpolate(): a^-1 b

@@ -72,7 +72,16 @@
 #define KW_RODS_SPEC_GROUPED 3     // 1: one dispatch per template, its constants named by RodPush (see there)
 #define KW_RODS_SPEC_EXACT 4       // 1: every chain of the dispatch has MAX_J joints, MAX_VIEWS views and MAX_KEYED keyed examples
 #define KW_RODS_SPEC_MAX_KEYED 5   // the most keyed examples of a chain of the dispatch (0: keyed examples compiled out)
-#define KW_RODS_SPEC_COUNT 6
+#define KW_RODS_SPEC_FEATURES 6    // KW_RODS_FEATURE_* the world uses; the others are compiled out
+#define KW_RODS_SPEC_COUNT 7
+
+// What a world may use beyond outside colliders (KW_RODS_SPEC_FEATURES): lavapipe runs
+// both sides of a branch under a mask, so code a world never takes still costs it (the
+// center's rotation of every joint, each collider kind's projection) unless compiled out.
+#define KW_RODS_FEATURE_CENTERS 1u  // chains with a center frame
+#define KW_RODS_FEATURE_INSIDE 2u   // inside colliders
+#define KW_RODS_FEATURE_PLANE 4u    // plane colliders
+#define KW_RODS_FEATURE_ALL 7u
 
 // Worlds of at most this many templates are stepped one dispatch per template (GROUPED);
 // each dispatch costs tens of microseconds on lavapipe, so more templates take one.
