@@ -72,7 +72,9 @@ void main() {
         RodInputAttachmentGpu a = attachments[push.counts.w + k];
         RodTransformGpu joint = rigid_part(i, a.node.x);
         colliders[ids.z + k].a = vec4(joint.position.xyz + rotate(joint.rotation, a.a.xyz), a.a.w);
-        colliders[ids.z + k].b = vec4(joint.position.xyz + rotate(joint.rotation, a.b.xyz), a.b.w);
+        // A plane's b is its normal: turned, not moved (rod_scene.cpp place()).
+        const vec3 b = rotate(joint.rotation, a.b.xyz);
+        colliders[ids.z + k].b = vec4(a.b.w == float(KW_RODS_COLLIDER_PLANE) ? b : joint.position.xyz + b, a.b.w);
     }
     // rod_scene.cpp key_entry: a motion source's world pose; a pose source's rotation
     // relative to its parent's (the world's when it has none), position 0.

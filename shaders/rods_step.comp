@@ -453,7 +453,7 @@ void main() {
                 const vec3 ca = col.a.xyz - from.position.xyz, cb = col.b.xyz - from.position.xyz;
                 // solver.cpp collide(), with rods::collider_reach()'s distance for each kind.
                 if ((FEATURES & KW_RODS_FEATURE_PLANE) != 0u && col.b.w == float(KW_RODS_COLLIDER_PLANE)) {
-                    const vec3 normal = cb - ca;
+                    const vec3 normal = col.b.xyz;  // a direction: not relative to `from`
                     [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
                         if (i < n) {
                             const float s = dot(p[i] - ca, normal);

@@ -42,8 +42,7 @@ public:
         rest_.assign(world.joint_count, glm::vec3(0.0f));
         run([&](std::uint32_t c) {
             const rods::RestShape rest = rods::rest_shape(world, c, initial);
-            states_[c] = rods::initial_state(world.templ(world.chains[c]).chain, initial.roots[c], rest.shape);
-            if (const std::uint32_t center = world.chains[c].center; center != rods::kNoCenter) states_[c].center = initial.centers[center];
+            states_[c] = rods::initial_chain_state(world, c, initial);
             keys_[c] = rods::initial_key_state(world, c, initial);
             keep(c, rest);
         });

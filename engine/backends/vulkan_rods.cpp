@@ -216,7 +216,6 @@ public:
         for (std::uint32_t e = 0; e < count; ++e) {
             const std::uint32_t c = order[e];
             const rods::ChainInstance& ch = world.chains[c];
-            static_assert(rods::kNoCenter == KW_RODS_NO_CENTER);
             chains[e] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, c, ch.center, 0u}};
             if (groups_.empty() || groups_.back().template_index != ch.template_index) {
                 groups_.push_back({ch.template_index, e, 0u, nullptr});

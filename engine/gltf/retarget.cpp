@@ -198,6 +198,21 @@ Result<Retargeted> retarget(const Character& source, std::size_t clip_index, con
             keys.insert(t.begin(), t.end());
         }
         if (keys.empty()) return invalid(source.source + ": $.animations[" + std::to_string(clip_index) + "]", "no channel moves a node");
+        // How many keys the split makes, counted in double before any is made: key times
+        // are any finite floats, and far from zero a float step exceeds kMotionKeyGap, so
+        // a loop that counted the keys it placed could spin without placing one.
+        // 1e-3: a gap that float rounding made a hair longer than kMotionKeyGap is not split.
+        const auto pieces_of = [](double gap) { return std::ceil(gap / kMotionKeyGap - 1e-3); };
+        double needed = static_cast<double>(keys.size());
+        for (auto it = keys.begin(); std::next(it) != keys.end(); ++it) {
+            needed += std::max(pieces_of(static_cast<double>(*std::next(it)) - static_cast<double>(*it)) - 1.0, 0.0);
+        }
+        if (needed > static_cast<double>(kMaxMotionKeys)) {
+            return invalid(source.source + ": $.animations[" + std::to_string(clip_index) + "]",
+                           "the clip needs more than " + std::to_string(kMaxMotionKeys) + " keys per channel (one at least every " +
+                               std::to_string(kMotionKeyGap) + " s from " + std::to_string(*keys.begin()) + " to " +
+                               std::to_string(*keys.rbegin()) + " s); cut it shorter");
+        }
         std::vector<float> times;
         for (auto it = keys.begin(); it != keys.end(); ++it) {
             const auto next = std::next(it);
@@ -205,20 +220,11 @@ Result<Retargeted> retarget(const Character& source, std::size_t clip_index, con
             if (next == keys.end()) break;
             const double a = *it;
             const double gap = static_cast<double>(*next) - a;
-            // 1e-3: a gap that float rounding made a hair longer than kMotionKeyGap is not split.
-            const auto pieces = static_cast<std::size_t>(std::ceil(gap / kMotionKeyGap - 1e-3));
+            const auto pieces = static_cast<std::size_t>(pieces_of(gap));  // <= kMaxMotionKeys (counted above)
             for (std::size_t k = 1; k < pieces; ++k) {
                 const auto t = static_cast<float>(a + gap * static_cast<double>(k) / static_cast<double>(pieces));
                 if (t > times.back() && t < *next) times.push_back(t);
-                if (times.size() > kMaxMotionKeys) break;
             }
-            if (times.size() > kMaxMotionKeys) break;
-        }
-        if (times.size() > kMaxMotionKeys) {
-            return invalid(source.source + ": $.animations[" + std::to_string(clip_index) + "]",
-                           "the clip needs more than " + std::to_string(kMaxMotionKeys) + " keys per channel (one at least every " +
-                               std::to_string(kMotionKeyGap) + " s over " + std::to_string(clip.end - clip.start) +
-                               " s); cut it shorter");
         }
 
         // The channels to write.

@@ -22,6 +22,7 @@ namespace {
 using nlohmann::json;
 
 constexpr float kMinThickness = 1e-4f;  // as scaled_physics()
+constexpr float kMaxGravity = 1000.0f;  // m/s^2, the scene format's bound on an acceleration component
 
 std::string at(const std::string& path, std::size_t index) { return path + "[" + std::to_string(index) + "]"; }
 
@@ -297,6 +298,14 @@ private:
         // The solver damps the velocity after adding gravity: the equilibrium sag carries
         // a factor exp(-damping h) = (1 - drag)^(60 h) that VRM's does not (vrm.hpp).
         spring.params.gravity = kVrmFrameRate * mean.gravity_dir / n / std::exp(-spring.params.damping * h);
+        // The scene format takes accelerations up to kMaxGravity (100 g) a component; VRM's
+        // gravityPower has no bound, and dividing by the decay (0.1 at dragForce 0.99)
+        // multiplies it, so a strong one is held there rather than refused.
+        if (const float g = glm::length(spring.params.gravity); g > kMaxGravity) {
+            spring.params.gravity *= kMaxGravity / g;
+            warn(path, "gravity " + std::to_string(g) + " m/s^2 (gravityPower, mapped) held at " + std::to_string(kMaxGravity) +
+                           " m/s^2, the scene format's bound");
+        }
         spring.hit_radius = mean.hit_radius / n;
 
         spring.physics = scaled_physics(c_, spring.chain);

@@ -184,11 +184,14 @@ void ColliderLayer::update_ranges() {
     ranges_.clear();
     std::vector<bool> drawn(count_, true);
     if (world_ != nullptr && skinned_ != nullptr && &skinned_->world == world_) {
-        for (const rods::ChainInstance& chain : world_->chains) {
-            if (chain.character >= skinned_->instances.size()) continue;
-            const auto& rig = skinned_->characters[skinned_->instances[chain.character].character].rig;
-            if (!rig || !draws_skinned(*rig)) continue;
-            for (std::uint32_t k = chain.collider_begin; k < chain.collider_begin + chain.collider_count && k < count_; ++k) drawn[k] = false;
+        // Every collider of a skinned instance, not only those its chains use: a character
+        // whose chains all list their own colliders still has the run of all of them
+        // (build_rod_scene), which no chain references.
+        for (const CharacterInstance& inst : skinned_->instances) {
+            const CharacterKinematics& k = skinned_->characters[inst.character];
+            if (!k.rig || !draws_skinned(*k.rig)) continue;
+            const auto end = static_cast<std::uint32_t>(std::min<std::size_t>(inst.collider_begin + k.colliders.size(), count_));
+            for (std::uint32_t c = inst.collider_begin; c < end; ++c) drawn[c] = false;
         }
     }
     for (std::uint32_t k = 0; k < count_; ++k) {

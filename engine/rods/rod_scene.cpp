@@ -18,10 +18,11 @@
 namespace kodawari {
 namespace {
 
-// A collider of a character template placed by its joint's pose: both points move
-// rigidly (a plane's b = a + n keeps its unit normal).
+// A collider of a character template placed by its joint's pose: its points move
+// rigidly, a plane's normal b only turns.
 rods::Collider place(const ColliderAttachment& a, const rods::Transform& joint) {
-    return rods::Collider{joint.position + joint.rotation * a.a, joint.position + joint.rotation * a.b, a.radius, a.kind};
+    const glm::vec3 b = a.kind == rods::ColliderKind::Plane ? joint.rotation * a.b : joint.position + joint.rotation * a.b;
+    return rods::Collider{joint.position + joint.rotation * a.a, b, a.radius, a.kind};
 }
 
 // A key source's entry of RodFrame::keys (keyed-examples.md K.1) from world poses.

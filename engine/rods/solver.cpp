@@ -107,12 +107,13 @@ void pull_in(glm::vec3& p, glm::vec3 center, float radius) {
 }
 
 // One collider on one particle of radius `thickness` (SPEC A.4, collisions; the kinds of
-// solver.hpp ColliderKind). `a` and `ab` = b - a are the collider's, relative to the
-// frame's origin; `reach` is what the kind keeps: radius + thickness outside,
-// max(radius - thickness, 0) inside, thickness for a plane (collider_reach()).
+// solver.hpp ColliderKind). `a` and `b` are the collider's, relative to the frame's
+// origin (a plane's b is its unit normal, a direction); `reach` is what the kind keeps:
+// radius + thickness outside, max(radius - thickness, 0) inside, thickness for a plane
+// (collider_reach()).
 void collide(glm::vec3& p, glm::vec3 a, glm::vec3 b, float reach, ColliderKind kind) {
     if (kind == ColliderKind::Plane) {
-        const glm::vec3 n = b - a;  // unit
+        const glm::vec3 n = b;  // unit
         const float s = glm::dot(p - a, n);
         if (s < reach) p += (reach - s) * n;
         return;
@@ -221,7 +222,7 @@ float collider_reach(const Collider& c, float thickness) {
 
 float collider_gap(const Collider& c, glm::vec3 p, float thickness) {
     const float reach = collider_reach(c, thickness);
-    if (c.kind == ColliderKind::Plane) return glm::dot(p - c.a, c.b - c.a) - reach;
+    if (c.kind == ColliderKind::Plane) return glm::dot(p - c.a, c.b) - reach;
     const float distance = glm::length(p - closest_on_segment(p, c.a, c.b));
     return c.kind == ColliderKind::Inside ? reach - distance : distance - reach;
 }
@@ -273,7 +274,7 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
     assert(colliders.size() <= kMaxChainColliders);
     for (std::size_t k = 0; k < colliders.size(); ++k) {
         collider_a[k] = colliders[k].a - from.position;
-        collider_b[k] = colliders[k].b - from.position;
+        collider_b[k] = colliders[k].kind == ColliderKind::Plane ? colliders[k].b : colliders[k].b - from.position;
         collider_reach_of[k] = collider_reach(colliders[k], chain.thickness);
     }
     std::array<glm::vec3, kMaxChainJoints> p{}, xbar{}, goal_sum{}, obar_axis{};

@@ -197,8 +197,8 @@ Result<void> check_frame(const RodWorld& world, const RodFrame& frame) {
             case ColliderKind::Outside:
             case ColliderKind::Inside: break;
             case ColliderKind::Plane:
-                // The normal b - a is a unit vector (to rounding: a rigid transform of both points keeps it).
-                if (std::abs(glm::length(c.b - c.a) - 1.0f) > 1e-3f) return bad("rod frame: a plane collider's normal b - a is not a unit vector");
+                // The normal b is a unit vector (to rounding: a rotation keeps it one).
+                if (std::abs(glm::length(c.b) - 1.0f) > 1e-3f) return bad("rod frame: a plane collider's normal b is not a unit vector");
                 break;
             default: return bad("rod frame: unknown collider kind");
         }

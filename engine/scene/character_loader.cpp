@@ -311,7 +311,7 @@ Result<ColliderSpec> read_collider(const JsonReader& r, const JsonNode& node,
         KW_TRY(optional_member(r, node, "point", c.a, [&](const JsonNode& n) { return read_point(r, n, kMaxLocal); }));
         glm::vec3 normal{0.0f};
         KW_SCENE_ASSIGN(normal, read_direction(r, r.member(node, "normal")));
-        c.b = c.a + normal;
+        c.b = normal;
         c.kind = rods::ColliderKind::Plane;
     } else {
         if (type == 0) {

@@ -104,9 +104,9 @@ Q4 extract_rotation(const M3& a, const Q4& q, const M3& r) {
     return turn(q, half_omega);
 }
 
-// One collider of a batch: its points relative to the frame's origin, ab = b - a and
-// len2 = dot(ab, ab) (the same for every joint, computed once), its reach, and the lanes
-// whose chain has it as each kind.
+// One collider of a batch: a relative to the frame's origin, ab = b - a (a plane's lanes:
+// its normal b) and len2 = dot(ab, ab) (the same for every joint, computed once), its
+// reach, and the lanes whose chain has it as each kind.
 struct CollidersK {
     V3 a, ab;
     V len2, reach;
@@ -275,13 +275,16 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
     for (std::size_t k = 0; k < batch.colliders; ++k) {
         const float* rows = in.colliders + k * kColliderRows * kBatchLanes;
         CollidersK& c = colliders[k];
-        c.a = sub(load3(rows, kCapA, off), from_p);
-        c.ab = sub(sub(load3(rows, kCapB, off), from_p), c.a);
-        c.len2 = dot(c.ab, c.ab);
-        c.reach = load(rows, kCapR, off);
         c.outside = hn::Gt(load(rows, kCapOutside, off), Z());
         c.inside = hn::Gt(load(rows, kCapInside, off), Z());
         c.plane = hn::Gt(load(rows, kCapPlane, off), Z());
+        c.a = sub(load3(rows, kCapA, off), from_p);
+        const V3 b = load3(rows, kCapB, off);
+        // A capsule's b - a (solver.cpp: both relative to the frame's origin), a plane's
+        // normal b itself (a direction).
+        c.ab = select(c.plane, b, sub(sub(b, from_p), c.a));
+        c.len2 = dot(c.ab, c.ab);
+        c.reach = load(rows, kCapR, off);
         c.any_capsule = !hn::AllFalse(D(), hn::Or(c.outside, c.inside));
         c.any_inside = !hn::AllFalse(D(), c.inside);
         c.any_plane = !hn::AllFalse(D(), c.plane);

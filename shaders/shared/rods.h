@@ -134,7 +134,7 @@ struct RodTransformGpu {
     vec4 rotation;  // quaternion
 };
 
-// A capsule (a sphere has a == b) or a plane (through a, unit normal b - a): rods::Collider.
+// A capsule (a sphere has a == b) or a plane (through a, unit normal b): rods::Collider.
 struct RodColliderGpu {
     vec4 a;  // xyz, w: radius (m)
     vec4 b;  // xyz, w: kind (KW_RODS_COLLIDER_*)

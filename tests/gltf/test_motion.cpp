@@ -333,7 +333,13 @@ TEST(Motion, LocalRotationIsTheSpecFormula) {
     const std::size_t a = static_cast<std::size_t>(arm);
     const glm::quat p_tgt = f.target[static_cast<std::size_t>(f.target[a].parent)].rotation;
     const glm::quat expected = glm::inverse(p_tgt) * d * p_tgt * local_rotation(f.target, a);
-    EXPECT_NEAR(std::abs(glm::dot(written, expected)), 1.0f, 1e-6f);
+    // The angle between the two rotations, 2 asin |vector part of written^-1 expected|
+    // (acos of a dot near 1 would lose half the digits): 1e-5 rad is float rounding of the
+    // few products above (a few 1e-7 each); a wrong order of the products is off by tens
+    // of degrees. (|dot| within 1e-6 of 1, the bound before, allowed 2.8 mrad.)
+    const glm::quat delta = glm::conjugate(written) * expected;
+    const float angle = 2.0f * std::asin(std::min(1.0f, glm::length(glm::vec3(delta.x, delta.y, delta.z))));
+    EXPECT_LT(angle, 1e-5f) << "rad";
 }
 
 TEST(Motion, Vrm0TargetFacingMinusZ) {
@@ -469,6 +475,19 @@ TEST(Motion, VrmaWithoutHumanoidBones) {
     write_doc(f.dir, "bones.vrma", s);
     expect_error(gltf::load_motion({"walk", bad, "", "", ""}, target),
                  bad + ": $.extensions.VRMC_vrm_animation.humanoid.humanBones: ", "no humanoid bone");
+}
+
+// Key times far from zero (review of issue 18): at 1e12 s a float step is about 1e5 s,
+// so a split that counted only the keys it could place spun for hours; the keys a clip
+// needs are counted first, and too many is an error naming the file and the clip.
+TEST(Motion, KeyTimesTooFarApartAreAnErrorNotAHang) {
+    Files f;
+    const gltf::Character target = load(f.avatar);
+    Doc s = skeleton_doc(f.source, Declares::Vrma);
+    add_clip(s, f.source, "walk", {{"leftUpperArm", "rotation", {1e12f, 1.001e12f}, {xyzw(glm::quat(1, 0, 0, 0)), xyzw(about(10, {1, 0, 0}))}}});
+    const std::string vrma = write_doc(f.dir, "far.vrma", s);
+    // (A hang fails by the test's timeout; the error must come at once.)
+    expect_error(gltf::load_motion({"walk", vrma, "", "", ""}, target), vrma + ": $.animations[0]", "keys per channel");
 }
 
 TEST(Motion, RequiredBoneTheAvatarLacks) {

@@ -213,6 +213,46 @@ TEST(Render, CollidersDrawnFromTheRodInputOnTheDevice) {
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
 
+// VRM avatars whose chains all list their own colliders (scenes/avatars.json) still carry
+// the run of all of a character's colliders, which no chain references: drawn as meshes
+// by the skinned layer, none of their colliders is drawn as a capsule (the arm capsules
+// stuck out of the skin). Control: without set_skinned the capsules show.
+TEST(Render, SkinnedAvatarsShowNoColliderCapsules) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto scene = load_scene(scene_path("avatars.json"));
+    ASSERT_TRUE(scene.ok()) << scene.error().message;
+    scene.value().crowds[0].count = 3;
+    scene.value().crowds[1].count = 2;
+    auto built = build_rod_scene(scene.value());
+    ASSERT_TRUE(built.ok());
+    const RodScene& rods = built.value();
+    auto renderer = make_renderer(kWidth, kHeight);
+    ASSERT_TRUE(renderer);
+    auto cpu = make_rod_backend(BackendKind::Cpu, {});
+    ASSERT_TRUE(cpu.ok());
+    const rods::RodFrame frame = rods.frame(0);
+    ASSERT_TRUE(renderer->set_chains(&rods.world).ok());
+    ASSERT_TRUE(renderer->colliders_from(*cpu.value(), frame).ok());
+    const render::DrawList list(render::scene_camera(scene.value(), 0), kWidth, kHeight);
+    const auto collider_pixels = [&](const Image& image) {
+        int n = 0;
+        for (std::uint32_t y = 0; y < kHeight; ++y) {
+            for (std::uint32_t x = 0; x < kWidth; ++x) n += lit_distance(image.at(x, y), render::kColliderColor) <= 2 ? 1 : 0;
+        }
+        return n;
+    };
+    auto shown = renderer->render(list);
+    ASSERT_TRUE(shown.ok());
+    ASSERT_TRUE(renderer->set_skinned(&rods).ok());
+    auto hidden = renderer->render(list);
+    ASSERT_TRUE(hidden.ok());
+    std::printf("[ render ] avatars' collider pixels: %d without the skinned layer, %d with it\n", collider_pixels(shown.value()),
+                collider_pixels(hidden.value()));
+    EXPECT_GE(collider_pixels(shown.value()), 50);
+    EXPECT_EQ(collider_pixels(hidden.value()), 0);
+    EXPECT_EQ(renderer->validation_messages(), 0u);
+}
+
 // present() needs a window: an offscreen renderer says so instead of crashing.
 }  // namespace
 }  // namespace kodawari

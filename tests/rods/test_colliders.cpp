@@ -73,7 +73,7 @@ TEST(Colliders, GapMatchesHandComputedDistances) {
     const Collider capsule{glm::vec3(-1.0f, 0.0f, 0.0f), glm::vec3(1.0f, 0.0f, 0.0f), 0.2f, ColliderKind::Inside};
     EXPECT_NEAR(collider_gap(capsule, glm::vec3(2.0f, 0.1f, 0.0f), t), 0.19f - std::sqrt(1.01f), 1e-6f);
     // A plane through (0, 1, 0) with normal +Y: a point at y = 1.5 is 0.49 clear of it.
-    const Collider plane{glm::vec3(0.0f, 1.0f, 0.0f), glm::vec3(0.0f, 2.0f, 0.0f), 0.0f, ColliderKind::Plane};
+    const Collider plane{glm::vec3(0.0f, 1.0f, 0.0f), glm::vec3(0.0f, 1.0f, 0.0f), 0.0f, ColliderKind::Plane};
     EXPECT_NEAR(collider_gap(plane, glm::vec3(7.0f, 1.5f, -3.0f), t), 0.49f, 1e-6f);
     EXPECT_NEAR(collider_gap(plane, glm::vec3(0.0f, 0.5f, 0.0f), t), -0.51f, 1e-6f);
     // The reach each kind keeps.
@@ -134,7 +134,7 @@ TEST(Colliders, PlaneKeepsTheStrandOnItsNormalSide) {
     for (const glm::vec3 normal : {glm::vec3(0.0f, 1.0f, 0.0f), glm::normalize(glm::vec3(1.0f, 1.0f, 0.0f))}) {
         SCOPED_TRACE(normal.x);
         const glm::vec3 point(0.0f, 0.8f, 0.0f);
-        const Collider plane{point, point + normal, 0.0f, ColliderKind::Plane};
+        const Collider plane{point, normal, 0.0f, ColliderKind::Plane};
         for (const bool with : {true, false}) {
             const ChainState state = with ? run(s, SolverParams{}, std::span(&plane, 1), 120) : run(s, SolverParams{}, {}, 120);
             float lowest = 1e9f;

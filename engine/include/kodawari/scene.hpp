@@ -82,7 +82,7 @@ struct FlockSpec {
 };
 
 /// One kinematic collider of a character, in its joint's frame (a sphere is a capsule
-/// with a == b; a plane has a on it and b = a + its unit normal; rods::Collider).
+/// with a == b; a plane has a on it and b its unit normal; rods::Collider).
 struct ColliderSpec {
     std::string name;         ///< for chains' `colliders` lists; may be empty
     std::uint32_t joint = 0;  ///< index into CharacterSpec::skeleton.joints

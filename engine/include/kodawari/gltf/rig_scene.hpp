@@ -7,7 +7,7 @@
 /// Where the chains come from, first rule that applies:
 /// 1. RigOptions::search given (`--roots` or `--chains`): find_chains() with it.
 /// 2. The file has VRM spring bones (read_vrm_springs()): one chain per spring, with its
-///    mapped physics, and the springs' sphere and capsule colliders.
+///    mapped physics, and the springs' colliders (sphere, capsule, inside, plane).
 /// 3. Otherwise find_chains() with the default name patterns.
 /// Colliders in the scene are in their node's rigid frame (rest pose, metres), named
 /// "collider<i>" after their index in the file, with their kind (outside, `inside`,

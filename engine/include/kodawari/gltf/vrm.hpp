@@ -32,7 +32,7 @@
 ///   response therefore depends on the frame rate; ours does not.) Our solver damps the
 ///   velocity after adding gravity, so its equilibrium sag is exp(-damping h) of VRM's
 ///   (0.775 at dragForce 0.4, measured against three-vrm); dividing by that factor gives
-///   one bone VRM's sag.
+///   one bone VRM's sag. Held at 1000 m/s^2 (the scene format's bound), with a warning.
 /// - rest_stiffness = a s / (a s + L) with a = kVrmFrameRate h^2 and s = mean stiffness.
 ///   For a horizontal rest bone, VRM's equilibrium sag angle is atan(gravityPower /
 ///   stiffness), independent of the bone; a particle held by our rest attraction k sags

@@ -41,7 +41,7 @@ struct ChainAttachment {
 };
 
 /// A collider of a character template, in its joint's frame (rods::Collider's meaning of
-/// a, b and radius for its kind).
+/// a, b and radius for its kind: a plane's b is its normal in the joint's frame).
 struct ColliderAttachment {
     std::uint32_t joint = 0;
     glm::vec3 a{0.0f}, b{0.0f};

@@ -77,13 +77,14 @@ enum class ColliderKind : std::uint32_t {
     Outside = 0,
     /// Inside the capsule or sphere: the distance is kept <= max(radius - thickness, 0).
     Inside = 1,
-    /// On the positive side of a plane through a with unit normal b - a: the signed
-    /// distance dot(p - a, b - a) is kept >= thickness. `radius` is unused.
+    /// On the positive side of a plane through a with unit normal b: the signed distance
+    /// dot(p - a, b) is kept >= thickness. `radius` is unused.
     Plane = 2,
 };
 
-/// A kinematic collider, world space. A plane stores its normal as the second point
-/// b = a + n so that a rigid transform of both points moves the plane.
+/// A kinematic collider, world space. A plane's b is its unit normal, a direction: a rigid
+/// transform turns it without moving it (and keeps it a unit vector far from the origin,
+/// where a second point's rounding would tilt it).
 struct Collider {
     glm::vec3 a{0.0f}, b{0.0f};
     float radius = 0.0f;  ///< m, >= 0
