@@ -232,8 +232,9 @@ TEST(Avatars, HairStaysOutsideTheHeadAndSwingsWithTheWalk) {
 }
 
 // Three walking avatars simulated for 30 frames and exported into the avatar's own file
-// (RiggedCrowdExport): glTF-Validator finds no error. (Warnings: the VRM extensions the
-// validator does not know are infos, not warnings.)
+// (RiggedCrowdExport): glTF-Validator finds no error (the VRM extensions it does not know
+// are infos), and Blender's own importer, where installed, makes one armature and one
+// action per avatar (tests/tools/blender_check.py).
 TEST(Avatars, CrowdExportIsValidGltf) {
     TempDir dir;
     Scene scene = testing_support::characters::load_file(rig(kAvatar, dir, "walk.json"));
@@ -261,6 +262,15 @@ TEST(Avatars, CrowdExportIsValidGltf) {
     ASSERT_EQ(testing_support::run_command(testing_support::gltf_validator_command(path), output), 0) << output;
     EXPECT_NE(output.find("glTF-Validator: 0 errors"), std::string::npos) << output;
     std::printf("%s\n", output.substr(0, 300).c_str());
+    if (testing_support::run_command("command -v blender", output) != 0) {
+        std::printf("SKIPPED the Blender import: blender not installed (bash scripts/setup --with-blender installs it)\n");
+        return;
+    }
+    const std::string line = testing_support::blender_report_line(path, output);
+    ASSERT_FALSE(line.empty()) << output;
+    const json report = json::parse(line);
+    EXPECT_EQ(report.at("armature_count").get<std::size_t>(), 3u) << line;
+    EXPECT_EQ(report.at("actions").get<std::size_t>(), 3u) << line;
 }
 
 }  // namespace
