@@ -59,7 +59,7 @@ sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from make_chibi import (  # noqa: E402
     ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER, FLOAT, IDENTITY_Q, UBYTE, USHORT, X_AXIS, Y_AXIS, Z_AXIS,
     Gltf, Primitive, add, capsule, catmull_rom, clean, cross, dot, ellipsoid, lathe, length, mat_inverse, mat_mul, mat_trs,
-    normalize, parse_glb, q_axis_angle, q_conj, q_euler, q_mul, q_normalize, q_rotate, q_shortest_arc,
+    node_worlds, normalize, parse_glb, q_axis_angle, q_conj, q_euler, q_mul, q_normalize, q_rotate, q_shortest_arc,
     read_accessor, scale, strand_samples, sub, to_glb, world_matrices)
 
 HERE = os.path.dirname(os.path.abspath(__file__))
@@ -962,28 +962,6 @@ def build_vrma(clip, variant=None):
 
 
 # --- verification (of the files' bytes) -----------------------------------------------------------
-
-
-def node_worlds(doc):
-    nodes = doc["nodes"]
-    parent = {}
-    for i, n in enumerate(nodes):
-        for c in n.get("children", []):
-            assert c not in parent, "node %d has two parents" % c
-            parent[c] = i
-    world = [None] * len(nodes)
-
-    def world_of(i):
-        if world[i] is None:
-            n = nodes[i]
-            assert "scale" not in n and "matrix" not in n, "node %s has a scale or matrix" % n.get("name")
-            local = mat_trs(n.get("translation", (0.0, 0.0, 0.0)), n.get("rotation", IDENTITY_Q))
-            world[i] = local if i not in parent else mat_mul(world_of(parent[i]), local)
-        return world[i]
-
-    for i in range(len(nodes)):
-        world_of(i)
-    return world, parent
 
 
 def position(m):

@@ -835,9 +835,9 @@ def read_accessor(doc, binary, i):
     return [flat[k:k + width] if width > 1 else flat[k] for k in range(0, len(flat), width)]
 
 
-def verify(data):
-    """Checks the file's bytes; returns a summary dict, raises AssertionError on a defect."""
-    doc, binary = parse_glb(data)
+def node_worlds(doc):
+    """Every node's world matrix from its translation and rotation (the generators write no
+    scale or matrix), and each node's parent; asserts the nodes form trees."""
     nodes = doc["nodes"]
     parent = {}
     for i, n in enumerate(nodes):
@@ -848,8 +848,24 @@ def verify(data):
 
     def world_of(i):
         if world[i] is None:
-            local = mat_trs(nodes[i].get("translation", (0.0, 0.0, 0.0)), nodes[i].get("rotation", IDENTITY_Q))
+            n = nodes[i]
+            assert "scale" not in n and "matrix" not in n, "node %s has a scale or matrix" % n.get("name")
+            local = mat_trs(n.get("translation", (0.0, 0.0, 0.0)), n.get("rotation", IDENTITY_Q))
             world[i] = local if i not in parent else mat_mul(world_of(parent[i]), local)
+        return world[i]
+
+    for i in range(len(nodes)):
+        world_of(i)
+    return world, parent
+
+
+def verify(data):
+    """Checks the file's bytes; returns a summary dict, raises AssertionError on a defect."""
+    doc, binary = parse_glb(data)
+    nodes = doc["nodes"]
+    world, parent = node_worlds(doc)
+
+    def world_of(i):
         return world[i]
 
     skin = doc["skins"][0]
