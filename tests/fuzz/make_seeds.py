@@ -41,6 +41,15 @@ bad_scenes = {
 }
 for name, text in bad_scenes.items():
     (scene / name).write_text(text)
+# VRM's collider model (issue 18): named colliders of every kind, chains' own lists, a center.
+(scene / "collider-kinds.json").write_text(
+    '{"format": "kodawari-scene", "version": 2, "fps": 30, "duration": 0.2, "characters": [{"name": "p",'
+    ' "skeleton": [{"name": "body", "position": [0, 0.9, 0]}, {"name": "head", "parent": "body", "position": [0, 0.6, 0]}],'
+    ' "colliders": [{"name": "s", "type": "sphere", "joint": "head", "radius": 0.1},'
+    ' {"name": "i", "type": "capsule", "joint": "head", "a": [-0.1, 0, 0], "b": [0.1, 0, 0], "radius": 0.3, "inside": true},'
+    ' {"name": "f", "type": "plane", "joint": "body", "point": [0, 0.2, 0], "normal": [0, 1, 0.3]}],'
+    ' "chains": [{"name": "c", "joint": "head", "colliders": ["s", "i", "f"], "center": "body",'
+    ' "shape": {"arc": {"joints": 5, "length": 0.3, "direction": [0, -1, 0]}}}]}]}')
 
 # The glTF importer: the test assets and the sample character.
 gltf = reset("gltf")
