@@ -184,9 +184,7 @@ void ColliderLayer::update_ranges() {
     ranges_.clear();
     std::vector<bool> drawn(count_, true);
     if (world_ != nullptr && skinned_ != nullptr && &skinned_->world == world_) {
-        // Every collider of a skinned instance, not only those its chains use: a character
-        // whose chains all list their own colliders still has the run of all of them
-        // (build_rod_scene), which no chain references.
+        // A skinned instance's whole collider range, which holds all its chains' runs.
         for (const CharacterInstance& inst : skinned_->instances) {
             const CharacterKinematics& k = skinned_->characters[inst.character];
             if (!k.rig || !draws_skinned(*k.rig)) continue;

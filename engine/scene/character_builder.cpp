@@ -117,9 +117,13 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
         k.motion = ch.motion;
         k.first_template = static_cast<std::uint32_t>(world.templates.size());
         // The collider sets laid out so far, in k.colliders order: first all of them as
-        // written (what every chain without a `colliders` list uses, and what renderers draw).
+        // written when a colliding chain has no `colliders` list (so that such characters
+        // keep the layout they always had), then each list not laid out yet. A set no chain
+        // uses is not laid out: every frame would place it for nothing.
         std::vector<std::vector<std::uint32_t>> runs;
-        if (!ch.colliders.empty()) {
+        const bool takes_all = std::any_of(ch.chains.begin(), ch.chains.end(),
+                                           [](const ChainSpec& c) { return c.collide && c.all_colliders; });
+        if (!ch.colliders.empty() && takes_all) {
             std::vector<std::uint32_t> all(ch.colliders.size());
             std::iota(all.begin(), all.end(), 0u);
             collider_run(runs, all, ch.colliders, k.colliders);

@@ -58,7 +58,7 @@ sys.dont_write_bytecode = True  # no __pycache__ in the source tree
 sys.path.insert(0, os.path.dirname(os.path.abspath(__file__)))
 from make_chibi import (  # noqa: E402
     ARRAY_BUFFER, ELEMENT_ARRAY_BUFFER, FLOAT, IDENTITY_Q, UBYTE, USHORT, X_AXIS, Y_AXIS, Z_AXIS,
-    Gltf, Primitive, add, capsule, catmull_rom, clean, cross, dot, ellipsoid, lathe, length, mat_inverse, mat_mul, mat_trs,
+    Gltf, Primitive, add, capsule, catmull_rom, clean, cross, dot, ellipsoid, ladder_weights, lathe, length, mat_inverse, mat_mul, mat_trs,
     node_worlds, normalize, parse_glb, q_axis_angle, q_conj, q_euler, q_mul, q_normalize, q_rotate, q_shortest_arc,
     read_accessor, scale, strand_samples, sub, to_glb, world_matrices)
 
@@ -398,14 +398,7 @@ def build_mesh(nodes, world, springs):
                                                "J_Bip_C_Neck")]
 
     def body_weights(y):
-        if y <= ladder[0][0]:
-            return [(ladder[0][1], 1.0)]
-        for (y0, j0), (y1, j1) in zip(ladder, ladder[1:]):
-            if y <= y1:
-                f = (y - y0) / (y1 - y0)
-                f = f * f * (3.0 - 2.0 * f)
-                return [(j0, 1.0 - f), (j1, f)]
-        return [(ladder[-1][1], 1.0)]
+        return ladder_weights(ladder, y)
 
     # Skin: head, neck, arms, hands, fingers, legs, feet.
     ellipsoid(skin, head_center, Z_AXIS, X_AXIS, Y_AXIS, (HEAD_R, HEAD_R, HEAD_R), 14, 24, head)

@@ -452,6 +452,19 @@ def catmull_rom(p0, p1, p2, p3, f):
     return tuple(pos), tuple(der)
 
 
+def ladder_weights(ladder, y):
+    """Skin weights by height: `ladder` is [(height, joint), ...] from the bottom; below the
+    first joint all to it, above the last all to it, between two a smoothstepped blend."""
+    if y <= ladder[0][0]:
+        return [(ladder[0][1], 1.0)]
+    for (y0, j0), (y1, j1) in zip(ladder, ladder[1:]):
+        if y <= y1:
+            f = (y - y0) / (y1 - y0)
+            f = f * f * (3.0 - 2.0 * f)
+            return [(j0, 1.0 - f), (j1, f)]
+    return [(ladder[-1][1], 1.0)]
+
+
 def strand_samples(pts, joints, per_segment):
     """Points along a Catmull-Rom spline through the joints `pts`, `per_segment` a segment,
     each (position, unit tangent, influences): at fraction f of segment i, weighted
@@ -537,14 +550,7 @@ def build_mesh(nodes, world):
     ladder = [(pos[n][1], index[n]) for n in ("hips", "spine", "neck", "head")]
 
     def body_weights(y):
-        if y <= ladder[0][0]:
-            return [(ladder[0][1], 1.0)]
-        for (y0, j0), (y1, j1) in zip(ladder, ladder[1:]):
-            if y <= y1:
-                f = (y - y0) / (y1 - y0)
-                f = f * f * (3.0 - 2.0 * f)
-                return [(j0, 1.0 - f), (j1, f)]
-        return [(ladder[-1][1], 1.0)]
+        return ladder_weights(ladder, y)
 
     skin, hair, clothes, eyes = Primitive(0), Primitive(1), Primitive(2), Primitive(3)
 

@@ -213,10 +213,9 @@ TEST(Render, CollidersDrawnFromTheRodInputOnTheDevice) {
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
 
-// VRM avatars whose chains all list their own colliders (scenes/avatars.json) still carry
-// the run of all of a character's colliders, which no chain references: drawn as meshes
-// by the skinned layer, none of their colliders is drawn as a capsule (the arm capsules
-// stuck out of the skin). Control: without set_skinned the capsules show.
+// VRM avatars whose chains all list their own colliders (scenes/avatars.json): drawn as
+// meshes by the skinned layer, none of their colliders is drawn as a capsule (the arm
+// capsules stuck out of the skin). Control: without set_skinned the capsules show.
 TEST(Render, SkinnedAvatarsShowNoColliderCapsules) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
     auto scene = load_scene(scene_path("avatars.json"));
