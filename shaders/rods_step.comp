@@ -116,6 +116,33 @@ vec3 closest_on_segment(vec3 p, vec3 a, vec3 b) {
     return a + t * ab;
 }
 
+// The chain's colliders (solver.cpp step): in the end root's frame (la, lb; a plane's lb
+// its turned normal), where the substep's root places them (ca, cb), the distance each
+// keeps (rods::collider_reach) and its kind. Indexed by a loop variable, so they live in
+// scratch memory; a chain has few.
+vec3 col_la[KW_RODS_MAX_CHAIN_COLLIDERS], col_lb[KW_RODS_MAX_CHAIN_COLLIDERS];
+vec3 col_ca[KW_RODS_MAX_CHAIN_COLLIDERS], col_cb[KW_RODS_MAX_CHAIN_COLLIDERS];
+float col_reach[KW_RODS_MAX_CHAIN_COLLIDERS];
+uint col_kind[KW_RODS_MAX_CHAIN_COLLIDERS];
+uint col_count;
+
+// solver.cpp collide_all(): one particle against every collider, the set
+// KW_RODS_COLLIDER_PASSES times.
+void collide_all(inout vec3 p) {
+    for (uint pass = 0; pass < KW_RODS_COLLIDER_PASSES; ++pass) {
+        for (uint k = 0; k < col_count; ++k) {
+            if ((FEATURES & KW_RODS_FEATURE_PLANE) != 0u && col_kind[k] == KW_RODS_COLLIDER_PLANE) {
+                const float s = dot(p - col_ca[k], col_cb[k]);
+                if (s < col_reach[k]) p += (col_reach[k] - s) * col_cb[k];
+            } else if ((FEATURES & KW_RODS_FEATURE_INSIDE) != 0u && col_kind[k] == KW_RODS_COLLIDER_INSIDE) {
+                pull_in(p, closest_on_segment(p, col_ca[k], col_cb[k]), col_reach[k]);
+            } else {
+                push_out(p, closest_on_segment(p, col_ca[k], col_cb[k]), col_reach[k]);
+            }
+        }
+    }
+}
+
 // A template's constants, each loaded once: template joint i of tj + i, and its shapes
 // (shape0 + k * n + i, examples pre-signed into the base's hemisphere at upload, SPEC A.2).
 // Indices are clamped instead of guarded so that no load sits in a branch (see GROUPED);
@@ -153,17 +180,29 @@ void load_constants(uint n, uint examples, uint tj, uint shape0, out Constants t
                  (b2 * relative + (a2 - b2) * outerProduct(qrot(qs[j], tc.axis[j]), obar_axis[j]));           \
         goal_sum[j] = vec3(0.0);                                                                              \
     }
+// Particle j (>= 1) placed on its parent's segment length, follow-the-leader, its
+// correction kept for DFTL (solver.cpp).
+#define KW_PLACE(j)                                                                                           \
+    {                                                                                                         \
+        const vec3 dd = p[j] - p[(j) - 1];                                                                    \
+        const float len = length(dd);                                                                         \
+        if (len > 1e-9) {                                                                                     \
+            const vec3 placed = p[(j) - 1] + (tc.seg_len[(j) - 1] / len) * dd;                                \
+            pulled[j] += placed - p[j];                                                                       \
+            p[j] = placed;                                                                                    \
+        }                                                                                                     \
+    }
 // Particle j (>= 1) after its last group: toward the mean of its goals, then rest-pose
 // attraction (Han & Harada 2012, global shape constraint), then the distance constraint to
-// its (already final) parent, follow-the-leader.
+// its (already final) parent, follow-the-leader, its correction kept for DFTL, then the
+// colliders (solver.cpp).
 #define KW_SETTLE(j, groups)                                                                                  \
     {                                                                                                         \
         p[j] += k_iter * (goal_sum[j] / (groups) - p[j]);                                                     \
         qs[j] = q_new[j];                                                                                     \
         p[j] += k_rest * (xbar[j] - p[j]);                                                                    \
-        const vec3 dd = p[j] - p[(j) - 1];                                                                    \
-        const float len = length(dd);                                                                         \
-        if (len > 1e-9) p[j] = p[(j) - 1] + (tc.seg_len[(j) - 1] / len) * dd;                                 \
+        KW_PLACE(j);                                                                                          \
+        if (col_count > 0u) collide_all(p[j]);                                                                \
     }
 
 void main() {
@@ -361,7 +400,24 @@ void main() {
     // Solved relative to the previous root position, as the state is (solver.cpp).
     const vec3 travel = to.position.xyz - from.position.xyz;
 
-    vec3 p[MAX_J], xbar[MAX_J], goal_sum[MAX_J], obar_axis[MAX_J];
+    // The colliders in the end root's frame (solver.cpp step).
+    col_count = cend - cbegin;
+    {
+        const vec4 to_root = qconj(to.rotation);
+        for (uint k = 0; k < col_count; ++k) {
+            const RodColliderGpu col = colliders[cbegin + k];
+            const uint kind = uint(col.b.w);
+            col_kind[k] = kind;
+            col_la[k] = qrot(to_root, col.a.xyz - to.position.xyz);
+            col_lb[k] = kind == KW_RODS_COLLIDER_PLANE ? qrot(to_root, col.b.xyz) : qrot(to_root, col.b.xyz - to.position.xyz);
+            // rods::collider_reach().
+            col_reach[k] = kind == KW_RODS_COLLIDER_PLANE    ? thickness
+                           : kind == KW_RODS_COLLIDER_INSIDE ? max(col.a.w - thickness, 0.0)
+                                                             : col.a.w + thickness;
+        }
+    }
+
+    vec3 p[MAX_J], xbar[MAX_J], goal_sum[MAX_J], obar_axis[MAX_J], pulled[MAX_J];
     vec4 qs[MAX_J], obar[MAX_J], q_new[MAX_J];
     mat3 a_j[MAX_J];
     for (uint sub = 1; sub <= substeps; ++sub) {
@@ -378,10 +434,16 @@ void main() {
         }
         p[0] = xbar[0];
         qs[0] = obar[0];
+        // The colliders placed by the substep's root.
+        for (uint k = 0; k < col_count; ++k) {
+            col_ca[k] = r_pos + qrot(r_rot, col_la[k]);
+            col_cb[k] = col_kind[k] == KW_RODS_COLLIDER_PLANE ? qrot(r_rot, col_lb[k]) : r_pos + qrot(r_rot, col_lb[k]);
+        }
+        [[unroll]] for (uint i = 0; i < MAX_J; ++i) pulled[i] = vec3(0.0);
 
         [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
             if (i < n) {
-                v[i] = decay * (v[i] + h * acceleration);
+                v[i] = decay * v[i] + h * acceleration;  // damping, then gravity (solver.cpp)
                 omega[i] = decay * omega[i];
                 p[i] = x[i] + h * v[i];
                 // First-order orientation update (solver.cpp).
@@ -447,29 +509,14 @@ void main() {
                 }
             }
 
-            // Collisions, collider by collider (solver.cpp).
-            for (uint ci = cbegin; ci < cend; ++ci) {
-                const RodColliderGpu col = colliders[ci];
-                const vec3 ca = col.a.xyz - from.position.xyz, cb = col.b.xyz - from.position.xyz;
-                // solver.cpp collide(), with rods::collider_reach()'s distance for each kind.
-                if ((FEATURES & KW_RODS_FEATURE_PLANE) != 0u && col.b.w == float(KW_RODS_COLLIDER_PLANE)) {
-                    const vec3 normal = col.b.xyz;  // a direction: not relative to `from`
-                    [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
-                        if (i < n) {
-                            const float s = dot(p[i] - ca, normal);
-                            if (s < thickness) p[i] += (thickness - s) * normal;
-                        }
-                    }
-                } else if ((FEATURES & KW_RODS_FEATURE_INSIDE) != 0u && col.b.w == float(KW_RODS_COLLIDER_INSIDE)) {
-                    const float radius = max(col.a.w - thickness, 0.0);
-                    [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
-                        if (i < n) pull_in(p[i], closest_on_segment(p[i], ca, cb), radius);
-                    }
-                } else {
-                    const float radius = col.a.w + thickness;
-                    [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
-                        if (i < n) push_out(p[i], closest_on_segment(p[i], ca, cb), radius);
-                    }
+        }
+        // The last sweep: placed, pushed out, placed again (solver.cpp).
+        [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
+            if (i < n) {
+                KW_PLACE(i);
+                if (col_count > 0u) {
+                    collide_all(p[i]);
+                    KW_PLACE(i);
                 }
             }
         }
@@ -477,6 +524,8 @@ void main() {
         [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
             if (i < n) {
                 v[i] = (p[i] - x[i]) / h;
+                // Dynamic follow-the-leader (solver.cpp; Mueller et al. 2012, eq. 9).
+                if (i > 0 && i + 1 < MAX_J && i + 1 < n) v[i] -= (KW_RODS_FTL_DAMPING / h) * pulled[i + 1];
                 const vec4 dq = positive_w(qmul(qs[i], qconj(q[i])));
                 omega[i] = (2.0 / h) * dq.xyz;
                 x[i] = p[i];

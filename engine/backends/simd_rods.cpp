@@ -84,13 +84,14 @@ simd::RodTemplateConsts template_consts(const rods::ChainTemplate& t) {
 void set_step(simd::RodTemplateConsts& k, const rods::SolverParams& p, float dt) {
     k.substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / p.max_substep)));
     k.h = dt / static_cast<float>(k.substeps);
-    k.k_iter = 1.0f - std::pow(1.0f - p.stiffness, 1.0f / static_cast<float>(p.iterations));
-    k.k_rest = 1.0f - std::pow(1.0f - p.rest_stiffness, 1.0f / static_cast<float>(p.iterations));
+    k.k_iter = rods::iteration_stiffness(rods::substep_stiffness(p.stiffness, k.h), p.iterations);
+    k.k_rest = rods::iteration_stiffness(rods::substep_stiffness(p.rest_stiffness, k.h), p.iterations);
     k.decay = std::exp(-p.damping * k.h);
     const glm::vec3 h_acceleration = k.h * (p.gravity + p.wind);
     k.h_acceleration = {h_acceleration.x, h_acceleration.y, h_acceleration.z};
     k.half_h = 0.5f * k.h;
     k.two_over_h = 2.0f / k.h;
+    k.ftl_over_h = rods::kFollowTheLeaderDamping / k.h;
 }
 
 class SimdRodBackend final : public RodBackend {

@@ -24,6 +24,8 @@ namespace {
 
 // The kernel's fixed-size arrays hold what the rod world allows.
 static_assert(KW_RODS_MAX_JOINTS == rods::kMaxChainJoints && KW_RODS_MAX_VIEWS == rods::kMaxViewExamples);
+static_assert(KW_RODS_MAX_CHAIN_COLLIDERS == rods::kMaxChainColliders && KW_RODS_COLLIDER_PASSES == rods::kColliderPasses);
+static_assert(static_cast<float>(KW_RODS_FTL_DAMPING) == rods::kFollowTheLeaderDamping);
 static_assert(KW_ROD_KEYS_MAX_SOURCES == rods::kMaxKeySources && KW_ROD_KEYS_MAX_EXAMPLES == rods::kMaxKeyedExamples);
 // rods_step.comp keeps u_1 .. u_4 in one vec4 and the combined weights in 8 floats.
 static_assert(rods::kMaxKeyedExamples == 4 && rods::kMaxViewExamples + 1 == 8);
@@ -68,9 +70,9 @@ void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
     const std::uint32_t substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / p.max_substep)));
     const float h = dt / static_cast<float>(substeps);
     g.solver = {p.iterations, substeps, g.solver.z, 0u};  // z: the keyed examples, set at load
-    g.step = {h, std::exp(-p.damping * h),
-              1.0f - std::pow(1.0f - p.stiffness, 1.0f / static_cast<float>(p.iterations)), p.momentum_suppression};
-    g.physics.y = 1.0f - std::pow(1.0f - p.rest_stiffness, 1.0f / static_cast<float>(p.iterations));
+    g.step = {h, std::exp(-p.damping * h), rods::iteration_stiffness(rods::substep_stiffness(p.stiffness, h), p.iterations),
+              p.momentum_suppression};
+    g.physics.y = rods::iteration_stiffness(rods::substep_stiffness(p.rest_stiffness, h), p.iterations);
 }
 
 // The smoothing factors alpha_j of a template's motion keys for a frame of `dt` (K.2),

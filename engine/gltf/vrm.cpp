@@ -289,18 +289,20 @@ private:
         }
         const auto n = static_cast<float>(bones.size());
         const float segment = spring.chain.length / static_cast<float>(spring.chain.nodes.size() - 1);
-        const float h = spring.params.max_substep;
+        // The stiffnesses are fractions per rods::kReferenceSubstep, whatever the substep
+        // (rods::substep_stiffness), so the calibration holds at every frame rate.
+        const float h = rods::kReferenceSubstep;
         const float a = kVrmFrameRate * h * h * (mean.stiffness / n);
         spring.params.rest_stiffness = a / (a + segment);
         spring.params.stiffness = 0.0f;  // VRM has no shape matching (vrm.hpp)
         const float drag = std::clamp(mean.drag / n, 0.0f, kMaxDragForce);
         spring.params.damping = -std::log(1.0f - drag) * kVrmFrameRate;
-        // The solver damps the velocity after adding gravity: the equilibrium sag carries
-        // a factor exp(-damping h) = (1 - drag)^(60 h) that VRM's does not (vrm.hpp).
-        spring.params.gravity = kVrmFrameRate * mean.gravity_dir / n / std::exp(-spring.params.damping * h);
+        // The solver damps the velocity before adding gravity, as VRM's verlet step damps
+        // the inertia term and not the gravity term, so the equilibrium sags agree without
+        // a correction (vrm.hpp).
+        spring.params.gravity = kVrmFrameRate * mean.gravity_dir / n;
         // The scene format takes accelerations up to kMaxGravity (100 g) a component; VRM's
-        // gravityPower has no bound, and dividing by the decay (0.1 at dragForce 0.99)
-        // multiplies it, so a strong one is held there rather than refused.
+        // gravityPower has no bound, so a strong one is held there rather than refused.
         if (const float g = glm::length(spring.params.gravity); g > kMaxGravity) {
             spring.params.gravity *= kMaxGravity / g;
             warn(path, "gravity " + std::to_string(g) + " m/s^2 (gravityPower, mapped) held at " + std::to_string(kMaxGravity) +

@@ -126,6 +126,24 @@ void collide(glm::vec3& p, glm::vec3 a, glm::vec3 b, float reach, ColliderKind k
     }
 }
 
+// The colliders of one substep, relative to the frame's origin (a plane's b: its unit
+// normal), with the distance each keeps (collider_reach()).
+struct SubstepColliders {
+    std::array<glm::vec3, kMaxChainColliders> a{}, b{};
+    std::array<float, kMaxChainColliders> reach{};
+    std::array<ColliderKind, kMaxChainColliders> kind{};
+    std::size_t count = 0;
+};
+
+// One particle against every collider, the whole set kColliderPasses times (solver.hpp):
+// Gauss-Seidel over the set, so a particle pushed out of one collider into another is
+// pushed out again by the next pass instead of ending inside whichever came first.
+void collide_all(glm::vec3& p, const SubstepColliders& c) {
+    for (std::uint32_t pass = 0; pass < kColliderPasses; ++pass) {
+        for (std::size_t k = 0; k < c.count; ++k) collide(p, c.a[k], c.b[k], c.reach[k], c.kind[k]);
+    }
+}
+
 // A.5 momentum suppression: the change of rest shape since the last step, applied
 // kinematically. Each segment of the current chain is turned by `suppression` of the
 // turn that takes its old rest direction to its new one (both placed by the current
@@ -211,6 +229,25 @@ ChainState initial_state(const Chain& chain, const Transform& root, const ChainS
     return s;
 }
 
+float substep_stiffness(float k, float h) {
+    // k per kReferenceSubstep is a compliance: K = k / ((1 - k) h_ref^2) (1/s^2), and a
+    // substep h covers k_h = K h^2 / (1 + K h^2) = r k / ((1 - k) + r k), r = (h / h_ref)^2,
+    // the XPBD step of one constraint (Macklin, Mueller, Chentanez, "XPBD: Position-Based
+    // Simulation of Compliant Constrained Dynamics", MIG 2016, eq. 18 with alpha~ = 1/(K h^2)
+    // and lambda reset every substep). Under a constant acceleration g a particle held by it
+    // then rests where k_h s = (1 - k_h) g h^2, s = g / K, whatever h: the sag no longer
+    // depends on the substep. k = 1 stays 1 (rigid), k = 0 stays 0.
+    if (!(k > 0.0f)) return 0.0f;
+    if (!(k < 1.0f)) return 1.0f;
+    const float r = (h / kReferenceSubstep) * (h / kReferenceSubstep);
+    return (r * k) / ((1.0f - k) + r * k);
+}
+
+float iteration_stiffness(float k_substep, std::uint32_t iterations) {
+    // (1 - k')^iterations = 1 - k_substep: `iterations` moves compound to k_substep.
+    return 1.0f - std::pow(1.0f - k_substep, 1.0f / static_cast<float>(iterations));
+}
+
 float collider_reach(const Collider& c, float thickness) {
     switch (c.kind) {
         case ColliderKind::Inside: return std::max(c.radius - thickness, 0.0f);
@@ -249,11 +286,10 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
 
     const std::uint32_t substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / params.max_substep)));
     const float h = dt / static_cast<float>(substeps);
-    // SPEC A.4 / this header: k per substep from k' per iteration, (1 - k')^iterations = 1 - k.
-    const float k_iter =
-        1.0f - std::pow(1.0f - params.stiffness, 1.0f / static_cast<float>(params.iterations));
-    const float k_rest =
-        1.0f - std::pow(1.0f - params.rest_stiffness, 1.0f / static_cast<float>(params.iterations));
+    // The stiffnesses are fractions per kReferenceSubstep, converted to this substep as
+    // compliances (substep_stiffness()) and then to one iteration (iteration_stiffness()).
+    const float k_iter = iteration_stiffness(substep_stiffness(params.stiffness, h), params.iterations);
+    const float k_rest = iteration_stiffness(substep_stiffness(params.rest_stiffness, h), params.iterations);
     const float decay = std::exp(-params.damping * h);
     const glm::vec3 acceleration = params.gravity + params.wind;
 
@@ -269,13 +305,21 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
     // ~1e-6 m at 10 m, as coarse as the solver's own corrections on a small strand.
     const Transform from = s.root;
     const glm::vec3 travel = root.position - from.position;
+    // The colliders are given at the end of the frame; within it they move with the
+    // interpolated root, as the rest shape does: held in the end root's frame here, placed
+    // by each substep's root below. A collider left at its end pose would sit up to a
+    // frame's travel ahead of the root in the early substeps and shove the strand.
     std::array<glm::vec3, kMaxChainColliders> collider_a{}, collider_b{};
-    std::array<float, kMaxChainColliders> collider_reach_of{};
+    SubstepColliders placed;
     assert(colliders.size() <= kMaxChainColliders);
+    placed.count = colliders.size();
+    const glm::quat to_root = glm::conjugate(root.rotation);
     for (std::size_t k = 0; k < colliders.size(); ++k) {
-        collider_a[k] = colliders[k].a - from.position;
-        collider_b[k] = colliders[k].kind == ColliderKind::Plane ? colliders[k].b : colliders[k].b - from.position;
-        collider_reach_of[k] = collider_reach(colliders[k], chain.thickness);
+        collider_a[k] = to_root * (colliders[k].a - root.position);
+        collider_b[k] = colliders[k].kind == ColliderKind::Plane ? to_root * colliders[k].b
+                                                                  : to_root * (colliders[k].b - root.position);
+        placed.reach[k] = collider_reach(colliders[k], chain.thickness);
+        placed.kind[k] = colliders[k].kind;
     }
     std::array<glm::vec3, kMaxChainJoints> p{}, xbar{}, goal_sum{}, obar_axis{};
     const float b2 = chain.thickness * chain.thickness;
@@ -294,8 +338,19 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
         }
         p[0] = xbar[0];
         qs[0] = obar[0];
+        // 3. The colliders placed by the root (a plane's normal turned by it).
+        for (std::size_t k = 0; k < placed.count; ++k) {
+            placed.a[k] = r.position + r.rotation * collider_a[k];
+            placed.b[k] = placed.kind[k] == ColliderKind::Plane ? r.rotation * collider_b[k]
+                                                                : r.position + r.rotation * collider_b[k];
+        }
+        // The distance constraints' corrections of each particle this substep (DFTL below).
+        std::array<glm::vec3, kMaxChainJoints> pulled{};
 
-        // 4. Predict: external acceleration, damping, explicit position update, and the
+        // 4. Predict: damping, then the external acceleration (damping the velocity the
+        // substep starts with, not the acceleration's share: a held particle then rests at
+        // g / K of its attraction whatever h and damping are, where damping after
+        // gravity scaled the sag by exp(-damping h)), explicit position update, and the
         // orientation update of SPEC A.4, q* = [w^ sin(|w| h/2), cos(|w| h/2)] q (Mueller &
         // Chentanez 2011, sec. 3), in its first-order form q* = normalize(q + h/2 [w, 0] q)
         // (Mueller et al., "Detailed Rigid Body Simulation with Extended Position Based
@@ -303,7 +358,7 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
         // turns by 2 atan(|w| h / 2), never more than |w| h; without sine and cosine it is
         // several times cheaper on the GPU, whose transcendentals dominated the frame.
         for (std::uint32_t i = 1; i < n; ++i) {
-            s.v[i] = decay * (s.v[i] + h * acceleration);
+            s.v[i] = decay * s.v[i] + h * acceleration;
             s.omega[i] = decay * s.omega[i];
             p[i] = s.x[i] + h * s.v[i];
             const glm::vec3 half_turn = (0.5f * h) * s.omega[i];
@@ -375,26 +430,51 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
             // Inextensible Hair and Fur" (VRIPHYS 2012): one sweep leaves every segment at
             // its length, where mass-weighted Gauss-Seidel needs many iterations on a long
             // chain and lets a violently shaken one stretch by several times its length.
-            // The price is extra damping towards the tip, which hair does not mind.
+            // Its corrections are not symmetric and would add energy; the velocity update
+            // below takes it back (DFTL).
+            // Collisions inside the sweep: each child is pushed out of the colliders right
+            // after it is placed, so its own children are placed from where it ends.
             for (std::uint32_t i = 0; i + 1 < n; ++i) {
                 const glm::vec3 d = p[i + 1] - p[i];
                 const float len = glm::length(d);
-                if (!(len > 1e-9f)) continue;  // no direction to correct along
-                p[i + 1] = p[i] + (chain.segment_length[i] / len) * d;
-            }
-
-            // Collisions: the particle's radius is the chain's thickness. Collider by
-            // collider, so the GPU loads each collider once per iteration.
-            for (std::size_t k = 0; k < colliders.size(); ++k) {
-                for (std::uint32_t i = 1; i < n; ++i) {
-                    collide(p[i], collider_a[k], collider_b[k], collider_reach_of[k], colliders[k].kind);
+                if (len > 1e-9f) {  // else no direction to correct along
+                    const glm::vec3 placed_child = p[i] + (chain.segment_length[i] / len) * d;
+                    pulled[i + 1] += placed_child - p[i + 1];
+                    p[i + 1] = placed_child;
                 }
+                collide_all(p[i + 1], placed);
+            }
+        }
+        // A last sweep that leaves no segment stretched: each child is placed on its
+        // parent's segment length, pushed out of the colliders, and placed again. The
+        // second placement moves it along its segment, by what the push stretched it,
+        // second order in the push; placing without the push in between would hand it
+        // its parent's push back into the collider (1.6 mm of a strand dragged across a
+        // capsule, tests/rods/test_rods.cpp).
+        auto place_on_parent = [&](std::uint32_t i) {
+            const glm::vec3 d = p[i + 1] - p[i];
+            const float len = glm::length(d);
+            if (!(len > 1e-9f)) return;
+            const glm::vec3 placed_child = p[i] + (chain.segment_length[i] / len) * d;
+            pulled[i + 1] += placed_child - p[i + 1];
+            p[i + 1] = placed_child;
+        };
+        for (std::uint32_t i = 0; i + 1 < n; ++i) {
+            place_on_parent(i);
+            if (placed.count > 0) {
+                collide_all(p[i + 1], placed);
+                place_on_parent(i);
             }
         }
 
-        // 6. Update.
+        // Dynamic follow-the-leader (Mueller et al. 2012, sec. 4, eq. 9): particle i's
+        // velocity gives back s_damping of its child's distance corrections d_{i+1} this
+        // substep, v_i = (p_i - x_i) / h - s_damping d_{i+1} / h, the pull the child
+        // would have exerted on it; without it each sweep hands the parent's motion to
+        // the child for free (a slack chain fell with 3.4x its potential energy).
         for (std::uint32_t i = 0; i < n; ++i) {
             s.v[i] = (p[i] - s.x[i]) / h;
+            if (i > 0 && i + 1 < n) s.v[i] -= (kFollowTheLeaderDamping / h) * pulled[i + 1];
             // omega from q* q^-1 taken the short way, first-order as the prediction (Mueller
             // et al. 2020, eq. 9): w = 2 [dq.x, dq.y, dq.z] / h.
             const glm::quat dq = positive_w(qs[i] * glm::conjugate(s.q[i]));

@@ -104,15 +104,26 @@ Q4 extract_rotation(const M3& a, const Q4& q, const M3& r) {
     return turn(q, half_omega);
 }
 
-// One collider of a batch: a relative to the frame's origin, ab = b - a (a plane's lanes:
-// its normal b) and len2 = dot(ab, ab) (the same for every joint, computed once), its
-// reach, and the lanes whose chain has it as each kind.
+// One collider of a batch in the end root's frame (solver.cpp step: la = R_to^-1 (a - to),
+// lb likewise, a plane's lb its turned normal), the lanes whose chain has it as each kind,
+// and, per substep, where the substep's root places it: a relative to the frame's origin,
+// ab = b - a (a plane's lanes: its normal b) and len2 = dot(ab, ab) (the same for every
+// joint of the substep, computed once), and its reach.
 struct CollidersK {
+    V3 la, lb;
     V3 a, ab;
     V len2, reach;
     M outside, inside, plane;
     bool any_capsule, any_inside, any_plane;  // some lane has it as a capsule (outside or inside), inside, a plane
 };
+
+// solver.cpp step 3: the collider placed by the substep's root (r_p, r_q).
+void place(CollidersK& c, const V3& r_p, const Q4& r_q) {
+    c.a = add(r_p, rotate(r_q, c.la));
+    const V3 turned = rotate(r_q, c.lb);
+    c.ab = select(c.plane, turned, sub(add(r_p, turned), c.a));
+    c.len2 = dot(c.ab, c.ab);
+}
 
 // solver.cpp collide(): closest_on_segment() then push_out() (outside lanes) or pull_in()
 // (inside lanes), and the plane's half-space (plane lanes), each kind's expressions as
@@ -272,23 +283,28 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
     const Q4 to_q = load4(in.rows, kToQ, off);
     const V3 travel = sub(to_p, from_p);
     CollidersK colliders[kMaxK];
+    const Q4 to_root = conj(to_q);
     for (std::size_t k = 0; k < batch.colliders; ++k) {
         const float* rows = in.colliders + k * kColliderRows * kBatchLanes;
         CollidersK& c = colliders[k];
         c.outside = hn::Gt(load(rows, kCapOutside, off), Z());
         c.inside = hn::Gt(load(rows, kCapInside, off), Z());
         c.plane = hn::Gt(load(rows, kCapPlane, off), Z());
-        c.a = sub(load3(rows, kCapA, off), from_p);
+        // In the end root's frame (solver.cpp): a plane's normal b is a direction.
         const V3 b = load3(rows, kCapB, off);
-        // A capsule's b - a (solver.cpp: both relative to the frame's origin), a plane's
-        // normal b itself (a direction).
-        c.ab = select(c.plane, b, sub(sub(b, from_p), c.a));
-        c.len2 = dot(c.ab, c.ab);
+        c.la = rotate(to_root, sub(load3(rows, kCapA, off), to_p));
+        c.lb = select(c.plane, rotate(to_root, b), rotate(to_root, sub(b, to_p)));
         c.reach = load(rows, kCapR, off);
         c.any_capsule = !hn::AllFalse(D(), hn::Or(c.outside, c.inside));
         c.any_inside = !hn::AllFalse(D(), c.inside);
         c.any_plane = !hn::AllFalse(D(), c.plane);
     }
+    // solver.cpp collide_all(): every collider, the whole set kColliderPasses times.
+    auto collide_all = [&](V3& particle) HWY_ATTR {
+        for (std::uint32_t pass = 0; pass < rods::kColliderPasses; ++pass) {
+            for (std::size_t k = 0; k < batch.colliders; ++k) collide(particle, colliders[k]);
+        }
+    };
     const Q4 relative_root = qmul(conj(from_q), to_q);  // interpolate(): a^-1 b
     V3 p[kMaxJ], xbar[kMaxJ], obar_axis[kMaxJ], goal_sum[kMaxJ];
     Q4 qs[kMaxJ], obar[kMaxJ], q_new[kMaxJ];
@@ -312,6 +328,10 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         }
         p[0] = xbar[0];
         qs[0] = obar[0];
+        // 3. The colliders placed by the root.
+        for (std::size_t k = 0; k < batch.colliders; ++k) place(colliders[k], r_p, r_q);
+        V3 pulled[kMaxJ];  // the distance constraints' corrections (DFTL)
+        for (std::size_t i = 0; i < n; ++i) pulled[i] = zero3();
         for (std::size_t i = 0; i < n; ++i) {
             const std::size_t lo = i == 0 ? 0 : i - 1;
             const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
@@ -323,7 +343,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         // 4. Predict.
         const V3 h_acceleration = splat3(t.h_acceleration.data());
         for (std::size_t i = 1; i < n; ++i) {
-            v[i] = mul(S(t.decay), add(v[i], h_acceleration));
+            v[i] = add(mul(S(t.decay), v[i]), h_acceleration);
             omega[i] = mul(S(t.decay), omega[i]);
             p[i] = add(x[i], mul(S(t.h), v[i]));
             qs[i] = turn(q[i], mul(S(t.half_h), omega[i]));
@@ -405,21 +425,39 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
             }
             // Rest-pose attraction.
             for (std::size_t i = 1; i < n; ++i) p[i] = add(p[i], mul(S(t.k_rest), sub(xbar[i], p[i])));
-            // Distance constraints, follow-the-leader.
+            // Distance constraints, follow-the-leader, each child pushed out of the
+            // colliders right after it is placed.
             for (std::size_t i = 0; i + 1 < n; ++i) {
                 const V3 dd = sub(p[i + 1], p[i]);
                 const V len = length(dd);
-                p[i + 1] = select(hn::Gt(len, S(1e-9f)), add(p[i], mul(hn::Div(S(t.segment[i]), len), dd)), p[i + 1]);
+                const M along = hn::Gt(len, S(1e-9f));
+                const V3 placed_child = add(p[i], mul(hn::Div(S(t.segment[i]), len), dd));
+                pulled[i + 1] = select(along, add(pulled[i + 1], sub(placed_child, p[i + 1])), pulled[i + 1]);
+                p[i + 1] = select(along, placed_child, p[i + 1]);
+                if (batch.colliders > 0) collide_all(p[i + 1]);
             }
-            // Collisions, collider by collider.
-            for (std::size_t k = 0; k < batch.colliders; ++k) {
-                for (std::size_t i = 1; i < n; ++i) collide(p[i], colliders[k]);
+        }
+        // The last sweep: placed, pushed out, placed again (solver.cpp).
+        auto place_on_parent = [&](std::size_t i) HWY_ATTR {
+            const V3 dd = sub(p[i + 1], p[i]);
+            const V len = length(dd);
+            const M along = hn::Gt(len, S(1e-9f));
+            const V3 placed_child = add(p[i], mul(hn::Div(S(t.segment[i]), len), dd));
+            pulled[i + 1] = select(along, add(pulled[i + 1], sub(placed_child, p[i + 1])), pulled[i + 1]);
+            p[i + 1] = select(along, placed_child, p[i + 1]);
+        };
+        for (std::size_t i = 0; i + 1 < n; ++i) {
+            place_on_parent(i);
+            if (batch.colliders > 0) {
+                collide_all(p[i + 1]);
+                place_on_parent(i);
             }
         }
 
-        // 6. Update.
+        // 6. Update, with the dynamic follow-the-leader correction (solver.cpp).
         for (std::size_t i = 0; i < n; ++i) {
             v[i] = div(sub(p[i], x[i]), S(t.h));
+            if (i > 0 && i + 1 < n) v[i] = sub(v[i], mul(S(t.ftl_over_h), pulled[i + 1]));
             const Q4 dq = positive_w(qmul(qs[i], conj(q[i])));
             omega[i] = mul(S(t.two_over_h), V3{dq.x, dq.y, dq.z});
             x[i] = p[i];

@@ -65,6 +65,7 @@ struct RodTemplateConsts {
     std::uint32_t substeps = 1;
     float h = 0.0f, decay = 0.0f, k_iter = 0.0f, k_rest = 0.0f;
     float half_h = 0.0f, two_over_h = 0.0f;
+    float ftl_over_h = 0.0f;                // rods::kFollowTheLeaderDamping / h
     std::array<float, 3> h_acceleration{};  // h * (gravity + wind)
 };
 

@@ -41,6 +41,9 @@
 #define KW_RODS_WORKGROUP_SIZE 64
 #define KW_RODS_MAX_JOINTS 32  // rods::kMaxChainJoints
 #define KW_RODS_MAX_VIEWS 7    // rods::kMaxViewExamples
+#define KW_RODS_MAX_CHAIN_COLLIDERS 16  // rods::kMaxChainColliders
+#define KW_RODS_COLLIDER_PASSES 2       // rods::kColliderPasses
+#define KW_RODS_FTL_DAMPING 1.0         // rods::kFollowTheLeaderDamping (DFTL's s_damping)
 
 #define KW_RODS_BINDING_TEMPLATES 0        // RodTemplateGpu, per chain template
 #define KW_RODS_BINDING_TEMPLATE_JOINTS 1  // RodTemplateJointGpu, per template joint

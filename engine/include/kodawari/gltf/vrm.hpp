@@ -23,23 +23,26 @@
 /// independently. Ours is shape matching plus a rest-pose attraction of every particle
 /// towards its rest position in the root frame (rods/solver.hpp). So the mapping matches
 /// the feel of one bone (its sag under gravity and its swing frequency at VRM's 60 Hz
-/// reference), not the trajectory. The formulas (h = SolverParams::max_substep, L = the
-/// chain's mean segment length in metres, kVrmFrameRate = 60):
-/// - gravity = kVrmFrameRate * mean over the chain's bones of gravityPower * gravityDir
-///   / exp(-damping h), m/s^2. VRM's terms are displacements per frame scaled by dt, and
-///   the inertia term carries them over frames, so a constant term p acts as an
-///   acceleration p / dt = 60 p at 60 Hz: gravityPower 1 is about 6 g, not 1 g. (VRM's
-///   response therefore depends on the frame rate; ours does not.) Our solver damps the
-///   velocity after adding gravity, so its equilibrium sag is exp(-damping h) of VRM's
-///   (0.775 at dragForce 0.4, measured against three-vrm); dividing by that factor gives
-///   one bone VRM's sag. Held at 1000 m/s^2 (the scene format's bound), with a warning.
+/// reference), not the trajectory. The formulas (h = rods::kReferenceSubstep, the
+/// substep the solver's stiffnesses are given for, L = the chain's mean segment length in
+/// metres, kVrmFrameRate = 60):
+/// - gravity = kVrmFrameRate * mean over the chain's bones of gravityPower * gravityDir,
+///   m/s^2. VRM's terms are displacements per frame scaled by dt, and the inertia term
+///   carries them over frames, so a constant term p acts as an acceleration p / dt = 60 p
+///   at 60 Hz: gravityPower 1 is about 6 g, not 1 g. (VRM's response therefore depends on
+///   the frame rate; ours does not: the stiffnesses are compliances, rods::
+///   substep_stiffness, and damping is a rate, so the mapped chain rests at the same sag
+///   and swings alike at any frame rate.) Our solver damps the velocity before adding
+///   gravity, as VRM damps its inertia term and not its gravity term, so the equilibrium
+///   sags agree with no correction for damping. Held at 1000 m/s^2 (the scene format's
+///   bound), with a warning.
 /// - rest_stiffness = a s / (a s + L) with a = kVrmFrameRate h^2 and s = mean stiffness.
 ///   For a horizontal rest bone, VRM's equilibrium sag angle is atan(gravityPower /
-///   stiffness), independent of the bone; a particle held by our rest attraction k sags
-///   by g h^2 (1 - k) / k per substep equilibrium. Equating the small-angle sag of one
-///   segment of length L gives this k, which is in [0, 1) for any s >= 0. It also matches
-///   the swing frequency: VRM's restoring term is a spring of omega^2 = 60 s / L, ours of
-///   about k / h^2, equal for small k. Limits: VRM's sag accumulates bone by bone along a
+///   stiffness), independent of the bone; a particle held by our rest attraction k (per
+///   h) sags by g h^2 (1 - k) / k at equilibrium, whatever the substep. Equating the
+///   small-angle sag of one segment of length L gives this k, which is in [0, 1) for any
+///   s >= 0. It also matches the swing frequency: VRM's restoring term is a spring of
+///   omega^2 = 60 s / L, ours of K = k / ((1 - k) h^2), equal by the same equation. Limits: VRM's sag accumulates bone by bone along a
 ///   chain and ours does not, so long VRM chains droop more than ours; and the same VRM
 ///   stiffness gives a weaker rest attraction on longer segments, as it does in VRM.
 /// - stiffness (shape matching) = 0: VRM has no such term, and at SolverParams' default

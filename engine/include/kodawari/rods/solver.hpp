@@ -69,6 +69,38 @@ inline constexpr float kMinFrameDt = 1e-5f;
 inline constexpr float kMaxThickness = 1.0f;
 inline constexpr float kMaxMass = 1000.0f;
 
+/// The substep the stiffnesses are given for, s: SolverParams::stiffness and
+/// rest_stiffness are the fractions covered per substep of this length, and other
+/// substeps take the same compliance (substep_stiffness()), so that results do not depend
+/// on the frame rate (SPEC A.4). 1/120 s, the default max_substep, so a 60 fps frame's
+/// two substeps take the stiffnesses as given.
+inline constexpr float kReferenceSubstep = 1.0f / 120.0f;
+/// Passes over a chain's collider set per particle (step()): a particle pushed out of one
+/// collider into another is pushed out again by the second pass, so the result no longer
+/// depends on the colliders' order except by what two passes leave (shaders/shared/rods.h
+/// KW_RODS_COLLIDER_PASSES).
+inline constexpr std::uint32_t kColliderPasses = 2;
+/// s_damping of the dynamic follow-the-leader velocity correction (Mueller, Kim,
+/// Chentanez 2012, eq. 9; s in [0, 1], they suggest 0.9): the share of a child's distance
+/// correction its parent's velocity gives back (shaders/shared/rods.h KW_RODS_FTL_DAMPING).
+/// 1: a slack 16-joint chain released horizontal then never moves with more energy than
+/// it started with at 1 ms, 1/120 s or 1/20 s substeps (tests/rods/test_rod_physics.cpp);
+/// at 0.9 it gained 18% at 1 ms (and 0.8 gained 73%, 0.5 17x), the under-corrected FTL
+/// energy the correction is there to remove. The velocity term is not all motion: a
+/// chain hanging at rest keeps velocities along its segments that the next sweep takes
+/// back (the paper's artefact), so kinetic_energy() of a resting chain is not 0 where
+/// gravity pulls along it; damping bounds them.
+inline constexpr float kFollowTheLeaderDamping = 1.0f;
+
+/// A stiffness fraction k per kReferenceSubstep as the fraction for a substep of `h` s,
+/// with the same compliance K = k / ((1 - k) h_ref^2): k_h = K h^2 / (1 + K h^2). A
+/// particle held by it against an acceleration g rests g / K away, whatever h. Every
+/// backend takes this value, so that they agree to the bit.
+[[nodiscard]] KODAWARI_API float substep_stiffness(float k, float h);
+/// The fraction per projection iteration that `iterations` iterations compound to
+/// `k_substep`: 1 - (1 - k_substep)^(1 / iterations).
+[[nodiscard]] KODAWARI_API float iteration_stiffness(float k_substep, std::uint32_t iterations);
+
 /// What a collider keeps a chain's particles from (VRMC_springBone 1.0 and its
 /// VRMC_springBone_extended_collider 1.0 define the three).
 enum class ColliderKind : std::uint32_t {
@@ -106,23 +138,31 @@ struct Collider {
 /// validate(); step() asserts them.
 struct SolverParams {
     /// Longest substep, s, in (0, 0.05]. A frame of length dt runs ceil(dt / max_substep)
-    /// equal substeps, so a result depends on the caller's frame rate only through that
-    /// rounding. 1/120 s keeps a 60 fps frame at two substeps.
+    /// equal substeps. The stiffnesses are converted to the substep's length as
+    /// compliances (kReferenceSubstep) and damping is a rate, so the substep count changes
+    /// the result only by the integration's own error: a horizontal strand's resting sag
+    /// is the same within 1% from 24 to 144 fps (tests/rods/test_rods.cpp). 1/120 s keeps a
+    /// 60 fps frame at two substeps.
     float max_substep = 1.0f / 120.0f;
     /// Projection iterations per substep, 1 .. 64.
     std::uint32_t iterations = 4;
     /// Shape-matching stiffness k in [0, 1]: the fraction of the way to the shape-matching
-    /// goals covered per substep, whatever `iterations` is. Each iteration uses
-    /// k' = 1 - (1 - k)^(1/iterations), so that `iterations` moves compound to k.
+    /// goals covered per kReferenceSubstep, whatever `iterations` is; a substep of h covers
+    /// k_h = substep_stiffness(k, h), and each iteration k' = 1 - (1 - k_h)^(1/iterations),
+    /// so that `iterations` moves compound to k_h.
     float stiffness = 0.5f;
     /// Rest-pose attraction k_rest in [0, 1]: the fraction of the way each particle moves
-    /// towards its rest position (the blended rest shape placed by the root) per substep,
-    /// whatever `iterations` is (same conversion as `stiffness`). It holds the artist's
-    /// shape against gravity; 0 leaves only shape matching, which cannot (see above).
-    /// Sag of a horizontal-ish strand scales as g h^2 / k_rest.
+    /// towards its rest position (the blended rest shape placed by the root) per
+    /// kReferenceSubstep, whatever `iterations` is (same conversions as `stiffness`). It
+    /// holds the artist's shape against gravity; 0 leaves only shape matching, which
+    /// cannot (see above). Sag of a horizontal-ish strand scales as
+    /// g h_ref^2 (1 - k_rest) / k_rest, whatever the substep.
     float rest_stiffness = 0.1f;
     /// Linear and angular velocity damping rate, 1/s, >= 0: velocities are multiplied by
-    /// exp(-damping h) per substep h, which is independent of the substep length.
+    /// exp(-damping h) per substep h, which is independent of the substep length. It acts
+    /// on world velocities, as VRM's drag does: a character moving at speed u pushes its
+    /// strands back by damping x u (12 m/s^2 at 2/s and 6 m/s); a chain's `center`
+    /// (follow_center()) measures velocities relative to a moving node instead.
     float damping = 1.0f;
     glm::vec3 gravity{0.0f, -9.81f, 0.0f};  ///< m/s^2
     glm::vec3 wind{0.0f};                   ///< an extra acceleration, m/s^2
@@ -172,9 +212,15 @@ struct ChainState {
 /// transform at the end of the frame; within the frame the substeps interpolate it from
 /// the previous one (linearly, and by slerp), so a fast root does not jump. `rest` is
 /// this frame's rest shape in the root frame (positions and orientations, joint_count
-/// each); the solver places it by the interpolated root in every substep. Colliders are
-/// taken as fixed during the frame and applied in order after every projection
-/// iteration; at most kMaxChainColliders.
+/// each); the solver places it by the interpolated root in every substep. `colliders`
+/// (at most kMaxChainColliders) are their poses at the end of the frame; within the frame
+/// they move rigidly with the interpolated root, as the rest shape does (a collider on the
+/// head stays where the head is in every substep). Each projection iteration ends with one
+/// follow-the-leader distance sweep in which every particle, right after it is placed on
+/// its parent's segment length, is pushed out of the whole collider set kColliderPasses
+/// times; a last distance sweep after the iterations leaves no segment stretched, and the
+/// velocities take the dynamic follow-the-leader correction (kFollowTheLeaderDamping), so
+/// the inextensibility adds no energy.
 KODAWARI_API void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
                        std::span<const Collider> colliders, float dt, ChainState& state);
 
