@@ -236,7 +236,7 @@ function clearance(P, shape, jointRadius) {
 // in the angle), so a chain sags as one body: its tip only atan(gP / (s (n - 1))) below
 // the root, n - 1 bones, where VRM's sag accumulates bone by bone.
 
-const SUBSTEP = 1 / 120; // SolverParams' max_substep, which rig keeps
+const SUBSTEP = 1 / 120; // rods::kReferenceSubstep, the stiffnesses' substep, and SolverParams' max_substep, which rig keeps
 const MAX_DRAG = 0.99; // vrm.hpp kMaxDragForce
 
 /// The spring's VRM settings as vrm.cpp reads them (VRMC_springBone 1.0's defaults), means
@@ -263,8 +263,8 @@ function vrmSettings(json, rest) {
 function mapped(v) {
   const a = FPS * SUBSTEP * SUBSTEP * v.stiffness;
   const damping = -Math.log(1 - Math.min(Math.max(v.drag, 0), MAX_DRAG)) * FPS;
-  const decay = Math.exp(-damping * SUBSTEP);
-  return { stiffness: 0, rest_stiffness: a / (a + v.length), damping, gravity: v.gravity.map((g) => (FPS * g) / decay) };
+  // Gravity undivided: the solver damps before adding it, as VRM does (issue 39).
+  return { stiffness: 0, rest_stiffness: a / (a + v.length), damping, gravity: v.gravity.map((g) => FPS * g) };
 }
 
 /// Frames [frame][joint][xyz] from a per-frame lateral step (the motion's axis set, the
@@ -333,7 +333,9 @@ function threeSag(v) {
 
 function oursSag(m, v) {
   const k = m.rest_stiffness;
-  const o = scale(m.gravity, ((1 - k) * Math.exp(-m.damping * SUBSTEP) * SUBSTEP * SUBSTEP) / k);
+  // A particle held by k per SUBSTEP rests g h^2 (1 - k) / k away (solver.hpp; damping
+  // acts before gravity, so it does not enter).
+  const o = scale(m.gravity, ((1 - k) * SUBSTEP * SUBSTEP) / k);
   const P = [[0, 0, 0], scale(unit(add(scale(REST_DIR, v.length), o)), v.length)];
   for (let i = 2; i < v.joints; ++i) P.push(add(scale(REST_DIR, i * v.length), o));
   return P;
