@@ -249,9 +249,11 @@ typedef struct kodawari_solver_params {
     float max_substep;
     /// Projection iterations per substep, 1 .. 64. Default 4.
     uint32_t iterations;
-    /// Shape-matching stiffness in [0, 1] per substep. Default 0.5.
+    /// Shape-matching stiffness in [0, 1] per 1/120 s (other substeps take the same
+    /// compliance: rods::substep_stiffness). Default 0.5.
     float stiffness;
-    /// Attraction to the rest shape in [0, 1] per substep; holds the shape against gravity.
+    /// Attraction to the rest shape in [0, 1] per 1/120 s, converted like stiffness; holds
+    /// the shape against gravity.
     /// Default 0.1.
     float rest_stiffness;
     /// Velocity damping rate, 1/s, in [0, 1000]. Default 1.
