@@ -510,13 +510,16 @@ void main() {
             }
 
         }
-        // The last sweep: placed, pushed out, placed again (solver.cpp).
+        // The last sweep: placed and pushed out, twice (solver.cpp).
         [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
             if (i < n) {
                 KW_PLACE(i);
                 if (col_count > 0u) {
                     collide_all(p[i]);
                     KW_PLACE(i);
+                    collide_all(p[i]);
+                    KW_PLACE(i);
+                    collide_all(p[i]);
                 }
             }
         }

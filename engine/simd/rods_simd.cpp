@@ -437,7 +437,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
                 if (batch.colliders > 0) collide_all(p[i + 1]);
             }
         }
-        // The last sweep: placed, pushed out, placed again (solver.cpp).
+        // The last sweep: placed and pushed out, twice (solver.cpp).
         auto place_on_parent = [&](std::size_t i) HWY_ATTR {
             const V3 dd = sub(p[i + 1], p[i]);
             const V len = length(dd);
@@ -451,6 +451,9 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
             if (batch.colliders > 0) {
                 collide_all(p[i + 1]);
                 place_on_parent(i);
+                collide_all(p[i + 1]);
+                place_on_parent(i);
+                collide_all(p[i + 1]);
             }
         }
 
