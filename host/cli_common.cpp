@@ -139,26 +139,32 @@ void add_route_check_options(CLI::App& app, bool& strict, bool& fit) {
                "(default: off)");
 }
 
-std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit) {
+std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit, bool print) {
     // What the characters' motions could not use (gltf/motion.hpp): notes, never errors.
     for (const CharacterSpec& c : scene.characters) {
-        if (!c.rig) continue;
+        if (!c.rig || !print) continue;
         for (const std::string& w : c.rig->warnings) std::fprintf(stderr, "kodawari: warning: %s\n", w.c_str());
     }
     if (scene.flocks.empty()) return std::nullopt;
     if (fit) {
         auto changes = fit_routes(scene);
-        if (!changes) return report(changes.error());
-        for (const std::string& line : changes.value()) std::printf("kodawari: fit: %s\n", line.c_str());
+        if (!changes) return print ? report(changes.error()) : exit_code(changes.error());
+        for (const std::string& line : changes.value()) {
+            if (print) std::printf("kodawari: fit: %s\n", line.c_str());
+        }
         std::fflush(stdout);
     }
     auto warnings = check_routes(scene);
-    if (!warnings) return report(warnings.error());
+    if (!warnings) return print ? report(warnings.error()) : exit_code(warnings.error());
     const char* kind = strict ? "error" : "warning";
-    for (const RouteWarning& w : warnings.value()) std::fprintf(stderr, "kodawari: %s: %s\n", kind, w.message.c_str());
+    for (const RouteWarning& w : warnings.value()) {
+        if (print) std::fprintf(stderr, "kodawari: %s: %s\n", kind, w.message.c_str());
+    }
     if (strict && !warnings.value().empty()) {
-        std::fprintf(stderr, "kodawari: error: %zu route limit%s exceeded (--strict; --fit-routes fits turns and speed changes)\n",
-                     warnings.value().size(), warnings.value().size() == 1 ? "" : "s");
+        if (print) {
+            std::fprintf(stderr, "kodawari: error: %zu route limit%s exceeded (--strict; --fit-routes fits turns and speed changes)\n",
+                         warnings.value().size(), warnings.value().size() == 1 ? "" : "s");
+        }
         return kExitBadInput;
     }
     return std::nullopt;
@@ -170,9 +176,11 @@ bool validation_failed(std::uint32_t messages) {
     return true;
 }
 
+int exit_code(const Error& error) { return error.kind == Error::Kind::InvalidInput ? kExitBadInput : kExitFailure; }
+
 int report(const Error& error) {
     std::fprintf(stderr, "kodawari: error: %s\n", error.message.c_str());
-    return error.kind == Error::Kind::InvalidInput ? kExitBadInput : kExitFailure;
+    return exit_code(error);
 }
 
 bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) == 1; }
