@@ -58,6 +58,27 @@ PY
 "$bin" run "$work/level.json" --backend cpu-reference --strict --fit-routes --no-export >"$work/level.out" 2>"$work/level.err"
 check "--strict --fit-routes passes a route whose only fault was the speed" test $? -eq 0 -a ! -s "$work/level.err"
 
+# A user's bird (issue 37): `rig --bird` writes a scene its own checks pass, at the bird's
+# own cruise speed; its flock is held to the bird's derived limits under the bird's name,
+# and --fit-routes starts from that cruise speed, not a built-in type's.
+PYTHONDONTWRITEBYTECODE=1 python3 scripts/make_test_bird.py "$work/mybird.glb" >/dev/null
+"$bin" rig "$work/mybird.glb" --bird --out "$work/mybird.json" >"$work/rigbird.out" 2>&1
+check "rig --bird exits 0 and says how big a route it made" bash -c "test $? -eq 0 && grep -q 'route: a generated loop [0-9]* m across' '$work/rigbird.out'"
+"$bin" run "$work/mybird.json" --backend cpu-reference --frames 1 --no-export --strict >/dev/null 2>"$work/rigbird.err"
+check "rig --bird's scene passes --strict (no route warning)" test $? -eq 0 -a ! -s "$work/rigbird.err"
+# The same flock on the example's small route: warnings name the user's bird and its own
+# minimum radius, and the fit starts from its cruise speed (11.2 m/s).
+python3 - "$work/mybird.json" "$work/small.json" <<'PY'
+import json, sys
+scene = json.load(open(sys.argv[1]))
+scene["flocks"][0]["generated_route"]["extent"] = [45, 8, 45]
+json.dump(scene, open(sys.argv[2], "w"))
+PY
+"$bin" run "$work/small.json" --backend cpu-reference --frames 1 --no-export >/dev/null 2>"$work/small.err"
+check "a user's bird's warnings name it, not a built-in type" bash -c "grep -q \"below the mybird's minimum\" '$work/small.err' && ! grep -q pigeon '$work/small.err'"
+"$bin" run "$work/small.json" --backend cpu-reference --frames 1 --no-export --fit-routes >"$work/small-fit.out" 2>/dev/null
+check "--fit-routes starts from the user's bird's cruise speed" grep -q 'speed 11.2 -> [0-9.]* m/s so its turns and speed changes are within the mybird' "$work/small-fit.out"
+
 for scene in scenes/*.json; do
     grep -q '"flocks"' "$scene" || continue
     "$bin" run "$scene" --backend cpu-reference --frames 1 --no-export --strict >/dev/null 2>"$work/shipped.err"

@@ -72,6 +72,27 @@ struct Worst {
     double excess = 0.0;  // value / limit, > 1 when violated
 };
 
+// What a flock's birds can fly: its wing type's limits, or for a user's bird (`"model"`)
+// those derived from its wing (birds::derive_flight), under the bird's own name.
+struct FlockLimits {
+    std::string name;
+    double cruise_speed = 0.0;
+    double max_climb = 0.0;
+    double max_dive = 0.0;
+    double max_speed_change = 0.0;
+};
+
+FlockLimits flock_limits(const FlockSpec& flock) {
+    if (flock.model) {
+        const birds::DerivedFlight& f = flock.model->flight;
+        return {flock.model->name.empty() ? "bird of " + flock.model_file : flock.model->name, double{f.cruise_speed},
+                double{f.max_climb}, double{f.max_dive}, double{f.max_speed_change}};
+    }
+    const birds::WingTypeSpec& wing = birds::wing_type_spec(flock.wing_type);
+    return {std::string(wing.name), double{wing.cruise_speed}, double{wing.max_climb}, double{wing.max_dive},
+            double{wing.max_speed_change}};
+}
+
 }  // namespace
 
 std::vector<RouteWarning> check_routes(const Scene& scene, const birds::BirdWorld& world) {
@@ -81,8 +102,8 @@ std::vector<RouteWarning> check_routes(const Scene& scene, const birds::BirdWorl
     const double bank_deg = double{scene.flight.max_bank} * kRadToDeg;
     for (std::size_t f = 0; f < scene.flocks.size(); ++f) {
         const FlockSpec& flock = scene.flocks[f];
-        const birds::WingTypeSpec& wing = birds::wing_type_spec(flock.wing_type);
-        const std::string who = std::string(wing.name);
+        const FlockLimits wing = flock_limits(flock);
+        const std::string who = wing.name;
         const std::string prefix = scene.path + ": $.flocks[" + std::to_string(f) + "] \"" + flock.name + "\": ";
         std::vector<std::array<Worst, 4>> worst;
         for (const FlownRoute& r : flown[f]) {
@@ -101,12 +122,12 @@ std::vector<RouteWarning> check_routes(const Scene& scene, const birds::BirdWorl
                     consider(RouteLimit::TurnRadius, d.turn_acceleration / capacity, d.turn_u, d.turn_radius, minimum,
                              d.turn_speed);
                 }
-                consider(RouteLimit::Climb, d.climb / double{wing.max_climb}, d.climb_u, d.climb * kRadToDeg,
-                         double{wing.max_climb} * kRadToDeg, 0.0);
-                consider(RouteLimit::Dive, d.dive / double{wing.max_dive}, d.dive_u, d.dive * kRadToDeg,
-                         double{wing.max_dive} * kRadToDeg, 0.0);
-                consider(RouteLimit::SpeedChange, d.speed_change / double{wing.max_speed_change}, d.speed_change_u,
-                         d.speed_change, double{wing.max_speed_change}, d.speed_change_speed);
+                consider(RouteLimit::Climb, d.climb / wing.max_climb, d.climb_u, d.climb * kRadToDeg,
+                         wing.max_climb * kRadToDeg, 0.0);
+                consider(RouteLimit::Dive, d.dive / wing.max_dive, d.dive_u, d.dive * kRadToDeg, wing.max_dive * kRadToDeg,
+                         0.0);
+                consider(RouteLimit::SpeedChange, d.speed_change / wing.max_speed_change, d.speed_change_u, d.speed_change,
+                         wing.max_speed_change, d.speed_change_speed);
             }
         }
         const std::uint32_t variants = std::max(flock.formation.route_variants, 1u);
@@ -167,22 +188,22 @@ Result<std::vector<std::string>> fit_routes(Scene& scene) {
         bool changed = false;
         for (std::size_t f = 0; f < scene.flocks.size(); ++f) {
             FlockSpec& flock = scene.flocks[f];
-            const birds::WingTypeSpec& wing = birds::wing_type_spec(flock.wing_type);
+            const FlockLimits wing = flock_limits(flock);
             double excess = 0.0;
             for (const FlownRoute& r : flown[f]) {
                 for (const birds::SegmentDemand& d : birds::route_demands(world, r.route, static_cast<float>(r.speed))) {
                     if (capacity > 0.0) excess = std::max(excess, d.turn_acceleration / capacity);
-                    excess = std::max(excess, d.speed_change / double{wing.max_speed_change});
+                    excess = std::max(excess, d.speed_change / wing.max_speed_change);
                 }
             }
             if (!(excess > 1.0)) continue;
             const double factor = std::sqrt(excess) * (1.0 + kMargin);
             const std::string who = scene.path + ": $.flocks[" + std::to_string(f) + "] \"" + flock.name + "\": ";
             if (flock.timing == birds::RouteTiming::ArcLength) {
-                const double before = flock.speed.value_or(wing.cruise_speed);
+                const double before = flock.speed ? double{*flock.speed} : wing.cruise_speed;
                 flock.speed = static_cast<float>(round_3_digits(before / factor, false));
                 changes.push_back(who + "speed " + number(before) + " -> " + number(double{*flock.speed}) +
-                                  " m/s so its turns and speed changes are within the " + std::string(wing.name) + "'s limits");
+                                  " m/s so its turns and speed changes are within the " + wing.name + "'s limits");
             } else {
                 if (!flock.route) {
                     // The generated leader, as the explicit route it is: the variants are
@@ -202,7 +223,7 @@ Result<std::vector<std::string>> fit_routes(Scene& scene) {
                 flock.route->segment_duration = static_cast<float>(round_3_digits(before * factor, true));
                 changes.push_back(who + "segment_duration " + number(before) + " -> " +
                                   number(double{flock.route->segment_duration}) +
-                                  " s so its turns and speed changes are within the " + std::string(wing.name) + "'s limits");
+                                  " s so its turns and speed changes are within the " + wing.name + "'s limits");
             }
             changed = true;
         }
