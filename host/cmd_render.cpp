@@ -5,14 +5,19 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cctype>
 #include <charconv>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
+#include <cerrno>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <unistd.h>
 
 #include "commands.hpp"
 #include "kodawari/render/apng.hpp"
@@ -98,7 +103,7 @@ public:
     }
 
     // Creates `dir` and its missing parents, remembering which were missing.
-    Result<void> create_directory(const std::string& dir) {
+    Result<void> create_directory(const std::string& dir, const std::string& option) {
         std::vector<std::filesystem::path> missing;
         std::error_code ec;
         for (std::filesystem::path p = std::filesystem::path(dir).lexically_normal(); !p.empty() && p != p.parent_path();
@@ -112,7 +117,7 @@ public:
             if (std::filesystem::is_directory(*p)) created_.push_back(p->string());
         }
         if (ec || !std::filesystem::is_directory(dir)) {
-            return make_error(Error::Kind::Io, "--out " + dir + ": cannot create the directory" +
+            return make_error(Error::Kind::Io, option + " " + dir + ": cannot create the directory" +
                                                    (ec ? " (" + ec.message() + ")" : std::string(" (a file is in the way)")));
         }
         return {};
@@ -172,6 +177,16 @@ int cmd_render(const RenderOptions& o) {
     const auto animation_size =
         o.animation_size ? parse_image_size("--animation-size", *o.animation_size, width, height) : std::pair{width, height};
     const float zoom = parse_zoom(o.zoom);
+    // What each file will be, checked before a frame is drawn: an animated PNG is written
+    // under a .png (or .apng) name only, since a viewer goes by the name.
+    const auto ends_with = [](const std::string& text, const std::string& tail) {
+        std::string lowered = text;
+        std::transform(lowered.begin(), lowered.end(), lowered.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
+        return lowered.size() >= tail.size() && lowered.compare(lowered.size() - tail.size(), tail.size(), tail) == 0;
+    };
+    if (animation_path && !ends_with(*animation_path, ".png") && !ends_with(*animation_path, ".apng")) {
+        throw UsageError{"--animation " + *animation_path + ": writes an animated PNG (APNG): name it .png or .apng"};
+    }
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
     const std::uint32_t scene_frames = loaded.value().frame_count();
@@ -201,7 +216,18 @@ int cmd_render(const RenderOptions& o) {
     // The directory only now that the renderer and the simulation are open: a run that
     // cannot start (no Vulkan device, a bad scene) creates nothing.
     RenderOutputs outputs;
-    if (auto made_dir = outputs.create_directory(*out_dir); !made_dir) return report(made_dir.error());
+    if (auto made_dir = outputs.create_directory(*out_dir, "--out"); !made_dir) return report(made_dir.error());
+    // The contact sheet's and the animation's folders too, and that they take files: found
+    // now, not after every frame is drawn.
+    for (const auto& [option, path] : {std::pair{"--contact-sheet", sheet_path}, std::pair{"--animation", animation_path}}) {
+        if (!path) continue;
+        const std::filesystem::path folder = std::filesystem::absolute(*path).parent_path();
+        if (auto folder_made = outputs.create_directory(folder.string(), option); !folder_made) return report(folder_made.error());
+        if (::access(folder.c_str(), W_OK) != 0) {
+            return report(make_error(Error::Kind::Io, std::string(option) + " " + *path + ": cannot write into " +
+                                                          folder.string() + " (" + std::strerror(errno) + "); nothing drawn"));
+        }
+    }
     // Frames go into the animation as they are drawn; only its frame count is needed now.
     std::optional<render::ApngWriter> animation;
     if (animation_path) {
