@@ -111,6 +111,10 @@ done
 if [[ -x "$prefix/bin/kodawari" ]]; then
   version="$("$prefix/bin/kodawari" --version)"
   echo "package: installed command: $version"
+  # Its help points at the reference page where the install put it (issue 37: it named
+  # docs/command-line.md, which an install has only under share/doc).
+  "$prefix/bin/kodawari" --help | tr -d '\n' | grep -qF "$prefix/share/doc/kodawari/docs/command-line.md" \
+    || fail "the installed command's --help does not name $prefix/share/doc/kodawari/docs/command-line.md"
 fi
 echo "package: installed into a temporary prefix: $(find "$prefix" -type f | wc -l) files," \
   "$(find "$prefix/include" -type f | wc -l) headers, libraries in $libdir"
