@@ -71,7 +71,7 @@ row sketch "output folder cannot be written" 1 "a-file/sub" -- \
   sketch scenes/ahoge.json --chain girl/ahoge --stroke "$work/stroke.json" --out "$unwritable/s.json"
 row render "missing scene file" 2 "nosuch.json" -- render "$work/nosuch.json" --out "$work/frames" --frames 1
 row render "--animation not named .png" 2 "a.gif" -- render scenes/ahoge.json --out "$work/frames" --frames 1 --animation "$work/a.gif"
-row render "--contact-sheet folder missing" 1 "a-file/sub" -- \
+row render "--contact-sheet folder cannot be made" 1 "a-file/sub" -- \
   render scenes/ahoge.json --out "$work/frames" --frames 1 --contact-sheet "$unwritable/sheet.png"
 row view "missing scene file" 2 "nosuch.json" -- view "$work/nosuch.json"
 row info "an instruction set that is no name" 2 "" -- info --isa pentium
