@@ -33,9 +33,16 @@ mkdir -p docs/images
 "$bin" render scenes/birds-closeup.json --frames 60 --size 640x360 --out "$work/birds"
 cp "$work/birds/birds-closeup_00060.png" docs/images/birds-closeup.png
 # Pigeons crouching and taking off one after another from a roof line, and 30 s later
-# landed on the other, wings folded (scenes/perch.json, docs/flight-modes.md).
+# landed on the other, wings folded (scenes/perch.json, docs/flight-modes.md). The roofs
+# are drawn under the perched birds (render::add_perches).
 "$bin" render scenes/perch.json --frames 150:1951:1800 --size 1280x720 --zoom 1.8 --out "$work/perch" \
     --contact-sheet docs/images/perch.png --columns 2
+# perch.json's hummingbirds hovering over their flower bed (a roof garden) 22.7 s in, from
+# a camera of their own (--camera: the scene camera never comes within 20 m of them, where
+# they are 8-pixel specks; the simulation keeps the scene camera).
+"$bin" render scenes/perch.json --frames 1360 --size 960x540 --zoom 1.6 --camera 13.6,6.3,44.3,11.4,6.45,46.8 \
+    --out "$work/hummingbirds"
+cp "$work/hummingbirds/perch_01360.png" docs/images/hummingbirds.png
 # The flock 3.3 s in, and the crowd 2 s in.
 "$bin" render scenes/flock.json --frames 200 --size 640x360 --zoom 2.2 --out "$work/flock"
 cp "$work/flock/flock_00200.png" docs/images/flock.png
