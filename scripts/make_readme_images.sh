@@ -38,7 +38,7 @@ cp "$work/birds/birds-closeup_00060.png" docs/images/birds-closeup.png
 "$bin" render scenes/perch.json --frames 150:1951:1800 --size 1280x720 --zoom 1.8 --out "$work/perch" \
     --contact-sheet docs/images/perch.png --columns 2
 # perch.json's hummingbirds hovering over their flower bed (a roof garden) 22.7 s in, from
-# a camera of their own (--camera: the scene camera never comes within 20 m of them, where
+# a camera of their own (--camera: the scene camera never comes within 14.5 m of them, where
 # they are 8-pixel specks; the simulation keeps the scene camera).
 "$bin" render scenes/perch.json --frames 1360 --size 960x540 --zoom 1.6 --camera 13.6,6.3,44.3,11.4,6.45,46.8 \
     --out "$work/hummingbirds"
