@@ -48,6 +48,12 @@ cp "$work/hummingbirds/perch_01360.png" docs/images/hummingbirds.png
 cp "$work/flock/flock_00200.png" docs/images/flock.png
 "$bin" render scenes/crowd.json --frames 120 --size 640x360 --out "$work/crowd"
 cp "$work/crowd/crowd_00120.png" docs/images/crowd.png
+# One of the crowd (critter#431, near the middle) running in and stopping dead at frame
+# 66 (its own clock's 3.6 s), seen from behind its right shoulder with --camera: its ears
+# overshoot forward at the stop and swing back (frames 57 to 72, every 3rd; at the scene
+# camera, 38 m out, they are a few pixels).
+"$bin" render scenes/crowd.json --frames 57:75:3 --size 1440x810 --zoom 2.2 --camera 1.0,2.3,-1.35,-0.43,1.72,-0.32 \
+    --out "$work/crowd-stop" --contact-sheet docs/images/crowd-stop.png --columns 3
 # The rigged crowd (64 of scenes/characters/chibi.glb, skinned in the vertex shader) 2 s in.
 "$bin" render scenes/crowd-gltf.json --frames 120 --size 640x360 --out "$work/crowd-gltf"
 cp "$work/crowd-gltf/crowd-gltf_00120.png" docs/images/crowd-gltf.png
