@@ -6,6 +6,8 @@
 
 #include <gtest/gtest.h>
 
+#include <map>
+
 #include "render_support.hpp"
 
 namespace kodawari {
@@ -254,6 +256,67 @@ TEST(Pictures, HummingbirdsHoverOverTheFlowerBed) {
                 double(bed.lo.x), double(bed.hi.x), double(bed.lo.y), double(bed.hi.y), double(bed.height), inside, samples);
     EXPECT_GE(samples, 5 * 30);
     EXPECT_EQ(inside, samples);
+}
+
+// crowd-stop.png: critter#431 (near the field's middle) stops dead at frame 66 (its own
+// clock's 3.6 s); its ears' tips run ahead of their rest shape at the stop, along the way
+// it was running, and are back within a few frames: 2 cm ahead at least at the stop
+// (measured 3.9 cm), and at least 3 times what they are off while running (frame 60) and
+// once settled (frame 72), measured 0.4 and 0.3 cm. The picture's frames depend on it.
+TEST(Pictures, CrowdStopsWithTheEarsOvershootingForward) {
+    auto scene = load_scene(scene_path("crowd.json"));
+    ASSERT_TRUE(scene.ok());
+    auto whole = build_rod_scene(scene.value());
+    ASSERT_TRUE(whole.ok());
+    constexpr std::uint32_t kCharacter = 431, kStop = 66;
+    ASSERT_EQ(whole.value().character_names[kCharacter], "critter#431");
+    // The one character alone: its frames are the whole scene's bit for bit (RodScene::slice).
+    const RodScene one = whole.value().slice(kCharacter, kCharacter + 1);
+    auto backend = make_rod_backend(BackendKind::Cpu, {});
+    ASSERT_TRUE(backend.ok());
+    std::vector<std::uint32_t> ears;
+    for (std::uint32_t c = 0; c < one.world.chains.size(); ++c) {
+        const std::string& name = one.chain_names[c];
+        if (name.ends_with("/ear_l") || name.ends_with("/ear_r")) ears.push_back(c);
+    }
+    ASSERT_EQ(ears.size(), 2u);
+    // Per frame of interest: the ears' largest tip offset from rest along the running
+    // direction (the head's horizontal motion over the 3 frames before the stop).
+    std::map<std::uint32_t, float> ahead;
+    std::vector<glm::vec3> head;
+    const auto heading = [&](std::uint32_t f) {
+        const glm::vec3 d = head[f] - head[f - 3];
+        return glm::normalize(glm::vec3(d.x, 0.0f, d.z));
+    };
+    glm::vec3 stop_heading{0.0f};
+    for (std::uint32_t f = 0; f <= 72; ++f) {
+        const rods::RodFrame input = one.frame(f);
+        head.push_back(input.reference[0].position);
+        ASSERT_TRUE((f == 0 ? backend.value()->load(one.world, input) : backend.value()->step(input)).ok());
+        if (f != 60 && f != kStop && f != 72) continue;
+        ChainSnapshot snapshot;
+        ASSERT_TRUE(backend.value()->read(snapshot).ok());
+        if (f == 60 || f == kStop) {
+            ASSERT_GT(glm::length(head[f] - head[f - 3]), 0.1f) << "frame " << f << ": running (2.2 m/s) until the stop";
+        }
+        // Running, that frame's heading; at the stop and after, the heading she stopped in.
+        if (f == kStop) stop_heading = heading(f);
+        const glm::vec3 run = f == 60 ? heading(f) : stop_heading;
+        // At the stop, how far the tips are ahead (signed); elsewhere how far off either way.
+        float most = f == kStop ? -1.0f : 0.0f;
+        for (const std::uint32_t c : ears) {
+            const std::uint32_t tip = one.world.chains[c].joint_begin + one.world.templ(one.world.chains[c]).chain.joint_count - 1;
+            const float along = glm::dot(snapshot.positions[tip] - snapshot.rest[tip], run);
+            most = std::max(most, f == kStop ? along : std::abs(along));
+        }
+        ahead[f] = most;
+    }
+    std::printf("[ pictures ] critter#431's ear tips off their rest along the run: %.1f cm running (frame 60), %.1f cm at the "
+                "stop (frame 66), %.1f cm at frame 72\n",
+                double(100.0f * ahead[60]), double(100.0f * ahead[kStop]), double(100.0f * ahead[72]));
+    EXPECT_GT(ahead[kStop], 0.02f);
+    EXPECT_GT(ahead[kStop], 3.0f * ahead[60]);
+    EXPECT_GT(ahead[kStop], 3.0f * ahead[72]);
 }
 
 }  // namespace
