@@ -147,6 +147,38 @@ render::CameraView zoomed(render::CameraView camera, float zoom) {
     return camera;
 }
 
+// --camera EX,EY,EZ,TX,TY,TZ: draw from this eye looking at this target (the scene's
+// field of view) instead of the scene camera. Only the picture changes: the simulation
+// keeps the scene's camera, so view-dependent chains keep the shapes the scene's camera
+// gives them (a close-up of something the scene camera passes at a distance, such as a
+// flock).
+std::optional<std::pair<glm::vec3, glm::vec3>> parse_camera(const std::optional<std::string>& text) {
+    if (!text) return std::nullopt;
+    float v[6] = {};
+    char extra = 0;
+    if (std::sscanf(text->c_str(), "%f,%f,%f,%f,%f,%f%c", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &extra) != 6 ||
+        !std::all_of(std::begin(v), std::end(v), [](float x) { return std::isfinite(x); })) {
+        throw UsageError{"--camera: expected EYE_X,EYE_Y,EYE_Z,TARGET_X,TARGET_Y,TARGET_Z, got \"" + *text + "\""};
+    }
+    const glm::vec3 eye(v[0], v[1], v[2]), target(v[3], v[4], v[5]);
+    if (!(glm::length(target - eye) > 1e-6f)) throw UsageError{"--camera: the target equals the eye"};
+    return std::pair{eye, target};
+}
+
+// The scene camera at `frame`, or the --camera eye and target with the scene's field of
+// view and near and far planes for that distance (render::scene_camera's rule).
+render::CameraView drawing_camera(const Scene& scene, std::uint32_t frame, const std::optional<std::pair<glm::vec3, glm::vec3>>& camera) {
+    render::CameraView view = render::scene_camera(scene, frame);
+    if (!camera) return view;
+    view.position = camera->first;
+    view.target = camera->second;
+    view.orthographic = false;
+    const float distance = glm::length(camera->second - camera->first);
+    view.near = std::clamp(0.01f * distance, 0.01f, 1.0f);
+    view.far = 1000.0f * view.near;
+    return view;
+}
+
 // The options as given; add_render() defines them.
 struct RenderOptions {
     std::optional<std::string> scene;
@@ -159,6 +191,7 @@ struct RenderOptions {
     std::optional<std::string> animation;
     std::optional<std::string> animation_size;
     std::optional<std::string> zoom;
+    std::optional<std::string> camera;
     bool joints = false;
 };
 
@@ -187,6 +220,7 @@ int cmd_render(const RenderOptions& o) {
     if (animation_path && !ends_with(*animation_path, ".png") && !ends_with(*animation_path, ".apng")) {
         throw UsageError{"--animation " + *animation_path + ": writes an animated PNG (APNG): name it .png or .apng"};
     }
+    const auto camera = parse_camera(o.camera);
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
     const std::uint32_t scene_frames = loaded.value().frame_count();
@@ -250,7 +284,7 @@ int cmd_render(const RenderOptions& o) {
         if (!drawn) continue;
         if (auto s = sim.draw_on(r); !s) return report(s.error());
         const auto start = std::chrono::steady_clock::now();
-        render::DrawList list(zoomed(render::scene_camera(scene, f), zoom), width, height);
+        render::DrawList list(zoomed(drawing_camera(scene, f, camera), zoom), width, height);
         // The grid covers where the content is at the first drawn frame and then stays put,
         // so that it does not jump from frame to frame.
         if (grid_points.empty()) {
@@ -260,6 +294,7 @@ int cmd_render(const RenderOptions& o) {
         }
         render::add_ground_grid(list, grid_points);
         if (sim.rod_scene()) render::add_characters(list, *sim.rod_scene(), f);
+        if (!sim.bird_world().birds.empty()) render::add_perches(list, sim.bird_world());
         auto image = r.render(list);
         if (!image) return report(image.error());
         render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -314,6 +349,9 @@ Command add_render(CLI::App& app) {
     add_text(*c, "--zoom", o->zoom, "F",
              "narrow the scene camera's field of view F times about its target, in [0.1, 100]; the camera "
              "and so the view-dependent shapes stay the scene's (default: 1)");
+    add_text(*c, "--camera", o->camera, "EX,EY,EZ,TX,TY,TZ",
+             "draw from this eye looking at this target, in metres (the scene's field of view); the simulation "
+             "keeps the scene camera (default: the scene camera)");
     add_text(*c, "--animation", o->animation, "FILE.png",
              "also the frames as one looping animated PNG at the scene's fps / STEP (default: none)");
     add_text(*c, "--animation-size", o->animation_size, "WxH",

@@ -205,6 +205,7 @@ int cmd_view(const ViewOptions& o) {
         }
         render::add_ground_grid(list, grid_points);
         if (s.rod_scene()) render::add_characters(list, *s.rod_scene(), v.current());
+        if (!s.bird_world().birds.empty()) render::add_perches(list, s.bird_world());
         if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
         if (v.sketch_mode && v.picked && s.rod_scene()) {
             // The picked chain's joints on the host while sketching (it may have been stepped).

@@ -337,6 +337,16 @@ check "render --zoom 2 draws a different picture of the frame" bash -c "test -s 
 "$bin" render scenes/ahoge.json --frames 0 --out "$work/zoom3" --zoom 0 >"$work/zoom-bad.out" 2>&1
 check "render --zoom 0 exits 2 naming the option and the range" bash -c "test $? -eq 2 && grep -q -- '--zoom: expected a number in \\[0.1, 100\\]' '$work/zoom-bad.out'"
 
+# --camera: another eye and target for the picture (the simulation keeps the scene's
+# camera); a different picture of the same frame, and a bad value or an eye on the target
+# is a usage error that writes nothing.
+"$bin" render scenes/ahoge.json --frames 0 --size 64x40 --out "$work/camera1" --camera 0.8,1.6,0.8,0,1.57,0 >/dev/null 2>&1
+check "render --camera draws a different picture of the frame" bash -c "test -s '$work/camera1/ahoge_00000.png' && ! cmp -s '$work/zoom1/ahoge_00000.png' '$work/camera1/ahoge_00000.png'"
+"$bin" render scenes/ahoge.json --frames 0 --out "$work/camera2" --camera 1,2,3 >"$work/camera-bad.out" 2>&1
+check "render --camera with 3 numbers exits 2 naming the option" bash -c "test $? -eq 2 && grep -q -- '--camera: expected EYE_X' '$work/camera-bad.out' && test ! -e '$work/camera2'"
+"$bin" render scenes/ahoge.json --frames 0 --out "$work/camera3" --camera 1,2,3,1,2,3 >"$work/camera-bad2.out" 2>&1
+check "render --camera with the eye on the target exits 2" bash -c "test $? -eq 2 && grep -q 'the target equals the eye' '$work/camera-bad2.out'"
+
 # --joints: dots at the strands' joints on request only (tests/render checks where).
 # (Dots are drawn only where the chain is long enough on screen for them to stay apart.)
 "$bin" render scenes/ahoge.json --frames 0 --size 320x180 --zoom 2 --out "$work/nojoints" >/dev/null 2>&1
