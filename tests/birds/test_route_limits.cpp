@@ -5,6 +5,7 @@
 #include <array>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "kodawari/birds/route_limits.hpp"
 #include "kodawari/route_check.hpp"
@@ -221,13 +222,18 @@ TEST(RouteLimits, GeneratedRoutesKeepToTheBirdWhereTheyCan) {
 // at the junction (a corner: the heading turns 30 degrees in one frame); and an S of two
 // 20 m quarter circles that meet with one direction but opposite curvature.
 const std::string kCorner = "[[0,20,0],[0,20,20],[0,20,40],[0,20,60],[10,20,77.3205],[20,20,94.641],[30,20,111.962]]";
+std::string all_messages(const std::vector<RouteWarning>& warnings) {
+    std::string text;
+    for (const RouteWarning& w : warnings) text += w.message + "\n";
+    return text;
+}
 const std::string kSBend = "[[0,20,0],[0,20,11.05],[-8.95,20,20],[-20,20,20],[-31.05,20,20],[-40,20,28.95],[-40,20,40]]";
 
 TEST(RouteLimits, AJunctionCornerWarns) {
     const Scene scene = flock_scene(kCorner);
     auto warnings = check_routes(scene);
     ASSERT_TRUE(warnings.ok());
-    ASSERT_EQ(warnings.value().size(), 1u) << warnings.value().front().message;  // straight either side: no bank jump
+    ASSERT_EQ(warnings.value().size(), 1u) << all_messages(warnings.value());  // straight either side: no bank jump
     const RouteWarning& w = warnings.value()[0];
     EXPECT_EQ(w.limit, RouteLimit::Corner);
     EXPECT_EQ(w.segment, 1u);
@@ -266,7 +272,7 @@ TEST(RouteLimits, ABankJumpWarnsUnlessTheRollFilterSpreadsIt) {
     const Scene scene = flock_scene(kSBend);
     auto warnings = check_routes(scene);
     ASSERT_TRUE(warnings.ok());
-    ASSERT_EQ(warnings.value().size(), 1u) << warnings.value().front().message;
+    ASSERT_EQ(warnings.value().size(), 1u) << all_messages(warnings.value());
     const RouteWarning& w = warnings.value()[0];
     EXPECT_EQ(w.limit, RouteLimit::BankJump);
     EXPECT_EQ(w.segment, 1u);
