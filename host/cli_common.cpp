@@ -133,10 +133,11 @@ Result<std::unique_ptr<Simulation>> open_simulation(const std::string& path, con
 
 void add_route_check_options(CLI::App& app, bool& strict, bool& fit) {
     add_switch(app, "--strict", strict,
-               "a route beyond its bird's limits (turn, climb, dive, speed change) is an error, exit 2 (default: off, a warning)");
+               "a route beyond its bird's limits (turn, climb, dive, speed change, corner or bank jump at a junction) is an error, exit 2 "
+               "(default: off, a warning)");
     add_switch(app, "--fit-routes", fit,
-               "lower a flock's speed (parametric timing: lengthen its segments) until its turns and speed changes pass "
-               "(default: off)");
+               "smooth the corners of explicit routes, then lower a flock's speed (parametric timing: lengthen its segments) "
+               "until its turns, bank jumps and speed changes pass (default: off)");
 }
 
 std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit, bool print) {
@@ -162,7 +163,9 @@ std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit, bool 
     }
     if (strict && !warnings.value().empty()) {
         if (print) {
-            std::fprintf(stderr, "kodawari: error: %zu route limit%s exceeded (--strict; --fit-routes fits turns and speed changes)\n",
+            std::fprintf(stderr,
+                         "kodawari: error: %zu route limit%s exceeded (--strict; --fit-routes fits corners, turns, bank jumps and "
+                         "speed changes)\n",
                          warnings.value().size(), warnings.value().size() == 1 ? "" : "s");
         }
         return kExitBadInput;
