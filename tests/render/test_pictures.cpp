@@ -225,9 +225,11 @@ TEST(Pictures, PerchedBirdsSitOnTheDrawnRoofs) {
 
 // perch.json's hummingbirds hover over the drawn flower bed: every hummingbird, sampled
 // once a second over the whole run, is inside the bed's extent and above its blossoms
-// (0.5 m at most over the soil), by less than 3.5 m over the soil (the route climbs and
+// (0.5 m at most over the soil), by less than 4 m over the soil (the route climbs and
 // sinks 1.5 m round its loop, the birds are spread 0.5 m in height about it, and the
-// soil is kFlowerGap under the lowest of them).
+// soil is kFlowerGap under the lowest of its control points, one of which, the loop's
+// closing handle [6, 5.5, 40] made collinear to remove its corner (issue 39), lies about
+// 0.5 m below the curve itself; measured: 3.61 m at the most).
 TEST(Pictures, HummingbirdsHoverOverTheFlowerBed) {
     auto scene = load_scene(scene_path("perch.json"));
     ASSERT_TRUE(scene.ok());
@@ -249,7 +251,7 @@ TEST(Pictures, HummingbirdsHoverOverTheFlowerBed) {
             const glm::vec2 p(poses[b].position.x, poses[b].position.z);
             const float above = poses[b].position.y - bed.height;
             ++samples;
-            inside += p.x >= bed.lo.x && p.x <= bed.hi.x && p.y >= bed.lo.y && p.y <= bed.hi.y && above > 0.5f && above < 3.5f;
+            inside += p.x >= bed.lo.x && p.x <= bed.hi.x && p.y >= bed.lo.y && p.y <= bed.hi.y && above > 0.5f && above < 4.0f;
         }
     }
     std::printf("[ pictures ] hummingbirds over the bed (x %.1f..%.1f, z %.1f..%.1f, soil at %.2f m): %d of %d samples\n",
