@@ -210,15 +210,13 @@ int cmd_render(const RenderOptions& o) {
     const auto animation_size =
         o.animation_size ? parse_image_size("--animation-size", *o.animation_size, width, height) : std::pair{width, height};
     const float zoom = parse_zoom(o.zoom);
-    // What each file will be, checked before a frame is drawn: an animated PNG is written
-    // under a .png (or .apng) name only, since a viewer goes by the name.
-    const auto ends_with = [](const std::string& text, const std::string& tail) {
-        std::string lowered = text;
-        std::transform(lowered.begin(), lowered.end(), lowered.begin(), [](unsigned char c) { return static_cast<char>(std::tolower(c)); });
-        return lowered.size() >= tail.size() && lowered.compare(lowered.size() - tail.size(), tail.size(), tail) == 0;
-    };
-    if (animation_path && !ends_with(*animation_path, ".png") && !ends_with(*animation_path, ".apng")) {
-        throw UsageError{"--animation " + *animation_path + ": writes an animated PNG (APNG): name it .png or .apng"};
+    // An animated PNG is written under a .png (or .apng) name only: a viewer goes by the name.
+    if (animation_path) {
+        std::string extension = std::filesystem::path(*animation_path).extension().string();
+        for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        if (extension != ".png" && extension != ".apng") {
+            throw UsageError{"--animation " + *animation_path + ": writes an animated PNG (APNG): name it .png or .apng"};
+        }
     }
     const auto camera = parse_camera(o.camera);
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
@@ -275,6 +273,8 @@ int cmd_render(const RenderOptions& o) {
     const std::uint32_t cell_width = std::max(1u, width / columns), cell_height = std::max(1u, height / columns);
     std::vector<render::Image> cells;
     std::vector<glm::vec3> grid_points;
+    // Where the birds perch: a pass over every bird, found with the grid, once.
+    render::Perches perches;
     double render_seconds = 0.0;
     const bool show_progress = stderr_is_terminal() && range.end > 100;
     for (std::uint32_t f = 0; f < range.end; ++f) {
@@ -291,10 +291,11 @@ int cmd_render(const RenderOptions& o) {
             grid_points = render::content_points(sim.rod_scene(), sim.rod_scene() ? &sim.chain_input() : nullptr,
                                                  sim.bird_world().birds.empty() ? nullptr : &sim.bird_world());
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
+            if (!sim.bird_world().birds.empty()) perches = render::perches_of(sim.bird_world());
         }
         render::add_ground_grid(list, grid_points);
         if (sim.rod_scene()) render::add_characters(list, *sim.rod_scene(), f);
-        if (!sim.bird_world().birds.empty()) render::add_perches(list, sim.bird_world());
+        render::add_perches(list, perches);
         auto image = r.render(list);
         if (!image) return report(image.error());
         render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

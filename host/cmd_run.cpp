@@ -153,8 +153,8 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
     // Rank 0 writes, so it makes the outputs' folders as a single process does; when it
     // cannot, its sink fails, and bake_distributed stops every rank with that error.
     if (root) {
-        for (const auto& path : {out, trace}) {
-            if (path) (void)make_parent_folder(*path, "--out");
+        for (const auto& [path, option] : {std::pair{out, "--out"}, std::pair{trace, "--trace"}}) {
+            if (path) (void)make_parent_folder(*path, option);
         }
     }
     auto written = bake_distributed(comm, scene_path, options);

@@ -299,8 +299,7 @@ Perches perches_of(const birds::BirdWorld& world) {
     return out;
 }
 
-void add_perches(DrawList& list, const birds::BirdWorld& world) {
-    const Perches perches = perches_of(world);
+void add_perches(DrawList& list, const Perches& perches) {
     const glm::vec3 up(0.0f, 1.0f, 0.0f);
     for (const Roof& roof : perches.roofs) {
         const glm::vec3 w = roof.across;

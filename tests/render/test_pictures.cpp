@@ -180,7 +180,7 @@ TEST(Pictures, PerchedBirdsSitOnTheDrawnRoofs) {
         ASSERT_TRUE(renderer->set_birds(&run.world).ok());
         ASSERT_TRUE(renderer->birds_from(run.poses).ok());
         render::DrawList list(view, kW, kH);
-        render::add_perches(list, run.world);
+        render::add_perches(list, perches);
         auto image = renderer->render(list);
         ASSERT_TRUE(image.ok()) << image.error().message;
         const Pinhole camera(view.position, view.target, view.fov_deg, kW, kH);

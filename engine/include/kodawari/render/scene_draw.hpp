@@ -144,8 +144,9 @@ inline constexpr Rgba8 kSoilColor{112, 82, 56};
 
 /// The perches drawn: each roof a gable roof (flat top, slopes of 35 degrees) on a house
 /// whose walls go down to the ground; each bed a patch of soil with flowers on it, on a
-/// flat-roofed building as tall as the bed is high.
-KODAWARI_API void add_perches(DrawList& list, const birds::BirdWorld& birds);
+/// flat-roofed building as tall as the bed is high. `perches` is perches_of() of the
+/// scene's birds, which does not change from frame to frame: a caller finds it once.
+KODAWARI_API void add_perches(DrawList& list, const Perches& perches);
 
 /// Where the content is, for add_ground_grid, from the scene alone (no simulation state,
 /// so that nothing needs reading back): character instances' placements, the chain roots
