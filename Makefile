@@ -24,7 +24,8 @@ FUZZ_TARGETS := fuzz_scene fuzz_gltf fuzz_stroke fuzz_scene_edit fuzz_capi
 # runs it; ten minutes under ASan for steps the shorter tests already cover), and the
 # crowd of 200 VRM avatars on every backend (the release lane runs it; 90 s a backend under
 # ASan for the code ColliderKindsGroupsAndCentersMatchTheReference and the Avatars tests
-# run there on a few characters).
+# run there on a few characters), and the README tour (`readme_tour`: the release lane runs
+# it; its commands' code is what cli, cli_exit_codes and the render tests run under ASan).
 ASAN_ENV := ASAN_OPTIONS=detect_leaks=1 LD_PRELOAD=$(CURDIR)/build/asan/tests/libkodawari_asan_keep_loaded.so
 
 .PHONY: run test build setup configure clean bench asan fuzz
@@ -47,7 +48,7 @@ test: build
 asan: setup
 	@cmake --preset asan >/dev/null
 	@cmake --build build/asan -j $(JOBS)
-	@$(ASAN_ENV) ctest --preset asan -j $(JOBS) --timeout 900 -E '^(package|export_identity|viewer_soak)$$|/Soak\.|AvatarCrowdOf200'
+	@$(ASAN_ENV) ctest --preset asan -j $(JOBS) --timeout 900 -E '^(package|export_identity|viewer_soak|readme_tour)$$|/Soak\.|AvatarCrowdOf200'
 
 fuzz: setup
 	@cmake --preset asan >/dev/null

@@ -5,6 +5,7 @@
 #   P/lib/cmake/kodawari/kodawariConfigVersion.cmake  which requested versions this one satisfies
 #   P/lib/cmake/kodawari/kodawariTargets*.cmake       the export set kodawariTargets
 #   P/lib/pkgconfig/kodawari.pc                       pkg-config --cflags --libs kodawari
+#   P/lib/pkgconfig/kodawari-c.pc                     the C API: pkg-config --cflags --libs kodawari-c
 #   P/share/doc/kodawari/                             README.md, CHANGELOG.md, docs/ (the reference)
 #
 # tests/package/ installs a build into a temporary prefix and builds programs against it.
@@ -71,7 +72,14 @@ else()
   endforeach()
 endif()
 configure_file(${CMAKE_CURRENT_LIST_DIR}/kodawari.pc.in ${PROJECT_BINARY_DIR}/package/kodawari.pc @ONLY)
-install(FILES ${PROJECT_BINARY_DIR}/package/kodawari.pc DESTINATION ${pkgconfig_dir})
+# The C API has a file of its own: libkodawari.so is always shared and carries its
+# dependencies, so `pkg-config --cflags --libs kodawari-c` is all a C program needs to
+# build. To run, the loader must find the library: a system prefix is on its path, any
+# other needs -Wl,-rpath,$(pkg-config --variable=libdir kodawari-c) or LD_LIBRARY_PATH
+# (docs/install.md, "The C API").
+configure_file(${CMAKE_CURRENT_LIST_DIR}/kodawari-c.pc.in ${PROJECT_BINARY_DIR}/package/kodawari-c.pc @ONLY)
+install(FILES ${PROJECT_BINARY_DIR}/package/kodawari.pc ${PROJECT_BINARY_DIR}/package/kodawari-c.pc
+  DESTINATION ${pkgconfig_dir})
 
 install(FILES ${PROJECT_SOURCE_DIR}/README.md ${PROJECT_SOURCE_DIR}/CHANGELOG.md
   DESTINATION ${CMAKE_INSTALL_DOCDIR})

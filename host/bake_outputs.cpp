@@ -97,6 +97,18 @@ std::string default_output(const std::string& scene_name, const std::string& ext
     return "out/" + scene_name + extension;
 }
 
+Result<void> make_parent_folder(const std::string& path, const std::string& option) {
+    const std::filesystem::path folder = std::filesystem::path(path).parent_path();
+    if (folder.empty()) return {};
+    std::error_code ec;
+    std::filesystem::create_directories(folder, ec);
+    if (ec || !std::filesystem::is_directory(folder)) {
+        return make_error(Error::Kind::Io, option + " " + path + ": cannot create the folder " + folder.string() +
+                                               (ec ? " (" + ec.message() + ")" : std::string(" (a file is in the way)")));
+    }
+    return {};
+}
+
 void print_wrote(const BakeOutput& file) {
     if (file.format == BakeOutput::Format::Trace) {
         std::printf("kodawari: wrote trace %s\n", file.path.c_str());

@@ -26,6 +26,10 @@ CLI::Option* add_compaction_option(CLI::App& app, std::optional<std::string>& in
 /// `out/<scene name>.glb`, creating `out/` (the default output).
 [[nodiscard]] std::string default_output(const std::string& scene_name, const std::string& extension = ".glb");
 
+/// Creates the folder of an output file (and its parents) when missing, as `render --out`
+/// does; an Io error naming `option` and the folder when it cannot.
+[[nodiscard]] Result<void> make_parent_folder(const std::string& path, const std::string& option);
+
 /// "kodawari: wrote FILE (N MiB, ...)", and for a compacted file what compaction did.
 void print_wrote(const BakeOutput& file);
 

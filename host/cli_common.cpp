@@ -133,32 +133,41 @@ Result<std::unique_ptr<Simulation>> open_simulation(const std::string& path, con
 
 void add_route_check_options(CLI::App& app, bool& strict, bool& fit) {
     add_switch(app, "--strict", strict,
-               "a route beyond its bird's limits (turn, climb, dive, speed change) is an error, exit 2 (default: off, a warning)");
+               "a route beyond its bird's limits (turn, climb, dive, speed change, corner or bank jump at a junction) is an error, exit 2 "
+               "(default: off, a warning)");
     add_switch(app, "--fit-routes", fit,
-               "lower a flock's speed (parametric timing: lengthen its segments) until its turns and speed changes pass "
-               "(default: off)");
+               "smooth the corners of explicit routes, then lower a flock's speed (parametric timing: lengthen its segments) "
+               "until its turns, bank jumps and speed changes pass (default: off)");
 }
 
-std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit) {
+std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit, bool print) {
     // What the characters' motions could not use (gltf/motion.hpp): notes, never errors.
     for (const CharacterSpec& c : scene.characters) {
-        if (!c.rig) continue;
+        if (!c.rig || !print) continue;
         for (const std::string& w : c.rig->warnings) std::fprintf(stderr, "kodawari: warning: %s\n", w.c_str());
     }
     if (scene.flocks.empty()) return std::nullopt;
     if (fit) {
         auto changes = fit_routes(scene);
-        if (!changes) return report(changes.error());
-        for (const std::string& line : changes.value()) std::printf("kodawari: fit: %s\n", line.c_str());
+        if (!changes) return print ? report(changes.error()) : exit_code(changes.error());
+        for (const std::string& line : changes.value()) {
+            if (print) std::printf("kodawari: fit: %s\n", line.c_str());
+        }
         std::fflush(stdout);
     }
     auto warnings = check_routes(scene);
-    if (!warnings) return report(warnings.error());
+    if (!warnings) return print ? report(warnings.error()) : exit_code(warnings.error());
     const char* kind = strict ? "error" : "warning";
-    for (const RouteWarning& w : warnings.value()) std::fprintf(stderr, "kodawari: %s: %s\n", kind, w.message.c_str());
+    for (const RouteWarning& w : warnings.value()) {
+        if (print) std::fprintf(stderr, "kodawari: %s: %s\n", kind, w.message.c_str());
+    }
     if (strict && !warnings.value().empty()) {
-        std::fprintf(stderr, "kodawari: error: %zu route limit%s exceeded (--strict; --fit-routes fits turns and speed changes)\n",
-                     warnings.value().size(), warnings.value().size() == 1 ? "" : "s");
+        if (print) {
+            std::fprintf(stderr,
+                         "kodawari: error: %zu route limit%s exceeded (--strict; --fit-routes fits corners, turns, bank jumps and "
+                         "speed changes)\n",
+                         warnings.value().size(), warnings.value().size() == 1 ? "" : "s");
+        }
         return kExitBadInput;
     }
     return std::nullopt;
@@ -170,9 +179,11 @@ bool validation_failed(std::uint32_t messages) {
     return true;
 }
 
+int exit_code(const Error& error) { return error.kind == Error::Kind::InvalidInput ? kExitBadInput : kExitFailure; }
+
 int report(const Error& error) {
     std::fprintf(stderr, "kodawari: error: %s\n", error.message.c_str());
-    return error.kind == Error::Kind::InvalidInput ? kExitBadInput : kExitFailure;
+    return exit_code(error);
 }
 
 bool stderr_is_terminal() { return ::isatty(STDERR_FILENO) == 1; }

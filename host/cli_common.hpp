@@ -118,13 +118,17 @@ void add_route_check_options(CLI::App& app, bool& strict, bool& fit);
 /// stdout; then warns on stderr about every route that exceeds its bird's limits. Returns
 /// the exit code to stop with (a scene that does not build, or warnings under `strict`),
 /// or none to go on. Also prints the rigged characters' warnings (RigSpec::warnings).
-[[nodiscard]] std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit);
+/// `print` false: the same checks and fit, silently (the ranks of `run --mpi` but rank 0).
+[[nodiscard]] std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit, bool print = true);
 
 /// True (after saying so on stderr) when Vulkan validation reported messages: the
 /// command then exits kExitFailure. Backends sharing one device share its count, so a
 /// caller passes that count once (or the largest of theirs).
 [[nodiscard]] bool validation_failed(std::uint32_t messages);
 
+/// The exit code of an error: kExitBadInput for bad input (a bad option or value, a
+/// missing or unreadable input file, content the loader refuses), kExitFailure otherwise.
+[[nodiscard]] int exit_code(const Error& error);
 /// Prints an error and returns its exit code.
 int report(const Error& error);
 

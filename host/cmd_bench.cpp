@@ -75,7 +75,10 @@ struct Measured {
     std::string isa;       // the cpu backend's SIMD instruction set, "" for the others
     unsigned threads = 0;  // CPU threads of the cpu kinds, 0 for vulkan (lavapipe has its own)
     std::vector<double> per_second, ms_per_frame;
-    double gpu_ms = 0.0;   // summed over the repetitions' frames; < 0 when the backend has no timestamps
+    // The device's timestamps per frame, one value per repetition; empty when the backend
+    // has none (the cpu kinds) or a repetition lacked them.
+    std::vector<double> gpu_ms_per_frame;
+    bool gpu_timed = true;
     std::uint64_t frames = 0;
 
     [[nodiscard]] static double median(std::vector<double> v) {
@@ -87,6 +90,9 @@ struct Measured {
     [[nodiscard]] double rate() const { return median(per_second); }
     [[nodiscard]] double min() const { return per_second.empty() ? 0.0 : *std::min_element(per_second.begin(), per_second.end()); }
     [[nodiscard]] double max() const { return per_second.empty() ? 0.0 : *std::max_element(per_second.begin(), per_second.end()); }
+    /// The median GPU ms per frame, the same statistic as the wall ms/frame beside it;
+    /// < 0 when not measured.
+    [[nodiscard]] double gpu_ms() const { return gpu_timed && !gpu_ms_per_frame.empty() ? median(gpu_ms_per_frame) : -1.0; }
 };
 
 // A backend set up and warmed up, and one timed repetition of it: returns the seconds it
@@ -107,8 +113,13 @@ struct BenchCommon {
 };
 
 std::vector<BackendKind> read_backends(const BenchCommon& o) {
+    // --backend NAME, which every other command takes, times that one backend here.
+    if (o.backend.backend && o.backends) throw UsageError{"--backend and --backends exclude each other: give one"};
+    if (o.backend.backend && *o.backend.backend == "auto") {
+        throw UsageError{"--backend: bench times named backends (cpu-reference, cpu, vulkan), not auto"};
+    }
     std::vector<BackendKind> kinds;
-    std::stringstream names(o.backends.value_or("cpu-reference,cpu,vulkan"));
+    std::stringstream names(o.backend.backend ? *o.backend.backend : o.backends.value_or("cpu-reference,cpu,vulkan"));
     for (std::string name; std::getline(names, name, ',');) {
         auto kind = parse_backend_choice(name);
         if (!kind || !kind.value()) throw UsageError{"--backends: unknown backend \"" + name + "\""};
@@ -143,7 +154,8 @@ Result<void> run_repetitions(std::vector<Contender>& contenders, std::uint32_t r
             Measured& m = c.measured;
             m.per_second.push_back(work_per_frame * static_cast<double>(frames_per_repetition) / seconds.value());
             m.ms_per_frame.push_back(1e3 * seconds.value() / static_cast<double>(frames_per_repetition));
-            m.gpu_ms = gpu_ms < 0.0 || m.gpu_ms < 0.0 ? -1.0 : m.gpu_ms + gpu_ms;
+            if (gpu_ms < 0.0) m.gpu_timed = false;
+            m.gpu_ms_per_frame.push_back(gpu_ms / static_cast<double>(frames_per_repetition));
             m.frames += frames_per_repetition;
         }
     }
@@ -178,15 +190,23 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
                 cpu_isa.c_str(), cpu_threads);
     std::printf("%-14s %-36s %14s %11s %11s %10s %12s %9s %7s %-7s %7s\n", "backend", "device", unit, "min", "max", "ms/frame",
                 "GPU ms/frame", "vs c-ref", "vs cpu", "isa", "threads");
+    bool gpu_above_wall = false;
     for (const auto& c : contenders) {
         const Measured& m = c.measured;
         char gpu[32] = "-";
-        if (m.gpu_ms >= 0.0 && m.frames > 0) std::snprintf(gpu, sizeof gpu, "%.3f", m.gpu_ms / static_cast<double>(m.frames));
+        if (m.gpu_ms() >= 0.0) std::snprintf(gpu, sizeof gpu, "%.3f", m.gpu_ms());
+        if (m.gpu_ms() > Measured::median(m.ms_per_frame)) gpu_above_wall = true;
         std::printf("%-14s %-36s %14.4g %11.4g %11.4g %10.3f %12s %9s %7s %-7s %7s\n", m.backend.c_str(), m.device.c_str(), m.rate(),
                     m.min(), m.max(), Measured::median(m.ms_per_frame), gpu, ratio(m.rate(), reference).c_str(),
                     ratio(m.rate(), cpu).c_str(), m.isa.empty() ? "-" : m.isa.c_str(),
                     m.threads == 0 ? "-" : std::to_string(m.threads).c_str());
     }
+    std::printf("(ms/frame: wall time per frame; GPU ms/frame: the device's timestamps around the frame's dispatches, "
+                "host preparation and waiting left out, '-' without timestamps; both medians of the repetitions)\n");
+    // The timestamps bracket the dispatches alone, so they cannot exceed the wall time of
+    // the same frames unless the device's clock disagrees with the host's (lavapipe's
+    // timestamps are the CPU's clock, read by its own threads).
+    if (gpu_above_wall) std::printf("note: GPU time above wall time: the device's timestamp clock disagrees with the host's\n");
     if (!json_path) return kExitOk;
     std::string text = json_head + ",\"isa\":\"" + json_escape(cpu_isa) + "\",\"threads\":" + std::to_string(cpu_threads) +
                        ",\"repetitions\":" + std::to_string(repetitions) + ",\"results\":[";
@@ -194,8 +214,10 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
         const Measured& m = contenders[i].measured;
         char numbers[320];
         std::snprintf(numbers, sizeof numbers,
-                      "\"per_second\":%.6g,\"min\":%.6g,\"max\":%.6g,\"ms_per_frame\":%.6g,\"vs_cpu_reference\":%s,\"vs_cpu\":%s",
+                      "\"per_second\":%.6g,\"min\":%.6g,\"max\":%.6g,\"ms_per_frame\":%.6g,\"gpu_ms_per_frame\":%s,"
+                      "\"vs_cpu_reference\":%s,\"vs_cpu\":%s",
                       m.rate(), m.min(), m.max(), Measured::median(m.ms_per_frame),
+                      m.gpu_ms() >= 0.0 ? std::to_string(m.gpu_ms()).c_str() : "null",
                       reference > 0.0 ? std::to_string(m.rate() / reference).c_str() : "null",
                       cpu > 0.0 ? std::to_string(m.rate() / cpu).c_str() : "null");
         text += (i ? "," : "") + std::string("{\"backend\":\"") + m.backend + "\",\"device\":\"" + json_escape(m.device) + "\"," +
@@ -469,6 +491,7 @@ void add_common(CLI::App& c, BenchCommon& o) {
     add_count(c, "--repetitions", o.repetitions, 3, 1000, "timed runs of every backend, interleaved (default: 3)");
     add_text(c, "--json", o.json, "FILE.json", "also write the results as JSON (default: none)");
     add_backend_options(c, o.backend);
+    c.get_option("--backend")->description("time this one backend, as --backends NAME (default: the --backends list)");
 }
 
 }  // namespace
@@ -477,6 +500,12 @@ Command add_bench(CLI::App& app) {
     CLI::App* bench = app.add_subcommand("bench", "time every backend on the same work after warm-up: medians, min, max and the "
                                                   "ratios to cpu-reference and cpu (docs/performance.md)");
     bench->require_subcommand(1);
+    bench->footer("Columns: the rate (median of the repetitions) with min and max; ms/frame, wall time per frame; GPU "
+                  "ms/frame, the device's timestamps around the frame's dispatches (host preparation and waiting left out; "
+                  "'-' for the cpu kinds); both medians of the repetitions; vs c-ref and vs cpu, the rate over "
+                  "cpu-reference's and cpu's of the same run; isa and threads of the cpu backends. --json writes the same "
+                  "(per_second, min, max, ms_per_frame, gpu_ms_per_frame, vs_cpu_reference, vs_cpu, isa, threads); "
+                  "docs/performance.md.");
     auto birds = std::make_shared<BirdsOptions>();
     CLI::App* b = bench->add_subcommand("birds", "bird-frames per second on a flock of N birds");
     add_count(*b, "--count", birds->count, 1, 4'000'000, "birds (default: 1000000)");

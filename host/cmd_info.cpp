@@ -29,11 +29,14 @@ int cmd_info(const InfoOptions& o) {
     } else {
         std::printf("SIMD: %s\n", isa.error().message.c_str());
     }
+    // info prints everything it can, then exits 2 when what it was asked to describe (an
+    // instruction set, a device) is not there, as every command does for bad input.
+    const int asked_isa_status = isa ? kExitOk : kExitBadInput;
     auto inventory = list_gpus(device);
     if (!inventory) {
         std::printf("Vulkan: unavailable: %s\n", inventory.error().message.c_str());
         std::printf("backend auto: cpu\n");
-        return kExitOk;
+        return asked_isa_status;
     }
     const auto& inv = inventory.value();
     std::printf("Vulkan devices: %zu\n", inv.devices.size());
@@ -54,10 +57,14 @@ int cmd_info(const InfoOptions& o) {
         std::printf("chosen: [%u] %s, because %s\n", inv.devices[static_cast<std::size_t>(inv.chosen)].index,
                     inv.devices[static_cast<std::size_t>(inv.chosen)].name.c_str(), inv.reason.c_str());
         std::printf("backend auto: vulkan\n");
+    } else if (!device.empty()) {
+        std::printf("chosen: none: %s\nbackend auto: none (a device was asked for: the simulating commands exit 2)\n",
+                    inv.reason.c_str());
+        return kExitBadInput;
     } else {
         std::printf("chosen: none: %s\nbackend auto: cpu\n", inv.reason.c_str());
     }
-    return kExitOk;
+    return asked_isa_status;
 }
 
 }  // namespace

@@ -33,6 +33,9 @@ int cmd_merge(const MergeArguments& o) {
                 world.scene->name.c_str(), world.scene->path.c_str(), world.birds->birds.size(),
                 has_chains ? world.rods->instances.size() : std::size_t{0}, world.frames);
     std::fflush(stdout);
+    if (out_option) {
+        if (auto made = make_parent_folder(*out_option, "--out"); !made) return report(made.error());
+    }
     auto sinks = glb_sinks(out_option ? *out_option : default_output(world.scene->name), has_birds, has_chains, compaction);
     auto written = bake(*source.value(), sink_pointers(sinks));
     if (!written) return report(written.error());

@@ -5,14 +5,19 @@
 #include <array>
 #include <cmath>
 #include <cstdint>
+#include <cctype>
 #include <charconv>
 #include <chrono>
 #include <cstdio>
+#include <cstring>
+#include <cerrno>
 #include <filesystem>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
+
+#include <unistd.h>
 
 #include "commands.hpp"
 #include "kodawari/render/apng.hpp"
@@ -98,7 +103,7 @@ public:
     }
 
     // Creates `dir` and its missing parents, remembering which were missing.
-    Result<void> create_directory(const std::string& dir) {
+    Result<void> create_directory(const std::string& dir, const std::string& option) {
         std::vector<std::filesystem::path> missing;
         std::error_code ec;
         for (std::filesystem::path p = std::filesystem::path(dir).lexically_normal(); !p.empty() && p != p.parent_path();
@@ -112,7 +117,7 @@ public:
             if (std::filesystem::is_directory(*p)) created_.push_back(p->string());
         }
         if (ec || !std::filesystem::is_directory(dir)) {
-            return make_error(Error::Kind::Io, "--out " + dir + ": cannot create the directory" +
+            return make_error(Error::Kind::Io, option + " " + dir + ": cannot create the directory" +
                                                    (ec ? " (" + ec.message() + ")" : std::string(" (a file is in the way)")));
         }
         return {};
@@ -142,6 +147,38 @@ render::CameraView zoomed(render::CameraView camera, float zoom) {
     return camera;
 }
 
+// --camera EX,EY,EZ,TX,TY,TZ: draw from this eye looking at this target (the scene's
+// field of view) instead of the scene camera. Only the picture changes: the simulation
+// keeps the scene's camera, so view-dependent chains keep the shapes the scene's camera
+// gives them (a close-up of something the scene camera passes at a distance, such as a
+// flock).
+std::optional<std::pair<glm::vec3, glm::vec3>> parse_camera(const std::optional<std::string>& text) {
+    if (!text) return std::nullopt;
+    float v[6] = {};
+    char extra = 0;
+    if (std::sscanf(text->c_str(), "%f,%f,%f,%f,%f,%f%c", &v[0], &v[1], &v[2], &v[3], &v[4], &v[5], &extra) != 6 ||
+        !std::all_of(std::begin(v), std::end(v), [](float x) { return std::isfinite(x); })) {
+        throw UsageError{"--camera: expected EYE_X,EYE_Y,EYE_Z,TARGET_X,TARGET_Y,TARGET_Z, got \"" + *text + "\""};
+    }
+    const glm::vec3 eye(v[0], v[1], v[2]), target(v[3], v[4], v[5]);
+    if (!(glm::length(target - eye) > 1e-6f)) throw UsageError{"--camera: the target equals the eye"};
+    return std::pair{eye, target};
+}
+
+// The scene camera at `frame`, or the --camera eye and target with the scene's field of
+// view and near and far planes for that distance (render::scene_camera's rule).
+render::CameraView drawing_camera(const Scene& scene, std::uint32_t frame, const std::optional<std::pair<glm::vec3, glm::vec3>>& camera) {
+    render::CameraView view = render::scene_camera(scene, frame);
+    if (!camera) return view;
+    view.position = camera->first;
+    view.target = camera->second;
+    view.orthographic = false;
+    const float distance = glm::length(camera->second - camera->first);
+    view.near = std::clamp(0.01f * distance, 0.01f, 1.0f);
+    view.far = 1000.0f * view.near;
+    return view;
+}
+
 // The options as given; add_render() defines them.
 struct RenderOptions {
     std::optional<std::string> scene;
@@ -154,6 +191,7 @@ struct RenderOptions {
     std::optional<std::string> animation;
     std::optional<std::string> animation_size;
     std::optional<std::string> zoom;
+    std::optional<std::string> camera;
     bool joints = false;
 };
 
@@ -172,6 +210,15 @@ int cmd_render(const RenderOptions& o) {
     const auto animation_size =
         o.animation_size ? parse_image_size("--animation-size", *o.animation_size, width, height) : std::pair{width, height};
     const float zoom = parse_zoom(o.zoom);
+    // An animated PNG is written under a .png (or .apng) name only: a viewer goes by the name.
+    if (animation_path) {
+        std::string extension = std::filesystem::path(*animation_path).extension().string();
+        for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+        if (extension != ".png" && extension != ".apng") {
+            throw UsageError{"--animation " + *animation_path + ": writes an animated PNG (APNG): name it .png or .apng"};
+        }
+    }
+    const auto camera = parse_camera(o.camera);
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
     const std::uint32_t scene_frames = loaded.value().frame_count();
@@ -201,7 +248,18 @@ int cmd_render(const RenderOptions& o) {
     // The directory only now that the renderer and the simulation are open: a run that
     // cannot start (no Vulkan device, a bad scene) creates nothing.
     RenderOutputs outputs;
-    if (auto made_dir = outputs.create_directory(*out_dir); !made_dir) return report(made_dir.error());
+    if (auto made_dir = outputs.create_directory(*out_dir, "--out"); !made_dir) return report(made_dir.error());
+    // The contact sheet's and the animation's folders too, and that they take files: found
+    // now, not after every frame is drawn.
+    for (const auto& [option, path] : {std::pair{"--contact-sheet", sheet_path}, std::pair{"--animation", animation_path}}) {
+        if (!path) continue;
+        const std::filesystem::path folder = std::filesystem::absolute(*path).parent_path();
+        if (auto folder_made = outputs.create_directory(folder.string(), option); !folder_made) return report(folder_made.error());
+        if (::access(folder.c_str(), W_OK) != 0) {
+            return report(make_error(Error::Kind::Io, std::string(option) + " " + *path + ": cannot write into " +
+                                                          folder.string() + " (" + std::strerror(errno) + "); nothing drawn"));
+        }
+    }
     // Frames go into the animation as they are drawn; only its frame count is needed now.
     std::optional<render::ApngWriter> animation;
     if (animation_path) {
@@ -215,6 +273,8 @@ int cmd_render(const RenderOptions& o) {
     const std::uint32_t cell_width = std::max(1u, width / columns), cell_height = std::max(1u, height / columns);
     std::vector<render::Image> cells;
     std::vector<glm::vec3> grid_points;
+    // Where the birds perch: a pass over every bird, found with the grid, once.
+    render::Perches perches;
     double render_seconds = 0.0;
     const bool show_progress = stderr_is_terminal() && range.end > 100;
     for (std::uint32_t f = 0; f < range.end; ++f) {
@@ -224,16 +284,18 @@ int cmd_render(const RenderOptions& o) {
         if (!drawn) continue;
         if (auto s = sim.draw_on(r); !s) return report(s.error());
         const auto start = std::chrono::steady_clock::now();
-        render::DrawList list(zoomed(render::scene_camera(scene, f), zoom), width, height);
+        render::DrawList list(zoomed(drawing_camera(scene, f, camera), zoom), width, height);
         // The grid covers where the content is at the first drawn frame and then stays put,
         // so that it does not jump from frame to frame.
         if (grid_points.empty()) {
             grid_points = render::content_points(sim.rod_scene(), sim.rod_scene() ? &sim.chain_input() : nullptr,
                                                  sim.bird_world().birds.empty() ? nullptr : &sim.bird_world());
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
+            if (!sim.bird_world().birds.empty()) perches = render::perches_of(sim.bird_world());
         }
         render::add_ground_grid(list, grid_points);
         if (sim.rod_scene()) render::add_characters(list, *sim.rod_scene(), f);
+        render::add_perches(list, perches);
         auto image = r.render(list);
         if (!image) return report(image.error());
         render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -288,6 +350,9 @@ Command add_render(CLI::App& app) {
     add_text(*c, "--zoom", o->zoom, "F",
              "narrow the scene camera's field of view F times about its target, in [0.1, 100]; the camera "
              "and so the view-dependent shapes stay the scene's (default: 1)");
+    add_text(*c, "--camera", o->camera, "EX,EY,EZ,TX,TY,TZ",
+             "draw from this eye looking at this target, in metres (the scene's field of view); the simulation "
+             "keeps the scene camera (default: the scene camera)");
     add_text(*c, "--animation", o->animation, "FILE.png",
              "also the frames as one looping animated PNG at the scene's fps / STEP (default: none)");
     add_text(*c, "--animation-size", o->animation_size, "WxH",

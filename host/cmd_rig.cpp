@@ -2,6 +2,8 @@
 // `kodawari rig BIRD --bird`: a user's rigged bird mapped onto the 7-part rig and measured
 // (docs/bird-models.md). The scene is checked by the scene loader before it is written,
 // so what this command writes is a scene `kodawari run` accepts.
+#include <algorithm>
+#include <cmath>
 #include <cstdio>
 #include <filesystem>
 #include <sstream>
@@ -12,6 +14,7 @@
 #include "kodawari/atomic_file.hpp"
 #include "kodawari/gltf/bird_model_import.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
+#include "kodawari/route_check.hpp"
 
 namespace kodawari::cli {
 namespace {
@@ -71,16 +74,33 @@ int cmd_rig_bird(const RigArguments& o) {
     const std::string& file = *o.character;
     const std::string out_path = o.out.value_or(std::filesystem::path(file).stem().string() + ".json");
     auto loaded = gltf::load_bird_model(file, o.map.value_or(""));
-    if (!loaded) {
-        std::fprintf(stderr, "kodawari: %s\n", loaded.error().message.c_str());
-        return loaded.error().kind == Error::Kind::Io ? kExitFailure : kExitBadInput;
-    }
+    if (!loaded) return report(loaded.error());
     const birds::BirdModel& m = loaded.value();
     gltf::BirdSceneOptions scene;
     scene.name = o.name.value_or(m.name);
     scene.model_file = relative_to_scene(file, out_path);
     if (o.map) scene.map_file = relative_to_scene(*o.map, out_path);
-    if (const int written = write_checked_scene(gltf::bird_scene_json(scene), file, out_path); written != kExitOk) return written;
+    // The generated route grows, 10 % at a time, until the bird flies it within its own
+    // limits (turns at its cruise speed, climbs, dives), so that `run` on the scene gives
+    // no route warning. Steps rather than a jump by the worst excess: the route variants'
+    // jitter is in metres and does not scale, so the demands are not monotonic in the size,
+    // and the smallest route that passes keeps the bird large in the camera's view.
+    std::string json;
+    for (int step = 0;; ++step) {
+        scene.route_scale = static_cast<float>(std::pow(1.1, step));
+        json = gltf::bird_scene_json(scene);
+        auto parsed = parse_scene(json, out_path);
+        if (!parsed) break;  // write_checked_scene says so
+        auto warnings = check_routes(parsed.value());
+        if (!warnings) return report(warnings.error());
+        if (warnings.value().empty()) break;
+        if (step == 48) {  // 1.1^48, about 100 times the example's size
+            std::fprintf(stderr, "kodawari: internal error: no route size found that %s can fly: %s\n", file.c_str(),
+                         warnings.value().front().message.c_str());
+            return kExitFailure;
+        }
+    }
+    if (const int written = write_checked_scene(json, file, out_path); written != kExitOk) return written;
 
     std::printf("%s: a bird, bones mapped by %s\n", file.c_str(), m.mapped_by.c_str());
     for (std::size_t part = 0; part < birds::kPartCount; ++part) {
@@ -96,6 +116,8 @@ int cmd_rig_bird(const RigArguments& o) {
     std::printf("  flight: wingbeat %.3g Hz, amplitude %.3g, glide ratio %.3g, cruise speed %.3g m/s\n",
                 static_cast<double>(f.flap_frequency), static_cast<double>(f.amplitude), static_cast<double>(f.glide_ratio),
                 static_cast<double>(f.cruise_speed));
+    std::printf("  route: a generated loop %.0f m across, sized for the bird's turns at its cruise speed\n",
+                std::round(90.0 * static_cast<double>(scene.route_scale)));
     std::printf("wrote %s (kodawari run %s)\n", out_path.c_str(), out_path.c_str());
     return kExitOk;
 }
@@ -130,10 +152,7 @@ int cmd_rig(const RigArguments& o) {
     if (out_path.empty()) out_path = std::filesystem::path(character).stem().string() + ".json";
 
     auto rig = gltf::make_rig_scene(character, out_path, options);
-    if (!rig) {
-        std::fprintf(stderr, "kodawari: %s\n", rig.error().message.c_str());
-        return rig.error().kind == Error::Kind::Io ? kExitFailure : kExitBadInput;
-    }
+    if (!rig) return report(rig.error());
     const gltf::RigScene& r = rig.value();
     for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 
@@ -165,7 +184,9 @@ Command add_rig(CLI::App& app) {
                                             "that simulates it (docs/rigged-characters.md)");
     add_text(*c, "character", o->character, "CHARACTER", "the character file (.gltf, .glb or .vrm)");
     add_text(*c, "--chains", o->chains, "PATTERNS",
-             "find the chains by node name patterns, comma-separated (default: VRM spring bones, else the built-in patterns)");
+             "find the chains by node name patterns, comma-separated, case-insensitive: a word matches within a name "
+             "(\"ear\" finds J_Sec_Ear_L), * and ? match whole names as a shell does (\"tail*\") (default: VRM spring "
+             "bones, else the built-in patterns)");
     add_text(*c, "--roots", o->roots, "NAMES", "the chains' root nodes by name, comma-separated, instead of --chains");
     add_text(*c, "--animation", o->animation, "CLIP",
              "the animation clip the instances play, a --motion's name too (default: the first --motion, else the file's first "

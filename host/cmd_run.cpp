@@ -37,25 +37,45 @@ void print_scene(const Simulation& sim) {
     std::fflush(stdout);
 }
 
+// "ms per frame" is the steady cost: the first call into a backend (frame 0 of the
+// chains: load, rest shapes, kernels compiled; the first chunk of the birds) is printed
+// apart, since lavapipe compiles a pipeline at its first dispatch and a short run would
+// otherwise report mostly that (docs/command-line.md, "Timing").
 void print_timing(const Simulation& sim) {
     const SimulationTiming& timing = sim.timing();
-    const std::uint32_t frames = sim.frame_count();
     const std::string backend(backend_name(sim.backend()));
     if (!sim.bird_world().birds.empty()) {
+        const bool steady = timing.bird_frames > 0;
+        const double seconds = steady ? timing.bird_seconds : timing.bird_first_seconds;
+        const double frames = static_cast<double>(steady ? timing.bird_frames : timing.bird_first_frames);
+        const double gpu_ms = steady ? (timing.bird_gpu_timed ? timing.bird_gpu_ms : -1.0) : timing.bird_first_gpu_ms;
         std::printf("kodawari: backend %s on %s: %.3f ms per frame", backend.c_str(), sim.device().c_str(),
-                    1e3 * timing.bird_seconds / frames);
-        if (timing.bird_gpu_timed) std::printf(" (GPU %.3f ms)", timing.bird_gpu_ms / frames);
-        std::printf(", %.3g bird-frames/s\n",
-                    static_cast<double>(sim.bird_world().birds.size()) * frames / std::max(timing.bird_seconds, 1e-9));
+                    1e3 * seconds / frames);
+        if (gpu_ms >= 0.0) std::printf(" (GPU %.3f ms)", gpu_ms / frames);
+        std::printf(", %.3g bird-frames/s", static_cast<double>(sim.bird_world().birds.size()) * frames / std::max(seconds, 1e-9));
+        if (steady) {
+            std::printf("; first %llu frames %.1f ms (kernels compiled)\n",
+                        static_cast<unsigned long long>(timing.bird_first_frames), 1e3 * timing.bird_first_seconds);
+        } else {
+            std::printf(" (one call: kernel compilation included)\n");
+        }
     }
     if (const RodScene* rods = sim.rod_scene()) {
-        const std::uint32_t steps = std::max(frames, 2u) - 1;
+        const std::uint32_t frames = sim.frame_count();
+        const std::string input = sim.rod_inputs_on_device() ? "; rigged characters' rod input written on the device" : "";
+        if (frames <= 2) {
+            std::printf("kodawari: backend %s on %s: %u frames in %.1f ms (load, rest shapes, kernels compiled: too few frames "
+                        "for a steady figure)%s\n",
+                        backend.c_str(), sim.device().c_str(), frames, 1e3 * timing.chain_warmup_seconds, input.c_str());
+            return;
+        }
+        const std::uint32_t steps = frames - 2;
         std::printf("kodawari: backend %s on %s: %.3f ms per frame", backend.c_str(), sim.device().c_str(),
-                    1e3 * timing.chain_seconds / frames);
+                    1e3 * timing.chain_seconds / steps);
         if (timing.chain_gpu_ms > 0.0) std::printf(" (GPU %.3f ms)", timing.chain_gpu_ms / steps);
-        std::printf(", %.3g joint-steps/s%s\n",
+        std::printf(", %.3g joint-steps/s; frames 0-1 %.1f ms (load, rest shapes, kernels compiled)%s\n",
                     static_cast<double>(rods->world.joint_count) * steps / std::max(timing.chain_seconds, 1e-9),
-                    sim.rod_inputs_on_device() ? "; rigged characters' rod input written on the device" : "");
+                    1e3 * timing.chain_warmup_seconds, input.c_str());
     }
 }
 
@@ -84,7 +104,7 @@ Shard parse_shard(const std::string& text) {
 // `run --mpi`: one shard per rank, rank 0 writes (kodawari/distributed.hpp).
 int run_distributed(const std::string& scene_path, const BackendChoice& choice, std::optional<std::uint64_t> frames,
                     const std::optional<std::string>& out, const std::optional<std::string>& trace, bool no_export,
-                    const GlbCompaction& compaction) {
+                    const GlbCompaction& compaction, bool strict, bool fit_routes) {
 #ifdef KODAWARI_WITH_MPI
     auto job = open_mpi_world();
     if (!job) return report(job.error());
@@ -95,6 +115,14 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
     options.simulation.options = choice.options;
     if (frames) options.simulation.frames = static_cast<std::uint32_t>(*frames);
     const Simulation* opened = nullptr;
+    // --strict and --fit-routes: every rank checks (and fits) the scene it loaded, the
+    // same way since the fit is a function of the scene; rank 0 alone says what it found.
+    options.prepare_scene = [&](Scene& scene) -> Result<void> {
+        const auto stop = check_scene_routes(scene, strict, fit_routes, root);
+        if (!stop) return {};
+        return make_error(*stop == kExitBadInput ? Error::Kind::InvalidInput : Error::Kind::Internal,
+                          "the route check stopped the bake (said above)");
+    };
     options.opened = [&](const Simulation& sim) {
         opened = &sim;
         if (!root) return;
@@ -122,13 +150,21 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
     if (root && stderr_is_terminal()) {
         options.bake.progress = [](std::uint32_t done, std::uint32_t total) { progress("simulating", done, total); };
     }
+    // Rank 0 writes, so it makes the outputs' folders as a single process does; when it
+    // cannot, its sink fails, and bake_distributed stops every rank with that error.
+    if (root) {
+        for (const auto& [path, option] : {std::pair{out, "--out"}, std::pair{trace, "--trace"}}) {
+            if (path) (void)make_parent_folder(*path, option);
+        }
+    }
     auto written = bake_distributed(comm, scene_path, options);
     // Every rank has the same error; rank 0 says it.
     if (!written) return root ? report(written.error()) : (written.error().kind == Error::Kind::InvalidInput ? kExitBadInput : kExitFailure);
     for (const BakeOutput& file : written.value()) print_wrote(file);
     return kExitOk;
 #else
-    (void)scene_path, (void)choice, (void)frames, (void)out, (void)trace, (void)no_export, (void)compaction;
+    (void)scene_path, (void)choice, (void)frames, (void)out, (void)trace, (void)no_export, (void)compaction, (void)strict,
+        (void)fit_routes;
     return report(make_error(Error::Kind::Unsupported,
                              "--mpi: this kodawari was built without MPI (bash scripts/setup installs OpenMPI; then rebuild)"));
 #endif
@@ -167,13 +203,9 @@ int cmd_run(const RunOptions& o) {
         throw UsageError{"--shard writes a part file with every key, and compaction happens at merge: give --compact to "
                          "`kodawari merge` instead"};
     }
-    if (mpi && (o.strict || o.fit_routes)) {
-        throw UsageError{"--strict and --fit-routes check the routes before one simulation; under --mpi run "
-                         "`kodawari validate --strict` (or --fit-routes) first"};
-    }
     if (mpi) {
-        return run_distributed(scene_path, choice, frames_option, out_option, trace_path, no_export,
-                               compaction);
+        return run_distributed(scene_path, choice, frames_option, out_option, trace_path, no_export, compaction, o.strict,
+                               o.fit_routes);
     }
     if (shard_option && (no_export || trace_path)) {
         throw UsageError{"--shard writes a part file for `kodawari merge` (at --out): it takes neither --no-export nor --trace"};
@@ -190,6 +222,11 @@ int cmd_run(const RunOptions& o) {
     const Scene& scene = sim.scene();
     const bool has_birds = !sim.bird_world().birds.empty();
     const bool has_chains = sim.rod_scene() != nullptr;
+    // The outputs' folders, made before the simulation runs (as render makes its --out).
+    for (const auto& [path, option] : {std::pair{out_option, "--out"}, std::pair{trace_path, "--trace"}}) {
+        if (!path) continue;
+        if (auto made = make_parent_folder(*path, option); !made) return report(made.error());
+    }
     std::vector<std::unique_ptr<BakeSink>> owned;
     if (shard_option) {
         const std::string part = out_option ? *out_option

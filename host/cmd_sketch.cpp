@@ -37,6 +37,7 @@ struct SketchOptions {
     std::optional<std::string> size;
     std::optional<std::string> influence;
     std::optional<std::string> out;
+    bool in_place = false;
     bool undo = false;
     std::optional<std::string> key;
     std::optional<std::string> joint;
@@ -94,7 +95,6 @@ std::optional<SketchKeyOptions> key_options(const SketchOptions& o) {
 }
 
 int cmd_sketch(const SketchOptions& o) {
-    const auto& chain = o.chain;
     const auto& stroke_path = o.stroke;
     const auto& frame_index = o.frame;
     const auto& camera_text = o.camera;
@@ -106,14 +106,35 @@ int cmd_sketch(const SketchOptions& o) {
     const auto& out_option = o.out;
     const bool undo = o.undo;
     if (!o.scene) throw UsageError{"sketch needs exactly one SCENE file"};
-    if (!chain) throw UsageError{"sketch needs --chain CHARACTER/CHAIN"};
+    if (!o.chain) throw UsageError{"sketch needs --chain CHARACTER/CHAIN"};
     if (undo && (stroke_path || camera_text || size_text || influence_text || frame_index || o.key || o.joint ||
                  o.measure || o.smoothing)) {
-        throw UsageError{"sketch --undo takes only SCENE, --chain and --out"};
+        throw UsageError{"sketch --undo takes only SCENE, --chain and --out or --in-place"};
     }
     if (!undo && !stroke_path) throw UsageError{"sketch needs --stroke STROKE.json (or --undo)"};
+    // An artist's scene is never rewritten by accident: the edit goes to --out, or to the
+    // scene itself only when asked with --in-place.
+    if (!out_option && !o.in_place) {
+        throw UsageError{"sketch writes the edited scene to --out SCENE2.json, or over SCENE with --in-place; "
+                         "neither was given (nothing written)"};
+    }
+    if (out_option && o.in_place) throw UsageError{"--out and --in-place exclude each other: give one"};
     const std::string& scene_path = *o.scene;
     const std::string out_path = out_option.value_or(scene_path);
+    // CHARACTER#N/CHAIN, as `run --trace` and `validate` name a chain, picks instance N of
+    // the character to draw over; the scene's examples belong to CHARACTER/CHAIN.
+    std::string chain_text = *o.chain;
+    std::optional<std::uint32_t> wanted_instance;
+    if (const auto hash = chain_text.find('#'), slash = chain_text.find('/');
+        hash != std::string::npos && slash != std::string::npos && hash < slash) {
+        const std::string digits = chain_text.substr(hash + 1, slash - hash - 1);
+        if (digits.empty() || digits.size() > 9 || digits.find_first_not_of("0123456789") != std::string::npos) {
+            throw UsageError{"--chain: expected CHARACTER/CHAIN or CHARACTER#N/CHAIN, got \"" + chain_text + "\""};
+        }
+        wanted_instance = static_cast<std::uint32_t>(std::stoul(digits));
+        chain_text.erase(hash, slash - hash);
+    }
+    const std::optional<std::string> chain = chain_text;
 
     auto text = read_text_file(scene_path);
     if (!text) return report(text.error());
@@ -124,8 +145,10 @@ int cmd_sketch(const SketchOptions& o) {
         auto edit = remove_last_sketch(text.value(), scene_path, *chain);
         if (!edit) return report(edit.error());
         if (auto written = write_scene_text(out_path, edit.value().text); !written) return report(written.error());
-        std::printf("removed %s example %u \"%s\" of %s; wrote %s\n", edit.value().keyed ? "keyed" : "view",
-                    edit.value().index, edit.value().name.c_str(), chain->c_str(), out_path.c_str());
+        const SceneEdit& e = edit.value();
+        std::printf("removed %s example %u \"%s\" of %s%s; wrote %s\n", e.keyed ? "keyed" : "view", e.index, e.name.c_str(),
+                    chain->c_str(), e.replaced ? (", putting back \"" + e.replaced_name + "\", which it had replaced").c_str() : "",
+                    out_path.c_str());
         return kExitOk;
     }
 
@@ -138,11 +161,20 @@ int cmd_sketch(const SketchOptions& o) {
         }
     }
 
-    auto stroke_text = read_text_file(*stroke_path);
+    auto stroke_text = read_text_file(*stroke_path, "the stroke file");
     if (!stroke_text) return report(stroke_text.error());
     auto stroke = parse_stroke(stroke_text.value(), *stroke_path);
     if (!stroke) return report(stroke.error());
     input.stroke = stroke.value();
+    // A stroke drawn wholly off the image cannot have been drawn over the view.
+    const bool on_image = std::any_of(input.stroke.begin(), input.stroke.end(), [&](const glm::dvec2& p) {
+        return p.x >= 0.0 && p.y >= 0.0 && p.x <= width && p.y <= height;
+    });
+    if (!on_image) {
+        return report(make_error(Error::Kind::InvalidInput,
+                                 *stroke_path + ": $.points: expected points on the " + std::to_string(width) + "x" +
+                                     std::to_string(height) + " image (--size), got none within it"));
+    }
 
     auto rod_scene = build_rod_scene(scene.value());
     if (!rod_scene) return report(rod_scene.error());
@@ -158,8 +190,13 @@ int cmd_sketch(const SketchOptions& o) {
     for (std::uint32_t t = 0; t < rs.world.templates.size(); ++t) {
         names += (names.empty() ? "\"" : ", \"") + rs.world.templates[t].name + "\"";
         if (rs.world.templates[t].name != *chain) continue;
+        std::uint32_t seen = 0;
         for (std::uint32_t c = 0; c < rs.world.chains.size() && !instance; ++c) {
-            if (rs.world.chains[c].template_index == t) instance = c;
+            if (rs.world.chains[c].template_index != t) continue;
+            if (seen++ == wanted_instance.value_or(0)) instance = c;
+        }
+        if (!instance && wanted_instance && seen > 0) {
+            throw UsageError{"--chain: " + *o.chain + ": the character has instances #0 to #" + std::to_string(seen - 1)};
         }
         if (!instance) {
             return report(make_error(Error::Kind::InvalidInput, scene_path + ": $.crowds: no instance of the character of " +
@@ -252,7 +289,7 @@ int cmd_sketch(const SketchOptions& o) {
     const SceneEdit& e = edit.value();
     std::printf("view example %u \"%s\" %s; wrote %s\n", e.index, e.name.c_str(),
                 e.replaced ? ("replaces \"" + e.replaced_name + "\" (within " + std::to_string(static_cast<int>(kSketchReplaceDeg)) +
-                              " degrees; --undo will not bring it back)").c_str()
+                              " degrees; kept in the file, --undo brings it back)").c_str()
                            : "added",
                 out_path.c_str());
     return kExitOk;
@@ -266,7 +303,8 @@ Command add_sketch(CLI::App& app) {
                                                "or with --key as a keyed example (docs/sketch.md); --undo removes the last "
                                                "one a sketch added");
     add_text(*c, "scene", o->scene, "SCENE", "the scene file to edit");
-    add_text(*c, "--chain", o->chain, "CHARACTER/CHAIN", "the chain to shape (required)");
+    add_text(*c, "--chain", o->chain, "CHARACTER/CHAIN",
+             "the chain to shape (required); CHARACTER#N/CHAIN, as traces name it, draws over instance N");
     add_text(*c, "--stroke", o->stroke, "STROKE.json", "the stroke, points in image pixels (required unless --undo)");
     add_count(*c, "--frame", o->frame, 0, 1'000'000'000, "the frame whose pose the stroke is drawn over (default: 0)");
     add_text(*c, "--camera", o->camera, "EX,EY,EZ,TX,TY,TZ", "the camera's eye and target in metres (default: the scene's camera)");
@@ -274,7 +312,8 @@ Command add_sketch(CLI::App& app) {
     add_text(*c, "--influence", o->influence, "P",
              "the example's influence: a view example's in (0, 1000] (default: 4); with --key motion in the measure's "
              "units (default: a quarter of the measured key), with --key pose in degrees (default: 20)");
-    add_text(*c, "--out", o->out, "SCENE2.json", "the scene file to write (default: SCENE, in place)");
+    add_text(*c, "--out", o->out, "SCENE2.json", "the scene file to write (this or --in-place is required)");
+    add_switch(*c, "--in-place", o->in_place, "write the edit over SCENE itself (default: off; this or --out is required)");
     add_switch(*c, "--undo", o->undo, "remove the last example (view or keyed) a sketch added to the chain");
     add_text(*c, "--key", o->key, "motion|pose",
              "make a keyed example instead of a view example, keyed by the character's motion or a joint's pose at --frame "

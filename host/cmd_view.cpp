@@ -163,6 +163,8 @@ int cmd_view(const ViewOptions& o) {
     std::fflush(stdout);
 
     std::vector<glm::vec3> grid_points;
+    // Where the birds perch: a pass over every bird, found with the grid, once.
+    render::Perches perches;
     std::optional<render::DrawList> last_list;
     std::uint64_t drawn = 0, screenshots = 0;
     double frame_ms = 0.0;
@@ -202,9 +204,11 @@ int cmd_view(const ViewOptions& o) {
             grid_points = render::content_points(s.rod_scene(), s.rod_scene() ? &s.chain_input() : nullptr,
                                                  s.bird_world().birds.empty() ? nullptr : &s.bird_world());
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
+            if (!s.bird_world().birds.empty()) perches = render::perches_of(s.bird_world());
         }
         render::add_ground_grid(list, grid_points);
         if (s.rod_scene()) render::add_characters(list, *s.rod_scene(), v.current());
+        render::add_perches(list, perches);
         if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
         if (v.sketch_mode && v.picked && s.rod_scene()) {
             // The picked chain's joints on the host while sketching (it may have been stepped).

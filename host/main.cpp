@@ -3,7 +3,9 @@
 // from the same definitions.
 #include <cstdio>
 #include <exception>
+#include <filesystem>
 #include <string>
+#include <system_error>
 #include <vector>
 
 #include "kodawari/atomic_file.hpp"
@@ -15,8 +17,22 @@ namespace {
 constexpr const char* kEnvironment = R"(Environment: KODAWARI_DEVICE (the device when no --device), KODAWARI_ISA (the cpu
 backend's SIMD instruction set when no --isa: avx512, avx2, sse4 or scalar), KODAWARI_VALIDATION=1
 (as --validation), KODAWARI_FORCE_STAGING=1 (staging copies even on unified memory).
-Exit status: 0 success, 1 failure (a check did not pass, a runtime error), 2 bad input or usage.
-`kodawari COMMAND --help` lists a command's options; docs/command-line.md is the reference.)";
+Exit status: 0 success, 1 failure (a check did not pass, a runtime error), 2 bad input or usage
+(a bad option, a missing or unreadable input file, a file's content refused).
+`kodawari COMMAND --help` lists a command's options; the reference is )";
+
+// Where the reference page is: the installed copy beside the command
+// (<prefix>/share/doc/kodawari/docs/command-line.md) when there is one, else its place in
+// the source tree.
+std::string reference_page() {
+    std::error_code ec;
+    const std::filesystem::path exe = std::filesystem::read_symlink("/proc/self/exe", ec);
+    if (!ec) {
+        const std::filesystem::path installed = exe.parent_path().parent_path() / "share/doc/kodawari/docs/command-line.md";
+        if (std::filesystem::exists(installed, ec)) return installed.lexically_normal().string() + ".";
+    }
+    return "docs/command-line.md in the source tree (installed as <prefix>/share/doc/kodawari/docs/command-line.md).";
+}
 
 // The deepest subcommand the command line named ("kodawari" when none), for the pointer
 // to its --help after a usage error.
@@ -54,7 +70,7 @@ int main(int argc, char** argv) {
                  "kodawari"};
     app.set_version_flag("--version", "kodawari " + std::string(kodawari::version()), "print the version and exit");
     app.require_subcommand(1);
-    app.footer(kEnvironment);
+    app.footer(std::string(kEnvironment) + reference_page());
     app.get_formatter()->column_width(42);
     const std::vector<Command> commands = {add_run(app),    add_merge(app),  add_validate(app), add_bench(app),
                                            add_rig(app),    add_sketch(app), add_render(app),   add_view(app),
@@ -70,7 +86,10 @@ int main(int argc, char** argv) {
         refuse_empty_values(argc, argv);
         // CLI11 would only say that a command is required.
         const auto named = app.get_subcommands([&](const CLI::App* sub) { return sub->get_name() == words[0]; });
-        if (!words[0].starts_with("-") && named.empty()) throw UsageError{"unknown command \"" + words[0] + "\""};
+        if (!words[0].starts_with("-") && named.empty()) {
+            std::fprintf(stderr, "kodawari: unknown command \"%s\"\n(`kodawari --help` lists the commands)\n", words[0].c_str());
+            return kExitBadInput;
+        }
         std::vector<std::string> reversed(words.rbegin(), words.rend());
         app.parse(reversed);
         for (const Command& command : commands) {

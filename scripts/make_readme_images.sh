@@ -33,14 +33,27 @@ mkdir -p docs/images
 "$bin" render scenes/birds-closeup.json --frames 60 --size 640x360 --out "$work/birds"
 cp "$work/birds/birds-closeup_00060.png" docs/images/birds-closeup.png
 # Pigeons crouching and taking off one after another from a roof line, and 30 s later
-# landed on the other, wings folded (scenes/perch.json, docs/flight-modes.md).
+# landed on the other, wings folded (scenes/perch.json, docs/flight-modes.md). The roofs
+# are drawn under the perched birds (render::add_perches).
 "$bin" render scenes/perch.json --frames 150:1951:1800 --size 1280x720 --zoom 1.8 --out "$work/perch" \
     --contact-sheet docs/images/perch.png --columns 2
+# perch.json's hummingbirds hovering over their flower bed (a roof garden) 22.7 s in, from
+# a camera of their own (--camera: the scene camera never comes within 14.5 m of them, where
+# they are 8-pixel specks; the simulation keeps the scene camera).
+"$bin" render scenes/perch.json --frames 1360 --size 960x540 --zoom 1.6 --camera 13.6,6.3,44.3,11.4,6.45,46.8 \
+    --out "$work/hummingbirds"
+cp "$work/hummingbirds/perch_01360.png" docs/images/hummingbirds.png
 # The flock 3.3 s in, and the crowd 2 s in.
 "$bin" render scenes/flock.json --frames 200 --size 640x360 --zoom 2.2 --out "$work/flock"
 cp "$work/flock/flock_00200.png" docs/images/flock.png
 "$bin" render scenes/crowd.json --frames 120 --size 640x360 --out "$work/crowd"
 cp "$work/crowd/crowd_00120.png" docs/images/crowd.png
+# One of the crowd (critter#431, near the middle) running in and stopping dead at frame
+# 66 (its own clock's 3.6 s), seen from behind its right shoulder with --camera: its ears
+# overshoot forward at the stop and swing back (frames 57 to 72, every 3rd; at the scene
+# camera, 38 m out, they are a few pixels).
+"$bin" render scenes/crowd.json --frames 57:75:3 --size 1440x810 --zoom 2.2 --camera 1.0,2.3,-1.35,-0.43,1.72,-0.32 \
+    --out "$work/crowd-stop" --contact-sheet docs/images/crowd-stop.png --columns 3
 # The rigged crowd (64 of scenes/characters/chibi.glb, skinned in the vertex shader) 2 s in.
 "$bin" render scenes/crowd-gltf.json --frames 120 --size 640x360 --out "$work/crowd-gltf"
 cp "$work/crowd-gltf/crowd-gltf_00120.png" docs/images/crowd-gltf.png

@@ -287,11 +287,12 @@ vec2 half_angle(float c, float s) {
 
 // engine/birds/flight.cpp body_frame(): the attitude's rotation without trig, as its
 // yaw, climb pitch and bank factors.
-struct BodyFrame { vec4 yaw; vec4 pitch; vec4 bank; };
+struct BodyFrame { vec4 yaw; vec4 pitch; vec4 bank; bool moving; };
 
 BodyFrame body_frame(vec3 v, vec3 a) {
     BodyFrame f;
     f.yaw = f.pitch = f.bank = vec4(0.0, 0.0, 0.0, 1.0);
+    f.moving = false;
     float horizontal = sqrt(v.x * v.x + v.z * v.z);
     float speed = sqrt(horizontal * horizontal + v.y * v.y);
     if (speed <= 0.0) return f;
@@ -329,6 +330,7 @@ BodyFrame body_frame(vec3 v, vec3 a) {
     f.yaw = yaw;
     f.pitch = pitch;
     f.bank = vec4(0.0, 0.0, b.y, b.x);
+    f.moving = true;
     return f;
 }
 
@@ -559,18 +561,22 @@ void main() {
         // Body, head and tail: flight.cpp step_bird(), docs/flight-modes.md F.5.
         vec3 v = r.attitude_velocity, a = r.acceleration;
         BodyFrame f = body_frame(v, a);
+        // The roll filter (flight.cpp step_bird(), docs/flight-modes.md F.6): a first-order
+        // low-pass of the bank quaternion's (w, z) and of the lateral acceleration.
+        float horizontal = sqrt(v.x * v.x + v.z * v.z);
+        float lateral = horizontal > 1e-3 ? (a.x * -v.z + a.z * v.x) / horizontal : 0.0;
+        vec3 target = vec3(f.bank.w, f.bank.z, lateral);
+        vec3 roll = first ? target : target + u.bank_limit.z * (state.roll.xyz - target);
+        state.roll = vec4(roll, 0.0);
+        if (f.moving) f.bank = vec4(0.0, 0.0, roll.y, roll.x) * (1.0 / sqrt(roll.x * roll.x + roll.y * roll.y));
         vec4 body_base = qmul_flight(qmul_flight(f.yaw, f.pitch), f.bank);  // identity factors when not moving
         float oscillation = float(KW_BOB_PITCH) * amplitude * sin_t * bob;
         float extra = pitch + oscillation;
         vec4 body = qmul_flight(body_base, nose_up(extra));
         float bob_height = -float(KW_BOB_HEIGHT) * bird.shape.x * amplitude * cos_t * bob;
         float sin_bank = 2.0 * f.bank.z * f.bank.w;
-        float horizontal = sqrt(v.x * v.x + v.z * v.z);
         float look = 0.0;
-        if (horizontal > 1e-3) {
-            float lateral = (a.x * -v.z + a.z * v.x) / horizontal;
-            look = clamp(-float(KW_LOOK_AHEAD) * lateral / horizontal, -float(KW_MAX_LOOK), float(KW_MAX_LOOK));
-        }
+        if (horizontal > 1e-3) look = clamp(-float(KW_LOOK_AHEAD) * roll.z / horizontal, -float(KW_MAX_LOOK), float(KW_MAX_LOOK));
         vec4 head = qmul_flight(qmul_flight(qmul_flight(nose_up(-(float(KW_HEAD_PITCH_HOLD) * pitch + float(KW_HEAD_BOB_HOLD) * oscillation)),
                                                         partial_turn(qconj(f.bank), float(KW_HEAD_BANK_HOLD))),
                                             partial_turn(qconj(f.pitch), float(KW_HEAD_CLIMB_HOLD))),
@@ -591,7 +597,9 @@ void main() {
             diags[slot].velocity = vec4(r.velocity, alpha);
             diags[slot].acceleration = vec4(r.acceleration, float(mode));
             diags[slot].angles = target_look.wings;
-            diags[slot].attitude = vec4(attitude(v, a), t);
+            vec3 angles = attitude(v, a);
+            angles.z = 2.0 * atan(f.bank.z, f.bank.w);  // the Body's (filtered) bank
+            diags[slot].attitude = vec4(angles, t);
             diags[slot].flight = vec4(r.speed_fraction, extra, tail_spread, state.phase.y);
         }
     }

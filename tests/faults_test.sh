@@ -53,7 +53,11 @@ expect_failure() {
   check "$name: no output, no temporary file left" test "$before" = "$after"
 }
 # The sketch cases: the scene in DIR is rewritten in place (or at --out).
-sketch_in() { "$bin" sketch "$1/ahoge.json" --chain girl/ahoge --stroke "$work/stroke.json" --influence 30 "${@:2}"; }
+sketch_in() {  # in place unless --out is among the arguments
+  local where=(--in-place)
+  [[ " ${*:2} " == *" --out "* ]] && where=()
+  "$bin" sketch "$1/ahoge.json" --chain girl/ahoge --stroke "$work/stroke.json" --influence 30 "${where[@]}" "${@:2}"
+}
 scene_unchanged() { cmp -s "$1/ahoge.json" "$work/ahoge.orig.json"; }
 
 # 1. A full disk: a 256 KiB tmpfs, outputs of several MiB (and a filled one for the small files).

@@ -72,15 +72,17 @@ if "${with_drivers[@]}" "$bin" info 2>/dev/null | grep -q '^chosen: [^n]'; then
   check "render failing part-way: the folder it did not create stays, with only what was there" \
     test "$(ls -A "$work/partway/existing")" = flock_00001.png
   # The same in folders the render creates (two levels): every frame is written, then the
-  # contact sheet cannot be (its folder does not exist); frames and folders go.
+  # contact sheet cannot be (a folder stands at its name; a missing folder is made, and
+  # one that cannot be is found before drawing); frames and folders go.
+  mkdir -p "$work/partway/sheet-is-a-folder.png"
   "${with_drivers[@]}" "$bin" render scenes/flock.json --frames 0:2 --size 64x36 --out "$work/partway/new/deep" \
-    --contact-sheet "$work/partway/no/such/dir/sheet.png" >"$work/partway2.out" 2>"$work/partway2.err"
+    --contact-sheet "$work/partway/sheet-is-a-folder.png" >"$work/partway2.out" 2>"$work/partway2.err"
   rc=$?
   cat "$work/partway2.err"
   check "render failing at the contact sheet: exits 1 naming it" bash -c \
-    "test $rc -eq 1 && grep -q 'kodawari: error: .*no/such/dir/sheet.png' '$work/partway2.err'"
+    "test $rc -eq 1 && grep -q 'kodawari: error: .*sheet-is-a-folder.png' '$work/partway2.err'"
   check "render failing at the contact sheet: its frames and the folders it created are removed" \
-    test "$(ls -A "$work/partway")" = existing
+    test "$(ls -A "$work/partway" | tr '\n' ' ')" = "existing sheet-is-a-folder.png "
 else
   echo "SKIP: render failing part-way: no Vulkan device on this machine even with its drivers"
 fi

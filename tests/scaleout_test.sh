@@ -102,11 +102,13 @@ rc=$?
 check "a failing rank fails the run" test $rc -ne 0
 check "its message, with its rank, is printed" grep -q 'rank 1: no usable Vulkan device matches "7"' "$work/mpi.out"
 check "a failing rank leaves no file" bash -c "! ls '$work' | grep -q failed"
-# The writing rank cannot create its output: the others stop too.
-"${mpi[@]}" -np 2 "$bin" run scenes/flock.json --backend cpu --frames 30 --mpi --out "$work/no/such/dir/x.glb" >"$work/mpi.out" 2>&1
+# The writing rank cannot create its output (a file stands where its folder should be):
+# the others stop too.
+: >"$work/in-the-way"
+"${mpi[@]}" -np 2 "$bin" run scenes/flock.json --backend cpu --frames 30 --mpi --out "$work/in-the-way/x.glb" >"$work/mpi.out" 2>&1
 rc=$?
 check "a failing writer fails the run" test $rc -ne 0
-check "the writer's error is printed" grep -q "rank 0: .*no/such/dir/x.glb" "$work/mpi.out"
+check "the writer's error is printed" grep -q "rank 0: .*in-the-way/x.glb" "$work/mpi.out"
 "$bin" run scenes/flock.json --mpi --shard 0/2 >"$work/bad.out" 2>&1
 check "--mpi with --shard exits 2" test $? -eq 2
 

@@ -57,7 +57,8 @@ public:
                     p.motion.z,       p.motion.w,       p.flight.x,       p.flight.y,       p.flight.z,      p.flight.w,
                     p.shape.x,        initial.blend.x,  initial.blend.y,  initial.blend.z,  initial.blend.w, initial.blend2.x,
                     initial.blend2.y, initial.blend2.z, initial.blend2.w, initial.phase.x,  initial.phase.y, initial.phase.z,
-                    -1.0f /* KW_MODE_UNSET */};
+                    -1.0f /* KW_MODE_UNSET */,
+                    initial.roll.x,   initial.roll.y,   initial.roll.z};
                 for (std::size_t r = 0; r < simd::kBirdPose; ++r) rows[r * kBatchLanes + l] = values[r];
                 for (std::size_t r = simd::kBirdPose; r < simd::kBirdRows; ++r) rows[r * kBatchLanes + l] = 0.0f;
             }

@@ -438,9 +438,33 @@ BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
         bob += w * looks[m].bob;
     }
 
+    // Roll (docs/flight-modes.md F.6): the bank body_frame() asks for and the lateral
+    // acceleration the head looks into the turn by pass through a first-order low-pass,
+    // x += (1 - e^(-dt/tau)) (target - x), the exact step of dx/dt = (target - x) / tau
+    // with the target held over the frame (the roll subsidence mode of flight dynamics,
+    // Etkin & Reid, "Dynamics of Flight", 3rd ed., 1996: the roll subsidence mode, a
+    // roll rate proportional to the roll still to go). The bank is filtered as its quaternion about
+    // the forward axis, (z, w) = (sin, cos) of half the angle, then normalised: no trig,
+    // and since |bank| < 90 deg both half angles are within 45 deg, where this nlerp's
+    // rate is within a factor 2 tan(d/4) / d <= 1 of the angle's own filter.
+    // uniforms.bank_limit.z holds e^(-dt/tau), 0 without a filter (then x = target
+    // exactly). Frame 0 starts on its target. Not moving, the Body has no bank (identity)
+    // and the filter runs on toward that.
+    BodyFrame frame_parts = body_frame(uniforms, sample);
+    const Vec3 v = sample.attitude_velocity, a = sample.acceleration;
+    const float horizontal = std::sqrt(v.x * v.x + v.z * v.z);
+    const float lateral = horizontal > 1e-3f ? (a.x * -v.z + a.z * v.x) / horizontal : 0.0f;  // toward the bird's right
+    const float keep = uniforms.bank_limit.z;
+    const gpu::vec4 bank_target = frame_parts.bank;
+    const float roll_w = first ? bank_target.w : bank_target.w + keep * (state.roll.x - bank_target.w);
+    const float roll_z = first ? bank_target.z : bank_target.z + keep * (state.roll.y - bank_target.z);
+    const float roll_lateral = first ? lateral : lateral + keep * (state.roll.z - lateral);
+    state.roll = {roll_w, roll_z, roll_lateral, 0.0f};
+    const float roll_inv = 1.0f / std::sqrt(roll_w * roll_w + roll_z * roll_z);
+    if (frame_parts.moving) frame_parts.bank = {0.0f, 0.0f, roll_z * roll_inv, roll_w * roll_inv};
+
     // Body (SPEC B.4) with the mode's extra pitch and the wingbeat's pitch oscillation
     // about its own lateral axis, and the body's bob (F.5).
-    const BodyFrame frame_parts = body_frame(uniforms, sample);
     const float oscillation = kBobPitch * amplitude * std::sin(t) * bob;
     const float extra = pitch + oscillation;
     // body_rotation()'s product, from the factors the head and tail also use.
@@ -451,14 +475,10 @@ BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
     const float sin_bank = 2.0f * frame_parts.bank.z * frame_parts.bank.w;
 
     // Head (F.5): levels itself against part of the climb, the bank, the extra pitch and
-    // the oscillation, and looks into the turn by the turn rate times a look-ahead time.
-    const Vec3 v = sample.attitude_velocity, a = sample.acceleration;
-    const float horizontal = std::sqrt(v.x * v.x + v.z * v.z);
+    // the oscillation, and looks into the turn by the turn rate (the filtered lateral
+    // acceleration over the speed, F.6) times a look-ahead time.
     float look = 0.0f;
-    if (horizontal > 1e-3f) {
-        const float lateral = (a.x * -v.z + a.z * v.x) / horizontal;  // toward the bird's right
-        look = std::clamp(-kLookAhead * lateral / horizontal, -kMaxLook, kMaxLook);
-    }
+    if (horizontal > 1e-3f) look = std::clamp(-kLookAhead * roll_lateral / horizontal, -kMaxLook, kMaxLook);
     const gpu::vec4 head = quat_mul(quat_mul(quat_mul(nose_up(-(kHeadPitchHold * pitch + kHeadBobHold * oscillation)),
                                                       partial(conj(frame_parts.bank), kHeadBankHold)),
                                              partial(conj(frame_parts.pitch), kHeadClimbHold)),
@@ -484,7 +504,8 @@ BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
     out.diag.velocity = {sample.velocity.x, sample.velocity.y, sample.velocity.z, alpha};
     out.diag.acceleration = {sample.acceleration.x, sample.acceleration.y, sample.acceleration.z, static_cast<float>(mode)};
     out.diag.angles = {target.arm1_pitch, target.arm2_pitch, target.arm1_heading, target.arm2_heading};
-    out.diag.attitude = {att.yaw, att.pitch, att.bank, t};
+    // The bank the Body has (filtered), not the route's instantaneous one.
+    out.diag.attitude = {att.yaw, att.pitch, 2.0f * std::atan2(frame_parts.bank.z, frame_parts.bank.w), t};
     out.diag.flight = {progress.speed_fraction, extra, tail_spread, state.phase.y};
     return out;
 }

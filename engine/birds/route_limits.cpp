@@ -1,5 +1,5 @@
-// What a route asks of a bird: turn load, climb, dive and speed change per segment
-// (docs/wing-types.md "Route limits"). Double precision from the stored float control
+// What a route asks of a bird: turn load, climb, dive and speed change per segment, and
+// the corner and bank jump at each junction (docs/wing-types.md "Route limits"). Double precision from the stored float control
 // points: this is a check, not part of the simulated bits.
 #include "kodawari/birds/route_limits.hpp"
 
@@ -117,6 +117,20 @@ std::vector<SegmentDemand> route_demands(const BirdWorld& world, std::uint32_t r
         const Derivatives c0 = derivatives(c, 0.0), c1 = derivatives(c, h);
         const double dt = step_time(a0, a1, h) + step_time(c0, c1, h);
         note_speed_change(out[k], speed_at(c1) - speed_at(a0), dt, 0.0, speed_at(c0));
+        // Direction and curvature either side: the corner angle atan2(|P'- x P'+|, P'-.P'+),
+        // and the lateral acceleration of flight.cpp step_bird() with v = speed T and
+        // a = speed^2 P'' / |P'|^2 (under either timing; a's part along T has no lateral
+        // component, so the normal part of docs' a = v^2 (P'' - (P''.T)T) / |P'|^2 gives the same).
+        out[k].junction = true;
+        out[k].corner = std::atan2(norm(cross(a1.d1, c0.d1)), a1.d1.x * c0.d1.x + a1.d1.y * c0.d1.y + a1.d1.z * c0.d1.z);
+        const auto lateral = [&](const Derivatives& d) {
+            const double length = norm(d.d1), speed = speed_at(d);
+            const D3 v = (speed / length) * d.d1, acc = (speed * speed / (length * length)) * d.d2;
+            const double horizontal = std::sqrt(v.x * v.x + v.z * v.z);
+            return horizontal > 1e-3 ? (acc.x * -v.z + acc.z * v.x) / horizontal : 0.0;
+        };
+        out[k].lateral_before = lateral(a1);
+        out[k].lateral_after = lateral(c0);
     }
     // Take-off and landing segments change the speed uniformly between rest and the
     // cruise speed (docs/flight-modes.md F.2): v^2 / (2 L) throughout. Their turns are

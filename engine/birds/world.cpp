@@ -206,7 +206,11 @@ gpu::FlightUniforms BirdWorld::uniforms() const {
     u.blend_rates = {f.blend_rates[0], f.blend_rates[1], f.blend_rates[2], f.seed_accel_threshold};
     u.rules = {static_cast<std::uint32_t>(f.bank_rule), static_cast<std::uint32_t>(f.mode_rule),
                static_cast<std::uint32_t>(birds.size()), 0};
-    u.bank_limit = {static_cast<float>(std::cos(double{f.max_bank})), static_cast<float>(std::sin(double{f.max_bank})), 0.0f, 0.0f};
+    // The roll filter keeps e^(-dt/tau) of what is left to roll each frame (F.6), computed
+    // here once, in double: the kernels then need no exp.
+    const double keep = f.bank_time > 0.0f ? std::exp(-static_cast<double>(dt) / double{f.bank_time}) : 0.0;
+    u.bank_limit = {static_cast<float>(std::cos(double{f.max_bank})), static_cast<float>(std::sin(double{f.max_bank})),
+                    static_cast<float>(keep), 0.0f};
     u.blend_rates2 = {f.blend_rates2[0], f.blend_rates2[1], f.blend_rates2[2], f.blend_rates2[3]};
     return u;
 }

@@ -196,7 +196,7 @@ void read_world(const kodawari_bird_world_desc& desc, birds::BirdWorld& world) {
 
 // Opens the backend `options` ask for and loads the world into it. AUTO takes vulkan when
 // a device opens and can hold the world, else cpu and says why, as Simulation::create
-// does: a world larger than the device can bind is Unsupported, which the CPU backends
+// does (but not when `device` names one that is not there: that is an error): a world larger than the device can bind is Unsupported, which the CPU backends
 // do not know. A device the caller lent is always used (effective_backend).
 void open_and_load(kodawari_bird_world& w, const kodawari_backend_options& options) {
     const BackendOptions engine_options = backend_options(options);
@@ -213,6 +213,9 @@ void open_and_load(kodawari_bird_world& w, const kodawari_backend_options& optio
             if (loaded.error().kind != Error::Kind::Unsupported) check(loaded);
             w.fallback_reason = loaded.error().message;
         } else {
+            // A device asked for by name or index that is not there is the caller's
+            // mistake (INVALID_ARGUMENT), never a reason to run elsewhere.
+            if (engine_options.device.size() > 0) check(vulkan);
             w.fallback_reason = vulkan.error().message;
         }
         w.kind = BackendKind::Cpu;

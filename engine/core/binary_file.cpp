@@ -11,9 +11,11 @@ namespace kodawari::core {
 
 Result<std::vector<unsigned char>> read_binary_file(const std::string& path) {
     std::error_code ec;
-    if (std::filesystem::is_directory(path, ec)) return make_error(Error::Kind::Io, path + ": cannot read: is a directory");
+    // An input file that is missing or cannot be opened is bad input (the command line's
+    // exit 2); a read that fails half way is an I/O failure.
+    if (std::filesystem::is_directory(path, ec)) return make_error(Error::Kind::InvalidInput, path + ": cannot read: is a directory");
     std::FILE* f = std::fopen(path.c_str(), "rb");
-    if (f == nullptr) return make_error(Error::Kind::Io, path + ": cannot open: " + std::strerror(errno));
+    if (f == nullptr) return make_error(Error::Kind::InvalidInput, path + ": cannot open: " + std::strerror(errno));
     std::vector<unsigned char> bytes;
     std::array<unsigned char, 65536> block{};
     for (;;) {

@@ -115,7 +115,7 @@ Result<std::array<int, kPartCount>> read_map(const std::string& map_path, const 
     std::array<int, kPartCount> bones{};
     bones.fill(-1);
     std::ifstream in(map_path, std::ios::binary);
-    if (!in) return make_error(Error::Kind::Io, map_path + ": cannot read the mapping file");
+    if (!in) return make_error(Error::Kind::InvalidInput, map_path + ": cannot read the mapping file");
     std::stringstream text;
     text << in.rdbuf();
     const nlohmann::json doc = nlohmann::json::parse(text.str(), nullptr, false);
@@ -362,7 +362,10 @@ std::string bird_scene_json(const BirdSceneOptions& o) {
     flock["seed"] = 1;
     flock["speed_jitter"] = 0.05;
     flock["frequency_jitter"] = 0.1;
-    flock["generated_route"] = {{"seed", 3}, {"segments", 8}, {"center", {0, 40, 0}}, {"extent", {45, 8, 45}}, {"loop", true}};
+    // Rounded to centimetres: the file is read by people, and the scale is a search's result.
+    const auto scaled = [&](double metres) { return std::round(metres * double{o.route_scale} * 100.0) / 100.0; };
+    flock["generated_route"] = {
+        {"seed", 3}, {"segments", 8}, {"center", {0, 40, 0}}, {"extent", {scaled(45), 8, scaled(45)}}, {"loop", true}};
     flock["formation"] = {{"spread", {10, 4, 10}}, {"route_variants", 4}, {"jitter", 2}, {"trail", 2}};
     Json scene;
     scene["format"] = "kodawari-scene";
@@ -370,7 +373,7 @@ std::string bird_scene_json(const BirdSceneOptions& o) {
     scene["name"] = o.name;
     scene["fps"] = 60;
     scene["duration"] = 10;
-    scene["camera"] = {{"position", {0, 60, -150}}, {"target", {0, 40, 0}}, {"fov_deg", 55}};
+    scene["camera"] = {{"position", {0, 60, -scaled(150)}}, {"target", {0, 40, 0}}, {"fov_deg", 55}};
     scene["flocks"] = Json::array({flock});
     return scene.dump(2) + "\n";
 }

@@ -24,9 +24,34 @@ std::string lower(std::string s) {
     return s;
 }
 
+// Shell-style wildcards over the whole (lowered) name: '*' any run, '?' one character.
+// Iterative with one backtrack point, so a pattern of many stars stays linear per star.
+bool wildcard_match(const std::string& name, const std::string& pattern) {
+    std::size_t n = 0, p = 0, star = std::string::npos, resume = 0;
+    while (n < name.size()) {
+        if (p < pattern.size() && (pattern[p] == '?' || pattern[p] == name[n])) {
+            ++n, ++p;
+        } else if (p < pattern.size() && pattern[p] == '*') {
+            star = p++;
+            resume = n;
+        } else if (star != std::string::npos) {
+            p = star + 1;
+            n = ++resume;
+        } else {
+            return false;
+        }
+    }
+    while (p < pattern.size() && pattern[p] == '*') ++p;
+    return p == pattern.size();
+}
+
+// A needle with '*' or '?' is a wildcard pattern over the whole name ("tail*"); any other
+// is a substring ("ear" matches "J_Sec_Ear_L").
 bool contains_any(const std::string& lowered_name, const std::vector<std::string>& needles) {
     return std::any_of(needles.begin(), needles.end(), [&](const std::string& needle) {
-        return !needle.empty() && lowered_name.find(lower(needle)) != std::string::npos;
+        if (needle.empty()) return false;
+        if (needle.find_first_of("*?") != std::string::npos) return wildcard_match(lowered_name, lower(needle));
+        return lowered_name.find(lower(needle)) != std::string::npos;
     });
 }
 

@@ -154,7 +154,7 @@ Result<void> check_buffers(const Context& ctx, const nlohmann::json& doc, const 
                                                   file.string() + ")");
         }
         const auto size = fs::file_size(file, ec);
-        if (ec) return make_error(Error::Kind::Io, ctx.file + ": " + path + ".uri: cannot read " + file.string());
+        if (ec) return make_error(Error::Kind::InvalidInput, ctx.file + ": " + path + ".uri: cannot read " + file.string());
         if (size < declared) {
             return ctx.invalid(path, "byteLength is " + std::to_string(declared) + " but \"" + text + "\" has " +
                                          std::to_string(size) + " bytes (truncated)");

@@ -29,9 +29,9 @@ static_assert(sizeof(ArcSample) == 32 && offsetof(ArcSample, next) == 16);
 static_assert(sizeof(BirdParams) == 80);
 static_assert(offsetof(BirdParams, offset) == 0 && offsetof(BirdParams, motion) == 16 && offsetof(BirdParams, ids) == 32 &&
               offsetof(BirdParams, flight) == 48 && offsetof(BirdParams, shape) == 64);
-static_assert(sizeof(BirdState) == 64);
+static_assert(sizeof(BirdState) == 80);
 static_assert(offsetof(BirdState, blend) == 0 && offsetof(BirdState, blend2) == 16 && offsetof(BirdState, phase) == 32 &&
-              offsetof(BirdState, mode) == 48);
+              offsetof(BirdState, mode) == 48 && offsetof(BirdState, roll) == 64);
 static_assert(sizeof(BirdPose) == 128);
 static_assert(offsetof(BirdPose, position) == 0 && offsetof(BirdPose, rotation) == 16);
 static_assert(sizeof(BirdPoseGpu) == 96);

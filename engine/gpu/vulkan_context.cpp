@@ -345,8 +345,10 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
         }
         choose(inventory, options.device);
         if (inventory.chosen < 0) {
-            // No Vulkan call failed (vk_result stays 0): every device was passed over.
-            Error none = make_error(Error::Kind::Unsupported, inventory.reason);
+            // No Vulkan call failed (vk_result stays 0): every device was passed over. A
+            // device the caller named that is not there is the caller's mistake (bad
+            // input: the command line's exit 2), not a missing capability.
+            Error none = make_error(options.device.empty() ? Error::Kind::Unsupported : Error::Kind::InvalidInput, inventory.reason);
             none.rejected_devices = rejections(inventory);
             return none;
         }

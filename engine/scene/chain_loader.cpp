@@ -136,8 +136,20 @@ Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::Solve
     return {};
 }
 
-Result<ViewSpec> read_view(const JsonReader& r, const JsonNode& node, std::size_t joints) {
-    KW_TRY(r.object(node, {"name", "direction", "influence", "shape"}));
+// `replaces`: the example a sketch replaced (kodawari/scene_edit.hpp), kept so that
+// `sketch --undo` can bring it back. It is checked as a view of the same chain (so an
+// undo never writes what the loader refuses) and otherwise unused; it nests when a sketch
+// replaces a sketch, at most kMaxReplacedDepth deep.
+constexpr int kMaxReplacedDepth = 16;
+
+Result<ViewSpec> read_view_at(const JsonReader& r, const JsonNode& node, std::size_t joints, int depth) {
+    KW_TRY(r.object(node, {"name", "direction", "influence", "shape", "replaces"}));
+    if (const JsonNode replaced = r.member(node, "replaces"); replaced.present()) {
+        if (depth >= kMaxReplacedDepth) {
+            return r.fail(replaced.path, "expected at most " + std::to_string(kMaxReplacedDepth) + " nested replaced examples");
+        }
+        KW_TRY(read_view_at(r, replaced, joints, depth + 1));
+    }
     ViewSpec v;
     KW_TRY(optional_member(r, node, "name", v.name, [&](const JsonNode& n) { return r.string(n); }));
     KW_SCENE_ASSIGN(v.view.direction, read_direction(r, r.member(node, "direction")));
@@ -145,6 +157,10 @@ Result<ViewSpec> read_view(const JsonReader& r, const JsonNode& node, std::size_
                            [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, rods::kMaxInfluence)); }));
     KW_SCENE_ASSIGN(v.shape, read_shape(r, r.member(node, "shape"), joints));
     return v;
+}
+
+Result<ViewSpec> read_view(const JsonReader& r, const JsonNode& node, std::size_t joints) {
+    return read_view_at(r, node, joints, 0);
 }
 
 // The mirror image of a chain across the X = 0 plane of its joint's frame (and of the

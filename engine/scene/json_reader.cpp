@@ -229,15 +229,15 @@ std::string element_path(const std::string& array_path, std::size_t index) {
     return array_path + "[" + std::to_string(index) + "]";
 }
 
-Result<std::string> read_text_file(const std::string& path) {
+Result<std::string> read_text_file(const std::string& path, const std::string& what) {
     std::error_code ec;
     if (std::filesystem::is_directory(path, ec)) {
-        return make_error(Error::Kind::Io, path + ": cannot read the scene: it is a directory");
+        return make_error(Error::Kind::InvalidInput, path + ": cannot read " + what + ": it is a directory");
     }
     const std::unique_ptr<std::FILE, int (*)(std::FILE*)> file(std::fopen(path.c_str(), "rb"), &std::fclose);
     if (!file) {
         const int err = errno;
-        return make_error(Error::Kind::Io, path + ": cannot open the scene: " + std::strerror(err));
+        return make_error(Error::Kind::InvalidInput, path + ": cannot open " + what + ": " + std::strerror(err));
     }
     std::string text;
     std::array<char, 65536> buffer{};
@@ -247,7 +247,7 @@ Result<std::string> read_text_file(const std::string& path) {
         if (n < buffer.size()) break;
     }
     if (std::ferror(file.get()) != 0) {
-        return make_error(Error::Kind::Io, path + ": cannot read the scene: read error");
+        return make_error(Error::Kind::Io, path + ": cannot read " + what + ": read error");
     }
     return text;
 }

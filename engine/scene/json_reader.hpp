@@ -79,8 +79,10 @@ struct NumberRange {
 /// The path of an array element: `$.a[3]`.
 [[nodiscard]] std::string element_path(const std::string& array_path, std::size_t index);
 
-/// Reads the whole file. Error::Kind::Io naming the file when it cannot be read.
-[[nodiscard]] Result<std::string> read_text_file(const std::string& path);
+/// Reads the whole file. An input the user named that cannot be read is bad input
+/// (Error::Kind::InvalidInput, exit 2 on the command line), naming the file and `what` it
+/// is ("the scene", "the stroke file").
+[[nodiscard]] Result<std::string> read_text_file(const std::string& path, const std::string& what = "the scene");
 
 /// Parses JSON text. A syntax error becomes `<file>:<line>:<column>: JSON syntax
 /// error: ...`; a key given twice in one object is an error as well, because nlohmann

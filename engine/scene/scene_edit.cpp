@@ -323,10 +323,14 @@ namespace {
 
 using namespace scene_edit_detail;
 
-std::string view_text(const ViewSpec& view, const std::string& name, const std::string& indent) {
+// `replaced`: the text of the example this one replaces, kept verbatim as its "replaces"
+// member so that remove_last_sketch can put those very bytes back.
+std::string view_text(const ViewSpec& view, const std::string& name, const std::string& indent,
+                      const std::string& replaced = {}) {
     Json name_json = name;
     return "{\"name\": " + name_json.dump() + ", \"direction\": " + vec(glm::vec3(glm::normalize(glm::dvec3(view.view.direction)))) +
-           ", \"influence\": " + num(view.view.influence) + ",\n" + indent + " " + shape_text(view.shape, indent) + "}";
+           ", \"influence\": " + num(view.view.influence) + ",\n" + indent + " " + shape_text(view.shape, indent) +
+           (replaced.empty() ? "" : ",\n" + indent + " \"replaces\": " + replaced) + "}";
 }
 
 // The view as the scene loader would take it back (chain_loader.cpp's read_view): a
@@ -392,7 +396,8 @@ Result<SceneEdit> add_view_example(const std::string& text, const std::string& p
         edit.text = text;
         const Span s = place.views.spans[*replace];
         const std::string indent = line_indent(text, s.begin).value_or("");
-        edit.text.replace(s.begin, s.end - s.begin, view_text(view, edit.name, indent));
+        edit.text.replace(s.begin, s.end - s.begin,
+                          view_text(view, edit.name, indent, text.substr(s.begin, s.end - s.begin)));
         edit.index = static_cast<std::uint32_t>(*replace);
         edit.replaced = true;
         const Json& old = views[*replace];
@@ -435,6 +440,19 @@ Result<SceneEdit> remove_last_sketch(const std::string& text, const std::string&
     edit.index = static_cast<std::uint32_t>(*target);
     edit.keyed = in_keyed;
     edit.name = place.chain[in_keyed ? "keyed" : "views"][*target]["name"].get<std::string>();
+    // A sketch that replaced an example kept it as "replaces": it goes back in its place,
+    // byte for byte.
+    const Span s = a.spans[*target];
+    const auto example_members = members(text, s.begin);
+    if (const Member* replaced = find_member(example_members, "replaces"); replaced != nullptr && !in_keyed) {
+        const std::string old = text.substr(replaced->value.begin, replaced->value.end - replaced->value.begin);
+        const Json old_json = Json::parse(old);
+        edit.replaced = true;
+        edit.replaced_name = old_json.contains("name") && old_json["name"].is_string() ? old_json["name"].get<std::string>() : "";
+        edit.text = text;
+        edit.text.replace(s.begin, s.end - s.begin, old);
+        return edit;
+    }
     edit.text = erase_element(text, place, a, *target);
     return edit;
 }
@@ -490,6 +508,8 @@ Result<void> write_scene_text(const std::string& path, const std::string& text) 
     return {};
 }
 
-Result<std::string> read_text_file(const std::string& path) { return scene_detail::read_text_file(path); }
+Result<std::string> read_text_file(const std::string& path, const std::string& what) {
+    return scene_detail::read_text_file(path, what);
+}
 
 }  // namespace kodawari

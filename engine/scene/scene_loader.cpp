@@ -99,7 +99,7 @@ Result<void> read_climb_thresholds(const JsonReader& r, const JsonNode& node, bi
 }
 
 Result<void> read_flight(const JsonReader& r, const JsonNode& node, birds::FlightSettings& flight) {
-    KW_TRY(r.object(node, {"bank_rule", "max_bank_deg", "mode_rule", "ascend_enter_deg", "ascend_exit_deg",
+    KW_TRY(r.object(node, {"bank_rule", "max_bank_deg", "bank_time_constant", "mode_rule", "ascend_enter_deg", "ascend_exit_deg",
                            "descend_enter_deg", "descend_exit_deg", "seed_accel_threshold", "blend_rates", "gravity"}));
     const JsonNode bank_rule = r.member(node, "bank_rule");
     if (bank_rule.present()) {
@@ -113,6 +113,10 @@ Result<void> read_flight(const JsonReader& r, const JsonNode& node, birds::Fligh
         KW_SCENE_ASSIGN(degrees, r.number(max_bank, NumberRange::closed(0.0, 89.0)));
         flight.max_bank = static_cast<float>(degrees * kDegToRad);
     }
+    // Seconds; 0 rolls instantly (docs/flight-modes.md F.6). 10 s: a bird that takes
+    // longer than that to roll into a turn has flown out of it.
+    KW_TRY(optional_member(r, node, "bank_time_constant", flight.bank_time,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 10.0)); }));
     const JsonNode mode_rule = r.member(node, "mode_rule");
     if (mode_rule.present()) {
         std::size_t index = 0;

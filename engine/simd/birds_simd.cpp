@@ -309,6 +309,8 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
     V glided = load(rows, kBirdGlided, off);
     V beats = load(rows, kBirdBeats, off);
     V mode_state = load(rows, kBirdMode, off);
+    V roll_w = load(rows, kBirdRoll, off), roll_z = load(rows, kBirdRoll + 1, off), roll_lateral = load(rows, kBirdRoll + 2, off);
+    const V roll_keep = S(u.bank_limit.z);  // the roll filter's e^(-dt/tau)
     const V dt = S(u.physics.z);
     const std::size_t valid = std::min(hn::Lanes(D()), batch.count - off);
     const float rates[KW_MODE_COUNT] = {u.blend_rates.x,  u.blend_rates.y,  u.blend_rates.z, u.blend_rates2.x,
@@ -428,7 +430,17 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
             seed_bank_lanes(u, kinematics, kBatchLanes, bank, hn::Lanes(D()));
             frame_parts.bank = load4(bank, 0, 0);
         }
+        // The roll filter (flight.cpp step_bird(), docs/flight-modes.md F.6).
+        const V horizontal = hn::Sqrt(hn::Add(hn::Mul(v.x, v.x), hn::Mul(v.z, v.z)));
+        const V lateral = hn::IfThenElseZero(hn::Gt(horizontal, S(1e-3f)),
+                                             hn::Div(hn::Add(hn::Mul(acc.x, hn::Neg(v.z)), hn::Mul(acc.z, v.x)), horizontal));
+        const Q4 bank_target = frame_parts.bank;
+        roll_w = hn::IfThenElse(first, bank_target.w, hn::Add(bank_target.w, hn::Mul(roll_keep, hn::Sub(roll_w, bank_target.w))));
+        roll_z = hn::IfThenElse(first, bank_target.z, hn::Add(bank_target.z, hn::Mul(roll_keep, hn::Sub(roll_z, bank_target.z))));
+        roll_lateral = hn::IfThenElse(first, lateral, hn::Add(lateral, hn::Mul(roll_keep, hn::Sub(roll_lateral, lateral))));
+        const V roll_inv = hn::Div(S(1.0f), hn::Sqrt(hn::Add(hn::Mul(roll_w, roll_w), hn::Mul(roll_z, roll_z))));
         const Q4 identity{Z(), Z(), Z(), S(1.0f)};
+        frame_parts.bank = select(frame_parts.moving, Q4{Z(), Z(), hn::Mul(roll_z, roll_inv), hn::Mul(roll_w, roll_inv)}, identity);
         const Q4 body_base =
             select(frame_parts.moving, quat_mul(quat_mul(frame_parts.yaw, frame_parts.pitch), frame_parts.bank), identity);
         const V oscillation = hn::Mul(hn::Mul(hn::Mul(S(birds::kBobPitch), motion.z), sin_t), bob);
@@ -436,9 +448,7 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
         const Q4 body = quat_mul(body_base, nose_up(extra));
         const V bob_height = hn::Mul(hn::Mul(hn::Mul(hn::Mul(S(-birds::kBobHeight), body_length), motion.z), cos_t), bob);
         const V sin_bank = hn::Mul(hn::Mul(S(2.0f), frame_parts.bank.z), frame_parts.bank.w);
-        const V horizontal = hn::Sqrt(hn::Add(hn::Mul(v.x, v.x), hn::Mul(v.z, v.z)));
-        const V lateral = hn::Div(hn::Add(hn::Mul(acc.x, hn::Neg(v.z)), hn::Mul(acc.z, v.x)), horizontal);
-        V look = hn::Div(hn::Mul(S(-birds::kLookAhead), lateral), horizontal);
+        V look = hn::Div(hn::Mul(S(-birds::kLookAhead), roll_lateral), horizontal);
         look = hn::Min(hn::Max(look, S(-birds::kMaxLook)), S(birds::kMaxLook));
         look = hn::IfThenElseZero(hn::Gt(horizontal, S(1e-3f)), look);
         V look_s, look_c;
@@ -472,6 +482,10 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
         if (a.diag != nullptr) {
             HWY_ALIGN float angles[3 * kBatchLanes];
             attitude_lanes(u, kinematics, kBatchLanes, angles, hn::Lanes(D()));
+            HWY_ALIGN float bank[2 * kBatchLanes];  // the Body's (filtered) bank, as the reference reports it
+            hn::Store(frame_parts.bank.z, D(), bank);
+            hn::Store(frame_parts.bank.w, D(), bank + kBatchLanes);
+            half_angle_lanes(bank, bank + kBatchLanes, angles + 2 * kBatchLanes, hn::Lanes(D()));
             const Q4 parts[5] = {{sample.velocity.x, sample.velocity.y, sample.velocity.z, alpha},
                                  {acc.x, acc.y, acc.z, mode},
                                  {target.arm1_pitch, target.arm2_pitch, target.arm1_heading, target.arm2_heading},
@@ -487,6 +501,9 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
     store(glided, rows, kBirdGlided, off);
     store(beats, rows, kBirdBeats, off);
     store(mode_state, rows, kBirdMode, off);
+    store(roll_w, rows, kBirdRoll, off);
+    store(roll_z, rows, kBirdRoll + 1, off);
+    store(roll_lateral, rows, kBirdRoll + 2, off);
 }
 
 void simulate_batches(const BirdStepArgs& args, std::size_t begin, std::size_t end) {

@@ -6,7 +6,7 @@
 // within a route, so that a batch's route (timing, looping, segment count, tables) is
 // uniform and one vector instruction advances 16 (AVX-512), 8 (AVX2) or 4 (SSE4) birds.
 // A batch's block holds rows of 16 floats: the birds' constants, their state (blend,
-// phase, mode) and, for frames simulated without an output, the moving parts' pose (the
+// phase, mode, roll) and, for frames simulated without an output, the moving parts' pose (the
 // GPU's BirdPoseGpu: position, Body, Head, Tail, LeftArm1, LeftArm2), which still goes to memory, as
 // on the GPU. Padding lanes repeat the batch's first bird and are never written out.
 //
@@ -41,8 +41,9 @@ enum BirdRow : std::uint32_t {
     kBirdGlided = 22,  // BirdState::phase.y
     kBirdBeats = 23,   // BirdState::phase.z
     kBirdMode = 24,    // BirdState::mode.x as a float; -1 = KW_MODE_UNSET
-    kBirdPose = 25,    // BirdPoseGpu (24 floats): the last frame without an output
-    kBirdRows = 49,
+    kBirdRoll = 25,    // BirdState::roll.xyz: the roll filter (filtered bank quaternion w, z; lateral acceleration)
+    kBirdPose = 28,    // BirdPoseGpu (24 floats): the last frame without an output
+    kBirdRows = 52,
 };
 
 /// A batch of up to kBatchLanes birds on one route.

@@ -61,6 +61,10 @@ void seed_bank_lanes(const gpu::FlightUniforms& uniforms, const float* motion, s
     }
 }
 
+void half_angle_lanes(const float* z, const float* w, float* angle, std::size_t count) {
+    for (std::size_t i = 0; i < count; ++i) angle[i] = 2.0f * std::atan2(z[i], w[i]);
+}
+
 void attitude_lanes(const gpu::FlightUniforms& uniforms, const float* motion, std::size_t stride, float* angles,
                     std::size_t count) {
     for (std::size_t i = 0; i < count; ++i) {

@@ -26,6 +26,10 @@ void partial_lanes(float* q, std::size_t stride, float fraction, std::size_t cou
 void seed_bank_lanes(const gpu::FlightUniforms& uniforms, const float* motion, std::size_t stride, float* rotation,
                               std::size_t count);
 
+/// The diagnostics' bank of flight.cpp step_bird(), 2 atan2(z, w) of the Body's bank
+/// quaternion: rows z and w in, `count` angles out.
+void half_angle_lanes(const float* z, const float* w, float* angle, std::size_t count);
+
 /// birds::attitude() lane by lane (the diagnostics' yaw, climb and bank): rows as above in,
 /// rows (yaw, pitch, bank) out.
 void attitude_lanes(const gpu::FlightUniforms& uniforms, const float* motion, std::size_t stride, float* angles,

@@ -8,6 +8,7 @@
 #include <optional>
 
 #include "kodawari/gpu_info.hpp"
+#include "kodawari/scene.hpp"
 #include "simulation/frame_payload.hpp"
 
 namespace kodawari {
@@ -50,7 +51,13 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
     SimulationOptions sim_options = options.simulation;
     sim_options.shard = {static_cast<std::uint32_t>(comm.rank()), static_cast<std::uint32_t>(comm.size())};
     choose_device_by_local_rank(sim_options, comm.local_rank());
-    auto opened = Simulation::open(scene_path, sim_options);
+    auto opened = [&]() -> Result<std::unique_ptr<Simulation>> {
+        if (!options.prepare_scene) return Simulation::open(scene_path, sim_options);
+        auto scene = load_scene(scene_path);
+        if (!scene) return scene.error();
+        if (auto prepared = options.prepare_scene(scene.value()); !prepared) return prepared.error();
+        return Simulation::create(std::move(scene).value(), sim_options);
+    }();
     KW_TRY(comm.agree(opened ? Result<void>{} : Result<void>{opened.error()}));
     Simulation& sim = *opened.value();
     if (options.opened) options.opened(sim);

@@ -32,7 +32,7 @@ Error bad(const std::string& text) { return Error{Error::Kind::InvalidInput, tex
 // the one it rebuilds the world from (a changed scene would give other instances).
 Result<std::uint64_t> hash_file(const std::string& path) {
     std::ifstream in(path, std::ios::binary);
-    if (!in) return make_error(Error::Kind::Io, path + ": cannot read the scene file");
+    if (!in) return make_error(Error::Kind::InvalidInput, path + ": cannot read the scene file");
     std::uint64_t hash = 0xcbf29ce484222325ull;
     char buffer[1 << 16];
     while (in) {
@@ -191,7 +191,7 @@ Result<Part> open_part(const std::string& path) {
     Part part;
     part.path = path;
     part.file = std::fopen(path.c_str(), "rb");
-    if (part.file == nullptr) return make_error(Error::Kind::Io, path + ": cannot open the part file");
+    if (part.file == nullptr) return make_error(Error::Kind::InvalidInput, path + ": cannot open the part file: " + std::strerror(errno));
     std::string magic(kMagic.size(), '\0');
     if (std::fread(magic.data(), 1, magic.size(), part.file) != magic.size() || magic != kMagic) {
         return bad(path + ": not a kodawari part file (it does not start with \"KODAWARI-PART 1\"; `kodawari run --shard I/N` writes them)");

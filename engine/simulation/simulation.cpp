@@ -79,8 +79,8 @@ struct Simulation::Impl {
             auto took = animator->write_inputs_on(*rods);
             if (!took) return took.error();
         }
-        timing.chain_seconds += seconds_since(start);
-        if (f > 0 && rods->last_gpu_ms() >= 0.0) timing.chain_gpu_ms += rods->last_gpu_ms();
+        (f < 2 ? timing.chain_warmup_seconds : timing.chain_seconds) += seconds_since(start);
+        if (f >= 2 && rods->last_gpu_ms() >= 0.0) timing.chain_gpu_ms += rods->last_gpu_ms();
         return {};
     }
 
@@ -93,11 +93,18 @@ struct Simulation::Impl {
         }
         const auto start = std::chrono::steady_clock::now();
         KW_TRY(birds->simulate(n, frame_out));
-        timing.bird_seconds += seconds_since(start);
-        if (birds->last_gpu_ms() >= 0.0) {
-            timing.bird_gpu_ms += birds->last_gpu_ms();
+        if (timing.bird_first_frames == 0) {
+            timing.bird_first_seconds = seconds_since(start);
+            timing.bird_first_frames = n;
+            timing.bird_first_gpu_ms = birds->last_gpu_ms();
         } else {
-            timing.bird_gpu_timed = false;
+            timing.bird_seconds += seconds_since(start);
+            timing.bird_frames += n;
+            if (birds->last_gpu_ms() >= 0.0) {
+                timing.bird_gpu_ms += birds->last_gpu_ms();
+            } else {
+                timing.bird_gpu_timed = false;
+            }
         }
         if (keep_poses) {
             const std::size_t count = bird_world.birds.size();
@@ -190,13 +197,14 @@ Result<std::unique_ptr<Simulation>> Simulation::create(Scene scene, const Simula
 
     // One Vulkan device for every backend, so that their buffers meet there (the pose
     // matrices feed the rod input, a renderer draws the state); "auto" falls back to the
-    // CPU when none opens.
+    // CPU when none opens, but not when a device was asked for by name or index: the
+    // caller meant that device, and running elsewhere would hide the mistake.
     impl->kind = options.backend.value_or(BackendKind::Vulkan);
     if (impl->kind == BackendKind::Vulkan && !impl->options.options.context) {
         auto device = open_shared_device(impl->options.options);
         if (device) {
             impl->options.options.context = std::move(device).value();
-        } else if (!options.backend) {
+        } else if (!options.backend && options.options.device.empty()) {
             impl->kind = BackendKind::Cpu;
             impl->fallback_reason = device.error().message;
         } else {

@@ -86,7 +86,7 @@ struct FlightUniforms {
     vec4 climb;        // sin(g)|sin(g)| of the climb thresholds g: x ascend enter, y ascend exit, z descend enter, w descend exit
     vec4 blend_rates;  // x: into level, y: into ascend, z: into descend (per 1/60 s), w: seed rule's |a_y| threshold
     uvec4 rules;       // x: bank rule, y: mode rule (the kernel takes both as specialization constants), z: bird count, w: unused
-    vec4 bank_limit;   // x: cos(max bank), y: sin(max bank), z, w: unused
+    vec4 bank_limit;   // x: cos(max bank), y: sin(max bank), z: the roll filter's gain per frame 1 - exp(-dt / tau) (1: no filter; docs/flight-modes.md F.6), w: unused
     vec4 blend_rates2; // into glide, take-off, landing, hover (per 1/60 s)
 };
 
@@ -123,12 +123,13 @@ struct BirdParams {
     vec4 shape;   // x: body length (m), y: wingspan (m), z, w: unused
 };
 
-// Per-bird state carried from frame to frame (mode hysteresis, transitions, phase).
+// Per-bird state carried from frame to frame (mode hysteresis, transitions, phase, roll).
 struct BirdState {
     vec4 blend;   // weights of the level, ascend, descend and glide poses in the blend source
     vec4 blend2;  // xyz: weights of the take-off, landing and hover poses, w: alpha (1 = no transition)
     vec4 phase;   // x: wingbeat phase in cycles [0, 1), y: seconds glided (flap-glide rhythm), z: wingbeats since the last glide, w: unused
     uvec4 mode;   // x: current target mode (KW_MODE_*), yzw: unused
+    vec4 roll;    // the roll filter (docs/flight-modes.md F.6): xy: the filtered bank quaternion's w, z (not normalised), z: the filtered lateral acceleration (m/s^2), w: unused
 };
 
 // Per-bird, per-frame output: the 7 part transforms. Translations other than the

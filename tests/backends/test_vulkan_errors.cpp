@@ -66,7 +66,8 @@ TEST(VulkanErrors, ADeviceNameThatMatchesNothingNamesEveryDeviceAndWhy) {
     const auto ctx = gpu::VulkanContext::create({.device = request});
     ASSERT_FALSE(ctx.ok());
     const Error& error = ctx.error();
-    EXPECT_EQ(error.kind, Error::Kind::Unsupported);
+    // The caller's request names nothing there: bad input (the command line's exit 2).
+    EXPECT_EQ(error.kind, Error::Kind::InvalidInput);
     EXPECT_EQ(error.vk_result, 0) << "no Vulkan call failed: every device was passed over";
     ASSERT_EQ(error.rejected_devices.size(), all.value().devices.size());
     for (std::size_t i = 0; i < error.rejected_devices.size(); ++i) {

@@ -2,8 +2,10 @@
 // with its messages, and the timing fit (docs/wing-types.md "Route limits").
 #include <gtest/gtest.h>
 
+#include <array>
 #include <cmath>
 #include <string>
+#include <vector>
 
 #include "kodawari/birds/route_limits.hpp"
 #include "kodawari/route_check.hpp"
@@ -15,8 +17,9 @@ namespace {
 
 // One gull on `route` (JSON control points) at `speed`, timing `timing`.
 Scene flock_scene(const std::string& points, const std::string& timing = "arc-length", double speed = 12.0,
-                  const std::string& extra = "") {
-    const std::string text = R"({"format": "kodawari-scene", "version": 1, "name": "t", "fps": 30, "duration": 1,
+                  const std::string& extra = "", const std::string& scene_extra = "") {
+    const std::string text = R"({"format": "kodawari-scene", "version": 1, "name": "t", "fps": 30, "duration": 1)" +
+                             scene_extra + R"(,
         "flocks": [{"name": "gulls", "wing_type": "gull", "count": 3, "seed": 5, "speed": )" +
                              std::to_string(speed) + R"(, "speed_jitter": 0.05, "timing": ")" + timing + R"(",
                      "route": {"points": )" + points + extra + R"(}}]})";
@@ -28,8 +31,8 @@ Scene flock_scene(const std::string& points, const std::string& timing = "arc-le
 // A straight, level first segment, then a hairpin of about 5 m radius (segment 1).
 const std::string kTightTurn = "[[0,20,0],[0,20,20],[0,20,40],[0,20,60],[0,20,68],[10,20,68],[10,20,60],"
                                "[10,20,40],[10,20,20],[10,20,0]]";
-// Level, then a straight 40 degree climb in segment 1 (a kink at the junction: the
-// check looks at climbs, not at G1).
+// Level, then a straight 40 degree climb in segment 1 (a kink at the junction: a corner
+// of 40 degrees too).
 const std::string kSteepClimb = "[[0,20,0],[0,20,20],[0,20,40],[0,20,60],[0,36.8,80],[0,53.6,100],[0,70.4,120]]";
 
 }  // namespace
@@ -94,7 +97,13 @@ TEST(RouteLimits, TightTurnWarnsNamingSegmentAndLimit) {
     const Scene scene = flock_scene(kTightTurn);
     auto warnings = check_routes(scene);
     ASSERT_TRUE(warnings.ok());
-    ASSERT_EQ(warnings.value().size(), 1u);
+    // The turn, and the bank jumps from straight flight into the hairpin and out of it
+    // (junctions 1 and 2, sorted by segment then limit).
+    ASSERT_EQ(warnings.value().size(), 3u);
+    EXPECT_EQ(warnings.value()[1].limit, RouteLimit::BankJump);
+    EXPECT_EQ(warnings.value()[1].segment, 1u);
+    EXPECT_EQ(warnings.value()[2].limit, RouteLimit::BankJump);
+    EXPECT_EQ(warnings.value()[2].segment, 2u);
     const RouteWarning& w = warnings.value()[0];
     EXPECT_EQ(w.segment, 1u);
     EXPECT_EQ(w.limit, RouteLimit::TurnRadius);
@@ -113,7 +122,8 @@ TEST(RouteLimits, SteepClimbWarns) {
     const Scene scene = flock_scene(kSteepClimb);
     auto warnings = check_routes(scene);
     ASSERT_TRUE(warnings.ok());
-    ASSERT_EQ(warnings.value().size(), 1u);
+    ASSERT_EQ(warnings.value().size(), 2u);  // the climb, and the corner where it starts
+    EXPECT_EQ(warnings.value()[1].limit, RouteLimit::Corner);
     const RouteWarning& w = warnings.value()[0];
     EXPECT_EQ(w.segment, 1u);
     EXPECT_EQ(w.limit, RouteLimit::Climb);
@@ -154,7 +164,7 @@ TEST(RouteLimits, FitLowersOnlyTheSpeed) {
     *faster.flocks[0].speed *= 1.01f;
     auto again = check_routes(faster);
     ASSERT_TRUE(again.ok());
-    EXPECT_EQ(again.value().size(), 1u);
+    EXPECT_FALSE(again.value().empty());
 }
 
 TEST(RouteLimits, FitLengthensParametricSegments) {
@@ -206,4 +216,83 @@ TEST(RouteLimits, GeneratedRoutesKeepToTheBirdWhereTheyCan) {
     ASSERT_TRUE(fast.ok()) << fast.error().message;
     ASSERT_FALSE(fast.value().empty());
     EXPECT_EQ(fast.value().front().limit, RouteLimit::TurnRadius) << fast.value().front().message;
+}
+
+// Issue 39: junctions. A level straight along +Z, then one turned 30 degrees toward +X
+// at the junction (a corner: the heading turns 30 degrees in one frame); and an S of two
+// 20 m quarter circles that meet with one direction but opposite curvature.
+const std::string kCorner = "[[0,20,0],[0,20,20],[0,20,40],[0,20,60],[10,20,77.3205],[20,20,94.641],[30,20,111.962]]";
+std::string all_messages(const std::vector<RouteWarning>& warnings) {
+    std::string text;
+    for (const RouteWarning& w : warnings) text += w.message + "\n";
+    return text;
+}
+const std::string kSBend = "[[0,20,0],[0,20,11.05],[-8.95,20,20],[-20,20,20],[-31.05,20,20],[-40,20,28.95],[-40,20,40]]";
+
+TEST(RouteLimits, AJunctionCornerWarns) {
+    const Scene scene = flock_scene(kCorner);
+    auto warnings = check_routes(scene);
+    ASSERT_TRUE(warnings.ok());
+    ASSERT_EQ(warnings.value().size(), 1u) << all_messages(warnings.value());  // straight either side: no bank jump
+    const RouteWarning& w = warnings.value()[0];
+    EXPECT_EQ(w.limit, RouteLimit::Corner);
+    EXPECT_EQ(w.segment, 1u);
+    EXPECT_NEAR(w.value, 30.0, 1e-3);  // atan2(10, 17.3205): the control points' rounding only
+    EXPECT_EQ(w.bound, kMaxCornerDeg);
+    EXPECT_NE(w.message.find("segment 1 (u = 0): the route turns 30 deg at the junction with segment 0 (a corner"),
+              std::string::npos)
+        << w.message;
+}
+
+TEST(RouteLimits, FitSmoothsACornerOntoTheBisector) {
+    Scene scene = flock_scene(kCorner);
+    auto changes = fit_routes(scene);
+    ASSERT_TRUE(changes.ok());
+    ASSERT_FALSE(changes.value().empty());
+    EXPECT_NE(changes.value()[0].find("route points 2 and 4 turned onto one line through point 3 (a 30 deg corner)"),
+              std::string::npos)
+        << changes.value()[0];
+    // The junction stays; its handles keep their lengths (20 m) on the bisector, 15
+    // degrees from +Z toward +X. A bend that is now a curve may then ask for a slower bird
+    // (a bank jump at the junctions either side), which the same fit gives.
+    const auto& p = scene.flocks[0].route->points;
+    EXPECT_EQ(p[3], (std::array<float, 3>{0, 20, 60}));
+    EXPECT_NEAR(p[2][0], -20.0 * std::sin(15.0 * 0.017453292519943295), 1e-4);
+    EXPECT_NEAR(p[4][2], 60.0 + 20.0 * std::cos(15.0 * 0.017453292519943295), 1e-4);
+    auto warnings = check_routes(scene);
+    ASSERT_TRUE(warnings.ok());
+    EXPECT_TRUE(warnings.value().empty()) << warnings.value().front().message;
+}
+
+TEST(RouteLimits, ABankJumpWarnsUnlessTheRollFilterSpreadsIt) {
+    // At up to 12.6 m/s (the fastest gull) on 20 m: a_lat = 7.9 m/s^2, a bank of 38.9 degrees
+    // each way, a jump of 77.8 (the cubic's curvature at its ends is within 1 % of the
+    // circle's). At 30 fps and tau = 0.3 s the filter rolls 1 - e^(-1/9) = 10.5 % of it in
+    // the first frame, 8.2 degrees, above 4; tau = 1 s rolls 3.3 % (2.6 degrees), within.
+    const Scene scene = flock_scene(kSBend);
+    auto warnings = check_routes(scene);
+    ASSERT_TRUE(warnings.ok());
+    ASSERT_EQ(warnings.value().size(), 1u) << all_messages(warnings.value());
+    const RouteWarning& w = warnings.value()[0];
+    EXPECT_EQ(w.limit, RouteLimit::BankJump);
+    EXPECT_EQ(w.segment, 1u);
+    EXPECT_GT(w.value, 7.0);  // the fastest bird's speed is 12 m/s +- 5 %: 7.2 to 8.2 degrees
+    EXPECT_LT(w.value, 8.4);
+    EXPECT_NE(w.message.find("segment 1 (u = 0): the bank the route asks for jumps at the junction with segment 0 at "),
+              std::string::npos)
+        << w.message;
+    EXPECT_NE(w.message.find(" m/s: the gull rolls "), std::string::npos) << w.message;
+    const Scene slow = flock_scene(kSBend, "arc-length", 12.0, "", R"(, "flight": {"bank_time_constant": 1})");
+    auto spread = check_routes(slow);
+    ASSERT_TRUE(spread.ok());
+    EXPECT_TRUE(spread.value().empty()) << spread.value().front().message;
+    // --fit-routes flies it slower instead.
+    Scene fitted = scene;
+    auto changes = fit_routes(fitted);
+    ASSERT_TRUE(changes.ok());
+    ASSERT_EQ(changes.value().size(), 1u);
+    EXPECT_NE(changes.value()[0].find("speed 12 -> "), std::string::npos) << changes.value()[0];
+    auto after = check_routes(fitted);
+    ASSERT_TRUE(after.ok());
+    EXPECT_TRUE(after.value().empty()) << after.value().front().message;
 }

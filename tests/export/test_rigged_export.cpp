@@ -496,7 +496,7 @@ TEST(RiggedExport, SourceThatDoesNotLoadIsAnError) {
     const std::string missing = dir.file("missing.gltf");
     auto created = RiggedGlbWriter::create(missing, crowd.character, crowd.instances, crowd.animated, kFps, "x");
     ASSERT_FALSE(created.ok());
-    EXPECT_EQ(created.error().kind, Error::Kind::Io);
+    EXPECT_EQ(created.error().kind, Error::Kind::InvalidInput);  // a missing input file: bad input (issue 37)
     EXPECT_NE(created.error().message.find(missing), std::string::npos) << created.error().message;
 
     // Another file than the character's: the node counts differ.

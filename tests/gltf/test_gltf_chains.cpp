@@ -212,6 +212,26 @@ TEST(GltfChains, SpringBoneSamplesByDefaultPatterns) {
     }
 }
 
+TEST(GltfChains, WildcardPatternsMatchWholeNamesAndWordsMatchWithin) {
+    // Issue 37: `rig --chains 'tail*'` found nothing, as patterns were substrings only.
+    // "Spring A" is the samples' chain root; "Collider" a separate root that never matches.
+    const gltf::Character character = load(kAssets + "/vrm-springbone/" + kSpringFiles.front());
+    const auto found = [&](std::vector<std::string> patterns) {
+        gltf::ChainSearch search;
+        search.patterns = std::move(patterns);
+        const auto setup = gltf::find_chains(character, search);
+        EXPECT_TRUE(setup.ok()) << setup.error().message;
+        return setup.ok() ? setup.value().chains.size() : std::size_t{99};
+    };
+    EXPECT_EQ(found({"spring*"}), 1u);      // the whole name, case-insensitive
+    EXPECT_EQ(found({"SPRING ?"}), 1u);     // '?' is one character
+    EXPECT_EQ(found({"*a"}), 1u);           // anchored at the end
+    EXPECT_EQ(found({"pring*"}), 0u);       // a wildcard pattern is anchored at the start
+    EXPECT_EQ(found({"spring"}), 1u);       // a word is a substring, as before
+    EXPECT_EQ(found({"pring"}), 1u);
+    EXPECT_EQ(found({"spring ??"}), 0u);    // one character too many
+}
+
 TEST(GltfChains, SpringBonePhysicsScaleWithSize) {
     // inside-collider: nodes at y = 2, 1.5, 1, 0.5, 0 and the collider at (0, 1, 0):
     // size 2 m, thickness 0.006 * 2 = 1.2 cm, mass 300 * pi * 0.012^2 * 0.5 = 67.9 g.

@@ -15,11 +15,12 @@ using namespace gltf_import_test;  // its helpers, TempDir, json and fs
 
 // --- bad input -------------------------------------------------------------------------
 
-TEST(GltfImportErrors, UnreadableFileIsIo) {
+TEST(GltfImportErrors, AMissingFileIsBadInput) {
+    // Issue 37: a missing input file is bad input (exit 2), as a malformed one is.
     TempDir dir;
     const auto loaded = gltf::load_character(dir.file("absent.gltf"));
     ASSERT_FALSE(loaded.ok());
-    EXPECT_EQ(loaded.error().kind, Error::Kind::Io);
+    EXPECT_EQ(loaded.error().kind, Error::Kind::InvalidInput);
     EXPECT_NE(loaded.error().message.find("absent.gltf"), std::string::npos) << loaded.error().message;
 }
 

@@ -13,6 +13,13 @@
 #   5. find_package_sim/: COMPONENTS sim, tests/consumers/sim_only.cpp on kodawari::sim alone.
 #   6. pkg_config/: make and `pkg-config --cflags --libs kodawari` (--static for a static
 #      build), consumer.cpp again.
+#   6b. The C API as docs/install.md shows it: find_package_c/ (COMPONENTS c, kodawari::c,
+#      a C-only project) and pkg_config_c/build.sh (`cc app.c $(pkg-config ... kodawari-c)`
+#      with the rpath), each running examples/embed_cpu/main.c and printing what the build
+#      tree's embed_cpu_c prints; without the rpath the program must not start, and with
+#      LD_LIBRARY_PATH (the documented alternative) it must.
+#   The C++ consumers set no C++ standard: the compiler's default must do, as the targets
+#   carry cxx_std_20 (GCC 12 defaults to C++17, where <span> is missing).
 #   7. add_subdirectory/: the source tree as a subproject (its tests, command and
 #      install rules off), consumer.cpp again. Its build folder is kept in
 #      BUILD/tests/package/add_subdirectory, so that a second run rebuilds only what
@@ -81,7 +88,8 @@ libdir="$(cd "$prefix" && ls -d lib* | head -1)"
 for f in include/kodawari/simulation.hpp include/kodawari/api.hpp include/kodawari/version.hpp \
   include/kodawari/shared/birds.h "$libdir/cmake/kodawari/kodawariConfig.cmake" \
   "$libdir/cmake/kodawari/kodawariConfigVersion.cmake" "$libdir/cmake/kodawari/kodawariTargets.cmake" \
-  "$libdir/pkgconfig/kodawari.pc" share/doc/kodawari/README.md share/doc/kodawari/docs/embedding.md \
+  "$libdir/pkgconfig/kodawari.pc" "$libdir/pkgconfig/kodawari-c.pc" include/kodawari/kodawari.h \
+  share/doc/kodawari/docs/command-line.md share/doc/kodawari/README.md share/doc/kodawari/docs/embedding.md \
   share/doc/kodawari/docs/scene.schema.json share/doc/kodawari/docs/images/crowd-gltf.png; do
   [[ -f "$prefix/$f" ]] || fail "$f not installed"
 done
@@ -92,6 +100,7 @@ while IFS= read -r header; do
   rel="${header#"$prefix/include/"}"
   [[ -f "$src/engine/include/$rel" || -f "$src/engine/include/$rel.in" ]] || fail "$rel is installed but not a public header"
 done < <(find "$prefix/include" -type f)
+ls "$prefix/$libdir/libkodawari.so".* >/dev/null 2>&1 || fail "libkodawari.so.* (the C API) not installed"
 for component in sim vulkan io render engine; do
   if is_on "$shared"; then
     ls "$prefix/$libdir/libkodawari_$component.so".* >/dev/null 2>&1 || fail "libkodawari_$component.so.* not installed"
@@ -102,6 +111,10 @@ done
 if [[ -x "$prefix/bin/kodawari" ]]; then
   version="$("$prefix/bin/kodawari" --version)"
   echo "package: installed command: $version"
+  # Its help points at the reference page where the install put it (issue 37: it named
+  # docs/command-line.md, which an install has only under share/doc).
+  "$prefix/bin/kodawari" --help | tr -d '\n' | grep -qF "$prefix/share/doc/kodawari/docs/command-line.md" \
+    || fail "the installed command's --help does not name $prefix/share/doc/kodawari/docs/command-line.md"
 fi
 echo "package: installed into a temporary prefix: $(find "$prefix" -type f | wc -l) files," \
   "$(find "$prefix/include" -type f | wc -l) headers, libraries in $libdir"
@@ -146,6 +159,27 @@ quiet make -C "$here/pkg_config" OUT="$work" CXX="$compiler" PKG_CONFIG_LIBS="$p
   LDFLAGS="$exe_linker_flags $ldflags"
 "$work/consumer" "$src" "$out" || fail "the pkg-config consumer"
 done_step "pkg-config consumer"
+
+# 6b. The C API, with CMake and with pkg-config, as docs/install.md shows it.
+expected_c="$("$build/tests/embed_cpu/embed_cpu_c")" || fail "the build tree's embed_cpu_c"
+cc_launcher=()
+[[ -n "$launcher" ]] && cc_launcher=(-DCMAKE_C_COMPILER_LAUNCHER="$launcher")
+quiet cmake -S "$here/find_package_c" -B "$work/find_package_c" -G "$generator" -DCMAKE_BUILD_TYPE="$build_type" \
+  -DCMAKE_C_FLAGS="$cxx_flags" -DCMAKE_EXE_LINKER_FLAGS="$exe_linker_flags" -DCMAKE_PREFIX_PATH="$prefix" "${cc_launcher[@]}"
+quiet cmake --build "$work/find_package_c" -j "$jobs"
+[[ "$("$work/find_package_c/app")" == "$expected_c" ]] || fail "the find_package(COMPONENTS c) consumer printed other tips than embed_cpu_c"
+done_step "find_package COMPONENTS c consumer (C, kodawari::c)"
+mkdir -p "$work/c"
+quiet bash "$here/pkg_config_c/build.sh" "$work/c"
+[[ "$("$work/c/app")" == "$expected_c" ]] || fail "the pkg-config kodawari-c consumer printed other tips than embed_cpu_c"
+# Without the rpath the loader cannot find libkodawari.so in a prefix of its own; with
+# LD_LIBRARY_PATH, the alternative docs/install.md gives, it can.
+(cd "$work/c" && quiet cc app.c $(pkg-config --cflags --libs kodawari-c) $exe_linker_flags -o app_norpath)
+if "$work/c/app_norpath" >/dev/null 2>&1; then fail "a program without the rpath started: the test's prefix is on the loader's path"; fi
+[[ "$(LD_LIBRARY_PATH="$(pkg-config --variable=libdir kodawari-c)" "$work/c/app_norpath")" == "$expected_c" ]] \
+  || fail "LD_LIBRARY_PATH=\$(pkg-config --variable=libdir kodawari-c) did not let the program run"
+echo "package: pkg-config --cflags --libs kodawari-c: $(pkg-config --cflags --libs kodawari-c)"
+done_step "pkg-config kodawari-c consumer (C, rpath and LD_LIBRARY_PATH)"
 
 # 7. add_subdirectory, in a build folder kept between runs.
 sub="$build/tests/package/add_subdirectory"

@@ -127,7 +127,7 @@ TEST(SketchRender, SketchChangesWhatRenderShowsFromThatView) {
     };
     const Png before = render_to("before");
     std::string output;
-    ASSERT_EQ(run_command(cli + " sketch " + shell_quote(scene_path) + " --chain girl/ahoge --stroke " + shell_quote(stroke_path) +
+    ASSERT_EQ(run_command(cli + " sketch " + shell_quote(scene_path) + " --in-place --chain girl/ahoge --stroke " + shell_quote(stroke_path) +
                               size + " --influence 50",
                           output),
               0)

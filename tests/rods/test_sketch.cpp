@@ -312,6 +312,39 @@ TEST(SketchSave, ReplacesAnExampleForNearlyTheSameView) {
     ASSERT_EQ(ahoge_chain(scene.value()).views.size(), 5u);
     EXPECT_EQ(ahoge_chain(scene.value()).views[0].name, "sketch 1");
     EXPECT_EQ(ahoge_chain(scene.value()).views[1].name, "back");
+
+    // Issue 37: the replaced example is kept as the sketch's "replaces" and an undo puts it
+    // back, byte for byte; a sketch replacing that sketch nests, and two undos unwind both.
+    EXPECT_NE(edit.value().text.find("\"replaces\": {\"name\": \"front\""), std::string::npos);
+    auto again = add_view_example(edit.value().text, "ahoge.json", "girl/ahoge", some_view({0.0f, 0.1f, 1.0f}));
+    ASSERT_TRUE(again.ok()) << again.error().message;
+    EXPECT_EQ(again.value().replaced_name, "sketch 1");
+    ASSERT_TRUE(parse_scene(again.value().text, ahoge_path()).ok());
+    auto undo2 = remove_last_sketch(again.value().text, "ahoge.json", "girl/ahoge");
+    ASSERT_TRUE(undo2.ok()) << undo2.error().message;
+    EXPECT_TRUE(undo2.value().replaced);
+    EXPECT_EQ(undo2.value().replaced_name, "sketch 1");
+    EXPECT_EQ(undo2.value().text, edit.value().text);
+    auto undo1 = remove_last_sketch(undo2.value().text, "ahoge.json", "girl/ahoge");
+    ASSERT_TRUE(undo1.ok()) << undo1.error().message;
+    EXPECT_EQ(undo1.value().replaced_name, "front");
+    EXPECT_EQ(undo1.value().text, text);  // byte for byte
+}
+
+TEST(SketchSave, AReplacedExampleTheLoaderWouldRefuseIsRefused) {
+    // The kept example is checked as a view of the chain, so an undo never writes what the
+    // loader refuses: one with a negative influence is an error naming its JSON path.
+    const std::string text = testing_support::file_bytes(ahoge_path());
+    auto edit = add_view_example(text, "ahoge.json", "girl/ahoge", some_view({0.0f, 0.2f, 1.0f}));
+    ASSERT_TRUE(edit.ok()) << edit.error().message;
+    Json scene = Json::parse(edit.value().text);
+    Json& kept = scene["characters"][0]["chains"][0]["views"][0]["replaces"];
+    ASSERT_TRUE(kept.is_object());
+    kept["influence"] = -1;
+    auto loaded = parse_scene(scene.dump(2), ahoge_path());
+    ASSERT_FALSE(loaded.ok());
+    EXPECT_NE(loaded.error().message.find("$.characters[0].chains[0].views[0].replaces.influence"), std::string::npos)
+        << loaded.error().message;
 }
 
 TEST(SketchSave, AChainWithoutViewsGetsAViewsArrayAndUndoRemovesIt) {

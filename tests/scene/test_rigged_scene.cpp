@@ -248,12 +248,12 @@ TEST(RiggedScene, BadInputNamesTheFileAndPath) {
     EXPECT_NE(error_of(chibi_scene(tail, R"([{"character": "chibi", "count": 2, "animations": ["run"]}])"))
                   .find("$.crowds[0].animations[0]"),
               std::string::npos);
-    // A missing file is an I/O error that names the scene, the key and the file.
+    // A missing file is bad input (issue 37: exit 2) that names the scene, the key and the file.
     std::string text = chibi_scene(tail);
     text.replace(text.find("chibi.glb"), 9, "missing.glb");
     auto missing = parse_scene(text, "test.json");
     ASSERT_FALSE(missing.ok());
-    EXPECT_EQ(missing.error().kind, Error::Kind::Io);
+    EXPECT_EQ(missing.error().kind, Error::Kind::InvalidInput);
     EXPECT_NE(missing.error().message.find("test.json: $.characters[0].gltf"), std::string::npos) << missing.error().message;
     EXPECT_NE(missing.error().message.find("missing.glb"), std::string::npos);
     // Clips belong to rigged characters only.

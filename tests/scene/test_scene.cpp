@@ -362,10 +362,12 @@ TEST(SceneFormat, DuplicateKey) {
               "test.json: $.flocks[0].count: duplicate key (each key may appear once per object)");
 }
 
-TEST(SceneFormat, MissingFileIsAnIoError) {
+TEST(SceneFormat, MissingFileIsBadInput) {
+    // A missing input file is the caller's mistake: InvalidInput, the command line's exit 2
+    // (issue 37's one exit-code policy; a read that fails half way stays Io).
     const auto scene = kodawari::load_scene(source_path("scenes/no-such-scene.json"));
     ASSERT_FALSE(scene.ok());
-    EXPECT_EQ(scene.error().kind, Error::Kind::Io);
+    EXPECT_EQ(scene.error().kind, Error::Kind::InvalidInput);
     EXPECT_TRUE(contains(scene.error().message, "no-such-scene.json")) << scene.error().message;
 }
 

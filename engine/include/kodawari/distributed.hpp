@@ -58,6 +58,11 @@ struct DistributedBakeOptions {
     BakeOptions bake;
     /// Called on every rank once its simulation is open (to print what it runs).
     std::function<void(const Simulation&)> opened;
+    /// When set, called on every rank with the loaded scene before its simulation opens,
+    /// to change it the same way on every rank (the command line fits the flocks' routes
+    /// here: `run --mpi --fit-routes`); an error stops every rank. The change must be a
+    /// function of the scene alone, or the ranks would bake different scenes.
+    std::function<Result<void>(Scene& scene)> prepare_scene;
 };
 
 /// Bakes the scene at `scene_path` over `comm`'s ranks. Returns rank 0's files (the other

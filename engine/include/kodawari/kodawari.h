@@ -152,7 +152,8 @@ typedef enum kodawari_backend {
 typedef struct kodawari_backend_options {
     kodawari_backend backend;
     /// vulkan: a device index ("0") or a substring of its name ("llvmpipe"); NULL or "" =
-    /// the best (discrete > integrated > virtual > cpu).
+    /// the best (discrete > integrated > virtual > cpu). One that matches no device is
+    /// KODAWARI_INVALID_ARGUMENT, with AUTO too (AUTO never falls back from a device asked for).
     const char* device;
     /// vulkan: 1 = Khronos validation with synchronization validation (the count of
     /// messages is in the world's info); 0 = off.

@@ -31,8 +31,9 @@ struct SceneEdit {
     std::uint32_t index = 0;     ///< the example's index in the chain's `views` (or `keyed`)
     bool keyed = false;          ///< the example is in the chain's `keyed` array
     std::string name;            ///< its name ("sketch 3")
-    bool replaced = false;       ///< add: an example within kSketchReplaceDeg was overwritten
-    std::string replaced_name;   ///< add: that example's name ("" if it had none)
+    bool replaced = false;       ///< add: an example within kSketchReplaceDeg was overwritten (kept as the
+                                 ///< sketch's `replaces`); remove: that example was put back
+    std::string replaced_name;   ///< that example's name ("" if it had none)
 };
 
 /// Adds `view` (direction, influence, shape in the chain root's frame) to the `views` of
@@ -89,8 +90,9 @@ struct KeyedSketch {
 /// one a sketch added). Undoing an append gives back the text from before it, byte for byte,
 /// with one exception: a chain's empty `"views": []` (nothing between the brackets) is
 /// removed with the first sketch, since after it the two cannot be told apart (the scene
-/// loads the same). An example that a sketch replaced is
-/// not brought back. Fails as add_view_example does,
+/// loads the same). An example that a sketch replaced (kept in the sketch as its
+/// `replaces` member) is put back in its place, byte for byte; SceneEdit::replaced and
+/// replaced_name then say which. Fails as add_view_example does,
 /// and when the chain has no sketched example. SceneEdit::keyed says which array it was in.
 [[nodiscard]] KODAWARI_API Result<SceneEdit> remove_last_sketch(const std::string& text, const std::string& path,
                                                                 const std::string& chain);
@@ -100,9 +102,10 @@ struct KeyedSketch {
 /// back from the file with load_scene to prove it.
 [[nodiscard]] KODAWARI_API Result<void> write_scene_text(const std::string& path, const std::string& text);
 
-/// The whole text of a scene or stroke file (the scene loader's reader): an I/O error
-/// naming the file when it cannot be read.
-[[nodiscard]] KODAWARI_API Result<std::string> read_text_file(const std::string& path);
+/// The whole text of a scene or stroke file (the scene loader's reader): an
+/// InvalidInput error naming the file and `what` it is when it cannot be opened.
+[[nodiscard]] KODAWARI_API Result<std::string> read_text_file(const std::string& path,
+                                                             const std::string& what = "the scene");
 
 /// Reads a stroke file (docs/sketch.md): `{"points": [[x, y], ...]}`, pixels with the
 /// origin at the image's top-left corner and y down, at least 2 points, finite numbers;

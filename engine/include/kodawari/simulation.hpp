@@ -86,7 +86,8 @@ struct SceneWorlds {
 /// How a Simulation runs.
 struct SimulationOptions {
     /// The backends' kind; none: "auto", vulkan when a Vulkan device opens and can hold
-    /// the scene (its buffers within the device's limits), else cpu
+    /// the scene (its buffers within the device's limits), else cpu; but a device asked
+    /// for (BackendOptions::device) that matches none is an error, never a fallback
     /// (Simulation::fallback_reason() then says why).
     std::optional<BackendKind> backend{};
     /// Device, validation, cpu threads, and a device to run on (a renderer's); without
@@ -110,13 +111,24 @@ struct StepOutput {
 
 /// Time spent so far, per domain, in the backends' own calls (the pose backends'
 /// clip evaluation is counted apart from the chains' step).
+///
+/// The first call into a backend also compiles its kernels (lavapipe compiles a pipeline
+/// at its first dispatch) and uploads its world, so it is kept apart: a per-frame figure
+/// is the steady one, over what came after it.
 struct SimulationTiming {
-    double bird_seconds = 0.0;   ///< wall time in the bird backend
-    double bird_gpu_ms = 0.0;    ///< its GPU time (when every call had timestamps)
+    double bird_seconds = 0.0;          ///< wall time in the bird backend after its first call
+    std::uint64_t bird_frames = 0;      ///< the frames of those calls
+    double bird_first_seconds = 0.0;    ///< wall time of the first call (kernels compiled)
+    std::uint64_t bird_first_frames = 0;  ///< the frames of the first call
+    double bird_first_gpu_ms = -1.0;    ///< its GPU time (< 0: none measured)
+    double bird_gpu_ms = 0.0;           ///< GPU time of the calls after the first (when every call had timestamps)
     bool bird_gpu_timed = true;
-    double chain_seconds = 0.0;  ///< wall time in the rod backend's load and steps
-    double chain_gpu_ms = 0.0;   ///< GPU time of the steps after frame 0
-    double pose_ms = 0.0;        ///< the pose backends' clip evaluation (and read back)
+    /// Frames 0 and 1 of the chains: loaded and put at rest, then the first step, each the
+    /// first dispatch of its kernels (compiled then on lavapipe).
+    double chain_warmup_seconds = 0.0;
+    double chain_seconds = 0.0;         ///< wall time in the rod backend's steps from frame 2 on
+    double chain_gpu_ms = 0.0;          ///< GPU time of those steps
+    double pose_ms = 0.0;               ///< the pose backends' clip evaluation (and read back)
 };
 
 /// A scene simulated frame after frame on backends of one kind.

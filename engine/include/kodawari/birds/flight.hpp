@@ -85,7 +85,7 @@ struct BirdFrame {
 };
 
 /// Advances `state` to frame `frame` and evaluates the bird. Frames must be visited in
-/// order from 0 (the state carries hysteresis, transition and phase).
+/// order from 0 (the state carries hysteresis, transition, phase and the roll filter).
 /// `uniforms` = world.uniforms(), passed in so a loop over birds computes it once.
 [[nodiscard]] KODAWARI_API BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
                                                const gpu::BirdParams& bird, gpu::BirdState& state, std::uint32_t frame);

@@ -32,6 +32,14 @@ struct SegmentDemand {
     double dive = 0.0, dive_u = 0.0;    ///< steepest dive angle, positive down
     double speed_change = 0.0, speed_change_u = 0.0;  ///< largest |dv/dt| (m/s^2)
     double speed_change_speed = 0.0;                  ///< speed there (m/s)
+    /// The junction where this segment starts (none on the first segment of an open
+    /// route): the angle between the tangents either side (rad; a corner turns the bird
+    /// that much in an instant), and the lateral acceleration just before and just after
+    /// it (m/s^2, toward the bird's right, as the kernel computes it for the bank: a jump
+    /// of curvature is a jump of the bank the route asks for).
+    bool junction = false;
+    double corner = 0.0;
+    double lateral_before = 0.0, lateral_after = 0.0;
 };
 
 /// The demands of every segment of `route` (segment order) flown at `speed` (m/s,

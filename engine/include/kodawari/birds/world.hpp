@@ -31,6 +31,9 @@ enum class RouteTiming : std::uint32_t { ArcLength = 0, Parametric = 1 };
 struct FlightSettings {
     float gravity = 9.81f;                  ///< for the coordinated-turn bank (m/s^2)
     float max_bank = 1.0471976f;            ///< 60 degrees
+    /// Time constant of the roll filter (s): the bank and the head's look follow the
+    /// route's through a first-order low-pass (docs/flight-modes.md F.6). 0: instantly.
+    float bank_time = 0.3f;
     BankRule bank_rule = BankRule::Coordinated;
     ModeRule mode_rule = ModeRule::Climb;
     float ascend_enter = 0.17453292f;       ///< 10 degrees of climb

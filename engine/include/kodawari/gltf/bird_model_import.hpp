@@ -28,6 +28,10 @@ struct BirdSceneOptions {
     std::string name;        ///< the scene's and the flock's name
     std::string model_file;  ///< the flock's "model", relative to the scene's folder
     std::string map_file;    ///< its "map" (empty: none)
+    /// The generated route's horizontal size (and the formation's and the camera's
+    /// distance) as a multiple of the example's 90 m: `rig --bird` grows it until the bird
+    /// can fly its turns at its cruise speed (kodawari/route_check.hpp).
+    float route_scale = 1.0f;
 };
 
 /// A scene (format version 1) with one flock of the model on a generated looping route,

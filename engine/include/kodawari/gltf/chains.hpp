@@ -38,9 +38,11 @@ struct ChainSearch {
     /// Exact node names (case-sensitive) of chain roots. When non-empty, `patterns` and
     /// `excludes` are not used. Each name must name exactly one node.
     std::vector<std::string> roots;
-    /// Case-insensitive (ASCII) substrings of node names that mark a chain root, used
-    /// when `roots` is empty. Substrings, so "ear" also matches "Ear_L" and "J_Sec_Ear";
-    /// "spring" is there for VRM spring-bone rigs, whose nodes are often so named.
+    /// Case-insensitive (ASCII) patterns of node names that mark a chain root, used when
+    /// `roots` is empty. A pattern without wildcards is a substring, so "ear" also matches
+    /// "Ear_L" and "J_Sec_Ear"; one with `*` (any run) or `?` (one character) matches the
+    /// whole name, as a shell does ("tail*" matches "Tail_1", not "Cocktail"). "spring" is
+    /// there for VRM spring-bone rigs, whose nodes are often so named.
     std::vector<std::string> patterns = {"hair", "bang", "ahoge", "ear", "tail", "ribbon", "skirt", "antenna", "spring"};
     /// Case-insensitive substrings that veto a pattern match: "ear" is a substring of
     /// "ForeArm" (Mixamo's "mixamorig:LeftForeArm"), which must not become a chain.

@@ -131,6 +131,8 @@ public:
     void add_line(const glm::vec3& a, const glm::vec3& b, Rgba8 color);
     /// A flat-shaded triangle lit by the light; `normal` need not be unit.
     void add_lit_triangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, const glm::vec3& normal, glm::vec3 color);
+    /// An unlit triangle in exactly `color` (depth tested like the rest).
+    void add_unlit_triangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, Rgba8 color);
     /// A thick segment: a quad facing the camera, `width` m wide but at least `min_px`
     /// pixels, in exactly `color` (unlit).
     void add_segment(const glm::vec3& a, const glm::vec3& b, float width, float min_px, Rgba8 color);
@@ -151,8 +153,6 @@ public:
     [[nodiscard]] std::span<const gpu::RenderVertex> shadows() const { return shadows_; }
 
 private:
-    void add_unlit_triangle(const glm::vec3& a, const glm::vec3& b, const glm::vec3& c, Rgba8 color);
-
     CameraView camera_;
     CameraBasis basis_;
     std::uint32_t width_, height_;

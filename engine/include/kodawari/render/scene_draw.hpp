@@ -5,8 +5,13 @@
 /// meshes are the renderer's layers (Renderer::set_chains, set_birds, set_skinned).
 /// Shared by `kodawari render` and `kodawari view`.
 
+#include <array>
 #include <cstdint>
+#include <optional>
 #include <span>
+#include <vector>
+
+#include <glm/gtc/quaternion.hpp>
 
 #include "kodawari/api.hpp"
 #include "kodawari/birds/world.hpp"
@@ -42,10 +47,106 @@ inline constexpr float kShadowOpacity = 0.35f;
 /// as the character rises off the ground (kShadowOpacity when it stands on it).
 KODAWARI_API void add_contact_shadow(DrawList& list, std::span<const rods::Transform> joints);
 
-/// Every character instance of `scene` at `frame`: its contact shadow (add_contact_shadow)
-/// and, unless it is drawn as a skinned mesh (Renderer::set_skinned), its skeleton bones
-/// from RodScene::joint_poses. The colliders are the renderer's (Renderer::colliders_from).
+/// A character's head: the largest sphere collider on its reference joint (the joint the
+/// view examples are measured from), posed. Its face looks along the joint's +Z (the
+/// characters' forward, as walks and the view examples' "front" are).
+struct Head {
+    glm::vec3 centre{0.0f};
+    glm::quat rotation{1.0f, 0.0f, 0.0f, 0.0f};  ///< the reference joint's
+    float radius = 0.0f;
+};
+
+/// Character instance `c`'s head posed as `joints` (RodScene::joint_poses), or none when
+/// its reference joint has no outside sphere collider.
+[[nodiscard]] KODAWARI_API std::optional<Head> head_of(const RodScene& scene, std::uint32_t c,
+                                                       std::span<const rods::Transform> joints);
+
+/// The eyes: dark ovals on the head sphere, kEyeAzimuthDeg either side of the face and
+/// kEyeElevationDeg above its middle (where the tests measure the bangs' clearance from
+/// the eyes: tests/character_support.hpp), with a short mouth below.
+inline constexpr float kEyeAzimuthDeg = 20.0f;
+inline constexpr float kEyeElevationDeg = 5.0f;
+inline constexpr Rgba8 kFaceColor{40, 32, 48};
+
+/// The centres of the eyes on the head's surface: the character's left eye (+X of the
+/// head frame) first.
+[[nodiscard]] KODAWARI_API std::array<glm::vec3, 2> eye_centres(const Head& head);
+
+/// The face of `head` (unlit, kFaceColor), 1% of the radius off the sphere: the renderer's
+/// low-poly sphere lies inside the true one, so the face shows in front of it where the
+/// face is turned to the camera and is hidden behind the head where it is turned away.
+KODAWARI_API void add_face(DrawList& list, const Head& head);
+
+/// Legs of a procedural character whose skeleton stops above the floor (the body, neck,
+/// head characters: the body joint is the hips, 0.9 m up): two straight legs from the
+/// lowest joint down to the floor the character stands on (its placement's height; the
+/// ground, y = 0, in every shipped scene), each ending in a foot that points forward.
+inline constexpr float kLegRadius = 0.05f;
+inline constexpr float kHipHalfWidth = 0.075f;
+inline constexpr float kFootLength = 0.14f;
+struct Legs {
+    std::array<glm::vec3, 2> hip{};   ///< the legs' tops (inside the body)
+    std::array<glm::vec3, 2> foot{};  ///< on the floor, under the hips
+    glm::vec3 forward{0.0f, 0.0f, 1.0f};  ///< the feet's direction (horizontal, unit)
+};
+
+/// Character instance `c`'s legs posed as `joints`, or none: a rigged character (its
+/// model has legs), or a skeleton whose lowest joint is within 0.1 m of the floor.
+[[nodiscard]] KODAWARI_API std::optional<Legs> legs_of(const RodScene& scene, std::uint32_t c,
+                                                       std::span<const rods::Transform> joints);
+
+/// The legs as lit tubes in kColliderColor (the body's colour).
+KODAWARI_API void add_legs(DrawList& list, const Legs& legs);
+
+/// Every character instance of `scene` at `frame`: its contact shadow (add_contact_shadow,
+/// the feet included), and, unless it is drawn as a skinned mesh (Renderer::set_skinned),
+/// its skeleton bones from RodScene::joint_poses, its face (add_face) and its legs
+/// (add_legs). The colliders are the renderer's (Renderer::colliders_from).
 KODAWARI_API void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame);
+
+/// The perches of a scene's birds, which the scene gives only as routes: a roof under
+/// the birds' bellies where a route takes off (its first point) or lands (its last),
+/// and a flower bed on the ground under a route with hovering segments.
+struct Roof {
+    /// The ends of the ridge's middle line: the flat top the perched birds' bellies rest
+    /// on (a bird's belly is kBellyDepth x its body length under its position).
+    glm::vec3 a{0.0f}, b{0.0f};
+    glm::vec3 across{0.0f, 0.0f, 1.0f};  ///< horizontal, unit: the route's heading there
+    float cap = 0.0f;         ///< the flat top's half-width across the ridge
+    float half_depth = 0.0f;  ///< the eaves' distance from the ridge's middle line
+};
+struct FlowerBed {
+    glm::vec2 lo{0.0f}, hi{0.0f};  ///< x, z extent
+    /// The soil's height: kFlowerGap under the lowest point the birds hover at, on a
+    /// flat-roofed building when that is off the ground (a roof garden), else 0.
+    float height = 0.0f;
+};
+/// How far under the hovering birds' lowest point the bed's soil is: the flowers stand
+/// 0.35 to 0.5 m tall, so the birds hover about half a metre over the blossoms.
+inline constexpr float kFlowerGap = 1.0f;
+struct Perches {
+    std::vector<Roof> roofs;
+    std::vector<FlowerBed> beds;
+};
+/// The body mesh's lowest point under a bird's position, per metre of body length
+/// (engine/birds/bird_meshes.cpp: the body's half height).
+inline constexpr float kBellyDepth = 0.10f;
+inline constexpr Rgba8 kRoofColor{168, 86, 62};
+inline constexpr Rgba8 kWallColor{222, 212, 190};
+inline constexpr Rgba8 kSoilColor{112, 82, 56};
+
+/// Where the perches of `birds` are: per route that takes off or lands, one roof whose
+/// ridge runs across the route's heading, under every bird of the route as it sits there
+/// (the route's end point plus the bird's offset); per route with a hover segment, one
+/// bed under its control points and its birds' offsets, with a 1 m margin, kFlowerGap
+/// under the lowest of them.
+[[nodiscard]] KODAWARI_API Perches perches_of(const birds::BirdWorld& birds);
+
+/// The perches drawn: each roof a gable roof (flat top, slopes of 35 degrees) on a house
+/// whose walls go down to the ground; each bed a patch of soil with flowers on it, on a
+/// flat-roofed building as tall as the bed is high. `perches` is perches_of() of the
+/// scene's birds, which does not change from frame to frame: a caller finds it once.
+KODAWARI_API void add_perches(DrawList& list, const Perches& perches);
 
 /// Where the content is, for add_ground_grid, from the scene alone (no simulation state,
 /// so that nothing needs reading back): character instances' placements, the chain roots

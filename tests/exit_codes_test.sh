@@ -1,0 +1,97 @@
+#!/usr/bin/env bash
+# One exit-code policy for every command (issue 37; docs/command-line.md, "Exit codes"):
+#   2  bad input or usage: a bad option, an input file that is missing or cannot be read,
+#      content a loader refuses, a device asked for that is not there;
+#   1  a runtime failure: an output that cannot be written, a failed check;
+#   0  success.
+# Every command of `kodawari --help` has rows here, printed as a table; each row also checks
+# that the message names what was wrong and that nothing was written.
+#   usage: exit_codes_test.sh KODAWARI_BINARY SOURCE_DIR
+set -uo pipefail
+bin=$1
+src=$2
+source "$(dirname "${BASH_SOURCE[0]}")/check.sh"
+cd "$src"
+
+# A folder that cannot be written: outputs under it fail at run time (exit 1), whoever runs
+# the test (root ignores permission bits, so a file stands where a folder should be).
+: >"$work/a-file"
+unwritable="$work/a-file/sub"
+printf '{"format":"kodawari-scene","version":1,"flocks":[{"wing_type":"pigeon","count":3,"colour":1}]}' >"$work/bad.json"
+printf 'not a part file\n' >"$work/bad.kwpart"
+printf '{"points": [[-900, -900], [-800, -850]]}' >"$work/offimage.json"
+printf '{"points": [[640, 300], [660, 260], [700, 240], [740, 250]]}' >"$work/stroke.json"
+printf '{"format":"kodawari-scene"' >"$work/truncated.json"
+"$bin" run scenes/flock.json --backend cpu --frames 3 --shard 0/1 --out "$work/ok.kwpart" >/dev/null 2>&1
+
+commands_seen=()
+printf '%-10s %-52s %-5s %s\n' "command" "case" "exit" "expected"
+row() {  # row COMMAND CASE EXPECTED_EXIT MESSAGE_REGEX -- ARGS...
+  local command=$1 case=$2 expected=$3 pattern=$4
+  shift 5
+  "$bin" "$@" >"$work/row.out" 2>"$work/row.err"
+  local rc=$?
+  printf '%-10s %-52s %-5s %s\n' "$command" "$case" "$rc" "$expected"
+  commands_seen+=("$command")
+  check "$command: $case exits $expected" test "$rc" -eq "$expected"
+  if [[ -n "$pattern" ]]; then
+    check "$command: $case: the message names it ($pattern)" grep -qE -- "$pattern" "$work/row.err"
+  fi
+}
+
+row run "missing scene file" 2 "nosuch.json" -- run "$work/nosuch.json" --out "$work/x.glb"
+row run "scene the loader refuses" 2 'bad.json.*\$\.flocks\[0\]\.colour' -- run "$work/bad.json" --out "$work/x.glb"
+row run "truncated JSON" 2 "truncated.json" -- run "$work/truncated.json" --out "$work/x.glb"
+row run "a device asked for that is not there" 2 'no usable Vulkan device matches "no-such-device"' -- \
+  run scenes/ahoge.json --frames 2 --no-export --device no-such-device
+row run "output folder cannot be made" 1 "a-file/sub" -- run scenes/ahoge.json --frames 2 --backend cpu --out "$unwritable/x.glb"
+row run "unknown option" 2 "--frobnicate" -- run scenes/ahoge.json --frobnicate
+row merge "missing part file" 2 "nosuch.kwpart" -- merge "$work/nosuch.kwpart" --out "$work/m.glb"
+row merge "not a part file" 2 "bad.kwpart" -- merge "$work/bad.kwpart" --out "$work/m.glb"
+row merge "output folder cannot be made" 1 "a-file/sub" -- merge "$work/ok.kwpart" --out "$unwritable/m.glb"
+row validate "missing scene file" 2 "nosuch.json" -- validate "$work/nosuch.json"
+row validate "scene the loader refuses" 2 "bad.json" -- validate "$work/bad.json"
+row bench "missing crowd scene file" 2 "nosuch.json" -- bench crowd "$work/nosuch.json" --backends cpu
+row bench "a count out of range" 2 "--count" -- bench birds --count 0
+row bench "--backend and --backends together" 2 "--backends" -- bench chains --backend cpu --backends cpu
+row bench "--backend auto" 2 "--backend" -- bench chains --backend auto
+row rig "missing character file" 2 "nosuch.glb" -- rig "$work/nosuch.glb" --out "$work/r.json"
+row rig "missing bird file" 2 "nosuch.glb" -- rig "$work/nosuch.glb" --bird --out "$work/r.json"
+row rig "missing bird map file" 2 "nosuch-map.json" -- rig scenes/characters/chibi.glb --bird --map "$work/nosuch-map.json" --out "$work/r.json"
+row rig "missing motion file" 2 "nosuch.vrma" -- rig scenes/characters/avatar.vrm --motion "$work/nosuch.vrma" --out "$work/r.json"
+row rig "a scene file given as a character" 2 "bad.json" -- rig "$work/bad.json" --out "$work/r.json"
+row rig "output folder cannot be written" 1 "a-file/sub" -- rig scenes/characters/chibi.glb --out "$unwritable/r.json"
+row sketch "missing scene file" 2 "nosuch.json" -- sketch "$work/nosuch.json" --chain girl/ahoge --stroke "$work/stroke.json" --out "$work/s.json"
+row sketch "missing stroke file" 2 "nosuch-stroke.json: cannot open the stroke file" -- \
+  sketch scenes/ahoge.json --chain girl/ahoge --stroke "$work/nosuch-stroke.json" --out "$work/s.json"
+row sketch "stroke wholly off the image" 2 'offimage.json: \$\.points' -- \
+  sketch scenes/ahoge.json --chain girl/ahoge --stroke "$work/offimage.json" --out "$work/s.json"
+row sketch "neither --out nor --in-place" 2 "--in-place" -- sketch scenes/ahoge.json --chain girl/ahoge --stroke "$work/stroke.json"
+row sketch "output folder cannot be written" 1 "a-file/sub" -- \
+  sketch scenes/ahoge.json --chain girl/ahoge --stroke "$work/stroke.json" --out "$unwritable/s.json"
+row render "missing scene file" 2 "nosuch.json" -- render "$work/nosuch.json" --out "$work/frames" --frames 1
+row render "--animation not named .png" 2 "a.gif" -- render scenes/ahoge.json --out "$work/frames" --frames 1 --animation "$work/a.gif"
+row render "--contact-sheet folder cannot be made" 1 "a-file/sub" -- \
+  render scenes/ahoge.json --out "$work/frames" --frames 1 --contact-sheet "$unwritable/sheet.png"
+row view "missing scene file" 2 "nosuch.json" -- view "$work/nosuch.json"
+row info "an instruction set that is no name" 2 "" -- info --isa pentium
+row info "a device asked for that is not there" 2 "" -- info --device no-such-device
+row schema "an argument it does not take" 2 "" -- schema extra
+row completion "a shell it does not know" 2 "" -- completion fish
+row kodawari "unknown command" 2 "lists the commands" -- frobnicate
+
+check "nothing written by the failing rows" bash -c "! ls '$work' | grep -qE '^(x\.glb|m\.glb|r\.json|s\.json|frames|a\.gif)$'"
+check "the folder that cannot be written is untouched" test -f "$work/a-file"
+# Writing to a closed stdout is a runtime failure, not bad input.
+"$bin" schema >&- 2>/dev/null
+check "schema: stdout closed exits 1" test $? -eq 1
+
+# Every command of the help has a row.
+help_commands=$("$bin" --help | awk '/^Subcommands:/{f=1;next} f && !NF {exit} f {print $1}')
+check "the help lists commands" test -n "$help_commands"
+for command in $help_commands; do
+  check "the table has rows for \`$command\`" bash -c "printf '%s\n' ${commands_seen[*]} | grep -qx '$command'"
+done
+
+echo "$passed passed, $failed failed"
+[[ $failed -eq 0 ]]
