@@ -192,6 +192,13 @@ void load_constants(uint n, uint examples, uint tj, uint shape0, out Constants t
             p[j] = placed;                                                                                    \
         }                                                                                                     \
     }
+// Particle j (>= 1) pushed out of the colliders, the push kept (solver.cpp).
+#define KW_COLLIDE(j)                                                                                         \
+    {                                                                                                         \
+        const vec3 before = p[j];                                                                             \
+        collide_all(p[j]);                                                                                    \
+        pushed[j] += p[j] - before;                                                                           \
+    }
 // Particle j (>= 1) after its last group: toward the mean of its goals, then rest-pose
 // attraction (Han & Harada 2012, global shape constraint), then the distance constraint to
 // its (already final) parent, follow-the-leader, its correction kept for DFTL, then the
@@ -202,7 +209,7 @@ void load_constants(uint n, uint examples, uint tj, uint shape0, out Constants t
         qs[j] = q_new[j];                                                                                     \
         p[j] += k_rest * (xbar[j] - p[j]);                                                                    \
         KW_PLACE(j);                                                                                          \
-        if (col_count > 0u) collide_all(p[j]);                                                                \
+        if (col_count > 0u) KW_COLLIDE(j);                                                                \
     }
 
 void main() {
@@ -417,7 +424,7 @@ void main() {
         }
     }
 
-    vec3 p[MAX_J], xbar[MAX_J], goal_sum[MAX_J], obar_axis[MAX_J], pulled[MAX_J];
+    vec3 p[MAX_J], xbar[MAX_J], goal_sum[MAX_J], obar_axis[MAX_J], pulled[MAX_J], pushed[MAX_J];
     vec4 qs[MAX_J], obar[MAX_J], q_new[MAX_J];
     mat3 a_j[MAX_J];
     for (uint sub = 1; sub <= substeps; ++sub) {
@@ -440,6 +447,7 @@ void main() {
             col_cb[k] = col_kind[k] == KW_RODS_COLLIDER_PLANE ? qrot(r_rot, col_lb[k]) : r_pos + qrot(r_rot, col_lb[k]);
         }
         [[unroll]] for (uint i = 0; i < MAX_J; ++i) pulled[i] = vec3(0.0);
+        [[unroll]] for (uint i = 0; i < MAX_J; ++i) pushed[i] = vec3(0.0);
 
         [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
             if (i < n) {
@@ -515,15 +523,26 @@ void main() {
             if (i < n) {
                 KW_PLACE(i);
                 if (col_count > 0u) {
-                    collide_all(p[i]);
+                    KW_COLLIDE(i);
                     KW_PLACE(i);
-                    collide_all(p[i]);
+                    KW_COLLIDE(i);
                     KW_PLACE(i);
-                    collide_all(p[i]);
+                    KW_COLLIDE(i);
                 }
             }
         }
 
+        // What the colliders undid is not the parent's to give back (solver.cpp).
+        if (col_count > 0u) {
+            [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
+                const float pl = length(pushed[i]);
+                if (i < n && pl > 0.0) {
+                    const vec3 nn = pushed[i] / pl;
+                    const float along = dot(pulled[i], nn);
+                    if (along < 0.0) pulled[i] -= max(along, -pl) * nn;
+                }
+            }
+        }
         [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
             if (i < n) {
                 v[i] = (p[i] - x[i]) / h;

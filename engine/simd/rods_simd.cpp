@@ -331,7 +331,14 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         // 3. The colliders placed by the root.
         for (std::size_t k = 0; k < batch.colliders; ++k) place(colliders[k], r_p, r_q);
         V3 pulled[kMaxJ];  // the distance constraints' corrections (DFTL)
+        V3 pushed[kMaxJ];  // and the colliders' (their net push, the contact normal)
         for (std::size_t i = 0; i < n; ++i) pulled[i] = zero3();
+        for (std::size_t i = 0; i < n; ++i) pushed[i] = zero3();
+        auto collide_counted = [&](std::size_t j) HWY_ATTR {
+            const V3 before = p[j];
+            collide_all(p[j]);
+            pushed[j] = add(pushed[j], sub(p[j], before));
+        };
         for (std::size_t i = 0; i < n; ++i) {
             const std::size_t lo = i == 0 ? 0 : i - 1;
             const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
@@ -434,7 +441,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
                 const V3 placed_child = add(p[i], mul(hn::Div(S(t.segment[i]), len), dd));
                 pulled[i + 1] = select(along, add(pulled[i + 1], sub(placed_child, p[i + 1])), pulled[i + 1]);
                 p[i + 1] = select(along, placed_child, p[i + 1]);
-                if (batch.colliders > 0) collide_all(p[i + 1]);
+                if (batch.colliders > 0) collide_counted(i + 1);
             }
         }
         // The last sweep: placed and pushed out, twice (solver.cpp).
@@ -449,14 +456,25 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         for (std::size_t i = 0; i + 1 < n; ++i) {
             place_on_parent(i);
             if (batch.colliders > 0) {
-                collide_all(p[i + 1]);
+                collide_counted(i + 1);
                 place_on_parent(i);
-                collide_all(p[i + 1]);
+                collide_counted(i + 1);
                 place_on_parent(i);
-                collide_all(p[i + 1]);
+                collide_counted(i + 1);
             }
         }
 
+        // What the colliders undid is not the parent's to give back (solver.cpp): the part
+        // of a child's distance corrections into its colliders' net push direction.
+        if (batch.colliders > 0) {
+            for (std::size_t i = 1; i < n; ++i) {
+                const V pl = length(pushed[i]);
+                const V3 nn = div(pushed[i], pl);
+                const V along = dot(pulled[i], nn);
+                const M into = hn::And(hn::Gt(pl, Z()), hn::Lt(along, Z()));
+                pulled[i] = select(into, sub(pulled[i], mul(hn::Max(along, hn::Neg(pl)), nn)), pulled[i]);
+            }
+        }
         // 6. Update, with the dynamic follow-the-leader correction (solver.cpp).
         for (std::size_t i = 0; i < n; ++i) {
             v[i] = div(sub(p[i], x[i]), S(t.h));

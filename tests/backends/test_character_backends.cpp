@@ -115,17 +115,26 @@ TEST_P(CharacterBackends, ShippedScenesMatchTheReference) {
 // inside capsule, a plane; one chain all of them, the insides wide enough for it to keep
 // to both at once: conflicting constraints make a chain chaotic, and any rounding then
 // grows to centimetres) and half of which measure their inertia in the body's space
-// (`center`). Bounds as ShippedScenesMatchTheReference: the CPU backends the reference's
-// bits, Vulkan within 1e-3 of the chain length. Also checks, on the reference run, that
-// each chain kept to its own colliders (gap >= -1e-5 m: the projection leaves a particle
-// on the bound, to rounding) and that chains a, b and c touched theirs, so the collider
-// sets are really in play.
+// (`center`), all with the shipped scenes' damping (3/s). Bounds: the CPU backends the
+// reference's bits; Vulkan within 1e-3 of the chain length at the end (as
+// ShippedScenesMatchTheReference), and in every frame within 1e-3 for chains c and d
+// and 5e-3 for chains a and b. Those two hang longer than their inside collider is wide,
+// so they are pressed into it, and a pressed chain amplifies rounding for a while: with
+// the dynamic follow-the-leader correction (issue 39: the sweep no longer drains energy)
+// Vulkan's few-ulp differences grew to 2.7e-3 of b's length around frame 40 and damping
+// drew the runs back to 1.7e-4 by frame 120. At damping 1/s the same chains are chaotic
+// (the reference with its inside radii 1e-7 m wider ends a third of b's length away;
+// docs/models.md), so no backend can be held to another's bits there. Also checks, on
+// the reference run, that each chain kept to its own colliders (gap >= -1e-5 m: the
+// projection leaves a particle on the bound, to rounding) and that chains a, b and c
+// touched theirs, so the collider sets are really in play.
 TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
     const std::string text = R"({
       "format": "kodawari-scene", "version": 2, "name": "colliders", "fps": 60, "duration": 2,
       "camera": {"orbit": {"target": [0, 1.5, 0], "radius": 3, "period": 8}},
       "characters": [{
         "name": "probe",
+        "physics": {"stiffness": 0.6, "damping": 3},
         "skeleton": [
           {"name": "body", "position": [0, 0.9, 0]},
           {"name": "head", "parent": "body", "position": [0, 0.6, 0]}
@@ -166,6 +175,10 @@ TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
     rs.frame(0, frame);
     ASSERT_TRUE(backend_->load(rs.world, frame).ok());
     Simulation sim(rs);
+    const bool vulkan = GetParam() == kodawari::BackendKind::Vulkan;
+    // Vulkan's worst distance from the reference over the run per chain (a, b, c, d), as
+    // a share of its length.
+    float over_run[4] = {0, 0, 0, 0};
     std::vector<float> nearest(rs.world.chains.size(), 1e9f);
     float violated = 0.0f;
     for (std::uint32_t f = 1; f <= 120; ++f) {
@@ -173,6 +186,20 @@ TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
         const auto stepped = backend_->step(frame);
         ASSERT_TRUE(stepped.ok()) << stepped.error().message;
         sim.step(f);
+        if (vulkan) {
+            kodawari::ChainSnapshot now;
+            ASSERT_TRUE(backend_->read(now).ok());
+            for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
+                const rods::ChainInstance& ch = rs.world.chains[c];
+                const rods::Chain& chain = rs.world.templ(ch).chain;
+                float length = 0.0f;
+                for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
+                for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
+                    const float off = glm::length(sim.x(c, i) - now.positions[ch.joint_begin + i]) / length;
+                    over_run[c % 4] = std::max(over_run[c % 4], off);
+                }
+            }
+        }
         for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
             const rods::ChainInstance& ch = rs.world.chains[c];
             const rods::Chain& chain = rs.world.templ(ch).chain;
@@ -192,8 +219,14 @@ TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
     const float worst = worst_of_length(rs, sim, snap);
     std::printf("[ measured ] collider kinds, groups and centers on %s: max %.3g of the chain length from the reference\n",
                 kodawari::testing_support::case_name(GetParam()).c_str(), static_cast<double>(worst));
-    if (GetParam() == kodawari::BackendKind::Vulkan) {
+    if (vulkan) {
         EXPECT_LT(worst, 1e-3f);
+        const char* names = "abcd";
+        for (int k = 0; k < 4; ++k) {
+            std::printf("[ measured ] chain %c: at most %.3g of its length from the reference in any frame\n", names[k],
+                        static_cast<double>(over_run[k]));
+            EXPECT_LT(over_run[k], k < 2 ? 5e-3f : 1e-3f) << "chain " << names[k];
+        }
     } else {
         EXPECT_EQ(worst, 0.0f) << "the CPU backends run the reference's code";
     }
