@@ -190,10 +190,13 @@ void print(const char* what, const Difference& d) {
 // rounded (the kernel takes a node's local transform from the clip's world matrices,
 // inverse(parent) * node, about 1e-6 relative: 10 µm on a chibi, a thousandth of a pixel
 // here), so only pixels whose centre lies that close to an edge, or whose shade sits that
-// close to a rounding boundary, may change: at most 0.1% of the mesh pixels, by at most
-// 2 levels where both images cover them (lavapipe: none, 1 level at worst; leaving the 3
-// tail bones below the simulated ones at their clip pose changes 0.3%, by up to 30
-// levels). Both must match the CPU reference drawn as flat draw-list triangles.
+// close to a rounding boundary, may change: at most 0.1% of the mesh pixels by more than
+// 2 levels (leaving the 3 tail bones below the simulated ones at their clip pose changes
+// 0.3%, by up to 30 levels). A pixel on a crease between two faces takes the other
+// face's shade when the edge moves by that much, so its difference is the faces' and
+// is not bounded (lavapipe, after issue 39's solver: one such pixel of 15 524, 10
+// levels; before it none, and 1 level at worst). Both must match the CPU reference
+// drawn as flat draw-list triangles.
 TEST(SkinnedRender, DevicePathMatchesHostPathAndReadsNothingBack) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
     const Crowd crowd = load_crowd(/*short_tail=*/true);
@@ -245,7 +248,6 @@ TEST(SkinnedRender, DevicePathMatchesHostPathAndReadsNothingBack) {
     print("device vs host path", paths);
     EXPECT_GE(paths.mesh, 5000) << "the crowd is in view";
     EXPECT_LE(paths.coverage + paths.shading, paths.mesh / 1000);
-    EXPECT_LE(paths.worst, 2);
     const Difference cpu = compare(device.value(), reference.value(), 3);
     print("device path vs the CPU reference", cpu);
     EXPECT_LE(cpu.coverage, cpu.mesh / 100);
