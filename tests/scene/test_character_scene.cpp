@@ -311,6 +311,14 @@ TEST(CharacterScene, BadPhysicsAndMotions) {
     chain0(thickness)["thickness"] = -0.01;
     EXPECT_EQ(parse_error(thickness),
               "test.json: $.characters[0].chains[0].thickness: expected a finite number in [1e-05, 1], got -0.01");
+    // Issue 39: at most half the shortest segment (8 joints over 0.2 m: 0.0286 m segments).
+    json overlapping = valid_character_scene();
+    chain0(overlapping)["thickness"] = 0.02;
+    EXPECT_EQ(parse_error(overlapping),
+              "test.json: $.characters[0].chains[0].thickness: thickness 0.020000 m is more than half the chain's shortest "
+              "segment (0.028571 m); at most 0.014286 m");
+    chain0(overlapping)["thickness"] = 0.014;
+    EXPECT_TRUE(kodawari::parse_scene(overlapping.dump(), "test.json").ok());
     json end = valid_character_scene();
     end["characters"][0]["motions"][0]["start"] = 2;
     end["characters"][0]["motions"][0]["end"] = 1;
