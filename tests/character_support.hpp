@@ -161,7 +161,7 @@ inline json valid_character_scene() {
           "colliders": [{"type": "sphere", "joint": "head", "radius": 0.1}],
           "chains": [
             {
-              "name": "ear", "joint": "head", "mirror": "ear_r",
+              "name": "ear", "joint": "head", "mirror": "ear_r", "offset": {"position": [0, 0.1, 0]},
               "shape": {"arc": {"joints": 8, "length": 0.2}},
               "views": [{"direction": [0, 0, 1], "shape": {"arc": {"joints": 8, "length": 0.2, "curl_deg": 30}}}]
             }

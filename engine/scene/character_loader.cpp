@@ -356,6 +356,51 @@ Result<std::vector<ColliderSpec>> read_colliders(const JsonReader& r, const Json
     return out;
 }
 
+namespace {
+
+// Issue 39: no chain's root inside one of its colliders, in the rest pose. The root is
+// kinematic and the collision pass pushes every other particle out, so the first
+// segments would fight the collider every substep. A root on the collider's surface (a
+// hair on the scalp: its particle overlaps the collider by the chain's thickness, as
+// every shipped scene's roots and VRM's do) is allowed; a root whose centre is inside
+// the shape (farther than `thickness` into the collider's reach, with 10 um for rounding)
+// is refused.
+// Procedural characters only (a rigged character's chains and colliders come from its
+// glTF file and are not checked here).
+Result<void> check_roots_outside_colliders(const JsonReader& r, const CharacterSpec& ch) {
+    if (ch.colliders.empty()) return {};
+    std::vector<rods::Transform> world(ch.skeleton.joints.size());
+    for (std::size_t j = 0; j < world.size(); ++j) {  // parents first (read_skeleton)
+        const rods::SkeletonJoint& joint = ch.skeleton.joints[j];
+        world[j] = joint.parent < 0 ? joint.rest : rods::compose(world[static_cast<std::size_t>(joint.parent)], joint.rest);
+    }
+    for (const ChainSpec& chain : ch.chains) {
+        if (!chain.collide) continue;
+        const glm::vec3 root = rods::compose(world[chain.joint], chain.offset).position;
+        for (std::size_t k = 0; k < ch.colliders.size(); ++k) {
+            if (!chain.all_colliders &&
+                std::find(chain.colliders.begin(), chain.colliders.end(), static_cast<std::uint32_t>(k)) == chain.colliders.end()) {
+                continue;
+            }
+            const ColliderSpec& c = ch.colliders[k];
+            const rods::Transform& at = world[c.joint];
+            const glm::vec3 b = c.kind == rods::ColliderKind::Plane ? at.rotation * c.b : at.position + at.rotation * c.b;
+            const rods::Collider placed{at.position + at.rotation * c.a, b, c.radius, c.kind};
+            // How far the root's centre is inside the shape itself (collider_gap measures
+            // the particle's surface; a clamped inside reach only makes it stricter).
+            const float depth = -(rods::collider_gap(placed, root, chain.thickness) + chain.thickness);
+            if (depth > 1e-5f) {
+                const std::string name = c.name.empty() ? "collider " + std::to_string(k) : "collider \"" + c.name + "\"";
+                return r.fail(chain.path, "the chain's root is " + std::to_string(depth) + " m inside " + name +
+                                              " in the rest pose; move the root onto or outside its surface");
+            }
+        }
+    }
+    return {};
+}
+
+}  // namespace
+
 Result<CharacterSpec> read_character(const JsonReader& r, const JsonNode& node) {
     if (node.present() && node.value->is_object() && r.member(node, "gltf").present()) return read_rigged_character(r, node);
     KW_TRY(r.object(node, {"name", "skeleton", "reference_joint", "motions", "colliders", "physics", "chains"}));
@@ -398,6 +443,7 @@ Result<CharacterSpec> read_character(const JsonReader& r, const JsonNode& node) 
     if (ch.chains.size() > kMaxPerCharacter) {
         return r.expected(chains, chains_what + ", counting mirrored copies; got " + std::to_string(ch.chains.size()));
     }
+    KW_TRY(check_roots_outside_colliders(r, ch));
     return ch;
 }
 

@@ -319,6 +319,13 @@ TEST(CharacterScene, BadPhysicsAndMotions) {
               "segment (0.028571 m); at most 0.014286 m");
     chain0(overlapping)["thickness"] = 0.014;
     EXPECT_TRUE(kodawari::parse_scene(overlapping.dump(), "test.json").ok());
+    // Issue 39: no root inside a collider (the ear's root sits on the head sphere's top).
+    json buried = valid_character_scene();
+    chain0(buried)["offset"] = {{"position", {0, 0.05, 0}}};
+    EXPECT_EQ(parse_error(buried), "test.json: $.characters[0].chains[0]: the chain's root is 0.050000 m inside collider 0 in "
+                                   "the rest pose; move the root onto or outside its surface");
+    chain0(buried)["collide"] = false;
+    EXPECT_TRUE(kodawari::parse_scene(buried.dump(), "test.json").ok());
     json end = valid_character_scene();
     end["characters"][0]["motions"][0]["start"] = 2;
     end["characters"][0]["motions"][0]["end"] = 1;
