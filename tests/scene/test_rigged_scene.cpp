@@ -637,8 +637,13 @@ void check_rod_input_on_device(const RodScene& rods, const char* what) {
 // depend on every key source through the smoothed measures, must agree within 1e-4
 // between the two runs every 10 frames (the inputs differ by rigid_part's rounding, about
 // 1e-7, which the weights' slopes of order 1 keep far below that; a missing, stale or
-// mis-parented key moves a weight by 0.1 or more), and the chains within 1e-5 m after 60
-// frames, the bound of the test above. The keyed weights must move, or a key left at its
+// mis-parented key moves a weight by 0.1 or more), and the chains within 1e-3 m after 60
+// frames. Not the 1e-5 m of the test above: the weights differ by up to 9e-6 here, and
+// hair lying on the head amplifies what its rest shape gets (issue 39's solver keeps the
+// energy the old sweep drained, and does not give back to a parent what the head's
+// collider undid): 3.2e-4 m after 60 frames (3e-6 with contacts given back; the hair's
+// second differences were the same, 10.4 mm/frame^2, so nothing visible changed). A
+// mis-parented key still moves the hair by centimetres. The keyed weights must move, or a key left at its
 // first value would pass. 37 instances: not a multiple of the workgroup size.
 TEST(RiggedScene, KeySourcesWrittenOnTheDeviceMatchTheHosts) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
@@ -747,7 +752,7 @@ TEST(RiggedScene, KeySourcesWrittenOnTheDeviceMatchTheHosts) {
                 static_cast<double>(worst));
     EXPECT_GT(high - low, 0.2f) << "the keyed weights must move";
     EXPECT_LT(worst_weight, 1e-4f);
-    EXPECT_LT(worst, 1e-5f);
+    EXPECT_LT(worst, 1e-3f);
     EXPECT_EQ(validation_messages(*device), 0u);
 }
 
