@@ -157,7 +157,7 @@ TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
            "shape": {"arc": {"joints": 9, "length": 0.5, "direction": [0, -1, -0.3], "bend_axis": [1, 0, 0], "curl_deg": 10}}},
           {"name": "c", "joint": "body", "offset": {"position": [0.1, 0.3, 0.15]}, "colliders": ["floor", "torso"], "center": "body",
            "shape": {"arc": {"joints": 6, "length": 0.5, "direction": [0.3, -1, 0.2], "bend_axis": [0, 0, 1], "curl_deg": 5}}},
-          {"name": "d", "joint": "head", "offset": {"position": [0, 0.12, 0]},
+          {"name": "d", "joint": "head", "offset": {"position": [0, 0.16, 0]},
            "shape": {"arc": {"joints": 5, "length": 0.2, "direction": [0, 1, 0], "bend_axis": [1, 0, 0], "curl_deg": 30}}}
         ]
       }],

@@ -202,12 +202,14 @@ TEST_P(RodBackends, Deterministic) {
 // at 1/60 or 1/30 s, where floor and ceil of the substep count agree, with outside
 // spheres only. One chain per character, so each has its own collider. Each frame is
 // compared from the same state, as OneStepMatchesTheReferenceFromTheSameState does. Bound:
-// the reference's bits on the cpu backend; 2e-4 of the chain length on Vulkan, 20x that
-// test's, since a plane's or sphere's contact starts or not by rounding where a particle
-// sits on its boundary, and these frames run 3 or 4 substeps (measured 7e-5, on the
-// plane's chains; a thin inside capsule, a rail, was tried and rejected: the chain folds
-// along it either way by rounding, 4 cm apart). The tolerance still catches a floor in
-// place of the substep count's ceil (1/50 s would run 2 substeps of 1/100 s).
+// the reference's bits on the cpu backend; 1e-3 of the chain length on Vulkan (the other
+// parity tests' bound), since a plane's or sphere's contact starts or not by rounding
+// where a particle sits on its boundary, these frames run 3 or 4 substeps, and the
+// velocity update's DFTL term and its contact part (issue 39) turn a position's rounding
+// into velocity divided by the substep (measured 4.1e-4; 7e-5 before the contact part;
+// a thin inside capsule, a rail, was tried and rejected: the chain folds along it either
+// way by rounding, 4 cm apart). The tolerance still catches a floor in place of the
+// substep count's ceil (1/50 s would run 2 substeps of 1/100 s: measured 0.28).
 TEST_P(RodBackends, ChangingFrameLengthsAndEveryColliderKindMatchTheReference) {
     rods::SyntheticOptions options = small_options(true);
     options.chains_per_character = 1;
@@ -259,7 +261,7 @@ TEST_P(RodBackends, ChangingFrameLengthsAndEveryColliderKindMatchTheReference) {
             }
         }
     }
-    EXPECT_LT(worst, 2e-4f * length);
+    EXPECT_LT(worst, 1e-3f * length);
     if (GetParam() != BackendKind::Vulkan) {
         EXPECT_EQ(worst, 0.0f) << "the CPU backends compute the reference's bits";
     }
