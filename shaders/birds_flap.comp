@@ -445,7 +445,8 @@ float beat_factor(uint mode, RouteSample r) {
 // flight.cpp arm_rotation(): heading about the body's up axis, then pitch about its forward axis.
 vec4 arm_rotation(float pitch, float heading) { return qmul_flight(quat_z(pitch), quat_y(heading)); }
 
-vec4 partial_turn(vec4 q, float k) {
+// flight.cpp nlerp_turn(): a fraction k of q's turn, by nlerp, without trig.
+vec4 nlerp_turn(vec4 q, float k) {
     vec4 p = vec4(k * q.xyz, (1.0 - k) + k * q.w);
     return p * (1.0 / sqrt(dot(p, p)));
 }
@@ -578,11 +579,11 @@ void main() {
         float look = 0.0;
         if (horizontal > 1e-3) look = clamp(-float(KW_LOOK_AHEAD) * roll.z / horizontal, -float(KW_MAX_LOOK), float(KW_MAX_LOOK));
         vec4 head = qmul_flight(qmul_flight(qmul_flight(nose_up(-(float(KW_HEAD_PITCH_HOLD) * pitch + float(KW_HEAD_BOB_HOLD) * oscillation)),
-                                                        partial_turn(qconj(f.bank), float(KW_HEAD_BANK_HOLD))),
-                                            partial_turn(qconj(f.pitch), float(KW_HEAD_CLIMB_HOLD))),
+                                                        nlerp_turn(qconj(f.bank), float(KW_HEAD_BANK_HOLD))),
+                                            nlerp_turn(qconj(f.pitch), float(KW_HEAD_CLIMB_HOLD))),
                                 quat_y(look));
-        vec4 tail = qmul_flight(qmul_flight(partial_turn(f.pitch, float(KW_TAIL_CLIMB)), nose_up(float(KW_TAIL_PITCH) * pitch)),
-                                partial_turn(f.bank, float(KW_TAIL_BANK)));
+        vec4 tail = qmul_flight(qmul_flight(nlerp_turn(f.pitch, float(KW_TAIL_CLIMB)), nose_up(float(KW_TAIL_PITCH) * pitch)),
+                                nlerp_turn(f.bank, float(KW_TAIL_BANK)));
         float tail_spread = spread + float(KW_TAIL_BANK_SPREAD) * abs(sin_bank);
 
         uint slot = (k % push.frames.z) * count + i;

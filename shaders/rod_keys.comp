@@ -25,7 +25,6 @@ layout(push_constant) uniform Push { RodKeyPush push; };
 
 const vec4 IDENTITY = vec4(0.0, 0.0, 0.0, 1.0);
 
-vec4 positive_w(vec4 q) { return q.w < 0.0 ? -q : q; }
 
 // keyed.cpp angular_velocity(): the turn from `last` to `now` over dt (K.2), world.
 vec3 angular_velocity(vec4 last, vec4 now, float dt) {

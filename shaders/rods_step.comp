@@ -69,7 +69,6 @@ const int EXTRACT_ITERATIONS = 1;      // solver.cpp kExtractIterations
 
 // ---- quaternions (lib/quat.glsl holds the ones shared with other kernels) --------------
 
-vec4 positive_w(vec4 q) { return q.w < 0.0 ? -q : q; }
 // solver.cpp partial(): the rotation by `fraction` of q's angle, the short way.
 vec4 partial_turn(vec4 q, float fraction) {
     if (fraction >= 1.0) return q;

@@ -22,6 +22,13 @@
 namespace kodawari {
 namespace {
 
+// RodChainGpu.joints.z of a chain without a center is rods::kNoCenter (checked here, with
+// the domain, so that gpu/shared_layout.cpp includes no domain header).
+static_assert(rods::kNoCenter == KW_RODS_NO_CENTER);
+// RodColliderGpu.b.w is a rods::ColliderKind as a float.
+static_assert(static_cast<std::uint32_t>(rods::ColliderKind::Outside) == KW_RODS_COLLIDER_OUTSIDE &&
+              static_cast<std::uint32_t>(rods::ColliderKind::Inside) == KW_RODS_COLLIDER_INSIDE &&
+              static_cast<std::uint32_t>(rods::ColliderKind::Plane) == KW_RODS_COLLIDER_PLANE);
 // The kernel's fixed-size arrays hold what the rod world allows.
 static_assert(KW_RODS_MAX_JOINTS == rods::kMaxChainJoints && KW_RODS_MAX_VIEWS == rods::kMaxViewExamples);
 static_assert(KW_RODS_MAX_CHAIN_COLLIDERS == rods::kMaxChainColliders && KW_RODS_COLLIDER_PASSES == rods::kColliderPasses);

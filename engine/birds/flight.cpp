@@ -329,7 +329,7 @@ namespace {
 
 gpu::vec4 conj(const gpu::vec4& q) { return {-q.x, -q.y, -q.z, q.w}; }
 // nlerp(identity, q, k) for a unit q with q.w >= 0: a fraction k of q's turn, without trig.
-gpu::vec4 partial(const gpu::vec4& q, float k) {
+gpu::vec4 nlerp_turn(const gpu::vec4& q, float k) {
     return quat_normalize({k * q.x, k * q.y, k * q.z, (1.0f - k) + k * q.w});
 }
 // A turn raising the nose (or lowering the tail) by `angle`: about -X.
@@ -480,13 +480,13 @@ BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
     float look = 0.0f;
     if (horizontal > 1e-3f) look = std::clamp(-kLookAhead * roll_lateral / horizontal, -kMaxLook, kMaxLook);
     const gpu::vec4 head = quat_mul(quat_mul(quat_mul(nose_up(-(kHeadPitchHold * pitch + kHeadBobHold * oscillation)),
-                                                      partial(conj(frame_parts.bank), kHeadBankHold)),
-                                             partial(conj(frame_parts.pitch), kHeadClimbHold)),
+                                                      nlerp_turn(conj(frame_parts.bank), kHeadBankHold)),
+                                             nlerp_turn(conj(frame_parts.pitch), kHeadClimbHold)),
                                     quat_y(look));
     // Tail (F.5): lowered with the extra pitch and part of the climb, twisted with part of
     // the bank; spread by the mode and the bank.
     const gpu::vec4 tail =
-        quat_mul(quat_mul(partial(frame_parts.pitch, kTailClimb), nose_up(kTailPitch * pitch)), partial(frame_parts.bank, kTailBank));
+        quat_mul(quat_mul(nlerp_turn(frame_parts.pitch, kTailClimb), nose_up(kTailPitch * pitch)), nlerp_turn(frame_parts.bank, kTailBank));
     const float tail_spread = spread + kTailBankSpread * std::fabs(sin_bank);
 
     BirdFrame out{};

@@ -13,8 +13,6 @@
 #include <kodawari/shared/rods.h>
 #include <kodawari/shared/skin.h>
 
-#include "kodawari/rods/solver.hpp"
-#include "kodawari/rods/world.hpp"
 
 namespace kodawari::gpu {
 
@@ -54,12 +52,6 @@ static_assert(sizeof(RodShapeJointGpu) == 32 && offsetof(RodShapeJointGpu, orien
 static_assert(sizeof(RodChainGpu) == 32 && offsetof(RodChainGpu, joints) == 16);
 static_assert(sizeof(RodTransformGpu) == 32 && offsetof(RodTransformGpu, rotation) == 16);
 static_assert(sizeof(RodColliderGpu) == 32 && offsetof(RodColliderGpu, b) == 16);
-// RodChainGpu.joints.z of a chain without a center is rods::kNoCenter.
-static_assert(rods::kNoCenter == KW_RODS_NO_CENTER);
-// RodColliderGpu.b.w is a rods::ColliderKind as a float.
-static_assert(static_cast<std::uint32_t>(rods::ColliderKind::Outside) == KW_RODS_COLLIDER_OUTSIDE &&
-              static_cast<std::uint32_t>(rods::ColliderKind::Inside) == KW_RODS_COLLIDER_INSIDE &&
-              static_cast<std::uint32_t>(rods::ColliderKind::Plane) == KW_RODS_COLLIDER_PLANE);
 static_assert(sizeof(RodJointMotionGpu) == 32 && offsetof(RodJointMotionGpu, v) == 16);
 static_assert(sizeof(RodJointSpinGpu) == 32 && offsetof(RodJointSpinGpu, omega) == 16);
 static_assert(sizeof(RodChainStateGpu) == 80);

@@ -269,7 +269,7 @@ V beat_factor(V mode, const Sample& r) {
     return k;
 }
 
-HWY_INLINE Q4 partial(const Q4& q, float k) {  // flight.cpp partial()
+HWY_INLINE Q4 nlerp_turn(const Q4& q, float k) {  // flight.cpp nlerp_turn()
     const Q4 p{hn::Mul(S(k), q.x), hn::Mul(S(k), q.y), hn::Mul(S(k), q.z), hn::Add(S(1.0f - k), hn::Mul(S(k), q.w))};
     const V inv = hn::Div(S(1.0f), hn::Sqrt(quat_dot(p, p)));
     return {hn::Mul(p.x, inv), hn::Mul(p.y, inv), hn::Mul(p.z, inv), hn::Mul(p.w, inv)};
@@ -455,11 +455,11 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
         sin_cos(hn::Mul(S(0.5f), look), look_s, look_c);
         const Q4 head = quat_mul(
             quat_mul(quat_mul(nose_up(hn::Neg(hn::Add(hn::Mul(S(birds::kHeadPitchHold), pitch), hn::Mul(S(birds::kHeadBobHold), oscillation)))),
-                              partial(conj4(frame_parts.bank), birds::kHeadBankHold)),
-                     partial(conj4(frame_parts.pitch), birds::kHeadClimbHold)),
+                              nlerp_turn(conj4(frame_parts.bank), birds::kHeadBankHold)),
+                     nlerp_turn(conj4(frame_parts.pitch), birds::kHeadClimbHold)),
             Q4{Z(), look_s, Z(), look_c});
-        const Q4 tail = quat_mul(quat_mul(partial(frame_parts.pitch, birds::kTailClimb), nose_up(hn::Mul(S(birds::kTailPitch), pitch))),
-                                 partial(frame_parts.bank, birds::kTailBank));
+        const Q4 tail = quat_mul(quat_mul(nlerp_turn(frame_parts.pitch, birds::kTailClimb), nose_up(hn::Mul(S(birds::kTailPitch), pitch))),
+                                 nlerp_turn(frame_parts.bank, birds::kTailBank));
         const V tail_spread = hn::Add(spread, hn::Mul(S(birds::kTailBankSpread), hn::Abs(sin_bank)));
 
         // Outputs: BirdPose (right wing mirrored) or, without one, the moving parts' rows.

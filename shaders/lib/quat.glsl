@@ -22,6 +22,8 @@ vec4 qmul_flight(vec4 a, vec4 b) {
 }
 
 vec4 qconj(vec4 q) { return vec4(-q.xyz, q.w); }
+// The same rotation with w >= 0, the short way (rods' positive_w in solver.cpp).
+vec4 positive_w(vec4 q) { return q.w < 0.0 ? -q : q; }
 
 // glm's quat * vec3.
 vec3 qrot(vec4 q, vec3 v) {
