@@ -119,7 +119,7 @@ Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendCh
     if (frames) options.frames = static_cast<std::uint32_t>(*frames);
     auto sim = Simulation::create(std::move(scene), options);
     if (sim && !sim.value()->fallback_reason().empty()) {
-        std::fprintf(stderr, "kodawari: Vulkan unavailable (%s); running on the CPU\n", sim.value()->fallback_reason().c_str());
+        std::fprintf(stderr, "kodawari: backend auto runs on the CPU: %s\n", sim.value()->fallback_reason().c_str());
     }
     return sim;
 }

@@ -56,7 +56,13 @@ int cmd_info(const InfoOptions& o) {
     if (inv.chosen >= 0) {
         std::printf("chosen: [%u] %s, because %s\n", inv.devices[static_cast<std::size_t>(inv.chosen)].index,
                     inv.devices[static_cast<std::size_t>(inv.chosen)].name.c_str(), inv.reason.c_str());
-        std::printf("backend auto: vulkan\n");
+        // auto passes over a CPU-type device it was not asked for (issue 38).
+        const std::string passed_over = device.empty() ? auto_passes_over(inv.devices[static_cast<std::size_t>(inv.chosen)]) : "";
+        if (passed_over.empty()) {
+            std::printf("backend auto: vulkan\n");
+        } else {
+            std::printf("backend auto: cpu (%s)\n", passed_over.c_str());
+        }
     } else if (!device.empty()) {
         std::printf("chosen: none: %s\nbackend auto: none (a device was asked for: the simulating commands exit 2)\n",
                     inv.reason.c_str());

@@ -24,6 +24,8 @@ std::uint64_t read_back_bytes(const gpu::VulkanContext& device) { return device.
 
 std::uint32_t validation_messages(const gpu::VulkanContext& device) { return device.validation_messages(); }
 
+const GpuDeviceInfo& device_info(const gpu::VulkanContext& device) { return device.info(); }
+
 Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options) {
     if (kind == BackendKind::Vulkan) return make_vulkan_bird_backend(options);
     return make_cpu_bird_backend(kind, options);

@@ -195,28 +195,34 @@ void read_world(const kodawari_bird_world_desc& desc, birds::BirdWorld& world) {
 }
 
 // Opens the backend `options` ask for and loads the world into it. AUTO takes vulkan when
-// a device opens and can hold the world, else cpu and says why, as Simulation::create
-// does (but not when `device` names one that is not there: that is an error): a world larger than the device can bind is Unsupported, which the CPU backends
-// do not know. A device the caller lent is always used (effective_backend).
+// a GPU opens and can hold the world, else cpu and says why, as Simulation::create does:
+// a CPU-type device unless named (lavapipe: the cpu backend is faster), no device, or a
+// world larger than the device can bind (Unsupported, which the CPU backends do not
+// know). A `device` that names nothing is an error, never a fallback; a device the
+// caller lent is always used (effective_backend).
 void open_and_load(kodawari_bird_world& w, const kodawari_backend_options& options) {
-    const BackendOptions engine_options = backend_options(options);
+    BackendOptions engine_options = backend_options(options);
     if (effective_backend(options) == KODAWARI_BACKEND_AUTO) {
-        auto vulkan = make_bird_backend(BackendKind::Vulkan, engine_options);
-        if (vulkan.ok()) {
-            auto backend = std::move(vulkan).value();
-            auto loaded = backend->load(w.world);
-            if (loaded.ok()) {
-                w.backend = std::move(backend);
-                w.kind = BackendKind::Vulkan;
-                return;
+        // Not on a CPU-type device unless it was named (open_auto_device(), issue 38).
+        w.fallback_reason = open_auto_device(engine_options);
+        if (w.fallback_reason.empty()) {
+            auto vulkan = make_bird_backend(BackendKind::Vulkan, engine_options);
+            if (vulkan.ok()) {
+                auto backend = std::move(vulkan).value();
+                auto loaded = backend->load(w.world);
+                if (loaded.ok()) {
+                    w.backend = std::move(backend);
+                    w.kind = BackendKind::Vulkan;
+                    return;
+                }
+                if (loaded.error().kind != Error::Kind::Unsupported) check(loaded);
+                w.fallback_reason = loaded.error().message;
+            } else {
+                // A device asked for by name or index that is not there is the caller's
+                // mistake (INVALID_ARGUMENT), never a reason to run elsewhere.
+                if (engine_options.device.size() > 0) check(vulkan);
+                w.fallback_reason = vulkan.error().message;
             }
-            if (loaded.error().kind != Error::Kind::Unsupported) check(loaded);
-            w.fallback_reason = loaded.error().message;
-        } else {
-            // A device asked for by name or index that is not there is the caller's
-            // mistake (INVALID_ARGUMENT), never a reason to run elsewhere.
-            if (engine_options.device.size() > 0) check(vulkan);
-            w.fallback_reason = vulkan.error().message;
         }
         w.kind = BackendKind::Cpu;
     } else {

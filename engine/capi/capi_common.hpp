@@ -140,6 +140,11 @@ kodawari_backend backend_enum(BackendKind kind);
 /// Checks `options` (the enum, the flags, the thread count) and names problems under `what`.
 void require_backend_options(const kodawari_backend_options& options, const std::string& what);
 BackendOptions backend_options(const kodawari_backend_options& options);
+/// AUTO's device when none is named (issue 38): opens the best one into `options.context`
+/// and returns "", or returns why auto passes over it (a CPU-type device: the cpu
+/// backend is faster there, auto_passes_over()) and leaves `options` as it was. A device
+/// that does not open is left for the Vulkan backend to fail on, with its reason.
+std::string open_auto_device(BackendOptions& options);
 
 /// Copies `text` into `out[size]`, cut to fit and always terminated.
 void copy_text(const std::string& text, char* out, std::size_t size);

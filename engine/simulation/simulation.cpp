@@ -199,12 +199,18 @@ Result<std::unique_ptr<Simulation>> Simulation::create(Scene scene, const Simula
     // matrices feed the rod input, a renderer draws the state); "auto" falls back to the
     // CPU when none opens, but not when a device was asked for by name or index: the
     // caller meant that device, and running elsewhere would hide the mistake.
+    // Nor does "auto" run on a CPU-type device (lavapipe) unless it was named: the cpu
+    // backend is several times faster there (auto_passes_over(), issue 38).
     impl->kind = options.backend.value_or(BackendKind::Vulkan);
     if (impl->kind == BackendKind::Vulkan && !impl->options.options.context) {
         auto device = open_shared_device(impl->options.options);
-        if (device) {
+        const bool chosen_by_auto = !options.backend && options.options.device.empty();
+        if (device && chosen_by_auto && !auto_passes_over(device_info(*device.value())).empty()) {
+            impl->kind = BackendKind::Cpu;
+            impl->fallback_reason = auto_passes_over(device_info(*device.value()));
+        } else if (device) {
             impl->options.options.context = std::move(device).value();
-        } else if (!options.backend && options.options.device.empty()) {
+        } else if (chosen_by_auto) {
             impl->kind = BackendKind::Cpu;
             impl->fallback_reason = device.error().message;
         } else {

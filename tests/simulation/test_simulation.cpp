@@ -10,6 +10,7 @@
 
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/crowd_animator.hpp"
+#include "kodawari/gpu_info.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
 
@@ -178,3 +179,51 @@ TEST(Simulation, BackendChoiceNames) {
 }
 
 }  // namespace
+
+// Issue 38: "auto" passes over a CPU-type Vulkan device (lavapipe), where the cpu backend
+// runs the same work several times faster, and only that type.
+TEST(AutoBackend, PassesOverACpuTypeDeviceOnly) {
+    GpuDeviceInfo device;
+    device.name = "llvmpipe (LLVM 15.0.6, 256 bits)";
+    for (const char* type : {"discrete", "integrated", "virtual", "other"}) {
+        device.type = type;
+        EXPECT_EQ(auto_passes_over(device), "") << type;
+    }
+    device.type = "cpu";
+    const std::string why = auto_passes_over(device);
+    EXPECT_NE(why.find("llvmpipe (LLVM 15.0.6, 256 bits) is a CPU, not a GPU"), std::string::npos) << why;
+    EXPECT_NE(why.find("--backend vulkan"), std::string::npos) << why;
+}
+
+// And Simulation follows it: on this machine's best device, the cpu backend with the
+// reason when it is a CPU, vulkan silently when it is a GPU; a device named by index is
+// obeyed whatever its type, and `backend` vulkan too.
+TEST(AutoBackend, SimulationTakesTheCpuBackendOnACpuDeviceUnlessNamed) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    auto gpus = list_gpus("");
+    ASSERT_TRUE(gpus.ok()) << gpus.error().message;
+    ASSERT_GE(gpus.value().chosen, 0) << gpus.value().reason;
+    const GpuDeviceInfo& best = gpus.value().devices[static_cast<std::size_t>(gpus.value().chosen)];
+    SimulationOptions options;
+    options.frames = 2;
+    auto automatic = Simulation::open(scene_path("ahoge.json"), options);
+    ASSERT_TRUE(automatic.ok()) << automatic.error().message;
+    if (best.type == "cpu") {
+        EXPECT_EQ(automatic.value()->backend(), BackendKind::Cpu);
+        EXPECT_NE(automatic.value()->fallback_reason().find("is a CPU, not a GPU"), std::string::npos)
+            << automatic.value()->fallback_reason();
+    } else {
+        EXPECT_EQ(automatic.value()->backend(), BackendKind::Vulkan);
+        EXPECT_EQ(automatic.value()->fallback_reason(), "");
+    }
+    options.options.device = std::to_string(best.index);
+    auto named = Simulation::open(scene_path("ahoge.json"), options);
+    ASSERT_TRUE(named.ok()) << named.error().message;
+    EXPECT_EQ(named.value()->backend(), BackendKind::Vulkan);
+    EXPECT_EQ(named.value()->fallback_reason(), "");
+    options.options.device.clear();
+    options.backend = BackendKind::Vulkan;
+    auto vulkan = Simulation::open(scene_path("ahoge.json"), options);
+    ASSERT_TRUE(vulkan.ok()) << vulkan.error().message;
+    EXPECT_EQ(vulkan.value()->backend(), BackendKind::Vulkan);
+}

@@ -15,6 +15,7 @@
 
 #include "kodawari/api.hpp"
 #include "kodawari/backend.hpp"
+#include "kodawari/gpu_info.hpp"
 #include "kodawari/pose_backend.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -44,5 +45,7 @@ namespace kodawari {
 [[nodiscard]] KODAWARI_API std::uint64_t read_back_bytes(const gpu::VulkanContext& device);
 /// Validation messages on `device` so far (every backend sharing it).
 [[nodiscard]] KODAWARI_API std::uint32_t validation_messages(const gpu::VulkanContext& device);
+/// What `device` is (name, type, limits), as `kodawari info` lists it.
+[[nodiscard]] KODAWARI_API const GpuDeviceInfo& device_info(const gpu::VulkanContext& device);
 
 }  // namespace kodawari

@@ -45,4 +45,12 @@ struct GpuInventory {
 /// Fails when there is no Vulkan loader or driver.
 [[nodiscard]] KODAWARI_API Result<GpuInventory> list_gpus(const std::string& request);
 
+/// Why backend "auto" passes over `device` although it opened: "" for a GPU (discrete,
+/// integrated, virtual or other), and for a CPU-type device (Mesa's lavapipe, SwiftShader)
+/// a sentence saying so: there the cpu backend runs the same work several times faster
+/// than the Vulkan kernels do (docs/performance.md), so "auto" takes it. A device asked
+/// for by name or index, and `--backend vulkan`, run on it anyway (Simulation::create and
+/// the C API's AUTO ask this only when no device was named).
+[[nodiscard]] KODAWARI_API std::string auto_passes_over(const GpuDeviceInfo& device);
+
 }  // namespace kodawari

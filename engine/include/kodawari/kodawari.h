@@ -135,8 +135,10 @@ KODAWARI_C_API const char* kodawari_last_error(void);
 /// Which implementation simulates a world. All agree within the tolerances the project's
 /// tests state; cpu-reference and cpu give the same bits.
 typedef enum kodawari_backend {
-    /// vulkan when a Vulkan device opens and can hold the world (a buffer within its
-    /// maxStorageBufferRange), else cpu (the world's info says why).
+    /// vulkan when a GPU opens and can hold the world (a buffer within its
+    /// maxStorageBufferRange), else cpu (the world's info says why). A CPU-type Vulkan
+    /// device (Mesa's lavapipe) gives cpu too, which is several times faster there,
+    /// unless `device` names it.
     KODAWARI_BACKEND_AUTO = 0,
     /// Scalar, one thread: the validation oracle.
     KODAWARI_BACKEND_CPU_REFERENCE = 1,

@@ -85,10 +85,11 @@ struct SceneWorlds {
 
 /// How a Simulation runs.
 struct SimulationOptions {
-    /// The backends' kind; none: "auto", vulkan when a Vulkan device opens and can hold
-    /// the scene (its buffers within the device's limits), else cpu; but a device asked
-    /// for (BackendOptions::device) that matches none is an error, never a fallback
-    /// (Simulation::fallback_reason() then says why).
+    /// The backends' kind; none: "auto", vulkan when a GPU opens and can hold the scene
+    /// (its buffers within the device's limits), else cpu (Simulation::fallback_reason()
+    /// then says why): also when the device is a CPU (lavapipe; auto_passes_over()), where
+    /// the cpu backend is several times faster, unless BackendOptions::device names it.
+    /// A device asked for that matches none is an error, never a fallback.
     std::optional<BackendKind> backend{};
     /// Device, validation, cpu threads, and a device to run on (a renderer's); without
     /// one, the vulkan backends share one device the Simulation opens.
