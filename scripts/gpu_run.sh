@@ -20,7 +20,8 @@
 # benchmarks' JSON files; the table of the benchmarks is printed last. The binary is
 # $KODAWARI, else the bundle's bin/kodawari, else build/release/host/kodawari; embed_vulkan
 # is $KODAWARI_EMBED_VULKAN, else the bundle's, else build/release/examples/embed_vulkan/.
-# Nothing is built. GPU_RUN_ONLY=REGEX runs only the steps whose names match (bash regex).
+# Nothing is built. GPU_RUN_ONLY=REGEX runs only the steps whose names match (bash regex);
+# GPU_RUN_BUDGET=SECONDS replaces the run's deadline (290 s, --quick 110 s).
 # Exit status: 0 when every step that ran passed, 1 when one failed, timed out or was left
 # out for lack of time, 2 for bad usage or a bundle that cannot be made.
 #
@@ -208,7 +209,8 @@ make_bundle() {
     echo "commit=$commit"
     echo "made=$(date -u +%Y-%m-%dT%H:%M:%SZ)"
     echo "made_on=$(uname -srm) $(getconf GNU_LIBC_VERSION 2>/dev/null || true)"
-    echo "needs_glibc=$(max_version GLIBC "${bundled_elves[@]}" "$tmp"/lib/compat/*)"
+    echo "needs_glibc=$(max_version GLIBC "${bundled_elves[@]}")"
+    echo "compat_needs_glibc=$(max_version GLIBC "$tmp"/lib/compat/*)"
     echo "needs_glibcxx=$(max_version GLIBCXX "${bundled_elves[@]}")"
     echo "needs_cxxabi=$(max_version CXXABI "${bundled_elves[@]}")"
   } >"$tmp/MANIFEST"
@@ -225,7 +227,18 @@ make_bundle() {
   (cd "$dest" && find . -type f ! -path './scenes/*' -printf '%s\t%p\n' | sort -k2 |
     awk -F'\t' '{ printf "  %8.2f MiB  %s\n", $1 / 1048576, substr($2, 3) }')
   echo "  $(du -sb "$dest/scenes" | awk '{ printf "%8.2f MiB", $1 / 1048576 }')  scenes/ ($(find "$dest/scenes" -type f | wc -l) files)"
-  sed -n 's/^\(commit\|needs_glibc\|needs_glibcxx\)=/  \1 /p' "$dest/MANIFEST"
+  local need f culprits=""
+  need="$(sed -n 's/^needs_glibc=//p' "$dest/MANIFEST")"
+  for f in "$dest"/bin/* "$dest"/lib/*.so*; do
+    if grep -aqF "$need" "$f"; then culprits+="${culprits:+, }${f#"$dest"/}"; fi
+  done
+  echo "  commit $(sed -n 's/^commit=//p' "$dest/MANIFEST"); the GPU machine needs glibc >= ${need#GLIBC_} ($culprits)"
+  # Open MPI's libevent is the usual culprit: Debian 12's needs glibc 2.36, past Ubuntu
+  # 22.04's 2.35, while kodawari itself needs 2.34. `--mpi` is of no use on the GPU
+  # machine, so a build without MPI makes a bundle that starts on more systems.
+  if [[ "$(printf '%s\n%s\n' "${need#GLIBC_}" 2.35 | sort -V | tail -n 1)" != 2.35 ]]; then
+    echo "  (past Ubuntu 22.04's glibc 2.35; a build without MPI needs less: docs/gpu.md, \"Older systems\")"
+  fi
   echo "copy the folder to the GPU machine and run: bash $(basename "$dest")/gpu_run.sh [OUT]"
 }
 
@@ -281,7 +294,8 @@ write_results() {
     printf ' "kodawari":%s,"embed_vulkan":%s,"bundle":%s,\n' "$(json_str "$bin")" "$(json_str "$embed")" "$bundle_json"
     printf ' "environment":%s,\n' "$env_json"
     printf ' "host":%s,\n' "$host"
-    printf ' "device":%s,\n' "$(json_str "$device")"
+    printf ' "device":%s,"driver":%s,"libstdcxx":%s,"glibc_warning":%s,\n' "$(json_str "$device")" \
+      "$(json_str "$driver_note")" "$(json_str "$compat_note")" "$(json_str "$glibc_note")"
     printf ' "steps":['
     for i in "${!steps_json[@]}"; do
       printf '%s\n  %s' "$sep" "${steps_json[$i]}"
@@ -394,7 +408,7 @@ print_table() {
       if (!(kind in seen)) units = units (units == "" ? "" : ", ") kind ": " unit "/s"
       seen[kind] = 1
     }
-    END { if (NR > 0) print "(rates: " units "; medians of the repetitions, min and max beside them; GPU ms: the device timestamps per frame)" }
+    END { if (NR == 0) print "(no benchmark wrote its results)"; else print "(rates: " units "; medians of the repetitions, min and max beside them; GPU ms: the device timestamps per frame)" }
   '
 }
 
@@ -430,9 +444,16 @@ setup_env() {
     local need_glibc have_glibc
     need_glibc="$(sed -n 's/^needs_glibc=GLIBC_//p' "$root/MANIFEST" 2>/dev/null || true)"
     have_glibc="$(getconf GNU_LIBC_VERSION 2>/dev/null | awk '{ print $2 }' || true)"
+    if ((compat)); then
+      local compat_glibc
+      compat_glibc="$(sed -n 's/^compat_needs_glibc=GLIBC_//p' "$root/MANIFEST" 2>/dev/null || true)"
+      if [[ -n "$compat_glibc" && "$(printf '%s\n%s\n' "$need_glibc" "$compat_glibc" | sort -V | tail -n 1)" == "$compat_glibc" ]]; then
+        need_glibc="$compat_glibc"
+      fi
+    fi
     if [[ -n "$need_glibc" && -n "$have_glibc" &&
       "$(printf '%s\n%s\n' "$need_glibc" "$have_glibc" | sort -V | head -n 1)" != "$need_glibc" ]]; then
-      glibc_note="WARNING: the bundle needs glibc >= $need_glibc, this machine has $have_glibc: its programs will not start"
+      glibc_note="WARNING: the bundle needs glibc >= $need_glibc, this machine has $have_glibc: its programs will not start (docs/gpu.md, \"Older systems\")"
     fi
   fi
   run_env+=(KODAWARI_VALIDATION=0)
@@ -480,6 +501,7 @@ run_all() {
   # for starting and the table).
   local budget=290
   ((quick)) && budget=110
+  budget="${GPU_RUN_BUDGET:-$budget}"
   deadline="$(awk -v t="$t0" -v b="$budget" 'BEGIN { printf "%.3f", t + b }')"
 
   if [[ -n "${KODAWARI:-}" ]]; then
@@ -507,7 +529,7 @@ run_all() {
   compat_note=""
   glibc_note=""
   setup_env
-  local driver_note="the loader's own search"
+  driver_note="the loader's own search"
   if ! sees_gpu; then
     local icd
     if icd="$(nvidia_icd)"; then
@@ -558,15 +580,18 @@ run_all() {
   # ones, where it takes seconds (its 1M chains would take minutes). --quick: the same
   # steps at sizes lavapipe on two loaded cores runs in seconds, counts not multiples of
   # a workgroup.
-  local chains_s=100000 chains_l=1000000 chains_frames=5
-  local birds_s=1000000 birds_l=10000000 birds_frames=10
+  # The large sizes (cpu and vulkan alone) take more frames and repetitions: a GPU step of
+  # 1M chains is a few milliseconds, and cpu-reference no longer sets the pace. validate's
+  # 20 frames: crowd.json's cpu-reference takes about 0.45 s a frame.
+  local chains_s=100000 chains_l=1000000 chains_frames_s=5 chains_frames_l=20
+  local birds_s=1000000 birds_l=10000000 birds_frames_s=10 birds_frames_l=20
   local crowd_s=1000 crowd_l=10000 crowd_frames=30
-  local reps=3 validate_frames=60 embed_frames=120 bench_limit=90 step_limit=45
-  local bench_reserve=60
+  local reps_s=3 reps_l=5 validate_frames=20 embed_frames=120 bench_limit=90 step_limit=40
+  local bench_reserve=75
   if ((quick)); then
-    chains_s=301 chains_l=1001 chains_frames=2
-    birds_s=1001 birds_l=10001 birds_frames=3
-    crowd_s=2 crowd_l=5 crowd_frames=3
+    chains_s=301 chains_l=1001 chains_frames_s=2 chains_frames_l=2
+    birds_s=1001 birds_l=10001 birds_frames_s=3 birds_frames_l=3
+    crowd_s=2 crowd_l=5 crowd_frames=3 reps_l=3
     validate_frames=3 embed_frames=12 bench_limit=40 step_limit=30 bench_reserve=30
   fi
   local all=cpu-reference,cpu,vulkan fast=cpu,vulkan
@@ -580,19 +605,19 @@ run_all() {
   # Benchmarks first: their figures are what the machine is lent for. Each keeps
   # bench_reserve seconds of the deadline for validate and embed_vulkan.
   run_step "bench-chains-$chains_s" "$bench_limit" "$bench_reserve" bench "$bin" bench chains --count "$chains_s" \
-    --joints 16 --iterations 4 --frames "$chains_frames" --repetitions "$reps" --backends "$all" \
+    --joints 16 --iterations 4 --frames "$chains_frames_s" --repetitions "$reps_s" --backends "$all" \
     --json "$out/bench-chains-$chains_s.json"
   run_step "bench-birds-$birds_s" "$bench_limit" "$bench_reserve" bench "$bin" bench birds --count "$birds_s" \
-    --frames "$birds_frames" --repetitions "$reps" --backends "$all" --json "$out/bench-birds-$birds_s.json"
+    --frames "$birds_frames_s" --repetitions "$reps_s" --backends "$all" --json "$out/bench-birds-$birds_s.json"
   run_step "bench-crowd-$crowd_s" "$bench_limit" "$bench_reserve" bench "$bin" bench crowd --count "$crowd_s" \
-    --frames "$crowd_frames" --repetitions "$reps" --backends "$all" --json "$out/bench-crowd-$crowd_s.json"
+    --frames "$crowd_frames" --repetitions "$reps_s" --backends "$all" --json "$out/bench-crowd-$crowd_s.json"
   run_step "bench-chains-$chains_l" "$bench_limit" "$bench_reserve" bench "$bin" bench chains --count "$chains_l" \
-    --joints 16 --iterations 4 --frames "$chains_frames" --repetitions "$reps" --backends "$fast" \
+    --joints 16 --iterations 4 --frames "$chains_frames_l" --repetitions "$reps_l" --backends "$fast" \
     --json "$out/bench-chains-$chains_l.json"
   run_step "bench-birds-$birds_l" "$bench_limit" "$bench_reserve" bench "$bin" bench birds --count "$birds_l" \
-    --frames "$birds_frames" --repetitions "$reps" --backends "$fast" --json "$out/bench-birds-$birds_l.json"
+    --frames "$birds_frames_l" --repetitions "$reps_l" --backends "$fast" --json "$out/bench-birds-$birds_l.json"
   run_step "bench-crowd-$crowd_l" "$bench_limit" "$bench_reserve" bench "$bin" bench crowd --count "$crowd_l" \
-    --frames "$crowd_frames" --repetitions "$reps" --backends "$fast" --json "$out/bench-crowd-$crowd_l.json"
+    --frames "$crowd_frames" --repetitions "$reps_l" --backends "$fast" --json "$out/bench-crowd-$crowd_l.json"
 
   # Every shipped scene, vulkan against cpu-reference.
   local scene base
