@@ -580,10 +580,11 @@ run_all() {
   # ones, where it takes seconds (its 1M chains would take minutes). --quick: the same
   # steps at sizes lavapipe on two loaded cores runs in seconds, counts not multiples of
   # a workgroup.
-  # The large sizes (cpu and vulkan alone) take more frames and repetitions: a GPU step of
-  # 1M chains is a few milliseconds, and cpu-reference no longer sets the pace. validate's
-  # 20 frames: crowd.json's cpu-reference takes about 0.45 s a frame.
-  local chains_s=100000 chains_l=1000000 chains_frames_s=5 chains_frames_l=20
+  # The large sizes (cpu and vulkan alone) take more repetitions: a GPU step of 1M chains
+  # is a few milliseconds, and cpu-reference no longer sets the pace (the cpu backend's 1M
+  # chains took 1.55 s a frame on the 2-core machine, so 10 frames). validate's 20 frames:
+  # crowd.json's cpu-reference takes about 0.45 s a frame.
+  local chains_s=100000 chains_l=1000000 chains_frames_s=5 chains_frames_l=10
   local birds_s=1000000 birds_l=10000000 birds_frames_s=10 birds_frames_l=20
   local crowd_s=1000 crowd_l=10000 crowd_frames=30
   local reps_s=3 reps_l=5 validate_frames=20 embed_frames=120 bench_limit=90 step_limit=40
