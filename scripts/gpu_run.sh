@@ -34,9 +34,11 @@ export LC_ALL=C
 
 script_dir="$(cd "$(dirname "${BASH_SOURCE[0]}")" && pwd)"
 # In a bundle the script sits beside bin/ and lib/; in a checkout it is scripts/gpu_run.sh.
-if [[ -x "$script_dir/bin/kodawari" && -d "$script_dir/lib" ]]; then
+if [[ -f "$script_dir/MANIFEST" && -f "$script_dir/bin/kodawari" && -d "$script_dir/lib" ]]; then
   in_bundle=1
   root="$script_dir"
+  # A copy that dropped the modes (some transfers do) still runs.
+  [[ -x "$root/bin/kodawari" ]] || chmod u+x "$root"/bin/* 2>/dev/null || true
 else
   in_bundle=0
   root="$(cd "$script_dir/.." && pwd)"
@@ -353,6 +355,13 @@ run_step() {
     if [[ "$kind" == bench && -s "$out/$name.json" ]]; then
       bench="$(cat "$out/$name.json")"
       bench_steps+=("$name")
+      # `bench` skips a backend that cannot start (exit 0, the others timed): on this run
+      # a missing vulkan result is the failure that matters most.
+      if [[ "$result" == ok && "$*" == *vulkan* ]] && ! grep -q '"backend":"vulkan' "$out/$name.json"; then
+        result="failed"
+        summary="no vulkan result: $(grep -m 1 'skipped:' "$out/step.out" | sed 's/^ *//' || true)"
+        failures+=("$name (no vulkan result)")
+      fi
     fi
   fi
   echo "--- $name: $result, exit ${status/null/-}, ${seconds}s" >>"$log_file"
