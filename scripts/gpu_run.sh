@@ -299,7 +299,7 @@ write_results() {
     printf ' "device":%s,"driver":%s,"libstdcxx":%s,"glibc_warning":%s,\n' "$(json_str "$device")" \
       "$(json_str "$driver_note")" "$(json_str "$compat_note")" "$(json_str "$glibc_note")"
     printf ' "steps":['
-    for i in "${!steps_json[@]}"; do
+    for i in ${steps_json[@]+"${!steps_json[@]}"}; do
       printf '%s\n  %s' "$sep" "${steps_json[$i]}"
       sep=","
     done
