@@ -469,8 +469,12 @@ setup_env() {
 }
 
 # Does the loader, as set up so far, see a GPU? `kodawari info` lists each device's type.
+# (Read whole, then searched: `info | grep -q` could end info with SIGPIPE once grep has
+# its match, and pipefail would call that a miss.)
 sees_gpu() {
-  timeout 60 env "${run_env[@]}" "$@" "$bin" info 2>&1 | grep -qE '^ +type (discrete|integrated)'
+  local listing
+  listing="$(timeout 60 env "${run_env[@]}" "$@" "$bin" info 2>&1 || true)"
+  grep -qE '^ +type (discrete|integrated)' <<<"$listing"
 }
 
 # The NVIDIA driver's Vulkan manifest, or one written for its library when the machine
