@@ -482,7 +482,7 @@ sees_gpu() {
 # of the NVIDIA container toolkit mounts libGLX_nvidia.so.0 alone, or nothing).
 nvidia_icd() {
   local f lib
-  for f in /usr/share/vulkan/icd.d/nvidia_icd.json /etc/vulkan/icd.d/nvidia_icd.json \
+  for f in /usr/local/nvidia/share/vulkan/icd.d/nvidia_icd.json /usr/share/vulkan/icd.d/nvidia_icd.json /etc/vulkan/icd.d/nvidia_icd.json \
     /usr/local/share/vulkan/icd.d/nvidia_icd.json /usr/share/vulkan/icd.d/nvidia_icd.x86_64.json \
     /etc/vulkan/icd.d/nvidia_icd.x86_64.json; do
     if [[ -f "$f" ]]; then
