@@ -25,7 +25,9 @@ FUZZ_TARGETS := fuzz_scene fuzz_gltf fuzz_stroke fuzz_scene_edit fuzz_capi
 # crowd of 200 VRM avatars on every backend (the release lane runs it; 90 s a backend under
 # ASan for the code ColliderKindsGroupsAndCentersMatchTheReference and the Avatars tests
 # run there on a few characters), and the README tour (`readme_tour`: the release lane runs
-# it; its commands' code is what cli, cli_exit_codes and the render tests run under ASan).
+# it; its commands' code is what cli, cli_exit_codes and the render tests run under ASan),
+# and the GPU machine's run at small sizes (`gpu_run_quick`: it bundles and times the
+# release binary; scripts/gpu_run.sh runs no code of its own under the sanitizers).
 ASAN_ENV := ASAN_OPTIONS=detect_leaks=1 LD_PRELOAD=$(CURDIR)/build/asan/tests/libkodawari_asan_keep_loaded.so
 
 .PHONY: run test build setup configure clean bench asan fuzz
@@ -48,7 +50,7 @@ test: build
 asan: setup
 	@cmake --preset asan >/dev/null
 	@cmake --build build/asan -j $(JOBS)
-	@$(ASAN_ENV) ctest --preset asan -j $(JOBS) --timeout 900 -E '^(package|export_identity|viewer_soak|readme_tour)$$|/Soak\.|AvatarCrowdOf200'
+	@$(ASAN_ENV) ctest --preset asan -j $(JOBS) --timeout 900 -E '^(package|export_identity|viewer_soak|readme_tour|gpu_run_quick)$$|/Soak\.|AvatarCrowdOf200'
 
 fuzz: setup
 	@cmake --preset asan >/dev/null
