@@ -203,26 +203,11 @@ void read_world(const kodawari_bird_world_desc& desc, birds::BirdWorld& world) {
 void open_and_load(kodawari_bird_world& w, const kodawari_backend_options& options) {
     BackendOptions engine_options = backend_options(options);
     if (effective_backend(options) == KODAWARI_BACKEND_AUTO) {
-        // Not on a CPU-type device unless it was named (open_auto_device(), issue 38).
-        w.fallback_reason = open_auto_device(engine_options);
-        if (w.fallback_reason.empty()) {
-            auto vulkan = make_bird_backend(BackendKind::Vulkan, engine_options);
-            if (vulkan.ok()) {
-                auto backend = std::move(vulkan).value();
-                auto loaded = backend->load(w.world);
-                if (loaded.ok()) {
-                    w.backend = std::move(backend);
-                    w.kind = BackendKind::Vulkan;
-                    return;
-                }
-                if (loaded.error().kind != Error::Kind::Unsupported) check(loaded);
-                w.fallback_reason = loaded.error().message;
-            } else {
-                // A device asked for by name or index that is not there is the caller's
-                // mistake (INVALID_ARGUMENT), never a reason to run elsewhere.
-                if (engine_options.device.size() > 0) check(vulkan);
-                w.fallback_reason = vulkan.error().message;
-            }
+        w.backend = open_auto_vulkan<BirdBackend>(engine_options, w.fallback_reason, make_bird_backend,
+                                                [&](BirdBackend& backend) { return backend.load(w.world); });
+        if (w.backend) {
+            w.kind = BackendKind::Vulkan;
+            return;
         }
         w.kind = BackendKind::Cpu;
     } else {

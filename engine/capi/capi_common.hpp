@@ -146,6 +146,31 @@ BackendOptions backend_options(const kodawari_backend_options& options);
 /// that does not open is left for the Vulkan backend to fail on, with its reason.
 std::string open_auto_device(BackendOptions& options);
 
+/// AUTO for a world (the chain and bird worlds' open_and_load): a vulkan backend made by
+/// `make(BackendKind::Vulkan, options)` with the world loaded by `load(backend)`, when a
+/// GPU (or a named device) opens and the world fits it; else null with `reason` saying
+/// why: a CPU-type device nobody named (open_auto_device()), no device, or a world larger
+/// than the device can bind (Unsupported, which the CPU backends do not know). A `device`
+/// that names nothing, and any other load error, throw (check()): never a reason to run
+/// elsewhere.
+template <typename Backend, typename Make, typename Load>
+std::unique_ptr<Backend> open_auto_vulkan(BackendOptions& options, std::string& reason, Make make, Load load) {
+    reason = open_auto_device(options);
+    if (!reason.empty()) return nullptr;
+    auto vulkan = make(BackendKind::Vulkan, options);
+    if (!vulkan.ok()) {
+        if (!options.device.empty()) check(vulkan);
+        reason = vulkan.error().message;
+        return nullptr;
+    }
+    std::unique_ptr<Backend> backend = std::move(vulkan).value();
+    const auto loaded = load(*backend);
+    if (loaded.ok()) return backend;
+    if (loaded.error().kind != Error::Kind::Unsupported) check(loaded);
+    reason = loaded.error().message;
+    return nullptr;
+}
+
 /// Copies `text` into `out[size]`, cut to fit and always terminated.
 void copy_text(const std::string& text, char* out, std::size_t size);
 

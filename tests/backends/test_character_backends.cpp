@@ -57,19 +57,23 @@ protected:
     std::unique_ptr<kodawari::RodBackend> backend_;
 };
 
-// The largest distance of a joint of `snap` from the reference run `sim`, in its chain's
-// lengths.
+// The largest distance of a joint of chain `c` in `snap` from the reference run `sim`, in
+// the chain's lengths; worst_of_length(): over every chain.
+float chain_off(const RodScene& rs, const Simulation& sim, const kodawari::ChainSnapshot& snap, std::uint32_t c) {
+    const rods::ChainInstance& ch = rs.world.chains[c];
+    const rods::Chain& chain = rs.world.templ(ch).chain;
+    float length = 0.0f;
+    for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
+    float worst = 0.0f;
+    for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
+        worst = std::max(worst, glm::length(sim.x(c, i) - snap.positions[ch.joint_begin + i]) / length);
+    }
+    return worst;
+}
+
 float worst_of_length(const RodScene& rs, const Simulation& sim, const kodawari::ChainSnapshot& snap) {
     float worst = 0.0f;
-    for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
-        const rods::ChainInstance& ch = rs.world.chains[c];
-        const rods::Chain& chain = rs.world.templ(ch).chain;
-        float length = 0.0f;
-        for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
-        for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
-            worst = std::max(worst, glm::length(sim.x(c, i) - snap.positions[ch.joint_begin + i]) / length);
-        }
-    }
+    for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) worst = std::max(worst, chain_off(rs, sim, snap, c));
     return worst;
 }
 
@@ -190,14 +194,7 @@ TEST_P(CharacterBackends, ColliderKindsGroupsAndCentersMatchTheReference) {
             kodawari::ChainSnapshot now;
             ASSERT_TRUE(backend_->read(now).ok());
             for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
-                const rods::ChainInstance& ch = rs.world.chains[c];
-                const rods::Chain& chain = rs.world.templ(ch).chain;
-                float length = 0.0f;
-                for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
-                for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
-                    const float off = glm::length(sim.x(c, i) - now.positions[ch.joint_begin + i]) / length;
-                    over_run[c % 4] = std::max(over_run[c % 4], off);
-                }
+                over_run[c % 4] = std::max(over_run[c % 4], chain_off(rs, sim, now, c));
             }
         }
         for (std::uint32_t c = 0; c < rs.world.chains.size(); ++c) {
