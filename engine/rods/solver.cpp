@@ -353,6 +353,16 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
             collide_all(p[j], placed);
             pushed[j] += p[j] - before;
         };
+        // Child i + 1 placed on its parent's segment length, follow-the-leader, its
+        // correction kept for DFTL (no direction to correct along when it sits on it).
+        auto place_on_parent = [&](std::uint32_t i) {
+            const glm::vec3 d = p[i + 1] - p[i];
+            const float len = glm::length(d);
+            if (!(len > 1e-9f)) return;
+            const glm::vec3 placed_child = p[i] + (chain.segment_length[i] / len) * d;
+            pulled[i + 1] += placed_child - p[i + 1];
+            p[i + 1] = placed_child;
+        };
 
         // 4. Predict: damping, then the external acceleration (damping the velocity the
         // substep starts with, not the acceleration's share: a held particle then rests at
@@ -442,13 +452,7 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
             // Collisions inside the sweep: each child is pushed out of the colliders right
             // after it is placed, so its own children are placed from where it ends.
             for (std::uint32_t i = 0; i + 1 < n; ++i) {
-                const glm::vec3 d = p[i + 1] - p[i];
-                const float len = glm::length(d);
-                if (len > 1e-9f) {  // else no direction to correct along
-                    const glm::vec3 placed_child = p[i] + (chain.segment_length[i] / len) * d;
-                    pulled[i + 1] += placed_child - p[i + 1];
-                    p[i + 1] = placed_child;
-                }
+                place_on_parent(i);
                 collide_counted(i + 1);
             }
         }
@@ -460,14 +464,6 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
         // (measured: at most 0.11% of a segment on a strand draped over a shaking head);
         // ending with a placement instead handed a parent's push back into the collider
         // (1.6 mm into a capsule, and 5 mm out of an inside sphere, tests/rods).
-        auto place_on_parent = [&](std::uint32_t i) {
-            const glm::vec3 d = p[i + 1] - p[i];
-            const float len = glm::length(d);
-            if (!(len > 1e-9f)) return;
-            const glm::vec3 placed_child = p[i] + (chain.segment_length[i] / len) * d;
-            pulled[i + 1] += placed_child - p[i + 1];
-            p[i + 1] = placed_child;
-        };
         for (std::uint32_t i = 0; i + 1 < n; ++i) {
             place_on_parent(i);
             if (placed.count > 0) {

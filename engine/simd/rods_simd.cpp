@@ -339,6 +339,15 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
             collide_all(p[j]);
             pushed[j] = add(pushed[j], sub(p[j], before));
         };
+        // solver.cpp place_on_parent(): child i + 1 on its parent's segment length.
+        auto place_on_parent = [&](std::size_t i) HWY_ATTR {
+            const V3 dd = sub(p[i + 1], p[i]);
+            const V len = length(dd);
+            const M along = hn::Gt(len, S(1e-9f));
+            const V3 placed_child = add(p[i], mul(hn::Div(S(t.segment[i]), len), dd));
+            pulled[i + 1] = select(along, add(pulled[i + 1], sub(placed_child, p[i + 1])), pulled[i + 1]);
+            p[i + 1] = select(along, placed_child, p[i + 1]);
+        };
         for (std::size_t i = 0; i < n; ++i) {
             const std::size_t lo = i == 0 ? 0 : i - 1;
             const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
@@ -435,24 +444,11 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
             // Distance constraints, follow-the-leader, each child pushed out of the
             // colliders right after it is placed.
             for (std::size_t i = 0; i + 1 < n; ++i) {
-                const V3 dd = sub(p[i + 1], p[i]);
-                const V len = length(dd);
-                const M along = hn::Gt(len, S(1e-9f));
-                const V3 placed_child = add(p[i], mul(hn::Div(S(t.segment[i]), len), dd));
-                pulled[i + 1] = select(along, add(pulled[i + 1], sub(placed_child, p[i + 1])), pulled[i + 1]);
-                p[i + 1] = select(along, placed_child, p[i + 1]);
+                place_on_parent(i);
                 if (batch.colliders > 0) collide_counted(i + 1);
             }
         }
         // The last sweep: placed and pushed out, twice (solver.cpp).
-        auto place_on_parent = [&](std::size_t i) HWY_ATTR {
-            const V3 dd = sub(p[i + 1], p[i]);
-            const V len = length(dd);
-            const M along = hn::Gt(len, S(1e-9f));
-            const V3 placed_child = add(p[i], mul(hn::Div(S(t.segment[i]), len), dd));
-            pulled[i + 1] = select(along, add(pulled[i + 1], sub(placed_child, p[i + 1])), pulled[i + 1]);
-            p[i + 1] = select(along, placed_child, p[i + 1]);
-        };
         for (std::size_t i = 0; i + 1 < n; ++i) {
             place_on_parent(i);
             if (batch.colliders > 0) {
