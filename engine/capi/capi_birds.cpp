@@ -81,6 +81,7 @@ birds::FlightSettings read_flight(const kodawari_flight_settings& f, const std::
     }
     require_range(f.seed_accel_threshold, 0.0, 1000.0, what + ".seed_accel_threshold", true);
     for (std::size_t i = 0; i < 3; ++i) require_range(f.blend_rates[i], 0.0, 1.0, at(what + ".blend_rates", i), true);
+    require_range(f.bank_time_constant, 0.0, 10.0, what + ".bank_time_constant");
     birds::FlightSettings s;
     s.gravity = f.gravity;
     s.max_bank = f.max_bank;
@@ -92,6 +93,7 @@ birds::FlightSettings read_flight(const kodawari_flight_settings& f, const std::
     s.descend_exit = f.descend_exit;
     s.seed_accel_threshold = f.seed_accel_threshold;
     s.blend_rates = {f.blend_rates[0], f.blend_rates[1], f.blend_rates[2]};
+    s.bank_time = f.bank_time_constant;
     return s;
 }
 
@@ -292,6 +294,7 @@ KODAWARI_C_API kodawari_status kodawari_flight_settings_default(kodawari_flight_
         f.descend_exit = s.descend_exit;
         f.seed_accel_threshold = s.seed_accel_threshold;
         for (std::size_t i = 0; i < 3; ++i) f.blend_rates[i] = s.blend_rates[i];
+        f.bank_time_constant = s.bank_time;
         *out = f;
     });
 }

@@ -1017,6 +1017,8 @@ static void test_birds_reject(void) {
     REJECT("desc->flight.max_bank: 2");
     f.desc.flight.seed_mode_rule = 9;
     REJECT("desc->flight.seed_mode_rule: 9");
+    f.desc.flight.bank_time_constant = 11.0f;
+    REJECT("desc->flight.bank_time_constant: 11");
     f.desc.backend.backend = (kodawari_backend)(-1);
     REJECT("desc->backend.backend: -1");
 #undef REJECT

@@ -304,7 +304,9 @@ TEST_P(CApiParity, FlockHasTheCppPathsBits) {
     const Scene scene = load("flock.json");
     auto built = build_bird_world(scene);
     ASSERT_TRUE(built.ok()) << built.error().message;
-    const birds::BirdWorld& world = built.value();
+    birds::BirdWorld world = built.value();
+    // Not the default (0.3 s), so that a C field left unread would show.
+    world.settings.bank_time = 0.55f;
     const std::size_t birds = world.birds.size();
     ASSERT_NE(birds % KW_BIRDS_WORKGROUP_SIZE, 0u) << "must exercise a partial workgroup";
 
@@ -346,7 +348,8 @@ TEST_P(CApiParity, FlockHasTheCppPathsBits) {
     const birds::FlightSettings& s = world.settings;
     desc.flight = {s.gravity, s.max_bank, s.bank_rule == birds::BankRule::Seed ? 1u : 0u,
                    s.mode_rule == birds::ModeRule::Seed ? 1u : 0u, s.ascend_enter, s.ascend_exit, s.descend_enter,
-                   s.descend_exit, s.seed_accel_threshold, {s.blend_rates[0], s.blend_rates[1], s.blend_rates[2]}};
+                   s.descend_exit, s.seed_accel_threshold, {s.blend_rates[0], s.blend_rates[1], s.blend_rates[2]},
+                   s.bank_time};
     desc.backend = c_options(GetParam());
     kodawari_bird_world* c = nullptr;
     ASSERT_EQ(kodawari_bird_world_create(&desc, &c), KODAWARI_OK) << kodawari_last_error();

@@ -536,6 +536,10 @@ typedef struct kodawari_flight_settings {
     /// Blend progress per 1/60 s into level, ascend and descend, each in (0, 1]. Default
     /// 0.016, 0.036, 0.032 (the seed's).
     float blend_rates[3];
+    /// Time constant of the first-order filter the bank (and the head's and tail's turn
+    /// responses) follows, s, in [0, 10]; 0 rolls instantly. Default 0.3 (a scene's
+    /// `flight.bank_time_constant`, docs/flight-modes.md).
+    float bank_time_constant;
 } kodawari_flight_settings;
 
 /// Fills `out` with the engine's default flight settings.
