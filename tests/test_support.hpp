@@ -130,6 +130,16 @@ inline std::string no_vulkan_device_reason() {
            "); the GPU tests need one";
 }
 
+/// The device list_gpus("") chooses, as the tests that depend on its type or limits need
+/// it: fills `out` and returns "", or returns why there is none.
+inline std::string chosen_device(GpuDeviceInfo& out) {
+    auto gpus = list_gpus("");
+    if (!gpus.ok()) return gpus.error().message;
+    if (gpus.value().chosen < 0) return gpus.value().reason;
+    out = gpus.value().devices[static_cast<std::size_t>(gpus.value().chosen)];
+    return "";
+}
+
 /// Runs a command through the shell, returns its exit status (-1 when it did not exit)
 /// and appends its output, stdout and stderr together, to `output`.
 inline int run_command(const std::string& command, std::string& output) {

@@ -20,11 +20,23 @@ Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOpti
     return backend_context(own);
 }
 
+Result<std::shared_ptr<gpu::VulkanContext>> open_auto_device(const BackendOptions& options, std::string& cpu_reason) {
+    cpu_reason.clear();
+    if (options.context) return options.context;
+    auto device = open_shared_device(options);
+    if (!options.device.empty()) return device;  // named: obeyed, or the error
+    if (!device) {
+        cpu_reason = device.error().message;
+        return std::shared_ptr<gpu::VulkanContext>{};
+    }
+    cpu_reason = auto_passes_over(device.value()->info());
+    if (!cpu_reason.empty()) return std::shared_ptr<gpu::VulkanContext>{};
+    return device;
+}
+
 std::uint64_t read_back_bytes(const gpu::VulkanContext& device) { return device.read_back_bytes(); }
 
 std::uint32_t validation_messages(const gpu::VulkanContext& device) { return device.validation_messages(); }
-
-const GpuDeviceInfo& device_info(const gpu::VulkanContext& device) { return device.info(); }
 
 Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options) {
     if (kind == BackendKind::Vulkan) return make_vulkan_bird_backend(options);

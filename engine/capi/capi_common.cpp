@@ -8,8 +8,6 @@
 #include <charconv>
 #include <cmath>
 
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/gpu_info.hpp"
 #include "kodawari/simd.hpp"
 #include "kodawari/version.hpp"
 
@@ -245,15 +243,6 @@ BackendOptions backend_options(const kodawari_backend_options& options) {
     out.isa = options.isa != nullptr ? options.isa : "";
     if (options.vulkan_device != nullptr) out.context = options.vulkan_device->context;
     return out;
-}
-
-std::string open_auto_device(BackendOptions& options) {
-    if (!options.device.empty() || options.context) return "";
-    auto device = open_shared_device(options);
-    if (!device.ok()) return "";
-    if (std::string why = auto_passes_over(device_info(*device.value())); !why.empty()) return why;
-    options.context = std::move(device).value();
-    return "";
 }
 
 void copy_text(const std::string& text, char* out, std::size_t size) {

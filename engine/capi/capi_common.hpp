@@ -18,6 +18,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "kodawari/backend.hpp"
+#include "kodawari/backend_factory.hpp"
 #include "kodawari/kodawari.h"
 #include "kodawari/result.hpp"
 
@@ -140,23 +141,19 @@ kodawari_backend backend_enum(BackendKind kind);
 /// Checks `options` (the enum, the flags, the thread count) and names problems under `what`.
 void require_backend_options(const kodawari_backend_options& options, const std::string& what);
 BackendOptions backend_options(const kodawari_backend_options& options);
-/// AUTO's device when none is named (issue 38): opens the best one into `options.context`
-/// and returns "", or returns why auto passes over it (a CPU-type device: the cpu
-/// backend is faster there, auto_passes_over()) and leaves `options` as it was. A device
-/// that does not open is left for the Vulkan backend to fail on, with its reason.
-std::string open_auto_device(BackendOptions& options);
-
 /// AUTO for a world (the chain and bird worlds' open_and_load): a vulkan backend made by
 /// `make(BackendKind::Vulkan, options)` with the world loaded by `load(backend)`, when a
 /// GPU (or a named device) opens and the world fits it; else null with `reason` saying
-/// why: a CPU-type device nobody named (open_auto_device()), no device, or a world larger
-/// than the device can bind (Unsupported, which the CPU backends do not know). A `device`
+/// why: a CPU-type device nobody named or no device (open_auto_device()), or a world
+/// larger than the device can bind (Unsupported, which the CPU backends do not know). A `device`
 /// that names nothing, and any other load error, throw (check()): never a reason to run
 /// elsewhere.
 template <typename Backend, typename Make, typename Load>
 std::unique_ptr<Backend> open_auto_vulkan(BackendOptions& options, std::string& reason, Make make, Load load) {
-    reason = open_auto_device(options);
-    if (!reason.empty()) return nullptr;
+    auto device = open_auto_device(options, reason);
+    check(device);
+    if (!device.value()) return nullptr;
+    options.context = std::move(device).value();
     auto vulkan = make(BackendKind::Vulkan, options);
     if (!vulkan.ok()) {
         if (!options.device.empty()) check(vulkan);

@@ -203,18 +203,13 @@ Result<std::unique_ptr<Simulation>> Simulation::create(Scene scene, const Simula
     // backend is several times faster there (auto_passes_over(), issue 38).
     impl->kind = options.backend.value_or(BackendKind::Vulkan);
     if (impl->kind == BackendKind::Vulkan && !impl->options.options.context) {
-        auto device = open_shared_device(impl->options.options);
-        const bool chosen_by_auto = !options.backend && options.options.device.empty();
-        if (device && chosen_by_auto && !auto_passes_over(device_info(*device.value())).empty()) {
-            impl->kind = BackendKind::Cpu;
-            impl->fallback_reason = auto_passes_over(device_info(*device.value()));
-        } else if (device) {
+        auto device = options.backend ? open_shared_device(impl->options.options)
+                                      : open_auto_device(impl->options.options, impl->fallback_reason);
+        if (!device) return device.error();
+        if (device.value()) {
             impl->options.options.context = std::move(device).value();
-        } else if (chosen_by_auto) {
-            impl->kind = BackendKind::Cpu;
-            impl->fallback_reason = device.error().message;
         } else {
-            return device.error();
+            impl->kind = BackendKind::Cpu;
         }
     }
     if (auto opened = impl->open_backends(); !opened) {

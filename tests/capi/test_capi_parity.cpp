@@ -481,10 +481,8 @@ TEST(CApiBackends, AMissingDeviceIsAnInvalidArgumentWithAutoTooAndAutoAloneFalls
 // by index is obeyed whatever its type.
 TEST(CApiBackends, AutoTakesTheCpuBackendOnACpuDeviceUnlessItIsNamed) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
-    auto gpus = list_gpus("");
-    ASSERT_TRUE(gpus.ok()) << gpus.error().message;
-    ASSERT_GE(gpus.value().chosen, 0) << gpus.value().reason;
-    const GpuDeviceInfo& best = gpus.value().devices[static_cast<std::size_t>(gpus.value().chosen)];
+    GpuDeviceInfo best;
+    if (const std::string none = testing_support::chosen_device(best); !none.empty()) FAIL() << none;
     const Scene scene = load("ahoge.json");
     auto built = build_rod_scene(scene);
     ASSERT_TRUE(built.ok());
@@ -520,10 +518,9 @@ TEST(CApiBackends, AutoTakesTheCpuBackendOnACpuDeviceUnlessItIsNamed) {
 // CPU and says why, as `kodawari run` does (faults_test.sh).
 TEST(CApiBackends, AWorldTooLargeForTheDeviceIsUnavailableAndAutoFallsBack) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
-    auto gpus = list_gpus("");
-    ASSERT_TRUE(gpus.ok()) << gpus.error().message;
-    ASSERT_GE(gpus.value().chosen, 0) << gpus.value().reason;
-    const std::uint64_t range = gpus.value().devices[static_cast<std::size_t>(gpus.value().chosen)].max_storage_buffer_range;
+    GpuDeviceInfo best;
+    if (const std::string none = testing_support::chosen_device(best); !none.empty()) FAIL() << none;
+    const std::uint64_t range = best.max_storage_buffer_range;
     const std::uint64_t birds = range / sizeof(gpu::BirdPoseGpu) + 1;
     if (birds > 10'000'000) {
         GTEST_SKIP() << "this device's storage buffer range (" << range << " bytes) holds the largest world (10 million birds)";
@@ -546,7 +543,7 @@ TEST(CApiBackends, AWorldTooLargeForTheDeviceIsUnavailableAndAutoFallsBack) {
     ASSERT_EQ(kodawari_flight_settings_default(&desc.flight), KODAWARI_OK) << kodawari_last_error();
     desc.backend.backend = KODAWARI_BACKEND_VULKAN;
     // The device named, so that AUTO below runs on it although it may be a CPU (issue 38).
-    const std::string chosen = std::to_string(gpus.value().devices[static_cast<std::size_t>(gpus.value().chosen)].index);
+    const std::string chosen = std::to_string(best.index);
     desc.backend.device = chosen.c_str();
 
     kodawari_bird_world* world = nullptr;

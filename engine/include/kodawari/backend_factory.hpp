@@ -12,10 +12,10 @@
 
 #include <cstdint>
 #include <memory>
+#include <string>
 
 #include "kodawari/api.hpp"
 #include "kodawari/backend.hpp"
-#include "kodawari/gpu_info.hpp"
 #include "kodawari/pose_backend.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -40,12 +40,17 @@ namespace kodawari {
 /// e.g. the pose backends' matrices feed the rod backend's input there
 /// (CrowdAnimator::write_inputs_on). A renderer has its own (Renderer::device_context()).
 [[nodiscard]] KODAWARI_API Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options);
+/// The device backend "auto" runs on (Simulation::create and the C API's AUTO): with no
+/// device named, the best one that opens and is a GPU, or null with `cpu_reason` saying
+/// why auto takes the cpu backend (no device opens, or it is a CPU: auto_passes_over());
+/// with a device named, that one whatever its type, and its failure to open is the error
+/// (never a reason to run elsewhere). `options.context`, when set, is returned as it is.
+[[nodiscard]] KODAWARI_API Result<std::shared_ptr<gpu::VulkanContext>> open_auto_device(const BackendOptions& options,
+                                                                                        std::string& cpu_reason);
 /// Bytes of kernel output read back to the host on `device` so far (every download and
 /// pose read back): how a caller checks that a pipeline keeps its data on the device.
 [[nodiscard]] KODAWARI_API std::uint64_t read_back_bytes(const gpu::VulkanContext& device);
 /// Validation messages on `device` so far (every backend sharing it).
 [[nodiscard]] KODAWARI_API std::uint32_t validation_messages(const gpu::VulkanContext& device);
-/// What `device` is (name, type, limits), as `kodawari info` lists it.
-[[nodiscard]] KODAWARI_API const GpuDeviceInfo& device_info(const gpu::VulkanContext& device);
 
 }  // namespace kodawari
