@@ -14,6 +14,7 @@
 #include "kodawari/rods/shape.hpp"
 #include "kodawari/rods/solver.hpp"
 #include "kodawari/rods/world.hpp"
+#include "rod_measures.hpp"
 
 using namespace kodawari::rods;
 
@@ -53,14 +54,7 @@ float total_energy(const Chain& chain, const ChainState& before, const ChainStat
     return e;
 }
 
-float max_stretch(const Chain& chain, const ChainState& s) {
-    float e = 0.0f;
-    for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) {
-        const float l = glm::length(s.x[i + 1] - s.x[i]);
-        e = std::max(e, std::abs(l - chain.segment_length[i]) / chain.segment_length[i]);
-    }
-    return e;
-}
+using kodawari::testing_support::max_stretch;
 
 }  // namespace
 

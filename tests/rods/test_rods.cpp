@@ -10,6 +10,7 @@
 #include "kodawari/rods/shape.hpp"
 #include "kodawari/rods/solver.hpp"
 #include "kodawari/rods/view.hpp"
+#include "rod_measures.hpp"
 
 using namespace kodawari::rods;
 
@@ -311,14 +312,7 @@ Rig make_rig(const ChainShape& rest, float thickness = 0.005f, float mass = 0.01
     return {chain.value(), rest};
 }
 
-float max_stretch(const Chain& chain, const ChainState& s) {
-    float e = 0.0f;
-    for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) {
-        const float l = glm::length(s.x[i + 1] - s.x[i]);
-        e = std::max(e, std::abs(l - chain.segment_length[i]) / chain.segment_length[i]);
-    }
-    return e;
-}
+using kodawari::testing_support::max_stretch;
 
 // Largest distance of a joint from where `rest` placed by `root` puts it.
 float rest_error(const Chain& chain, const ChainState& s, const Transform& root, const ChainShape& rest) {
