@@ -17,6 +17,8 @@
 #include "kodawari/rods/synthetic.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/simd.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
@@ -368,14 +370,14 @@ int bench_crowd(const CrowdOptions& o) {
     for (const auto [kind, device_input] : variants) {
         // Frame 0 (load) and 2 warm-up steps, then the timed frames.
         auto made = Simulation::create(scene, {.backend = kind, .options = choice.options, .frames = frames * repetitions + 3,
-                                               .rod_inputs_on_device = device_input});
+                                               .device_inputs = device_input});
         if (!made) {
             std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), made.error().message.c_str());
             continue;
         }
         Simulation& sim = *made.value();
         if (auto r = sim.step(3); !r) return report(r.error());
-        if (device_input && !sim.rod_inputs_on_device()) {
+        if (device_input && !rod_inputs_on_device(sim)) {
             return report(make_error(Error::Kind::Internal, "the rod input could not go on the device"));
         }
         const std::size_t index = sims.size();
@@ -387,13 +389,13 @@ int bench_crowd(const CrowdOptions& o) {
         describe(c.measured, kind, choice.options);
         c.repetition = [&, index, frames](double& gpu_ms) -> Result<double> {
             Simulation& s = *sims[index];
-            const SimulationTiming before = s.timing();
+            const ChainTiming before = chain_timing(s);
             const auto start = std::chrono::steady_clock::now();
             for (std::uint32_t f = 0; f < frames; ++f) KW_TRY(s.step());
             const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-            const double chain_gpu = s.timing().chain_gpu_ms - before.chain_gpu_ms;
+            const double chain_gpu = chain_timing(s).gpu_ms - before.gpu_ms;
             gpu_ms = chain_gpu > 0.0 ? chain_gpu : -1.0;
-            clip_ms[index] += s.timing().pose_ms - before.pose_ms;
+            clip_ms[index] += chain_timing(s).pose_ms - before.pose_ms;
             return seconds;
         };
         contenders.push_back(std::move(c));

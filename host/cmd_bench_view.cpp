@@ -12,6 +12,8 @@
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/scene.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
@@ -64,18 +66,18 @@ int bench_view(const ViewOptions& o) {
         options.context = run.renderer->device_context();
         // The read-back configuration makes the rigged characters' rod input on the host too.
         auto made = Simulation::create(scene, {.backend = run.kind, .options = options, .frames = 2 + frames,
-                                               .rod_inputs_on_device = run.source == Simulation::DrawSource::Device});
+                                               .device_inputs = run.source == Simulation::DrawSource::Device});
         if (!made) return report(made.error());
         run.sim = std::move(made).value();
-        run.sim->keep_bird_poses(run.source == Simulation::DrawSource::ReadBack);
+        keep_bird_poses(*run.sim, run.source == Simulation::DrawSource::ReadBack);
         if (auto s = run.sim->show_on(*run.renderer); !s) return report(s.error());
     }
     const Simulation& first = *runs.front().sim;
-    const std::vector<glm::vec3> grid = render::content_points(first.rod_scene(), nullptr, &first.bird_world());
+    const std::vector<glm::vec3> grid = render::content_points(rod_scene(first), nullptr, &bird_world(first));
     std::printf("bench view: scene \"%s\": %zu chains, %zu birds, %ux%u, %u frames per configuration after 2 warm-up frames, "
                 "interleaved 10 at a time, on %s\n",
-                scene.name.c_str(), first.rod_scene() ? first.rod_scene()->world.chains.size() : std::size_t{0},
-                first.bird_world().birds.size(), width, height, frames, runs.front().renderer->device().c_str());
+                scene.name.c_str(), rod_scene(first) ? rod_scene(first)->world.chains.size() : std::size_t{0},
+                bird_world(first).birds.size(), width, height, frames, runs.front().renderer->device().c_str());
     std::fflush(stdout);
 
     // One frame of a configuration: simulate, give the renderer the state, draw.
@@ -87,7 +89,7 @@ int bench_view(const ViewOptions& o) {
         const std::uint32_t f = *run.sim->frame();
         render::DrawList list(render::scene_camera(scene, f), width, height);
         render::add_ground_grid(list, grid);
-        if (run.sim->rod_scene()) render::add_characters(list, *run.sim->rod_scene(), f);
+        if (rod_scene(*run.sim)) render::add_characters(list, *rod_scene(*run.sim), f);
         KW_TRY(r.draw(list));
         if (f >= 2) run.read_back_bytes += r.read_back_bytes() - before;
         return {};

@@ -24,6 +24,8 @@
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_scene.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
@@ -288,13 +290,13 @@ int cmd_render(const RenderOptions& o) {
         // The grid covers where the content is at the first drawn frame and then stays put,
         // so that it does not jump from frame to frame.
         if (grid_points.empty()) {
-            grid_points = render::content_points(sim.rod_scene(), sim.rod_scene() ? &sim.chain_input() : nullptr,
-                                                 sim.bird_world().birds.empty() ? nullptr : &sim.bird_world());
+            grid_points = render::content_points(rod_scene(sim), rod_scene(sim) ? &chain_input(sim) : nullptr,
+                                                 bird_world(sim).birds.empty() ? nullptr : &bird_world(sim));
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
-            if (!sim.bird_world().birds.empty()) perches = render::perches_of(sim.bird_world());
+            if (!bird_world(sim).birds.empty()) perches = render::perches_of(bird_world(sim));
         }
         render::add_ground_grid(list, grid_points);
-        if (sim.rod_scene()) render::add_characters(list, *sim.rod_scene(), f);
+        if (rod_scene(sim)) render::add_characters(list, *rod_scene(sim), f);
         render::add_perches(list, perches);
         auto image = r.render(list);
         if (!image) return report(image.error());

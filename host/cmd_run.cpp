@@ -16,6 +16,8 @@
 #ifdef KODAWARI_WITH_MPI
 #include "mpi_communicator.hpp"
 #endif
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
@@ -24,11 +26,11 @@ namespace {
 
 void print_scene(const Simulation& sim) {
     const Scene& scene = sim.scene();
-    if (!sim.bird_world().birds.empty()) {
+    if (!bird_world(sim).birds.empty()) {
         std::printf("kodawari: scene \"%s\" (%s): %zu birds, %u frames at %g fps\n", scene.name.c_str(), scene.path.c_str(),
-                    sim.bird_world().birds.size(), sim.frame_count(), static_cast<double>(sim.bird_world().fps));
+                    bird_world(sim).birds.size(), sim.frame_count(), static_cast<double>(bird_world(sim).fps));
     }
-    if (const RodScene* rods = sim.rod_scene()) {
+    if (const RodScene* rods = rod_scene(sim)) {
         const rods::RodWorld& world = rods->world;
         std::printf("kodawari: scene \"%s\" (%s): %u characters, %zu chains, %zu joints, %u frames at %g fps\n",
                     scene.name.c_str(), scene.path.c_str(), world.character_count, world.chains.size(),
@@ -42,50 +44,55 @@ void print_scene(const Simulation& sim) {
 // apart, since lavapipe compiles a pipeline at its first dispatch and a short run would
 // otherwise report mostly that (docs/command-line.md, "Timing").
 void print_timing(const Simulation& sim) {
-    const SimulationTiming& timing = sim.timing();
+    const BirdTiming& timing = bird_timing(sim);
+    const ChainTiming& chain = chain_timing(sim);
     const std::string backend(backend_name(sim.backend()));
     // Only a Vulkan backend compiles kernels at its first call; the CPU ones have nothing
     // to compile, and since auto takes cpu on lavapipe the label must not say they do.
     const bool compiles = sim.backend() == BackendKind::Vulkan;
-    if (!sim.bird_world().birds.empty()) {
-        const bool steady = timing.bird_frames > 0;
-        const double seconds = steady ? timing.bird_seconds : timing.bird_first_seconds;
-        const double frames = static_cast<double>(steady ? timing.bird_frames : timing.bird_first_frames);
-        const double gpu_ms = steady ? (timing.bird_gpu_timed ? timing.bird_gpu_ms : -1.0) : timing.bird_first_gpu_ms;
+    if (!bird_world(sim).birds.empty()) {
+        const bool steady = timing.frames > 0;
+        const double seconds = steady ? timing.seconds : timing.first_seconds;
+        const double frames = static_cast<double>(steady ? timing.frames : timing.first_frames);
+        const double gpu_ms = steady ? (timing.gpu_timed ? timing.gpu_ms : -1.0) : timing.first_gpu_ms;
         std::printf("kodawari: backend %s on %s: %.3f ms per frame", backend.c_str(), sim.device().c_str(),
                     1e3 * seconds / frames);
         if (gpu_ms >= 0.0) std::printf(" (GPU %.3f ms)", gpu_ms / frames);
-        std::printf(", %.3g bird-frames/s", static_cast<double>(sim.bird_world().birds.size()) * frames / std::max(seconds, 1e-9));
+        std::printf(", %.3g bird-frames/s", static_cast<double>(bird_world(sim).birds.size()) * frames / std::max(seconds, 1e-9));
         if (steady) {
-            std::printf("; first %llu frames %.1f ms%s\n", static_cast<unsigned long long>(timing.bird_first_frames),
-                        1e3 * timing.bird_first_seconds, compiles ? " (kernels compiled)" : "");
+            std::printf("; first %llu frames %.1f ms%s\n", static_cast<unsigned long long>(timing.first_frames),
+                        1e3 * timing.first_seconds, compiles ? " (kernels compiled)" : "");
         } else {
             std::printf(" (one call%s)\n", compiles ? ": kernel compilation included" : "");
         }
     }
-    if (const RodScene* rods = sim.rod_scene()) {
+    if (const RodScene* rods = rod_scene(sim)) {
         const std::uint32_t frames = sim.frame_count();
-        const std::string input = sim.rod_inputs_on_device() ? "; rigged characters' rod input written on the device" : "";
+        const std::string input = rod_inputs_on_device(sim) ? "; rigged characters' rod input written on the device" : "";
         if (frames <= 2) {
             std::printf("kodawari: backend %s on %s: %u frames in %.1f ms (load, rest shapes%s: too few frames for a steady "
                         "figure)%s\n",
-                        backend.c_str(), sim.device().c_str(), frames, 1e3 * timing.chain_warmup_seconds,
+                        backend.c_str(), sim.device().c_str(), frames, 1e3 * chain.warmup_seconds,
                         compiles ? ", kernels compiled" : "", input.c_str());
             return;
         }
         const std::uint32_t steps = frames - 2;
         std::printf("kodawari: backend %s on %s: %.3f ms per frame", backend.c_str(), sim.device().c_str(),
-                    1e3 * timing.chain_seconds / steps);
-        if (timing.chain_gpu_ms > 0.0) std::printf(" (GPU %.3f ms)", timing.chain_gpu_ms / steps);
+                    1e3 * chain.seconds / steps);
+        if (chain.gpu_ms > 0.0) std::printf(" (GPU %.3f ms)", chain.gpu_ms / steps);
         std::printf(", %.3g joint-steps/s; frames 0-1 %.1f ms (load, rest shapes%s)%s\n",
-                    static_cast<double>(rods->world.joint_count) * steps / std::max(timing.chain_seconds, 1e-9),
-                    1e3 * timing.chain_warmup_seconds, compiles ? ", kernels compiled" : "", input.c_str());
+                    static_cast<double>(rods->world.joint_count) * steps / std::max(chain.seconds, 1e-9),
+                    1e3 * chain.warmup_seconds, compiles ? ", kernels compiled" : "", input.c_str());
     }
 }
 
 void print_shard(const ShardInfo& info, const std::string& what) {
-    std::printf("kodawari: %s: birds [%u, %u) of %u, characters [%u, %u) of %u\n", what.c_str(), info.birds.begin,
-                info.birds.end, info.scene_birds, info.characters.begin, info.characters.end, info.scene_characters);
+    std::string parts;
+    for (const ShardPart& part : info.parts) {
+        parts += (parts.empty() ? "" : ", ") + part.instances + " [" + std::to_string(part.range.begin) + ", " +
+                 std::to_string(part.range.end) + ") of " + std::to_string(part.scene_count);
+    }
+    std::printf("kodawari: %s: %s\n", what.c_str(), parts.c_str());
 }
 
 Shard parse_shard(const std::string& text) {
@@ -224,8 +231,8 @@ int cmd_run(const RunOptions& o) {
     if (!opened) return report(opened.error());
     Simulation& sim = *opened.value();
     const Scene& scene = sim.scene();
-    const bool has_birds = !sim.bird_world().birds.empty();
-    const bool has_chains = sim.rod_scene() != nullptr;
+    const bool has_birds = !bird_world(sim).birds.empty();
+    const bool has_chains = rod_scene(sim) != nullptr;
     // The outputs' folders, made before the simulation runs (as render makes its --out).
     for (const auto& [path, option] : {std::pair{out_option, "--out"}, std::pair{trace_path, "--trace"}}) {
         if (!path) continue;
@@ -244,7 +251,7 @@ int cmd_run(const RunOptions& o) {
 
     print_scene(sim);
     if (shard_option) print_shard(sim.shard(), "shard " + std::to_string(shard.index) + " of " + std::to_string(shard.count));
-    const std::size_t per_frame = sim.bird_world().birds.size() + (has_chains ? sim.rod_scene()->world.joint_count : 0);
+    const std::size_t per_frame = bird_world(sim).birds.size() + (has_chains ? rod_scene(sim)->world.joint_count : 0);
     BakeOptions options;
     if (stderr_is_terminal() && std::uint64_t{sim.frame_count()} * per_frame >= 2'000'000) {
         options.progress = [](std::uint32_t done, std::uint32_t total) { progress("simulating", done, total); };

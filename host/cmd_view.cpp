@@ -20,6 +20,8 @@
 #include <GLFW/glfw3.h>
 
 #include "commands.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/scene_edit.hpp"
@@ -201,20 +203,20 @@ int cmd_view(const ViewOptions& o) {
 
         render::DrawList list(v.view(), width, height);
         if (grid_points.empty()) {
-            grid_points = render::content_points(s.rod_scene(), s.rod_scene() ? &s.chain_input() : nullptr,
-                                                 s.bird_world().birds.empty() ? nullptr : &s.bird_world());
+            grid_points = render::content_points(rod_scene(s), rod_scene(s) ? &chain_input(s) : nullptr,
+                                                 bird_world(s).birds.empty() ? nullptr : &bird_world(s));
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
-            if (!s.bird_world().birds.empty()) perches = render::perches_of(s.bird_world());
+            if (!bird_world(s).birds.empty()) perches = render::perches_of(bird_world(s));
         }
         render::add_ground_grid(list, grid_points);
-        if (s.rod_scene()) render::add_characters(list, *s.rod_scene(), v.current());
+        if (rod_scene(s)) render::add_characters(list, *rod_scene(s), v.current());
         render::add_perches(list, perches);
         if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
-        if (v.sketch_mode && v.picked && s.rod_scene()) {
+        if (v.sketch_mode && v.picked && rod_scene(s)) {
             // The picked chain's joints on the host while sketching (it may have been stepped).
-            if (auto r = s.read_chains(v.snapshot); !r) return report(r.error());
-            const auto& ci = s.rod_scene()->world.chains[*v.picked];
-            const std::size_t joints = s.rod_scene()->world.templ(ci).basis.lengths.size() + 1;
+            if (auto r = read_chains(s, v.snapshot); !r) return report(r.error());
+            const auto& ci = rod_scene(s)->world.chains[*v.picked];
+            const std::size_t joints = rod_scene(s)->world.templ(ci).basis.lengths.size() + 1;
             for (std::size_t j = 0; j < joints; ++j) {
                 list.add_dot(v.snapshot.positions[ci.joint_begin + j], 0.0f, 5.0f, kPickedColor);
             }
@@ -229,8 +231,8 @@ int cmd_view(const ViewOptions& o) {
                       v.current(), static_cast<double>(v.current()) / static_cast<double>(s.scene().fps), v.playing ? "playing" : "paused",
                       std::string(backend_name(s.backend())).c_str(), frame_ms, static_cast<unsigned long long>(read_back_frame),
                       v.follow_scene ? "scene" : "orbit", list.camera().orthographic ? "ortho" : "persp",
-                      s.rod_scene() ? static_cast<std::size_t>(s.rod_scene()->world.character_count) : 0,
-                      s.rod_scene() ? s.rod_scene()->world.chains.size() : 0, s.bird_world().birds.size(),
+                      rod_scene(s) ? static_cast<std::size_t>(rod_scene(s)->world.character_count) : 0,
+                      rod_scene(s) ? rod_scene(s)->world.chains.size() : 0, bird_world(s).birds.size(),
                       v.sketch_mode ? ("  [sketch: " + v.sketch_status() + "]").c_str() : "",
                       v.message.empty() ? "" : ("  " + v.message).c_str());
         add_status(list, status);

@@ -133,6 +133,12 @@ std::uint32_t Renderer::validation_messages() const { return impl_->ctx->validat
 std::shared_ptr<gpu::VulkanContext> Renderer::device_context() const { return impl_->ctx; }
 std::uint64_t Renderer::read_back_bytes() const { return impl_->ctx->read_back_bytes(); }
 
+Result<void> Renderer::clear_layers() {
+    KW_TRY(set_chains(nullptr));
+    KW_TRY(set_skinned(nullptr));
+    return set_birds(nullptr);
+}
+
 Result<void> Renderer::set_chains(const rods::RodWorld* world, const ChainStyle& style) {
     impl_->colliders->set_world(world);
     return impl_->chains->set_world(*impl_->ctx, world, style);

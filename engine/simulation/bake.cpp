@@ -6,6 +6,8 @@
 #include <string>
 
 #include "kodawari/backend.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace kodawari {
@@ -23,31 +25,32 @@ public:
     explicit SimulationSource(Simulation& sim) : sim_(sim) {}
 
     BakeWorld world() const override {
-        return {&sim_.scene(), &sim_.bird_world(), sim_.rod_scene(), sim_.frame_count(),
+        return {&sim_.scene(), &bird_world(sim_), rod_scene(sim_), sim_.frame_count(),
                 std::string(backend_name(sim_.backend()))};
     }
 
     std::uint32_t chunk_frames() const override {
         // The whole scene's birds, so that a shard steps in the chunks of the whole.
-        return bake_chunk_frames(sim_.shard().scene_birds, sim_.rod_scene() != nullptr);
+        return bake_chunk_frames(sim_.shard().part("birds").scene_count, rod_scene(sim_) != nullptr);
     }
 
     Result<BakeFrames> next(std::uint32_t first, std::uint32_t count, const BakeNeeds& needs) override {
-        const std::size_t birds = sim_.bird_world().birds.size();
-        StepOutput out;
+        const std::size_t birds = bird_world(sim_).birds.size();
+        std::span<gpu::BirdPose> poses;
+        std::span<gpu::BirdDiag> diag;
         if (birds > 0 && (needs.bird_poses || needs.bird_diag)) {
             // Diagnostics come with the poses they describe.
             poses_.resize(std::size_t{count} * birds);
-            out.bird_poses = poses_;
+            poses = poses_;
             if (needs.bird_diag) {
                 diag_.resize(std::size_t{count} * birds);
-                out.bird_diag = diag_;
+                diag = diag_;
             }
         }
-        KW_TRY(sim_.step(count, out));
-        const bool chains = needs.chains && sim_.rod_scene() != nullptr;
-        if (chains) KW_TRY(sim_.read_chains(snapshot_));
-        return BakeFrames{first, count, out.bird_poses, out.bird_diag, chains ? &snapshot_ : nullptr};
+        KW_TRY(step_birds(sim_, count, poses, diag));
+        const bool chains = needs.chains && rod_scene(sim_) != nullptr;
+        if (chains) KW_TRY(read_chains(sim_, snapshot_));
+        return BakeFrames{first, count, poses, diag, chains ? &snapshot_ : nullptr};
     }
 
 private:

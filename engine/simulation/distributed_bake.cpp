@@ -10,6 +10,7 @@
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/scene.hpp"
 #include "simulation/frame_payload.hpp"
+#include "simulation/scene_worlds.hpp"
 
 namespace kodawari {
 
@@ -63,16 +64,15 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
     if (options.opened) options.opened(sim);
 
     // Rank 0: the whole scene's world (built, not simulated) and the sinks.
-    std::optional<SceneWorlds> worlds;
+    std::optional<detail::SceneWorlds> worlds;
     std::vector<std::unique_ptr<BakeSink>> sinks;
     BakeNeeds needs;
     Result<void> setup;
     if (root) {
-        auto built = build_scene_worlds(sim.scene(), sim.frame_count());
+        auto built = detail::build_scene_worlds(sim.scene(), sim.frame_count());
         if (built) {
             worlds.emplace(std::move(built).value());
-            const BakeWorld world{&sim.scene(), &worlds->birds, worlds->rods ? &*worlds->rods : nullptr, sim.frame_count(),
-                                  std::string(backend_name(sim.backend()))};
+            const BakeWorld world = worlds->bake_world(sim.scene(), std::string(backend_name(sim.backend())));
             sinks = options.make_sinks(world);
             for (const auto& sink : sinks) {
                 const BakeNeeds n = sink->needs();
@@ -95,9 +95,9 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
     std::vector<std::byte> wanted = bytes_of(&needs, sizeof needs);
     comm.broadcast(wanted);
     std::memcpy(&needs, wanted.data(), sizeof needs);
-    const PartCounts mine{static_cast<std::uint32_t>(sim.bird_world().birds.size()),
-                          sim.rod_scene() ? sim.rod_scene()->world.joint_count : 0,
-                          sim.rod_scene() ? static_cast<std::uint32_t>(sim.rod_scene()->world.chains.size()) : 0};
+    const RodScene* rods = rod_scene(sim);
+    const PartCounts mine{static_cast<std::uint32_t>(bird_world(sim).birds.size()), rods ? rods->world.joint_count : 0,
+                          rods ? static_cast<std::uint32_t>(rods->world.chains.size()) : 0};
     std::vector<std::byte> all;
     std::vector<std::size_t> sizes;
     comm.gather(std::span(reinterpret_cast<const std::byte*>(&mine), sizeof mine), all, sizes);

@@ -16,6 +16,7 @@
 #include "kodawari/atomic_file.hpp"
 #include "kodawari/version.hpp"
 #include "simulation/frame_payload.hpp"
+#include "simulation/scene_worlds.hpp"
 
 namespace kodawari {
 
@@ -81,8 +82,8 @@ public:
             {"scene_fnv1a64", hex(hash.value())},
             {"frames", world.frames},
             {"shard", {shard_.shard.index, shard_.shard.count}},
-            {"birds", {shard_.birds.begin, shard_.birds.end, shard_.scene_birds}},
-            {"characters", {shard_.characters.begin, shard_.characters.end, shard_.scene_characters}},
+            {"birds", range("birds")},
+            {"characters", range("characters")},
             {"joints", layout_.joints},
             {"chains", layout_.chains},
             {"backend", world.backend},
@@ -114,6 +115,12 @@ public:
     }
 
 private:
+    // [begin, end, scene count] of the instances called `instances`.
+    nlohmann::json range(std::string_view instances) const {
+        const ShardPart part = shard_.part(instances);
+        return {part.range.begin, part.range.end, part.scene_count};
+    }
+
     std::string path_;
     ShardInfo shard_;
     detail::PayloadLayout layout_;
@@ -244,7 +251,7 @@ Result<Part> open_part(const std::string& path) {
 
 class PartsSource final : public BakeSource {
 public:
-    PartsSource(std::vector<Part> parts, Scene scene, SceneWorlds worlds, std::string backend)
+    PartsSource(std::vector<Part> parts, Scene scene, detail::SceneWorlds worlds, std::string backend)
         : parts_(std::move(parts)), scene_(std::move(scene)), worlds_(std::move(worlds)), backend_(std::move(backend)) {
         std::vector<detail::PayloadLayout> layouts;
         for (const Part& part : parts_) {
@@ -255,11 +262,11 @@ public:
     }
 
     BakeWorld world() const override {
-        return {&scene_, &worlds_.birds, worlds_.rods ? &*worlds_.rods : nullptr, worlds_.frames, backend_};
+        return worlds_.bake_world(scene_, backend_);
     }
 
     std::uint32_t chunk_frames() const override {
-        return bake_chunk_frames(worlds_.birds.birds.size(), worlds_.rods.has_value());
+        return bake_chunk_frames(worlds_.birds->birds.size(), worlds_.rods != nullptr);
     }
 
     Result<BakeFrames> next(std::uint32_t first, std::uint32_t count, const BakeNeeds& needs) override {
@@ -301,7 +308,7 @@ private:
     std::vector<Part> parts_;
     std::vector<std::string> names_;
     Scene scene_;
-    SceneWorlds worlds_;
+    detail::SceneWorlds worlds_;
     std::string backend_;
     std::optional<detail::FrameAssembler> assembler_;
     std::vector<std::vector<std::byte>> payloads_;
@@ -362,15 +369,15 @@ Result<std::unique_ptr<BakeSource>> open_parts(std::span<const std::string> path
     }
     auto scene = load_scene(scene_path);
     if (!scene) return scene.error();
-    auto worlds = build_scene_worlds(scene.value(), a.header["frames"].get<std::uint32_t>());
+    auto worlds = detail::build_scene_worlds(scene.value(), a.header["frames"].get<std::uint32_t>());
     if (!worlds) return worlds.error();
     // The whole world must be the parts' sum (the same scene gives the same counts).
     std::size_t joints = 0;
     for (const Part& p : parts) joints += p.layout.joints;
     const std::size_t world_joints = worlds.value().rods ? worlds.value().rods->world.joint_count : 0;
     const std::size_t world_characters = worlds.value().rods ? worlds.value().rods->instances.size() : 0;
-    if (worlds.value().birds.birds.size() != a.scene_birds || world_characters != a.scene_characters || joints != world_joints) {
-        return bad(scene_path + ": builds " + std::to_string(worlds.value().birds.birds.size()) + " birds, " +
+    if (worlds.value().birds->birds.size() != a.scene_birds || world_characters != a.scene_characters || joints != world_joints) {
+        return bad(scene_path + ": builds " + std::to_string(worlds.value().birds->birds.size()) + " birds, " +
                    std::to_string(world_characters) + " characters and " + std::to_string(world_joints) +
                    " joints; the parts hold " + std::to_string(a.scene_birds) + ", " + std::to_string(a.scene_characters) +
                    " and " + std::to_string(joints));

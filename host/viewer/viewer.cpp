@@ -7,6 +7,7 @@
 #include <cmath>
 #include <cstdio>
 
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/scene_edit.hpp"
@@ -72,7 +73,7 @@ void Viewer::fail(Error e) {
 
 void Viewer::seek(std::uint32_t f) {
     // The frames simulated from now on take their view from the camera shown.
-    sim->set_view_camera(rod_camera());
+    set_view_camera(*sim, rod_camera());
     if (auto r = sim->seek(f); !r) fail(r.error());
 }
 
@@ -103,13 +104,13 @@ bool Viewer::rebuild(const std::string& scene_text, std::optional<BackendKind> b
 
 void Viewer::pick(glm::dvec2 at) {
     picked.reset();
-    if (!sim->rod_scene()) return;
-    if (auto r = sim->read_chains(snapshot); !r) {
+    if (!rod_scene(*sim)) return;
+    if (auto r = read_chains(*sim, snapshot); !r) {
         fail(r.error());
         return;
     }
     const rods::ImageCamera cam = image_camera();
-    const rods::RodWorld& w = sim->rod_scene()->world;
+    const rods::RodWorld& w = rod_scene(*sim)->world;
     double best = kPickRadiusPx;
     for (std::uint32_t c = 0; c < w.chains.size(); ++c) {
         const auto& ci = w.chains[c];
@@ -128,12 +129,12 @@ void Viewer::pick(glm::dvec2 at) {
 
 void Viewer::apply_sketch() {
     if (!picked || stroke.size() < 2) return;
-    const rods::RodWorld& w = sim->rod_scene()->world;
+    const rods::RodWorld& w = rod_scene(*sim)->world;
     const rods::ChainInstance& ci = w.chains[*picked];
     const std::string name = w.templ(ci).name;
     rods::SketchInput input;
     input.camera = image_camera();
-    auto kinematic = sim->host_chain_input();
+    auto kinematic = host_chain_input(*sim);
     if (!kinematic) {
         say("sketch failed: " + kinematic.error().message);
         return;
@@ -181,7 +182,7 @@ void Viewer::apply_keyed_sketch(const std::string& name, std::uint32_t character
     // speed smoothed as the scene format does, the default influences.
     SketchKeyOptions options;
     options.kind = sketch_kind == SketchKind::Pose ? rods::KeyKind::Pose : rods::KeyKind::Motion;
-    auto key = measure_sketch_key(*sim->rod_scene(), character, current(), options);
+    auto key = measure_sketch_key(*rod_scene(*sim), character, current(), options);
     if (!key) {
         say("sketch failed: " + key.error().message);
         return;

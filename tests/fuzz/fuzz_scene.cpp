@@ -14,6 +14,8 @@
 
 #include "fuzz_support.hpp"
 #include "kodawari/scene.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace {
@@ -55,21 +57,19 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     options.frames = kFrames;
     auto sim = Simulation::create(std::move(scene).value(), options);
     if (!sim) return 0;  // a character file that does not load, a route that does not build: messages
-    const std::size_t bird_count = sim.value()->bird_world().birds.size();
+    const std::size_t bird_count = bird_world(*sim.value()).birds.size();
     std::vector<gpu::BirdPose> poses(bird_count);
-    StepOutput out;
-    out.bird_poses = poses;
     for (std::uint32_t f = 0; f < kFrames; ++f) {
-        auto stepped = sim.value()->step(1, bird_count > 0 ? out : StepOutput{});
+        auto stepped = step_birds(*sim.value(), 1, poses);
         if (!stepped) fuzz::finding("a loaded scene failed to step: " + stepped.error().message);
         for (const gpu::BirdPose& p : poses) {
             fuzz::require_finite(p.position.x + p.position.y + p.position.z, "a bird position");
             for (const gpu::vec4& q : p.rotation) fuzz::require_finite(q.x + q.y + q.z + q.w, "a bird rotation");
         }
     }
-    if (sim.value()->rod_scene() != nullptr) {
+    if (rod_scene(*sim.value()) != nullptr) {
         ChainSnapshot chains;
-        auto read = sim.value()->read_chains(chains);
+        auto read = read_chains(*sim.value(), chains);
         if (!read) fuzz::finding("reading the chains failed: " + read.error().message);
         for (const auto& p : chains.positions) {
             for (int c = 0; c < 3; ++c) fuzz::require_finite(p[c], "a chain joint position");

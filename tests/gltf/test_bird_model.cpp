@@ -20,6 +20,8 @@
 #include "kodawari/export.hpp"
 #include "kodawari/gltf/bird_model_import.hpp"
 #include "kodawari/scene.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
 
@@ -229,7 +231,7 @@ TEST(BirdModel, FlockSimulatesAndExports) {
                     "generated_route": {"seed": 4, "segments": 4, "center": [0, 40, 0], "extent": [45, 8, 45], "loop": true}}]})";
     auto sim = Simulation::open(scene, {.backend = BackendKind::CpuReference, .frames = 12});
     ASSERT_TRUE(sim.ok()) << sim.error().message;
-    const birds::BirdWorld& world = sim.value()->bird_world();
+    const birds::BirdWorld& world = bird_world(*sim.value());
     ASSERT_EQ(world.models.size(), 1u);
     EXPECT_EQ(world.birds[0].ids.y, birds::kWingTypeCount);
     EXPECT_EQ(world.birds[4].ids.y, birds::kWingTypeCount);
@@ -258,7 +260,7 @@ TEST(BirdModel, FlockSimulatesAndExports) {
     auto stepped = Simulation::open(scene, {.backend = BackendKind::CpuReference, .frames = 12});
     ASSERT_TRUE(stepped.ok()) << stepped.error().message;
     std::vector<gpu::BirdPose> poses(12 * world.birds.size());
-    ASSERT_TRUE(stepped.value()->step(12, {.bird_poses = poses, .bird_diag = {}}).ok());
+    ASSERT_TRUE(step_birds(*stepped.value(), 12, poses).ok());
     int spine = -1;
     for (std::size_t n = 0; n < model.nodes.size(); ++n) {
         if (model.nodes[n].name == "bird_0/spine") spine = static_cast<int>(n);
@@ -306,9 +308,9 @@ TEST(BirdModel, TailSpreadScalesTheTailBone) {
                     "generated_route": {"seed": 3, "segments": 4, "center": [0, 40, 0], "extent": [45, 8, 45], "loop": true}}]})";
     auto sim = Simulation::open(scene, {.backend = BackendKind::CpuReference, .frames = 4});
     ASSERT_TRUE(sim.ok()) << sim.error().message;
-    const birds::BirdWorld& world = sim.value()->bird_world();
+    const birds::BirdWorld& world = bird_world(*sim.value());
     std::vector<gpu::BirdPose> poses(4 * world.birds.size());
-    ASSERT_TRUE(sim.value()->step(4, {.bird_poses = poses, .bird_diag = {}}).ok());
+    ASSERT_TRUE(step_birds(*sim.value(), 4, poses).ok());
     // The simulation spreads every tail a little (flight-modes.md F.5); here bird 0 keeps
     // its tail furled and bird 1 spreads it by a known amount.
     for (std::uint32_t f = 0; f < 4; ++f) {

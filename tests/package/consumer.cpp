@@ -34,6 +34,7 @@
 // render
 #include <kodawari/render/renderer.hpp>
 // engine
+#include <kodawari/domains/chains.hpp>
 #include <kodawari/simulation.hpp>
 
 namespace {
@@ -171,7 +172,7 @@ void simulate_scene(const std::string& source_dir) {
     if (!ok(sim, "Simulation::open(ahoge.json)")) return;
     if (!ok(sim.value()->step(30), "Simulation::step")) return;
     ChainSnapshot snapshot;
-    if (!ok(sim.value()->read_chains(snapshot), "read_chains")) return;
+    if (!ok(read_chains(*sim.value(), snapshot), "read_chains")) return;
     check(!snapshot.positions.empty(), "no joints");
     for (const glm::vec3& p : snapshot.positions) check(finite(p), "a joint is not finite");
     std::printf("consumer: engine: scene \"%s\", %u frames on %s (%s): %zu joints\n", sim.value()->scene().name.c_str(),

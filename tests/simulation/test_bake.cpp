@@ -9,6 +9,8 @@
 
 #include "kodawari/bake.hpp"
 #include "kodawari/export.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
 
@@ -56,9 +58,9 @@ TEST(Bake, BirdsGlbIsTheWritersFileOfTheSteppedPoses) {
 
     auto stepped = open("flock.json", kFrames);
     ASSERT_NE(stepped, nullptr);
-    std::vector<gpu::BirdPose> poses(std::size_t{kFrames} * stepped->bird_world().birds.size());
-    ASSERT_TRUE(stepped->step(kFrames, {.bird_poses = poses, .bird_diag = {}}).ok());
-    ASSERT_TRUE(write_birds_glb(dir.file("stepped.glb"), stepped->bird_world(), poses, kFrames).ok());
+    std::vector<gpu::BirdPose> poses(std::size_t{kFrames} * bird_world(*stepped).birds.size());
+    ASSERT_TRUE(step_birds(*stepped, kFrames, poses).ok());
+    ASSERT_TRUE(write_birds_glb(dir.file("stepped.glb"), bird_world(*stepped), poses, kFrames).ok());
     EXPECT_EQ(testing_support::file_bytes(dir.file("baked.glb")), testing_support::file_bytes(dir.file("stepped.glb")));
 }
 
@@ -81,11 +83,11 @@ TEST(Bake, ChainsGlbIsTheWritersFileOfTheSnapshots) {
     ChainSnapshot snapshot;
     for (std::uint32_t f = 0; f < kFrames; ++f) {
         ASSERT_TRUE(stepped->step().ok());
-        ASSERT_TRUE(stepped->read_chains(snapshot).ok());
+        ASSERT_TRUE(read_chains(*stepped, snapshot).ok());
         positions.insert(positions.end(), snapshot.positions.begin(), snapshot.positions.end());
         orientations.insert(orientations.end(), snapshot.orientations.begin(), snapshot.orientations.end());
     }
-    ASSERT_TRUE(write_chains_glb(dir.file("stepped.glb"), *stepped->rod_scene(), kFrames, positions, orientations).ok());
+    ASSERT_TRUE(write_chains_glb(dir.file("stepped.glb"), *rod_scene(*stepped), kFrames, positions, orientations).ok());
     EXPECT_EQ(testing_support::file_bytes(dir.file("baked.glb")), testing_support::file_bytes(dir.file("stepped.glb")));
 }
 

@@ -13,6 +13,8 @@
 #include "kodawari/bake.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/shards.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
 
@@ -67,7 +69,7 @@ void expect_merge_is_single_bake(const char* scene_name, std::uint32_t frames, s
     const std::string scene = scene_path(scene_name);
     auto single = open(scene, frames);
     ASSERT_NE(single, nullptr);
-    const BakeWorld world{&single->scene(), &single->bird_world(), single->rod_scene(), frames, ""};
+    const BakeWorld world{&single->scene(), &bird_world(*single), rod_scene(*single), frames, ""};
     auto single_sinks = glb_sinks(world, dir.file("single.glb"));
     ASSERT_TRUE(bake(*single, pointers(single_sinks)).ok());
 
@@ -154,17 +156,17 @@ TEST_P(ShardedSimulation, BirdShardsAreTheWholeRunsBirds) {
     constexpr std::uint32_t kFrames = 24, kShards = 7;
     auto whole = open(scene_path("flock.json"), kFrames, {}, GetParam());
     ASSERT_NE(whole, nullptr);
-    const std::size_t n = whole->bird_world().birds.size();
+    const std::size_t n = bird_world(*whole).birds.size();
     std::vector<gpu::BirdPose> all(kFrames * n);
-    ASSERT_TRUE(whole->step(kFrames, {.bird_poses = all, .bird_diag = {}}).ok());
+    ASSERT_TRUE(step_birds(*whole, kFrames, all).ok());
     for (std::uint32_t s = 0; s < kShards; ++s) {
         auto part = open(scene_path("flock.json"), kFrames, {s, kShards}, GetParam());
         ASSERT_NE(part, nullptr);
-        const InstanceRange range = part->shard().birds;
-        ASSERT_EQ(part->bird_world().birds.size(), range.size());
-        EXPECT_EQ(part->shard().scene_birds, n);
+        const InstanceRange range = part->shard().part("birds").range;
+        ASSERT_EQ(bird_world(*part).birds.size(), range.size());
+        EXPECT_EQ(part->shard().part("birds").scene_count, n);
         std::vector<gpu::BirdPose> poses(kFrames * range.size());
-        ASSERT_TRUE(part->step(kFrames, {.bird_poses = poses, .bird_diag = {}}).ok());
+        ASSERT_TRUE(step_birds(*part, kFrames, poses).ok());
         for (std::uint32_t f = 0; f < kFrames; ++f) {
             for (std::uint32_t b = 0; b < range.size(); ++b) {
                 ASSERT_TRUE(same_bits(poses[f * range.size() + b], all[f * n + range.begin + b]))
@@ -183,19 +185,19 @@ TEST_P(ShardedSimulation, CharacterShardsAreTheWholeRunsChains) {
         std::vector<ChainSnapshot> all(kFrames);
         for (auto& snapshot : all) {
             ASSERT_TRUE(whole->step(1).ok());
-            ASSERT_TRUE(whole->read_chains(snapshot).ok());
+            ASSERT_TRUE(read_chains(*whole, snapshot).ok());
         }
         for (std::uint32_t s = 0; s < kShards; ++s) {
             auto part = open(scene_path(name), kFrames, {s, kShards}, GetParam());
             ASSERT_NE(part, nullptr);
-            const InstanceRange range = part->shard().characters;
+            const InstanceRange range = part->shard().part("characters").range;
             const std::uint32_t joint0 =
-                whole->rod_scene()->world.chains[whole->rod_scene()->instances[range.begin].chain_begin].joint_begin;
+                rod_scene(*whole)->world.chains[rod_scene(*whole)->instances[range.begin].chain_begin].joint_begin;
             ChainSnapshot snapshot;
             for (std::uint32_t f = 0; f < kFrames; ++f) {
                 ASSERT_TRUE(part->step(1).ok());
-                ASSERT_TRUE(part->read_chains(snapshot).ok());
-                ASSERT_EQ(snapshot.positions.size(), part->rod_scene()->world.joint_count);
+                ASSERT_TRUE(read_chains(*part, snapshot).ok());
+                ASSERT_EQ(snapshot.positions.size(), rod_scene(*part)->world.joint_count);
                 for (std::size_t j = 0; j < snapshot.positions.size(); ++j) {
                     ASSERT_TRUE(same_bits(snapshot.positions[j], all[f].positions[joint0 + j]) &&
                                 same_bits(snapshot.orientations[j], all[f].orientations[joint0 + j]))

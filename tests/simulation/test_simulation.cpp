@@ -11,6 +11,8 @@
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/gpu_info.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
 
@@ -44,7 +46,7 @@ TEST_P(Simulations, ChainsAreTheBackendsSequencedByHand) {
     auto made = Simulation::open(scene_path("crowd-gltf.json"), options(kFrames));
     ASSERT_TRUE(made.ok()) << made.error().message;
     Simulation& sim = *made.value();
-    ASSERT_NE(sim.rod_scene(), nullptr);
+    ASSERT_NE(rod_scene(sim), nullptr);
     EXPECT_EQ(sim.backend(), GetParam());
     EXPECT_TRUE(sim.fallback_reason().empty());
 
@@ -58,13 +60,13 @@ TEST_P(Simulations, ChainsAreTheBackendsSequencedByHand) {
     }
     auto rods = make_rod_backend(GetParam(), by_hand);
     ASSERT_TRUE(rods.ok()) << rods.error().message;
-    auto animator = CrowdAnimator::create(*sim.rod_scene(), GetParam(), by_hand);
+    auto animator = CrowdAnimator::create(*rod_scene(sim), GetParam(), by_hand);
     ASSERT_TRUE(animator.ok()) << animator.error().message;
     rods::RodFrame input;
     ChainSnapshot expected, actual;
     for (std::uint32_t f = 0; f < kFrames; ++f) {
         ASSERT_TRUE(animator.value().frame(f, input).ok());
-        ASSERT_TRUE((f == 0 ? rods.value()->load(sim.rod_scene()->world, input) : rods.value()->step(input)).ok());
+        ASSERT_TRUE((f == 0 ? rods.value()->load(rod_scene(sim)->world, input) : rods.value()->step(input)).ok());
         if (f == 0) {
             ASSERT_TRUE(animator.value().write_inputs_on(*rods.value()).ok());
         }
@@ -72,10 +74,10 @@ TEST_P(Simulations, ChainsAreTheBackendsSequencedByHand) {
         ASSERT_TRUE(stepped.ok()) << stepped.error().message;
         ASSERT_EQ(sim.frame(), f);
         ASSERT_TRUE(rods.value()->read(expected).ok());
-        ASSERT_TRUE(sim.read_chains(actual).ok());
+        ASSERT_TRUE(read_chains(sim, actual).ok());
         ASSERT_TRUE(same_bits(expected.positions, actual.positions)) << "frame " << f;
     }
-    EXPECT_EQ(sim.rod_inputs_on_device(), GetParam() == BackendKind::Vulkan);
+    EXPECT_EQ(rod_inputs_on_device(sim), GetParam() == BackendKind::Vulkan);
     EXPECT_EQ(sim.validation_messages(), 0u);
 }
 
@@ -87,14 +89,14 @@ TEST_P(Simulations, SeekingIsStepping) {
     ASSERT_TRUE(sim.step(12).ok());  // frames 0 .. 11
     EXPECT_EQ(sim.frame(), 11u);
     ChainSnapshot at11, again;
-    ASSERT_TRUE(sim.read_chains(at11).ok());
+    ASSERT_TRUE(read_chains(sim, at11).ok());
     ASSERT_TRUE(sim.seek(20).ok());
     EXPECT_EQ(sim.frame(), 20u);
-    ASSERT_TRUE(sim.read_chains(again).ok());
+    ASSERT_TRUE(read_chains(sim, again).ok());
     EXPECT_FALSE(same_bits(at11.positions, again.positions)) << "the ahoge moves between frames 11 and 20";
     ASSERT_TRUE(sim.seek(11).ok());
     EXPECT_EQ(sim.frame(), 11u);
-    ASSERT_TRUE(sim.read_chains(again).ok());
+    ASSERT_TRUE(read_chains(sim, again).ok());
     EXPECT_TRUE(same_bits(at11.positions, again.positions));
     // Past the end: clamped to the last frame.
     ASSERT_TRUE(sim.seek(1000).ok());
@@ -109,19 +111,19 @@ TEST_P(Simulations, BirdsInChunksOrOneByOne) {
     auto chunked = Simulation::open(scene_path("flock.json"), options(kFrames));
     auto single = Simulation::open(scene_path("flock.json"), options(kFrames));
     ASSERT_TRUE(chunked.ok() && single.ok());
-    const std::size_t birds = chunked.value()->bird_world().birds.size();
+    const std::size_t birds = bird_world(*chunked.value()).birds.size();
     ASSERT_GT(birds, 0u);
     std::vector<gpu::BirdPose> all(kFrames * birds), one(birds);
-    ASSERT_TRUE(chunked.value()->step(kFrames, {.bird_poses = all, .bird_diag = {}}).ok());
+    ASSERT_TRUE(step_birds(*chunked.value(), kFrames, all).ok());
     for (std::uint32_t f = 0; f < kFrames; ++f) {
-        ASSERT_TRUE(single.value()->step(1, {.bird_poses = one, .bird_diag = {}}).ok());
+        ASSERT_TRUE(step_birds(*single.value(), 1, one).ok());
         EXPECT_EQ(std::memcmp(one.data(), all.data() + f * birds, birds * sizeof(gpu::BirdPose)), 0) << "frame " << f;
     }
     ASSERT_TRUE(single.value()->seek(2).ok());
     ASSERT_TRUE(single.value()->seek(3).ok());
     // seek() keeps no poses: step the last frame with an output to compare.
     ASSERT_TRUE(single.value()->seek(2).ok());
-    ASSERT_TRUE(single.value()->step(1, {.bird_poses = one, .bird_diag = {}}).ok());
+    ASSERT_TRUE(step_birds(*single.value(), 1, one).ok());
     EXPECT_EQ(std::memcmp(one.data(), all.data() + 3 * birds, birds * sizeof(gpu::BirdPose)), 0);
     EXPECT_EQ(chunked.value()->validation_messages(), 0u);
 }
@@ -132,9 +134,9 @@ TEST_P(Simulations, MisuseIsAnErrorThatNamesTheArgument) {
     ASSERT_TRUE(made.ok()) << made.error().message;
     Simulation& sim = *made.value();
     std::vector<gpu::BirdPose> wrong(3);
-    const auto mismatched = sim.step(2, {.bird_poses = wrong, .bird_diag = {}});
+    const auto mismatched = step_birds(sim, 2, wrong);
     ASSERT_FALSE(mismatched.ok());
-    EXPECT_NE(mismatched.error().message.find("frames x birds"), std::string::npos) << mismatched.error().message;
+    EXPECT_NE(mismatched.error().message.find("\"birds.poses\" must hold frames x elements = 5"), std::string::npos) << mismatched.error().message;
     EXPECT_FALSE(sim.frame().has_value());
     const auto past = sim.step(6);
     ASSERT_FALSE(past.ok());
@@ -162,9 +164,9 @@ TEST(Simulation, RunsASceneBuiltInCode) {
     auto made = Simulation::create(std::move(parsed).value(), {.backend = BackendKind::CpuReference});
     ASSERT_TRUE(made.ok()) << made.error().message;
     EXPECT_EQ(made.value()->frame_count(), 15u);
-    EXPECT_EQ(made.value()->rod_scene(), nullptr);
+    EXPECT_EQ(rod_scene(*made.value()), nullptr);
     std::vector<gpu::BirdPose> poses(15 * 5);
-    ASSERT_TRUE(made.value()->step(15, {.bird_poses = poses, .bird_diag = {}}).ok());
+    ASSERT_TRUE(step_birds(*made.value(), 15, poses).ok());
     // The birds fly along +x.
     EXPECT_GT(poses[14 * 5].position.x, poses[0].position.x);
 }

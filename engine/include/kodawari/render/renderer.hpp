@@ -215,6 +215,10 @@ public:
     /// simulation's, when it shares the device): the viewer's per-frame figure.
     [[nodiscard]] std::uint64_t read_back_bytes() const;
 
+    /// Draws no layer from now on (a simulation's show_on() starts with it, so that what
+    /// another simulation showed goes).
+    [[nodiscard]] Result<void> clear_layers();
+
     /// Draws the chains of `world` in every following frame (null: none), their state
     /// set per frame by chains_from(). `world` must outlive its use here.
     [[nodiscard]] Result<void> set_chains(const rods::RodWorld* world, const ChainStyle& style = {});

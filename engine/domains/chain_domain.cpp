@@ -1,0 +1,196 @@
+// The chain domain (kodawari/domains/chains.hpp): the characters' chains on a RodBackend,
+// fed by their kinematics (CrowdAnimator), behind the domain contract (kodawari/domain.hpp).
+#include "kodawari/domains/chains.hpp"
+
+#include <chrono>
+#include <string>
+#include <vector>
+
+#include "kodawari/backend_factory.hpp"
+#include "kodawari/crowd_animator.hpp"
+#include "kodawari/render/renderer.hpp"
+#include "kodawari/simulation.hpp"
+
+namespace kodawari {
+
+namespace {
+
+double seconds_since(std::chrono::steady_clock::time_point start) {
+    return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+}
+
+class ChainDomain final : public Domain {
+public:
+    explicit ChainDomain(std::optional<RodScene> scene) : scene_(std::move(scene)) {}
+
+    std::string_view name() const override { return kChainDomain; }
+    std::string_view instance_noun() const override { return "characters"; }
+    std::uint32_t scene_instances() const override {
+        return scene_ ? static_cast<std::uint32_t>(scene_->instances.size()) : 0;
+    }
+    void keep_instances(InstanceRange range) override {
+        if (!scene_ || (range.begin == 0 && range.end == scene_->instances.size())) return;
+        scene_.emplace(scene_->slice(range.begin, range.end));
+    }
+    std::vector<std::string> outputs() const override { return {std::string(kChainDomain)}; }
+
+    Result<void> open(const DomainSetup& setup, std::span<Domain* const>) override {
+        device_inputs_ = setup.device_inputs;
+        // A shard may hold none of the characters: nothing to step then.
+        if (!scene_ || scene_->instances.empty()) return {};
+        auto made = make_rod_backend(setup.kind, setup.options);
+        if (!made) return made.error();
+        rods_ = std::move(made).value();
+        // Rigged characters' clips are evaluated by the pose backend of the same kind.
+        auto created = CrowdAnimator::create(*scene_, setup.kind, setup.options);
+        if (!created) return created.error();
+        animator_.emplace(std::move(created).value());
+        return {};
+    }
+    void close() override {
+        animator_.reset();
+        rods_.reset();
+    }
+    Result<void> rewind() override {
+        host_input_frame_.reset();
+        current_.reset();
+        return {};
+    }
+
+    Result<void> step(std::uint32_t first, std::uint32_t frames, std::span<const ChannelOutput>) override {
+        if (!rods_) return {};
+        for (std::uint32_t f = first; f < first + frames; ++f) {
+            KW_TRY(frame(f));
+            current_ = f;
+        }
+        return {};
+    }
+
+    std::string device() const override { return rods_ ? rods_->device() : std::string(); }
+    std::uint32_t validation_messages() const override {
+        std::uint32_t n = rods_ ? rods_->validation_messages() : 0;
+        if (animator_) n = std::max(n, animator_->validation_messages());
+        return n;
+    }
+
+    Result<void> show_on(render::Renderer& renderer, bool) override {
+        KW_TRY(renderer.set_chains(rods_ ? &scene_->world : nullptr));
+        return renderer.set_skinned(rods_ ? &*scene_ : nullptr);
+    }
+
+    Result<void> draw_on(render::Renderer& renderer, DrawSource source, bool) override {
+        if (!rods_) return {};
+        if (source == DrawSource::Device) {
+            // The renderer reads back and uploads what is not on its device.
+            KW_TRY(renderer.chains_from(*rods_));
+            KW_TRY(renderer.skinned_from(*animator_, *rods_, current_.value_or(0)));
+        } else {
+            KW_TRY(rods_->read(snapshot_));
+            KW_TRY(renderer.chains_from(snapshot_));
+            KW_TRY(renderer.skinned_from(snapshot_, current_.value_or(0)));
+        }
+        return renderer.colliders_from(*rods_, input_);
+    }
+
+    const RodScene* scene() const { return scene_ ? &*scene_ : nullptr; }
+    Result<void> read(ChainSnapshot& out) {
+        if (!rods_) return {};
+        return rods_->read(out);
+    }
+    const rods::RodFrame& input() const { return input_; }
+    Result<const rods::RodFrame*> host_input() {
+        if (!animator_ || !animator_->writes_inputs_on_device() || !current_) return &input_;
+        if (host_input_frame_ != current_) {
+            KW_TRY(animator_->host_frame(*current_, host_input_));
+            host_input_.camera = input_.camera;
+            host_input_frame_ = current_;
+        }
+        return &host_input_;
+    }
+    bool inputs_on_device() const { return animator_ && animator_->writes_inputs_on_device(); }
+    void set_view_camera(std::optional<rods::Camera> camera) { view_camera_ = camera; }
+    const ChainTiming& timing() const { return timing_; }
+
+private:
+    // Frame `f` of the chains: the kinematic input, then the initial state (f == 0) or one step.
+    Result<void> frame(std::uint32_t f) {
+        KW_TRY(animator_->frame(f, input_));
+        timing_.pose_ms += animator_->last_pose_ms();
+        if (view_camera_) input_.camera = *view_camera_;
+        const auto start = std::chrono::steady_clock::now();
+        KW_TRY(f == 0 ? rods_->load(scene_->world, input_) : rods_->step(input_));
+        if (f == 0 && device_inputs_) {
+            // From now on the rigged characters' input is written where the chains step
+            // (when the pose and rod backends share a Vulkan device; nothing otherwise).
+            auto took = animator_->write_inputs_on(*rods_);
+            if (!took) return took.error();
+        }
+        (f < 2 ? timing_.warmup_seconds : timing_.seconds) += seconds_since(start);
+        if (f >= 2 && rods_->last_gpu_ms() >= 0.0) timing_.gpu_ms += rods_->last_gpu_ms();
+        return {};
+    }
+
+    std::optional<RodScene> scene_;
+    bool device_inputs_ = true;
+    std::unique_ptr<RodBackend> rods_;
+    std::optional<CrowdAnimator> animator_;
+    std::optional<rods::Camera> view_camera_;
+    rods::RodFrame input_;
+    rods::RodFrame host_input_;
+    std::optional<std::uint32_t> host_input_frame_;
+    std::optional<std::uint32_t> current_;
+    ChainSnapshot snapshot_;  // DrawSource::ReadBack
+    ChainTiming timing_;
+};
+
+ChainDomain* find(const Simulation& sim) { return dynamic_cast<ChainDomain*>(sim.domain(kChainDomain)); }
+
+}  // namespace
+
+std::unique_ptr<Domain> make_chain_domain(std::optional<RodScene> scene) {
+    return std::make_unique<ChainDomain>(std::move(scene));
+}
+
+const RodScene* rod_scene_of(const Domain& domain) {
+    const auto* chains = dynamic_cast<const ChainDomain*>(&domain);
+    return chains ? chains->scene() : nullptr;
+}
+
+const RodScene* rod_scene(const Simulation& sim) {
+    const ChainDomain* domain = find(sim);
+    return domain ? domain->scene() : nullptr;
+}
+
+Result<void> read_chains(Simulation& sim, ChainSnapshot& out) {
+    ChainDomain* domain = find(sim);
+    return domain ? domain->read(out) : Result<void>{};
+}
+
+const rods::RodFrame& chain_input(const Simulation& sim) {
+    static const rods::RodFrame none;
+    const ChainDomain* domain = find(sim);
+    return domain ? domain->input() : none;
+}
+
+Result<const rods::RodFrame*> host_chain_input(Simulation& sim) {
+    static const rods::RodFrame none;
+    ChainDomain* domain = find(sim);
+    return domain ? domain->host_input() : Result<const rods::RodFrame*>{&none};
+}
+
+bool rod_inputs_on_device(const Simulation& sim) {
+    const ChainDomain* domain = find(sim);
+    return domain && domain->inputs_on_device();
+}
+
+void set_view_camera(Simulation& sim, std::optional<rods::Camera> camera) {
+    if (ChainDomain* domain = find(sim)) domain->set_view_camera(camera);
+}
+
+const ChainTiming& chain_timing(const Simulation& sim) {
+    static const ChainTiming none;
+    const ChainDomain* domain = find(sim);
+    return domain ? domain->timing() : none;
+}
+
+}  // namespace kodawari

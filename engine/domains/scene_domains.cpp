@@ -1,0 +1,30 @@
+// The scene's own domains (kodawari/domain.hpp's build_scene_domains): the one place that
+// lists the domains a scene file describes, so that the Simulation facade names none.
+#include <optional>
+
+#include "kodawari/domain.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
+#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
+
+namespace kodawari {
+
+Result<std::vector<std::unique_ptr<Domain>>> build_scene_domains(const Scene& scene, std::uint32_t frames) {
+    auto birds = build_bird_world(scene);
+    if (!birds) return birds.error();
+    birds.value().frames = frames;
+    std::optional<RodScene> rods;
+    if (!scene.characters.empty()) {
+        auto built = build_rod_scene(scene);
+        if (!built) return built.error();
+        rods.emplace(std::move(built).value());
+    }
+    // Both always, also empty: a shard's part files name both instance kinds.
+    std::vector<std::unique_ptr<Domain>> domains;
+    domains.push_back(make_bird_domain(std::move(birds).value()));
+    domains.push_back(make_chain_domain(std::move(rods)));
+    return domains;
+}
+
+}  // namespace kodawari

@@ -1,0 +1,73 @@
+#pragma once
+/// @file
+/// The chain domain (SPEC A): the characters' chains, driven by their kinematics (rigged
+/// characters' clips on a PoseBackend, then the rod input), stepped on a RodBackend, as
+/// one domain of a Simulation (kodawari/domain.hpp):
+///
+///   per frame f:  rigged characters' clips at f (pose backend)
+///                 -> chain roots, reference joints, colliders, camera (RodFrame)
+///                 -> f == 0: every chain at rest on its rest shape (load)
+///                    f > 0:  one rod step (SPEC A.3-A.5)
+///                 -> after frame 0, on one Vulkan device: the rigged characters' part of
+///                    the input written on the device from then on
+///
+/// What is particular to chains is reached here, not through the Simulation facade.
+
+#include <cstdint>
+#include <memory>
+#include <optional>
+#include <string_view>
+
+#include "kodawari/api.hpp"
+#include "kodawari/domain.hpp"
+#include "kodawari/result.hpp"
+#include "kodawari/rod_scene.hpp"
+#include "kodawari/rods/chain_snapshot.hpp"
+#include "kodawari/rods/kinematics.hpp"
+
+namespace kodawari {
+
+class Simulation;
+
+/// The chain domain's name in a Simulation.
+inline constexpr std::string_view kChainDomain = "chains";
+
+/// Time spent in the chain domain's backends. Frames 0 and 1 (loaded and put at rest,
+/// then the first step, each the first dispatch of its kernels, compiled then on
+/// lavapipe) are kept apart.
+struct ChainTiming {
+    double warmup_seconds = 0.0;  ///< frames 0 and 1
+    double seconds = 0.0;         ///< wall time in the rod backend's steps from frame 2 on
+    double gpu_ms = 0.0;          ///< GPU time of those steps
+    double pose_ms = 0.0;         ///< the pose backends' clip evaluation (and read back)
+};
+
+/// A chain domain of `scene` (none: a scene without characters, nothing to step): what
+/// build_scene_domains() makes of a scene's characters.
+[[nodiscard]] KODAWARI_API std::unique_ptr<Domain> make_chain_domain(std::optional<RodScene> scene);
+
+/// The chains and kinematics of `domain` when it is a chain domain with characters; null
+/// otherwise.
+[[nodiscard]] KODAWARI_API const RodScene* rod_scene_of(const Domain& domain);
+
+/// `sim`'s characters' chains and kinematics (the part of the scene's it runs); null
+/// without characters.
+[[nodiscard]] KODAWARI_API const RodScene* rod_scene(const Simulation& sim);
+/// The chains' state after the last step (read back from a device); nothing without chains.
+[[nodiscard]] KODAWARI_API Result<void> read_chains(Simulation& sim, ChainSnapshot& out);
+/// The last frame's kinematic input of the chains as given to the rod backend: on one
+/// Vulkan device the rigged characters' entries in it are not this frame's (they are
+/// written on the device), see host_chain_input().
+[[nodiscard]] KODAWARI_API const rods::RodFrame& chain_input(const Simulation& sim);
+/// The last frame's kinematic input with every entry on the host (the pose matrices read
+/// back when they live on a device): a sketch's root, a paused frame's colliders.
+[[nodiscard]] KODAWARI_API Result<const rods::RodFrame*> host_chain_input(Simulation& sim);
+/// Whether the rigged characters' rod input is written on the device.
+[[nodiscard]] KODAWARI_API bool rod_inputs_on_device(const Simulation& sim);
+/// The camera that drives the view-dependent rest shapes of the frames simulated from now
+/// on (SPEC A.3); none: the scene's camera at each frame. A viewer's orbit camera.
+KODAWARI_API void set_view_camera(Simulation& sim, std::optional<rods::Camera> camera);
+/// The chain domain's time so far (zero without chains).
+[[nodiscard]] KODAWARI_API const ChainTiming& chain_timing(const Simulation& sim);
+
+}  // namespace kodawari
