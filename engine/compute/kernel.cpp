@@ -7,9 +7,16 @@ namespace kodawari::compute {
 
 Result<Kernel> Kernel::create(const Device& device, std::string_view shader, std::span<const Binding> bindings,
                               std::uint32_t push_bytes, std::span<const std::uint32_t> specialization) {
-    const auto count = static_cast<std::uint32_t>(bindings.size());
     const auto code = embedded_shader(shader);
     assert(!code.empty() && "shader not embedded: add it to shaders/CMakeLists.txt");
+    return create(device, shader, code, bindings, push_bytes, specialization);
+}
+
+Result<Kernel> Kernel::create(const Device& device, std::string_view shader, std::span<const std::uint32_t> code,
+                              std::span<const Binding> bindings, std::uint32_t push_bytes,
+                              std::span<const std::uint32_t> specialization) {
+    if (code.empty()) return make_error(Error::Kind::InvalidInput, "kernel " + std::string(shader) + ": no SPIR-V");
+    const auto count = static_cast<std::uint32_t>(bindings.size());
     Kernel out;
     out.device_ = &device;
     for (const Binding b : bindings) {

@@ -42,6 +42,11 @@ public:
     /// and 32-bit specialization constants with ids 0..m-1.
     [[nodiscard]] static Result<Kernel> create(const Device& device, std::string_view shader, std::span<const Binding> bindings,
                                                std::uint32_t push_bytes, std::span<const std::uint32_t> specialization = {});
+    /// The same from SPIR-V the caller holds (a domain's own kernel, compiled outside
+    /// the engine); `name` names it in errors. `spirv` is read during the call only.
+    [[nodiscard]] static Result<Kernel> create(const Device& device, std::string_view name, std::span<const std::uint32_t> spirv,
+                                               std::span<const Binding> bindings, std::uint32_t push_bytes,
+                                               std::span<const std::uint32_t> specialization = {});
 
     Kernel(Kernel&&) noexcept = default;
     Kernel& operator=(Kernel&&) noexcept = default;
