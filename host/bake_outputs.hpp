@@ -8,6 +8,8 @@
 
 #include "cli_common.hpp"
 #include "kodawari/bake.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 
 namespace kodawari::cli {
 

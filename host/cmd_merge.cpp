@@ -27,11 +27,13 @@ int cmd_merge(const MergeArguments& o) {
     auto source = open_parts(parts, options);
     if (!source) return report(source.error());
     const BakeWorld world = source.value()->world();
-    const bool has_birds = !world.birds->birds.empty();
-    const bool has_chains = world.rods != nullptr;
+    const birds::BirdWorld& birds = bird_world_of(world);
+    const RodScene* rods = rod_scene_of(world);
+    const bool has_birds = !birds.birds.empty();
+    const bool has_chains = rods != nullptr;
     std::printf("kodawari: merging %zu parts of scene \"%s\" (%s): %zu birds, %zu characters, %u frames\n", parts.size(),
-                world.scene->name.c_str(), world.scene->path.c_str(), world.birds->birds.size(),
-                has_chains ? world.rods->instances.size() : std::size_t{0}, world.frames);
+                world.scene->name.c_str(), world.scene->path.c_str(), birds.birds.size(),
+                has_chains ? rods->instances.size() : std::size_t{0}, world.frames);
     std::fflush(stdout);
     if (out_option) {
         if (auto made = make_parent_folder(*out_option, "--out"); !made) return report(made.error());

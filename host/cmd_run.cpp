@@ -18,6 +18,7 @@
 #endif
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
+#include "kodawari/domains/trace.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace kodawari::cli {
@@ -144,8 +145,8 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
     options.make_sinks = [&](const BakeWorld& world) {
         std::vector<std::unique_ptr<BakeSink>> sinks;
         if (!no_export) {
-            sinks = glb_sinks(out ? *out : default_output(world.scene->name), !world.birds->birds.empty(), world.rods != nullptr,
-                              compaction);
+            sinks = glb_sinks(out ? *out : default_output(world.scene->name), !bird_world_of(world).birds.empty(),
+                              rod_scene_of(world) != nullptr, compaction);
         }
         if (trace) sinks.push_back(make_trace_sink(*trace));
         return sinks;
@@ -243,7 +244,7 @@ int cmd_run(const RunOptions& o) {
         const std::string part = out_option ? *out_option
                                             : default_output(scene.name, ".shard-" + std::to_string(shard.index) + "-of-" +
                                                                             std::to_string(shard.count) + ".kwpart");
-        owned.push_back(make_part_sink(part, sim.shard()));
+        owned.push_back(make_part_sink(part, sim));
     } else if (!no_export) {
         owned = glb_sinks(out_option ? *out_option : default_output(scene.name), has_birds, has_chains, compaction);
     }

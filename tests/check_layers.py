@@ -89,6 +89,7 @@ PUBLIC_OWNERS = {
     "domain.hpp": "engine",
     "domains/birds.hpp": "engine",
     "domains/chains.hpp": "engine",
+    "domains/trace.hpp": "engine",
     "bake.hpp": "engine",
     "shards.hpp": "engine",
     "distributed.hpp": "engine",

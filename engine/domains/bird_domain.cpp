@@ -2,6 +2,7 @@
 // the domain contract (kodawari/domain.hpp).
 #include "kodawari/domains/birds.hpp"
 
+#include <algorithm>
 #include <chrono>
 #include <cstring>
 #include <optional>
@@ -29,10 +30,11 @@ std::span<T> as(std::span<std::byte> bytes) {
 
 class BirdDomain final : public Domain {
 public:
-    explicit BirdDomain(birds::BirdWorld world) : world_(std::move(world)) {}
+    explicit BirdDomain(birds::BirdWorld world)
+        : world_(std::move(world)), scene_birds_(static_cast<std::uint32_t>(world_.birds.size())) {}
 
     std::string_view name() const override { return kBirdDomain; }
-    std::uint32_t scene_instances() const override { return static_cast<std::uint32_t>(world_.birds.size()); }
+    std::uint32_t scene_instances() const override { return scene_birds_; }
     void keep_instances(InstanceRange range) override {
         auto& birds = world_.birds;
         if (range.begin == 0 && range.end == birds.size()) return;
@@ -56,8 +58,15 @@ public:
 
     std::vector<ChannelInfo> channels() const override {
         const std::uint64_t n = world_.birds.size();
-        return {{std::string(kBirdPosesChannel), sizeof(gpu::BirdPose), n},
-                {std::string(kBirdDiagChannel), sizeof(gpu::BirdDiag), n}};
+        return {{std::string(kBirdPosesChannel), sizeof(gpu::BirdPose), n, false},
+                {std::string(kBirdDiagChannel), sizeof(gpu::BirdDiag), n, true}};
+    }
+    // Bird poses read back per step when birds go in chunks: bounds the chunk buffers
+    // (2^18 x 128 bytes = 32 MiB of poses, as much of diagnostics) while amortizing the
+    // step calls.
+    std::uint32_t max_bake_frames() const override {
+        constexpr std::uint32_t kChunkPoses = 1u << 18;
+        return std::clamp<std::uint32_t>(kChunkPoses / std::max(scene_birds_, 1u), 1, kMaxBakeFrames);
     }
 
     Result<void> step(std::uint32_t, std::uint32_t n, std::span<const ChannelOutput> out) override {
@@ -122,6 +131,7 @@ public:
 
 private:
     birds::BirdWorld world_;
+    std::uint32_t scene_birds_;  // before keep_instances()
     std::unique_ptr<BirdBackend> backend_;
     // The last frame's poses on the host, for drawing from a CPU backend.
     bool keep_poses_ = false;

@@ -2,7 +2,9 @@
 // fed by their kinematics (CrowdAnimator), behind the domain contract (kodawari/domain.hpp).
 #include "kodawari/domains/chains.hpp"
 
+#include <cassert>
 #include <chrono>
+#include <cstring>
 #include <string>
 #include <vector>
 
@@ -15,18 +17,40 @@ namespace kodawari {
 
 namespace {
 
+// A snapshot's array that channel `name` holds (ChainDomain::channels()).
+std::span<const std::byte> snapshot_channel(const ChainSnapshot& s, std::string_view name) {
+    if (name == kChainPositionsChannel) return std::as_bytes(std::span(s.positions));
+    if (name == kChainOrientationsChannel) return std::as_bytes(std::span(s.orientations));
+    if (name == kChainRestChannel) return std::as_bytes(std::span(s.rest));
+    if (name == kChainViewDirectionsChannel) return std::as_bytes(std::span(s.view_directions));
+    assert(name == kChainWeightsChannel);
+    return std::as_bytes(std::span(s.weights));
+}
+
 double seconds_since(std::chrono::steady_clock::time_point start) {
     return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
 }
 
 class ChainDomain final : public Domain {
 public:
-    explicit ChainDomain(std::optional<RodScene> scene) : scene_(std::move(scene)) {}
+    explicit ChainDomain(std::optional<RodScene> scene)
+        : scene_(std::move(scene)), scene_characters_(scene_ ? static_cast<std::uint32_t>(scene_->instances.size()) : 0) {}
 
     std::string_view name() const override { return kChainDomain; }
     std::string_view instance_noun() const override { return "characters"; }
-    std::uint32_t scene_instances() const override {
-        return scene_ ? static_cast<std::uint32_t>(scene_->instances.size()) : 0;
+    std::uint32_t scene_instances() const override { return scene_characters_; }
+    // The chains are read back after each frame (a snapshot of every joint): one frame at
+    // a time when the scene has characters, in every shard alike.
+    std::uint32_t max_bake_frames() const override { return scene_characters_ > 0 ? 1 : kMaxBakeFrames; }
+
+    std::vector<ChannelInfo> channels() const override {
+        const std::uint64_t joints = scene_ ? scene_->world.joint_count : 0;
+        const std::uint64_t chains = scene_ ? scene_->world.chains.size() : 0;
+        return {{std::string(kChainPositionsChannel), sizeof(glm::vec3), joints, false},
+                {std::string(kChainOrientationsChannel), sizeof(glm::quat), joints, false},
+                {std::string(kChainRestChannel), sizeof(glm::vec3), joints, true},
+                {std::string(kChainViewDirectionsChannel), sizeof(glm::vec3), chains, true},
+                {std::string(kChainWeightsChannel), sizeof(float) * kChainWeights, chains, true}};
     }
     void keep_instances(InstanceRange range) override {
         if (!scene_ || (range.begin == 0 && range.end == scene_->instances.size())) return;
@@ -57,11 +81,19 @@ public:
         return {};
     }
 
-    Result<void> step(std::uint32_t first, std::uint32_t frames, std::span<const ChannelOutput>) override {
+    Result<void> step(std::uint32_t first, std::uint32_t frames, std::span<const ChannelOutput> out) override {
         if (!rods_) return {};
         for (std::uint32_t f = first; f < first + frames; ++f) {
             KW_TRY(frame(f));
             current_ = f;
+            if (out.empty()) continue;
+            // The channels asked for, from a snapshot read back after the frame.
+            KW_TRY(rods_->read(snapshot_));
+            for (const ChannelOutput& channel : out) {
+                const std::span<const std::byte> from = snapshot_channel(snapshot_, channel.name);
+                assert(channel.bytes.size() == std::size_t{frames} * from.size());
+                std::memcpy(channel.bytes.data() + std::size_t{f - first} * from.size(), from.data(), from.size());
+            }
         }
         return {};
     }
@@ -131,6 +163,7 @@ private:
     }
 
     std::optional<RodScene> scene_;
+    std::uint32_t scene_characters_;  // before keep_instances()
     bool device_inputs_ = true;
     std::unique_ptr<RodBackend> rods_;
     std::optional<CrowdAnimator> animator_;

@@ -1,23 +1,17 @@
 // The bake loop (kodawari/bake.hpp): one frame order for every output, so that `run`,
-// `merge`, a distributed bake and embedders write the same bytes.
+// `merge`, a distributed bake and embedders write the same bytes. It moves channels
+// (kodawari/domain.hpp) and names no domain.
 #include "kodawari/bake.hpp"
 
 #include <algorithm>
 #include <string>
 
 #include "kodawari/backend.hpp"
-#include "kodawari/domains/birds.hpp"
-#include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 
 namespace kodawari {
 
 namespace {
-
-// Bird poses read back per step when birds go in chunks: bounds the chunk buffers
-// (2^18 x 128 bytes = 32 MiB of poses, as much of diagnostics) while amortizing the
-// step calls.
-constexpr std::size_t kChunkPoses = std::size_t{1} << 18;
 
 // A Simulation's frames, read back into buffers reused from chunk to chunk.
 class SimulationSource final : public BakeSource {
@@ -25,57 +19,83 @@ public:
     explicit SimulationSource(Simulation& sim) : sim_(sim) {}
 
     BakeWorld world() const override {
-        return {&sim_.scene(), &bird_world(sim_), rod_scene(sim_), sim_.frame_count(),
-                std::string(backend_name(sim_.backend()))};
+        BakeWorld world{&sim_.scene(), {}, sim_.frame_count(), std::string(backend_name(sim_.backend()))};
+        for (const Domain* domain : sim_.domains()) world.domains.push_back(domain);
+        return world;
     }
 
     std::uint32_t chunk_frames() const override {
-        // The whole scene's birds, so that a shard steps in the chunks of the whole.
-        return bake_chunk_frames(sim_.shard().part("birds").scene_count, rod_scene(sim_) != nullptr);
+        // Domains answer from the whole scene's instances, so that a shard steps in the
+        // chunks of the whole.
+        std::vector<const Domain*> domains(sim_.domains().begin(), sim_.domains().end());
+        return bake_chunk_frames(domains);
     }
 
     Result<BakeFrames> next(std::uint32_t first, std::uint32_t count, const BakeNeeds& needs) override {
-        const std::size_t birds = bird_world(sim_).birds.size();
-        std::span<gpu::BirdPose> poses;
-        std::span<gpu::BirdDiag> diag;
-        if (birds > 0 && (needs.bird_poses || needs.bird_diag)) {
-            // Diagnostics come with the poses they describe.
-            poses_.resize(std::size_t{count} * birds);
-            poses = poses_;
-            if (needs.bird_diag) {
-                diag_.resize(std::size_t{count} * birds);
-                diag = diag_;
+        std::vector<ChannelOutput> out;
+        BakeFrames frames{first, count, {}};
+        buffers_.resize(needs.channels.size());
+        std::size_t used = 0;
+        for (const std::string& name : needs.channels) {
+            for (const Domain* domain : sim_.domains()) {
+                for (const ChannelInfo& info : domain->channels()) {
+                    if (info.name != name) continue;
+                    std::vector<std::byte>& buffer = buffers_[used++];
+                    buffer.resize(std::size_t{count} * info.elements * info.element_bytes);
+                    out.push_back({name, buffer});  // `needs` outlives the step; channels() is a temporary
+                }
             }
         }
-        KW_TRY(step_birds(sim_, count, poses, diag));
-        const bool chains = needs.chains && rod_scene(sim_) != nullptr;
-        if (chains) KW_TRY(read_chains(sim_, snapshot_));
-        return BakeFrames{first, count, poses, diag, chains ? &snapshot_ : nullptr};
+        KW_TRY(sim_.step(count, out));
+        for (const ChannelOutput& o : out) frames.channels.push_back({std::string(o.name), o.bytes});
+        return frames;
     }
 
 private:
     Simulation& sim_;
-    std::vector<gpu::BirdPose> poses_;
-    std::vector<gpu::BirdDiag> diag_;
-    ChainSnapshot snapshot_;
+    std::vector<std::vector<std::byte>> buffers_;
 };
 
 }  // namespace
 
-std::uint32_t bake_chunk_frames(std::size_t scene_birds, bool has_chains) {
-    if (has_chains) return 1;
-    return static_cast<std::uint32_t>(std::clamp<std::size_t>(kChunkPoses / std::max<std::size_t>(scene_birds, 1), 1, 120));
+const Domain* BakeWorld::domain(std::string_view name) const {
+    for (const Domain* d : domains) {
+        if (d->name() == name) return d;
+    }
+    return nullptr;
+}
+
+std::optional<ChannelInfo> BakeWorld::channel(std::string_view name) const {
+    for (const Domain* d : domains) {
+        for (ChannelInfo& info : d->channels()) {
+            if (info.name == name) return std::move(info);
+        }
+    }
+    return std::nullopt;
+}
+
+std::span<const std::byte> BakeFrames::channel(std::string_view name) const {
+    for (const BakeChannel& c : channels) {
+        if (c.name == name) return c.bytes;
+    }
+    return {};
+}
+
+std::uint32_t bake_chunk_frames(std::span<const Domain* const> domains) {
+    std::uint32_t frames = kMaxBakeFrames;
+    for (const Domain* domain : domains) frames = std::min(frames, std::max(domain->max_bake_frames(), 1u));
+    return frames;
 }
 
 Result<std::vector<BakeOutput>> bake(BakeSource& source, std::span<BakeSink* const> sinks, const BakeOptions& options) {
     const BakeWorld world = source.world();
     BakeNeeds needs;
     for (BakeSink* sink : sinks) {
-        const BakeNeeds n = sink->needs();
-        needs.bird_poses |= n.bird_poses;
-        needs.bird_diag |= n.bird_diag;
-        needs.chains |= n.chains;
-        needs.chain_shapes |= n.chain_shapes;
+        for (std::string& name : sink->needs().channels) {
+            if (std::find(needs.channels.begin(), needs.channels.end(), name) == needs.channels.end()) {
+                needs.channels.push_back(std::move(name));
+            }
+        }
     }
     for (BakeSink* sink : sinks) KW_TRY(sink->begin(world));
     const std::uint32_t chunk = source.chunk_frames();

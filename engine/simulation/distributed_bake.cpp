@@ -33,11 +33,6 @@ void choose_device_by_local_rank(SimulationOptions& options, int local_rank) {
     options.options.device = std::to_string(candidates[static_cast<std::size_t>(local_rank) % candidates.size()]);
 }
 
-// A rank's part: its counts, sent to rank 0 once.
-struct PartCounts {
-    std::uint32_t birds = 0, joints = 0, chains = 0;
-};
-
 std::vector<std::byte> bytes_of(const void* data, std::size_t size) {
     std::vector<std::byte> out(size);
     std::memcpy(out.data(), data, size);
@@ -75,11 +70,11 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
             const BakeWorld world = worlds->bake_world(sim.scene(), std::string(backend_name(sim.backend())));
             sinks = options.make_sinks(world);
             for (const auto& sink : sinks) {
-                const BakeNeeds n = sink->needs();
-                needs.bird_poses |= n.bird_poses;
-                needs.bird_diag |= n.bird_diag;
-                needs.chains |= n.chains;
-                needs.chain_shapes |= n.chain_shapes;
+                for (std::string& name : sink->needs().channels) {
+                    if (std::find(needs.channels.begin(), needs.channels.end(), name) == needs.channels.end()) {
+                        needs.channels.push_back(std::move(name));
+                    }
+                }
             }
             for (const auto& sink : sinks) {
                 setup = sink->begin(world);
@@ -91,32 +86,42 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
     }
     KW_TRY(comm.agree(setup));
 
-    // What every rank sends: rank 0's needs, to all; every rank's counts, to rank 0.
-    std::vector<std::byte> wanted = bytes_of(&needs, sizeof needs);
+    // What every rank sends: rank 0's needs (channel names, one per line), to all; every
+    // rank's elements per channel, to rank 0. Every rank has the same domains, so the
+    // same channels in the same order.
+    std::string names_text;
+    for (const std::string& name : needs.channels) names_text += name + "\n";
+    std::vector<std::byte> wanted = bytes_of(names_text.data(), names_text.size());
     comm.broadcast(wanted);
-    std::memcpy(&needs, wanted.data(), sizeof needs);
-    const RodScene* rods = rod_scene(sim);
-    const PartCounts mine{static_cast<std::uint32_t>(bird_world(sim).birds.size()), rods ? rods->world.joint_count : 0,
-                          rods ? static_cast<std::uint32_t>(rods->world.chains.size()) : 0};
+    needs.channels.clear();
+    std::string line;
+    for (std::byte b : wanted) {
+        if (static_cast<char>(b) == '\n') {
+            needs.channels.push_back(std::move(line));
+            line.clear();
+        } else {
+            line.push_back(static_cast<char>(b));
+        }
+    }
+    std::vector<const Domain*> mine(sim.domains().begin(), sim.domains().end());
+    const detail::PayloadLayout content = detail::payload_layout(mine, needs);
+    std::vector<std::uint64_t> elements;
+    for (const ChannelInfo& c : content.channels) elements.push_back(c.elements);
     std::vector<std::byte> all;
     std::vector<std::size_t> sizes;
-    comm.gather(std::span(reinterpret_cast<const std::byte*>(&mine), sizeof mine), all, sizes);
-    detail::PayloadLayout content = detail::payload_content(needs);
-    content.birds = mine.birds;
-    content.joints = mine.joints;
-    content.chains = mine.chains;
+    comm.gather(std::as_bytes(std::span(elements)), all, sizes);
     std::optional<detail::FrameAssembler> assembler;
     std::vector<std::string> names;
     if (root) {
         std::vector<detail::PayloadLayout> layouts;
+        std::size_t at = 0;
         for (int r = 0; r < comm.size(); ++r) {
-            PartCounts counts;
-            std::memcpy(&counts, all.data() + static_cast<std::size_t>(r) * sizeof counts, sizeof counts);
             detail::PayloadLayout layout = content;
-            layout.birds = counts.birds;
-            layout.joints = counts.joints;
-            layout.chains = counts.chains;
-            layouts.push_back(layout);
+            for (ChannelInfo& c : layout.channels) {
+                std::memcpy(&c.elements, all.data() + at, sizeof c.elements);
+                at += sizeof c.elements;
+            }
+            layouts.push_back(std::move(layout));
             names.push_back("rank " + std::to_string(r));
         }
         assembler.emplace(std::move(layouts));
@@ -145,7 +150,6 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
             }
             auto whole = assembler->assemble(done, n, parts, names);
             if (whole) {
-                if (!worlds->rods) whole.value().chains = nullptr;
                 for (const auto& sink : sinks) {
                     consumed = sink->consume(whole.value());
                     if (!consumed) break;

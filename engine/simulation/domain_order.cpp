@@ -18,7 +18,7 @@ Error bad(const Domain& domain, const std::string& what) {
 }  // namespace
 
 Result<std::vector<std::size_t>> order_domains(std::span<const Domain* const> domains) {
-    std::map<std::string, std::size_t, std::less<>> names, producer, buffer_owner;
+    std::map<std::string, std::size_t, std::less<>> names, producer, buffer_owner, channel_owner;
     for (std::size_t i = 0; i < domains.size(); ++i) {
         const Domain& d = *domains[i];
         if (d.name().empty()) return make_error(Error::Kind::InvalidInput, "domain " + std::to_string(i) + ": has no name");
@@ -28,6 +28,12 @@ Result<std::vector<std::size_t>> order_domains(std::span<const Domain* const> do
         for (const std::string& output : d.outputs()) {
             if (auto [at, fresh] = producer.emplace(output, i); !fresh) {
                 return bad(d, "output \"" + output + "\" is also produced by domain \"" +
+                                  std::string(domains[at->second]->name()) + "\"");
+            }
+        }
+        for (const ChannelInfo& channel : d.channels()) {
+            if (auto [at, fresh] = channel_owner.emplace(channel.name, i); !fresh) {
+                return bad(d, "channel \"" + channel.name + "\" is also a channel of domain \"" +
                                   std::string(domains[at->second]->name()) + "\"");
             }
         }

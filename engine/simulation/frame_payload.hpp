@@ -2,55 +2,52 @@
 // The frames of one part of a scene (a shard, an MPI rank) as bytes, and the whole
 // scene's frames put back together from the parts in order: what part files hold
 // (shards.cpp) and what ranks send to the writing rank (distributed_bake.cpp).
-// Raw little-endian arrays in the engine's own layouts (gpu::BirdPose, glm vectors), so
-// that the whole is the single process's frames bit for bit.
+// Channel after channel (kodawari/domain.hpp), each frames x the part's elements in the
+// domain's own layout, so that the whole is the single process's frames bit for bit. It
+// names no domain: a part's instances are consecutive in every channel.
 
 #include <cstddef>
 #include <cstdint>
 #include <span>
+#include <string>
 #include <vector>
 
 #include "kodawari/bake.hpp"
 
 namespace kodawari::detail {
 
-/// What a part's payload holds per frame, and its sizes.
+/// What a part's payload holds per frame: channels in order, with the part's elements.
 struct PayloadLayout {
-    std::uint32_t birds = 0;   ///< the part's birds
-    std::uint32_t joints = 0;  ///< the part's chain joints
-    std::uint32_t chains = 0;  ///< the part's chains
-    bool poses = false;        ///< bird poses
-    bool diag = false;         ///< bird diagnostics
-    bool chain_pose = false;   ///< chain joint positions and orientations
-    bool chain_extra = false;  ///< blended rest shapes, view directions and weights (traces)
+    std::vector<ChannelInfo> channels;
 
-    /// Bytes of `frames` frames (chains are handed over one frame at a time).
+    /// Bytes of `frames` frames.
     [[nodiscard]] std::size_t bytes(std::uint32_t frames) const;
 };
 
-/// The content a set of sinks needs from every part.
-[[nodiscard]] PayloadLayout payload_content(const BakeNeeds& needs);
+/// The channels of `domains` that `needs` names, in the order `needs` names them, with
+/// those domains' element counts (a part's domains: its part).
+[[nodiscard]] PayloadLayout payload_layout(std::span<const Domain* const> domains, const BakeNeeds& needs);
 
-/// Appends `frames`' content under `layout` to `out` (cleared first). The spans must hold
-/// what the layout says (asserted: a bake hands them so).
+/// Appends `frames`' channels under `layout` to `out` (cleared first). The frames must
+/// hold what the layout says (asserted: a source hands them so).
 void encode_frames(const BakeFrames& frames, const PayloadLayout& layout, std::vector<std::byte>& out);
 
 /// Puts the parts' payloads of one chunk back into the whole scene's frames.
 class FrameAssembler {
 public:
-    /// `parts`: each part's layout, in instance order (shard or rank order).
+    /// `parts`: each part's layout (the same channels in the same order), in instance
+    /// order (shard or rank order).
     explicit FrameAssembler(std::vector<PayloadLayout> parts);
     /// The whole frames [first, first + count) from one payload per part. A payload of the
-    /// wrong size is an InvalidInput error naming the part (`part_names[i]`).
+    /// wrong size is an InvalidInput error naming the part (`part_names[i]`). The frames'
+    /// spans stay valid until the next call.
     [[nodiscard]] Result<BakeFrames> assemble(std::uint32_t first, std::uint32_t count,
                                               std::span<const std::span<const std::byte>> payloads,
                                               std::span<const std::string> part_names);
 
 private:
     std::vector<PayloadLayout> parts_;
-    std::vector<gpu::BirdPose> poses_;
-    std::vector<gpu::BirdDiag> diag_;
-    ChainSnapshot snapshot_;
+    std::vector<std::vector<std::byte>> whole_;  // per channel
 };
 
 }  // namespace kodawari::detail

@@ -22,7 +22,8 @@ namespace kodawari {
 
 namespace {
 
-constexpr std::string_view kMagic = "KODAWARI-PART 1\n";
+// Version 2: per-domain instance ranges and the channels' layout in the header (issue 31).
+constexpr std::string_view kMagic = "KODAWARI-PART 2\n";
 constexpr std::string_view kEndMark = "KODAWARI-PART-END\n";
 // A header line longer than this is not a part file's (the real ones hold ~400 bytes).
 constexpr std::size_t kMaxHeaderBytes = 1 << 16;
@@ -60,20 +61,27 @@ struct ChunkHead {
 
 class PartSink final : public BakeSink {
 public:
-    PartSink(std::string path, const ShardInfo& shard) : path_(std::move(path)), shard_(shard) {}
+    PartSink(std::string path, const Simulation& sim) : path_(std::move(path)), shard_(sim.shard()) {
+        // What the domains' .glb outputs need: every channel but the diagnostics.
+        for (const Domain* domain : sim.domains()) {
+            for (const ChannelInfo& info : domain->channels()) {
+                if (!info.diagnostic) needs_.channels.push_back(info.name);
+            }
+        }
+    }
 
-    BakeNeeds needs() const override { return {.bird_poses = true, .chains = true}; }
+    BakeNeeds needs() const override { return needs_; }
 
     Result<void> begin(const BakeWorld& world) override {
         auto hash = hash_file(world.scene->path);
         if (!hash) return hash.error();
-        layout_.birds = static_cast<std::uint32_t>(world.birds->birds.size());
-        layout_.poses = true;
-        if (world.rods != nullptr) {
-            layout_.joints = world.rods->world.joint_count;
-            layout_.chains = static_cast<std::uint32_t>(world.rods->world.chains.size());
-            layout_.chain_pose = true;
+        layout_ = detail::payload_layout(world.domains, needs_);
+        nlohmann::json instances = nlohmann::json::object();
+        for (const ShardPart& part : shard_.parts) {
+            instances[part.instances] = {part.range.begin, part.range.end, part.scene_count};
         }
+        nlohmann::json channels = nlohmann::json::array();
+        for (const ChannelInfo& c : layout_.channels) channels.push_back({c.name, c.element_bytes, c.elements});
         std::error_code ec;
         const auto scene_path = std::filesystem::absolute(world.scene->path, ec);
         const nlohmann::json header = {
@@ -82,10 +90,8 @@ public:
             {"scene_fnv1a64", hex(hash.value())},
             {"frames", world.frames},
             {"shard", {shard_.shard.index, shard_.shard.count}},
-            {"birds", range("birds")},
-            {"characters", range("characters")},
-            {"joints", layout_.joints},
-            {"chains", layout_.chains},
+            {"instances", instances},
+            {"channels", channels},
             {"backend", world.backend},
         };
         auto file = AtomicFile::open(path_);
@@ -115,14 +121,9 @@ public:
     }
 
 private:
-    // [begin, end, scene count] of the instances called `instances`.
-    nlohmann::json range(std::string_view instances) const {
-        const ShardPart part = shard_.part(instances);
-        return {part.range.begin, part.range.end, part.scene_count};
-    }
-
     std::string path_;
     ShardInfo shard_;
+    BakeNeeds needs_;
     detail::PayloadLayout layout_;
     std::optional<AtomicFile> file_;
     std::vector<std::byte> payload_;
@@ -134,8 +135,7 @@ struct Part {
     std::FILE* file = nullptr;
     nlohmann::json header;
     Shard shard;
-    InstanceRange birds, characters;
-    std::uint32_t scene_birds = 0, scene_characters = 0;
+    std::vector<ShardPart> instances;  // per domain, in the header's order
     detail::PayloadLayout layout;
 
     Part() = default;
@@ -145,11 +145,8 @@ struct Part {
         std::swap(file, other.file);
         std::swap(header, other.header);
         shard = other.shard;
-        birds = other.birds;
-        characters = other.characters;
-        scene_birds = other.scene_birds;
-        scene_characters = other.scene_characters;
-        layout = other.layout;
+        std::swap(instances, other.instances);
+        std::swap(layout, other.layout);
         return *this;
     }
     Part(const Part&) = delete;
@@ -201,7 +198,8 @@ Result<Part> open_part(const std::string& path) {
     if (part.file == nullptr) return make_error(Error::Kind::InvalidInput, path + ": cannot open the part file: " + std::strerror(errno));
     std::string magic(kMagic.size(), '\0');
     if (std::fread(magic.data(), 1, magic.size(), part.file) != magic.size() || magic != kMagic) {
-        return bad(path + ": not a kodawari part file (it does not start with \"KODAWARI-PART 1\"; `kodawari run --shard I/N` writes them)");
+        return bad(path + ": not a kodawari part file of this version (it does not start with \"KODAWARI-PART 2\"; `kodawari run "
+                          "--shard I/N` writes them)");
     }
     std::string line;
     for (int c; (c = std::fgetc(part.file)) != '\n';) {
@@ -216,36 +214,42 @@ Result<Part> open_part(const std::string& path) {
     if (part.shard.count == 0 || part.shard.index >= part.shard.count) {
         return bad(path + ": header field \"shard\": expected [index, count] with index < count, got " + part.header["shard"].dump());
     }
-    auto birds = numbers(part, "birds", 3);
-    if (!birds) return birds.error();
-    auto characters = numbers(part, "characters", 3);
-    if (!characters) return characters.error();
-    part.scene_birds = birds.value()[2];
-    part.scene_characters = characters.value()[2];
-    part.birds = {birds.value()[0], birds.value()[1]};
-    part.characters = {characters.value()[0], characters.value()[1]};
-    // The ranges follow from the shard; a part that says otherwise was not written by
-    // `run --shard` (or by another version of the formula).
-    const InstanceRange b = shard_range(part.scene_birds, part.shard);
-    const InstanceRange c = shard_range(part.scene_characters, part.shard);
-    if (b.begin != part.birds.begin || b.end != part.birds.end || c.begin != part.characters.begin ||
-        c.end != part.characters.end) {
-        return bad(path + ": header fields \"birds\" and \"characters\" are not shard " + std::to_string(part.shard.index) +
-                   " of " + std::to_string(part.shard.count) + "'s ranges");
+    // "instances": {"birds": [begin, end, scene count], ...}, each range the shard's.
+    const auto instances = part.header.find("instances");
+    if (instances == part.header.end() || !instances->is_object()) {
+        return bad(path + ": header field \"instances\" must be an object of [begin, end, count] per kind of instance");
     }
-    auto joints = numbers(part, "joints", 1);
-    if (!joints) return joints.error();
-    auto chains = numbers(part, "chains", 1);
-    if (!chains) return chains.error();
+    for (const auto& [noun, value] : instances->items()) {
+        const bool good = value.is_array() && value.size() == 3 &&
+                          std::all_of(value.begin(), value.end(), [](const nlohmann::json& v) {
+                              return v.is_number_unsigned() && v.get<std::uint64_t>() <= 0xffffffffull;
+                          });
+        if (!good) return bad(path + ": header field \"instances\": \"" + noun + "\": expected [begin, end, count], got " + value.dump());
+        ShardPart share{noun, {value[0].get<std::uint32_t>(), value[1].get<std::uint32_t>()}, value[2].get<std::uint32_t>()};
+        // The ranges follow from the shard; a part that says otherwise was not written by
+        // `run --shard` (or by another version of the formula).
+        const InstanceRange expected = shard_range(share.scene_count, part.shard);
+        if (expected.begin != share.range.begin || expected.end != share.range.end) {
+            return bad(path + ": header field \"instances\": \"" + noun + "\" is not shard " + std::to_string(part.shard.index) +
+                       " of " + std::to_string(part.shard.count) + "'s range");
+        }
+        part.instances.push_back(std::move(share));
+    }
+    // "channels": [[name, element bytes, elements], ...], the payload's order.
+    const auto channels = part.header.find("channels");
+    if (channels == part.header.end() || !channels->is_array()) {
+        return bad(path + ": header field \"channels\" must be an array of [name, element bytes, elements]");
+    }
+    for (const nlohmann::json& c : *channels) {
+        const bool good = c.is_array() && c.size() == 3 && c[0].is_string() && c[1].is_number_unsigned() &&
+                          c[1].get<std::uint64_t>() <= 0xffffffffull && c[2].is_number_unsigned();
+        if (!good) return bad(path + ": header field \"channels\": expected [name, element bytes, elements], got " + c.dump());
+        part.layout.channels.push_back({c[0].get<std::string>(), c[1].get<std::uint32_t>(), c[2].get<std::uint64_t>(), false});
+    }
     KW_TRY(numbers(part, "frames", 1));
     KW_TRY(text(part, "scene"));
     KW_TRY(text(part, "scene_fnv1a64"));
     KW_TRY(text(part, "backend"));
-    part.layout.birds = part.birds.size();
-    part.layout.joints = joints.value()[0];
-    part.layout.chains = chains.value()[0];
-    part.layout.poses = true;
-    part.layout.chain_pose = part.scene_characters > 0;
     return part;
 }
 
@@ -265,13 +269,22 @@ public:
         return worlds_.bake_world(scene_, backend_);
     }
 
-    std::uint32_t chunk_frames() const override {
-        return bake_chunk_frames(worlds_.birds->birds.size(), worlds_.rods != nullptr);
-    }
+    std::uint32_t chunk_frames() const override { return bake_chunk_frames(worlds_.views()); }
 
     Result<BakeFrames> next(std::uint32_t first, std::uint32_t count, const BakeNeeds& needs) override {
-        if (needs.bird_diag || needs.chain_shapes) {
-            return bad(names_.front() + ": part files hold bird poses and chain joints, not the diagnostics and rest shapes a trace needs");
+        // Part files hold what the .glb outputs need: a channel of the scene they do not
+        // hold (a diagnostic) cannot be merged.
+        for (const std::string& name : needs.channels) {
+            const auto& held = parts_.front().layout.channels;
+            if (std::any_of(held.begin(), held.end(), [&](const ChannelInfo& c) { return c.name == name; })) continue;
+            for (const Domain* domain : worlds_.views()) {
+                for (const ChannelInfo& info : domain->channels()) {
+                    if (info.name == name && info.elements > 0) {
+                        return bad(names_.front() + ": part files do not hold channel \"" + name +
+                                   "\" (a diagnostic, what a trace needs): a merge writes the .glb files");
+                    }
+                }
+            }
         }
         payloads_.resize(parts_.size());
         std::vector<std::span<const std::byte>> spans;
@@ -298,10 +311,7 @@ public:
                 }
             }
         }
-        auto frames = assembler_->assemble(first, count, spans, names_);
-        if (!frames) return frames.error();
-        if (!worlds_.rods) frames.value().chains = nullptr;
-        return frames;
+        return assembler_->assemble(first, count, spans, names_);
     }
 
 private:
@@ -316,9 +326,31 @@ private:
 
 }  // namespace
 
-std::unique_ptr<BakeSink> make_part_sink(std::string path, const ShardInfo& shard) {
-    return std::make_unique<PartSink>(std::move(path), shard);
+std::unique_ptr<BakeSink> make_part_sink(std::string path, const Simulation& sim) {
+    return std::make_unique<PartSink>(std::move(path), sim);
 }
+
+namespace {
+
+// Parts of one bake: the same kinds of instances with the same totals, and the same
+// channels in the same order with the same element sizes.
+bool same_bake(const Part& a, const Part& b) {
+    if (a.instances.size() != b.instances.size() || a.layout.channels.size() != b.layout.channels.size()) return false;
+    for (std::size_t i = 0; i < a.instances.size(); ++i) {
+        if (a.instances[i].instances != b.instances[i].instances || a.instances[i].scene_count != b.instances[i].scene_count) {
+            return false;
+        }
+    }
+    for (std::size_t c = 0; c < a.layout.channels.size(); ++c) {
+        if (a.layout.channels[c].name != b.layout.channels[c].name ||
+            a.layout.channels[c].element_bytes != b.layout.channels[c].element_bytes) {
+            return false;
+        }
+    }
+    return true;
+}
+
+}  // namespace
 
 Result<std::unique_ptr<BakeSource>> open_parts(std::span<const std::string> paths, const MergeOptions& options) {
     if (paths.empty()) return bad("merge: no part files given");
@@ -341,7 +373,7 @@ Result<std::unique_ptr<BakeSource>> open_parts(std::span<const std::string> path
     }
     std::vector<const Part*> by_index(a.shard.count, nullptr);
     for (const Part& b : parts) {
-        if (b.shard.count != a.shard.count || b.scene_birds != a.scene_birds || b.scene_characters != a.scene_characters) {
+        if (b.shard.count != a.shard.count || !same_bake(a, b)) {
             return bad(b.path + ": shard " + std::to_string(b.shard.index) + " of " + std::to_string(b.shard.count) +
                        " does not belong with " + a.path + "'s shard " + std::to_string(a.shard.index) + " of " +
                        std::to_string(a.shard.count));
@@ -371,16 +403,30 @@ Result<std::unique_ptr<BakeSource>> open_parts(std::span<const std::string> path
     if (!scene) return scene.error();
     auto worlds = detail::build_scene_worlds(scene.value(), a.header["frames"].get<std::uint32_t>());
     if (!worlds) return worlds.error();
-    // The whole world must be the parts' sum (the same scene gives the same counts).
-    std::size_t joints = 0;
-    for (const Part& p : parts) joints += p.layout.joints;
-    const std::size_t world_joints = worlds.value().rods ? worlds.value().rods->world.joint_count : 0;
-    const std::size_t world_characters = worlds.value().rods ? worlds.value().rods->instances.size() : 0;
-    if (worlds.value().birds->birds.size() != a.scene_birds || world_characters != a.scene_characters || joints != world_joints) {
-        return bad(scene_path + ": builds " + std::to_string(worlds.value().birds->birds.size()) + " birds, " +
-                   std::to_string(world_characters) + " characters and " + std::to_string(world_joints) +
-                   " joints; the parts hold " + std::to_string(a.scene_birds) + ", " + std::to_string(a.scene_characters) +
-                   " and " + std::to_string(joints));
+    // The whole scene must be the parts' sum (the same scene gives the same counts): its
+    // instances of every kind, and the elements of every channel the parts hold.
+    const std::vector<const Domain*> whole = worlds.value().views();
+    for (const ShardPart& share : a.instances) {
+        const auto domain = std::find_if(whole.begin(), whole.end(), [&](const Domain* d) { return d->instance_noun() == share.instances; });
+        const std::uint32_t built = domain == whole.end() ? 0 : (*domain)->scene_instances();
+        if (built != share.scene_count) {
+            return bad(scene_path + ": builds " + std::to_string(built) + " " + share.instances + "; the parts hold " +
+                       std::to_string(share.scene_count));
+        }
+    }
+    for (std::size_t c = 0; c < a.layout.channels.size(); ++c) {
+        const std::string& name = a.layout.channels[c].name;
+        std::uint64_t held = 0, built = 0;
+        for (const Part& p : parts) held += p.layout.channels[c].elements;
+        for (const Domain* d : whole) {
+            for (const ChannelInfo& info : d->channels()) {
+                if (info.name == name) built = info.elements;
+            }
+        }
+        if (held != built) {
+            return bad(scene_path + ": builds " + std::to_string(built) + " elements of channel \"" + name +
+                       "\"; the parts hold " + std::to_string(held));
+        }
     }
     const std::string backend = a.header["backend"].get<std::string>();
     return std::unique_ptr<BakeSource>(

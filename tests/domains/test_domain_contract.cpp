@@ -14,6 +14,7 @@
 #include <cstdio>
 #include <functional>
 #include <cstring>
+#include <filesystem>
 #include <fstream>
 #include <iterator>
 #include <memory>
@@ -22,8 +23,10 @@
 #include <vector>
 
 #include <glm/glm.hpp>
+#include <tiny_gltf.h>
 
 #include "compute/compute.hpp"
+#include "kodawari/bake.hpp"
 #include "kodawari/domain.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
@@ -342,6 +345,57 @@ TEST(DomainContract, ATestDomainRunsThroughSimulationOnEveryBackendKind) {
     }
 }
 
+// The bake pipeline hands the test domain's channel to a sink as it does the scene's
+// domains'; the points sink writes it as a glTF that glTF-Validator passes, every node
+// where the domain put its particle.
+TEST(DomainContract, TheTestDomainBakesToGltf) {
+    testing_support::TempDir dir;
+    std::vector<std::unique_ptr<Domain>> domains;
+    domains.push_back(std::make_unique<CirclesDomain>("circles", 37, 60.0f));
+    auto made = make(BackendKind::Cpu, std::move(domains));
+    ASSERT_TRUE(made.ok()) << made.error().message;
+    const std::string path = dir.file("circles.glb");
+    auto sink = make_points_glb_sink(path, std::string(kPositions), "circles", 60.0f);
+    BakeSink* sinks[] = {sink.get()};
+    auto written = bake(*made.value(), sinks);
+    ASSERT_TRUE(written.ok()) << written.error().message;
+    ASSERT_EQ(written.value().size(), 1u);
+
+    std::string output;
+    const int status = testing_support::run_command(testing_support::gltf_validator_command(path), output);
+    EXPECT_EQ(status, 0) << output;
+    EXPECT_NE(output.find("0 errors, 0 warnings"), std::string::npos) << output;
+
+    tinygltf::Model model;
+    tinygltf::TinyGLTF loader;
+    std::string error, warning;
+    ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, path)) << error;
+    ASSERT_EQ(model.nodes.size(), 38u);  // the root and 37 points
+    ASSERT_EQ(model.animations.size(), 1u);
+    // Particle 20's last key is where the domain put it at frame 29.
+    const tinygltf::AnimationChannel& channel = model.animations[0].channels[20];
+    EXPECT_EQ(channel.target_node, 21);
+    const tinygltf::Accessor& keys = model.accessors[static_cast<std::size_t>(model.animations[0].samplers[static_cast<std::size_t>(channel.sampler)].output)];
+    ASSERT_EQ(keys.count, 30u);
+    const tinygltf::BufferView& view = model.bufferViews[static_cast<std::size_t>(keys.bufferView)];
+    glm::vec3 last;
+    std::memcpy(&last, model.buffers[0].data.data() + view.byteOffset + keys.byteOffset + 29 * sizeof(glm::vec3), sizeof last);
+    const glm::vec4 e = expected(20, 29);
+    EXPECT_EQ(last.x, e.x);
+    EXPECT_EQ(last.z, e.z);
+
+    // A channel the scene does not have is refused naming it, and nothing is written.
+    auto again = make(BackendKind::Cpu, {});
+    ASSERT_TRUE(again.ok());
+    auto missing = make_points_glb_sink(dir.file("none.glb"), "circles.velocities", "v", 60.0f);
+    BakeSink* missing_sinks[] = {missing.get()};
+    auto refused = bake(*again.value(), missing_sinks);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_NE(refused.error().message.find("no domain of the scene has a channel \"circles.velocities\""), std::string::npos)
+        << refused.error().message;
+    EXPECT_FALSE(std::filesystem::exists(dir.file("none.glb")));
+}
+
 // A shard of the Simulation cuts every domain, the test's too, by the same formula.
 TEST(DomainContract, ShardsCutTheTestDomain) {
     std::vector<std::unique_ptr<Domain>> domains;
@@ -388,6 +442,14 @@ TEST(DomainContract, BadDefinitionsAreRefusedNamingTheDomain) {
              return d;
          },
          "domain \"copycat\": buffer \"circles.angles\" is also a buffer of domain \"circles\""},
+        {"a channel name twice",
+         [&] {
+             std::vector<std::unique_ptr<Domain>> d;
+             d.push_back(circles());
+             d.push_back(std::make_unique<CirclesDomain>("squares", 10, 60.0f));
+             return d;
+         },
+         "domain \"squares\": channel \"circles.positions\" is also a channel of domain \"circles\""},
         {"an input nothing produces",
          [&] {
              std::vector<std::unique_ptr<Domain>> d;

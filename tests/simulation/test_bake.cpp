@@ -11,6 +11,7 @@
 #include "kodawari/export.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
+#include "kodawari/domains/trace.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
 

@@ -15,6 +15,7 @@
 #include "kodawari/shards.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
+#include "kodawari/domains/trace.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
 
@@ -42,8 +43,8 @@ std::unique_ptr<Simulation> open(const std::string& scene, std::uint32_t frames,
 // Bakes `scene` into the .glb files a single `kodawari run` writes at `out`.
 std::vector<std::unique_ptr<BakeSink>> glb_sinks(const BakeWorld& world, const std::string& out) {
     std::vector<std::unique_ptr<BakeSink>> sinks;
-    if (!world.birds->birds.empty()) sinks.push_back(make_birds_glb_sink(out));
-    if (world.rods != nullptr) sinks.push_back(make_chains_glb_sink(out));
+    if (!bird_world_of(world).birds.empty()) sinks.push_back(make_birds_glb_sink(out));
+    if (rod_scene_of(world) != nullptr) sinks.push_back(make_chains_glb_sink(out));
     return sinks;
 }
 
@@ -57,7 +58,7 @@ std::vector<BakeSink*> pointers(const std::vector<std::unique_ptr<BakeSink>>& si
 void bake_part(const std::string& scene, std::uint32_t frames, Shard shard, const std::string& part) {
     auto sim = open(scene, frames, shard);
     ASSERT_NE(sim, nullptr);
-    auto sink = make_part_sink(part, sim->shard());
+    auto sink = make_part_sink(part, *sim);
     BakeSink* sinks[] = {sink.get()};
     auto written = bake(*sim, sinks);
     ASSERT_TRUE(written.ok()) << written.error().message;
@@ -69,7 +70,7 @@ void expect_merge_is_single_bake(const char* scene_name, std::uint32_t frames, s
     const std::string scene = scene_path(scene_name);
     auto single = open(scene, frames);
     ASSERT_NE(single, nullptr);
-    const BakeWorld world{&single->scene(), &bird_world(*single), rod_scene(*single), frames, ""};
+    const BakeWorld world = make_simulation_source(*single)->world();
     auto single_sinks = glb_sinks(world, dir.file("single.glb"));
     ASSERT_TRUE(bake(*single, pointers(single_sinks)).ok());
 

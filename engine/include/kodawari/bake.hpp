@@ -2,58 +2,75 @@
 /// @file
 /// The bake pipeline: a Simulation run over all its frames, each frame handed as it is
 /// simulated to sinks that write outputs (glTF, traces). One loop for the `kodawari`
-/// command and embedding applications; a sink decides what it keeps in memory.
+/// command and embedding applications; a sink decides what it keeps in memory. It knows
+/// the domains through their channels alone (kodawari/domain.hpp): the sinks of the
+/// scene's domains are made by the domains' headers (make_birds_glb_sink() in
+/// kodawari/domains/birds.hpp, make_chains_glb_sink() and make_trace_sink() in
+/// kodawari/domains/chains.hpp).
 
+#include <cstddef>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string>
+#include <string_view>
 #include <vector>
 
-#include <kodawari/shared/birds.h>
-
 #include "kodawari/api.hpp"
-#include "birds/world.hpp"
+#include "domain.hpp"
 #include "export.hpp"
 #include "result.hpp"
-#include "rod_scene.hpp"
-#include "rods/chain_snapshot.hpp"
 #include "scene.hpp"
 
 namespace kodawari {
 
 class Simulation;
 
-/// What sinks are told before the first frame.
+/// What sinks are told before the first frame: the domains whose frames they get (a
+/// Simulation's, cut to its shard when it runs one; a merge's or a distributed bake's
+/// writer: the whole scene's, built with every random draw made). Sinks find theirs by
+/// name (the domain headers' accessors: kodawari/domains/).
 struct BakeWorld {
     const Scene* scene = nullptr;
-    const birds::BirdWorld* birds = nullptr;  ///< the flock (maybe without birds)
-    const RodScene* rods = nullptr;           ///< the characters' chains, or nullptr
-    std::uint32_t frames = 0;                 ///< frames the bake will hand over in all
-    std::string backend;                      ///< the backend kind's name (backend_name())
+    std::vector<const Domain*> domains;
+    std::uint32_t frames = 0;  ///< frames the bake will hand over in all
+    std::string backend;       ///< the backend kind's name (backend_name())
+    /// The domain named `name`; null when there is none.
+    [[nodiscard]] KODAWARI_API const Domain* domain(std::string_view name) const;
+    /// The channel named `name` of one of the domains; none when none has it.
+    [[nodiscard]] KODAWARI_API std::optional<ChannelInfo> channel(std::string_view name) const;
 };
 
-/// `count` consecutive frames from `first`, as simulated.
+/// One channel of a domain over the frames handed over (ChannelInfo): frames x elements
+/// x element_bytes bytes, frame-major.
+struct BakeChannel {
+    std::string name;
+    std::span<const std::byte> bytes;
+};
+
+/// `count` consecutive frames from `first`, as simulated: the channels some sink asked
+/// for (BakeNeeds) that a domain of the scene has.
 struct BakeFrames {
     std::uint32_t first = 0;
     std::uint32_t count = 0;
-    /// count x birds, frame-major; empty unless a sink needs them.
-    std::span<const gpu::BirdPose> bird_poses;
-    std::span<const gpu::BirdDiag> bird_diag;
-    /// The chains after frame `first` (count is 1 then); nullptr unless a sink needs them.
-    const ChainSnapshot* chains = nullptr;
+    std::vector<BakeChannel> channels;
+    /// The bytes of channel `name` (empty when it was not handed over).
+    [[nodiscard]] KODAWARI_API std::span<const std::byte> channel(std::string_view name) const;
+    /// The same as elements of T (the channel's element type; its size is asserted).
+    template <class T>
+    [[nodiscard]] std::span<const T> channel_as(std::string_view name) const {
+        const std::span<const std::byte> bytes = channel(name);
+        return {reinterpret_cast<const T*>(bytes.data()), bytes.size() / sizeof(T)};
+    }
 };
 
-/// What a sink needs read back from the backends each frame.
+/// What a sink needs read back from the domains each frame: channels by name
+/// (Domain::channels(); "birds.poses"). A name no domain of the scene has is handed over
+/// as nothing.
 struct BakeNeeds {
-    bool bird_poses = false;
-    bool bird_diag = false;
-    bool chains = false;
-    /// With chains: their blended rest shapes, view directions and weights too (traces);
-    /// part files and ranks hand them over only when asked.
-    bool chain_shapes = false;
+    std::vector<std::string> channels;
 };
 
 /// A file a sink wrote.
@@ -89,11 +106,12 @@ struct BakeOptions {
     std::function<Result<void>()> simulated;
 };
 
-/// Frames handed over per call: with chains one (they are read back after each frame),
-/// else as many as keep a call at most 2^18 bird poses (1 to 120), which bounds the memory
-/// of the frames in flight. Every source of a bake uses the scene's whole counts, so that
-/// shards and ranks step in the same chunks as a single process.
-[[nodiscard]] KODAWARI_API std::uint32_t bake_chunk_frames(std::size_t scene_birds, bool has_chains);
+/// Frames handed over per call: the fewest any of `domains` takes at once
+/// (Domain::max_bake_frames(): 1 with characters' chains, read back after each frame; for
+/// birds as many as keep a call at most 2^18 poses), at most kMaxBakeFrames. Every source
+/// of a bake asks the whole scene's domains, so that shards and ranks step in the same
+/// chunks as a single process.
+[[nodiscard]] KODAWARI_API std::uint32_t bake_chunk_frames(std::span<const Domain* const> domains);
 
 /// Where a bake's frames come from: a Simulation (bake(Simulation&, ...)), the part files
 /// of a sharded bake (kodawari/shards.hpp), or the ranks of a distributed bake
@@ -125,22 +143,12 @@ public:
 [[nodiscard]] KODAWARI_API Result<std::vector<BakeOutput>> bake(Simulation& sim, std::span<BakeSink* const> sinks,
                                                                 const BakeOptions& options = {});
 
-/// The flock as a `.glb` (write_birds_glb()'s file) at `path`, streamed (BirdGlbWriter):
-/// its memory does not grow with the frames. `compaction`: its keys compacted (default:
-/// not).
-[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path,
-                                                                         const GlbCompaction& compaction = {});
-
-/// The characters as `.glb` files: the procedural characters (and then the rigged ones
-/// too, as bones) in write_chains_glb's file at `path`, streamed (ChainsGlbWriter); each
-/// rigged character template in its own file (RiggedCrowdExport), `path` itself when it
-/// is the scene's only character, else `<path without .glb>-<character>.glb`. Its memory
-/// does not grow with the frames. `compaction`: every file's keys compacted (default:
-/// not).
-[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_chains_glb_sink(std::string path,
-                                                                          const GlbCompaction& compaction = {});
-
-/// A JSON Lines trace (docs/trace-format.md) of birds and chains at `path`.
-[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_trace_sink(std::string path);
+/// A domain's positions channel (elements of 3 or more floats, x y z first: glm::vec3 or
+/// glm::vec4) as write_points_glb()'s file at `path`, the points named `name`, keys at
+/// `fps`: the glTF of any domain whose instances are points, with no writer of its own.
+/// It keeps every frame until finish(). A channel the scene does not have, or of another
+/// element size, is an InvalidInput error at begin() naming it.
+[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_points_glb_sink(std::string path, std::string channel,
+                                                                          std::string name, float fps);
 
 }  // namespace kodawari

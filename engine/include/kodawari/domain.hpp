@@ -46,7 +46,13 @@ struct ChannelInfo {
     std::string name;
     std::uint32_t element_bytes = 0;
     std::uint64_t elements = 0;
+    /// A diagnostic (what a trace records: rest shapes, view weights), not needed to write
+    /// the domain's glTF; part files of a sharded bake do not keep them.
+    bool diagnostic = false;
 };
+
+/// The most frames a bake hands over at once (kodawari/bake.hpp, bake_chunk_frames()).
+inline constexpr std::uint32_t kMaxBakeFrames = 120;
 
 /// Where step() writes a channel's frames: frames x elements x element_bytes bytes,
 /// frame-major; a channel the domain does not have is an error naming it.
@@ -112,6 +118,10 @@ public:
     [[nodiscard]] virtual Result<void> step(std::uint32_t first, std::uint32_t frames, std::span<const ChannelOutput> out) = 0;
     /// The channels step() can fill.
     [[nodiscard]] virtual std::vector<ChannelInfo> channels() const { return {}; }
+    /// The most frames a bake should step at once (bounding what it holds per chunk),
+    /// from the whole scene's instances (scene_instances()), so that every shard steps in
+    /// the chunks of the whole.
+    [[nodiscard]] virtual std::uint32_t max_bake_frames() const { return kMaxBakeFrames; }
 
     /// What it runs on ("llvmpipe (LLVM 15.0.6, 256 bits)", "2 threads"); "" when it has
     /// nothing to run.
@@ -126,7 +136,7 @@ public:
     [[nodiscard]] virtual Result<void> draw_on(render::Renderer& renderer, DrawSource source, bool shared_device) = 0;
 };
 
-/// Checks that `domains` can run together: unique names and buffer names, every input
+/// Checks that `domains` can run together: unique names, channel and buffer names, every input
 /// produced by exactly one domain, no cycle. Returns the order to step them in (indices
 /// into `domains`, producers first, otherwise the given order). Errors (InvalidInput) name
 /// the domain and what is wrong.

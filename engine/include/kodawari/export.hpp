@@ -138,6 +138,16 @@ private:
                                                          std::span<const glm::quat> orientations,
                                                          const GlbCompaction& compaction = {});
 
+/// Points moving frame by frame as a `.glb`: a node named `name` holding one child node
+/// per point (named `<name>.<i>`, a box `size` m wide), each with a LINEAR translation
+/// animation over `frames` frames at `fps` (key k at k / fps s), the first frame its rest
+/// translation. `positions`: frames x points, frame-major, finite. The output that fits
+/// any domain whose instances are points (make_points_glb_sink() in kodawari/bake.hpp);
+/// it holds every frame in memory. Written atomically.
+[[nodiscard]] KODAWARI_API Result<void> write_points_glb(const std::string& path, const std::string& name, float fps,
+                                                         std::uint32_t frames, std::span<const glm::vec3> positions,
+                                                         float size = 0.05f);
+
 /// Streams write_chains_glb()'s file (the same bytes) frame by frame, so that memory does
 /// not grow with frames x joints: each frame's keys wait in a temporary file beside
 /// `path` (SpillFile, unlinked at once, so nothing is left behind) and finish() copies

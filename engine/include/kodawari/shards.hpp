@@ -23,9 +23,10 @@
 
 namespace kodawari {
 
-/// The sink of a shard's bake: its frames (what the `.glb` outputs need) in a part file
-/// at `path`. `shard` is the Simulation's (Simulation::shard()).
-[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_part_sink(std::string path, const ShardInfo& shard);
+/// The sink of a shard's bake of `sim`: its frames (every channel of its domains but the
+/// diagnostics: what the `.glb` outputs need) in a part file at `path`, with its shard
+/// (Simulation::shard()). `sim` is read when the sink is made.
+[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_part_sink(std::string path, const Simulation& sim);
 
 /// How open_parts() finds the scene.
 struct MergeOptions {

@@ -90,8 +90,8 @@ public:
     [[nodiscard]] static Result<std::unique_ptr<Simulation>> open(const std::string& path, const SimulationOptions& options);
     /// Opens the backends for a scene parsed (parse_scene) or built in code: the scene's
     /// domains (build_scene_domains()) and then `domains`, an application's own, stepped
-    /// after the scene's unless their inputs say otherwise. Bad definitions (two domains
-    /// or buffers of one name, an input nothing produces, a cycle) are InvalidInput errors
+    /// after the scene's unless their inputs say otherwise. Bad definitions (two domains,
+    /// channels or buffers of one name, an input nothing produces, a cycle) are InvalidInput errors
     /// naming the domain (order_domains()).
     [[nodiscard]] static Result<std::unique_ptr<Simulation>> create(Scene scene, const SimulationOptions& options,
                                                                     std::vector<std::unique_ptr<Domain>> domains = {});

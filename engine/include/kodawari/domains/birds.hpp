@@ -7,9 +7,11 @@
 #include <cstdint>
 #include <memory>
 #include <span>
+#include <string>
 #include <string_view>
 
 #include "kodawari/api.hpp"
+#include "kodawari/bake.hpp"
 #include "kodawari/birds/world.hpp"
 #include "kodawari/device_data.hpp"
 #include "kodawari/domain.hpp"
@@ -45,6 +47,15 @@ struct BirdTiming {
 
 /// The world of `domain` when it is a bird domain; null otherwise.
 [[nodiscard]] KODAWARI_API const birds::BirdWorld* bird_world_of(const Domain& domain);
+
+/// The birds of a bake's world (an empty world when it has none).
+[[nodiscard]] KODAWARI_API const birds::BirdWorld& bird_world_of(const BakeWorld& world);
+
+/// The flock as a `.glb` (write_birds_glb()'s file) at `path`, streamed (BirdGlbWriter):
+/// its memory does not grow with the frames. `compaction`: its keys compacted (default:
+/// not). Each user's bird model's birds go in a glTF of their own beside it.
+[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path,
+                                                                         const GlbCompaction& compaction = {});
 
 /// `sim`'s birds: the part of the scene's it runs (an empty world when it has none).
 [[nodiscard]] KODAWARI_API const birds::BirdWorld& bird_world(const Simulation& sim);

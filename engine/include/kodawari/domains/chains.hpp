@@ -16,14 +16,17 @@
 #include <cstdint>
 #include <memory>
 #include <optional>
+#include <string>
 #include <string_view>
 
 #include "kodawari/api.hpp"
+#include "kodawari/bake.hpp"
 #include "kodawari/domain.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/rod_scene.hpp"
 #include "kodawari/rods/chain_snapshot.hpp"
 #include "kodawari/rods/kinematics.hpp"
+#include "kodawari/rods/world.hpp"
 
 namespace kodawari {
 
@@ -31,6 +34,16 @@ class Simulation;
 
 /// The chain domain's name in a Simulation.
 inline constexpr std::string_view kChainDomain = "chains";
+/// Its channels (Simulation::step, the bake), each frame's ChainSnapshot arrays: per joint
+/// the positions (glm::vec3), orientations (glm::quat) and blended rest shape (glm::vec3),
+/// per chain the view direction (glm::vec3) and kChainWeights weights (float). The last
+/// three are diagnostics (traces).
+inline constexpr std::string_view kChainPositionsChannel = "chains.positions";
+inline constexpr std::string_view kChainOrientationsChannel = "chains.orientations";
+inline constexpr std::string_view kChainRestChannel = "chains.rest";
+inline constexpr std::string_view kChainViewDirectionsChannel = "chains.view_directions";
+inline constexpr std::string_view kChainWeightsChannel = "chains.weights";
+inline constexpr std::uint32_t kChainWeights = rods::kMaxViewExamples + 1;
 
 /// Time spent in the chain domain's backends. Frames 0 and 1 (loaded and put at rest,
 /// then the first step, each the first dispatch of its kernels, compiled then on
@@ -49,6 +62,21 @@ struct ChainTiming {
 /// The chains and kinematics of `domain` when it is a chain domain with characters; null
 /// otherwise.
 [[nodiscard]] KODAWARI_API const RodScene* rod_scene_of(const Domain& domain);
+
+/// The chains and kinematics of a bake's world; null without characters.
+[[nodiscard]] KODAWARI_API const RodScene* rod_scene_of(const BakeWorld& world);
+/// The chains' channels of `frames` (one frame) as a snapshot: the arrays of the channels
+/// handed over, the others emptied.
+KODAWARI_API void snapshot_from(const BakeFrames& frames, ChainSnapshot& out);
+
+/// The characters as `.glb` files: the procedural characters (and then the rigged ones
+/// too, as bones) in write_chains_glb's file at `path`, streamed (ChainsGlbWriter); each
+/// rigged character template in its own file (RiggedCrowdExport), `path` itself when it
+/// is the scene's only character, else `<path without .glb>-<character>.glb`. Its memory
+/// does not grow with the frames. `compaction`: every file's keys compacted (default:
+/// not).
+[[nodiscard]] KODAWARI_API std::unique_ptr<BakeSink> make_chains_glb_sink(std::string path,
+                                                                          const GlbCompaction& compaction = {});
 
 /// `sim`'s characters' chains and kinematics (the part of the scene's it runs); null
 /// without characters.

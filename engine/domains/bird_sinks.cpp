@@ -1,0 +1,92 @@
+// The birds' glTF sink of the bake (kodawari/domains/birds.hpp): BirdGlbWriter fed with
+// the "birds.poses" channel frame by frame.
+#include <algorithm>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "kodawari/bake.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/export.hpp"
+
+namespace kodawari {
+
+namespace {
+
+// Streams: memory stays BirdGlbWriter's, whatever the frames.
+class BirdsGlbSink final : public BakeSink {
+public:
+    BirdsGlbSink(std::string path, const GlbCompaction& compaction) : path_(std::move(path)), compaction_(compaction) {}
+
+    BakeNeeds needs() const override { return {{std::string(kBirdPosesChannel)}}; }
+
+    // The built-in wing types' birds at `path`; each user's model's birds in its own
+    // glTF beside it, `<path without .glb>-<model>.glb`, or at `path` itself when the
+    // scene's birds are all of one model (docs/bird-models.md).
+    Result<void> begin(const BakeWorld& world) override {
+        const birds::BirdWorld& birds = bird_world_of(world);
+        if (birds.birds.empty()) return {};
+        const auto& params = birds.birds;
+        const bool built_in = std::any_of(params.begin(), params.end(),
+                                          [](const gpu::BirdParams& p) { return p.ids.y < birds::kWingTypeCount; });
+        if (built_in || birds.models.empty()) {
+            auto writer = BirdGlbWriter::create(path_, birds, world.frames, compaction_);
+            if (!writer) return writer.error();
+            writer_.emplace(std::move(writer).value());
+        }
+        const std::string stem = path_.substr(0, path_.size() - (path_.ends_with(".glb") ? 4 : 0));
+        const bool alone = !built_in && birds.models.size() == 1;
+        for (std::size_t k = 0; k < birds.models.size(); ++k) {
+            const std::string path = alone ? path_ : stem + "-" + birds.models[k]->name + ".glb";
+            auto model = BirdModelExport::create(birds, k, path, compaction_);
+            if (!model) return model.error();
+            models_.push_back(std::move(model).value());
+        }
+        return {};
+    }
+
+    Result<void> consume(const BakeFrames& frames) override {
+        const auto poses = frames.channel_as<gpu::BirdPose>(kBirdPosesChannel);
+        if (writer_) KW_TRY(writer_->add_frames(poses));
+        for (BirdModelExport& model : models_) KW_TRY(model.add_frames(poses));
+        return {};
+    }
+
+    Result<std::vector<BakeOutput>> finish() override {
+        std::vector<BakeOutput> out;
+        if (writer_) {
+            KW_TRY(writer_->finish());
+            std::optional<GlbCompactionStats> stats;
+            if (compaction_.enabled) stats = writer_->compaction_stats();
+            out.push_back({path_, BakeOutput::Format::Glb, "", stats});
+        }
+        for (BirdModelExport& model : models_) {
+            KW_TRY(model.finish());
+            std::optional<GlbCompactionStats> model_stats;
+            if (compaction_.enabled) model_stats = model.compaction_stats();
+            out.push_back({model.path(), BakeOutput::Format::Glb, "user's bird model", model_stats});
+        }
+        return out;
+    }
+
+private:
+    std::string path_;
+    GlbCompaction compaction_;
+    std::optional<BirdGlbWriter> writer_;
+    std::vector<BirdModelExport> models_;
+};
+
+}  // namespace
+
+std::unique_ptr<BakeSink> make_birds_glb_sink(std::string path, const GlbCompaction& compaction) {
+    return std::make_unique<BirdsGlbSink>(std::move(path), compaction);
+}
+
+const birds::BirdWorld& bird_world_of(const BakeWorld& world) {
+    static const birds::BirdWorld none;
+    const Domain* domain = world.domain(kBirdDomain);
+    const birds::BirdWorld* birds = domain ? bird_world_of(*domain) : nullptr;
+    return birds ? *birds : none;
+}
+
+}  // namespace kodawari

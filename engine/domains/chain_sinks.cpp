@@ -1,0 +1,115 @@
+// The characters' glTF sink of the bake (kodawari/domains/chains.hpp): ChainsGlbWriter and
+// RiggedCrowdExport fed with the chains' channels frame by frame.
+#include <algorithm>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "kodawari/bake.hpp"
+#include "kodawari/domains/chains.hpp"
+#include "kodawari/export.hpp"
+
+namespace kodawari {
+
+namespace {
+
+class ChainsGlbSink final : public BakeSink {
+public:
+    ChainsGlbSink(std::string path, const GlbCompaction& compaction) : path_(std::move(path)), compaction_(compaction) {}
+
+    BakeNeeds needs() const override {
+        return {{std::string(kChainPositionsChannel), std::string(kChainOrientationsChannel)}};
+    }
+
+    Result<void> begin(const BakeWorld& world) override {
+        scene_ = rod_scene_of(world);
+        frames_ = world.frames;
+        if (scene_ == nullptr) return {};
+        const RodScene& rods = *scene_;
+        // Rigged characters go back into their own glTF, one file per character template
+        // (the path itself when it is the only character); procedural characters (and
+        // then the rigged ones too, as bones) into ChainsGlbWriter's file.
+        const bool any_procedural =
+            std::any_of(rods.characters.begin(), rods.characters.end(), [](const CharacterKinematics& k) { return !k.rig; });
+        const std::string stem = path_.substr(0, path_.size() - (path_.ends_with(".glb") ? 4 : 0));
+        for (std::uint32_t k = 0; k < rods.characters.size(); ++k) {
+            if (!rods.characters[k].rig) continue;
+            std::string path = !any_procedural && rods.characters.size() == 1 ? path_ : stem + "-" + rods.characters[k].name + ".glb";
+            auto e = RiggedCrowdExport::create(rods, k, path, compaction_);
+            if (!e) return e.error();
+            if (e.value().instances().empty()) continue;
+            rigged_.push_back(std::move(e).value());
+            rigged_paths_.push_back(std::move(path));
+        }
+        if (any_procedural) {
+            auto writer = ChainsGlbWriter::create(path_, rods, frames_, compaction_);
+            if (!writer) return writer.error();
+            procedural_.emplace(std::move(writer).value());
+        }
+        return {};
+    }
+
+    Result<void> consume(const BakeFrames& frames) override {
+        if (scene_ == nullptr) return {};
+        snapshot_from(frames, snapshot_);
+        const ChainSnapshot& snapshot = snapshot_;
+        for (RiggedCrowdExport& e : rigged_) KW_TRY(e.add_frame(frames.first, snapshot));
+        if (procedural_) KW_TRY(procedural_->add_frame(snapshot.positions, snapshot.orientations));
+        return {};
+    }
+
+    Result<std::vector<BakeOutput>> finish() override {
+        std::vector<BakeOutput> written;
+        for (std::size_t i = 0; i < rigged_.size(); ++i) {
+            KW_TRY(rigged_[i].finish(rigged_paths_[i]));
+            written.push_back({rigged_paths_[i], BakeOutput::Format::Glb, "the character's own skeleton and meshes",
+                               stats(rigged_[i].writer().compaction_stats())});
+        }
+        if (procedural_) {
+            KW_TRY(procedural_->finish());
+            written.push_back({path_, BakeOutput::Format::Glb, "", stats(procedural_->compaction_stats())});
+        }
+        return written;
+    }
+
+private:
+    [[nodiscard]] std::optional<GlbCompactionStats> stats(const GlbCompactionStats& s) const {
+        if (!compaction_.enabled) return std::nullopt;
+        return s;
+    }
+
+    std::string path_;
+    GlbCompaction compaction_;
+    const RodScene* scene_ = nullptr;
+    std::uint32_t frames_ = 0;
+    std::vector<RiggedCrowdExport> rigged_;
+    std::vector<std::string> rigged_paths_;
+    std::optional<ChainsGlbWriter> procedural_;  // streams: memory does not grow with the frames
+    ChainSnapshot snapshot_;
+};
+
+}  // namespace
+
+std::unique_ptr<BakeSink> make_chains_glb_sink(std::string path, const GlbCompaction& compaction) {
+    return std::make_unique<ChainsGlbSink>(std::move(path), compaction);
+}
+
+const RodScene* rod_scene_of(const BakeWorld& world) {
+    const Domain* domain = world.domain(kChainDomain);
+    return domain ? rod_scene_of(*domain) : nullptr;
+}
+
+void snapshot_from(const BakeFrames& frames, ChainSnapshot& out) {
+    const auto take = [&]<class T>(std::string_view name, std::vector<T>& into) {
+        const auto values = frames.channel_as<T>(name);
+        into.assign(values.begin(), values.end());
+    };
+    take(kChainPositionsChannel, out.positions);
+    take(kChainOrientationsChannel, out.orientations);
+    take(kChainRestChannel, out.rest);
+    take(kChainViewDirectionsChannel, out.view_directions);
+    take(kChainWeightsChannel, out.weights);
+}
+
+}  // namespace kodawari
