@@ -1,5 +1,6 @@
 #!/usr/bin/env python3
-"""Layering of the engine's component targets (engine/CMakeLists.txt, issue 19).
+"""Layering of the engine's component targets (engine/CMakeLists.txt, issue 19), and the
+layers that must name no domain (NEUTRAL, issue 31).
 
 No target's sources include, directly or through other headers, a header of a target it
 does not link, or a third-party header it does not link. A header belongs to the target
@@ -163,9 +164,37 @@ def check_installed(owner):
     return problems, len(listed)
 
 
+# The layers that know domains only through the domain contract (issue 31): no code in
+# them (comments aside) names a domain. The renderer (render/) and the compute layer
+# (compute/, gpu/) are not in this list yet: their domain-named parts (the chain, bird and
+# skinned layers; DeviceBuffer) are the issue's next steps.
+NEUTRAL = ["simulation/*.cpp", "simulation/*.hpp", "include/kodawari/simulation.hpp", "include/kodawari/bake.hpp",
+           "include/kodawari/domain.hpp", "include/kodawari/shards.hpp", "include/kodawari/distributed.hpp"]
+# Inside identifiers too (set_chains, RodBackend, birds_from); "produce" is not a rod.
+DOMAIN_WORDS = re.compile(r"bird|rod(?!uc)|chain|flock", re.I)
+
+
+def code_of(text):
+    """`text` without its comments and string literals' contents."""
+    text = re.sub(r"/\*.*?\*/", "", text, flags=re.S)
+    text = re.sub(r"//[^\n]*", "", text)
+    return re.sub(r'"(?:\\.|[^"\\])*"', '""', text)
+
+
+def check_neutral():
+    """Identifiers naming a domain in the neutral layers, as `file:line: word`."""
+    problems = []
+    for pattern in NEUTRAL:
+        for path in sorted(ENGINE.glob(pattern)):
+            for number, line in enumerate(code_of(path.read_text()).splitlines(), 1):
+                for m in DOMAIN_WORDS.finditer(line):
+                    problems.append(f"{path.relative_to(ENGINE)}:{number}: names a domain ({m.group(0)}): {line.strip()}")
+    return problems
+
+
 def check():
     owner = owners()
-    problems = []
+    problems = check_neutral()
 
     def scan(source, target, seen):
         if source in seen:
