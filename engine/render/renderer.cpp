@@ -18,6 +18,7 @@
 #include "compute/buffer.hpp"
 #include "gpu/graphics.hpp"
 #include "render/device_layers.hpp"
+#include "render/draw_recorder.hpp"
 #include "render/skinned_layer.hpp"
 
 namespace kodawari::render {
@@ -90,6 +91,16 @@ struct PresentTarget {
 
 struct Renderer::Impl {
     std::shared_ptr<gpu::VulkanContext> ctx;
+    DrawRecorder draws;  // what domains drew through render::Draw
+
+    // `list`, or a copy of it with what domains drew, sized for its camera.
+    [[nodiscard]] const DrawList& with_draws(const DrawList& list, std::optional<DrawList>& merged) const {
+        if (draws.empty()) return list;
+        merged.emplace(list);
+        draws.replay(*merged, std::clamp(static_cast<float>(list.height()) / 720.0f, 0.5f, 2.0f));
+        return *merged;
+    }
+
     std::uint32_t width = 0, height = 0;
     bool joints = false;  // RendererOptions::joints
     vk::SampleCountFlagBits samples = vk::SampleCountFlagBits::e1;
@@ -132,6 +143,19 @@ std::string Renderer::device() const { return impl_->ctx->info().name; }
 std::uint32_t Renderer::validation_messages() const { return impl_->ctx->validation_messages(); }
 std::shared_ptr<gpu::VulkanContext> Renderer::device_context() const { return impl_->ctx; }
 std::uint64_t Renderer::read_back_bytes() const { return impl_->ctx->read_back_bytes(); }
+
+void Renderer::lines(std::span<const glm::vec3> pairs, Rgba8 color) { impl_->draws.lines(pairs, color); }
+void Renderer::tubes(std::span<const glm::vec3> points, std::span<const Polyline> polylines, float min_px) {
+    impl_->draws.tubes(points, polylines, min_px);
+}
+void Renderer::capsules(std::span<const Capsule> capsules, Rgba8 color) { impl_->draws.capsules(capsules, color); }
+void Renderer::discs(std::span<const glm::vec3> centers, float radius, Rgba8 color, float min_px) {
+    impl_->draws.discs(centers, radius, color, min_px);
+}
+void Renderer::meshes(const MeshView& mesh, std::span<const glm::mat4> transforms, Rgba8 color) {
+    impl_->draws.meshes(mesh, transforms, color);
+}
+void Renderer::clear_draws() { impl_->draws.clear(); }
 
 Result<void> Renderer::clear_layers() {
     KW_TRY(set_chains(nullptr));
@@ -434,14 +458,16 @@ Result<Image> Renderer::render(const DrawList& list) {
     assert(list.width() == impl_->width && list.height() == impl_->height && "the draw list is for another size");
     Impl& r = *impl_;
     gpu::VulkanContext& c = *r.ctx;
-    KW_TRY(r.upload(list));
+    std::optional<DrawList> merged;
+    const DrawList& frame = r.with_draws(list, merged);
+    KW_TRY(r.upload(frame));
     KW_TRY(c.submit([&](const vk::raii::CommandBuffer& cmd) {
         // The previous frame's copy into the readback buffer (its fence waited for)
         // before this frame's copy overwrites it.
         const vk::MemoryBarrier readback_reuse{.srcAccessMask = vk::AccessFlagBits::eTransferWrite,
                                                .dstAccessMask = vk::AccessFlagBits::eTransferWrite};
         cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eTransfer, {}, readback_reuse, {}, {});
-        r.record_pass(cmd, list);
+        r.record_pass(cmd, frame);
         cmd.copyImageToBuffer(r.color->handle(), vk::ImageLayout::eTransferSrcOptimal, r.readback->handle(),
                               vk::BufferImageCopy{.bufferOffset = 0,
                                                   .imageSubresource = {.aspectMask = vk::ImageAspectFlagBits::eColor, .layerCount = 1},
@@ -461,8 +487,10 @@ Result<Image> Renderer::render(const DrawList& list) {
 Result<void> Renderer::draw(const DrawList& list) {
     assert(list.width() == impl_->width && list.height() == impl_->height && "the draw list is for another size");
     Impl& r = *impl_;
-    KW_TRY(r.upload(list));
-    return r.ctx->submit([&](const vk::raii::CommandBuffer& cmd) { r.record_pass(cmd, list); });
+    std::optional<DrawList> merged;
+    const DrawList& frame = r.with_draws(list, merged);
+    KW_TRY(r.upload(frame));
+    return r.ctx->submit([&](const vk::raii::CommandBuffer& cmd) { r.record_pass(cmd, frame); });
 }
 
 Result<void> Renderer::Impl::make_swapchain(std::uint32_t w, std::uint32_t h) {
@@ -551,10 +579,12 @@ Result<bool> Renderer::present(const DrawList& list, std::uint32_t window_width,
         }
         if (!acquired.value()) return false;
         const std::uint32_t index = *acquired.value();
-        KW_TRY(r.upload(list));
+        std::optional<DrawList> merged;
+        const DrawList& frame = r.with_draws(list, merged);
+        KW_TRY(r.upload(frame));
         w.cmd.reset();
         w.cmd.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
-        r.record_pass(w.cmd, list);
+        r.record_pass(w.cmd, frame);
         const vk::ImageSubresourceRange range{.aspectMask = vk::ImageAspectFlagBits::eColor, .levelCount = 1, .layerCount = 1};
         // The acquire semaphore is waited for at the transfer stage; the image's old
         // contents are not needed.

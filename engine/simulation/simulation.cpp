@@ -237,12 +237,15 @@ Result<void> Simulation::show_on(render::Renderer& renderer) {
     Impl& s = *impl_;
     // What another simulation showed on this renderer goes first.
     KW_TRY(renderer.clear_layers());
+    renderer.clear_draws();
     for (Domain* domain : s.domains) KW_TRY(domain->show_on(renderer, s.shares_device_with(renderer)));
     return {};
 }
 
 Result<void> Simulation::draw_on(render::Renderer& renderer, DrawSource source) {
     Impl& s = *impl_;
+    // What the domains drew through render::Draw for the previous frame goes.
+    renderer.clear_draws();
     for (Domain* domain : s.domains) KW_TRY(domain->draw_on(renderer, source, s.shares_device_with(renderer)));
     return {};
 }

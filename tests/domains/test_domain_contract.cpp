@@ -28,6 +28,7 @@
 #include "compute/compute.hpp"
 #include "kodawari/bake.hpp"
 #include "kodawari/domain.hpp"
+#include "kodawari/render/renderer.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
 
@@ -147,7 +148,16 @@ public:
     std::string device() const override { return device_ ? device_->info().name : std::string("1 thread"); }
     std::uint32_t validation_messages() const override { return device_ ? device_->validation_messages() : 0; }
     Result<void> show_on(render::Renderer&, bool) override { return {}; }
-    Result<void> draw_on(render::Renderer&, DrawSource, bool) override { return {}; }
+    // Through the neutral drawing interface: a disc per particle, where it is now.
+    Result<void> draw_on(render::Renderer& renderer, DrawSource, bool) override {
+        std::vector<glm::vec3> centers;
+        for (const glm::vec4& p : positions_) centers.emplace_back(p);
+        render::Draw& draw = renderer;
+        draw.discs(centers, 0.04f, kDiscColor, 3.0f);
+        return {};
+    }
+
+    static constexpr render::Rgba8 kDiscColor{250, 40, 200};
 
     [[nodiscard]] std::optional<std::uint32_t> current() const { return current_; }
     [[nodiscard]] const std::vector<glm::vec4>& positions() const { return positions_; }
@@ -394,6 +404,67 @@ TEST(DomainContract, TheTestDomainBakesToGltf) {
     EXPECT_NE(refused.error().message.find("no domain of the scene has a channel \"circles.velocities\""), std::string::npos)
         << refused.error().message;
     EXPECT_FALSE(std::filesystem::exists(dir.file("none.glb")));
+}
+
+// The test domain draws itself through render::Draw from Simulation::draw_on(): seen from
+// above, each particle's disc is in its colour at the pixel it projects to, and the next
+// frame's discs replace the last ones.
+TEST(DomainContract, TheTestDomainRenders) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    render::RendererOptions ropts;
+    ropts.width = 320;
+    ropts.height = 240;
+    ropts.validation = testing_support::validation_requested();
+    auto renderer = render::Renderer::create(ropts);
+    ASSERT_TRUE(renderer.ok()) << renderer.error().message;
+    constexpr std::uint32_t kCount = 50;
+    std::vector<std::unique_ptr<Domain>> domains;
+    domains.push_back(std::make_unique<CirclesDomain>("circles", kCount, 60.0f));
+    auto made = make(BackendKind::Cpu, std::move(domains));
+    ASSERT_TRUE(made.ok()) << made.error().message;
+    Simulation& sim = *made.value();
+    ASSERT_TRUE(sim.show_on(*renderer.value()).ok());
+
+    render::CameraView camera;
+    camera.position = {0.0f, 10.0f, 0.0f};
+    camera.target = {0.0f, 0.0f, 0.0f};
+    camera.orthographic = true;
+    camera.ortho_height = 12.0f;
+    const glm::mat4 vp = render::view_projection(camera, 320.0f / 240.0f);
+    const auto pixel = [&](const glm::vec4& p) {
+        const glm::vec4 clip = vp * glm::vec4(glm::vec3(p), 1.0f);
+        return glm::ivec2(static_cast<int>((clip.x / clip.w * 0.5f + 0.5f) * 320.0f),
+                          static_cast<int>((clip.y / clip.w * 0.5f + 0.5f) * 240.0f));
+    };
+    std::size_t coloured_before = 0;
+    for (std::uint32_t frame = 0; frame < 2; ++frame) {
+        ASSERT_TRUE(sim.step(1).ok());
+        ASSERT_TRUE(sim.draw_on(*renderer.value()).ok());
+        auto image = renderer.value()->render(render::DrawList(camera, 320, 240));
+        ASSERT_TRUE(image.ok()) << image.error().message;
+        for (std::uint32_t i : {0u, 17u, 42u}) {
+            const glm::ivec2 at = pixel(expected(i, frame));
+            ASSERT_TRUE(at.x > 0 && at.x < 320 && at.y > 0 && at.y < 240) << at.x << ", " << at.y;
+            EXPECT_EQ(image.value().at(static_cast<std::uint32_t>(at.x), static_cast<std::uint32_t>(at.y)),
+                      CirclesDomain::kDiscColor)
+                << "particle " << i << " at frame " << frame << ", pixel " << at.x << ", " << at.y;
+        }
+        EXPECT_NE(image.value().at(2, 2), CirclesDomain::kDiscColor);  // outside every circle
+        std::size_t coloured = 0;
+        for (std::uint32_t y = 0; y < 240; ++y) {
+            for (std::uint32_t x = 0; x < 320; ++x) coloured += image.value().at(x, y) == CirclesDomain::kDiscColor;
+        }
+        if (frame == 1) {
+            // The same discs moved, not more of them: within a fifth of frame 0's pixels
+            // (overlaps change as they move).
+            EXPECT_LT(static_cast<double>(coloured), 1.2 * static_cast<double>(coloured_before));
+        }
+        coloured_before = coloured;
+        // 50 discs of at least 1.5 pixels' radius (3 at 720 rows, 240 here): about 6 pixels
+        // each, 2 or more of them covered whole (exactly the colour) where none overlap.
+        EXPECT_GE(coloured, 100u);
+    }
+    EXPECT_EQ(renderer.value()->validation_messages(), 0u);
 }
 
 // A shard of the Simulation cuts every domain, the test's too, by the same formula.

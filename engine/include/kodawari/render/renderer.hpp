@@ -23,6 +23,7 @@
 #include <kodawari/shared/render.h>
 
 #include "kodawari/api.hpp"
+#include "draw.hpp"
 #include "kodawari/backend.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -34,11 +35,6 @@ struct RodScene;
 
 namespace kodawari::render {
 
-/// An 8-bit colour (sRGB values, written to the image as they are).
-struct Rgba8 {
-    std::uint8_t r = 0, g = 0, b = 0, a = 255;
-    friend bool operator==(const Rgba8&, const Rgba8&) = default;
-};
 
 /// The first chain's colour (chain 0 of every world: the one tests look for). Chains are
 /// lit (ChainStyle), so a pixel of a chain is this colour scaled by a light factor in
@@ -176,13 +172,15 @@ struct RendererOptions {
     std::function<Result<VkSurfaceKHR>(VkInstance)> create_surface{};
 };
 
-/// Draws draw lists offscreen on a Vulkan device with a graphics queue.
-class KODAWARI_API Renderer {
+/// Draws draw lists offscreen on a Vulkan device with a graphics queue; what domains draw
+/// through render::Draw (kodawari/render/draw.hpp) joins every frame's list until
+/// clear_draws().
+class KODAWARI_API Renderer final : public Draw {
 public:
     /// Creates the device, the targets and the pipelines. Fails with a readable reason
     /// when there is no Vulkan device or it cannot draw.
     [[nodiscard]] static Result<std::unique_ptr<Renderer>> create(const RendererOptions& options);
-    ~Renderer();
+    ~Renderer() override;
     Renderer(const Renderer&) = delete;
     Renderer& operator=(const Renderer&) = delete;
 
@@ -214,6 +212,16 @@ public:
     /// Bytes of kernel output read back to the host on this device so far (the
     /// simulation's, when it shares the device): the viewer's per-frame figure.
     [[nodiscard]] std::uint64_t read_back_bytes() const;
+
+    /// render::Draw: primitives that join every frame's draw list until clear_draws(),
+    /// sized for its camera at render time.
+    void lines(std::span<const glm::vec3> pairs, Rgba8 color) override;
+    void tubes(std::span<const glm::vec3> points, std::span<const Polyline> polylines, float min_px = 2.0f) override;
+    void capsules(std::span<const Capsule> capsules, Rgba8 color) override;
+    void discs(std::span<const glm::vec3> centers, float radius, Rgba8 color, float min_px = 2.0f) override;
+    void meshes(const MeshView& mesh, std::span<const glm::mat4> transforms, Rgba8 color) override;
+    /// Forgets what was drawn through render::Draw (Simulation::draw_on() starts with it).
+    void clear_draws();
 
     /// Draws no layer from now on (a simulation's show_on() starts with it, so that what
     /// another simulation showed goes).
