@@ -12,6 +12,7 @@
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/simulation.hpp"
+#include "kodawari/vulkan_embed.hpp"
 
 namespace kodawari {
 
@@ -102,6 +103,12 @@ public:
             last_poses_.assign(last.begin(), last.end());
         }
         return {};
+    }
+
+    // The frame's flapping and flight (record_simulate; the vulkan backend's barriers).
+    Result<void> record(std::uint32_t, VkCommandBuffer cmd) override {
+        if (!backend_) return {};
+        return record_simulate(*backend_, cmd, 1);
     }
 
     std::string device() const override { return backend_ ? backend_->device() : std::string(); }

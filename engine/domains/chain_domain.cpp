@@ -12,6 +12,7 @@
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/simulation.hpp"
+#include "kodawari/vulkan_embed.hpp"
 
 namespace kodawari {
 
@@ -95,6 +96,31 @@ public:
                 std::memcpy(channel.bytes.data() + std::size_t{f - first} * from.size(), from.data(), from.size());
             }
         }
+        return {};
+    }
+
+    // The frame's kinematic input made on the host (rigged characters' clips evaluated
+    // in the pose backends' own submissions, waited for) and uploaded through the rod
+    // backend's ring of frames in flight, then the step recorded (record_step). Frame 0
+    // loads the world, submitting to the queue and waiting, and records nothing.
+    Result<void> record(std::uint32_t f, VkCommandBuffer cmd) override {
+        if (!rods_) return {};
+        if (animator_->writes_inputs_on_device()) {
+            // The pose backends would overwrite the matrices that frames still in flight
+            // read on the device.
+            return make_error(Error::Kind::Unsupported,
+                              "domain \"chains\": since step() the rigged characters' rod input is written on the device "
+                              "from poses that each frame overwrites; record from frame 0, or make the Simulation with "
+                              "SimulationOptions::device_inputs = false");
+        }
+        KW_TRY(animator_->frame(f, input_));
+        if (view_camera_) input_.camera = *view_camera_;
+        if (f == 0) {
+            KW_TRY(rods_->load(scene_->world, input_));
+        } else {
+            KW_TRY(record_step(*rods_, cmd, input_));
+        }
+        current_ = f;
         return {};
     }
 

@@ -220,6 +220,23 @@ Result<void> Simulation::step(std::uint32_t frames, std::span<const ChannelOutpu
     return {};
 }
 
+Result<void> Simulation::record(VkCommandBuffer cmd) {
+    Impl& s = *impl_;
+    if (s.kind != BackendKind::Vulkan) {
+        return make_error(Error::Kind::InvalidInput, "Simulation::record: records Vulkan commands; this simulation runs on the " +
+                                                         std::string(backend_name(s.kind)) + " backend");
+    }
+    if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "Simulation::record: cmd is null");
+    const std::uint32_t frame = s.current ? *s.current + 1 : 0;
+    if (frame >= s.frames) {
+        return make_error(Error::Kind::InvalidInput, "Simulation::record: frame " + std::to_string(frame) +
+                                                         " is past the last frame (" + std::to_string(s.frames - 1) + ")");
+    }
+    for (Domain* domain : s.domains) KW_TRY(domain->record(frame, cmd));
+    s.current = frame;
+    return {};
+}
+
 Result<void> Simulation::seek(std::uint32_t target) {
     Impl& s = *impl_;
     target = std::min(target, s.frames - 1);

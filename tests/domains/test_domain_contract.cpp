@@ -28,8 +28,11 @@
 #include "compute/compute.hpp"
 #include "kodawari/bake.hpp"
 #include "kodawari/domain.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/simulation.hpp"
+#include "kodawari/vulkan_embed.hpp"
+#include "domains/app_device.hpp"
 #include "test_support.hpp"
 
 using namespace kodawari;
@@ -144,6 +147,24 @@ public:
         }
         return {};
     }
+
+    // The kernel into the application's command buffer (a recording that borrows it),
+    // between barriers against the application's work before and after.
+    Result<void> record(std::uint32_t frame, VkCommandBuffer cmd) override {
+        if (kind_ != BackendKind::Vulkan) return make_error(Error::Kind::Unsupported, "circles: record needs vulkan");
+        auto recording = compute::Recording::borrow(*device_, cmd, nullptr);
+        compute::barrier(recording, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
+        struct Push {
+            std::uint32_t count;
+            float dt;
+        } push{static_cast<std::uint32_t>(params_.size()), frame == 0 ? 0.0f : dt_};
+        kernel_->dispatch(recording, std::as_bytes(std::span(&push, 1)), (push.count + 63) / 64);
+        compute::barrier(recording, compute::Stage::Compute, compute::Stage::Compute | compute::Stage::Transfer);
+        current_ = frame;
+        return {};
+    }
+    // The positions on the device, after the application's submission completed.
+    Result<void> read_back() { return compute::download(*device_, gpu_[2], std::as_writable_bytes(std::span(positions_))); }
 
     std::string device() const override { return device_ ? device_->info().name : std::string("1 thread"); }
     std::uint32_t validation_messages() const override { return device_ ? device_->validation_messages() : 0; }
@@ -465,6 +486,87 @@ TEST(DomainContract, TheTestDomainRenders) {
         EXPECT_GE(coloured, 100u);
     }
     EXPECT_EQ(renderer.value()->validation_messages(), 0u);
+}
+
+// Simulation::record: the test domain's frames recorded into an application's command
+// buffers (its own instance and device, adopted; three frames in flight) are the frames
+// step() gives on the same device, bit for bit; the scene's domains record with it.
+TEST(DomainContract, TheTestDomainRecordsIntoTheApplicationsCommandBuffers) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    testing_support::AppDevice app;
+    ASSERT_TRUE(app.ok());
+    auto device = adopt_vulkan_device(app.handles());
+    ASSERT_TRUE(device.ok()) << device.error().message;
+    const auto on_app_device = [&]() {
+        std::vector<std::unique_ptr<Domain>> domains;
+        domains.push_back(std::make_unique<CirclesDomain>("circles", kParticles, 60.0f));
+        SimulationOptions options;
+        options.backend = BackendKind::Vulkan;
+        options.options.context = device.value();
+        return Simulation::create(empty_scene(0.5f), options, std::move(domains));
+    };
+    auto recorded = on_app_device();
+    auto stepped = on_app_device();
+    ASSERT_TRUE(recorded.ok() && stepped.ok()) << (recorded.ok() ? stepped.error().message : recorded.error().message);
+    for (std::uint32_t k = 0; k < 12; ++k) {
+        VkCommandBuffer cmd = app.begin(k);
+        ASSERT_TRUE(recorded.value()->record(cmd).ok());
+        app.submit(k);
+    }
+    app.wait_all();
+    EXPECT_EQ(recorded.value()->frame(), 11u);
+    ASSERT_TRUE(stepped.value()->step(12).ok());
+    auto* a = dynamic_cast<CirclesDomain*>(recorded.value()->domain("circles"));
+    auto* b = dynamic_cast<CirclesDomain*>(stepped.value()->domain("circles"));
+    ASSERT_TRUE(a->read_back().ok());
+    ASSERT_EQ(a->positions().size(), b->positions().size());
+    EXPECT_EQ(std::memcmp(a->positions().data(), b->positions().data(), a->positions().size() * sizeof(glm::vec4)), 0);
+    const glm::vec4 e = expected(7, 11);
+    EXPECT_NEAR(a->positions()[7].x, e.x, 2e-3f);  // the bound of the first test
+    EXPECT_NEAR(a->positions()[7].z, e.z, 2e-3f);
+    // Misuse: a null command buffer; the cpu backends record nothing.
+    EXPECT_FALSE(recorded.value()->record(VK_NULL_HANDLE).ok());
+    auto cpu = make(BackendKind::Cpu, {});
+    ASSERT_TRUE(cpu.ok());
+    const auto refused = cpu.value()->record(app.begin(12));
+    ASSERT_FALSE(refused.ok());
+    EXPECT_NE(refused.error().message.find("runs on the cpu backend"), std::string::npos) << refused.error().message;
+    app.submit(12);
+    app.wait_all();
+    EXPECT_EQ(app.messages(), 0u);
+    EXPECT_EQ(recorded.value()->validation_messages(), 0u);
+}
+
+// The scene's own domains record too: the chains of a scene recorded frame by frame into
+// the application's command buffers are the chains step() gives on the same device.
+TEST(DomainContract, TheScenesDomainsRecordAsTheyStep) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    testing_support::AppDevice app;
+    ASSERT_TRUE(app.ok());
+    auto device = adopt_vulkan_device(app.handles());
+    ASSERT_TRUE(device.ok()) << device.error().message;
+    SimulationOptions options;
+    options.backend = BackendKind::Vulkan;
+    options.options.context = device.value();
+    options.frames = 8;
+    const std::string scene = std::string(KODAWARI_SOURCE_DIR) + "/scenes/ponytail.json";
+    auto recorded = Simulation::open(scene, options);
+    auto stepped = Simulation::open(scene, options);
+    ASSERT_TRUE(recorded.ok() && stepped.ok());
+    for (std::uint32_t k = 0; k < 8; ++k) {
+        VkCommandBuffer cmd = app.begin(k);
+        ASSERT_TRUE(recorded.value()->record(cmd).ok());
+        app.submit(k);
+    }
+    app.wait_all();
+    ASSERT_TRUE(stepped.value()->step(8).ok());
+    ChainSnapshot a, b;
+    ASSERT_TRUE(read_chains(*recorded.value(), a).ok());
+    ASSERT_TRUE(read_chains(*stepped.value(), b).ok());
+    ASSERT_FALSE(a.positions.empty());
+    ASSERT_EQ(a.positions.size(), b.positions.size());
+    EXPECT_EQ(std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(glm::vec3)), 0);
+    EXPECT_EQ(app.messages(), 0u);
 }
 
 // A shard of the Simulation cuts every domain, the test's too, by the same formula.

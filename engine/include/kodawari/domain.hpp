@@ -20,6 +20,8 @@
 #include <string_view>
 #include <vector>
 
+#include <vulkan/vulkan_core.h>
+
 #include "kodawari/api.hpp"
 #include "backend.hpp"
 #include "result.hpp"
@@ -116,6 +118,17 @@ public:
     /// Simulates frames [first, first + frames); `out` names channels to fill (each
     /// frames x channel elements).
     [[nodiscard]] virtual Result<void> step(std::uint32_t first, std::uint32_t frames, std::span<const ChannelOutput> out) = 0;
+    /// step() of one frame (`frame`) recorded into `cmd`, an application's command buffer
+    /// in the recording state on the Simulation's device (an adopted one,
+    /// kodawari/vulkan_embed.hpp), between barriers that order it after the application's
+    /// earlier work and before its later work (docs/embedding.md, "Synchronization").
+    /// Nothing is submitted or waited for, except what a domain documents (loading its
+    /// world at frame 0). Domains that cannot record say so (Unsupported, the default).
+    [[nodiscard]] virtual Result<void> record(std::uint32_t frame, VkCommandBuffer cmd) {
+        (void)frame;
+        (void)cmd;
+        return make_error(Error::Kind::Unsupported, "domain \"" + std::string(name()) + "\" cannot record into a command buffer");
+    }
     /// The channels step() can fill.
     [[nodiscard]] virtual std::vector<ChannelInfo> channels() const { return {}; }
     /// The most frames a bake should step at once (bounding what it holds per chunk),

@@ -122,6 +122,17 @@ public:
     /// frame_count() in all. `out` names domains' channels to fill with every frame
     /// simulated (ChannelOutput; a name no domain has is an error).
     [[nodiscard]] Result<void> step(std::uint32_t frames = 1, std::span<const ChannelOutput> out = {});
+    /// The next frame of every domain recorded into `cmd`, a command buffer of the
+    /// application's in the recording state, on the device the Simulation runs on (the
+    /// vulkan backends, SimulationOptions::options.context an adopted device:
+    /// kodawari/vulkan_embed.hpp), each domain's work between barriers against the
+    /// application's (docs/embedding.md). Nothing is submitted or waited for but what the
+    /// domains say (Domain::record()); the frame's state is in the domains' buffers once
+    /// the application's submission completed, and the application keeps at most
+    /// VulkanDeviceHandles::frames_in_flight frames recorded ahead of the GPU. Errors: not
+    /// the vulkan backends, a null `cmd`, past the last frame (InvalidInput), a domain that
+    /// cannot record (Unsupported, naming it).
+    [[nodiscard]] Result<void> record(VkCommandBuffer cmd);
     /// Simulates up to frame `target` (clamped to the last): forwards from the current
     /// frame, or again from frame 0 when going back. Nothing when it is the current one.
     [[nodiscard]] Result<void> seek(std::uint32_t target);
