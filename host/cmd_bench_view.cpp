@@ -10,7 +10,7 @@
 #include "bench_common.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"

@@ -10,7 +10,7 @@
 #include "commands.hpp"
 #include "kodawari/bake.hpp"
 #include "kodawari/distributed.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/shards.hpp"
 #ifdef KODAWARI_WITH_MPI

@@ -12,7 +12,7 @@
 #include <string>
 
 #include "commands.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/scene_edit.hpp"
 #include "kodawari/sketch_key.hpp"

@@ -9,7 +9,7 @@
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/compare.hpp"
 #include "kodawari/rod_backend.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 
 namespace kodawari::cli {

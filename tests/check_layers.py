@@ -82,7 +82,6 @@ PUBLIC_OWNERS = {
     "vulkan_embed.hpp": "vulkan",
     "gpu_info.hpp": "vulkan",
     "scene.hpp": "io",
-    "rod_scene.hpp": "io",
     "export.hpp": "io",
     "scene_edit.hpp": "io",
     "sketch_key.hpp": "io",

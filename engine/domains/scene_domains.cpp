@@ -5,7 +5,7 @@
 #include "kodawari/domain.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 
 namespace kodawari {

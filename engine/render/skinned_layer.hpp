@@ -18,7 +18,7 @@
 #include "gpu/graphics.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/rod_backend.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 
 namespace kodawari::render {
 

@@ -21,7 +21,7 @@
 #include <kodawari/rod_backend.hpp>
 
 #include "test_support.hpp"
-#include <kodawari/rod_scene.hpp>
+#include <kodawari/scene.hpp>
 #include <kodawari/rods/kinematics.hpp>
 #include <kodawari/rods/solver.hpp>
 #include <kodawari/rods/world.hpp>

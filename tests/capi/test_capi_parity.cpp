@@ -23,7 +23,7 @@
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/rod_backend.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 #include "test_support.hpp"
 #include "vulkan_app_support.hpp"

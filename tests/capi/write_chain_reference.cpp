@@ -11,7 +11,7 @@
 #include <string>
 
 #include "kodawari/rod_backend.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 
 using namespace kodawari;

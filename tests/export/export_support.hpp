@@ -32,7 +32,7 @@
 #include "kodawari/birds/world.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/rod_backend.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 
 
 namespace kodawari::export_test {

@@ -21,7 +21,7 @@
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/render/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 #include "render_support.hpp"
 #include "test_support.hpp"

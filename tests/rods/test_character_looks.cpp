@@ -18,7 +18,7 @@
 
 #include <kodawari/gpu_info.hpp>
 #include <kodawari/rod_backend.hpp>
-#include <kodawari/rod_scene.hpp>
+#include <kodawari/scene.hpp>
 #include <kodawari/rods/kinematics.hpp>
 #include <kodawari/rods/solver.hpp>
 #include <kodawari/rods/world.hpp>

@@ -16,7 +16,7 @@
 
 #include <kodawari/backend_factory.hpp>
 #include <kodawari/rod_backend.hpp>
-#include <kodawari/rod_scene.hpp>
+#include <kodawari/scene.hpp>
 #include <kodawari/rods/keyed.hpp>
 #include <kodawari/rods/world.hpp>
 #include <kodawari/scene.hpp>

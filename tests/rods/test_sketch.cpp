@@ -14,7 +14,7 @@
 
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/rod_backend.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/scene_edit.hpp"
 #include "test_support.hpp"

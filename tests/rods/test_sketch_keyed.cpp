@@ -15,7 +15,7 @@
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
 
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/scene_edit.hpp"
 #include "kodawari/sketch_key.hpp"

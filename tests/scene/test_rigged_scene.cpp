@@ -28,7 +28,7 @@
 #include "kodawari/gltf/import.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
 #include "kodawari/rod_backend.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 #include "test_support.hpp"
 

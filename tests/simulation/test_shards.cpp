@@ -11,7 +11,7 @@
 #include <vector>
 
 #include "kodawari/bake.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/shards.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"

@@ -20,7 +20,7 @@
 #include "birds/world.hpp"
 #include "gltf/character.hpp"
 #include "result.hpp"
-#include "rod_scene.hpp"
+#include "scene.hpp"
 #include "rods/chain_snapshot.hpp"
 
 namespace kodawari {

@@ -17,8 +17,9 @@
 #include "birds/world.hpp"
 #include "gltf/character.hpp"
 #include "result.hpp"
-#include "rods/kinematics.hpp"
 #include "rods/keyed.hpp"
+#include "rods/kinematics.hpp"
+#include "rods/rod_scene.hpp"
 #include "rods/shape.hpp"
 #include "rods/solver.hpp"
 #include "rods/view.hpp"
@@ -226,5 +227,12 @@ struct KODAWARI_API Scene {
 /// Builds the backends' data: routes, arc-length tables and every bird's constants.
 /// Deterministic: the same scene gives the same bits.
 [[nodiscard]] KODAWARI_API Result<birds::BirdWorld> build_bird_world(const Scene& scene);
+
+/// Builds the rod data of `scene`'s characters and crowds (SPEC A, C): the RodScene of
+/// kodawari/rods/rod_scene.hpp. Deterministic: the same scene gives the same bits (on the
+/// same build and platform: the motions use the C library's sin and cos). A scene without
+/// characters gives an empty RodScene (no chains). Errors (InvalidInput) name the file and
+/// the JSON path.
+[[nodiscard]] KODAWARI_API Result<RodScene> build_rod_scene(const Scene& scene);
 
 }  // namespace kodawari

@@ -23,7 +23,7 @@
 #include "kodawari/bake.hpp"
 #include "kodawari/domain.hpp"
 #include "kodawari/result.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/rods/chain_snapshot.hpp"
 #include "kodawari/rods/kinematics.hpp"
 #include "kodawari/rods/world.hpp"

@@ -17,7 +17,7 @@
 #include "kodawari/birds/world.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/rod_backend.hpp"
-#include "kodawari/rod_scene.hpp"
+#include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 
 namespace kodawari::render {
