@@ -76,10 +76,29 @@ def library_candidates():
     return [os.path.join(here, _config.LIBRARY)]
 
 
+def _preload(folder):
+    """Loads the libraries _config.PRELOAD names from `folder`: once loaded, the dynamic
+    loader takes them for the library's dependencies of the same SONAME. One of them may
+    need another (tinygltf needs stb): those that fail are tried again after the rest."""
+    left = list(getattr(_config, "PRELOAD", ()))
+    while left:
+        failed, errors = [], []
+        for name in left:
+            try:
+                ctypes.CDLL(os.path.join(folder, name))
+            except OSError as error:
+                failed.append(name)
+                errors.append(str(error))
+        if len(failed) == len(left):
+            raise ImportError("kodawari: cannot load " + "; ".join(errors))
+        left = failed
+
+
 def _load():
     tried = []
     for path in library_candidates():
         if os.path.exists(path):
+            _preload(os.path.dirname(path))
             return ctypes.CDLL(path), path
         tried.append(path)
     raise ImportError(f"kodawari: {_config.LIBRARY} not found (looked for {', '.join(tried)}); "

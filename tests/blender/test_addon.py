@@ -1,0 +1,181 @@
+"""ctest `blender_addon`: the add-on (blender/kodawari_blender) installed from
+kodawari_blender.zip alone into an empty user scripts folder and run headless:
+
+    blender -b --factory-startup --python-exit-code 1 -P test_addon.py -- kodawari_blender.zip
+
+- bad selections (nothing, a mesh, a poly curve, a handle on its point) report an error
+  and change nothing;
+- a Bezier curve of three control points gives N armatures (N = 7, not a multiple of
+  anything) with one action each, in a new collection, keyed from the scene's start frame;
+  every bird's Body follows the curve within 0.05 m with spread 0 (its wingbeat bob), and
+  stays within the spread's reach of it with spread 3.
+"""
+import math
+import os
+import sys
+
+import bpy
+from mathutils import Vector
+
+zip_path = sys.argv[sys.argv.index("--") + 1]
+failures = []
+
+
+def check(condition, what):
+    if not condition:
+        failures.append(what)
+        print("FAILED:", what, flush=True)
+
+
+def counts():
+    return {name: len(getattr(bpy.data, name)) for name in ("objects", "armatures", "meshes", "actions", "collections")}
+
+
+def expect_error(needle, **properties):
+    before = counts()
+    try:
+        bpy.ops.kodawari.flock_from_curve(**properties)
+        check(False, f"no error for {needle!r}")
+    except RuntimeError as error:  # an operator's ERROR report, run from a script
+        check(needle in str(error), f"the error {str(error)!r} does not say {needle!r}")
+        print(f"refused: {str(error).strip()}")
+    check(counts() == before, f"a refused call changed the file: {before} -> {counts()}")
+
+
+bpy.ops.wm.read_factory_settings(use_empty=True)
+scripts = os.environ.get("BLENDER_USER_SCRIPTS", "")
+check(scripts != "", "BLENDER_USER_SCRIPTS is not set: the test would install into the user's own folder")
+bpy.ops.preferences.addon_install(filepath=zip_path, overwrite=True)
+bpy.ops.preferences.addon_enable(module="kodawari_blender")
+import kodawari_blender  # noqa: E402
+from kodawari_blender import flock  # noqa: E402
+
+# The zip's own package and library, not the build tree's.
+check(flock.kodawari.library_path.startswith(os.path.realpath(scripts)) or
+      flock.kodawari.library_path.startswith(scripts), f"library from {flock.kodawari.library_path}")
+print(f"add-on from {os.path.dirname(kodawari_blender.__file__)}, library {flock.kodawari.library_path}")
+
+scene = bpy.context.scene
+scene.render.fps = 24
+scene.frame_start = 1
+scene.frame_end = 48
+
+# ---- Bad selections.
+expect_error("select one or more Bezier curve")
+bpy.ops.mesh.primitive_cube_add()
+expect_error("select one or more Bezier curve")
+poly = bpy.data.curves.new("poly", "CURVE")
+spline = poly.splines.new("POLY")
+spline.points.add(2)
+poly_object = bpy.data.objects.new("poly", poly)
+scene.collection.objects.link(poly_object)
+bpy.ops.object.select_all(action="DESELECT")
+poly_object.select_set(True)
+expect_error("is a poly spline")
+
+# ---- A route of three control points, moved by its object.
+curve = bpy.data.curves.new("route", "CURVE")
+curve.dimensions = "3D"
+spline = curve.splines.new("BEZIER")
+spline.bezier_points.add(2)
+points = [((0, 0, 20), (-10, 0, 20), (10, 0, 20)),
+          ((40, 10, 25), (30, 8, 24), (50, 12, 26)),
+          ((80, 0, 20), (70, 2, 20), (90, -2, 20))]
+for point, (co, left, right) in zip(spline.bezier_points, points):
+    point.handle_left_type = point.handle_right_type = "FREE"
+    point.co, point.handle_left, point.handle_right = co, left, right
+route = bpy.data.objects.new("route", curve)
+route.location = (5, -3, 0)
+scene.collection.objects.link(route)
+bpy.ops.object.select_all(action="DESELECT")
+route.select_set(True)
+bpy.context.view_layer.objects.active = route
+bpy.context.view_layer.update()
+
+# A handle on its point: refused, naming it.
+saved = spline.bezier_points[1].handle_right.copy()
+spline.bezier_points[1].handle_right = spline.bezier_points[1].co
+expect_error("point 1: a handle sits on its point")
+spline.bezier_points[1].handle_right = saved
+bpy.context.view_layer.update()
+
+# The curve in world space, sampled densely (5000 points per segment: 1 cm apart on these
+# ~45 m segments, so sampling adds at most 5 mm to a distance).
+world = route.matrix_world
+control = []
+bp = spline.bezier_points
+for k in range(len(bp) - 1):
+    control.append([world @ bp[k].co, world @ bp[k].handle_right, world @ bp[k + 1].handle_left, world @ bp[k + 1].co])
+samples = []
+for b0, b1, b2, b3 in control:
+    for i in range(5001):
+        t = i / 5000
+        u = 1 - t
+        samples.append(u * u * u * b0 + 3 * u * u * t * b1 + 3 * u * t * t * b2 + t * t * t * b3)
+
+
+def distance_to_curve(p):
+    return min((p - s).length for s in samples)
+
+
+def bodies(armatures, frame):
+    scene.frame_set(frame)
+    out = []
+    for arm in armatures:
+        body = next(b for b in arm.pose.bones if b.name.endswith("/Body"))
+        out.append((arm.matrix_world @ body.matrix).translation.copy())
+    return out
+
+
+def make_flock(**properties):
+    bpy.ops.object.select_all(action="DESELECT")
+    route.select_set(True)
+    before = {o.as_pointer() for o in bpy.data.objects}
+    result = bpy.ops.kodawari.flock_from_curve(**properties)
+    check(result == {"FINISHED"}, f"flock_from_curve returned {result}")
+    new = [o for o in bpy.data.objects if o.as_pointer() not in before]
+    return [o for o in new if o.type == "ARMATURE"], new
+
+
+N = 7
+armatures, new = make_flock(count=N, wing_type="GULL", spread=0.0, frames=48)
+check(len(armatures) == N, f"{len(armatures)} armatures, expected {N}")
+actions = [a.animation_data.action for a in armatures if a.animation_data and a.animation_data.action]
+check(len(actions) == N and len(set(actions)) == N, f"{len(actions)} actions for {N} armatures")
+collections = {c.name for o in new for c in o.users_collection}
+check(len(collections) == 1 and next(iter(collections)).startswith("Flock route"), f"collections {collections}")
+keys = [k.co.x for a in actions for f in a.fcurves for k in f.keyframe_points]
+check(min(keys) == 1 and max(keys) == 48, f"keys from frame {min(keys)} to {max(keys)}, expected 1 to 48")
+worst = 0.0
+for frame in (1, 10, 24, 37, 48):
+    for p in bodies(armatures, frame):
+        worst = max(worst, distance_to_curve(p))
+print(f"spread 0: {N} bodies within {worst:.4f} m of the curve at frames 1 to 48")
+# The Body flies on the route, bobbing with the wingbeat by up to 0.05 body lengths x the
+# amplitude (docs/flight-modes.md F.5, KW_BOB_HEIGHT; a gull's: ~0.02 m), and the sampling
+# above adds up to 5 mm: 0.05 m bounds both (measured: 0.024 m).
+check(worst < 0.05, f"a body is {worst} m off the curve")
+
+armatures, new = make_flock(count=N, wing_type="PIGEON", spread=3.0, frames=48, seed=5)
+reach = math.sqrt(3 ** 2 + 3 ** 2 + 1.5 ** 2)
+worst = max(distance_to_curve(p) for frame in (1, 30) for p in bodies(armatures, frame))
+print(f"spread 3: bodies within {worst:.3f} m of the curve (the offsets reach {reach:.3f} m)")
+check(worst < reach + 0.05 and worst > 0.1, f"spread 3: a body {worst} m off the curve")
+
+# Take-off and landing: perched on the curve's start point on the first frame and on its end point
+# on the last (1 cm: float rounding of ~90 m coordinates; measured 3e-6 m), the
+# last (at 12 m/s with a slow take-off and landing, 20 s, 480 frames, is ample for these ~90 m).
+armatures, new = make_flock(count=3, wing_type="GULL", spread=0.0, frames=480, takeoff=True, landing=True)
+start, end = control[0][0], control[-1][3]
+first = max((p - start).length for p in bodies(armatures, 1))
+last = max((p - end).length for p in bodies(armatures, 480))
+print(f"take-off and landing: bodies {first:.3f} m from the start at frame 1, {last:.3f} m from the end at frame 480")
+check(first < 0.01 and last < 0.01, f"perches: {first} m from the start, {last} m from the end")
+spline.use_cyclic_u = True
+bpy.ops.object.select_all(action="DESELECT")
+route.select_set(True)
+expect_error("take-off and landing need an open curve", takeoff=True)
+spline.use_cyclic_u = False
+
+print(f"test_addon: {len(failures)} failures")
+sys.exit(1 if failures else 0)
