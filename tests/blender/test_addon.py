@@ -162,9 +162,9 @@ worst = max(distance_to_curve(p) for frame in (1, 30) for p in bodies(armatures,
 print(f"spread 3: bodies within {worst:.3f} m of the curve (the offsets reach {reach:.3f} m)")
 check(worst < reach + 0.05 and worst > 0.1, f"spread 3: a body {worst} m off the curve")
 
-# Take-off and landing: perched on the curve's start point on the first frame and on its end point
-# on the last (1 cm: float rounding of ~90 m coordinates; measured 3e-6 m), the
-# last (at 12 m/s with a slow take-off and landing, 20 s, 480 frames, is ample for these ~90 m).
+# Take-off and landing: perched on the curve's first point at the first frame and on its
+# last point at the last (within 1 cm, float rounding of ~90 m coordinates; measured 3e-6
+# m). 480 frames (20 s) leave the gulls time to fly the ~90 m at 12 m/s and land.
 armatures, new = make_flock(count=3, wing_type="GULL", spread=0.0, frames=480, takeoff=True, landing=True)
 start, end = control[0][0], control[-1][3]
 first = max((p - start).length for p in bodies(armatures, 1))
