@@ -154,6 +154,21 @@ KODAWARI_C_API kodawari_status kodawari_simulation_bird_poses(kodawari_simulatio
     });
 }
 
+KODAWARI_C_API kodawari_status kodawari_simulation_bird_tail_spreads(kodawari_simulation* sim, float* out,
+                                                                     size_t capacity) {
+    return guard("kodawari_simulation_bird_tail_spreads", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_stepped(*sim);
+        const std::size_t birds = sim->poses.size();
+        require_array(out, birds, "out", "the bird count");
+        if (capacity < birds) {
+            reject(KODAWARI_BUFFER_TOO_SMALL, "out: holds " + std::to_string(capacity) + " floats, needs " +
+                                                  std::to_string(birds) + " (one per bird)");
+        }
+        for (std::size_t i = 0; i < birds; ++i) out[i] = sim->poses[i].position.w;
+    });
+}
+
 KODAWARI_C_API kodawari_status kodawari_simulation_read_chains(kodawari_simulation* sim, const kodawari_chain_output* out) {
     return guard("kodawari_simulation_read_chains", sim ? &sim->message : nullptr, [&] {
         require_sim(sim);

@@ -176,6 +176,18 @@ class Simulation:
             _check(_native.lib.kodawari_simulation_bird_poses(handle, _native.ctypes.byref(out)), handle)
             return poses
 
+    def bird_tail_spreads(self):
+        """The last simulated frame's tail spread of every bird: a new float32 array of shape
+        (birds,). The Tail's scale along its width (its local x) is 1 + spread, as in the
+        glTF export. A copy, as bird_poses(). Raises Error before the first step()."""
+        with self._lock:
+            handle = self._live()
+            info = _native.SimulationInfo()
+            _check(_native.lib.kodawari_simulation_get_info(handle, _native.ctypes.byref(info)), handle)
+            spreads = numpy.empty(info.bird_count, numpy.float32)
+            _check(_native.lib.kodawari_simulation_bird_tail_spreads(handle, spreads.ctypes.data, spreads.size), handle)
+            return spreads
+
     def chain_joints(self):
         """The chains' joints after the last step: (positions, orientations), new float32
         arrays of shape (joints, 3) (world, metres) and (joints, 4) (the particles' world

@@ -142,6 +142,15 @@ static void test_flock(void) {
             if (speed > fastest) fastest = speed;
         }
     }
+    {
+        /* The tail spreads as the glTF export's Tail scale takes them: finite, and a
+         * fan of at most a tail's width again (wingbeat.cpp's looks spread 0 to 0.9). */
+        static float spreads[kBirds];
+        EXPECT_OK(kodawari_simulation_bird_tail_spreads(sim, spreads, kBirds));
+        for (b = 0; b < kBirds; ++b) {
+            CHECK(spreads[b] >= 0.0f && spreads[b] <= 1.0f, "bird %u: tail spread %g", (unsigned)b, (double)spreads[b]);
+        }
+    }
     printf("flock: %u birds, %u frames on %s, fastest %.2f m/s\n", info.bird_count, info.frame_count, info.device,
            (double)fastest);
 
@@ -320,7 +329,7 @@ static void test_bake(void) {
 }
 
 static void test_rejects(void) {
-    static float small[kFloatsPerBird];
+    static float small[kBirds * kFloatsPerBird];
     char missing[4200];
     kodawari_simulation* sim = (kodawari_simulation*)&g_checks; /* must be set to NULL */
     kodawari_backend_options options;
@@ -360,6 +369,9 @@ static void test_rejects(void) {
     EXPECT_FAIL(kodawari_simulation_bird_poses(sim, &out), KODAWARI_BUFFER_TOO_SMALL, sim, "out->world_transforms",
                 "holds 49 floats, needs 13230", "270 birds x 7 parts x 7");
     EXPECT_FAIL(kodawari_simulation_bird_poses(sim, NULL), KODAWARI_INVALID_ARGUMENT, sim, "out");
+    EXPECT_FAIL(kodawari_simulation_bird_tail_spreads(sim, small, kBirds - 1), KODAWARI_BUFFER_TOO_SMALL, sim,
+                "out: holds 269 floats, needs 270");
+    EXPECT_FAIL(kodawari_simulation_bird_tail_spreads(sim, NULL, 0), KODAWARI_INVALID_ARGUMENT, sim, "out", "NULL");
     EXPECT_FAIL(kodawari_simulation_get_info(sim, NULL), KODAWARI_INVALID_ARGUMENT, sim, "out");
     /* Nothing changed: the rejected step of 4 left frame 1 next. */
     EXPECT_OK(kodawari_simulation_get_info(sim, &info));

@@ -730,6 +730,11 @@ KODAWARI_C_API kodawari_status kodawari_simulation_get_info(kodawari_simulation*
 /// floats; capacities at least bird_count x 49. Before the first step:
 /// KODAWARI_INVALID_ARGUMENT.
 KODAWARI_C_API kodawari_status kodawari_simulation_bird_poses(kodawari_simulation* sim, const kodawari_bird_output* out);
+/// The last simulated frame's tail spread of every bird (`out`: at least bird_count floats):
+/// s, the Tail's scale along its width (its local X) being 1 + s (docs/flight-modes.md F.5;
+/// the glTF export's Tail scale). Before the first step: KODAWARI_INVALID_ARGUMENT.
+KODAWARI_C_API kodawari_status kodawari_simulation_bird_tail_spreads(kodawari_simulation* sim, float* out,
+                                                                     size_t capacity);
 /// The chains' state after the last step, as kodawari_chain_world_read writes it (one
 /// read-back from a device); a scene without characters has 0 joints and writes nothing.
 /// Before the first step: KODAWARI_INVALID_ARGUMENT.
