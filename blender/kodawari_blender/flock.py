@@ -15,6 +15,8 @@ import time
 
 import bpy
 
+from . import build
+
 try:  # the zip's copy of the package, next to this file
     from . import kodawari
 except ImportError:  # a development checkout with the package on sys.path
@@ -98,18 +100,53 @@ def scene_dict(curves, props, fps, frames):
             "duration": frames / fps, "flocks": flocks}
 
 
-def shift_keys(actions, frames):
-    """Moves every key of `actions` by `frames` (Kodawari's frame 0 onto the scene's start)."""
+def make_flock(context, description, backend, frames, curves):
+    """Simulates the scene `description` and makes its birds in a new collection; returns
+    the number of birds and the seconds the simulation took. One bird of the first flock is
+    baked and imported as the template (build.Template); the rest is made from the poses."""
+    import json
     import numpy
-    for action in actions:
-        for fcurve in action.fcurves:
-            points = fcurve.keyframe_points
-            for attribute in ("co", "handle_left", "handle_right"):
-                values = numpy.empty(2 * len(points), numpy.float32)
-                points.foreach_get(attribute, values)
-                values[0::2] += frames
-                points.foreach_set(attribute, values)
-            fcurve.update()
+    scene = context.scene
+    with tempfile.TemporaryDirectory(prefix="kodawari-") as folder:
+        template_description = dict(description, flocks=[dict(description["flocks"][0], count=1)])
+        template_path = os.path.join(folder, "template.json")
+        with open(template_path, "w") as file:
+            json.dump(template_description, file)
+        glb = os.path.join(folder, "template.glb")
+        with kodawari.Simulation.open(template_path, backend, frames=1) as sim:
+            sim.bake(glb)
+            sim.step(1)
+            template_poses, template_spreads = sim.bird_poses("world")[0], sim.bird_tail_spreads()[0]
+        before = {o.as_pointer() for o in bpy.data.objects}
+        import_gltf(glb)
+        imported = [o for o in bpy.data.objects if o.as_pointer() not in before]
+        path = os.path.join(folder, "flock.json")
+        with open(path, "w") as file:
+            json.dump(description, file)
+        started = time.perf_counter()
+        with kodawari.Simulation.open(path, backend, frames=frames) as sim:
+            poses = numpy.empty((frames, sim.bird_count, 7, 7), numpy.float32)
+            spreads = numpy.empty((frames, sim.bird_count), numpy.float32)
+            for f in range(frames):
+                sim.step(1)
+                poses[f] = sim.bird_poses("world")
+                spreads[f] = sim.bird_tail_spreads()
+        simulated = time.perf_counter() - started
+    armature = next(o for o in imported if o.type == 'ARMATURE')
+    mesh = next(o for o in imported if o.type == 'MESH')
+    template_actions = {armature.animation_data.action} if armature.animation_data else set()
+    scene.frame_set(0)  # the template's one frame, at time 0
+    template = build.Template(armature, mesh, template_poses, template_spreads)
+    names = [f"{flock['name']}_{i}" for flock in description["flocks"] for i in range(flock["count"])]
+    collection = bpy.data.collections.new("Flock " + ", ".join(c.name for c in curves))
+    scene.collection.children.link(collection)
+    build.make_birds(template, names, poses, spreads, scene.frame_start, collection)
+    template.mesh.data.name = template.armature.data.name = f"kodawari {description['flocks'][0]['wing_type']}"
+    for obj in imported:
+        bpy.data.objects.remove(obj)
+    for action in template_actions:
+        bpy.data.actions.remove(action)
+    return len(names), simulated
 
 
 def import_gltf(path):
@@ -173,40 +210,24 @@ class KODAWARI_OT_flock_from_curve(bpy.types.Operator):
         except FlockError as error:
             self.report({'ERROR'}, f"Flock from Curve: {error}")
             return {'CANCELLED'}
-        import json
         before = {name: {b.as_pointer() for b in getattr(bpy.data, name)}
                   for name in ("objects", "armatures", "meshes", "actions", "materials", "collections", "images")}
         selected = list(context.selected_objects)
         active = context.view_layer.objects.active
+        current = scene.frame_current
         try:
-            with tempfile.TemporaryDirectory(prefix="kodawari-") as folder:
-                path = os.path.join(folder, "flock.json")
-                with open(path, "w") as file:
-                    json.dump(description, file)
-                with kodawari.Simulation.open(path, self.backend, frames=frames) as sim:
-                    glb = os.path.join(folder, "flock.glb")
-                    sim.bake(glb)
-                simulated = time.perf_counter() - start
-                import_gltf(glb)
-            new_objects = [o for o in bpy.data.objects if o.as_pointer() not in before["objects"]]
-            new_actions = [a for a in bpy.data.actions if a.as_pointer() not in before["actions"]]
-            shift_keys(new_actions, scene.frame_start)
-            collection = bpy.data.collections.new("Flock " + ", ".join(c.name for c in curves))
-            scene.collection.children.link(collection)
-            for obj in new_objects:
-                for owner in list(obj.users_collection):
-                    owner.objects.unlink(obj)
-                collection.objects.link(obj)
+            birds, simulated = make_flock(context, description, self.backend, frames, curves)
         except (kodawari.Error, FlockError, RuntimeError, OSError) as error:
             remove_new(before)
+            scene.frame_set(current)
             for obj in selected:
                 obj.select_set(True)
             context.view_layer.objects.active = active
             self.report({'ERROR'}, f"Flock from Curve: {error}")
             return {'CANCELLED'}
-        armatures = [o for o in new_objects if o.type == 'ARMATURE']
-        self.report({'INFO'}, f"Flock from Curve: {len(armatures)} birds, {frames} frames in "
-                              f"{time.perf_counter() - start:.1f} s (simulated and baked in {simulated:.2f} s)")
+        scene.frame_set(current)
+        self.report({'INFO'}, f"Flock from Curve: {birds} birds, {frames} frames in "
+                              f"{time.perf_counter() - start:.1f} s (simulated in {simulated:.2f} s)")
         return {'FINISHED'}
 
 

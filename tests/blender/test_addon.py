@@ -122,7 +122,7 @@ def bodies(armatures, frame):
     scene.frame_set(frame)
     out = []
     for arm in armatures:
-        body = next(b for b in arm.pose.bones if b.name.endswith("/Body"))
+        body = arm.pose.bones["Body"]
         out.append((arm.matrix_world @ body.matrix).translation.copy())
     return out
 
@@ -155,6 +155,45 @@ print(f"spread 0: {N} bodies within {worst:.4f} m of the curve at frames 1 to 48
 # amplitude (docs/flight-modes.md F.5, KW_BOB_HEIGHT; a gull's: ~0.02 m), and the sampling
 # above adds up to 5 mm: 0.05 m bounds both (measured: 0.024 m).
 check(worst < 0.05, f"a body is {worst} m off the curve")
+
+# The armatures are made from the poses directly (blender/kodawari_blender/build.py), not
+# by the glTF importer: every bone's matrix must be what the importer makes of the same
+# flock's glTF file (baked here by the add-on's own package from the add-on's own scene
+# description), keys at frame f + 1 against the importer's at f (it keys from frame 0).
+# Within 1e-4 (m and rotation-matrix entries): float32 keys of ~50 m coordinates are
+# 4e-6 apart, and the two compose the same transforms in other orders.
+import tempfile  # noqa: E402
+from types import SimpleNamespace  # noqa: E402
+settings = SimpleNamespace(count=N, wing_type="GULL", spread=0.0, speed=0.0, trail=0.0, takeoff=False, landing=False,
+                           seed=1)
+description = flock.scene_dict([route], settings, 24.0, 48)
+ours = sorted(armatures, key=lambda a: int(a.name.rsplit("_", 1)[1]))
+with tempfile.TemporaryDirectory() as folder:
+    import json  # noqa: E402
+    path = os.path.join(folder, "flock.json")
+    with open(path, "w") as file:
+        json.dump(description, file)
+    with flock.kodawari.Simulation.open(path, "cpu", frames=48) as sim:
+        sim.bake(os.path.join(folder, "flock.glb"))
+    before = {o.as_pointer() for o in bpy.data.objects}
+    flock.import_gltf(os.path.join(folder, "flock.glb"))
+imported = [o for o in bpy.data.objects if o.as_pointer() not in before]
+reference = sorted((o for o in imported if o.type == "ARMATURE"), key=lambda a: int(a.name.rsplit("_", 1)[1]))
+check(len(reference) == N, f"the importer made {len(reference)} armatures")
+worst = 0.0
+for frame in (0, 17, 47):
+    scene.frame_set(frame)
+    want = [[(a.matrix_world @ pb.matrix).copy() for pb in a.pose.bones] for a in reference]
+    names = [[pb.name.rsplit("/", 1)[1] for pb in a.pose.bones] for a in reference]
+    scene.frame_set(frame + 1)
+    for a, w, n in zip(ours, want, names):
+        for matrix, part in zip(w, n):
+            got = a.matrix_world @ a.pose.bones[part].matrix
+            worst = max(worst, max(abs(got[i][j] - matrix[i][j]) for i in range(4) for j in range(4)))
+print(f"the armatures made directly against the glTF importer's: bone matrices within {worst:.2e}")
+check(worst < 1e-4, f"bone matrices {worst} off the importer's")
+for obj in imported:
+    bpy.data.objects.remove(obj)
 
 armatures, new = make_flock(count=N, wing_type="PIGEON", spread=3.0, frames=48, seed=5)
 reach = math.sqrt(3 ** 2 + 3 ** 2 + 1.5 ** 2)

@@ -96,6 +96,9 @@ for backend in ("cpu-reference", "cpu", "vulkan"):
         # 20 frames at 60 fps: every bird flies between 1 and 40 m/s (cruise speeds 8-20 m/s).
         speeds = numpy.linalg.norm(world[:, 0, :3] - early[:, 0, :3], axis=1) / (20 / 60)
         check(speeds.min() > 1 and speeds.max() < 40, f"{backend}: speeds {speeds.min()} to {speeds.max()} m/s")
+        # The Tail's spread (its scale is 1 + s): the looks of wingbeat.cpp spread 0 to 0.9.
+        spreads = sim.bird_tail_spreads()
+        check(spreads.shape == (270,) and spreads.min() >= 0 and spreads.max() <= 1, f"{backend}: spreads {spreads}")
         # A copy: stepping on does not change it.
         before = local.copy()
         check(not numpy.shares_memory(local, sim.bird_poses()), f"{backend}: two calls share memory")
