@@ -23,7 +23,7 @@ import numpy
 from . import _config
 from . import _native
 
-__all__ = ["Simulation", "Error", "BACKENDS", "PARTS", "__version__", "library_version", "library_path"]
+__all__ = ["Simulation", "Error", "rig", "BACKENDS", "PARTS", "__version__", "library_version", "library_path"]
 
 #: The package's version: the project's (CMake's project version, as the library's).
 __version__ = _config.VERSION
@@ -56,6 +56,24 @@ def _check(status, handle=None):
     lib = _native.lib
     message = lib.kodawari_simulation_last_error(handle) if handle else lib.kodawari_last_error()
     raise Error(lib.kodawari_status_name(status).decode(), message.decode(errors="replace"))
+
+
+def rig(character_path, scene_path, clip="", duration=10.0):
+    """Sets up the chains of a rigged .glb/.gltf/.vrm character as `kodawari rig` does and
+    writes a scene file that simulates it at `scene_path` (docs/rigged-characters.md):
+    VRM spring bones, else bones named like hair, tails and ears. `clip`: the animation to
+    play ("" = the file's first); `duration`: the scene's, in seconds. Returns the chains
+    as (name, root node, joint count) tuples. Raises Error naming the file when it has no
+    chains or cannot be read."""
+    chains = _native.ctypes.create_string_buffer(256 * 1024)
+    _check(_native.lib.kodawari_rig_scene(os.fsencode(character_path), os.fsencode(scene_path),
+                                          clip.encode() if clip else None, float(duration), chains, len(chains)))
+    out = []
+    for line in chains.value.decode(errors="replace").split("\n"):
+        if line:
+            name, root, joints = line.split("\t")
+            out.append((name, root, int(joints)))
+    return out
 
 
 class Simulation:

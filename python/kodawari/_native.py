@@ -133,3 +133,5 @@ _declare("kodawari_simulation_chain_joints", _status, _sim, ctypes.c_uint32, _P(
          _P(ctypes.c_uint32))
 _declare("kodawari_simulation_bake", _status, _sim, ctypes.c_char_p, ctypes.c_uint32, ctypes.c_char_p,
          ctypes.c_size_t)
+_declare("kodawari_rig_scene", _status, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_char_p, ctypes.c_float,
+         ctypes.c_char_p, ctypes.c_size_t)

@@ -3,7 +3,8 @@
  * checked (the bird count, the rig's rigid parts, flight speeds, the chain's root joint on
  * its root, cpu-reference and cpu giving the same bits, one long step giving the bits of
  * many short ones, a bake leaving the stepped state alone) and every entry point given bad
- * input: the status, the message naming the argument or the file, nothing changed.
+ * input: the status, the message naming the argument or the file, nothing changed; and
+ * kodawari_rig_scene on scenes/characters/chibi.glb.
  *
  *   test_capi_simulation SOURCE_DIR TEMP_DIR
  *
@@ -379,6 +380,31 @@ static void test_rejects(void) {
     kodawari_simulation_destroy(sim);
 }
 
+/* kodawari_rig_scene: scenes/characters/chibi.glb's 7 chains (the README's `kodawari rig`
+ * listing), a scene that opens with them, and bad arguments named. */
+static void test_rig(const char* source) {
+    char character[4200], scene[4200], missing[4200], chains[4096];
+    kodawari_simulation* sim = NULL;
+    kodawari_simulation_info info;
+    snprintf(character, sizeof character, "%s/scenes/characters/chibi.glb", source);
+    snprintf(scene, sizeof scene, "%s/chibi.json", g_temp);
+    snprintf(missing, sizeof missing, "%s/no-such-character.glb", g_temp);
+    EXPECT_OK(kodawari_rig_scene(character, scene, NULL, 2.0f, chains, sizeof chains));
+    CHECK(strstr(chains, "tail_0\ttail_0\t8") != NULL && strstr(chains, "ahoge_0\tahoge_0\t5") != NULL,
+          "chains \"%s\"", chains);
+    EXPECT_OK(kodawari_simulation_open(scene, NULL, 0, &sim));
+    if (sim != NULL) {
+        EXPECT_OK(kodawari_simulation_get_info(sim, &info));
+        CHECK(info.chain_count == 7 && info.joint_count == 40 && info.frame_count == 120,
+              "%u chains, %u joints, %u frames", info.chain_count, info.joint_count, info.frame_count);
+        kodawari_simulation_destroy(sim);
+    }
+    EXPECT_FAIL(kodawari_rig_scene(missing, scene, NULL, 2.0f, NULL, 0), KODAWARI_INVALID_ARGUMENT, NULL, missing);
+    EXPECT_FAIL(kodawari_rig_scene(character, scene, NULL, 0.0f, NULL, 0), KODAWARI_INVALID_ARGUMENT, NULL, "duration: 0");
+    EXPECT_FAIL(kodawari_rig_scene(character, scene, "dance", 2.0f, NULL, 0), KODAWARI_INVALID_ARGUMENT, NULL, "dance");
+    EXPECT_FAIL(kodawari_rig_scene(character, NULL, NULL, 2.0f, NULL, 0), KODAWARI_INVALID_ARGUMENT, NULL, "scene_path");
+}
+
 int main(int argc, char** argv) {
     if (argc != 3) {
         fprintf(stderr, "usage: test_capi_simulation SOURCE_DIR TEMP_DIR\n");
@@ -394,6 +420,7 @@ int main(int argc, char** argv) {
     test_chains();
     test_bake();
     test_rejects();
+    test_rig(argv[1]);
     printf("%d checks, %d failures\n", g_checks, g_failures);
     return g_failures == 0 ? 0 : 1;
 }

@@ -755,6 +755,16 @@ KODAWARI_C_API kodawari_status kodawari_simulation_chain_joints(kodawari_simulat
 KODAWARI_C_API kodawari_status kodawari_simulation_bake(kodawari_simulation* sim, const char* path, uint32_t compact,
                                                         char* written, size_t written_size);
 
+/// Sets up the chains of a rigged character as `kodawari rig CHARACTER --out SCENE` does
+/// (docs/rigged-characters.md): VRM spring bones, else bones named like hair, tails and
+/// ears, with their colliders; writes a scene file that simulates it (one instance at the
+/// origin, `clip` playing, "" or NULL: the file's first; `duration` s, (0, 3600]) at
+/// `scene_path`, whole or not at all. A file without chains is KODAWARI_INVALID_ARGUMENT
+/// naming it. `chains` (NULL, or `chains_size` bytes): one line per chain, its name, root
+/// node and joint count separated by tabs, cut to fit.
+KODAWARI_C_API kodawari_status kodawari_rig_scene(const char* character_path, const char* scene_path, const char* clip,
+                                                  float duration, char* chains, size_t chains_size);
+
 #ifdef __cplusplus
 }
 #endif
