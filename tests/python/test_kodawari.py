@@ -200,6 +200,18 @@ try:
 except kodawari.Error as error:
     check("closed" in str(error), f"after close: {error}")
 
+# ---- kodawari.rig: the chibi's chains as the README's `kodawari rig` lists them.
+chains = kodawari.rig(os.path.join(source, "scenes", "characters", "chibi.glb"), os.path.join(temp, "chibi.json"),
+                      duration=1.0)
+check(len(chains) == 7 and ("tail_0", "tail_0", 8) in chains, f"rig: {chains}")
+with kodawari.Simulation.open(os.path.join(temp, "chibi.json"), "cpu") as sim:
+    check((sim.chain_count, sim.joint_count, sim.frame_count) == (7, 40, 60), f"the rigged scene: {sim!r}")
+try:
+    kodawari.rig(missing, os.path.join(temp, "x.json"))
+    check(False, "rig of a missing file raised nothing")
+except kodawari.Error as error:
+    check(missing in str(error), f"rig: {error}")
+
 # ---- help() is readable: the docstrings are there.
 text = pydoc.render_doc(kodawari.Simulation, renderer=pydoc.plaintext)
 for needle in ("bird_poses", "a copy", "chain_joints", "bake", "Simulation.open", "Error naming the file"):
