@@ -9,7 +9,6 @@ Blender needs an OpenGL context to render even in the background: xvfb-run gives
 (Mesa's llvmpipe) where there is no display. BLENDER_USER_SCRIPTS keeps the add-on's
 install out of the user's own scripts folder.
 """
-import math
 import sys
 
 import bpy

@@ -8,7 +8,6 @@ B2 = the left handle of point k + 1, B3 = point k + 1 (a cyclic spline adds the 
 from the last point back to the first and loops). Blender's +Z up becomes Kodawari's +Y
 up: (x, y, z) -> (x, z, -y), which Blender's glTF importer turns back.
 """
-import math
 import os
 import tempfile
 import time

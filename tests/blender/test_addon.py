@@ -279,7 +279,7 @@ with tempfile.TemporaryDirectory() as folder:
     description["fps"] = 24.0
     with open(os.path.join(folder, "chibi.json"), "w") as file:
         json.dump(description, file)
-    worst, moved = 0.0, 0.0
+    worst = 0.0
     with flock.kodawari.Simulation.open(os.path.join(folder, "chibi.json"), "cpu", frames=48) as sim:
         sim.bake(os.path.join(folder, "baked.glb"))
         before = {o.as_pointer() for o in bpy.data.objects}

@@ -145,7 +145,7 @@ for backend in ("cpu", "vulkan"):
     worst = float(numpy.linalg.norm(joints[backend] - joints["cpu-reference"], axis=1).max())
     print(f"ahoge on {backend} against cpu-reference: joints within {worst:g} m")
     if backend == "cpu":
-        check(numpy.array_equal(joints["cpu"], joints["cpu-reference"]), f"cpu's joints are not cpu-reference's bits")
+        check(numpy.array_equal(joints["cpu"], joints["cpu-reference"]), "cpu's joints are not cpu-reference's bits")
     else:
         # The rod backends' trajectory parity (tests/backends/test_rod_backends.cpp): within
         # 1e-3 of the chain length, 1.4e-4 m.
