@@ -28,7 +28,8 @@ LINKS = {
     "io": {"io", "sim"},
     "render": {"render", "vulkan", "io", "sim"},
     "engine": {"engine", "render", "vulkan", "io", "sim"},
-    "c": {"c", "vulkan", "sim"},
+    # The scene simulations (capi/capi_simulation.cpp) open Simulation and bake.
+    "c": {"c", "engine", "render", "vulkan", "io", "sim"},
 }
 # The third-party headers each target may include (prefixes of the include path).
 THIRD_PARTY = {"tiny_gltf", "nlohmann", "vulkan/", "stb/", "hwy/"}

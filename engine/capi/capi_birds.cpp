@@ -13,6 +13,7 @@
 #include <utility>
 #include <vector>
 
+#include "capi/capi_bird_pose.hpp"
 #include "capi/capi_common.hpp"
 #include "kodawari/vulkan_embed.hpp"
 #include "kodawari/backend_factory.hpp"
@@ -23,11 +24,6 @@ using namespace kodawari;
 using namespace kodawari::capi;
 
 namespace {
-
-using PartOffsets = std::array<std::array<float, 3>, birds::kPartCount>;
-constexpr std::size_t kFloatsPerBird = KODAWARI_BIRD_PARTS * KODAWARI_TRANSFORM_FLOATS;
-static_assert(KODAWARI_BIRD_PARTS == birds::kPartCount && KODAWARI_PART_RIGHT_ARM2 == KW_PART_RIGHT_ARM2,
-              "kodawari.h's parts are the rig's, in BirdPose order");
 
 constexpr std::uint64_t kMaxBirds = 10'000'000;     // as the scene files
 constexpr std::uint32_t kMaxFramesPerCall = 100'000;
@@ -221,41 +217,6 @@ void open_and_load(kodawari_bird_world& w, const kodawari_backend_options& optio
     check(w.backend->load(w.world));
 }
 
-glm::quat rotation(const gpu::vec4& q) { return {q.w, q.x, q.y, q.z}; }
-
-void put(float* out, const glm::vec3& p, const glm::quat& q) {
-    out[0] = p.x;
-    out[1] = p.y;
-    out[2] = p.z;
-    out[3] = q.x;
-    out[4] = q.y;
-    out[5] = q.z;
-    out[6] = q.w;
-}
-
-// One bird's parts: relative to the parent (rig offset, rotation; Body in world space)
-// and in world space (composed down the rig, parents first).
-void part_transforms(const gpu::BirdPose& pose, const PartOffsets& offsets, float* local, float* world) {
-    std::array<glm::vec3, birds::kPartCount> position{};
-    std::array<glm::quat, birds::kPartCount> orientation{};
-    for (std::size_t k = 0; k < birds::kPartCount; ++k) {
-        const glm::vec3 offset = k == KW_PART_BODY ? glm::vec3(pose.position.x, pose.position.y, pose.position.z)
-                                                   : glm::vec3(offsets[k][0], offsets[k][1], offsets[k][2]);
-        const glm::quat q = rotation(pose.rotation[k]);
-        if (local != nullptr) put(local + k * KODAWARI_TRANSFORM_FLOATS, offset, q);
-        const int parent = birds::kPartParents[k];
-        if (parent < 0) {
-            position[k] = offset;
-            orientation[k] = q;
-        } else {
-            const auto p = static_cast<std::size_t>(parent);
-            position[k] = position[p] + orientation[p] * offset;
-            orientation[k] = glm::normalize(orientation[p] * q);
-        }
-        if (world != nullptr) put(world + k * KODAWARI_TRANSFORM_FLOATS, position[k], orientation[k]);
-    }
-}
-
 void require_world(const kodawari_bird_world* world) { require_pointer(world, "world"); }
 
 }  // namespace
@@ -307,7 +268,7 @@ KODAWARI_C_API kodawari_status kodawari_bird_world_create(const kodawari_bird_wo
         require_backend_options(desc->backend, "desc->backend");
         auto w = std::make_unique<kodawari_bird_world>();
         read_world(*desc, w->world);
-        for (std::size_t t = 0; t < birds::kWingTypeCount; ++t) w->offsets[t] = birds::part_offsets(static_cast<birds::WingType>(t));
+        w->offsets = all_part_offsets();
         open_and_load(*w, desc->backend);
         *out = w.release();
     });

@@ -81,7 +81,6 @@ def main():
     objects = list(bpy.data.objects)
     armatures = [o for o in objects if o.type == 'ARMATURE']
     report = {
-        'check': 'kodawari-blender',
         'blender': bpy.app.version_string,
         'actions': len(bpy.data.actions),
         'action_names': sorted(a.name for a in bpy.data.actions),
@@ -91,7 +90,14 @@ def main():
         'mesh_objects': sum(1 for o in objects if o.type == 'MESH'),
         'objects': len(objects),
     }
-    print(json.dumps(report, sort_keys=True), flush=True)
+    # "check" first, as the readers look for the line by its start
+    # (testing_support::blender_report_line); the rest sorted, so that two runs print the
+    # same line. json.dumps(sort_keys=True) on the whole report would put "action_names"
+    # first and the readers would find no report (issue 33).
+    line = {'check': 'kodawari-blender'}
+    line.update(sorted(report.items()))
+    line['armatures'] = dict(sorted(line['armatures'].items()))
+    print(json.dumps(line), flush=True)
 
 
 main()

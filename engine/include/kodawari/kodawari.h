@@ -681,6 +681,90 @@ KODAWARI_C_API kodawari_status kodawari_chain_world_buffer(kodawari_chain_world*
 KODAWARI_C_API kodawari_status kodawari_bird_world_buffer(kodawari_bird_world* world, kodawari_device_buffer which,
                                                           kodawari_buffer_range* out);
 
+/* ------------------------------------------------------------------------------------ */
+/* Simulations of scene files (issue 33): a whole scene, birds and characters           */
+/* ------------------------------------------------------------------------------------ */
+/* A scene file (docs/scene-format.md) opened, stepped and baked as `kodawari run` does,
+ * on one backend kind: what the Python package (python/kodawari) and the Blender add-on
+ * use. The chain and bird worlds above build a world from arrays instead. */
+
+/// A scene simulated frame after frame (opaque).
+typedef struct kodawari_simulation kodawari_simulation;
+
+/// Loads the scene file at `path` (UTF-8) and opens its backends. `backend`: as for the
+/// worlds (NULL = all zeros: auto); `frames`: how many frames to simulate, or 0 for the
+/// scene's own count (its duration x fps). A file that cannot be read or is not a valid
+/// scene is KODAWARI_INVALID_ARGUMENT with a message naming the file (and the JSON path
+/// of the first problem). `*out` is set only on success (to NULL otherwise).
+KODAWARI_C_API kodawari_status kodawari_simulation_open(const char* path, const kodawari_backend_options* backend,
+                                                        uint32_t frames, kodawari_simulation** out);
+/// Destroys a simulation (NULL: nothing happens).
+KODAWARI_C_API void kodawari_simulation_destroy(kodawari_simulation* sim);
+/// The message of the most recent call on `sim` ("" when it succeeded; "" for NULL).
+/// Valid until the next call on `sim`.
+KODAWARI_C_API const char* kodawari_simulation_last_error(const kodawari_simulation* sim);
+/// Simulates the next `frames` frames (the first call simulates frame 0), at least 1 and
+/// at most the frames left (info.frame_count - info.next_frame).
+KODAWARI_C_API kodawari_status kodawari_simulation_step(kodawari_simulation* sim, uint32_t frames);
+
+/// What a simulation is, where it runs and how far it got.
+typedef struct kodawari_simulation_info {
+    uint32_t bird_count;
+    uint32_t character_count;  ///< character instances (their chains are the chains below)
+    uint32_t chain_count;
+    uint32_t joint_count;      ///< every chain's joints: the per-joint arrays' length
+    uint32_t frame_count;      ///< frames in all: `frames` of open, else the scene's
+    uint32_t next_frame;       ///< the frames simulated so far (0 before the first step)
+    float fps;
+    kodawari_backend backend;  ///< never AUTO
+    uint32_t validation_messages;
+    char name[256];             ///< the scene's name, cut to fit
+    char device[256];           ///< what it runs on, cut to fit
+    char fallback_reason[1024];  ///< AUTO that fell back to cpu: why; else ""
+} kodawari_simulation_info;
+/// Fills `out` with what `sim` is.
+KODAWARI_C_API kodawari_status kodawari_simulation_get_info(kodawari_simulation* sim, kodawari_simulation_info* out);
+
+/// The last simulated frame's bird poses, as kodawari_bird_world_simulate writes one frame:
+/// per bird (in the scene's order, flock by flock), per part, KODAWARI_TRANSFORM_FLOATS
+/// floats; capacities at least bird_count x 49. Before the first step:
+/// KODAWARI_INVALID_ARGUMENT.
+KODAWARI_C_API kodawari_status kodawari_simulation_bird_poses(kodawari_simulation* sim, const kodawari_bird_output* out);
+/// The last simulated frame's tail spread of every bird (`out`: at least bird_count floats):
+/// s, the Tail's scale along its width (its local X) being 1 + s (docs/flight-modes.md F.5;
+/// the glTF export's Tail scale). Before the first step: KODAWARI_INVALID_ARGUMENT.
+KODAWARI_C_API kodawari_status kodawari_simulation_bird_tail_spreads(kodawari_simulation* sim, float* out,
+                                                                     size_t capacity);
+/// The chains' state after the last step, as kodawari_chain_world_read writes it (one
+/// read-back from a device); a scene without characters has 0 joints and writes nothing.
+/// Before the first step: KODAWARI_INVALID_ARGUMENT.
+KODAWARI_C_API kodawari_status kodawari_simulation_read_chains(kodawari_simulation* sim, const kodawari_chain_output* out);
+/// Chain `chain`'s joints in the per-joint arrays: [*joint_begin, *joint_begin +
+/// *joint_count). Either pointer may be NULL.
+KODAWARI_C_API kodawari_status kodawari_simulation_chain_joints(kodawari_simulation* sim, uint32_t chain,
+                                                                uint32_t* joint_begin, uint32_t* joint_count);
+/// Bakes the scene to glTF binary files as `kodawari run --out PATH` does: every frame from
+/// frame 0, on a simulation of its own with the same scene, backend and frame count, so
+/// that `sim`'s own state and frame are untouched. The flock goes to `path`; the
+/// characters to `path` too when the scene has no birds, else to `<path without
+/// .glb>-characters.glb` (one file per rigged character template, as the command line
+/// writes them). `compact`: 1 drops the keys linear interpolation reproduces within 1 mm
+/// and 0.001 rad (docs/compact.md), 0 keeps every key. Each file is written whole or not
+/// at all. `written` (NULL, or `written_size` bytes): the paths written, one per line,
+/// cut to fit.
+KODAWARI_C_API kodawari_status kodawari_simulation_bake(kodawari_simulation* sim, const char* path, uint32_t compact,
+                                                        char* written, size_t written_size);
+
+/// Sets up the chains of a rigged character as `kodawari rig CHARACTER --out SCENE` does
+/// (docs/rigged-characters.md): VRM spring bones, else bones named like hair, tails and
+/// ears, with their colliders; writes a scene file that simulates it (one instance at the
+/// origin, `clip` playing, "" or NULL: the file's first; `duration` s, (0, 3600]) at
+/// `scene_path`, whole or not at all. A file without chains is KODAWARI_INVALID_ARGUMENT
+/// naming it. `chains` (NULL, or `chains_size` bytes): one line per chain, its name, root
+/// node and joint count separated by tabs, cut to fit.
+KODAWARI_C_API kodawari_status kodawari_rig_scene(const char* character_path, const char* scene_path, const char* clip,
+                                                  float duration, char* chains, size_t chains_size);
+
 #ifdef __cplusplus
 }
 #endif

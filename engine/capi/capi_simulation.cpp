@@ -1,0 +1,262 @@
+// The C API's scene simulations (issue 33): a scene file opened as kodawari::Simulation,
+// stepped, read and baked through kodawari::bake with the glTF sinks, as `kodawari run`
+// does. Every use of the C++ Simulation and bake API is in this file, so that a change
+// of that API (issue 31) is adapted here alone. Arguments are checked before anything
+// changes, as everywhere in the C API (capi_common.hpp).
+#include <algorithm>
+#include <array>
+#include <cstdint>
+#include <memory>
+#include <string>
+#include <utility>
+#include <vector>
+
+#include "capi/capi_bird_pose.hpp"
+#include "capi/capi_common.hpp"
+#include "kodawari/bake.hpp"
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
+#include "kodawari/export.hpp"
+#include "kodawari/simulation.hpp"
+
+using namespace kodawari;
+using namespace kodawari::capi;
+
+/// The opaque handle of kodawari.h.
+struct kodawari_simulation {
+    std::string message;  // the last call's (kodawari_simulation_last_error)
+    std::unique_ptr<Simulation> sim;
+    SimulationOptions options;  // what bake() opens its own simulation with
+    std::uint32_t next_frame = 0;
+    std::vector<gpu::BirdPose> poses;  // the last frame's, read back by step()
+    ChainSnapshot chains;              // read_chains()' scratch, reused
+    std::array<PartOffsets, birds::kWingTypeCount> offsets{};
+};
+
+namespace {
+
+void require_sim(const kodawari_simulation* sim) { require_pointer(sim, "sim"); }
+
+void require_stepped(const kodawari_simulation& sim) {
+    if (sim.next_frame == 0) invalid("sim", "no frame simulated yet; call kodawari_simulation_step first");
+}
+
+// A file that cannot be read is the caller's argument, as a file that is not a scene: the
+// engine reports both (Io, InvalidInput) with the path in the message.
+[[noreturn]] void fail_on_file(const Error& error) {
+    if (error.kind == Error::Kind::Io) reject(KODAWARI_INVALID_ARGUMENT, error.message);
+    fail(error);
+}
+
+// `kodawari run`'s files (host/bake_outputs.cpp, glb_sinks): one per kind of content.
+std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& path, bool has_birds, bool has_chains,
+                                                 const GlbCompaction& compaction) {
+    std::vector<std::unique_ptr<BakeSink>> sinks;
+    if (has_birds) sinks.push_back(make_birds_glb_sink(path, compaction));
+    if (has_chains) {
+        const std::string stem = path.substr(0, path.size() - (path.ends_with(".glb") ? 4 : 0));
+        sinks.push_back(make_chains_glb_sink(has_birds ? stem + "-characters.glb" : path, compaction));
+    }
+    return sinks;
+}
+
+}  // namespace
+
+extern "C" {
+
+KODAWARI_C_API kodawari_status kodawari_simulation_open(const char* path, const kodawari_backend_options* backend,
+                                                        uint32_t frames, kodawari_simulation** out) {
+    return guard("kodawari_simulation_open", nullptr, [&] {
+        require_pointer(out, "out");
+        *out = nullptr;
+        require_pointer(path, "path");
+        if (path[0] == '\0') invalid("path", "\"\"; expected a scene file (SCENE.json)");
+        const kodawari_backend_options zero{};
+        const kodawari_backend_options& b = backend != nullptr ? *backend : zero;
+        require_backend_options(b, "backend");
+        auto s = std::make_unique<kodawari_simulation>();
+        const kodawari_backend kind = effective_backend(b);
+        if (kind != KODAWARI_BACKEND_AUTO) s->options.backend = backend_kind(kind);
+        s->options.options = backend_options(b);
+        if (frames != 0) s->options.frames = frames;
+        auto opened = Simulation::open(path, s->options);
+        if (!opened.ok()) fail_on_file(opened.error());
+        s->sim = std::move(opened).value();
+        s->offsets = all_part_offsets();
+        *out = s.release();
+    });
+}
+
+KODAWARI_C_API void kodawari_simulation_destroy(kodawari_simulation* sim) { delete sim; }
+
+KODAWARI_C_API const char* kodawari_simulation_last_error(const kodawari_simulation* sim) {
+    return sim != nullptr ? sim->message.c_str() : "";
+}
+
+KODAWARI_C_API kodawari_status kodawari_simulation_step(kodawari_simulation* sim, uint32_t frames) {
+    return guard("kodawari_simulation_step", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        const std::uint32_t total = sim->sim->frame_count();
+        const std::uint32_t left = total - sim->next_frame;
+        if (frames < 1 || frames > left) {
+            invalid("frames", std::to_string(frames) + "; expected 1 to " + std::to_string(left) + " (frame " +
+                                  std::to_string(sim->next_frame) + " of " + std::to_string(total) + " is next)");
+        }
+        // Only the last frame's poses are kept: the frames before it are stepped without
+        // reading anything back, so that a long step costs no memory per frame.
+        if (frames > 1) check(sim->sim->step(frames - 1));
+        const std::size_t birds = bird_world(*sim->sim).birds.size();
+        sim->poses.resize(birds);
+        check(step_birds(*sim->sim, 1, std::span<gpu::BirdPose>(sim->poses)));
+        sim->next_frame += frames;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_simulation_get_info(kodawari_simulation* sim, kodawari_simulation_info* out) {
+    return guard("kodawari_simulation_get_info", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_pointer(out, "out");
+        const Simulation& s = *sim->sim;
+        kodawari_simulation_info info{};
+        info.bird_count = static_cast<std::uint32_t>(bird_world(s).birds.size());
+        if (const RodScene* rods = rod_scene(s)) {
+            info.character_count = rods->world.character_count;
+            info.chain_count = static_cast<std::uint32_t>(rods->world.chains.size());
+            info.joint_count = rods->world.joint_count;
+        }
+        info.frame_count = s.frame_count();
+        info.next_frame = sim->next_frame;
+        info.fps = s.scene().fps;
+        info.backend = backend_enum(s.backend());
+        info.validation_messages = s.validation_messages();
+        copy_text(s.scene().name, info.name, sizeof info.name);
+        copy_text(s.device(), info.device, sizeof info.device);
+        copy_text(s.fallback_reason(), info.fallback_reason, sizeof info.fallback_reason);
+        *out = info;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_simulation_bird_poses(kodawari_simulation* sim, const kodawari_bird_output* out) {
+    return guard("kodawari_simulation_bird_poses", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_pointer(out, "out");
+        require_stepped(*sim);
+        const std::size_t birds = sim->poses.size();
+        const std::size_t needed = birds * kFloatsPerBird;
+        const std::string why = std::to_string(birds) + " birds x " + std::to_string(KODAWARI_BIRD_PARTS) + " parts x " +
+                                std::to_string(KODAWARI_TRANSFORM_FLOATS);
+        require_capacity(out->local_transforms, out->local_transforms_capacity, needed, "out->local_transforms", why);
+        require_capacity(out->world_transforms, out->world_transforms_capacity, needed, "out->world_transforms", why);
+        const auto& params = bird_world(*sim->sim).birds;
+        for (std::size_t i = 0; i < birds; ++i) {
+            part_transforms(sim->poses[i], sim->offsets[params[i].ids.y],
+                            out->local_transforms ? out->local_transforms + i * kFloatsPerBird : nullptr,
+                            out->world_transforms ? out->world_transforms + i * kFloatsPerBird : nullptr);
+        }
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_simulation_bird_tail_spreads(kodawari_simulation* sim, float* out,
+                                                                     size_t capacity) {
+    return guard("kodawari_simulation_bird_tail_spreads", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_stepped(*sim);
+        const std::size_t birds = sim->poses.size();
+        require_array(out, birds, "out", "the bird count");
+        if (capacity < birds) {
+            reject(KODAWARI_BUFFER_TOO_SMALL, "out: holds " + std::to_string(capacity) + " floats, needs " +
+                                                  std::to_string(birds) + " (one per bird)");
+        }
+        for (std::size_t i = 0; i < birds; ++i) out[i] = sim->poses[i].position.w;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_simulation_read_chains(kodawari_simulation* sim, const kodawari_chain_output* out) {
+    return guard("kodawari_simulation_read_chains", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_pointer(out, "out");
+        require_stepped(*sim);
+        const RodScene* rods = rod_scene(*sim->sim);
+        if (rods == nullptr) return;  // no characters: 0 joints, nothing to write
+        const std::size_t joints = rods->world.joint_count;
+        const std::size_t chains = rods->world.chains.size();
+        const std::string j = std::to_string(joints) + " joints";
+        const std::string c = std::to_string(chains) + " chains";
+        require_capacity(out->positions, out->positions_capacity, joints * 3, "out->positions", j + " x 3");
+        require_capacity(out->orientations, out->orientations_capacity, joints * 4, "out->orientations", j + " x 4");
+        require_capacity(out->rest_positions, out->rest_positions_capacity, joints * 3, "out->rest_positions", j + " x 3");
+        require_capacity(out->view_directions, out->view_directions_capacity, chains * 3, "out->view_directions", c + " x 3");
+        require_capacity(out->weights, out->weights_capacity, chains * KODAWARI_WEIGHTS_PER_CHAIN, "out->weights",
+                         c + " x KODAWARI_WEIGHTS_PER_CHAIN (" + std::to_string(KODAWARI_WEIGHTS_PER_CHAIN) + ")");
+        ChainSnapshot& s = sim->chains;
+        check(read_chains(*sim->sim, s));
+        const auto copy3 = [](const std::vector<glm::vec3>& from, float* to) {
+            if (to == nullptr) return;
+            for (std::size_t i = 0; i < from.size(); ++i) {
+                to[3 * i] = from[i].x;
+                to[3 * i + 1] = from[i].y;
+                to[3 * i + 2] = from[i].z;
+            }
+        };
+        copy3(s.positions, out->positions);
+        copy3(s.rest, out->rest_positions);
+        copy3(s.view_directions, out->view_directions);
+        if (out->orientations != nullptr) {
+            for (std::size_t i = 0; i < s.orientations.size(); ++i) {
+                const glm::quat& q = s.orientations[i];
+                float* o = out->orientations + 4 * i;
+                o[0] = q.x;
+                o[1] = q.y;
+                o[2] = q.z;
+                o[3] = q.w;
+            }
+        }
+        if (out->weights != nullptr) std::copy(s.weights.begin(), s.weights.end(), out->weights);
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_simulation_chain_joints(kodawari_simulation* sim, uint32_t chain,
+                                                                uint32_t* joint_begin, uint32_t* joint_count) {
+    return guard("kodawari_simulation_chain_joints", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        const RodScene* rods = rod_scene(*sim->sim);
+        const std::size_t chains = rods != nullptr ? rods->world.chains.size() : 0;
+        if (chain >= chains) {
+            invalid("chain", std::to_string(chain) + "; expected an index below the scene's chain count (" +
+                                 std::to_string(chains) + ")");
+        }
+        const rods::ChainInstance& c = rods->world.chains[chain];
+        if (joint_begin != nullptr) *joint_begin = c.joint_begin;
+        if (joint_count != nullptr) *joint_count = rods->world.templ(c).chain.joint_count;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_simulation_bake(kodawari_simulation* sim, const char* path, uint32_t compact,
+                                                        char* written, size_t written_size) {
+    return guard("kodawari_simulation_bake", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_pointer(path, "path");
+        if (path[0] == '\0') invalid("path", "\"\"; expected an output file (OUT.glb)");
+        require_flag(compact, "compact");
+        if (written != nullptr && written_size == 0) invalid("written_size", "0 with a written buffer; expected its size in bytes");
+        // A simulation of its own from frame 0, so that `sim` keeps its frame.
+        auto opened = Simulation::create(sim->sim->scene(), sim->options);
+        check(opened);
+        Simulation& baked = *opened.value();
+        GlbCompaction compaction;
+        compaction.enabled = compact != 0;
+        auto sinks = glb_sinks(path, !bird_world(baked).birds.empty(), rod_scene(baked) != nullptr, compaction);
+        if (sinks.empty()) invalid("sim", "its scene has neither birds nor characters; nothing to bake");
+        std::vector<BakeSink*> pointers;
+        for (auto& sink : sinks) pointers.push_back(sink.get());
+        auto files = bake(baked, pointers);
+        if (!files.ok()) fail_on_file(files.error());
+        if (written != nullptr) {
+            std::string list;
+            for (const BakeOutput& file : files.value()) list += (list.empty() ? "" : "\n") + file.path;
+            copy_text(list, written, written_size);
+        }
+    });
+}
+
+}  // extern "C"

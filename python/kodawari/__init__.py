@@ -1,0 +1,325 @@
+"""Kodawari from Python: scene files simulated on any backend, read as numpy arrays, baked
+to glTF.
+
+    import kodawari
+    with kodawari.Simulation.open("scenes/flock.json", backend="cpu", frames=120) as sim:
+        sim.step(120)
+        poses = sim.bird_poses()          # (birds, 7, 7) float32: per part x y z qx qy qz qw
+        sim.bake("out/flock.glb")         # every frame from frame 0, as `kodawari run`
+
+The package calls libkodawari.so (the C API, kodawari.h) through ctypes: no compiled
+Python module, so it works in any Python 3 of the machine (Debian's /usr/bin/python3,
+Blender's) without being built for it. Every array it returns is a copy (numpy memory of
+its own, valid for as long as you keep it); see docs/python.md.
+
+Errors raise kodawari.Error, whose message is the library's (it names the function, the
+argument or the file, and what was expected).
+"""
+import os
+import threading
+
+import numpy
+
+from . import _config
+from . import _native
+
+__all__ = ["Simulation", "Error", "rig", "BACKENDS", "PARTS", "__version__", "library_version", "library_path"]
+
+#: The package's version: the project's (CMake's project version, as the library's).
+__version__ = _config.VERSION
+#: The backends a Simulation can run on ("auto": vulkan when a GPU opens, else cpu).
+BACKENDS = tuple(_native.BACKENDS)
+#: The parts of a bird, in the order of bird_poses()' second axis.
+PARTS = ("Body", "Head", "Tail", "LeftArm1", "LeftArm2", "RightArm1", "RightArm2")
+#: Where the library was loaded from.
+library_path = _native.library_path
+
+
+def library_version():
+    """The loaded libkodawari.so's version ("0.2.0"); the same as __version__ unless the
+    library next to the package was replaced."""
+    return _native.lib.kodawari_version().decode()
+
+
+class Error(Exception):
+    """A call into the library failed. str(error) is the library's message; `status` is the
+    C status' name ("KODAWARI_INVALID_ARGUMENT", "KODAWARI_UNAVAILABLE", ...)."""
+
+    def __init__(self, status, message):
+        super().__init__(message)
+        self.status = status
+
+
+def _check(status, handle=None):
+    if status == 0:
+        return
+    lib = _native.lib
+    message = lib.kodawari_simulation_last_error(handle) if handle else lib.kodawari_last_error()
+    raise Error(lib.kodawari_status_name(status).decode(), message.decode(errors="replace"))
+
+
+def rig(character_path, scene_path, clip="", duration=10.0):
+    """Sets up the chains of a rigged .glb/.gltf/.vrm character as `kodawari rig` does and
+    writes a scene file that simulates it at `scene_path` (docs/rigged-characters.md):
+    VRM spring bones, else bones named like hair, tails and ears. `clip`: the animation to
+    play ("" = the file's first); `duration`: the scene's, in seconds. Returns the chains
+    as (name, root node, joint count) tuples. Raises Error naming the file when it has no
+    chains or cannot be read."""
+    chains = _native.ctypes.create_string_buffer(256 * 1024)
+    _check(_native.lib.kodawari_rig_scene(os.fsencode(character_path), os.fsencode(scene_path),
+                                          clip.encode() if clip else None, float(duration), chains, len(chains)))
+    out = []
+    for line in chains.value.decode(errors="replace").split("\n"):
+        if line:
+            name, root, joints = line.split("\t")
+            out.append((name, root, int(joints)))
+    return out
+
+
+class Simulation:
+    """A scene file simulated frame after frame on one backend kind, as `kodawari run`
+    runs it: its flocks' birds and its characters' chains.
+
+    Make one with Simulation.open(). It holds the library's simulation (and, on vulkan, a
+    Vulkan device) until close(), the end of a `with` block, or garbage collection. Calls on
+    one Simulation are serialized by a lock; different Simulations may run on different
+    threads at once.
+    """
+
+    def __init__(self, handle):
+        # Use Simulation.open(); this takes the library's handle.
+        self._handle = handle
+        self._lock = threading.Lock()
+
+    @classmethod
+    def open(cls, path, backend="cpu", *, frames=None, threads=0, device=None, validation=False):
+        """Loads the scene file `path` (SCENE.json, docs/scene-format.md) and opens its
+        backends.
+
+        backend: "cpu-reference" (scalar, one thread: the oracle), "cpu" (vectorized, on
+        `threads` threads, 0 = one per hardware thread), "vulkan" (compute shaders; Mesa's
+        lavapipe without a GPU) or "auto".
+        frames: how many frames to simulate (None: the scene's duration x fps).
+        device: for vulkan, a device index ("0") or part of its name ("llvmpipe").
+        validation: for vulkan, run under the Khronos validation layer.
+
+        Raises Error naming the file when it cannot be read or is not a valid scene, and
+        with status KODAWARI_UNAVAILABLE when the backend cannot run here (no Vulkan device).
+        """
+        if backend not in _native.BACKENDS:
+            raise ValueError(f"backend: {backend!r}; expected one of {', '.join(BACKENDS)}")
+        if frames is not None and (int(frames) != frames or frames < 1 or frames > 0xFFFFFFFF):
+            raise ValueError(f"frames: {frames!r}; expected a whole number >= 1, or None for the scene's")
+        options = _native.BackendOptions()
+        options.backend = _native.BACKENDS[backend]
+        options.device = device.encode() if device else None
+        options.validation = 1 if validation else 0
+        options.threads = threads
+        handle = _native.ctypes.c_void_p()
+        _check(_native.lib.kodawari_simulation_open(os.fsencode(path), options, int(frames or 0),
+                                                    _native.ctypes.byref(handle)))
+        return cls(handle)
+
+    # ---- lifetime
+
+    def close(self):
+        """Frees the library's simulation (and its device). Calling it again does nothing;
+        any other call afterwards raises Error. Arrays already returned stay valid."""
+        with self._lock:
+            if self._handle:
+                _native.lib.kodawari_simulation_destroy(self._handle)
+                self._handle = None
+
+    def __enter__(self):
+        return self
+
+    def __exit__(self, *exc):
+        self.close()
+
+    def __del__(self):
+        handle = getattr(self, "_handle", None)
+        if handle:
+            _native.lib.kodawari_simulation_destroy(handle)
+            self._handle = None
+
+    def _live(self):
+        if not self._handle:
+            raise Error("KODAWARI_INVALID_ARGUMENT", "sim: this Simulation was closed")
+        return self._handle
+
+    def _info(self):
+        with self._lock:
+            handle = self._live()
+            info = _native.SimulationInfo()
+            _check(_native.lib.kodawari_simulation_get_info(handle, _native.ctypes.byref(info)), handle)
+            return info
+
+    # ---- stepping
+
+    def step(self, frames=1):
+        """Simulates the next `frames` frames (the first call simulates frame 0). Raises
+        Error (naming `frames`) past the last frame; nothing changes then."""
+        if int(frames) != frames or frames < 1 or frames > 0xFFFFFFFF:
+            raise ValueError(f"frames: {frames!r}; expected a whole number >= 1")
+        with self._lock:
+            handle = self._live()
+            _check(_native.lib.kodawari_simulation_step(handle, int(frames)), handle)
+
+    # ---- outputs
+
+    def bird_poses(self, space="local"):
+        """The last simulated frame's birds: a new float32 array of shape (birds, 7, 7), one
+        row per bird (in the scene's order, flock by flock), one entry per part (PARTS
+        order), each x, y, z, qx, qy, qz, qw.
+
+        space="local": each part relative to its parent (its rig offset and rotation; Body
+        in world space), what drives an armature's bones. space="world": each part in world
+        space. Metres, +Y up; quaternions unit length.
+
+        The array is a copy: the next step() does not change it, and it stays valid after
+        close(). Raises Error before the first step().
+        """
+        if space not in ("local", "world"):
+            raise ValueError(f"space: {space!r}; expected 'local' or 'world'")
+        with self._lock:
+            handle = self._live()
+            info = _native.SimulationInfo()
+            _check(_native.lib.kodawari_simulation_get_info(handle, _native.ctypes.byref(info)), handle)
+            poses = numpy.empty((info.bird_count, _native.BIRD_PARTS, _native.TRANSFORM_FLOATS), numpy.float32)
+            out = _native.BirdOutput()
+            if space == "local":
+                out.local_transforms, out.local_transforms_capacity = poses.ctypes.data, poses.size
+            else:
+                out.world_transforms, out.world_transforms_capacity = poses.ctypes.data, poses.size
+            _check(_native.lib.kodawari_simulation_bird_poses(handle, _native.ctypes.byref(out)), handle)
+            return poses
+
+    def bird_tail_spreads(self):
+        """The last simulated frame's tail spread of every bird: a new float32 array of shape
+        (birds,). The Tail's scale along its width (its local x) is 1 + spread, as in the
+        glTF export. A copy, as bird_poses(). Raises Error before the first step()."""
+        with self._lock:
+            handle = self._live()
+            info = _native.SimulationInfo()
+            _check(_native.lib.kodawari_simulation_get_info(handle, _native.ctypes.byref(info)), handle)
+            spreads = numpy.empty(info.bird_count, numpy.float32)
+            _check(_native.lib.kodawari_simulation_bird_tail_spreads(handle, spreads.ctypes.data, spreads.size), handle)
+            return spreads
+
+    def chain_joints(self):
+        """The chains' joints after the last step: (positions, orientations), new float32
+        arrays of shape (joints, 3) (world, metres) and (joints, 4) (the particles' world
+        orientations, x, y, z, w). Chain c's joints are rows chain_ranges()[c]. A scene
+        without characters gives 0 rows.
+
+        Copies, read back from the device on vulkan: valid after the next step() and after
+        close(). Raises Error before the first step().
+        """
+        with self._lock:
+            handle = self._live()
+            info = _native.SimulationInfo()
+            _check(_native.lib.kodawari_simulation_get_info(handle, _native.ctypes.byref(info)), handle)
+            positions = numpy.empty((info.joint_count, 3), numpy.float32)
+            orientations = numpy.empty((info.joint_count, 4), numpy.float32)
+            out = _native.ChainOutput()
+            out.positions, out.positions_capacity = positions.ctypes.data, positions.size
+            out.orientations, out.orientations_capacity = orientations.ctypes.data, orientations.size
+            _check(_native.lib.kodawari_simulation_read_chains(handle, _native.ctypes.byref(out)), handle)
+            return positions, orientations
+
+    def chain_ranges(self):
+        """Where each chain's joints are in chain_joints()' rows: a new uint32 array of
+        shape (chains, 2), each row (first joint, joint count)."""
+        with self._lock:
+            handle = self._live()
+            info = _native.SimulationInfo()
+            _check(_native.lib.kodawari_simulation_get_info(handle, _native.ctypes.byref(info)), handle)
+            ranges = numpy.empty((info.chain_count, 2), numpy.uint32)
+            begin, count = _native.ctypes.c_uint32(), _native.ctypes.c_uint32()
+            for c in range(info.chain_count):
+                _check(_native.lib.kodawari_simulation_chain_joints(handle, c, _native.ctypes.byref(begin),
+                                                                     _native.ctypes.byref(count)), handle)
+                ranges[c] = (begin.value, count.value)
+            return ranges
+
+    def bake(self, path, compact=False):
+        """Bakes the scene to glTF binary files as `kodawari run --out PATH` does and
+        returns the paths written. Every frame from frame 0 is simulated anew on a
+        simulation of its own (same scene, backend and frame count): this one keeps its
+        frame. The flock goes to `path`, the characters to `path` when the scene has no
+        birds, else to PATH-without-.glb + "-characters.glb". compact=True drops the keys
+        that linear interpolation reproduces within 1 mm / 0.001 rad (docs/compact.md).
+        Files are written whole or not at all; Error names a path that cannot be written.
+        """
+        with self._lock:
+            handle = self._live()
+            written = _native.ctypes.create_string_buffer(64 * 1024)
+            _check(_native.lib.kodawari_simulation_bake(handle, os.fsencode(path), 1 if compact else 0, written,
+                                                        len(written)), handle)
+            return [os.fsdecode(line) for line in written.value.split(b"\n") if line]
+
+    # ---- what it is
+
+    @property
+    def backend(self):
+        """The backend running ("cpu-reference", "cpu" or "vulkan"; "auto" resolved)."""
+        return _native.BACKEND_NAMES[self._info().backend]
+
+    @property
+    def device(self):
+        """What it runs on ("llvmpipe (LLVM 15.0.6, 256 bits)", "2 threads")."""
+        return self._info().device.decode(errors="replace")
+
+    @property
+    def fallback_reason(self):
+        """Why backend="auto" runs on the CPU ("" when it did not fall back)."""
+        return self._info().fallback_reason.decode(errors="replace")
+
+    @property
+    def name(self):
+        """The scene's name."""
+        return self._info().name.decode(errors="replace")
+
+    @property
+    def bird_count(self):
+        """Birds of every flock."""
+        return self._info().bird_count
+
+    @property
+    def character_count(self):
+        """Character instances."""
+        return self._info().character_count
+
+    @property
+    def chain_count(self):
+        """Chains of every character instance."""
+        return self._info().chain_count
+
+    @property
+    def joint_count(self):
+        """Joints of every chain: chain_joints()' rows."""
+        return self._info().joint_count
+
+    @property
+    def frame_count(self):
+        """Frames in all: open()'s `frames`, else the scene's."""
+        return self._info().frame_count
+
+    @property
+    def frame(self):
+        """The frame simulated last (0 after the first step), or None before it."""
+        done = self._info().next_frame
+        return done - 1 if done else None
+
+    @property
+    def fps(self):
+        """Frames per second of the scene."""
+        return self._info().fps
+
+    def __repr__(self):
+        if not self._handle:
+            return "<kodawari.Simulation (closed)>"
+        info = self._info()
+        return (f"<kodawari.Simulation {info.name.decode(errors='replace')!r}: {info.bird_count} birds, "
+                f"{info.chain_count} chains, {info.next_frame} of {info.frame_count} frames simulated on "
+                f"{_native.BACKEND_NAMES[info.backend]}>")

@@ -1,0 +1,329 @@
+"""ctest `blender_addon`: the add-on (blender/kodawari_blender) installed from
+kodawari_blender.zip alone into an empty user scripts folder and run headless:
+
+    blender -b --factory-startup --python-exit-code 1 -P test_addon.py -- kodawari_blender.zip
+
+- bad selections (nothing, a mesh, a poly curve, a handle on its point) report an error
+  and change nothing;
+- a Bezier curve of three control points gives N armatures (N = 7, not a multiple of
+  anything) with one action each, in a new collection, keyed from the scene's start frame;
+  every bird's Body follows the curve within 0.05 m with spread 0 (its wingbeat bob), and
+  stays within the spread's reach of it with spread 3.
+"""
+import json
+import math
+import os
+import sys
+import tempfile
+
+import bpy
+from mathutils import Vector
+
+zip_path, chibi_path = sys.argv[sys.argv.index("--") + 1:][:2]
+failures = []
+
+
+def check(condition, what):
+    if not condition:
+        failures.append(what)
+        print("FAILED:", what, flush=True)
+
+
+def counts():
+    return {name: len(getattr(bpy.data, name)) for name in ("objects", "armatures", "meshes", "actions", "collections")}
+
+
+def expect_error(needle, operator=None, **properties):
+    before = counts()
+    try:
+        (operator or bpy.ops.kodawari.flock_from_curve)(**properties)
+        check(False, f"no error for {needle!r}")
+    except RuntimeError as error:  # an operator's ERROR report, run from a script
+        check(needle in str(error), f"the error {str(error)!r} does not say {needle!r}")
+        print(f"refused: {str(error).strip()}")
+    check(counts() == before, f"a refused call changed the file: {before} -> {counts()}")
+
+
+bpy.ops.wm.read_factory_settings(use_empty=True)
+scripts = os.environ.get("BLENDER_USER_SCRIPTS", "")
+check(scripts != "", "BLENDER_USER_SCRIPTS is not set: the test would install into the user's own folder")
+bpy.ops.preferences.addon_install(filepath=zip_path, overwrite=True)
+bpy.ops.preferences.addon_enable(module="kodawari_blender")
+import kodawari_blender  # noqa: E402
+from kodawari_blender import flock  # noqa: E402
+
+# The zip's own package and library, not the build tree's.
+check(flock.kodawari.library_path.startswith(os.path.realpath(scripts)) or
+      flock.kodawari.library_path.startswith(scripts), f"library from {flock.kodawari.library_path}")
+print(f"add-on from {os.path.dirname(kodawari_blender.__file__)}, library {flock.kodawari.library_path}")
+
+scene = bpy.context.scene
+scene.render.fps = 24
+scene.frame_start = 1
+scene.frame_end = 48
+
+# ---- Bad selections.
+expect_error("select one or more Bezier curve")
+bpy.ops.mesh.primitive_cube_add()
+expect_error("select one or more Bezier curve")
+poly = bpy.data.curves.new("poly", "CURVE")
+spline = poly.splines.new("POLY")
+spline.points.add(2)
+poly_object = bpy.data.objects.new("poly", poly)
+scene.collection.objects.link(poly_object)
+bpy.ops.object.select_all(action="DESELECT")
+poly_object.select_set(True)
+expect_error("is a poly spline")
+
+# ---- A route of three control points, moved by its object.
+curve = bpy.data.curves.new("route", "CURVE")
+curve.dimensions = "3D"
+spline = curve.splines.new("BEZIER")
+spline.bezier_points.add(2)
+points = [((0, 0, 20), (-10, 0, 20), (10, 0, 20)),
+          ((40, 10, 25), (30, 8, 24), (50, 12, 26)),
+          ((80, 0, 20), (70, 2, 20), (90, -2, 20))]
+for point, (co, left, right) in zip(spline.bezier_points, points):
+    point.handle_left_type = point.handle_right_type = "FREE"
+    point.co, point.handle_left, point.handle_right = co, left, right
+route = bpy.data.objects.new("route", curve)
+route.location = (5, -3, 0)
+scene.collection.objects.link(route)
+bpy.ops.object.select_all(action="DESELECT")
+route.select_set(True)
+bpy.context.view_layer.objects.active = route
+bpy.context.view_layer.update()
+
+# A handle on its point: refused, naming it.
+saved = spline.bezier_points[1].handle_right.copy()
+spline.bezier_points[1].handle_right = spline.bezier_points[1].co
+expect_error("point 1: a handle sits on its point")
+spline.bezier_points[1].handle_right = saved
+bpy.context.view_layer.update()
+
+# The curve in world space, sampled densely (5000 points per segment: 1 cm apart on these
+# ~45 m segments, so sampling adds at most 5 mm to a distance).
+world = route.matrix_world
+control = []
+bp = spline.bezier_points
+for k in range(len(bp) - 1):
+    control.append([world @ bp[k].co, world @ bp[k].handle_right, world @ bp[k + 1].handle_left, world @ bp[k + 1].co])
+samples = []
+for b0, b1, b2, b3 in control:
+    for i in range(5001):
+        t = i / 5000
+        u = 1 - t
+        samples.append(u * u * u * b0 + 3 * u * u * t * b1 + 3 * u * t * t * b2 + t * t * t * b3)
+
+
+def distance_to_curve(p):
+    return min((p - s).length for s in samples)
+
+
+def bodies(armatures, frame):
+    scene.frame_set(frame)
+    out = []
+    for arm in armatures:
+        body = arm.pose.bones["Body"]
+        out.append((arm.matrix_world @ body.matrix).translation.copy())
+    return out
+
+
+def make_flock(**properties):
+    bpy.ops.object.select_all(action="DESELECT")
+    route.select_set(True)
+    before = {o.as_pointer() for o in bpy.data.objects}
+    result = bpy.ops.kodawari.flock_from_curve(**properties)
+    check(result == {"FINISHED"}, f"flock_from_curve returned {result}")
+    new = [o for o in bpy.data.objects if o.as_pointer() not in before]
+    return [o for o in new if o.type == "ARMATURE"], new
+
+
+N = 7
+armatures, new = make_flock(count=N, wing_type="GULL", spread=0.0, frames=48)
+check(len(armatures) == N, f"{len(armatures)} armatures, expected {N}")
+actions = [a.animation_data.action for a in armatures if a.animation_data and a.animation_data.action]
+check(len(actions) == N and len(set(actions)) == N, f"{len(actions)} actions for {N} armatures")
+collections = {c.name for o in new for c in o.users_collection}
+check(len(collections) == 1 and next(iter(collections)).startswith("Flock route"), f"collections {collections}")
+keys = [k.co.x for a in actions for f in a.fcurves for k in f.keyframe_points]
+check(min(keys) == 1 and max(keys) == 48, f"keys from frame {min(keys)} to {max(keys)}, expected 1 to 48")
+worst = 0.0
+for frame in (1, 10, 24, 37, 48):
+    for p in bodies(armatures, frame):
+        worst = max(worst, distance_to_curve(p))
+print(f"spread 0: {N} bodies within {worst:.4f} m of the curve at frames 1 to 48")
+# The Body flies on the route, bobbing with the wingbeat by up to 0.05 body lengths x the
+# amplitude (docs/flight-modes.md F.5, KW_BOB_HEIGHT; a gull's: ~0.02 m), and the sampling
+# above adds up to 5 mm: 0.05 m bounds both (measured: 0.024 m).
+check(worst < 0.05, f"a body is {worst} m off the curve")
+
+# The armatures are made from the poses directly (blender/kodawari_blender/build.py), not
+# by the glTF importer: every bone's matrix must be what the importer makes of the same
+# flock's glTF file (baked here by the add-on's own package from the add-on's own scene
+# description), keys at frame f + 1 against the importer's at f (it keys from frame 0).
+# Within 1e-4 (m and rotation-matrix entries): float32 keys of ~50 m coordinates are
+# 4e-6 apart, and the two compose the same transforms in other orders.
+from types import SimpleNamespace  # noqa: E402
+settings = SimpleNamespace(count=N, wing_type="GULL", spread=0.0, speed=0.0, trail=0.0, takeoff=False, landing=False,
+                           seed=1)
+description = flock.scene_dict([route], settings, 24.0, 48)
+ours = sorted(armatures, key=lambda a: int(a.name.rsplit("_", 1)[1]))
+with tempfile.TemporaryDirectory() as folder:
+    path = os.path.join(folder, "flock.json")
+    with open(path, "w") as file:
+        json.dump(description, file)
+    with flock.kodawari.Simulation.open(path, "cpu", frames=48) as sim:
+        sim.bake(os.path.join(folder, "flock.glb"))
+    before = {o.as_pointer() for o in bpy.data.objects}
+    flock.import_gltf(os.path.join(folder, "flock.glb"))
+imported = [o for o in bpy.data.objects if o.as_pointer() not in before]
+reference = sorted((o for o in imported if o.type == "ARMATURE"), key=lambda a: int(a.name.rsplit("_", 1)[1]))
+check(len(reference) == N, f"the importer made {len(reference)} armatures")
+worst = 0.0
+for frame in (0, 17, 47):
+    scene.frame_set(frame)
+    want = [[(a.matrix_world @ pb.matrix).copy() for pb in a.pose.bones] for a in reference]
+    names = [[pb.name.rsplit("/", 1)[1] for pb in a.pose.bones] for a in reference]
+    scene.frame_set(frame + 1)
+    for a, w, n in zip(ours, want, names):
+        for matrix, part in zip(w, n):
+            got = a.matrix_world @ a.pose.bones[part].matrix
+            worst = max(worst, max(abs(got[i][j] - matrix[i][j]) for i in range(4) for j in range(4)))
+print(f"the armatures made directly against the glTF importer's: bone matrices within {worst:.2e}")
+check(worst < 1e-4, f"bone matrices {worst} off the importer's")
+for obj in imported:
+    bpy.data.objects.remove(obj)
+
+armatures, new = make_flock(count=N, wing_type="PIGEON", spread=3.0, frames=48, seed=5)
+reach = math.sqrt(3 ** 2 + 3 ** 2 + 1.5 ** 2)
+worst = max(distance_to_curve(p) for frame in (1, 30) for p in bodies(armatures, frame))
+print(f"spread 3: bodies within {worst:.3f} m of the curve (the offsets reach {reach:.3f} m)")
+check(worst < reach + 0.05 and worst > 0.1, f"spread 3: a body {worst} m off the curve")
+
+# Take-off and landing: perched on the curve's first point at the first frame and on its
+# last point at the last (within 1 cm, float rounding of ~90 m coordinates; measured 3e-6
+# m). 480 frames (20 s) leave the gulls time to fly the ~90 m at 12 m/s and land.
+armatures, new = make_flock(count=3, wing_type="GULL", spread=0.0, frames=480, takeoff=True, landing=True)
+start, end = control[0][0], control[-1][3]
+first = max((p - start).length for p in bodies(armatures, 1))
+last = max((p - end).length for p in bodies(armatures, 480))
+print(f"take-off and landing: bodies {first:.3f} m from the start at frame 1, {last:.3f} m from the end at frame 480")
+check(first < 0.01 and last < 0.01, f"perches: {first} m from the start, {last} m from the end")
+spline.use_cyclic_u = True
+bpy.ops.object.select_all(action="DESELECT")
+route.select_set(True)
+expect_error("take-off and landing need an open curve", takeoff=True)
+spline.use_cyclic_u = False
+
+# ---- Bake Chains on the chibi, imported as a user would (its clips in NLA tracks, "idle"
+# active).
+for obj in list(bpy.data.objects):
+    bpy.data.objects.remove(obj)
+scene.frame_start, scene.frame_end = 1, 48
+flock.import_gltf(chibi_path)
+chibi = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+own = chibi.animation_data.action
+own_keys = [(f.data_path, f.array_index, [tuple(k.co) for k in f.keyframe_points]) for f in own.fcurves]
+tracks = len(chibi.animation_data.nla_tracks)
+bpy.ops.object.select_all(action="DESELECT")
+bpy.context.view_layer.objects.active = None
+expect_error("make a rigged character's armature the active object", operator=bpy.ops.kodawari.bake_chains)
+# An armature without chains: one bone named like none of them.
+bare = bpy.data.objects.new("bare", bpy.data.armatures.new("bare"))
+scene.collection.objects.link(bare)
+bpy.context.view_layer.objects.active = bare
+bpy.ops.object.mode_set(mode="EDIT")
+bone = bare.data.edit_bones.new("spine")
+bone.head, bone.tail = (0, 0, 0), (0, 0, 1)
+bpy.ops.object.mode_set(mode="OBJECT")
+expect_error("armature 'bare'", operator=bpy.ops.kodawari.bake_chains, frames=48)
+
+# Roll the chain bones a quarter turn, as a user's own rig may have them: the keys must
+# still put every bone where the simulation has it and deform the mesh as the baked file
+# does. (Blender's exporter and importer keep the roll through the round trip, so here
+# chains.py's rest correction is the identity; it is there for rigs whose bones the
+# importer orients otherwise.)
+bpy.context.view_layer.objects.active = chibi
+bpy.ops.object.mode_set(mode="EDIT")
+for bone in chibi.data.edit_bones:
+    if bone.name.split("_")[0] in ("ahoge", "bang", "hair", "tail"):
+        bone.roll += math.pi / 2
+bpy.ops.object.mode_set(mode="OBJECT")
+result = bpy.ops.kodawari.bake_chains(frames=48)
+check(result == {"FINISHED"}, f"bake_chains returned {result}")
+data = chibi.animation_data
+check(data.action == own, "the armature's active action changed")
+check([(f.data_path, f.array_index, [tuple(k.co) for k in f.keyframe_points]) for f in own.fcurves] == own_keys,
+      "the armature's own keys changed")
+check(len(data.nla_tracks) == tracks + 1 and data.nla_tracks[-1].name == "Kodawari chains",
+      f"NLA tracks {[t.name for t in data.nla_tracks]}")
+baked = data.nla_tracks[-1].strips[0].action
+bones = sorted({f.data_path.split('"')[1] for f in baked.fcurves})
+check(len(bones) == 40, f"{len(bones)} bones keyed: {bones}")
+
+# The same rig and simulation through the add-on's package: every chain bone's head on its
+# joint. Within 1e-3 m: the character goes through Blender's glTF exporter and Kodawari's
+# rigged export and importer, each writing float32 (the chibi is 1.4 m tall: 1e-7 m per
+# rounding), and Blender composes each bone down its chain of up to 8 bones.
+with tempfile.TemporaryDirectory() as folder:
+    bpy.ops.object.select_all(action="DESELECT")
+    chibi.select_set(True)
+    for child in chibi.children:
+        child.select_set(True)
+    bpy.ops.export_scene.gltf(filepath=os.path.join(folder, "chibi.glb"), export_format="GLB", use_selection=True)
+    chains = flock.kodawari.rig(os.path.join(folder, "chibi.glb"), os.path.join(folder, "chibi.json"), clip="idle",
+                                duration=2.0)
+    with open(os.path.join(folder, "chibi.json")) as file:
+        description = json.load(file)
+    description["fps"] = 24.0
+    with open(os.path.join(folder, "chibi.json"), "w") as file:
+        json.dump(description, file)
+    worst = 0.0
+    with flock.kodawari.Simulation.open(os.path.join(folder, "chibi.json"), "cpu", frames=48) as sim:
+        sim.bake(os.path.join(folder, "baked.glb"))
+        before = {o.as_pointer() for o in bpy.data.objects}
+        flock.import_gltf(os.path.join(folder, "baked.glb"))
+        imported = [o for o in bpy.data.objects if o.as_pointer() not in before]
+        reference = next(o for o in imported if o.type == "ARMATURE")
+        prefix = reference.data.bones[0].name.split("/", 1)[0] + "/"
+        deform = 0.0
+        ranges = sim.chain_ranges()
+        for frame in range(48):
+            sim.step(1)
+            if frame not in (0, 20, 47):
+                continue
+            joints, _ = sim.chain_joints()
+            scene.frame_set(frame)  # Kodawari's frame f is Blender's frame f (glTF time f / fps)
+            for (name, root, count), (first, n) in zip(chains, ranges):
+                bone = chibi.data.bones[root]
+                for j in range(n):
+                    x, y, z = joints[first + j]
+                    head = chibi.matrix_world @ chibi.pose.bones[bone.name].head
+                    worst = max(worst, (head - Vector((x, -z, y))).length)
+                    # The bone deforms the mesh as the baked file's bone does: pose x rest^-1
+                    # (world), whatever the two rest orientations are.
+                    theirs = reference.data.bones[prefix + bone.name]
+                    want = (reference.matrix_world @ reference.pose.bones[theirs.name].matrix @
+                            theirs.matrix_local.inverted() @ reference.matrix_world.inverted())
+                    got = (chibi.matrix_world @ chibi.pose.bones[bone.name].matrix @ bone.matrix_local.inverted() @
+                           chibi.matrix_world.inverted())
+                    deform = max(deform, max(abs(got[r][c] - want[r][c]) for r in range(3) for c in range(4)))
+                    bone = bone.children[0] if bone.children else bone
+    for obj in imported:
+        bpy.data.objects.remove(obj)
+print(f"bake_chains: {len(chains)} chains, {len(bones)} bones keyed; heads within {worst:.2e} m of the joints, "
+      f"deformation within {deform:.2e} of the baked file's")
+check(worst < 1e-3, f"chain bone heads {worst} m off the simulated joints")
+# 1e-4: float32 rotations composed down chains of up to 8 bones, and the same rounding of
+# ~1 m translations.
+check(deform < 1e-4, f"chain bones deform {deform} off the baked file's bones")
+# And they move: the tail's tip between frames 1 and 24 (the idle sways it).
+scene.frame_set(1)
+a = (chibi.matrix_world @ chibi.pose.bones["tail_7"].head).copy()
+scene.frame_set(24)
+b = chibi.matrix_world @ chibi.pose.bones["tail_7"].head
+check((a - b).length > 0.01, f"the tail's tip moved {(a - b).length} m")
+
+print(f"test_addon: {len(failures)} failures")
+sys.exit(1 if failures else 0)

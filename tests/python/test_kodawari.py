@@ -1,0 +1,221 @@
+"""ctest `python`: the Python package `kodawari` (python/kodawari, issue 33) from the build
+tree, in Debian's /usr/bin/python3 with Debian's numpy, on every backend kind this machine
+has (cpu-reference, cpu, and vulkan where a Vulkan device opens: lavapipe here), with
+figures checked against each other and against the scene:
+
+- scenes/flock.json (270 birds, 30 frames): poses of shape (270, 7, 7), unit quaternions,
+  cpu against cpu-reference and vulkan against cpu-reference within the bird parity
+  tolerances (BirdTolerances, kodawari/compare.hpp);
+- scenes/ahoge.json (one 12-joint chain, 40 frames): cpu's joints are cpu-reference's bits,
+  vulkan's within 1e-3 of the chain length;
+- arrays are copies; a bad path raises kodawari.Error naming the file; a bake writes a
+  glTF binary file; help() shows the methods' documentation.
+
+- a bake writes the bytes `kodawari run` writes for the same scene, backend and frames.
+
+Usage: /usr/bin/python3 test_kodawari.py BUILD_PYTHON_DIR SOURCE_DIR TEMP_DIR VERSION KODAWARI_CLI
+Exit status 0 when every check passed.
+"""
+import os
+import pydoc
+import subprocess
+import sys
+import time
+
+build_python, source, temp, version, cli = sys.argv[1:6]
+sys.path.insert(0, build_python)
+
+failures = []
+
+
+def check(condition, what):
+    if not condition:
+        failures.append(what)
+        print("FAILED:", what, flush=True)
+
+
+# The interpreter ctest runs is Debian's, whatever else is on PATH (pyenv, conda).
+check(sys.executable == "/usr/bin/python3", f"running in {sys.executable}, not /usr/bin/python3")
+try:
+    import numpy
+except ImportError:
+    print("test_kodawari: Debian's python3-numpy is missing (bash scripts/setup installs it)", file=sys.stderr)
+    sys.exit(1)
+import kodawari  # noqa: E402
+
+check(os.path.dirname(kodawari.__file__) == os.path.join(build_python, "kodawari"), f"imported {kodawari.__file__}")
+check(kodawari.library_path.startswith(os.path.join(build_python, "kodawari")), f"library {kodawari.library_path}")
+check(kodawari.__version__ == version == kodawari.library_version(),
+      f"versions: package {kodawari.__version__}, project {version}, library {kodawari.library_version()}")
+
+FLOCK = os.path.join(source, "scenes", "flock.json")
+AHOGE = os.path.join(source, "scenes", "ahoge.json")
+validation = os.environ.get("KODAWARI_VALIDATION", "0") not in ("", "0")
+
+
+def open_or_none(path, backend, frames):
+    try:
+        return kodawari.Simulation.open(path, backend, frames=frames, validation=validation and backend == "vulkan")
+    except kodawari.Error as error:
+        if backend == "vulkan" and error.status == "KODAWARI_UNAVAILABLE":
+            print(f"vulkan: not available here, skipped ({error})")
+            return None
+        raise
+
+
+# ---- The flock on every backend.
+poses = {}
+for backend in ("cpu-reference", "cpu", "vulkan"):
+    sim = open_or_none(FLOCK, backend, 30)
+    if sim is None:
+        continue
+    with sim:
+        check(sim.backend == backend, f"{backend}: runs {sim.backend}")
+        check((sim.bird_count, sim.chain_count, sim.frame_count, sim.frame) == (270, 0, 30, None),
+              f"{backend}: {sim!r}")
+        start = time.perf_counter()
+        sim.step(10)
+        early = sim.bird_poses("world")
+        sim.step(20)
+        seconds = time.perf_counter() - start
+        local = sim.bird_poses()
+        world = sim.bird_poses("world")
+        check(sim.frame == 29, f"{backend}: frame {sim.frame} after 30 frames")
+        check(local.shape == (270, 7, 7) and local.dtype == numpy.float32, f"{backend}: shape {local.shape}")
+        # Body is in world space in both spaces.
+        check(numpy.array_equal(local[:, 0], world[:, 0]), f"{backend}: Body differs between spaces")
+        # "local": a child part sits at its rig offset, the same for every bird of a wing
+        # type (the first 120 are pigeons); "world": at that distance from its parent.
+        check(numpy.array_equal(local[:120, 1, :3], numpy.broadcast_to(local[0, 1, :3], (120, 3))),
+              f"{backend}: the pigeons' Head offsets differ in local space")
+        reach = numpy.linalg.norm(world[:, 1, :3] - world[:, 0, :3], axis=1)
+        check(numpy.abs(reach - numpy.linalg.norm(local[:, 1, :3], axis=1)).max() < 1e-5,
+              f"{backend}: Head's world distance from Body is not its offset's length")
+        norms = numpy.linalg.norm(local[:, :, 3:], axis=2)
+        check(numpy.abs(norms - 1).max() < 1e-5, f"{backend}: quaternion lengths off by {numpy.abs(norms - 1).max()}")
+        # 20 frames at 60 fps: every bird flies between 1 and 40 m/s (cruise speeds 8-20 m/s).
+        speeds = numpy.linalg.norm(world[:, 0, :3] - early[:, 0, :3], axis=1) / (20 / 60)
+        check(speeds.min() > 1 and speeds.max() < 40, f"{backend}: speeds {speeds.min()} to {speeds.max()} m/s")
+        # The Tail's spread (its scale is 1 + s): the looks of wingbeat.cpp spread 0 to 0.9.
+        spreads = sim.bird_tail_spreads()
+        check(spreads.shape == (270,) and spreads.min() >= 0 and spreads.max() <= 1, f"{backend}: spreads {spreads}")
+        # A copy: stepping on does not change it.
+        before = local.copy()
+        check(not numpy.shares_memory(local, sim.bird_poses()), f"{backend}: two calls share memory")
+        print(f"{backend}: 270 birds, 30 frames in {seconds * 1000:.1f} ms on {sim.device}; "
+              f"speeds {speeds.min():.2f} to {speeds.max():.2f} m/s")
+        poses[backend] = local
+    check(numpy.array_equal(before, local), f"{backend}: an array changed after close()")
+
+reference = poses["cpu-reference"]
+for backend in ("cpu", "vulkan"):
+    if backend not in poses:
+        continue
+    got = poses[backend]
+    position = float(numpy.abs(got[:, :, :3] - reference[:, :, :3]).max())
+    rotation = float(numpy.abs(got[:, :, 3:] - reference[:, :, 3:]).max())
+    print(f"{backend} against cpu-reference: positions within {position:g} m, quaternion components within {rotation:g}")
+    # BirdTolerances: rotations within 1e-4 rad, which moves a unit quaternion's components
+    # by at most 5e-5; positions within 1e-5 of the longest route, 2e-3 m on flock.json's
+    # ~200 m routes. (The cpu backend's poses are not cpu-reference's bits: it takes its
+    # own vectorized sines of the wingbeat phase; tests/backends/test_backends.cpp.)
+    check(position <= 2e-3, f"{backend}: positions {position} m off cpu-reference")
+    check(rotation <= 5e-5, f"{backend}: rotations {rotation} off cpu-reference")
+
+# ---- The ahoge's chain on every backend.
+joints = {}
+for backend in ("cpu-reference", "cpu", "vulkan"):
+    sim = open_or_none(AHOGE, backend, 40)
+    if sim is None:
+        continue
+    with sim:
+        check((sim.chain_count, sim.joint_count, sim.bird_count) == (1, 12, 0), f"{backend}: {sim!r}")
+        check(sim.chain_ranges().tolist() == [[0, 12]], f"{backend}: ranges {sim.chain_ranges().tolist()}")
+        sim.step(40)
+        positions, orientations = sim.chain_joints()
+        check(positions.shape == (12, 3) and orientations.shape == (12, 4), f"{backend}: {positions.shape}")
+        segments = numpy.linalg.norm(numpy.diff(positions, axis=0), axis=1)
+        # 0.14 m in 11 segments; the distance constraints hold each within 2 % while the
+        # head turns (the C test's bound).
+        check(numpy.abs(segments / (0.14 / 11) - 1).max() < 0.02, f"{backend}: segments {segments}")
+        joints[backend] = positions
+for backend in ("cpu", "vulkan"):
+    if backend not in joints:
+        continue
+    worst = float(numpy.linalg.norm(joints[backend] - joints["cpu-reference"], axis=1).max())
+    print(f"ahoge on {backend} against cpu-reference: joints within {worst:g} m")
+    if backend == "cpu":
+        check(numpy.array_equal(joints["cpu"], joints["cpu-reference"]), "cpu's joints are not cpu-reference's bits")
+    else:
+        # The rod backends' trajectory parity (tests/backends/test_rod_backends.cpp): within
+        # 1e-3 of the chain length, 1.4e-4 m.
+        check(worst < 1e-3 * 0.14, f"vulkan's joints {worst} m off cpu-reference")
+
+# ---- Errors carry the library's message.
+missing = os.path.join(temp, "no-such-scene.json")
+try:
+    kodawari.Simulation.open(missing)
+    check(False, "opening a missing file raised nothing")
+except kodawari.Error as error:
+    print(f"a missing file: {error.status}: {error}")
+    check(error.status == "KODAWARI_INVALID_ARGUMENT" and missing in str(error), f"the error says {error}")
+with kodawari.Simulation.open(FLOCK, "cpu", frames=3) as sim:
+    for call in (sim.bird_poses, sim.chain_joints):
+        try:
+            call()
+            check(False, f"{call.__name__} before a step raised nothing")
+        except kodawari.Error as error:
+            check("no frame simulated yet" in str(error), f"{call.__name__}: {error}")
+    try:
+        sim.step(4)
+        check(False, "stepping past the end raised nothing")
+    except kodawari.Error as error:
+        check("frames: 4" in str(error) and "expected 1 to 3" in str(error), f"step(4): {error}")
+    check(sim.frame is None, "a rejected step changed the frame")
+    # A bake: its own simulation from frame 0; this one keeps its frame.
+    sim.step(2)
+    out = os.path.join(temp, "flock-python.glb")
+    written = sim.bake(out)
+    check(written == [out], f"bake wrote {written}")
+    with open(out, "rb") as file:
+        check(file.read(4) == b"glTF", f"{out} is not a glTF binary file")
+    check(sim.frame == 1, f"frame {sim.frame} after a bake")
+    # The command line's file for the same scene, backend and frames, byte for byte.
+    out_cli = os.path.join(temp, "flock-cli.glb")
+    # Without the sanitizer runtime the asan lane preloads into Python (the command carries
+    # its own).
+    environment = {k: v for k, v in os.environ.items() if k != "LD_PRELOAD"}
+    subprocess.run([cli, "run", FLOCK, "--backend", "cpu", "--frames", "3", "--out", out_cli], check=True,
+                   stdout=subprocess.DEVNULL, env=environment)
+    with open(out, "rb") as a, open(out_cli, "rb") as b:
+        check(a.read() == b.read(), f"{out} differs from `kodawari run`'s {out_cli}")
+    try:
+        sim.bake(os.path.join(temp, "no-such-folder", "x.glb"))
+        check(False, "a bake into a missing folder raised nothing")
+    except kodawari.Error as error:
+        check("no-such-folder" in str(error), f"bake: {error}")
+try:
+    sim.step()
+    check(False, "a closed simulation stepped")
+except kodawari.Error as error:
+    check("closed" in str(error), f"after close: {error}")
+
+# ---- kodawari.rig: the chibi's chains as the README's `kodawari rig` lists them.
+chains = kodawari.rig(os.path.join(source, "scenes", "characters", "chibi.glb"), os.path.join(temp, "chibi.json"),
+                      duration=1.0)
+check(len(chains) == 7 and ("tail_0", "tail_0", 8) in chains, f"rig: {chains}")
+with kodawari.Simulation.open(os.path.join(temp, "chibi.json"), "cpu") as sim:
+    check((sim.chain_count, sim.joint_count, sim.frame_count) == (7, 40, 60), f"the rigged scene: {sim!r}")
+try:
+    kodawari.rig(missing, os.path.join(temp, "x.json"))
+    check(False, "rig of a missing file raised nothing")
+except kodawari.Error as error:
+    check(missing in str(error), f"rig: {error}")
+
+# ---- help() is readable: the docstrings are there.
+text = pydoc.render_doc(kodawari.Simulation, renderer=pydoc.plaintext)
+for needle in ("bird_poses", "a copy", "chain_joints", "bake", "Simulation.open", "Error naming the file"):
+    check(needle in text, f"help(kodawari.Simulation) lacks {needle!r}")
+
+print(f"test_kodawari: {len(failures)} failures")
+sys.exit(1 if failures else 0)
