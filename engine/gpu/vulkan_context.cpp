@@ -257,6 +257,19 @@ std::string auto_passes_over(const GpuDeviceInfo& device) {
                          "times faster there; --backend vulkan, or naming the device, runs on it anyway";
 }
 
+void choose_gpu(GpuInventory& inventory, const std::string& request) {
+    inventory.chosen = -1;
+    inventory.reason.clear();
+    gpu::choose(inventory, request);
+}
+
+bool vulkan_validation_available() {
+    auto context = gpu::open_loader();
+    if (!context) return false;
+    auto found = gpu::guard("Vulkan layers", [&]() -> Result<bool> { return gpu::has_validation_layer(*context.value()); });
+    return found && found.value();
+}
+
 Result<GpuInventory> list_gpus(const std::string& request) {
     auto context = gpu::open_loader();
     if (!context) return context.error();
@@ -268,7 +281,7 @@ Result<GpuInventory> list_gpus(const std::string& request) {
         if (inventory.devices.empty()) {
             inventory.reason = "the Vulkan loader found no device (is a driver such as Mesa's lavapipe installed?)";
         } else {
-            gpu::choose(inventory, request);
+            choose_gpu(inventory, request);
         }
         return inventory;
     });

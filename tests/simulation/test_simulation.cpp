@@ -200,6 +200,53 @@ TEST(AutoBackend, PassesOverACpuTypeDeviceOnly) {
 // And Simulation follows it: on this machine's best device, the cpu backend with the
 // reason when it is a CPU, vulkan silently when it is a GPU; a device named by index is
 // obeyed whatever its type, and `backend` vulkan too.
+// The device choice on a list that no machine here has (issue 38): an NVIDIA discrete GPU
+// beside llvmpipe. The GPU is chosen, auto keeps it, a request by name or index is obeyed,
+// a request that matches nothing is no choice (naming every device), and a GPU passed
+// over for its own reason leaves llvmpipe, which auto then passes over for the cpu backend.
+TEST(AutoBackend, ChoosesOnAFakeDeviceList) {
+    const auto devices = [] {
+        GpuInventory inventory;
+        GpuDeviceInfo llvmpipe;
+        llvmpipe.index = 0;
+        llvmpipe.name = "llvmpipe (LLVM 15.0.6, 256 bits)";
+        llvmpipe.type = "cpu";
+        GpuDeviceInfo h100;
+        h100.index = 1;
+        h100.name = "NVIDIA H100 80GB HBM3";
+        h100.type = "discrete";
+        inventory.devices = {llvmpipe, h100};
+        return inventory;
+    };
+    GpuInventory best = devices();
+    choose_gpu(best, "");
+    ASSERT_EQ(best.chosen, 1);
+    EXPECT_NE(best.reason.find("discrete"), std::string::npos) << best.reason;
+    EXPECT_EQ(auto_passes_over(best.devices[1]), "");
+
+    for (const char* request : {"llvmpipe", "0", "LLVMPIPE"}) {
+        GpuInventory named = devices();
+        choose_gpu(named, request);
+        EXPECT_EQ(named.chosen, 0) << request;
+        EXPECT_NE(named.devices[1].rejected, "") << request;
+    }
+    GpuInventory absent = devices();
+    choose_gpu(absent, "7");
+    EXPECT_EQ(absent.chosen, -1);
+    EXPECT_NE(absent.reason.find("no usable Vulkan device matches \"7\""), std::string::npos) << absent.reason;
+    EXPECT_NE(absent.reason.find("NVIDIA H100 80GB HBM3: is device 1, not 7"), std::string::npos) << absent.reason;
+
+    GpuInventory old_driver = devices();
+    old_driver.devices[1].rejected = "Vulkan 1.0 < 1.1 needed";
+    choose_gpu(old_driver, "");
+    ASSERT_EQ(old_driver.chosen, 0);
+    EXPECT_NE(auto_passes_over(old_driver.devices[0]).find("is a CPU"), std::string::npos);
+    GpuInventory asked_for_it = old_driver;
+    choose_gpu(asked_for_it, "nvidia");
+    EXPECT_EQ(asked_for_it.chosen, -1);
+    EXPECT_NE(asked_for_it.reason.find("Vulkan 1.0 < 1.1 needed"), std::string::npos) << asked_for_it.reason;
+}
+
 TEST(AutoBackend, SimulationTakesTheCpuBackendOnACpuDeviceUnlessNamed) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
     GpuDeviceInfo best;

@@ -45,6 +45,16 @@ struct GpuInventory {
 /// Fails when there is no Vulkan loader or driver.
 [[nodiscard]] KODAWARI_API Result<GpuInventory> list_gpus(const std::string& request);
 
+/// The choice list_gpus() makes, on a list of devices given (a test's, or list_gpus()'s
+/// own): `chosen` and `reason` set, and each device a request passes over marked with why
+/// (`rejected`). Devices already rejected are never chosen. `request` as for list_gpus();
+/// one that matches no usable device leaves `chosen` at -1, its reason naming every device.
+KODAWARI_API void choose_gpu(GpuInventory& inventory, const std::string& request);
+
+/// Whether the Khronos validation layer (VK_LAYER_KHRONOS_validation) is installed where the
+/// Vulkan loader finds it; false without a loader.
+[[nodiscard]] KODAWARI_API bool vulkan_validation_available();
+
 /// Why backend "auto" passes over `device` although it opened: "" for a GPU (discrete,
 /// integrated, virtual or other), and for a CPU-type device (Mesa's lavapipe, SwiftShader)
 /// a sentence saying so: there the cpu backend runs the same work several times faster
