@@ -21,6 +21,7 @@
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/kodawari.h"
 #include "kodawari/result.hpp"
+#include "kodawari/rods/chain_snapshot.hpp"
 
 /// kodawari_vulkan_device_adopt's handle: the application's device, wrapped
 /// (kodawari::adopt_vulkan_device); shared with the worlds made on it.
@@ -175,5 +176,12 @@ void copy_text(const std::string& text, char* out, std::size_t size);
 /// `capacity` floats and needs `needed` (`count_text` says why, "12 joints x 3").
 void require_capacity(const void* pointer, std::size_t capacity, std::size_t needed, const std::string& what,
                       const std::string& count_text);
+
+/// The capacity checks of a kodawari_chain_output for `joints` joints and `chains` chains
+/// (each array it asks for), naming the field.
+void require_chain_output(const kodawari_chain_output& out, std::size_t joints, std::size_t chains);
+/// Writes `s` into the arrays `out` asks for (require_chain_output() first): positions,
+/// orientations (x y z w), rest positions, view directions and weights.
+void write_chain_output(const ChainSnapshot& s, const kodawari_chain_output& out);
 
 }  // namespace kodawari::capi

@@ -375,38 +375,10 @@ KODAWARI_C_API kodawari_status kodawari_chain_world_read(kodawari_chain_world* w
         require_pointer(out, "out");
         const std::size_t joints = world->world.joint_count;
         const std::size_t chains = world->world.chains.size();
-        const std::string j = std::to_string(joints) + " joints";
-        const std::string c = std::to_string(chains) + " chains";
-        require_capacity(out->positions, out->positions_capacity, joints * 3, "out->positions", j + " x 3");
-        require_capacity(out->orientations, out->orientations_capacity, joints * 4, "out->orientations", j + " x 4");
-        require_capacity(out->rest_positions, out->rest_positions_capacity, joints * 3, "out->rest_positions", j + " x 3");
-        require_capacity(out->view_directions, out->view_directions_capacity, chains * 3, "out->view_directions", c + " x 3");
-        require_capacity(out->weights, out->weights_capacity, chains * KODAWARI_WEIGHTS_PER_CHAIN, "out->weights",
-                         c + " x KODAWARI_WEIGHTS_PER_CHAIN (" + std::to_string(KODAWARI_WEIGHTS_PER_CHAIN) + ")");
+        require_chain_output(*out, joints, chains);
         ChainSnapshot& s = world->snapshot;
         check(world->backend->read(s));
-        const auto copy3 = [](const std::vector<glm::vec3>& from, float* to) {
-            if (to == nullptr) return;
-            for (std::size_t i = 0; i < from.size(); ++i) {
-                to[3 * i] = from[i].x;
-                to[3 * i + 1] = from[i].y;
-                to[3 * i + 2] = from[i].z;
-            }
-        };
-        copy3(s.positions, out->positions);
-        copy3(s.rest, out->rest_positions);
-        copy3(s.view_directions, out->view_directions);
-        if (out->orientations != nullptr) {
-            for (std::size_t i = 0; i < s.orientations.size(); ++i) {
-                const glm::quat& q = s.orientations[i];
-                float* o = out->orientations + 4 * i;
-                o[0] = q.x;
-                o[1] = q.y;
-                o[2] = q.z;
-                o[3] = q.w;
-            }
-        }
-        if (out->weights != nullptr) std::copy(s.weights.begin(), s.weights.end(), out->weights);
+        write_chain_output(s, *out);
     });
 }
 
