@@ -35,7 +35,7 @@ void choose_device_by_local_rank(SimulationOptions& options, int local_rank) {
 
 std::vector<std::byte> bytes_of(const void* data, std::size_t size) {
     std::vector<std::byte> out(size);
-    std::memcpy(out.data(), data, size);
+    if (size != 0) std::memcpy(out.data(), data, size);  // memcpy of null, even for 0 bytes, is undefined
     return out;
 }
 
