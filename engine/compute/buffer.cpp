@@ -26,6 +26,7 @@ Result<Buffer> Buffer::create(const Device& device, std::uint64_t size, Usage us
             flags = Flag::eTransferDst;
             required = Memory::eHostVisible;
             preferred = Memory::eHostCached;
+            device.count_readback_buffer(size);
             break;
         case Usage::Vertex:
             // Rewritten by the CPU every frame; device-local too where that exists

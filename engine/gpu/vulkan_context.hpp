@@ -122,6 +122,10 @@ public:
     /// the buffers where they are.
     [[nodiscard]] std::uint64_t read_back_bytes() const { return read_back_bytes_; }
     void count_read_back(std::uint64_t bytes) { read_back_bytes_ += bytes; }
+    /// Bytes of read-back buffers (host memory the device copies into) created so far: how
+    /// a test checks that work reading nothing back pins no host memory for it.
+    [[nodiscard]] std::uint64_t readback_buffer_bytes() const { return readback_buffer_bytes_; }
+    void count_readback_buffer(std::uint64_t bytes) const { readback_buffer_bytes_ += bytes; }
     /// Submissions to the queue so far: how a test checks that recording submits nothing.
     [[nodiscard]] std::uint64_t submissions() const { return submissions_; }
     void count_submission() { ++submissions_; }
@@ -151,6 +155,7 @@ private:
     std::uint64_t timestamp_mask_ = 0;
     std::uint32_t queue_family_ = 0;
     std::uint64_t read_back_bytes_ = 0;
+    mutable std::uint64_t readback_buffer_bytes_ = 0;  // counted by compute::Buffer::create
     std::uint64_t submissions_ = 0;
     bool unified_ = false;
     bool validation_ = false;
