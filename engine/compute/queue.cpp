@@ -28,19 +28,25 @@ Access source(Stage s) {
 
 Access destination(Stage s) {
     Access a;
+    // Uniform buffers (Binding::Uniform) are read through UNIFORM_READ, which SHADER_READ
+    // does not cover (Vulkan's access types): a copy that wrote one (the rods' templates when
+    // dt changes) must be made visible to it by name.
     if (has(s, Stage::Compute)) {
         a = {a.stages | vk::PipelineStageFlagBits::eComputeShader,
-             a.access | vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
+             a.access | vk::AccessFlagBits::eUniformRead | vk::AccessFlagBits::eShaderRead | vk::AccessFlagBits::eShaderWrite};
     }
     if (has(s, Stage::Transfer)) {
         a = {a.stages | vk::PipelineStageFlagBits::eTransfer, a.access | vk::AccessFlagBits::eTransferRead | vk::AccessFlagBits::eTransferWrite};
     }
     if (has(s, Stage::Host)) a = {a.stages | vk::PipelineStageFlagBits::eHost, a.access | vk::AccessFlagBits::eHostRead};
-    if (has(s, Stage::Vertex)) a = {a.stages | vk::PipelineStageFlagBits::eVertexShader, a.access | vk::AccessFlagBits::eShaderRead};
+    if (has(s, Stage::Vertex)) {
+        a = {a.stages | vk::PipelineStageFlagBits::eVertexShader,
+             a.access | vk::AccessFlagBits::eUniformRead | vk::AccessFlagBits::eShaderRead};
+    }
     if (has(s, Stage::Draw)) {
         a = {a.stages | vk::PipelineStageFlagBits::eVertexInput | vk::PipelineStageFlagBits::eVertexShader |
                  vk::PipelineStageFlagBits::eFragmentShader,
-             a.access | vk::AccessFlagBits::eVertexAttributeRead | vk::AccessFlagBits::eShaderRead};
+             a.access | vk::AccessFlagBits::eVertexAttributeRead | vk::AccessFlagBits::eUniformRead | vk::AccessFlagBits::eShaderRead};
     }
     return a;
 }
