@@ -21,7 +21,7 @@ import numpy
 from mathutils import Vector
 
 from . import build
-from .flock import FlockError, import_gltf, kodawari, remove_new, to_kodawari
+from .flock import BACKEND_ITEMS, FlockError, import_gltf, kodawari, remove_new, to_kodawari
 
 
 def chain_bones(armature, root, joints):
@@ -157,10 +157,7 @@ class KODAWARI_OT_bake_chains(bpy.types.Operator):
     frames: bpy.props.IntProperty(name="Frames", description="Frames to bake from frame 0 (the armature's "
                                   "animation's time 0); 0: up to the scene's end frame", default=0, min=0,
                                   max=1000000)
-    backend: bpy.props.EnumProperty(name="Backend", items=(
-        ("cpu", "CPU", "Vectorized, on every core"),
-        ("vulkan", "Vulkan", "Compute shaders on a Vulkan device"),
-        ("cpu-reference", "CPU Reference", "Scalar, one thread")), default="cpu")
+    backend: bpy.props.EnumProperty(name="Backend", items=BACKEND_ITEMS, default="cpu")
 
     def execute(self, context):
         start = time.perf_counter()

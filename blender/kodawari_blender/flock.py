@@ -29,6 +29,13 @@ WING_TYPES = (
 )
 
 
+# The backends an operator offers (both operators: flock.py's and chains.py's).
+BACKEND_ITEMS = (
+    ("cpu", "CPU", "Vectorized, on every core"),
+    ("vulkan", "Vulkan", "Compute shaders on a Vulkan device"),
+    ("cpu-reference", "CPU Reference", "Scalar, one thread"))
+
+
 class FlockError(Exception):
     """A problem with the user's selection or settings, said in Blender's words."""
 
@@ -190,10 +197,7 @@ class KODAWARI_OT_flock_from_curve(bpy.types.Operator):
                                   "0: the scene's frame range", default=0, min=0, max=1000000)
     seed: bpy.props.IntProperty(name="Seed", description="Seed of the birds' offsets, speeds and phases",
                                 default=1, min=0)
-    backend: bpy.props.EnumProperty(name="Backend", items=(
-        ("cpu", "CPU", "Vectorized, on every core"),
-        ("vulkan", "Vulkan", "Compute shaders on a Vulkan device"),
-        ("cpu-reference", "CPU Reference", "Scalar, one thread")), default="cpu")
+    backend: bpy.props.EnumProperty(name="Backend", items=BACKEND_ITEMS, default="cpu")
 
     def execute(self, context):
         start = time.perf_counter()

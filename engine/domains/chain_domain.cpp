@@ -113,13 +113,7 @@ public:
                               "from poses that each frame overwrites; record from frame 0, or make the Simulation with "
                               "SimulationOptions::device_inputs = false");
         }
-        KW_TRY(animator_->frame(f, input_));
-        if (view_camera_) input_.camera = *view_camera_;
-        if (f == 0) {
-            KW_TRY(rods_->load(scene_->world, input_));
-        } else {
-            KW_TRY(record_step(*rods_, cmd, input_));
-        }
+        KW_TRY(frame(f, cmd));
         current_ = f;
         return {};
     }
@@ -170,21 +164,28 @@ public:
     const ChainTiming& timing() const { return timing_; }
 
 private:
-    // Frame `f` of the chains: the kinematic input, then the initial state (f == 0) or one step.
-    Result<void> frame(std::uint32_t f) {
+    // Frame `f` of the chains: the kinematic input, then the initial state (f == 0) or one
+    // step, submitted, or recorded into `cmd` when one is given (record()).
+    Result<void> frame(std::uint32_t f, VkCommandBuffer cmd = VK_NULL_HANDLE) {
         KW_TRY(animator_->frame(f, input_));
         timing_.pose_ms += animator_->last_pose_ms();
         if (view_camera_) input_.camera = *view_camera_;
         const auto start = std::chrono::steady_clock::now();
-        KW_TRY(f == 0 ? rods_->load(scene_->world, input_) : rods_->step(input_));
-        if (f == 0 && device_inputs_) {
+        if (f == 0) {
+            KW_TRY(rods_->load(scene_->world, input_));
+        } else {
+            KW_TRY(cmd != VK_NULL_HANDLE ? record_step(*rods_, cmd, input_) : rods_->step(input_));
+        }
+        if (f == 0 && device_inputs_ && cmd == VK_NULL_HANDLE) {
             // From now on the rigged characters' input is written where the chains step
             // (when the pose and rod backends share a Vulkan device; nothing otherwise).
+            // Not when recording: frames in flight would read the pose matrices the next
+            // frame's clips overwrite.
             auto took = animator_->write_inputs_on(*rods_);
             if (!took) return took.error();
         }
         (f < 2 ? timing_.warmup_seconds : timing_.seconds) += seconds_since(start);
-        if (f >= 2 && rods_->last_gpu_ms() >= 0.0) timing_.gpu_ms += rods_->last_gpu_ms();
+        if (f >= 2 && cmd == VK_NULL_HANDLE && rods_->last_gpu_ms() >= 0.0) timing_.gpu_ms += rods_->last_gpu_ms();
         return {};
     }
 

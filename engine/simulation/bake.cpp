@@ -37,13 +37,11 @@ public:
         buffers_.resize(needs.channels.size());
         std::size_t used = 0;
         for (const std::string& name : needs.channels) {
-            for (const Domain* domain : sim_.domains()) {
-                for (const ChannelInfo& info : domain->channels()) {
-                    if (info.name != name) continue;
-                    std::vector<std::byte>& buffer = buffers_[used++];
-                    buffer.resize(std::size_t{count} * info.elements * info.element_bytes);
-                    out.push_back({name, buffer});  // `needs` outlives the step; channels() is a temporary
-                }
+            for (const ChannelInfo& info : sim_.channels()) {
+                if (info.name != name) continue;
+                std::vector<std::byte>& buffer = buffers_[used++];
+                buffer.resize(std::size_t{count} * info.elements * info.element_bytes);
+                out.push_back({name, buffer});  // `needs` outlives the step
             }
         }
         KW_TRY(sim_.step(count, out));

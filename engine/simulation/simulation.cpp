@@ -22,11 +22,23 @@ struct Simulation::Impl {
     std::vector<std::unique_ptr<Domain>> owned;
     std::vector<Domain*> domains;
     std::vector<std::vector<Domain*>> producers;
+    // Every domain's channels as opened, and the domain (index into `domains`) of each:
+    // step() matches outputs against them without asking the domains every frame.
+    std::vector<ChannelInfo> channels;
+    std::vector<std::size_t> channel_domain;
     std::optional<std::uint32_t> current;
 
     [[nodiscard]] Result<void> open_domains() {
         const DomainSetup setup{kind, options.options, options.device_inputs};
         for (std::size_t i = 0; i < domains.size(); ++i) KW_TRY(domains[i]->open(setup, producers[i]));
+        channels.clear();
+        channel_domain.clear();
+        for (std::size_t i = 0; i < domains.size(); ++i) {
+            for (ChannelInfo& info : domains[i]->channels()) {
+                channels.push_back(std::move(info));
+                channel_domain.push_back(i);
+            }
+        }
         return {};
     }
 
@@ -156,6 +168,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(Scene scene, const Simula
 
 const Scene& Simulation::scene() const { return impl_->scene; }
 std::span<Domain* const> Simulation::domains() const { return impl_->domains; }
+std::span<const ChannelInfo> Simulation::channels() const { return impl_->channels; }
 const ShardInfo& Simulation::shard() const { return impl_->shard; }
 BackendKind Simulation::backend() const { return impl_->kind; }
 const std::string& Simulation::fallback_reason() const { return impl_->fallback_reason; }
@@ -193,27 +206,22 @@ Result<void> Simulation::step(std::uint32_t frames, std::span<const ChannelOutpu
     // Every output names a channel of one domain and holds frames x its elements.
     std::vector<std::vector<ChannelOutput>> per_domain(s.domains.size());
     for (const ChannelOutput& channel : out) {
-        bool found = false;
-        for (std::size_t d = 0; d < s.domains.size() && !found; ++d) {
-            for (const ChannelInfo& info : s.domains[d]->channels()) {
-                if (info.name != channel.name) continue;
-                const std::uint64_t bytes = std::uint64_t{frames} * info.elements * info.element_bytes;
-                if (channel.bytes.size() != bytes) {
-                    return make_error(Error::Kind::InvalidInput,
-                                      "Simulation::step: channel \"" + info.name + "\" must hold frames x elements = " +
-                                          std::to_string(std::uint64_t{frames} * info.elements) + " entries of " +
-                                          std::to_string(info.element_bytes) + " bytes (" + std::to_string(bytes) +
-                                          " bytes), got " + std::to_string(channel.bytes.size()) + " bytes");
-                }
-                per_domain[d].push_back(channel);
-                found = true;
-                break;
-            }
-        }
-        if (!found) {
+        const auto at = std::find_if(s.channels.begin(), s.channels.end(),
+                                     [&](const ChannelInfo& info) { return info.name == channel.name; });
+        if (at == s.channels.end()) {
             return make_error(Error::Kind::InvalidInput,
                               "Simulation::step: no domain has a channel \"" + std::string(channel.name) + "\"");
         }
+        const ChannelInfo& info = *at;
+        const std::uint64_t bytes = std::uint64_t{frames} * info.elements * info.element_bytes;
+        if (channel.bytes.size() != bytes) {
+            return make_error(Error::Kind::InvalidInput,
+                              "Simulation::step: channel \"" + info.name + "\" must hold frames x elements = " +
+                                  std::to_string(std::uint64_t{frames} * info.elements) + " entries of " +
+                                  std::to_string(info.element_bytes) + " bytes (" + std::to_string(bytes) +
+                                  " bytes), got " + std::to_string(channel.bytes.size()) + " bytes");
+        }
+        per_domain[s.channel_domain[static_cast<std::size_t>(at - s.channels.begin())]].push_back(channel);
     }
     for (std::size_t d = 0; d < s.domains.size(); ++d) KW_TRY(s.domains[d]->step(first, frames, per_domain[d]));
     s.current = first + frames - 1;

@@ -105,6 +105,8 @@ public:
     [[nodiscard]] std::span<Domain* const> domains() const;
     /// The domain named `name`; null when there is none.
     [[nodiscard]] Domain* domain(std::string_view name) const;
+    /// Every domain's channels (Domain::channels()) as opened, in step order.
+    [[nodiscard]] std::span<const ChannelInfo> channels() const;
     /// The part of the scene this simulation runs (SimulationOptions::shard).
     [[nodiscard]] const ShardInfo& shard() const;
     /// The kind every backend is of ("auto" resolved).
