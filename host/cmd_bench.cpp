@@ -11,7 +11,7 @@
 #include "kodawari/atomic_file.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/render/scene_draw.hpp"
+#include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/rods/synthetic.hpp"

@@ -9,7 +9,7 @@
 
 #include "bench_common.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/render/scene_draw.hpp"
+#include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/domains/birds.hpp"
@@ -73,7 +73,7 @@ int bench_view(const ViewOptions& o) {
         if (auto s = run.sim->show_on(*run.renderer); !s) return report(s.error());
     }
     const Simulation& first = *runs.front().sim;
-    const std::vector<glm::vec3> grid = render::content_points(rod_scene(first), nullptr, &bird_world(first));
+    const std::vector<glm::vec3> grid = kodawari::content_points(rod_scene(first), nullptr, &bird_world(first));
     std::printf("bench view: scene \"%s\": %zu chains, %zu birds, %ux%u, %u frames per configuration after 2 warm-up frames, "
                 "interleaved 10 at a time, on %s\n",
                 scene.name.c_str(), rod_scene(first) ? rod_scene(first)->world.chains.size() : std::size_t{0},
@@ -87,9 +87,9 @@ int bench_view(const ViewOptions& o) {
         KW_TRY(run.sim->step());
         KW_TRY(run.sim->draw_on(r, run.source));
         const std::uint32_t f = *run.sim->frame();
-        render::DrawList list(render::scene_camera(scene, f), width, height);
+        render::DrawList list(kodawari::scene_camera(scene, f), width, height);
         render::add_ground_grid(list, grid);
-        if (rod_scene(*run.sim)) render::add_characters(list, *rod_scene(*run.sim), f);
+        if (rod_scene(*run.sim)) kodawari::add_characters(list, *rod_scene(*run.sim), f);
         KW_TRY(r.draw(list));
         if (f >= 2) run.read_back_bytes += r.read_back_bytes() - before;
         return {};

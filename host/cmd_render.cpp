@@ -22,7 +22,7 @@
 #include "commands.hpp"
 #include "kodawari/render/apng.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/render/scene_draw.hpp"
+#include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
@@ -168,9 +168,9 @@ std::optional<std::pair<glm::vec3, glm::vec3>> parse_camera(const std::optional<
 }
 
 // The scene camera at `frame`, or the --camera eye and target with the scene's field of
-// view and near and far planes for that distance (render::scene_camera's rule).
+// view and near and far planes for that distance (kodawari::scene_camera's rule).
 render::CameraView drawing_camera(const Scene& scene, std::uint32_t frame, const std::optional<std::pair<glm::vec3, glm::vec3>>& camera) {
-    render::CameraView view = render::scene_camera(scene, frame);
+    render::CameraView view = kodawari::scene_camera(scene, frame);
     if (!camera) return view;
     view.position = camera->first;
     view.target = camera->second;
@@ -276,7 +276,7 @@ int cmd_render(const RenderOptions& o) {
     std::vector<render::Image> cells;
     std::vector<glm::vec3> grid_points;
     // Where the birds perch: a pass over every bird, found with the grid, once.
-    render::Perches perches;
+    kodawari::Perches perches;
     double render_seconds = 0.0;
     const bool show_progress = stderr_is_terminal() && range.end > 100;
     for (std::uint32_t f = 0; f < range.end; ++f) {
@@ -290,14 +290,14 @@ int cmd_render(const RenderOptions& o) {
         // The grid covers where the content is at the first drawn frame and then stays put,
         // so that it does not jump from frame to frame.
         if (grid_points.empty()) {
-            grid_points = render::content_points(rod_scene(sim), rod_scene(sim) ? &chain_input(sim) : nullptr,
+            grid_points = kodawari::content_points(rod_scene(sim), rod_scene(sim) ? &chain_input(sim) : nullptr,
                                                  bird_world(sim).birds.empty() ? nullptr : &bird_world(sim));
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
-            if (!bird_world(sim).birds.empty()) perches = render::perches_of(bird_world(sim));
+            if (!bird_world(sim).birds.empty()) perches = kodawari::perches_of(bird_world(sim));
         }
         render::add_ground_grid(list, grid_points);
-        if (rod_scene(sim)) render::add_characters(list, *rod_scene(sim), f);
-        render::add_perches(list, perches);
+        if (rod_scene(sim)) kodawari::add_characters(list, *rod_scene(sim), f);
+        kodawari::add_perches(list, perches);
         auto image = r.render(list);
         if (!image) return report(image.error());
         render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();

@@ -23,7 +23,7 @@
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/render/scene_draw.hpp"
+#include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/scene_edit.hpp"
 #include "viewer/viewer.hpp"
 
@@ -166,7 +166,7 @@ int cmd_view(const ViewOptions& o) {
 
     std::vector<glm::vec3> grid_points;
     // Where the birds perch: a pass over every bird, found with the grid, once.
-    render::Perches perches;
+    kodawari::Perches perches;
     std::optional<render::DrawList> last_list;
     std::uint64_t drawn = 0, screenshots = 0;
     double frame_ms = 0.0;
@@ -203,14 +203,14 @@ int cmd_view(const ViewOptions& o) {
 
         render::DrawList list(v.view(), width, height);
         if (grid_points.empty()) {
-            grid_points = render::content_points(rod_scene(s), rod_scene(s) ? &chain_input(s) : nullptr,
+            grid_points = kodawari::content_points(rod_scene(s), rod_scene(s) ? &chain_input(s) : nullptr,
                                                  bird_world(s).birds.empty() ? nullptr : &bird_world(s));
             if (grid_points.empty()) grid_points.emplace_back(0.0f);
-            if (!bird_world(s).birds.empty()) perches = render::perches_of(bird_world(s));
+            if (!bird_world(s).birds.empty()) perches = kodawari::perches_of(bird_world(s));
         }
         render::add_ground_grid(list, grid_points);
-        if (rod_scene(s)) render::add_characters(list, *rod_scene(s), v.current());
-        render::add_perches(list, perches);
+        if (rod_scene(s)) kodawari::add_characters(list, *rod_scene(s), v.current());
+        kodawari::add_perches(list, perches);
         if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
         if (v.sketch_mode && v.picked && rod_scene(s)) {
             // The picked chain's joints on the host while sketching (it may have been stepped).

@@ -8,7 +8,7 @@
 // (x, -y, -z, w) (SPEC B.2).
 #extension GL_GOOGLE_include_directive : require
 #include "shared/birds.h"
-#include "shared/render.h"
+#include "shared/bird_draw.h"
 #include "lib/camera.glsl"
 #include "lib/matrix.glsl"
 #include "lib/quat.glsl"

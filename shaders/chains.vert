@@ -9,7 +9,7 @@
 // (ChainStyle::joints), and only where the chain is long enough on screen for them to
 // stay apart (scene_draw.cpp explains the rule).
 #extension GL_GOOGLE_include_directive : require
-#include "shared/render.h"
+#include "shared/chain_draw.h"
 #include "shared/rods.h"
 #include "lib/camera.glsl"
 #include "lib/matrix.glsl"

@@ -7,7 +7,7 @@
 // joined by a cylinder band; a sphere (ends closer than 1e-6 m) is the same mesh with a
 // cylinder of no length. shared/render.h has the layout.
 #extension GL_GOOGLE_include_directive : require
-#include "shared/render.h"
+#include "shared/chain_draw.h"
 #include "shared/rods.h"
 #include "lib/matrix.glsl"
 

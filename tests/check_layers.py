@@ -67,6 +67,7 @@ OWNER_PATTERNS = [
     ("include/kodawari/render/*.hpp", "render"),
     ("capi/*.hpp", "c"),
     ("simulation/*.hpp", "engine"),
+    ("domains/*.hpp", "engine"),
 ]
 PUBLIC_OWNERS = {
     "gltf/character.hpp": "sim",
@@ -90,6 +91,9 @@ PUBLIC_OWNERS = {
     "domain.hpp": "engine",
     "domains/birds.hpp": "engine",
     "domains/chains.hpp": "engine",
+    "domains/chain_draw.hpp": "engine",
+    "domains/bird_draw.hpp": "engine",
+    "domains/scene_draw.hpp": "engine",
     "domains/trace.hpp": "engine",
     "bake.hpp": "engine",
     "shards.hpp": "engine",
@@ -169,9 +173,15 @@ def check_installed(owner):
 # (compute/, gpu/) are not in this list yet: their domain-named parts (the chain, bird and
 # skinned layers; DeviceBuffer) are the next steps.
 NEUTRAL = ["simulation/*.cpp", "simulation/*.hpp", "include/kodawari/simulation.hpp", "include/kodawari/bake.hpp",
-           "include/kodawari/domain.hpp", "include/kodawari/shards.hpp", "include/kodawari/distributed.hpp"]
-# Inside identifiers too (set_chains, RodBackend, birds_from); "produce" is not a rod.
-DOMAIN_WORDS = re.compile(r"bird|rod(?!uc)|chain|flock", re.I)
+           "include/kodawari/domain.hpp", "include/kodawari/shards.hpp", "include/kodawari/distributed.hpp",
+           # The renderer and its shared layout: domains draw through render::Draw and
+           # their own render layers (render/layer.hpp).
+           "render/*.cpp", "render/*.hpp", "include/kodawari/render/*.hpp", "include/kodawari/shared/render.h",
+           # The compute layer.
+           "compute/*.cpp", "compute/*.hpp"]
+# Inside identifiers too (set_chains, RodBackend, birds_from); "produce" is not a rod, a
+# swapchain is not a chain.
+DOMAIN_WORDS = re.compile(r"bird|rod(?!uc)|(?<!swap)chain|flock", re.I)
 
 
 def code_of(text):

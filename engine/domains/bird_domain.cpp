@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "kodawari/backend_factory.hpp"
+#include "kodawari/domains/bird_draw.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/simulation.hpp"
 #include "kodawari/vulkan_embed.hpp"
@@ -115,7 +116,7 @@ public:
     std::uint32_t validation_messages() const override { return backend_ ? backend_->validation_messages() : 0; }
 
     Result<void> show_on(render::Renderer& renderer, bool shared_device) override {
-        KW_TRY(renderer.set_birds(backend_ ? &world_ : nullptr));
+        KW_TRY(show_birds(renderer, backend_ ? &world_ : nullptr));
         // Poses on the host only where the renderer cannot draw them where they are.
         if (backend_ && !shared_device) keep_poses_ = true;
         return {};
@@ -123,13 +124,13 @@ public:
 
     Result<void> draw_on(render::Renderer& renderer, DrawSource source, bool shared_device) override {
         if (!backend_) return {};
-        if (source == DrawSource::Device && shared_device) return renderer.birds_from(*backend_);
+        if (source == DrawSource::Device && shared_device) return draw_birds(renderer, *backend_);
         if (last_poses_.size() != world_.birds.size()) {
             return make_error(Error::Kind::InvalidInput,
                               "Simulation::draw_on: the bird poses are not on the renderer's device and were not kept "
                               "(show_on() before step(), or keep_bird_poses(true))");
         }
-        return renderer.birds_from(last_poses_);
+        return draw_birds(renderer, last_poses_);
     }
 
     const birds::BirdWorld& world() const { return world_; }

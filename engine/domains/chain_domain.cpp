@@ -10,6 +10,7 @@
 
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/crowd_animator.hpp"
+#include "kodawari/domains/chain_draw.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/simulation.hpp"
 #include "kodawari/vulkan_embed.hpp"
@@ -126,22 +127,22 @@ public:
     }
 
     Result<void> show_on(render::Renderer& renderer, bool) override {
-        KW_TRY(renderer.set_chains(rods_ ? &scene_->world : nullptr));
-        return renderer.set_skinned(rods_ ? &*scene_ : nullptr);
+        KW_TRY(show_chains(renderer, rods_ ? &scene_->world : nullptr));
+        return show_skinned(renderer, rods_ ? &*scene_ : nullptr);
     }
 
     Result<void> draw_on(render::Renderer& renderer, DrawSource source, bool) override {
         if (!rods_) return {};
         if (source == DrawSource::Device) {
             // The renderer reads back and uploads what is not on its device.
-            KW_TRY(renderer.chains_from(*rods_));
-            KW_TRY(renderer.skinned_from(*animator_, *rods_, current_.value_or(0)));
+            KW_TRY(draw_chains(renderer, *rods_));
+            KW_TRY(draw_skinned(renderer, *animator_, *rods_, current_.value_or(0)));
         } else {
             KW_TRY(rods_->read(snapshot_));
-            KW_TRY(renderer.chains_from(snapshot_));
-            KW_TRY(renderer.skinned_from(snapshot_, current_.value_or(0)));
+            KW_TRY(draw_chains(renderer, snapshot_));
+            KW_TRY(draw_skinned(renderer, snapshot_, current_.value_or(0)));
         }
-        return renderer.colliders_from(*rods_, input_);
+        return draw_colliders(renderer, *rods_, input_);
     }
 
     const RodScene* scene() const { return scene_ ? &*scene_ : nullptr; }

@@ -5,7 +5,9 @@
 #include <cstddef>
 #include <cstdint>
 
+#include <kodawari/shared/bird_draw.h>
 #include <kodawari/shared/birds.h>
+#include <kodawari/shared/chain_draw.h>
 #include <kodawari/shared/poses.h>
 #include <kodawari/shared/render.h>
 #include <kodawari/shared/rod_inputs.h>

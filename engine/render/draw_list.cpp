@@ -121,4 +121,33 @@ void DrawList::add_screen_triangle(glm::vec2 a, glm::vec2 b, glm::vec2 c, Rgba8 
     for (const glm::vec2 p : {a, b, c}) triangles_.push_back({clip(p), col, {0.0f, 0.0f, 0.0f, KW_RENDER_CLIP}});
 }
 
+void add_ground_grid(DrawList& list, std::span<const glm::vec3> points) {
+    glm::vec2 lo{0.0f}, hi{0.0f};
+    for (const glm::vec3& p : points) {
+        if (!std::isfinite(p.x) || !std::isfinite(p.z)) continue;
+        lo = glm::min(lo, glm::vec2(p.x, p.z));
+        hi = glm::max(hi, glm::vec2(p.x, p.z));
+    }
+    const glm::vec2 center = 0.5f * (lo + hi);
+    const float half = std::max(3.0f, 0.5f * std::max(hi.x - lo.x, hi.y - lo.y) * 1.3f + 2.0f);
+    // A round spacing giving 10 to 25 lines each way.
+    const float rough = 2.0f * half / 10.0f;
+    const float decade = std::pow(10.0f, std::floor(std::log10(rough)));
+    float spacing = decade;
+    for (const float m : {1.0f, 2.0f, 5.0f, 10.0f}) {
+        if (m * decade <= rough) spacing = m * decade;
+    }
+    const float x0 = std::floor((center.x - half) / spacing) * spacing, x1 = std::ceil((center.x + half) / spacing) * spacing;
+    const float z0 = std::floor((center.y - half) / spacing) * spacing, z1 = std::ceil((center.y + half) / spacing) * spacing;
+    const int nx = static_cast<int>(std::lround((x1 - x0) / spacing)), nz = static_cast<int>(std::lround((z1 - z0) / spacing));
+    for (int i = 0; i <= nx; ++i) {
+        const float x = x0 + spacing * static_cast<float>(i);
+        list.add_line({x, 0.0f, z0}, {x, 0.0f, z1}, kGridColor);
+    }
+    for (int i = 0; i <= nz; ++i) {
+        const float z = z0 + spacing * static_cast<float>(i);
+        list.add_line({x0, 0.0f, z}, {x1, 0.0f, z}, kGridColor);
+    }
+}
+
 }  // namespace kodawari::render

@@ -1,9 +1,8 @@
 // The renderer: one render pass into an RGBA8 colour + depth target (multisampled and
 // resolved into the single-sample colour image at the end of the pass); three pipelines of
-// the draw list's shaders (background without depth, lines, triangles), then the chain,
-// bird and skinned-mesh layers drawn from device buffers (device_layers.hpp,
-// skinned_layer.hpp); the image copied to a host-visible buffer after the pass, or
-// blitted into a swapchain image.
+// the draw list's shaders (background without depth, lines, triangles), then the layers
+// domains draw from their device buffers (layer.hpp), in their order; the image copied to
+// a host-visible buffer after the pass, or blitted into a swapchain image.
 
 #include "kodawari/render/renderer.hpp"
 
@@ -17,9 +16,8 @@
 
 #include "compute/buffer.hpp"
 #include "gpu/graphics.hpp"
-#include "render/device_layers.hpp"
+#include "render/layer.hpp"
 #include "render/draw_recorder.hpp"
-#include "render/skinned_layer.hpp"
 
 namespace kodawari::render {
 
@@ -111,10 +109,13 @@ struct Renderer::Impl {
     vk::raii::Framebuffer framebuffer{nullptr};
     std::optional<gpu::GraphicsPipeline> background, lines, triangles, shadows;
     std::optional<compute::Buffer> vertices, readback;
-    std::optional<ChainLayer> chains;
-    std::optional<ColliderLayer> colliders;
-    std::optional<BirdLayer> birds;
-    std::optional<SkinnedLayer> skinned;
+    // What domains draw from device buffers (render/layer.hpp), in drawing order.
+    struct NamedLayer {
+        int order = 0;
+        std::string name;
+        std::unique_ptr<Layer> layer;
+    };
+    std::vector<NamedLayer> layers;
 
     // Presentation, when the renderer has a surface (PresentTarget above).
     std::optional<PresentTarget> window;
@@ -158,35 +159,36 @@ void Renderer::meshes(const MeshView& mesh, std::span<const glm::mat4> transform
 void Renderer::clear_draws() { impl_->draws.clear(); }
 
 Result<void> Renderer::clear_layers() {
-    KW_TRY(set_chains(nullptr));
-    KW_TRY(set_skinned(nullptr));
-    return set_birds(nullptr);
+    for (Impl::NamedLayer& named : impl_->layers) KW_TRY(named.layer->clear(*impl_->ctx));
+    return {};
 }
 
-Result<void> Renderer::set_chains(const rods::RodWorld* world, const ChainStyle& style) {
-    impl_->colliders->set_world(world);
-    return impl_->chains->set_world(*impl_->ctx, world, style);
+// The friend of Renderer that render/layer.hpp's functions reach its layers through.
+struct LayerAccess {
+    static Renderer::Impl& of(Renderer& renderer) { return *renderer.impl_; }
+    static const Renderer::Impl& of(const Renderer& renderer) { return *renderer.impl_; }
+};
+
+Result<Layer*> layer(Renderer& renderer, std::string_view name, int order, const LayerFactory& make) {
+    auto& r = LayerAccess::of(renderer);
+    for (const auto& named : r.layers) {
+        if (named.name == name) return named.layer.get();
+    }
+    auto made = make(LayerTarget{*r.ctx, *r.pass, r.samples});
+    if (!made) return made.error();
+    const auto at = std::find_if(r.layers.begin(), r.layers.end(),
+                                 [&](const auto& n) { return n.order > order || (n.order == order && n.name > name); });
+    return r.layers.insert(at, {order, std::string(name), std::move(made).value()})->layer.get();
 }
-Result<void> Renderer::chains_from(RodBackend& backend) { return impl_->chains->from_backend(*impl_->ctx, backend); }
-Result<void> Renderer::chains_from(const ChainSnapshot& snapshot) { return impl_->chains->from_snapshot(*impl_->ctx, snapshot); }
-bool Renderer::chains_on_device() const { return impl_->chains->on_device(); }
-Result<void> Renderer::colliders_from(const RodBackend& backend, const rods::RodFrame& input) {
-    return impl_->colliders->from(*impl_->ctx, backend, input);
+
+const Layer* find_layer(const Renderer& renderer, std::string_view name) {
+    for (const auto& named : LayerAccess::of(renderer).layers) {
+        if (named.name == name) return named.layer.get();
+    }
+    return nullptr;
 }
-Result<void> Renderer::set_birds(const birds::BirdWorld* world) { return impl_->birds->set_world(*impl_->ctx, world, kBirdMinPixels); }
-Result<void> Renderer::birds_from(const BirdBackend& backend) { return impl_->birds->from_backend(*impl_->ctx, backend); }
-Result<void> Renderer::birds_from(std::span<const gpu::BirdPose> poses) { return impl_->birds->from_poses(*impl_->ctx, poses); }
-Result<void> Renderer::set_skinned(const RodScene* scene) {
-    impl_->colliders->set_skinned(scene);
-    return impl_->skinned->set_scene(*impl_->ctx, scene);
-}
-Result<void> Renderer::skinned_from(const CrowdAnimator& animator, RodBackend& rods, std::uint32_t frame) {
-    return impl_->skinned->from_backends(*impl_->ctx, animator, rods, frame);
-}
-Result<void> Renderer::skinned_from(const ChainSnapshot& snapshot, std::uint32_t frame) {
-    return impl_->skinned->from_snapshot(*impl_->ctx, snapshot, frame);
-}
-bool Renderer::skinned_on_device() const { return impl_->skinned->on_device(); }
+
+gpu::VulkanContext& layer_context(Renderer& renderer) { return *LayerAccess::of(renderer).ctx; }
 
 namespace {
 
@@ -349,10 +351,6 @@ Result<std::unique_ptr<Renderer>> Renderer::create(const RendererOptions& option
     KW_TRY(keep(impl->shadows, gpu::GraphicsPipeline::create(c, *impl->pass, "render.vert", "shadow.frag", sizeof(gpu::RenderVertex), 3,
                                                              sizeof(gpu::RenderPush),
                                                              {.depth = true, .samples = impl->samples, .blend = true})));
-    KW_TRY(keep(impl->colliders, ColliderLayer::create(c, *impl->pass, impl->samples)));
-    KW_TRY(keep(impl->chains, ChainLayer::create(c, *impl->pass, impl->samples)));
-    KW_TRY(keep(impl->birds, BirdLayer::create(c, *impl->pass, impl->samples)));
-    KW_TRY(keep(impl->skinned, SkinnedLayer::create(c, *impl->pass, impl->samples)));
 
     auto readback = compute::Buffer::create(c, vk::DeviceSize{options.width} * options.height * 4, compute::Usage::Readback);
     if (!readback) return readback.error();
@@ -410,9 +408,9 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     push.draw.w = camera.orthographic ? KW_RENDER_ORTHOGRAPHIC : KW_RENDER_PERSPECTIVE;
     using Stage = vk::PipelineStageFlagBits;
     using Access = vk::AccessFlagBits;
-    // The skinned meshes' node matrices, composed on the device (before the barrier below,
-    // which makes them visible to the vertex shaders).
-    skinned->record_kernels(cmd);
+    // What layers compute on the device for their draws (before the barrier below, which
+    // makes it visible to the vertex shaders).
+    for (const NamedLayer& named : layers) named.layer->record_compute(cmd);
     // The layers' vertex shaders read what kernels, copies and the host wrote before
     // (the simulation's state on a shared device, uploads).
     const vk::MemoryBarrier layer_inputs{.srcAccessMask = Access::eShaderWrite | Access::eTransferWrite | Access::eHostWrite,
@@ -442,10 +440,8 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     draw(*lines, kBackgroundVertices, list.lines().size());
     draw(*triangles, kBackgroundVertices + list.lines().size(), list.triangles().size());
     // The minimum sizes are for 720 rows; smaller images get thinner strands.
-    chains->record(cmd, push, std::clamp(static_cast<float>(height) / 720.0f, 0.5f, 2.0f), joints);
-    colliders->record(cmd, push, kColliderColor);
-    birds->record(cmd, push);
-    skinned->record(cmd, push);
+    const LayerFrame frame{push, std::clamp(static_cast<float>(height) / 720.0f, 0.5f, 2.0f), joints};
+    for (const NamedLayer& named : layers) named.layer->record(cmd, frame);
     // Translucent, after everything opaque: what stands on the shadow hides it.
     cmd.bindVertexBuffers(0, vertices->handle(), vk::DeviceSize{0});
     draw(*shadows, kBackgroundVertices + list.lines().size() + list.triangles().size(), list.shadows().size());

@@ -9,7 +9,7 @@
 
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/rods/sketch.hpp"
-#include "kodawari/render/scene_draw.hpp"
+#include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/scene_edit.hpp"
 #include "kodawari/sketch_key.hpp"
 
@@ -34,7 +34,7 @@ rods::ImageCamera Viewer::image_camera() const {
 }
 
 render::CameraView Viewer::view() const {
-    return follow_scene ? render::scene_camera(sim->scene(), current()) : camera.view();
+    return follow_scene ? kodawari::scene_camera(sim->scene(), current()) : camera.view();
 }
 
 std::optional<rods::Camera> Viewer::rod_camera() const {

@@ -18,12 +18,14 @@
 
 #include <stb/stb_image.h>
 
+#include "kodawari/domains/bird_draw.hpp"
+#include "kodawari/domains/chain_draw.hpp"
 #include "kodawari/backend.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/render/scene_draw.hpp"
+#include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
@@ -167,12 +169,12 @@ inline AhogeRun simulate_ahoge(const std::vector<std::uint32_t>& frames) {
 
 // The frame's draw list (grid, skeleton) and, on the renderer, its chains from `snapshot`.
 inline render::DrawList ahoge_frame(render::Renderer& renderer, const AhogeRun& run, std::uint32_t frame, const ChainSnapshot& snapshot) {
-    render::DrawList list(render::scene_camera(run.scene, frame), renderer.width(), renderer.height());
+    render::DrawList list(kodawari::scene_camera(run.scene, frame), renderer.width(), renderer.height());
     const rods::RodFrame input = run.rods.frame(frame);
-    render::add_ground_grid(list, render::content_points(&run.rods, &input, nullptr));
-    render::add_characters(list, run.rods, frame);
-    EXPECT_TRUE(renderer.set_chains(&run.rods.world).ok());
-    EXPECT_TRUE(renderer.chains_from(snapshot).ok());
+    render::add_ground_grid(list, kodawari::content_points(&run.rods, &input, nullptr));
+    kodawari::add_characters(list, run.rods, frame);
+    EXPECT_TRUE(kodawari::show_chains(renderer, &run.rods.world).ok());
+    EXPECT_TRUE(kodawari::draw_chains(renderer, snapshot).ok());
     return list;
 }
 

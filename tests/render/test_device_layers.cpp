@@ -4,6 +4,8 @@
 
 #include <gtest/gtest.h>
 
+#include "kodawari/domains/bird_draw.hpp"
+#include "kodawari/domains/chain_draw.hpp"
 #include "render_support.hpp"
 
 namespace kodawari {
@@ -29,7 +31,7 @@ TEST(Render, ChainsDrawnFromTheVulkanBackendsBuffersNeedNoReadBack) {
     auto backend = make_rod_backend(BackendKind::Vulkan, options);
     ASSERT_TRUE(backend.ok()) << backend.error().message;
     RodBackend& vulkan = *backend.value();
-    ASSERT_TRUE(renderer->set_chains(&rods.value().world).ok());
+    ASSERT_TRUE(kodawari::show_chains(*renderer, &rods.value().world).ok());
     constexpr std::uint32_t kFrames = 60;
     const std::uint64_t before = renderer->read_back_bytes();
     std::optional<render::DrawList> list;
@@ -38,9 +40,9 @@ TEST(Render, ChainsDrawnFromTheVulkanBackendsBuffersNeedNoReadBack) {
         const rods::RodFrame input = rods.value().frame(f);
         ASSERT_TRUE((f == 0 ? vulkan.load(rods.value().world, input) : vulkan.step(input)).ok());
         if (f + 20 <= kFrames) continue;
-        ASSERT_TRUE(renderer->chains_from(vulkan).ok());
-        ASSERT_TRUE(renderer->chains_on_device());
-        list.emplace(render::scene_camera(scene.value(), f), kWidth, kHeight);
+        ASSERT_TRUE(kodawari::draw_chains(*renderer, vulkan).ok());
+        ASSERT_TRUE(kodawari::chains_drawn_on_device(*renderer));
+        list.emplace(kodawari::scene_camera(scene.value(), f), kWidth, kHeight);
         auto image = renderer->render(*list);
         ASSERT_TRUE(image.ok()) << image.error().message;
         from_device = std::move(image).value();
@@ -51,13 +53,13 @@ TEST(Render, ChainsDrawnFromTheVulkanBackendsBuffersNeedNoReadBack) {
     ChainSnapshot snapshot;
     ASSERT_TRUE(vulkan.read(snapshot).ok());
     EXPECT_GT(renderer->read_back_bytes() - before, 0u) << "read() is counted: the check above can fail";
-    ASSERT_TRUE(renderer->chains_from(snapshot).ok());
-    EXPECT_FALSE(renderer->chains_on_device());
+    ASSERT_TRUE(kodawari::draw_chains(*renderer, snapshot).ok());
+    EXPECT_FALSE(kodawari::chains_drawn_on_device(*renderer));
     auto from_host = renderer->render(*list);
     ASSERT_TRUE(from_host.ok());
     int chain_pixels = 0;
     for (std::size_t i = 0; i < from_device.rgba.size(); i += 4) {
-        chain_pixels += lit_distance(Rgba8{from_device.rgba[i], from_device.rgba[i + 1], from_device.rgba[i + 2], 255}, render::kChainColor) <= 2;
+        chain_pixels += lit_distance(Rgba8{from_device.rgba[i], from_device.rgba[i + 1], from_device.rgba[i + 2], 255}, kodawari::kChainColor) <= 2;
     }
     std::printf("[ render ] device-drawn chains: %d chain pixels, %llu bytes read back over 20 frames\n", chain_pixels,
                 static_cast<unsigned long long>(read_back));
@@ -85,15 +87,15 @@ TEST(Render, BirdsDrawnFromTheVulkanBackendsRingNeedNoReadBack) {
     ASSERT_TRUE(shared.ok() && reading.ok());
     ASSERT_TRUE(shared.value()->load(world.value()).ok());
     ASSERT_TRUE(reading.value()->load(world.value()).ok());
-    ASSERT_TRUE(renderer->set_birds(&world.value()).ok());
+    ASSERT_TRUE(kodawari::show_birds(*renderer, &world.value()).ok());
     constexpr std::uint32_t kFrame = 120;
-    const render::DrawList list(render::scene_camera(scene.value(), kFrame), kWidth, kHeight);
+    const render::DrawList list(kodawari::scene_camera(scene.value(), kFrame), kWidth, kHeight);
     const std::uint64_t before = renderer->read_back_bytes();
     Image from_device;
     for (std::uint32_t f = 0; f <= kFrame; ++f) {
         ASSERT_TRUE(shared.value()->simulate(1, {}).ok());
         if (f + 10 <= kFrame) continue;
-        ASSERT_TRUE(renderer->birds_from(*shared.value()).ok());
+        ASSERT_TRUE(kodawari::draw_birds(*renderer, *shared.value()).ok());
         auto image = renderer->render(list);
         ASSERT_TRUE(image.ok());
         from_device = std::move(image).value();
@@ -104,7 +106,7 @@ TEST(Render, BirdsDrawnFromTheVulkanBackendsRingNeedNoReadBack) {
     std::vector<gpu::BirdPose> poses(world.value().birds.size());
     for (std::uint32_t f = 0; f <= kFrame; ++f) ASSERT_TRUE(reading.value()->simulate(1, {.poses = poses, .diag = {}}).ok());
     EXPECT_GT(renderer->read_back_bytes() - before, 0u) << "pose read back is counted: the check above can fail";
-    ASSERT_TRUE(renderer->birds_from(poses).ok());
+    ASSERT_TRUE(kodawari::draw_birds(*renderer, poses).ok());
     auto from_host = renderer->render(list);
     ASSERT_TRUE(from_host.ok());
     int drawn = 0;
@@ -118,7 +120,7 @@ TEST(Render, BirdsDrawnFromTheVulkanBackendsRingNeedNoReadBack) {
     // A CPU backend has no poses on the device: an error, not a silent empty frame.
     auto cpu = make_bird_backend(BackendKind::Cpu, {});
     ASSERT_TRUE(cpu.ok());
-    EXPECT_FALSE(renderer->birds_from(*cpu.value()).ok());
+    EXPECT_FALSE(kodawari::draw_birds(*renderer, *cpu.value()).ok());
     EXPECT_EQ(renderer->validation_messages(), 0u);
 }
 
@@ -157,11 +159,11 @@ TEST(Render, CollidersDrawnFromTheRodInputOnTheDevice) {
             ASSERT_TRUE(took.ok() && took.value());
         }
     }
-    ASSERT_TRUE(renderer->set_chains(&rods.world).ok());  // the colliders' world; no chain state given: none drawn
-    const render::CameraView view = render::scene_camera(scene.value(), kFrame);
+    ASSERT_TRUE(kodawari::show_chains(*renderer, &rods.world).ok());  // the colliders' world; no chain state given: none drawn
+    const render::CameraView view = kodawari::scene_camera(scene.value(), kFrame);
     const render::DrawList list(view, kWidth, kHeight);
     const std::uint64_t before = renderer->read_back_bytes();
-    ASSERT_TRUE(renderer->colliders_from(*backend.value(), input).ok());
+    ASSERT_TRUE(kodawari::draw_colliders(*renderer, *backend.value(), input).ok());
     auto from_device = renderer->render(list);
     ASSERT_TRUE(from_device.ok());
     EXPECT_EQ(renderer->read_back_bytes() - before, 0u);
@@ -170,7 +172,7 @@ TEST(Render, CollidersDrawnFromTheRodInputOnTheDevice) {
     ASSERT_TRUE(animator.value().host_frame(kFrame, host).ok());
     auto cpu = make_rod_backend(BackendKind::Cpu, {});  // no device state: its frame's colliders are uploaded
     ASSERT_TRUE(cpu.ok());
-    ASSERT_TRUE(renderer->colliders_from(*cpu.value(), host).ok());
+    ASSERT_TRUE(kodawari::draw_colliders(*renderer, *cpu.value(), host).ok());
     auto from_host = renderer->render(list);
     ASSERT_TRUE(from_host.ok());
 
@@ -181,10 +183,10 @@ TEST(Render, CollidersDrawnFromTheRodInputOnTheDevice) {
         if (!camera.project(0.5f * (c.a + c.b), q)) continue;
         if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
         ++shapes;
-        found += nearest_lit_match(from_device.value(), q, 1, render::kColliderColor) <= 2 ? 1 : 0;
+        found += nearest_lit_match(from_device.value(), q, 1, kodawari::kColliderColor) <= 2 ? 1 : 0;
     }
     const auto body = [](const Image& image, std::uint32_t x, std::uint32_t y) {
-        return lit_distance(image.at(x, y), render::kColliderColor) <= 2;
+        return lit_distance(image.at(x, y), kodawari::kColliderColor) <= 2;
     };
     int collider_pixels = 0, differ = 0;
     for (std::uint32_t y = 0; y < kHeight; ++y) {
@@ -202,7 +204,7 @@ TEST(Render, CollidersDrawnFromTheRodInputOnTheDevice) {
     EXPECT_LE(differ, collider_pixels / 100);
 
     // With the meshes drawn by the skinned layer, no capsule shows (none posed: no mesh either).
-    ASSERT_TRUE(renderer->set_skinned(&rods).ok());
+    ASSERT_TRUE(kodawari::show_skinned(*renderer, &rods).ok());
     auto hidden = renderer->render(list);
     ASSERT_TRUE(hidden.ok());
     int hidden_pixels = 0;
@@ -215,7 +217,7 @@ TEST(Render, CollidersDrawnFromTheRodInputOnTheDevice) {
 
 // VRM avatars whose chains all list their own colliders (scenes/avatars.json): drawn as
 // meshes by the skinned layer, none of their colliders is drawn as a capsule (the arm
-// capsules stuck out of the skin). Control: without set_skinned the capsules show.
+// capsules stuck out of the skin). Control: without show_skinned the capsules show.
 TEST(Render, SkinnedAvatarsShowNoColliderCapsules) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
     auto scene = load_scene(scene_path("avatars.json"));
@@ -230,19 +232,19 @@ TEST(Render, SkinnedAvatarsShowNoColliderCapsules) {
     auto cpu = make_rod_backend(BackendKind::Cpu, {});
     ASSERT_TRUE(cpu.ok());
     const rods::RodFrame frame = rods.frame(0);
-    ASSERT_TRUE(renderer->set_chains(&rods.world).ok());
-    ASSERT_TRUE(renderer->colliders_from(*cpu.value(), frame).ok());
-    const render::DrawList list(render::scene_camera(scene.value(), 0), kWidth, kHeight);
+    ASSERT_TRUE(kodawari::show_chains(*renderer, &rods.world).ok());
+    ASSERT_TRUE(kodawari::draw_colliders(*renderer, *cpu.value(), frame).ok());
+    const render::DrawList list(kodawari::scene_camera(scene.value(), 0), kWidth, kHeight);
     const auto collider_pixels = [&](const Image& image) {
         int n = 0;
         for (std::uint32_t y = 0; y < kHeight; ++y) {
-            for (std::uint32_t x = 0; x < kWidth; ++x) n += lit_distance(image.at(x, y), render::kColliderColor) <= 2 ? 1 : 0;
+            for (std::uint32_t x = 0; x < kWidth; ++x) n += lit_distance(image.at(x, y), kodawari::kColliderColor) <= 2 ? 1 : 0;
         }
         return n;
     };
     auto shown = renderer->render(list);
     ASSERT_TRUE(shown.ok());
-    ASSERT_TRUE(renderer->set_skinned(&rods).ok());
+    ASSERT_TRUE(kodawari::show_skinned(*renderer, &rods).ok());
     auto hidden = renderer->render(list);
     ASSERT_TRUE(hidden.ok());
     std::printf("[ render ] avatars' collider pixels: %d without the skinned layer, %d with it\n", collider_pixels(shown.value()),

@@ -8,6 +8,8 @@
 
 #include <map>
 
+#include "kodawari/domains/bird_draw.hpp"
+#include "kodawari/domains/chain_draw.hpp"
 #include "render_support.hpp"
 
 namespace kodawari {
@@ -25,10 +27,10 @@ Image draw_character(const render::CameraView& view, std::uint32_t width, std::u
     auto backend = make_rod_backend(BackendKind::Cpu, {});
     EXPECT_TRUE(backend.ok());
     const rods::RodFrame input = rods.frame(0);
-    EXPECT_TRUE(renderer->set_chains(&rods.world).ok());
-    EXPECT_TRUE(renderer->colliders_from(*backend.value(), input).ok());
+    EXPECT_TRUE(kodawari::show_chains(*renderer, &rods.world).ok());
+    EXPECT_TRUE(kodawari::draw_colliders(*renderer, *backend.value(), input).ok());
     render::DrawList list(view, width, height);
-    render::add_characters(list, rods, 0);
+    kodawari::add_characters(list, rods, 0);
     auto image = renderer->render(list);
     EXPECT_TRUE(image.ok()) << (image.ok() ? "" : image.error().message);
     EXPECT_EQ(renderer->validation_messages(), 0u);
@@ -58,7 +60,7 @@ TEST(Pictures, EyesShowFromTheFrontOnly) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
     const RodScene rods = ahoge_character();
     const std::vector<rods::Transform> joints = rods.joint_poses(0, 0);
-    const std::optional<render::Head> head = render::head_of(rods, 0, joints);
+    const std::optional<kodawari::Head> head = kodawari::head_of(rods, 0, joints);
     ASSERT_TRUE(head);
     EXPECT_FLOAT_EQ(head->radius, 0.11f);
     // The character faces +Z: the front camera on +Z, 0.8 m from the head's centre.
@@ -72,19 +74,19 @@ TEST(Pictures, EyesShowFromTheFrontOnly) {
         ASSERT_EQ(image.width, kWidth);
         const Pinhole camera(view.position, view.target, view.fov_deg, kWidth, kHeight);
         const bool front = side > 0.0f;
-        for (const glm::vec3& eye : render::eye_centres(*head)) {
+        for (const glm::vec3& eye : kodawari::eye_centres(*head)) {
             glm::vec2 q;
             ASSERT_TRUE(camera.project(eye, q));
             const Rgba8 c = image.at(std::uint32_t(q.x), std::uint32_t(q.y));
             if (front) {
                 // Unlit and several pixels across: the exact colour at its centre (1 for rounding).
-                EXPECT_LE(channel_distance(c, render::kFaceColor), 1) << "no eye at (" << q.x << ", " << q.y << ")";
+                EXPECT_LE(channel_distance(c, kodawari::kFaceColor), 1) << "no eye at (" << q.x << ", " << q.y << ")";
             } else {
                 // Behind the head: the head's lit clay (2: 8-bit rounding of the light factor).
-                EXPECT_LE(lit_distance(c, render::kColliderColor), 2) << "the back of the head at (" << q.x << ", " << q.y << ")";
+                EXPECT_LE(lit_distance(c, kodawari::kColliderColor), 2) << "the back of the head at (" << q.x << ", " << q.y << ")";
             }
         }
-        face_pixels[front ? 0 : 1] = count_color(image, render::kFaceColor, 1);
+        face_pixels[front ? 0 : 1] = count_color(image, kodawari::kFaceColor, 1);
     }
     std::printf("[ pictures ] face-coloured pixels: %d from the front, %d from behind\n", face_pixels[0], face_pixels[1]);
     // Two eyes of about 7 x 12 degrees of a sphere 0.11 m across, at 0.8 m on 199 rows: a
@@ -100,7 +102,7 @@ TEST(Pictures, ProceduralCharactersStandOnTheGround) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
     const RodScene rods = ahoge_character();
     const std::vector<rods::Transform> joints = rods.joint_poses(0, 0);
-    const std::optional<render::Legs> legs = render::legs_of(rods, 0, joints);
+    const std::optional<kodawari::Legs> legs = kodawari::legs_of(rods, 0, joints);
     ASSERT_TRUE(legs);
     constexpr std::uint32_t kW = 400, kH = 640;
     render::CameraView view;
@@ -122,7 +124,7 @@ TEST(Pictures, ProceduralCharactersStandOnTheGround) {
         const auto x = std::uint32_t(ground.x);
         int lowest = -1;
         for (auto y = std::uint32_t(hip.y); y < kH; ++y) {
-            if (lit_distance(image.at(x, y), render::kColliderColor) <= 6) lowest = int(y);
+            if (lit_distance(image.at(x, y), kodawari::kColliderColor) <= 6) lowest = int(y);
         }
         std::printf("[ pictures ] a leg ends on row %d; the ground under the foot is row %.1f\n", lowest, double(ground.y));
         // Within 2 pixels (a pixel is 3.6 mm here: the foot's underside is the floor).
@@ -130,7 +132,7 @@ TEST(Pictures, ProceduralCharactersStandOnTheGround) {
         // And the capsule above the legs is not floating: its colour is continuous down
         // the leg (every row from the hips to the ground).
         int gaps = 0;
-        for (auto y = std::uint32_t(hip.y); y + 3 < std::uint32_t(ground.y); ++y) gaps += lit_distance(image.at(x, y), render::kColliderColor) > 6;
+        for (auto y = std::uint32_t(hip.y); y + 3 < std::uint32_t(ground.y); ++y) gaps += lit_distance(image.at(x, y), kodawari::kColliderColor) > 6;
         EXPECT_EQ(gaps, 0) << "rows between the hips and the ground without the body colour";
     }
 }
@@ -167,9 +169,9 @@ TEST(Pictures, PerchedBirdsSitOnTheDrawnRoofs) {
     constexpr std::uint32_t kW = 640, kH = 400;
     for (const std::uint32_t frame : {0u, 2039u}) {
         const PerchedBirds run = perch_at(frame);
-        const render::Perches perches = render::perches_of(run.world);
+        const kodawari::Perches perches = kodawari::perches_of(run.world);
         ASSERT_EQ(perches.roofs.size(), 2u) << "a take-off roof and a landing roof";
-        const render::Roof& roof = perches.roofs[frame == 0 ? 0 : 1];
+        const kodawari::Roof& roof = perches.roofs[frame == 0 ? 0 : 1];
         const glm::vec3 middle = 0.5f * (roof.a + roof.b);
         render::CameraView view;
         view.position = middle - 7.0f * roof.across + glm::vec3(0.0f, 0.3f, 0.0f);
@@ -177,10 +179,10 @@ TEST(Pictures, PerchedBirdsSitOnTheDrawnRoofs) {
         view.fov_deg = 50.0f;
         auto renderer = make_renderer(kW, kH);
         ASSERT_TRUE(renderer);
-        ASSERT_TRUE(renderer->set_birds(&run.world).ok());
-        ASSERT_TRUE(renderer->birds_from(run.poses).ok());
+        ASSERT_TRUE(kodawari::show_birds(*renderer, &run.world).ok());
+        ASSERT_TRUE(kodawari::draw_birds(*renderer, run.poses).ok());
         render::DrawList list(view, kW, kH);
-        render::add_perches(list, perches);
+        kodawari::add_perches(list, perches);
         auto image = renderer->render(list);
         ASSERT_TRUE(image.ok()) << image.error().message;
         const Pinhole camera(view.position, view.target, view.fov_deg, kW, kH);
@@ -196,7 +198,7 @@ TEST(Pictures, PerchedBirdsSitOnTheDrawnRoofs) {
             const gpu::vec4& end = run.world.control_points[route.extent.x + (frame == 0 ? 0 : 3 * route.extent.y)];
             if (glm::length(p - glm::vec3(end.x + bird.offset.x, end.y + bird.offset.y, end.z + bird.offset.z)) > 0.05f) continue;
             ++perched;
-            const glm::vec3 belly = p - glm::vec3(0.0f, render::kBellyDepth * bird.shape.x, 0.0f);
+            const glm::vec3 belly = p - glm::vec3(0.0f, kodawari::kBellyDepth * bird.shape.x, 0.0f);
             glm::vec2 q, centre;
             ASSERT_TRUE(camera.project(belly, q));
             ASSERT_TRUE(camera.project(p, centre));
@@ -206,13 +208,13 @@ TEST(Pictures, PerchedBirdsSitOnTheDrawnRoofs) {
                 for (int dx = -12; dx <= 12; ++dx) {
                     const int x = int(q.x) + dx, y = int(q.y) + dy;
                     if (x < 0 || y < 0 || x >= int(kW) || y >= int(kH)) continue;
-                    if (lit_distance(image.value().at(std::uint32_t(x), std::uint32_t(y)), render::kRoofColor) > 3) continue;
+                    if (lit_distance(image.value().at(std::uint32_t(x), std::uint32_t(y)), kodawari::kRoofColor) > 3) continue;
                     nearest = std::min(nearest, glm::length(glm::vec2(float(x) + 0.5f, float(y) + 0.5f) - q));
                 }
             }
             worst = std::max(worst, nearest);
             on_roof += nearest <= 3.0f;
-            EXPECT_GT(lit_distance(image.value().at(std::uint32_t(centre.x), std::uint32_t(centre.y)), render::kRoofColor), 3)
+            EXPECT_GT(lit_distance(image.value().at(std::uint32_t(centre.x), std::uint32_t(centre.y)), kodawari::kRoofColor), 3)
                 << "the roof covers bird " << b << " at frame " << frame;
         }
         std::printf("[ pictures ] perch frame %u: %d perched pigeons, %d with the roof within 3 px of the belly (farthest %.1f px)\n",
@@ -235,9 +237,9 @@ TEST(Pictures, HummingbirdsHoverOverTheFlowerBed) {
     ASSERT_TRUE(scene.ok());
     auto world = build_bird_world(scene.value());
     ASSERT_TRUE(world.ok());
-    const render::Perches perches = render::perches_of(world.value());
+    const kodawari::Perches perches = kodawari::perches_of(world.value());
     ASSERT_EQ(perches.beds.size(), 1u);
-    const render::FlowerBed& bed = perches.beds[0];
+    const kodawari::FlowerBed& bed = perches.beds[0];
     auto backend = make_bird_backend(BackendKind::Cpu, {});
     ASSERT_TRUE(backend.ok());
     ASSERT_TRUE(backend.value()->load(world.value()).ok());

@@ -5,6 +5,8 @@
 
 #include <gtest/gtest.h>
 
+#include "kodawari/domains/bird_draw.hpp"
+#include "kodawari/domains/chain_draw.hpp"
 #include "render_support.hpp"
 
 namespace kodawari {
@@ -40,7 +42,7 @@ TEST(Render, ChainPixelsAreWhereTheSimulationPutsThem) {
             ASSERT_TRUE(camera.project(p, q));
             chain_px.push_back(q);
             if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
-            const int d = nearest_lit_match(img, q, 1, render::kChainColor);
+            const int d = nearest_lit_match(img, q, 1, kodawari::kChainColor);
             worst = std::max(worst, d);
             EXPECT_LE(d, 2) << "frame " << f << ": no chain colour near the joint projected at (" << q.x << ", " << q.y << ")";
             ++joints;
@@ -130,9 +132,9 @@ TEST(Render, BirdsAreWhereTheyFly) {
     auto renderer = make_renderer(kWidth, kHeight);
     ASSERT_TRUE(renderer);
     // Birds only, no grid: any non-background pixel is a bird.
-    const render::DrawList list(render::scene_camera(scene.value(), kFrame), kWidth, kHeight);
-    ASSERT_TRUE(renderer->set_birds(&world.value()).ok());
-    ASSERT_TRUE(renderer->birds_from(poses).ok());
+    const render::DrawList list(kodawari::scene_camera(scene.value(), kFrame), kWidth, kHeight);
+    ASSERT_TRUE(kodawari::show_birds(*renderer, &world.value()).ok());
+    ASSERT_TRUE(kodawari::draw_birds(*renderer, poses).ok());
     auto image = renderer->render(list);
     ASSERT_TRUE(image.ok());
     const Image& img = image.value();
@@ -152,7 +154,7 @@ TEST(Render, BirdsAreWhereTheyFly) {
         const float depth = glm::dot(p - camera.eye, camera.forward);
         const float span = birds::wing_type_spec(static_cast<birds::WingType>(world.value().birds[b].ids.y)).wingspan;
         const float span_px = span / (2.0f * depth * camera.tan_half) * float(kHeight);
-        birds_px.push_back({q, 4.0f + std::max(span_px, render::kBirdMinPixels)});
+        birds_px.push_back({q, 4.0f + std::max(span_px, kodawari::kBirdMinPixels)});
         if (q.x < 3 || q.y < 3 || q.x > kWidth - 3 || q.y > kHeight - 3) continue;
         ++visible;
         bool hit = false;
@@ -192,7 +194,7 @@ TEST(Render, ScreenOverlaysAreInPixelsAndOnTop) {
     ASSERT_TRUE(renderer);
     render::DrawList list = ahoge_frame(*renderer, run, 0, run.snapshots[0]);
     // Where the strand is: its first joint, projected independently.
-    const render::CameraView camera = render::scene_camera(run.scene, 0);
+    const render::CameraView camera = kodawari::scene_camera(run.scene, 0);
     const Pinhole pinhole(camera.position, camera.target, camera.fov_deg, kWidth, kHeight);
     glm::vec2 root;
     ASSERT_TRUE(pinhole.project(run.snapshots[0].positions[0], root));
@@ -243,12 +245,12 @@ TEST(Render, OrthographicSceneCameraIsDrawnOrthographic) {
     ASSERT_TRUE(backend.value()->read(snapshot).ok());
     auto renderer = make_renderer(kWidth, kHeight);
     ASSERT_TRUE(renderer);
-    const render::CameraView view = render::scene_camera(scene.value(), kFrame);
+    const render::CameraView view = kodawari::scene_camera(scene.value(), kFrame);
     EXPECT_TRUE(view.orthographic);
     render::DrawList list(view, kWidth, kHeight);
-    render::add_characters(list, rods.value(), kFrame);
-    ASSERT_TRUE(renderer->set_chains(&rods.value().world).ok());
-    ASSERT_TRUE(renderer->chains_from(snapshot).ok());
+    kodawari::add_characters(list, rods.value(), kFrame);
+    ASSERT_TRUE(kodawari::show_chains(*renderer, &rods.value().world).ok());
+    ASSERT_TRUE(kodawari::draw_chains(*renderer, snapshot).ok());
     auto image = renderer->render(list);
     ASSERT_TRUE(image.ok()) << image.error().message;
 
@@ -267,7 +269,7 @@ TEST(Render, OrthographicSceneCameraIsDrawnOrthographic) {
         ASSERT_TRUE(pinhole.project(p, perspective));
         apart = std::max(apart, glm::length(perspective - q));
         if (q.x < 2 || q.y < 2 || q.x > kWidth - 2 || q.y > kHeight - 2) continue;
-        const int d = nearest_lit_match(image.value(), q, 1, render::kChainColor);
+        const int d = nearest_lit_match(image.value(), q, 1, kodawari::kChainColor);
         worst = std::max(worst, d);
         EXPECT_LE(d, 2) << "no chain colour near the joint projected at (" << q.x << ", " << q.y << ")";
         ++joints;
@@ -304,7 +306,7 @@ TEST(Render, JointDotsOnlyWhenAskedFor) {
         ASSERT_TRUE(image.ok()) << image.error().message;
         const Image& img = image.value();
         for (std::uint32_t y = 0; y < kH; ++y) {
-            for (std::uint32_t x = 0; x < kW; ++x) exact[with_joints] += img.at(x, y) == render::kChainColor;
+            for (std::uint32_t x = 0; x < kW; ++x) exact[with_joints] += img.at(x, y) == kodawari::kChainColor;
         }
         if (with_joints) {
             const rods::CameraPose pose = run.rods.camera_pose(kFrame);
@@ -313,7 +315,7 @@ TEST(Render, JointDotsOnlyWhenAskedFor) {
                 glm::vec2 q;
                 if (!camera.project(p, q) || q.x < 2 || q.y < 2 || q.x > kW - 2 || q.y > kH - 2) continue;
                 ++joints;
-                dotted += nearest_match(img, q, 1, render::kChainColor) == 0;
+                dotted += nearest_match(img, q, 1, kodawari::kChainColor) == 0;
             }
         }
         EXPECT_EQ(renderer.value()->validation_messages(), 0u);
@@ -335,16 +337,16 @@ TEST(Render, StrandEdgesAreAntiAliased) {
     const AhogeRun run = simulate_ahoge({kFrame});
     auto renderer = make_renderer(kWidth, kHeight);
     ASSERT_TRUE(renderer);
-    ASSERT_TRUE(renderer->set_chains(&run.rods.world).ok());
-    ASSERT_TRUE(renderer->chains_from(run.snapshots[0]).ok());
-    auto image = renderer->render(render::DrawList(render::scene_camera(run.scene, kFrame), kWidth, kHeight));
+    ASSERT_TRUE(kodawari::show_chains(*renderer, &run.rods.world).ok());
+    ASSERT_TRUE(kodawari::draw_chains(*renderer, run.snapshots[0]).ok());
+    auto image = renderer->render(render::DrawList(kodawari::scene_camera(run.scene, kFrame), kWidth, kHeight));
     ASSERT_TRUE(image.ok()) << image.error().message;
     int shade = 0, blend = 0;
     for (std::uint32_t y = 0; y < kHeight; ++y) {
         for (std::uint32_t x = 0; x < kWidth; ++x) {
             const Rgba8 c = image.value().at(x, y);
             if (channel_distance(c, background_at(y, kHeight)) <= 2) continue;
-            (lit_distance(c, render::kChainColor) <= 2 ? shade : blend) += 1;
+            (lit_distance(c, kodawari::kChainColor) <= 2 ? shade : blend) += 1;
         }
     }
     std::printf("[ render ] anti-aliasing: %d strand pixels of a pure shade, %d blended with the background\n", shade, blend);

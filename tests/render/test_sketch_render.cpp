@@ -17,9 +17,11 @@
 
 #include <stb/stb_image.h>
 
+#include "kodawari/domains/bird_draw.hpp"
+#include "kodawari/domains/chain_draw.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/render/scene_draw.hpp"
+#include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
@@ -63,7 +65,7 @@ bool chain_near(const Png& image, glm::vec2 p, int radius) {
     for (int y = static_cast<int>(p.y) - radius; y <= static_cast<int>(p.y) + radius; ++y) {
         for (int x = static_cast<int>(p.x) - radius; x <= static_cast<int>(p.x) + radius; ++x) {
             if (x < 0 || y < 0 || x >= image.width || y >= image.height) continue;
-            if (render_test::lit_distance(image.at(x, y), render::kChainColor) <= 2) return true;
+            if (render_test::lit_distance(image.at(x, y), kodawari::kChainColor) <= 2) return true;
         }
     }
     return false;
@@ -87,7 +89,7 @@ TEST(SketchRender, SketchChangesWhatRenderShowsFromThatView) {
     auto rods = build_rod_scene(scene.value());
     ASSERT_TRUE(rods.ok());
     const rods::RodFrame input = rods.value().frame(0);
-    const render::CameraView view = render::scene_camera(scene.value(), 0);
+    const render::CameraView view = kodawari::scene_camera(scene.value(), 0);
     const glm::mat4 vp = render::view_projection(view, static_cast<float>(kWidth) / static_cast<float>(kHeight));
     const auto project = [&](glm::vec3 p) {
         const glm::vec4 c = vp * glm::vec4(p, 1.0f);
@@ -201,16 +203,16 @@ TEST(SketchRender, RiggedCharacterIsDrawnAsItsSkinnedMesh) {
         }
         ChainSnapshot snapshot;
         EXPECT_TRUE(backend.value()->read(snapshot).ok());
-        const render::CameraView view = render::scene_camera(scene, kLast);
+        const render::CameraView view = kodawari::scene_camera(scene, kLast);
         render::DrawList list(view, kWidth, kHeight);
-        render::add_characters(list, rs, kLast);
-        EXPECT_TRUE(renderer.value()->set_chains(&rs.world).ok());
-        EXPECT_TRUE(renderer.value()->chains_from(snapshot).ok());
-        EXPECT_TRUE(renderer.value()->set_skinned(&rs).ok());
-        EXPECT_TRUE(renderer.value()->skinned_from(snapshot, kLast).ok());
+        kodawari::add_characters(list, rs, kLast);
+        EXPECT_TRUE(kodawari::show_chains(*renderer.value(), &rs.world).ok());
+        EXPECT_TRUE(kodawari::draw_chains(*renderer.value(), snapshot).ok());
+        EXPECT_TRUE(kodawari::show_skinned(*renderer.value(), &rs).ok());
+        EXPECT_TRUE(kodawari::draw_skinned(*renderer.value(), snapshot, kLast).ok());
         auto image = renderer.value()->render(list);
-        EXPECT_TRUE(renderer.value()->set_chains(nullptr).ok());  // rs goes out of scope
-        EXPECT_TRUE(renderer.value()->set_skinned(nullptr).ok());
+        EXPECT_TRUE(kodawari::show_chains(*renderer.value(), nullptr).ok());  // rs goes out of scope
+        EXPECT_TRUE(kodawari::show_skinned(*renderer.value(), nullptr).ok());
         EXPECT_TRUE(image.ok());
         return {std::move(image).value(), rs.frame(kLast).reference[0], view};
     };

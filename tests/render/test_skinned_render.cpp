@@ -18,11 +18,13 @@
 #include <glm/glm.hpp>
 #include <gtest/gtest.h>
 
+#include "kodawari/domains/bird_draw.hpp"
+#include "kodawari/domains/chain_draw.hpp"
 #include "kodawari/backend.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/render/scene_draw.hpp"
+#include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
@@ -217,12 +219,12 @@ TEST(SkinnedRender, DevicePathMatchesHostPathAndReadsNothingBack) {
         ASSERT_TRUE(animator.value().frame(f, input).ok());
         ASSERT_TRUE((f == 0 ? rods.load(rs.world, input) : rods.step(input)).ok());
     }
-    const render::DrawList list(render::scene_camera(crowd.scene, kFrame), kWidth, kHeight);
+    const render::DrawList list(kodawari::scene_camera(crowd.scene, kFrame), kWidth, kHeight);
 
-    ASSERT_TRUE(renderer.set_skinned(&rs).ok());
+    ASSERT_TRUE(kodawari::show_skinned(renderer, &rs).ok());
     const std::uint64_t before = renderer.read_back_bytes();
-    ASSERT_TRUE(renderer.skinned_from(animator.value(), rods, kFrame).ok());
-    EXPECT_TRUE(renderer.skinned_on_device());
+    ASSERT_TRUE(kodawari::draw_skinned(renderer, animator.value(), rods, kFrame).ok());
+    EXPECT_TRUE(kodawari::skinned_drawn_on_device(renderer));
     auto device = renderer.render(list);
     ASSERT_TRUE(device.ok()) << device.error().message;
     const std::uint64_t read_back = renderer.read_back_bytes() - before;
@@ -231,12 +233,12 @@ TEST(SkinnedRender, DevicePathMatchesHostPathAndReadsNothingBack) {
     ChainSnapshot snapshot;
     ASSERT_TRUE(rods.read(snapshot).ok());
     EXPECT_GT(renderer.read_back_bytes() - before, 0u) << "read() is counted: the check above can fail";
-    ASSERT_TRUE(renderer.skinned_from(snapshot, kFrame).ok());
-    EXPECT_FALSE(renderer.skinned_on_device());
+    ASSERT_TRUE(kodawari::draw_skinned(renderer, snapshot, kFrame).ok());
+    EXPECT_FALSE(kodawari::skinned_drawn_on_device(renderer));
     auto host = renderer.render(list);
     ASSERT_TRUE(host.ok()) << host.error().message;
 
-    ASSERT_TRUE(renderer.set_skinned(nullptr).ok());
+    ASSERT_TRUE(kodawari::show_skinned(renderer, nullptr).ok());
     render::DrawList reference_list(list.camera(), kWidth, kHeight);
     const std::size_t triangles = add_reference_meshes(reference_list, rs, kFrame, snapshot);
     auto reference = renderer.render(reference_list);
@@ -255,7 +257,7 @@ TEST(SkinnedRender, DevicePathMatchesHostPathAndReadsNothingBack) {
     EXPECT_EQ(renderer.validation_messages(), 0u);
 }
 
-// The host path (CPU backends: skinned_from() reads the rod backend and composes the
+// The host path (CPU backends: draw_skinned() reads the rod backend and composes the
 // matrices with rigged_world) against the CPU reference drawn as flat draw-list triangles
 // with their face normals: the same coverage and the same flat shading up to rounding
 // (the layer's normal comes from the fragment's position derivatives, the reference's
@@ -284,14 +286,14 @@ TEST(SkinnedRender, HostPathMatchesTheCpuReference) {
             ASSERT_TRUE(rods.read(earlier).ok());
         }
     }
-    const render::DrawList list(render::scene_camera(crowd.scene, kFrame), kWidth, kHeight);
-    ASSERT_TRUE(renderer.set_skinned(&rs).ok());
-    ASSERT_TRUE(renderer.skinned_from(animator.value(), rods, kFrame).ok());
-    EXPECT_FALSE(renderer.skinned_on_device());
+    const render::DrawList list(kodawari::scene_camera(crowd.scene, kFrame), kWidth, kHeight);
+    ASSERT_TRUE(kodawari::show_skinned(renderer, &rs).ok());
+    ASSERT_TRUE(kodawari::draw_skinned(renderer, animator.value(), rods, kFrame).ok());
+    EXPECT_FALSE(kodawari::skinned_drawn_on_device(renderer));
     auto layer = renderer.render(list);
     ASSERT_TRUE(layer.ok()) << layer.error().message;
 
-    ASSERT_TRUE(renderer.set_skinned(nullptr).ok());
+    ASSERT_TRUE(kodawari::show_skinned(renderer, nullptr).ok());
     ChainSnapshot snapshot;
     ASSERT_TRUE(rods.read(snapshot).ok());
     render::DrawList reference_list(list.camera(), kWidth, kHeight);

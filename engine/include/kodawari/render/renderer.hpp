@@ -4,10 +4,10 @@
 /// where the device can, resolved: anti-aliased edges), read back as an
 /// image (render(); PNG output and contact sheets) or blitted into a window's swapchain
 /// (present(), the viewer). A frame is a draw list built on the CPU (ground grid,
-/// skeletons, colliders, overlays) plus the chains, birds and rigged characters' skinned
-/// meshes, which are drawn from buffers on the device: the vulkan backends' own when they
-/// share the renderer's device (BackendOptions::context = device_context(); nothing read
-/// back), else uploaded.
+/// overlays), what domains draw through render::Draw, and the layers domains draw from
+/// their buffers on the device (the vulkan backends' own when they share the renderer's
+/// device: BackendOptions::context = device_context(), nothing read back). The renderer
+/// names no domain (issue 31).
 
 #include <array>
 #include <cstdint>
@@ -24,51 +24,17 @@
 
 #include "kodawari/api.hpp"
 #include "draw.hpp"
-#include "kodawari/backend.hpp"
 #include "kodawari/result.hpp"
-#include "kodawari/rod_backend.hpp"
 
-namespace kodawari {
-class CrowdAnimator;
-struct RodScene;
-}  // namespace kodawari
+namespace kodawari::gpu {
+class VulkanContext;
+}  // namespace kodawari::gpu
 
 namespace kodawari::render {
 
-
-/// The first chain's colour (chain 0 of every world: the one tests look for). Chains are
-/// lit (ChainStyle), so a pixel of a chain is this colour scaled by a light factor in
-/// [kAmbientLight, 1]; joint dots are unlit, exactly this colour.
-inline constexpr Rgba8 kChainColor{235, 95, 20};
-/// The colours chains cycle through (chain c: kChainPalette[c % size]): distinct hues, so
-/// that neighbouring strands read apart, the same for the same world every time.
-inline constexpr std::array<Rgba8, 6> kChainPalette{
-    kChainColor, Rgba8{40, 150, 160}, Rgba8{150, 85, 205}, Rgba8{225, 180, 40}, Rgba8{205, 45, 80}, Rgba8{60, 115, 215}};
 /// The renderer's light: the fraction of a lit colour that faces turned away from the
 /// light keep (the rest is Lambert from one directional light).
 inline constexpr float kAmbientLight = 0.45f;
-/// Colliders: the procedural characters' bodies, solid capsules and spheres lit as the
-/// chains are (f x this, f in [kAmbientLight, 1]). A muted clay.
-inline constexpr Rgba8 kColliderColor{196, 172, 150};
-/// At 720 rows (scaled by rows / 720 within [0.5, 2]), a chain is drawn at least this
-/// many pixels wide and its joint dots at least this radius, so that a strand a few
-/// millimetres thick reads in a preview. A chain too short on screen for its dots to
-/// stay apart (its length under 3 dot radii per joint) gets none.
-inline constexpr float kChainMinPixels = 4.0f;
-inline constexpr float kJointDotMinPixels = 3.0f;
-/// Birds smaller than this wingspan in pixels are drawn scaled up to it, so that a far
-/// flock stays visible (a preview aid: the birds' positions are exact, their size not).
-inline constexpr float kBirdMinPixels = 8.0f;
-
-/// How chains are drawn: lit tubes (camera-facing ribbons shaded as cylinders) 2 x
-/// thickness wide at the root, tapering to 40% of that at the tip, with minimum widths in
-/// pixels; chain c in colors[c % colors.size()]. With RendererOptions::joints, a dot of
-/// radius 1.5 x thickness at each joint, unlit in the chain's exact colour.
-struct ChainStyle {
-    std::vector<Rgba8> colors{kChainPalette.begin(), kChainPalette.end()};  ///< not empty
-    float min_width_px = kChainMinPixels;  ///< at 720 rows
-    float min_dot_px = kJointDotMinPixels; ///< at 720 rows
-};
 
 /// A look-at camera, perspective or orthographic. Up is world +Y (+Z when looking
 /// straight up or down).
@@ -103,7 +69,7 @@ struct KODAWARI_API Image {
     [[nodiscard]] Rgba8 at(std::uint32_t x, std::uint32_t y) const;
 };
 
-/// What one frame draws besides the chains, birds and skinned meshes, in world space:
+/// What one frame draws besides what domains draw, in world space:
 /// built on the CPU and uploaded every frame.
 class KODAWARI_API DrawList {
 public:
@@ -156,14 +122,20 @@ private:
     std::vector<gpu::RenderVertex> triangles_, lines_, shadows_;
 };
 
+/// The ground grid's colour.
+inline constexpr Rgba8 kGridColor{150, 156, 168};
+/// A square grid on the ground (y = 0) covering the points' horizontal extent plus a
+/// margin, with about 10 to 25 lines each way (spacing 1, 2 or 5 x 10^k m).
+KODAWARI_API void add_ground_grid(DrawList& list, std::span<const glm::vec3> points);
+
 /// Where the renderer runs.
 struct RendererOptions {
     std::uint32_t width = 1280, height = 720;  ///< in [1, 8192]
     std::string device;       ///< Vulkan device name substring or index ("" = best)
     bool validation = false;  ///< Khronos validation + synchronization validation
     bool force_staging = false;  ///< staging copies even on shared memory (BackendOptions::force_staging)
-    /// Dots at the chains' joints (ChainStyle; a debugging aid: where the simulation's
-    /// joints are). Off: the strands alone.
+    /// Dots at the joints of what layers draw as strands (a debugging aid: where the
+    /// simulation's joints are). Off: the strands alone.
     bool joints = false;
     /// A window to present to (the viewer): the instance extensions its surface needs and
     /// a function that creates the surface on the renderer's instance. Empty = offscreen
@@ -184,8 +156,8 @@ public:
     Renderer(const Renderer&) = delete;
     Renderer& operator=(const Renderer&) = delete;
 
-    /// Draws the background, then `list`'s lines and triangles and the chain, bird and
-    /// skinned-mesh layers (depth tested), waits and reads the image back. `list` must be
+    /// Draws the background, then `list`'s lines and triangles, what was drawn through
+    /// render::Draw and the layers (depth tested), waits and reads the image back. `list` must be
     /// for this renderer's size. Deterministic: the same list and layer state give the
     /// same bytes.
     [[nodiscard]] Result<Image> render(const DrawList& list);
@@ -227,56 +199,12 @@ public:
     /// another simulation showed goes).
     [[nodiscard]] Result<void> clear_layers();
 
-    /// Draws the chains of `world` in every following frame (null: none), their state
-    /// set per frame by chains_from(). `world` must outlive its use here.
-    [[nodiscard]] Result<void> set_chains(const rods::RodWorld* world, const ChainStyle& style = {});
-    /// This frame's chain state: a backend whose state lives on this renderer's device
-    /// (the vulkan one made with device_context()) is drawn from its own buffers, nothing
-    /// read back; any other is read (RodBackend::read) and uploaded.
-    [[nodiscard]] Result<void> chains_from(RodBackend& backend);
-    /// This frame's chain state from a snapshot (joint positions, uploaded).
-    [[nodiscard]] Result<void> chains_from(const ChainSnapshot& snapshot);
-    /// Whether the last chains_from() drew the backend's own buffers.
-    [[nodiscard]] bool chains_on_device() const;
-    /// This frame's colliders of the world given to set_chains() (drawn as lit capsules in
-    /// kColliderColor; not those of characters set_skinned() draws as meshes): the vulkan rod backend's input buffer when it lives on this
-    /// renderer's device (rigged characters' colliders are written there on the device),
-    /// otherwise those of `input` (the frame given to the backend's step), uploaded.
-    [[nodiscard]] Result<void> colliders_from(const RodBackend& backend, const rods::RodFrame& input);
-
-    /// Draws the birds of `world` (their part meshes, lit, in the wing type's colour) in
-    /// every following frame (null: none), their poses set per frame by birds_from().
-    [[nodiscard]] Result<void> set_birds(const birds::BirdWorld* world);
-    /// This frame's bird poses where a vulkan bird backend made with device_context()
-    /// keeps them (BirdBackend::device_poses(): simulate() need not read them back). An
-    /// error for a backend on another device or on the CPU: pass its poses instead.
-    [[nodiscard]] Result<void> birds_from(const BirdBackend& backend);
-    /// This frame's bird poses, one per bird, uploaded.
-    [[nodiscard]] Result<void> birds_from(std::span<const gpu::BirdPose> poses);
-
-    /// Draws the rigged characters of `scene` that have meshes as their skinned meshes
-    /// (glTF §3.7.3; flat shaded, lit) in every following frame (null: none), posed per
-    /// frame by skinned_from(). `scene` must outlive its use here.
-    [[nodiscard]] Result<void> set_skinned(const RodScene* scene);
-    /// Frame `frame`'s poses: the clip's with the hair bones where `rods` simulated them
-    /// (RodScene::rigged_world). When the animator's pose backends and `rods` keep their
-    /// buffers on this renderer's device (the vulkan ones made with device_context()), a
-    /// kernel composes the node matrices there, nothing read back; the animator's last
-    /// frame() and `rods`' state must then be frame `frame`'s. Otherwise `rods` is read
-    /// and the matrices are composed on the CPU and uploaded. `animator` must be made from
-    /// the scene given to set_skinned().
-    [[nodiscard]] Result<void> skinned_from(const CrowdAnimator& animator, RodBackend& rods, std::uint32_t frame);
-    /// Frame `frame`'s poses from a snapshot of the chains at that frame, composed on the
-    /// CPU (RodScene::rigged_world) and uploaded.
-    [[nodiscard]] Result<void> skinned_from(const ChainSnapshot& snapshot, std::uint32_t frame);
-    /// Whether the last skinned_from() composed the poses on the device.
-    [[nodiscard]] bool skinned_on_device() const;
-
     /// Validation messages seen so far (with validation on).
     [[nodiscard]] std::uint32_t validation_messages() const;
 
 private:
     struct Impl;
+    friend struct LayerAccess;  // render/layer.hpp: the layers domains draw from device buffers
     explicit Renderer(std::unique_ptr<Impl> impl);
     std::unique_ptr<Impl> impl_;
 };

@@ -1,4 +1,4 @@
-#include "render/skinned_layer.hpp"
+#include "domains/skinned_layer.hpp"
 
 #include <algorithm>
 #include <array>
@@ -9,10 +9,9 @@
 #include <kodawari/shared/skin.h>
 
 #include "compute/compute.hpp"
-#include "kodawari/render/scene_draw.hpp"
-#include "render/device_layers.hpp"
+#include "kodawari/domains/scene_draw.hpp"
 
-namespace kodawari::render {
+namespace kodawari {
 
 namespace {
 
@@ -27,9 +26,9 @@ gpu::PoseMatrixGpu packed(const glm::mat4& m) { return {{v4(m[0]), v4(m[1]), v4(
 
 }  // namespace
 
-Result<SkinnedLayer> SkinnedLayer::create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples) {
+Result<SkinnedLayer> SkinnedLayer::create(const render::LayerTarget& target) {
     SkinnedLayer layer;
-    auto pipeline = layer_pipeline(ctx, pass, "skinned.vert", "skinned.frag", sizeof(gpu::SkinnedVertexGpu), 4, KW_SKINNED_BINDING_COUNT, samples);
+    auto pipeline = render::layer_pipeline(target, "skinned.vert", "skinned.frag", sizeof(gpu::SkinnedVertexGpu), 4, KW_SKINNED_BINDING_COUNT);
     if (!pipeline) return pipeline.error();
     layer.pipeline_.emplace(std::move(pipeline).value());
     return layer;
@@ -132,9 +131,9 @@ Result<void> SkinnedLayer::set_scene(gpu::VulkanContext& ctx, const RodScene* sc
         }
         ch.indices = static_cast<std::uint32_t>(indices.size());
 
-        KW_TRY(store(ctx, ch.walk, bytes_of(walk)));
-        KW_TRY(store(ctx, ch.instance_chains, bytes_of(chains)));
-        KW_TRY(store(ctx, ch.joints, bytes_of(joints)));
+        KW_TRY(render::store(ctx, ch.walk, bytes_of(walk)));
+        KW_TRY(render::store(ctx, ch.instance_chains, bytes_of(chains)));
+        KW_TRY(render::store(ctx, ch.joints, bytes_of(joints)));
         // One storage buffer of every instance's node matrices (range-checked).
         const std::uint64_t world_bytes[] = {std::uint64_t{ch.nodes} * ch.instances.size() * sizeof(gpu::PoseMatrixGpu)};
         auto world = compute::create_storage_buffers(ctx, world_bytes, "the skinned meshes of " + rig.source);
@@ -173,7 +172,7 @@ Result<void> SkinnedLayer::from_backends(gpu::VulkanContext& ctx, const CrowdAni
         if (it == posed.end() || !std::ranges::equal(it->instances, ch.instances)) {
             return make_error(Error::Kind::InvalidInput, "the crowd animator does not pose the instances of character template " +
                                                              scene_->characters[ch.character].name +
-                                                             " the renderer draws: make it from the scene given to set_skinned()");
+                                                             " the renderer draws: make it from the scene given to show_skinned()");
         }
         const DeviceData* poses = it->backend->device_data();
         const DeviceSpan world = poses != nullptr ? poses->buffer(DeviceBuffer::PoseWorld) : DeviceSpan{};
@@ -230,7 +229,7 @@ Result<void> SkinnedLayer::from_snapshot(gpu::VulkanContext& ctx, const ChainSna
     return {};
 }
 
-void SkinnedLayer::record_kernels(const vk::raii::CommandBuffer& cmd) const {
+void SkinnedLayer::record_compute(const vk::raii::CommandBuffer& cmd) const {
     const bool any = std::any_of(characters_.begin(), characters_.end(), [](const Character& ch) { return ch.dispatch; });
     if (!any) return;
     using Stage = vk::PipelineStageFlagBits;
@@ -249,7 +248,8 @@ void SkinnedLayer::record_kernels(const vk::raii::CommandBuffer& cmd) const {
     }
 }
 
-void SkinnedLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push) const {
+void SkinnedLayer::record(const vk::raii::CommandBuffer& cmd, const render::LayerFrame& frame) const {
+    gpu::RenderPush push = frame.push;
     bool bound = false;
     for (const Character& ch : characters_) {
         if (!ch.filled || ch.indices == 0) continue;
@@ -267,4 +267,4 @@ void SkinnedLayer::record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush pu
     }
 }
 
-}  // namespace kodawari::render
+}  // namespace kodawari

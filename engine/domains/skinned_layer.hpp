@@ -1,5 +1,5 @@
 #pragma once
-// The renderer's skinned-mesh layer: rigged characters drawn as their glTF meshes,
+// The chain domain's skinned-mesh layer (a render::Layer, kodawari/domains/chain_draw.hpp): rigged characters drawn as their glTF meshes,
 // skinned in a vertex shader (shaders/skinned.vert) with node world matrices that live in
 // a buffer of the layer. Those are composed on the device by shaders/skin_nodes.comp from
 // the pose and rod backends' buffers when both are on the renderer's device (nothing
@@ -19,12 +19,13 @@
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
+#include "render/layer.hpp"
 
-namespace kodawari::render {
+namespace kodawari {
 
-class SkinnedLayer {
+class SkinnedLayer final : public render::Layer {
 public:
-    [[nodiscard]] static Result<SkinnedLayer> create(const gpu::VulkanContext& ctx, vk::RenderPass pass, vk::SampleCountFlagBits samples);
+    [[nodiscard]] static Result<SkinnedLayer> create(const render::LayerTarget& target);
 
     /// The rigged characters of `scene` that have meshes (null: none): per character
     /// template its expanded triangles, skin joints, node walk and instances' chains are
@@ -39,11 +40,11 @@ public:
     /// Whether the last from_*() composed the matrices on the device.
     [[nodiscard]] bool on_device() const { return on_device_; }
 
-    /// Records the kernels that compose the matrices (outside the render pass; the
-    /// renderer's barrier to the vertex shaders follows).
-    void record_kernels(const vk::raii::CommandBuffer& cmd) const;
-    /// Records the draws (inside the render pass; `push` has the camera and the light).
-    void record(const vk::raii::CommandBuffer& cmd, gpu::RenderPush push) const;
+    [[nodiscard]] Result<void> clear(gpu::VulkanContext& ctx) override { return set_scene(ctx, nullptr); }
+    /// The kernels that compose the matrices (outside the render pass; the renderer's
+    /// barrier to the vertex shaders follows).
+    void record_compute(const vk::raii::CommandBuffer& cmd) const override;
+    void record(const vk::raii::CommandBuffer& cmd, const render::LayerFrame& frame) const override;
 
 private:
     SkinnedLayer() = default;
@@ -68,4 +69,4 @@ private:
     bool on_device_ = false;
 };
 
-}  // namespace kodawari::render
+}  // namespace kodawari

@@ -1,4 +1,4 @@
-#include "kodawari/render/scene_draw.hpp"
+#include "kodawari/domains/scene_draw.hpp"
 
 #include <algorithm>
 #include <cmath>
@@ -7,7 +7,12 @@
 #include <glm/gtc/quaternion.hpp>
 
 
-namespace kodawari::render {
+namespace kodawari {
+
+using render::CameraView;
+using render::DrawList;
+using render::Rgba8;
+
 
 CameraView scene_camera(const Scene& scene, std::uint32_t frame) {
     const float fps = scene.fps > 0.0f ? scene.fps : 60.0f;
@@ -31,35 +36,6 @@ CameraView scene_camera(const Scene& scene, std::uint32_t frame) {
         view.far = 1e4f;
     }
     return view;
-}
-
-void add_ground_grid(DrawList& list, std::span<const glm::vec3> points) {
-    glm::vec2 lo{0.0f}, hi{0.0f};
-    for (const glm::vec3& p : points) {
-        if (!std::isfinite(p.x) || !std::isfinite(p.z)) continue;
-        lo = glm::min(lo, glm::vec2(p.x, p.z));
-        hi = glm::max(hi, glm::vec2(p.x, p.z));
-    }
-    const glm::vec2 center = 0.5f * (lo + hi);
-    const float half = std::max(3.0f, 0.5f * std::max(hi.x - lo.x, hi.y - lo.y) * 1.3f + 2.0f);
-    // A round spacing giving 10 to 25 lines each way.
-    const float rough = 2.0f * half / 10.0f;
-    const float decade = std::pow(10.0f, std::floor(std::log10(rough)));
-    float spacing = decade;
-    for (const float m : {1.0f, 2.0f, 5.0f, 10.0f}) {
-        if (m * decade <= rough) spacing = m * decade;
-    }
-    const float x0 = std::floor((center.x - half) / spacing) * spacing, x1 = std::ceil((center.x + half) / spacing) * spacing;
-    const float z0 = std::floor((center.y - half) / spacing) * spacing, z1 = std::ceil((center.y + half) / spacing) * spacing;
-    const int nx = static_cast<int>(std::lround((x1 - x0) / spacing)), nz = static_cast<int>(std::lround((z1 - z0) / spacing));
-    for (int i = 0; i <= nx; ++i) {
-        const float x = x0 + spacing * static_cast<float>(i);
-        list.add_line({x, 0.0f, z0}, {x, 0.0f, z1}, kGridColor);
-    }
-    for (int i = 0; i <= nz; ++i) {
-        const float z = z0 + spacing * static_cast<float>(i);
-        list.add_line({x0, 0.0f, z}, {x1, 0.0f, z}, kGridColor);
-    }
 }
 
 bool draws_skinned(const gltf::Character& character) {
@@ -378,4 +354,4 @@ std::vector<glm::vec3> content_points(const RodScene* scene, const rods::RodFram
     return points;
 }
 
-}  // namespace kodawari::render
+}  // namespace kodawari

@@ -1,9 +1,10 @@
 #pragma once
 /// @file
-/// Draw lists of a scene's content for the renderer (renderer.hpp): the scene camera,
-/// a ground grid, characters (skeleton bones, colliders). The chains, birds and skinned
-/// meshes are the renderer's layers (Renderer::set_chains, set_birds, set_skinned).
-/// Shared by `kodawari render` and `kodawari view`.
+/// Draw lists of a scene's content besides what its domains simulate: the scene camera,
+/// the characters (skeleton bones, faces, legs, contact shadows) and the birds' perches.
+/// The chains, colliders, skinned meshes and birds are the domains' render layers
+/// (kodawari/domains/chain_draw.hpp, bird_draw.hpp). Shared by `kodawari render` and
+/// `kodawari view`.
 
 #include <array>
 #include <cstdint>
@@ -16,27 +17,22 @@
 #include "kodawari/api.hpp"
 #include "kodawari/birds/world.hpp"
 #include "kodawari/render/renderer.hpp"
+#include "kodawari/domains/chain_draw.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
-#include "kodawari/scene.hpp"
 
-namespace kodawari::render {
+namespace kodawari {
 
-inline constexpr Rgba8 kBoneColor{50, 60, 80};
-inline constexpr Rgba8 kGridColor{150, 156, 168};
+inline constexpr render::Rgba8 kBoneColor{50, 60, 80};
 /// The scene camera at `frame` (time = frame / fps) as scene.camera.motion gives it, the
 /// same pose RodScene::camera_pose gives characters, and its projection: an orthographic
 /// camera is as tall as the perspective frustum at its target (rods::ImageCamera's
 /// convention). Perspective near and far planes follow the distance to the target:
 /// near = 1% of it (within [0.01, 1] m), far = 1000 x near; orthographic: 0.01 to 10 km.
-[[nodiscard]] KODAWARI_API CameraView scene_camera(const Scene& scene, std::uint32_t frame);
+[[nodiscard]] KODAWARI_API render::CameraView scene_camera(const Scene& scene, std::uint32_t frame);
 
-/// A square grid on the ground (y = 0) covering the points' horizontal extent plus a
-/// margin, with about 10 to 25 lines each way (spacing 1, 2 or 5 x 10^k m).
-KODAWARI_API void add_ground_grid(DrawList& list, std::span<const glm::vec3> points);
-
-/// Whether a rigged character is drawn as its skinned mesh (the renderer's skinned-mesh
-/// layer, Renderer::set_skinned) rather than as bones: some node has a mesh with triangles.
+/// Whether a rigged character is drawn as its skinned mesh (the chain domain's skinned-mesh
+/// layer, show_skinned()) rather than as bones: some node has a mesh with triangles.
 [[nodiscard]] KODAWARI_API bool draws_skinned(const gltf::Character& character);
 
 /// The darkest a contact shadow gets (a character whose lowest joint is on the ground).
@@ -45,7 +41,7 @@ inline constexpr float kShadowOpacity = 0.35f;
 /// A soft contact shadow on the ground under a character posed as `joints` (root first):
 /// a disc under the joints' centroid about as wide as the body (0.3 x the skeleton's height), fading
 /// as the character rises off the ground (kShadowOpacity when it stands on it).
-KODAWARI_API void add_contact_shadow(DrawList& list, std::span<const rods::Transform> joints);
+KODAWARI_API void add_contact_shadow(render::DrawList& list, std::span<const rods::Transform> joints);
 
 /// A character's head: the largest sphere collider on its reference joint (the joint the
 /// view examples are measured from), posed. Its face looks along the joint's +Z (the
@@ -66,7 +62,7 @@ struct Head {
 /// the eyes: tests/character_support.hpp), with a short mouth below.
 inline constexpr float kEyeAzimuthDeg = 20.0f;
 inline constexpr float kEyeElevationDeg = 5.0f;
-inline constexpr Rgba8 kFaceColor{40, 32, 48};
+inline constexpr render::Rgba8 kFaceColor{40, 32, 48};
 
 /// The centres of the eyes on the head's surface: the character's left eye (+X of the
 /// head frame) first.
@@ -75,7 +71,7 @@ inline constexpr Rgba8 kFaceColor{40, 32, 48};
 /// The face of `head` (unlit, kFaceColor), 1% of the radius off the sphere: the renderer's
 /// low-poly sphere lies inside the true one, so the face shows in front of it where the
 /// face is turned to the camera and is hidden behind the head where it is turned away.
-KODAWARI_API void add_face(DrawList& list, const Head& head);
+KODAWARI_API void add_face(render::DrawList& list, const Head& head);
 
 /// Legs of a procedural character whose skeleton stops above the floor (the body, neck,
 /// head characters: the body joint is the hips, 0.9 m up): two straight legs from the
@@ -96,13 +92,13 @@ struct Legs {
                                                        std::span<const rods::Transform> joints);
 
 /// The legs as lit tubes in kColliderColor (the body's colour).
-KODAWARI_API void add_legs(DrawList& list, const Legs& legs);
+KODAWARI_API void add_legs(render::DrawList& list, const Legs& legs);
 
 /// Every character instance of `scene` at `frame`: its contact shadow (add_contact_shadow,
-/// the feet included), and, unless it is drawn as a skinned mesh (Renderer::set_skinned),
+/// the feet included), and, unless it is drawn as a skinned mesh (show_skinned()),
 /// its skeleton bones from RodScene::joint_poses, its face (add_face) and its legs
-/// (add_legs). The colliders are the renderer's (Renderer::colliders_from).
-KODAWARI_API void add_characters(DrawList& list, const RodScene& scene, std::uint32_t frame);
+/// (add_legs). The colliders are the chain domain's layer (draw_colliders()).
+KODAWARI_API void add_characters(render::DrawList& list, const RodScene& scene, std::uint32_t frame);
 
 /// The perches of a scene's birds, which the scene gives only as routes: a roof under
 /// the birds' bellies where a route takes off (its first point) or lands (its last),
@@ -131,9 +127,9 @@ struct Perches {
 /// The body mesh's lowest point under a bird's position, per metre of body length
 /// (engine/birds/bird_meshes.cpp: the body's half height).
 inline constexpr float kBellyDepth = 0.10f;
-inline constexpr Rgba8 kRoofColor{168, 86, 62};
-inline constexpr Rgba8 kWallColor{222, 212, 190};
-inline constexpr Rgba8 kSoilColor{112, 82, 56};
+inline constexpr render::Rgba8 kRoofColor{168, 86, 62};
+inline constexpr render::Rgba8 kWallColor{222, 212, 190};
+inline constexpr render::Rgba8 kSoilColor{112, 82, 56};
 
 /// Where the perches of `birds` are: per route that takes off or lands, one roof whose
 /// ridge runs across the route's heading, under every bird of the route as it sits there
@@ -146,13 +142,13 @@ inline constexpr Rgba8 kSoilColor{112, 82, 56};
 /// whose walls go down to the ground; each bed a patch of soil with flowers on it, on a
 /// flat-roofed building as tall as the bed is high. `perches` is perches_of() of the
 /// scene's birds, which does not change from frame to frame: a caller finds it once.
-KODAWARI_API void add_perches(DrawList& list, const Perches& perches);
+KODAWARI_API void add_perches(render::DrawList& list, const Perches& perches);
 
-/// Where the content is, for add_ground_grid, from the scene alone (no simulation state,
+/// Where the content is, for render::add_ground_grid(), from the scene alone (no simulation state,
 /// so that nothing needs reading back): character instances' placements, the chain roots
 /// of `frame` (a RodScene frame's kinematic input; may be null), the control points of
 /// the birds' routes.
 [[nodiscard]] KODAWARI_API std::vector<glm::vec3> content_points(const RodScene* scene, const rods::RodFrame* frame,
                                                                  const birds::BirdWorld* birds);
 
-}  // namespace kodawari::render
+}  // namespace kodawari
