@@ -16,6 +16,7 @@ layout(local_size_x = KW_BIRDS_WORKGROUP_SIZE) in;
 layout(constant_id = KW_BIRDS_SPEC_BANK_RULE) const uint BANK_RULE = KW_BANK_COORDINATED;
 layout(constant_id = KW_BIRDS_SPEC_MODE_RULE) const uint MODE_RULE = KW_MODE_RULE_CLIMB;
 layout(constant_id = KW_BIRDS_SPEC_DIAGNOSTICS) const bool WRITE_DIAGNOSTICS = false;
+layout(constant_id = KW_BIRDS_SPEC_DRIVEN) const bool HAS_DRIVEN = false;
 
 layout(std140, binding = KW_BIRDS_BINDING_UNIFORMS) uniform Uniforms { FlightUniforms u; };
 layout(std430, binding = KW_BIRDS_BINDING_ROUTES) readonly buffer Routes { RouteHeader routes[]; };
@@ -25,6 +26,7 @@ layout(std430, binding = KW_BIRDS_BINDING_PARAMS) readonly buffer Params { BirdP
 layout(std430, binding = KW_BIRDS_BINDING_STATES) buffer States { BirdState states[]; };
 layout(std430, binding = KW_BIRDS_BINDING_POSES) writeonly buffer Poses { BirdPoseGpu poses[]; };
 layout(std430, binding = KW_BIRDS_BINDING_DIAGNOSTICS) writeonly buffer Diagnostics { BirdDiag diags[]; };
+layout(std430, binding = KW_BIRDS_BINDING_MOTION) readonly buffer Motions { BirdMotionGpu motions[]; };
 
 layout(push_constant) uniform Push { BirdPush push; };
 
@@ -137,6 +139,23 @@ struct RouteSample {
     float since_crouch;
     float since_touchdown;
 };
+
+// flight.cpp motion_sample(): a driven bird's frame, from the motion another domain gave.
+RouteSample motion_sample(BirdMotionGpu m) {
+    RouteSample r;
+    r.position = m.position.xyz;
+    r.velocity = m.velocity.xyz;
+    r.acceleration = m.acceleration.xyz;
+    r.direction = r.velocity;
+    r.lift = m.acceleration.y;
+    r.lift_scale = 1.0;
+    r.attitude_velocity = r.velocity;
+    r.segment_mode = KW_SEGMENT_AUTO;
+    r.speed_fraction = 1.0;
+    r.since_crouch = 1e9;
+    r.since_touchdown = -1.0;
+    return r;
+}
 
 // One Bezier evaluation per frame: lavapipe runs both sides of a divergent branch, so
 // the timing and end cases only choose the parameter and how the result is used.
@@ -479,7 +498,10 @@ void main() {
         bool first = previous == KW_MODE_UNSET;
 
         precise float time = float(frame) * dt + bird.offset.w;
-        RouteSample r = sample_route(route, time, bird.motion.x, cache);
+        // HAS_DRIVEN is a specialization constant: without driven birds this is the
+        // route alone (lavapipe runs both sides of a branch).
+        const bool driven = HAS_DRIVEN && bird.ids.w == KW_BIRD_DRIVEN;
+        RouteSample r = driven ? motion_sample(motions[k * push.frames.w + bird.ids.z]) : sample_route(route, time, bird.motion.x, cache);
 
         uint climb_previous = previous <= KW_MODE_DESCEND ? previous : previous == KW_MODE_GLIDE ? KW_MODE_LEVEL : KW_MODE_UNSET;
         uint mode = flight_mode(bird, state, r, next_mode(climb_previous, r));
@@ -587,7 +609,7 @@ void main() {
         float tail_spread = spread + float(KW_TAIL_BANK_SPREAD) * abs(sin_bank);
 
         uint slot = (k % push.frames.z) * count + i;
-        vec3 position = r.position + bird.offset.xyz;
+        vec3 position = driven ? r.position : r.position + bird.offset.xyz;
         poses[slot].position = vec4(position.x, position.y + bob_height, position.z, tail_spread);
         poses[slot].body = body;
         poses[slot].head = head;

@@ -68,6 +68,7 @@ OWNER_PATTERNS = [
     ("capi/*.hpp", "c"),
     ("simulation/*.hpp", "engine"),
     ("domains/*.hpp", "engine"),
+    ("domains/flocking/*.hpp", "engine"),
 ]
 PUBLIC_OWNERS = {
     "gltf/character.hpp": "sim",
@@ -94,6 +95,7 @@ PUBLIC_OWNERS = {
     "domains/chain_draw.hpp": "engine",
     "domains/bird_draw.hpp": "engine",
     "domains/scene_draw.hpp": "engine",
+    "domains/flocking.hpp": "engine",
     "domains/trace.hpp": "engine",
     "bake.hpp": "engine",
     "shards.hpp": "engine",

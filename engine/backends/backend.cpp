@@ -17,6 +17,14 @@ std::string_view backend_name(BackendKind kind) {
 
 unsigned cpu_backend_threads(const BackendOptions& options) { return resolve_threads(options.threads); }
 
+Result<void> BirdBackend::check_motion(const birds::BirdWorld& world, std::uint32_t frames) const {
+    const std::uint64_t needed = std::uint64_t{frames} * world.driven;
+    if (motion_.size() >= needed) return {};
+    return make_error(Error::Kind::InvalidInput, std::to_string(world.driven) + " birds are flown by another domain: drive() must give " +
+                                                     std::to_string(needed) + " motions for " + std::to_string(frames) +
+                                                     " frames, got " + std::to_string(motion_.size()));
+}
+
 namespace {
 
 Error no_vulkan(std::string_view family) {

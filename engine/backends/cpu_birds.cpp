@@ -29,11 +29,14 @@ public:
         const std::size_t count = world_->birds.size();
         assert(out.poses.empty() || out.poses.size() == frames * count);
         assert(out.diag.empty() || out.diag.size() == frames * count);
+        KW_TRY(check_motion(*world_, frames));
         for (std::size_t i = 0; i < count; ++i) {
             const gpu::BirdParams& bird = world_->birds[i];
             gpu::BirdState& state = states_[i];
             for (std::uint32_t k = 0; k < frames; ++k) {
-                const birds::BirdFrame f = birds::step_bird(*world_, uniforms_, bird, state, frame_ + k);
+                const gpu::BirdMotionGpu* motion =
+                    bird.ids.w == KW_BIRD_DRIVEN ? &motion_[std::size_t{k} * world_->driven + bird.ids.z] : nullptr;
+                const birds::BirdFrame f = birds::step_bird(*world_, uniforms_, bird, state, frame_ + k, motion);
                 const std::size_t slot = k * count + i;
                 // Without an output the pose still goes to memory, as on the GPU.
                 (out.poses.empty() ? scratch_[i] : out.poses[slot]) = f.pose;

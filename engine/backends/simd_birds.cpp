@@ -81,6 +81,10 @@ public:
         args.poses = out.poses.empty() ? nullptr : out.poses.data();
         args.diag = out.diag.empty() ? nullptr : out.diag.data();
         args.birds = count;
+        KW_TRY(check_motion(*world_, frames));
+        args.params = world_->birds.data();
+        args.motion = motion_.data();
+        args.driven = world_->driven;
         args.first_frame = frame_;
         args.frames = frames;
         parallel_for(batches_.size(), threads_, [&](std::size_t begin, std::size_t end) { kernels_.simulate(args, begin, end); });

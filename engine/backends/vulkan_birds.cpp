@@ -51,7 +51,7 @@ public:
     /// The kernel specialized for this world's rules, with or without diagnostics; built
     /// on first use (lavapipe compiles it at its first dispatch) and kept.
     Result<const compute::Kernel*> pipeline(bool diagnostics) {
-        const std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT> spec = {rules_.x, rules_.y, diagnostics ? 1u : 0u};
+        const std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT> spec = {rules_.x, rules_.y, diagnostics ? 1u : 0u, driven_ > 0 ? 1u : 0u};
         for (const auto& [key, p] : pipelines_) {
             if (key == spec) return &p;
         }
@@ -79,6 +79,11 @@ public:
 
     Result<void> record_simulate(compute::Recording& recording, std::uint32_t frames) override {
         assert(count_ > 0 && "load() first");
+        if (driven_ > 0) {
+            return make_error(Error::Kind::Unsupported, std::to_string(driven_) +
+                                                            " birds are flown by another domain (flocking), whose motion is given per "
+                                                            "simulate(): recording them into a command buffer is not supported yet");
+        }
         assert(&recording.device() == ctx_.get() && "a recording of the backend's device");
         auto kernel = pipeline(false);
         if (!kernel) return kernel.error();
@@ -140,14 +145,14 @@ public:
         buffers_.clear();
         const std::span<const std::byte> contents[KW_BIRDS_BINDING_COUNT] = {
             std::as_bytes(std::span(&uniforms, 1)), bytes_of(world.routes), bytes_of(world.control_points),
-            bytes_of(world.arc_samples), bytes_of(world.birds), bytes_of(states), {}, {}};
+            bytes_of(world.arc_samples), bytes_of(world.birds), bytes_of(states), {}, {}, {}};
         const std::uint64_t sizes[KW_BIRDS_BINDING_COUNT] = {
             sizeof(uniforms), contents[1].size(), contents[2].size(), contents[3].size(), contents[4].size(),
             contents[5].size(), std::uint64_t{slots_} * count * sizeof(gpu::BirdPoseGpu),
-            std::uint64_t{slots_} * count * sizeof(gpu::BirdDiag)};
+            std::uint64_t{slots_} * count * sizeof(gpu::BirdDiag), std::uint64_t{slots_} * world.driven * sizeof(gpu::BirdMotionGpu)};
         static constexpr const char* kBindingNames[KW_BIRDS_BINDING_COUNT] = {
             "uniforms", "routes", "route control points", "route arc samples", "bird parameters", "bird states",
-            "poses", "diagnostics"};
+            "poses", "diagnostics", "driven birds' motion"};
         for (std::uint32_t b = 0; b < KW_BIRDS_BINDING_COUNT; ++b) {
             if (sizes[b] > max_range) return too_large(kBindingNames[b], sizes[b], "binding " + std::to_string(b));
         }
@@ -161,6 +166,8 @@ public:
         // 10 M birds it pins 1.76 GB of host memory that benchmarks never read).
         readback_.reset();
         rules_ = uniforms.rules;
+        driven_ = world.driven;
+        world_ = &world;
         for (auto& [key, p] : pipelines_) p.bind(bound_buffers());
         return {};
     }
@@ -174,9 +181,10 @@ public:
         auto kernel = pipeline(want_diag);
         if (!kernel) return kernel.error();
         gpu_ms_ = 0.0;
+        KW_TRY(check_motion(*world_, frames));
 
         const compute::Queue queue(*ctx_);
-        if (!want_poses && !want_diag) {
+        if (!want_poses && !want_diag && driven_ == 0) {
             // Nothing read back (benchmarks): one dispatch runs every frame; each frame's
             // poses still go to the ring, whose slots are reused.
             auto recording = queue.begin();
@@ -192,7 +200,7 @@ public:
             return {};
         }
 
-        if (!ctx_->unified_memory() && !readback_) {
+        if (!ctx_->unified_memory() && !readback_ && (want_poses || want_diag)) {
             auto readback = Buffer::create(*ctx_, buffers_[KW_BIRDS_BINDING_POSES].size() + buffers_[KW_BIRDS_BINDING_DIAGNOSTICS].size(),
                                            Buffer::Kind::Readback);
             if (!readback) return readback.error();
@@ -200,19 +208,33 @@ public:
         }
         for (std::uint32_t done = 0; done < frames;) {
             const std::uint32_t n = std::min(slots_, frames - done);
+            if (driven_ > 0) {
+                // This chunk's motion, before the dispatch that reads it (the last one has
+                // finished: every submission is waited for).
+                const auto chunk = motion_.subspan(std::size_t{done} * driven_, std::size_t{n} * driven_);
+                KW_TRY(compute::upload(*ctx_, buffers_[KW_BIRDS_BINDING_MOTION], std::as_bytes(chunk)));
+            }
             auto recording = queue.begin();
             if (!recording) return recording.error();
             compute::Recording& rec = recording.value();
             rec.timestamp(compute::Timestamp::Begin);
             record_frames(rec, *kernel.value(), frame_ + done, n);
             rec.timestamp(compute::Timestamp::End);
-            record_readback(rec, n, want_diag);
+            if (want_poses || want_diag) {
+                record_readback(rec, n, want_diag);
+            } else {
+                compute::barrier(rec, compute::Stage::Compute, compute::Stage::Host);
+            }
             auto submission = queue.submit(std::move(recording).value());
             if (!submission) return submission.error();
             double ms = -1.0;
             KW_TRY(submission.value().wait(&ms));
             if (ms >= 0.0) gpu_ms_ += ms;
             const std::size_t pose_count = std::size_t{n} * count_;
+            if (!want_poses && !want_diag) {
+                done += n;
+                continue;
+            }
             ctx_->count_read_back(pose_count * ((want_poses ? sizeof(gpu::BirdPoseGpu) : 0) + (want_diag ? sizeof(gpu::BirdDiag) : 0)));
             const std::byte* poses = readback_ ? readback_->mapped() : buffers_[KW_BIRDS_BINDING_POSES].mapped();
             const std::byte* diags = readback_ ? readback_->mapped() + buffers_[KW_BIRDS_BINDING_POSES].size()
@@ -237,7 +259,7 @@ private:
         // The previous dispatch (this or an earlier submission) wrote the states and the
         // ring, and a copy may have read the ring; this one reads and overwrites them.
         compute::barrier(recording, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
-        const gpu::BirdPush push{{first, n, slots_, 0u}};
+        const gpu::BirdPush push{{first, n, slots_, driven_}};
         const std::uint32_t groups = (count_ + KW_BIRDS_WORKGROUP_SIZE - 1) / KW_BIRDS_WORKGROUP_SIZE;
         kernel.dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
     }
@@ -276,6 +298,8 @@ private:
     std::uint32_t slots_ = 1;
     std::uint32_t frame_ = 0;
     std::uint32_t last_slot_ = 0;  // the ring slot of the last simulated frame
+    std::uint32_t driven_ = 0;     // BirdWorld::driven
+    const birds::BirdWorld* world_ = nullptr;
     double gpu_ms_ = -1.0;
 };
 

@@ -2,6 +2,7 @@
 // order of operations as shaders/birds_flap.comp, so the two agree to rounding.
 #include "kodawari/birds/flight.hpp"
 
+#include <cassert>
 #include <algorithm>
 #include <cmath>
 #include <numbers>
@@ -343,14 +344,28 @@ float blend_rate(const gpu::FlightUniforms& u, std::uint32_t mode) {
 
 }  // namespace
 
+RouteSample motion_sample(const gpu::BirdMotionGpu& motion) {
+    RouteSample out;
+    out.position = xyz(motion.position);
+    out.velocity = xyz(motion.velocity);
+    out.acceleration = xyz(motion.acceleration);
+    out.direction = out.velocity;
+    out.attitude_velocity = out.velocity;
+    out.lift = motion.acceleration.y;
+    out.lift_scale = 1.0f;
+    return out;
+}
+
 BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms, const gpu::BirdParams& bird,
-                    gpu::BirdState& state, std::uint32_t frame) {
+                    gpu::BirdState& state, std::uint32_t frame, const gpu::BirdMotionGpu* motion) {
     const float dt = uniforms.physics.z;
     const std::uint32_t previous = state.mode.x;
     const bool first = previous == KW_MODE_UNSET;
 
     const float time = static_cast<float>(frame) * dt + bird.offset.w;
-    const RouteSample sample = sample_route(world, bird.ids.x, time, bird.motion.x);
+    const bool driven = bird.ids.w == KW_BIRD_DRIVEN;
+    assert(!driven || motion != nullptr);
+    const RouteSample sample = driven ? motion_sample(*motion) : sample_route(world, bird.ids.x, time, bird.motion.x);
     const Attitude att = attitude(uniforms, sample);
 
     // Mode (SPEC B.5, docs/flight-modes.md F.1). The climb rule keeps its hysteresis
@@ -490,7 +505,7 @@ BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
     const float tail_spread = spread + kTailBankSpread * std::fabs(sin_bank);
 
     BirdFrame out{};
-    const Vec3 position = sample.position + xyz(bird.offset);
+    const Vec3 position = driven ? sample.position : sample.position + xyz(bird.offset);
     out.pose.position = {position.x, position.y + bob_height, position.z, tail_spread};
     out.pose.rotation[KW_PART_BODY] = body;
     out.pose.rotation[KW_PART_HEAD] = head;

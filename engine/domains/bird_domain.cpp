@@ -11,6 +11,7 @@
 
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/domains/bird_draw.hpp"
+#include "kodawari/domains/flocking.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/simulation.hpp"
 #include "kodawari/vulkan_embed.hpp"
@@ -44,8 +45,14 @@ public:
         birds.erase(birds.begin(), birds.begin() + range.begin);
     }
     std::vector<std::string> outputs() const override { return {std::string(kBirdDomain)}; }
+    // Driven birds fly what the flocking domain gives them each frame.
+    std::vector<std::string> inputs() const override {
+        if (world_.driven == 0) return {};
+        return {std::string(kFlockingDomain)};
+    }
 
-    Result<void> open(const DomainSetup& setup, std::span<Domain* const>) override {
+    Result<void> open(const DomainSetup& setup, std::span<Domain* const> producers) override {
+        driver_ = producers.empty() ? nullptr : producers.front();
         if (world_.birds.empty()) return {};
         auto made = make_bird_backend(setup.kind, setup.options);
         if (!made) return made.error();
@@ -84,6 +91,10 @@ public:
             frame_out.poses = scratch_;
         }
         const auto start = std::chrono::steady_clock::now();
+        if (world_.driven > 0) {
+            const auto motion = driver_ != nullptr ? flocking_motion(*driver_) : std::span<const gpu::BirdMotionGpu>{};
+            KW_TRY(backend_->drive(motion.first(std::min<std::size_t>(motion.size(), std::size_t{n} * world_.driven))));
+        }
         KW_TRY(backend_->simulate(n, frame_out));
         if (timing_.first_frames == 0) {
             timing_.first_seconds = seconds_since(start);
@@ -141,6 +152,7 @@ private:
     birds::BirdWorld world_;
     std::uint32_t scene_birds_;  // before keep_instances()
     std::unique_ptr<BirdBackend> backend_;
+    const Domain* driver_ = nullptr;  // the flocking domain, when birds are driven
     // The last frame's poses on the host, for drawing from a CPU backend.
     bool keep_poses_ = false;
     std::vector<gpu::BirdPose> last_poses_;

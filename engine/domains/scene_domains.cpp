@@ -5,6 +5,7 @@
 #include "kodawari/domain.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
+#include "kodawari/domains/flocking.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 
@@ -20,9 +21,13 @@ Result<std::vector<std::unique_ptr<Domain>>> build_scene_domains(const Scene& sc
         if (!built) return built.error();
         rods.emplace(std::move(built).value());
     }
+    // Flocking flocks' birds are flown by a flocking domain (none without them).
+    auto flocking = make_flocking_domain(scene, birds.value());
+    if (!flocking) return flocking.error();
     // Both always, also empty: a shard's part files name both instance kinds.
     std::vector<std::unique_ptr<Domain>> domains;
     domains.push_back(make_bird_domain(std::move(birds).value()));
+    if (flocking.value()) domains.push_back(std::move(flocking).value());
     domains.push_back(make_chain_domain(std::move(rods)));
     return domains;
 }

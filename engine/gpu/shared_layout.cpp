@@ -8,6 +8,7 @@
 #include <kodawari/shared/bird_draw.h>
 #include <kodawari/shared/birds.h>
 #include <kodawari/shared/chain_draw.h>
+#include <kodawari/shared/flocking.h>
 #include <kodawari/shared/poses.h>
 #include <kodawari/shared/render.h>
 #include <kodawari/shared/rod_inputs.h>
@@ -108,6 +109,18 @@ static_assert(sizeof(RodInputAttachmentGpu) == 48 && offsetof(RodInputAttachment
               offsetof(RodInputAttachmentGpu, b) == 32);
 static_assert(sizeof(RodInputPush) == 32 && offsetof(RodInputPush, more) == 16);
 static_assert(sizeof(RenderPush) <= 128, "Vulkan guarantees 128 bytes of push constants");
+
+// shared/flocking.h and the driven birds' motion (shared/birds.h)
+static_assert(sizeof(BirdMotionGpu) == 48 && offsetof(BirdMotionGpu, velocity) == 16 && offsetof(BirdMotionGpu, acceleration) == 32);
+static_assert(sizeof(FlockParamsGpu) == 80 && offsetof(FlockParamsGpu, radii) == 16 && offsetof(FlockParamsGpu, weights) == 32 &&
+              offsetof(FlockParamsGpu, ground) == 48 && offsetof(FlockParamsGpu, target) == 64);
+static_assert(sizeof(FlockBirdGpu) == 64 && offsetof(FlockBirdGpu, offset) == 16 && offsetof(FlockBirdGpu, speed) == 32 &&
+              offsetof(FlockBirdGpu, turn) == 48);
+static_assert(sizeof(FlockStateGpu) == 32 && offsetof(FlockStateGpu, velocity) == 16);
+static_assert(sizeof(FlockAgentGpu) == 32 && offsetof(FlockAgentGpu, kind_weight) == 16);
+static_assert(sizeof(FlockPush) == 64 && offsetof(FlockPush, slots) == 16 && offsetof(FlockPush, bases) == 32 &&
+              offsetof(FlockPush, step) == 48);
+static_assert(KW_FLOCK_WORKGROUP_SIZE % 32 == 0 && KW_FLOCK_SCAN_SIZE % 32 == 0, "multiples of common subgroup sizes");
 
 // shared/skin.h
 static_assert(sizeof(SkinNodeGpu) == 48 && offsetof(SkinNodeGpu, joint) == 16 && offsetof(SkinNodeGpu, axis) == 32);

@@ -487,6 +487,10 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
         p.motion.w = phase;
         p.ids.x = first_route + b % variants;
         p.ids.y = type;
+        if (flock.flocking) {
+            p.ids.z = world.driven++;
+            p.ids.w = KW_BIRD_DRIVEN;
+        }
         p.flight = flight;
         p.shape = shape;
         world.birds.push_back(p);

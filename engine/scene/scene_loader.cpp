@@ -13,9 +13,11 @@
 #include <utility>
 
 #include <kodawari/scene.hpp>
+#include <kodawari/shared/flocking.h>
 
 #include "kodawari/gltf/bird_model_import.hpp"
 #include "scene/character_loader.hpp"
+
 #include "scene/json_reader.hpp"
 
 namespace kodawari {
@@ -226,11 +228,79 @@ Result<void> read_formation(const JsonReader& r, const JsonNode& node, Formation
     return {};
 }
 
+Result<void> read_predator(const JsonReader& r, const JsonNode& node, PredatorSpec& predator) {
+    KW_TRY(r.object(node, {"from", "to", "start", "every", "speed", "radius", "weight"}));
+    const auto point = [&](const JsonNode& n) -> Result<glm::vec3> {
+        std::array<float, 3> v{};
+        KW_SCENE_ASSIGN(v, r.vec3(n, NumberRange::closed(-kMaxCoordinate, kMaxCoordinate)));
+        return glm::vec3(v[0], v[1], v[2]);
+    };
+    KW_SCENE_ASSIGN(predator.from, point(r.member(node, "from")));
+    KW_SCENE_ASSIGN(predator.to, point(r.member(node, "to")));
+    if (predator.from == predator.to) return r.fail(node.path, "expected \"from\" and \"to\" apart, got the same point");
+    KW_TRY(optional_member(r, node, "start", predator.start,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1e6)); }));
+    KW_TRY(optional_member(r, node, "every", predator.every,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1e6)); }));
+    KW_TRY(optional_member(r, node, "speed", predator.speed,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 200.0)); }));
+    KW_TRY(optional_member(r, node, "radius", predator.radius,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+    KW_TRY(optional_member(r, node, "weight", predator.weight,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1000.0)); }));
+    return {};
+}
+
+Result<void> read_flocking(const JsonReader& r, const JsonNode& node, FlockingSpec& f) {
+    KW_TRY(r.object(node, {"neighbours", "metric", "search_radius", "blind_angle_deg", "separation_distance", "separation", "separation_front",
+                           "alignment", "cohesion", "route", "route_radius", "ground_clearance", "ground", "speed_time",
+                           "predators"}));
+    const JsonNode neighbours = r.member(node, "neighbours");
+    if (neighbours.present()) {
+        std::uint64_t value = 0;
+        KW_SCENE_ASSIGN(value, r.integer(neighbours, 1, KW_FLOCK_MAX_NEIGHBOURS));
+        f.neighbours = static_cast<std::uint32_t>(value);
+    }
+    KW_TRY(optional_member(r, node, "metric", f.metric, [&](const JsonNode& n) { return r.boolean(n); }));
+    const auto length = [&](double max) {
+        return [&r, max](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, max)); };
+    };
+    const auto weight = [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1000.0)); };
+    KW_TRY(optional_member(r, node, "search_radius", f.search_radius, length(100.0)));
+    KW_TRY(optional_member(r, node, "blind_angle_deg", f.blind_angle_deg,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange{0.0, 180.0, false, true}); }));
+    KW_TRY(optional_member(r, node, "separation_distance", f.separation_distance, length(100.0)));
+    if (f.separation_distance > f.search_radius) {
+        return r.fail(r.member(node, "separation_distance").present() ? r.member(node, "separation_distance").path : node.path,
+                      "expected at most search_radius (" + scene_detail::format_number(f.search_radius) + " m), got " +
+                          scene_detail::format_number(f.separation_distance));
+    }
+    KW_TRY(optional_member(r, node, "separation", f.separation, weight));
+    KW_TRY(optional_member(r, node, "separation_front", f.separation_front,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 10.0)); }));
+    KW_TRY(optional_member(r, node, "alignment", f.alignment, weight));
+    KW_TRY(optional_member(r, node, "cohesion", f.cohesion, weight));
+    KW_TRY(optional_member(r, node, "route", f.route, weight));
+    KW_TRY(optional_member(r, node, "route_radius", f.route_radius, length(10000.0)));
+    KW_TRY(optional_member(r, node, "ground_clearance", f.ground_clearance, length(1000.0)));
+    KW_TRY(optional_member(r, node, "ground", f.ground, weight));
+    KW_TRY(optional_member(r, node, "speed_time", f.speed_time, length(60.0)));
+    const JsonNode predators = r.member(node, "predators");
+    if (predators.present()) {
+        std::size_t count = 0;
+        KW_SCENE_ASSIGN(count, r.array(predators, "an array of predators"));
+        if (count > 64) return r.fail(predators.path, "expected at most 64 predators, got " + std::to_string(count));
+        f.predators.resize(count);
+        for (std::size_t i = 0; i < count; ++i) KW_TRY(read_predator(r, r.element(predators, i), f.predators[i]));
+    }
+    return {};
+}
+
 Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t index, std::uint64_t& total_birds,
                         FlockSpec& flock) {
     KW_TRY(r.object(node, {"name", "wing_type", "model", "map", "count", "seed", "speed", "speed_jitter", "frequency",
                            "frequency_jitter", "amplitude", "amplitude_jitter", "phase_jitter", "timing", "route",
-                           "generated_route", "formation"}));
+                           "generated_route", "formation", "flocking"}));
     flock.name = "flock" + std::to_string(index);
     KW_TRY(optional_member(r, node, "name", flock.name, [&](const JsonNode& n) { return r.string(n); }));
 
@@ -312,6 +382,15 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
 
     const JsonNode formation = r.member(node, "formation");
     if (formation.present()) KW_TRY(read_formation(r, formation, flock.formation));
+    const JsonNode flocking = r.member(node, "flocking");
+    if (flocking.present()) {
+        if (flock.timing == birds::RouteTiming::Parametric) {
+            return r.fail(flocking.path, "a flocking flock's route gives its leader at its speed: expected \"timing\": \"arc-length\", got \"parametric\"");
+        }
+        FlockingSpec spec;
+        KW_TRY(read_flocking(r, flocking, spec));
+        flock.flocking = std::move(spec);
+    }
     return {};
 }
 

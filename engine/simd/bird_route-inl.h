@@ -149,6 +149,30 @@ struct Sample {
     V segment_mode, speed_fraction, since_crouch, since_touchdown;  // flight.hpp RouteSample
 };
 
+// flight.cpp motion_sample(): the lanes' motions (slot per lane) gathered.
+inline Sample motion_sample(const gpu::BirdMotionGpu* motion, const std::array<std::uint32_t, kBatchLanes>& slots) {
+    HWY_ALIGN float rows[9][kBatchLanes];
+    for (std::size_t l = 0; l < hn::Lanes(D()); ++l) {
+        const gpu::BirdMotionGpu& m = motion[slots[l]];
+        const float values[9] = {m.position.x, m.position.y, m.position.z, m.velocity.x, m.velocity.y,
+                                 m.velocity.z, m.acceleration.x, m.acceleration.y, m.acceleration.z};
+        for (std::size_t r = 0; r < 9; ++r) rows[r][l] = values[r];
+    }
+    Sample out;
+    out.position = {hn::Load(D(), rows[0]), hn::Load(D(), rows[1]), hn::Load(D(), rows[2])};
+    out.velocity = {hn::Load(D(), rows[3]), hn::Load(D(), rows[4]), hn::Load(D(), rows[5])};
+    out.acceleration = {hn::Load(D(), rows[6]), hn::Load(D(), rows[7]), hn::Load(D(), rows[8])};
+    out.direction = out.velocity;
+    out.attitude_velocity = out.velocity;
+    out.lift = out.acceleration.y;
+    out.lift_scale = S(1.0f);
+    out.segment_mode = S(static_cast<float>(KW_SEGMENT_AUTO));
+    out.speed_fraction = S(1.0f);
+    out.since_crouch = S(1e9f);
+    out.since_touchdown = S(-1.0f);
+    return out;
+}
+
 // flight.cpp sample_route(): both ends' cases and the inside computed, one chosen per lane.
 inline Sample sample_route(const BirdStepArgs& a, const gpu::RouteHeader& route, V time, V speed, RouteCache& cache) {
     const bool loop = (route.flags.x & KW_ROUTE_LOOP) != 0;

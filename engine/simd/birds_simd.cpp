@@ -317,12 +317,19 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
                                         u.blend_rates2.y, u.blend_rates2.z, u.blend_rates2.w};
 
     RouteCache cache;
+    // A driven batch (flight.cpp motion_sample()) flies its motion, with no offset added.
+    const bool driven = a.params != nullptr && a.params[batch.bird[off]].ids.w == KW_BIRD_DRIVEN;
+    std::array<std::uint32_t, kBatchLanes> slots{};
+    if (driven) {
+        for (std::size_t l = 0; l < hn::Lanes(D()); ++l) slots[l] = a.params[batch.bird[off + std::min(l, valid - 1)]].ids.z;
+    }
     for (std::uint32_t k = 0; k < a.frames; ++k) {
         const std::uint32_t frame = a.first_frame + k;
         const V previous = mode_state;
         const M first = hn::Lt(previous, Z());  // KW_MODE_UNSET
         const V time = hn::Add(hn::Mul(S(static_cast<float>(frame)), dt), offset.w);
-        const Sample sample = sample_route(a, route, time, motion.x, cache);
+        const Sample sample = driven ? motion_sample(a.motion + std::size_t{k} * a.driven, slots)
+                                     : sample_route(a, route, time, motion.x, cache);
 
         // Mode (SPEC B.5; docs/flight-modes.md F.1): the climb rule keeps its hysteresis
         // through a glide and decides afresh after the other modes.
@@ -463,7 +470,7 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
         const V tail_spread = hn::Add(spread, hn::Mul(S(birds::kTailBankSpread), hn::Abs(sin_bank)));
 
         // Outputs: BirdPose (right wing mirrored) or, without one, the moving parts' rows.
-        const V3 position = add(sample.position, V3{offset.x, offset.y, offset.z});
+        const V3 position = driven ? sample.position : add(sample.position, V3{offset.x, offset.y, offset.z});
         const Q4 placed{position.x, hn::Add(position.y, bob_height), position.z, tail_spread};
         if (a.poses != nullptr) {
             const Q4 parts[8] = {placed, body, head, tail, left1, left2,

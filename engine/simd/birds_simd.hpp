@@ -63,6 +63,11 @@ struct BirdStepArgs {
     float* storage = nullptr;        // kBirdRows x kBatchLanes floats per batch
     gpu::BirdPose* poses = nullptr;  // frames x birds, frame-major, or null
     gpu::BirdDiag* diag = nullptr;   // likewise
+    // Driven birds (BirdWorld::driven, a route's birds all are or none is): their motion,
+    // frames x driven, and every bird's params (ids.z: the slot).
+    const gpu::BirdParams* params = nullptr;
+    const gpu::BirdMotionGpu* motion = nullptr;
+    std::uint32_t driven = 0;
     std::size_t birds = 0;
     std::uint32_t first_frame = 0, frames = 0;
 };

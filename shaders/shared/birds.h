@@ -17,13 +17,15 @@
 #define KW_BIRDS_BINDING_STATES 5
 #define KW_BIRDS_BINDING_POSES 6  // BirdPoseGpu
 #define KW_BIRDS_BINDING_DIAGNOSTICS 7
-#define KW_BIRDS_BINDING_COUNT 8
+#define KW_BIRDS_BINDING_MOTION 8  // BirdMotionGpu per frame per driven bird (KW_BIRD_DRIVEN), frame-major
+#define KW_BIRDS_BINDING_COUNT 9
 
 // Specialization constant ids of birds_flap.comp.
 #define KW_BIRDS_SPEC_BANK_RULE 0
 #define KW_BIRDS_SPEC_MODE_RULE 1
 #define KW_BIRDS_SPEC_DIAGNOSTICS 2
-#define KW_BIRDS_SPEC_COUNT 3
+#define KW_BIRDS_SPEC_DRIVEN 3  // the world has driven birds (reads the motion binding)
+#define KW_BIRDS_SPEC_COUNT 4
 
 // Flight modes (SPEC B.5). KW_MODE_UNSET marks a state that has not seen frame 0.
 #define KW_MODE_LEVEL 0u
@@ -40,6 +42,10 @@
 #define KW_BANK_SEED 1u
 #define KW_MODE_RULE_CLIMB 0u
 #define KW_MODE_RULE_SEED 1u
+
+// BirdParams.ids.w: the bird flies the motion another domain gives it each frame
+// (BirdMotionGpu below) instead of its route; its offset is not added.
+#define KW_BIRD_DRIVEN 1u
 
 #define KW_ROUTE_LOOP 1u
 #define KW_ROUTE_PARAMETRIC 2u
@@ -118,7 +124,7 @@ struct ArcSample {
 struct BirdParams {
     vec4 offset;  // xyz: translation added to the route (m), w: time offset (s)
     vec4 motion;  // x: speed (m/s), y: flap frequency (Hz), z: flap amplitude scale, w: initial phase (cycles)
-    uvec4 ids;    // x: route index, y: bird type (WingType, or a user's model after them), z, w: unused
+    uvec4 ids;    // x: route index, y: bird type (WingType, or a user's model after them), z: motion slot (driven birds), w: KW_BIRD_DRIVEN or 0
     vec4 flight;  // x: glide ratio, y: flap-glide beats (0: none), z: flap-glide glide seconds, w: 1 if it can hover
     vec4 shape;   // x: body length (m), y: wingspan (m), z, w: unused
 };
@@ -160,9 +166,17 @@ struct BirdDiag {
     vec4 flight;        // x: speed as a fraction of the cruise speed, y: extra body pitch (rad, nose up), z: tail spread, w: seconds glided
 };
 
+// What another domain (flocking) flies a driven bird along: per bird per frame, the
+// bird domain's input; its route sample (engine/birds/flight.cpp) is made from it.
+struct BirdMotionGpu {
+    vec4 position;      // xyz (m), w: unused
+    vec4 velocity;      // xyz (m/s), w: unused
+    vec4 acceleration;  // xyz (m/s^2): the velocity's change over the frame / dt, w: unused
+};
+
 // Push constants of birds_flap.comp.
 struct BirdPush {
-    uvec4 frames;  // x: first frame, y: frame count, z: output slots (frames the pose buffer holds), w: unused
+    uvec4 frames;  // x: first frame, y: frame count, z: output slots (frames the pose buffer holds), w: driven birds (the motion's frame stride)
 };
 
 KW_NAMESPACE_END

@@ -211,7 +211,7 @@ TEST(SceneFormat, UnknownKey) {
     EXPECT_EQ(parse_error(doc),
               "test.json: $.flocks[0].colour: unknown key (expected one of: name, wing_type, model, map, count, seed, speed, "
               "speed_jitter, frequency, frequency_jitter, amplitude, amplitude_jitter, phase_jitter, timing, route, "
-              "generated_route, formation)");
+              "generated_route, formation, flocking)");
     json top = valid_scene();
     top["odd key"] = 1;
     EXPECT_TRUE(contains(parse_error(top), "test.json: $[\"odd key\"]: unknown key (expected one of: format, version"));

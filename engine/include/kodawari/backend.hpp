@@ -70,8 +70,17 @@ public:
     [[nodiscard]] virtual Result<void> load(const birds::BirdWorld& world) = 0;
 
     /// Simulates the next `frames` frames. `out.poses` must hold frames x birds entries
-    /// or be empty; likewise `out.diag`.
+    /// or be empty; likewise `out.diag`. A world with driven birds (BirdWorld::driven)
+    /// needs drive() first.
     [[nodiscard]] virtual Result<void> simulate(std::uint32_t frames, FrameOutput out) = 0;
+
+    /// The motion the world's driven birds fly in the next simulate(): frames x
+    /// BirdWorld::driven entries, frame-major (a flocking domain's output). Read during
+    /// simulate() only: it must stay valid until then.
+    [[nodiscard]] virtual Result<void> drive(std::span<const gpu::BirdMotionGpu> motion) {
+        motion_ = motion;
+        return {};
+    }
 
     /// GPU time of the last simulate() in milliseconds, when the device has timestamps.
     [[nodiscard]] virtual double last_gpu_ms() const { return -1.0; }
@@ -84,6 +93,12 @@ public:
     /// when simulate() was given no output; render::Renderer draws the birds from them
     /// without reading them back.
     [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }
+
+protected:
+    /// What the last drive() gave: frames x driven, or empty.
+    std::span<const gpu::BirdMotionGpu> motion_;
+    /// An error when the world has driven birds and drive() gave too little for `frames`.
+    [[nodiscard]] Result<void> check_motion(const birds::BirdWorld& world, std::uint32_t frames) const;
 };
 
 /// The threads a cpu backend made with `options` runs on: BackendOptions::threads, or the

@@ -58,6 +58,39 @@ struct FormationSpec {
     float trail = 0.0f;                ///< time offsets spread over [0, trail] seconds
 };
 
+/// A predator passing through a flocking flock: from `from` to `to` at `speed`, starting
+/// at `start` s and again every `every` s (0: once). Birds within `radius` flee it.
+struct PredatorSpec {
+    glm::vec3 from{0.0f}, to{0.0f};
+    float start = 0.0f;    ///< s
+    float every = 0.0f;    ///< s, 0: one pass
+    float speed = 20.0f;   ///< m/s
+    float radius = 15.0f;  ///< m
+    float weight = 40.0f;  ///< m/s^2 at its position, falling linearly to 0 at radius
+};
+
+/// The flocking rules of a flock (docs/flocking.md): its birds fly by their neighbours
+/// and are drawn to the flock's route rather than following it. Accelerations in m/s^2.
+struct FlockingSpec {
+    std::uint32_t neighbours = 7;   ///< k nearest (topological), in [1, 16]
+    bool metric = false;            ///< true: every neighbour within search_radius (16 nearest at most)
+    float search_radius = 5.0f;     ///< m: neighbours are looked for this far
+    float blind_angle_deg = 90.0f;  ///< behind the bird, unseen
+    float separation_distance = 0.8f;  ///< m: full separation within, Gaussian beyond
+    float separation = 6.0f;
+    /// The separation distance along the flight direction is (1 + this) x as long as to
+    /// the side: a bird keeps a longer gap to the bird ahead or behind.
+    float separation_front = 1.0f;
+    float alignment = 3.0f;
+    float cohesion = 2.0f;
+    float route = 2.0f;           ///< drawn to the route's leader plus the bird's formation offset
+    float route_radius = 20.0f;   ///< m: within it the draw falls in proportion to the distance
+    float ground_clearance = 3.0f;  ///< m
+    float ground = 10.0f;
+    float speed_time = 1.0f;      ///< s: the time constant of the cruise-speed control
+    std::vector<PredatorSpec> predators;
+};
+
 /// One flock: `count` birds of a wing type following a route.
 struct FlockSpec {
     std::string name;
@@ -80,6 +113,9 @@ struct FlockSpec {
     std::optional<GeneratedRouteSpec> generated_route;  ///< one made from a seed
     birds::RouteTiming timing = birds::RouteTiming::ArcLength;
     FormationSpec formation;
+    /// Flies by the flocking rules (a flocking domain) instead of its route; none: the
+    /// route, exactly as without the key.
+    std::optional<FlockingSpec> flocking;
 };
 
 /// One kinematic collider of a character, in its joint's frame (a sphere is a capsule

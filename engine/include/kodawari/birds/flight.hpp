@@ -86,9 +86,16 @@ struct BirdFrame {
 
 /// Advances `state` to frame `frame` and evaluates the bird. Frames must be visited in
 /// order from 0 (the state carries hysteresis, transition, phase and the roll filter).
-/// `uniforms` = world.uniforms(), passed in so a loop over birds computes it once.
+/// `uniforms` = world.uniforms(), passed in so a loop over birds computes it once. A
+/// driven bird (ids.w == KW_BIRD_DRIVEN) flies `motion`, its frame's, instead of its route.
 [[nodiscard]] KODAWARI_API BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
-                                               const gpu::BirdParams& bird, gpu::BirdState& state, std::uint32_t frame);
+                                               const gpu::BirdParams& bird, gpu::BirdState& state, std::uint32_t frame,
+                                               const gpu::BirdMotionGpu* motion = nullptr);
+
+/// The route sample of a bird flown along `motion` (a driven bird): its position, velocity
+/// and acceleration, the direction its velocity's, the lift its vertical acceleration, at
+/// cruise speed (no take-off or landing).
+[[nodiscard]] KODAWARI_API RouteSample motion_sample(const gpu::BirdMotionGpu& motion);
 
 /// A state before frame 0.
 [[nodiscard]] KODAWARI_API gpu::BirdState initial_state();

@@ -90,6 +90,10 @@ struct KODAWARI_API BirdWorld {
     /// BirdParams::ids.y is kWingTypeCount + k is of models[k]. Shared, not copied, by
     /// the worlds made from one scene (shards, the exporter, the renderer).
     std::vector<std::shared_ptr<const BirdModel>> models;
+    /// Birds flown by another domain (a flocking flock's, issue 32): BirdParams::ids.w is
+    /// KW_BIRD_DRIVEN and ids.z their slot in the motion each frame brings
+    /// (BirdBackend::drive()); there are this many slots.
+    std::uint32_t driven = 0;
 
     /// Adds a route (validated: finite, no coincident consecutive control points, no
     /// cusp) and returns its index. `what` names it in errors ("scene.json: $.flocks[0].route").

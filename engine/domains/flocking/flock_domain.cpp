@@ -1,0 +1,125 @@
+// The flocking domain (kodawari/domains/flocking.hpp, docs/flocking.md): the flocking
+// flocks' birds stepped by their rules on a FlockBackend, each frame's motion handed to
+// the bird domain, behind the domain contract (kodawari/domain.hpp).
+#include "kodawari/domains/flocking.hpp"
+
+#include <algorithm>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include "domains/flocking/flock_backend.hpp"
+#include "domains/flocking/flock_world.hpp"
+
+namespace kodawari {
+
+namespace {
+
+class FlockingDomain final : public Domain {
+public:
+    explicit FlockingDomain(flocking::FlockWorld world) : world_(std::move(world)) {}
+
+    std::string_view name() const override { return kFlockingDomain; }
+    std::string_view instance_noun() const override { return "flocking birds"; }
+    // Not cut into shards: a bird's neighbours may be in any shard's range, so every
+    // shard simulates the whole flock and the bird domain keeps its range.
+    std::uint32_t scene_instances() const override { return 0; }
+    void keep_instances(InstanceRange) override {}
+    std::vector<std::string> outputs() const override { return {std::string(kFlockingDomain)}; }
+
+    Result<void> open(const DomainSetup& setup, std::span<Domain* const>) override {
+        switch (setup.kind) {
+            case BackendKind::CpuReference: backend_ = flocking::make_cpu_flock_backend(1); break;
+            case BackendKind::Cpu: backend_ = flocking::make_cpu_flock_backend(cpu_backend_threads(setup.options)); break;
+            case BackendKind::Vulkan: {
+                auto made = flocking::make_vulkan_flock_backend(setup.options);
+                if (!made) return made.error();
+                backend_ = std::move(made).value();
+                break;
+            }
+        }
+        return rewind();
+    }
+    void close() override { backend_.reset(); }
+    Result<void> rewind() override {
+        frame_ = 0;
+        return backend_ ? backend_->load(world_) : Result<void>{};
+    }
+
+    std::vector<ChannelInfo> channels() const override {
+        return {{std::string(kFlockingMotionChannel), sizeof(gpu::BirdMotionGpu), world_.birds.size(), true}};
+    }
+    std::uint32_t max_bake_frames() const override {
+        constexpr std::uint32_t kChunkMotions = 1u << 18;
+        return std::clamp<std::uint32_t>(kChunkMotions / std::max<std::uint32_t>(static_cast<std::uint32_t>(world_.birds.size()), 1u), 1,
+                                         kMaxBakeFrames);
+    }
+
+    Result<void> step(std::uint32_t first, std::uint32_t frames, std::span<const ChannelOutput> out) override {
+        if (!backend_) return {};
+        if (first != frame_) {
+            return make_error(Error::Kind::InvalidInput, "domain \"flocking\": step(" + std::to_string(first) + ") after frame " +
+                                                             std::to_string(frame_) + " (frames go in order from 0)");
+        }
+        const std::size_t n = world_.birds.size(), f = world_.flocks.size(), a = world_.predators.size();
+        motion_.resize(std::size_t{frames} * n);
+        std::uint32_t k0 = 0;
+        if (first == 0 && frames > 0) {
+            std::copy(world_.first.begin(), world_.first.end(), motion_.begin());
+            k0 = 1;
+        }
+        const std::uint32_t advance = frames - k0;
+        if (advance > 0) {
+            flocks_.resize(std::size_t{advance} * f);
+            agents_.resize(std::size_t{advance} * a);
+            for (std::uint32_t k = 0; k < advance; ++k) {
+                world_.frame_inputs(first + k0 + k, std::span(flocks_).subspan(std::size_t{k} * f, f),
+                                    std::span(agents_).subspan(std::size_t{k} * a, a));
+            }
+            KW_TRY(backend_->advance(advance, flocks_, agents_, std::span(motion_).subspan(std::size_t{k0} * n)));
+        }
+        frame_ += frames;
+        for (const ChannelOutput& channel : out) {
+            if (channel.name == kFlockingMotionChannel) std::memcpy(channel.bytes.data(), motion_.data(), channel.bytes.size());
+        }
+        return {};
+    }
+
+    Result<void> record(std::uint32_t, VkCommandBuffer) override {
+        return make_error(Error::Kind::Unsupported,
+                          "domain \"flocking\" cannot record into a command buffer yet: its birds' motion is read back each frame "
+                          "(docs/flocking.md, \"What is not there yet\")");
+    }
+
+    std::string device() const override { return backend_ ? backend_->device() : std::string(); }
+    std::uint32_t validation_messages() const override { return backend_ ? backend_->validation_messages() : 0; }
+    // The birds draw themselves (the bird domain).
+    Result<void> show_on(render::Renderer&, bool) override { return {}; }
+    Result<void> draw_on(render::Renderer&, DrawSource, bool) override { return {}; }
+
+    std::span<const gpu::BirdMotionGpu> motion() const { return motion_; }
+
+private:
+    flocking::FlockWorld world_;
+    std::unique_ptr<flocking::FlockBackend> backend_;
+    std::uint32_t frame_ = 0;
+    std::vector<gpu::BirdMotionGpu> motion_;
+    std::vector<gpu::FlockParamsGpu> flocks_;
+    std::vector<gpu::FlockAgentGpu> agents_;
+};
+
+}  // namespace
+
+Result<std::unique_ptr<Domain>> make_flocking_domain(const Scene& scene, const birds::BirdWorld& world) {
+    if (world.driven == 0) return std::unique_ptr<Domain>();
+    auto built = flocking::build_flock_world(scene, world);
+    if (!built) return built.error();
+    return std::unique_ptr<Domain>(std::make_unique<FlockingDomain>(std::move(built).value()));
+}
+
+std::span<const gpu::BirdMotionGpu> flocking_motion(const Domain& domain) {
+    const auto* flock = dynamic_cast<const FlockingDomain*>(&domain);
+    return flock ? flock->motion() : std::span<const gpu::BirdMotionGpu>{};
+}
+
+}  // namespace kodawari

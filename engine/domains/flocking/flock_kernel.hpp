@@ -1,0 +1,61 @@
+#pragma once
+// The flocking step written once (shaders/shared/flock_body.h) compiled as C++: GLM gives
+// GLSL's vec3, ivec3 and functions, and a Kernel holds the buffers the GLSL reads as
+// spans, so the body's accessors read the same data. The grid passes (flock_grid.comp's
+// clear, count, scan, scatter) are build_grid() here: a counting sort in bird order.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <glm/glm.hpp>
+
+#include <kodawari/shared/flocking.h>
+
+namespace kodawari::flocking::glsl {
+
+// GLSL's names for the body (inside this namespace only).
+using namespace glm;
+using uint = std::uint32_t;
+using gpu::FlockAgentGpu;
+using gpu::FlockBirdGpu;
+using gpu::FlockParamsGpu;
+using gpu::FlockStateGpu;
+
+inline vec3 kw_xyz(const gpu::vec4& v) { return vec3(v.x, v.y, v.z); }
+
+/// One frame's buffers, as flock_step.comp binds them.
+struct Kernel {
+    std::span<const FlockParamsGpu> flocks;
+    std::span<const FlockBirdGpu> birds_in;
+    std::span<const FlockStateGpu> states;  ///< this frame's slot
+    std::span<const uint> buckets;          ///< start, count per bucket
+    std::span<const uint> sorted;
+    std::span<const FlockAgentGpu> agents_in;
+
+#define KW_XYZ(v) kw_xyz(v)
+    FlockParamsGpu kw_flock(uint f) const { return flocks[f]; }
+    FlockBirdGpu kw_bird(uint i) const { return birds_in[i]; }
+    FlockStateGpu kw_state(uint i) const { return states[i]; }
+    uint kw_bucket_start(uint b) const { return buckets[2u * b]; }
+    uint kw_bucket_count(uint b) const { return buckets[2u * b + 1u]; }
+    uint kw_sorted(uint s) const { return sorted[s]; }
+    FlockAgentGpu kw_agent(uint a) const { return agents_in[a]; }
+#include <kodawari/shared/flock_body.h>
+#undef KW_XYZ
+};
+
+}  // namespace kodawari::flocking::glsl
+
+namespace kodawari::flocking {
+
+/// The bucket table's size for `birds` birds: a power of two, at least twice the birds
+/// (few collisions) and at least KW_FLOCK_SCAN_SIZE.
+[[nodiscard]] std::uint32_t bucket_count(std::uint32_t birds);
+
+/// flock_grid.comp's passes on the CPU: `buckets` (2 per bucket: start, count) and
+/// `sorted` (the birds by bucket, in bird order within one) for `states`.
+void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::vector<std::uint32_t>& cells,
+                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted);
+
+}  // namespace kodawari::flocking

@@ -1,0 +1,164 @@
+// The flocking step on a Vulkan device: per substep, the grid in four dispatches of
+// shaders/flock_grid.comp (clear, count, scan, scatter) and the step of every bird
+// (shaders/flock_step.comp, shared/flock_body.h), recorded for many frames into one
+// submission; each frame's motion read back for the bird domain.
+#include <algorithm>
+#include <array>
+#include <cstring>
+#include <optional>
+#include <string>
+#include <vector>
+
+#include "backends/device_backends.hpp"
+#include "compute/compute.hpp"
+#include "domains/flocking/flock_backend.hpp"
+
+namespace kodawari::flocking {
+
+namespace {
+
+template <typename T>
+std::span<const std::byte> bytes_of(std::span<const T> v) {
+    return std::as_bytes(v);
+}
+
+class VulkanFlockBackend final : public FlockBackend {
+public:
+    explicit VulkanFlockBackend(std::shared_ptr<compute::Device> device) : device_(std::move(device)) {}
+
+    Result<void> create_kernels() {
+        const std::vector<compute::Binding> types(KW_FLOCK_BINDING_COUNT, compute::Binding::Storage);
+        auto grid = compute::Kernel::create(*device_, "flock_grid", types, sizeof(gpu::FlockPush));
+        if (!grid) return grid.error();
+        grid_.emplace(std::move(grid).value());
+        auto step = compute::Kernel::create(*device_, "flock_step", types, sizeof(gpu::FlockPush));
+        if (!step) return step.error();
+        step_.emplace(std::move(step).value());
+        return {};
+    }
+
+    Result<void> load(const FlockWorld& world) override {
+        world_ = &world;
+        count_ = static_cast<std::uint32_t>(world.birds.size());
+        slot_ = 0;
+        buffers_.clear();
+        const std::uint64_t n = count_;
+        // Flocks, agents and motion grow with the frames of a call (advance()).
+        const std::uint64_t sizes[KW_FLOCK_BINDING_COUNT] = {
+            sizeof(gpu::FlockParamsGpu) * std::max<std::size_t>(world.flocks.size(), 1), sizeof(gpu::FlockBirdGpu) * n,
+            2 * sizeof(gpu::FlockStateGpu) * n, sizeof(std::uint32_t) * n, 2 * sizeof(std::uint32_t) * std::uint64_t{world.buckets},
+            sizeof(std::uint32_t) * n, sizeof(gpu::FlockAgentGpu) * std::max<std::size_t>(world.predators.size(), 1),
+            sizeof(gpu::BirdMotionGpu) * n};
+        for (std::uint64_t bytes : sizes) {
+            if (bytes > device_->info().max_storage_buffer_range) {
+                return make_error(Error::Kind::Unsupported, device_->info().name + " cannot hold " + std::to_string(count_) +
+                                                                " flocking birds: a buffer of " + std::to_string(bytes) +
+                                                                " bytes exceeds maxStorageBufferRange");
+            }
+            auto buffer = compute::Buffer::create(*device_, std::max<std::uint64_t>(bytes, 16), compute::Usage::Storage);
+            if (!buffer) return buffer.error();
+            buffers_.push_back(std::move(buffer).value());
+        }
+        KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_BIRDS], bytes_of(std::span(world.birds))));
+        KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_STATES], bytes_of(std::span(world.initial))));
+        bind();
+        return {};
+    }
+
+    Result<void> advance(std::uint32_t frames, std::span<const gpu::FlockParamsGpu> flocks, std::span<const gpu::FlockAgentGpu> agents,
+                         std::span<gpu::BirdMotionGpu> out) override {
+        const FlockWorld& w = *world_;
+        const std::size_t n = count_, f = w.flocks.size(), a = w.predators.size();
+        // A chunk's motion at most 64 MiB, its inputs with it.
+        const std::uint32_t chunk = std::clamp<std::uint32_t>(
+            static_cast<std::uint32_t>((64u << 20) / std::max<std::size_t>(n * sizeof(gpu::BirdMotionGpu), 1)), 1, frames);
+        KW_TRY(grow(KW_FLOCK_BINDING_FLOCKS, std::uint64_t{chunk} * f * sizeof(gpu::FlockParamsGpu)));
+        KW_TRY(grow(KW_FLOCK_BINDING_AGENTS, std::uint64_t{chunk} * a * sizeof(gpu::FlockAgentGpu)));
+        KW_TRY(grow(KW_FLOCK_BINDING_MOTION, std::uint64_t{chunk} * n * sizeof(gpu::BirdMotionGpu)));
+        const compute::Queue queue(*device_);
+        const std::uint32_t groups_birds = static_cast<std::uint32_t>((n + KW_FLOCK_WORKGROUP_SIZE - 1) / KW_FLOCK_WORKGROUP_SIZE);
+        const std::uint32_t groups_grid = static_cast<std::uint32_t>((n + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE);
+        const std::uint32_t groups_buckets = (w.buckets + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE;
+        for (std::uint32_t done = 0; done < frames;) {
+            const std::uint32_t m = std::min(chunk, frames - done);
+            if (f > 0) KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_FLOCKS], bytes_of(flocks.subspan(done * f, m * f))));
+            if (a > 0) KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_AGENTS], bytes_of(agents.subspan(done * a, m * a))));
+            auto recording = queue.begin();
+            if (!recording) return recording.error();
+            compute::Recording& rec = recording.value();
+            for (std::uint32_t k = 0; k < m; ++k) {
+                for (std::uint32_t s = 0; s < w.substeps; ++s) {
+                    gpu::FlockPush push{};
+                    push.counts = {count_, w.buckets - 1u, static_cast<std::uint32_t>(a), KW_FLOCK_PASS_CLEAR};
+                    push.slots = {slot_, k, w.substeps, s};
+                    push.bases = {static_cast<std::uint32_t>(k * f), static_cast<std::uint32_t>(k * a), 0u, 0u};
+                    push.step = {w.dt, 1.0f / w.search_radius, w.gravity, 0.0f};
+                    const auto dispatch = [&](const compute::Kernel& kernel, std::uint32_t pass, std::uint32_t groups) {
+                        // Each pass reads what the previous one (or the last submission's
+                        // copy, upload or step) wrote.
+                        compute::barrier(rec, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
+                        push.counts.w = pass;
+                        kernel.dispatch(rec, std::as_bytes(std::span(&push, 1)), groups);
+                    };
+                    dispatch(*grid_, KW_FLOCK_PASS_CLEAR, groups_buckets);
+                    dispatch(*grid_, KW_FLOCK_PASS_COUNT, groups_grid);
+                    dispatch(*grid_, KW_FLOCK_PASS_SCAN, 1);
+                    dispatch(*grid_, KW_FLOCK_PASS_SCATTER, groups_grid);
+                    dispatch(*step_, 0u, groups_birds);
+                    slot_ = 1u - slot_;
+                }
+            }
+            compute::barrier(rec, compute::Stage::Compute, compute::Stage::Transfer | compute::Stage::Host);
+            auto submission = queue.submit(std::move(recording).value());
+            if (!submission) return submission.error();
+            KW_TRY(submission.value().wait());
+            const auto target = out.subspan(std::size_t{done} * n, std::size_t{m} * n);
+            KW_TRY(compute::download(*device_, buffers_[KW_FLOCK_BINDING_MOTION], std::as_writable_bytes(target)));
+            done += m;
+        }
+        return {};
+    }
+
+    std::string device() const override { return device_->info().name; }
+    std::uint32_t validation_messages() const override { return device_->validation_messages(); }
+
+private:
+    // Binding `b` at least `bytes` long (no submission is pending: each is waited for).
+    Result<void> grow(std::uint32_t b, std::uint64_t bytes) {
+        if (buffers_[b].size() >= bytes) return {};
+        if (bytes > device_->info().max_storage_buffer_range) {
+            return make_error(Error::Kind::Unsupported, device_->info().name + ": the flocking binding " + std::to_string(b) + " needs " +
+                                                            std::to_string(bytes) + " bytes, more than maxStorageBufferRange");
+        }
+        auto buffer = compute::Buffer::create(*device_, bytes, compute::Usage::Storage);
+        if (!buffer) return buffer.error();
+        buffers_[b] = std::move(buffer).value();
+        bind();
+        return {};
+    }
+    void bind() {
+        std::vector<const compute::Buffer*> bound;
+        for (const auto& b : buffers_) bound.push_back(&b);
+        grid_->bind(bound);
+        step_->bind(bound);
+    }
+
+    std::shared_ptr<compute::Device> device_;
+    std::optional<compute::Kernel> grid_, step_;
+    std::vector<compute::Buffer> buffers_;
+    const FlockWorld* world_ = nullptr;
+    std::uint32_t count_ = 0;
+    std::uint32_t slot_ = 0;  // the state slot the next substep reads
+};
+
+}  // namespace
+
+Result<std::unique_ptr<FlockBackend>> make_vulkan_flock_backend(const BackendOptions& options) {
+    auto device = backend_context(options);
+    if (!device) return device.error();
+    auto backend = std::make_unique<VulkanFlockBackend>(std::move(device).value());
+    KW_TRY(backend->create_kernels());
+    return std::unique_ptr<FlockBackend>(std::move(backend));
+}
+
+}  // namespace kodawari::flocking

@@ -1,0 +1,46 @@
+#pragma once
+// The flocking domain's world (docs/flocking.md): what its kernels read, built from the
+// scene's flocking flocks and the bird world's driven birds, and what changes per frame
+// (the flocks' route leaders, the predators).
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include <kodawari/shared/flocking.h>
+
+#include "kodawari/birds/world.hpp"
+#include "kodawari/result.hpp"
+#include "kodawari/scene.hpp"
+
+namespace kodawari::flocking {
+
+struct FlockWorld {
+    std::vector<gpu::FlockParamsGpu> flocks;  ///< per flocking flock (target: frame_inputs())
+    std::vector<gpu::FlockBirdGpu> birds;     ///< per driven bird, by its slot (BirdParams::ids.z)
+    std::vector<gpu::FlockStateGpu> initial;  ///< frame 0: where and how its route flies it
+    std::vector<gpu::BirdMotionGpu> first;    ///< frame 0's motion (the route's acceleration)
+    /// Per flock: the route its leader flies (arc-length timing) at `speed`.
+    struct Leader {
+        std::uint32_t route = 0;
+        float speed = 0.0f;
+    };
+    std::vector<Leader> leaders;
+    std::vector<PredatorSpec> predators;  ///< every flocking flock's, fleeing any of them
+    birds::BirdWorld routes;              ///< the bird world's routes (sample_route())
+    float dt = 1.0f / 60.0f;              ///< a substep (s)
+    std::uint32_t substeps = 1;           ///< per frame: at most 1/60 s each
+    float search_radius = 1.0f;           ///< the grid's cell: the largest flock's
+    float gravity = 9.81f;
+    std::uint32_t buckets = 0;            ///< bucket_count(birds)
+
+    /// Frame `frame`'s flock parameters (their leaders there) and agents (the predators,
+    /// weight 0 while not passing).
+    void frame_inputs(std::uint32_t frame, std::span<gpu::FlockParamsGpu> flocks_out, std::span<gpu::FlockAgentGpu> agents_out) const;
+};
+
+/// The flocking world of `scene`'s flocks with a `flocking` object, whose birds are
+/// `world`'s driven birds. Errors name the scene file and the flock.
+[[nodiscard]] Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld& world);
+
+}  // namespace kodawari::flocking

@@ -1,0 +1,44 @@
+#version 450
+// The flocking step (issue 32): one invocation per bird finds its neighbours in the grid
+// flock_grid.comp built and applies the rules (shared/flock_body.h, the same source the
+// CPU backends compile), writing the other state slot and, after a frame's last substep,
+// the frame's motion for the bird domain.
+#extension GL_GOOGLE_include_directive : require
+
+#include "shared/flocking.h"
+
+layout(local_size_x = KW_FLOCK_WORKGROUP_SIZE) in;
+
+layout(std430, binding = KW_FLOCK_BINDING_FLOCKS) readonly buffer Flocks { FlockParamsGpu flocks[]; };
+layout(std430, binding = KW_FLOCK_BINDING_BIRDS) readonly buffer Birds { FlockBirdGpu birds[]; };
+layout(std430, binding = KW_FLOCK_BINDING_STATES) buffer States { FlockStateGpu states[]; };
+layout(std430, binding = KW_FLOCK_BINDING_CELLS) readonly buffer Cells { uint cells[]; };
+layout(std430, binding = KW_FLOCK_BINDING_BUCKETS) readonly buffer Buckets { uint buckets[]; };
+layout(std430, binding = KW_FLOCK_BINDING_SORTED) readonly buffer Sorted { uint sorted_birds[]; };
+layout(std430, binding = KW_FLOCK_BINDING_AGENTS) readonly buffer Agents { FlockAgentGpu agents_in[]; };
+layout(std430, binding = KW_FLOCK_BINDING_MOTION) writeonly buffer Motion { BirdMotionGpu motion[]; };
+
+layout(push_constant) uniform Push { FlockPush push; };
+
+#define KW_XYZ(v) ((v).xyz)
+FlockParamsGpu kw_flock(uint f) { return flocks[push.bases.x + f]; }
+FlockBirdGpu kw_bird(uint i) { return birds[i]; }
+FlockStateGpu kw_state(uint i) { return states[push.slots.x * push.counts.x + i]; }
+uint kw_bucket_start(uint b) { return buckets[2u * b]; }
+uint kw_bucket_count(uint b) { return buckets[2u * b + 1u]; }
+uint kw_sorted(uint s) { return sorted_birds[s]; }
+FlockAgentGpu kw_agent(uint a) { return agents_in[push.bases.y + a]; }
+
+#include "shared/flock_body.h"
+
+void main() {
+    const uint i = gl_GlobalInvocationID.x;
+    const uint count = push.counts.x;
+    if (i >= count) return;
+    const FlockStep s = flock_step_bird(i, push.counts.y, push.counts.z, push.step.x, push.step.y);
+    const uint out_slot = 1u - push.slots.x;
+    states[out_slot * count + i] = FlockStateGpu(vec4(s.position, 0.0), vec4(s.velocity, 0.0));
+    if (push.slots.w + 1u == push.slots.z) {
+        motion[push.slots.y * count + i] = BirdMotionGpu(vec4(s.position, 0.0), vec4(s.velocity, 0.0), vec4(s.acceleration, 0.0));
+    }
+}

@@ -1,0 +1,180 @@
+// The flocking step of one bird, written once (issue 31 item 5): GLSL in
+// shaders/flock_step.comp, C++ (GLM's vec3 and functions) in the cpu-reference and cpu
+// backends (engine/domains/flocking/flock_cpu.cpp). The includer provides, before this
+// file:
+//   KW_XYZ(v)                  the xyz of a shared vec4 as a vec3
+//   FlockParamsGpu kw_flock(uint f)      FlockBirdGpu kw_bird(uint i)
+//   FlockStateGpu kw_state(uint i)       (this frame's, the slot read)
+//   uint kw_bucket_start(uint b)  uint kw_bucket_count(uint b)  uint kw_sorted(uint s)
+//   FlockAgentGpu kw_agent(uint a)
+// Float literals carry an f (GLSL accepts it; C++ needs it: no double arithmetic here),
+// conversions are explicit, and nothing depends on the order candidates are visited in:
+// the neighbours are the k nearest by (distance, index), a total order, and the rules
+// sum over them in that order, so the GPU's atomically filled buckets give the bits of
+// the CPU's ordered ones on the same device (docs/flocking.md, "Determinism").
+//
+// The model: Reynolds (1987) separation, alignment and cohesion over each bird's k
+// nearest neighbours (topological, as Ballerini et al. 2008 measured in starlings) in
+// its field of view (a blind angle behind it, as Hildenbrandt, Carere & Hemelrijk 2010),
+// with their Gaussian-softened separation, attraction to the flock's route (their roost
+// attraction, here a point moving along the scene's route), a cruise-speed control with
+// time constant tau (their eq. for the thrust), ground clearance, agents (predators,
+// attractors, sphere obstacles), and the wing's limits (docs/flocking.md).
+
+// The bucket of a position: its cell of the search radius's size, hashed (Teschner et
+// al. 2003's primes) into a power-of-two table. Unsigned arithmetic wraps the same way
+// in GLSL and C++.
+uint flock_bucket(vec3 p, float inv_radius, uint mask) {
+    const ivec3 c = ivec3(floor(p * inv_radius));
+    const uint h = (uint(c.x) * 73856093u) ^ (uint(c.y) * 19349663u) ^ (uint(c.z) * 83492791u);
+    return h & mask;
+}
+
+struct FlockStep {
+    vec3 position;
+    vec3 velocity;
+    vec3 acceleration;
+};
+
+// Whether candidate (d2, j) comes before (bd, bj): nearer, or as near with a lower index.
+bool flock_before(float d2, uint j, float bd, uint bj) { return d2 < bd || (d2 == bd && j < bj); }
+
+FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_radius) {
+    const FlockBirdGpu bird = kw_bird(i);
+    const FlockParamsGpu flock = kw_flock(bird.ids.x);
+    const FlockStateGpu state = kw_state(i);
+    const vec3 p = KW_XYZ(state.position);
+    const vec3 v = KW_XYZ(state.velocity);
+    const float speed = length(v);
+    const vec3 forward = speed > 1e-6f ? v / speed : vec3(0.0f, 0.0f, 1.0f);
+    const float radius = flock.radii.x;
+    const float radius2 = radius * radius;
+    const uint k = flock.counts.y == 1u ? uint(KW_FLOCK_MAX_NEIGHBOURS) : min(flock.counts.x, uint(KW_FLOCK_MAX_NEIGHBOURS));
+
+    // The k nearest birds of the flock within the search radius and the field of view:
+    // the 27 cells round the bird's hold every bird within the radius.
+    float best_d2[KW_FLOCK_MAX_NEIGHBOURS];
+    uint best_j[KW_FLOCK_MAX_NEIGHBOURS];
+    uint found = 0u;
+    uint visited[27];
+    uint visited_count = 0u;
+    const ivec3 home = ivec3(floor(p * inv_radius));
+    for (int dz = -1; dz <= 1; ++dz) {
+        for (int dy = -1; dy <= 1; ++dy) {
+            for (int dx = -1; dx <= 1; ++dx) {
+                const ivec3 c = home + ivec3(dx, dy, dz);
+                const uint b = ((uint(c.x) * 73856093u) ^ (uint(c.y) * 19349663u) ^ (uint(c.z) * 83492791u)) & mask;
+                // Two of the 27 cells may hash to one bucket: visit it once.
+                bool seen = false;
+                for (uint s = 0u; s < visited_count; ++s) seen = seen || visited[s] == b;
+                if (seen) continue;
+                visited[visited_count] = b;
+                visited_count += 1u;
+                const uint first = kw_bucket_start(b);
+                const uint end = first + kw_bucket_count(b);
+                for (uint s = first; s < end; ++s) {
+                    const uint j = kw_sorted(s);
+                    if (j == i || kw_bird(j).ids.x != bird.ids.x) continue;
+                    const vec3 d = KW_XYZ(kw_state(j).position) - p;
+                    const float d2 = dot(d, d);
+                    if (d2 > radius2) continue;
+                    // Behind the bird, in its blind angle: not seen.
+                    if (dot(d, forward) < flock.radii.z * sqrt(d2)) continue;
+                    if (found == k && !flock_before(d2, j, best_d2[k - 1u], best_j[k - 1u])) continue;
+                    // Insertion into the sorted list, dropping the farthest when full.
+                    uint at = found < k ? found : k - 1u;
+                    while (at > 0u && flock_before(d2, j, best_d2[at - 1u], best_j[at - 1u])) {
+                        best_d2[at] = best_d2[at - 1u];
+                        best_j[at] = best_j[at - 1u];
+                        at -= 1u;
+                    }
+                    best_d2[at] = d2;
+                    best_j[at] = j;
+                    if (found < k) found += 1u;
+                }
+            }
+        }
+    }
+
+    // Reynolds' rules over the neighbours, nearest first.
+    vec3 separation = vec3(0.0f);
+    vec3 heading = vec3(0.0f);
+    vec3 centre = vec3(0.0f);
+    const float r_sep = flock.radii.y;
+    for (uint n = 0u; n < found; ++n) {
+        const FlockStateGpu other = kw_state(best_j[n]);
+        const vec3 d = KW_XYZ(other.position) - p;
+        const float dist = sqrt(best_d2[n]);
+        // Hildenbrandt et al.'s separation: full within r_sep, a Gaussian beyond it; r_sep
+        // grows along the flight direction by (1 + front cos^2), keeping a longer gap to
+        // the bird ahead or behind than to the side (ours, docs/flocking.md).
+        const float along_axis = dist > 1e-6f ? dot(d, forward) / dist : 0.0f;
+        const float r_here = r_sep * (1.0f + flock.ground.w * along_axis * along_axis);
+        const float over = max(dist - r_here, 0.0f) / r_here;
+        const float g = exp(-(over * over));
+        if (dist > 1e-6f) separation += (g / dist) * d;
+        const vec3 w = KW_XYZ(other.velocity);
+        const float ws = length(w);
+        if (ws > 1e-6f) heading += w / ws;
+        centre += d;
+    }
+    vec3 a = vec3(0.0f);
+    if (found > 0u) {
+        const float inv_n = 1.0f / float(found);
+        a += (-flock.weights.x * inv_n) * separation;
+        const float hl = length(heading);
+        if (hl > 1e-6f) a += flock.weights.y * (heading / hl - forward);
+        a += (flock.weights.z * inv_n / radius) * centre;
+    }
+    // The route: drawn to the leader's place plus the bird's formation offset, in
+    // proportion within the route radius, at full weight beyond it.
+    const vec3 to_target = KW_XYZ(flock.target) + KW_XYZ(bird.offset) - p;
+    a += (flock.weights.w / max(length(to_target), flock.radii.w)) * to_target;
+    // Cruise speed: thrust towards v0 with time constant tau.
+    a += ((bird.speed.x - speed) / flock.ground.z) * forward;
+    // The ground: pushed up within the clearance, in proportion to the depth into it.
+    if (p.y < flock.ground.x) a.y += flock.ground.y * (flock.ground.x - p.y) / flock.ground.x;
+    // Agents.
+    for (uint g = 0u; g < agents; ++g) {
+        const FlockAgentGpu agent = kw_agent(g);
+        const vec3 d = p - KW_XYZ(agent.position);
+        const float dist = length(d);
+        const float reach = agent.position.w;
+        if (dist < 1e-6f) continue;
+        if (agent.kind_weight.x == KW_FLOCK_AGENT_SPHERE) {
+            const float margin = max(agent.kind_weight.z, 1e-3f);
+            const float depth = reach + margin - dist;
+            if (depth > 0.0f) a += (agent.kind_weight.y * min(depth / margin, 1.0f) / dist) * d;
+        } else if (dist < reach) {
+            const float s = agent.kind_weight.y * (1.0f - dist / reach) / dist;
+            a += (agent.kind_weight.x == KW_FLOCK_AGENT_REPELLER ? s : -s) * d;
+        }
+    }
+
+    // What the wing allows: the tangential part within the largest speed change, the
+    // lateral part within a coordinated turn at the largest bank (g tan(bank)).
+    const float along = clamp(dot(a, forward), -bird.speed.w, bird.speed.w);
+    vec3 lateral = a - dot(a, forward) * forward;
+    const float ll = length(lateral);
+    if (ll > bird.turn.x) lateral *= bird.turn.x / ll;
+    a = along * forward + lateral;
+    // Semi-implicit Euler; speed within [min, max], climb and dive within the wing's.
+    vec3 v1 = v + dt * a;
+    const float s1 = length(v1);
+    const float s = clamp(s1, bird.speed.y, bird.speed.z);
+    v1 = s1 > 1e-6f ? (s / s1) * v1 : s * forward;
+    const float sin_pitch = v1.y / s;
+    const float limited = clamp(sin_pitch, -bird.turn.z, bird.turn.y);
+    if (limited != sin_pitch) {
+        vec3 h = vec3(v1.x, 0.0f, v1.z);
+        const float hl = length(h);
+        h = hl > 1e-6f ? h / hl : vec3(1.0f, 0.0f, 0.0f);
+        const float cos_pitch = sqrt(max(1.0f - limited * limited, 0.0f));
+        v1 = vec3(s * cos_pitch * h.x, s * limited, s * cos_pitch * h.z);
+    }
+    FlockStep result;
+    result.velocity = v1;
+    result.position = p + dt * v1;
+    result.acceleration = (v1 - v) / dt;
+    return result;
+}

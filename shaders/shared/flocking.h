@@ -1,0 +1,80 @@
+// GPU-shared data of the flocking domain (issue 32, docs/flocking.md): every struct,
+// binding and constant its kernels (shaders/flock_grid.comp, flock_step.comp) and its CPU
+// paths (engine/domains/flocking/) share. Static asserts: engine/gpu/shared_layout.cpp.
+#ifndef KODAWARI_SHADERS_SHARED_FLOCKING_H
+#define KODAWARI_SHADERS_SHARED_FLOCKING_H
+
+#include "birds.h"
+#include "glsl_types.h"
+
+#define KW_FLOCK_WORKGROUP_SIZE 64
+// The most neighbours a bird weighs (FlockParamsGpu.counts.x is at most this).
+#define KW_FLOCK_MAX_NEIGHBOURS 16
+// The grid's buckets are a power of two (FlockPush.counts.y = buckets - 1) and the scan
+// of their counts runs in one workgroup of this many invocations.
+#define KW_FLOCK_SCAN_SIZE 256
+
+#define KW_FLOCK_BINDING_FLOCKS 0   // FlockParamsGpu per flock (per frame: its target moves)
+#define KW_FLOCK_BINDING_BIRDS 1    // FlockBirdGpu per bird (constants)
+#define KW_FLOCK_BINDING_STATES 2   // FlockStateGpu per bird, two slots: [slot * birds + i]
+#define KW_FLOCK_BINDING_CELLS 3    // uint per bird: its bucket this frame
+#define KW_FLOCK_BINDING_BUCKETS 4  // uvec2 per bucket as two uints: start, count
+#define KW_FLOCK_BINDING_SORTED 5   // uint per bird: bird indices by bucket
+#define KW_FLOCK_BINDING_AGENTS 6   // FlockAgentGpu: repellers, attractors, obstacles (per frame)
+#define KW_FLOCK_BINDING_MOTION 7   // BirdMotionGpu (shared/birds.h) per frame per bird: what the bird domain flies
+#define KW_FLOCK_BINDING_COUNT 8
+
+// flock_grid.comp's passes (FlockPush.counts.w).
+#define KW_FLOCK_PASS_CLEAR 0u    // every bucket's count to 0
+#define KW_FLOCK_PASS_COUNT 1u    // each bird's bucket, its count incremented
+#define KW_FLOCK_PASS_SCAN 2u     // starts = exclusive prefix sum of the counts; counts to 0
+#define KW_FLOCK_PASS_SCATTER 3u  // each bird into its bucket's range (counts back up)
+
+// FlockAgentGpu.kind_weight.x
+#define KW_FLOCK_AGENT_REPELLER 0.0f  // a predator: birds within radius flee it
+#define KW_FLOCK_AGENT_ATTRACTOR 1.0f // birds within radius are drawn to it
+#define KW_FLOCK_AGENT_SPHERE 2.0f    // an obstacle: birds keep out of it, margin = kind_weight.z
+
+KW_NAMESPACE_BEGIN
+
+// Per flock: the rules' parameters (FlockingSpec) and where its route's leader is this
+// frame, which the flock is drawn to.
+struct FlockParamsGpu {
+    uvec4 counts;   // x: neighbours k, y: 1 = metric (every neighbour within radii.x, nearest k first), z, w: unused
+    vec4 radii;     // x: search radius (m), y: separation distance (m), z: cos of half the field of view (blind angle behind), w: route radius (m)
+    vec4 weights;   // x: separation, y: alignment, z: cohesion, w: route attraction (m/s^2)
+    vec4 ground;    // x: clearance (m), y: weight (m/s^2), z: speed time constant tau (s), w: separation's front factor
+    vec4 target;    // xyz: the route's leader this frame (m), w: unused
+};
+
+// Per bird, constant: its flock, its place in the formation about the leader and what
+// its wing allows (birds::derive_flight, docs/wing-types.md).
+struct FlockBirdGpu {
+    uvec4 ids;      // x: flock, y, z, w: unused
+    vec4 offset;    // xyz: formation offset from the leader (m), w: unused
+    vec4 speed;     // x: cruise speed v0, y: minimum speed, z: maximum speed (m/s), w: max speed change (m/s^2)
+    vec4 turn;      // x: max lateral acceleration g tan(max bank) (m/s^2), y: sin(max climb), z: sin(max dive), w: unused
+};
+
+// Per bird, carried from frame to frame.
+struct FlockStateGpu {
+    vec4 position;  // xyz (m), w: unused
+    vec4 velocity;  // xyz (m/s), w: unused
+};
+
+// A repeller, attractor or obstacle, given per frame by the scene or the application.
+struct FlockAgentGpu {
+    vec4 position;     // xyz (m), w: radius of influence (m)
+    vec4 kind_weight;  // x: KW_FLOCK_AGENT_*, y: weight (m/s^2), z: obstacle margin (m), w: unused
+};
+
+struct FlockPush {
+    uvec4 counts;  // x: birds, y: bucket mask (buckets - 1), z: agents, w: the grid pass (KW_FLOCK_PASS_*)
+    uvec4 slots;   // x: state slot read (the other is written), y: motion frame slot, z: substeps, w: substep index
+    uvec4 bases;   // x: this frame's first FlockParamsGpu, y: its first FlockAgentGpu, zw: unused
+    vec4 step;     // x: dt of a substep (s), y: 1 / search radius, z: gravity (m/s^2), w: unused
+};
+
+KW_NAMESPACE_END
+
+#endif
