@@ -1,0 +1,300 @@
+// The flocking domain (issue 32, docs/flocking.md): the same body on every backend, what
+// a flock looks like by the measures of starling flocks, predators, the routes of other
+// flocks untouched, shards, and bad input.
+#include <gtest/gtest.h>
+
+#include <algorithm>
+#include <cmath>
+#include <cstring>
+#include <string>
+#include <vector>
+
+#include <glm/glm.hpp>
+#include <glm/gtc/quaternion.hpp>
+
+#include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/flocking.hpp"
+#include "kodawari/simulation.hpp"
+#include "test_support.hpp"
+
+using namespace kodawari;
+
+namespace {
+
+// A loop over a field at 45 m, 1 001 birds (not a multiple of the 64- or 256-wide
+// workgroups), and the flocking object `flocking` (JSON).
+std::string scene_text(std::uint32_t birds, double seconds, const std::string& flocking, const std::string& extra_flock = "") {
+    return R"({"format": "kodawari-scene", "version": 1, "name": "flocking-test", "fps": 60, "duration": )" + std::to_string(seconds) +
+           R"(, "camera": {"position": [0, 60, -160], "target": [0, 45, 0], "fov_deg": 60}, "flocks": [)" + extra_flock +
+           R"({"name": "starlings", "wing_type": "pigeon", "count": )" + std::to_string(birds) +
+           R"(, "seed": 2024, "speed": 15, "speed_jitter": 0.04,
+               "generated_route": {"seed": 7, "segments": 8, "center": [0, 45, 0], "extent": [45, 8, 45], "loop": true},
+               "formation": {"spread": [8, 4, 8]}, "flocking": )" + flocking + "}]}";
+}
+
+std::unique_ptr<Simulation> open_text(const std::string& text, const testing_support::BackendCase& backend) {
+    auto scene = parse_scene(text, "flocking-test.json");
+    EXPECT_TRUE(scene.ok()) << scene.error().message;
+    if (!scene.ok()) return nullptr;
+    SimulationOptions options{.backend = backend.kind, .options = testing_support::backend_options(backend)};
+    auto made = Simulation::create(std::move(scene).value(), options);
+    EXPECT_TRUE(made.ok()) << made.error().message;
+    return made.ok() ? std::move(made).value() : nullptr;
+}
+
+std::string parse_error(const std::string& text) {
+    auto scene = parse_scene(text, "flocking-test.json");
+    return scene.ok() ? std::string("(parsed)") : scene.error().message;
+}
+
+bool same_bits(const gpu::BirdPose& a, const gpu::BirdPose& b) { return std::memcmp(&a, &b, sizeof(a)) == 0; }
+
+glm::vec3 position(const gpu::BirdPose& p) { return {p.position.x, p.position.y, p.position.z}; }
+glm::vec3 forward(const gpu::BirdPose& p) {
+    const gpu::vec4& q = p.rotation[KW_PART_BODY];
+    return glm::quat(q.w, q.x, q.y, q.z) * glm::vec3(0.0f, 0.0f, 1.0f);
+}
+
+// Starling flocks' measures (Ballerini et al. 2008) of one frame's poses.
+struct FlockMeasures {
+    float min_nn = 1e9f, median_nn = 0.0f, polarization = 0.0f, cos2 = 0.0f;
+};
+FlockMeasures measure(std::span<const gpu::BirdPose> poses) {
+    const std::size_t n = poses.size();
+    std::vector<float> nn(n, 1e9f);
+    std::vector<std::size_t> nearest(n, 0);
+    for (std::size_t i = 0; i < n; ++i) {
+        for (std::size_t j = 0; j < n; ++j) {
+            if (i == j) continue;
+            const float d = glm::length(position(poses[j]) - position(poses[i]));
+            if (d < nn[i]) nn[i] = d, nearest[i] = j;
+        }
+    }
+    FlockMeasures m;
+    glm::vec3 mean_forward(0.0f);
+    double cos2 = 0.0;
+    for (std::size_t i = 0; i < n; ++i) {
+        const glm::vec3 f = forward(poses[i]);
+        mean_forward += f;
+        const glm::vec3 to = glm::normalize(position(poses[nearest[i]]) - position(poses[i]));
+        cos2 += static_cast<double>(glm::dot(to, f) * glm::dot(to, f));
+        m.min_nn = std::min(m.min_nn, nn[i]);
+    }
+    std::vector<float> sorted = nn;
+    std::nth_element(sorted.begin(), sorted.begin() + static_cast<std::ptrdiff_t>(n / 2), sorted.end());
+    m.median_nn = sorted[n / 2];
+    m.polarization = glm::length(mean_forward) / static_cast<float>(n);
+    m.cos2 = static_cast<float>(cos2 / static_cast<double>(n));
+    return m;
+}
+
+class FlockingBackends : public ::testing::TestWithParam<testing_support::BackendCase> {};
+
+// cpu (every instruction set) is cpu-reference's bits in the flock's motion and the birds'
+// positions (their rotations within the bird backends' parity); vulkan is
+// within 1e-3 m of it after 40 frames (the flow is chaotic, so two orders of rounding part
+// slowly: measured 5.3e-5 m after 136 frames on lavapipe) and gives the same bits twice.
+TEST_P(FlockingBackends, StepLikeTheReference) {
+    if (GetParam() == BackendKind::Vulkan) {
+        const std::string why = testing_support::no_vulkan_device_reason();
+        if (!why.empty()) GTEST_SKIP() << why;
+    }
+    constexpr std::uint32_t kBirds = 1001, kFrames = 40;
+    const std::string text = scene_text(kBirds, 2.0, "{}");
+    const auto run = [&](const testing_support::BackendCase& backend, std::vector<gpu::BirdPose>& poses,
+                         std::vector<gpu::BirdMotionGpu>& motion) {
+        auto sim = open_text(text, backend);
+        ASSERT_NE(sim, nullptr);
+        poses.resize(std::size_t{kFrames} * kBirds);
+        motion.resize(std::size_t{kFrames} * kBirds);
+        // In two calls: the second starts from the state the first left.
+        const std::size_t half = std::size_t{kFrames / 2} * kBirds;
+        for (std::size_t first : {std::size_t{0}, half}) {
+            const ChannelOutput out[] = {
+                {kBirdPosesChannel, std::as_writable_bytes(std::span(poses).subspan(first, half))},
+                {kFlockingMotionChannel, std::as_writable_bytes(std::span(motion).subspan(first, half))}};
+            ASSERT_TRUE(sim->step(kFrames / 2, out).ok());
+        }
+    };
+    std::vector<gpu::BirdPose> reference, poses, again;
+    std::vector<gpu::BirdMotionGpu> reference_motion, motion, again_motion;
+    run({BackendKind::CpuReference, ""}, reference, reference_motion);
+    run(GetParam(), poses, motion);
+    if (GetParam() == BackendKind::Vulkan) {
+        float worst = 0.0f;
+        for (std::size_t i = 0; i < poses.size(); ++i) worst = std::max(worst, glm::length(position(poses[i]) - position(reference[i])));
+        std::printf("vulkan against cpu-reference after %u frames: %.3g m\n", kFrames, static_cast<double>(worst));
+        EXPECT_LT(worst, 1e-3f);
+        run(GetParam(), again, again_motion);
+        EXPECT_EQ(std::memcmp(again.data(), poses.data(), poses.size() * sizeof(gpu::BirdPose)), 0) << "vulkan twice: other bits";
+        EXPECT_EQ(std::memcmp(again_motion.data(), motion.data(), motion.size() * sizeof(gpu::BirdMotionGpu)), 0);
+    } else {
+        EXPECT_EQ(std::memcmp(motion.data(), reference_motion.data(), motion.size() * sizeof(gpu::BirdMotionGpu)), 0);
+        // The bird backends' own parity (compare.hpp's BirdTolerances): positions within
+        // 1e-5 m (the body's bob follows the wingbeat's sine), part rotations within 1e-4
+        // (the cpu backend's own vector sines of the wingbeat and the attitude's).
+        for (std::size_t i = 0; i < poses.size(); ++i) {
+            ASSERT_LT(glm::length(position(poses[i]) - position(reference[i])), 1e-5f) << "frame " << i / kBirds << ", bird " << i % kBirds;
+            for (int p = 0; p < KW_PART_COUNT; ++p) {
+                const gpu::vec4 &a = poses[i].rotation[p], &b = reference[i].rotation[p];
+                ASSERT_NEAR(a.x, b.x, 1e-4f);
+                ASSERT_NEAR(a.y, b.y, 1e-4f);
+                ASSERT_NEAR(a.z, b.z, 1e-4f);
+                ASSERT_NEAR(a.w, b.w, 1e-4f);
+            }
+        }
+    }
+}
+
+INSTANTIATE_TEST_SUITE_P(All, FlockingBackends, testing_support::all_backend_kinds(), testing_support::backend_test_name);
+
+// The default rules give what starling flocks show (Ballerini et al. 2008; Cavagna et al.
+// 2010) once it has settled from the random box it starts in (6 s): no two birds closer
+// than 0.1 m (half a body length), nearest neighbours 0.5 to 2 m apart (median),
+// polarization at least 0.9, and neighbours to the sides more than ahead or behind (mean
+// cos^2 of the angle between a bird's flight and the direction to its nearest neighbour
+// at most 0.3; 1/3 is no structure). Measured on cpu at 6, 8 and 10 s: nearest 0.44 to
+// 0.70 m, medians 1.6 to 1.8 m, polarization 0.997, cos^2 0.26 to 0.30 (at 2 s, still
+// the box: 0.36).
+TEST(Flocking, FliesLikeStarlings) {
+    constexpr std::uint32_t kBirds = 1501;
+    auto sim = open_text(scene_text(kBirds, 12.0, "{}"), {BackendKind::Cpu, ""});
+    ASSERT_NE(sim, nullptr);
+    std::vector<gpu::BirdPose> poses(kBirds);
+    std::uint32_t done = 0;
+    for (const std::uint32_t until : {480u, 600u, 720u}) {
+        std::vector<gpu::BirdPose> frames(std::size_t{until - done} * kBirds);
+        ASSERT_TRUE(step_birds(*sim, until - done, frames).ok());
+        done = until;
+        const FlockMeasures m = measure(std::span(frames).last(kBirds));
+        std::printf("t = %.0f s: nearest %.3f m, median %.2f m, polarization %.3f, cos^2 %.3f\n", until / 60.0,
+                    static_cast<double>(m.min_nn), static_cast<double>(m.median_nn), static_cast<double>(m.polarization),
+                    static_cast<double>(m.cos2));
+        EXPECT_GE(m.min_nn, 0.1f);
+        EXPECT_GE(m.median_nn, 0.5f);
+        EXPECT_LE(m.median_nn, 2.0f);
+        EXPECT_GE(m.polarization, 0.9f);
+        EXPECT_LE(m.cos2, 0.3f);
+    }
+}
+
+// A predator through the middle of the flock at 4 s: birds keep out of its way. Without
+// it (the control) birds are where it passes.
+TEST(Flocking, BirdsFleeAPredator) {
+    constexpr std::uint32_t kBirds = 601, kFrames = 420;
+    const auto closest = [&](const std::string& flocking) {
+        auto sim = open_text(scene_text(kBirds, 7.0, flocking), {BackendKind::Cpu, ""});
+        EXPECT_NE(sim, nullptr);
+        std::vector<gpu::BirdPose> poses(std::size_t{kFrames} * kBirds);
+        EXPECT_TRUE(step_birds(*sim, kFrames, poses).ok());
+        // The flock's centre at 4 s, where the predator's line crosses it.
+        return poses;
+    };
+    // Where the flock is at 4 s without a predator: the predator is sent through there.
+    const std::vector<gpu::BirdPose> alone = closest("{}");
+    glm::vec3 centre(0.0f);
+    for (std::uint32_t b = 0; b < kBirds; ++b) centre += position(alone[std::size_t{240} * kBirds + b]) / float(kBirds);
+    const glm::vec3 from = centre + glm::vec3(-40.0f, 0.0f, 0.0f), to = centre + glm::vec3(40.0f, 0.0f, 0.0f);
+    const std::string predator = R"({"predators": [{"from": [)" + std::to_string(from.x) + "," + std::to_string(from.y) + "," +
+                                 std::to_string(from.z) + "], \"to\": [" + std::to_string(to.x) + "," + std::to_string(to.y) + "," +
+                                 std::to_string(to.z) + R"(], "start": 2, "speed": 20, "radius": 20, "weight": 60}]})";
+    const std::vector<gpu::BirdPose> chased = closest(predator);
+    // The predator is at from + 20 (t - 2) m along x; the nearest bird to it each frame.
+    const auto nearest = [&](const std::vector<gpu::BirdPose>& poses) {
+        float best = 1e9f;
+        for (std::uint32_t f = 150; f < 330; ++f) {
+            const float t = static_cast<float>(f) / 60.0f;
+            const glm::vec3 at = from + glm::vec3(20.0f * (t - 2.0f), 0.0f, 0.0f);
+            for (std::uint32_t b = 0; b < kBirds; ++b) best = std::min(best, glm::length(position(poses[std::size_t{f} * kBirds + b]) - at));
+        }
+        return best;
+    };
+    const float without = nearest(alone), with = nearest(chased);
+    std::printf("nearest bird to the predator's path, 2.5 to 5.5 s: %.2f m without it, %.2f m with it\n", static_cast<double>(without),
+                static_cast<double>(with));
+    EXPECT_LT(without, 1.0f);  // the control: the line goes through the flock
+    EXPECT_GT(with, 3.0f * without + 1.0f);
+}
+
+// A flock without "flocking" flies its route exactly as without the flocking flock beside
+// it: the same bits.
+TEST(Flocking, RouteFlocksBesideItAreUnchanged) {
+    const std::string route_flock = R"({"name": "gulls", "wing_type": "gull", "count": 37, "seed": 5,
+        "route": {"points": [[0, 20, 0], [10, 22, 5], [20, 24, 5], [30, 20, 0]]}}, )";
+    auto both = open_text(scene_text(101, 1.0, "{}", route_flock), {BackendKind::Cpu, ""});
+    auto alone_scene = parse_scene(R"({"format": "kodawari-scene", "version": 1, "name": "flocking-test", "fps": 60, "duration": 1,
+        "camera": {"position": [0, 60, -160], "target": [0, 45, 0], "fov_deg": 60}, "flocks": [)" +
+                                       route_flock.substr(0, route_flock.size() - 2) + "]}",
+                                   "alone.json");
+    ASSERT_TRUE(alone_scene.ok()) << alone_scene.error().message;
+    auto alone = Simulation::create(std::move(alone_scene).value(), {.backend = BackendKind::Cpu});
+    ASSERT_TRUE(alone.ok()) << alone.error().message;
+    ASSERT_NE(both, nullptr);
+    constexpr std::uint32_t kFrames = 60;
+    std::vector<gpu::BirdPose> a(kFrames * 138), b(kFrames * 37);
+    ASSERT_TRUE(step_birds(*both, kFrames, a).ok());
+    ASSERT_TRUE(step_birds(*alone.value(), kFrames, b).ok());
+    for (std::uint32_t f = 0; f < kFrames; ++f) {
+        for (std::uint32_t i = 0; i < 37; ++i) ASSERT_TRUE(same_bits(a[f * 138 + i], b[f * 37 + i])) << "frame " << f << ", gull " << i;
+    }
+}
+
+// Every shard simulates the whole flocking flock and keeps its birds: the shards' birds
+// are the whole run's, bit for bit.
+TEST(Flocking, ShardsAreTheWholeRunsBirds) {
+    constexpr std::uint32_t kBirds = 301, kFrames = 30, kShards = 3;
+    auto scene = parse_scene(scene_text(kBirds, 0.5, "{}"), "flocking-test.json");
+    ASSERT_TRUE(scene.ok());
+    auto whole = Simulation::create(scene.value(), {.backend = BackendKind::Cpu});
+    ASSERT_TRUE(whole.ok());
+    std::vector<gpu::BirdPose> all(std::size_t{kFrames} * kBirds);
+    ASSERT_TRUE(step_birds(*whole.value(), kFrames, all).ok());
+    for (std::uint32_t s = 0; s < kShards; ++s) {
+        auto part = Simulation::create(scene.value(), {.backend = BackendKind::Cpu, .shard = {s, kShards}});
+        ASSERT_TRUE(part.ok()) << part.error().message;
+        const InstanceRange range = part.value()->shard().part("birds").range;
+        std::vector<gpu::BirdPose> poses(std::size_t{kFrames} * range.size());
+        ASSERT_TRUE(step_birds(*part.value(), kFrames, poses).ok());
+        for (std::uint32_t f = 0; f < kFrames; ++f) {
+            for (std::uint32_t b = 0; b < range.size(); ++b) {
+                ASSERT_TRUE(same_bits(poses[f * range.size() + b], all[f * kBirds + range.begin + b])) << "shard " << s << ", frame " << f;
+            }
+        }
+    }
+}
+
+TEST(Flocking, BadValuesAreRefusedNamingThem) {
+    EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"neighbours": 0})")),
+              "flocking-test.json: $.flocks[0].flocking.neighbours: expected an integer in [1, 16], got 0");
+    EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"blind_angle_deg": 180})")),
+              "flocking-test.json: $.flocks[0].flocking.blind_angle_deg: expected a finite number in [0, 180), got 180");
+    EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"search_radius": 2, "separation_distance": 3})")),
+              "flocking-test.json: $.flocks[0].flocking.separation_distance: expected at most search_radius (2 m), got 3");
+    EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"predators": [{"from": [0, 1, 2], "to": [0, 1, 2]}]})")),
+              "flocking-test.json: $.flocks[0].flocking.predators[0]: expected \"from\" and \"to\" apart, got the same point");
+    EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"speed_time": -1})")),
+              "flocking-test.json: $.flocks[0].flocking.speed_time: expected a finite number in (0, 60], got -1");
+    EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"cohesion": "strong"})")),
+              "flocking-test.json: $.flocks[0].flocking.cohesion: expected a finite number in [0, 1000], got \"strong\"");
+    EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"alignement": 1})")).substr(0, 64),
+              "flocking-test.json: $.flocks[0].flocking.alignement: unknown key");
+}
+
+// A bird backend given a world with driven birds and no motion says so.
+TEST(Flocking, DrivenBirdsWithoutMotionAreAnError) {
+    auto scene = parse_scene(scene_text(10, 1.0, "{}"), "flocking-test.json");
+    ASSERT_TRUE(scene.ok());
+    auto world = build_bird_world(scene.value());
+    ASSERT_TRUE(world.ok());
+    world.value().frames = 60;
+    for (const BackendKind kind : {BackendKind::CpuReference, BackendKind::Cpu}) {
+        auto backend = make_cpu_bird_backend(kind, {});
+        ASSERT_TRUE(backend.ok());
+        ASSERT_TRUE(backend.value()->load(world.value()).ok());
+        const auto result = backend.value()->simulate(2, {});
+        ASSERT_FALSE(result.ok());
+        EXPECT_EQ(result.error().message, "10 birds are flown by another domain: drive() must give 20 motions for 2 frames, got 0");
+    }
+}
+
+}  // namespace
