@@ -229,15 +229,28 @@ Result<void> read_formation(const JsonReader& r, const JsonNode& node, Formation
 }
 
 Result<void> read_predator(const JsonReader& r, const JsonNode& node, PredatorSpec& predator) {
-    KW_TRY(r.object(node, {"from", "to", "start", "every", "speed", "radius", "weight"}));
+    KW_TRY(r.object(node, {"flock", "from", "to", "start", "every", "speed", "radius", "weight"}));
     const auto point = [&](const JsonNode& n) -> Result<glm::vec3> {
         std::array<float, 3> v{};
         KW_SCENE_ASSIGN(v, r.vec3(n, NumberRange::closed(-kMaxCoordinate, kMaxCoordinate)));
         return glm::vec3(v[0], v[1], v[2]);
     };
-    KW_SCENE_ASSIGN(predator.from, point(r.member(node, "from")));
-    KW_SCENE_ASSIGN(predator.to, point(r.member(node, "to")));
-    if (predator.from == predator.to) return r.fail(node.path, "expected \"from\" and \"to\" apart, got the same point");
+    const JsonNode flock = r.member(node, "flock");
+    if (flock.present()) {
+        // A route flock's first bird (checked against the scene's flocks when built).
+        for (const char* key : {"from", "to", "every", "speed"}) {
+            if (r.member(node, key).present()) {
+                return r.fail(r.member(node, key).path, "a predator that is a flock's bird flies that flock's route: expected no \"" +
+                                                            std::string(key) + "\" beside \"flock\"");
+            }
+        }
+        KW_SCENE_ASSIGN(predator.flock, r.string(flock));
+        if (predator.flock.empty()) return r.expected(flock, "the name of a flock without \"flocking\"");
+    } else {
+        KW_SCENE_ASSIGN(predator.from, point(r.member(node, "from")));
+        KW_SCENE_ASSIGN(predator.to, point(r.member(node, "to")));
+        if (predator.from == predator.to) return r.fail(node.path, "expected \"from\" and \"to\" apart, got the same point");
+    }
     KW_TRY(optional_member(r, node, "start", predator.start,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1e6)); }));
     KW_TRY(optional_member(r, node, "every", predator.every,

@@ -88,6 +88,27 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
         }
         first_bird = end;
     }
+    // Predators that are another flock's birds: that flock's first bird.
+    out.predator_birds.assign(out.predators.size(), gpu::BirdParams{});
+    for (std::size_t a = 0; a < out.predators.size(); ++a) {
+        const std::string& name = out.predators[a].flock;
+        if (name.empty()) continue;
+        std::size_t bird = 0;
+        const FlockSpec* found = nullptr;
+        for (const FlockSpec& spec : scene.flocks) {
+            if (spec.name == name) {
+                found = &spec;
+                break;
+            }
+            bird += spec.count;
+        }
+        if (found == nullptr || found->flocking) {
+            return make_error(Error::Kind::InvalidInput,
+                              scene.path + ": a predator's \"flock\" is \"" + name + "\": expected the name of a flock without \"flocking\"" +
+                                  (found == nullptr ? ", and the scene has no flock of that name" : ", and that one flocks"));
+        }
+        out.predator_birds[a] = world.birds[bird];
+    }
     out.buckets = bucket_count(world.driven);
     return out;
 }
@@ -106,7 +127,13 @@ void FlockWorld::frame_inputs(std::uint32_t frame, std::span<gpu::FlockParamsGpu
         agent.kind_weight = {KW_FLOCK_AGENT_REPELLER, 0.0f, 0.0f, 0.0f};
         agent.position = {p.from.x, p.from.y, p.from.z, p.radius};
         float since = t - p.start;
-        if (since >= 0.0f) {
+        if (!p.flock.empty()) {
+            // Where that flock's first bird is (flight.cpp: its route and offset).
+            const gpu::BirdParams& b = predator_birds[a];
+            const birds::RouteSample s = birds::sample_route(routes, b.ids.x, t + b.offset.w, b.motion.x);
+            agent.position = {s.position.x + b.offset.x, s.position.y + b.offset.y, s.position.z + b.offset.z, p.radius};
+            if (since >= 0.0f) agent.kind_weight.y = p.weight;
+        } else if (since >= 0.0f) {
             if (p.every > 0.0f) since -= p.every * std::floor(since / p.every);
             const glm::vec3 path = p.to - p.from;
             const float length = glm::length(path);

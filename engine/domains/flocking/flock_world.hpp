@@ -27,6 +27,9 @@ struct FlockWorld {
     };
     std::vector<Leader> leaders;
     std::vector<PredatorSpec> predators;  ///< every flocking flock's, fleeing any of them
+    /// Per predator that is a flock's bird (PredatorSpec::flock): that bird's params (its
+    /// route, speed, offsets); unused for the others.
+    std::vector<gpu::BirdParams> predator_birds;
     birds::BirdWorld routes;              ///< the bird world's routes (sample_route())
     float dt = 1.0f / 60.0f;              ///< a substep (s)
     std::uint32_t substeps = 1;           ///< per frame: at most 1/60 s each

@@ -59,8 +59,11 @@ struct FormationSpec {
 };
 
 /// A predator passing through a flocking flock: from `from` to `to` at `speed`, starting
-/// at `start` s and again every `every` s (0: once). Birds within `radius` flee it.
+/// at `start` s and again every `every` s (0: once); or, with `flock`, the first bird of
+/// that (route) flock from `start` on, drawn and baked as the bird it is. Birds within
+/// `radius` flee it.
 struct PredatorSpec {
+    std::string flock;  ///< a flock without flocking, or empty: from and to
     glm::vec3 from{0.0f}, to{0.0f};
     float start = 0.0f;    ///< s
     float every = 0.0f;    ///< s, 0: one pass
