@@ -15,6 +15,8 @@ import math
 import os
 import sys
 import tempfile
+import types
+from types import SimpleNamespace
 
 import bpy
 from mathutils import Vector
@@ -30,7 +32,41 @@ def check(condition, what):
 
 
 def counts():
-    return {name: len(getattr(bpy.data, name)) for name in ("objects", "armatures", "meshes", "actions", "collections")}
+    # Every kind of data-block the operators may make (kodawari_blender/jobs.py's KINDS).
+    return {name: len(getattr(bpy.data, name)) for name in ("objects", "armatures", "meshes", "actions", "materials",
+                                                            "collections", "images", "textures", "node_groups",
+                                                            "cameras", "lights", "curves")}
+
+
+def view_state():
+    """What a cancelled job must put back besides the data-blocks: the selection, the
+    active object and the current frame."""
+    layer = bpy.context.view_layer
+    return (sorted(o.name for o in layer.objects if o.select_get()),
+            layer.objects.active.name if layer.objects.active else None, bpy.context.scene.frame_current)
+
+
+def cancel_after(start, chunks, what, user_state=lambda: None):
+    """Starts a job (start() -> kodawari_blender.jobs.Job, what the operators' execute and
+    invoke start), runs `chunks` chunks of it, then cancels it through Job.cancel(), the
+    path Esc takes (jobs.ModalJob.modal), and checks that the file is as before: the same
+    data-blocks of every kind, the selection, the active object, the frame, user_state()
+    (the user's own data) and no temporary folder left. Returns the data-blocks the job
+    had made when cancelled (so that a test can see it cancelled real work)."""
+    before, view, user = counts(), view_state(), user_state()
+    job = start()
+    for k in range(chunks):
+        check(job.step(), f"{what}: the job ended after {k} of {chunks} chunks")
+    made = sum(counts().values()) - sum(before.values())
+    folder = job.folder
+    job.cancel()
+    check(job.cancelled and not job.step(), f"{what}: the job goes on after cancel()")
+    check(counts() == before, f"{what}, cancelled after {chunks} chunks: {before} -> {counts()}")
+    check(view_state() == view, f"{what}, cancelled after {chunks} chunks: selection, active, frame {view} -> "
+                                f"{view_state()}")
+    check(user_state() == user, f"{what}, cancelled after {chunks} chunks: the user's data changed")
+    check(not os.path.exists(folder), f"{what}: the temporary folder {folder} is left")
+    return made
 
 
 def expect_error(needle, operator=None, **properties):
@@ -164,7 +200,6 @@ check(worst < 0.05, f"a body is {worst} m off the curve")
 # description), keys at frame f + 1 against the importer's at f (it keys from frame 0).
 # Within 1e-4 (m and rotation-matrix entries): float32 keys of ~50 m coordinates are
 # 4e-6 apart, and the two compose the same transforms in other orders.
-from types import SimpleNamespace  # noqa: E402
 settings = SimpleNamespace(count=N, wing_type="GULL", spread=0.0, speed=0.0, trail=0.0, takeoff=False, landing=False,
                            seed=1)
 description = flock.scene_dict([route], settings, 24.0, 48)
@@ -216,6 +251,46 @@ route.select_set(True)
 expect_error("take-off and landing need an open curve", takeoff=True)
 spline.use_cyclic_u = False
 
+# ---- Cancelled flocks (Esc): 130 birds x 48 frames run in 6 chunks (the template; frames 1
+# and 26 simulated on; birds 1, 65 and 129 made on); cancelled after each, nothing is left,
+# though by then the template, the collection and up to 128 armatures with actions exist.
+from kodawari_blender import chains as chains_module, jobs  # noqa: E402
+settings = SimpleNamespace(count=130, wing_type="PIGEON", spread=2.0, speed=0.0, trail=0.0, takeoff=False,
+                           landing=False, seed=1, frames=48, backend="cpu")
+bpy.ops.object.select_all(action="DESELECT")
+route.select_set(True)
+bpy.context.view_layer.objects.active = route
+scene.frame_set(7)
+made = [cancel_after(lambda: flock.start_flock(bpy.context, [route], settings), chunks, "flock_from_curve")
+        for chunks in range(1, 7)]
+print(f"flock_from_curve cancelled after 1 to 6 chunks, holding {made} new data-blocks: all removed")
+check(made[0] == 0 and made[-1] > 2 * 128, f"the cancelled flocks held {made} data-blocks")
+
+# The same through the modal operator's own handler (jobs.ModalJob.modal, what invoke()
+# installs; a background Blender has no window to run it in): two timer ticks of one chunk
+# each, then Esc. An operator instance cannot be made outside Blender's operator calls, so
+# a stand-in carries its attributes.
+reports = []
+before, view = counts(), view_state()
+modal = SimpleNamespace(_job=flock.start_flock(bpy.context, [route], settings), _timer=None, TICK=0.0,
+                        report=lambda kind, text: reports.append((kind, text)), ERRORS=flock.FlockError)
+for method in ("_end", "_show"):
+    setattr(modal, method, types.MethodType(getattr(jobs.ModalJob, method), modal))
+for tick in range(5):  # the template and the first 25 frames, then the birds' first chunk
+    check(jobs.ModalJob.modal(modal, bpy.context, SimpleNamespace(type="TIMER", value="NOTHING")) ==
+          {"RUNNING_MODAL"}, "a timer tick ended the job")
+check(sum(counts().values()) > sum(before.values()) + 100, "five ticks made no birds")
+check(jobs.ModalJob.modal(modal, bpy.context, SimpleNamespace(type="ESC", value="PRESS")) == {"CANCELLED"},
+      "Esc did not cancel")
+check(counts() == before and view_state() == view, f"Esc left {counts()} (before: {before}), {view_state()}")
+print(f"flock_from_curve: Esc after 5 timer ticks reported {reports}, nothing left")
+
+job = flock.start_flock(bpy.context, [route], settings)
+job.run()
+check(job.done and not job.cancelled and job.result[0] == 130 and job.chunks == 6,
+      f"the flock job run to the end: {job.result}, {job.chunks} chunks")
+scene.frame_set(1)
+
 # ---- Bake Chains on the chibi, imported as a user would (its clips in NLA tracks, "idle"
 # active).
 for obj in list(bpy.data.objects):
@@ -238,6 +313,42 @@ bone = bare.data.edit_bones.new("spine")
 bone.head, bone.tail = (0, 0, 0), (0, 0, 1)
 bpy.ops.object.mode_set(mode="OBJECT")
 expect_error("armature 'bare'", operator=bpy.ops.kodawari.bake_chains, frames=48)
+
+# ---- Cancelled bakes (Esc): 48 frames of the chibi's 40 chain bones run in 14 chunks
+# (export; rig; simulation and bake; import; frames 1, 11, .., 41 read; bones 1, 9, .., 33
+# keyed). Cancelled after each of them, nothing is left: not the imported armature, not
+# the half-keyed action, and the user's action, keys, NLA tracks and the chain bones'
+# rotation modes (some set to Euler here, which keying makes quaternion) are as they were.
+bpy.context.view_layer.objects.active = chibi
+bpy.ops.object.select_all(action="DESELECT")
+chibi.select_set(True)
+for name in ("tail_1", "tail_2", "ahoge_1", "hair_back_1"):
+    if name in chibi.pose.bones:
+        chibi.pose.bones[name].rotation_mode = "XYZ"
+
+
+def chibi_state():
+    data = chibi.animation_data
+    return (data.action.name if data and data.action else None,
+            [(f.data_path, f.array_index, [tuple(k.co) for k in f.keyframe_points]) for f in own.fcurves],
+            [(t.name, [(s.name, s.action.name if s.action else None) for s in t.strips]) for t in data.nla_tracks],
+            [(b.name, b.rotation_mode) for b in chibi.pose.bones])
+
+
+bake_settings = SimpleNamespace(frames=48, backend="cpu", vrm_path="")
+made = [cancel_after(lambda: chains_module.start_bake(bpy.context, chibi, bake_settings), chunks, "bake_chains",
+                     chibi_state) for chunks in (1, 2, 4, 5, 9, 10, 13, 14)]
+print(f"bake_chains cancelled after 1 to 14 chunks, holding {made} new data-blocks: all removed")
+check(made[0] == 0 and made[-1] > 0, f"the cancelled bakes held {made} data-blocks")
+# The same on an armature that had no animation data: the bake creates it, a cancel clears it.
+bare_chibi = chibi.copy()
+scene.collection.objects.link(bare_chibi)
+bare_chibi.animation_data_clear()
+bpy.ops.object.select_all(action="DESELECT")
+bpy.context.view_layer.objects.active = bare_chibi
+cancel_after(lambda: chains_module.start_bake(bpy.context, bare_chibi, bake_settings), 4, "bake_chains (no animation)",
+             lambda: bare_chibi.animation_data is None)
+bpy.data.objects.remove(bare_chibi)
 
 # Roll the chain bones a quarter turn, as a user's own rig may have them: the keys must
 # still put every bone where the simulation has it and deform the mesh as the baked file
