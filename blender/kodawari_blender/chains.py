@@ -156,7 +156,7 @@ def bake_steps(job, armature, frames, backend, vrm="", frames_per_chunk=10, bone
     yield 0.0, "exporting the armature"
     exported = os.path.join(folder, f"{armature.name}.glb")
     for obj in job.view_layer.objects:
-        if obj.select_get():
+        if obj is not None and obj.select_get():
             obj.select_set(False)
     armature.select_set(True)
     for child in armature.children:
@@ -205,6 +205,10 @@ def bake_steps(job, armature, frames, backend, vrm="", frames_per_chunk=10, bone
     source = next((o for o in imported if o.type == 'ARMATURE'), None)
     if source is None:
         raise FlockError("the baked file has no armature")
+    # Only the armature's pose is read: its meshes would be skinned again at every frame_set.
+    for obj in [o for o in imported if o is not source]:
+        bpy.data.objects.remove(obj)
+    imported = [source]
     prefix = source.data.bones[0].name.split("/", 1)[0] + "/"
 
     names = [n for chain in chains for n in chain_bones(armature, chain[1], chain[2])]

@@ -116,9 +116,10 @@ class Job:
         return f"{self.title}: {self.doing} ({100 * self.fraction:.0f}%), Esc to cancel"
 
     def _restore_view(self):
+        self.view_layer.update()  # objects removed by the job leave the layer's list here
         objects = self.view_layer.objects
         for obj in list(objects):
-            if obj.select_get():
+            if obj is not None and obj.select_get():
                 obj.select_set(False)
         for name in self.selected:
             obj = objects.get(name)

@@ -494,6 +494,7 @@ for variant in ("avatar.vrm", "avatar-vrm0.vrm"):
         copy.keyframe_points.add(len(curve.keyframe_points))
         copy.keyframe_points.foreach_set("co", co)
         copy.update()
+    bpy.data.actions.remove(source.animation_data.action)  # else Blender's exporter tries it on the avatar too
     for obj in walked:
         bpy.data.objects.remove(obj)
     avatar.animation_data_create().action = walk
