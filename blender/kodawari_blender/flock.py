@@ -9,12 +9,11 @@ from the last point back to the first and loops). Blender's +Z up becomes Kodawa
 up: (x, y, z) -> (x, z, -y), which Blender's glTF importer turns back.
 """
 import os
-import tempfile
 import time
 
 import bpy
 
-from . import build
+from . import build, jobs
 
 try:  # the zip's copy of the package, next to this file
     from . import kodawari
@@ -106,38 +105,44 @@ def scene_dict(curves, props, fps, frames):
             "duration": frames / fps, "flocks": flocks}
 
 
-def make_flock(context, description, backend, frames, curves):
-    """Simulates the scene `description` and makes its birds in a new collection; returns
-    the number of birds and the seconds the simulation took. One bird of the first flock is
-    baked and imported as the template (build.Template); the rest is made from the poses."""
+def flock_steps(job, description, backend, frames, curves, birds_per_chunk=64, frames_per_chunk=25):
+    """The flock as a Job's operation (jobs.py): simulates the scene `description` and
+    makes its birds in a new collection; returns the number of birds and the seconds the
+    simulation took. One bird of the first flock is baked and imported as the template
+    (build.Template); the rest is made from the poses. Chunks: the template, then
+    `frames_per_chunk` frames simulated, then `birds_per_chunk` armatures made, at a time."""
     import json
     import numpy
-    scene = context.scene
-    with tempfile.TemporaryDirectory(prefix="kodawari-") as folder:
-        template_description = dict(description, flocks=[dict(description["flocks"][0], count=1)])
-        template_path = os.path.join(folder, "template.json")
-        with open(template_path, "w") as file:
-            json.dump(template_description, file)
-        glb = os.path.join(folder, "template.glb")
-        with kodawari.Simulation.open(template_path, backend, frames=1) as sim:
-            sim.bake(glb)
+    scene = job.scene
+    folder = job.folder
+    yield 0.0, "making the template bird"
+    template_description = dict(description, flocks=[dict(description["flocks"][0], count=1)])
+    template_path = os.path.join(folder, "template.json")
+    with open(template_path, "w") as file:
+        json.dump(template_description, file)
+    glb = os.path.join(folder, "template.glb")
+    with kodawari.Simulation.open(template_path, backend, frames=1) as sim:
+        sim.bake(glb)
+        sim.step(1)
+        template_poses, template_spreads = sim.bird_poses("world")[0], sim.bird_tail_spreads()[0]
+    before = {o.as_pointer() for o in bpy.data.objects}
+    import_gltf(glb)
+    imported = [o for o in bpy.data.objects if o.as_pointer() not in before]
+    path = os.path.join(folder, "flock.json")
+    with open(path, "w") as file:
+        json.dump(description, file)
+    simulated = 0.0
+    with kodawari.Simulation.open(path, backend, frames=frames) as sim:
+        poses = numpy.empty((frames, sim.bird_count, 7, 7), numpy.float32)
+        spreads = numpy.empty((frames, sim.bird_count), numpy.float32)
+        for f in range(frames):
+            if f % frames_per_chunk == 0:
+                yield 0.05 + 0.25 * f / frames, f"simulating frame {f + 1} of {frames}"
+            started = time.perf_counter()
             sim.step(1)
-            template_poses, template_spreads = sim.bird_poses("world")[0], sim.bird_tail_spreads()[0]
-        before = {o.as_pointer() for o in bpy.data.objects}
-        import_gltf(glb)
-        imported = [o for o in bpy.data.objects if o.as_pointer() not in before]
-        path = os.path.join(folder, "flock.json")
-        with open(path, "w") as file:
-            json.dump(description, file)
-        started = time.perf_counter()
-        with kodawari.Simulation.open(path, backend, frames=frames) as sim:
-            poses = numpy.empty((frames, sim.bird_count, 7, 7), numpy.float32)
-            spreads = numpy.empty((frames, sim.bird_count), numpy.float32)
-            for f in range(frames):
-                sim.step(1)
-                poses[f] = sim.bird_poses("world")
-                spreads[f] = sim.bird_tail_spreads()
-        simulated = time.perf_counter() - started
+            poses[f] = sim.bird_poses("world")
+            spreads[f] = sim.bird_tail_spreads()
+            simulated += time.perf_counter() - started
     armature = next(o for o in imported if o.type == 'ARMATURE')
     mesh = next(o for o in imported if o.type == 'MESH')
     template_actions = {armature.animation_data.action} if armature.animation_data else set()
@@ -146,7 +151,11 @@ def make_flock(context, description, backend, frames, curves):
     names = [f"{flock['name']}_{i}" for flock in description["flocks"] for i in range(flock["count"])]
     collection = bpy.data.collections.new("Flock " + ", ".join(c.name for c in curves))
     scene.collection.children.link(collection)
-    build.make_birds(template, names, poses, spreads, scene.frame_start, collection)
+    for begin in range(0, len(names), birds_per_chunk):
+        yield 0.3 + 0.7 * begin / len(names), f"making bird {begin + 1} of {len(names)}"
+        end = min(len(names), begin + birds_per_chunk)
+        build.make_birds(template, names[begin:end], poses[:, begin:end], spreads[:, begin:end], scene.frame_start,
+                         collection)
     template.mesh.data.name = template.armature.data.name = f"kodawari {description['flocks'][0]['wing_type']}"
     for obj in imported:
         bpy.data.objects.remove(obj)
@@ -166,15 +175,21 @@ def import_gltf(path):
         raise FlockError(f"Blender's glTF importer did not finish ({sorted(result)})")
 
 
-def remove_new(before):
-    """Removes every data-block made since `before` (nothing half-made after an error)."""
-    for name in ("objects", "armatures", "meshes", "actions", "materials", "collections", "images"):
-        data = getattr(bpy.data, name)
-        for block in [b for b in data if b.as_pointer() not in before[name]]:
-            data.remove(block)
+def start_flock(context, curves, settings):
+    """The flock from `curves` with the operator's `settings` (its properties, or any
+    object with the same attributes) as a jobs.Job: nothing is made until it runs. Raises
+    FlockError for a curve or setting Kodawari refuses."""
+    scene = context.scene
+    fps = scene.render.fps / scene.render.fps_base
+    frames = settings.frames or (scene.frame_end - scene.frame_start + 1)
+    description = scene_dict(curves, settings, fps, frames)
+    job = jobs.Job(context, "Flock from Curve",
+                   lambda job: flock_steps(job, description, settings.backend, frames, curves))
+    job.frames = frames
+    return job
 
 
-class KODAWARI_OT_flock_from_curve(bpy.types.Operator):
+class KODAWARI_OT_flock_from_curve(jobs.ModalJob, bpy.types.Operator):
     """Make a flock of Kodawari birds fly along each selected Bezier curve: one skinned
     armature with one action per bird, in a new collection"""
     bl_idname = "kodawari.flock_from_curve"
@@ -199,38 +214,25 @@ class KODAWARI_OT_flock_from_curve(bpy.types.Operator):
                                 default=1, min=0)
     backend: bpy.props.EnumProperty(name="Backend", items=BACKEND_ITEMS, default="cpu")
 
-    def execute(self, context):
-        start = time.perf_counter()
+    ERRORS = (kodawari.Error, FlockError, RuntimeError, OSError)
+
+    def start(self, context):
+        """The job of this call (jobs.Job), or None when the selection or the settings are
+        refused (reported)."""
         curves = [o for o in context.selected_objects if o.type == 'CURVE']
         if not curves:
             self.report({'ERROR'}, "Flock from Curve: select one or more Bezier curve objects (the routes)")
-            return {'CANCELLED'}
-        scene = context.scene
-        fps = scene.render.fps / scene.render.fps_base
-        frames = self.frames or (scene.frame_end - scene.frame_start + 1)
+            return None
         try:
-            description = scene_dict(curves, self, fps, frames)
+            return start_flock(context, curves, self)
         except FlockError as error:
             self.report({'ERROR'}, f"Flock from Curve: {error}")
-            return {'CANCELLED'}
-        before = {name: {b.as_pointer() for b in getattr(bpy.data, name)}
-                  for name in ("objects", "armatures", "meshes", "actions", "materials", "collections", "images")}
-        selected = list(context.selected_objects)
-        active = context.view_layer.objects.active
-        current = scene.frame_current
-        try:
-            birds, simulated = make_flock(context, description, self.backend, frames, curves)
-        except (kodawari.Error, FlockError, RuntimeError, OSError) as error:
-            remove_new(before)
-            scene.frame_set(current)
-            for obj in selected:
-                obj.select_set(True)
-            context.view_layer.objects.active = active
-            self.report({'ERROR'}, f"Flock from Curve: {error}")
-            return {'CANCELLED'}
-        scene.frame_set(current)
-        self.report({'INFO'}, f"Flock from Curve: {birds} birds, {frames} frames in "
-                              f"{time.perf_counter() - start:.1f} s (simulated in {simulated:.2f} s)")
+            return None
+
+    def finish(self, context, job):
+        birds, simulated = job.result
+        self.report({'INFO'}, f"Flock from Curve: {birds} birds, {job.frames} frames in "
+                              f"{time.perf_counter() - job.started:.1f} s (simulated in {simulated:.2f} s)")
         return {'FINISHED'}
 
 

@@ -15,7 +15,11 @@ its own, valid for as long as you keep it); see docs/python.md.
 Errors raise kodawari.Error, whose message is the library's (it names the function, the
 argument or the file, and what was expected).
 """
+import json
 import os
+import shutil
+import subprocess
+import tempfile
 import threading
 
 import numpy
@@ -23,7 +27,7 @@ import numpy
 from . import _config
 from . import _native
 
-__all__ = ["Simulation", "Error", "rig", "BACKENDS", "PARTS", "__version__", "library_version", "library_path"]
+__all__ = ["Simulation", "Error", "rig", "bench", "command_path", "BACKENDS", "PARTS", "__version__", "library_version", "library_path"]
 
 #: The package's version: the project's (CMake's project version, as the library's).
 __version__ = _config.VERSION
@@ -74,6 +78,67 @@ def rig(character_path, scene_path, clip="", duration=10.0):
             name, root, joints = line.split("\t")
             out.append((name, root, int(joints)))
     return out
+
+
+def command_path():
+    """The `kodawari` command that bench() runs: the one built or installed with this
+    package (build/<preset>/host/kodawari beside build/<preset>/python, or
+    <prefix>/bin/kodawari beside <prefix>/lib/python3/dist-packages), else the first on
+    PATH. Raises Error when there is none (the Blender add-on's zip carries no command)."""
+    here = os.path.dirname(os.path.abspath(__file__))
+    for candidate in (os.path.join(here, "..", "..", "host", "kodawari"),
+                      os.path.join(here, "..", "..", "..", "..", "bin", "kodawari")):
+        if os.path.isfile(candidate) and os.access(candidate, os.X_OK):
+            return os.path.realpath(candidate)
+    found = shutil.which("kodawari")
+    if found is None:
+        raise Error("KODAWARI_UNAVAILABLE", "kodawari.bench: no `kodawari` command beside the package "
+                    f"({here}) or on PATH; build the project or install it")
+    return found
+
+
+def bench(kind, *, command=None, **options):
+    """Runs `kodawari bench KIND ... --json` and returns what it writes, as a dict
+    (docs/performance.md: "benchmark", the settings, and "results", one dict per backend
+    with per_second, min, max, ms_per_frame, gpu_ms_per_frame, vs_cpu_reference, vs_cpu,
+    isa, threads).
+
+    kind: "birds", "chains", "crowd" or "view". options: the command's options with _ for
+    - (count=1000, frames=30, backends=["cpu", "vulkan"], repetitions=3, readback=True,
+    threads=2, isa="avx2", device=..., validation=True; `kodawari bench KIND --help` lists
+    them); True gives a flag, a list is joined with commas, None and False are left out.
+    command: the `kodawari` executable (default: command_path()).
+
+    The benchmark runs in the command, a process of its own, exactly as from the shell: the
+    timings are the command's, not this Python's. Blocks until it ends (seconds to minutes).
+    Raises Error with the command's message when it refuses an option or fails, and when
+    the command's version is not this package's.
+    """
+    command = command or command_path()
+    arguments = [command, "bench", str(kind)]
+    for name, value in options.items():
+        if value is None or value is False:
+            continue
+        flag = "--" + name.replace("_", "-")
+        if value is True:
+            arguments.append(flag)
+        elif isinstance(value, (list, tuple)):
+            arguments += [flag, ",".join(str(v) for v in value)]
+        else:
+            arguments += [flag, str(value)]
+    version = subprocess.run([command, "--version"], capture_output=True, text=True)
+    if version.returncode != 0 or version.stdout.split()[-1:] != [__version__]:
+        raise Error("KODAWARI_UNAVAILABLE", f"kodawari.bench: {command} is {version.stdout.strip() or 'not kodawari'}, "
+                    f"this package is {__version__}")
+    with tempfile.TemporaryDirectory(prefix="kodawari-bench-") as folder:
+        path = os.path.join(folder, "bench.json")
+        run = subprocess.run(arguments + ["--json", path], capture_output=True, text=True)
+        if run.returncode != 0:
+            message = run.stderr.strip() or run.stdout.strip()
+            raise Error("KODAWARI_INVALID_ARGUMENT" if run.returncode == 2 else "KODAWARI_INTERNAL",
+                        f"{' '.join(arguments[1:])}: {message}")
+        with open(path) as file:
+            return json.load(file)
 
 
 class Simulation:

@@ -13,8 +13,12 @@ kodawari_blender.zip alone into an empty user scripts folder and run headless:
 import json
 import math
 import os
+import shutil
 import sys
 import tempfile
+import time
+import types
+from types import SimpleNamespace
 
 import bpy
 from mathutils import Vector
@@ -30,7 +34,41 @@ def check(condition, what):
 
 
 def counts():
-    return {name: len(getattr(bpy.data, name)) for name in ("objects", "armatures", "meshes", "actions", "collections")}
+    # Every kind of data-block the operators may make (kodawari_blender/jobs.py's KINDS).
+    return {name: len(getattr(bpy.data, name)) for name in ("objects", "armatures", "meshes", "actions", "materials",
+                                                            "collections", "images", "textures", "node_groups",
+                                                            "cameras", "lights", "curves")}
+
+
+def view_state():
+    """What a cancelled job must put back besides the data-blocks: the selection, the
+    active object and the current frame."""
+    layer = bpy.context.view_layer
+    return (sorted(o.name for o in layer.objects if o.select_get()),
+            layer.objects.active.name if layer.objects.active else None, bpy.context.scene.frame_current)
+
+
+def cancel_after(start, chunks, what, user_state=lambda: None):
+    """Starts a job (start() -> kodawari_blender.jobs.Job, what the operators' execute and
+    invoke start), runs `chunks` chunks of it, then cancels it through Job.cancel(), the
+    path Esc takes (jobs.ModalJob.modal), and checks that the file is as before: the same
+    data-blocks of every kind, the selection, the active object, the frame, user_state()
+    (the user's own data) and no temporary folder left. Returns the data-blocks the job
+    had made when cancelled (so that a test can see it cancelled real work)."""
+    before, view, user = counts(), view_state(), user_state()
+    job = start()
+    for k in range(chunks):
+        check(job.step(), f"{what}: the job ended after {k} of {chunks} chunks")
+    made = sum(counts().values()) - sum(before.values())
+    folder = job.folder
+    job.cancel()
+    check(job.cancelled and not job.step(), f"{what}: the job goes on after cancel()")
+    check(counts() == before, f"{what}, cancelled after {chunks} chunks: {before} -> {counts()}")
+    check(view_state() == view, f"{what}, cancelled after {chunks} chunks: selection, active, frame {view} -> "
+                                f"{view_state()}")
+    check(user_state() == user, f"{what}, cancelled after {chunks} chunks: the user's data changed")
+    check(not os.path.exists(folder), f"{what}: the temporary folder {folder} is left")
+    return made
 
 
 def expect_error(needle, operator=None, **properties):
@@ -164,7 +202,6 @@ check(worst < 0.05, f"a body is {worst} m off the curve")
 # description), keys at frame f + 1 against the importer's at f (it keys from frame 0).
 # Within 1e-4 (m and rotation-matrix entries): float32 keys of ~50 m coordinates are
 # 4e-6 apart, and the two compose the same transforms in other orders.
-from types import SimpleNamespace  # noqa: E402
 settings = SimpleNamespace(count=N, wing_type="GULL", spread=0.0, speed=0.0, trail=0.0, takeoff=False, landing=False,
                            seed=1)
 description = flock.scene_dict([route], settings, 24.0, 48)
@@ -216,6 +253,46 @@ route.select_set(True)
 expect_error("take-off and landing need an open curve", takeoff=True)
 spline.use_cyclic_u = False
 
+# ---- Cancelled flocks (Esc): 130 birds x 48 frames run in 6 chunks (the template; frames 1
+# and 26 simulated on; birds 1, 65 and 129 made on); cancelled after each, nothing is left,
+# though by then the template, the collection and up to 128 armatures with actions exist.
+from kodawari_blender import chains as chains_module, jobs  # noqa: E402
+settings = SimpleNamespace(count=130, wing_type="PIGEON", spread=2.0, speed=0.0, trail=0.0, takeoff=False,
+                           landing=False, seed=1, frames=48, backend="cpu")
+bpy.ops.object.select_all(action="DESELECT")
+route.select_set(True)
+bpy.context.view_layer.objects.active = route
+scene.frame_set(7)
+made = [cancel_after(lambda: flock.start_flock(bpy.context, [route], settings), chunks, "flock_from_curve")
+        for chunks in range(1, 7)]
+print(f"flock_from_curve cancelled after 1 to 6 chunks, holding {made} new data-blocks: all removed")
+check(made[0] == 0 and made[-1] > 2 * 128, f"the cancelled flocks held {made} data-blocks")
+
+# The same through the modal operator's own handler (jobs.ModalJob.modal, what invoke()
+# installs; a background Blender has no window to run it in): two timer ticks of one chunk
+# each, then Esc. An operator instance cannot be made outside Blender's operator calls, so
+# a stand-in carries its attributes.
+reports = []
+before, view = counts(), view_state()
+modal = SimpleNamespace(_job=flock.start_flock(bpy.context, [route], settings), _timer=None, TICK=0.0,
+                        report=lambda kind, text: reports.append((kind, text)), ERRORS=flock.FlockError)
+for method in ("_end", "_show"):
+    setattr(modal, method, types.MethodType(getattr(jobs.ModalJob, method), modal))
+for tick in range(5):  # the template and the first 25 frames, then the birds' first chunk
+    check(jobs.ModalJob.modal(modal, bpy.context, SimpleNamespace(type="TIMER", value="NOTHING")) ==
+          {"RUNNING_MODAL"}, "a timer tick ended the job")
+check(sum(counts().values()) > sum(before.values()) + 100, "five ticks made no birds")
+check(jobs.ModalJob.modal(modal, bpy.context, SimpleNamespace(type="ESC", value="PRESS")) == {"CANCELLED"},
+      "Esc did not cancel")
+check(counts() == before and view_state() == view, f"Esc left {counts()} (before: {before}), {view_state()}")
+print(f"flock_from_curve: Esc after 5 timer ticks reported {reports}, nothing left")
+
+job = flock.start_flock(bpy.context, [route], settings)
+job.run()
+check(job.done and not job.cancelled and job.result[0] == 130 and job.chunks == 6,
+      f"the flock job run to the end: {job.result}, {job.chunks} chunks")
+scene.frame_set(1)
+
 # ---- Bake Chains on the chibi, imported as a user would (its clips in NLA tracks, "idle"
 # active).
 for obj in list(bpy.data.objects):
@@ -238,6 +315,42 @@ bone = bare.data.edit_bones.new("spine")
 bone.head, bone.tail = (0, 0, 0), (0, 0, 1)
 bpy.ops.object.mode_set(mode="OBJECT")
 expect_error("armature 'bare'", operator=bpy.ops.kodawari.bake_chains, frames=48)
+
+# ---- Cancelled bakes (Esc): 48 frames of the chibi's 40 chain bones run in 14 chunks
+# (export; rig; simulation and bake; import; frames 1, 11, .., 41 read; bones 1, 9, .., 33
+# keyed). Cancelled after each of them, nothing is left: not the imported armature, not
+# the half-keyed action, and the user's action, keys, NLA tracks and the chain bones'
+# rotation modes (some set to Euler here, which keying makes quaternion) are as they were.
+bpy.context.view_layer.objects.active = chibi
+bpy.ops.object.select_all(action="DESELECT")
+chibi.select_set(True)
+for name in ("tail_1", "tail_2", "ahoge_1", "hair_back_1"):
+    if name in chibi.pose.bones:
+        chibi.pose.bones[name].rotation_mode = "XYZ"
+
+
+def chibi_state():
+    data = chibi.animation_data
+    return (data.action.name if data and data.action else None,
+            [(f.data_path, f.array_index, [tuple(k.co) for k in f.keyframe_points]) for f in own.fcurves],
+            [(t.name, [(s.name, s.action.name if s.action else None) for s in t.strips]) for t in data.nla_tracks],
+            [(b.name, b.rotation_mode) for b in chibi.pose.bones])
+
+
+bake_settings = SimpleNamespace(frames=48, backend="cpu", vrm_path="")
+made = [cancel_after(lambda: chains_module.start_bake(bpy.context, chibi, bake_settings), chunks, "bake_chains",
+                     chibi_state) for chunks in (1, 2, 4, 5, 9, 10, 13, 14)]
+print(f"bake_chains cancelled after 1 to 14 chunks, holding {made} new data-blocks: all removed")
+check(made[0] == 0 and made[-1] > 0, f"the cancelled bakes held {made} data-blocks")
+# The same on an armature that had no animation data: the bake creates it, a cancel clears it.
+bare_chibi = chibi.copy()
+scene.collection.objects.link(bare_chibi)
+bare_chibi.animation_data_clear()
+bpy.ops.object.select_all(action="DESELECT")
+bpy.context.view_layer.objects.active = bare_chibi
+cancel_after(lambda: chains_module.start_bake(bpy.context, bare_chibi, bake_settings), 4, "bake_chains (no animation)",
+             lambda: bare_chibi.animation_data is None)
+bpy.data.objects.remove(bare_chibi)
 
 # Roll the chain bones a quarter turn, as a user's own rig may have them: the keys must
 # still put every bone where the simulation has it and deform the mesh as the baked file
@@ -324,6 +437,116 @@ a = (chibi.matrix_world @ chibi.pose.bones["tail_7"].head).copy()
 scene.frame_set(24)
 b = chibi.matrix_world @ chibi.pose.bones["tail_7"].head
 check((a - b).length > 0.01, f"the tail's tip moved {(a - b).length} m")
+
+# ---- Bake Chains from a VRM file. Blender 3.4 has no VRM importer, but a .vrm is a glTF
+# binary with extensions: its copy as .glb imports (its spring bones, which the importer
+# drops, come from the .vrm through vrm_path). The avatar's own animation here is a walk:
+# Kodawari plays scenes/motions/walk-turn.vrma on the .vrm (the reference) and bakes it, and
+# the humanoid bones' keys of that bake become the user's action. Then bake_chains with
+# vrm_path must put every chain bone's head on the reference's joint: the same spring data
+# and colliders (each turned from the VRM joint's frame into the exported bone's, since
+# Blender's round trip reorients the bones: without the turn the heads are 3.7 cm off) and
+# the same motion. Within 1e-4 m: float32 through Blender's exporter, the rigged export and
+# the importer on a 1.6 m avatar (measured 1.4e-6 m).
+characters = os.path.dirname(chibi_path)
+motions = os.path.join(os.path.dirname(characters), "motions")
+workdir = tempfile.mkdtemp()
+for variant in ("avatar.vrm", "avatar-vrm0.vrm"):
+    for obj in list(bpy.data.objects):
+        bpy.data.objects.remove(obj)
+    vrm = os.path.join(characters, variant)
+    frames = 36
+    folder = os.path.join(workdir, variant)
+    os.mkdir(folder)
+    if True:
+        reference = os.path.join(folder, "reference.json")
+        vrm_chains = flock.kodawari.rig(vrm, reference, duration=frames / 24)
+        with open(reference) as file:
+            description = json.load(file)
+        character = description["characters"][0]
+        character.pop("animate", None)
+        character["gltf"] = vrm
+        character["motions"] = [{"name": "walk", "file": os.path.join(motions, "walk-turn.vrma")}]
+        character["animation"] = "walk"
+        description["fps"] = 24.0
+        with open(reference, "w") as file:
+            json.dump(description, file)
+        # One frame more than baked: a clip loops at its end (docs/scene-format.md,
+        # `animation`), so the user's action must reach past the last frame baked.
+        with flock.kodawari.Simulation.open(reference, "cpu", frames=frames + 1) as sim:
+            sim.bake(os.path.join(folder, "walk.glb"))
+        shutil.copy(vrm, os.path.join(folder, "avatar.glb"))
+        flock.import_gltf(os.path.join(folder, "avatar.glb"))
+        avatar = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+        before = {o.as_pointer() for o in bpy.data.objects}
+        flock.import_gltf(os.path.join(folder, "walk.glb"))
+    walked = [o for o in bpy.data.objects if o.as_pointer() not in before]
+    source = next(o for o in walked if o.type == "ARMATURE")
+    prefix = source.data.bones[0].name.split("/", 1)[0] + "/"
+    walk = bpy.data.actions.new("walk")
+    for curve in source.animation_data.action.fcurves:
+        bone = curve.data_path.split('"')[1][len(prefix):]
+        if bone.startswith("J_Sec_"):
+            continue  # the user keys the body; the springs are the bake's
+        copy = walk.fcurves.new(curve.data_path.replace(prefix, ""), index=curve.array_index, action_group=bone)
+        co = [0.0] * (2 * len(curve.keyframe_points))
+        curve.keyframe_points.foreach_get("co", co)
+        copy.keyframe_points.add(len(curve.keyframe_points))
+        copy.keyframe_points.foreach_set("co", co)
+        copy.update()
+    bpy.data.actions.remove(source.animation_data.action)  # else Blender's exporter tries it on the avatar too
+    for obj in walked:
+        bpy.data.objects.remove(obj)
+    avatar.animation_data_create().action = walk
+    walk_keys = [(f.data_path, f.array_index, [tuple(k.co) for k in f.keyframe_points]) for f in walk.fcurves]
+    bpy.ops.object.select_all(action="DESELECT")
+    avatar.select_set(True)
+    bpy.context.view_layer.objects.active = avatar
+    expect_error("not found", operator=bpy.ops.kodawari.bake_chains, frames=frames,
+                 vrm_path=os.path.join(characters, "missing.vrm"))
+    started = time.perf_counter()
+    result = bpy.ops.kodawari.bake_chains(frames=frames, vrm_path=vrm)
+    seconds = time.perf_counter() - started
+    check(result == {"FINISHED"}, f"{variant}: bake_chains returned {result}")
+    data = avatar.animation_data
+    check(data.action == walk and [(f.data_path, f.array_index, [tuple(k.co) for k in f.keyframe_points])
+                                   for f in walk.fcurves] == walk_keys, f"{variant}: the user's walk changed")
+    check(len(data.nla_tracks) == 1 and data.nla_tracks[0].name == "Kodawari chains",
+          f"{variant}: NLA tracks {[t.name for t in data.nla_tracks]}")
+    baked = data.nla_tracks[-1].strips[0].action
+    keyed = {f.data_path.split('"')[1] for f in baked.fcurves}
+    joints = sum(count for _, _, count in vrm_chains)
+    check(len(vrm_chains) == 32 and len(keyed) == joints, f"{variant}: {len(keyed)} bones keyed of {len(vrm_chains)} "
+                                                           f"chains, {joints} joints")
+    worst = 0.0
+    with flock.kodawari.Simulation.open(reference, "cpu", frames=frames) as sim:
+        ranges = sim.chain_ranges()
+        for frame in range(frames):
+            sim.step(1)
+            if frame not in (0, frames // 2, frames - 1):
+                continue
+            positions, _ = sim.chain_joints()
+            scene.frame_set(frame)
+            for (name, root, count), (first, n) in zip(vrm_chains, ranges):
+                bone = avatar.data.bones[root]
+                for j in range(n):
+                    x, y, z = positions[first + j]
+                    head = avatar.matrix_world @ avatar.pose.bones[bone.name].head
+                    worst = max(worst, (head - Vector((x, -z, y))).length)
+                    bone = bone.children[0] if bone.children else bone
+    print(f"bake_chains from {variant}: {len(vrm_chains)} spring chains, {len(keyed)} bones keyed in {seconds:.1f} s; "
+          f"heads within {worst:.2e} m of Kodawari's own simulation of the .vrm")
+    check(worst < 1e-4, f"{variant}: chain bone heads {worst} m off the reference")
+shutil.rmtree(workdir)
+
+# The chibi's armature with the avatar's VRM: refused, naming a bone it does not have.
+for obj in list(bpy.data.objects):
+    bpy.data.objects.remove(obj)
+flock.import_gltf(chibi_path)
+chibi = next(o for o in bpy.data.objects if o.type == "ARMATURE")
+bpy.context.view_layer.objects.active = chibi
+expect_error("which armature 'chibi", operator=bpy.ops.kodawari.bake_chains, frames=12,
+             vrm_path=os.path.join(characters, "avatar.vrm"))
 
 print(f"test_addon: {len(failures)} failures")
 sys.exit(1 if failures else 0)

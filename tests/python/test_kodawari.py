@@ -11,7 +11,8 @@ figures checked against each other and against the scene:
 - arrays are copies; a bad path raises kodawari.Error naming the file; a bake writes a
   glTF binary file; help() shows the methods' documentation.
 
-- a bake writes the bytes `kodawari run` writes for the same scene, backend and frames.
+- a bake writes the bytes `kodawari run` writes for the same scene, backend and frames;
+- bench() returns what `kodawari bench --json` writes, with the command's keys and settings.
 
 Usage: /usr/bin/python3 test_kodawari.py BUILD_PYTHON_DIR SOURCE_DIR TEMP_DIR VERSION KODAWARI_CLI
 Exit status 0 when every check passed.
@@ -212,10 +213,48 @@ try:
 except kodawari.Error as error:
     check(missing in str(error), f"rig: {error}")
 
+# ---- kodawari.bench: what `kodawari bench birds ... --json` writes, run by the command built
+# with the package (the same executable ctest names), as a dict with the command's own
+# keys. 1 001 birds x 3 frames on the two cpu kinds: milliseconds. The same options given
+# to the command directly write a file of the same keys and settings (the rates differ:
+# they are timings).
+check(os.path.realpath(kodawari.command_path()) == os.path.realpath(cli),
+      f"bench runs {kodawari.command_path()}, not the build's {cli}")
+result = kodawari.bench("birds", count=1001, frames=3, backends=["cpu-reference", "cpu"], repetitions=3,
+                        readback=True, threads=2)
+subprocess.run([cli, "bench", "birds", "--count", "1001", "--frames", "3", "--backends", "cpu-reference,cpu",
+                "--repetitions", "3", "--readback", "--threads", "2", "--json", os.path.join(temp, "bench.json")],
+               check=True, capture_output=True)
+import json  # noqa: E402
+with open(os.path.join(temp, "bench.json")) as file:
+    direct = json.load(file)
+settings = ("benchmark", "count", "frames", "readback", "threads", "repetitions")
+check(isinstance(result, dict) and [result.get(k) for k in settings] == ["birds", 1001, 3, True, 2, 3] and
+      [direct.get(k) for k in settings] == [result.get(k) for k in settings],
+      f"bench settings {[result.get(k) for k in settings]}, the command's {[direct.get(k) for k in settings]}")
+rows = result.get("results", [])
+check([r.get("backend") for r in rows] == ["cpu-reference", "cpu"] and
+      all(sorted(r) == sorted(d) for r, d in zip(rows, direct["results"])) and
+      all(r["per_second"] > 0 and r["min"] <= r["per_second"] <= r["max"] for r in rows),
+      f"bench results {rows}")
+print(f"bench: {[(r['backend'], r['per_second']) for r in rows]} bird-frames/s")
+try:
+    kodawari.bench("birds", count=0)
+    check(False, "bench with count=0 raised nothing")
+except kodawari.Error as error:
+    check("--count" in str(error) and error.status == "KODAWARI_INVALID_ARGUMENT", f"bench count=0: {error}")
+try:
+    kodawari.bench("birds", command=sys.executable)
+    check(False, "bench with another program as the command raised nothing")
+except kodawari.Error as error:
+    check("this package is" in str(error), f"bench with python as the command: {error}")
+
 # ---- help() is readable: the docstrings are there.
 text = pydoc.render_doc(kodawari.Simulation, renderer=pydoc.plaintext)
 for needle in ("bird_poses", "a copy", "chain_joints", "bake", "Simulation.open", "Error naming the file"):
     check(needle in text, f"help(kodawari.Simulation) lacks {needle!r}")
+text = pydoc.render_doc(kodawari.bench, renderer=pydoc.plaintext)
+check("--json" in text and "per_second" in text, "help(kodawari.bench) lacks its documentation")
 
 print(f"test_kodawari: {len(failures)} failures")
 sys.exit(1 if failures else 0)
