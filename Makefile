@@ -50,7 +50,7 @@ test: build
 asan: setup
 	@cmake --preset asan >/dev/null
 	@cmake --build build/asan -j $(JOBS)
-	@$(ASAN_ENV) ctest --preset asan -j $(JOBS) --timeout 900 -E '^(package|export_identity|viewer_soak|readme_tour|gpu_run_quick)$$|/Soak\.|AvatarCrowdOf200'
+	@$(ASAN_ENV) ctest --preset asan -j $(JOBS) --timeout 900 -E '^(package|export_identity|viewer_soak|readme_tour|gpu_run_quick|starlings)$$|^blender|/Soak\.|AvatarCrowdOf200|Flocking\.FliesLikeStarlings'
 
 fuzz: setup
 	@cmake --preset asan >/dev/null

@@ -6,6 +6,7 @@
 #include <vector>
 
 #include "commands.hpp"
+#include "kodawari/domains/flocking.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/compare.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -203,6 +204,14 @@ int cmd_validate(const ValidateOptions& o) {
     if (!reference) return report(reference.error());
     if (auto r = tested.value()->load(world); !r) return report(r.error());
     if (auto r = reference.value()->load(world); !r) return report(r.error());
+    // Birds of flocking flocks fly what the flocking domain gives them: both backends fly
+    // the reference's (cpu-reference) motion, so that the comparison is of the bird
+    // backends alone; the flocking step itself is compared below.
+    auto flocking = make_flocking_domain(scene, world);
+    if (!flocking) return report(flocking.error());
+    if (flocking.value()) {
+        if (auto r = flocking.value()->open({.kind = BackendKind::CpuReference}, {}); !r) return report(r.error());
+    }
 
     const std::size_t count = world.birds.size();
     const std::uint32_t chunk = static_cast<std::uint32_t>(std::clamp<std::size_t>((1u << 19) / count, 1, 120));
@@ -213,6 +222,12 @@ int cmd_validate(const ValidateOptions& o) {
         const std::uint32_t n = std::min(chunk, world.frames - done);
         for (auto* v : {&ref_poses, &test_poses}) v->resize(std::size_t{n} * count);
         for (auto* v : {&ref_diag, &test_diag}) v->resize(std::size_t{n} * count);
+        if (flocking.value()) {
+            if (auto r = flocking.value()->step(done, n, {}); !r) return report(r.error());
+            const auto motion = flocking_motion(*flocking.value());
+            if (auto r = reference.value()->drive(motion); !r) return report(r.error());
+            if (auto r = tested.value()->drive(motion); !r) return report(r.error());
+        }
         if (auto r = reference.value()->simulate(n, {ref_poses, ref_diag}); !r) return report(r.error());
         if (auto r = tested.value()->simulate(n, {test_poses, test_diag}); !r) return report(r.error());
         comparison.add(done, n, ref_poses, test_poses, ref_diag, test_diag);

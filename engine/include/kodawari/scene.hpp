@@ -77,16 +77,16 @@ struct PredatorSpec {
 struct FlockingSpec {
     std::uint32_t neighbours = 7;   ///< k nearest (topological), in [1, 16]
     bool metric = false;            ///< true: every neighbour within search_radius (16 nearest at most)
-    float search_radius = 5.0f;     ///< m: neighbours are looked for this far
+    float search_radius = 3.0f;     ///< m: neighbours are looked for this far
     float blind_angle_deg = 90.0f;  ///< behind the bird, unseen
-    float separation_distance = 0.8f;  ///< m: full separation within, Gaussian beyond
+    float separation_distance = 0.6f;  ///< m: full separation within, Gaussian beyond
     float separation = 6.0f;
     /// The separation distance along the flight direction is (1 + this) x as long as to
     /// the side: a bird keeps a longer gap to the bird ahead or behind.
     float separation_front = 1.0f;
-    float alignment = 3.0f;
+    float alignment = 2.0f;
     float cohesion = 2.0f;
-    float route = 2.0f;           ///< drawn to the route's leader plus the bird's formation offset
+    float route = 10.0f;          ///< drawn to the route's leader plus the bird's formation offset
     float route_radius = 20.0f;   ///< m: within it the draw falls in proportion to the distance
     float ground_clearance = 3.0f;  ///< m
     float ground = 10.0f;
