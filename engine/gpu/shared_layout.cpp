@@ -117,7 +117,7 @@ static_assert(sizeof(FlockParamsGpu) == 80 && offsetof(FlockParamsGpu, radii) ==
 static_assert(sizeof(FlockBirdGpu) == 64 && offsetof(FlockBirdGpu, offset) == 16 && offsetof(FlockBirdGpu, speed) == 32 &&
               offsetof(FlockBirdGpu, turn) == 48);
 static_assert(sizeof(FlockStateGpu) == 32 && offsetof(FlockStateGpu, velocity) == 16);
-static_assert(sizeof(FlockAgentGpu) == 32 && offsetof(FlockAgentGpu, kind_weight) == 16);
+static_assert(sizeof(FlockAgentGpu) == 48 && offsetof(FlockAgentGpu, kind_weight) == 16 && offsetof(FlockAgentGpu, velocity) == 32);
 static_assert(sizeof(FlockPush) == 64 && offsetof(FlockPush, slots) == 16 && offsetof(FlockPush, bases) == 32 &&
               offsetof(FlockPush, step) == 48);
 static_assert(KW_FLOCK_WORKGROUP_SIZE % 32 == 0 && KW_FLOCK_SCAN_SIZE % 32 == 0, "multiples of common subgroup sizes");

@@ -124,6 +124,9 @@ std::vector<RouteWarning> check_routes(const Scene& scene, const birds::BirdWorl
     const double bank_deg = double{scene.flight.max_bank} * kRadToDeg;
     for (std::size_t f = 0; f < scene.flocks.size(); ++f) {
         const FlockSpec& flock = scene.flocks[f];
+        // A flocking flock's birds do not fly its route: it only draws them
+        // (docs/flocking.md), and their own flight keeps within their wing's limits.
+        if (flock.flocking) continue;
         const FlockLimits wing = flock_limits(flock);
         const std::string who = wing.name;
         const std::string prefix = scene.path + ": $.flocks[" + std::to_string(f) + "] \"" + flock.name + "\": ";

@@ -132,6 +132,7 @@ void FlockWorld::frame_inputs(std::uint32_t frame, std::span<gpu::FlockParamsGpu
             const gpu::BirdParams& b = predator_birds[a];
             const birds::RouteSample s = birds::sample_route(routes, b.ids.x, t + b.offset.w, b.motion.x);
             agent.position = {s.position.x + b.offset.x, s.position.y + b.offset.y, s.position.z + b.offset.z, p.radius};
+            agent.velocity = {s.velocity.x, s.velocity.y, s.velocity.z, 0.0f};
             if (since >= 0.0f) agent.kind_weight.y = p.weight;
         } else if (since >= 0.0f) {
             if (p.every > 0.0f) since -= p.every * std::floor(since / p.every);
@@ -140,7 +141,9 @@ void FlockWorld::frame_inputs(std::uint32_t frame, std::span<gpu::FlockParamsGpu
             const float along = p.speed * since;
             if (along <= length) {
                 const glm::vec3 at = p.from + (along / length) * path;
+                const glm::vec3 velocity = (p.speed / length) * path;
                 agent.position = {at.x, at.y, at.z, p.radius};
+                agent.velocity = {velocity.x, velocity.y, velocity.z, 0.0f};
                 agent.kind_weight.y = p.weight;
             }
         }
