@@ -2,7 +2,7 @@
 // The flocking domain's neighbour grid (issue 32): a uniform grid of the search radius's
 // cells hashed into a power-of-two bucket table, filled by a counting sort in four passes
 // (FlockPush.counts.w): clear, count, scan, scatter. The order of birds within a bucket
-// is the order atomics happen to give; nothing downstream depends on it (shared/flock_body.h).
+// is the order atomics happen to give; nothing downstream depends on it (lib/flock_body.glsl).
 #extension GL_GOOGLE_include_directive : require
 
 #include "shared/flocking.h"

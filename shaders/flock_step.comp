@@ -1,6 +1,6 @@
 #version 450
 // The flocking step (issue 32): one invocation per bird finds its neighbours in the grid
-// flock_grid.comp built and applies the rules (shared/flock_body.h, the same source the
+// flock_grid.comp built and applies the rules (lib/flock_body.glsl, the same source the
 // CPU backends compile), writing the other state slot and, after a frame's last substep,
 // the frame's motion for the bird domain.
 #extension GL_GOOGLE_include_directive : require
@@ -29,7 +29,7 @@ uint kw_bucket_count(uint b) { return buckets[2u * b + 1u]; }
 uint kw_sorted(uint s) { return sorted_birds[s]; }
 FlockAgentGpu kw_agent(uint a) { return agents_in[push.bases.y + a]; }
 
-#include "shared/flock_body.h"
+#include "lib/flock_body.glsl"
 
 void main() {
     const uint i = gl_GlobalInvocationID.x;

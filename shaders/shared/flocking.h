@@ -66,6 +66,7 @@ struct FlockStateGpu {
 struct FlockAgentGpu {
     vec4 position;     // xyz (m), w: radius of influence (m)
     vec4 kind_weight;  // x: KW_FLOCK_AGENT_*, y: weight (m/s^2), z: obstacle margin (m), w: unused
+    vec4 velocity;     // xyz: the agent's velocity (m/s): a predator is fled across its path, w: unused
 };
 
 struct FlockPush {

@@ -167,6 +167,18 @@ TEST(Flocking, FliesLikeStarlings) {
         ASSERT_TRUE(step_birds(*sim, until - done, frames).ok());
         done = until;
         const FlockMeasures m = measure(std::span(frames).last(kBirds));
+        // No Body turns more than 6 degrees between frames (the route birds' bound,
+        // tests/birds/test_bank_filter.cpp), wingbeat included.
+        double worst_turn = 0.0;
+        for (std::size_t f = 1; f < frames.size() / kBirds; ++f) {
+            for (std::size_t b = 0; b < kBirds; ++b) {
+                const gpu::vec4 &p = frames[(f - 1) * kBirds + b].rotation[KW_PART_BODY], &q = frames[f * kBirds + b].rotation[KW_PART_BODY];
+                const double dot = std::min(1.0, std::abs(double{p.x * q.x + p.y * q.y + p.z * q.z + p.w * q.w}));
+                worst_turn = std::max(worst_turn, 2.0 * std::acos(dot) * 180.0 / 3.141592653589793);
+            }
+        }
+        std::printf("largest Body turn between frames: %.2f deg\n", worst_turn);
+        EXPECT_LE(worst_turn, 6.0);
         std::printf("t = %.0f s: nearest %.3f m, median %.2f m, polarization %.3f, cos^2 %.3f\n", until / 60.0,
                     static_cast<double>(m.min_nn), static_cast<double>(m.median_nn), static_cast<double>(m.polarization),
                     static_cast<double>(m.cos2));

@@ -1,5 +1,5 @@
 // The flocking step on the CPU: the grid (flock_grid.comp's passes as one counting sort in
-// bird order) and shaders/shared/flock_body.h compiled as C++ (flock_kernel.hpp), bird
+// bird order) and shaders/lib/flock_body.glsl compiled as C++ (flock_kernel.hpp), bird
 // after bird on one thread (cpu-reference) or over the cpu backend's threads (cpu: the
 // same body per bird, so the same bits).
 #include "domains/flocking/flock_kernel.hpp"

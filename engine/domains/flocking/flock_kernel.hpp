@@ -1,5 +1,5 @@
 #pragma once
-// The flocking step written once (shaders/shared/flock_body.h) compiled as C++: GLM gives
+// The flocking step written once (shaders/lib/flock_body.glsl) compiled as C++: GLM gives
 // GLSL's vec3, ivec3 and functions, and a Kernel holds the buffers the GLSL reads as
 // spans, so the body's accessors read the same data. The grid passes (flock_grid.comp's
 // clear, count, scan, scatter) are build_grid() here: a counting sort in bird order.
@@ -41,7 +41,7 @@ struct Kernel {
     uint kw_bucket_count(uint b) const { return buckets[2u * b + 1u]; }
     uint kw_sorted(uint s) const { return sorted[s]; }
     FlockAgentGpu kw_agent(uint a) const { return agents_in[a]; }
-#include <kodawari/shared/flock_body.h>
+#include "lib/flock_body.glsl"
 #undef KW_XYZ
 };
 

@@ -1,6 +1,6 @@
 // The flocking step on a Vulkan device: per substep, the grid in four dispatches of
 // shaders/flock_grid.comp (clear, count, scan, scatter) and the step of every bird
-// (shaders/flock_step.comp, shared/flock_body.h), recorded for many frames into one
+// (shaders/flock_step.comp, lib/flock_body.glsl), recorded for many frames into one
 // submission; each frame's motion read back for the bird domain.
 #include <algorithm>
 #include <array>

@@ -146,8 +146,19 @@ FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_ra
             const float depth = reach + margin - dist;
             if (depth > 0.0f) a += (agent.kind_weight.y * min(depth / margin, 1.0f) / dist) * d;
         } else if (dist < reach) {
-            const float s = agent.kind_weight.y * (1.0f - dist / reach) / dist;
-            a += (agent.kind_weight.x == KW_FLOCK_AGENT_REPELLER ? s : -s) * d;
+            const float s = agent.kind_weight.y * (1.0f - dist / reach);
+            if (agent.kind_weight.x == KW_FLOCK_AGENT_REPELLER) {
+                // Fled across its path (the flock splits round a passing predator rather
+                // than being driven ahead of it): away from the line it flies along.
+                const vec3 u = KW_XYZ(agent.velocity);
+                const float ul = length(u);
+                vec3 away = d;
+                if (ul > 1e-6f) away = d - (dot(d, u) / (ul * ul)) * u;
+                const float al = length(away);
+                a += (al > 1e-3f ? s / al : s / dist) * (al > 1e-3f ? away : d);
+            } else {
+                a -= (s / dist) * d;
+            }
         }
     }
 
