@@ -89,6 +89,10 @@ def scene_dict(curves, props, fps, frames):
                 if props.landing:
                     modes[-1] = "landing"
             route["modes"] = modes
+            flocking = getattr(props, "flocking", False)
+            if flocking and (props.takeoff or props.landing):
+                raise FlockError("flocking birds fly by their neighbours and are only drawn to the curve: "
+                                 "take-off and landing need birds that follow it (turn Flocking or them off)")
             flock = {
                 "name": f"{obj.name}.{index}" if len(obj.data.splines) > 1 else obj.name,
                 "wing_type": props.wing_type.lower(),
@@ -100,6 +104,9 @@ def scene_dict(curves, props, fps, frames):
             }
             if props.speed > 0:
                 flock["speed"] = props.speed
+            if flocking:
+                # The flocking rules' defaults (docs/flocking.md); the curve draws the flock.
+                flock["flocking"] = {}
             flocks.append(flock)
     return {"format": "kodawari-scene", "version": 1, "name": "blender", "fps": fps,
             "duration": frames / fps, "flocks": flocks}
@@ -208,6 +215,9 @@ class KODAWARI_OT_flock_from_curve(jobs.ModalJob, bpy.types.Operator):
     takeoff: bpy.props.BoolProperty(name="Take Off", description="Start from rest at the curve's start",
                                     default=False)
     landing: bpy.props.BoolProperty(name="Land", description="Come to rest at the curve's end", default=False)
+    flocking: bpy.props.BoolProperty(name="Flocking", description="Fly by the neighbours (separation, alignment, "
+                                     "cohesion over the 7 nearest), drawn to the curve, instead of following it "
+                                     "(docs/flocking.md)", default=False)
     frames: bpy.props.IntProperty(name="Frames", description="Frames to simulate from the scene's start frame; "
                                   "0: the scene's frame range", default=0, min=0, max=1000000)
     seed: bpy.props.IntProperty(name="Seed", description="Seed of the birds' offsets, speeds and phases",
