@@ -118,18 +118,29 @@ FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_ra
         if (ws > 1e-6f) heading += w / ws;
         centre += d;
     }
+    // Panic: within a predator's reach a bird heeds the flock's centre and its route the
+    // less the nearer the predator is (1 - distance / reach), so that the flock can part
+    // round it and close again behind it (ours, docs/flocking.md).
+    float panic = 0.0f;
+    for (uint g = 0u; g < agents; ++g) {
+        const FlockAgentGpu agent = kw_agent(g);
+        if (agent.kind_weight.x != KW_FLOCK_AGENT_REPELLER || agent.kind_weight.y <= 0.0f) continue;
+        const float reach = agent.position.w;
+        panic = max(panic, 1.0f - min(length(p - KW_XYZ(agent.position)) / reach, 1.0f));
+    }
+    const float calm = 1.0f - panic;
     vec3 a = vec3(0.0f);
     if (found > 0u) {
         const float inv_n = 1.0f / float(found);
         a += (-flock.weights.x * inv_n) * separation;
         const float hl = length(heading);
         if (hl > 1e-6f) a += flock.weights.y * (heading / hl - forward);
-        a += (flock.weights.z * inv_n / radius) * centre;
+        a += (calm * flock.weights.z * inv_n / radius) * centre;
     }
     // The route: drawn to the leader's place plus the bird's formation offset, in
     // proportion within the route radius, at full weight beyond it.
     const vec3 to_target = KW_XYZ(flock.target) + KW_XYZ(bird.offset) - p;
-    a += (flock.weights.w / max(length(to_target), flock.radii.w)) * to_target;
+    a += (calm * flock.weights.w / max(length(to_target), flock.radii.w)) * to_target;
     // Cruise speed: thrust towards v0 with time constant tau.
     a += ((bird.speed.x - speed) / flock.ground.z) * forward;
     // The ground: pushed up within the clearance, in proportion to the depth into it.

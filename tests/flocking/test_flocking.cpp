@@ -191,7 +191,7 @@ TEST(Flocking, FliesLikeStarlings) {
 }
 
 // A predator through the middle of the flock at 4 s: birds keep out of its way (measured:
-// the nearest bird 3.99 m from it, 2.5 to 5.5 s). Without it (the control) birds are
+// the nearest bird 3.75 m from it, 2.5 to 5.5 s). Without it (the control) birds are
 // where it passes (0.33 m).
 TEST(Flocking, BirdsFleeAPredator) {
     constexpr std::uint32_t kBirds = 601, kFrames = 420;
