@@ -25,12 +25,8 @@ namespace kodawari {
 
 namespace {
 
-template <typename T>
-std::span<const std::byte> bytes_of(const std::vector<T>& v) {
-    return std::as_bytes(std::span<const T>(v));
-}
-
-std::uint32_t bits(float value) { return std::bit_cast<std::uint32_t>(value); }
+using render::bytes_of;
+using render::float_bits;
 
 /// The birds of a BirdWorld.
 class BirdLayer final : public render::Layer {
@@ -201,7 +197,7 @@ void BirdLayer::record(const vk::raii::CommandBuffer& cmd, const render::LayerFr
     for (std::uint32_t t = 0; t < birds::kWingTypeCount; ++t) {
         const TypeRange& r = ranges_[t];
         if (r.birds == 0 || r.vertices == 0) continue;
-        push.draw = {t, first_pose_, bits(min_wingspan_px_), push.draw.w};
+        push.draw = {t, first_pose_, float_bits(min_wingspan_px_), push.draw.w};
         cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment,
                                            0, push);
         cmd.draw(r.vertices, r.birds, r.first_vertex, r.first_bird);

@@ -30,12 +30,8 @@ namespace kodawari {
 
 namespace {
 
-template <typename T>
-std::span<const std::byte> bytes_of(const std::vector<T>& v) {
-    return std::as_bytes(std::span<const T>(v));
-}
-
-std::uint32_t bits(float value) { return std::bit_cast<std::uint32_t>(value); }
+using render::bytes_of;
+using render::float_bits;
 
 /// The chains of a RodWorld.
 class ChainLayer final : public render::Layer {
@@ -196,7 +192,7 @@ void ChainLayer::record(const vk::raii::CommandBuffer& cmd, const render::LayerF
     cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline_->handle());
     cmd.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, pipeline_->layout(), 0, set_->handle(), {});
     const auto stages = vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment;
-    push.draw = {KW_CHAINS_DRAW_SEGMENTS, bits(rows_scale * style_.min_width_px), bits(rows_scale * style_.min_dot_px), push.draw.w};
+    push.draw = {KW_CHAINS_DRAW_SEGMENTS, float_bits(rows_scale * style_.min_width_px), float_bits(rows_scale * style_.min_dot_px), push.draw.w};
     cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), stages, 0, push);
     cmd.draw(KW_CHAIN_SEGMENT_VERTICES, world_->joint_count, 0, 0);
     if (!frame.joints) return;

@@ -15,10 +15,7 @@ namespace kodawari {
 
 namespace {
 
-template <typename T>
-std::span<const std::byte> bytes_of(const std::vector<T>& v) {
-    return std::as_bytes(std::span<const T>(v));
-}
+using render::bytes_of;
 
 gpu::vec4 v4(const glm::vec4& v) { return {v.x, v.y, v.z, v.w}; }
 

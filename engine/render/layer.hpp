@@ -7,12 +7,14 @@
 // kodawari/render/draw.hpp). A domain makes its layer at the first call that needs it
 // (layer_of()) with its own pipelines (layer_pipeline()) and shaders.
 
+#include <bit>
 #include <cstdint>
 #include <functional>
 #include <memory>
 #include <optional>
 #include <span>
 #include <string_view>
+#include <vector>
 
 #include <kodawari/shared/render.h>
 
@@ -70,6 +72,14 @@ template <typename L>
     if (!found) return found.error();
     return static_cast<L*>(found.value());
 }
+
+/// A vector's bytes, as uploads take them.
+template <typename T>
+[[nodiscard]] std::span<const std::byte> bytes_of(const std::vector<T>& v) {
+    return std::as_bytes(std::span<const T>(v));
+}
+/// A float's bits, as RenderPush::draw carries layer parameters.
+[[nodiscard]] inline std::uint32_t float_bits(float value) { return std::bit_cast<std::uint32_t>(value); }
 
 /// A storage buffer of at least 16 bytes (an empty world still binds one) filled with `bytes`.
 [[nodiscard]] Result<compute::Buffer> storage_with(gpu::VulkanContext& ctx, std::span<const std::byte> bytes);
