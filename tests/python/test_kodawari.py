@@ -220,6 +220,13 @@ except kodawari.Error as error:
 # they are timings).
 check(os.path.realpath(kodawari.command_path()) == os.path.realpath(cli),
       f"bench runs {kodawari.command_path()}, not the build's {cli}")
+# Under the asan lane this Python runs with the shared ASan runtime preloaded (it loads
+# the sanitized library); the sanitized command links its own runtime statically and
+# refuses a second one, so the preload, which is this process's and not the command's,
+# is not handed to the commands run below.
+if "asan" in os.environ.get("LD_PRELOAD", ""):
+    print("the ASan runtime preloaded for Python is not passed to the kodawari command")
+    del os.environ["LD_PRELOAD"]
 result = kodawari.bench("birds", count=1001, frames=3, backends=["cpu-reference", "cpu"], repetitions=3,
                         readback=True, threads=2)
 subprocess.run([cli, "bench", "birds", "--count", "1001", "--frames", "3", "--backends", "cpu-reference,cpu",
