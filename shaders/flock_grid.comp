@@ -22,11 +22,7 @@ layout(push_constant) uniform Push { FlockPush push; };
 
 shared uint partial[KW_FLOCK_SCAN_SIZE];
 
-uint bucket_of(vec3 p) {
-    const ivec3 c = ivec3(floor(p * push.step.y));
-    const uint h = (uint(c.x) * 73856093u) ^ (uint(c.y) * 19349663u) ^ (uint(c.z) * 83492791u);
-    return h & push.counts.y;
-}
+#include "lib/flock_hash.glsl"
 
 void main() {
     const uint i = gl_GlobalInvocationID.x;
@@ -67,7 +63,7 @@ void main() {
     }
     if (i >= count) return;
     if (pass == KW_FLOCK_PASS_COUNT) {
-        const uint b = bucket_of(states[push.slots.x * count + i].position.xyz);
+        const uint b = flock_bucket(states[push.slots.x * count + i].position.xyz, push.step.y, push.counts.y);
         cells[i] = b;
         atomicAdd(buckets[2u * b + 1u], 1u);
     } else {

@@ -29,6 +29,7 @@ uint kw_bucket_count(uint b) { return buckets[2u * b + 1u]; }
 uint kw_sorted(uint s) { return sorted_birds[s]; }
 FlockAgentGpu kw_agent(uint a) { return agents_in[push.bases.y + a]; }
 
+#include "lib/flock_hash.glsl"
 #include "lib/flock_body.glsl"
 
 void main() {

@@ -211,6 +211,11 @@ Result<void> read_generated_route(const JsonReader& r, const JsonNode& node, Gen
     return {};
 }
 
+// A reader of a number in (0, max], for optional_member.
+auto positive_up_to(const JsonReader& r, double max) {
+    return [&r, max](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, max)); };
+}
+
 Result<void> read_formation(const JsonReader& r, const JsonNode& node, FormationSpec& formation) {
     KW_TRY(r.object(node, {"spread", "route_variants", "jitter", "trail"}));
     KW_TRY(optional_member(r, node, "spread", formation.spread,
@@ -275,9 +280,7 @@ Result<void> read_flocking(const JsonReader& r, const JsonNode& node, FlockingSp
         f.neighbours = static_cast<std::uint32_t>(value);
     }
     KW_TRY(optional_member(r, node, "metric", f.metric, [&](const JsonNode& n) { return r.boolean(n); }));
-    const auto length = [&](double max) {
-        return [&r, max](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, max)); };
-    };
+    const auto length = [&r](double max) { return positive_up_to(r, max); };
     const auto weight = [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1000.0)); };
     KW_TRY(optional_member(r, node, "search_radius", f.search_radius, length(100.0)));
     KW_TRY(optional_member(r, node, "blind_angle_deg", f.blind_angle_deg,
@@ -356,9 +359,7 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
         return r.integer(n, 0, std::numeric_limits<std::uint64_t>::max());
     }));
     // Upper bounds keep base * (1 + jitter) finite and the numbers physical.
-    const auto positive = [&](double max) {
-        return [&r, max](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, max)); };
-    };
+    const auto positive = [&r](double max) { return positive_up_to(r, max); };
     const auto jitter = [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 0.9)); };
     KW_TRY(optional_member(r, node, "speed", flock.speed, positive(1000.0)));
     KW_TRY(optional_member(r, node, "speed_jitter", flock.speed_jitter, jitter));

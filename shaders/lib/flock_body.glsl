@@ -7,6 +7,7 @@
 //   FlockStateGpu kw_state(uint i)       (this frame's, the slot read)
 //   uint kw_bucket_start(uint b)  uint kw_bucket_count(uint b)  uint kw_sorted(uint s)
 //   FlockAgentGpu kw_agent(uint a)
+// and lib/flock_hash.glsl's functions.
 // Float literals carry an f (GLSL accepts it; C++ needs it: no double arithmetic here),
 // conversions are explicit, and nothing depends on the order candidates are visited in:
 // the neighbours are the k nearest by (distance, index), a total order, and the rules
@@ -20,15 +21,6 @@
 // attraction, here a point moving along the scene's route), a cruise-speed control with
 // time constant tau (their eq. for the thrust), ground clearance, agents (predators,
 // attractors, sphere obstacles), and the wing's limits (docs/flocking.md).
-
-// The bucket of a position: its cell of the search radius's size, hashed (Teschner et
-// al. 2003's primes) into a power-of-two table. Unsigned arithmetic wraps the same way
-// in GLSL and C++.
-uint flock_bucket(vec3 p, float inv_radius, uint mask) {
-    const ivec3 c = ivec3(floor(p * inv_radius));
-    const uint h = (uint(c.x) * 73856093u) ^ (uint(c.y) * 19349663u) ^ (uint(c.z) * 83492791u);
-    return h & mask;
-}
 
 struct FlockStep {
     vec3 position;
@@ -58,12 +50,11 @@ FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_ra
     uint found = 0u;
     uint visited[27];
     uint visited_count = 0u;
-    const ivec3 home = ivec3(floor(p * inv_radius));
+    const ivec3 home = flock_cell(p, inv_radius);
     for (int dz = -1; dz <= 1; ++dz) {
         for (int dy = -1; dy <= 1; ++dy) {
             for (int dx = -1; dx <= 1; ++dx) {
-                const ivec3 c = home + ivec3(dx, dy, dz);
-                const uint b = ((uint(c.x) * 73856093u) ^ (uint(c.y) * 19349663u) ^ (uint(c.z) * 83492791u)) & mask;
+                const uint b = flock_cell_bucket(home + ivec3(dx, dy, dz), mask);
                 // Two of the 27 cells may hash to one bucket: visit it once.
                 bool seen = false;
                 for (uint s = 0u; s < visited_count; ++s) seen = seen || visited[s] == b;
@@ -118,15 +109,38 @@ FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_ra
         if (ws > 1e-6f) heading += w / ws;
         centre += d;
     }
-    // Panic: within a predator's reach a bird heeds the flock's centre and its route the
-    // less the nearer the predator is (1 - distance / reach), so that the flock can part
-    // round it and close again behind it (ours, docs/flocking.md).
+    // Agents, in one pass: their pushes, and panic: within a predator's reach a bird heeds
+    // the flock's centre and its route the less the nearer the predator is
+    // (1 - distance / reach), so that the flock can part round it and close again behind
+    // it (ours, docs/flocking.md).
+    vec3 fled = vec3(0.0f);
     float panic = 0.0f;
     for (uint g = 0u; g < agents; ++g) {
         const FlockAgentGpu agent = kw_agent(g);
-        if (agent.kind_weight.x != KW_FLOCK_AGENT_REPELLER || agent.kind_weight.y <= 0.0f) continue;
+        const vec3 d = p - KW_XYZ(agent.position);
+        const float dist = length(d);
         const float reach = agent.position.w;
-        panic = max(panic, 1.0f - min(length(p - KW_XYZ(agent.position)) / reach, 1.0f));
+        if (dist < 1e-6f) continue;
+        if (agent.kind_weight.x == KW_FLOCK_AGENT_SPHERE) {
+            const float margin = max(agent.kind_weight.z, 1e-3f);
+            const float depth = reach + margin - dist;
+            if (depth > 0.0f) fled += (agent.kind_weight.y * min(depth / margin, 1.0f) / dist) * d;
+        } else if (dist < reach) {
+            const float s = agent.kind_weight.y * (1.0f - dist / reach);
+            if (agent.kind_weight.x == KW_FLOCK_AGENT_REPELLER) {
+                if (agent.kind_weight.y > 0.0f) panic = max(panic, 1.0f - dist / reach);
+                // Fled across its path (the flock splits round a passing predator rather
+                // than being driven ahead of it): away from the line it flies along.
+                const vec3 u = KW_XYZ(agent.velocity);
+                const float ul = length(u);
+                vec3 away = d;
+                if (ul > 1e-6f) away = d - (dot(d, u) / (ul * ul)) * u;
+                const float al = length(away);
+                fled += (al > 1e-3f ? s / al : s / dist) * (al > 1e-3f ? away : d);
+            } else {
+                fled -= (s / dist) * d;
+            }
+        }
     }
     const float calm = 1.0f - panic;
     vec3 a = vec3(0.0f);
@@ -145,33 +159,7 @@ FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_ra
     a += ((bird.speed.x - speed) / flock.ground.z) * forward;
     // The ground: pushed up within the clearance, in proportion to the depth into it.
     if (p.y < flock.ground.x) a.y += flock.ground.y * (flock.ground.x - p.y) / flock.ground.x;
-    // Agents.
-    for (uint g = 0u; g < agents; ++g) {
-        const FlockAgentGpu agent = kw_agent(g);
-        const vec3 d = p - KW_XYZ(agent.position);
-        const float dist = length(d);
-        const float reach = agent.position.w;
-        if (dist < 1e-6f) continue;
-        if (agent.kind_weight.x == KW_FLOCK_AGENT_SPHERE) {
-            const float margin = max(agent.kind_weight.z, 1e-3f);
-            const float depth = reach + margin - dist;
-            if (depth > 0.0f) a += (agent.kind_weight.y * min(depth / margin, 1.0f) / dist) * d;
-        } else if (dist < reach) {
-            const float s = agent.kind_weight.y * (1.0f - dist / reach);
-            if (agent.kind_weight.x == KW_FLOCK_AGENT_REPELLER) {
-                // Fled across its path (the flock splits round a passing predator rather
-                // than being driven ahead of it): away from the line it flies along.
-                const vec3 u = KW_XYZ(agent.velocity);
-                const float ul = length(u);
-                vec3 away = d;
-                if (ul > 1e-6f) away = d - (dot(d, u) / (ul * ul)) * u;
-                const float al = length(away);
-                a += (al > 1e-3f ? s / al : s / dist) * (al > 1e-3f ? away : d);
-            } else {
-                a -= (s / dist) * d;
-            }
-        }
-    }
+    a += fled;
 
     // What the wing allows: the tangential part within the largest speed change, the
     // lateral part within a coordinated turn at the largest bank (g tan(bank)).

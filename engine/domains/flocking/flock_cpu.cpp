@@ -20,10 +20,8 @@ void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, st
     cells.resize(n);
     buckets.assign(2 * (std::size_t{mask} + 1), 0u);
     sorted.resize(n);
-    glsl::Kernel hash{};
     for (std::size_t i = 0; i < n; ++i) {
-        const glm::vec3 p = glsl::kw_xyz(states[i].position);
-        cells[i] = hash.flock_bucket(p, inv_radius, mask);
+        cells[i] = glsl::flock_bucket(glsl::kw_xyz(states[i].position), inv_radius, mask);
         buckets[2 * cells[i] + 1] += 1;
     }
     std::uint32_t start = 0;

@@ -24,6 +24,11 @@ using gpu::FlockStateGpu;
 
 inline vec3 kw_xyz(const gpu::vec4& v) { return vec3(v.x, v.y, v.z); }
 
+// The grid's hash (lib/flock_hash.glsl), inline: one definition for every translation unit.
+#define KW_FLOCK_FN inline
+#include "lib/flock_hash.glsl"
+#undef KW_FLOCK_FN
+
 /// One frame's buffers, as flock_step.comp binds them.
 struct Kernel {
     std::span<const FlockParamsGpu> flocks;
