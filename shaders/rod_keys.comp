@@ -63,12 +63,19 @@ void main() {
             const RodTransformGpu key = keys[ids.z + s];
             rotation[s] = key.rotation;
             if ((t.counts.z & (1u << s)) != 0u) {
-                velocity[s] = (key.position.xyz - state.position[s].xyz) / dt;
-                acceleration[s] = state.position[s].w != 0.0 ? (velocity[s] - state.velocity[s].xyz) / dt : vec3(0.0);
+                const vec3 jump = key.position.xyz - state.position[s].xyz;
+                const float reach = uintBitsToFloat(t.counts.w);  // the teleport distance
                 spin[s] = angular_velocity(state.rotation[s], key.rotation, dt);
-                state.position[s] = vec4(key.position.xyz, 1.0);
                 state.rotation[s] = key.rotation;
-                state.velocity[s] = vec4(velocity[s], 0.0);
+                if (dot(jump, jump) > reach * reach) {  // a teleport (keyed.cpp): motion as it was
+                    velocity[s] = state.velocity[s].xyz;
+                    state.position[s].xyz = key.position.xyz;
+                } else {
+                    velocity[s] = jump / dt;
+                    acceleration[s] = state.position[s].w != 0.0 ? (velocity[s] - state.velocity[s].xyz) / dt : vec3(0.0);
+                    state.position[s] = vec4(key.position.xyz, 1.0);
+                    state.velocity[s] = vec4(velocity[s], 0.0);
+                }
             }
         }
     }

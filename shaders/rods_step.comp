@@ -350,9 +350,33 @@ void main() {
 
     // ---- the chain carried by its center frame's motion (solver.cpp follow_center) ----
     const uint center = chain.joints.z;
-    if ((FEATURES & KW_RODS_FEATURE_CENTERS) != 0u && center != KW_RODS_NO_CENTER) {
-        const RodTransformGpu was = center_states[center];
-        const RodTransformGpu now = centers[center];
+    // ---- and by a teleport, the root's jump (solver.cpp follow_teleport) ----
+    // Three carries at most, by the same code: the center's motion; a root that jumped
+    // farther than the teleport distance from where that left it, carried to the new root
+    // and then back by one frame of joint 0's (the root's) own motion (frame_before).
+    bool teleported = false;
+    [[unroll]] for (uint pass = 0; pass < 3; ++pass) {
+        RodTransformGpu was = from, now = to;
+        if (pass == 0) {
+            if ((FEATURES & KW_RODS_FEATURE_CENTERS) == 0u || center == KW_RODS_NO_CENTER) continue;
+            was = center_states[center];
+            now = centers[center];
+            center_states[center] = now;
+        } else if (pass == 1) {
+            const vec3 jump = to.position.xyz - from.position.xyz;
+            teleported = dot(jump, jump) > t.physics.z * t.physics.z;
+            if (!teleported) continue;
+        } else {
+            if (!teleported) continue;
+            const float dt = push.camera_forward.w;
+            const vec3 turn = omega[0] * dt;
+            const float angle = length(turn);
+            const vec3 axis = angle > 0.0 ? turn / angle : vec3(0.0);
+            const vec4 back = vec4(-sin(0.5 * angle) * axis, cos(0.5 * angle));
+            was = to;
+            now.position = vec4(to.position.xyz - v[0] * dt, 0.0);
+            now.rotation = qnormalize(qmul(back, to.rotation));
+        }
         const vec4 r = qnormalize(qmul(now.rotation, qconj(was.rotation)));
         [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
             if (i < n) {
@@ -364,7 +388,20 @@ void main() {
         }
         from.position = vec4(now.position.xyz + qrot(r, from.position.xyz - was.position.xyz), 0.0);
         from.rotation = qnormalize(qmul(r, from.rotation));
-        center_states[center] = now;
+    }
+
+    // ---- the first step starts moving with the root (solver.cpp start_moving) ----
+    if (push.flags.x != 0u && t.physics.w != 0.0) {
+        const float dt = push.camera_forward.w;
+        const vec4 turn = positive_w(qnormalize(qmul(to.rotation, qconj(from.rotation))));
+        const vec3 travel = to.position.xyz - from.position.xyz;
+        const vec3 spin = (2.0 / dt) * turn.xyz;
+        [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
+            if (i < n) {
+                v[i] += (travel + (qrot(turn, x[i]) - x[i])) / dt;
+                omega[i] += spin;
+            }
+        }
     }
 
     // ---- A.5: momentum suppression (solver.cpp suppress_momentum) ----

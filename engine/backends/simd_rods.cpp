@@ -147,6 +147,7 @@ public:
             if (world.chains[c].center != rods::kNoCenter) center_chains_.push_back(c);
         }
         centers_ = initial.centers;
+        started_ = false;
         split_threads();
 
         // Every chain at rest on its initial rest shape, by engine/rods itself (as the other
@@ -154,10 +155,13 @@ public:
         parallel_for(batches_.size(), threads_, [&](std::size_t begin, std::size_t end) {
             for (std::size_t b = begin; b < end; ++b) {
                 const simd::RodBatch& batch = batches_[b];
+                rods::ChainState first;
                 for (std::size_t l = 0; l < kBatchLanes; ++l) {
                     const std::uint32_t c = batch.chain[l];
                     const rods::RestShape rest = rods::rest_shape(world, c, initial);
-                    const rods::ChainState s = rods::initial_state(world.templ(world.chains[c]).chain, initial.roots[c], rest.shape);
+                    // Padding lanes copy the first chain's state, settled once.
+                    const rods::ChainState s = l < batch.count ? rods::initial_chain_state(world, c, initial) : first;
+                    if (l == 0) first = s;
                     put_state(batch, l, s);
                     float* chain = chain_rows(batch);
                     const float view[3] = {rest.view_direction.x, rest.view_direction.y, rest.view_direction.z};
@@ -198,6 +202,34 @@ public:
             }
         });
         centers_ = frame.centers;
+        // Teleports (rods::follow_teleport, which rods::step calls first), by engine/rods
+        // itself as the centers above: a chain whose root jumped farther than its
+        // template's teleport distance is carried lane by lane (rare: a cut, a respawn),
+        // after its center's carry as in the reference; the scan reads one root a chain.
+        // The world's first step then starts its chains moving with their roots
+        // (rods::start_moving, as rods::step on a chain's first step).
+        const bool first = !started_;
+        started_ = true;
+        parallel_for(batches_.size(), threads_, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t b = begin; b < end; ++b) {
+                const simd::RodBatch& batch = batches_[b];
+                const float* chain = chain_rows(batch);
+                for (std::size_t l = 0; l < batch.count; ++l) {  // padding lanes' results are unused
+                    const std::uint32_t c = batch.chain[l];
+                    const rods::SolverParams& params = world_->templ(world_->chains[c]).params;
+                    const glm::vec3 last(chain[(simd::kRootP + 0) * kBatchLanes + l], chain[(simd::kRootP + 1) * kBatchLanes + l],
+                                         chain[(simd::kRootP + 2) * kBatchLanes + l]);
+                    const glm::vec3 jump = frame.roots[c].position - last;
+                    const bool teleport = glm::dot(jump, jump) > params.teleport_distance * params.teleport_distance;
+                    const bool start = first && params.settle_start;
+                    if (!teleport && !start) continue;
+                    rods::ChainState s = state(c);
+                    if (teleport) rods::follow_teleport(params, frame.roots[c], frame.dt, s);
+                    if (start) rods::start_moving(frame.roots[c], frame.dt, s);
+                    put_state(batch, l, s);
+                }
+            }
+        });
         const simd::RodStepArgs args{templates_.data(), batches_.data(), storage_.get(), &frame, world_->chains.data(),
                                      keyed_.data()};
         const std::size_t parts = split_.size() - 1;
@@ -299,6 +331,7 @@ private:
         s.root.position = {at(simd::kRootP), at(simd::kRootP + 1), at(simd::kRootP + 2)};
         s.root.rotation = glm::quat(at(simd::kRootQ + 3), at(simd::kRootQ), at(simd::kRootQ + 1), at(simd::kRootQ + 2));
         if (const std::uint32_t center = world_->chains[c].center; center != rods::kNoCenter) s.center = centers_[center];
+        s.started = started_;
         return s;
     }
 
@@ -338,6 +371,7 @@ private:
     std::vector<rods::KeyState> key_states_;                      // per chain (keyed ones only used)
     std::vector<float> keyed_;                                    // per chain, kMaxKeyedExamples raw weights
     std::vector<std::uint32_t> center_chains_;                    // the chains with a center frame
+    bool started_ = false;  // whether a step has run since load()
     std::vector<rods::Transform> centers_;                        // the last frame's center frames (RodFrame::centers)
     hwy::AlignedFreeUniquePtr<float[]> storage_;
 };

@@ -6,6 +6,7 @@
 // when dt changes, the templates' step sizes and smoothing factors; state stays on the
 // device until the caller reads it.
 #include <algorithm>
+#include <bit>
 #include <array>
 #include <cmath>
 #include <cstring>
@@ -98,7 +99,8 @@ gpu::RodKeyTemplateGpu key_template(const rods::ChainTemplate& t) {
     for (std::size_t s = 0; s < t.key_sources.size(); ++s) {
         if (t.key_sources[s] == rods::KeySourceKind::Motion) motion |= 1u << s;
     }
-    g.counts = {static_cast<std::uint32_t>(t.key_sources.size()), static_cast<std::uint32_t>(t.keyed.size()), motion, 0u};
+    g.counts = {static_cast<std::uint32_t>(t.key_sources.size()), static_cast<std::uint32_t>(t.keyed.size()), motion,
+                std::bit_cast<std::uint32_t>(t.params.teleport_distance)};
     for (std::size_t j = 0; j < t.keyed.size(); ++j) {
         const rods::KeyedExample& e = t.keyed[j];
         const bool pose = e.kind == rods::KeyKind::Pose;
@@ -171,6 +173,7 @@ public:
         }
         world_ = &world;
         dt_ = -1.0f;
+        started_ = false;
         ring_.reset();  // sized for the world
 
         // Constants: templates, their joints and shapes.
@@ -191,7 +194,7 @@ public:
             g.counts = {n, static_cast<std::uint32_t>(t.views.size()), static_cast<std::uint32_t>(tjoints.size()),
                         static_cast<std::uint32_t>(shapes.size())};
             g.solver.z = static_cast<std::uint32_t>(t.keyed.size());
-            g.physics = {t.chain.thickness, 0.0f, 0.0f, 0.0f};
+            g.physics = {t.chain.thickness, 0.0f, t.params.teleport_distance, t.params.settle_start ? 1.0f : 0.0f};
             g.accel = to_gpu(t.params.gravity + t.params.wind);
             g.first_dir = to_gpu(t.basis.first_direction);
             for (std::size_t k = 0; k < t.views.size(); ++k) g.views[k] = to_gpu(t.views[k].direction, t.views[k].influence);
@@ -264,7 +267,7 @@ public:
             for (std::size_t c = begin; c < end; ++c) {
                 const rods::ChainInstance& ch = world.chains[c];
                 const rods::RestShape r = rods::rest_shape(world, static_cast<std::uint32_t>(c), initial);
-                const rods::ChainState s = rods::initial_state(world.templ(ch).chain, initial.roots[c], r.shape);
+                const rods::ChainState s = rods::initial_chain_state(world, static_cast<std::uint32_t>(c), initial);
                 for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
                     const std::uint32_t j = ch.joint_begin + i;
                     motion[j] = {to_gpu(s.x[i]), to_gpu(s.v[i])};
@@ -468,6 +471,7 @@ public:
             const rods::ChainInstance& ch = world_->chains[c];
             rods::ChainState& s = out[c];
             s.root = transform_of(chain_states_[c].root);
+            s.started = started_;
             if (ch.center != rods::kNoCenter) s.center = transform_of(center_states_[ch.center]);
             const rods::ChainShape rest = rest_of(static_cast<std::uint32_t>(c));
             for (std::uint32_t i = 0; i < world_->templ(ch).chain.joint_count; ++i) {
@@ -508,7 +512,10 @@ private:
         if (input_writer_) input_writer_->record(recording, *this);
 
         const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
-        gpu::RodPush push{{}, {}, to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f), to_gpu(frame.camera.forward)};
+        // The world's first step starts its chains moving with their roots (rods::start_moving).
+        gpu::RodPush push{{}, {}, to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f), to_gpu(frame.camera.forward, frame.dt),
+                          {started_ ? 0u : 1u, 0u, 0u, 0u}};
+        started_ = true;
         auto dispatch = [&](const compute::Kernel* kernel, std::uint32_t first, std::uint32_t chains) {
             push.counts.x = chains;
             push.counts.y = first;
@@ -615,6 +622,7 @@ private:
     bool grouped_ = false;
     std::uint32_t features_ = KW_RODS_FEATURE_ALL;  // KW_RODS_SPEC_FEATURES of the loaded world
     float dt_ = -1.0f;
+    bool started_ = false;  // whether a step has been recorded since load()
     double gpu_ms_ = -1.0;
     // Per-frame staging on the host, kept to avoid reallocating every frame.
     std::vector<gpu::RodTransformGpu> reference_, roots_, keys_, centers_;

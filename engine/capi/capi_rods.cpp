@@ -90,6 +90,8 @@ rods::SolverParams read_solver(const kodawari_solver_params& s, const std::strin
     require_point(s.gravity, 1000.0, what + ".gravity");
     require_point(s.wind, 1000.0, what + ".wind");
     require_range(s.momentum_suppression, 0.0, 1.0, what + ".momentum_suppression");
+    if (s.settle_start > 1) invalid(what + ".settle_start", std::to_string(s.settle_start) + "; expected 0 or 1");
+    require_range(s.teleport_distance, 0.0, 1e6, what + ".teleport_distance", true);
     rods::SolverParams p;
     p.max_substep = s.max_substep;
     p.iterations = s.iterations;
@@ -99,6 +101,8 @@ rods::SolverParams read_solver(const kodawari_solver_params& s, const std::strin
     p.gravity = vec3(s.gravity);
     p.wind = vec3(s.wind);
     p.momentum_suppression = s.momentum_suppression;
+    p.settle_start = s.settle_start != 0;
+    p.teleport_distance = s.teleport_distance;
     return p;
 }
 
@@ -293,6 +297,8 @@ KODAWARI_C_API kodawari_status kodawari_solver_params_default(kodawari_solver_pa
             s.wind[i] = p.wind[i];
         }
         s.momentum_suppression = p.momentum_suppression;
+        s.settle_start = p.settle_start ? 1u : 0u;
+        s.teleport_distance = p.teleport_distance;
         *out = s;
     });
 }

@@ -33,7 +33,7 @@ KeyState initial_key_state(std::span<const Transform> keys) {
 }
 
 KeyedWeights keyed_weights(std::span<const KeyedExample> examples, std::span<const KeySourceKind> sources,
-                           std::span<const Transform> keys, float dt, KeyState& state) {
+                           std::span<const Transform> keys, float dt, KeyState& state, float teleport_distance) {
     assert(examples.size() <= kMaxKeyedExamples && sources.size() <= kMaxKeySources && keys.size() == sources.size());
     assert(dt > 0.0f);
     // K.2: the measures of every motion source; then the last poses move on.
@@ -41,10 +41,15 @@ KeyedWeights keyed_weights(std::span<const KeyedExample> examples, std::span<con
     for (std::size_t s = 0; s < sources.size(); ++s) {
         if (sources[s] != KeySourceKind::Motion) continue;
         KeyState::Source& src = state.sources[s];
-        velocity[s] = (keys[s].position - src.last.position) / dt;
-        acceleration[s] = src.has_velocity ? (velocity[s] - src.velocity) / dt : glm::vec3(0.0f);
+        const glm::vec3 jump = keys[s].position - src.last.position;
         spin[s] = angular_velocity(src.last.rotation, keys[s].rotation, dt);
         src.last = keys[s];
+        if (glm::dot(jump, jump) > teleport_distance * teleport_distance) {  // a teleport
+            velocity[s] = src.velocity;  // 0 before any velocity
+            continue;
+        }
+        velocity[s] = jump / dt;
+        acceleration[s] = src.has_velocity ? (velocity[s] - src.velocity) / dt : glm::vec3(0.0f);
         src.velocity = velocity[s];
         src.has_velocity = true;
     }

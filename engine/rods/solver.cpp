@@ -185,6 +185,9 @@ Result<void> validate(const SolverParams& p) {
     if (!std::isfinite(glm::dot(p.gravity, p.gravity)) || !std::isfinite(glm::dot(p.wind, p.wind))) {
         return bad("gravity and wind must be finite");
     }
+    if (!(p.teleport_distance > 0.0f && std::isfinite(p.teleport_distance))) {
+        return bad("teleport_distance must be > 0 m and finite");
+    }
     return {};
 }
 
@@ -227,6 +230,49 @@ ChainState initial_state(const Chain& chain, const Transform& root, const ChainS
         s.rest_orientation[i] = rest.orientations[i];
     }
     return s;
+}
+
+std::uint32_t settle(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
+                     std::span<const Collider> colliders, ChainState& s) {
+    // First quasi-static: every velocity set to 0 after each substep, so the particles
+    // slide down their potential and never overshoot, until no particle moves by the
+    // tolerance in a substep. Then
+    // kSettleDynamicSubsteps as step() runs, because step()'s rest state is not still:
+    // the follow-the-leader velocity correction leaves velocities along the segments that
+    // the next sweep takes back (kFollowTheLeaderDamping), and a chain released from the
+    // quasi-static state alone drifted at up to 0.12 m/s (scenes/ahoge.json) towards the
+    // state with them.
+    //
+    // The quasi-static substeps are kSettleSubstep long: the stiffnesses are compliances
+    // (substep_stiffness), so the equilibrium, where a substep's fall g h^2 is what the
+    // projection takes back, (d + g h^2)(1 - k_h) = d, is d = g / K whatever h; a long h
+    // takes a larger share k_h of the remaining distance each substep (0.8 against 0.1
+    // for the default rest_stiffness), reaching it in a tenth of the substeps.
+    SolverParams coarse = params;
+    coarse.max_substep = std::max(params.max_substep, kSettleSubstep);
+    // The tolerance grows with the distance from the origin, where a float's spacing
+    // (and so a substep's rounding noise) grows: 1e-6 m at the origin is 4e-5 m 40 m away
+    // (scenes/crowd.json), about 8 float spacings there.
+    const float tolerance = kSettleTolerance * (1.0f + glm::length(root.position));
+    std::uint32_t taken = 0;
+    for (std::uint32_t k = 0; k < kMaxSettleSubsteps; ++k) {
+        const std::array<glm::vec3, kMaxChainJoints> before = s.x;
+        step(chain, coarse, root, rest, colliders, coarse.max_substep, s);
+        ++taken;
+        float moved = 0.0f;
+        for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
+            moved = std::max(moved, glm::length(s.x[i] - before[i]));
+            s.v[i] = glm::vec3(0.0f);
+            s.omega[i] = glm::vec3(0.0f);
+        }
+        if (moved < tolerance) break;
+    }
+    for (std::uint32_t k = 0; k < kSettleDynamicSubsteps; ++k) {
+        step(chain, params, root, rest, colliders, params.max_substep, s);
+        ++taken;
+    }
+    s.started = false;  // settling is not the chain's first step
+    return taken;
 }
 
 float substep_stiffness(float k, float h) {
@@ -276,6 +322,36 @@ void follow_center(const Transform& from, const Transform& to, ChainState& s) {
     s.root.rotation = glm::normalize(r * s.root.rotation);
 }
 
+Transform frame_before(const Transform& root, const ChainState& s, float dt) {
+    const glm::vec3 turn = s.omega[0] * dt;
+    const float angle = glm::length(turn);
+    const glm::vec3 axis = angle > 0.0f ? turn / angle : glm::vec3(0.0f);
+    const glm::quat back(std::cos(0.5f * angle), -std::sin(0.5f * angle) * axis);
+    return {root.position - s.v[0] * dt, glm::normalize(back * root.rotation)};
+}
+
+void start_moving(const Transform& root, float dt, ChainState& s) {
+    const glm::quat turn = positive_w(glm::normalize(root.rotation * glm::conjugate(s.root.rotation)));
+    const glm::vec3 travel = root.position - s.root.position;
+    const glm::vec3 omega = (2.0f / dt) * glm::vec3(turn.x, turn.y, turn.z);
+    for (std::uint32_t i = 0; i < kMaxChainJoints; ++i) {
+        s.v[i] += (travel + (turn * s.x[i] - s.x[i])) / dt;
+        s.omega[i] += omega;
+    }
+}
+
+bool follow_teleport(const SolverParams& params, const Transform& root, float dt, ChainState& s) {
+    const glm::vec3 jump = root.position - s.root.position;
+    if (!(glm::dot(jump, jump) > params.teleport_distance * params.teleport_distance)) return false;
+    // Carried to the new root, then back by one frame of the root's own motion (joint 0
+    // follows the root: its velocities, carried too, are the root's), so that step() sees
+    // the root move on as it moved and the chain's velocities, which carry that motion,
+    // do not take it a second time.
+    follow_center(s.root, root, s);
+    follow_center(root, frame_before(root, s, dt), s);
+    return true;
+}
+
 void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
           std::span<const Collider> colliders, float dt, ChainState& s) {
     assert(validate(params).ok());
@@ -283,6 +359,11 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
     const std::uint32_t n = chain.joint_count;
     assert(n >= 2 && n <= kMaxChainJoints);
     assert(rest.positions.size() == n && rest.orientations.size() == n);
+    // A cut or a respawn moves the root farther than any motion would in a frame: the
+    // chain is carried across the gap with it rather than dragged (SolverParams).
+    follow_teleport(params, root, dt, s);
+    if (!s.started && params.settle_start) start_moving(root, dt, s);
+    s.started = true;
 
     const std::uint32_t substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / params.max_substep)));
     const float h = dt / static_cast<float>(substeps);

@@ -225,7 +225,13 @@ RestShape rest_shape(const RodWorld& world, std::uint32_t chain, const RodFrame&
 
 ChainState initial_chain_state(const RodWorld& world, std::uint32_t chain, const RodFrame& frame) {
     const ChainInstance& c = world.chains[chain];
-    ChainState s = initial_state(world.templ(c).chain, frame.roots[chain], rest_shape(world, chain, frame).shape);
+    const ChainTemplate& t = world.templ(c);
+    const ChainShape rest = rest_shape(world, chain, frame).shape;
+    ChainState s = initial_state(t.chain, frame.roots[chain], rest);
+    if (t.params.settle_start) {
+        settle(t.chain, t.params, frame.roots[chain], rest,
+               std::span<const Collider>(frame.colliders).subspan(c.collider_begin, c.collider_count), s);
+    }
     if (c.center != kNoCenter) s.center = frame.centers[c.center];
     return s;
 }
@@ -242,7 +248,7 @@ KeyState initial_key_state(const RodWorld& world, std::uint32_t chain, const Rod
 KeyedWeights measure_keys(const RodWorld& world, std::uint32_t chain, const RodFrame& frame, KeyState& keys) {
     const ChainTemplate& t = world.templ(world.chains[chain]);
     if (t.keyed.empty()) return {};
-    return keyed_weights(t.keyed, t.key_sources, chain_keys(world, chain, frame), frame.dt, keys);
+    return keyed_weights(t.keyed, t.key_sources, chain_keys(world, chain, frame), frame.dt, keys, t.params.teleport_distance);
 }
 
 }  // namespace kodawari::rods

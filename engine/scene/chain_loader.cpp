@@ -114,7 +114,7 @@ Result<glm::quat> read_unit_quat(const JsonReader& r, const JsonNode& q) {
 
 Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::SolverParams& p) {
     KW_TRY(r.object(node, {"stiffness", "rest_stiffness", "damping", "iterations", "max_substep", "gravity", "wind",
-                           "momentum_suppression"}));
+                           "momentum_suppression", "start", "teleport_distance"}));
     KW_TRY(optional_member(r, node, "stiffness", p.stiffness,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0)); }));
     KW_TRY(optional_member(r, node, "rest_stiffness", p.rest_stiffness,
@@ -134,6 +134,14 @@ Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::Solve
     KW_TRY(optional_member(r, node, "wind", p.wind, accel));
     KW_TRY(optional_member(r, node, "momentum_suppression", p.momentum_suppression,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0)); }));
+    if (const JsonNode start = r.member(node, "start"); start.present()) {
+        std::string value;
+        KW_SCENE_ASSIGN(value, r.string(start));
+        if (value != "settled" && value != "rest") return r.fail(start.path, "expected \"settled\" or \"rest\", got \"" + value + "\"");
+        p.settle_start = value == "settled";
+    }
+    KW_TRY(optional_member(r, node, "teleport_distance", p.teleport_distance,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1e6)); }));
     return {};
 }
 

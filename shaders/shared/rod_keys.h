@@ -43,7 +43,7 @@ KW_NAMESPACE_BEGIN
 // reference's expression, so both sides smooth with the same bits (as set_step does for
 // the solver's step sizes).
 struct RodKeyTemplateGpu {
-    uvec4 counts;  // x: key sources S, y: keyed examples J, z: bit s set for every Motion source s, w: unused
+    uvec4 counts;  // x: key sources S, y: keyed examples J, z: bit s set for every Motion source s, w: the teleport distance's float bits (m)
     uvec4 examples[KW_ROD_KEYS_MAX_EXAMPLES];  // x: KW_ROD_KEYS_KIND_*, y: motion: source, pose: source mask,
                                                // z: KW_ROD_KEYS_MEASURE_*, w: KW_ROD_KEYS_FRAME_*
     vec4 keys[KW_ROD_KEYS_MAX_EXAMPLES];       // xyz: motion key kappa_j, w: influence sigma_j

@@ -104,7 +104,7 @@ struct RodTemplateGpu {
     uvec4 counts;     // x: joint count n, y: view examples m, z: first RodTemplateJointGpu, w: first RodShapeJointGpu
     uvec4 solver;     // x: projection iterations, y: substeps this frame, z: keyed examples J (shapes m+1 .. m+J), w: unused
     vec4 step;        // x: substep h (s), y: velocity decay exp(-damping h), z: k' per iteration, w: suppression
-    vec4 physics;     // x: thickness (m), y: k_rest' per iteration (this frame), z, w: unused
+    vec4 physics;     // x: thickness (m), y: k_rest' per iteration (this frame), z: teleport distance (m), w: 1 = settle_start
     vec4 accel;       // xyz: gravity + wind (m/s^2), w: unused
     vec4 first_dir;   // xyz: e, the base shape's first segment direction (SPEC A.2)
     vec4 views[KW_RODS_MAX_VIEWS];  // xyz: d_k (unit, reference joint's frame), w: influence p_k
@@ -168,7 +168,9 @@ struct RodPush {
     uvec4 counts;           // x: chains, y: first RodChainGpu, z: first RodTemplateJointGpu, w: first RodShapeJointGpu (GROUPED)
     uvec4 group;            // GROUPED: x: template, y: joint count n, z: view examples m, w: keyed examples J
     vec4 camera_position;   // xyz, w: 1 = orthographic
-    vec4 camera_forward;    // xyz, w: unused
+    vec4 camera_forward;    // xyz, w: the frame's length dt (s)
+    uvec4 flags;            // x: 1 on the world's first step (chains of templates with
+                            // physics.w != 0 start moving with their roots); yzw: 0
 };
 
 KW_NAMESPACE_END

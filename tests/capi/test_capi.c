@@ -128,6 +128,9 @@ static void make_ahoge(ahoge* a, kodawari_backend backend) {
     a->templ.solver.stiffness = 0.6f;
     a->templ.solver.damping = 3.0f;
     a->templ.solver.iterations = 4;
+    /* On its rest shape and still at frame 0, which the checks below read (the default,
+     * settle_start = 1, starts it settled under gravity: the C++ tests measure that). */
+    a->templ.solver.settle_start = 0;
     a->chain.template_index = 0;
     a->chain.character = 0;
     a->chain.collider_begin = 0;
@@ -449,6 +452,12 @@ static void test_version_and_status(void) {
     CHECK(strcmp(kodawari_chain_world_last_error(NULL), "") == 0 && strcmp(kodawari_bird_world_last_error(NULL), "") == 0,
           "NULL handles have no message");
     EXPECT_FAIL(kodawari_solver_params_default(NULL), KODAWARI_INVALID_ARGUMENT, "kodawari_solver_params_default", "out: is NULL");
+    {
+        kodawari_solver_params p;
+        EXPECT_OK(kodawari_solver_params_default(&p));
+        CHECK(p.settle_start == 1 && p.teleport_distance == 1.0f, "defaults settle_start %u, teleport_distance %g",
+              p.settle_start, (double)p.teleport_distance);
+    }
     EXPECT_FAIL(kodawari_flight_settings_default(NULL), KODAWARI_INVALID_ARGUMENT, "out: is NULL");
 }
 
@@ -574,6 +583,10 @@ static void test_chain_create_rejects(void) {
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].solver.wind", "within 1000");
     a.templ.solver.momentum_suppression = 1.5f;
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].solver.momentum_suppression: 1.5");
+    a.templ.solver.settle_start = 2;
+    REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].solver.settle_start: 2; expected 0 or 1");
+    a.templ.solver.teleport_distance = 0.0f;
+    REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].solver.teleport_distance: 0");
     a.chain.template_index = 1;
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->chains[0].template_index: 1; expected an index below desc->template_count (1)");
     a.chain.character = 3;

@@ -110,6 +110,8 @@ struct CWorld {
                 put3(t.solver.gravity, c.params.gravity);
                 put3(t.solver.wind, c.params.wind);
                 t.solver.momentum_suppression = c.params.momentum_suppression;
+                t.solver.settle_start = c.params.settle_start ? 1u : 0u;
+                t.solver.teleport_distance = c.params.teleport_distance;
                 templates.push_back(t);
             }
         }

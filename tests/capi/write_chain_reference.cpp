@@ -126,6 +126,8 @@ int main(int argc, char** argv) {
             w.vec3(p.wind);
             w.raw(",\"momentum_suppression\":");
             w.number(p.momentum_suppression);
+            std::fprintf(file, ",\"settle_start\":%u,\"teleport_distance\":", p.settle_start ? 1u : 0u);
+            w.number(p.teleport_distance);
             w.raw("}}");
         }
     }

@@ -268,6 +268,13 @@ typedef struct kodawari_solver_params {
     /// Momentum suppression (SPEC A.5) in [0, 1]: 0 = plain shape matching, 1 = a change of
     /// rest shape injects no velocity. Default 1.
     float momentum_suppression;
+    /// 1: a chain starts at rest in equilibrium under gravity, wind and its colliders and
+    /// moving with its root; 0: on its rest shape and still (as UniVRM and three-vrm
+    /// start). Default 1.
+    uint32_t settle_start;
+    /// A root that moves farther than this in one frame, m (> 0, finite), has teleported:
+    /// its chain is carried with it instead of dragged across the gap. Default 1.
+    float teleport_distance;
 } kodawari_solver_params;
 
 /// Fills `out` with the engine's default solver settings.

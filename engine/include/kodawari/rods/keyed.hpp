@@ -110,9 +110,13 @@ using KeyedWeights = std::array<float, kMaxKeyedExamples>;
 /// Measures the keys of one frame of `dt` s (K.2, K.3) and updates `state`: the weights
 /// u_j = exp(-(Delta_j / sigma_j)^2 / 2) of `examples`, from `keys` (this frame's, one per
 /// key source, as RodFrame::keys holds them). `sources` are the kinds of the key sources.
+/// A motion source that moved farther than `teleport_distance` (m; SolverParams's) in the
+/// frame teleported: its motion goes on as it was (last velocity, no acceleration), so a
+/// cut does not read as a burst of speed.
 [[nodiscard]] KODAWARI_API KeyedWeights keyed_weights(std::span<const KeyedExample> examples,
                                                       std::span<const KeySourceKind> sources,
-                                                      std::span<const Transform> keys, float dt, KeyState& state);
+                                                      std::span<const Transform> keys, float dt, KeyState& state,
+                                                      float teleport_distance = 1.0f);
 
 /// Combines view weights w_0 .. w_m (SPEC A.3) with raw keyed weights u_1 .. u_J (K.4):
 /// U = sum u_j; if U >= 1 every u_j /= U and U = 1; then the view weights scale by 1 - U.

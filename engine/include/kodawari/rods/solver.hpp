@@ -169,6 +169,19 @@ struct SolverParams {
     /// Momentum suppression (SPEC A.5) in [0, 1]: 0 = plain shape matching, 1 = a change
     /// of rest shape moves the particles kinematically and injects no velocity.
     float momentum_suppression = 1.0f;
+    /// How a chain starts: true, at rest in equilibrium under gravity, wind and its
+    /// colliders (settle()), and in its first step moving with its root (start_moving()),
+    /// as if it had been carried along before the first frame; false, on its rest shape
+    /// and still, so that its first frames sag towards that equilibrium and lag behind a
+    /// moving root (what UniVRM and three-vrm do; the comparisons with three-vrm start
+    /// both sides this way).
+    bool settle_start = true;
+    /// A root that moves farther than this in one frame, m (> 0), has teleported (a cut,
+    /// a respawn): its chain is carried rigidly by the root's jump, keeping its shape and
+    /// velocities relative to the root (follow_center() by the old and new root), instead
+    /// of being dragged across the gap. 1 m a frame is 60 m/s at 60 fps, past any
+    /// character's run; a jump shorter than this is simulated as motion.
+    float teleport_distance = 1.0f;
 };
 
 /// Checks every SolverParams range above.
@@ -202,11 +215,47 @@ struct ChainState {
     Transform center;
     std::array<glm::vec3, kMaxChainJoints> rest_position{};  ///< the last step's rest shape, root frame
     std::array<glm::quat, kMaxChainJoints> rest_orientation{};
+    /// Whether it has stepped since initial_state() (step() starts it moving first).
+    bool started = false;
 };
 
 /// A chain at rest: the rest shape `rest` (root frame, e.g. a blend from A.2) placed by
 /// `root`, zero velocities.
 [[nodiscard]] KODAWARI_API ChainState initial_state(const Chain& chain, const Transform& root, const ChainShape& rest);
+
+/// The most quasi-static substeps settle() takes, their length (s: the longest
+/// max_substep that validate() accepts) and the largest move of a particle in one of them
+/// below which it stops, m per m of the root's distance from the origin plus 1 (about 8
+/// float spacings: below that a substep's rounding moves particles). A quasi-static
+/// substep moves every particle by its remaining distance times (1 - k_h), k_h the
+/// stiffness of a 0.05 s substep (0.8 for the default rest_stiffness), so 1e-6 m comes
+/// within 15 substeps of a 0.3 m sag; the cap is for soft chains.
+inline constexpr std::uint32_t kMaxSettleSubsteps = 600;
+inline constexpr float kSettleSubstep = 0.05f;
+inline constexpr float kSettleTolerance = 1e-6f;
+/// The dynamic substeps of params.max_substep that follow. Measured on scenes/ahoge.json
+/// with the root held: the fastest particle moves at 0.02 m/s after 30, 1e-4 m/s after
+/// 120; the dynamic phase decays at the damping's rate, not to a tolerance in any bounded
+/// time, so it has a fixed length, which a crowd's load pays per chain (scenes/crowd.json,
+/// 8 192 chains).
+inline constexpr std::uint32_t kSettleDynamicSubsteps = 60;
+
+/// Brings `state` to rest in equilibrium at `root` under the chain's gravity, wind and
+/// `colliders`, with `rest` its rest shape, by step()s of params.max_substep with the
+/// root held: quasi-static first (substeps of kSettleSubstep, every velocity set to 0
+/// after each, so nothing overshoots) until no particle moves by kSettleTolerance (x (1 +
+/// |root.position|)) in a substep or kMaxSettleSubsteps have run, then kSettleDynamicSubsteps as step() runs (its rest
+/// state keeps the small velocities of its follow-the-leader correction). Returns the
+/// substeps taken.
+KODAWARI_API std::uint32_t settle(const Chain& chain, const SolverParams& params, const Transform& root,
+                                  const ChainShape& rest, std::span<const Collider> colliders, ChainState& state);
+
+/// Adds to every velocity of `state` the rigid motion that carries its last root
+/// (state.root) to `root` in `dt` s: v_i += (travel + turn x_i - x_i) / dt, omega_i += that of
+/// the turn (first order, as step() takes angular velocities), so that a chain that
+/// starts still does not lag behind a root that is already moving. step() calls it on a
+/// chain's first step when params.settle_start (after a teleport's carry).
+KODAWARI_API void start_moving(const Transform& root, float dt, ChainState& state);
 
 /// Advances `state` by a frame of `dt` > 0 seconds (SPEC A.4). `root` is the root
 /// transform at the end of the frame; within the frame the substeps interpolate it from
@@ -220,7 +269,9 @@ struct ChainState {
 /// its parent's segment length, is pushed out of the whole collider set kColliderPasses
 /// times; a last distance sweep after the iterations leaves no segment stretched, and the
 /// velocities take the dynamic follow-the-leader correction (kFollowTheLeaderDamping), so
-/// the inextensibility adds no energy.
+/// the inextensibility adds no energy. A root that jumped farther than
+/// params.teleport_distance first carries the chain (follow_teleport()); a chain's first
+/// step then starts it moving with its root (start_moving(), when params.settle_start).
 KODAWARI_API void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
                        std::span<const Collider> colliders, float dt, ChainState& state);
 
@@ -233,6 +284,19 @@ KODAWARI_API void step(const Chain& chain, const SolverParams& params, const Tra
 /// next step() interpolates the root from where the carried chain hangs. Call it before
 /// step() with the center's transforms at the previous and this frame.
 KODAWARI_API void follow_center(const Transform& from, const Transform& to, ChainState& state);
+
+/// The root's pose a frame of `dt` before `root` had it moved as joint 0 last moved:
+/// back by its velocity state.v[0] and its turn state.omega[0] (joint 0 follows the root).
+[[nodiscard]] KODAWARI_API Transform frame_before(const Transform& root, const ChainState& state, float dt);
+
+/// A teleport: when `root` is farther than params.teleport_distance from the last step's
+/// root (state.root), carries `state` rigidly to `root` (follow_center(state.root, root)),
+/// then back to frame_before(root, state, dt), so that the chain keeps its shape and
+/// velocities relative to its root and the frame of `dt` that step() then takes sees the
+/// root move on as it moved (the velocities carry that motion; a chain carried to the
+/// frame's end would take it twice). step() calls it first; a backend that carries chains
+/// itself calls it before its own step. Returns whether it carried.
+KODAWARI_API bool follow_teleport(const SolverParams& params, const Transform& root, float dt, ChainState& state);
 
 /// What a renderer or a skinned mesh needs from a chain.
 struct ChainPose {

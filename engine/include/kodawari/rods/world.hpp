@@ -120,8 +120,10 @@ struct RodFrame {
 [[nodiscard]] KODAWARI_API Result<void> check_frame(const RodWorld& world, const RodFrame& frame);
 
 /// `chain` at rest at `frame` (its first): initial_state() on the rest shape of
-/// rest_shape(world, chain, frame), with its center frame (ChainState::center) from
-/// frame.centers when it has one.
+/// rest_shape(world, chain, frame), settled there (settle(), with the chain's colliders
+/// at `frame`) unless its params say settle_start false, with its center frame
+/// (ChainState::center) from frame.centers when it has one. Every backend starts from
+/// these bits.
 [[nodiscard]] KODAWARI_API ChainState initial_chain_state(const RodWorld& world, std::uint32_t chain, const RodFrame& frame);
 
 /// The view direction, weights and blended rest shape of one chain (SPEC A.3, A.2).
