@@ -66,7 +66,9 @@ if(BUILD_SHARED_LIBS)
   set(KODAWARI_PC_LIBS_PRIVATE "")
 else()
   set(KODAWARI_PC_REQUIRES_PRIVATE "vulkan, tinygltf, nlohmann_json >= 3.10, libhwy, zlib")
-  set(KODAWARI_PC_LIBS_PRIVATE "-pthread")
+  # meshoptimizer (`--compact --meshopt`): Debian's libmeshoptimizer-dev installs a CMake
+  # package but no .pc file, so the library itself.
+  set(KODAWARI_PC_LIBS_PRIVATE "-lmeshoptimizer -pthread")
   foreach(lib IN LISTS CMAKE_DL_LIBS)
     string(APPEND KODAWARI_PC_LIBS_PRIVATE " -l${lib}")
   endforeach()

@@ -21,7 +21,11 @@ std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool ha
     return sinks;
 }
 
-CLI::Option* add_compaction_option(CLI::App& app, std::optional<std::string>& into) {
+CLI::Option* add_compaction_option(CLI::App& app, std::optional<std::string>& into, bool& meshopt) {
+    app.add_flag("--meshopt", meshopt,
+                 "with --compact: quantize the kept keys per channel and write them with meshopt's codec "
+                 "(EXT_meshopt_compression, a required extension: three.js with MeshoptDecoder, gltf-transform, "
+                 "Blender 5.2+ read it; docs/compact.md)");
     // A flag, whose value comes only after "=": `--compact SCENE` leaves SCENE a positional.
     static const std::string description =
         "drop the animation keys that linear interpolation reproduces within METRES (translations) and RADIANS "
@@ -35,10 +39,14 @@ CLI::Option* add_compaction_option(CLI::App& app, std::optional<std::string>& in
 // displacement of a point 1 m from the joint: a rotation of E rad, or a scale off by E
 // relative, moves it E m, as a translation error of E m does. A second number sets the
 // rotation (and scale) bound on its own.
-GlbCompaction read_compaction(const std::optional<std::string>& option) {
+GlbCompaction read_compaction(const std::optional<std::string>& option, bool meshopt) {
     GlbCompaction compaction;
+    if (meshopt && !option) {
+        throw UsageError{"--meshopt: compresses compacted keys, give it with --compact (e.g. --compact --meshopt)"};
+    }
     if (!option) return compaction;
     compaction.enabled = true;
+    compaction.meshopt = meshopt;
     // CLI11 gives a flag without a value as "true".
     if (*option == "true") return compaction;
     const std::string& text = *option;

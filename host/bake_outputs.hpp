@@ -19,11 +19,13 @@ namespace kodawari::cli {
 [[nodiscard]] std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains,
                                                                const GlbCompaction& compaction);
 
-/// Adds `--compact[=METRES[,RADIANS]]` (docs/compact.md); `into` holds its value.
-CLI::Option* add_compaction_option(CLI::App& app, std::optional<std::string>& into);
-/// The compaction `--compact` asks for; not enabled when absent. A bad value is a
-/// UsageError naming --compact.
-[[nodiscard]] GlbCompaction read_compaction(const std::optional<std::string>& option);
+/// Adds `--compact[=METRES[,RADIANS]]` (docs/compact.md), whose value `into` holds, and
+/// `--meshopt`, which sets `meshopt`.
+CLI::Option* add_compaction_option(CLI::App& app, std::optional<std::string>& into, bool& meshopt);
+/// The compaction `--compact` (and `--meshopt`) ask for; not enabled when absent. A bad
+/// value is a UsageError naming --compact; `--meshopt` without `--compact`, one naming
+/// --meshopt.
+[[nodiscard]] GlbCompaction read_compaction(const std::optional<std::string>& option, bool meshopt = false);
 
 /// `out/<scene name>.glb`, creating `out/` (the default output).
 [[nodiscard]] std::string default_output(const std::string& scene_name, const std::string& extension = ".glb");

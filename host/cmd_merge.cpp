@@ -15,13 +15,14 @@ struct MergeArguments {
     std::optional<std::string> out;
     std::optional<std::string> scene;
     std::optional<std::string> compact;
+    bool meshopt = false;
 };
 
 int cmd_merge(const MergeArguments& o) {
     const auto& out_option = o.out;
     MergeOptions options;
     if (o.scene) options.scene = *o.scene;
-    const GlbCompaction compaction = read_compaction(o.compact);
+    const GlbCompaction compaction = read_compaction(o.compact, o.meshopt);
     const std::vector<std::string>& parts = o.parts;
     if (parts.empty()) throw UsageError{"merge takes the part files of every shard (written by `run --shard I/N`)"};
     auto source = open_parts(parts, options);
@@ -54,7 +55,7 @@ Command add_merge(CLI::App& app) {
     add_text(*c, "--out", o->out, "FILE.glb", "the glTF file (default: out/<scene>.glb)");
     add_text(*c, "--scene", o->scene, "SCENE.json",
              "the scene file, when it moved since the bake; its bytes must be unchanged (default: the path in the parts)");
-    add_compaction_option(*c, o->compact);
+    add_compaction_option(*c, o->compact, o->meshopt);
     return {c, [o] { return cmd_merge(*o); }};
 }
 

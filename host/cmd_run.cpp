@@ -191,6 +191,7 @@ struct RunOptions {
     std::optional<std::string> trace;
     std::optional<std::string> shard;
     std::optional<std::string> compact;
+    bool meshopt = false;
     bool mpi = false;
     bool strict = false;
     bool fit_routes = false;
@@ -203,7 +204,7 @@ int cmd_run(const RunOptions& o) {
     const bool no_export = o.no_export;
     const auto& trace_path = o.trace;
     const auto& shard_option = o.shard;
-    const GlbCompaction compaction = read_compaction(o.compact);
+    const GlbCompaction compaction = read_compaction(o.compact, o.meshopt);
     const bool mpi = o.mpi;
     const std::string scene_path = o.scene.value_or(kDefaultScene);
     if (mpi && shard_option) throw UsageError{"--mpi and --shard exclude each other (--mpi runs one shard per rank)"};
@@ -279,7 +280,7 @@ Command add_run(CLI::App& app) {
     add_text(*c, "--out", o->out, "FILE.glb",
              "the glTF file (default: out/<scene>.glb; with --shard out/<scene>.shard-I-of-N.kwpart)");
     add_switch(*c, "--no-export", o->no_export, "simulate (and trace) without writing glTF");
-    add_compaction_option(*c, o->compact);
+    add_compaction_option(*c, o->compact, o->meshopt);
     add_text(*c, "--trace", o->trace, "FILE.jsonl", "also write every frame's state as JSON Lines (default: none)");
     add_text(*c, "--shard", o->shard, "I/N", "simulate only shard I of N and write a part file for `kodawari merge` (default: all)");
     add_switch(*c, "--mpi", o->mpi, "under mpirun: one shard per rank, rank 0 writes (default: off)");

@@ -1,10 +1,18 @@
 #!/usr/bin/env python3
 """Re-imports a compact .glb and the uncompacted .glb of the same bake and reports what
-compaction did (docs/compact.md): file sizes and their ratio, keys kept per channel kind
-(and per node-name group with --groups), and the largest error of every kind, measured by
-evaluating the compact file's LINEAR samplers (lerp; slerp along the short arc on the
-rotations decoded from normalized shorts as max(c / 32767, -1) or bytes as max(c / 127,
--1), glTF 2.0 §3.11 and Appendix C) at every key time of the uncompacted file. Pure Python (no numpy), so it runs anywhere.
+compaction did (docs/compact.md): file sizes, their ratio and the bytes per animated node
+and frame, keys kept per channel kind (and per node-name group with --groups), and the
+largest error of every kind, measured by evaluating the compact file's LINEAR samplers
+(lerp; slerp along the short arc on the rotations decoded from normalized shorts as
+max(c / 32767, -1) or bytes as max(c / 127, -1), glTF 2.0 §3.11 and Appendix C) at every
+key time of the uncompacted file.
+
+Channels are matched by node name and path, so the compact file may come from another
+tool that renumbers nodes (gltfpack); a node the compact file does not animate holds its
+own translation, rotation and scale there (gltfpack drops constant channels). A file with
+EXT_meshopt_compression (ours with --meshopt, gltfpack's -c and -cc) is decoded first by
+gltf-transform (scripts/gltf_plain.mjs; Node.js and scripts/setup's .tools/npm); the rest
+is pure Python (no numpy), so plain files are read anywhere.
 
     python3 scripts/compact_report.py FULL.glb COMPACT.glb [--groups]
 """
@@ -12,7 +20,9 @@ import json
 import math
 import os
 import struct
+import subprocess
 import sys
+import tempfile
 from bisect import bisect_right
 from collections import defaultdict
 
@@ -48,13 +58,45 @@ def accessor(gltf, binary, index):
 
 
 def tracks(gltf, binary):
-    animation = gltf["animations"][0]
+    """Every animated (node name, path): (key times, values)."""
     out = {}
-    for channel in animation["channels"]:
-        sampler = animation["samplers"][channel["sampler"]]
-        key = (channel["target"]["node"], channel["target"]["path"])
-        out[key] = (accessor(gltf, binary, sampler["input"]), accessor(gltf, binary, sampler["output"]))
+    for animation in gltf.get("animations", []):
+        for channel in animation["channels"]:
+            sampler = animation["samplers"][channel["sampler"]]
+            node = gltf["nodes"][channel["target"]["node"]]
+            key = (node.get("name", str(channel["target"]["node"])), channel["target"]["path"])
+            out[key] = (accessor(gltf, binary, sampler["input"]), accessor(gltf, binary, sampler["output"]))
     return out
+
+
+REST = {"translation": (0.0, 0.0, 0.0), "rotation": (0.0, 0.0, 0.0, 1.0), "scale": (1.0, 1.0, 1.0)}
+
+
+def rest_values(gltf):
+    """(node name, path): the node's own value, for the channels a file leaves out."""
+    out = {}
+    for index, node in enumerate(gltf.get("nodes", [])):
+        for path, default in REST.items():
+            out[(node.get("name", str(index)), path)] = tuple(node.get(path, default))
+    return out
+
+
+def uses_meshopt(gltf):
+    return any(e.endswith("meshopt_compression") for e in gltf.get("extensionsUsed", []))
+
+
+def load_plain(path):
+    """load(), decoding meshopt compression through gltf-transform when the file uses it."""
+    gltf, binary = load(path)
+    if not uses_meshopt(gltf):
+        return gltf, binary
+    helper = os.path.join(os.path.dirname(os.path.abspath(__file__)), "gltf_plain.mjs")
+    with tempfile.TemporaryDirectory() as work:
+        plain = os.path.join(work, "plain.glb")
+        result = subprocess.run(["node", helper, path, plain], capture_output=True, text=True)
+        if result.returncode != 0:
+            sys.exit(f"{path}: uses meshopt compression, and decoding it failed: {result.stderr.strip()}")
+        return load(plain)
 
 
 def normalize(q):
@@ -102,27 +144,38 @@ def main():
     if len(args) != 2:
         sys.exit(__doc__)
     full_path, compact_path = args
-    full_gltf, full_bin = load(full_path)
-    compact_gltf, compact_bin = load(compact_path)
+    full_gltf, full_bin = load_plain(full_path)
+    compact_gltf, compact_bin = load_plain(compact_path)
     full = tracks(full_gltf, full_bin)
     compact = tracks(compact_gltf, compact_bin)
-    if set(full) != set(compact):
-        sys.exit("the two files animate different channels")
+    rest = rest_values(compact_gltf)
+    extra = set(compact) - set(full)
+    if extra:
+        sys.exit(f"{compact_path} animates {len(extra)} channels the uncompacted file does not, e.g. {sorted(extra)[0]}")
     worst = defaultdict(float)
     keys = defaultdict(int)
     kept = defaultdict(int)
-    for (node, path), (times, values) in full.items():
-        ctimes, cvalues = compact[(node, path)]
-        name = full_gltf["nodes"][node].get("name", "")
+    frames = 0
+    for (name, path), (times, values) in full.items():
+        frames = max(frames, len(times))
+        if (name, path) in compact:
+            ctimes, cvalues = compact[(name, path)]
+        elif (name, path) in rest:
+            ctimes, cvalues = [(times[0][0],)], [rest[(name, path)]]
+        else:
+            sys.exit(f"{compact_path} has no node named {name!r}")
         group = path + (" " + name.rstrip("0123456789").rstrip("_/") if groups else "")
         keys[group] += len(times)
-        kept[group] += len(ctimes)
+        kept[group] += len(ctimes) if (name, path) in compact else 0
         flat = [t[0] for t in ctimes]
         for (time,), original in zip(times, values):
             value = evaluate(flat, cvalues, time, path == "rotation")
             worst[path] = max(worst[path], error(path, value, original))
     a, b = os.path.getsize(full_path), os.path.getsize(compact_path)
+    nodes = len({name for name, _ in full})
+    per = nodes * frames
     print(f"{full_path}: {a} bytes; {compact_path}: {b} bytes; ratio {a / b:.2f}x")
+    print(f"  {nodes} animated nodes x {frames} frames: {a / per:.2f} -> {b / per:.2f} bytes per animated node and frame")
     for group in sorted(keys):
         print(f"  {group}: {kept[group]} of {keys[group]} keys kept ({100.0 * kept[group] / keys[group]:.1f}%)")
     units = {"translation": ("mm", 1e3), "rotation": ("mrad", 1e3), "scale": ("%", 1e2)}

@@ -222,6 +222,16 @@ for bad in "--compact=abc" "--compact=-1" "--compact=0.001,x" "--compact="; do
     "$bin" run scenes/ahoge.json --frames 3 "$bad" --out "$work/bad-compact.glb" >"$work/bad-compact.out" 2>&1
     check "run $bad exits 2 naming --compact" bash -c "test $? -eq 2 && grep -q -- '--compact: expected' '$work/bad-compact.out' && test ! -e '$work/bad-compact.glb'"
 done
+# --meshopt compresses compacted keys: without --compact it exits 2 naming --meshopt, as
+# a bad value of either option does, and writes nothing; merge likewise.
+"$bin" run scenes/ahoge.json --frames 3 --meshopt --out "$work/bad-meshopt.glb" >"$work/bad-meshopt.out" 2>&1
+check "run --meshopt without --compact exits 2 naming --meshopt" bash -c "test $? -eq 2 && grep -q -- '--meshopt: .*--compact' '$work/bad-meshopt.out' && test ! -e '$work/bad-meshopt.glb'"
+"$bin" run scenes/ahoge.json --frames 3 --compact=abc --meshopt --out "$work/bad-meshopt.glb" >"$work/bad-meshopt.out" 2>&1
+check "run --compact=abc --meshopt exits 2 naming --compact" bash -c "test $? -eq 2 && grep -q -- '--compact: expected' '$work/bad-meshopt.out' && test ! -e '$work/bad-meshopt.glb'"
+"$bin" merge "$work/no-such-part.glb" --meshopt --out "$work/bad-meshopt.glb" >"$work/bad-meshopt.out" 2>&1
+check "merge --meshopt without --compact exits 2 naming --meshopt" bash -c "test $? -eq 2 && grep -q -- '--meshopt: .*--compact' '$work/bad-meshopt.out' && test ! -e '$work/bad-meshopt.glb'"
+"$bin" run scenes/ahoge.json --frames 10 --compact --meshopt --out "$work/ahoge-meshopt.glb" >"$work/ahoge-meshopt.out" 2>&1
+check "ahoge --compact --meshopt passes glTF-Validator" bash -c "node tests/tools/validate_gltf.mjs '$work/ahoge-meshopt.glb' | grep -q '0 errors, 0 warnings'"
 "$bin" bench crowd --count 13 --frames 2 --json "$work/bench-crowd.json" >/dev/null 2>&1
 # Vulkan twice: the rod input made on the host, then written on the device.
 check "bench crowd json" bash -c "node -e 'const r=require(\"$work/bench-crowd.json\"); if (r.benchmark!==\"crowd\"||r.instances!==13||r.results.length!==4||r.results[3].backend!==\"vulkan/dev-in\"||!(r.results[3].per_second>0)) process.exit(1)'"

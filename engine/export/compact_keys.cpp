@@ -10,6 +10,9 @@
 namespace kodawari {
 
 Result<void> check_compaction(const std::string& path, const GlbCompaction& compaction) {
+    if (compaction.meshopt && !compaction.enabled) {
+        return make_error(Error::Kind::InvalidInput, path + ": meshopt compression is for compacted keys only (enable compaction)");
+    }
     if (!compaction.enabled) return {};
     const auto bad = [](float v) { return !std::isfinite(v) || v < 0.0f; };
     if (bad(compaction.position_m) || bad(compaction.rotation_rad) || bad(compaction.scale_rel)) {
@@ -66,18 +69,27 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
     out.first_time_ = frames > 0 ? static_cast<double>(times.front()) : 0.0;
     out.last_time_ = frames > 0 ? static_cast<double>(times.back()) : 0.0;
 
-    // The shared key times: every frame's, then the first and the last.
+    // The shared key times: every frame's, then the first and the last (with meshopt, the
+    // first elements of the times' first chunk, chunk 0: the same offsets).
     std::vector<unsigned char> block;
-    append_bytes(block, times.data(), times.size());
     const std::uint64_t all_frames = 0;
-    const std::uint64_t ends = block.size();
-    out.ends_ = frames > 1 ? ends : 0;
-    if (frames > 1) {
-        const float pair[2] = {times.front(), times.back()};
-        append_bytes(block, pair, 2);
+    std::uint64_t ends = std::uint64_t{frames} * sizeof(float);
+    const float pair[2] = {frames > 0 ? times.front() : 0.0f, frames > 0 ? times.back() : 0.0f};
+    out.meshopt_ = bounds.meshopt;
+    if (out.meshopt_) {
+        if (frames > 0) KW_TRY(out.streams_.append(MeshoptStream::Times, times.data(), frames, out.data_, out.bytes_));
+        if (frames > 1) {
+            auto at = out.streams_.append(MeshoptStream::Times, pair, 2, out.data_, out.bytes_);
+            if (!at) return at.error();
+            ends = at.value();
+        }
+    } else {
+        append_bytes(block, times.data(), times.size());
+        if (frames > 1) append_bytes(block, pair, 2);
+        KW_TRY(out.data_.append(block.data(), block.size()));
+        out.bytes_ = block.size();
     }
-    KW_TRY(out.data_.append(block.data(), block.size()));
-    out.bytes_ = block.size();
+    out.ends_ = frames > 1 ? ends : 0;
     out.stats_.bytes_before = std::uint64_t{frames} * sizeof(float);
 
     std::size_t record_floats = 0;
@@ -124,7 +136,15 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
                 const std::size_t value_bytes = kind == ChannelKind::Rotation ? 4 * sizeof(std::int16_t) : 3 * sizeof(float);
                 Reduction r;
                 bool bytes = false;
-                if (kind == ChannelKind::Rotation) {
+                MeshoptChannel quantized;  // with meshopt: the filter's input for the kept keys
+                if (out.meshopt_) {
+                    quantized = kind == ChannelKind::Rotation
+                                    ? choose_rotation(times, channel, bounds.rotation_rad)
+                                    : choose_vector(times, channel,
+                                                    kind == ChannelKind::Translation ? bounds.position_m : bounds.scale_rel,
+                                                    kind == ChannelKind::Translation ? VectorMetric::Distance : VectorMetric::Relative);
+                    r = std::move(quantized.reduction);
+                } else if (kind == ChannelKind::Rotation) {
                     shorts.resize(channel.size());
                     quantize_rotations(channel, shorts);
                     r = reduce_rotations(times, channel, shorts, bounds.rotation_rad);
@@ -168,16 +188,28 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
                     if (same != item_times.end()) {
                         c.times = same->second;
                     } else {
-                        c.times = out.bytes_ + block.size();
                         kept_times.clear();
                         for (const std::uint32_t f : r.kept) kept_times.push_back(times[f]);
-                        append_bytes(block, kept_times.data(), kept_times.size());
+                        if (out.meshopt_) {
+                            auto at = out.streams_.append(MeshoptStream::Times, kept_times.data(), kept_times.size(), out.data_,
+                                                          out.bytes_);
+                            if (!at) return at.error();
+                            c.times = at.value();
+                        } else {
+                            c.times = out.bytes_ + block.size();
+                            append_bytes(block, kept_times.data(), kept_times.size());
+                        }
                         item_times.emplace_back(r.kept, c.times);
                         ++accessors;
                     }
                 }
                 c.values = out.bytes_ + block.size();
-                if (kind == ChannelKind::Rotation && bytes) {
+                if (out.meshopt_) {
+                    auto at = out.streams_.append(kind == ChannelKind::Rotation ? MeshoptStream::Rotations : MeshoptStream::Vectors,
+                                                  quantized.encoded.data(), r.kept.size(), out.data_, out.bytes_);
+                    if (!at) return at.error();
+                    c.values = at.value();
+                } else if (kind == ChannelKind::Rotation && bytes) {
                     kept_bytes.clear();
                     for (const std::uint32_t f : r.kept) {
                         for (std::size_t k = 0; k < 4; ++k) kept_bytes.push_back(static_cast<std::int8_t>(shorts[f * 4 + k]));
@@ -204,6 +236,7 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
         KW_TRY(out.data_.append(block.data(), block.size()));
         out.bytes_ += block.size();
     }
+    if (out.meshopt_) KW_TRY(out.streams_.finish(out.data_, out.bytes_));
     out.item_channels_.push_back(out.channels_.size());
     out.item_accessors_.push_back(accessors);
     out.stats_.bytes_after = out.bytes_;
@@ -214,8 +247,8 @@ tinygltf::Accessor CompactKeys::time_accessor(int view, const Channel& c) const 
     // Key times are float seconds with min and max, as §3.11 requires of sampler inputs;
     // every channel keeps the first and the last frame.
     tinygltf::Accessor accessor;
-    accessor.bufferView = view;
-    accessor.byteOffset = c.times;
+    accessor.bufferView = view + static_cast<int>(MeshoptStreams::chunk_of(c.times));
+    accessor.byteOffset = MeshoptStreams::offset_of(c.times);
     accessor.componentType = TINYGLTF_COMPONENT_TYPE_FLOAT;
     accessor.count = c.keys;
     accessor.type = TINYGLTF_TYPE_SCALAR;
@@ -226,8 +259,8 @@ tinygltf::Accessor CompactKeys::time_accessor(int view, const Channel& c) const 
 
 tinygltf::Accessor CompactKeys::value_accessor(int view, const Channel& c) {
     tinygltf::Accessor accessor;
-    accessor.bufferView = view;
-    accessor.byteOffset = c.values;
+    accessor.bufferView = view + static_cast<int>(MeshoptStreams::chunk_of(c.values));
+    accessor.byteOffset = MeshoptStreams::offset_of(c.values);
     accessor.count = c.keys;
     if (c.kind == ChannelKind::Rotation) {
         accessor.componentType = c.bytes ? TINYGLTF_COMPONENT_TYPE_BYTE : TINYGLTF_COMPONENT_TYPE_SHORT;
@@ -238,6 +271,11 @@ tinygltf::Accessor CompactKeys::value_accessor(int view, const Channel& c) {
         accessor.type = TINYGLTF_TYPE_VEC3;
     }
     return accessor;
+}
+
+int CompactKeys::add_views(tinygltf::Model& model, std::uint64_t head, MeshoptJson& json) const {
+    if (!meshopt_) return add_buffer_view(model, head, bytes_, 0);
+    return streams_.add_views(model, head, json);
 }
 
 std::pair<int, int> CompactKeys::add_next_channel(tinygltf::Model& model, int view) {

@@ -19,6 +19,12 @@
 // than shorts: bytes halve the values but keep more keys. Every block is a multiple of
 // 4 bytes, so every accessor is aligned to its component size (§3.6.2.4).
 //
+// With GlbCompaction::meshopt (meshopt_streams.hpp) each channel is also quantized, and
+// its key times and values go to meshopt streams instead: the tail then holds the
+// streams' compressed chunks, each a buffer view of its own (add_views()), and a
+// channel's offsets are locations (a chunk, an offset in it; MeshoptStreams). Without it,
+// the tail is one buffer view and the file is byte for byte what it was before meshopt.
+//
 // Two ways to get the accessors: add_next_channel() adds them to a tinygltf model
 // (the chains' and the rigged writers); item_accessors() and item_channels() make an
 // item's on demand (the birds' writer, whose JSON is streamed: gltf_json_stream.hpp), so
@@ -34,6 +40,7 @@
 #include <vector>
 
 #include "export/gltf_common.hpp"
+#include "export/meshopt_streams.hpp"
 #include "kodawari/export.hpp"
 
 namespace kodawari::gltf {
@@ -58,9 +65,16 @@ public:
     [[nodiscard]] std::uint64_t bytes() const { return bytes_; }
     [[nodiscard]] const GlbCompactionStats& stats() const { return stats_; }
 
+    /// Adds the buffer views that hold the tail, which starts at `head` in buffer 0, and
+    /// returns the first one's index, the `view` of the calls below: one view of the whole
+    /// tail; with meshopt, one per chunk, the fallback buffer and the extension, and
+    /// `json` gets the JSON tinygltf does not write (pass it to write_streamed_glb()).
+    [[nodiscard]] int add_views(tinygltf::Model& model, std::uint64_t head, MeshoptJson& json) const;
+    /// The decoded size of the meshopt streams (0 without meshopt).
+    [[nodiscard]] std::uint64_t fallback_bytes() const { return meshopt_ ? streams_.fallback_bytes() : 0; }
+
     /// Adds to `model` the key-time and value accessors of the next channel (in build
-    /// order: item after item, its kept fields in order) within `view`, the buffer view
-    /// that holds the tail from its first byte. Time accessors are shared where the
+    /// order: item after item, its kept fields in order) within `view`, add_views()'s. Time accessors are shared where the
     /// times are (one per distinct offset). Returns {input, output}.
     [[nodiscard]] std::pair<int, int> add_next_channel(tinygltf::Model& model, int view);
 
@@ -82,8 +96,10 @@ public:
 
 private:
     struct Channel {
-        std::uint64_t times = 0;   // byte offset of its key times in the tail
-        std::uint64_t values = 0;  // byte offset of its values
+        // Where its key times and values are: a byte offset in the tail's one view, or
+        // with meshopt a MeshoptStreams location (chunk, offset).
+        std::uint64_t times = 0;
+        std::uint64_t values = 0;
         std::uint32_t keys = 0;
         ChannelKind kind = ChannelKind::Translation;
         bool bytes = false;  // a rotation in normalized bytes, not shorts
@@ -93,6 +109,8 @@ private:
     [[nodiscard]] bool shared_times(const Channel& c) const { return c.times == 0 || (ends_ != 0 && c.times == ends_); }
     SpillFile data_;
     std::uint64_t bytes_ = 0;
+    bool meshopt_ = false;
+    MeshoptStreams streams_;
     std::vector<Channel> channels_;
     std::size_t next_ = 0;
     double first_time_ = 0.0;

@@ -450,6 +450,9 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     tinygltf::Model model;
     model.asset.version = "2.0";
     model.asset.generator = "kodawari " + std::string(version());
+    // Room for meshopt's fallback buffer (CompactKeys::add_views), which must not move
+    // buffer 0's bytes while `bytes` and `writer` refer to them.
+    model.buffers.reserve(2);
     model.buffers.emplace_back();
     std::vector<unsigned char>& bytes = model.buffers[0].data;
     BufferWriter writer(bytes);
@@ -474,6 +477,7 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
                       (tail_spread ? layout.translation_bytes : 0);
     const float fps = world->fps;
     std::optional<CompactKeys> compact;
+    StreamedElements streamed;
     if (compaction.enabled) {
         std::vector<float> times(frames);
         for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / fps;
@@ -487,7 +491,7 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
         compact.emplace(std::move(built).value());
         stats = compact->stats();
         layout.compact = &*compact;
-        layout.animation_view = add_buffer_view(model, bytes.size(), compact->bytes(), 0);
+        layout.animation_view = compact->add_views(model, bytes.size(), streamed.meshopt);
         compact->add_shared_times(model, layout.animation_view);
         layout.first_accessor = static_cast<int>(model.accessors.size());
     }
@@ -506,7 +510,6 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
         layout.first_accessor = static_cast<int>(model.accessors.size());
     }
 
-    StreamedElements streamed;
     // Node 0 is the root, then each bird's armature root, joints and mesh node.
     streamed.nodes.groups = 1 + bird_count;
     streamed.nodes.fill = [&](std::size_t group, std::vector<tinygltf::Node>& out) {

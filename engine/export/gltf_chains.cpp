@@ -341,7 +341,8 @@ Result<void> ChainsGlbWriter::Impl::build_and_write_compact(AtomicFile& file) {
     if (!compacted) return compacted.error();
     CompactKeys& keys_out = compacted.value();
     stats = keys_out.stats();
-    const int view = add_buffer_view(model, model.buffers[0].data.size(), keys_out.bytes(), 0);
+    MeshoptJson meshopt;
+    const int view = keys_out.add_views(model, model.buffers[0].data.size(), meshopt);
     tinygltf::Animation animation;
     animation.name = "simulation";
     for (std::size_t t = 0; t < track_nodes.size(); ++t) {
@@ -354,7 +355,7 @@ Result<void> ChainsGlbWriter::Impl::build_and_write_compact(AtomicFile& file) {
     }
     if (!animation.channels.empty()) model.animations.push_back(std::move(animation));
     add_scene();
-    return write_glb_with_tail(file, model, keys_out.bytes(), [&] { return keys_out.write(file); });
+    return write_glb_with_tail(file, model, keys_out.bytes(), [&] { return keys_out.write(file); }, &meshopt);
 }
 
 Result<void> ChainsGlbWriter::finish() {

@@ -128,10 +128,12 @@ Result<void> write_glb(AtomicFile& file, tinygltf::Model& model) {
 }
 
 Result<void> write_glb_with_tail(AtomicFile& file, tinygltf::Model& model, std::uint64_t tail_bytes,
-                                 const std::function<Result<void>()>& write_tail) {
+                                 const std::function<Result<void>()>& write_tail, const MeshoptJson* meshopt) {
     // The streamed writer with nothing streamed: one framing of the container, and the
     // JSON never held twice (tinygltf's DOM and string of a large model).
-    return write_streamed_glb(file, model, StreamedElements{}, tail_bytes, write_tail);
+    StreamedElements streamed;
+    if (meshopt != nullptr) streamed.meshopt = *meshopt;
+    return write_streamed_glb(file, model, streamed, tail_bytes, write_tail);
 }
 
 Result<SpillFile> SpillFile::open(const std::string& beside) {

@@ -20,6 +20,8 @@
 
 namespace kodawari::gltf {
 
+struct MeshoptJson;  // gltf_json_stream.hpp
+
 using Vec3 = std::array<float, 3>;
 using Quat = std::array<float, 4>;
 
@@ -62,8 +64,11 @@ private:
 /// `file`: the bytes write_glb() would write with the tail in the buffer, without holding
 /// the tail in memory (write_streamed_glb() with nothing streamed: the JSON waits in a
 /// temporary file beside `file`). tinygltf may throw; callers catch.
+/// `meshopt`: EXT_meshopt_compression's JSON when the tail holds meshopt streams
+/// (gltf_json_stream.hpp).
 [[nodiscard]] Result<void> write_glb_with_tail(AtomicFile& file, tinygltf::Model& model, std::uint64_t tail_bytes,
-                                               const std::function<Result<void>()>& write_tail);
+                                               const std::function<Result<void>()>& write_tail,
+                                               const MeshoptJson* meshopt = nullptr);
 
 /// Data that arrives in another order than a file wants it (keys frame by frame, a
 /// .glb's channels each contiguous) wait here: a file beside the output, on the disk

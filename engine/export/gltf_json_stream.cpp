@@ -362,6 +362,23 @@ Result<void> write_streamed_glb(AtomicFile& file, tinygltf::Model& model, const 
     const std::uint64_t bin_bytes = head_bytes + tail_bytes;
     if (!model.buffers.empty()) root.at("buffers").at(0)["byteLength"] = bin_bytes;
     if (stand_in) root.at("animations").at(0).at("channels").erase(0);
+    if (const MeshoptJson& meshopt = streamed.meshopt; meshopt.fallback >= 0) {
+        json& views = root.at("bufferViews");
+        if (meshopt.fallback == 0 || static_cast<std::size_t>(meshopt.fallback) >= root.at("buffers").size() ||
+            meshopt.first_view < 0 || static_cast<std::size_t>(meshopt.first_view) + meshopt.views.size() > views.size()) {
+            return make_error(Error::Kind::Internal, path + ": meshopt views outside the model");
+        }
+        root["buffers"][static_cast<std::size_t>(meshopt.fallback)] =
+            json{{"byteLength", meshopt.fallback_bytes}, {"extensions", {{"EXT_meshopt_compression", {{"fallback", true}}}}}};
+        for (std::size_t k = 0; k < meshopt.views.size(); ++k) {
+            const MeshoptJson::View& v = meshopt.views[k];
+            json extension{{"buffer", 0},        {"byteLength", v.byte_length}, {"byteStride", v.byte_stride},
+                           {"count", v.count},   {"mode", "ATTRIBUTES"}};
+            if (v.byte_offset != 0) extension["byteOffset"] = v.byte_offset;
+            if (std::string_view(v.filter) != "NONE") extension["filter"] = v.filter;
+            views[static_cast<std::size_t>(meshopt.first_view) + k]["extensions"]["EXT_meshopt_compression"] = std::move(extension);
+        }
+    }
     // Members that only streamed elements fill, in their place among the sorted keys.
     for (const char* key : {"accessors", "nodes", "skins"}) {
         if (!root.contains(key)) root[key] = nullptr;

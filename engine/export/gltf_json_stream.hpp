@@ -29,6 +29,25 @@ struct ElementSource {
     std::function<void(std::size_t group, std::vector<T>& out)> fill;
 };
 
+/// EXT_meshopt_compression's JSON (the spec: KhronosGroup/glTF,
+/// extensions/2.0/Vendor/EXT_meshopt_compression), which tinygltf 2.7 does not write (it
+/// writes no buffer or buffer view extensions, and a buffer's byteLength only from its
+/// data): buffer `fallback` gets byteLength `fallback_bytes`, no uri and the extension's
+/// `fallback: true`; the buffer views from `first_view` on get `views`' objects in order.
+struct MeshoptJson {
+    struct View {
+        std::uint64_t byte_offset = 0;  // in buffer 0, the GLB's BIN chunk
+        std::uint64_t byte_length = 0;
+        std::uint32_t byte_stride = 0;
+        std::uint64_t count = 0;
+        const char* filter = "NONE";  // NONE is the default: not written
+    };
+    int fallback = -1;  // -1: none
+    std::uint64_t fallback_bytes = 0;
+    int first_view = 0;
+    std::vector<View> views;
+};
+
 /// What is appended to the model's arrays while they are written.
 struct StreamedElements {
     ElementSource<tinygltf::Node> nodes;          // after model.nodes
@@ -39,6 +58,7 @@ struct StreamedElements {
     // extras and place come from the model even when every channel is streamed).
     ElementSource<tinygltf::AnimationChannel> channels;
     ElementSource<tinygltf::AnimationSampler> samplers;
+    MeshoptJson meshopt;
 };
 
 /// Writes into `file` (not committed) the .glb that tinygltf (write_glb(), binary, compact

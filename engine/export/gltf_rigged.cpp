@@ -538,7 +538,8 @@ Result<void> RiggedGlbWriter::Impl::write_compact(AtomicFile& file, tinygltf::Mo
     if (!compacted) return compacted.error();
     CompactKeys& keys_out = compacted.value();
     stats = keys_out.stats();
-    const int view = add_buffer_view(out, bytes.size(), keys_out.bytes(), 0);
+    MeshoptJson meshopt;
+    const int view = keys_out.add_views(out, bytes.size(), meshopt);
     tinygltf::Animation animation;
     animation.name = animation_name;
     for (std::size_t i = 0; i < instances.size(); ++i) {
@@ -556,7 +557,7 @@ Result<void> RiggedGlbWriter::Impl::write_compact(AtomicFile& file, tinygltf::Mo
     }
     out.animations.push_back(std::move(animation));
     out.buffers[0].data = std::move(bytes);
-    return write_glb_with_tail(file, out, keys_out.bytes(), [&] { return keys_out.write(file); });
+    return write_glb_with_tail(file, out, keys_out.bytes(), [&] { return keys_out.write(file); }, &meshopt);
 }
 
 // The spill file holds frames x tracks keys; the .glb per track its translations over

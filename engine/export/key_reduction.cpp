@@ -84,21 +84,38 @@ void normalize4(double q[4]) {
 }  // namespace
 
 Reduction reduce_vec3(std::span<const float> times, std::span<const float> values, double bound, VectorMetric metric) {
+    return reduce_vec3(times, values, values, bound, metric);
+}
+
+Reduction reduce_vec3(std::span<const float> times, std::span<const float> values, std::span<const float> written,
+                      double bound, VectorMetric metric) {
     const auto frames = static_cast<std::uint32_t>(times.size());
-    assert(values.size() == std::size_t{frames} * 3);
-    const auto error_at = [&](std::uint32_t a, std::uint32_t b, std::uint32_t i) {
-        const double t = parameter(times, a, b, i);
+    assert(values.size() == std::size_t{frames} * 3 && written.size() == values.size());
+    // The error of `at` (written keys a and b interpolated at t) against frame i.
+    const auto error_of = [&](auto&& at, std::uint32_t i) {
         double distance = 0.0;
         double relative = 0.0;
         for (std::size_t c = 0; c < 3; ++c) {
-            const double va = values[a * 3 + c];
-            const double vb = values[b * 3 + c];
             const double v = values[i * 3 + c];
-            const double d = std::abs(va + (vb - va) * t - v);
+            const double d = std::abs(at(c) - v);
             distance += d * d;
             if (d > 0.0) relative = std::max(relative, std::abs(v) > 0.0 ? d / std::abs(v) : std::numeric_limits<double>::infinity());
         }
         return metric == VectorMetric::Distance ? std::sqrt(distance) : relative;
+    };
+    const auto error_at = [&](std::uint32_t a, std::uint32_t b, std::uint32_t i) {
+        const double t = parameter(times, a, b, i);
+        return error_of(
+            [&](std::size_t c) {
+                const double va = written[a * 3 + c];
+                const double vb = written[b * 3 + c];
+                return va + (vb - va) * t;
+            },
+            i);
+    };
+    const bool exact = written.data() == values.data();
+    const auto key_error = [&](std::uint32_t k) {
+        return exact ? 0.0 : error_of([&](std::size_t c) { return static_cast<double>(written[k * 3 + c]); }, k);
     };
     const auto span_error = [&](std::uint32_t a, std::uint32_t b) {
         double worst = 0.0;
@@ -108,7 +125,7 @@ Reduction reduce_vec3(std::span<const float> times, std::span<const float> value
         }
         return worst;
     };
-    return reduce(frames, bound, span_error, [](std::uint32_t) { return 0.0; });
+    return reduce(frames, bound, span_error, key_error);
 }
 
 double worst_rounding(RotationBits bits) { return 2.0 * std::asin(1.0 / unit_scale(bits)); }
@@ -173,7 +190,7 @@ double rounding_error(std::span<const float> xyzw, std::span<const std::int16_t>
 }
 
 Reduction reduce_rotations(std::span<const float> times, std::span<const float> xyzw, std::span<const std::int16_t> quantized,
-                           double bound, RotationBits bits) {
+                           double bound, RotationBits bits, bool either_sign) {
     const auto frames = static_cast<std::uint32_t>(times.size());
     assert(xyzw.size() == std::size_t{frames} * 4 && quantized.size() == xyzw.size());
     const auto decoded = [&](std::uint32_t k, double q[4]) {
@@ -199,7 +216,8 @@ Reduction reduce_rotations(std::span<const float> times, std::span<const float> 
         // which rounding to integers makes exact) leave the direction to each player's
         // arithmetic (the spec's "negate when negative" meets a dot of -0 or 1e-17), so
         // a span must be clearly within one hemisphere.
-        if (dot4(qa, qb) < kMinKeyDot) return std::numeric_limits<double>::infinity();
+        const double dot = dot4(qa, qb);
+        if ((either_sign ? std::abs(dot) : dot) < kMinKeyDot) return std::numeric_limits<double>::infinity();
         double worst = 0.0;
         for (std::uint32_t i = a + 1; i < b; ++i) {
             double q[4];

@@ -54,6 +54,12 @@ struct Reduction {
 /// is 0. `bound` >= 0.
 [[nodiscard]] KODAWARI_INTERNAL Reduction reduce_vec3(std::span<const float> times, std::span<const float> values,
                                                       double bound, VectorMetric metric);
+/// As above, but the keys are written as `written` (the same layout as `values`: the
+/// values a quantizing filter gives back, docs/compact.md's `--meshopt`): a player
+/// interpolates those, and the error is measured against `values`, so a kept key's own
+/// error is its rounding and max_error counts it.
+[[nodiscard]] KODAWARI_INTERNAL Reduction reduce_vec3(std::span<const float> times, std::span<const float> values,
+                                                      std::span<const float> written, double bound, VectorMetric metric);
 
 /// How rotation components are stored: glTF 2.0 §3.11 ("Animations", the table of
 /// channel outputs) allows rotation outputs as floats or as normalized signed bytes
@@ -94,9 +100,13 @@ KODAWARI_INTERNAL void quantize_rotations(std::span<const float> xyzw, std::span
 /// apart, where the short way is ambiguous), so that players which
 /// slerp without taking the short way (not as the spec's Appendix C does) turn the same
 /// way. `bound` >= 0 radians; a bound below the rounding keeps every key rounding changes.
+/// `either_sign`: the written keys need not be in one hemisphere (meshopt's QUATERNION
+/// filter gives each key back with its largest component positive): two consecutive kept
+/// keys then need |dot| >= 1e-4, and a player takes the short way between them, as the
+/// spec's Appendix C slerp does.
 [[nodiscard]] KODAWARI_INTERNAL Reduction reduce_rotations(std::span<const float> times, std::span<const float> xyzw,
                                                            std::span<const std::int16_t> quantized, double bound,
-                                                           RotationBits bits = RotationBits::Short);
+                                                           RotationBits bits = RotationBits::Short, bool either_sign = false);
 
 /// The largest angle (radians) by which rounding to `bits` turned a key: the error of a
 /// rotation channel that keeps every key.

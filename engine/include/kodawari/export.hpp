@@ -45,6 +45,13 @@ struct GlbCompaction {
     /// A dropped scale key's difference from the interpolated one, per axis, relative to
     /// the key.
     float scale_rel = 0.001f;
+    /// With `enabled` (`--compact --meshopt`): the keys also quantized per channel
+    /// (rotations through meshopt's QUATERNION filter, translations and scales through its
+    /// EXPONENTIAL one, the bits each channel's bound allows, the quantization counted in
+    /// the bounds) and the key streams written with meshopt's attribute codec as
+    /// EXT_meshopt_compression, a required extension: smaller, for the readers that decode
+    /// it (three.js with its MeshoptDecoder, gltf-transform, Blender 5.2 and later).
+    bool meshopt = false;
 };
 
 /// What compaction did to one file: keys over all channels before and after, the
