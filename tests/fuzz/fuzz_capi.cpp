@@ -98,6 +98,8 @@ void chain_world(ByteReader& in) {
             d.solver.gravity[1] = in.number(50.0f);
             d.solver.wind[0] = in.number(50.0f);
             d.solver.momentum_suppression = in.number(1.0f);
+            d.solver.settle_start = in.upto(2);  // 2 is an error
+            d.solver.teleport_distance = in.number(5.0f);
         }
     }
     std::vector<kodawari_chain_desc> chains(chain_count);
