@@ -219,8 +219,7 @@ public:
                     const rods::SolverParams& params = world_->templ(world_->chains[c]).params;
                     const glm::vec3 last(chain[(simd::kRootP + 0) * kBatchLanes + l], chain[(simd::kRootP + 1) * kBatchLanes + l],
                                          chain[(simd::kRootP + 2) * kBatchLanes + l]);
-                    const glm::vec3 jump = frame.roots[c].position - last;
-                    const bool teleport = glm::dot(jump, jump) > params.teleport_distance * params.teleport_distance;
+                    const bool teleport = rods::teleported(last, frame.roots[c].position, params.teleport_distance);
                     const bool start = first && params.settle_start;
                     if (!teleport && !start) continue;
                     rods::ChainState s = state(c);

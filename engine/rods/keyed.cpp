@@ -42,9 +42,10 @@ KeyedWeights keyed_weights(std::span<const KeyedExample> examples, std::span<con
         if (sources[s] != KeySourceKind::Motion) continue;
         KeyState::Source& src = state.sources[s];
         const glm::vec3 jump = keys[s].position - src.last.position;
+        const bool teleport = teleported(src.last.position, keys[s].position, teleport_distance);
         spin[s] = angular_velocity(src.last.rotation, keys[s].rotation, dt);
         src.last = keys[s];
-        if (glm::dot(jump, jump) > teleport_distance * teleport_distance) {  // a teleport
+        if (teleport) {
             velocity[s] = src.velocity;  // 0 before any velocity
             continue;
         }

@@ -341,8 +341,7 @@ void start_moving(const Transform& root, float dt, ChainState& s) {
 }
 
 bool follow_teleport(const SolverParams& params, const Transform& root, float dt, ChainState& s) {
-    const glm::vec3 jump = root.position - s.root.position;
-    if (!(glm::dot(jump, jump) > params.teleport_distance * params.teleport_distance)) return false;
+    if (!teleported(s.root.position, root.position, params.teleport_distance)) return false;
     // Carried to the new root, then back by one frame of the root's own motion (joint 0
     // follows the root: its velocities, carried too, are the root's), so that step() sees
     // the root move on as it moved and the chain's velocities, which carry that motion,

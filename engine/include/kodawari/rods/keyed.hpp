@@ -116,7 +116,7 @@ using KeyedWeights = std::array<float, kMaxKeyedExamples>;
 [[nodiscard]] KODAWARI_API KeyedWeights keyed_weights(std::span<const KeyedExample> examples,
                                                       std::span<const KeySourceKind> sources,
                                                       std::span<const Transform> keys, float dt, KeyState& state,
-                                                      float teleport_distance = 1.0f);
+                                                      float teleport_distance = SolverParams{}.teleport_distance);
 
 /// Combines view weights w_0 .. w_m (SPEC A.3) with raw keyed weights u_1 .. u_J (K.4):
 /// U = sum u_j; if U >= 1 every u_j /= U and U = 1; then the view weights scale by 1 - U.

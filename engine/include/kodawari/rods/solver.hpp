@@ -289,6 +289,13 @@ KODAWARI_API void follow_center(const Transform& from, const Transform& to, Chai
 /// back by its velocity state.v[0] and its turn state.omega[0] (joint 0 follows the root).
 [[nodiscard]] KODAWARI_API Transform frame_before(const Transform& root, const ChainState& state, float dt);
 
+/// Whether a root (or a motion key source) that moved from `from` to `to` in one frame
+/// teleported: farther than `distance` (SolverParams::teleport_distance).
+[[nodiscard]] inline bool teleported(const glm::vec3& from, const glm::vec3& to, float distance) {
+    const glm::vec3 jump = to - from;
+    return glm::dot(jump, jump) > distance * distance;
+}
+
 /// A teleport: when `root` is farther than params.teleport_distance from the last step's
 /// root (state.root), carries `state` rigidly to `root` (follow_center(state.root, root)),
 /// then back to frame_before(root, state, dt), so that the chain keeps its shape and
