@@ -11,6 +11,7 @@
 
 #include "shared/rods.h"
 #include "lib/quat.glsl"
+#include "lib/wind.glsl"
 
 layout(local_size_x = KW_RODS_WORKGROUP_SIZE) in;
 
@@ -60,6 +61,7 @@ layout(std430, binding = KW_RODS_BINDING_CHAIN_STATE) buffer ChainStates { RodCh
 layout(std430, binding = KW_RODS_BINDING_KEYED) readonly buffer Keyed { vec4 keyed[]; };
 layout(std430, binding = KW_RODS_BINDING_CENTERS) readonly buffer Centers { RodTransformGpu centers[]; };
 layout(std430, binding = KW_RODS_BINDING_CENTER_STATE) buffer CenterStates { RodTransformGpu center_states[]; };
+layout(std430, binding = KW_RODS_BINDING_WINDS) readonly buffer Winds { RodWindGpu winds[]; };
 
 layout(push_constant) uniform Push { RodPush push; };
 
@@ -438,6 +440,15 @@ void main() {
     const float thickness = t.physics.x;
     const float b2 = thickness * thickness;
     const vec3 acceleration = t.accel.xyz;
+    // The air around the chain this frame (rods::chain_air: its field at its end root),
+    // and the drag across and along its segments (solver.cpp step).
+    const bool AIR = (FEATURES & KW_RODS_FEATURE_AIR) != 0u;
+    vec3 air = vec3(0.0);
+    if (AIR && push.flags.y != 0u) {
+        const RodWindGpu w = winds[chain.joints.w];
+        air = wind_air_velocity(w.velocity.xyz, w.velocity.w, w.scales.x, w.scales.y, w.seed.x, to.position.xyz, push.time.x);
+    }
+    const bool drag = AIR && t.drag.z != 0.0;
     const uint cbegin = chain.ids.z;
     const uint cend = chain.ids.z + chain.ids.w;
     // Solved relative to the previous root position, as the state is (solver.cpp).
@@ -487,7 +498,22 @@ void main() {
 
         [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
             if (i < n) {
-                v[i] = decay * v[i] + h * acceleration;  // damping, then gravity (solver.cpp)
+                if (AIR) {
+                    // Damping and drag relative to the air, then gravity (solver.cpp).
+                    vec3 relative = decay * (v[i] - air);
+                    if (drag) {
+                        const vec3 segment = x[i] - x[i - 1];
+                        const float len = length(segment);
+                        if (len > 1e-9) {
+                            const vec3 axis = segment / len;
+                            const vec3 along = dot(relative, axis) * axis;
+                            relative = t.drag.x * (relative - along) + t.drag.y * along;
+                        }
+                    }
+                    v[i] = air + relative + h * acceleration;
+                } else {
+                    v[i] = decay * v[i] + h * acceleration;  // damping, then gravity (solver.cpp)
+                }
                 omega[i] = decay * omega[i];
                 p[i] = x[i] + h * v[i];
                 // First-order orientation update (solver.cpp).

@@ -18,7 +18,8 @@ void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, cons
         state.center = frame.centers[c.center];
     }
     const std::span<const rods::Collider> colliders(frame.colliders.data() + c.collider_begin, c.collider_count);
-    rods::step(t.chain, t.params, frame.roots[chain], rest.shape, colliders, frame.dt, state);
+    rods::step(t.chain, t.params, frame.roots[chain], rest.shape, colliders, frame.dt, state,
+               rods::chain_air(world, chain, frame));
     if (rest_out != nullptr) *rest_out = std::move(rest);
 }
 

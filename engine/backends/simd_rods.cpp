@@ -89,6 +89,9 @@ void set_step(simd::RodTemplateConsts& k, const rods::SolverParams& p, float dt)
     k.decay = std::exp(-p.damping * k.h);
     const glm::vec3 h_acceleration = k.h * (p.gravity + p.wind);
     k.h_acceleration = {h_acceleration.x, h_acceleration.y, h_acceleration.z};
+    k.drag = p.normal_drag > 0.0f || p.tangent_drag > 0.0f;
+    k.normal_decay = std::exp(-p.normal_drag * k.h);
+    k.tangent_decay = std::exp(-p.tangent_drag * k.h);
     k.half_h = 0.5f * k.h;
     k.two_over_h = 2.0f / k.h;
     k.ftl_over_h = rods::kFollowTheLeaderDamping / k.h;
@@ -229,8 +232,22 @@ public:
                 }
             }
         });
+        // The air around each chain (rods::chain_air), by engine/rods' own function (a
+        // hundred operations a chain with gusts), where any field moves the air; in calm
+        // air it is 0 everywhere, which the kernel takes without the rows (same bits).
+        const bool moving = std::any_of(frame.winds.begin(), frame.winds.end(),
+                                        [](const rods::WindField& w) { return w.velocity != glm::vec3(0.0f); });
+        if (moving) {
+            air_.resize(world_->chains.size() * 3);
+            parallel_for(world_->chains.size(), threads_, [&](std::size_t begin, std::size_t end) {
+                for (std::size_t c = begin; c < end; ++c) {
+                    const glm::vec3 a = rods::chain_air(*world_, static_cast<std::uint32_t>(c), frame);
+                    for (int r = 0; r < 3; ++r) air_[c * 3 + r] = a[r];
+                }
+            });
+        }
         const simd::RodStepArgs args{templates_.data(), batches_.data(), storage_.get(), &frame, world_->chains.data(),
-                                     keyed_.data()};
+                                     keyed_.data(), moving ? air_.data() : nullptr};
         const std::size_t parts = split_.size() - 1;
         parallel_for(parts, static_cast<unsigned>(parts), [&](std::size_t begin, std::size_t end) {
             for (std::size_t p = begin; p < end; ++p) kernels_.step(args, split_[p], split_[p + 1]);
@@ -369,6 +386,7 @@ private:
     std::vector<std::uint32_t> keyed_chains_;                     // the chains with keyed examples
     std::vector<rods::KeyState> key_states_;                      // per chain (keyed ones only used)
     std::vector<float> keyed_;                                    // per chain, kMaxKeyedExamples raw weights
+    std::vector<float> air_;                                      // per chain, the air's velocity (3 floats)
     std::vector<std::uint32_t> center_chains_;                    // the chains with a center frame
     bool started_ = false;  // whether a step has run since load()
     std::vector<rods::Transform> centers_;                        // the last frame's center frames (RodFrame::centers)

@@ -81,6 +81,21 @@ void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
     g.step = {h, std::exp(-p.damping * h), rods::iteration_stiffness(rods::substep_stiffness(p.stiffness, h), p.iterations),
               p.momentum_suppression};
     g.physics.y = rods::iteration_stiffness(rods::substep_stiffness(p.rest_stiffness, h), p.iterations);
+    const bool drag = p.normal_drag > 0.0f || p.tangent_drag > 0.0f;
+    g.drag = {std::exp(-p.normal_drag * h), std::exp(-p.tangent_drag * h), drag ? 1.0f : 0.0f, 0.0f};
+}
+
+// Whether any of a frame's wind fields moves the air (a calm field, velocity 0, moves
+// nothing whatever its gusts: they scale with the mean speed).
+bool moving_air(const rods::RodFrame& frame) {
+    return std::any_of(frame.winds.begin(), frame.winds.end(),
+                       [](const rods::WindField& w) { return w.velocity != glm::vec3(0.0f); });
+}
+
+// A wind field as the kernel takes it (shared/rods.h), with rods::air_velocity's own
+// reciprocals, so both sides scale the noise by the same bits.
+gpu::RodWindGpu to_gpu(const rods::WindField& w) {
+    return {to_gpu(w.velocity, w.gust), {1.0f / w.gust_period, 1.0f / w.gust_size, 0.0f, 0.0f}, {w.seed, 0u, 0u, 0u}};
 }
 
 // The smoothing factors alpha_j of a template's motion keys for a frame of `dt` (K.2),
@@ -228,7 +243,8 @@ public:
         for (std::uint32_t e = 0; e < count; ++e) {
             const std::uint32_t c = order[e];
             const rods::ChainInstance& ch = world.chains[c];
-            chains[e] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count}, {ch.joint_begin, c, ch.center, 0u}};
+            chains[e] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count},
+                         {ch.joint_begin, c, ch.center, world.wind_count > 0 ? ch.wind : 0u}};
             if (groups_.empty() || groups_.back().template_index != ch.template_index) {
                 groups_.push_back({ch.template_index, e, 0u, nullptr});
             }
@@ -297,7 +313,8 @@ public:
             chain_states.size() * sizeof(gpu::RodChainStateGpu),
             count * sizeof(gpu::vec4),
             std::uint64_t{world.center_count} * sizeof(gpu::RodTransformGpu),
-            std::uint64_t{world.center_count} * sizeof(gpu::RodTransformGpu)};
+            std::uint64_t{world.center_count} * sizeof(gpu::RodTransformGpu),
+            std::uint64_t{world.wind_count} * sizeof(gpu::RodWindGpu)};
         auto storage = compute::create_storage_buffers(*ctx_, sizes, "the rod world");
         if (!storage) return storage.error();
         buffers_ = std::move(storage).value();
@@ -342,48 +359,20 @@ public:
 
         // The kinds of collider and the centers the world uses, the rest compiled out.
         features_ = world.center_count > 0 ? KW_RODS_FEATURE_CENTERS : 0u;
+        // Velocities relative to the air where the air moves or a template has drag; a
+        // world loaded in calm air runs the plain kernel (calm air gives the same bits)
+        // until a frame's wind moves (record()).
+        bool air = moving_air(initial);
+        for (const rods::ChainTemplate& t : world.templates) air = air || t.params.normal_drag > 0.0f || t.params.tangent_drag > 0.0f;
+        if (air) features_ |= KW_RODS_FEATURE_AIR;
         for (const rods::Collider& c : initial.colliders) features_ |= feature_of(c.kind);
-        const std::uint32_t suppression = all_none   ? KW_RODS_SUPPRESSION_NONE
-                                          : all_full ? KW_RODS_SUPPRESSION_FULL
-                                                     : KW_RODS_SUPPRESSION_PARTIAL;
-        // Each kernel is specialized to chains of exactly MAX_J joints and MAX_VIEWS views
-        // where it can be (KW_RODS_SPEC_EXACT: no per-joint masks, no code for absent
-        // joints). GROUPED: one variant per distinct (n, m) of the templates, when there are
-        // few (each is a compilation); otherwise the world's longest for the runs that have
-        // it and the general kernel for the rest.
-        auto shape_of = [&](std::uint32_t t) {
-            return std::array<std::uint32_t, 3>{templates_[t].counts.x, templates_[t].counts.y, templates_[t].solver.z};
-        };
-        std::vector<std::array<std::uint32_t, 3>> shapes_of_runs;
-        for (const Group& g : groups_) {
-            const auto nmj = shape_of(g.template_index);
-            if (std::find(shapes_of_runs.begin(), shapes_of_runs.end(), nmj) == shapes_of_runs.end()) shapes_of_runs.push_back(nmj);
-        }
-        const bool per_shape = grouped_ && shapes_of_runs.size() <= KW_RODS_MAX_VARIANTS;
-        std::vector<const Buffer*> bound;
-        for (const auto& b : buffers_) bound.push_back(&b);
-        auto kernel_for = [&](std::uint32_t n, std::uint32_t m, std::uint32_t keyed, bool exact) -> Result<const compute::Kernel*> {
-            auto kernel = pipeline({n, m, suppression, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed, features_});
-            if (!kernel) return kernel.error();
-            kernel.value()->bind(bound);  // (again for a shared one: the same bindings)
-            return kernel.value();
-        };
-        bool all_exact = true;
-        for (Group& g : groups_) {
-            const auto [n, m, keyed] = shape_of(g.template_index);
-            const bool exact = n == max_joints && m == max_views && keyed == max_keyed;
-            all_exact = all_exact && exact;
-            if (!grouped_) continue;
-            auto kernel = per_shape ? kernel_for(n, m, keyed, true) : kernel_for(max_joints, max_views, max_keyed, exact);
-            if (!kernel) return kernel.error();
-            g.kernel = kernel.value();
-        }
-        if (!grouped_) {
-            auto kernel = kernel_for(max_joints, max_views, max_keyed, all_exact);
-            if (!kernel) return kernel.error();
-            kernel_ = kernel.value();
-        }
-        return {};
+        suppression_ = all_none   ? KW_RODS_SUPPRESSION_NONE
+                       : all_full ? KW_RODS_SUPPRESSION_FULL
+                                  : KW_RODS_SUPPRESSION_PARTIAL;
+        max_joints_ = max_joints;
+        max_views_ = max_views;
+        max_keyed_ = max_keyed;
+        return select_kernels();
     }
 
     Result<void> step(const rods::RodFrame& frame) override {
@@ -417,7 +406,8 @@ public:
                                         rounded(std::uint64_t{world_->character_count} * sizeof(gpu::RodTransformGpu)) +
                                         rounded(world_->chains.size() * sizeof(gpu::RodTransformGpu)) +
                                         rounded(std::uint64_t{world_->collider_count} * sizeof(gpu::RodColliderGpu)) +
-                                        rounded(std::uint64_t{world_->center_count} * sizeof(gpu::RodTransformGpu));
+                                        rounded(std::uint64_t{world_->center_count} * sizeof(gpu::RodTransformGpu)) +
+                                        rounded(std::uint64_t{world_->wind_count} * sizeof(gpu::RodWindGpu));
             auto ring = compute::StagingRing::create(*ctx_, bytes, ctx_->frames_in_flight());
             if (!ring) return ring.error();
             ring_.emplace(std::move(ring).value());
@@ -488,6 +478,49 @@ public:
     }
 
 private:
+    // The kernels of the loaded world's dispatches for its features_ (pipeline(), cached):
+    // at load, and again when a world loaded in calm air gets a wind (record()).
+    Result<void> select_kernels() {
+        // Each kernel is specialized to chains of exactly MAX_J joints and MAX_VIEWS views
+        // where it can be (KW_RODS_SPEC_EXACT: no per-joint masks, no code for absent
+        // joints). GROUPED: one variant per distinct (n, m) of the templates, when there are
+        // few (each is a compilation); otherwise the world's longest for the runs that have
+        // it and the general kernel for the rest.
+        auto shape_of = [&](std::uint32_t t) {
+            return std::array<std::uint32_t, 3>{templates_[t].counts.x, templates_[t].counts.y, templates_[t].solver.z};
+        };
+        std::vector<std::array<std::uint32_t, 3>> shapes_of_runs;
+        for (const Group& g : groups_) {
+            const auto nmj = shape_of(g.template_index);
+            if (std::find(shapes_of_runs.begin(), shapes_of_runs.end(), nmj) == shapes_of_runs.end()) shapes_of_runs.push_back(nmj);
+        }
+        const bool per_shape = grouped_ && shapes_of_runs.size() <= KW_RODS_MAX_VARIANTS;
+        std::vector<const Buffer*> bound;
+        for (const auto& b : buffers_) bound.push_back(&b);
+        auto kernel_for = [&](std::uint32_t n, std::uint32_t m, std::uint32_t keyed, bool exact) -> Result<const compute::Kernel*> {
+            auto kernel = pipeline({n, m, suppression_, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed, features_});
+            if (!kernel) return kernel.error();
+            kernel.value()->bind(bound);  // (again for a shared one: the same bindings)
+            return kernel.value();
+        };
+        bool all_exact = true;
+        for (Group& g : groups_) {
+            const auto [n, m, keyed] = shape_of(g.template_index);
+            const bool exact = n == max_joints_ && m == max_views_ && keyed == max_keyed_;
+            all_exact = all_exact && exact;
+            if (!grouped_) continue;
+            auto kernel = per_shape ? kernel_for(n, m, keyed, true) : kernel_for(max_joints_, max_views_, max_keyed_, exact);
+            if (!kernel) return kernel.error();
+            g.kernel = kernel.value();
+        }
+        if (!grouped_) {
+            auto kernel = kernel_for(max_joints_, max_views_, max_keyed_, all_exact);
+            if (!kernel) return kernel.error();
+            kernel_ = kernel.value();
+        }
+        return {};
+    }
+
     // The step of `frame`: its input (and, when dt changed, the templates' step sizes)
     // written, the input writer's kernels, then the step's dispatch between the
     // timestamps when `timed`, its writes made visible to the host and to copies.
@@ -508,13 +541,17 @@ private:
                                   "the kernel is specialized to the kinds it loaded with: load() the world again");
             }
         }
+        if ((features_ & KW_RODS_FEATURE_AIR) == 0u && moving_air(frame)) {
+            features_ |= KW_RODS_FEATURE_AIR;
+            KW_TRY(select_kernels());
+        }
         KW_TRY(upload_input(recording, frame));
         if (input_writer_) input_writer_->record(recording, *this);
 
         const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
         // The world's first step starts its chains moving with their roots (rods::start_moving).
         gpu::RodPush push{{}, {}, to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f), to_gpu(frame.camera.forward, frame.dt),
-                          {started_ ? 0u : 1u, 0u, 0u, 0u}};
+                          {started_ ? 0u : 1u, world_->wind_count > 0 ? 1u : 0u, 0u, 0u}, {frame.time, 0.0f, 0.0f, 0.0f}};
         started_ = true;
         auto dispatch = [&](const compute::Kernel* kernel, std::uint32_t first, std::uint32_t chains) {
             push.counts.x = chains;
@@ -572,6 +609,9 @@ private:
         keys_.resize(frame.keys.size());
         std::transform(frame.keys.begin(), frame.keys.end(), keys_.begin(), [](const rods::Transform& t) { return to_gpu(t); });
         KW_TRY(compute::upload(target, key_buffers_[KW_ROD_KEYS_BINDING_KEYS], bytes_of(keys_)));
+        winds_.resize(frame.winds.size());
+        std::transform(frame.winds.begin(), frame.winds.end(), winds_.begin(), [](const rods::WindField& w) { return to_gpu(w); });
+        KW_TRY(compute::upload(target, buffers_[KW_RODS_BINDING_WINDS], bytes_of(winds_)));
         return compute::upload(target, buffers_[KW_RODS_BINDING_COLLIDERS], bytes_of(colliders_));
     }
 
@@ -621,12 +661,15 @@ private:
     std::vector<Group> groups_;
     bool grouped_ = false;
     std::uint32_t features_ = KW_RODS_FEATURE_ALL;  // KW_RODS_SPEC_FEATURES of the loaded world
+    // What the world's kernels are specialized to besides features_ (select_kernels()).
+    std::uint32_t suppression_ = KW_RODS_SUPPRESSION_PARTIAL, max_joints_ = 2, max_views_ = 0, max_keyed_ = 0;
     float dt_ = -1.0f;
     bool started_ = false;  // whether a step has been recorded since load()
     double gpu_ms_ = -1.0;
     // Per-frame staging on the host, kept to avoid reallocating every frame.
     std::vector<gpu::RodTransformGpu> reference_, roots_, keys_, centers_;
     std::vector<gpu::RodColliderGpu> colliders_;
+    std::vector<gpu::RodWindGpu> winds_;
     std::vector<gpu::RodJointMotionGpu> motion_;
     std::vector<gpu::RodJointSpinGpu> spin_;
     std::vector<gpu::RodChainStateGpu> chain_states_;

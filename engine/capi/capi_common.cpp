@@ -112,6 +112,32 @@ void require_range(float value, double low, double high, const std::string& what
                       (high_open ? ")" : "]"));
 }
 
+rods::WindField read_wind(const kodawari_wind& wind, const std::string& what) {
+    require_point(wind.velocity, 100.0, what + ".velocity");
+    require_range(wind.gust, 0.0, 4.0, what + ".gust");
+    require_range(wind.gust_period, 0.05, 1000.0, what + ".gust_period");
+    require_range(wind.gust_size, 0.05, 10000.0, what + ".gust_size");
+    rods::WindField out;
+    out.velocity = glm::vec3(wind.velocity[0], wind.velocity[1], wind.velocity[2]);
+    out.gust = wind.gust;
+    out.gust_period = wind.gust_period;
+    out.gust_size = wind.gust_size;
+    out.seed = wind.seed;
+    // The engine's own check, behind ours (the float bounds agree with it).
+    check(rods::validate(out, what.c_str()));
+    return out;
+}
+
+kodawari_wind to_c(const rods::WindField& wind) {
+    kodawari_wind out{};
+    for (int i = 0; i < 3; ++i) out.velocity[i] = wind.velocity[i];
+    out.gust = wind.gust;
+    out.gust_period = wind.gust_period;
+    out.gust_size = wind.gust_size;
+    out.seed = wind.seed;
+    return out;
+}
+
 void require_point(const float* xyz, double limit, const std::string& what) {
     for (std::size_t i = 0; i < 3; ++i) {
         if (!finite(xyz[i]) || std::abs(static_cast<double>(xyz[i])) > limit) {

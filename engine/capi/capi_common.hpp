@@ -22,6 +22,7 @@
 #include "kodawari/kodawari.h"
 #include "kodawari/result.hpp"
 #include "kodawari/rods/chain_snapshot.hpp"
+#include "kodawari/rods/wind.hpp"
 
 /// kodawari_vulkan_device_adopt's handle: the application's device, wrapped
 /// (kodawari::adopt_vulkan_device); shared with the worlds made on it.
@@ -103,6 +104,10 @@ void require_range(float value, double low, double high, const std::string& what
                    bool high_open = false);
 /// Finite coordinates with |each| <= limit.
 void require_point(const float* xyz, double limit, const std::string& what);
+/// A checked wind field (`what` names the argument): every kodawari_wind range.
+rods::WindField read_wind(const kodawari_wind& wind, const std::string& what);
+/// The C form of a wind field.
+kodawari_wind to_c(const rods::WindField& wind);
 /// A unit quaternion (x, y, z, w), length within 1e-3 of 1.
 void require_unit_quat(const float* xyzw, const std::string& what);
 /// A finite vector of length >= 1e-6 (and |each| <= 1e6, so that its square is finite).

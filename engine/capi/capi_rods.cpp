@@ -32,6 +32,7 @@ struct kodawari_chain_world {
     rods::RodFrame frame;     // the last step's input, reused (no allocation per step)
     ChainSnapshot snapshot;   // read()'s scratch, reused
     double time = 0.0;        // s since create or reset (RodFrame::time)
+    rods::WindField wind;     // kodawari_chain_world_set_wind's (calm by default)
 };
 
 namespace {
@@ -92,6 +93,8 @@ rods::SolverParams read_solver(const kodawari_solver_params& s, const std::strin
     require_range(s.momentum_suppression, 0.0, 1.0, what + ".momentum_suppression");
     if (s.settle_start > 1) invalid(what + ".settle_start", std::to_string(s.settle_start) + "; expected 0 or 1");
     require_range(s.teleport_distance, 0.0, 1e6, what + ".teleport_distance", true);
+    require_range(s.normal_drag, 0.0, 1000.0, what + ".normal_drag");
+    require_range(s.tangent_drag, 0.0, 1000.0, what + ".tangent_drag");
     rods::SolverParams p;
     p.max_substep = s.max_substep;
     p.iterations = s.iterations;
@@ -103,6 +106,8 @@ rods::SolverParams read_solver(const kodawari_solver_params& s, const std::strin
     p.momentum_suppression = s.momentum_suppression;
     p.settle_start = s.settle_start != 0;
     p.teleport_distance = s.teleport_distance;
+    p.normal_drag = s.normal_drag;
+    p.tangent_drag = s.tangent_drag;
     return p;
 }
 
@@ -185,6 +190,7 @@ void read_world(const kodawari_chain_world_desc& desc, rods::RodWorld& world,
     }
     world.character_count = desc.character_count;
     world.collider_count = desc.collider_count;
+    world.wind_count = 1;  // kodawari_chain_world_set_wind's field, every chain's
     check(world.finalize());
 }
 
@@ -247,6 +253,7 @@ void fill_frame(const kodawari_chain_world& w, const kodawari_chain_frame& f, fl
         out.colliders[i] = rods::Collider{ref.position + ref.rotation * vec3(a.local.a),
                                          ref.position + ref.rotation * vec3(a.local.b), a.local.radius};
     }
+    out.winds.assign(1, w.wind);
     // The engine's own check, behind ours.
     check(rods::check_frame(w.world, out));
 }
@@ -299,7 +306,23 @@ KODAWARI_C_API kodawari_status kodawari_solver_params_default(kodawari_solver_pa
         s.momentum_suppression = p.momentum_suppression;
         s.settle_start = p.settle_start ? 1u : 0u;
         s.teleport_distance = p.teleport_distance;
+        s.normal_drag = p.normal_drag;
+        s.tangent_drag = p.tangent_drag;
         *out = s;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_wind_default(kodawari_wind* out) {
+    return guard("kodawari_wind_default", nullptr, [&] {
+        require_pointer(out, "out");
+        *out = to_c(rods::WindField{});
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_chain_world_set_wind(kodawari_chain_world* world, const kodawari_wind* wind) {
+    return guard("kodawari_chain_world_set_wind", world ? &world->message : nullptr, [&] {
+        require_world(world);
+        world->wind = wind != nullptr ? read_wind(*wind, "wind") : rods::WindField{};
     });
 }
 

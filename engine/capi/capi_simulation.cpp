@@ -93,6 +93,15 @@ KODAWARI_C_API const char* kodawari_simulation_last_error(const kodawari_simulat
     return sim != nullptr ? sim->message.c_str() : "";
 }
 
+KODAWARI_C_API kodawari_status kodawari_simulation_set_wind(kodawari_simulation* sim, const kodawari_wind* wind) {
+    return guard("kodawari_simulation_set_wind", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        std::optional<rods::WindField> field;
+        if (wind != nullptr) field = read_wind(*wind, "wind");
+        check(set_wind(*sim->sim, field));
+    });
+}
+
 KODAWARI_C_API kodawari_status kodawari_simulation_step(kodawari_simulation* sim, uint32_t frames) {
     return guard("kodawari_simulation_step", sim ? &sim->message : nullptr, [&] {
         require_sim(sim);

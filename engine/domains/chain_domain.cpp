@@ -162,6 +162,11 @@ public:
     }
     bool inputs_on_device() const { return animator_ && animator_->writes_inputs_on_device(); }
     void set_view_camera(std::optional<rods::Camera> camera) { view_camera_ = camera; }
+    Result<void> set_wind(std::optional<rods::WindField> wind) {
+        if (wind) KW_TRY(rods::validate(*wind, "set_wind: wind"));
+        wind_ = wind;
+        return {};
+    }
     const ChainTiming& timing() const { return timing_; }
 
 private:
@@ -171,6 +176,7 @@ private:
         KW_TRY(animator_->frame(f, input_));
         timing_.pose_ms += animator_->last_pose_ms();
         if (view_camera_) input_.camera = *view_camera_;
+        if (wind_ && !input_.winds.empty()) input_.winds[0] = *wind_;
         const auto start = std::chrono::steady_clock::now();
         if (f == 0) {
             KW_TRY(rods_->load(scene_->world, input_));
@@ -196,6 +202,7 @@ private:
     std::unique_ptr<RodBackend> rods_;
     std::optional<CrowdAnimator> animator_;
     std::optional<rods::Camera> view_camera_;
+    std::optional<rods::WindField> wind_;  // set_wind(): the scene's field from now on
     rods::RodFrame input_;
     rods::RodFrame host_input_;
     std::optional<std::uint32_t> host_input_frame_;
@@ -246,6 +253,11 @@ bool rod_inputs_on_device(const Simulation& sim) {
 
 void set_view_camera(Simulation& sim, std::optional<rods::Camera> camera) {
     if (ChainDomain* domain = find(sim)) domain->set_view_camera(camera);
+}
+
+Result<void> set_wind(Simulation& sim, std::optional<rods::WindField> wind) {
+    if (ChainDomain* domain = find(sim)) return domain->set_wind(wind);
+    return {};
 }
 
 const ChainTiming& chain_timing(const Simulation& sim) {

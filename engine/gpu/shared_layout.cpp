@@ -45,11 +45,12 @@ static_assert(sizeof(BirdPush) == 16);
 static_assert(KW_BIRDS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 
 // shared/rods.h
-static_assert(sizeof(RodTemplateGpu) == 16 * (6 + KW_RODS_MAX_VIEWS));
+static_assert(sizeof(RodTemplateGpu) == 16 * (7 + KW_RODS_MAX_VIEWS));
 static_assert(offsetof(RodTemplateGpu, counts) == 0 && offsetof(RodTemplateGpu, solver) == 16 &&
               offsetof(RodTemplateGpu, step) == 32 && offsetof(RodTemplateGpu, physics) == 48 &&
               offsetof(RodTemplateGpu, accel) == 64 && offsetof(RodTemplateGpu, first_dir) == 80 &&
-              offsetof(RodTemplateGpu, views) == 96);
+              offsetof(RodTemplateGpu, drag) == 96 && offsetof(RodTemplateGpu, views) == 112);
+static_assert(sizeof(RodWindGpu) == 48 && offsetof(RodWindGpu, scales) == 16 && offsetof(RodWindGpu, seed) == 32);
 static_assert(sizeof(RodTemplateJointGpu) == 32 && offsetof(RodTemplateJointGpu, lengths) == 16);
 static_assert(sizeof(RodShapeJointGpu) == 32 && offsetof(RodShapeJointGpu, orientation) == 16);
 static_assert(sizeof(RodChainGpu) == 32 && offsetof(RodChainGpu, joints) == 16);
@@ -60,8 +61,8 @@ static_assert(sizeof(RodJointSpinGpu) == 32 && offsetof(RodJointSpinGpu, omega) 
 static_assert(sizeof(RodChainStateGpu) == 80);
 static_assert(offsetof(RodChainStateGpu, root) == 0 && offsetof(RodChainStateGpu, view) == 32 &&
               offsetof(RodChainStateGpu, weights) == 48);
-static_assert(sizeof(RodPush) == 80 && offsetof(RodPush, group) == 16 && offsetof(RodPush, camera_position) == 32 &&
-              offsetof(RodPush, camera_forward) == 48 && offsetof(RodPush, flags) == 64);
+static_assert(sizeof(RodPush) == 96 && offsetof(RodPush, group) == 16 && offsetof(RodPush, camera_position) == 32 &&
+              offsetof(RodPush, camera_forward) == 48 && offsetof(RodPush, flags) == 64 && offsetof(RodPush, time) == 80);
 static_assert(sizeof(RodPush) <= 128, "Vulkan guarantees 128 bytes of push constants");
 static_assert(KW_RODS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 

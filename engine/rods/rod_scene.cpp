@@ -60,6 +60,7 @@ void RodScene::kinematic_frame(std::uint32_t index, rods::RodFrame& out, bool ri
     out.colliders.resize(world.collider_count);
     out.keys.resize(world.key_count);
     out.centers.resize(world.center_count);
+    out.winds.assign(winds.begin(), winds.end());
     std::array<rods::Transform, rods::kMaxSkeletonJoints> poses;
     gltf::Pose pose;
     std::vector<glm::mat4> nodes;
@@ -227,7 +228,9 @@ RodScene RodScene::slice(std::uint32_t begin, std::uint32_t end) const {
     out.characters = characters;
     out.camera = camera;
     out.fov_deg = fov_deg;
+    out.winds = winds;
     out.world.templates = world.templates;
+    out.world.wind_count = world.wind_count;
     if (begin == end) return out;
     // Instances own contiguous runs of chains and colliders (build_rod_scene lays them out
     // instance by instance), so a range of instances is a range of each, rebased to 0.

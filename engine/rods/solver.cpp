@@ -182,6 +182,8 @@ Result<void> validate(const SolverParams& p) {
     if (!(p.momentum_suppression >= 0.0f && p.momentum_suppression <= 1.0f)) {
         return bad("momentum_suppression must be in [0, 1]");
     }
+    if (!(p.normal_drag >= 0.0f && p.normal_drag <= 1000.0f)) return bad("normal_drag must be in [0, 1000] 1/s");
+    if (!(p.tangent_drag >= 0.0f && p.tangent_drag <= 1000.0f)) return bad("tangent_drag must be in [0, 1000] 1/s");
     if (!std::isfinite(glm::dot(p.gravity, p.gravity)) || !std::isfinite(glm::dot(p.wind, p.wind))) {
         return bad("gravity and wind must be finite");
     }
@@ -233,7 +235,7 @@ ChainState initial_state(const Chain& chain, const Transform& root, const ChainS
 }
 
 std::uint32_t settle(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
-                     std::span<const Collider> colliders, ChainState& s) {
+                     std::span<const Collider> colliders, ChainState& s, const glm::vec3& air) {
     // First quasi-static: every velocity set to 0 after each substep, so the particles
     // slide down their potential and never overshoot, until no particle moves by the
     // tolerance in a substep. Then
@@ -257,7 +259,7 @@ std::uint32_t settle(const Chain& chain, const SolverParams& params, const Trans
     std::uint32_t taken = 0;
     for (std::uint32_t k = 0; k < kMaxSettleSubsteps; ++k) {
         const std::array<glm::vec3, kMaxChainJoints> before = s.x;
-        step(chain, coarse, root, rest, colliders, coarse.max_substep, s);
+        step(chain, coarse, root, rest, colliders, coarse.max_substep, s, air);
         ++taken;
         float moved = 0.0f;
         for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
@@ -268,7 +270,7 @@ std::uint32_t settle(const Chain& chain, const SolverParams& params, const Trans
         if (moved < tolerance) break;
     }
     for (std::uint32_t k = 0; k < kSettleDynamicSubsteps; ++k) {
-        step(chain, params, root, rest, colliders, params.max_substep, s);
+        step(chain, params, root, rest, colliders, params.max_substep, s, air);
         ++taken;
     }
     s.started = false;  // settling is not the chain's first step
@@ -352,7 +354,7 @@ bool follow_teleport(const SolverParams& params, const Transform& root, float dt
 }
 
 void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
-          std::span<const Collider> colliders, float dt, ChainState& s) {
+          std::span<const Collider> colliders, float dt, ChainState& s, const glm::vec3& air) {
     assert(validate(params).ok());
     assert(dt > 0.0f && std::isfinite(dt));
     const std::uint32_t n = chain.joint_count;
@@ -372,6 +374,9 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
     const float k_rest = iteration_stiffness(substep_stiffness(params.rest_stiffness, h), params.iterations);
     const float decay = std::exp(-params.damping * h);
     const glm::vec3 acceleration = params.gravity + params.wind;
+    const bool drag = params.normal_drag > 0.0f || params.tangent_drag > 0.0f;
+    const float normal_decay = std::exp(-params.normal_drag * h);
+    const float tangent_decay = std::exp(-params.tangent_drag * h);
 
     // A.5, once per frame: the rest shape changes at frame boundaries only.
     suppress_momentum(chain, rest, params.momentum_suppression, s);
@@ -454,8 +459,23 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
         // Dynamics", 2020, eq. 8). The two differ by O((|w| h)^3) and the first-order one
         // turns by 2 atan(|w| h / 2), never more than |w| h; without sine and cosine it is
         // several times cheaper on the GPU, whose transcendentals dominated the frame.
+        // Damping and drag act on the velocity relative to the air (rods::WindField): in
+        // calm air (air = 0) this is decay * v exactly. Drag splits it across and along the
+        // particle's segment, from its parent at the substep's start (a thin cylinder's
+        // cross-flow drag, Hoerner, "Fluid-Dynamic Drag", 1965, ch. 3), each part decaying
+        // at its own rate, exactly integrated like the damping.
         for (std::uint32_t i = 1; i < n; ++i) {
-            s.v[i] = decay * s.v[i] + h * acceleration;
+            glm::vec3 relative = decay * (s.v[i] - air);
+            if (drag) {
+                const glm::vec3 segment = s.x[i] - s.x[i - 1];
+                const float length = glm::length(segment);
+                if (length > 1e-9f) {
+                    const glm::vec3 axis = segment / length;
+                    const glm::vec3 along = glm::dot(relative, axis) * axis;
+                    relative = normal_decay * (relative - along) + tangent_decay * along;
+                }
+            }
+            s.v[i] = air + relative + h * acceleration;
             s.omega[i] = decay * s.omega[i];
             p[i] = s.x[i] + h * s.v[i];
             const glm::vec3 half_turn = (0.5f * h) * s.omega[i];

@@ -155,6 +155,7 @@ Result<void> RodWorld::finalize() {
         if (chain.collider_count > kMaxChainColliders) {
             return bad(where + "at most " + std::to_string(kMaxChainColliders) + " colliders per chain");
         }
+        if (wind_count > 0 && chain.wind >= wind_count) return bad(where + "wind index out of range");
         if (chain.center != kNoCenter) {
             if (chain.center >= center_count) return bad(where + "center index out of range");
             if (center_taken[chain.center]) return bad(where + "center " + std::to_string(chain.center) + " belongs to another chain");
@@ -173,11 +174,16 @@ Result<void> check_frame(const RodWorld& world, const RodFrame& frame) {
     if (!(frame.dt >= kMinFrameDt && std::isfinite(frame.dt))) return bad("rod frame: dt must be >= 1e-5 s");
     if (frame.reference.size() != world.character_count || frame.roots.size() != world.chains.size() ||
         frame.colliders.size() != world.collider_count || frame.keys.size() != world.key_count ||
-        frame.centers.size() != world.center_count) {
+        frame.centers.size() != world.center_count || frame.winds.size() != world.wind_count) {
         return bad("rod frame: expected " + std::to_string(world.character_count) + " reference poses, " +
                    std::to_string(world.chains.size()) + " roots, " + std::to_string(world.collider_count) +
-                   " colliders, " + std::to_string(world.key_count) + " key sources and " +
-                   std::to_string(world.center_count) + " centers");
+                   " colliders, " + std::to_string(world.key_count) + " key sources, " +
+                   std::to_string(world.center_count) + " centers and " + std::to_string(world.wind_count) + " winds");
+    }
+    if (!std::isfinite(frame.time)) return bad("rod frame: time must be finite");
+    for (std::size_t k = 0; k < frame.winds.size(); ++k) {
+        const std::string what = "rod frame: winds[" + std::to_string(k) + "]";
+        KW_TRY(validate(frame.winds[k], what.c_str()));
     }
     for (const Transform& t : frame.centers) {
         if (!finite(t.position) || !finite(t.rotation)) return bad("rod frame: non-finite center");
@@ -223,6 +229,11 @@ RestShape rest_shape(const RodWorld& world, std::uint32_t chain, const RodFrame&
     return out;
 }
 
+glm::vec3 chain_air(const RodWorld& world, std::uint32_t chain, const RodFrame& frame) {
+    if (world.wind_count == 0) return glm::vec3(0.0f);
+    return air_velocity(frame.winds[world.chains[chain].wind], frame.roots[chain].position, frame.time);
+}
+
 ChainState initial_chain_state(const RodWorld& world, std::uint32_t chain, const RodFrame& frame) {
     const ChainInstance& c = world.chains[chain];
     const ChainTemplate& t = world.templ(c);
@@ -230,7 +241,8 @@ ChainState initial_chain_state(const RodWorld& world, std::uint32_t chain, const
     ChainState s = initial_state(t.chain, frame.roots[chain], rest);
     if (t.params.settle_start) {
         settle(t.chain, t.params, frame.roots[chain], rest,
-               std::span<const Collider>(frame.colliders).subspan(c.collider_begin, c.collider_count), s);
+               std::span<const Collider>(frame.colliders).subspan(c.collider_begin, c.collider_count), s,
+               chain_air(world, chain, frame));
     }
     if (c.center != kNoCenter) s.center = frame.centers[c.center];
     return s;

@@ -113,13 +113,17 @@ Result<glm::quat> read_unit_quat(const JsonReader& r, const JsonNode& q) {
 }
 
 Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::SolverParams& p) {
-    KW_TRY(r.object(node, {"stiffness", "rest_stiffness", "damping", "iterations", "max_substep", "gravity", "wind",
-                           "momentum_suppression", "start", "teleport_distance"}));
+    KW_TRY(r.object(node, {"stiffness", "rest_stiffness", "damping", "normal_drag", "tangent_drag", "iterations", "max_substep",
+                           "gravity", "wind", "momentum_suppression", "start", "teleport_distance"}));
     KW_TRY(optional_member(r, node, "stiffness", p.stiffness,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0)); }));
     KW_TRY(optional_member(r, node, "rest_stiffness", p.rest_stiffness,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0)); }));
     KW_TRY(optional_member(r, node, "damping", p.damping,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1000.0)); }));
+    KW_TRY(optional_member(r, node, "normal_drag", p.normal_drag,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1000.0)); }));
+    KW_TRY(optional_member(r, node, "tangent_drag", p.tangent_drag,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1000.0)); }));
     const JsonNode iterations = r.member(node, "iterations");
     if (iterations.present()) {
@@ -142,6 +146,22 @@ Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::Solve
     }
     KW_TRY(optional_member(r, node, "teleport_distance", p.teleport_distance,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1e6)); }));
+    return {};
+}
+
+Result<void> read_wind(const JsonReader& r, const JsonNode& node, rods::WindField& w) {
+    KW_TRY(r.object(node, {"velocity", "gust", "gust_period", "gust_size", "seed"}));
+    KW_TRY(optional_member(r, node, "velocity", w.velocity, [&](const JsonNode& n) { return read_point(r, n, 100.0); }));
+    KW_TRY(optional_member(r, node, "gust", w.gust, [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 4.0)); }));
+    KW_TRY(optional_member(r, node, "gust_period", w.gust_period,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.05, 1000.0)); }));
+    KW_TRY(optional_member(r, node, "gust_size", w.gust_size,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.05, 10000.0)); }));
+    if (const JsonNode seed = r.member(node, "seed"); seed.present()) {
+        std::uint64_t value = 0;
+        KW_SCENE_ASSIGN(value, r.integer(seed, 0, 0xFFFFFFFFu));
+        w.seed = static_cast<std::uint32_t>(value);
+    }
     return {};
 }
 

@@ -108,6 +108,16 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
     out.fov_deg = scene.camera.fov_deg;
     out.camera = scene.camera.motion;
     rods::RodWorld& world = out.world;
+    // Wind fields: the scene's first (calm without one, so that an application can set a
+    // wind later: set_wind), then each character's own.
+    out.winds.push_back(scene.wind.value_or(rods::WindField{}));
+    std::vector<std::uint32_t> wind_of(scene.characters.size(), 0u);
+    for (std::size_t c = 0; c < scene.characters.size(); ++c) {
+        if (!scene.characters[c].wind) continue;
+        wind_of[c] = static_cast<std::uint32_t>(out.winds.size());
+        out.winds.push_back(*scene.characters[c].wind);
+    }
+    world.wind_count = static_cast<std::uint32_t>(out.winds.size());
 
     // Templates, shared by every instance of a character.
     for (const CharacterSpec& ch : scene.characters) {
@@ -199,6 +209,7 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
                 chain.character = index;
                 chain.collider_begin = inst.collider_begin + k.chains[c].collider_begin;
                 chain.collider_count = k.chains[c].collider_count;
+                chain.wind = wind_of[crowd.character];
                 if (k.chains[c].center >= 0) chain.center = world.center_count++;
                 world.chains.push_back(chain);
                 out.chain_names.push_back(name + "/" + scene.characters[crowd.character].chains[c].name);

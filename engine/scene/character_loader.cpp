@@ -403,7 +403,7 @@ Result<void> check_roots_outside_colliders(const JsonReader& r, const CharacterS
 
 Result<CharacterSpec> read_character(const JsonReader& r, const JsonNode& node) {
     if (node.present() && node.value->is_object() && r.member(node, "gltf").present()) return read_rigged_character(r, node);
-    KW_TRY(r.object(node, {"name", "skeleton", "reference_joint", "motions", "colliders", "physics", "chains"}));
+    KW_TRY(r.object(node, {"name", "skeleton", "reference_joint", "motions", "colliders", "physics", "chains", "wind"}));
     CharacterSpec ch;
     ch.path = node.path;
     KW_SCENE_ASSIGN(ch.name, read_name(r, r.member(node, "name")));
@@ -559,6 +559,12 @@ Result<void> read_characters(const JsonReader& r, const JsonNode& characters, co
         const JsonNode node = r.element(characters, i);
         CharacterSpec c;
         KW_SCENE_ASSIGN(c, read_character(r, node));
+        // Its own wind field: the scene's where it is silent.
+        if (const JsonNode wind = r.member(node, "wind"); wind.present()) {
+            rods::WindField field = scene.wind.value_or(rods::WindField{});
+            KW_TRY(read_wind(r, wind, field));
+            c.wind = field;
+        }
         for (const CharacterSpec& other : scene.characters) {
             if (other.name == c.name) {
                 return r.expected(r.member(node, "name"), "a character name no other character has (\"" + c.name + "\" is taken)");

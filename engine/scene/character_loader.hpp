@@ -66,6 +66,9 @@ inline constexpr double kMaxTime = 1e5;        // motion times (s)
 [[nodiscard]] Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const gltf::Character& character);
 /// The `physics` object, over the values already in `p`.
 [[nodiscard]] Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::SolverParams& p);
+/// A `wind` object (rods::WindField), over the values already in `w` (a character's
+/// over the scene's).
+[[nodiscard]] Result<void> read_wind(const JsonReader& r, const JsonNode& node, rods::WindField& w);
 /// A view example whose shape has `joints` joints.
 [[nodiscard]] Result<ViewSpec> read_view(const JsonReader& r, const JsonNode& node, std::size_t joints);
 /// The optional `colliders` member of a character `node`: at most kMaxCharacterColliders

@@ -277,7 +277,8 @@ Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const 
 }
 
 Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode& node) {
-    KW_TRY(r.object(node, {"name", "gltf", "reference_joint", "animation", "animate", "motions", "colliders", "physics", "chains"}));
+    KW_TRY(r.object(node, {"name", "gltf", "reference_joint", "animation", "animate", "motions", "colliders", "physics", "chains",
+                           "wind"}));
     CharacterSpec out;
     out.path = node.path;
     KW_SCENE_ASSIGN(out.name, read_name(r, r.member(node, "name")));

@@ -411,7 +411,7 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
 Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, const std::string& path) {
     const JsonNode root{&document, "$"};
     KW_TRY(r.object(root, {"format", "version", "name", "fps", "duration", "camera", "flight", "flocks", "characters", "crowds",
-                           "$schema"}));
+                           "wind", "$schema"}));
     // Editors find the JSON Schema (docs/scene.schema.json) through "$schema"; the loader
     // checks the same rules itself, so only the key's type matters here.
     const JsonNode schema = r.member(root, "$schema");
@@ -429,7 +429,7 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
 
     Scene scene;
     scene.version = version.value->get<double>() == 2.0 ? 2u : 1u;
-    KW_TRY(require_version_2(r, root, scene.version, {"characters", "crowds"}));
+    KW_TRY(require_version_2(r, root, scene.version, {"characters", "crowds", "wind"}));
     scene.path = path;
     scene.name = std::filesystem::path(path).stem().string();
     if (scene.name.empty()) scene.name = "scene";
@@ -464,6 +464,12 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
         for (std::size_t i = 0; i < count; ++i) KW_TRY(read_flock(r, r.element(flocks, i), i, total_birds, scene.flocks[i]));
     } else if (!characters.present()) {
         return r.fail(root.path, "expected \"flocks\", \"characters\" or both, got neither");
+    }
+    // Before the characters: theirs are the scene's where they are silent.
+    if (const JsonNode wind = r.member(root, "wind"); wind.present()) {
+        rods::WindField field;
+        KW_TRY(scene_detail::read_wind(r, wind, field));
+        scene.wind = field;
     }
     if (characters.present()) {
         KW_TRY(scene_detail::read_characters(r, characters, crowds, scene));

@@ -23,7 +23,8 @@ constexpr std::size_t kMaxK = rods::kMaxChainColliders;
 
 // This frame's input of a batch's 16 lanes, gathered from the frame's per-chain arrays.
 // kKeyed: the chain's raw keyed weights u_1 .. u_4 (keyed-examples.md K.2, K.3).
-enum InputRow : std::uint32_t { kRefP = 0, kRefQ = 3, kToP = 7, kToQ = 10, kKeyed = 14, kInputRows = 18 };
+// kAir: the air's velocity around the chain (RodStepArgs::air).
+enum InputRow : std::uint32_t { kRefP = 0, kRefQ = 3, kToP = 7, kToQ = 10, kKeyed = 14, kAir = 18, kInputRows = 21 };
 // Per collider: a (3), b (3), its reach (rods::collider_reach), and 1 in the row of its
 // kind (outside, inside, plane) where the lane's chain has it.
 enum ColliderRow : std::uint32_t {
@@ -49,6 +50,9 @@ void gather_inputs(const RodStepArgs& args, const RodBatch& batch, const RodTemp
         // Only a keyed template's kernel reads them (step_lanes).
         for (std::size_t j = 0; j < t.keyed; ++j) {
             in.rows[(kKeyed + j) * kBatchLanes + l] = args.keyed[c * rods::kMaxKeyedExamples + j];
+        }
+        if (args.air != nullptr) {
+            for (std::size_t r = 0; r < 3; ++r) in.rows[(kAir + r) * kBatchLanes + l] = args.air[c * 3 + r];
         }
         for (std::uint32_t k = 0; k < batch.colliders; ++k) {
             float* rows = in.colliders + k * kColliderRows * kBatchLanes;
@@ -282,6 +286,8 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
     const V3 to_p = load3(in.rows, kToP, off);
     const Q4 to_q = load4(in.rows, kToQ, off);
     const V3 travel = sub(to_p, from_p);
+    const bool wind = args.air != nullptr;
+    const V3 air = wind ? load3(in.rows, kAir, off) : zero3();
     CollidersK colliders[kMaxK];
     const Q4 to_root = conj(to_q);
     for (std::size_t k = 0; k < batch.colliders; ++k) {
@@ -359,7 +365,23 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         // 4. Predict.
         const V3 h_acceleration = splat3(t.h_acceleration.data());
         for (std::size_t i = 1; i < n; ++i) {
-            v[i] = add(mul(S(t.decay), v[i]), h_acceleration);
+            if (wind || t.drag) {
+                // Relative to the air (0 without wind), then drag across and along the
+                // segment (solver.cpp); the else branch is this with air = 0 and no drag.
+                V3 rel_air = mul(S(t.decay), sub(v[i], air));
+                if (t.drag) {
+                    const V3 segment = sub(x[i], x[i - 1]);
+                    const V len = length(segment);
+                    const M along_segment = hn::Gt(len, S(1e-9f));
+                    const V3 axis = div(segment, len);
+                    const V3 along = mul(dot(rel_air, axis), axis);
+                    const V3 dragged = add(mul(S(t.normal_decay), sub(rel_air, along)), mul(S(t.tangent_decay), along));
+                    rel_air = select(along_segment, dragged, rel_air);
+                }
+                v[i] = add(add(air, rel_air), h_acceleration);
+            } else {
+                v[i] = add(mul(S(t.decay), v[i]), h_acceleration);
+            }
             omega[i] = mul(S(t.decay), omega[i]);
             p[i] = add(x[i], mul(S(t.h), v[i]));
             qs[i] = turn(q[i], mul(S(t.half_h), omega[i]));

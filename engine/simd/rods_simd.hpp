@@ -67,6 +67,10 @@ struct RodTemplateConsts {
     float half_h = 0.0f, two_over_h = 0.0f;
     float ftl_over_h = 0.0f;                // rods::kFollowTheLeaderDamping / h
     std::array<float, 3> h_acceleration{};  // h * (gravity + wind)
+    // Drag across and along the segments (SolverParams::normal_drag, tangent_drag): on,
+    // and each part's decay exp(-drag h).
+    bool drag = false;
+    float normal_decay = 1.0f, tangent_decay = 1.0f;
 };
 
 /// A batch of up to kBatchLanes chains of one template.
@@ -93,6 +97,10 @@ struct RodStepArgs {
     /// Per chain, its raw keyed weights this frame (rods::measure_keys, kMaxKeyedExamples
     /// each): measured by the backend, since they are a few scalars per chain.
     const float* keyed = nullptr;
+    /// Per chain, the air's velocity this frame (rods::chain_air, 3 floats each),
+    /// computed by the backend with engine/rods' own function; null in a world without
+    /// wind, whose kernels then take damping on the world velocities as before.
+    const float* air = nullptr;
 };
 
 /// Advances batches [begin, end) by one frame (SPEC A.3, A.2, A.5, A.4).

@@ -15,6 +15,7 @@ its own, valid for as long as you keep it); see docs/python.md.
 Errors raise kodawari.Error, whose message is the library's (it names the function, the
 argument or the file, and what was expected).
 """
+import ctypes
 import json
 import os
 import shutil
@@ -229,6 +230,26 @@ class Simulation:
         with self._lock:
             handle = self._live()
             _check(_native.lib.kodawari_simulation_step(handle, int(frames)), handle)
+
+    def set_wind(self, velocity=None, *, gust=0.0, gust_period=3.0, gust_size=6.0, seed=0):
+        """The wind the characters' chains feel from the next frame on, in place of the
+        scene's `wind` (characters with a wind of their own keep theirs): the mean air
+        `velocity` (m/s, 3 numbers, each within 100), gusts up to `gust` (0 to 4) times
+        its speed, rising and falling over `gust_period` s and `gust_size` m, from noise
+        `seed`. `velocity=None`: the scene's wind again. Raises Error naming the member
+        out of range; nothing changes then."""
+        wind = None
+        if velocity is not None:
+            if len(velocity) != 3:
+                raise ValueError(f"velocity: {velocity!r}; expected 3 numbers (m/s)")
+            if int(seed) != seed or not 0 <= seed <= 0xFFFFFFFF:
+                raise ValueError(f"seed: {seed!r}; expected a whole number in [0, 4294967295]")
+            wind = _native.Wind((ctypes.c_float * 3)(*[float(v) for v in velocity]), float(gust), float(gust_period),
+                                float(gust_size), int(seed))
+        with self._lock:
+            handle = self._live()
+            _check(_native.lib.kodawari_simulation_set_wind(handle, ctypes.byref(wind) if wind is not None else None),
+                   handle)
 
     # ---- outputs
 

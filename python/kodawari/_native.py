@@ -105,6 +105,11 @@ def _load():
                       "build the project (cmake --build) or install its python component")
 
 
+class Wind(ctypes.Structure):
+    _fields_ = [("velocity", ctypes.c_float * 3), ("gust", ctypes.c_float), ("gust_period", ctypes.c_float),
+                ("gust_size", ctypes.c_float), ("seed", ctypes.c_uint32)]
+
+
 lib, library_path = _load()
 
 _P = ctypes.POINTER
@@ -125,6 +130,7 @@ _declare("kodawari_simulation_open", _status, ctypes.c_char_p, _P(BackendOptions
 _declare("kodawari_simulation_destroy", None, _sim)
 _declare("kodawari_simulation_last_error", ctypes.c_char_p, _sim)
 _declare("kodawari_simulation_step", _status, _sim, ctypes.c_uint32)
+_declare("kodawari_simulation_set_wind", _status, _sim, _P(Wind))
 _declare("kodawari_simulation_get_info", _status, _sim, _P(SimulationInfo))
 _declare("kodawari_simulation_bird_poses", _status, _sim, _P(BirdOutput))
 _declare("kodawari_simulation_bird_tail_spreads", _status, _sim, ctypes.c_void_p, ctypes.c_size_t)

@@ -58,7 +58,8 @@
 #define KW_RODS_BINDING_KEYED 10           // vec4 per chain: raw keyed weights u_1 .. u_4 (this frame, shared/rod_keys.h)
 #define KW_RODS_BINDING_CENTERS 11         // RodTransformGpu, per center (RodFrame::centers, this frame)
 #define KW_RODS_BINDING_CENTER_STATE 12    // RodTransformGpu, per center: the last frame's (state)
-#define KW_RODS_BINDING_COUNT 13
+#define KW_RODS_BINDING_WINDS 13           // RodWindGpu, per wind field (RodFrame::winds, this frame)
+#define KW_RODS_BINDING_COUNT 14
 
 // RodChainGpu.joints.z of a chain without a center frame (rods::kNoCenter).
 #define KW_RODS_NO_CENTER 0xFFFFFFFFu
@@ -84,7 +85,8 @@
 #define KW_RODS_FEATURE_CENTERS 1u  // chains with a center frame
 #define KW_RODS_FEATURE_INSIDE 2u   // inside colliders
 #define KW_RODS_FEATURE_PLANE 4u    // plane colliders
-#define KW_RODS_FEATURE_ALL 7u
+#define KW_RODS_FEATURE_AIR 8u      // wind fields or drag: velocities relative to the air (rods::WindField)
+#define KW_RODS_FEATURE_ALL 15u
 
 // Worlds of at most this many templates are stepped one dispatch per template (GROUPED);
 // each dispatch costs tens of microseconds on lavapipe, so more templates take one.
@@ -107,6 +109,7 @@ struct RodTemplateGpu {
     vec4 physics;     // x: thickness (m), y: k_rest' per iteration (this frame), z: teleport distance (m), w: 1 = settle_start
     vec4 accel;       // xyz: gravity + wind (m/s^2), w: unused
     vec4 first_dir;   // xyz: e, the base shape's first segment direction (SPEC A.2)
+    vec4 drag;        // this frame's: x: exp(-normal_drag h), y: exp(-tangent_drag h), z: 1 = drag on, w: unused
     vec4 views[KW_RODS_MAX_VIEWS];  // xyz: d_k (unit, reference joint's frame), w: influence p_k
 };
 
@@ -129,7 +132,15 @@ struct RodShapeJointGpu {
 struct RodChainGpu {
     uvec4 ids;     // x: template, y: character, z: first collider, w: collider count
     uvec4 joints;  // x: first joint in the per-joint buffers, y: the chain's index in the per-chain buffers,
-                   // z: its center (KW_RODS_BINDING_CENTERS index, KW_RODS_NO_CENTER: none), w: unused
+                   // z: its center (KW_RODS_BINDING_CENTERS index, KW_RODS_NO_CENTER: none),
+                   // w: its wind field (KW_RODS_BINDING_WINDS index; read where the world has winds)
+};
+
+// A wind field (rods::WindField) as shaders/lib/wind.glsl takes it.
+struct RodWindGpu {
+    vec4 velocity;  // xyz: the mean air velocity (m/s), w: gust strength
+    vec4 scales;    // x: 1 / gust_period (1/s), y: 1 / gust_size (1/m), z, w: unused
+    uvec4 seed;     // x: the noise seed, yzw: 0
 };
 
 struct RodTransformGpu {
@@ -170,7 +181,9 @@ struct RodPush {
     vec4 camera_position;   // xyz, w: 1 = orthographic
     vec4 camera_forward;    // xyz, w: the frame's length dt (s)
     uvec4 flags;            // x: 1 on the world's first step (chains of templates with
-                            // physics.w != 0 start moving with their roots); yzw: 0
+                            // physics.w != 0 start moving with their roots); y: 1 = the world has
+                            // wind fields (KW_RODS_BINDING_WINDS); zw: 0
+    vec4 time;              // x: the frame's time (s, RodFrame::time: the wind's), yzw: unused
 };
 
 KW_NAMESPACE_END

@@ -457,6 +457,16 @@ static void test_version_and_status(void) {
         EXPECT_OK(kodawari_solver_params_default(&p));
         CHECK(p.settle_start == 1 && p.teleport_distance == 1.0f, "defaults settle_start %u, teleport_distance %g",
               p.settle_start, (double)p.teleport_distance);
+        CHECK(p.normal_drag == 0.0f && p.tangent_drag == 0.0f, "defaults normal_drag %g, tangent_drag %g",
+              (double)p.normal_drag, (double)p.tangent_drag);
+    }
+    EXPECT_FAIL(kodawari_wind_default(NULL), KODAWARI_INVALID_ARGUMENT, "kodawari_wind_default", "out: is NULL");
+    {
+        kodawari_wind w;
+        EXPECT_OK(kodawari_wind_default(&w));
+        CHECK(w.velocity[0] == 0.0f && w.velocity[1] == 0.0f && w.velocity[2] == 0.0f && w.gust == 0.0f &&
+                  w.gust_period == 3.0f && w.gust_size == 6.0f && w.seed == 0,
+              "default wind: calm, gusts of 3 s and 6 m");
     }
     EXPECT_FAIL(kodawari_flight_settings_default(NULL), KODAWARI_INVALID_ARGUMENT, "out: is NULL");
 }
@@ -587,6 +597,10 @@ static void test_chain_create_rejects(void) {
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].solver.settle_start: 2; expected 0 or 1");
     a.templ.solver.teleport_distance = 0.0f;
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].solver.teleport_distance: 0");
+    a.templ.solver.normal_drag = -1.0f;
+    REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].solver.normal_drag: -1; expected a number in [0, 1000]");
+    a.templ.solver.tangent_drag = (float)NAN;
+    REJECT(KODAWARI_INVALID_ARGUMENT, "desc->templates[0].solver.tangent_drag: nan");
     a.chain.template_index = 1;
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->chains[0].template_index: 1; expected an index below desc->template_count (1)");
     a.chain.character = 3;
@@ -739,6 +753,25 @@ static void test_chain_calls_reject(void) {
     EXPECT_OK(kodawari_chain_world_chain_joints(world, 0, NULL, NULL));
     EXPECT_FAIL(kodawari_chain_world_get_info(NULL, NULL), KODAWARI_INVALID_ARGUMENT, "world: is NULL");
     EXPECT_FAIL(kodawari_chain_world_get_info(world, NULL), KODAWARI_INVALID_ARGUMENT, "out: is NULL");
+    {
+        /* set_wind: a field out of range names the member and leaves the world's air as it was. */
+        kodawari_wind wind;
+        EXPECT_OK(kodawari_wind_default(&wind));
+        EXPECT_FAIL(kodawari_chain_world_set_wind(NULL, &wind), KODAWARI_INVALID_ARGUMENT,
+                    "kodawari_chain_world_set_wind: world: is NULL");
+        wind.gust = 5.0f;
+        EXPECT_FAIL(kodawari_chain_world_set_wind(world, &wind), KODAWARI_INVALID_ARGUMENT, "wind.gust: 5; expected a number in [0, 4]");
+        wind.gust = 0.5f;
+        wind.velocity[2] = (float)INFINITY;
+        EXPECT_FAIL(kodawari_chain_world_set_wind(world, &wind), KODAWARI_INVALID_ARGUMENT, "wind.velocity");
+        wind.velocity[2] = 0.0f;
+        wind.gust_period = 0.0f;
+        EXPECT_FAIL(kodawari_chain_world_set_wind(world, &wind), KODAWARI_INVALID_ARGUMENT, "wind.gust_period: 0");
+        wind.gust_period = 3.0f;
+        wind.gust_size = 1e5f;
+        EXPECT_FAIL(kodawari_chain_world_set_wind(world, &wind), KODAWARI_INVALID_ARGUMENT, "wind.gust_size: 1e+05; expected a number in [0.05, 10000]");
+        EXPECT_OK(kodawari_chain_world_set_wind(world, NULL)); /* calm, as it was */
+    }
 
     /* Nothing of that changed the world: the same state, and the next step gives the twin's bits. */
     EXPECT_OK(read_state(world, &after));
@@ -748,6 +781,22 @@ static void test_chain_calls_reject(void) {
     EXPECT_OK(read_state(world, &after));
     EXPECT_OK(read_state(twin, &twin_state));
     CHECK(memcmp(&after, &twin_state, sizeof after) == 0, "after rejected calls the world steps differently from its twin");
+    {
+        /* And a wind blows: the world in a 10 m/s wind steps elsewhere than its twin in calm air. */
+        kodawari_wind wind;
+        EXPECT_OK(kodawari_wind_default(&wind));
+        wind.velocity[0] = 10.0f;
+        wind.gust = 0.5f;
+        EXPECT_OK(kodawari_chain_world_set_wind(world, &wind));
+        for (i = 0; i < 10; ++i) {
+            make_frame(&f, 320 + i);
+            EXPECT_OK(kodawari_chain_world_step(world, &f.frame));
+            EXPECT_OK(kodawari_chain_world_step(twin, &f.frame));
+        }
+        EXPECT_OK(read_state(world, &after));
+        EXPECT_OK(read_state(twin, &twin_state));
+        CHECK(memcmp(&after, &twin_state, sizeof after) != 0, "a 10 m/s wind left the chain as in calm air");
+    }
     kodawari_chain_world_destroy(world);
     kodawari_chain_world_destroy(twin);
     kodawari_chain_world_destroy(NULL);

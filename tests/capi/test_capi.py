@@ -64,7 +64,8 @@ class ViewExample(C.Structure):
 class SolverParams(C.Structure):
     _fields_ = [("max_substep", C.c_float), ("iterations", C.c_uint32), ("stiffness", C.c_float),
                 ("rest_stiffness", C.c_float), ("damping", C.c_float), ("gravity", Float3), ("wind", Float3),
-                ("momentum_suppression", C.c_float), ("settle_start", C.c_uint32), ("teleport_distance", C.c_float)]
+                ("momentum_suppression", C.c_float), ("settle_start", C.c_uint32), ("teleport_distance", C.c_float),
+                ("normal_drag", C.c_float), ("tangent_drag", C.c_float)]
 
 
 class ChainTemplateDesc(C.Structure):

@@ -112,6 +112,8 @@ struct CWorld {
                 t.solver.momentum_suppression = c.params.momentum_suppression;
                 t.solver.settle_start = c.params.settle_start ? 1u : 0u;
                 t.solver.teleport_distance = c.params.teleport_distance;
+                t.solver.normal_drag = c.params.normal_drag;
+                t.solver.tangent_drag = c.params.tangent_drag;
                 templates.push_back(t);
             }
         }

@@ -128,6 +128,10 @@ int main(int argc, char** argv) {
             w.number(p.momentum_suppression);
             std::fprintf(file, ",\"settle_start\":%u,\"teleport_distance\":", p.settle_start ? 1u : 0u);
             w.number(p.teleport_distance);
+            w.raw(",\"normal_drag\":");
+            w.number(p.normal_drag);
+            w.raw(",\"tangent_drag\":");
+            w.number(p.tangent_drag);
             w.raw("}}");
         }
     }

@@ -100,6 +100,8 @@ void chain_world(ByteReader& in) {
             d.solver.momentum_suppression = in.number(1.0f);
             d.solver.settle_start = in.upto(2);  // 2 is an error
             d.solver.teleport_distance = in.number(5.0f);
+            d.solver.normal_drag = in.number(1200.0f);  // past 1000 is an error
+            d.solver.tangent_drag = in.number(1200.0f);
         }
     }
     std::vector<kodawari_chain_desc> chains(chain_count);
@@ -216,6 +218,18 @@ void chain_world(ByteReader& in) {
     out.positions_capacity = positions.size();
     out.weights = weights.data();
     out.weights_capacity = weights.size();
+    if (in.flag()) {
+        // A wind, in range or not (each bound exceeded by a fifth at most), or calm air.
+        kodawari_wind wind;
+        kodawari_wind_default(&wind);
+        for (float& v : wind.velocity) v = in.number(120.0f);
+        wind.gust = in.number(5.0f);
+        wind.gust_period = in.number(4.0f);
+        wind.gust_size = in.number(20.0f);
+        wind.seed = in.u32();
+        const kodawari_status s = kodawari_chain_world_set_wind(world, in.flag() ? &wind : nullptr);
+        check(s, "kodawari_chain_world_set_wind", kodawari_chain_world_last_error(world));
+    }
     for (int f = 0; f < 3; ++f) {
         next_frame(frame);
         dump_frame(frame);

@@ -152,6 +152,34 @@ for backend in ("cpu", "vulkan"):
         # 1e-3 of the chain length, 1.4e-4 m.
         check(worst < 1e-3 * 0.14, f"vulkan's joints {worst} m off cpu-reference")
 
+# ---- Wind from the application: the ahoge in a 10 m/s gusty wind from frame 10 ends elsewhere
+# than in the scene's calm air; a gust out of range raises Error naming the member and
+# changes nothing; set_wind(None) gives the scene's calm air back (the same bits as never set).
+def ahoge_joints(wind):
+    with kodawari.Simulation.open(AHOGE, "cpu", frames=40) as sim:
+        sim.step(10)
+        if wind == "bad-then-none":
+            try:
+                sim.set_wind((5.0, 0.0, 0.0), gust=9.0)
+                check(False, "a gust of 9 raised nothing")
+            except kodawari.Error as error:
+                check("wind.gust: 9" in str(error), f"set_wind(gust=9): {error}")
+            sim.set_wind((5.0, 0.0, 0.0))
+            sim.set_wind(None)
+        elif wind is not None:
+            sim.set_wind(wind, gust=0.5, gust_period=2.0, gust_size=4.0, seed=7)
+        sim.step(30)
+        return sim.chain_joints()[0]
+
+
+calm = ahoge_joints(None)
+blown = ahoge_joints((10.0, 0.0, 0.0))
+restored = ahoge_joints("bad-then-none")
+moved = float(numpy.abs(blown - calm).max())
+print(f"set_wind: a 10 m/s wind moved a joint by {moved:.4f} m in 30 frames")
+check(moved > 1e-3, f"set_wind: the wind moved nothing ({moved} m)")
+check(numpy.array_equal(restored, calm), "set_wind(None) did not give the scene's calm air back")
+
 # ---- Errors carry the library's message.
 missing = os.path.join(temp, "no-such-scene.json")
 try:

@@ -155,7 +155,7 @@ TEST(CharacterScene, UnknownKeys) {
     doc["characters"][0]["skeletons"] = json::array();
     EXPECT_EQ(parse_error(doc),
               "test.json: $.characters[0].skeletons: unknown key (expected one of: name, skeleton, reference_joint, motions, "
-              "colliders, physics, chains)");
+              "colliders, physics, chains, wind)");
     json chain = valid_character_scene();
     chain0(chain)["stiffness"] = 0.5;
     EXPECT_EQ(parse_error(chain),

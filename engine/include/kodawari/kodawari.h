@@ -275,7 +275,33 @@ typedef struct kodawari_solver_params {
     /// A root that moves farther than this in one frame, m (> 0, finite), has teleported:
     /// its chain is carried with it instead of dragged across the gap. Default 1.
     float teleport_distance;
+    /// Drag across each segment, 1/s, in [0, 1000]: on top of `damping`, the part of a
+    /// particle's velocity relative to the air (kodawari_wind) across its segment decays
+    /// at this rate. Default 0.
+    float normal_drag;
+    /// Drag along each segment, 1/s, in [0, 1000]. Default 0.
+    float tangent_drag;
 } kodawari_solver_params;
+
+/// A wind field (docs/models.md "Wind"): the air moves at `velocity` with gusts, smooth
+/// noise in horizontal position and time carried along with the wind. Chains feel the
+/// air at their root through their damping and drag (kodawari_solver_params).
+/// kodawari_wind_default() gives calm air.
+typedef struct kodawari_wind {
+    /// The mean air velocity, m/s, |each| <= 100. Default 0 (calm).
+    float velocity[3];
+    /// Gust strength in [0, 4], a fraction of the mean speed. Default 0.
+    float gust;
+    /// Gust period, s, in [0.05, 1000]. Default 3.
+    float gust_period;
+    /// Gust size, m, in [0.05, 10000]. Default 6.
+    float gust_size;
+    /// Noise seed. Default 0.
+    uint32_t seed;
+} kodawari_wind;
+
+/// Fills `out` with calm air and the default gust scales.
+KODAWARI_C_API kodawari_status kodawari_wind_default(kodawari_wind* out);
 
 /// Fills `out` with the engine's default solver settings.
 KODAWARI_C_API kodawari_status kodawari_solver_params_default(kodawari_solver_params* out);
@@ -375,6 +401,10 @@ KODAWARI_C_API const char* kodawari_chain_world_last_error(const kodawari_chain_
 /// teleported, a cut in the film); dt is not used.
 KODAWARI_C_API kodawari_status kodawari_chain_world_reset(kodawari_chain_world* world,
                                                           const kodawari_chain_frame* frame);
+
+/// The wind every chain of `world` feels from the next step (or reset) on; NULL: calm
+/// air (the default). A field out of range is KODAWARI_INVALID_ARGUMENT naming the member.
+KODAWARI_C_API kodawari_status kodawari_chain_world_set_wind(kodawari_chain_world* world, const kodawari_wind* wind);
 
 /// Advances every chain by one frame (SPEC A.3-A.5): the rest shape from the view, then
 /// the oriented-particles solver.
@@ -713,6 +743,11 @@ KODAWARI_C_API const char* kodawari_simulation_last_error(const kodawari_simulat
 /// Simulates the next `frames` frames (the first call simulates frame 0), at least 1 and
 /// at most the frames left (info.frame_count - info.next_frame).
 KODAWARI_C_API kodawari_status kodawari_simulation_step(kodawari_simulation* sim, uint32_t frames);
+
+/// The wind the scene's characters feel from the next frame on, in place of the scene's
+/// `wind` (characters with a `wind` of their own keep theirs); NULL: the scene's again. A
+/// field out of range is KODAWARI_INVALID_ARGUMENT naming the member.
+KODAWARI_C_API kodawari_status kodawari_simulation_set_wind(kodawari_simulation* sim, const kodawari_wind* wind);
 
 /// What a simulation is, where it runs and how far it got.
 typedef struct kodawari_simulation_info {

@@ -199,6 +199,9 @@ struct CharacterSpec {
     std::optional<RigSpec> rig;
     std::vector<ColliderSpec> colliders;
     std::vector<ChainSpec> chains;
+    /// Its own wind field (the scene's values where its `wind` is silent); none: the
+    /// scene's.
+    std::optional<rods::WindField> wind;
     std::string path;
 };
 
@@ -251,6 +254,9 @@ struct KODAWARI_API Scene {
     /// Instances of the characters. When the file has no `crowds`, the loader puts one
     /// instance of every character at the origin here.
     std::vector<CrowdSpec> crowds;
+    /// The wind the characters' chains feel (rods::WindField); none: calm air, until an
+    /// application sets one (set_wind, kodawari/domains/chains.hpp).
+    std::optional<rods::WindField> wind;
 
     /// Number of frames: round(duration * fps), at least 1.
     [[nodiscard]] std::uint32_t frame_count() const;

@@ -95,6 +95,11 @@ KODAWARI_API void snapshot_from(const BakeFrames& frames, ChainSnapshot& out);
 /// The camera that drives the view-dependent rest shapes of the frames simulated from now
 /// on (SPEC A.3); none: the scene's camera at each frame. A viewer's orbit camera.
 KODAWARI_API void set_view_camera(Simulation& sim, std::optional<rods::Camera> camera);
+/// The wind the chains feel from the next frame on, in place of the scene's `wind` (its
+/// characters' own fields stay theirs); none: the scene's again. A field out of
+/// range (rods::validate) is refused, naming the member. Frames already simulated keep
+/// theirs; a seek or a rewind replays with the field set now.
+[[nodiscard]] KODAWARI_API Result<void> set_wind(Simulation& sim, std::optional<rods::WindField> wind);
 /// The chain domain's time so far (zero without chains).
 [[nodiscard]] KODAWARI_API const ChainTiming& chain_timing(const Simulation& sim);
 

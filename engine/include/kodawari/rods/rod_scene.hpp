@@ -94,6 +94,9 @@ struct KODAWARI_API RodScene {
     std::vector<CharacterInstance> instances;     ///< world.character_count of them
     rods::CameraMotion camera;
     float fov_deg = 50.0f;  ///< vertical field of view, for renderers and projections
+    /// The wind fields every frame gives (world.wind_count of them): [0] the scene's
+    /// (calm when it has none), then the characters' own; ChainInstance::wind picks.
+    std::vector<rods::WindField> winds;
 
     /// The character instances [begin, end) alone, with their chains and colliders, the
     /// same templates, camera and timing: what one shard of a bake simulates (issue 15).

@@ -163,9 +163,22 @@ struct SolverParams {
     /// on world velocities, as VRM's drag does: a character moving at speed u pushes its
     /// strands back by damping x u (12 m/s^2 at 2/s and 6 m/s); a chain's `center`
     /// (follow_center()) measures velocities relative to a moving node instead.
+    /// In a wind (rods::WindField) it acts on velocities relative to the air, so that
+    /// the default 1/s is also a chain's isotropic drag: still air brakes a moving
+    /// strand, moving air carries a still one.
     float damping = 1.0f;
+    /// Drag across and along each segment, 1/s, each in [0, 1000]: on top of `damping`,
+    /// the part of a particle's velocity relative to the air that is across its segment
+    /// (joint i-1 to i) decays by exp(-normal_drag h) per substep h, the part along it by
+    /// exp(-tangent_drag h), as a thin cylinder's drag is mostly across it (Houdini
+    /// Vellum's normal and tangent drag). A strand then turns across a wind, not only
+    /// with it. 0 and 0: isotropic damping only.
+    float normal_drag = 0.0f;
+    float tangent_drag = 0.0f;
     glm::vec3 gravity{0.0f, -9.81f, 0.0f};  ///< m/s^2
-    glm::vec3 wind{0.0f};                   ///< an extra acceleration, m/s^2
+    /// An extra constant acceleration, m/s^2 (a push that ignores the chain's motion;
+    /// a moving air is a rods::WindField).
+    glm::vec3 wind{0.0f};
     /// Momentum suppression (SPEC A.5) in [0, 1]: 0 = plain shape matching, 1 = a change
     /// of rest shape moves the particles kinematically and injects no velocity.
     float momentum_suppression = 1.0f;
@@ -240,15 +253,16 @@ inline constexpr float kSettleTolerance = 1e-6f;
 /// 8 192 chains).
 inline constexpr std::uint32_t kSettleDynamicSubsteps = 60;
 
-/// Brings `state` to rest in equilibrium at `root` under the chain's gravity, wind and
-/// `colliders`, with `rest` its rest shape, by step()s of params.max_substep with the
+/// Brings `state` to rest in equilibrium at `root` under the chain's gravity, the air
+/// moving at `air` (m/s) and `colliders`, with `rest` its rest shape, by step()s of params.max_substep with the
 /// root held: quasi-static first (substeps of kSettleSubstep, every velocity set to 0
 /// after each, so nothing overshoots) until no particle moves by kSettleTolerance (x (1 +
 /// |root.position|)) in a substep or kMaxSettleSubsteps have run, then kSettleDynamicSubsteps as step() runs (its rest
 /// state keeps the small velocities of its follow-the-leader correction). Returns the
 /// substeps taken.
 KODAWARI_API std::uint32_t settle(const Chain& chain, const SolverParams& params, const Transform& root,
-                                  const ChainShape& rest, std::span<const Collider> colliders, ChainState& state);
+                                  const ChainShape& rest, std::span<const Collider> colliders, ChainState& state,
+                                  const glm::vec3& air = glm::vec3(0.0f));
 
 /// Adds to every velocity of `state` the rigid motion that carries its last root
 /// (state.root) to `root` in `dt` s: v_i += (travel + turn x_i - x_i) / dt, omega_i += that of
@@ -272,8 +286,11 @@ KODAWARI_API void start_moving(const Transform& root, float dt, ChainState& stat
 /// the inextensibility adds no energy. A root that jumped farther than
 /// params.teleport_distance first carries the chain (follow_teleport()); a chain's first
 /// step then starts it moving with its root (start_moving(), when params.settle_start).
+/// `air` is the air's velocity around the chain this frame (m/s, rods::air_velocity()
+/// at its root): damping and drag act on velocities relative to it.
 KODAWARI_API void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
-                       std::span<const Collider> colliders, float dt, ChainState& state);
+                       std::span<const Collider> colliders, float dt, ChainState& state,
+                       const glm::vec3& air = glm::vec3(0.0f));
 
 /// Carries `state` rigidly by the motion of a *center* frame from `from` to `to` (the
 /// spring's `center` of VRMC_springBone 1.0 and VRM 0.x): UniVRM and three-vrm keep a

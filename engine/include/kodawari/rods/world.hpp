@@ -17,6 +17,7 @@
 #include "shape.hpp"
 #include "solver.hpp"
 #include "view.hpp"
+#include "wind.hpp"
 
 namespace kodawari::rods {
 
@@ -80,6 +81,9 @@ struct ChainInstance {
     /// Its center frame (follow_center()): an index into RodFrame::centers that no other
     /// chain uses, or kNoCenter for a chain whose inertia is measured in the world.
     std::uint32_t center = kNoCenter;
+    /// The wind field it feels: an index into RodFrame::winds (ignored in a world without
+    /// wind fields, RodWorld::wind_count 0).
+    std::uint32_t wind = 0;
 };
 
 /// The chains of a scene.
@@ -89,6 +93,9 @@ struct KODAWARI_API RodWorld {
     std::uint32_t character_count = 0;  ///< character instances (RodFrame::reference entries)
     std::uint32_t collider_count = 0;   ///< RodFrame::colliders entries
     std::uint32_t center_count = 0;     ///< RodFrame::centers entries
+    /// RodFrame::winds entries: 0, no wind (the chains' damping acts on their world
+    /// velocities), or the fields that ChainInstance::wind picks from.
+    std::uint32_t wind_count = 0;
     std::uint32_t joint_count = 0;      ///< sum of the chains' joints (set by finalize)
     std::uint32_t key_count = 0;        ///< sum of the chains' key sources (set by finalize)
 
@@ -114,14 +121,20 @@ struct RodFrame {
     /// Per chain, its key sources (ChainInstance::key_begin): a Motion source's world
     /// pose, a Pose source's rotation relative to its parent (position 0).
     std::vector<Transform> keys;
+    /// The wind fields (RodWorld::wind_count of them), at `time`: each chain feels the air
+    /// of its field at its root (chain_air()), for the whole frame.
+    std::vector<WindField> winds;
 };
 
 /// Checks that `frame` fits `world` (sizes, dt > 0, finite values).
 [[nodiscard]] KODAWARI_API Result<void> check_frame(const RodWorld& world, const RodFrame& frame);
 
+/// The air's velocity around `chain` this frame: rods::air_velocity() of its wind field
+/// at its root and frame.time; 0 in a world without wind.
+[[nodiscard]] KODAWARI_API glm::vec3 chain_air(const RodWorld& world, std::uint32_t chain, const RodFrame& frame);
 /// `chain` at rest at `frame` (its first): initial_state() on the rest shape of
 /// rest_shape(world, chain, frame), settled there (settle(), with the chain's colliders
-/// at `frame`) unless its params say settle_start false, with its center frame
+/// and air at `frame`) unless its params say settle_start false, with its center frame
 /// (ChainState::center) from frame.centers when it has one. Every backend starts from
 /// these bits.
 [[nodiscard]] KODAWARI_API ChainState initial_chain_state(const RodWorld& world, std::uint32_t chain, const RodFrame& frame);
