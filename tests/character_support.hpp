@@ -20,6 +20,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
+#include <kodawari/backend_factory.hpp>
 #include <kodawari/gpu_info.hpp>
 #include <kodawari/rod_backend.hpp>
 #include <kodawari/scene.hpp>
@@ -196,6 +197,46 @@ inline bool same_frame(const rods::RodFrame& a, const rods::RodFrame& b) {
 inline bool same_frame_kinematics(const rods::RodFrame& a, const rods::RodFrame& b) {
     return std::memcmp(&a.camera, &b.camera, sizeof(rods::Camera)) == 0 && same_bytes(a.reference, b.reference) &&
            same_bytes(a.roots, b.roots) && same_bytes(a.colliders, b.colliders);
+}
+
+// Runs `rs`'s chains on `kind` for `frames` frames, frame f from `frame_at(f, frame)` (frame 0
+// loads the world), failing the test on any error or Vulkan validation message; returns
+// the snapshot after the last (empty after a failure).
+template <typename FrameAt>
+ChainSnapshot run_rod_frames(const BackendCase& kind, const RodScene& rs, std::uint32_t frames, FrameAt&& frame_at) {
+    auto made = make_rod_backend(kind, backend_options(kind));
+    EXPECT_TRUE(made.ok()) << made.error().message;
+    if (!made.ok()) return {};
+    RodBackend& backend = *made.value();
+    rods::RodFrame frame;
+    frame_at(0u, frame);
+    EXPECT_TRUE(backend.load(rs.world, frame).ok());
+    for (std::uint32_t f = 1; f < frames; ++f) {
+        frame_at(f, frame);
+        const auto stepped = backend.step(frame);
+        EXPECT_TRUE(stepped.ok()) << (stepped.ok() ? "" : stepped.error().message);
+        if (!stepped.ok()) return {};
+    }
+    EXPECT_EQ(backend.validation_messages(), 0u) << "Vulkan validation reported problems (see stderr)";
+    ChainSnapshot snap;
+    EXPECT_TRUE(backend.read(snap).ok());
+    return snap;
+}
+
+// The largest distance between a joint of `ours` and of `reference` (per joint, rs's
+// layout), in units of its chain's length: the parity tests' measure.
+inline float worst_in_chain_lengths(const RodScene& rs, const std::vector<glm::vec3>& ours,
+                                    const std::vector<glm::vec3>& reference) {
+    float worst = 0.0f;
+    for (const rods::ChainInstance& c : rs.world.chains) {
+        const rods::Chain& chain = rs.world.templ(c).chain;
+        float length = 0.0f;
+        for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
+        for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
+            worst = std::max(worst, glm::length(ours[c.joint_begin + i] - reference[c.joint_begin + i]) / length);
+        }
+    }
+    return worst;
 }
 
 }  // namespace kodawari::testing_support::characters

@@ -12,6 +12,8 @@
 // radii as written) and we (who scale them by the node's world scale, as UniVRM does;
 // engine/include/kodawari/gltf/vrm.hpp) collide the same shapes.
 
+import { glbBytes } from '../tools/three_vrm_swing.mjs';
+
 export const FPS = 60;
 const L = 0.25; // bone length, m
 const HIT = 0.05; // hitRadius, m
@@ -260,10 +262,6 @@ export const CASES = [
 // the motion (a LINEAR key per frame on each channel, one second beyond the run: a
 // rigged character's clip loops, and the run's last frame must not wrap round).
 
-function pad4(n) {
-  return (n + 3) & ~3;
-}
-
 export function packGlb(json, motion) {
   const out = structuredClone(json);
   const n = frameCount(motion) + FPS;
@@ -299,18 +297,5 @@ export function packGlb(json, motion) {
   }
   out.animations = [animation];
   out.buffers = [{ byteLength: length }];
-  const bin = Buffer.concat(parts, length);
-  let text = Buffer.from(JSON.stringify(out), 'utf8');
-  text = Buffer.concat([text, Buffer.alloc(pad4(text.length) - text.length, 0x20)]);
-  const header = Buffer.alloc(12);
-  header.writeUInt32LE(0x46546c67, 0); // "glTF"
-  header.writeUInt32LE(2, 4);
-  header.writeUInt32LE(12 + 8 + text.length + 8 + bin.length, 8);
-  const chunk = (bytes, type) => {
-    const h = Buffer.alloc(8);
-    h.writeUInt32LE(bytes.length, 0);
-    h.writeUInt32LE(type, 4);
-    return [h, bytes];
-  };
-  return Buffer.concat([header, ...chunk(text, 0x4e4f534a), ...chunk(bin, 0x004e4942)]);
+  return glbBytes(out, Buffer.concat(parts, length));
 }

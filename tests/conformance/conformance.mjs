@@ -45,6 +45,7 @@ import { mkdirSync, mkdtempSync, readFileSync, readdirSync, rmSync, writeFileSyn
 import os from 'node:os';
 import path from 'node:path';
 import { fileURLToPath } from 'node:url';
+import { sineFit, slope } from '../tools/sine_fit.mjs';
 import { CASES, FPS, packGlb, rotate, worldPose } from './cases.mjs';
 import { defaultToolsDir, loadTools, makeVectors, shapeClearance } from './make_vectors.mjs';
 
@@ -71,37 +72,9 @@ function sway(channel, t) {
   return channel.amplitude * Math.sin(2 * Math.PI * channel.frequency * Math.min(t, channel.until));
 }
 
-/// Least-squares fit of x_j(t) = G A sin(w t - lag) + c along the sway's axis over frames
-/// [f0, f1]: {gain, lag (degrees, in [0, 360): the joint follows the root late)}.
+/// The fit of joint j's displacement along the sway's axis over frames [f0, f1] (sineFit).
 function transfer(P, j, channel, f0, f1) {
-  const w = 2 * Math.PI * channel.frequency;
-  const M = [[0, 0, 0], [0, 0, 0], [0, 0, 0]];
-  const r = [0, 0, 0];
-  for (let f = f0; f <= f1; ++f) {
-    const b = [Math.sin((w * f) / FPS), Math.cos((w * f) / FPS), 1];
-    const x = dot(P[f][j], channel.axis);
-    for (let i = 0; i < 3; ++i) {
-      r[i] += b[i] * x;
-      for (let k = 0; k < 3; ++k) M[i][k] += b[i] * b[k];
-    }
-  }
-  const c = solve3(M, r);
-  return { gain: Math.hypot(c[0], c[1]) / channel.amplitude, lag: ((((Math.atan2(-c[1], c[0]) * 180) / Math.PI) % 360) + 360) % 360 };
-}
-
-function solve3(M, r) {
-  const m = M.map((row, i) => [...row, r[i]]);
-  for (let i = 0; i < 3; ++i) {
-    let p = i;
-    for (let k = i + 1; k < 3; ++k) if (Math.abs(m[k][i]) > Math.abs(m[p][i])) p = k;
-    [m[i], m[p]] = [m[p], m[i]];
-    for (let k = 0; k < 3; ++k) {
-      if (k === i) continue;
-      const s = m[k][i] / m[i][i];
-      for (let c = i; c < 4; ++c) m[k][c] -= s * m[i][c];
-    }
-  }
-  return m.map((row, i) => row[3] / row[i]);
+  return sineFit((f) => dot(P[f][j], channel.axis), channel.amplitude, channel.frequency, FPS, f0, f1);
 }
 
 /// The rate (1/s) at which joint j's offset from the root along the axis dies away after
@@ -130,17 +103,7 @@ function decayRate(P, j, channel, h) {
       if (v <= 0.3 * big && v >= 0.03 * big) points.push([f / FPS, Math.log(v)]);
     }
   }
-  if (points.length < 3) return NaN;
-  const n = points.length;
-  const mx = points.reduce((s, p) => s + p[0], 0) / n;
-  const my = points.reduce((s, p) => s + p[1], 0) / n;
-  let sxy = 0;
-  let sxx = 0;
-  for (const [x, y] of points) {
-    sxy += (x - mx) * (y - my);
-    sxx += (x - mx) ** 2;
-  }
-  return -sxy / sxx;
+  return points.length < 3 ? NaN : -slope(points);
 }
 
 /// Mean angle (degrees) below the horizontal of the line from joint i to joint j over the

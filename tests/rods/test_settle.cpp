@@ -152,22 +152,9 @@ class SettleBackends : public ::testing::TestWithParam<kodawari::testing_support
 // returns the joints' positions at the end, relative to their chain's root.
 std::vector<glm::vec3> teleported_run(const kodawari::testing_support::BackendCase& kind, const RodScene& rs,
                                       std::uint32_t frames, std::uint32_t teleport_at) {
-    auto made = kodawari::make_rod_backend(kind, kodawari::testing_support::backend_options(kind));
-    EXPECT_TRUE(made.ok()) << made.error().message;
-    if (!made.ok()) return {};
-    kodawari::RodBackend& backend = *made.value();
-    rods::RodFrame frame;
-    rs.frame(0, frame);
-    EXPECT_TRUE(backend.load(rs.world, frame).ok());
-    for (std::uint32_t f = 1; f < frames; ++f) {
+    const kodawari::ChainSnapshot snap = run_rod_frames(kind, rs, frames, [&](std::uint32_t f, rods::RodFrame& frame) {
         shifted_frame(rs, f, f >= teleport_at ? kJump : glm::vec3(0.0f), frame);
-        const auto stepped = backend.step(frame);
-        EXPECT_TRUE(stepped.ok()) << (stepped.ok() ? "" : stepped.error().message);
-        if (!stepped.ok()) return {};
-    }
-    EXPECT_EQ(backend.validation_messages(), 0u) << "Vulkan validation reported problems (see stderr)";
-    kodawari::ChainSnapshot snap;
-    EXPECT_TRUE(backend.read(snap).ok());
+    });
     std::vector<glm::vec3> out(snap.positions.size());
     for (const rods::ChainInstance& c : rs.world.chains) {
         for (std::uint32_t i = 0; i < rs.world.templ(c).chain.joint_count; ++i) {
@@ -194,15 +181,7 @@ TEST_P(SettleBackends, TeleportsMatchTheReference) {
         const std::vector<glm::vec3> ours = teleported_run(GetParam(), rs, 61, 30);
         const std::vector<glm::vec3> reference = teleported_run(kodawari::testing_support::BackendCase{kodawari::BackendKind::CpuReference, {}}, rs, 61, 30);
         ASSERT_EQ(ours.size(), reference.size()) << file;
-        float worst = 0.0f;
-        for (const rods::ChainInstance& c : rs.world.chains) {
-            const rods::Chain& chain = rs.world.templ(c).chain;
-            float length = 0.0f;
-            for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
-            for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
-                worst = std::max(worst, glm::length(ours[c.joint_begin + i] - reference[c.joint_begin + i]) / length);
-            }
-        }
+        const float worst = worst_in_chain_lengths(rs, ours, reference);
         std::printf("[ measured ] %s on %s, teleported: max %.3g of the chain length from the reference\n", file,
                     kodawari::testing_support::case_name(GetParam()).c_str(), static_cast<double>(worst));
         if (GetParam() == kodawari::BackendKind::Vulkan) {

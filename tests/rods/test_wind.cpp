@@ -299,29 +299,12 @@ class WindBackends : public ::testing::TestWithParam<kodawari::testing_support::
 // `calm_until` (as an application's set_wind at that frame): every joint's position at the end.
 std::vector<glm::vec3> windy_run(const kodawari::testing_support::BackendCase& kind, const RodScene& rs,
                                  std::uint32_t frames, std::uint32_t calm_until = 0) {
-    auto made = kodawari::make_rod_backend(kind, kodawari::testing_support::backend_options(kind));
-    EXPECT_TRUE(made.ok()) << made.error().message;
-    if (!made.ok()) return {};
-    kodawari::RodBackend& backend = *made.value();
-    rods::RodFrame frame;
-    auto at = [&](std::uint32_t f) {
-        rs.frame(f, frame);
-        if (f < calm_until) {
-            for (rods::WindField& w : frame.winds) w = rods::WindField{};
-        }
-    };
-    at(0);
-    EXPECT_TRUE(backend.load(rs.world, frame).ok());
-    for (std::uint32_t f = 1; f < frames; ++f) {
-        at(f);
-        const auto stepped = backend.step(frame);
-        EXPECT_TRUE(stepped.ok()) << (stepped.ok() ? "" : stepped.error().message);
-        if (!stepped.ok()) return {};
-    }
-    EXPECT_EQ(backend.validation_messages(), 0u) << "Vulkan validation reported problems (see stderr)";
-    kodawari::ChainSnapshot snap;
-    EXPECT_TRUE(backend.read(snap).ok());
-    return snap.positions;
+    return run_rod_frames(kind, rs, frames, [&](std::uint32_t f, rods::RodFrame& frame) {
+               rs.frame(f, frame);
+               if (f < calm_until) {
+                   for (rods::WindField& w : frame.winds) w = rods::WindField{};
+               }
+           }).positions;
 }
 
 }  // namespace
@@ -350,15 +333,7 @@ TEST_P(WindBackends, GustyCrowdMatchesTheReference) {
         const std::vector<glm::vec3> reference =
             windy_run(kodawari::testing_support::BackendCase{kodawari::BackendKind::CpuReference, {}}, run, 61, calm_until);
         ASSERT_EQ(ours.size(), reference.size());
-        float worst = 0.0f;
-        for (const rods::ChainInstance& c : rs.world.chains) {
-            const rods::Chain& chain = rs.world.templ(c).chain;
-            float length = 0.0f;
-            for (std::uint32_t i = 0; i + 1 < chain.joint_count; ++i) length += chain.segment_length[i];
-            for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
-                worst = std::max(worst, glm::length(ours[c.joint_begin + i] - reference[c.joint_begin + i]) / length);
-            }
-        }
+        const float worst = worst_in_chain_lengths(rs, ours, reference);
         std::printf("[ measured ] windy.json on %s, calm until frame %u: max %.3g of the chain length from the reference\n",
                     kodawari::testing_support::case_name(GetParam()).c_str(), calm_until, static_cast<double>(worst));
         if (GetParam() == kodawari::BackendKind::Vulkan) {

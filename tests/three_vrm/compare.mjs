@@ -51,6 +51,7 @@ import { fileURLToPath, pathToFileURL } from 'node:url';
 
 const here = path.dirname(fileURLToPath(import.meta.url));
 const swing = await import(pathToFileURL(path.join(here, '..', 'tools', 'three_vrm_swing.mjs')).href);
+const { sineFit, slope } = await import(pathToFileURL(path.join(here, '..', 'tools', 'sine_fit.mjs')).href);
 const { FPS, displacement, frameCount } = swing;
 
 function usage(message) {
@@ -63,42 +64,10 @@ function usage(message) {
 
 const AXIS = { x: 0, y: 1, z: 2 };
 
-/// Least-squares fit of x_j(t) = G A sin(w t - lag) + c over frames [f0, f1]: {gain, lag}
-/// (lag in degrees, positive: the joint follows the root late).
+/// The fit of joint j's displacement along the motion's axis over frames [f0, f1] (sineFit).
 function transfer(P, j, motion, f0, f1) {
   const a = AXIS[motion.axis];
-  const w = 2 * Math.PI * motion.frequency;
-  // Normal equations of the basis (sin, cos, 1).
-  const M = [[0, 0, 0], [0, 0, 0], [0, 0, 0]];
-  const r = [0, 0, 0];
-  for (let f = f0; f <= f1; ++f) {
-    const t = f / FPS;
-    const b = [Math.sin(w * t), Math.cos(w * t), 1];
-    for (let i = 0; i < 3; ++i) {
-      r[i] += b[i] * P[f][j][a];
-      for (let k = 0; k < 3; ++k) M[i][k] += b[i] * b[k];
-    }
-  }
-  const c = solve3(M, r);
-  const gain = Math.hypot(c[0], c[1]) / motion.amplitude;
-  // In [0, 360): a chain's tip can lag its root by more than half a period.
-  const lag = (((Math.atan2(-c[1], c[0]) * 180) / Math.PI) % 360 + 360) % 360;
-  return { gain, lag };
-}
-
-function solve3(M, r) {
-  const m = M.map((row, i) => [...row, r[i]]);
-  for (let i = 0; i < 3; ++i) {
-    let p = i;
-    for (let k = i + 1; k < 3; ++k) if (Math.abs(m[k][i]) > Math.abs(m[p][i])) p = k;
-    [m[i], m[p]] = [m[p], m[i]];
-    for (let k = 0; k < 3; ++k) {
-      if (k === i) continue;
-      const s = m[k][i] / m[i][i];
-      for (let c = i; c < 4; ++c) m[k][c] -= s * m[i][c];
-    }
-  }
-  return m.map((row, i) => row[3] / row[i]);
+  return sineFit((f) => P[f][j][a], motion.amplitude, motion.frequency, FPS, f0, f1);
 }
 
 /// The joint's offset from the root along the motion axis, per frame.
@@ -149,19 +118,6 @@ function decay(P, j, motion, h) {
     if (v <= 0.3 * big && v >= 0.03 * big) points.push([f / FPS, Math.log(v)]);
   }
   return { frequency: null, rate: points.length >= 3 ? -slope(points) : NaN };
-}
-
-function slope(points) {
-  const n = points.length;
-  const mx = points.reduce((s, p) => s + p[0], 0) / n;
-  const my = points.reduce((s, p) => s + p[1], 0) / n;
-  let sxy = 0;
-  let sxx = 0;
-  for (const [x, y] of points) {
-    sxy += (x - mx) * (y - my);
-    sxx += (x - mx) * (x - mx);
-  }
-  return sxy / sxx;
 }
 
 /// Mean angle (degrees) below the horizontal of the line from joint i to joint j over the

@@ -180,8 +180,12 @@ export function packGlb(json, buffers, motion) {
     }];
   }
   out.buffers = [{ byteLength: length }];
-  const bin = Buffer.concat(parts, length);
-  let text = Buffer.from(JSON.stringify(out), 'utf8');
+  return glbBytes(out, Buffer.concat(parts, length));
+}
+
+/// A glTF binary file of `json` and its one buffer `bin` (4-byte aligned).
+export function glbBytes(json, bin) {
+  let text = Buffer.from(JSON.stringify(json), 'utf8');
   text = Buffer.concat([text, Buffer.alloc(pad4(text.length) - text.length, 0x20)]);
   const header = Buffer.alloc(12);
   header.writeUInt32LE(0x46546c67, 0); // "glTF"
