@@ -235,8 +235,7 @@ public:
         // The air around each chain (rods::chain_air), by engine/rods' own function (a
         // hundred operations a chain with gusts), where any field moves the air; in calm
         // air it is 0 everywhere, which the kernel takes without the rows (same bits).
-        const bool moving = std::any_of(frame.winds.begin(), frame.winds.end(),
-                                        [](const rods::WindField& w) { return w.velocity != glm::vec3(0.0f); });
+        const bool moving = moving_air(frame);
         if (moving) {
             air_.resize(world_->chains.size() * 3);
             parallel_for(world_->chains.size(), threads_, [&](std::size_t begin, std::size_t end) {

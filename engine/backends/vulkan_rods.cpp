@@ -85,13 +85,6 @@ void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
     g.drag = {std::exp(-p.normal_drag * h), std::exp(-p.tangent_drag * h), drag ? 1.0f : 0.0f, 0.0f};
 }
 
-// Whether any of a frame's wind fields moves the air (a calm field, velocity 0, moves
-// nothing whatever its gusts: they scale with the mean speed).
-bool moving_air(const rods::RodFrame& frame) {
-    return std::any_of(frame.winds.begin(), frame.winds.end(),
-                       [](const rods::WindField& w) { return w.velocity != glm::vec3(0.0f); });
-}
-
 // A wind field as the kernel takes it (shared/rods.h), with rods::air_velocity's own
 // reciprocals, so both sides scale the noise by the same bits.
 gpu::RodWindGpu to_gpu(const rods::WindField& w) {
@@ -551,7 +544,7 @@ private:
         const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
         // The world's first step starts its chains moving with their roots (rods::start_moving).
         gpu::RodPush push{{}, {}, to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f), to_gpu(frame.camera.forward, frame.dt),
-                          {started_ ? 0u : 1u, world_->wind_count > 0 ? 1u : 0u, 0u, 0u}, {frame.time, 0.0f, 0.0f, 0.0f}};
+                          {started_ ? 0u : 1u, moving_air(frame) ? 1u : 0u, 0u, 0u}, {frame.time, 0.0f, 0.0f, 0.0f}};
         started_ = true;
         auto dispatch = [&](const compute::Kernel* kernel, std::uint32_t first, std::uint32_t chains) {
             push.counts.x = chains;

@@ -181,8 +181,8 @@ struct RodPush {
     vec4 camera_position;   // xyz, w: 1 = orthographic
     vec4 camera_forward;    // xyz, w: the frame's length dt (s)
     uvec4 flags;            // x: 1 on the world's first step (chains of templates with
-                            // physics.w != 0 start moving with their roots); y: 1 = the world has
-                            // wind fields (KW_RODS_BINDING_WINDS); zw: 0
+                            // physics.w != 0 start moving with their roots); y: 1 = a wind field
+                            // moves the air (KW_RODS_BINDING_WINDS); zw: 0
     vec4 time;              // x: the frame's time (s, RodFrame::time: the wind's), yzw: unused
 };
 
