@@ -6,6 +6,7 @@
 #include "kodawari/gltf/rig_scene.hpp"
 
 #include <algorithm>
+#include <cassert>
 #include <cctype>
 #include <cmath>
 #include <cstdio>
@@ -38,6 +39,22 @@ double num(float v) {
     return std::strtod(text, nullptr);
 }
 Json vec(glm::vec3 v) { return Json::array({num(v.x), num(v.y), num(v.z)}); }
+
+// The same six digits, never above `v` once read back as a float: for a value the loader
+// bounds from above by something it recomputes from the glTF (a thickness of half the
+// shortest segment), where rounding to the nearest could put it 1e-6 over and `run` would
+// refuse the scene `rig` wrote (fuzz_gltf, CI stop 46).
+double num_at_most(float v) {
+    double d = num(v);
+    if (static_cast<float>(d) <= v) return d;
+    // One unit in the sixth digit below: the largest six-digit decimal under v.
+    const double step = std::pow(10.0, std::floor(std::log10(std::abs(static_cast<double>(v)))) - 5.0);
+    char text[32];
+    std::snprintf(text, sizeof(text), "%.6g", d - step);
+    d = std::strtod(text, nullptr);
+    assert(static_cast<float>(d) <= v);
+    return d;
+}
 
 // nlohmann puts every array element on a line of its own; [x, y, z] on one line reads
 // better. Only arrays of plain numbers are joined (names could hold brackets).
@@ -272,7 +289,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
             for (const int n : c.nodes) list.push_back(refs[static_cast<std::size_t>(n)]);
             j["nodes"] = list;
         }
-        j["thickness"] = num(k.physics.thickness);
+        j["thickness"] = num_at_most(k.physics.thickness);
         j["mass"] = num(k.physics.mass);
         if (k.params) {
             Json physics;
