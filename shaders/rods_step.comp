@@ -12,6 +12,7 @@
 #include "shared/rods.h"
 #include "lib/quat.glsl"
 #include "lib/wind.glsl"
+#include "lib/spring_limit.glsl"
 
 layout(local_size_x = KW_RODS_WORKGROUP_SIZE) in;
 
@@ -152,6 +153,9 @@ struct Constants {
     float mass[MAX_J], weight[MAX_J], seg_len[MAX_J], half_len[MAX_J];
     vec3 axis[MAX_J];
     vec4 rotation[MAX_EXAMPLES + 1][MAX_J], orientation[MAX_EXAMPLES + 1][MAX_J];
+    // Angle limits (KW_RODS_FEATURE_LIMITS only): segment i's kind, trig and frame.
+    uint limit_kind[MAX_J];
+    vec4 limit_trig[MAX_J], limit_frame[MAX_J];
 };
 void load_constants(uint n, uint examples, uint tj, uint shape0, out Constants tc) {
     [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
@@ -162,6 +166,11 @@ void load_constants(uint n, uint examples, uint tj, uint shape0, out Constants t
         tc.weight[i] = i == 0 ? ROOT_SHAPE_WEIGHT * tc.mass[i] : tc.mass[i];
         tc.seg_len[i] = tjoint.lengths.x;
         tc.half_len[i] = tjoint.lengths.y;
+        if ((FEATURES & KW_RODS_FEATURE_LIMITS) != 0u) {
+            tc.limit_kind[i] = uint(tjoint.lengths.z);
+            tc.limit_trig[i] = tjoint.limit_trig;
+            tc.limit_frame[i] = tjoint.limit_frame;
+        }
         [[unroll]] for (uint v = 0; v <= MAX_EXAMPLES; ++v) {
             const RodShapeJointGpu s = shapes[shape0 + min(v, examples) * n + ic];
             tc.rotation[v][i] = s.rotation;
@@ -200,6 +209,28 @@ void load_constants(uint n, uint examples, uint tj, uint shape0, out Constants t
         collide_all(p[j]);                                                                                    \
         pushed[j] += p[j] - before;                                                                           \
     }
+// Particle j + 1 turned about particle j, at the same distance, to the nearest direction
+// segment j's angle limit allows, then the parent bones' swing carried past it
+// (solver.cpp limit_child; the limit itself is shaders/lib/spring_limit.glsl).
+#define KW_LIMIT(j)                                                                                           \
+    {                                                                                                         \
+        const vec3 dd = p[(j) + 1] - p[j];                                                                    \
+        const float len = length(dd);                                                                         \
+        if (len > 1e-9) {                                                                                     \
+            vec3 dir = dd / len;                                                                              \
+            const uint kind = tc.limit_kind[j];                                                               \
+            if (kind != KW_RODS_LIMIT_NONE) {                                                                 \
+                const vec4 frame = qmul(qmul(swing, obar[j]), tc.limit_frame[j]);                             \
+                const vec3 local = qrot(qconj(frame), dir);                                                   \
+                const vec3 allowed = limit_direction(kind, tc.limit_trig[j], local);                          \
+                if (any(notEqual(allowed, local))) {                                                          \
+                    dir = qrot(frame, allowed);                                                               \
+                    p[(j) + 1] = p[j] + len * dir;                                                            \
+                }                                                                                             \
+            }                                                                                                 \
+            swing = qnormalize(qmul(shortest_arc(qrot(swing, obar_axis[j]), dir), swing));                    \
+        }                                                                                                     \
+    }
 // Particle j (>= 1) after its last group: toward the mean of its goals, then rest-pose
 // attraction (Han & Harada 2012, global shape constraint), then the distance constraint to
 // its (already final) parent, follow-the-leader, its correction kept for DFTL, then the
@@ -211,6 +242,7 @@ void load_constants(uint n, uint examples, uint tj, uint shape0, out Constants t
         p[j] += k_rest * (xbar[j] - p[j]);                                                                    \
         KW_PLACE(j);                                                                                          \
         if (col_count > 0u) KW_COLLIDE(j);                                                                \
+        if (LIMITS) KW_LIMIT((j) - 1);                                                                        \
     }
 
 void main() {
@@ -449,6 +481,9 @@ void main() {
         air = wind_air_velocity(w.velocity.xyz, w.velocity.w, w.scales.x, w.scales.y, w.seed.x, to.position.xyz, push.time.x);
     }
     const bool drag = AIR && t.drag.z != 0.0;
+    // Angle limits: the parent bones' swing from their rest, carried down each sweep (solver.cpp).
+    const bool LIMITS = (FEATURES & KW_RODS_FEATURE_LIMITS) != 0u && t.solver.w != 0u;
+    vec4 swing = vec4(0.0, 0.0, 0.0, 1.0);
     const uint cbegin = chain.ids.z;
     const uint cend = chain.ids.z + chain.ids.w;
     // Solved relative to the previous root position, as the state is (solver.cpp).
@@ -522,6 +557,7 @@ void main() {
         }
 
         for (uint it = 0; it < iterations; ++it) {
+            swing = vec4(0.0, 0.0, 0.0, 1.0);
             // One pass over the groups that also finishes each joint as soon as its last
             // group is done: A_j right before its first group, a joint's goal average,
             // rest-pose attraction and distance constraint right after its last. The same
@@ -580,7 +616,8 @@ void main() {
             }
 
         }
-        // The last sweep: placed and pushed out, twice (solver.cpp).
+        // The last sweep: placed and pushed out, twice, then limited (solver.cpp).
+        swing = vec4(0.0, 0.0, 0.0, 1.0);
         [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
             if (i < n) {
                 KW_PLACE(i);
@@ -591,6 +628,7 @@ void main() {
                     KW_PLACE(i);
                     KW_COLLIDE(i);
                 }
+                if (LIMITS) KW_LIMIT(i - 1);
             }
         }
 

@@ -46,7 +46,11 @@ simd::RodTemplateConsts template_consts(const rods::ChainTemplate& t) {
         k.segment[j] = chain.segment_length[j];
         k.bone_axis[j] = {chain.bone_axis[j].x, chain.bone_axis[j].y, chain.bone_axis[j].z};
         if (j + 1 < n) k.lengths[j] = t.basis.lengths[j];
+        k.limit_kind[j] = static_cast<std::uint32_t>(chain.limit[j].kind);
+        k.limit_trig[j] = {chain.limit_trig[j].x, chain.limit_trig[j].y, chain.limit_trig[j].z, chain.limit_trig[j].w};
+        k.limit_frame[j] = xyzw(chain.limit_frame[j]);
     }
+    k.limited = chain.limited;
     for (std::uint32_t i = 0; i < n; ++i) {
         const std::uint32_t lo = i == 0 ? 0 : i - 1;
         const std::uint32_t hi = std::min(i + 1, n - 1);

@@ -77,7 +77,7 @@ std::span<std::byte> writable_bytes_of(std::vector<T>& v) {
 void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
     const std::uint32_t substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / p.max_substep)));
     const float h = dt / static_cast<float>(substeps);
-    g.solver = {p.iterations, substeps, g.solver.z, 0u};  // z: the keyed examples, set at load
+    g.solver = {p.iterations, substeps, g.solver.z, g.solver.w};  // z: the keyed examples, w: limited, set at load
     g.step = {h, std::exp(-p.damping * h), rods::iteration_stiffness(rods::substep_stiffness(p.stiffness, h), p.iterations),
               p.momentum_suppression};
     g.physics.y = rods::iteration_stiffness(rods::substep_stiffness(p.rest_stiffness, h), p.iterations);
@@ -187,6 +187,7 @@ public:
         // Constants: templates, their joints and shapes.
         std::uint32_t max_joints = 2, max_views = 0, max_keyed = 0;
         bool all_none = true, all_full = true;
+        bool limits = false;  // a template with angle limits (KW_RODS_FEATURE_LIMITS)
         templates_.clear();
         key_templates_.clear();
         std::vector<gpu::RodTemplateJointGpu> tjoints;
@@ -202,6 +203,8 @@ public:
             g.counts = {n, static_cast<std::uint32_t>(t.views.size()), static_cast<std::uint32_t>(tjoints.size()),
                         static_cast<std::uint32_t>(shapes.size())};
             g.solver.z = static_cast<std::uint32_t>(t.keyed.size());
+            g.solver.w = t.chain.limited ? 1u : 0u;
+            limits = limits || t.chain.limited;
             g.physics = {t.chain.thickness, 0.0f, t.params.teleport_distance, t.params.settle_start ? 1.0f : 0.0f};
             g.accel = to_gpu(t.params.gravity + t.params.wind);
             g.first_dir = to_gpu(t.basis.first_direction);
@@ -210,7 +213,11 @@ public:
             key_templates_.push_back(key_template(t));
             for (std::uint32_t i = 0; i < n; ++i) {
                 tjoints.push_back({to_gpu(t.chain.bone_axis[i], t.chain.mass[i]),
-                                   {t.chain.segment_length[i], t.chain.half_length[i], 0.0f, 0.0f}});
+                                   {t.chain.segment_length[i], t.chain.half_length[i],
+                                    static_cast<float>(static_cast<std::uint32_t>(t.chain.limit[i].kind)), 0.0f},
+                                   {t.chain.limit_trig[i].x, t.chain.limit_trig[i].y, t.chain.limit_trig[i].z,
+                                    t.chain.limit_trig[i].w},
+                                   to_gpu(t.chain.limit_frame[i])});
             }
             const rods::RotationShape& base = t.shapes[0];
             for (const rods::RotationShape& s : t.shapes) {
@@ -358,6 +365,7 @@ public:
         bool air = moving_air(initial);
         for (const rods::ChainTemplate& t : world.templates) air = air || t.params.normal_drag > 0.0f || t.params.tangent_drag > 0.0f;
         if (air) features_ |= KW_RODS_FEATURE_AIR;
+        if (limits) features_ |= KW_RODS_FEATURE_LIMITS;
         for (const rods::Collider& c : initial.colliders) features_ |= feature_of(c.kind);
         suppression_ = all_none   ? KW_RODS_SUPPRESSION_NONE
                        : all_full ? KW_RODS_SUPPRESSION_FULL

@@ -137,6 +137,20 @@ rods::ChainTemplate read_template(const kodawari_chain_template_desc& t, const s
     const rods::SolverParams params = read_solver(t.solver, what + ".solver");
     auto made = rods::make_chain_template(what, base, shapes, views, t.thickness, t.mass, params);
     check(made);
+    if (t.limit_count != 0 && t.limit_count + 1 != t.joint_count) {
+        invalid(what + ".limit_count", std::to_string(t.limit_count) + "; expected 0 or joint_count - 1 (" +
+                                           std::to_string(t.joint_count - 1) + ")");
+    }
+    require_array(t.limits, t.limit_count, what + ".limits", what + ".limit_count");
+    std::vector<rods::AngleLimit> limits;
+    for (std::uint32_t i = 0; i < t.limit_count; ++i) {
+        const kodawari_angle_limit& l = t.limits[i];
+        const std::string limit = at(what + ".limits", i);
+        if (l.kind > KODAWARI_LIMIT_SPHERICAL) invalid(limit + ".kind", std::to_string(l.kind) + "; expected a kodawari_limit_kind");
+        limits.push_back({static_cast<rods::LimitKind>(l.kind), l.angle, l.yaw,
+                          glm::quat(l.rotation[3], l.rotation[0], l.rotation[1], l.rotation[2])});
+    }
+    check(rods::set_limits(made.value().chain, limits, what + ".limits"));
     return std::move(made).value();
 }
 

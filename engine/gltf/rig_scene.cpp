@@ -150,7 +150,37 @@ struct Candidate {
     std::optional<rods::SolverParams> params;  // VRM's mapped parameters
     std::vector<std::size_t> colliders;        // VRM: the spring's colliders (VrmSprings::colliders indices)
     int center = -1;                           // VRM: its center node
+    std::vector<rods::AngleLimit> limits;      // VRM: its joints' angle limits (or none)
 };
+
+// A limit's rotation as the scene writes rotations ({"axis", "angle_deg"}).
+Json rotation_json(const glm::quat& q0) {
+    const glm::quat q = q0.w < 0.0f ? -q0 : q0;
+    const float s = std::sqrt(std::max(0.0f, 1.0f - q.w * q.w));
+    const glm::vec3 axis = s > 1e-6f ? glm::vec3(q.x, q.y, q.z) / s : glm::vec3(0.0f, 1.0f, 0.0f);
+    Json r;
+    r["axis"] = vec(axis);
+    r["angle_deg"] = num(glm::degrees(2.0f * std::acos(std::min(q.w, 1.0f))));
+    return r;
+}
+
+// One joint's limit as the scene format writes it (docs/scene-format.md, "limit"), or
+// null for none. Degrees at six digits; a limit at pi or pi/2 stays within the loader's
+// [0, 180] and [0, 90] (num_at_most).
+Json limit_json(const rods::AngleLimit& l) {
+    if (l.kind == rods::LimitKind::None) return nullptr;
+    Json shape;
+    if (l.kind == rods::LimitKind::Spherical) {
+        shape["pitch_deg"] = num_at_most(glm::degrees(l.angle));
+        shape["yaw_deg"] = num_at_most(glm::degrees(l.yaw));
+    } else {
+        shape["angle_deg"] = num_at_most(glm::degrees(l.angle));
+    }
+    if (l.rotation != glm::quat(1.0f, 0.0f, 0.0f, 0.0f)) shape["rotation"] = rotation_json(l.rotation);
+    Json j;
+    j[l.kind == rods::LimitKind::Cone ? "cone" : l.kind == rods::LimitKind::Hinge ? "hinge" : "spherical"] = shape;
+    return j;
+}
 
 float max_scale(const glm::mat4& m) {
     return std::max({glm::length(glm::vec3(m[0])), glm::length(glm::vec3(m[1])), glm::length(glm::vec3(m[2]))});
@@ -242,6 +272,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
                 k.params = s.params;
                 k.colliders = s.colliders;
                 k.center = s.center;
+                k.limits = s.limits;
                 candidates.push_back(std::move(k));
             }
             vrm_colliders = std::move(vrm.colliders);
@@ -302,6 +333,11 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
             j["physics"] = physics;
         }
         if (k.center >= 0) j["center"] = refs[static_cast<std::size_t>(k.center)];
+        if (!k.limits.empty()) {
+            Json limits = Json::array();
+            for (const rods::AngleLimit& l : k.limits) limits.push_back(limit_json(l));
+            j["limit"] = limits;
+        }
         chains.push_back(j);
         written.push_back(&k);
         out.chains.push_back(RigChain{name, ch.nodes[static_cast<std::size_t>(c.nodes.front())].name.empty()

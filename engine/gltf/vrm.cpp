@@ -33,6 +33,7 @@ struct Settings {
     float gravity_power = 0.0f;
     glm::vec3 gravity_dir{0.0f, -1.0f, 0.0f};
     float drag = 0.5f;
+    rods::AngleLimit limit;  // VRMC_springBone_limit on the joint (VRM 1.0 only)
 };
 
 class Reader {
@@ -95,6 +96,68 @@ private:
         if (!std::isfinite(v)) return invalid(path + "." + key, "not finite");
         return static_cast<float>(v);
     }
+    // A joint's VRMC_springBone_limit (1.0-draft): exactly one of cone {angle, rotation},
+    // hinge {angle, rotation}, spherical {pitch, yaw, rotation}; angles in radians, >= 0,
+    // read as pi (pitch, angle) or pi/2 (yaw) above those, as the draft says an
+    // implementation MUST; rotation a unit quaternion (x, y, z, w), normalized as written.
+    Result<rods::AngleLimit> limit(const json& joint, const std::string& path) {
+        rods::AngleLimit out;
+        const auto exts = joint.find("extensions");
+        if (exts == joint.end() || !exts->is_object()) return out;
+        const auto ext = exts->find("VRMC_springBone_limit");
+        if (ext == exts->end()) return out;
+        const std::string p = path + ".extensions.VRMC_springBone_limit";
+        if (!ext->is_object()) return invalid(p, "expected an object");
+        const auto lim = ext->find("limit");
+        const char* kinds[3] = {"cone", "hinge", "spherical"};
+        if (lim == ext->end() || !lim->is_object()) return invalid(p + ".limit", "expected an object with one of cone, hinge, spherical");
+        int found = -1;
+        for (int k = 0; k < 3; ++k) {
+            if (!lim->contains(kinds[k])) continue;
+            if (found >= 0) return invalid(p + ".limit", "more than one of cone, hinge, spherical");
+            found = k;
+        }
+        if (found < 0) return invalid(p + ".limit", "expected one of cone, hinge, spherical");
+        const json& shape = (*lim)[kinds[found]];
+        const std::string sp = p + ".limit." + kinds[found];
+        if (!shape.is_object()) return invalid(sp, "expected an object");
+        auto angle = [&](const char* key, float most) -> Result<float> {
+            if (!shape.contains(key)) return invalid(sp, std::string("missing \"") + key + "\"");
+            auto v = number(shape, key, sp, 0.0f);
+            if (!v) return v.error();
+            if (v.value() < 0.0f) return invalid(sp + "." + key, "negative (" + std::to_string(v.value()) + " rad); at least 0");
+            return std::min(v.value(), most);
+        };
+        if (found == 2) {
+            out.kind = rods::LimitKind::Spherical;
+            auto pitch = angle("pitch", rods::kMaxLimitAngle);
+            if (!pitch) return pitch.error();
+            auto yaw = angle("yaw", rods::kMaxLimitYaw);
+            if (!yaw) return yaw.error();
+            out.angle = pitch.value();
+            out.yaw = yaw.value();
+        } else {
+            out.kind = found == 0 ? rods::LimitKind::Cone : rods::LimitKind::Hinge;
+            auto a = angle("angle", rods::kMaxLimitAngle);
+            if (!a) return a.error();
+            out.angle = a.value();
+        }
+        if (const auto r = shape.find("rotation"); r != shape.end()) {
+            const std::string rp = sp + ".rotation";
+            if (!r->is_array() || r->size() != 4) return invalid(rp, "expected 4 numbers [x, y, z, w]");
+            float q[4] = {};
+            for (std::size_t i = 0; i < 4; ++i) {
+                if (!(*r)[i].is_number() || !std::isfinite((*r)[i].get<double>())) return invalid(rp, "expected 4 finite numbers");
+                q[i] = (*r)[i].get<float>();
+            }
+            const glm::quat rotation(q[3], q[0], q[1], q[2]);
+            const float len = glm::length(rotation);
+            if (!(len > 1e-6f)) return invalid(rp, "a zero quaternion; expected a unit one");
+            out.rotation = rotation / len;
+        }
+        return out;
+    }
+
     Result<float> radius(const json& parent, const std::string& path, float fallback) {
         auto r = number(parent, "radius", path, fallback);
         if (r && r.value() < 0.0f) return invalid(path + ".radius", "negative (" + std::to_string(r.value()) + ")");
@@ -278,6 +341,10 @@ private:
 
         VrmSpring spring;
         spring.chain = std::move(chain).value();
+        // Angle limits, one per bone (VRMC_springBone_limit), where any bone has one.
+        if (std::any_of(bones.begin(), bones.end(), [](const Settings& b) { return b.limit.kind != rods::LimitKind::None; })) {
+            for (const Settings& b : bones) spring.limits.push_back(b.limit);
+        }
         Settings mean;
         mean.gravity_dir = glm::vec3(0.0f);  // accumulates gravityPower * gravityDir
         mean.hit_radius = mean.stiffness = mean.drag = 0.0f;
@@ -388,6 +455,11 @@ private:
                 }
                 auto settings_j = settings(joint, jp, defaults, false);
                 if (!settings_j) return settings_j.error();
+                // The last joint's limit is ignored, as the draft says it MUST be (the tail
+                // has no child to limit); its settings are dropped below.
+                auto limit_j = limit(joint, jp);
+                if (!limit_j) return limit_j.error();
+                settings_j.value().limit = limit_j.value();
                 nodes.push_back(n);
                 bones.push_back(settings_j.value());
             }

@@ -51,7 +51,8 @@ static_assert(offsetof(RodTemplateGpu, counts) == 0 && offsetof(RodTemplateGpu, 
               offsetof(RodTemplateGpu, accel) == 64 && offsetof(RodTemplateGpu, first_dir) == 80 &&
               offsetof(RodTemplateGpu, drag) == 96 && offsetof(RodTemplateGpu, views) == 112);
 static_assert(sizeof(RodWindGpu) == 48 && offsetof(RodWindGpu, scales) == 16 && offsetof(RodWindGpu, seed) == 32);
-static_assert(sizeof(RodTemplateJointGpu) == 32 && offsetof(RodTemplateJointGpu, lengths) == 16);
+static_assert(sizeof(RodTemplateJointGpu) == 64 && offsetof(RodTemplateJointGpu, lengths) == 16 &&
+              offsetof(RodTemplateJointGpu, limit_trig) == 32 && offsetof(RodTemplateJointGpu, limit_frame) == 48);
 static_assert(sizeof(RodShapeJointGpu) == 32 && offsetof(RodShapeJointGpu, orientation) == 16);
 static_assert(sizeof(RodChainGpu) == 32 && offsetof(RodChainGpu, joints) == 16);
 static_assert(sizeof(RodTransformGpu) == 32 && offsetof(RodTransformGpu, rotation) == 16);

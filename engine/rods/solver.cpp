@@ -193,6 +193,26 @@ Result<void> validate(const SolverParams& p) {
     return {};
 }
 
+Result<void> set_limits(Chain& chain, std::span<const AngleLimit> limits, const std::string& what) {
+    if (!limits.empty() && limits.size() + 1 != chain.joint_count) {
+        return make_error(Error::Kind::InvalidInput, what + ": expected " + std::to_string(chain.joint_count - 1) +
+                                                         " limits (one per segment), got " +
+                                                         std::to_string(limits.size()));
+    }
+    Chain limited = chain;
+    limited.limited = false;
+    for (std::uint32_t i = 0; i < kMaxChainJoints; ++i) {
+        const AngleLimit limit = i < limits.size() ? limits[i] : AngleLimit{};
+        KW_TRY(validate(limit, what + "[" + std::to_string(i) + "]"));
+        limited.limit[i] = limit;
+        limited.limit_trig[i] = limit_trig(limit);
+        limited.limit_frame[i] = limit_frame(chain.bone_axis[i], limit.rotation);
+        limited.limited = limited.limited || limit.kind != LimitKind::None;
+    }
+    chain = limited;
+    return {};
+}
+
 Result<Chain> make_chain(const ChainShape& base, float thickness, float mass) {
     auto basis = make_basis(base);
     if (!basis) return basis.error();
@@ -411,6 +431,11 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
     std::array<glm::quat, kMaxChainJoints> qs{}, obar{}, q_new{};
     std::array<glm::mat3, kMaxChainJoints> ellipsoid{};
     auto weight = [&](std::uint32_t j) { return j == 0 ? kRootShapeWeight * chain.mass[0] : chain.mass[j]; };
+    // Angle limits (set_limits(); VRMC_springBone_limit 1.0 draft): the parent bone's turn
+    // from its rest, carried down each sweep (the draft's parent.worldRotation: a bone
+    // turns by the shortest arc from its carried rest direction to its child, as VRM's
+    // spring joints do), so that a limit's frame is its rest frame turned with its parent.
+    glm::quat swing(1.0f, 0.0f, 0.0f, 0.0f);
     for (std::uint32_t sub = 1; sub <= substeps; ++sub) {
         const float t = static_cast<float>(sub) / static_cast<float>(substeps);
         const Transform r{t * travel, interpolate(from.rotation, root.rotation, t)};
@@ -440,6 +465,25 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
         };
         // Child i + 1 placed on its parent's segment length, follow-the-leader, its
         // correction kept for DFTL (no direction to correct along when it sits on it).
+        // Child i + 1 turned about particle i, at the same distance, to the nearest
+        // direction joint i's limit allows in its frame (limits.hpp), then the swing
+        // carried past it.
+        auto limit_child = [&](std::uint32_t i) {
+            const glm::vec3 d = p[i + 1] - p[i];
+            const float len = glm::length(d);
+            if (!(len > 1e-9f)) return;
+            glm::vec3 dir = d / len;
+            if (chain.limit[i].kind != LimitKind::None) {
+                const glm::quat frame = (swing * obar[i]) * chain.limit_frame[i];
+                const glm::vec3 local = glm::conjugate(frame) * dir;
+                const glm::vec3 allowed = limit_direction(chain.limit[i].kind, chain.limit_trig[i], local);
+                if (allowed != local) {
+                    dir = frame * allowed;
+                    p[i + 1] = p[i] + len * dir;
+                }
+            }
+            swing = glm::normalize(shortest_arc(swing * obar_axis[i], dir) * swing);
+        };
         auto place_on_parent = [&](std::uint32_t i) {
             const glm::vec3 d = p[i + 1] - p[i];
             const float len = glm::length(d);
@@ -551,9 +595,11 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
             // below takes it back (DFTL).
             // Collisions inside the sweep: each child is pushed out of the colliders right
             // after it is placed, so its own children are placed from where it ends.
+            swing = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
             for (std::uint32_t i = 0; i + 1 < n; ++i) {
                 place_on_parent(i);
                 collide_counted(i + 1);
+                if (chain.limited) limit_child(i);
             }
         }
         // A last sweep that leaves neither stretch nor penetration: each child is placed
@@ -564,6 +610,8 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
         // (measured: at most 0.11% of a segment on a strand draped over a shaking head);
         // ending with a placement instead handed a parent's push back into the collider
         // (1.6 mm into a capsule, and 5 mm out of an inside sphere, tests/rods).
+        // The limits last (the draft applies them after the colliders).
+        swing = glm::quat(1.0f, 0.0f, 0.0f, 0.0f);
         for (std::uint32_t i = 0; i + 1 < n; ++i) {
             place_on_parent(i);
             if (placed.count > 0) {
@@ -573,6 +621,7 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
                 place_on_parent(i);
                 collide_counted(i + 1);
             }
+            if (chain.limited) limit_child(i);
         }
 
         // Dynamic follow-the-leader (Mueller et al. 2012, sec. 4, eq. 9): particle i's

@@ -212,6 +212,7 @@ Result<rods::ChainTemplate> make_template(const std::string& name, const ChainSp
         views.push_back(v.view);
     }
     auto t = rods::make_chain_template(name, chain.base, shapes, views, chain.thickness, chain.mass, chain.params);
+    if (t && !chain.limits.empty()) KW_TRY(rods::set_limits(t.value().chain, chain.limits, name + ".limit"));
     if (!t || chain.keyed.empty()) return t;
     std::vector<rods::KeySourceKind> sources;
     for (const rods::KeyJoint& k : chain.key_sources) sources.push_back(k.kind);
@@ -286,6 +287,62 @@ Result<void> read_chain_colliders(const JsonReader& r, const JsonNode& node, con
 
 }  // namespace
 
+// One joint's limit, as VRMC_springBone_limit's `limit` object with the scene format's
+// units: exactly one of {"cone": {"angle_deg", "rotation"}}, {"hinge": {"angle_deg",
+// "rotation"}}, {"spherical": {"pitch_deg", "yaw_deg", "rotation"}}; `rotation` as
+// elsewhere ({"axis", "angle_deg"}), the identity when absent (docs/scene-format.md).
+Result<rods::AngleLimit> read_limit(const JsonReader& r, const JsonNode& node) {
+    KW_TRY(r.object(node, {"cone", "hinge", "spherical"}));
+    const JsonNode kinds[3] = {r.member(node, "cone"), r.member(node, "hinge"), r.member(node, "spherical")};
+    const int given = int(kinds[0].present()) + int(kinds[1].present()) + int(kinds[2].present());
+    if (given != 1) return r.expected(node, "exactly one of \"cone\", \"hinge\" or \"spherical\"");
+    rods::AngleLimit limit;
+    const NumberRange half_turn = NumberRange::closed(0.0, 180.0);
+    if (kinds[2].present()) {
+        const JsonNode& k = kinds[2];
+        KW_TRY(r.object(k, {"pitch_deg", "yaw_deg", "rotation"}));
+        limit.kind = rods::LimitKind::Spherical;
+        KW_SCENE_ASSIGN(limit.angle, read_degrees(r, r.member(k, "pitch_deg"), half_turn));
+        KW_SCENE_ASSIGN(limit.yaw, read_degrees(r, r.member(k, "yaw_deg"), NumberRange::closed(0.0, 90.0)));
+    } else {
+        const JsonNode& k = kinds[0].present() ? kinds[0] : kinds[1];
+        KW_TRY(r.object(k, {"angle_deg", "rotation"}));
+        limit.kind = kinds[0].present() ? rods::LimitKind::Cone : rods::LimitKind::Hinge;
+        KW_SCENE_ASSIGN(limit.angle, read_degrees(r, r.member(k, "angle_deg"), half_turn));
+    }
+    const JsonNode& k = kinds[0].present() ? kinds[0] : kinds[1].present() ? kinds[1] : kinds[2];
+    KW_TRY(optional_member(r, k, "rotation", limit.rotation, [&](const JsonNode& n) { return read_rotation(r, n); }));
+    // Degrees to radians rounds 180 and 90 to a hair above pi and pi/2 in float.
+    limit.angle = std::min(limit.angle, rods::kMaxLimitAngle);
+    limit.yaw = std::min(limit.yaw, rods::kMaxLimitYaw);
+    return limit;
+}
+
+// `limit`: one limit object for every segment, or an array of one per segment (joint i
+// to i+1: joint count - 1 entries), null where a joint has none.
+Result<void> read_limits(const JsonReader& r, const JsonNode& node, ChainSpec& c) {
+    const JsonNode limit = r.member(node, "limit");
+    if (!limit.present()) return {};
+    const std::size_t segments = c.base.positions.size() - 1;
+    if (!limit.value->is_array()) {
+        rods::AngleLimit one;
+        KW_SCENE_ASSIGN(one, read_limit(r, limit));
+        c.limits.assign(segments, one);
+        return {};
+    }
+    const std::string what = "an array of " + std::to_string(segments) +
+                             " limits, one per segment of the chain (null where a joint has none)";
+    std::size_t n = 0;
+    KW_SCENE_ASSIGN(n, read_array(r, limit, segments, segments, what));
+    c.limits.assign(segments, rods::AngleLimit{});
+    for (std::size_t i = 0; i < n; ++i) {
+        const JsonNode e = r.element(limit, i);
+        if (e.value->is_null()) continue;
+        KW_SCENE_ASSIGN(c.limits[i], read_limit(r, e));
+    }
+    return {};
+}
+
 Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, const JointLookup& joints, ChainSpec& c) {
     KW_TRY(optional_member(r, node, "thickness", c.thickness,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(1e-5, 1.0)); }));
@@ -314,6 +371,7 @@ Result<void> read_chain_settings(const JsonReader& r, const JsonNode& node, cons
     }
     const JsonNode keyed = r.member(node, "keyed");
     if (keyed.present()) KW_TRY(read_keyed(r, keyed, joints, c));
+    KW_TRY(read_limits(r, node, c));
     KW_TRY(check_template(r, node, c));
     // A particle thicker than half its segment overlaps its neighbours' spheres, and a
     // collider's push of one then moves the next by more than the segment allows (the
@@ -336,7 +394,7 @@ Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::S
                         const std::vector<ColliderSpec>& colliders, const rods::SolverParams& defaults,
                         std::vector<ChainSpec>& chains) {
     KW_TRY(r.object(node, {"name", "joint", "offset", "shape", "thickness", "mass", "physics", "collide", "colliders",
-                           "center", "mirror", "views", "keyed"}));
+                           "center", "mirror", "views", "keyed", "limit"}));
     ChainSpec c;
     c.path = node.path;
     c.params = defaults;
@@ -391,6 +449,9 @@ Result<void> read_chain(const JsonReader& r, const JsonNode& node, const rods::S
         }
         for (glm::quat& q : k.example.rotations) q = mirror(q);
     }
+    // A limit's frame is its joint's, mirrored with it (M R M); cones, hinges about X
+    // and spherical limits are symmetric under x -> -x in their own frames.
+    for (rods::AngleLimit& l : m.limits) l.rotation = mirror(l.rotation);
     chains.push_back(std::move(m));
     return {};
 }

@@ -46,6 +46,8 @@ inline constexpr double kMaxTime = 1e5;        // motion times (s)
 [[nodiscard]] Result<float> read_degrees(const JsonReader& r, const JsonNode& node, const NumberRange& range);
 /// A time in s, in [0, kMaxTime].
 [[nodiscard]] Result<float> read_time(const JsonReader& r, const JsonNode& node);
+/// {"axis": [x, y, z], "angle_deg": a}: a rotation about a direction.
+[[nodiscard]] Result<glm::quat> read_rotation(const JsonReader& r, const JsonNode& node);
 /// {"position": [x, y, z], "rotation": {"axis": [...], "angle_deg": a}}, both optional.
 [[nodiscard]] Result<rods::Transform> read_transform(const JsonReader& r, const JsonNode& node);
 /// The index of the joint called `name`, or an error at `node` listing the joints.

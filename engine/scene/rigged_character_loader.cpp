@@ -160,7 +160,7 @@ Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const 
                                std::uint32_t reference, const std::vector<ColliderSpec>& colliders,
                                const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
     KW_TRY(r.object(node, {"name", "root", "nodes", "joints", "thickness", "mass", "physics", "collide", "colliders", "center",
-                           "views", "keyed"}));
+                           "views", "keyed", "limit"}));
     ChainSpec c;
     c.path = node.path;
     c.params = defaults;

@@ -336,6 +336,9 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         qs[0] = obar[0];
         // 3. The colliders placed by the root.
         for (std::size_t k = 0; k < batch.colliders; ++k) place(colliders[k], r_p, r_q);
+        // The parent bones' swing from their rest (solver.cpp step, angle limits).
+        const Q4 identity{Z(), Z(), Z(), S(1.0f)};
+        Q4 swing = identity;
         V3 pulled[kMaxJ];  // the distance constraints' corrections (DFTL)
         V3 pushed[kMaxJ];  // and the colliders' (their net push, the contact normal)
         for (std::size_t i = 0; i < n; ++i) pulled[i] = zero3();
@@ -344,6 +347,59 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
             const V3 before = p[j];
             collide_all(p[j]);
             pushed[j] = add(pushed[j], sub(p[j], before));
+        };
+        // solver.cpp limit_child(): child i + 1 turned about particle i to the nearest
+        // direction segment i's limit allows (shaders/lib/spring_limit.glsl, its every
+        // expression repeated per lane), then the parent bones' swing carried past it.
+        // The limit's kind is the template's, so one branch serves every lane.
+        auto limit_child = [&](std::size_t i) HWY_ATTR {
+            const V3 seg = sub(p[i + 1], p[i]);
+            const V len = length(seg);
+            const M ok = hn::Gt(len, S(1e-9f));
+            V3 dir = div(seg, len);
+            const std::uint32_t kind = t.limit_kind[i];
+            if (kind != 0u) {
+                const Q4 lframe = qmul(qmul(swing, obar[i]), splat4(t.limit_frame[i].data()));
+                const V3 l = rotate(conj(lframe), dir);
+                const V cx = S(t.limit_trig[i][0]), sx = S(t.limit_trig[i][1]);
+                const V singular = S(1e-12f);
+                V3 allowed = l;
+                if (kind == 1u) {
+                    const V h2 = hn::Add(hn::Mul(l.x, l.x), hn::Mul(l.z, l.z));
+                    const V s = hn::Div(sx, hn::Sqrt(h2));
+                    const V3 tilted = select(hn::Le(h2, singular), V3{Z(), cx, sx}, V3{hn::Mul(l.x, s), cx, hn::Mul(l.z, s)});
+                    allowed = select(hn::Lt(l.y, cx), tilted, l);
+                } else if (kind == 2u) {
+                    const V p2 = hn::Add(hn::Mul(l.y, l.y), hn::Mul(l.z, l.z));
+                    const V inv = hn::Div(S(1.0f), hn::Sqrt(p2));
+                    V3 e{Z(), hn::Mul(l.y, inv), hn::Mul(l.z, inv)};
+                    const V z_side = hn::IfThenElse(hn::Lt(e.z, Z()), hn::Neg(sx), sx);
+                    e = select(hn::Lt(e.y, cx), V3{Z(), cx, z_side}, e);
+                    allowed = select(hn::Le(p2, singular), V3{Z(), S(1.0f), Z()}, e);
+                } else {
+                    const V cyaw = S(t.limit_trig[i][2]), syaw = S(t.limit_trig[i][3]);
+                    const V p2 = hn::Add(hn::Mul(l.y, l.y), hn::Mul(l.z, l.z));
+                    const M sing = hn::Le(p2, singular);
+                    const V inv = hn::Div(S(1.0f), hn::Sqrt(p2));
+                    V cp = hn::IfThenElse(sing, S(1.0f), hn::Mul(l.y, inv));
+                    V sp = hn::IfThenElse(sing, Z(), hn::Mul(l.z, inv));
+                    const M pitch_out = hn::Lt(cp, cx);
+                    sp = hn::IfThenElse(pitch_out, hn::IfThenElse(hn::Lt(sp, Z()), hn::Neg(sx), sx), sp);
+                    cp = hn::IfThenElse(pitch_out, cx, cp);
+                    const M yaw_out = hn::Gt(hn::Abs(l.x), syaw);
+                    const V sy = hn::IfThenElse(yaw_out, hn::IfThenElse(hn::Lt(l.x, Z()), hn::Neg(syaw), syaw), l.x);
+                    const V cy = hn::IfThenElse(yaw_out, cyaw, hn::Sqrt(p2));
+                    const M limited = hn::Or(sing, hn::Or(pitch_out, yaw_out));
+                    allowed = select(limited, V3{sy, hn::Mul(cy, cp), hn::Mul(cy, sp)}, l);
+                }
+                // Only a direction the limit changed is turned back (solver.cpp: `allowed != local`).
+                const M changed = hn::Or(hn::Ne(allowed.x, l.x), hn::Or(hn::Ne(allowed.y, l.y), hn::Ne(allowed.z, l.z)));
+                const M apply = hn::And(ok, changed);
+                const V3 turned = rotate(lframe, allowed);
+                dir = select(apply, turned, dir);
+                p[i + 1] = select(apply, add(p[i], mul(len, turned)), p[i + 1]);
+            }
+            swing = select(ok, qnormalize(qmul(shortest_arc(rotate(swing, obar_axis[i]), dir), swing)), swing);
         };
         // solver.cpp place_on_parent(): child i + 1 on its parent's segment length.
         auto place_on_parent = [&](std::size_t i) HWY_ATTR {
@@ -465,12 +521,15 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
             for (std::size_t i = 1; i < n; ++i) p[i] = add(p[i], mul(S(t.k_rest), sub(xbar[i], p[i])));
             // Distance constraints, follow-the-leader, each child pushed out of the
             // colliders right after it is placed.
+            swing = identity;
             for (std::size_t i = 0; i + 1 < n; ++i) {
                 place_on_parent(i);
                 if (batch.colliders > 0) collide_counted(i + 1);
+                if (t.limited) limit_child(i);
             }
         }
         // The last sweep: placed and pushed out, twice (solver.cpp).
+        swing = identity;
         for (std::size_t i = 0; i + 1 < n; ++i) {
             place_on_parent(i);
             if (batch.colliders > 0) {
@@ -480,6 +539,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
                 place_on_parent(i);
                 collide_counted(i + 1);
             }
+            if (t.limited) limit_child(i);
         }
 
         // What the colliders undid is not the parent's to give back (solver.cpp): the part

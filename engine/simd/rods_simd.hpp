@@ -61,6 +61,12 @@ struct RodTemplateConsts {
     // by engine/rods itself (n positions, n orientations).
     std::vector<std::array<float, 3>> fixed_rest_position;
     std::vector<std::array<float, 4>> fixed_rest_orientation;
+    // Angle limits (rods::set_limits): per segment its kind (rods::LimitKind), its
+    // rods::limit_trig and its rods::limit_frame (x, y, z, w); `limited` when any has one.
+    bool limited = false;
+    std::array<std::uint32_t, rods::kMaxChainJoints> limit_kind{};
+    std::array<std::array<float, 4>, rods::kMaxChainJoints> limit_trig{};
+    std::array<std::array<float, 4>, rods::kMaxChainJoints> limit_frame{};
     // This frame's (RodTemplateConsts::set_step).
     std::uint32_t substeps = 1;
     float h = 0.0f, decay = 0.0f, k_iter = 0.0f, k_rest = 0.0f;

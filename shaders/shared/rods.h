@@ -86,7 +86,14 @@
 #define KW_RODS_FEATURE_INSIDE 2u   // inside colliders
 #define KW_RODS_FEATURE_PLANE 4u    // plane colliders
 #define KW_RODS_FEATURE_AIR 8u      // wind fields or drag: velocities relative to the air (rods::WindField)
-#define KW_RODS_FEATURE_ALL 15u
+#define KW_RODS_FEATURE_LIMITS 16u  // angle limits (rods::AngleLimit, shaders/lib/spring_limit.glsl)
+#define KW_RODS_FEATURE_ALL 31u
+
+// RodTemplateJointGpu.lengths.z: the joint's limit (rods::LimitKind), stored as a float.
+#define KW_RODS_LIMIT_NONE 0u
+#define KW_RODS_LIMIT_CONE 1u
+#define KW_RODS_LIMIT_HINGE 2u
+#define KW_RODS_LIMIT_SPHERICAL 3u
 
 // Worlds of at most this many templates are stepped one dispatch per template (GROUPED);
 // each dispatch costs tens of microseconds on lavapipe, so more templates take one.
@@ -104,7 +111,8 @@ KW_NAMESPACE_BEGIN
 // A chain template's constants (rods::ChainTemplate) and this frame's step sizes.
 struct RodTemplateGpu {
     uvec4 counts;     // x: joint count n, y: view examples m, z: first RodTemplateJointGpu, w: first RodShapeJointGpu
-    uvec4 solver;     // x: projection iterations, y: substeps this frame, z: keyed examples J (shapes m+1 .. m+J), w: unused
+    uvec4 solver;     // x: projection iterations, y: substeps this frame, z: keyed examples J (shapes m+1 .. m+J),
+                      // w: 1 = a joint has an angle limit
     vec4 step;        // x: substep h (s), y: velocity decay exp(-damping h), z: k' per iteration, w: suppression
     vec4 physics;     // x: thickness (m), y: k_rest' per iteration (this frame), z: teleport distance (m), w: 1 = settle_start
     vec4 accel;       // xyz: gravity + wind (m/s^2), w: unused
@@ -116,7 +124,10 @@ struct RodTemplateGpu {
 // Per joint of a template.
 struct RodTemplateJointGpu {
     vec4 axis_mass;  // xyz: bone axis u_i (joint frame), w: mass (kg)
-    vec4 lengths;    // x: segment length l_i (0 for the last joint), y: ellipsoid half length a_i, z, w: unused
+    vec4 lengths;    // x: segment length l_i (0 for the last joint), y: ellipsoid half length a_i,
+                     // z: segment i's angle limit (KW_RODS_LIMIT_*), w: unused
+    vec4 limit_trig;   // rods::limit_trig: (cos angle, sin angle, cos yaw, sin yaw)
+    vec4 limit_frame;  // rods::limit_frame: the limit's frame in the joint's (quaternion)
 };
 
 // Per joint of one shape of a template (shape 0 = base, k = view example k, m + j = keyed

@@ -68,9 +68,14 @@ class SolverParams(C.Structure):
                 ("normal_drag", C.c_float), ("tangent_drag", C.c_float)]
 
 
+class AngleLimit(C.Structure):
+    _fields_ = [("kind", C.c_uint32), ("angle", C.c_float), ("yaw", C.c_float), ("rotation", Float4)]
+
+
 class ChainTemplateDesc(C.Structure):
     _fields_ = [("joint_count", C.c_uint32), ("base", ChainShape), ("views", C.POINTER(ViewExample)),
-                ("view_count", C.c_uint32), ("thickness", C.c_float), ("mass", C.c_float), ("solver", SolverParams)]
+                ("view_count", C.c_uint32), ("thickness", C.c_float), ("mass", C.c_float), ("solver", SolverParams),
+                ("limits", C.POINTER(AngleLimit)), ("limit_count", C.c_uint32)]
 
 
 class ChainDesc(C.Structure):

@@ -70,6 +70,7 @@ struct CWorld {
     // vectors, whose buffers stay where they are when the outer vector grows.
     std::vector<std::vector<float>> floats;
     std::vector<std::vector<kodawari_view_example>> views;
+    std::vector<std::vector<kodawari_angle_limit>> limits;
     std::vector<kodawari_chain_template_desc> templates;
     std::vector<kodawari_chain_desc> chains;
     kodawari_chain_world_desc desc{};
@@ -114,6 +115,14 @@ struct CWorld {
                 t.solver.teleport_distance = c.params.teleport_distance;
                 t.solver.normal_drag = c.params.normal_drag;
                 t.solver.tangent_drag = c.params.tangent_drag;
+                std::vector<kodawari_angle_limit>& l = limits.emplace_back();
+                for (const rods::AngleLimit& a : c.limits) {
+                    kodawari_angle_limit e{static_cast<std::uint32_t>(a.kind), a.angle, a.yaw, {}};
+                    put4(e.rotation, a.rotation);
+                    l.push_back(e);
+                }
+                t.limits = l.empty() ? nullptr : l.data();
+                t.limit_count = static_cast<std::uint32_t>(l.size());
                 templates.push_back(t);
             }
         }
@@ -290,6 +299,9 @@ TEST_P(CApiParity, AhogeHasTheCppPathsBits) { same_bits(load("ahoge.json"), 240)
 
 // bangs: 3 chains with mirrored copies and explicit orientations.
 TEST_P(CApiParity, BangsHaveTheCppPathsBits) { same_bits(load("bangs.json"), 120); }
+
+// limits: 7 bunnies whose chains carry every angle limit kind (kodawari_angle_limit).
+TEST_P(CApiParity, LimitsHaveTheCppPathsBits) { same_bits(load("limits.json"), 90); }
 
 // A crowd of 13 critters of 8 chains each (5 in the file, 3 of them mirrored) = 104 chains:
 // one full vulkan workgroup of 64 and a partial one, many characters and collider ranges.

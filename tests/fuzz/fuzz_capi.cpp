@@ -72,6 +72,7 @@ void chain_world(ByteReader& in) {
     std::vector<kodawari_chain_template_desc> templates(template_count);
     std::vector<ShapeData> shapes;
     std::vector<std::vector<kodawari_view_example>> views(template_count);
+    std::vector<std::vector<kodawari_angle_limit>> limits(template_count);
     shapes.reserve(template_count * (1 + KODAWARI_MAX_VIEW_EXAMPLES));
     for (std::uint32_t t = 0; t < template_count; ++t) {
         kodawari_chain_template_desc& d = templates[t];
@@ -88,6 +89,22 @@ void chain_world(ByteReader& in) {
         d.view_count = static_cast<std::uint32_t>(views[t].size());
         d.thickness = in.number(0.05f);
         d.mass = in.number(0.01f);
+        // Angle limits: usually one per segment, sometimes a wrong count; kinds past the
+        // last, angles past pi and pi/2, and rotations far from unit are errors.
+        if (in.flag()) {
+            limits[t].resize(in.flag() ? joints - 1 : in.upto(4));
+            for (kodawari_angle_limit& l : limits[t]) {
+                l.kind = in.upto(5);
+                l.angle = in.number(4.0f);
+                l.yaw = in.number(2.0f);
+                l.rotation[3] = 1.0f;
+                if (in.flag()) {
+                    for (float& c : l.rotation) c = in.number(1.0f);
+                }
+            }
+            d.limits = limits[t].empty() ? nullptr : limits[t].data();
+            d.limit_count = static_cast<std::uint32_t>(limits[t].size());
+        }
         kodawari_solver_params_default(&d.solver);
         if (in.flag()) {
             d.solver.max_substep = in.number(0.05f);

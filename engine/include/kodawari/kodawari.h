@@ -306,6 +306,31 @@ KODAWARI_C_API kodawari_status kodawari_wind_default(kodawari_wind* out);
 /// Fills `out` with the engine's default solver settings.
 KODAWARI_C_API kodawari_status kodawari_solver_params_default(kodawari_solver_params* out);
 
+/// Which angle limit a joint has (docs/models.md "Angle limits"; VRMC_springBone_limit).
+typedef enum kodawari_limit_kind {
+    KODAWARI_LIMIT_NONE = 0,
+    /// At most `angle` from the limit's axis.
+    KODAWARI_LIMIT_CONE = 1,
+    /// Turning about the limit frame's X only, at most `angle` from its axis.
+    KODAWARI_LIMIT_HINGE = 2,
+    /// Pitch (about X) within +-`angle` and yaw (towards X) within +-`yaw`.
+    KODAWARI_LIMIT_SPHERICAL = 3
+} kodawari_limit_kind;
+
+/// One joint's angle limit: the direction from the joint to its child is kept within it,
+/// in the limit's frame (+Y along the joint's rest direction to its child, carried by its
+/// parent bone's current turn, then turned by `rotation`).
+typedef struct kodawari_angle_limit {
+    /// A kodawari_limit_kind.
+    uint32_t kind;
+    /// Cone and hinge: the angle; spherical: the pitch. rad, in [0, pi].
+    float angle;
+    /// Spherical: the yaw, rad, in [0, pi/2]; 0 otherwise.
+    float yaw;
+    /// The limit frame's turn, a unit quaternion [x, y, z, w].
+    float rotation[4];
+} kodawari_angle_limit;
+
 /// A chain template: what the chains made from it share (their shapes, views, physics).
 typedef struct kodawari_chain_template_desc {
     /// Joints of every shape, 2 .. KODAWARI_MAX_CHAIN_JOINTS.
@@ -322,6 +347,10 @@ typedef struct kodawari_chain_template_desc {
     /// Mass of every particle, kg, in [1e-9, 1000].
     float mass;
     kodawari_solver_params solver;
+    /// limit_count angle limits, one per segment (joint i to i+1: limit_count =
+    /// joint_count - 1), or NULL with limit_count 0 (no limits).
+    const kodawari_angle_limit* limits;
+    uint32_t limit_count;
 } kodawari_chain_template_desc;
 
 /// One simulated chain: a template on one character.

@@ -18,6 +18,7 @@
 #include "gltf/character.hpp"
 #include "result.hpp"
 #include "rods/keyed.hpp"
+#include "rods/limits.hpp"
 #include "rods/kinematics.hpp"
 #include "rods/rod_scene.hpp"
 #include "rods/shape.hpp"
@@ -156,6 +157,8 @@ struct ChainSpec {
     std::vector<ViewSpec> views;
     std::vector<rods::KeyJoint> key_sources;  ///< the joints its keyed examples read
     std::vector<KeyedSpec> keyed;             ///< keyed examples (docs/keyed-examples.md)
+    /// Angle limits, one per segment (joint i to i+1), or none (rods::set_limits).
+    std::vector<rods::AngleLimit> limits;
     float thickness = 0.005f;  ///< m
     float mass = 0.002f;       ///< kg per joint
     rods::SolverParams params;

@@ -110,6 +110,9 @@ struct VrmSpring {
     std::vector<std::size_t> colliders;
     /// The node whose space its inertia is measured in (`center`), -1 for none.
     int center = -1;
+    /// Its joints' angle limits (VRMC_springBone_limit 1.0-draft), one per bone (joint
+    /// count - 1), or none when no joint has one.
+    std::vector<rods::AngleLimit> limits;
 };
 
 /// A sphere, capsule or plane collider, in the frame of its node: the node's world matrix

@@ -36,12 +36,14 @@
 #include <array>
 #include <cstdint>
 #include <span>
+#include <string>
 
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
 #include "kodawari/api.hpp"
 #include "kodawari/result.hpp"
+#include "kodawari/rods/limits.hpp"
 #include "kodawari/rods/shape.hpp"
 
 namespace kodawari::rods {
@@ -208,11 +210,31 @@ struct Chain {
     std::array<float, kMaxChainJoints> segment_length{};   ///< l_i, m, joint i to i+1
     std::array<float, kMaxChainJoints> half_length{};      ///< ellipsoid radius a along u_i, m
     std::array<glm::vec3, kMaxChainJoints> bone_axis{};    ///< u_i, unit, in joint i's frame
+    /// Angle limits (set_limits()): limit[i] constrains the direction of segment i, from
+    /// joint i to joint i+1; `limited` when any joint has one.
+    bool limited = false;
+    std::array<AngleLimit, kMaxChainJoints> limit{};
+    std::array<glm::vec4, kMaxChainJoints> limit_trig{};   ///< limit_trig() of each
+    std::array<glm::quat, kMaxChainJoints> limit_frame{};  ///< limit_frame(u_i, rotation) of each
 };
 
 /// A chain from its base shape (SPEC A.1), with `thickness` > 0 m and every particle of
 /// `mass` > 0 kg. Fails on a base shape make_basis() rejects or a bad thickness or mass.
 [[nodiscard]] KODAWARI_API Result<Chain> make_chain(const ChainShape& base, float thickness, float mass);
+
+/// Gives `chain` angle limits: `limits` has one per segment (joint_count - 1, the last
+/// joint has no child to limit) or none (no limits). Fails (InvalidInput, naming
+/// `what`[i] and the field) on a limit out of range (validate(AngleLimit)) or a count that
+/// does not fit.
+///
+/// step() applies a joint's limit wherever it places its child (each projection
+/// iteration's follow-the-leader sweep and the last sweep), after the colliders' push, as
+/// the draft orders it ("immediately after each collision"): the child is turned about its
+/// parent, at the same distance, to the nearest direction the limit allows (limits.hpp),
+/// in the limit's frame carried by the parent bone's current turn from its rest
+/// (docs/models.md "Angle limits").
+[[nodiscard]] KODAWARI_API Result<void> set_limits(Chain& chain, std::span<const AngleLimit> limits,
+                                                   const std::string& what);
 
 /// Everything a chain carries from one step to the next. Joint 0 is kinematic.
 struct ChainState {
