@@ -160,7 +160,7 @@ TEST(CharacterScene, UnknownKeys) {
     chain0(chain)["stiffness"] = 0.5;
     EXPECT_EQ(parse_error(chain),
               "test.json: $.characters[0].chains[0].stiffness: unknown key (expected one of: name, joint, offset, shape, "
-              "thickness, mass, physics, collide, colliders, center, mirror, views, keyed)");
+              "thickness, mass, physics, collide, colliders, center, mirror, views, keyed, limit)");
     // Keys depend on the motion's and the collider's type.
     json motion = valid_character_scene();
     motion["characters"][0]["motions"][1]["axis"] = {0, 1, 0};
