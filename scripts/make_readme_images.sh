@@ -54,9 +54,13 @@ cp "$work/crowd/crowd_00120.png" docs/images/crowd.png
 # camera, 38 m out, they are a few pixels).
 "$bin" render scenes/crowd.json --frames 57:75:3 --size 1440x810 --zoom 2.2 --camera 1.0,2.3,-1.35,-0.43,1.72,-0.32 \
     --out "$work/crowd-stop" --contact-sheet docs/images/crowd-stop.png --columns 3
-# The rigged crowd (64 of scenes/characters/chibi.glb, skinned in the vertex shader) 2 s in.
+# The crowd in a gusty wind (scenes/windy.json), frames 40, 80 and 120 from the side.
 "$bin" render scenes/windy.json --frames 40:160:40 --size 1440x810 --zoom 2.0 --camera 2.5,2.2,4.5,0.5,1.5,-2.5 \
     --out "$work/windy" --contact-sheet docs/images/windy.png --columns 3
+# Bunnies whose chains carry every angle limit kind (scenes/limits.json), frames 100, 200, 300.
+"$bin" render scenes/limits.json --frames 100:400:100 --size 1440x810 --zoom 1.8 --camera 3.2,2.0,3.4,0.0,1.4,0.0 \
+    --out "$work/limits" --contact-sheet docs/images/limits.png --columns 3
+# The rigged crowd (64 of scenes/characters/chibi.glb, skinned in the vertex shader) 2 s in.
 "$bin" render scenes/crowd-gltf.json --frames 120 --size 640x360 --out "$work/crowd-gltf"
 cp "$work/crowd-gltf/crowd-gltf_00120.png" docs/images/crowd-gltf.png
 # VRM avatars (issue 18) walking circles and idling with retargeted VRM Animation clips,
