@@ -16,6 +16,7 @@
 #include "kodawari/bake.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
+#include "kodawari/domains/flocking.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/simulation.hpp"
 
@@ -99,6 +100,36 @@ KODAWARI_C_API kodawari_status kodawari_simulation_set_wind(kodawari_simulation*
         std::optional<rods::WindField> field;
         if (wind != nullptr) field = read_wind(*wind, "wind");
         check(set_wind(*sim->sim, field));
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_flock_agent_default(kodawari_flock_agent* out) {
+    return guard("kodawari_flock_agent_default", nullptr, [&] {
+        require_pointer(out, "out");
+        const FlockAgent d;
+        *out = kodawari_flock_agent{static_cast<std::uint32_t>(d.kind), {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, d.radius, d.weight, d.margin};
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_agents(kodawari_simulation* sim, const kodawari_flock_agent* agents,
+                                                                    uint32_t count) {
+    return guard("kodawari_simulation_set_flock_agents", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_array(agents, count, "agents", "count");
+        std::vector<FlockAgent> list;
+        for (std::uint32_t i = 0; i < count; ++i) {
+            const kodawari_flock_agent& a = agents[i];
+            FlockAgent f;
+            // Out-of-range kinds reach set_flock_agents as themselves, which names them.
+            f.kind = static_cast<FlockAgent::Kind>(a.kind);
+            f.position = {a.position[0], a.position[1], a.position[2]};
+            f.velocity = {a.velocity[0], a.velocity[1], a.velocity[2]};
+            f.radius = a.radius;
+            f.weight = a.weight;
+            f.margin = a.margin;
+            list.push_back(f);
+        }
+        check(set_flock_agents(*sim->sim, list));
     });
 }
 

@@ -110,6 +110,11 @@ class Wind(ctypes.Structure):
                 ("gust_size", ctypes.c_float), ("seed", ctypes.c_uint32)]
 
 
+class FlockAgent(ctypes.Structure):
+    _fields_ = [("kind", ctypes.c_uint32), ("position", ctypes.c_float * 3), ("velocity", ctypes.c_float * 3),
+                ("radius", ctypes.c_float), ("weight", ctypes.c_float), ("margin", ctypes.c_float)]
+
+
 lib, library_path = _load()
 
 _P = ctypes.POINTER
@@ -131,6 +136,7 @@ _declare("kodawari_simulation_destroy", None, _sim)
 _declare("kodawari_simulation_last_error", ctypes.c_char_p, _sim)
 _declare("kodawari_simulation_step", _status, _sim, ctypes.c_uint32)
 _declare("kodawari_simulation_set_wind", _status, _sim, _P(Wind))
+_declare("kodawari_simulation_set_flock_agents", _status, _sim, _P(FlockAgent), ctypes.c_uint32)
 _declare("kodawari_simulation_get_info", _status, _sim, _P(SimulationInfo))
 _declare("kodawari_simulation_bird_poses", _status, _sim, _P(BirdOutput))
 _declare("kodawari_simulation_bird_tail_spreads", _status, _sim, ctypes.c_void_p, ctypes.c_size_t)

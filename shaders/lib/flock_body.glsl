@@ -122,9 +122,29 @@ FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_ra
         const float reach = agent.position.w;
         if (dist < 1e-6f) continue;
         if (agent.kind_weight.x == KW_FLOCK_AGENT_SPHERE) {
+            // Steered round, not only pushed back (Reynolds 1999's "obstacle avoidance"
+            // steers laterally): a bird flying at the sphere turns across its own flight,
+            // away from the sphere's centre line, since a push straight back would only
+            // brake a bird heading for its centre; one moving away from it, or inside it,
+            // is pushed straight out. Within `margin` of its surface, in proportion to the
+            // depth into that shell.
             const float margin = max(agent.kind_weight.z, 1e-3f);
             const float depth = reach + margin - dist;
-            if (depth > 0.0f) fled += (agent.kind_weight.y * min(depth / margin, 1.0f) / dist) * d;
+            if (depth > 0.0f) {
+                const float s = agent.kind_weight.y * min(depth / margin, 1.0f);
+                const float along = dot(d, forward);
+                vec3 away = d / dist;
+                if (along < 0.0f && dist > reach) {
+                    const vec3 across = d - along * forward;
+                    const float cl = length(across);
+                    // Dead on the centre line: turn towards the side of the bird's right
+                    // (forward x up), a fixed choice rather than none.
+                    const vec3 side = cross(forward, vec3(0.0f, 1.0f, 0.0f));
+                    const float sl = length(side);
+                    away = cl > 1e-3f ? across / cl : sl > 1e-3f ? side / sl : vec3(1.0f, 0.0f, 0.0f);
+                }
+                fled += s * away;
+            }
         } else if (dist < reach) {
             const float s = agent.kind_weight.y * (1.0f - dist / reach);
             if (agent.kind_weight.x == KW_FLOCK_AGENT_REPELLER) {

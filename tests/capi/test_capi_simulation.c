@@ -374,6 +374,32 @@ static void test_rejects(void) {
                 "out: holds 269 floats, needs 270");
     EXPECT_FAIL(kodawari_simulation_bird_tail_spreads(sim, NULL, 0), KODAWARI_INVALID_ARGUMENT, sim, "out", "NULL");
     EXPECT_FAIL(kodawari_simulation_get_info(sim, NULL), KODAWARI_INVALID_ARGUMENT, sim, "out");
+    /* Flock agents: each member out of range named; a scene without flocking flocks takes
+       good ones (and does nothing with them); NULL with 0 removes them. */
+    {
+        kodawari_flock_agent agents[2];
+        EXPECT_FAIL(kodawari_flock_agent_default(NULL), KODAWARI_INVALID_ARGUMENT, NULL, "out");
+        EXPECT_OK(kodawari_flock_agent_default(&agents[0]));
+        CHECK(agents[0].kind == KODAWARI_FLOCK_PREDATOR && agents[0].radius == 15.0f && agents[0].weight == 40.0f &&
+                  agents[0].margin == 2.0f,
+              "flock agent defaults: kind %u, radius %g, weight %g, margin %g", agents[0].kind, (double)agents[0].radius,
+              (double)agents[0].weight, (double)agents[0].margin);
+        agents[1] = agents[0];
+        agents[1].kind = KODAWARI_FLOCK_OBSTACLE;
+        agents[1].margin = 0.0f;
+        EXPECT_FAIL(kodawari_simulation_set_flock_agents(sim, agents, 2), KODAWARI_INVALID_ARGUMENT, sim, "agents[1].margin");
+        agents[1].margin = 1.0f;
+        agents[1].kind = 9;
+        EXPECT_FAIL(kodawari_simulation_set_flock_agents(sim, agents, 2), KODAWARI_INVALID_ARGUMENT, sim, "agents[1].kind");
+        agents[1].kind = KODAWARI_FLOCK_ATTRACTOR;
+        agents[1].position[1] = 1e30f;
+        EXPECT_FAIL(kodawari_simulation_set_flock_agents(sim, agents, 2), KODAWARI_INVALID_ARGUMENT, sim, "agents[1].position");
+        agents[1].position[1] = 40.0f;
+        EXPECT_FAIL(kodawari_simulation_set_flock_agents(sim, NULL, 2), KODAWARI_INVALID_ARGUMENT, sim, "agents");
+        EXPECT_FAIL(kodawari_simulation_set_flock_agents(NULL, agents, 2), KODAWARI_INVALID_ARGUMENT, NULL, "sim");
+        EXPECT_OK(kodawari_simulation_set_flock_agents(sim, agents, 2));
+        EXPECT_OK(kodawari_simulation_set_flock_agents(sim, NULL, 0));
+    }
     /* Nothing changed: the rejected step of 4 left frame 1 next. */
     EXPECT_OK(kodawari_simulation_get_info(sim, &info));
     CHECK(info.next_frame == 1, "next frame %u", info.next_frame);

@@ -180,6 +180,49 @@ print(f"set_wind: a 10 m/s wind moved a joint by {moved:.4f} m in 30 frames")
 check(moved > 1e-3, f"set_wind: the wind moved nothing ({moved} m)")
 check(numpy.array_equal(restored, calm), "set_wind(None) did not give the scene's calm air back")
 
+# ---- Flock agents from the application: named errors, and a flocking flock flies round an
+# obstacle placed in its way (no bird inside the 3 m sphere; without it, birds pass its centre).
+flocking_scene = os.path.join(temp, "flocking.json")
+with open(flocking_scene, "w") as f:
+    f.write('{"format": "kodawari-scene", "version": 1, "fps": 60, "duration": 4, '
+            '"camera": {"position": [0, 60, -160], "target": [0, 45, 0]}, "flocks": [{"name": "s", "wing_type": "pigeon", "count": 301, '
+            '"seed": 3, "speed": 15, "generated_route": {"seed": 7, "segments": 8, "center": [0, 45, 0], '
+            '"extent": [45, 8, 45], "loop": true}, "formation": {"spread": [10, 5, 10]}, "flocking": {}}]}')
+
+
+def flock_positions(agents):
+    with kodawari.Simulation.open(flocking_scene, "cpu", frames=180) as sim:
+        if agents:
+            sim.set_flock_agents(agents)
+        out = []
+        for _ in range(180):
+            sim.step(1)
+            out.append(sim.bird_poses(space="world")[:, 0, :3].copy())
+        return numpy.stack(out)
+
+
+free_flight = flock_positions(None)
+middle = free_flight[120].mean(axis=0)
+placed = flock_positions([{"kind": "obstacle", "position": tuple(float(v) for v in middle), "radius": 3.0,
+                           "margin": 12.0, "weight": 80.0}])
+near_free = float(numpy.linalg.norm(free_flight[90:150] - middle, axis=2).min())
+near_placed = float(numpy.linalg.norm(placed[90:150] - middle, axis=2).min())
+print(f"set_flock_agents: nearest bird to a 3 m obstacle's centre {near_free:.2f} m without it, {near_placed:.2f} m with it")
+# No bird inside the sphere (docs/flocking.md: a 12 m margin leaves room to turn aside).
+check(near_placed > 3.0 and near_placed > near_free, "set_flock_agents: the flock did not keep out of the obstacle")
+with kodawari.Simulation.open(flocking_scene, "cpu", frames=2) as sim:
+    try:
+        sim.set_flock_agents([{"kind": "predator", "position": (0, 40, 0)}, {"kind": "obstacle", "position": (0, 0, 0), "radius": -1}])
+        check(False, "a radius of -1 raised nothing")
+    except kodawari.Error as error:
+        check("agents[1].radius" in str(error), f"set_flock_agents(radius=-1): {error}")
+    try:
+        sim.set_flock_agents([{"kind": "hawk", "position": (0, 0, 0)}])
+        check(False, "a kind of hawk raised nothing")
+    except ValueError as error:
+        check("agents[0].kind" in str(error), f"set_flock_agents(kind=hawk): {error}")
+    sim.set_flock_agents([])
+
 # ---- Errors carry the library's message.
 missing = os.path.join(temp, "no-such-scene.json")
 try:

@@ -22,8 +22,8 @@ public:
     /// Takes `world` (it must outlive the backend's use of it) and sets frame 0's state.
     [[nodiscard]] virtual Result<void> load(const FlockWorld& world) = 0;
     /// Advances `frames` frames from the current state, frame k with flocks[k x flocks]
-    /// and agents[k x agents] (FlockWorld::frame_inputs()), writing each frame's motion to
-    /// out[k x birds].
+    /// and agents[k x agents] (FlockWorld::frame_inputs(), then the application's:
+    /// agents.size() / frames a frame), writing each frame's motion to out[k x birds].
     [[nodiscard]] virtual Result<void> advance(std::uint32_t frames, std::span<const gpu::FlockParamsGpu> flocks,
                                                std::span<const gpu::FlockAgentGpu> agents, std::span<gpu::BirdMotionGpu> out) = 0;
     [[nodiscard]] virtual std::string device() const = 0;

@@ -61,7 +61,7 @@ public:
     Result<void> advance(std::uint32_t frames, std::span<const gpu::FlockParamsGpu> flocks, std::span<const gpu::FlockAgentGpu> agents,
                          std::span<gpu::BirdMotionGpu> out) override {
         const FlockWorld& w = *world_;
-        const std::size_t n = state_.size(), f_count = w.flocks.size(), a_count = w.predators.size();
+        const std::size_t n = state_.size(), f_count = w.flocks.size(), a_count = frames > 0 ? agents.size() / frames : 0;
         const std::uint32_t mask = w.buckets - 1u;
         const float inv_radius = 1.0f / w.search_radius;
         for (std::uint32_t k = 0; k < frames; ++k) {

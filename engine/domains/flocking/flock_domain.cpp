@@ -4,6 +4,7 @@
 #include "kodawari/domains/flocking.hpp"
 
 #include <algorithm>
+#include <cmath>
 #include <cstring>
 #include <string>
 #include <vector>
@@ -61,7 +62,8 @@ public:
             return make_error(Error::Kind::InvalidInput, "domain \"flocking\": step(" + std::to_string(first) + ") after frame " +
                                                              std::to_string(frame_) + " (frames go in order from 0)");
         }
-        const std::size_t n = world_.birds.size(), f = world_.flocks.size(), a = world_.predators.size();
+        const std::size_t n = world_.birds.size(), f = world_.flocks.size(), scene_agents = world_.predators.size();
+        const std::size_t a = scene_agents + app_agents_.size();
         motion_.resize(std::size_t{frames} * n);
         std::uint32_t k0 = 0;
         if (first == 0 && frames > 0) {
@@ -74,7 +76,9 @@ public:
             agents_.resize(std::size_t{advance} * a);
             for (std::uint32_t k = 0; k < advance; ++k) {
                 world_.frame_inputs(first + k0 + k, std::span(flocks_).subspan(std::size_t{k} * f, f),
-                                    std::span(agents_).subspan(std::size_t{k} * a, a));
+                                    std::span(agents_).subspan(std::size_t{k} * a, scene_agents));
+                // The application's after the scene's, the same every frame of the call.
+                std::copy(app_agents_.begin(), app_agents_.end(), agents_.begin() + static_cast<std::ptrdiff_t>(k * a + scene_agents));
             }
             KW_TRY(backend_->advance(advance, flocks_, agents_, std::span(motion_).subspan(std::size_t{k0} * n)));
         }
@@ -98,6 +102,7 @@ public:
     Result<void> draw_on(render::Renderer&, DrawSource, bool) override { return {}; }
 
     std::span<const gpu::BirdMotionGpu> motion() const { return motion_; }
+    void set_agents(std::vector<gpu::FlockAgentGpu> agents) { app_agents_ = std::move(agents); }
 
 private:
     flocking::FlockWorld world_;
@@ -106,7 +111,34 @@ private:
     std::vector<gpu::BirdMotionGpu> motion_;
     std::vector<gpu::FlockParamsGpu> flocks_;
     std::vector<gpu::FlockAgentGpu> agents_;
+    std::vector<gpu::FlockAgentGpu> app_agents_;  // set_flock_agents()
 };
+
+// One application agent as the kernels take it, or an error naming agents[i] and the member.
+Result<gpu::FlockAgentGpu> agent_gpu(const FlockAgent& a, std::size_t i) {
+    const std::string what = "set_flock_agents: agents[" + std::to_string(i) + "].";
+    auto bad = [&](const char* member, const char* expected) {
+        return make_error(Error::Kind::InvalidInput, what + member + ": expected " + expected);
+    };
+    if (a.kind != FlockAgent::Kind::Predator && a.kind != FlockAgent::Kind::Attractor && a.kind != FlockAgent::Kind::Obstacle) {
+        return bad("kind", "Predator, Attractor or Obstacle");
+    }
+    for (int c = 0; c < 3; ++c) {
+        if (!(std::abs(a.position[c]) <= 1e6f)) return bad("position", "3 numbers in [-1e6, 1e6] m");
+        if (!(std::abs(a.velocity[c]) <= 1000.0f)) return bad("velocity", "3 numbers in [-1000, 1000] m/s");
+    }
+    if (!(a.radius > 0.0f && a.radius <= 1e4f)) return bad("radius", "a number in (0, 10000] m");
+    if (!(a.weight >= 0.0f && a.weight <= 1000.0f)) return bad("weight", "a number in [0, 1000] m/s^2");
+    if (!(a.margin > 0.0f && a.margin <= 1000.0f)) return bad("margin", "a number in (0, 1000] m");
+    gpu::FlockAgentGpu g{};
+    g.position = {a.position.x, a.position.y, a.position.z, a.radius};
+    const float kind = a.kind == FlockAgent::Kind::Predator    ? KW_FLOCK_AGENT_REPELLER
+                       : a.kind == FlockAgent::Kind::Attractor ? KW_FLOCK_AGENT_ATTRACTOR
+                                                               : KW_FLOCK_AGENT_SPHERE;
+    g.kind_weight = {kind, a.weight, a.kind == FlockAgent::Kind::Obstacle ? a.margin : 0.0f, 0.0f};
+    g.velocity = {a.velocity.x, a.velocity.y, a.velocity.z, 0.0f};
+    return g;
+}
 
 }  // namespace
 
@@ -115,6 +147,21 @@ Result<std::unique_ptr<Domain>> make_flocking_domain(const Scene& scene, const b
     auto built = flocking::build_flock_world(scene, world);
     if (!built) return built.error();
     return std::unique_ptr<Domain>(std::make_unique<FlockingDomain>(std::move(built).value()));
+}
+
+Result<void> set_flock_agents(Simulation& sim, std::span<const FlockAgent> agents) {
+    if (agents.size() > kMaxFlockAgents) {
+        return make_error(Error::Kind::InvalidInput, "set_flock_agents: agents: " + std::to_string(agents.size()) +
+                                                         " agents; at most " + std::to_string(kMaxFlockAgents));
+    }
+    std::vector<gpu::FlockAgentGpu> converted;
+    for (std::size_t i = 0; i < agents.size(); ++i) {
+        auto g = agent_gpu(agents[i], i);
+        if (!g) return g.error();
+        converted.push_back(g.value());
+    }
+    if (auto* flock = dynamic_cast<FlockingDomain*>(sim.domain(kFlockingDomain))) flock->set_agents(std::move(converted));
+    return {};
 }
 
 std::span<const gpu::BirdMotionGpu> flocking_motion(const Domain& domain) {

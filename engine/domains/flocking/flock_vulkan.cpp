@@ -68,7 +68,7 @@ public:
     Result<void> advance(std::uint32_t frames, std::span<const gpu::FlockParamsGpu> flocks, std::span<const gpu::FlockAgentGpu> agents,
                          std::span<gpu::BirdMotionGpu> out) override {
         const FlockWorld& w = *world_;
-        const std::size_t n = count_, f = w.flocks.size(), a = w.predators.size();
+        const std::size_t n = count_, f = w.flocks.size(), a = frames > 0 ? agents.size() / frames : 0;
         // A chunk's motion at most 64 MiB, its inputs with it.
         const std::uint32_t chunk = std::clamp<std::uint32_t>(
             static_cast<std::uint32_t>((64u << 20) / std::max<std::size_t>(n * sizeof(gpu::BirdMotionGpu), 1)), 1, frames);

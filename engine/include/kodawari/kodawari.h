@@ -778,6 +778,43 @@ KODAWARI_C_API kodawari_status kodawari_simulation_step(kodawari_simulation* sim
 /// field out of range is KODAWARI_INVALID_ARGUMENT naming the member.
 KODAWARI_C_API kodawari_status kodawari_simulation_set_wind(kodawari_simulation* sim, const kodawari_wind* wind);
 
+/// What an application places among a scene's flocking birds (docs/flocking.md): a
+/// predator they flee, an attractor they are drawn to, or a sphere they keep out of.
+typedef enum kodawari_flock_agent_kind {
+    /// Fled within `radius` (across its path, by `velocity`), `weight` m/s^2 at it, 0 at `radius`.
+    KODAWARI_FLOCK_PREDATOR = 0,
+    /// Drawn to within `radius`, the same falloff.
+    KODAWARI_FLOCK_ATTRACTOR = 1,
+    /// A sphere of `radius`: pushed out within `margin` of its surface, `weight` m/s^2 at it.
+    KODAWARI_FLOCK_OBSTACLE = 2
+} kodawari_flock_agent_kind;
+
+/// One agent; kodawari_flock_agent_default() gives a predator at the origin.
+typedef struct kodawari_flock_agent {
+    /// A kodawari_flock_agent_kind.
+    uint32_t kind;
+    /// World position, m, |each| <= 1e6.
+    float position[3];
+    /// Its velocity, m/s, |each| <= 1000 (a predator's; unused by the others). Default 0.
+    float velocity[3];
+    /// m, in (0, 10000]. Default 15.
+    float radius;
+    /// m/s^2, in [0, 1000]. Default 40.
+    float weight;
+    /// An obstacle's margin, m, in (0, 1000]. Default 2.
+    float margin;
+} kodawari_flock_agent;
+
+/// Fills `out` with the defaults above.
+KODAWARI_C_API kodawari_status kodawari_flock_agent_default(kodawari_flock_agent* out);
+
+/// Places `count` agents (at most 64; NULL with 0 removes them) among the scene's flocking
+/// birds from the next frame on, beside the scene's predators, until called again. An
+/// agent out of range is KODAWARI_INVALID_ARGUMENT naming agents[i] and the member, and
+/// changes nothing. A scene without flocking flocks takes them and does nothing with them.
+KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_agents(kodawari_simulation* sim, const kodawari_flock_agent* agents,
+                                                                    uint32_t count);
+
 /// What a simulation is, where it runs and how far it got.
 typedef struct kodawari_simulation_info {
     uint32_t bird_count;

@@ -21,12 +21,14 @@
 #include <span>
 #include <string_view>
 
+#include <glm/glm.hpp>
 #include <kodawari/shared/birds.h>
 
 #include "kodawari/api.hpp"
 #include "kodawari/birds/world.hpp"
 #include "kodawari/domain.hpp"
 #include "kodawari/scene.hpp"
+#include "kodawari/simulation.hpp"
 
 namespace kodawari {
 
@@ -39,6 +41,35 @@ inline constexpr std::string_view kFlockingMotionChannel = "flocking.motion";
 /// A flocking domain for the driven birds of `world` (BirdWorld::driven; their flocks'
 /// FlockSpec::flocking in `scene`), or none when no flock of the scene flocks.
 [[nodiscard]] KODAWARI_API Result<std::unique_ptr<Domain>> make_flocking_domain(const Scene& scene, const birds::BirdWorld& world);
+
+/// What an application places among the flocking birds, per frame or once (issue 32: a
+/// flock that reacts to the application): a predator they flee (across its path, with
+/// panic, as the scene's `predators`), an attractor they are drawn to, or a sphere they keep
+/// out of (an obstacle: a balloon, a tower's top, the player).
+struct FlockAgent {
+    enum class Kind : std::uint32_t {
+        Predator = 0,   ///< fled within `radius`, at `weight` m/s^2 at the agent falling to 0 at `radius`
+        Attractor = 1,  ///< drawn to within `radius`, the same falloff
+        Obstacle = 2,   ///< a sphere of `radius`: pushed out within `margin` of its surface, `weight` at the surface
+    };
+    Kind kind = Kind::Predator;
+    glm::vec3 position{0.0f};  ///< m, world; |each| <= 1e6
+    /// m/s, |each| <= 1000: a predator's own velocity (birds flee across its path); unused
+    /// by the others.
+    glm::vec3 velocity{0.0f};
+    float radius = 15.0f;  ///< m, in (0, 10 000]
+    float weight = 40.0f;  ///< m/s^2, in [0, 1000]
+    float margin = 2.0f;   ///< m, an obstacle's, in (0, 1000]
+};
+/// The most agents an application may place at once (each bird visits every agent every
+/// substep).
+inline constexpr std::uint32_t kMaxFlockAgents = 64;
+
+/// Places `agents` among the flocking birds of `sim` from its next step on, beside the
+/// scene's predators, until called again (an empty span removes them). InvalidInput naming
+/// `agents[i]` and the member (nothing changes then); with no flocking flock in the scene,
+/// nothing to do.
+[[nodiscard]] KODAWARI_API Result<void> set_flock_agents(Simulation& sim, std::span<const FlockAgent> agents);
 
 /// The motion the flocking domain `domain` gave for the frames of its last step():
 /// frames x BirdWorld::driven, frame-major; empty for another domain.
