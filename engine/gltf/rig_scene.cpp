@@ -153,14 +153,12 @@ struct Candidate {
     std::vector<rods::AngleLimit> limits;      // VRM: its joints' angle limits (or none)
 };
 
-// A limit's rotation as the scene writes rotations ({"axis", "angle_deg"}).
-Json rotation_json(const glm::quat& q0) {
-    const glm::quat q = q0.w < 0.0f ? -q0 : q0;
-    const float s = std::sqrt(std::max(0.0f, 1.0f - q.w * q.w));
-    const glm::vec3 axis = s > 1e-6f ? glm::vec3(q.x, q.y, q.z) / s : glm::vec3(0.0f, 1.0f, 0.0f);
+// A limit's rotation as the scene writes rotations ({"axis", "angle_deg"}), the short way.
+Json rotation_json(const glm::quat& q) {
+    const glm::quat shortest = q.w < 0.0f ? -q : q;
     Json r;
-    r["axis"] = vec(axis);
-    r["angle_deg"] = num(glm::degrees(2.0f * std::acos(std::min(q.w, 1.0f))));
+    r["axis"] = vec(glm::axis(shortest));
+    r["angle_deg"] = num(glm::degrees(glm::angle(shortest)));
     return r;
 }
 

@@ -463,8 +463,6 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
             collide_all(p[j], placed);
             pushed[j] += p[j] - before;
         };
-        // Child i + 1 placed on its parent's segment length, follow-the-leader, its
-        // correction kept for DFTL (no direction to correct along when it sits on it).
         // Child i + 1 turned about particle i, at the same distance, to the nearest
         // direction joint i's limit allows in its frame (limits.hpp), then the swing
         // carried past it.
@@ -484,6 +482,8 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
             }
             swing = glm::normalize(shortest_arc(swing * obar_axis[i], dir) * swing);
         };
+        // Child i + 1 placed on its parent's segment length, follow-the-leader, its
+        // correction kept for DFTL (no direction to correct along when it sits on it).
         auto place_on_parent = [&](std::uint32_t i) {
             const glm::vec3 d = p[i + 1] - p[i];
             const float len = glm::length(d);
