@@ -73,8 +73,11 @@ public:
     /// DeviceBuffer::BirdPoses is the last of them once the caller's submission completed.
     [[nodiscard]] virtual Result<void> record_simulate(compute::Recording& recording, std::uint32_t frames) = 0;
     /// record_simulate into the application's command buffer, between the barriers of
-    /// embedding_consumers().
-    [[nodiscard]] virtual Result<void> record_external(VkCommandBuffer cmd, std::uint32_t frames) = 0;
+    /// embedding_consumers(). Birds flown by another domain (BirdWorld::driven) take one
+    /// frame's motion from `motion` (BirdMotionGpu per driven bird, from its start: the
+    /// flocking domain's buffer, written earlier in the same command buffer), copied in
+    /// on the device; `frames` is then 1. Without driven birds `motion` is unused.
+    [[nodiscard]] virtual Result<void> record_external(VkCommandBuffer cmd, std::uint32_t frames, const compute::Buffer* motion) = 0;
 };
 
 /// What the vulkan pose backend adds to PoseBackend inside the engine.

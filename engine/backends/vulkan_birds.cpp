@@ -82,27 +82,36 @@ public:
         if (driven_ > 0) {
             return make_error(Error::Kind::Unsupported, std::to_string(driven_) +
                                                             " birds are flown by another domain (flocking), whose motion is given per "
-                                                            "simulate(): recording them into a command buffer is not supported yet");
+                                                            "simulate() or, recorded, by that domain's buffer (Simulation::record)");
         }
-        assert(&recording.device() == ctx_.get() && "a recording of the backend's device");
-        auto kernel = pipeline(false);
-        if (!kernel) return kernel.error();
-        record_frames(recording, *kernel.value(), frame_, frames);
-        frame_ += frames;
-        last_slot_ = (frames - 1) % slots_;
-        return {};
+        return record_next(recording, frames);
     }
 
-    Result<void> record_external(VkCommandBuffer cmd, std::uint32_t frames) override {
+    Result<void> record_external(VkCommandBuffer cmd, std::uint32_t frames, const compute::Buffer* motion) override {
         if (count_ == 0) return make_error(Error::Kind::InvalidInput, "record_simulate: the backend has no flock; load() one first");
         if (frames == 0 || frames > slots_) {
             return make_error(Error::Kind::InvalidInput, "record_simulate: frames is " + std::to_string(frames) + "; expected 1 to " +
                                                              std::to_string(slots_) + " (the pose ring's slots for this flock)");
         }
-        // No per-frame input: nothing to stage.
+        if (driven_ > 0 && (motion == nullptr || frames != 1)) {
+            return make_error(Error::Kind::Unsupported,
+                              std::to_string(driven_) + " birds are flown by another domain (flocking): they record one frame at a time "
+                                                        "with that domain's motion on the device (Simulation::record)");
+        }
+        const std::uint64_t motion_bytes = std::uint64_t{driven_} * sizeof(gpu::BirdMotionGpu);
+        if (driven_ > 0 && motion->size() < motion_bytes) {
+            return make_error(Error::Kind::InvalidInput, "record_simulate: the driven birds' motion buffer holds " +
+                                                             std::to_string(motion->size()) + " bytes; " +
+                                                             std::to_string(motion_bytes) + " needed");
+        }
+        // No per-frame input from the host: nothing to stage.
         auto recording = compute::Recording::borrow(*ctx_, cmd, nullptr);
-        compute::barrier(recording, embedding_consumers(*ctx_), compute::Stage::Compute);
-        KW_TRY(record_simulate(recording, frames));
+        compute::barrier(recording, embedding_consumers(*ctx_), compute::Stage::Compute | compute::Stage::Transfer);
+        // The frame's motion, written by the flocking domain's kernels before this call,
+        // copied into slot 0 of the motion ring (record_frames' barrier orders the copy
+        // before the dispatch).
+        if (driven_ > 0) compute::copy(recording, *motion, 0, buffers_[KW_BIRDS_BINDING_MOTION], 0, motion_bytes);
+        KW_TRY(record_next(recording, frames));
         compute::barrier(recording, compute::Stage::Compute, embedding_consumers(*ctx_));
         return {};
     }
@@ -254,6 +263,17 @@ public:
     }
 
 private:
+    // The next `frames` frames recorded (the motion of driven birds already in place).
+    Result<void> record_next(compute::Recording& recording, std::uint32_t frames) {
+        assert(&recording.device() == ctx_.get() && "a recording of the backend's device");
+        auto kernel = pipeline(false);
+        if (!kernel) return kernel.error();
+        record_frames(recording, *kernel.value(), frame_, frames);
+        frame_ += frames;
+        last_slot_ = (frames - 1) % slots_;
+        return {};
+    }
+
     // The dispatch of frames [first, first + n) (at most slots_ when read back).
     void record_frames(compute::Recording& recording, const compute::Kernel& kernel, std::uint32_t first, std::uint32_t n) const {
         // The previous dispatch (this or an earlier submission) wrote the states and the

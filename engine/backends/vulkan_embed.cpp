@@ -217,7 +217,7 @@ Result<void> record_simulate(BirdBackend& birds, VkCommandBuffer cmd, std::uint3
     if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "record_simulate: cmd is null");
     auto* device = dynamic_cast<DeviceBirdBackend*>(&birds);
     if (device == nullptr) return not_vulkan("record_simulate", "birds", birds.name());
-    return device->record_external(cmd, frames);
+    return device->record_external(cmd, frames, nullptr);
 }
 
 Result<void> record_evaluate(PoseBackend& poses, VkCommandBuffer cmd, float time) {

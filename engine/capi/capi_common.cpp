@@ -234,17 +234,30 @@ kodawari_backend effective_backend(const kodawari_backend_options& options) {
     return options.vulkan_device != nullptr ? KODAWARI_BACKEND_VULKAN : options.backend;
 }
 
-void fill_range(const DeviceData* data, kodawari_device_buffer which, kodawari_buffer_range* out, bool chains) {
-    require_pointer(out, "out");
+DeviceBuffer device_buffer(kodawari_device_buffer which) {
     const std::int64_t value = enum_value(which);
-    DeviceBuffer name = DeviceBuffer::BirdPoses;
     switch (value) {
-        case KODAWARI_BUFFER_CHAIN_STATES: name = DeviceBuffer::RodChainStates; break;
-        case KODAWARI_BUFFER_JOINT_MOTION: name = DeviceBuffer::RodMotion; break;
-        case KODAWARI_BUFFER_JOINT_SPIN: name = DeviceBuffer::RodSpin; break;
-        case KODAWARI_BUFFER_BIRD_POSES: name = DeviceBuffer::BirdPoses; break;
+        case KODAWARI_BUFFER_CHAIN_STATES: return DeviceBuffer::RodChainStates;
+        case KODAWARI_BUFFER_JOINT_MOTION: return DeviceBuffer::RodMotion;
+        case KODAWARI_BUFFER_JOINT_SPIN: return DeviceBuffer::RodSpin;
+        case KODAWARI_BUFFER_BIRD_POSES: return DeviceBuffer::BirdPoses;
         default: invalid("which", std::to_string(value) + "; expected a kodawari_device_buffer (0 to 3)");
     }
+}
+
+kodawari_buffer_range buffer_range(const VulkanBufferRange& range) {
+    kodawari_buffer_range r{};
+    r.buffer = reinterpret_cast<std::uint64_t>(range.buffer);
+    r.offset = range.offset;
+    r.range = range.range;
+    r.count = range.count;
+    r.stride = range.stride;
+    return r;
+}
+
+void fill_range(const DeviceData* data, kodawari_device_buffer which, kodawari_buffer_range* out, bool chains) {
+    require_pointer(out, "out");
+    const DeviceBuffer name = device_buffer(which);
     if (chains == (name == DeviceBuffer::BirdPoses)) {
         invalid("which", chains ? "BIRD_POSES is a bird world's buffer" : "a chain world's buffer; a bird world has BIRD_POSES");
     }
@@ -253,13 +266,7 @@ void fill_range(const DeviceData* data, kodawari_device_buffer which, kodawari_b
     }
     auto range = vulkan_buffer(*data, name);
     check(range);
-    kodawari_buffer_range r{};
-    r.buffer = reinterpret_cast<std::uint64_t>(range.value().buffer);
-    r.offset = range.value().offset;
-    r.range = range.value().range;
-    r.count = range.value().count;
-    r.stride = range.value().stride;
-    *out = r;
+    *out = buffer_range(range.value());
 }
 
 BackendOptions backend_options(const kodawari_backend_options& options) {

@@ -23,6 +23,7 @@
 #include "kodawari/result.hpp"
 #include "kodawari/rods/chain_snapshot.hpp"
 #include "kodawari/rods/wind.hpp"
+#include "kodawari/vulkan_embed.hpp"
 
 /// kodawari_vulkan_device_adopt's handle: the application's device, wrapped
 /// (kodawari::adopt_vulkan_device); shared with the worlds made on it.
@@ -141,6 +142,10 @@ inline glm::quat quat(const float* p) { return {p[3], p[0], p[1], p[2]}; }  // g
 kodawari_backend effective_backend(const kodawari_backend_options& options);
 /// Where a device buffer is, in C (`what` names the argument in errors).
 void fill_range(const DeviceData* data, kodawari_device_buffer which, kodawari_buffer_range* out, bool chains);
+/// The engine's name of a C buffer name; InvalidInput naming `which` when out of range.
+DeviceBuffer device_buffer(kodawari_device_buffer which);
+/// A VulkanBufferRange as the C API writes it.
+kodawari_buffer_range buffer_range(const VulkanBufferRange& range);
 /// The engine's kind of an explicit kodawari_backend (not AUTO).
 BackendKind backend_kind(kodawari_backend backend);
 kodawari_backend backend_enum(BackendKind kind);

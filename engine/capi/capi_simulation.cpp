@@ -11,6 +11,8 @@
 #include <utility>
 #include <vector>
 
+#include <vulkan/vulkan_core.h>
+
 #include "capi/capi_bird_pose.hpp"
 #include "capi/capi_common.hpp"
 #include "kodawari/bake.hpp"
@@ -29,6 +31,7 @@ struct kodawari_simulation {
     std::unique_ptr<Simulation> sim;
     SimulationOptions options;  // what bake() opens its own simulation with
     std::uint32_t next_frame = 0;
+    bool recorded = false;             // the last frame was recorded (its poses are on the device)
     std::vector<gpu::BirdPose> poses;  // the last frame's, read back by step()
     ChainSnapshot chains;              // read_chains()' scratch, reused
     std::array<PartOffsets, birds::kWingTypeCount> offsets{};
@@ -40,6 +43,15 @@ void require_sim(const kodawari_simulation* sim) { require_pointer(sim, "sim"); 
 
 void require_stepped(const kodawari_simulation& sim) {
     if (sim.next_frame == 0) invalid("sim", "no frame simulated yet; call kodawari_simulation_step first");
+}
+
+// The host's copy of the last frame's poses: not of a recorded frame.
+void require_poses(const kodawari_simulation& sim) {
+    require_stepped(sim);
+    if (sim.recorded) {
+        invalid("sim", "the last frame was recorded into a command buffer: its poses are on the device "
+                       "(kodawari_simulation_buffer); kodawari_simulation_step reads them back");
+    }
 }
 
 // A file that cannot be read is the caller's argument, as a file that is not a scene: the
@@ -149,6 +161,36 @@ KODAWARI_C_API kodawari_status kodawari_simulation_step(kodawari_simulation* sim
         sim->poses.resize(birds);
         check(step_birds(*sim->sim, 1, std::span<gpu::BirdPose>(sim->poses)));
         sim->next_frame += frames;
+        sim->recorded = false;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_simulation_record(kodawari_simulation* sim, void* command_buffer) {
+    return guard("kodawari_simulation_record", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_pointer(command_buffer, "command_buffer");
+        if (sim->options.backend != BackendKind::Vulkan || !sim->options.options.context) {
+            invalid("sim", "opened without backend options' vulkan_device; recording needs the application's device");
+        }
+        const std::uint32_t total = sim->sim->frame_count();
+        if (sim->next_frame >= total) {
+            invalid("sim", "every frame is simulated (" + std::to_string(total) + "); no frame left to record");
+        }
+        check(sim->sim->record(static_cast<VkCommandBuffer>(command_buffer)));
+        sim->next_frame += 1;
+        sim->recorded = true;
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_simulation_buffer(kodawari_simulation* sim, kodawari_device_buffer which,
+                                                          kodawari_buffer_range* out) {
+    return guard("kodawari_simulation_buffer", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_pointer(out, "out");
+        const DeviceBuffer name = device_buffer(which);
+        auto range = name == DeviceBuffer::BirdPoses ? bird_pose_buffer(*sim->sim) : chain_buffer(*sim->sim, name);
+        check(range);
+        *out = buffer_range(range.value());
     });
 }
 
@@ -180,7 +222,7 @@ KODAWARI_C_API kodawari_status kodawari_simulation_bird_poses(kodawari_simulatio
     return guard("kodawari_simulation_bird_poses", sim ? &sim->message : nullptr, [&] {
         require_sim(sim);
         require_pointer(out, "out");
-        require_stepped(*sim);
+        require_poses(*sim);
         const std::size_t birds = sim->poses.size();
         const std::size_t needed = birds * kFloatsPerBird;
         const std::string why = std::to_string(birds) + " birds x " + std::to_string(KODAWARI_BIRD_PARTS) + " parts x " +
@@ -200,7 +242,7 @@ KODAWARI_C_API kodawari_status kodawari_simulation_bird_tail_spreads(kodawari_si
                                                                      size_t capacity) {
     return guard("kodawari_simulation_bird_tail_spreads", sim ? &sim->message : nullptr, [&] {
         require_sim(sim);
-        require_stepped(*sim);
+        require_poses(*sim);
         const std::size_t birds = sim->poses.size();
         require_array(out, birds, "out", "the bird count");
         if (capacity < birds) {

@@ -9,6 +9,8 @@
 #include <string>
 #include <vector>
 
+#include "backends/device_backends.hpp"
+#include "domains/flocking/flock_backend.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/domains/bird_draw.hpp"
 #include "kodawari/domains/flocking.hpp"
@@ -117,13 +119,19 @@ public:
         return {};
     }
 
-    // The frame's flapping and flight (record_simulate; the vulkan backend's barriers).
+    // The frame's flapping and flight (the vulkan backend's barriers); driven birds fly
+    // the motion the flocking domain recorded just before, on the device.
     Result<void> record(std::uint32_t, VkCommandBuffer cmd) override {
         if (!backend_) return {};
-        return record_simulate(*backend_, cmd, 1);
+        if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "record_simulate: cmd is null");
+        auto* device = dynamic_cast<DeviceBirdBackend*>(backend_.get());
+        if (device == nullptr) return record_simulate(*backend_, cmd, 1);  // its error: not a vulkan backend
+        const compute::Buffer* motion = world_.driven > 0 && driver_ != nullptr ? flocking::flocking_motion_buffer(*driver_) : nullptr;
+        return device->record_external(cmd, 1, motion);
     }
 
     std::string device() const override { return backend_ ? backend_->device() : std::string(); }
+    const DeviceData* device_data() const { return backend_ ? backend_->device_data() : nullptr; }
     std::uint32_t validation_messages() const override { return backend_ ? backend_->validation_messages() : 0; }
 
     Result<void> show_on(render::Renderer& renderer, bool shared_device) override {
@@ -186,6 +194,18 @@ Result<void> step_birds(Simulation& sim, std::uint32_t frames, std::span<gpu::Bi
 
 void keep_bird_poses(Simulation& sim, bool keep) {
     if (BirdDomain* domain = find(sim)) domain->keep_poses(keep);
+}
+
+Result<VulkanBufferRange> bird_pose_buffer(const Simulation& sim) {
+    const BirdDomain* domain = find(sim);
+    const DeviceData* data = domain ? domain->device_data() : nullptr;
+    if (data == nullptr) {
+        return make_error(Error::Kind::InvalidInput,
+                          domain == nullptr || domain->world().birds.empty()
+                              ? "bird_pose_buffer: the simulation has no birds"
+                              : "bird_pose_buffer: the birds' poses are not on a Vulkan device (a cpu backend, or no frame yet)");
+    }
+    return vulkan_buffer(*data, DeviceBuffer::BirdPoses);
 }
 
 const BirdTiming& bird_timing(const Simulation& sim) {

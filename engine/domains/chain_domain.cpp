@@ -120,6 +120,7 @@ public:
     }
 
     std::string device() const override { return rods_ ? rods_->device() : std::string(); }
+    const DeviceData* device_data() const { return rods_ ? rods_->device_data() : nullptr; }
     std::uint32_t validation_messages() const override {
         std::uint32_t n = rods_ ? rods_->validation_messages() : 0;
         if (animator_) n = std::max(n, animator_->validation_messages());
@@ -258,6 +259,19 @@ void set_view_camera(Simulation& sim, std::optional<rods::Camera> camera) {
 Result<void> set_wind(Simulation& sim, std::optional<rods::WindField> wind) {
     if (ChainDomain* domain = find(sim)) return domain->set_wind(wind);
     return {};
+}
+
+Result<VulkanBufferRange> chain_buffer(const Simulation& sim, DeviceBuffer which) {
+    if (which != DeviceBuffer::RodChainStates && which != DeviceBuffer::RodMotion && which != DeviceBuffer::RodSpin) {
+        return make_error(Error::Kind::InvalidInput, "chain_buffer: which: expected RodChainStates, RodMotion or RodSpin");
+    }
+    const ChainDomain* domain = find(sim);
+    if (domain == nullptr || domain->scene() == nullptr) {
+        return make_error(Error::Kind::InvalidInput, "chain_buffer: the simulation has no chains");
+    }
+    const DeviceData* data = domain->device_data();
+    if (data == nullptr) return make_error(Error::Kind::InvalidInput, "chain_buffer: the chains are not on a Vulkan device (a cpu backend)");
+    return vulkan_buffer(*data, which);
 }
 
 const ChainTiming& chain_timing(const Simulation& sim) {

@@ -9,6 +9,7 @@
 // saying why, only where there is none.
 #include <gtest/gtest.h>
 
+#include <cstdio>
 #include <cstring>
 #include <memory>
 #include <string>
@@ -580,6 +581,103 @@ TEST(CApiBackends, AWorldTooLargeForTheDeviceIsUnavailableAndAutoFallsBack) {
     EXPECT_EQ(info.backend, KODAWARI_BACKEND_CPU);
     EXPECT_NE(std::string(info.fallback_reason).find(sizes), std::string::npos) << info.fallback_reason;
     std::printf("[ measured ] auto, %llu birds: %s\n", static_cast<unsigned long long>(birds), info.fallback_reason);
+}
+
+// A whole scene recorded through the C API (kodawari_simulation_record): a flocking flock
+// with a predator the application moves each frame, recorded three frames in flight on
+// the application's device, is where a simulation stepped on the same device is: the next
+// frame stepped from both gives the same poses, bit for bit. The pose buffer's range is
+// the birds'; poses are not read from the host after a recorded frame; bad calls are
+// refused naming the argument.
+TEST(CApiEmbedding, RecordedScenesGiveTheStepsBits) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    testing_support::Application app;
+    ASSERT_TRUE(app.ok());
+    testing_support::messages = 0;
+    const VulkanDeviceHandles h = app.handles();
+    const kodawari_vulkan_device_desc desc{h.instance, h.physical_device, h.device, h.queue_family, h.queue_index,
+                                           reinterpret_cast<void*>(h.get_instance_proc_addr), nullptr, h.api_version,
+                                           h.frames_in_flight};
+    kodawari_vulkan_device* device = nullptr;
+    ASSERT_EQ(kodawari_vulkan_device_adopt(&desc, &device), KODAWARI_OK) << kodawari_last_error();
+    constexpr std::uint32_t kBirds = 203;
+    const testing_support::TempDir dir;
+    const std::string path = dir.file("capi-record-flocking.json");
+    {
+        std::FILE* file = std::fopen(path.c_str(), "wb");
+        ASSERT_NE(file, nullptr);
+        const std::string text = R"({"format": "kodawari-scene", "version": 1, "name": "capi-record", "fps": 30, "duration": 1,
+            "camera": {"position": [0, 60, -160], "target": [0, 45, 0], "fov_deg": 60},
+            "flocks": [{"name": "starlings", "wing_type": "pigeon", "count": 203, "seed": 5, "speed": 15,
+                        "generated_route": {"seed": 7, "segments": 8, "center": [0, 45, 0], "extent": [45, 8, 45], "loop": true},
+                        "formation": {"spread": [10, 5, 10]}, "flocking": {}}]})";
+        std::fwrite(text.data(), 1, text.size(), file);
+        std::fclose(file);
+    }
+    kodawari_backend_options on_app{};
+    on_app.vulkan_device = device;
+    kodawari_simulation* recorded = nullptr;
+    kodawari_simulation* stepped = nullptr;
+    ASSERT_EQ(kodawari_simulation_open(path.c_str(), &on_app, 0, &recorded), KODAWARI_OK) << kodawari_last_error();
+    ASSERT_EQ(kodawari_simulation_open(path.c_str(), &on_app, 0, &stepped), KODAWARI_OK) << kodawari_last_error();
+    kodawari_vulkan_device_release(device);  // the simulations hold it
+    for (std::uint32_t k = 0; k < 8; ++k) {
+        kodawari_flock_agent hawk{};
+        ASSERT_EQ(kodawari_flock_agent_default(&hawk), KODAWARI_OK);
+        hawk.position[0] = -20.0f + 5.0f * static_cast<float>(k);
+        hawk.position[1] = 45.0f;
+        hawk.velocity[0] = 150.0f;
+        for (kodawari_simulation* sim : {recorded, stepped}) {
+            ASSERT_EQ(kodawari_simulation_set_flock_agents(sim, &hawk, 1), KODAWARI_OK) << kodawari_simulation_last_error(sim);
+        }
+        VkCommandBuffer cmd = app.begin(k);
+        ASSERT_EQ(kodawari_simulation_record(recorded, cmd), KODAWARI_OK) << kodawari_simulation_last_error(recorded);
+        app.submit(k);
+        ASSERT_EQ(kodawari_simulation_step(stepped, 1), KODAWARI_OK) << kodawari_simulation_last_error(stepped);
+    }
+    app.wait_all();
+    kodawari_buffer_range range{};
+    ASSERT_EQ(kodawari_simulation_buffer(recorded, KODAWARI_BUFFER_BIRD_POSES, &range), KODAWARI_OK)
+        << kodawari_simulation_last_error(recorded);
+    EXPECT_NE(range.buffer, 0u);
+    EXPECT_EQ(range.count, kBirds);
+    EXPECT_EQ(range.range, std::uint64_t{range.count} * range.stride);
+    std::vector<float> local(std::size_t{kBirds} * KODAWARI_BIRD_PARTS * KODAWARI_TRANSFORM_FLOATS);
+    const kodawari_bird_output out{local.data(), local.size(), nullptr, 0};
+    EXPECT_EQ(kodawari_simulation_bird_poses(recorded, &out), KODAWARI_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(kodawari_simulation_last_error(recorded)).find("recorded"), std::string::npos);
+    EXPECT_EQ(kodawari_simulation_buffer(recorded, KODAWARI_BUFFER_JOINT_MOTION, &range), KODAWARI_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(kodawari_simulation_last_error(recorded)).find("no chains"), std::string::npos)
+        << kodawari_simulation_last_error(recorded);
+    EXPECT_EQ(kodawari_simulation_record(recorded, nullptr), KODAWARI_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(kodawari_simulation_last_error(recorded)).find("command_buffer"), std::string::npos);
+
+    std::vector<float> other(local.size());
+    const kodawari_bird_output out_other{other.data(), other.size(), nullptr, 0};
+    ASSERT_EQ(kodawari_simulation_step(recorded, 1), KODAWARI_OK) << kodawari_simulation_last_error(recorded);
+    ASSERT_EQ(kodawari_simulation_step(stepped, 1), KODAWARI_OK) << kodawari_simulation_last_error(stepped);
+    ASSERT_EQ(kodawari_simulation_bird_poses(recorded, &out), KODAWARI_OK) << kodawari_simulation_last_error(recorded);
+    ASSERT_EQ(kodawari_simulation_bird_poses(stepped, &out_other), KODAWARI_OK);
+    EXPECT_EQ(std::memcmp(local.data(), other.data(), local.size() * sizeof(float)), 0) << "recorded and stepped part";
+    kodawari_simulation_info info{};
+    ASSERT_EQ(kodawari_simulation_get_info(recorded, &info), KODAWARI_OK);
+    EXPECT_EQ(info.next_frame, 9u);
+    EXPECT_EQ(info.validation_messages, 0u);
+
+    // A simulation on a device of the module's own cannot record.
+    kodawari_backend_options own{};
+    own.backend = KODAWARI_BACKEND_VULKAN;
+    kodawari_simulation* alone = nullptr;
+    ASSERT_EQ(kodawari_simulation_open(path.c_str(), &own, 0, &alone), KODAWARI_OK) << kodawari_last_error();
+    VkCommandBuffer cmd = app.begin(9);
+    EXPECT_EQ(kodawari_simulation_record(alone, cmd), KODAWARI_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(kodawari_simulation_last_error(alone)).find("vulkan_device"), std::string::npos);
+    app.submit(9);
+    app.wait_all();
+    kodawari_simulation_destroy(alone);
+    kodawari_simulation_destroy(stepped);
+    kodawari_simulation_destroy(recorded);
+    EXPECT_EQ(testing_support::messages, 0u);
 }
 
 // The C API on the application's own device (kodawari.h, "Device embedding"): the crowd's

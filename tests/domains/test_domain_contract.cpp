@@ -20,15 +20,21 @@
 #include <memory>
 #include <optional>
 #include <string>
+#include <tuple>
 #include <vector>
 
 #include <glm/glm.hpp>
 #include <tiny_gltf.h>
 
+#include <kodawari/shared/birds.h>
+#include <kodawari/shared/rods.h>
+
 #include "compute/compute.hpp"
 #include "kodawari/bake.hpp"
 #include "kodawari/domain.hpp"
+#include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
+#include "kodawari/domains/flocking.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/simulation.hpp"
 #include "kodawari/vulkan_embed.hpp"
@@ -566,7 +572,78 @@ TEST(DomainContract, TheScenesDomainsRecordAsTheyStep) {
     ASSERT_FALSE(a.positions.empty());
     ASSERT_EQ(a.positions.size(), b.positions.size());
     EXPECT_EQ(std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(glm::vec3)), 0);
+    // Where the application binds them: the joints' motion, one RodJointMotionGpu each.
+    auto motion = chain_buffer(*recorded.value(), DeviceBuffer::RodMotion);
+    ASSERT_TRUE(motion.ok()) << motion.error().message;
+    EXPECT_EQ(motion.value().count, a.positions.size());
+    EXPECT_EQ(motion.value().stride, sizeof(gpu::RodJointMotionGpu));
+    EXPECT_FALSE(chain_buffer(*recorded.value(), DeviceBuffer::BirdPoses).ok());
+    EXPECT_FALSE(bird_pose_buffer(*recorded.value()).ok());  // no birds
     EXPECT_EQ(app.messages(), 0u);
+}
+
+// A scene with a flocking flock records too: the flocking step (its grid and rules) and
+// the birds it drives go into the application's command buffers frame by frame, the
+// frame's inputs (the flock's route leader, the scene's predator, a predator the
+// application moves every frame) through staging rings, the motion never read back.
+// From the state recorded that way the next frame step()s to the same bits as a run
+// stepped all along on the same device: flocks and birds recorded exactly as stepped.
+TEST(DomainContract, FlockingRecordsAsItSteps) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    testing_support::AppDevice app;
+    ASSERT_TRUE(app.ok());
+    auto device = adopt_vulkan_device(app.handles());
+    ASSERT_TRUE(device.ok()) << device.error().message;
+    // 301 birds (not a multiple of the 64- or 256-wide workgroups), 2 substeps a frame at 30 fps.
+    constexpr std::uint32_t kBirds = 301, kFrames = 10;
+    const std::string text = R"({"format": "kodawari-scene", "version": 1, "name": "flocking-record", "fps": 30, "duration": 1,
+        "camera": {"position": [0, 60, -160], "target": [0, 45, 0], "fov_deg": 60},
+        "flocks": [{"name": "starlings", "wing_type": "pigeon", "count": 301, "seed": 2024, "speed": 15,
+                    "generated_route": {"seed": 7, "segments": 8, "center": [0, 45, 0], "extent": [45, 8, 45], "loop": true},
+                    "formation": {"spread": [14, 6, 14]},
+                    "flocking": {"predators": [{"from": [-40, 45, 0], "to": [40, 45, 0], "start": 0.1, "speed": 20,
+                                                "radius": 20, "weight": 60}]}}]})";
+    SimulationOptions options;
+    options.backend = BackendKind::Vulkan;
+    options.options.context = device.value();
+    const auto open = [&] {
+        auto scene = parse_scene(text, "flocking-record.json");
+        EXPECT_TRUE(scene.ok()) << scene.error().message;
+        return Simulation::create(std::move(scene).value(), options);
+    };
+    auto recorded = open();
+    auto stepped = open();
+    ASSERT_TRUE(recorded.ok() && stepped.ok()) << (recorded.ok() ? stepped.error().message : recorded.error().message);
+    for (std::uint32_t k = 0; k < kFrames; ++k) {
+        FlockAgent hawk;
+        hawk.position = {-30.0f + 6.0f * static_cast<float>(k), 45.0f, 4.0f};
+        hawk.velocity = {180.0f, 0.0f, 0.0f};
+        hawk.radius = 25.0f;
+        ASSERT_TRUE(set_flock_agents(*recorded.value(), std::span(&hawk, 1)).ok());
+        ASSERT_TRUE(set_flock_agents(*stepped.value(), std::span(&hawk, 1)).ok());
+        VkCommandBuffer cmd = app.begin(k);
+        const auto made = recorded.value()->record(cmd);
+        ASSERT_TRUE(made.ok()) << made.error().message;
+        app.submit(k);
+        ASSERT_TRUE(stepped.value()->step(1).ok());
+    }
+    app.wait_all();
+    EXPECT_EQ(recorded.value()->frame(), kFrames - 1);
+    auto pose_range = bird_pose_buffer(*recorded.value());
+    ASSERT_TRUE(pose_range.ok()) << pose_range.error().message;
+    EXPECT_EQ(pose_range.value().count, kBirds);
+    EXPECT_EQ(pose_range.value().stride, sizeof(gpu::BirdPoseGpu));
+    std::vector<gpu::BirdPose> a(kBirds), b(kBirds);
+    std::vector<gpu::BirdMotionGpu> ma(kBirds), mb(kBirds);
+    for (auto [sim, poses, motion] : {std::tuple(recorded.value().get(), &a, &ma), std::tuple(stepped.value().get(), &b, &mb)}) {
+        const ChannelOutput out[] = {{kBirdPosesChannel, std::as_writable_bytes(std::span(*poses))},
+                                     {kFlockingMotionChannel, std::as_writable_bytes(std::span(*motion))}};
+        ASSERT_TRUE(sim->step(1, out).ok());
+    }
+    EXPECT_EQ(std::memcmp(ma.data(), mb.data(), ma.size() * sizeof(gpu::BirdMotionGpu)), 0) << "the flocks' state";
+    EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(gpu::BirdPose)), 0) << "the birds' poses";
+    EXPECT_EQ(app.messages(), 0u);
+    EXPECT_EQ(recorded.value()->validation_messages(), 0u);
 }
 
 // A shard of the Simulation cuts every domain, the test's too, by the same formula.

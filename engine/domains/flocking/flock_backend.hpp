@@ -8,11 +8,18 @@
 #include <span>
 #include <string>
 
+#include <vulkan/vulkan_core.h>
+
 #include <kodawari/shared/flocking.h>
 
 #include "domains/flocking/flock_world.hpp"
 #include "kodawari/backend.hpp"
+#include "kodawari/domain.hpp"
 #include "kodawari/result.hpp"
+
+namespace kodawari::compute {
+class Buffer;
+}
 
 namespace kodawari::flocking {
 
@@ -26,9 +33,27 @@ public:
     /// agents.size() / frames a frame), writing each frame's motion to out[k x birds].
     [[nodiscard]] virtual Result<void> advance(std::uint32_t frames, std::span<const gpu::FlockParamsGpu> flocks,
                                                std::span<const gpu::FlockAgentGpu> agents, std::span<gpu::BirdMotionGpu> out) = 0;
+    /// One frame recorded into `cmd`, an application's command buffer on the backend's
+    /// device (Simulation::record): `first` (frame 0) puts the world's first motion in
+    /// motion_buffer() (a submission of its own, waited for), any other frame records its
+    /// substeps with `flocks` and `agents` (one frame's) copied in through a ring of
+    /// Device::frames_in_flight() staging slots, between the embedding barriers. The
+    /// frame's motion is then in motion_buffer() (BirdMotionGpu per bird) once the
+    /// application's submission completed; nothing is read back. Unsupported on the CPU.
+    [[nodiscard]] virtual Result<void> record(VkCommandBuffer cmd, bool first, std::span<const gpu::FlockParamsGpu> flocks,
+                                              std::span<const gpu::FlockAgentGpu> agents) {
+        (void)cmd, (void)first, (void)flocks, (void)agents;
+        return make_error(Error::Kind::Unsupported, "the flocking step records into a command buffer on the vulkan backend only");
+    }
+    /// Where record() leaves the frame's motion; null on the CPU.
+    [[nodiscard]] virtual const compute::Buffer* motion_buffer() const { return nullptr; }
     [[nodiscard]] virtual std::string device() const = 0;
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
 };
+
+/// Where the flocking domain `domain` leaves a recorded frame's motion (FlockBackend::
+/// motion_buffer()); null for another domain or off the vulkan backend.
+[[nodiscard]] const compute::Buffer* flocking_motion_buffer(const Domain& domain);
 
 /// cpu-reference (threads = 1) or cpu.
 [[nodiscard]] std::unique_ptr<FlockBackend> make_cpu_flock_backend(unsigned threads);

@@ -89,10 +89,28 @@ public:
         return {};
     }
 
-    Result<void> record(std::uint32_t, VkCommandBuffer) override {
-        return make_error(Error::Kind::Unsupported,
-                          "domain \"flocking\" cannot record into a command buffer yet: its birds' motion is read back each frame "
-                          "(docs/flocking.md, \"What is not there yet\")");
+    // One frame into the application's command buffer: the frame's inputs go through the
+    // backend's staging ring and its motion stays on the device, where the bird domain's
+    // record copies it from (motion_buffer()); nothing is read back.
+    Result<void> record(std::uint32_t frame, VkCommandBuffer cmd) override {
+        if (!backend_) return {};
+        if (frame != frame_) {
+            return make_error(Error::Kind::InvalidInput, "domain \"flocking\": record(" + std::to_string(frame) + ") after frame " +
+                                                             std::to_string(frame_) + " (frames go in order from 0)");
+        }
+        const std::size_t f = world_.flocks.size(), scene_agents = world_.predators.size();
+        if (frame == 0) {
+            KW_TRY(backend_->record(cmd, true, {}, {}));
+        } else {
+            flocks_.resize(f);
+            agents_.resize(scene_agents + app_agents_.size());
+            world_.frame_inputs(frame, flocks_, std::span(agents_).first(scene_agents));
+            std::copy(app_agents_.begin(), app_agents_.end(), agents_.begin() + static_cast<std::ptrdiff_t>(scene_agents));
+            KW_TRY(backend_->record(cmd, false, flocks_, agents_));
+        }
+        frame_ = frame + 1;
+        motion_.clear();  // this frame's motion is on the device only
+        return {};
     }
 
     std::string device() const override { return backend_ ? backend_->device() : std::string(); }
@@ -102,6 +120,7 @@ public:
     Result<void> draw_on(render::Renderer&, DrawSource, bool) override { return {}; }
 
     std::span<const gpu::BirdMotionGpu> motion() const { return motion_; }
+    const compute::Buffer* motion_buffer() const { return backend_ ? backend_->motion_buffer() : nullptr; }
     void set_agents(std::vector<gpu::FlockAgentGpu> agents) { app_agents_ = std::move(agents); }
 
 private:
@@ -168,5 +187,14 @@ std::span<const gpu::BirdMotionGpu> flocking_motion(const Domain& domain) {
     const auto* flock = dynamic_cast<const FlockingDomain*>(&domain);
     return flock ? flock->motion() : std::span<const gpu::BirdMotionGpu>{};
 }
+
+namespace flocking {
+
+const compute::Buffer* flocking_motion_buffer(const Domain& domain) {
+    const auto* flock = dynamic_cast<const FlockingDomain*>(&domain);
+    return flock ? flock->motion_buffer() : nullptr;
+}
+
+}  // namespace flocking
 
 }  // namespace kodawari

@@ -1,9 +1,11 @@
 // The flocking step on a Vulkan device: per substep, the grid in four dispatches of
 // shaders/flock_grid.comp (clear, count, scan, scatter) and the step of every bird
 // (shaders/flock_step.comp, lib/flock_body.glsl), recorded for many frames into one
-// submission; each frame's motion read back for the bird domain.
+// submission with each frame's motion read back for the bird domain, or one frame into an
+// application's command buffer with the motion left on the device for the birds' kernel.
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cstring>
 #include <optional>
 #include <string>
@@ -12,6 +14,7 @@
 #include "backends/device_backends.hpp"
 #include "compute/compute.hpp"
 #include "domains/flocking/flock_backend.hpp"
+#include "kodawari/domains/flocking.hpp"
 
 namespace kodawari::flocking {
 
@@ -41,13 +44,14 @@ public:
         world_ = &world;
         count_ = static_cast<std::uint32_t>(world.birds.size());
         slot_ = 0;
+        ring_.reset();
         buffers_.clear();
         const std::uint64_t n = count_;
         // Flocks, agents and motion grow with the frames of a call (advance()).
         const std::uint64_t sizes[KW_FLOCK_BINDING_COUNT] = {
             sizeof(gpu::FlockParamsGpu) * std::max<std::size_t>(world.flocks.size(), 1), sizeof(gpu::FlockBirdGpu) * n,
             2 * sizeof(gpu::FlockStateGpu) * n, sizeof(std::uint32_t) * n, 2 * sizeof(std::uint32_t) * std::uint64_t{world.buckets},
-            sizeof(std::uint32_t) * n, sizeof(gpu::FlockAgentGpu) * std::max<std::size_t>(world.predators.size(), 1),
+            sizeof(std::uint32_t) * n, sizeof(gpu::FlockAgentGpu) * (world.predators.size() + kMaxFlockAgents),
             sizeof(gpu::BirdMotionGpu) * n};
         for (std::uint64_t bytes : sizes) {
             if (bytes > device_->info().max_storage_buffer_range) {
@@ -76,9 +80,6 @@ public:
         KW_TRY(grow(KW_FLOCK_BINDING_AGENTS, std::uint64_t{chunk} * a * sizeof(gpu::FlockAgentGpu)));
         KW_TRY(grow(KW_FLOCK_BINDING_MOTION, std::uint64_t{chunk} * n * sizeof(gpu::BirdMotionGpu)));
         const compute::Queue queue(*device_);
-        const std::uint32_t groups_birds = static_cast<std::uint32_t>((n + KW_FLOCK_WORKGROUP_SIZE - 1) / KW_FLOCK_WORKGROUP_SIZE);
-        const std::uint32_t groups_grid = static_cast<std::uint32_t>((n + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE);
-        const std::uint32_t groups_buckets = (w.buckets + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE;
         for (std::uint32_t done = 0; done < frames;) {
             const std::uint32_t m = std::min(chunk, frames - done);
             if (f > 0) KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_FLOCKS], bytes_of(flocks.subspan(done * f, m * f))));
@@ -86,28 +87,7 @@ public:
             auto recording = queue.begin();
             if (!recording) return recording.error();
             compute::Recording& rec = recording.value();
-            for (std::uint32_t k = 0; k < m; ++k) {
-                for (std::uint32_t s = 0; s < w.substeps; ++s) {
-                    gpu::FlockPush push{};
-                    push.counts = {count_, w.buckets - 1u, static_cast<std::uint32_t>(a), KW_FLOCK_PASS_CLEAR};
-                    push.slots = {slot_, k, w.substeps, s};
-                    push.bases = {static_cast<std::uint32_t>(k * f), static_cast<std::uint32_t>(k * a), 0u, 0u};
-                    push.step = {w.dt, 1.0f / w.search_radius, w.gravity, 0.0f};
-                    const auto dispatch = [&](const compute::Kernel& kernel, std::uint32_t pass, std::uint32_t groups) {
-                        // Each pass reads what the previous one (or the last submission's
-                        // copy, upload or step) wrote.
-                        compute::barrier(rec, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
-                        push.counts.w = pass;
-                        kernel.dispatch(rec, std::as_bytes(std::span(&push, 1)), groups);
-                    };
-                    dispatch(*grid_, KW_FLOCK_PASS_CLEAR, groups_buckets);
-                    dispatch(*grid_, KW_FLOCK_PASS_COUNT, groups_grid);
-                    dispatch(*grid_, KW_FLOCK_PASS_SCAN, 1);
-                    dispatch(*grid_, KW_FLOCK_PASS_SCATTER, groups_grid);
-                    dispatch(*step_, 0u, groups_birds);
-                    slot_ = 1u - slot_;
-                }
-            }
+            for (std::uint32_t k = 0; k < m; ++k) record_frame(rec, k, static_cast<std::uint32_t>(f), static_cast<std::uint32_t>(a));
             compute::barrier(rec, compute::Stage::Compute, compute::Stage::Transfer | compute::Stage::Host);
             auto submission = queue.submit(std::move(recording).value());
             if (!submission) return submission.error();
@@ -119,10 +99,79 @@ public:
         return {};
     }
 
+    Result<void> record(VkCommandBuffer cmd, bool first, std::span<const gpu::FlockParamsGpu> flocks,
+                        std::span<const gpu::FlockAgentGpu> agents) override {
+        const FlockWorld& w = *world_;
+        assert(flocks.size() == w.flocks.size());
+        if (agents.size() > agent_capacity()) {
+            return make_error(Error::Kind::InvalidInput, "the flocking step: " + std::to_string(agents.size()) +
+                                                             " agents in a frame; at most " + std::to_string(agent_capacity()));
+        }
+        if (first) {
+            // Frame 0 is where the routes fly the birds (advance() never computes it): the
+            // world loads, as every domain's does at frame 0.
+            return compute::upload(*device_, buffers_[KW_FLOCK_BINDING_MOTION], bytes_of(std::span(w.first)));
+        }
+        if (!ring_) {
+            // The most one frame uploads: its flocks' parameters and every agent it may have.
+            const auto rounded = [](std::uint64_t bytes) { return (bytes + 15) / 16 * 16; };
+            const std::uint64_t bytes =
+                rounded(w.flocks.size() * sizeof(gpu::FlockParamsGpu)) + rounded(agent_capacity() * sizeof(gpu::FlockAgentGpu));
+            auto ring = compute::StagingRing::create(*device_, bytes, device_->frames_in_flight());
+            if (!ring) return ring.error();
+            ring_.emplace(std::move(ring).value());
+        }
+        ring_->next_frame();
+        auto rec = compute::Recording::borrow(*device_, cmd, &*ring_);
+        // The application's reads of the previous frame's motion (the birds' copy, its own
+        // draws or kernels) before this frame's copies and dispatches overwrite it.
+        compute::barrier(rec, embedding_consumers(*device_), compute::Stage::Transfer | compute::Stage::Compute);
+        KW_TRY(compute::upload(rec, buffers_[KW_FLOCK_BINDING_FLOCKS], bytes_of(flocks)));
+        KW_TRY(compute::upload(rec, buffers_[KW_FLOCK_BINDING_AGENTS], bytes_of(agents)));
+        record_frame(rec, 0, static_cast<std::uint32_t>(flocks.size()), static_cast<std::uint32_t>(agents.size()));
+        compute::barrier(rec, compute::Stage::Compute, embedding_consumers(*device_));
+        return {};
+    }
+
+    const compute::Buffer* motion_buffer() const override { return &buffers_[KW_FLOCK_BINDING_MOTION]; }
+
     std::string device() const override { return device_->info().name; }
     std::uint32_t validation_messages() const override { return device_->validation_messages(); }
 
 private:
+    // The substeps of the k-th frame of a recording: per substep the grid's four passes
+    // and the birds' step; the frame's motion goes to motion slot k, its flocks and
+    // agents are at k x flocks and k x agents.
+    void record_frame(compute::Recording& rec, std::uint32_t k, std::uint32_t flocks, std::uint32_t agents) {
+        const FlockWorld& w = *world_;
+        const std::uint32_t groups_birds = (count_ + KW_FLOCK_WORKGROUP_SIZE - 1) / KW_FLOCK_WORKGROUP_SIZE;
+        const std::uint32_t groups_grid = (count_ + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE;
+        const std::uint32_t groups_buckets = (w.buckets + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE;
+        for (std::uint32_t s = 0; s < w.substeps; ++s) {
+            gpu::FlockPush push{};
+            push.counts = {count_, w.buckets - 1u, agents, KW_FLOCK_PASS_CLEAR};
+            push.slots = {slot_, k, w.substeps, s};
+            push.bases = {k * flocks, k * agents, 0u, 0u};
+            push.step = {w.dt, 1.0f / w.search_radius, w.gravity, 0.0f};
+            const auto dispatch = [&](const compute::Kernel& kernel, std::uint32_t pass, std::uint32_t groups) {
+                // Each pass reads what the previous one (or the last submission's copy,
+                // upload or step) wrote.
+                compute::barrier(rec, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
+                push.counts.w = pass;
+                kernel.dispatch(rec, std::as_bytes(std::span(&push, 1)), groups);
+            };
+            dispatch(*grid_, KW_FLOCK_PASS_CLEAR, groups_buckets);
+            dispatch(*grid_, KW_FLOCK_PASS_COUNT, groups_grid);
+            dispatch(*grid_, KW_FLOCK_PASS_SCAN, 1);
+            dispatch(*grid_, KW_FLOCK_PASS_SCATTER, groups_grid);
+            dispatch(*step_, 0u, groups_birds);
+            slot_ = 1u - slot_;
+        }
+    }
+
+    // The most agents a frame has: the scene's predators and the application's.
+    std::size_t agent_capacity() const { return world_->predators.size() + kMaxFlockAgents; }
+
     // Binding `b` at least `bytes` long (no submission is pending: each is waited for).
     Result<void> grow(std::uint32_t b, std::uint64_t bytes) {
         if (buffers_[b].size() >= bytes) return {};
@@ -146,6 +195,7 @@ private:
     std::shared_ptr<compute::Device> device_;
     std::optional<compute::Kernel> grid_, step_;
     std::vector<compute::Buffer> buffers_;
+    std::optional<compute::StagingRing> ring_;  // record()'s per-frame uploads
     const FlockWorld* world_ = nullptr;
     std::uint32_t count_ = 0;
     std::uint32_t slot_ = 0;  // the state slot the next substep reads

@@ -815,6 +815,23 @@ KODAWARI_C_API kodawari_status kodawari_flock_agent_default(kodawari_flock_agent
 KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_agents(kodawari_simulation* sim, const kodawari_flock_agent* agents,
                                                                     uint32_t count);
 
+/// Records the next frame of the whole scene (its flocks, flocking birds and characters'
+/// chains) into `command_buffer`, a VkCommandBuffer of the application's in the
+/// recording state, on the device the simulation was opened on (backend options with
+/// vulkan_device): Simulation::record, with the synchronization of the record calls
+/// above. Nothing is read back: the frame's state is in the simulation's buffers
+/// (kodawari_simulation_buffer) once the application's submission completed, so
+/// kodawari_simulation_bird_poses refuses after it until the next step, while
+/// kodawari_simulation_read_chains reads the chains back (after that submission).
+/// Another backend, a null command buffer or no frame left: KODAWARI_INVALID_ARGUMENT.
+KODAWARI_C_API kodawari_status kodawari_simulation_record(kodawari_simulation* sim, void* command_buffer);
+/// Where a simulation's buffer is on its Vulkan device, for the application's shaders:
+/// BIRD_POSES (the last frame's, after a step or record: ask again after each), or the
+/// chains' CHAIN_STATES, JOINT_MOTION and JOINT_SPIN. Another backend, a buffer the scene
+/// does not have or no frame yet: KODAWARI_INVALID_ARGUMENT.
+KODAWARI_C_API kodawari_status kodawari_simulation_buffer(kodawari_simulation* sim, kodawari_device_buffer which,
+                                                          kodawari_buffer_range* out);
+
 /// What a simulation is, where it runs and how far it got.
 typedef struct kodawari_simulation_info {
     uint32_t bird_count;

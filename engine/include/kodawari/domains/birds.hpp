@@ -16,6 +16,7 @@
 #include "kodawari/device_data.hpp"
 #include "kodawari/domain.hpp"
 #include "kodawari/result.hpp"
+#include "kodawari/vulkan_embed.hpp"
 
 namespace kodawari {
 
@@ -67,6 +68,12 @@ struct BirdTiming {
 /// backend); on by Simulation::show_on() for backends whose poses are not on the
 /// renderer's device.
 KODAWARI_API void keep_bird_poses(Simulation& sim, bool keep);
+/// Where the birds' poses of the last frame stepped or recorded (Simulation::record) are
+/// on the device, to bind in the application's shaders: BirdPoseGpu per bird
+/// (<kodawari/shared/birds.h>). InvalidInput off the vulkan backends, without birds or
+/// before the first frame. The range moves with the frames (the pose ring): ask again
+/// after each step or record.
+[[nodiscard]] KODAWARI_API Result<VulkanBufferRange> bird_pose_buffer(const Simulation& sim);
 /// The bird backend's time so far (zero without birds).
 [[nodiscard]] KODAWARI_API const BirdTiming& bird_timing(const Simulation& sim);
 

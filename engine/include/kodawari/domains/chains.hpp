@@ -27,6 +27,7 @@
 #include "kodawari/rods/chain_snapshot.hpp"
 #include "kodawari/rods/kinematics.hpp"
 #include "kodawari/rods/world.hpp"
+#include "kodawari/vulkan_embed.hpp"
 
 namespace kodawari {
 
@@ -100,6 +101,10 @@ KODAWARI_API void set_view_camera(Simulation& sim, std::optional<rods::Camera> c
 /// range (rods::validate) is refused, naming the member. Frames already simulated keep
 /// theirs; a seek or a rewind replays with the field set now.
 [[nodiscard]] KODAWARI_API Result<void> set_wind(Simulation& sim, std::optional<rods::WindField> wind);
+/// Where the chains' state is on the device, to bind in the application's shaders:
+/// `which` is DeviceBuffer::RodChainStates, RodMotion or RodSpin (<kodawari/shared/rods.h>).
+/// InvalidInput off the vulkan backends, without chains or for another buffer.
+[[nodiscard]] KODAWARI_API Result<VulkanBufferRange> chain_buffer(const Simulation& sim, DeviceBuffer which);
 /// The chain domain's time so far (zero without chains).
 [[nodiscard]] KODAWARI_API const ChainTiming& chain_timing(const Simulation& sim);
 
