@@ -3,13 +3,15 @@
 //
 //   1. it creates its instance and device as it always does, and hands them to
 //      kodawari::adopt_vulkan_device();
-//   2. it makes a vulkan rod backend (a crowd of strands) and bird backend (a flock) on it;
-//   3. each frame, with two frames in flight, it records the module's step and flap into
-//      its own command buffer, then draws joints and birds as points straight from the
+//   2. it makes a vulkan rod backend (a crowd of strands) and a Simulation of a flocking
+//      flock (a scene in a string: birds that fly by their neighbours) on it;
+//   3. each frame, with two frames in flight, it moves a hawk of its own through the flock
+//      (set_flock_agents), records the module's chain step and the flock's frame into its
+//      own command buffer, then draws joints and birds as points straight from the
 //      module's buffers (its own shaders, the module's struct definitions), offscreen;
 //   4. at the end it checks that the drawn points are where a read-back of the same state
-//      puts them, and that the validation layers (with synchronization validation) said
-//      nothing.
+//      puts them (the flock: a second Simulation stepped with the same hawk), and that the
+//      validation layers (with synchronization validation) said nothing.
 //
 //   embed_vulkan [--validation] [--frames N] [--png OUT.ppm]
 //
@@ -29,7 +31,11 @@
 #include <vulkan/vulkan.h>
 
 #include <kodawari/backend_factory.hpp>
+#include <kodawari/domains/birds.hpp>
+#include <kodawari/domains/flocking.hpp>
 #include <kodawari/rods/synthetic.hpp>
+#include <kodawari/scene.hpp>
+#include <kodawari/simulation.hpp>
 #include <kodawari/shared/birds.h>
 #include <kodawari/shared/rods.h>
 #include <kodawari/version.hpp>
@@ -245,21 +251,23 @@ Match match(const View& view, const std::vector<glm::vec3>& points, const std::u
     return m;
 }
 
-// A flock on one looping route.
-kodawari::birds::BirdWorld make_flock() {
-    kodawari::birds::BirdWorld world;
-    world.frames = 600;
-    kodawari::birds::RouteSpec loop;
-    loop.points = {{0, 10, 0}, {40, 20, 0}, {40, 0, 40}, {0, 10, 40}, {-40, 20, 40}, {-40, 0, 0}, {0, 10, 0}};
-    loop.loop = true;
-    if (!world.add_route(loop, "the example's route")) fail("add_route");
-    for (std::uint32_t i = 0; i < kBirds; ++i) {
-        kodawari::gpu::BirdParams b{};
-        b.offset = {static_cast<float>(i % 17) - 8.0f, static_cast<float>(i % 5), static_cast<float>(i % 13) - 6.0f, 0.0f};
-        b.motion = {10.0f + 0.1f * static_cast<float>(i % 10), 3.0f, 1.0f, 0.013f * static_cast<float>(i % 77)};
-        world.birds.push_back(b);
-    }
-    return world;
+// A flocking flock over a field, as a scene file would have it (docs/scene-format.md):
+// 301 birds that fly by their seven nearest neighbours, drawn to a looping route.
+constexpr const char* kFlockScene = R"({"format": "kodawari-scene", "version": 1, "name": "embedded flock", "fps": 60,
+    "duration": 10, "camera": {"position": [0, 60, -120], "target": [0, 20, 0], "fov_deg": 60},
+    "flocks": [{"name": "starlings", "wing_type": "pigeon", "count": 301, "seed": 3, "speed": 12,
+                "generated_route": {"seed": 7, "segments": 6, "center": [0, 20, 0], "extent": [35, 6, 35], "loop": true},
+                "formation": {"spread": [10, 4, 10]}, "flocking": {}}]})";
+
+// The application's hawk at frame k: through where the flock starts, 30 m/s along x.
+kodawari::FlockAgent hawk_at(std::uint32_t k, const glm::vec3& start) {
+    kodawari::FlockAgent hawk;
+    hawk.kind = kodawari::FlockAgent::Kind::Predator;
+    hawk.velocity = {30.0f, 0.0f, 0.0f};
+    hawk.position = start + glm::vec3(-6.0f + 0.5f * static_cast<float>(k), 0.0f, 0.0f);
+    hawk.radius = 12.0f;
+    hawk.weight = 60.0f;
+    return hawk;
 }
 
 }  // namespace
@@ -308,9 +316,17 @@ int main(int argc, char** argv) {
     scene.frame(0, kDt, frame);
     ok_or_fail(rods->load(world, frame), "rods load");  // uploads once, on the application's queue
 
-    const kodawari::birds::BirdWorld flock = make_flock();
-    auto birds = value_of(kodawari::make_bird_backend(kodawari::BackendKind::Vulkan, options), "make_bird_backend");
-    ok_or_fail(birds->load(flock), "birds load");
+    // The flock: a Simulation of its scene on the same device (no file needed), recorded
+    // frame by frame with Simulation::record; a second one is stepped the usual way with
+    // the same hawk, to check against.
+    const auto open_flock = [&] {
+        kodawari::SimulationOptions flock_options{.backend = kodawari::BackendKind::Vulkan, .options = options};
+        auto flock_scene = value_of(kodawari::parse_scene(kFlockScene, "embedded-flock.json"), "the flock's scene");
+        return value_of(kodawari::Simulation::create(std::move(flock_scene), flock_options), "the flock's Simulation");
+    };
+    std::unique_ptr<kodawari::Simulation> flock = open_flock();
+    const kodawari::birds::BirdWorld& flock_world = kodawari::bird_world(*flock);
+    if (flock_world.birds.size() != kBirds) fail("the flock's scene has another bird count");
 
     // --- The application's drawing -------------------------------------------------------
     const VkAttachmentDescription color{0, VK_FORMAT_R8G8B8A8_UNORM, VK_SAMPLE_COUNT_1_BIT, VK_ATTACHMENT_LOAD_OP_CLEAR,
@@ -432,13 +448,22 @@ int main(int argc, char** argv) {
     ok_or_fail(rods->read(snapshot), "rods read");
     const View chain_view = fit(snapshot.positions, 0, 1, 0);
     std::vector<glm::vec3> route_points;
-    for (const kodawari::gpu::vec4& p : flock.control_points) route_points.push_back({p.x, p.y, p.z});
-    const View bird_view = fit(route_points, 0, 2, kWidth / 2);
+    for (const kodawari::gpu::vec4& p : flock_world.control_points) route_points.push_back({p.x, p.y, p.z});
+    if (flock_world.control_points.empty()) fail("the flock's route has no points");
+    const kodawari::gpu::vec4 first_point = flock_world.control_points[0];
+    const glm::vec3 route_start(first_point.x, first_point.y, first_point.z);
+    // Flocking birds trail their route's leader by up to some 20 m (docs/flocking.md) and
+    // scatter from the hawk: the view takes the route's box grown by 25 m.
+    glm::vec3 lo = route_start, hi = route_start;
+    for (const glm::vec3& p : route_points) lo = glm::min(lo, p), hi = glm::max(hi, p);
+    const View bird_view = fit({lo - glm::vec3(25.0f), hi + glm::vec3(25.0f)}, 0, 2, kWidth / 2);
 
     // --- The frame loop: two frames in flight ----------------------------------------------
     std::uint32_t first_bird = 0;
     for (std::uint32_t k = 1; k <= frames; ++k) {
         const std::uint32_t slot = k % kFramesInFlight;
+        const kodawari::FlockAgent hawk = hawk_at(k, route_start);
+        ok_or_fail(kodawari::set_flock_agents(*flock, std::span(&hawk, 1)), "set_flock_agents");
         check(vkWaitForFences(app.device, 1, &fences[slot], VK_TRUE, UINT64_MAX), "vkWaitForFences");
         check(vkResetFences(app.device, 1, &fences[slot]), "vkResetFences");
         VkCommandBuffer cmd = cmds[slot];
@@ -449,7 +474,7 @@ int main(int argc, char** argv) {
         scene.frame(k, kDt, frame);
         // The module's work, then the draws that read it, with no barrier of the
         // application's in between (the module records them: docs/embedding.md).
-        ok_or_fail(kodawari::record_simulate(*birds, cmd, 1), "record_simulate");
+        ok_or_fail(flock->record(cmd), "Simulation::record");
         ok_or_fail(kodawari::record_step(*rods, cmd, frame), "record_step");
 
         // Where this frame's results are: bound once (the ranges do not move), the bird
@@ -457,7 +482,7 @@ int main(int argc, char** argv) {
         // alignment).
         const auto states = value_of(kodawari::vulkan_buffer(*rods->device_data(), kodawari::DeviceBuffer::RodChainStates), "states");
         const auto motion = value_of(kodawari::vulkan_buffer(*rods->device_data(), kodawari::DeviceBuffer::RodMotion), "motion");
-        const auto poses = value_of(kodawari::vulkan_buffer(*birds->device_data(), kodawari::DeviceBuffer::BirdPoses), "poses");
+        const auto poses = value_of(kodawari::bird_pose_buffer(*flock), "bird_pose_buffer");
         if (motion.stride != sizeof(kodawari::gpu::RodJointMotionGpu) || poses.stride != sizeof(kodawari::gpu::BirdPoseGpu)) {
             fail("the module's strides differ from its structs");
         }
@@ -504,13 +529,20 @@ int main(int argc, char** argv) {
 
     // --- The checks: the drawn points against a read-back of the same state -------------
     ok_or_fail(rods->read(snapshot), "rods read");
-    auto reference = value_of(kodawari::make_bird_backend(kodawari::BackendKind::CpuReference, {}), "cpu-reference birds");
-    ok_or_fail(reference->load(flock), "cpu-reference load");
-    std::vector<kodawari::gpu::BirdPose> expected(std::size_t{frames} * kBirds);
-    ok_or_fail(reference->simulate(frames, {expected, {}}), "cpu-reference simulate");
+    // The flock stepped frame after frame with the same hawk: recorded frames are the
+    // stepped ones bit for bit (the module's tests check that), so its last frame is
+    // where the drawn birds must be (both ran frames 0 to frames - 1).
+    std::unique_ptr<kodawari::Simulation> stepped = open_flock();
+    std::vector<kodawari::gpu::BirdPose> expected(kBirds);
+    for (std::uint32_t k = 1; k <= frames; ++k) {
+        const kodawari::FlockAgent hawk = hawk_at(k, route_start);
+        ok_or_fail(kodawari::set_flock_agents(*stepped, std::span(&hawk, 1)), "set_flock_agents");
+        ok_or_fail(kodawari::step_birds(*stepped, 1, k == frames ? std::span(expected) : std::span<kodawari::gpu::BirdPose>{}),
+                   "the stepped flock");
+    }
     std::vector<glm::vec3> bird_points;
     for (std::uint32_t b = 0; b < kBirds; ++b) {
-        const kodawari::gpu::vec4& p = expected[std::size_t{frames - 1} * kBirds + b].position;
+        const kodawari::gpu::vec4& p = expected[b].position;
         bird_points.push_back({p.x, p.y, p.z});
     }
     const auto* rgba = static_cast<const std::uint8_t*>(targets[frames % kFramesInFlight].pixels.mapped);
@@ -520,8 +552,9 @@ int main(int argc, char** argv) {
                 rods->device().c_str());
     std::printf("chains: %u joints, %u in view, %u drawn where read back, %u lit pixels\n", static_cast<std::uint32_t>(snapshot.positions.size()),
                 chains.inside, chains.found, chains.lit);
-    std::printf("birds:  %u birds, %u in view, %u drawn where read back, %u lit pixels\n", kBirds, flock_match.inside,
-                flock_match.found, flock_match.lit);
+    std::printf("birds:  %u flocking birds and the application's hawk, %u in view, %u drawn where the stepped flock has them, "
+                "%u lit pixels\n",
+                kBirds, flock_match.inside, flock_match.found, flock_match.lit);
     std::printf("validation messages: %u%s\n", validation_messages, validation ? "" : " (validation off)");
     if (image_out != nullptr) {
         if (FILE* f = std::fopen(image_out, "wb"); f != nullptr) {
@@ -545,13 +578,14 @@ int main(int argc, char** argv) {
     expect(chains.found == chains.inside, "every joint in view drawn where it was read back");
     expect(chains.lit <= snapshot.positions.size(), "no more chain pixels than joints");
     expect(flock_match.inside >= kBirds * 9 / 10, "at least 90% of the birds in view");
-    expect(flock_match.found == flock_match.inside, "every bird in view drawn where the cpu-reference puts it");
+    expect(flock_match.found == flock_match.inside, "every bird in view drawn where the stepped flock has it");
     expect(flock_match.lit <= kBirds, "no more bird pixels than birds");
     expect(validation_messages == 0, "no validation message");
 
     // --- Teardown: the module first (it destroys only its own objects), then ours ---------
     // (every owner of the device wrapper: the backends and the options that named it).
-    birds.reset();
+    stepped.reset();
+    flock.reset();
     rods.reset();
     options.context.reset();
     device.reset();
