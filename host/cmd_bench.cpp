@@ -23,25 +23,6 @@
 
 namespace kodawari::cli {
 
-std::string json_escape(const std::string& s) {
-    std::string out;
-    for (char c : s) {
-        if (c == '"' || c == '\\') out += '\\';
-        if (static_cast<unsigned char>(c) >= 0x20) out += c;
-    }
-    return out;
-}
-
-// Writes a benchmark's JSON atomically and says so.
-int write_json(const std::string& path, const std::string& text) {
-    auto file = AtomicFile::open(path);
-    if (!file) return report(file.error());
-    file.value().write(text);
-    if (auto r = file.value().commit(); !r) return report(r.error());
-    std::printf("wrote %s\n", path.c_str());
-    return kExitOk;
-}
-
 namespace {
 
 // The benchmark flock: the three wing types in equal shares over generated looping
@@ -68,166 +49,6 @@ Scene bench_scene(std::uint32_t count, std::uint32_t frames) {
         scene.flocks.push_back(flock);
     }
     return scene;
-}
-
-// One backend's figures: a rate per repetition (bird-frames, joint-steps or frames per
-// second) and what it ran on.
-struct Measured {
-    std::string backend, device;
-    std::string isa;       // the cpu backend's SIMD instruction set, "" for the others
-    unsigned threads = 0;  // CPU threads of the cpu kinds, 0 for vulkan (lavapipe has its own)
-    std::vector<double> per_second, ms_per_frame;
-    // The device's timestamps per frame, one value per repetition; empty when the backend
-    // has none (the cpu kinds) or a repetition lacked them.
-    std::vector<double> gpu_ms_per_frame;
-    bool gpu_timed = true;
-    std::uint64_t frames = 0;
-
-    [[nodiscard]] static double median(std::vector<double> v) {
-        if (v.empty()) return 0.0;
-        std::sort(v.begin(), v.end());
-        const std::size_t n = v.size();
-        return n % 2 == 1 ? v[n / 2] : 0.5 * (v[n / 2 - 1] + v[n / 2]);
-    }
-    [[nodiscard]] double rate() const { return median(per_second); }
-    [[nodiscard]] double min() const { return per_second.empty() ? 0.0 : *std::min_element(per_second.begin(), per_second.end()); }
-    [[nodiscard]] double max() const { return per_second.empty() ? 0.0 : *std::max_element(per_second.begin(), per_second.end()); }
-    /// The median GPU ms per frame, the same statistic as the wall ms/frame beside it;
-    /// < 0 when not measured.
-    [[nodiscard]] double gpu_ms() const { return gpu_timed && !gpu_ms_per_frame.empty() ? median(gpu_ms_per_frame) : -1.0; }
-};
-
-// A backend set up and warmed up, and one timed repetition of it: returns the seconds it
-// took and adds the GPU milliseconds it measured (or makes them negative).
-struct Contender {
-    Measured measured;
-    std::function<Result<double>(double& gpu_ms)> repetition;
-};
-
-
-// What every benchmark takes: the backend options, the backends to time, how often, where
-// the JSON goes.
-struct BenchCommon {
-    BackendFlags backend;
-    std::optional<std::string> backends;
-    std::optional<std::uint64_t> repetitions;
-    std::optional<std::string> json;
-};
-
-std::vector<BackendKind> read_backends(const BenchCommon& o) {
-    // --backend NAME, which every other command takes, times that one backend here.
-    if (o.backend.backend && o.backends) throw UsageError{"--backend and --backends exclude each other: give one"};
-    if (o.backend.backend && *o.backend.backend == "auto") {
-        throw UsageError{"--backend: bench times named backends (cpu-reference, cpu, vulkan), not auto"};
-    }
-    std::vector<BackendKind> kinds;
-    std::stringstream names(o.backend.backend ? *o.backend.backend : o.backends.value_or("cpu-reference,cpu,vulkan"));
-    for (std::string name; std::getline(names, name, ',');) {
-        auto kind = parse_backend_choice(name);
-        if (!kind || !kind.value()) throw UsageError{"--backends: unknown backend \"" + name + "\""};
-        kinds.push_back(*kind.value());
-    }
-    return kinds;
-}
-
-// --repetitions: how many timed runs of every backend the medians come from.
-std::uint32_t read_repetitions(const BenchCommon& o) { return static_cast<std::uint32_t>(o.repetitions.value_or(3)); }
-
-// The ISA and threads a backend of `kind` runs with (what the table and the JSON say).
-void describe(Measured& m, BackendKind kind, const BackendOptions& options) {
-    if (kind == BackendKind::Cpu) {
-        auto isa = simd_isa(options.isa);
-        m.isa = isa ? isa.value() : "";
-        m.threads = cpu_backend_threads(options);
-    } else if (kind == BackendKind::CpuReference) {
-        m.threads = 1;
-    }
-}
-
-// The repetitions, interleaved (repetition r of every backend, then r + 1) so that a
-// noisy machine slows them alike.
-Result<void> run_repetitions(std::vector<Contender>& contenders, std::uint32_t repetitions, std::uint64_t frames_per_repetition,
-                             double work_per_frame) {
-    for (std::uint32_t r = 0; r < repetitions; ++r) {
-        for (Contender& c : contenders) {
-            double gpu_ms = 0.0;
-            auto seconds = c.repetition(gpu_ms);
-            if (!seconds) return seconds.error();
-            Measured& m = c.measured;
-            m.per_second.push_back(work_per_frame * static_cast<double>(frames_per_repetition) / seconds.value());
-            m.ms_per_frame.push_back(1e3 * seconds.value() / static_cast<double>(frames_per_repetition));
-            if (gpu_ms < 0.0) m.gpu_timed = false;
-            m.gpu_ms_per_frame.push_back(gpu_ms / static_cast<double>(frames_per_repetition));
-            m.frames += frames_per_repetition;
-        }
-    }
-    for (const Contender& c : contenders) {
-        std::printf("  %-14s done: %.4g (min %.4g, max %.4g)\n", c.measured.backend.c_str(), c.measured.rate(), c.measured.min(),
-                    c.measured.max());
-    }
-    std::fflush(stdout);
-    return {};
-}
-
-
-// The table and the --json file, the same shape for every benchmark: each backend's median
-// rate with its min and max over the repetitions, its ratio to cpu-reference and to cpu
-// (medians of the same run), the ISA and the threads.
-int report_results(const std::vector<Contender>& contenders, const char* unit, std::uint32_t repetitions,
-                   const BackendOptions& options, const std::string& json_head, const std::optional<std::string>& json_path) {
-    double reference = 0.0, cpu = 0.0;
-    for (const auto& c : contenders) {
-        if (c.measured.backend == "cpu-reference") reference = c.measured.rate();
-        if (c.measured.backend == "cpu") cpu = c.measured.rate();
-    }
-    auto ratio = [](double value, double base) {
-        char text[32] = "-";
-        if (base > 0.0) std::snprintf(text, sizeof text, "%.2fx", value / base);
-        return std::string(text);
-    };
-    auto isa = simd_isa(options.isa);
-    const std::string cpu_isa = isa ? isa.value() : "";
-    const unsigned cpu_threads = cpu_backend_threads(options);
-    std::printf("\nmedians of %u repetitions (min and max beside them), after warm-up; cpu: %s, %u threads\n", repetitions,
-                cpu_isa.c_str(), cpu_threads);
-    std::printf("%-14s %-36s %14s %11s %11s %10s %12s %9s %7s %-7s %7s\n", "backend", "device", unit, "min", "max", "ms/frame",
-                "GPU ms/frame", "vs c-ref", "vs cpu", "isa", "threads");
-    bool gpu_above_wall = false;
-    for (const auto& c : contenders) {
-        const Measured& m = c.measured;
-        char gpu[32] = "-";
-        if (m.gpu_ms() >= 0.0) std::snprintf(gpu, sizeof gpu, "%.3f", m.gpu_ms());
-        if (m.gpu_ms() > Measured::median(m.ms_per_frame)) gpu_above_wall = true;
-        std::printf("%-14s %-36s %14.4g %11.4g %11.4g %10.3f %12s %9s %7s %-7s %7s\n", m.backend.c_str(), m.device.c_str(), m.rate(),
-                    m.min(), m.max(), Measured::median(m.ms_per_frame), gpu, ratio(m.rate(), reference).c_str(),
-                    ratio(m.rate(), cpu).c_str(), m.isa.empty() ? "-" : m.isa.c_str(),
-                    m.threads == 0 ? "-" : std::to_string(m.threads).c_str());
-    }
-    std::printf("(ms/frame: wall time per frame; GPU ms/frame: the device's timestamps around the frame's dispatches, "
-                "host preparation and waiting left out, '-' without timestamps; both medians of the repetitions)\n");
-    // The timestamps bracket the dispatches alone, so they cannot exceed the wall time of
-    // the same frames unless the device's clock disagrees with the host's (lavapipe's
-    // timestamps are the CPU's clock, read by its own threads).
-    if (gpu_above_wall) std::printf("note: GPU time above wall time: the device's timestamp clock disagrees with the host's\n");
-    if (!json_path) return kExitOk;
-    std::string text = json_head + ",\"isa\":\"" + json_escape(cpu_isa) + "\",\"threads\":" + std::to_string(cpu_threads) +
-                       ",\"repetitions\":" + std::to_string(repetitions) + ",\"results\":[";
-    for (std::size_t i = 0; i < contenders.size(); ++i) {
-        const Measured& m = contenders[i].measured;
-        char numbers[320];
-        std::snprintf(numbers, sizeof numbers,
-                      "\"per_second\":%.6g,\"min\":%.6g,\"max\":%.6g,\"ms_per_frame\":%.6g,\"gpu_ms_per_frame\":%s,"
-                      "\"vs_cpu_reference\":%s,\"vs_cpu\":%s",
-                      m.rate(), m.min(), m.max(), Measured::median(m.ms_per_frame),
-                      m.gpu_ms() >= 0.0 ? std::to_string(m.gpu_ms()).c_str() : "null",
-                      reference > 0.0 ? std::to_string(m.rate() / reference).c_str() : "null",
-                      cpu > 0.0 ? std::to_string(m.rate() / cpu).c_str() : "null");
-        text += (i ? "," : "") + std::string("{\"backend\":\"") + m.backend + "\",\"device\":\"" + json_escape(m.device) + "\"," +
-                numbers + ",\"isa\":" + (m.isa.empty() ? "null" : "\"" + m.isa + "\"") +
-                ",\"threads\":" + (m.threads == 0 ? "null" : std::to_string(m.threads)) + "}";
-    }
-    text += "]}\n";
-    return write_json(*json_path, text);
 }
 
 // kodawari bench chains: every backend on the same procedural chains (rods/synthetic.hpp),
@@ -488,14 +309,6 @@ int bench_birds(const BirdsOptions& o) {
     return report_results(contenders, "bird-frames/s", repetitions, choice.options, head, json_path);
 }
 
-void add_common(CLI::App& c, BenchCommon& o) {
-    add_text(c, "--backends", o.backends, "LIST", "the backends to time, comma-separated (default: cpu-reference,cpu,vulkan)");
-    add_count(c, "--repetitions", o.repetitions, 3, 1000, "timed runs of every backend, interleaved (default: 3)");
-    add_text(c, "--json", o.json, "FILE.json", "also write the results as JSON (default: none)");
-    add_backend_options(c, o.backend);
-    c.get_option("--backend")->description("time this one backend, as --backends NAME (default: the --backends list)");
-}
-
 }  // namespace
 
 Command add_bench(CLI::App& app) {
@@ -532,6 +345,8 @@ Command add_bench(CLI::App& app) {
     add_count(*cr, "--frames", crowd->frames, 1, 100'000, "frames per repetition (default: 60)");
     add_common(*cr, crowd->common);
 
+    std::function<int()> run_flock;
+    CLI::App* fl = add_bench_flock(*bench, run_flock);
     std::function<int()> run_view;
     add_bench_view(*bench, run_view);
 
@@ -539,6 +354,7 @@ Command add_bench(CLI::App& app) {
                 if (b->parsed()) return bench_birds(*birds);
                 if (ch->parsed()) return bench_chains(*chains);
                 if (cr->parsed()) return bench_crowd(*crowd);
+                if (fl->parsed()) return run_flock();
                 return run_view();
             }};
 }

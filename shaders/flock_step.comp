@@ -21,6 +21,7 @@ layout(std430, binding = KW_FLOCK_BINDING_MOTION) writeonly buffer Motion { Bird
 layout(push_constant) uniform Push { FlockPush push; };
 
 #define KW_XYZ(v) ((v).xyz)
+#define KW_INOUT(T) inout T
 FlockParamsGpu kw_flock(uint f) { return flocks[push.bases.x + f]; }
 FlockBirdGpu kw_bird(uint i) { return birds[i]; }
 FlockStateGpu kw_state(uint i) { return states[push.slots.x * push.counts.x + i]; }

@@ -38,8 +38,9 @@ ALLOWED_THIRD_PARTY = {
     "vulkan": {"vulkan"},
     "io": {"tiny_gltf", "nlohmann"},
     "render": {"vulkan", "stb"},
-    # Part files' JSON header (simulation/shards.cpp).
-    "engine": {"vulkan", "nlohmann"},
+    # Part files' JSON header (simulation/shards.cpp); the flocking cpu backend's
+    # hand-tuned search (domains/flocking/flock_search_simd.cpp, with simd/dispatch.hpp).
+    "engine": {"vulkan", "nlohmann", "hwy"},
     # The C API's device embedding converts the application's handles (vulkan_core.h's C
     # types) for kodawari/vulkan_embed.hpp; kodawari.h itself names no Vulkan type.
     "c": {"vulkan"},

@@ -83,7 +83,7 @@ check "render --help lists --size with its default" bash -c "test $? -eq 0 && gr
 "$bin" bench chains --help >"$work/chains-help.out" 2>&1
 check "bench chains --help: --frames with its default, --steps documented as the old spelling" bash -c \
     "grep -q -- '--frames N.*(default: 10)' '$work/chains-help.out' && grep -q -- '--steps N.*old spelling of --frames' '$work/chains-help.out'"
-for command in run merge validate "bench birds" "bench chains" "bench crowd" "bench view" rig sketch render view info schema completion; do
+for command in run merge validate "bench birds" "bench chains" "bench crowd" "bench flock" "bench view" rig sketch render view info schema completion; do
     # shellcheck disable=SC2086
     "$bin" $command --help >"$work/cmd-help.out" 2>&1
     # An option whose value name is longer than the column (--measure's choices) has its
@@ -171,6 +171,11 @@ check "rod export passes glTF-Validator" node tests/tools/validate_gltf.mjs "$wo
 check "validate passes on the bunny" grep -q "validate: PASS" "$work/validate-bunny.out"
 "$bin" bench chains --count 130 --joints 9 --frames 2 --json "$work/bench-chains.json" >/dev/null 2>&1
 check "bench chains json" bash -c "node -e 'const r=require(\"$work/bench-chains.json\"); if (r.benchmark!==\"chains\"||r.results.length!==3||!(r.results[0].per_second>0)) process.exit(1)'"
+# bench flock: every backend on one flocking flock, in bird-steps/s, and where the CPU
+# backends' time went (the grid, the neighbour search, the rules).
+"$bin" bench flock --count 301 --frames 2 --json "$work/bench-flock.json" >"$work/bench-flock.out" 2>&1
+check "bench flock json" bash -c "node -e 'const r=require(\"$work/bench-flock.json\"); if (r.benchmark!==\"flock\"||r.count!==301||r.results.length!==3||!(r.results[1].per_second>0)) process.exit(1)'"
+check "bench flock says the search's share" grep -q '^cpu-reference  *[0-9.]*  *[0-9.]*  *[0-9.]*  *[0-9.]*$' "$work/bench-flock.out"
 # The old spellings --chains and --steps still work for one release, saying so on stderr.
 "$bin" bench chains --chains 130 --joints 9 --steps 2 --backends cpu --json "$work/bench-steps.json" >/dev/null 2>"$work/bench-steps.err"
 check "bench chains --steps and --chains still work, deprecated" bash -c "test $? -eq 0 && grep -q -- '--steps is deprecated.*use --frames' '$work/bench-steps.err' && grep -q -- '--chains is deprecated.*use --count' '$work/bench-steps.err' && node -e 'const r=require(\"$work/bench-steps.json\"); if (r.chains!==130||r.steps!==2) process.exit(1)'"

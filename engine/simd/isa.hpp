@@ -8,6 +8,7 @@
 #include <string>
 #include <string_view>
 
+#include "core/internal_api.hpp"
 #include "kodawari/result.hpp"
 
 namespace kodawari::simd {
@@ -20,7 +21,7 @@ struct Isa {
 };
 
 /// The instruction set for BackendOptions::isa == `requested` (kodawari::simd_isa()).
-[[nodiscard]] Result<Isa> choose_isa(std::string_view requested);
+[[nodiscard]] KODAWARI_INTERNAL Result<Isa> choose_isa(std::string_view requested);
 
 /// Chains, birds or instances per batch: a batch is one AVX-512 vector of floats, two AVX2
 /// vectors, four SSE4 ones, so that the backends' structure-of-arrays layout is the same

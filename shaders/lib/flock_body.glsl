@@ -7,6 +7,7 @@
 //   FlockStateGpu kw_state(uint i)       (this frame's, the slot read)
 //   uint kw_bucket_start(uint b)  uint kw_bucket_count(uint b)  uint kw_sorted(uint s)
 //   FlockAgentGpu kw_agent(uint a)
+//   KW_INOUT(T)                a parameter read and written: GLSL's inout T, C++'s T&
 // and lib/flock_hash.glsl's functions.
 // Float literals carry an f (GLSL accepts it; C++ needs it: no double arithmetic here),
 // conversions are explicit, and nothing depends on the order candidates are visited in:
@@ -28,26 +29,57 @@ struct FlockStep {
     vec3 acceleration;
 };
 
+// A bird's neighbours: the k nearest, nearest first, by (distance^2, index).
+struct FlockNeighbours {
+    uint found;
+    float d2[KW_FLOCK_MAX_NEIGHBOURS];
+    uint j[KW_FLOCK_MAX_NEIGHBOURS];
+};
+
 // Whether candidate (d2, j) comes before (bd, bj): nearer, or as near with a lower index.
 bool flock_before(float d2, uint j, float bd, uint bj) { return d2 < bd || (d2 == bd && j < bj); }
 
-FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_radius) {
+// The direction a bird flies (+z when it is still): its field of view's axis.
+vec3 flock_forward(vec3 v) {
+    const float speed = length(v);
+    return speed > 1e-6f ? v / speed : vec3(0.0f, 0.0f, 1.0f);
+}
+
+// How many neighbours a bird of `flock` heeds: k, or all it finds (up to the most) with a
+// metric radius.
+uint flock_k(FlockParamsGpu flock) {
+    return flock.counts.y == 1u ? uint(KW_FLOCK_MAX_NEIGHBOURS) : min(flock.counts.x, uint(KW_FLOCK_MAX_NEIGHBOURS));
+}
+
+// Candidate j at offset d (d2 = dot(d, d)) offered to a bird's sorted list of k.
+void flock_offer(KW_INOUT(FlockNeighbours) nb, uint k, float d2, uint j) {
+    if (nb.found == k && !flock_before(d2, j, nb.d2[k - 1u], nb.j[k - 1u])) return;
+    // Insertion into the sorted list, dropping the farthest when full.
+    uint at = nb.found < k ? nb.found : k - 1u;
+    while (at > 0u && flock_before(d2, j, nb.d2[at - 1u], nb.j[at - 1u])) {
+        nb.d2[at] = nb.d2[at - 1u];
+        nb.j[at] = nb.j[at - 1u];
+        at -= 1u;
+    }
+    nb.d2[at] = d2;
+    nb.j[at] = j;
+    if (nb.found < k) nb.found += 1u;
+}
+
+// The neighbour search (the grid's part of the step): the k nearest birds of the flock
+// within the search radius and the field of view. The 27 cells round the bird's hold
+// every bird within the radius.
+FlockNeighbours flock_neighbours(uint i, uint mask, float inv_radius) {
     const FlockBirdGpu bird = kw_bird(i);
     const FlockParamsGpu flock = kw_flock(bird.ids.x);
     const FlockStateGpu state = kw_state(i);
     const vec3 p = KW_XYZ(state.position);
-    const vec3 v = KW_XYZ(state.velocity);
-    const float speed = length(v);
-    const vec3 forward = speed > 1e-6f ? v / speed : vec3(0.0f, 0.0f, 1.0f);
+    const vec3 forward = flock_forward(KW_XYZ(state.velocity));
     const float radius = flock.radii.x;
     const float radius2 = radius * radius;
-    const uint k = flock.counts.y == 1u ? uint(KW_FLOCK_MAX_NEIGHBOURS) : min(flock.counts.x, uint(KW_FLOCK_MAX_NEIGHBOURS));
-
-    // The k nearest birds of the flock within the search radius and the field of view:
-    // the 27 cells round the bird's hold every bird within the radius.
-    float best_d2[KW_FLOCK_MAX_NEIGHBOURS];
-    uint best_j[KW_FLOCK_MAX_NEIGHBOURS];
-    uint found = 0u;
+    const uint k = flock_k(flock);
+    FlockNeighbours nb;
+    nb.found = 0u;
     uint visited[27];
     uint visited_count = 0u;
     const ivec3 home = flock_cell(p, inv_radius);
@@ -71,21 +103,26 @@ FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_ra
                     if (d2 > radius2) continue;
                     // Behind the bird, in its blind angle: not seen.
                     if (dot(d, forward) < flock.radii.z * sqrt(d2)) continue;
-                    if (found == k && !flock_before(d2, j, best_d2[k - 1u], best_j[k - 1u])) continue;
-                    // Insertion into the sorted list, dropping the farthest when full.
-                    uint at = found < k ? found : k - 1u;
-                    while (at > 0u && flock_before(d2, j, best_d2[at - 1u], best_j[at - 1u])) {
-                        best_d2[at] = best_d2[at - 1u];
-                        best_j[at] = best_j[at - 1u];
-                        at -= 1u;
-                    }
-                    best_d2[at] = d2;
-                    best_j[at] = j;
-                    if (found < k) found += 1u;
+                    flock_offer(nb, k, d2, j);
                 }
             }
         }
     }
+    return nb;
+}
+
+// The rules' part of the step, given the bird's neighbours (flock_neighbours(), or the cpu
+// backend's own search, which finds the same list).
+FlockStep flock_rules(uint i, FlockNeighbours nb, uint agents, float dt) {
+    const FlockBirdGpu bird = kw_bird(i);
+    const FlockParamsGpu flock = kw_flock(bird.ids.x);
+    const FlockStateGpu state = kw_state(i);
+    const vec3 p = KW_XYZ(state.position);
+    const vec3 v = KW_XYZ(state.velocity);
+    const float speed = length(v);
+    const vec3 forward = flock_forward(v);
+    const float radius = flock.radii.x;
+    const uint found = nb.found;
 
     // Reynolds' rules over the neighbours, nearest first.
     vec3 separation = vec3(0.0f);
@@ -93,9 +130,9 @@ FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_ra
     vec3 centre = vec3(0.0f);
     const float r_sep = flock.radii.y;
     for (uint n = 0u; n < found; ++n) {
-        const FlockStateGpu other = kw_state(best_j[n]);
+        const FlockStateGpu other = kw_state(nb.j[n]);
         const vec3 d = KW_XYZ(other.position) - p;
-        const float dist = sqrt(best_d2[n]);
+        const float dist = sqrt(nb.d2[n]);
         // Hildenbrandt et al.'s separation: full within r_sep, a Gaussian beyond it; r_sep
         // grows along the flight direction by (1 + front cos^2), keeping a longer gap to
         // the bird ahead or behind than to the side (ours, docs/flocking.md).
@@ -207,4 +244,9 @@ FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_ra
     result.position = p + dt * v1;
     result.acceleration = (v1 - v) / dt;
     return result;
+}
+
+// The whole step of bird i.
+FlockStep flock_step_bird(uint i, uint mask, uint agents, float dt, float inv_radius) {
+    return flock_rules(i, flock_neighbours(i, mask, inv_radius), agents, dt);
 }

@@ -15,6 +15,7 @@
 #include "domains/flocking/flock_world.hpp"
 #include "kodawari/backend.hpp"
 #include "kodawari/domain.hpp"
+#include "kodawari/domains/flocking.hpp"
 #include "kodawari/result.hpp"
 
 namespace kodawari::compute {
@@ -48,6 +49,8 @@ public:
     /// Where record() leaves the frame's motion; null on the CPU.
     [[nodiscard]] virtual const compute::Buffer* motion_buffer() const { return nullptr; }
     [[nodiscard]] virtual std::string device() const = 0;
+    /// Its time since load() (kodawari/domains/flocking.hpp); zeros where not measured.
+    [[nodiscard]] virtual FlockingTiming timing() const { return {}; }
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
 };
 
@@ -55,8 +58,11 @@ public:
 /// motion_buffer()); null for another domain or off the vulkan backend.
 [[nodiscard]] const compute::Buffer* flocking_motion_buffer(const Domain& domain);
 
-/// cpu-reference (threads = 1) or cpu.
-[[nodiscard]] std::unique_ptr<FlockBackend> make_cpu_flock_backend(unsigned threads);
+/// cpu-reference: flock_body.glsl bird after bird on one thread.
+[[nodiscard]] std::unique_ptr<FlockBackend> make_reference_flock_backend();
+/// cpu: the same rules over `options`' threads with the hand-tuned search of its
+/// instruction set (options.isa; an unknown one is an error naming it).
+[[nodiscard]] Result<std::unique_ptr<FlockBackend>> make_cpu_flock_backend(const BackendOptions& options);
 /// The GPU's, on `options.context`.
 [[nodiscard]] Result<std::unique_ptr<FlockBackend>> make_vulkan_flock_backend(const BackendOptions& options);
 

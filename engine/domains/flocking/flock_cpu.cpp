@@ -1,7 +1,8 @@
 // The flocking step on the CPU: the grid (flock_grid.comp's passes as one counting sort in
 // bird order) and shaders/lib/flock_body.glsl compiled as C++ (flock_kernel.hpp), bird
-// after bird on one thread (cpu-reference) or over the cpu backend's threads (cpu: the
-// same body per bird, so the same bits).
+// after bird on one thread (cpu-reference) or over the cpu backend's threads, where the
+// neighbour search is the hand-tuned one of flock_search_simd.cpp (the same lists, so the
+// same bits) and the rules the shared body.
 #include "domains/flocking/flock_kernel.hpp"
 
 #include <algorithm>
@@ -38,10 +39,16 @@ void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, st
 
 }  // namespace kodawari::flocking
 
+#include <chrono>
+#include <mutex>
+#include <optional>
 #include <string>
+#include <vector>
 
 #include "core/parallel.hpp"
 #include "domains/flocking/flock_backend.hpp"
+#include "domains/flocking/flock_search.hpp"
+#include "simd/isa.hpp"
 
 namespace kodawari::flocking {
 
@@ -49,10 +56,14 @@ namespace {
 
 class CpuFlockBackend final : public FlockBackend {
 public:
-    explicit CpuFlockBackend(unsigned threads) : threads_(threads) {}
+    /// `isa`: the cpu backend's instruction set, whose hand-tuned search it runs; none:
+    /// cpu-reference, flock_body.glsl's search.
+    CpuFlockBackend(unsigned threads, std::optional<simd::Isa> isa)
+        : threads_(threads), isa_(std::move(isa)), search_(isa_ ? flock_search_kernel(isa_->target) : nullptr) {}
 
     Result<void> load(const FlockWorld& world) override {
         world_ = &world;
+        timing_ = {};
         state_ = world.initial;
         next_.resize(state_.size());
         return {};
@@ -66,42 +77,93 @@ public:
         const float inv_radius = 1.0f / w.search_radius;
         for (std::uint32_t k = 0; k < frames; ++k) {
             for (std::uint32_t s = 0; s < w.substeps; ++s) {
+                const auto grid_start = Clock::now();
                 build_grid(state_, inv_radius, mask, cells_, buckets_, sorted_);
+                if (search_ != nullptr) sorted_birds_.fill(state_, w.birds, sorted_);
+                timing_.grid_seconds += seconds(grid_start, Clock::now());
                 glsl::Kernel kernel{flocks.subspan(k * f_count, f_count), w.birds, state_, buckets_, sorted_,
                                           agents.subspan(k * a_count, a_count)};
+                const SearchArgs search_args{&kernel, &sorted_birds_, mask, inv_radius};
                 const bool last = s + 1 == w.substeps;
                 gpu::BirdMotionGpu* motion = out.data() + std::size_t{k} * n;
+                const auto agent_count = static_cast<std::uint32_t>(a_count);
+                // cpu-reference goes bird after bird; the cpu backend in the grid's order,
+                // where birds of a cell come together (flock_search.hpp).
+                if (search_ == nullptr && order_.size() != n) {
+                    order_.resize(n);
+                    for (std::size_t i = 0; i < n; ++i) order_[i] = static_cast<std::uint32_t>(i);
+                }
+                const std::uint32_t* order = search_ != nullptr ? sorted_.data() : order_.data();
                 parallel_for(n, threads_, [&](std::size_t begin, std::size_t end) {
-                    for (std::size_t i = begin; i < end; ++i) {
-                        const auto b = static_cast<std::uint32_t>(i);
-                        const glsl::Kernel::FlockStep step =
-                            kernel.flock_step_bird(b, mask, static_cast<std::uint32_t>(a_count), w.dt, inv_radius);
-                        next_[i].position = {step.position.x, step.position.y, step.position.z, 0.0f};
-                        next_[i].velocity = {step.velocity.x, step.velocity.y, step.velocity.z, 0.0f};
-                        if (last) {
-                            motion[i].position = next_[i].position;
-                            motion[i].velocity = next_[i].velocity;
-                            motion[i].acceleration = {step.acceleration.x, step.acceleration.y, step.acceleration.z, 0.0f};
+                    // In blocks: every bird's neighbours, then every bird's rules, each
+                    // phase timed (two clock reads a block of 256 birds).
+                    std::vector<glsl::Kernel::FlockNeighbours> found(kBlock);
+                    double search = 0.0, rules = 0.0;
+                    for (std::size_t b0 = begin; b0 < end; b0 += kBlock) {
+                        const std::size_t b1 = std::min(end, b0 + kBlock);
+                        const auto t0 = Clock::now();
+                        if (search_ != nullptr) {
+                            search_(search_args, static_cast<std::uint32_t>(b0), static_cast<std::uint32_t>(b1 - b0), found.data());
+                        } else {
+                            for (std::size_t o = b0; o < b1; ++o) found[o - b0] = kernel.flock_neighbours(order[o], mask, inv_radius);
                         }
+                        const auto t1 = Clock::now();
+                        for (std::size_t o = b0; o < b1; ++o) {
+                            const std::uint32_t i = order[o];
+                            const glsl::Kernel::FlockStep step = kernel.flock_rules(i, found[o - b0], agent_count, w.dt);
+                            next_[i].position = {step.position.x, step.position.y, step.position.z, 0.0f};
+                            next_[i].velocity = {step.velocity.x, step.velocity.y, step.velocity.z, 0.0f};
+                            if (last) {
+                                motion[i].position = next_[i].position;
+                                motion[i].velocity = next_[i].velocity;
+                                motion[i].acceleration = {step.acceleration.x, step.acceleration.y, step.acceleration.z, 0.0f};
+                            }
+                        }
+                        const auto t2 = Clock::now();
+                        search += seconds(t0, t1);
+                        rules += seconds(t1, t2);
                     }
+                    const std::lock_guard lock(timing_mutex_);
+                    timing_.search_seconds += search;
+                    timing_.rules_seconds += rules;
                 });
+                timing_.bird_steps += n;
                 state_.swap(next_);
             }
         }
         return {};
     }
 
-    std::string device() const override { return std::to_string(threads_) + (threads_ == 1 ? " thread" : " threads"); }
+    std::string device() const override {
+        return std::to_string(threads_) + (threads_ == 1 ? " thread" : " threads") + (isa_ ? ", " + isa_->name : std::string());
+    }
+    FlockingTiming timing() const override { return timing_; }
 
 private:
+    using Clock = std::chrono::steady_clock;
+    static double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+    static constexpr std::size_t kBlock = 256;
+
     unsigned threads_;
+    std::optional<simd::Isa> isa_;
+    SearchFn search_;
+    SortedBirds sorted_birds_;  // the hand-tuned search's copy of the grid
     const FlockWorld* world_ = nullptr;
     std::vector<gpu::FlockStateGpu> state_, next_;
     std::vector<std::uint32_t> cells_, buckets_, sorted_;
+    std::vector<std::uint32_t> order_;  // cpu-reference's: 0, 1, 2, ...
+    FlockingTiming timing_;
+    std::mutex timing_mutex_;
 };
 
 }  // namespace
 
-std::unique_ptr<FlockBackend> make_cpu_flock_backend(unsigned threads) { return std::make_unique<CpuFlockBackend>(threads); }
+std::unique_ptr<FlockBackend> make_reference_flock_backend() { return std::make_unique<CpuFlockBackend>(1, std::nullopt); }
+
+Result<std::unique_ptr<FlockBackend>> make_cpu_flock_backend(const BackendOptions& options) {
+    auto isa = simd::choose_isa(options.isa);
+    if (!isa) return isa.error();
+    return std::unique_ptr<FlockBackend>(std::make_unique<CpuFlockBackend>(cpu_backend_threads(options), std::move(isa).value()));
+}
 
 }  // namespace kodawari::flocking

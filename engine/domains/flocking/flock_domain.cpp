@@ -30,8 +30,13 @@ public:
 
     Result<void> open(const DomainSetup& setup, std::span<Domain* const>) override {
         switch (setup.kind) {
-            case BackendKind::CpuReference: backend_ = flocking::make_cpu_flock_backend(1); break;
-            case BackendKind::Cpu: backend_ = flocking::make_cpu_flock_backend(cpu_backend_threads(setup.options)); break;
+            case BackendKind::CpuReference: backend_ = flocking::make_reference_flock_backend(); break;
+            case BackendKind::Cpu: {
+                auto made = flocking::make_cpu_flock_backend(setup.options);
+                if (!made) return made.error();
+                backend_ = std::move(made).value();
+                break;
+            }
             case BackendKind::Vulkan: {
                 auto made = flocking::make_vulkan_flock_backend(setup.options);
                 if (!made) return made.error();
@@ -121,6 +126,7 @@ public:
 
     std::span<const gpu::BirdMotionGpu> motion() const { return motion_; }
     const compute::Buffer* motion_buffer() const { return backend_ ? backend_->motion_buffer() : nullptr; }
+    FlockingTiming timing() const { return backend_ ? backend_->timing() : FlockingTiming{}; }
     void set_agents(std::vector<gpu::FlockAgentGpu> agents) { app_agents_ = std::move(agents); }
 
 private:
@@ -186,6 +192,11 @@ Result<void> set_flock_agents(Simulation& sim, std::span<const FlockAgent> agent
 std::span<const gpu::BirdMotionGpu> flocking_motion(const Domain& domain) {
     const auto* flock = dynamic_cast<const FlockingDomain*>(&domain);
     return flock ? flock->motion() : std::span<const gpu::BirdMotionGpu>{};
+}
+
+FlockingTiming flocking_timing(const Domain& domain) {
+    const auto* flock = dynamic_cast<const FlockingDomain*>(&domain);
+    return flock ? flock->timing() : FlockingTiming{};
 }
 
 namespace flocking {

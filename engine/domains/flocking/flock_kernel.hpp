@@ -39,6 +39,7 @@ struct Kernel {
     std::span<const FlockAgentGpu> agents_in;
 
 #define KW_XYZ(v) kw_xyz(v)
+#define KW_INOUT(T) T&
     FlockParamsGpu kw_flock(uint f) const { return flocks[f]; }
     FlockBirdGpu kw_bird(uint i) const { return birds_in[i]; }
     FlockStateGpu kw_state(uint i) const { return states[i]; }
@@ -47,6 +48,7 @@ struct Kernel {
     uint kw_sorted(uint s) const { return sorted[s]; }
     FlockAgentGpu kw_agent(uint a) const { return agents_in[a]; }
 #include "lib/flock_body.glsl"
+#undef KW_INOUT
 #undef KW_XYZ
 };
 

@@ -71,6 +71,19 @@ inline constexpr std::uint32_t kMaxFlockAgents = 64;
 /// nothing to do.
 [[nodiscard]] KODAWARI_API Result<void> set_flock_agents(Simulation& sim, std::span<const FlockAgent> agents);
 
+/// Where a flocking domain's time went since it opened, on the CPU backends (zeros on
+/// vulkan, whose passes run in one submission): the grid's counting sort (one thread),
+/// the neighbour search (each bird's k nearest in view) and the rules and limits, the last
+/// two summed over the threads that ran them (so their sum is thread-seconds).
+/// `kodawari bench flock` reports the search's share.
+struct FlockingTiming {
+    double grid_seconds = 0.0;
+    double search_seconds = 0.0;
+    double rules_seconds = 0.0;
+    std::uint64_t bird_steps = 0;  ///< birds x substeps stepped
+};
+[[nodiscard]] KODAWARI_API FlockingTiming flocking_timing(const Domain& domain);
+
 /// The motion the flocking domain `domain` gave for the frames of its last step():
 /// frames x BirdWorld::driven, frame-major; empty for another domain.
 [[nodiscard]] KODAWARI_API std::span<const gpu::BirdMotionGpu> flocking_motion(const Domain& domain);

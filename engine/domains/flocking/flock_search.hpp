@@ -1,0 +1,52 @@
+#pragma once
+// The cpu backend's neighbour search (flock_search_simd.cpp): an implementation of its own,
+// hand-tuned with Highway, of what shaders/lib/flock_body.glsl's flock_neighbours() finds
+// (cpu-reference and vulkan run that one), held to it bit for bit: the same candidates,
+// the same distance arithmetic, and a result (the k nearest by distance and index, a
+// total order) that does not depend on the order candidates are visited in.
+//
+// Why it is faster: the grid's birds are copied each substep into arrays in bucket order
+// (SortedBirds), so a cell's candidates are contiguous floats a vector compares at once
+// (16 on AVX-512), where the reference reads each candidate's 64-byte parameters and
+// 32-byte state by index; only the few that pass go through the scalar insertion.
+
+#include <cstdint>
+#include <span>
+#include <vector>
+
+#include "domains/flocking/flock_kernel.hpp"
+
+namespace kodawari::flocking {
+
+/// The grid's birds in its sorted order (slot s holds bird sorted[s]), as arrays padded
+/// with kSortedPad unused slots so that a vector load past a bucket's end stays inside.
+struct SortedBirds {
+    static constexpr std::size_t kSortedPad = 16;
+    std::vector<float> x, y, z;
+    std::vector<float> vx, vy, vz;
+    std::vector<float> flock;         ///< the bird's flock (exact as a float below 2^24)
+    std::vector<std::uint32_t> bird;  ///< the bird's index
+
+    /// Fills the arrays from this substep's states and grid (build_grid()'s `sorted`).
+    void fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
+              std::span<const std::uint32_t> sorted);
+};
+
+/// What one call of the search reads.
+struct SearchArgs {
+    const glsl::Kernel* kernel = nullptr;
+    const SortedBirds* sorted = nullptr;
+    std::uint32_t mask = 0;
+    float inv_radius = 0.0f;
+};
+
+/// Fills out[n] with the neighbours of the bird in grid slot first_slot + n (SortedBirds::
+/// bird), n < count: birds in the grid's order, so that the birds of one cell come
+/// together, share its 27 buckets' candidates, and are read in order.
+using SearchFn = void (*)(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t count,
+                          glsl::Kernel::FlockNeighbours* out);
+
+/// The search compiled for the Highway target `target` (simd::Isa::target).
+[[nodiscard]] SearchFn flock_search_kernel(std::int64_t target);
+
+}  // namespace kodawari::flocking

@@ -1,0 +1,171 @@
+// The cpu backend's neighbour search for every instruction set (flock_search.hpp): per
+// bird, the 27 cells round its own (a bucket visited once, as flock_neighbours() does),
+// each bucket's contiguous candidates compared a vector at a time, the passing lanes
+// offered to the bird's sorted list by the shared flock_offer().
+//
+// Exactness: the distance is (dx dx + dy dy) + dz dz and the field-of-view test
+// (dx fx + dy fy) + dz fz < cos sqrt(d2), GLM's dot() operation for operation, without
+// fused multiply-add (the library is built with -ffp-contract=off; Highway's Mul and Add
+// never fuse); the tests are the reference's negated (a NaN fails both the same way).
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "domains/flocking/flock_search_simd.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include <bit>
+#include <vector>
+
+#include "domains/flocking/flock_search.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace kodawari::flocking {
+namespace HWY_NAMESPACE {
+namespace {
+
+namespace hn = hwy::HWY_NAMESPACE;
+
+void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t count, glsl::Kernel::FlockNeighbours* out) {
+    using D = hn::ScalableTag<float>;
+    const D d;
+    const std::size_t lanes = hn::Lanes(d);
+    glsl::Kernel kernel = *args.kernel;  // the body's functions are not const
+    const SortedBirds& sorted = *args.sorted;
+    HWY_ALIGN float d2_lanes[hn::MaxLanes(d)];
+    // The candidates of the 27 cells round the last bird's cell (each bucket once),
+    // gathered into contiguous arrays: birds come in the grid's order, so the next bird is
+    // usually in the same cell and scans the same list, whole vectors at a time.
+    std::vector<float> cx, cy, cz, cf;
+    std::vector<std::uint32_t> cb;
+    std::size_t used = 0;  // candidates in the arrays
+    std::uint32_t visited[27];
+    glm::ivec3 list_home(0);
+    bool have_list = false;
+    for (std::uint32_t n = 0; n < count; ++n) {
+        // The bird in grid slot first_slot + n, read from the sorted arrays (in order,
+        // where its own parameters and state by index would be a cache miss each).
+        const std::uint32_t slot = first_slot + n;
+        const std::uint32_t i = sorted.bird[slot];
+        const auto own = static_cast<std::uint32_t>(sorted.flock[slot]);
+        const gpu::FlockParamsGpu flock = kernel.kw_flock(own);
+        const glm::vec3 p(sorted.x[slot], sorted.y[slot], sorted.z[slot]);
+        const glm::vec3 forward = kernel.flock_forward(glm::vec3(sorted.vx[slot], sorted.vy[slot], sorted.vz[slot]));
+        const float radius2 = flock.radii.x * flock.radii.x;
+        const std::uint32_t k = kernel.flock_k(flock);
+        glsl::Kernel::FlockNeighbours& nb = out[n];
+        nb.found = 0u;
+        const glm::ivec3 home = glsl::flock_cell(p, args.inv_radius);
+        if (!have_list || home != list_home) {
+            std::uint32_t visited_count = 0;
+            // A 64-bit filter of the buckets seen so far: the list is scanned only when two
+            // buckets share a bit (rare: the hash spreads the 27 cells).
+            std::uint64_t filter = 0;
+            used = 0;
+            for (int dz = -1; dz <= 1; ++dz) {
+                for (int dy = -1; dy <= 1; ++dy) {
+                    for (int dx = -1; dx <= 1; ++dx) {
+                        const std::uint32_t b = glsl::flock_cell_bucket(home + glm::ivec3(dx, dy, dz), args.mask);
+                        const std::uint64_t bit = std::uint64_t{1} << (b & 63u);
+                        bool seen = false;
+                        if ((filter & bit) != 0) {
+                            for (std::uint32_t v = 0; v < visited_count; ++v) seen = seen || visited[v] == b;
+                        }
+                        if (seen) continue;
+                        filter |= bit;
+                        visited[visited_count++] = b;
+                        const std::uint32_t first = kernel.kw_bucket_start(b);
+                        const std::uint32_t last = first + kernel.kw_bucket_count(b);
+                        // A handful of birds per bucket: copied by hand (a memmove call
+                        // per array and bucket cost more than the copy).
+                        if (used + (last - first) + lanes > cx.size()) {
+                            const std::size_t grown = 2 * (used + (last - first) + lanes);
+                            cx.resize(grown), cy.resize(grown), cz.resize(grown), cf.resize(grown), cb.resize(grown);
+                        }
+                        for (std::uint32_t t = first; t < last; ++t, ++used) {
+                            cx[used] = sorted.x[t];
+                            cy[used] = sorted.y[t];
+                            cz[used] = sorted.z[t];
+                            cf[used] = sorted.flock[t];
+                            cb[used] = sorted.bird[t];
+                        }
+                    }
+                }
+            }
+            // The last vector's loads stay inside the arrays (masked off below).
+            list_home = home;
+            have_list = true;
+        }
+        const auto px = hn::Set(d, p.x), py = hn::Set(d, p.y), pz = hn::Set(d, p.z);
+        const auto fx = hn::Set(d, forward.x), fy = hn::Set(d, forward.y), fz = hn::Set(d, forward.z);
+        const auto r2 = hn::Set(d, radius2), blind = hn::Set(d, flock.radii.z);
+        const auto own_flock = hn::Set(d, sorted.flock[slot]);
+        const auto candidates = static_cast<std::uint32_t>(used);
+        for (std::uint32_t s = 0; s < candidates; s += static_cast<std::uint32_t>(lanes)) {
+            const auto ex = hn::Sub(hn::LoadU(d, cx.data() + s), px);
+            const auto ey = hn::Sub(hn::LoadU(d, cy.data() + s), py);
+            const auto ez = hn::Sub(hn::LoadU(d, cz.data() + s), pz);
+            const auto d2 = hn::Add(hn::Add(hn::Mul(ex, ex), hn::Mul(ey, ey)), hn::Mul(ez, ez));
+            const auto ahead = hn::Add(hn::Add(hn::Mul(ex, fx), hn::Mul(ey, fy)), hn::Mul(ez, fz));
+            auto pass = hn::FirstN(d, candidates - s);
+            pass = hn::And(pass, hn::Eq(hn::LoadU(d, cf.data() + s), own_flock));
+            pass = hn::AndNot(hn::Gt(d2, r2), pass);
+            pass = hn::AndNot(hn::Lt(ahead, hn::Mul(blind, hn::Sqrt(d2))), pass);
+            // Once the list is full, only a candidate as near as its farthest can enter
+            // (flock_offer decides the ties by index): the rest never reach the insertion.
+            if (nb.found == k) pass = hn::And(pass, hn::Le(d2, hn::Set(d, nb.d2[k - 1u])));
+            if (hn::AllFalse(d, pass)) continue;
+            hn::Store(d2, d, d2_lanes);
+            std::uint8_t bits[8] = {};
+            hn::StoreMaskBits(d, pass, bits);
+            std::uint64_t set = 0;
+            for (std::size_t byte = 0; byte < (lanes + 7) / 8; ++byte) set |= std::uint64_t{bits[byte]} << (8 * byte);
+            while (set != 0) {
+                const int lane = std::countr_zero(set);
+                set &= set - 1;
+                const std::uint32_t j = cb[s + static_cast<std::uint32_t>(lane)];
+                if (j != i) kernel.flock_offer(nb, k, d2_lanes[lane], j);  // the bird itself always passes
+            }
+        }
+    }
+}
+
+}  // namespace
+
+SearchFn flock_search_kernel() { return &search; }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace kodawari::flocking
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include "simd/dispatch.hpp"
+
+namespace kodawari::flocking {
+
+SearchFn flock_search_kernel(std::int64_t target) { KW_SIMD_SELECT(target, flock_search_kernel) }
+
+void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
+                       std::span<const std::uint32_t> order) {
+    const std::size_t n = order.size(), padded = n + kSortedPad;
+    x.resize(padded);
+    y.resize(padded);
+    z.resize(padded);
+    vx.resize(padded);
+    vy.resize(padded);
+    vz.resize(padded);
+    flock.assign(padded, -1.0f);
+    bird.assign(padded, 0u);
+    for (std::size_t s = 0; s < n; ++s) {
+        const std::uint32_t i = order[s];
+        x[s] = states[i].position.x;
+        y[s] = states[i].position.y;
+        z[s] = states[i].position.z;
+        vx[s] = states[i].velocity.x;
+        vy[s] = states[i].velocity.y;
+        vz[s] = states[i].velocity.z;
+        flock[s] = static_cast<float>(birds[i].ids.x);
+        bird[s] = i;
+    }
+}
+
+}  // namespace kodawari::flocking
+#endif
