@@ -27,6 +27,8 @@ using scene_detail::JsonNode;
 using scene_detail::JsonReader;
 using scene_detail::NumberRange;
 using scene_detail::optional_member;
+using scene_detail::read_direction;
+using scene_detail::read_point;
 
 constexpr std::uint64_t kMaxBirds = 10'000'000;   // per flock and per scene
 constexpr double kMaxCoordinate = 1e6;            // BirdWorld::add_route's limit (m)
@@ -269,10 +271,60 @@ Result<void> read_predator(const JsonReader& r, const JsonNode& node, PredatorSp
     return {};
 }
 
+// An obstacle: a sphere, capsule or plane in world space, as a chain collider is written
+// in a joint's frame (character_loader.cpp's read_collider), with a margin and a weight.
+Result<void> read_obstacle(const JsonReader& r, const JsonNode& node, FlockObstacleSpec& o) {
+    if (!node.present() || !node.value->is_object()) return r.expected(node, "an object with \"type\": \"sphere\", \"capsule\" or \"plane\"");
+    std::size_t type = 0;
+    KW_SCENE_ASSIGN(type, r.choice(r.member(node, "type"), {"sphere", "capsule", "plane"}));
+    if (type == 2) {
+        KW_TRY(r.object(node, {"type", "point", "normal", "margin", "weight"}));
+        o.type = FlockObstacleSpec::Type::Plane;
+        KW_TRY(optional_member(r, node, "point", o.a, [&](const JsonNode& n) { return read_point(r, n, kMaxCoordinate); }));
+        KW_SCENE_ASSIGN(o.b, read_direction(r, r.member(node, "normal")));
+    } else {
+        if (type == 0) {
+            KW_TRY(r.object(node, {"type", "center", "radius", "margin", "weight"}));
+            o.type = FlockObstacleSpec::Type::Sphere;
+            KW_TRY(optional_member(r, node, "center", o.a, [&](const JsonNode& n) { return read_point(r, n, kMaxCoordinate); }));
+            o.b = o.a;
+        } else {
+            KW_TRY(r.object(node, {"type", "a", "b", "radius", "margin", "weight"}));
+            o.type = FlockObstacleSpec::Type::Capsule;
+            KW_SCENE_ASSIGN(o.a, read_point(r, r.member(node, "a"), kMaxCoordinate));
+            KW_SCENE_ASSIGN(o.b, read_point(r, r.member(node, "b"), kMaxCoordinate));
+        }
+        KW_SCENE_ASSIGN(o.radius, r.real(r.member(node, "radius"), NumberRange::left_open(0.0, 1e4)));
+    }
+    KW_TRY(optional_member(r, node, "margin", o.margin, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+    KW_TRY(optional_member(r, node, "weight", o.weight, [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1000.0)); }));
+    return {};
+}
+
+Result<void> read_attractor(const JsonReader& r, const JsonNode& node, FlockAttractorSpec& a) {
+    KW_TRY(r.object(node, {"position", "radius", "weight"}));
+    KW_SCENE_ASSIGN(a.position, read_point(r, r.member(node, "position"), kMaxCoordinate));
+    KW_TRY(optional_member(r, node, "radius", a.radius, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1e4)); }));
+    KW_TRY(optional_member(r, node, "weight", a.weight, [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1000.0)); }));
+    return {};
+}
+
+// An array of at most 64 `what`s at `node` (when present), each read by `read`.
+template <typename T, typename Read>
+Result<void> read_agents(const JsonReader& r, const JsonNode& node, const char* what, std::vector<T>& out, Read read) {
+    if (!node.present()) return {};
+    std::size_t count = 0;
+    KW_SCENE_ASSIGN(count, r.array(node, std::string("an array of ") + what));
+    if (count > 64) return r.fail(node.path, "expected at most 64 " + std::string(what) + ", got " + std::to_string(count));
+    out.resize(count);
+    for (std::size_t i = 0; i < count; ++i) KW_TRY(read(r, r.element(node, i), out[i]));
+    return {};
+}
+
 Result<void> read_flocking(const JsonReader& r, const JsonNode& node, FlockingSpec& f) {
     KW_TRY(r.object(node, {"neighbours", "metric", "search_radius", "blind_angle_deg", "separation_distance", "separation", "separation_front",
                            "alignment", "cohesion", "route", "route_radius", "ground_clearance", "ground", "speed_time",
-                           "predators"}));
+                           "predators", "obstacles", "attractors"}));
     const JsonNode neighbours = r.member(node, "neighbours");
     if (neighbours.present()) {
         std::uint64_t value = 0;
@@ -301,14 +353,9 @@ Result<void> read_flocking(const JsonReader& r, const JsonNode& node, FlockingSp
     KW_TRY(optional_member(r, node, "ground_clearance", f.ground_clearance, length(1000.0)));
     KW_TRY(optional_member(r, node, "ground", f.ground, weight));
     KW_TRY(optional_member(r, node, "speed_time", f.speed_time, length(60.0)));
-    const JsonNode predators = r.member(node, "predators");
-    if (predators.present()) {
-        std::size_t count = 0;
-        KW_SCENE_ASSIGN(count, r.array(predators, "an array of predators"));
-        if (count > 64) return r.fail(predators.path, "expected at most 64 predators, got " + std::to_string(count));
-        f.predators.resize(count);
-        for (std::size_t i = 0; i < count; ++i) KW_TRY(read_predator(r, r.element(predators, i), f.predators[i]));
-    }
+    KW_TRY(read_agents(r, r.member(node, "predators"), "predators", f.predators, read_predator));
+    KW_TRY(read_agents(r, r.member(node, "obstacles"), "obstacles", f.obstacles, read_obstacle));
+    KW_TRY(read_agents(r, r.member(node, "attractors"), "attractors", f.attractors, read_attractor));
     return {};
 }
 

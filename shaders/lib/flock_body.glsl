@@ -21,7 +21,7 @@
 // with their Gaussian-softened separation, attraction to the flock's route (their roost
 // attraction, here a point moving along the scene's route), a cruise-speed control with
 // time constant tau (their eq. for the thrust), ground clearance, agents (predators,
-// attractors, sphere obstacles), and the wing's limits (docs/flocking.md).
+// attractors, obstacles: spheres, capsules, planes), and the wing's limits (docs/flocking.md).
 
 struct FlockStep {
     vec3 position;
@@ -151,14 +151,45 @@ FlockStep flock_rules(uint i, FlockNeighbours nb, uint agents, float dt) {
     // (1 - distance / reach), so that the flock can part round it and close again behind
     // it (ours, docs/flocking.md).
     vec3 fled = vec3(0.0f);
+    vec3 avoid = vec3(0.0f);  // the obstacles' (spheres, capsules, planes): allocated first, below
     float panic = 0.0f;
     for (uint g = 0u; g < agents; ++g) {
         const FlockAgentGpu agent = kw_agent(g);
-        const vec3 d = p - KW_XYZ(agent.position);
+        const float kind = agent.kind_weight.x;
+        if (kind == KW_FLOCK_AGENT_PLANE) {
+            // Kept to the normal's side: pushed along the normal within `margin` of the
+            // plane (and behind it), in proportion to the depth into that layer. A bird
+            // flying at it turns away as its velocity gains the normal's component.
+            const vec3 n = KW_XYZ(agent.velocity);
+            const float margin = max(agent.kind_weight.z, 1e-3f);
+            const float depth = margin - dot(p - KW_XYZ(agent.position), n);
+            if (depth > 0.0f) avoid += (agent.kind_weight.y * min(depth / margin, 1.0f)) * n;
+            continue;
+        }
+        // A capsule is avoided as the sphere round its segment's point nearest the bird,
+        // steering across its axis: the bird's heading and its sides are taken in the
+        // plane normal to the axis (a bird flying at a tower turns left or right, where
+        // the sphere's rule would have it pitch up or down along the tower).
+        vec3 at = KW_XYZ(agent.position);
+        vec3 facing = forward;
+        vec3 up = vec3(0.0f, 1.0f, 0.0f);
+        if (kind == KW_FLOCK_AGENT_CAPSULE) {
+            const vec3 ab = KW_XYZ(agent.velocity) - at;
+            const float ab2 = dot(ab, ab);
+            const float t = ab2 > 0.0f ? clamp(dot(p - at, ab) / ab2, 0.0f, 1.0f) : 0.0f;
+            at += t * ab;
+            if (ab2 > 0.0f) {
+                up = ab / sqrt(ab2);
+                const vec3 flat_forward = forward - dot(forward, up) * up;
+                const float fl = length(flat_forward);
+                if (fl > 1e-3f) facing = flat_forward / fl;
+            }
+        }
+        const vec3 d = p - at;
         const float dist = length(d);
         const float reach = agent.position.w;
         if (dist < 1e-6f) continue;
-        if (agent.kind_weight.x == KW_FLOCK_AGENT_SPHERE) {
+        if (kind == KW_FLOCK_AGENT_SPHERE || kind == KW_FLOCK_AGENT_CAPSULE) {
             // Steered round, not only pushed back (Reynolds 1999's "obstacle avoidance"
             // steers laterally): a bird flying at the sphere turns across its own flight,
             // away from the sphere's centre line, since a push straight back would only
@@ -169,22 +200,22 @@ FlockStep flock_rules(uint i, FlockNeighbours nb, uint agents, float dt) {
             const float depth = reach + margin - dist;
             if (depth > 0.0f) {
                 const float s = agent.kind_weight.y * min(depth / margin, 1.0f);
-                const float along = dot(d, forward);
+                const float along = dot(d, facing);
                 vec3 away = d / dist;
                 if (along < 0.0f && dist > reach) {
-                    const vec3 across = d - along * forward;
+                    const vec3 across = d - along * facing;
                     const float cl = length(across);
                     // Dead on the centre line: turn towards the side of the bird's right
                     // (forward x up), a fixed choice rather than none.
-                    const vec3 side = cross(forward, vec3(0.0f, 1.0f, 0.0f));
+                    const vec3 side = cross(facing, up);
                     const float sl = length(side);
                     away = cl > 1e-3f ? across / cl : sl > 1e-3f ? side / sl : vec3(1.0f, 0.0f, 0.0f);
                 }
-                fled += s * away;
+                avoid += s * away;
             }
         } else if (dist < reach) {
             const float s = agent.kind_weight.y * (1.0f - dist / reach);
-            if (agent.kind_weight.x == KW_FLOCK_AGENT_REPELLER) {
+            if (kind == KW_FLOCK_AGENT_REPELLER) {
                 if (agent.kind_weight.y > 0.0f) panic = max(panic, 1.0f - dist / reach);
                 // Fled across its path (the flock splits round a passing predator rather
                 // than being driven ahead of it): away from the line it flies along.
@@ -220,10 +251,29 @@ FlockStep flock_rules(uint i, FlockNeighbours nb, uint agents, float dt) {
 
     // What the wing allows: the tangential part within the largest speed change, the
     // lateral part within a coordinated turn at the largest bank (g tan(bank)).
-    const float along = clamp(dot(a, forward), -bird.speed.w, bird.speed.w);
-    vec3 lateral = a - dot(a, forward) * forward;
-    const float ll = length(lateral);
-    if (ll > bird.turn.x) lateral *= bird.turn.x / ll;
+    float along;
+    vec3 lateral;
+    if (dot(avoid, avoid) == 0.0f) {
+        along = clamp(dot(a, forward), -bird.speed.w, bird.speed.w);
+        lateral = a - dot(a, forward) * forward;
+        const float ll = length(lateral);
+        if (ll > bird.turn.x) lateral *= bird.turn.x / ll;
+    } else {
+        // Reynolds (1987)'s prioritized acceleration allocation: avoiding an obstacle takes
+        // the lateral budget first and the other rules get what is left, so that the
+        // flock pressing on (separation, cohesion, the route) cannot turn a bird into a
+        // tower it is steering round.
+        const vec3 total = a + avoid;
+        along = clamp(dot(total, forward), -bird.speed.w, bird.speed.w);
+        vec3 first = avoid - dot(avoid, forward) * forward;
+        const float fl = length(first);
+        if (fl > bird.turn.x) first *= bird.turn.x / fl;
+        vec3 rest = a - dot(a, forward) * forward;
+        const float budget = bird.turn.x - min(fl, bird.turn.x);
+        const float rl = length(rest);
+        if (rl > budget) rest *= budget / rl;
+        lateral = first + rest;
+    }
     a = along * forward + lateral;
     // Semi-implicit Euler; speed within [min, max], climb and dive within the wing's.
     vec3 v1 = v + dt * a;

@@ -34,6 +34,8 @@
 #define KW_FLOCK_AGENT_REPELLER 0.0f  // a predator: birds within radius flee it
 #define KW_FLOCK_AGENT_ATTRACTOR 1.0f // birds within radius are drawn to it
 #define KW_FLOCK_AGENT_SPHERE 2.0f    // an obstacle: birds keep out of it, margin = kind_weight.z
+#define KW_FLOCK_AGENT_CAPSULE 3.0f   // a sphere swept from position.xyz to velocity.xyz (radius position.w), as SPHERE
+#define KW_FLOCK_AGENT_PLANE 4.0f     // birds keep to the side of velocity.xyz (unit normal) of the plane through position.xyz
 
 KW_NAMESPACE_BEGIN
 

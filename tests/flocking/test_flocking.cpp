@@ -91,7 +91,8 @@ FlockMeasures measure(std::span<const gpu::BirdPose> poses) {
 class FlockingBackends : public ::testing::TestWithParam<testing_support::BackendCase> {};
 
 // cpu (every instruction set) is cpu-reference's bits in the flock's motion and the birds'
-// positions (their rotations within the bird backends' parity); vulkan is
+// positions (their rotations within the bird backends' parity), with every kind of the
+// scene's obstacles and an attractor among the birds; vulkan is
 // within 1e-3 m of it after 40 frames (the flow is chaotic, so two orders of rounding part
 // slowly: measured 3.8e-6 m after 40 frames on lavapipe) and gives the same bits twice.
 TEST_P(FlockingBackends, StepLikeTheReference) {
@@ -100,7 +101,25 @@ TEST_P(FlockingBackends, StepLikeTheReference) {
         if (!why.empty()) GTEST_SKIP() << why;
     }
     constexpr std::uint32_t kBirds = 1001, kFrames = 40;
-    const std::string text = scene_text(kBirds, 2.0, "{}");
+    // Where the flock starts, for the scene's obstacles to be among it: a capsule through
+    // it, a plane across it, a sphere and an attractor beside it (every agent kind).
+    glm::vec3 c(0.0f);
+    {
+        auto probe = open_text(scene_text(kBirds, 2.0, "{}"), {BackendKind::CpuReference, ""});
+        ASSERT_NE(probe, nullptr);
+        std::vector<gpu::BirdPose> first(kBirds);
+        ASSERT_TRUE(step_birds(*probe, 1, first).ok());
+        for (const gpu::BirdPose& p : first) c += position(p) / float(kBirds);
+    }
+    const auto at = [&](float x, float y, float z) {
+        return "[" + std::to_string(c.x + x) + ", " + std::to_string(c.y + y) + ", " + std::to_string(c.z + z) + "]";
+    };
+    const std::string text = scene_text(
+        kBirds, 2.0,
+        R"({"obstacles": [{"type": "capsule", "a": )" + at(-3, -20, 0) + R"(, "b": )" + at(-3, 20, 0) +
+            R"(, "radius": 2, "margin": 6}, {"type": "plane", "point": )" + at(0, -2, 0) +
+            R"(, "normal": [0, 1, 0.2], "margin": 4}, {"type": "sphere", "center": )" + at(6, 0, 4) +
+            R"(, "radius": 1.5, "margin": 5}], "attractors": [{"position": )" + at(0, 10, 30) + R"(, "radius": 60, "weight": 10}]})");
     const auto run = [&](const testing_support::BackendCase& backend, std::vector<gpu::BirdPose>& poses,
                          std::vector<gpu::BirdMotionGpu>& motion) {
         auto sim = open_text(text, backend);
@@ -319,6 +338,72 @@ TEST(Flocking, ApplicationAgentsAreFledAndAvoided) {
     EXPECT_FALSE(set_flock_agents(*probe, many).ok());
 }
 
+// The scene's own obstacles and attractors (flocking.obstacles, flocking.attractors): a
+// capsule standing where the flock flies at 4 s (a tower: radius 4 m, margin 12 m) is flown
+// round, a plane across the flock's height (a cliff top: margin 6 m) keeps the birds
+// above it, and an attractor 60 m aside draws the flock's centre towards it. Measured
+// against the same scene without each, from 2.5 to 5.5 s.
+TEST(Flocking, SceneObstaclesAndAttractorsShapeTheFlight) {
+    constexpr std::uint32_t kBirds = 601, kFrames = 330;
+    auto probe = open_text(scene_text(kBirds, 5.5, "{}"), {BackendKind::Cpu, ""});
+    ASSERT_NE(probe, nullptr);
+    std::vector<gpu::BirdPose> alone(std::size_t{kFrames} * kBirds);
+    ASSERT_TRUE(step_birds(*probe, kFrames, alone).ok());
+    glm::vec3 centre(0.0f);
+    for (std::uint32_t b = 0; b < kBirds; ++b) centre += position(alone[std::size_t{240} * kBirds + b]) / float(kBirds);
+    const auto json = [](const glm::vec3& v) {
+        return "[" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + "]";
+    };
+    const auto run = [&](const std::string& flocking) {
+        auto sim = open_text(scene_text(kBirds, 5.5, flocking), {BackendKind::Cpu, ""});
+        EXPECT_NE(sim, nullptr);
+        std::vector<gpu::BirdPose> poses(std::size_t{kFrames} * kBirds);
+        if (sim) {
+            EXPECT_TRUE(step_birds(*sim, kFrames, poses).ok());
+        }
+        return poses;
+    };
+    const glm::vec3 foot = centre - glm::vec3(0.0f, 40.0f, 0.0f), top = centre + glm::vec3(0.0f, 40.0f, 0.0f);
+    const std::vector<gpu::BirdPose> towered = run(R"({"obstacles": [{"type": "capsule", "a": )" + json(foot) + R"(, "b": )" +
+                                                   json(top) + R"(, "radius": 4, "margin": 12, "weight": 80}]})");
+    const float cliff = centre.y - 2.0f;
+    const std::vector<gpu::BirdPose> walled = run(R"({"obstacles": [{"type": "plane", "point": )" +
+                                                  json(glm::vec3(centre.x, cliff, centre.z)) +
+                                                  R"(, "normal": [0, 1, 0], "margin": 6, "weight": 80}]})");
+    const glm::vec3 lure = centre + glm::vec3(60.0f, 0.0f, 0.0f);
+    const std::vector<gpu::BirdPose> lured = run(R"({"attractors": [{"position": )" + json(lure) + R"(, "radius": 120, "weight": 30}]})");
+    // Over 2.5 to 5.5 s: the nearest bird to the tower's axis, the lowest bird against the
+    // plane, the flock's centre's mean distance to the attractor.
+    const auto measure = [&](const std::vector<gpu::BirdPose>& poses, float& axis, float& lowest, float& lure_distance) {
+        axis = 1e9f, lowest = 1e9f, lure_distance = 0.0f;
+        for (std::uint32_t f = 150; f < kFrames; ++f) {
+            glm::vec3 mean(0.0f);
+            for (std::uint32_t b = 0; b < kBirds; ++b) {
+                const glm::vec3 p = position(poses[std::size_t{f} * kBirds + b]);
+                axis = std::min(axis, glm::length(glm::vec2(p.x - centre.x, p.z - centre.z)));
+                lowest = std::min(lowest, p.y - cliff);
+                mean += p / float(kBirds);
+            }
+            lure_distance += glm::length(mean - lure) / float(kFrames - 150);
+        }
+    };
+    float axis_alone = 0, low_alone = 0, lure_alone = 0, axis_with = 0, low_with = 0, lure_with = 0, unused = 0;
+    measure(alone, axis_alone, low_alone, lure_alone);
+    measure(towered, axis_with, unused, unused);
+    measure(walled, unused, low_with, unused);
+    measure(lured, unused, unused, lure_with);
+    std::printf("[ measured ] nearest bird to the tower's axis (radius 4 m): %.2f m without it, %.2f m with it; lowest bird "
+                "against the plane: %.2f m without it, %.2f m with it; the flock's centre to the attractor: %.1f m without "
+                "it, %.1f m with it\n",
+                static_cast<double>(axis_alone), static_cast<double>(axis_with), static_cast<double>(low_alone),
+                static_cast<double>(low_with), static_cast<double>(lure_alone), static_cast<double>(lure_with));
+    EXPECT_LT(axis_alone, 1.0f);
+    EXPECT_GT(axis_with, 4.0f);  // never inside the tower
+    EXPECT_LT(low_alone, -3.0f);
+    EXPECT_GT(low_with, -0.5f);  // at most half a metre into the cliff's plane
+    EXPECT_LT(lure_with, lure_alone - 10.0f);
+}
+
 // A flock without "flocking" flies its route exactly as without the flocking flock beside
 // it: the same bits.
 TEST(Flocking, RouteFlocksBesideItAreUnchanged) {
@@ -381,6 +466,26 @@ TEST(Flocking, BadValuesAreRefusedNamingThem) {
               "flocking-test.json: $.flocks[0].flocking.cohesion: expected a finite number in [0, 1000], got \"strong\"");
     EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"alignement": 1})")).substr(0, 64),
               "flocking-test.json: $.flocks[0].flocking.alignement: unknown key");
+    // The scene's obstacles and attractors.
+    const auto obstacle = [](const std::string& o) { return parse_error(scene_text(10, 1.0, R"({"obstacles": [)" + o + "]}")); };
+    EXPECT_EQ(obstacle(R"({"type": "cube", "center": [0, 0, 0], "radius": 1})"),
+              "flocking-test.json: $.flocks[0].flocking.obstacles[0].type: expected one of \"sphere\", \"capsule\", \"plane\", got \"cube\"");
+    EXPECT_EQ(obstacle(R"({"type": "sphere", "center": [0, 0, 0], "radius": 0})"),
+              "flocking-test.json: $.flocks[0].flocking.obstacles[0].radius: expected a finite number in (0, 10000], got 0");
+    EXPECT_EQ(obstacle(R"({"type": "capsule", "a": [0, 0, 0], "radius": 1})"),
+              "flocking-test.json: $.flocks[0].flocking.obstacles[0].b: expected an array of 3 numbers [x, y, z], each a finite "
+              "number in [-1000000, 1000000], got nothing (required key missing)");
+    EXPECT_EQ(obstacle(R"({"type": "plane", "normal": [0, 0, 0]})").substr(0, 71),
+              "flocking-test.json: $.flocks[0].flocking.obstacles[0].normal: expected ");
+    EXPECT_EQ(obstacle(R"({"type": "sphere", "radius": 1, "margin": 0})"),
+              "flocking-test.json: $.flocks[0].flocking.obstacles[0].margin: expected a finite number in (0, 1000], got 0");
+    EXPECT_EQ(obstacle(R"({"type": "plane", "normal": [0, 1, 0], "radius": 2})").substr(0, 73),
+              "flocking-test.json: $.flocks[0].flocking.obstacles[0].radius: unknown key");
+    EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"attractors": [{"position": [0, 1e9, 0]}]})")),
+              "flocking-test.json: $.flocks[0].flocking.attractors[0].position[1]: expected a finite number in [-1000000, 1000000], "
+              "got 1000000000");
+    EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"attractors": [{"position": [0, 1, 0], "weight": -1}]})")),
+              "flocking-test.json: $.flocks[0].flocking.attractors[0].weight: expected a finite number in [0, 1000], got -1");
 }
 
 // A bird backend given a world with driven birds and no motion says so.

@@ -67,7 +67,7 @@ public:
             return make_error(Error::Kind::InvalidInput, "domain \"flocking\": step(" + std::to_string(first) + ") after frame " +
                                                              std::to_string(frame_) + " (frames go in order from 0)");
         }
-        const std::size_t n = world_.birds.size(), f = world_.flocks.size(), scene_agents = world_.predators.size();
+        const std::size_t n = world_.birds.size(), f = world_.flocks.size(), scene_agents = world_.scene_agents();
         const std::size_t a = scene_agents + app_agents_.size();
         motion_.resize(std::size_t{frames} * n);
         std::uint32_t k0 = 0;
@@ -103,7 +103,7 @@ public:
             return make_error(Error::Kind::InvalidInput, "domain \"flocking\": record(" + std::to_string(frame) + ") after frame " +
                                                              std::to_string(frame_) + " (frames go in order from 0)");
         }
-        const std::size_t f = world_.flocks.size(), scene_agents = world_.predators.size();
+        const std::size_t f = world_.flocks.size(), scene_agents = world_.scene_agents();
         if (frame == 0) {
             KW_TRY(backend_->record(cmd, true, {}, {}));
         } else {

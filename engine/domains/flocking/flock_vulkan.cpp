@@ -51,7 +51,7 @@ public:
         const std::uint64_t sizes[KW_FLOCK_BINDING_COUNT] = {
             sizeof(gpu::FlockParamsGpu) * std::max<std::size_t>(world.flocks.size(), 1), sizeof(gpu::FlockBirdGpu) * n,
             2 * sizeof(gpu::FlockStateGpu) * n, sizeof(std::uint32_t) * n, 2 * sizeof(std::uint32_t) * std::uint64_t{world.buckets},
-            sizeof(std::uint32_t) * n, sizeof(gpu::FlockAgentGpu) * (world.predators.size() + kMaxFlockAgents),
+            sizeof(std::uint32_t) * n, sizeof(gpu::FlockAgentGpu) * (world.scene_agents() + kMaxFlockAgents),
             sizeof(gpu::BirdMotionGpu) * n};
         for (std::uint64_t bytes : sizes) {
             if (bytes > device_->info().max_storage_buffer_range) {
@@ -169,8 +169,8 @@ private:
         }
     }
 
-    // The most agents a frame has: the scene's predators and the application's.
-    std::size_t agent_capacity() const { return world_->predators.size() + kMaxFlockAgents; }
+    // The most agents a frame has: the scene's and the application's.
+    std::size_t agent_capacity() const { return world_->scene_agents() + kMaxFlockAgents; }
 
     // Binding `b` at least `bytes` long (no submission is pending: each is waited for).
     Result<void> grow(std::uint32_t b, std::uint64_t bytes) {

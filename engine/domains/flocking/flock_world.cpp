@@ -14,6 +14,18 @@ namespace kodawari::flocking {
 
 namespace {
 
+// A scene obstacle as the kernels take it (shared/flocking.h's KW_FLOCK_AGENT_*).
+gpu::FlockAgentGpu obstacle_agent(const FlockObstacleSpec& o) {
+    gpu::FlockAgentGpu agent{};
+    const float kind = o.type == FlockObstacleSpec::Type::Plane     ? KW_FLOCK_AGENT_PLANE
+                       : o.type == FlockObstacleSpec::Type::Capsule ? KW_FLOCK_AGENT_CAPSULE
+                                                                    : KW_FLOCK_AGENT_SPHERE;
+    agent.position = {o.a.x, o.a.y, o.a.z, o.type == FlockObstacleSpec::Type::Plane ? 0.0f : o.radius};
+    agent.kind_weight = {kind, o.weight, o.margin, 0.0f};
+    agent.velocity = {o.b.x, o.b.y, o.b.z, 0.0f};
+    return agent;
+}
+
 gpu::vec4 v4(const birds::Vec3& v) { return {v.x, v.y, v.z, 0.0f}; }
 
 }  // namespace
@@ -53,6 +65,13 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
             out.flocks.push_back(p);
             out.search_radius = std::max(out.search_radius, rules.search_radius);
             out.predators.insert(out.predators.end(), rules.predators.begin(), rules.predators.end());
+            for (const FlockObstacleSpec& o : rules.obstacles) out.fixed_agents.push_back(obstacle_agent(o));
+            for (const FlockAttractorSpec& a : rules.attractors) {
+                gpu::FlockAgentGpu agent{};
+                agent.position = {a.position.x, a.position.y, a.position.z, a.radius};
+                agent.kind_weight = {KW_FLOCK_AGENT_ATTRACTOR, a.weight, 0.0f, 0.0f};
+                out.fixed_agents.push_back(agent);
+            }
             // The leader: the flock's first route (its variants are jittered copies) at the
             // flock's speed.
             const birds::WingTypeSpec& wing = birds::wing_type_spec(spec.wing_type);
@@ -149,6 +168,7 @@ void FlockWorld::frame_inputs(std::uint32_t frame, std::span<gpu::FlockParamsGpu
         }
         agents_out[a] = agent;
     }
+    std::copy(fixed_agents.begin(), fixed_agents.end(), agents_out.begin() + static_cast<std::ptrdiff_t>(predators.size()));
 }
 
 }  // namespace kodawari::flocking

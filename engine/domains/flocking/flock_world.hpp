@@ -27,6 +27,9 @@ struct FlockWorld {
     };
     std::vector<Leader> leaders;
     std::vector<PredatorSpec> predators;  ///< every flocking flock's, fleeing any of them
+    /// Every flocking flock's obstacles and attractors, the same every frame (after the
+    /// predators among a frame's agents).
+    std::vector<gpu::FlockAgentGpu> fixed_agents;
     /// Per predator that is a flock's bird (PredatorSpec::flock): that bird's params (its
     /// route, speed, offsets); unused for the others.
     std::vector<gpu::BirdParams> predator_birds;
@@ -37,8 +40,10 @@ struct FlockWorld {
     float gravity = 9.81f;
     std::uint32_t buckets = 0;            ///< bucket_count(birds)
 
+    /// The scene's agents a frame has: the predators, then the obstacles and attractors.
+    [[nodiscard]] std::size_t scene_agents() const { return predators.size() + fixed_agents.size(); }
     /// Frame `frame`'s flock parameters (their leaders there) and agents (the predators,
-    /// weight 0 while not passing).
+    /// weight 0 while not passing, then fixed_agents; scene_agents() of them).
     void frame_inputs(std::uint32_t frame, std::span<gpu::FlockParamsGpu> flocks_out, std::span<gpu::FlockAgentGpu> agents_out) const;
 };
 

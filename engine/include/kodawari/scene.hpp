@@ -73,6 +73,26 @@ struct PredatorSpec {
     float weight = 40.0f;  ///< m/s^2 at its position, falling linearly to 0 at radius
 };
 
+/// An obstacle flocking birds keep clear of (docs/scene-format.md, `flocking.obstacles`):
+/// a sphere, a capsule or a plane in world space, as the chains' colliders, with a
+/// margin within which birds are steered away.
+struct FlockObstacleSpec {
+    enum class Type : std::uint8_t { Sphere, Capsule, Plane };
+    Type type = Type::Sphere;
+    glm::vec3 a{0.0f};  ///< a sphere's centre, a capsule's first end, a point of a plane (m)
+    glm::vec3 b{0.0f};  ///< a capsule's second end (a sphere's: a); a plane's unit normal
+    float radius = 1.0f;   ///< m, spheres and capsules
+    float margin = 2.0f;   ///< m: birds within it of the surface are pushed out
+    float weight = 40.0f;  ///< m/s^2 at the surface, falling to 0 at the margin
+};
+
+/// A place flocking birds are drawn to within `radius` (`flocking.attractors`).
+struct FlockAttractorSpec {
+    glm::vec3 position{0.0f};
+    float radius = 15.0f;  ///< m
+    float weight = 40.0f;  ///< m/s^2 at the attractor's place, falling linearly to 0 at radius
+};
+
 /// The flocking rules of a flock (docs/flocking.md): its birds fly by their neighbours
 /// and are drawn to the flock's route rather than following it. Accelerations in m/s^2.
 struct FlockingSpec {
@@ -93,6 +113,10 @@ struct FlockingSpec {
     float ground = 10.0f;
     float speed_time = 1.0f;      ///< s: the time constant of the cruise-speed control
     std::vector<PredatorSpec> predators;
+    /// Every flocking bird of the scene keeps clear of them and is drawn to them, as it
+    /// flees every predator (the flocks share one sky).
+    std::vector<FlockObstacleSpec> obstacles;
+    std::vector<FlockAttractorSpec> attractors;
 };
 
 /// One flock: `count` birds of a wing type following a route.
