@@ -583,6 +583,17 @@ TEST(CApiBackends, AWorldTooLargeForTheDeviceIsUnavailableAndAutoFallsBack) {
     std::printf("[ measured ] auto, %llu birds: %s\n", static_cast<unsigned long long>(birds), info.fallback_reason);
 }
 
+namespace {
+
+// The C description of the test application's device.
+kodawari_vulkan_device_desc device_desc(const testing_support::Application& app) {
+    const VulkanDeviceHandles h = app.handles();
+    return {h.instance, h.physical_device, h.device, h.queue_family, h.queue_index,
+            reinterpret_cast<void*>(h.get_instance_proc_addr), nullptr, h.api_version, h.frames_in_flight};
+}
+
+}  // namespace
+
 // A whole scene recorded through the C API (kodawari_simulation_record): a flocking flock
 // with a predator the application moves each frame, recorded three frames in flight on
 // the application's device, is where a simulation stepped on the same device is: the next
@@ -594,10 +605,7 @@ TEST(CApiEmbedding, RecordedScenesGiveTheStepsBits) {
     testing_support::Application app;
     ASSERT_TRUE(app.ok());
     testing_support::messages = 0;
-    const VulkanDeviceHandles h = app.handles();
-    const kodawari_vulkan_device_desc desc{h.instance, h.physical_device, h.device, h.queue_family, h.queue_index,
-                                           reinterpret_cast<void*>(h.get_instance_proc_addr), nullptr, h.api_version,
-                                           h.frames_in_flight};
+    const kodawari_vulkan_device_desc desc = device_desc(app);
     kodawari_vulkan_device* device = nullptr;
     ASSERT_EQ(kodawari_vulkan_device_adopt(&desc, &device), KODAWARI_OK) << kodawari_last_error();
     constexpr std::uint32_t kBirds = 203;
@@ -689,10 +697,7 @@ TEST(CApiEmbedding, RecordedStepsOnTheApplicationsDeviceGiveTheStepsBits) {
     testing_support::Application app;
     ASSERT_TRUE(app.ok());
     testing_support::messages = 0;
-    const VulkanDeviceHandles h = app.handles();
-    const kodawari_vulkan_device_desc desc{h.instance, h.physical_device, h.device, h.queue_family, h.queue_index,
-                                           reinterpret_cast<void*>(h.get_instance_proc_addr), nullptr, h.api_version,
-                                           h.frames_in_flight};
+    const kodawari_vulkan_device_desc desc = device_desc(app);
     kodawari_vulkan_device* device = nullptr;
     ASSERT_EQ(kodawari_vulkan_device_adopt(&desc, &device), KODAWARI_OK) << kodawari_last_error();
 
