@@ -102,7 +102,6 @@ public:
     Result<void> record(VkCommandBuffer cmd, bool first, std::span<const gpu::FlockParamsGpu> flocks,
                         std::span<const gpu::FlockAgentGpu> agents) override {
         const FlockWorld& w = *world_;
-        assert(flocks.size() == w.flocks.size());
         if (agents.size() > agent_capacity()) {
             return make_error(Error::Kind::InvalidInput, "the flocking step: " + std::to_string(agents.size()) +
                                                              " agents in a frame; at most " + std::to_string(agent_capacity()));
@@ -112,6 +111,7 @@ public:
             // world loads, as every domain's does at frame 0.
             return compute::upload(*device_, buffers_[KW_FLOCK_BINDING_MOTION], bytes_of(std::span(w.first)));
         }
+        assert(flocks.size() == w.flocks.size() && "one frame's flock parameters");
         if (!ring_) {
             // The most one frame uploads: its flocks' parameters and every agent it may have.
             const auto rounded = [](std::uint64_t bytes) { return (bytes + 15) / 16 * 16; };
