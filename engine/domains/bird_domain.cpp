@@ -123,9 +123,12 @@ public:
     // the motion the flocking domain recorded just before, on the device.
     Result<void> record(std::uint32_t, VkCommandBuffer cmd) override {
         if (!backend_) return {};
-        if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "record_simulate: cmd is null");
+        // (Simulation::record refused a null command buffer and the cpu kinds already; a
+        // caller of the domain itself is told.)
         auto* device = dynamic_cast<DeviceBirdBackend*>(backend_.get());
-        if (device == nullptr) return record_simulate(*backend_, cmd, 1);  // its error: not a vulkan backend
+        if (device == nullptr) {
+            return make_error(Error::Kind::Unsupported, "domain \"birds\" records into a command buffer on the vulkan backend only");
+        }
         const compute::Buffer* motion = world_.driven > 0 && driver_ != nullptr ? flocking::flocking_motion_buffer(*driver_) : nullptr;
         return device->record_external(cmd, 1, motion);
     }

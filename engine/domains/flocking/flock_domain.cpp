@@ -67,8 +67,8 @@ public:
             return make_error(Error::Kind::InvalidInput, "domain \"flocking\": step(" + std::to_string(first) + ") after frame " +
                                                              std::to_string(frame_) + " (frames go in order from 0)");
         }
-        const std::size_t n = world_.birds.size(), f = world_.flocks.size(), scene_agents = world_.scene_agents();
-        const std::size_t a = scene_agents + app_agents_.size();
+        const std::size_t n = world_.birds.size(), f = world_.flocks.size();
+        const std::size_t a = world_.scene_agents() + app_agents_.size();
         motion_.resize(std::size_t{frames} * n);
         std::uint32_t k0 = 0;
         if (first == 0 && frames > 0) {
@@ -80,10 +80,7 @@ public:
             flocks_.resize(std::size_t{advance} * f);
             agents_.resize(std::size_t{advance} * a);
             for (std::uint32_t k = 0; k < advance; ++k) {
-                world_.frame_inputs(first + k0 + k, std::span(flocks_).subspan(std::size_t{k} * f, f),
-                                    std::span(agents_).subspan(std::size_t{k} * a, scene_agents));
-                // The application's after the scene's, the same every frame of the call.
-                std::copy(app_agents_.begin(), app_agents_.end(), agents_.begin() + static_cast<std::ptrdiff_t>(k * a + scene_agents));
+                frame_inputs(first + k0 + k, std::span(flocks_).subspan(std::size_t{k} * f, f), std::span(agents_).subspan(std::size_t{k} * a, a));
             }
             KW_TRY(backend_->advance(advance, flocks_, agents_, std::span(motion_).subspan(std::size_t{k0} * n)));
         }
@@ -103,14 +100,12 @@ public:
             return make_error(Error::Kind::InvalidInput, "domain \"flocking\": record(" + std::to_string(frame) + ") after frame " +
                                                              std::to_string(frame_) + " (frames go in order from 0)");
         }
-        const std::size_t f = world_.flocks.size(), scene_agents = world_.scene_agents();
         if (frame == 0) {
             KW_TRY(backend_->record(cmd, true, {}, {}));
         } else {
-            flocks_.resize(f);
-            agents_.resize(scene_agents + app_agents_.size());
-            world_.frame_inputs(frame, flocks_, std::span(agents_).first(scene_agents));
-            std::copy(app_agents_.begin(), app_agents_.end(), agents_.begin() + static_cast<std::ptrdiff_t>(scene_agents));
+            flocks_.resize(world_.flocks.size());
+            agents_.resize(world_.scene_agents() + app_agents_.size());
+            frame_inputs(frame, flocks_, agents_);
             KW_TRY(backend_->record(cmd, false, flocks_, agents_));
         }
         frame_ = frame + 1;
@@ -130,6 +125,14 @@ public:
     void set_agents(std::vector<gpu::FlockAgentGpu> agents) { app_agents_ = std::move(agents); }
 
 private:
+    // Frame `frame`'s flock parameters and agents: the scene's (FlockWorld::frame_inputs),
+    // then the application's (set_flock_agents), which `agents` has room for.
+    void frame_inputs(std::uint32_t frame, std::span<gpu::FlockParamsGpu> flocks, std::span<gpu::FlockAgentGpu> agents) const {
+        const std::size_t scene_agents = world_.scene_agents();
+        world_.frame_inputs(frame, flocks, agents.first(scene_agents));
+        std::copy(app_agents_.begin(), app_agents_.end(), agents.begin() + static_cast<std::ptrdiff_t>(scene_agents));
+    }
+
     flocking::FlockWorld world_;
     std::unique_ptr<flocking::FlockBackend> backend_;
     std::uint32_t frame_ = 0;

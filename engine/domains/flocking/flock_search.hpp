@@ -18,14 +18,14 @@
 
 namespace kodawari::flocking {
 
-/// The grid's birds in its sorted order (slot s holds bird sorted[s]), as arrays padded
-/// with kSortedPad unused slots so that a vector load past a bucket's end stays inside.
+/// The grid's birds in its sorted order (slot s holds bird sorted[s], the grid's own
+/// array, which the kernel reads as kw_sorted), as arrays padded with kSortedPad unused
+/// slots so that a vector load past a bucket's end stays inside.
 struct SortedBirds {
     static constexpr std::size_t kSortedPad = 16;
     std::vector<float> x, y, z;
     std::vector<float> vx, vy, vz;
-    std::vector<float> flock;         ///< the bird's flock (exact as a float below 2^24)
-    std::vector<std::uint32_t> bird;  ///< the bird's index
+    std::vector<float> flock;  ///< the bird's flock (exact as a float below 2^24)
 
     /// Fills the arrays from this substep's states and grid (build_grid()'s `sorted`).
     void fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
@@ -40,8 +40,8 @@ struct SearchArgs {
     float inv_radius = 0.0f;
 };
 
-/// Fills out[n] with the neighbours of the bird in grid slot first_slot + n (SortedBirds::
-/// bird), n < count: birds in the grid's order, so that the birds of one cell come
+/// Fills out[n] with the neighbours of the bird in grid slot first_slot + n (kw_sorted),
+/// n < count: birds in the grid's order, so that the birds of one cell come
 /// together, share its 27 buckets' candidates, and are read in order.
 using SearchFn = void (*)(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t count,
                           glsl::Kernel::FlockNeighbours* out);

@@ -33,9 +33,10 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
     HWY_ALIGN float d2_lanes[hn::MaxLanes(d)];
     // The candidates of the 27 cells round the last bird's cell (each bucket once),
     // gathered into contiguous arrays: birds come in the grid's order, so the next bird is
-    // usually in the same cell and scans the same list, whole vectors at a time.
-    std::vector<float> cx, cy, cz, cf;
-    std::vector<std::uint32_t> cb;
+    // usually in the same cell and scans the same list, whole vectors at a time. Kept by
+    // the thread from call to call (a call is one block of birds).
+    thread_local std::vector<float> cx, cy, cz, cf;
+    thread_local std::vector<std::uint32_t> cb;
     std::size_t used = 0;  // candidates in the arrays
     std::uint32_t visited[27];
     glm::ivec3 list_home(0);
@@ -44,7 +45,7 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
         // The bird in grid slot first_slot + n, read from the sorted arrays (in order,
         // where its own parameters and state by index would be a cache miss each).
         const std::uint32_t slot = first_slot + n;
-        const std::uint32_t i = sorted.bird[slot];
+        const std::uint32_t i = kernel.kw_sorted(slot);
         const auto own = static_cast<std::uint32_t>(sorted.flock[slot]);
         const gpu::FlockParamsGpu flock = kernel.kw_flock(own);
         const glm::vec3 p(sorted.x[slot], sorted.y[slot], sorted.z[slot]);
@@ -85,7 +86,7 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
                             cy[used] = sorted.y[t];
                             cz[used] = sorted.z[t];
                             cf[used] = sorted.flock[t];
-                            cb[used] = sorted.bird[t];
+                            cb[used] = kernel.kw_sorted(t);
                         }
                     }
                 }
@@ -152,8 +153,8 @@ void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<con
     vx.resize(padded);
     vy.resize(padded);
     vz.resize(padded);
-    flock.assign(padded, -1.0f);
-    bird.assign(padded, 0u);
+    flock.resize(padded);
+    for (std::size_t s = n; s < padded; ++s) flock[s] = -1.0f;  // no bird's flock
     for (std::size_t s = 0; s < n; ++s) {
         const std::uint32_t i = order[s];
         x[s] = states[i].position.x;
@@ -163,7 +164,6 @@ void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<con
         vy[s] = states[i].velocity.y;
         vz[s] = states[i].velocity.z;
         flock[s] = static_cast<float>(birds[i].ids.x);
-        bird[s] = i;
     }
 }
 
