@@ -14,7 +14,9 @@ fi
 source "$(dirname "${BASH_SOURCE[0]}")/check.sh"
 view() {  # view OUT-PREFIX ARGS...: the viewer in a fresh Xvfb screen
     local out=$1; shift
-    xvfb-run -a -s "-screen 0 1024x768x24" "$bin" view "$@" >"$out.out" 2>"$out.err"
+    # -f: our own authority file, so that xvfb-run makes no temporary folder of its own
+    # (removing one failed once in CI, exit 5, with the viewer's result right).
+    xvfb-run -a -f "$out.xauth" -s "-screen 0 1024x768x24" "$bin" view "$@" >"$out.out" 2>"$out.err"
     local rc=$?
     cat "$out.out" "$out.err"
     return $rc
