@@ -41,10 +41,10 @@ public:
             // The rod backend's buffers change with each load(); the set is not in use here
             // (the previous submission that used it has been waited for).
             const compute::BufferView views[KW_ROD_INPUTS_BINDING_COUNT] = {
-                {poses->buffer(DeviceBuffer::PoseWorld).buffer}, {&rig.instances}, {&rig.attachments},
-                {rods.buffer(DeviceBuffer::RodReference).buffer}, {rods.buffer(DeviceBuffer::RodRoots).buffer},
-                {rods.buffer(DeviceBuffer::RodColliders).buffer}, {rods.buffer(DeviceBuffer::RodKeys).buffer},
-                {rods.buffer(DeviceBuffer::RodCenters).buffer}};
+                {poses->buffer(pose_buffers::world).buffer}, {&rig.instances}, {&rig.attachments},
+                {rods.buffer(rod_buffers::reference).buffer}, {rods.buffer(rod_buffers::roots).buffer},
+                {rods.buffer(rod_buffers::colliders).buffer}, {rods.buffer(rod_buffers::keys).buffer},
+                {rods.buffer(rod_buffers::centers).buffer}};
             rig.kernel.bind(views);
             const std::uint32_t groups = (rig.push.counts.x + KW_ROD_INPUTS_WORKGROUP_SIZE - 1) / KW_ROD_INPUTS_WORKGROUP_SIZE;
             rig.kernel.dispatch(recording, std::as_bytes(std::span(&rig.push, 1)), groups);

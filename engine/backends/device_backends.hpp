@@ -70,7 +70,7 @@ public:
     virtual ~DeviceBirdBackend() = default;
     /// simulate(frames, {}) without submitting or waiting: records the dispatch of the
     /// next `frames` frames into `recording` (a recording of this backend's device);
-    /// DeviceBuffer::BirdPoses is the last of them once the caller's submission completed.
+    /// bird_buffers::poses is the last of them once the caller's submission completed.
     [[nodiscard]] virtual Result<void> record_simulate(compute::Recording& recording, std::uint32_t frames) = 0;
     /// record_simulate into the application's command buffer, between the barriers of
     /// embedding_consumers(). Birds flown by another domain (BirdWorld::driven) take one

@@ -72,9 +72,12 @@ public:
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
     const DeviceData* device_data() const override { return frame_ > 0 ? this : nullptr; }
     const gpu::VulkanContext& context() const override { return *ctx_; }
-    DeviceSpan buffer(DeviceBuffer name) const override {
-        if (name != DeviceBuffer::BirdPoses || frame_ == 0) return {};
-        return {.buffer = &buffers_[KW_BIRDS_BINDING_POSES], .first = std::uint64_t{last_slot_} * count_, .items = count_};
+    DeviceSpan buffer(std::string_view name) const override {
+        if (name != bird_buffers::poses || frame_ == 0) return {};
+        return {.buffer = &buffers_[KW_BIRDS_BINDING_POSES],
+                .first = std::uint64_t{last_slot_} * count_,
+                .items = count_,
+                .element_bytes = sizeof(gpu::BirdPoseGpu)};
     }
 
     Result<void> record_simulate(compute::Recording& recording, std::uint32_t frames) override {

@@ -16,22 +16,6 @@
 namespace kodawari {
 namespace {
 
-std::uint32_t element_bytes(DeviceBuffer name) {
-    switch (name) {
-        case DeviceBuffer::BirdPoses: return sizeof(gpu::BirdPoseGpu);
-        case DeviceBuffer::RodChainStates: return sizeof(gpu::RodChainStateGpu);
-        case DeviceBuffer::RodMotion: return sizeof(gpu::RodJointMotionGpu);
-        case DeviceBuffer::RodSpin: return sizeof(gpu::RodJointSpinGpu);
-        case DeviceBuffer::RodReference: return sizeof(gpu::RodTransformGpu);
-        case DeviceBuffer::RodRoots: return sizeof(gpu::RodTransformGpu);
-        case DeviceBuffer::RodColliders: return sizeof(gpu::RodColliderGpu);
-        case DeviceBuffer::PoseWorld: return sizeof(gpu::PoseMatrixGpu);
-        case DeviceBuffer::RodKeys: return sizeof(gpu::RodTransformGpu);
-        case DeviceBuffer::RodCenters: return sizeof(gpu::RodTransformGpu);
-    }
-    return 0;
-}
-
 Error not_vulkan(const char* function, const char* argument, std::string_view backend) {
     return make_error(Error::Kind::InvalidInput, std::string(function) + ": " + argument + " is a " + std::string(backend) +
                                                      " backend; recording needs a vulkan one (BackendKind::Vulkan)");
@@ -50,12 +34,12 @@ public:
             {.buffer = nullptr, .offset = input.offset, .size = VkDeviceSize{input.instances} * input.nodes * sizeof(gpu::PoseMatrixGpu),
              .foreign = input.buffer},
             {&instances_}, {&attachments_},
-            {rods.buffer(DeviceBuffer::RodReference).buffer}, {rods.buffer(DeviceBuffer::RodRoots).buffer},
-            {rods.buffer(DeviceBuffer::RodColliders).buffer},
+            {rods.buffer(rod_buffers::reference).buffer}, {rods.buffer(rod_buffers::roots).buffer},
+            {rods.buffer(rod_buffers::colliders).buffer},
             // MatrixInput names no key sources (more.y = 0): they come from the RodFrame.
-            {rods.buffer(DeviceBuffer::RodKeys).buffer},
+            {rods.buffer(rod_buffers::keys).buffer},
             // Nor centers (more.z = 0; set_matrix_input refuses worlds that have them).
-            {rods.buffer(DeviceBuffer::RodCenters).buffer}};
+            {rods.buffer(rod_buffers::centers).buffer}};
         kernel_.bind(views);
     }
 
@@ -190,13 +174,13 @@ Result<std::shared_ptr<gpu::VulkanContext>> adopt_vulkan_device(const VulkanDevi
     return std::shared_ptr<gpu::VulkanContext>(std::move(adopted).value());
 }
 
-Result<VulkanBufferRange> vulkan_buffer(const DeviceData& data, DeviceBuffer name) {
+Result<VulkanBufferRange> vulkan_buffer(const DeviceData& data, std::string_view name) {
     const DeviceSpan span = data.buffer(name);
     if (span.buffer == nullptr) {
-        return make_error(Error::Kind::InvalidInput,
-                          "vulkan_buffer: the backend keeps no buffer of that name now (another family's, or not loaded yet)");
+        return make_error(Error::Kind::InvalidInput, "vulkan_buffer: the backend keeps no buffer named \"" + std::string(name) +
+                                                         "\" now (another family's, or not loaded yet)");
     }
-    const std::uint32_t stride = element_bytes(name);
+    const std::uint32_t stride = span.element_bytes;
     VulkanBufferRange out;
     out.buffer = static_cast<VkBuffer>(span.buffer->handle());
     out.count = span.items * span.per_item;

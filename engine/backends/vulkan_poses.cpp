@@ -293,12 +293,13 @@ public:
 
     const DeviceData* device_data() const override { return evaluated_ ? this : nullptr; }
     const gpu::VulkanContext& context() const override { return *ctx_; }
-    DeviceSpan buffer(DeviceBuffer name) const override {
-        if (name != DeviceBuffer::PoseWorld || !evaluated_) return {};
+    DeviceSpan buffer(std::string_view name) const override {
+        if (name != pose_buffers::world || !evaluated_) return {};
         return {.buffer = &buffers_[KW_POSES_BINDING_WORLD],
                 .first = 0,
                 .items = count_,
-                .per_item = static_cast<std::uint32_t>(character_->nodes.size())};
+                .per_item = static_cast<std::uint32_t>(character_->nodes.size()),
+                .element_bytes = sizeof(gpu::PoseMatrixGpu)};
     }
 
     Result<void> read(std::vector<glm::mat4>& world) override {

@@ -148,23 +148,21 @@ public:
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
     const DeviceData* device_data() const override { return world_ != nullptr ? this : nullptr; }
     const gpu::VulkanContext& context() const override { return *ctx_; }
-    DeviceSpan buffer(DeviceBuffer name) const override {
+    DeviceSpan buffer(std::string_view name) const override {
         if (world_ == nullptr) return {};
-        auto span = [&](std::uint32_t binding, std::size_t items) {
-            return DeviceSpan{.buffer = &buffers_[binding], .first = 0, .items = static_cast<std::uint32_t>(items)};
+        auto span = [&]<typename Element>(const compute::Buffer& buffer, std::size_t items, Element) {
+            return DeviceSpan{.buffer = &buffer, .items = static_cast<std::uint32_t>(items), .element_bytes = sizeof(Element)};
         };
-        switch (name) {
-            case DeviceBuffer::RodChainStates: return span(KW_RODS_BINDING_CHAIN_STATE, world_->chains.size());
-            case DeviceBuffer::RodMotion: return span(KW_RODS_BINDING_MOTION, world_->joint_count);
-            case DeviceBuffer::RodSpin: return span(KW_RODS_BINDING_SPIN, world_->joint_count);
-            case DeviceBuffer::RodReference: return span(KW_RODS_BINDING_REFERENCE, world_->character_count);
-            case DeviceBuffer::RodRoots: return span(KW_RODS_BINDING_ROOTS, world_->chains.size());
-            case DeviceBuffer::RodColliders: return span(KW_RODS_BINDING_COLLIDERS, world_->collider_count);
-            case DeviceBuffer::RodCenters: return span(KW_RODS_BINDING_CENTERS, world_->center_count);
-            case DeviceBuffer::RodKeys:
-                return DeviceSpan{.buffer = &key_buffers_[KW_ROD_KEYS_BINDING_KEYS], .first = 0, .items = world_->key_count};
-            default: return {};
-        }
+        const auto& b = buffers_;
+        if (name == rod_buffers::chain_states) return span(b[KW_RODS_BINDING_CHAIN_STATE], world_->chains.size(), gpu::RodChainStateGpu{});
+        if (name == rod_buffers::motion) return span(b[KW_RODS_BINDING_MOTION], world_->joint_count, gpu::RodJointMotionGpu{});
+        if (name == rod_buffers::spin) return span(b[KW_RODS_BINDING_SPIN], world_->joint_count, gpu::RodJointSpinGpu{});
+        if (name == rod_buffers::reference) return span(b[KW_RODS_BINDING_REFERENCE], world_->character_count, gpu::RodTransformGpu{});
+        if (name == rod_buffers::roots) return span(b[KW_RODS_BINDING_ROOTS], world_->chains.size(), gpu::RodTransformGpu{});
+        if (name == rod_buffers::colliders) return span(b[KW_RODS_BINDING_COLLIDERS], world_->collider_count, gpu::RodColliderGpu{});
+        if (name == rod_buffers::centers) return span(b[KW_RODS_BINDING_CENTERS], world_->center_count, gpu::RodTransformGpu{});
+        if (name == rod_buffers::keys) return span(key_buffers_[KW_ROD_KEYS_BINDING_KEYS], world_->key_count, gpu::RodTransformGpu{});
+        return {};
     }
     void set_input_writer(std::shared_ptr<const RodInputWriter> writer) override { input_writer_ = std::move(writer); }
     const rods::RodWorld* world() const override { return world_; }

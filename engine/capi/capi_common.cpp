@@ -234,13 +234,13 @@ kodawari_backend effective_backend(const kodawari_backend_options& options) {
     return options.vulkan_device != nullptr ? KODAWARI_BACKEND_VULKAN : options.backend;
 }
 
-DeviceBuffer device_buffer(kodawari_device_buffer which) {
+std::string_view device_buffer(kodawari_device_buffer which) {
     const std::int64_t value = enum_value(which);
     switch (value) {
-        case KODAWARI_BUFFER_CHAIN_STATES: return DeviceBuffer::RodChainStates;
-        case KODAWARI_BUFFER_JOINT_MOTION: return DeviceBuffer::RodMotion;
-        case KODAWARI_BUFFER_JOINT_SPIN: return DeviceBuffer::RodSpin;
-        case KODAWARI_BUFFER_BIRD_POSES: return DeviceBuffer::BirdPoses;
+        case KODAWARI_BUFFER_CHAIN_STATES: return rod_buffers::chain_states;
+        case KODAWARI_BUFFER_JOINT_MOTION: return rod_buffers::motion;
+        case KODAWARI_BUFFER_JOINT_SPIN: return rod_buffers::spin;
+        case KODAWARI_BUFFER_BIRD_POSES: return bird_buffers::poses;
         default: invalid("which", std::to_string(value) + "; expected a kodawari_device_buffer (0 to 3)");
     }
 }
@@ -257,8 +257,8 @@ kodawari_buffer_range buffer_range(const VulkanBufferRange& range) {
 
 void fill_range(const DeviceData* data, kodawari_device_buffer which, kodawari_buffer_range* out, bool chains) {
     require_pointer(out, "out");
-    const DeviceBuffer name = device_buffer(which);
-    if (chains == (name == DeviceBuffer::BirdPoses)) {
+    const std::string_view name = device_buffer(which);
+    if (chains == (name == bird_buffers::poses)) {
         invalid("which", chains ? "BIRD_POSES is a bird world's buffer" : "a chain world's buffer; a bird world has BIRD_POSES");
     }
     if (data == nullptr) {

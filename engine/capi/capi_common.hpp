@@ -143,7 +143,7 @@ kodawari_backend effective_backend(const kodawari_backend_options& options);
 /// Where a device buffer is, in C (`what` names the argument in errors).
 void fill_range(const DeviceData* data, kodawari_device_buffer which, kodawari_buffer_range* out, bool chains);
 /// The engine's name of a C buffer name; InvalidInput naming `which` when out of range.
-DeviceBuffer device_buffer(kodawari_device_buffer which);
+std::string_view device_buffer(kodawari_device_buffer which);
 /// A VulkanBufferRange as the C API writes it.
 kodawari_buffer_range buffer_range(const VulkanBufferRange& range);
 /// The engine's kind of an explicit kodawari_backend (not AUTO).

@@ -187,8 +187,7 @@ KODAWARI_C_API kodawari_status kodawari_simulation_buffer(kodawari_simulation* s
     return guard("kodawari_simulation_buffer", sim ? &sim->message : nullptr, [&] {
         require_sim(sim);
         require_pointer(out, "out");
-        const DeviceBuffer name = device_buffer(which);
-        auto range = name == DeviceBuffer::BirdPoses ? bird_pose_buffer(*sim->sim) : chain_buffer(*sim->sim, name);
+        auto range = sim->sim->buffer(device_buffer(which));
         check(range);
         *out = buffer_range(range.value());
     });

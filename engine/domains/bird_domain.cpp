@@ -47,6 +47,18 @@ public:
         birds.erase(birds.begin(), birds.begin() + range.begin);
     }
     std::vector<std::string> outputs() const override { return {std::string(kBirdDomain)}; }
+    std::vector<std::string> buffers() const override {
+        if (world_.birds.empty()) return {};
+        return {std::string(bird_buffers::poses)};
+    }
+    Result<VulkanBufferRange> buffer(std::string_view name) const override {
+        const DeviceData* data = device_data();
+        if (name != bird_buffers::poses || data == nullptr) {
+            return make_error(Error::Kind::InvalidInput, "domain \"birds\": \"" + std::string(name) +
+                                                             "\" is not on a Vulkan device (a cpu backend, or no frame yet)");
+        }
+        return vulkan_buffer(*data, name);
+    }
     // Driven birds fly what the flocking domain gives them each frame.
     std::vector<std::string> inputs() const override {
         if (world_.driven == 0) return {};
@@ -197,18 +209,6 @@ Result<void> step_birds(Simulation& sim, std::uint32_t frames, std::span<gpu::Bi
 
 void keep_bird_poses(Simulation& sim, bool keep) {
     if (BirdDomain* domain = find(sim)) domain->keep_poses(keep);
-}
-
-Result<VulkanBufferRange> bird_pose_buffer(const Simulation& sim) {
-    const BirdDomain* domain = find(sim);
-    const DeviceData* data = domain ? domain->device_data() : nullptr;
-    if (data == nullptr) {
-        return make_error(Error::Kind::InvalidInput,
-                          domain == nullptr || domain->world().birds.empty()
-                              ? "bird_pose_buffer: the simulation has no birds"
-                              : "bird_pose_buffer: the birds' poses are not on a Vulkan device (a cpu backend, or no frame yet)");
-    }
-    return vulkan_buffer(*data, DeviceBuffer::BirdPoses);
 }
 
 const BirdTiming& bird_timing(const Simulation& sim) {

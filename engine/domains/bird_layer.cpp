@@ -148,7 +148,7 @@ Result<void> BirdLayer::set_world(gpu::VulkanContext& ctx, const birds::BirdWorl
 Result<void> BirdLayer::from_backend(gpu::VulkanContext& ctx, const BirdBackend& backend) {
     if (count_ == 0) return {};
     const DeviceData* data = backend.device_data();
-    const DeviceSpan poses = data != nullptr ? data->buffer(DeviceBuffer::BirdPoses) : DeviceSpan{};
+    const DeviceSpan poses = data != nullptr ? data->buffer(bird_buffers::poses) : DeviceSpan{};
     if (data == nullptr || &data->context() != &ctx || poses.buffer == nullptr) {
         return make_error(Error::Kind::InvalidInput, "the " + std::string(backend.name()) +
                                                          " bird backend has no poses on the renderer's device: pass its poses");

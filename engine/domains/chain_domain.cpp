@@ -59,6 +59,19 @@ public:
         scene_.emplace(scene_->slice(range.begin, range.end));
     }
     std::vector<std::string> outputs() const override { return {std::string(kChainDomain)}; }
+    // The state an application draws from; the inputs are written for the step.
+    std::vector<std::string> buffers() const override {
+        if (!scene_) return {};
+        return {std::string(rod_buffers::chain_states), std::string(rod_buffers::motion), std::string(rod_buffers::spin)};
+    }
+    Result<VulkanBufferRange> buffer(std::string_view name) const override {
+        const DeviceData* data = device_data();
+        if (data == nullptr) {
+            return make_error(Error::Kind::InvalidInput, "domain \"chains\": \"" + std::string(name) +
+                                                             "\" is not on a Vulkan device (a cpu backend, or no chains in this shard)");
+        }
+        return vulkan_buffer(*data, name);
+    }
 
     Result<void> open(const DomainSetup& setup, std::span<Domain* const>) override {
         device_inputs_ = setup.device_inputs;
@@ -259,19 +272,6 @@ void set_view_camera(Simulation& sim, std::optional<rods::Camera> camera) {
 Result<void> set_wind(Simulation& sim, std::optional<rods::WindField> wind) {
     if (ChainDomain* domain = find(sim)) return domain->set_wind(wind);
     return {};
-}
-
-Result<VulkanBufferRange> chain_buffer(const Simulation& sim, DeviceBuffer which) {
-    if (which != DeviceBuffer::RodChainStates && which != DeviceBuffer::RodMotion && which != DeviceBuffer::RodSpin) {
-        return make_error(Error::Kind::InvalidInput, "chain_buffer: which: expected RodChainStates, RodMotion or RodSpin");
-    }
-    const ChainDomain* domain = find(sim);
-    if (domain == nullptr || domain->scene() == nullptr) {
-        return make_error(Error::Kind::InvalidInput, "chain_buffer: the simulation has no chains");
-    }
-    const DeviceData* data = domain->device_data();
-    if (data == nullptr) return make_error(Error::Kind::InvalidInput, "chain_buffer: the chains are not on a Vulkan device (a cpu backend)");
-    return vulkan_buffer(*data, which);
 }
 
 const ChainTiming& chain_timing(const Simulation& sim) {

@@ -147,8 +147,8 @@ Result<void> ChainLayer::from_backend(gpu::VulkanContext& ctx, RodBackend& backe
     }
     const gpu::BufferRange ranges[KW_CHAINS_BINDING_COUNT] = {{info_->handle()},
                                                               {joint_chain_->handle()},
-                                                              {state->buffer(DeviceBuffer::RodChainStates).buffer->handle()},
-                                                              {state->buffer(DeviceBuffer::RodMotion).buffer->handle()}};
+                                                              {state->buffer(rod_buffers::chain_states).buffer->handle()},
+                                                              {state->buffer(rod_buffers::motion).buffer->handle()}};
     set_->bind(ctx, ranges);
     bound_ = on_device_ = true;
     return {};
@@ -247,7 +247,7 @@ Result<void> ColliderLayer::from(gpu::VulkanContext& ctx, const RodBackend& back
     if (count_ == 0) return {};
     const DeviceData* state = backend.device_data();
     if (state != nullptr && &state->context() == &ctx) {
-        const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{state->buffer(DeviceBuffer::RodColliders).buffer->handle()}};
+        const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{state->buffer(rod_buffers::colliders).buffer->handle()}};
         set_->bind(ctx, ranges);
         bound_ = true;
         return {};

@@ -172,7 +172,7 @@ Result<void> SkinnedLayer::from_backends(gpu::VulkanContext& ctx, const CrowdAni
                                                              " the renderer draws: make it from the scene given to show_skinned()");
         }
         const DeviceData* poses = it->backend->device_data();
-        const DeviceSpan world = poses != nullptr ? poses->buffer(DeviceBuffer::PoseWorld) : DeviceSpan{};
+        const DeviceSpan world = poses != nullptr ? poses->buffer(pose_buffers::world) : DeviceSpan{};
         device = device && world.buffer != nullptr && &poses->context() == &ctx && world.items == ch.instances.size() &&
                  world.per_item == ch.nodes;
         worlds.push_back(world);
@@ -193,9 +193,9 @@ Result<void> SkinnedLayer::from_backends(gpu::VulkanContext& ctx, const CrowdAni
         const compute::BufferView buffers[KW_SKIN_BINDING_COUNT] = {{&*ch.walk},
                                                                     {&*ch.instance_chains},
                                                                     {worlds[k].buffer},
-                                                                    {state->buffer(DeviceBuffer::RodChainStates).buffer},
-                                                                    {state->buffer(DeviceBuffer::RodMotion).buffer},
-                                                                    {state->buffer(DeviceBuffer::RodSpin).buffer},
+                                                                    {state->buffer(rod_buffers::chain_states).buffer},
+                                                                    {state->buffer(rod_buffers::motion).buffer},
+                                                                    {state->buffer(rod_buffers::spin).buffer},
                                                                     {&*ch.world}};
         ch.kernel->bind(buffers);
         ch.filled = ch.dispatch = true;

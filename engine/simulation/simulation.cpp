@@ -245,6 +245,18 @@ Result<void> Simulation::record(VkCommandBuffer cmd) {
     return {};
 }
 
+Result<VulkanBufferRange> Simulation::buffer(std::string_view name) const {
+    std::string names;
+    for (const Domain* domain : impl_->domains) {
+        for (const std::string& own : domain->buffers()) {
+            if (own == name) return domain->buffer(name);
+            names += (names.empty() ? "" : ", ") + own;
+        }
+    }
+    return make_error(Error::Kind::InvalidInput, "Simulation::buffer: no domain has a buffer named \"" + std::string(name) +
+                                                     "\" (" + (names.empty() ? std::string("none has buffers") : "they have " + names) + ")");
+}
+
 Result<void> Simulation::seek(std::uint32_t target) {
     Impl& s = *impl_;
     target = std::min(target, s.frames - 1);

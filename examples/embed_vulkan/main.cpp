@@ -480,9 +480,9 @@ int main(int argc, char** argv) {
         // Where this frame's results are: bound once (the ranges do not move), the bird
         // slot passed as an element index (an offset need not meet the descriptor
         // alignment).
-        const auto states = value_of(kodawari::vulkan_buffer(*rods->device_data(), kodawari::DeviceBuffer::RodChainStates), "states");
-        const auto motion = value_of(kodawari::vulkan_buffer(*rods->device_data(), kodawari::DeviceBuffer::RodMotion), "motion");
-        const auto poses = value_of(kodawari::bird_pose_buffer(*flock), "bird_pose_buffer");
+        const auto states = value_of(kodawari::vulkan_buffer(*rods->device_data(), kodawari::rod_buffers::chain_states), "states");
+        const auto motion = value_of(kodawari::vulkan_buffer(*rods->device_data(), kodawari::rod_buffers::motion), "motion");
+        const auto poses = value_of(flock->buffer(kodawari::bird_buffers::poses), "birds.poses");
         if (motion.stride != sizeof(kodawari::gpu::RodJointMotionGpu) || poses.stride != sizeof(kodawari::gpu::BirdPoseGpu)) {
             fail("the module's strides differ from its structs");
         }

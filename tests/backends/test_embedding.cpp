@@ -97,13 +97,13 @@ TEST_F(Embedding, RecordedStepsInFlightGiveTheBitsOfStep) {
     expect_same_bits(a, b);
 
     // The output ranges name the module's buffers with the shared structs' strides.
-    const auto motion = vulkan_buffer(*rods.value()->device_data(), DeviceBuffer::RodMotion);
+    const auto motion = vulkan_buffer(*rods.value()->device_data(), rod_buffers::motion);
     ASSERT_TRUE(motion.ok()) << motion.error().message;
     EXPECT_NE(motion.value().buffer, VK_NULL_HANDLE);
     EXPECT_EQ(motion.value().count, synthetic.world().joint_count);
     EXPECT_EQ(motion.value().stride, sizeof(gpu::RodJointMotionGpu));
     EXPECT_EQ(motion.value().range, VkDeviceSize{motion.value().count} * motion.value().stride);
-    EXPECT_FALSE(vulkan_buffer(*rods.value()->device_data(), DeviceBuffer::BirdPoses).ok());
+    EXPECT_FALSE(vulkan_buffer(*rods.value()->device_data(), bird_buffers::poses).ok());
     EXPECT_EQ(messages, 0u);
 }
 

@@ -88,6 +88,19 @@ public:
     void keep_instances(InstanceRange range) override { range_ = range; }
     std::vector<std::string> outputs() const override { return {name_}; }
     std::vector<std::string> buffers() const override { return {name_ + ".params", name_ + ".angles", name_ + ".positions"}; }
+    // The positions, for an application's shaders (vec4 per particle); the others are the
+    // domain's own.
+    Result<VulkanBufferRange> buffer(std::string_view name) const override {
+        if (name != name_ + ".positions" || kind_ != BackendKind::Vulkan || gpu_.size() < 3) {
+            return make_error(Error::Kind::InvalidInput, "circles: hands out only its positions, on vulkan");
+        }
+        VulkanBufferRange out;
+        out.buffer = static_cast<VkBuffer>(gpu_[2].handle());
+        out.count = static_cast<std::uint32_t>(positions_.size());
+        out.stride = sizeof(glm::vec4);
+        out.range = VkDeviceSize{out.count} * out.stride;
+        return out;
+    }
 
     Result<void> open(const DomainSetup& setup, std::span<Domain* const>) override {
         kind_ = setup.kind;
@@ -530,6 +543,20 @@ TEST(DomainContract, TheTestDomainRecordsIntoTheApplicationsCommandBuffers) {
     const glm::vec4 e = expected(7, 11);
     EXPECT_NEAR(a->positions()[7].x, e.x, 2e-3f);  // the bound of the first test
     EXPECT_NEAR(a->positions()[7].z, e.z, 2e-3f);
+    // The buffer it names, found by the Simulation among its domains' (the engine names
+    // no circles): the application binds the positions it just recorded.
+    auto positions = recorded.value()->buffer("circles.positions");
+    ASSERT_TRUE(positions.ok()) << positions.error().message;
+    EXPECT_NE(positions.value().buffer, VK_NULL_HANDLE);
+    EXPECT_EQ(positions.value().count, kParticles);
+    EXPECT_EQ(positions.value().stride, sizeof(glm::vec4));
+    const auto unknown = recorded.value()->buffer("circles.velocities");
+    ASSERT_FALSE(unknown.ok());
+    EXPECT_NE(unknown.error().message.find("no domain has a buffer named \"circles.velocities\" (they have circles.params, "
+                                           "circles.angles, circles.positions)"),
+              std::string::npos)
+        << unknown.error().message;
+    EXPECT_FALSE(recorded.value()->buffer("circles.angles").ok());  // named, not handed out
     // Misuse: a null command buffer; the cpu backends record nothing.
     EXPECT_FALSE(recorded.value()->record(VK_NULL_HANDLE).ok());
     auto cpu = make(BackendKind::Cpu, {});
@@ -573,12 +600,15 @@ TEST(DomainContract, TheScenesDomainsRecordAsTheyStep) {
     ASSERT_EQ(a.positions.size(), b.positions.size());
     EXPECT_EQ(std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(glm::vec3)), 0);
     // Where the application binds them: the joints' motion, one RodJointMotionGpu each.
-    auto motion = chain_buffer(*recorded.value(), DeviceBuffer::RodMotion);
+    auto motion = recorded.value()->buffer(rod_buffers::motion);
     ASSERT_TRUE(motion.ok()) << motion.error().message;
     EXPECT_EQ(motion.value().count, a.positions.size());
     EXPECT_EQ(motion.value().stride, sizeof(gpu::RodJointMotionGpu));
-    EXPECT_FALSE(chain_buffer(*recorded.value(), DeviceBuffer::BirdPoses).ok());
-    EXPECT_FALSE(bird_pose_buffer(*recorded.value()).ok());  // no birds
+    auto states = recorded.value()->buffer(rod_buffers::chain_states);
+    ASSERT_TRUE(states.ok()) << states.error().message;
+    EXPECT_EQ(states.value().stride, sizeof(gpu::RodChainStateGpu));
+    EXPECT_FALSE(recorded.value()->buffer(rod_buffers::colliders).ok());  // an input, not handed out
+    EXPECT_FALSE(recorded.value()->buffer(bird_buffers::poses).ok());    // no birds
     EXPECT_EQ(app.messages(), 0u);
 }
 
@@ -629,7 +659,7 @@ TEST(DomainContract, FlockingRecordsAsItSteps) {
     }
     app.wait_all();
     EXPECT_EQ(recorded.value()->frame(), kFrames - 1);
-    auto pose_range = bird_pose_buffer(*recorded.value());
+    auto pose_range = recorded.value()->buffer(bird_buffers::poses);
     ASSERT_TRUE(pose_range.ok()) << pose_range.error().message;
     EXPECT_EQ(pose_range.value().count, kBirds);
     EXPECT_EQ(pose_range.value().stride, sizeof(gpu::BirdPoseGpu));

@@ -21,6 +21,13 @@ namespace gpu {
 class VulkanContext;
 }
 
+/// The bird backends' device buffers (DeviceData::buffer()).
+namespace bird_buffers {
+/// BirdPoseGpu per bird (<kodawari/shared/birds.h>): the last simulated frame's poses, one
+/// slot of the backend's ring of frames.
+inline constexpr std::string_view poses = "birds.poses";
+}  // namespace bird_buffers
+
 /// Which implementation runs the simulation.
 enum class BackendKind { CpuReference, Cpu, Vulkan };
 
@@ -89,7 +96,7 @@ public:
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
 
     /// The backend's data on its device (the vulkan backend; null otherwise): after
-    /// simulate(), DeviceBuffer::BirdPoses holds the last simulated frame's poses, also
+    /// simulate(), bird_buffers::poses holds the last simulated frame's poses, also
     /// when simulate() was given no output; render::Renderer draws the birds from them
     /// without reading them back.
     [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }

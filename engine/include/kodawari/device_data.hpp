@@ -6,6 +6,7 @@
 /// naming no graphics-API type: buffers are the compute layer's (engine/compute/).
 
 #include <cstdint>
+#include <string_view>
 
 #include "kodawari/api.hpp"
 
@@ -18,26 +19,17 @@ namespace compute {
 class Buffer;
 }
 
-/// The buffers a backend may keep on its device; element layouts in shaders/shared/.
-enum class DeviceBuffer : std::uint8_t {
-    BirdPoses,       ///< BirdPoseGpu: the bird backend's ring of frame slots
-    RodChainStates,  ///< RodChainStateGpu per chain (root.position)
-    RodMotion,       ///< RodJointMotionGpu per joint (x, relative to the root)
-    RodSpin,         ///< RodJointSpinGpu per joint (q, the particle's orientation)
-    RodReference,    ///< RodTransformGpu per character: this frame's input
-    RodRoots,        ///< RodTransformGpu per chain: this frame's input
-    RodColliders,    ///< RodColliderGpu: this frame's input
-    PoseWorld,       ///< PoseMatrixGpu, items (instances) x per_item (nodes), instance-major
-    RodKeys,         ///< RodTransformGpu per key source (RodFrame::keys): this frame's input
-    RodCenters,      ///< RodTransformGpu per center frame (RodFrame::centers): this frame's input
-};
-
-/// Where a named buffer's current data is.
+/// Where a named buffer's current data is. Names belong to each backend family and are
+/// listed in its header (bird_buffers in backend.hpp, rod_buffers in rod_backend.hpp,
+/// pose_buffers in pose_backend.hpp), with the std430 element struct of each in
+/// <kodawari/shared/*.h>: there is no list of every family's buffers, so a new family
+/// names its own.
 struct DeviceSpan {
     const compute::Buffer* buffer = nullptr;  ///< null: the backend keeps no such buffer (now)
-    std::uint64_t first = 0;                  ///< the first element of the current data (BirdPoses: bird 0 of the last frame)
+    std::uint64_t first = 0;                  ///< the first element of the current data (bird poses: bird 0 of the last frame)
     std::uint32_t items = 0;                  ///< birds, chains, joints, instances
-    std::uint32_t per_item = 1;               ///< elements per item (PoseWorld: nodes)
+    std::uint32_t per_item = 1;               ///< elements per item (pose world matrices: nodes)
+    std::uint32_t element_bytes = 0;          ///< bytes per element: the element struct's size
 };
 
 /// A backend's data on its device (BirdBackend, RodBackend, PoseBackend::device_data()).
@@ -46,8 +38,9 @@ public:
     virtual ~DeviceData() = default;
     /// The device the buffers live on: compare with a renderer's before drawing from them.
     [[nodiscard]] virtual const gpu::VulkanContext& context() const = 0;
-    /// A named buffer; {} when this backend has none (another family's name, or not loaded).
-    [[nodiscard]] virtual DeviceSpan buffer(DeviceBuffer name) const = 0;
+    /// A named buffer (its family's names); {} when this backend has none (another
+    /// family's name, an unknown one, or not loaded).
+    [[nodiscard]] virtual DeviceSpan buffer(std::string_view name) const = 0;
 
 protected:
     DeviceData() = default;

@@ -24,6 +24,7 @@
 
 #include "kodawari/api.hpp"
 #include "backend.hpp"
+#include "vulkan_embed.hpp"
 #include "result.hpp"
 
 namespace kodawari {
@@ -104,8 +105,17 @@ public:
     [[nodiscard]] virtual std::vector<std::string> outputs() const { return {}; }
     /// Names of other domains' outputs it reads: those domains step first.
     [[nodiscard]] virtual std::vector<std::string> inputs() const { return {}; }
-    /// Names of the device buffers it owns; unique in a Simulation.
+    /// Names of the device buffers it owns and hands out with buffer(); unique in a
+    /// Simulation ("birds.poses"). The domain's header says each one's element struct.
     [[nodiscard]] virtual std::vector<std::string> buffers() const { return {}; }
+    /// Where one of buffers() is now, on the vulkan backends, for the application's
+    /// shaders; InvalidInput, naming the domain and the buffer, when it is not on a
+    /// device now (the cpu backends, or no frame yet). The Simulation asks only for names
+    /// in buffers().
+    [[nodiscard]] virtual Result<VulkanBufferRange> buffer(std::string_view name) const {
+        return make_error(Error::Kind::InvalidInput,
+                          "domain \"" + std::string(this->name()) + "\" hands out no buffer \"" + std::string(name) + "\"");
+    }
 
     /// Opens its backends of `setup.kind`. `producers` are the domains whose outputs it
     /// named in inputs(), in that order. An Unsupported error (a buffer the device cannot

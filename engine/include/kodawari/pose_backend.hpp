@@ -23,6 +23,12 @@
 
 namespace kodawari {
 
+/// The pose backends' device buffers (DeviceData::buffer()).
+namespace pose_buffers {
+/// PoseMatrixGpu (<kodawari/shared/poses.h>), instances x nodes, instance-major: the world
+/// matrices of the last evaluate().
+inline constexpr std::string_view world = "poses.world";
+}  // namespace pose_buffers
 
 /// Checks instances against a character: every clip is -1 or an animation of it, every
 /// time offset and placement is finite. Errors name the instance ("instance 17: clip 3
@@ -62,7 +68,7 @@ public:
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
 
     /// The backend's data on its device (the vulkan backend; null otherwise): after
-    /// evaluate(), DeviceBuffer::PoseWorld holds the world matrices, for kernels and
+    /// evaluate(), pose_buffers::world holds the world matrices, for kernels and
     /// shaders that use them there.
     [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }
 };

@@ -17,6 +17,19 @@
 
 namespace kodawari {
 
+/// The rod backends' device buffers (DeviceData::buffer()); element structs in
+/// <kodawari/shared/rods.h>. The state, then this frame's input (written by the backend's
+/// step, or on the device by the crowd animator's kernels).
+namespace rod_buffers {
+inline constexpr std::string_view chain_states = "chains.states";  ///< RodChainStateGpu per chain (root.position)
+inline constexpr std::string_view motion = "chains.motion";        ///< RodJointMotionGpu per joint (x, relative to the root)
+inline constexpr std::string_view spin = "chains.spin";            ///< RodJointSpinGpu per joint (q, the particle's orientation)
+inline constexpr std::string_view reference = "chains.reference";  ///< RodTransformGpu per character
+inline constexpr std::string_view roots = "chains.roots";          ///< RodTransformGpu per chain
+inline constexpr std::string_view colliders = "chains.colliders";  ///< RodColliderGpu per collider
+inline constexpr std::string_view keys = "chains.keys";            ///< RodTransformGpu per key source (RodFrame::keys)
+inline constexpr std::string_view centers = "chains.centers";      ///< RodTransformGpu per center frame (RodFrame::centers)
+}  // namespace rod_buffers
 
 /// Simulates a RodWorld frame after frame.
 class KODAWARI_API RodBackend {
@@ -51,7 +64,7 @@ public:
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
 
     /// The backend's data on its device (the vulkan backend; null otherwise): after
-    /// load(), the Rod* buffers of DeviceBuffer (state and this frame's input);
+    /// load(), the rod_buffers (state and this frame's input);
     /// render::Renderer draws the chains from them without reading them back.
     [[nodiscard]] virtual const DeviceData* device_data() const { return nullptr; }
 };

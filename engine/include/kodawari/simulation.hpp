@@ -135,6 +135,13 @@ public:
     /// the vulkan backends, a null `cmd`, past the last frame (InvalidInput), a domain that
     /// cannot record (Unsupported, naming it).
     [[nodiscard]] Result<void> record(VkCommandBuffer cmd);
+    /// Where a domain's named device buffer is now (Domain::buffers(); the scene's:
+    /// bird_buffers::poses, rod_buffers::chain_states, motion and spin), to bind in the
+    /// application's shaders after step() or record(). The range can move with the frames
+    /// (the birds' pose ring): ask again after each. Errors (InvalidInput): a name no
+    /// domain has (the message lists those it has), or the buffer not on a device (the
+    /// cpu backends, or before the first frame).
+    [[nodiscard]] Result<VulkanBufferRange> buffer(std::string_view name) const;
     /// Simulates up to frame `target` (clamped to the last): forwards from the current
     /// frame, or again from frame 0 when going back. Nothing when it is the current one.
     [[nodiscard]] Result<void> seek(std::uint32_t target);

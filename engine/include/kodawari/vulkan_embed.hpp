@@ -12,7 +12,7 @@
 ///     rods.value()->load(world, first_frame);          // submits once to the queue, waits
 ///     // each frame, while recording the application's command buffer:
 ///     record_step(*rods.value(), cmd, frame);          // no submit, no wait
-///     auto joints = vulkan_buffer(*rods.value()->device_data(), DeviceBuffer::RodMotion);
+///     auto joints = vulkan_buffer(*rods.value()->device_data(), rod_buffers::motion);
 ///     // bind joints.value().buffer at joints.value().offset in the application's shaders
 ///
 /// What the module needs from the device: vulkan_requirements(). What it records and how
@@ -80,22 +80,24 @@ struct VulkanRequirements {
 /// application destroys its device, and once the GPU finished the work recorded with it.
 [[nodiscard]] KODAWARI_API Result<std::shared_ptr<gpu::VulkanContext>> adopt_vulkan_device(const VulkanDeviceHandles& handles);
 
-/// A range of a buffer the module writes, to bind in the application's shaders. The
-/// element layout is the std430 struct named for each DeviceBuffer (device_data.hpp),
-/// defined in <kodawari/shared/*.h> for GLSL and C++ alike.
+
+/// A range of a buffer on the Simulation's Vulkan device, to bind in the application's
+/// shaders (vulkan_buffer(), Simulation::buffer()). The element layout is the std430
+/// struct its owner names with the buffer, defined in <kodawari/shared/*.h> for GLSL and
+/// C++ alike.
 struct VulkanBufferRange {
     VkBuffer buffer = VK_NULL_HANDLE;
     VkDeviceSize offset = 0;  ///< bytes from the buffer's start to the first element
     VkDeviceSize range = 0;   ///< bytes: count x stride
-    std::uint32_t count = 0;  ///< elements (items x per_item of DeviceSpan)
+    std::uint32_t count = 0;  ///< elements
     std::uint32_t stride = 0; ///< bytes per element (the struct's size)
 };
 
 /// Where a backend's named buffer is now (after load(), or after the first record for
 /// birds and poses); InvalidInput when the backend keeps no such buffer. Ranges stay
-/// valid until the backend's next load() (BirdPoses: until the next record_simulate,
+/// valid until the backend's next load() (bird poses: until the next record_simulate,
 /// which may use another slot of its ring).
-[[nodiscard]] KODAWARI_API Result<VulkanBufferRange> vulkan_buffer(const DeviceData& data, DeviceBuffer name);
+[[nodiscard]] KODAWARI_API Result<VulkanBufferRange> vulkan_buffer(const DeviceData& data, std::string_view name);
 
 /// Records one frame of `rods` (a vulkan rod backend, loaded) into `cmd`, a command buffer
 /// of VulkanDeviceHandles::queue_family in the recording state: the frame's input copied
@@ -107,11 +109,11 @@ struct VulkanBufferRange {
 [[nodiscard]] KODAWARI_API Result<void> record_step(RodBackend& rods, VkCommandBuffer cmd, const rods::RodFrame& frame);
 
 /// Records the next `frames` frames of `birds` (a vulkan bird backend, loaded) into `cmd`;
-/// DeviceBuffer::BirdPoses then holds the last of them.
+/// bird_buffers::poses then holds the last of them.
 [[nodiscard]] KODAWARI_API Result<void> record_simulate(BirdBackend& birds, VkCommandBuffer cmd, std::uint32_t frames);
 
 /// Records the evaluation of every instance of `poses` (a vulkan pose backend, loaded) at
-/// scene time `time` into `cmd`; DeviceBuffer::PoseWorld then holds the world matrices.
+/// scene time `time` into `cmd`; pose_buffers::world then holds the world matrices.
 [[nodiscard]] KODAWARI_API Result<void> record_evaluate(PoseBackend& poses, VkCommandBuffer cmd, float time);
 
 /// A collider of a matrix-driven character: a capsule (a sphere when a == b) in a node's frame.

@@ -28,6 +28,8 @@ inline constexpr std::string_view kBirdDomain = "birds";
 /// gpu::BirdDiag of the same frames.
 inline constexpr std::string_view kBirdPosesChannel = "birds.poses";
 inline constexpr std::string_view kBirdDiagChannel = "birds.diag";
+// Its device buffer, the same poses where the vulkan backend keeps them:
+// bird_buffers::poses (kodawari/backend.hpp), through Simulation::buffer().
 
 /// Time spent in the bird backend's own calls. The first call also compiles its kernels
 /// (lavapipe compiles a pipeline at its first dispatch) and uploads the world, so it is
@@ -68,12 +70,6 @@ struct BirdTiming {
 /// backend); on by Simulation::show_on() for backends whose poses are not on the
 /// renderer's device.
 KODAWARI_API void keep_bird_poses(Simulation& sim, bool keep);
-/// Where the birds' poses of the last frame stepped or recorded (Simulation::record) are
-/// on the device, to bind in the application's shaders: BirdPoseGpu per bird
-/// (<kodawari/shared/birds.h>). InvalidInput off the vulkan backends, without birds or
-/// before the first frame. The range moves with the frames (the pose ring): ask again
-/// after each step or record.
-[[nodiscard]] KODAWARI_API Result<VulkanBufferRange> bird_pose_buffer(const Simulation& sim);
 /// The bird backend's time so far (zero without birds).
 [[nodiscard]] KODAWARI_API const BirdTiming& bird_timing(const Simulation& sim);
 

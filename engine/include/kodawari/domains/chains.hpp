@@ -44,6 +44,8 @@ inline constexpr std::string_view kChainOrientationsChannel = "chains.orientatio
 inline constexpr std::string_view kChainRestChannel = "chains.rest";
 inline constexpr std::string_view kChainViewDirectionsChannel = "chains.view_directions";
 inline constexpr std::string_view kChainWeightsChannel = "chains.weights";
+// Its device buffers, the state where the vulkan backend keeps it: rod_buffers::chain_states,
+// motion and spin (kodawari/rod_backend.hpp), through Simulation::buffer().
 inline constexpr std::uint32_t kChainWeights = rods::kMaxViewExamples + 1;
 
 /// Time spent in the chain domain's backends. Frames 0 and 1 (loaded and put at rest,
@@ -101,10 +103,6 @@ KODAWARI_API void set_view_camera(Simulation& sim, std::optional<rods::Camera> c
 /// range (rods::validate) is refused, naming the member. Frames already simulated keep
 /// theirs; a seek or a rewind replays with the field set now.
 [[nodiscard]] KODAWARI_API Result<void> set_wind(Simulation& sim, std::optional<rods::WindField> wind);
-/// Where the chains' state is on the device, to bind in the application's shaders:
-/// `which` is DeviceBuffer::RodChainStates, RodMotion or RodSpin (<kodawari/shared/rods.h>).
-/// InvalidInput off the vulkan backends, without chains or for another buffer.
-[[nodiscard]] KODAWARI_API Result<VulkanBufferRange> chain_buffer(const Simulation& sim, DeviceBuffer which);
 /// The chain domain's time so far (zero without chains).
 [[nodiscard]] KODAWARI_API const ChainTiming& chain_timing(const Simulation& sim);
 
