@@ -119,7 +119,14 @@ KODAWARI_C_API kodawari_status kodawari_flock_agent_default(kodawari_flock_agent
     return guard("kodawari_flock_agent_default", nullptr, [&] {
         require_pointer(out, "out");
         const FlockAgent d;
-        *out = kodawari_flock_agent{static_cast<std::uint32_t>(d.kind), {0.0f, 0.0f, 0.0f}, {0.0f, 0.0f, 0.0f}, d.radius, d.weight, d.margin};
+        *out = kodawari_flock_agent{static_cast<std::uint32_t>(d.kind),
+                                    {0.0f, 0.0f, 0.0f},
+                                    {0.0f, 0.0f, 0.0f},
+                                    d.radius,
+                                    d.weight,
+                                    d.margin,
+                                    {d.end.x, d.end.y, d.end.z},
+                                    {d.normal.x, d.normal.y, d.normal.z}};
     });
 }
 
@@ -139,6 +146,8 @@ KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_agents(kodawari_sim
             f.radius = a.radius;
             f.weight = a.weight;
             f.margin = a.margin;
+            f.end = {a.end[0], a.end[1], a.end[2]};
+            f.normal = {a.normal[0], a.normal[1], a.normal[2]};
             list.push_back(f);
         }
         check(set_flock_agents(*sim->sim, list));

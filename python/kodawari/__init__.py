@@ -251,15 +251,17 @@ class Simulation:
             _check(_native.lib.kodawari_simulation_set_wind(handle, ctypes.byref(wind) if wind is not None else None),
                    handle)
 
-    FLOCK_AGENT_KINDS = ("predator", "attractor", "obstacle")
+    FLOCK_AGENT_KINDS = ("predator", "attractor", "obstacle", "capsule", "plane")
 
     def set_flock_agents(self, agents=()):
         """Places agents among the scene's flocking birds from the next frame on, beside the
         scene's predators, until called again (no agents: removes them). Each agent is a
         dict: `kind` ("predator": fled across its path; "attractor": drawn to; "obstacle":
-        a sphere kept out of), `position` (3 numbers, m), and optionally `velocity` (m/s, a
-        predator's), `radius` (m, default 15), `weight` (m/s^2, default 40) and `margin`
-        (m, an obstacle's, default 2). At most 64. Raises Error naming agents[i] and the
+        a sphere kept out of; "capsule": one from `position` to `end`; "plane": the one
+        through `position` with `normal`, birds kept on the normal's side), `position` (3
+        numbers, m), and optionally `velocity` (m/s, a predator's), `radius` (m, default
+        15), `weight` (m/s^2, default 40), `margin` (m, an obstacle's, default 2), `end`
+        (m, a capsule's) and `normal` (a plane's, default up). At most 64. Raises Error naming agents[i] and the
         member out of range; nothing changes then."""
         agents = list(agents)
         array = (_native.FlockAgent * max(len(agents), 1))()
@@ -267,17 +269,19 @@ class Simulation:
             kind = agent.get("kind", "predator")
             if kind not in self.FLOCK_AGENT_KINDS:
                 raise ValueError(f"agents[{i}].kind: {kind!r}; expected one of {', '.join(self.FLOCK_AGENT_KINDS)}")
-            for key in ("position", "velocity"):
+            for key in ("position", "velocity", "end", "normal"):
                 if key in agent and len(agent[key]) != 3:
                     raise ValueError(f"agents[{i}].{key}: {agent[key]!r}; expected 3 numbers")
-            unknown = set(agent) - {"kind", "position", "velocity", "radius", "weight", "margin"}
+            unknown = set(agent) - {"kind", "position", "velocity", "radius", "weight", "margin", "end", "normal"}
             if unknown:
                 raise ValueError(f"agents[{i}]: unknown key(s) {', '.join(sorted(unknown))}")
             array[i] = _native.FlockAgent(self.FLOCK_AGENT_KINDS.index(kind),
                                           (ctypes.c_float * 3)(*[float(v) for v in agent.get("position", (0, 0, 0))]),
                                           (ctypes.c_float * 3)(*[float(v) for v in agent.get("velocity", (0, 0, 0))]),
                                           float(agent.get("radius", 15.0)), float(agent.get("weight", 40.0)),
-                                          float(agent.get("margin", 2.0)))
+                                          float(agent.get("margin", 2.0)),
+                                          (ctypes.c_float * 3)(*[float(v) for v in agent.get("end", (0, 0, 0))]),
+                                          (ctypes.c_float * 3)(*[float(v) for v in agent.get("normal", (0, 1, 0))]))
         with self._lock:
             handle = self._live()
             _check(_native.lib.kodawari_simulation_set_flock_agents(handle, array if agents else None, len(agents)), handle)

@@ -112,7 +112,8 @@ class Wind(ctypes.Structure):
 
 class FlockAgent(ctypes.Structure):
     _fields_ = [("kind", ctypes.c_uint32), ("position", ctypes.c_float * 3), ("velocity", ctypes.c_float * 3),
-                ("radius", ctypes.c_float), ("weight", ctypes.c_float), ("margin", ctypes.c_float)]
+                ("radius", ctypes.c_float), ("weight", ctypes.c_float), ("margin", ctypes.c_float),
+                ("end", ctypes.c_float * 3), ("normal", ctypes.c_float * 3)]
 
 
 lib, library_path = _load()

@@ -395,6 +395,21 @@ static void test_rejects(void) {
         agents[1].position[1] = 1e30f;
         EXPECT_FAIL(kodawari_simulation_set_flock_agents(sim, agents, 2), KODAWARI_INVALID_ARGUMENT, sim, "agents[1].position");
         agents[1].position[1] = 40.0f;
+        CHECK(agents[0].normal[0] == 0.0f && agents[0].normal[1] == 1.0f && agents[0].normal[2] == 0.0f &&
+                  agents[0].end[0] == 0.0f && agents[0].end[1] == 0.0f && agents[0].end[2] == 0.0f,
+              "flock agent defaults: normal (%g, %g, %g), end (%g, %g, %g)", (double)agents[0].normal[0],
+              (double)agents[0].normal[1], (double)agents[0].normal[2], (double)agents[0].end[0], (double)agents[0].end[1],
+              (double)agents[0].end[2]);
+        /* A capsule and a plane: a capsule's end and a plane's normal are checked. */
+        agents[1].kind = KODAWARI_FLOCK_CAPSULE;
+        agents[1].end[2] = -1e30f;
+        EXPECT_FAIL(kodawari_simulation_set_flock_agents(sim, agents, 2), KODAWARI_INVALID_ARGUMENT, sim, "agents[1].end");
+        agents[1].end[2] = 10.0f;
+        EXPECT_OK(kodawari_simulation_set_flock_agents(sim, agents, 2));
+        agents[1].kind = KODAWARI_FLOCK_PLANE;
+        agents[1].normal[1] = 0.0f;
+        EXPECT_FAIL(kodawari_simulation_set_flock_agents(sim, agents, 2), KODAWARI_INVALID_ARGUMENT, sim, "agents[1].normal");
+        agents[1].normal[1] = -3.0f;
         EXPECT_FAIL(kodawari_simulation_set_flock_agents(sim, NULL, 2), KODAWARI_INVALID_ARGUMENT, sim, "agents");
         EXPECT_FAIL(kodawari_simulation_set_flock_agents(NULL, agents, 2), KODAWARI_INVALID_ARGUMENT, NULL, "sim");
         EXPECT_OK(kodawari_simulation_set_flock_agents(sim, agents, 2));

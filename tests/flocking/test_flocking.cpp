@@ -402,6 +402,55 @@ TEST(Flocking, SceneObstaclesAndAttractorsShapeTheFlight) {
     EXPECT_LT(low_alone, -3.0f);
     EXPECT_GT(low_with, -0.5f);  // at most half a metre into the cliff's plane
     EXPECT_LT(lure_with, lure_alone - 10.0f);
+    // The same capsule and plane placed by the application (set_flock_agents, once: they
+    // stay until called again) fly the scene's flight bit for bit: one encoding, one path.
+    const auto placed = [&](const FlockAgent& agent) {
+        auto sim = open_text(scene_text(kBirds, 5.5, "{}"), {BackendKind::Cpu, ""});
+        EXPECT_NE(sim, nullptr);
+        std::vector<gpu::BirdPose> poses(std::size_t{kFrames} * kBirds);
+        if (sim) {
+            EXPECT_TRUE(set_flock_agents(*sim, std::span(&agent, 1)).ok());
+            EXPECT_TRUE(step_birds(*sim, kFrames, poses).ok());
+        }
+        return poses;
+    };
+    FlockAgent tower;
+    tower.kind = FlockAgent::Kind::Capsule;
+    tower.position = foot;
+    tower.end = top;
+    tower.radius = 4.0f;
+    tower.margin = 12.0f;
+    tower.weight = 80.0f;
+    FlockAgent wall;
+    wall.kind = FlockAgent::Kind::Plane;
+    wall.position = {centre.x, cliff, centre.z};
+    wall.normal = {0.0f, 2.5f, 0.0f};  // normalized, as the scene's
+    wall.margin = 6.0f;
+    wall.weight = 80.0f;
+    // The scene's text rounds the points to 6 decimals (std::to_string): the agents get the
+    // same rounding.
+    const auto rounded = [](glm::vec3 v) {
+        for (int c = 0; c < 3; ++c) v[c] = std::stof(std::to_string(v[c]));
+        return v;
+    };
+    tower.position = rounded(tower.position);
+    tower.end = rounded(tower.end);
+    wall.position = rounded(wall.position);
+    const std::vector<gpu::BirdPose> towered_by_app = placed(tower), walled_by_app = placed(wall);
+    EXPECT_EQ(std::memcmp(towered_by_app.data(), towered.data(), towered.size() * sizeof(gpu::BirdPose)), 0);
+    EXPECT_EQ(std::memcmp(walled_by_app.data(), walled.data(), walled.size() * sizeof(gpu::BirdPose)), 0);
+    // Bad ones are named: a capsule's end, a plane's normal.
+    FlockAgent far_end = tower;
+    far_end.end.y = 2e6f;
+    const auto no_end = set_flock_agents(*probe, std::span(&far_end, 1));
+    ASSERT_FALSE(no_end.ok());
+    EXPECT_NE(no_end.error().message.find("agents[0].end"), std::string::npos) << no_end.error().message;
+    FlockAgent flat = wall;
+    flat.normal = glm::vec3(0.0f);
+    const auto no_normal = set_flock_agents(*probe, std::span(&flat, 1));
+    ASSERT_FALSE(no_normal.ok());
+    EXPECT_NE(no_normal.error().message.find("agents[0].normal: expected a direction"), std::string::npos)
+        << no_normal.error().message;
 }
 
 // A flock without "flocking" flies its route exactly as without the flocking flock beside

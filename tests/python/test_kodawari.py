@@ -210,7 +210,20 @@ near_placed = float(numpy.linalg.norm(placed[90:150] - middle, axis=2).min())
 print(f"set_flock_agents: nearest bird to a 3 m obstacle's centre {near_free:.2f} m without it, {near_placed:.2f} m with it")
 # No bird inside the sphere (docs/flocking.md: a 12 m margin leaves room to turn aside).
 check(near_placed > 3.0 and near_placed > near_free, "set_flock_agents: the flock did not keep out of the obstacle")
+# A plane 2 m under the flock's middle (a cliff top): the birds keep above it.
+floor_y = float(middle[1]) - 2.0
+walled = flock_positions([{"kind": "plane", "position": (float(middle[0]), floor_y, float(middle[2])), "normal": (0, 1, 0),
+                           "margin": 6.0, "weight": 80.0}])
+low_free = float((free_flight[90:180, :, 1] - floor_y).min())
+low_walled = float((walled[90:180, :, 1] - floor_y).min())
+print(f"set_flock_agents: lowest bird against a plane 2 m under the flock {low_free:.2f} m without it, {low_walled:.2f} m with it")
+check(low_free < -1.0 and low_walled > -0.5, "set_flock_agents: the flock did not keep above the plane")
 with kodawari.Simulation.open(flocking_scene, "cpu", frames=2) as sim:
+    try:
+        sim.set_flock_agents([{"kind": "plane", "position": (0, 0, 0), "normal": (0, 0, 0)}])
+        check(False, "a plane's zero normal raised nothing")
+    except kodawari.Error as error:
+        check("agents[0].normal" in str(error), f"set_flock_agents(normal=0): {error}")
     try:
         sim.set_flock_agents([{"kind": "predator", "position": (0, 40, 0)}, {"kind": "obstacle", "position": (0, 0, 0), "radius": -1}])
         check(False, "a radius of -1 raised nothing")

@@ -148,23 +148,35 @@ Result<gpu::FlockAgentGpu> agent_gpu(const FlockAgent& a, std::size_t i) {
     auto bad = [&](const char* member, const char* expected) {
         return make_error(Error::Kind::InvalidInput, what + member + ": expected " + expected);
     };
-    if (a.kind != FlockAgent::Kind::Predator && a.kind != FlockAgent::Kind::Attractor && a.kind != FlockAgent::Kind::Obstacle) {
-        return bad("kind", "Predator, Attractor or Obstacle");
+    using Kind = FlockAgent::Kind;
+    if (static_cast<std::uint32_t>(a.kind) > static_cast<std::uint32_t>(Kind::Plane)) {
+        return bad("kind", "Predator, Attractor, Obstacle, Capsule or Plane (0 to 4)");
     }
+    const bool obstacle = a.kind == Kind::Obstacle || a.kind == Kind::Capsule || a.kind == Kind::Plane;
     for (int c = 0; c < 3; ++c) {
         if (!(std::abs(a.position[c]) <= 1e6f)) return bad("position", "3 numbers in [-1e6, 1e6] m");
         if (!(std::abs(a.velocity[c]) <= 1000.0f)) return bad("velocity", "3 numbers in [-1000, 1000] m/s");
+        if (a.kind == Kind::Capsule && !(std::abs(a.end[c]) <= 1e6f)) return bad("end", "3 numbers in [-1e6, 1e6] m");
+        if (a.kind == Kind::Plane && !(std::abs(a.normal[c]) <= 1e6f)) return bad("normal", "3 finite numbers");
     }
-    if (!(a.radius > 0.0f && a.radius <= 1e4f)) return bad("radius", "a number in (0, 10000] m");
+    // A plane has no extent to bound (the kernels read no radius for it).
+    if (a.kind != Kind::Plane && !(a.radius > 0.0f && a.radius <= 1e4f)) return bad("radius", "a number in (0, 10000] m");
     if (!(a.weight >= 0.0f && a.weight <= 1000.0f)) return bad("weight", "a number in [0, 1000] m/s^2");
     if (!(a.margin > 0.0f && a.margin <= 1000.0f)) return bad("margin", "a number in (0, 1000] m");
+    const float normal_length = glm::length(a.normal);
+    if (a.kind == Kind::Plane && !(normal_length > 1e-6f)) return bad("normal", "a direction (length above 1e-6)");
+    // The kernels' encoding (shared/flocking.h), as the scene's obstacles are written
+    // (flock_world.cpp): a capsule's other end and a plane's unit normal in `velocity`.
     gpu::FlockAgentGpu g{};
-    g.position = {a.position.x, a.position.y, a.position.z, a.radius};
-    const float kind = a.kind == FlockAgent::Kind::Predator    ? KW_FLOCK_AGENT_REPELLER
-                       : a.kind == FlockAgent::Kind::Attractor ? KW_FLOCK_AGENT_ATTRACTOR
-                                                               : KW_FLOCK_AGENT_SPHERE;
-    g.kind_weight = {kind, a.weight, a.kind == FlockAgent::Kind::Obstacle ? a.margin : 0.0f, 0.0f};
-    g.velocity = {a.velocity.x, a.velocity.y, a.velocity.z, 0.0f};
+    g.position = {a.position.x, a.position.y, a.position.z, a.kind == Kind::Plane ? 0.0f : a.radius};
+    const float kind = a.kind == Kind::Predator    ? KW_FLOCK_AGENT_REPELLER
+                       : a.kind == Kind::Attractor ? KW_FLOCK_AGENT_ATTRACTOR
+                       : a.kind == Kind::Obstacle  ? KW_FLOCK_AGENT_SPHERE
+                       : a.kind == Kind::Capsule   ? KW_FLOCK_AGENT_CAPSULE
+                                                   : KW_FLOCK_AGENT_PLANE;
+    g.kind_weight = {kind, a.weight, obstacle ? a.margin : 0.0f, 0.0f};
+    const glm::vec3 v = a.kind == Kind::Capsule ? a.end : a.kind == Kind::Plane ? a.normal / normal_length : a.velocity;
+    g.velocity = {v.x, v.y, v.z, 0.0f};
     return g;
 }
 

@@ -779,14 +779,19 @@ KODAWARI_C_API kodawari_status kodawari_simulation_step(kodawari_simulation* sim
 KODAWARI_C_API kodawari_status kodawari_simulation_set_wind(kodawari_simulation* sim, const kodawari_wind* wind);
 
 /// What an application places among a scene's flocking birds (docs/flocking.md): a
-/// predator they flee, an attractor they are drawn to, or a sphere they keep out of.
+/// predator they flee, an attractor they are drawn to, or an obstacle they keep out of
+/// (a sphere, a capsule, or a plane they keep to one side of).
 typedef enum kodawari_flock_agent_kind {
     /// Fled within `radius` (across its path, by `velocity`), `weight` m/s^2 at it, 0 at `radius`.
     KODAWARI_FLOCK_PREDATOR = 0,
     /// Drawn to within `radius`, the same falloff.
     KODAWARI_FLOCK_ATTRACTOR = 1,
     /// A sphere of `radius`: pushed out within `margin` of its surface, `weight` m/s^2 at it.
-    KODAWARI_FLOCK_OBSTACLE = 2
+    KODAWARI_FLOCK_OBSTACLE = 2,
+    /// A capsule of `radius` from `position` to `end`: kept out of as the sphere, steered round its axis.
+    KODAWARI_FLOCK_CAPSULE = 3,
+    /// The plane through `position` with `normal`: birds keep to the normal's side, pushed within `margin`.
+    KODAWARI_FLOCK_PLANE = 4
 } kodawari_flock_agent_kind;
 
 /// One agent; kodawari_flock_agent_default() gives a predator at the origin.
@@ -797,12 +802,16 @@ typedef struct kodawari_flock_agent {
     float position[3];
     /// Its velocity, m/s, |each| <= 1000 (a predator's; unused by the others). Default 0.
     float velocity[3];
-    /// m, in (0, 10000]. Default 15.
+    /// m, in (0, 10000] (a plane's is not read). Default 15.
     float radius;
     /// m/s^2, in [0, 1000]. Default 40.
     float weight;
-    /// An obstacle's margin, m, in (0, 1000]. Default 2.
+    /// An obstacle's margin (sphere, capsule, plane), m, in (0, 1000]. Default 2.
     float margin;
+    /// A capsule's other end, m, |each| <= 1e6. Default 0.
+    float end[3];
+    /// A plane's normal, any length above 1e-6 (normalized). Default (0, 1, 0).
+    float normal[3];
 } kodawari_flock_agent;
 
 /// Fills `out` with the defaults above.

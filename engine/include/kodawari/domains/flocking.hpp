@@ -51,6 +51,8 @@ struct FlockAgent {
         Predator = 0,   ///< fled within `radius`, at `weight` m/s^2 at the agent falling to 0 at `radius`
         Attractor = 1,  ///< drawn to within `radius`, the same falloff
         Obstacle = 2,   ///< a sphere of `radius`: pushed out within `margin` of its surface, `weight` at the surface
+        Capsule = 3,    ///< a capsule of `radius` from `position` to `end`: kept out of as the sphere, steered round its axis
+        Plane = 4,      ///< the plane through `position` with `normal`: birds kept on the normal's side, within `margin`
     };
     Kind kind = Kind::Predator;
     glm::vec3 position{0.0f};  ///< m, world; |each| <= 1e6
@@ -59,7 +61,10 @@ struct FlockAgent {
     glm::vec3 velocity{0.0f};
     float radius = 15.0f;  ///< m, in (0, 10 000]
     float weight = 40.0f;  ///< m/s^2, in [0, 1000]
-    float margin = 2.0f;   ///< m, an obstacle's, in (0, 1000]
+    float margin = 2.0f;   ///< m, an obstacle's (sphere, capsule, plane), in (0, 1000]
+    glm::vec3 end{0.0f};   ///< m, world, |each| <= 1e6: a capsule's other end
+    /// A plane's normal, any length above 1e-6 (normalized): the side birds keep to.
+    glm::vec3 normal{0.0f, 1.0f, 0.0f};
 };
 /// The most agents an application may place at once (each bird visits every agent every
 /// substep).
