@@ -217,14 +217,27 @@ FlockStep flock_rules(uint i, FlockNeighbours nb, uint agents, float dt) {
             const float s = agent.kind_weight.y * (1.0f - dist / reach);
             if (kind == KW_FLOCK_AGENT_REPELLER) {
                 if (agent.kind_weight.y > 0.0f) panic = max(panic, 1.0f - dist / reach);
-                // Fled across its path (the flock splits round a passing predator rather
-                // than being driven ahead of it): away from the line it flies along.
+                // Escaped by a banked turn to the side of the predator's path the bird is
+                // on (starlings and pigeons turn away from an attacking falcon: Storms et
+                // al. 2019, Behav Ecol Sociobiol 73:10; Papadopoulou et al. 2022, Proc R
+                // Soc B 289:20212337): level, across the path, so that birds above and
+                // below it turn the same way and the flock parts along the vertical plane
+                // through the path and closes again behind it. Fleeing radially from the
+                // path, as before, opened a tube through the flock that never split it
+                // (docs/flocking.md). A predator at rest, or one diving straight down: away
+                // from it, level.
                 const vec3 u = KW_XYZ(agent.velocity);
-                const float ul = length(u);
-                vec3 away = d;
-                if (ul > 1e-6f) away = d - (dot(d, u) / (ul * ul)) * u;
-                const float al = length(away);
-                fled += (al > 1e-3f ? s / al : s / dist) * (al > 1e-3f ? away : d);
+                vec3 side = cross(u, vec3(0.0f, 1.0f, 0.0f));
+                const float sl = length(side);
+                vec3 away;
+                if (sl > 1e-3f) {
+                    away = (dot(d, side) >= 0.0f ? 1.0f / sl : -1.0f / sl) * side;
+                } else {
+                    const vec3 flat_d = vec3(d.x, 0.0f, d.z);
+                    const float fl = length(flat_d);
+                    away = fl > 1e-3f ? flat_d / fl : vec3(1.0f, 0.0f, 0.0f);
+                }
+                fled += s * away;
             } else {
                 fled -= (s / dist) * d;
             }
