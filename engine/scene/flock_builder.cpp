@@ -471,9 +471,15 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
 
     for (std::uint32_t b = 0; b < flock.count; ++b) {
         gpu::BirdParams p{};
-        p.offset.x = static_cast<float>(spread[0] * offset_rng.symmetric());
-        p.offset.y = static_cast<float>(spread[1] * offset_rng.symmetric());
-        p.offset.z = static_cast<float>(spread[2] * offset_rng.symmetric());
+        double u[3] = {offset_rng.symmetric(), offset_rng.symmetric(), offset_rng.symmetric()};
+        // Uniform in the ellipsoid: the box's draws again until one falls in the unit ball
+        // (on average 1.9 draws of three; the stream is the offsets' own).
+        while (flock.formation.shape == FormationSpec::Shape::Ellipsoid && u[0] * u[0] + u[1] * u[1] + u[2] * u[2] > 1.0) {
+            for (double& c : u) c = offset_rng.symmetric();
+        }
+        p.offset.x = static_cast<float>(spread[0] * u[0]);
+        p.offset.y = static_cast<float>(spread[1] * u[1]);
+        p.offset.z = static_cast<float>(spread[2] * u[2]);
         // On a route that takes off, a bird further back leaves its perch later (a negative
         // time offset: docs/flight-modes.md F.2); elsewhere it is further along the route.
         p.offset.w = static_cast<float>(trail * time_rng.unit());

@@ -219,9 +219,21 @@ auto positive_up_to(const JsonReader& r, double max) {
 }
 
 Result<void> read_formation(const JsonReader& r, const JsonNode& node, FormationSpec& formation) {
-    KW_TRY(r.object(node, {"spread", "route_variants", "jitter", "trail"}));
+    KW_TRY(r.object(node, {"spread", "shape", "route_variants", "jitter", "trail"}));
     KW_TRY(optional_member(r, node, "spread", formation.spread,
                            [&](const JsonNode& n) { return r.vec3(n, NumberRange::closed(0.0, 10000.0)); }));
+    const JsonNode shape = r.member(node, "shape");
+    if (shape.present()) {
+        std::string value;
+        KW_SCENE_ASSIGN(value, r.string(shape));
+        if (value == "box") {
+            formation.shape = FormationSpec::Shape::Box;
+        } else if (value == "ellipsoid") {
+            formation.shape = FormationSpec::Shape::Ellipsoid;
+        } else {
+            return r.expected(shape, "\"box\" or \"ellipsoid\"");
+        }
+    }
     const JsonNode variants = r.member(node, "route_variants");
     if (variants.present()) {
         std::uint64_t value = 0;

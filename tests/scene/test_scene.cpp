@@ -140,6 +140,39 @@ TEST(SceneFormat, SeedChangesTheBirds) {
     EXPECT_FALSE(same_bytes(wa.value().birds, wb.value().birds));
 }
 
+// formation.shape "ellipsoid": every offset inside the ellipsoid of the spread's
+// semi-axes, filling it (some beyond the inscribed ball's radius along the long axis);
+// the box (the default) puts some outside that ellipsoid. A bad shape is named.
+TEST(SceneFormat, EllipsoidFormationKeepsOffsetsInside) {
+    json doc = valid_scene();
+    doc["flocks"][0]["count"] = 2001;
+    doc["flocks"][0]["formation"] = {{"spread", {8, 2, 4}}};
+    const auto outside = [](const kodawari::birds::BirdWorld& w, float& longest) {
+        std::size_t n = 0;
+        longest = 0.0f;
+        for (const auto& b : w.birds) {
+            const float r = (b.offset.x / 8.0f) * (b.offset.x / 8.0f) + (b.offset.y / 2.0f) * (b.offset.y / 2.0f) +
+                            (b.offset.z / 4.0f) * (b.offset.z / 4.0f);
+            n += r > 1.0f + 1e-6f ? 1 : 0;
+            longest = std::max(longest, std::fabs(b.offset.x));
+        }
+        return n;
+    };
+    const auto box = kodawari::parse_scene(doc.dump(), "test.json");
+    doc["flocks"][0]["formation"]["shape"] = "ellipsoid";
+    const auto ellipsoid = kodawari::parse_scene(doc.dump(), "test.json");
+    ASSERT_TRUE(box.ok() && ellipsoid.ok());
+    const auto wb = kodawari::build_bird_world(box.value());
+    const auto we = kodawari::build_bird_world(ellipsoid.value());
+    ASSERT_TRUE(wb.ok() && we.ok());
+    float longest_box = 0.0f, longest = 0.0f;
+    EXPECT_GT(outside(wb.value(), longest_box), 500u);  // 1 - pi/6 of a box lies outside: about 960 of 2 001
+    EXPECT_EQ(outside(we.value(), longest), 0u);
+    EXPECT_GT(longest, 7.0f);  // the long axis is filled, not a ball of the short one
+    doc["flocks"][0]["formation"]["shape"] = "sphere";
+    EXPECT_TRUE(contains(parse_error(doc), "$.flocks[0].formation.shape: expected \"box\" or \"ellipsoid\"")) << parse_error(doc);
+}
+
 // Variants move each junction together with its two handles, so the handle vectors
 // (and with them the C1 continuity) are the leader's, and a loop stays closed.
 TEST(SceneFormat, RouteVariantsKeepHandlesAndClosure) {

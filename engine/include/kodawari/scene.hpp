@@ -53,7 +53,11 @@ struct GeneratedRouteSpec {
 
 /// How the birds of a flock spread around the leader route.
 struct FormationSpec {
+    /// The region the offsets are uniform in: the box of half sizes `spread`, or the
+    /// ellipsoid of those semi-axes (a flocking flock's outline follows its offsets).
+    enum class Shape : std::uint8_t { Box, Ellipsoid };
     std::array<float, 3> spread = {4.0f, 2.0f, 4.0f};  ///< half sizes of the offset box (m)
+    Shape shape = Shape::Box;
     std::uint32_t route_variants = 1;  ///< distinct jittered copies of the leader route
     float jitter = 0.0f;               ///< max displacement of the variants' junction points (m)
     float trail = 0.0f;                ///< time offsets spread over [0, trail] seconds
