@@ -44,6 +44,22 @@ std::unique_ptr<Simulation> open_text(const std::string& text, const testing_sup
     return made.ok() ? std::move(made).value() : nullptr;
 }
 
+// The poses of `frames` frames of scene_text(birds, seconds, flocking) on the cpu backend.
+std::vector<gpu::BirdPose> fly_cpu(std::uint32_t birds, double seconds, std::uint32_t frames, const std::string& flocking) {
+    auto sim = open_text(scene_text(birds, seconds, flocking), {BackendKind::Cpu, ""});
+    EXPECT_NE(sim, nullptr);
+    std::vector<gpu::BirdPose> poses(std::size_t{frames} * birds);
+    if (sim) {
+        EXPECT_TRUE(step_birds(*sim, frames, poses).ok());
+    }
+    return poses;
+}
+
+// A point as JSON, [x, y, z].
+std::string json_point(const glm::vec3& v) {
+    return "[" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + "]";
+}
+
 std::string parse_error(const std::string& text) {
     auto scene = parse_scene(text, "flocking-test.json");
     return scene.ok() ? std::string("(parsed)") : scene.error().message;
@@ -267,14 +283,7 @@ TEST(Flocking, FliesLikeStarlings) {
 // where it passes (0.33 m).
 TEST(Flocking, BirdsFleeAPredator) {
     constexpr std::uint32_t kBirds = 601, kFrames = 420;
-    const auto closest = [&](const std::string& flocking) {
-        auto sim = open_text(scene_text(kBirds, 7.0, flocking), {BackendKind::Cpu, ""});
-        EXPECT_NE(sim, nullptr);
-        std::vector<gpu::BirdPose> poses(std::size_t{kFrames} * kBirds);
-        EXPECT_TRUE(step_birds(*sim, kFrames, poses).ok());
-        // The flock's centre at 4 s, where the predator's line crosses it.
-        return poses;
-    };
+    const auto closest = [&](const std::string& flocking) { return fly_cpu(kBirds, 7.0, kFrames, flocking); };
     // Where the flock is at 4 s without a predator: the predator is sent through there.
     const std::vector<gpu::BirdPose> alone = closest("{}");
     glm::vec3 centre(0.0f);
@@ -313,16 +322,7 @@ TEST(Flocking, BirdsFleeAPredator) {
 // together; a bird's 7 neighbours are all in its own half: docs/flocking.md).
 TEST(Flocking, AFalconSplitsTheFlockAndItRejoins) {
     constexpr std::uint32_t kBirds = 2001, kFrames = 720;
-    const auto fly = [&](const std::string& flocking) {
-        auto sim = open_text(scene_text(kBirds, 12.0, flocking), {BackendKind::Cpu, ""});
-        EXPECT_NE(sim, nullptr);
-        std::vector<gpu::BirdPose> poses(std::size_t{kFrames} * kBirds);
-        if (sim) {
-            EXPECT_TRUE(step_birds(*sim, kFrames, poses).ok());
-        }
-        return poses;
-    };
-    const std::vector<gpu::BirdPose> alone = fly("{}");
+    const std::vector<gpu::BirdPose> alone = fly_cpu(kBirds, 12.0, kFrames, "{}");
     // Head-on along the flock's heading at 4 s, as a falcon attacks from ahead: from 60 m
     // ahead of the flock's centre then, at 30 m/s from 1 s, so it meets the flock at about
     // 2.5 s on and passes through its length.
@@ -334,11 +334,10 @@ TEST(Flocking, AFalconSplitsTheFlockAndItRejoins) {
     heading.y = 0.0f;
     heading = glm::normalize(heading);
     const glm::vec3 from = centre + 60.0f * heading, to = centre - 120.0f * heading;
-    const auto json = [](const glm::vec3& v) {
-        return "[" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + "]";
-    };
-    const std::vector<gpu::BirdPose> chased = fly(R"({"predators": [{"from": )" + json(from) + R"(, "to": )" + json(to) +
-                                                  R"(, "start": 1, "speed": 30, "radius": 15, "weight": 40}]})");
+    const std::vector<gpu::BirdPose> chased =
+        fly_cpu(kBirds, 12.0, kFrames,
+                R"({"predators": [{"from": )" + json_point(from) + R"(, "to": )" + json_point(to) +
+                    R"(, "start": 1, "speed": 30, "radius": 15, "weight": 40}]})");
     const auto largest = [&](const std::vector<gpu::BirdPose>& poses, std::uint32_t f) {
         return largest_group(std::span(poses).subspan(std::size_t{f} * kBirds, kBirds), 3.0f);
     };
@@ -450,18 +449,8 @@ TEST(Flocking, SceneObstaclesAndAttractorsShapeTheFlight) {
     ASSERT_TRUE(step_birds(*probe, kFrames, alone).ok());
     glm::vec3 centre(0.0f);
     for (std::uint32_t b = 0; b < kBirds; ++b) centre += position(alone[std::size_t{240} * kBirds + b]) / float(kBirds);
-    const auto json = [](const glm::vec3& v) {
-        return "[" + std::to_string(v.x) + ", " + std::to_string(v.y) + ", " + std::to_string(v.z) + "]";
-    };
-    const auto run = [&](const std::string& flocking) {
-        auto sim = open_text(scene_text(kBirds, 5.5, flocking), {BackendKind::Cpu, ""});
-        EXPECT_NE(sim, nullptr);
-        std::vector<gpu::BirdPose> poses(std::size_t{kFrames} * kBirds);
-        if (sim) {
-            EXPECT_TRUE(step_birds(*sim, kFrames, poses).ok());
-        }
-        return poses;
-    };
+    const auto json = json_point;
+    const auto run = [&](const std::string& flocking) { return fly_cpu(kBirds, 5.5, kFrames, flocking); };
     const glm::vec3 foot = centre - glm::vec3(0.0f, 40.0f, 0.0f), top = centre + glm::vec3(0.0f, 40.0f, 0.0f);
     const std::vector<gpu::BirdPose> towered = run(R"({"obstacles": [{"type": "capsule", "a": )" + json(foot) + R"(, "b": )" +
                                                    json(top) + R"(, "radius": 4, "margin": 12, "weight": 80}]})");
