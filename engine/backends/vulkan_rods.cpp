@@ -150,18 +150,21 @@ public:
     const gpu::VulkanContext& context() const override { return *ctx_; }
     DeviceSpan buffer(std::string_view name) const override {
         if (world_ == nullptr) return {};
-        auto span = [&]<typename Element>(const compute::Buffer& buffer, std::size_t items, Element) {
-            return DeviceSpan{.buffer = &buffer, .items = static_cast<std::uint32_t>(items), .element_bytes = sizeof(Element)};
+        auto span = [](const compute::Buffer& buffer, std::size_t items, std::size_t element_bytes) {
+            return DeviceSpan{.buffer = &buffer,
+                              .items = static_cast<std::uint32_t>(items),
+                              .element_bytes = static_cast<std::uint32_t>(element_bytes)};
         };
         const auto& b = buffers_;
-        if (name == rod_buffers::chain_states) return span(b[KW_RODS_BINDING_CHAIN_STATE], world_->chains.size(), gpu::RodChainStateGpu{});
-        if (name == rod_buffers::motion) return span(b[KW_RODS_BINDING_MOTION], world_->joint_count, gpu::RodJointMotionGpu{});
-        if (name == rod_buffers::spin) return span(b[KW_RODS_BINDING_SPIN], world_->joint_count, gpu::RodJointSpinGpu{});
-        if (name == rod_buffers::reference) return span(b[KW_RODS_BINDING_REFERENCE], world_->character_count, gpu::RodTransformGpu{});
-        if (name == rod_buffers::roots) return span(b[KW_RODS_BINDING_ROOTS], world_->chains.size(), gpu::RodTransformGpu{});
-        if (name == rod_buffers::colliders) return span(b[KW_RODS_BINDING_COLLIDERS], world_->collider_count, gpu::RodColliderGpu{});
-        if (name == rod_buffers::centers) return span(b[KW_RODS_BINDING_CENTERS], world_->center_count, gpu::RodTransformGpu{});
-        if (name == rod_buffers::keys) return span(key_buffers_[KW_ROD_KEYS_BINDING_KEYS], world_->key_count, gpu::RodTransformGpu{});
+        const rods::RodWorld& w = *world_;
+        if (name == rod_buffers::chain_states) return span(b[KW_RODS_BINDING_CHAIN_STATE], w.chains.size(), sizeof(gpu::RodChainStateGpu));
+        if (name == rod_buffers::motion) return span(b[KW_RODS_BINDING_MOTION], w.joint_count, sizeof(gpu::RodJointMotionGpu));
+        if (name == rod_buffers::spin) return span(b[KW_RODS_BINDING_SPIN], w.joint_count, sizeof(gpu::RodJointSpinGpu));
+        if (name == rod_buffers::reference) return span(b[KW_RODS_BINDING_REFERENCE], w.character_count, sizeof(gpu::RodTransformGpu));
+        if (name == rod_buffers::roots) return span(b[KW_RODS_BINDING_ROOTS], w.chains.size(), sizeof(gpu::RodTransformGpu));
+        if (name == rod_buffers::colliders) return span(b[KW_RODS_BINDING_COLLIDERS], w.collider_count, sizeof(gpu::RodColliderGpu));
+        if (name == rod_buffers::centers) return span(b[KW_RODS_BINDING_CENTERS], w.center_count, sizeof(gpu::RodTransformGpu));
+        if (name == rod_buffers::keys) return span(key_buffers_[KW_ROD_KEYS_BINDING_KEYS], w.key_count, sizeof(gpu::RodTransformGpu));
         return {};
     }
     void set_input_writer(std::shared_ptr<const RodInputWriter> writer) override { input_writer_ = std::move(writer); }
