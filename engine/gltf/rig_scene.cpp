@@ -31,6 +31,11 @@ using Json = nlohmann::ordered_json;
 // (docs/scene-format.md, "Colliders"), m.
 constexpr float kMaxColliderReach = 1000.0f;
 
+// The scene format's bound on the camera's orbit target and radius (camera_loader.cpp:
+// half the 1e6 m world bound), m: the rig aims its camera at a joint and backs it off by
+// the character's size, so every rest-pose joint must lie inside it.
+constexpr float kMaxJointReach = 5.0e5f;
+
 // Six significant digits: what a person reads and edits, and well inside every
 // tolerance the loader applies (float keeps about seven).
 double num(float v) {
@@ -234,9 +239,24 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
         motions.push_back(j);
         ch.animations.push_back(std::move(m.animation));
     }
-    out.size = character_size(ch);
     const std::vector<Json> refs = node_refs(ch);
     const Pose rest = rest_pose(ch);
+    // A node far out (or its transforms' product overflowing) would write a camera the
+    // loader refuses (fuzz_gltf, CI stop 49): name the node and its place instead.
+    for (std::size_t i = 0; i < rest.world.size(); ++i) {
+        const glm::vec3 p(rest.world[i][3]);
+        if (!std::isfinite(p.x) || !std::isfinite(p.y) || !std::isfinite(p.z) ||
+            std::max({std::abs(p.x), std::abs(p.y), std::abs(p.z)}) > kMaxJointReach) {
+            char where[96];
+            std::snprintf(where, sizeof(where), "(%g, %g, %g)", static_cast<double>(p.x), static_cast<double>(p.y),
+                          static_cast<double>(p.z));
+            return make_error(Error::Kind::InvalidInput,
+                              ch.source + ": nodes[" + std::to_string(i) + "] (\"" + ch.nodes[i].name +
+                                  "\") is at " + where + " in the rest pose: expected every node within 500 km of " +
+                                  "the origin (a scene's camera range); are the file's units or transforms wrong?");
+        }
+    }
+    out.size = character_size(ch);
 
     // The chains, by the first rule that applies (see the header).
     std::vector<Candidate> candidates;
@@ -485,7 +505,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
     scene["duration"] = num(options.duration);
     Json orbit;
     orbit["target"] = vec(head);
-    orbit["radius"] = num(std::max(0.5f, 1.5f * out.size));
+    orbit["radius"] = num(std::clamp(1.5f * out.size, 0.5f, kMaxJointReach));
     orbit["height"] = 0;
     orbit["degrees_per_second"] = 30;
     scene["camera"] = Json{{"orbit", orbit}};

@@ -425,6 +425,14 @@ TEST(RiggedScene, RigWritesScenesThatLoad) {
     auto bad_clip = gltf::make_rig_scene(kChibi, dir.file("c.json"), dance);
     ASSERT_FALSE(bad_clip.ok());
     EXPECT_NE(bad_clip.error().message.find("\"idle\", \"walk\", \"turn\""), std::string::npos) << bad_clip.error().message;
+    // Nodes whose rest places overflow (3e38 m each side: a span of infinity) would aim the
+    // camera at no finite distance (fuzz_gltf, CI stop 49): refused, naming the node.
+    const std::string far = kSource + "/tests/fuzz/regressions/gltf/named-joints-overflowing-the-camera-range.gltf";
+    auto overflow = gltf::make_rig_scene(far, dir.file("f.json"), {});
+    ASSERT_FALSE(overflow.ok());
+    EXPECT_NE(overflow.error().message.find("nodes[4] (\"far_a\") is at (3e+38, 0, 0)"), std::string::npos)
+        << overflow.error().message;
+    EXPECT_NE(overflow.error().message.find(far), std::string::npos) << overflow.error().message;
 }
 
 
