@@ -65,7 +65,7 @@ void add_backend_options(CLI::App& app, BackendFlags& flags) {
     add_text(app, "--device", flags.device, "NAME|INDEX",
              "the Vulkan device, a name or an index as `kodawari info` lists them (default: $KODAWARI_DEVICE, else "
              "the one `kodawari info` chooses)");
-    add_count(app, "--threads", flags.threads, 1, 1024, "the cpu backend's threads (default: one per hardware thread)");
+    add_count(app, "--threads", flags.threads, 1, 1024, "the cpu backend's threads, and --compact's encoder's (default: one per hardware thread)");
     add_text(app, "--isa", flags.isa, "avx512|avx2|sse4|scalar",
              "the cpu backend's SIMD instruction set (default: $KODAWARI_ISA, else the widest this CPU runs)");
     add_switch(app, "--validation", flags.validation,

@@ -204,7 +204,8 @@ int cmd_run(const RunOptions& o) {
     const bool no_export = o.no_export;
     const auto& trace_path = o.trace;
     const auto& shard_option = o.shard;
-    const GlbCompaction compaction = read_compaction(o.compact, o.meshopt);
+    GlbCompaction compaction = read_compaction(o.compact, o.meshopt);
+    compaction.threads = choice.options.threads;  // --threads bounds the encoder too
     const bool mpi = o.mpi;
     const std::string scene_path = o.scene.value_or(kDefaultScene);
     if (mpi && shard_option) throw UsageError{"--mpi and --shard exclude each other (--mpi runs one shard per rank)"};

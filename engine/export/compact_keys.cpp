@@ -5,6 +5,7 @@
 #include <cmath>
 #include <cstring>
 
+#include "core/parallel.hpp"
 #include "export/key_reduction.hpp"
 
 namespace kodawari {
@@ -55,6 +56,81 @@ std::uint64_t cost(const Reduction& r, std::size_t value_bytes, std::uint32_t fr
     return kept * value_bytes + (kept == frames || kept == 2 ? 0 : kept * sizeof(float));
 }
 
+
+// One channel of a group after the first pass: whether it is written, its reduction,
+// and its kept keys' bytes as the tail holds them (without meshopt: floats, shorts or
+// bytes; with it, the quantizing filter's output).
+struct Prepared {
+    bool kept = false;
+    Reduction r;
+    bool bytes = false;  // a rotation in normalized bytes
+    std::vector<unsigned char> values;
+};
+
+// A thread's buffers for prepare_channel(): `channel` holds the channel's keys, frame
+// after frame (3 or 4 floats each).
+struct PrepareScratch {
+    std::vector<float> channel;
+    std::vector<std::int16_t> shorts;
+    std::vector<std::int16_t> narrow;  // the rotations rounded to bytes (held in shorts)
+};
+
+// Reduces scratch.channel within `bounds` (key_reduction.hpp) into `p`.
+void prepare_channel(ChannelKind kind, std::span<const float> times, const GlbCompaction& bounds, PrepareScratch& scratch,
+                     Prepared& p) {
+    const std::vector<float>& channel = scratch.channel;
+    const auto frames = static_cast<std::uint32_t>(times.size());
+    const std::size_t value_bytes = kind == ChannelKind::Rotation ? 4 * sizeof(std::int16_t) : 3 * sizeof(float);
+    p.bytes = false;
+    p.values.clear();
+    if (bounds.meshopt) {
+        MeshoptChannel quantized =
+            kind == ChannelKind::Rotation
+                ? choose_rotation(times, channel, bounds.rotation_rad)
+                : choose_vector(times, channel, kind == ChannelKind::Translation ? bounds.position_m : bounds.scale_rel,
+                                kind == ChannelKind::Translation ? VectorMetric::Distance : VectorMetric::Relative);
+        p.r = std::move(quantized.reduction);
+        p.values = std::move(quantized.encoded);
+        return;
+    }
+    if (kind != ChannelKind::Rotation) {
+        p.r = reduce_vec3(times, channel, kind == ChannelKind::Translation ? bounds.position_m : bounds.scale_rel,
+                          kind == ChannelKind::Translation ? VectorMetric::Distance : VectorMetric::Relative);
+        keep_all_if_smaller(p.r, value_bytes, frames, [] { return 0.0; });
+        for (const std::uint32_t f : p.r.kept) append_bytes(p.values, &channel[f * 3], 3);
+        return;
+    }
+    std::vector<std::int16_t>& shorts = scratch.shorts;
+    std::vector<std::int16_t>& narrow = scratch.narrow;
+    shorts.resize(channel.size());
+    quantize_rotations(channel, shorts);
+    p.r = reduce_rotations(times, channel, shorts, bounds.rotation_rad);
+    keep_all_if_smaller(p.r, value_bytes, frames, [&] { return rounding_error(channel, shorts); });
+    // Bytes where the bound absorbs their rounding at every key (then every kept key is
+    // within it and reduce_rotations keeps the spans within it) and they come out
+    // smaller: half the bytes per key, but more keys.
+    narrow.resize(channel.size());
+    quantize_rotations(channel, narrow, RotationBits::Byte);
+    if (rounding_error(channel, narrow, RotationBits::Byte) <= static_cast<double>(bounds.rotation_rad)) {
+        Reduction r8 = reduce_rotations(times, channel, narrow, bounds.rotation_rad, RotationBits::Byte);
+        keep_all_if_smaller(r8, value_bytes / 2, frames, [&] { return rounding_error(channel, narrow, RotationBits::Byte); });
+        if (r8.max_error <= static_cast<double>(bounds.rotation_rad) &&
+            cost(r8, value_bytes / 2, frames) < cost(p.r, value_bytes, frames)) {
+            p.r = std::move(r8);
+            p.bytes = true;
+        }
+    }
+    if (p.bytes) {
+        for (const std::uint32_t f : p.r.kept) {
+            std::int8_t key[4];
+            for (std::size_t k = 0; k < 4; ++k) key[k] = static_cast<std::int8_t>(narrow[f * 4 + k]);
+            append_bytes(p.values, key, 4);
+        }
+    } else {
+        for (const std::uint32_t f : p.r.kept) append_bytes(p.values, &shorts[f * 4], 4);
+    }
+}
+
 }  // namespace
 
 Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& beside, std::size_t count,
@@ -98,78 +174,54 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
     const std::size_t group =
         std::max<std::size_t>(1, group_bytes / std::max<std::size_t>(1, std::size_t{frames} * record_bytes));
     std::vector<float> in(std::min(group, count) * std::size_t{frames} * record_floats);
-    std::vector<float> channel;
-    std::vector<std::int16_t> shorts;
     std::vector<float> kept_times;
-    std::vector<float> kept_floats;
-    std::vector<std::int16_t> narrow;  // the rotations rounded to bytes (held in shorts)
-    std::vector<std::int16_t> kept_shorts;
-    std::vector<std::int8_t> kept_bytes;
     std::uint64_t accessors = 0;  // streamed: accessors of the items so far
     out.item_channels_.reserve(count + 1);
     out.item_accessors_.reserve(count + 1);
     // The kept frames of the current item's channels and where their times went, to
     // share them between its channels.
     std::vector<std::pair<std::vector<std::uint32_t>, std::uint64_t>> item_times;
+    std::vector<Prepared> prepared(std::min(group, count) * fields.size());
+    const unsigned threads = resolve_threads(bounds.threads);
     for (std::size_t begin = 0; begin < count; begin += group) {
         const std::size_t n = std::min(group, count - begin);
         KW_TRY(read_item_group(keys, count, frames, record_floats, begin, n, in.data()));
+        // First pass, on every core: each channel of the group reduced and its kept keys
+        // encoded (the channels are independent; the reductions are the cost).
+        parallel_for(n, threads, [&](std::size_t first, std::size_t last) {
+            PrepareScratch scratch;
+            for (std::size_t item = first; item < last; ++item) {
+                std::size_t offset = 0;
+                for (std::size_t field = 0; field < fields.size(); ++field) {
+                    const ChannelKind kind = fields[field];
+                    const std::size_t w = width(kind);
+                    Prepared& p = prepared[item * fields.size() + field];
+                    p.kept = !keep || keep(begin + item, field);
+                    if (p.kept) {
+                        scratch.channel.resize(std::size_t{frames} * w);
+                        for (std::uint32_t f = 0; f < frames; ++f) {
+                            std::memcpy(scratch.channel.data() + std::size_t{f} * w,
+                                        in.data() + (std::size_t{f} * n + item) * record_floats + offset, w * sizeof(float));
+                        }
+                        prepare_channel(kind, times, bounds, scratch, p);
+                    }
+                    offset += w;
+                }
+            }
+        });
+        // Second pass, in item order, alone: the channels appended to the tail, so that
+        // the bytes are the same whatever the threads.
         block.clear();
         for (std::size_t item = 0; item < n; ++item) {
             out.item_channels_.push_back(out.channels_.size());
             out.item_accessors_.push_back(accessors);
             item_times.clear();
-            std::size_t offset = 0;
             for (std::size_t field = 0; field < fields.size(); ++field) {
                 const ChannelKind kind = fields[field];
                 const std::size_t w = width(kind);
-                if (keep && !keep(begin + item, field)) {
-                    offset += w;
-                    continue;
-                }
-                channel.resize(std::size_t{frames} * w);
-                for (std::uint32_t f = 0; f < frames; ++f) {
-                    std::memcpy(channel.data() + std::size_t{f} * w,
-                                in.data() + (std::size_t{f} * n + item) * record_floats + offset, w * sizeof(float));
-                }
-                offset += w;
-                const std::size_t value_bytes = kind == ChannelKind::Rotation ? 4 * sizeof(std::int16_t) : 3 * sizeof(float);
-                Reduction r;
-                bool bytes = false;
-                MeshoptChannel quantized;  // with meshopt: the filter's input for the kept keys
-                if (out.meshopt_) {
-                    quantized = kind == ChannelKind::Rotation
-                                    ? choose_rotation(times, channel, bounds.rotation_rad)
-                                    : choose_vector(times, channel,
-                                                    kind == ChannelKind::Translation ? bounds.position_m : bounds.scale_rel,
-                                                    kind == ChannelKind::Translation ? VectorMetric::Distance : VectorMetric::Relative);
-                    r = std::move(quantized.reduction);
-                } else if (kind == ChannelKind::Rotation) {
-                    shorts.resize(channel.size());
-                    quantize_rotations(channel, shorts);
-                    r = reduce_rotations(times, channel, shorts, bounds.rotation_rad);
-                    keep_all_if_smaller(r, value_bytes, frames, [&] { return rounding_error(channel, shorts); });
-                    // Bytes where the bound absorbs their rounding at every key (then every
-                    // kept key is within it and reduce_rotations keeps the spans within it)
-                    // and they come out smaller: half the bytes per key, but more keys.
-                    narrow.resize(channel.size());
-                    quantize_rotations(channel, narrow, RotationBits::Byte);
-                    if (rounding_error(channel, narrow, RotationBits::Byte) <= static_cast<double>(bounds.rotation_rad)) {
-                        Reduction r8 = reduce_rotations(times, channel, narrow, bounds.rotation_rad, RotationBits::Byte);
-                        keep_all_if_smaller(r8, value_bytes / 2, frames,
-                                            [&] { return rounding_error(channel, narrow, RotationBits::Byte); });
-                        if (r8.max_error <= static_cast<double>(bounds.rotation_rad) &&
-                            cost(r8, value_bytes / 2, frames) < cost(r, value_bytes, frames)) {
-                            r = std::move(r8);
-                            bytes = true;
-                            shorts.swap(narrow);
-                        }
-                    }
-                } else {
-                    r = reduce_vec3(times, channel, kind == ChannelKind::Translation ? bounds.position_m : bounds.scale_rel,
-                                    kind == ChannelKind::Translation ? VectorMetric::Distance : VectorMetric::Relative);
-                    keep_all_if_smaller(r, value_bytes, frames, [] { return 0.0; });
-                }
+                Prepared& p = prepared[item * fields.size() + field];
+                if (!p.kept) continue;
+                const Reduction& r = p.r;
                 double& worst = kind == ChannelKind::Rotation      ? out.stats_.rotation_rad
                                 : kind == ChannelKind::Translation ? out.stats_.position_m
                                                                    : out.stats_.scale_rel;
@@ -177,7 +229,7 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
                 Channel c;
                 c.kind = kind;
                 c.keys = static_cast<std::uint32_t>(r.kept.size());
-                c.bytes = bytes;
+                c.bytes = p.bytes;
                 if (r.kept.size() == frames) {
                     c.times = all_frames;
                 } else if (r.kept.size() == 2) {
@@ -206,24 +258,12 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
                 c.values = out.bytes_ + block.size();
                 if (out.meshopt_) {
                     auto at = out.streams_.append(kind == ChannelKind::Rotation ? MeshoptStream::Rotations : MeshoptStream::Vectors,
-                                                  quantized.encoded.data(), r.kept.size(), out.data_, out.bytes_);
+                                                  p.values.data(), r.kept.size(), out.data_, out.bytes_);
                     if (!at) return at.error();
                     c.values = at.value();
-                } else if (kind == ChannelKind::Rotation && bytes) {
-                    kept_bytes.clear();
-                    for (const std::uint32_t f : r.kept) {
-                        for (std::size_t k = 0; k < 4; ++k) kept_bytes.push_back(static_cast<std::int8_t>(shorts[f * 4 + k]));
-                    }
-                    append_bytes(block, kept_bytes.data(), kept_bytes.size());
-                    ++out.stats_.byte_rotations;
-                } else if (kind == ChannelKind::Rotation) {
-                    kept_shorts.clear();
-                    for (const std::uint32_t f : r.kept) kept_shorts.insert(kept_shorts.end(), &shorts[f * 4], &shorts[f * 4] + 4);
-                    append_bytes(block, kept_shorts.data(), kept_shorts.size());
                 } else {
-                    kept_floats.clear();
-                    for (const std::uint32_t f : r.kept) kept_floats.insert(kept_floats.end(), &channel[f * 3], &channel[f * 3] + 3);
-                    append_bytes(block, kept_floats.data(), kept_floats.size());
+                    append_bytes(block, p.values.data(), p.values.size());
+                    if (kind == ChannelKind::Rotation && p.bytes) ++out.stats_.byte_rotations;
                 }
                 if (kind == ChannelKind::Rotation) ++out.stats_.rotations;
                 out.channels_.push_back(c);

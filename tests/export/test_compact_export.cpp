@@ -313,6 +313,32 @@ TEST(CompactExport, BirdsWithinBoundsWhenReimported) {
     }
 }
 
+// The channels are reduced and encoded on several threads (GlbCompaction::threads), then
+// appended in bird order: the file's bytes are the same on 1, 2, 3 and 7 threads (7: more
+// threads than a range of birds needs, ranges of 9 or 10 birds), plain and meshopt.
+TEST(CompactExport, TheBytesAreTheSameOnAnyNumberOfThreads) {
+    const birds::BirdWorld world = make_world();
+    const std::uint32_t frames = 90;
+    const std::vector<gpu::BirdPose> poses = make_poses(world, frames);
+    TempDir dir;
+    for (const bool meshopt : {false, true}) {
+        SCOPED_TRACE(meshopt ? "meshopt" : "plain");
+        std::string first;
+        for (const unsigned threads : {1u, 2u, 3u, 7u}) {
+            SCOPED_TRACE(std::to_string(threads) + " threads");
+            const std::string path = dir.file("compact-" + std::to_string(threads) + ".glb");
+            auto writer = BirdGlbWriter::create(path, world, frames, GlbCompaction{true, 0.001f, 0.001f, 0.001f, meshopt, threads});
+            ASSERT_TRUE(writer.ok()) << writer.error().message;
+            ASSERT_TRUE(writer.value().add_frames(poses).ok());
+            ASSERT_TRUE(writer.value().finish().ok());
+            const std::string bytes = testing_support::file_bytes(path);
+            EXPECT_GT(bytes.size(), 1000u);
+            if (first.empty()) first = bytes;
+            EXPECT_TRUE(bytes == first) << "the file differs from the one written on 1 thread";
+        }
+    }
+}
+
 // The 4 GiB limit of a .glb: uncompacted, keys past it are refused before the simulation
 // runs; compacted, their size is known only once reduced, so create() takes them (and
 // finish() refuses a BIN chunk past 4 GiB before writing any JSON).

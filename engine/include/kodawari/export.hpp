@@ -52,6 +52,9 @@ struct GlbCompaction {
     /// EXT_meshopt_compression, a required extension: smaller, for the readers that decode
     /// it (three.js with its MeshoptDecoder, gltf-transform, Blender 5.2 and later).
     bool meshopt = false;
+    /// The threads that reduce and encode the channels (0: one per core). The file's bytes
+    /// are the same whatever the count.
+    unsigned threads = 0;
 };
 
 /// What compaction did to one file: keys over all channels before and after, the
