@@ -4,10 +4,15 @@
 // (routes, flocks, flight settings), with values that are often out of range, non-finite
 // or inconsistent (an index past its array, a route with a cusp). Array lengths always
 // match what the description says: a caller who lies about a pointer's size is outside
-// any C API's reach. The cpu backend with one thread runs what is created.
+// any C API's reach. The cpu backend with one thread runs what is created. A third kind
+// of input drives a scene simulation (kodawari_simulation_*) of a small flocking flock as
+// an application does between steps: agents placed (predators, attractors, obstacles,
+// capsules, planes, out-of-range kinds and counts), the wind set, frames stepped.
 //
 // Invariants: every call returns a status from the header's list, with a message when it
-// is not KODAWARI_OK; a world that is created steps, and its outputs are finite.
+// is not KODAWARI_OK; a world that is created steps, and its outputs are finite; agents
+// refused are refused naming agents[i] and the member (or the count), and a simulation
+// steps on after any refusal with finite poses.
 #include <cstdint>
 #include <cstdio>
 #include <cstdlib>
@@ -358,14 +363,117 @@ void bird_world(ByteReader& in) {
     kodawari_bird_world_destroy(world);
 }
 
+// A flocking flock of 37 birds (not a multiple of any workgroup) on a generated loop,
+// written once per process beside the other scratch files.
+const std::string& flocking_scene() {
+    static const std::string path = [] {
+        const std::string file = (kodawari::fuzz::scratch_dir() / "capi-flocking.json").string();
+        const std::string text = R"({"format": "kodawari-scene", "version": 2, "name": "capi-fuzz", "fps": 60, "duration": 1,
+  "camera": {"position": [0, 60, -160], "target": [0, 45, 0], "fov_deg": 60},
+  "flocks": [{"name": "starlings", "wing_type": "pigeon", "count": 37, "seed": 5, "speed": 15,
+    "generated_route": {"seed": 7, "segments": 6, "center": [0, 45, 0], "extent": [30, 6, 30], "loop": true},
+    "formation": {"spread": [8, 3, 8]}, "flocking": {}}]})";
+        kodawari::fuzz::write_file(file, reinterpret_cast<const std::uint8_t*>(text.data()), text.size());
+        return file;
+    }();
+    return path;
+}
+
+void agent(ByteReader& in, kodawari_flock_agent& a) {
+    kodawari_flock_agent_default(&a);
+    a.kind = in.upto(6);  // 5 and 6 are no kind
+    for (float& v : a.position) v = in.flag() ? in.number(60.0f) : in.number(2.0e6f);
+    for (float& v : a.velocity) v = in.number(in.flag() ? 40.0f : 2000.0f);
+    if (in.flag()) a.radius = in.number(in.flag() ? 30.0f : 2.0e4f);
+    if (in.flag()) a.weight = in.number(in.flag() ? 80.0f : 2000.0f);
+    if (in.flag()) a.margin = in.number(in.flag() ? 5.0f : 2000.0f);
+    if (in.flag()) {
+        for (float& v : a.end) v = in.number(60.0f);
+    }
+    if (in.flag()) {
+        for (float& v : a.normal) v = in.number(in.flag() ? 1.0f : 1.0e-5f);
+    }
+}
+
+void scene_simulation(ByteReader& in) {
+    kodawari_backend_options backend{};
+    backend.backend = in.flag() ? KODAWARI_BACKEND_CPU_REFERENCE : KODAWARI_BACKEND_CPU;
+    backend.threads = 1;
+    kodawari_simulation* sim = nullptr;
+    const kodawari_status opened = kodawari_simulation_open(flocking_scene().c_str(), &backend, 4, &sim);
+    check(opened, "kodawari_simulation_open", kodawari_last_error());
+    if (opened != KODAWARI_OK) finding("the fuzz scene did not open: " + std::string(kodawari_last_error()));
+    kodawari_simulation_info info{};
+    check(kodawari_simulation_get_info(sim, &info), "kodawari_simulation_get_info", kodawari_simulation_last_error(sim));
+    std::vector<float> poses(std::size_t{info.bird_count} * KODAWARI_BIRD_PARTS * KODAWARI_TRANSFORM_FLOATS);
+    std::vector<kodawari_flock_agent> agents;
+    for (std::uint32_t op = 0; op < 6 && info.next_frame < info.frame_count; ++op) {
+        switch (in.upto(3)) {
+        case 0: {
+            // Mostly a few agents; sometimes past the 64 allowed.
+            const std::uint32_t count = in.flag() ? in.upto(4) : 60 + in.upto(8);
+            agents.resize(count);
+            for (kodawari_flock_agent& a : agents) agent(in, a);
+            const bool null_array = count == 0 && in.flag();
+            const kodawari_status s = kodawari_simulation_set_flock_agents(sim, null_array ? nullptr : agents.data(), count);
+            const std::string message = kodawari_simulation_last_error(sim);
+            check(s, "kodawari_simulation_set_flock_agents", message.c_str());
+            if (s == KODAWARI_INVALID_ARGUMENT && count <= 64 && message.find("agents[") == std::string::npos) {
+                finding("agents refused without naming agents[i]: " + message);
+            }
+            break;
+        }
+        case 1: {
+            kodawari_wind wind;
+            kodawari_wind_default(&wind);
+            for (float& v : wind.velocity) v = in.number(in.flag() ? 20.0f : 200.0f);
+            wind.gust = in.number(5.0f);
+            wind.gust_period = in.number(2000.0f);
+            wind.gust_size = in.number(2.0e4f);
+            wind.seed = in.u32();
+            const kodawari_status s = kodawari_simulation_set_wind(sim, in.flag() ? nullptr : &wind);
+            check(s, "kodawari_simulation_set_wind", kodawari_simulation_last_error(sim));
+            break;
+        }
+        default: {
+            const std::uint32_t frames = 1 + in.upto(1);
+            const kodawari_status s = kodawari_simulation_step(sim, frames);
+            check(s, "kodawari_simulation_step", kodawari_simulation_last_error(sim));
+            if (s != KODAWARI_OK) {
+                if (info.next_frame + frames <= info.frame_count) {
+                    finding("a step within the frames left failed: " + std::string(kodawari_simulation_last_error(sim)));
+                }
+                break;
+            }
+            kodawari_bird_output out{};
+            out.world_transforms = poses.data();
+            out.world_transforms_capacity = poses.size();
+            const kodawari_status read = kodawari_simulation_bird_poses(sim, &out);
+            check(read, "kodawari_simulation_bird_poses", kodawari_simulation_last_error(sim));
+            if (read != KODAWARI_OK) finding("the poses of a stepped simulation were refused");
+            for (float v : poses) kodawari::fuzz::require_finite(v, "a flocking bird's transform");
+            break;
+        }
+        }
+        check(kodawari_simulation_get_info(sim, &info), "kodawari_simulation_get_info", kodawari_simulation_last_error(sim));
+    }
+    kodawari_simulation_destroy(sim);
+}
+
 }  // namespace
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     ByteReader in(data, size);
-    if (in.flag()) {
+    switch (in.byte() % 3) {
+    case 0:
         chain_world(in);
-    } else {
+        break;
+    case 1:
         bird_world(in);
+        break;
+    default:
+        scene_simulation(in);
+        break;
     }
     return 0;
 }

@@ -84,3 +84,7 @@ capi = reset("capi")
 r = random.Random(16)
 for k in range(12):
     (capi / f"random-{k:02}.bin").write_bytes(bytes(r.randrange(256) for _ in range(64 + 48 * k)))
+# The scene simulation's inputs (first byte 2 mod 3: fuzz_capi.cpp's third kind): agents,
+# wind and steps in random order, so the seed corpus reaches kodawari_simulation_*.
+for k in range(6):
+    (capi / f"simulation-{k:02}.bin").write_bytes(bytes([2]) + bytes(r.randrange(256) for _ in range(96 + 64 * k)))
