@@ -9,6 +9,7 @@
 #include <charconv>
 #include <cmath>
 
+#include "kodawari/domains/flocking.hpp"
 #include "kodawari/simd.hpp"
 #include "kodawari/version.hpp"
 
@@ -241,7 +242,8 @@ std::string_view device_buffer(kodawari_device_buffer which) {
         case KODAWARI_BUFFER_JOINT_MOTION: return rod_buffers::motion;
         case KODAWARI_BUFFER_JOINT_SPIN: return rod_buffers::spin;
         case KODAWARI_BUFFER_BIRD_POSES: return bird_buffers::poses;
-        default: invalid("which", std::to_string(value) + "; expected a kodawari_device_buffer (0 to 3)");
+        case KODAWARI_BUFFER_FLOCK_AGENTS: return flock_buffers::agents;
+        default: invalid("which", std::to_string(value) + "; expected a kodawari_device_buffer (0 to 4)");
     }
 }
 
@@ -258,6 +260,7 @@ kodawari_buffer_range buffer_range(const VulkanBufferRange& range) {
 void fill_range(const DeviceData* data, kodawari_device_buffer which, kodawari_buffer_range* out, bool chains) {
     require_pointer(out, "out");
     const std::string_view name = device_buffer(which);
+    if (name == flock_buffers::agents) invalid("which", "FLOCK_AGENTS is a scene simulation's buffer (kodawari_simulation_buffer)");
     if (chains == (name == bird_buffers::poses)) {
         invalid("which", chains ? "BIRD_POSES is a bird world's buffer" : "a chain world's buffer; a bird world has BIRD_POSES");
     }

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cstdint>
+#include <cstring>
 #include <memory>
 #include <string>
 #include <utility>
@@ -115,6 +116,24 @@ KODAWARI_C_API kodawari_status kodawari_simulation_set_wind(kodawari_simulation*
     });
 }
 
+namespace {
+
+FlockAgent flock_agent(const kodawari_flock_agent& a) {
+    FlockAgent f;
+    // Out-of-range kinds reach set_flock_agents as themselves, which names them.
+    f.kind = static_cast<FlockAgent::Kind>(a.kind);
+    f.position = {a.position[0], a.position[1], a.position[2]};
+    f.velocity = {a.velocity[0], a.velocity[1], a.velocity[2]};
+    f.radius = a.radius;
+    f.weight = a.weight;
+    f.margin = a.margin;
+    f.end = {a.end[0], a.end[1], a.end[2]};
+    f.normal = {a.normal[0], a.normal[1], a.normal[2]};
+    return f;
+}
+
+}  // namespace
+
 KODAWARI_C_API kodawari_status kodawari_flock_agent_default(kodawari_flock_agent* out) {
     return guard("kodawari_flock_agent_default", nullptr, [&] {
         require_pointer(out, "out");
@@ -136,21 +155,27 @@ KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_agents(kodawari_sim
         require_sim(sim);
         require_array(agents, count, "agents", "count");
         std::vector<FlockAgent> list;
-        for (std::uint32_t i = 0; i < count; ++i) {
-            const kodawari_flock_agent& a = agents[i];
-            FlockAgent f;
-            // Out-of-range kinds reach set_flock_agents as themselves, which names them.
-            f.kind = static_cast<FlockAgent::Kind>(a.kind);
-            f.position = {a.position[0], a.position[1], a.position[2]};
-            f.velocity = {a.velocity[0], a.velocity[1], a.velocity[2]};
-            f.radius = a.radius;
-            f.weight = a.weight;
-            f.margin = a.margin;
-            f.end = {a.end[0], a.end[1], a.end[2]};
-            f.normal = {a.normal[0], a.normal[1], a.normal[2]};
-            list.push_back(f);
-        }
+        for (std::uint32_t i = 0; i < count; ++i) list.push_back(flock_agent(agents[i]));
         check(set_flock_agents(*sim->sim, list));
+    });
+}
+
+
+KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_device_agents(kodawari_simulation* sim, uint32_t count) {
+    return guard("kodawari_simulation_set_flock_device_agents", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        check(set_flock_device_agents(*sim->sim, count));
+    });
+}
+
+KODAWARI_C_API kodawari_status kodawari_encode_flock_agent(const kodawari_flock_agent* agent, float out[12]) {
+    return guard("kodawari_encode_flock_agent", nullptr, [&] {
+        require_pointer(agent, "agent");
+        require_pointer(out, "out");
+        auto encoded = encode_flock_agent(flock_agent(*agent));
+        check(encoded);
+        static_assert(sizeof(gpu::FlockAgentGpu) == 12 * sizeof(float));
+        std::memcpy(out, &encoded.value(), sizeof(gpu::FlockAgentGpu));
     });
 }
 

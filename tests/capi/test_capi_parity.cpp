@@ -655,7 +655,7 @@ TEST(CApiEmbedding, RecordedScenesGiveTheStepsBits) {
     EXPECT_EQ(kodawari_simulation_bird_poses(recorded, &out), KODAWARI_INVALID_ARGUMENT);
     EXPECT_NE(std::string(kodawari_simulation_last_error(recorded)).find("recorded"), std::string::npos);
     EXPECT_EQ(kodawari_simulation_buffer(recorded, KODAWARI_BUFFER_JOINT_MOTION, &range), KODAWARI_INVALID_ARGUMENT);
-    EXPECT_NE(std::string(kodawari_simulation_last_error(recorded)).find("no domain has a buffer named \"chains.motion\" (they have birds.poses)"),
+    EXPECT_NE(std::string(kodawari_simulation_last_error(recorded)).find("no domain has a buffer named \"chains.motion\" (they have flocking.agents, birds.poses)"),
               std::string::npos)
         << kodawari_simulation_last_error(recorded);
     EXPECT_EQ(kodawari_simulation_record(recorded, nullptr), KODAWARI_INVALID_ARGUMENT);

@@ -414,6 +414,25 @@ static void test_rejects(void) {
         EXPECT_FAIL(kodawari_simulation_set_flock_agents(NULL, agents, 2), KODAWARI_INVALID_ARGUMENT, NULL, "sim");
         EXPECT_OK(kodawari_simulation_set_flock_agents(sim, agents, 2));
         EXPECT_OK(kodawari_simulation_set_flock_agents(sim, NULL, 0));
+        /* Agents on the device: their encoding (FlockAgentGpu's 12 floats), and the count
+           bounded (this scene has no flocking flock: 0 and 64 do nothing). */
+        float encoded[12];
+        agents[0].position[0] = 3.0f;
+        agents[0].velocity[2] = -5.0f;
+        EXPECT_OK(kodawari_encode_flock_agent(&agents[0], encoded));
+        CHECK(encoded[0] == 3.0f && encoded[3] == 15.0f && encoded[4] == 0.0f && encoded[5] == 40.0f && encoded[6] == 0.0f &&
+                  encoded[10] == -5.0f,
+              "encoded predator: position (%g, ...), radius %g, kind %g, weight %g, margin %g, velocity z %g",
+              (double)encoded[0], (double)encoded[3], (double)encoded[4], (double)encoded[5], (double)encoded[6],
+              (double)encoded[10]);
+        agents[0].radius = -1.0f;
+        EXPECT_FAIL(kodawari_encode_flock_agent(&agents[0], encoded), KODAWARI_INVALID_ARGUMENT, NULL, "agent.radius");
+        EXPECT_FAIL(kodawari_encode_flock_agent(NULL, encoded), KODAWARI_INVALID_ARGUMENT, NULL, "agent");
+        EXPECT_FAIL(kodawari_simulation_set_flock_device_agents(sim, 65), KODAWARI_INVALID_ARGUMENT, sim, "count: 65");
+        EXPECT_OK(kodawari_simulation_set_flock_device_agents(sim, 0));
+        kodawari_buffer_range agent_range;
+        EXPECT_FAIL(kodawari_simulation_buffer(sim, KODAWARI_BUFFER_FLOCK_AGENTS, &agent_range), KODAWARI_INVALID_ARGUMENT, sim,
+                    "flocking.agents");
     }
     /* Nothing changed: the rejected step of 4 left frame 1 next. */
     EXPECT_OK(kodawari_simulation_get_info(sim, &info));

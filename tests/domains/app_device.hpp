@@ -25,6 +25,10 @@ public:
     [[nodiscard]] VkCommandBuffer begin(std::uint32_t k);
     void submit(std::uint32_t k);
     void wait_all();
+    /// Records into `cmd` what an application's kernel writing `bytes` of `buffer` at
+    /// `offset` would: a barrier after earlier compute-shader reads, then the write
+    /// (vkCmdUpdateBuffer: at most 65 536 bytes).
+    void write_buffer(VkCommandBuffer cmd, VkBuffer buffer, VkDeviceSize offset, const void* data, VkDeviceSize bytes);
     /// Validation messages the application's messenger saw.
     [[nodiscard]] std::uint32_t messages() const;
 

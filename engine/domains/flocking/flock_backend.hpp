@@ -41,13 +41,18 @@ public:
     /// Device::frames_in_flight() staging slots, between the embedding barriers. The
     /// frame's motion is then in motion_buffer() (BirdMotionGpu per bird) once the
     /// application's submission completed; nothing is read back. Unsupported on the CPU.
+    /// `device_agents` more agents follow `agents` in agents_buffer(), written there by
+    /// the application before this recording (set_flock_device_agents): not copied in.
     [[nodiscard]] virtual Result<void> record(VkCommandBuffer cmd, bool first, std::span<const gpu::FlockParamsGpu> flocks,
-                                              std::span<const gpu::FlockAgentGpu> agents) {
-        (void)cmd, (void)first, (void)flocks, (void)agents;
+                                              std::span<const gpu::FlockAgentGpu> agents, std::uint32_t device_agents) {
+        (void)cmd, (void)first, (void)flocks, (void)agents, (void)device_agents;
         return make_error(Error::Kind::Unsupported, "the flocking step records into a command buffer on the vulkan backend only");
     }
     /// Where record() leaves the frame's motion; null on the CPU.
     [[nodiscard]] virtual const compute::Buffer* motion_buffer() const { return nullptr; }
+    /// Where record() reads a frame's agents (FlockAgentGpu each: the scene's, then the
+    /// application's); null on the CPU.
+    [[nodiscard]] virtual const compute::Buffer* agents_buffer() const { return nullptr; }
     [[nodiscard]] virtual std::string device() const = 0;
     /// Its time since load() (kodawari/domains/flocking.hpp); zeros where not measured.
     [[nodiscard]] virtual FlockingTiming timing() const { return {}; }

@@ -9,6 +9,7 @@
 #include <string>
 #include <vector>
 
+#include "compute/compute.hpp"
 #include "domains/flocking/flock_backend.hpp"
 #include "domains/flocking/flock_world.hpp"
 
@@ -27,6 +28,23 @@ public:
     std::uint32_t scene_instances() const override { return 0; }
     void keep_instances(InstanceRange) override {}
     std::vector<std::string> outputs() const override { return {std::string(kFlockingDomain)}; }
+    std::vector<std::string> buffers() const override { return {std::string(flock_buffers::agents)}; }
+    // The application's range of the agents' buffer (set_flock_device_agents): after the
+    // scene's predators, room for kMaxFlockAgents.
+    Result<VulkanBufferRange> buffer(std::string_view name) const override {
+        const compute::Buffer* agents = backend_ ? backend_->agents_buffer() : nullptr;
+        if (agents == nullptr) {
+            return make_error(Error::Kind::InvalidInput, "domain \"flocking\": \"" + std::string(name) +
+                                                             "\" is not on a Vulkan device (a cpu backend)");
+        }
+        VulkanBufferRange range;
+        range.buffer = static_cast<VkBuffer>(agents->handle());
+        range.stride = sizeof(gpu::FlockAgentGpu);
+        range.count = kMaxFlockAgents;
+        range.offset = VkDeviceSize{world_.scene_agents()} * range.stride;
+        range.range = VkDeviceSize{range.count} * range.stride;
+        return range;
+    }
 
     Result<void> open(const DomainSetup& setup, std::span<Domain* const>) override {
         switch (setup.kind) {
@@ -63,6 +81,12 @@ public:
 
     Result<void> step(std::uint32_t first, std::uint32_t frames, std::span<const ChannelOutput> out) override {
         if (!backend_) return {};
+        if (device_agents_ > 0) {
+            return make_error(Error::Kind::InvalidInput,
+                              "domain \"flocking\": " + std::to_string(device_agents_) +
+                                  " agents are on the device (set_flock_device_agents), which record() reads and step() "
+                                  "cannot: record the frames, or set_flock_device_agents(sim, 0) first");
+        }
         if (first != frame_) {
             return make_error(Error::Kind::InvalidInput, "domain \"flocking\": step(" + std::to_string(first) + ") after frame " +
                                                              std::to_string(frame_) + " (frames go in order from 0)");
@@ -101,12 +125,12 @@ public:
                                                              std::to_string(frame_) + " (frames go in order from 0)");
         }
         if (frame == 0) {
-            KW_TRY(backend_->record(cmd, true, {}, {}));
+            KW_TRY(backend_->record(cmd, true, {}, {}, 0));
         } else {
             flocks_.resize(world_.flocks.size());
             agents_.resize(world_.scene_agents() + app_agents_.size());
             frame_inputs(frame, flocks_, agents_);
-            KW_TRY(backend_->record(cmd, false, flocks_, agents_));
+            KW_TRY(backend_->record(cmd, false, flocks_, agents_, device_agents_));
         }
         frame_ = frame + 1;
         motion_.clear();  // this frame's motion is on the device only
@@ -122,7 +146,22 @@ public:
     std::span<const gpu::BirdMotionGpu> motion() const { return motion_; }
     const compute::Buffer* motion_buffer() const { return backend_ ? backend_->motion_buffer() : nullptr; }
     FlockingTiming timing() const { return backend_ ? backend_->timing() : FlockingTiming{}; }
-    void set_agents(std::vector<gpu::FlockAgentGpu> agents) { app_agents_ = std::move(agents); }
+    // The application's agents: from host arrays, or that many on the device; each
+    // replaces the other.
+    void set_agents(std::vector<gpu::FlockAgentGpu> agents) {
+        app_agents_ = std::move(agents);
+        device_agents_ = 0;
+    }
+    Result<void> set_device_agents(std::uint32_t count) {
+        if (count > 0 && (backend_ == nullptr || backend_->agents_buffer() == nullptr)) {
+            return make_error(Error::Kind::InvalidInput, "set_flock_device_agents: agents on the device need the vulkan backend "
+                                                         "(this simulation runs on the CPU): set_flock_agents takes them from "
+                                                         "host arrays");
+        }
+        app_agents_.clear();
+        device_agents_ = count;
+        return {};
+    }
 
 private:
     // Frame `frame`'s flock parameters and agents: the scene's (FlockWorld::frame_inputs),
@@ -140,11 +179,12 @@ private:
     std::vector<gpu::FlockParamsGpu> flocks_;
     std::vector<gpu::FlockAgentGpu> agents_;
     std::vector<gpu::FlockAgentGpu> app_agents_;  // set_flock_agents()
+    std::uint32_t device_agents_ = 0;              // set_flock_device_agents()
 };
 
-// One application agent as the kernels take it, or an error naming agents[i] and the member.
-Result<gpu::FlockAgentGpu> agent_gpu(const FlockAgent& a, std::size_t i) {
-    const std::string what = "set_flock_agents: agents[" + std::to_string(i) + "].";
+// One application agent as the kernels take it, or an error naming `what` (the argument,
+// with its trailing dot) and the member.
+Result<gpu::FlockAgentGpu> agent_gpu(const FlockAgent& a, const std::string& what) {
     auto bad = [&](const char* member, const char* expected) {
         return make_error(Error::Kind::InvalidInput, what + member + ": expected " + expected);
     };
@@ -189,6 +229,17 @@ Result<std::unique_ptr<Domain>> make_flocking_domain(const Scene& scene, const b
     return std::unique_ptr<Domain>(std::make_unique<FlockingDomain>(std::move(built).value()));
 }
 
+Result<gpu::FlockAgentGpu> encode_flock_agent(const FlockAgent& agent) { return agent_gpu(agent, "encode_flock_agent: agent."); }
+
+Result<void> set_flock_device_agents(Simulation& sim, std::uint32_t count) {
+    if (count > kMaxFlockAgents) {
+        return make_error(Error::Kind::InvalidInput, "set_flock_device_agents: count: " + std::to_string(count) +
+                                                         " agents; at most " + std::to_string(kMaxFlockAgents));
+    }
+    if (auto* flock = dynamic_cast<FlockingDomain*>(sim.domain(kFlockingDomain))) return flock->set_device_agents(count);
+    return {};
+}
+
 Result<void> set_flock_agents(Simulation& sim, std::span<const FlockAgent> agents) {
     if (agents.size() > kMaxFlockAgents) {
         return make_error(Error::Kind::InvalidInput, "set_flock_agents: agents: " + std::to_string(agents.size()) +
@@ -196,7 +247,7 @@ Result<void> set_flock_agents(Simulation& sim, std::span<const FlockAgent> agent
     }
     std::vector<gpu::FlockAgentGpu> converted;
     for (std::size_t i = 0; i < agents.size(); ++i) {
-        auto g = agent_gpu(agents[i], i);
+        auto g = agent_gpu(agents[i], "set_flock_agents: agents[" + std::to_string(i) + "].");
         if (!g) return g.error();
         converted.push_back(g.value());
     }

@@ -100,9 +100,9 @@ public:
     }
 
     Result<void> record(VkCommandBuffer cmd, bool first, std::span<const gpu::FlockParamsGpu> flocks,
-                        std::span<const gpu::FlockAgentGpu> agents) override {
+                        std::span<const gpu::FlockAgentGpu> agents, std::uint32_t device_agents) override {
         const FlockWorld& w = *world_;
-        if (agents.size() > agent_capacity()) {
+        if (agents.size() + device_agents > agent_capacity()) {
             return make_error(Error::Kind::InvalidInput, "the flocking step: " + std::to_string(agents.size()) +
                                                              " agents in a frame; at most " + std::to_string(agent_capacity()));
         }
@@ -124,16 +124,22 @@ public:
         ring_->next_frame();
         auto rec = compute::Recording::borrow(*device_, cmd, &*ring_);
         // The application's reads of the previous frame's motion (the birds' copy, its own
-        // draws or kernels) before this frame's copies and dispatches overwrite it.
+        // draws or kernels) before this frame's copies and dispatches overwrite it; and its
+        // writes of the agents it places on the device (a copy or a kernel of its own)
+        // before the step reads them.
         compute::barrier(rec, embedding_consumers(*device_), compute::Stage::Transfer | compute::Stage::Compute);
         KW_TRY(compute::upload(rec, buffers_[KW_FLOCK_BINDING_FLOCKS], bytes_of(flocks)));
+        // Only the agents given here: the application's device agents after them are its own.
         KW_TRY(compute::upload(rec, buffers_[KW_FLOCK_BINDING_AGENTS], bytes_of(agents)));
-        record_frame(rec, 0, static_cast<std::uint32_t>(flocks.size()), static_cast<std::uint32_t>(agents.size()));
+        record_frame(rec, 0, static_cast<std::uint32_t>(flocks.size()), static_cast<std::uint32_t>(agents.size()) + device_agents);
         compute::barrier(rec, compute::Stage::Compute, embedding_consumers(*device_));
         return {};
     }
 
     const compute::Buffer* motion_buffer() const override { return &buffers_[KW_FLOCK_BINDING_MOTION]; }
+    const compute::Buffer* agents_buffer() const override {
+        return buffers_.empty() ? nullptr : &buffers_[KW_FLOCK_BINDING_AGENTS];
+    }
 
     std::string device() const override { return device_->info().name; }
     std::uint32_t validation_messages() const override { return device_->validation_messages(); }

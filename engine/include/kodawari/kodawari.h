@@ -729,6 +729,7 @@ typedef enum kodawari_device_buffer {
     KODAWARI_BUFFER_JOINT_MOTION = 1,  /* RodJointMotionGpu per joint: x relative to the chain's root */
     KODAWARI_BUFFER_JOINT_SPIN = 2,    /* RodJointSpinGpu per joint: q (x, y, z, w) */
     KODAWARI_BUFFER_BIRD_POSES = 3,    /* BirdPoseGpu per bird: the last simulated frame */
+    KODAWARI_BUFFER_FLOCK_AGENTS = 4,  /* FlockAgentGpu: a simulation's agents on the device (kodawari_simulation_set_flock_device_agents) */
     KODAWARI_BUFFER_MAX_ENUM = 0x7FFFFFFF
 } kodawari_device_buffer;
 
@@ -823,6 +824,23 @@ KODAWARI_C_API kodawari_status kodawari_flock_agent_default(kodawari_flock_agent
 /// changes nothing. A scene without flocking flocks takes them and does nothing with them.
 KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_agents(kodawari_simulation* sim, const kodawari_flock_agent* agents,
                                                                     uint32_t count);
+
+/// Agents the application writes on its device for kodawari_simulation_record to read
+/// (docs/flocking.md, "Agents on the device"): from the next recorded frame on, the first
+/// `count` elements (at most 64) of the buffer KODAWARI_BUFFER_FLOCK_AGENTS
+/// (kodawari_simulation_buffer; FlockAgentGpu each, kodawari/shared/flocking.h; encode
+/// them as kodawari_simulation_encode_flock_agent does) are the application's agents, in
+/// place of kodawari_simulation_set_flock_agents' (each call replaces the other's; 0
+/// removes them). Write them after the previous frame's recording has read them and
+/// before this frame's, which begins with a barrier from transfer and compute-shader
+/// writes. Their values are not checked. KODAWARI_INVALID_ARGUMENT naming `count` above
+/// 64, or on a CPU backend; while `count` > 0, kodawari_simulation_step is refused.
+KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_device_agents(kodawari_simulation* sim, uint32_t count);
+/// `agent` as the kernels read it: 12 floats (FlockAgentGpu: position xyz and radius;
+/// kind, weight, margin, 0; velocity, a capsule's end or a plane's unit normal, and 0)
+/// into `out`, what an application writes into KODAWARI_BUFFER_FLOCK_AGENTS. An agent out
+/// of range is KODAWARI_INVALID_ARGUMENT naming the member.
+KODAWARI_C_API kodawari_status kodawari_encode_flock_agent(const kodawari_flock_agent* agent, float out[12]);
 
 /// Records the next frame of the whole scene (its flocks, flocking birds and characters'
 /// chains) into `command_buffer`, a VkCommandBuffer of the application's in the

@@ -23,6 +23,7 @@
 
 #include <glm/glm.hpp>
 #include <kodawari/shared/birds.h>
+#include <kodawari/shared/flocking.h>
 
 #include "kodawari/api.hpp"
 #include "kodawari/birds/world.hpp"
@@ -75,6 +76,29 @@ inline constexpr std::uint32_t kMaxFlockAgents = 64;
 /// `agents[i]` and the member (nothing changes then); with no flocking flock in the scene,
 /// nothing to do.
 [[nodiscard]] KODAWARI_API Result<void> set_flock_agents(Simulation& sim, std::span<const FlockAgent> agents);
+
+/// The flocking domain's device buffers (Simulation::buffer, on the vulkan backend).
+namespace flock_buffers {
+/// The application's agents on the device (set_flock_device_agents): kMaxFlockAgents
+/// gpu::FlockAgentGpu (kodawari/shared/flocking.h, the kernels' own encoding:
+/// encode_flock_agent()) after the scene's predators, the range handed out.
+inline constexpr std::string_view agents = "flocking.agents";
+}  // namespace flock_buffers
+
+/// Agents the application writes on its device, in its own command buffers, for
+/// record() (Simulation::record) to read: from the next recorded frame on, the first
+/// `count` elements of the buffer flock_buffers::agents (at most kMaxFlockAgents) are the
+/// application's agents, in place of set_flock_agents' (each call replaces the other's;
+/// 0 removes them). Write them after the previous frame's record() has read them (a
+/// barrier from compute-shader reads) and before this frame's: record() begins with a
+/// barrier from transfer and compute-shader writes. Their values are not checked: write
+/// what encode_flock_agent() gives. InvalidInput naming `count` above kMaxFlockAgents, or
+/// on a CPU backend; while `count` > 0, step() is refused (it cannot see them).
+[[nodiscard]] KODAWARI_API Result<void> set_flock_device_agents(Simulation& sim, std::uint32_t count);
+
+/// `agent` as the kernels read it (what set_flock_agents() writes, and what an application
+/// writes into flock_buffers::agents), or InvalidInput naming the member out of range.
+[[nodiscard]] KODAWARI_API Result<gpu::FlockAgentGpu> encode_flock_agent(const FlockAgent& agent);
 
 /// Where a flocking domain's time went since it opened, on the CPU backends (zeros on
 /// vulkan, whose passes run in one submission): the grid's counting sort (one thread),
