@@ -6,8 +6,9 @@
 //   2. it makes a vulkan rod backend (a crowd of strands) and a Simulation of a flocking
 //      flock (a scene in a string: birds that fly by their neighbours) on it;
 //   3. each frame, with two frames in flight, it moves a hawk of its own through the flock
-//      (set_flock_agents), records the module's chain step and the flock's frame into its
-//      own command buffer, then draws joints and birds as points straight from the
+//      (written on the device, into the buffer the module reads its agents from:
+//      set_flock_device_agents), records the module's chain step and the flock's frame into
+//      its own command buffer, then draws joints and birds as points straight from the
 //      module's buffers (its own shaders, the module's struct definitions), offscreen;
 //   4. at the end it checks that the drawn points are where a read-back of the same state
 //      puts them (the flock: a second Simulation stepped with the same hawk), and that the
@@ -460,10 +461,13 @@ int main(int argc, char** argv) {
 
     // --- The frame loop: two frames in flight ----------------------------------------------
     std::uint32_t first_bird = 0;
+    // The hawk is the application's: it writes it on the device each frame, where the
+    // flock's step reads its agents (one agent, the first of the range handed out).
+    ok_or_fail(kodawari::set_flock_device_agents(*flock, 1), "set_flock_device_agents");
+    const auto agents = value_of(flock->buffer(kodawari::flock_buffers::agents), "flocking.agents");
     for (std::uint32_t k = 1; k <= frames; ++k) {
         const std::uint32_t slot = k % kFramesInFlight;
-        const kodawari::FlockAgent hawk = hawk_at(k, route_start);
-        ok_or_fail(kodawari::set_flock_agents(*flock, std::span(&hawk, 1)), "set_flock_agents");
+        const kodawari::gpu::FlockAgentGpu hawk = value_of(kodawari::encode_flock_agent(hawk_at(k, route_start)), "hawk");
         check(vkWaitForFences(app.device, 1, &fences[slot], VK_TRUE, UINT64_MAX), "vkWaitForFences");
         check(vkResetFences(app.device, 1, &fences[slot]), "vkResetFences");
         VkCommandBuffer cmd = cmds[slot];
@@ -472,6 +476,13 @@ int main(int argc, char** argv) {
         check(vkBeginCommandBuffer(cmd, &begin), "vkBeginCommandBuffer");
 
         scene.frame(k, kDt, frame);
+        // The hawk, where a kernel of the application's would write it: after the previous
+        // frame's step read the agents (a barrier from compute-shader reads), before this
+        // frame's, which makes the write visible to itself.
+        const VkMemoryBarrier after_reads{VK_STRUCTURE_TYPE_MEMORY_BARRIER, nullptr, 0, 0};
+        vkCmdPipelineBarrier(cmd, VK_PIPELINE_STAGE_COMPUTE_SHADER_BIT, VK_PIPELINE_STAGE_TRANSFER_BIT, 0, 1, &after_reads, 0,
+                             nullptr, 0, nullptr);
+        vkCmdUpdateBuffer(cmd, agents.buffer, agents.offset, sizeof hawk, &hawk);
         // The module's work, then the draws that read it, with no barrier of the
         // application's in between (the module records them: docs/embedding.md).
         ok_or_fail(flock->record(cmd), "Simulation::record");
@@ -529,9 +540,10 @@ int main(int argc, char** argv) {
 
     // --- The checks: the drawn points against a read-back of the same state -------------
     ok_or_fail(rods->read(snapshot), "rods read");
-    // The flock stepped frame after frame with the same hawk: recorded frames are the
-    // stepped ones bit for bit (the module's tests check that), so its last frame is
-    // where the drawn birds must be (both ran frames 0 to frames - 1).
+    // The flock stepped frame after frame with the same hawk from host arrays: recorded
+    // frames are the stepped ones bit for bit, the hawk written on the device too (the
+    // module's tests check that), so its last frame is where the drawn birds must be (both
+    // ran frames 0 to frames - 1).
     std::unique_ptr<kodawari::Simulation> stepped = open_flock();
     std::vector<kodawari::gpu::BirdPose> expected(kBirds);
     for (std::uint32_t k = 1; k <= frames; ++k) {
