@@ -7,7 +7,8 @@
 // any C API's reach. The cpu backend with one thread runs what is created. A third kind
 // of input drives a scene simulation (kodawari_simulation_*) of a small flocking flock as
 // an application does between steps: agents placed (predators, attractors, obstacles,
-// capsules, planes, out-of-range kinds and counts), the wind set, frames stepped.
+// capsules, planes, out-of-range kinds and counts), agents on the device asked for and
+// encoded, the wind set, frames stepped.
 //
 // Invariants: every call returns a status from the header's list, with a message when it
 // is not KODAWARI_OK; a world that is created steps, and its outputs are finite; agents
@@ -412,7 +413,7 @@ void scene_simulation(ByteReader& in) {
     std::vector<float> poses(std::size_t{info.bird_count} * KODAWARI_BIRD_PARTS * KODAWARI_TRANSFORM_FLOATS);
     std::vector<kodawari_flock_agent> agents;
     for (std::uint32_t op = 0; op < 6 && info.next_frame < info.frame_count; ++op) {
-        switch (in.upto(3)) {
+        switch (in.upto(4)) {
         case 0: {
             // Mostly a few agents; sometimes past the 64 allowed.
             const std::uint32_t count = in.flag() ? in.upto(4) : 60 + in.upto(8);
@@ -424,6 +425,24 @@ void scene_simulation(ByteReader& in) {
             check(s, "kodawari_simulation_set_flock_agents", message.c_str());
             if (s == KODAWARI_INVALID_ARGUMENT && count <= 64 && message.find("agents[") == std::string::npos) {
                 finding("agents refused without naming agents[i]: " + message);
+            }
+            break;
+        }
+        case 3: {
+            // Agents on the device: the count (a CPU backend refuses any above 0, as does
+            // a count above 64) and one agent's encoding.
+            const std::uint32_t count = in.upto(70);
+            const kodawari_status s = kodawari_simulation_set_flock_device_agents(sim, count);
+            const std::string message = kodawari_simulation_last_error(sim);
+            check(s, "kodawari_simulation_set_flock_device_agents", message.c_str());
+            if (count > 0 && s == KODAWARI_OK) finding("a cpu simulation took agents on the device");
+            kodawari_flock_agent a;
+            agent(in, a);
+            float encoded[12];
+            const kodawari_status e = kodawari_encode_flock_agent(&a, encoded);
+            check(e, "kodawari_encode_flock_agent", kodawari_last_error());
+            if (e == KODAWARI_OK) {
+                for (float v : encoded) kodawari::fuzz::require_finite(v, "an encoded agent");
             }
             break;
         }
