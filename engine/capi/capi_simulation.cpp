@@ -160,7 +160,6 @@ KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_agents(kodawari_sim
     });
 }
 
-
 KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_device_agents(kodawari_simulation* sim, uint32_t count) {
     return guard("kodawari_simulation_set_flock_device_agents", sim ? &sim->message : nullptr, [&] {
         require_sim(sim);

@@ -56,7 +56,6 @@ std::uint64_t cost(const Reduction& r, std::size_t value_bytes, std::uint32_t fr
     return kept * value_bytes + (kept == frames || kept == 2 ? 0 : kept * sizeof(float));
 }
 
-
 // One channel of a group after the first pass: whether it is written, its reduction,
 // and its kept keys' bytes as the tail holds them (without meshopt: floats, shorts or
 // bytes; with it, the quantizing filter's output).

@@ -53,9 +53,11 @@ public:
     /// Compacts `keys`: `frames` x `count` records, frame-major, each the fields of
     /// `fields` in order (3 floats for translations and scales, 4 for rotations, x y z w,
     /// consecutive frames in one hemisphere) at `times` (one per frame, increasing).
-    /// `keep(item, field)` false leaves a field out. The compacted keys wait in a
-    /// SpillFile beside `beside`. `group_bytes` bounds the transpose's buffers as
-    /// copy_item_major's does. Errors: the spill files' (Io).
+    /// `keep(item, field)` false leaves a field out (called from bounds.threads threads at
+    /// once: it only reads). The compacted keys wait in a SpillFile beside `beside`.
+    /// `group_bytes` bounds the transpose's buffers as copy_item_major's does; the
+    /// channels of a group are reduced on bounds.threads threads, then appended in item
+    /// order (the same bytes on any count). Errors: the spill files' (Io).
     [[nodiscard]] static Result<CompactKeys> build(SpillFile& keys, const std::string& beside, std::size_t count,
                                                    std::span<const ChannelKind> fields, std::span<const float> times,
                                                    const GlbCompaction& bounds, std::size_t group_bytes,

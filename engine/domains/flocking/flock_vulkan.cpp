@@ -103,7 +103,7 @@ public:
                         std::span<const gpu::FlockAgentGpu> agents, std::uint32_t device_agents) override {
         const FlockWorld& w = *world_;
         if (agents.size() + device_agents > agent_capacity()) {
-            return make_error(Error::Kind::InvalidInput, "the flocking step: " + std::to_string(agents.size()) +
+            return make_error(Error::Kind::InvalidInput, "the flocking step: " + std::to_string(agents.size() + device_agents) +
                                                              " agents in a frame; at most " + std::to_string(agent_capacity()));
         }
         if (first) {
