@@ -10,6 +10,7 @@
 #include "kodawari/backend.hpp"
 #include "kodawari/pose_backend.hpp"
 #include "kodawari/rod_backend.hpp"
+#include "kodawari/vulkan_embed.hpp"
 
 namespace kodawari {
 
@@ -31,6 +32,18 @@ public:
     virtual ~RodInputWriter() = default;
     virtual void record(compute::Recording& recording, const DeviceData& rods) const = 0;
 };
+
+/// Where `span` (a backend's buffer, non-null) is, as an application binds it: what
+/// vulkan_buffer() and the domains' Domain::buffer() hand out.
+[[nodiscard]] inline VulkanBufferRange vulkan_range(const DeviceSpan& span) {
+    VulkanBufferRange out;
+    out.buffer = static_cast<VkBuffer>(span.buffer->handle());
+    out.count = span.items * span.per_item;
+    out.stride = span.element_bytes;
+    out.offset = span.first * span.element_bytes;
+    out.range = VkDeviceSize{out.count} * span.element_bytes;
+    return out;
+}
 
 /// Who reads what the module writes, in an application's command buffer: its kernels,
 /// copies and, on a queue family that draws, its draws (docs/embedding.md,

@@ -180,14 +180,7 @@ Result<VulkanBufferRange> vulkan_buffer(const DeviceData& data, std::string_view
         return make_error(Error::Kind::InvalidInput, "vulkan_buffer: the backend keeps no buffer named \"" + std::string(name) +
                                                          "\" now (another family's, or not loaded yet)");
     }
-    const std::uint32_t stride = span.element_bytes;
-    VulkanBufferRange out;
-    out.buffer = static_cast<VkBuffer>(span.buffer->handle());
-    out.count = span.items * span.per_item;
-    out.stride = stride;
-    out.offset = span.first * stride;
-    out.range = VkDeviceSize{out.count} * stride;
-    return out;
+    return vulkan_range(span);
 }
 
 Result<void> record_step(RodBackend& rods, VkCommandBuffer cmd, const rods::RodFrame& frame) {

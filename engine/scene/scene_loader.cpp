@@ -224,15 +224,9 @@ Result<void> read_formation(const JsonReader& r, const JsonNode& node, Formation
                            [&](const JsonNode& n) { return r.vec3(n, NumberRange::closed(0.0, 10000.0)); }));
     const JsonNode shape = r.member(node, "shape");
     if (shape.present()) {
-        std::string value;
-        KW_SCENE_ASSIGN(value, r.string(shape));
-        if (value == "box") {
-            formation.shape = FormationSpec::Shape::Box;
-        } else if (value == "ellipsoid") {
-            formation.shape = FormationSpec::Shape::Ellipsoid;
-        } else {
-            return r.expected(shape, "\"box\" or \"ellipsoid\"");
-        }
+        std::size_t index = 0;
+        KW_SCENE_ASSIGN(index, r.choice(shape, {"box", "ellipsoid"}));
+        formation.shape = index == 0 ? FormationSpec::Shape::Box : FormationSpec::Shape::Ellipsoid;
     }
     const JsonNode variants = r.member(node, "route_variants");
     if (variants.present()) {

@@ -170,7 +170,7 @@ TEST(SceneFormat, EllipsoidFormationKeepsOffsetsInside) {
     EXPECT_EQ(outside(we.value(), longest), 0u);
     EXPECT_GT(longest, 7.0f);  // the long axis is filled, not a ball of the short one
     doc["flocks"][0]["formation"]["shape"] = "sphere";
-    EXPECT_TRUE(contains(parse_error(doc), "$.flocks[0].formation.shape: expected \"box\" or \"ellipsoid\"")) << parse_error(doc);
+    EXPECT_TRUE(contains(parse_error(doc), "$.flocks[0].formation.shape: expected one of \"box\", \"ellipsoid\"")) << parse_error(doc);
 }
 
 // Variants move each junction together with its two handles, so the handle vectors

@@ -14,6 +14,7 @@
 
 #include "domains/flocking/flock_world.hpp"
 #include "kodawari/backend.hpp"
+#include "kodawari/device_data.hpp"
 #include "kodawari/domain.hpp"
 #include "kodawari/domains/flocking.hpp"
 #include "kodawari/result.hpp"
@@ -41,7 +42,7 @@ public:
     /// Device::frames_in_flight() staging slots, between the embedding barriers. The
     /// frame's motion is then in motion_buffer() (BirdMotionGpu per bird) once the
     /// application's submission completed; nothing is read back. Unsupported on the CPU.
-    /// `device_agents` more agents follow `agents` in agents_buffer(), written there by
+    /// `device_agents` more agents follow `agents` (the range device_agents()), written by
     /// the application before this recording (set_flock_device_agents): not copied in.
     [[nodiscard]] virtual Result<void> record(VkCommandBuffer cmd, bool first, std::span<const gpu::FlockParamsGpu> flocks,
                                               std::span<const gpu::FlockAgentGpu> agents, std::uint32_t device_agents) {
@@ -50,9 +51,9 @@ public:
     }
     /// Where record() leaves the frame's motion; null on the CPU.
     [[nodiscard]] virtual const compute::Buffer* motion_buffer() const { return nullptr; }
-    /// Where record() reads a frame's agents (FlockAgentGpu each: the scene's, then the
-    /// application's); null on the CPU.
-    [[nodiscard]] virtual const compute::Buffer* agents_buffer() const { return nullptr; }
+    /// Where record() reads the application's agents written on the device
+    /// (FlockAgentGpu each, kMaxFlockAgents after the scene's); no buffer on the CPU.
+    [[nodiscard]] virtual DeviceSpan device_agents() const { return {}; }
     [[nodiscard]] virtual std::string device() const = 0;
     /// Its time since load() (kodawari/domains/flocking.hpp); zeros where not measured.
     [[nodiscard]] virtual FlockingTiming timing() const { return {}; }

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "compute/compute.hpp"
+#include "backends/device_backends.hpp"
 #include "domains/flocking/flock_backend.hpp"
 #include "domains/flocking/flock_world.hpp"
 
@@ -32,18 +32,12 @@ public:
     // The application's range of the agents' buffer (set_flock_device_agents): after the
     // scene's predators, room for kMaxFlockAgents.
     Result<VulkanBufferRange> buffer(std::string_view name) const override {
-        const compute::Buffer* agents = backend_ ? backend_->agents_buffer() : nullptr;
-        if (agents == nullptr) {
+        const DeviceSpan agents = backend_ ? backend_->device_agents() : DeviceSpan{};
+        if (agents.buffer == nullptr) {
             return make_error(Error::Kind::InvalidInput, "domain \"flocking\": \"" + std::string(name) +
                                                              "\" is not on a Vulkan device (a cpu backend)");
         }
-        VulkanBufferRange range;
-        range.buffer = static_cast<VkBuffer>(agents->handle());
-        range.stride = sizeof(gpu::FlockAgentGpu);
-        range.count = kMaxFlockAgents;
-        range.offset = VkDeviceSize{world_.scene_agents()} * range.stride;
-        range.range = VkDeviceSize{range.count} * range.stride;
-        return range;
+        return vulkan_range(agents);
     }
 
     Result<void> open(const DomainSetup& setup, std::span<Domain* const>) override {
@@ -153,7 +147,7 @@ public:
         device_agents_ = 0;
     }
     Result<void> set_device_agents(std::uint32_t count) {
-        if (count > 0 && (backend_ == nullptr || backend_->agents_buffer() == nullptr)) {
+        if (count > 0 && (backend_ == nullptr || backend_->device_agents().buffer == nullptr)) {
             return make_error(Error::Kind::InvalidInput, "set_flock_device_agents: agents on the device need the vulkan backend "
                                                          "(this simulation runs on the CPU): set_flock_agents takes them from "
                                                          "host arrays");

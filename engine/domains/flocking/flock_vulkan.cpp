@@ -137,8 +137,12 @@ public:
     }
 
     const compute::Buffer* motion_buffer() const override { return &buffers_[KW_FLOCK_BINDING_MOTION]; }
-    const compute::Buffer* agents_buffer() const override {
-        return buffers_.empty() ? nullptr : &buffers_[KW_FLOCK_BINDING_AGENTS];
+    DeviceSpan device_agents() const override {
+        if (buffers_.empty()) return {};
+        return DeviceSpan{.buffer = &buffers_[KW_FLOCK_BINDING_AGENTS],
+                          .first = world_->scene_agents(),
+                          .items = kMaxFlockAgents,
+                          .element_bytes = sizeof(gpu::FlockAgentGpu)};
     }
 
     std::string device() const override { return device_->info().name; }
