@@ -1,7 +1,7 @@
 #!/usr/bin/env bash
 # Scale-out end to end (issue 15): `run --shard I/N` + `merge`, and `mpirun ... run --mpi`
 # with real Open MPI, each compared byte for byte with a single-process run of a bird
-# scene and a rigged crowd, compacted (--compact, at merge and on rank 0) or not, and
+# scene and a rigged crowd, compacted (--compact, at merge, on every rank) or not, and
 # traces under MPI. A rank that fails (a device index it does not have) and a writing rank
 # that fails (an output it cannot create) end every rank with the message and leave no
 # file. Vulkan runs under validation (ctest sets KODAWARI_VALIDATION=1).
@@ -79,11 +79,24 @@ check "only rank 0 writes and says so" test "$(grep -c 'wrote ' "$work/mpi.out")
 check "MPI flock (3 ranks, vulkan) = single run, byte for byte" cmp "$work/flock-vulkan.glb" "$work/mpi-flock-vk.glb"
 "${mpi[@]}" -np 3 "$bin" run scenes/crowd-gltf.json --backend cpu --threads 1 --frames 8 --mpi --out "$work/mpi-crowd.glb" >"$work/mpi.out" 2>&1
 check "MPI rigged crowd (3 ranks) = single run, byte for byte" cmp "$work/crowd.glb" "$work/mpi-crowd.glb"
-# Rank 0 compacts what it gathers: the bytes of run --compact.
+# --compact: every rank compacts its own birds' keys and writes them into rank 0's file
+# at the agreed places (issue 34); the bytes of run --compact, on 2 and 3 ranks, and on
+# more ranks than birds (rank 0 and others with none).
 "${mpi[@]}" -np 2 "$bin" run scenes/flock.json --backend cpu --threads 1 --frames 130 --mpi --compact --out "$work/mpi-flock-compact.glb" >"$work/mpi.out" 2>&1
 check "mpirun --compact exits 0" test $? -eq 0
 check "MPI --compact flock (2 ranks) = run --compact, byte for byte" cmp "$work/flock-compact.glb" "$work/mpi-flock-compact.glb"
 check "MPI --compact says what compaction did, once" test "$(grep -c 'compact: .* keys kept' "$work/mpi.out")" -eq 1
+check "MPI --compact: every rank compacted its own birds" grep -q "birds' keys compacted on 2 ranks" "$work/mpi.out"
+"${mpi[@]}" -np 3 "$bin" run scenes/flock.json --backend cpu --threads 1 --frames 130 --mpi --compact --out "$work/mpi-flock-compact3.glb" >"$work/mpi.out" 2>&1
+check "MPI --compact flock (3 ranks) = run --compact, byte for byte" cmp "$work/flock-compact.glb" "$work/mpi-flock-compact3.glb"
+"$bin" run scenes/birds-closeup.json --backend cpu --frames 30 --compact --out "$work/closeup-compact.glb" >/dev/null 2>&1
+"${mpi[@]}" -np 5 "$bin" run scenes/birds-closeup.json --backend cpu --threads 1 --frames 30 --mpi --compact --out "$work/mpi-closeup.glb" >"$work/mpi.out" 2>&1
+check "MPI --compact, 5 ranks for 3 birds = run --compact, byte for byte" cmp "$work/closeup-compact.glb" "$work/mpi-closeup.glb"
+# meshopt's chunks span birds: rank 0 compacts what it gathers, the same bytes.
+"$bin" run scenes/flock.json --backend cpu --frames 40 --compact --meshopt --out "$work/flock-meshopt.glb" >/dev/null 2>&1
+"${mpi[@]}" -np 2 "$bin" run scenes/flock.json --backend cpu --threads 1 --frames 40 --mpi --compact --meshopt --out "$work/mpi-flock-meshopt.glb" >"$work/mpi.out" 2>&1
+check "MPI --compact --meshopt flock (2 ranks) = run --compact --meshopt, byte for byte" cmp "$work/flock-meshopt.glb" "$work/mpi-flock-meshopt.glb"
+check "MPI --compact --meshopt: rank 0 compacts" bash -c "! grep -q 'compacted on' '$work/mpi.out'"
 "${mpi[@]}" -np 3 "$bin" run scenes/crowd-gltf.json --backend cpu --threads 1 --frames 8 --mpi --compact=0.005,0.02 --out "$work/mpi-crowd-compact.glb" >"$work/mpi.out" 2>&1
 check "MPI --compact rigged crowd (3 ranks) = run --compact, byte for byte" cmp "$work/crowd-compact.glb" "$work/mpi-crowd-compact.glb"
 

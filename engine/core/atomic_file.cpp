@@ -1,6 +1,8 @@
 #include "kodawari/atomic_file.hpp"
 
 #include <array>
+#include <cassert>
+#include <cstdint>
 #include <atomic>
 #include <cerrno>
 #include <csignal>
@@ -152,6 +154,45 @@ void AtomicFile::write(const void* data, std::size_t size) {
         failed_ = true;
         error_ = errno;  // why, for commit()'s message (later calls may change errno)
     }
+}
+
+std::uint64_t AtomicFile::position() const {
+    if (file_ == nullptr) return 0;
+    const off_t at = ::ftello(file_);
+    return at < 0 ? 0 : static_cast<std::uint64_t>(at);
+}
+
+void AtomicFile::skip(std::uint64_t size) {
+    if (file_ == nullptr || failed_ || size == 0) return;
+    // A hole until the other process writes it; the file ends where the last write does.
+    if (size > static_cast<std::uint64_t>(INT64_MAX) || ::fseeko(file_, static_cast<off_t>(size), SEEK_CUR) != 0) {
+        failed_ = true;
+        error_ = errno;
+    }
+}
+
+Result<std::string> AtomicFile::share() {
+    assert(file_ != nullptr && "share() after commit() or a move");
+    if (direct_) return make_error(Error::Kind::Io, path_ + ": a device or a pipe cannot be written by several processes");
+    if (failed_ || std::fflush(file_) != 0) {
+        return make_error(Error::Kind::Io, path_ + ": write failed (" + std::strerror(failed_ ? error_ : errno) + ")");
+    }
+    if (unnamed_) {
+        // The unnamed file gets its temporary name now, as commit() would give it; from
+        // here on it is a named temporary file (removed on failure and on signals).
+        slot_ = register_temp(temp_);
+        std::remove(temp_.c_str());  // a stale one of a dead process with our pid
+        const std::string self = "/proc/self/fd/" + std::to_string(::fileno(file_));
+        if (::linkat(AT_FDCWD, self.c_str(), AT_FDCWD, temp_.c_str(), AT_SYMLINK_FOLLOW) != 0) {
+            const int saved = errno;
+            unregister_temp(slot_);
+            slot_ = -1;
+            return make_error(Error::Kind::Io, path_ + ": cannot name the temporary file " + temp_ + " (" +
+                                                   std::strerror(saved) + ")");
+        }
+        unnamed_ = false;
+    }
+    return temp_;
 }
 
 Result<void> AtomicFile::commit() {

@@ -6,8 +6,10 @@
 #include <vector>
 
 #include "kodawari/bake.hpp"
+#include "kodawari/communicator.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/export.hpp"
+#include "kodawari/simulation.hpp"
 
 namespace kodawari {
 
@@ -24,6 +26,7 @@ public:
     // glTF beside it, `<path without .glb>-<model>.glb`, or at `path` itself when the
     // scene's birds are all of one model (docs/bird-models.md).
     Result<void> begin(const BakeWorld& world) override {
+        if (const Domain* domain = world.domain(kBirdDomain)) noun_ = domain->instance_noun();
         const birds::BirdWorld& birds = bird_world_of(world);
         if (birds.birds.empty()) return {};
         const auto& params = birds.birds;
@@ -69,7 +72,27 @@ public:
         return out;
     }
 
+    // A distributed bake's ranks each compact their own birds' channels (BirdGlbWriter's
+    // share()); a user's model's birds go to files of their own, which rank 0 writes.
+    bool can_share() const override { return writer_ && models_.empty() && writer_->can_share(); }
+
+    Result<void> share(const ShardInfo& mine) override {
+        if (!writer_) return BakeSink::share(mine);
+        const ShardPart part = mine.part(noun_);
+        return writer_->share(part.range.begin, part.range.end);
+    }
+
+    Result<std::vector<BakeOutput>> finish_shared(Communicator& ranks) override {
+        if (!writer_) return BakeSink::finish_shared(ranks);
+        KW_TRY(writer_->finish(ranks));
+        if (ranks.rank() != 0) return std::vector<BakeOutput>{};
+        return std::vector<BakeOutput>{{path_, BakeOutput::Format::Glb,
+                                         "its birds' keys compacted on " + std::to_string(ranks.size()) + " ranks",
+                                         writer_->compaction_stats()}};
+    }
+
 private:
+    std::string noun_;  // what the bird domain calls its instances (ShardInfo's parts)
     std::string path_;
     GlbCompaction compaction_;
     std::optional<BirdGlbWriter> writer_;

@@ -3,7 +3,12 @@
 
 #include <algorithm>
 #include <cmath>
+#include <cassert>
+#include <cerrno>
 #include <cstring>
+
+#include <fcntl.h>
+#include <unistd.h>
 
 #include "core/parallel.hpp"
 #include "export/key_reduction.hpp"
@@ -141,6 +146,7 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
     if (!spill) return spill.error();
     out.data_ = std::move(spill).value();
     const auto frames = static_cast<std::uint32_t>(times.size());
+    out.frames_ = frames;
     out.first_time_ = frames > 0 ? static_cast<double>(times.front()) : 0.0;
     out.last_time_ = frames > 0 ? static_cast<double>(times.back()) : 0.0;
 
@@ -163,6 +169,7 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
         if (frames > 1) append_bytes(block, pair, 2);
         KW_TRY(out.data_.append(block.data(), block.size()));
         out.bytes_ = block.size();
+        out.shared_bytes_ = out.bytes_;
     }
     out.ends_ = frames > 1 ? ends : 0;
     out.stats_.bytes_before = std::uint64_t{frames} * sizeof(float);
@@ -279,6 +286,7 @@ Result<CompactKeys> CompactKeys::build(SpillFile& keys, const std::string& besid
     out.item_channels_.push_back(out.channels_.size());
     out.item_accessors_.push_back(accessors);
     out.stats_.bytes_after = out.bytes_;
+    out.local_bytes_ = out.bytes_;
     return out;
 }
 
@@ -379,13 +387,159 @@ void CompactKeys::item_channels(std::size_t item, int first, std::vector<std::pa
 
 Result<void> CompactKeys::write(AtomicFile& file) {
     constexpr std::size_t kChunk = std::size_t{8} << 20;
-    std::vector<unsigned char> buffer(static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, bytes_)));
-    for (std::uint64_t at = 0; at < bytes_; at += buffer.size()) {
-        const auto size = static_cast<std::size_t>(std::min<std::uint64_t>(buffer.size(), bytes_ - at));
+    std::vector<unsigned char> buffer(static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, local_bytes_)));
+    for (std::uint64_t at = 0; at < local_bytes_; at += buffer.size()) {
+        const auto size = static_cast<std::size_t>(std::min<std::uint64_t>(buffer.size(), local_bytes_ - at));
         KW_TRY(data_.read(at, buffer.data(), size));
         file.write(buffer.data(), size);
     }
+    file.skip(bytes_ - local_bytes_);
     return {};
+}
+
+namespace {
+
+// describe()'s bytes: fixed-size fields in the host's order (every rank runs the same
+// build of the engine on the same kind of machine).
+class Described {
+public:
+    explicit Described(std::vector<std::byte>& out) : out_(&out) {}
+    explicit Described(std::span<const std::byte> in) : in_(in) {}
+    template <class T>
+    void put(const T& value) {
+        const auto* bytes = reinterpret_cast<const std::byte*>(&value);
+        out_->insert(out_->end(), bytes, bytes + sizeof(T));
+    }
+    template <class T>
+    [[nodiscard]] bool get(T& value) {
+        if (in_.size() - at_ < sizeof(T)) return false;
+        std::memcpy(&value, in_.data() + at_, sizeof(T));
+        at_ += sizeof(T);
+        return true;
+    }
+    [[nodiscard]] bool done() const { return at_ == in_.size(); }
+
+private:
+    std::vector<std::byte>* out_ = nullptr;
+    std::span<const std::byte> in_;
+    std::size_t at_ = 0;
+};
+
+}  // namespace
+
+std::vector<std::byte> CompactKeys::describe() const {
+    assert(!meshopt_ && next_ == 0 && local_bytes_ == bytes_ && "describe() a part as build() made it");
+    std::vector<std::byte> out;
+    Described d(out);
+    d.put(bytes_);
+    d.put(shared_bytes_);
+    d.put(ends_);
+    d.put(frames_);
+    d.put(static_cast<std::uint64_t>(item_channels_.size()));
+    d.put(static_cast<std::uint64_t>(channels_.size()));
+    d.put(stats_);
+    for (std::size_t i = 0; i < item_channels_.size(); ++i) {
+        d.put(item_channels_[i]);
+        d.put(item_accessors_[i]);
+    }
+    for (const Channel& c : channels_) {
+        d.put(c.times);
+        d.put(c.values);
+        d.put(c.keys);
+        d.put(static_cast<std::uint8_t>(c.kind));
+        d.put(static_cast<std::uint8_t>(c.bytes));
+    }
+    return out;
+}
+
+Result<std::vector<std::uint64_t>> CompactKeys::join(std::span<const std::vector<std::byte>> parts) {
+    assert(!meshopt_ && next_ == 0 && "join() parts as build() made them");
+    const auto bad = [](const std::string& why) {
+        return make_error(Error::Kind::Internal, "joining the ranks' compacted keys: " + why);
+    };
+    const std::uint64_t times_bytes = std::uint64_t{frames_} * sizeof(float);  // build()'s first bytes_before
+    std::vector<std::uint64_t> at;
+    for (std::size_t p = 0; p < parts.size(); ++p) {
+        Described d(parts[p]);
+        std::uint64_t bytes = 0, shared = 0, ends = 0, items = 0, channels = 0;
+        std::uint32_t frames = 0;
+        GlbCompactionStats stats;
+        if (!d.get(bytes) || !d.get(shared) || !d.get(ends) || !d.get(frames) || !d.get(items) || !d.get(channels) ||
+            !d.get(stats)) {
+            return bad("part " + std::to_string(p + 1) + " is cut short");
+        }
+        if (shared != shared_bytes_ || ends != ends_ || frames != frames_ || bytes < shared || items == 0) {
+            return bad("part " + std::to_string(p + 1) + " has other shared key times");
+        }
+        // This part's bytes go after those so far; its offsets counted from its own tail's
+        // start move by `shift` (it has the same shared key times, which it does not write).
+        const std::uint64_t base = bytes_;
+        at.push_back(base);
+        const std::uint64_t first_channel = channels_.size();
+        const std::uint64_t first_accessor = item_accessors_.back();
+        item_channels_.pop_back();
+        item_accessors_.pop_back();
+        for (std::uint64_t i = 0; i < items; ++i) {
+            std::uint64_t channel = 0, accessors = 0;
+            if (!d.get(channel) || !d.get(accessors)) return bad("part " + std::to_string(p + 1) + " is cut short");
+            item_channels_.push_back(first_channel + channel);
+            item_accessors_.push_back(first_accessor + accessors);
+        }
+        for (std::uint64_t k = 0; k < channels; ++k) {
+            Channel c;
+            std::uint8_t kind = 0, narrow = 0;
+            if (!d.get(c.times) || !d.get(c.values) || !d.get(c.keys) || !d.get(kind) || !d.get(narrow) ||
+                kind > static_cast<std::uint8_t>(ChannelKind::Scale)) {
+                return bad("part " + std::to_string(p + 1) + " is cut short");
+            }
+            c.kind = static_cast<ChannelKind>(kind);
+            c.bytes = narrow != 0;
+            if (!shared_times(c)) {
+                if (c.times < shared) return bad("a channel's key times are inside the shared ones");
+                c.times = c.times - shared + base;
+            }
+            if (c.values < shared) return bad("a channel's values are inside the shared key times");
+            c.values = c.values - shared + base;
+            channels_.push_back(c);
+        }
+        if (!d.done() || item_channels_.back() != channels_.size()) return bad("part " + std::to_string(p + 1) + " does not add up");
+        bytes_ += bytes - shared;
+        stats_.keys += stats.keys;
+        stats_.kept += stats.kept;
+        stats_.bytes_before += stats.bytes_before - times_bytes;  // its key times are counted once
+        stats_.position_m = std::max(stats_.position_m, stats.position_m);
+        stats_.rotation_rad = std::max(stats_.rotation_rad, stats.rotation_rad);
+        stats_.scale_rel = std::max(stats_.scale_rel, stats.scale_rel);
+        stats_.rotations += stats.rotations;
+        stats_.byte_rotations += stats.byte_rotations;
+    }
+    stats_.bytes_after = bytes_;
+    return at;
+}
+
+Result<void> CompactKeys::write_part(const std::string& path, std::uint64_t at) {
+    const auto failed = [&](const char* what) {
+        return make_error(Error::Kind::Io, path + ": cannot " + what + " this rank's compacted keys (" + std::strerror(errno) + ")");
+    };
+    const int fd = ::open(path.c_str(), O_WRONLY | O_CLOEXEC);
+    if (fd < 0) return failed("open the file for");
+    constexpr std::size_t kChunk = std::size_t{8} << 20;
+    std::vector<unsigned char> buffer(static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, bytes_ - shared_bytes_)));
+    Result<void> status;
+    for (std::uint64_t done = 0; status && done < bytes_ - shared_bytes_;) {
+        const auto size = static_cast<std::size_t>(std::min<std::uint64_t>(buffer.size(), bytes_ - shared_bytes_ - done));
+        status = data_.read(shared_bytes_ + done, buffer.data(), size);
+        for (std::size_t put = 0; status && put < size;) {
+            const ssize_t n = ::pwrite(fd, buffer.data() + put, size - put, static_cast<off_t>(at + done + put));
+            if (n < 0 && errno == EINTR) continue;
+            if (n <= 0) status = failed("write");
+            else put += static_cast<std::size_t>(n);
+        }
+        done += size;
+    }
+    if (status && ::fsync(fd) != 0) status = failed("sync");
+    if (::close(fd) != 0 && status) status = failed("close");
+    return status;
 }
 
 }  // namespace gltf

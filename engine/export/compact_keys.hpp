@@ -93,8 +93,26 @@ public:
     /// numbered from `first`.
     void item_channels(std::size_t item, int first, std::vector<std::pair<int, int>>& out) const;
 
-    /// Appends the tail to `file`.
+    /// Appends the tail to `file`. After join(): this part's bytes, then room for the
+    /// other parts' (AtomicFile::skip()), which write_part() fills.
     [[nodiscard]] Result<void> write(AtomicFile& file);
+
+    /// Distributed bakes (docs/scale-out.md): the items of one file compacted by several
+    /// ranks, each its own contiguous run of them, with the same bounds and key times.
+    /// What the first part needs of this one to join it: its records (channels, items),
+    /// its stats and its size, not its keys. Without meshopt only (its chunks span items).
+    [[nodiscard]] std::vector<std::byte> describe() const;
+    /// Appends to this part (rank 0's) the parts `parts` describe (the other ranks',
+    /// in item order): their channels and items follow this one's, as if one build() had
+    /// made them all, and their bytes follow in the tail, each without the shared key
+    /// times it starts with. Returns where each part's bytes go, counted from the tail's
+    /// first byte. Errors: a description that is not one of a part compacted alike
+    /// (Internal).
+    [[nodiscard]] Result<std::vector<std::uint64_t>> join(std::span<const std::vector<std::byte>> parts);
+    /// Writes this part's own bytes (its tail without the shared key times) into the file
+    /// at `path` (another process's AtomicFile::share()) from byte `at` on, and syncs it.
+    /// Errors: the file's, naming it (Io).
+    [[nodiscard]] Result<void> write_part(const std::string& path, std::uint64_t at);
 
 private:
     struct Channel {
@@ -111,10 +129,13 @@ private:
     [[nodiscard]] bool shared_times(const Channel& c) const { return c.times == 0 || (ends_ != 0 && c.times == ends_); }
     SpillFile data_;
     std::uint64_t bytes_ = 0;
+    std::uint64_t local_bytes_ = 0;   // of bytes_, those in data_ (less after join())
+    std::uint64_t shared_bytes_ = 0;  // the shared key times the tail starts with
     bool meshopt_ = false;
     MeshoptStreams streams_;
     std::vector<Channel> channels_;
     std::size_t next_ = 0;
+    std::uint32_t frames_ = 0;
     double first_time_ = 0.0;
     double last_time_ = 0.0;
     std::uint64_t ends_ = 0;  // offset of the shared first and last times (0: none)

@@ -10,6 +10,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
@@ -22,6 +23,8 @@
 #include <utility>
 #include <string>
 #include <vector>
+
+#include <sys/stat.h>
 
 #include "kodawari/version.hpp"
 #include "birds/bird_meshes.hpp"
@@ -153,21 +156,32 @@ struct BirdGlbWriter::Impl {
     std::vector<std::uint32_t> exported;
     std::uint32_t frames = 0;
     std::uint32_t added = 0;
-    SpillFile keys;  // frames x birds records
-    std::vector<float> first;     // birds x record: frame 0, the rest pose
-    std::vector<float> previous;  // birds x record: the last frame added (rotation hemispheres)
-    std::vector<float> row;       // birds x record being written
+    // The birds whose keys this writer keeps: all of them, or one rank's of a distributed
+    // bake (share(); then every bird is exported, and add_frames() gets these alone).
+    std::size_t own_begin = 0;
+    std::size_t own_end = 0;
+    bool shared = false;
+    SpillFile keys;  // frames x own birds records
+    std::vector<float> first;     // birds x record: frame 0, the rest pose (all birds)
+    std::vector<float> previous;  // own birds x record: the last frame added (rotation hemispheres)
+    std::vector<float> row;       // own birds x record being written
+    // A shared writer's compacted keys, every rank's joined (rank 0), and where in the
+    // file its tail starts.
+    std::optional<CompactKeys> joined;
+    std::uint64_t tail_at = 0;
     GlbCompaction compaction;
     GlbCompactionStats stats;
     bool tail_spread = false;  // some bird's tail spread s is not 0 in some frame
 
     [[nodiscard]] std::size_t count() const { return exported.size(); }
+    [[nodiscard]] std::size_t own() const { return own_end - own_begin; }
     [[nodiscard]] std::uint32_t type_of(std::size_t b) const { return world->birds[exported[b]].ids.y; }
     [[nodiscard]] std::string name_of(std::size_t b) const {
         return std::string(birds::wing_type_spec(static_cast<birds::WingType>(type_of(b))).name) + "_" +
                std::to_string(exported[b]);
     }
     [[nodiscard]] Result<void> add_frame(std::span<const gpu::BirdPose> poses);
+    [[nodiscard]] Result<CompactKeys> compact_own();
     [[nodiscard]] Result<void> build_and_write(AtomicFile& file);
     [[nodiscard]] Result<void> copy_channels(AtomicFile& file);
 
@@ -220,13 +234,14 @@ Result<BirdGlbWriter> BirdGlbWriter::create(const std::string& path, const birds
     auto keys = SpillFile::open(path);
     if (!keys) return keys.error();
     impl->keys = std::move(keys).value();
+    impl->own_end = impl->exported.size();
     impl->row.resize(impl->exported.size() * kRecordFloats);
     return BirdGlbWriter(std::move(impl));
 }
 
 Result<void> BirdGlbWriter::add_frames(std::span<const gpu::BirdPose> poses) {
     Impl& w = *impl_;
-    const std::size_t count = w.world->birds.size();
+    const std::size_t count = w.shared ? w.own() : w.world->birds.size();
     if (count == 0) return {};  // no keys: the file holds the key times alone
     if (poses.size() % count != 0 || w.added + poses.size() / count > w.frames) {
         return make_error(Error::Kind::InvalidInput, w.path + ": " + std::to_string(poses.size()) + " poses are not whole frames of " +
@@ -239,9 +254,11 @@ Result<void> BirdGlbWriter::add_frames(std::span<const gpu::BirdPose> poses) {
 
 Result<void> BirdGlbWriter::Impl::add_frame(std::span<const gpu::BirdPose> poses) {
     const std::uint32_t f = added;
-    for (std::size_t i = 0; i < exported.size(); ++i) {
-        const std::size_t b = exported[i];
-        const gpu::BirdPose& pose = poses[b];
+    // A shared writer's poses are its own birds' (every bird exported: b is their index).
+    const std::size_t pose_base = shared ? own_begin : 0;
+    for (std::size_t i = 0; i < own(); ++i) {
+        const std::size_t b = exported[own_begin + i];
+        const gpu::BirdPose& pose = poses[b - pose_base];
         float* record = row.data() + i * kRecordFloats;
         const Vec3 position = {pose.position.x, pose.position.y, pose.position.z};
         if (!std::isfinite(position[0]) || !std::isfinite(position[1]) || !std::isfinite(position[2])) {
@@ -278,7 +295,10 @@ Result<void> BirdGlbWriter::Impl::add_frame(std::span<const gpu::BirdPose> poses
         record[kTailScaleAt + 2] = 1.0f;
     }
     KW_TRY(keys.append(row.data(), row.size() * sizeof(float)));
-    if (f == 0) first = row;
+    if (f == 0) {
+        first.resize(count() * kRecordFloats);
+        std::copy(row.begin(), row.end(), first.begin() + static_cast<std::ptrdiff_t>(own_begin * kRecordFloats));
+    }
     previous.swap(row);
     row.resize(previous.size());
     ++added;
@@ -442,6 +462,18 @@ void BirdGlbWriter::Impl::bird_channels(const Layout& layout, std::size_t b,
     }
 }
 
+// The own birds' keys compacted (CompactKeys): every bird's, or one rank's.
+Result<CompactKeys> BirdGlbWriter::Impl::compact_own() {
+    std::vector<float> times(frames);
+    for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / world->fps;
+    std::array<ChannelKind, 2 + birds::kPartCount> fields{};
+    fields.fill(ChannelKind::Rotation);
+    fields[0] = ChannelKind::Translation;
+    fields[kTailScaleField] = ChannelKind::Scale;
+    return CompactKeys::build(keys, path, own(), fields, times, compaction, BirdGlbWriter::kTransposeBytes,
+                              [&](std::size_t, std::size_t field) { return field != kTailScaleField || tail_spread; });
+}
+
 // The model holds what does not grow with the flock (meshes, materials, the key times);
 // the birds' nodes, accessors, channels and samplers are made one bird at a time while
 // the JSON is written (write_streamed_glb), and their keys copied from the key file.
@@ -479,16 +511,14 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     std::optional<CompactKeys> compact;
     StreamedElements streamed;
     if (compaction.enabled) {
-        std::vector<float> times(frames);
-        for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / fps;
-        std::array<ChannelKind, 2 + birds::kPartCount> fields{};
-        fields.fill(ChannelKind::Rotation);
-        fields[0] = ChannelKind::Translation;
-        fields[kTailScaleField] = ChannelKind::Scale;
-        auto built = CompactKeys::build(keys, path, bird_count, fields, times, compaction, BirdGlbWriter::kTransposeBytes,
-                                        [&](std::size_t, std::size_t field) { return field != kTailScaleField || tail_spread; });
-        if (!built) return built.error();
-        compact.emplace(std::move(built).value());
+        if (joined) {
+            compact.emplace(std::move(*joined));
+            joined.reset();
+        } else {
+            auto built = compact_own();
+            if (!built) return built.error();
+            compact.emplace(std::move(built).value());
+        }
         stats = compact->stats();
         layout.compact = &*compact;
         layout.animation_view = compact->add_views(model, bytes.size(), streamed.meshopt);
@@ -545,7 +575,12 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
 
-    if (compact) return write_streamed_glb(file, model, streamed, compact->bytes(), [&] { return compact->write(file); });
+    if (compact) {
+        return write_streamed_glb(file, model, streamed, compact->bytes(), [&] {
+            tail_at = file.position();
+            return compact->write(file);
+        });
+    }
     return write_streamed_glb(file, model, streamed, std::uint64_t{bird_count} * layout.per_bird,
                               [&] { return copy_channels(file); });
 }
@@ -564,6 +599,151 @@ Result<void> BirdGlbWriter::finish() {
 }
 
 const GlbCompactionStats& BirdGlbWriter::compaction_stats() const { return impl_->stats; }
+
+bool BirdGlbWriter::can_share() const {
+    const Impl& w = *impl_;
+    struct stat existing {};
+    const bool device = ::stat(w.path.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode);
+    return w.compaction.enabled && !w.compaction.meshopt && w.count() == w.world->birds.size() && !device;
+}
+
+Result<void> BirdGlbWriter::share(std::size_t begin, std::size_t end) {
+    Impl& w = *impl_;
+    if (!can_share()) {
+        return make_error(Error::Kind::InvalidInput, w.path + ": this writer's work cannot be shared between ranks "
+                                                              "(it needs compacted keys without meshopt, built-in wing "
+                                                              "types only, and a regular file)");
+    }
+    if (begin > end || end > w.count() || w.added > 0) {
+        return make_error(Error::Kind::InvalidInput, w.path + ": birds [" + std::to_string(begin) + ", " + std::to_string(end) +
+                                                         ") are not a range of the " + std::to_string(w.count()) +
+                                                         " birds, given before the first frame");
+    }
+    w.shared = true;
+    w.own_begin = begin;
+    w.own_end = end;
+    w.row.assign(w.own() * kRecordFloats, 0.0f);
+    return {};
+}
+
+// The collective finish of a shared writer (export.hpp). Every step that can fail on one
+// rank ends in an agreement, so that no rank waits in a gather or broadcast that another
+// has left; rank 0 always broadcasts the plan once, empty when it failed before it.
+Result<void> BirdGlbWriter::finish(Communicator& ranks) {
+    Impl& w = *impl_;
+    assert(w.shared && "finish(ranks) of a writer that share() made one rank's");
+    const bool root = ranks.rank() == 0;
+    Result<void> ready;
+    if (w.own() > 0 && w.added != w.frames) {
+        ready = make_error(Error::Kind::InvalidInput, w.path + ": " + std::to_string(w.added) + " of " +
+                                                          std::to_string(w.frames) + " frames added");
+    }
+    KW_TRY(ranks.agree(ready));
+    std::vector<float>().swap(w.previous);
+    std::vector<float>().swap(w.row);
+
+    // Whether the tail's scale is written is every bird's business: any rank's.
+    std::vector<std::byte> all;
+    std::vector<std::size_t> sizes;
+    const std::byte spread_here{static_cast<unsigned char>(w.tail_spread ? 1 : 0)};
+    ranks.gather(std::span(&spread_here, 1), all, sizes);
+    std::vector<std::byte> spread{spread_here};
+    if (root) spread[0] = std::byte{static_cast<unsigned char>(std::any_of(all.begin(), all.end(), [](std::byte b) {
+                                        return b != std::byte{0};
+                                    }))};
+    ranks.broadcast(spread);
+    w.tail_spread = spread.size() == 1 && spread[0] != std::byte{0};
+
+    // Each rank compacts its own birds' channels, then tells rank 0 their records and
+    // their rest poses (frame 0), which its JSON holds.
+    auto built = w.compact_own();
+    KW_TRY(ranks.agree(built ? Result<void>{} : Result<void>{built.error()}));
+    CompactKeys& mine = built.value();
+    std::vector<std::byte> description = mine.describe();
+    const std::uint64_t described = description.size();
+    std::vector<std::byte> message(sizeof described);
+    std::memcpy(message.data(), &described, sizeof described);
+    message.insert(message.end(), description.begin(), description.end());
+    if (!root && w.own() > 0) {
+        const auto* rest = reinterpret_cast<const std::byte*>(w.first.data() + w.own_begin * kRecordFloats);
+        message.insert(message.end(), rest, rest + w.own() * kRecordFloats * sizeof(float));
+    }
+    ranks.gather(message, all, sizes);
+
+    if (root) {
+        // The others' parts joined onto rank 0's, their rest poses in place; then the file,
+        // with room for the others' keys, shared for them to write before it is committed.
+        Result<void> parts;
+        bool planned = false;
+        Result<void> written = [&]() -> Result<void> {
+            std::vector<std::vector<std::byte>> descriptions;
+            w.first.resize(w.count() * kRecordFloats);  // rank 0 may have no bird of its own
+            std::size_t at = sizes.empty() ? 0 : sizes[0];
+            std::size_t bird = w.own_end;
+            for (std::size_t r = 1; r < sizes.size(); ++r) {
+                const std::byte* part = all.data() + at;
+                std::uint64_t length = 0;
+                if (sizes[r] < sizeof length) return make_error(Error::Kind::Internal, "rank " + std::to_string(r) + "'s keys: cut short");
+                std::memcpy(&length, part, sizeof length);
+                const std::size_t rest_bytes = sizes[r] - sizeof length - std::min<std::size_t>(length, sizes[r] - sizeof length);
+                const std::size_t birds_there = rest_bytes / (kRecordFloats * sizeof(float));
+                if (length > sizes[r] - sizeof length || rest_bytes % (kRecordFloats * sizeof(float)) != 0 ||
+                    bird + birds_there > w.count()) {
+                    return make_error(Error::Kind::Internal, "rank " + std::to_string(r) + "'s keys do not fit the birds");
+                }
+                descriptions.emplace_back(part + sizeof length, part + sizeof length + length);
+                std::memcpy(w.first.data() + bird * kRecordFloats, part + sizeof length + length, rest_bytes);
+                bird += birds_there;
+                at += sizes[r];
+            }
+            if (bird != w.count()) return make_error(Error::Kind::Internal, "the ranks' keys are not every bird's");
+            auto offsets = mine.join(descriptions);
+            if (!offsets) return offsets.error();
+            w.joined.emplace(std::move(mine));
+            return write_file_atomically(w.path, [&](AtomicFile& file) -> Result<void> {
+                KW_TRY(w.build_and_write(file));
+                auto name = file.share();
+                if (!name) return name.error();
+                // The plan: the file's name, then rank r's place (r >= 1), 8 bytes each.
+                std::vector<std::byte> plan(name.value().size());
+                std::memcpy(plan.data(), name.value().data(), plan.size());
+                for (const std::uint64_t offset : offsets.value()) {
+                    const std::uint64_t place = w.tail_at + offset;
+                    const auto* bytes = reinterpret_cast<const std::byte*>(&place);
+                    plan.insert(plan.end(), bytes, bytes + sizeof place);
+                }
+                ranks.broadcast(plan);
+                planned = true;
+                parts = ranks.agree({});
+                return parts;
+            });
+        }();
+        if (!planned) {
+            std::vector<std::byte> none;
+            ranks.broadcast(none);
+        }
+        Result<void> status = ranks.agree(parts ? written : Result<void>{});
+        return parts ? status : parts;
+    }
+    std::vector<std::byte> plan;
+    ranks.broadcast(plan);
+    Result<void> parts;
+    if (!plan.empty()) {
+        const std::size_t places = static_cast<std::size_t>(ranks.size() - 1) * sizeof(std::uint64_t);
+        Result<void> wrote;
+        if (plan.size() <= places) {
+            wrote = make_error(Error::Kind::Internal, "rank 0's plan for the keys is cut short");
+        } else {
+            const std::string name(reinterpret_cast<const char*>(plan.data()), plan.size() - places);
+            std::uint64_t place = 0;
+            std::memcpy(&place, plan.data() + name.size() + static_cast<std::size_t>(ranks.rank() - 1) * sizeof place, sizeof place);
+            wrote = mine.write_part(name, place);
+        }
+        parts = ranks.agree(wrote);
+    }
+    Result<void> status = ranks.agree({});
+    return parts ? status : parts;
+}
 
 Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,
                              std::span<const gpu::BirdPose> poses, std::uint32_t frames, const GlbCompaction& compaction) {

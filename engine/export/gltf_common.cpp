@@ -6,6 +6,7 @@
 #include <cassert>
 #include <cerrno>
 #include <cmath>
+#include <cstdlib>
 #include <cstring>
 #include <filesystem>
 #include <limits>
@@ -144,11 +145,21 @@ Result<SpillFile> SpillFile::open(const std::string& beside) {
     const bool regular = beside.empty() || ::stat(beside.c_str(), &existing) != 0 || S_ISREG(existing.st_mode);
     const std::string base =
         beside.empty() || !regular ? (std::filesystem::temp_directory_path() / "kodawari").string() : beside;
-    spill.path_ = base + ".keys-" + std::to_string(static_cast<long>(::getpid()));
+    // A name of its own (mkstemp: O_EXCL), so that writers beside one output in one
+    // process (the ranks of a distributed bake run as threads) never share a file.
+    std::string name = base + ".keys-" + std::to_string(static_cast<long>(::getpid())) + "-XXXXXX";
     // Errors name the output the file serves (the file itself never has a name for long).
     spill.serves_ = beside;
-    spill.file_ = std::fopen(spill.path_.c_str(), "w+b");
-    if (spill.file_ == nullptr) return make_error(Error::Kind::Io, spill.spill_error("cannot create", std::strerror(errno)));
+    const int fd = ::mkstemp(name.data());
+    spill.path_ = name;
+    if (fd < 0) return make_error(Error::Kind::Io, spill.spill_error("cannot create", std::strerror(errno)));
+    spill.file_ = ::fdopen(fd, "w+b");
+    if (spill.file_ == nullptr) {
+        const int saved = errno;
+        ::close(fd);
+        std::remove(name.c_str());
+        return make_error(Error::Kind::Io, spill.spill_error("cannot create", std::strerror(saved)));
+    }
     std::remove(spill.path_.c_str());
     return spill;
 }

@@ -72,6 +72,14 @@ std::optional<ChannelInfo> BakeWorld::channel(std::string_view name) const {
     return std::nullopt;
 }
 
+Result<void> BakeSink::share(const ShardInfo&) {
+    return make_error(Error::Kind::Internal, "this bake sink cannot share its work between ranks");
+}
+
+Result<std::vector<BakeOutput>> BakeSink::finish_shared(Communicator&) {
+    return make_error(Error::Kind::Internal, "this bake sink cannot share its work between ranks");
+}
+
 std::span<const std::byte> BakeFrames::channel(std::string_view name) const {
     for (const BakeChannel& c : channels) {
         if (c.name == name) return c.bytes;

@@ -61,87 +61,152 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
     // Rank 0: the whole scene's world (built, not simulated) and the sinks.
     std::optional<detail::SceneWorlds> worlds;
     std::vector<std::unique_ptr<BakeSink>> sinks;
-    BakeNeeds needs;
+    const auto build_world = [&]() -> Result<BakeWorld> {
+        auto built = detail::build_scene_worlds(sim.scene(), sim.frame_count());
+        if (!built) return built.error();
+        worlds.emplace(std::move(built).value());
+        return worlds->bake_world(sim.scene(), std::string(backend_name(sim.backend())));
+    };
     Result<void> setup;
     if (root) {
-        auto built = detail::build_scene_worlds(sim.scene(), sim.frame_count());
-        if (built) {
-            worlds.emplace(std::move(built).value());
-            const BakeWorld world = worlds->bake_world(sim.scene(), std::string(backend_name(sim.backend())));
-            sinks = options.make_sinks(world);
+        auto world = build_world();
+        if (world) {
+            sinks = options.make_sinks(world.value());
             for (const auto& sink : sinks) {
-                for (std::string& name : sink->needs().channels) {
-                    if (std::find(needs.channels.begin(), needs.channels.end(), name) == needs.channels.end()) {
-                        needs.channels.push_back(std::move(name));
-                    }
-                }
-            }
-            for (const auto& sink : sinks) {
-                setup = sink->begin(world);
+                setup = sink->begin(world.value());
                 if (!setup) break;
             }
         } else {
-            setup = built.error();
+            setup = world.error();
         }
     }
     KW_TRY(comm.agree(setup));
 
-    // What every rank sends: rank 0's needs (channel names, one per line), to all; every
-    // rank's elements per channel, to rank 0. Every rank has the same domains, so the
-    // same channels in the same order.
-    std::string names_text;
-    for (const std::string& name : needs.channels) names_text += name + "\n";
-    std::vector<std::byte> wanted = bytes_of(names_text.data(), names_text.size());
-    comm.broadcast(wanted);
-    needs.channels.clear();
-    std::string line;
-    for (std::byte b : wanted) {
-        if (static_cast<char>(b) == '\n') {
-            needs.channels.push_back(std::move(line));
-            line.clear();
-        } else {
-            line.push_back(static_cast<char>(b));
+    // Which sinks every rank shares (BakeSink::can_share(), rank 0's answer): the other
+    // ranks make the same sinks on the whole scene's world and begin those, and every
+    // rank tells them its shard. The others' frames go to rank 0 alone.
+    std::vector<std::byte> shared(sinks.size());
+    for (std::size_t k = 0; k < sinks.size(); ++k) shared[k] = std::byte{static_cast<unsigned char>(sinks[k]->can_share())};
+    comm.broadcast(shared);
+    const auto is_shared = [&](std::size_t k) { return shared[k] != std::byte{0}; };
+    bool any_shared = false;
+    bool gathering = false;
+    for (std::size_t k = 0; k < shared.size(); ++k) (is_shared(k) ? any_shared : gathering) = true;
+    Result<void> joined;
+    if (!root && any_shared) {
+        joined = [&]() -> Result<void> {
+            auto world = build_world();
+            if (!world) return world.error();
+            sinks = options.make_sinks(world.value());
+            if (sinks.size() != shared.size()) {
+                return make_error(Error::Kind::Internal, "make_sinks made " + std::to_string(sinks.size()) + " sinks here, " +
+                                                             std::to_string(shared.size()) + " on rank 0");
+            }
+            for (std::size_t k = 0; k < sinks.size(); ++k) {
+                if (!is_shared(k)) continue;
+                KW_TRY(sinks[k]->begin(world.value()));
+                if (!sinks[k]->can_share()) {
+                    return make_error(Error::Kind::Internal, "sink " + std::to_string(k) + " cannot share its work here, as it can on rank 0");
+                }
+            }
+            return {};
+        }();
+    }
+    KW_TRY(comm.agree(joined));
+    Result<void> sharing;
+    for (std::size_t k = 0; k < shared.size() && sharing; ++k) {
+        if (is_shared(k)) sharing = sinks[k]->share(sim.shard());
+    }
+    KW_TRY(comm.agree(sharing));
+
+    // What every rank steps: every sink's channels (rank 0's needs, one name per line, to
+    // all); of them, those of the sinks rank 0 alone feeds are gathered. Every rank's
+    // elements per gathered channel go to rank 0. Every rank has the same domains, so
+    // the same channels in the same order.
+    const auto names_of = [&](bool of_shared) {
+        BakeNeeds needs;
+        for (std::size_t k = 0; k < sinks.size(); ++k) {
+            if (of_shared && !is_shared(k)) continue;
+            if (!of_shared && is_shared(k)) continue;
+            for (std::string& name : sinks[k]->needs().channels) {
+                if (std::find(needs.channels.begin(), needs.channels.end(), name) == needs.channels.end()) {
+                    needs.channels.push_back(std::move(name));
+                }
+            }
+        }
+        return needs;
+    };
+    const auto broadcast_names = [&](BakeNeeds needs) {
+        std::string names_text;
+        for (const std::string& name : needs.channels) names_text += name + "\n";
+        std::vector<std::byte> wanted = bytes_of(names_text.data(), names_text.size());
+        comm.broadcast(wanted);
+        needs.channels.clear();
+        std::string line;
+        for (std::byte b : wanted) {
+            if (static_cast<char>(b) == '\n') {
+                needs.channels.push_back(std::move(line));
+                line.clear();
+            } else {
+                line.push_back(static_cast<char>(b));
+            }
+        }
+        return needs;
+    };
+    const BakeNeeds gathered = broadcast_names(root ? names_of(false) : BakeNeeds{});
+    BakeNeeds needs = gathered;
+    for (std::string& name : broadcast_names(root ? names_of(true) : BakeNeeds{}).channels) {
+        if (std::find(needs.channels.begin(), needs.channels.end(), name) == needs.channels.end()) {
+            needs.channels.push_back(std::move(name));
         }
     }
     std::vector<const Domain*> mine(sim.domains().begin(), sim.domains().end());
-    const detail::PayloadLayout content = detail::payload_layout(mine, needs);
-    std::vector<std::uint64_t> elements;
-    for (const ChannelInfo& c : content.channels) elements.push_back(c.elements);
+    const detail::PayloadLayout content = detail::payload_layout(mine, gathered);
     std::vector<std::byte> all;
     std::vector<std::size_t> sizes;
-    comm.gather(std::as_bytes(std::span(elements)), all, sizes);
     std::optional<detail::FrameAssembler> assembler;
     std::vector<std::string> names;
-    if (root) {
-        std::vector<detail::PayloadLayout> layouts;
-        std::size_t at = 0;
-        for (int r = 0; r < comm.size(); ++r) {
-            detail::PayloadLayout layout = content;
-            for (ChannelInfo& c : layout.channels) {
-                std::memcpy(&c.elements, all.data() + at, sizeof c.elements);
-                at += sizeof c.elements;
+    if (gathering) {
+        std::vector<std::uint64_t> elements;
+        for (const ChannelInfo& c : content.channels) elements.push_back(c.elements);
+        comm.gather(std::as_bytes(std::span(elements)), all, sizes);
+        if (root) {
+            std::vector<detail::PayloadLayout> layouts;
+            std::size_t at = 0;
+            for (int r = 0; r < comm.size(); ++r) {
+                detail::PayloadLayout layout = content;
+                for (ChannelInfo& c : layout.channels) {
+                    std::memcpy(&c.elements, all.data() + at, sizeof c.elements);
+                    at += sizeof c.elements;
+                }
+                layouts.push_back(std::move(layout));
+                names.push_back("rank " + std::to_string(r));
             }
-            layouts.push_back(std::move(layout));
-            names.push_back("rank " + std::to_string(r));
+            assembler.emplace(std::move(layouts));
         }
-        assembler.emplace(std::move(layouts));
     }
 
     auto source = make_simulation_source(sim);
     const std::uint32_t frames = sim.frame_count();
     const std::uint32_t chunk = source->chunk_frames();  // the whole scene's, the same on every rank
     std::vector<std::byte> payload;
-    // Rank 0 writes chunk k while the others simulate chunk k + 1: its status for chunk k
-    // joins the agreement on chunk k + 1's steps (and the last one is agreed after the
-    // loop), so that no rank waits for the writer before stepping on.
+    // Every rank hands its own frames to the shared sinks; rank 0 writes chunk k of the
+    // others while they simulate chunk k + 1: each rank's status for chunk k joins the
+    // agreement on chunk k + 1's steps (and the last one is agreed after the loop), so
+    // that no rank waits for the writer before stepping on.
     Result<void> consumed;
     for (std::uint32_t done = 0; done < frames;) {
         const std::uint32_t n = std::min(chunk, frames - done);
         auto stepped = source->next(done, n, needs);
         KW_TRY(comm.agree(!consumed ? consumed : stepped ? Result<void>{} : Result<void>{stepped.error()}));
-        detail::encode_frames(stepped.value(), content, payload);
-        comm.gather(payload, all, sizes);
-        if (root) {
+        for (std::size_t k = 0; k < sinks.size() && consumed; ++k) {
+            if (is_shared(k)) consumed = sinks[k]->consume(stepped.value());
+        }
+        if (gathering) {
+            detail::encode_frames(stepped.value(), content, payload);
+            comm.gather(payload, all, sizes);
+        }
+        if (root && gathering && consumed) {
             std::vector<std::span<const std::byte>> parts;
             std::size_t at = 0;
             for (std::size_t size : sizes) {
@@ -150,9 +215,8 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
             }
             auto whole = assembler->assemble(done, n, parts, names);
             if (whole) {
-                for (const auto& sink : sinks) {
-                    consumed = sink->consume(whole.value());
-                    if (!consumed) break;
+                for (std::size_t k = 0; k < sinks.size() && consumed; ++k) {
+                    if (!is_shared(k)) consumed = sinks[k]->consume(whole.value());
                 }
             } else {
                 consumed = whole.error();
@@ -164,17 +228,20 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
     KW_TRY(comm.agree(consumed));
     KW_TRY(comm.agree(options.bake.simulated ? options.bake.simulated() : Result<void>{}));
 
+    // The sinks finish in order: a shared one on every rank at once (its status is the
+    // same everywhere), the others on rank 0, each agreed before the next.
     std::vector<BakeOutput> written;
-    Result<void> finished;
-    for (const auto& sink : sinks) {
-        auto files = sink->finish();
-        if (!files) {
-            finished = files.error();
-            break;
+    for (std::size_t k = 0; k < shared.size(); ++k) {
+        Result<std::vector<BakeOutput>> files = std::vector<BakeOutput>{};
+        if (is_shared(k)) {
+            files = sinks[k]->finish_shared(comm);
+            if (!files) return files.error();
+        } else {
+            if (root) files = sinks[k]->finish();
+            KW_TRY(comm.agree(files ? Result<void>{} : Result<void>{files.error()}));
         }
         for (BakeOutput& file : files.value()) written.push_back(std::move(file));
     }
-    KW_TRY(comm.agree(finished));
     return written;
 }
 

@@ -3,6 +3,7 @@
 /// Output files are written to a temporary file beside the target and renamed over it
 /// when complete, so a failure never leaves a half-written file.
 
+#include <cstdint>
 #include <cstdio>
 #include <string>
 
@@ -30,6 +31,15 @@ public:
     /// Appends bytes; failures are remembered and reported by commit().
     void write(const void* data, std::size_t size);
     void write(const std::string& text) { write(text.data(), text.size()); }
+    /// Where the next write() goes: the bytes written and skipped so far.
+    [[nodiscard]] std::uint64_t position() const;
+    /// Leaves `size` bytes for another process to write (share()) and goes on after them.
+    void skip(std::uint64_t size);
+
+    /// Gives the file a name that other processes can open to write into it before
+    /// commit() (the ranks of a distributed bake, on a file system they share), flushes
+    /// what was written, and returns that name. A device or a pipe cannot be shared (Io).
+    [[nodiscard]] Result<std::string> share();
 
     /// Flushes, syncs and renames over the target.
     [[nodiscard]] Result<void> commit();

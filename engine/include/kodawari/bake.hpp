@@ -26,7 +26,9 @@
 
 namespace kodawari {
 
+class Communicator;
 class Simulation;
+struct ShardInfo;
 
 /// What sinks are told before the first frame: the domains whose frames they get (a
 /// Simulation's, cut to its shard when it runs one; a merge's or a distributed bake's
@@ -96,6 +98,19 @@ public:
     [[nodiscard]] virtual Result<void> consume(const BakeFrames& frames) = 0;
     /// Completes the outputs after the last frame; returns the files written.
     [[nodiscard]] virtual Result<std::vector<BakeOutput>> finish() = 0;
+
+    /// Distributed bakes (kodawari/distributed.hpp): whether every rank can do its own
+    /// instances' part of this sink's work (a compacted birds' .glb: each rank compacts
+    /// its birds' channels and writes them into the file), asked on rank 0 after begin().
+    /// Then every rank makes the sink and begins it with the whole scene's world, share()
+    /// tells it the rank's shard before the first frame, consume() gets that rank's own
+    /// frames (its shard's instances) only, and finish_shared() replaces finish().
+    [[nodiscard]] virtual bool can_share() const { return false; }
+    /// See can_share(). Errors: the sink's (the default: it cannot share, Internal).
+    [[nodiscard]] virtual Result<void> share(const ShardInfo& mine);
+    /// finish() of a shared sink, on every rank at once (collective: every rank must
+    /// return the same status). Rank 0 returns the files written, the others none.
+    [[nodiscard]] virtual Result<std::vector<BakeOutput>> finish_shared(Communicator& ranks);
 };
 
 /// How bake() reports and checks.

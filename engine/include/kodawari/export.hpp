@@ -17,6 +17,7 @@
 
 #include "kodawari/api.hpp"
 #include "atomic_file.hpp"
+#include "communicator.hpp"
 #include "birds/world.hpp"
 #include "gltf/character.hpp"
 #include "result.hpp"
@@ -130,6 +131,24 @@ public:
 
     /// What compaction did, once finish() has written a compacted file (zeros else).
     [[nodiscard]] const GlbCompactionStats& compaction_stats() const;
+
+    /// Distributed bakes (kodawari/distributed.hpp): whether the ranks can share this
+    /// writer's work, each compacting its own birds' channels: compacted keys without
+    /// meshopt (whose chunks span birds), every bird of a built-in wing type, and a file
+    /// other processes can write into (not a device or a pipe).
+    [[nodiscard]] bool can_share() const;
+    /// Makes this the writer of one rank of a distributed bake, before the first frame:
+    /// it keeps the keys of birds [begin, end) alone (this rank's shard, a contiguous
+    /// range of the world's birds, as every rank's writer has been created on the whole
+    /// world), and add_frames() takes whole frames of those birds. Errors: can_share()
+    /// false, a range outside the world, frames added already (InvalidInput).
+    [[nodiscard]] Result<void> share(std::size_t begin, std::size_t end);
+    /// finish() of a shared writer, on every rank at once (collective): every rank
+    /// compacts its birds' channels; rank 0 writes the header, the JSON and its own
+    /// birds' keys, and each other rank writes its birds' keys into the file at the place
+    /// agreed, before rank 0 renames it into place. The same bytes as one writer fed
+    /// every bird. Every rank returns the same status.
+    [[nodiscard]] Result<void> finish(Communicator& ranks);
 
 private:
     struct Impl;
