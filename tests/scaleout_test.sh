@@ -99,6 +99,13 @@ check "MPI --compact --meshopt flock (2 ranks) = run --compact --meshopt, byte f
 check "MPI --compact --meshopt: rank 0 compacts" bash -c "! grep -q 'compacted on' '$work/mpi.out'"
 "${mpi[@]}" -np 3 "$bin" run scenes/crowd-gltf.json --backend cpu --threads 1 --frames 8 --mpi --compact=0.005,0.02 --out "$work/mpi-crowd-compact.glb" >"$work/mpi.out" 2>&1
 check "MPI --compact rigged crowd (3 ranks) = run --compact, byte for byte" cmp "$work/crowd-compact.glb" "$work/mpi-crowd-compact.glb"
+check "MPI --compact: every rank posed and compacted its own characters" grep -q "its keys compacted on 3 ranks" "$work/mpi.out"
+# Two rigged characters, a file each, both shared.
+"$bin" run scenes/avatars.json --backend cpu --frames 6 --compact --out "$work/avatars.glb" >/dev/null 2>&1
+"${mpi[@]}" -np 3 "$bin" run scenes/avatars.json --backend cpu --threads 1 --frames 6 --mpi --compact --out "$work/mpi-avatars.glb" >"$work/mpi.out" 2>&1
+for character in avatar avatar0; do
+  check "MPI --compact avatars (3 ranks): $character's file = run --compact's" cmp "$work/avatars-$character.glb" "$work/mpi-avatars-$character.glb"
+done
 
 # Traces too (the ranks send the chains' rest shapes and the birds' diagnostics then).
 "$bin" run scenes/crowd.json --backend cpu --frames 3 --no-export --trace "$work/crowd-1.jsonl" >/dev/null 2>&1

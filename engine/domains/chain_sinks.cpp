@@ -7,8 +7,10 @@
 #include <vector>
 
 #include "kodawari/bake.hpp"
+#include "kodawari/communicator.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/export.hpp"
+#include "kodawari/simulation.hpp"
 
 namespace kodawari {
 
@@ -24,6 +26,7 @@ public:
 
     Result<void> begin(const BakeWorld& world) override {
         scene_ = rod_scene_of(world);
+        if (const Domain* domain = world.domain(kChainDomain)) noun_ = domain->instance_noun();
         frames_ = world.frames;
         if (scene_ == nullptr) return {};
         const RodScene& rods = *scene_;
@@ -53,7 +56,18 @@ public:
     Result<void> consume(const BakeFrames& frames) override {
         if (scene_ == nullptr) return {};
         snapshot_from(frames, snapshot_);
-        const ChainSnapshot& snapshot = snapshot_;
+        if (shared_) {
+            // This rank's chains, in the whole world's joint order where the exports read them.
+            const std::size_t local = snapshot_.positions.size();
+            if (joint_offset_ + local > whole_.positions.size() || snapshot_.orientations.size() != local) {
+                return make_error(Error::Kind::Internal, path_ + ": this rank's " + std::to_string(local) +
+                                                             " chain joints do not fit the world's from joint " +
+                                                             std::to_string(joint_offset_));
+            }
+            std::copy(snapshot_.positions.begin(), snapshot_.positions.end(), whole_.positions.begin() + joint_offset_);
+            std::copy(snapshot_.orientations.begin(), snapshot_.orientations.end(), whole_.orientations.begin() + joint_offset_);
+        }
+        const ChainSnapshot& snapshot = shared_ ? whole_ : snapshot_;
         for (RiggedCrowdExport& e : rigged_) KW_TRY(e.add_frame(frames.first, snapshot));
         if (procedural_) KW_TRY(procedural_->add_frame(snapshot.positions, snapshot.orientations));
         return {};
@@ -73,6 +87,46 @@ public:
         return written;
     }
 
+    // A distributed bake's ranks each pose and compact their own rigged instances
+    // (RiggedGlbWriter::share()); procedural characters' files are rank 0's.
+    bool can_share() const override {
+        return scene_ != nullptr && !procedural_ && !rigged_.empty() &&
+               std::all_of(rigged_.begin(), rigged_.end(), [](const RiggedCrowdExport& e) { return e.can_share(); });
+    }
+
+    Result<void> share(const ShardInfo& mine) override {
+        if (!can_share()) return BakeSink::share(mine);
+        const InstanceRange range = mine.part(noun_).range;
+        for (RiggedCrowdExport& e : rigged_) {
+            const auto& instances = e.instances();  // ascending scene indices
+            const auto first = std::lower_bound(instances.begin(), instances.end(), range.begin);
+            const auto end = std::lower_bound(instances.begin(), instances.end(), range.end);
+            KW_TRY(e.share(static_cast<std::size_t>(first - instances.begin()), static_cast<std::size_t>(end - instances.begin())));
+        }
+        const rods::RodWorld& world = scene_->world;
+        const std::uint32_t chain = range.begin < scene_->instances.size() ? scene_->instances[range.begin].chain_begin
+                                                                           : static_cast<std::uint32_t>(world.chains.size());
+        joint_offset_ = chain < world.chains.size() ? world.chains[chain].joint_begin : world.joint_count;
+        whole_.positions.assign(world.joint_count, glm::vec3(0.0f));
+        whole_.orientations.assign(world.joint_count, glm::quat(1.0f, 0.0f, 0.0f, 0.0f));
+        shared_ = true;
+        return {};
+    }
+
+    Result<std::vector<BakeOutput>> finish_shared(Communicator& ranks) override {
+        if (!shared_) return BakeSink::finish_shared(ranks);
+        std::vector<BakeOutput> written;
+        for (std::size_t i = 0; i < rigged_.size(); ++i) {
+            KW_TRY(rigged_[i].finish(ranks, rigged_paths_[i]));
+            written.push_back({rigged_paths_[i], BakeOutput::Format::Glb,
+                               "the character's own skeleton and meshes, its keys compacted on " +
+                                   std::to_string(ranks.size()) + " ranks",
+                               stats(rigged_[i].writer().compaction_stats())});
+        }
+        if (ranks.rank() != 0) written.clear();
+        return written;
+    }
+
 private:
     [[nodiscard]] std::optional<GlbCompactionStats> stats(const GlbCompactionStats& s) const {
         if (!compaction_.enabled) return std::nullopt;
@@ -87,6 +141,10 @@ private:
     std::vector<std::string> rigged_paths_;
     std::optional<ChainsGlbWriter> procedural_;  // streams: memory does not grow with the frames
     ChainSnapshot snapshot_;
+    std::string noun_;  // what the chain domain calls its instances (ShardInfo's parts)
+    bool shared_ = false;
+    std::size_t joint_offset_ = 0;  // this rank's first chain joint in the world (shared)
+    ChainSnapshot whole_;           // the world's joints, this rank's filled in (shared)
 };
 
 }  // namespace

@@ -386,6 +386,7 @@ void CompactKeys::item_channels(std::size_t item, int first, std::vector<std::pa
 }
 
 Result<void> CompactKeys::write(AtomicFile& file) {
+    written_at_ = file.position();
     constexpr std::size_t kChunk = std::size_t{8} << 20;
     std::vector<unsigned char> buffer(static_cast<std::size_t>(std::min<std::uint64_t>(kChunk, local_bytes_)));
     for (std::uint64_t at = 0; at < local_bytes_; at += buffer.size()) {

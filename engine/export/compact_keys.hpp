@@ -96,6 +96,8 @@ public:
     /// Appends the tail to `file`. After join(): this part's bytes, then room for the
     /// other parts' (AtomicFile::skip()), which write_part() fills.
     [[nodiscard]] Result<void> write(AtomicFile& file);
+    /// Where the last write() began in its file (AtomicFile::position()).
+    [[nodiscard]] std::uint64_t written_at() const { return written_at_; }
 
     /// Distributed bakes (docs/scale-out.md): the items of one file compacted by several
     /// ranks, each its own contiguous run of them, with the same bounds and key times.
@@ -131,6 +133,7 @@ private:
     std::uint64_t bytes_ = 0;
     std::uint64_t local_bytes_ = 0;   // of bytes_, those in data_ (less after join())
     std::uint64_t shared_bytes_ = 0;  // the shared key times the tail starts with
+    std::uint64_t written_at_ = 0;
     bool meshopt_ = false;
     MeshoptStreams streams_;
     std::vector<Channel> channels_;

@@ -31,6 +31,7 @@
 #include "export/compact_keys.hpp"
 #include "export/gltf_common.hpp"
 #include "export/gltf_json_stream.hpp"
+#include "export/shared_glb.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/export.hpp"
 
@@ -165,10 +166,9 @@ struct BirdGlbWriter::Impl {
     std::vector<float> first;     // birds x record: frame 0, the rest pose (all birds)
     std::vector<float> previous;  // own birds x record: the last frame added (rotation hemispheres)
     std::vector<float> row;       // own birds x record being written
-    // A shared writer's compacted keys, every rank's joined (rank 0), and where in the
-    // file its tail starts.
-    std::optional<CompactKeys> joined;
-    std::uint64_t tail_at = 0;
+    // A shared writer's compacted keys, every rank's joined (rank 0, while it writes:
+    // finish_shared_glb() owns them, and reads where they were written).
+    CompactKeys* joined = nullptr;
     GlbCompaction compaction;
     GlbCompactionStats stats;
     bool tail_spread = false;  // some bird's tail spread s is not 0 in some frame
@@ -508,19 +508,19 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     layout.per_bird = layout.translation_bytes + birds::kPartCount * layout.rotation_bytes +
                       (tail_spread ? layout.translation_bytes : 0);
     const float fps = world->fps;
-    std::optional<CompactKeys> compact;
+    std::optional<CompactKeys> built_here;
+    CompactKeys* compact = nullptr;  // joined's (a shared writer's rank 0) or built here
     StreamedElements streamed;
     if (compaction.enabled) {
-        if (joined) {
-            compact.emplace(std::move(*joined));
-            joined.reset();
+        if (joined != nullptr) {
+            compact = joined;
         } else {
             auto built = compact_own();
             if (!built) return built.error();
-            compact.emplace(std::move(built).value());
+            compact = &built_here.emplace(std::move(built).value());
         }
         stats = compact->stats();
-        layout.compact = &*compact;
+        layout.compact = compact;
         layout.animation_view = compact->add_views(model, bytes.size(), streamed.meshopt);
         compact->add_shared_times(model, layout.animation_view);
         layout.first_accessor = static_cast<int>(model.accessors.size());
@@ -575,12 +575,7 @@ Result<void> BirdGlbWriter::Impl::build_and_write(AtomicFile& file) {
     model.scenes.push_back(std::move(scene));
     model.defaultScene = 0;
 
-    if (compact) {
-        return write_streamed_glb(file, model, streamed, compact->bytes(), [&] {
-            tail_at = file.position();
-            return compact->write(file);
-        });
-    }
+    if (compact) return write_streamed_glb(file, model, streamed, compact->bytes(), [&] { return compact->write(file); });
     return write_streamed_glb(file, model, streamed, std::uint64_t{bird_count} * layout.per_bird,
                               [&] { return copy_channels(file); });
 }
@@ -654,95 +649,30 @@ Result<void> BirdGlbWriter::finish(Communicator& ranks) {
     ranks.broadcast(spread);
     w.tail_spread = spread.size() == 1 && spread[0] != std::byte{0};
 
-    // Each rank compacts its own birds' channels, then tells rank 0 their records and
-    // their rest poses (frame 0), which its JSON holds.
-    auto built = w.compact_own();
-    KW_TRY(ranks.agree(built ? Result<void>{} : Result<void>{built.error()}));
-    CompactKeys& mine = built.value();
-    std::vector<std::byte> description = mine.describe();
-    const std::uint64_t described = description.size();
-    std::vector<std::byte> message(sizeof described);
-    std::memcpy(message.data(), &described, sizeof described);
-    message.insert(message.end(), description.begin(), description.end());
-    if (!root && w.own() > 0) {
-        const auto* rest = reinterpret_cast<const std::byte*>(w.first.data() + w.own_begin * kRecordFloats);
-        message.insert(message.end(), rest, rest + w.own() * kRecordFloats * sizeof(float));
-    }
-    ranks.gather(message, all, sizes);
-
-    if (root) {
-        // The others' parts joined onto rank 0's, their rest poses in place; then the file,
-        // with room for the others' keys, shared for them to write before it is committed.
-        Result<void> parts;
-        bool planned = false;
-        Result<void> written = [&]() -> Result<void> {
-            std::vector<std::vector<std::byte>> descriptions;
-            w.first.resize(w.count() * kRecordFloats);  // rank 0 may have no bird of its own
-            std::size_t at = sizes.empty() ? 0 : sizes[0];
-            std::size_t bird = w.own_end;
-            for (std::size_t r = 1; r < sizes.size(); ++r) {
-                const std::byte* part = all.data() + at;
-                std::uint64_t length = 0;
-                if (sizes[r] < sizeof length) return make_error(Error::Kind::Internal, "rank " + std::to_string(r) + "'s keys: cut short");
-                std::memcpy(&length, part, sizeof length);
-                const std::size_t rest_bytes = sizes[r] - sizeof length - std::min<std::size_t>(length, sizes[r] - sizeof length);
-                const std::size_t birds_there = rest_bytes / (kRecordFloats * sizeof(float));
-                if (length > sizes[r] - sizeof length || rest_bytes % (kRecordFloats * sizeof(float)) != 0 ||
-                    bird + birds_there > w.count()) {
-                    return make_error(Error::Kind::Internal, "rank " + std::to_string(r) + "'s keys do not fit the birds");
-                }
-                descriptions.emplace_back(part + sizeof length, part + sizeof length + length);
-                std::memcpy(w.first.data() + bird * kRecordFloats, part + sizeof length + length, rest_bytes);
-                bird += birds_there;
-                at += sizes[r];
+    // Each rank compacts its own birds' channels; rank 0 also needs the others' rest
+    // poses (frame 0), which its JSON holds, and writes the file (shared_glb.hpp).
+    w.first.resize(w.count() * kRecordFloats);  // rank 0 may have no bird of its own
+    const std::span<const std::byte> rest =
+        std::as_bytes(std::span(w.first).subspan(w.own_begin * kRecordFloats, w.own() * kRecordFloats));
+    std::size_t bird = w.own_end;  // rank 0's next bird: the ranks' birds follow in rank order
+    constexpr std::size_t kRestBytes = kRecordFloats * sizeof(float);
+    return finish_shared_glb(
+        ranks, w.path, w.compact_own(), rest,
+        [&](std::size_t rank, std::span<const std::byte> theirs) -> Result<void> {
+            if (theirs.size() % kRestBytes != 0 || bird + theirs.size() / kRestBytes > w.count()) {
+                return make_error(Error::Kind::Internal, w.path + ": rank " + std::to_string(rank) + "'s birds do not fit");
             }
-            if (bird != w.count()) return make_error(Error::Kind::Internal, "the ranks' keys are not every bird's");
-            auto offsets = mine.join(descriptions);
-            if (!offsets) return offsets.error();
-            w.joined.emplace(std::move(mine));
-            return write_file_atomically(w.path, [&](AtomicFile& file) -> Result<void> {
-                KW_TRY(w.build_and_write(file));
-                auto name = file.share();
-                if (!name) return name.error();
-                // The plan: the file's name, then rank r's place (r >= 1), 8 bytes each.
-                std::vector<std::byte> plan(name.value().size());
-                std::memcpy(plan.data(), name.value().data(), plan.size());
-                for (const std::uint64_t offset : offsets.value()) {
-                    const std::uint64_t place = w.tail_at + offset;
-                    const auto* bytes = reinterpret_cast<const std::byte*>(&place);
-                    plan.insert(plan.end(), bytes, bytes + sizeof place);
-                }
-                ranks.broadcast(plan);
-                planned = true;
-                parts = ranks.agree({});
-                return parts;
-            });
-        }();
-        if (!planned) {
-            std::vector<std::byte> none;
-            ranks.broadcast(none);
-        }
-        Result<void> status = ranks.agree(parts ? written : Result<void>{});
-        return parts ? status : parts;
-    }
-    std::vector<std::byte> plan;
-    ranks.broadcast(plan);
-    Result<void> parts;
-    if (!plan.empty()) {
-        const std::size_t places = static_cast<std::size_t>(ranks.size() - 1) * sizeof(std::uint64_t);
-        Result<void> wrote;
-        if (plan.size() <= places) {
-            wrote = make_error(Error::Kind::Internal, "rank 0's plan for the keys is cut short");
-        } else {
-            const std::string name(reinterpret_cast<const char*>(plan.data()), plan.size() - places);
-            std::uint64_t place = 0;
-            std::memcpy(&place, plan.data() + name.size() + static_cast<std::size_t>(ranks.rank() - 1) * sizeof place, sizeof place);
-            wrote = mine.write_part(name, place);
-        }
-        parts = ranks.agree(wrote);
-    }
-    Result<void> status = ranks.agree({});
-    return parts ? status : parts;
+            std::memcpy(w.first.data() + bird * kRecordFloats, theirs.data(), theirs.size());
+            bird += theirs.size() / kRestBytes;
+            if (rank + 1 == static_cast<std::size_t>(ranks.size()) && bird != w.count()) {
+                return make_error(Error::Kind::Internal, w.path + ": the ranks' birds are not every bird");
+            }
+            return {};
+        },
+        [&](AtomicFile& file, CompactKeys& keys) {
+            w.joined = &keys;
+            return w.build_and_write(file);
+        });
 }
 
 Result<void> write_birds_glb(const std::string& path, const birds::BirdWorld& world,

@@ -22,9 +22,12 @@
 #include <utility>
 #include <vector>
 
+#include <sys/stat.h>
+
 #include "kodawari/version.hpp"
 #include "core/binary_file.hpp"
 #include "export/compact_keys.hpp"
+#include "export/shared_glb.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/export.hpp"
 
@@ -121,9 +124,15 @@ struct RiggedGlbWriter::Impl {
     std::optional<SpillFile> keys;
     std::vector<Key> row;
     std::vector<glm::quat> previous;
-    std::vector<bool> scaled;
+    std::vector<bool> scaled;  // per own track; on a shared writer's rank 0 at finish, every track's
     std::uint32_t frames = 0;
     bool finished = false;
+    // The instances whose keys this writer keeps: all, or one rank's (share()), and a
+    // shared writer's keys joined with the other ranks' (rank 0, at finish).
+    std::size_t own_begin = 0;
+    std::size_t own_end = 0;
+    bool shared = false;
+    CompactKeys* joined = nullptr;  // finish_shared_glb()'s, while rank 0 writes
     GlbCompaction compaction;
     GlbCompactionStats stats;
 
@@ -132,6 +141,9 @@ struct RiggedGlbWriter::Impl {
         return static_cast<int>(instance * stride() + 1) + node;
     }
     [[nodiscard]] std::size_t tracks() const { return instances.size() * animated_nodes.size(); }
+    [[nodiscard]] std::size_t own() const { return own_end - own_begin; }
+    [[nodiscard]] std::size_t own_tracks() const { return own() * animated_nodes.size(); }
+    [[nodiscard]] Result<CompactKeys> compact_own();
 
     Result<void> build_and_write(AtomicFile& file);
     [[nodiscard]] Result<void> copy_tracks(AtomicFile& file);
@@ -244,6 +256,7 @@ Result<RiggedGlbWriter> RiggedGlbWriter::create(const std::string& source_path, 
 
     impl->source_path = source_path;
     impl->instances.assign(instances.begin(), instances.end());
+    impl->own_end = impl->instances.size();
     impl->fps = fps;
     impl->animation_name = std::move(animation_name);
     impl->spill_beside = std::move(spill_beside);
@@ -288,11 +301,11 @@ Result<void> RiggedGlbWriter::add_frame(std::span<const glm::vec3> translation, 
                                         std::span<const glm::vec3> scale) {
     Impl& w = *impl_;
     assert(!w.finished);
-    const std::size_t expected = w.instances.size() * w.node_count;
+    const std::size_t expected = w.own() * w.node_count;
     assert(translation.size() == expected && rotation.size() == expected && scale.size() == expected &&
            "add_frame takes instances x nodes values");
     (void)expected;
-    const std::size_t tracks = w.tracks();
+    const std::size_t tracks = w.own_tracks();
     if (!w.keys) {
         auto keys = SpillFile::open(w.spill_beside);
         if (!keys) return keys.error();
@@ -301,7 +314,7 @@ Result<void> RiggedGlbWriter::add_frame(std::span<const glm::vec3> translation, 
         w.previous.resize(tracks);
         w.scaled.assign(tracks, false);
     }
-    for (std::size_t i = 0; i < w.instances.size(); ++i) {
+    for (std::size_t i = 0; i < w.own(); ++i) {
         for (std::size_t k = 0; k < w.animated_nodes.size(); ++k) {
             const auto node = static_cast<std::size_t>(w.animated_nodes[k]);
             const std::size_t at = i * w.node_count + node;
@@ -309,7 +322,7 @@ Result<void> RiggedGlbWriter::add_frame(std::span<const glm::vec3> translation, 
             const float length = glm::length(q);
             if (!finite(translation[at]) || !finite(q) || !finite(scale[at]) || !(length > 0.0f)) {
                 return make_error(Error::Kind::InvalidInput,
-                                  "frame " + std::to_string(w.frames) + ", instance " + w.instances[i].name + ", node " +
+                                  "frame " + std::to_string(w.frames) + ", instance " + w.instances[w.own_begin + i].name + ", node " +
                                       w.names[node] + ": the transform is not finite (or a zero rotation)");
             }
             q /= length;
@@ -528,15 +541,28 @@ Result<void> RiggedGlbWriter::Impl::build_and_write(AtomicFile& file) {
 // file whose bytes follow the buffer's head (the source's data and images) as its tail,
 // one buffer view; each channel's key times and values are accessors into it. A scale
 // channel only for the nodes whose scale leaves the rest scale, as uncompacted.
-Result<void> RiggedGlbWriter::Impl::write_compact(AtomicFile& file, tinygltf::Model& out, std::vector<unsigned char>& bytes) {
+// The own tracks' keys compacted: every track's, or one rank's.
+Result<CompactKeys> RiggedGlbWriter::Impl::compact_own() {
     std::vector<float> times(frames);
     for (std::uint32_t f = 0; f < frames; ++f) times[f] = static_cast<float>(f) / fps;
-    static_assert(sizeof(Key) == 10 * sizeof(float));
     constexpr std::array<ChannelKind, 3> kFields = {ChannelKind::Translation, ChannelKind::Rotation, ChannelKind::Scale};
-    auto compacted = CompactKeys::build(*keys, spill_beside, tracks(), kFields, times, compaction, RiggedGlbWriter::kTransposeBytes,
-                                        [&](std::size_t track, std::size_t field) { return field != 2 || scaled[track]; });
-    if (!compacted) return compacted.error();
-    CompactKeys& keys_out = compacted.value();
+    if (!keys) {  // no frame added (finish() refuses that) or, shared, no instance of its own
+        auto opened = SpillFile::open(spill_beside);
+        if (!opened) return opened.error();
+        keys.emplace(std::move(opened).value());
+    }
+    return CompactKeys::build(*keys, spill_beside, own_tracks(), kFields, times, compaction, RiggedGlbWriter::kTransposeBytes,
+                              [&](std::size_t track, std::size_t field) { return field != 2 || scaled[track]; });
+}
+
+Result<void> RiggedGlbWriter::Impl::write_compact(AtomicFile& file, tinygltf::Model& out, std::vector<unsigned char>& bytes) {
+    static_assert(sizeof(Key) == 10 * sizeof(float));
+    std::optional<Result<CompactKeys>> built_here;
+    if (joined == nullptr) {
+        built_here.emplace(compact_own());
+        if (!*built_here) return built_here->error();
+    }
+    CompactKeys& keys_out = joined != nullptr ? *joined : built_here->value();
     stats = keys_out.stats();
     MeshoptJson meshopt;
     const int view = keys_out.add_views(out, bytes.size(), meshopt);
@@ -570,6 +596,60 @@ Result<void> RiggedGlbWriter::Impl::copy_tracks(AtomicFile& file) {
     constexpr std::array<std::size_t, 3> kFields = {3, 4, 3};
     return copy_item_major(*keys, file, tracks(), frames, kFields, RiggedGlbWriter::kTransposeBytes,
                            [&](std::size_t track, std::size_t field) { return field != 2 || scaled[track]; });
+}
+
+bool RiggedGlbWriter::can_share() const {
+    const Impl& w = *impl_;
+    struct stat existing {};
+    const bool device = !w.spill_beside.empty() && ::stat(w.spill_beside.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode);
+    return w.compaction.enabled && !w.compaction.meshopt && !w.animated_nodes.empty() && !w.spill_beside.empty() && !device;
+}
+
+Result<void> RiggedGlbWriter::share(std::size_t begin, std::size_t end) {
+    Impl& w = *impl_;
+    if (!can_share()) {
+        return make_error(Error::Kind::InvalidInput, w.spill_beside + ": this writer's work cannot be shared between ranks "
+                                                                      "(it needs compacted keys without meshopt, animated "
+                                                                      "nodes, and a regular file)");
+    }
+    if (begin > end || end > w.instances.size() || w.frames > 0) {
+        return make_error(Error::Kind::InvalidInput, w.spill_beside + ": instances [" + std::to_string(begin) + ", " +
+                                                         std::to_string(end) + ") are not a range of the " +
+                                                         std::to_string(w.instances.size()) +
+                                                         " instances, given before the first frame");
+    }
+    w.shared = true;
+    w.own_begin = begin;
+    w.own_end = end;
+    return {};
+}
+
+Result<void> RiggedGlbWriter::finish(Communicator& ranks, const std::string& path) {
+    Impl& w = *impl_;
+    assert(w.shared && !w.finished && "finish(ranks, path) once, of a writer that share() made one rank's");
+    KW_TRY(ranks.agree(w.frames == 0 ? Result<void>{make_error(Error::Kind::InvalidInput, path + ": no frames to write")}
+                                     : Result<void>{}));
+    // Rank 0 writes every track's channels, the scale only where it changes: the other
+    // ranks' tracks say which of theirs do (a byte each), in rank order after its own.
+    w.scaled.resize(w.own_tracks());  // an instance-less rank never sized them
+    std::vector<std::byte> mine(w.scaled.size());
+    for (std::size_t t = 0; t < mine.size(); ++t) mine[t] = std::byte{static_cast<unsigned char>(w.scaled[t])};
+    std::vector<bool> every = w.scaled;
+    return finish_shared_glb(
+        ranks, path, w.compact_own(), mine,
+        [&](std::size_t rank, std::span<const std::byte> theirs) -> Result<void> {
+            if (every.size() + theirs.size() > w.tracks() ||
+                (rank + 1 == static_cast<std::size_t>(ranks.size()) && every.size() + theirs.size() != w.tracks())) {
+                return make_error(Error::Kind::Internal, path + ": rank " + std::to_string(rank) + "'s tracks do not fit");
+            }
+            for (const std::byte b : theirs) every.push_back(b != std::byte{0});
+            return {};
+        },
+        [&](AtomicFile& file, CompactKeys& keys) {
+            w.scaled = std::move(every);
+            w.joined = &keys;
+            return w.build_and_write(file);
+        });
 }
 
 Result<void> RiggedGlbWriter::finish(const std::string& path) {

@@ -15,7 +15,14 @@ namespace kodawari {
 
 RiggedCrowdExport::RiggedCrowdExport(const RodScene& scene, std::uint32_t character, std::vector<std::uint32_t> instances,
                                      RiggedGlbWriter writer)
-    : scene_(&scene), character_(character), instances_(std::move(instances)), writer_(std::move(writer)) {}
+    : scene_(&scene), character_(character), instances_(std::move(instances)), own_end_(instances_.size()), writer_(std::move(writer)) {}
+
+Result<void> RiggedCrowdExport::share(std::size_t begin, std::size_t end) {
+    KW_TRY(writer_.share(begin, end));
+    own_begin_ = begin;
+    own_end_ = end;
+    return {};
+}
 
 Result<RiggedCrowdExport> RiggedCrowdExport::create(const RodScene& scene, std::uint32_t character, const std::string& output,
                                                     const GlbCompaction& compaction) {
@@ -47,19 +54,20 @@ Result<void> RiggedCrowdExport::add_frame(std::uint32_t frame, const ChainSnapsh
     const CharacterKinematics& k = scene.characters[character_];
     const gltf::Character& ch = *k.rig;
     const std::size_t n = ch.nodes.size();
-    translation_.resize(instances_.size() * n);
-    rotation_.resize(instances_.size() * n);
-    scale_.resize(instances_.size() * n);
+    const std::size_t own = own_end_ - own_begin_;
+    translation_.resize(own * n);
+    rotation_.resize(own * n);
+    scale_.resize(own * n);
     // Instances are independent and each fills only its own slice: posing them (the
     // clip's CPU evaluation, RodScene::rigged_world) is most of a frame's cost, so it
     // runs on every core. The first error in instance order wins, whatever the threads.
     std::mutex failed_lock;
     std::optional<std::pair<std::size_t, Error>> failed;
-    parallel_for(instances_.size(), resolve_threads(0), [&](std::size_t begin, std::size_t end) {
+    parallel_for(own, resolve_threads(0), [&](std::size_t begin, std::size_t end) {
         gltf::Pose pose;
         std::vector<glm::mat4> world;
         for (std::size_t j = begin; j < end; ++j) {
-            const std::uint32_t c = instances_[j];
+            const std::uint32_t c = instances_[own_begin_ + j];
             const CharacterInstance& inst = scene.instances[c];
             // World matrices with the simulated joints placed (RodScene::rigged_world); pose
             // is left holding the clip's local TRS, which every other node keeps.

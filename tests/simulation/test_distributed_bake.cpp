@@ -19,6 +19,7 @@
 #include "kodawari/bake.hpp"
 #include "kodawari/distributed.hpp"
 #include "kodawari/domains/birds.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
@@ -192,6 +193,38 @@ TEST(DistributedBake, CompactedBirdsAreTheSingleProcessBytesOnAnyNumberOfRanks) 
     const auto results = bake_on_threads(5, "birds-closeup.json", birds_glb(dir.file("closeup-5.glb"), 30, kCompact));
     ASSERT_TRUE(results[0].ok()) << results[0].error().message;
     EXPECT_TRUE(testing_support::file_bytes(dir.file("closeup-5.glb")) == closeup) << "5 ranks, 3 birds: not the same bytes";
+}
+
+// The rigged characters' file: every rank poses and compacts its own instances.
+TEST(DistributedBake, CompactedRiggedCrowdIsTheSingleProcessBytesOnAnyNumberOfRanks) {
+    testing_support::TempDir dir;
+    constexpr std::uint32_t kFrames = 8;
+    const GlbCompaction compaction{.enabled = true, .position_m = 0.005f, .rotation_rad = 0.02f, .threads = 1};
+    std::string expected;
+    {
+        auto sim = Simulation::open(scene_path("crowd-gltf.json"), {.backend = BackendKind::Cpu, .frames = kFrames});
+        ASSERT_TRUE(sim.ok()) << sim.error().message;
+        auto sink = make_chains_glb_sink(dir.file("one.glb"), compaction);
+        BakeSink* sinks[] = {sink.get()};
+        auto written = bake(*sim.value(), sinks);
+        ASSERT_TRUE(written.ok()) << written.error().message;
+        expected = testing_support::file_bytes(dir.file("one.glb"));
+    }
+    for (const int ranks : {2, 3}) {
+        SCOPED_TRACE(std::to_string(ranks) + " ranks");
+        const std::string path = dir.file("ranks-" + std::to_string(ranks) + ".glb");
+        DistributedBakeOptions options = birds_glb(path, kFrames, compaction);
+        options.make_sinks = [path, compaction](const BakeWorld&) {
+            std::vector<std::unique_ptr<BakeSink>> sinks;
+            sinks.push_back(make_chains_glb_sink(path, compaction));
+            return sinks;
+        };
+        const auto results = bake_on_threads(ranks, "crowd-gltf.json", options);
+        ASSERT_TRUE(results[0].ok()) << results[0].error().message;
+        ASSERT_EQ(results[0].value().size(), 1u);
+        EXPECT_NE(results[0].value()[0].description.find("compacted on " + std::to_string(ranks) + " ranks"), std::string::npos);
+        EXPECT_TRUE(testing_support::file_bytes(path) == expected) << "not the single process's bytes";
+    }
 }
 
 TEST(DistributedBake, MeshoptKeysAreCompactedOnRankZeroTheSameBytes) {

@@ -337,6 +337,19 @@ public:
     /// node); -1 when `node` has no skinned mesh.
     [[nodiscard]] int skinned_mesh_node(std::size_t instance, int node) const;
 
+    /// Distributed bakes (kodawari/distributed.hpp), as BirdGlbWriter's: whether the
+    /// ranks can share this writer's work, each compacting its own instances' channels
+    /// (compacted keys without meshopt, animated nodes, and an output that is not a device
+    /// or a pipe).
+    [[nodiscard]] bool can_share() const;
+    /// Before the first frame: this rank keeps the keys of instances [begin, end) alone,
+    /// and add_frame() takes the values of those instances only. Errors: can_share()
+    /// false, a range outside the instances, frames added already (InvalidInput).
+    [[nodiscard]] Result<void> share(std::size_t begin, std::size_t end);
+    /// finish(path) of a shared writer, on every rank at once (collective; shared_glb):
+    /// the same bytes as one writer fed every instance. Every rank returns the same status.
+    [[nodiscard]] Result<void> finish(Communicator& ranks, const std::string& path);
+
 private:
     struct Impl;
     explicit RiggedGlbWriter(std::unique_ptr<Impl> impl);
@@ -406,6 +419,16 @@ public:
     /// Writes the `.glb` atomically (RiggedGlbWriter::finish).
     [[nodiscard]] Result<void> finish(const std::string& path);
 
+    /// Distributed bakes: RiggedGlbWriter::can_share().
+    [[nodiscard]] bool can_share() const { return writer_.can_share(); }
+    /// Distributed bakes, before the first frame: this rank poses and keeps instances
+    /// [begin, end) of instances() alone; add_frame()'s snapshot must still be indexed as
+    /// the whole world's (only those instances' joints are read). Errors:
+    /// RiggedGlbWriter::share's.
+    [[nodiscard]] Result<void> share(std::size_t begin, std::size_t end);
+    /// finish(path) on every rank at once (RiggedGlbWriter::finish(ranks, path)).
+    [[nodiscard]] Result<void> finish(Communicator& ranks, const std::string& path) { return writer_.finish(ranks, path); }
+
     /// The instances written, in order: indices into RodScene::instances.
     [[nodiscard]] const std::vector<std::uint32_t>& instances() const { return instances_; }
     /// The writer (for its node mapping).
@@ -418,6 +441,8 @@ private:
     const RodScene* scene_;
     std::uint32_t character_;
     std::vector<std::uint32_t> instances_;
+    std::size_t own_begin_ = 0;  // the instances this rank poses (share())
+    std::size_t own_end_ = 0;
     RiggedGlbWriter writer_;
     // Per-frame scratch, instances x nodes.
     std::vector<glm::vec3> translation_, scale_;
