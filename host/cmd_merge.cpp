@@ -16,13 +16,15 @@ struct MergeArguments {
     std::optional<std::string> scene;
     std::optional<std::string> compact;
     bool meshopt = false;
+    std::optional<std::uint64_t> threads;
 };
 
 int cmd_merge(const MergeArguments& o) {
     const auto& out_option = o.out;
     MergeOptions options;
     if (o.scene) options.scene = *o.scene;
-    const GlbCompaction compaction = read_compaction(o.compact, o.meshopt);
+    GlbCompaction compaction = read_compaction(o.compact, o.meshopt);
+    if (o.threads) compaction.threads = static_cast<unsigned>(*o.threads);
     const std::vector<std::string>& parts = o.parts;
     if (parts.empty()) throw UsageError{"merge takes the part files of every shard (written by `run --shard I/N`)"};
     auto source = open_parts(parts, options);
@@ -56,6 +58,7 @@ Command add_merge(CLI::App& app) {
     add_text(*c, "--scene", o->scene, "SCENE.json",
              "the scene file, when it moved since the bake; its bytes must be unchanged (default: the path in the parts)");
     add_compaction_option(*c, o->compact, o->meshopt);
+    add_count(*c, "--threads", o->threads, 1, 1024, "--compact's encoder's threads (default: one per hardware thread)");
     return {c, [o] { return cmd_merge(*o); }};
 }
 

@@ -38,6 +38,11 @@ check "merged rigged crowd = single run, byte for byte" cmp "$work/crowd.glb" "$
 check "merge --compact exits 0" test $? -eq 0
 check "merge --compact says what compaction did" grep -q "compact: .* keys kept" "$work/merge.out"
 check "merged --compact flock = run --compact, byte for byte" cmp "$work/flock-compact.glb" "$work/merged-compact.glb"
+"$bin" merge "$work"/flock-cpu.{0,1,2,3}.kwpart --compact --threads 1 --out "$work/merged-compact-1.glb" >/dev/null 2>&1
+check "merge --compact --threads 1: the same bytes" cmp "$work/flock-compact.glb" "$work/merged-compact-1.glb"
+"$bin" merge "$work"/flock-cpu.{0,1,2,3}.kwpart --compact --threads 0 --out "$work/merged-compact-0.glb" >"$work/bad.out" 2>&1
+check "merge --threads 0 exits 2" test $? -eq 2
+check "merge --threads 0 writes nothing" test ! -e "$work/merged-compact-0.glb"
 "$bin" run scenes/crowd-gltf.json --backend cpu --frames 8 --compact=0.005,0.02 --out "$work/crowd-compact.glb" >/dev/null 2>&1
 "$bin" merge "$work"/crowd.*.kwpart --compact=0.005,0.02 --out "$work/crowd-merged-compact.glb" >/dev/null 2>&1
 check "merged --compact rigged crowd = run --compact, byte for byte" cmp "$work/crowd-compact.glb" "$work/crowd-merged-compact.glb"
