@@ -97,6 +97,15 @@ check "MPI --compact flock (3 ranks) = run --compact, byte for byte" cmp "$work/
 "$bin" run scenes/birds-closeup.json --backend cpu --frames 30 --compact --out "$work/closeup-compact.glb" >/dev/null 2>&1
 "${mpi[@]}" -np 5 "$bin" run scenes/birds-closeup.json --backend cpu --threads 1 --frames 30 --mpi --compact --out "$work/mpi-closeup.glb" >"$work/mpi.out" 2>&1
 check "MPI --compact, 5 ranks for 3 birds = run --compact, byte for byte" cmp "$work/closeup-compact.glb" "$work/mpi-closeup.glb"
+# Where a rank cannot write into the output's folder (here: its own working directory,
+# and a relative --out), rank 0 writes the file alone, says so, and leaves no probe.
+mkdir -p "$work/rank0" "$work/rank1"
+"${mpi[@]}" -np 1 -wdir "$work/rank0" "$bin" run "$src/scenes/flock.json" --backend cpu --threads 1 --frames 130 --mpi --compact --out x.glb : \
+  -np 1 -wdir "$work/rank1" "$bin" run "$src/scenes/flock.json" --backend cpu --threads 1 --frames 130 --mpi --compact --out x.glb >"$work/mpi.out" 2>&1
+check "MPI --compact, output folder not shared: exits 0" test $? -eq 0
+check "MPI --compact, output folder not shared: run --compact's bytes" cmp "$work/flock-compact.glb" "$work/rank0/x.glb"
+check "MPI --compact, output folder not shared: rank 0 says it wrote alone" grep -q "written by rank 0 alone: rank 1 cannot write into its folder" "$work/mpi.out"
+check "MPI --compact, output folder not shared: no probe or file left" test "$(ls "$work/rank0")" = x.glb -a -z "$(ls "$work/rank1")"
 # meshopt's chunks span birds: rank 0 compacts what it gathers, the same bytes.
 "$bin" run scenes/flock.json --backend cpu --frames 40 --compact --meshopt --out "$work/flock-meshopt.glb" >/dev/null 2>&1
 "${mpi[@]}" -np 2 "$bin" run scenes/flock.json --backend cpu --threads 1 --frames 40 --mpi --compact --meshopt --out "$work/mpi-flock-meshopt.glb" >"$work/mpi.out" 2>&1

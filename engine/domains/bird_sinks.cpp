@@ -75,6 +75,7 @@ public:
     // A distributed bake's ranks each compact their own birds' channels (BirdGlbWriter's
     // share()); a user's model's birds go to files of their own, which rank 0 writes.
     bool can_share() const override { return writer_ && models_.empty() && writer_->can_share(); }
+    std::string share_probe() const override { return path_; }
 
     Result<void> share(const ShardInfo& mine) override {
         if (!writer_) return BakeSink::share(mine);

@@ -94,6 +94,9 @@ public:
                std::all_of(rigged_.begin(), rigged_.end(), [](const RiggedCrowdExport& e) { return e.can_share(); });
     }
 
+    // The rigged characters' files are beside path_: one folder.
+    std::string share_probe() const override { return path_; }
+
     Result<void> share(const ShardInfo& mine) override {
         if (!can_share()) return BakeSink::share(mine);
         const InstanceRange range = mine.part(noun_).range;

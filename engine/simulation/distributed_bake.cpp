@@ -4,8 +4,12 @@
 #include "kodawari/distributed.hpp"
 
 #include <algorithm>
+#include <cstdio>
 #include <cstring>
+#include <filesystem>
 #include <optional>
+
+#include <unistd.h>
 
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/scene.hpp"
@@ -37,6 +41,69 @@ std::vector<std::byte> bytes_of(const void* data, std::size_t size) {
     std::vector<std::byte> out(size);
     if (size != 0) std::memcpy(out.data(), data, size);  // memcpy of null, even for 0 bytes, is undefined
     return out;
+}
+
+// The ranks write a shared sink's file where rank 0 made it: only where every rank sees
+// that folder as rank 0 does (a file system they share, the same working directory for
+// a relative path). Rank 0 puts a probe file there and asks; a sink some rank cannot
+// see is not shared, and rank 0 writes it from the gathered frames, as any other sink.
+// Checked before the first frame, so that a farm without a shared file system loses
+// no bake. Collective; `shared` is rank 0's (changed there only).
+// Returns, per sink, why it is not shared after all ("" where it is or never could be).
+std::vector<std::string> share_where_every_rank_sees(Communicator& comm, const std::vector<std::unique_ptr<BakeSink>>& sinks,
+                                                     std::vector<std::byte>& shared) {
+    const bool root = comm.rank() == 0;
+    std::string probes;  // one line per sink: its probe's path, or nothing
+    std::vector<std::string> made;
+    if (root) {
+        for (std::size_t k = 0; k < sinks.size(); ++k) {
+            std::string probe;
+            if (shared[k] != std::byte{0}) {
+                const std::filesystem::path out = sinks[k]->share_probe();
+                probe = (out.parent_path() / (out.filename().string() + ".probe-" + std::to_string(::getpid()) + "-" +
+                                              std::to_string(k)))
+                            .string();
+                std::FILE* file = out.empty() ? nullptr : std::fopen(probe.c_str(), "wb");
+                if (file == nullptr) {
+                    probe.clear();  // rank 0 cannot write there either: its own sink will say so
+                    shared[k] = std::byte{0};
+                } else {
+                    std::fclose(file);
+                    made.push_back(probe);
+                }
+            }
+            probes += probe + "\n";
+        }
+    }
+    std::vector<std::byte> text = bytes_of(probes.data(), probes.size());
+    comm.broadcast(text);
+    std::vector<std::byte> seen;  // per sink: 1 where this rank can write its probe
+    {
+        std::string line;
+        for (const std::byte b : text) {
+            if (static_cast<char>(b) != '\n') {
+                line.push_back(static_cast<char>(b));
+                continue;
+            }
+            seen.push_back(std::byte{static_cast<unsigned char>(!line.empty() && ::access(line.c_str(), W_OK) == 0)});
+            line.clear();
+        }
+    }
+    std::vector<std::byte> all;
+    std::vector<std::size_t> sizes;
+    comm.gather(seen, all, sizes);
+    std::vector<std::string> why(sinks.size());
+    if (!root) return why;
+    for (const std::string& probe : made) std::remove(probe.c_str());
+    // Every rank's answers, rank after rank, one per sink.
+    for (std::size_t at = 0; at < all.size(); ++at) {
+        const std::size_t k = at % shared.size();
+        if (all[at] != std::byte{0} || shared[k] == std::byte{0}) continue;
+        shared[k] = std::byte{0};
+        why[k] = "written by rank 0 alone: rank " + std::to_string(at / shared.size()) +
+                 " cannot write into its folder (not a file system every rank shares)";
+    }
+    return why;
 }
 
 }  // namespace
@@ -87,6 +154,7 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
     // rank tells them its shard. The others' frames go to rank 0 alone.
     std::vector<std::byte> shared(sinks.size());
     for (std::size_t k = 0; k < sinks.size(); ++k) shared[k] = std::byte{static_cast<unsigned char>(sinks[k]->can_share())};
+    const std::vector<std::string> not_shared = share_where_every_rank_sees(comm, sinks, shared);
     comm.broadcast(shared);
     const auto is_shared = [&](std::size_t k) { return shared[k] != std::byte{0}; };
     bool any_shared = false;
@@ -240,7 +308,12 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
             if (root) files = sinks[k]->finish();
             KW_TRY(comm.agree(files ? Result<void>{} : Result<void>{files.error()}));
         }
-        for (BakeOutput& file : files.value()) written.push_back(std::move(file));
+        for (BakeOutput& file : files.value()) {
+            if (root && !not_shared[k].empty()) {
+                file.description += (file.description.empty() ? "" : ", ") + not_shared[k];
+            }
+            written.push_back(std::move(file));
+        }
     }
     return written;
 }

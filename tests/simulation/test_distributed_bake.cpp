@@ -141,6 +141,7 @@ public:
     BakeNeeds needs() const override { return {{std::string(kBirdPosesChannel)}}; }
     Result<void> begin(const BakeWorld&) override { return {}; }
     bool can_share() const override { return true; }
+    std::string share_probe() const override { return path_; }
     Result<void> share(const ShardInfo& mine) override {
         rank_ = static_cast<int>(mine.shard.index);
         return {};

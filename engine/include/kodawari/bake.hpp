@@ -106,6 +106,11 @@ public:
     /// tells it the rank's shard before the first frame, consume() gets that rank's own
     /// frames (its shard's instances) only, and finish_shared() replaces finish().
     [[nodiscard]] virtual bool can_share() const { return false; }
+    /// The file the ranks would write into, as every rank resolves the path (a relative
+    /// one from its working directory): a sink is shared only where every rank can
+    /// write into that file's folder (a file system they share), checked before the
+    /// first frame; elsewhere rank 0 writes it alone from the gathered frames.
+    [[nodiscard]] virtual std::string share_probe() const { return {}; }
     /// See can_share(). Errors: the sink's (the default: it cannot share, Internal).
     [[nodiscard]] virtual Result<void> share(const ShardInfo& mine);
     /// finish() of a shared sink, on every rank at once (collective: every rank must
