@@ -25,17 +25,24 @@ namespace kodawari::cli {
 
 namespace {
 
+// The scene's counts (a shard's or a rank's simulation holds part of it: its chains and
+// joints are said as its own, print_shard() says which instances).
 void print_scene(const Simulation& sim) {
     const Scene& scene = sim.scene();
+    const bool part = sim.shard().shard.count > 1;
+    const auto whole = [&](std::string_view noun, std::size_t own) {
+        return part ? std::size_t{sim.shard().part(noun).scene_count} : own;
+    };
     if (!bird_world(sim).birds.empty()) {
         std::printf("kodawari: scene \"%s\" (%s): %zu birds, %u frames at %g fps\n", scene.name.c_str(), scene.path.c_str(),
-                    bird_world(sim).birds.size(), sim.frame_count(), static_cast<double>(bird_world(sim).fps));
+                    whole("birds", bird_world(sim).birds.size()), sim.frame_count(), static_cast<double>(bird_world(sim).fps));
     }
     if (const RodScene* rods = rod_scene(sim)) {
         const rods::RodWorld& world = rods->world;
-        std::printf("kodawari: scene \"%s\" (%s): %u characters, %zu chains, %zu joints, %u frames at %g fps\n",
-                    scene.name.c_str(), scene.path.c_str(), world.character_count, world.chains.size(),
-                    std::size_t{world.joint_count}, sim.frame_count(), static_cast<double>(rods->fps));
+        std::printf("kodawari: scene \"%s\" (%s): %zu characters, %zu chains, %zu joints%s, %u frames at %g fps\n",
+                    scene.name.c_str(), scene.path.c_str(), whole("characters", world.character_count), world.chains.size(),
+                    std::size_t{world.joint_count}, part ? " in this shard" : "", sim.frame_count(),
+                    static_cast<double>(rods->fps));
     }
     std::fflush(stdout);
 }
@@ -139,7 +146,7 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
         opened = &sim;
         if (!root) return;
         print_scene(sim);
-        print_shard(sim.shard(), "rank 0 of " + std::to_string(comm.size()) + " (one shard per rank; rank 0 writes)");
+        print_shard(sim.shard(), "rank 0 of " + std::to_string(comm.size()) + " (one shard per rank)");
         std::fflush(stdout);
     };
     options.make_sinks = [&](const BakeWorld& world) {
