@@ -24,8 +24,6 @@
 #include <string>
 #include <vector>
 
-#include <sys/stat.h>
-
 #include "kodawari/version.hpp"
 #include "birds/bird_meshes.hpp"
 #include "export/compact_keys.hpp"
@@ -597,23 +595,13 @@ const GlbCompactionStats& BirdGlbWriter::compaction_stats() const { return impl_
 
 bool BirdGlbWriter::can_share() const {
     const Impl& w = *impl_;
-    struct stat existing {};
-    const bool device = ::stat(w.path.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode);
-    return w.compaction.enabled && !w.compaction.meshopt && w.count() == w.world->birds.size() && !device;
+    return w.compaction.enabled && !w.compaction.meshopt && w.count() == w.world->birds.size() && !is_device_or_pipe(w.path);
 }
 
 Result<void> BirdGlbWriter::share(std::size_t begin, std::size_t end) {
     Impl& w = *impl_;
-    if (!can_share()) {
-        return make_error(Error::Kind::InvalidInput, w.path + ": this writer's work cannot be shared between ranks "
-                                                              "(it needs compacted keys without meshopt, built-in wing "
-                                                              "types only, and a regular file)");
-    }
-    if (begin > end || end > w.count() || w.added > 0) {
-        return make_error(Error::Kind::InvalidInput, w.path + ": birds [" + std::to_string(begin) + ", " + std::to_string(end) +
-                                                         ") are not a range of the " + std::to_string(w.count()) +
-                                                         " birds, given before the first frame");
-    }
+    KW_TRY(check_share(w.path, can_share(), "compacted keys without meshopt, built-in wing types only, and a regular file",
+                       "birds", begin, end, w.count(), w.added > 0));
     w.shared = true;
     w.own_begin = begin;
     w.own_end = end;

@@ -22,8 +22,6 @@
 #include <utility>
 #include <vector>
 
-#include <sys/stat.h>
-
 #include "kodawari/version.hpp"
 #include "core/binary_file.hpp"
 #include "export/compact_keys.hpp"
@@ -600,24 +598,14 @@ Result<void> RiggedGlbWriter::Impl::copy_tracks(AtomicFile& file) {
 
 bool RiggedGlbWriter::can_share() const {
     const Impl& w = *impl_;
-    struct stat existing {};
-    const bool device = !w.spill_beside.empty() && ::stat(w.spill_beside.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode);
-    return w.compaction.enabled && !w.compaction.meshopt && !w.animated_nodes.empty() && !w.spill_beside.empty() && !device;
+    return w.compaction.enabled && !w.compaction.meshopt && !w.animated_nodes.empty() && !w.spill_beside.empty() &&
+           !is_device_or_pipe(w.spill_beside);
 }
 
 Result<void> RiggedGlbWriter::share(std::size_t begin, std::size_t end) {
     Impl& w = *impl_;
-    if (!can_share()) {
-        return make_error(Error::Kind::InvalidInput, w.spill_beside + ": this writer's work cannot be shared between ranks "
-                                                                      "(it needs compacted keys without meshopt, animated "
-                                                                      "nodes, and a regular file)");
-    }
-    if (begin > end || end > w.instances.size() || w.frames > 0) {
-        return make_error(Error::Kind::InvalidInput, w.spill_beside + ": instances [" + std::to_string(begin) + ", " +
-                                                         std::to_string(end) + ") are not a range of the " +
-                                                         std::to_string(w.instances.size()) +
-                                                         " instances, given before the first frame");
-    }
+    KW_TRY(check_share(w.spill_beside, can_share(), "compacted keys without meshopt, animated nodes, and a regular file",
+                       "instances", begin, end, w.instances.size(), w.frames > 0));
     w.shared = true;
     w.own_begin = begin;
     w.own_end = end;

@@ -5,7 +5,29 @@
 #include <utility>
 #include <vector>
 
+#include <sys/stat.h>
+
 namespace kodawari::gltf {
+
+bool is_device_or_pipe(const std::string& path) {
+    struct stat existing {};
+    return !path.empty() && ::stat(path.c_str(), &existing) == 0 && !S_ISREG(existing.st_mode);
+}
+
+Result<void> check_share(const std::string& path, bool shareable, const char* needs, const char* items, std::size_t begin,
+                         std::size_t end, std::size_t count, bool started) {
+    if (!shareable) {
+        return make_error(Error::Kind::InvalidInput,
+                          path + ": this writer's work cannot be shared between ranks (it needs " + needs + ")");
+    }
+    if (begin > end || end > count || started) {
+        return make_error(Error::Kind::InvalidInput, path + ": " + items + " [" + std::to_string(begin) + ", " +
+                                                         std::to_string(end) + ") are not a range of the " +
+                                                         std::to_string(count) + " " + items +
+                                                         ", given before the first frame");
+    }
+    return {};
+}
 
 Result<void> finish_shared_glb(Communicator& ranks, const std::string& path, Result<CompactKeys> mine,
                                std::span<const std::byte> extra,

@@ -17,6 +17,15 @@
 
 namespace kodawari::gltf {
 
+/// Whether `path` names a device or a pipe: a file several processes cannot write into.
+[[nodiscard]] bool is_device_or_pipe(const std::string& path);
+
+/// A writer's share(begin, end) checked: InvalidInput naming `path` when the writer
+/// cannot share (`shareable` false: it needs `needs`), or [begin, end) is not a range of
+/// its `count` `items` given before the first frame (`started`).
+[[nodiscard]] Result<void> check_share(const std::string& path, bool shareable, const char* needs, const char* items,
+                                       std::size_t begin, std::size_t end, std::size_t count, bool started);
+
 /// Collective: every rank calls it once, with its own compacted keys (or the error that
 /// stopped it compacting them) and `extra`, bytes of its own that rank 0's file needs
 /// (rest poses, which channels exist). Rank 0: `take_extra(rank, bytes)` receives every
