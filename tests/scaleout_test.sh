@@ -114,6 +114,11 @@ check "MPI --compact --meshopt: rank 0 compacts" bash -c "! grep -q 'compacted o
 "${mpi[@]}" -np 3 "$bin" run scenes/crowd-gltf.json --backend cpu --threads 1 --frames 8 --mpi --compact=0.005,0.02 --out "$work/mpi-crowd-compact.glb" >"$work/mpi.out" 2>&1
 check "MPI --compact rigged crowd (3 ranks) = run --compact, byte for byte" cmp "$work/crowd-compact.glb" "$work/mpi-crowd-compact.glb"
 check "MPI --compact: every rank posed and compacted its own characters" grep -q "its keys compacted on 3 ranks" "$work/mpi.out"
+# Procedural characters (ChainsGlbWriter's file), shared the same way.
+"$bin" run scenes/crowd.json --backend cpu --frames 4 --compact --out "$work/procedural-compact.glb" >/dev/null 2>&1
+"${mpi[@]}" -np 3 "$bin" run scenes/crowd.json --backend cpu --threads 1 --frames 4 --mpi --compact --out "$work/mpi-procedural-compact.glb" >"$work/mpi.out" 2>&1
+check "MPI --compact procedural crowd (3 ranks) = run --compact, byte for byte" cmp "$work/procedural-compact.glb" "$work/mpi-procedural-compact.glb"
+check "MPI --compact: every rank compacted its own procedural characters" grep -q "its keys compacted on 3 ranks" "$work/mpi.out"
 # Two rigged characters, a file each, both shared.
 "$bin" run scenes/avatars.json --backend cpu --frames 6 --compact --out "$work/avatars.glb" >/dev/null 2>&1
 "${mpi[@]}" -np 3 "$bin" run scenes/avatars.json --backend cpu --threads 1 --frames 6 --mpi --compact --out "$work/mpi-avatars.glb" >"$work/mpi.out" 2>&1

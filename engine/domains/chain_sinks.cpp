@@ -87,10 +87,11 @@ public:
         return written;
     }
 
-    // A distributed bake's ranks each pose and compact their own rigged instances
-    // (RiggedGlbWriter::share()); procedural characters' files are rank 0's.
+    // A distributed bake's ranks each pose and compact their own characters: their
+    // instances of each rigged template (RiggedGlbWriter::share()) and, in the
+    // procedural characters' file, their tracks (ChainsGlbWriter::share()).
     bool can_share() const override {
-        return scene_ != nullptr && !procedural_ && !rigged_.empty() &&
+        return scene_ != nullptr && (procedural_ || !rigged_.empty()) && (!procedural_ || procedural_->can_share()) &&
                std::all_of(rigged_.begin(), rigged_.end(), [](const RiggedCrowdExport& e) { return e.can_share(); });
     }
 
@@ -106,6 +107,7 @@ public:
             const auto end = std::lower_bound(instances.begin(), instances.end(), range.end);
             KW_TRY(e.share(static_cast<std::size_t>(first - instances.begin()), static_cast<std::size_t>(end - instances.begin())));
         }
+        if (procedural_) KW_TRY(procedural_->share(range.begin, range.end));
         const rods::RodWorld& world = scene_->world;
         const std::uint32_t chain = range.begin < scene_->instances.size() ? scene_->instances[range.begin].chain_begin
                                                                            : static_cast<std::uint32_t>(world.chains.size());
@@ -125,6 +127,11 @@ public:
                                "the character's own skeleton and meshes, its keys compacted on " +
                                    std::to_string(ranks.size()) + " ranks",
                                stats(rigged_[i].writer().compaction_stats())});
+        }
+        if (procedural_) {
+            KW_TRY(procedural_->finish(ranks));
+            written.push_back({path_, BakeOutput::Format::Glb, "its keys compacted on " + std::to_string(ranks.size()) + " ranks",
+                               stats(procedural_->compaction_stats())});
         }
         if (ranks.rank() != 0) written.clear();
         return written;

@@ -7,6 +7,7 @@
 
 #include <algorithm>
 #include <array>
+#include <cassert>
 #include <cmath>
 #include <cstring>
 #include <optional>
@@ -20,6 +21,7 @@
 
 #include "kodawari/version.hpp"
 #include "export/compact_keys.hpp"
+#include "export/shared_glb.hpp"
 #include "core/parallel.hpp"
 #include "export/gltf_common.hpp"
 #include "kodawari/export.hpp"
@@ -60,9 +62,22 @@ struct ChainsGlbWriter::Impl {
     SpillFile keys;             // frames x tracks records
     std::vector<float> first;     // tracks x record: frame 0, the rest pose
     std::vector<float> previous;  // tracks x record: the last frame added (rotation hemispheres)
-    std::vector<float> row;       // tracks x record being written
+    std::vector<float> row;       // own tracks x record being written
     GlbCompaction compaction;
     GlbCompactionStats stats;
+    // Per character its first track (tracks are character after character), and the
+    // track count at the end. The characters whose keys this writer keeps: all, or one
+    // rank's (share()), and a shared writer's keys joined with the other ranks' (rank 0,
+    // while it writes: finish_shared_glb()'s).
+    std::vector<std::size_t> character_tracks;
+    std::size_t own_begin = 0;
+    std::size_t own_end = 0;
+    bool shared = false;
+    CompactKeys* joined = nullptr;
+
+    [[nodiscard]] std::size_t track_base() const { return character_tracks[own_begin]; }
+    [[nodiscard]] std::size_t own_tracks() const { return character_tracks[own_end] - character_tracks[own_begin]; }
+    [[nodiscard]] Result<CompactKeys> compact_own();
 
     [[nodiscard]] std::size_t key_bytes() const { return std::size_t{frames} * kRecordBytes; }
     void build_nodes();
@@ -114,6 +129,7 @@ void ChainsGlbWriter::Impl::build_nodes() {
     joint_tracks.resize(world.character_count);
     chain_tracks.resize(world.character_count);
     for (std::uint32_t c = 0; c < world.character_count; ++c) {
+        character_tracks.push_back(track_nodes.size());
         const CharacterInstance& instance = scene->instances[c];
         const CharacterKinematics& kind = scene->characters[instance.character];
         const auto& names = scene->joint_names(c);
@@ -145,6 +161,8 @@ void ChainsGlbWriter::Impl::build_nodes() {
             }
         }
     }
+    character_tracks.push_back(track_nodes.size());
+    own_end = world.character_count;
 }
 
 ChainsGlbWriter::ChainsGlbWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
@@ -197,7 +215,10 @@ Result<void> ChainsGlbWriter::add_frame(std::span<const glm::vec3> positions, st
 Result<void> ChainsGlbWriter::Impl::add_frame(std::span<const glm::vec3> positions, std::span<const glm::quat> orientations) {
     const rods::RodWorld& world = scene->world;
     const std::uint32_t f = added;
+    // Rows of the own tracks only (a shared writer's: its characters').
+    const std::size_t base_track = track_base();
     auto write_key = [&](std::size_t track, const Local& l) {
+        track -= base_track;
         float* record = row.data() + track * kRecordFloats;
         Quat r = {l.r.x, l.r.y, l.r.z, l.r.w};
         if (f > 0) {
@@ -216,10 +237,10 @@ Result<void> ChainsGlbWriter::Impl::add_frame(std::span<const glm::vec3> positio
     // The first error in character order wins, whatever the threads.
     std::mutex failed_lock;
     std::optional<std::pair<std::uint32_t, Error>> failed;
-    parallel_for(world.character_count, resolve_threads(0), [&](std::size_t begin, std::size_t end) {
+    parallel_for(own_end - own_begin, resolve_threads(0), [&](std::size_t begin, std::size_t end) {
         std::vector<rods::Transform> joints;
         std::vector<glm::quat> bones;
-        for (auto c = static_cast<std::uint32_t>(begin); c < end; ++c) {
+        for (auto c = static_cast<std::uint32_t>(own_begin + begin); c < own_begin + end; ++c) {
             const CharacterInstance& instance = scene->instances[c];
             const CharacterKinematics& kind = scene->characters[instance.character];
             const auto& parents = scene->joint_parents(c);
@@ -268,7 +289,10 @@ Result<void> ChainsGlbWriter::Impl::add_frame(std::span<const glm::vec3> positio
     });
     if (failed) return failed->second;
     KW_TRY(keys.append(row.data(), row.size() * sizeof(float)));
-    if (f == 0) first = row;
+    if (f == 0) {
+        first.resize(track_nodes.size() * kRecordFloats);
+        std::copy(row.begin(), row.end(), first.begin() + static_cast<std::ptrdiff_t>(base_track * kRecordFloats));
+    }
     previous.swap(row);
     row.resize(previous.size());
     ++added;
@@ -333,13 +357,20 @@ void ChainsGlbWriter::Impl::add_scene() {
 // GlbCompaction: the keys are reduced first (compact_keys.hpp), into a second temporary
 // file whose bytes, after the meshes, are the buffer's tail: one buffer view holds them,
 // and each channel's key times and values are accessors into it.
-Result<void> ChainsGlbWriter::Impl::build_and_write_compact(AtomicFile& file) {
+Result<CompactKeys> ChainsGlbWriter::Impl::compact_own() {
     std::vector<float> times(frames);
     for (std::uint32_t f = 0; f < frames; ++f) times[f] = scene->time(f);
     constexpr std::array<ChannelKind, 2> kFields = {ChannelKind::Translation, ChannelKind::Rotation};
-    auto compacted = CompactKeys::build(keys, path, track_nodes.size(), kFields, times, compaction, ChainsGlbWriter::kTransposeBytes);
-    if (!compacted) return compacted.error();
-    CompactKeys& keys_out = compacted.value();
+    return CompactKeys::build(keys, path, own_tracks(), kFields, times, compaction, ChainsGlbWriter::kTransposeBytes);
+}
+
+Result<void> ChainsGlbWriter::Impl::build_and_write_compact(AtomicFile& file) {
+    std::optional<Result<CompactKeys>> built_here;
+    if (joined == nullptr) {
+        built_here.emplace(compact_own());
+        if (!*built_here) return built_here->error();
+    }
+    CompactKeys& keys_out = joined != nullptr ? *joined : built_here->value();
     stats = keys_out.stats();
     MeshoptJson meshopt;
     const int view = keys_out.add_views(model, model.buffers[0].data.size(), meshopt);
@@ -370,6 +401,54 @@ Result<void> ChainsGlbWriter::finish() {
 }
 
 const GlbCompactionStats& ChainsGlbWriter::compaction_stats() const { return impl_->stats; }
+
+bool ChainsGlbWriter::can_share() const {
+    const Impl& w = *impl_;
+    return w.compaction.enabled && !w.compaction.meshopt && !is_device_or_pipe(w.path);
+}
+
+Result<void> ChainsGlbWriter::share(std::size_t begin, std::size_t end) {
+    Impl& w = *impl_;
+    KW_TRY(check_share(w.path, can_share(), "compacted keys without meshopt, and a regular file", "characters", begin, end,
+                       w.character_tracks.size() - 1, w.added > 0));
+    w.shared = true;
+    w.own_begin = begin;
+    w.own_end = end;
+    w.row.assign(w.own_tracks() * kRecordFloats, 0.0f);
+    return {};
+}
+
+Result<void> ChainsGlbWriter::finish(Communicator& ranks) {
+    Impl& w = *impl_;
+    assert(w.shared && "finish(ranks) of a writer that share() made one rank's");
+    KW_TRY(ranks.agree(w.added != w.frames ? Result<void>{make_error(Error::Kind::InvalidInput,
+                                                                     w.path + ": " + std::to_string(w.added) + " of " +
+                                                                         std::to_string(w.frames) + " frames added")}
+                                           : Result<void>{}));
+    std::vector<float>().swap(w.previous);
+    std::vector<float>().swap(w.row);
+    // Rank 0's JSON holds every track's rest pose (frame 0): the others' follow its own.
+    w.first.resize(w.track_nodes.size() * kRecordFloats);  // a rank without characters has none
+    const std::span<const std::byte> rest =
+        std::as_bytes(std::span(w.first).subspan(w.track_base() * kRecordFloats, w.own_tracks() * kRecordFloats));
+    std::size_t track = w.character_tracks[w.own_end];
+    constexpr std::size_t kRestBytes = kRecordFloats * sizeof(float);
+    return finish_shared_glb(
+        ranks, w.path, w.compact_own(), rest,
+        [&](std::size_t rank, std::span<const std::byte> theirs) -> Result<void> {
+            if (theirs.size() % kRestBytes != 0 || track + theirs.size() / kRestBytes > w.track_nodes.size() ||
+                (rank + 1 == static_cast<std::size_t>(ranks.size()) && track + theirs.size() / kRestBytes != w.track_nodes.size())) {
+                return make_error(Error::Kind::Internal, w.path + ": rank " + std::to_string(rank) + "'s tracks do not fit");
+            }
+            std::memcpy(w.first.data() + track * kRecordFloats, theirs.data(), theirs.size());
+            track += theirs.size() / kRestBytes;
+            return {};
+        },
+        [&](AtomicFile& file, CompactKeys& keys) {
+            w.joined = &keys;
+            return w.build_and_write_compact(file);
+        });
+}
 
 Result<void> write_chains_glb(const std::string& path, const RodScene& scene, std::uint32_t frames,
                               std::span<const glm::vec3> positions, std::span<const glm::quat> orientations,

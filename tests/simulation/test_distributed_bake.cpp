@@ -196,14 +196,17 @@ TEST(DistributedBake, CompactedBirdsAreTheSingleProcessBytesOnAnyNumberOfRanks) 
     EXPECT_TRUE(testing_support::file_bytes(dir.file("closeup-5.glb")) == closeup) << "5 ranks, 3 birds: not the same bytes";
 }
 
-// The rigged characters' file: every rank poses and compacts its own instances.
-TEST(DistributedBake, CompactedRiggedCrowdIsTheSingleProcessBytesOnAnyNumberOfRanks) {
+// The characters' files: every rank poses and compacts its own instances, rigged
+// (RiggedGlbWriter, crowd-gltf.json) or procedural (ChainsGlbWriter, bunny.json).
+class DistributedCharacters : public testing::TestWithParam<const char*> {};
+
+TEST_P(DistributedCharacters, CompactedFileIsTheSingleProcessBytesOnAnyNumberOfRanks) {
     testing_support::TempDir dir;
     constexpr std::uint32_t kFrames = 8;
     const GlbCompaction compaction{.enabled = true, .position_m = 0.005f, .rotation_rad = 0.02f, .threads = 1};
     std::string expected;
     {
-        auto sim = Simulation::open(scene_path("crowd-gltf.json"), {.backend = BackendKind::Cpu, .frames = kFrames});
+        auto sim = Simulation::open(scene_path(GetParam()), {.backend = BackendKind::Cpu, .frames = kFrames});
         ASSERT_TRUE(sim.ok()) << sim.error().message;
         auto sink = make_chains_glb_sink(dir.file("one.glb"), compaction);
         BakeSink* sinks[] = {sink.get()};
@@ -220,13 +223,18 @@ TEST(DistributedBake, CompactedRiggedCrowdIsTheSingleProcessBytesOnAnyNumberOfRa
             sinks.push_back(make_chains_glb_sink(path, compaction));
             return sinks;
         };
-        const auto results = bake_on_threads(ranks, "crowd-gltf.json", options);
+        const auto results = bake_on_threads(ranks, GetParam(), options);
         ASSERT_TRUE(results[0].ok()) << results[0].error().message;
         ASSERT_EQ(results[0].value().size(), 1u);
         EXPECT_NE(results[0].value()[0].description.find("compacted on " + std::to_string(ranks) + " ranks"), std::string::npos);
         EXPECT_TRUE(testing_support::file_bytes(path) == expected) << "not the single process's bytes";
     }
 }
+
+INSTANTIATE_TEST_SUITE_P(Scenes, DistributedCharacters, testing::Values("crowd-gltf.json", "bunny.json"),
+                         [](const testing::TestParamInfo<const char*>& scene) {
+                             return std::string(scene.param) == "crowd-gltf.json" ? std::string("rigged") : std::string("procedural");
+                         });
 
 TEST(DistributedBake, MeshoptKeysAreCompactedOnRankZeroTheSameBytes) {
     testing_support::TempDir dir;

@@ -213,6 +213,19 @@ public:
     /// What compaction did, once finish() has written a compacted file (zeros else).
     [[nodiscard]] const GlbCompactionStats& compaction_stats() const;
 
+    /// Distributed bakes (kodawari/distributed.hpp), as BirdGlbWriter's: whether the
+    /// ranks can share this writer's work (compacted keys without meshopt, an output that
+    /// is not a device or a pipe).
+    [[nodiscard]] bool can_share() const;
+    /// Before the first frame: this rank keeps the keys of characters [begin, end) (scene
+    /// instances) alone; add_frame() still takes the whole world's joints, of which only
+    /// those characters' are read. Errors: can_share() false, a range outside the
+    /// characters, frames added already (InvalidInput).
+    [[nodiscard]] Result<void> share(std::size_t begin, std::size_t end);
+    /// finish() of a shared writer, on every rank at once (collective): the same bytes as
+    /// one writer fed every character. Every rank returns the same status.
+    [[nodiscard]] Result<void> finish(Communicator& ranks);
+
 private:
     struct Impl;
     explicit ChainsGlbWriter(std::unique_ptr<Impl> impl);
