@@ -43,6 +43,24 @@ std::vector<std::byte> bytes_of(const void* data, std::size_t size) {
     return out;
 }
 
+// Rank 0's lines (none may hold a newline), on every rank.
+std::vector<std::string> broadcast_lines(Communicator& comm, const std::vector<std::string>& lines) {
+    std::string text;
+    for (const std::string& line : lines) text += line + "\n";
+    std::vector<std::byte> bytes = bytes_of(text.data(), text.size());
+    comm.broadcast(bytes);
+    std::vector<std::string> out(1);
+    for (const std::byte b : bytes) {
+        if (static_cast<char>(b) == '\n') {
+            out.emplace_back();
+        } else {
+            out.back().push_back(static_cast<char>(b));
+        }
+    }
+    out.pop_back();  // after the last newline: nothing
+    return out;
+}
+
 // The ranks write a shared sink's file where rank 0 made it: only where every rank sees
 // that folder as rank 0 does (a file system they share, the same working directory for
 // a relative path). Rank 0 puts a probe file there and asks; a sink some rank cannot
@@ -53,7 +71,7 @@ std::vector<std::byte> bytes_of(const void* data, std::size_t size) {
 std::vector<std::string> share_where_every_rank_sees(Communicator& comm, const std::vector<std::unique_ptr<BakeSink>>& sinks,
                                                      std::vector<std::byte>& shared) {
     const bool root = comm.rank() == 0;
-    std::string probes;  // one line per sink: its probe's path, or nothing
+    std::vector<std::string> probes;  // per sink: its probe's path, or nothing
     std::vector<std::string> made;
     if (root) {
         for (std::size_t k = 0; k < sinks.size(); ++k) {
@@ -72,22 +90,12 @@ std::vector<std::string> share_where_every_rank_sees(Communicator& comm, const s
                     made.push_back(probe);
                 }
             }
-            probes += probe + "\n";
+            probes.push_back(probe);
         }
     }
-    std::vector<std::byte> text = bytes_of(probes.data(), probes.size());
-    comm.broadcast(text);
     std::vector<std::byte> seen;  // per sink: 1 where this rank can write its probe
-    {
-        std::string line;
-        for (const std::byte b : text) {
-            if (static_cast<char>(b) != '\n') {
-                line.push_back(static_cast<char>(b));
-                continue;
-            }
-            seen.push_back(std::byte{static_cast<unsigned char>(!line.empty() && ::access(line.c_str(), W_OK) == 0)});
-            line.clear();
-        }
+    for (const std::string& probe : broadcast_lines(comm, probes)) {
+        seen.push_back(std::byte{static_cast<unsigned char>(!probe.empty() && ::access(probe.c_str(), W_OK) == 0)});
     }
     std::vector<std::byte> all;
     std::vector<std::size_t> sizes;
@@ -204,23 +212,7 @@ Result<std::vector<BakeOutput>> bake_distributed(Communicator& comm, const std::
         }
         return needs;
     };
-    const auto broadcast_names = [&](BakeNeeds needs) {
-        std::string names_text;
-        for (const std::string& name : needs.channels) names_text += name + "\n";
-        std::vector<std::byte> wanted = bytes_of(names_text.data(), names_text.size());
-        comm.broadcast(wanted);
-        needs.channels.clear();
-        std::string line;
-        for (std::byte b : wanted) {
-            if (static_cast<char>(b) == '\n') {
-                needs.channels.push_back(std::move(line));
-                line.clear();
-            } else {
-                line.push_back(static_cast<char>(b));
-            }
-        }
-        return needs;
-    };
+    const auto broadcast_names = [&](const BakeNeeds& needs) { return BakeNeeds{broadcast_lines(comm, needs.channels)}; };
     const BakeNeeds gathered = broadcast_names(root ? names_of(false) : BakeNeeds{});
     BakeNeeds needs = gathered;
     for (std::string& name : broadcast_names(root ? names_of(true) : BakeNeeds{}).channels) {
