@@ -59,7 +59,6 @@ OWNER_PATTERNS = [
     ("simd/*.hpp", "sim"),
     ("simd/*-inl.h", "sim"),
     ("backends/device_backends.hpp", "vulkan"),
-    ("compute/*.hpp", "vulkan"),
     ("gpu/*.hpp", "vulkan"),
     ("scene/*.hpp", "io"),
     ("export/*.hpp", "io"),
@@ -81,6 +80,7 @@ PUBLIC_OWNERS = {
     "gltf/import.hpp": "io",
     "gltf/bird_model_import.hpp": "io",
     "route_check.hpp": "io",
+    "compute.hpp": "vulkan",
     "backend_factory.hpp": "vulkan",
     "crowd_animator.hpp": "vulkan",
     "vulkan_embed.hpp": "vulkan",
@@ -179,8 +179,8 @@ NEUTRAL = ["simulation/*.cpp", "simulation/*.hpp", "include/kodawari/simulation.
            # The renderer and its shared layout: domains draw through render::Draw and
            # their own render layers (render/layer.hpp).
            "render/*.cpp", "render/*.hpp", "include/kodawari/render/*.hpp", "include/kodawari/shared/render.h",
-           # The compute layer.
-           "compute/*.cpp", "compute/*.hpp"]
+           # The compute layer: its interface and its Vulkan implementation.
+           "include/kodawari/compute.hpp", "gpu/compute_*.cpp", "gpu/compute_vulkan.hpp"]
 # Inside identifiers too (set_chains, RodBackend, birds_from); "produce" is not a rod, a
 # swapchain is not a chain.
 DOMAIN_WORDS = re.compile(r"bird|rod(?!uc)|(?<!swap)chain|flock", re.I)
@@ -204,9 +204,29 @@ def check_neutral():
     return problems
 
 
+# The compute layer's interface and what a domain or an embedder reaches it through name no
+# Vulkan type (issue 31, item 2): Vulkan is its implementation, in gpu/; the application's
+# Vulkan handles come in through kodawari/vulkan_embed.hpp alone.
+VULKAN_FREE = ["include/kodawari/compute.hpp", "include/kodawari/backend.hpp", "include/kodawari/device_data.hpp",
+               "include/kodawari/backend_factory.hpp", "include/kodawari/gpu_info.hpp"]
+VULKAN_WORDS = re.compile(r"\bvk::|\bVk[A-Z]\w*|\bVK_\w+|vulkan[/_]\w+\.h|gpu::VulkanContext")
+
+
+def check_vulkan_free():
+    """Vulkan types (or includes) in the headers of VULKAN_FREE, as `file:line: word`."""
+    problems = []
+    for header in VULKAN_FREE:
+        path = ENGINE / header
+        text = re.sub(r"//[^\n]*", "", path.read_text())  # comments may name Vulkan
+        for number, line in enumerate(text.splitlines(), 1):
+            for m in VULKAN_WORDS.finditer(line):
+                problems.append(f"{header}:{number}: names Vulkan ({m.group(0)}): {line.strip()}")
+    return problems
+
+
 def check():
     owner = owners()
-    problems = check_neutral()
+    problems = check_neutral() + check_vulkan_free()
 
     def scan(source, target, seen):
         if source in seen:

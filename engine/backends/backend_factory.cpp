@@ -3,40 +3,41 @@
 #include "kodawari/backend_factory.hpp"
 
 #include "backends/device_backends.hpp"
+#include "gpu/vulkan_context.hpp"
 
 namespace kodawari {
 
 Result<std::shared_ptr<compute::Device>> backend_context(const BackendOptions& options) {
     if (options.context) return options.context;
-    auto created = compute::Device::create(
+    auto created = gpu::VulkanContext::create(
         {.device = options.device, .validation = options.validation, .force_staging = options.force_staging});
     if (!created) return created.error();
     return std::shared_ptr<compute::Device>(std::move(created).value());
 }
 
-Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options) {
+Result<std::shared_ptr<compute::Device>> open_shared_device(const BackendOptions& options) {
     BackendOptions own = options;
     own.context.reset();
     return backend_context(own);
 }
 
-Result<std::shared_ptr<gpu::VulkanContext>> open_auto_device(const BackendOptions& options, std::string& cpu_reason) {
+Result<std::shared_ptr<compute::Device>> open_auto_device(const BackendOptions& options, std::string& cpu_reason) {
     cpu_reason.clear();
     if (options.context) return options.context;
     auto device = open_shared_device(options);
     if (!options.device.empty()) return device;  // named: obeyed, or the error
     if (!device) {
         cpu_reason = device.error().message;
-        return std::shared_ptr<gpu::VulkanContext>{};
+        return std::shared_ptr<compute::Device>{};
     }
     cpu_reason = auto_passes_over(device.value()->info());
-    if (!cpu_reason.empty()) return std::shared_ptr<gpu::VulkanContext>{};
+    if (!cpu_reason.empty()) return std::shared_ptr<compute::Device>{};
     return device;
 }
 
-std::uint64_t read_back_bytes(const gpu::VulkanContext& device) { return device.read_back_bytes(); }
+std::uint64_t read_back_bytes(const compute::Device& device) { return device.read_back_bytes(); }
 
-std::uint32_t validation_messages(const gpu::VulkanContext& device) { return device.validation_messages(); }
+std::uint32_t validation_messages(const compute::Device& device) { return device.validation_messages(); }
 
 Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options) {
     if (kind == BackendKind::Vulkan) return make_vulkan_bird_backend(options);

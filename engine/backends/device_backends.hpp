@@ -6,7 +6,7 @@
 #include <cstdint>
 #include <memory>
 
-#include "compute/compute.hpp"
+#include "kodawari/compute.hpp"
 #include "kodawari/backend.hpp"
 #include "kodawari/pose_backend.hpp"
 #include "kodawari/rod_backend.hpp"
@@ -36,13 +36,7 @@ public:
 /// Where `span` (a backend's buffer, non-null) is, as an application binds it: what
 /// vulkan_buffer() and the domains' Domain::buffer() hand out.
 [[nodiscard]] inline VulkanBufferRange vulkan_range(const DeviceSpan& span) {
-    VulkanBufferRange out;
-    out.buffer = static_cast<VkBuffer>(span.buffer->handle());
-    out.count = span.items * span.per_item;
-    out.stride = span.element_bytes;
-    out.offset = span.first * span.element_bytes;
-    out.range = VkDeviceSize{out.count} * span.element_bytes;
-    return out;
+    return vulkan_range(*span.buffer, span.items * span.per_item, span.element_bytes, VkDeviceSize{span.first} * span.element_bytes);
 }
 
 /// Who reads what the module writes, in an application's command buffer: its kernels,
@@ -71,35 +65,41 @@ public:
     /// submitted (and complete) before the next record_step or step. The state is the
     /// new frame's once the caller's submission completed.
     [[nodiscard]] virtual Result<void> record_step(compute::Recording& recording, const rods::RodFrame& frame) = 0;
-    /// record_step into the application's command buffer (kodawari/vulkan_embed.hpp):
-    /// the input through a ring of Device::frames_in_flight() staging slots, the barriers
-    /// of embedding_consumers() before and after. Checks everything before recording.
-    [[nodiscard]] virtual Result<void> record_external(VkCommandBuffer cmd, const rods::RodFrame& frame) = 0;
+    /// record_step into a borrowed recording, the application's command buffer
+    /// (kodawari/vulkan_embed.hpp): the input through a ring of
+    /// Device::frames_in_flight() staging slots, the barriers of embedding_consumers()
+    /// before and after. Checks everything before recording.
+    [[nodiscard]] virtual Result<void> record_external(compute::Recording& recording, const rods::RodFrame& frame) = 0;
 };
 
 /// What the vulkan bird backend adds to BirdBackend inside the engine.
 class DeviceBirdBackend {
 public:
     virtual ~DeviceBirdBackend() = default;
+    /// The device it runs on.
+    [[nodiscard]] virtual compute::Device& compute_device() const = 0;
     /// simulate(frames, {}) without submitting or waiting: records the dispatch of the
     /// next `frames` frames into `recording` (a recording of this backend's device);
     /// bird_buffers::poses is the last of them once the caller's submission completed.
     [[nodiscard]] virtual Result<void> record_simulate(compute::Recording& recording, std::uint32_t frames) = 0;
-    /// record_simulate into the application's command buffer, between the barriers of
+    /// record_simulate into a borrowed recording (the application's command buffer), between the barriers of
     /// embedding_consumers(). Birds flown by another domain (BirdWorld::driven) take one
     /// frame's motion from `motion` (BirdMotionGpu per driven bird, from its start: the
     /// flocking domain's buffer, written earlier in the same command buffer), copied in
     /// on the device; `frames` is then 1. Without driven birds `motion` is unused.
-    [[nodiscard]] virtual Result<void> record_external(VkCommandBuffer cmd, std::uint32_t frames, const compute::Buffer* motion) = 0;
+    [[nodiscard]] virtual Result<void> record_external(compute::Recording& recording, std::uint32_t frames,
+                                                        const compute::Buffer* motion) = 0;
 };
 
 /// What the vulkan pose backend adds to PoseBackend inside the engine.
 class DevicePoseBackend {
 public:
     virtual ~DevicePoseBackend() = default;
-    /// evaluate(time) recorded into the application's command buffer, between the
-    /// barriers of embedding_consumers().
-    [[nodiscard]] virtual Result<void> record_external(VkCommandBuffer cmd, float time) = 0;
+    /// The device it runs on.
+    [[nodiscard]] virtual compute::Device& compute_device() const = 0;
+    /// evaluate(time) recorded into a borrowed recording (the application's command
+    /// buffer), between the barriers of embedding_consumers().
+    [[nodiscard]] virtual Result<void> record_external(compute::Recording& recording, float time) = 0;
 };
 
 }  // namespace kodawari

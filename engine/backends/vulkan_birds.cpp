@@ -10,6 +10,7 @@
 
 #include "backends/backends.hpp"
 #include "backends/device_backends.hpp"
+#include "gpu/compute_vulkan.hpp"
 #include "kodawari/birds/flight.hpp"
 
 namespace kodawari {
@@ -71,7 +72,8 @@ public:
     double last_gpu_ms() const override { return gpu_ms_; }
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
     const DeviceData* device_data() const override { return frame_ > 0 ? this : nullptr; }
-    const gpu::VulkanContext& context() const override { return *ctx_; }
+    const compute::Device& context() const override { return *ctx_; }
+    compute::Device& compute_device() const override { return *ctx_; }
     DeviceSpan buffer(std::string_view name) const override {
         if (name != bird_buffers::poses || frame_ == 0) return {};
         return {.buffer = &buffers_[KW_BIRDS_BINDING_POSES],
@@ -90,7 +92,7 @@ public:
         return record_next(recording, frames);
     }
 
-    Result<void> record_external(VkCommandBuffer cmd, std::uint32_t frames, const compute::Buffer* motion) override {
+    Result<void> record_external(compute::Recording& recording, std::uint32_t frames, const compute::Buffer* motion) override {
         if (count_ == 0) return make_error(Error::Kind::InvalidInput, "record_simulate: the backend has no flock; load() one first");
         if (frames == 0 || frames > slots_) {
             return make_error(Error::Kind::InvalidInput, "record_simulate: frames is " + std::to_string(frames) + "; expected 1 to " +
@@ -108,7 +110,6 @@ public:
                                                              std::to_string(motion_bytes) + " needed");
         }
         // No per-frame input from the host: nothing to stage.
-        auto recording = compute::Recording::borrow(*ctx_, cmd, nullptr);
         compute::barrier(recording, embedding_consumers(*ctx_), compute::Stage::Compute | compute::Stage::Transfer);
         // The frame's motion, written by the flocking domain's kernels before this call,
         // copied into slot 0 of the motion ring (record_frames' barrier orders the copy
@@ -247,7 +248,7 @@ public:
                 done += n;
                 continue;
             }
-            ctx_->count_read_back(pose_count * ((want_poses ? sizeof(gpu::BirdPoseGpu) : 0) + (want_diag ? sizeof(gpu::BirdDiag) : 0)));
+            gpu::vulkan(*ctx_).count_read_back(pose_count * ((want_poses ? sizeof(gpu::BirdPoseGpu) : 0) + (want_diag ? sizeof(gpu::BirdDiag) : 0)));
             const std::byte* poses = readback_ ? readback_->mapped() : buffers_[KW_BIRDS_BINDING_POSES].mapped();
             const std::byte* diags = readback_ ? readback_->mapped() + buffers_[KW_BIRDS_BINDING_POSES].size()
                                                : buffers_[KW_BIRDS_BINDING_DIAGNOSTICS].mapped();

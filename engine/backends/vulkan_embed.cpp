@@ -12,6 +12,7 @@
 #include <cmath>
 
 #include "backends/device_backends.hpp"
+#include "gpu/compute_vulkan.hpp"
 
 namespace kodawari {
 namespace {
@@ -30,17 +31,18 @@ public:
         : kernel_(std::move(kernel)), instances_(std::move(instances)), attachments_(std::move(attachments)), push_(push) {}
 
     void bind(const MatrixInput& input, const DeviceData& rods) {
-        const compute::BufferView views[KW_ROD_INPUTS_BINDING_COUNT] = {
-            {.buffer = nullptr, .offset = input.offset, .size = VkDeviceSize{input.instances} * input.nodes * sizeof(gpu::PoseMatrixGpu),
-             .foreign = input.buffer},
-            {&instances_}, {&attachments_},
-            {rods.buffer(rod_buffers::reference).buffer}, {rods.buffer(rod_buffers::roots).buffer},
-            {rods.buffer(rod_buffers::colliders).buffer},
+        // The application's matrices are its own buffer, not the compute layer's.
+        const auto whole = [](const compute::Buffer* b) { return gpu::BufferRange{gpu::vk_buffer(*b)}; };
+        const gpu::BufferRange ranges[KW_ROD_INPUTS_BINDING_COUNT] = {
+            {input.buffer, input.offset, VkDeviceSize{input.instances} * input.nodes * sizeof(gpu::PoseMatrixGpu)},
+            whole(&instances_), whole(&attachments_),
+            whole(rods.buffer(rod_buffers::reference).buffer), whole(rods.buffer(rod_buffers::roots).buffer),
+            whole(rods.buffer(rod_buffers::colliders).buffer),
             // MatrixInput names no key sources (more.y = 0): they come from the RodFrame.
-            {rods.buffer(rod_buffers::keys).buffer},
+            whole(rods.buffer(rod_buffers::keys).buffer),
             // Nor centers (more.z = 0; set_matrix_input refuses worlds that have them).
-            {rods.buffer(rod_buffers::centers).buffer}};
-        kernel_.bind(views);
+            whole(rods.buffer(rod_buffers::centers).buffer)};
+        gpu::bind(kernel_, ranges);
     }
 
     void record(compute::Recording& recording, const DeviceData&) const override {
@@ -67,7 +69,7 @@ Result<void> check_matrix_input(const MatrixInput& input, const rods::RodWorld& 
         return bad_input("MatrixInput::reference_node is " + std::to_string(input.reference_node) + "; expected < nodes (" +
                          std::to_string(input.nodes) + ")");
     }
-    const VkDeviceSize alignment = device.physical_device().getProperties().limits.minStorageBufferOffsetAlignment;
+    const VkDeviceSize alignment = gpu::vulkan(device).physical_device().getProperties().limits.minStorageBufferOffsetAlignment;
     if (alignment > 0 && input.offset % alignment != 0) {
         return bad_input("MatrixInput::offset " + std::to_string(input.offset) + " is not a multiple of the device's " +
                          "minStorageBufferOffsetAlignment (" + std::to_string(alignment) + ")");
@@ -160,7 +162,7 @@ Result<void> clear_matrix_input(RodBackend& rods) {
 
 VulkanRequirements vulkan_requirements() { return {}; }
 
-Result<std::shared_ptr<gpu::VulkanContext>> adopt_vulkan_device(const VulkanDeviceHandles& handles) {
+Result<std::shared_ptr<compute::Device>> adopt_vulkan_device(const VulkanDeviceHandles& handles) {
     auto adopted = gpu::VulkanContext::adopt({.instance = handles.instance,
                                               .physical_device = handles.physical_device,
                                               .device = handles.device,
@@ -171,7 +173,7 @@ Result<std::shared_ptr<gpu::VulkanContext>> adopt_vulkan_device(const VulkanDevi
                                               .api_version = handles.api_version,
                                               .frames_in_flight = handles.frames_in_flight});
     if (!adopted) return adopted.error();
-    return std::shared_ptr<gpu::VulkanContext>(std::move(adopted).value());
+    return std::shared_ptr<compute::Device>(std::move(adopted).value());
 }
 
 Result<VulkanBufferRange> vulkan_buffer(const DeviceData& data, std::string_view name) {
@@ -183,25 +185,43 @@ Result<VulkanBufferRange> vulkan_buffer(const DeviceData& data, std::string_view
     return vulkan_range(span);
 }
 
+Result<compute::Recording> borrow_command_buffer(compute::Device& device, VkCommandBuffer cmd) {
+    if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "borrow_command_buffer: cmd is null");
+    return gpu::borrow(device, cmd, nullptr);
+}
+
+VulkanBufferRange vulkan_range(const compute::Buffer& buffer, std::uint32_t count, std::uint32_t stride, VkDeviceSize offset) {
+    VulkanBufferRange out;
+    out.buffer = static_cast<VkBuffer>(gpu::vk_buffer(buffer));
+    out.offset = offset;
+    out.count = count;
+    out.stride = stride;
+    out.range = VkDeviceSize{count} * stride;
+    return out;
+}
+
 Result<void> record_step(RodBackend& rods, VkCommandBuffer cmd, const rods::RodFrame& frame) {
     if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "record_step: cmd is null");
     auto* device = dynamic_cast<DeviceRodBackend*>(&rods);
     if (device == nullptr) return not_vulkan("record_step", "rods", rods.name());
-    return device->record_external(cmd, frame);
+    compute::Recording recording = gpu::borrow(device->compute_device(), cmd, nullptr);
+    return device->record_external(recording, frame);
 }
 
 Result<void> record_simulate(BirdBackend& birds, VkCommandBuffer cmd, std::uint32_t frames) {
     if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "record_simulate: cmd is null");
     auto* device = dynamic_cast<DeviceBirdBackend*>(&birds);
     if (device == nullptr) return not_vulkan("record_simulate", "birds", birds.name());
-    return device->record_external(cmd, frames, nullptr);
+    compute::Recording recording = gpu::borrow(device->compute_device(), cmd, nullptr);
+    return device->record_external(recording, frames, nullptr);
 }
 
 Result<void> record_evaluate(PoseBackend& poses, VkCommandBuffer cmd, float time) {
     if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "record_evaluate: cmd is null");
     auto* device = dynamic_cast<DevicePoseBackend*>(&poses);
     if (device == nullptr) return not_vulkan("record_evaluate", "poses", poses.name());
-    return device->record_external(cmd, time);
+    compute::Recording recording = gpu::borrow(device->compute_device(), cmd, nullptr);
+    return device->record_external(recording, time);
 }
 
 }  // namespace kodawari

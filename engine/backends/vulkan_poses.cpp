@@ -255,12 +255,11 @@ public:
         return {};
     }
 
-    Result<void> record_external(VkCommandBuffer cmd, float time) override {
+    Result<void> record_external(compute::Recording& recording, float time) override {
         if (character_ == nullptr) return make_error(Error::Kind::InvalidInput, "record_evaluate: the backend has no character; load() one first");
         if (!std::isfinite(time)) return make_error(Error::Kind::InvalidInput, "record_evaluate: time is not finite");
         evaluated_ = true;
         if (count_ == 0) return {};
-        auto recording = compute::Recording::borrow(*ctx_, cmd, nullptr);
         compute::barrier(recording, embedding_consumers(*ctx_), compute::Stage::Compute);
         kernel_->dispatch(recording, push_bytes(time), groups());
         compute::barrier(recording, compute::Stage::Compute, embedding_consumers(*ctx_));
@@ -292,7 +291,8 @@ public:
     }
 
     const DeviceData* device_data() const override { return evaluated_ ? this : nullptr; }
-    const gpu::VulkanContext& context() const override { return *ctx_; }
+    const compute::Device& context() const override { return *ctx_; }
+    compute::Device& compute_device() const override { return *ctx_; }
     DeviceSpan buffer(std::string_view name) const override {
         if (name != pose_buffers::world || !evaluated_) return {};
         return {.buffer = &buffers_[KW_POSES_BINDING_WORLD],

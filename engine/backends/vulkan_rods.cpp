@@ -147,7 +147,7 @@ public:
     double last_gpu_ms() const override { return gpu_ms_; }
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
     const DeviceData* device_data() const override { return world_ != nullptr ? this : nullptr; }
-    const gpu::VulkanContext& context() const override { return *ctx_; }
+    const compute::Device& context() const override { return *ctx_; }
     DeviceSpan buffer(std::string_view name) const override {
         if (world_ == nullptr) return {};
         auto span = [](const compute::Buffer& buffer, std::size_t items, std::size_t element_bytes) {
@@ -396,7 +396,7 @@ public:
         return record(recording, frame, false);
     }
 
-    Result<void> record_external(VkCommandBuffer cmd, const rods::RodFrame& frame) override {
+    Result<void> record_external(compute::Recording& borrowed, const rods::RodFrame& frame) override {
         if (world_ == nullptr) return make_error(Error::Kind::InvalidInput, "record_step: the backend has no world; load() one first");
         KW_TRY(rods::check_frame(*world_, frame));
         if (!ring_) {
@@ -415,7 +415,7 @@ public:
             ring_.emplace(std::move(ring).value());
         }
         ring_->next_frame();
-        auto recording = compute::Recording::borrow(*ctx_, cmd, &*ring_);
+        auto recording = borrowed.share(&*ring_);
         // The application's reads of the previous frame's state and input (draws, its
         // kernels, copies) before this frame's copies and dispatch overwrite them.
         compute::barrier(recording, embedding_consumers(*ctx_), compute::Stage::Transfer | compute::Stage::Compute);

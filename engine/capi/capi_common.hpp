@@ -28,7 +28,7 @@
 /// kodawari_vulkan_device_adopt's handle: the application's device, wrapped
 /// (kodawari::adopt_vulkan_device); shared with the worlds made on it.
 struct kodawari_vulkan_device {
-    std::shared_ptr<kodawari::gpu::VulkanContext> context;
+    std::shared_ptr<kodawari::compute::Device> context;
 };
 
 namespace kodawari::capi {

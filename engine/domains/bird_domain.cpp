@@ -134,16 +134,16 @@ public:
 
     // The frame's flapping and flight (the vulkan backend's barriers); driven birds fly
     // the motion the flocking domain recorded just before, on the device.
-    Result<void> record(std::uint32_t, VkCommandBuffer cmd) override {
+    Result<void> record(std::uint32_t, compute::Recording& recording) override {
         if (!backend_) return {};
-        // (Simulation::record refused a null command buffer and the cpu kinds already; a
-        // caller of the domain itself is told.)
+        // (Simulation::record refused the cpu kinds already; a caller of the domain itself
+        // is told.)
         auto* device = dynamic_cast<DeviceBirdBackend*>(backend_.get());
         if (device == nullptr) {
             return make_error(Error::Kind::Unsupported, "domain \"birds\" records into a command buffer on the vulkan backend only");
         }
         const compute::Buffer* motion = world_.driven > 0 && driver_ != nullptr ? flocking::flocking_motion_buffer(*driver_) : nullptr;
-        return device->record_external(cmd, 1, motion);
+        return device->record_external(recording, 1, motion);
     }
 
     std::string device() const override { return backend_ ? backend_->device() : std::string(); }

@@ -17,7 +17,7 @@
 #include <kodawari/shared/bird_draw.h>
 
 #include "birds/bird_meshes.hpp"
-#include "compute/compute.hpp"
+#include "gpu/compute_vulkan.hpp"
 #include "kodawari/device_data.hpp"
 #include "render/layer.hpp"
 
@@ -153,7 +153,7 @@ Result<void> BirdLayer::from_backend(gpu::VulkanContext& ctx, const BirdBackend&
         return make_error(Error::Kind::InvalidInput, "the " + std::string(backend.name()) +
                                                          " bird backend has no poses on the renderer's device: pass its poses");
     }
-    const gpu::BufferRange ranges[KW_BIRDS_DRAW_BINDING_COUNT] = {{types_->handle()}, {order_->handle()}, {poses.buffer->handle()}};
+    const gpu::BufferRange ranges[KW_BIRDS_DRAW_BINDING_COUNT] = {{gpu::vk_buffer(*types_)}, {gpu::vk_buffer(*order_)}, {gpu::vk_buffer(*poses.buffer)}};
     set_->bind(ctx, ranges);
     first_pose_ = static_cast<std::uint32_t>(poses.first);
     bound_ = true;
@@ -181,7 +181,7 @@ Result<void> BirdLayer::from_poses(gpu::VulkanContext& ctx, std::span<const gpu:
         bound_ = false;
     }
     KW_TRY(compute::upload(ctx, *host_poses_, bytes_of(packed_)));
-    const gpu::BufferRange ranges[KW_BIRDS_DRAW_BINDING_COUNT] = {{types_->handle()}, {order_->handle()}, {host_poses_->handle()}};
+    const gpu::BufferRange ranges[KW_BIRDS_DRAW_BINDING_COUNT] = {{gpu::vk_buffer(*types_)}, {gpu::vk_buffer(*order_)}, {gpu::vk_buffer(*host_poses_)}};
     set_->bind(ctx, ranges);
     first_pose_ = 0;
     bound_ = true;
@@ -193,7 +193,7 @@ void BirdLayer::record(const vk::raii::CommandBuffer& cmd, const render::LayerFr
     gpu::RenderPush push = frame.push;
     cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline_->handle());
     cmd.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, pipeline_->layout(), 0, set_->handle(), {});
-    cmd.bindVertexBuffers(0, vertices_->handle(), vk::DeviceSize{0});
+    cmd.bindVertexBuffers(0, gpu::vk_buffer(*vertices_), vk::DeviceSize{0});
     for (std::uint32_t t = 0; t < birds::kWingTypeCount; ++t) {
         const TypeRange& r = ranges_[t];
         if (r.birds == 0 || r.vertices == 0) continue;

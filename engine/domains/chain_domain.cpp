@@ -8,6 +8,7 @@
 #include <string>
 #include <vector>
 
+#include "backends/device_backends.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/domains/chain_draw.hpp"
@@ -117,7 +118,7 @@ public:
     // in the pose backends' own submissions, waited for) and uploaded through the rod
     // backend's ring of frames in flight, then the step recorded (record_step). Frame 0
     // loads the world, submitting to the queue and waiting, and records nothing.
-    Result<void> record(std::uint32_t f, VkCommandBuffer cmd) override {
+    Result<void> record(std::uint32_t f, compute::Recording& recording) override {
         if (!rods_) return {};
         if (animator_->writes_inputs_on_device()) {
             // The pose backends would overwrite the matrices that frames still in flight
@@ -127,7 +128,7 @@ public:
                               "from poses that each frame overwrites; record from frame 0, or make the Simulation with "
                               "SimulationOptions::device_inputs = false");
         }
-        KW_TRY(frame(f, cmd));
+        KW_TRY(frame(f, &recording));
         current_ = f;
         return {};
     }
@@ -185,8 +186,8 @@ public:
 
 private:
     // Frame `f` of the chains: the kinematic input, then the initial state (f == 0) or one
-    // step, submitted, or recorded into `cmd` when one is given (record()).
-    Result<void> frame(std::uint32_t f, VkCommandBuffer cmd = VK_NULL_HANDLE) {
+    // step, submitted, or recorded into `recording` when one is given (record()).
+    Result<void> frame(std::uint32_t f, compute::Recording* recording = nullptr) {
         KW_TRY(animator_->frame(f, input_));
         timing_.pose_ms += animator_->last_pose_ms();
         if (view_camera_) input_.camera = *view_camera_;
@@ -195,9 +196,17 @@ private:
         if (f == 0) {
             KW_TRY(rods_->load(scene_->world, input_));
         } else {
-            KW_TRY(cmd != VK_NULL_HANDLE ? record_step(*rods_, cmd, input_) : rods_->step(input_));
+            if (recording != nullptr) {
+                auto* device = dynamic_cast<DeviceRodBackend*>(rods_.get());
+                if (device == nullptr) {
+                    return make_error(Error::Kind::Unsupported, "domain \"chains\" records into a command buffer on the vulkan backend only");
+                }
+                KW_TRY(device->record_external(*recording, input_));
+            } else {
+                KW_TRY(rods_->step(input_));
+            }
         }
-        if (f == 0 && device_inputs_ && cmd == VK_NULL_HANDLE) {
+        if (f == 0 && device_inputs_ && recording == nullptr) {
             // From now on the rigged characters' input is written where the chains step
             // (when the pose and rod backends share a Vulkan device; nothing otherwise).
             // Not when recording: frames in flight would read the pose matrices the next
@@ -206,7 +215,7 @@ private:
             if (!took) return took.error();
         }
         (f < 2 ? timing_.warmup_seconds : timing_.seconds) += seconds_since(start);
-        if (f >= 2 && cmd == VK_NULL_HANDLE && rods_->last_gpu_ms() >= 0.0) timing_.gpu_ms += rods_->last_gpu_ms();
+        if (f >= 2 && recording == nullptr && rods_->last_gpu_ms() >= 0.0) timing_.gpu_ms += rods_->last_gpu_ms();
         return {};
     }
 

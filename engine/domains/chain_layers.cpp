@@ -20,7 +20,7 @@
 #include <kodawari/shared/chain_draw.h>
 #include <kodawari/shared/rods.h>
 
-#include "compute/compute.hpp"
+#include "gpu/compute_vulkan.hpp"
 #include "domains/skinned_layer.hpp"
 #include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/scene.hpp"
@@ -145,10 +145,10 @@ Result<void> ChainLayer::from_backend(gpu::VulkanContext& ctx, RodBackend& backe
         KW_TRY(backend.read(scratch_));
         return from_snapshot(ctx, scratch_);
     }
-    const gpu::BufferRange ranges[KW_CHAINS_BINDING_COUNT] = {{info_->handle()},
-                                                              {joint_chain_->handle()},
-                                                              {state->buffer(rod_buffers::chain_states).buffer->handle()},
-                                                              {state->buffer(rod_buffers::motion).buffer->handle()}};
+    const gpu::BufferRange ranges[KW_CHAINS_BINDING_COUNT] = {{gpu::vk_buffer(*info_)},
+                                                              {gpu::vk_buffer(*joint_chain_)},
+                                                              {gpu::vk_buffer(*state->buffer(rod_buffers::chain_states).buffer)},
+                                                              {gpu::vk_buffer(*state->buffer(rod_buffers::motion).buffer)}};
     set_->bind(ctx, ranges);
     bound_ = on_device_ = true;
     return {};
@@ -177,7 +177,7 @@ Result<void> ChainLayer::from_snapshot(gpu::VulkanContext& ctx, const ChainSnaps
     KW_TRY(compute::upload(ctx, *host_motion_, bytes_of(motion_)));
     if (on_device_ || !bound_) {
         const gpu::BufferRange ranges[KW_CHAINS_BINDING_COUNT] = {
-            {info_->handle()}, {joint_chain_->handle()}, {host_states_->handle()}, {host_motion_->handle()}};
+            {gpu::vk_buffer(*info_)}, {gpu::vk_buffer(*joint_chain_)}, {gpu::vk_buffer(*host_states_)}, {gpu::vk_buffer(*host_motion_)}};
         set_->bind(ctx, ranges);
     }
     bound_ = true;
@@ -247,7 +247,7 @@ Result<void> ColliderLayer::from(gpu::VulkanContext& ctx, const RodBackend& back
     if (count_ == 0) return {};
     const DeviceData* state = backend.device_data();
     if (state != nullptr && &state->context() == &ctx) {
-        const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{state->buffer(rod_buffers::colliders).buffer->handle()}};
+        const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{gpu::vk_buffer(*state->buffer(rod_buffers::colliders).buffer)}};
         set_->bind(ctx, ranges);
         bound_ = true;
         return {};
@@ -266,7 +266,7 @@ Result<void> ColliderLayer::from(gpu::VulkanContext& ctx, const RodBackend& back
         host_.emplace(std::move(buffer).value());
     }
     KW_TRY(compute::upload(ctx, *host_, bytes_of(packed_)));
-    const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{host_->handle()}};
+    const gpu::BufferRange ranges[KW_COLLIDERS_BINDING_COUNT] = {{gpu::vk_buffer(*host_)}};
     set_->bind(ctx, ranges);
     bound_ = true;
     return {};

@@ -8,7 +8,7 @@
 
 #include <kodawari/shared/skin.h>
 
-#include "compute/compute.hpp"
+#include "gpu/compute_vulkan.hpp"
 #include "kodawari/domains/scene_draw.hpp"
 
 namespace kodawari {
@@ -149,7 +149,7 @@ Result<void> SkinnedLayer::set_scene(gpu::VulkanContext& ctx, const RodScene* sc
         auto set = gpu::BufferSet::create(ctx, *pipeline_);
         if (!set) return set.error();
         ch.set.emplace(std::move(set).value());
-        const gpu::BufferRange ranges[KW_SKINNED_BINDING_COUNT] = {{ch.joints->handle()}, {ch.world->handle()}};
+        const gpu::BufferRange ranges[KW_SKINNED_BINDING_COUNT] = {{gpu::vk_buffer(*ch.joints)}, {gpu::vk_buffer(*ch.world)}};
         ch.set->bind(ctx, ranges);
         characters_.push_back(std::move(ch));
     }
@@ -241,7 +241,7 @@ void SkinnedLayer::record_compute(const vk::raii::CommandBuffer& cmd) const {
         if (!ch.dispatch) continue;
         const auto instances = static_cast<std::uint32_t>(ch.instances.size());
         const gpu::SkinPush push{{instances, ch.nodes, ch.chains, 0u}};
-        ch.kernel->dispatch(cmd, std::as_bytes(std::span(&push, 1)), (instances + KW_SKIN_WORKGROUP_SIZE - 1) / KW_SKIN_WORKGROUP_SIZE);
+        gpu::dispatch(*ch.kernel, cmd, std::as_bytes(std::span(&push, 1)), (instances + KW_SKIN_WORKGROUP_SIZE - 1) / KW_SKIN_WORKGROUP_SIZE);
     }
 }
 
@@ -255,8 +255,8 @@ void SkinnedLayer::record(const vk::raii::CommandBuffer& cmd, const render::Laye
             bound = true;
         }
         cmd.bindDescriptorSets(vk::PipelineBindPoint::eGraphics, pipeline_->layout(), 0, ch.set->handle(), {});
-        cmd.bindVertexBuffers(0, ch.vertex_buffer->handle(), vk::DeviceSize{0});
-        cmd.bindIndexBuffer(ch.index_buffer->handle(), 0, vk::IndexType::eUint32);
+        cmd.bindVertexBuffers(0, gpu::vk_buffer(*ch.vertex_buffer), vk::DeviceSize{0});
+        cmd.bindIndexBuffer(gpu::vk_buffer(*ch.index_buffer), 0, vk::IndexType::eUint32);
         push.draw = {ch.nodes, 0u, 0u, push.draw.w};
         cmd.pushConstants<gpu::RenderPush>(pipeline_->layout(), vk::ShaderStageFlagBits::eVertex | vk::ShaderStageFlagBits::eFragment, 0,
                                            push);

@@ -13,8 +13,7 @@
 #include <kodawari/shared/poses.h>
 #include <kodawari/shared/render.h>
 
-#include "compute/kernel.hpp"
-#include "compute/buffer.hpp"
+#include "gpu/compute_vulkan.hpp"
 #include "gpu/graphics.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/rod_backend.hpp"

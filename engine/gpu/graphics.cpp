@@ -3,7 +3,7 @@
 #include <cassert>
 #include <vector>
 
-#include "compute/kernel.hpp"
+#include "gpu/compute_vulkan.hpp"
 
 namespace kodawari::gpu {
 

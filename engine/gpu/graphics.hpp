@@ -6,7 +6,7 @@
 #include <span>
 #include <string_view>
 
-#include "compute/buffer.hpp"
+#include "gpu/compute_vulkan.hpp"
 #include "core/internal_api.hpp"
 
 namespace kodawari::gpu {

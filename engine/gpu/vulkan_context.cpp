@@ -1,6 +1,6 @@
 #include "gpu/vulkan_context.hpp"
 
-#include "compute/queue.hpp"
+#include "gpu/compute_vulkan.hpp"
 
 #include <algorithm>
 #include <cassert>
@@ -514,7 +514,7 @@ Result<void> VulkanContext::submit(const std::function<void(const vk::raii::Comm
     const compute::Queue queue(*this);
     auto recording = queue.begin();
     if (!recording) return recording.error();
-    record(recording.value().vulkan());
+    record(vk_commands(recording.value()));
     auto submission = queue.submit(std::move(recording).value());
     if (!submission) return submission.error();
     return submission.value().wait(gpu_ms);

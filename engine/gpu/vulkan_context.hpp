@@ -14,6 +14,7 @@
 #include <vulkan/vulkan_raii.hpp>
 
 #include "core/internal_api.hpp"
+#include "kodawari/compute.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/result.hpp"
 
@@ -60,7 +61,8 @@ struct CommandSlot {
     vk::raii::Fence fence{nullptr};
 };
 
-class KODAWARI_INTERNAL VulkanContext {
+/// compute::Device's one implementation (kodawari/compute.hpp).
+class KODAWARI_INTERNAL VulkanContext final : public compute::Device {
 public:
     /// Opens the loader, creates the instance and the device. Errors say what is missing.
     [[nodiscard]] static Result<std::unique_ptr<VulkanContext>> create(const ContextOptions& options);
@@ -71,15 +73,15 @@ public:
 
     VulkanContext(const VulkanContext&) = delete;
     VulkanContext& operator=(const VulkanContext&) = delete;
-    ~VulkanContext();
+    ~VulkanContext() override;
 
     [[nodiscard]] const vk::raii::Device& device() const { return device_; }
     [[nodiscard]] const vk::raii::PhysicalDevice& physical_device() const { return physical_; }
-    [[nodiscard]] const GpuDeviceInfo& info() const { return info_; }
+    [[nodiscard]] const GpuDeviceInfo& info() const override { return info_; }
     /// Device-local memory is also host-visible and coherent and the device shares the
     /// host's memory (integrated, CPU): buffers are mapped, no staging copies.
-    [[nodiscard]] bool unified_memory() const { return unified_; }
-    [[nodiscard]] std::uint32_t validation_messages() const { return messages_->load(); }
+    [[nodiscard]] bool unified_memory() const override { return unified_; }
+    [[nodiscard]] std::uint32_t validation_messages() const override { return messages_->load(); }
     [[nodiscard]] bool validation_enabled() const { return validation_; }
     [[nodiscard]] const vk::raii::Instance& instance() const { return instance_; }
     /// The window surface (null without ContextOptions::create_surface).
@@ -88,12 +90,12 @@ public:
     [[nodiscard]] const vk::raii::Queue& queue() const { return queue_; }
     [[nodiscard]] std::uint32_t queue_family() const { return queue_family_; }
     /// The queue family also draws: barriers may name the vertex and fragment stages.
-    [[nodiscard]] bool graphics_queue() const { return graphics_queue_; }
+    [[nodiscard]] bool graphics_queue() const override { return graphics_queue_; }
     /// The instance and device are the application's (adopt()).
     [[nodiscard]] bool adopted() const { return adopted_; }
     /// Frames the application may have in flight (adopt(); 1 for the engine's own devices,
     /// which wait for each submission): the depth of the per-frame input rings.
-    [[nodiscard]] std::uint32_t frames_in_flight() const { return frames_in_flight_; }
+    [[nodiscard]] std::uint32_t frames_in_flight() const override { return frames_in_flight_; }
     /// The application's allocation callbacks for every object created on the device
     /// (null: the driver's).
     [[nodiscard]] const vk::AllocationCallbacks* allocator() const { return allocator_; }
@@ -120,14 +122,14 @@ public:
     /// Bytes of kernel output read back to the host so far (download(), the bird
     /// backend's pose read back): what the viewer keeps at 0 per frame by drawing from
     /// the buffers where they are.
-    [[nodiscard]] std::uint64_t read_back_bytes() const { return read_back_bytes_; }
+    [[nodiscard]] std::uint64_t read_back_bytes() const override { return read_back_bytes_; }
     void count_read_back(std::uint64_t bytes) { read_back_bytes_ += bytes; }
     /// Bytes of read-back buffers (host memory the device copies into) created so far: how
     /// a test checks that work reading nothing back pins no host memory for it.
     [[nodiscard]] std::uint64_t readback_buffer_bytes() const { return readback_buffer_bytes_; }
     void count_readback_buffer(std::uint64_t bytes) const { readback_buffer_bytes_ += bytes; }
     /// Submissions to the queue so far: how a test checks that recording submits nothing.
-    [[nodiscard]] std::uint64_t submissions() const { return submissions_; }
+    [[nodiscard]] std::uint64_t submissions() const override { return submissions_; }
     void count_submission() { ++submissions_; }
 
     /// Index of a memory type with all `required` flags, preferring `preferred` too.

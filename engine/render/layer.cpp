@@ -2,7 +2,7 @@
 
 #include <algorithm>
 
-#include "compute/compute.hpp"
+#include "gpu/compute_vulkan.hpp"
 
 namespace kodawari::render {
 

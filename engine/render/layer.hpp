@@ -18,7 +18,7 @@
 
 #include <kodawari/shared/render.h>
 
-#include "compute/buffer.hpp"
+#include "gpu/compute_vulkan.hpp"
 #include "gpu/graphics.hpp"
 #include "kodawari/render/renderer.hpp"
 

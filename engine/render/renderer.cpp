@@ -14,7 +14,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "compute/buffer.hpp"
+#include "gpu/compute_vulkan.hpp"
 #include "gpu/graphics.hpp"
 #include "render/layer.hpp"
 #include "render/draw_recorder.hpp"
@@ -142,7 +142,7 @@ std::uint32_t Renderer::width() const { return impl_->width; }
 std::uint32_t Renderer::height() const { return impl_->height; }
 std::string Renderer::device() const { return impl_->ctx->info().name; }
 std::uint32_t Renderer::validation_messages() const { return impl_->ctx->validation_messages(); }
-std::shared_ptr<gpu::VulkanContext> Renderer::device_context() const { return impl_->ctx; }
+std::shared_ptr<compute::Device> Renderer::device_context() const { return impl_->ctx; }
 std::uint64_t Renderer::read_back_bytes() const { return impl_->ctx->read_back_bytes(); }
 
 void Renderer::lines(std::span<const glm::vec3> pairs, Rgba8 color) { impl_->draws.lines(pairs, color); }
@@ -428,7 +428,7 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
                         vk::SubpassContents::eInline);
     cmd.setViewport(0, vk::Viewport{0.0f, 0.0f, static_cast<float>(width), static_cast<float>(height), 0.0f, 1.0f});
     cmd.setScissor(0, vk::Rect2D{{0, 0}, {width, height}});
-    cmd.bindVertexBuffers(0, vertices->handle(), vk::DeviceSize{0});
+    cmd.bindVertexBuffers(0, gpu::vk_buffer(*vertices), vk::DeviceSize{0});
     const auto draw = [&](const gpu::GraphicsPipeline& pipeline, std::size_t first, std::size_t n) {
         if (n == 0) return;
         cmd.bindPipeline(vk::PipelineBindPoint::eGraphics, pipeline.handle());
@@ -443,7 +443,7 @@ void Renderer::Impl::record_pass(const vk::raii::CommandBuffer& cmd, const DrawL
     const LayerFrame frame{push, std::clamp(static_cast<float>(height) / 720.0f, 0.5f, 2.0f), joints};
     for (const NamedLayer& named : layers) named.layer->record(cmd, frame);
     // Translucent, after everything opaque: what stands on the shadow hides it.
-    cmd.bindVertexBuffers(0, vertices->handle(), vk::DeviceSize{0});
+    cmd.bindVertexBuffers(0, gpu::vk_buffer(*vertices), vk::DeviceSize{0});
     draw(*shadows, kBackgroundVertices + list.lines().size() + list.triangles().size(), list.shadows().size());
     cmd.endRenderPass();
     // The next frame's kernels and uploads overwrite what the vertex shaders read.
@@ -464,7 +464,7 @@ Result<Image> Renderer::render(const DrawList& list) {
                                                .dstAccessMask = vk::AccessFlagBits::eTransferWrite};
         cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eTransfer, {}, readback_reuse, {}, {});
         r.record_pass(cmd, frame);
-        cmd.copyImageToBuffer(r.color->handle(), vk::ImageLayout::eTransferSrcOptimal, r.readback->handle(),
+        cmd.copyImageToBuffer(r.color->handle(), vk::ImageLayout::eTransferSrcOptimal, gpu::vk_buffer(*r.readback),
                               vk::BufferImageCopy{.bufferOffset = 0,
                                                   .imageSubresource = {.aspectMask = vk::ImageAspectFlagBits::eColor, .layerCount = 1},
                                                   .imageExtent = {r.width, r.height, 1}});

@@ -7,6 +7,8 @@
 #include <cassert>
 
 #include "kodawari/backend_factory.hpp"
+#include "kodawari/compute.hpp"
+#include "kodawari/vulkan_embed.hpp"
 #include "kodawari/render/renderer.hpp"
 
 namespace kodawari {
@@ -228,21 +230,36 @@ Result<void> Simulation::step(std::uint32_t frames, std::span<const ChannelOutpu
     return {};
 }
 
+Result<void> Simulation::record(compute::Recording& recording) {
+    Impl& s = *impl_;
+    if (s.kind != BackendKind::Vulkan) {
+        return make_error(Error::Kind::InvalidInput, "Simulation::record: records Vulkan commands; this simulation runs on the " +
+                                                         std::string(backend_name(s.kind)) + " backend");
+    }
+    if (&recording.device() != s.options.options.context.get()) {
+        return make_error(Error::Kind::InvalidInput,
+                          "Simulation::record: the recording is on another device than the simulation's "
+                          "(borrow_command_buffer on SimulationOptions::options.context)");
+    }
+    const std::uint32_t frame = s.current ? *s.current + 1 : 0;
+    if (frame >= s.frames) {
+        return make_error(Error::Kind::InvalidInput, "Simulation::record: frame " + std::to_string(frame) +
+                                                         " is past the last frame (" + std::to_string(s.frames - 1) + ")");
+    }
+    for (Domain* domain : s.domains) KW_TRY(domain->record(frame, recording));
+    s.current = frame;
+    return {};
+}
+
 Result<void> Simulation::record(VkCommandBuffer cmd) {
     Impl& s = *impl_;
     if (s.kind != BackendKind::Vulkan) {
         return make_error(Error::Kind::InvalidInput, "Simulation::record: records Vulkan commands; this simulation runs on the " +
                                                          std::string(backend_name(s.kind)) + " backend");
     }
-    if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "Simulation::record: cmd is null");
-    const std::uint32_t frame = s.current ? *s.current + 1 : 0;
-    if (frame >= s.frames) {
-        return make_error(Error::Kind::InvalidInput, "Simulation::record: frame " + std::to_string(frame) +
-                                                         " is past the last frame (" + std::to_string(s.frames - 1) + ")");
-    }
-    for (Domain* domain : s.domains) KW_TRY(domain->record(frame, cmd));
-    s.current = frame;
-    return {};
+    auto recording = borrow_command_buffer(*s.options.options.context, cmd);
+    if (!recording) return recording.error();
+    return record(recording.value());
 }
 
 Result<VulkanBufferRange> Simulation::buffer(std::string_view name) const {

@@ -11,7 +11,7 @@
 
 #include "backends/device_backends.hpp"
 #include "kodawari/backend_factory.hpp"
-#include "compute/compute.hpp"
+#include "gpu/compute_vulkan.hpp"
 #include "kodawari/rods/synthetic.hpp"
 #include "kodawari/scene.hpp"
 #include "keyed_scene.hpp"
@@ -164,7 +164,7 @@ TEST(DevicePaths, BirdsPinNoReadbackMemoryUntilAsked) {
     staged.force_staging = true;
     auto opened = open_shared_device(staged);
     ASSERT_TRUE(opened.ok()) << opened.error().message;
-    const compute::Device& device = *opened.value();
+    const gpu::VulkanContext& device = gpu::vulkan(*opened.value());
     ASSERT_FALSE(device.unified_memory());
     staged.context = opened.value();
     const birds::BirdWorld birds = bird_world();

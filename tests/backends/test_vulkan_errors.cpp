@@ -7,7 +7,7 @@
 
 #include <string>
 
-#include "compute/device.hpp"
+#include "gpu/compute_vulkan.hpp"
 #include "gpu/vulkan_context.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "test_support.hpp"

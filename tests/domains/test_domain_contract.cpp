@@ -6,7 +6,7 @@
 // refused when it is made, naming the domain. Nothing under engine/ knows these domains.
 //
 // The kernel is compiled by the tests' CMake (tests/domains/circles.comp) and run through
-// the engine's compute layer (white-box: engine/compute/ is not public yet).
+// the public compute layer (kodawari/compute.hpp); the test sees public headers only.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -29,7 +29,8 @@
 #include <kodawari/shared/birds.h>
 #include <kodawari/shared/rods.h>
 
-#include "compute/compute.hpp"
+#include "kodawari/backend_factory.hpp"
+#include "kodawari/compute.hpp"
 #include "kodawari/bake.hpp"
 #include "kodawari/domain.hpp"
 #include "kodawari/domains/birds.hpp"
@@ -94,12 +95,7 @@ public:
         if (name != name_ + ".positions" || kind_ != BackendKind::Vulkan || gpu_.size() < 3) {
             return make_error(Error::Kind::InvalidInput, "circles: hands out only its positions, on vulkan");
         }
-        VulkanBufferRange out;
-        out.buffer = static_cast<VkBuffer>(gpu_[2].handle());
-        out.count = static_cast<std::uint32_t>(positions_.size());
-        out.stride = sizeof(glm::vec4);
-        out.range = VkDeviceSize{out.count} * out.stride;
-        return out;
+        return vulkan_range(gpu_[2], static_cast<std::uint32_t>(positions_.size()), sizeof(glm::vec4));
     }
 
     Result<void> open(const DomainSetup& setup, std::span<Domain* const>) override {
@@ -167,11 +163,10 @@ public:
         return {};
     }
 
-    // The kernel into the application's command buffer (a recording that borrows it),
+    // The kernel into the recording it is handed (the application's command buffer),
     // between barriers against the application's work before and after.
-    Result<void> record(std::uint32_t frame, VkCommandBuffer cmd) override {
+    Result<void> record(std::uint32_t frame, compute::Recording& recording) override {
         if (kind_ != BackendKind::Vulkan) return make_error(Error::Kind::Unsupported, "circles: record needs vulkan");
-        auto recording = compute::Recording::borrow(*device_, cmd, nullptr);
         compute::barrier(recording, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
         struct Push {
             std::uint32_t count;
@@ -529,7 +524,16 @@ TEST(DomainContract, TheTestDomainRecordsIntoTheApplicationsCommandBuffers) {
     ASSERT_TRUE(recorded.ok() && stepped.ok()) << (recorded.ok() ? stepped.error().message : recorded.error().message);
     for (std::uint32_t k = 0; k < 12; ++k) {
         VkCommandBuffer cmd = app.begin(k);
-        ASSERT_TRUE(recorded.value()->record(cmd).ok());
+        if (k % 2 == 0) {
+            // The compute layer's recording of the application's command buffer
+            // (kodawari/compute.hpp through vulkan_embed.hpp), on odd frames the command
+            // buffer itself: both the same frames.
+            auto recording = borrow_command_buffer(*device.value(), cmd);
+            ASSERT_TRUE(recording.ok()) << recording.error().message;
+            ASSERT_TRUE(recorded.value()->record(recording.value()).ok());
+        } else {
+            ASSERT_TRUE(recorded.value()->record(cmd).ok());
+        }
         app.submit(k);
     }
     app.wait_all();
@@ -557,8 +561,21 @@ TEST(DomainContract, TheTestDomainRecordsIntoTheApplicationsCommandBuffers) {
               std::string::npos)
         << unknown.error().message;
     EXPECT_FALSE(recorded.value()->buffer("circles.angles").ok());  // named, not handed out
-    // Misuse: a null command buffer; the cpu backends record nothing.
+    // Misuse: a null command buffer; a recording on another device; the cpu backends
+    // record nothing.
     EXPECT_FALSE(recorded.value()->record(VK_NULL_HANDLE).ok());
+    EXPECT_FALSE(borrow_command_buffer(*device.value(), VK_NULL_HANDLE).ok());
+    {
+        auto other = open_shared_device(testing_support::gpu_options());
+        ASSERT_TRUE(other.ok()) << other.error().message;
+        const compute::Queue queue(*other.value());
+        auto elsewhere = queue.begin();
+        ASSERT_TRUE(elsewhere.ok());
+        const auto wrong = recorded.value()->record(elsewhere.value());
+        ASSERT_FALSE(wrong.ok());
+        EXPECT_NE(wrong.error().message.find("on another device than the simulation's"), std::string::npos) << wrong.error().message;
+        EXPECT_EQ(recorded.value()->frame(), 11u) << "a refused record advanced the frame";
+    }
     auto cpu = make(BackendKind::Cpu, {});
     ASSERT_TRUE(cpu.ok());
     const auto refused = cpu.value()->record(app.begin(12));
@@ -618,7 +635,7 @@ TEST(DomainContract, TheScenesDomainsRecordAsTheyStep) {
 namespace {
 
 constexpr std::uint32_t kFlockingBirds = 301;
-Result<std::unique_ptr<Simulation>> open_flocking(BackendKind kind, const std::shared_ptr<gpu::VulkanContext>& device) {
+Result<std::unique_ptr<Simulation>> open_flocking(BackendKind kind, const std::shared_ptr<compute::Device>& device) {
     const std::string text = R"({"format": "kodawari-scene", "version": 1, "name": "flocking-record", "fps": 30, "duration": 1,
         "camera": {"position": [0, 60, -160], "target": [0, 45, 0], "fov_deg": 60},
         "flocks": [{"name": "starlings", "wing_type": "pigeon", "count": 301, "seed": 2024, "speed": 15,

@@ -10,6 +10,8 @@
 #   3. headers/: every installed header compiles alone against the prefix, -Werror.
 #   4. find_package/: find_package(kodawari 0.2 CONFIG REQUIRED), kodawari::engine,
 #      consumer.cpp (every component used, a real run of each).
+#   4b. examples/own_domain/: a domain of the application's own (its kernel, the public
+#      compute layer) built standalone against the prefix and run.
 #   5. find_package_sim/: COMPONENTS sim, tests/consumers/sim_only.cpp on kodawari::sim alone.
 #   6. pkg_config/: make and `pkg-config --cflags --libs kodawari` (--static for a static
 #      build), consumer.cpp again.
@@ -142,6 +144,15 @@ configure "$here/find_package" "$work/find_package" -DCMAKE_PREFIX_PATH="$prefix
 quiet cmake --build "$work/find_package" -j "$jobs"
 "$work/find_package/consumer" "$src" "$out" || fail "the find_package consumer"
 done_step "find_package consumer"
+
+# 4b. A domain of the application's own on the installed compute layer
+# (examples/own_domain, standalone: its kernel compiled by its own CMakeLists), run with
+# a scene's domains on cpu and, where a device exists, vulkan.
+configure "$src/examples/own_domain" "$work/own_domain" -DCMAKE_PREFIX_PATH="$prefix"
+quiet cmake --build "$work/own_domain" -j "$jobs"
+"$work/own_domain/own_domain" "$src/scenes/birds-closeup.json" --frames 30 | sed 's/^/package: /' \
+  || fail "the own_domain example on the installed package"
+done_step "find_package own_domain example"
 
 # 5. find_package, COMPONENTS sim.
 configure "$here/find_package_sim" "$work/find_package_sim" -DCMAKE_PREFIX_PATH="$prefix"

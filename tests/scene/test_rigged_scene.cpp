@@ -53,7 +53,7 @@ struct HostAndDeviceInput {
         std::optional<CrowdAnimator> animator;
         rods::RodFrame frame;
     };
-    std::shared_ptr<gpu::VulkanContext> device;
+    std::shared_ptr<compute::Device> device;
     BackendOptions options;
     Run host, on_device;
 

@@ -44,9 +44,9 @@ public:
     /// application's submission completed; nothing is read back. Unsupported on the CPU.
     /// `device_agents` more agents follow `agents` (the range device_agents()), written by
     /// the application before this recording (set_flock_device_agents): not copied in.
-    [[nodiscard]] virtual Result<void> record(VkCommandBuffer cmd, bool first, std::span<const gpu::FlockParamsGpu> flocks,
+    [[nodiscard]] virtual Result<void> record(compute::Recording& recording, bool first, std::span<const gpu::FlockParamsGpu> flocks,
                                               std::span<const gpu::FlockAgentGpu> agents, std::uint32_t device_agents) {
-        (void)cmd, (void)first, (void)flocks, (void)agents, (void)device_agents;
+        (void)recording, (void)first, (void)flocks, (void)agents, (void)device_agents;
         return make_error(Error::Kind::Unsupported, "the flocking step records into a command buffer on the vulkan backend only");
     }
     /// Where record() leaves the frame's motion; null on the CPU.

@@ -112,19 +112,19 @@ public:
     // One frame into the application's command buffer: the frame's inputs go through the
     // backend's staging ring and its motion stays on the device, where the bird domain's
     // record copies it from (motion_buffer()); nothing is read back.
-    Result<void> record(std::uint32_t frame, VkCommandBuffer cmd) override {
+    Result<void> record(std::uint32_t frame, compute::Recording& recording) override {
         if (!backend_) return {};
         if (frame != frame_) {
             return make_error(Error::Kind::InvalidInput, "domain \"flocking\": record(" + std::to_string(frame) + ") after frame " +
                                                              std::to_string(frame_) + " (frames go in order from 0)");
         }
         if (frame == 0) {
-            KW_TRY(backend_->record(cmd, true, {}, {}, 0));
+            KW_TRY(backend_->record(recording, true, {}, {}, 0));
         } else {
             flocks_.resize(world_.flocks.size());
             agents_.resize(world_.scene_agents() + app_agents_.size());
             frame_inputs(frame, flocks_, agents_);
-            KW_TRY(backend_->record(cmd, false, flocks_, agents_, device_agents_));
+            KW_TRY(backend_->record(recording, false, flocks_, agents_, device_agents_));
         }
         frame_ = frame + 1;
         motion_.clear();  // this frame's motion is on the device only

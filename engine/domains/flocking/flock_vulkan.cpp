@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "backends/device_backends.hpp"
-#include "compute/compute.hpp"
+#include "kodawari/compute.hpp"
 #include "domains/flocking/flock_backend.hpp"
 #include "kodawari/domains/flocking.hpp"
 
@@ -99,7 +99,7 @@ public:
         return {};
     }
 
-    Result<void> record(VkCommandBuffer cmd, bool first, std::span<const gpu::FlockParamsGpu> flocks,
+    Result<void> record(compute::Recording& recording, bool first, std::span<const gpu::FlockParamsGpu> flocks,
                         std::span<const gpu::FlockAgentGpu> agents, std::uint32_t device_agents) override {
         const FlockWorld& w = *world_;
         if (agents.size() + device_agents > agent_capacity()) {
@@ -122,7 +122,7 @@ public:
             ring_.emplace(std::move(ring).value());
         }
         ring_->next_frame();
-        auto rec = compute::Recording::borrow(*device_, cmd, &*ring_);
+        auto rec = recording.share(&*ring_);
         // The application's reads of the previous frame's motion (the birds' copy, its own
         // draws or kernels) before this frame's copies and dispatches overwrite it; and its
         // writes of the agents it places on the device (a copy or a kernel of its own)

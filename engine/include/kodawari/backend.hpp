@@ -17,8 +17,8 @@
 
 namespace kodawari {
 
-namespace gpu {
-class VulkanContext;
+namespace compute {
+class Device;
 }
 
 /// The bird backends' device buffers (DeviceData::buffer()).
@@ -50,7 +50,7 @@ struct BackendOptions {
     /// (render::Renderer::device_context()), so that the renderer draws straight from the
     /// backends' buffers on the same device. `device` and `validation` are then the
     /// context's. Null: each vulkan backend opens its own.
-    std::shared_ptr<gpu::VulkanContext> context{};
+    std::shared_ptr<compute::Device> context{};
 };
 
 /// Where simulated frames go. Empty spans: the backend still does all the work but

@@ -39,18 +39,18 @@ namespace kodawari {
 /// backends through BackendOptions::context, so that their buffers meet on one device:
 /// e.g. the pose backends' matrices feed the rod backend's input there
 /// (CrowdAnimator::write_inputs_on). A renderer has its own (Renderer::device_context()).
-[[nodiscard]] KODAWARI_API Result<std::shared_ptr<gpu::VulkanContext>> open_shared_device(const BackendOptions& options);
+[[nodiscard]] KODAWARI_API Result<std::shared_ptr<compute::Device>> open_shared_device(const BackendOptions& options);
 /// The device backend "auto" runs on (Simulation::create and the C API's AUTO): with no
 /// device named, the best one that opens and is a GPU, or null with `cpu_reason` saying
 /// why auto takes the cpu backend (no device opens, or it is a CPU: auto_passes_over());
 /// with a device named, that one whatever its type, and its failure to open is the error
 /// (never a reason to run elsewhere). `options.context`, when set, is returned as it is.
-[[nodiscard]] KODAWARI_API Result<std::shared_ptr<gpu::VulkanContext>> open_auto_device(const BackendOptions& options,
+[[nodiscard]] KODAWARI_API Result<std::shared_ptr<compute::Device>> open_auto_device(const BackendOptions& options,
                                                                                         std::string& cpu_reason);
 /// Bytes of kernel output read back to the host on `device` so far (every download and
 /// pose read back): how a caller checks that a pipeline keeps its data on the device.
-[[nodiscard]] KODAWARI_API std::uint64_t read_back_bytes(const gpu::VulkanContext& device);
+[[nodiscard]] KODAWARI_API std::uint64_t read_back_bytes(const compute::Device& device);
 /// Validation messages on `device` so far (every backend sharing it).
-[[nodiscard]] KODAWARI_API std::uint32_t validation_messages(const gpu::VulkanContext& device);
+[[nodiscard]] KODAWARI_API std::uint32_t validation_messages(const compute::Device& device);
 
 }  // namespace kodawari

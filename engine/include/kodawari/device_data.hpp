@@ -3,7 +3,7 @@
 /// What a backend keeps on its device, for other GPU work on that device (the renderer
 /// draws from it, the crowd animator writes the rod input from the pose matrices) without
 /// a copy back to the host (issue 5). One typed interface for every backend family,
-/// naming no graphics-API type: buffers are the compute layer's (engine/compute/).
+/// naming no graphics-API type: buffers are the compute layer's (kodawari/compute.hpp).
 
 #include <cstdint>
 #include <string_view>
@@ -12,8 +12,8 @@
 
 namespace kodawari {
 
-namespace gpu {
-class VulkanContext;
+namespace compute {
+class Device;
 }
 namespace compute {
 class Buffer;
@@ -37,7 +37,7 @@ class KODAWARI_API DeviceData {
 public:
     virtual ~DeviceData() = default;
     /// The device the buffers live on: compare with a renderer's before drawing from them.
-    [[nodiscard]] virtual const gpu::VulkanContext& context() const = 0;
+    [[nodiscard]] virtual const compute::Device& context() const = 0;
     /// A named buffer (its family's names); {} when this backend has none (another
     /// family's name, an unknown one, or not loaded).
     [[nodiscard]] virtual DeviceSpan buffer(std::string_view name) const = 0;

@@ -32,6 +32,9 @@ namespace kodawari {
 namespace render {
 class Renderer;
 }
+namespace compute {
+class Recording;
+}
 
 class Simulation;
 struct Scene;
@@ -128,15 +131,18 @@ public:
     /// Simulates frames [first, first + frames); `out` names channels to fill (each
     /// frames x channel elements).
     [[nodiscard]] virtual Result<void> step(std::uint32_t first, std::uint32_t frames, std::span<const ChannelOutput> out) = 0;
-    /// step() of one frame (`frame`) recorded into `cmd`, an application's command buffer
-    /// in the recording state on the Simulation's device (an adopted one,
-    /// kodawari/vulkan_embed.hpp), between barriers that order it after the application's
-    /// earlier work and before its later work (docs/embedding.md, "Synchronization").
-    /// Nothing is submitted or waited for, except what a domain documents (loading its
-    /// world at frame 0). Domains that cannot record say so (Unsupported, the default).
-    [[nodiscard]] virtual Result<void> record(std::uint32_t frame, VkCommandBuffer cmd) {
+    /// step() of one frame (`frame`) recorded into `recording`, on the Simulation's device
+    /// (with the compute layer, kodawari/compute.hpp). On the vulkan backends it is the
+    /// application's command buffer (an adopted device, kodawari/vulkan_embed.hpp's
+    /// borrow_command_buffer()): record between barriers that order the work after the
+    /// application's earlier work and before its later work (docs/embedding.md,
+    /// "Synchronization"), and upload per-frame input through a StagingRing of the
+    /// device's frames_in_flight() slots (Recording::share()). Nothing is submitted or
+    /// waited for, except what a domain documents (loading its world at frame 0). Domains
+    /// that cannot record say so (Unsupported, the default).
+    [[nodiscard]] virtual Result<void> record(std::uint32_t frame, compute::Recording& recording) {
         (void)frame;
-        (void)cmd;
+        (void)recording;
         return make_error(Error::Kind::Unsupported, "domain \"" + std::string(name()) + "\" cannot record into a command buffer");
     }
     /// The channels step() can fill.

@@ -31,6 +31,9 @@ namespace kodawari {
 namespace render {
 class Renderer;
 }
+namespace compute {
+class Recording;
+}
 
 /// One of `count` parts of a scene's instances, for baking a scene over several processes
 /// or machines (issue 15; kodawari/shards.hpp). Shard `index` holds instances
@@ -124,16 +127,21 @@ public:
     /// frame_count() in all. `out` names domains' channels to fill with every frame
     /// simulated (ChannelOutput; a name no domain has is an error).
     [[nodiscard]] Result<void> step(std::uint32_t frames = 1, std::span<const ChannelOutput> out = {});
-    /// The next frame of every domain recorded into `cmd`, a command buffer of the
-    /// application's in the recording state, on the device the Simulation runs on (the
-    /// vulkan backends, SimulationOptions::options.context an adopted device:
-    /// kodawari/vulkan_embed.hpp), each domain's work between barriers against the
-    /// application's (docs/embedding.md). Nothing is submitted or waited for but what the
-    /// domains say (Domain::record()); the frame's state is in the domains' buffers once
-    /// the application's submission completed, and the application keeps at most
-    /// VulkanDeviceHandles::frames_in_flight frames recorded ahead of the GPU. Errors: not
-    /// the vulkan backends, a null `cmd`, past the last frame (InvalidInput), a domain that
-    /// cannot record (Unsupported, naming it).
+    /// The next frame of every domain recorded into `recording` (kodawari/compute.hpp), on
+    /// the device the Simulation runs on: the vulkan backends, SimulationOptions::
+    /// options.context an adopted device, and `recording` the application's command
+    /// buffer (borrow_command_buffer(), kodawari/vulkan_embed.hpp), each domain's work
+    /// between barriers against the application's (docs/embedding.md). Nothing is
+    /// submitted or waited for but what the domains say (Domain::record()); the frame's
+    /// state is in the domains' buffers once the application's submission completed, and
+    /// the application keeps at most VulkanDeviceHandles::frames_in_flight frames recorded
+    /// ahead of the GPU. Errors: not the vulkan backends, a recording on another device,
+    /// past the last frame (InvalidInput), a domain that cannot record (Unsupported,
+    /// naming it).
+    [[nodiscard]] Result<void> record(compute::Recording& recording);
+    /// record() into `cmd`, a command buffer of the application's in the recording state
+    /// (borrow_command_buffer() on the Simulation's device, then record()). A null `cmd`
+    /// is InvalidInput.
     [[nodiscard]] Result<void> record(VkCommandBuffer cmd);
     /// Where a domain's named device buffer is now (Domain::buffers(); the scene's:
     /// bird_buffers::poses, rod_buffers::chain_states, motion and spin), to bind in the

@@ -27,6 +27,7 @@
 
 #include "kodawari/api.hpp"
 #include "kodawari/backend.hpp"
+#include "kodawari/compute.hpp"
 #include "kodawari/device_data.hpp"
 #include "kodawari/pose_backend.hpp"
 #include "kodawari/result.hpp"
@@ -78,7 +79,7 @@ struct VulkanRequirements {
 /// device lacks) are returned before any call through a handle that could be bad. The
 /// returned object must be released (with every backend made on it) before the
 /// application destroys its device, and once the GPU finished the work recorded with it.
-[[nodiscard]] KODAWARI_API Result<std::shared_ptr<gpu::VulkanContext>> adopt_vulkan_device(const VulkanDeviceHandles& handles);
+[[nodiscard]] KODAWARI_API Result<std::shared_ptr<compute::Device>> adopt_vulkan_device(const VulkanDeviceHandles& handles);
 
 
 /// A range of a buffer on the Simulation's Vulkan device, to bind in the application's
@@ -92,6 +93,18 @@ struct VulkanBufferRange {
     std::uint32_t count = 0;  ///< elements
     std::uint32_t stride = 0; ///< bytes per element (the struct's size)
 };
+
+/// A compute::Recording (kodawari/compute.hpp) into `cmd`, a command buffer of the
+/// application's in the recording state on `device` (adopt_vulkan_device()'s), of
+/// VulkanDeviceHandles::queue_family: what Simulation::record() and a domain's
+/// Domain::record() record into. Nothing is submitted, waited for or freed through it; it
+/// must not outlive `cmd` or the device. InvalidInput when `cmd` is null.
+[[nodiscard]] KODAWARI_API Result<compute::Recording> borrow_command_buffer(compute::Device& device, VkCommandBuffer cmd);
+
+/// `count` elements of `stride` bytes of a compute::Buffer from `offset`, as a range to
+/// bind in the application's shaders (what a domain's Domain::buffer() hands out).
+[[nodiscard]] KODAWARI_API VulkanBufferRange vulkan_range(const compute::Buffer& buffer, std::uint32_t count,
+                                                         std::uint32_t stride, VkDeviceSize offset = 0);
 
 /// Where a backend's named buffer is now (after load(), or after the first record for
 /// birds and poses); InvalidInput when the backend keeps no such buffer. Ranges stay

@@ -26,9 +26,9 @@
 #include "draw.hpp"
 #include "kodawari/result.hpp"
 
-namespace kodawari::gpu {
-class VulkanContext;
-}  // namespace kodawari::gpu
+namespace kodawari::compute {
+class Device;
+}  // namespace kodawari::compute
 
 namespace kodawari::render {
 
@@ -180,7 +180,7 @@ public:
     [[nodiscard]] std::string device() const;
     /// The renderer's Vulkan device, to run the simulation on (BackendOptions::context):
     /// the vulkan backends then keep their state where the layers draw it.
-    [[nodiscard]] std::shared_ptr<gpu::VulkanContext> device_context() const;
+    [[nodiscard]] std::shared_ptr<compute::Device> device_context() const;
     /// Bytes of kernel output read back to the host on this device so far (the
     /// simulation's, when it shares the device): the viewer's per-frame figure.
     [[nodiscard]] std::uint64_t read_back_bytes() const;

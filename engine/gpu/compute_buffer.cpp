@@ -1,10 +1,22 @@
-#include "compute/buffer.hpp"
+// compute::Buffer on Vulkan (kodawari/compute.hpp): device memory mapped where memory is
+// unified, otherwise device-local memory filled and read through host-visible staging.
+#include "gpu/compute_vulkan.hpp"
 
 #include <algorithm>
 
 namespace kodawari::compute {
 
-Result<Buffer> Buffer::create(const Device& device, std::uint64_t size, Usage usage) {
+Device::~Device() = default;
+
+Buffer::Buffer() : native_(std::make_unique<Native>()) {}
+Buffer::Buffer(Buffer&&) noexcept = default;
+Buffer& Buffer::operator=(Buffer&&) noexcept = default;
+// Unmaps (freeing the memory does) after the buffer is destroyed: Native's members in
+// reverse order.
+Buffer::~Buffer() = default;
+
+Result<Buffer> Buffer::create(const Device& compute_device, std::uint64_t size, Usage usage) {
+    const gpu::VulkanContext& device = gpu::vulkan(compute_device);
     Buffer out;
     out.size_ = size;
     out.usage_ = usage;
@@ -37,15 +49,15 @@ Result<Buffer> Buffer::create(const Device& device, std::uint64_t size, Usage us
             break;
     }
     return guard("Vulkan buffer of " + std::to_string(size) + " bytes", [&]() -> Result<Buffer> {
-        out.buffer_ = device.device().createBuffer({.size = size, .usage = flags, .sharingMode = vk::SharingMode::eExclusive}, device.allocator());
-        const auto needs = out.buffer_.getMemoryRequirements();
+        out.native_->buffer = device.device().createBuffer({.size = size, .usage = flags, .sharingMode = vk::SharingMode::eExclusive}, device.allocator());
+        const auto needs = out.native_->buffer.getMemoryRequirements();
         auto type = device.memory_type(needs.memoryTypeBits, required, preferred);
         if (!type) return type.error();
-        out.memory_ = device.device().allocateMemory({.allocationSize = needs.size, .memoryTypeIndex = type.value()}, device.allocator());
-        out.buffer_.bindMemory(*out.memory_, 0);
+        out.native_->memory = device.device().allocateMemory({.allocationSize = needs.size, .memoryTypeIndex = type.value()}, device.allocator());
+        out.native_->buffer.bindMemory(*out.native_->memory, 0);
         const auto properties = device.physical_device().getMemoryProperties().memoryTypes[type.value()].propertyFlags;
         if (properties & Memory::eHostVisible) {
-            out.mapped_ = static_cast<std::byte*>(out.memory_.mapMemory(0, VK_WHOLE_SIZE));
+            out.mapped_ = static_cast<std::byte*>(out.native_->memory.mapMemory(0, VK_WHOLE_SIZE));
             out.coherent_ = static_cast<bool>(properties & Memory::eHostCoherent);
         }
         return std::move(out);
@@ -55,7 +67,7 @@ Result<Buffer> Buffer::create(const Device& device, std::uint64_t size, Usage us
 Result<void> Buffer::invalidate(const Device& device) const {
     if (coherent_ || mapped_ == nullptr) return {};
     return guard("invalidate", [&]() -> Result<void> {
-        device.device().invalidateMappedMemoryRanges(vk::MappedMemoryRange{.memory = *memory_, .offset = 0, .size = VK_WHOLE_SIZE});
+        gpu::vulkan(device).device().invalidateMappedMemoryRanges(vk::MappedMemoryRange{.memory = *native_->memory, .offset = 0, .size = VK_WHOLE_SIZE});
         return {};
     });
 }

@@ -1,4 +1,6 @@
-#include "compute/queue.hpp"
+// compute::Queue, Recording and Submission on Vulkan (kodawari/compute.hpp): command slots
+// from the context, fences, pipeline barriers and copies.
+#include "gpu/compute_vulkan.hpp"
 
 #include <cassert>
 #include <algorithm>
@@ -53,9 +55,11 @@ Access destination(Stage s) {
 
 }  // namespace
 
+Recording::Recording(Device& device, std::unique_ptr<Native> native) : device_(&device), native_(std::move(native)) {}
+
 Recording::Recording(Recording&& other) noexcept
     : device_(std::exchange(other.device_, nullptr)),
-      slot_(std::move(other.slot_)),
+      native_(std::move(other.native_)),
       kept_(std::move(other.kept_)),
       staging_(std::exchange(other.staging_, nullptr)),
       borrowed_(std::exchange(other.borrowed_, false)) {}
@@ -64,7 +68,7 @@ Recording& Recording::operator=(Recording&& other) noexcept {
     if (this != &other) {
         release();
         device_ = std::exchange(other.device_, nullptr);
-        slot_ = std::move(other.slot_);
+        native_ = std::move(other.native_);
         kept_ = std::move(other.kept_);
         staging_ = std::exchange(other.staging_, nullptr);
         borrowed_ = std::exchange(other.borrowed_, false);
@@ -74,26 +78,30 @@ Recording& Recording::operator=(Recording&& other) noexcept {
 
 Recording::~Recording() { release(); }
 
-Recording Recording::borrow(Device& device, VkCommandBuffer cmd, StagingRing* staging) {
-    gpu::CommandSlot slot;
-    // No pool: the command buffer is let go of, never freed (release()).
-    slot.cmd = vk::raii::CommandBuffer(device.device(), cmd, VK_NULL_HANDLE);
-    Recording out(device, std::move(slot));
+Recording Recording::borrow(Device& device, std::unique_ptr<Native> native, StagingRing* staging) {
+    Recording out(device, std::move(native));
     out.staging_ = staging;
     out.borrowed_ = true;
     return out;
 }
 
+Recording Recording::share(StagingRing* staging) const {
+    return gpu::borrow(*device_, static_cast<VkCommandBuffer>(*native_->slot.cmd), staging);
+}
+
 void Recording::release() {
+    if (native_ == nullptr) return;  // moved from
     if (borrowed_) {
-        (void)slot_.cmd.release();  // the application's
+        (void)native_->slot.cmd.release();  // not ours to free
+        native_.reset();
         staging_ = nullptr;
         borrowed_ = false;
         device_ = nullptr;
         return;
     }
     // Never submitted: nothing runs, the command buffer is reset at its next begin().
-    if (device_ != nullptr) device_->release_slot(std::move(slot_));
+    if (device_ != nullptr) gpu::vulkan(*device_).release_slot(std::move(native_->slot));
+    native_.reset();
     device_ = nullptr;
     kept_.clear();
 }
@@ -105,22 +113,24 @@ void Recording::keep(Buffer buffer) {
 
 void Recording::timestamp(Timestamp which) {
     if (borrowed_) return;
-    device_->write_timestamp(slot_.cmd, which == Timestamp::Begin ? 0 : 1,
-                             which == Timestamp::Begin ? vk::PipelineStageFlagBits::eTopOfPipe
-                                                       : vk::PipelineStageFlagBits::eBottomOfPipe);
+    gpu::vulkan(*device_).write_timestamp(native_->slot.cmd, which == Timestamp::Begin ? 0 : 1,
+                                          which == Timestamp::Begin ? vk::PipelineStageFlagBits::eTopOfPipe
+                                                                    : vk::PipelineStageFlagBits::eBottomOfPipe);
 }
 
 Submission::Submission(Recording recording)
-    : device_(std::exchange(recording.device_, nullptr)), slot_(std::move(recording.slot_)), kept_(std::move(recording.kept_)) {}
+    : device_(std::exchange(recording.device_, nullptr)),
+      native_(std::move(recording.native_)),
+      kept_(std::move(recording.kept_)) {}
 
 Submission::Submission(Submission&& other) noexcept
-    : device_(std::exchange(other.device_, nullptr)), slot_(std::move(other.slot_)), kept_(std::move(other.kept_)) {}
+    : device_(std::exchange(other.device_, nullptr)), native_(std::move(other.native_)), kept_(std::move(other.kept_)) {}
 
 Submission& Submission::operator=(Submission&& other) noexcept {
     if (this != &other) {
         (void)wait();
         device_ = std::exchange(other.device_, nullptr);
-        slot_ = std::move(other.slot_);
+        native_ = std::move(other.native_);
         kept_ = std::move(other.kept_);
     }
     return *this;
@@ -131,10 +141,11 @@ Submission::~Submission() { (void)wait(); }
 Result<void> Submission::wait(double* gpu_ms) {
     if (gpu_ms != nullptr) *gpu_ms = -1.0;
     if (device_ == nullptr) return {};
-    Device& device = *device_;
+    gpu::VulkanContext& device = gpu::vulkan(*device_);
+    gpu::CommandSlot& slot = native_->slot;
     auto waited = guard("Vulkan submission", [&]() -> Result<void> {
         constexpr std::uint64_t kTimeoutNs = 600ull * 1000 * 1000 * 1000;
-        if (device.device().waitForFences(*slot_.fence, VK_TRUE, kTimeoutNs) != vk::Result::eSuccess) {
+        if (device.device().waitForFences(*slot.fence, VK_TRUE, kTimeoutNs) != vk::Result::eSuccess) {
             Error error = make_error(Error::Kind::Vulkan, "the GPU did not finish within 600 s");
             error.vk_result = static_cast<int>(vk::Result::eTimeout);
             return error;
@@ -144,20 +155,23 @@ Result<void> Submission::wait(double* gpu_ms) {
     });
     if (!waited) return waited;  // still pending: the destructor must not free what runs
     device_ = nullptr;
-    device.release_slot(std::move(slot_));
+    device.release_slot(std::move(slot));
+    native_.reset();
     kept_.clear();
     return {};
 }
 
 Result<Recording> Queue::begin() const {
-    auto slot = device_->acquire_slot();
+    gpu::VulkanContext& device = gpu::vulkan(*device_);
+    auto slot = device.acquire_slot();
     if (!slot) return slot.error();
-    Recording recording(*device_, std::move(slot).value());
+    Recording recording(*device_, std::make_unique<Recording::Native>(Recording::Native{std::move(slot).value()}));
     return guard("Vulkan recording", [&]() -> Result<Recording> {
-        recording.slot_.cmd.reset();
-        recording.slot_.cmd.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
-        if (const auto& pool = device_->timestamp_pool(); static_cast<VkQueryPool>(*pool) != VK_NULL_HANDLE) {
-            recording.slot_.cmd.resetQueryPool(*pool, 0, 2);
+        const vk::raii::CommandBuffer& cmd = recording.native_->slot.cmd;
+        cmd.reset();
+        cmd.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
+        if (const auto& pool = device.timestamp_pool(); static_cast<VkQueryPool>(*pool) != VK_NULL_HANDLE) {
+            cmd.resetQueryPool(*pool, 0, 2);
         }
         return std::move(recording);
     });
@@ -167,11 +181,13 @@ Result<Submission> Queue::submit(Recording recording) const {
     assert(recording.device_ == device_ && "a recording of this queue's device");
     assert(!recording.borrowed_ && "a borrowed command buffer is the application's to submit");
     return guard("Vulkan submission", [&]() -> Result<Submission> {
-        recording.slot_.cmd.end();
-        device_->device().resetFences(*recording.slot_.fence);
-        const vk::CommandBuffer cmd = *recording.slot_.cmd;
-        device_->queue().submit(vk::SubmitInfo{.commandBufferCount = 1, .pCommandBuffers = &cmd}, *recording.slot_.fence);
-        device_->count_submission();
+        gpu::VulkanContext& device = gpu::vulkan(*device_);
+        gpu::CommandSlot& slot = recording.native_->slot;
+        slot.cmd.end();
+        device.device().resetFences(*slot.fence);
+        const vk::CommandBuffer cmd = *slot.cmd;
+        device.queue().submit(vk::SubmitInfo{.commandBufferCount = 1, .pCommandBuffers = &cmd}, *slot.fence);
+        device.count_submission();
         return Submission(std::move(recording));
     });
 }
@@ -180,12 +196,12 @@ void barrier(Recording& recording, Stage before, Stage after) {
     const Access src = source(before);
     const Access dst = destination(after);
     const vk::MemoryBarrier memory{.srcAccessMask = src.access, .dstAccessMask = dst.access};
-    recording.vulkan().pipelineBarrier(src.stages, dst.stages, {}, memory, {}, {});
+    gpu::vk_commands(recording).pipelineBarrier(src.stages, dst.stages, {}, memory, {}, {});
 }
 
 void copy(Recording& recording, const Buffer& source, std::uint64_t source_offset, const Buffer& target,
           std::uint64_t target_offset, std::uint64_t bytes) {
-    recording.vulkan().copyBuffer(source.handle(), target.handle(),
+    gpu::vk_commands(recording).copyBuffer(gpu::vk_buffer(source), gpu::vk_buffer(target),
                                   vk::BufferCopy{.srcOffset = source_offset, .dstOffset = target_offset, .size = bytes});
 }
 
@@ -267,7 +283,7 @@ Result<void> upload(Device& device, const Buffer& buffer, std::span<const std::b
 Result<void> download(Device& device, const Buffer& buffer, std::span<std::byte> bytes) {
     assert(bytes.size() <= buffer.size());
     if (bytes.empty()) return {};
-    device.count_read_back(bytes.size());
+    gpu::vulkan(device).count_read_back(bytes.size());
     if (buffer.mapped() != nullptr) {
         KW_TRY(buffer.invalidate(device));
         std::memcpy(bytes.data(), buffer.mapped(), bytes.size());
@@ -291,3 +307,14 @@ Result<void> download(Device& device, const Buffer& buffer, std::span<std::byte>
 }
 
 }  // namespace kodawari::compute
+
+namespace kodawari::gpu {
+
+compute::Recording borrow(compute::Device& device, VkCommandBuffer cmd, compute::StagingRing* staging) {
+    auto native = std::make_unique<compute::Recording::Native>();
+    // No pool: the command buffer is let go of, never freed (Recording::release()).
+    native->slot.cmd = vk::raii::CommandBuffer(vulkan(device).device(), cmd, VK_NULL_HANDLE);
+    return compute::Recording::borrow(device, std::move(native), staging);
+}
+
+}  // namespace kodawari::gpu

@@ -1,0 +1,130 @@
+// compute::Kernel on Vulkan (kodawari/compute.hpp): a compute pipeline, its layout and its
+// one descriptor set.
+#include "gpu/compute_vulkan.hpp"
+
+#include <cassert>
+#include <string>
+
+namespace kodawari::compute {
+
+Kernel::Kernel() : native_(std::make_unique<Native>()) {}
+Kernel::Kernel(Kernel&&) noexcept = default;
+Kernel& Kernel::operator=(Kernel&&) noexcept = default;
+Kernel::~Kernel() = default;
+
+Result<Kernel> Kernel::create(const Device& device, std::string_view shader, std::span<const Binding> bindings,
+                              std::uint32_t push_bytes, std::span<const std::uint32_t> specialization) {
+    const auto code = embedded_shader(shader);
+    if (code.empty()) {
+        return make_error(Error::Kind::InvalidInput, "kernel " + std::string(shader) +
+                                                         ": not one of the engine's shaders (shaders/CMakeLists.txt embeds them)");
+    }
+    return create(device, shader, code, bindings, push_bytes, specialization);
+}
+
+Result<Kernel> Kernel::create(const Device& compute_device, std::string_view shader, std::span<const std::uint32_t> code,
+                              std::span<const Binding> bindings, std::uint32_t push_bytes,
+                              std::span<const std::uint32_t> specialization) {
+    if (code.empty()) return make_error(Error::Kind::InvalidInput, "kernel " + std::string(shader) + ": no SPIR-V");
+    const auto count = static_cast<std::uint32_t>(bindings.size());
+    const gpu::VulkanContext& device = gpu::vulkan(compute_device);
+    Kernel out;
+    Native& n = *out.native_;
+    n.device = &device;
+    for (const Binding b : bindings) {
+        n.types.push_back(b == Binding::Uniform ? vk::DescriptorType::eUniformBuffer : vk::DescriptorType::eStorageBuffer);
+    }
+    return guard("Vulkan pipeline " + std::string(shader), [&]() -> Result<Kernel> {
+        const auto& vk_device = device.device();
+        std::vector<vk::DescriptorSetLayoutBinding> slots(count);
+        for (std::uint32_t i = 0; i < count; ++i) {
+            slots[i] = vk::DescriptorSetLayoutBinding{.binding = i,
+                                                      .descriptorType = n.types[i],
+                                                      .descriptorCount = 1,
+                                                      .stageFlags = vk::ShaderStageFlagBits::eCompute};
+        }
+        n.set_layout = vk_device.createDescriptorSetLayout({.bindingCount = count, .pBindings = slots.data()}, device.allocator());
+        const vk::PushConstantRange push{.stageFlags = vk::ShaderStageFlagBits::eCompute, .offset = 0, .size = push_bytes};
+        const vk::DescriptorSetLayout set_layout = *n.set_layout;
+        n.layout = vk_device.createPipelineLayout({.setLayoutCount = 1,
+                                                      .pSetLayouts = &set_layout,
+                                                      .pushConstantRangeCount = push_bytes > 0 ? 1u : 0u,
+                                                      .pPushConstantRanges = &push}, device.allocator());
+        n.module = vk_device.createShaderModule({.codeSize = code.size_bytes(), .pCode = code.data()}, device.allocator());
+        std::vector<vk::SpecializationMapEntry> entries;
+        for (std::uint32_t i = 0; i < specialization.size(); ++i) {
+            entries.push_back({.constantID = i, .offset = i * 4u, .size = 4});
+        }
+        const vk::SpecializationInfo spec{.mapEntryCount = static_cast<std::uint32_t>(entries.size()),
+                                          .pMapEntries = entries.data(),
+                                          .dataSize = specialization.size_bytes(),
+                                          .pData = specialization.data()};
+        n.pipeline = vk_device.createComputePipeline(
+            nullptr, {.stage = {.stage = vk::ShaderStageFlagBits::eCompute,
+                                .module = *n.module,
+                                .pName = "main",
+                                .pSpecializationInfo = specialization.empty() ? nullptr : &spec},
+                      .layout = *n.layout}, device.allocator());
+        std::vector<vk::DescriptorPoolSize> sizes;
+        for (const vk::DescriptorType type : n.types) sizes.push_back({.type = type, .descriptorCount = 1});
+        n.pool = vk_device.createDescriptorPool({.flags = vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet,
+                                                    .maxSets = 1,
+                                                    .poolSizeCount = static_cast<std::uint32_t>(sizes.size()),
+                                                    .pPoolSizes = sizes.data()}, device.allocator());
+        n.set = std::move(vk_device.allocateDescriptorSets(
+            {.descriptorPool = *n.pool, .descriptorSetCount = 1, .pSetLayouts = &set_layout})[0]);
+        return std::move(out);
+    });
+}
+
+void Kernel::bind(std::span<const Buffer* const> buffers) const {
+    std::vector<BufferView> views;
+    views.reserve(buffers.size());
+    for (const Buffer* b : buffers) views.push_back({b});
+    bind(views);
+}
+
+void Kernel::bind(std::span<const BufferView> views) const {
+    std::vector<gpu::BufferRange> ranges(views.size());
+    for (std::size_t i = 0; i < views.size(); ++i) {
+        assert(views[i].buffer != nullptr && "a view of a buffer");
+        ranges[i] = {gpu::vk_buffer(*views[i].buffer), views[i].offset,
+                     views[i].size == kWholeSize ? VK_WHOLE_SIZE : vk::DeviceSize{views[i].size}};
+    }
+    gpu::bind(*this, ranges);
+}
+
+void Kernel::dispatch(Recording& recording, std::span<const std::byte> push, std::uint32_t groups_x) const {
+    gpu::dispatch(*this, gpu::vk_commands(recording), push, groups_x);
+}
+
+}  // namespace kodawari::compute
+
+namespace kodawari::gpu {
+
+void dispatch(const compute::Kernel& kernel, const vk::raii::CommandBuffer& cmd, std::span<const std::byte> push,
+              std::uint32_t groups_x) {
+    const compute::Kernel::Native& n = kernel.native();
+    cmd.bindPipeline(vk::PipelineBindPoint::eCompute, *n.pipeline);
+    cmd.bindDescriptorSets(vk::PipelineBindPoint::eCompute, *n.layout, 0, *n.set, {});
+    if (!push.empty()) cmd.pushConstants<std::byte>(*n.layout, vk::ShaderStageFlagBits::eCompute, 0, push);
+    cmd.dispatch(groups_x, 1, 1);
+}
+
+void bind(const compute::Kernel& kernel, std::span<const BufferRange> ranges) {
+    const compute::Kernel::Native& n = kernel.native();
+    assert(ranges.size() == n.types.size());
+    std::vector<vk::DescriptorBufferInfo> infos(ranges.size());
+    std::vector<vk::WriteDescriptorSet> writes(ranges.size());
+    for (std::uint32_t i = 0; i < ranges.size(); ++i) {
+        infos[i] = vk::DescriptorBufferInfo{.buffer = ranges[i].buffer, .offset = ranges[i].offset, .range = ranges[i].size};
+        writes[i] = vk::WriteDescriptorSet{.dstSet = *n.set,
+                                           .dstBinding = i,
+                                           .descriptorCount = 1,
+                                           .descriptorType = n.types[i],
+                                           .pBufferInfo = &infos[i]};
+    }
+    n.device->device().updateDescriptorSets(writes, {});
+}
+
+}  // namespace kodawari::gpu
