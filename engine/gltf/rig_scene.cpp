@@ -382,6 +382,16 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
             out.warnings.push_back(what + " skipped: radius 0");
             continue;
         }
+        // A plane's normal turns by the inverse transpose of the node's linear part (exact
+        // under non-uniform scale); a node scaled to 0 along an axis has none, and its
+        // plane no direction.
+        const glm::mat3 linear(world);
+        const glm::vec3 turned = glm::transpose(glm::inverse(linear)) * c.normal;
+        if (c.kind == rods::ColliderKind::Plane &&
+            !(std::abs(glm::determinant(linear)) > 0.0f && std::isfinite(glm::length(turned)) && glm::length(turned) > 0.0f)) {
+            out.warnings.push_back(what + " skipped: a plane on a node scaled to 0 along an axis has no normal");
+            continue;
+        }
         if (colliders.size() == rods::kMaxCharacterColliders) {
             out.warnings.push_back(what + " and later ones skipped: a character has at most " +
                                    std::to_string(rods::kMaxCharacterColliders) + " colliders");
@@ -403,9 +413,8 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
         j["name"] = collider_name[i];
         j["joint"] = refs[static_cast<std::size_t>(c.node)];
         if (c.kind == rods::ColliderKind::Plane) {
-            // A normal turns by the inverse transpose of the node's linear part (exact under
-            // non-uniform scale), then into the rigid frame.
-            const glm::vec3 n = glm::normalize(glm::transpose(glm::inverse(glm::mat3(world))) * c.normal);
+            // The normal turned above, then into the rigid frame.
+            const glm::vec3 n = glm::normalize(turned);
             j["type"] = "plane";
             j["point"] = vec(a);
             j["normal"] = vec(glm::normalize(inverse * n));
