@@ -35,10 +35,6 @@ Result<std::shared_ptr<compute::Device>> open_auto_device(const BackendOptions& 
     return device;
 }
 
-std::uint64_t read_back_bytes(const compute::Device& device) { return device.read_back_bytes(); }
-
-std::uint32_t validation_messages(const compute::Device& device) { return device.validation_messages(); }
-
 Result<std::unique_ptr<BirdBackend>> make_bird_backend(BackendKind kind, const BackendOptions& options) {
     if (kind == BackendKind::Vulkan) return make_vulkan_bird_backend(options);
     return make_cpu_bird_backend(kind, options);

@@ -97,7 +97,7 @@ TEST(RecordMode, RodsAndBirdsRecordIntoOneSubmission) {
     ASSERT_TRUE(recorded_birds.value()->simulate(1, {a, {}}).ok());
     ASSERT_TRUE(simulated_birds.value()->simulate(1, {b, {}}).ok());
     EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(gpu::BirdPose)), 0);
-    EXPECT_EQ(validation_messages(device), 0u);
+    EXPECT_EQ(device.validation_messages(), 0u);
 }
 
 // Keyed examples in record mode (docs/keyed-examples.md K.6): the recorded step measures
@@ -148,7 +148,7 @@ TEST(RecordMode, KeyedExamplesRecordAsTheyStep) {
         }
     }
     EXPECT_GT(most_keyed, 0.5f) << "the keyed examples took part";
-    EXPECT_EQ(validation_messages(device), 0u);
+    EXPECT_EQ(device.validation_messages(), 0u);
 }
 
 }  // namespace
@@ -182,5 +182,5 @@ TEST(DevicePaths, BirdsPinNoReadbackMemoryUntilAsked) {
     ASSERT_TRUE(mapped.value()->simulate(1, {b, {}}).ok());
     EXPECT_GT(device.readback_buffer_bytes(), before);
     EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(gpu::BirdPose)), 0);
-    EXPECT_EQ(validation_messages(device), 0u);
+    EXPECT_EQ(device.validation_messages(), 0u);
 }

@@ -23,6 +23,7 @@
 #include <nlohmann/json.hpp>
 
 #include "kodawari/backend_factory.hpp"
+#include "kodawari/compute.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/gltf/import.hpp"
@@ -619,10 +620,10 @@ void check_rod_input_on_device(const RodScene& rods, const char* what) {
     for (std::uint32_t f = 1; f <= kFrames; ++f) {
         ASSERT_TRUE(host.animator->frame(f, host.frame).ok());
         ASSERT_TRUE(host.rods->step(host.frame).ok());
-        const std::uint64_t before = read_back_bytes(*device);
+        const std::uint64_t before = device->read_back_bytes();
         ASSERT_TRUE(on_device.animator->frame(f, on_device.frame).ok());
         ASSERT_TRUE(on_device.rods->step(on_device.frame).ok());
-        device_read_back += read_back_bytes(*device) - before;
+        device_read_back += device->read_back_bytes() - before;
     }
     float worst = 0.0f;
     ASSERT_NO_FATAL_FAILURE(worst = runs.joint_distance(rods));
@@ -631,7 +632,7 @@ void check_rod_input_on_device(const RodScene& rods, const char* what) {
                 what, kFrames, static_cast<double>(worst), static_cast<unsigned long long>(device_read_back));
     EXPECT_LT(worst, 1e-5f);
     EXPECT_EQ(device_read_back, 0u);
-    EXPECT_EQ(validation_messages(*device), 0u);
+    EXPECT_EQ(device->validation_messages(), 0u);
 }
 
 // The key sources of keyed examples (docs/keyed-examples.md K.1) written on the device
@@ -761,7 +762,7 @@ TEST(RiggedScene, KeySourcesWrittenOnTheDeviceMatchTheHosts) {
     EXPECT_GT(high - low, 0.2f) << "the keyed weights must move";
     EXPECT_LT(worst_weight, 1e-4f);
     EXPECT_LT(worst, 1e-3f);
-    EXPECT_EQ(validation_messages(*device), 0u);
+    EXPECT_EQ(device->validation_messages(), 0u);
 }
 
 // Blender's own glTF importer (tests/tools/blender_check.py) on the export of a

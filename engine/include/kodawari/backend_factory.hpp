@@ -47,10 +47,5 @@ namespace kodawari {
 /// (never a reason to run elsewhere). `options.context`, when set, is returned as it is.
 [[nodiscard]] KODAWARI_API Result<std::shared_ptr<compute::Device>> open_auto_device(const BackendOptions& options,
                                                                                         std::string& cpu_reason);
-/// Bytes of kernel output read back to the host on `device` so far (every download and
-/// pose read back): how a caller checks that a pipeline keeps its data on the device.
-[[nodiscard]] KODAWARI_API std::uint64_t read_back_bytes(const compute::Device& device);
-/// Validation messages on `device` so far (every backend sharing it).
-[[nodiscard]] KODAWARI_API std::uint32_t validation_messages(const compute::Device& device);
 
 }  // namespace kodawari

@@ -56,7 +56,8 @@ public:
     [[nodiscard]] virtual bool graphics_queue() const = 0;
     /// Submissions to its queue so far: how a test checks that recording submits nothing.
     [[nodiscard]] virtual std::uint64_t submissions() const = 0;
-    /// Bytes of kernel output read back to the host so far (download()).
+    /// Bytes of kernel output read back to the host so far (every download() and pose
+    /// read back): how a caller checks that a pipeline keeps its data on the device.
     [[nodiscard]] virtual std::uint64_t read_back_bytes() const = 0;
 
 protected:
