@@ -196,6 +196,21 @@ make_bundle() {
     return 2
   fi
 
+  # The GL vendor-neutral dispatch libraries (glvnd) that the NVIDIA driver's Vulkan
+  # library, libGLX_nvidia.so.0, links against: a CUDA-only image has the driver's
+  # libraries mounted but not glvnd, and then the loader cannot open the driver (seen on
+  # the first H200 lease: "no Vulkan driver found" with the driver's manifest present).
+  # Used there only when the machine has none (setup_env).
+  local glvnd
+  mkdir -p "$tmp/lib/glvnd"
+  for glvnd in libGLdispatch.so.0 libGLX.so.0; do
+    if path="$(find_lib "$glvnd")"; then
+      cp -L "$path" "$tmp/lib/glvnd/$glvnd"
+    else
+      echo "gpu_run.sh --bundle: no $glvnd here (Debian packages libglvnd0, libglx0): bundled without it" >&2
+    fi
+  done
+
   cp -R "$root/scenes" "$tmp/scenes"
   cp "$root/scripts/gpu_run.sh" "$tmp/gpu_run.sh"
   chmod +x "$tmp/gpu_run.sh"
@@ -499,6 +514,57 @@ nvidia_icd() {
   return 1
 }
 
+# The loader found no GPU by itself: try the NVIDIA driver's manifest, then the bundle's
+# glvnd libraries (lib/glvnd) behind the machine's own libraries, each alone and both;
+# keep the first that shows a GPU. When none does, keep the loader's own account of why
+# (VK_LOADER_DEBUG) for run.log.
+find_driver() {
+  local icd="" glvnd_env="" lib_env="" e
+  icd="$(nvidia_icd || true)"
+  if [[ -d "$root/lib/glvnd" && -z "$(find_lib libGLdispatch.so.0 || true)" ]]; then
+    for e in "${run_env[@]}"; do
+      [[ "$e" == LD_LIBRARY_PATH=* ]] && lib_env="${e#LD_LIBRARY_PATH=}"
+    done
+    glvnd_env="LD_LIBRARY_PATH=${lib_env:+$lib_env:}$root/lib/glvnd"
+  fi
+  local -a tries=()
+  [[ -n "$icd" ]] && tries+=("VK_DRIVER_FILES=$icd VK_ICD_FILENAMES=$icd")
+  [[ -n "$glvnd_env" ]] && tries+=("$glvnd_env")
+  [[ -n "$icd" && -n "$glvnd_env" ]] && tries+=("VK_DRIVER_FILES=$icd VK_ICD_FILENAMES=$icd $glvnd_env")
+  local try
+  local -a vars
+  for try in "${tries[@]}"; do
+    read -r -a vars <<<"$try"
+    if sees_gpu "${vars[@]}"; then
+      local -a kept=()
+      for e in "${run_env[@]}"; do
+        [[ -n "$glvnd_env" && "$try" == *"$glvnd_env"* && "$e" == LD_LIBRARY_PATH=* ]] && continue
+        kept+=("$e")
+      done
+      run_env=("${kept[@]}" "${vars[@]}")
+      driver_note="${icd:+$icd (VK_DRIVER_FILES) }${glvnd_env:+and }the loader found no GPU by itself; found with: $try"
+      [[ "$try" == *LD_LIBRARY_PATH* ]] && driver_note+=" (the bundle's glvnd: the machine has no libGLdispatch.so.0)"
+      return 0
+    fi
+  done
+  if [[ -n "$icd" ]]; then
+    driver_note="no GPU from the loader's own search, nor with the NVIDIA manifest $icd${glvnd_env:+ and the glvnd of the bundle}"
+  else
+    driver_note="no GPU from the loader's own search (no NVIDIA driver manifest or libGLX_nvidia.so.0 here)"
+  fi
+  # Why, in the loader's words, with the last combination tried (none tried: nothing of
+  # NVIDIA's here, as on a machine with lavapipe alone, and nothing to explain).
+  ((${#tries[@]} > 0)) || return 0
+  read -r -a vars <<<"${tries[${#tries[@]}-1]}"
+  loader_debug="$(timeout 60 env "${run_env[@]}" "${vars[@]}" VK_LOADER_DEBUG=error,warn,driver "$bin" info 2>&1 | tail -n 40 || true)"
+  local lib
+  if [[ -n "$icd" ]]; then
+    lib="$(sed -n 's/.*"library_path"[[:space:]]*:[[:space:]]*"\([^"]*\)".*/\1/p' "$icd" | head -n 1)"
+    [[ "$lib" != /* ]] && lib="$(find_lib "$lib" || echo "$lib")"
+    loader_debug+=$'\n'"ldd $lib:"$'\n'"$(ldd "$lib" 2>&1 | head -n 30 || true)"
+  fi
+}
+
 run_all() {
   local quick="$1"
   out="$2"
@@ -543,18 +609,9 @@ run_all() {
   glibc_note=""
   setup_env
   driver_note="the loader's own search"
+  loader_debug=""
   if ! sees_gpu; then
-    local icd
-    if icd="$(nvidia_icd)"; then
-      if sees_gpu "VK_DRIVER_FILES=$icd" "VK_ICD_FILENAMES=$icd"; then
-        run_env+=("VK_DRIVER_FILES=$icd" "VK_ICD_FILENAMES=$icd")
-        driver_note="$icd (VK_DRIVER_FILES: the loader found no GPU by itself)"
-      else
-        driver_note="the loader's own search, no GPU (the NVIDIA manifest $icd gave none either)"
-      fi
-    else
-      driver_note="the loader's own search, no GPU (no NVIDIA driver manifest or libGLX_nvidia.so.0 here)"
-    fi
+    find_driver
   fi
   device="$(timeout 60 env "${run_env[@]}" "$bin" info 2>/dev/null | sed -n 's/^chosen: \[[0-9]*\] \(.*\), because.*/\1/p' | head -n 1 || true)"
   [[ -z "$device" ]] && device="none"
@@ -585,6 +642,9 @@ run_all() {
   } | tee -a "$log_file"
   if ((!quick)) && [[ "$device" == none || "$device" == llvmpipe* ]]; then
     log "WARNING: no GPU is visible to Vulkan: the vulkan figures will be the CPU device's or missing"
+  fi
+  if [[ -n "$loader_debug" ]]; then
+    { echo "the Vulkan loader's account (VK_LOADER_DEBUG=error,warn,driver, last lines):"; echo "$loader_debug"; } | tee -a "$log_file"
   fi
   write_results false
 

@@ -61,6 +61,7 @@ Result<SyntheticScene> SyntheticScene::make(const SyntheticOptions& o) {
     params.iterations = o.iterations;
     params.stiffness = 0.5f;
     params.damping = 2.0f;
+    params.settle_start = o.settle;
     const glm::vec3 directions[kMaxViewExamples] = {{0, 0, 1},  {1, 0, 0},  {-1, 0, 0}, {0, 0, -1},
                                                     {0, 1, 0},  {0.7f, 0, 0.7f}, {-0.7f, 0, 0.7f}};
     for (std::uint32_t k = 0; k < per; ++k) {

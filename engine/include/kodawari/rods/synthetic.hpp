@@ -20,6 +20,11 @@ struct SyntheticOptions {
     std::uint32_t views = 3;                 ///< view examples per chain, 0 .. kMaxViewExamples
     bool colliders = true;                   ///< a head sphere per character
     float motion = 1.0f;                     ///< scales the head's sway and turn (0 = still)
+    /// Chains start settled on their rest shape (SolverParams::settle_start). Off: they
+    /// start on the rest shape itself, unsettled. Settling takes 60 to 660 solver
+    /// substeps a chain at load (about 0.65 ms a chain on cpu-reference, so minutes for a
+    /// million), which a benchmark of the step does not measure.
+    bool settle = true;
 };
 
 /// The world and its kinematics.
