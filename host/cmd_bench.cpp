@@ -171,7 +171,7 @@ int bench_crowd(const CrowdOptions& o) {
     auto built = build_rod_scene(scene);
     if (!built) return report(built.error());
     const RodScene& rods_scene = built.value();
-    const gltf::Character& character = *rods_scene.characters[crowd.character].rig;
+    const animation::Character& character = *rods_scene.characters[crowd.character].rig;
     std::printf("bench crowd: %u instances of %s (%zu nodes, %zu clips), %zu chains, %u joints; %u repetitions of %u frames at "
                 "%g fps per backend, interleaved, after 2 warm-up frames each (they also compile the kernels)\n",
                 count, character.source.c_str(), character.nodes.size(), character.animations.size(),

@@ -5,7 +5,7 @@
 // Interpolation of the glTF 2.0.1 specification), composes local T * R * S and world =
 // parent world * local (§3.5.3 Transformations), then writes every node's world matrix,
 // its anchor's times the node's constant rest transform relative to it, with the
-// instance's placement applied. Mirrors engine/gltf/animation.cpp (sample, compute_world)
+// instance's placement applied. Mirrors engine/animation/character.cpp (sample, compute_world)
 // and clip_time() in engine/backends/pose_backend.cpp; shared/poses.h has the layout and
 // why.
 #extension GL_GOOGLE_include_directive : require
@@ -91,7 +91,7 @@ float clip_time(PoseClipGpu clip, float offset, bool loop, float time) {
     return wrapped;
 }
 
-// ---- sampling (§3.11, Appendix C), as gltf::sample() ------------------------------------
+// ---- sampling (§3.11, Appendix C), as animation::sample() ------------------------------------
 
 // sin(x) / x by its Taylor series to x^12: the truncation is below 5e-10 on [0, pi/2].
 float sinc(float x) {
@@ -261,7 +261,7 @@ void main() {
     slots[0] = mat4_columns(instance.placement);
     for (uint a = 0u; a < anchor_count; ++a) {
         // The rest TRS with the clip's channels of this anchor applied in the file's order
-        // (a later channel of the same property wins, as in gltf::evaluate).
+        // (a later channel of the same property wins, as in animation::evaluate).
         vec3 translation = anchors[a].rest[0].xyz;
         vec4 rotation = anchors[a].rest[1];
         vec3 scale = anchors[a].rest[2].xyz;

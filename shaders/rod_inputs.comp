@@ -3,7 +3,7 @@
 // posed instance (one invocation), its reference joint, its chain roots, its colliders,
 // its chains' key sources and center frames (docs/keyed-examples.md K.1; engine/rods/rod_scene.cpp key_entry)
 // from the pose backend's world matrices, exactly as RodScene::rigged_frame computes them
-// on the host (engine/scene/rod_scene.cpp) with gltf::rigid_part (engine/gltf/animation.cpp:
+// on the host (engine/scene/rod_scene.cpp) with animation::rigid_part (engine/animation/character.cpp:
 // the translation, and the rotation of the matrix's columns normalized, a mirror turned
 // proper, converted to a quaternion as glm::quat_cast does). shared/rod_inputs.h has the
 // layout.
@@ -47,7 +47,7 @@ vec4 quat_cast(mat3 m) {
     return vec4((m[2][0] + m[0][2]) * mult, (m[1][2] + m[2][1]) * mult, value, (m[0][1] - m[1][0]) * mult);
 }
 
-// gltf::rigid_part of node n of posed instance i.
+// animation::rigid_part of node n of posed instance i.
 RodTransformGpu rigid_part(uint i, uint n) {
     PoseMatrixGpu w = world[i * push.counts.y + n];
     mat3 r = mat3(w.columns[0].xyz, w.columns[1].xyz, w.columns[2].xyz);

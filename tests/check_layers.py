@@ -3,18 +3,22 @@
 layers that must name no domain (NEUTRAL, issue 31).
 
 No target's sources include, directly or through other headers, a header of a target it
-does not link, or a third-party header it does not link. A header belongs to the target
-that defines what it declares (OWNERS below); a new header needs an entry, so that its
-layer is a decision. The link test (tests/consumers/sim_only.cpp) cannot see header-only
-libraries such as nlohmann-json; this can.
+does not link, or a third-party header it does not link. Which target owns a header is
+derived from engine/CMakeLists.txt, not listed here (issue 31, item 4): an engine folder
+is one component (all of its sources compiled into one kodawari_component(); its internal
+headers are that component's), and a public header is the component's whose
+kodawari_headers() installs it, every header of one public folder (include/kodawari/<f>/)
+the same component's. So a new folder or header needs no entry here, and a folder whose
+files go to two components is reported. The link test (tests/consumers/sim_only.cpp)
+cannot see header-only libraries such as nlohmann-json; this can.
 
-The public headers are also what `cmake --install` copies (kodawari_headers() in
-engine/CMakeLists.txt): every header under include/kodawari/ is listed there once, under
-the target that owns it, so that a new public header is installed and an internal one is
-not. Generated headers (api.hpp, version.hpp) are their .in templates here.
+Every header under include/kodawari/ is installed once (kodawari_headers()), so that a
+new public header is installed and an internal one is not. Generated headers (api.hpp,
+version.hpp) are their .in templates here.
 
 Usage: check_layers.py SOURCE_DIR
 """
+import os
 import pathlib
 import re
 import sys
@@ -45,64 +49,12 @@ ALLOWED_THIRD_PARTY = {
     # types) for kodawari/vulkan_embed.hpp; kodawari.h itself names no Vulkan type.
     "c": {"vulkan"},
 }
-# Which target owns each header: folders first, then the public headers one by one.
-OWNER_PATTERNS = [
-    ("include/kodawari/*.hpp", "sim"),
-    ("include/kodawari/*.hpp.in", "sim"),
-    ("include/kodawari/shared/*.h", "sim"),
-    ("include/kodawari/birds/*.hpp", "sim"),
-    ("include/kodawari/rods/*.hpp", "sim"),
-    ("core/*.hpp", "sim"),
-    ("birds/*.hpp", "sim"),
-    ("backends/backends.hpp", "sim"),
-    ("backends/pose_backends.hpp", "sim"),
-    ("simd/*.hpp", "sim"),
-    ("simd/*-inl.h", "sim"),
-    ("backends/device_backends.hpp", "vulkan"),
-    ("gpu/*.hpp", "vulkan"),
-    ("scene/*.hpp", "io"),
-    ("export/*.hpp", "io"),
-    ("gltf/*.hpp", "io"),
-    ("render/*.hpp", "render"),
-    ("include/kodawari/render/*.hpp", "render"),
-    ("capi/*.hpp", "c"),
-    ("simulation/*.hpp", "engine"),
-    ("domains/*.hpp", "engine"),
-    ("domains/flocking/*.hpp", "engine"),
-]
-PUBLIC_OWNERS = {
-    "gltf/character.hpp": "sim",
-    "gltf/pose_instance.hpp": "sim",
-    "gltf/chains.hpp": "io",
-    "gltf/vrm.hpp": "io",
-    "gltf/motion.hpp": "io",
-    "gltf/rig_scene.hpp": "io",
-    "gltf/import.hpp": "io",
-    "gltf/bird_model_import.hpp": "io",
-    "route_check.hpp": "io",
-    "compute.hpp": "vulkan",
-    "backend_factory.hpp": "vulkan",
-    "crowd_animator.hpp": "vulkan",
-    "vulkan_embed.hpp": "vulkan",
-    "gpu_info.hpp": "vulkan",
-    "scene.hpp": "io",
-    "export.hpp": "io",
-    "scene_edit.hpp": "io",
-    "sketch_key.hpp": "io",
-    "simulation.hpp": "engine",
-    "domain.hpp": "engine",
-    "domains/birds.hpp": "engine",
-    "domains/chains.hpp": "engine",
-    "domains/chain_draw.hpp": "engine",
-    "domains/bird_draw.hpp": "engine",
-    "domains/scene_draw.hpp": "engine",
-    "domains/flocking.hpp": "engine",
-    "domains/trace.hpp": "engine",
-    "bake.hpp": "engine",
-    "shards.hpp": "engine",
-    "distributed.hpp": "engine",
-    "kodawari.h": "c",
-}
+# Which target owns each header is derived, never listed by hand (issue 31, item 4): an
+# engine folder is one component (every source in it is compiled into the same
+# kodawari_component(), and its internal headers belong to that component), and a public
+# header belongs to the component whose kodawari_headers() installs it, every header of a
+# public subfolder (include/kodawari/<folder>/) to the same one.
+INTERNAL_HEADERS = ("*.hpp", "*.h")
 
 
 def generated(path):
@@ -110,14 +62,40 @@ def generated(path):
     return path[: -len(".in")] if path.endswith(".in") else path
 
 
-def owners():
+def folder_components(found):
+    """Each engine folder's component, from the components' sources; a folder whose
+    sources go to two components is a problem."""
+    folders, problems = {}, []
+    for target, sources in found.items():
+        for source in sources:
+            folder = str(pathlib.PurePosixPath(source).parent)
+            folders.setdefault(folder, set()).add(target)
+    for folder, targets_of in sorted(folders.items()):
+        if len(targets_of) > 1:
+            problems.append(f"engine/{folder}/: sources of {' and '.join(sorted(targets_of))} "
+                            "(a folder is one component: move one side's files to a folder of its own)")
+    return {folder: sorted(t)[0] for folder, t in folders.items()}, problems
+
+
+def owners(found):
+    """Every engine header's owning component, and the problems of deriving it."""
+    folder_of, problems = folder_components(found)
     table = {}
-    for pattern, target in OWNER_PATTERNS:
-        for path in ENGINE.glob(pattern):
-            table[generated(str(path.relative_to(ENGINE)))] = target
-    for header, target in PUBLIC_OWNERS.items():
-        table["include/kodawari/" + header] = target
-    return table
+    for folder, target in folder_of.items():
+        for pattern in INTERNAL_HEADERS:
+            for path in (ENGINE / folder).glob(pattern):
+                table[str(path.relative_to(ENGINE))] = target
+    subfolder_owner = {}
+    for target, headers in installed_headers().items():
+        for header in headers:
+            table[header] = target
+            parts = pathlib.PurePosixPath(header).parts  # include, kodawari, [folder,] name
+            if len(parts) > 3:
+                first = subfolder_owner.setdefault(parts[2], (target, header))
+                if first[0] != target:
+                    problems.append(f"{header}: installed by {target}, but {first[1]} of the same folder by {first[0]} "
+                                    "(a public folder is one component)")
+    return table, problems
 
 
 def targets():
@@ -152,22 +130,32 @@ def installed_headers():
             for m in re.finditer(r"kodawari_headers\((\w+)\n(.*?)\)", text, re.S)}
 
 
-def check_installed(owner):
-    """Every public header installed once, by its owner; nothing else installed."""
+def public_headers():
+    """Every header file under include/kodawari/ (generated ones by their installed name)."""
+    found = set()
+    # os.walk follows include/kodawari/shared, a link to shaders/shared (rglob would not).
+    for folder, _, files in os.walk(ENGINE / "include/kodawari", followlinks=True):
+        for name in files:
+            if name.endswith((".hpp", ".h", ".hpp.in")):
+                path = pathlib.Path(folder) / name
+                found.add(generated(str(path.relative_to(ENGINE))))
+    return found
+
+
+def check_installed():
+    """Every public header installed once; nothing else installed."""
     problems = []
     listed = {}
+    public = public_headers()
     for target, headers in installed_headers().items():
         for header in headers:
             if header in listed:
                 problems.append(f"{header}: installed by both {listed[header]} and {target}")
             listed[header] = target
-            if header not in owner or not header.startswith("include/"):
+            if header not in public:
                 problems.append(f"{header}: installed by {target} but not a public header")
-            elif owner[header] != target:
-                problems.append(f"{header}: installed by {target}, owned by {owner[header]}")
-    for header in sorted(h for h in owner if h.startswith("include/")):
-        if header not in listed:
-            problems.append(f"{header}: a public header that kodawari_headers() does not install")
+    for header in sorted(public - set(listed)):
+        problems.append(f"{header}: a public header that kodawari_headers() does not install")
     return problems, len(listed)
 
 
@@ -225,8 +213,9 @@ def check_vulkan_free():
 
 
 def check():
-    owner = owners()
-    problems = check_neutral() + check_vulkan_free()
+    found = targets()
+    owner, derived = owners(found)
+    problems = derived + check_neutral() + check_vulkan_free()
 
     def scan(source, target, seen):
         if source in seen:
@@ -243,18 +232,17 @@ def check():
             if header is None:
                 continue  # the standard library, glm
             if header not in owner:
-                problems.append(f"{header}: no owner in check_layers.py")
+                problems.append(f"{header}: no owner (neither in a component's folder nor installed by one)")
                 continue
             if owner[header] not in LINKS[target]:
                 problems.append(f"{target}: {source} includes {include} ({owner[header]})")
             scan(source_file(header), target, seen)
 
-    found = targets()
     for target, sources in found.items():
         for source in sources:
             if source.endswith(".cpp"):
                 scan(ENGINE / source, target, set())
-    installed, count = check_installed(owner)
+    installed, count = check_installed()
     problems += installed
     for line in problems:
         print(line)

@@ -1,5 +1,5 @@
 // The cpu-reference pose backend: instance after instance on one thread with
-// gltf::evaluate (engine/gltf/animation.cpp), the validation oracle. (The cpu backend is
+// animation::evaluate (engine/animation/character.cpp), the validation oracle. (The cpu backend is
 // simd_poses.cpp.)
 #include <cassert>
 #include <cmath>
@@ -16,14 +16,14 @@ public:
     std::string_view name() const override { return "cpu-reference"; }
     std::string device() const override { return "1 thread"; }
 
-    Result<void> load(const gltf::Character& character, std::span<const PoseInstance> instances) override {
+    Result<void> load(const animation::Character& character, std::span<const PoseInstance> instances) override {
         KW_TRY(check_instances(character, instances));
         character_ = &character;
         instances_.assign(instances.begin(), instances.end());
         placements_.resize(instances.size());
         for (std::size_t i = 0; i < instances.size(); ++i) placements_[i] = placement_matrix(instances[i].placement);
         // Every rest-pose instance shares one evaluation of the rest pose.
-        rest_ = gltf::rest_pose(character);
+        rest_ = animation::rest_pose(character);
         world_.assign(instances.size() * character.nodes.size(), glm::mat4(0.0f));
         evaluated_ = false;
         return {};
@@ -46,15 +46,15 @@ public:
 private:
     // Instances [begin, end): the clip at the instance's clip time (or the rest pose),
     // then the placement.
-    void evaluate_range(std::size_t begin, std::size_t end, float time, gltf::Pose& scratch) {
-        const gltf::Character& character = *character_;
+    void evaluate_range(std::size_t begin, std::size_t end, float time, animation::Pose& scratch) {
+        const animation::Character& character = *character_;
         const std::size_t nodes = character.nodes.size();
         for (std::size_t i = begin; i < end; ++i) {
             const PoseInstance& instance = instances_[i];
-            const gltf::Pose* pose = &rest_;
+            const animation::Pose* pose = &rest_;
             if (instance.clip >= 0) {
                 const auto clip = static_cast<std::size_t>(instance.clip);
-                gltf::evaluate(character, clip, clip_time(character.animations[clip], instance, time), scratch);
+                animation::evaluate(character, clip, clip_time(character.animations[clip], instance, time), scratch);
                 pose = &scratch;
             }
             glm::mat4* out = world_.data() + i * nodes;
@@ -62,11 +62,11 @@ private:
         }
     }
 
-    const gltf::Character* character_ = nullptr;
+    const animation::Character* character_ = nullptr;
     std::vector<PoseInstance> instances_;
     std::vector<glm::mat4> placements_;
-    gltf::Pose rest_;
-    gltf::Pose scratch_;  // reused from evaluation to evaluation
+    animation::Pose rest_;
+    animation::Pose scratch_;  // reused from evaluation to evaluation
     std::vector<glm::mat4> world_;
     bool evaluated_ = false;
 };

@@ -1,5 +1,5 @@
 // What every pose backend shares: the checks of the instances (the clip time and the
-// placement matrix: gltf/pose_instance.cpp; the choice of backend: backend.cpp and
+// placement matrix: animation/pose_instance.cpp; the choice of backend: backend.cpp and
 // backend_factory.cpp).
 #include <algorithm>
 #include <cmath>
@@ -10,7 +10,7 @@
 
 namespace kodawari {
 
-Result<void> check_instances(const gltf::Character& character, std::span<const PoseInstance> instances) {
+Result<void> check_instances(const animation::Character& character, std::span<const PoseInstance> instances) {
     const std::size_t clips = character.animations.size();
     for (std::size_t i = 0; i < instances.size(); ++i) {
         const PoseInstance& instance = instances[i];

@@ -1,7 +1,7 @@
 // The cpu pose backend: engine/simd/poses_simd.cpp's kernel on every core. Instances are
 // grouped by clip into batches of 16 (simd/poses_simd.hpp); per evaluation each thread
 // takes a contiguous range of batches, samples their channels lane by lane with the
-// reference's gltf::sample (and clip_time), then composes their matrices in vectors,
+// reference's animation::sample (and clip_time), then composes their matrices in vectors,
 // writing each instance's own rows of the output.
 #include <algorithm>
 #include <cmath>
@@ -30,7 +30,7 @@ std::array<float, 16> columns(const glm::mat4& m) {
 }
 
 // The plan of clip `clip` (-1: the rest pose) of `character` (poses_simd.hpp).
-simd::PoseClipPlan make_plan(const gltf::Character& character, const gltf::Pose& rest, int clip) {
+simd::PoseClipPlan make_plan(const animation::Character& character, const animation::Pose& rest, int clip) {
     simd::PoseClipPlan plan;
     const std::size_t n = character.nodes.size();
     plan.order = character.order;
@@ -38,21 +38,21 @@ simd::PoseClipPlan make_plan(const gltf::Character& character, const gltf::Pose&
     plan.r_channel.assign(n, -1);
     plan.s_channel.assign(n, -1);
     if (clip >= 0) {
-        const gltf::Animation& animation = character.animations[static_cast<std::size_t>(clip)];
+        const animation::Animation& animation = character.animations[static_cast<std::size_t>(clip)];
         plan.channels = static_cast<std::uint32_t>(animation.channels.size());
         for (std::size_t c = 0; c < animation.channels.size(); ++c) {
-            const gltf::Channel& channel = animation.channels[c];
+            const animation::Channel& channel = animation.channels[c];
             const auto node = static_cast<std::size_t>(channel.node);
-            auto& slot = channel.path == gltf::Path::Translation ? plan.t_channel
-                         : channel.path == gltf::Path::Rotation  ? plan.r_channel
+            auto& slot = channel.path == animation::Path::Translation ? plan.t_channel
+                         : channel.path == animation::Path::Rotation  ? plan.r_channel
                                                                  : plan.s_channel;
-            slot[node] = static_cast<std::int32_t>(c);  // gltf::evaluate applies the channels in order
+            slot[node] = static_cast<std::int32_t>(c);  // animation::evaluate applies the channels in order
         }
     }
     plan.uniform_world.assign(n, 1);
     for (const int index : character.order) {
         const auto i = static_cast<std::size_t>(index);
-        const gltf::Node& node = character.nodes[i];
+        const animation::Node& node = character.nodes[i];
         plan.parent.resize(n);
         plan.parent[i] = node.parent;
         const bool animated = plan.t_channel[i] >= 0 || plan.r_channel[i] >= 0 || plan.s_channel[i] >= 0;
@@ -60,7 +60,7 @@ simd::PoseClipPlan make_plan(const gltf::Character& character, const gltf::Pose&
         plan.uniform_world[i] = animated || under_animated ? 0 : 1;
     }
     for (std::size_t i = 0; i < n; ++i) {
-        const gltf::Node& node = character.nodes[i];
+        const animation::Node& node = character.nodes[i];
         plan.world.push_back(columns(rest.world[i]));
         // compute_world's local matrix of the rest TRS.
         const glm::mat4 local = node.matrix ? *node.matrix
@@ -84,11 +84,11 @@ public:
         return std::to_string(threads_) + (threads_ == 1 ? " thread, " : " threads, ") + isa_.name;
     }
 
-    Result<void> load(const gltf::Character& character, std::span<const PoseInstance> instances) override {
+    Result<void> load(const animation::Character& character, std::span<const PoseInstance> instances) override {
         KW_TRY(check_instances(character, instances));
         character_ = &character;
         instances_.assign(instances.begin(), instances.end());
-        const gltf::Pose rest = gltf::rest_pose(character);
+        const animation::Pose rest = animation::rest_pose(character);
         plans_.clear();
         for (int clip = -1; clip < static_cast<int>(character.animations.size()); ++clip) {
             plans_.push_back(make_plan(character, rest, clip));
@@ -160,17 +160,17 @@ public:
 
 private:
     // Batch b's channel values at scene time `time`, lane by lane with the reference's own
-    // functions (clip_time, gltf::sample), into its rows.
+    // functions (clip_time, animation::sample), into its rows.
     void sample(std::size_t b, float time) {
         const simd::PoseBatch& batch = batches_[b];
         if (batch.plan == 0) return;  // the rest pose samples nothing
-        const gltf::Animation& clip = character_->animations[batch.plan - 1];
+        const animation::Animation& clip = character_->animations[batch.plan - 1];
         float* rows = values_.get() + value_offset_[b];
         for (std::size_t l = 0; l < kBatchLanes; ++l) {
             const float t = clip_time(clip, instances_[batch.instance[l]], time);
             for (std::size_t c = 0; c < clip.channels.size(); ++c) {
-                const gltf::Channel& channel = clip.channels[c];
-                const glm::vec4 v = gltf::sample(clip.samplers[channel.sampler], channel.path, t);
+                const animation::Channel& channel = clip.channels[c];
+                const glm::vec4 v = animation::sample(clip.samplers[channel.sampler], channel.path, t);
                 for (int k = 0; k < 4; ++k) rows[(c * 4 + static_cast<std::size_t>(k)) * kBatchLanes + l] = v[k];
             }
         }
@@ -179,7 +179,7 @@ private:
     simd::Isa isa_;
     unsigned threads_;
     simd::PoseKernels kernels_;
-    const gltf::Character* character_ = nullptr;
+    const animation::Character* character_ = nullptr;
     std::vector<PoseInstance> instances_;
     std::vector<simd::PoseClipPlan> plans_;  // plans_[clip + 1]
     std::vector<simd::PoseBatch> batches_;

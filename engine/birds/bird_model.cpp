@@ -9,7 +9,7 @@ namespace kodawari::birds {
 glm::quat model_bone_rotation(const BirdModel& model, std::size_t part, const glm::quat& q) {
     assert(part < kPartCount);
     const glm::quat& c = model.axes[part];
-    const gltf::Node& bone = model.character.nodes[static_cast<std::size_t>(model.bones[part])];
+    const animation::Node& bone = model.character.nodes[static_cast<std::size_t>(model.bones[part])];
     // q turns vectors given in the rig part's axes; C takes the bone's frame to those axes,
     // so the same turn of the bone's own vectors is conj(C) q C, made after the bone's
     // rest rotation (its children and its vertices are in the rotated frame).

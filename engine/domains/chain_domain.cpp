@@ -8,7 +8,7 @@
 #include <string>
 #include <vector>
 
-#include "backends/device_backends.hpp"
+#include "vulkan_backends/device_backends.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/domains/chain_draw.hpp"

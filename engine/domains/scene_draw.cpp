@@ -38,8 +38,8 @@ CameraView scene_camera(const Scene& scene, std::uint32_t frame) {
     return view;
 }
 
-bool draws_skinned(const gltf::Character& character) {
-    return std::any_of(character.nodes.begin(), character.nodes.end(), [&](const gltf::Node& n) {
+bool draws_skinned(const animation::Character& character) {
+    return std::any_of(character.nodes.begin(), character.nodes.end(), [&](const animation::Node& n) {
         return n.mesh >= 0 && !character.meshes[static_cast<std::size_t>(n.mesh)].triangles.empty();
     });
 }

@@ -45,7 +45,7 @@ Result<void> SkinnedLayer::set_scene(gpu::VulkanContext& ctx, const RodScene* sc
             if (scene->instances[c].character == k) ch.instances.push_back(c);
         }
         if (ch.instances.empty()) continue;
-        const gltf::Character& rig = *kin.rig;
+        const animation::Character& rig = *kin.rig;
         ch.nodes = static_cast<std::uint32_t>(rig.nodes.size());
         ch.chains = static_cast<std::uint32_t>(kin.chains.size());
 
@@ -85,7 +85,7 @@ Result<void> SkinnedLayer::set_scene(gpu::VulkanContext& ctx, const RodScene* sc
         // Every skin's joints in one table (JOINTS_0 entry j of skin s is entry first[s] + j).
         std::vector<gpu::SkinJointGpu> joints;
         std::vector<std::uint32_t> skin_first;
-        for (const gltf::Skin& skin : rig.skins) {
+        for (const animation::Skin& skin : rig.skins) {
             skin_first.push_back(static_cast<std::uint32_t>(joints.size()));
             for (std::size_t j = 0; j < skin.joints.size(); ++j) {
                 const glm::mat4& m = skin.inverse_bind_matrices[j];
@@ -99,10 +99,10 @@ Result<void> SkinnedLayer::set_scene(gpu::VulkanContext& ctx, const RodScene* sc
         std::vector<gpu::SkinnedVertexGpu> vertices;
         std::vector<std::uint32_t> indices;
         for (std::size_t n = 0; n < rig.nodes.size(); ++n) {
-            const gltf::Node& node = rig.nodes[n];
+            const animation::Node& node = rig.nodes[n];
             if (node.mesh < 0) continue;
-            const gltf::Skin* skin = node.skin >= 0 ? &rig.skins[static_cast<std::size_t>(node.skin)] : nullptr;
-            for (const gltf::Mesh::Triangles& t : rig.meshes[static_cast<std::size_t>(node.mesh)].triangles) {
+            const animation::Skin* skin = node.skin >= 0 ? &rig.skins[static_cast<std::size_t>(node.skin)] : nullptr;
+            for (const animation::Mesh::Triangles& t : rig.meshes[static_cast<std::size_t>(node.mesh)].triangles) {
                 const auto base = static_cast<std::uint32_t>(vertices.size());
                 for (std::size_t v = 0; v < t.positions.size(); ++v) {
                     const glm::vec3& p = t.positions[v];

@@ -62,7 +62,7 @@ private:
     const RodScene* scene_ = nullptr;
     std::vector<Character> characters_;
     std::vector<gpu::PoseMatrixGpu> packed_;
-    gltf::Pose pose_;
+    animation::Pose pose_;
     std::vector<glm::mat4> matrices_;
     ChainSnapshot scratch_;
     bool on_device_ = false;

@@ -37,13 +37,13 @@ Result<BirdModelExport> BirdModelExport::create(const birds::BirdWorld& world, s
     if (!writer) return writer.error();
     BirdModelExport out(world, model, path, std::move(birds), std::move(writer).value());
     const int parent = m.character.nodes[static_cast<std::size_t>(m.bones[KW_PART_BODY])].parent;
-    if (parent >= 0) out.body_parent_inverse_ = glm::inverse(gltf::rest_pose(m.character).world[static_cast<std::size_t>(parent)]);
+    if (parent >= 0) out.body_parent_inverse_ = glm::inverse(animation::rest_pose(m.character).world[static_cast<std::size_t>(parent)]);
     return out;
 }
 
 Result<void> BirdModelExport::add_frames(std::span<const gpu::BirdPose> poses) {
     const birds::BirdModel& m = *world_->models[model_];
-    const gltf::Character& c = m.character;
+    const animation::Character& c = m.character;
     const std::size_t count = world_->birds.size();
     const std::size_t nodes = c.nodes.size();
     if (count == 0 || poses.size() % count != 0) {
@@ -53,7 +53,7 @@ Result<void> BirdModelExport::add_frames(std::span<const gpu::BirdPose> poses) {
     translation_.resize(birds_.size() * nodes);
     rotation_.resize(birds_.size() * nodes);
     scale_.resize(birds_.size() * nodes);
-    const glm::quat body_rest = gltf::rigid_part(gltf::rest_pose(c).world[static_cast<std::size_t>(m.bones[KW_PART_BODY])]).rotation;
+    const glm::quat body_rest = animation::rigid_part(animation::rest_pose(c).world[static_cast<std::size_t>(m.bones[KW_PART_BODY])]).rotation;
     // The tail's spread s widens the rig's Tail along its X (1 + s); a node scales along
     // its own axes, so the tail bone's axis nearest the rig's X takes it.
     const glm::vec3 width = glm::conjugate(m.axes[KW_PART_TAIL]) * glm::vec3(1.0f, 0.0f, 0.0f);
@@ -85,7 +85,7 @@ Result<void> BirdModelExport::add_frames(std::span<const gpu::BirdPose> poses) {
                                         glm::mat4_cast(quat(pose.rotation[part]) * body_rest) * glm::scale(glm::mat4(1.0f), c.nodes[bone].scale);
                 const glm::mat4 local = body_parent_inverse_ * world;
                 translation_[i * nodes + bone] = glm::vec3(local[3]);
-                rotation_[i * nodes + bone] = gltf::rigid_part(local).rotation;
+                rotation_[i * nodes + bone] = animation::rigid_part(local).rotation;
             }
         }
         KW_TRY(writer_.add_frame(translation_, rotation_, scale_));

@@ -185,7 +185,7 @@ Result<tinygltf::Model> load_source(const std::string& path) {
 
 }  // namespace
 
-Result<RiggedGlbWriter> RiggedGlbWriter::create(const std::string& source_path, const gltf::Character& character,
+Result<RiggedGlbWriter> RiggedGlbWriter::create(const std::string& source_path, const animation::Character& character,
                                                 std::span<const RiggedInstance> instances, std::vector<bool> animated,
                                                 float fps, std::string animation_name, std::string spill_beside,
                                                 const GlbCompaction& compaction) {
@@ -263,7 +263,7 @@ Result<RiggedGlbWriter> RiggedGlbWriter::create(const std::string& source_path, 
     impl->animated = std::move(animated);
 
     std::vector<bool> joint(n, false);
-    for (const gltf::Skin& skin : character.skins) {
+    for (const animation::Skin& skin : character.skins) {
         for (const int j : skin.joints) joint[static_cast<std::size_t>(j)] = true;
     }
     std::vector<bool> shown(n, false);  // in the displayed scene
@@ -277,7 +277,7 @@ Result<RiggedGlbWriter> RiggedGlbWriter::create(const std::string& source_path, 
     impl->moves.assign(n, false);
     impl->extra.assign(n, -1);
     for (std::size_t k = 0; k < n; ++k) {
-        const gltf::Node& node = character.nodes[k];
+        const animation::Node& node = character.nodes[k];
         impl->names.push_back(node.name.empty() ? "#" + std::to_string(k) : node.name);
         impl->matrix.push_back(node.matrix.has_value());
         impl->rest_translation.push_back(node.translation);

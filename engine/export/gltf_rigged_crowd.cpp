@@ -28,7 +28,7 @@ Result<RiggedCrowdExport> RiggedCrowdExport::create(const RodScene& scene, std::
                                                     const GlbCompaction& compaction) {
     assert(character < scene.characters.size() && scene.characters[character].rig);
     const CharacterKinematics& k = scene.characters[character];
-    const gltf::Character& ch = *k.rig;
+    const animation::Character& ch = *k.rig;
     std::vector<std::uint32_t> instances;
     std::vector<RiggedInstance> placed;
     for (std::uint32_t c = 0; c < scene.instances.size(); ++c) {
@@ -38,8 +38,8 @@ Result<RiggedCrowdExport> RiggedCrowdExport::create(const RodScene& scene, std::
     }
     // Keys for what moves: nodes some clip animates, and every chain joint.
     std::vector<bool> animated(ch.nodes.size(), false);
-    for (const gltf::Animation& clip : ch.animations) {
-        for (const gltf::Channel& channel : clip.channels) animated[static_cast<std::size_t>(channel.node)] = true;
+    for (const animation::Animation& clip : ch.animations) {
+        for (const animation::Channel& channel : clip.channels) animated[static_cast<std::size_t>(channel.node)] = true;
     }
     for (const std::vector<int>& nodes : k.chain_nodes) {
         for (const int n : nodes) animated[static_cast<std::size_t>(n)] = true;
@@ -52,7 +52,7 @@ Result<RiggedCrowdExport> RiggedCrowdExport::create(const RodScene& scene, std::
 Result<void> RiggedCrowdExport::add_frame(std::uint32_t frame, const ChainSnapshot& snapshot) {
     const RodScene& scene = *scene_;
     const CharacterKinematics& k = scene.characters[character_];
-    const gltf::Character& ch = *k.rig;
+    const animation::Character& ch = *k.rig;
     const std::size_t n = ch.nodes.size();
     const std::size_t own = own_end_ - own_begin_;
     translation_.resize(own * n);
@@ -64,7 +64,7 @@ Result<void> RiggedCrowdExport::add_frame(std::uint32_t frame, const ChainSnapsh
     std::mutex failed_lock;
     std::optional<std::pair<std::size_t, Error>> failed;
     parallel_for(own, resolve_threads(0), [&](std::size_t begin, std::size_t end) {
-        gltf::Pose pose;
+        animation::Pose pose;
         std::vector<glm::mat4> world;
         for (std::size_t j = begin; j < end; ++j) {
             const std::uint32_t c = instances_[own_begin_ + j];
@@ -82,8 +82,8 @@ Result<void> RiggedCrowdExport::add_frame(std::uint32_t frame, const ChainSnapsh
                     const auto node = static_cast<std::size_t>(nodes[i]);
                     const glm::mat4& parent = world[static_cast<std::size_t>(nodes[i - 1])];
                     const glm::vec3 t = glm::vec3(glm::inverse(parent) * world[node][3]);
-                    const glm::quat r = glm::normalize(glm::conjugate(gltf::rigid_part(parent).rotation) *
-                                                       gltf::rigid_part(world[node]).rotation);
+                    const glm::quat r = glm::normalize(glm::conjugate(animation::rigid_part(parent).rotation) *
+                                                       animation::rigid_part(world[node]).rotation);
                     if (!std::isfinite(t.x + t.y + t.z + r.x + r.y + r.z + r.w)) {
                         const std::lock_guard lock(failed_lock);
                         if (!failed || failed->first > j) {

@@ -11,15 +11,15 @@
 namespace kodawari::gltf::detail {
 namespace {
 
-Result<Sampler> load_sampler(const Context& ctx, const tinygltf::Model& model, const tinygltf::AnimationSampler& src,
-                             const std::string& path, Path target) {
-    Sampler sampler;
+Result<animation::Sampler> load_sampler(const Context& ctx, const tinygltf::Model& model, const tinygltf::AnimationSampler& src,
+                             const std::string& path, animation::Path target) {
+    animation::Sampler sampler;
     if (src.interpolation == "LINEAR") {
-        sampler.interpolation = Interpolation::Linear;
+        sampler.interpolation = animation::Interpolation::Linear;
     } else if (src.interpolation == "STEP") {
-        sampler.interpolation = Interpolation::Step;
+        sampler.interpolation = animation::Interpolation::Step;
     } else if (src.interpolation == "CUBICSPLINE") {
-        sampler.interpolation = Interpolation::CubicSpline;
+        sampler.interpolation = animation::Interpolation::CubicSpline;
     } else {
         return ctx.invalid(path + ".interpolation", "expected LINEAR, STEP or CUBICSPLINE, got \"" + src.interpolation + "\"");
     }
@@ -30,7 +30,7 @@ Result<Sampler> load_sampler(const Context& ctx, const tinygltf::Model& model, c
                                                 type_name(accessor_of(model, src.input).type) + ", expected SCALAR");
     }
     sampler.times = std::move(times).value();
-    const bool cubic = sampler.interpolation == Interpolation::CubicSpline;
+    const bool cubic = sampler.interpolation == animation::Interpolation::CubicSpline;
     if (sampler.times.empty() || (cubic && sampler.times.size() < 2)) {
         return ctx.invalid(path + ".input", cubic ? "CUBICSPLINE needs at least two keys" : "no keys");
     }
@@ -42,13 +42,13 @@ Result<Sampler> load_sampler(const Context& ctx, const tinygltf::Model& model, c
                                                     std::to_string(sampler.times[k - 1]));
         }
     }
-    const std::size_t comps = target == Path::Rotation ? 4 : 3;
-    auto values = read_floats(ctx, model, src.output, path + ".output", target == Path::Rotation);
+    const std::size_t comps = target == animation::Path::Rotation ? 4 : 3;
+    auto values = read_floats(ctx, model, src.output, path + ".output", target == animation::Path::Rotation);
     if (!values) return values.error();
     const tinygltf::Accessor& output = accessor_of(model, src.output);
     if (component_count(output.type) != comps || output.type == TINYGLTF_TYPE_MAT2) {
         return ctx.invalid(path + ".output", "accessor " + std::to_string(src.output) + " is " + type_name(output.type) +
-                                                 ", a " + (target == Path::Rotation ? "rotation needs VEC4" : "translation or scale needs VEC3"));
+                                                 ", a " + (target == animation::Path::Rotation ? "rotation needs VEC4" : "translation or scale needs VEC3"));
     }
     const std::size_t expected = sampler.times.size() * (cubic ? 3 : 1);
     if (output.count != expected) {
@@ -66,11 +66,11 @@ Result<Sampler> load_sampler(const Context& ctx, const tinygltf::Model& model, c
 
 }  // namespace
 
-Result<void> load_animations(const Context& ctx, const tinygltf::Model& model, Character& out) {
+Result<void> load_animations(const Context& ctx, const tinygltf::Model& model, animation::Character& out) {
     for (std::size_t a = 0; a < model.animations.size(); ++a) {
         const tinygltf::Animation& src = model.animations[a];
         const std::string path = at("$.animations", a);
-        Animation animation;
+        animation::Animation animation;
         // Scenes pick clips by name, so an unnamed clip gets one (see Animation::name).
         animation.name = src.name.empty() ? "animation" + std::to_string(a) : src.name;
         animation.samplers.resize(src.samplers.size());
@@ -86,13 +86,13 @@ Result<void> load_animations(const Context& ctx, const tinygltf::Model& model, C
             if (static_cast<std::size_t>(channel.target_node) >= out.nodes.size()) {
                 return ctx.invalid(cpath + ".target.node", "node " + std::to_string(channel.target_node) + " does not exist");
             }
-            Path target = Path::Translation;
+            animation::Path target = animation::Path::Translation;
             if (channel.target_path == "translation") {
-                target = Path::Translation;
+                target = animation::Path::Translation;
             } else if (channel.target_path == "rotation") {
-                target = Path::Rotation;
+                target = animation::Path::Rotation;
             } else if (channel.target_path == "scale") {
-                target = Path::Scale;
+                target = animation::Path::Scale;
             } else if (channel.target_path == "weights") {
                 continue;  // morph targets do not move joints
             } else {
@@ -103,14 +103,14 @@ Result<void> load_animations(const Context& ctx, const tinygltf::Model& model, C
                 return ctx.invalid(cpath + ".target.node", "node " + std::to_string(channel.target_node) +
                                                                " has a matrix; an animated node must use TRS (§3.5.3)");
             }
-            for (const Channel& other : animation.channels) {
+            for (const animation::Channel& other : animation.channels) {
                 if (other.node == channel.target_node && other.path == target) {
                     return ctx.invalid(cpath + ".target", "node " + std::to_string(channel.target_node) + "'s " +
                                                               channel.target_path + " is animated twice in this animation");
                 }
             }
             const auto s = static_cast<std::size_t>(channel.sampler);
-            const int wanted = target == Path::Rotation ? 4 : 3;
+            const int wanted = target == animation::Path::Rotation ? 4 : 3;
             if (sampler_path[s] < 0) {
                 auto sampler = load_sampler(ctx, model, src.samplers[s], at(path + ".samplers", s), target);
                 if (!sampler) return sampler.error();
@@ -121,7 +121,7 @@ Result<void> load_animations(const Context& ctx, const tinygltf::Model& model, C
                                                            " also drives a property of another size");
             }
             animation.channels.push_back({channel.target_node, target, s});
-            const Sampler& used = animation.samplers[s];
+            const animation::Sampler& used = animation.samplers[s];
             animation.start = any ? std::min(animation.start, used.times.front()) : used.times.front();
             animation.end = any ? std::max(animation.end, used.times.back()) : used.times.back();
             any = true;

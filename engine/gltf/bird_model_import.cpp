@@ -78,7 +78,7 @@ Side part_side(std::size_t part) {
 
 bool is_wing(std::size_t part) { return part_side(part) != Side::None; }
 
-int depth(const Character& c, int node) {
+int depth(const animation::Character& c, int node) {
     int d = 0;
     for (int n = c.nodes[static_cast<std::size_t>(node)].parent; n >= 0; n = c.nodes[static_cast<std::size_t>(n)].parent) ++d;
     return d;
@@ -93,7 +93,7 @@ std::string patterns_text(std::size_t part) {
 
 // The bone of `part` by name patterns among the skin's joints not taken yet: the first
 // pattern any bone matches, the bone nearest the root among its matches (then the first).
-std::optional<int> find_by_pattern(const Character& c, const Skin& skin, std::size_t part, const std::vector<int>& taken) {
+std::optional<int> find_by_pattern(const animation::Character& c, const animation::Skin& skin, std::size_t part, const std::vector<int>& taken) {
     for (const std::string& pattern : kPatterns[part]) {
         std::optional<int> best;
         for (const int joint : skin.joints) {
@@ -110,7 +110,7 @@ std::optional<int> find_by_pattern(const Character& c, const Skin& skin, std::si
 Error bad(const std::string& where, const std::string& what) { return make_error(Error::Kind::InvalidInput, where + ": " + what); }
 
 // The mapping file's bones: part -> node, -1 for the parts it leaves to the patterns.
-Result<std::array<int, kPartCount>> read_map(const std::string& map_path, const std::string& path, const Character& c,
+Result<std::array<int, kPartCount>> read_map(const std::string& map_path, const std::string& path, const animation::Character& c,
                                             std::size_t skin_index) {
     std::array<int, kPartCount> bones{};
     bones.fill(-1);
@@ -121,7 +121,7 @@ Result<std::array<int, kPartCount>> read_map(const std::string& map_path, const 
     const nlohmann::json doc = nlohmann::json::parse(text.str(), nullptr, false);
     if (doc.is_discarded()) return bad(map_path, "not JSON (expected an object {\"body\": \"bone name\", ...})");
     if (!doc.is_object()) return bad(map_path, std::string("$: expected an object {\"body\": \"bone name\", ...}, found ") + doc.type_name());
-    const Skin& skin = c.skins[skin_index];
+    const animation::Skin& skin = c.skins[skin_index];
     for (const auto& [key, value] : doc.items()) {
         const auto it = std::find(birds::kModelPartKeys.begin(), birds::kModelPartKeys.end(), key);
         if (it == birds::kModelPartKeys.end()) {
@@ -154,20 +154,20 @@ Result<birds::BirdModel> load_bird_model(const std::string& path, const std::str
     model.source = path;
     model.name = std::filesystem::path(path).stem().string();
     model.character = std::move(loaded).value();
-    const Character& c = model.character;
+    const animation::Character& c = model.character;
     if (c.skins.empty()) {
         return bad(path, "skins: the file has no skin; a rigged bird needs its bones in one (export it with its armature)");
     }
     // The bird's skin: the first one a mesh uses, else the first.
     std::size_t skin_index = 0;
-    for (const Node& node : c.nodes) {
+    for (const animation::Node& node : c.nodes) {
         if (node.mesh >= 0 && node.skin >= 0) {
             skin_index = static_cast<std::size_t>(node.skin);
             break;
         }
     }
     model.skin = static_cast<int>(skin_index);
-    const Skin& skin = c.skins[skin_index];
+    const animation::Skin& skin = c.skins[skin_index];
     const std::string skin_path = "skins[" + std::to_string(skin_index) + "].joints";
 
     // Which bone is which part: the mapping file's, then the name patterns.
@@ -205,7 +205,7 @@ Result<birds::BirdModel> load_bird_model(const std::string& path, const std::str
     // inverse bind matrix, weighted), each triangle on the part its weights lean to. A
     // joint that is no part's bone belongs to the nearest part bone above it (feather
     // bones under a forearm are wing).
-    const Pose rest = rest_pose(c);
+    const animation::Pose rest = rest_pose(c);
     std::vector<int> part_of_node(c.nodes.size(), -1);
     for (std::size_t n = 0; n < c.nodes.size(); ++n) {
         for (int up = static_cast<int>(n); up >= 0 && part_of_node[n] < 0; up = c.nodes[static_cast<std::size_t>(up)].parent) {
@@ -224,10 +224,10 @@ Result<birds::BirdModel> load_bird_model(const std::string& path, const std::str
     };
     std::vector<Triangle> triangles;
     int mesh_index = -1;
-    for (const Node& node : c.nodes) {
+    for (const animation::Node& node : c.nodes) {
         if (node.mesh < 0 || node.skin != static_cast<int>(skin_index)) continue;
-        const Mesh& mesh = c.meshes[static_cast<std::size_t>(node.mesh)];
-        for (const Mesh::Triangles& t : mesh.triangles) {
+        const animation::Mesh& mesh = c.meshes[static_cast<std::size_t>(node.mesh)];
+        for (const animation::Mesh::Triangles& t : mesh.triangles) {
             if (t.joints.empty() || t.indices.empty()) continue;
             if (mesh_index < 0) mesh_index = node.mesh;
             std::vector<glm::vec3> skinned(t.positions.size());
@@ -340,7 +340,7 @@ Result<birds::BirdModel> load_bird_model(const std::string& path, const std::str
         frames[part] = glm::mat3(x, glm::cross(z, x), z);
     }
     for (std::size_t part = 0; part < kPartCount; ++part) {
-        const glm::quat bone = rigid_part(rest.world[static_cast<std::size_t>(bones[part])]).rotation;
+        const glm::quat bone = animation::rigid_part(rest.world[static_cast<std::size_t>(bones[part])]).rotation;
         model.axes[part] = glm::normalize(glm::quat_cast(glm::transpose(frames[part])) * bone);
         const int parent = birds::kPartParents[part];
         if (parent < 0) continue;

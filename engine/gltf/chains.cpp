@@ -55,28 +55,28 @@ bool contains_any(const std::string& lowered_name, const std::vector<std::string
     });
 }
 
-std::string node_label(const Character& character, int index) {
+std::string node_label(const animation::Character& character, int index) {
     const std::string& name = character.nodes[static_cast<std::size_t>(index)].name;
     return name.empty() ? "node " + std::to_string(index)
                         : "node \"" + name + "\" (" + std::to_string(index) + ")";
 }
 
-std::string chain_name(const Character& character, int root) {
+std::string chain_name(const animation::Character& character, int root) {
     const std::string& name = character.nodes[static_cast<std::size_t>(root)].name;
     return name.empty() ? "node " + std::to_string(root) : name;
 }
 
-Error invalid(const Character& character, const std::string& what) {
+Error invalid(const animation::Character& character, const std::string& what) {
     return make_error(Error::Kind::InvalidInput, character.source + ": chain setup: " + what);
 }
 
 // The base shape of `nodes` in the rest pose `pose` (see FoundChain::base).
-Result<rods::ChainShape> base_shape(const Character& character, const Pose& pose, const std::vector<int>& nodes) {
-    const rods::Transform root = rigid_part(pose.world[static_cast<std::size_t>(nodes.front())]);
+Result<rods::ChainShape> base_shape(const animation::Character& character, const animation::Pose& pose, const std::vector<int>& nodes) {
+    const rods::Transform root = animation::rigid_part(pose.world[static_cast<std::size_t>(nodes.front())]);
     const glm::quat to_root = glm::conjugate(root.rotation);
     rods::ChainShape shape;
     for (std::size_t k = 0; k < nodes.size(); ++k) {
-        const rods::Transform t = rigid_part(pose.world[static_cast<std::size_t>(nodes[k])]);
+        const rods::Transform t = animation::rigid_part(pose.world[static_cast<std::size_t>(nodes[k])]);
         // Joint 0 exactly at the origin with the identity: computing it would leave
         // rounding residue, and SPEC A.1 defines the frame by it.
         shape.positions.push_back(k == 0 ? glm::vec3(0.0f) : to_root * (t.position - root.position));
@@ -96,10 +96,10 @@ Result<rods::ChainShape> base_shape(const Character& character, const Pose& pose
 
 }  // namespace
 
-Result<ChainSetup> find_chains(const Character& character, const ChainSearch& search) {
+Result<ChainSetup> find_chains(const animation::Character& character, const ChainSearch& search) {
     const std::size_t n = character.nodes.size();
     const std::uint32_t min_joints = std::max<std::uint32_t>(search.min_joints, 2);
-    const Pose pose = rest_pose(character);
+    const animation::Pose pose = rest_pose(character);
 
     // Roots, in the order they start chains.
     std::vector<int> named_roots;
@@ -118,7 +118,7 @@ Result<ChainSetup> find_chains(const Character& character, const ChainSearch& se
     }
     std::vector<std::string> lowered_names;
     lowered_names.reserve(n);
-    for (const Node& node : character.nodes) lowered_names.push_back(lower(node.name));
+    for (const animation::Node& node : character.nodes) lowered_names.push_back(lower(node.name));
     // Parents first, so that a strand is claimed by its top matching node.
     const std::vector<int>& candidates = search.roots.empty() ? character.order : named_roots;
 
@@ -164,7 +164,7 @@ Result<ChainSetup> find_chains(const Character& character, const ChainSearch& se
     return setup;
 }
 
-Result<FoundChain> make_found_chain(const Character& character, const Pose& rest, std::vector<int> nodes) {
+Result<FoundChain> make_found_chain(const animation::Character& character, const animation::Pose& rest, std::vector<int> nodes) {
     assert(nodes.size() >= 2 && nodes.size() <= rods::kMaxChainJoints);
     const int root = nodes.front();
     auto shape = base_shape(character, rest, nodes);
@@ -180,9 +180,9 @@ Result<FoundChain> make_found_chain(const Character& character, const Pose& rest
     return chain;
 }
 
-float character_size(const Character& character) {
+float character_size(const animation::Character& character) {
     if (character.nodes.empty()) return 0.0f;
-    const Pose pose = rest_pose(character);
+    const animation::Pose pose = rest_pose(character);
     glm::vec3 lo(std::numeric_limits<float>::max());
     glm::vec3 hi(std::numeric_limits<float>::lowest());
     for (const glm::mat4& world : pose.world) {
@@ -193,7 +193,7 @@ float character_size(const Character& character) {
     return glm::length(hi - lo);
 }
 
-PhysicsScale scaled_physics(const Character& character, const FoundChain& chain) {
+PhysicsScale scaled_physics(const animation::Character& character, const FoundChain& chain) {
     assert(chain.base.positions.size() >= 2);
     float shortest = std::numeric_limits<float>::max();
     for (std::size_t i = 1; i < chain.base.positions.size(); ++i) {

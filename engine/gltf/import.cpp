@@ -25,7 +25,7 @@ bool finite(const std::vector<double>& values) {
 }
 
 // TRS of a matrix without shear (§3.5.3): columns are the scaled rotated axes.
-void decompose(const glm::mat4& m, Node& node) {
+void decompose(const glm::mat4& m, animation::Node& node) {
     node.translation = glm::vec3(m[3]);
     glm::vec3 s{glm::length(glm::vec3(m[0])), glm::length(glm::vec3(m[1])), glm::length(glm::vec3(m[2]))};
     if (glm::determinant(glm::mat3(m)) < 0.0f) s.x = -s.x;
@@ -37,12 +37,12 @@ void decompose(const glm::mat4& m, Node& node) {
     node.rotation = glm::normalize(glm::quat_cast(r));
 }
 
-Result<void> load_nodes(const Context& ctx, const tinygltf::Model& model, Character& out) {
+Result<void> load_nodes(const Context& ctx, const tinygltf::Model& model, animation::Character& out) {
     const std::size_t n = model.nodes.size();
     out.nodes.resize(n);
     for (std::size_t i = 0; i < n; ++i) {
         const tinygltf::Node& src = model.nodes[i];
-        Node& node = out.nodes[i];
+        animation::Node& node = out.nodes[i];
         const std::string path = at("$.nodes", i);
         node.name = src.name;
         if (src.mesh >= 0 && static_cast<std::size_t>(src.mesh) >= model.meshes.size()) {
@@ -98,7 +98,7 @@ Result<void> load_nodes(const Context& ctx, const tinygltf::Model& model, Charac
             if (static_cast<std::size_t>(c) == i) {
                 return ctx.invalid(path, "node " + std::to_string(c) + " is its own child (a cycle in the node tree)");
             }
-            Node& child = out.nodes[static_cast<std::size_t>(c)];
+            animation::Node& child = out.nodes[static_cast<std::size_t>(c)];
             if (child.parent >= 0) {
                 return ctx.invalid(path, "node " + std::to_string(c) + " already has parent node " +
                                              std::to_string(child.parent) + " (a node has at most one parent)");
@@ -140,7 +140,7 @@ Result<void> load_nodes(const Context& ctx, const tinygltf::Model& model, Charac
         if (out.nodes[i].parent < 0) out.order.push_back(static_cast<int>(i));
     }
     for (std::size_t k = 0; k < out.order.size(); ++k) {
-        const Node& node = out.nodes[static_cast<std::size_t>(out.order[k])];
+        const animation::Node& node = out.nodes[static_cast<std::size_t>(out.order[k])];
         out.order.insert(out.order.end(), node.children.begin(), node.children.end());
     }
     // §3.5.1 Scenes: the scene's nodes are roots. No scene: every root is shown.
@@ -173,7 +173,7 @@ Result<void> load_nodes(const Context& ctx, const tinygltf::Model& model, Charac
 
 namespace kodawari::gltf {
 
-Result<Character> load_character(const std::string& path) {
+Result<animation::Character> load_character(const std::string& path) {
     namespace fs = std::filesystem;
     using namespace detail;  // the steps of the import, one file each (import_detail.hpp)
     try {
@@ -186,7 +186,7 @@ Result<Character> load_character(const std::string& path) {
         if (!parsed) return parsed.error();
         const tinygltf::Model& model = parsed.value();
         KW_TRY(check_storage(ctx, model));
-        Character character;
+        animation::Character character;
         character.source = path;
         character.extensions = std::move(extensions);
         KW_TRY(load_meshes(ctx, model, character));

@@ -11,7 +11,7 @@
 
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 
 namespace kodawari::gltf::detail {
 
@@ -61,8 +61,8 @@ Result<std::vector<std::uint32_t>> read_uints(const Context& ctx, const tinygltf
 // checked against the model (load_nodes, in import.cpp, comes before skins and animations).
 // Mesh geometry for display (§3.7.2): TRIANGLES primitives with POSITION, and NORMAL,
 // JOINTS_0 and WEIGHTS_0 where given.
-Result<void> load_meshes(const Context& ctx, const tinygltf::Model& model, Character& out);
-Result<void> load_skins(const Context& ctx, const tinygltf::Model& model, Character& out);
-Result<void> load_animations(const Context& ctx, const tinygltf::Model& model, Character& out);
+Result<void> load_meshes(const Context& ctx, const tinygltf::Model& model, animation::Character& out);
+Result<void> load_skins(const Context& ctx, const tinygltf::Model& model, animation::Character& out);
+Result<void> load_animations(const Context& ctx, const tinygltf::Model& model, animation::Character& out);
 
 }  // namespace kodawari::gltf::detail

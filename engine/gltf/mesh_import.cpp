@@ -11,10 +11,10 @@ namespace kodawari::gltf::detail {
 
 // Mesh geometry for display (§3.7.2): TRIANGLES primitives with POSITION, and NORMAL,
 // JOINTS_0 and WEIGHTS_0 where given.
-Result<void> load_meshes(const Context& ctx, const tinygltf::Model& model, Character& out) {
+Result<void> load_meshes(const Context& ctx, const tinygltf::Model& model, animation::Character& out) {
     for (std::size_t m = 0; m < model.meshes.size(); ++m) {
         const tinygltf::Mesh& src = model.meshes[m];
-        Mesh mesh{src.name, src.primitives.size(), {}};
+        animation::Mesh mesh{src.name, src.primitives.size(), {}};
         for (std::size_t k = 0; k < src.primitives.size(); ++k) {
             const tinygltf::Primitive& prim = src.primitives[k];
             const std::string path = at(at("$.meshes", m) + ".primitives", k);
@@ -24,7 +24,7 @@ Result<void> load_meshes(const Context& ctx, const tinygltf::Model& model, Chara
                 return it == prim.attributes.end() ? -1 : it->second;
             };
             if (attribute("POSITION") < 0) return ctx.invalid(path + ".attributes", "a triangle primitive needs POSITION");
-            Mesh::Triangles t;
+            animation::Mesh::Triangles t;
             std::vector<float> values;
             KW_GLTF_ASSIGN(values, read_floats(ctx, model, attribute("POSITION"), path + ".attributes.POSITION", false));
             if (accessor_of(model, attribute("POSITION")).type != TINYGLTF_TYPE_VEC3) {

@@ -47,7 +47,7 @@ glm::dquat rotation_of(const glm::dmat4& world) {
     return glm::normalize(glm::quat_cast(r));
 }
 
-glm::dmat4 local_matrix(const Node& node, const glm::dvec3& t, const glm::dquat& r, const glm::dvec3& s) {
+glm::dmat4 local_matrix(const animation::Node& node, const glm::dvec3& t, const glm::dquat& r, const glm::dvec3& s) {
     if (node.matrix) return glm::dmat4(*node.matrix);
     return glm::translate(glm::dmat4(1.0), t) * glm::mat4_cast(r) * glm::scale(glm::dmat4(1.0), s);
 }
@@ -59,27 +59,27 @@ struct Locals {
     std::vector<glm::dvec3> s;
 };
 
-Locals locals_of(const Character& c, const Animation* clip, float time) {
+Locals locals_of(const animation::Character& c, const animation::Animation* clip, float time) {
     Locals l;
-    for (const Node& n : c.nodes) {
+    for (const animation::Node& n : c.nodes) {
         l.t.emplace_back(n.translation);
         l.r.emplace_back(glm::dquat(n.rotation));
         l.s.emplace_back(n.scale);
     }
     if (clip == nullptr) return l;
-    for (const Channel& ch : clip->channels) {
+    for (const animation::Channel& ch : clip->channels) {
         const glm::vec4 v = sample(clip->samplers[ch.sampler], ch.path, time);
         const auto i = static_cast<std::size_t>(ch.node);
         switch (ch.path) {
-            case Path::Translation: l.t[i] = glm::dvec3(glm::vec3(v)); break;
-            case Path::Rotation: l.r[i] = glm::normalize(glm::dquat(v.w, v.x, v.y, v.z)); break;
-            case Path::Scale: l.s[i] = glm::dvec3(glm::vec3(v)); break;
+            case animation::Path::Translation: l.t[i] = glm::dvec3(glm::vec3(v)); break;
+            case animation::Path::Rotation: l.r[i] = glm::normalize(glm::dquat(v.w, v.x, v.y, v.z)); break;
+            case animation::Path::Scale: l.s[i] = glm::dvec3(glm::vec3(v)); break;
         }
     }
     return l;
 }
 
-std::vector<glm::dmat4> world_of(const Character& c, const Locals& l) {
+std::vector<glm::dmat4> world_of(const animation::Character& c, const Locals& l) {
     std::vector<glm::dmat4> world(c.nodes.size(), glm::dmat4(1.0));
     for (const int index : c.order) {
         const auto i = static_cast<std::size_t>(index);
@@ -121,13 +121,13 @@ std::string file_of(const std::string& where) { return where.substr(0, where.fin
 
 }  // namespace
 
-Result<Retargeted> retarget(const Character& source, std::size_t clip_index, const HumanoidMap& source_map,
-                            const Character& target, const HumanoidMap& target_map, const std::string& name) {
+Result<Retargeted> retarget(const animation::Character& source, std::size_t clip_index, const HumanoidMap& source_map,
+                            const animation::Character& target, const HumanoidMap& target_map, const std::string& name) {
     try {
         if (clip_index >= source.animations.size()) {
             return invalid(source.source + ": $.animations", "animation " + std::to_string(clip_index) + " does not exist");
         }
-        const Animation& clip = source.animations[clip_index];
+        const animation::Animation& clip = source.animations[clip_index];
         Retargeted out;
 
         // The bones both skeletons have, in humanoid order.
@@ -151,19 +151,19 @@ Result<Retargeted> retarget(const Character& source, std::size_t clip_index, con
         std::vector<bool> rotated(ns, false);
         std::vector<bool> any_channel(ns, false);
         for (std::size_t c = 0; c < clip.channels.size(); ++c) {
-            const Channel& ch = clip.channels[c];
+            const animation::Channel& ch = clip.channels[c];
             const auto n = static_cast<std::size_t>(ch.node);
             any_channel[n] = true;
-            if (ch.path == Path::Rotation) rotated[n] = true;
+            if (ch.path == animation::Path::Rotation) rotated[n] = true;
             const auto bone = std::find_if(source_map.bones.begin(), source_map.bones.end(),
                                            [&](const HumanBone& b) { return b.node == ch.node; });
             if (bone == source_map.bones.end()) continue;
             own_channel[n] = true;
             const std::string where = source.source + ": $.animations[" + std::to_string(clip_index) + "].channels[" +
                                       std::to_string(c) + "]";
-            if (ch.path == Path::Scale) {
+            if (ch.path == animation::Path::Scale) {
                 out.warnings.push_back(where + ": scales bone " + bone->name + "; ignored (humanoid bones are not scaled)");
-            } else if (ch.path == Path::Translation && bone->name != "hips") {
+            } else if (ch.path == animation::Path::Translation && bone->name != "hips") {
                 out.warnings.push_back(where + ": translates bone " + bone->name + "; ignored (only the hips move)");
             }
         }
@@ -193,7 +193,7 @@ Result<Retargeted> retarget(const Character& source, std::size_t clip_index, con
 
         // The key times: every key of the clip, gaps longer than kMotionKeyGap split evenly.
         std::set<float> keys;
-        for (const Channel& ch : clip.channels) {
+        for (const animation::Channel& ch : clip.channels) {
             const std::vector<float>& t = clip.samplers[ch.sampler].times;
             keys.insert(t.begin(), t.end());
         }
@@ -236,8 +236,8 @@ Result<Retargeted> retarget(const Character& source, std::size_t clip_index, con
         const HumanBone* tgt_hips = target_map.find("hips");
         const bool hips_move = src_hips != nullptr && tgt_hips != nullptr &&
                                (above_moves[static_cast<std::size_t>(src_hips->node)] ||
-                                std::any_of(clip.channels.begin(), clip.channels.end(), [&](const Channel& ch) {
-                                    return ch.node == src_hips->node && ch.path == Path::Translation;
+                                std::any_of(clip.channels.begin(), clip.channels.end(), [&](const animation::Channel& ch) {
+                                    return ch.node == src_hips->node && ch.path == animation::Path::Translation;
                                 }));
         if (rotations.empty() && !hips_move) {
             return invalid(source_map.where, "the clip moves none of the bones " + file_of(target_map.where) + " has");
@@ -291,7 +291,7 @@ Result<Retargeted> retarget(const Character& source, std::size_t clip_index, con
             std::vector<glm::dmat4> world(nt, glm::dmat4(1.0));
             for (const int index : target.order) {
                 const auto i = static_cast<std::size_t>(index);
-                const Node& node = target.nodes[i];
+                const animation::Node& node = target.nodes[i];
                 const glm::dmat4 parent = node.parent >= 0 ? world[static_cast<std::size_t>(node.parent)] : glm::dmat4(1.0);
                 if (const int r = rotation_of_node[i]; r >= 0) {
                     const auto ri = static_cast<std::size_t>(r);
@@ -319,18 +319,18 @@ Result<Retargeted> retarget(const Character& source, std::size_t clip_index, con
             }
         }
 
-        Animation& a = out.animation;
+        animation::Animation& a = out.animation;
         a.name = name;
-        const auto add = [&](int node, Path path, std::vector<glm::vec4> values) {
-            Sampler s;
+        const auto add = [&](int node, animation::Path path, std::vector<glm::vec4> values) {
+            animation::Sampler s;
             s.times = times;
             s.values = std::move(values);
-            s.interpolation = Interpolation::Linear;
-            a.channels.push_back(Channel{node, path, a.samplers.size()});
+            s.interpolation = animation::Interpolation::Linear;
+            a.channels.push_back(animation::Channel{node, path, a.samplers.size()});
             a.samplers.push_back(std::move(s));
         };
-        if (hips_move) add(tgt_hips->node, Path::Translation, std::move(hips_keys));
-        for (std::size_t i = 0; i < rotations.size(); ++i) add(rotations[i].tgt->node, Path::Rotation, std::move(rotation_keys[i]));
+        if (hips_move) add(tgt_hips->node, animation::Path::Translation, std::move(hips_keys));
+        for (std::size_t i = 0; i < rotations.size(); ++i) add(rotations[i].tgt->node, animation::Path::Rotation, std::move(rotation_keys[i]));
         a.start = times.front();
         a.end = times.back();
         out.bones = rotations.size();
@@ -341,7 +341,7 @@ Result<Retargeted> retarget(const Character& source, std::size_t clip_index, con
     }
 }
 
-Result<Retargeted> load_motion(const MotionRequest& request, const Character& target, MotionKey* key) {
+Result<Retargeted> load_motion(const MotionRequest& request, const animation::Character& target, MotionKey* key) {
     const auto at = [&](MotionKey k) {
         if (key != nullptr) *key = k;
     };
@@ -359,7 +359,7 @@ Result<Retargeted> load_motion(const MotionRequest& request, const Character& ta
     at(MotionKey::File);
     auto loaded = load_character(request.file);
     if (!loaded) return loaded.error();
-    const Character& source = loaded.value();
+    const animation::Character& source = loaded.value();
 
     HumanoidMap source_map;
     if (!request.map.empty()) {
@@ -386,10 +386,10 @@ Result<Retargeted> load_motion(const MotionRequest& request, const Character& ta
     if (!request.clip.empty()) {
         at(MotionKey::Clip);
         const auto it = std::find_if(source.animations.begin(), source.animations.end(),
-                                     [&](const Animation& a) { return a.name == request.clip; });
+                                     [&](const animation::Animation& a) { return a.name == request.clip; });
         if (it == source.animations.end()) {
             std::string names;
-            for (const Animation& a : source.animations) names += (names.empty() ? "\"" : ", \"") + a.name + "\"";
+            for (const animation::Animation& a : source.animations) names += (names.empty() ? "\"" : ", \"") + a.name + "\"";
             return invalid(source.source + ": $.animations", "no animation is called \"" + request.clip + "\" (" + names + ")");
         }
         clip = static_cast<std::size_t>(it - source.animations.begin());

@@ -107,10 +107,10 @@ std::string scene_name(std::string s) {
 // How the scene names each node (the scene loader's find_node): its name where no other
 // node has it; else its path of names from a root ("Armature/Hips/Hair") where each step
 // is unique among its siblings and holds no '/'; else its index.
-std::vector<Json> node_refs(const Character& ch) {
+std::vector<Json> node_refs(const animation::Character& ch) {
     const auto unique_name = [&](std::size_t i) {
         return !ch.nodes[i].name.empty() &&
-               std::count_if(ch.nodes.begin(), ch.nodes.end(), [&](const Node& n) { return n.name == ch.nodes[i].name; }) == 1;
+               std::count_if(ch.nodes.begin(), ch.nodes.end(), [&](const animation::Node& n) { return n.name == ch.nodes[i].name; }) == 1;
     };
     std::vector<Json> out(ch.nodes.size());
     for (std::size_t i = 0; i < ch.nodes.size(); ++i) {
@@ -121,7 +121,7 @@ std::vector<Json> node_refs(const Character& ch) {
         std::string path;
         bool ok = true;
         for (int n = static_cast<int>(i); n >= 0 && ok; n = ch.nodes[static_cast<std::size_t>(n)].parent) {
-            const Node& node = ch.nodes[static_cast<std::size_t>(n)];
+            const animation::Node& node = ch.nodes[static_cast<std::size_t>(n)];
             const int parent = node.parent;
             const auto same = [&](int other) { return other != n && ch.nodes[static_cast<std::size_t>(other)].name == node.name; };
             bool clash = false;
@@ -137,14 +137,14 @@ std::vector<Json> node_refs(const Character& ch) {
             path = path.empty() ? node.name : node.name + "/" + path;
         }
         // A path that is itself some node's name would be read as that name.
-        ok = ok && std::none_of(ch.nodes.begin(), ch.nodes.end(), [&](const Node& n) { return n.name == path; });
+        ok = ok && std::none_of(ch.nodes.begin(), ch.nodes.end(), [&](const animation::Node& n) { return n.name == path; });
         out[i] = ok ? Json(path) : Json(i);
     }
     return out;
 }
 
 // A node's name for messages: its name, or "node <index>".
-std::string node_label(const Character& ch, int n) {
+std::string node_label(const animation::Character& ch, int n) {
     const std::string& name = ch.nodes[static_cast<std::size_t>(n)].name;
     return name.empty() ? "node " + std::to_string(n) : "\"" + name + "\"";
 }
@@ -194,7 +194,7 @@ float max_scale(const glm::mat4& m) {
 Result<RigScene> make_rig_scene(const std::string& character_path, const std::string& scene_path, const RigOptions& options) {
     auto loaded = load_character(character_path);
     if (!loaded) return loaded.error();
-    Character& ch = loaded.value();
+    animation::Character& ch = loaded.value();
     RigScene out;
     namespace fs = std::filesystem;
     const fs::path scene_dir = fs::absolute(fs::path(scene_path)).parent_path();
@@ -211,7 +211,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
         std::string name = fs::path(file).stem().string();
         if (name.empty()) name = "motion";
         const auto taken = [&](const std::string& n) {
-            return std::any_of(ch.animations.begin(), ch.animations.end(), [&](const Animation& a) { return a.name == n; });
+            return std::any_of(ch.animations.begin(), ch.animations.end(), [&](const animation::Animation& a) { return a.name == n; });
         };
         request.name = name;
         for (int suffix = 2; taken(request.name); ++suffix) request.name = name + "_" + std::to_string(suffix);
@@ -229,7 +229,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
         Retargeted& m = motion.value();
         out.warnings.insert(out.warnings.end(), m.warnings.begin(), m.warnings.end());
         const bool hips = std::any_of(m.animation.channels.begin(), m.animation.channels.end(),
-                                      [](const Channel& c) { return c.path == Path::Translation; });
+                                      [](const animation::Channel& c) { return c.path == animation::Path::Translation; });
         out.motions.push_back(
             RigMotion{request.name, file, m.bones, m.keys, m.animation.end - m.animation.start, hips, m.leg_ratio, mapped});
         Json j;
@@ -240,7 +240,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
         ch.animations.push_back(std::move(m.animation));
     }
     const std::vector<Json> refs = node_refs(ch);
-    const Pose rest = rest_pose(ch);
+    const animation::Pose rest = rest_pose(ch);
     // A node far out (or its transforms' product overflowing) would write a camera the
     // loader refuses (fuzz_gltf, CI stop 49): name the node and its place instead.
     for (std::size_t i = 0; i < rest.world.size(); ++i) {
@@ -327,7 +327,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
         // "root" + "joints" when the walk down single children gives these nodes, else the list.
         bool walk = true;
         for (std::size_t i = 0; i + 1 < c.nodes.size(); ++i) {
-            const Node& n = ch.nodes[static_cast<std::size_t>(c.nodes[i])];
+            const animation::Node& n = ch.nodes[static_cast<std::size_t>(c.nodes[i])];
             walk = walk && n.children.size() == 1 && n.children.front() == c.nodes[i + 1];
         }
         if (walk) {
@@ -397,7 +397,7 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
                                    std::to_string(rods::kMaxCharacterColliders) + " colliders");
             break;
         }
-        const rods::Transform frame = rigid_part(world);
+        const rods::Transform frame = animation::rigid_part(world);
         const glm::quat inverse = glm::inverse(frame.rotation);
         const auto local = [&](glm::vec3 p) { return inverse * (glm::vec3(world * glm::vec4(p, 1.0f)) - frame.position); };
         const glm::vec3 a = local(c.offset);
@@ -475,10 +475,10 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
     out.reference = ch.nodes[static_cast<std::size_t>(reference)].name;
 
     if (!options.clip.empty()) {
-        const auto it = std::find_if(ch.animations.begin(), ch.animations.end(), [&](const Animation& a) { return a.name == options.clip; });
+        const auto it = std::find_if(ch.animations.begin(), ch.animations.end(), [&](const animation::Animation& a) { return a.name == options.clip; });
         if (it == ch.animations.end()) {
             std::string names;
-            for (const Animation& a : ch.animations) names += (names.empty() ? "\"" : ", \"") + a.name + "\"";
+            for (const animation::Animation& a : ch.animations) names += (names.empty() ? "\"" : ", \"") + a.name + "\"";
             return make_error(Error::Kind::InvalidInput, ch.source + ": no animation is called \"" + options.clip + "\" (" +
                                                              (names.empty() ? std::string("the file has none") : names) + ")");
         }

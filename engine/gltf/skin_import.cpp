@@ -40,11 +40,11 @@ bool invertible(const glm::mat4& m, double& det_out) {
 
 }  // namespace
 
-Result<void> load_skins(const Context& ctx, const tinygltf::Model& model, Character& out) {
+Result<void> load_skins(const Context& ctx, const tinygltf::Model& model, animation::Character& out) {
     for (std::size_t s = 0; s < model.skins.size(); ++s) {
         const tinygltf::Skin& src = model.skins[s];
         const std::string path = at("$.skins", s);
-        Skin skin;
+        animation::Skin skin;
         skin.name = src.name;
         // §3.7.3: joints is required and non-empty.
         if (src.joints.empty()) return ctx.invalid(path + ".joints", "a skin needs at least one joint, it has none");

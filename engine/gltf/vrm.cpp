@@ -38,7 +38,7 @@ struct Settings {
 
 class Reader {
 public:
-    explicit Reader(const Character& character) : c_(character), rest_(rest_pose(character)) {}
+    explicit Reader(const animation::Character& character) : c_(character), rest_(animation::rest_pose(character)) {}
 
     Result<VrmSprings> read() {
         if (c_.extensions.empty()) return std::move(out_);
@@ -61,8 +61,8 @@ public:
     }
 
 private:
-    const Character& c_;
-    Pose rest_;
+    const animation::Character& c_;
+    animation::Pose rest_;
     VrmSprings out_;
 
     [[nodiscard]] Error invalid(const std::string& path, const std::string& what) const {
@@ -582,7 +582,7 @@ private:
 
 }  // namespace
 
-Result<VrmSprings> read_vrm_springs(const Character& character) {
+Result<VrmSprings> read_vrm_springs(const animation::Character& character) {
     try {
         return Reader(character).read();
     } catch (const std::exception& e) {
@@ -595,7 +595,7 @@ Result<VrmSprings> read_vrm_springs(const Character& character) {
 
 namespace kodawari::gltf {
 
-int vrm_humanoid_bone(const Character& character, std::string_view bone) {
+int vrm_humanoid_bone(const animation::Character& character, std::string_view bone) {
     if (character.extensions.empty()) return -1;
     const json ext = json::parse(character.extensions, nullptr, /*allow_exceptions=*/false);
     if (!ext.is_object()) return -1;

@@ -72,13 +72,13 @@ Facing facing_of(const json& extensions) {
     return Facing::PlusZ;
 }
 
-json parse_extensions(const Character& c) {
+json parse_extensions(const animation::Character& c) {
     if (c.extensions.empty()) return json::object();
     return json::parse(c.extensions, nullptr, /*allow_exceptions=*/false);
 }
 
 // Adds bone `name` on `node` (an integer JSON value at `path`), checked, to `out`.
-Result<void> add_bone(const Character& c, HumanoidMap& out, const std::string& name, const json& node, const std::string& path) {
+Result<void> add_bone(const animation::Character& c, HumanoidMap& out, const std::string& name, const json& node, const std::string& path) {
     if (!node.is_number_integer()) return invalid(c.source, path, "expected a node index (an integer)");
     const auto index = node.get<long long>();
     if (index < 0 || static_cast<unsigned long long>(index) >= c.nodes.size()) {
@@ -113,7 +113,7 @@ const HumanBone* HumanoidMap::find(std::string_view name) const {
     return it == bones.end() ? nullptr : &*it;
 }
 
-Result<HumanoidMap> read_vrm_animation_humanoid(const Character& c) {
+Result<HumanoidMap> read_vrm_animation_humanoid(const animation::Character& c) {
     try {
         const json ext = parse_extensions(c);
         const std::string root = "$.extensions.VRMC_vrm_animation";
@@ -167,7 +167,7 @@ Result<HumanoidMap> read_vrm_animation_humanoid(const Character& c) {
     }
 }
 
-Result<HumanoidMap> read_vrm_humanoid(const Character& c) {
+Result<HumanoidMap> read_vrm_humanoid(const animation::Character& c) {
     try {
         const json ext = parse_extensions(c);
         HumanoidMap out;
@@ -240,7 +240,7 @@ Result<HumanoidMap> read_vrm_humanoid(const Character& c) {
     }
 }
 
-Result<HumanoidMap> read_humanoid_name_map(const std::string& map_path, const Character& c) {
+Result<HumanoidMap> read_humanoid_name_map(const std::string& map_path, const animation::Character& c) {
     auto bytes = core::read_binary_file(map_path);
     if (!bytes) return bytes.error();
     json doc;

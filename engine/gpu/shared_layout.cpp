@@ -1,6 +1,6 @@
 // The C++ side of every GPU-shared struct must match GLSL's std430 layout exactly.
 // (The domains' own constants that must match these are checked where the domain is:
-// e.g. KW_RODS_MAX_JOINTS in backends/vulkan_rods.cpp.)
+// e.g. KW_RODS_MAX_JOINTS in vulkan_backends/vulkan_rods.cpp.)
 // Only vec4/uvec4 members are used, so size = 16 x member count and offsets follow.
 #include <cstddef>
 #include <cstdint>

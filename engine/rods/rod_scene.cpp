@@ -11,7 +11,7 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include <kodawari/gltf/pose_instance.hpp>
+#include <kodawari/animation/pose_instance.hpp>
 #include <kodawari/rods/rod_scene.hpp>
 #include <kodawari/rods/shape.hpp>
 
@@ -62,7 +62,7 @@ void RodScene::kinematic_frame(std::uint32_t index, rods::RodFrame& out, bool ri
     out.centers.resize(world.center_count);
     out.winds.assign(winds.begin(), winds.end());
     std::array<rods::Transform, rods::kMaxSkeletonJoints> poses;
-    gltf::Pose pose;
+    animation::Pose pose;
     std::vector<glm::mat4> nodes;
     for (std::size_t i = 0; i < instances.size(); ++i) {
         const CharacterInstance& inst = instances[i];
@@ -107,11 +107,11 @@ void RodScene::joint_poses(std::uint32_t c, std::uint32_t index, std::vector<rod
     const CharacterInstance& inst = instances[c];
     const CharacterKinematics& k = characters[inst.character];
     if (k.rig) {
-        gltf::Pose pose;
+        animation::Pose pose;
         std::vector<glm::mat4> nodes;
         rig_world(c, index, pose, nodes);
         out.resize(nodes.size());
-        for (std::size_t n = 0; n < nodes.size(); ++n) out[n] = gltf::rigid_part(nodes[n]);
+        for (std::size_t n = 0; n < nodes.size(); ++n) out[n] = animation::rigid_part(nodes[n]);
         return;
     }
     out.resize(k.skeleton.joints.size());
@@ -138,17 +138,17 @@ float RodScene::clip_time(std::uint32_t c, std::uint32_t index) const {
                                PoseInstance{inst.placement, inst.clip, inst.time_offset, true}, time(index));
 }
 
-void RodScene::clip_pose(std::uint32_t c, std::uint32_t index, gltf::Pose& pose) const {
+void RodScene::clip_pose(std::uint32_t c, std::uint32_t index, animation::Pose& pose) const {
     const CharacterInstance& inst = instances[c];
-    const gltf::Character& ch = *characters[inst.character].rig;
+    const animation::Character& ch = *characters[inst.character].rig;
     if (inst.clip >= 0) {
-        gltf::evaluate(ch, static_cast<std::size_t>(inst.clip), clip_time(c, index), pose);
+        animation::evaluate(ch, static_cast<std::size_t>(inst.clip), clip_time(c, index), pose);
     } else {
-        pose = gltf::rest_pose(ch);
+        pose = animation::rest_pose(ch);
     }
 }
 
-void RodScene::rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose, std::vector<glm::mat4>& nodes) const {
+void RodScene::rig_world(std::uint32_t c, std::uint32_t index, animation::Pose& pose, std::vector<glm::mat4>& nodes) const {
     clip_pose(c, index, pose);
     const glm::mat4 placement = placement_matrix(instances[c].placement);
     nodes.resize(pose.world.size());
@@ -156,12 +156,12 @@ void RodScene::rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose,
 }
 
 void RodScene::rigged_world(std::uint32_t c, std::uint32_t index, std::span<const glm::vec3> positions,
-                            std::span<const glm::quat> orientations, gltf::Pose& pose, std::vector<glm::mat4>& out) const {
+                            std::span<const glm::quat> orientations, animation::Pose& pose, std::vector<glm::mat4>& out) const {
     assert(c < instances.size());
     const CharacterInstance& inst = instances[c];
     const CharacterKinematics& k = characters[inst.character];
     assert(k.rig);
-    const gltf::Character& ch = *k.rig;
+    const animation::Character& ch = *k.rig;
     // The clip's local transforms; world matrices are composed once, below, with the
     // simulated joints put in on the way down.
     clip_pose(c, index, pose);
@@ -169,7 +169,7 @@ void RodScene::rigged_world(std::uint32_t c, std::uint32_t index, std::span<cons
     out.resize(ch.nodes.size());
     for (const int n : ch.order) {
         const auto node = static_cast<std::size_t>(n);
-        const gltf::Node& src = ch.nodes[node];
+        const animation::Node& src = ch.nodes[node];
         const glm::mat4 parent = src.parent >= 0 ? out[static_cast<std::size_t>(src.parent)] : placement;
         const auto [chain, i] = k.simulated_joint[node];
         if (chain < 0) {
@@ -201,22 +201,22 @@ void RodScene::rigged_frame(std::uint32_t c, std::span<const glm::mat4> nodes, r
     const CharacterInstance& inst = instances[c];
     const CharacterKinematics& k = characters[inst.character];
     assert(k.rig && nodes.size() == k.rig->nodes.size());
-    out.reference[c] = gltf::rigid_part(nodes[k.skeleton.reference]);
+    out.reference[c] = animation::rigid_part(nodes[k.skeleton.reference]);
     for (std::size_t i = 0; i < k.chains.size(); ++i) {
-        out.roots[inst.chain_begin + i] = gltf::rigid_part(nodes[k.chains[i].joint]);
+        out.roots[inst.chain_begin + i] = animation::rigid_part(nodes[k.chains[i].joint]);
         const std::uint32_t key_begin = world.chains[inst.chain_begin + i].key_begin;
         for (std::size_t s = 0; s < k.chains[i].keys.size(); ++s) {
             const KeyJoint& key = k.chains[i].keys[s];
-            const rods::Transform parent = key.parent >= 0 ? gltf::rigid_part(nodes[key.parent]) : rods::Transform{};
-            out.keys[key_begin + s] = key_entry(key, gltf::rigid_part(nodes[key.joint]), key.parent >= 0 ? &parent : nullptr);
+            const rods::Transform parent = key.parent >= 0 ? animation::rigid_part(nodes[key.parent]) : rods::Transform{};
+            out.keys[key_begin + s] = key_entry(key, animation::rigid_part(nodes[key.joint]), key.parent >= 0 ? &parent : nullptr);
         }
     }
     for (std::size_t i = 0; i < k.colliders.size(); ++i) {
-        out.colliders[inst.collider_begin + i] = place(k.colliders[i], gltf::rigid_part(nodes[k.colliders[i].joint]));
+        out.colliders[inst.collider_begin + i] = place(k.colliders[i], animation::rigid_part(nodes[k.colliders[i].joint]));
     }
     for (std::size_t i = 0; i < k.chains.size(); ++i) {
         const std::uint32_t center = world.chains[inst.chain_begin + i].center;
-        if (center != rods::kNoCenter) out.centers[center] = gltf::rigid_part(nodes[static_cast<std::size_t>(k.chains[i].center)]);
+        if (center != rods::kNoCenter) out.centers[center] = animation::rigid_part(nodes[static_cast<std::size_t>(k.chains[i].center)]);
     }
 }
 

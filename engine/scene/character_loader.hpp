@@ -65,7 +65,7 @@ inline constexpr double kMaxTime = 1e5;        // motion times (s)
                                               const std::string& what);
 /// The index of the animation of `character` named by the string at `node`
 /// (rigged_character_loader.cpp).
-[[nodiscard]] Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const gltf::Character& character);
+[[nodiscard]] Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const animation::Character& character);
 /// The `physics` object, over the values already in `p`.
 [[nodiscard]] Result<void> read_physics(const JsonReader& r, const JsonNode& node, rods::SolverParams& p);
 /// A `wind` object (rods::WindField), over the values already in `w` (a character's

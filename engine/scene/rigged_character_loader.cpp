@@ -34,7 +34,7 @@ std::string lower(std::string s) {
 // one node has, or, where names repeat, its path of names from a root node of the file
 // ("Armature/Hips/Hair_01": each name a child of the one before, unique among its
 // siblings).
-Result<int> find_node(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
+Result<int> find_node(const JsonReader& r, const JsonNode& node, const animation::Character& ch) {
     if (node.present() && node.value->is_number_integer()) {
         std::uint64_t index = 0;
         KW_SCENE_ASSIGN(index, r.integer(node, 0, ch.nodes.size() - 1));
@@ -89,7 +89,7 @@ Result<int> find_node(const JsonReader& r, const JsonNode& node, const gltf::Cha
 
 // The reference joint when the scene names none: a node called "head" (any case), else
 // the humanoid head bone of a VRM file.
-Result<int> default_reference(const JsonReader& r, const JsonNode& at, const gltf::Character& ch) {
+Result<int> default_reference(const JsonReader& r, const JsonNode& at, const animation::Character& ch) {
     int found = -1;
     for (std::size_t i = 0; i < ch.nodes.size(); ++i) {
         if (lower(ch.nodes[i].name) != "head") continue;
@@ -107,7 +107,7 @@ Result<int> default_reference(const JsonReader& r, const JsonNode& at, const glt
 
 // A chain's nodes: "nodes" (each the child of the one before) or "root" walked down
 // single children (docs: at most "joints" of them).
-Result<std::vector<int>> read_chain_nodes(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
+Result<std::vector<int>> read_chain_nodes(const JsonReader& r, const JsonNode& node, const animation::Character& ch) {
     const JsonNode root = r.member(node, "root");
     const JsonNode list = r.member(node, "nodes");
     const JsonNode joints = r.member(node, "joints");
@@ -156,7 +156,7 @@ Result<std::vector<int>> read_chain_nodes(const JsonReader& r, const JsonNode& n
     return nodes;
 }
 
-Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const gltf::Character& ch, const gltf::Pose& rest,
+Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const animation::Character& ch, const animation::Pose& rest,
                                std::uint32_t reference, const std::vector<ColliderSpec>& colliders,
                                const rods::SolverParams& defaults, std::vector<ChainSpec>& chains) {
     KW_TRY(r.object(node, {"name", "root", "nodes", "joints", "thickness", "mass", "physics", "collide", "colliders", "center",
@@ -194,10 +194,10 @@ Result<void> read_rigged_chain(const JsonReader& r, const JsonNode& node, const 
     joints.parent = [&](std::uint32_t n) { return static_cast<std::int32_t>(ch.nodes[n].parent); };
     // As RodScene::rigged_frame measures it: from the rest pose's world matrices, scale removed.
     joints.rest_rotation = [&](std::uint32_t n) {
-        const glm::quat world = gltf::rigid_part(rest.world[n]).rotation;
+        const glm::quat world = animation::rigid_part(rest.world[n]).rotation;
         const int parent = ch.nodes[n].parent;
         if (parent < 0) return world;
-        return glm::normalize(glm::conjugate(gltf::rigid_part(rest.world[static_cast<std::size_t>(parent)]).rotation) * world);
+        return glm::normalize(glm::conjugate(animation::rigid_part(rest.world[static_cast<std::size_t>(parent)]).rotation) * world);
     };
     joints.reference = reference;
     joints.colliders = collider_names(colliders);
@@ -214,7 +214,7 @@ std::string scene_relative(const JsonReader& r, const std::string& given) {
 
 // The `motions` of a rigged character (docs/scene-format.md, "Motions"): each a clip made
 // for another skeleton, retargeted onto `ch` (gltf/motion.hpp) and appended to its clips.
-Result<void> read_motions(const JsonReader& r, const JsonNode& motions, gltf::Character& ch, std::vector<std::string>& warnings) {
+Result<void> read_motions(const JsonReader& r, const JsonNode& motions, animation::Character& ch, std::vector<std::string>& warnings) {
     std::size_t n = 0;
     KW_SCENE_ASSIGN(n, read_array(r, motions, 1, kMaxPerCharacter,
                                   "a non-empty array of motions (at most " + std::to_string(kMaxPerCharacter) + ")"));
@@ -263,14 +263,14 @@ Result<void> read_motions(const JsonReader& r, const JsonNode& motions, gltf::Ch
 
 }  // namespace
 
-Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const gltf::Character& ch) {
+Result<std::int32_t> find_clip(const JsonReader& r, const JsonNode& node, const animation::Character& ch) {
     if (ch.animations.empty()) {
         // Still a string, or that is the error.
         KW_TRY(r.string(node));
         return r.expected(node, "no animation: " + ch.source + " has no animation clips");
     }
     std::vector<std::string> names;
-    for (const gltf::Animation& clip : ch.animations) names.push_back(clip.name);
+    for (const animation::Animation& clip : ch.animations) names.push_back(clip.name);
     std::uint32_t clip = 0;
     KW_SCENE_ASSIGN(clip, find_name(r, node, names, "the name of an animation of " + ch.source));
     return static_cast<std::int32_t>(clip);
@@ -296,8 +296,8 @@ Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode&
     if (const JsonNode motions = r.member(node, "motions"); motions.present()) {
         KW_TRY(read_motions(r, motions, loaded.value(), rig.warnings));
     }
-    auto character = std::make_shared<const gltf::Character>(std::move(loaded.value()));
-    const gltf::Character& ch = *character;
+    auto character = std::make_shared<const animation::Character>(std::move(loaded.value()));
+    const animation::Character& ch = *character;
 
     const JsonNode reference = r.member(node, "reference_joint");
     int reference_node = 0;
@@ -328,7 +328,7 @@ Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode&
     rods::SolverParams defaults;
     const JsonNode physics = r.member(node, "physics");
     if (physics.present()) KW_TRY(read_physics(r, physics, defaults));
-    const gltf::Pose rest = gltf::rest_pose(ch);
+    const animation::Pose rest = animation::rest_pose(ch);
     const JsonNode chains = r.member(node, "chains");
     std::size_t n = 0;
     KW_SCENE_ASSIGN(n, read_array(r, chains, 1, kMaxPerCharacter,

@@ -2,7 +2,7 @@
 // Transformations of the glTF 2.0.1 specification), vectorized across the instances of a
 // batch (poses_simd.hpp: layout, and why every matrix is cpu-reference's bits). Compiled
 // once per instruction set by Highway's foreach_target.h. It repeats
-// engine/gltf/animation.cpp compute_world() and the backends' placement product.
+// engine/animation/character.cpp compute_world() and the backends' placement product.
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "simd/poses_simd.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep

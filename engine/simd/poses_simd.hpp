@@ -13,7 +13,7 @@
 //
 // Exactness. The matrix products are glm's (0.9.9, scalar: each column
 // ((A0 b0 + A1 b1) + A2 b2) + A3 b3, its literal zeros and ones included), as are
-// translate, mat4_cast and scale; the channels' values (gltf::sample: the key search and
+// translate, mat4_cast and scale; the channels' values (animation::sample: the key search and
 // the interpolation, in double) and the clip times (clip_time) come from the reference's
 // functions lane by lane, a small share of the work. So every matrix is cpu-reference's
 // bits, on every instruction set.

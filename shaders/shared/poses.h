@@ -1,6 +1,6 @@
 // GPU-shared data of the pose kernel (glTF animation of crowds): every struct, binding
 // index and the workgroup size, defined once for shaders/pose_eval.comp and the C++
-// backend (engine/backends/vulkan_poses.cpp). Layout: std430 (the node records also as a
+// backend (engine/vulkan_backends/vulkan_poses.cpp). Layout: std430 (the node records also as a
 // std140 uniform block, the same bytes for vec4-only structs), only vec4/uvec4 members
 // (see glsl_types.h); sizes and offsets are checked in engine/gpu/shared_layout.cpp.
 //
@@ -69,11 +69,11 @@
 
 #define KW_POSES_NONE 0xFFFFFFFFu     // no parent; no clip (rest pose)
 
-#define KW_POSES_PATH_TRANSLATION 0u  // gltf::Path
+#define KW_POSES_PATH_TRANSLATION 0u  // animation::Path
 #define KW_POSES_PATH_ROTATION 1u
 #define KW_POSES_PATH_SCALE 2u
 
-#define KW_POSES_INTERP_LINEAR 0u     // gltf::Interpolation
+#define KW_POSES_INTERP_LINEAR 0u     // animation::Interpolation
 #define KW_POSES_INTERP_STEP 1u
 #define KW_POSES_INTERP_CUBICSPLINE 2u
 

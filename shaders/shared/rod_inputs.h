@@ -3,7 +3,7 @@
 // the key sources of keyed examples, docs/keyed-examples.md K.1) written on the
 // device from a pose backend's world matrices (shared/poses.h), so that a crowd of rigged
 // characters animated on the GPU feeds its chains without its poses coming back to the
-// host (CrowdAnimator::write_inputs_on, engine/backends/crowd_animator.cpp). Layout:
+// host (CrowdAnimator::write_inputs_on, engine/vulkan_backends/crowd_animator.cpp). Layout:
 // std430, only vec4/uvec4 members (see glsl_types.h); sizes and offsets are checked in
 // engine/gpu/shared_layout.cpp.
 #ifndef KODAWARI_SHADERS_SHARED_ROD_INPUTS_H

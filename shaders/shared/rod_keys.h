@@ -2,7 +2,7 @@
 // K.3): per chain with keyed examples, this frame's key sources (RodFrame::keys) and its
 // key state in, its raw keyed weights u_1 .. u_4 out, which shaders/rods_step.comp
 // combines with the view weights (K.4) at binding KW_RODS_BINDING_KEYED. Defined once
-// for the kernel and the C++ backend (engine/backends/vulkan_rods.cpp). Layout: std430,
+// for the kernel and the C++ backend (engine/vulkan_backends/vulkan_rods.cpp). Layout: std430,
 // only vec4/uvec4 members (see glsl_types.h); sizes and offsets are checked in
 // engine/gpu/shared_layout.cpp.
 //

@@ -1,6 +1,6 @@
 // GPU-shared data of the rods kernel (SPEC part A): every struct, binding index and the
 // workgroup size, defined once for shaders/rods_step.comp and the C++ backend
-// (engine/backends/vulkan_rods.cpp). Layout: std430, only vec4/uvec4 members (see
+// (engine/vulkan_backends/vulkan_rods.cpp). Layout: std430, only vec4/uvec4 members (see
 // glsl_types.h); sizes and offsets are checked in engine/gpu/shared_layout.cpp.
 //
 // Why this layout. One invocation simulates one whole chain: every substep and

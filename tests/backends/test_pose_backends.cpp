@@ -21,7 +21,7 @@
 #include <kodawari/shared/poses.h>
 
 #include "kodawari/backend_factory.hpp"
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 #include "kodawari/gltf/import.hpp"
 #include "kodawari/pose_backend.hpp"
 #include "test_support.hpp"
@@ -65,8 +65,8 @@ struct Lcg {
 
 // The largest distance between two node origins at rest (1 when all coincide): what
 // the errors are measured against.
-double character_size(const gltf::Character& c) {
-    const gltf::Pose rest = gltf::rest_pose(c);
+double character_size(const animation::Character& c) {
+    const animation::Pose rest = animation::rest_pose(c);
     double size = 0.0;
     for (const glm::mat4& a : rest.world) {
         for (const glm::mat4& b : rest.world) size = std::max(size, static_cast<double>(glm::length(glm::vec3(a[3] - b[3]))));
@@ -77,7 +77,7 @@ double character_size(const gltf::Character& c) {
 // A crowd: every fifth instance at rest, the others on clip (i % clips); every third
 // without a time offset (so that scene times on keys and wraps are sampled exactly
 // there), every seventh not looping; placements up to 10 sizes away, turned anyhow.
-std::vector<PoseInstance> crowd(const gltf::Character& c, std::size_t count, std::uint64_t seed) {
+std::vector<PoseInstance> crowd(const animation::Character& c, std::size_t count, std::uint64_t seed) {
     Lcg random{seed};
     const double size = character_size(c);
     std::vector<PoseInstance> out(count);
@@ -211,7 +211,7 @@ std::string write_tiny(const TempDir& dir) {
     return w.write(dir, "tiny.gltf");
 }
 
-gltf::Character load(const std::string& path) {
+animation::Character load(const std::string& path) {
     auto loaded = gltf::load_character(path);
     EXPECT_TRUE(loaded.ok()) << (loaded.ok() ? "" : loaded.error().message);
     if (!loaded.ok()) return {};
@@ -249,7 +249,7 @@ protected:
 
     // Loads `instances` of `c` on this backend and on cpu-reference and compares them at
     // every time: bit for bit for cpu, within kVulkanBound of the size for vulkan.
-    void expect_matches_reference(const gltf::Character& c, const std::vector<PoseInstance>& instances,
+    void expect_matches_reference(const animation::Character& c, const std::vector<PoseInstance>& instances,
                                   const std::vector<float>& times, const char* what) {
         auto reference = make_pose_backend(BackendKind::CpuReference, {});
         ASSERT_TRUE(reference.ok());
@@ -294,10 +294,10 @@ protected:
 // it): a crowd at times before the clip, on its first and last key, on keys in between,
 // after it and on exact wrap points (start + k d), and at arbitrary times.
 TEST_P(PoseBackends, RiggedSimpleCrowdMatchesTheReference) {
-    const gltf::Character c = load(kRiggedSimple);
+    const animation::Character c = load(kRiggedSimple);
     ASSERT_EQ(c.animations.size(), 1u);
     ASSERT_NE(kInstances % KW_POSES_WORKGROUP_SIZE, 0u) << "must exercise a partial workgroup";
-    const gltf::Animation& clip = c.animations[0];
+    const animation::Animation& clip = c.animations[0];
     const std::vector<float>& keys = clip.samplers[0].times;
     const float d = clip.end - clip.start;
     const std::vector<float> times = {-5.0f,     0.0f,       clip.start,          keys[1],      keys[17],
@@ -312,7 +312,7 @@ TEST_P(PoseBackends, RiggedSimpleCrowdMatchesTheReference) {
 // d = 0.6 is not a power of two, so its wrap count needs a real division).
 TEST_P(PoseBackends, StepAndCubicSplineMatchTheReference) {
     const TempDir dir;
-    const gltf::Character c = load(write_tiny(dir));
+    const animation::Character c = load(write_tiny(dir));
     ASSERT_EQ(c.animations.size(), 2u);
     std::vector<float> times = {-7.3f, 0.0f, 0.1f, 0.5f, 0.7f, 1.0f, 1.3f, 1.5f, 2.2f, 2.5f, 4.5f, 5.0f, 100.25f};
     Lcg random{7};
@@ -324,14 +324,14 @@ TEST_P(PoseBackends, StepAndCubicSplineMatchTheReference) {
 // with short chains added below its animated bone and below its root, so that nodes
 // past the block are read from the storage buffer, animated ancestors and all.
 TEST_P(PoseBackends, ManyNodesMatchTheReference) {
-    gltf::Character c = load(kRiggedSimple);
+    animation::Character c = load(kRiggedSimple);
     ASSERT_EQ(c.animations.size(), 1u);
     const int animated = c.animations[0].channels[0].node;
     const int root = c.order[0];
     const int added = static_cast<int>(KW_POSES_UNIFORM_NODES) + 40;
     for (int k = 0; k < added; ++k) {
         const int index = static_cast<int>(c.nodes.size());
-        gltf::Node node;
+        animation::Node node;
         node.name = "added_" + std::to_string(k);
         // Chains of 3: a fresh start below the bone (or, every 4th chain, the root), then
         // below the node added just before.
@@ -344,7 +344,7 @@ TEST_P(PoseBackends, ManyNodesMatchTheReference) {
         c.order.push_back(index);
     }
     ASSERT_GT(c.nodes.size(), std::size_t{KW_POSES_UNIFORM_NODES});
-    const gltf::Animation& clip = c.animations[0];
+    const animation::Animation& clip = c.animations[0];
     const std::vector<float> times = {-5.0f, clip.start, 0.3f, 0.77f, 1.5f, clip.end, 10.0f};
     expect_matches_reference(c, crowd(c, kInstances, 3), times, "RiggedSimple with many nodes");
 }
@@ -354,7 +354,7 @@ TEST_P(PoseBackends, ManyNodesMatchTheReference) {
 // instead of relying on the constant one it writes at load.
 TEST_P(PoseBackends, NonAffineMatrixNodeMatchesTheReference) {
     const TempDir dir;
-    gltf::Character c = load(write_tiny(dir));
+    animation::Character c = load(write_tiny(dir));
     ASSERT_TRUE(c.nodes[0].matrix.has_value());
     (*c.nodes[0].matrix)[0][3] = 0.01f;  // row 3, column 0
     (*c.nodes[0].matrix)[3][3] = 1.5f;
@@ -366,7 +366,7 @@ TEST_P(PoseBackends, NonAffineMatrixNodeMatchesTheReference) {
 // compare the backends with it).
 TEST_P(PoseBackends, TinyCharacterHasTheHandComputedPose) {
     const TempDir dir;
-    const gltf::Character c = load(write_tiny(dir));
+    const animation::Character c = load(write_tiny(dir));
     ASSERT_EQ(c.nodes.size(), 4u);
     PoseInstance placed;
     placed.placement.position = {10.0f, 0.0f, -1.0f};
@@ -421,7 +421,7 @@ TEST_P(PoseBackends, TinyCharacterHasTheHandComputedPose) {
 
 // The same time twice gives the same bits (with another time in between).
 TEST_P(PoseBackends, Deterministic) {
-    const gltf::Character c = load(kRiggedSimple);
+    const animation::Character c = load(kRiggedSimple);
     const std::vector<PoseInstance> instances = crowd(c, kInstances, 3);
     ASSERT_TRUE(backend_->load(c, instances).ok());
     const std::vector<glm::mat4> a = evaluate(*backend_, 0.9f);
@@ -433,7 +433,7 @@ TEST_P(PoseBackends, Deterministic) {
 }
 
 TEST_P(PoseBackends, RejectsAClipOutOfRangeNamingTheInstance) {
-    const gltf::Character c = load(kRiggedSimple);
+    const animation::Character c = load(kRiggedSimple);
     std::vector<PoseInstance> instances = crowd(c, 12, 4);
     instances[7].clip = 1;
     auto r = backend_->load(c, instances);
@@ -455,7 +455,7 @@ TEST_P(PoseBackends, RejectsAClipOutOfRangeNamingTheInstance) {
 }
 
 TEST_P(PoseBackends, NoInstancesIsFine) {
-    const gltf::Character c = load(kRiggedSimple);
+    const animation::Character c = load(kRiggedSimple);
     ASSERT_TRUE(backend_->load(c, {}).ok());
     std::vector<glm::mat4> world(3);
     ASSERT_TRUE(backend_->evaluate(1.0f).ok());
@@ -467,7 +467,7 @@ INSTANTIATE_TEST_SUITE_P(All, PoseBackends, testing_support::all_backend_kinds()
 
 // clip_time (pose_backend.hpp) on exact values: d = 2, so every step below is exact.
 TEST(PoseClipTime, WrapsLoopsAndPassesOthersThrough) {
-    gltf::Animation clip;
+    animation::Animation clip;
     clip.start = 0.5f;
     clip.end = 2.5f;
     PoseInstance instance;

@@ -1,4 +1,4 @@
-// The vulkan backends' record mode (engine/backends/device_backends.hpp, issue 19): a rod
+// The vulkan backends' record mode (engine/vulkan_backends/device_backends.hpp, issue 19): a rod
 // step and a bird frame recorded into the caller's one recording submit nothing and wait
 // for nothing until the caller submits, and give the very state step() and simulate()
 // give. White-box: the engine's internal headers, as an embedding layer inside the
@@ -9,7 +9,7 @@
 #include <cstring>
 #include <vector>
 
-#include "backends/device_backends.hpp"
+#include "vulkan_backends/device_backends.hpp"
 #include "kodawari/backend_factory.hpp"
 #include "gpu/compute_vulkan.hpp"
 #include "kodawari/rods/synthetic.hpp"

@@ -22,7 +22,7 @@
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
 #include "kodawari/export.hpp"
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 #include "kodawari/gltf/import.hpp"
 #include "test_support.hpp"
 
@@ -53,7 +53,7 @@ glm::mat4 placement_matrix(const rods::Transform& p) {
 /// instance, the last two joints of its skin additionally turned every frame (standing
 /// in for simulated hair).
 struct RiggedSimpleCrowd {
-    gltf::Character character;
+    animation::Character character;
     std::vector<RiggedInstance> instances;
     std::vector<bool> animated;
     std::vector<int> perturbed;  // the two joints turned on top of the clip
@@ -71,7 +71,7 @@ struct RiggedSimpleCrowd {
             instances.push_back({"crowd" + std::to_string(i), placements[i % placements.size()]});
         }
         animated.assign(character.nodes.size(), false);
-        for (const gltf::Channel& channel : character.animations.at(0).channels) {
+        for (const animation::Channel& channel : character.animations.at(0).channels) {
             animated[static_cast<std::size_t>(channel.node)] = true;
         }
         const std::vector<int>& joints = character.skins.at(0).joints;
@@ -87,11 +87,11 @@ struct RiggedSimpleCrowd {
         t.resize(instances.size() * n);
         r.resize(instances.size() * n);
         s.resize(instances.size() * n);
-        const gltf::Animation& clip = character.animations.at(0);
-        gltf::Pose pose;
+        const animation::Animation& clip = character.animations.at(0);
+        animation::Pose pose;
         for (std::size_t i = 0; i < instances.size(); ++i) {
             const float time = std::fmod(static_cast<float>(f) / kFps + 0.37f * static_cast<float>(i), clip.end);
-            gltf::evaluate(character, 0, time, pose);
+            animation::evaluate(character, 0, time, pose);
             for (std::size_t k = 0; k < n; ++k) {
                 t[i * n + k] = pose.translation[k];
                 r[i * n + k] = pose.rotation[k];
@@ -115,7 +115,7 @@ struct RiggedSimpleCrowd {
         std::vector<glm::mat4> out(n);
         for (const int index : character.order) {
             const auto k = static_cast<std::size_t>(index);
-            const gltf::Node& node = character.nodes[k];
+            const animation::Node& node = character.nodes[k];
             glm::mat4 local;
             if (animated[k]) {
                 local = trs(t[i * n + k], r[i * n + k], s[i * n + k]);
@@ -203,15 +203,15 @@ TEST(RiggedExport, RoundTripMatchesThePlacedSourcePose) {
 
     auto reloaded = gltf::load_character(path);
     ASSERT_TRUE(reloaded.ok()) << reloaded.error().message;
-    const gltf::Character& out = reloaded.value();
-    const gltf::Character& source = crowd.character;
+    const animation::Character& out = reloaded.value();
+    const animation::Character& source = crowd.character;
 
     // Structure: one animation, a skin per instance with the source's joints, the meshes
     // shared, the skinned mesh nodes at the scene root with their instance's skin.
     ASSERT_EQ(out.animations.size(), 1u);
     EXPECT_EQ(out.animations[0].name, "simulation");
     ASSERT_EQ(out.skins.size(), crowd.instances.size() * source.skins.size());
-    for (const gltf::Skin& skin : out.skins) EXPECT_EQ(skin.joints.size(), source.skins[0].joints.size());
+    for (const animation::Skin& skin : out.skins) EXPECT_EQ(skin.joints.size(), source.skins[0].joints.size());
     EXPECT_EQ(out.meshes.size(), source.meshes.size());
     std::set<int> skinned_mesh_nodes;
     for (std::size_t i = 0; i < crowd.instances.size(); ++i) {
@@ -219,18 +219,18 @@ TEST(RiggedExport, RoundTripMatchesThePlacedSourcePose) {
         EXPECT_EQ(out.nodes.at(static_cast<std::size_t>(root)).name, crowd.instances[i].name);
         EXPECT_NE(std::find(out.roots.begin(), out.roots.end(), root), out.roots.end());
         for (std::size_t k = 0; k < source.nodes.size(); ++k) {
-            const gltf::Node& node = out.nodes.at(static_cast<std::size_t>(writer.output_node(i, static_cast<int>(k))));
+            const animation::Node& node = out.nodes.at(static_cast<std::size_t>(writer.output_node(i, static_cast<int>(k))));
             EXPECT_EQ(node.name, crowd.instances[i].name + "/" + source.nodes[k].name);
             if (source.nodes[k].skin < 0) continue;
             const int mesh_node = writer.skinned_mesh_node(i, static_cast<int>(k));
             skinned_mesh_nodes.insert(mesh_node);
-            const gltf::Node& holder = out.nodes.at(static_cast<std::size_t>(mesh_node));
+            const animation::Node& holder = out.nodes.at(static_cast<std::size_t>(mesh_node));
             EXPECT_EQ(holder.parent, -1);
             EXPECT_NE(std::find(out.roots.begin(), out.roots.end(), mesh_node), out.roots.end());
             EXPECT_EQ(holder.mesh, source.nodes[k].mesh);
             ASSERT_GE(holder.skin, 0);
-            const gltf::Skin& skin = out.skins[static_cast<std::size_t>(holder.skin)];
-            const gltf::Skin& original = source.skins[static_cast<std::size_t>(source.nodes[k].skin)];
+            const animation::Skin& skin = out.skins[static_cast<std::size_t>(holder.skin)];
+            const animation::Skin& original = source.skins[static_cast<std::size_t>(source.nodes[k].skin)];
             for (std::size_t j = 0; j < skin.joints.size(); ++j) {
                 EXPECT_EQ(skin.joints[j], writer.output_node(i, original.joints[j]));
             }
@@ -245,10 +245,10 @@ TEST(RiggedExport, RoundTripMatchesThePlacedSourcePose) {
     // transforms in another order (placement first, then the file's hierarchy) on
     // coordinates of a few units: a few ulps of ~5 (~5e-7 each), far below 1e-5.
     float worst = 0.0f;
-    gltf::Pose pose;
+    animation::Pose pose;
     std::size_t compared = 0;
     for (std::uint32_t f = 0; f < kFrames; ++f) {
-        gltf::evaluate(out, 0, static_cast<float>(f) / kFps, pose);
+        animation::evaluate(out, 0, static_cast<float>(f) / kFps, pose);
         for (std::size_t i = 0; i < crowd.instances.size(); ++i) {
             worst = std::max(worst, max_abs_difference(pose.world[static_cast<std::size_t>(writer.output_node(i, -1))],
                                                        placement_matrix(crowd.instances[i].placement)));
@@ -267,9 +267,9 @@ TEST(RiggedExport, RoundTripMatchesThePlacedSourcePose) {
 
     // The perturbed joints really move between frames (the test would pass vacuously
     // if the keys were constant).
-    gltf::evaluate(out, 0, 0.0f, pose);
+    animation::evaluate(out, 0, 0.0f, pose);
     const glm::mat4 first = pose.world[static_cast<std::size_t>(writer.output_node(1, crowd.perturbed[1]))];
-    gltf::evaluate(out, 0, 5.0f / kFps, pose);
+    animation::evaluate(out, 0, 5.0f / kFps, pose);
     EXPECT_GT(max_abs_difference(first, pose.world[static_cast<std::size_t>(writer.output_node(1, crowd.perturbed[1]))]), 1e-2f);
 }
 
@@ -312,23 +312,23 @@ TEST(RiggedExport, AnimatedSkinnedMeshNodeGetsAnExtraMeshNode) {
     const RiggedGlbWriter writer = crowd.writer();  // the same layout, to look indices up
     auto reloaded = gltf::load_character(path);
     ASSERT_TRUE(reloaded.ok()) << reloaded.error().message;
-    const gltf::Character& out = reloaded.value();
+    const animation::Character& out = reloaded.value();
     EXPECT_EQ(out.nodes.size(), crowd.instances.size() * (crowd.nodes() + 2));
     const int parent = crowd.character.nodes[static_cast<std::size_t>(skinned)].parent;
     for (std::size_t i = 0; i < crowd.instances.size(); ++i) {
-        const gltf::Node& kept = out.nodes.at(static_cast<std::size_t>(writer.output_node(i, skinned)));
+        const animation::Node& kept = out.nodes.at(static_cast<std::size_t>(writer.output_node(i, skinned)));
         EXPECT_EQ(kept.mesh, -1);
         EXPECT_EQ(kept.skin, -1);
         EXPECT_EQ(kept.parent, parent < 0 ? writer.output_node(i, -1) : writer.output_node(i, parent));
         const int holder = writer.skinned_mesh_node(i, skinned);
         EXPECT_NE(holder, writer.output_node(i, skinned));
-        const gltf::Node& mesh_node = out.nodes.at(static_cast<std::size_t>(holder));
+        const animation::Node& mesh_node = out.nodes.at(static_cast<std::size_t>(holder));
         EXPECT_EQ(mesh_node.name, kept.name + "/skinned mesh");
         EXPECT_EQ(mesh_node.parent, -1);
         EXPECT_GE(mesh_node.skin, 0);
         EXPECT_NE(std::find(out.roots.begin(), out.roots.end(), holder), out.roots.end());
         const bool has_channel = std::any_of(out.animations.at(0).channels.begin(), out.animations.at(0).channels.end(),
-                                             [&](const gltf::Channel& c) { return c.node == writer.output_node(i, skinned); });
+                                             [&](const animation::Channel& c) { return c.node == writer.output_node(i, skinned); });
         EXPECT_TRUE(has_channel);
     }
 }
@@ -347,7 +347,7 @@ TEST(RiggedExport, ExternalBinSourceBecomesSelfContainedGlb) {
     auto created = RiggedGlbWriter::create(source, character.value(), instances, animated, kFps, "springs");
     ASSERT_TRUE(created.ok()) << created.error().message;
     RiggedGlbWriter& writer = created.value();
-    const gltf::Pose rest = gltf::rest_pose(character.value());
+    const animation::Pose rest = animation::rest_pose(character.value());
     for (std::uint32_t f = 0; f < 12; ++f) {
         std::vector<glm::vec3> t;
         std::vector<glm::quat> r;

@@ -21,7 +21,7 @@
 
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 #include "kodawari/gltf/import.hpp"
 #include "test_support.hpp"
 
@@ -158,7 +158,7 @@ inline Builder tiny_character() {
     return b;
 }
 
-inline gltf::Character load_ok(const std::string& path) {
+inline animation::Character load_ok(const std::string& path) {
     auto loaded = gltf::load_character(path);
     EXPECT_TRUE(loaded.ok()) << (loaded.ok() ? "" : loaded.error().message);
     if (!loaded.ok()) return {};

@@ -113,12 +113,12 @@ TEST(BirdModel, PartRotationsTurnTheBonesAsTheRigsParts) {
     auto loaded = gltf::load_bird_model(make_bird(dir));
     ASSERT_TRUE(loaded.ok()) << loaded.error().message;
     const birds::BirdModel& m = loaded.value();
-    const gltf::Pose rest = gltf::rest_pose(m.character);
+    const animation::Pose rest = animation::rest_pose(m.character);
     // A wingbeat-like turn about the forward axis, and a sweep about the up axis.
     const glm::quat q = glm::angleAxis(0.6f, glm::vec3(0, 0, 1)) * glm::angleAxis(0.3f, glm::vec3(0, 1, 0));
     for (const std::size_t part : {std::size_t{KW_PART_LEFT_ARM1}, std::size_t{KW_PART_RIGHT_ARM1}, std::size_t{KW_PART_HEAD}}) {
-        const gltf::Node& node = m.character.nodes[static_cast<std::size_t>(m.bones[part])];
-        const glm::quat parent = gltf::rigid_part(rest.world[static_cast<std::size_t>(node.parent)]).rotation;
+        const animation::Node& node = m.character.nodes[static_cast<std::size_t>(m.bones[part])];
+        const glm::quat parent = animation::rigid_part(rest.world[static_cast<std::size_t>(node.parent)]).rotation;
         const glm::quat world = parent * birds::model_bone_rotation(m, part, q);
         // The bone's +Y in the world, against q applied to the rig part's direction.
         const glm::vec3 rig_dir = turn(m.axes[part], glm::vec3(0, 1, 0));

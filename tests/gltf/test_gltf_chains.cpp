@@ -25,7 +25,7 @@ const std::string kAssets = std::string(KODAWARI_SOURCE_DIR) + "/tests/assets";
 const std::string kRiggedSimple = kAssets + "/khronos/RiggedSimple.gltf";
 const std::array<std::string, 3> kSpringFiles = {"inside-collider.gltf", "plane-collider.gltf", "sphere-collider.gltf"};
 
-gltf::Character load(const std::string& path) {
+animation::Character load(const std::string& path) {
     auto character = gltf::load_character(path);
     EXPECT_TRUE(character.ok()) << (character.ok() ? "" : character.error().message);
     return std::move(character).value();
@@ -102,9 +102,9 @@ double distance(const Mat& a, const Mat& b) {
 // A hand-built character: nodes added with a parent and a local translation; finish()
 // fills the children, roots and parents-first order the loader would.
 struct Builder {
-    gltf::Character character;
+    animation::Character character;
     int add(const std::string& name, int parent, glm::vec3 translation) {
-        gltf::Node node;
+        animation::Node node;
         node.name = name;
         node.parent = parent;
         node.translation = translation;
@@ -124,7 +124,7 @@ struct Builder {
         }
         return first;
     }
-    gltf::Character finish() {
+    animation::Character finish() {
         character.source = "hand-built.gltf";
         // Nodes are added after their parents, so index order is parents first.
         for (std::size_t i = 0; i < character.nodes.size(); ++i) character.order.push_back(static_cast<int>(i));
@@ -133,7 +133,7 @@ struct Builder {
 };
 
 // Every found chain must be accepted by the solver with the scaled parameters.
-void expect_simulable(const gltf::Character& character, const gltf::ChainSetup& setup) {
+void expect_simulable(const animation::Character& character, const gltf::ChainSetup& setup) {
     for (const auto& chain : setup.chains) {
         const gltf::PhysicsScale physics = gltf::scaled_physics(character, chain);
         EXPECT_GT(physics.thickness, 0.0f) << chain.name;
@@ -144,7 +144,7 @@ void expect_simulable(const gltf::Character& character, const gltf::ChainSetup& 
 }
 
 TEST(GltfChains, RiggedSimpleNamedRootMatchesBindPose) {
-    const gltf::Character character = load(kRiggedSimple);
+    const animation::Character character = load(kRiggedSimple);
     gltf::ChainSearch search;
     search.roots = {"Bone"};
     const auto setup = gltf::find_chains(character, search);
@@ -193,7 +193,7 @@ TEST(GltfChains, SpringBoneSamplesByDefaultPatterns) {
     // is a separate scene root and does not match.
     for (const std::string& file : kSpringFiles) {
         SCOPED_TRACE(file);
-        const gltf::Character character = load(kAssets + "/vrm-springbone/" + file);
+        const animation::Character character = load(kAssets + "/vrm-springbone/" + file);
         const auto setup = gltf::find_chains(character, gltf::ChainSearch{});
         ASSERT_TRUE(setup.ok()) << setup.error().message;
         EXPECT_TRUE(setup.value().warnings.empty());
@@ -215,7 +215,7 @@ TEST(GltfChains, SpringBoneSamplesByDefaultPatterns) {
 TEST(GltfChains, WildcardPatternsMatchWholeNamesAndWordsMatchWithin) {
     // Issue 37: `rig --chains 'tail*'` found nothing, as patterns were substrings only.
     // "Spring A" is the samples' chain root; "Collider" a separate root that never matches.
-    const gltf::Character character = load(kAssets + "/vrm-springbone/" + kSpringFiles.front());
+    const animation::Character character = load(kAssets + "/vrm-springbone/" + kSpringFiles.front());
     const auto found = [&](std::vector<std::string> patterns) {
         gltf::ChainSearch search;
         search.patterns = std::move(patterns);
@@ -235,7 +235,7 @@ TEST(GltfChains, WildcardPatternsMatchWholeNamesAndWordsMatchWithin) {
 TEST(GltfChains, SpringBonePhysicsScaleWithSize) {
     // inside-collider: nodes at y = 2, 1.5, 1, 0.5, 0 and the collider at (0, 1, 0):
     // size 2 m, thickness 0.006 * 2 = 1.2 cm, mass 300 * pi * 0.012^2 * 0.5 = 67.9 g.
-    const gltf::Character character = load(kAssets + "/vrm-springbone/inside-collider.gltf");
+    const animation::Character character = load(kAssets + "/vrm-springbone/inside-collider.gltf");
     EXPECT_NEAR(gltf::character_size(character), 2.0f, 1e-6f);
     const auto setup = gltf::find_chains(character, gltf::ChainSearch{});
     ASSERT_TRUE(setup.ok() && setup.value().chains.size() == 1);
@@ -248,7 +248,7 @@ TEST(GltfChains, SpringBonePhysicsScaleWithSize) {
 }
 
 TEST(GltfChains, NamedRootInsideStrandAndOverlap) {
-    const gltf::Character character = load(kAssets + "/vrm-springbone/inside-collider.gltf");
+    const animation::Character character = load(kAssets + "/vrm-springbone/inside-collider.gltf");
     gltf::ChainSearch search;
     search.roots = {"Spring C"};
     const auto setup = gltf::find_chains(character, search);
@@ -275,7 +275,7 @@ TEST(GltfChains, MissingRootNamesFileAndNode) {
 }
 
 TEST(GltfChains, MinJointsSkipsWithWarning) {
-    const gltf::Character character = load(kAssets + "/vrm-springbone/plane-collider.gltf");
+    const animation::Character character = load(kAssets + "/vrm-springbone/plane-collider.gltf");
     gltf::ChainSearch search;
     search.min_joints = 6;  // the strand has 5
     const auto setup = gltf::find_chains(character, search);
@@ -288,7 +288,7 @@ TEST(GltfChains, MinJointsSkipsWithWarning) {
 
 // Head with: a hair strand that branches after two joints into two strands, a 40-joint
 // tail, a forearm and hand ("ear" in "ForeArm" must not match), and a leaf ear.
-gltf::Character branching_character() {
+animation::Character branching_character() {
     Builder b;
     const int head = b.add("Head", -1, {0.0f, 1.6f, 0.0f});
     const int hair = b.add("Hair_Root", head, {0.0f, 0.1f, 0.0f});
@@ -303,7 +303,7 @@ gltf::Character branching_character() {
 }
 
 TEST(GltfChains, BranchEndsChainAndLongStrandIsTruncated) {
-    const gltf::Character character = branching_character();
+    const animation::Character character = branching_character();
     const auto setup = gltf::find_chains(character, gltf::ChainSearch{});
     ASSERT_TRUE(setup.ok()) << setup.error().message;
     const auto& chains = setup.value().chains;
@@ -352,7 +352,7 @@ TEST(GltfChains, OrientationsAreInRootFrame) {
     const int second = b.add("ribbon_1", root, {0.0f, -0.1f, 0.0f});
     b.character.nodes[static_cast<std::size_t>(second)].rotation = glm::angleAxis(0.5f, glm::vec3(1, 0, 0));
     b.add("ribbon_2", second, {0.0f, -0.1f, 0.0f});
-    const gltf::Character character = b.finish();
+    const animation::Character character = b.finish();
     const auto setup = gltf::find_chains(character, gltf::ChainSearch{});
     ASSERT_TRUE(setup.ok()) << setup.error().message;
     ASSERT_EQ(setup.value().chains.size(), 1u);

@@ -17,7 +17,7 @@ using namespace gltf_import_test;  // its helpers, TempDir, json and fs
 // ---------------------------------------------------------------------------------------
 
 TEST(GltfImport, RiggedSimpleLoads) {
-    const gltf::Character c = load_ok(kRiggedSimple);
+    const animation::Character c = load_ok(kRiggedSimple);
     // From the file: Z_UP -> Armature -> {Bone -> Bone.001, Cylinder (mesh, skin)}.
     ASSERT_EQ(c.nodes.size(), 5u);
     EXPECT_EQ(c.nodes[0].name, "Z_UP");
@@ -42,7 +42,7 @@ TEST(GltfImport, RiggedSimpleLoads) {
         const json doc = read_json(kRiggedSimple);
         const json& prim = doc["meshes"][0]["primitives"][0];
         const auto count = [&](const json& accessor) { return doc["accessors"][accessor.get<std::size_t>()]["count"].get<std::size_t>(); };
-        const gltf::Mesh::Triangles& t = c.meshes[0].triangles[0];
+        const animation::Mesh::Triangles& t = c.meshes[0].triangles[0];
         EXPECT_EQ(t.positions.size(), count(prim["attributes"]["POSITION"]));
         EXPECT_EQ(t.normals.size(), t.positions.size());
         EXPECT_EQ(t.joints.size(), t.positions.size());
@@ -60,12 +60,12 @@ TEST(GltfImport, RiggedSimpleLoads) {
     EXPECT_EQ(c.skins[0].skeleton, 3);
     EXPECT_EQ(c.skins[0].inverse_bind_matrices.size(), 2u);
     ASSERT_EQ(c.animations.size(), 1u);
-    const gltf::Animation& a = c.animations[0];
+    const animation::Animation& a = c.animations[0];
     ASSERT_EQ(a.channels.size(), 3u);  // translation, rotation, scale of Bone.001
-    for (const gltf::Channel& ch : a.channels) EXPECT_EQ(ch.node, 4);
-    for (const gltf::Sampler& s : a.samplers) {
+    for (const animation::Channel& ch : a.channels) EXPECT_EQ(ch.node, 4);
+    for (const animation::Sampler& s : a.samplers) {
         EXPECT_EQ(s.times.size(), 50u);
-        EXPECT_EQ(s.interpolation, gltf::Interpolation::Linear);
+        EXPECT_EQ(s.interpolation, animation::Interpolation::Linear);
     }
     // Accessor 5's min / max in the file.
     EXPECT_FLOAT_EQ(a.start, 0.04166661947965622f);
@@ -78,9 +78,9 @@ TEST(GltfImport, RiggedSimpleLoads) {
 // node "Z_UP", so that matrix is Z_UP's world matrix. Tolerance 1e-5: float matrices of
 // magnitude ~4.
 TEST(GltfImport, RiggedSimpleRestPoseIsBindPose) {
-    const gltf::Character c = load_ok(kRiggedSimple);
+    const animation::Character c = load_ok(kRiggedSimple);
     ASSERT_EQ(c.skins.size(), 1u);
-    const gltf::Pose pose = gltf::rest_pose(c);
+    const animation::Pose pose = animation::rest_pose(c);
     const glm::dmat4 bind_space_inverse = glm::inverse(glm::dmat4(pose.world[0]));
     double worst = 0.0;
     for (std::size_t j = 0; j < c.skins[0].joints.size(); ++j) {
@@ -99,7 +99,7 @@ TEST(GltfImport, RiggedSimpleRestPoseIsBindPose) {
 // the raw accessors. Tolerance 1e-5: float storage of values up to ~4.2 (float epsilon
 // 1.2e-7 times a few products).
 TEST(GltfImport, RiggedSimpleAnimationMatchesIndependentComposition) {
-    const gltf::Character c = load_ok(kRiggedSimple);
+    const animation::Character c = load_ok(kRiggedSimple);
     ASSERT_EQ(c.animations.size(), 1u);
     tinygltf::Model model;
     tinygltf::TinyGLTF loader;
@@ -126,11 +126,11 @@ TEST(GltfImport, RiggedSimpleAnimationMatchesIndependentComposition) {
     const std::vector<double> first_time = raw_floats(raw.samplers[0].input, 0, 1);
 
     double worst = 0.0;
-    gltf::Pose pose;
+    animation::Pose pose;
     const std::vector<float> times = {-1.0f, 0.0f, static_cast<float>(first_time[0]), 0.3f, 0.5f, 0.77f,
                                       1.0f,  1.5f, 2.0f, 2.083333015441895f, 5.0f};
     for (const float t : times) {
-        gltf::evaluate(c, 0, t, pose);
+        animation::evaluate(c, 0, t, pose);
         for (std::size_t i = 0; i < c.nodes.size(); ++i) {
             EXPECT_TRUE(std::isfinite(pose.translation[i].x + pose.translation[i].y + pose.translation[i].z));
             EXPECT_NEAR(glm::length(pose.rotation[i]), 1.0f, 1e-6f) << "t " << t << " node " << i;
@@ -156,7 +156,7 @@ TEST(GltfImport, RiggedSimpleAnimationMatchesIndependentComposition) {
     const std::size_t keys = c.animations[0].samplers[0].times.size();
     for (std::size_t k = 0; k < keys; ++k) {
         const float t = static_cast<float>(raw_floats(raw.samplers[0].input, k, 1)[0]);
-        gltf::evaluate(c, 0, t, pose);
+        animation::evaluate(c, 0, t, pose);
         for (const tinygltf::AnimationChannel& ch : raw.channels) {
             const tinygltf::AnimationSampler& s = raw.samplers[static_cast<std::size_t>(ch.sampler)];
             if (ch.target_path == "rotation") {
@@ -174,7 +174,7 @@ TEST(GltfImport, RiggedSimpleAnimationMatchesIndependentComposition) {
 
 TEST(GltfImport, VrmSampleWithExternalBufferLoads) {
     for (const char* name : {"sphere-collider.gltf", "plane-collider.gltf", "inside-collider.gltf"}) {
-        const gltf::Character c = load_ok(kAssets + "/vrm-springbone/" + name);
+        const animation::Character c = load_ok(kAssets + "/vrm-springbone/" + name);
         EXPECT_EQ(c.nodes.size(), 6u) << name;
         EXPECT_EQ(c.order.size(), 6u) << name;
     }
@@ -188,9 +188,9 @@ TEST(GltfImport, LinearAndStepInterpolation) {
     TempDir dir;
     const std::string file = dir.file("tiny.gltf");
     write_text(file, tiny_character().gltf().dump());
-    const gltf::Character c = load_ok(file);
+    const animation::Character c = load_ok(file);
     ASSERT_EQ(c.animations.size(), 2u);
-    gltf::Pose pose;
+    animation::Pose pose;
     struct Expect {
         float t;
         glm::vec3 translation;
@@ -213,7 +213,7 @@ TEST(GltfImport, LinearAndStepInterpolation) {
         {7.0f, {2, 0, 0}, {3, 3, 3}, {-0.8f, 0, 0, -0.6f}},   // after the last key: clamped
     };
     for (const Expect& e : expected) {
-        gltf::evaluate(c, 0, e.t, pose);
+        animation::evaluate(c, 0, e.t, pose);
         const bool key = e.t <= 0.0f || e.t == 1.0f || e.t >= 3.0f;
         for (int k = 0; k < 3; ++k) {
             if (key) {
@@ -234,7 +234,7 @@ TEST(GltfImport, LinearAndStepInterpolation) {
     }
     // World: root at (0,1,0), child local (2,2,-3) rotated/scaled nothing above: the
     // child's world translation is the sum (the root has no rotation).
-    gltf::evaluate(c, 0, 2.0f, pose);
+    animation::evaluate(c, 0, 2.0f, pose);
     EXPECT_NEAR(pose.world[1][3].x, 2.0f, 1e-6f);
     EXPECT_NEAR(pose.world[1][3].y, 3.0f, 1e-6f);
     EXPECT_NEAR(pose.world[1][3].z, -3.0f, 1e-6f);
@@ -247,20 +247,20 @@ TEST(GltfImport, CubicSplineInterpolation) {
     TempDir dir;
     const std::string file = dir.file("tiny.gltf");
     write_text(file, tiny_character().gltf().dump());
-    const gltf::Character c = load_ok(file);
+    const animation::Character c = load_ok(file);
     ASSERT_EQ(c.animations.size(), 2u);
-    gltf::Pose pose;
+    animation::Pose pose;
     const glm::dvec3 v0(0, 1, 0), b0(1, 0, 2), a1(3, -1, 0), v1(1, 3, -1);
     const double td = 2.0;
     for (const double t : {0.5, 1.0, 1.5}) {
         const double u = t / td;
         const glm::dvec3 want = (2 * u * u * u - 3 * u * u + 1) * v0 + (u * u * u - 2 * u * u + u) * td * b0 +
                                 (-2 * u * u * u + 3 * u * u) * v1 + (u * u * u - u * u) * td * a1;
-        gltf::evaluate(c, 1, static_cast<float>(t), pose);
+        animation::evaluate(c, 1, static_cast<float>(t), pose);
         for (int k = 0; k < 3; ++k) EXPECT_NEAR(pose.translation[1][k], want[k], 1e-6) << "t " << t;
     }
     // By hand at the midpoint: 0.5 v0 + 0.25 b0 + 0.5 v1 - 0.25 a1 = (0, 2.25, 0).
-    gltf::evaluate(c, 1, 1.0f, pose);
+    animation::evaluate(c, 1, 1.0f, pose);
     EXPECT_NEAR(pose.translation[1].y, 2.25f, 1e-6f);
     // Zero tangents between identity and 180 degrees about z: the midpoint (0,0,.5,.5)
     // normalizes to 90 degrees about z.
@@ -269,11 +269,11 @@ TEST(GltfImport, CubicSplineInterpolation) {
     EXPECT_NEAR(pose.rotation[1].w, h, 1e-6f);
     EXPECT_NEAR(glm::length(pose.rotation[1]), 1.0f, 1e-6f);
     // Keys and clamping: the stored values, exactly.
-    gltf::evaluate(c, 1, 0.0f, pose);
+    animation::evaluate(c, 1, 0.0f, pose);
     EXPECT_EQ(pose.translation[1], glm::vec3(0, 1, 0));
-    gltf::evaluate(c, 1, 2.0f, pose);
+    animation::evaluate(c, 1, 2.0f, pose);
     EXPECT_EQ(pose.translation[1], glm::vec3(1, 3, -1));
-    gltf::evaluate(c, 1, 9.0f, pose);
+    animation::evaluate(c, 1, 9.0f, pose);
     EXPECT_EQ(pose.translation[1], glm::vec3(1, 3, -1));
     EXPECT_EQ(pose.rotation[1], glm::quat(0, 0, 0, 1));
 }
@@ -282,7 +282,7 @@ TEST(GltfImport, GlbLoadsLikeGltf) {
     TempDir dir;
     const std::string file = dir.file("tiny.glb");
     write_bytes(file, tiny_character().glb());
-    const gltf::Character c = load_ok(file);
+    const animation::Character c = load_ok(file);
     EXPECT_EQ(c.nodes.size(), 2u);
     ASSERT_EQ(c.skins.size(), 1u);
     EXPECT_EQ(c.skins[0].inverse_bind_matrices[1][3].y, -1.0f);

@@ -42,13 +42,13 @@ void write_text(const std::string& path, const std::string& text) {
     out << text;
 }
 
-gltf::Character load(const std::string& path) {
+animation::Character load(const std::string& path) {
     auto character = gltf::load_character(path);
     EXPECT_TRUE(character.ok()) << (character.ok() ? "" : character.error().message);
     return std::move(character).value();
 }
 
-gltf::VrmSprings read(const gltf::Character& character) {
+gltf::VrmSprings read(const animation::Character& character) {
     auto springs = gltf::read_vrm_springs(character);
     EXPECT_TRUE(springs.ok()) << (springs.ok() ? "" : springs.error().message);
     return std::move(springs).value();
@@ -221,7 +221,7 @@ TEST(GltfVrm, BrokenJointPathNamesFileAndJsonPath) {
     const std::string path = dir.file("broken.gltf");
     write_text(path, doc.dump());
     fs::copy_file(kSpringDir + "/sphere_mesh.bin", dir.file("sphere_mesh.bin"));
-    const gltf::Character character = load(path);
+    const animation::Character character = load(path);
     const auto vrm = gltf::read_vrm_springs(character);
     ASSERT_FALSE(vrm.ok());
     EXPECT_EQ(vrm.error().kind, Error::Kind::InvalidInput);

@@ -207,30 +207,30 @@ std::vector<Track> walk_tracks(const std::vector<Joint>& j) {
     };
 }
 
-gltf::Character load(const std::string& path) {
+animation::Character load(const std::string& path) {
     auto c = gltf::load_character(path);
     EXPECT_TRUE(c.ok()) << (c.ok() ? "" : c.error().message);
-    return c.ok() ? std::move(c).value() : gltf::Character{};
+    return c.ok() ? std::move(c).value() : animation::Character{};
 }
 
-gltf::Retargeted motion_ok(const gltf::MotionRequest& request, const gltf::Character& target) {
+gltf::Retargeted motion_ok(const gltf::MotionRequest& request, const animation::Character& target) {
     auto m = gltf::load_motion(request, target);
     EXPECT_TRUE(m.ok()) << (m.ok() ? "" : m.error().message);
     return m.ok() ? std::move(m).value() : gltf::Retargeted{};
 }
 
 // The target with the retargeted clip appended, posed at `time`.
-gltf::Pose pose_at(gltf::Character target, const gltf::Animation& clip, float time) {
+animation::Pose pose_at(animation::Character target, const animation::Animation& clip, float time) {
     target.animations.push_back(clip);
-    gltf::Pose pose;
-    gltf::evaluate(target, target.animations.size() - 1, time, pose);
+    animation::Pose pose;
+    animation::evaluate(target, target.animations.size() - 1, time, pose);
     return pose;
 }
 
-glm::vec3 world_position(const gltf::Pose& pose, int node) { return glm::vec3(pose.world[static_cast<std::size_t>(node)][3]); }
+glm::vec3 world_position(const animation::Pose& pose, int node) { return glm::vec3(pose.world[static_cast<std::size_t>(node)][3]); }
 
 // The upper arm's bone: from the upper arm's joint to the lower arm's, in world space.
-glm::vec3 arm_direction(const gltf::Pose& pose, const std::vector<Joint>& j, const std::string& side = "left") {
+glm::vec3 arm_direction(const animation::Pose& pose, const std::vector<Joint>& j, const std::string& side = "left") {
     return world_position(pose, index_of(j, side + "LowerArm")) - world_position(pose, index_of(j, side + "UpperArm"));
 }
 
@@ -260,7 +260,7 @@ struct Files {
 
 TEST(Motion, VrmaRetargetsOntoAvatarWithOtherRestFrames) {
     Files f;
-    const gltf::Character target = load(f.avatar);
+    const animation::Character target = load(f.avatar);
     const gltf::Retargeted m = motion_ok({"walk", f.vrma, "", "", ""}, target);
     ASSERT_FALSE(m.animation.channels.empty());
     EXPECT_EQ(m.animation.name, "walk");
@@ -269,19 +269,19 @@ TEST(Motion, VrmaRetargetsOntoAvatarWithOtherRestFrames) {
     // Keys at the source's keys, gaps split to at most 1/30 s: 0, 1/30, ..., 2.
     EXPECT_EQ(m.keys, 61u);
     EXPECT_NEAR(m.leg_ratio, leg(1.28f) / leg(1.6f), 1e-6f);
-    for (const gltf::Sampler& s : m.animation.samplers) {
-        EXPECT_EQ(s.interpolation, gltf::Interpolation::Linear);
+    for (const animation::Sampler& s : m.animation.samplers) {
+        EXPECT_EQ(s.interpolation, animation::Interpolation::Linear);
         EXPECT_EQ(s.times.size(), m.keys);
     }
     // Only humanoid bones are animated: the hair strand and the root keep their rest pose.
-    for (const gltf::Channel& c : m.animation.channels) {
+    for (const animation::Channel& c : m.animation.channels) {
         EXPECT_FALSE(f.target[static_cast<std::size_t>(c.node)].bone.empty()) << f.target[static_cast<std::size_t>(c.node)].name;
     }
 
-    const gltf::Pose rest = gltf::rest_pose(target);
+    const animation::Pose rest = animation::rest_pose(target);
     const glm::vec3 arm0 = arm_direction(rest, f.target);
     // t = 1: the upper arm's bone has turned by exactly 45 degrees about +Z.
-    const gltf::Pose p1 = pose_at(target, m.animation, 1.0f);
+    const animation::Pose p1 = pose_at(target, m.animation, 1.0f);
     const glm::vec3 arm1 = arm_direction(p1, f.target);
     expect_near(arm1, about(45, {0, 0, 1}) * arm0, kPositionTol, "upper arm at t = 1");
     EXPECT_NEAR(glm::degrees(std::acos(glm::dot(glm::normalize(arm0), glm::normalize(arm1)))), 45.0f, 1e-3f);
@@ -302,7 +302,7 @@ TEST(Motion, VrmaRetargetsOntoAvatarWithOtherRestFrames) {
     const glm::vec3 arm_half = arm_direction(pose_at(target, m.animation, 0.5f), f.target);
     expect_near(arm_half, about(22.5f, {0, 0, 1}) * arm0, kPositionTol, "upper arm at t = 0.5");
     // t = 2: the spine's 30 degrees about +Y carry the arm (still raised 45 degrees) with it.
-    const gltf::Pose p2 = pose_at(target, m.animation, 2.0f);
+    const animation::Pose p2 = pose_at(target, m.animation, 2.0f);
     expect_near(arm_direction(p2, f.target), about(30, {0, 1, 0}) * about(45, {0, 0, 1}) * arm0, kPositionTol, "upper arm at t = 2");
     expect_near(world_position(p2, hips), world_position(rest, hips), kPositionTol, "hips back at t = 2");
     // The hair strand stays at rest relative to the head.
@@ -319,14 +319,14 @@ TEST(Motion, VrmaRetargetsOntoAvatarWithOtherRestFrames) {
 // world rest rotation, W the bone's, L its local rest rotation.
 TEST(Motion, LocalRotationIsTheSpecFormula) {
     Files f;
-    const gltf::Character target = load(f.avatar);
+    const animation::Character target = load(f.avatar);
     const gltf::Retargeted m = motion_ok({"walk", f.vrma, "", "", ""}, target);
     const int arm = index_of(f.target, "leftUpperArm");
-    const auto channel = std::find_if(m.animation.channels.begin(), m.animation.channels.end(), [&](const gltf::Channel& c) {
-        return c.node == arm && c.path == gltf::Path::Rotation;
+    const auto channel = std::find_if(m.animation.channels.begin(), m.animation.channels.end(), [&](const animation::Channel& c) {
+        return c.node == arm && c.path == animation::Path::Rotation;
     });
     ASSERT_NE(channel, m.animation.channels.end());
-    const glm::vec4 v = gltf::sample(m.animation.samplers[channel->sampler], gltf::Path::Rotation, 1.0f);
+    const glm::vec4 v = animation::sample(m.animation.samplers[channel->sampler], animation::Path::Rotation, 1.0f);
     const glm::quat written(v.w, v.x, v.y, v.z);
     // The source's rests are identity: P_src = W_src = 1, so D = q_src = Rz(45).
     const glm::quat d = about(45, {0, 0, 1});
@@ -345,12 +345,12 @@ TEST(Motion, LocalRotationIsTheSpecFormula) {
 TEST(Motion, Vrm0TargetFacingMinusZ) {
     Files f;
     const std::vector<Joint> vrm0 = humanoid(1.28f, false, true);
-    const gltf::Character target = load(write_doc(f.dir, "avatar0.gltf", skeleton_doc(vrm0, Declares::Vrm0)));
+    const animation::Character target = load(write_doc(f.dir, "avatar0.gltf", skeleton_doc(vrm0, Declares::Vrm0)));
     const gltf::Retargeted m = motion_ok({"walk", f.vrma, "", "", ""}, target);
-    const gltf::Pose rest = gltf::rest_pose(target);
+    const animation::Pose rest = animation::rest_pose(target);
     const glm::vec3 arm0 = arm_direction(rest, vrm0);
     ASSERT_LT(arm0.x, 0.0f);  // facing -Z, the character's left is -X
-    const gltf::Pose p1 = pose_at(target, m.animation, 1.0f);
+    const animation::Pose p1 = pose_at(target, m.animation, 1.0f);
     // The motion is turned half round +Y with the model: 45 degrees about -Z, and the arm rises.
     const glm::vec3 arm1 = arm_direction(p1, vrm0);
     expect_near(arm1, about(-45, {0, 0, 1}) * arm0, kPositionTol, "upper arm at t = 1");
@@ -391,12 +391,12 @@ TEST(Motion, NameMapsOnBothSides) {
     }
     write_text(dir.file("mixamo-map.json"), map.dump());
     write_text(dir.file("target-map.json"), target_map.dump());
-    const gltf::Character tgt = load(write_doc(dir, "target.gltf", skeleton_doc(target, Declares::Nothing)));
+    const animation::Character tgt = load(write_doc(dir, "target.gltf", skeleton_doc(target, Declares::Nothing)));
 
     const gltf::Retargeted m =
         motion_ok({"run", glb, "Run", dir.file("mixamo-map.json"), dir.file("target-map.json")}, tgt);
-    const gltf::Pose rest = gltf::rest_pose(tgt);
-    const gltf::Pose p1 = pose_at(tgt, m.animation, 1.0f);
+    const animation::Pose rest = animation::rest_pose(tgt);
+    const animation::Pose p1 = pose_at(tgt, m.animation, 1.0f);
     expect_near(arm_direction(p1, target), about(45, {0, 0, 1}) * arm_direction(rest, target), kPositionTol, "upper arm");
     const int th = index_of(target, "hips");
     expect_near(world_position(p1, th) - world_position(rest, th), (leg(1.28f) / leg(1.6f)) * glm::vec3(0.1f, -0.1f, 0.3f),
@@ -422,7 +422,7 @@ TEST(Motion, NameMapsOnBothSides) {
 
 TEST(Motion, SameInputSameBits) {
     Files f;
-    const gltf::Character target = load(f.avatar);
+    const animation::Character target = load(f.avatar);
     const gltf::Retargeted a = motion_ok({"walk", f.vrma, "", "", ""}, target);
     const gltf::Retargeted b = motion_ok({"walk", f.vrma, "", "", ""}, target);
     ASSERT_EQ(a.animation.samplers.size(), b.animation.samplers.size());
@@ -444,7 +444,7 @@ TEST(Motion, ExpressionsLookAtAndOptionalBonesAreWarnings) {
     add_clip(s, f.source, "walk", tracks);
     const std::string vrma = write_doc(f.dir, "notes.vrma", s);
     // The avatar has no toes (optional): skipped with a warning.
-    const gltf::Character target = load(write_doc(f.dir, "toeless.gltf", skeleton_doc(f.target, Declares::Vrm1, {"leftToes"})));
+    const animation::Character target = load(write_doc(f.dir, "toeless.gltf", skeleton_doc(f.target, Declares::Vrm1, {"leftToes"})));
     const gltf::Retargeted m = motion_ok({"walk", vrma, "", "", ""}, target);
     const auto warned = [&](const std::string& words) {
         return std::any_of(m.warnings.begin(), m.warnings.end(), [&](const std::string& w) { return w.find(words) != std::string::npos; });
@@ -464,7 +464,7 @@ void expect_error(const Result<gltf::Retargeted>& r, const std::string& starts, 
 
 TEST(Motion, VrmaWithoutHumanoidBones) {
     Files f;
-    const gltf::Character target = load(f.avatar);
+    const animation::Character target = load(f.avatar);
     Doc s = skeleton_doc(f.source, Declares::Vrma);
     s.extensions["VRMC_vrm_animation"].erase("humanoid");
     add_clip(s, f.source, "walk", walk_tracks(f.source));
@@ -482,7 +482,7 @@ TEST(Motion, VrmaWithoutHumanoidBones) {
 // needs are counted first, and too many is an error naming the file and the clip.
 TEST(Motion, KeyTimesTooFarApartAreAnErrorNotAHang) {
     Files f;
-    const gltf::Character target = load(f.avatar);
+    const animation::Character target = load(f.avatar);
     Doc s = skeleton_doc(f.source, Declares::Vrma);
     add_clip(s, f.source, "walk", {{"leftUpperArm", "rotation", {1e12f, 1.001e12f}, {xyzw(glm::quat(1, 0, 0, 0)), xyzw(about(10, {1, 0, 0}))}}});
     const std::string vrma = write_doc(f.dir, "far.vrma", s);
@@ -497,7 +497,7 @@ TEST(Motion, RequiredBoneTheAvatarLacks) {
     tracks.push_back({"leftHand", "rotation", {0, 1}, {xyzw(glm::quat(1, 0, 0, 0)), xyzw(about(10, {1, 0, 0}))}});
     add_clip(s, f.source, "wave", tracks);
     const std::string vrma = write_doc(f.dir, "wave.vrma", s);
-    const gltf::Character handless = load(write_doc(f.dir, "handless.gltf", skeleton_doc(f.target, Declares::Vrm1, {"leftHand"})));
+    const animation::Character handless = load(write_doc(f.dir, "handless.gltf", skeleton_doc(f.target, Declares::Vrm1, {"leftHand"})));
     expect_error(gltf::load_motion({"wave", vrma, "", "", ""}, handless),
                  vrma + ": $.extensions.VRMC_vrm_animation.humanoid.humanBones.leftHand.node: ", "required VRM humanoid bone");
 }
@@ -511,14 +511,14 @@ TEST(Motion, NoCommonBones) {
     add_clip(s, f.source, "wiggle", {{"leftToes", "rotation", {0, 1}, {xyzw(glm::quat(1, 0, 0, 0)), xyzw(about(20, {1, 0, 0}))}}});
     const std::string vrma = write_doc(f.dir, "toes.vrma", s);
     write_text(f.dir.file("hips-only.json"), json{{"hips", "hips"}}.dump());
-    const gltf::Character target = load(write_doc(f.dir, "plain.gltf", skeleton_doc(f.target, Declares::Nothing)));
+    const animation::Character target = load(write_doc(f.dir, "plain.gltf", skeleton_doc(f.target, Declares::Nothing)));
     expect_error(gltf::load_motion({"wiggle", vrma, "", "", f.dir.file("hips-only.json")}, target),
                  vrma + ": $.extensions.VRMC_vrm_animation.humanoid.humanBones: ", "no humanoid bone in common");
 }
 
 TEST(Motion, MapNamingANodeThatDoesNotExist) {
     Files f;
-    const gltf::Character target = load(f.avatar);
+    const animation::Character target = load(f.avatar);
     write_text(f.dir.file("map.json"), json{{"hips", "hips"}, {"leftHand", "mixamorig:LeftHand"}}.dump());
     gltf::MotionKey key = gltf::MotionKey::File;
     const auto r = gltf::load_motion({"walk", f.vrma, "", f.dir.file("map.json"), ""}, target, &key);

@@ -90,24 +90,24 @@ Crowd load_crowd(bool short_tail) {
 // matrices (glTF §3.7.3; weights normalized by their sum; a vertex without a skin follows
 // its node) and added as lit triangles with their face normals. Returns the triangle count.
 std::size_t add_reference_meshes(render::DrawList& list, const RodScene& scene, std::uint32_t frame, const ChainSnapshot& snapshot) {
-    gltf::Pose pose;
+    animation::Pose pose;
     std::vector<glm::mat4> world, joint_matrices;
     std::vector<glm::vec3> skinned;
     std::size_t triangles = 0;
     for (std::uint32_t c = 0; c < scene.instances.size(); ++c) {
-        const gltf::Character& ch = *scene.characters[scene.instances[c].character].rig;
+        const animation::Character& ch = *scene.characters[scene.instances[c].character].rig;
         scene.rigged_world(c, frame, snapshot.positions, snapshot.orientations, pose, world);
         for (std::size_t n = 0; n < ch.nodes.size(); ++n) {
-            const gltf::Node& node = ch.nodes[n];
+            const animation::Node& node = ch.nodes[n];
             if (node.mesh < 0) continue;
-            const gltf::Skin* skin = node.skin >= 0 ? &ch.skins[static_cast<std::size_t>(node.skin)] : nullptr;
+            const animation::Skin* skin = node.skin >= 0 ? &ch.skins[static_cast<std::size_t>(node.skin)] : nullptr;
             joint_matrices.clear();
             if (skin != nullptr) {
                 for (std::size_t j = 0; j < skin->joints.size(); ++j) {
                     joint_matrices.push_back(world[static_cast<std::size_t>(skin->joints[j])] * skin->inverse_bind_matrices[j]);
                 }
             }
-            for (const gltf::Mesh::Triangles& t : ch.meshes[static_cast<std::size_t>(node.mesh)].triangles) {
+            for (const animation::Mesh::Triangles& t : ch.meshes[static_cast<std::size_t>(node.mesh)].triangles) {
                 skinned.resize(t.positions.size());
                 for (std::size_t v = 0; v < t.positions.size(); ++v) {
                     const glm::vec4 p(t.positions[v], 1.0f);

@@ -123,7 +123,7 @@ std::string error_of(const std::string& text) {
     return scene.ok() ? std::string("(loaded)") : scene.error().message;
 }
 
-int node_named(const gltf::Character& ch, const std::string& name) {
+int node_named(const animation::Character& ch, const std::string& name) {
     for (std::size_t i = 0; i < ch.nodes.size(); ++i) {
         if (ch.nodes[i].name == name) return static_cast<int>(i);
     }
@@ -152,7 +152,7 @@ TEST(RiggedScene, ShippedCrowdLoadsWithClipsAndOffsets) {
     EXPECT_GT(offsets.size(), 60u);
 }
 
-// The per-frame input of a rigged instance, recomputed here from gltf::evaluate with the
+// The per-frame input of a rigged instance, recomputed here from animation::evaluate with the
 // placement written out as translate * rotate-about-Y: reference joint, chain roots and
 // the head collider, at frames where the clip time wraps.
 TEST(RiggedScene, FrameInputFollowsTheClipAtTheInstanceTime) {
@@ -164,7 +164,7 @@ TEST(RiggedScene, FrameInputFollowsTheClipAtTheInstanceTime) {
     auto parsed = parse_scene(chibi_scene(chains, crowd, colliders), "test.json");
     ASSERT_TRUE(parsed.ok()) << parsed.error().message;
     const RodScene rods = build(parsed.value());
-    const gltf::Character& ch = *rods.characters[0].rig;
+    const animation::Character& ch = *rods.characters[0].rig;
     ASSERT_EQ(rods.world.chains.size(), 4u);
     EXPECT_EQ(rods.world.templ(rods.world.chains[0]).chain.joint_count, 8u);  // tail_0..tail_7, to the leaf
     EXPECT_EQ(rods.world.templ(rods.world.chains[1]).chain.joint_count, 3u);  // "joints": 3
@@ -172,21 +172,21 @@ TEST(RiggedScene, FrameInputFollowsTheClipAtTheInstanceTime) {
     const int head = node_named(ch, "head");
     const int tail = node_named(ch, "tail_0");
     const int bang = node_named(ch, "bang_C_0");
-    gltf::Pose pose;
+    animation::Pose pose;
     for (const std::uint32_t frame : {0u, 37u, 59u}) {
         const rods::RodFrame input = rods.frame(frame);
         for (std::uint32_t c = 0; c < 2; ++c) {
             const CharacterInstance& inst = rods.instances[c];
-            const gltf::Animation& clip = ch.animations[static_cast<std::size_t>(inst.clip)];
+            const animation::Animation& clip = ch.animations[static_cast<std::size_t>(inst.clip)];
             // Looping: the clip time is the instance time modulo the clip's length.
             const double t = static_cast<double>(frame) / 60.0 + static_cast<double>(inst.time_offset);
             const double d = static_cast<double>(clip.end - clip.start);
             const auto clip_t = static_cast<float>(static_cast<double>(clip.start) + std::fmod(t - static_cast<double>(clip.start), d));
             EXPECT_NEAR(rods.clip_time(c, frame), clip_t, 1e-5f);
-            gltf::evaluate(ch, static_cast<std::size_t>(inst.clip), clip_t, pose);
+            animation::evaluate(ch, static_cast<std::size_t>(inst.clip), clip_t, pose);
             const glm::mat4 placement = glm::rotate(glm::translate(glm::mat4(1.0f), inst.placement.position),
                                                     c == 0 ? glm::radians(90.0f) : 0.0f, glm::vec3(0, 1, 0));
-            const auto world_of = [&](int node) { return gltf::rigid_part(placement * pose.world[static_cast<std::size_t>(node)]); };
+            const auto world_of = [&](int node) { return animation::rigid_part(placement * pose.world[static_cast<std::size_t>(node)]); };
             // 1e-5 m: float matrices of a 1.2 m character, composed a few times.
             EXPECT_LT(max_difference(input.reference[c].position, world_of(head).position), 1e-5f) << "frame " << frame;
             EXPECT_LT(max_difference(input.roots[2 * c].position, world_of(tail).position), 1e-5f);
@@ -215,11 +215,11 @@ TEST(RiggedScene, BaseShapeIsTheRestPose) {
                               "test.json");
     ASSERT_TRUE(parsed.ok()) << parsed.error().message;
     const RodScene rods = build(parsed.value());
-    const gltf::Character& ch = *rods.characters[0].rig;
+    const animation::Character& ch = *rods.characters[0].rig;
     EXPECT_EQ(rods.instances[0].clip, -1);
     const rods::RestShape rest = rods::rest_shape(rods.world, 0, rods.frame(0));
-    const gltf::Pose pose = gltf::rest_pose(ch);
-    const rods::Transform root = gltf::rigid_part(pose.world[static_cast<std::size_t>(node_named(ch, "tail_0"))]);
+    const animation::Pose pose = animation::rest_pose(ch);
+    const rods::Transform root = animation::rigid_part(pose.world[static_cast<std::size_t>(node_named(ch, "tail_0"))]);
     for (int i = 0; i < 4; ++i) {
         const glm::vec3 world = glm::vec3(pose.world[static_cast<std::size_t>(node_named(ch, "tail_" + std::to_string(i)))][3]);
         EXPECT_LT(max_difference(root.position + root.rotation * rest.shape.positions[static_cast<std::size_t>(i)], world), 1e-5f)
@@ -486,16 +486,16 @@ TEST(RiggedScene, ExportRoundTripsTheSimulation) {
 
     auto reloaded = gltf::load_character(path);
     ASSERT_TRUE(reloaded.ok()) << reloaded.error().message;
-    const gltf::Character& exported = reloaded.value();
+    const animation::Character& exported = reloaded.value();
     ASSERT_EQ(exported.animations.size(), 1u);
-    const gltf::Character& source = *sim.rods.characters[0].rig;
+    const animation::Character& source = *sim.rods.characters[0].rig;
     const int head = node_named(source, "head");
-    gltf::Pose pose;
-    gltf::Pose clip;
+    animation::Pose pose;
+    animation::Pose clip;
     float worst_chain = 0.0f;
     float worst_head = 0.0f;
     for (std::uint32_t f = 0; f < kFrames; ++f) {
-        gltf::evaluate(exported, 0, sim.rods.time(f), pose);
+        animation::evaluate(exported, 0, sim.rods.time(f), pose);
         for (std::uint32_t c = 0; c < 3; ++c) {
             const CharacterInstance& inst = sim.rods.instances[c];
             // Every simulated joint (joint 0 follows the clip) where the solver put it.
@@ -509,7 +509,7 @@ TEST(RiggedScene, ExportRoundTripsTheSimulation) {
                 }
             }
             // The skeleton where the instance's clip puts it.
-            gltf::evaluate(source, static_cast<std::size_t>(inst.clip), sim.rods.clip_time(c, f), clip);
+            animation::evaluate(source, static_cast<std::size_t>(inst.clip), sim.rods.clip_time(c, f), clip);
             const glm::vec3 expected = inst.placement.position + inst.placement.rotation * glm::vec3(clip.world[static_cast<std::size_t>(head)][3]);
             const int out_head = sim.output_nodes[c][static_cast<std::size_t>(head)];
             worst_head = std::max(worst_head, glm::length(glm::vec3(pose.world[static_cast<std::size_t>(out_head)][3]) - expected));
@@ -788,10 +788,10 @@ TEST(RiggedScene, BlenderImportsTheExport) {
         // Blender 3.4 makes each skin an armature and one action per animated object, bone
         // channels going to their armature: one action per instance, whose animated bones
         // are the nodes the clips animate plus every chain joint.
-        const gltf::Character& source = *sim.rods.characters[0].rig;
+        const animation::Character& source = *sim.rods.characters[0].rig;
         std::set<int> animated;
-        for (const gltf::Animation& a : source.animations) {
-            for (const gltf::Channel& ch : a.channels) animated.insert(ch.node);
+        for (const animation::Animation& a : source.animations) {
+            for (const animation::Channel& ch : a.channels) animated.insert(ch.node);
         }
         for (const std::vector<int>& nodes : sim.rods.characters[0].chain_nodes) animated.insert(nodes.begin(), nodes.end());
         EXPECT_EQ(report.at("actions").get<std::size_t>(), kInstances);

@@ -9,7 +9,7 @@
 #include <string>
 #include <vector>
 
-#include "backends/device_backends.hpp"
+#include "vulkan_backends/device_backends.hpp"
 #include "domains/flocking/flock_backend.hpp"
 #include "domains/flocking/flock_world.hpp"
 

@@ -11,7 +11,7 @@
 #include <string>
 #include <vector>
 
-#include "backends/device_backends.hpp"
+#include "vulkan_backends/device_backends.hpp"
 #include "kodawari/compute.hpp"
 #include "domains/flocking/flock_backend.hpp"
 #include "kodawari/domains/flocking.hpp"

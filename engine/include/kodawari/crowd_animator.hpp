@@ -20,7 +20,7 @@
 
 namespace kodawari {
 
-class DeviceInputWriter;  // engine/backends/crowd_animator.cpp
+class DeviceInputWriter;  // engine/vulkan_backends/crowd_animator.cpp
 
 /// Produces RodFrames of a RodScene, its rigged characters posed by pose backends.
 class KODAWARI_API CrowdAnimator {

@@ -19,7 +19,7 @@
 #include "atomic_file.hpp"
 #include "communicator.hpp"
 #include "birds/world.hpp"
-#include "gltf/character.hpp"
+#include "animation/character.hpp"
 #include "result.hpp"
 #include "scene.hpp"
 #include "rods/chain_snapshot.hpp"
@@ -306,7 +306,7 @@ public:
     /// system's temporary directory); a failure to create that file is an Io error of
     /// the first add_frame(). `compaction`: the keys compacted (default: not; bad
     /// bounds are InvalidInput).
-    [[nodiscard]] static Result<RiggedGlbWriter> create(const std::string& source_path, const gltf::Character& character,
+    [[nodiscard]] static Result<RiggedGlbWriter> create(const std::string& source_path, const animation::Character& character,
                                                         std::span<const RiggedInstance> instances,
                                                         std::vector<bool> animated, float fps,
                                                         std::string animation_name, std::string spill_beside = {},

@@ -16,8 +16,8 @@
 
 #include "kodawari/api.hpp"
 #include "backend.hpp"
-#include "gltf/character.hpp"
-#include "gltf/pose_instance.hpp"
+#include "animation/character.hpp"
+#include "animation/pose_instance.hpp"
 #include "result.hpp"
 #include "rods/solver.hpp"
 
@@ -33,7 +33,7 @@ inline constexpr std::string_view world = "poses.world";
 /// Checks instances against a character: every clip is -1 or an animation of it, every
 /// time offset and placement is finite. Errors name the instance ("instance 17: clip 3
 /// does not exist; the character has 1 animation"). Every backend's load() runs it.
-[[nodiscard]] KODAWARI_API Result<void> check_instances(const gltf::Character& character,
+[[nodiscard]] KODAWARI_API Result<void> check_instances(const animation::Character& character,
                                                         std::span<const PoseInstance> instances);
 
 /// Evaluates a crowd of instances of one character at scene times.
@@ -52,7 +52,7 @@ public:
     /// Uploads the character (nodes, rest TRS, clips) and the instances (check_instances()
     /// must accept them; no instances is fine). `character` must outlive the backend's use
     /// of it; `instances` is copied.
-    [[nodiscard]] virtual Result<void> load(const gltf::Character& character, std::span<const PoseInstance> instances) = 0;
+    [[nodiscard]] virtual Result<void> load(const animation::Character& character, std::span<const PoseInstance> instances) = 0;
 
     /// Evaluates every instance at scene time `time` (s, finite). load() first.
     [[nodiscard]] virtual Result<void> evaluate(float time) = 0;

@@ -15,7 +15,7 @@
 #include "kodawari/api.hpp"
 #include "birds/bird_model.hpp"
 #include "birds/world.hpp"
-#include "gltf/character.hpp"
+#include "animation/character.hpp"
 #include "result.hpp"
 #include "rods/keyed.hpp"
 #include "rods/limits.hpp"
@@ -201,7 +201,7 @@ struct ChainSpec {
     std::string path;     ///< its JSON path (for messages from the builder)
     /// A rigged (glTF) character's chain: its joints' node indices, root first. Then
     /// `joint` is nodes[0], `offset` the identity, and the chain root's frame is the
-    /// root node's animated world transform with its scale removed (gltf::rigid_part).
+    /// root node's animated world transform with its scale removed (animation::rigid_part).
     std::vector<int> nodes;
 };
 
@@ -210,7 +210,7 @@ struct ChainSpec {
 struct RigSpec {
     std::string file;      ///< as written in the scene
     std::string resolved;  ///< the path it was loaded from (relative to the scene file's folder)
-    std::shared_ptr<const gltf::Character> character;
+    std::shared_ptr<const animation::Character> character;
     /// The clip instances play unless their crowd says otherwise: an index into
     /// character->animations, or -1 for the rest pose.
     std::int32_t clip = -1;

@@ -17,7 +17,7 @@
 #include "kodawari/api.hpp"
 #include "kodawari/birds/allometry.hpp"
 #include "kodawari/birds/rig.hpp"
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 
 namespace kodawari::birds {
 
@@ -30,7 +30,7 @@ inline constexpr std::array<std::string_view, kPartCount> kModelPartKeys = {
 struct KODAWARI_API BirdModel {
     std::string source;             ///< the file it came from, as given
     std::string name;               ///< the file's stem: the type's name in outputs
-    gltf::Character character;      ///< the file's nodes, skins, meshes (gltf/character.hpp)
+    animation::Character character;      ///< the file's nodes, skins, meshes (animation/character.hpp)
     int skin = 0;                   ///< index into character.skins of the bird's skin
     std::string mapped_by;          ///< "name patterns" or the mapping file's path
     /// The node of each part's bone, in Part order.

@@ -33,7 +33,7 @@ inline constexpr render::Rgba8 kBoneColor{50, 60, 80};
 
 /// Whether a rigged character is drawn as its skinned mesh (the chain domain's skinned-mesh
 /// layer, show_skinned()) rather than as bones: some node has a mesh with triangles.
-[[nodiscard]] KODAWARI_API bool draws_skinned(const gltf::Character& character);
+[[nodiscard]] KODAWARI_API bool draws_skinned(const animation::Character& character);
 
 /// The darkest a contact shadow gets (a character whose lowest joint is on the ground).
 inline constexpr float kShadowOpacity = 0.35f;

@@ -27,7 +27,7 @@
 #include <vector>
 
 #include "kodawari/api.hpp"
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/rods/shape.hpp"
 
@@ -82,13 +82,13 @@ struct ChainSetup {
 /// have; a named root inside a chain found before; two consecutive joints closer than
 /// 1e-6 m in the rest pose (the chain would have a zero-length segment); a base shape
 /// rods::make_basis() rejects for any other reason.
-[[nodiscard]] KODAWARI_API Result<ChainSetup> find_chains(const Character& character, const ChainSearch& search);
+[[nodiscard]] KODAWARI_API Result<ChainSetup> find_chains(const animation::Character& character, const ChainSearch& search);
 
 /// The chain of the joints `nodes` (root first, each the child of the one before, 2..32
 /// of them; the caller checks that) with its base shape from `rest` (rest_pose()), as
 /// find_chains() builds each of its chains. Errors as find_chains(): two consecutive
 /// joints closer than 1e-6 m, or a base shape rods::make_basis() rejects.
-[[nodiscard]] KODAWARI_API Result<FoundChain> make_found_chain(const Character& character, const Pose& rest,
+[[nodiscard]] KODAWARI_API Result<FoundChain> make_found_chain(const animation::Character& character, const animation::Pose& rest,
                                                                std::vector<int> nodes);
 
 /// Physical parameters of one chain for rods::make_chain().
@@ -101,7 +101,7 @@ struct PhysicsScale {
 /// node world positions in the rest pose, m (0 for a single node). It includes meshes'
 /// nodes and the root nodes, so it is the rig's extent rather than the mesh's; for a
 /// humanoid rig it is about its height.
-[[nodiscard]] KODAWARI_API float character_size(const Character& character);
+[[nodiscard]] KODAWARI_API float character_size(const animation::Character& character);
 
 /// Thickness and mass of `chain`, scaled by character_size():
 /// - thickness = kThicknessPerSize * size (1 cm for a 1.7 m character: a hair lock's
@@ -116,7 +116,7 @@ struct PhysicsScale {
 ///
 /// Both are then clamped() to what the solver takes, so a chain of micrometre or
 /// kilometre segments still loads.
-[[nodiscard]] KODAWARI_API PhysicsScale scaled_physics(const Character& character, const FoundChain& chain);
+[[nodiscard]] KODAWARI_API PhysicsScale scaled_physics(const animation::Character& character, const FoundChain& chain);
 
 /// `physics` with thickness in [rods::kMinThickness, rods::kMaxThickness] and mass in
 /// [rods::kMinMass, rods::kMaxMass].

@@ -6,7 +6,7 @@
 #include <string>
 
 #include "kodawari/api.hpp"
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 #include "kodawari/result.hpp"
 
 namespace kodawari::gltf {
@@ -16,6 +16,6 @@ namespace kodawari::gltf {
 /// node 17 does not exist"); Error::Kind::Io when the file cannot be read,
 /// InvalidInput for everything wrong inside it (including external buffers that are
 /// missing). Never throws.
-[[nodiscard]] KODAWARI_API Result<Character> load_character(const std::string& path);
+[[nodiscard]] KODAWARI_API Result<animation::Character> load_character(const std::string& path);
 
 }  // namespace kodawari::gltf

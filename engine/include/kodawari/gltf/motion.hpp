@@ -15,7 +15,7 @@
 /// The retargeting (retarget()) carries each bone's rotation over in its rest frame and
 /// the hips' displacement scaled by the leg-length ratio; docs/motions.md gives the
 /// equations and their references (VRMC_vrm_animation 1.0, "how_to_transform_human_pose";
-/// VRMC_vrm 1.0 humanoid). The result is an ordinary gltf::Animation of the target, so
+/// VRMC_vrm 1.0 humanoid). The result is an ordinary animation::Animation of the target, so
 /// clips, pose backends, export and crowds use it unchanged.
 ///
 /// Errors: make_error(Error::Kind::InvalidInput, "<file>: <JSON path>: <what was
@@ -28,7 +28,7 @@
 #include <vector>
 
 #include "kodawari/api.hpp"
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 #include "kodawari/result.hpp"
 
 namespace kodawari::gltf {
@@ -72,13 +72,13 @@ struct HumanoidMap {
 /// "1.0-draft"), no `humanoid.humanBones` or none in it, a node index that is not an
 /// integer in range, a node used by two bones. Warnings: bones that are not VRM humanoid
 /// bone names, leftEye / rightEye (the spec gives eyes to lookAt), `expressions`, `lookAt`.
-[[nodiscard]] KODAWARI_API Result<HumanoidMap> read_vrm_animation_humanoid(const Character& animation);
+[[nodiscard]] KODAWARI_API Result<HumanoidMap> read_vrm_animation_humanoid(const animation::Character& animation);
 
 /// The humanoid of a VRM model: VRMC_vrm 1.0's `humanoid.humanBones` (facing +Z), else
 /// VRM 0.x's `humanoid.humanBones[]` (facing -Z; its thumb bones renamed to 1.0's:
 /// thumbProximal -> thumbMetacarpal, thumbIntermediate -> thumbProximal). Errors: neither
 /// extension, node indices out of range or repeated.
-[[nodiscard]] KODAWARI_API Result<HumanoidMap> read_vrm_humanoid(const Character& character);
+[[nodiscard]] KODAWARI_API Result<HumanoidMap> read_vrm_humanoid(const animation::Character& character);
 
 /// A name map file, `{"<humanoid bone>": "<node name>", ...}`, applied to `character`.
 /// Facing: -Z when `character` is a VRM 0.x file, else +Z. Errors (naming `map_path` and
@@ -86,7 +86,7 @@ struct HumanoidMap {
 /// not a string, a node name that no node (or more than one) of `character` has, a node
 /// named for two bones, an empty map.
 [[nodiscard]] KODAWARI_API Result<HumanoidMap> read_humanoid_name_map(const std::string& map_path,
-                                                                     const Character& character);
+                                                                     const animation::Character& character);
 
 /// The most keys one retargeted channel may have (bounds the memory of a motion).
 inline constexpr std::size_t kMaxMotionKeys = 100'000;
@@ -96,7 +96,7 @@ inline constexpr double kMotionKeyGap = 1.0 / 30.0;
 
 /// What retarget() made.
 struct Retargeted {
-    Animation animation;  ///< channels on the target's nodes only, every sampler LINEAR
+    animation::Animation animation;  ///< channels on the target's nodes only, every sampler LINEAR
     std::vector<std::string> warnings;
     float leg_ratio = 1.0f;    ///< the hips displacement's scale (see docs/motions.md)
     std::size_t bones = 0;     ///< humanoid bones given a rotation channel
@@ -111,8 +111,8 @@ struct Retargeted {
 /// ancestor. Errors: no bone in common; a bone the clip animates that the target lacks and
 /// VRM requires; more than kMaxMotionKeys keys. An optional bone the target lacks is a
 /// warning. Deterministic: the same inputs give the same bits.
-[[nodiscard]] KODAWARI_API Result<Retargeted> retarget(const Character& source, std::size_t clip, const HumanoidMap& source_map,
-                                                       const Character& target, const HumanoidMap& target_map,
+[[nodiscard]] KODAWARI_API Result<Retargeted> retarget(const animation::Character& source, std::size_t clip, const HumanoidMap& source_map,
+                                                       const animation::Character& target, const HumanoidMap& target_map,
                                                        const std::string& name);
 
 /// A motion as a scene or `kodawari rig --motion` names it (docs/scene-format.md,
@@ -132,7 +132,7 @@ enum class MotionKey { File, Clip, Map, TargetMap };
 /// humanoid) and the clip, the target's humanoid (target_map, else its VRM humanoid), and
 /// retargets. On error, `*key` (when given) says which request key it is about. The
 /// warnings of the maps are added to the result's.
-[[nodiscard]] KODAWARI_API Result<Retargeted> load_motion(const MotionRequest& request, const Character& target,
+[[nodiscard]] KODAWARI_API Result<Retargeted> load_motion(const MotionRequest& request, const animation::Character& target,
                                                           MotionKey* key = nullptr);
 
 }  // namespace kodawari::gltf

@@ -84,7 +84,7 @@
 
 #include "kodawari/api.hpp"
 #include "kodawari/gltf/chains.hpp"
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 #include "kodawari/result.hpp"
 #include "kodawari/rods/solver.hpp"
 
@@ -149,12 +149,12 @@ struct VrmSprings {
 /// field, a node or collider (group) index out of range, a 1.0 joint that is not the
 /// child of the joint before it, a negative radius, a plane whose normal is zero, and the
 /// errors of make_found_chain().
-[[nodiscard]] KODAWARI_API Result<VrmSprings> read_vrm_springs(const Character& character);
+[[nodiscard]] KODAWARI_API Result<VrmSprings> read_vrm_springs(const animation::Character& character);
 
 /// The node of a VRM humanoid bone ("head", "hips", ...): VRMC_vrm 1.0's
 /// `humanoid.humanBones.<bone>.node`, else VRM 0.x's `humanoid.humanBones[i]` whose
 /// `bone` is `bone`. -1 when the file has neither or does not map that bone (or maps it
 /// to a node out of range).
-[[nodiscard]] KODAWARI_API int vrm_humanoid_bone(const Character& character, std::string_view bone);
+[[nodiscard]] KODAWARI_API int vrm_humanoid_bone(const animation::Character& character, std::string_view bone);
 
 }  // namespace kodawari::gltf

@@ -17,7 +17,7 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "kodawari/api.hpp"
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 #include "kodawari/rods/kinematics.hpp"
 #include "kodawari/rods/world.hpp"
 
@@ -53,12 +53,12 @@ struct ColliderAttachment {
 /// or a rigged glTF character (`rig` set) whose animation clips pose its nodes. For a
 /// rigged character, joint indices (chain attachments, colliders, skeleton.reference)
 /// are node indices, skeleton.joints is empty, and a chain's root frame is its root
-/// node's world transform with the scale removed (gltf::rigid_part).
+/// node's world transform with the scale removed (animation::rigid_part).
 struct CharacterKinematics {
     std::string name;
     rods::Skeleton skeleton;
     rods::CharacterMotion motion;
-    std::shared_ptr<const gltf::Character> rig;
+    std::shared_ptr<const animation::Character> rig;
     std::vector<std::vector<int>> chain_nodes;  ///< rigged: per chain its nodes, root first
     /// Rigged: per node, (chain, joint) when it is a simulated joint (joint >= 1) of one of
     /// the chains, else (-1, -1).
@@ -139,7 +139,7 @@ struct KODAWARI_API RodScene {
     [[nodiscard]] float clip_time(std::uint32_t c, std::uint32_t index) const;
     /// Rigged instance `c`'s entries of `out` (reference, chain roots, colliders) from
     /// its nodes' world matrices `nodes` (placement included, as a pose backend returns
-    /// them). frame() does this with gltf::evaluate; a GPU pose backend feeds it too.
+    /// them). frame() does this with animation::evaluate; a GPU pose backend feeds it too.
     void rigged_frame(std::uint32_t c, std::span<const glm::mat4> nodes, rods::RodFrame& out) const;
 
     /// Rigged instance `c`'s node world matrices at frame `index` (placement included,
@@ -152,14 +152,14 @@ struct KODAWARI_API RodScene {
     /// local scale; every other node follows its parent with its clip pose. `pose` is
     /// scratch (it ends as the clip pose). What skinning and the rigged export use.
     void rigged_world(std::uint32_t c, std::uint32_t index, std::span<const glm::vec3> positions,
-                      std::span<const glm::quat> orientations, gltf::Pose& pose, std::vector<glm::mat4>& out) const;
+                      std::span<const glm::quat> orientations, animation::Pose& pose, std::vector<glm::mat4>& out) const;
 
 private:
     // Rigged instance c's clip pose (local TRS and unplaced world) at frame `index`.
-    void clip_pose(std::uint32_t c, std::uint32_t index, gltf::Pose& pose) const;
+    void clip_pose(std::uint32_t c, std::uint32_t index, animation::Pose& pose) const;
     // Rigged instance c's node world matrices at frame `index` on the CPU, placement
     // included; `pose` is scratch.
-    void rig_world(std::uint32_t c, std::uint32_t index, gltf::Pose& pose, std::vector<glm::mat4>& nodes) const;
+    void rig_world(std::uint32_t c, std::uint32_t index, animation::Pose& pose, std::vector<glm::mat4>& nodes) const;
 };
 
 }  // namespace kodawari

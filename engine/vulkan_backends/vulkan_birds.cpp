@@ -9,7 +9,7 @@
 #include <optional>
 
 #include "backends/backends.hpp"
-#include "backends/device_backends.hpp"
+#include "vulkan_backends/device_backends.hpp"
 #include "gpu/compute_vulkan.hpp"
 #include "kodawari/birds/flight.hpp"
 

@@ -8,7 +8,7 @@
 
 #include <kodawari/shared/rod_inputs.h>
 
-#include "backends/device_backends.hpp"
+#include "vulkan_backends/device_backends.hpp"
 #include "core/parallel.hpp"
 #include "kodawari/backend_factory.hpp"
 

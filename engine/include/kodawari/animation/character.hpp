@@ -1,12 +1,11 @@
 #pragma once
 /// @file
-/// Rigged glTF 2.0 characters on the CPU (SPEC A.7, issue 4): the node hierarchy, skins,
-/// animations and a per-node mesh reference, and the evaluation of an animation into a
-/// pose (local TRS and world matrices of every node): kodawari::sim. Loading one from
-/// `.gltf` or `.glb` is gltf/import.hpp (kodawari::io).
-///
-/// Section numbers refer to the glTF 2.0 specification, version 2.0.1
-/// (https://registry.khronos.org/glTF/specs/2.0/glTF-2.0.html).
+/// Rigged characters and their clips on the CPU (SPEC A.7, issue 4): the node hierarchy,
+/// skins, clips and a per-node mesh reference, and the evaluation of a clip into a pose
+/// (local TRS and world matrices of every node): namespace kodawari::animation, in the sim
+/// library. The data model is glTF 2.0's, so the section numbers below refer to its
+/// specification, version 2.0.1 (https://registry.khronos.org/glTF/specs/2.0/glTF-2.0.html);
+/// loading one from `.gltf`, `.glb` or `.vrm` is gltf/import.hpp (kodawari::io).
 
 #include <cstddef>
 #include <cstdint>
@@ -21,7 +20,7 @@
 #include "kodawari/result.hpp"
 #include "kodawari/rods/solver.hpp"
 
-namespace kodawari::gltf {
+namespace kodawari::animation {
 
 /// One node of the hierarchy (§3.5.2 Nodes and Hierarchy, §3.5.3 Transformations).
 struct Node {
@@ -143,4 +142,4 @@ KODAWARI_API void compute_world(const Character& character, Pose& pose);
 /// with the scale divided out (exact for matrices without shear).
 [[nodiscard]] KODAWARI_API rods::Transform rigid_part(const glm::mat4& world);
 
-}  // namespace kodawari::gltf
+}  // namespace kodawari::animation

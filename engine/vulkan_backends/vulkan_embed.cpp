@@ -11,7 +11,7 @@
 
 #include <cmath>
 
-#include "backends/device_backends.hpp"
+#include "vulkan_backends/device_backends.hpp"
 #include "gpu/compute_vulkan.hpp"
 
 namespace kodawari {

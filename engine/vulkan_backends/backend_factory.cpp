@@ -2,7 +2,7 @@
 // the vulkan target): the CPU kinds come from kodawari::sim.
 #include "kodawari/backend_factory.hpp"
 
-#include "backends/device_backends.hpp"
+#include "vulkan_backends/device_backends.hpp"
 #include "gpu/vulkan_context.hpp"
 
 namespace kodawari {

@@ -17,7 +17,7 @@
 #include <kodawari/shared/rods.h>
 
 #include "backends/backends.hpp"
-#include "backends/device_backends.hpp"
+#include "vulkan_backends/device_backends.hpp"
 #include "core/parallel.hpp"
 
 namespace kodawari {

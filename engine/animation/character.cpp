@@ -8,9 +8,9 @@
 
 #include <glm/gtc/matrix_transform.hpp>
 
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 
-namespace kodawari::gltf {
+namespace kodawari::animation {
 namespace {
 
 // The key value of key k (CUBICSPLINE stores in-tangent, value, out-tangent per key).
@@ -144,4 +144,4 @@ rods::Transform rigid_part(const glm::mat4& world) {
     return t;
 }
 
-}  // namespace kodawari::gltf
+}  // namespace kodawari::animation

@@ -10,7 +10,7 @@
 #include <glm/glm.hpp>
 
 #include "kodawari/api.hpp"
-#include "kodawari/gltf/character.hpp"
+#include "kodawari/animation/character.hpp"
 #include "kodawari/rods/solver.hpp"
 
 namespace kodawari {
@@ -25,10 +25,10 @@ struct PoseInstance {
 
 /// The time an instance samples its clip at for scene time `time`: t = time + time_offset;
 /// looping: start + (t - start) - d * floor((t - start) / d) with d = end - start
-/// (d == 0: start); not looping: t (gltf::sample() clamps). Exactly this float formula
+/// (d == 0: start); not looping: t (animation::sample() clamps). Exactly this float formula
 /// (IEEE single precision, correctly rounded, evaluated left to right without
 /// contraction) on every backend, so every backend wraps at the same scene times.
-[[nodiscard]] KODAWARI_API float clip_time(const gltf::Animation& clip, const PoseInstance& instance, float time);
+[[nodiscard]] KODAWARI_API float clip_time(const animation::Animation& clip, const PoseInstance& instance, float time);
 
 /// The matrix of an instance's placement: translate(position) * mat4_cast(rotation).
 /// Every backend applies this very matrix.

@@ -13,7 +13,7 @@
 
 #include <kodawari/shared/poses.h>
 
-#include "backends/device_backends.hpp"
+#include "vulkan_backends/device_backends.hpp"
 #include "backends/pose_backends.hpp"
 
 namespace kodawari {
@@ -30,20 +30,20 @@ std::span<const std::byte> bytes_of(const std::vector<T>& v) {
     return std::as_bytes(std::span<const T>(v));
 }
 
-std::uint32_t path_of(gltf::Path path) {
+std::uint32_t path_of(animation::Path path) {
     switch (path) {
-        case gltf::Path::Translation: return KW_POSES_PATH_TRANSLATION;
-        case gltf::Path::Rotation: return KW_POSES_PATH_ROTATION;
-        case gltf::Path::Scale: return KW_POSES_PATH_SCALE;
+        case animation::Path::Translation: return KW_POSES_PATH_TRANSLATION;
+        case animation::Path::Rotation: return KW_POSES_PATH_ROTATION;
+        case animation::Path::Scale: return KW_POSES_PATH_SCALE;
     }
     return KW_POSES_PATH_TRANSLATION;
 }
 
-std::uint32_t interpolation_of(gltf::Interpolation interpolation) {
+std::uint32_t interpolation_of(animation::Interpolation interpolation) {
     switch (interpolation) {
-        case gltf::Interpolation::Linear: return KW_POSES_INTERP_LINEAR;
-        case gltf::Interpolation::Step: return KW_POSES_INTERP_STEP;
-        case gltf::Interpolation::CubicSpline: return KW_POSES_INTERP_CUBICSPLINE;
+        case animation::Interpolation::Linear: return KW_POSES_INTERP_LINEAR;
+        case animation::Interpolation::Step: return KW_POSES_INTERP_STEP;
+        case animation::Interpolation::CubicSpline: return KW_POSES_INTERP_CUBICSPLINE;
     }
     return KW_POSES_INTERP_LINEAR;
 }
@@ -65,7 +65,7 @@ void set_columns(gpu::vec4 (&out)[4], const glm::mat4& m) {
 
 // The kernel's first guess of a key index: keys per second over the sampler's span, as
 // float bits (PoseChannelGpu::keys.z); only a guess, so its rounding does not matter.
-std::uint32_t per_second(const gltf::Sampler& sampler) {
+std::uint32_t per_second(const animation::Sampler& sampler) {
     const std::size_t n = sampler.times.size();
     const float span = n >= 2 ? sampler.times.back() - sampler.times.front() : 0.0f;
     const float rate = span > 0.0f ? static_cast<float>(n - 1) / span : 0.0f;
@@ -76,7 +76,7 @@ std::uint32_t per_second(const gltf::Sampler& sampler) {
 
 bool bottom_row_is_0001(const glm::mat4& m) { return m[0][3] == 0.0f && m[1][3] == 0.0f && m[2][3] == 0.0f && m[3][3] == 1.0f; }
 
-FlatCharacter flatten(const gltf::Character& character) {
+FlatCharacter flatten(const animation::Character& character) {
     FlatCharacter flat;
     const std::size_t n = character.nodes.size();
     assert(character.order.size() == n && "Character::order lists every node");
@@ -85,8 +85,8 @@ FlatCharacter flatten(const gltf::Character& character) {
     // §3.5.3, a Character built in code may still have them), so it is no anchor and its
     // channels are dropped below.
     std::vector<bool> animated(n, false);
-    for (const gltf::Animation& clip : character.animations) {
-        for (const gltf::Channel& channel : clip.channels) {
+    for (const animation::Animation& clip : character.animations) {
+        for (const animation::Channel& channel : clip.channels) {
             const auto i = static_cast<std::size_t>(channel.node);
             animated[i] = !character.nodes[i].matrix;
         }
@@ -100,7 +100,7 @@ FlatCharacter flatten(const gltf::Character& character) {
     std::vector<bool> walked(n, false);
     for (const int index : character.order) {
         const auto i = static_cast<std::size_t>(index);
-        const gltf::Node& node = character.nodes[i];
+        const animation::Node& node = character.nodes[i];
         const bool has_parent = node.parent >= 0;
         const auto parent = static_cast<std::size_t>(has_parent ? node.parent : 0);
         assert((!has_parent || walked[parent]) && "parents first");
@@ -132,19 +132,19 @@ FlatCharacter flatten(const gltf::Character& character) {
         flat.affine = flat.affine && bottom_row_is_0001(relative[i]);
         set_columns(flat.nodes[i].relative, relative[i]);
     }
-    for (const gltf::Animation& clip : character.animations) {
+    for (const animation::Animation& clip : character.animations) {
         // Each sampler's keys once, however many channels use it.
         std::vector<std::array<std::uint32_t, 2>> keys(clip.samplers.size());
         for (std::size_t s = 0; s < clip.samplers.size(); ++s) {
-            const gltf::Sampler& sampler = clip.samplers[s];
+            const animation::Sampler& sampler = clip.samplers[s];
             keys[s] = {static_cast<std::uint32_t>(flat.times.size()), static_cast<std::uint32_t>(flat.values.size())};
             flat.times.insert(flat.times.end(), sampler.times.begin(), sampler.times.end());
             for (const glm::vec4& v : sampler.values) flat.values.push_back(to_gpu(v));
         }
         // Channels in the kernel's walk order of the anchors; stable, so that of two
         // channels of one property the file's later one is applied last and wins, as in
-        // gltf::evaluate.
-        const auto anchor = [&](const gltf::Channel& channel) { return slot[static_cast<std::size_t>(channel.node)] - 1u; };
+        // animation::evaluate.
+        const auto anchor = [&](const animation::Channel& channel) { return slot[static_cast<std::size_t>(channel.node)] - 1u; };
         std::vector<std::size_t> sorted;
         for (std::size_t c = 0; c < clip.channels.size(); ++c) {
             if (animated[static_cast<std::size_t>(clip.channels[c].node)]) sorted.push_back(c);
@@ -156,8 +156,8 @@ FlatCharacter flatten(const gltf::Character& character) {
         g.range = {clip.start, clip.end, 0.0f, 0.0f};
         flat.clips.push_back(g);
         for (const std::size_t c : sorted) {
-            const gltf::Channel& channel = clip.channels[c];
-            const gltf::Sampler& sampler = clip.samplers[channel.sampler];
+            const animation::Channel& channel = clip.channels[c];
+            const animation::Sampler& sampler = clip.samplers[channel.sampler];
             flat.channels.push_back({{anchor(channel), path_of(channel.path), interpolation_of(sampler.interpolation),
                                       static_cast<std::uint32_t>(sampler.times.size())},
                                      {keys[channel.sampler][0], keys[channel.sampler][1], per_second(sampler), 0u}});
@@ -175,7 +175,7 @@ public:
     double last_gpu_ms() const override { return gpu_ms_; }
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
 
-    Result<void> load(const gltf::Character& character, std::span<const PoseInstance> instances) override {
+    Result<void> load(const animation::Character& character, std::span<const PoseInstance> instances) override {
         KW_TRY(check_instances(character, instances));
         const std::uint64_t count = instances.size();
         const std::uint64_t groups = (count + KW_POSES_WORKGROUP_SIZE - 1) / KW_POSES_WORKGROUP_SIZE;
@@ -322,7 +322,7 @@ private:
     std::uint32_t slots_ = 0;  // the kernel's KW_POSES_SPEC_SLOTS
     bool affine_ = false;      // and KW_POSES_SPEC_AFFINE
     std::vector<Buffer> buffers_;
-    const gltf::Character* character_ = nullptr;
+    const animation::Character* character_ = nullptr;
     std::uint32_t count_ = 0;
     bool evaluated_ = false;
     double gpu_ms_ = -1.0;

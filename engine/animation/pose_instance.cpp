@@ -1,5 +1,5 @@
 // The clip time and placement matrix of a crowd instance, the same on every pose backend and in the rod scene.
-#include "kodawari/gltf/pose_instance.hpp"
+#include "kodawari/animation/pose_instance.hpp"
 
 #include <cmath>
 
@@ -7,7 +7,7 @@
 
 namespace kodawari {
 
-float clip_time(const gltf::Animation& clip, const PoseInstance& instance, float time) {
+float clip_time(const animation::Animation& clip, const PoseInstance& instance, float time) {
     const float t = time + instance.time_offset;
     if (!instance.loop) return t;
     const float d = clip.end - clip.start;
