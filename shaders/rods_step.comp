@@ -44,6 +44,14 @@ layout(constant_id = KW_RODS_SPEC_MAX_KEYED) const uint MAX_KEYED = 0;
 // The world's KW_RODS_FEATURE_*: centers and inside and plane colliders are compiled out
 // of worlds that have none (lavapipe would run their code masked for every chain).
 layout(constant_id = KW_RODS_SPEC_FEATURES) const uint FEATURES = KW_RODS_FEATURE_ALL;
+// The most colliders of any chain of the world (at most KW_RODS_MAX_CHAIN_COLLIDERS): the
+// collider loops are unrolled to it with `if (k < col_count)` guards, so the collider
+// arrays are indexed by constants and live in registers. With a loop bound known only at
+// run time they lived in scratch memory, read lane by lane on lavapipe, in the collisions
+// every joint makes every iteration: `bench chains` (one head collider a chain) ran 3.7
+// times slower. 0 compiles collisions out.
+layout(constant_id = KW_RODS_SPEC_MAX_COLLIDERS) const uint MAX_COLLIDERS = KW_RODS_MAX_CHAIN_COLLIDERS;
+const uint COLLIDER_SLOTS = MAX_COLLIDERS > 0u ? MAX_COLLIDERS : 1u;  // (an array has one element at least)
 // The examples the blend sums past the base: views, then keyed ones (shapes 1 .. m + J).
 // A chain has at most KW_RODS_MAX_VIEWS in all (rods::add_keyed_examples), which caps the
 // sum of two dispatch-wide maxima that may come from different templates.
@@ -120,19 +128,18 @@ vec3 closest_on_segment(vec3 p, vec3 a, vec3 b) {
 
 // The chain's colliders (solver.cpp step): in the end root's frame (la, lb; a plane's lb
 // its turned normal), where the substep's root places them (ca, cb), the distance each
-// keeps (rods::collider_reach) and its kind. Indexed by a loop variable, so they live in
-// scratch memory; a chain has few.
-vec3 col_la[KW_RODS_MAX_CHAIN_COLLIDERS], col_lb[KW_RODS_MAX_CHAIN_COLLIDERS];
-vec3 col_ca[KW_RODS_MAX_CHAIN_COLLIDERS], col_cb[KW_RODS_MAX_CHAIN_COLLIDERS];
-float col_reach[KW_RODS_MAX_CHAIN_COLLIDERS];
-uint col_kind[KW_RODS_MAX_CHAIN_COLLIDERS];
+// keeps (rods::collider_reach) and its kind. Sized and indexed by constants (MAX_COLLIDERS).
+vec3 col_la[COLLIDER_SLOTS], col_lb[COLLIDER_SLOTS];
+vec3 col_ca[COLLIDER_SLOTS], col_cb[COLLIDER_SLOTS];
+float col_reach[COLLIDER_SLOTS];
+uint col_kind[COLLIDER_SLOTS];
 uint col_count;
 
 // solver.cpp collide_all(): one particle against every collider, the set
 // KW_RODS_COLLIDER_PASSES times.
 void collide_all(inout vec3 p) {
-    for (uint pass = 0; pass < KW_RODS_COLLIDER_PASSES; ++pass) {
-        for (uint k = 0; k < col_count; ++k) {
+    [[unroll]] for (uint pass = 0; pass < KW_RODS_COLLIDER_PASSES; ++pass) {
+        [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
             if ((FEATURES & KW_RODS_FEATURE_PLANE) != 0u && col_kind[k] == KW_RODS_COLLIDER_PLANE) {
                 const float s = dot(p - col_ca[k], col_cb[k]);
                 if (s < col_reach[k]) p += (col_reach[k] - s) * col_cb[k];
@@ -241,7 +248,7 @@ void load_constants(uint n, uint examples, uint tj, uint shape0, out Constants t
         qs[j] = q_new[j];                                                                                     \
         p[j] += k_rest * (xbar[j] - p[j]);                                                                    \
         KW_PLACE(j);                                                                                          \
-        if (col_count > 0u) KW_COLLIDE(j);                                                                \
+        if (MAX_COLLIDERS > 0u && col_count > 0u) KW_COLLIDE(j);                                                                \
         if (LIMITS) KW_LIMIT((j) - 1);                                                                        \
     }
 
@@ -490,10 +497,10 @@ void main() {
     const vec3 travel = to.position.xyz - from.position.xyz;
 
     // The colliders in the end root's frame (solver.cpp step).
-    col_count = cend - cbegin;
+    col_count = min(cend - cbegin, MAX_COLLIDERS);  // (the host sets MAX_COLLIDERS to the world's most)
     {
         const vec4 to_root = qconj(to.rotation);
-        for (uint k = 0; k < col_count; ++k) {
+        [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
             const RodColliderGpu col = colliders[cbegin + k];
             const uint kind = uint(col.b.w);
             col_kind[k] = kind;
@@ -524,7 +531,7 @@ void main() {
         p[0] = xbar[0];
         qs[0] = obar[0];
         // The colliders placed by the substep's root.
-        for (uint k = 0; k < col_count; ++k) {
+        [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
             col_ca[k] = r_pos + qrot(r_rot, col_la[k]);
             col_cb[k] = col_kind[k] == KW_RODS_COLLIDER_PLANE ? qrot(r_rot, col_lb[k]) : r_pos + qrot(r_rot, col_lb[k]);
         }
@@ -621,7 +628,7 @@ void main() {
         [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
             if (i < n) {
                 KW_PLACE(i);
-                if (col_count > 0u) {
+                if (MAX_COLLIDERS > 0u && col_count > 0u) {
                     KW_COLLIDE(i);
                     KW_PLACE(i);
                     KW_COLLIDE(i);
@@ -633,7 +640,7 @@ void main() {
         }
 
         // What the colliders undid is not the parent's to give back (solver.cpp).
-        if (col_count > 0u) {
+        if (MAX_COLLIDERS > 0u && col_count > 0u) {
             [[unroll]] for (uint i = 1; i < MAX_J; ++i) {
                 const float pl = length(pushed[i]);
                 if (i < n && pl > 0.0) {

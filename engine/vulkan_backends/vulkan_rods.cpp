@@ -186,7 +186,7 @@ public:
         ring_.reset();  // sized for the world
 
         // Constants: templates, their joints and shapes.
-        std::uint32_t max_joints = 2, max_views = 0, max_keyed = 0;
+        std::uint32_t max_joints = 2, max_views = 0, max_keyed = 0, max_colliders = 0;
         bool all_none = true, all_full = true;
         bool limits = false;  // a template with angle limits (KW_RODS_FEATURE_LIMITS)
         templates_.clear();
@@ -244,6 +244,7 @@ public:
         for (std::uint32_t e = 0; e < count; ++e) {
             const std::uint32_t c = order[e];
             const rods::ChainInstance& ch = world.chains[c];
+            max_colliders = std::max(max_colliders, ch.collider_count);
             chains[e] = {{ch.template_index, ch.character, ch.collider_begin, ch.collider_count},
                          {ch.joint_begin, c, ch.center, world.wind_count > 0 ? ch.wind : 0u}};
             if (groups_.empty() || groups_.back().template_index != ch.template_index) {
@@ -374,6 +375,8 @@ public:
         max_joints_ = max_joints;
         max_views_ = max_views;
         max_keyed_ = max_keyed;
+        // rods::kMaxChainColliders bounds a chain's set (rods::check_world).
+        max_colliders_ = std::min<std::uint32_t>(max_colliders, KW_RODS_MAX_CHAIN_COLLIDERS);
         return select_kernels();
     }
 
@@ -500,7 +503,7 @@ private:
         std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
         auto kernel_for = [&](std::uint32_t n, std::uint32_t m, std::uint32_t keyed, bool exact) -> Result<const compute::Kernel*> {
-            auto kernel = pipeline({n, m, suppression_, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed, features_});
+            auto kernel = pipeline({n, m, suppression_, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed, features_, max_colliders_});
             if (!kernel) return kernel.error();
             kernel.value()->bind(bound);  // (again for a shared one: the same bindings)
             return kernel.value();
@@ -665,6 +668,7 @@ private:
     std::uint32_t features_ = KW_RODS_FEATURE_ALL;  // KW_RODS_SPEC_FEATURES of the loaded world
     // What the world's kernels are specialized to besides features_ (select_kernels()).
     std::uint32_t suppression_ = KW_RODS_SUPPRESSION_PARTIAL, max_joints_ = 2, max_views_ = 0, max_keyed_ = 0;
+    std::uint32_t max_colliders_ = 0;  // KW_RODS_SPEC_MAX_COLLIDERS: the most colliders of one chain
     float dt_ = -1.0f;
     bool started_ = false;  // whether a step has been recorded since load()
     double gpu_ms_ = -1.0;
