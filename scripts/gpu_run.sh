@@ -519,43 +519,45 @@ nvidia_icd() {
 # keep the first that shows a GPU. When none does, keep the loader's own account of why
 # (VK_LOADER_DEBUG) for run.log.
 find_driver() {
-  local icd="" glvnd_env="" lib_env="" e
+  local icd="" glvnd_lib="" e
   icd="$(nvidia_icd || true)"
   if [[ -d "$root/lib/glvnd" && -z "$(find_lib libGLdispatch.so.0 || true)" ]]; then
     for e in "${run_env[@]}"; do
-      [[ "$e" == LD_LIBRARY_PATH=* ]] && lib_env="${e#LD_LIBRARY_PATH=}"
+      [[ "$e" == LD_LIBRARY_PATH=* ]] && glvnd_lib="${e#LD_LIBRARY_PATH=}:"
     done
-    glvnd_env="LD_LIBRARY_PATH=${lib_env:+$lib_env:}$root/lib/glvnd"
+    glvnd_lib="LD_LIBRARY_PATH=$glvnd_lib$root/lib/glvnd"
   fi
+  # Each try is its variables joined by the unit separator (paths may hold spaces).
+  local sep=$'\x1f'
   local -a tries=()
-  [[ -n "$icd" ]] && tries+=("VK_DRIVER_FILES=$icd VK_ICD_FILENAMES=$icd")
-  [[ -n "$glvnd_env" ]] && tries+=("$glvnd_env")
-  [[ -n "$icd" && -n "$glvnd_env" ]] && tries+=("VK_DRIVER_FILES=$icd VK_ICD_FILENAMES=$icd $glvnd_env")
+  [[ -n "$icd" ]] && tries+=("VK_DRIVER_FILES=$icd${sep}VK_ICD_FILENAMES=$icd")
+  [[ -n "$glvnd_lib" ]] && tries+=("$glvnd_lib")
+  [[ -n "$icd" && -n "$glvnd_lib" ]] && tries+=("VK_DRIVER_FILES=$icd${sep}VK_ICD_FILENAMES=$icd${sep}$glvnd_lib")
   local try
   local -a vars
   for try in "${tries[@]}"; do
-    read -r -a vars <<<"$try"
+    IFS="$sep" read -r -a vars <<<"$try"
     if sees_gpu "${vars[@]}"; then
+      # (a later LD_LIBRARY_PATH would win in env anyway; one is clearer in run.log)
       local -a kept=()
       for e in "${run_env[@]}"; do
-        [[ -n "$glvnd_env" && "$try" == *"$glvnd_env"* && "$e" == LD_LIBRARY_PATH=* ]] && continue
-        kept+=("$e")
+        [[ "$try" == *LD_LIBRARY_PATH=* && "$e" == LD_LIBRARY_PATH=* ]] || kept+=("$e")
       done
       run_env=("${kept[@]}" "${vars[@]}")
-      driver_note="${icd:+$icd (VK_DRIVER_FILES) }${glvnd_env:+and }the loader found no GPU by itself; found with: $try"
-      [[ "$try" == *LD_LIBRARY_PATH* ]] && driver_note+=" (the bundle's glvnd: the machine has no libGLdispatch.so.0)"
+      driver_note="the loader found no GPU by itself; found with ${vars[*]}"
+      [[ "$try" == *LD_LIBRARY_PATH=* ]] && driver_note+=" (the bundle's glvnd: the machine has no libGLdispatch.so.0)"
       return 0
     fi
   done
   if [[ -n "$icd" ]]; then
-    driver_note="no GPU from the loader's own search, nor with the NVIDIA manifest $icd${glvnd_env:+ and the glvnd of the bundle}"
+    driver_note="no GPU from the loader's own search, nor with the NVIDIA manifest $icd${glvnd_lib:+ and the glvnd of the bundle}"
   else
     driver_note="no GPU from the loader's own search (no NVIDIA driver manifest or libGLX_nvidia.so.0 here)"
   fi
   # Why, in the loader's words, with the last combination tried (none tried: nothing of
   # NVIDIA's here, as on a machine with lavapipe alone, and nothing to explain).
   ((${#tries[@]} > 0)) || return 0
-  read -r -a vars <<<"${tries[${#tries[@]}-1]}"
+  IFS="$sep" read -r -a vars <<<"${tries[${#tries[@]}-1]}"
   loader_debug="$(timeout 60 env "${run_env[@]}" "${vars[@]}" VK_LOADER_DEBUG=error,warn,driver "$bin" info 2>&1 | tail -n 40 || true)"
   local lib
   if [[ -n "$icd" ]]; then
