@@ -52,6 +52,13 @@ layout(constant_id = KW_RODS_SPEC_FEATURES) const uint FEATURES = KW_RODS_FEATUR
 // times slower. 0 compiles collisions out.
 layout(constant_id = KW_RODS_SPEC_MAX_COLLIDERS) const uint MAX_COLLIDERS = KW_RODS_MAX_CHAIN_COLLIDERS;
 const uint COLLIDER_SLOTS = MAX_COLLIDERS > 0u ? MAX_COLLIDERS : 1u;  // (an array has one element at least)
+// Up to KW_RODS_UNROLLED_COLLIDERS colliders a chain the collisions of every joint are
+// unrolled as above; past it they stay a loop. The unrolled code is joints x passes x
+// colliders copies of a collision, at every place a joint collides: for the VRM avatars
+// (16 colliders a chain) lavapipe took about 2 minutes to compile that pipeline (the
+// scene itself runs 3 frames in a second). The same operations in the same order either
+// way: the same bits.
+const bool UNROLL_COLLIDERS = MAX_COLLIDERS <= KW_RODS_UNROLLED_COLLIDERS;
 // The examples the blend sums past the base: views, then keyed ones (shapes 1 .. m + J).
 // A chain has at most KW_RODS_MAX_VIEWS in all (rods::add_keyed_examples), which caps the
 // sum of two dispatch-wide maxima that may come from different templates.
@@ -135,19 +142,26 @@ float col_reach[COLLIDER_SLOTS];
 uint col_kind[COLLIDER_SLOTS];
 uint col_count;
 
+// solver.cpp collide_all(): one particle against collider k.
+void collide_with(inout vec3 p, uint k) {
+    if ((FEATURES & KW_RODS_FEATURE_PLANE) != 0u && col_kind[k] == KW_RODS_COLLIDER_PLANE) {
+        const float s = dot(p - col_ca[k], col_cb[k]);
+        if (s < col_reach[k]) p += (col_reach[k] - s) * col_cb[k];
+    } else if ((FEATURES & KW_RODS_FEATURE_INSIDE) != 0u && col_kind[k] == KW_RODS_COLLIDER_INSIDE) {
+        pull_in(p, closest_on_segment(p, col_ca[k], col_cb[k]), col_reach[k]);
+    } else {
+        push_out(p, closest_on_segment(p, col_ca[k], col_cb[k]), col_reach[k]);
+    }
+}
+
 // solver.cpp collide_all(): one particle against every collider, the set
-// KW_RODS_COLLIDER_PASSES times.
+// KW_RODS_COLLIDER_PASSES times (unrolled for few colliders: UNROLL_COLLIDERS).
 void collide_all(inout vec3 p) {
     [[unroll]] for (uint pass = 0; pass < KW_RODS_COLLIDER_PASSES; ++pass) {
-        [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
-            if ((FEATURES & KW_RODS_FEATURE_PLANE) != 0u && col_kind[k] == KW_RODS_COLLIDER_PLANE) {
-                const float s = dot(p - col_ca[k], col_cb[k]);
-                if (s < col_reach[k]) p += (col_reach[k] - s) * col_cb[k];
-            } else if ((FEATURES & KW_RODS_FEATURE_INSIDE) != 0u && col_kind[k] == KW_RODS_COLLIDER_INSIDE) {
-                pull_in(p, closest_on_segment(p, col_ca[k], col_cb[k]), col_reach[k]);
-            } else {
-                push_out(p, closest_on_segment(p, col_ca[k], col_cb[k]), col_reach[k]);
-            }
+        if (UNROLL_COLLIDERS) {
+            [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) collide_with(p, k);
+        } else {
+            [[dont_unroll]] for (uint k = 0; k < col_count; ++k) collide_with(p, k);
         }
     }
 }

@@ -43,6 +43,7 @@
 #define KW_RODS_MAX_VIEWS 7    // rods::kMaxViewExamples
 #define KW_RODS_MAX_CHAIN_COLLIDERS 16  // rods::kMaxChainColliders
 #define KW_RODS_COLLIDER_PASSES 2       // rods::kColliderPasses
+#define KW_RODS_UNROLLED_COLLIDERS 4    // rods_step.comp unrolls its collisions up to this many colliders a chain
 #define KW_RODS_FTL_DAMPING 1.0         // rods::kFollowTheLeaderDamping (DFTL's s_damping)
 
 #define KW_RODS_BINDING_TEMPLATES 0        // RodTemplateGpu, per chain template

@@ -269,6 +269,81 @@ TEST_P(RodBackends, ChangingFrameLengthsAndEveryColliderKindMatchTheReference) {
                 testing_support::case_name(GetParam()).c_str(), static_cast<double>(worst / length));
 }
 
+// More colliders a chain than rods_step.comp unrolls (KW_RODS_UNROLLED_COLLIDERS): its
+// collisions run as a loop, the same operations in the same order. Six colliders per
+// character (of 8 chains): the scene's sphere, a thin inside sphere at the root, a tilted
+// plane under the roots and three spheres beside the head, at the same bound as above.
+TEST_P(RodBackends, MoreCollidersThanTheKernelUnrollsMatchTheReference) {
+    constexpr std::uint32_t kPer = 6;
+    static_assert(kPer > KW_RODS_UNROLLED_COLLIDERS, "must take the kernel's loop");
+    auto scene = rods::SyntheticScene::make(small_options(true));
+    ASSERT_TRUE(scene.ok());
+    rods::RodWorld world = scene.value().world();
+    world.collider_count *= kPer;
+    for (rods::ChainInstance& ch : world.chains) {
+        ch.collider_begin = ch.character * kPer;
+        ch.collider_count = kPer;
+    }
+    ASSERT_TRUE(world.finalize().ok());
+    std::vector<std::uint32_t> first_chain(world.character_count, 0);
+    for (auto c = static_cast<std::uint32_t>(world.chains.size()); c-- > 0;) first_chain[world.chains[c].character] = c;
+    const float length = scene.value().chain_length();
+    auto frame_at = [&](std::uint32_t f, rods::RodFrame& frame) {
+        scene.value().frame(f, kDt, frame);
+        const std::vector<rods::Collider> heads = frame.colliders;
+        frame.colliders.assign(heads.size() * kPer, {});
+        for (std::uint32_t c = 0; c < heads.size(); ++c) {
+            for (std::uint32_t k = 0; k < kPer; ++k) {
+                rods::Collider col = heads[c];
+                if (k == 1) {
+                    col.kind = rods::ColliderKind::Inside;
+                    col.a = col.b = frame.roots[first_chain[c]].position;
+                    col.radius = 0.001f;
+                } else if (k == 2) {
+                    col.kind = rods::ColliderKind::Plane;
+                    col.a -= glm::vec3(0.0f, 0.02f, 0.0f);
+                    col.b = glm::normalize(glm::vec3(0.3f, 1.0f, 0.0f));
+                    col.radius = 0.0f;
+                } else if (k > 2) {
+                    const glm::vec3 side(k == 3 ? 1.0f : -1.0f, 0.2f * static_cast<float>(k), k == 5 ? 1.0f : 0.0f);
+                    col.a += 0.6f * length * side;
+                    col.b += 0.6f * length * side;
+                    col.radius *= 0.5f;
+                }
+                frame.colliders[c * kPer + k] = col;
+            }
+        }
+    };
+    rods::RodFrame frame;
+    frame_at(0, frame);
+    ASSERT_TRUE(backend_->load(world, frame).ok());
+    std::vector<rods::KeyState> keys(world.chains.size());
+    float worst = 0.0f;
+    for (std::uint32_t f = 1; f <= 20; ++f) {
+        std::vector<rods::ChainState> states;
+        ASSERT_TRUE(backend_->read_states(states).ok());
+        frame_at(f, frame);
+        for (std::uint32_t c = 0; c < world.chains.size(); ++c) step_chain_reference(world, c, frame, states[c], keys[c]);
+        ASSERT_TRUE(backend_->step(frame).ok());
+        ChainSnapshot snap;
+        ASSERT_TRUE(backend_->read(snap).ok());
+        for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
+            const rods::ChainInstance& ch = world.chains[c];
+            for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
+                const glm::vec3 p = snap.positions[ch.joint_begin + i];
+                ASSERT_TRUE(std::isfinite(p.x + p.y + p.z));
+                worst = std::max(worst, glm::length(rods::position(states[c], i) - p));
+            }
+        }
+    }
+    EXPECT_LT(worst, 1e-3f * length);
+    if (GetParam() != BackendKind::Vulkan) {
+        EXPECT_EQ(worst, 0.0f) << "the CPU backends compute the reference's bits";
+    }
+    std::printf("[ measured ] %s, %u colliders a chain: max %.3g of the chain length\n",
+                testing_support::case_name(GetParam()).c_str(), kPer, static_cast<double>(worst / length));
+}
+
 TEST_P(RodBackends, RejectsAFrameThatDoesNotFitTheWorld) {
     auto scene = rods::SyntheticScene::make(small_options(true));
     ASSERT_TRUE(scene.ok());
