@@ -61,7 +61,19 @@ struct BenchCommon {
     std::optional<std::string> backends;
     std::optional<std::uint64_t> repetitions;
     std::optional<std::string> json;
+    std::optional<std::string> workgroup_sizes;
 };
+
+/// One contender's backend: its kind, its options and its name in the table ("vulkan",
+/// or "vulkan/wg128" for each of --workgroup-sizes).
+struct BenchVariant {
+    BackendKind kind;
+    BackendOptions options;
+    std::string label;
+};
+/// The backends to time (read_backends) with `choice`'s options, the vulkan one once per
+/// size of --workgroup-sizes: variants a GPU run times side by side.
+[[nodiscard]] std::vector<BenchVariant> read_variants(const BenchCommon& o, const BackendChoice& choice);
 
 /// --backend NAME or --backends LIST: the backends to time (cpu-reference,cpu,vulkan by default).
 [[nodiscard]] std::vector<BackendKind> read_backends(const BenchCommon& o);

@@ -2,6 +2,7 @@
 // the interleaved repetitions and the table and JSON they report (bench_common.hpp).
 #include <algorithm>
 #include <cstdio>
+#include <cstdlib>
 #include <sstream>
 #include <vector>
 
@@ -49,6 +50,36 @@ std::vector<BackendKind> read_backends(const BenchCommon& o) {
         kinds.push_back(*kind.value());
     }
     return kinds;
+}
+
+std::vector<BenchVariant> read_variants(const BenchCommon& o, const BackendChoice& choice) {
+    std::vector<unsigned> sizes;
+    if (o.workgroup_sizes) {
+        if (o.backend.workgroup_size) throw UsageError{"--workgroup-size and --workgroup-sizes exclude each other: give one"};
+        std::stringstream list(*o.workgroup_sizes);
+        for (std::string item; std::getline(list, item, ',');) {
+            char* end = nullptr;
+            const unsigned long n = std::strtoul(item.c_str(), &end, 10);
+            if (item.empty() || end == nullptr || *end != '\0' || n < 32 || n > 1024 || (n & (n - 1)) != 0) {
+                throw UsageError{"--workgroup-sizes: \"" + item + "\" is not a power of two from 32 to 1024"};
+            }
+            sizes.push_back(static_cast<unsigned>(n));
+        }
+    }
+    std::vector<BenchVariant> variants;
+    for (const BackendKind kind : read_backends(o)) {
+        const std::string name(backend_name(kind));
+        if (kind != BackendKind::Vulkan || sizes.empty()) {
+            variants.push_back({kind, choice.options, name});
+            continue;
+        }
+        for (const unsigned n : sizes) {
+            BackendOptions options = choice.options;
+            options.workgroup_size = n;
+            variants.push_back({kind, options, name + "/wg" + std::to_string(n)});
+        }
+    }
+    return variants;
 }
 
 // --repetitions: how many timed runs of every backend the medians come from.
@@ -111,7 +142,10 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
     const unsigned cpu_threads = cpu_backend_threads(options);
     std::printf("\nmedians of %u repetitions (min and max beside them), after warm-up; cpu: %s, %u threads\n", repetitions,
                 cpu_isa.c_str(), cpu_threads);
-    std::printf("%-14s %-36s %14s %11s %11s %10s %12s %9s %7s %-7s %7s\n", "backend", "device", unit, "min", "max", "ms/frame",
+    // The backend column fits the longest name ("vulkan/wg128/host-in" with --workgroup-sizes).
+    int width = 14;
+    for (const auto& c : contenders) width = std::max(width, static_cast<int>(c.measured.backend.size()));
+    std::printf("%-*s %-36s %14s %11s %11s %10s %12s %9s %7s %-7s %7s\n", width, "backend", "device", unit, "min", "max", "ms/frame",
                 "GPU ms/frame", "vs c-ref", "vs cpu", "isa", "threads");
     bool gpu_above_wall = false;
     for (const auto& c : contenders) {
@@ -119,7 +153,7 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
         char gpu[32] = "-";
         if (m.gpu_ms() >= 0.0) std::snprintf(gpu, sizeof gpu, "%.3f", m.gpu_ms());
         if (m.gpu_ms() > Measured::median(m.ms_per_frame)) gpu_above_wall = true;
-        std::printf("%-14s %-36s %14.4g %11.4g %11.4g %10.3f %12s %9s %7s %-7s %7s\n", m.backend.c_str(), m.device.c_str(), m.rate(),
+        std::printf("%-*s %-36s %14.4g %11.4g %11.4g %10.3f %12s %9s %7s %-7s %7s\n", width, m.backend.c_str(), m.device.c_str(), m.rate(),
                     m.min(), m.max(), Measured::median(m.ms_per_frame), gpu, ratio(m.rate(), reference).c_str(),
                     ratio(m.rate(), cpu).c_str(), m.isa.empty() ? "-" : m.isa.c_str(),
                     m.threads == 0 ? "-" : std::to_string(m.threads).c_str());
@@ -155,6 +189,9 @@ void add_common(CLI::App& c, BenchCommon& o) {
     add_text(c, "--backends", o.backends, "LIST", "the backends to time, comma-separated (default: cpu-reference,cpu,vulkan)");
     add_count(c, "--repetitions", o.repetitions, 3, 1000, "timed runs of every backend, interleaved (default: 3)");
     add_text(c, "--json", o.json, "FILE.json", "also write the results as JSON (default: none)");
+    add_text(c, "--workgroup-sizes", o.workgroup_sizes, "LIST",
+             "time the vulkan backend at each of these workgroup sizes, side by side, e.g. 32,64,128,256 (default: "
+             "--workgroup-size, else 64)");
     add_backend_options(c, o.backend);
     c.get_option("--backend")->description("time this one backend, as --backends NAME (default: the --backends list)");
 }

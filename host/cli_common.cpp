@@ -68,6 +68,9 @@ void add_backend_options(CLI::App& app, BackendFlags& flags) {
     add_count(app, "--threads", flags.threads, 1, 1024, "the cpu backend's threads, and --compact's encoder's (default: one per hardware thread)");
     add_text(app, "--isa", flags.isa, "avx512|avx2|sse4|scalar",
              "the cpu backend's SIMD instruction set (default: $KODAWARI_ISA, else the widest this CPU runs)");
+    add_count(app, "--workgroup-size", flags.workgroup_size, 32, 1024,
+              "invocations per workgroup of the vulkan kernels that run one chain, bird or character each, a power of "
+              "two the device allows; the results are the same (default: 64)");
     add_switch(app, "--validation", flags.validation,
                "Khronos validation and synchronization validation; messages fail the command (default: off, or "
                "$KODAWARI_VALIDATION=1)");
@@ -107,6 +110,11 @@ BackendChoice read_backend_choice(const BackendFlags& flags) {
     const char* isa_from = flags.isa ? "--isa" : "KODAWARI_ISA";
     if (!choice.options.isa.empty()) {
         if (auto checked = simd_isa(choice.options.isa); !checked) throw UsageError{std::string(isa_from) + ": " + checked.error().message};
+    }
+    if (flags.workgroup_size) {
+        const auto n = *flags.workgroup_size;
+        if ((n & (n - 1)) != 0) throw UsageError{"--workgroup-size: " + std::to_string(n) + " is not a power of two (32, 64, ... 1024)"};
+        choice.options.workgroup_size = static_cast<unsigned>(n);
     }
     choice.options.validation = flags.validation || env_flag("KODAWARI_VALIDATION");
     choice.options.force_staging = env_flag("KODAWARI_FORCE_STAGING");

@@ -78,6 +78,7 @@ struct BackendFlags {
     std::optional<std::string> device;
     std::optional<std::uint64_t> threads;
     std::optional<std::string> isa;
+    std::optional<std::uint64_t> workgroup_size;
     bool validation = false;
 };
 /// Adds the backend options to a command that runs a simulation.
@@ -88,7 +89,7 @@ struct BackendChoice {
     std::optional<BackendKind> backend;  ///< none: auto (vulkan when a device opens, else cpu)
     BackendOptions options;
 };
-/// --backend, --device, --threads, --isa, --validation; and the environment, which only the
+/// --backend, --device, --threads, --isa, --workgroup-size, --validation; and the environment, which only the
 /// command line reads (the library takes options): KODAWARI_DEVICE (the device when no
 /// --device), KODAWARI_ISA (the cpu backend's SIMD instruction set when no --isa),
 /// KODAWARI_VALIDATION=1 (as --validation), KODAWARI_FORCE_STAGING=1.

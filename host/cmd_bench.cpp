@@ -80,7 +80,7 @@ int bench_chains(ChainsOptions o) {
     const std::uint32_t steps = static_cast<std::uint32_t>(o.frames.value_or(10));
     const std::uint32_t repetitions = read_repetitions(o.common);
     const auto& json_path = o.common.json;
-    const std::vector<BackendKind> kinds = read_backends(o.common);
+    const std::vector<BenchVariant> variants = read_variants(o.common, choice);
     auto made = rods::SyntheticScene::make(options);
     if (!made) return report(made.error());
     const rods::SyntheticScene& scene = made.value();
@@ -97,10 +97,10 @@ int bench_chains(ChainsOptions o) {
     std::vector<std::unique_ptr<RodBackend>> backends;
     std::vector<std::size_t> next;  // per contender: the next frame to step
     std::vector<Contender> contenders;
-    for (BackendKind kind : kinds) {
-        auto backend = make_rod_backend(kind, choice.options);
+    for (const auto& [kind, backend_options, label] : variants) {
+        auto backend = make_rod_backend(kind, backend_options);
         if (!backend) {
-            std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), backend.error().message.c_str());
+            std::printf("  %-14s skipped: %s\n", label.c_str(), backend.error().message.c_str());
             continue;
         }
         RodBackend& b = *backend.value();
@@ -110,7 +110,7 @@ int bench_chains(ChainsOptions o) {
         backends.push_back(std::move(backend).value());
         next.push_back(2);
         Contender c;
-        c.measured.backend = std::string(b.name());
+        c.measured.backend = label;
         c.measured.device = b.device();
         describe(c.measured, kind, choice.options);
         c.repetition = [&, index, steps](double& gpu_ms) -> Result<double> {
@@ -153,7 +153,7 @@ int bench_crowd(const CrowdOptions& o) {
     const std::uint32_t frames = static_cast<std::uint32_t>(o.frames.value_or(60));
     const std::uint32_t repetitions = read_repetitions(o.common);
     const auto& json_path = o.common.json;
-    const std::vector<BackendKind> kinds = read_backends(o.common);
+    const std::vector<BenchVariant> kinds = read_variants(o.common, choice);
     const std::string path = o.scene.value_or("scenes/crowd-gltf.json");
     auto loaded = load_scene(path);
     if (!loaded) return report(loaded.error());
@@ -182,23 +182,24 @@ int bench_crowd(const CrowdOptions& o) {
     // Vulkan twice: the pose matrices read back and the rod input made on the host, then
     // (one device for both backends) the rod input written on the device.
     struct Variant {
-        BackendKind kind;
+        const BenchVariant* backend;
         bool device_input;
     };
     std::vector<Variant> variants;
-    for (BackendKind kind : kinds) {
-        variants.push_back({kind, false});
-        if (kind == BackendKind::Vulkan) variants.push_back({kind, true});
+    for (const BenchVariant& v : kinds) {
+        variants.push_back({&v, false});
+        if (v.kind == BackendKind::Vulkan) variants.push_back({&v, true});
     }
     std::vector<std::unique_ptr<Simulation>> sims;
     std::vector<Contender> contenders;
     std::vector<double> clip_ms(variants.size(), 0.0);  // per contender, summed over its timed frames
-    for (const auto [kind, device_input] : variants) {
+    for (const auto [variant, device_input] : variants) {
+        const BackendKind kind = variant->kind;
         // Frame 0 (load) and 2 warm-up steps, then the timed frames.
-        auto made = Simulation::create(scene, {.backend = kind, .options = choice.options, .frames = frames * repetitions + 3,
+        auto made = Simulation::create(scene, {.backend = kind, .options = variant->options, .frames = frames * repetitions + 3,
                                                .device_inputs = device_input});
         if (!made) {
-            std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), made.error().message.c_str());
+            std::printf("  %-14s skipped: %s\n", variant->label.c_str(), made.error().message.c_str());
             continue;
         }
         Simulation& sim = *made.value();
@@ -209,8 +210,7 @@ int bench_crowd(const CrowdOptions& o) {
         const std::size_t index = sims.size();
         sims.push_back(std::move(made).value());
         Contender c;
-        c.measured.backend =
-            std::string(backend_name(kind)) + (kind == BackendKind::Vulkan ? (device_input ? "/dev-in" : "/host-in") : "");
+        c.measured.backend = variant->label + (kind == BackendKind::Vulkan ? (device_input ? "/dev-in" : "/host-in") : "");
         c.measured.device = sim.device();
         describe(c.measured, kind, choice.options);
         c.repetition = [&, index, frames](double& gpu_ms) -> Result<double> {
@@ -234,7 +234,7 @@ int bench_crowd(const CrowdOptions& o) {
         double total_ms = 0.0;
         for (const double ms : m.ms_per_frame) total_ms += ms * frames;
         const double clips = clip_ms[i] / static_cast<double>(m.frames);
-        std::printf("  %-14s clips %.3f ms + chains %.3f ms per frame (means)\n", m.backend.c_str(), clips,
+        std::printf("  %-20s clips %.3f ms + chains %.3f ms per frame (means)\n", m.backend.c_str(), clips,
                     total_ms / static_cast<double>(m.frames) - clips);
     }
     for (const auto& s : sims) {
@@ -258,9 +258,9 @@ int bench_birds(const BirdsOptions& o) {
     const std::uint32_t count = static_cast<std::uint32_t>(o.count.value_or(1'000'000));
     const std::uint32_t frames = static_cast<std::uint32_t>(o.frames.value_or(30));
     const std::uint32_t repetitions = read_repetitions(o.common);
+    const std::vector<BenchVariant> variants = read_variants(o.common, choice);
     const auto& json_path = o.common.json;
     const bool readback = o.readback;
-    const std::vector<BackendKind> kinds = read_backends(o.common);
 
     auto built = build_bird_world(bench_scene(count, frames * repetitions + 1));
     if (!built) return report(built.error());
@@ -273,10 +273,10 @@ int bench_birds(const BirdsOptions& o) {
     std::vector<gpu::BirdPose> poses(readback ? std::size_t{count} : 0);
     std::vector<std::unique_ptr<BirdBackend>> backends;
     std::vector<Contender> contenders;
-    for (BackendKind kind : kinds) {
-        auto backend = make_bird_backend(kind, choice.options);
+    for (const auto& [kind, backend_options, label] : variants) {
+        auto backend = make_bird_backend(kind, backend_options);
         if (!backend) {
-            std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), backend.error().message.c_str());
+            std::printf("  %-14s skipped: %s\n", label.c_str(), backend.error().message.c_str());
             continue;
         }
         BirdBackend& b = *backend.value();
@@ -286,7 +286,7 @@ int bench_birds(const BirdsOptions& o) {
         const std::size_t index = backends.size();
         backends.push_back(std::move(backend).value());
         Contender c;
-        c.measured.backend = std::string(b.name());
+        c.measured.backend = label;
         c.measured.device = b.device();
         describe(c.measured, kind, choice.options);
         c.repetition = [&, index, frames, readback](double& gpu_ms) -> Result<double> {

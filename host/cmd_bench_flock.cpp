@@ -54,7 +54,7 @@ int bench_flock(const FlockOptions& o) {
     const auto count = static_cast<std::uint32_t>(o.count.value_or(1'000'000));
     const auto frames = static_cast<std::uint32_t>(o.frames.value_or(5));
     const std::uint32_t repetitions = read_repetitions(o.common);
-    const std::vector<BackendKind> kinds = read_backends(o.common);
+    const std::vector<BenchVariant> variants = read_variants(o.common, choice);
     // Frame 0 is the formation; frame 1 warms up (and compiles the kernels).
     const std::uint32_t total = 2 + frames * repetitions;
     const Scene scene = flock_scene(count, total);
@@ -69,13 +69,13 @@ int bench_flock(const FlockOptions& o) {
     std::vector<std::unique_ptr<Domain>> domains;
     std::vector<std::uint32_t> next;
     std::vector<Contender> contenders;
-    for (BackendKind kind : kinds) {
+    for (const auto& [kind, backend_options, label] : variants) {
         auto made = make_flocking_domain(scene, world.value());
         if (!made) return report(made.error());
         Domain& d = *made.value();
-        DomainSetup setup{.kind = kind, .options = choice.options};
+        DomainSetup setup{.kind = kind, .options = backend_options};
         if (auto opened = d.open(setup, {}); !opened) {
-            std::printf("  %-14s skipped: %s\n", std::string(backend_name(kind)).c_str(), opened.error().message.c_str());
+            std::printf("  %-14s skipped: %s\n", label.c_str(), opened.error().message.c_str());
             continue;
         }
         if (auto r = d.step(0, 2, {}); !r) return report(r.error());
@@ -83,7 +83,7 @@ int bench_flock(const FlockOptions& o) {
         domains.push_back(std::move(made).value());
         next.push_back(2);
         Contender c;
-        c.measured.backend = std::string(backend_name(kind));
+        c.measured.backend = label;
         c.measured.device = d.device();
         describe(c.measured, kind, choice.options);
         c.repetition = [&, index, frames](double& gpu_ms) -> Result<double> {
@@ -103,15 +103,15 @@ int bench_flock(const FlockOptions& o) {
                                       o.common.json);
     // Where the CPU backends' time went, over the warm-up and every repetition.
     std::printf("\nwhere the time went (cpu kinds; the search and the rules in thread-seconds over their threads):\n");
-    std::printf("%-14s %10s %12s %12s %14s\n", "backend", "grid %", "search %", "rules %", "search ns/bird");
+    std::printf("%-20s %10s %12s %12s %14s\n", "backend", "grid %", "search %", "rules %", "search ns/bird");
     for (std::size_t i = 0; i < contenders.size(); ++i) {
         const FlockingTiming t = flocking_timing(*domains[i]);
         const double sum = t.grid_seconds + t.search_seconds + t.rules_seconds;
         if (sum <= 0.0 || t.bird_steps == 0) {
-            std::printf("%-14s %10s %12s %12s %14s\n", contenders[i].measured.backend.c_str(), "-", "-", "-", "-");
+            std::printf("%-20s %10s %12s %12s %14s\n", contenders[i].measured.backend.c_str(), "-", "-", "-", "-");
             continue;
         }
-        std::printf("%-14s %10.1f %12.1f %12.1f %14.1f\n", contenders[i].measured.backend.c_str(), 100.0 * t.grid_seconds / sum,
+        std::printf("%-20s %10.1f %12.1f %12.1f %14.1f\n", contenders[i].measured.backend.c_str(), 100.0 * t.grid_seconds / sum,
                     100.0 * t.search_seconds / sum, 100.0 * t.rules_seconds / sum,
                     1e9 * t.search_seconds / static_cast<double>(t.bird_steps));
     }

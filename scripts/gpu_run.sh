@@ -411,20 +411,20 @@ print_table() {
     }
     function num(v, f) { return (v == "" || v == "null") ? "-" : sprintf(f, v) }
     BEGIN {
-      printf "%-22s %-15s %9s %11s %11s %11s %9s %9s %8s  %s\n", "bench", "backend", "count", "median/s",
+      printf "%-22s %-20s %9s %11s %11s %11s %9s %9s %8s  %s\n", "bench", "backend", "count", "median/s",
         "min/s", "max/s", "ms/frame", "GPU ms", "vs cpu", "device"
     }
     {
       json = $2
       kind = field(json, "benchmark")
       count = field(json, kind == "chains" ? "chains" : (kind == "crowd" ? "instances" : "count"))
-      unit = kind == "chains" ? "joint-steps" : (kind == "birds" ? "bird-frames" : "frames")
+      unit = kind == "chains" ? "joint-steps" : (kind == "birds" ? "bird-frames" : (kind == "flock" ? "bird-steps" : "frames"))
       rest = substr(json, index(json, "\"results\":[") + 11)
       n = split(rest, objs, "},")
       for (i = 1; i <= n; ++i) {
         o = objs[i]
         if (field(o, "backend") == "") continue
-        printf "%-22s %-15s %9s %11s %11s %11s %9s %9s %8s  %s\n", $1, field(o, "backend"), count,
+        printf "%-22s %-20s %9s %11s %11s %11s %9s %9s %8s  %s\n", $1, field(o, "backend"), count,
           num(field(o, "per_second"), "%.4g"), num(field(o, "min"), "%.4g"), num(field(o, "max"), "%.4g"),
           num(field(o, "ms_per_frame"), "%.3f"), num(field(o, "gpu_ms_per_frame"), "%.3f"),
           num(field(o, "vs_cpu"), "%.2fx"), field(o, "device")
@@ -662,12 +662,20 @@ run_all() {
   local chains_s=100000 chains_l=1000000 chains_frames_s=5 chains_frames_l=10
   local birds_s=1000000 birds_l=10000000 birds_frames_s=10 birds_frames_l=20
   local crowd_s=1000 crowd_l=10000 crowd_frames=30
+  # The flock: 10 000 birds (issue 32's size beside Blender's boids) and a million.
+  local flock_s=10000 flock_l=1000000 flock_frames_s=60 flock_frames_l=5
+  # The vulkan kernels' workgroup sizes timed side by side at the large sizes (issue 38,
+  # item 2; `bench --workgroup-sizes`): the first GPU run picks the default from them.
+  local workgroups=32,64,128,256
   local reps_s=3 reps_l=5 validate_frames=20 embed_frames=120 bench_limit=90 step_limit=40
   local bench_reserve=75
   if ((quick)); then
     chains_s=301 chains_l=1001 chains_frames_s=2 chains_frames_l=2
     birds_s=1001 birds_l=10001 birds_frames_s=3 birds_frames_l=3
     crowd_s=2 crowd_l=5 crowd_frames=3 reps_l=3
+    flock_s=1001 flock_l=3001 flock_frames_s=2 flock_frames_l=2
+    # Two sizes keep the option's path run; each is a pipeline lavapipe compiles.
+    workgroups=32,64
     validate_frames=3 embed_frames=12 bench_limit=40 step_limit=30 bench_reserve=30
   fi
   local all=cpu-reference,cpu,vulkan fast=cpu,vulkan
@@ -689,11 +697,18 @@ run_all() {
     --frames "$crowd_frames" --repetitions "$reps_s" --backends "$all" --json "$out/bench-crowd-$crowd_s.json"
   run_step "bench-chains-$chains_l" "$bench_limit" "$bench_reserve" bench "$bin" bench chains --count "$chains_l" \
     --joints 16 --iterations 4 --frames "$chains_frames_l" --repetitions "$reps_l" --backends "$fast" \
-    --json "$out/bench-chains-$chains_l.json"
+    --workgroup-sizes "$workgroups" --json "$out/bench-chains-$chains_l.json"
   run_step "bench-birds-$birds_l" "$bench_limit" "$bench_reserve" bench "$bin" bench birds --count "$birds_l" \
-    --frames "$birds_frames_l" --repetitions "$reps_l" --backends "$fast" --json "$out/bench-birds-$birds_l.json"
+    --frames "$birds_frames_l" --repetitions "$reps_l" --backends "$fast" --workgroup-sizes "$workgroups" \
+    --json "$out/bench-birds-$birds_l.json"
   run_step "bench-crowd-$crowd_l" "$bench_limit" "$bench_reserve" bench "$bin" bench crowd --count "$crowd_l" \
-    --frames "$crowd_frames" --repetitions "$reps_l" --backends "$fast" --json "$out/bench-crowd-$crowd_l.json"
+    --frames "$crowd_frames" --repetitions "$reps_l" --backends "$fast" --workgroup-sizes "$workgroups" \
+    --json "$out/bench-crowd-$crowd_l.json"
+  run_step "bench-flock-$flock_s" "$bench_limit" "$bench_reserve" bench "$bin" bench flock --count "$flock_s" \
+    --frames "$flock_frames_s" --repetitions "$reps_s" --backends "$all" --json "$out/bench-flock-$flock_s.json"
+  run_step "bench-flock-$flock_l" "$bench_limit" "$bench_reserve" bench "$bin" bench flock --count "$flock_l" \
+    --frames "$flock_frames_l" --repetitions "$reps_l" --backends "$fast" --workgroup-sizes "$workgroups" \
+    --json "$out/bench-flock-$flock_l.json"
 
   # Every shipped scene, vulkan against cpu-reference.
   local scene base

@@ -8,7 +8,10 @@
 #include "shared/birds.h"
 #include "lib/quat.glsl"
 
-layout(local_size_x = KW_BIRDS_WORKGROUP_SIZE) in;
+// The size is a specialization constant (default KW_BIRDS_WORKGROUP_SIZE): a variant to
+// time on each GPU (BackendOptions::workgroup_size); one bird per invocation, no shared
+// memory, so the results do not depend on it.
+layout(local_size_x = KW_BIRDS_WORKGROUP_SIZE, local_size_x_id = KW_BIRDS_SPEC_WORKGROUP_SIZE) in;
 
 // The rules and the diagnostics switch are specialization constants, not uniforms:
 // lavapipe executes both sides of every branch, uniform ones included, so code that a

@@ -7,7 +7,8 @@
 
 #include "shared/flocking.h"
 
-layout(local_size_x = KW_FLOCK_WORKGROUP_SIZE) in;
+// The size is a specialization constant (default KW_FLOCK_WORKGROUP_SIZE, see birds_flap.comp).
+layout(local_size_x = KW_FLOCK_WORKGROUP_SIZE, local_size_x_id = KW_FLOCK_SPEC_WORKGROUP_SIZE) in;
 
 layout(std430, binding = KW_FLOCK_BINDING_FLOCKS) readonly buffer Flocks { FlockParamsGpu flocks[]; };
 layout(std430, binding = KW_FLOCK_BINDING_BIRDS) readonly buffer Birds { FlockBirdGpu birds[]; };

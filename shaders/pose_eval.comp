@@ -14,7 +14,8 @@
 #include "lib/matrix.glsl"
 #include "lib/quat.glsl"
 
-layout(local_size_x = KW_POSES_WORKGROUP_SIZE) in;
+// The size is a specialization constant (default KW_POSES_WORKGROUP_SIZE, see birds_flap.comp).
+layout(local_size_x = KW_POSES_WORKGROUP_SIZE, local_size_x_id = KW_POSES_SPEC_WORKGROUP_SIZE) in;
 
 layout(std140, binding = KW_POSES_BINDING_NODES) uniform Nodes { PoseNodeGpu nodes[KW_POSES_UNIFORM_NODES]; };
 layout(std430, binding = KW_POSES_BINDING_MORE_NODES) readonly buffer MoreNodes { PoseNodeGpu more_nodes[]; };

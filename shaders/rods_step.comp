@@ -14,7 +14,8 @@
 #include "lib/wind.glsl"
 #include "lib/spring_limit.glsl"
 
-layout(local_size_x = KW_RODS_WORKGROUP_SIZE) in;
+// The size is a specialization constant (default KW_RODS_WORKGROUP_SIZE, see birds_flap.comp).
+layout(local_size_x = KW_RODS_WORKGROUP_SIZE, local_size_x_id = KW_RODS_SPEC_WORKGROUP_SIZE) in;
 
 // Sizes the per-chain register arrays: the longest chain of the dispatch, not
 // KW_RODS_MAX_JOINTS, so short chains do not pay for 32-joint arrays. Every loop over

@@ -86,10 +86,15 @@ expected = ["info"] + [f"validate-{s}" for s in scenes] + (["embed_vulkan"] if e
 for name in expected:
     check(name in steps, f"no step {name}")
 benches = [s for s in d["steps"] if s["name"].startswith("bench-")]
-check(len(benches) == 6, f"{len(benches)} bench steps, not 6")
+check(len(benches) == 8, f"{len(benches)} bench steps, not 8")
 for s in benches:
     backends = {r["backend"].split("/")[0] for r in s["bench"]["results"]}
     check({"cpu", "vulkan"} <= backends, f"{s['name']}: backends {backends}")
+# The large sizes time the vulkan kernels at every workgroup size of --workgroup-sizes.
+for name in ("bench-chains-1001", "bench-birds-10001", "bench-flock-3001"):
+    check(name in steps, f"no step {name}")
+    labels = {r["backend"] for r in steps[name]["bench"]["results"]}
+    check({"vulkan/wg32", "vulkan/wg64"} <= labels, f"{name}: backends {labels}, not vulkan/wg32 and vulkan/wg64")
     for r in s["bench"]["results"]:
         check(r["per_second"] > 0 and r["min"] <= r["per_second"] <= r["max"], f"{s['name']}: {r}")
 EOF

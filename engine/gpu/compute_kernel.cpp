@@ -2,10 +2,27 @@
 // one descriptor set.
 #include "gpu/compute_vulkan.hpp"
 
+#include <algorithm>
 #include <cassert>
 #include <string>
 
 namespace kodawari::compute {
+
+Result<std::uint32_t> workgroup_size(const Device& device, unsigned requested, std::uint32_t preferred, std::string_view what) {
+    const std::uint32_t size = requested == 0 ? preferred : requested;
+    const GpuDeviceInfo& info = device.info();
+    // A device reports at least 128 for both limits (the Vulkan specification's minimum).
+    const std::uint32_t limit = std::min(info.max_workgroup_size_x > 0 ? info.max_workgroup_size_x : 128u,
+                                         info.max_workgroup_invocations > 0 ? info.max_workgroup_invocations : 128u);
+    const bool power_of_two = size != 0 && (size & (size - 1)) == 0;
+    if (!power_of_two || size < 32 || size > 1024 || size > limit) {
+        return make_error(Error::Kind::InvalidInput,
+                          std::string(what) + ": " + std::to_string(size) +
+                              " invocations per workgroup; expected a power of two from 32 to " +
+                              std::to_string(std::min(limit, 1024u)) + " (" + info.name + "'s limit " + std::to_string(limit) + ")");
+    }
+    return size;
+}
 
 Kernel::Kernel() : native_(std::make_unique<Native>()) {}
 Kernel::Kernel(Kernel&&) noexcept = default;

@@ -78,6 +78,7 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& device, std::uint32_t ind
     }
     info.subgroup_size = chain.get<vk::PhysicalDeviceSubgroupProperties>().subgroupSize;
     info.max_workgroup_invocations = props.limits.maxComputeWorkGroupInvocations;
+    info.max_workgroup_size_x = props.limits.maxComputeWorkGroupSize[0];
     info.max_workgroup_count = {props.limits.maxComputeWorkGroupCount[0], props.limits.maxComputeWorkGroupCount[1],
                                 props.limits.maxComputeWorkGroupCount[2]};
     info.max_storage_buffer_range = props.limits.maxStorageBufferRange;

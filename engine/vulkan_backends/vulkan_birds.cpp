@@ -47,12 +47,13 @@ std::span<const std::byte> bytes_of(const std::vector<T>& v) {
 
 class VulkanBirdBackend final : public BirdBackend, public DeviceBirdBackend, public DeviceData {
 public:
-    explicit VulkanBirdBackend(std::shared_ptr<compute::Device> ctx) : ctx_(std::move(ctx)) {}
+    VulkanBirdBackend(std::shared_ptr<compute::Device> ctx, std::uint32_t workgroup) : ctx_(std::move(ctx)), workgroup_(workgroup) {}
 
     /// The kernel specialized for this world's rules, with or without diagnostics; built
     /// on first use (lavapipe compiles it at its first dispatch) and kept.
     Result<const compute::Kernel*> pipeline(bool diagnostics) {
-        const std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT> spec = {rules_.x, rules_.y, diagnostics ? 1u : 0u, driven_ > 0 ? 1u : 0u};
+        const std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT> spec = {rules_.x, rules_.y, diagnostics ? 1u : 0u, driven_ > 0 ? 1u : 0u,
+                                                                         workgroup_};
         for (const auto& [key, p] : pipelines_) {
             if (key == spec) return &p;
         }
@@ -123,12 +124,10 @@ public:
     Result<void> load(const birds::BirdWorld& world) override {
         const std::size_t count = world.birds.size();
         if (count == 0) return make_error(Error::Kind::InvalidInput, "the world has no birds");
-        const std::uint64_t groups = (count + KW_BIRDS_WORKGROUP_SIZE - 1) / KW_BIRDS_WORKGROUP_SIZE;
-        if (groups > ctx_->info().max_workgroup_count[0]) {
+        if (compute::groups_for(count, workgroup_) > ctx_->info().max_workgroup_count[0]) {
             return make_error(Error::Kind::Unsupported, std::to_string(count) + " birds exceed what one dispatch on " +
                                                             ctx_->info().name + " can cover (" +
-                                                            std::to_string(std::uint64_t{ctx_->info().max_workgroup_count[0]} *
-                                                                           KW_BIRDS_WORKGROUP_SIZE) +
+                                                            std::to_string(std::uint64_t{ctx_->info().max_workgroup_count[0]} * workgroup_) +
                                                             ")");
         }
         count_ = static_cast<std::uint32_t>(count);
@@ -284,8 +283,7 @@ private:
         // ring, and a copy may have read the ring; this one reads and overwrites them.
         compute::barrier(recording, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Compute);
         const gpu::BirdPush push{{first, n, slots_, driven_}};
-        const std::uint32_t groups = (count_ + KW_BIRDS_WORKGROUP_SIZE - 1) / KW_BIRDS_WORKGROUP_SIZE;
-        kernel.dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
+        kernel.dispatch(recording, std::as_bytes(std::span(&push, 1)), compute::groups_for(count_, workgroup_));
     }
 
     // The poses (and diagnostics) of the dispatch's n frames to where the host reads them.
@@ -315,6 +313,7 @@ private:
 
     // A handful of variants at most (rules x diagnostics): a vector is the simplest map.
     std::vector<std::pair<std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT>, compute::Kernel>> pipelines_;
+    std::uint32_t workgroup_ = KW_BIRDS_WORKGROUP_SIZE;  // invocations per workgroup (KW_BIRDS_SPEC_WORKGROUP_SIZE)
     gpu::uvec4 rules_{};
     std::vector<Buffer> buffers_;
     std::optional<Buffer> readback_;
@@ -332,7 +331,9 @@ private:
 Result<std::unique_ptr<BirdBackend>> make_vulkan_bird_backend(const BackendOptions& options) {
     auto ctx = backend_context(options);
     if (!ctx) return ctx.error();
-    auto backend = std::make_unique<VulkanBirdBackend>(std::move(ctx).value());
+    auto workgroup = compute::workgroup_size(*ctx.value(), options.workgroup_size, KW_BIRDS_WORKGROUP_SIZE);
+    if (!workgroup) return workgroup.error();
+    auto backend = std::make_unique<VulkanBirdBackend>(std::move(ctx).value(), workgroup.value());
     // The default variant now, so a broken shader or driver shows up at creation.
     if (auto p = backend->pipeline(false); !p) return p.error();
     return std::unique_ptr<BirdBackend>(std::move(backend));

@@ -168,7 +168,7 @@ FlatCharacter flatten(const animation::Character& character) {
 
 class VulkanPoseBackend final : public PoseBackend, public DevicePoseBackend, public DeviceData {
 public:
-    explicit VulkanPoseBackend(std::shared_ptr<compute::Device> ctx) : ctx_(std::move(ctx)) {}
+    VulkanPoseBackend(std::shared_ptr<compute::Device> ctx, std::uint32_t workgroup) : ctx_(std::move(ctx)), workgroup_(workgroup) {}
 
     std::string_view name() const override { return "vulkan"; }
     std::string device() const override { return ctx_->info().name; }
@@ -178,8 +178,7 @@ public:
     Result<void> load(const animation::Character& character, std::span<const PoseInstance> instances) override {
         KW_TRY(check_instances(character, instances));
         const std::uint64_t count = instances.size();
-        const std::uint64_t groups = (count + KW_POSES_WORKGROUP_SIZE - 1) / KW_POSES_WORKGROUP_SIZE;
-        if (groups > ctx_->info().max_workgroup_count[0]) {
+        if (compute::groups_for(count, workgroup_) > ctx_->info().max_workgroup_count[0]) {
             return make_error(Error::Kind::Unsupported, std::to_string(count) + " instances exceed what one dispatch on " +
                                                             ctx_->info().name + " can cover");
         }
@@ -240,7 +239,7 @@ public:
             kernel_.reset();
             std::vector<compute::Binding> types(KW_POSES_BINDING_COUNT, compute::Binding::Storage);
             types[KW_POSES_BINDING_NODES] = compute::Binding::Uniform;
-            const std::uint32_t specialization[] = {slots, affine ? 1u : 0u};
+            const std::uint32_t specialization[KW_POSES_SPEC_COUNT] = {slots, affine ? 1u : 0u, workgroup_};
             auto created = compute::Kernel::create(*ctx_, "pose_eval", types, sizeof(gpu::PosePush), specialization);
             if (!created) return created.error();
             kernel_.emplace(std::move(created).value());
@@ -314,9 +313,10 @@ private:
         push_ = {{time, 0.0f, 0.0f, 0.0f}, {count_, static_cast<std::uint32_t>(character_->nodes.size()), slots_ - 1u, 0u}};
         return std::as_bytes(std::span(&push_, 1));
     }
-    std::uint32_t groups() const { return (count_ + KW_POSES_WORKGROUP_SIZE - 1) / KW_POSES_WORKGROUP_SIZE; }
+    std::uint32_t groups() const { return compute::groups_for(count_, workgroup_); }
 
     std::shared_ptr<compute::Device> ctx_;
+    std::uint32_t workgroup_ = KW_POSES_WORKGROUP_SIZE;  // invocations per workgroup (KW_POSES_SPEC_WORKGROUP_SIZE)
     gpu::PosePush push_{};
     std::optional<compute::Kernel> kernel_;
     std::uint32_t slots_ = 0;  // the kernel's KW_POSES_SPEC_SLOTS
@@ -333,7 +333,9 @@ private:
 Result<std::unique_ptr<PoseBackend>> make_vulkan_pose_backend(const BackendOptions& options) {
     auto ctx = backend_context(options);
     if (!ctx) return ctx.error();
-    return std::unique_ptr<PoseBackend>(std::make_unique<VulkanPoseBackend>(std::move(ctx).value()));
+    auto workgroup = compute::workgroup_size(*ctx.value(), options.workgroup_size, KW_POSES_WORKGROUP_SIZE);
+    if (!workgroup) return workgroup.error();
+    return std::unique_ptr<PoseBackend>(std::make_unique<VulkanPoseBackend>(std::move(ctx).value(), workgroup.value()));
 }
 
 }  // namespace kodawari

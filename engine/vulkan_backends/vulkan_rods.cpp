@@ -125,7 +125,7 @@ gpu::RodKeyTemplateGpu key_template(const rods::ChainTemplate& t) {
 
 class VulkanRodBackend final : public RodBackend, public DeviceRodBackend, public DeviceData {
 public:
-    explicit VulkanRodBackend(std::shared_ptr<compute::Device> ctx) : ctx_(std::move(ctx)) {}
+    VulkanRodBackend(std::shared_ptr<compute::Device> ctx, std::uint32_t workgroup) : ctx_(std::move(ctx)), workgroup_(workgroup) {}
 
     using Variant = std::array<std::uint32_t, KW_RODS_SPEC_COUNT>;
 
@@ -175,8 +175,7 @@ public:
         KW_TRY(rods::check_frame(world, initial));
         const std::size_t count = world.chains.size();
         if (count == 0) return make_error(Error::Kind::InvalidInput, "the world has no chains");
-        const std::uint64_t groups = (count + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE;
-        if (groups > ctx_->info().max_workgroup_count[0]) {
+        if (count > std::uint64_t{ctx_->info().max_workgroup_count[0]} * workgroup_) {
             return make_error(Error::Kind::Unsupported,
                               std::to_string(count) + " chains exceed what one dispatch on " + ctx_->info().name + " can cover");
         }
@@ -503,7 +502,7 @@ private:
         std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
         auto kernel_for = [&](std::uint32_t n, std::uint32_t m, std::uint32_t keyed, bool exact) -> Result<const compute::Kernel*> {
-            auto kernel = pipeline({n, m, suppression_, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed, features_, max_colliders_});
+            auto kernel = pipeline({n, m, suppression_, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed, features_, max_colliders_, workgroup_});
             if (!kernel) return kernel.error();
             kernel.value()->bind(bound);  // (again for a shared one: the same bindings)
             return kernel.value();
@@ -561,8 +560,7 @@ private:
         auto dispatch = [&](const compute::Kernel* kernel, std::uint32_t first, std::uint32_t chains) {
             push.counts.x = chains;
             push.counts.y = first;
-            const std::uint32_t groups = (chains + KW_RODS_WORKGROUP_SIZE - 1) / KW_RODS_WORKGROUP_SIZE;
-            kernel->dispatch(recording, std::as_bytes(std::span(&push, 1)), groups);
+            kernel->dispatch(recording, std::as_bytes(std::span(&push, 1)), compute::groups_for(chains, workgroup_));
         };
         // What earlier dispatches and copies wrote (the state this dispatch reads and
         // overwrites, the input) before the step.
@@ -646,6 +644,7 @@ private:
     // A few variants at most (one per kind of world): a vector is the simplest map.
     // (A deque: kernel_ and the groups' kernels point into it.)
     std::deque<std::pair<Variant, compute::Kernel>> pipelines_;
+    std::uint32_t workgroup_ = KW_RODS_WORKGROUP_SIZE;  // invocations per workgroup (KW_RODS_SPEC_WORKGROUP_SIZE)
     const compute::Kernel* kernel_ = nullptr;  // the one dispatch's when not grouped_
     const rods::RodWorld* world_ = nullptr;
     std::vector<Buffer> buffers_;
@@ -687,7 +686,9 @@ private:
 Result<std::unique_ptr<RodBackend>> make_vulkan_rod_backend(const BackendOptions& options) {
     auto ctx = backend_context(options);
     if (!ctx) return ctx.error();
-    return std::unique_ptr<RodBackend>(std::make_unique<VulkanRodBackend>(std::move(ctx).value()));
+    auto workgroup = compute::workgroup_size(*ctx.value(), options.workgroup_size, KW_RODS_WORKGROUP_SIZE);
+    if (!workgroup) return workgroup.error();
+    return std::unique_ptr<RodBackend>(std::make_unique<VulkanRodBackend>(std::move(ctx).value(), workgroup.value()));
 }
 
 }  // namespace kodawari

@@ -8,6 +8,9 @@
 #include "glsl_types.h"
 
 #define KW_FLOCK_WORKGROUP_SIZE 64
+// flock_step.comp's one specialization constant: its invocations per workgroup
+// (BackendOptions::workgroup_size; the grid's passes keep KW_FLOCK_SCAN_SIZE).
+#define KW_FLOCK_SPEC_WORKGROUP_SIZE 0
 // The most neighbours a bird weighs (FlockParamsGpu.counts.x is at most this).
 #define KW_FLOCK_MAX_NEIGHBOURS 16
 // The grid's buckets are a power of two (FlockPush.counts.y = buckets - 1) and the scan

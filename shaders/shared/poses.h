@@ -66,6 +66,9 @@
 // bottom row (0, 0, 0, 1), as TRS nodes always do: then every output matrix has it too,
 // load() writes it once and the kernel stores only the upper three rows.
 #define KW_POSES_SPEC_AFFINE 1
+// Specialization constant: invocations per workgroup (BackendOptions::workgroup_size).
+#define KW_POSES_SPEC_WORKGROUP_SIZE 2
+#define KW_POSES_SPEC_COUNT 3
 
 #define KW_POSES_NONE 0xFFFFFFFFu     // no parent; no clip (rest pose)
 

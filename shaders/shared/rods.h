@@ -79,7 +79,8 @@
 #define KW_RODS_SPEC_MAX_KEYED 5   // the most keyed examples of a chain of the dispatch (0: keyed examples compiled out)
 #define KW_RODS_SPEC_FEATURES 6    // KW_RODS_FEATURE_* the world uses; the others are compiled out
 #define KW_RODS_SPEC_MAX_COLLIDERS 7  // the most colliders of a chain of the world (0: collisions compiled out)
-#define KW_RODS_SPEC_COUNT 8
+#define KW_RODS_SPEC_WORKGROUP_SIZE 8  // invocations per workgroup (BackendOptions::workgroup_size)
+#define KW_RODS_SPEC_COUNT 9
 
 // What a world may use beyond outside colliders (KW_RODS_SPEC_FEATURES): lavapipe runs
 // both sides of a branch under a mask, so code a world never takes still costs it (the

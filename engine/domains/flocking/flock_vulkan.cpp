@@ -27,14 +27,16 @@ std::span<const std::byte> bytes_of(std::span<const T> v) {
 
 class VulkanFlockBackend final : public FlockBackend {
 public:
-    explicit VulkanFlockBackend(std::shared_ptr<compute::Device> device) : device_(std::move(device)) {}
+    VulkanFlockBackend(std::shared_ptr<compute::Device> device, std::uint32_t workgroup)
+        : device_(std::move(device)), workgroup_(workgroup) {}
 
     Result<void> create_kernels() {
         const std::vector<compute::Binding> types(KW_FLOCK_BINDING_COUNT, compute::Binding::Storage);
         auto grid = compute::Kernel::create(*device_, "flock_grid", types, sizeof(gpu::FlockPush));
         if (!grid) return grid.error();
         grid_.emplace(std::move(grid).value());
-        auto step = compute::Kernel::create(*device_, "flock_step", types, sizeof(gpu::FlockPush));
+        const std::uint32_t spec[] = {workgroup_};  // KW_FLOCK_SPEC_WORKGROUP_SIZE
+        auto step = compute::Kernel::create(*device_, "flock_step", types, sizeof(gpu::FlockPush), spec);
         if (!step) return step.error();
         step_.emplace(std::move(step).value());
         return {};
@@ -154,7 +156,7 @@ private:
     // agents are at k x flocks and k x agents.
     void record_frame(compute::Recording& rec, std::uint32_t k, std::uint32_t flocks, std::uint32_t agents) {
         const FlockWorld& w = *world_;
-        const std::uint32_t groups_birds = (count_ + KW_FLOCK_WORKGROUP_SIZE - 1) / KW_FLOCK_WORKGROUP_SIZE;
+        const std::uint32_t groups_birds = compute::groups_for(count_, workgroup_);
         const std::uint32_t groups_grid = (count_ + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE;
         const std::uint32_t groups_buckets = (w.buckets + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE;
         for (std::uint32_t s = 0; s < w.substeps; ++s) {
@@ -209,6 +211,7 @@ private:
     const FlockWorld* world_ = nullptr;
     std::uint32_t count_ = 0;
     std::uint32_t slot_ = 0;  // the state slot the next substep reads
+    std::uint32_t workgroup_ = KW_FLOCK_WORKGROUP_SIZE;  // flock_step's invocations per workgroup
 };
 
 }  // namespace
@@ -216,7 +219,9 @@ private:
 Result<std::unique_ptr<FlockBackend>> make_vulkan_flock_backend(const BackendOptions& options) {
     auto device = backend_context(options);
     if (!device) return device.error();
-    auto backend = std::make_unique<VulkanFlockBackend>(std::move(device).value());
+    auto workgroup = compute::workgroup_size(*device.value(), options.workgroup_size, KW_FLOCK_WORKGROUP_SIZE);
+    if (!workgroup) return workgroup.error();
+    auto backend = std::make_unique<VulkanFlockBackend>(std::move(device).value(), workgroup.value());
     KW_TRY(backend->create_kernels());
     return std::unique_ptr<FlockBackend>(std::move(backend));
 }

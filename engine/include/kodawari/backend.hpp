@@ -42,6 +42,11 @@ struct BackendOptions {
     /// path; for tests on an integrated or CPU device).
     bool force_staging = false;
     unsigned threads = 0;      ///< cpu backend threads (0 = hardware concurrency)
+    /// Invocations per workgroup of the vulkan backends' per-instance kernels (chains,
+    /// birds, poses, flocking): 0 = their default (64); else a power of two from 32 to
+    /// 1024 that the device allows. A variant to time on a GPU (`bench --workgroup-sizes`);
+    /// the results are the same bits at every size. Others: InvalidInput naming it.
+    unsigned workgroup_size = 0;
     /// The cpu backend's SIMD instruction set: "" = the widest this machine runs, or one
     /// of available_simd_isas() ("avx512", "avx2", "sse4", "scalar"; kodawari/simd.hpp).
     /// A name it cannot use makes make_cpu_*_backend() fail with InvalidInput.

@@ -265,6 +265,19 @@ private:
     Device* device_;
 };
 
+/// The workgroup size a per-instance kernel runs at on `device`: `requested` (a caller's
+/// BackendOptions::workgroup_size, 0 = `preferred`) checked to be a power of two from 32
+/// to 1024 within the device's maxComputeWorkGroupSize[0] and
+/// maxComputeWorkGroupInvocations. The kernel takes it as a specialization constant
+/// (`layout(local_size_x_id = ...)`), so one shader serves every size. InvalidInput
+/// naming `what` (the option) otherwise.
+[[nodiscard]] KODAWARI_API Result<std::uint32_t> workgroup_size(const Device& device, unsigned requested, std::uint32_t preferred,
+                                                                 std::string_view what = "BackendOptions::workgroup_size");
+/// Workgroups of `size` invocations that cover `count` instances.
+[[nodiscard]] constexpr std::uint32_t groups_for(std::uint64_t count, std::uint32_t size) {
+    return static_cast<std::uint32_t>((count + size - 1) / size);
+}
+
 /// A compute kernel: the pipeline of a SPIR-V shader with its binding layout, push
 /// constants and specialization constants, and its one set of buffer bindings.
 class KODAWARI_API Kernel {

@@ -23,6 +23,7 @@ struct GpuDeviceInfo {
     bool timestamps = false;
     std::uint32_t subgroup_size = 0;
     std::uint32_t max_workgroup_invocations = 0;
+    std::uint32_t max_workgroup_size_x = 0;  ///< maxComputeWorkGroupSize[0]
     std::array<std::uint32_t, 3> max_workgroup_count{};
     std::uint64_t max_storage_buffer_range = 0;
     std::uint32_t max_push_constants = 0;
