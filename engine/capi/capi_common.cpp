@@ -221,6 +221,16 @@ void require_backend_options(const kodawari_backend_options& options, const std:
         auto isa = simd_isa(options.isa);
         if (!isa) invalid(what + ".isa", isa.error().message);
     }
+    if (options.workgroup_size != 0) {
+        if (backend != KODAWARI_BACKEND_AUTO && backend != KODAWARI_BACKEND_VULKAN) {
+            invalid(what + ".workgroup_size", std::to_string(options.workgroup_size) +
+                                                  " with a backend other than KODAWARI_BACKEND_VULKAN, which has no workgroups");
+        }
+        const std::uint32_t n = options.workgroup_size;
+        if (n < 32 || n > 1024 || (n & (n - 1)) != 0) {
+            invalid(what + ".workgroup_size", std::to_string(n) + "; expected 0 (64) or a power of two from 32 to 1024");
+        }
+    }
     if (options.vulkan_device != nullptr) {
         if (backend != KODAWARI_BACKEND_AUTO && backend != KODAWARI_BACKEND_VULKAN) {
             invalid(what + ".vulkan_device", "set with a CPU backend; the application's device runs KODAWARI_BACKEND_VULKAN");
@@ -278,6 +288,7 @@ BackendOptions backend_options(const kodawari_backend_options& options) {
     out.validation = options.validation != 0;
     out.threads = options.threads;
     out.isa = options.isa != nullptr ? options.isa : "";
+    out.workgroup_size = options.workgroup_size;
     if (options.vulkan_device != nullptr) out.context = options.vulkan_device->context;
     return out;
 }

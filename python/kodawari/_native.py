@@ -16,6 +16,7 @@ class BackendOptions(ctypes.Structure):
         ("threads", ctypes.c_uint32),
         ("vulkan_device", ctypes.c_void_p),
         ("isa", ctypes.c_char_p),
+        ("workgroup_size", ctypes.c_uint32),
     ]
 
 

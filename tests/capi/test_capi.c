@@ -624,6 +624,11 @@ static void test_chain_create_rejects(void) {
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->backend.isa", "avx9", "scalar");
     a.desc.backend.isa = "scalar";
     REJECT(KODAWARI_INVALID_ARGUMENT, "desc->backend.isa: \"scalar\" with a backend other than KODAWARI_BACKEND_CPU");
+    a.desc.backend.workgroup_size = 128;
+    REJECT(KODAWARI_INVALID_ARGUMENT, "desc->backend.workgroup_size: 128 with a backend other than KODAWARI_BACKEND_VULKAN");
+    a.desc.backend.backend = KODAWARI_BACKEND_VULKAN;
+    a.desc.backend.workgroup_size = 48;
+    REJECT(KODAWARI_INVALID_ARGUMENT, "desc->backend.workgroup_size: 48; expected 0 (64) or a power of two from 32 to 1024");
     initial.reference_count = 2;
     REJECT(KODAWARI_INVALID_ARGUMENT, "initial->reference_count: 2; expected 1 (one per character)");
     f.root.rotation[3] = 0.0f;

@@ -169,6 +169,11 @@ typedef struct kodawari_backend_options {
     /// cpu: the SIMD instruction set, "avx512", "avx2", "sse4" or "scalar"; NULL or "" =
     /// the widest this machine runs. One this machine cannot run is INVALID_ARGUMENT.
     const char* isa;
+    /// vulkan: invocations per workgroup of the kernels that run one chain, bird or
+    /// character each, a power of two from 32 to 1024 that the device allows; 0 = 64. The
+    /// results are the same at every size (it is a speed variant to time on a GPU). Another
+    /// value, or one with a CPU backend, is INVALID_ARGUMENT.
+    uint32_t workgroup_size;
 } kodawari_backend_options;
 
 /* ------------------------------------------------------------------------------------ */
