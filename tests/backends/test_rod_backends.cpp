@@ -8,6 +8,8 @@
 #include <cmath>
 #include <cstdio>
 #include <cstring>
+#include <functional>
+#include <limits>
 #include <string>
 #include <utility>
 #include <vector>
@@ -73,6 +75,33 @@ protected:
             const auto stepped = backend.step(frame);
             ASSERT_TRUE(stepped.ok()) << stepped.error().message;
         }
+    }
+
+    // Frames 1 .. frames of `frame_at` on backend_ (loaded), each also stepped by the CPU
+    // reference from the backend's own state before it: the largest distance between
+    // their joints over every frame (infinity for a non-finite joint or a failed call).
+    float worst_against_reference(const rods::RodWorld& world, std::uint32_t frames,
+                                  const std::function<void(std::uint32_t, rods::RodFrame&)>& frame_at) {
+        std::vector<rods::KeyState> keys(world.chains.size());
+        float worst = 0.0f;
+        rods::RodFrame frame;
+        for (std::uint32_t f = 1; f <= frames; ++f) {
+            std::vector<rods::ChainState> states;
+            EXPECT_TRUE(backend_->read_states(states).ok());
+            frame_at(f, frame);
+            for (std::uint32_t c = 0; c < world.chains.size(); ++c) step_chain_reference(world, c, frame, states[c], keys[c]);
+            ChainSnapshot snap;
+            if (!backend_->step(frame).ok() || !backend_->read(snap).ok()) return std::numeric_limits<float>::infinity();
+            for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
+                const rods::ChainInstance& ch = world.chains[c];
+                for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
+                    const glm::vec3 p = snap.positions[ch.joint_begin + i];
+                    if (!std::isfinite(p.x + p.y + p.z)) return std::numeric_limits<float>::infinity();
+                    worst = std::max(worst, glm::length(rods::position(states[c], i) - p));
+                }
+            }
+        }
+        return worst;
     }
 
     std::unique_ptr<RodBackend> backend_;
@@ -240,27 +269,10 @@ TEST_P(RodBackends, ChangingFrameLengthsAndEveryColliderKindMatchTheReference) {
     scene.value().frame(0, lengths[0], frame);
     with_colliders(frame);
     ASSERT_TRUE(backend_->load(world, frame).ok());
-    std::vector<rods::KeyState> keys(world.chains.size());
-    float worst = 0.0f;
-    for (std::uint32_t f = 1; f <= 21; ++f) {
-        const float dt = lengths[f % std::size(lengths)];
-        std::vector<rods::ChainState> states;
-        ASSERT_TRUE(backend_->read_states(states).ok());
-        scene.value().frame(f, dt, frame);
-        with_colliders(frame);
-        for (std::uint32_t c = 0; c < world.chains.size(); ++c) step_chain_reference(world, c, frame, states[c], keys[c]);
-        ASSERT_TRUE(backend_->step(frame).ok());
-        ChainSnapshot snap;
-        ASSERT_TRUE(backend_->read(snap).ok());
-        for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
-            const rods::ChainInstance& ch = world.chains[c];
-            for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
-                const glm::vec3 p = snap.positions[ch.joint_begin + i];
-                ASSERT_TRUE(std::isfinite(p.x + p.y + p.z));
-                worst = std::max(worst, glm::length(rods::position(states[c], i) - p));
-            }
-        }
-    }
+    const float worst = worst_against_reference(world, 21, [&](std::uint32_t f, rods::RodFrame& out) {
+        scene.value().frame(f, lengths[f % std::size(lengths)], out);
+        with_colliders(out);
+    });
     EXPECT_LT(worst, 1e-3f * length);
     if (GetParam() != BackendKind::Vulkan) {
         EXPECT_EQ(worst, 0.0f) << "the CPU backends compute the reference's bits";
@@ -317,25 +329,7 @@ TEST_P(RodBackends, MoreCollidersThanTheKernelUnrollsMatchTheReference) {
     rods::RodFrame frame;
     frame_at(0, frame);
     ASSERT_TRUE(backend_->load(world, frame).ok());
-    std::vector<rods::KeyState> keys(world.chains.size());
-    float worst = 0.0f;
-    for (std::uint32_t f = 1; f <= 20; ++f) {
-        std::vector<rods::ChainState> states;
-        ASSERT_TRUE(backend_->read_states(states).ok());
-        frame_at(f, frame);
-        for (std::uint32_t c = 0; c < world.chains.size(); ++c) step_chain_reference(world, c, frame, states[c], keys[c]);
-        ASSERT_TRUE(backend_->step(frame).ok());
-        ChainSnapshot snap;
-        ASSERT_TRUE(backend_->read(snap).ok());
-        for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
-            const rods::ChainInstance& ch = world.chains[c];
-            for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
-                const glm::vec3 p = snap.positions[ch.joint_begin + i];
-                ASSERT_TRUE(std::isfinite(p.x + p.y + p.z));
-                worst = std::max(worst, glm::length(rods::position(states[c], i) - p));
-            }
-        }
-    }
+    const float worst = worst_against_reference(world, 20, frame_at);
     EXPECT_LT(worst, 1e-3f * length);
     if (GetParam() != BackendKind::Vulkan) {
         EXPECT_EQ(worst, 0.0f) << "the CPU backends compute the reference's bits";
