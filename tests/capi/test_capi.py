@@ -38,7 +38,7 @@ Float3, Float4 = C.c_float * 3, C.c_float * 4
 
 class BackendOptions(C.Structure):
     _fields_ = [("backend", C.c_int), ("device", C.c_char_p), ("validation", C.c_uint32), ("threads", C.c_uint32),
-                ("vulkan_device", C.c_void_p), ("isa", C.c_char_p)]
+                ("vulkan_device", C.c_void_p), ("isa", C.c_char_p), ("workgroup_size", C.c_uint32)]
 
 
 class Transform(C.Structure):
