@@ -8,6 +8,7 @@
 
 #include "bench_common.hpp"
 #include "kodawari/atomic_file.hpp"
+#include "kodawari/compute.hpp"
 #include "kodawari/simd.hpp"
 #include "kodawari/simulation.hpp"
 
@@ -60,7 +61,7 @@ std::vector<BenchVariant> read_variants(const BenchCommon& o, const BackendChoic
         for (std::string item; std::getline(list, item, ',');) {
             char* end = nullptr;
             const unsigned long n = std::strtoul(item.c_str(), &end, 10);
-            if (item.empty() || end == nullptr || *end != '\0' || n < 32 || n > 1024 || (n & (n - 1)) != 0) {
+            if (item.empty() || end == nullptr || *end != '\0' || !compute::is_workgroup_size(n)) {
                 throw UsageError{"--workgroup-sizes: \"" + item + "\" is not a power of two from 32 to 1024"};
             }
             sizes.push_back(static_cast<unsigned>(n));

@@ -2,6 +2,7 @@
 
 #include "kodawari/route_check.hpp"
 
+#include "kodawari/compute.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/simd.hpp"
 
@@ -113,7 +114,7 @@ BackendChoice read_backend_choice(const BackendFlags& flags) {
     }
     if (flags.workgroup_size) {
         const auto n = *flags.workgroup_size;
-        if ((n & (n - 1)) != 0) throw UsageError{"--workgroup-size: " + std::to_string(n) + " is not a power of two (32, 64, ... 1024)"};
+        if (!compute::is_workgroup_size(n)) throw UsageError{"--workgroup-size: " + std::to_string(n) + " is not a power of two (32, 64, ... 1024)"};
         choice.options.workgroup_size = static_cast<unsigned>(n);
     }
     choice.options.validation = flags.validation || env_flag("KODAWARI_VALIDATION");

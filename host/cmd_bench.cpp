@@ -153,7 +153,7 @@ int bench_crowd(const CrowdOptions& o) {
     const std::uint32_t frames = static_cast<std::uint32_t>(o.frames.value_or(60));
     const std::uint32_t repetitions = read_repetitions(o.common);
     const auto& json_path = o.common.json;
-    const std::vector<BenchVariant> kinds = read_variants(o.common, choice);
+    const std::vector<BenchVariant> backends = read_variants(o.common, choice);
     const std::string path = o.scene.value_or("scenes/crowd-gltf.json");
     auto loaded = load_scene(path);
     if (!loaded) return report(loaded.error());
@@ -186,7 +186,7 @@ int bench_crowd(const CrowdOptions& o) {
         bool device_input;
     };
     std::vector<Variant> variants;
-    for (const BenchVariant& v : kinds) {
+    for (const BenchVariant& v : backends) {
         variants.push_back({&v, false});
         if (v.kind == BackendKind::Vulkan) variants.push_back({&v, true});
     }

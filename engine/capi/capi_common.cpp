@@ -1,6 +1,7 @@
 // The C API's shared parts: version, status names, the last-error messages, the argument
 // checks, and the mapping of engine errors to status codes.
 #include "capi/capi_common.hpp"
+#include "kodawari/compute.hpp"
 #include "kodawari/vulkan_embed.hpp"
 
 #include <algorithm>
@@ -226,9 +227,9 @@ void require_backend_options(const kodawari_backend_options& options, const std:
             invalid(what + ".workgroup_size", std::to_string(options.workgroup_size) +
                                                   " with a backend other than KODAWARI_BACKEND_VULKAN, which has no workgroups");
         }
-        const std::uint32_t n = options.workgroup_size;
-        if (n < 32 || n > 1024 || (n & (n - 1)) != 0) {
-            invalid(what + ".workgroup_size", std::to_string(n) + "; expected 0 (64) or a power of two from 32 to 1024");
+        if (!compute::is_workgroup_size(options.workgroup_size)) {
+            invalid(what + ".workgroup_size",
+                    std::to_string(options.workgroup_size) + "; expected 0 (64) or a power of two from 32 to 1024");
         }
     }
     if (options.vulkan_device != nullptr) {

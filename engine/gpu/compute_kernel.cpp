@@ -14,8 +14,7 @@ Result<std::uint32_t> workgroup_size(const Device& device, unsigned requested, s
     // A device reports at least 128 for both limits (the Vulkan specification's minimum).
     const std::uint32_t limit = std::min(info.max_workgroup_size_x > 0 ? info.max_workgroup_size_x : 128u,
                                          info.max_workgroup_invocations > 0 ? info.max_workgroup_invocations : 128u);
-    const bool power_of_two = size != 0 && (size & (size - 1)) == 0;
-    if (!power_of_two || size < 32 || size > 1024 || size > limit) {
+    if (!is_workgroup_size(size) || size > limit) {
         return make_error(Error::Kind::InvalidInput,
                           std::string(what) + ": " + std::to_string(size) +
                               " invocations per workgroup; expected a power of two from 32 to " +

@@ -175,7 +175,7 @@ public:
         KW_TRY(rods::check_frame(world, initial));
         const std::size_t count = world.chains.size();
         if (count == 0) return make_error(Error::Kind::InvalidInput, "the world has no chains");
-        if (count > std::uint64_t{ctx_->info().max_workgroup_count[0]} * workgroup_) {
+        if (compute::groups_for(count, workgroup_) > ctx_->info().max_workgroup_count[0]) {
             return make_error(Error::Kind::Unsupported,
                               std::to_string(count) + " chains exceed what one dispatch on " + ctx_->info().name + " can cover");
         }

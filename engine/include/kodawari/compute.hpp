@@ -273,6 +273,10 @@ private:
 /// naming `what` (the option) otherwise.
 [[nodiscard]] KODAWARI_API Result<std::uint32_t> workgroup_size(const Device& device, unsigned requested, std::uint32_t preferred,
                                                                  std::string_view what = "BackendOptions::workgroup_size");
+/// A workgroup size every caller may ask for: a power of two from 32 to 1024 (whether a
+/// device allows it is workgroup_size()'s question). One rule for the C++, C and command-line
+/// checks.
+[[nodiscard]] constexpr bool is_workgroup_size(std::uint64_t n) { return n >= 32 && n <= 1024 && (n & (n - 1)) == 0; }
 /// Workgroups of `size` invocations that cover `count` instances.
 [[nodiscard]] constexpr std::uint32_t groups_for(std::uint64_t count, std::uint32_t size) {
     return static_cast<std::uint32_t>((count + size - 1) / size);
