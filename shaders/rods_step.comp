@@ -13,6 +13,7 @@
 #include "lib/quat.glsl"
 #include "lib/wind.glsl"
 #include "lib/spring_limit.glsl"
+#include "lib/rod_lod.glsl"
 
 // The size is a specialization constant (default KW_RODS_WORKGROUP_SIZE, see birds_flap.comp).
 layout(local_size_x = KW_RODS_WORKGROUP_SIZE, local_size_x_id = KW_RODS_SPEC_WORKGROUP_SIZE) in;
@@ -302,6 +303,22 @@ void main() {
             d = normalize(qrot(to_reference, -push.camera_forward.xyz));
         }
     }
+    // ---- the level of detail (shaders/lib/rod_lod.glsl, rods::chain_level), from the
+    // character's reference joint and the level of the chain's last step ----
+    const bool LOD = (FEATURES & KW_RODS_FEATURE_LOD) != 0u;
+    uint level = KW_RODS_LEVEL_FULL;
+    // The share of full simulation in the result (rods::blend_in; kept in the state's
+    // root.position.w): 1 without levels of detail.
+    float share = 1.0;
+    if (LOD && push.flags.z != 0u) {
+        const RodChainStateGpu last = chain_states[c];
+        const vec3 offset = ref.position.xyz - push.camera_position.xyz;
+        level = rod_level(dot(offset, push.camera_forward.xyz), dot(offset, push.camera_right.xyz),
+                          dot(offset, push.camera_up.xyz), push.camera_right.w, push.camera_up.w, push.time.y, push.time.z,
+                          push.time.w, uint(last.view.w));
+        share = level == KW_RODS_LEVEL_FULL ? min(1.0, last.root.position.w + t.drag.w) : 0.0;
+    }
+    const bool HANDING = LOD && level == KW_RODS_LEVEL_FULL && share < 1.0;
     float w[KW_RODS_MAX_VIEWS + 1];
     {
         float sum = 0.0;
@@ -457,6 +474,72 @@ void main() {
                 v[i] += (travel + (qrot(turn, x[i]) - x[i])) / dt;
                 omega[i] += spin;
             }
+        }
+    }
+
+    // ---- the posed level of detail (solver.cpp step_posed): no dynamics, the chain carried
+    // by its root and eased onto its rest shape ----
+    vec3 posed_x[MAX_J], x_before[MAX_J];
+    vec4 posed_q[MAX_J], q_before[MAX_J];
+    if (LOD && (level != KW_RODS_LEVEL_FULL || HANDING)) {
+        const float blend = t.accel.w;
+        const float dt = push.camera_forward.w;
+        const vec3 moved = to.position.xyz - from.position.xyz;
+        const vec4 turn_by = qnormalize(qmul(to.rotation, qconj(from.rotation)));
+        // The colliders at their end-of-frame poses relative to the last root position.
+        col_count = min(chain.ids.w, MAX_COLLIDERS);
+        [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
+            const RodColliderGpu col = colliders[chain.ids.z + k];
+            const uint kind = uint(col.b.w);
+            col_kind[k] = kind;
+            col_ca[k] = col.a.xyz - from.position.xyz;
+            col_cb[k] = kind == KW_RODS_COLLIDER_PLANE ? col.b.xyz : col.b.xyz - from.position.xyz;
+            col_reach[k] = kind == KW_RODS_COLLIDER_PLANE    ? t.physics.x
+                           : kind == KW_RODS_COLLIDER_INSIDE ? max(col.a.w - t.physics.x, 0.0)
+                                                             : col.a.w + t.physics.x;
+        }
+        vec3 parent = vec3(0.0);
+        [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
+            if (i < n) {
+                const vec3 target = moved + qrot(to.rotation, rest_p[i]);
+                vec4 goal = qnormalize(qmul(to.rotation, rest_o[i]));
+                vec3 px = target;
+                vec4 pq = goal;
+                if (i > 0) {
+                    const vec3 sag = vec3(motion[j0 + i].x.w, motion[j0 + i].v.w, spin[j0 + i].omega.w);
+                    const vec3 sagged = moved + qrot(to.rotation, rest_p[i] + sag);
+                    const vec3 carried = moved + qrot(turn_by, x[i]);
+                    px = carried + blend * (sagged - carried);
+                    // On its parent's segment length and out of the colliders (solver.cpp step_posed).
+                    {
+                        const vec3 dd = px - parent;
+                        const float len = length(dd);
+                        if (len > 1e-9) px = parent + (tc.seg_len[i - 1] / len) * dd;
+                    }
+                    if (MAX_COLLIDERS > 0u && col_count > 0u) collide_all(px);
+                    const vec4 held = qnormalize(qmul(turn_by, q[i]));
+                    if (dot(held, goal) < 0.0) goal = -goal;
+                    pq = qnormalize(held + blend * (goal - held));
+                }
+                parent = px;
+                if (HANDING) {  // kept for hand_over() below
+                    posed_x[i] = px;
+                    posed_q[i] = pq;
+                    x_before[i] = x[i];
+                    q_before[i] = q[i];
+                } else {
+                    const vec4 dq = positive_w(qmul(pq, qconj(q[i])));
+                    motion[j0 + i].x.xyz = px - moved;
+                    motion[j0 + i].v.xyz = (px - x[i]) / dt;
+                    spin[j0 + i].q = pq;
+                    spin[j0 + i].omega.xyz = (2.0 / dt) * dq.xyz;
+                }
+            }
+        }
+        if (!HANDING) {
+            chain_states[c] = RodChainStateGpu(RodTransformGpu(vec4(to.position.xyz, share), to.rotation), vec4(d, float(level)),
+                                               vec4[2](vec4(w[0], w[1], w[2], w[3]), vec4(w[4], w[5], w[6], w[7])));
+            return;
         }
     }
 
@@ -681,9 +764,26 @@ void main() {
     // ---- store ----
     [[unroll]] for (uint i = 0; i < MAX_J; ++i) {
         if (i < n) {
-            motion[j0 + i] = RodJointMotionGpu(vec4(x[i] - travel, 0.0), vec4(v[i], 0.0));
-            spin[j0 + i] = RodJointSpinGpu(q[i], vec4(omega[i], 0.0));
+            vec3 stored = x[i] - travel;
+            if (HANDING) {
+                // Turning full again (solver.cpp hand_over): the step's result mixed with the posed one.
+                const float dt = push.camera_forward.w;
+                const vec3 a = posed_x[i] - travel;
+                const vec3 mixed = a + share * (stored - a);
+                vec4 full = q[i];
+                if (dot(posed_q[i], full) < 0.0) full = -full;
+                q[i] = qnormalize(posed_q[i] + share * (full - posed_q[i]));
+                v[i] = (mixed - (x_before[i] - travel)) / dt;
+                const vec4 dq = positive_w(qmul(q[i], qconj(q_before[i])));
+                omega[i] = (2.0 / dt) * dq.xyz;
+                stored = mixed;
+            }
+            // xyz only: w holds the sag (RodJointMotionGpu).
+            motion[j0 + i].x.xyz = stored;
+            motion[j0 + i].v.xyz = v[i];
+            spin[j0 + i].q = q[i];
+            spin[j0 + i].omega.xyz = omega[i];
         }
     }
-    chain_states[c] = RodChainStateGpu(to, vec4(d, 0.0), vec4[2](vec4(w[0], w[1], w[2], w[3]), vec4(w[4], w[5], w[6], w[7])));
+    chain_states[c] = RodChainStateGpu(RodTransformGpu(vec4(to.position.xyz, share), to.rotation), vec4(d, float(level)), vec4[2](vec4(w[0], w[1], w[2], w[3]), vec4(w[4], w[5], w[6], w[7])));
 }

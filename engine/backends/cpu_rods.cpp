@@ -17,9 +17,34 @@ void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, cons
         rods::follow_center(state.center, frame.centers[c.center], state);
         state.center = frame.centers[c.center];
     }
+    // Its level of detail this frame (rods::chain_level, from its character's reference joint).
+    // A frame whose camera gives no levels (LOD off, an orthographic camera) has every chain
+    // full at once.
+    const rods::LodView view = rods::lod_view(world.lod, frame.camera);
+    const rods::Level level = rods::chain_level(view, frame.reference[c.character].position,
+                                                static_cast<rods::Level>(state.level));
+    state.level = static_cast<std::uint32_t>(level);
+    const float share = view.enabled ? rods::blend_in(world.lod, level, state.blend_in, frame.dt) : 1.0f;
+    state.blend_in = share;
     const std::span<const rods::Collider> colliders(frame.colliders.data() + c.collider_begin, c.collider_count);
-    rods::step(t.chain, t.params, frame.roots[chain], rest.shape, colliders, frame.dt, state,
-               rods::chain_air(world, chain, frame));
+    const rods::Transform& root = frame.roots[chain];
+    const float blend = rods::posed_blend(world.lod, frame.dt);
+    if (level != rods::Level::Full) {
+        rods::step_posed(t.chain, t.params, root, rest.shape, colliders, frame.dt, blend, state);
+    } else if (share < 1.0f) {
+        // Turning full again: the step and the posed frame from the same start, mixed.
+        rods::follow_teleport(t.params, root, frame.dt, state);
+        if (!state.started && t.params.settle_start) rods::start_moving(root, frame.dt, state);
+        state.started = true;
+        const rods::ChainState before = state;
+        rods::ChainState posed = state;
+        rods::step_posed(t.chain, t.params, root, rest.shape, colliders, frame.dt, blend, posed);
+        rods::step(t.chain, t.params, root, rest.shape, colliders, frame.dt, state, rods::chain_air(world, chain, frame));
+        rods::hand_over(t.chain, before, posed, share, frame.dt, state);
+    } else {
+        rods::step(t.chain, t.params, frame.roots[chain], rest.shape, colliders, frame.dt, state,
+                   rods::chain_air(world, chain, frame));
+    }
     if (rest_out != nullptr) *rest_out = std::move(rest);
 }
 

@@ -122,7 +122,7 @@ public:
         batches_.clear();
         std::vector<std::vector<std::uint32_t>> by_template(world.templates.size());
         for (std::uint32_t c = 0; c < world.chains.size(); ++c) by_template[world.chains[c].template_index].push_back(c);
-        std::size_t floats = 0;
+        std::size_t floats = 0, sag_floats = 0;
         lane_of_.assign(world.chains.size(), {});
         for (std::uint32_t t = 0; t < by_template.size(); ++t) {
             const std::vector<std::uint32_t>& chains = by_template[t];
@@ -137,10 +137,13 @@ public:
                 for (std::uint32_t l = 0; l < b.count; ++l) lane_of_[b.chain[l]] = {batches_.size(), l};
                 b.offset = floats;
                 floats += simd::rod_block_floats(templates_[t].joints);
+                b.sag_offset = sag_floats;
+                sag_floats += std::size_t{templates_[t].joints} * 3 * kBatchLanes;
                 batches_.push_back(b);
             }
         }
         storage_ = hwy::AllocateAligned<float>(std::max<std::size_t>(floats, 1));
+        sag_ = hwy::AllocateAligned<float>(std::max<std::size_t>(sag_floats, 1));
         // keyed-examples.md K.6: the keys are measured per chain by engine/rods itself.
         keyed_chains_.clear();
         for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
@@ -217,10 +220,25 @@ public:
         // (rods::start_moving, as rods::step on a chain's first step).
         const bool first = !started_;
         started_ = true;
+        // Levels of detail (rods::chain_level, by engine/rods' own function, a few dozen
+        // operations a chain), written to each lane's level row for the kernel, padding
+        // lanes too (they repeat their batch's first chain).
+        const rods::LodView lod = rods::lod_view(world_->lod, frame.camera);
         parallel_for(batches_.size(), threads_, [&](std::size_t begin, std::size_t end) {
             for (std::size_t b = begin; b < end; ++b) {
                 const simd::RodBatch& batch = batches_[b];
-                const float* chain = chain_rows(batch);
+                float* chain = chain_rows(batch);
+                if (world_->lod.enabled) {
+                    for (std::size_t l = 0; l < kBatchLanes; ++l) {
+                        float& level = chain[simd::kLevel * kBatchLanes + l];
+                        float& share = chain[simd::kBlendIn * kBatchLanes + l];
+                        const rods::Transform& reference = frame.reference[world_->chains[batch.chain[l]].character];
+                        const rods::Level next = rods::chain_level(lod, reference.position,
+                                                                   static_cast<rods::Level>(static_cast<std::uint32_t>(level)));
+                        level = static_cast<float>(static_cast<std::uint32_t>(next));
+                        share = lod.enabled ? rods::blend_in(world_->lod, next, share, frame.dt) : 1.0f;
+                    }
+                }
                 for (std::size_t l = 0; l < batch.count; ++l) {  // padding lanes' results are unused
                     const std::uint32_t c = batch.chain[l];
                     const rods::SolverParams& params = world_->templ(world_->chains[c]).params;
@@ -250,7 +268,11 @@ public:
             });
         }
         const simd::RodStepArgs args{templates_.data(), batches_.data(), storage_.get(), &frame, world_->chains.data(),
-                                     keyed_.data(), moving ? air_.data() : nullptr};
+                                     keyed_.data(), moving ? air_.data() : nullptr, lod.enabled,
+                                     rods::posed_blend(world_->lod, frame.dt), sag_.get()};
+        // With levels of detail a batch's cost follows its lanes' levels: the threads'
+        // ranges are split again each frame.
+        if (lod.enabled) split_threads(true);
         const std::size_t parts = split_.size() - 1;
         parallel_for(parts, static_cast<unsigned>(parts), [&](std::size_t begin, std::size_t end) {
             for (std::size_t p = begin; p < end; ++p) kernels_.step(args, split_[p], split_[p + 1]);
@@ -326,6 +348,12 @@ private:
         const float root[7] = {s.root.position.x, s.root.position.y, s.root.position.z, s.root.rotation.x,
                                s.root.rotation.y, s.root.rotation.z, s.root.rotation.w};
         for (std::size_t f = 0; f < 7; ++f) chain[(simd::kRootP + f) * kBatchLanes + l] = root[f];
+        chain[simd::kLevel * kBatchLanes + l] = static_cast<float>(s.level);
+        chain[simd::kBlendIn * kBatchLanes + l] = s.blend_in;
+        float* sag = sag_.get() + b.sag_offset;
+        for (std::uint32_t i = 0; i < templates_[b.templ].joints; ++i) {
+            for (std::size_t r = 0; r < 3; ++r) sag[(3 * i + r) * kBatchLanes + l] = s.sag[i][static_cast<int>(r)];
+        }
     }
 
     rods::ChainState state(std::uint32_t c) const {
@@ -349,6 +377,12 @@ private:
         auto at = [&](std::size_t row) { return chain[row * kBatchLanes + l]; };
         s.root.position = {at(simd::kRootP), at(simd::kRootP + 1), at(simd::kRootP + 2)};
         s.root.rotation = glm::quat(at(simd::kRootQ + 3), at(simd::kRootQ), at(simd::kRootQ + 1), at(simd::kRootQ + 2));
+        s.level = static_cast<std::uint32_t>(at(simd::kLevel));
+        s.blend_in = at(simd::kBlendIn);
+        const float* sag = sag_.get() + batch.sag_offset;
+        for (std::uint32_t i = 0; i < templates_[batch.templ].joints; ++i) {
+            s.sag[i] = {sag[(3 * i) * kBatchLanes + l], sag[(3 * i + 1) * kBatchLanes + l], sag[(3 * i + 2) * kBatchLanes + l]};
+        }
         if (const std::uint32_t center = world_->chains[c].center; center != rods::kNoCenter) s.center = centers_[center];
         s.started = started_;
         return s;
@@ -357,13 +391,24 @@ private:
     // Contiguous batch ranges of about equal cost, one per thread: a batch's work grows
     // with its joints times its projection work (iterations and colliders) and its
     // vectors (lanes in use, rounded up to whole vectors of the instruction set).
-    void split_threads() {
+    // `levels`: from the lanes' levels of detail (a vector of lanes none of which is full
+    // costs its posed update only, about 2 units a joint).
+    void split_threads(bool levels = false) {
         std::vector<double> cost(batches_.size());
         for (std::size_t b = 0; b < batches_.size(); ++b) {
             const simd::RodBatch& batch = batches_[b];
             const simd::RodTemplateConsts& t = templates_[batch.templ];
-            const double vectors = std::ceil(static_cast<double>(batch.count) / isa_.lanes);
-            cost[b] = vectors * t.joints * (2.0 + t.iterations * (4.0 + batch.colliders));
+            const float* chain = chain_rows(batch);
+            double vectors = 0.0, full = 0.0;
+            for (std::size_t off = 0; off < batch.count; off += isa_.lanes) {
+                vectors += 1.0;
+                bool any_full = !levels;
+                for (std::size_t l = off; l < std::min<std::size_t>(off + isa_.lanes, kBatchLanes) && !any_full; ++l) {
+                    any_full = chain[simd::kLevel * kBatchLanes + l] == 0.0f;
+                }
+                if (any_full) full += 1.0;
+            }
+            cost[b] = vectors * t.joints * 2.0 + full * t.joints * t.iterations * (4.0 + batch.colliders);
         }
         const double total = std::accumulate(cost.begin(), cost.end(), 0.0);
         const std::size_t parts = std::max<std::size_t>(1, std::min<std::size_t>(threads_, batches_.size()));
@@ -394,6 +439,7 @@ private:
     bool started_ = false;  // whether a step has run since load()
     std::vector<rods::Transform> centers_;                        // the last frame's center frames (RodFrame::centers)
     hwy::AlignedFreeUniquePtr<float[]> storage_;
+    hwy::AlignedFreeUniquePtr<float[]> sag_;  // per batch (RodBatch::sag_offset): 3 rows a joint
 };
 
 }  // namespace

@@ -62,8 +62,9 @@ static_assert(sizeof(RodJointSpinGpu) == 32 && offsetof(RodJointSpinGpu, omega) 
 static_assert(sizeof(RodChainStateGpu) == 80);
 static_assert(offsetof(RodChainStateGpu, root) == 0 && offsetof(RodChainStateGpu, view) == 32 &&
               offsetof(RodChainStateGpu, weights) == 48);
-static_assert(sizeof(RodPush) == 96 && offsetof(RodPush, group) == 16 && offsetof(RodPush, camera_position) == 32 &&
-              offsetof(RodPush, camera_forward) == 48 && offsetof(RodPush, flags) == 64 && offsetof(RodPush, time) == 80);
+static_assert(sizeof(RodPush) == 128 && offsetof(RodPush, group) == 16 && offsetof(RodPush, camera_position) == 32 &&
+              offsetof(RodPush, camera_forward) == 48 && offsetof(RodPush, flags) == 64 && offsetof(RodPush, time) == 80 &&
+              offsetof(RodPush, camera_right) == 96 && offsetof(RodPush, camera_up) == 112);
 static_assert(sizeof(RodPush) <= 128, "Vulkan guarantees 128 bytes of push constants");
 static_assert(KW_RODS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 

@@ -141,6 +141,7 @@ Result<void> add_keyed_examples(ChainTemplate& t, std::span<const KeySourceKind>
 }
 
 Result<void> RodWorld::finalize() {
+    KW_TRY(validate(lod, "rod world: lod"));
     joint_count = 0;
     key_count = 0;
     std::vector<bool> center_taken(center_count, false);
@@ -243,6 +244,10 @@ ChainState initial_chain_state(const RodWorld& world, std::uint32_t chain, const
         settle(t.chain, t.params, frame.roots[chain], rest,
                std::span<const Collider>(frame.colliders).subspan(c.collider_begin, c.collider_count), s,
                chain_air(world, chain, frame));
+        const glm::quat to_root = glm::conjugate(frame.roots[chain].rotation);
+        for (std::uint32_t i = 0; i < t.chain.joint_count; ++i) {
+            s.sag[i] = to_root * (s.x[i] - frame.roots[chain].rotation * rest.positions[i]);
+        }
     }
     if (c.center != kNoCenter) s.center = frame.centers[c.center];
     return s;

@@ -259,6 +259,94 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
     }
     const V3 from_p = load3(chain_rows, kRootP, off);
     const Q4 from_q = load4(chain_rows, kRootQ, off);
+    const V3 to_p = load3(in.rows, kToP, off);
+    const Q4 to_q = load4(in.rows, kToQ, off);
+    const V3 travel = sub(to_p, from_p);
+
+    // ---- the posed level of detail (solver.cpp step_posed) for lanes not full, from the
+    // state before the step; a vector of lanes none of which is full skips the substeps ----
+    const M posed = args.lod ? hn::Gt(load(chain_rows, kLevel, off), Z()) : hn::FirstN(D(), 0);
+    const V share = args.lod ? load(chain_rows, kBlendIn, off) : S(1.0f);
+    const M handing = args.lod ? hn::AndNot(posed, hn::Lt(share, S(1.0f))) : hn::FirstN(D(), 0);
+    const bool any_handing = args.lod && !hn::AllFalse(D(), handing);
+    const bool any_posed = args.lod && (any_handing || !hn::AllFalse(D(), posed));
+    V3 posed_x[kMaxJ], posed_v[kMaxJ], posed_omega[kMaxJ], x_before[kMaxJ];
+    Q4 posed_q[kMaxJ], q_before[kMaxJ];
+    if (any_handing) {
+        for (std::size_t i = 0; i < n; ++i) {
+            x_before[i] = x[i];
+            q_before[i] = q[i];
+        }
+    }
+    if (any_posed) {
+        const V blend = S(args.blend);
+        const V dt = S(frame.dt);
+        const V two_over_dt = S(2.0f / frame.dt);
+        const Q4 turn_by = qnormalize(qmul(to_q, conj(from_q)));
+        // The colliders at their end-of-frame poses relative to the last root position
+        // (solver.cpp step_posed), as place() would leave them.
+        CollidersK posed_colliders[kMaxK];
+        for (std::size_t k = 0; k < batch.colliders; ++k) {
+            const float* rows = in.colliders + k * kColliderRows * kBatchLanes;
+            CollidersK& c = posed_colliders[k];
+            c.outside = hn::Gt(load(rows, kCapOutside, off), Z());
+            c.inside = hn::Gt(load(rows, kCapInside, off), Z());
+            c.plane = hn::Gt(load(rows, kCapPlane, off), Z());
+            const V3 b = load3(rows, kCapB, off);
+            c.a = sub(load3(rows, kCapA, off), from_p);
+            c.ab = select(c.plane, b, sub(sub(b, from_p), c.a));
+            c.len2 = dot(c.ab, c.ab);
+            c.reach = load(rows, kCapR, off);
+            c.any_capsule = !hn::AllFalse(D(), hn::Or(c.outside, c.inside));
+            c.any_inside = !hn::AllFalse(D(), c.inside);
+            c.any_plane = !hn::AllFalse(D(), c.plane);
+        }
+        V3 parent = zero3();
+        for (std::size_t i = 0; i < n; ++i) {
+            const V3 target = add(travel, rotate(to_q, rest_p[i]));
+            Q4 goal = qnormalize(qmul(to_q, rest_o[i]));
+            V3 px = target;
+            Q4 pq = goal;
+            if (i > 0) {
+                const V3 sagged = add(travel, rotate(to_q, add(rest_p[i], load3(args.sag + batch.sag_offset, 3 * i, off))));
+                const V3 carried = add(travel, rotate(turn_by, x[i]));
+                px = add(carried, mul(blend, sub(sagged, carried)));
+                const V3 dd = sub(px, parent);
+                const V len = length(dd);
+                px = select(hn::Gt(len, S(1e-9f)), add(parent, mul(hn::Div(S(t.segment[i - 1]), len), dd)), px);
+                for (std::uint32_t pass = 0; pass < rods::kColliderPasses; ++pass) {
+                    for (std::size_t k = 0; k < batch.colliders; ++k) collide(px, posed_colliders[k]);
+                }
+                const Q4 held = qnormalize(qmul(turn_by, q[i]));
+                goal = select(hn::Lt(qdot(held, goal), Z()), Q4{hn::Neg(goal.x), hn::Neg(goal.y), hn::Neg(goal.z), hn::Neg(goal.w)},
+                              goal);
+                const Q4 gap{hn::Sub(goal.x, held.x), hn::Sub(goal.y, held.y), hn::Sub(goal.z, held.z), hn::Sub(goal.w, held.w)};
+                pq = qnormalize(qadd(held, Q4{hn::Mul(gap.x, blend), hn::Mul(gap.y, blend), hn::Mul(gap.z, blend),
+                                              hn::Mul(gap.w, blend)}));
+            }
+            parent = px;
+            posed_v[i] = div(sub(px, x[i]), dt);
+            const Q4 dq = positive_w(qmul(pq, conj(q[i])));
+            posed_omega[i] = mul(two_over_dt, V3{dq.x, dq.y, dq.z});
+            posed_x[i] = px;
+            posed_q[i] = pq;
+        }
+    }
+    if (any_posed && !any_handing && hn::AllTrue(D(), posed)) {
+        for (std::size_t i = 0; i < n; ++i) {
+            store3(sub(posed_x[i], travel), block, joint_row(i, kX), off);
+            store3(posed_v[i], block, joint_row(i, kV), off);
+            store4(posed_q[i], block, joint_row(i, kQ), off);
+            store3(posed_omega[i], block, joint_row(i, kOmega), off);
+            store3(rest_p[i], block, joint_row(i, kRestP), off);
+            store4(rest_o[i], block, joint_row(i, kRestO), off);
+        }
+        store3(to_p, chain_rows, kRootP, off);
+        store4(to_q, chain_rows, kRootQ, off);
+        store3(d, chain_rows, kView, off);
+        for (std::size_t k = 0; k <= rods::kMaxViewExamples; ++k) store(k <= mk ? w[k] : Z(), chain_rows, kWeights + k, off);
+        return;
+    }
 
     // ---- SPEC A.5: momentum suppression (solver.cpp suppress_momentum) ----
     if (t.suppression > 0.0f) {
@@ -283,9 +371,6 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
 
     // ---- SPEC A.4: the substeps (solver.cpp step) ----
     // Solved relative to the previous root position; colliders likewise.
-    const V3 to_p = load3(in.rows, kToP, off);
-    const Q4 to_q = load4(in.rows, kToQ, off);
-    const V3 travel = sub(to_p, from_p);
     const bool wind = args.air != nullptr;
     const V3 air = wind ? load3(in.rows, kAir, off) : zero3();
     CollidersK colliders[kMaxK];
@@ -565,8 +650,33 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
     }
 
     // ---- store: the state relative to the new root, this frame's rest shape, view, weights ----
+    const V dt = S(frame.dt);
+    const V two_over_dt = S(2.0f / frame.dt);
     for (std::size_t i = 0; i < n; ++i) {
-        store3(sub(x[i], travel), block, joint_row(i, kX), off);
+        V3 stored = sub(x[i], travel);
+        if (any_handing) {  // solver.cpp hand_over(): the step's result mixed with the posed one
+            const V3 a = sub(posed_x[i], travel);
+            const V3 mixed = add(a, mul(share, sub(stored, a)));
+            const Q4 pq = posed_q[i];
+            const Q4 full = select(hn::Lt(qdot(pq, q[i]), Z()), Q4{hn::Neg(q[i].x), hn::Neg(q[i].y), hn::Neg(q[i].z), hn::Neg(q[i].w)},
+                                   q[i]);
+            const Q4 gap{hn::Sub(full.x, pq.x), hn::Sub(full.y, pq.y), hn::Sub(full.z, pq.z), hn::Sub(full.w, pq.w)};
+            const Q4 qm = qnormalize(qadd(pq, Q4{hn::Mul(gap.x, share), hn::Mul(gap.y, share), hn::Mul(gap.z, share),
+                                                 hn::Mul(gap.w, share)}));
+            const V3 vm = div(sub(mixed, sub(x_before[i], travel)), dt);
+            const Q4 dq = positive_w(qmul(qm, conj(q_before[i])));
+            stored = select(handing, mixed, stored);
+            v[i] = select(handing, vm, v[i]);
+            q[i] = select(handing, qm, q[i]);
+            omega[i] = select(handing, mul(two_over_dt, V3{dq.x, dq.y, dq.z}), omega[i]);
+        }
+        if (any_posed) {  // the posed lanes' results (above) in place of the step's
+            stored = select(posed, sub(posed_x[i], travel), stored);
+            v[i] = select(posed, posed_v[i], v[i]);
+            q[i] = select(posed, posed_q[i], q[i]);
+            omega[i] = select(posed, posed_omega[i], omega[i]);
+        }
+        store3(stored, block, joint_row(i, kX), off);
         store3(v[i], block, joint_row(i, kV), off);
         store4(q[i], block, joint_row(i, kQ), off);
         store3(omega[i], block, joint_row(i, kOmega), off);

@@ -31,8 +31,10 @@ namespace kodawari::simd {
 
 /// Rows per joint in a batch block: x(3) v(3) q(4) omega(3) rest position(3) rest orientation(4).
 enum JointRow : std::uint32_t { kX = 0, kV = 3, kQ = 6, kOmega = 10, kRestP = 13, kRestO = 16, kJointRows = 20 };
-/// Rows per chain after the joints: root position(3) and rotation(4), view direction(3), weights(8).
-enum ChainRow : std::uint32_t { kRootP = 0, kRootQ = 3, kView = 7, kWeights = 10, kChainRows = 18 };
+/// Rows per chain after the joints: root position(3) and rotation(4), view direction(3), weights(8),
+/// level of detail (rods::Level as a float) and the share of full simulation in the result
+/// (rods::ChainState::blend_in), both decided by the backend before each step.
+enum ChainRow : std::uint32_t { kRootP = 0, kRootQ = 3, kView = 7, kWeights = 10, kLevel = 18, kBlendIn = 19, kChainRows = 20 };
 
 /// A template's constants in the kernel's terms, and this frame's step sizes, computed
 /// by the backend with rods::step's own expressions.
@@ -86,6 +88,7 @@ struct RodBatch {
     std::array<std::uint32_t, kBatchLanes> chain{};  // chain index per lane (padding: lane 0's)
     std::size_t offset = 0;                         // first float of its block in the storage
     std::uint32_t colliders = 0;                    // most colliders of one of its chains
+    std::size_t sag_offset = 0;                     // first float of its sag rows (RodStepArgs::sag)
 };
 
 /// Floats of a batch block of chains of `joints` joints.
@@ -107,6 +110,14 @@ struct RodStepArgs {
     /// computed by the backend with engine/rods' own function; null in a world without
     /// wind, whose kernels then take damping on the world velocities as before.
     const float* air = nullptr;
+    /// Levels of detail on (RodWorld::lod): lanes whose kLevel row is not full take
+    /// rods::step_posed with this blend (rods::posed_blend); full lanes whose kBlendIn row
+    /// is below 1 take rods::hand_over of the two.
+    bool lod = false;
+    float blend = 0.0f;
+    /// Per batch, from RodBatch::sag_offset: each joint's rods::ChainState::sag, 3 rows
+    /// of kBatchLanes (read by posed lanes only, so kept out of the blocks the step streams).
+    const float* sag = nullptr;
 };
 
 /// Advances batches [begin, end) by one frame (SPEC A.3, A.2, A.5, A.4).

@@ -287,11 +287,14 @@ public:
                 const rods::ChainState s = rods::initial_chain_state(world, static_cast<std::uint32_t>(c), initial);
                 for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
                     const std::uint32_t j = ch.joint_begin + i;
-                    motion[j] = {to_gpu(s.x[i]), to_gpu(s.v[i])};
-                    spin[j] = {to_gpu(s.q[i]), to_gpu(s.omega[i])};
+                    // The w components hold the chain's sag (rods::ChainState::sag), which no
+                    // step changes.
+                    motion[j] = {to_gpu(s.x[i], s.sag[i].x), to_gpu(s.v[i], s.sag[i].y)};
+                    spin[j] = {to_gpu(s.q[i]), to_gpu(s.omega[i], s.sag[i].z)};
                 }
                 gpu::RodChainStateGpu& cs = chain_states[c];
                 cs.root = to_gpu(s.root);
+                cs.root.position.w = s.blend_in;
                 cs.view = to_gpu(r.view_direction);
                 float w[8] = {};
                 std::copy(r.weights.begin(), r.weights.end(), w);
@@ -367,6 +370,7 @@ public:
         for (const rods::ChainTemplate& t : world.templates) air = air || t.params.normal_drag > 0.0f || t.params.tangent_drag > 0.0f;
         if (air) features_ |= KW_RODS_FEATURE_AIR;
         if (limits) features_ |= KW_RODS_FEATURE_LIMITS;
+        if (world.lod.enabled) features_ |= KW_RODS_FEATURE_LOD;
         for (const rods::Collider& c : initial.colliders) features_ |= feature_of(c.kind);
         suppression_ = all_none   ? KW_RODS_SUPPRESSION_NONE
                        : all_full ? KW_RODS_SUPPRESSION_FULL
@@ -466,6 +470,8 @@ public:
             rods::ChainState& s = out[c];
             s.root = transform_of(chain_states_[c].root);
             s.started = started_;
+            s.level = static_cast<std::uint32_t>(chain_states_[c].view.w);
+            s.blend_in = chain_states_[c].root.position.w;
             if (ch.center != rods::kNoCenter) s.center = transform_of(center_states_[ch.center]);
             const rods::ChainShape rest = rest_of(static_cast<std::uint32_t>(c));
             for (std::uint32_t i = 0; i < world_->templ(ch).chain.joint_count; ++i) {
@@ -474,6 +480,7 @@ public:
                 s.v[i] = vec3_of(motion_[j].v);
                 s.q[i] = quat_of(spin_[j].q);
                 s.omega[i] = vec3_of(spin_[j].omega);
+                s.sag[i] = {motion_[j].x.w, motion_[j].v.w, spin_[j].omega.w};
                 s.rest_position[i] = rest.positions[i];
                 s.rest_orientation[i] = rest.orientations[i];
             }
@@ -532,7 +539,12 @@ private:
         assert(world_ != nullptr && "load() first");
         KW_TRY(rods::check_frame(*world_, frame));
         if (frame.dt != dt_) {
-            for (std::size_t t = 0; t < templates_.size(); ++t) set_step(templates_[t], world_->templates[t].params, frame.dt);
+            const float blend = rods::posed_blend(world_->lod, frame.dt);
+            for (std::size_t t = 0; t < templates_.size(); ++t) {
+                set_step(templates_[t], world_->templates[t].params, frame.dt);
+                templates_[t].accel.w = blend;  // the world's, in every template (rods::step_posed)
+                templates_[t].drag.w = frame.dt / world_->lod.blend_time;  // rods::blend_in's step
+            }
             KW_TRY(compute::upload(recording, buffers_[KW_RODS_BINDING_TEMPLATES], bytes_of(templates_)));
             for (std::size_t t = 0; t < key_templates_.size(); ++t) set_smoothing(key_templates_[t], world_->templates[t].keyed, frame.dt);
             KW_TRY(compute::upload(recording, key_buffers_[KW_ROD_KEYS_BINDING_TEMPLATES], bytes_of(key_templates_)));
@@ -554,8 +566,17 @@ private:
 
         const bool ortho = frame.camera.projection == rods::Camera::Projection::Orthographic;
         // The world's first step starts its chains moving with their roots (rods::start_moving).
-        gpu::RodPush push{{}, {}, to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f), to_gpu(frame.camera.forward, frame.dt),
-                          {started_ ? 0u : 1u, moving_air(frame) ? 1u : 0u, 0u, 0u}, {frame.time, 0.0f, 0.0f, 0.0f}};
+        // Levels of detail: the camera's part of the decision (rods::lod_view), for
+        // shaders/lib/rod_lod.glsl.
+        const rods::LodView lod = rods::lod_view(world_->lod, frame.camera);
+        gpu::RodPush push{{},
+                          {},
+                          to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f),
+                          to_gpu(frame.camera.forward, frame.dt),
+                          {started_ ? 0u : 1u, moving_air(frame) ? 1u : 0u, lod.enabled ? 1u : 0u, 0u},
+                          {frame.time, lod.margin, lod.full_distance, lod.stay_distance},
+                          to_gpu(lod.right, lod.tan_x),
+                          to_gpu(lod.up, lod.tan_y)};
         started_ = true;
         auto dispatch = [&](const compute::Kernel* kernel, std::uint32_t first, std::uint32_t chains) {
             push.counts.x = chains;

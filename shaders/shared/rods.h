@@ -90,7 +90,14 @@
 #define KW_RODS_FEATURE_PLANE 4u    // plane colliders
 #define KW_RODS_FEATURE_AIR 8u      // wind fields or drag: velocities relative to the air (rods::WindField)
 #define KW_RODS_FEATURE_LIMITS 16u  // angle limits (rods::AngleLimit, shaders/lib/spring_limit.glsl)
-#define KW_RODS_FEATURE_ALL 31u
+#define KW_RODS_FEATURE_LOD 32u     // level of detail (rods::LodSettings, shaders/lib/rod_lod.glsl)
+#define KW_RODS_FEATURE_ALL 63u
+
+// A chain's level of detail (rods::Level, docs/level-of-detail.md), kept in
+// RodChainStateGpu.view.w as a float.
+#define KW_RODS_LEVEL_FULL 0u    // every substep
+#define KW_RODS_LEVEL_POSED 1u   // no dynamics: carried by its root and eased onto its rest shape
+#define KW_RODS_LEVEL_HIDDEN 2u  // off the camera's frustum: updated as posed
 
 // RodTemplateJointGpu.lengths.z: the joint's limit (rods::LimitKind), stored as a float.
 #define KW_RODS_LIMIT_NONE 0u
@@ -118,9 +125,10 @@ struct RodTemplateGpu {
                       // w: 1 = a joint has an angle limit
     vec4 step;        // x: substep h (s), y: velocity decay exp(-damping h), z: k' per iteration, w: suppression
     vec4 physics;     // x: thickness (m), y: k_rest' per iteration (this frame), z: teleport distance (m), w: 1 = settle_start
-    vec4 accel;       // xyz: gravity + wind (m/s^2), w: unused
+    vec4 accel;       // xyz: gravity + wind (m/s^2), w: this frame's posed blend (rods::posed_blend, the world's)
     vec4 first_dir;   // xyz: e, the base shape's first segment direction (SPEC A.2)
-    vec4 drag;        // this frame's: x: exp(-normal_drag h), y: exp(-tangent_drag h), z: 1 = drag on, w: unused
+    vec4 drag;        // this frame's: x: exp(-normal_drag h), y: exp(-tangent_drag h), z: 1 = drag on,
+                      // w: dt / LodSettings::blend_time (rods::blend_in's step, the world's)
     vec4 views[KW_RODS_MAX_VIEWS];  // xyz: d_k (unit, reference joint's frame), w: influence p_k
 };
 
@@ -169,18 +177,18 @@ struct RodColliderGpu {
 };
 
 struct RodJointMotionGpu {
-    vec4 x;  // position relative to the chain's root position (RodChainStateGpu.root), w: unused
-    vec4 v;  // velocity, w: unused
+    vec4 x;  // position relative to the chain's root position (RodChainStateGpu.root), w: sag.x (rods::ChainState::sag)
+    vec4 v;  // velocity, w: sag.y
 };
 
 struct RodJointSpinGpu {
     vec4 q;      // orientation
-    vec4 omega;  // angular velocity (world), w: unused
+    vec4 omega;  // angular velocity (world), w: sag.z (the w components are written at load only)
 };
 
 struct RodChainStateGpu {
-    RodTransformGpu root;  // last frame's root frame
-    vec4 view;             // xyz: this frame's view direction d (reference joint's frame), w: unused
+    RodTransformGpu root;  // last frame's root frame; position.w: the share of full simulation in its result (rods::blend_in)
+    vec4 view;             // xyz: this frame's view direction d (reference joint's frame), w: its level (KW_RODS_LEVEL_*)
     vec4 weights[2];       // W_0 .. W_7 (W_0 = the base's; views, then keyed examples, K.4); the next frame blends last
                            // frame's rest shape from them again for SPEC A.5 instead of
                            // storing it per joint (loads and stores are the costly part)
@@ -196,8 +204,12 @@ struct RodPush {
     vec4 camera_forward;    // xyz, w: the frame's length dt (s)
     uvec4 flags;            // x: 1 on the world's first step (chains of templates with
                             // physics.w != 0 start moving with their roots); y: 1 = a wind field
-                            // moves the air (KW_RODS_BINDING_WINDS); zw: 0
-    vec4 time;              // x: the frame's time (s, RodFrame::time: the wind's), yzw: unused
+                            // moves the air (KW_RODS_BINDING_WINDS); z: 1 = levels of detail
+                            // (rods::LodView::enabled); w: 0
+    vec4 time;              // x: the frame's time (s, RodFrame::time: the wind's), y: LOD margin (m),
+                            // z: LOD full distance (m), w: LOD stay distance (m) (rods::LodView)
+    vec4 camera_right;      // xyz: the camera's right axis (unit), w: tan of half the horizontal field of view
+    vec4 camera_up;         // xyz: the camera's up axis (unit), w: tan of half the vertical field of view
 };
 
 KW_NAMESPACE_END

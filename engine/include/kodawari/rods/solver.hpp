@@ -252,6 +252,18 @@ struct ChainState {
     std::array<glm::quat, kMaxChainJoints> rest_orientation{};
     /// Whether it has stepped since initial_state() (step() starts it moving first).
     bool started = false;
+    /// Where the chain settled at load relative to its rest shape, in the root's frame (m):
+    /// R^-1 (x_i - R rest_i) of the settled state (rods::initial_chain_state; 0 for a
+    /// chain that does not settle). step_posed() eases a chain onto its rest shape plus
+    /// this sag, the shape full simulation holds it in, so that one that turns full again
+    /// does not fall.
+    std::array<glm::vec3, kMaxChainJoints> sag{};
+    /// Its level of detail at the last step (rods::Level in kodawari/rods/lod.hpp: 0 full,
+    /// 1 posed, 2 hidden), which the next step's decision starts from (hysteresis).
+    std::uint32_t level = 0;
+    /// The share of full simulation in its last result (rods::blend_in): 1 while it is
+    /// simulated, 0 while posed, and in between while it turns full again.
+    float blend_in = 1.0f;
 };
 
 /// A chain at rest: the rest shape `rest` (root frame, e.g. a blend from A.2) placed by
@@ -313,6 +325,34 @@ KODAWARI_API void start_moving(const Transform& root, float dt, ChainState& stat
 KODAWARI_API void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
                        std::span<const Collider> colliders, float dt, ChainState& state,
                        const glm::vec3& air = glm::vec3(0.0f));
+
+/// The posed level of detail's frame (kodawari/rods/lod.hpp, docs/level-of-detail.md): no
+/// dynamics. Like step(), a teleport's carry and a first step's start come first. Then,
+/// from the root outwards, every joint is carried rigidly by the root's motion over the
+/// frame (state.root to `root`: the travel and the turn R = root.rotation
+/// state.root.rotation^-1), moved `blend` (in [0, 1]: posed_blend()) of the way from there
+/// to its rest position plus its sag (ChainState::sag) placed by `root`, and put back on its parent's segment length and
+/// out of `colliders` (their end-of-frame poses) as step()'s last sweep does (one round:
+/// placed, then pushed out); its orientation goes `blend` of the way to its rest orientation
+/// (a normalized lerp in one hemisphere). Joint 0 takes its rest placement exactly, as in
+/// step(). Velocities are the frame's move over dt and the angular velocities its turn
+/// (2/dt times the vector part of q_new q_old^-1 in the positive hemisphere), as step()'s
+/// last substep derives them, so that a chain that turns full again moves on without a
+/// jump from a shape its constraints already keep; the rest shape is kept for the next
+/// frame's momentum suppression (SPEC A.5) as step() keeps it. No joint moves in a frame
+/// by more than the root's motion plus `blend` of its distance from its rest shape (and
+/// what the constraints take back). Every backend computes these operations in this order.
+KODAWARI_API void step_posed(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
+                             std::span<const Collider> colliders, float dt, float blend, ChainState& state);
+
+/// A chain turning full again (LodSettings::blend_time): `state` holds the frame step()
+/// made from `before` (after its teleport carry and start), `posed` the one step_posed()
+/// made from it; their mix `share` (in [0, 1]) of the way from `posed` to `state` goes
+/// into `state`: positions linearly, orientations by a normalized lerp in one hemisphere,
+/// velocities and angular velocities from the move since `before` as step() derives
+/// them. Every backend computes these operations in this order.
+KODAWARI_API void hand_over(const Chain& chain, const ChainState& before, const ChainState& posed, float share, float dt,
+                            ChainState& state);
 
 /// Carries `state` rigidly by the motion of a *center* frame from `from` to `to` (the
 /// spring's `center` of VRMC_springBone 1.0 and VRM 0.x): UniVRM and three-vrm keep a

@@ -14,6 +14,7 @@
 #include "kodawari/api.hpp"
 #include "../result.hpp"
 #include "keyed.hpp"
+#include "lod.hpp"
 #include "shape.hpp"
 #include "solver.hpp"
 #include "view.hpp"
@@ -98,8 +99,11 @@ struct KODAWARI_API RodWorld {
     std::uint32_t wind_count = 0;
     std::uint32_t joint_count = 0;      ///< sum of the chains' joints (set by finalize)
     std::uint32_t key_count = 0;        ///< sum of the chains' key sources (set by finalize)
+    /// Levels of detail (lod.hpp): off unless enabled; then every backend decides each
+    /// chain's level per frame from RodFrame::camera and its character's reference joint.
+    LodSettings lod;
 
-    /// Checks every index and range (a center belongs to one chain) and sets joint_begin,
+    /// Checks every index and range (a center belongs to one chain) and `lod`, and sets joint_begin,
     /// key_begin, joint_count and key_count.
     [[nodiscard]] Result<void> finalize();
     [[nodiscard]] const ChainTemplate& templ(const ChainInstance& c) const { return templates[c.template_index]; }
@@ -135,7 +139,8 @@ struct RodFrame {
 /// `chain` at rest at `frame` (its first): initial_state() on the rest shape of
 /// rest_shape(world, chain, frame), settled there (settle(), with the chain's colliders
 /// and air at `frame`) unless its params say settle_start false, with its center frame
-/// (ChainState::center) from frame.centers when it has one. Every backend starts from
+/// (ChainState::center) from frame.centers when it has one, and where it settled relative to
+/// its rest shape (ChainState::sag). Every backend starts from
 /// these bits.
 [[nodiscard]] KODAWARI_API ChainState initial_chain_state(const RodWorld& world, std::uint32_t chain, const RodFrame& frame);
 

@@ -1,0 +1,93 @@
+#pragma once
+/// @file
+/// Levels of detail of a crowd's chains (issue 35, docs/level-of-detail.md): each
+/// character is simulated fully only where the camera sees it large enough for its
+/// strands' motion to show; farther ones are posed (their chains carried by their roots
+/// and eased onto the rest shape of the current view and pose examples), characters off
+/// the camera's frustum hidden (updated as posed). The level is decided per chain by
+/// every rod backend from its character's reference joint (shaders/lib/rod_lod.glsl, one
+/// definition for GLSL and C++), with hysteresis; the eased posed frame and the
+/// velocities it leaves keep every change of level free of a jump.
+
+#include <cstdint>
+
+#include <glm/glm.hpp>
+
+#include "kodawari/api.hpp"
+#include "kodawari/result.hpp"
+#include "kodawari/rods/view.hpp"
+
+namespace kodawari::rods {
+
+/// A chain's level of detail (ChainState::level; shaders/shared/rods.h KW_RODS_LEVEL_*).
+enum class Level : std::uint32_t {
+    Full = 0,    ///< every substep (step())
+    Posed = 1,   ///< no dynamics: step_posed()
+    Hidden = 2,  ///< off the camera's frustum by more than the character's size: step_posed()
+};
+
+/// How a world chooses its characters' levels (RodWorld::lod). Off by default: a world
+/// without it steps every chain fully, bit for bit as before.
+struct LodSettings {
+    bool enabled = false;
+    /// The size of a character that its projection measures, m (> 0): what is compared
+    /// with full_pixels, and how far it may stick out of the frustum while its reference
+    /// joint is outside. 1 m: a chibi's height.
+    float size = 1.0f;
+    /// A character is full while its size projects to at least this many pixels (at
+    /// viewport_height), posed below (> 0). 24 px keeps the posed characters of
+    /// scenes/crowd-10k.json within a pixel of full simulation (docs/level-of-detail.md).
+    float full_pixels = 24.0f;
+    /// A full character turns posed only below full_pixels x (1 - hysteresis), in [0, 0.9]:
+    /// one on the boundary does not flicker between levels.
+    float hysteresis = 0.25f;
+    /// log2 of a scale on every projected size, in [-8, 8]: +1 treats every character as if
+    /// it were twice as near (more of them full), -1 half as near.
+    float bias = 0.0f;
+    /// How fast a posed chain eases onto its rest shape, 1/s (> 0): each frame of dt it
+    /// covers 1 - exp(-settle_rate dt) of the way (posed_blend()). 8/s: 12.5% a frame at
+    /// 60 fps, 95% within 0.4 s.
+    float settle_rate = 8.0f;
+    /// How long a chain that turns full again takes to hand over from its posed motion to
+    /// full simulation, s (> 0): its result is the posed frame's moved a share of the way
+    /// to the simulated one that grows by dt / blend_time a frame (blend_in()), so that the
+    /// dynamics the posed frames left out catch up without a jump. 0.25 s: 15 frames at 60 fps.
+    float blend_time = 0.25f;
+    /// The camera's projection: vertical field of view (degrees, in (0, 180)), the
+    /// image's width over height and its height in pixels (> 0). The scene's camera's
+    /// fov; 1920 x 1080 unless told.
+    float vertical_fov_deg = 50.0f;
+    float aspect = 16.0f / 9.0f;
+    float viewport_height = 1080.0f;
+};
+
+/// Checks every field's range (InvalidInput naming `what`.field and what was expected).
+[[nodiscard]] KODAWARI_API Result<void> validate(const LodSettings& lod, const char* what = "lod");
+
+/// The settings as one frame's camera puts them (what rods_step.comp's push constants
+/// carry): the camera's axes, the frustum's tangents and the two distances of the
+/// decision. Not enabled for an orthographic camera (every chain full).
+struct LodView {
+    bool enabled = false;
+    glm::vec3 position{0.0f}, forward{0.0f, 0.0f, -1.0f}, right{1.0f, 0.0f, 0.0f}, up{0.0f, 1.0f, 0.0f};
+    float tan_x = 1.0f, tan_y = 1.0f;
+    float margin = 0.0f;         ///< LodSettings::size
+    float full_distance = 0.0f;  ///< depth within which a posed or hidden character turns full
+    float stay_distance = 0.0f;  ///< depth within which a full one stays full (>= full_distance)
+};
+[[nodiscard]] KODAWARI_API LodView lod_view(const LodSettings& lod, const Camera& camera);
+
+/// The level of a chain whose character's reference joint is at `reference`, given its
+/// level at its last step (shaders/lib/rod_lod.glsl). Full when `view` is not enabled.
+[[nodiscard]] KODAWARI_API Level chain_level(const LodView& view, glm::vec3 reference, Level previous);
+
+/// The share of the way to its rest shape a posed chain covers in a frame of `dt` s:
+/// 1 - exp(-settle_rate dt).
+[[nodiscard]] KODAWARI_API float posed_blend(const LodSettings& lod, float dt);
+
+/// The share of full simulation in a chain's result after a frame of `dt` s at `level`,
+/// from `previous` (ChainState::blend_in): 0 at any level but full, else
+/// min(1, previous + dt / blend_time). A world without levels of detail keeps every chain at 1.
+[[nodiscard]] KODAWARI_API float blend_in(const LodSettings& lod, Level level, float previous, float dt);
+
+}  // namespace kodawari::rods

@@ -1,0 +1,80 @@
+// Levels of detail (kodawari/rods/lod.hpp): the settings' checks, the camera's part of the
+// decision, and the decision itself from the one definition that rods_step.comp compiles
+// too (shaders/lib/rod_lod.glsl).
+#include "kodawari/rods/lod.hpp"
+
+#include <algorithm>
+#include <cmath>
+#include <string>
+
+#include "kodawari/shared/rods.h"
+
+namespace kodawari::rods {
+
+static_assert(static_cast<std::uint32_t>(Level::Full) == KW_RODS_LEVEL_FULL);
+static_assert(static_cast<std::uint32_t>(Level::Posed) == KW_RODS_LEVEL_POSED);
+static_assert(static_cast<std::uint32_t>(Level::Hidden) == KW_RODS_LEVEL_HIDDEN);
+
+namespace glsl {
+// GLSL's names for shaders/lib/rod_lod.glsl (inside this namespace only).
+using uint = std::uint32_t;
+#define KW_LOD_FN inline
+#include "lib/rod_lod.glsl"
+#undef KW_LOD_FN
+}  // namespace glsl
+
+Result<void> validate(const LodSettings& lod, const char* what) {
+    auto bad = [&](const std::string& field, const std::string& expected) {
+        return make_error(Error::Kind::InvalidInput, std::string(what) + "." + field + ": expected " + expected);
+    };
+    if (!(lod.size > 0.0f && lod.size <= 1000.0f)) return bad("size", "a number in (0, 1000] m");
+    if (!(lod.full_pixels > 0.0f && lod.full_pixels <= 100000.0f)) return bad("full_pixels", "a number in (0, 100000] pixels");
+    if (!(lod.hysteresis >= 0.0f && lod.hysteresis <= 0.9f)) return bad("hysteresis", "a number in [0, 0.9]");
+    if (!(lod.bias >= -8.0f && lod.bias <= 8.0f)) return bad("bias", "a number in [-8, 8]");
+    if (!(lod.settle_rate > 0.0f && lod.settle_rate <= 1000.0f)) return bad("settle_rate", "a number in (0, 1000] 1/s");
+    if (!(lod.blend_time > 0.0f && lod.blend_time <= 100.0f)) return bad("blend_time", "a number in (0, 100] s");
+    if (!(lod.vertical_fov_deg > 0.0f && lod.vertical_fov_deg < 180.0f)) return bad("vertical_fov_deg", "a number in (0, 180) degrees");
+    if (!(lod.aspect > 0.0f && lod.aspect <= 100.0f)) return bad("aspect", "a number in (0, 100]");
+    if (!(lod.viewport_height >= 1.0f && lod.viewport_height <= 100000.0f)) return bad("viewport_height", "a number in [1, 100000] pixels");
+    return {};
+}
+
+LodView lod_view(const LodSettings& lod, const Camera& camera) {
+    LodView v;
+    v.enabled = lod.enabled && camera.projection == Camera::Projection::Perspective;
+    if (!v.enabled) return v;
+    v.position = camera.position;
+    v.forward = camera.forward;
+    // The camera's right and up with +Y up, as every view of Kodawari renders it; a camera
+    // looking straight up or down takes +X as its right.
+    const glm::vec3 side = glm::cross(v.forward, glm::vec3(0.0f, 1.0f, 0.0f));
+    const float side_length = glm::length(side);
+    v.right = side_length > 1e-6f ? side / side_length : glm::vec3(1.0f, 0.0f, 0.0f);
+    v.up = glm::cross(v.right, v.forward);
+    v.tan_y = std::tan(glm::radians(lod.vertical_fov_deg) * 0.5f);
+    v.tan_x = v.tan_y * lod.aspect;
+    v.margin = lod.size;
+    // The size's projection in pixels at depth z: size x viewport_height / (2 tan_y z) x
+    // 2^bias; it reaches full_pixels at z = that scale / full_pixels.
+    const float scale = lod.size * lod.viewport_height / (2.0f * v.tan_y) * std::exp2(lod.bias);
+    v.full_distance = scale / lod.full_pixels;
+    v.stay_distance = scale / (lod.full_pixels * (1.0f - lod.hysteresis));
+    return v;
+}
+
+Level chain_level(const LodView& view, glm::vec3 reference, Level previous) {
+    if (!view.enabled) return Level::Full;
+    const glm::vec3 offset = reference - view.position;
+    return static_cast<Level>(glsl::rod_level(glm::dot(offset, view.forward), glm::dot(offset, view.right),
+                                              glm::dot(offset, view.up), view.tan_x, view.tan_y, view.margin,
+                                              view.full_distance, view.stay_distance, static_cast<std::uint32_t>(previous)));
+}
+
+float posed_blend(const LodSettings& lod, float dt) { return 1.0f - std::exp(-lod.settle_rate * dt); }
+
+float blend_in(const LodSettings& lod, Level level, float previous, float dt) {
+    if (level != Level::Full) return 0.0f;
+    return std::min(1.0f, previous + dt / lod.blend_time);
+}
+
+}  // namespace kodawari::rods

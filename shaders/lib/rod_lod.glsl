@@ -1,0 +1,33 @@
+// The level of detail of a character's chains (rods::Level, docs/level-of-detail.md):
+// the one decision every rod backend takes, per chain, from where its character's
+// reference joint sits in the camera's view, written once for GLSL
+// (shaders/rods_step.comp) and C++ (engine/rods/lod.cpp, which the CPU backends call),
+// so that no backend has its own rule. Every chain of a character reads the same joint
+// and the same camera, so they take the same level: the level is the character's.
+//
+// `depth`, `right`, `up`: the reference joint from the camera, along its forward, right
+// and up axes (m). `tan_x`, `tan_y`: the tangents of half the horizontal and vertical
+// fields of view. `margin`: the character's size (m), by which it may stick out of the
+// frustum while its joint is outside. `full_distance`: the depth within which a posed or
+// hidden character turns full (its projected size reaches LodSettings::full_pixels);
+// `stay_distance` (>= full_distance): the depth within which a full one stays full (the
+// hysteresis band). `previous`: the chain's level at its last step (KW_RODS_LEVEL_*).
+//
+// A character off the frustum by more than its size is hidden; else one nearer than
+// its distance is full, and a farther one posed. The comparisons are of products and
+// sums of a few floats: a GPU that fuses a multiply-add can differ from the CPU only for
+// a character on a boundary to the last bit.
+//
+// KW_LOD_FN: nothing in GLSL, `inline` in C++. Float literals carry an f.
+#ifndef KW_LOD_FN
+#define KW_LOD_FN
+#endif
+
+KW_LOD_FN uint rod_level(float depth, float right, float up, float tan_x, float tan_y, float margin, float full_distance,
+                         float stay_distance, uint previous) {
+    const float across = right < 0.0f ? -right : right;
+    const float above = up < 0.0f ? -up : up;
+    if (depth < -margin || across > depth * tan_x + margin || above > depth * tan_y + margin) return KW_RODS_LEVEL_HIDDEN;
+    return depth <= (previous == KW_RODS_LEVEL_FULL ? stay_distance : full_distance) ? KW_RODS_LEVEL_FULL
+                                                                                      : KW_RODS_LEVEL_POSED;
+}
