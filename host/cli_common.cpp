@@ -122,6 +122,25 @@ BackendChoice read_backend_choice(const BackendFlags& flags) {
     return choice;
 }
 
+void add_lod_options(CLI::App& app, LodFlags& flags) {
+    add_switch(app, "--lod", flags.lod,
+               "levels of detail of the characters' chains: full simulation only where the scene camera sees a character large "
+               "enough, posed farther, hidden off the view (the scene's `lod` settings, else the defaults; docs/level-of-detail.md) "
+               "(default: off, unless the scene's `lod` turns them on)");
+    add_text(app, "--lod-bias", flags.bias, "X",
+             "log2 of a scale on every character's projected size, in [-8, 8]: +1 simulates as if every character were twice as near "
+             "(default: the scene's `lod.bias`, else 0)");
+}
+
+void apply_lod(const LodFlags& flags, Scene& scene) {
+    if (flags.lod) scene.lod.enabled = true;
+    if (flags.bias) {
+        const float bias = parse_real("--lod-bias", *flags.bias);
+        if (!(bias >= -8.0f && bias <= 8.0f)) throw UsageError{"--lod-bias: " + *flags.bias + " is not in [-8, 8]"};
+        scene.lod.bias = bias;
+    }
+}
+
 Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendChoice& choice, std::optional<std::uint64_t> frames,
                                                     Shard shard) {
     SimulationOptions options{.backend = choice.backend, .options = choice.options, .shard = shard};

@@ -84,6 +84,16 @@ struct BackendFlags {
 /// Adds the backend options to a command that runs a simulation.
 void add_backend_options(CLI::App& app, BackendFlags& flags);
 
+/// --lod and --lod-bias: levels of detail of the characters' chains (docs/level-of-detail.md).
+struct LodFlags {
+    bool lod = false;
+    std::optional<std::string> bias;
+};
+void add_lod_options(CLI::App& app, LodFlags& flags);
+/// The flags applied to `scene`'s settings: --lod turns them on (the scene's `lod`, or the
+/// defaults), --lod-bias sets the bias (a UsageError outside [-8, 8]).
+void apply_lod(const LodFlags& flags, Scene& scene);
+
 /// Options common to commands that run a simulation.
 struct BackendChoice {
     std::optional<BackendKind> backend;  ///< none: auto (vulkan when a device opens, else cpu)

@@ -145,6 +145,7 @@ struct CrowdOptions {
     std::optional<std::string> scene;
     std::optional<std::uint64_t> count;
     std::optional<std::uint64_t> frames;
+    LodFlags lod;
 };
 
 int bench_crowd(const CrowdOptions& o) {
@@ -167,6 +168,7 @@ int bench_crowd(const CrowdOptions& o) {
     crowd.count = count;
     crowd.instances.clear();
     scene.crowds = {crowd};
+    apply_lod(o.lod, scene);
     // The scene as each backend's Simulation builds it, for the header line.
     auto built = build_rod_scene(scene);
     if (!built) return report(built.error());
@@ -348,6 +350,7 @@ Command add_bench(CLI::App& app) {
     add_scene(*cr, crowd->scene, "scenes/crowd-gltf.json");
     add_count(*cr, "--count", crowd->count, 1, 100'000, "characters (default: 1000)");
     add_count(*cr, "--frames", crowd->frames, 1, 100'000, "frames per repetition (default: 60)");
+    add_lod_options(*cr, crowd->lod);
     add_common(*cr, crowd->common);
 
     std::function<int()> run_flock;

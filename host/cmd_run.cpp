@@ -192,6 +192,7 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
 struct RunOptions {
     std::optional<std::string> scene;
     BackendFlags backend;
+    LodFlags lod;
     std::optional<std::uint64_t> frames;
     std::optional<std::string> out;
     bool no_export = false;
@@ -235,6 +236,7 @@ int cmd_run(const RunOptions& o) {
     auto loaded = load_scene(scene_path);
     if (!loaded) return report(loaded.error());
     Scene checked = std::move(loaded).value();
+    apply_lod(o.lod, checked);
     // Before anything is written: under --strict a route the birds cannot fly stops here.
     if (auto stop = check_scene_routes(checked, o.strict, o.fit_routes)) return *stop;
     auto opened = make_simulation(std::move(checked), choice, frames_option, shard);
@@ -294,6 +296,7 @@ Command add_run(CLI::App& app) {
     add_switch(*c, "--mpi", o->mpi, "under mpirun: one shard per rank, rank 0 writes (default: off)");
     add_route_check_options(*c, o->strict, o->fit_routes);
     add_backend_options(*c, o->backend);
+    add_lod_options(*c, o->lod);
     return {c, [o] { return cmd_run(*o); }};
 }
 

@@ -108,6 +108,8 @@ Result<RodScene> build_rod_scene(const Scene& scene) {
     out.fov_deg = scene.camera.fov_deg;
     out.camera = scene.camera.motion;
     rods::RodWorld& world = out.world;
+    world.lod = scene.lod;
+    world.lod.vertical_fov_deg = scene.camera.fov_deg;
     // Wind fields: the scene's first (calm without one, so that an application can set a
     // wind later: set_wind), then each character's own.
     out.winds.push_back(scene.wind.value_or(rods::WindField{}));

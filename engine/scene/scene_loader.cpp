@@ -461,10 +461,38 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
     return {};
 }
 
+// The characters' levels of detail (docs/level-of-detail.md): on unless "enabled" is false.
+Result<void> read_lod(const JsonReader& r, const JsonNode& node, float fov_deg, rods::LodSettings& lod) {
+    KW_TRY(r.object(node, {"enabled", "size", "full_pixels", "hysteresis", "bias", "settle_rate", "blend_time", "viewport"}));
+    lod.enabled = true;
+    if (const JsonNode enabled = r.member(node, "enabled"); enabled.present()) KW_SCENE_ASSIGN(lod.enabled, r.boolean(enabled));
+    KW_TRY(optional_member(r, node, "size", lod.size, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+    KW_TRY(optional_member(r, node, "full_pixels", lod.full_pixels,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 100000.0)); }));
+    KW_TRY(optional_member(r, node, "hysteresis", lod.hysteresis,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 0.9)); }));
+    KW_TRY(optional_member(r, node, "bias", lod.bias, [&](const JsonNode& n) { return r.real(n, NumberRange::closed(-8.0, 8.0)); }));
+    KW_TRY(optional_member(r, node, "settle_rate", lod.settle_rate,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
+    KW_TRY(optional_member(r, node, "blend_time", lod.blend_time,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 100.0)); }));
+    if (const JsonNode viewport = r.member(node, "viewport"); viewport.present()) {
+        std::size_t count = 0;
+        KW_SCENE_ASSIGN(count, r.array(viewport, "[width, height] in pixels"));
+        if (count != 2) return r.expected(viewport, "[width, height] in pixels");
+        double size[2] = {};
+        for (std::size_t i = 0; i < 2; ++i) KW_SCENE_ASSIGN(size[i], r.number(r.element(viewport, i), NumberRange::closed(1.0, 100000.0)));
+        lod.viewport_height = static_cast<float>(size[1]);
+        lod.aspect = static_cast<float>(size[0] / size[1]);
+    }
+    lod.vertical_fov_deg = fov_deg;
+    return {};
+}
+
 Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, const std::string& path) {
     const JsonNode root{&document, "$"};
     KW_TRY(r.object(root, {"format", "version", "name", "fps", "duration", "camera", "flight", "flocks", "characters", "crowds",
-                           "wind", "$schema"}));
+                           "wind", "lod", "$schema"}));
     // Editors find the JSON Schema (docs/scene.schema.json) through "$schema"; the loader
     // checks the same rules itself, so only the key's type matters here.
     const JsonNode schema = r.member(root, "$schema");
@@ -482,7 +510,7 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
 
     Scene scene;
     scene.version = version.value->get<double>() == 2.0 ? 2u : 1u;
-    KW_TRY(require_version_2(r, root, scene.version, {"characters", "crowds", "wind"}));
+    KW_TRY(require_version_2(r, root, scene.version, {"characters", "crowds", "wind", "lod"}));
     scene.path = path;
     scene.name = std::filesystem::path(path).stem().string();
     if (scene.name.empty()) scene.name = "scene";
@@ -524,6 +552,7 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
         KW_TRY(scene_detail::read_wind(r, wind, field));
         scene.wind = field;
     }
+    if (const JsonNode lod = r.member(root, "lod"); lod.present()) KW_TRY(read_lod(r, lod, scene.camera.fov_deg, scene.lod));
     if (characters.present()) {
         KW_TRY(scene_detail::read_characters(r, characters, crowds, scene));
     } else if (crowds.present()) {

@@ -15,6 +15,7 @@
 #include "kodawari/api.hpp"
 #include "birds/bird_model.hpp"
 #include "birds/world.hpp"
+#include "rods/lod.hpp"
 #include "animation/character.hpp"
 #include "result.hpp"
 #include "rods/keyed.hpp"
@@ -288,6 +289,10 @@ struct KODAWARI_API Scene {
     /// The wind the characters' chains feel (rods::WindField); none: calm air, until an
     /// application sets one (set_wind, kodawari/domains/chains.hpp).
     std::optional<rods::WindField> wind;
+    /// Levels of detail of the characters' chains (rods::LodSettings,
+    /// docs/level-of-detail.md): off unless the file's `lod` object turns them on (or an
+    /// application does, SimulationDesc::lod). The vertical field of view is the camera's.
+    rods::LodSettings lod;
 
     /// Number of frames: round(duration * fps), at least 1.
     [[nodiscard]] std::uint32_t frame_count() const;
