@@ -332,12 +332,14 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
             posed_q[i] = pq;
         }
     }
-    if (any_posed && !any_handing && hn::AllTrue(D(), posed)) {
+    // The frame's end: the state (`x_new` relative to the new root), this frame's rest
+    // shape, root, view and weights.
+    auto store_frame = [&](const V3* x_new, const V3* v_new, const Q4* q_new, const V3* omega_new) HWY_ATTR {
         for (std::size_t i = 0; i < n; ++i) {
-            store3(sub(posed_x[i], travel), block, joint_row(i, kX), off);
-            store3(posed_v[i], block, joint_row(i, kV), off);
-            store4(posed_q[i], block, joint_row(i, kQ), off);
-            store3(posed_omega[i], block, joint_row(i, kOmega), off);
+            store3(x_new[i], block, joint_row(i, kX), off);
+            store3(v_new[i], block, joint_row(i, kV), off);
+            store4(q_new[i], block, joint_row(i, kQ), off);
+            store3(omega_new[i], block, joint_row(i, kOmega), off);
             store3(rest_p[i], block, joint_row(i, kRestP), off);
             store4(rest_o[i], block, joint_row(i, kRestO), off);
         }
@@ -345,6 +347,10 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         store4(to_q, chain_rows, kRootQ, off);
         store3(d, chain_rows, kView, off);
         for (std::size_t k = 0; k <= rods::kMaxViewExamples; ++k) store(k <= mk ? w[k] : Z(), chain_rows, kWeights + k, off);
+    };
+    if (any_posed && !any_handing && hn::AllTrue(D(), posed)) {
+        for (std::size_t i = 0; i < n; ++i) posed_x[i] = sub(posed_x[i], travel);
+        store_frame(posed_x, posed_v, posed_q, posed_omega);
         return;
     }
 
@@ -676,17 +682,9 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
             q[i] = select(posed, posed_q[i], q[i]);
             omega[i] = select(posed, posed_omega[i], omega[i]);
         }
-        store3(stored, block, joint_row(i, kX), off);
-        store3(v[i], block, joint_row(i, kV), off);
-        store4(q[i], block, joint_row(i, kQ), off);
-        store3(omega[i], block, joint_row(i, kOmega), off);
-        store3(rest_p[i], block, joint_row(i, kRestP), off);
-        store4(rest_o[i], block, joint_row(i, kRestO), off);
+        x[i] = stored;
     }
-    store3(to_p, chain_rows, kRootP, off);
-    store4(to_q, chain_rows, kRootQ, off);
-    store3(d, chain_rows, kView, off);
-    for (std::size_t k = 0; k <= rods::kMaxViewExamples; ++k) store(k <= mk ? w[k] : Z(), chain_rows, kWeights + k, off);
+    store_frame(x, v, q, omega);
 }
 
 void step_batches(const RodStepArgs& args, std::size_t begin, std::size_t end) {
