@@ -28,22 +28,25 @@ void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, cons
     state.blend_in = share;
     const std::span<const rods::Collider> colliders(frame.colliders.data() + c.collider_begin, c.collider_count);
     const rods::Transform& root = frame.roots[chain];
-    const float blend = rods::posed_blend(world.lod, frame.dt);
     if (level != rods::Level::Full) {
-        rods::step_posed(t.chain, t.params, root, rest.shape, colliders, frame.dt, blend, state);
+        rods::step_posed(t.chain, t.params, root, rest.shape, colliders, frame.dt, rods::posed_blend(world.lod, frame.dt),
+                         state);
     } else if (share < 1.0f) {
-        // Turning full again: the step and the posed frame from the same start, mixed.
+        // Turning full again: the step and the posed frame from the same start (the
+        // teleport's carry and the first step's start done here, once, as the other
+        // backends do them before their kernels; step() and step_posed() then find neither
+        // left to do), mixed.
         rods::follow_teleport(t.params, root, frame.dt, state);
         if (!state.started && t.params.settle_start) rods::start_moving(root, frame.dt, state);
         state.started = true;
         const rods::ChainState before = state;
         rods::ChainState posed = state;
-        rods::step_posed(t.chain, t.params, root, rest.shape, colliders, frame.dt, blend, posed);
+        rods::step_posed(t.chain, t.params, root, rest.shape, colliders, frame.dt, rods::posed_blend(world.lod, frame.dt),
+                         posed);
         rods::step(t.chain, t.params, root, rest.shape, colliders, frame.dt, state, rods::chain_air(world, chain, frame));
         rods::hand_over(t.chain, before, posed, share, frame.dt, state);
     } else {
-        rods::step(t.chain, t.params, frame.roots[chain], rest.shape, colliders, frame.dt, state,
-                   rods::chain_air(world, chain, frame));
+        rods::step(t.chain, t.params, root, rest.shape, colliders, frame.dt, state, rods::chain_air(world, chain, frame));
     }
     if (rest_out != nullptr) *rest_out = std::move(rest);
 }

@@ -121,6 +121,18 @@ struct CollidersK {
     bool any_capsule, any_inside, any_plane;  // some lane has it as a capsule (outside or inside), inside, a plane
 };
 
+// A collider's kinds per lane (the rows gather_inputs() wrote), which of them any lane
+// has, and its reach.
+void load_kinds(const float* rows, std::size_t off, CollidersK& c) {
+    c.outside = hn::Gt(load(rows, kCapOutside, off), Z());
+    c.inside = hn::Gt(load(rows, kCapInside, off), Z());
+    c.plane = hn::Gt(load(rows, kCapPlane, off), Z());
+    c.reach = load(rows, kCapR, off);
+    c.any_capsule = !hn::AllFalse(D(), hn::Or(c.outside, c.inside));
+    c.any_inside = !hn::AllFalse(D(), c.inside);
+    c.any_plane = !hn::AllFalse(D(), c.plane);
+}
+
 // solver.cpp step 3: the collider placed by the substep's root (r_p, r_q).
 void place(CollidersK& c, const V3& r_p, const Q4& r_q) {
     c.a = add(r_p, rotate(r_q, c.la));
@@ -289,25 +301,20 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         for (std::size_t k = 0; k < batch.colliders; ++k) {
             const float* rows = in.colliders + k * kColliderRows * kBatchLanes;
             CollidersK& c = posed_colliders[k];
-            c.outside = hn::Gt(load(rows, kCapOutside, off), Z());
-            c.inside = hn::Gt(load(rows, kCapInside, off), Z());
-            c.plane = hn::Gt(load(rows, kCapPlane, off), Z());
+            load_kinds(rows, off, c);
             const V3 b = load3(rows, kCapB, off);
             c.a = sub(load3(rows, kCapA, off), from_p);
             c.ab = select(c.plane, b, sub(sub(b, from_p), c.a));
             c.len2 = dot(c.ab, c.ab);
-            c.reach = load(rows, kCapR, off);
-            c.any_capsule = !hn::AllFalse(D(), hn::Or(c.outside, c.inside));
-            c.any_inside = !hn::AllFalse(D(), c.inside);
-            c.any_plane = !hn::AllFalse(D(), c.plane);
         }
         V3 parent = zero3();
         for (std::size_t i = 0; i < n; ++i) {
-            const V3 target = add(travel, rotate(to_q, rest_p[i]));
             Q4 goal = qnormalize(qmul(to_q, rest_o[i]));
-            V3 px = target;
+            V3 px;
             Q4 pq = goal;
-            if (i > 0) {
+            if (i == 0) {
+                px = add(travel, rotate(to_q, rest_p[0]));
+            } else {
                 const V3 sagged = add(travel, rotate(to_q, add(rest_p[i], load3(args.sag + batch.sag_offset, 3 * i, off))));
                 const V3 carried = add(travel, rotate(turn_by, x[i]));
                 px = add(carried, mul(blend, sub(sagged, carried)));
@@ -384,17 +391,11 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
     for (std::size_t k = 0; k < batch.colliders; ++k) {
         const float* rows = in.colliders + k * kColliderRows * kBatchLanes;
         CollidersK& c = colliders[k];
-        c.outside = hn::Gt(load(rows, kCapOutside, off), Z());
-        c.inside = hn::Gt(load(rows, kCapInside, off), Z());
-        c.plane = hn::Gt(load(rows, kCapPlane, off), Z());
+        load_kinds(rows, off, c);
         // In the end root's frame (solver.cpp): a plane's normal b is a direction.
         const V3 b = load3(rows, kCapB, off);
         c.la = rotate(to_root, sub(load3(rows, kCapA, off), to_p));
         c.lb = select(c.plane, rotate(to_root, b), rotate(to_root, sub(b, to_p)));
-        c.reach = load(rows, kCapR, off);
-        c.any_capsule = !hn::AllFalse(D(), hn::Or(c.outside, c.inside));
-        c.any_inside = !hn::AllFalse(D(), c.inside);
-        c.any_plane = !hn::AllFalse(D(), c.plane);
     }
     // solver.cpp collide_all(): every collider, the whole set kColliderPasses times.
     auto collide_all = [&](V3& particle) HWY_ATTR {
