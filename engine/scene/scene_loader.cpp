@@ -462,7 +462,9 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
 }
 
 // The characters' levels of detail (docs/level-of-detail.md): on unless "enabled" is false.
-Result<void> read_lod(const JsonReader& r, const JsonNode& node, float fov_deg, rods::LodSettings& lod) {
+// The vertical field of view is the camera's, set where the rod world is built
+// (build_rod_scene), as for a scene built in code.
+Result<void> read_lod(const JsonReader& r, const JsonNode& node, rods::LodSettings& lod) {
     KW_TRY(r.object(node, {"enabled", "size", "full_pixels", "hysteresis", "bias", "settle_rate", "blend_time", "viewport"}));
     lod.enabled = true;
     if (const JsonNode enabled = r.member(node, "enabled"); enabled.present()) KW_SCENE_ASSIGN(lod.enabled, r.boolean(enabled));
@@ -485,7 +487,6 @@ Result<void> read_lod(const JsonReader& r, const JsonNode& node, float fov_deg, 
         lod.viewport_height = static_cast<float>(size[1]);
         lod.aspect = static_cast<float>(size[0] / size[1]);
     }
-    lod.vertical_fov_deg = fov_deg;
     return {};
 }
 
@@ -552,7 +553,7 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
         KW_TRY(scene_detail::read_wind(r, wind, field));
         scene.wind = field;
     }
-    if (const JsonNode lod = r.member(root, "lod"); lod.present()) KW_TRY(read_lod(r, lod, scene.camera.fov_deg, scene.lod));
+    if (const JsonNode lod = r.member(root, "lod"); lod.present()) KW_TRY(read_lod(r, lod, scene.lod));
     if (characters.present()) {
         KW_TRY(scene_detail::read_characters(r, characters, crowds, scene));
     } else if (crowds.present()) {

@@ -291,7 +291,8 @@ struct KODAWARI_API Scene {
     std::optional<rods::WindField> wind;
     /// Levels of detail of the characters' chains (rods::LodSettings,
     /// docs/level-of-detail.md): off unless the file's `lod` object turns them on (or an
-    /// application does, SimulationDesc::lod). The vertical field of view is the camera's.
+    /// application does, here, before Simulation::create). The vertical field of view is
+    /// the camera's (build_rod_scene sets it).
     rods::LodSettings lod;
 
     /// Number of frames: round(duration * fps), at least 1.
