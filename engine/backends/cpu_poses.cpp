@@ -43,6 +43,11 @@ public:
         return {};
     }
 
+    std::span<const glm::mat4> host_world() const override {
+        assert(character_ != nullptr && evaluated_ && "evaluate() first");
+        return world_;
+    }
+
 private:
     // Instances [begin, end): the clip at the instance's clip time (or the rest pose),
     // then the placement.

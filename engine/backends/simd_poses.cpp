@@ -126,9 +126,22 @@ public:
         return {};
     }
 
-    Result<void> evaluate(float time) override {
+    Result<void> evaluate(float time) override { return evaluate_some(time, {}); }
+
+    Result<void> evaluate_some(float time, std::span<const std::uint8_t> may_keep) override {
         assert(character_ != nullptr && "load() first");
+        assert((may_keep.empty() || may_keep.size() == instances_.size()) && "one entry per instance");
         if (!std::isfinite(time)) return make_error(Error::Kind::InvalidInput, "the scene time is not finite");
+        // A batch whose lanes all may keep their matrices is skipped (after a first
+        // evaluation, so that every matrix has been written).
+        auto keeps = [&](std::size_t b) {
+            if (may_keep.empty() || !evaluated_) return false;
+            const simd::PoseBatch& batch = batches_[b];
+            for (std::uint32_t l = 0; l < batch.count; ++l) {
+                if (may_keep[batch.instance[l]] == 0) return false;
+            }
+            return true;
+        };
         const std::size_t nodes = character_->nodes.size();
         simd::PoseStepArgs args;
         args.plans = plans_.data();
@@ -143,6 +156,7 @@ public:
             simd::PoseStepArgs mine = args;
             mine.scratch = scratch.get();
             for (std::size_t b = begin; b < end; ++b) {
+                if (keeps(b)) continue;
                 sample(b, time);
                 kernels_.evaluate(mine, b, b + 1);
             }
@@ -156,6 +170,14 @@ public:
         world.resize(matrices_);
         std::memcpy(static_cast<void*>(world.data()), world_.get(), matrices_ * sizeof(glm::mat4));  // glm::mat4: 16 floats, column-major
         return {};
+    }
+
+    std::span<const glm::mat4> host_world() const override {
+        assert(character_ != nullptr && evaluated_ && "evaluate() first");
+        // glm::mat4 is 16 floats, column-major, as the kernel writes them (read() copies
+        // the same bytes).
+        static_assert(sizeof(glm::mat4) == 16 * sizeof(float) && alignof(glm::mat4) <= 64);
+        return {reinterpret_cast<const glm::mat4*>(world_.get()), matrices_};
     }
 
 private:

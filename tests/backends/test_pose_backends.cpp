@@ -244,6 +244,14 @@ protected:
         EXPECT_TRUE(evaluated.ok()) << evaluated.error().message;
         const auto read = backend.read(world);
         EXPECT_TRUE(read.ok()) << read.error().message;
+        // Where the backend lends its matrices in place, they are read()'s, byte for byte.
+        const std::span<const glm::mat4> lent = backend.host_world();
+        if (!lent.empty()) {
+            EXPECT_EQ(lent.size(), world.size());
+            EXPECT_EQ(std::memcmp(lent.data(), world.data(), world.size() * sizeof(glm::mat4)), 0) << "host_world() differs from read()";
+        } else if (!world.empty()) {
+            EXPECT_EQ(backend.name(), "vulkan") << "the cpu kinds keep their matrices on the host";
+        }
         return world;
     }
 
@@ -430,6 +438,62 @@ TEST_P(PoseBackends, Deterministic) {
     ASSERT_EQ(a.size(), b.size());
     EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(glm::mat4)), 0);
     EXPECT_NE(std::memcmp(a.data(), other.data(), a.size() * sizeof(glm::mat4)), 0);
+}
+
+// evaluate_some(): every instance not allowed to keep its matrices has this time's (the
+// reference's bits on the CPU backends); every one allowed has this time's or the last
+// evaluation's, whole; the cpu backend keeps a batch of 16 whose instances all may, the
+// reference and vulkan evaluate every instance. 203 instances of one clip, allowed to
+// keep in runs of 16 and singly.
+TEST_P(PoseBackends, EvaluateSomeKeepsWholeInstancesOrRenewsThem) {
+    const TempDir dir;
+    const animation::Character c = load(write_tiny(dir));
+    // One clip, so that the cpu backend's batches are runs of 16 in instance order.
+    std::vector<PoseInstance> instances = crowd(c, kInstances, 5);
+    for (PoseInstance& p : instances) p.clip = 1;
+    auto reference = make_pose_backend(BackendKind::CpuReference, {});
+    ASSERT_TRUE(reference.ok());
+    ASSERT_TRUE(reference.value()->load(c, instances).ok());
+    ASSERT_TRUE(backend_->load(c, instances).ok());
+    const std::size_t nodes = c.nodes.size();
+    std::vector<std::uint8_t> may_keep(kInstances, 1);
+    // The first evaluation after load() renews everything, whatever the allowance.
+    ASSERT_TRUE(backend_->evaluate_some(0.4f, may_keep).ok());
+    std::vector<glm::mat4> got;
+    ASSERT_TRUE(backend_->read(got).ok());
+    const double size = character_size(c);
+    // Instance i of `got` is `want`'s: the same bits on the CPU backends, within
+    // kVulkanBound of the size on vulkan.
+    const auto same = [&](const std::vector<glm::mat4>& want, std::size_t i) {
+        double worst = 0.0;
+        for (std::size_t n = 0; n < nodes; ++n) worst = std::max(worst, max_abs_difference(want[i * nodes + n], got[i * nodes + n]) / size);
+        return GetParam() == BackendKind::Vulkan ? worst <= kVulkanBound
+                                                 : std::memcmp(&want[i * nodes], &got[i * nodes], nodes * sizeof(glm::mat4)) == 0;
+    };
+    const std::vector<glm::mat4> before = evaluate(*reference.value(), 0.4f);
+    for (std::size_t i = 0; i < kInstances; ++i) EXPECT_TRUE(same(before, i)) << "instance " << i << " at the first evaluation";
+    for (std::size_t i = 0; i < kInstances; ++i) may_keep[i] = (i / 16) % 2 == 1 || i % 7 == 3 ? 1 : 0;
+    ASSERT_TRUE(backend_->evaluate_some(1.3f, may_keep).ok());
+    ASSERT_TRUE(backend_->read(got).ok());
+    const std::vector<glm::mat4> now = evaluate(*reference.value(), 1.3f);
+    std::size_t kept = 0;
+    for (std::size_t i = 0; i < kInstances; ++i) {
+        if (may_keep[i] == 0) {
+            EXPECT_TRUE(same(now, i)) << "instance " << i << " was to be evaluated at 1.3 s";
+        } else if (same(before, i) && !same(now, i)) {
+            ++kept;
+        } else {
+            EXPECT_TRUE(same(now, i)) << "instance " << i << ": neither the last nor this evaluation";
+        }
+    }
+    std::printf("[ measured ] %s: %zu of %zu instances allowed to keep their matrices kept them\n",
+                testing_support::case_name(GetParam()).c_str(), kept,
+                static_cast<std::size_t>(std::count(may_keep.begin(), may_keep.end(), 1)));
+    if (backend_->name() == "cpu") {
+        EXPECT_GT(kept, 0u) << "the cpu backend skips batches whose instances all may keep";
+    } else {
+        EXPECT_EQ(kept, 0u) << "the others evaluate every instance";
+    }
 }
 
 TEST_P(PoseBackends, RejectsAClipOutOfRangeNamingTheInstance) {
