@@ -165,6 +165,14 @@ public:
         if (!rods_) return {};
         return rods_->read(out);
     }
+    Result<void> read_levels(std::vector<rods::Level>& out) {
+        out.clear();
+        if (!rods_) return {};
+        KW_TRY(rods_->read_states(states_));
+        out.reserve(states_.size());
+        for (const rods::ChainState& s : states_) out.push_back(static_cast<rods::Level>(s.level));
+        return {};
+    }
     const rods::RodFrame& input() const { return input_; }
     Result<const rods::RodFrame*> host_input() {
         if (!animator_ || !animator_->writes_inputs_on_device() || !current_) return &input_;
@@ -231,6 +239,7 @@ private:
     std::optional<std::uint32_t> host_input_frame_;
     std::optional<std::uint32_t> current_;
     ChainSnapshot snapshot_;  // DrawSource::ReadBack
+    std::vector<rods::ChainState> states_;  // read_levels()
     ChainTiming timing_;
 };
 
@@ -255,6 +264,15 @@ const RodScene* rod_scene(const Simulation& sim) {
 Result<void> read_chains(Simulation& sim, ChainSnapshot& out) {
     ChainDomain* domain = find(sim);
     return domain ? domain->read(out) : Result<void>{};
+}
+
+Result<void> read_chain_levels(Simulation& sim, std::vector<rods::Level>& out) {
+    ChainDomain* domain = find(sim);
+    if (domain == nullptr) {
+        out.clear();
+        return {};
+    }
+    return domain->read_levels(out);
 }
 
 const rods::RodFrame& chain_input(const Simulation& sim) {

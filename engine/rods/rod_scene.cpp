@@ -264,6 +264,7 @@ RodScene RodScene::slice(std::uint32_t begin, std::uint32_t end) const {
     out.world.templates = world.templates;
     out.world.wind_count = world.wind_count;
     out.world.lod = world.lod;
+    out.first_instance = first_instance + begin;
     if (begin == end) return out;
     // Instances own contiguous runs of chains and colliders (build_rod_scene lays them out
     // instance by instance), so a range of instances is a range of each, rebased to 0.

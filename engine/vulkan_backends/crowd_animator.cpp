@@ -84,7 +84,7 @@ Result<CrowdAnimator> CrowdAnimator::create(const RodScene& scene, BackendKind k
 }
 
 Result<void> CrowdAnimator::frame(std::uint32_t index, rods::RodFrame& out) {
-    if (!writer_) return host_frame(index, out);
+    if (!writer_) return host_frame(index, out, /*clip_rate=*/true);
     const RodScene& scene = *scene_;
     // The rigged entries are written on the device at the rod backend's step.
     scene.kinematic_frame(index, out, /*rigged=*/false);
@@ -94,17 +94,63 @@ Result<void> CrowdAnimator::frame(std::uint32_t index, rods::RodFrame& out) {
     return {};
 }
 
-Result<void> CrowdAnimator::host_frame(std::uint32_t index, rods::RodFrame& out) {
+Result<void> CrowdAnimator::host_frame(std::uint32_t index, rods::RodFrame& out) { return host_frame(index, out, false); }
+
+bool CrowdAnimator::choose_clip_updates(std::uint32_t index, const rods::RodFrame& previous) {
     const RodScene& scene = *scene_;
+    const rods::LodSettings& lod = scene.world.lod;
+    const bool follows = last_rate_frame_ && *last_rate_frame_ + 1 == index && previous.reference.size() == scene.instances.size();
+    last_rate_frame_ = index;
+    if (!lod.enabled || !follows) {
+        // The first frame, a seek or a rewind: every clip, and the levels afresh.
+        clip_level_.assign(scene.instances.size(), rods::Level::Full);
+        return false;
+    }
+    // The levels from the last frame's reference joints and camera, as the rod backends
+    // decide them (rods::chain_level) but for characters twice as near: one that is about
+    // to turn full has its clip at every frame first.
+    rods::LodSettings nearer = lod;
+    nearer.bias = std::min(lod.bias + 1.0f, 8.0f);
+    const rods::LodView view = rods::lod_view(nearer, previous.camera);
+    for (Rig& rig : rigs_) {
+        rig.may_keep.resize(rig.instances.size());
+        for (std::size_t j = 0; j < rig.instances.size(); ++j) {
+            const std::uint32_t c = rig.instances[j];
+            const rods::Level level = rods::chain_level(view, previous.reference[c].position, clip_level_[c]);
+            clip_level_[c] = level;
+            // Groups of 16 consecutive instances of the whole scene take turns (the cpu
+            // pose backend's batches of one clip, when they line up), so that every frame
+            // costs about the same.
+            const std::uint32_t period = level == rods::Level::Full ? 1u : level == rods::Level::Posed ? kPosedClipPeriod : kHiddenClipPeriod;
+            const std::uint32_t turn = (scene.first_instance + c) / 16u;
+            rig.may_keep[j] = (index + turn) % period != 0 ? 1 : 0;
+        }
+    }
+    return true;
+}
+
+Result<void> CrowdAnimator::host_frame(std::uint32_t index, rods::RodFrame& out, bool clip_rate) {
+    const RodScene& scene = *scene_;
+    // The last frame's camera (as the caller set it) and reference joints, before
+    // kinematic_frame() writes this frame's camera.
+    const bool rate = clip_rate && choose_clip_updates(index, out);
     scene.kinematic_frame(index, out, /*rigged=*/rigs_.empty());
     const auto start = std::chrono::steady_clock::now();
     for (Rig& rig : rigs_) {
-        KW_TRY(rig.backend->evaluate(scene.time(index)));
-        KW_TRY(rig.backend->read(world_));
-        // Each instance writes its own entries of `out` (sized by kinematic_frame).
+        const std::span<const std::uint8_t> may_keep = rate ? std::span<const std::uint8_t>(rig.may_keep) : std::span<const std::uint8_t>();
+        KW_TRY(rig.backend->evaluate_some(scene.time(index), may_keep));
+        // The cpu kinds' matrices where they are; a device's read back.
+        std::span<const glm::mat4> world = rig.backend->host_world();
+        if (world.empty()) {
+            KW_TRY(rig.backend->read(world_));
+            world = world_;
+        }
+        // Each instance writes its own entries of `out` (sized by kinematic_frame); one
+        // that keeps its clip's pose keeps them too.
         parallel_for(rig.instances.size(), host_threads_, [&](std::size_t begin, std::size_t end) {
             for (std::size_t j = begin; j < end; ++j) {
-                scene.rigged_frame(rig.instances[j], std::span<const glm::mat4>(world_).subspan(j * rig.nodes, rig.nodes), out);
+                if (!may_keep.empty() && may_keep[j] != 0) continue;
+                scene.rigged_frame(rig.instances[j], world.subspan(j * rig.nodes, rig.nodes), out);
             }
         });
     }

@@ -4,6 +4,7 @@
 // The MPI path is tested with real mpirun in tests/scaleout_test.sh.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstring>
 #include <filesystem>
 #include <fstream>
@@ -177,6 +178,30 @@ TEST_P(ShardedSimulation, BirdShardsAreTheWholeRunsBirds) {
     }
 }
 
+namespace {
+
+// Steps `part`, a shard of `whole` (stepped already, its chains per frame in `all`), and
+// expects each frame's chains to be the whole run's of the shard's characters, bit for bit.
+void expect_shard_is_whole(Simulation& part, const Simulation& whole, const std::vector<ChainSnapshot>& all,
+                           const std::string& what) {
+    const InstanceRange range = part.shard().part("characters").range;
+    const RodScene& scene = *rod_scene(whole);
+    const std::uint32_t joint0 = scene.world.chains[scene.instances[range.begin].chain_begin].joint_begin;
+    ChainSnapshot snapshot;
+    for (std::uint32_t f = 0; f < all.size(); ++f) {
+        ASSERT_TRUE(part.step(1).ok());
+        ASSERT_TRUE(read_chains(part, snapshot).ok());
+        ASSERT_EQ(snapshot.positions.size(), rod_scene(part)->world.joint_count);
+        for (std::size_t j = 0; j < snapshot.positions.size(); ++j) {
+            ASSERT_TRUE(same_bits(snapshot.positions[j], all[f].positions[joint0 + j]) &&
+                        same_bits(snapshot.orientations[j], all[f].orientations[joint0 + j]))
+                << what << ", frame " << f << ", joint " << joint0 + j;
+        }
+    }
+}
+
+}  // namespace
+
 // Chains of procedural (crowd.json) and rigged (crowd-gltf.json) characters in 3 shards.
 TEST_P(ShardedSimulation, CharacterShardsAreTheWholeRunsChains) {
     constexpr std::uint32_t kFrames = 4, kShards = 3;
@@ -191,21 +216,48 @@ TEST_P(ShardedSimulation, CharacterShardsAreTheWholeRunsChains) {
         for (std::uint32_t s = 0; s < kShards; ++s) {
             auto part = open(scene_path(name), kFrames, {s, kShards}, GetParam());
             ASSERT_NE(part, nullptr);
-            const InstanceRange range = part->shard().part("characters").range;
-            const std::uint32_t joint0 =
-                rod_scene(*whole)->world.chains[rod_scene(*whole)->instances[range.begin].chain_begin].joint_begin;
-            ChainSnapshot snapshot;
-            for (std::uint32_t f = 0; f < kFrames; ++f) {
-                ASSERT_TRUE(part->step(1).ok());
-                ASSERT_TRUE(read_chains(*part, snapshot).ok());
-                ASSERT_EQ(snapshot.positions.size(), rod_scene(*part)->world.joint_count);
-                for (std::size_t j = 0; j < snapshot.positions.size(); ++j) {
-                    ASSERT_TRUE(same_bits(snapshot.positions[j], all[f].positions[joint0 + j]) &&
-                                same_bits(snapshot.orientations[j], all[f].orientations[joint0 + j]))
-                        << name << ": shard " << s << ", frame " << f << ", joint " << joint0 + j;
-                }
-            }
+            expect_shard_is_whole(*part, *whole, all, std::string(name) + ": shard " + std::to_string(s));
         }
+    }
+}
+
+// With levels of detail on (crowd-10k.json: 100 chibis 90 m from the camera, posed, their
+// clips every second frame in turns by groups of 16 instances of the whole scene), 3
+// shards of 33, 33 and 34 characters: their groups are not the shards' own, and every
+// shard's chains are still the whole run's, bit for bit (RodScene::first_instance).
+TEST_P(ShardedSimulation, LevelOfDetailShardsAreTheWholeRunsChains) {
+    constexpr std::uint32_t kFrames = 8, kShards = 3, kCount = 100;
+    auto make = [&](Shard shard) -> std::unique_ptr<Simulation> {
+        auto loaded = load_scene(scene_path("crowd-10k.json"));
+        EXPECT_TRUE(loaded.ok()) << loaded.error().message;
+        if (!loaded.ok()) return nullptr;
+        Scene scene = std::move(loaded).value();
+        scene.crowds[0].count = kCount;
+        scene.lod.enabled = true;
+        auto made = Simulation::create(std::move(scene), {.backend = GetParam().kind,
+                                                          .options = testing_support::backend_options(GetParam()),
+                                                          .frames = kFrames, .shard = shard});
+        EXPECT_TRUE(made.ok()) << made.error().message;
+        return made.ok() ? std::move(made).value() : nullptr;
+    };
+    auto whole = make({});
+    ASSERT_NE(whole, nullptr);
+    std::vector<ChainSnapshot> all(kFrames);
+    std::vector<rods::Level> levels;
+    for (auto& snapshot : all) {
+        ASSERT_TRUE(whole->step(1).ok());
+        ASSERT_TRUE(read_chains(*whole, snapshot).ok());
+    }
+    ASSERT_TRUE(read_chain_levels(*whole, levels).ok());
+    EXPECT_EQ(std::count(levels.begin(), levels.end(), rods::Level::Posed), static_cast<std::ptrdiff_t>(levels.size()))
+        << "every chain posed";
+    for (std::uint32_t s = 0; s < kShards; ++s) {
+        auto part = make({s, kShards});
+        ASSERT_NE(part, nullptr);
+        if (s > 0) {
+            EXPECT_NE(part->shard().part("characters").range.begin % 16, 0u) << "the shard must not start a group of 16";
+        }
+        expect_shard_is_whole(*part, *whole, all, "shard " + std::to_string(s));
     }
 }
 

@@ -10,12 +10,14 @@
 
 #include <cstdint>
 #include <memory>
+#include <optional>
 #include <span>
 #include <vector>
 
 #include "kodawari/api.hpp"
 #include "pose_backend.hpp"
 #include "rod_backend.hpp"
+#include "rods/lod.hpp"
 #include "rods/rod_scene.hpp"
 
 namespace kodawari {
@@ -33,7 +35,19 @@ public:
     /// The input of frame `index` into `out` (reusing its storage), as RodScene::frame()
     /// gives it up to the pose backend's rounding (the vulkan backend: about 1e-6 of a
     /// character's size; cpu and cpu-reference: the same bits).
+    ///
+    /// With the scene's levels of detail on (RodWorld::lod) and `out` holding frame
+    /// index - 1, a rigged character that was posed at that frame (rods::chain_level on
+    /// its reference joint and `out`'s camera, as if twice as near) takes its clip's pose
+    /// and its entries of `out` afresh every kPosedClipPeriod frames only, a hidden one
+    /// every kHiddenClipPeriod: between them they keep the last ones (docs/level-of-
+    /// detail.md, "The clips' rate"). The same on every backend (the choice is made here,
+    /// on the host), deterministic, and a shard's instances choose as in the whole scene
+    /// (RodScene::first_instance). Not with the input written on the device
+    /// (write_inputs_on()): every clip every frame there.
     [[nodiscard]] Result<void> frame(std::uint32_t index, rods::RodFrame& out);
+    /// A posed character's clip every this many frames, a hidden one's every this many.
+    static constexpr std::uint32_t kPosedClipPeriod = 2, kHiddenClipPeriod = 4;
 
     /// From now on the rigged characters' reference joints, chain roots and colliders are
     /// written on the device by shaders/rod_inputs.comp straight into `rods`'s input
@@ -47,8 +61,8 @@ public:
     /// Whether write_inputs_on() took effect.
     [[nodiscard]] bool writes_inputs_on_device() const { return writer_ != nullptr; }
     /// The input of frame `index` with every entry on the host (the pose matrices read
-    /// back), whatever write_inputs_on() did: for a viewer's paused frame (colliders to
-    /// draw, a sketch's root).
+    /// back) and every clip evaluated at `index`, whatever write_inputs_on() did and the
+    /// clips' rate: for a viewer's paused frame (colliders to draw, a sketch's root).
     [[nodiscard]] Result<void> host_frame(std::uint32_t index, rods::RodFrame& out);
 
     /// Milliseconds the pose backends spent in the last frame() (evaluate + read).
@@ -71,8 +85,13 @@ private:
         std::shared_ptr<PoseBackend> backend;  // shared with the input writer
         std::vector<std::uint32_t> instances;  // RodScene::instances indices, in backend order
         std::size_t nodes = 0;
+        std::vector<std::uint8_t> may_keep;    // per instance, this frame (the clips' rate)
     };
     explicit CrowdAnimator(const RodScene& scene) : scene_(&scene) {}
+    Result<void> host_frame(std::uint32_t index, rods::RodFrame& out, bool clip_rate);
+    // Each rig's may_keep for frame `index` from the last frame's input in `previous`;
+    // false when every clip is to be evaluated (no levels of detail, a first frame, a seek).
+    bool choose_clip_updates(std::uint32_t index, const rods::RodFrame& previous);
 
     const RodScene* scene_;
     BackendOptions options_;
@@ -84,6 +103,8 @@ private:
     // cpu-reference stays the single-threaded yardstick.
     unsigned host_threads_ = 1;
     double last_pose_ms_ = 0.0;
+    std::optional<std::uint32_t> last_rate_frame_;  // the frame choose_clip_updates() saw last
+    std::vector<rods::Level> clip_level_;           // per RodScene instance, for the clips' rate
 };
 
 }  // namespace kodawari

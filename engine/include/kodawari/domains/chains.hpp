@@ -26,6 +26,7 @@
 #include "kodawari/scene.hpp"
 #include "kodawari/rods/chain_snapshot.hpp"
 #include "kodawari/rods/kinematics.hpp"
+#include "kodawari/rods/lod.hpp"
 #include "kodawari/rods/world.hpp"
 #include "kodawari/vulkan_embed.hpp"
 
@@ -86,6 +87,9 @@ KODAWARI_API void snapshot_from(const BakeFrames& frames, ChainSnapshot& out);
 [[nodiscard]] KODAWARI_API const RodScene* rod_scene(const Simulation& sim);
 /// The chains' state after the last step (read back from a device); nothing without chains.
 [[nodiscard]] KODAWARI_API Result<void> read_chains(Simulation& sim, ChainSnapshot& out);
+/// Each chain's level of detail at the last step (kodawari/rods/lod.hpp), read back with
+/// the state: every chain Level::Full while the scene's `lod` is off; nothing without chains.
+[[nodiscard]] KODAWARI_API Result<void> read_chain_levels(Simulation& sim, std::vector<rods::Level>& out);
 /// The last frame's kinematic input of the chains as given to the rod backend: on one
 /// Vulkan device the rigged characters' entries in it are not this frame's (they are
 /// written on the device), see host_chain_input().

@@ -92,6 +92,10 @@ struct KODAWARI_API RodScene {
     std::uint32_t frames = 1;  ///< the scene's frame count; frames 0 .. frames - 1
     std::vector<CharacterKinematics> characters;  ///< templates
     std::vector<CharacterInstance> instances;     ///< world.character_count of them
+    /// The whole scene's index of instances[0]: 0, or where slice() began. What a rule
+    /// per instance keys on (the clips' rate of posed characters, CrowdAnimator), so that
+    /// a shard's instances follow it as in the whole scene.
+    std::uint32_t first_instance = 0;
     rods::CameraMotion camera;
     float fov_deg = 50.0f;  ///< vertical field of view, for renderers and projections
     /// The wind fields every frame gives (world.wind_count of them): [0] the scene's
