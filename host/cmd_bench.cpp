@@ -1,4 +1,5 @@
 #include <algorithm>
+#include <array>
 #include <chrono>
 #include <functional>
 #include <optional>
@@ -195,6 +196,12 @@ int bench_crowd(const CrowdOptions& o) {
     std::vector<std::unique_ptr<Simulation>> sims;
     std::vector<Contender> contenders;
     std::vector<double> clip_ms(variants.size(), 0.0);  // per contender, summed over its timed frames
+    // With levels of detail, the chains at each level (full, posed, hidden) summed over
+    // every tenth timed frame, per contender.
+    const bool lod_on = scene.lod.enabled;
+    constexpr std::uint32_t kLevelSampling = 10;
+    std::vector<std::array<std::uint64_t, 3>> level_counts(variants.size(), std::array<std::uint64_t, 3>{});
+    std::vector<rods::Level> levels;
     for (const auto [variant, device_input] : variants) {
         const BackendKind kind = variant->kind;
         // Frame 0 (load) and 2 warm-up steps, then the timed frames.
@@ -218,9 +225,18 @@ int bench_crowd(const CrowdOptions& o) {
         c.repetition = [&, index, frames](double& gpu_ms) -> Result<double> {
             Simulation& s = *sims[index];
             const ChainTiming before = chain_timing(s);
-            const auto start = std::chrono::steady_clock::now();
-            for (std::uint32_t f = 0; f < frames; ++f) KW_TRY(s.step());
-            const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            double seconds = 0.0;
+            auto start = std::chrono::steady_clock::now();
+            for (std::uint32_t f = 0; f < frames; ++f) {
+                KW_TRY(s.step());
+                if (!lod_on || f % kLevelSampling != 0) continue;
+                // Every tenth frame's levels, read back with the clock stopped.
+                seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+                KW_TRY(read_chain_levels(s, levels));
+                for (const rods::Level l : levels) ++level_counts[index][static_cast<std::size_t>(l)];
+                start = std::chrono::steady_clock::now();
+            }
+            seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
             const double chain_gpu = chain_timing(s).gpu_ms - before.gpu_ms;
             gpu_ms = chain_gpu > 0.0 ? chain_gpu : -1.0;
             clip_ms[index] += chain_timing(s).pose_ms - before.pose_ms;
@@ -236,8 +252,16 @@ int bench_crowd(const CrowdOptions& o) {
         double total_ms = 0.0;
         for (const double ms : m.ms_per_frame) total_ms += ms * frames;
         const double clips = clip_ms[i] / static_cast<double>(m.frames);
-        std::printf("  %-20s clips %.3f ms + chains %.3f ms per frame (means)\n", m.backend.c_str(), clips,
+        std::printf("  %-20s clips %.3f ms + chains %.3f ms per frame (means)", m.backend.c_str(), clips,
                     total_ms / static_cast<double>(m.frames) - clips);
+        const auto& n = level_counts[i];
+        const auto sampled = static_cast<double>(n[0] + n[1] + n[2]);
+        if (sampled > 0.0) {
+            auto share = [&](std::size_t l) { return 100.0 * static_cast<double>(n[l]) / sampled; };
+            std::printf("; chains full %.1f%%, posed %.1f%%, hidden %.1f%% (every %uth frame)", share(0), share(1), share(2),
+                        kLevelSampling);
+        }
+        std::printf("\n");
     }
     for (const auto& s : sims) {
         if (validation_failed(s->validation_messages())) return kExitFailure;
