@@ -195,6 +195,7 @@ struct RenderOptions {
     std::optional<std::string> zoom;
     std::optional<std::string> camera;
     bool joints = false;
+    LodFlags lod;
 };
 
 int cmd_render(const RenderOptions& o) {
@@ -223,6 +224,7 @@ int cmd_render(const RenderOptions& o) {
     const auto camera = parse_camera(o.camera);
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
+    apply_lod(o.lod, loaded.value());
     const std::uint32_t scene_frames = loaded.value().frame_count();
     FrameRange range{0, scene_frames, 1};
     if (frames_text) {
@@ -347,6 +349,7 @@ Command add_render(CLI::App& app) {
              "frames A, A+STEP, ... below B (B exclusive), or the one frame N (default: the whole scene)");
     add_size(*c, o->size, "the images");
     add_switch(*c, "--joints", o->joints, "a dot at every simulated joint of the strands (default: off, the strands alone)");
+    add_lod_options(*c, o->lod);
     add_text(*c, "--contact-sheet", o->contact_sheet, "FILE.png", "also the frames shrunk into one grid (default: none)");
     add_count(*c, "--columns", o->columns, 1, 64, "the contact sheet's columns (default: min(frames, 4))");
     add_text(*c, "--zoom", o->zoom, "F",

@@ -58,6 +58,7 @@ row bench "--backend auto" 2 "--backend" -- bench chains --backend auto
 row bench "a workgroup size that is no power of two" 2 "--workgroup-size" -- bench chains --backends vulkan --workgroup-size 96
 row bench "a workgroup size list with one out of range" 2 "--workgroup-sizes" -- bench chains --backends vulkan --workgroup-sizes 64,2048
 row run "a level-of-detail bias out of range" 2 "--lod-bias" -- run scenes/crowd-gltf.json --frames 1 --no-export --lod-bias 9
+row render "a level-of-detail bias out of range" 2 "--lod-bias" -- render scenes/crowd-gltf.json --out "$work/lod-frames" --frames 1 --lod-bias 9
 row rig "missing character file" 2 "nosuch.glb" -- rig "$work/nosuch.glb" --out "$work/r.json"
 row rig "missing bird file" 2 "nosuch.glb" -- rig "$work/nosuch.glb" --bird --out "$work/r.json"
 row rig "missing bird map file" 2 "nosuch-map.json" -- rig scenes/characters/chibi.glb --bird --map "$work/nosuch-map.json" --out "$work/r.json"
