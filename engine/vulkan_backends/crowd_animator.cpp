@@ -118,11 +118,13 @@ bool CrowdAnimator::choose_clip_updates(std::uint32_t index, const rods::RodFram
             const std::uint32_t c = rig.instances[j];
             const rods::Level level = rods::chain_level(view, previous.reference[c].position, clip_level_[c]);
             clip_level_[c] = level;
-            // Groups of 16 consecutive instances of the whole scene take turns (the cpu
-            // pose backend's batches of one clip, when they line up), so that every frame
-            // costs about the same.
-            const std::uint32_t period = level == rods::Level::Full ? 1u : level == rods::Level::Posed ? kPosedClipPeriod : kHiddenClipPeriod;
-            const std::uint32_t turn = (scene.first_instance + c) / 16u;
+            // Groups of consecutive instances of the whole scene take turns (the cpu pose
+            // backend's batches of one clip, when they line up), so that every frame costs
+            // about the same.
+            const std::uint32_t period = level == rods::Level::Full    ? 1u
+                                         : level == rods::Level::Posed ? kPosedClipPeriod
+                                                                       : kHiddenClipPeriod;
+            const std::uint32_t turn = (scene.first_instance + c) / kClipRateGroup;
             rig.may_keep[j] = (index + turn) % period != 0 ? 1 : 0;
         }
     }
@@ -137,7 +139,8 @@ Result<void> CrowdAnimator::host_frame(std::uint32_t index, rods::RodFrame& out,
     scene.kinematic_frame(index, out, /*rigged=*/rigs_.empty());
     const auto start = std::chrono::steady_clock::now();
     for (Rig& rig : rigs_) {
-        const std::span<const std::uint8_t> may_keep = rate ? std::span<const std::uint8_t>(rig.may_keep) : std::span<const std::uint8_t>();
+        const std::span<const std::uint8_t> may_keep = rate ? std::span<const std::uint8_t>(rig.may_keep)
+                                                            : std::span<const std::uint8_t>();
         KW_TRY(rig.backend->evaluate_some(scene.time(index), may_keep));
         // The cpu kinds' matrices where they are; a device's read back.
         std::span<const glm::mat4> world = rig.backend->host_world();

@@ -48,6 +48,9 @@ public:
     [[nodiscard]] Result<void> frame(std::uint32_t index, rods::RodFrame& out);
     /// A posed character's clip every this many frames, a hidden one's every this many.
     static constexpr std::uint32_t kPosedClipPeriod = 2, kHiddenClipPeriod = 4;
+    /// Instances take those turns in groups of this many consecutive ones of the whole
+    /// scene: the cpu pose backend's batch of one clip, which it skips whole.
+    static constexpr std::uint32_t kClipRateGroup = 16;
 
     /// From now on the rigged characters' reference joints, chain roots and colliders are
     /// written on the device by shaders/rod_inputs.comp straight into `rods`'s input
