@@ -130,10 +130,14 @@ void add_lod_options(CLI::App& app, LodFlags& flags) {
     add_text(app, "--lod-bias", flags.bias, "X",
              "log2 of a scale on every character's projected size, in [-8, 8]: +1 simulates as if every character were twice as near "
              "(default: the scene's `lod.bias`, else 0)");
+    add_switch(app, "--lod-every-frame", flags.every_frame,
+               "step every posed and hidden chain every frame, as the scene's `lod.lower_rate: false` (default: far posed chains "
+               "step every 2nd frame, hidden ones every 4th)");
 }
 
 void apply_lod(const LodFlags& flags, Scene& scene) {
     if (flags.lod) scene.lod.enabled = true;
+    if (flags.every_frame) scene.lod.lower_rate = false;
     if (flags.bias) {
         const float bias = parse_real("--lod-bias", *flags.bias);
         if (!(bias >= -8.0f && bias <= 8.0f)) throw UsageError{"--lod-bias: " + *flags.bias + " is not in [-8, 8]"};

@@ -88,6 +88,7 @@ void add_backend_options(CLI::App& app, BackendFlags& flags);
 struct LodFlags {
     bool lod = false;
     std::optional<std::string> bias;
+    bool every_frame = false;
 };
 void add_lod_options(CLI::App& app, LodFlags& flags);
 /// The flags applied to `scene`'s settings: --lod turns them on (the scene's `lod`, or the

@@ -12,6 +12,7 @@
 #include "shared/rod_keys.h"
 #include "shared/rods.h"
 #include "lib/quat.glsl"
+#include "lib/rod_lod.glsl"
 
 layout(local_size_x = KW_ROD_KEYS_WORKGROUP_SIZE) in;
 
@@ -20,6 +21,8 @@ layout(std430, binding = KW_ROD_KEYS_BINDING_CHAINS) readonly buffer Chains { Ro
 layout(std430, binding = KW_ROD_KEYS_BINDING_KEYS) readonly buffer Keys { RodTransformGpu keys[]; };
 layout(std430, binding = KW_ROD_KEYS_BINDING_STATE) buffer States { RodKeyStateGpu states[]; };
 layout(std430, binding = KW_ROD_KEYS_BINDING_WEIGHTS) writeonly buffer Weights { vec4 weights[]; };
+layout(std430, binding = KW_ROD_KEYS_BINDING_REFERENCE) readonly buffer Reference { RodTransformGpu reference[]; };
+layout(std430, binding = KW_ROD_KEYS_BINDING_CHAIN_STATE) readonly buffer ChainStates { RodChainStateGpu chain_states[]; };
 
 layout(push_constant) uniform Push { RodKeyPush push; };
 
@@ -46,7 +49,23 @@ void main() {
     RodKeyStateGpu state = states[i];
     const uint sources = t.counts.x;
     const uint examples = t.counts.y;
-    const float dt = push.frame.x;
+    // The posed and hidden levels' rate (rods_step.comp decides the same from the same
+    // values): a chain that keeps its state is measured at its next step, over the frames
+    // it kept (rods::measure_keys' frames).
+    uint frames = 1u;
+    if (push.counts.y != 0u && (push.counts.z & KW_RODS_RATE_ON) != 0u && ids.w != KW_ROD_KEYS_EVERY_FRAME) {
+        const uint packed = uint(chain_states[ids.y].view.w);  // level + KW_RODS_IDLE_UNIT x idle
+        const uint previous = packed % KW_RODS_IDLE_UNIT;
+        const vec3 offset = reference[ids.w].position.xyz - push.camera_position.xyz;
+        const float depth = dot(offset, push.camera_forward.xyz);
+        const uint level = rod_level(depth, dot(offset, push.camera_right.xyz), dot(offset, push.camera_up.xyz),
+                                     push.camera_right.w, push.camera_up.w, push.frame.y, push.frame.z, push.frame.w, previous);
+        const uint rate = push.counts.z;
+        const uint turn = (rate & 3u) + (((rate >> 2u) & 15u) + ids.w) / KW_RODS_RATE_GROUP;
+        if (rod_rests(level, previous, depth, push.frame.z, turn)) return;
+        frames = packed / KW_RODS_IDLE_UNIT + 1u;
+    }
+    const float dt = frames == 1u ? push.frame.x : push.frame.x * float(frames);
 
     // Every index into these arrays is a constant of an unrolled loop (a source picked by
     // an example is selected, not indexed), so they stay in registers: lavapipe keeps an
@@ -98,8 +117,15 @@ void main() {
                     }
                 }
                 const vec3 read = e.w == KW_ROD_KEYS_FRAME_JOINT ? qrot(qconj(joint), raw) : vec3(length(raw), 0.0, 0.0);
-                // alpha_j for this frame's dt, from the host (RodKeyTemplateGpu).
-                const float alpha = t.smoothing[j].z;
+                // alpha_j for this frame's dt, from the host (RodKeyTemplateGpu); over several
+                // frames 1 - (1 - alpha)^frames (the CPU's exp of their length, to rounding).
+                float alpha = t.smoothing[j].z;
+                if (frames > 1u) {
+                    const float one = 1.0 - alpha;
+                    float kept = one;
+                    for (uint k = 1u; k < frames; ++k) kept *= one;
+                    alpha = 1.0 - kept;
+                }
                 vec3 m = state.smoothed[j].xyz;
                 m += alpha * (read - m);
                 state.smoothed[j] = vec4(m, 0.0);

@@ -310,14 +310,31 @@ void main() {
     // The share of full simulation in the result (rods::blend_in; kept in the state's
     // root.position.w): 1 without levels of detail.
     float share = 1.0;
+    // The frames the chain kept its state since its last step (rods::ChainState::idle).
+    uint idle = 0u;
     if (LOD && push.flags.z != 0u) {
         const RodChainStateGpu last = chain_states[c];
+        const uint packed = uint(last.view.w);  // level + KW_RODS_IDLE_UNIT x idle
+        const uint previous = packed % KW_RODS_IDLE_UNIT;
+        idle = packed / KW_RODS_IDLE_UNIT;
         const vec3 offset = ref.position.xyz - push.camera_position.xyz;
-        level = rod_level(dot(offset, push.camera_forward.xyz), dot(offset, push.camera_right.xyz),
-                          dot(offset, push.camera_up.xyz), push.camera_right.w, push.camera_up.w, push.time.y, push.time.z,
-                          push.time.w, uint(last.view.w));
+        const float depth = dot(offset, push.camera_forward.xyz);
+        level = rod_level(depth, dot(offset, push.camera_right.xyz), dot(offset, push.camera_up.xyz), push.camera_right.w,
+                          push.camera_up.w, push.time.y, push.time.z, push.time.w, previous);
+        // The posed and hidden levels' rate (rods::chain_rests): between its turns the chain
+        // keeps its state (a chain with a center frame steps every frame, as on the CPU).
+        const uint rate = push.flags.w;
+        if ((rate & KW_RODS_RATE_ON) != 0u && chain.joints.z == KW_RODS_NO_CENTER) {
+            const uint turn = (rate & 3u) + (((rate >> 2u) & 15u) + chain.ids.y) / KW_RODS_RATE_GROUP;
+            if (rod_rests(level, previous, depth, push.time.z, turn)) {
+                chain_states[c].view.w = float(previous + KW_RODS_IDLE_UNIT * (idle + 1u));
+                return;
+            }
+        }
         share = level == KW_RODS_LEVEL_FULL ? min(1.0, last.root.position.w + t.drag.w) : 0.0;
     }
+    // A posed step covers the frames the chain kept (solver.cpp step_posed with dt x (idle + 1)).
+    const float steps = float(idle + 1u);
     const bool HANDING = LOD && level == KW_RODS_LEVEL_FULL && share < 1.0;
     float w[KW_RODS_MAX_VIEWS + 1];
     {
@@ -441,7 +458,8 @@ void main() {
             if (!teleported) continue;
         } else {
             if (!teleported) continue;
-            const float dt = push.camera_forward.w;
+            // A posed step's carry is over the frames it covers (rods::follow_teleport in step_posed).
+            const float dt = level == KW_RODS_LEVEL_FULL ? push.camera_forward.w : push.camera_forward.w * steps;
             const vec3 turn = omega[0] * dt;
             const float angle = length(turn);
             const vec3 axis = angle > 0.0 ? turn / angle : vec3(0.0);
@@ -482,8 +500,16 @@ void main() {
     vec3 posed_x[MAX_J], x_before[MAX_J];
     vec4 posed_q[MAX_J], q_before[MAX_J];
     if (LOD && (level != KW_RODS_LEVEL_FULL || HANDING)) {
-        const float blend = t.accel.w;
-        const float dt = push.camera_forward.w;
+        // rods::posed_blend over the frames covered: 1 - (1 - blend)^steps (the CPU takes
+        // exp once of their length: the same to rounding); one frame's as given.
+        float blend = t.accel.w;
+        if (idle > 0u && !HANDING) {
+            float kept = 1.0 - t.accel.w;
+            const float one = kept;
+            for (uint k = 0u; k < idle; ++k) kept *= one;
+            blend = 1.0 - kept;
+        }
+        const float dt = HANDING ? push.camera_forward.w : push.camera_forward.w * steps;
         const vec3 moved = to.position.xyz - from.position.xyz;
         const vec4 turn_by = qnormalize(qmul(to.rotation, qconj(from.rotation)));
         // The colliders at their end-of-frame poses relative to the last root position.

@@ -8,11 +8,11 @@
 
 namespace kodawari {
 
-void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
+bool step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
                           rods::ChainState& state, rods::KeyState& keys, rods::RestShape* rest_out) {
     const rods::ChainInstance& c = world.chains[chain];
     const rods::ChainTemplate& t = world.templ(c);
-    rods::RestShape rest = rods::rest_shape(world, chain, frame, rods::measure_keys(world, chain, frame, keys));
+    // The center is followed every frame (a chain with one never rests).
     if (c.center != rods::kNoCenter) {
         rods::follow_center(state.center, frame.centers[c.center], state);
         state.center = frame.centers[c.center];
@@ -21,15 +21,30 @@ void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, cons
     // A frame whose camera gives no levels (LOD off, an orthographic camera) has every chain
     // full at once.
     const rods::LodView view = rods::lod_view(world.lod, frame.camera);
-    const rods::Level level = rods::chain_level(view, frame.reference[c.character].position,
-                                                static_cast<rods::Level>(state.level));
+    const glm::vec3 reference = frame.reference[c.character].position;
+    const rods::Level previous = static_cast<rods::Level>(state.level);
+    const rods::Level level = rods::chain_level(view, reference, previous);
+    // The posed and hidden levels' rate: between its turns a chain keeps its state.
+    if (frame.number != rods::kNoFrameNumber &&
+        rods::chain_rests(view, reference, level, previous, rods::rate_turn(frame.number, frame.first_character + c.character))) {
+        ++state.idle;
+        return false;
+    }
+    // Its keys over the frames since its last step (their motion measured across them, as
+    // its clip's pose renews at its turns).
+    const rods::KeyedWeights keyed = rods::measure_keys(world, chain, frame, keys, state.idle + 1);
+    // A posed step covers the frames the chain kept too (its root's motion over them is
+    // the carry; the ease and the velocities take their length).
+    const float posed_dt = frame.dt * static_cast<float>(state.idle + 1);
+    state.idle = 0;
+    rods::RestShape rest = rods::rest_shape(world, chain, frame, keyed);
     state.level = static_cast<std::uint32_t>(level);
     const float share = view.enabled ? rods::blend_in(world.lod, level, state.blend_in, frame.dt) : 1.0f;
     state.blend_in = share;
     const std::span<const rods::Collider> colliders(frame.colliders.data() + c.collider_begin, c.collider_count);
     const rods::Transform& root = frame.roots[chain];
     if (level != rods::Level::Full) {
-        rods::step_posed(t.chain, t.params, root, rest.shape, colliders, frame.dt, rods::posed_blend(world.lod, frame.dt),
+        rods::step_posed(t.chain, t.params, root, rest.shape, colliders, posed_dt, rods::posed_blend(world.lod, posed_dt),
                          state);
     } else if (share < 1.0f) {
         // Turning full again: the step and the posed frame from the same start (the
@@ -49,6 +64,7 @@ void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, cons
         rods::step(t.chain, t.params, root, rest.shape, colliders, frame.dt, state, rods::chain_air(world, chain, frame));
     }
     if (rest_out != nullptr) *rest_out = std::move(rest);
+    return true;
 }
 
 namespace {
@@ -83,8 +99,7 @@ public:
         KW_TRY(rods::check_frame(*world_, frame));
         run([&](std::uint32_t c) {
             rods::RestShape rest;
-            step_chain_reference(*world_, c, frame, states_[c], keys_[c], &rest);
-            keep(c, rest);
+            if (step_chain_reference(*world_, c, frame, states_[c], keys_[c], &rest)) keep(c, rest);
         });
         return {};
     }

@@ -192,13 +192,6 @@ public:
             for (std::size_t t = 0; t < templates_.size(); ++t) set_step(templates_[t], world_->templates[t].params, frame.dt);
             dt_ = frame.dt;
         }
-        parallel_for(keyed_chains_.size(), threads_, [&](std::size_t begin, std::size_t end) {
-            for (std::size_t i = begin; i < end; ++i) {
-                const std::uint32_t c = keyed_chains_[i];
-                const rods::KeyedWeights u = rods::measure_keys(*world_, c, frame, key_states_[c]);
-                std::copy(u.begin(), u.end(), keyed_.begin() + static_cast<std::ptrdiff_t>(c * rods::kMaxKeyedExamples));
-            }
-        });
         // Chains with a center frame are carried by its motion first, by engine/rods itself
         // (cpu-reference's step_chain_reference), lane by lane: they are few (a VRM
         // avatar's springs that name a center), and the result keeps the reference's bits.
@@ -224,6 +217,9 @@ public:
         // operations a chain), written to each lane's level row for the kernel, padding
         // lanes too (they repeat their batch's first chain).
         const rods::LodView lod = rods::lod_view(world_->lod, frame.camera);
+        // The posed and hidden levels' rate (rods::chain_rests): which lanes keep their state.
+        const bool rate = lod.enabled && lod.lower_rate && frame.number != rods::kNoFrameNumber;
+        resting_.assign(rate ? batches_.size() : 0, 0u);
         parallel_for(batches_.size(), threads_, [&](std::size_t begin, std::size_t end) {
             for (std::size_t b = begin; b < end; ++b) {
                 const simd::RodBatch& batch = batches_[b];
@@ -232,14 +228,24 @@ public:
                     for (std::size_t l = 0; l < kBatchLanes; ++l) {
                         float& level = chain[simd::kLevel * kBatchLanes + l];
                         float& share = chain[simd::kBlendIn * kBatchLanes + l];
-                        const rods::Transform& reference = frame.reference[world_->chains[batch.chain[l]].character];
-                        const rods::Level next = rods::chain_level(lod, reference.position,
-                                                                   static_cast<rods::Level>(static_cast<std::uint32_t>(level)));
+                        const rods::ChainInstance& instance = world_->chains[batch.chain[l]];
+                        const glm::vec3 reference = frame.reference[instance.character].position;
+                        const auto previous = static_cast<rods::Level>(static_cast<std::uint32_t>(level));
+                        const rods::Level next = rods::chain_level(lod, reference, previous);
+                        // As cpu_rods.cpp step_chain_reference (a chain with a center frame steps every frame).
+                        if (rate && instance.center == rods::kNoCenter &&
+                            rods::chain_rests(lod, reference, next, previous,
+                                              rods::rate_turn(frame.number, frame.first_character + instance.character))) {
+                            chain[simd::kIdle * kBatchLanes + l] += 1.0f;
+                            resting_[b] |= 1u << l;
+                            continue;
+                        }
                         level = static_cast<float>(static_cast<std::uint32_t>(next));
                         share = lod.enabled ? rods::blend_in(world_->lod, next, share, frame.dt) : 1.0f;
                     }
                 }
                 for (std::size_t l = 0; l < batch.count; ++l) {  // padding lanes' results are unused
+                    if (!resting_.empty() && (resting_[b] >> l & 1u) != 0u) continue;
                     const std::uint32_t c = batch.chain[l];
                     const rods::SolverParams& params = world_->templ(world_->chains[c]).params;
                     const glm::vec3 last(chain[(simd::kRootP + 0) * kBatchLanes + l], chain[(simd::kRootP + 1) * kBatchLanes + l],
@@ -248,10 +254,26 @@ public:
                     const bool start = first && params.settle_start;
                     if (!teleport && !start) continue;
                     rods::ChainState s = state(c);
-                    if (teleport) rods::follow_teleport(params, frame.roots[c], frame.dt, s);
+                    // A posed step's carry is over the frames it covers (rods::step_posed's follow_teleport).
+                    const float carry_dt = s.level != static_cast<std::uint32_t>(rods::Level::Full)
+                                               ? frame.dt * static_cast<float>(s.idle + 1)
+                                               : frame.dt;
+                    if (teleport) rods::follow_teleport(params, frame.roots[c], carry_dt, s);
                     if (start) rods::start_moving(frame.roots[c], frame.dt, s);
                     put_state(batch, l, s);
                 }
+            }
+        });
+        // The keyed weights (rods::measure_keys) of the chains that step, over the frames
+        // since their last step (their kIdle row, which the kernel sets to 0 again).
+        parallel_for(keyed_chains_.size(), threads_, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) {
+                const std::uint32_t c = keyed_chains_[i];
+                const auto [b, l] = lane_of_[c];
+                if (!resting_.empty() && (resting_[b] >> l & 1u) != 0u) continue;
+                const auto frames = static_cast<std::uint32_t>(chain_rows(batches_[b])[simd::kIdle * kBatchLanes + l]) + 1u;
+                const rods::KeyedWeights u = rods::measure_keys(*world_, c, frame, key_states_[c], frames);
+                std::copy(u.begin(), u.end(), keyed_.begin() + static_cast<std::ptrdiff_t>(c * rods::kMaxKeyedExamples));
             }
         });
         // The air around each chain (rods::chain_air), by engine/rods' own function (a
@@ -267,9 +289,12 @@ public:
                 }
             });
         }
-        const simd::RodStepArgs args{templates_.data(), batches_.data(), storage_.get(), &frame, world_->chains.data(),
-                                     keyed_.data(), moving ? air_.data() : nullptr, lod.enabled,
-                                     rods::posed_blend(world_->lod, frame.dt), sag_.get()};
+        simd::RodStepArgs args{templates_.data(), batches_.data(), storage_.get(), &frame, world_->chains.data(),
+                               keyed_.data(), moving ? air_.data() : nullptr, lod.enabled, {}, nullptr, sag_.get()};
+        for (std::size_t k = 0; k < args.blend.size(); ++k) {
+            args.blend[k] = rods::posed_blend(world_->lod, frame.dt * static_cast<float>(k + 1));
+        }
+        if (rate) args.resting = resting_.data();
         // With levels of detail a batch's cost follows its lanes' levels: the threads'
         // ranges are split again each frame.
         if (lod.enabled) split_threads(true);
@@ -350,6 +375,7 @@ private:
         for (std::size_t f = 0; f < 7; ++f) chain[(simd::kRootP + f) * kBatchLanes + l] = root[f];
         chain[simd::kLevel * kBatchLanes + l] = static_cast<float>(s.level);
         chain[simd::kBlendIn * kBatchLanes + l] = s.blend_in;
+        chain[simd::kIdle * kBatchLanes + l] = static_cast<float>(s.idle);
         float* sag = sag_.get() + b.sag_offset;
         for (std::uint32_t i = 0; i < templates_[b.templ].joints; ++i) {
             for (std::size_t r = 0; r < 3; ++r) sag[(3 * i + r) * kBatchLanes + l] = s.sag[i][static_cast<int>(r)];
@@ -379,6 +405,7 @@ private:
         s.root.rotation = glm::quat(at(simd::kRootQ + 3), at(simd::kRootQ), at(simd::kRootQ + 1), at(simd::kRootQ + 2));
         s.level = static_cast<std::uint32_t>(at(simd::kLevel));
         s.blend_in = at(simd::kBlendIn);
+        s.idle = static_cast<std::uint32_t>(at(simd::kIdle));
         const float* sag = sag_.get() + batch.sag_offset;
         for (std::uint32_t i = 0; i < templates_[batch.templ].joints; ++i) {
             s.sag[i] = {sag[(3 * i) * kBatchLanes + l], sag[(3 * i + 1) * kBatchLanes + l], sag[(3 * i + 2) * kBatchLanes + l]};
@@ -400,6 +427,11 @@ private:
             const simd::RodTemplateConsts& t = templates_[batch.templ];
             const float* chain = chain_rows(batch);
             double vectors = 0.0, full = 0.0;
+            // A batch whose every lane keeps its state is not stepped.
+            if (levels && !resting_.empty() && resting_[b] == (1u << kBatchLanes) - 1u) {
+                cost[b] = 0.0;
+                continue;
+            }
             for (std::size_t off = 0; off < batch.count; off += isa_.lanes) {
                 vectors += 1.0;
                 bool any_full = !levels;
@@ -431,6 +463,7 @@ private:
     std::vector<simd::RodBatch> batches_;
     std::vector<std::pair<std::size_t, std::uint32_t>> lane_of_;  // chain -> (batch, lane)
     std::vector<std::size_t> split_;                              // thread p: batches [split_[p], split_[p + 1])
+    std::vector<std::uint32_t> resting_;                          // per batch, its lanes that keep their state (RodStepArgs::resting)
     std::vector<std::uint32_t> keyed_chains_;                     // the chains with keyed examples
     std::vector<rods::KeyState> key_states_;                      // per chain (keyed ones only used)
     std::vector<float> keyed_;                                    // per chain, kMaxKeyedExamples raw weights

@@ -79,7 +79,7 @@ static_assert(sizeof(RodKeyStateGpu) == 16 * (3 * KW_ROD_KEYS_MAX_SOURCES + KW_R
 static_assert(offsetof(RodKeyStateGpu, position) == 0 && offsetof(RodKeyStateGpu, rotation) == 16 * KW_ROD_KEYS_MAX_SOURCES &&
               offsetof(RodKeyStateGpu, velocity) == 32 * KW_ROD_KEYS_MAX_SOURCES &&
               offsetof(RodKeyStateGpu, smoothed) == 48 * KW_ROD_KEYS_MAX_SOURCES);
-static_assert(sizeof(RodKeyPush) == 32 && offsetof(RodKeyPush, frame) == 16);
+static_assert(sizeof(RodKeyPush) == 96 && offsetof(RodKeyPush, frame) == 16 && offsetof(RodKeyPush, camera_up) == 80);
 static_assert(KW_ROD_KEYS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 
 // shared/poses.h

@@ -15,6 +15,11 @@ static_assert(static_cast<std::uint32_t>(Level::Full) == KW_RODS_LEVEL_FULL);
 static_assert(static_cast<std::uint32_t>(Level::Posed) == KW_RODS_LEVEL_POSED);
 static_assert(static_cast<std::uint32_t>(Level::Hidden) == KW_RODS_LEVEL_HIDDEN);
 
+static_assert(kPosedPeriod == KW_RODS_POSED_PERIOD && kHiddenPeriod == KW_RODS_HIDDEN_PERIOD && kRateGroup == KW_RODS_RATE_GROUP);
+// rod_rests() takes a turn modulo the period: powers of two that divide 4 (RodPush.flags.w
+// carries the frame's turn mod 4).
+static_assert(4 % kPosedPeriod == 0 && 4 % kHiddenPeriod == 0);
+
 namespace glsl {
 // GLSL's names for shaders/lib/rod_lod.glsl (inside this namespace only).
 using uint = std::uint32_t;
@@ -54,6 +59,7 @@ LodView lod_view(const LodSettings& lod, const Camera& camera) {
     v.tan_y = std::tan(glm::radians(lod.vertical_fov_deg) * 0.5f);
     v.tan_x = v.tan_y * lod.aspect;
     v.margin = lod.size;
+    v.lower_rate = lod.lower_rate;
     // The size's projection in pixels at depth z: size x viewport_height / (2 tan_y z) x
     // 2^bias; it reaches full_pixels at z = that scale / full_pixels.
     const float scale = lod.size * lod.viewport_height / (2.0f * v.tan_y) * std::exp2(lod.bias);
@@ -68,6 +74,12 @@ Level chain_level(const LodView& view, glm::vec3 reference, Level previous) {
     return static_cast<Level>(glsl::rod_level(glm::dot(offset, view.forward), glm::dot(offset, view.right),
                                               glm::dot(offset, view.up), view.tan_x, view.tan_y, view.margin,
                                               view.full_distance, view.stay_distance, static_cast<std::uint32_t>(previous)));
+}
+
+bool chain_rests(const LodView& view, glm::vec3 reference, Level level, Level previous, std::uint32_t turn) {
+    if (!view.enabled || !view.lower_rate) return false;
+    return glsl::rod_rests(static_cast<std::uint32_t>(level), static_cast<std::uint32_t>(previous),
+                           glm::dot(reference - view.position, view.forward), view.full_distance, turn);
 }
 
 float posed_blend(const LodSettings& lod, float dt) { return 1.0f - std::exp(-lod.settle_rate * dt); }

@@ -54,6 +54,8 @@ void RodScene::kinematic_frame(std::uint32_t index, rods::RodFrame& out, bool ri
     const float t = time(index);
     out.time = t;
     out.dt = static_cast<float>(1.0 / static_cast<double>(fps));
+    out.number = index;
+    out.first_character = first_instance;
     out.camera = camera_pose(index).camera();
     out.reference.resize(world.character_count);
     out.roots.resize(world.chains.size());

@@ -262,10 +262,13 @@ KeyState initial_key_state(const RodWorld& world, std::uint32_t chain, const Rod
     return initial_key_state(chain_keys(world, chain, frame));
 }
 
-KeyedWeights measure_keys(const RodWorld& world, std::uint32_t chain, const RodFrame& frame, KeyState& keys) {
+KeyedWeights measure_keys(const RodWorld& world, std::uint32_t chain, const RodFrame& frame, KeyState& keys,
+                          std::uint32_t frames) {
+    assert(frames >= 1);
     const ChainTemplate& t = world.templ(world.chains[chain]);
     if (t.keyed.empty()) return {};
-    return keyed_weights(t.keyed, t.key_sources, chain_keys(world, chain, frame), frame.dt, keys, t.params.teleport_distance);
+    const float dt = frame.dt * static_cast<float>(frames);  // over the frames since the last measure
+    return keyed_weights(t.keyed, t.key_sources, chain_keys(world, chain, frame), dt, keys, t.params.teleport_distance);
 }
 
 }  // namespace kodawari::rods

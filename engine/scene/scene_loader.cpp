@@ -465,7 +465,8 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
 // The vertical field of view is the camera's, set where the rod world is built
 // (build_rod_scene), as for a scene built in code.
 Result<void> read_lod(const JsonReader& r, const JsonNode& node, rods::LodSettings& lod) {
-    KW_TRY(r.object(node, {"enabled", "size", "full_pixels", "hysteresis", "bias", "settle_rate", "blend_time", "viewport"}));
+    KW_TRY(r.object(node, {"enabled", "size", "full_pixels", "hysteresis", "bias", "settle_rate", "blend_time", "lower_rate",
+                         "viewport"}));
     lod.enabled = true;
     if (const JsonNode enabled = r.member(node, "enabled"); enabled.present()) KW_SCENE_ASSIGN(lod.enabled, r.boolean(enabled));
     KW_TRY(optional_member(r, node, "size", lod.size, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
@@ -478,6 +479,7 @@ Result<void> read_lod(const JsonReader& r, const JsonNode& node, rods::LodSettin
                            [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
     KW_TRY(optional_member(r, node, "blend_time", lod.blend_time,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 100.0)); }));
+    if (const JsonNode rate = r.member(node, "lower_rate"); rate.present()) KW_SCENE_ASSIGN(lod.lower_rate, r.boolean(rate));
     if (const JsonNode viewport = r.member(node, "viewport"); viewport.present()) {
         std::size_t count = 0;
         KW_SCENE_ASSIGN(count, r.array(viewport, "[width, height] in pixels"));

@@ -188,8 +188,8 @@ Q4 blend_one(const std::array<float, 4>* shapes, const float* signs, std::size_t
 // block, [prefetch, prefetch_end), asked for a few cache lines at a time while this one
 // computes: a batch's state is streamed from memory once per frame (100 000 chains hold
 // 130 MB), and the hardware prefetchers see only the current block.
-void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in, std::size_t off, const float* prefetch,
-                const float* prefetch_end) {
+void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t resting, const Inputs& in, std::size_t off,
+                const float* prefetch, const float* prefetch_end) {
     const RodTemplateConsts& t = args.templates[batch.templ];
     const rods::RodFrame& frame = *args.frame;
     const std::size_t n = t.joints;
@@ -291,9 +291,15 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
         }
     }
     if (any_posed) {
-        const V blend = S(args.blend);
-        const V dt = S(frame.dt);
-        const V two_over_dt = S(2.0f / frame.dt);
+        // Over the frames the step covers (cpu_rods.cpp step_chain_reference): dt x (idle + 1)
+        // and the blend of that length; a handing lane's posed frame is one frame's.
+        const V steps = hn::IfThenElse(handing, S(1.0f), hn::Add(load(chain_rows, kIdle, off), S(1.0f)));
+        const V dt = hn::Mul(S(frame.dt), steps);
+        const V two_over_dt = hn::Div(S(2.0f), dt);
+        V blend = S(args.blend[0]);
+        for (std::size_t k = 1; k < args.blend.size(); ++k) {
+            blend = hn::IfThenElse(hn::Eq(steps, S(static_cast<float>(k + 1))), S(args.blend[k]), blend);
+        }
         const Q4 turn_by = qnormalize(qmul(to_q, conj(from_q)));
         // The colliders at their end-of-frame poses relative to the last root position
         // (solver.cpp step_posed), as place() would leave them.
@@ -341,19 +347,44 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
     }
     // The frame's end: the state (`x_new` relative to the new root), this frame's rest
     // shape, root, view and weights.
+    // Lanes that keep their state this frame (RodStepArgs::resting) keep their rows as they
+    // were; the others' idle frames are 0 again.
+    const bool keeping = (resting >> off) != 0u;
+    M keep = hn::FirstN(D(), 0);
+    if (keeping) {
+        HWY_ALIGN float bits[kBatchLanes];
+        for (std::size_t l = 0; l < hn::Lanes(D()); ++l) bits[l] = static_cast<float>((resting >> (off + l)) & 1u);
+        keep = hn::Gt(hn::Load(D(), bits), Z());
+    }
+    auto put = [&](V value, float* rows, std::size_t r) HWY_ATTR {
+        if (keeping) value = hn::IfThenElse(keep, load(rows, r, off), value);
+        store(value, rows, r, off);
+    };
+    auto put3 = [&](const V3& value, float* rows, std::size_t r) HWY_ATTR {
+        put(value.x, rows, r);
+        put(value.y, rows, r + 1);
+        put(value.z, rows, r + 2);
+    };
+    auto put4 = [&](const Q4& value, float* rows, std::size_t r) HWY_ATTR {
+        put(value.x, rows, r);
+        put(value.y, rows, r + 1);
+        put(value.z, rows, r + 2);
+        put(value.w, rows, r + 3);
+    };
     auto store_frame = [&](const V3* x_new, const V3* v_new, const Q4* q_new, const V3* omega_new) HWY_ATTR {
         for (std::size_t i = 0; i < n; ++i) {
-            store3(x_new[i], block, joint_row(i, kX), off);
-            store3(v_new[i], block, joint_row(i, kV), off);
-            store4(q_new[i], block, joint_row(i, kQ), off);
-            store3(omega_new[i], block, joint_row(i, kOmega), off);
-            store3(rest_p[i], block, joint_row(i, kRestP), off);
-            store4(rest_o[i], block, joint_row(i, kRestO), off);
+            put3(x_new[i], block, joint_row(i, kX));
+            put3(v_new[i], block, joint_row(i, kV));
+            put4(q_new[i], block, joint_row(i, kQ));
+            put3(omega_new[i], block, joint_row(i, kOmega));
+            put3(rest_p[i], block, joint_row(i, kRestP));
+            put4(rest_o[i], block, joint_row(i, kRestO));
         }
-        store3(to_p, chain_rows, kRootP, off);
-        store4(to_q, chain_rows, kRootQ, off);
-        store3(d, chain_rows, kView, off);
-        for (std::size_t k = 0; k <= rods::kMaxViewExamples; ++k) store(k <= mk ? w[k] : Z(), chain_rows, kWeights + k, off);
+        put3(to_p, chain_rows, kRootP);
+        put4(to_q, chain_rows, kRootQ);
+        put3(d, chain_rows, kView);
+        for (std::size_t k = 0; k <= rods::kMaxViewExamples; ++k) put(k <= mk ? w[k] : Z(), chain_rows, kWeights + k);
+        if (args.lod) put(Z(), chain_rows, kIdle);
     };
     if (any_posed && !any_handing && hn::AllTrue(D(), posed)) {
         for (std::size_t i = 0; i < n; ++i) posed_x[i] = sub(posed_x[i], travel);
@@ -691,19 +722,25 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, const Inputs& in
 void step_batches(const RodStepArgs& args, std::size_t begin, std::size_t end) {
     const std::size_t lanes = hn::Lanes(D());
     Inputs in;
+    // Every lane of a batch keeps its state (padding lanes repeat lane 0's chain and decide alike).
+    constexpr std::uint32_t kAllLanes = (1u << kBatchLanes) - 1u;
+    auto resting = [&](std::size_t b) { return args.resting != nullptr ? args.resting[b] : 0u; };
     for (std::size_t b = begin; b < end; ++b) {
+        if (resting(b) == kAllLanes) continue;
         const RodBatch& batch = args.batches[b];
         gather_inputs(args, batch, args.templates[batch.templ], in);
         const float* next = nullptr;
         const float* next_end = nullptr;
-        if (b + 1 < end) {
-            const RodBatch& after = args.batches[b + 1];
+        std::size_t a = b + 1;
+        while (a < end && resting(a) == kAllLanes) ++a;
+        if (a < end) {
+            const RodBatch& after = args.batches[a];
             next = args.storage + after.offset;
             next_end = next + rod_block_floats(args.templates[after.templ].joints);
         }
         for (std::size_t off = 0; off < batch.count; off += lanes) {
             // The first sub-vector asks for the next block (the others find it on its way).
-            step_lanes(args, batch, in, off, off == 0 ? next : nullptr, off == 0 ? next_end : nullptr);
+            step_lanes(args, batch, resting(b), in, off, off == 0 ? next : nullptr, off == 0 ? next_end : nullptr);
         }
     }
 }

@@ -33,8 +33,12 @@ namespace kodawari::simd {
 enum JointRow : std::uint32_t { kX = 0, kV = 3, kQ = 6, kOmega = 10, kRestP = 13, kRestO = 16, kJointRows = 20 };
 /// Rows per chain after the joints: root position(3) and rotation(4), view direction(3), weights(8),
 /// level of detail (rods::Level as a float) and the share of full simulation in the result
-/// (rods::ChainState::blend_in), both decided by the backend before each step.
-enum ChainRow : std::uint32_t { kRootP = 0, kRootQ = 3, kView = 7, kWeights = 10, kLevel = 18, kBlendIn = 19, kChainRows = 20 };
+/// (rods::ChainState::blend_in), both decided by the backend before each step, and the
+/// frames the chain kept its state since its last step (rods::ChainState::idle: counted by
+/// the backend, 0 again after a step).
+enum ChainRow : std::uint32_t {
+    kRootP = 0, kRootQ = 3, kView = 7, kWeights = 10, kLevel = 18, kBlendIn = 19, kIdle = 20, kChainRows = 21
+};
 
 /// A template's constants in the kernel's terms, and this frame's step sizes, computed
 /// by the backend with rods::step's own expressions.
@@ -114,7 +118,13 @@ struct RodStepArgs {
     /// rods::step_posed with this blend (rods::posed_blend); full lanes whose kBlendIn row
     /// is below 1 take rods::hand_over of the two.
     bool lod = false;
-    float blend = 0.0f;
+    /// rods::posed_blend over 1 .. kHiddenPeriod frames: a posed step covers its lane's
+    /// kIdle row + 1 frames.
+    std::array<float, rods::kHiddenPeriod> blend{};
+    /// Per batch, the lanes (bit l) that keep their state this frame (rods::chain_rests),
+    /// null where none does: a batch whose every lane keeps is not stepped, the others keep
+    /// those lanes' rows as they were.
+    const std::uint32_t* resting = nullptr;
     /// Per batch, from RodBatch::sag_offset: each joint's rods::ChainState::sag, 3 rows
     /// of kBatchLanes (read by posed lanes only, so kept out of the blocks the step streams).
     const float* sag = nullptr;

@@ -106,26 +106,36 @@ bool CrowdAnimator::choose_clip_updates(std::uint32_t index, const rods::RodFram
         clip_level_.assign(scene.instances.size(), rods::Level::Full);
         return false;
     }
-    // The levels from the last frame's reference joints and camera, as the rod backends
-    // decide them (rods::chain_level) but for characters twice as near: one that is about
-    // to turn full has its clip at every frame first.
-    rods::LodSettings nearer = lod;
-    nearer.bias = std::min(lod.bias + 1.0f, 8.0f);
-    const rods::LodView view = rods::lod_view(nearer, previous.camera);
+    // The rod backends' decision (rods::chain_level, then rods::chain_rests at this frame's
+    // turn), taken from the last frame's reference joints and camera: a character keeps its
+    // clip's pose where its chains will keep their state, so that they step at the frames its
+    // pose renews. Within twice its full distance (about to turn full) it has every clip.
+    // With lower_rate off, the levels of characters twice as near decide (one about to turn
+    // full has its clip at every frame first) and the clips alone keep the levels' rate.
+    rods::LodSettings decide = lod;
+    if (!lod.lower_rate) decide.bias = std::min(lod.bias + 1.0f, 8.0f);
+    const rods::LodView view = rods::lod_view(decide, previous.camera);
     for (Rig& rig : rigs_) {
         rig.may_keep.resize(rig.instances.size());
         for (std::size_t j = 0; j < rig.instances.size(); ++j) {
             const std::uint32_t c = rig.instances[j];
-            const rods::Level level = rods::chain_level(view, previous.reference[c].position, clip_level_[c]);
-            clip_level_[c] = level;
+            const glm::vec3 reference = previous.reference[c].position;
+            const rods::Level level = rods::chain_level(view, reference, clip_level_[c]);
             // Groups of consecutive instances of the whole scene take turns (the cpu pose
             // backend's batches of one clip, when they line up), so that every frame costs
             // about the same.
-            const std::uint32_t period = level == rods::Level::Full    ? 1u
-                                         : level == rods::Level::Posed ? kPosedClipPeriod
-                                                                       : kHiddenClipPeriod;
-            const std::uint32_t turn = (scene.first_instance + c) / kClipRateGroup;
-            rig.may_keep[j] = (index + turn) % period != 0 ? 1 : 0;
+            const std::uint32_t turn = rods::rate_turn(index, scene.first_instance + c);
+            bool keep = false;
+            if (lod.lower_rate) {
+                keep = rods::chain_rests(view, reference, level, clip_level_[c], turn);
+            } else {
+                const std::uint32_t period = level == rods::Level::Full    ? 1u
+                                             : level == rods::Level::Posed ? kPosedClipPeriod
+                                                                           : kHiddenClipPeriod;
+                keep = turn % period != 0;
+            }
+            clip_level_[c] = level;
+            rig.may_keep[j] = keep ? 1 : 0;
         }
     }
     return true;

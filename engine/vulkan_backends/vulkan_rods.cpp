@@ -261,7 +261,8 @@ public:
         for (std::uint32_t c = 0; c < count; ++c) {
             const rods::ChainInstance& ch = world.chains[c];
             if (world.templ(ch).keyed.empty()) continue;
-            key_chains.push_back({{ch.template_index, c, ch.key_begin, 0u}});
+            key_chains.push_back({{ch.template_index, c, ch.key_begin,
+                                   ch.center != rods::kNoCenter ? KW_ROD_KEYS_EVERY_FRAME : ch.character}});
             const rods::KeyState initial_keys = rods::initial_key_state(world, c, initial);
             gpu::RodKeyStateGpu ks{};
             for (std::size_t k = 0; k < rods::kMaxKeySources; ++k) {
@@ -295,7 +296,7 @@ public:
                 gpu::RodChainStateGpu& cs = chain_states[c];
                 cs.root = to_gpu(s.root);
                 cs.root.position.w = s.blend_in;
-                cs.view = to_gpu(r.view_direction);
+                cs.view = to_gpu(r.view_direction, static_cast<float>(s.level + KW_RODS_IDLE_UNIT * s.idle));
                 float w[8] = {};
                 std::copy(r.weights.begin(), r.weights.end(), w);
                 cs.weights[0] = {w[0], w[1], w[2], w[3]};
@@ -337,7 +338,7 @@ public:
         KW_TRY(compute::upload(*ctx_, buffers_[KW_RODS_BINDING_KEYED], bytes_of(std::vector<gpu::vec4>(count, gpu::vec4{}))));
 
         key_buffers_.clear();
-        const std::uint64_t key_sizes[KW_ROD_KEYS_BINDING_COUNT - 1] = {
+        const std::uint64_t key_sizes[KW_ROD_KEYS_BINDING_WEIGHTS] = {  // the bindings the key kernel owns
             key_templates_.size() * sizeof(gpu::RodKeyTemplateGpu), key_chains.size() * sizeof(gpu::RodKeyChainGpu),
             std::uint64_t{world.key_count} * sizeof(gpu::RodTransformGpu), key_states.size() * sizeof(gpu::RodKeyStateGpu)};
         auto key_storage = compute::create_storage_buffers(*ctx_, key_sizes, "the rod world's keyed examples");
@@ -354,7 +355,8 @@ public:
             }
             const Buffer* key_bound[KW_ROD_KEYS_BINDING_COUNT] = {
                 &key_buffers_[KW_ROD_KEYS_BINDING_TEMPLATES], &key_buffers_[KW_ROD_KEYS_BINDING_CHAINS],
-                &key_buffers_[KW_ROD_KEYS_BINDING_KEYS], &key_buffers_[KW_ROD_KEYS_BINDING_STATE], &buffers_[KW_RODS_BINDING_KEYED]};
+                &key_buffers_[KW_ROD_KEYS_BINDING_KEYS], &key_buffers_[KW_ROD_KEYS_BINDING_STATE], &buffers_[KW_RODS_BINDING_KEYED],
+                &buffers_[KW_RODS_BINDING_REFERENCE], &buffers_[KW_RODS_BINDING_CHAIN_STATE]};
             key_kernel_->bind(key_bound);
         }
         // The input buffers hold the initial frame's input until the first step (what a
@@ -470,7 +472,9 @@ public:
             rods::ChainState& s = out[c];
             s.root = transform_of(chain_states_[c].root);
             s.started = started_;
-            s.level = static_cast<std::uint32_t>(chain_states_[c].view.w);
+            const auto packed = static_cast<std::uint32_t>(chain_states_[c].view.w);  // level + KW_RODS_IDLE_UNIT x idle
+            s.level = packed % KW_RODS_IDLE_UNIT;
+            s.idle = packed / KW_RODS_IDLE_UNIT;
             s.blend_in = chain_states_[c].root.position.w;
             if (ch.center != rods::kNoCenter) s.center = transform_of(center_states_[ch.center]);
             const rods::ChainShape rest = rest_of(static_cast<std::uint32_t>(c));
@@ -569,11 +573,17 @@ private:
         // Levels of detail: the camera's part of the decision (rods::lod_view), for
         // shaders/lib/rod_lod.glsl.
         const rods::LodView lod = rods::lod_view(world_->lod, frame.camera);
+        // The posed and hidden levels' rate (rods::rate_turn): the frame's turn mod 4 and the
+        // first character's place in its group, which with each chain's character give its turn.
+        const std::uint32_t rate = lod.enabled && lod.lower_rate && frame.number != rods::kNoFrameNumber
+                                       ? KW_RODS_RATE_ON | ((frame.number + frame.first_character / KW_RODS_RATE_GROUP) & 3u) |
+                                             ((frame.first_character % KW_RODS_RATE_GROUP) << 2u)
+                                       : 0u;
         gpu::RodPush push{{},
                           {},
                           to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f),
                           to_gpu(frame.camera.forward, frame.dt),
-                          {started_ ? 0u : 1u, moving_air(frame) ? 1u : 0u, lod.enabled ? 1u : 0u, 0u},
+                          {started_ ? 0u : 1u, moving_air(frame) ? 1u : 0u, lod.enabled ? 1u : 0u, rate},
                           {frame.time, lod.margin, lod.full_distance, lod.stay_distance},
                           to_gpu(lod.right, lod.tan_x),
                           to_gpu(lod.up, lod.tan_y)};
@@ -589,7 +599,12 @@ private:
         if (timed) recording.timestamp(compute::Timestamp::Begin);
         if (keyed_chains_ > 0) {
             // K.2, K.3: the raw keyed weights, which the step reads (K.4).
-            const gpu::RodKeyPush key_push{{keyed_chains_, 0u, 0u, 0u}, {frame.dt, 0.0f, 0.0f, 0.0f}};
+            const gpu::RodKeyPush key_push{{keyed_chains_, push.flags.z, push.flags.w, 0u},
+                                           {frame.dt, lod.margin, lod.full_distance, lod.stay_distance},
+                                           push.camera_position,
+                                           push.camera_forward,
+                                           push.camera_right,
+                                           push.camera_up};
             const std::uint32_t key_groups = (keyed_chains_ + KW_ROD_KEYS_WORKGROUP_SIZE - 1) / KW_ROD_KEYS_WORKGROUP_SIZE;
             key_kernel_->dispatch(recording, std::as_bytes(std::span(&key_push, 1)), key_groups);
             compute::barrier(recording, compute::Stage::Compute, compute::Stage::Compute);

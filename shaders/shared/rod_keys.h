@@ -25,7 +25,11 @@
 #define KW_ROD_KEYS_BINDING_KEYS 2       // RodTransformGpu (shared/rods.h), per key source: RodFrame::keys (this frame)
 #define KW_ROD_KEYS_BINDING_STATE 3      // RodKeyStateGpu, per chain with keyed examples (state)
 #define KW_ROD_KEYS_BINDING_WEIGHTS 4    // vec4 per chain of the world: u_1 .. u_4 (the rods kernel's KW_RODS_BINDING_KEYED)
-#define KW_ROD_KEYS_BINDING_COUNT 5
+#define KW_ROD_KEYS_BINDING_REFERENCE 5  // RodTransformGpu per character (the rods kernel's KW_RODS_BINDING_REFERENCE)
+#define KW_ROD_KEYS_BINDING_CHAIN_STATE 6  // RodChainStateGpu per chain (the rods kernel's KW_RODS_BINDING_CHAIN_STATE), read
+#define KW_ROD_KEYS_BINDING_COUNT 7
+// RodKeyChainGpu.ids.w of a chain with a center frame: it steps every frame (no level read).
+#define KW_ROD_KEYS_EVERY_FRAME 0xFFFFFFFFu
 
 // rods::KeyKind, rods::MotionMeasure, rods::MotionFrame (checked in vulkan_rods.cpp).
 #define KW_ROD_KEYS_KIND_MOTION 0u
@@ -54,7 +58,8 @@ struct RodKeyTemplateGpu {
 
 // A chain with keyed examples.
 struct RodKeyChainGpu {
-    uvec4 ids;  // x: template, y: the chain's index in the per-chain buffers, z: its first key source, w: unused
+    uvec4 ids;  // x: template, y: the chain's index in the per-chain buffers, z: its first key source,
+                // w: its character (the reference joint's index), KW_ROD_KEYS_EVERY_FRAME for a chain with a center
 };
 
 // rods::KeyState of one chain.
@@ -65,9 +70,18 @@ struct RodKeyStateGpu {
     vec4 smoothed[KW_ROD_KEYS_MAX_EXAMPLES]; // xyz: m_j, the smoothed read key (K.2), w: unused
 };
 
+// A chain that keeps its state this frame (the posed and hidden levels' rate,
+// shaders/lib/rod_lod.glsl rod_rests) is not measured: its next step measures over the
+// frames it kept. The level is decided as rods_step.comp decides it, from the same push
+// values (RodPush's camera and LOD fields).
 struct RodKeyPush {
-    uvec4 counts;  // x: chains with keyed examples, yzw: unused
-    vec4 frame;    // x: dt (s), yzw: unused
+    uvec4 counts;          // x: chains with keyed examples, y: 1 = levels of detail (RodPush.flags.z),
+                           // z: the rate (RodPush.flags.w), w: unused
+    vec4 frame;            // x: dt (s), y: LOD margin, z: LOD full distance, w: LOD stay distance (m)
+    vec4 camera_position;  // xyz
+    vec4 camera_forward;   // xyz
+    vec4 camera_right;     // xyz, w: tan of half the horizontal field of view
+    vec4 camera_up;        // xyz, w: tan of half the vertical field of view
 };
 
 KW_NAMESPACE_END

@@ -94,10 +94,25 @@
 #define KW_RODS_FEATURE_ALL 63u
 
 // A chain's level of detail (rods::Level, docs/level-of-detail.md), kept in
-// RodChainStateGpu.view.w as a float.
+// RodChainStateGpu.view.w as a float (with its idle frames, below).
 #define KW_RODS_LEVEL_FULL 0u    // every substep
 #define KW_RODS_LEVEL_POSED 1u   // no dynamics: carried by its root and eased onto its rest shape
 #define KW_RODS_LEVEL_HIDDEN 2u  // off the camera's frustum: updated as posed
+// RodChainStateGpu.view.w holds level + KW_RODS_IDLE_UNIT x idle, idle the frames the chain
+// has kept its state since its last step (rods::ChainState::idle, at most 3).
+#define KW_RODS_IDLE_UNIT 4u
+
+// The posed and hidden levels' rate (shaders/lib/rod_lod.glsl rod_rests,
+// docs/level-of-detail.md "The rate"): a posed chain steps every KW_RODS_POSED_PERIOD-th
+// frame, a hidden one every KW_RODS_HIDDEN_PERIOD-th (powers of two), characters taking
+// turns in groups of KW_RODS_RATE_GROUP consecutive ones of the scene.
+#define KW_RODS_POSED_PERIOD 2u
+#define KW_RODS_HIDDEN_PERIOD 4u
+#define KW_RODS_RATE_GROUP 16u
+// RodPush.flags.w with the rate on: this bit, the frame's number plus the world's first
+// character / KW_RODS_RATE_GROUP in bits 0-1 (mod 4: every period divides 4), and the first
+// character mod KW_RODS_RATE_GROUP in bits 2-5.
+#define KW_RODS_RATE_ON 0x80000000u
 
 // RodTemplateJointGpu.lengths.z: the joint's limit (rods::LimitKind), stored as a float.
 #define KW_RODS_LIMIT_NONE 0u
@@ -189,6 +204,7 @@ struct RodJointSpinGpu {
 struct RodChainStateGpu {
     RodTransformGpu root;  // last frame's root frame; position.w: the share of full simulation in its result (rods::blend_in)
     vec4 view;             // xyz: this frame's view direction d (reference joint's frame), w: its level (KW_RODS_LEVEL_*)
+                           // + KW_RODS_IDLE_UNIT x the frames it has kept its state since (rods::ChainState::idle)
     vec4 weights[2];       // W_0 .. W_7 (W_0 = the base's; views, then keyed examples, K.4); the next frame blends last
                            // frame's rest shape from them again for SPEC A.5 instead of
                            // storing it per joint (loads and stores are the costly part)
@@ -205,7 +221,7 @@ struct RodPush {
     uvec4 flags;            // x: 1 on the world's first step (chains of templates with
                             // physics.w != 0 start moving with their roots); y: 1 = a wind field
                             // moves the air (KW_RODS_BINDING_WINDS); z: 1 = levels of detail
-                            // (rods::LodView::enabled); w: 0
+                            // (rods::LodView::enabled); w: the posed and hidden levels' rate (KW_RODS_RATE_ON), or 0
     vec4 time;              // x: the frame's time (s, RodFrame::time: the wind's), y: LOD margin (m),
                             // z: LOD full distance (m), w: LOD stay distance (m) (rods::LodView)
     vec4 camera_right;      // xyz: the camera's right axis (unit), w: tan of half the horizontal field of view

@@ -94,6 +94,34 @@ TEST(Lod, OffOrOrthographicIsAlwaysFull) {
     EXPECT_EQ(rods::chain_level(rods::lod_view(settings(), camera()), far, Level::Full), Level::Posed);
 }
 
+// The posed and hidden levels' rate (rods::chain_rests): far posed chains step on even
+// turns only, hidden ones every 4th; never a full chain, one that changed level, one within
+// twice its full distance (23.2 m here), or with lower_rate off.
+TEST(Lod, FarPosedAndHiddenChainsRestBetweenTheirTurns) {
+    const rods::LodView v = rods::lod_view(settings(), camera());
+    const glm::vec3 far(0.0f, 0.0f, -30.0f), near(0.0f, 0.0f, -20.0f), behind(0.0f, 0.0f, 30.0f);
+    std::uint32_t posed_steps = 0, hidden_steps = 0;
+    for (std::uint32_t turn = 0; turn < 8; ++turn) {
+        posed_steps += rods::chain_rests(v, far, Level::Posed, Level::Posed, turn) ? 0u : 1u;
+        hidden_steps += rods::chain_rests(v, behind, Level::Hidden, Level::Hidden, turn) ? 0u : 1u;
+        EXPECT_FALSE(rods::chain_rests(v, far, Level::Full, Level::Full, turn));
+        EXPECT_FALSE(rods::chain_rests(v, far, Level::Posed, Level::Full, turn));
+        EXPECT_FALSE(rods::chain_rests(v, far, Level::Hidden, Level::Posed, turn));
+        EXPECT_FALSE(rods::chain_rests(v, near, Level::Posed, Level::Posed, turn));
+    }
+    EXPECT_EQ(posed_steps, 4u);
+    EXPECT_EQ(hidden_steps, 2u);
+    EXPECT_TRUE(rods::chain_rests(v, far, Level::Posed, Level::Posed, 1));
+    EXPECT_FALSE(rods::chain_rests(v, far, Level::Posed, Level::Posed, 2));
+    // Groups of 16 characters take turns: the 16th is a turn after the 15th.
+    EXPECT_EQ(rods::rate_turn(7, 15), 7u);
+    EXPECT_EQ(rods::rate_turn(7, 16), 8u);
+    rods::LodSettings every = settings();
+    every.lower_rate = false;
+    EXPECT_FALSE(rods::chain_rests(rods::lod_view(every, camera()), far, Level::Posed, Level::Posed, 1));
+    EXPECT_FALSE(rods::chain_rests(rods::lod_view(rods::LodSettings{}, camera()), far, Level::Posed, Level::Posed, 1));
+}
+
 TEST(Lod, RefusesSettingsOutOfRange) {
     const float nan = std::numeric_limits<float>::quiet_NaN();
     const float inf = std::numeric_limits<float>::infinity();

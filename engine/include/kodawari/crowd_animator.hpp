@@ -37,20 +37,24 @@ public:
     /// character's size; cpu and cpu-reference: the same bits).
     ///
     /// With the scene's levels of detail on (RodWorld::lod) and `out` holding frame
-    /// index - 1, a rigged character that was posed at that frame (rods::chain_level on
-    /// its reference joint and `out`'s camera, as if twice as near) takes its clip's pose
-    /// and its entries of `out` afresh every kPosedClipPeriod frames only, a hidden one
-    /// every kHiddenClipPeriod: between them they keep the last ones (docs/level-of-
-    /// detail.md, "The clips' rate"). The same on every backend (the choice is made here,
+    /// index - 1, a rigged character whose chains keep their state this frame
+    /// (rods::chain_rests on its reference joint and `out`'s camera: posed and farther than
+    /// twice its full distance, between its turns) keeps its clip's pose and its entries of
+    /// `out`, so that it takes them afresh every kPosedClipPeriod frames, a hidden one every
+    /// kHiddenClipPeriod, at the frames its chains step (docs/level-of-detail.md, "The
+    /// rate"). With LodSettings::lower_rate off, a character posed as if twice as near
+    /// keeps them between those turns while its chains step every frame. The same on every backend (the choice is made here,
     /// on the host), deterministic, and a shard's instances choose as in the whole scene
     /// (RodScene::first_instance). Not with the input written on the device
     /// (write_inputs_on()): every clip every frame there.
     [[nodiscard]] Result<void> frame(std::uint32_t index, rods::RodFrame& out);
     /// A posed character's clip every this many frames, a hidden one's every this many.
-    static constexpr std::uint32_t kPosedClipPeriod = 2, kHiddenClipPeriod = 4;
+    /// The chains' rate (rods::kPosedPeriod, rods::kHiddenPeriod), so that a posed chain's
+    /// turn finds its root moved on.
+    static constexpr std::uint32_t kPosedClipPeriod = rods::kPosedPeriod, kHiddenClipPeriod = rods::kHiddenPeriod;
     /// Instances take those turns in groups of this many consecutive ones of the whole
-    /// scene: the cpu pose backend's batch of one clip, which it skips whole.
-    static constexpr std::uint32_t kClipRateGroup = 16;
+    /// scene (rods::rate_turn): the cpu pose backend's batch of one clip, which it skips whole.
+    static constexpr std::uint32_t kClipRateGroup = rods::kRateGroup;
 
     /// From now on the rigged characters' reference joints, chain roots and colliders are
     /// written on the device by shaders/rod_inputs.comp straight into `rods`'s input

@@ -77,9 +77,12 @@ public:
 /// One chain's frame with the CPU reference (SPEC A.3, A.2, A.5, A.4, and
 /// docs/keyed-examples.md): its keyed weights (advancing `keys`, which start as
 /// rods::initial_key_state), its rest shape from `frame`, the chain carried by its center's
-/// motion (rods::follow_center from ChainState::center, which it updates), then rods::step. What every
-/// backend computes; exposed for tests and `kodawari validate`.
-KODAWARI_API void step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
+/// motion (rods::follow_center from ChainState::center, which it updates), its level of
+/// detail, then rods::step (or rods::step_posed). What every backend computes; exposed for
+/// tests and `kodawari validate`. Returns false where the chain kept its state this frame
+/// (rods::chain_rests: a posed or hidden chain between its turns; its keys and center are
+/// still measured and carried, its idle frames counted): `rest_out` is then untouched.
+KODAWARI_API bool step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, const rods::RodFrame& frame,
                                        rods::ChainState& state, rods::KeyState& keys,
                                        rods::RestShape* rest_out = nullptr);
 

@@ -54,6 +54,10 @@ struct LodSettings {
     /// to the simulated one that grows by dt / blend_time a frame (blend_in()), so that the
     /// dynamics the posed frames left out catch up without a jump. 0.25 s: 15 frames at 60 fps.
     float blend_time = 0.25f;
+    /// Far posed and hidden chains step at their levels' rate (chain_rests(): a posed one
+    /// every kPosedPeriod-th frame, a hidden one every kHiddenPeriod-th, over the frames it
+    /// kept): false steps every chain every frame.
+    bool lower_rate = true;
     /// The camera's projection: vertical field of view (degrees, in (0, 180)), the
     /// image's width over height and its height in pixels (> 0). The scene's camera's
     /// fov; 1920 x 1080 unless told.
@@ -75,12 +79,36 @@ struct LodView {
     float margin = 0.0f;         ///< LodSettings::size
     float full_distance = 0.0f;  ///< depth within which a posed or hidden character turns full
     float stay_distance = 0.0f;  ///< depth within which a full one stays full (>= full_distance)
+    bool lower_rate = false;     ///< LodSettings::lower_rate (chain_rests())
 };
 [[nodiscard]] KODAWARI_API LodView lod_view(const LodSettings& lod, const Camera& camera);
 
 /// The level of a chain whose character's reference joint is at `reference`, given its
 /// level at its last step (shaders/lib/rod_lod.glsl). Full when `view` is not enabled.
 [[nodiscard]] KODAWARI_API Level chain_level(const LodView& view, glm::vec3 reference, Level previous);
+
+/// The posed and hidden levels' rate (docs/level-of-detail.md, "The rate"; shaders/shared/
+/// rods.h KW_RODS_*_PERIOD): a posed chain far from full steps every kPosedPeriod-th frame,
+/// a hidden one every kHiddenPeriod-th, over the frames it kept; characters take turns in
+/// groups of kRateGroup consecutive ones of the scene, so that every frame costs about the
+/// same. CrowdAnimator evaluates those characters' clips at the same rate.
+inline constexpr std::uint32_t kPosedPeriod = 2, kHiddenPeriod = 4, kRateGroup = 16;
+/// RodFrame::number of a frame made by hand: every chain steps every frame.
+inline constexpr std::uint32_t kNoFrameNumber = 0xFFFFFFFFu;
+
+/// The turn of the scene's character `character` at the frame numbered `number`: a chain
+/// at a level of period P steps when it is a multiple of P.
+[[nodiscard]] constexpr std::uint32_t rate_turn(std::uint32_t number, std::uint32_t character) {
+    return number + character / kRateGroup;
+}
+
+/// Whether a chain keeps its state this frame instead of stepping (shaders/lib/rod_lod.glsl
+/// rod_rests): its character's reference joint at `reference`, its level `level` this frame
+/// (chain_level()) and `previous` at its last step, `turn` its character's rate_turn().
+/// Never a full chain, one whose level changed, or one within twice its full distance of
+/// the camera; never when `view` is not enabled or not lower_rate.
+[[nodiscard]] KODAWARI_API bool chain_rests(const LodView& view, glm::vec3 reference, Level level, Level previous,
+                                            std::uint32_t turn);
 
 /// The share of the way to its rest shape a posed chain covers in a frame of `dt` s:
 /// 1 - exp(-settle_rate dt).

@@ -264,6 +264,10 @@ struct ChainState {
     /// The share of full simulation in its last result (rods::blend_in): 1 while it is
     /// simulated, 0 while posed, and in between while it turns full again.
     float blend_in = 1.0f;
+    /// The frames it has kept its state since its last step (rods::chain_rests: a posed or
+    /// hidden chain stepped at the levels' rate, at most kHiddenPeriod - 1); its next step
+    /// covers idle + 1 frames.
+    std::uint32_t idle = 0;
 };
 
 /// A chain at rest: the rest shape `rest` (root frame, e.g. a blend from A.2) placed by

@@ -128,6 +128,14 @@ struct RodFrame {
     /// The wind fields (RodWorld::wind_count of them), at `time`: each chain feels the air
     /// of its field at its root (chain_air()), for the whole frame.
     std::vector<WindField> winds;
+    /// The frame's number in its scene (RodScene: the frame's index), by which posed and
+    /// hidden chains take turns to step (rate_turn(), chain_rests(); docs/level-of-detail.md
+    /// "The rate"). kNoFrameNumber, a frame made by hand, steps every chain every frame.
+    std::uint32_t number = kNoFrameNumber;
+    /// The scene's index of this world's character 0 (a shard's first instance,
+    /// RodScene::first_instance): the characters that take turns together are the whole
+    /// scene's.
+    std::uint32_t first_character = 0;
 };
 
 /// Checks that `frame` fits `world` (sizes, dt > 0, finite values).
@@ -167,8 +175,9 @@ struct RestShape {
                                                       const RodFrame& frame);
 
 /// `chain`'s raw keyed weights this frame (keyed_weights), advancing `keys`; all 0 for a
-/// chain without keyed examples.
+/// chain without keyed examples. `frames`: the frames since its last measure (a chain that
+/// kept its state between its turns, rods::chain_rests, is measured at its step over them).
 [[nodiscard]] KODAWARI_API KeyedWeights measure_keys(const RodWorld& world, std::uint32_t chain, const RodFrame& frame,
-                                                     KeyState& keys);
+                                                     KeyState& keys, std::uint32_t frames = 1);
 
 }  // namespace kodawari::rods
