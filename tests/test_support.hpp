@@ -20,6 +20,7 @@
 #include "kodawari/backend.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/simd.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari::testing_support {
 

@@ -16,6 +16,7 @@
 #include "kodawari/compare.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/scene.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 

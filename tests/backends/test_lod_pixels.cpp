@@ -32,6 +32,7 @@
 #include "kodawari/rods/lod.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/simulation.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 

@@ -25,6 +25,7 @@
 #include "kodawari/gltf/import.hpp"
 #include "kodawari/pose_backend.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 using nlohmann::json;

@@ -14,6 +14,7 @@
 #include "kodawari/scene.hpp"
 #include "kodawari/simd.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 

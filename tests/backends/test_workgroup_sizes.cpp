@@ -20,6 +20,7 @@
 #include "kodawari/rods/synthetic.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 

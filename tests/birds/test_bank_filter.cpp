@@ -13,6 +13,7 @@
 
 #include "kodawari/birds/flight.hpp"
 #include "kodawari/scene.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 using namespace kodawari::birds;

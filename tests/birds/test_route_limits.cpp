@@ -10,6 +10,7 @@
 #include "kodawari/birds/route_limits.hpp"
 #include "kodawari/route_check.hpp"
 #include "kodawari/scene.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 

@@ -33,6 +33,7 @@
 #include "kodawari/export.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
+#include "test_paths.hpp"
 
 
 namespace kodawari::export_test {

@@ -10,6 +10,7 @@
 #include <sstream>
 
 #include "export_support.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari {
 namespace {

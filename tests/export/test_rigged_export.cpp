@@ -25,6 +25,7 @@
 #include "kodawari/animation/character.hpp"
 #include "kodawari/gltf/import.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari {
 namespace {

@@ -24,6 +24,7 @@
 #include "kodawari/animation/character.hpp"
 #include "kodawari/gltf/import.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 
 namespace kodawari::gltf_import_test {

@@ -15,6 +15,7 @@
 #include "kodawari/gltf/chains.hpp"
 #include "kodawari/gltf/import.hpp"
 #include "kodawari/rods/solver.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari {
 namespace {

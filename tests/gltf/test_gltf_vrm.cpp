@@ -19,6 +19,7 @@
 #include "kodawari/gltf/import.hpp"
 #include "kodawari/gltf/vrm.hpp"
 #include "kodawari/rods/solver.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari {
 namespace {

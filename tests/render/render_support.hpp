@@ -30,6 +30,7 @@
 #include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari::render_test {
 

@@ -20,6 +20,7 @@
 #include "kodawari/render/apng.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari {
 namespace {

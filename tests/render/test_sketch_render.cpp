@@ -27,6 +27,7 @@
 #include "kodawari/scene.hpp"
 #include "render_support.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari {
 namespace {

@@ -18,6 +18,7 @@
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/scene_edit.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari {
 namespace {

@@ -20,6 +20,7 @@
 #include "kodawari/scene_edit.hpp"
 #include "kodawari/sketch_key.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari {
 namespace {

@@ -26,6 +26,7 @@
 #include "kodawari/backend_factory.hpp"
 #include "kodawari/export.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari {
 namespace {

@@ -32,6 +32,7 @@
 #include "kodawari/scene.hpp"
 #include "kodawari/scene.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 namespace kodawari {
 namespace {

@@ -11,6 +11,7 @@
 #include <nlohmann/json.hpp>
 
 #include <kodawari/scene.hpp>
+#include "test_paths.hpp"
 
 namespace {
 

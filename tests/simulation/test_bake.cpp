@@ -14,6 +14,7 @@
 #include "kodawari/domains/trace.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 

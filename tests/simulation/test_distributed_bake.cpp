@@ -23,6 +23,7 @@
 #include "kodawari/export.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 

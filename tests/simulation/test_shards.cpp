@@ -19,6 +19,7 @@
 #include "kodawari/domains/trace.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 using testing_support::TempDir;

@@ -15,6 +15,7 @@
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
 #include "test_support.hpp"
+#include "test_paths.hpp"
 
 using namespace kodawari;
 
