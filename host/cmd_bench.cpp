@@ -16,7 +16,6 @@
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
 #include "kodawari/rods/synthetic.hpp"
-#include "kodawari/scene.hpp"
 #include "kodawari/simd.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"

@@ -11,7 +11,6 @@
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/scene.hpp"
-#include "kodawari/scene.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"

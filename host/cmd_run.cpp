@@ -11,7 +11,6 @@
 #include "kodawari/bake.hpp"
 #include "kodawari/distributed.hpp"
 #include "kodawari/scene.hpp"
-#include "kodawari/scene.hpp"
 #include "kodawari/shards.hpp"
 #ifdef KODAWARI_WITH_MPI
 #include "mpi_communicator.hpp"

@@ -11,7 +11,6 @@
 #include "kodawari/compare.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
-#include "kodawari/scene.hpp"
 
 namespace kodawari::cli {
 namespace {

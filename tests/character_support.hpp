@@ -27,7 +27,6 @@
 #include <kodawari/rods/kinematics.hpp>
 #include <kodawari/rods/solver.hpp>
 #include <kodawari/rods/world.hpp>
-#include <kodawari/scene.hpp>
 
 #include "test_support.hpp"
 #include "test_paths.hpp"

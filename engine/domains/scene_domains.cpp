@@ -7,7 +7,6 @@
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/domains/flocking.hpp"
 #include "kodawari/scene.hpp"
-#include "kodawari/scene.hpp"
 
 namespace kodawari {
 

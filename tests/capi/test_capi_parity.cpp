@@ -25,7 +25,6 @@
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
-#include "kodawari/scene.hpp"
 #include "test_support.hpp"
 #include "vulkan_app_support.hpp"
 

@@ -12,7 +12,6 @@
 
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
-#include "kodawari/scene.hpp"
 
 using namespace kodawari;
 

@@ -14,7 +14,7 @@
 #include "fuzz_support.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
 #include "kodawari/scene.hpp"
-#include "kodawari/scene.hpp"
+#include "test_paths.hpp"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {
     namespace fs = std::filesystem;

@@ -17,6 +17,7 @@
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/simulation.hpp"
+#include "test_paths.hpp"
 
 namespace {
 

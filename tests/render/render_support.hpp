@@ -28,7 +28,6 @@
 #include "kodawari/domains/scene_draw.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
-#include "kodawari/scene.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

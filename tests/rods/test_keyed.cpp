@@ -19,7 +19,6 @@
 #include <kodawari/scene.hpp>
 #include <kodawari/rods/keyed.hpp>
 #include <kodawari/rods/world.hpp>
-#include <kodawari/scene.hpp>
 
 #include "character_support.hpp"
 

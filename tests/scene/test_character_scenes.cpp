@@ -22,7 +22,6 @@
 #include <kodawari/rods/kinematics.hpp>
 #include <kodawari/rods/solver.hpp>
 #include <kodawari/rods/world.hpp>
-#include <kodawari/scene.hpp>
 
 #include "character_support.hpp"
 

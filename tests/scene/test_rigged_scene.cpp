@@ -30,7 +30,6 @@
 #include "kodawari/gltf/rig_scene.hpp"
 #include "kodawari/rod_backend.hpp"
 #include "kodawari/scene.hpp"
-#include "kodawari/scene.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 
