@@ -3,6 +3,7 @@
 #include "kodawari/route_check.hpp"
 
 #include "kodawari/compute.hpp"
+#include "kodawari/domains/chains.hpp"
 #include "kodawari/gpu_info.hpp"
 #include "kodawari/simd.hpp"
 
@@ -133,6 +134,11 @@ void add_lod_options(CLI::App& app, LodFlags& flags) {
     add_switch(app, "--lod-every-frame", flags.every_frame,
                "step every posed and hidden chain every frame, as the scene's `lod.lower_rate: false` (default: far posed chains "
                "step every 2nd frame, hidden ones every 4th)");
+    add_text(app, "--budget-ms", flags.budget_ms, "MS",
+             "the budget mode (turns --lod on): fewer characters full, nearest first, so that a frame's clips and chains stay "
+             "within MS milliseconds, in (0, 100000]; `run` and `render` price frames by the scene's cost model (`lod.costs`: "
+             "the same bits on every run), `view` and `bench` by what their frames take (default: the scene's `lod.budget_ms`, "
+             "else no budget)");
 }
 
 void apply_lod(const LodFlags& flags, Scene& scene) {
@@ -143,6 +149,19 @@ void apply_lod(const LodFlags& flags, Scene& scene) {
         if (!(bias >= -8.0f && bias <= 8.0f)) throw UsageError{"--lod-bias: " + *flags.bias + " is not in [-8, 8]"};
         scene.lod.bias = bias;
     }
+    if (flags.budget_ms) {
+        const float ms = parse_real("--budget-ms", *flags.budget_ms);
+        if (!(ms > 0.0f && ms <= 100000.0f)) {
+            throw UsageError{"--budget-ms: expected a positive number of milliseconds, at most 100000, got " + *flags.budget_ms};
+        }
+        scene.lod.enabled = true;
+        scene.lod.budget_ms = ms;
+    }
+}
+
+Result<void> apply_measured_budget(const LodFlags& flags, Simulation& sim) {
+    if (!flags.budget_ms) return {};
+    return set_lod_budget(sim, sim.scene().lod.budget_ms, /*measured=*/true);
 }
 
 Result<std::unique_ptr<Simulation>> make_simulation(Scene scene, const BackendChoice& choice, std::optional<std::uint64_t> frames,

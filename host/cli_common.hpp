@@ -89,11 +89,18 @@ struct LodFlags {
     bool lod = false;
     std::optional<std::string> bias;
     bool every_frame = false;
+    std::optional<std::string> budget_ms;
 };
 void add_lod_options(CLI::App& app, LodFlags& flags);
 /// The flags applied to `scene`'s settings: --lod turns them on (the scene's `lod`, or the
 /// defaults), --lod-bias sets the bias (a UsageError outside [-8, 8]).
+/// --budget-ms turns them on with the scene's `lod.budget_ms` set (priced by the cost
+/// model: a bake's levels never depend on the wall clock); a UsageError unless a positive
+/// finite number of ms, at most 100000.
 void apply_lod(const LodFlags& flags, Scene& scene);
+/// For `view` and `bench`: --budget-ms measured, the model scaled by what the frames take
+/// on this machine (set_lod_budget(sim, ms, true)); nothing without it.
+[[nodiscard]] Result<void> apply_measured_budget(const LodFlags& flags, Simulation& sim);
 
 /// Options common to commands that run a simulation.
 struct BackendChoice {

@@ -190,7 +190,13 @@ int bench_crowd(const CrowdOptions& o) {
     std::vector<Variant> variants;
     for (const BenchVariant& v : backends) {
         variants.push_back({&v, false});
-        if (v.kind == BackendKind::Vulkan) variants.push_back({&v, true});
+        // A budget ranks the characters by their reference joints on the host (their rod
+        // input stays there: set_lod_budget()).
+        if (v.kind == BackendKind::Vulkan && !o.lod.budget_ms) variants.push_back({&v, true});
+    }
+    if (o.lod.budget_ms) {
+        std::printf("  a budget of %g ms a frame (clips and chains, measured): vulkan/dev-in left out, the budget keeps the "
+                    "rod input on the host\n", static_cast<double>(scene.lod.budget_ms));
     }
     std::vector<std::unique_ptr<Simulation>> sims;
     std::vector<Contender> contenders;
@@ -211,6 +217,7 @@ int bench_crowd(const CrowdOptions& o) {
             continue;
         }
         Simulation& sim = *made.value();
+        if (auto r = apply_measured_budget(o.lod, sim); !r) return report(r.error());
         if (auto r = sim.step(3); !r) return report(r.error());
         if (device_input && !rod_inputs_on_device(sim)) {
             return report(make_error(Error::Kind::Internal, "the rod input could not go on the device"));

@@ -41,6 +41,7 @@ struct ViewOptions {
     std::optional<std::string> keys;
     std::optional<std::string> size;
     bool joints = false;
+    LodFlags lod;
 };
 
 int cmd_view(const ViewOptions& o) {
@@ -92,6 +93,7 @@ int cmd_view(const ViewOptions& o) {
     // The scene first: a bad scene is reported without opening a window.
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
+    apply_lod(o.lod, loaded.value());
     Viewer v;
     v.scene_path = loaded.value().path;
     auto text = read_text_file(v.scene_path);
@@ -149,6 +151,7 @@ int cmd_view(const ViewOptions& o) {
     auto made = make_simulation(std::move(loaded).value(), v.choice, std::nullopt);
     if (!made) return report(made.error());
     v.sim = std::move(made).value();
+    if (auto r = apply_measured_budget(o.lod, *v.sim); !r) return report(r.error());
     if (auto r = v.sim->show_on(*renderer.value()); !r) return report(r.error());
 
     glfwSetWindowUserPointer(window.w, &v);
@@ -293,6 +296,7 @@ Command add_view(CLI::App& app) {
              "one key per drawn frame first: space right left home [ ] 1 2 3 s k w u c o + - p q escape, drag:X1:Y1:X2:Y2, "
              "orbit:DX:DY, resize:W:H (default: none)");
     add_text(*c, "--screenshot", o->screenshot, "FILE.png", "write the last drawn frame (default: none)");
+    add_lod_options(*c, o->lod);
     add_backend_options(*c, o->backend);
     return {c, [o] { return cmd_view(*o); }};
 }

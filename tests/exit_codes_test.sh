@@ -22,6 +22,7 @@ printf 'not a part file\n' >"$work/bad.kwpart"
 printf '{"points": [[-900, -900], [-800, -850]]}' >"$work/offimage.json"
 printf '{"points": [[640, 300], [660, 260], [700, 240], [740, 250]]}' >"$work/stroke.json"
 printf '{"format":"kodawari-scene"' >"$work/truncated.json"
+python3 -c 'import json, sys; d = json.load(open("scenes/ahoge.json")); d["lod"] = {"budget_ms": 0}; json.dump(d, open(sys.argv[1], "w"))' "$work/zero-budget.json"
 "$bin" run scenes/flock.json --backend cpu --frames 3 --shard 0/1 --out "$work/ok.kwpart" >/dev/null 2>&1
 
 commands_seen=()
@@ -59,6 +60,9 @@ row bench "a workgroup size that is no power of two" 2 "--workgroup-size" -- ben
 row bench "a workgroup size list with one out of range" 2 "--workgroup-sizes" -- bench chains --backends vulkan --workgroup-sizes 64,2048
 row run "a level-of-detail bias out of range" 2 "--lod-bias" -- run scenes/crowd-gltf.json --frames 1 --no-export --lod-bias 9
 row render "a level-of-detail bias out of range" 2 "--lod-bias" -- render scenes/crowd-gltf.json --out "$work/lod-frames" --frames 1 --lod-bias 9
+row run "a frame budget of zero" 2 "--budget-ms: expected a positive number of milliseconds" -- run scenes/crowd-gltf.json --frames 1 --no-export --budget-ms 0
+row bench "a frame budget that is not a number" 2 "--budget-ms: expected a finite number" -- bench crowd --count 2 --frames 1 --budget-ms nan
+row run "a scene's budget of zero" 2 "lod.budget_ms" -- run "$work/zero-budget.json" --frames 1 --no-export
 row rig "missing character file" 2 "nosuch.glb" -- rig "$work/nosuch.glb" --out "$work/r.json"
 row rig "missing bird file" 2 "nosuch.glb" -- rig "$work/nosuch.glb" --bird --out "$work/r.json"
 row rig "missing bird map file" 2 "nosuch-map.json" -- rig scenes/characters/chibi.glb --bird --map "$work/nosuch-map.json" --out "$work/r.json"

@@ -20,7 +20,7 @@ bool step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, cons
     // Its level of detail this frame (rods::chain_level, from its character's reference joint).
     // A frame whose camera gives no levels (LOD off, an orthographic camera) has every chain
     // full at once.
-    const rods::LodView view = rods::lod_view(world.lod, frame.camera);
+    const rods::LodView view = rods::lod_view(world.lod, frame.camera, frame.full_distance_cap);
     const glm::vec3 reference = frame.reference[c.character].position;
     const rods::Level previous = static_cast<rods::Level>(state.level);
     const rods::Level level = rods::chain_level(view, reference, previous);

@@ -216,7 +216,7 @@ public:
         // Levels of detail (rods::chain_level, by engine/rods' own function, a few dozen
         // operations a chain), written to each lane's level row for the kernel, padding
         // lanes too (they repeat their batch's first chain).
-        const rods::LodView lod = rods::lod_view(world_->lod, frame.camera);
+        const rods::LodView lod = rods::lod_view(world_->lod, frame.camera, frame.full_distance_cap);
         // The posed and hidden levels' rate (rods::chain_rests): which lanes keep their state.
         const bool rate = lod.enabled && lod.lower_rate && frame.number != rods::kNoFrameNumber;
         resting_.assign(rate ? batches_.size() : 0, 0u);

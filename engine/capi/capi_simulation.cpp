@@ -116,6 +116,13 @@ KODAWARI_C_API kodawari_status kodawari_simulation_set_wind(kodawari_simulation*
     });
 }
 
+KODAWARI_C_API kodawari_status kodawari_simulation_set_lod_budget(kodawari_simulation* sim, float budget_ms, int measured) {
+    return guard("kodawari_simulation_set_lod_budget", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        check(set_lod_budget(*sim->sim, budget_ms, measured != 0));
+    });
+}
+
 namespace {
 
 FlockAgent flock_agent(const kodawari_flock_agent& a) {

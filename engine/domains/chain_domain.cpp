@@ -13,6 +13,7 @@
 #include "kodawari/crowd_animator.hpp"
 #include "kodawari/domains/chain_draw.hpp"
 #include "kodawari/render/renderer.hpp"
+#include "kodawari/rods/lod_budget.hpp"
 #include "kodawari/simulation.hpp"
 #include "kodawari/vulkan_embed.hpp"
 
@@ -78,6 +79,12 @@ public:
         device_inputs_ = setup.device_inputs;
         // A shard may hold none of the characters: nothing to step then.
         if (!scene_ || scene_->instances.empty()) return {};
+        const rods::LodSettings& lod = scene_->world.lod;
+        if (lod.enabled && lod.budget_ms > 0.0f) {
+            auto budget = rods::LodBudget::create(lod.budget_ms, /*measured=*/false, lod.costs, "lod.budget_ms");
+            if (!budget) return budget.error();
+            KW_TRY(take_budget(std::move(budget).value()));
+        }
         auto made = make_rod_backend(setup.kind, setup.options);
         if (!made) return made.error();
         rods_ = std::move(made).value();
@@ -192,7 +199,35 @@ public:
     }
     const ChainTiming& timing() const { return timing_; }
 
+    Result<void> set_budget(float budget_ms, bool measured) {
+        const rods::LodSettings& lod = scene_->world.lod;
+        if (!lod.enabled) {
+            return make_error(Error::Kind::InvalidInput,
+                              "set_lod_budget: the scene's levels of detail are off (its `lod.enabled`, Scene::lod.enabled)");
+        }
+        auto budget = rods::LodBudget::create(budget_ms, measured, lod.costs, "set_lod_budget: budget_ms");
+        if (!budget) return budget.error();
+        return take_budget(std::move(budget).value());
+    }
+    const std::optional<rods::LodBudget>& budget() const { return budget_; }
+
 private:
+    // The budget ranks characters by their reference joints on the host: the rigged
+    // characters' rod input stays there (their reference joints are what the pose
+    // backends write on the device otherwise).
+    Result<void> take_budget(rods::LodBudget budget) {
+        if (animator_ && animator_->writes_inputs_on_device()) {
+            return make_error(Error::Kind::Unsupported,
+                              "set_lod_budget: the rigged characters' rod input is written on the device since the first "
+                              "step; set the budget before it, or make the Simulation with SimulationOptions::device_inputs = false");
+        }
+        device_inputs_ = false;
+        chains_per_character_.assign(scene_->world.character_count, 0);
+        for (const rods::ChainInstance& chain : scene_->world.chains) ++chains_per_character_[chain.character];
+        budget_ = std::move(budget);
+        return {};
+    }
+
     // Frame `f` of the chains: the kinematic input, then the initial state (f == 0) or one
     // step, submitted, or recorded into `recording` when one is given (record()).
     Result<void> frame(std::uint32_t f, compute::Recording* recording = nullptr) {
@@ -200,6 +235,12 @@ private:
         timing_.pose_ms += animator_->last_pose_ms();
         if (view_camera_) input_.camera = *view_camera_;
         if (wind_ && !input_.winds.empty()) input_.winds[0] = *wind_;
+        const double pose_ms = animator_->last_pose_ms();
+        if (budget_) {
+            references_.resize(input_.reference.size());
+            for (std::size_t c = 0; c < references_.size(); ++c) references_[c] = input_.reference[c].position;
+            input_.full_distance_cap = budget_->cap(rods::lod_view(scene_->world.lod, input_.camera), references_, chains_per_character_);
+        }
         const auto start = std::chrono::steady_clock::now();
         if (f == 0) {
             KW_TRY(rods_->load(scene_->world, input_));
@@ -222,7 +263,11 @@ private:
             auto took = animator_->write_inputs_on(*rods_);
             if (!took) return took.error();
         }
-        (f < 2 ? timing_.warmup_seconds : timing_.seconds) += seconds_since(start);
+        const double step_seconds = seconds_since(start);
+        (f < 2 ? timing_.warmup_seconds : timing_.seconds) += step_seconds;
+        // A measured budget learns this machine's cost of the frame it priced (clips and
+        // chains; a recorded step's time is the application's to measure).
+        if (budget_ && f > 0 && recording == nullptr) budget_->observe(pose_ms + step_seconds * 1000.0);
         if (f >= 2 && recording == nullptr && rods_->last_gpu_ms() >= 0.0) timing_.gpu_ms += rods_->last_gpu_ms();
         return {};
     }
@@ -234,6 +279,9 @@ private:
     std::optional<CrowdAnimator> animator_;
     std::optional<rods::Camera> view_camera_;
     std::optional<rods::WindField> wind_;  // set_wind(): the scene's field from now on
+    std::optional<rods::LodBudget> budget_;  // the scene's lod.budget_ms, or set_lod_budget()
+    std::vector<std::uint32_t> chains_per_character_;
+    std::vector<glm::vec3> references_;
     rods::RodFrame input_;
     rods::RodFrame host_input_;
     std::optional<std::uint32_t> host_input_frame_;
@@ -299,6 +347,21 @@ void set_view_camera(Simulation& sim, std::optional<rods::Camera> camera) {
 Result<void> set_wind(Simulation& sim, std::optional<rods::WindField> wind) {
     if (ChainDomain* domain = find(sim)) return domain->set_wind(wind);
     return {};
+}
+
+Result<void> set_lod_budget(Simulation& sim, float budget_ms, bool measured) {
+    ChainDomain* domain = find(sim);
+    if (domain == nullptr || domain->scene() == nullptr) {
+        return make_error(Error::Kind::InvalidInput, "set_lod_budget: the simulation has no characters' chains");
+    }
+    return domain->set_budget(budget_ms, measured);
+}
+
+std::optional<LodBudgetState> lod_budget(const Simulation& sim) {
+    const ChainDomain* domain = find(sim);
+    if (domain == nullptr || !domain->budget()) return std::nullopt;
+    const rods::LodBudget& b = *domain->budget();
+    return LodBudgetState{b.budget_ms(), b.measured(), b.scale()};
 }
 
 const ChainTiming& chain_timing(const Simulation& sim) {

@@ -40,11 +40,15 @@ Result<void> validate(const LodSettings& lod, const char* what) {
     if (!(lod.blend_time > 0.0f && lod.blend_time <= 100.0f)) return bad("blend_time", "a number in (0, 100] s");
     if (!(lod.vertical_fov_deg > 0.0f && lod.vertical_fov_deg < 180.0f)) return bad("vertical_fov_deg", "a number in (0, 180) degrees");
     if (!(lod.aspect > 0.0f && lod.aspect <= 100.0f)) return bad("aspect", "a number in (0, 100]");
+    if (!(lod.budget_ms == 0.0f || (lod.budget_ms > 0.0f && lod.budget_ms <= 100000.0f))) {
+        return bad("budget_ms", "0 (no budget) or a number of milliseconds in (0, 100000]");
+    }
+    KW_TRY(validate(lod.costs, (std::string(what) + ".costs").c_str()));
     if (!(lod.viewport_height >= 1.0f && lod.viewport_height <= 100000.0f)) return bad("viewport_height", "a number in [1, 100000] pixels");
     return {};
 }
 
-LodView lod_view(const LodSettings& lod, const Camera& camera) {
+LodView lod_view(const LodSettings& lod, const Camera& camera, float cap) {
     LodView v;
     v.enabled = lod.enabled && camera.projection == Camera::Projection::Perspective;
     if (!v.enabled) return v;
@@ -65,6 +69,10 @@ LodView lod_view(const LodSettings& lod, const Camera& camera) {
     const float scale = lod.size * lod.viewport_height / (2.0f * v.tan_y) * std::exp2(lod.bias);
     v.full_distance = scale / lod.full_pixels;
     v.stay_distance = scale / (lod.full_pixels * (1.0f - lod.hysteresis));
+    // The budget's cap: no character deeper is full, and the hysteresis band ends there
+    // too (a full one past it would spend what the budget gave a nearer one).
+    if (cap < v.full_distance) v.full_distance = cap;
+    if (cap < v.stay_distance) v.stay_distance = std::max(cap, v.full_distance);
     return v;
 }
 

@@ -466,7 +466,7 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
 // (build_rod_scene), as for a scene built in code.
 Result<void> read_lod(const JsonReader& r, const JsonNode& node, rods::LodSettings& lod) {
     KW_TRY(r.object(node, {"enabled", "size", "full_pixels", "hysteresis", "bias", "settle_rate", "blend_time", "lower_rate",
-                         "viewport"}));
+                         "viewport", "budget_ms", "costs"}));
     lod.enabled = true;
     if (const JsonNode enabled = r.member(node, "enabled"); enabled.present()) KW_SCENE_ASSIGN(lod.enabled, r.boolean(enabled));
     KW_TRY(optional_member(r, node, "size", lod.size, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
@@ -480,6 +480,25 @@ Result<void> read_lod(const JsonReader& r, const JsonNode& node, rods::LodSettin
     KW_TRY(optional_member(r, node, "blend_time", lod.blend_time,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 100.0)); }));
     if (const JsonNode rate = r.member(node, "lower_rate"); rate.present()) KW_SCENE_ASSIGN(lod.lower_rate, r.boolean(rate));
+    KW_TRY(optional_member(r, node, "budget_ms", lod.budget_ms,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 100000.0)); }));
+    if (const JsonNode costs = r.member(node, "costs"); costs.present()) {
+        KW_TRY(r.object(costs, {"full_chain_us", "posed_chain_us", "full_clip_us", "posed_clip_us"}));
+        rods::LodCosts& c = lod.costs;
+        for (auto [name, field] : {std::pair{"full_chain_us", &c.full_chain_us}, std::pair{"posed_chain_us", &c.posed_chain_us},
+                                   std::pair{"full_clip_us", &c.full_clip_us}, std::pair{"posed_clip_us", &c.posed_clip_us}}) {
+            KW_TRY(optional_member(r, costs, name, *field,
+                                   [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0e6)); }));
+        }
+        if (c.full_chain_us < c.posed_chain_us) {
+            return r.expected(r.member(costs, "full_chain_us").present() ? r.member(costs, "full_chain_us") : costs,
+                              "full_chain_us at least posed_chain_us (a full chain costs more than a posed one)");
+        }
+        if (c.full_clip_us < c.posed_clip_us) {
+            return r.expected(r.member(costs, "full_clip_us").present() ? r.member(costs, "full_clip_us") : costs,
+                              "full_clip_us at least posed_clip_us");
+        }
+    }
     if (const JsonNode viewport = r.member(node, "viewport"); viewport.present()) {
         std::size_t count = 0;
         KW_SCENE_ASSIGN(count, r.array(viewport, "[width, height] in pixels"));

@@ -113,8 +113,12 @@ bool CrowdAnimator::choose_clip_updates(std::uint32_t index, const rods::RodFram
     // With lower_rate off, the levels of characters twice as near decide (one about to turn
     // full has its clip at every frame first) and the clips alone keep the levels' rate.
     rods::LodSettings decide = lod;
-    if (!lod.lower_rate) decide.bias = std::min(lod.bias + 1.0f, 8.0f);
-    const rods::LodView view = rods::lod_view(decide, previous.camera);
+    float cap = previous.full_distance_cap;  // the budget's, at the last frame
+    if (!lod.lower_rate) {
+        decide.bias = std::min(lod.bias + 1.0f, 8.0f);
+        cap *= 2.0f;
+    }
+    const rods::LodView view = rods::lod_view(decide, previous.camera, cap);
     for (Rig& rig : rigs_) {
         rig.may_keep.resize(rig.instances.size());
         for (std::size_t j = 0; j < rig.instances.size(); ++j) {

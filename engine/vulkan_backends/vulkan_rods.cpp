@@ -572,7 +572,7 @@ private:
         // The world's first step starts its chains moving with their roots (rods::start_moving).
         // Levels of detail: the camera's part of the decision (rods::lod_view), for
         // shaders/lib/rod_lod.glsl.
-        const rods::LodView lod = rods::lod_view(world_->lod, frame.camera);
+        const rods::LodView lod = rods::lod_view(world_->lod, frame.camera, frame.full_distance_cap);
         // The posed and hidden levels' rate (rods::rate_turn): the frame's turn mod 4 and the
         // first character's place in its group, which with each chain's character give its turn.
         const std::uint32_t rate = lod.enabled && lod.lower_rate && frame.number != rods::kNoFrameNumber

@@ -17,6 +17,7 @@ argument or the file, and what was expected).
 """
 import ctypes
 import json
+import math
 import os
 import shutil
 import subprocess
@@ -250,6 +251,21 @@ class Simulation:
             handle = self._live()
             _check(_native.lib.kodawari_simulation_set_wind(handle, ctypes.byref(wind) if wind is not None else None),
                    handle)
+
+    def set_lod_budget(self, budget_ms, *, measured=False):
+        """The budget mode of the levels of detail: from the next frame, fewer characters
+        are fully simulated, nearest first, so that a frame's clips and chains stay within
+        `budget_ms` milliseconds. `measured=False` prices frames by the scene's cost model
+        (the same bits on every run); True scales it by what the frames took. Raises
+        ValueError for a budget that is not a positive finite number, Error when the scene
+        has no characters, its `lod` is off, or (Unsupported) after the first step with
+        the rod input on the device."""
+        budget = float(budget_ms)
+        if not math.isfinite(budget) or budget <= 0.0:
+            raise ValueError(f"budget_ms: {budget_ms!r}; expected a positive finite number of milliseconds")
+        with self._lock:
+            handle = self._live()
+            _check(_native.lib.kodawari_simulation_set_lod_budget(handle, budget, 1 if measured else 0), handle)
 
     FLOCK_AGENT_KINDS = ("predator", "attractor", "obstacle", "capsule", "plane")
 

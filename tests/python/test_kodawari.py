@@ -180,6 +180,23 @@ print(f"set_wind: a 10 m/s wind moved a joint by {moved:.4f} m in 30 frames")
 check(moved > 1e-3, f"set_wind: the wind moved nothing ({moved} m)")
 check(numpy.array_equal(restored, calm), "set_wind(None) did not give the scene's calm air back")
 
+# ---- The levels of detail's budget from the application: refused where it cannot be (a
+# budget that is no positive finite number raises ValueError; a scene whose lod is off
+# raises Error naming it), taken otherwise.
+with kodawari.Simulation.open(AHOGE, "cpu", frames=4) as sim:
+    for bad in (0.0, -1.0, float("inf"), float("nan")):
+        try:
+            sim.set_lod_budget(bad)
+            check(False, f"set_lod_budget({bad}) raised nothing")
+        except ValueError as error:
+            check("budget_ms" in str(error), f"set_lod_budget({bad}): {error}")
+    try:
+        sim.set_lod_budget(16.0)
+        check(False, "set_lod_budget on a scene without levels of detail raised nothing")
+    except kodawari.Error as error:
+        check("levels of detail are off" in str(error), f"set_lod_budget without lod: {error}")
+    sim.step(4)
+
 # ---- Flock agents from the application: named errors, and a flocking flock flies round an
 # obstacle placed in its way (no bird inside the 3 m sphere; without it, birds pass its centre).
 flocking_scene = os.path.join(temp, "flocking.json")

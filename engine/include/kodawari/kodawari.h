@@ -784,6 +784,17 @@ KODAWARI_C_API kodawari_status kodawari_simulation_step(kodawari_simulation* sim
 /// field out of range is KODAWARI_INVALID_ARGUMENT naming the member.
 KODAWARI_C_API kodawari_status kodawari_simulation_set_wind(kodawari_simulation* sim, const kodawari_wind* wind);
 
+/// The budget mode of the levels of detail (docs/level-of-detail.md "The budget"): from
+/// the next frame, fewer characters are fully simulated, nearest first, so that a frame's
+/// clips and chains stay within `budget_ms` milliseconds (a positive finite number).
+/// `measured` 0 prices frames by the scene's cost model alone (`lod.costs`: the same bits
+/// on every run, as a bake must be); non-zero scales the model by what the frames took
+/// (an interactive application's). KODAWARI_INVALID_ARGUMENT naming `budget_ms` for a bad
+/// budget, or when the scene has no characters or its `lod` is off; KODAWARI_UNSUPPORTED
+/// once the rigged characters' rod input is written on the device (set it before the
+/// first step).
+KODAWARI_C_API kodawari_status kodawari_simulation_set_lod_budget(kodawari_simulation* sim, float budget_ms, int measured);
+
 /// What an application places among a scene's flocking birds (docs/flocking.md): a
 /// predator they flee, an attractor they are drawn to, or an obstacle they keep out of
 /// (a sphere, a capsule, or a plane they keep to one side of).

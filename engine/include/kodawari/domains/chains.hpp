@@ -107,6 +107,25 @@ KODAWARI_API void set_view_camera(Simulation& sim, std::optional<rods::Camera> c
 /// range (rods::validate) is refused, naming the member. Frames already simulated keep
 /// theirs; a seek or a rewind replays with the field set now.
 [[nodiscard]] KODAWARI_API Result<void> set_wind(Simulation& sim, std::optional<rods::WindField> wind);
+/// The budget mode (docs/level-of-detail.md "The budget"): from the next frame, the
+/// characters' levels keep a frame's clips and chains within `budget_ms` (a positive
+/// finite number of ms), nearest characters full first. `measured` false prices frames by
+/// the scene's cost model alone (Scene::lod.costs: deterministic, as a bake must be);
+/// true scales the model by what the frames measured (an interactive view's). Refused
+/// (InvalidInput naming the argument) without characters, with the scene's levels of
+/// detail off, or for a bad budget; Unsupported once the rigged characters' rod input is
+/// written on the device (set it before the first step: the budget then keeps that input
+/// on the host, where it ranks the characters).
+[[nodiscard]] KODAWARI_API Result<void> set_lod_budget(Simulation& sim, float budget_ms, bool measured);
+/// A budget's state: its ms, whether measured, and the scale measured frames put on the
+/// cost model (1 for a model-only budget).
+struct LodBudgetState {
+    float budget_ms = 0.0f;
+    bool measured = false;
+    float scale = 1.0f;
+};
+/// The budget in force (the scene's `lod.budget_ms` or set_lod_budget()); none without.
+[[nodiscard]] KODAWARI_API std::optional<LodBudgetState> lod_budget(const Simulation& sim);
 /// The chain domain's time so far (zero without chains).
 [[nodiscard]] KODAWARI_API const ChainTiming& chain_timing(const Simulation& sim);
 

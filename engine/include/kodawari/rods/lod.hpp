@@ -10,6 +10,7 @@
 /// velocities it leaves keep every change of level free of a jump.
 
 #include <cstdint>
+#include <limits>
 
 #include <glm/glm.hpp>
 
@@ -25,6 +26,21 @@ enum class Level : std::uint32_t {
     Posed = 1,   ///< no dynamics: step_posed()
     Hidden = 2,  ///< off the camera's frustum by more than the character's size: step_posed()
 };
+
+/// What a character's frame costs at each level, in microseconds: its clip and each of
+/// its chains. Defaults: the cpu backend on 2 cores (AVX2) at scenes/crowd-10k.json
+/// (`bench crowd --count 10000`: 87.8 ms of chains for 70 000 full chains, 16.2 ms at
+/// every character posed or hidden with the rate; clips 23.2 ms at every frame, 11.9 ms
+/// at the levels' rate), docs/level-of-detail.md.
+struct LodCosts {
+    float full_chain_us = 1.25f;    ///< a full chain's step (every substep)
+    float posed_chain_us = 0.23f;   ///< a posed or hidden chain's, over its rate's kept frames
+    float full_clip_us = 2.3f;      ///< a full character's clip, every frame
+    float posed_clip_us = 1.2f;     ///< a posed or hidden character's clip, at its rate
+};
+
+/// Checks the costs (each finite and >= 0, full at least posed), naming `what`.field.
+[[nodiscard]] KODAWARI_API Result<void> validate(const LodCosts& costs, const char* what = "lod.costs");
 
 /// How a world chooses its characters' levels (RodWorld::lod). Off by default: a world
 /// without it steps every chain fully, bit for bit as before.
@@ -58,6 +74,12 @@ struct LodSettings {
     /// every kPosedPeriod-th frame, a hidden one every kHiddenPeriod-th, over the frames it
     /// kept): false steps every chain every frame.
     bool lower_rate = true;
+    /// The budget mode (lod_budget.hpp, docs/level-of-detail.md "The budget"): 0 (off), or
+    /// a frame's cost in ms that the levels keep within, nearest characters full first,
+    /// priced by `costs` (the cost model: a bake's levels never depend on the wall
+    /// clock). full_pixels still bounds the full characters: a budget only makes fewer full.
+    float budget_ms = 0.0f;
+    LodCosts costs;
     /// The camera's projection: vertical field of view (degrees, in (0, 180)), the
     /// image's width over height and its height in pixels (> 0). The scene's camera's
     /// fov; 1920 x 1080 unless told.
@@ -81,7 +103,10 @@ struct LodView {
     float stay_distance = 0.0f;  ///< depth within which a full one stays full (>= full_distance)
     bool lower_rate = false;     ///< LodSettings::lower_rate (chain_rests())
 };
-[[nodiscard]] KODAWARI_API LodView lod_view(const LodSettings& lod, const Camera& camera);
+/// RodFrame::full_distance_cap when no budget caps it (lod_budget.hpp).
+inline constexpr float kNoDistanceCap = std::numeric_limits<float>::infinity();
+/// `cap` (RodFrame::full_distance_cap, the budget's) bounds both distances from above.
+[[nodiscard]] KODAWARI_API LodView lod_view(const LodSettings& lod, const Camera& camera, float cap = kNoDistanceCap);
 
 /// The level of a chain whose character's reference joint is at `reference`, given its
 /// level at its last step (shaders/lib/rod_lod.glsl). Full when `view` is not enabled.

@@ -136,6 +136,10 @@ struct RodFrame {
     /// RodScene::first_instance): the characters that take turns together are the whole
     /// scene's.
     std::uint32_t first_character = 0;
+    /// The budget's cap on the full distance this frame (lod_budget.hpp, LodBudget::cap()):
+    /// a character deeper than it is not full whatever its projected size. kNoDistanceCap
+    /// (infinity) without a budget.
+    float full_distance_cap = kNoDistanceCap;
 };
 
 /// Checks that `frame` fits `world` (sizes, dt > 0, finite values).
