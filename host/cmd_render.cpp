@@ -196,7 +196,39 @@ struct RenderOptions {
     std::optional<std::string> camera;
     bool joints = false;
     LodFlags lod;
+    bool show_lod = false;
 };
+
+// --show-lod: the characters at each level (rods::Level: full, posed, hidden) by colour.
+constexpr std::array<render::Rgba8, 3> kLevelColors = {render::Rgba8{70, 200, 90, 255}, render::Rgba8{240, 170, 40, 255},
+                                                       render::Rgba8{90, 130, 230, 255}};
+constexpr std::array<const char*, 3> kLevelNames = {"full", "posed", "hidden"};
+
+// A dot over each character's reference joint in its level's colour: the level of its
+// first chain (every chain of a character takes the same, shaders/lib/rod_lod.glsl),
+// read back from the rod backend. Returns how many characters are at each level.
+Result<std::array<std::uint32_t, 3>> add_level_dots(render::DrawList& list, Simulation& sim, std::vector<rods::Level>& levels) {
+    std::array<std::uint32_t, 3> counts{};
+    const RodScene* scene = rod_scene(sim);
+    if (scene == nullptr) return counts;
+    KW_TRY(read_chain_levels(sim, levels));
+    auto input = host_chain_input(sim);
+    if (!input) return input.error();
+    const rods::RodFrame& frame = *input.value();
+    std::vector<std::uint8_t> seen(scene->world.character_count, 0);
+    for (std::size_t c = 0; c < levels.size() && c < scene->world.chains.size(); ++c) {
+        const std::uint32_t character = scene->world.chains[c].character;
+        if (seen[character] != 0 || character >= frame.reference.size()) continue;
+        seen[character] = 1;
+        const auto level = std::min<std::size_t>(static_cast<std::size_t>(levels[c]), 2);
+        ++counts[level];
+        // Over the reference joint (a head, 1 m characters by default: LodSettings::size)
+        // clear of the hair, 0.16 m across and never under 4 px, so that the far crowd shows too.
+        const float lift = 0.5f * sim.scene().lod.size;
+        list.add_dot(frame.reference[character].position + glm::vec3(0.0f, lift, 0.0f), 0.08f, 4.0f, kLevelColors[level]);
+    }
+    return counts;
+}
 
 int cmd_render(const RenderOptions& o) {
     BackendChoice choice = read_backend_choice(o.backend);
@@ -225,6 +257,12 @@ int cmd_render(const RenderOptions& o) {
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
     apply_lod(o.lod, loaded.value());
+    if (o.show_lod) {
+        if (loaded.value().characters.empty()) {
+            throw UsageError{"--show-lod: scene " + loaded.value().path + " has no characters (levels of detail are the characters' chains')"};
+        }
+        loaded.value().lod.enabled = true;
+    }
     const std::uint32_t scene_frames = loaded.value().frame_count();
     FrameRange range{0, scene_frames, 1};
     if (frames_text) {
@@ -281,6 +319,7 @@ int cmd_render(const RenderOptions& o) {
     kodawari::Perches perches;
     double render_seconds = 0.0;
     const bool show_progress = stderr_is_terminal() && range.end > 100;
+    std::vector<rods::Level> levels;
     for (std::uint32_t f = 0; f < range.end; ++f) {
         const bool drawn = f >= range.first && (f - range.first) % range.step == 0;
         if (auto s = sim.step(); !s) return report(s.error());
@@ -300,6 +339,12 @@ int cmd_render(const RenderOptions& o) {
         render::add_ground_grid(list, grid_points);
         if (rod_scene(sim)) kodawari::add_characters(list, *rod_scene(sim), f);
         kodawari::add_perches(list, perches);
+        if (o.show_lod) {
+            auto counts = add_level_dots(list, sim, levels);
+            if (!counts) return report(counts.error());
+            std::printf("kodawari: frame %u: characters %s %u, %s %u, %s %u\n", f, kLevelNames[0], counts.value()[0], kLevelNames[1],
+                        counts.value()[1], kLevelNames[2], counts.value()[2]);
+        }
         auto image = r.render(list);
         if (!image) return report(image.error());
         render_seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -350,6 +395,9 @@ Command add_render(CLI::App& app) {
     add_size(*c, o->size, "the images");
     add_switch(*c, "--joints", o->joints, "a dot at every simulated joint of the strands (default: off, the strands alone)");
     add_lod_options(*c, o->lod);
+    add_switch(*c, "--show-lod", o->show_lod,
+               "a dot over each character in the colour of its level of detail: green full, amber posed, blue hidden; turns --lod "
+               "on, and prints how many characters are at each level (default: off)");
     add_text(*c, "--contact-sheet", o->contact_sheet, "FILE.png", "also the frames shrunk into one grid (default: none)");
     add_count(*c, "--columns", o->columns, 1, 64, "the contact sheet's columns (default: min(frames, 4))");
     add_text(*c, "--zoom", o->zoom, "F",

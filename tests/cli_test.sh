@@ -360,6 +360,15 @@ check "render with an empty --frames range exits 2 and says why" bash -c "test $
 check "render past the scene's end exits 2" test $? -eq 2
 "$bin" render scenes/ahoge.json --size 0x10 --out "$work/render-bad" >"$work/render-bad3.out" 2>&1
 check "render with a bad --size exits 2" test $? -eq 2
+# --show-lod (issue 35): a dot over each of the 64 characters in its level's colour, and the
+# counts per level printed; the picture differs from the one without the dots.
+"$bin" render scenes/crowd-gltf.json --backend cpu --frames 30 --size 160x90 --show-lod --out "$work/render-lod" \
+    >"$work/render-lod.out" 2>&1
+check "render --show-lod exits 0" test $? -eq 0
+check "render --show-lod counts every character once" bash -c \
+    "grep -E 'frame 30: characters full [0-9]+, posed [0-9]+, hidden [0-9]+' '$work/render-lod.out' | awk '{ n = \$6 + \$8 + \$10; exit (n != 64) }'"
+"$bin" render scenes/crowd-gltf.json --backend cpu --frames 30 --size 160x90 --lod --out "$work/render-nolod" >/dev/null 2>&1
+check "render --show-lod draws the dots" bash -c "! cmp -s '$work/render-lod/crowd-gltf_00030.png' '$work/render-nolod/crowd-gltf_00030.png'"
 
 # --zoom: the scene camera's field of view narrowed about its target; a different picture
 # of the same frame, and a bad value is a usage error.

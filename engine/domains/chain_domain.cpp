@@ -83,7 +83,7 @@ public:
         if (lod.enabled && lod.budget_ms > 0.0f) {
             auto budget = rods::LodBudget::create(lod.budget_ms, /*measured=*/false, lod.costs, "lod.budget_ms");
             if (!budget) return budget.error();
-            KW_TRY(take_budget(std::move(budget).value()));
+            KW_TRY(take_budget(std::move(budget).value(), "lod.budget_ms"));
         }
         auto made = make_rod_backend(setup.kind, setup.options);
         if (!made) return made.error();
@@ -207,7 +207,7 @@ public:
         }
         auto budget = rods::LodBudget::create(budget_ms, measured, lod.costs, "set_lod_budget: budget_ms");
         if (!budget) return budget.error();
-        return take_budget(std::move(budget).value());
+        return take_budget(std::move(budget).value(), "set_lod_budget");
     }
     const std::optional<rods::LodBudget>& budget() const { return budget_; }
 
@@ -215,10 +215,18 @@ private:
     // The budget ranks characters by their reference joints on the host: the rigged
     // characters' rod input stays there (their reference joints are what the pose
     // backends write on the device otherwise).
-    Result<void> take_budget(rods::LodBudget budget) {
+    Result<void> take_budget(rods::LodBudget budget, const char* what) {
+        // A shard would rank its own characters alone and spend the whole budget on them:
+        // its chains would not be the whole run's.
+        if (scene_->instances.size() != scene_characters_) {
+            return make_error(Error::Kind::Unsupported,
+                              std::string(what) + ": a budget ranks every character of the scene, and this shard holds " +
+                                  std::to_string(scene_->instances.size()) + " of its " + std::to_string(scene_characters_) +
+                                  "; bake the shards without a budget, or the scene whole");
+        }
         if (animator_ && animator_->writes_inputs_on_device()) {
             return make_error(Error::Kind::Unsupported,
-                              "set_lod_budget: the rigged characters' rod input is written on the device since the first "
+                              std::string(what) + ": the rigged characters' rod input is written on the device since the first "
                               "step; set the budget before it, or make the Simulation with SimulationOptions::device_inputs = false");
         }
         device_inputs_ = false;

@@ -186,3 +186,15 @@ TEST(LodBudget, SimulationRefusesABadBudgetNamingIt) {
     EXPECT_TRUE(lod_budget(*on.value())->measured);
     EXPECT_TRUE(on.value()->step(4));
 }
+
+TEST(LodBudget, AShardWithABudgetIsRefusedNamingIt) {
+    // A shard would rank its own characters alone: its chains would not be the whole run's.
+    Scene scene = crowd(20);
+    scene.lod.budget_ms = 16.0f;
+    auto made = Simulation::create(std::move(scene), {.backend = BackendKind::Cpu, .frames = 2, .shard = {1, 2}});
+    ASSERT_FALSE(made);
+    EXPECT_EQ(made.error().kind, Error::Kind::Unsupported);
+    EXPECT_NE(made.error().message.find("lod.budget_ms: a budget ranks every character of the scene, and this shard holds 10 of its 20"),
+              std::string::npos)
+        << made.error().message;
+}
