@@ -240,10 +240,10 @@ private:
     // step, submitted, or recorded into `recording` when one is given (record()).
     Result<void> frame(std::uint32_t f, compute::Recording* recording = nullptr) {
         KW_TRY(animator_->frame(f, input_));
-        timing_.pose_ms += animator_->last_pose_ms();
+        const double pose_ms = animator_->last_pose_ms();
+        timing_.pose_ms += pose_ms;
         if (view_camera_) input_.camera = *view_camera_;
         if (wind_ && !input_.winds.empty()) input_.winds[0] = *wind_;
-        const double pose_ms = animator_->last_pose_ms();
         if (budget_) {
             references_.resize(input_.reference.size());
             for (std::size_t c = 0; c < references_.size(); ++c) references_[c] = input_.reference[c].position;

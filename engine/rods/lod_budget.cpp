@@ -13,11 +13,7 @@
 namespace kodawari::rods {
 namespace {
 
-struct Candidate {
-    float depth;
-    std::uint32_t character;
-    double extra_us;  // what turning it full adds to the frame
-};
+using Candidate = detail::LodCandidate;
 
 // A character's modelled frame at a level other than full, and what full adds to it, us.
 double posed_us(const LodCosts& c, std::uint32_t chains) {
@@ -44,15 +40,22 @@ Result<void> validate(const LodCosts& costs, const char* what) {
     return {};
 }
 
-float budget_distance(const LodView& view, std::span<const glm::vec3> references, std::span<const std::uint32_t> chains,
-                      const LodCosts& costs, float budget_ms, float scale) {
+namespace {
+
+// budget_distance() and the frame's modelled cost at the levels it leaves, in one pass over
+// the characters; `candidates` is the caller's scratch (no allocation a frame once grown).
+struct Choice {
+    float distance;
+    double frame_us;
+};
+Choice choose(const LodView& view, std::span<const glm::vec3> references, std::span<const std::uint32_t> chains,
+              const LodCosts& costs, float budget_ms, float scale, std::vector<Candidate>& candidates) {
     assert(references.size() == chains.size() && "a chain count per character");
-    if (!view.enabled) return kNoDistanceCap;
     // Everyone at the lower levels first; then the characters the view would make full
     // (chain_level() from posed: the projected-size rule stays the upper bound), nearest
     // first, while the frame stays within the budget. Ties by index: the same bits always.
     double frame_us = 0.0;
-    std::vector<Candidate> candidates;
+    candidates.clear();
     for (std::uint32_t c = 0; c < references.size(); ++c) {
         frame_us += posed_us(costs, chains[c]);
         if (chain_level(view, references[c], Level::Posed) != Level::Full) continue;
@@ -67,11 +70,23 @@ float budget_distance(const LodView& view, std::span<const glm::vec3> references
         frame_us += candidates[promoted].extra_us;
         ++promoted;
     }
-    if (promoted == candidates.size()) return kNoDistanceCap;
+    if (promoted == candidates.size()) return {kNoDistanceCap, frame_us};
     // A character as deep as the first one left out would be full too: stop before the
     // depth they share.
-    while (promoted > 0 && candidates[promoted - 1].depth == candidates[promoted].depth) --promoted;
-    return promoted == 0 ? -kNoDistanceCap : candidates[promoted - 1].depth;
+    while (promoted > 0 && candidates[promoted - 1].depth == candidates[promoted].depth) {
+        --promoted;
+        frame_us -= candidates[promoted].extra_us;
+    }
+    return {promoted == 0 ? -kNoDistanceCap : candidates[promoted - 1].depth, frame_us};
+}
+
+}  // namespace
+
+float budget_distance(const LodView& view, std::span<const glm::vec3> references, std::span<const std::uint32_t> chains,
+                      const LodCosts& costs, float budget_ms, float scale) {
+    if (!view.enabled) return kNoDistanceCap;
+    std::vector<Candidate> candidates;
+    return choose(view, references, chains, costs, budget_ms, scale, candidates).distance;
 }
 
 double modelled_ms(const LodView& view, std::span<const glm::vec3> references, std::span<const std::uint32_t> chains,
@@ -99,11 +114,10 @@ Result<LodBudget> LodBudget::create(float budget_ms, bool measured, const LodCos
 }
 
 float LodBudget::cap(const LodView& view, std::span<const glm::vec3> references, std::span<const std::uint32_t> chains) {
-    const float distance = budget_distance(view, references, chains, costs_, budget_ms_, scale_);
-    LodView capped = view;
-    capped.full_distance = std::min(view.full_distance, distance);
-    last_modelled_ms_ = modelled_ms(capped, references, chains, costs_);
-    return distance;
+    if (!view.enabled) return kNoDistanceCap;
+    const Choice choice = choose(view, references, chains, costs_, budget_ms_, scale_, candidates_);
+    last_modelled_ms_ = choice.frame_us / 1000.0;
+    return choice.distance;
 }
 
 void LodBudget::observe(double measured_ms) {

@@ -12,6 +12,7 @@
 #include <cstdint>
 #include <limits>
 #include <span>
+#include <vector>
 
 #include <glm/glm.hpp>
 
@@ -35,6 +36,15 @@ namespace kodawari::rods {
 /// from `references` (its previous level taken as posed), by `costs`.
 [[nodiscard]] KODAWARI_API double modelled_ms(const LodView& view, std::span<const glm::vec3> references,
                                               std::span<const std::uint32_t> chains, const LodCosts& costs);
+
+namespace detail {
+/// A character the view would make full, as budget_distance() ranks it.
+struct LodCandidate {
+    float depth;
+    std::uint32_t character;
+    double extra_us;  ///< what turning it full adds to the frame
+};
+}  // namespace detail
 
 /// A frame budget over time. Bakes (measured false) price every frame by the model
 /// alone; an interactive caller (measured true) reports each frame's measured cost
@@ -65,6 +75,7 @@ private:
     LodCosts costs_;
     float scale_ = 1.0f;
     double last_modelled_ms_ = 0.0;
+    std::vector<detail::LodCandidate> candidates_;  // cap()'s scratch
 };
 
 }  // namespace kodawari::rods
