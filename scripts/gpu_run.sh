@@ -22,6 +22,8 @@
 # is $KODAWARI_EMBED_VULKAN, else the bundle's, else build/release/examples/embed_vulkan/.
 # Nothing is built. GPU_RUN_ONLY=REGEX runs only the steps whose names match (bash regex);
 # GPU_RUN_BUDGET=SECONDS replaces the run's deadline (290 s, --quick 110 s).
+# GPU_RUN_STEP_LIMIT=SECONDS replaces the limit of each validate and embed step (40 s,
+# --quick 30 s).
 # Exit status: 0 when every step that ran passed, 1 when one failed, timed out or was left
 # out for lack of time, 2 for bad usage or a bundle that cannot be made.
 #
@@ -678,6 +680,9 @@ run_all() {
     workgroups=32,64
     validate_frames=3 embed_frames=12 bench_limit=40 step_limit=30 bench_reserve=30
   fi
+  step_limit="${GPU_RUN_STEP_LIMIT:-$step_limit}"
+  [[ "$step_limit" =~ ^[0-9]+$ && "$step_limit" -ge 5 ]] ||
+    { echo "gpu_run.sh: GPU_RUN_STEP_LIMIT is '$step_limit'; expected whole seconds, 5 or more" >&2; exit 2; }
   local all=cpu-reference,cpu,vulkan fast=cpu,vulkan
   local has_layer=0
   if [[ "$in_bundle" == 1 && -f "$root/layers/VkLayer_khronos_validation.json" ]] ||
