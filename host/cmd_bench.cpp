@@ -206,7 +206,11 @@ int bench_crowd(const CrowdOptions& o) {
     const bool lod_on = scene.lod.enabled;
     constexpr std::uint32_t kLevelSampling = 10;
     std::vector<std::array<std::uint64_t, 3>> level_counts(variants.size(), std::array<std::uint64_t, 3>{});
+    // And of those chains, the ones that kept their state instead of stepping (the posed and
+    // hidden levels' rate, docs/level-of-detail.md "The rate").
+    std::vector<std::uint64_t> kept_counts(variants.size(), 0);
     std::vector<rods::Level> levels;
+    std::vector<std::uint8_t> kept;
     for (const auto [variant, device_input] : variants) {
         const BackendKind kind = variant->kind;
         // Frame 0 (load) and 2 warm-up steps, then the timed frames.
@@ -238,8 +242,9 @@ int bench_crowd(const CrowdOptions& o) {
                 if (!lod_on || f % kLevelSampling != 0) continue;
                 // Every tenth frame's levels, read back with the clock stopped.
                 seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
-                KW_TRY(read_chain_levels(s, levels));
+                KW_TRY(read_chain_levels(s, levels, &kept));
                 for (const rods::Level l : levels) ++level_counts[index][static_cast<std::size_t>(l)];
+                for (const std::uint8_t k : kept) kept_counts[index] += k;
                 start = std::chrono::steady_clock::now();
             }
             seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
@@ -264,8 +269,8 @@ int bench_crowd(const CrowdOptions& o) {
         const auto sampled = static_cast<double>(n[0] + n[1] + n[2]);
         if (sampled > 0.0) {
             auto share = [&](std::size_t l) { return 100.0 * static_cast<double>(n[l]) / sampled; };
-            std::printf("; chains full %.1f%%, posed %.1f%%, hidden %.1f%% (every %uth frame)", share(0), share(1), share(2),
-                        kLevelSampling);
+            std::printf("; chains full %.1f%%, posed %.1f%%, hidden %.1f%%, kept their state %.1f%% (every %uth frame)",
+                        share(0), share(1), share(2), 100.0 * static_cast<double>(kept_counts[i]) / sampled, kLevelSampling);
         }
         std::printf("\n");
     }

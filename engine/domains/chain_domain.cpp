@@ -172,12 +172,18 @@ public:
         if (!rods_) return {};
         return rods_->read(out);
     }
-    Result<void> read_levels(std::vector<rods::Level>& out) {
+    Result<void> read_levels(std::vector<rods::Level>& out, std::vector<std::uint8_t>* kept) {
         out.clear();
+        if (kept) kept->clear();
         if (!rods_) return {};
         KW_TRY(rods_->read_states(states_));
         out.reserve(states_.size());
         for (const rods::ChainState& s : states_) out.push_back(static_cast<rods::Level>(s.level));
+        if (kept) {
+            // ChainState::idle counts the frames kept since the last step: 0 after a step.
+            kept->reserve(states_.size());
+            for (const rods::ChainState& s : states_) kept->push_back(s.idle > 0 ? 1 : 0);
+        }
         return {};
     }
     const rods::RodFrame& input() const { return input_; }
@@ -322,13 +328,14 @@ Result<void> read_chains(Simulation& sim, ChainSnapshot& out) {
     return domain ? domain->read(out) : Result<void>{};
 }
 
-Result<void> read_chain_levels(Simulation& sim, std::vector<rods::Level>& out) {
+Result<void> read_chain_levels(Simulation& sim, std::vector<rods::Level>& out, std::vector<std::uint8_t>* kept) {
     ChainDomain* domain = find(sim);
     if (domain == nullptr) {
         out.clear();
+        if (kept) kept->clear();
         return {};
     }
-    return domain->read_levels(out);
+    return domain->read_levels(out, kept);
 }
 
 const rods::RodFrame& chain_input(const Simulation& sim) {

@@ -89,7 +89,10 @@ KODAWARI_API void snapshot_from(const BakeFrames& frames, ChainSnapshot& out);
 [[nodiscard]] KODAWARI_API Result<void> read_chains(Simulation& sim, ChainSnapshot& out);
 /// Each chain's level of detail at the last step (kodawari/rods/lod.hpp), read back with
 /// the state: every chain Level::Full while the scene's `lod` is off; nothing without chains.
-[[nodiscard]] KODAWARI_API Result<void> read_chain_levels(Simulation& sim, std::vector<rods::Level>& out);
+/// With `kept`, also whether each chain kept its state at the last step instead of stepping
+/// (1; the posed and hidden levels' rate, docs/level-of-detail.md "The rate") or stepped (0).
+[[nodiscard]] KODAWARI_API Result<void> read_chain_levels(Simulation& sim, std::vector<rods::Level>& out,
+                                                          std::vector<std::uint8_t>* kept = nullptr);
 /// The last frame's kinematic input of the chains as given to the rod backend: on one
 /// Vulkan device the rigged characters' entries in it are not this frame's (they are
 /// written on the device), see host_chain_input().
