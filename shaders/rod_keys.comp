@@ -58,11 +58,13 @@ void main() {
         const uint previous = packed % KW_RODS_IDLE_UNIT;
         const vec3 offset = reference[ids.w].position.xyz - push.camera_position.xyz;
         const float depth = dot(offset, push.camera_forward.xyz);
-        const uint level = rod_level(depth, dot(offset, push.camera_right.xyz), dot(offset, push.camera_up.xyz),
-                                     push.camera_right.w, push.camera_up.w, push.frame.y, push.frame.z, push.frame.w, previous);
-        const uint rate = push.counts.z;
-        const uint turn = (rate & 3u) + (((rate >> 2u) & 15u) + ids.w) / KW_RODS_RATE_GROUP;
-        if (rod_rests(level, previous, depth, push.frame.z, turn)) return;
+        const float right = dot(offset, push.camera_right.xyz);
+        const float up = dot(offset, push.camera_up.xyz);
+        const uint level = rod_level(depth, right, up, push.camera_right.w, push.camera_up.w, push.frame.y, push.frame.z,
+                                     push.frame.w, previous);
+        const bool far_off = level == KW_RODS_LEVEL_HIDDEN &&
+                             rod_far_off_view(depth, right, up, push.camera_right.w, push.camera_up.w, push.frame.y);
+        if (rod_rests(level, previous, depth, push.frame.z, far_off, rod_rate_turn(push.counts.z, ids.w))) return;
         frames = packed / KW_RODS_IDLE_UNIT + 1u;
     }
     const float dt = frames == 1u ? push.frame.x : push.frame.x * float(frames);

@@ -319,14 +319,17 @@ void main() {
         idle = packed / KW_RODS_IDLE_UNIT;
         const vec3 offset = ref.position.xyz - push.camera_position.xyz;
         const float depth = dot(offset, push.camera_forward.xyz);
-        level = rod_level(depth, dot(offset, push.camera_right.xyz), dot(offset, push.camera_up.xyz), push.camera_right.w,
-                          push.camera_up.w, push.time.y, push.time.z, push.time.w, previous);
+        const float right = dot(offset, push.camera_right.xyz);
+        const float up = dot(offset, push.camera_up.xyz);
+        level = rod_level(depth, right, up, push.camera_right.w, push.camera_up.w, push.time.y, push.time.z, push.time.w,
+                          previous);
         // The posed and hidden levels' rate (rods::chain_rests): between its turns the chain
         // keeps its state (a chain with a center frame steps every frame, as on the CPU).
         const uint rate = push.flags.w;
         if ((rate & KW_RODS_RATE_ON) != 0u && chain.joints.z == KW_RODS_NO_CENTER) {
-            const uint turn = (rate & 3u) + (((rate >> 2u) & 15u) + chain.ids.y) / KW_RODS_RATE_GROUP;
-            if (rod_rests(level, previous, depth, push.time.z, turn)) {
+            const bool far_off = level == KW_RODS_LEVEL_HIDDEN &&
+                                 rod_far_off_view(depth, right, up, push.camera_right.w, push.camera_up.w, push.time.y);
+            if (rod_rests(level, previous, depth, push.time.z, far_off, rod_rate_turn(rate, chain.ids.y))) {
                 chain_states[c].view.w = float(previous + KW_RODS_IDLE_UNIT * (idle + 1u));
                 return;
             }

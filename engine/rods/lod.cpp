@@ -19,6 +19,8 @@ static_assert(kPosedPeriod == KW_RODS_POSED_PERIOD && kHiddenPeriod == KW_RODS_H
 // rod_rests() takes a turn modulo the period: powers of two that divide 4 (RodPush.flags.w
 // carries the frame's turn mod 4).
 static_assert(4 % kPosedPeriod == 0 && 4 % kHiddenPeriod == 0);
+// rod_far_off_view()'s widening: KW_RODS_FAR_OFF_TAN is tan(KW_RODS_FAR_OFF_DEG degrees).
+static_assert(KW_RODS_FAR_OFF_TAN > 0.36397f && KW_RODS_FAR_OFF_TAN < 0.36398f && KW_RODS_FAR_OFF_DEG == 20);
 
 namespace glsl {
 // GLSL's names for shaders/lib/rod_lod.glsl (inside this namespace only).
@@ -86,8 +88,13 @@ Level chain_level(const LodView& view, glm::vec3 reference, Level previous) {
 
 bool chain_rests(const LodView& view, glm::vec3 reference, Level level, Level previous, std::uint32_t turn) {
     if (!view.enabled || !view.lower_rate) return false;
-    return glsl::rod_rests(static_cast<std::uint32_t>(level), static_cast<std::uint32_t>(previous),
-                           glm::dot(reference - view.position, view.forward), view.full_distance, turn);
+    const glm::vec3 offset = reference - view.position;
+    const float depth = glm::dot(offset, view.forward);
+    const bool far_off = level == Level::Hidden && glsl::rod_far_off_view(depth, glm::dot(offset, view.right),
+                                                                          glm::dot(offset, view.up), view.tan_x,
+                                                                          view.tan_y, view.margin);
+    return glsl::rod_rests(static_cast<std::uint32_t>(level), static_cast<std::uint32_t>(previous), depth,
+                           view.full_distance, far_off, turn);
 }
 
 float posed_blend(const LodSettings& lod, float dt) { return 1.0f - std::exp(-lod.settle_rate * dt); }

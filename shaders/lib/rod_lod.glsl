@@ -32,6 +32,22 @@ KW_LOD_FN uint rod_level(float depth, float right, float up, float tan_x, float 
                                                                                       : KW_RODS_LEVEL_POSED;
 }
 
+// Whether a hidden character is far off the view: off the frustum widened by
+// KW_RODS_FAR_OFF_DEG on every side by more than its size (the arguments as rod_level's).
+// The camera must turn by that angle, or move as far across, before it sees the
+// character, which takes more frames than KW_RODS_HIDDEN_PERIOD at any pace short of a
+// cut (20 degrees in 3 frames: 400 degrees a second). tan(a + w) = (tan a + tan w) / (1 -
+// tan a tan w); a field of view that the widening takes to 90 degrees or more has no far
+// side (false).
+KW_LOD_FN bool rod_far_off_view(float depth, float right, float up, float tan_x, float tan_y, float margin) {
+    const float w = KW_RODS_FAR_OFF_TAN;
+    const float below_x = 1.0f - tan_x * w;
+    const float below_y = 1.0f - tan_y * w;
+    if (below_x <= 0.0f || below_y <= 0.0f) return false;
+    return rod_level(depth, right, up, (tan_x + w) / below_x, (tan_y + w) / below_y, margin, 0.0f, 0.0f,
+                     KW_RODS_LEVEL_HIDDEN) == KW_RODS_LEVEL_HIDDEN;
+}
+
 // Whether a chain keeps its state this frame instead of stepping (docs/level-of-detail.md,
 // "The rate"): posed chains step every KW_RODS_POSED_PERIOD-th frame, hidden ones every
 // KW_RODS_HIDDEN_PERIOD-th, when `turn` (the frame's number plus the character's index in
@@ -39,13 +55,23 @@ KW_LOD_FN uint rod_level(float depth, float right, float up, float tan_x, float 
 // full chain, one whose level changed (`level` this frame's, `previous` its last step's),
 // or one within twice its full distance of the camera (|depth| <= 2 full_distance: as if
 // twice as near it would be full), which steps every frame so that it turns full from a
-// state of the frame before. Hidden chains too: one beside or behind the camera turns full
-// when the camera turns to it, and a full step over 4 frames of its root's motion jumps
-// (tests/backends/test_level_of_detail.cpp measured 5.0 cm at a change of level against
-// 2.3 cm of full simulation when hidden chains rested at any distance).
-KW_LOD_FN bool rod_rests(uint level, uint previous, float depth, float full_distance, uint turn) {
+// state of the frame before; but a hidden one far off the view (`far_off`,
+// rod_far_off_view()) rests at any distance. Hidden chains at the view's side step every
+// frame: one turns full when the camera turns to it, and a full step over 4 frames of its
+// root's motion jumps (tests/backends/test_level_of_detail.cpp measured 5.0 cm at a change
+// of level against 2.3 cm of full simulation when hidden chains rested at any distance).
+KW_LOD_FN bool rod_rests(uint level, uint previous, float depth, float full_distance, bool far_off, uint turn) {
     if (level == KW_RODS_LEVEL_FULL || level != previous) return false;
-    if ((depth < 0.0f ? -depth : depth) <= 2.0f * full_distance) return false;
+    const bool anywhere = level == KW_RODS_LEVEL_HIDDEN && far_off;
+    if (!anywhere && (depth < 0.0f ? -depth : depth) <= 2.0f * full_distance) return false;
     const uint period = level == KW_RODS_LEVEL_POSED ? KW_RODS_POSED_PERIOD : KW_RODS_HIDDEN_PERIOD;
     return (turn & (period - 1u)) != 0u;
+}
+
+// The turn of a chain of the world's character `character` (its index in the world) from
+// RodPush.flags.w with KW_RODS_RATE_ON set (rods_step.comp and rod_keys.comp decode it
+// here, once): the frame's number plus its character's index in the whole scene /
+// KW_RODS_RATE_GROUP, mod 4 (rods::rate_turn; every period divides 4).
+KW_LOD_FN uint rod_rate_turn(uint rate, uint character) {
+    return (rate & 3u) + (((rate >> 2u) & 15u) + character) / KW_RODS_RATE_GROUP;
 }

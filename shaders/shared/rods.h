@@ -109,6 +109,10 @@
 #define KW_RODS_POSED_PERIOD 2u
 #define KW_RODS_HIDDEN_PERIOD 4u
 #define KW_RODS_RATE_GROUP 16u
+// A hidden chain off the frustum widened by 20 degrees on every side rests at any distance
+// (shaders/lib/rod_lod.glsl rod_far_off_view): tan(20 degrees).
+#define KW_RODS_FAR_OFF_DEG 20
+#define KW_RODS_FAR_OFF_TAN 0.36397023f
 // RodPush.flags.w with the rate on: this bit, the frame's number plus the world's first
 // character / KW_RODS_RATE_GROUP in bits 0-1 (mod 4: every period divides 4), and the first
 // character mod KW_RODS_RATE_GROUP in bits 2-5.

@@ -96,7 +96,8 @@ TEST(Lod, OffOrOrthographicIsAlwaysFull) {
 
 // The posed and hidden levels' rate (rods::chain_rests): far posed chains step on even
 // turns only, hidden ones every 4th; never a full chain, one that changed level, one within
-// twice its full distance (23.2 m here), or with lower_rate off.
+// twice its full distance (23.2 m here) unless hidden far off the view, or with lower_rate
+// off.
 TEST(Lod, FarPosedAndHiddenChainsRestBetweenTheirTurns) {
     const rods::LodView v = rods::lod_view(settings(), camera());
     const glm::vec3 far(0.0f, 0.0f, -30.0f), near(0.0f, 0.0f, -20.0f), behind(0.0f, 0.0f, 30.0f);
@@ -111,6 +112,34 @@ TEST(Lod, FarPosedAndHiddenChainsRestBetweenTheirTurns) {
     }
     EXPECT_EQ(posed_steps, 4u);
     EXPECT_EQ(hidden_steps, 2u);
+    // Within twice the full distance a hidden chain beside the view steps every frame (the
+    // camera may turn to it), one far off the view rests: off the frustum widened by 20
+    // degrees (vertically 25 + 20 = 45: at 10 m deep the widened edge is 10 m up, plus the
+    // character's 1 m), or behind the camera.
+    const glm::vec3 above(0.0f, 6.7f, -10.0f), far_above(0.0f, 11.5f, -10.0f), close_behind(0.0f, 0.0f, 10.0f);
+    ASSERT_EQ(rods::chain_level(v, above, Level::Hidden), Level::Hidden);
+    ASSERT_EQ(rods::chain_level(v, far_above, Level::Hidden), Level::Hidden);
+    std::uint32_t above_steps = 0, far_above_steps = 0, behind_steps = 0;
+    for (std::uint32_t turn = 0; turn < 8; ++turn) {
+        above_steps += rods::chain_rests(v, above, Level::Hidden, Level::Hidden, turn) ? 0u : 1u;
+        far_above_steps += rods::chain_rests(v, far_above, Level::Hidden, Level::Hidden, turn) ? 0u : 1u;
+        behind_steps += rods::chain_rests(v, close_behind, Level::Hidden, Level::Hidden, turn) ? 0u : 1u;
+        // Posed there (the level the view would give): posed chains never rest near.
+        EXPECT_FALSE(rods::chain_rests(v, far_above, Level::Posed, Level::Posed, turn));
+    }
+    EXPECT_EQ(above_steps, 8u);
+    EXPECT_EQ(far_above_steps, 2u);
+    EXPECT_EQ(behind_steps, 2u);
+    // A field of view that 20 degrees more takes past 90 has no far side: 150 degrees (its
+    // full distance 1.45 m, so 1.5 m behind is within twice it).
+    rods::LodSettings wide = settings();
+    wide.vertical_fov_deg = 150.0f;
+    wide.aspect = 1.0f;
+    const rods::LodView wide_view = rods::lod_view(wide, camera());
+    const glm::vec3 just_behind(0.0f, 0.0f, 1.5f);
+    ASSERT_EQ(rods::chain_level(wide_view, just_behind, Level::Hidden), Level::Hidden);
+    ASSERT_LT(1.5f, 2.0f * wide_view.full_distance);
+    EXPECT_FALSE(rods::chain_rests(wide_view, just_behind, Level::Hidden, Level::Hidden, 1));
     EXPECT_TRUE(rods::chain_rests(v, far, Level::Posed, Level::Posed, 1));
     EXPECT_FALSE(rods::chain_rests(v, far, Level::Posed, Level::Posed, 2));
     // Groups of 16 characters take turns: the 16th is a turn after the 15th.

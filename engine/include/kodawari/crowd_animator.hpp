@@ -38,8 +38,8 @@ public:
     ///
     /// With the scene's levels of detail on (RodWorld::lod) and `out` holding frame
     /// index - 1, a rigged character whose chains keep their state this frame
-    /// (rods::chain_rests on its reference joint and `out`'s camera: posed and farther than
-    /// twice its full distance, between its turns) keeps its clip's pose and its entries of
+    /// (rods::chain_rests on its reference joint and `out`'s camera: posed or hidden and
+    /// farther than twice its full distance, or hidden far off the view, between its turns) keeps its clip's pose and its entries of
     /// `out`, so that it takes them afresh every kPosedClipPeriod frames, a hidden one every
     /// kHiddenClipPeriod, at the frames its chains step (docs/level-of-detail.md, "The
     /// rate"). With LodSettings::lower_rate off, a character posed as if twice as near

@@ -131,7 +131,8 @@ inline constexpr std::uint32_t kNoFrameNumber = 0xFFFFFFFFu;
 /// rod_rests): its character's reference joint at `reference`, its level `level` this frame
 /// (chain_level()) and `previous` at its last step, `turn` its character's rate_turn().
 /// Never a full chain, one whose level changed, or one within twice its full distance of
-/// the camera; never when `view` is not enabled or not lower_rate.
+/// the camera unless it is hidden far off the view (off the frustum widened by 20 degrees,
+/// rod_far_off_view); never when `view` is not enabled or not lower_rate.
 [[nodiscard]] KODAWARI_API bool chain_rests(const LodView& view, glm::vec3 reference, Level level, Level previous,
                                             std::uint32_t turn);
 
