@@ -21,6 +21,7 @@
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/domains/flocking.hpp"
 #include "kodawari/export.hpp"
+#include "kodawari/rods/lod.hpp"
 #include "kodawari/simulation.hpp"
 
 using namespace kodawari;
@@ -305,6 +306,31 @@ KODAWARI_C_API kodawari_status kodawari_simulation_read_chains(kodawari_simulati
         ChainSnapshot& s = sim->chains;
         check(read_chains(*sim->sim, s));
         write_chain_output(s, *out);
+    });
+}
+
+static_assert(KODAWARI_LEVEL_FULL == static_cast<int>(rods::Level::Full) &&
+              KODAWARI_LEVEL_POSED == static_cast<int>(rods::Level::Posed) &&
+              KODAWARI_LEVEL_HIDDEN == static_cast<int>(rods::Level::Hidden));
+
+KODAWARI_C_API kodawari_status kodawari_simulation_chain_levels(kodawari_simulation* sim, uint8_t* levels, uint8_t* kept,
+                                                                size_t capacity) {
+    return guard("kodawari_simulation_chain_levels", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_stepped(*sim);
+        const RodScene* rods = rod_scene(*sim->sim);
+        if (rods == nullptr) return;  // no characters: no chains, nothing to write
+        const std::size_t chains = rods->world.chains.size();
+        require_array(levels, chains, "levels", "the chain count");
+        if (capacity < chains) {
+            reject(KODAWARI_BUFFER_TOO_SMALL, "levels: holds " + std::to_string(capacity) + " bytes, needs " +
+                                                  std::to_string(chains) + " (one per chain)");
+        }
+        std::vector<rods::Level> read;
+        std::vector<std::uint8_t> kept_read;
+        check(read_chain_levels(*sim->sim, read, kept ? &kept_read : nullptr));
+        for (std::size_t c = 0; c < read.size(); ++c) levels[c] = static_cast<std::uint8_t>(read[c]);
+        if (kept != nullptr) std::copy(kept_read.begin(), kept_read.end(), kept);
     });
 }
 

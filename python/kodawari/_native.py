@@ -144,6 +144,7 @@ _declare("kodawari_simulation_get_info", _status, _sim, _P(SimulationInfo))
 _declare("kodawari_simulation_bird_poses", _status, _sim, _P(BirdOutput))
 _declare("kodawari_simulation_bird_tail_spreads", _status, _sim, ctypes.c_void_p, ctypes.c_size_t)
 _declare("kodawari_simulation_read_chains", _status, _sim, _P(ChainOutput))
+_declare("kodawari_simulation_chain_levels", _status, _sim, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t)
 _declare("kodawari_simulation_chain_joints", _status, _sim, ctypes.c_uint32, _P(ctypes.c_uint32),
          _P(ctypes.c_uint32))
 _declare("kodawari_simulation_bake", _status, _sim, ctypes.c_char_p, ctypes.c_uint32, ctypes.c_char_p,

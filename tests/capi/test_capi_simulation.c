@@ -245,6 +245,7 @@ static void test_chains(void) {
     kodawari_chain_output out;
     kodawari_simulation_info info;
     uint32_t begin = 99, count = 0;
+    uint8_t levels[2] = {9, 9}, kept[2] = {9, 9};
     int j;
     kodawari_simulation* sim = open_scene(g_ahoge, KODAWARI_BACKEND_CPU, 20);
     if (sim == NULL) return;
@@ -258,7 +259,17 @@ static void test_chains(void) {
     out.positions = positions;
     out.positions_capacity = sizeof positions / sizeof(float);
     EXPECT_FAIL(kodawari_simulation_read_chains(sim, &out), KODAWARI_INVALID_ARGUMENT, sim, "no frame simulated yet");
+    EXPECT_FAIL(kodawari_simulation_chain_levels(sim, levels, kept, 2), KODAWARI_INVALID_ARGUMENT, sim,
+                "no frame simulated yet", "kodawari_simulation_step");
     EXPECT_OK(kodawari_simulation_step(sim, 20));
+    /* The levels of detail: the ahoge's scene has none, so its one chain is full and steps. */
+    EXPECT_OK(kodawari_simulation_chain_levels(sim, levels, kept, 2));
+    CHECK(levels[0] == KODAWARI_LEVEL_FULL && kept[0] == 0 && levels[1] == 9 && kept[1] == 9,
+          "levels %u %u, kept %u %u", levels[0], levels[1], kept[0], kept[1]);
+    EXPECT_OK(kodawari_simulation_chain_levels(sim, levels, NULL, 1));
+    EXPECT_FAIL(kodawari_simulation_chain_levels(sim, levels, kept, 0), KODAWARI_BUFFER_TOO_SMALL, sim, "levels: holds 0",
+                "needs 1");
+    EXPECT_FAIL(kodawari_simulation_chain_levels(sim, NULL, kept, 2), KODAWARI_INVALID_ARGUMENT, sim, "levels", "NULL");
     out.rest_positions = rest;
     out.rest_positions_capacity = sizeof rest / sizeof(float);
     out.orientations = orientations;

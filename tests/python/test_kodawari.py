@@ -17,6 +17,7 @@ figures checked against each other and against the scene:
 Usage: /usr/bin/python3 test_kodawari.py BUILD_PYTHON_DIR SOURCE_DIR TEMP_DIR VERSION KODAWARI_CLI
 Exit status 0 when every check passed.
 """
+import json
 import os
 import pydoc
 import subprocess
@@ -197,6 +198,39 @@ with kodawari.Simulation.open(AHOGE, "cpu", frames=4) as sim:
         check("levels of detail are off" in str(error), f"set_lod_budget without lod: {error}")
     sim.step(4)
 
+# ---- Every chain's level of detail and whether it kept its state: crowd-10k cut to 40
+# characters (camera 90 m out: every chain posed, far ones keeping their state between their
+# turns), the same on cpu-reference and cpu; a scene without levels of detail is all full.
+crowd_scene = os.path.join(temp, "crowd-40.json")
+with open(os.path.join(source, "scenes", "crowd-10k.json")) as f:
+    crowd = json.load(f)
+crowd["lod"]["enabled"] = True
+crowd["crowds"][0]["count"] = 40
+crowd["characters"][0]["gltf"] = os.path.join(source, "scenes", "characters", "chibi.glb")
+with open(crowd_scene, "w") as f:
+    json.dump(crowd, f)
+level_runs = []
+for backend in ("cpu-reference", "cpu"):
+    with kodawari.Simulation.open(crowd_scene, backend, frames=8) as sim:
+        try:
+            sim.chain_levels()
+            check(False, "chain_levels() before the first step raised nothing")
+        except kodawari.Error as error:
+            check("kodawari_simulation_step" in str(error), f"chain_levels() before a step: {error}")
+        sim.step(6)
+        levels, kept = sim.chain_levels()
+        check(levels.shape == (sim.chain_count,) and levels.dtype == numpy.uint8, f"levels {levels.shape} {levels.dtype}")
+        check(kept.shape == (sim.chain_count,) and kept.dtype == bool, f"kept {kept.shape} {kept.dtype}")
+        check(bool((levels == kodawari.LEVEL_POSED).all()), f"{backend}: levels {numpy.bincount(levels)}, every chain posed expected")
+        check(0 < int(kept.sum()) < sim.chain_count, f"{backend}: {int(kept.sum())} of {sim.chain_count} chains kept their state")
+        level_runs.append((levels, kept))
+print(f"chain_levels: {len(level_runs[1][0])} chains posed, {int(level_runs[1][1].sum())} kept their state at frame 6")
+check(all(numpy.array_equal(a, b) for a, b in zip(*level_runs)), "chain_levels: cpu and cpu-reference disagree")
+with kodawari.Simulation.open(AHOGE, "cpu", frames=2) as sim:
+    sim.step(1)
+    levels, kept = sim.chain_levels()
+    check(bool((levels == kodawari.LEVEL_FULL).all()) and not kept.any(), f"ahoge (no lod): {levels}, {kept}")
+
 # ---- Flock agents from the application: named errors, and a flocking flock flies round an
 # obstacle placed in its way (no bird inside the 3 m sphere; without it, birds pass its centre).
 flocking_scene = os.path.join(temp, "flocking.json")
@@ -333,7 +367,6 @@ result = kodawari.bench("birds", count=1001, frames=3, backends=["cpu-reference"
 subprocess.run([cli, "bench", "birds", "--count", "1001", "--frames", "3", "--backends", "cpu-reference,cpu",
                 "--repetitions", "3", "--readback", "--threads", "2", "--json", os.path.join(temp, "bench.json")],
                check=True, capture_output=True)
-import json  # noqa: E402
 with open(os.path.join(temp, "bench.json")) as file:
     direct = json.load(file)
 settings = ("benchmark", "count", "frames", "readback", "threads", "repetitions")

@@ -911,6 +911,23 @@ KODAWARI_C_API kodawari_status kodawari_simulation_read_chains(kodawari_simulati
 /// *joint_count). Either pointer may be NULL.
 KODAWARI_C_API kodawari_status kodawari_simulation_chain_joints(kodawari_simulation* sim, uint32_t chain,
                                                                 uint32_t* joint_begin, uint32_t* joint_count);
+/// A chain's level of detail (docs/level-of-detail.md): simulated fully, posed (no
+/// dynamics: carried by its root onto its rest shape), or hidden (off the camera's view).
+typedef enum kodawari_level {
+    KODAWARI_LEVEL_FULL = 0,
+    KODAWARI_LEVEL_POSED = 1,
+    KODAWARI_LEVEL_HIDDEN = 2
+} kodawari_level;
+/// Every chain's level of detail at the last step, in the order of the per-chain arrays
+/// (one read-back from a device): `levels[c]` a kodawari_level, and where `kept` is not
+/// NULL, `kept[c]` 1 if chain c kept its state at that step instead of stepping (a far
+/// posed or hidden chain between its turns, docs/level-of-detail.md "The rate"), else 0.
+/// Both arrays hold `capacity` bytes, at least chain_count (else
+/// KODAWARI_BUFFER_TOO_SMALL); every chain is FULL while the scene's `lod` is off, and a
+/// scene without characters writes nothing. Before the first step, or `levels` NULL:
+/// KODAWARI_INVALID_ARGUMENT.
+KODAWARI_C_API kodawari_status kodawari_simulation_chain_levels(kodawari_simulation* sim, uint8_t* levels, uint8_t* kept,
+                                                                size_t capacity);
 /// Bakes the scene to glTF binary files as `kodawari run --out PATH` does: every frame from
 /// frame 0, on a simulation of its own with the same scene, backend and frame count, so
 /// that `sim`'s own state and frame are untouched. The flock goes to `path`; the
