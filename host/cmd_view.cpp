@@ -20,6 +20,7 @@
 #include <GLFW/glfw3.h>
 
 #include "commands.hpp"
+#include "level_dots.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/render/renderer.hpp"
@@ -42,6 +43,7 @@ struct ViewOptions {
     std::optional<std::string> size;
     bool joints = false;
     LodFlags lod;
+    bool show_lod = false;
 };
 
 int cmd_view(const ViewOptions& o) {
@@ -60,7 +62,7 @@ int cmd_view(const ViewOptions& o) {
     std::vector<Step> scripted;
     if (keys_text) {
         static constexpr const char* kKnown =
-            "space right left home [ ] 1 2 3 s k w u c o + - p q escape, drag:X1:Y1:X2:Y2, orbit:DX:DY, resize:W:H";
+            "space right left home [ ] 1 2 3 s k w u c o l + - p q escape, drag:X1:Y1:X2:Y2, orbit:DX:DY, resize:W:H";
         std::stringstream list(*keys_text);
         for (std::string name; std::getline(list, name, ',');) {
             Step step;
@@ -94,7 +96,11 @@ int cmd_view(const ViewOptions& o) {
     auto loaded = load_scene(o.scene.value_or(kDefaultScene));
     if (!loaded) return report(loaded.error());
     apply_lod(o.lod, loaded.value());
+    if (o.show_lod && loaded.value().characters.empty()) {
+        throw UsageError{"--show-lod: scene " + loaded.value().path + " has no characters (levels of detail are the characters' chains')"};
+    }
     Viewer v;
+    v.show_lod = o.show_lod;
     v.scene_path = loaded.value().path;
     auto text = read_text_file(v.scene_path);
     if (!text) return report(text.error());
@@ -171,6 +177,7 @@ int cmd_view(const ViewOptions& o) {
     // Where the birds perch: a pass over every bird, found with the grid, once.
     kodawari::Perches perches;
     std::optional<render::DrawList> last_list;
+    std::vector<rods::Level> levels;  // --show-lod: read back each frame
     std::uint64_t drawn = 0, screenshots = 0;
     double frame_ms = 0.0;
     // Simulation state read back to the host: in all, and over the last frame.
@@ -214,6 +221,15 @@ int cmd_view(const ViewOptions& o) {
         render::add_ground_grid(list, grid_points);
         if (rod_scene(s)) kodawari::add_characters(list, *rod_scene(s), v.current());
         kodawari::add_perches(list, perches);
+        // --show-lod, L: each character's level (read back: the status line counts it).
+        std::string level_counts;
+        if (v.show_lod && rod_scene(s)) {
+            auto counts = add_level_dots(list, s, levels);
+            if (!counts) return report(counts.error());
+            level_counts = std::string("  levels ") + kLevelNames[0] + " " + std::to_string(counts.value()[0]) + " " +
+                           kLevelNames[1] + " " + std::to_string(counts.value()[1]) + " " + kLevelNames[2] + " " +
+                           std::to_string(counts.value()[2]);
+        }
         if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
         if (v.sketch_mode && v.picked && rod_scene(s)) {
             // The picked chain's joints on the host while sketching (it may have been stepped).
@@ -230,12 +246,12 @@ int cmd_view(const ViewOptions& o) {
         read_back_before = renderer.value()->read_back_bytes();
         char status[512];
         std::snprintf(status, sizeof(status),
-                      "frame %u  t %.2f s  %s  backend %s  %.1f ms/frame  %llu B read back  camera %s %s  %zu characters %zu chains %zu birds%s%s",
+                      "frame %u  t %.2f s  %s  backend %s  %.1f ms/frame  %llu B read back  camera %s %s  %zu characters %zu chains %zu birds%s%s%s",
                       v.current(), static_cast<double>(v.current()) / static_cast<double>(s.scene().fps), v.playing ? "playing" : "paused",
                       std::string(backend_name(s.backend())).c_str(), frame_ms, static_cast<unsigned long long>(read_back_frame),
                       v.follow_scene ? "scene" : "orbit", list.camera().orthographic ? "ortho" : "persp",
                       rod_scene(s) ? static_cast<std::size_t>(rod_scene(s)->world.character_count) : 0,
-                      rod_scene(s) ? rod_scene(s)->world.chains.size() : 0, bird_world(s).birds.size(),
+                      rod_scene(s) ? rod_scene(s)->world.chains.size() : 0, bird_world(s).birds.size(), level_counts.c_str(),
                       v.sketch_mode ? ("  [sketch: " + v.sketch_status() + "]").c_str() : "",
                       v.message.empty() ? "" : ("  " + v.message).c_str());
         add_status(list, status);
@@ -293,10 +309,13 @@ Command add_view(CLI::App& app) {
     add_switch(*c, "--joints", o->joints, "a dot at every simulated joint of the strands (default: off, the strands alone)");
     add_count(*c, "--frames", o->frames, 1, 100'000'000, "quit after N drawn frames (default: run until closed)");
     add_text(*c, "--keys", o->keys, "K1,K2,...",
-             "one key per drawn frame first: space right left home [ ] 1 2 3 s k w u c o + - p q escape, drag:X1:Y1:X2:Y2, "
+             "one key per drawn frame first: space right left home [ ] 1 2 3 s k w u c o l + - p q escape, drag:X1:Y1:X2:Y2, "
              "orbit:DX:DY, resize:W:H (default: none)");
     add_text(*c, "--screenshot", o->screenshot, "FILE.png", "write the last drawn frame (default: none)");
     add_lod_options(*c, o->lod);
+    add_switch(*c, "--show-lod", o->show_lod,
+               "a dot over each character in its level of detail's colour (green full, amber posed, blue hidden) and "
+               "the counts on the status line, as render --show-lod; L toggles it (default: off)");
     add_backend_options(*c, o->backend);
     return {c, [o] { return cmd_view(*o); }};
 }

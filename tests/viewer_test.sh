@@ -154,6 +154,30 @@ check "C: the window shows what render shows" python3 "$work/pngcmp.py" same "$w
 check "without C: the orbit camera shows another view" python3 "$work/pngcmp.py" differ "$work/orbit.png" "$work/frames/ahoge_00029.png"
 check "O: the orthographic orbit camera shows another picture" python3 "$work/pngcmp.py" differ "$work/ortho.png" "$work/orbit.png"
 
+# L (--show-lod) shows each character's level of detail as `render --show-lod` does: on
+# crowd-10k cut to 40 chibis with its `lod` on (camera 90 m out: every one posed, amber),
+# following the scene camera (C), frame 29 in the window is render's frame 29 pixel for
+# pixel; without L there is no amber dot. The status line counts the levels; --show-lod on
+# a scene without characters is a usage error naming the scene.
+python3 - "$src" "$work/crowd-40.json" <<'PY'
+import json, os, sys
+src, out = sys.argv[1], sys.argv[2]
+scene = json.load(open(os.path.join(src, "scenes", "crowd-10k.json")))
+scene["lod"]["enabled"] = True
+scene["crowds"][0]["count"] = 40
+scene["characters"][0]["gltf"] = os.path.join(src, "scenes", "characters", "chibi.glb")
+json.dump(scene, open(out, "w"))
+PY
+view "$work/lod" "$work/crowd-40.json" --backend vulkan --size 200x150 --frames 30 --keys c,l --screenshot "$work/lod.png"
+view "$work/nolod" "$work/crowd-40.json" --backend vulkan --size 200x150 --frames 30 --keys c --screenshot "$work/nolod.png"
+"$bin" render "$work/crowd-40.json" --backend vulkan --size 200x150 --frames 0:30 --show-lod --out "$work/lod-frames" >/dev/null
+check "L: the window shows the levels as render --show-lod does" python3 "$work/pngcmp.py" same "$work/lod.png" "$work/lod-frames/crowd-10k_00029.png"
+check "L: posed characters' amber dots" python3 "$work/png.py" "$work/lod.png" 240,170,40
+check "without L: no amber dot" bash -c "! python3 '$work/png.py' '$work/nolod.png' 240,170,40 >/dev/null"
+check "L says what it shows" grep -q "levels of detail shown (green full, amber posed, blue hidden)" "$work/lod.out"
+view "$work/nochars" scenes/flock.json --size 160x120 --frames 2 --show-lod
+check "--show-lod without characters exits 2 naming the scene" bash -c "test $? -eq 2 && grep -q -- '--show-lod: scene .*flock.json has no characters' '$work/nochars.err'"
+
 # Playing: 5 drawn frames are frames 0 .. 4; Q quits before the limit.
 view "$work/play" scenes/ahoge.json --size 160x120 --frames 5
 check "playing ends at frame 4" grep -q "view ended at frame 4 (t 0.067 s, playing)" "$work/play.out"

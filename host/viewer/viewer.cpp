@@ -289,6 +289,14 @@ void Viewer::key(int key, int mods) {
             say(camera.orthographic ? "orbit camera: orthographic" : "orbit camera: perspective");
             break;
         case GLFW_KEY_U: undo(); break;
+        case GLFW_KEY_L:
+            if (!rod_scene(*sim)) {
+                say("no characters: no levels of detail to show");
+                break;
+            }
+            show_lod = !show_lod;
+            say(show_lod ? "levels of detail shown (green full, amber posed, blue hidden)" : "levels of detail not shown");
+            break;
         case GLFW_KEY_EQUAL:
         case GLFW_KEY_KP_ADD: influence = std::min(influence * 1.25f, 1000.0f); break;
         case GLFW_KEY_MINUS:
@@ -372,7 +380,7 @@ std::optional<int> key_by_name(const std::string& name) {
         {"space", GLFW_KEY_SPACE}, {"right", GLFW_KEY_RIGHT}, {"left", GLFW_KEY_LEFT},   {"home", GLFW_KEY_HOME},
         {"[", GLFW_KEY_LEFT_BRACKET}, {"]", GLFW_KEY_RIGHT_BRACKET}, {"1", GLFW_KEY_1},  {"2", GLFW_KEY_2},
         {"3", GLFW_KEY_3},         {"s", GLFW_KEY_S},         {"k", GLFW_KEY_K},         {"w", GLFW_KEY_W},         {"u", GLFW_KEY_U},
-        {"c", GLFW_KEY_C},         {"o", GLFW_KEY_O},
+        {"c", GLFW_KEY_C},         {"o", GLFW_KEY_O},         {"l", GLFW_KEY_L},
         {"+", GLFW_KEY_EQUAL},     {"-", GLFW_KEY_MINUS},     {"p", GLFW_KEY_P},         {"q", GLFW_KEY_Q},
         {"escape", GLFW_KEY_ESCAPE}};
     for (const auto& [n, k] : kNames) {

@@ -52,6 +52,7 @@ struct Viewer {
     ChainSnapshot snapshot;             // the chains read back for picking and sketching
 
     bool follow_scene = false;  // C: the scene's camera (its motion and projection) instead of the orbit camera
+    bool show_lod = false;      // L (--show-lod): each character's level of detail as a dot
 
     // The camera of the current frame: the orbit camera, or the scene's at that frame.
     [[nodiscard]] rods::ImageCamera image_camera() const;
