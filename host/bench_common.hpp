@@ -32,6 +32,9 @@ struct Measured {
     std::vector<double> gpu_ms_per_frame;
     bool gpu_timed = true;
     std::uint64_t frames = 0;
+    // More members of this result's JSON object, each `,"name":number` (flat: gpu_run.sh's
+    // awk reads the file); "" for none.
+    std::string extra_json;
 
     [[nodiscard]] static double median(std::vector<double> v) {
         if (v.empty()) return 0.0;

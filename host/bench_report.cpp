@@ -180,7 +180,7 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
                       cpu > 0.0 ? std::to_string(m.rate() / cpu).c_str() : "null");
         text += (i ? "," : "") + std::string("{\"backend\":\"") + m.backend + "\",\"device\":\"" + json_escape(m.device) + "\"," +
                 numbers + ",\"isa\":" + (m.isa.empty() ? "null" : "\"" + m.isa + "\"") +
-                ",\"threads\":" + (m.threads == 0 ? "null" : std::to_string(m.threads)) + "}";
+                ",\"threads\":" + (m.threads == 0 ? "null" : std::to_string(m.threads)) + m.extra_json + "}";
     }
     text += "]}\n";
     return write_json(*json_path, text);

@@ -263,15 +263,26 @@ int bench_crowd(const CrowdOptions& o) {
         double total_ms = 0.0;
         for (const double ms : m.ms_per_frame) total_ms += ms * frames;
         const double clips = clip_ms[i] / static_cast<double>(m.frames);
-        std::printf("  %-20s clips %.3f ms + chains %.3f ms per frame (means)", m.backend.c_str(), clips,
-                    total_ms / static_cast<double>(m.frames) - clips);
+        const double chains = total_ms / static_cast<double>(m.frames) - clips;
+        std::printf("  %-20s clips %.3f ms + chains %.3f ms per frame (means)", m.backend.c_str(), clips, chains);
+        // The same in the JSON: clip_ms, chain_ms and with levels of detail the shares
+        // (fractions of the sampled chains; null without).
+        char extra[256];
+        std::snprintf(extra, sizeof extra, ",\"clip_ms\":%.6g,\"chain_ms\":%.6g", clips, chains);
+        contenders[i].measured.extra_json = extra;
         const auto& n = level_counts[i];
         const auto sampled = static_cast<double>(n[0] + n[1] + n[2]);
         if (sampled > 0.0) {
-            auto share = [&](std::size_t l) { return 100.0 * static_cast<double>(n[l]) / sampled; };
+            auto share = [&](std::size_t l) { return static_cast<double>(n[l]) / sampled; };
+            const double kept_share = static_cast<double>(kept_counts[i]) / sampled;
             std::printf("; chains full %.1f%%, posed %.1f%%, hidden %.1f%%, kept their state %.1f%% (every %uth frame)",
-                        share(0), share(1), share(2), 100.0 * static_cast<double>(kept_counts[i]) / sampled, kLevelSampling);
+                        100.0 * share(0), 100.0 * share(1), 100.0 * share(2), 100.0 * kept_share, kLevelSampling);
+            std::snprintf(extra, sizeof extra, ",\"full_share\":%.6g,\"posed_share\":%.6g,\"hidden_share\":%.6g,\"kept_share\":%.6g",
+                          share(0), share(1), share(2), kept_share);
+        } else {
+            std::snprintf(extra, sizeof extra, ",\"full_share\":null,\"posed_share\":null,\"hidden_share\":null,\"kept_share\":null");
         }
+        contenders[i].measured.extra_json += extra;
         std::printf("\n");
     }
     for (const auto& s : sims) {
@@ -361,7 +372,8 @@ Command add_bench(CLI::App& app) {
                   "ms/frame, the device's timestamps around the frame's dispatches (host preparation and waiting left out; "
                   "'-' for the cpu kinds); both medians of the repetitions; vs c-ref and vs cpu, the rate over "
                   "cpu-reference's and cpu's of the same run; isa and threads of the cpu backends. --json writes the same "
-                  "(per_second, min, max, ms_per_frame, gpu_ms_per_frame, vs_cpu_reference, vs_cpu, isa, threads); "
+                  "(per_second, min, max, ms_per_frame, gpu_ms_per_frame, vs_cpu_reference, vs_cpu, isa, threads; bench "
+                  "crowd also clip_ms, chain_ms and the levels' full_share, posed_share, hidden_share, kept_share); "
                   "docs/performance.md.");
     auto birds = std::make_shared<BirdsOptions>();
     CLI::App* b = bench->add_subcommand("birds", "bird-frames per second on a flock of N birds");

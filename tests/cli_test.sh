@@ -243,7 +243,9 @@ check "bench crowd json" bash -c "node -e 'const r=require(\"$work/bench-crowd.j
 # With levels of detail it prints the chains at each level and the share that kept their
 # state (the rate), read back from each backend: the reference and cpu agree, and far
 # characters keep (crowd-10k's camera starts 90 m out).
-"$bin" bench crowd scenes/crowd-10k.json --count 40 --frames 11 --backends cpu-reference,cpu --lod >"$work/bench-lod.out" 2>&1
+"$bin" bench crowd scenes/crowd-10k.json --count 40 --frames 11 --backends cpu-reference,cpu --lod --json "$work/bench-lod.json" >"$work/bench-lod.out" 2>&1
+check "bench crowd --lod --json: the shares, the same on both backends, and the frame's split" bash -c "node -e 'const r=require(\"$work/bench-lod.json\").results; if (r.length!==2||!(r[0].kept_share>0)||r[0].kept_share!==r[1].kept_share||r[0].posed_share!==1||!(r[1].clip_ms>0)||!(r[1].chain_ms>0)) process.exit(1)'"
+check "bench crowd json without levels of detail: null shares" bash -c "node -e 'const r=require(\"$work/bench-crowd.json\").results; if (r[0].kept_share!==null||!(r[0].clip_ms>0)) process.exit(1)'"
 check "bench crowd --lod prints the kept share, the same on both backends" bash -c "test \$(grep -o 'kept their state [0-9.]*%' '$work/bench-lod.out' | sort -u | wc -l) -eq 1 && grep -c 'kept their state [1-9][0-9.]*%' '$work/bench-lod.out' | grep -qx 2"
 "$bin" bench view scenes/ahoge.json --frames 3 --size 64x48 --json "$work/bench-view.json" >"$work/bench-view.out" 2>&1
 check "bench view: three configurations, nothing read back when shared" bash -c "node -e 'const r=require(\"$work/bench-view.json\"); if (r.benchmark!==\"view\"||r.results.length!==3||r.results[0].configuration!==\"vulkan shared\"||r.results[0].read_back_bytes_per_frame!==0||!(r.results[1].read_back_bytes_per_frame>0)) process.exit(1)'"
