@@ -663,7 +663,7 @@ run_all() {
   # crowd.json's cpu-reference takes about 0.45 s a frame.
   local chains_s=100000 chains_l=1000000 chains_frames_s=5 chains_frames_l=10
   local birds_s=1000000 birds_l=10000000 birds_frames_s=10 birds_frames_l=20
-  local crowd_s=1000 crowd_l=10000 crowd_frames=30
+  local crowd_s=1000 crowd_l=10000 crowd_frames=30 crowd_lod_frames=60
   # The flock: 10 000 birds (issue 32's size beside Blender's boids) and a million.
   local flock_s=10000 flock_l=1000000 flock_frames_s=60 flock_frames_l=5
   # The vulkan kernels' workgroup sizes timed side by side at the large sizes (issue 38,
@@ -674,7 +674,7 @@ run_all() {
   if ((quick)); then
     chains_s=301 chains_l=1001 chains_frames_s=2 chains_frames_l=2
     birds_s=1001 birds_l=10001 birds_frames_s=3 birds_frames_l=3
-    crowd_s=2 crowd_l=5 crowd_frames=3 reps_l=3
+    crowd_s=2 crowd_l=5 crowd_frames=3 crowd_lod_frames=11 reps_l=3
     flock_s=1001 flock_l=3001 flock_frames_s=2 flock_frames_l=2
     # Two sizes keep the option's path run; each is a pipeline lavapipe compiles.
     workgroups=32,64
@@ -709,6 +709,11 @@ run_all() {
   run_step "bench-crowd-$crowd_l" "$bench_limit" "$bench_reserve" bench "$bin" bench crowd --count "$crowd_l" \
     --frames "$crowd_frames" --repetitions "$reps_l" --backends "$fast" --workgroup-sizes "$workgroups" \
     --json "$out/bench-crowd-$crowd_l.json"
+  # The levels of detail on crowd-10k (issue 35: the camera's first second, 90 m out;
+  # `--lod`), so that a GPU's figures stand beside the cpu backend's 94 frames/s on 2 cores.
+  run_step "bench-crowd-lod-$crowd_l" "$bench_limit" "$bench_reserve" bench "$bin" bench crowd scenes/crowd-10k.json \
+    --count "$crowd_l" --frames "$crowd_lod_frames" --lod --repetitions "$reps_l" --backends "$fast" \
+    --json "$out/bench-crowd-lod-$crowd_l.json"
   run_step "bench-flock-$flock_s" "$bench_limit" "$bench_reserve" bench "$bin" bench flock --count "$flock_s" \
     --frames "$flock_frames_s" --repetitions "$reps_s" --backends "$all" --json "$out/bench-flock-$flock_s.json"
   run_step "bench-flock-$flock_l" "$bench_limit" "$bench_reserve" bench "$bin" bench flock --count "$flock_l" \

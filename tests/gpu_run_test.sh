@@ -95,7 +95,12 @@ expected = ["info"] + [f"validate-{s}" for s in scenes] + (["embed_vulkan"] if e
 for name in expected:
     check(name in steps, f"no step {name}")
 benches = [s for s in d["steps"] if s["name"].startswith("bench-")]
-check(len(benches) == 8, f"{len(benches)} bench steps, not 8")
+check(len(benches) == 9, f"{len(benches)} bench steps, not 9")
+# The levels of detail's crowd: the shares of each level and of the kept state per result.
+check("bench-crowd-lod-5" in steps, "no step bench-crowd-lod-5")
+for r in steps["bench-crowd-lod-5"]["bench"]["results"]:
+    check(r.get("posed_share") is not None and r.get("kept_share") is not None and r["clip_ms"] >= 0,
+          f"bench-crowd-lod-5: {r}")
 for s in benches:
     backends = {r["backend"].split("/")[0] for r in s["bench"]["results"]}
     check({"cpu", "vulkan"} <= backends, f"{s['name']}: backends {backends}")
