@@ -11,6 +11,7 @@
 #include <array>
 #include <chrono>
 #include <cstdio>
+#include <limits>
 #include <optional>
 #include <sstream>
 #include <string>
@@ -32,6 +33,22 @@ namespace kodawari::cli {
 namespace {
 
 Viewer* from(GLFWwindow* w) { return static_cast<Viewer*>(glfwGetWindowUserPointer(w)); }
+
+// The levels' budget at the last step (--budget-ms): the status line's and the end line's.
+std::string budget_text(const LodBudgetState& b) {
+    char text[160];
+    const char* within = b.full_distance == std::numeric_limits<float>::infinity()    ? "every character the rule makes full"
+                         : b.full_distance == -std::numeric_limits<float>::infinity() ? "no character full"
+                                                                                     : nullptr;
+    if (within != nullptr) {
+        std::snprintf(text, sizeof text, "budget %g ms (%s x%.2f): %s", static_cast<double>(b.budget_ms),
+                      b.measured ? "measured" : "model", static_cast<double>(b.scale), within);
+    } else {
+        std::snprintf(text, sizeof text, "budget %g ms (%s x%.2f): full within %.1f m", static_cast<double>(b.budget_ms),
+                      b.measured ? "measured" : "model", static_cast<double>(b.scale), static_cast<double>(b.full_distance));
+    }
+    return text;
+}
 
 
 struct ViewOptions {
@@ -222,14 +239,16 @@ int cmd_view(const ViewOptions& o) {
         if (rod_scene(s)) kodawari::add_characters(list, *rod_scene(s), v.current());
         kodawari::add_perches(list, perches);
         // --show-lod, L: each character's level (read back: the status line counts it).
-        std::string level_counts;
+        std::string lod_status;
         if (v.show_lod && rod_scene(s)) {
             auto counts = add_level_dots(list, s, levels);
             if (!counts) return report(counts.error());
-            level_counts = std::string("  levels ") + kLevelNames[0] + " " + std::to_string(counts.value()[0]) + " " +
+            lod_status = std::string("  levels ") + kLevelNames[0] + " " + std::to_string(counts.value()[0]) + " " +
                            kLevelNames[1] + " " + std::to_string(counts.value()[1]) + " " + kLevelNames[2] + " " +
                            std::to_string(counts.value()[2]);
         }
+        // --budget-ms: what the budget did at the last step.
+        if (const auto budget = lod_budget(s)) lod_status += "  " + budget_text(*budget);
         if (auto r = s.draw_on(*renderer.value()); !r) return report(r.error());
         if (v.sketch_mode && v.picked && rod_scene(s)) {
             // The picked chain's joints on the host while sketching (it may have been stepped).
@@ -251,7 +270,7 @@ int cmd_view(const ViewOptions& o) {
                       std::string(backend_name(s.backend())).c_str(), frame_ms, static_cast<unsigned long long>(read_back_frame),
                       v.follow_scene ? "scene" : "orbit", list.camera().orthographic ? "ortho" : "persp",
                       rod_scene(s) ? static_cast<std::size_t>(rod_scene(s)->world.character_count) : 0,
-                      rod_scene(s) ? rod_scene(s)->world.chains.size() : 0, bird_world(s).birds.size(), level_counts.c_str(),
+                      rod_scene(s) ? rod_scene(s)->world.chains.size() : 0, bird_world(s).birds.size(), lod_status.c_str(),
                       v.sketch_mode ? ("  [sketch: " + v.sketch_status() + "]").c_str() : "",
                       v.message.empty() ? "" : ("  " + v.message).c_str());
         add_status(list, status);
@@ -290,6 +309,7 @@ int cmd_view(const ViewOptions& o) {
                 static_cast<double>(v.current()) / static_cast<double>(v.sim->scene().fps), v.playing ? "playing" : "paused",
                 std::string(backend_name(v.sim->backend())).c_str(), static_cast<unsigned long long>(drawn),
                 v.dirty ? "; unsaved sketches discarded" : "");
+    if (const auto budget = lod_budget(*v.sim)) std::printf("kodawari: at the last frame, %s\n", budget_text(*budget).c_str());
     std::printf("kodawari: simulation and drawing on one device (%s); %llu bytes of simulation state read back in %llu frames\n",
                 renderer.value()->device().c_str(),
                 static_cast<unsigned long long>(renderer.value()->read_back_bytes() - read_back_start),

@@ -175,6 +175,11 @@ check "L: the window shows the levels as render --show-lod does" python3 "$work/
 check "L: posed characters' amber dots" python3 "$work/png.py" "$work/lod.png" 240,170,40
 check "without L: no amber dot" bash -c "! python3 '$work/png.py' '$work/nolod.png' 240,170,40 >/dev/null"
 check "L says what it shows" grep -q "levels of detail shown (green full, amber posed, blue hidden)" "$work/lod.out"
+# --budget-ms: the end line says what the budget did at the last frame (a roomy one takes
+# every character the projected-size rule makes full, whatever the measured scale).
+view "$work/budget" "$work/crowd-40.json" --size 160x120 --frames 5 --budget-ms 100
+check "--budget-ms: the end line says what the budget did" grep -q \
+    "at the last frame, budget 100 ms (measured x[0-9.]*): every character the rule makes full" "$work/budget.out"
 view "$work/nochars" scenes/flock.json --size 160x120 --frames 2 --show-lod
 check "--show-lod without characters exits 2 naming the scene" bash -c "test $? -eq 2 && grep -q -- '--show-lod: scene .*flock.json has no characters' '$work/nochars.err'"
 

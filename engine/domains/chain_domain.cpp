@@ -376,7 +376,7 @@ std::optional<LodBudgetState> lod_budget(const Simulation& sim) {
     const ChainDomain* domain = find(sim);
     if (domain == nullptr || !domain->budget()) return std::nullopt;
     const rods::LodBudget& b = *domain->budget();
-    return LodBudgetState{b.budget_ms(), b.measured(), b.scale()};
+    return LodBudgetState{b.budget_ms(), b.measured(), b.scale(), domain->input().full_distance_cap, b.modelled_ms()};
 }
 
 const ChainTiming& chain_timing(const Simulation& sim) {

@@ -120,6 +120,7 @@ Scene crowd(std::uint32_t count) {
 struct BudgetRun {
     std::vector<std::byte> positions;  // every frame's joints
     std::uint64_t full = 0;           // chain-frames at the full level
+    std::optional<LodBudgetState> budget;  // after the last frame
 };
 
 BudgetRun run(Scene scene, std::uint32_t frames) {
@@ -138,6 +139,7 @@ BudgetRun run(Scene scene, std::uint32_t frames) {
         const auto* bytes = reinterpret_cast<const std::byte*>(snapshot.positions.data());
         out.positions.insert(out.positions.end(), bytes, bytes + snapshot.positions.size() * sizeof(glm::vec3));
     }
+    out.budget = lod_budget(sim);
     return out;
 }
 
@@ -160,11 +162,24 @@ TEST(LodBudget, ABudgetMakesFewerCharactersFullTheSameWayEveryRun) {
     // Deterministic: the cost model alone decides, never the clock.
     EXPECT_TRUE(capped.positions == again.positions);
     EXPECT_EQ(capped.full, again.full);
+    // The state says what the budget did at the last frame: full within a finite depth, the
+    // frame priced within the budget and above every character posed (1.12 ms).
+    ASSERT_FALSE(free.budget.has_value());
+    ASSERT_TRUE(capped.budget.has_value());
+    std::printf("the last frame: full within %.2f m, modelled %.3f ms\n", static_cast<double>(capped.budget->full_distance),
+                capped.budget->modelled_ms);
+    EXPECT_TRUE(std::isfinite(capped.budget->full_distance) && capped.budget->full_distance > 0.0f);
+    EXPECT_LE(capped.budget->modelled_ms, 1.3);
+    EXPECT_GT(capped.budget->modelled_ms, 1.12);
+    EXPECT_FALSE(capped.budget->measured);
+    EXPECT_EQ(capped.budget->scale, 1.0f);
     // A budget every character fits in caps nothing: the bits of no budget.
     Scene roomy = crowd(kCount);
     roomy.lod.budget_ms = 1000.0f;
     const BudgetRun loose = run(roomy, kFrames);
     EXPECT_TRUE(loose.positions == free.positions);
+    ASSERT_TRUE(loose.budget.has_value());
+    EXPECT_EQ(loose.budget->full_distance, std::numeric_limits<float>::infinity());
 }
 
 TEST(LodBudget, SimulationRefusesABadBudgetNamingIt) {

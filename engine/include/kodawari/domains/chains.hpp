@@ -14,6 +14,7 @@
 /// What is particular to chains is reached here, not through the Simulation facade.
 
 #include <cstdint>
+#include <limits>
 #include <memory>
 #include <optional>
 #include <string>
@@ -121,11 +122,17 @@ KODAWARI_API void set_view_camera(Simulation& sim, std::optional<rods::Camera> c
 /// on the host, where it ranks the characters).
 [[nodiscard]] KODAWARI_API Result<void> set_lod_budget(Simulation& sim, float budget_ms, bool measured);
 /// A budget's state: its ms, whether measured, and the scale measured frames put on the
-/// cost model (1 for a model-only budget).
+/// cost model (1 for a model-only budget); and at the last step the depth along the camera's
+/// axis within which characters could be full (the budget's cap on the full distance:
+/// +infinity when it took every character the projected-size rule makes full, or before the
+/// first step; -infinity when it took none) and the frame as the model priced it, ms
+/// (before the scale).
 struct LodBudgetState {
     float budget_ms = 0.0f;
     bool measured = false;
     float scale = 1.0f;
+    float full_distance = std::numeric_limits<float>::infinity();
+    double modelled_ms = 0.0;
 };
 /// The budget in force (the scene's `lod.budget_ms` or set_lod_budget()); none without.
 [[nodiscard]] KODAWARI_API std::optional<LodBudgetState> lod_budget(const Simulation& sim);

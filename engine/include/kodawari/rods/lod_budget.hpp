@@ -61,6 +61,8 @@ public:
     [[nodiscard]] bool measured() const { return measured_; }
     [[nodiscard]] float scale() const { return scale_; }
     [[nodiscard]] const LodCosts& costs() const { return costs_; }
+    /// The last cap()'s modelled frame, ms (before the scale; 0 before the first).
+    [[nodiscard]] double modelled_ms() const { return last_modelled_ms_; }
 
     /// This frame's cap on the full distance (budget_distance() at the current scale),
     /// remembering the frame's modelled cost for observe().
