@@ -124,6 +124,22 @@ KODAWARI_C_API kodawari_status kodawari_simulation_set_lod_budget(kodawari_simul
     });
 }
 
+KODAWARI_C_API kodawari_status kodawari_simulation_lod_budget(kodawari_simulation* sim, kodawari_lod_budget* out) {
+    return guard("kodawari_simulation_lod_budget", sim ? &sim->message : nullptr, [&] {
+        require_sim(sim);
+        require_pointer(out, "out");
+        *out = kodawari_lod_budget{};
+        const auto budget = lod_budget(*sim->sim);
+        if (!budget) return;
+        out->active = 1;
+        out->measured = budget->measured ? 1 : 0;
+        out->budget_ms = budget->budget_ms;
+        out->scale = budget->scale;
+        out->full_distance = budget->full_distance;
+        out->modelled_ms = static_cast<float>(budget->modelled_ms);
+    });
+}
+
 namespace {
 
 FlockAgent flock_agent(const kodawari_flock_agent& a) {

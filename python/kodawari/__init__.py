@@ -271,6 +271,21 @@ class Simulation:
 
     FLOCK_AGENT_KINDS = ("predator", "attractor", "obstacle", "capsule", "plane")
 
+    def lod_budget(self):
+        """The levels' budget and what it did at the last step, or None without a budget: a
+        dict of budget_ms, measured (bool), scale (what measured frames put on the cost
+        model), full_distance (m: the depth within which characters could be full; inf
+        when the budget took every character the projected-size rule makes full, -inf when
+        it took none) and modelled_ms (the frame as the model priced it)."""
+        with self._lock:
+            handle = self._live()
+            out = _native.LodBudget()
+            _check(_native.lib.kodawari_simulation_lod_budget(handle, _native.ctypes.byref(out)), handle)
+            if not out.active:
+                return None
+            return {"budget_ms": out.budget_ms, "measured": bool(out.measured), "scale": out.scale,
+                    "full_distance": out.full_distance, "modelled_ms": out.modelled_ms}
+
     def set_flock_agents(self, agents=()):
         """Places agents among the scene's flocking birds from the next frame on, beside the
         scene's predators, until called again (no agents: removes them). Each agent is a

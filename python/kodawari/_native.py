@@ -46,6 +46,11 @@ class BirdOutput(ctypes.Structure):
     ]
 
 
+class LodBudget(ctypes.Structure):
+    _fields_ = [("active", ctypes.c_uint32), ("measured", ctypes.c_uint32), ("budget_ms", ctypes.c_float),
+                ("scale", ctypes.c_float), ("full_distance", ctypes.c_float), ("modelled_ms", ctypes.c_float)]
+
+
 class ChainOutput(ctypes.Structure):
     _fields_ = [
         ("positions", ctypes.c_void_p),
@@ -145,6 +150,7 @@ _declare("kodawari_simulation_bird_poses", _status, _sim, _P(BirdOutput))
 _declare("kodawari_simulation_bird_tail_spreads", _status, _sim, ctypes.c_void_p, ctypes.c_size_t)
 _declare("kodawari_simulation_read_chains", _status, _sim, _P(ChainOutput))
 _declare("kodawari_simulation_chain_levels", _status, _sim, ctypes.c_void_p, ctypes.c_void_p, ctypes.c_size_t)
+_declare("kodawari_simulation_lod_budget", _status, _sim, _P(LodBudget))
 _declare("kodawari_simulation_chain_joints", _status, _sim, ctypes.c_uint32, _P(ctypes.c_uint32),
          _P(ctypes.c_uint32))
 _declare("kodawari_simulation_bake", _status, _sim, ctypes.c_char_p, ctypes.c_uint32, ctypes.c_char_p,

@@ -270,6 +270,15 @@ static void test_chains(void) {
     EXPECT_FAIL(kodawari_simulation_chain_levels(sim, levels, kept, 0), KODAWARI_BUFFER_TOO_SMALL, sim, "levels: holds 0",
                 "needs 1");
     EXPECT_FAIL(kodawari_simulation_chain_levels(sim, NULL, kept, 2), KODAWARI_INVALID_ARGUMENT, sim, "levels", "NULL");
+    /* No budget on a scene without levels of detail: inactive, the rest zero. */
+    {
+        kodawari_lod_budget budget;
+        memset(&budget, 0xff, sizeof budget);
+        EXPECT_OK(kodawari_simulation_lod_budget(sim, &budget));
+        CHECK(budget.active == 0 && budget.measured == 0 && budget.budget_ms == 0.0f && budget.full_distance == 0.0f,
+              "lod_budget without a budget: active %u, %g ms", budget.active, (double)budget.budget_ms);
+        EXPECT_FAIL(kodawari_simulation_lod_budget(sim, NULL), KODAWARI_INVALID_ARGUMENT, sim, "out", "NULL");
+    }
     out.rest_positions = rest;
     out.rest_positions_capacity = sizeof rest / sizeof(float);
     out.orientations = orientations;

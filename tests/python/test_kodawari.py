@@ -211,7 +211,7 @@ with open(crowd_scene, "w") as f:
     json.dump(crowd, f)
 level_runs = []
 for backend in ("cpu-reference", "cpu"):
-    with kodawari.Simulation.open(crowd_scene, backend, frames=8) as sim:
+    with kodawari.Simulation.open(crowd_scene, backend, frames=9) as sim:
         try:
             sim.chain_levels()
             check(False, "chain_levels() before the first step raised nothing")
@@ -224,6 +224,14 @@ for backend in ("cpu-reference", "cpu"):
         check(bool((levels == kodawari.LEVEL_POSED).all()), f"{backend}: levels {numpy.bincount(levels)}, every chain posed expected")
         check(0 < int(kept.sum()) < sim.chain_count, f"{backend}: {int(kept.sum())} of {sim.chain_count} chains kept their state")
         level_runs.append((levels, kept))
+        # The budget's state: none, then a roomy model budget that takes every character the
+        # rule makes full (so full_distance is +inf) and priced the frame.
+        check(sim.lod_budget() is None, f"{backend}: a budget before set_lod_budget: {sim.lod_budget()}")
+        sim.set_lod_budget(100.0)
+        sim.step(1)
+        budget = sim.lod_budget()
+        check(budget is not None and budget["budget_ms"] == 100.0 and budget["measured"] is False and budget["scale"] == 1.0
+              and budget["full_distance"] == float("inf") and 0.0 < budget["modelled_ms"] < 100.0, f"{backend}: {budget}")
 print(f"chain_levels: {len(level_runs[1][0])} chains posed, {int(level_runs[1][1].sum())} kept their state at frame 6")
 check(all(numpy.array_equal(a, b) for a, b in zip(*level_runs)), "chain_levels: cpu and cpu-reference disagree")
 with kodawari.Simulation.open(AHOGE, "cpu", frames=2) as sim:

@@ -795,6 +795,19 @@ KODAWARI_C_API kodawari_status kodawari_simulation_set_wind(kodawari_simulation*
 /// first step).
 KODAWARI_C_API kodawari_status kodawari_simulation_set_lod_budget(kodawari_simulation* sim, float budget_ms, int measured);
 
+/// What the levels' budget did (kodawari_simulation_lod_budget).
+typedef struct kodawari_lod_budget {
+    uint32_t active;      ///< 1 while a budget is in force (the scene's `lod.budget_ms` or the call above), else 0
+    uint32_t measured;    ///< 1: scaled by what the frames took; 0: the cost model alone
+    float budget_ms;      ///< the budget, ms
+    float scale;          ///< what measured frames put on the model (1 for a model-only budget)
+    float full_distance;  ///< at the last step, the depth along the camera's axis within which characters could be full (m): +INFINITY when the budget took every character the projected-size rule makes full (and before the first step), -INFINITY when it took none
+    float modelled_ms;    ///< the last step's frame as the model priced it, ms (before the scale)
+} kodawari_lod_budget;
+/// Fills `out` with the levels' budget and what it did at the last step; `out->active` 0
+/// (and the rest zero) without a budget.
+KODAWARI_C_API kodawari_status kodawari_simulation_lod_budget(kodawari_simulation* sim, kodawari_lod_budget* out);
+
 /// What an application places among a scene's flocking birds (docs/flocking.md): a
 /// predator they flee, an attractor they are drawn to, or an obstacle they keep out of
 /// (a sphere, a capsule, or a plane they keep to one side of).
