@@ -36,6 +36,8 @@ struct kodawari_simulation {
     bool recorded = false;             // the last frame was recorded (its poses are on the device)
     std::vector<gpu::BirdPose> poses;  // the last frame's, read back by step()
     ChainSnapshot chains;              // read_chains()' scratch, reused
+    std::vector<rods::Level> levels;   // chain_levels()' scratch, reused
+    std::vector<std::uint8_t> kept;    // and which chains kept their state
     std::array<PartOffsets, birds::kWingTypeCount> offsets{};
 };
 
@@ -342,11 +344,9 @@ KODAWARI_C_API kodawari_status kodawari_simulation_chain_levels(kodawari_simulat
             reject(KODAWARI_BUFFER_TOO_SMALL, "levels: holds " + std::to_string(capacity) + " bytes, needs " +
                                                   std::to_string(chains) + " (one per chain)");
         }
-        std::vector<rods::Level> read;
-        std::vector<std::uint8_t> kept_read;
-        check(read_chain_levels(*sim->sim, read, kept ? &kept_read : nullptr));
-        for (std::size_t c = 0; c < read.size(); ++c) levels[c] = static_cast<std::uint8_t>(read[c]);
-        if (kept != nullptr) std::copy(kept_read.begin(), kept_read.end(), kept);
+        check(read_chain_levels(*sim->sim, sim->levels, kept ? &sim->kept : nullptr));
+        for (std::size_t c = 0; c < sim->levels.size(); ++c) levels[c] = static_cast<std::uint8_t>(sim->levels[c]);
+        if (kept != nullptr) std::copy(sim->kept.begin(), sim->kept.end(), kept);
     });
 }
 

@@ -39,12 +39,13 @@ public:
     /// With the scene's levels of detail on (RodWorld::lod) and `out` holding frame
     /// index - 1, a rigged character whose chains keep their state this frame
     /// (rods::chain_rests on its reference joint and `out`'s camera: posed or hidden and
-    /// farther than twice its full distance, or hidden far off the view, between its turns) keeps its clip's pose and its entries of
-    /// `out`, so that it takes them afresh every kPosedClipPeriod frames, a hidden one every
-    /// kHiddenClipPeriod, at the frames its chains step (docs/level-of-detail.md, "The
-    /// rate"). With LodSettings::lower_rate off, a character posed as if twice as near
-    /// keeps them between those turns while its chains step every frame. The same on every backend (the choice is made here,
-    /// on the host), deterministic, and a shard's instances choose as in the whole scene
+    /// farther than twice its full distance, or hidden far off the view, between its
+    /// turns) keeps its clip's pose and its entries of `out`, so that it takes them afresh
+    /// every kPosedClipPeriod frames, a hidden one every kHiddenClipPeriod, at the frames
+    /// its chains step (docs/level-of-detail.md, "The rate"). With LodSettings::lower_rate
+    /// off, a character posed as if twice as near keeps them between those turns while its
+    /// chains step every frame. The same on every backend (the choice is made here, on the
+    /// host), deterministic, and a shard's instances choose as in the whole scene
     /// (RodScene::first_instance). Not with the input written on the device
     /// (write_inputs_on()): every clip every frame there.
     [[nodiscard]] Result<void> frame(std::uint32_t index, rods::RodFrame& out);
