@@ -131,6 +131,9 @@ void add_lod_options(CLI::App& app, LodFlags& flags) {
     add_text(app, "--lod-bias", flags.bias, "X",
              "log2 of a scale on every character's projected size, in [-8, 8]: +1 simulates as if every character were twice as near "
              "(default: the scene's `lod.bias`, else 0)");
+    add_text(app, "--lod-reduced", flags.reduced, "PX",
+             "the reduced level: characters below `lod.full_pixels` and down to PX pixels are simulated at half the substeps and "
+             "iterations, posed below; 0 turns it off; below `lod.full_pixels` (default: the scene's `lod.reduced_pixels`, else off)");
     add_switch(app, "--lod-every-frame", flags.every_frame,
                "step every posed and hidden chain every frame, as the scene's `lod.lower_rate: false` (default: far posed chains "
                "step every 2nd frame, hidden ones every 4th)");
@@ -148,6 +151,16 @@ void apply_lod(const LodFlags& flags, Scene& scene) {
         const float bias = parse_real("--lod-bias", *flags.bias);
         if (!(bias >= -8.0f && bias <= 8.0f)) throw UsageError{"--lod-bias: " + *flags.bias + " is not in [-8, 8]"};
         scene.lod.bias = bias;
+    }
+    if (flags.reduced) {
+        const float pixels = parse_real("--lod-reduced", *flags.reduced);
+        if (!(pixels == 0.0f || (pixels > 0.0f && pixels < scene.lod.full_pixels))) {
+            char full[32];
+            std::snprintf(full, sizeof full, "%g", static_cast<double>(scene.lod.full_pixels));
+            throw UsageError{"--lod-reduced: expected 0 (off) or a number of pixels below the scene's lod.full_pixels (" +
+                             std::string(full) + "), got " + *flags.reduced};
+        }
+        scene.lod.reduced_pixels = pixels;
     }
     if (flags.budget_ms) {
         const float ms = parse_real("--budget-ms", *flags.budget_ms);

@@ -90,10 +90,12 @@ struct LodFlags {
     std::optional<std::string> bias;
     bool every_frame = false;
     std::optional<std::string> budget_ms;
+    std::optional<std::string> reduced;
 };
 void add_lod_options(CLI::App& app, LodFlags& flags);
 /// The flags applied to `scene`'s settings: --lod turns them on (the scene's `lod`, or the
-/// defaults), --lod-bias sets the bias (a UsageError outside [-8, 8]).
+/// defaults), --lod-bias sets the bias (a UsageError outside [-8, 8]), --lod-reduced the
+/// reduced level's pixels (0: off; a UsageError unless below the full level's).
 /// --budget-ms turns them on with the scene's `lod.budget_ms` set (priced by the cost
 /// model: a bake's levels never depend on the wall clock); a UsageError unless a positive
 /// finite number of ms, at most 100000.

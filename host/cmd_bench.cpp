@@ -201,11 +201,11 @@ int bench_crowd(const CrowdOptions& o) {
     std::vector<std::unique_ptr<Simulation>> sims;
     std::vector<Contender> contenders;
     std::vector<double> clip_ms(variants.size(), 0.0);  // per contender, summed over its timed frames
-    // With levels of detail, the chains at each level (full, posed, hidden) summed over
-    // every tenth timed frame, per contender.
+    // With levels of detail, the chains at each level (full, posed, hidden, reduced: by
+    // rods::Level) summed over every tenth timed frame, per contender.
     const bool lod_on = scene.lod.enabled;
     constexpr std::uint32_t kLevelSampling = 10;
-    std::vector<std::array<std::uint64_t, 3>> level_counts(variants.size(), std::array<std::uint64_t, 3>{});
+    std::vector<std::array<std::uint64_t, 4>> level_counts(variants.size(), std::array<std::uint64_t, 4>{});
     // And of those chains, the ones that kept their state instead of stepping (the posed and
     // hidden levels' rate, docs/level-of-detail.md "The rate").
     std::vector<std::uint64_t> kept_counts(variants.size(), 0);
@@ -243,7 +243,7 @@ int bench_crowd(const CrowdOptions& o) {
                 // Every tenth frame's levels, read back with the clock stopped.
                 seconds += std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
                 KW_TRY(read_chain_levels(s, levels, &kept));
-                for (const rods::Level l : levels) ++level_counts[index][static_cast<std::size_t>(l)];
+                for (const rods::Level l : levels) ++level_counts[index][std::min<std::size_t>(static_cast<std::size_t>(l), 3)];
                 for (const std::uint8_t k : kept) kept_counts[index] += k;
                 start = std::chrono::steady_clock::now();
             }
@@ -271,16 +271,20 @@ int bench_crowd(const CrowdOptions& o) {
         std::snprintf(extra, sizeof extra, ",\"clip_ms\":%.6g,\"chain_ms\":%.6g", clips, chains);
         contenders[i].measured.extra_json = extra;
         const auto& n = level_counts[i];
-        const auto sampled = static_cast<double>(n[0] + n[1] + n[2]);
+        const auto sampled = static_cast<double>(n[0] + n[1] + n[2] + n[3]);
         if (sampled > 0.0) {
             auto share = [&](std::size_t l) { return static_cast<double>(n[l]) / sampled; };
             const double kept_share = static_cast<double>(kept_counts[i]) / sampled;
-            std::printf("; chains full %.1f%%, posed %.1f%%, hidden %.1f%%, kept their state %.1f%% (every %uth frame)",
-                        100.0 * share(0), 100.0 * share(1), 100.0 * share(2), 100.0 * kept_share, kLevelSampling);
-            std::snprintf(extra, sizeof extra, ",\"full_share\":%.6g,\"posed_share\":%.6g,\"hidden_share\":%.6g,\"kept_share\":%.6g",
-                          share(0), share(1), share(2), kept_share);
+            std::printf("; chains full %.1f%%, ", 100.0 * share(0));
+            if (scene.lod.reduced_pixels > 0.0f) std::printf("reduced %.1f%%, ", 100.0 * share(3));
+            std::printf("posed %.1f%%, hidden %.1f%%, kept their state %.1f%% (every %uth frame)", 100.0 * share(1),
+                        100.0 * share(2), 100.0 * kept_share, kLevelSampling);
+            std::snprintf(extra, sizeof extra,
+                          ",\"full_share\":%.6g,\"reduced_share\":%.6g,\"posed_share\":%.6g,\"hidden_share\":%.6g,\"kept_share\":%.6g",
+                          share(0), share(3), share(1), share(2), kept_share);
         } else {
-            std::snprintf(extra, sizeof extra, ",\"full_share\":null,\"posed_share\":null,\"hidden_share\":null,\"kept_share\":null");
+            std::snprintf(extra, sizeof extra,
+                          ",\"full_share\":null,\"reduced_share\":null,\"posed_share\":null,\"hidden_share\":null,\"kept_share\":null");
         }
         contenders[i].measured.extra_json += extra;
         std::printf("\n");
@@ -373,7 +377,7 @@ Command add_bench(CLI::App& app) {
                   "'-' for the cpu kinds); both medians of the repetitions; vs c-ref and vs cpu, the rate over "
                   "cpu-reference's and cpu's of the same run; isa and threads of the cpu backends. --json writes the same "
                   "(per_second, min, max, ms_per_frame, gpu_ms_per_frame, vs_cpu_reference, vs_cpu, isa, threads; bench "
-                  "crowd also clip_ms, chain_ms and the levels' full_share, posed_share, hidden_share, kept_share); "
+                  "crowd also clip_ms, chain_ms and the levels' full_share, reduced_share, posed_share, hidden_share, kept_share); "
                   "docs/performance.md.");
     auto birds = std::make_shared<BirdsOptions>();
     CLI::App* b = bench->add_subcommand("birds", "bird-frames per second on a flock of N birds");

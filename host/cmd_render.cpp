@@ -312,8 +312,8 @@ int cmd_render(const RenderOptions& o) {
         if (o.show_lod) {
             auto counts = add_level_dots(list, sim, levels);
             if (!counts) return report(counts.error());
-            std::printf("kodawari: frame %u: characters %s %u, %s %u, %s %u\n", f, kLevelNames[0], counts.value()[0], kLevelNames[1],
-                        counts.value()[1], kLevelNames[2], counts.value()[2]);
+            std::printf("kodawari: frame %u: characters %s\n", f,
+                        levels_text(counts.value(), sim.scene().lod.reduced_pixels > 0.0f, ", ").c_str());
         }
         auto image = r.render(list);
         if (!image) return report(image.error());

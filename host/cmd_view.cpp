@@ -243,9 +243,7 @@ int cmd_view(const ViewOptions& o) {
         if (v.show_lod && rod_scene(s)) {
             auto counts = add_level_dots(list, s, levels);
             if (!counts) return report(counts.error());
-            lod_status = std::string("  levels ") + kLevelNames[0] + " " + std::to_string(counts.value()[0]) + " " +
-                           kLevelNames[1] + " " + std::to_string(counts.value()[1]) + " " + kLevelNames[2] + " " +
-                           std::to_string(counts.value()[2]);
+            lod_status = "  levels " + levels_text(counts.value(), s.scene().lod.reduced_pixels > 0.0f, " ");
         }
         // --budget-ms: what the budget did at the last step.
         if (const auto budget = lod_budget(s)) lod_status += "  " + budget_text(*budget);

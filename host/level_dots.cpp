@@ -9,8 +9,19 @@
 
 namespace kodawari::cli {
 
-Result<std::array<std::uint32_t, 3>> add_level_dots(render::DrawList& list, Simulation& sim, std::vector<rods::Level>& levels) {
-    std::array<std::uint32_t, 3> counts{};
+std::string levels_text(const LevelCounts& counts, bool reduced, const char* separator) {
+    std::string text;
+    for (const rods::Level level : {rods::Level::Full, rods::Level::Reduced, rods::Level::Posed, rods::Level::Hidden}) {
+        if (level == rods::Level::Reduced && !reduced) continue;
+        const auto l = static_cast<std::size_t>(level);
+        if (!text.empty()) text += separator;
+        text += std::string(kLevelNames[l]) + " " + std::to_string(counts[l]);
+    }
+    return text;
+}
+
+Result<LevelCounts> add_level_dots(render::DrawList& list, Simulation& sim, std::vector<rods::Level>& levels) {
+    LevelCounts counts{};
     const RodScene* scene = rod_scene(sim);
     if (scene == nullptr) return counts;
     KW_TRY(read_chain_levels(sim, levels));
@@ -22,7 +33,7 @@ Result<std::array<std::uint32_t, 3>> add_level_dots(render::DrawList& list, Simu
         const std::uint32_t character = scene->world.chains[c].character;
         if (seen[character] != 0 || character >= frame.reference.size()) continue;
         seen[character] = 1;
-        const auto level = std::min<std::size_t>(static_cast<std::size_t>(levels[c]), 2);
+        const auto level = std::min<std::size_t>(static_cast<std::size_t>(levels[c]), kLevelCount - 1);
         ++counts[level];
         // Over the reference joint (a head, 1 m characters by default: LodSettings::size)
         // clear of the hair, 0.16 m across and never under 4 px, so that the far crowd shows too.

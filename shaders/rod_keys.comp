@@ -61,10 +61,10 @@ void main() {
         const float right = dot(offset, push.camera_right.xyz);
         const float up = dot(offset, push.camera_up.xyz);
         const uint level = rod_level(depth, right, up, push.camera_right.w, push.camera_up.w, push.frame.y, push.frame.z,
-                                     push.frame.w, previous);
+                                     push.frame.w, push.camera_position.w, push.camera_forward.w, previous);
         const bool far_off = level == KW_RODS_LEVEL_HIDDEN &&
                              rod_far_off_view(depth, right, up, push.camera_right.w, push.camera_up.w, push.frame.y);
-        if (rod_rests(level, previous, depth, push.frame.z, far_off, rod_rate_turn(push.counts.z, ids.w))) return;
+        if (rod_rests(level, previous, depth, push.camera_position.w, far_off, rod_rate_turn(push.counts.z, ids.w))) return;
         frames = packed / KW_RODS_IDLE_UNIT + 1u;
     }
     const float dt = frames == 1u ? push.frame.x : push.frame.x * float(frames);

@@ -312,7 +312,7 @@ void main() {
     float share = 1.0;
     // The frames the chain kept its state since its last step (rods::ChainState::idle).
     uint idle = 0u;
-    if (LOD && push.flags.z != 0u) {
+    if (LOD && (push.flags.x & KW_RODS_STEP_LOD) != 0u) {
         const RodChainStateGpu last = chain_states[c];
         const uint packed = uint(last.view.w);  // level + KW_RODS_IDLE_UNIT x idle
         const uint previous = packed % KW_RODS_IDLE_UNIT;
@@ -321,24 +321,27 @@ void main() {
         const float depth = dot(offset, push.camera_forward.xyz);
         const float right = dot(offset, push.camera_right.xyz);
         const float up = dot(offset, push.camera_up.xyz);
+        const float reduced_distance = uintBitsToFloat(push.flags.y);
         level = rod_level(depth, right, up, push.camera_right.w, push.camera_up.w, push.time.y, push.time.z, push.time.w,
-                          previous);
+                          reduced_distance, uintBitsToFloat(push.flags.z), previous);
         // The posed and hidden levels' rate (rods::chain_rests): between its turns the chain
         // keeps its state (a chain with a center frame steps every frame, as on the CPU).
         const uint rate = push.flags.w;
         if ((rate & KW_RODS_RATE_ON) != 0u && chain.joints.z == KW_RODS_NO_CENTER) {
             const bool far_off = level == KW_RODS_LEVEL_HIDDEN &&
                                  rod_far_off_view(depth, right, up, push.camera_right.w, push.camera_up.w, push.time.y);
-            if (rod_rests(level, previous, depth, push.time.z, far_off, rod_rate_turn(rate, chain.ids.y))) {
+            if (rod_rests(level, previous, depth, reduced_distance, far_off, rod_rate_turn(rate, chain.ids.y))) {
                 chain_states[c].view.w = float(previous + KW_RODS_IDLE_UNIT * (idle + 1u));
                 return;
             }
         }
-        share = level == KW_RODS_LEVEL_FULL ? min(1.0, last.root.position.w + t.drag.w) : 0.0;
+        share = level == KW_RODS_LEVEL_FULL || level == KW_RODS_LEVEL_REDUCED ? min(1.0, last.root.position.w + t.drag.w) : 0.0;
     }
     // A posed step covers the frames the chain kept (solver.cpp step_posed with dt x (idle + 1)).
     const float steps = float(idle + 1u);
-    const bool HANDING = LOD && level == KW_RODS_LEVEL_FULL && share < 1.0;
+    // Full and reduced chains run the dynamics; posed and hidden ones step_posed.
+    const bool DYNAMIC = level == KW_RODS_LEVEL_FULL || level == KW_RODS_LEVEL_REDUCED;
+    const bool HANDING = LOD && DYNAMIC && share < 1.0;
     float w[KW_RODS_MAX_VIEWS + 1];
     {
         float sum = 0.0;
@@ -462,7 +465,7 @@ void main() {
         } else {
             if (!teleported) continue;
             // A posed step's carry is over the frames it covers (rods::follow_teleport in step_posed).
-            const float dt = level == KW_RODS_LEVEL_FULL ? push.camera_forward.w : push.camera_forward.w * steps;
+            const float dt = DYNAMIC ? push.camera_forward.w : push.camera_forward.w * steps;
             const vec3 turn = omega[0] * dt;
             const float angle = length(turn);
             const vec3 axis = angle > 0.0 ? turn / angle : vec3(0.0);
@@ -485,7 +488,7 @@ void main() {
     }
 
     // ---- the first step starts moving with the root (solver.cpp start_moving) ----
-    if (push.flags.x != 0u && t.physics.w != 0.0) {
+    if ((push.flags.x & KW_RODS_STEP_FIRST) != 0u && t.physics.w != 0.0) {
         const float dt = push.camera_forward.w;
         const vec4 turn = positive_w(qnormalize(qmul(to.rotation, qconj(from.rotation))));
         const vec3 travel = to.position.xyz - from.position.xyz;
@@ -502,7 +505,7 @@ void main() {
     // by its root and eased onto its rest shape ----
     vec3 posed_x[MAX_J], x_before[MAX_J];
     vec4 posed_q[MAX_J], q_before[MAX_J];
-    if (LOD && (level != KW_RODS_LEVEL_FULL || HANDING)) {
+    if (LOD && (!DYNAMIC || HANDING)) {
         // rods::posed_blend over the frames covered: 1 - (1 - blend)^steps (the CPU takes
         // exp once of their length: the same to rounding); one frame's as given.
         float blend = t.accel.w;
@@ -596,13 +599,15 @@ void main() {
         }
     }
 
-    // ---- A.4: the substeps (solver.cpp step) ----
-    const uint substeps = t.solver.y;
-    const uint iterations = t.solver.x;
-    const float h = t.step.x;
-    const float decay = t.step.y;
-    const float k_iter = t.step.z;
-    const float k_rest = t.physics.y;
+    // ---- A.4: the substeps (solver.cpp step), a reduced chain's with rods::reduced_params' ----
+    const bool REDUCED = LOD && level == KW_RODS_LEVEL_REDUCED;
+    const uint substeps = REDUCED ? uint(t.reduced_solver.w) : t.solver.y;
+    const uint iterations = REDUCED ? uint(t.reduced_solver.z) : t.solver.x;
+    const float h = REDUCED ? t.reduced_step.x : t.step.x;
+    const float decay = REDUCED ? t.reduced_step.y : t.step.y;
+    const float k_iter = REDUCED ? t.reduced_step.z : t.step.z;
+    const float k_rest = REDUCED ? t.reduced_step.w : t.physics.y;
+    const vec2 drag_decay = REDUCED ? t.reduced_solver.xy : t.drag.xy;
     const float thickness = t.physics.x;
     const float b2 = thickness * thickness;
     const vec3 acceleration = t.accel.xyz;
@@ -610,7 +615,7 @@ void main() {
     // and the drag across and along its segments (solver.cpp step).
     const bool AIR = (FEATURES & KW_RODS_FEATURE_AIR) != 0u;
     vec3 air = vec3(0.0);
-    if (AIR && push.flags.y != 0u) {
+    if (AIR && (push.flags.x & KW_RODS_STEP_WIND) != 0u) {
         const RodWindGpu w = winds[chain.joints.w];
         air = wind_air_velocity(w.velocity.xyz, w.velocity.w, w.scales.x, w.scales.y, w.seed.x, to.position.xyz, push.time.x);
     }
@@ -676,7 +681,7 @@ void main() {
                         if (len > 1e-9) {
                             const vec3 axis = segment / len;
                             const vec3 along = dot(relative, axis) * axis;
-                            relative = t.drag.x * (relative - along) + t.drag.y * along;
+                            relative = drag_decay.x * (relative - along) + drag_decay.y * along;
                         }
                     }
                     v[i] = air + relative + h * acceleration;

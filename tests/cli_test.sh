@@ -245,6 +245,8 @@ check "bench crowd json" bash -c "node -e 'const r=require(\"$work/bench-crowd.j
 # characters keep (crowd-10k's camera starts 90 m out).
 "$bin" bench crowd scenes/crowd-10k.json --count 40 --frames 11 --backends cpu-reference,cpu --lod --json "$work/bench-lod.json" >"$work/bench-lod.out" 2>&1
 check "bench crowd --lod --json: the shares, the same on both backends, and the frame's split" bash -c "node -e 'const r=require(\"$work/bench-lod.json\").results; if (r.length!==2||!(r[0].kept_share>0)||r[0].kept_share!==r[1].kept_share||r[0].posed_share!==1||!(r[1].clip_ms>0)||!(r[1].chain_ms>0)) process.exit(1)'"
+"$bin" bench crowd scenes/crowd-10k.json --count 40 --frames 11 --backends cpu-reference,cpu --lod --lod-reduced 24 --lod-bias 1 --json "$work/bench-reduced.json" >/dev/null 2>&1
+check "bench crowd --lod-reduced: a reduced share, the same on both backends" bash -c "node -e 'const r=require(\"$work/bench-reduced.json\").results; if (r.length!==2||!(r[0].reduced_share>0)||r[0].reduced_share!==r[1].reduced_share) process.exit(1)'"
 check "bench crowd json without levels of detail: null shares" bash -c "node -e 'const r=require(\"$work/bench-crowd.json\").results; if (r[0].kept_share!==null||!(r[0].clip_ms>0)) process.exit(1)'"
 check "bench crowd --lod prints the kept share, the same on both backends" bash -c "test \$(grep -o 'kept their state [0-9.]*%' '$work/bench-lod.out' | sort -u | wc -l) -eq 1 && grep -c 'kept their state [1-9][0-9.]*%' '$work/bench-lod.out' | grep -qx 2"
 "$bin" bench view scenes/ahoge.json --frames 3 --size 64x48 --json "$work/bench-view.json" >"$work/bench-view.out" 2>&1
@@ -375,6 +377,11 @@ check "render --show-lod exits 0" test $? -eq 0
 check "render --show-lod counts every character once" bash -c \
     "grep -E 'frame 30: characters full [0-9]+, posed [0-9]+, hidden [0-9]+' '$work/render-lod.out' | awk '{ n = \$6 + \$8 + \$10; exit (n != 64) }'"
 "$bin" render scenes/crowd-gltf.json --backend cpu --frames 30 --size 160x90 --lod --out "$work/render-nolod" >/dev/null 2>&1
+# --lod-reduced: the reduced level between full and posed, counted on its own line.
+"$bin" render scenes/crowd-gltf.json --backend cpu --frames 30 --size 160x90 --show-lod --lod-reduced 12 \
+    --out "$work/render-reduced" >"$work/render-reduced.out" 2>&1
+check "render --show-lod --lod-reduced counts the reduced level too" bash -c \
+    "grep -E 'frame 30: characters full [0-9]+, reduced [1-9][0-9]*, posed [0-9]+, hidden [0-9]+' '$work/render-reduced.out' | awk '{ n = \$6 + \$8 + \$10 + \$12; exit (n != 64) }'"
 check "render --show-lod draws the dots" bash -c "! cmp -s '$work/render-lod/crowd-gltf_00030.png' '$work/render-nolod/crowd-gltf_00030.png'"
 
 # --zoom: the scene camera's field of view narrowed about its target; a different picture

@@ -43,25 +43,27 @@ bool step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, cons
     state.blend_in = share;
     const std::span<const rods::Collider> colliders(frame.colliders.data() + c.collider_begin, c.collider_count);
     const rods::Transform& root = frame.roots[chain];
-    if (level != rods::Level::Full) {
+    // A reduced chain steps as a full one at half the substeps and iterations.
+    const rods::SolverParams params = level == rods::Level::Reduced ? rods::reduced_params(t.params) : t.params;
+    if (!rods::dynamic(level)) {
         rods::step_posed(t.chain, t.params, root, rest.shape, colliders, posed_dt, rods::posed_blend(world.lod, posed_dt),
                          state);
     } else if (share < 1.0f) {
-        // Turning full again: the step and the posed frame from the same start (the
+        // Turning full (or reduced) again: the step and the posed frame from the same start (the
         // teleport's carry and the first step's start done here, once, as the other
         // backends do them before their kernels; step() and step_posed() then find neither
         // left to do), mixed.
-        rods::follow_teleport(t.params, root, frame.dt, state);
-        if (!state.started && t.params.settle_start) rods::start_moving(root, frame.dt, state);
+        rods::follow_teleport(params, root, frame.dt, state);
+        if (!state.started && params.settle_start) rods::start_moving(root, frame.dt, state);
         state.started = true;
         const rods::ChainState before = state;
         rods::ChainState posed = state;
         rods::step_posed(t.chain, t.params, root, rest.shape, colliders, frame.dt, rods::posed_blend(world.lod, frame.dt),
                          posed);
-        rods::step(t.chain, t.params, root, rest.shape, colliders, frame.dt, state, rods::chain_air(world, chain, frame));
+        rods::step(t.chain, params, root, rest.shape, colliders, frame.dt, state, rods::chain_air(world, chain, frame));
         rods::hand_over(t.chain, before, posed, share, frame.dt, state);
     } else {
-        rods::step(t.chain, t.params, root, rest.shape, colliders, frame.dt, state, rods::chain_air(world, chain, frame));
+        rods::step(t.chain, params, root, rest.shape, colliders, frame.dt, state, rods::chain_air(world, chain, frame));
     }
     if (rest_out != nullptr) *rest_out = std::move(rest);
     return true;

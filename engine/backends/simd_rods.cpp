@@ -33,7 +33,6 @@ simd::RodTemplateConsts template_consts(const rods::ChainTemplate& t) {
     k.joints = n;
     k.views = static_cast<std::uint32_t>(t.views.size());
     k.keyed = static_cast<std::uint32_t>(t.keyed.size());
-    k.iterations = t.params.iterations;
     k.thickness = chain.thickness;
     k.b2 = chain.thickness * chain.thickness;
     k.suppression = t.params.momentum_suppression;
@@ -51,6 +50,10 @@ simd::RodTemplateConsts template_consts(const rods::ChainTemplate& t) {
         k.limit_frame[j] = xyzw(chain.limit_frame[j]);
     }
     k.limited = chain.limited;
+    k.drag = t.params.normal_drag > 0.0f || t.params.tangent_drag > 0.0f;
+    // What split_threads() weighs before the first step's set_step().
+    k.step.iterations = t.params.iterations;
+    k.reduced.iterations = rods::reduced_params(t.params).iterations;
     for (std::uint32_t i = 0; i < n; ++i) {
         const std::uint32_t lo = i == 0 ? 0 : i - 1;
         const std::uint32_t hi = std::min(i + 1, n - 1);
@@ -85,7 +88,8 @@ simd::RodTemplateConsts template_consts(const rods::ChainTemplate& t) {
 }
 
 // The step sizes of a frame of `dt`, as rods::step computes them.
-void set_step(simd::RodTemplateConsts& k, const rods::SolverParams& p, float dt) {
+void set_step(simd::RodStepConsts& k, const rods::SolverParams& p, float dt) {
+    k.iterations = p.iterations;
     k.substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / p.max_substep)));
     k.h = dt / static_cast<float>(k.substeps);
     k.k_iter = rods::iteration_stiffness(rods::substep_stiffness(p.stiffness, k.h), p.iterations);
@@ -93,7 +97,6 @@ void set_step(simd::RodTemplateConsts& k, const rods::SolverParams& p, float dt)
     k.decay = std::exp(-p.damping * k.h);
     const glm::vec3 h_acceleration = k.h * (p.gravity + p.wind);
     k.h_acceleration = {h_acceleration.x, h_acceleration.y, h_acceleration.z};
-    k.drag = p.normal_drag > 0.0f || p.tangent_drag > 0.0f;
     k.normal_decay = std::exp(-p.normal_drag * k.h);
     k.tangent_decay = std::exp(-p.tangent_drag * k.h);
     k.half_h = 0.5f * k.h;
@@ -189,7 +192,11 @@ public:
         assert(world_ != nullptr && "load() first");
         KW_TRY(rods::check_frame(*world_, frame));
         if (frame.dt != dt_) {
-            for (std::size_t t = 0; t < templates_.size(); ++t) set_step(templates_[t], world_->templates[t].params, frame.dt);
+            for (std::size_t t = 0; t < templates_.size(); ++t) {
+                const rods::SolverParams& params = world_->templates[t].params;
+                set_step(templates_[t].step, params, frame.dt);
+                set_step(templates_[t].reduced, rods::reduced_params(params), frame.dt);
+            }
             dt_ = frame.dt;
         }
         // Chains with a center frame are carried by its motion first, by engine/rods itself
@@ -255,7 +262,7 @@ public:
                     if (!teleport && !start) continue;
                     rods::ChainState s = state(c);
                     // A posed step's carry is over the frames it covers (rods::step_posed's follow_teleport).
-                    const float carry_dt = s.level != static_cast<std::uint32_t>(rods::Level::Full)
+                    const float carry_dt = !rods::dynamic(static_cast<rods::Level>(s.level))
                                                ? frame.dt * static_cast<float>(s.idle + 1)
                                                : frame.dt;
                     if (teleport) rods::follow_teleport(params, frame.roots[c], carry_dt, s);
@@ -419,14 +426,15 @@ private:
     // with its joints times its projection work (iterations and colliders) and its
     // vectors (lanes in use, rounded up to whole vectors of the instruction set).
     // `levels`: from the lanes' levels of detail (a vector of lanes none of which is full
-    // costs its posed update only, about 2 units a joint).
+    // or reduced costs its posed update only, about 2 units a joint; one with reduced lanes
+    // adds their step, and one with both adds both).
     void split_threads(bool levels = false) {
         std::vector<double> cost(batches_.size());
         for (std::size_t b = 0; b < batches_.size(); ++b) {
             const simd::RodBatch& batch = batches_[b];
             const simd::RodTemplateConsts& t = templates_[batch.templ];
             const float* chain = chain_rows(batch);
-            double vectors = 0.0, full = 0.0;
+            double vectors = 0.0, full = 0.0, reduced = 0.0;
             // A batch whose every lane keeps its state is not stepped.
             if (levels && !resting_.empty() && resting_[b] == (1u << kBatchLanes) - 1u) {
                 cost[b] = 0.0;
@@ -434,13 +442,19 @@ private:
             }
             for (std::size_t off = 0; off < batch.count; off += isa_.lanes) {
                 vectors += 1.0;
-                bool any_full = !levels;
-                for (std::size_t l = off; l < std::min<std::size_t>(off + isa_.lanes, kBatchLanes) && !any_full; ++l) {
-                    any_full = chain[simd::kLevel * kBatchLanes + l] == 0.0f;
+                bool any_full = !levels, any_reduced = false;
+                for (std::size_t l = off; l < std::min<std::size_t>(off + isa_.lanes, kBatchLanes); ++l) {
+                    const float level = chain[simd::kLevel * kBatchLanes + l];
+                    any_full = any_full || level == 0.0f;
+                    any_reduced = any_reduced || (levels && level == static_cast<float>(rods::Level::Reduced));
                 }
                 if (any_full) full += 1.0;
+                if (any_reduced) reduced += 1.0;
             }
-            cost[b] = vectors * t.joints * 2.0 + full * t.joints * t.iterations * (4.0 + batch.colliders);
+            const double per_vector = t.joints * (4.0 + batch.colliders);
+            const double reduced_share = static_cast<double>(t.reduced.substeps) / static_cast<double>(t.step.substeps);
+            cost[b] = vectors * t.joints * 2.0 +
+                      per_vector * (full * t.step.iterations + reduced * t.reduced.iterations * reduced_share);
         }
         const double total = std::accumulate(cost.begin(), cost.end(), 0.0);
         const std::size_t parts = std::max<std::size_t>(1, std::min<std::size_t>(threads_, batches_.size()));

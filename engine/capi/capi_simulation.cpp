@@ -329,7 +329,8 @@ KODAWARI_C_API kodawari_status kodawari_simulation_read_chains(kodawari_simulati
 
 static_assert(KODAWARI_LEVEL_FULL == static_cast<int>(rods::Level::Full) &&
               KODAWARI_LEVEL_POSED == static_cast<int>(rods::Level::Posed) &&
-              KODAWARI_LEVEL_HIDDEN == static_cast<int>(rods::Level::Hidden));
+              KODAWARI_LEVEL_HIDDEN == static_cast<int>(rods::Level::Hidden) &&
+              KODAWARI_LEVEL_REDUCED == static_cast<int>(rods::Level::Reduced));
 
 KODAWARI_C_API kodawari_status kodawari_simulation_chain_levels(kodawari_simulation* sim, uint8_t* levels, uint8_t* kept,
                                                                 size_t capacity) {

@@ -45,11 +45,12 @@ static_assert(sizeof(BirdPush) == 16);
 static_assert(KW_BIRDS_WORKGROUP_SIZE % 32 == 0, "a multiple of common subgroup sizes");
 
 // shared/rods.h
-static_assert(sizeof(RodTemplateGpu) == 16 * (7 + KW_RODS_MAX_VIEWS));
+static_assert(sizeof(RodTemplateGpu) == 16 * (9 + KW_RODS_MAX_VIEWS));
 static_assert(offsetof(RodTemplateGpu, counts) == 0 && offsetof(RodTemplateGpu, solver) == 16 &&
               offsetof(RodTemplateGpu, step) == 32 && offsetof(RodTemplateGpu, physics) == 48 &&
               offsetof(RodTemplateGpu, accel) == 64 && offsetof(RodTemplateGpu, first_dir) == 80 &&
-              offsetof(RodTemplateGpu, drag) == 96 && offsetof(RodTemplateGpu, views) == 112);
+              offsetof(RodTemplateGpu, drag) == 96 && offsetof(RodTemplateGpu, reduced_step) == 112 &&
+              offsetof(RodTemplateGpu, reduced_solver) == 128 && offsetof(RodTemplateGpu, views) == 144);
 static_assert(sizeof(RodWindGpu) == 48 && offsetof(RodWindGpu, scales) == 16 && offsetof(RodWindGpu, seed) == 32);
 static_assert(sizeof(RodTemplateJointGpu) == 64 && offsetof(RodTemplateJointGpu, lengths) == 16 &&
               offsetof(RodTemplateJointGpu, limit_trig) == 32 && offsetof(RodTemplateJointGpu, limit_frame) == 48);

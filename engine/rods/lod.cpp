@@ -14,6 +14,9 @@ namespace kodawari::rods {
 static_assert(static_cast<std::uint32_t>(Level::Full) == KW_RODS_LEVEL_FULL);
 static_assert(static_cast<std::uint32_t>(Level::Posed) == KW_RODS_LEVEL_POSED);
 static_assert(static_cast<std::uint32_t>(Level::Hidden) == KW_RODS_LEVEL_HIDDEN);
+static_assert(static_cast<std::uint32_t>(Level::Reduced) == KW_RODS_LEVEL_REDUCED);
+// RodChainStateGpu.view.w keeps a level below KW_RODS_IDLE_UNIT beside its idle frames.
+static_assert(KW_RODS_LEVEL_REDUCED < KW_RODS_IDLE_UNIT);
 
 static_assert(kPosedPeriod == KW_RODS_POSED_PERIOD && kHiddenPeriod == KW_RODS_HIDDEN_PERIOD && kRateGroup == KW_RODS_RATE_GROUP);
 // rod_rests() takes a turn modulo the period: powers of two that divide 4 (RodPush.flags.w
@@ -36,6 +39,9 @@ Result<void> validate(const LodSettings& lod, const char* what) {
     };
     if (!(lod.size > 0.0f && lod.size <= 1000.0f)) return bad("size", "a number in (0, 1000] m");
     if (!(lod.full_pixels > 0.0f && lod.full_pixels <= 100000.0f)) return bad("full_pixels", "a number in (0, 100000] pixels");
+    if (!(lod.reduced_pixels == 0.0f || (lod.reduced_pixels > 0.0f && lod.reduced_pixels < lod.full_pixels))) {
+        return bad("reduced_pixels", "0 (no reduced level) or a number of pixels in (0, full_pixels)");
+    }
     if (!(lod.hysteresis >= 0.0f && lod.hysteresis <= 0.9f)) return bad("hysteresis", "a number in [0, 0.9]");
     if (!(lod.bias >= -8.0f && lod.bias <= 8.0f)) return bad("bias", "a number in [-8, 8]");
     if (!(lod.settle_rate > 0.0f && lod.settle_rate <= 1000.0f)) return bad("settle_rate", "a number in (0, 1000] 1/s");
@@ -71,10 +77,15 @@ LodView lod_view(const LodSettings& lod, const Camera& camera, float cap) {
     const float scale = lod.size * lod.viewport_height / (2.0f * v.tan_y) * std::exp2(lod.bias);
     v.full_distance = scale / lod.full_pixels;
     v.stay_distance = scale / (lod.full_pixels * (1.0f - lod.hysteresis));
-    // The budget's cap: no character deeper is full, and the hysteresis band ends there
-    // too (a full one past it would spend what the budget gave a nearer one).
+    // The reduced level's band beyond (lod.reduced_pixels; the full one's distances when off).
+    v.reduced_distance = lod.reduced_pixels > 0.0f ? scale / lod.reduced_pixels : v.full_distance;
+    v.reduced_stay = lod.reduced_pixels > 0.0f ? scale / (lod.reduced_pixels * (1.0f - lod.hysteresis)) : v.stay_distance;
+    // The budget's cap: no character deeper is full or reduced, and the hysteresis bands
+    // end there too (a simulated one past it would spend what the budget gave a nearer one).
     if (cap < v.full_distance) v.full_distance = cap;
     if (cap < v.stay_distance) v.stay_distance = std::max(cap, v.full_distance);
+    if (cap < v.reduced_distance) v.reduced_distance = cap;
+    if (cap < v.reduced_stay) v.reduced_stay = std::max(cap, v.reduced_distance);
     return v;
 }
 
@@ -83,7 +94,8 @@ Level chain_level(const LodView& view, glm::vec3 reference, Level previous) {
     const glm::vec3 offset = reference - view.position;
     return static_cast<Level>(glsl::rod_level(glm::dot(offset, view.forward), glm::dot(offset, view.right),
                                               glm::dot(offset, view.up), view.tan_x, view.tan_y, view.margin,
-                                              view.full_distance, view.stay_distance, static_cast<std::uint32_t>(previous)));
+                                              view.full_distance, view.stay_distance, view.reduced_distance,
+                                              view.reduced_stay, static_cast<std::uint32_t>(previous)));
 }
 
 bool chain_rests(const LodView& view, glm::vec3 reference, Level level, Level previous, std::uint32_t turn) {
@@ -94,13 +106,20 @@ bool chain_rests(const LodView& view, glm::vec3 reference, Level level, Level pr
                                                                           glm::dot(offset, view.up), view.tan_x,
                                                                           view.tan_y, view.margin);
     return glsl::rod_rests(static_cast<std::uint32_t>(level), static_cast<std::uint32_t>(previous), depth,
-                           view.full_distance, far_off, turn);
+                           view.reduced_distance, far_off, turn);
+}
+
+SolverParams reduced_params(const SolverParams& params) {
+    SolverParams reduced = params;
+    reduced.max_substep = std::min(0.05f, 2.0f * params.max_substep);  // validate()'s longest
+    reduced.iterations = std::max(1u, (params.iterations + 1u) / 2u);
+    return reduced;
 }
 
 float posed_blend(const LodSettings& lod, float dt) { return 1.0f - std::exp(-lod.settle_rate * dt); }
 
 float blend_in(const LodSettings& lod, Level level, float previous, float dt) {
-    if (level != Level::Full) return 0.0f;
+    if (!dynamic(level)) return 0.0f;
     return std::min(1.0f, previous + dt / lod.blend_time);
 }
 

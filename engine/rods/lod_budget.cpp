@@ -15,13 +15,15 @@ namespace {
 
 using Candidate = detail::LodCandidate;
 
-// A character's modelled frame at a level other than full, and what full adds to it, us.
+// A character's modelled frame at the posed or hidden level, and what full or reduced
+// (`level`) adds to it, us. A reduced character's clip plays every frame, as a full one's.
 double posed_us(const LodCosts& c, std::uint32_t chains) {
     return static_cast<double>(c.posed_clip_us) + static_cast<double>(chains) * static_cast<double>(c.posed_chain_us);
 }
-double extra_us(const LodCosts& c, std::uint32_t chains) {
+double extra_us(const LodCosts& c, std::uint32_t chains, Level level) {
+    const float chain_us = level == Level::Full ? c.full_chain_us : c.reduced_chain_us;
     return static_cast<double>(c.full_clip_us - c.posed_clip_us) +
-           static_cast<double>(chains) * static_cast<double>(c.full_chain_us - c.posed_chain_us);
+           static_cast<double>(chains) * static_cast<double>(chain_us - c.posed_chain_us);
 }
 
 }  // namespace
@@ -31,8 +33,10 @@ Result<void> validate(const LodCosts& costs, const char* what) {
         return make_error(Error::Kind::InvalidInput, std::string(what) + "." + field + ": expected " + expected);
     };
     constexpr float kMost = 1.0e6f;  // a second a chain: a typo, not a cost
-    for (const auto& [name, value] : {std::pair{"full_chain_us", costs.full_chain_us}, std::pair{"posed_chain_us", costs.posed_chain_us},
-                                      std::pair{"full_clip_us", costs.full_clip_us}, std::pair{"posed_clip_us", costs.posed_clip_us}}) {
+    for (const auto& [name, value] :
+         {std::pair{"full_chain_us", costs.full_chain_us}, std::pair{"reduced_chain_us", costs.reduced_chain_us},
+          std::pair{"posed_chain_us", costs.posed_chain_us}, std::pair{"full_clip_us", costs.full_clip_us},
+          std::pair{"posed_clip_us", costs.posed_clip_us}}) {
         if (!(value >= 0.0f && value <= kMost)) return bad(name, "a number of microseconds in [0, 1e6]");
     }
     if (costs.full_chain_us < costs.posed_chain_us) return bad("full_chain_us", "at least posed_chain_us (a full chain costs more than a posed one)");
@@ -52,14 +56,16 @@ Choice choose(const LodView& view, std::span<const glm::vec3> references, std::s
               const LodCosts& costs, float budget_ms, float scale, std::vector<Candidate>& candidates) {
     assert(references.size() == chains.size() && "a chain count per character");
     // Everyone at the lower levels first; then the characters the view would make full
-    // (chain_level() from posed: the projected-size rule stays the upper bound), nearest
-    // first, while the frame stays within the budget. Ties by index: the same bits always.
+    // or reduced (chain_level() from posed: the projected-size rule stays the upper bound),
+    // nearest first, while the frame stays within the budget. Ties by index: the same bits
+    // always.
     double frame_us = 0.0;
     candidates.clear();
     for (std::uint32_t c = 0; c < references.size(); ++c) {
         frame_us += posed_us(costs, chains[c]);
-        if (chain_level(view, references[c], Level::Posed) != Level::Full) continue;
-        candidates.push_back({glm::dot(references[c] - view.position, view.forward), c, extra_us(costs, chains[c])});
+        const Level level = chain_level(view, references[c], Level::Posed);
+        if (!dynamic(level)) continue;
+        candidates.push_back({glm::dot(references[c] - view.position, view.forward), c, extra_us(costs, chains[c], level)});
     }
     std::sort(candidates.begin(), candidates.end(), [](const Candidate& a, const Candidate& b) {
         return a.depth < b.depth || (a.depth == b.depth && a.character < b.character);
@@ -95,7 +101,8 @@ double modelled_ms(const LodView& view, std::span<const glm::vec3> references, s
     double us = 0.0;
     for (std::size_t c = 0; c < references.size(); ++c) {
         us += posed_us(costs, chains[c]);
-        if (chain_level(view, references[c], Level::Posed) == Level::Full) us += extra_us(costs, chains[c]);
+        const Level level = chain_level(view, references[c], Level::Posed);
+        if (dynamic(level)) us += extra_us(costs, chains[c], level);
     }
     return us / 1000.0;
 }

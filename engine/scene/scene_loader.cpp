@@ -465,13 +465,18 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
 // The vertical field of view is the camera's, set where the rod world is built
 // (build_rod_scene), as for a scene built in code.
 Result<void> read_lod(const JsonReader& r, const JsonNode& node, rods::LodSettings& lod) {
-    KW_TRY(r.object(node, {"enabled", "size", "full_pixels", "hysteresis", "bias", "settle_rate", "blend_time", "lower_rate",
+    KW_TRY(r.object(node, {"enabled", "size", "full_pixels", "reduced_pixels", "hysteresis", "bias", "settle_rate", "blend_time", "lower_rate",
                          "viewport", "budget_ms", "costs"}));
     lod.enabled = true;
     if (const JsonNode enabled = r.member(node, "enabled"); enabled.present()) KW_SCENE_ASSIGN(lod.enabled, r.boolean(enabled));
     KW_TRY(optional_member(r, node, "size", lod.size, [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 1000.0)); }));
     KW_TRY(optional_member(r, node, "full_pixels", lod.full_pixels,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 100000.0)); }));
+    KW_TRY(optional_member(r, node, "reduced_pixels", lod.reduced_pixels,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 100000.0)); }));
+    if (const JsonNode reduced = r.member(node, "reduced_pixels"); reduced.present() && !(lod.reduced_pixels < lod.full_pixels)) {
+        return r.expected(reduced, "a number of pixels below full_pixels");
+    }
     KW_TRY(optional_member(r, node, "hysteresis", lod.hysteresis,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 0.9)); }));
     KW_TRY(optional_member(r, node, "bias", lod.bias, [&](const JsonNode& n) { return r.real(n, NumberRange::closed(-8.0, 8.0)); }));
@@ -483,9 +488,10 @@ Result<void> read_lod(const JsonReader& r, const JsonNode& node, rods::LodSettin
     KW_TRY(optional_member(r, node, "budget_ms", lod.budget_ms,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::left_open(0.0, 100000.0)); }));
     if (const JsonNode costs = r.member(node, "costs"); costs.present()) {
-        KW_TRY(r.object(costs, {"full_chain_us", "posed_chain_us", "full_clip_us", "posed_clip_us"}));
+        KW_TRY(r.object(costs, {"full_chain_us", "reduced_chain_us", "posed_chain_us", "full_clip_us", "posed_clip_us"}));
         rods::LodCosts& c = lod.costs;
-        for (auto [name, field] : {std::pair{"full_chain_us", &c.full_chain_us}, std::pair{"posed_chain_us", &c.posed_chain_us},
+        for (auto [name, field] : {std::pair{"full_chain_us", &c.full_chain_us}, std::pair{"reduced_chain_us", &c.reduced_chain_us},
+                                   std::pair{"posed_chain_us", &c.posed_chain_us},
                                    std::pair{"full_clip_us", &c.full_clip_us}, std::pair{"posed_clip_us", &c.posed_clip_us}}) {
             KW_TRY(optional_member(r, costs, name, *field,
                                    [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 1.0e6)); }));

@@ -6,6 +6,7 @@
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "simd/rods_simd.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <algorithm>
 #include <hwy/cache_control.h>
 #include <hwy/highway.h>
 
@@ -277,7 +278,10 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
 
     // ---- the posed level of detail (solver.cpp step_posed) for lanes not full, from the
     // state before the step; a vector of lanes none of which is full skips the substeps ----
-    const M posed = args.lod ? hn::Gt(load(chain_rows, kLevel, off), Z()) : hn::FirstN(D(), 0);
+    // Posed and hidden lanes (levels 1 and 2), reduced ones (3); the rest are full.
+    const V level = args.lod ? load(chain_rows, kLevel, off) : Z();
+    const M posed = args.lod ? hn::And(hn::Gt(level, Z()), hn::Lt(level, S(3.0f))) : hn::FirstN(D(), 0);
+    const M reduced = args.lod ? hn::Eq(level, S(3.0f)) : hn::FirstN(D(), 0);
     const V share = args.lod ? load(chain_rows, kBlendIn, off) : S(1.0f);
     const M handing = args.lod ? hn::AndNot(posed, hn::Lt(share, S(1.0f))) : hn::FirstN(D(), 0);
     const bool any_handing = args.lod && !hn::AllFalse(D(), handing);
@@ -413,7 +417,8 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
         }
     }
 
-    // ---- SPEC A.4: the substeps (solver.cpp step) ----
+    // ---- SPEC A.4: the substeps (solver.cpp step), with step sizes `sc`: the template's,
+    // or rods::reduced_params' for reduced lanes ----
     // Solved relative to the previous root position; colliders likewise.
     const bool wind = args.air != nullptr;
     const V3 air = wind ? load3(in.rows, kAir, off) : zero3();
@@ -444,247 +449,283 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
     // warm start of group j's rotation extraction). Same operations, same bits, once.
     V3 cbar[kMaxJ];
     Q4 relative[kMaxJ];
-    for (std::uint32_t sub_step = 1; sub_step <= t.substeps; ++sub_step) {
-        const float f = static_cast<float>(sub_step) / static_cast<float>(t.substeps);
-        const V3 r_p = mul(S(f), travel);
-        const Q4 r_q = qnormalize(qmul(from_q, partial(relative_root, f)));
+    auto substeps = [&](const RodStepConsts& sc) HWY_ATTR {
+        for (std::uint32_t sub_step = 1; sub_step <= sc.substeps; ++sub_step) {
+            const float f = static_cast<float>(sub_step) / static_cast<float>(sc.substeps);
+            const V3 r_p = mul(S(f), travel);
+            const Q4 r_q = qnormalize(qmul(from_q, partial(relative_root, f)));
 
-        // 1-2. Kinematic root and the rest shape placed by the root.
-        for (std::size_t i = 0; i < n; ++i) {
-            xbar[i] = add(r_p, rotate(r_q, rest_p[i]));
-            obar[i] = qnormalize(qmul(r_q, rest_o[i]));
-            obar_axis[i] = rotate(obar[i], splat3(t.bone_axis[i].data()));
-        }
-        p[0] = xbar[0];
-        qs[0] = obar[0];
-        // 3. The colliders placed by the root.
-        for (std::size_t k = 0; k < batch.colliders; ++k) place(colliders[k], r_p, r_q);
-        // The parent bones' swing from their rest (solver.cpp step, angle limits).
-        const Q4 identity{Z(), Z(), Z(), S(1.0f)};
-        Q4 swing = identity;
-        V3 pulled[kMaxJ];  // the distance constraints' corrections (DFTL)
-        V3 pushed[kMaxJ];  // and the colliders' (their net push, the contact normal)
-        for (std::size_t i = 0; i < n; ++i) pulled[i] = zero3();
-        for (std::size_t i = 0; i < n; ++i) pushed[i] = zero3();
-        auto collide_counted = [&](std::size_t j) HWY_ATTR {
-            const V3 before = p[j];
-            collide_all(p[j]);
-            pushed[j] = add(pushed[j], sub(p[j], before));
-        };
-        // solver.cpp limit_child(): child i + 1 turned about particle i to the nearest
-        // direction segment i's limit allows (shaders/lib/spring_limit.glsl, its every
-        // expression repeated per lane), then the parent bones' swing carried past it.
-        // The limit's kind is the template's, so one branch serves every lane.
-        auto limit_child = [&](std::size_t i) HWY_ATTR {
-            const V3 seg = sub(p[i + 1], p[i]);
-            const V len = length(seg);
-            const M ok = hn::Gt(len, S(1e-9f));
-            V3 dir = div(seg, len);
-            const std::uint32_t kind = t.limit_kind[i];
-            if (kind != 0u) {
-                const Q4 lframe = qmul(qmul(swing, obar[i]), splat4(t.limit_frame[i].data()));
-                const V3 l = rotate(conj(lframe), dir);
-                const V cx = S(t.limit_trig[i][0]), sx = S(t.limit_trig[i][1]);
-                const V singular = S(1e-12f);
-                V3 allowed = l;
-                if (kind == 1u) {
-                    const V h2 = hn::Add(hn::Mul(l.x, l.x), hn::Mul(l.z, l.z));
-                    const V s = hn::Div(sx, hn::Sqrt(h2));
-                    const V3 tilted = select(hn::Le(h2, singular), V3{Z(), cx, sx}, V3{hn::Mul(l.x, s), cx, hn::Mul(l.z, s)});
-                    allowed = select(hn::Lt(l.y, cx), tilted, l);
-                } else if (kind == 2u) {
-                    const V p2 = hn::Add(hn::Mul(l.y, l.y), hn::Mul(l.z, l.z));
-                    const V inv = hn::Div(S(1.0f), hn::Sqrt(p2));
-                    V3 e{Z(), hn::Mul(l.y, inv), hn::Mul(l.z, inv)};
-                    const V z_side = hn::IfThenElse(hn::Lt(e.z, Z()), hn::Neg(sx), sx);
-                    e = select(hn::Lt(e.y, cx), V3{Z(), cx, z_side}, e);
-                    allowed = select(hn::Le(p2, singular), V3{Z(), S(1.0f), Z()}, e);
-                } else {
-                    const V cyaw = S(t.limit_trig[i][2]), syaw = S(t.limit_trig[i][3]);
-                    const V p2 = hn::Add(hn::Mul(l.y, l.y), hn::Mul(l.z, l.z));
-                    const M sing = hn::Le(p2, singular);
-                    const V inv = hn::Div(S(1.0f), hn::Sqrt(p2));
-                    V cp = hn::IfThenElse(sing, S(1.0f), hn::Mul(l.y, inv));
-                    V sp = hn::IfThenElse(sing, Z(), hn::Mul(l.z, inv));
-                    const M pitch_out = hn::Lt(cp, cx);
-                    sp = hn::IfThenElse(pitch_out, hn::IfThenElse(hn::Lt(sp, Z()), hn::Neg(sx), sx), sp);
-                    cp = hn::IfThenElse(pitch_out, cx, cp);
-                    const M yaw_out = hn::Gt(hn::Abs(l.x), syaw);
-                    const V sy = hn::IfThenElse(yaw_out, hn::IfThenElse(hn::Lt(l.x, Z()), hn::Neg(syaw), syaw), l.x);
-                    const V cy = hn::IfThenElse(yaw_out, cyaw, hn::Sqrt(p2));
-                    const M limited = hn::Or(sing, hn::Or(pitch_out, yaw_out));
-                    allowed = select(limited, V3{sy, hn::Mul(cy, cp), hn::Mul(cy, sp)}, l);
-                }
-                // Only a direction the limit changed is turned back (solver.cpp: `allowed != local`).
-                const M changed = hn::Or(hn::Ne(allowed.x, l.x), hn::Or(hn::Ne(allowed.y, l.y), hn::Ne(allowed.z, l.z)));
-                const M apply = hn::And(ok, changed);
-                const V3 turned = rotate(lframe, allowed);
-                dir = select(apply, turned, dir);
-                p[i + 1] = select(apply, add(p[i], mul(len, turned)), p[i + 1]);
+            // 1-2. Kinematic root and the rest shape placed by the root.
+            for (std::size_t i = 0; i < n; ++i) {
+                xbar[i] = add(r_p, rotate(r_q, rest_p[i]));
+                obar[i] = qnormalize(qmul(r_q, rest_o[i]));
+                obar_axis[i] = rotate(obar[i], splat3(t.bone_axis[i].data()));
             }
-            swing = select(ok, qnormalize(qmul(shortest_arc(rotate(swing, obar_axis[i]), dir), swing)), swing);
-        };
-        // solver.cpp place_on_parent(): child i + 1 on its parent's segment length.
-        auto place_on_parent = [&](std::size_t i) HWY_ATTR {
-            const V3 dd = sub(p[i + 1], p[i]);
-            const V len = length(dd);
-            const M along = hn::Gt(len, S(1e-9f));
-            const V3 placed_child = add(p[i], mul(hn::Div(S(t.segment[i]), len), dd));
-            pulled[i + 1] = select(along, add(pulled[i + 1], sub(placed_child, p[i + 1])), pulled[i + 1]);
-            p[i + 1] = select(along, placed_child, p[i + 1]);
-        };
-        for (std::size_t i = 0; i < n; ++i) {
-            const std::size_t lo = i == 0 ? 0 : i - 1;
-            const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
-            V3 sum = zero3();
-            for (std::size_t j = lo; j <= hi; ++j) sum = add(sum, mul(S(t.weight[j]), xbar[j]));
-            cbar[i] = div(sum, S(t.group_mass[i]));
-        }
-
-        // 4. Predict.
-        const V3 h_acceleration = splat3(t.h_acceleration.data());
-        for (std::size_t i = 1; i < n; ++i) {
-            if (wind || t.drag) {
-                // Relative to the air (0 without wind), then drag across and along the
-                // segment (solver.cpp); the else branch is this with air = 0 and no drag.
-                V3 rel_air = mul(S(t.decay), sub(v[i], air));
-                if (t.drag) {
-                    const V3 segment = sub(x[i], x[i - 1]);
-                    const V len = length(segment);
-                    const M along_segment = hn::Gt(len, S(1e-9f));
-                    const V3 axis = div(segment, len);
-                    const V3 along = mul(dot(rel_air, axis), axis);
-                    const V3 dragged = add(mul(S(t.normal_decay), sub(rel_air, along)), mul(S(t.tangent_decay), along));
-                    rel_air = select(along_segment, dragged, rel_air);
-                }
-                v[i] = add(add(air, rel_air), h_acceleration);
-            } else {
-                v[i] = add(mul(S(t.decay), v[i]), h_acceleration);
-            }
-            omega[i] = mul(S(t.decay), omega[i]);
-            p[i] = add(x[i], mul(S(t.h), v[i]));
-            qs[i] = turn(q[i], mul(S(t.half_h), omega[i]));
-        }
-
-        // 5. Project.
-        for (std::uint32_t it = 0; it < t.iterations; ++it) {
-            // The ellipsoid terms A_j, once per particle.
-            for (std::size_t j = 0; j < n; ++j) {
-                for (int line = 0; line < 8 && prefetch < prefetch_end; ++line, prefetch += 16) hwy::Prefetch(prefetch);
-                relative[j] = qmul(qs[j], conj(obar[j]));
-                const M3 rel = mat3_cast(relative[j]);
-                const V3 u = rotate(qs[j], splat3(t.bone_axis[j].data()));
-                const V3& ob = obar_axis[j];
-                const V uc[3] = {u.x, u.y, u.z};
-                const V oc[3] = {ob.x, ob.y, ob.z};
-                const V b2 = S(t.b2), ab = S(t.ab[j]), w5 = S(t.weight5[j]);
-                for (int col = 0; col < 3; ++col) {
-                    const V rc[3] = {rel.c[col].x, rel.c[col].y, rel.c[col].z};
-                    V e[3];
-                    for (int row = 0; row < 3; ++row) {
-                        e[row] = hn::Mul(w5, hn::Add(hn::Mul(b2, rc[row]), hn::Mul(ab, hn::Mul(uc[row], oc[col]))));
+            p[0] = xbar[0];
+            qs[0] = obar[0];
+            // 3. The colliders placed by the root.
+            for (std::size_t k = 0; k < batch.colliders; ++k) place(colliders[k], r_p, r_q);
+            // The parent bones' swing from their rest (solver.cpp step, angle limits).
+            const Q4 identity{Z(), Z(), Z(), S(1.0f)};
+            Q4 swing = identity;
+            V3 pulled[kMaxJ];  // the distance constraints' corrections (DFTL)
+            V3 pushed[kMaxJ];  // and the colliders' (their net push, the contact normal)
+            for (std::size_t i = 0; i < n; ++i) pulled[i] = zero3();
+            for (std::size_t i = 0; i < n; ++i) pushed[i] = zero3();
+            auto collide_counted = [&](std::size_t j) HWY_ATTR {
+                const V3 before = p[j];
+                collide_all(p[j]);
+                pushed[j] = add(pushed[j], sub(p[j], before));
+            };
+            // solver.cpp limit_child(): child i + 1 turned about particle i to the nearest
+            // direction segment i's limit allows (shaders/lib/spring_limit.glsl, its every
+            // expression repeated per lane), then the parent bones' swing carried past it.
+            // The limit's kind is the template's, so one branch serves every lane.
+            auto limit_child = [&](std::size_t i) HWY_ATTR {
+                const V3 seg = sub(p[i + 1], p[i]);
+                const V len = length(seg);
+                const M ok = hn::Gt(len, S(1e-9f));
+                V3 dir = div(seg, len);
+                const std::uint32_t kind = t.limit_kind[i];
+                if (kind != 0u) {
+                    const Q4 lframe = qmul(qmul(swing, obar[i]), splat4(t.limit_frame[i].data()));
+                    const V3 l = rotate(conj(lframe), dir);
+                    const V cx = S(t.limit_trig[i][0]), sx = S(t.limit_trig[i][1]);
+                    const V singular = S(1e-12f);
+                    V3 allowed = l;
+                    if (kind == 1u) {
+                        const V h2 = hn::Add(hn::Mul(l.x, l.x), hn::Mul(l.z, l.z));
+                        const V s = hn::Div(sx, hn::Sqrt(h2));
+                        const V3 tilted = select(hn::Le(h2, singular), V3{Z(), cx, sx}, V3{hn::Mul(l.x, s), cx, hn::Mul(l.z, s)});
+                        allowed = select(hn::Lt(l.y, cx), tilted, l);
+                    } else if (kind == 2u) {
+                        const V p2 = hn::Add(hn::Mul(l.y, l.y), hn::Mul(l.z, l.z));
+                        const V inv = hn::Div(S(1.0f), hn::Sqrt(p2));
+                        V3 e{Z(), hn::Mul(l.y, inv), hn::Mul(l.z, inv)};
+                        const V z_side = hn::IfThenElse(hn::Lt(e.z, Z()), hn::Neg(sx), sx);
+                        e = select(hn::Lt(e.y, cx), V3{Z(), cx, z_side}, e);
+                        allowed = select(hn::Le(p2, singular), V3{Z(), S(1.0f), Z()}, e);
+                    } else {
+                        const V cyaw = S(t.limit_trig[i][2]), syaw = S(t.limit_trig[i][3]);
+                        const V p2 = hn::Add(hn::Mul(l.y, l.y), hn::Mul(l.z, l.z));
+                        const M sing = hn::Le(p2, singular);
+                        const V inv = hn::Div(S(1.0f), hn::Sqrt(p2));
+                        V cp = hn::IfThenElse(sing, S(1.0f), hn::Mul(l.y, inv));
+                        V sp = hn::IfThenElse(sing, Z(), hn::Mul(l.z, inv));
+                        const M pitch_out = hn::Lt(cp, cx);
+                        sp = hn::IfThenElse(pitch_out, hn::IfThenElse(hn::Lt(sp, Z()), hn::Neg(sx), sx), sp);
+                        cp = hn::IfThenElse(pitch_out, cx, cp);
+                        const M yaw_out = hn::Gt(hn::Abs(l.x), syaw);
+                        const V sy = hn::IfThenElse(yaw_out, hn::IfThenElse(hn::Lt(l.x, Z()), hn::Neg(syaw), syaw), l.x);
+                        const V cy = hn::IfThenElse(yaw_out, cyaw, hn::Sqrt(p2));
+                        const M limited = hn::Or(sing, hn::Or(pitch_out, yaw_out));
+                        allowed = select(limited, V3{sy, hn::Mul(cy, cp), hn::Mul(cy, sp)}, l);
                     }
-                    ellipsoid[j].c[col] = {e[0], e[1], e[2]};
+                    // Only a direction the limit changed is turned back (solver.cpp: `allowed != local`).
+                    const M changed = hn::Or(hn::Ne(allowed.x, l.x), hn::Or(hn::Ne(allowed.y, l.y), hn::Ne(allowed.z, l.z)));
+                    const M apply = hn::And(ok, changed);
+                    const V3 turned = rotate(lframe, allowed);
+                    dir = select(apply, turned, dir);
+                    p[i + 1] = select(apply, add(p[i], mul(len, turned)), p[i + 1]);
                 }
-                goal_sum[j] = zero3();
-            }
-            // Shape matching over G_i = {i-1, i, i+1}, clipped at the ends: the goal centre c
-            // and rotation of group i, then its goals added to its members' sums, in group
-            // order. Two groups at a time, so that the processor overlaps their long chains
-            // of dependent operations (the sums still take the groups in order).
-            auto group = [&](std::size_t i, V3& c, Q4& rot) HWY_ATTR {
+                swing = select(ok, qnormalize(qmul(shortest_arc(rotate(swing, obar_axis[i]), dir), swing)), swing);
+            };
+            // solver.cpp place_on_parent(): child i + 1 on its parent's segment length.
+            auto place_on_parent = [&](std::size_t i) HWY_ATTR {
+                const V3 dd = sub(p[i + 1], p[i]);
+                const V len = length(dd);
+                const M along = hn::Gt(len, S(1e-9f));
+                const V3 placed_child = add(p[i], mul(hn::Div(S(t.segment[i]), len), dd));
+                pulled[i + 1] = select(along, add(pulled[i + 1], sub(placed_child, p[i + 1])), pulled[i + 1]);
+                p[i + 1] = select(along, placed_child, p[i + 1]);
+            };
+            for (std::size_t i = 0; i < n; ++i) {
                 const std::size_t lo = i == 0 ? 0 : i - 1;
                 const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
-                c = zero3();
-                for (std::size_t j = lo; j <= hi; ++j) c = add(c, mul(S(t.weight[j]), p[j]));
-                c = div(c, S(t.group_mass[i]));
-                M3 a{{zero3(), zero3(), zero3()}};
-                for (std::size_t j = lo; j <= hi; ++j) {
-                    const V3 u = sub(p[j], c), ub = sub(xbar[j], cbar[i]);
+                V3 sum = zero3();
+                for (std::size_t j = lo; j <= hi; ++j) sum = add(sum, mul(S(t.weight[j]), xbar[j]));
+                cbar[i] = div(sum, S(t.group_mass[i]));
+            }
+
+            // 4. Predict.
+            const V3 h_acceleration = splat3(sc.h_acceleration.data());
+            for (std::size_t i = 1; i < n; ++i) {
+                if (wind || t.drag) {
+                    // Relative to the air (0 without wind), then drag across and along the
+                    // segment (solver.cpp); the else branch is this with air = 0 and no drag.
+                    V3 rel_air = mul(S(sc.decay), sub(v[i], air));
+                    if (t.drag) {
+                        const V3 segment = sub(x[i], x[i - 1]);
+                        const V len = length(segment);
+                        const M along_segment = hn::Gt(len, S(1e-9f));
+                        const V3 axis = div(segment, len);
+                        const V3 along = mul(dot(rel_air, axis), axis);
+                        const V3 dragged = add(mul(S(sc.normal_decay), sub(rel_air, along)), mul(S(sc.tangent_decay), along));
+                        rel_air = select(along_segment, dragged, rel_air);
+                    }
+                    v[i] = add(add(air, rel_air), h_acceleration);
+                } else {
+                    v[i] = add(mul(S(sc.decay), v[i]), h_acceleration);
+                }
+                omega[i] = mul(S(sc.decay), omega[i]);
+                p[i] = add(x[i], mul(S(sc.h), v[i]));
+                qs[i] = turn(q[i], mul(S(sc.half_h), omega[i]));
+            }
+
+            // 5. Project.
+            for (std::uint32_t it = 0; it < sc.iterations; ++it) {
+                // The ellipsoid terms A_j, once per particle.
+                for (std::size_t j = 0; j < n; ++j) {
+                    for (int line = 0; line < 8 && prefetch < prefetch_end; ++line, prefetch += 16) hwy::Prefetch(prefetch);
+                    relative[j] = qmul(qs[j], conj(obar[j]));
+                    const M3 rel = mat3_cast(relative[j]);
+                    const V3 u = rotate(qs[j], splat3(t.bone_axis[j].data()));
+                    const V3& ob = obar_axis[j];
                     const V uc[3] = {u.x, u.y, u.z};
-                    const V bc[3] = {ub.x, ub.y, ub.z};
-                    const V wj = S(t.weight[j]);
+                    const V oc[3] = {ob.x, ob.y, ob.z};
+                    const V b2 = S(t.b2), ab = S(t.ab[j]), w5 = S(t.weight5[j]);
                     for (int col = 0; col < 3; ++col) {
-                        V* ac[3] = {&a.c[col].x, &a.c[col].y, &a.c[col].z};
-                        const V ec[3] = {ellipsoid[j].c[col].x, ellipsoid[j].c[col].y, ellipsoid[j].c[col].z};
+                        const V rc[3] = {rel.c[col].x, rel.c[col].y, rel.c[col].z};
+                        V e[3];
                         for (int row = 0; row < 3; ++row) {
-                            *ac[row] = hn::Add(hn::Add(*ac[row], hn::Mul(wj, hn::Mul(uc[row], bc[col]))), ec[row]);
+                            e[row] = hn::Mul(w5, hn::Add(hn::Mul(b2, rc[row]), hn::Mul(ab, hn::Mul(uc[row], oc[col]))));
+                        }
+                        ellipsoid[j].c[col] = {e[0], e[1], e[2]};
+                    }
+                    goal_sum[j] = zero3();
+                }
+                // Shape matching over G_i = {i-1, i, i+1}, clipped at the ends: the goal centre c
+                // and rotation of group i, then its goals added to its members' sums, in group
+                // order. Two groups at a time, so that the processor overlaps their long chains
+                // of dependent operations (the sums still take the groups in order).
+                auto group = [&](std::size_t i, V3& c, Q4& rot) HWY_ATTR {
+                    const std::size_t lo = i == 0 ? 0 : i - 1;
+                    const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
+                    c = zero3();
+                    for (std::size_t j = lo; j <= hi; ++j) c = add(c, mul(S(t.weight[j]), p[j]));
+                    c = div(c, S(t.group_mass[i]));
+                    M3 a{{zero3(), zero3(), zero3()}};
+                    for (std::size_t j = lo; j <= hi; ++j) {
+                        const V3 u = sub(p[j], c), ub = sub(xbar[j], cbar[i]);
+                        const V uc[3] = {u.x, u.y, u.z};
+                        const V bc[3] = {ub.x, ub.y, ub.z};
+                        const V wj = S(t.weight[j]);
+                        for (int col = 0; col < 3; ++col) {
+                            V* ac[3] = {&a.c[col].x, &a.c[col].y, &a.c[col].z};
+                            const V ec[3] = {ellipsoid[j].c[col].x, ellipsoid[j].c[col].y, ellipsoid[j].c[col].z};
+                            for (int row = 0; row < 3; ++row) {
+                                *ac[row] = hn::Add(hn::Add(*ac[row], hn::Mul(wj, hn::Mul(uc[row], bc[col]))), ec[row]);
+                            }
                         }
                     }
+                    rot = extract_rotation(a, relative[i], mat3_cast(relative[i]));
+                };
+                auto goals = [&](std::size_t i, const V3& c, const Q4& rot) HWY_ATTR {
+                    const std::size_t lo = i == 0 ? 0 : i - 1;
+                    const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
+                    for (std::size_t j = lo; j <= hi; ++j) {
+                        goal_sum[j] = add(goal_sum[j], add(c, rotate(rot, sub(xbar[j], cbar[i]))));
+                    }
+                    q_new[i] = qnormalize(qmul(rot, obar[i]));
+                };
+                std::size_t g = 0;
+                for (; g + 1 < n; g += 2) {
+                    V3 c0, c1;
+                    Q4 r0, r1;
+                    group(g, c0, r0);
+                    group(g + 1, c1, r1);
+                    goals(g, c0, r0);
+                    goals(g + 1, c1, r1);
                 }
-                rot = extract_rotation(a, relative[i], mat3_cast(relative[i]));
-            };
-            auto goals = [&](std::size_t i, const V3& c, const Q4& rot) HWY_ATTR {
-                const std::size_t lo = i == 0 ? 0 : i - 1;
-                const std::size_t hi = i + 1 < n ? i + 1 : n - 1;
-                for (std::size_t j = lo; j <= hi; ++j) goal_sum[j] = add(goal_sum[j], add(c, rotate(rot, sub(xbar[j], cbar[i]))));
-                q_new[i] = qnormalize(qmul(rot, obar[i]));
-            };
-            std::size_t g = 0;
-            for (; g + 1 < n; g += 2) {
-                V3 c0, c1;
-                Q4 r0, r1;
-                group(g, c0, r0);
-                group(g + 1, c1, r1);
-                goals(g, c0, r0);
-                goals(g + 1, c1, r1);
+                if (g < n) {
+                    V3 c0;
+                    Q4 r0;
+                    group(g, c0, r0);
+                    goals(g, c0, r0);
+                }
+                for (std::size_t i = 1; i < n; ++i) {
+                    const V count = S(i + 1 == n ? 2.0f : 3.0f);
+                    p[i] = add(p[i], mul(S(sc.k_iter), sub(div(goal_sum[i], count), p[i])));
+                    qs[i] = q_new[i];
+                }
+                // Rest-pose attraction.
+                for (std::size_t i = 1; i < n; ++i) p[i] = add(p[i], mul(S(sc.k_rest), sub(xbar[i], p[i])));
+                // Distance constraints, follow-the-leader, each child pushed out of the
+                // colliders right after it is placed.
+                swing = identity;
+                for (std::size_t i = 0; i + 1 < n; ++i) {
+                    place_on_parent(i);
+                    if (batch.colliders > 0) collide_counted(i + 1);
+                    if (t.limited) limit_child(i);
+                }
             }
-            if (g < n) {
-                V3 c0;
-                Q4 r0;
-                group(g, c0, r0);
-                goals(g, c0, r0);
-            }
-            for (std::size_t i = 1; i < n; ++i) {
-                const V count = S(i + 1 == n ? 2.0f : 3.0f);
-                p[i] = add(p[i], mul(S(t.k_iter), sub(div(goal_sum[i], count), p[i])));
-                qs[i] = q_new[i];
-            }
-            // Rest-pose attraction.
-            for (std::size_t i = 1; i < n; ++i) p[i] = add(p[i], mul(S(t.k_rest), sub(xbar[i], p[i])));
-            // Distance constraints, follow-the-leader, each child pushed out of the
-            // colliders right after it is placed.
+            // The last sweep: placed and pushed out, twice (solver.cpp).
             swing = identity;
             for (std::size_t i = 0; i + 1 < n; ++i) {
                 place_on_parent(i);
-                if (batch.colliders > 0) collide_counted(i + 1);
+                if (batch.colliders > 0) {
+                    collide_counted(i + 1);
+                    place_on_parent(i);
+                    collide_counted(i + 1);
+                    place_on_parent(i);
+                    collide_counted(i + 1);
+                }
                 if (t.limited) limit_child(i);
             }
-        }
-        // The last sweep: placed and pushed out, twice (solver.cpp).
-        swing = identity;
-        for (std::size_t i = 0; i + 1 < n; ++i) {
-            place_on_parent(i);
-            if (batch.colliders > 0) {
-                collide_counted(i + 1);
-                place_on_parent(i);
-                collide_counted(i + 1);
-                place_on_parent(i);
-                collide_counted(i + 1);
-            }
-            if (t.limited) limit_child(i);
-        }
 
-        // What the colliders undid is not the parent's to give back (solver.cpp): the part
-        // of a child's distance corrections into its colliders' net push direction.
-        if (batch.colliders > 0) {
-            for (std::size_t i = 1; i < n; ++i) {
-                const V pl = length(pushed[i]);
-                const V3 nn = div(pushed[i], pl);
-                const V along = dot(pulled[i], nn);
-                const M into = hn::And(hn::Gt(pl, Z()), hn::Lt(along, Z()));
-                pulled[i] = select(into, sub(pulled[i], mul(hn::Max(along, hn::Neg(pl)), nn)), pulled[i]);
+            // What the colliders undid is not the parent's to give back (solver.cpp): the part
+            // of a child's distance corrections into its colliders' net push direction.
+            if (batch.colliders > 0) {
+                for (std::size_t i = 1; i < n; ++i) {
+                    const V pl = length(pushed[i]);
+                    const V3 nn = div(pushed[i], pl);
+                    const V along = dot(pulled[i], nn);
+                    const M into = hn::And(hn::Gt(pl, Z()), hn::Lt(along, Z()));
+                    pulled[i] = select(into, sub(pulled[i], mul(hn::Max(along, hn::Neg(pl)), nn)), pulled[i]);
+                }
+            }
+            // 6. Update, with the dynamic follow-the-leader correction (solver.cpp).
+            for (std::size_t i = 0; i < n; ++i) {
+                v[i] = div(sub(p[i], x[i]), S(sc.h));
+                if (i > 0 && i + 1 < n) v[i] = sub(v[i], mul(S(sc.ftl_over_h), pulled[i + 1]));
+                const Q4 dq = positive_w(qmul(qs[i], conj(q[i])));
+                omega[i] = mul(S(sc.two_over_h), V3{dq.x, dq.y, dq.z});
+                x[i] = p[i];
+                q[i] = qs[i];
             }
         }
-        // 6. Update, with the dynamic follow-the-leader correction (solver.cpp).
+    };
+    // A vector of lanes at one of the two levels steps once; one with both steps the state
+    // at each and takes each lane's own.
+    const bool any_reduced = args.lod && !hn::AllFalse(D(), reduced);
+    const bool any_full = !any_reduced || !hn::AllTrue(D(), hn::Or(reduced, posed));
+    if (any_full && any_reduced) {
+        V3 x0[kMaxJ], v0[kMaxJ], omega0[kMaxJ];
+        Q4 q0[kMaxJ];
+        std::copy(x, x + n, x0);
+        std::copy(v, v + n, v0);
+        std::copy(q, q + n, q0);
+        std::copy(omega, omega + n, omega0);
+        substeps(t.step);
+        V3 x1[kMaxJ], v1[kMaxJ], omega1[kMaxJ];
+        Q4 q1[kMaxJ];
+        std::copy(x, x + n, x1);
+        std::copy(v, v + n, v1);
+        std::copy(q, q + n, q1);
+        std::copy(omega, omega + n, omega1);
+        std::copy(x0, x0 + n, x);
+        std::copy(v0, v0 + n, v);
+        std::copy(q0, q0 + n, q);
+        std::copy(omega0, omega0 + n, omega);
+        substeps(t.reduced);
         for (std::size_t i = 0; i < n; ++i) {
-            v[i] = div(sub(p[i], x[i]), S(t.h));
-            if (i > 0 && i + 1 < n) v[i] = sub(v[i], mul(S(t.ftl_over_h), pulled[i + 1]));
-            const Q4 dq = positive_w(qmul(qs[i], conj(q[i])));
-            omega[i] = mul(S(t.two_over_h), V3{dq.x, dq.y, dq.z});
-            x[i] = p[i];
-            q[i] = qs[i];
+            x[i] = select(reduced, x[i], x1[i]);
+            v[i] = select(reduced, v[i], v1[i]);
+            q[i] = select(reduced, q[i], q1[i]);
+            omega[i] = select(reduced, omega[i], omega1[i]);
         }
+    } else {
+        substeps(any_reduced ? t.reduced : t.step);
     }
 
     // ---- store: the state relative to the new root, this frame's rest shape, view, weights ----

@@ -40,10 +40,22 @@ enum ChainRow : std::uint32_t {
     kRootP = 0, kRootQ = 3, kView = 7, kWeights = 10, kLevel = 18, kBlendIn = 19, kIdle = 20, kChainRows = 21
 };
 
+/// A frame's step sizes for one set of solver settings, computed by the backend with
+/// rods::step's own expressions (backends/simd_rods.cpp set_step).
+struct RodStepConsts {
+    std::uint32_t substeps = 1, iterations = 0;
+    float h = 0.0f, decay = 0.0f, k_iter = 0.0f, k_rest = 0.0f;
+    float half_h = 0.0f, two_over_h = 0.0f;
+    float ftl_over_h = 0.0f;                // rods::kFollowTheLeaderDamping / h
+    std::array<float, 3> h_acceleration{};  // h * (gravity + wind)
+    // Each part of the drag's decay, exp(-drag h) (SolverParams::normal_drag, tangent_drag).
+    float normal_decay = 1.0f, tangent_decay = 1.0f;
+};
+
 /// A template's constants in the kernel's terms, and this frame's step sizes, computed
 /// by the backend with rods::step's own expressions.
 struct RodTemplateConsts {
-    std::uint32_t joints = 0, views = 0, iterations = 0;
+    std::uint32_t joints = 0, views = 0;
     std::uint32_t keyed = 0;         // keyed examples J (docs/keyed-examples.md), shapes m+1 .. m+J
     float thickness = 0.0f;
     float b2 = 0.0f;                 // thickness^2
@@ -73,16 +85,11 @@ struct RodTemplateConsts {
     std::array<std::uint32_t, rods::kMaxChainJoints> limit_kind{};
     std::array<std::array<float, 4>, rods::kMaxChainJoints> limit_trig{};
     std::array<std::array<float, 4>, rods::kMaxChainJoints> limit_frame{};
-    // This frame's (RodTemplateConsts::set_step).
-    std::uint32_t substeps = 1;
-    float h = 0.0f, decay = 0.0f, k_iter = 0.0f, k_rest = 0.0f;
-    float half_h = 0.0f, two_over_h = 0.0f;
-    float ftl_over_h = 0.0f;                // rods::kFollowTheLeaderDamping / h
-    std::array<float, 3> h_acceleration{};  // h * (gravity + wind)
-    // Drag across and along the segments (SolverParams::normal_drag, tangent_drag): on,
-    // and each part's decay exp(-drag h).
+    // Drag across and along the segments (SolverParams::normal_drag, tangent_drag) on.
     bool drag = false;
-    float normal_decay = 1.0f, tangent_decay = 1.0f;
+    // This frame's step sizes: the template's settings (full lanes) and rods::reduced_params
+    // of them (lanes at the reduced level).
+    RodStepConsts step, reduced;
 };
 
 /// A batch of up to kBatchLanes chains of one template.
@@ -114,9 +121,10 @@ struct RodStepArgs {
     /// computed by the backend with engine/rods' own function; null in a world without
     /// wind, whose kernels then take damping on the world velocities as before.
     const float* air = nullptr;
-    /// Levels of detail on (RodWorld::lod): lanes whose kLevel row is not full take
-    /// rods::step_posed with this blend (rods::posed_blend); full lanes whose kBlendIn row
-    /// is below 1 take rods::hand_over of the two.
+    /// Levels of detail on (RodWorld::lod): lanes whose kLevel row is posed or hidden take
+    /// rods::step_posed with this blend (rods::posed_blend), reduced lanes step with their
+    /// template's `reduced` constants; full and reduced lanes whose kBlendIn row is below 1
+    /// take rods::hand_over of the step and the posed frame.
     bool lod = false;
     /// rods::posed_blend over 1 .. kHiddenPeriod frames: a posed step covers its lane's
     /// kIdle row + 1 frames.

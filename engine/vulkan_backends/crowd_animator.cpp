@@ -133,7 +133,7 @@ bool CrowdAnimator::choose_clip_updates(std::uint32_t index, const rods::RodFram
             if (lod.lower_rate) {
                 keep = rods::chain_rests(view, reference, level, clip_level_[c], turn);
             } else {
-                const std::uint32_t period = level == rods::Level::Full    ? 1u
+                const std::uint32_t period = rods::dynamic(level)          ? 1u
                                              : level == rods::Level::Posed ? kPosedClipPeriod
                                                                            : kHiddenClipPeriod;
                 keep = turn % period != 0;

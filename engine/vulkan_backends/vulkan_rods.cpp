@@ -83,6 +83,14 @@ void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
     g.physics.y = rods::iteration_stiffness(rods::substep_stiffness(p.rest_stiffness, h), p.iterations);
     const bool drag = p.normal_drag > 0.0f || p.tangent_drag > 0.0f;
     g.drag = {std::exp(-p.normal_drag * h), std::exp(-p.tangent_drag * h), drag ? 1.0f : 0.0f, 0.0f};
+    // The reduced level's (rods::reduced_params), the same expressions.
+    const rods::SolverParams r = rods::reduced_params(p);
+    const std::uint32_t reduced_substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / r.max_substep)));
+    const float rh = dt / static_cast<float>(reduced_substeps);
+    g.reduced_step = {rh, std::exp(-r.damping * rh), rods::iteration_stiffness(rods::substep_stiffness(r.stiffness, rh), r.iterations),
+                      rods::iteration_stiffness(rods::substep_stiffness(r.rest_stiffness, rh), r.iterations)};
+    g.reduced_solver = {std::exp(-r.normal_drag * rh), std::exp(-r.tangent_drag * rh), static_cast<float>(r.iterations),
+                        static_cast<float>(reduced_substeps)};
 }
 
 // A wind field as the kernel takes it (shared/rods.h), with rods::air_velocity's own
@@ -583,7 +591,10 @@ private:
                           {},
                           to_gpu(frame.camera.position, ortho ? 1.0f : 0.0f),
                           to_gpu(frame.camera.forward, frame.dt),
-                          {started_ ? 0u : 1u, moving_air(frame) ? 1u : 0u, lod.enabled ? 1u : 0u, rate},
+                          {(started_ ? 0u : KW_RODS_STEP_FIRST) | (moving_air(frame) ? KW_RODS_STEP_WIND : 0u) |
+                               (lod.enabled ? KW_RODS_STEP_LOD : 0u),
+                           std::bit_cast<std::uint32_t>(lod.reduced_distance), std::bit_cast<std::uint32_t>(lod.reduced_stay),
+                           rate},
                           {frame.time, lod.margin, lod.full_distance, lod.stay_distance},
                           to_gpu(lod.right, lod.tan_x),
                           to_gpu(lod.up, lod.tan_y)};
@@ -599,10 +610,10 @@ private:
         if (timed) recording.timestamp(compute::Timestamp::Begin);
         if (keyed_chains_ > 0) {
             // K.2, K.3: the raw keyed weights, which the step reads (K.4).
-            const gpu::RodKeyPush key_push{{keyed_chains_, push.flags.z, push.flags.w, 0u},
+            const gpu::RodKeyPush key_push{{keyed_chains_, lod.enabled ? 1u : 0u, push.flags.w, 0u},
                                            {frame.dt, lod.margin, lod.full_distance, lod.stay_distance},
-                                           push.camera_position,
-                                           push.camera_forward,
+                                           to_gpu(frame.camera.position, lod.reduced_distance),
+                                           to_gpu(frame.camera.forward, lod.reduced_stay),
                                            push.camera_right,
                                            push.camera_up};
             const std::uint32_t key_groups = (keyed_chains_ + KW_ROD_KEYS_WORKGROUP_SIZE - 1) / KW_ROD_KEYS_WORKGROUP_SIZE;

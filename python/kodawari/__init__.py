@@ -29,7 +29,7 @@ import numpy
 from . import _config
 from . import _native
 
-__all__ = ["Simulation", "Error", "rig", "bench", "command_path", "BACKENDS", "PARTS", "LEVEL_FULL", "LEVEL_POSED", "LEVEL_HIDDEN", "__version__", "library_version", "library_path"]
+__all__ = ["Simulation", "Error", "rig", "bench", "command_path", "BACKENDS", "PARTS", "LEVEL_FULL", "LEVEL_POSED", "LEVEL_HIDDEN", "LEVEL_REDUCED", "__version__", "library_version", "library_path"]
 
 #: The package's version: the project's (CMake's project version, as the library's).
 __version__ = _config.VERSION
@@ -38,7 +38,7 @@ BACKENDS = tuple(_native.BACKENDS)
 #: The parts of a bird, in the order of bird_poses()' second axis.
 PARTS = ("Body", "Head", "Tail", "LeftArm1", "LeftArm2", "RightArm1", "RightArm2")
 #: A chain's levels of detail as chain_levels() gives them (kodawari.h kodawari_level).
-LEVEL_FULL, LEVEL_POSED, LEVEL_HIDDEN = 0, 1, 2
+LEVEL_FULL, LEVEL_POSED, LEVEL_HIDDEN, LEVEL_REDUCED = 0, 1, 2, 3
 #: Where the library was loaded from.
 library_path = _native.library_path
 
@@ -383,9 +383,10 @@ class Simulation:
 
     def chain_levels(self):
         """Every chain's level of detail at the last step (docs/level-of-detail.md): (levels,
-        kept), new arrays of shape (chains,): levels uint8, LEVEL_FULL, LEVEL_POSED or
-        LEVEL_HIDDEN; kept bool, True where the chain kept its state at that step instead
-        of stepping (a far posed or hidden chain between its turns). Every chain
+        kept), new arrays of shape (chains,): levels uint8, LEVEL_FULL, LEVEL_POSED,
+        LEVEL_HIDDEN or LEVEL_REDUCED (where the scene's lod.reduced_pixels turns it on);
+        kept bool, True where the chain kept its state at that step instead of stepping
+        (a far posed or hidden chain between its turns). Every chain
         LEVEL_FULL while the scene's `lod` is off. Raises Error before the first step()."""
         with self._lock:
             handle = self._live()

@@ -75,11 +75,11 @@ struct RodKeyStateGpu {
 // frames it kept. The level is decided as rods_step.comp decides it, from the same push
 // values (RodPush's camera and LOD fields).
 struct RodKeyPush {
-    uvec4 counts;          // x: chains with keyed examples, y: 1 = levels of detail (RodPush.flags.z),
+    uvec4 counts;          // x: chains with keyed examples, y: 1 = levels of detail (KW_RODS_STEP_LOD),
                            // z: the rate (RodPush.flags.w), w: unused
     vec4 frame;            // x: dt (s), y: LOD margin, z: LOD full distance, w: LOD stay distance (m)
-    vec4 camera_position;  // xyz
-    vec4 camera_forward;   // xyz
+    vec4 camera_position;  // xyz, w: LOD reduced distance (m)
+    vec4 camera_forward;   // xyz, w: LOD reduced stay distance (m)
     vec4 camera_right;     // xyz, w: tan of half the horizontal field of view
     vec4 camera_up;        // xyz, w: tan of half the vertical field of view
 };

@@ -98,6 +98,7 @@
 #define KW_RODS_LEVEL_FULL 0u    // every substep
 #define KW_RODS_LEVEL_POSED 1u   // no dynamics: carried by its root and eased onto its rest shape
 #define KW_RODS_LEVEL_HIDDEN 2u  // off the camera's frustum: updated as posed
+#define KW_RODS_LEVEL_REDUCED 3u // dynamics at half the substeps and iterations (rods::reduced_params)
 // RodChainStateGpu.view.w holds level + KW_RODS_IDLE_UNIT x idle, idle the frames the chain
 // has kept its state since its last step (rods::ChainState::idle, at most 3).
 #define KW_RODS_IDLE_UNIT 4u
@@ -117,6 +118,11 @@
 // character / KW_RODS_RATE_GROUP in bits 0-1 (mod 4: every period divides 4), and the first
 // character mod KW_RODS_RATE_GROUP in bits 2-5.
 #define KW_RODS_RATE_ON 0x80000000u
+
+// RodPush.flags.x's bits.
+#define KW_RODS_STEP_FIRST 1u  // the world's first step (chains of templates with physics.w != 0 start moving with their roots)
+#define KW_RODS_STEP_WIND 2u   // a wind field moves the air (KW_RODS_BINDING_WINDS)
+#define KW_RODS_STEP_LOD 4u    // levels of detail (rods::LodView::enabled)
 
 // RodTemplateJointGpu.lengths.z: the joint's limit (rods::LimitKind), stored as a float.
 #define KW_RODS_LIMIT_NONE 0u
@@ -148,6 +154,10 @@ struct RodTemplateGpu {
     vec4 first_dir;   // xyz: e, the base shape's first segment direction (SPEC A.2)
     vec4 drag;        // this frame's: x: exp(-normal_drag h), y: exp(-tangent_drag h), z: 1 = drag on,
                       // w: dt / LodSettings::blend_time (rods::blend_in's step, the world's)
+    vec4 reduced_step;  // this frame's at the reduced level (rods::reduced_params): x: substep h (s), y: velocity
+                        // decay, z: k' per iteration, w: k_rest' per iteration
+    vec4 reduced_solver;  // x: exp(-normal_drag h), y: exp(-tangent_drag h) (its h), z: projection iterations,
+                          // w: substeps this frame (whole numbers as floats)
     vec4 views[KW_RODS_MAX_VIEWS];  // xyz: d_k (unit, reference joint's frame), w: influence p_k
 };
 
@@ -222,10 +232,9 @@ struct RodPush {
     uvec4 group;            // GROUPED: x: template, y: joint count n, z: view examples m, w: keyed examples J
     vec4 camera_position;   // xyz, w: 1 = orthographic
     vec4 camera_forward;    // xyz, w: the frame's length dt (s)
-    uvec4 flags;            // x: 1 on the world's first step (chains of templates with
-                            // physics.w != 0 start moving with their roots); y: 1 = a wind field
-                            // moves the air (KW_RODS_BINDING_WINDS); z: 1 = levels of detail
-                            // (rods::LodView::enabled); w: the posed and hidden levels' rate (KW_RODS_RATE_ON), or 0
+    uvec4 flags;            // x: KW_RODS_STEP_* bits; y, z: the bits of the LOD reduced distance and
+                            // reduced stay distance (m, rods::LodView; floats); w: the posed and
+                            // hidden levels' rate (KW_RODS_RATE_ON), or 0
     vec4 time;              // x: the frame's time (s, RodFrame::time: the wind's), y: LOD margin (m),
                             // z: LOD full distance (m), w: LOD stay distance (m) (rods::LodView)
     vec4 camera_right;      // xyz: the camera's right axis (unit), w: tan of half the horizontal field of view

@@ -1,7 +1,9 @@
 // Levels of detail (issue 35, kodawari/rods/lod.hpp) against every rod backend: the same
 // levels and the same posed frames as the CPU reference, and no jump at a change of
 // level. A camera dollies into a grid of 26 swaying characters and out again while it
-// pans across them, so that characters turn full, posed and hidden, and back.
+// pans across them, so that characters turn full, posed and hidden, and back; each test
+// runs again with the reduced level on (rods::LodSettings::reduced_pixels), so that they
+// turn reduced too.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -37,11 +39,13 @@ rods::SyntheticOptions grid_options() {
 }
 
 // A character is full within 11.6 m and stays full within 15.4 m (1 m at 100 px of 1080,
-// 50 degrees): the grid spans 2 to 30 m from the camera over the run.
-rods::LodSettings lod_settings() {
+// 50 degrees): the grid spans 2 to 30 m from the camera over the run. `reduced`: reduced
+// from there to 16.5 m (70 px), staying so within 22.1 m.
+rods::LodSettings lod_settings(bool reduced) {
     rods::LodSettings lod;
     lod.enabled = true;
     lod.full_pixels = 100.0f;
+    lod.reduced_pixels = reduced ? 70.0f : 0.0f;
     return lod;
 }
 
@@ -71,9 +75,12 @@ protected:
         auto made = rods::SyntheticScene::make(grid_options());
         ASSERT_TRUE(made.ok()) << made.error().message;
         scene_ = std::make_unique<rods::SyntheticScene>(std::move(made).value());
-        world_ = scene_->world();
-        world_.lod = lod_settings();
-        ASSERT_TRUE(world_.finalize().ok());
+        for (const bool reduced : {false, true}) {
+            rods::RodWorld& world = worlds_[reduced ? 1 : 0];
+            world = scene_->world();
+            world.lod = lod_settings(reduced);
+            ASSERT_TRUE(world.finalize().ok());
+        }
     }
 
     std::unique_ptr<RodBackend> make_backend() {
@@ -83,7 +90,7 @@ protected:
     }
 
     std::unique_ptr<rods::SyntheticScene> scene_;
-    rods::RodWorld world_;
+    std::array<rods::RodWorld, 2> worlds_;  // the reduced level off, on
 };
 
 }  // namespace
@@ -94,54 +101,61 @@ protected:
 // RodBackends.OneStepMatchesTheReferenceFromTheSameState) and on every level. The run
 // must also take every level and change levels, or it tests nothing.
 TEST_P(LevelOfDetail, LevelsAndPosedFramesMatchTheReference) {
-    std::unique_ptr<RodBackend> backend = make_backend();
-    ASSERT_NE(backend, nullptr);
-    rods::RodFrame frame;
-    dolly_frame(*scene_, 0, frame);
-    ASSERT_TRUE(backend->load(world_, frame).ok());
-    const float length = scene_->chain_length();
-    std::vector<rods::KeyState> keys(world_.chains.size());
-    std::array<std::uint32_t, 3> seen{};
-    std::uint32_t changes = 0, disagreements = 0, resting = 0;
-    float worst = 0.0f;
-    for (std::uint32_t f = 1; f <= kFrames; ++f) {
-        std::vector<rods::ChainState> states;
-        ASSERT_TRUE(backend->read_states(states).ok());
-        const std::vector<rods::ChainState> before = states;
-        dolly_frame(*scene_, f, frame);
-        for (std::uint32_t c = 0; c < world_.chains.size(); ++c) step_chain_reference(world_, c, frame, states[c], keys[c]);
-        ASSERT_TRUE(backend->step(frame).ok());
-        ChainSnapshot snap;
-        std::vector<rods::ChainState> got;
-        ASSERT_TRUE(backend->read(snap).ok());
-        ASSERT_TRUE(backend->read_states(got).ok());
-        for (std::uint32_t c = 0; c < world_.chains.size(); ++c) {
-            const rods::ChainInstance& ch = world_.chains[c];
-            ASSERT_LT(got[c].level, 3u);
-            ++seen[got[c].level];
-            if (got[c].level != before[c].level) ++changes;
-            if (got[c].level != states[c].level || got[c].idle != states[c].idle) ++disagreements;
-            if (got[c].idle > 0) ++resting;
-            for (std::uint32_t i = 0; i < world_.templ(ch).chain.joint_count; ++i) {
-                const glm::vec3 p = snap.positions[ch.joint_begin + i];
-                ASSERT_TRUE(std::isfinite(p.x + p.y + p.z));
-                worst = std::max(worst, glm::length(rods::position(states[c], i) - p));
+    for (const bool reduced : {false, true}) {
+        SCOPED_TRACE(reduced ? "reduced level on" : "reduced level off");
+        const rods::RodWorld& world = worlds_[reduced ? 1 : 0];
+        std::unique_ptr<RodBackend> backend = make_backend();
+        ASSERT_NE(backend, nullptr);
+        rods::RodFrame frame;
+        dolly_frame(*scene_, 0, frame);
+        ASSERT_TRUE(backend->load(world, frame).ok());
+        const float length = scene_->chain_length();
+        std::vector<rods::KeyState> keys(world.chains.size());
+        std::array<std::uint32_t, 4> seen{};
+        std::uint32_t changes = 0, disagreements = 0, resting = 0;
+        float worst = 0.0f;
+        for (std::uint32_t f = 1; f <= kFrames; ++f) {
+            std::vector<rods::ChainState> states;
+            ASSERT_TRUE(backend->read_states(states).ok());
+            const std::vector<rods::ChainState> before = states;
+            dolly_frame(*scene_, f, frame);
+            for (std::uint32_t c = 0; c < world.chains.size(); ++c) step_chain_reference(world, c, frame, states[c], keys[c]);
+            ASSERT_TRUE(backend->step(frame).ok());
+            ChainSnapshot snap;
+            std::vector<rods::ChainState> got;
+            ASSERT_TRUE(backend->read(snap).ok());
+            ASSERT_TRUE(backend->read_states(got).ok());
+            for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
+                const rods::ChainInstance& ch = world.chains[c];
+                ASSERT_LT(got[c].level, reduced ? 4u : 3u);
+                ++seen[got[c].level];
+                if (got[c].level != before[c].level) ++changes;
+                if (got[c].level != states[c].level || got[c].idle != states[c].idle) ++disagreements;
+                if (got[c].idle > 0) ++resting;
+                for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
+                    const glm::vec3 p = snap.positions[ch.joint_begin + i];
+                    ASSERT_TRUE(std::isfinite(p.x + p.y + p.z));
+                    worst = std::max(worst, glm::length(rods::position(states[c], i) - p));
+                }
             }
         }
-    }
-    std::printf("[ measured ] %s: chain-frames full %u, posed %u, hidden %u (%u of them kept between turns); %u changes "
-                "of level; worst %.3g of the chain length against the reference\n",
-                testing_support::case_name(GetParam()).c_str(), seen[0], seen[1], seen[2], resting, changes,
-                static_cast<double>(worst / length));
-    EXPECT_GT(seen[0], 0u);
-    EXPECT_GT(seen[1], 0u);
-    EXPECT_GT(seen[2], 0u);
-    EXPECT_GT(changes, 100u) << "the run must change levels";
-    EXPECT_GT(resting, 1000u) << "far chains must keep their state between their turns";
-    EXPECT_EQ(disagreements, 0u) << "levels or idle frames that differ from the reference's";
-    EXPECT_LT(worst, 1e-5f * length);
-    if (GetParam() != BackendKind::Vulkan) {
-        EXPECT_EQ(worst, 0.0f) << "the CPU backends compute the reference's bits";
+        std::printf("[ measured ] %s%s: chain-frames full %u, reduced %u, posed %u, hidden %u (%u of them kept between turns); "
+                    "%u changes of level; worst %.3g of the chain length against the reference\n",
+                    testing_support::case_name(GetParam()).c_str(), reduced ? " (reduced level on)" : "", seen[0], seen[3], seen[1],
+                    seen[2], resting, changes, static_cast<double>(worst / length));
+        EXPECT_GT(seen[0], 0u);
+        EXPECT_GT(seen[1], 0u);
+        EXPECT_GT(seen[2], 0u);
+        if (reduced) {
+            EXPECT_GT(seen[3], 1000u) << "the run must take the reduced level";
+        }
+        EXPECT_GT(changes, 100u) << "the run must change levels";
+        EXPECT_GT(resting, reduced ? 100u : 1000u) << "far chains must keep their state between their turns";
+        EXPECT_EQ(disagreements, 0u) << "levels or idle frames that differ from the reference's";
+        EXPECT_LT(worst, 1e-5f * length);
+        if (GetParam() != BackendKind::Vulkan) {
+            EXPECT_EQ(worst, 0.0f) << "the CPU backends compute the reference's bits";
+        }
     }
 }
 
@@ -149,52 +163,56 @@ TEST_P(LevelOfDetail, LevelsAndPosedFramesMatchTheReference) {
 // chain's level than the farthest any joint moves between two frames of full simulation
 // of the same run (the same backend, LOD off).
 TEST_P(LevelOfDetail, NoJointJumpsAtAChangeOfLevel) {
-    rods::RodWorld full_world = scene_->world();
-    std::unique_ptr<RodBackend> full = make_backend();
-    std::unique_ptr<RodBackend> lod = make_backend();
-    ASSERT_NE(full, nullptr);
-    ASSERT_NE(lod, nullptr);
-    rods::RodFrame frame;
-    dolly_frame(*scene_, 0, frame);
-    ASSERT_TRUE(full->load(full_world, frame).ok());
-    ASSERT_TRUE(lod->load(world_, frame).ok());
-    ChainSnapshot last_full, last_lod, snap;
-    ASSERT_TRUE(full->read(last_full).ok());
-    ASSERT_TRUE(lod->read(last_lod).ok());
-    std::vector<rods::ChainState> levels_before, levels;
-    ASSERT_TRUE(lod->read_states(levels_before).ok());
-    float full_move = 0.0f, change_move = 0.0f, posed_move = 0.0f;
-    std::uint32_t changes = 0;
-    for (std::uint32_t f = 1; f <= kFrames; ++f) {
-        dolly_frame(*scene_, f, frame);
-        ASSERT_TRUE(full->step(frame).ok());
-        ASSERT_TRUE(full->read(snap).ok());
-        for (std::size_t j = 0; j < snap.positions.size(); ++j) {
-            full_move = std::max(full_move, glm::length(snap.positions[j] - last_full.positions[j]));
-        }
-        last_full = snap;
-        ASSERT_TRUE(lod->step(frame).ok());
-        ASSERT_TRUE(lod->read(snap).ok());
-        ASSERT_TRUE(lod->read_states(levels).ok());
-        for (std::uint32_t c = 0; c < world_.chains.size(); ++c) {
-            const rods::ChainInstance& ch = world_.chains[c];
-            const bool changed = levels[c].level != levels_before[c].level;
-            changes += changed ? 1u : 0u;
-            for (std::uint32_t i = 0; i < world_.templ(ch).chain.joint_count; ++i) {
-                const float move = glm::length(snap.positions[ch.joint_begin + i] - last_lod.positions[ch.joint_begin + i]);
-                if (changed) change_move = std::max(change_move, move);
-                if (levels[c].level != 0u) posed_move = std::max(posed_move, move);
+    for (const bool reduced : {false, true}) {
+        SCOPED_TRACE(reduced ? "reduced level on" : "reduced level off");
+        const rods::RodWorld& world = worlds_[reduced ? 1 : 0];
+        rods::RodWorld full_world = scene_->world();
+        std::unique_ptr<RodBackend> full = make_backend();
+        std::unique_ptr<RodBackend> lod = make_backend();
+        ASSERT_NE(full, nullptr);
+        ASSERT_NE(lod, nullptr);
+        rods::RodFrame frame;
+        dolly_frame(*scene_, 0, frame);
+        ASSERT_TRUE(full->load(full_world, frame).ok());
+        ASSERT_TRUE(lod->load(world, frame).ok());
+        ChainSnapshot last_full, last_lod, snap;
+        ASSERT_TRUE(full->read(last_full).ok());
+        ASSERT_TRUE(lod->read(last_lod).ok());
+        std::vector<rods::ChainState> levels_before, levels;
+        ASSERT_TRUE(lod->read_states(levels_before).ok());
+        float full_move = 0.0f, change_move = 0.0f, posed_move = 0.0f;
+        std::uint32_t changes = 0;
+        for (std::uint32_t f = 1; f <= kFrames; ++f) {
+            dolly_frame(*scene_, f, frame);
+            ASSERT_TRUE(full->step(frame).ok());
+            ASSERT_TRUE(full->read(snap).ok());
+            for (std::size_t j = 0; j < snap.positions.size(); ++j) {
+                full_move = std::max(full_move, glm::length(snap.positions[j] - last_full.positions[j]));
             }
+            last_full = snap;
+            ASSERT_TRUE(lod->step(frame).ok());
+            ASSERT_TRUE(lod->read(snap).ok());
+            ASSERT_TRUE(lod->read_states(levels).ok());
+            for (std::uint32_t c = 0; c < world.chains.size(); ++c) {
+                const rods::ChainInstance& ch = world.chains[c];
+                const bool changed = levels[c].level != levels_before[c].level;
+                changes += changed ? 1u : 0u;
+                for (std::uint32_t i = 0; i < world.templ(ch).chain.joint_count; ++i) {
+                    const float move = glm::length(snap.positions[ch.joint_begin + i] - last_lod.positions[ch.joint_begin + i]);
+                    if (changed) change_move = std::max(change_move, move);
+                    if (!rods::dynamic(static_cast<rods::Level>(levels[c].level))) posed_move = std::max(posed_move, move);
+                }
+            }
+            last_lod = snap;
+            levels_before = levels;
         }
-        last_lod = snap;
-        levels_before = levels;
+        std::printf("[ measured ] %s%s: largest move of a joint between two frames: %.4f m in full simulation, %.4f m at a "
+                    "change of level (%u changes), %.4f m posed or hidden\n",
+                    testing_support::case_name(GetParam()).c_str(), reduced ? " (reduced level on)" : "",
+                    static_cast<double>(full_move), static_cast<double>(change_move), changes, static_cast<double>(posed_move));
+        EXPECT_GT(changes, 100u);
+        EXPECT_LE(change_move, full_move);
     }
-    std::printf("[ measured ] %s: largest move of a joint between two frames: %.4f m in full simulation, %.4f m at a "
-                "change of level (%u changes), %.4f m posed or hidden\n",
-                testing_support::case_name(GetParam()).c_str(), static_cast<double>(full_move),
-                static_cast<double>(change_move), changes, static_cast<double>(posed_move));
-    EXPECT_GT(changes, 100u);
-    EXPECT_LE(change_move, full_move);
 }
 
 INSTANTIATE_TEST_SUITE_P(All, LevelOfDetail, testing_support::all_backend_kinds(), testing_support::backend_test_name);

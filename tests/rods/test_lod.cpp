@@ -54,6 +54,77 @@ TEST(Lod, FullWithinItsProjectedSizeWithHysteresis) {
     EXPECT_EQ(at(0.5f, Level::Posed), Level::Full);
 }
 
+// The reduced level between full and posed (LodSettings::reduced_pixels): 50 px reaches
+// 23.16 m, and a full or reduced character stays simulated within 30.88 m (37.5 px). Off,
+// the band is empty and the decision is the two-level one.
+TEST(Lod, ReducedBetweenFullAndPosedWithHysteresis) {
+    rods::LodSettings lod = settings();
+    lod.reduced_pixels = 50.0f;
+    const rods::LodView v = rods::lod_view(lod, camera());
+    EXPECT_NEAR(v.reduced_distance, depth_at_pixels(50.0f), 1e-3f);
+    EXPECT_NEAR(v.reduced_stay, depth_at_pixels(37.5f), 1e-3f);
+    const auto at = [&](float z, Level previous) { return rods::chain_level(v, glm::vec3(0.0f, 0.0f, -z), previous); };
+    EXPECT_EQ(at(10.0f, Level::Reduced), Level::Full);
+    EXPECT_EQ(at(13.0f, Level::Full), Level::Full);       // full's own hysteresis band
+    EXPECT_EQ(at(13.0f, Level::Reduced), Level::Reduced);
+    EXPECT_EQ(at(13.0f, Level::Posed), Level::Reduced);
+    EXPECT_EQ(at(20.0f, Level::Full), Level::Reduced);
+    EXPECT_EQ(at(20.0f, Level::Posed), Level::Reduced);
+    EXPECT_EQ(at(20.0f, Level::Hidden), Level::Reduced);
+    // The reduced band's hysteresis: between 23.16 and 30.88 m it keeps what it was.
+    EXPECT_EQ(at(27.0f, Level::Reduced), Level::Reduced);
+    EXPECT_EQ(at(27.0f, Level::Full), Level::Reduced);
+    EXPECT_EQ(at(27.0f, Level::Posed), Level::Posed);
+    EXPECT_EQ(at(32.0f, Level::Reduced), Level::Posed);
+    // Off the frustum: hidden whatever the distance.
+    EXPECT_EQ(rods::chain_level(v, glm::vec3(0.0f, 0.0f, 20.0f), Level::Reduced), Level::Hidden);
+    // Reduced chains step every frame, as full ones; posed ones rest only beyond twice the
+    // reduced distance (46.3 m) now.
+    for (std::uint32_t turn = 0; turn < 4; ++turn) {
+        EXPECT_FALSE(rods::chain_rests(v, glm::vec3(0.0f, 0.0f, -60.0f), Level::Reduced, Level::Reduced, turn));
+        EXPECT_FALSE(rods::chain_rests(v, glm::vec3(0.0f, 0.0f, -40.0f), Level::Posed, Level::Posed, turn));
+    }
+    EXPECT_TRUE(rods::chain_rests(v, glm::vec3(0.0f, 0.0f, -50.0f), Level::Posed, Level::Posed, 1));
+    // Off: the reduced distances are the full ones, and no character is reduced.
+    const rods::LodView off = rods::lod_view(settings(), camera());
+    EXPECT_EQ(off.reduced_distance, off.full_distance);
+    EXPECT_EQ(off.reduced_stay, off.stay_distance);
+    for (const float z : {5.0f, 13.0f, 20.0f, 40.0f}) {
+        for (const Level previous : {Level::Full, Level::Posed, Level::Hidden}) {
+            EXPECT_NE(rods::chain_level(off, glm::vec3(0.0f, 0.0f, -z), previous), Level::Reduced) << z;
+        }
+    }
+    // A budget's cap bounds the reduced band too: at 15 m nothing deeper is simulated.
+    const rods::LodView capped = rods::lod_view(lod, camera(), 15.0f);
+    EXPECT_EQ(capped.full_distance, v.full_distance);
+    EXPECT_EQ(capped.reduced_distance, 15.0f);
+    EXPECT_EQ(capped.reduced_stay, 15.0f);
+    EXPECT_EQ(rods::chain_level(capped, glm::vec3(0.0f, 0.0f, -16.0f), Level::Reduced), Level::Posed);
+    // The blend into simulation runs for reduced chains as for full ones.
+    EXPECT_GT(rods::blend_in(lod, Level::Reduced, 0.0f, 1.0f / 60.0f), 0.0f);
+    EXPECT_EQ(rods::blend_in(lod, Level::Posed, 0.5f, 1.0f / 60.0f), 0.0f);
+}
+
+// rods::reduced_params: twice the longest substep (at most 0.05 s), half the iterations
+// rounded up, every other setting the same.
+TEST(Lod, ReducedParamsHalveTheSubstepsAndIterations) {
+    rods::SolverParams p;
+    p.max_substep = 1.0f / 120.0f;
+    p.iterations = 4;
+    const rods::SolverParams r = rods::reduced_params(p);
+    EXPECT_EQ(r.max_substep, 2.0f / 120.0f);
+    EXPECT_EQ(r.iterations, 2u);
+    EXPECT_EQ(r.stiffness, p.stiffness);
+    EXPECT_EQ(r.damping, p.damping);
+    p.max_substep = 0.04f;
+    p.iterations = 1;
+    EXPECT_EQ(rods::reduced_params(p).max_substep, 0.05f);
+    EXPECT_EQ(rods::reduced_params(p).iterations, 1u);
+    p.iterations = 5;
+    EXPECT_EQ(rods::reduced_params(p).iterations, 3u);
+    EXPECT_TRUE(rods::validate(rods::reduced_params(p)).ok());
+}
+
 TEST(Lod, HiddenOffTheFrustumByMoreThanItsSize) {
     const rods::LodView v = rods::lod_view(settings(), camera());
     const float tan_y = std::tan(glm::radians(25.0f));
@@ -164,6 +235,9 @@ TEST(Lod, RefusesSettingsOutOfRange) {
         {"size", [](rods::LodSettings& l, float x) { l.size = x; }, nan},
         {"full_pixels", [](rods::LodSettings& l, float x) { l.full_pixels = x; }, -1.0f},
         {"full_pixels", [](rods::LodSettings& l, float x) { l.full_pixels = x; }, inf},
+        {"reduced_pixels", [](rods::LodSettings& l, float x) { l.reduced_pixels = x; }, -1.0f},
+        {"reduced_pixels", [](rods::LodSettings& l, float x) { l.reduced_pixels = x; }, 100.0f},  // full_pixels'
+        {"reduced_pixels", [](rods::LodSettings& l, float x) { l.reduced_pixels = x; }, nan},
         {"hysteresis", [](rods::LodSettings& l, float x) { l.hysteresis = x; }, 0.95f},
         {"bias", [](rods::LodSettings& l, float x) { l.bias = x; }, nan},
         {"settle_rate", [](rods::LodSettings& l, float x) { l.settle_rate = x; }, 0.0f},

@@ -49,9 +49,10 @@ TEST(LodBudget, PromotesTheNearestCharactersWhileTheFrameFits) {
     EXPECT_EQ(rods::budget_distance(view, refs, chains, costs, 0.0661f), 30.0f);
     // All four the view makes full fit: no cap (the far one and the hidden one are never promoted).
     EXPECT_EQ(rods::budget_distance(view, refs, chains, costs, 0.0861f), rods::kNoDistanceCap);
-    // The model prices the frame at the levels the capped view gives.
+    // The model prices the frame at the levels the capped view gives (lod_view bounds the
+    // reduced level's distances by a cap too; off, they are the full ones).
     rods::LodView capped = view;
-    capped.full_distance = 20.0f;
+    capped.full_distance = capped.reduced_distance = 20.0f;
     EXPECT_DOUBLE_EQ(rods::modelled_ms(capped, refs, chains, costs), 0.046);
     // A character as deep as the first one left out is left out too: the cap stops
     // before their depth.
@@ -63,6 +64,33 @@ TEST(LodBudget, PromotesTheNearestCharactersWhileTheFrameFits) {
     const rods::LodView bounded = rods::lod_view(on, rods::Camera{}, 20.0f);
     EXPECT_EQ(bounded.full_distance, 20.0f);
     EXPECT_EQ(bounded.stay_distance, 20.0f);
+    EXPECT_EQ(bounded.reduced_distance, 20.0f);
+}
+
+// With the reduced level on, characters the view makes reduced are candidates too, priced
+// at reduced_chain_us: nearest first, whatever their level.
+TEST(LodBudget, PricesReducedCharactersAtTheirOwnCost) {
+    rods::LodSettings lod;
+    lod.enabled = true;
+    lod.reduced_pixels = 12.0f;  // full within 48.3 m, reduced within 96.5 m
+    rods::Camera camera;
+    camera.position = glm::vec3(0.0f);
+    camera.forward = glm::vec3(0.0f, 0.0f, -1.0f);
+    const rods::LodView view = rods::lod_view(lod, camera);
+    ASSERT_NEAR(view.reduced_distance, 96.5f, 0.1f);
+    const std::vector<glm::vec3> refs = {{0, 0, -30}, {0, 0, -60}, {0, 0, -80}, {0, 0, -200}};
+    const std::vector<std::uint32_t> chains(refs.size(), 2);
+    rods::LodCosts costs = unit_costs();
+    costs.reduced_chain_us = 2.0f;
+    // Base 4 us; the full one adds 20 us, each reduced one 4 us.
+    EXPECT_DOUBLE_EQ(rods::modelled_ms(view, refs, chains, costs), 0.032);
+    EXPECT_EQ(rods::budget_distance(view, refs, chains, costs, 0.024f), 30.0f);   // the full one only
+    EXPECT_EQ(rods::budget_distance(view, refs, chains, costs, 0.028f), 60.0f);   // and the nearer reduced one
+    EXPECT_EQ(rods::budget_distance(view, refs, chains, costs, 0.032f), rods::kNoDistanceCap);
+    const rods::LodView capped = rods::lod_view(lod, camera, 60.0f);
+    EXPECT_EQ(rods::chain_level(capped, refs[1], rods::Level::Posed), rods::Level::Reduced);
+    EXPECT_EQ(rods::chain_level(capped, refs[2], rods::Level::Posed), rods::Level::Posed);
+    EXPECT_DOUBLE_EQ(rods::modelled_ms(capped, refs, chains, costs), 0.028);
 }
 
 TEST(LodBudget, RefusesABudgetThatIsNotAPositiveFiniteNumber) {

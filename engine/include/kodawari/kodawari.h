@@ -925,11 +925,14 @@ KODAWARI_C_API kodawari_status kodawari_simulation_read_chains(kodawari_simulati
 KODAWARI_C_API kodawari_status kodawari_simulation_chain_joints(kodawari_simulation* sim, uint32_t chain,
                                                                 uint32_t* joint_begin, uint32_t* joint_count);
 /// A chain's level of detail (docs/level-of-detail.md): simulated fully, posed (no
-/// dynamics: carried by its root onto its rest shape), or hidden (off the camera's view).
+/// dynamics: carried by its root onto its rest shape), hidden (off the camera's view), or
+/// reduced (simulated at half the substeps and iterations, where the scene's
+/// `lod.reduced_pixels` turns that level on).
 typedef enum kodawari_level {
     KODAWARI_LEVEL_FULL = 0,
     KODAWARI_LEVEL_POSED = 1,
-    KODAWARI_LEVEL_HIDDEN = 2
+    KODAWARI_LEVEL_HIDDEN = 2,
+    KODAWARI_LEVEL_REDUCED = 3
 } kodawari_level;
 /// Every chain's level of detail at the last step, in the order of the per-chain arrays
 /// (one read-back from a device): `levels[c]` a kodawari_level, and where `kept` is not

@@ -16,6 +16,7 @@
 
 #include "kodawari/api.hpp"
 #include "kodawari/result.hpp"
+#include "kodawari/rods/solver.hpp"
 #include "kodawari/rods/view.hpp"
 
 namespace kodawari::rods {
@@ -25,7 +26,19 @@ enum class Level : std::uint32_t {
     Full = 0,    ///< every substep (step())
     Posed = 1,   ///< no dynamics: step_posed()
     Hidden = 2,  ///< off the camera's frustum by more than the character's size: step_posed()
+    Reduced = 3, ///< step() with reduced_params(): half the substeps and iterations
 };
+
+/// Whether a level runs the dynamics (full or reduced) rather than step_posed().
+[[nodiscard]] constexpr bool dynamic(Level level) { return level == Level::Full || level == Level::Reduced; }
+
+/// The solver settings a reduced chain steps with (LodSettings::reduced_pixels): twice
+/// the longest substep (at most 0.05 s) and half the projection iterations, rounded up.
+/// The stiffnesses are per reference substep and compound over the iterations, and damping
+/// is a rate (SolverParams), so the reduced chain keeps the full one's stiffness, damping
+/// and drag per second and differs by its coarser time steps only (SPEC A.4): about a
+/// quarter of a full step's projection work and half the rest at 60 frames/s.
+[[nodiscard]] KODAWARI_API SolverParams reduced_params(const SolverParams& params);
 
 /// What a character's frame costs at each level, in microseconds: its clip and each of
 /// its chains. Defaults: the cpu backend on 2 cores (AVX2) at scenes/crowd-10k.json
@@ -34,6 +47,7 @@ enum class Level : std::uint32_t {
 /// at the levels' rate), docs/level-of-detail.md.
 struct LodCosts {
     float full_chain_us = 1.25f;    ///< a full chain's step (every substep)
+    float reduced_chain_us = 0.45f; ///< a reduced chain's step (reduced_params()); not ordered against the others
     float posed_chain_us = 0.23f;   ///< a posed or hidden chain's, over its rate's kept frames
     float full_clip_us = 2.3f;      ///< a full character's clip, every frame
     float posed_clip_us = 1.2f;     ///< a posed or hidden character's clip, at its rate
@@ -55,6 +69,10 @@ struct LodSettings {
     /// image stays within 0.10 px of full simulation at 24 px, 0.22 px at 48 px (the
     /// scene's) and 0.92 px at 96 px (docs/level-of-detail.md).
     float full_pixels = 24.0f;
+    /// The reduced level (Level::Reduced): 0 (off: full, then posed), or a size in pixels
+    /// in (0, full_pixels) down to which a character below full_pixels is simulated at
+    /// reduced_params(), posed below (with the same hysteresis).
+    float reduced_pixels = 0.0f;
     /// A full character turns posed only below full_pixels x (1 - hysteresis), in [0, 0.9]:
     /// one on the boundary does not flicker between levels.
     float hysteresis = 0.25f;
@@ -101,6 +119,10 @@ struct LodView {
     float margin = 0.0f;         ///< LodSettings::size
     float full_distance = 0.0f;  ///< depth within which a posed or hidden character turns full
     float stay_distance = 0.0f;  ///< depth within which a full one stays full (>= full_distance)
+    /// Depth within which a posed or hidden character turns reduced (>= full_distance), and
+    /// within which a full or reduced one stays simulated (>= reduced_distance, >=
+    /// stay_distance); full_distance and stay_distance when the reduced level is off.
+    float reduced_distance = 0.0f, reduced_stay = 0.0f;
     bool lower_rate = false;     ///< LodSettings::lower_rate (chain_rests())
 };
 /// RodFrame::full_distance_cap when no budget caps it (lod_budget.hpp).
@@ -130,8 +152,8 @@ inline constexpr std::uint32_t kNoFrameNumber = 0xFFFFFFFFu;
 /// Whether a chain keeps its state this frame instead of stepping (shaders/lib/rod_lod.glsl
 /// rod_rests): its character's reference joint at `reference`, its level `level` this frame
 /// (chain_level()) and `previous` at its last step, `turn` its character's rate_turn().
-/// Never a full chain, one whose level changed, or one within twice its full distance of
-/// the camera unless it is hidden far off the view (off the frustum widened by 20 degrees,
+/// Never a full or reduced chain, one whose level changed, or one within twice its reduced
+/// distance (the full one when the reduced level is off) of the camera unless it is hidden far off the view (off the frustum widened by 20 degrees,
 /// rod_far_off_view); never when `view` is not enabled or not lower_rate.
 [[nodiscard]] KODAWARI_API bool chain_rests(const LodView& view, glm::vec3 reference, Level level, Level previous,
                                             std::uint32_t turn);
@@ -141,8 +163,8 @@ inline constexpr std::uint32_t kNoFrameNumber = 0xFFFFFFFFu;
 [[nodiscard]] KODAWARI_API float posed_blend(const LodSettings& lod, float dt);
 
 /// The share of full simulation in a chain's result after a frame of `dt` s at `level`,
-/// from `previous` (ChainState::blend_in): 0 at any level but full, else
-/// min(1, previous + dt / blend_time). A world without levels of detail keeps every chain at 1.
+/// from `previous` (ChainState::blend_in): 0 at the posed and hidden levels, else (full or
+/// reduced, dynamic()) min(1, previous + dt / blend_time). A world without levels of detail keeps every chain at 1.
 [[nodiscard]] KODAWARI_API float blend_in(const LodSettings& lod, Level level, float previous, float dt);
 
 }  // namespace kodawari::rods
