@@ -238,6 +238,8 @@ with kodawari.Simulation.open(AHOGE, "cpu", frames=2) as sim:
     sim.step(1)
     levels, kept = sim.chain_levels()
     check(bool((levels == kodawari.LEVEL_FULL).all()) and not kept.any(), f"ahoge (no lod): {levels}, {kept}")
+check((kodawari.LEVEL_FULL, kodawari.LEVEL_POSED, kodawari.LEVEL_HIDDEN, kodawari.LEVEL_REDUCED) == (0, 1, 2, 3),
+      "the levels' values are the C API's kodawari_level")
 
 # ---- Flock agents from the application: named errors, and a flocking flock flies round an
 # obstacle placed in its way (no bird inside the 3 m sphere; without it, birds pass its centre).
