@@ -61,7 +61,7 @@ row bench "a workgroup size list with one out of range" 2 "--workgroup-sizes" --
 row run "a level-of-detail bias out of range" 2 "--lod-bias" -- run scenes/crowd-gltf.json --frames 1 --no-export --lod-bias 9
 row render "a level-of-detail bias out of range" 2 "--lod-bias" -- render scenes/crowd-gltf.json --out "$work/lod-frames" --frames 1 --lod-bias 9
 row render "levels of detail shown on a scene without characters" 2 "--show-lod: scene" -- render scenes/flock.json --out "$work/lod-frames" --frames 1 --show-lod
-row run "a reduced level at or above full_pixels" 2 "--lod-reduced: expected 0 (off) or a number of pixels below the scene's lod.full_pixels (24), got 24" -- run scenes/crowd-gltf.json --frames 1 --no-export --lod-reduced 24
+row run "a reduced level at or above full_pixels" 2 "--lod-reduced: expected 0 .off. or a number of pixels below the scene's lod.full_pixels .24., got 24" -- run scenes/crowd-gltf.json --frames 1 --no-export --lod-reduced 24
 row run "a frame budget of zero" 2 "--budget-ms: expected a positive number of milliseconds" -- run scenes/crowd-gltf.json --frames 1 --no-export --budget-ms 0
 row bench "a frame budget that is not a number" 2 "--budget-ms: expected a finite number" -- bench crowd --count 2 --frames 1 --budget-ms nan
 row run "a scene's budget of zero" 2 "lod.budget_ms" -- run "$work/zero-budget.json" --frames 1 --no-export
