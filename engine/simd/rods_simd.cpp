@@ -700,30 +700,23 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
     const bool any_reduced = args.lod && !hn::AllFalse(D(), reduced);
     const bool any_full = !any_reduced || !hn::AllTrue(D(), hn::Or(reduced, posed));
     if (any_full && any_reduced) {
-        V3 x0[kMaxJ], v0[kMaxJ], omega0[kMaxJ];
-        Q4 q0[kMaxJ];
-        std::copy(x, x + n, x0);
-        std::copy(v, v + n, v0);
-        std::copy(q, q + n, q0);
-        std::copy(omega, omega + n, omega0);
+        // The start kept aside, the full step, then the start back (the full result kept
+        // aside in its place) for the reduced step.
+        V3 x_other[kMaxJ], v_other[kMaxJ], omega_other[kMaxJ];
+        Q4 q_other[kMaxJ];
+        auto each = [&](auto&& f) HWY_ATTR {
+            f(x, x_other);
+            f(v, v_other);
+            f(q, q_other);
+            f(omega, omega_other);
+        };
+        each([&](auto* state, auto* other) HWY_ATTR { std::copy(state, state + n, other); });
         substeps(t.step);
-        V3 x1[kMaxJ], v1[kMaxJ], omega1[kMaxJ];
-        Q4 q1[kMaxJ];
-        std::copy(x, x + n, x1);
-        std::copy(v, v + n, v1);
-        std::copy(q, q + n, q1);
-        std::copy(omega, omega + n, omega1);
-        std::copy(x0, x0 + n, x);
-        std::copy(v0, v0 + n, v);
-        std::copy(q0, q0 + n, q);
-        std::copy(omega0, omega0 + n, omega);
+        each([&](auto* state, auto* other) HWY_ATTR { std::swap_ranges(state, state + n, other); });
         substeps(t.reduced);
-        for (std::size_t i = 0; i < n; ++i) {
-            x[i] = select(reduced, x[i], x1[i]);
-            v[i] = select(reduced, v[i], v1[i]);
-            q[i] = select(reduced, q[i], q1[i]);
-            omega[i] = select(reduced, omega[i], omega1[i]);
-        }
+        each([&](auto* state, const auto* other) HWY_ATTR {
+            for (std::size_t i = 0; i < n; ++i) state[i] = select(reduced, state[i], other[i]);
+        });
     } else {
         substeps(any_reduced ? t.reduced : t.step);
     }
