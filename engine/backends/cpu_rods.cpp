@@ -44,7 +44,8 @@ bool step_chain_reference(const rods::RodWorld& world, std::uint32_t chain, cons
     const std::span<const rods::Collider> colliders(frame.colliders.data() + c.collider_begin, c.collider_count);
     const rods::Transform& root = frame.roots[chain];
     // A reduced chain steps as a full one at half the substeps and iterations.
-    const rods::SolverParams params = level == rods::Level::Reduced ? rods::reduced_params(t.params) : t.params;
+    rods::SolverParams reduced;
+    const rods::SolverParams& params = level == rods::Level::Reduced ? (reduced = rods::reduced_params(t.params)) : t.params;
     if (!rods::dynamic(level)) {
         rods::step_posed(t.chain, t.params, root, rest.shape, colliders, posed_dt, rods::posed_blend(world.lod, posed_dt),
                          state);

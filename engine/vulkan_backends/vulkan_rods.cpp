@@ -72,25 +72,38 @@ std::span<std::byte> writable_bytes_of(std::vector<T>& v) {
     return std::as_writable_bytes(std::span<T>(v));
 }
 
-// The step fields of a template for a frame of `dt`, computed exactly as rods::step
-// computes them (same expressions, same library calls), so both sides use the same bits.
-void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
+// One set of solver settings' step sizes for a frame of `dt`, computed exactly as
+// rods::step computes them (same expressions, same library calls), so both sides use the
+// same bits.
+struct StepSizes {
+    std::uint32_t substeps;
+    float h, decay, k_iter, k_rest, normal_decay, tangent_decay;
+};
+StepSizes step_sizes(const rods::SolverParams& p, float dt) {
     const std::uint32_t substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / p.max_substep)));
     const float h = dt / static_cast<float>(substeps);
-    g.solver = {p.iterations, substeps, g.solver.z, g.solver.w};  // z: the keyed examples, w: limited, set at load
-    g.step = {h, std::exp(-p.damping * h), rods::iteration_stiffness(rods::substep_stiffness(p.stiffness, h), p.iterations),
-              p.momentum_suppression};
-    g.physics.y = rods::iteration_stiffness(rods::substep_stiffness(p.rest_stiffness, h), p.iterations);
+    return {substeps,
+            h,
+            std::exp(-p.damping * h),
+            rods::iteration_stiffness(rods::substep_stiffness(p.stiffness, h), p.iterations),
+            rods::iteration_stiffness(rods::substep_stiffness(p.rest_stiffness, h), p.iterations),
+            std::exp(-p.normal_drag * h),
+            std::exp(-p.tangent_drag * h)};
+}
+
+// The step fields of a template for a frame of `dt`: its settings' and the reduced
+// level's (rods::reduced_params).
+void set_step(gpu::RodTemplateGpu& g, const rods::SolverParams& p, float dt) {
+    const StepSizes s = step_sizes(p, dt);
+    g.solver = {p.iterations, s.substeps, g.solver.z, g.solver.w};  // z: the keyed examples, w: limited, set at load
+    g.step = {s.h, s.decay, s.k_iter, p.momentum_suppression};
+    g.physics.y = s.k_rest;
     const bool drag = p.normal_drag > 0.0f || p.tangent_drag > 0.0f;
-    g.drag = {std::exp(-p.normal_drag * h), std::exp(-p.tangent_drag * h), drag ? 1.0f : 0.0f, 0.0f};
-    // The reduced level's (rods::reduced_params), the same expressions.
-    const rods::SolverParams r = rods::reduced_params(p);
-    const std::uint32_t reduced_substeps = std::max(1u, static_cast<std::uint32_t>(std::ceil(dt / r.max_substep)));
-    const float rh = dt / static_cast<float>(reduced_substeps);
-    g.reduced_step = {rh, std::exp(-r.damping * rh), rods::iteration_stiffness(rods::substep_stiffness(r.stiffness, rh), r.iterations),
-                      rods::iteration_stiffness(rods::substep_stiffness(r.rest_stiffness, rh), r.iterations)};
-    g.reduced_solver = {std::exp(-r.normal_drag * rh), std::exp(-r.tangent_drag * rh), static_cast<float>(r.iterations),
-                        static_cast<float>(reduced_substeps)};
+    g.drag = {s.normal_decay, s.tangent_decay, drag ? 1.0f : 0.0f, 0.0f};
+    const rods::SolverParams reduced = rods::reduced_params(p);
+    const StepSizes r = step_sizes(reduced, dt);
+    g.reduced_step = {r.h, r.decay, r.k_iter, r.k_rest};
+    g.reduced_solver = {r.normal_decay, r.tangent_decay, static_cast<float>(reduced.iterations), static_cast<float>(r.substeps)};
 }
 
 // A wind field as the kernel takes it (shared/rods.h), with rods::air_velocity's own
