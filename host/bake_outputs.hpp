@@ -7,7 +7,7 @@
 #include <vector>
 
 #include "cli_common.hpp"
-#include "kodawari/bake.hpp"
+#include "kodawari/simulation/bake.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 

@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "cli_common.hpp"
-#include "kodawari/backend.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::cli {
 

@@ -7,10 +7,10 @@
 #include <vector>
 
 #include "bench_common.hpp"
-#include "kodawari/atomic_file.hpp"
-#include "kodawari/compute.hpp"
-#include "kodawari/simd.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/core/atomic_file.hpp"
+#include "kodawari/vulkan/compute.hpp"
+#include "kodawari/backends/simd.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari::cli {
 

@@ -1,11 +1,11 @@
 #include "cli_common.hpp"
 
-#include "kodawari/route_check.hpp"
+#include "kodawari/scene/route_check.hpp"
 
-#include "kodawari/compute.hpp"
+#include "kodawari/vulkan/compute.hpp"
 #include "kodawari/domains/chains.hpp"
-#include "kodawari/gpu_info.hpp"
-#include "kodawari/simd.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
+#include "kodawari/backends/simd.hpp"
 
 #include <cmath>
 #include <cstdio>

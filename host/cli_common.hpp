@@ -10,12 +10,12 @@
 
 #include <CLI/CLI.hpp>
 
-#include "kodawari/backend.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/result.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari::cli {
 
@@ -134,7 +134,7 @@ BackendChoice read_backend_choice(const BackendFlags& flags);
 /// --strict and --fit-routes of `run` and `validate`.
 void add_route_check_options(CLI::App& app, bool& strict, bool& fit);
 
-/// The route check of `run` and `validate` (kodawari/route_check.hpp, --strict and
+/// The route check of `run` and `validate` (kodawari/scene/route_check.hpp, --strict and
 /// --fit-routes): with `fit`, fits the flocks' timing first and says what changed on
 /// stdout; then warns on stderr about every route that exceeds its bird's limits. Returns
 /// the exit code to stop with (a scene that does not build, or warnings under `strict`),

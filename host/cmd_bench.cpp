@@ -9,17 +9,17 @@
 
 #include "bench_common.hpp"
 #include "commands.hpp"
-#include "kodawari/atomic_file.hpp"
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/core/atomic_file.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/domains/scene_draw.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "kodawari/rods/synthetic.hpp"
-#include "kodawari/simd.hpp"
+#include "kodawari/backends/simd.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari::cli {
 

@@ -10,9 +10,9 @@
 #include <vector>
 
 #include "bench_common.hpp"
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/domains/flocking.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari::cli {
 

@@ -1,10 +1,10 @@
 #include <cstdio>
 #include <thread>
 
-#include "kodawari/version.hpp"
+#include "kodawari/core/version.hpp"
 #include "commands.hpp"
-#include "kodawari/gpu_info.hpp"
-#include "kodawari/simd.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
+#include "kodawari/backends/simd.hpp"
 
 namespace kodawari::cli {
 

@@ -1,10 +1,10 @@
 // `kodawari merge PARTS... --out FILE.glb`: joins the part files of `run --shard I/N` into
-// the files one `run` writes, byte for byte (kodawari/shards.hpp).
+// the files one `run` writes, byte for byte (kodawari/simulation/shards.hpp).
 #include <cstdio>
 
 #include "bake_outputs.hpp"
 #include "commands.hpp"
-#include "kodawari/shards.hpp"
+#include "kodawari/simulation/shards.hpp"
 
 namespace kodawari::cli {
 

@@ -24,10 +24,10 @@
 #include "kodawari/render/apng.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/domains/scene_draw.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari::cli {
 

@@ -11,10 +11,10 @@
 #include <vector>
 
 #include "commands.hpp"
-#include "kodawari/atomic_file.hpp"
+#include "kodawari/core/atomic_file.hpp"
 #include "kodawari/gltf/bird_model_import.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
-#include "kodawari/route_check.hpp"
+#include "kodawari/scene/route_check.hpp"
 
 namespace kodawari::cli {
 namespace {

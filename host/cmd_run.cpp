@@ -1,4 +1,4 @@
-// `kodawari run SCENE`: bakes a scene (kodawari/bake.hpp) into glTF and optionally a
+// `kodawari run SCENE`: bakes a scene (kodawari/simulation/bake.hpp) into glTF and optionally a
 // JSON Lines trace. Arguments and messages around the engine's bake pipeline.
 #include <algorithm>
 #include <cstdio>
@@ -8,17 +8,17 @@
 
 #include "bake_outputs.hpp"
 #include "commands.hpp"
-#include "kodawari/bake.hpp"
-#include "kodawari/distributed.hpp"
-#include "kodawari/scene.hpp"
-#include "kodawari/shards.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/simulation/distributed.hpp"
+#include "kodawari/scene/scene.hpp"
+#include "kodawari/simulation/shards.hpp"
 #ifdef KODAWARI_WITH_MPI
 #include "mpi_communicator.hpp"
 #endif
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/domains/trace.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari::cli {
 
@@ -119,7 +119,7 @@ Shard parse_shard(const std::string& text) {
     return {static_cast<std::uint32_t>(index), static_cast<std::uint32_t>(count)};
 }
 
-// `run --mpi`: one shard per rank, rank 0 writes (kodawari/distributed.hpp).
+// `run --mpi`: one shard per rank, rank 0 writes (kodawari/simulation/distributed.hpp).
 int run_distributed(const std::string& scene_path, const BackendChoice& choice, std::optional<std::uint64_t> frames,
                     const std::optional<std::string>& out, const std::optional<std::string>& trace, bool no_export,
                     const GlbCompaction& compaction, bool strict, bool fit_routes) {

@@ -12,10 +12,10 @@
 #include <string>
 
 #include "commands.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "kodawari/rods/sketch.hpp"
-#include "kodawari/scene_edit.hpp"
-#include "kodawari/sketch_key.hpp"
+#include "kodawari/scene/scene_edit.hpp"
+#include "kodawari/scene/sketch_key.hpp"
 
 namespace kodawari::cli {
 namespace {

@@ -7,10 +7,10 @@
 
 #include "commands.hpp"
 #include "kodawari/domains/flocking.hpp"
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/compare.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/backends/compare.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari::cli {
 namespace {

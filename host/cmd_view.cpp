@@ -26,7 +26,7 @@
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/domains/scene_draw.hpp"
-#include "kodawari/scene_edit.hpp"
+#include "kodawari/scene/scene_edit.hpp"
 #include "viewer/viewer.hpp"
 
 namespace kodawari::cli {

@@ -5,7 +5,7 @@
 
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/rods/rod_scene.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari::cli {
 

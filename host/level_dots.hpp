@@ -9,7 +9,7 @@
 
 #include "kodawari/render/draw.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 #include "kodawari/rods/lod.hpp"
 
 namespace kodawari {

@@ -8,8 +8,8 @@
 #include <system_error>
 #include <vector>
 
-#include "kodawari/atomic_file.hpp"
-#include "kodawari/version.hpp"
+#include "kodawari/core/atomic_file.hpp"
+#include "kodawari/core/version.hpp"
 #include "commands.hpp"
 
 namespace {

@@ -3,7 +3,7 @@
 // every rank; errors of the bake itself travel through agree().
 #include "mpi_communicator.hpp"
 
-#include "kodawari/atomic_file.hpp"
+#include "kodawari/core/atomic_file.hpp"
 
 #include <climits>
 #include <cstdio>

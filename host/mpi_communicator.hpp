@@ -1,10 +1,10 @@
 #pragma once
-// The Communicator of `kodawari run --mpi` (kodawari/distributed.hpp) over MPI's world.
+// The Communicator of `kodawari run --mpi` (kodawari/simulation/distributed.hpp) over MPI's world.
 // Only built when CMake finds MPI (KODAWARI_WITH_MPI).
 
 #include <memory>
 
-#include "kodawari/distributed.hpp"
+#include "kodawari/simulation/distributed.hpp"
 
 namespace kodawari::cli {
 

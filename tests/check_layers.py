@@ -46,7 +46,7 @@ ALLOWED_THIRD_PARTY = {
     # hand-tuned search (domains/flocking/flock_search_simd.cpp, with simd/dispatch.hpp).
     "engine": {"vulkan", "nlohmann", "hwy"},
     # The C API's device embedding converts the application's handles (vulkan_core.h's C
-    # types) for kodawari/vulkan_embed.hpp; kodawari.h itself names no Vulkan type.
+    # types) for kodawari/vulkan/vulkan_embed.hpp; kodawari.h itself names no Vulkan type.
     "c": {"vulkan"},
 }
 # Which target owns each header is derived, never listed by hand (issue 31, item 4): an
@@ -156,19 +156,25 @@ def check_installed():
                 problems.append(f"{header}: installed by {target} but not a public header")
     for header in sorted(public - set(listed)):
         problems.append(f"{header}: a public header that kodawari_headers() does not install")
+    # One folder per component (issue 31, item 4): the top level holds the C API's header
+    # alone; the forwarding headers of the old top-level paths are generated at install.
+    for header in sorted(public):
+        if header.count("/") == 2 and header != "include/kodawari/kodawari.h":
+            problems.append(f"{header}: a public header outside a component's folder "
+                            "(include/kodawari/<component>/)")
     return problems, len(listed)
 
 
 # The layers that know domains only through the domain contract (issue 31): no code in
 # them (comments aside) names a domain. gpu/ (Vulkan's instance, device and graphics) is
 # not in the list: shared_layout.cpp checks every shared struct's layout, domains' too.
-NEUTRAL = ["simulation/*.cpp", "simulation/*.hpp", "include/kodawari/simulation.hpp", "include/kodawari/bake.hpp",
-           "include/kodawari/domain.hpp", "include/kodawari/device_data.hpp", "include/kodawari/shards.hpp", "include/kodawari/distributed.hpp",
+NEUTRAL = ["simulation/*.cpp", "simulation/*.hpp", "include/kodawari/simulation/simulation.hpp", "include/kodawari/simulation/bake.hpp",
+           "include/kodawari/simulation/domain.hpp", "include/kodawari/backends/device_data.hpp", "include/kodawari/simulation/shards.hpp", "include/kodawari/simulation/distributed.hpp",
            # The renderer and its shared layout: domains draw through render::Draw and
            # their own render layers (render/layer.hpp).
            "render/*.cpp", "render/*.hpp", "include/kodawari/render/*.hpp", "include/kodawari/shared/render.h",
            # The compute layer: its interface and its Vulkan implementation.
-           "include/kodawari/compute.hpp", "gpu/compute_*.cpp", "gpu/compute_vulkan.hpp"]
+           "include/kodawari/vulkan/compute.hpp", "gpu/compute_*.cpp", "gpu/compute_vulkan.hpp"]
 # Inside identifiers too (set_chains, RodBackend, birds_from); "produce" is not a rod, a
 # swapchain is not a chain.
 DOMAIN_WORDS = re.compile(r"bird|rod(?!uc)|(?<!swap)chain|flock", re.I)
@@ -194,10 +200,10 @@ def check_neutral():
 
 # The compute layer's interface and what a domain or an embedder reaches it through name no
 # Vulkan type (issue 31, item 2): Vulkan is its implementation, in gpu/; the application's
-# Vulkan handles come in through kodawari/vulkan_embed.hpp alone.
-VULKAN_FREE = ["include/kodawari/compute.hpp", "include/kodawari/backend.hpp", "include/kodawari/device_data.hpp",
-               "include/kodawari/backend_factory.hpp", "include/kodawari/gpu_info.hpp"]
-VULKAN_WORDS = re.compile(r"\bvk::|\bVk[A-Z]\w*|\bVK_\w+|vulkan[/_]\w+\.h|gpu::VulkanContext")
+# Vulkan handles come in through kodawari/vulkan/vulkan_embed.hpp alone.
+VULKAN_FREE = ["include/kodawari/vulkan/compute.hpp", "include/kodawari/backends/backend.hpp", "include/kodawari/backends/device_data.hpp",
+               "include/kodawari/vulkan/backend_factory.hpp", "include/kodawari/vulkan/gpu_info.hpp"]
+VULKAN_WORDS = re.compile(r"\bvk::|\bVk[A-Z]\w*|\bVK_\w+|(?<!kodawari/)vulkan[/_]\w+\.h|gpu::VulkanContext")
 
 
 def check_vulkan_free():

@@ -17,9 +17,9 @@
 #include <sys/wait.h>
 #include <unistd.h>
 
-#include "kodawari/backend.hpp"
-#include "kodawari/gpu_info.hpp"
-#include "kodawari/simd.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
+#include "kodawari/backends/simd.hpp"
 #include "test_paths.hpp"
 
 namespace kodawari::testing_support {

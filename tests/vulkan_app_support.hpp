@@ -12,7 +12,7 @@
 
 #include <vulkan/vulkan.h>
 
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 #include "test_support.hpp"
 
 namespace kodawari::testing_support {

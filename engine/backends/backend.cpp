@@ -31,7 +31,7 @@ Error no_vulkan(std::string_view family) {
     return make_error(Error::Kind::InvalidInput,
                       "the vulkan " + std::string(family) +
                           " backend is in kodawari::vulkan: link it and call make_" + std::string(family) +
-                          "_backend() (kodawari/backend_factory.hpp)");
+                          "_backend() (kodawari/vulkan/backend_factory.hpp)");
 }
 
 }  // namespace

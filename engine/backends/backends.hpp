@@ -7,8 +7,8 @@
 #include <algorithm>
 #include <memory>
 
-#include "kodawari/backend.hpp"
-#include "kodawari/rod_backend.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/backends/rod_backend.hpp"
 #include "simd/isa.hpp"
 
 namespace kodawari {

@@ -1,4 +1,4 @@
-#include "kodawari/compare.hpp"
+#include "kodawari/backends/compare.hpp"
 
 #include <algorithm>
 #include <cassert>

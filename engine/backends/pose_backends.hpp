@@ -4,7 +4,7 @@
 
 #include <memory>
 
-#include "kodawari/pose_backend.hpp"
+#include "kodawari/backends/pose_backend.hpp"
 #include "simd/isa.hpp"
 
 namespace kodawari {

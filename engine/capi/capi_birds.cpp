@@ -15,8 +15,8 @@
 
 #include "capi/capi_bird_pose.hpp"
 #include "capi/capi_common.hpp"
-#include "kodawari/vulkan_embed.hpp"
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/birds/world.hpp"
 

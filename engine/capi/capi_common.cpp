@@ -1,8 +1,8 @@
 // The C API's shared parts: version, status names, the last-error messages, the argument
 // checks, and the mapping of engine errors to status codes.
 #include "capi/capi_common.hpp"
-#include "kodawari/compute.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/vulkan/compute.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 
 #include <algorithm>
 #include <vector>
@@ -11,8 +11,8 @@
 #include <cmath>
 
 #include "kodawari/domains/flocking.hpp"
-#include "kodawari/simd.hpp"
-#include "kodawari/version.hpp"
+#include "kodawari/backends/simd.hpp"
+#include "kodawari/core/version.hpp"
 
 namespace kodawari::capi {
 namespace {

@@ -17,13 +17,13 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "kodawari/backend.hpp"
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/kodawari.h"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 #include "kodawari/rods/chain_snapshot.hpp"
 #include "kodawari/rods/wind.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 
 /// kodawari_vulkan_device_adopt's handle: the application's device, wrapped
 /// (kodawari::adopt_vulkan_device); shared with the worlds made on it.

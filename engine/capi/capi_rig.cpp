@@ -5,9 +5,9 @@
 #include <string>
 
 #include "capi/capi_common.hpp"
-#include "kodawari/atomic_file.hpp"
+#include "kodawari/core/atomic_file.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 
 using namespace kodawari;
 using namespace kodawari::capi;

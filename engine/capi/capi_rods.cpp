@@ -11,9 +11,9 @@
 #include <vector>
 
 #include "capi/capi_common.hpp"
-#include "kodawari/vulkan_embed.hpp"
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/rod_backend.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/backends/rod_backend.hpp"
 #include "kodawari/rods/world.hpp"
 
 using namespace kodawari;

@@ -16,13 +16,13 @@
 
 #include "capi/capi_bird_pose.hpp"
 #include "capi/capi_common.hpp"
-#include "kodawari/bake.hpp"
+#include "kodawari/simulation/bake.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/domains/flocking.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/export/export.hpp"
 #include "kodawari/rods/lod.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 using namespace kodawari;
 using namespace kodawari::capi;

@@ -4,7 +4,7 @@
 #include <vulkan/vulkan_core.h>
 
 #include "capi/capi_common.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 
 using namespace kodawari;
 using namespace kodawari::capi;

@@ -1,4 +1,4 @@
-#include "kodawari/atomic_file.hpp"
+#include "kodawari/core/atomic_file.hpp"
 
 #include <array>
 #include <cassert>

@@ -5,7 +5,7 @@
 #include <vector>
 
 #include "core/internal_api.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::core {
 

@@ -7,6 +7,6 @@
 // as KODAWARI_API is. They are not part of the API: no installed header declares them,
 // and they change in any release.
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 
 #define KODAWARI_INTERNAL KODAWARI_API

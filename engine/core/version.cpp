@@ -1,5 +1,5 @@
 // The library's version, compiled in from the generated header.
-#include "kodawari/version.hpp"
+#include "kodawari/core/version.hpp"
 
 namespace kodawari {
 

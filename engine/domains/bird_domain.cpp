@@ -1,5 +1,5 @@
 // The bird domain (kodawari/domains/birds.hpp): a scene's flocks on a BirdBackend, behind
-// the domain contract (kodawari/domain.hpp).
+// the domain contract (kodawari/simulation/domain.hpp).
 #include "kodawari/domains/birds.hpp"
 
 #include <algorithm>
@@ -11,12 +11,12 @@
 
 #include "vulkan_backends/device_backends.hpp"
 #include "domains/flocking/flock_backend.hpp"
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/domains/bird_draw.hpp"
 #include "kodawari/domains/flocking.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/simulation.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/simulation/simulation.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 
 namespace kodawari {
 

@@ -18,7 +18,7 @@
 
 #include "birds/bird_meshes.hpp"
 #include "gpu/compute_vulkan.hpp"
-#include "kodawari/device_data.hpp"
+#include "kodawari/backends/device_data.hpp"
 #include "render/layer.hpp"
 
 namespace kodawari {

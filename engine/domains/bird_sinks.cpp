@@ -5,11 +5,11 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/bake.hpp"
-#include "kodawari/communicator.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/core/communicator.hpp"
 #include "kodawari/domains/birds.hpp"
-#include "kodawari/export.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/export/export.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari {
 

@@ -1,5 +1,5 @@
 // The chain domain (kodawari/domains/chains.hpp): the characters' chains on a RodBackend,
-// fed by their kinematics (CrowdAnimator), behind the domain contract (kodawari/domain.hpp).
+// fed by their kinematics (CrowdAnimator), behind the domain contract (kodawari/simulation/domain.hpp).
 #include "kodawari/domains/chains.hpp"
 
 #include <cassert>
@@ -9,13 +9,13 @@
 #include <vector>
 
 #include "vulkan_backends/device_backends.hpp"
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/crowd_animator.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/vulkan/crowd_animator.hpp"
 #include "kodawari/domains/chain_draw.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/rods/lod_budget.hpp"
-#include "kodawari/simulation.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/simulation/simulation.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 
 namespace kodawari {
 

@@ -23,7 +23,7 @@
 #include "gpu/compute_vulkan.hpp"
 #include "domains/skinned_layer.hpp"
 #include "kodawari/domains/scene_draw.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "render/layer.hpp"
 
 namespace kodawari {

@@ -6,11 +6,11 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/bake.hpp"
-#include "kodawari/communicator.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/core/communicator.hpp"
 #include "kodawari/domains/chains.hpp"
-#include "kodawari/export.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/export/export.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari {
 

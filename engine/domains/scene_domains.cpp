@@ -1,12 +1,12 @@
-// The scene's own domains (kodawari/domain.hpp's build_scene_domains): the one place that
+// The scene's own domains (kodawari/simulation/domain.hpp's build_scene_domains): the one place that
 // lists the domains a scene file describes, so that the Simulation facade names none.
 #include <optional>
 
-#include "kodawari/domain.hpp"
+#include "kodawari/simulation/domain.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/domains/flocking.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari {
 

@@ -15,9 +15,9 @@
 
 #include "gpu/compute_vulkan.hpp"
 #include "gpu/graphics.hpp"
-#include "kodawari/crowd_animator.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/vulkan/crowd_animator.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "render/layer.hpp"
 
 namespace kodawari {

@@ -4,11 +4,11 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/bake.hpp"
+#include "kodawari/simulation/bake.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/domains/trace.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/export/export.hpp"
 
 namespace kodawari {
 

@@ -41,7 +41,7 @@
 
 #include "export/gltf_common.hpp"
 #include "export/meshopt_streams.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/export/export.hpp"
 
 namespace kodawari::gltf {
 

@@ -9,7 +9,7 @@
 #include <glm/gtc/matrix_transform.hpp>
 
 #include "kodawari/birds/bird_model.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/export/export.hpp"
 
 namespace kodawari {
 

@@ -24,14 +24,14 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/version.hpp"
+#include "kodawari/core/version.hpp"
 #include "birds/bird_meshes.hpp"
 #include "export/compact_keys.hpp"
 #include "export/gltf_common.hpp"
 #include "export/gltf_json_stream.hpp"
 #include "export/shared_glb.hpp"
 #include "kodawari/birds/rig.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/export/export.hpp"
 
 namespace kodawari {
 namespace {

@@ -19,12 +19,12 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/version.hpp"
+#include "kodawari/core/version.hpp"
 #include "export/compact_keys.hpp"
 #include "export/shared_glb.hpp"
 #include "core/parallel.hpp"
 #include "export/gltf_common.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/export/export.hpp"
 #include "kodawari/rods/shape.hpp"
 
 namespace kodawari {

@@ -15,8 +15,8 @@
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
 #include "core/flat_mesh.hpp"
-#include "kodawari/atomic_file.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/atomic_file.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::gltf {
 

@@ -1,4 +1,4 @@
-// Points as a glTF (kodawari/export.hpp's write_points_glb): the one output that fits any
+// Points as a glTF (kodawari/export/export.hpp's write_points_glb): the one output that fits any
 // domain whose instances are points moving frame by frame (a test domain's particles, a
 // new domain before it has a glTF of its own). One node per point with a shared box mesh
 // and a LINEAR translation channel (glTF 2.0 §3.11); the first frame is the rest pose.
@@ -9,8 +9,8 @@
 #include <vector>
 
 #include "export/gltf_common.hpp"
-#include "kodawari/export.hpp"
-#include "kodawari/version.hpp"
+#include "kodawari/export/export.hpp"
+#include "kodawari/core/version.hpp"
 
 namespace kodawari {
 

@@ -22,12 +22,12 @@
 #include <utility>
 #include <vector>
 
-#include "kodawari/version.hpp"
+#include "kodawari/core/version.hpp"
 #include "core/binary_file.hpp"
 #include "export/compact_keys.hpp"
 #include "export/shared_glb.hpp"
 #include "export/gltf_common.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/export/export.hpp"
 
 namespace kodawari {
 namespace {

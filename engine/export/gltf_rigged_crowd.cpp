@@ -9,7 +9,7 @@
 #include <utility>
 
 #include "core/parallel.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/export/export.hpp"
 
 namespace kodawari {
 

@@ -13,7 +13,7 @@
 #include <string>
 
 #include "export/compact_keys.hpp"
-#include "kodawari/communicator.hpp"
+#include "kodawari/core/communicator.hpp"
 
 namespace kodawari::gltf {
 

@@ -15,7 +15,7 @@
 
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/birds/wingbeat.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/export/export.hpp"
 
 namespace kodawari {
 namespace {

@@ -1,4 +1,4 @@
-// compute::Buffer on Vulkan (kodawari/compute.hpp): device memory mapped where memory is
+// compute::Buffer on Vulkan (kodawari/vulkan/compute.hpp): device memory mapped where memory is
 // unified, otherwise device-local memory filled and read through host-visible staging.
 #include "gpu/compute_vulkan.hpp"
 

@@ -1,4 +1,4 @@
-// compute::Kernel on Vulkan (kodawari/compute.hpp): a compute pipeline, its layout and its
+// compute::Kernel on Vulkan (kodawari/vulkan/compute.hpp): a compute pipeline, its layout and its
 // one descriptor set.
 #include "gpu/compute_vulkan.hpp"
 

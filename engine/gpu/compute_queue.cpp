@@ -1,4 +1,4 @@
-// compute::Queue, Recording and Submission on Vulkan (kodawari/compute.hpp): command slots
+// compute::Queue, Recording and Submission on Vulkan (kodawari/vulkan/compute.hpp): command slots
 // from the context, fences, pipeline barriers and copies.
 #include "gpu/compute_vulkan.hpp"
 

@@ -1,6 +1,6 @@
 #pragma once
 // The compute layer's Vulkan implementation, as the engine's own Vulkan code sees it: the
-// handles behind kodawari/compute.hpp's Buffer, Recording and Kernel, and the device as a
+// handles behind kodawari/vulkan/compute.hpp's Buffer, Recording and Kernel, and the device as a
 // gpu::VulkanContext. The renderer's graphics, the domains' render layers and the
 // embedding entry points use these; a domain's compute code needs none of them.
 
@@ -14,7 +14,7 @@
 
 #include "core/internal_api.hpp"
 #include "gpu/vulkan_context.hpp"
-#include "kodawari/compute.hpp"
+#include "kodawari/vulkan/compute.hpp"
 
 namespace kodawari::gpu {
 /// SPIR-V of shaders/<name>, compiled at build time (empty when unknown;
@@ -89,7 +89,7 @@ struct BufferRange {
 };
 
 /// compute::Kernel::bind for ranges of Vulkan buffers, some of them not the compute
-/// layer's (the application's matrices, kodawari/vulkan_embed.hpp's set_matrix_input).
+/// layer's (the application's matrices, kodawari/vulkan/vulkan_embed.hpp's set_matrix_input).
 KODAWARI_INTERNAL void bind(const compute::Kernel& kernel, std::span<const BufferRange> ranges);
 
 }  // namespace kodawari::gpu

@@ -14,9 +14,9 @@
 #include <vulkan/vulkan_raii.hpp>
 
 #include "core/internal_api.hpp"
-#include "kodawari/compute.hpp"
-#include "kodawari/gpu_info.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/vulkan/compute.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::gpu {
 
@@ -40,7 +40,7 @@ struct ContextOptions {
 };
 
 /// A device the application created (issue 11): Kodawari runs on it and never destroys
-/// it (kodawari/vulkan_embed.hpp's VulkanDeviceHandles is the public form).
+/// it (kodawari/vulkan/vulkan_embed.hpp's VulkanDeviceHandles is the public form).
 struct AdoptOptions {
     VkInstance instance = VK_NULL_HANDLE;
     VkPhysicalDevice physical_device = VK_NULL_HANDLE;
@@ -61,7 +61,7 @@ struct CommandSlot {
     vk::raii::Fence fence{nullptr};
 };
 
-/// compute::Device's one implementation (kodawari/compute.hpp).
+/// compute::Device's one implementation (kodawari/vulkan/compute.hpp).
 class KODAWARI_INTERNAL VulkanContext final : public compute::Device {
 public:
     /// Opens the loader, creates the instance and the device. Errors say what is missing.

@@ -16,7 +16,7 @@
 
 #include <zlib.h>
 
-#include "kodawari/atomic_file.hpp"
+#include "kodawari/core/atomic_file.hpp"
 #include "kodawari/render/renderer.hpp"
 
 namespace kodawari::render {

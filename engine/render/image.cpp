@@ -5,7 +5,7 @@
 #include <cassert>
 #include <vector>
 
-#include "kodawari/atomic_file.hpp"
+#include "kodawari/core/atomic_file.hpp"
 #include "kodawari/render/renderer.hpp"
 
 namespace kodawari::render {

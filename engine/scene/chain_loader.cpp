@@ -165,7 +165,7 @@ Result<void> read_wind(const JsonReader& r, const JsonNode& node, rods::WindFiel
     return {};
 }
 
-// `replaces`: the example a sketch replaced (kodawari/scene_edit.hpp), kept so that
+// `replaces`: the example a sketch replaced (kodawari/scene/scene_edit.hpp), kept so that
 // `sketch --undo` can bring it back. It is checked as a view of the same chain (so an
 // undo never writes what the loader refuses) and otherwise unused; it nests when a sketch
 // replaces a sketch, at most kMaxReplacedDepth deep.

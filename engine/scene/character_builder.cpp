@@ -13,7 +13,7 @@
 #include <string>
 #include <utility>
 
-#include <kodawari/scene.hpp>
+#include <kodawari/scene/scene.hpp>
 
 #include "scene/character_loader.hpp"
 #include "scene/seeded_random.hpp"

@@ -11,7 +11,7 @@
 #include <vector>
 
 #include <kodawari/rods/world.hpp>
-#include <kodawari/scene.hpp>
+#include <kodawari/scene/scene.hpp>
 
 #include "scene/json_reader.hpp"
 

@@ -15,7 +15,7 @@
 #include <vector>
 
 #include <kodawari/birds/route_limits.hpp>
-#include <kodawari/scene.hpp>
+#include <kodawari/scene/scene.hpp>
 
 #include "scene/json_reader.hpp"
 #include "scene/seeded_random.hpp"

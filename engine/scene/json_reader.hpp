@@ -17,7 +17,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include <kodawari/result.hpp>
+#include <kodawari/core/result.hpp>
 
 namespace kodawari::scene_detail {
 

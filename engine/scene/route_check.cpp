@@ -1,7 +1,7 @@
 // Routes a bird can fly: the demands of every flock's routes (birds/route_limits.hpp)
 // against its wing type's limits (docs/wing-types.md "Route limits"), and the timing fit
 // of `--fit-routes`.
-#include <kodawari/route_check.hpp>
+#include <kodawari/scene/route_check.hpp>
 
 #include <algorithm>
 #include <array>

@@ -2,7 +2,7 @@
 // the chain and its examples; a small scanner finds where they are in the text, and the
 // edit splices only there, so the rest of the file keeps its bytes.
 
-#include "kodawari/scene_edit.hpp"
+#include "kodawari/scene/scene_edit.hpp"
 
 #include <algorithm>
 #include <cassert>
@@ -15,7 +15,7 @@
 
 #include <nlohmann/json.hpp>
 
-#include "kodawari/atomic_file.hpp"
+#include "kodawari/core/atomic_file.hpp"
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/rods/world.hpp"
 #include "scene/character_loader.hpp"

@@ -10,8 +10,8 @@
 #include <utility>
 
 #include "kodawari/rods/world.hpp"
-#include "kodawari/scene_edit.hpp"
-#include "kodawari/sketch_key.hpp"
+#include "kodawari/scene/scene_edit.hpp"
+#include "kodawari/scene/sketch_key.hpp"
 #include "scene/scene_edit_text.hpp"
 
 namespace kodawari {

@@ -12,7 +12,7 @@
 #include <glm/glm.hpp>
 #include <nlohmann/json.hpp>
 
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 #include "kodawari/rods/shape.hpp"
 
 namespace kodawari::scene_edit_detail {

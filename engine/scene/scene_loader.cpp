@@ -12,7 +12,7 @@
 #include <string>
 #include <utility>
 
-#include <kodawari/scene.hpp>
+#include <kodawari/scene/scene.hpp>
 #include <kodawari/shared/flocking.h>
 
 #include "kodawari/gltf/bird_model_import.hpp"

@@ -1,7 +1,7 @@
 // The key of a keyed sketch (sketch_key.hpp): what the character does at the sketched
 // frame, measured the way the backends measure it (docs/keyed-examples.md K.2, K.3).
 
-#include "kodawari/sketch_key.hpp"
+#include "kodawari/scene/sketch_key.hpp"
 
 #include <cassert>
 #include <cmath>

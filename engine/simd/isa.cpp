@@ -1,4 +1,4 @@
-// The instruction sets of the cpu backends (kodawari/simd.hpp): what this build compiled
+// The instruction sets of the cpu backends (kodawari/backends/simd.hpp): what this build compiled
 // (HWY_TARGETS) and this machine runs (hwy::SupportedTargets(), which also checks that the
 // operating system saves the wide registers).
 #include "simd/isa.hpp"
@@ -6,8 +6,8 @@
 #include <hwy/highway.h>
 #include <hwy/targets.h>
 
-#include "kodawari/backend.hpp"
-#include "kodawari/simd.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/backends/simd.hpp"
 
 namespace kodawari::simd {
 namespace {

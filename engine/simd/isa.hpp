@@ -1,5 +1,5 @@
 #pragma once
-// The Highway target a cpu backend's kernels run on (kodawari/simd.hpp is the public side).
+// The Highway target a cpu backend's kernels run on (kodawari/backends/simd.hpp is the public side).
 // Each backend chooses one at construction and keeps that target's kernel functions
 // (rods_simd.hpp, birds_simd.hpp, poses_simd.hpp): nothing process-wide, so two backends
 // on different instruction sets work side by side (the tests run two).
@@ -9,7 +9,7 @@
 #include <string_view>
 
 #include "core/internal_api.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::simd {
 

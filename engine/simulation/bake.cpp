@@ -1,13 +1,13 @@
-// The bake loop (kodawari/bake.hpp): one frame order for every output, so that `run`,
+// The bake loop (kodawari/simulation/bake.hpp): one frame order for every output, so that `run`,
 // `merge`, a distributed bake and embedders write the same bytes. It moves channels
-// (kodawari/domain.hpp) and names no domain.
-#include "kodawari/bake.hpp"
+// (kodawari/simulation/domain.hpp) and names no domain.
+#include "kodawari/simulation/bake.hpp"
 
 #include <algorithm>
 #include <string>
 
-#include "kodawari/backend.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari {
 

@@ -1,7 +1,7 @@
-// A bake over the ranks of a job (kodawari/distributed.hpp). Every step is collective and
+// A bake over the ranks of a job (kodawari/simulation/distributed.hpp). Every step is collective and
 // followed by agree(), so that a failure anywhere ends every rank at the same point
 // instead of leaving the others waiting in a gather.
-#include "kodawari/distributed.hpp"
+#include "kodawari/simulation/distributed.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -11,8 +11,8 @@
 
 #include <unistd.h>
 
-#include "kodawari/gpu_info.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "simulation/frame_payload.hpp"
 #include "simulation/scene_worlds.hpp"
 

@@ -1,11 +1,11 @@
-// Checking and ordering a Simulation's domains (kodawari/domain.hpp's order_domains):
+// Checking and ordering a Simulation's domains (kodawari/simulation/domain.hpp's order_domains):
 // Kahn's topological sort over the named outputs, ties broken by the given order, so that
 // domains that do not depend on each other step in the order they were given.
 #include <map>
 #include <set>
 #include <string>
 
-#include "kodawari/domain.hpp"
+#include "kodawari/simulation/domain.hpp"
 
 namespace kodawari {
 

@@ -2,7 +2,7 @@
 // The frames of one part of a scene (a shard, an MPI rank) as bytes, and the whole
 // scene's frames put back together from the parts in order: what part files hold
 // (shards.cpp) and what ranks send to the writing rank (distributed_bake.cpp).
-// Channel after channel (kodawari/domain.hpp), each frames x the part's elements in the
+// Channel after channel (kodawari/simulation/domain.hpp), each frames x the part's elements in the
 // domain's own layout, so that the whole is the single process's frames bit for bit. It
 // names no domain: a part's instances are consecutive in every channel.
 
@@ -12,7 +12,7 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/bake.hpp"
+#include "kodawari/simulation/bake.hpp"
 
 namespace kodawari::detail {
 

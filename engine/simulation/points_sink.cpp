@@ -1,12 +1,12 @@
-// The points sink of the bake (kodawari/bake.hpp's make_points_glb_sink): a positions
+// The points sink of the bake (kodawari/simulation/bake.hpp's make_points_glb_sink): a positions
 // channel of any domain, kept frame by frame and written by write_points_glb(). It names
 // no domain.
 #include <cstring>
 #include <string>
 #include <vector>
 
-#include "kodawari/bake.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/export/export.hpp"
 
 namespace kodawari {
 

@@ -8,8 +8,8 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/bake.hpp"
-#include "kodawari/domain.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/simulation/domain.hpp"
 
 namespace kodawari::detail {
 

@@ -1,6 +1,6 @@
-// Part files of a sharded bake (kodawari/shards.hpp): the sink that writes a shard's
+// Part files of a sharded bake (kodawari/simulation/shards.hpp): the sink that writes a shard's
 // frames, and the source that reads every shard back as the whole scene's frames.
-#include "kodawari/shards.hpp"
+#include "kodawari/simulation/shards.hpp"
 
 #include <algorithm>
 #include <cstdio>
@@ -13,8 +13,8 @@
 
 #include <nlohmann/json.hpp>
 
-#include "kodawari/atomic_file.hpp"
-#include "kodawari/version.hpp"
+#include "kodawari/core/atomic_file.hpp"
+#include "kodawari/core/version.hpp"
 #include "simulation/frame_payload.hpp"
 #include "simulation/scene_worlds.hpp"
 

@@ -1,14 +1,14 @@
-// The Simulation facade (kodawari/simulation.hpp): the frame protocol that `run`,
+// The Simulation facade (kodawari/simulation/simulation.hpp): the frame protocol that `run`,
 // `render`, `view` and `bench` each sequenced on their own before (issue 19), in one
-// place, over the domain contract (kodawari/domain.hpp, issue 31): it names no domain.
-#include "kodawari/simulation.hpp"
+// place, over the domain contract (kodawari/simulation/domain.hpp, issue 31): it names no domain.
+#include "kodawari/simulation/simulation.hpp"
 
 #include <algorithm>
 #include <cassert>
 
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/compute.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/vulkan/compute.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 #include "kodawari/render/renderer.hpp"
 
 namespace kodawari {

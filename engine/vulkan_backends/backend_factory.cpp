@@ -1,6 +1,6 @@
-// The factories of every backend kind (kodawari/backend_factory.hpp says why they live in
+// The factories of every backend kind (kodawari/vulkan/backend_factory.hpp says why they live in
 // the vulkan target): the CPU kinds come from kodawari::sim.
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 
 #include "vulkan_backends/device_backends.hpp"
 #include "gpu/vulkan_context.hpp"

@@ -1,7 +1,7 @@
 // CrowdAnimator: RodScene frames with the rigged characters posed by pose backends, and
 // optionally the rigged part of the rod input written on the device (rod_inputs.comp).
 
-#include "kodawari/crowd_animator.hpp"
+#include "kodawari/vulkan/crowd_animator.hpp"
 
 #include <chrono>
 #include <optional>
@@ -10,7 +10,7 @@
 
 #include "vulkan_backends/device_backends.hpp"
 #include "core/parallel.hpp"
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 
 namespace kodawari {
 

@@ -6,11 +6,11 @@
 #include <cstdint>
 #include <memory>
 
-#include "kodawari/compute.hpp"
-#include "kodawari/backend.hpp"
-#include "kodawari/pose_backend.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/vulkan/compute.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/backends/pose_backend.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 
 namespace kodawari {
 
@@ -66,7 +66,7 @@ public:
     /// new frame's once the caller's submission completed.
     [[nodiscard]] virtual Result<void> record_step(compute::Recording& recording, const rods::RodFrame& frame) = 0;
     /// record_step into a borrowed recording, the application's command buffer
-    /// (kodawari/vulkan_embed.hpp): the input through a ring of
+    /// (kodawari/vulkan/vulkan_embed.hpp): the input through a ring of
     /// Device::frames_in_flight() staging slots, the barriers of embedding_consumers()
     /// before and after. Checks everything before recording.
     [[nodiscard]] virtual Result<void> record_external(compute::Recording& recording, const rods::RodFrame& frame) = 0;

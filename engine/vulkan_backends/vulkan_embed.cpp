@@ -1,8 +1,8 @@
-// The embedding entry points (kodawari/vulkan_embed.hpp): the application's device
+// The embedding entry points (kodawari/vulkan/vulkan_embed.hpp): the application's device
 // wrapped as a compute::Device, and the vulkan backends' record_external() behind
 // functions that check their arguments first, so that a wrong backend or a null command
 // buffer is an error, not a crash.
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 
 #include <kodawari/shared/birds.h>
 #include <kodawari/shared/poses.h>

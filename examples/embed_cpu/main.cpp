@@ -3,7 +3,7 @@
 // same through the C API and prints the same numbers.
 #include <cstdio>
 
-#include <kodawari/rod_backend.hpp>
+#include <kodawari/backends/rod_backend.hpp>
 #include <kodawari/rods/world.hpp>
 
 using namespace kodawari;

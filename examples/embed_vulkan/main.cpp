@@ -31,16 +31,16 @@
 #include <glm/glm.hpp>
 #include <vulkan/vulkan.h>
 
-#include <kodawari/backend_factory.hpp>
+#include <kodawari/vulkan/backend_factory.hpp>
 #include <kodawari/domains/birds.hpp>
 #include <kodawari/domains/flocking.hpp>
 #include <kodawari/rods/synthetic.hpp>
-#include <kodawari/scene.hpp>
-#include <kodawari/simulation.hpp>
+#include <kodawari/scene/scene.hpp>
+#include <kodawari/simulation/simulation.hpp>
 #include <kodawari/shared/birds.h>
 #include <kodawari/shared/rods.h>
-#include <kodawari/version.hpp>
-#include <kodawari/vulkan_embed.hpp>
+#include <kodawari/core/version.hpp>
+#include <kodawari/vulkan/vulkan_embed.hpp>
 
 #include "points.frag.spv.h"
 #include "points.vert.spv.h"

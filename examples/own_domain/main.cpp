@@ -1,8 +1,8 @@
 // A domain of the application's own, simulated by Kodawari beside a scene's domains
 // (docs/architecture.md, "Adding a domain"): fireflies that circle and bob, with a compute
 // kernel the application compiled itself (fireflies.comp), written against the public
-// compute layer (kodawari/compute.hpp: Device, Buffer, Kernel, Queue, Recording) and the
-// domain contract (kodawari/domain.hpp). Nothing of Kodawari changes for it.
+// compute layer (kodawari/vulkan/compute.hpp: Device, Buffer, Kernel, Queue, Recording) and the
+// domain contract (kodawari/simulation/domain.hpp). Nothing of Kodawari changes for it.
 //
 //   own_domain SCENE.json [--frames N] [--validation]
 //
@@ -27,12 +27,12 @@
 
 #include <glm/glm.hpp>
 
-#include <kodawari/compute.hpp>
-#include <kodawari/domain.hpp>
+#include <kodawari/vulkan/compute.hpp>
+#include <kodawari/simulation/domain.hpp>
 #include <kodawari/render/renderer.hpp>
-#include <kodawari/scene.hpp>
-#include <kodawari/simulation.hpp>
-#include <kodawari/vulkan_embed.hpp>
+#include <kodawari/scene/scene.hpp>
+#include <kodawari/simulation/simulation.hpp>
+#include <kodawari/vulkan/vulkan_embed.hpp>
 
 #include "fireflies.comp.spv.h"
 

@@ -9,7 +9,7 @@
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/rods/kinematics.hpp"
 #include "kodawari/rods/sketch.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari::cli {
 

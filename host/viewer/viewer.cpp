@@ -10,8 +10,8 @@
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/rods/sketch.hpp"
 #include "kodawari/domains/scene_draw.hpp"
-#include "kodawari/scene_edit.hpp"
-#include "kodawari/sketch_key.hpp"
+#include "kodawari/scene/scene_edit.hpp"
+#include "kodawari/scene/sketch_key.hpp"
 
 namespace kodawari::cli {
 

@@ -11,7 +11,7 @@
 
 #include "../cli_common.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "orbit_camera.hpp"
 
 namespace kodawari::cli {

@@ -10,12 +10,12 @@
 #include <vector>
 
 #include "test_support.hpp"
-#include "kodawari/backend.hpp"
+#include "kodawari/backends/backend.hpp"
 #include "kodawari/birds/wingbeat.hpp"
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/compare.hpp"
-#include "kodawari/gpu_info.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/backends/compare.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "test_paths.hpp"
 
 using namespace kodawari;

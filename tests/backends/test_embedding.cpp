@@ -1,5 +1,5 @@
 // Kodawari on an application's own Vulkan device and command buffers (issue 11,
-// kodawari/vulkan_embed.hpp), black-box: the test plays the application, with its own
+// kodawari/vulkan/vulkan_embed.hpp), black-box: the test plays the application, with its own
 // instance, device, command pool and fences (validation with synchronization validation on
 // when ctest asks for it), and checks that
 //   - steps recorded into its command buffers give the very bits step() gives on a device
@@ -22,9 +22,9 @@
 
 #include <kodawari/shared/rods.h>
 
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/rods/synthetic.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 #include "test_support.hpp"
 #include "vulkan_app_support.hpp"
 

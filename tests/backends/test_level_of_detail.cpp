@@ -14,8 +14,8 @@
 #include <vector>
 
 #include "test_support.hpp"
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/rod_backend.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/backends/rod_backend.hpp"
 #include "kodawari/rods/lod.hpp"
 #include "kodawari/rods/synthetic.hpp"
 

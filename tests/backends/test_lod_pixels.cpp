@@ -36,8 +36,8 @@
 #include "test_support.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/rods/lod.hpp"
-#include "kodawari/scene.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/scene/scene.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "test_paths.hpp"
 
 using namespace kodawari;

@@ -20,10 +20,10 @@
 
 #include <kodawari/shared/poses.h>
 
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/animation/character.hpp"
 #include "kodawari/gltf/import.hpp"
-#include "kodawari/pose_backend.hpp"
+#include "kodawari/backends/pose_backend.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

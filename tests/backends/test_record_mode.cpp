@@ -10,10 +10,10 @@
 #include <vector>
 
 #include "vulkan_backends/device_backends.hpp"
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "gpu/compute_vulkan.hpp"
 #include "kodawari/rods/synthetic.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "keyed_scene.hpp"
 #include "test_support.hpp"
 

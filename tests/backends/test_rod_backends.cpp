@@ -18,9 +18,9 @@
 
 #include "keyed_scene.hpp"
 #include "test_support.hpp"
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/gpu_info.hpp"
-#include "kodawari/rod_backend.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
+#include "kodawari/backends/rod_backend.hpp"
 #include "kodawari/rods/synthetic.hpp"
 
 using namespace kodawari;

@@ -1,4 +1,4 @@
-// The cpu backends' SIMD instruction sets (kodawari/simd.hpp, BackendOptions::isa): the
+// The cpu backends' SIMD instruction sets (kodawari/backends/simd.hpp, BackendOptions::isa): the
 // choice, its errors, and backends on different instruction sets side by side in one
 // process giving one result (the shared backend bodies compare each with cpu-reference).
 #include <gtest/gtest.h>
@@ -8,11 +8,11 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/gltf/import.hpp"
 #include "kodawari/rods/synthetic.hpp"
-#include "kodawari/scene.hpp"
-#include "kodawari/simd.hpp"
+#include "kodawari/scene/scene.hpp"
+#include "kodawari/backends/simd.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

@@ -34,8 +34,8 @@
 #include <glm/gtc/quaternion.hpp>
 
 #include "test_support.hpp"
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/rod_backend.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/backends/rod_backend.hpp"
 #include "kodawari/rods/synthetic.hpp"
 
 using namespace kodawari;

@@ -9,7 +9,7 @@
 
 #include "gpu/compute_vulkan.hpp"
 #include "gpu/vulkan_context.hpp"
-#include "kodawari/gpu_info.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
 #include "test_support.hpp"
 
 using namespace kodawari;

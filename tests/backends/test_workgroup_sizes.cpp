@@ -11,14 +11,14 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/backend_factory.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/gltf/import.hpp"
-#include "kodawari/pose_backend.hpp"
-#include "kodawari/rod_backend.hpp"
+#include "kodawari/backends/pose_backend.hpp"
+#include "kodawari/backends/rod_backend.hpp"
 #include "kodawari/rods/synthetic.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

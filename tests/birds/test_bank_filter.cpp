@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "kodawari/birds/flight.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "test_paths.hpp"
 
 using namespace kodawari;

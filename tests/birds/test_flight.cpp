@@ -6,7 +6,7 @@
 #include <vector>
 
 #include "kodawari/birds/flight.hpp"
-#include "kodawari/compare.hpp"
+#include "kodawari/backends/compare.hpp"
 #include "quat_math.hpp"
 
 using namespace kodawari;

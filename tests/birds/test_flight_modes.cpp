@@ -10,7 +10,7 @@
 #include <vector>
 
 #include "kodawari/birds/flight.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "quat_math.hpp"
 
 using namespace kodawari;

@@ -8,8 +8,8 @@
 #include <vector>
 
 #include "kodawari/birds/route_limits.hpp"
-#include "kodawari/route_check.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/route_check.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "test_paths.hpp"
 
 using namespace kodawari;

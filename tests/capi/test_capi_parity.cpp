@@ -21,10 +21,10 @@
 
 #include <kodawari/kodawari.h>
 
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/gpu_info.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "test_support.hpp"
 #include "vulkan_app_support.hpp"
 

@@ -10,8 +10,8 @@
 #include <cstdlib>
 #include <string>
 
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/scene/scene.hpp"
 
 using namespace kodawari;
 

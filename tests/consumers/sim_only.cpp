@@ -11,7 +11,7 @@
 
 #include <glm/glm.hpp>
 
-#include "kodawari/rod_backend.hpp"
+#include "kodawari/backends/rod_backend.hpp"
 #include "kodawari/rods/synthetic.hpp"
 
 namespace {

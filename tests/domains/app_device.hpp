@@ -8,7 +8,7 @@
 
 #include <vulkan/vulkan_core.h>
 
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 
 namespace kodawari::testing_support {
 

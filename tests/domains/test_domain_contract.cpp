@@ -1,4 +1,4 @@
-// The domain contract (kodawari/domain.hpp, issue 31): a domain defined here alone,
+// The domain contract (kodawari/simulation/domain.hpp, issue 31): a domain defined here alone,
 // particles on circles with a kernel and buffers of its own, runs through Simulation on
 // every backend kind beside the scene's own domains, a second domain that reads its output
 // steps after it whatever order they are given in, and definitions the Simulation cannot
@@ -6,7 +6,7 @@
 // refused when it is made, naming the domain. Nothing under engine/ knows these domains.
 //
 // The kernel is compiled by the tests' CMake (tests/domains/circles.comp) and run through
-// the public compute layer (kodawari/compute.hpp); the test sees public headers only.
+// the public compute layer (kodawari/vulkan/compute.hpp); the test sees public headers only.
 #include <gtest/gtest.h>
 
 #include <algorithm>
@@ -29,16 +29,16 @@
 #include <kodawari/shared/birds.h>
 #include <kodawari/shared/rods.h>
 
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/compute.hpp"
-#include "kodawari/bake.hpp"
-#include "kodawari/domain.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/vulkan/compute.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/simulation/domain.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/domains/flocking.hpp"
 #include "kodawari/render/renderer.hpp"
-#include "kodawari/simulation.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/simulation/simulation.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 #include "domains/app_device.hpp"
 #include "test_support.hpp"
 
@@ -526,7 +526,7 @@ TEST(DomainContract, TheTestDomainRecordsIntoTheApplicationsCommandBuffers) {
         VkCommandBuffer cmd = app.begin(k);
         if (k % 2 == 0) {
             // The compute layer's recording of the application's command buffer
-            // (kodawari/compute.hpp through vulkan_embed.hpp), on odd frames the command
+            // (kodawari/vulkan/compute.hpp through vulkan_embed.hpp), on odd frames the command
             // buffer itself: both the same frames.
             auto recording = borrow_command_buffer(*device.value(), cmd);
             ASSERT_TRUE(recording.ok()) << recording.error().message;

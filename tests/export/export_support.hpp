@@ -25,14 +25,14 @@
 #include <glm/gtc/matrix_transform.hpp>
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/version.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/core/version.hpp"
 #include "test_support.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/birds/world.hpp"
-#include "kodawari/export.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/export/export.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "test_paths.hpp"
 
 

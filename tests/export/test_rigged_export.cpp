@@ -21,7 +21,7 @@
 #include <nlohmann/json.hpp>
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
-#include "kodawari/export.hpp"
+#include "kodawari/export/export.hpp"
 #include "kodawari/animation/character.hpp"
 #include "kodawari/gltf/import.hpp"
 #include "test_support.hpp"

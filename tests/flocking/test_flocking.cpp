@@ -16,7 +16,7 @@
 
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/flocking.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "test_support.hpp"
 
 using namespace kodawari;

@@ -13,7 +13,7 @@
 
 #include "fuzz_support.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "test_paths.hpp"
 
 extern "C" int LLVMFuzzerInitialize(int*, char***) {

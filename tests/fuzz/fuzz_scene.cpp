@@ -13,10 +13,10 @@
 #include <vector>
 
 #include "fuzz_support.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "test_paths.hpp"
 
 namespace {

@@ -21,8 +21,8 @@
 #include <nlohmann/json.hpp>
 
 #include "fuzz_support.hpp"
-#include "kodawari/scene.hpp"
-#include "kodawari/scene_edit.hpp"
+#include "kodawari/scene/scene.hpp"
+#include "kodawari/scene/scene_edit.hpp"
 
 namespace {
 

@@ -13,7 +13,7 @@
 
 #include "fuzz_support.hpp"
 #include "kodawari/rods/sketch.hpp"
-#include "kodawari/scene_edit.hpp"
+#include "kodawari/scene/scene_edit.hpp"
 
 extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size) {
     using namespace kodawari;

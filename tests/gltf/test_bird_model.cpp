@@ -16,13 +16,13 @@
 
 #include <tiny_gltf.h>  // a system header: its warnings are not ours
 
-#include "kodawari/bake.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/export/export.hpp"
 #include "kodawari/gltf/bird_model_import.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

@@ -20,7 +20,7 @@
 #include "gltf/gltf_import_support.hpp"
 #include "kodawari/gltf/import.hpp"
 #include "kodawari/gltf/motion.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari {
 namespace {

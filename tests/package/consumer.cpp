@@ -20,22 +20,22 @@
 #include <glm/glm.hpp>
 
 // sim
-#include <kodawari/backend.hpp>
-#include <kodawari/rod_backend.hpp>
+#include <kodawari/backends/backend.hpp>
+#include <kodawari/backends/rod_backend.hpp>
 #include <kodawari/rods/synthetic.hpp>
-#include <kodawari/version.hpp>
+#include <kodawari/core/version.hpp>
 // vulkan
-#include <kodawari/backend_factory.hpp>
-#include <kodawari/gpu_info.hpp>
+#include <kodawari/vulkan/backend_factory.hpp>
+#include <kodawari/vulkan/gpu_info.hpp>
 // io
-#include <kodawari/export.hpp>
+#include <kodawari/export/export.hpp>
 #include <kodawari/gltf/import.hpp>
-#include <kodawari/scene.hpp>
+#include <kodawari/scene/scene.hpp>
 // render
 #include <kodawari/render/renderer.hpp>
 // engine
 #include <kodawari/domains/chains.hpp>
-#include <kodawari/simulation.hpp>
+#include <kodawari/simulation/simulation.hpp>
 
 namespace {
 

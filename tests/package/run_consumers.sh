@@ -93,7 +93,7 @@ configure() {  # configure SOURCE BINARY ARGS...
 # 1. Install.
 quiet cmake --install "$build" --prefix "$prefix"
 libdir="$(cd "$prefix" && ls -d lib* | head -1)"
-for f in include/kodawari/simulation.hpp include/kodawari/api.hpp include/kodawari/version.hpp \
+for f in include/kodawari/simulation/simulation.hpp include/kodawari/core/api.hpp include/kodawari/core/version.hpp \
   include/kodawari/shared/birds.h "$libdir/cmake/kodawari/kodawariConfig.cmake" \
   "$libdir/cmake/kodawari/kodawariConfigVersion.cmake" "$libdir/cmake/kodawari/kodawariTargets.cmake" \
   "$libdir/pkgconfig/kodawari.pc" "$libdir/pkgconfig/kodawari-c.pc" include/kodawari/kodawari.h \
@@ -103,11 +103,21 @@ for f in include/kodawari/simulation.hpp include/kodawari/api.hpp include/kodawa
 done
 links="$(find "$prefix/include" -type l)"
 [[ -z "$links" ]] || fail "links installed instead of headers: $links"
-# No internal header: every installed header is one of the source tree's public ones.
+# No internal header: every installed header is one of the source tree's public ones, or
+# a forwarding header at a 0.2 path (kodawari/<name>.hpp, moved into a component's folder
+# in 0.3) that includes one of them and nothing else.
+forwarding=0
 while IFS= read -r header; do
   rel="${header#"$prefix/include/"}"
-  [[ -f "$src/engine/include/$rel" || -f "$src/engine/include/$rel.in" ]] || fail "$rel is installed but not a public header"
+  [[ -f "$src/engine/include/$rel" || -f "$src/engine/include/$rel.in" ]] && continue
+  target="$(sed -n 's/^#include "\(kodawari\/[a-z_]*\/[a-z_]*\.hpp\)"$/\1/p' "$header")"
+  [[ "$rel" == kodawari/*.hpp && "$rel" != kodawari/*/* && -n "$target" &&
+     ( -f "$src/engine/include/$target" || -f "$src/engine/include/$target.in" ) &&
+     "$(grep -c '^#' "$header")" == 2 ]] || fail "$rel is installed but not a public header"
+  forwarding=$((forwarding + 1))
 done < <(find "$prefix/include" -type f)
+# One forwarding header per header moved (engine/CMakeLists.txt, KODAWARI_MOVED_HEADERS).
+[[ $forwarding == 26 ]] || fail "$forwarding forwarding headers installed at the 0.2 paths, expected 26"
 ls "$prefix/$libdir/libkodawari.so".* >/dev/null 2>&1 || fail "libkodawari.so.* (the C API) not installed"
 for component in sim vulkan io render engine; do
   if is_on "$shared"; then

@@ -5,7 +5,7 @@ figures checked against each other and against the scene:
 
 - scenes/flock.json (270 birds, 30 frames): poses of shape (270, 7, 7), unit quaternions,
   cpu against cpu-reference and vulkan against cpu-reference within the bird parity
-  tolerances (BirdTolerances, kodawari/compare.hpp);
+  tolerances (BirdTolerances, kodawari/backends/compare.hpp);
 - scenes/ahoge.json (one 12-joint chain, 40 frames): cpu's joints are cpu-reference's bits,
   vulkan's within 1e-3 of the chain length;
 - arrays are copies; a bad path raises kodawari.Error naming the file; a bake writes a

@@ -20,13 +20,13 @@
 
 #include "kodawari/domains/bird_draw.hpp"
 #include "kodawari/domains/chain_draw.hpp"
-#include "kodawari/backend.hpp"
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/crowd_animator.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/vulkan/crowd_animator.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/domains/scene_draw.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

@@ -14,9 +14,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <kodawari/backend_factory.hpp>
-#include <kodawari/rod_backend.hpp>
-#include <kodawari/scene.hpp>
+#include <kodawari/vulkan/backend_factory.hpp>
+#include <kodawari/backends/rod_backend.hpp>
+#include <kodawari/scene/scene.hpp>
 #include <kodawari/rods/keyed.hpp>
 #include <kodawari/rods/world.hpp>
 

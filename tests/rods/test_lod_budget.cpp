@@ -13,8 +13,8 @@
 
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/rods/lod_budget.hpp"
-#include "kodawari/scene.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/scene/scene.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "test_paths.hpp"
 
 using namespace kodawari;

@@ -15,11 +15,11 @@
 #include <glm/glm.hpp>
 #include <gtest/gtest.h>
 
-#include <kodawari/backend_factory.hpp>
-#include <kodawari/rod_backend.hpp>
+#include <kodawari/vulkan/backend_factory.hpp>
+#include <kodawari/backends/rod_backend.hpp>
 #include <kodawari/rods/solver.hpp>
 #include <kodawari/rods/world.hpp>
-#include <kodawari/scene.hpp>
+#include <kodawari/scene/scene.hpp>
 
 #include "character_support.hpp"
 #include "test_support.hpp"

@@ -12,11 +12,11 @@
 
 #include <nlohmann/json.hpp>
 
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "kodawari/rods/sketch.hpp"
-#include "kodawari/scene_edit.hpp"
+#include "kodawari/scene/scene_edit.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

@@ -15,10 +15,10 @@
 #include <glm/gtc/quaternion.hpp>
 #include <nlohmann/json.hpp>
 
-#include "kodawari/scene.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "kodawari/rods/sketch.hpp"
-#include "kodawari/scene_edit.hpp"
-#include "kodawari/sketch_key.hpp"
+#include "kodawari/scene/scene_edit.hpp"
+#include "kodawari/scene/sketch_key.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

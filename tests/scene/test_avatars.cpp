@@ -23,8 +23,8 @@
 
 #include "character_support.hpp"
 #include "test_support.hpp"
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/export/export.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
 #include "test_paths.hpp"
 

@@ -16,9 +16,9 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <kodawari/gpu_info.hpp>
-#include <kodawari/rod_backend.hpp>
-#include <kodawari/scene.hpp>
+#include <kodawari/vulkan/gpu_info.hpp>
+#include <kodawari/backends/rod_backend.hpp>
+#include <kodawari/scene/scene.hpp>
 #include <kodawari/rods/kinematics.hpp>
 #include <kodawari/rods/solver.hpp>
 #include <kodawari/rods/world.hpp>

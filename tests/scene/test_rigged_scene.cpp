@@ -22,14 +22,14 @@
 
 #include <nlohmann/json.hpp>
 
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/compute.hpp"
-#include "kodawari/crowd_animator.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/vulkan/compute.hpp"
+#include "kodawari/vulkan/crowd_animator.hpp"
+#include "kodawari/export/export.hpp"
 #include "kodawari/gltf/import.hpp"
 #include "kodawari/gltf/rig_scene.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

@@ -10,7 +10,7 @@
 #include <gtest/gtest.h>
 #include <nlohmann/json.hpp>
 
-#include <kodawari/scene.hpp>
+#include <kodawari/scene/scene.hpp>
 #include "test_paths.hpp"
 
 namespace {

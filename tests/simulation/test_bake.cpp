@@ -1,4 +1,4 @@
-// The bake pipeline (kodawari/bake.hpp): its files are those of the writers fed by hand,
+// The bake pipeline (kodawari/simulation/bake.hpp): its files are those of the writers fed by hand,
 // a failure anywhere leaves no file (not even a temporary one), and it needs a fresh
 // simulation. CPU backends: the loop is the same for every kind.
 #include <gtest/gtest.h>
@@ -7,12 +7,12 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/bake.hpp"
-#include "kodawari/export.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/export/export.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/domains/trace.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

@@ -1,4 +1,4 @@
-// A distributed bake (kodawari/distributed.hpp) in one process: the ranks are threads
+// A distributed bake (kodawari/simulation/distributed.hpp) in one process: the ranks are threads
 // that speak through ThreadRanks, a Communicator of their own, so the protocol runs
 // under the sanitizers (the MPI runs of tests/scaleout_test.sh cannot check leaks). The
 // compacted birds' .glb, whose work every rank shares (each compacts its own birds'
@@ -16,12 +16,12 @@
 #include <thread>
 #include <vector>
 
-#include "kodawari/bake.hpp"
-#include "kodawari/distributed.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/simulation/distributed.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
-#include "kodawari/export.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/export/export.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

@@ -1,4 +1,4 @@
-// Shards of a bake (kodawari/shards.hpp, SimulationOptions::shard): a shard simulates the
+// Shards of a bake (kodawari/simulation/shards.hpp, SimulationOptions::shard): a shard simulates the
 // whole scene's instances of its range bit for bit on every backend (its result does not
 // depend on the shard count), and merging the part files gives the single bake's bytes.
 // The MPI path is tested with real mpirun in tests/scaleout_test.sh.
@@ -11,13 +11,13 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/bake.hpp"
-#include "kodawari/scene.hpp"
-#include "kodawari/shards.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/scene/scene.hpp"
+#include "kodawari/simulation/shards.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
 #include "kodawari/domains/trace.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

@@ -1,4 +1,4 @@
-// The Simulation facade (kodawari/simulation.hpp) against every backend kind: the frame
+// The Simulation facade (kodawari/simulation/simulation.hpp) against every backend kind: the frame
 // protocol it runs gives what the backends give when sequenced by hand, seeking is
 // stepping, and misuse is an error that names the argument. Vulkan on lavapipe where
 // there is no GPU, with validation on (ctest sets KODAWARI_VALIDATION=1).
@@ -8,12 +8,12 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/backend_factory.hpp"
-#include "kodawari/crowd_animator.hpp"
-#include "kodawari/gpu_info.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
+#include "kodawari/vulkan/crowd_animator.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/domains/chains.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/simulation.hpp"
 #include "test_support.hpp"
 #include "test_paths.hpp"
 

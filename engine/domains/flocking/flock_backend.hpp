@@ -13,11 +13,11 @@
 #include <kodawari/shared/flocking.h>
 
 #include "domains/flocking/flock_world.hpp"
-#include "kodawari/backend.hpp"
-#include "kodawari/device_data.hpp"
-#include "kodawari/domain.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/backends/device_data.hpp"
+#include "kodawari/simulation/domain.hpp"
 #include "kodawari/domains/flocking.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::compute {
 class Buffer;

@@ -1,6 +1,6 @@
 // The flocking domain (kodawari/domains/flocking.hpp, docs/flocking.md): the flocking
 // flocks' birds stepped by their rules on a FlockBackend, each frame's motion handed to
-// the bird domain, behind the domain contract (kodawari/domain.hpp).
+// the bird domain, behind the domain contract (kodawari/simulation/domain.hpp).
 #include "kodawari/domains/flocking.hpp"
 
 #include <algorithm>

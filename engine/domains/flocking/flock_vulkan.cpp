@@ -12,7 +12,7 @@
 #include <vector>
 
 #include "vulkan_backends/device_backends.hpp"
-#include "kodawari/compute.hpp"
+#include "kodawari/vulkan/compute.hpp"
 #include "domains/flocking/flock_backend.hpp"
 #include "kodawari/domains/flocking.hpp"
 

@@ -10,8 +10,8 @@
 #include <kodawari/shared/flocking.h>
 
 #include "kodawari/birds/world.hpp"
-#include "kodawari/result.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari::flocking {
 

@@ -684,7 +684,7 @@ KODAWARI_C_API kodawari_status kodawari_bird_world_get_info(kodawari_bird_world*
 /* ------------------------------------------------------------------------------------ */
 /* Device embedding: the application's Vulkan device and command buffers                */
 /* ------------------------------------------------------------------------------------ */
-/* The C form of kodawari/vulkan_embed.hpp (docs/embedding.md has the frame loop, the
+/* The C form of kodawari/vulkan/vulkan_embed.hpp (docs/embedding.md has the frame loop, the
  * synchronization the module records and the lifetimes). Vulkan handles travel as void*
  * (dispatchable: VkInstance, VkPhysicalDevice, VkDevice, VkCommandBuffer) and uint64_t
  * (non-dispatchable: VkBuffer), so that this header needs no Vulkan header. */

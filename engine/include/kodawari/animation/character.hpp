@@ -16,8 +16,8 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "kodawari/api.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
 #include "kodawari/rods/solver.hpp"
 
 namespace kodawari::animation {

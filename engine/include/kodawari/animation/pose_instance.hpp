@@ -9,7 +9,7 @@
 
 #include <glm/glm.hpp>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/animation/character.hpp"
 #include "kodawari/rods/solver.hpp"
 

@@ -5,7 +5,7 @@
 /// bird's mass (sources in docs/wing-types.md). Used for a user's bird model and for the
 /// built-in wing types alike.
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 
 namespace kodawari::birds {
 

@@ -14,7 +14,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/birds/allometry.hpp"
 #include "kodawari/birds/rig.hpp"
 #include "kodawari/animation/character.hpp"

@@ -8,9 +8,9 @@
 
 #include <kodawari/shared/birds.h>
 
-#include "kodawari/api.hpp"
-#include "wingbeat.hpp"
-#include "world.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/birds/wingbeat.hpp"
+#include "kodawari/birds/world.hpp"
 
 namespace kodawari::birds {
 

@@ -3,13 +3,13 @@
 /// What a route asks of a bird (issue 14, docs/wing-types.md "Route limits"): the
 /// tightest turn, the steepest climb and dive and the largest speed change along each
 /// Bezier segment of a route, at the speed the bird flies it. The scene-level check
-/// (kodawari/route_check.hpp) compares them with the bird's limits.
+/// (kodawari/scene/route_check.hpp) compares them with the bird's limits.
 
 #include <cstdint>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "world.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/birds/world.hpp"
 
 namespace kodawari::birds {
 

@@ -7,7 +7,7 @@
 
 #include <kodawari/shared/birds.h>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 
 namespace kodawari::birds {
 

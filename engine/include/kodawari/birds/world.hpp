@@ -13,10 +13,10 @@
 
 #include <kodawari/shared/birds.h>
 
-#include "kodawari/api.hpp"
-#include "../result.hpp"
-#include "bird_model.hpp"
-#include "rig.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/birds/bird_model.hpp"
+#include "kodawari/birds/rig.hpp"
 
 namespace kodawari::birds {
 

@@ -11,10 +11,10 @@
 
 #include <kodawari/shared/birds.h>
 
-#include "kodawari/api.hpp"
-#include "kodawari/backend.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/backends/backend.hpp"
 #include "kodawari/birds/world.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari {
 

@@ -1,7 +1,7 @@
 #pragma once
 /// @file
 /// The bird domain (SPEC B): a scene's flocks, flapping and flying frame after frame on a
-/// BirdBackend, as one domain of a Simulation (kodawari/domain.hpp). What is particular
+/// BirdBackend, as one domain of a Simulation (kodawari/simulation/domain.hpp). What is particular
 /// to birds is reached here, not through the Simulation facade.
 
 #include <cstdint>
@@ -10,13 +10,13 @@
 #include <string>
 #include <string_view>
 
-#include "kodawari/api.hpp"
-#include "kodawari/bake.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/simulation/bake.hpp"
 #include "kodawari/birds/world.hpp"
-#include "kodawari/device_data.hpp"
-#include "kodawari/domain.hpp"
-#include "kodawari/result.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/backends/device_data.hpp"
+#include "kodawari/simulation/domain.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 
 namespace kodawari {
 
@@ -29,7 +29,7 @@ inline constexpr std::string_view kBirdDomain = "birds";
 inline constexpr std::string_view kBirdPosesChannel = "birds.poses";
 inline constexpr std::string_view kBirdDiagChannel = "birds.diag";
 // Its device buffer, the same poses where the vulkan backend keeps them:
-// bird_buffers::poses (kodawari/backend.hpp), through Simulation::buffer().
+// bird_buffers::poses (kodawari/backends/backend.hpp), through Simulation::buffer().
 
 /// Time spent in the bird backend's own calls. The first call also compiles its kernels
 /// (lavapipe compiles a pipeline at its first dispatch) and uploads the world, so it is

@@ -11,10 +11,10 @@
 #include <cstdint>
 #include <vector>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/render/draw.hpp"
-#include "kodawari/result.hpp"
-#include "kodawari/rod_backend.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/backends/rod_backend.hpp"
 #include "kodawari/rods/chain_snapshot.hpp"
 #include "kodawari/rods/world.hpp"
 

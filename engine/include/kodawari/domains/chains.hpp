@@ -2,7 +2,7 @@
 /// @file
 /// The chain domain (SPEC A): the characters' chains, driven by their kinematics (rigged
 /// characters' clips on a PoseBackend, then the rod input), stepped on a RodBackend, as
-/// one domain of a Simulation (kodawari/domain.hpp):
+/// one domain of a Simulation (kodawari/simulation/domain.hpp):
 ///
 ///   per frame f:  rigged characters' clips at f (pose backend)
 ///                 -> chain roots, reference joints, colliders, camera (RodFrame)
@@ -20,16 +20,16 @@
 #include <string>
 #include <string_view>
 
-#include "kodawari/api.hpp"
-#include "kodawari/bake.hpp"
-#include "kodawari/domain.hpp"
-#include "kodawari/result.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/simulation/domain.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "kodawari/rods/chain_snapshot.hpp"
 #include "kodawari/rods/kinematics.hpp"
 #include "kodawari/rods/lod.hpp"
 #include "kodawari/rods/world.hpp"
-#include "kodawari/vulkan_embed.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
 
 namespace kodawari {
 
@@ -47,7 +47,7 @@ inline constexpr std::string_view kChainRestChannel = "chains.rest";
 inline constexpr std::string_view kChainViewDirectionsChannel = "chains.view_directions";
 inline constexpr std::string_view kChainWeightsChannel = "chains.weights";
 // Its device buffers, the state where the vulkan backend keeps it: rod_buffers::chain_states,
-// motion and spin (kodawari/rod_backend.hpp), through Simulation::buffer().
+// motion and spin (kodawari/backends/rod_backend.hpp), through Simulation::buffer().
 inline constexpr std::uint32_t kChainWeights = rods::kMaxViewExamples + 1;
 
 /// Time spent in the chain domain's backends. Frames 0 and 1 (loaded and put at rest,

@@ -25,11 +25,11 @@
 #include <kodawari/shared/birds.h>
 #include <kodawari/shared/flocking.h>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/birds/world.hpp"
-#include "kodawari/domain.hpp"
-#include "kodawari/scene.hpp"
-#include "kodawari/simulation.hpp"
+#include "kodawari/simulation/domain.hpp"
+#include "kodawari/scene/scene.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari {
 

@@ -14,12 +14,12 @@
 
 #include <glm/gtc/quaternion.hpp>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/birds/world.hpp"
 #include "kodawari/render/renderer.hpp"
 #include "kodawari/domains/chain_draw.hpp"
-#include "kodawari/rod_backend.hpp"
-#include "kodawari/scene.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari {
 

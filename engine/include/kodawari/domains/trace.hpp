@@ -6,8 +6,8 @@
 #include <memory>
 #include <string>
 
-#include "kodawari/api.hpp"
-#include "kodawari/bake.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/simulation/bake.hpp"
 
 namespace kodawari {
 

@@ -6,9 +6,9 @@
 
 #include <string>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/birds/bird_model.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::gltf {
 
@@ -30,7 +30,7 @@ struct BirdSceneOptions {
     std::string map_file;    ///< its "map" (empty: none)
     /// The generated route's horizontal size (and the formation's and the camera's
     /// distance) as a multiple of the example's 90 m: `rig --bird` grows it until the bird
-    /// can fly its turns at its cruise speed (kodawari/route_check.hpp).
+    /// can fly its turns at its cruise speed (kodawari/scene/route_check.hpp).
     float route_scale = 1.0f;
 };
 

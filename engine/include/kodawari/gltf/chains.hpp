@@ -26,9 +26,9 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/animation/character.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 #include "kodawari/rods/shape.hpp"
 
 namespace kodawari::gltf {

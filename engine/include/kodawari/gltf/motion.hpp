@@ -27,9 +27,9 @@
 #include <string_view>
 #include <vector>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/animation/character.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::gltf {
 

@@ -22,9 +22,9 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/gltf/chains.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::gltf {
 

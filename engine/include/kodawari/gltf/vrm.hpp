@@ -82,10 +82,10 @@
 
 #include <glm/glm.hpp>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/gltf/chains.hpp"
 #include "kodawari/animation/character.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/result.hpp"
 #include "kodawari/rods/solver.hpp"
 
 namespace kodawari::gltf {

@@ -8,8 +8,8 @@
 #include <memory>
 #include <string>
 
-#include "kodawari/api.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::render {
 

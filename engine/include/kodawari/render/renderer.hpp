@@ -22,9 +22,9 @@
 
 #include <kodawari/shared/render.h>
 
-#include "kodawari/api.hpp"
-#include "draw.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/render/draw.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::compute {
 class Device;

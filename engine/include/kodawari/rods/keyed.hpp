@@ -15,8 +15,8 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "kodawari/api.hpp"
-#include "solver.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/rods/solver.hpp"
 
 namespace kodawari::rods {
 

@@ -15,9 +15,9 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "kodawari/api.hpp"
-#include "solver.hpp"
-#include "view.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/rods/solver.hpp"
+#include "kodawari/rods/view.hpp"
 
 namespace kodawari::rods {
 

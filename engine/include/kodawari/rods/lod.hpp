@@ -14,8 +14,8 @@
 
 #include <glm/glm.hpp>
 
-#include "kodawari/api.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
 #include "kodawari/rods/solver.hpp"
 #include "kodawari/rods/view.hpp"
 

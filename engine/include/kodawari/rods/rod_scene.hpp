@@ -4,7 +4,7 @@
 /// chain of each character, one chain instance per chain of each character instance, and
 /// the kinematic model (skeletons, procedural motions, instance placements, the camera)
 /// that produces every frame's input on demand. Part of kodawari::sim; building one from a
-/// scene file is kodawari/scene.hpp's build_rod_scene (kodawari::io).
+/// scene file is kodawari/scene/scene.hpp's build_rod_scene (kodawari::io).
 
 #include <cstdint>
 #include <memory>
@@ -16,7 +16,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 #include "kodawari/animation/character.hpp"
 #include "kodawari/rods/kinematics.hpp"
 #include "kodawari/rods/world.hpp"

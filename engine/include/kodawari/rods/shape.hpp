@@ -11,8 +11,8 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "kodawari/api.hpp"
-#include "kodawari/result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::rods {
 

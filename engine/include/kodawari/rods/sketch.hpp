@@ -17,12 +17,12 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "kodawari/api.hpp"
-#include "../result.hpp"
-#include "kinematics.hpp"
-#include "shape.hpp"
-#include "solver.hpp"
-#include "view.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/rods/kinematics.hpp"
+#include "kodawari/rods/shape.hpp"
+#include "kodawari/rods/solver.hpp"
+#include "kodawari/rods/view.hpp"
 
 namespace kodawari::rods {
 

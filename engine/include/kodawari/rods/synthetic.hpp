@@ -7,8 +7,8 @@
 
 #include <cstdint>
 
-#include "kodawari/api.hpp"
-#include "world.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/rods/world.hpp"
 
 namespace kodawari::rods {
 

@@ -8,7 +8,7 @@
 #include <glm/glm.hpp>
 #include <glm/gtc/quaternion.hpp>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 
 namespace kodawari::rods {
 

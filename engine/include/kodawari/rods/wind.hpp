@@ -10,8 +10,8 @@
 
 #include <glm/glm.hpp>
 
-#include "kodawari/api.hpp"
-#include "../result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::rods {
 

@@ -11,14 +11,14 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "../result.hpp"
-#include "keyed.hpp"
-#include "lod.hpp"
-#include "shape.hpp"
-#include "solver.hpp"
-#include "view.hpp"
-#include "wind.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/rods/keyed.hpp"
+#include "kodawari/rods/lod.hpp"
+#include "kodawari/rods/shape.hpp"
+#include "kodawari/rods/solver.hpp"
+#include "kodawari/rods/view.hpp"
+#include "kodawari/rods/wind.hpp"
 
 namespace kodawari::rods {
 

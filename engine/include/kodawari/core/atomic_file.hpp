@@ -7,8 +7,8 @@
 #include <cstdio>
 #include <string>
 
-#include "kodawari/api.hpp"
-#include "result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari {
 

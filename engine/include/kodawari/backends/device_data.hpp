@@ -3,12 +3,12 @@
 /// What a backend keeps on its device, for other GPU work on that device (the renderer
 /// draws from it, the crowd animator writes the rod input from the pose matrices) without
 /// a copy back to the host (issue 5). One typed interface for every backend family,
-/// naming no graphics-API type: buffers are the compute layer's (kodawari/compute.hpp).
+/// naming no graphics-API type: buffers are the compute layer's (kodawari/vulkan/compute.hpp).
 
 #include <cstdint>
 #include <string_view>
 
-#include "kodawari/api.hpp"
+#include "kodawari/core/api.hpp"
 
 namespace kodawari {
 

@@ -10,9 +10,9 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "result.hpp"
-#include "scene.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari {
 

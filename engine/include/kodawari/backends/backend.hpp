@@ -10,10 +10,10 @@
 #include <string_view>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "birds/world.hpp"
-#include "device_data.hpp"
-#include "result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/birds/world.hpp"
+#include "kodawari/backends/device_data.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari {
 
@@ -48,7 +48,7 @@ struct BackendOptions {
     /// the results are the same bits at every size. Others: InvalidInput naming it.
     unsigned workgroup_size = 0;
     /// The cpu backend's SIMD instruction set: "" = the widest this machine runs, or one
-    /// of available_simd_isas() ("avx512", "avx2", "sse4", "scalar"; kodawari/simd.hpp).
+    /// of available_simd_isas() ("avx512", "avx2", "sse4", "scalar"; kodawari/backends/simd.hpp).
     /// A name it cannot use makes make_cpu_*_backend() fail with InvalidInput.
     std::string isa;
     /// A Vulkan device to run on instead of opening one: a renderer's
@@ -119,7 +119,7 @@ protected:
 
 /// Creates a cpu-reference or cpu bird backend (kodawari::sim). BackendKind::Vulkan is an
 /// InvalidInput error naming kodawari::vulkan, whose make_bird_backend() makes every kind
-/// (kodawari/backend_factory.hpp).
+/// (kodawari/vulkan/backend_factory.hpp).
 [[nodiscard]] KODAWARI_API Result<std::unique_ptr<BirdBackend>> make_cpu_bird_backend(BackendKind kind,
                                                                                       const BackendOptions& options);
 

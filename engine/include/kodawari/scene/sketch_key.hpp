@@ -10,11 +10,11 @@
 #include <optional>
 #include <string>
 
-#include "kodawari/api.hpp"
-#include "result.hpp"
-#include "rods/keyed.hpp"
-#include "rods/rod_scene.hpp"
-#include "scene_edit.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/rods/keyed.hpp"
+#include "kodawari/rods/rod_scene.hpp"
+#include "kodawari/scene/scene_edit.hpp"
 
 namespace kodawari {
 

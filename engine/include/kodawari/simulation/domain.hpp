@@ -22,10 +22,10 @@
 
 #include <vulkan/vulkan_core.h>
 
-#include "kodawari/api.hpp"
-#include "backend.hpp"
-#include "vulkan_embed.hpp"
-#include "result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/vulkan/vulkan_embed.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari {
 
@@ -57,7 +57,7 @@ struct ChannelInfo {
     bool diagnostic = false;
 };
 
-/// The most frames a bake hands over at once (kodawari/bake.hpp, bake_chunk_frames()).
+/// The most frames a bake hands over at once (kodawari/simulation/bake.hpp, bake_chunk_frames()).
 inline constexpr std::uint32_t kMaxBakeFrames = 120;
 
 /// Where step() writes a channel's frames: frames x elements x element_bytes bytes,
@@ -100,7 +100,7 @@ public:
     [[nodiscard]] virtual std::string_view instance_noun() const { return name(); }
     /// The whole scene's instances (before keep_instances()).
     [[nodiscard]] virtual std::uint32_t scene_instances() const = 0;
-    /// Keeps instances [range) only (a shard; kodawari/simulation.hpp's Shard). Called
+    /// Keeps instances [range) only (a shard; kodawari/simulation/simulation.hpp's Shard). Called
     /// once, before open(), also with the whole range.
     virtual void keep_instances(InstanceRange range) = 0;
 
@@ -132,8 +132,8 @@ public:
     /// frames x channel elements).
     [[nodiscard]] virtual Result<void> step(std::uint32_t first, std::uint32_t frames, std::span<const ChannelOutput> out) = 0;
     /// step() of one frame (`frame`) recorded into `recording`, on the Simulation's device
-    /// (with the compute layer, kodawari/compute.hpp). On the vulkan backends it is the
-    /// application's command buffer (an adopted device, kodawari/vulkan_embed.hpp's
+    /// (with the compute layer, kodawari/vulkan/compute.hpp). On the vulkan backends it is the
+    /// application's command buffer (an adopted device, kodawari/vulkan/vulkan_embed.hpp's
     /// borrow_command_buffer()): record between barriers that order the work after the
     /// application's earlier work and before its later work (docs/embedding.md,
     /// "Synchronization"), and upload per-frame input through a StagingRing of the

@@ -1,8 +1,8 @@
 #pragma once
 /// @file
 /// The ranks of a distributed job as the engine speaks to them (issue 15): what
-/// bake_distributed() (kodawari/distributed.hpp) runs on, and what a sink that shares its
-/// work between the ranks (BakeSink::finish_shared(), kodawari/bake.hpp) uses to agree
+/// bake_distributed() (kodawari/simulation/distributed.hpp) runs on, and what a sink that shares its
+/// work between the ranks (BakeSink::finish_shared(), kodawari/simulation/bake.hpp) uses to agree
 /// where each rank's bytes go. The `kodawari` command implements it with MPI; an
 /// application with a job system of its own can implement it too.
 
@@ -10,8 +10,8 @@
 #include <span>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari {
 

@@ -15,14 +15,14 @@
 
 #include <kodawari/shared/birds.h>
 
-#include "kodawari/api.hpp"
-#include "atomic_file.hpp"
-#include "communicator.hpp"
-#include "birds/world.hpp"
-#include "animation/character.hpp"
-#include "result.hpp"
-#include "scene.hpp"
-#include "rods/chain_snapshot.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/atomic_file.hpp"
+#include "kodawari/core/communicator.hpp"
+#include "kodawari/birds/world.hpp"
+#include "kodawari/animation/character.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/scene/scene.hpp"
+#include "kodawari/rods/chain_snapshot.hpp"
 
 namespace kodawari {
 
@@ -132,7 +132,7 @@ public:
     /// What compaction did, once finish() has written a compacted file (zeros else).
     [[nodiscard]] const GlbCompactionStats& compaction_stats() const;
 
-    /// Distributed bakes (kodawari/distributed.hpp): whether the ranks can share this
+    /// Distributed bakes (kodawari/simulation/distributed.hpp): whether the ranks can share this
     /// writer's work, each compacting its own birds' channels: compacted keys without
     /// meshopt (whose chunks span birds), every bird of a built-in wing type, and a file
     /// other processes can write into (not a device or a pipe).
@@ -171,7 +171,7 @@ private:
 /// per point (named `<name>.<i>`, a box `size` m wide), each with a LINEAR translation
 /// animation over `frames` frames at `fps` (key k at k / fps s), the first frame its rest
 /// translation. `positions`: frames x points, frame-major, finite. The output that fits
-/// any domain whose instances are points (make_points_glb_sink() in kodawari/bake.hpp);
+/// any domain whose instances are points (make_points_glb_sink() in kodawari/simulation/bake.hpp);
 /// it holds every frame in memory. Written atomically.
 [[nodiscard]] KODAWARI_API Result<void> write_points_glb(const std::string& path, const std::string& name, float fps,
                                                          std::uint32_t frames, std::span<const glm::vec3> positions,
@@ -213,7 +213,7 @@ public:
     /// What compaction did, once finish() has written a compacted file (zeros else).
     [[nodiscard]] const GlbCompactionStats& compaction_stats() const;
 
-    /// Distributed bakes (kodawari/distributed.hpp), as BirdGlbWriter's: whether the
+    /// Distributed bakes (kodawari/simulation/distributed.hpp), as BirdGlbWriter's: whether the
     /// ranks can share this writer's work (compacted keys without meshopt, an output that
     /// is not a device or a pipe).
     [[nodiscard]] bool can_share() const;
@@ -350,7 +350,7 @@ public:
     /// node); -1 when `node` has no skinned mesh.
     [[nodiscard]] int skinned_mesh_node(std::size_t instance, int node) const;
 
-    /// Distributed bakes (kodawari/distributed.hpp), as BirdGlbWriter's: whether the
+    /// Distributed bakes (kodawari/simulation/distributed.hpp), as BirdGlbWriter's: whether the
     /// ranks can share this writer's work, each compacting its own instances' channels
     /// (compacted keys without meshopt, animated nodes, and an output that is not a device
     /// or a pipe).

@@ -13,10 +13,10 @@
 
 #include <glm/glm.hpp>
 
-#include "kodawari/api.hpp"
-#include "result.hpp"
-#include "rods/keyed.hpp"
-#include "scene.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/rods/keyed.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari {
 

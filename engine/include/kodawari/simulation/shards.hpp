@@ -16,10 +16,10 @@
 #include <span>
 #include <string>
 
-#include "kodawari/api.hpp"
-#include "bake.hpp"
-#include "result.hpp"
-#include "simulation.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari {
 

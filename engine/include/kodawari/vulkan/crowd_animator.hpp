@@ -14,11 +14,11 @@
 #include <span>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "pose_backend.hpp"
-#include "rod_backend.hpp"
-#include "rods/lod.hpp"
-#include "rods/rod_scene.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/backends/pose_backend.hpp"
+#include "kodawari/backends/rod_backend.hpp"
+#include "kodawari/rods/lod.hpp"
+#include "kodawari/rods/rod_scene.hpp"
 
 namespace kodawari {
 

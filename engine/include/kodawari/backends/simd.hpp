@@ -13,8 +13,8 @@
 #include <string_view>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari {
 

@@ -7,8 +7,8 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari {
 

@@ -10,8 +10,8 @@
 
 #include <kodawari/shared/birds.h>
 
-#include "kodawari/api.hpp"
-#include "birds/world.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/birds/world.hpp"
 
 namespace kodawari {
 

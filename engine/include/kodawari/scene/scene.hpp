@@ -12,19 +12,19 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "birds/bird_model.hpp"
-#include "birds/world.hpp"
-#include "rods/lod.hpp"
-#include "animation/character.hpp"
-#include "result.hpp"
-#include "rods/keyed.hpp"
-#include "rods/limits.hpp"
-#include "rods/kinematics.hpp"
-#include "rods/rod_scene.hpp"
-#include "rods/shape.hpp"
-#include "rods/solver.hpp"
-#include "rods/view.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/birds/bird_model.hpp"
+#include "kodawari/birds/world.hpp"
+#include "kodawari/rods/lod.hpp"
+#include "kodawari/animation/character.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/rods/keyed.hpp"
+#include "kodawari/rods/limits.hpp"
+#include "kodawari/rods/kinematics.hpp"
+#include "kodawari/rods/rod_scene.hpp"
+#include "kodawari/rods/shape.hpp"
+#include "kodawari/rods/solver.hpp"
+#include "kodawari/rods/view.hpp"
 
 namespace kodawari {
 

@@ -4,7 +4,7 @@
 /// against, in the shape of Jolt's ComputeSystem and ComputeQueue. Devices, buffers,
 /// kernels, recordings and submissions, with no Vulkan type: the one implementation is
 /// Vulkan (engine/gpu/), and what an application hands over in Vulkan's terms (its device,
-/// its command buffers) is wrapped in kodawari/vulkan_embed.hpp.
+/// its command buffers) is wrapped in kodawari/vulkan/vulkan_embed.hpp.
 ///
 ///     compute::Queue queue(device);
 ///     auto rec = queue.begin();                          // Result<Recording>
@@ -16,7 +16,7 @@
 /// Recording, submitting and waiting are separate calls, so that a caller can record
 /// several domains' work into one submission and wait only when it needs the results. A
 /// Recording can also wrap an application's command buffer (borrow_command_buffer() in
-/// kodawari/vulkan_embed.hpp): then nothing is submitted or waited for here.
+/// kodawari/vulkan/vulkan_embed.hpp): then nothing is submitted or waited for here.
 
 #include <cstddef>
 #include <cstdint>
@@ -27,9 +27,9 @@
 #include <utility>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "gpu_info.hpp"
-#include "result.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
+#include "kodawari/core/result.hpp"
 
 namespace kodawari::compute {
 
@@ -155,7 +155,7 @@ class StagingRing;
 
 /// Commands being recorded: move-only; owns its command buffer until submitted (then the
 /// Submission owns it) or destroyed unsubmitted (given back, nothing runs), unless it
-/// borrows the application's (kodawari/vulkan_embed.hpp, borrow_command_buffer()).
+/// borrows the application's (kodawari/vulkan/vulkan_embed.hpp, borrow_command_buffer()).
 class KODAWARI_API Recording {
 public:
     struct Native;  // the implementation's command buffer (engine/gpu/)

@@ -14,11 +14,11 @@
 #include <memory>
 #include <string>
 
-#include "kodawari/api.hpp"
-#include "kodawari/backend.hpp"
-#include "kodawari/pose_backend.hpp"
-#include "kodawari/result.hpp"
-#include "kodawari/rod_backend.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/backends/pose_backend.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/backends/rod_backend.hpp"
 
 namespace kodawari {
 

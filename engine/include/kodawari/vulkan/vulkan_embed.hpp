@@ -25,13 +25,13 @@
 
 #include <vulkan/vulkan_core.h>
 
-#include "kodawari/api.hpp"
-#include "kodawari/backend.hpp"
-#include "kodawari/compute.hpp"
-#include "kodawari/device_data.hpp"
-#include "kodawari/pose_backend.hpp"
-#include "kodawari/result.hpp"
-#include "kodawari/rod_backend.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/vulkan/compute.hpp"
+#include "kodawari/backends/device_data.hpp"
+#include "kodawari/backends/pose_backend.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/backends/rod_backend.hpp"
 
 namespace kodawari {
 
@@ -94,7 +94,7 @@ struct VulkanBufferRange {
     std::uint32_t stride = 0; ///< bytes per element (the struct's size)
 };
 
-/// A compute::Recording (kodawari/compute.hpp) into `cmd`, a command buffer of the
+/// A compute::Recording (kodawari/vulkan/compute.hpp) into `cmd`, a command buffer of the
 /// application's in the recording state on `device` (adopt_vulkan_device()'s), of
 /// VulkanDeviceHandles::queue_family: what Simulation::record() and a domain's
 /// Domain::record() record into. Nothing is submitted, waited for or freed through it; it

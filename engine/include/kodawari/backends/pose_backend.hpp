@@ -14,12 +14,12 @@
 
 #include <glm/glm.hpp>
 
-#include "kodawari/api.hpp"
-#include "backend.hpp"
-#include "animation/character.hpp"
-#include "animation/pose_instance.hpp"
-#include "result.hpp"
-#include "rods/solver.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/animation/character.hpp"
+#include "kodawari/animation/pose_instance.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/rods/solver.hpp"
 
 namespace kodawari {
 

@@ -9,11 +9,11 @@
 #include <string_view>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "backend.hpp"
-#include "result.hpp"
-#include "rods/chain_snapshot.hpp"
-#include "rods/world.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/rods/chain_snapshot.hpp"
+#include "kodawari/rods/world.hpp"
 
 namespace kodawari {
 

@@ -2,7 +2,7 @@
 /// @file
 /// The engine's one entry point for simulating a scene (issue 19), what `kodawari run`,
 /// `render`, `view` and `bench` and embedding applications use, as Box2D's `b2World_Step`
-/// or Jolt's `PhysicsSystem::Update` are: it owns the domains of a scene (kodawari/domain.hpp:
+/// or Jolt's `PhysicsSystem::Update` are: it owns the domains of a scene (kodawari/simulation/domain.hpp:
 /// the flocks' birds, the characters' chains, an application's own) on backends of one
 /// kind on one device, and steps them frame after frame in their dependency order, so
 /// that no caller has to know it. It names no domain: what is particular to one
@@ -20,11 +20,11 @@
 #include <string_view>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "backend.hpp"
-#include "domain.hpp"
-#include "result.hpp"
-#include "scene.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/backends/backend.hpp"
+#include "kodawari/simulation/domain.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari {
 
@@ -36,7 +36,7 @@ class Recording;
 }
 
 /// One of `count` parts of a scene's instances, for baking a scene over several processes
-/// or machines (issue 15; kodawari/shards.hpp). Shard `index` holds instances
+/// or machines (issue 15; kodawari/simulation/shards.hpp). Shard `index` holds instances
 /// [index * n / count, (index + 1) * n / count) of each domain's n (the scene's birds, its
 /// character instances): contiguous ranges, in the scene's order, that cover it once. The scene is built whole (every random draw made) before it is cut, so an
 /// instance's frames do not depend on `count`.
@@ -127,10 +127,10 @@ public:
     /// frame_count() in all. `out` names domains' channels to fill with every frame
     /// simulated (ChannelOutput; a name no domain has is an error).
     [[nodiscard]] Result<void> step(std::uint32_t frames = 1, std::span<const ChannelOutput> out = {});
-    /// The next frame of every domain recorded into `recording` (kodawari/compute.hpp), on
+    /// The next frame of every domain recorded into `recording` (kodawari/vulkan/compute.hpp), on
     /// the device the Simulation runs on: the vulkan backends, SimulationOptions::
     /// options.context an adopted device, and `recording` the application's command
-    /// buffer (borrow_command_buffer(), kodawari/vulkan_embed.hpp), each domain's work
+    /// buffer (borrow_command_buffer(), kodawari/vulkan/vulkan_embed.hpp), each domain's work
     /// between barriers against the application's (docs/embedding.md). Nothing is
     /// submitted or waited for but what the domains say (Domain::record()); the frame's
     /// state is in the domains' buffers once the application's submission completed, and

@@ -10,7 +10,7 @@
 /// frames. An error on any rank stops every rank with that rank's message, and the sinks
 /// leave no file.
 ///
-/// The engine speaks to the job through Communicator (kodawari/communicator.hpp); the
+/// The engine speaks to the job through Communicator (kodawari/core/communicator.hpp); the
 /// `kodawari` command implements it with MPI (`kodawari run SCENE --mpi` under
 /// `mpirun`), and an application with a job system of its own can implement it too.
 
@@ -21,11 +21,11 @@
 #include <string>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "bake.hpp"
-#include "communicator.hpp"
-#include "result.hpp"
-#include "simulation.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/simulation/bake.hpp"
+#include "kodawari/core/communicator.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/simulation/simulation.hpp"
 
 namespace kodawari {
 

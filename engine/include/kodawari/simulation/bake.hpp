@@ -3,7 +3,7 @@
 /// The bake pipeline: a Simulation run over all its frames, each frame handed as it is
 /// simulated to sinks that write outputs (glTF, traces). One loop for the `kodawari`
 /// command and embedding applications; a sink decides what it keeps in memory. It knows
-/// the domains through their channels alone (kodawari/domain.hpp): the sinks of the
+/// the domains through their channels alone (kodawari/simulation/domain.hpp): the sinks of the
 /// scene's domains are made by the domains' headers (make_birds_glb_sink() in
 /// kodawari/domains/birds.hpp, make_chains_glb_sink() and make_trace_sink() in
 /// kodawari/domains/chains.hpp).
@@ -18,11 +18,11 @@
 #include <string_view>
 #include <vector>
 
-#include "kodawari/api.hpp"
-#include "domain.hpp"
-#include "export.hpp"
-#include "result.hpp"
-#include "scene.hpp"
+#include "kodawari/core/api.hpp"
+#include "kodawari/simulation/domain.hpp"
+#include "kodawari/export/export.hpp"
+#include "kodawari/core/result.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari {
 
@@ -99,7 +99,7 @@ public:
     /// Completes the outputs after the last frame; returns the files written.
     [[nodiscard]] virtual Result<std::vector<BakeOutput>> finish() = 0;
 
-    /// Distributed bakes (kodawari/distributed.hpp): whether every rank can do its own
+    /// Distributed bakes (kodawari/simulation/distributed.hpp): whether every rank can do its own
     /// instances' part of this sink's work (a compacted birds' .glb: each rank compacts
     /// its birds' channels and writes them into the file), asked on rank 0 after begin().
     /// Then every rank makes the sink and begins it with the whole scene's world, share()
@@ -134,8 +134,8 @@ struct BakeOptions {
 [[nodiscard]] KODAWARI_API std::uint32_t bake_chunk_frames(std::span<const Domain* const> domains);
 
 /// Where a bake's frames come from: a Simulation (bake(Simulation&, ...)), the part files
-/// of a sharded bake (kodawari/shards.hpp), or the ranks of a distributed bake
-/// (kodawari/distributed.hpp).
+/// of a sharded bake (kodawari/simulation/shards.hpp), or the ranks of a distributed bake
+/// (kodawari/simulation/distributed.hpp).
 class KODAWARI_API BakeSource {
 public:
     virtual ~BakeSource() = default;
