@@ -17,6 +17,14 @@
 namespace kodawari {
 namespace {
 
+// A recording of the backend's device: the module's buffers are not on another one.
+Result<void> check_device(const char* function, const compute::Recording& recording, const compute::Device& device) {
+    if (&recording.device() == &device) return {};
+    return make_error(Error::Kind::InvalidInput, std::string(function) + ": recording is on another device (" +
+                                                     recording.device().info().name + ") than the backend's (" +
+                                                     device.info().name + ")");
+}
+
 Error not_vulkan(const char* function, const char* argument, std::string_view backend) {
     return make_error(Error::Kind::InvalidInput, std::string(function) + ": " + argument + " is a " + std::string(backend) +
                                                      " backend; recording needs a vulkan one (BackendKind::Vulkan)");
@@ -221,6 +229,27 @@ Result<void> record_evaluate(PoseBackend& poses, VkCommandBuffer cmd, float time
     auto* device = dynamic_cast<DevicePoseBackend*>(&poses);
     if (device == nullptr) return not_vulkan("record_evaluate", "poses", poses.name());
     compute::Recording recording = gpu::borrow(device->compute_device(), cmd, nullptr);
+    return device->record_external(recording, time);
+}
+
+Result<void> record_step(RodBackend& rods, compute::Recording& recording, const rods::RodFrame& frame) {
+    auto* device = dynamic_cast<DeviceRodBackend*>(&rods);
+    if (device == nullptr) return not_vulkan("record_step", "rods", rods.name());
+    KW_TRY(check_device("record_step", recording, device->compute_device()));
+    return device->record_external(recording, frame);
+}
+
+Result<void> record_simulate(BirdBackend& birds, compute::Recording& recording, std::uint32_t frames) {
+    auto* device = dynamic_cast<DeviceBirdBackend*>(&birds);
+    if (device == nullptr) return not_vulkan("record_simulate", "birds", birds.name());
+    KW_TRY(check_device("record_simulate", recording, device->compute_device()));
+    return device->record_external(recording, frames, nullptr);
+}
+
+Result<void> record_evaluate(PoseBackend& poses, compute::Recording& recording, float time) {
+    auto* device = dynamic_cast<DevicePoseBackend*>(&poses);
+    if (device == nullptr) return not_vulkan("record_evaluate", "poses", poses.name());
+    KW_TRY(check_device("record_evaluate", recording, device->compute_device()));
     return device->record_external(recording, time);
 }
 

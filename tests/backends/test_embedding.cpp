@@ -24,6 +24,7 @@
 
 #include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/rods/synthetic.hpp"
+#include "kodawari/scene/scene.hpp"
 #include "kodawari/vulkan/vulkan_embed.hpp"
 #include "test_support.hpp"
 #include "vulkan_app_support.hpp"
@@ -104,6 +105,88 @@ TEST_F(Embedding, RecordedStepsInFlightGiveTheBitsOfStep) {
     EXPECT_EQ(motion.value().stride, sizeof(gpu::RodJointMotionGpu));
     EXPECT_EQ(motion.value().range, VkDeviceSize{motion.value().count} * motion.value().stride);
     EXPECT_FALSE(vulkan_buffer(*rods.value()->device_data(), bird_buffers::poses).ok());
+    EXPECT_EQ(messages, 0u);
+}
+
+// The record calls into a compute::Recording of the module's own queue (no Vulkan code in
+// the caller): a chains' frame and a flock's frame recorded together submit once and give
+// step()'s and simulate()'s bits; a recording of another device is refused by name, the
+// backend unchanged. 37 birds, 101 chains: neither a multiple of the workgroup size.
+TEST_F(Embedding, BackendsRecordIntoOneRecordingOfTheModulesQueue) {
+    const rods::SyntheticScene synthetic = scene();
+    constexpr float dt = 1.0f / 60.0f;
+    rods::RodFrame frame;
+    synthetic.frame(0, dt, frame);
+    auto parsed = parse_scene(R"({"format": "kodawari-scene", "version": 1, "name": "record", "fps": 60, "duration": 1,
+        "flocks": [{"name": "f", "wing_type": "hawk", "count": 37,
+                    "route": {"points": [[0, 10, 0], [10, 20, 0], [30, 0, 10], [40, 10, 0]]}}]})",
+                              "(test)");
+    ASSERT_TRUE(parsed.ok()) << parsed.error().message;
+    auto flock = build_bird_world(parsed.value());
+    ASSERT_TRUE(flock.ok()) << flock.error().message;
+
+    auto opened = open_shared_device(testing_support::gpu_options());
+    ASSERT_TRUE(opened.ok()) << opened.error().message;
+    compute::Device& device = *opened.value();
+    BackendOptions shared = testing_support::gpu_options();
+    shared.context = opened.value();
+    auto rods = std::move(make_rod_backend(BackendKind::Vulkan, shared)).value();
+    auto birds = std::move(make_bird_backend(BackendKind::Vulkan, shared)).value();
+    auto stepped = std::move(make_rod_backend(BackendKind::Vulkan, testing_support::gpu_options())).value();
+    auto simulated = std::move(make_bird_backend(BackendKind::Vulkan, testing_support::gpu_options())).value();
+    ASSERT_TRUE(rods->load(synthetic.world(), frame).ok());
+    ASSERT_TRUE(stepped->load(synthetic.world(), frame).ok());
+    ASSERT_TRUE(birds->load(flock.value()).ok());
+    ASSERT_TRUE(simulated->load(flock.value()).ok());
+
+    const compute::Queue queue(device);
+    for (std::uint32_t k = 1; k <= 5; ++k) {
+        synthetic.frame(k, dt, frame);
+        ASSERT_TRUE(stepped->step(frame).ok());
+        ASSERT_TRUE(simulated->simulate(1, {}).ok());
+        const std::uint64_t before = device.submissions();
+        auto recording = queue.begin();
+        ASSERT_TRUE(recording.ok()) << recording.error().message;
+        const auto chains = record_step(*rods, recording.value(), frame);
+        ASSERT_TRUE(chains.ok()) << chains.error().message;
+        const auto flew = record_simulate(*birds, recording.value(), 1);
+        ASSERT_TRUE(flew.ok()) << flew.error().message;
+        EXPECT_EQ(device.submissions(), before) << "recording submitted work (frame " << k << ")";
+        auto submission = queue.submit(std::move(recording).value());
+        ASSERT_TRUE(submission.ok()) << submission.error().message;
+        ASSERT_TRUE(submission.value().wait().ok());
+        EXPECT_EQ(device.submissions(), before + 1) << "one submission for both backends (frame " << k << ")";
+    }
+    std::vector<rods::ChainState> a, b;
+    ASSERT_TRUE(rods->read_states(a).ok());
+    ASSERT_TRUE(stepped->read_states(b).ok());
+    expect_same_bits(a, b);
+    // The flocks' states agree too: their next frame is the same poses.
+    std::vector<gpu::BirdPose> recorded_poses(flock.value().birds.size()), simulated_poses(flock.value().birds.size());
+    ASSERT_TRUE(birds->simulate(1, {recorded_poses, {}}).ok());
+    ASSERT_TRUE(simulated->simulate(1, {simulated_poses, {}}).ok());
+    EXPECT_EQ(std::memcmp(recorded_poses.data(), simulated_poses.data(), recorded_poses.size() * sizeof(gpu::BirdPose)), 0);
+
+    // A recording of the application's device is not the backends': refused, naming it,
+    // and nothing recorded (the state is the last frame's).
+    auto adopted = adopt_vulkan_device(app_->handles());
+    ASSERT_TRUE(adopted.ok()) << adopted.error().message;
+    VkCommandBuffer cmd = app_->begin(1);
+    auto foreign = borrow_command_buffer(*adopted.value(), cmd);
+    ASSERT_TRUE(foreign.ok()) << foreign.error().message;
+    synthetic.frame(6, dt, frame);
+    const auto refused = record_step(*rods, foreign.value(), frame);
+    ASSERT_FALSE(refused.ok());
+    EXPECT_NE(refused.error().message.find("record_step: recording is on another device"), std::string::npos)
+        << refused.error().message;
+    const auto refused_birds = record_simulate(*birds, foreign.value(), 1);
+    ASSERT_FALSE(refused_birds.ok());
+    EXPECT_NE(refused_birds.error().message.find("record_simulate: recording"), std::string::npos) << refused_birds.error().message;
+    app_->submit(1);
+    app_->wait_all();
+    ASSERT_TRUE(rods->read_states(b).ok());
+    expect_same_bits(a, b);
+    EXPECT_EQ(device.validation_messages(), 0u);
     EXPECT_EQ(messages, 0u);
 }
 

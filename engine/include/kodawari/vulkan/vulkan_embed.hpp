@@ -129,6 +129,25 @@ struct VulkanBufferRange {
 /// scene time `time` into `cmd`; pose_buffers::world then holds the world matrices.
 [[nodiscard]] KODAWARI_API Result<void> record_evaluate(PoseBackend& poses, VkCommandBuffer cmd, float time);
 
+/// The same three into a compute::Recording: one an application borrowed
+/// (borrow_command_buffer(), what the VkCommandBuffer calls above make), or one of the
+/// module's own queue (compute::Queue::begin() on the backends' device), so that a
+/// program without Vulkan code of its own submits several backends' frames at once:
+///
+///     compute::Queue queue(*device);
+///     auto recording = queue.begin();
+///     record_step(*rods, recording.value(), frame);   // the chains' frame
+///     record_simulate(*birds, recording.value(), 1);  // and the flock's, same submission
+///     queue.submit(std::move(recording).value()).value().wait();
+///
+/// InvalidInput when the recording is on another device than the backend's, naming
+/// `recording`; the synchronization is the VkCommandBuffer calls'. A recording of the
+/// module's queue may hold several frames of a backend as long as they fit its ring of
+/// frames in flight (VulkanDeviceHandles::frames_in_flight).
+[[nodiscard]] KODAWARI_API Result<void> record_step(RodBackend& rods, compute::Recording& recording, const rods::RodFrame& frame);
+[[nodiscard]] KODAWARI_API Result<void> record_simulate(BirdBackend& birds, compute::Recording& recording, std::uint32_t frames);
+[[nodiscard]] KODAWARI_API Result<void> record_evaluate(PoseBackend& poses, compute::Recording& recording, float time);
+
 /// A collider of a matrix-driven character: a capsule (a sphere when a == b) in a node's frame.
 struct MatrixCollider {
     std::uint32_t node = 0;           ///< the node whose matrix carries it
