@@ -610,12 +610,36 @@ TEST(DomainContract, TheScenesDomainsRecordAsTheyStep) {
     }
     app.wait_all();
     ASSERT_TRUE(stepped.value()->step(8).ok());
-    ChainSnapshot a, b;
+    // No application device at all: a Simulation on a device of the module's own
+    // (open_shared_device) records each frame into a recording of the module's queue,
+    // submitted and waited for by the caller: the same chains.
+    auto own_device = open_shared_device(testing_support::gpu_options());
+    ASSERT_TRUE(own_device.ok()) << own_device.error().message;
+    SimulationOptions own = options;
+    own.options = testing_support::gpu_options();
+    own.options.context = own_device.value();
+    auto queued = Simulation::open(scene, own);
+    ASSERT_TRUE(queued.ok()) << queued.error().message;
+    const compute::Queue queue(*own_device.value());
+    for (std::uint32_t k = 0; k < 8; ++k) {
+        auto recording = queue.begin();
+        ASSERT_TRUE(recording.ok()) << recording.error().message;
+        const auto made = queued.value()->record(recording.value());
+        ASSERT_TRUE(made.ok()) << made.error().message;
+        auto submission = queue.submit(std::move(recording).value());
+        ASSERT_TRUE(submission.ok()) << submission.error().message;
+        ASSERT_TRUE(submission.value().wait().ok());
+    }
+    ChainSnapshot a, b, c;
     ASSERT_TRUE(read_chains(*recorded.value(), a).ok());
     ASSERT_TRUE(read_chains(*stepped.value(), b).ok());
+    ASSERT_TRUE(read_chains(*queued.value(), c).ok());
     ASSERT_FALSE(a.positions.empty());
     ASSERT_EQ(a.positions.size(), b.positions.size());
+    ASSERT_EQ(c.positions.size(), b.positions.size());
     EXPECT_EQ(std::memcmp(a.positions.data(), b.positions.data(), a.positions.size() * sizeof(glm::vec3)), 0);
+    EXPECT_EQ(std::memcmp(c.positions.data(), b.positions.data(), c.positions.size() * sizeof(glm::vec3)), 0);
+    EXPECT_EQ(queued.value()->validation_messages(), 0u);
     // Where the application binds them: the joints' motion, one RodJointMotionGpu each.
     auto motion = recorded.value()->buffer(rod_buffers::motion);
     ASSERT_TRUE(motion.ok()) << motion.error().message;
