@@ -77,6 +77,20 @@ std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& path, bool h
     return sinks;
 }
 
+FlockAgent flock_agent(const kodawari_flock_agent& a) {
+    FlockAgent f;
+    // Out-of-range kinds reach set_flock_agents as themselves, which names them.
+    f.kind = static_cast<FlockAgent::Kind>(a.kind);
+    f.position = {a.position[0], a.position[1], a.position[2]};
+    f.velocity = {a.velocity[0], a.velocity[1], a.velocity[2]};
+    f.radius = a.radius;
+    f.weight = a.weight;
+    f.margin = a.margin;
+    f.end = {a.end[0], a.end[1], a.end[2]};
+    f.normal = {a.normal[0], a.normal[1], a.normal[2]};
+    return f;
+}
+
 }  // namespace
 
 extern "C" {
@@ -141,24 +155,6 @@ KODAWARI_C_API kodawari_status kodawari_simulation_lod_budget(kodawari_simulatio
         out->modelled_ms = static_cast<float>(budget->modelled_ms);
     });
 }
-
-namespace {
-
-FlockAgent flock_agent(const kodawari_flock_agent& a) {
-    FlockAgent f;
-    // Out-of-range kinds reach set_flock_agents as themselves, which names them.
-    f.kind = static_cast<FlockAgent::Kind>(a.kind);
-    f.position = {a.position[0], a.position[1], a.position[2]};
-    f.velocity = {a.velocity[0], a.velocity[1], a.velocity[2]};
-    f.radius = a.radius;
-    f.weight = a.weight;
-    f.margin = a.margin;
-    f.end = {a.end[0], a.end[1], a.end[2]};
-    f.normal = {a.normal[0], a.normal[1], a.normal[2]};
-    return f;
-}
-
-}  // namespace
 
 KODAWARI_C_API kodawari_status kodawari_flock_agent_default(kodawari_flock_agent* out) {
     return guard("kodawari_flock_agent_default", nullptr, [&] {
