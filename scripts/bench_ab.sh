@@ -17,7 +17,7 @@ benches=("$@")
 if [[ ${#benches[@]} -eq 0 ]]; then
   benches=(
     "birds --count 1000000 --frames 30"
-    "chains --chains 100000 --joints 16 --iterations 4 --steps 10"
+    "chains --count 100000 --joints 16 --iterations 4 --frames 10"
     "crowd --count 1000 --frames 30"
     "view scenes/crowd-gltf.json --frames 30 --size 640x360"
   )

@@ -24,8 +24,8 @@
 
 #include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/rods/synthetic.hpp"
-#include "kodawari/scene/scene.hpp"
 #include "kodawari/vulkan/vulkan_embed.hpp"
+#include "small_flock.hpp"
 #include "test_support.hpp"
 #include "vulkan_app_support.hpp"
 
@@ -117,13 +117,7 @@ TEST_F(Embedding, BackendsRecordIntoOneRecordingOfTheModulesQueue) {
     constexpr float dt = 1.0f / 60.0f;
     rods::RodFrame frame;
     synthetic.frame(0, dt, frame);
-    auto parsed = parse_scene(R"({"format": "kodawari-scene", "version": 1, "name": "record", "fps": 60, "duration": 1,
-        "flocks": [{"name": "f", "wing_type": "hawk", "count": 37,
-                    "route": {"points": [[0, 10, 0], [10, 20, 0], [30, 0, 10], [40, 10, 0]]}}]})",
-                              "(test)");
-    ASSERT_TRUE(parsed.ok()) << parsed.error().message;
-    auto flock = build_bird_world(parsed.value());
-    ASSERT_TRUE(flock.ok()) << flock.error().message;
+    const birds::BirdWorld flock = testing_support::small_flock();
 
     auto opened = open_shared_device(testing_support::gpu_options());
     ASSERT_TRUE(opened.ok()) << opened.error().message;
@@ -136,8 +130,8 @@ TEST_F(Embedding, BackendsRecordIntoOneRecordingOfTheModulesQueue) {
     auto simulated = std::move(make_bird_backend(BackendKind::Vulkan, testing_support::gpu_options())).value();
     ASSERT_TRUE(rods->load(synthetic.world(), frame).ok());
     ASSERT_TRUE(stepped->load(synthetic.world(), frame).ok());
-    ASSERT_TRUE(birds->load(flock.value()).ok());
-    ASSERT_TRUE(simulated->load(flock.value()).ok());
+    ASSERT_TRUE(birds->load(flock).ok());
+    ASSERT_TRUE(simulated->load(flock).ok());
 
     const compute::Queue queue(device);
     for (std::uint32_t k = 1; k <= 5; ++k) {
@@ -162,7 +156,7 @@ TEST_F(Embedding, BackendsRecordIntoOneRecordingOfTheModulesQueue) {
     ASSERT_TRUE(stepped->read_states(b).ok());
     expect_same_bits(a, b);
     // The flocks' states agree too: their next frame is the same poses.
-    std::vector<gpu::BirdPose> recorded_poses(flock.value().birds.size()), simulated_poses(flock.value().birds.size());
+    std::vector<gpu::BirdPose> recorded_poses(flock.birds.size()), simulated_poses(flock.birds.size());
     ASSERT_TRUE(birds->simulate(1, {recorded_poses, {}}).ok());
     ASSERT_TRUE(simulated->simulate(1, {simulated_poses, {}}).ok());
     EXPECT_EQ(std::memcmp(recorded_poses.data(), simulated_poses.data(), recorded_poses.size() * sizeof(gpu::BirdPose)), 0);

@@ -15,22 +15,12 @@
 #include "kodawari/rods/synthetic.hpp"
 #include "kodawari/scene/scene.hpp"
 #include "keyed_scene.hpp"
+#include "small_flock.hpp"
 #include "test_support.hpp"
 
 using namespace kodawari;
 
 namespace {
-
-birds::BirdWorld bird_world() {
-    auto scene = parse_scene(R"({"format": "kodawari-scene", "version": 1, "name": "record", "fps": 60, "duration": 1,
-        "flocks": [{"name": "f", "wing_type": "hawk", "count": 37,
-                    "route": {"points": [[0, 10, 0], [10, 20, 0], [30, 0, 10], [40, 10, 0]]}}]})",
-                             "(test)");
-    EXPECT_TRUE(scene.ok()) << scene.error().message;
-    auto world = build_bird_world(scene.value());
-    EXPECT_TRUE(world.ok());
-    return std::move(world).value();
-}
 
 TEST(RecordMode, RodsAndBirdsRecordIntoOneSubmission) {
     if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
@@ -48,7 +38,7 @@ TEST(RecordMode, RodsAndBirdsRecordIntoOneSubmission) {
     auto made = rods::SyntheticScene::make(o);
     ASSERT_TRUE(made.ok()) << made.error().message;
     const rods::SyntheticScene& scene = made.value();
-    const birds::BirdWorld birds = bird_world();
+    const birds::BirdWorld birds = testing_support::small_flock();
 
     auto recorded_rods = make_rod_backend(BackendKind::Vulkan, options);
     auto stepped_rods = make_rod_backend(BackendKind::Vulkan, options);
@@ -167,7 +157,7 @@ TEST(DevicePaths, BirdsPinNoReadbackMemoryUntilAsked) {
     const gpu::VulkanContext& device = gpu::vulkan(*opened.value());
     ASSERT_FALSE(device.unified_memory());
     staged.context = opened.value();
-    const birds::BirdWorld birds = bird_world();
+    const birds::BirdWorld birds = testing_support::small_flock();
     auto tested = make_bird_backend(BackendKind::Vulkan, staged);
     auto mapped = make_bird_backend(BackendKind::Vulkan, testing_support::gpu_options());
     ASSERT_TRUE(tested.ok() && mapped.ok());
