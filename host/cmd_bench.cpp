@@ -303,14 +303,45 @@ struct BirdsOptions {
     std::optional<std::uint64_t> count;
     std::optional<std::uint64_t> frames;
     bool readback = false;
+    std::optional<std::string> pose_layouts;
 };
+
+// --pose-layouts records,fields: each vulkan variant once per layout of its poses
+// (BackendOptions::bird_pose_fields), side by side; the others as they are.
+std::vector<BenchVariant> with_pose_layouts(std::vector<BenchVariant> variants, const BirdsOptions& o) {
+    if (!o.pose_layouts) return variants;
+    if (o.readback) throw UsageError{"--pose-layouts and --readback exclude each other: poses laid out as fields are not read back"};
+    std::vector<bool> fields;
+    std::stringstream list(*o.pose_layouts);
+    for (std::string item; std::getline(list, item, ',');) {
+        if (item != "records" && item != "fields") {
+            throw UsageError{"--pose-layouts: \"" + item + "\" is neither records nor fields"};
+        }
+        fields.push_back(item == "fields");
+    }
+    if (fields.empty()) throw UsageError{"--pose-layouts: expected records, fields or both"};
+    std::vector<BenchVariant> out;
+    for (const BenchVariant& v : variants) {
+        if (v.kind != BackendKind::Vulkan) {
+            out.push_back(v);
+            continue;
+        }
+        for (const bool f : fields) {
+            BenchVariant each = v;
+            each.options.bird_pose_fields = f;
+            each.label += f ? "/fields" : "/records";
+            out.push_back(std::move(each));
+        }
+    }
+    return out;
+}
 
 int bench_birds(const BirdsOptions& o) {
     const BackendChoice choice = read_backend_choice(o.common.backend);
     const std::uint32_t count = static_cast<std::uint32_t>(o.count.value_or(1'000'000));
     const std::uint32_t frames = static_cast<std::uint32_t>(o.frames.value_or(30));
     const std::uint32_t repetitions = read_repetitions(o.common);
-    const std::vector<BenchVariant> variants = read_variants(o.common, choice);
+    const std::vector<BenchVariant> variants = with_pose_layouts(read_variants(o.common, choice), o);
     const auto& json_path = o.common.json;
     const bool readback = o.readback;
 
@@ -384,6 +415,9 @@ Command add_bench(CLI::App& app) {
     add_count(*b, "--count", birds->count, 1, 20'000'000, "birds (default: 1000000)");
     add_count(*b, "--frames", birds->frames, 1, 100'000, "frames per repetition (default: 30)");
     add_switch(*b, "--readback", birds->readback, "read the poses back every frame (default: off)");
+    add_text(*b, "--pose-layouts", birds->pose_layouts, "LIST",
+             "time the vulkan backend with its poses as records (one BirdPoseGpu per bird), as fields (six arrays of "
+             "vec4), or both side by side: records,fields (default: records)");
     add_common(*b, birds->common);
 
     auto chains = std::make_shared<ChainsOptions>();

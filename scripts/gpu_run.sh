@@ -696,8 +696,10 @@ run_all() {
   run_step "bench-chains-$chains_s" "$bench_limit" "$bench_reserve" bench "$bin" bench chains --count "$chains_s" \
     --joints 16 --iterations 4 --frames "$chains_frames_s" --repetitions "$reps_s" --backends "$all" \
     --json "$out/bench-chains-$chains_s.json"
+  # The poses as records and as fields side by side (docs/performance.md, "Birds").
   run_step "bench-birds-$birds_s" "$bench_limit" "$bench_reserve" bench "$bin" bench birds --count "$birds_s" \
-    --frames "$birds_frames_s" --repetitions "$reps_s" --backends "$all" --json "$out/bench-birds-$birds_s.json"
+    --frames "$birds_frames_s" --repetitions "$reps_s" --backends "$all" --pose-layouts records,fields \
+    --json "$out/bench-birds-$birds_s.json"
   run_step "bench-crowd-$crowd_s" "$bench_limit" "$bench_reserve" bench "$bin" bench crowd --count "$crowd_s" \
     --frames "$crowd_frames" --repetitions "$reps_s" --backends "$all" --json "$out/bench-crowd-$crowd_s.json"
   run_step "bench-chains-$chains_l" "$bench_limit" "$bench_reserve" bench "$bin" bench chains --count "$chains_l" \

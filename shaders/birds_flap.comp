@@ -20,6 +20,11 @@ layout(constant_id = KW_BIRDS_SPEC_BANK_RULE) const uint BANK_RULE = KW_BANK_COO
 layout(constant_id = KW_BIRDS_SPEC_MODE_RULE) const uint MODE_RULE = KW_MODE_RULE_CLIMB;
 layout(constant_id = KW_BIRDS_SPEC_DIAGNOSTICS) const bool WRITE_DIAGNOSTICS = false;
 layout(constant_id = KW_BIRDS_SPEC_DRIVEN) const bool HAS_DRIVEN = false;
+// The pose layout, a variant to time on a GPU (docs/performance.md, "Bird poses: records
+// or fields"): false, a BirdPoseGpu record per bird; true, the same bytes as six arrays of
+// vec4, one per field, so that a subgroup's store of one field is one run of consecutive
+// vec4s rather than vec4s 96 bytes apart.
+layout(constant_id = KW_BIRDS_SPEC_POSE_FIELDS) const bool POSE_FIELDS = false;
 
 layout(std140, binding = KW_BIRDS_BINDING_UNIFORMS) uniform Uniforms { FlightUniforms u; };
 layout(std430, binding = KW_BIRDS_BINDING_ROUTES) readonly buffer Routes { RouteHeader routes[]; };
@@ -28,6 +33,8 @@ layout(std430, binding = KW_BIRDS_BINDING_ARC_SAMPLES) readonly buffer ArcSample
 layout(std430, binding = KW_BIRDS_BINDING_PARAMS) readonly buffer Params { BirdParams params[]; };
 layout(std430, binding = KW_BIRDS_BINDING_STATES) buffer States { BirdState states[]; };
 layout(std430, binding = KW_BIRDS_BINDING_POSES) writeonly buffer Poses { BirdPoseGpu poses[]; };
+// The same binding as fields (POSE_FIELDS): field f of ring slot s at (s * 6 + f) * count + i.
+layout(std430, binding = KW_BIRDS_BINDING_POSES) writeonly buffer PoseFields { vec4 pose_fields[]; };
 layout(std430, binding = KW_BIRDS_BINDING_DIAGNOSTICS) writeonly buffer Diagnostics { BirdDiag diags[]; };
 layout(std430, binding = KW_BIRDS_BINDING_MOTION) readonly buffer Motions { BirdMotionGpu motions[]; };
 
@@ -613,12 +620,23 @@ void main() {
 
         uint slot = (k % push.frames.z) * count + i;
         vec3 position = driven ? r.position : r.position + bird.offset.xyz;
-        poses[slot].position = vec4(position.x, position.y + bob_height, position.z, tail_spread);
-        poses[slot].body = body;
-        poses[slot].head = head;
-        poses[slot].tail = tail;
-        poses[slot].left_arm1 = left1;
-        poses[slot].left_arm2 = left2;
+        const vec4 placed = vec4(position.x, position.y + bob_height, position.z, tail_spread);
+        if (POSE_FIELDS) {
+            uint field = (k % push.frames.z) * 6u * count + i;
+            pose_fields[field] = placed;
+            pose_fields[field + count] = body;
+            pose_fields[field + 2u * count] = head;
+            pose_fields[field + 3u * count] = tail;
+            pose_fields[field + 4u * count] = left1;
+            pose_fields[field + 5u * count] = left2;
+        } else {
+            poses[slot].position = placed;
+            poses[slot].body = body;
+            poses[slot].head = head;
+            poses[slot].tail = tail;
+            poses[slot].left_arm1 = left1;
+            poses[slot].left_arm2 = left2;
+        }
         if (WRITE_DIAGNOSTICS) {
             diags[slot].velocity = vec4(r.velocity, alpha);
             diags[slot].acceleration = vec4(r.acceleration, float(mode));

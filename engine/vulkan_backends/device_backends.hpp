@@ -89,6 +89,9 @@ public:
     /// on the device; `frames` is then 1. Without driven birds `motion` is unused.
     [[nodiscard]] virtual Result<void> record_external(compute::Recording& recording, std::uint32_t frames,
                                                         const compute::Buffer* motion) = 0;
+    /// The poses' ring as the kernel writes it (records, or fields with
+    /// BackendOptions::bird_pose_fields), after load(): what a test compares the layouts by.
+    [[nodiscard]] virtual const compute::Buffer& pose_ring() const = 0;
 };
 
 /// What the vulkan pose backend adds to PoseBackend inside the engine.

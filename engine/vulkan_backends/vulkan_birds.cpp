@@ -47,13 +47,14 @@ std::span<const std::byte> bytes_of(const std::vector<T>& v) {
 
 class VulkanBirdBackend final : public BirdBackend, public DeviceBirdBackend, public DeviceData {
 public:
-    VulkanBirdBackend(std::shared_ptr<compute::Device> ctx, std::uint32_t workgroup) : ctx_(std::move(ctx)), workgroup_(workgroup) {}
+    VulkanBirdBackend(std::shared_ptr<compute::Device> ctx, std::uint32_t workgroup, bool pose_fields)
+        : ctx_(std::move(ctx)), workgroup_(workgroup), pose_fields_(pose_fields) {}
 
     /// The kernel specialized for this world's rules, with or without diagnostics; built
     /// on first use (lavapipe compiles it at its first dispatch) and kept.
     Result<const compute::Kernel*> pipeline(bool diagnostics) {
         const std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT> spec = {rules_.x, rules_.y, diagnostics ? 1u : 0u, driven_ > 0 ? 1u : 0u,
-                                                                         workgroup_};
+                                                                         workgroup_, pose_fields_ ? 1u : 0u};
         for (const auto& [key, p] : pipelines_) {
             if (key == spec) return &p;
         }
@@ -72,7 +73,8 @@ public:
     std::string device() const override { return ctx_->info().name; }
     double last_gpu_ms() const override { return gpu_ms_; }
     std::uint32_t validation_messages() const override { return ctx_->validation_messages(); }
-    const DeviceData* device_data() const override { return frame_ > 0 ? this : nullptr; }
+    // Poses laid out as fields are for timing only: no reader of bird_buffers::poses knows them.
+    const DeviceData* device_data() const override { return frame_ > 0 && !pose_fields_ ? this : nullptr; }
     const compute::Device& context() const override { return *ctx_; }
     compute::Device& compute_device() const override { return *ctx_; }
     DeviceSpan buffer(std::string_view name) const override {
@@ -83,8 +85,14 @@ public:
                 .element_bytes = sizeof(gpu::BirdPoseGpu)};
     }
 
+    const compute::Buffer& pose_ring() const override {
+        assert(!buffers_.empty() && "load() first");
+        return buffers_[KW_BIRDS_BINDING_POSES];
+    }
+
     Result<void> record_simulate(compute::Recording& recording, std::uint32_t frames) override {
         assert(count_ > 0 && "load() first");
+        if (pose_fields_) return fields_unsupported();
         if (driven_ > 0) {
             return make_error(Error::Kind::Unsupported, std::to_string(driven_) +
                                                             " birds are flown by another domain (flocking), whose motion is given per "
@@ -95,6 +103,7 @@ public:
 
     Result<void> record_external(compute::Recording& recording, std::uint32_t frames, const compute::Buffer* motion) override {
         if (count_ == 0) return make_error(Error::Kind::InvalidInput, "record_simulate: the backend has no flock; load() one first");
+        if (pose_fields_) return fields_unsupported();
         if (frames == 0 || frames > slots_) {
             return make_error(Error::Kind::InvalidInput, "record_simulate: frames is " + std::to_string(frames) + "; expected 1 to " +
                                                              std::to_string(slots_) + " (the pose ring's slots for this flock)");
@@ -190,6 +199,7 @@ public:
         assert(out.diag.empty() || out.diag.size() == std::size_t{frames} * count_);
         const bool want_poses = !out.poses.empty();
         const bool want_diag = !out.diag.empty();
+        if (pose_fields_ && (want_poses || want_diag || driven_ > 0)) return fields_unsupported();
         auto kernel = pipeline(want_diag);
         if (!kernel) return kernel.error();
         gpu_ms_ = 0.0;
@@ -202,7 +212,7 @@ public:
             auto recording = queue.begin();
             if (!recording) return recording.error();
             recording.value().timestamp(compute::Timestamp::Begin);
-            KW_TRY(record_simulate(recording.value(), frames));
+            KW_TRY(record_next(recording.value(), frames));
             recording.value().timestamp(compute::Timestamp::End);
             auto submission = queue.submit(std::move(recording).value());
             if (!submission) return submission.error();
@@ -266,6 +276,12 @@ public:
     }
 
 private:
+    static Error fields_unsupported() {
+        return make_error(Error::Kind::Unsupported,
+                          "BackendOptions::bird_pose_fields lays the poses out for timing only (bench birds --pose-layouts): "
+                          "nothing reads them back, records them for an application or draws them");
+    }
+
     // The next `frames` frames recorded (the motion of driven birds already in place).
     Result<void> record_next(compute::Recording& recording, std::uint32_t frames) {
         assert(&recording.device() == ctx_.get() && "a recording of the backend's device");
@@ -314,6 +330,7 @@ private:
     // A handful of variants at most (rules x diagnostics): a vector is the simplest map.
     std::vector<std::pair<std::array<std::uint32_t, KW_BIRDS_SPEC_COUNT>, compute::Kernel>> pipelines_;
     std::uint32_t workgroup_ = KW_BIRDS_WORKGROUP_SIZE;  // invocations per workgroup (KW_BIRDS_SPEC_WORKGROUP_SIZE)
+    bool pose_fields_ = false;  // KW_BIRDS_SPEC_POSE_FIELDS: the fields layout, a variant to time
     gpu::uvec4 rules_{};
     std::vector<Buffer> buffers_;
     std::optional<Buffer> readback_;
@@ -333,7 +350,7 @@ Result<std::unique_ptr<BirdBackend>> make_vulkan_bird_backend(const BackendOptio
     if (!ctx) return ctx.error();
     auto workgroup = compute::workgroup_size(*ctx.value(), options.workgroup_size, KW_BIRDS_WORKGROUP_SIZE);
     if (!workgroup) return workgroup.error();
-    auto backend = std::make_unique<VulkanBirdBackend>(std::move(ctx).value(), workgroup.value());
+    auto backend = std::make_unique<VulkanBirdBackend>(std::move(ctx).value(), workgroup.value(), options.bird_pose_fields);
     // The default variant now, so a broken shader or driver shows up at creation.
     if (auto p = backend->pipeline(false); !p) return p.error();
     return std::unique_ptr<BirdBackend>(std::move(backend));

@@ -26,7 +26,8 @@
 #define KW_BIRDS_SPEC_DIAGNOSTICS 2
 #define KW_BIRDS_SPEC_DRIVEN 3  // the world has driven birds (reads the motion binding)
 #define KW_BIRDS_SPEC_WORKGROUP_SIZE 4  // invocations per workgroup (BackendOptions::workgroup_size)
-#define KW_BIRDS_SPEC_COUNT 5
+#define KW_BIRDS_SPEC_POSE_FIELDS 5  // poses as six arrays of vec4, one per field (BackendOptions::bird_pose_fields)
+#define KW_BIRDS_SPEC_COUNT 6
 
 // Flight modes (SPEC B.5). KW_MODE_UNSET marks a state that has not seen frame 0.
 #define KW_MODE_LEVEL 0u

@@ -174,3 +174,64 @@ TEST(DevicePaths, BirdsPinNoReadbackMemoryUntilAsked) {
     EXPECT_EQ(std::memcmp(a.data(), b.data(), a.size() * sizeof(gpu::BirdPose)), 0);
     EXPECT_EQ(device.validation_messages(), 0u);
 }
+
+// The birds' pose layouts (BackendOptions::bird_pose_fields, a variant `bench birds
+// --pose-layouts` times on a GPU): the fields layout holds the very bytes of the records
+// layout, field by field, for every bird of every frame of a dispatch; and since nothing
+// reads fields, asking for poses, diagnostics or a recording with it is refused by name.
+// 301 birds: several workgroups, the last one partial.
+TEST(DevicePaths, BirdPoseFieldsHoldTheRecordsBytes) {
+    if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
+    constexpr std::uint32_t kBirds = 301, kFrames = 3;
+    const birds::BirdWorld birds = testing_support::small_flock(kBirds);
+    BackendOptions as_fields = testing_support::gpu_options();
+    as_fields.bird_pose_fields = true;
+    auto records = make_bird_backend(BackendKind::Vulkan, testing_support::gpu_options());
+    auto fields = make_bird_backend(BackendKind::Vulkan, as_fields);
+    ASSERT_TRUE(records.ok() && fields.ok());
+    ASSERT_TRUE(records.value()->load(birds).ok());
+    ASSERT_TRUE(fields.value()->load(birds).ok());
+    ASSERT_TRUE(records.value()->simulate(kFrames, {}).ok());
+    const auto simulated = fields.value()->simulate(kFrames, {});
+    ASSERT_TRUE(simulated.ok()) << simulated.error().message;
+
+    auto* records_device = dynamic_cast<DeviceBirdBackend*>(records.value().get());
+    auto* fields_device = dynamic_cast<DeviceBirdBackend*>(fields.value().get());
+    ASSERT_TRUE(records_device != nullptr && fields_device != nullptr);
+    constexpr std::size_t kFields = sizeof(gpu::BirdPoseGpu) / sizeof(glm::vec4);
+    static_assert(kFields == 6);
+    // The dispatch's frame k went to ring slot k (the rest of the ring holds whatever the
+    // memory held: not compared).
+    constexpr std::size_t kSlots = kFrames;
+    const std::size_t count = kSlots * kBirds * kFields;
+    std::vector<glm::vec4> a(records_device->pose_ring().size() / sizeof(glm::vec4));
+    std::vector<glm::vec4> b(fields_device->pose_ring().size() / sizeof(glm::vec4));
+    ASSERT_GE(a.size(), count);
+    ASSERT_EQ(a.size(), b.size());
+    ASSERT_TRUE(compute::download(records_device->compute_device(), records_device->pose_ring(), std::as_writable_bytes(std::span(a))).ok());
+    ASSERT_TRUE(compute::download(fields_device->compute_device(), fields_device->pose_ring(), std::as_writable_bytes(std::span(b))).ok());
+    std::size_t differ = 0;
+    for (std::size_t s = 0; s < kSlots; ++s) {
+        for (std::size_t i = 0; i < kBirds; ++i) {
+            for (std::size_t f = 0; f < kFields; ++f) {
+                const glm::vec4& record = a[(s * kBirds + i) * kFields + f];
+                const glm::vec4& field = b[(s * kFields + f) * kBirds + i];
+                differ += std::memcmp(&record, &field, sizeof(glm::vec4)) != 0;
+            }
+        }
+    }
+    EXPECT_EQ(differ, 0u) << "of " << count << " vec4s";
+    EXPECT_NE(std::memcmp(a.data(), b.data(), count * sizeof(glm::vec4)), 0) << "the two layouts are the same bytes in the same order";
+
+    std::vector<gpu::BirdPose> poses(kBirds);
+    const auto read = fields.value()->simulate(1, {poses, {}});
+    ASSERT_FALSE(read.ok());
+    EXPECT_EQ(read.error().kind, Error::Kind::Unsupported);
+    EXPECT_NE(read.error().message.find("bird_pose_fields"), std::string::npos) << read.error().message;
+    EXPECT_EQ(fields.value()->device_data(), nullptr) << "fields handed out as bird_buffers::poses";
+    const compute::Queue queue(fields_device->compute_device());
+    auto recording = queue.begin();
+    ASSERT_TRUE(recording.ok());
+    EXPECT_FALSE(fields_device->record_simulate(recording.value(), 1).ok());
+    EXPECT_EQ(fields_device->compute_device().validation_messages(), 0u);
+}

@@ -47,6 +47,13 @@ struct BackendOptions {
     /// 1024 that the device allows. A variant to time on a GPU (`bench --workgroup-sizes`);
     /// the results are the same bits at every size. Others: InvalidInput naming it.
     unsigned workgroup_size = 0;
+    /// The vulkan bird backend writes each frame's poses as six arrays of vec4, one per
+    /// BirdPoseGpu field, instead of a record per bird: the same bytes, laid out so that a
+    /// GPU's subgroup stores one field as one run. A variant to time on a GPU (`bench
+    /// birds --pose-layouts records,fields`); nothing reads such poses, so simulate() with
+    /// poses or diagnostics, recording and drawing are Unsupported with it. Ignored by the
+    /// other backends.
+    bool bird_pose_fields = false;
     /// The cpu backend's SIMD instruction set: "" = the widest this machine runs, or one
     /// of available_simd_isas() ("avx512", "avx2", "sse4", "scalar"; kodawari/backends/simd.hpp).
     /// A name it cannot use makes make_cpu_*_backend() fail with InvalidInput.
