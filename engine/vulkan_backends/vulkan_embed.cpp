@@ -17,14 +17,6 @@
 namespace kodawari {
 namespace {
 
-// A recording of the backend's device: the module's buffers are not on another one.
-Result<void> check_device(const char* function, const compute::Recording& recording, const compute::Device& device) {
-    if (&recording.device() == &device) return {};
-    return make_error(Error::Kind::InvalidInput, std::string(function) + ": recording is on another device (" +
-                                                     recording.device().info().name + ") than the backend's (" +
-                                                     device.info().name + ")");
-}
-
 Error not_vulkan(const char* function, const char* argument, std::string_view backend) {
     return make_error(Error::Kind::InvalidInput, std::string(function) + ": " + argument + " is a " + std::string(backend) +
                                                      " backend; recording needs a vulkan one (BackendKind::Vulkan)");
@@ -208,49 +200,68 @@ VulkanBufferRange vulkan_range(const compute::Buffer& buffer, std::uint32_t coun
     return out;
 }
 
-Result<void> record_step(RodBackend& rods, VkCommandBuffer cmd, const rods::RodFrame& frame) {
-    if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "record_step: cmd is null");
-    auto* device = dynamic_cast<DeviceRodBackend*>(&rods);
-    if (device == nullptr) return not_vulkan("record_step", "rods", rods.name());
-    compute::Recording recording = gpu::borrow(device->compute_device(), cmd, nullptr);
-    return device->record_external(recording, frame);
+namespace {
+
+// The vulkan side of `backend`, which every record call needs, with `recording` checked
+// to be on its device (the module's buffers are not on another one).
+template <typename DeviceBackend, typename Backend>
+Result<DeviceBackend*> recorder(Backend& backend, const compute::Recording& recording, const char* function, const char* argument) {
+    auto* device = dynamic_cast<DeviceBackend*>(&backend);
+    if (device == nullptr) return not_vulkan(function, argument, backend.name());
+    if (&recording.device() != &device->compute_device()) {
+        return make_error(Error::Kind::InvalidInput, std::string(function) + ": recording is on another device (" +
+                                                         recording.device().info().name + ") than the backend's (" +
+                                                         device->compute_device().info().name + ")");
+    }
+    return device;
 }
 
-Result<void> record_simulate(BirdBackend& birds, VkCommandBuffer cmd, std::uint32_t frames) {
-    if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "record_simulate: cmd is null");
-    auto* device = dynamic_cast<DeviceBirdBackend*>(&birds);
-    if (device == nullptr) return not_vulkan("record_simulate", "birds", birds.name());
-    compute::Recording recording = gpu::borrow(device->compute_device(), cmd, nullptr);
-    return device->record_external(recording, frames, nullptr);
+// The command-buffer forms: the application's command buffer borrowed on the backend's
+// device, for the Recording forms below.
+template <typename DeviceBackend, typename Backend>
+Result<compute::Recording> borrow_for(Backend& backend, VkCommandBuffer cmd, const char* function, const char* argument) {
+    if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, std::string(function) + ": cmd is null");
+    auto* device = dynamic_cast<DeviceBackend*>(&backend);
+    if (device == nullptr) return not_vulkan(function, argument, backend.name());
+    return gpu::borrow(device->compute_device(), cmd, nullptr);
 }
 
-Result<void> record_evaluate(PoseBackend& poses, VkCommandBuffer cmd, float time) {
-    if (cmd == VK_NULL_HANDLE) return make_error(Error::Kind::InvalidInput, "record_evaluate: cmd is null");
-    auto* device = dynamic_cast<DevicePoseBackend*>(&poses);
-    if (device == nullptr) return not_vulkan("record_evaluate", "poses", poses.name());
-    compute::Recording recording = gpu::borrow(device->compute_device(), cmd, nullptr);
-    return device->record_external(recording, time);
-}
+}  // namespace
 
 Result<void> record_step(RodBackend& rods, compute::Recording& recording, const rods::RodFrame& frame) {
-    auto* device = dynamic_cast<DeviceRodBackend*>(&rods);
-    if (device == nullptr) return not_vulkan("record_step", "rods", rods.name());
-    KW_TRY(check_device("record_step", recording, device->compute_device()));
-    return device->record_external(recording, frame);
+    auto device = recorder<DeviceRodBackend>(rods, recording, "record_step", "rods");
+    if (!device) return device.error();
+    return device.value()->record_external(recording, frame);
 }
 
 Result<void> record_simulate(BirdBackend& birds, compute::Recording& recording, std::uint32_t frames) {
-    auto* device = dynamic_cast<DeviceBirdBackend*>(&birds);
-    if (device == nullptr) return not_vulkan("record_simulate", "birds", birds.name());
-    KW_TRY(check_device("record_simulate", recording, device->compute_device()));
-    return device->record_external(recording, frames, nullptr);
+    auto device = recorder<DeviceBirdBackend>(birds, recording, "record_simulate", "birds");
+    if (!device) return device.error();
+    return device.value()->record_external(recording, frames, nullptr);
 }
 
 Result<void> record_evaluate(PoseBackend& poses, compute::Recording& recording, float time) {
-    auto* device = dynamic_cast<DevicePoseBackend*>(&poses);
-    if (device == nullptr) return not_vulkan("record_evaluate", "poses", poses.name());
-    KW_TRY(check_device("record_evaluate", recording, device->compute_device()));
-    return device->record_external(recording, time);
+    auto device = recorder<DevicePoseBackend>(poses, recording, "record_evaluate", "poses");
+    if (!device) return device.error();
+    return device.value()->record_external(recording, time);
+}
+
+Result<void> record_step(RodBackend& rods, VkCommandBuffer cmd, const rods::RodFrame& frame) {
+    auto recording = borrow_for<DeviceRodBackend>(rods, cmd, "record_step", "rods");
+    if (!recording) return recording.error();
+    return record_step(rods, recording.value(), frame);
+}
+
+Result<void> record_simulate(BirdBackend& birds, VkCommandBuffer cmd, std::uint32_t frames) {
+    auto recording = borrow_for<DeviceBirdBackend>(birds, cmd, "record_simulate", "birds");
+    if (!recording) return recording.error();
+    return record_simulate(birds, recording.value(), frames);
+}
+
+Result<void> record_evaluate(PoseBackend& poses, VkCommandBuffer cmd, float time) {
+    auto recording = borrow_for<DevicePoseBackend>(poses, cmd, "record_evaluate", "poses");
+    if (!recording) return recording.error();
+    return record_evaluate(poses, recording.value(), time);
 }
 
 }  // namespace kodawari
