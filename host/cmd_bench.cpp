@@ -61,7 +61,37 @@ struct ChainsOptions {
     std::optional<std::uint64_t> iterations;
     std::optional<std::uint64_t> frames;
     std::optional<std::uint64_t> steps;  // the old spelling of --frames
+    std::optional<std::string> rod_kernels;
 };
+
+// --rod-kernels per-chain,per-joint: each vulkan variant once per rod kernel
+// (BackendOptions::rod_joint_lanes), side by side; the others as they are.
+std::vector<BenchVariant> with_rod_kernels(std::vector<BenchVariant> variants, const std::optional<std::string>& kernels) {
+    if (!kernels) return variants;
+    std::vector<bool> lanes;
+    std::stringstream list(*kernels);
+    for (std::string item; std::getline(list, item, ',');) {
+        if (item != "per-chain" && item != "per-joint") {
+            throw UsageError{"--rod-kernels: \"" + item + "\" is neither per-chain nor per-joint"};
+        }
+        lanes.push_back(item == "per-joint");
+    }
+    if (lanes.empty()) throw UsageError{"--rod-kernels: expected per-chain, per-joint or both"};
+    std::vector<BenchVariant> out;
+    for (const BenchVariant& v : variants) {
+        if (v.kind != BackendKind::Vulkan) {
+            out.push_back(v);
+            continue;
+        }
+        for (const bool l : lanes) {
+            BenchVariant each = v;
+            each.options.rod_joint_lanes = l;
+            each.label += l ? "/per-joint" : "/per-chain";
+            out.push_back(std::move(each));
+        }
+    }
+    return out;
+}
 
 int bench_chains(ChainsOptions o) {
     // --chains and --steps were this benchmark's own names for what every other command
@@ -80,7 +110,7 @@ int bench_chains(ChainsOptions o) {
     const std::uint32_t steps = static_cast<std::uint32_t>(o.frames.value_or(10));
     const std::uint32_t repetitions = read_repetitions(o.common);
     const auto& json_path = o.common.json;
-    const std::vector<BenchVariant> variants = read_variants(o.common, choice);
+    const std::vector<BenchVariant> variants = with_rod_kernels(read_variants(o.common, choice), o.rod_kernels);
     auto made = rods::SyntheticScene::make(options);
     if (!made) return report(made.error());
     const rods::SyntheticScene& scene = made.value();
@@ -104,7 +134,13 @@ int bench_chains(ChainsOptions o) {
             continue;
         }
         RodBackend& b = *backend.value();
-        if (auto r = b.load(scene.world(), frames[0]); !r) return report(r.error());
+        if (auto r = b.load(scene.world(), frames[0]); !r) {
+            // A variant this device cannot run (--rod-kernels per-joint at a workgroup size
+            // past its shared memory) leaves the others to time.
+            if (r.error().kind != Error::Kind::Unsupported) return report(r.error());
+            std::printf("  %-14s skipped: %s\n", label.c_str(), r.error().message.c_str());
+            continue;
+        }
         if (auto r = b.step(frames[1]); !r) return report(r.error());
         const std::size_t index = backends.size();
         backends.push_back(std::move(backend).value());
@@ -428,6 +464,9 @@ Command add_bench(CLI::App& app) {
     add_count(*ch, "--iterations", chains->iterations, 1, 64, "solver iterations per substep (default: 4)");
     add_count(*ch, "--frames", chains->frames, 1, 100'000, "frames (steps of 1/120 s) per repetition (default: 10)");
     add_count(*ch, "--steps", chains->steps, 1, 100'000, "deprecated: the old spelling of --frames, for one release");
+    add_text(*ch, "--rod-kernels", chains->rod_kernels, "LIST",
+             "time the vulkan backend with a chain per invocation (rods_step.comp), a chain per group of invocations and a "
+             "joint per invocation (rods_lanes.comp), or both side by side: per-chain,per-joint (default: per-chain)");
     add_common(*ch, chains->common);
 
     auto crowd = std::make_shared<CrowdOptions>();

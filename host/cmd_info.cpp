@@ -46,8 +46,8 @@ int cmd_info(const InfoOptions& o) {
         std::printf("      compute queue %s, timestamps %s, subgroup %u, workgroup invocations <= %u, groups <= %u x %u x %u\n",
                     d.has_compute_queue ? "yes" : "no", d.timestamps ? "yes" : "no", d.subgroup_size, d.max_workgroup_invocations,
                     d.max_workgroup_count[0], d.max_workgroup_count[1], d.max_workgroup_count[2]);
-        std::printf("      storage buffer range %.1f MiB, push constants %u B, device-local memory %.1f GiB\n",
-                    static_cast<double>(d.max_storage_buffer_range) / (1 << 20), d.max_push_constants,
+        std::printf("      storage buffer range %.1f MiB, push constants %u B, shared memory %u KiB, device-local memory %.1f GiB\n",
+                    static_cast<double>(d.max_storage_buffer_range) / (1 << 20), d.max_push_constants, d.max_shared_memory / 1024,
                     static_cast<double>(d.device_local_bytes) / (1 << 30));
         // Why it cannot be chosen (an old driver, no compute queue, not the one asked
         // for), so that "chosen: none" is not the only clue.

@@ -53,14 +53,6 @@ layout(constant_id = KW_RODS_SPEC_FEATURES) const uint FEATURES = KW_RODS_FEATUR
 // every joint makes every iteration: `bench chains` (one head collider a chain) ran 3.7
 // times slower. 0 compiles collisions out.
 layout(constant_id = KW_RODS_SPEC_MAX_COLLIDERS) const uint MAX_COLLIDERS = KW_RODS_MAX_CHAIN_COLLIDERS;
-const uint COLLIDER_SLOTS = MAX_COLLIDERS > 0u ? MAX_COLLIDERS : 1u;  // (an array has one element at least)
-// Up to KW_RODS_UNROLLED_COLLIDERS colliders a chain the collisions of every joint are
-// unrolled as above; past it they stay a loop. The unrolled code is joints x passes x
-// colliders copies of a collision, at every place a joint collides: for the VRM avatars
-// (16 colliders a chain) lavapipe took about 2 minutes to compile that pipeline (the
-// scene itself runs 3 frames in a second). The same operations in the same order either
-// way: the same bits.
-const bool UNROLL_COLLIDERS = MAX_COLLIDERS <= KW_RODS_UNROLLED_COLLIDERS;
 // The examples the blend sums past the base: views, then keyed ones (shapes 1 .. m + J).
 // A chain has at most KW_RODS_MAX_VIEWS in all (rods::add_keyed_examples), which caps the
 // sum of two dispatch-wide maxima that may come from different templates.
@@ -83,90 +75,7 @@ layout(std430, binding = KW_RODS_BINDING_WINDS) readonly buffer Winds { RodWindG
 
 layout(push_constant) uniform Push { RodPush push; };
 
-const vec4 IDENTITY = vec4(0.0, 0.0, 0.0, 1.0);
-const float ROOT_SHAPE_WEIGHT = 10.0;  // solver.cpp kRootShapeWeight
-const int EXTRACT_ITERATIONS = 1;      // solver.cpp kExtractIterations
-
-// ---- quaternions (lib/quat.glsl holds the ones shared with other kernels) --------------
-
-// solver.cpp partial(): the rotation by `fraction` of q's angle, the short way.
-vec4 partial_turn(vec4 q, float fraction) {
-    if (fraction >= 1.0) return q;
-    if (fraction <= 0.0) return IDENTITY;
-    q = positive_w(q);
-    const float sn = length(q.xyz);
-    if (!(sn > 0.0)) return IDENTITY;
-    const float half_angle = fraction * atan(sn, q.w);
-    return qnormalize(vec4(sin(half_angle) * (q.xyz / sn), cos(half_angle)));
-}
-// solver.cpp interpolate().
-vec4 interpolate(vec4 a, vec4 b, float t) { return qnormalize(qmul(a, partial_turn(qmul(qconj(a), b), t))); }
-// solver.cpp extract_rotation(): Mueller et al. 2016, Algorithm 1, warm-started, with
-// the first-order turn.
-vec4 extract_rotation(mat3 a, vec4 q) {
-    [[unroll]] for (int iter = 0; iter < EXTRACT_ITERATIONS; ++iter) {
-        const mat3 r = mat3_cast(q);
-        const vec3 torque = cross(r[0], a[0]) + cross(r[1], a[1]) + cross(r[2], a[2]);
-        const float alignment = abs(dot(r[0], a[0]) + dot(r[1], a[1]) + dot(r[2], a[2]));
-        const vec3 half_omega = torque * (0.5 / (alignment + 1e-9));
-        q = qnormalize(q + qmul(vec4(half_omega, 0.0), q));
-    }
-    return q;
-}
-void push_out(inout vec3 p, vec3 center, float radius) {
-    const vec3 d = p - center;
-    const float len2 = dot(d, d);
-    if (len2 >= radius * radius) return;
-    const float len = sqrt(len2);
-    const vec3 n = len > 1e-9 ? d / len : vec3(0.0, 1.0, 0.0);
-    p = center + radius * n;
-}
-void pull_in(inout vec3 p, vec3 center, float radius) {
-    const vec3 d = p - center;
-    const float len2 = dot(d, d);
-    if (len2 <= radius * radius) return;
-    p = center + radius * (d / sqrt(len2));
-}
-vec3 closest_on_segment(vec3 p, vec3 a, vec3 b) {
-    const vec3 ab = b - a;
-    const float len2 = dot(ab, ab);
-    if (len2 <= 0.0) return a;
-    const float t = clamp(dot(p - a, ab) / len2, 0.0, 1.0);
-    return a + t * ab;
-}
-
-// The chain's colliders (solver.cpp step): in the end root's frame (la, lb; a plane's lb
-// its turned normal), where the substep's root places them (ca, cb), the distance each
-// keeps (rods::collider_reach) and its kind. Sized and indexed by constants (MAX_COLLIDERS).
-vec3 col_la[COLLIDER_SLOTS], col_lb[COLLIDER_SLOTS];
-vec3 col_ca[COLLIDER_SLOTS], col_cb[COLLIDER_SLOTS];
-float col_reach[COLLIDER_SLOTS];
-uint col_kind[COLLIDER_SLOTS];
-uint col_count;
-
-// solver.cpp collide_all(): one particle against collider k.
-void collide_with(inout vec3 p, uint k) {
-    if ((FEATURES & KW_RODS_FEATURE_PLANE) != 0u && col_kind[k] == KW_RODS_COLLIDER_PLANE) {
-        const float s = dot(p - col_ca[k], col_cb[k]);
-        if (s < col_reach[k]) p += (col_reach[k] - s) * col_cb[k];
-    } else if ((FEATURES & KW_RODS_FEATURE_INSIDE) != 0u && col_kind[k] == KW_RODS_COLLIDER_INSIDE) {
-        pull_in(p, closest_on_segment(p, col_ca[k], col_cb[k]), col_reach[k]);
-    } else {
-        push_out(p, closest_on_segment(p, col_ca[k], col_cb[k]), col_reach[k]);
-    }
-}
-
-// solver.cpp collide_all(): one particle against every collider, the set
-// KW_RODS_COLLIDER_PASSES times (unrolled for few colliders: UNROLL_COLLIDERS).
-void collide_all(inout vec3 p) {
-    [[unroll]] for (uint pass = 0; pass < KW_RODS_COLLIDER_PASSES; ++pass) {
-        if (UNROLL_COLLIDERS) {
-            [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) collide_with(p, k);
-        } else {
-            [[dont_unroll]] for (uint k = 0; k < col_count; ++k) collide_with(p, k);
-        }
-    }
-}
+#include "lib/rod_solver.glsl"
 
 // A template's constants, each loaded once: template joint i of tj + i, and its shapes
 // (shape0 + k * n + i, examples pre-signed into the base's hemisphere at upload, SPEC A.2).

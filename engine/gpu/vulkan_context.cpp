@@ -82,6 +82,7 @@ GpuDeviceInfo describe(const vk::raii::PhysicalDevice& device, std::uint32_t ind
     info.max_workgroup_count = {props.limits.maxComputeWorkGroupCount[0], props.limits.maxComputeWorkGroupCount[1],
                                 props.limits.maxComputeWorkGroupCount[2]};
     info.max_storage_buffer_range = props.limits.maxStorageBufferRange;
+    info.max_shared_memory = props.limits.maxComputeSharedMemorySize;
     info.max_push_constants = props.limits.maxPushConstantsSize;
     const auto memory = device.getMemoryProperties();
     for (std::uint32_t h = 0; h < memory.memoryHeapCount; ++h) {

@@ -146,18 +146,20 @@ gpu::RodKeyTemplateGpu key_template(const rods::ChainTemplate& t) {
 
 class VulkanRodBackend final : public RodBackend, public DeviceRodBackend, public DeviceData {
 public:
-    VulkanRodBackend(std::shared_ptr<compute::Device> ctx, std::uint32_t workgroup) : ctx_(std::move(ctx)), workgroup_(workgroup) {}
+    VulkanRodBackend(std::shared_ptr<compute::Device> ctx, std::uint32_t workgroup, bool joint_lanes)
+        : ctx_(std::move(ctx)), workgroup_(workgroup), joint_lanes_(joint_lanes) {}
 
     using Variant = std::array<std::uint32_t, KW_RODS_SPEC_COUNT>;
 
     /// The kernel specialized for a world (shared/rods.h, KW_RODS_SPEC_*); built on first
-    /// use and kept.
+    /// use and kept. Lanes per chain other than 0: rods_lanes.comp.
     Result<const compute::Kernel*> pipeline(const Variant& spec) {
         for (const auto& [key, p] : pipelines_) {
             if (key == spec) return &p;
         }
         const std::vector<compute::Binding> types(KW_RODS_BINDING_COUNT, compute::Binding::Storage);
-        auto created = compute::Kernel::create(*ctx_, "rods_step", types, sizeof(gpu::RodPush), spec);
+        const char* kernel = spec[KW_RODS_SPEC_LANES] != 0 ? "rods_lanes" : "rods_step";
+        auto created = compute::Kernel::create(*ctx_, kernel, types, sizeof(gpu::RodPush), spec);
         if (!created) return created.error();
         pipelines_.emplace_back(spec, std::move(created).value());
         return &pipelines_.back().second;
@@ -196,7 +198,12 @@ public:
         KW_TRY(rods::check_frame(world, initial));
         const std::size_t count = world.chains.size();
         if (count == 0) return make_error(Error::Kind::InvalidInput, "the world has no chains");
-        if (compute::groups_for(count, workgroup_) > ctx_->info().max_workgroup_count[0]) {
+        if (joint_lanes_) {
+            auto lanes = joint_lanes_for(world);
+            if (!lanes) return lanes.error();
+            lanes_ = lanes.value();
+        }
+        if (compute::groups_for(count, chains_per_group()) > ctx_->info().max_workgroup_count[0]) {
             return make_error(Error::Kind::Unsupported,
                               std::to_string(count) + " chains exceed what one dispatch on " + ctx_->info().name + " can cover");
         }
@@ -514,6 +521,50 @@ public:
     }
 
 private:
+    // Chains a workgroup steps: one per invocation, or one per `lanes_` invocations.
+    std::uint32_t chains_per_group() const { return joint_lanes_ ? workgroup_ / lanes_ : workgroup_; }
+
+    // BackendOptions::rod_joint_lanes: the lanes per chain of rods_lanes.comp for `world`
+    // (a power of two, at least its longest chain), or why that kernel cannot step it.
+    Result<std::uint32_t> joint_lanes_for(const rods::RodWorld& world) const {
+        auto refuse = [&](const std::string& what) {
+            return make_error(Error::Kind::Unsupported,
+                              "BackendOptions::rod_joint_lanes: the joint-lanes kernel (shaders/rods_lanes.comp) steps worlds of at most " +
+                                  std::to_string(KW_RODS_MAX_GROUPS) +
+                                  " templates without levels of detail, keyed examples, center frames or angle limits; this world has " +
+                                  what + " (step it without the option)");
+        };
+        std::vector<bool> used(world.templates.size(), false);
+        for (const rods::ChainInstance& ch : world.chains) used[ch.template_index] = true;
+        const auto templates = static_cast<std::size_t>(std::count(used.begin(), used.end(), true));
+        if (templates > KW_RODS_MAX_GROUPS) return refuse(std::to_string(templates) + " templates");
+        if (world.lod.enabled) return refuse("levels of detail");
+        if (world.center_count > 0) return refuse("center frames");
+        std::uint32_t max_joints = 2;
+        for (const rods::ChainTemplate& t : world.templates) {
+            if (!t.keyed.empty()) return refuse("keyed examples");
+            if (t.chain.limited) return refuse("angle limits");
+            max_joints = std::max(max_joints, t.chain.joint_count);
+        }
+        const std::uint32_t lanes = std::bit_ceil(max_joints);
+        if (lanes > workgroup_) {
+            return make_error(Error::Kind::Unsupported, "BackendOptions::rod_joint_lanes: chains of " + std::to_string(max_joints) +
+                                                            " joints take " + std::to_string(lanes) +
+                                                            " lanes, more than the workgroup's " + std::to_string(workgroup_) +
+                                                            " (BackendOptions::workgroup_size)");
+        }
+        // rods_lanes.comp's shared arrays, per invocation: 8 vec3 and 2 vec4 (16 bytes each,
+        // as vec3 arrays are laid out), a mat3 (3 x 16) and 2 floats.
+        const std::uint64_t shared = std::uint64_t{workgroup_} * (10 * 16 + 48 + 2 * 4);
+        if (shared > ctx_->info().max_shared_memory) {
+            return make_error(Error::Kind::Unsupported,
+                              "BackendOptions::rod_joint_lanes: a workgroup of " + std::to_string(workgroup_) + " invocations needs " +
+                                  std::to_string(shared) + " bytes of shared memory; " + ctx_->info().name + " has " +
+                                  std::to_string(ctx_->info().max_shared_memory) + " (a smaller BackendOptions::workgroup_size)");
+        }
+        return lanes;
+    }
+
     // The kernels of the loaded world's dispatches for its features_ (pipeline(), cached):
     // at load, and again when a world loaded in calm air gets a wind (record()).
     Result<void> select_kernels() {
@@ -534,7 +585,8 @@ private:
         std::vector<const Buffer*> bound;
         for (const auto& b : buffers_) bound.push_back(&b);
         auto kernel_for = [&](std::uint32_t n, std::uint32_t m, std::uint32_t keyed, bool exact) -> Result<const compute::Kernel*> {
-            auto kernel = pipeline({n, m, suppression_, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed, features_, max_colliders_, workgroup_});
+            auto kernel = pipeline({n, m, suppression_, grouped_ ? 1u : 0u, exact ? 1u : 0u, keyed, features_, max_colliders_, workgroup_,
+                                    joint_lanes_ ? lanes_ : 0u});
             if (!kernel) return kernel.error();
             kernel.value()->bind(bound);  // (again for a shared one: the same bindings)
             return kernel.value();
@@ -615,7 +667,7 @@ private:
         auto dispatch = [&](const compute::Kernel* kernel, std::uint32_t first, std::uint32_t chains) {
             push.counts.x = chains;
             push.counts.y = first;
-            kernel->dispatch(recording, std::as_bytes(std::span(&push, 1)), compute::groups_for(chains, workgroup_));
+            kernel->dispatch(recording, std::as_bytes(std::span(&push, 1)), compute::groups_for(chains, chains_per_group()));
         };
         // What earlier dispatches and copies wrote (the state this dispatch reads and
         // overwrites, the input) before the step.
@@ -705,6 +757,8 @@ private:
     // (A deque: kernel_ and the groups' kernels point into it.)
     std::deque<std::pair<Variant, compute::Kernel>> pipelines_;
     std::uint32_t workgroup_ = KW_RODS_WORKGROUP_SIZE;  // invocations per workgroup (KW_RODS_SPEC_WORKGROUP_SIZE)
+    bool joint_lanes_ = false;  // BackendOptions::rod_joint_lanes: rods_lanes.comp
+    std::uint32_t lanes_ = 0;   // its invocations per chain (KW_RODS_SPEC_LANES) for the loaded world
     const compute::Kernel* kernel_ = nullptr;  // the one dispatch's when not grouped_
     const rods::RodWorld* world_ = nullptr;
     std::vector<Buffer> buffers_;
@@ -748,7 +802,8 @@ Result<std::unique_ptr<RodBackend>> make_vulkan_rod_backend(const BackendOptions
     if (!ctx) return ctx.error();
     auto workgroup = compute::workgroup_size(*ctx.value(), options.workgroup_size, KW_RODS_WORKGROUP_SIZE);
     if (!workgroup) return workgroup.error();
-    return std::unique_ptr<RodBackend>(std::make_unique<VulkanRodBackend>(std::move(ctx).value(), workgroup.value()));
+    return std::unique_ptr<RodBackend>(
+        std::make_unique<VulkanRodBackend>(std::move(ctx).value(), workgroup.value(), options.rod_joint_lanes));
 }
 
 }  // namespace kodawari

@@ -32,7 +32,9 @@
 // GPU-first kernel would map a subgroup (or workgroup) to a chain and an invocation to a
 // joint, exchanging the group's neighbours by subgroup shuffles or shared memory:
 // coalesced, few registers, but lavapipe pays per invocation and per shuffle, which is
-// why this one does not.
+// why this one does not. shaders/rods_lanes.comp is that kernel (shared memory: lavapipe's
+// subgroups are 8 lanes, fewer than a chain's joints), a variant for a GPU run to time
+// (BackendOptions::rod_joint_lanes); it reads the same buffers.
 #ifndef KODAWARI_SHADERS_SHARED_RODS_H
 #define KODAWARI_SHADERS_SHARED_RODS_H
 
@@ -70,7 +72,8 @@
 #define KW_RODS_COLLIDER_INSIDE 1
 #define KW_RODS_COLLIDER_PLANE 2
 
-// Specialization constant ids of rods_step.comp.
+// Specialization constant ids of rods_step.comp (and of rods_lanes.comp, which reads
+// MAX_VIEWS, SUPPRESSION, FEATURES, MAX_COLLIDERS, WORKGROUP_SIZE and LANES).
 #define KW_RODS_SPEC_MAX_JOINTS 0  // the longest chain of the dispatch: sizes the register arrays
 #define KW_RODS_SPEC_MAX_VIEWS 1   // the most view examples of a chain of the dispatch
 #define KW_RODS_SPEC_SUPPRESSION 2 // KW_RODS_SUPPRESSION_*: what the world's chains need of SPEC A.5
@@ -80,7 +83,8 @@
 #define KW_RODS_SPEC_FEATURES 6    // KW_RODS_FEATURE_* the world uses; the others are compiled out
 #define KW_RODS_SPEC_MAX_COLLIDERS 7  // the most colliders of a chain of the world (0: collisions compiled out)
 #define KW_RODS_SPEC_WORKGROUP_SIZE 8  // invocations per workgroup (BackendOptions::workgroup_size)
-#define KW_RODS_SPEC_COUNT 9
+#define KW_RODS_SPEC_LANES 9  // rods_lanes.comp: invocations per chain (a power of two >= its joints)
+#define KW_RODS_SPEC_COUNT 10
 
 // What a world may use beyond outside colliders (KW_RODS_SPEC_FEATURES): lavapipe runs
 // both sides of a branch under a mask, so code a world never takes still costs it (the

@@ -54,6 +54,15 @@ struct BackendOptions {
     /// poses or diagnostics, recording and drawing are Unsupported with it. Ignored by the
     /// other backends.
     bool bird_pose_fields = false;
+    /// The vulkan rod backend steps each chain with a group of invocations, one per joint
+    /// (shaders/rods_lanes.comp), instead of one invocation per chain: the same bits, with
+    /// each invocation's registers one joint's and the state's loads consecutive across a
+    /// subgroup, at the cost of barriers where the solver is sequential along the chain. A
+    /// variant to time on a GPU (`bench chains --rod-kernels per-chain,per-joint`). It
+    /// covers worlds of at most 32 templates without levels of detail, keyed examples,
+    /// center frames or angle limits; load() refuses the others (Unsupported, naming this
+    /// option and what the world has). Ignored by the other backends.
+    bool rod_joint_lanes = false;
     /// The cpu backend's SIMD instruction set: "" = the widest this machine runs, or one
     /// of available_simd_isas() ("avx512", "avx2", "sse4", "scalar"; kodawari/backends/simd.hpp).
     /// A name it cannot use makes make_cpu_*_backend() fail with InvalidInput.

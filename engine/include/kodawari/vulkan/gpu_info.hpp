@@ -27,6 +27,7 @@ struct GpuDeviceInfo {
     std::array<std::uint32_t, 3> max_workgroup_count{};
     std::uint64_t max_storage_buffer_range = 0;
     std::uint32_t max_push_constants = 0;
+    std::uint32_t max_shared_memory = 0;  ///< maxComputeSharedMemorySize (bytes)
     std::uint64_t device_local_bytes = 0;
     /// Why this device was passed over ("no queue family with compute", "Vulkan 1.0 < 1.1
     /// needed", "does not match \"nvidia\""); "" when it can be chosen.
