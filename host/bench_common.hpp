@@ -65,6 +65,7 @@ struct BenchCommon {
     std::optional<std::uint64_t> repetitions;
     std::optional<std::string> json;
     std::optional<std::string> workgroup_sizes;
+    bool kernel_statistics = false;  // --kernel-statistics
 };
 
 /// One contender's backend: its kind, its options and its name in the table ("vulkan",
@@ -75,7 +76,10 @@ struct BenchVariant {
     std::string label;
 };
 /// The backends to time (read_backends) with `choice`'s options, the vulkan one once per
-/// size of --workgroup-sizes: variants a GPU run times side by side.
+/// size of --workgroup-sizes: variants a GPU run times side by side. With
+/// --kernel-statistics each vulkan variant gets a device of its own that captures its
+/// kernels' statistics (BackendOptions::context), which report_results() prints last.
+/// A variant added later from these (with_rod_kernels, with_pose_layouts) shares its device.
 [[nodiscard]] std::vector<BenchVariant> read_variants(const BenchCommon& o, const BackendChoice& choice);
 
 /// --backend NAME or --backends LIST: the backends to time (cpu-reference,cpu,vulkan by default).

@@ -8,6 +8,7 @@
 
 #include "bench_common.hpp"
 #include "kodawari/core/atomic_file.hpp"
+#include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/vulkan/compute.hpp"
 #include "kodawari/backends/simd.hpp"
 #include "kodawari/simulation/simulation.hpp"
@@ -53,6 +54,38 @@ std::vector<BackendKind> read_backends(const BenchCommon& o) {
     return kinds;
 }
 
+namespace {
+
+// The devices of --kernel-statistics, by the label of the variant that opened them.
+std::vector<std::pair<std::string, std::shared_ptr<compute::Device>>>& statistics_devices() {
+    static std::vector<std::pair<std::string, std::shared_ptr<compute::Device>>> devices;
+    return devices;
+}
+
+// --kernel-statistics: each device's kernels as the driver describes them.
+void print_kernel_statistics() {
+    for (const auto& [label, device] : statistics_devices()) {
+        auto statistics = device->kernel_statistics();
+        if (!statistics) {
+            std::printf("kernel statistics of %s: none (%s)\n", label.c_str(), statistics.error().message.c_str());
+            continue;
+        }
+        std::printf("kernel statistics of %s on %s (VK_KHR_pipeline_executable_properties; the driver's names):\n", label.c_str(),
+                    device->info().name.c_str());
+        for (const compute::KernelStatistics& k : statistics.value()) {
+            std::string spec;
+            for (const std::uint32_t s : k.specialization) spec += (spec.empty() ? "" : " ") + std::to_string(s);
+            std::printf("  %s [%s]%s%s\n", k.kernel.c_str(), spec.c_str(), k.note.empty() ? "" : ": ", k.note.c_str());
+            for (const compute::KernelStatistics::Value& v : k.values) {
+                std::printf("    %s: %s = %s\n", v.executable.c_str(), v.name.c_str(), v.value.c_str());
+            }
+        }
+    }
+    std::fflush(stdout);
+}
+
+}  // namespace
+
 std::vector<BenchVariant> read_variants(const BenchCommon& o, const BackendChoice& choice) {
     std::vector<unsigned> sizes;
     if (o.workgroup_sizes) {
@@ -80,8 +113,20 @@ std::vector<BenchVariant> read_variants(const BenchCommon& o, const BackendChoic
             variants.push_back({kind, options, name + "/wg" + std::to_string(n)});
         }
     }
+    if (o.kernel_statistics) {
+        for (BenchVariant& v : variants) {
+            if (v.kind != BackendKind::Vulkan) continue;
+            v.options.kernel_statistics = true;
+            auto device = open_shared_device(v.options);
+            if (!device) continue;  // the backend's own attempt reports why
+            v.options.context = device.value();
+            statistics_devices().push_back({v.label, std::move(device).value()});
+        }
+    }
     return variants;
 }
+
+
 
 // --repetitions: how many timed runs of every backend the medians come from.
 std::uint32_t read_repetitions(const BenchCommon& o) { return static_cast<std::uint32_t>(o.repetitions.value_or(3)); }
@@ -165,6 +210,7 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
     // the same frames unless the device's clock disagrees with the host's (lavapipe's
     // timestamps are the CPU's clock, read by its own threads).
     if (gpu_above_wall) std::printf("note: GPU time above wall time: the device's timestamp clock disagrees with the host's\n");
+    print_kernel_statistics();
     if (!json_path) return kExitOk;
     std::string text = json_head + ",\"isa\":\"" + json_escape(cpu_isa) + "\",\"threads\":" + std::to_string(cpu_threads) +
                        ",\"repetitions\":" + std::to_string(repetitions) + ",\"results\":[";
@@ -193,6 +239,9 @@ void add_common(CLI::App& c, BenchCommon& o) {
     add_text(c, "--workgroup-sizes", o.workgroup_sizes, "LIST",
              "time the vulkan backend at each of these workgroup sizes, side by side, e.g. 32,64,128,256 (default: "
              "--workgroup-size, else 64)");
+    add_switch(c, "--kernel-statistics", o.kernel_statistics,
+               "after the table, each vulkan kernel's statistics as the driver reports them (registers, spills, shared "
+               "memory; VK_KHR_pipeline_executable_properties, where the driver offers it; default: off)");
     add_backend_options(c, o.backend);
     c.get_option("--backend")->description("time this one backend, as --backends NAME (default: the --backends list)");
 }

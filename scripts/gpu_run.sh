@@ -694,16 +694,17 @@ run_all() {
   # Benchmarks first: their figures are what the machine is lent for. Each keeps
   # bench_reserve seconds of the deadline for validate and embed_vulkan.
   # The rod kernels side by side: a chain per invocation and a joint per invocation
-  # (docs/performance.md, "Chains on a GPU").
+  # (docs/performance.md, "The GPU-first variant"). The first bench of each kind also
+  # prints its kernels' registers and spills (--kernel-statistics).
   run_step "bench-chains-$chains_s" "$bench_limit" "$bench_reserve" bench "$bin" bench chains --count "$chains_s" \
     --joints 16 --iterations 4 --frames "$chains_frames_s" --repetitions "$reps_s" --backends "$all" \
-    --rod-kernels per-chain,per-joint --json "$out/bench-chains-$chains_s.json"
+    --rod-kernels per-chain,per-joint --kernel-statistics --json "$out/bench-chains-$chains_s.json"
   # The poses as records and as fields side by side (docs/performance.md, "Birds").
   run_step "bench-birds-$birds_s" "$bench_limit" "$bench_reserve" bench "$bin" bench birds --count "$birds_s" \
     --frames "$birds_frames_s" --repetitions "$reps_s" --backends "$all" --pose-layouts records,fields \
-    --json "$out/bench-birds-$birds_s.json"
+    --kernel-statistics --json "$out/bench-birds-$birds_s.json"
   run_step "bench-crowd-$crowd_s" "$bench_limit" "$bench_reserve" bench "$bin" bench crowd --count "$crowd_s" \
-    --frames "$crowd_frames" --repetitions "$reps_s" --backends "$all" --json "$out/bench-crowd-$crowd_s.json"
+    --frames "$crowd_frames" --repetitions "$reps_s" --backends "$all" --kernel-statistics --json "$out/bench-crowd-$crowd_s.json"
   run_step "bench-chains-$chains_l" "$bench_limit" "$bench_reserve" bench "$bin" bench chains --count "$chains_l" \
     --joints 16 --iterations 4 --frames "$chains_frames_l" --repetitions "$reps_l" --backends "$fast" \
     --workgroup-sizes "$workgroups" --json "$out/bench-chains-$chains_l.json"
@@ -719,7 +720,7 @@ run_all() {
     --count "$crowd_l" --frames "$crowd_lod_frames" --lod --repetitions "$reps_l" --backends "$fast" \
     --json "$out/bench-crowd-lod-$crowd_l.json"
   run_step "bench-flock-$flock_s" "$bench_limit" "$bench_reserve" bench "$bin" bench flock --count "$flock_s" \
-    --frames "$flock_frames_s" --repetitions "$reps_s" --backends "$all" --json "$out/bench-flock-$flock_s.json"
+    --frames "$flock_frames_s" --repetitions "$reps_s" --backends "$all" --kernel-statistics --json "$out/bench-flock-$flock_s.json"
   run_step "bench-flock-$flock_l" "$bench_limit" "$bench_reserve" bench "$bin" bench flock --count "$flock_l" \
     --frames "$flock_frames_l" --repetitions "$reps_l" --backends "$fast" --workgroup-sizes "$workgroups" \
     --json "$out/bench-flock-$flock_l.json"

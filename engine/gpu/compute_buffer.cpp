@@ -8,6 +8,10 @@ namespace kodawari::compute {
 
 Device::~Device() = default;
 
+Result<std::vector<KernelStatistics>> Device::kernel_statistics() const {
+    return make_error(Error::Kind::Unsupported, "kernel statistics: this device does not capture them");
+}
+
 Buffer::Buffer() : native_(std::make_unique<Native>()) {}
 Buffer::Buffer(Buffer&&) noexcept = default;
 Buffer& Buffer::operator=(Buffer&&) noexcept = default;

@@ -38,6 +38,41 @@ Result<Kernel> Kernel::create(const Device& device, std::string_view shader, std
     return create(device, shader, code, bindings, push_bytes, specialization);
 }
 
+namespace {
+
+// A pipeline's statistics (VK_KHR_pipeline_executable_properties), read once it is created
+// with VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR. A driver's failure here is noted, not
+// fatal: the kernel runs without its statistics.
+compute::KernelStatistics statistics_of(const gpu::VulkanContext& device, vk::Pipeline pipeline, std::string_view shader,
+                                        std::span<const std::uint32_t> specialization) {
+    compute::KernelStatistics out;
+    out.kernel = std::string(shader);
+    out.specialization.assign(specialization.begin(), specialization.end());
+    try {
+        const auto& vk_device = device.device();
+        const auto executables = vk_device.getPipelineExecutablePropertiesKHR({.pipeline = pipeline});
+        for (std::uint32_t e = 0; e < executables.size(); ++e) {
+            const std::string executable(executables[e].name.data());
+            for (const vk::PipelineExecutableStatisticKHR& s :
+                 vk_device.getPipelineExecutableStatisticsKHR({.pipeline = pipeline, .executableIndex = e})) {
+                std::string value;
+                switch (s.format) {
+                case vk::PipelineExecutableStatisticFormatKHR::eBool32: value = s.value.b32 ? "true" : "false"; break;
+                case vk::PipelineExecutableStatisticFormatKHR::eInt64: value = std::to_string(s.value.i64); break;
+                case vk::PipelineExecutableStatisticFormatKHR::eUint64: value = std::to_string(s.value.u64); break;
+                case vk::PipelineExecutableStatisticFormatKHR::eFloat64: value = std::to_string(s.value.f64); break;
+                }
+                out.values.push_back({executable, std::string(s.name.data()), std::move(value)});
+            }
+        }
+    } catch (const std::exception& e) {
+        out.note = std::string("the driver's statistics could not be read: ") + e.what();
+    }
+    return out;
+}
+
+}  // namespace
+
 Result<Kernel> Kernel::create(const Device& compute_device, std::string_view shader, std::span<const std::uint32_t> code,
                               std::span<const Binding> bindings, std::uint32_t push_bytes,
                               std::span<const std::uint32_t> specialization) {
@@ -76,11 +111,13 @@ Result<Kernel> Kernel::create(const Device& compute_device, std::string_view sha
                                           .dataSize = specialization.size_bytes(),
                                           .pData = specialization.data()};
         n.pipeline = vk_device.createComputePipeline(
-            nullptr, {.stage = {.stage = vk::ShaderStageFlagBits::eCompute,
+            nullptr, {.flags = device.captures_statistics() ? vk::PipelineCreateFlagBits::eCaptureStatisticsKHR : vk::PipelineCreateFlags{},
+                      .stage = {.stage = vk::ShaderStageFlagBits::eCompute,
                                 .module = *n.module,
                                 .pName = "main",
                                 .pSpecializationInfo = specialization.empty() ? nullptr : &spec},
                       .layout = *n.layout}, device.allocator());
+        if (device.captures_statistics()) device.add_statistics(statistics_of(device, *n.pipeline, shader, specialization));
         std::vector<vk::DescriptorPoolSize> sizes;
         for (const vk::DescriptorType type : n.types) sizes.push_back({.type = type, .descriptorCount = 1});
         n.pool = vk_device.createDescriptorPool({.flags = vk::DescriptorPoolCreateFlagBits::eFreeDescriptorSet,

@@ -383,15 +383,49 @@ Result<std::unique_ptr<VulkanContext>> VulkanContext::create(const ContextOption
 
         const float priority = 1.0f;
         const vk::DeviceQueueCreateInfo queue_info{.queueFamilyIndex = ctx->queue_family_, .queueCount = 1, .pQueuePriorities = &priority};
-        const char* swapchain_extension = VK_KHR_SWAPCHAIN_EXTENSION_NAME;
-        ctx->device_ = ctx->physical_.createDevice({.queueCreateInfoCount = 1,
+        std::vector<const char*> extensions;
+        if (presents) extensions.push_back(VK_KHR_SWAPCHAIN_EXTENSION_NAME);
+        // Kernel statistics (ContextOptions::capture_statistics): the extension and its one
+        // feature, where the driver offers both; otherwise the note says which is missing.
+        vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR executable_info{.pipelineExecutableInfo = VK_TRUE};
+        if (options.capture_statistics) {
+            const char* name = VK_KHR_PIPELINE_EXECUTABLE_PROPERTIES_EXTENSION_NAME;
+            bool offered = false;
+            for (const vk::ExtensionProperties& e : ctx->physical_.enumerateDeviceExtensionProperties()) {
+                offered = offered || std::string_view(e.extensionName) == name;
+            }
+            if (!offered) {
+                ctx->statistics_note_ = "kernel statistics: " + ctx->info_.name + "'s driver does not offer " + name;
+            } else if (!ctx->physical_
+                            .getFeatures2<vk::PhysicalDeviceFeatures2, vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR>()
+                            .get<vk::PhysicalDevicePipelineExecutablePropertiesFeaturesKHR>()
+                            .pipelineExecutableInfo) {
+                ctx->statistics_note_ = "kernel statistics: " + ctx->info_.name + " offers " + name + " without pipelineExecutableInfo";
+            } else {
+                extensions.push_back(name);
+                ctx->captures_statistics_ = true;
+            }
+        }
+        ctx->device_ = ctx->physical_.createDevice({.pNext = ctx->captures_statistics_ ? &executable_info : nullptr,
+                                                    .queueCreateInfoCount = 1,
                                                     .pQueueCreateInfos = &queue_info,
-                                                    .enabledExtensionCount = presents ? 1u : 0u,
-                                                    .ppEnabledExtensionNames = presents ? &swapchain_extension : nullptr});
+                                                    .enabledExtensionCount = static_cast<std::uint32_t>(extensions.size()),
+                                                    .ppEnabledExtensionNames = extensions.empty() ? nullptr : extensions.data()});
         ctx->finish_setup(options.force_staging);
         return {};
     }));
     return ctx;
+}
+
+void VulkanContext::add_statistics(compute::KernelStatistics statistics) const {
+    const std::lock_guard lock(statistics_mutex_);
+    statistics_.push_back(std::move(statistics));
+}
+
+Result<std::vector<compute::KernelStatistics>> VulkanContext::kernel_statistics() const {
+    if (!captures_statistics_) return make_error(Error::Kind::Unsupported, statistics_note_);
+    const std::lock_guard lock(statistics_mutex_);
+    return statistics_;
 }
 
 void VulkanContext::finish_setup(bool force_staging, std::uint32_t queue_index) {

@@ -6,6 +6,7 @@
 #include <atomic>
 #include <functional>
 #include <memory>
+#include <mutex>
 #include <string>
 #include <string_view>
 #include <type_traits>
@@ -37,6 +38,9 @@ struct ContextOptions {
     /// The context then owns the surface, picks a queue family that can present to it and
     /// enables VK_KHR_swapchain.
     std::function<Result<VkSurfaceKHR>(VkInstance)> create_surface{};
+    /// Enables VK_KHR_pipeline_executable_properties where the device offers it, so that
+    /// every kernel's statistics are captured (compute::Device::kernel_statistics).
+    bool capture_statistics = false;
 };
 
 /// A device the application created (issue 11): Kodawari runs on it and never destroys
@@ -131,6 +135,11 @@ public:
     /// Submissions to the queue so far: how a test checks that recording submits nothing.
     [[nodiscard]] std::uint64_t submissions() const override { return submissions_; }
     void count_submission() { ++submissions_; }
+    /// Kernels are created with VK_PIPELINE_CREATE_CAPTURE_STATISTICS_BIT_KHR and report
+    /// their statistics through add_statistics().
+    [[nodiscard]] bool captures_statistics() const { return captures_statistics_; }
+    void add_statistics(compute::KernelStatistics statistics) const;
+    [[nodiscard]] Result<std::vector<compute::KernelStatistics>> kernel_statistics() const override;
 
     /// Index of a memory type with all `required` flags, preferring `preferred` too.
     [[nodiscard]] Result<std::uint32_t> memory_type(std::uint32_t type_bits, vk::MemoryPropertyFlags required,
@@ -163,6 +172,10 @@ private:
     bool validation_ = false;
     bool graphics_queue_ = false;
     bool adopted_ = false;
+    bool captures_statistics_ = false;
+    std::string statistics_note_ = "kernel statistics: not asked for (BackendOptions::kernel_statistics)";
+    mutable std::mutex statistics_mutex_;  // kernels may be created on several threads
+    mutable std::vector<compute::KernelStatistics> statistics_;
     std::uint32_t frames_in_flight_ = 1;
     const vk::AllocationCallbacks* allocator_ = nullptr;
     // Heap-allocated so the callback's pointer stays valid when the context moves.

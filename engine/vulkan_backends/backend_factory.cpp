@@ -9,8 +9,10 @@ namespace kodawari {
 
 Result<std::shared_ptr<compute::Device>> backend_context(const BackendOptions& options) {
     if (options.context) return options.context;
-    auto created = gpu::VulkanContext::create(
-        {.device = options.device, .validation = options.validation, .force_staging = options.force_staging});
+    auto created = gpu::VulkanContext::create({.device = options.device,
+                                               .validation = options.validation,
+                                               .force_staging = options.force_staging,
+                                               .capture_statistics = options.kernel_statistics});
     if (!created) return created.error();
     return std::shared_ptr<compute::Device>(std::move(created).value());
 }

@@ -63,6 +63,11 @@ struct BackendOptions {
     /// center frames or angle limits; load() refuses the others (Unsupported, naming this
     /// option and what the world has). Ignored by the other backends.
     bool rod_joint_lanes = false;
+    /// The Vulkan device a vulkan backend opens captures every kernel's statistics, where
+    /// the driver offers VK_KHR_pipeline_executable_properties (registers, spills, shared
+    /// memory: compute::Device::kernel_statistics()); `bench --kernel-statistics` prints
+    /// them. Ignored with `context` (a device already open) and by the other backends.
+    bool kernel_statistics = false;
     /// The cpu backend's SIMD instruction set: "" = the widest this machine runs, or one
     /// of available_simd_isas() ("avx512", "avx2", "sse4", "scalar"; kodawari/backends/simd.hpp).
     /// A name it cannot use makes make_cpu_*_backend() fail with InvalidInput.

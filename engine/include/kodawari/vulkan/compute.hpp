@@ -33,6 +33,22 @@
 
 namespace kodawari::compute {
 
+/// One compiled kernel as the driver describes it (VK_KHR_pipeline_executable_properties):
+/// what a GPU run reads to see what a kernel costs the hardware, e.g. NVIDIA's register
+/// count, local (spill) memory and shared memory. Names and units are the driver's.
+struct KernelStatistics {
+    std::string kernel;                         ///< the shader ("rods_step")
+    std::vector<std::uint32_t> specialization;  ///< its specialization constants, by id
+    struct Value {
+        std::string executable;  ///< the driver's name for the compiled stage
+        std::string name;        ///< "Register Count"
+        std::string value;       ///< as the driver gives it: an integer, a float or true/false
+    };
+    std::vector<Value> values;
+    /// Why there are none where a statistic could not be read (the kernel still runs).
+    std::string note;
+};
+
 /// A device with one queue, shared (std::shared_ptr) by the backends, the domains and a
 /// renderer that run on it. Made by the engine (a Simulation, a backend, a renderer) or
 /// adopted from an application (kodawari::adopt_vulkan_device); never made by a caller.
@@ -59,6 +75,10 @@ public:
     /// Bytes of kernel output read back to the host so far (every download() and pose
     /// read back): how a caller checks that a pipeline keeps its data on the device.
     [[nodiscard]] virtual std::uint64_t read_back_bytes() const = 0;
+    /// The statistics of every kernel created on it so far, where it was opened to capture
+    /// them (BackendOptions::kernel_statistics) and the driver offers them; otherwise
+    /// Unsupported, saying which of the two is missing.
+    [[nodiscard]] virtual Result<std::vector<KernelStatistics>> kernel_statistics() const;
 
 protected:
     Device() = default;
