@@ -7,6 +7,9 @@
 # kodawari::gpu::embedded_shader("<name>") returns them. A compute kernel's name is its
 # file name without .comp ("rods_step"); a graphics stage keeps its extension
 # ("render.vert"), since a vertex and a fragment shader usually share a base name.
+# A source given as <file.comp>@<name>@<MACRO> is that file compiled once more with MACRO
+# defined, as kernel <name>: a variant that differs in what a specialization constant
+# cannot change (rods_step.comp@rods_step_shared@KW_RODS_SHARED_CONSTANTS).
 function(kodawari_embed_shaders)
   cmake_parse_arguments(ARG "" "TARGET" "SOURCES;INCLUDE_DIRS" ${ARGN})
   set(out_dir ${CMAKE_CURRENT_BINARY_DIR}/spirv)
@@ -18,10 +21,21 @@ function(kodawari_embed_shaders)
   set(headers)
   set(includes "")
   set(entries "")
-  foreach(src IN LISTS ARG_SOURCES)
+  foreach(entry IN LISTS ARG_SOURCES)
+    set(defines)
+    if(entry MATCHES "^(.+)@(.+)@(.+)$")
+      set(src ${CMAKE_MATCH_1})
+      set(variant_key ${CMAKE_MATCH_2})
+      set(defines -D${CMAKE_MATCH_3})
+    else()
+      set(src ${entry})
+      set(variant_key)
+    endif()
     get_filename_component(file_name ${src} NAME)
     get_filename_component(ext ${src} LAST_EXT)
-    if(ext STREQUAL ".comp")
+    if(variant_key)
+      set(key ${variant_key})
+    elseif(ext STREQUAL ".comp")
       get_filename_component(key ${src} NAME_WE)
     else()
       set(key ${file_name})
@@ -31,7 +45,7 @@ function(kodawari_embed_shaders)
     set(header ${out_dir}/${name}.spv.h)
     add_custom_command(
       OUTPUT ${header}
-      COMMAND Vulkan::glslangValidator --quiet --target-env vulkan1.1 -V ${include_flags}
+      COMMAND Vulkan::glslangValidator --quiet --target-env vulkan1.1 -V ${include_flags} ${defines}
               --vn kodawari_spirv_${name} --depfile ${header}.d -o ${header} ${abs}
       DEPENDS ${abs}
       DEPFILE ${header}.d

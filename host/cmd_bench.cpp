@@ -64,29 +64,32 @@ struct ChainsOptions {
     std::optional<std::string> rod_kernels;
 };
 
-// --rod-kernels per-chain,per-joint: each vulkan variant once per rod kernel
-// (BackendOptions::rod_joint_lanes), side by side; the others as they are.
+// --rod-kernels per-chain,shared-constants,per-joint: each vulkan variant once per rod
+// kernel (BackendOptions::rod_kernel), side by side; the others as they are.
 std::vector<BenchVariant> with_rod_kernels(std::vector<BenchVariant> variants, const std::optional<std::string>& kernels) {
     if (!kernels) return variants;
-    std::vector<bool> lanes;
+    constexpr std::pair<const char*, RodKernel> kNames[] = {
+        {"per-chain", RodKernel::PerChain}, {"shared-constants", RodKernel::PerChainSharedConstants}, {"per-joint", RodKernel::PerJoint}};
+    std::vector<std::pair<std::string, RodKernel>> chosen;
     std::stringstream list(*kernels);
     for (std::string item; std::getline(list, item, ',');) {
-        if (item != "per-chain" && item != "per-joint") {
-            throw UsageError{"--rod-kernels: \"" + item + "\" is neither per-chain nor per-joint"};
+        const auto* found = std::find_if(std::begin(kNames), std::end(kNames), [&](const auto& n) { return item == n.first; });
+        if (found == std::end(kNames)) {
+            throw UsageError{"--rod-kernels: \"" + item + "\" is none of per-chain, shared-constants, per-joint"};
         }
-        lanes.push_back(item == "per-joint");
+        chosen.emplace_back(found->first, found->second);
     }
-    if (lanes.empty()) throw UsageError{"--rod-kernels: expected per-chain, per-joint or both"};
+    if (chosen.empty()) throw UsageError{"--rod-kernels: expected one or more of per-chain, shared-constants, per-joint"};
     std::vector<BenchVariant> out;
     for (const BenchVariant& v : variants) {
         if (v.kind != BackendKind::Vulkan) {
             out.push_back(v);
             continue;
         }
-        for (const bool l : lanes) {
+        for (const auto& [name, kernel] : chosen) {
             BenchVariant each = v;
-            each.options.rod_joint_lanes = l;
-            each.label += l ? "/per-joint" : "/per-chain";
+            each.options.rod_kernel = kernel;
+            each.label += "/" + name;
             out.push_back(std::move(each));
         }
     }
@@ -465,8 +468,9 @@ Command add_bench(CLI::App& app) {
     add_count(*ch, "--frames", chains->frames, 1, 100'000, "frames (steps of 1/120 s) per repetition (default: 10)");
     add_count(*ch, "--steps", chains->steps, 1, 100'000, "deprecated: the old spelling of --frames, for one release");
     add_text(*ch, "--rod-kernels", chains->rod_kernels, "LIST",
-             "time the vulkan backend with a chain per invocation (rods_step.comp), a chain per group of invocations and a "
-             "joint per invocation (rods_lanes.comp), or both side by side: per-chain,per-joint (default: per-chain)");
+             "time the vulkan backend's rod kernels side by side: per-chain (an invocation per chain, rods_step.comp), "
+             "shared-constants (the same with the template's constants in shared memory), per-joint (an invocation per "
+             "joint, rods_lanes.comp), e.g. per-chain,shared-constants,per-joint (default: per-chain)");
     add_common(*ch, chains->common);
 
     auto crowd = std::make_shared<CrowdOptions>();

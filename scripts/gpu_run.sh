@@ -693,12 +693,13 @@ run_all() {
   run_step info 60 0 plain "$bin" info
   # Benchmarks first: their figures are what the machine is lent for. Each keeps
   # bench_reserve seconds of the deadline for validate and embed_vulkan.
-  # The rod kernels side by side: a chain per invocation and a joint per invocation
-  # (docs/performance.md, "The GPU-first variant"). The first bench of each kind also
+  # The rod kernels side by side: a chain per invocation (its template's constants in
+  # registers or in shared memory) and a joint per invocation (docs/performance.md, "The
+  # GPU-first variant"). The first bench of each kind also
   # prints its kernels' registers and spills (--kernel-statistics).
   run_step "bench-chains-$chains_s" "$bench_limit" "$bench_reserve" bench "$bin" bench chains --count "$chains_s" \
     --joints 16 --iterations 4 --frames "$chains_frames_s" --repetitions "$reps_s" --backends "$all" \
-    --rod-kernels per-chain,per-joint --kernel-statistics --json "$out/bench-chains-$chains_s.json"
+    --rod-kernels per-chain,shared-constants,per-joint --kernel-statistics --json "$out/bench-chains-$chains_s.json"
   # The poses as records and as fields side by side (docs/performance.md, "Birds").
   run_step "bench-birds-$birds_s" "$bench_limit" "$bench_reserve" bench "$bin" bench birds --count "$birds_s" \
     --frames "$birds_frames_s" --repetitions "$reps_s" --backends "$all" --pose-layouts records,fields \

@@ -2,7 +2,8 @@
 // One frame of the view-dependent rods (SPEC part A), a chain per group of LANES
 // invocations and a joint per invocation: the GPU-first mapping that shared/rods.h's "On a
 // discrete GPU" describes, built as a variant for the first GPU run to time against
-// rods_step.comp's chain per invocation (issue 38, item 2; BackendOptions::rod_joint_lanes).
+// rods_step.comp's chain per invocation (issue 38, item 2; BackendOptions::rod_kernel,
+// RodKernel::PerJoint).
 //
 // Each lane keeps its own joint's state and template constants (a few dozen registers
 // instead of a whole chain's), and the chain's joints are consecutive lanes, so the
@@ -18,7 +19,7 @@
 // It covers the worlds of a GROUPED dispatch (one template per dispatch, so the substep and
 // iteration counts that bound the loops around the barriers are the same for every lane of
 // a workgroup) without levels of detail, keyed examples, center frames or angle limits;
-// the backend refuses the others (vulkan_rods.cpp, joint_lanes_refusal).
+// the backend refuses the others (vulkan_rods.cpp, kernel_variant_for).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 

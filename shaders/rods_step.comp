@@ -177,13 +177,33 @@ void load_constants(uint n, uint examples, uint tj, uint shape0, out Constants t
         if (LIMITS) KW_LIMIT((j) - 1);                                                                        \
     }
 
+#ifdef KW_RODS_SHARED_CONSTANTS
+// Kernel rods_step_shared (BackendOptions::rod_kernel, issue 38 item 2): the template's
+// constants loaded once per workgroup into shared memory and read there at each use,
+// instead of held in every invocation's registers (some 600 floats at 16 joints and 3
+// views), for a GPU run to time against the kernel that holds them. GROUPED dispatches
+// only (one template per dispatch; the backend builds it for no other). The same values
+// in the same operations.
+shared Constants tc_shared;
+#endif
+
 void main() {
+#ifdef KW_RODS_SHARED_CONSTANTS
+#define tc tc_shared
+#else
     Constants tc;
+#endif
     RodTemplateGpu t;
     if (GROUPED) {
         t = templates[push.group.x];
-        load_constants(EXACT ? MAX_J : push.group.y, EXACT ? MAX_VIEWS + MAX_KEYED : push.group.z + push.group.w, push.counts.z,
-                       push.counts.w, tc);
+#ifdef KW_RODS_SHARED_CONSTANTS
+        if (gl_LocalInvocationIndex == 0u)
+#endif
+            load_constants(EXACT ? MAX_J : push.group.y, EXACT ? MAX_VIEWS + MAX_KEYED : push.group.z + push.group.w, push.counts.z,
+                           push.counts.w, tc);
+#ifdef KW_RODS_SHARED_CONSTANTS
+        barrier();
+#endif
     }
     const uint e = gl_GlobalInvocationID.x;
     if (e >= push.counts.x) return;

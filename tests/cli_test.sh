@@ -173,9 +173,9 @@ check "validate passes on the bunny" grep -q "validate: PASS" "$work/validate-bu
 check "bench chains json" bash -c "node -e 'const r=require(\"$work/bench-chains.json\"); if (r.benchmark!==\"chains\"||r.results.length!==3||!(r.results[0].per_second>0)) process.exit(1)'"
 # The rod kernels side by side (issue 38, item 2), and the kernels' statistics where the
 # driver offers them (lavapipe does not: the line says so).
-"$bin" bench chains --count 130 --joints 9 --frames 2 --backends vulkan --rod-kernels per-chain,per-joint --kernel-statistics \
-  --json "$work/bench-kernels.json" >"$work/bench-kernels.out" 2>&1
-check "bench chains --rod-kernels times both rod kernels" bash -c "node -e 'const r=require(\"$work/bench-kernels.json\"); if (r.results.length!==2||r.results[0].backend!==\"vulkan/per-chain\"||r.results[1].backend!==\"vulkan/per-joint\"||!(r.results[1].per_second>0)) process.exit(1)'"
+"$bin" bench chains --count 130 --joints 9 --frames 2 --backends vulkan --rod-kernels per-chain,shared-constants,per-joint \
+  --kernel-statistics --json "$work/bench-kernels.json" >"$work/bench-kernels.out" 2>&1
+check "bench chains --rod-kernels times the three rod kernels" bash -c "node -e 'const r=require(\"$work/bench-kernels.json\"); if (r.results.length!==3||r.results[0].backend!==\"vulkan/per-chain\"||r.results[1].backend!==\"vulkan/shared-constants\"||r.results[2].backend!==\"vulkan/per-joint\"||!(r.results[2].per_second>0)) process.exit(1)'"
 check "bench --kernel-statistics reports the kernels or why not" grep -q "^kernel statistics of vulkan" "$work/bench-kernels.out"
 "$bin" bench chains --count 130 --frames 2 --backends vulkan --rod-kernels per-thread >/dev/null 2>"$work/bench-kernels.err"
 check "bench chains --rod-kernels with an unknown kernel exits 2 naming it" bash -c "test $? -eq 2 && grep -q 'per-thread' '$work/bench-kernels.err'"

@@ -146,19 +146,21 @@ gpu::RodKeyTemplateGpu key_template(const rods::ChainTemplate& t) {
 
 class VulkanRodBackend final : public RodBackend, public DeviceRodBackend, public DeviceData {
 public:
-    VulkanRodBackend(std::shared_ptr<compute::Device> ctx, std::uint32_t workgroup, bool joint_lanes)
-        : ctx_(std::move(ctx)), workgroup_(workgroup), joint_lanes_(joint_lanes) {}
+    VulkanRodBackend(std::shared_ptr<compute::Device> ctx, std::uint32_t workgroup, RodKernel kernel)
+        : ctx_(std::move(ctx)), workgroup_(workgroup), kernel_kind_(kernel), joint_lanes_(kernel == RodKernel::PerJoint) {}
 
     using Variant = std::array<std::uint32_t, KW_RODS_SPEC_COUNT>;
 
     /// The kernel specialized for a world (shared/rods.h, KW_RODS_SPEC_*); built on first
-    /// use and kept. Lanes per chain other than 0: rods_lanes.comp.
+    /// use and kept. The backend's one RodKernel picks the shader.
     Result<const compute::Kernel*> pipeline(const Variant& spec) {
         for (const auto& [key, p] : pipelines_) {
             if (key == spec) return &p;
         }
         const std::vector<compute::Binding> types(KW_RODS_BINDING_COUNT, compute::Binding::Storage);
-        const char* kernel = spec[KW_RODS_SPEC_LANES] != 0 ? "rods_lanes" : "rods_step";
+        const char* kernel = kernel_kind_ == RodKernel::PerJoint                  ? "rods_lanes"
+                             : kernel_kind_ == RodKernel::PerChainSharedConstants ? "rods_step_shared"
+                                                                                  : "rods_step";
         auto created = compute::Kernel::create(*ctx_, kernel, types, sizeof(gpu::RodPush), spec);
         if (!created) return created.error();
         pipelines_.emplace_back(spec, std::move(created).value());
@@ -198,8 +200,8 @@ public:
         KW_TRY(rods::check_frame(world, initial));
         const std::size_t count = world.chains.size();
         if (count == 0) return make_error(Error::Kind::InvalidInput, "the world has no chains");
-        if (joint_lanes_) {
-            auto lanes = joint_lanes_for(world);
+        if (kernel_kind_ != RodKernel::PerChain) {
+            auto lanes = kernel_variant_for(world);
             if (!lanes) return lanes.error();
             lanes_ = lanes.value();
         }
@@ -524,20 +526,29 @@ private:
     // Chains a workgroup steps: one per invocation, or one per `lanes_` invocations.
     std::uint32_t chains_per_group() const { return joint_lanes_ ? workgroup_ / lanes_ : workgroup_; }
 
-    // BackendOptions::rod_joint_lanes: the lanes per chain of rods_lanes.comp for `world`
-    // (a power of two, at least its longest chain), or why that kernel cannot step it.
-    Result<std::uint32_t> joint_lanes_for(const rods::RodWorld& world) const {
+    // BackendOptions::rod_kernel other than PerChain: whether its kernel can step `world`,
+    // and for PerJoint the lanes per chain of rods_lanes.comp (a power of two, at least its
+    // longest chain; 0 for PerChainSharedConstants).
+    Result<std::uint32_t> kernel_variant_for(const rods::RodWorld& world) const {
+        const bool per_joint = kernel_kind_ == RodKernel::PerJoint;
         auto refuse = [&](const std::string& what) {
             return make_error(Error::Kind::Unsupported,
-                              "BackendOptions::rod_joint_lanes: the joint-lanes kernel (shaders/rods_lanes.comp) steps worlds of at most " +
-                                  std::to_string(KW_RODS_MAX_GROUPS) +
-                                  " templates without levels of detail, keyed examples, center frames or angle limits; this world has " +
-                                  what + " (step it without the option)");
+                              per_joint ? "BackendOptions::rod_kernel RodKernel::PerJoint: the joint-lanes kernel (shaders/rods_lanes.comp) "
+                                          "steps worlds of at most " +
+                                              std::to_string(KW_RODS_MAX_GROUPS) +
+                                              " templates without levels of detail, keyed examples, center frames or angle limits; "
+                                              "this world has " +
+                                              what + " (step it with RodKernel::PerChain)"
+                                        : "BackendOptions::rod_kernel RodKernel::PerChainSharedConstants: the kernel steps worlds of at "
+                                          "most " +
+                                              std::to_string(KW_RODS_MAX_GROUPS) + " templates (one dispatch each); this world has " +
+                                              what + " (step it with RodKernel::PerChain)");
         };
         std::vector<bool> used(world.templates.size(), false);
         for (const rods::ChainInstance& ch : world.chains) used[ch.template_index] = true;
         const auto templates = static_cast<std::size_t>(std::count(used.begin(), used.end(), true));
         if (templates > KW_RODS_MAX_GROUPS) return refuse(std::to_string(templates) + " templates");
+        if (!per_joint) return 0u;
         if (world.lod.enabled) return refuse("levels of detail");
         if (world.center_count > 0) return refuse("center frames");
         std::uint32_t max_joints = 2;
@@ -548,7 +559,7 @@ private:
         }
         const std::uint32_t lanes = std::bit_ceil(max_joints);
         if (lanes > workgroup_) {
-            return make_error(Error::Kind::Unsupported, "BackendOptions::rod_joint_lanes: chains of " + std::to_string(max_joints) +
+            return make_error(Error::Kind::Unsupported, "BackendOptions::rod_kernel RodKernel::PerJoint: chains of " + std::to_string(max_joints) +
                                                             " joints take " + std::to_string(lanes) +
                                                             " lanes, more than the workgroup's " + std::to_string(workgroup_) +
                                                             " (BackendOptions::workgroup_size)");
@@ -558,7 +569,7 @@ private:
         const std::uint64_t shared = std::uint64_t{workgroup_} * (10 * 16 + 48 + 2 * 4);
         if (shared > ctx_->info().max_shared_memory) {
             return make_error(Error::Kind::Unsupported,
-                              "BackendOptions::rod_joint_lanes: a workgroup of " + std::to_string(workgroup_) + " invocations needs " +
+                              "BackendOptions::rod_kernel RodKernel::PerJoint: a workgroup of " + std::to_string(workgroup_) + " invocations needs " +
                                   std::to_string(shared) + " bytes of shared memory; " + ctx_->info().name + " has " +
                                   std::to_string(ctx_->info().max_shared_memory) + " (a smaller BackendOptions::workgroup_size)");
         }
@@ -757,7 +768,8 @@ private:
     // (A deque: kernel_ and the groups' kernels point into it.)
     std::deque<std::pair<Variant, compute::Kernel>> pipelines_;
     std::uint32_t workgroup_ = KW_RODS_WORKGROUP_SIZE;  // invocations per workgroup (KW_RODS_SPEC_WORKGROUP_SIZE)
-    bool joint_lanes_ = false;  // BackendOptions::rod_joint_lanes: rods_lanes.comp
+    RodKernel kernel_kind_ = RodKernel::PerChain;  // BackendOptions::rod_kernel
+    bool joint_lanes_ = false;  // RodKernel::PerJoint: rods_lanes.comp
     std::uint32_t lanes_ = 0;   // its invocations per chain (KW_RODS_SPEC_LANES) for the loaded world
     const compute::Kernel* kernel_ = nullptr;  // the one dispatch's when not grouped_
     const rods::RodWorld* world_ = nullptr;
@@ -803,7 +815,7 @@ Result<std::unique_ptr<RodBackend>> make_vulkan_rod_backend(const BackendOptions
     auto workgroup = compute::workgroup_size(*ctx.value(), options.workgroup_size, KW_RODS_WORKGROUP_SIZE);
     if (!workgroup) return workgroup.error();
     return std::unique_ptr<RodBackend>(
-        std::make_unique<VulkanRodBackend>(std::move(ctx).value(), workgroup.value(), options.rod_joint_lanes));
+        std::make_unique<VulkanRodBackend>(std::move(ctx).value(), workgroup.value(), options.rod_kernel));
 }
 
 }  // namespace kodawari

@@ -34,7 +34,7 @@
 // coalesced, few registers, but lavapipe pays per invocation and per shuffle, which is
 // why this one does not. shaders/rods_lanes.comp is that kernel (shared memory: lavapipe's
 // subgroups are 8 lanes, fewer than a chain's joints), a variant for a GPU run to time
-// (BackendOptions::rod_joint_lanes); it reads the same buffers.
+// (BackendOptions::rod_kernel, RodKernel::PerJoint); it reads the same buffers.
 #ifndef KODAWARI_SHADERS_SHARED_RODS_H
 #define KODAWARI_SHADERS_SHARED_RODS_H
 

@@ -34,6 +34,24 @@ enum class BackendKind { CpuReference, Cpu, Vulkan };
 /// "cpu-reference", "cpu", "vulkan".
 [[nodiscard]] KODAWARI_API std::string_view backend_name(BackendKind kind);
 
+/// How the vulkan rod backend maps chains onto invocations (BackendOptions::rod_kernel).
+enum class RodKernel {
+    /// An invocation per chain, the template's constants in its registers
+    /// (shaders/rods_step.comp): the default, and the fastest on lavapipe.
+    PerChain,
+    /// The same, with the template's constants once per workgroup in shared memory, read
+    /// at each use (rods_step.comp built as rods_step_shared), to free registers on a GPU.
+    /// Worlds of at most 32 templates (one dispatch each); load() refuses others.
+    PerChainSharedConstants,
+    /// A group of invocations per chain and one per joint (shaders/rods_lanes.comp): a
+    /// lane's registers are one joint's and the state's loads consecutive across a
+    /// subgroup, at the cost of barriers where the solver is sequential along the chain.
+    /// Worlds of at most 32 templates without levels of detail, keyed examples, center
+    /// frames or angle limits; load() refuses others (Unsupported, naming the option and
+    /// what the world has).
+    PerJoint,
+};
+
 /// Options for creating backends.
 struct BackendOptions {
     std::string device;        ///< Vulkan device name substring or index ("" = best)
@@ -54,15 +72,10 @@ struct BackendOptions {
     /// poses or diagnostics, recording and drawing are Unsupported with it. Ignored by the
     /// other backends.
     bool bird_pose_fields = false;
-    /// The vulkan rod backend steps each chain with a group of invocations, one per joint
-    /// (shaders/rods_lanes.comp), instead of one invocation per chain: the same bits, with
-    /// each invocation's registers one joint's and the state's loads consecutive across a
-    /// subgroup, at the cost of barriers where the solver is sequential along the chain. A
-    /// variant to time on a GPU (`bench chains --rod-kernels per-chain,per-joint`). It
-    /// covers worlds of at most 32 templates without levels of detail, keyed examples,
-    /// center frames or angle limits; load() refuses the others (Unsupported, naming this
-    /// option and what the world has). Ignored by the other backends.
-    bool rod_joint_lanes = false;
+    /// The kernel the vulkan rod backend steps chains with (RodKernel): variants to time on
+    /// a GPU (`bench chains --rod-kernels per-chain,shared-constants,per-joint`). The same
+    /// solver in each, to rounding. Ignored by the other backends.
+    RodKernel rod_kernel = RodKernel::PerChain;
     /// The Vulkan device a vulkan backend opens captures every kernel's statistics, where
     /// the driver offers VK_KHR_pipeline_executable_properties (registers, spills, shared
     /// memory: compute::Device::kernel_statistics()); `bench --kernel-statistics` prints

@@ -1,6 +1,9 @@
-// The rods' joint-lanes kernel (BackendOptions::rod_joint_lanes, shaders/rods_lanes.comp;
-// issue 38 item 2): a chain per group of invocations, a joint per invocation, as a variant
-// for a GPU run to time against the chain-per-invocation kernel (rods_step.comp). Both run
+// The vulkan rod backend's kernels (BackendOptions::rod_kernel; issue 38 item 2), variants
+// for a GPU run to time against each other. The template's constants in shared memory
+// (RodKernel::PerChainSharedConstants, rods_step.comp built as rods_step_shared) changes
+// where the values are read, not an operation: the same bits as the per-chain kernel. The
+// joint-lanes kernel (RodKernel::PerJoint, shaders/rods_lanes.comp) puts a chain on a group
+// of invocations, a joint on each, against the chain-per-invocation kernel. Both run
 // the same operations in the same order, but they are compiled apart and the compiler
 // contracts multiply-adds into FMAs where a product has one use (lavapipe's LLVM does): in
 // rods_step.comp a neighbour's weighted position is one product shared by two groups, in
@@ -16,9 +19,11 @@
 // Lavapipe where there is no GPU, with validation on (ctest sets KODAWARI_VALIDATION=1).
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <cstdio>
 #include <cstring>
 #include <string>
+#include <utility>
 #include <vector>
 
 #include "kodawari/backends/rod_backend.hpp"
@@ -34,11 +39,14 @@ namespace {
 
 std::string scene_path(const char* name) { return std::string(KODAWARI_SOURCE_DIR) + "/scenes/" + name; }
 
-BackendOptions lanes(bool on) {
+BackendOptions with_kernel(RodKernel kernel) {
     BackendOptions o = testing_support::gpu_options();
-    o.rod_joint_lanes = on;
+    o.rod_kernel = kernel;
     return o;
 }
+
+// cpu-reference, then the vulkan kernels (their order in the vectors below).
+constexpr RodKernel kKernels[] = {RodKernel::PerChain, RodKernel::PerChainSharedConstants, RodKernel::PerJoint};
 
 // How many of the vec3s differ in their bits, and the largest difference (m).
 struct Difference {
@@ -68,12 +76,19 @@ void teleport(rods::RodFrame& frame, glm::vec3 by) {
     }
 }
 
-// The joint-lanes kernel held to the CPU reference as the chain kernel is (see above).
-void expect_as_close(const std::string& what, const std::vector<glm::vec3>& reference, const std::vector<glm::vec3>& chain,
-                     const std::vector<glm::vec3>& lanes) {
+// The shared-constants kernel the per-chain kernel's bits; the joint-lanes kernel held to
+// the CPU reference as the per-chain kernel is (see above). `p`: cpu-reference's positions,
+// then each of kKernels'.
+void expect_as_close(const std::string& what, const std::vector<std::vector<glm::vec3>>& p) {
+    ASSERT_EQ(p.size(), 4u) << what;
+    const std::vector<glm::vec3>& reference = p[0];
+    const std::vector<glm::vec3>& chain = p[1];
+    const std::vector<glm::vec3>& lanes = p[3];
     ASSERT_FALSE(reference.empty()) << what;
-    ASSERT_EQ(reference.size(), chain.size()) << what;
-    ASSERT_EQ(reference.size(), lanes.size()) << what;
+    for (const auto& each : p) ASSERT_EQ(reference.size(), each.size()) << what;
+    const Difference shared = compare(p[2], chain);
+    EXPECT_EQ(shared.differ, 0u) << what << ": with the constants in shared memory " << shared.differ << " joints differ, by up to "
+                                 << shared.largest << " m";
     const Difference c = compare(chain, reference), l = compare(lanes, reference), between = compare(lanes, chain);
     std::printf("%s: from cpu-reference, the chain kernel up to %.3g m (%zu joints differ), the joint-lanes kernel up to %.3g m "
                 "(%zu); between them up to %.3g m (%zu of %zu)\n",
@@ -82,7 +97,7 @@ void expect_as_close(const std::string& what, const std::vector<glm::vec3>& refe
     EXPECT_LE(l.largest, 2.0f * c.largest + 1e-6f) << what << ": the joint-lanes kernel is farther from cpu-reference than rounding";
 }
 
-class RodJointLanes : public ::testing::Test {
+class RodKernels : public ::testing::Test {
 protected:
     void SetUp() override {
         if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
@@ -98,7 +113,7 @@ protected:
 // workgroup partly empty. 12 frames, the first of which
 // starts the chains moving with their roots (KW_RODS_STEP_FIRST); at the seventh every
 // character jumps 3 m (a teleport).
-TEST_F(RodJointLanes, SyntheticChainsAreTheChainKernelsResult) {
+TEST_F(RodKernels, SyntheticChainsAreTheChainKernelsResult) {
     struct Case {
         std::uint32_t joints;
         bool windy;  // drag on every template and a gusting wind (KW_RODS_FEATURE_AIR)
@@ -119,8 +134,9 @@ TEST_F(RodJointLanes, SyntheticChainsAreTheChainKernelsResult) {
             world.wind_count = 1;
         }
         std::vector<std::vector<glm::vec3>> positions;
-        for (const int which : {0, 1, 2}) {  // cpu-reference, the chain kernel, the joint-lanes kernel
-            auto backend = make_rod_backend(which == 0 ? BackendKind::CpuReference : BackendKind::Vulkan, lanes(which == 2));
+        for (const int which : {0, 1, 2, 3}) {  // cpu-reference, then kKernels
+            auto backend = make_rod_backend(which == 0 ? BackendKind::CpuReference : BackendKind::Vulkan,
+                                            with_kernel(kKernels[std::max(which, 1) - 1]));
             ASSERT_TRUE(backend.ok()) << backend.error().message;
             rods::RodFrame frame;
             auto frame_at = [&](std::uint32_t f) {
@@ -140,20 +156,19 @@ TEST_F(RodJointLanes, SyntheticChainsAreTheChainKernelsResult) {
             positions.push_back(snap.positions);
             EXPECT_EQ(backend.value()->validation_messages(), 0u);
         }
-        expect_as_close(std::to_string(k.joints) + " joints" + (k.windy ? ", wind and drag" : ""), positions[0], positions[1],
-                        positions[2]);
+        expect_as_close(std::to_string(k.joints) + " joints" + (k.windy ? ", wind and drag" : ""), positions);
     }
 }
 
 // Shipped scenes the kernel covers (sphere and capsule colliders, several chain templates),
 // stepped through the simulation facade.
-TEST_F(RodJointLanes, ShippedScenesAreTheChainKernelsResult) {
+TEST_F(RodKernels, ShippedScenesAreTheChainKernelsResult) {
     for (const char* name : {"ahoge.json", "bangs.json"}) {
         const std::uint32_t frames = 20;
         std::vector<std::vector<glm::vec3>> positions;
-        for (const int which : {0, 1, 2}) {
+        for (const int which : {0, 1, 2, 3}) {
             auto sim = Simulation::open(scene_path(name), {.backend = which == 0 ? BackendKind::CpuReference : BackendKind::Vulkan,
-                                                           .options = lanes(which == 2),
+                                                           .options = with_kernel(kKernels[std::max(which, 1) - 1]),
                                                            .frames = frames});
             ASSERT_TRUE(sim.ok()) << name << ": " << sim.error().message;
             ASSERT_TRUE(sim.value()->step(frames).ok()) << name;
@@ -162,19 +177,25 @@ TEST_F(RodJointLanes, ShippedScenesAreTheChainKernelsResult) {
             positions.push_back(snap.positions);
             EXPECT_EQ(sim.value()->validation_messages(), 0u) << name;
         }
-        expect_as_close(name, positions[0], positions[1], positions[2]);
+        expect_as_close(name, positions);
     }
 }
 
-// A world with what the kernel does not cover is refused at load, naming the option and
-// what the world has: keyed examples (nod.json), levels of detail (crowd-gltf.json).
-TEST_F(RodJointLanes, WorldsItDoesNotCoverAreRefusedNamingTheOption) {
+// A world with what the joint-lanes kernel does not cover is refused at load, naming the
+// option and what the world has: keyed examples (nod.json), levels of detail
+// (crowd-gltf.json). The shared-constants kernel steps them (it covers what the per-chain
+// kernel does in worlds of up to 32 templates).
+TEST_F(RodKernels, WorldsAKernelDoesNotCoverAreRefusedNamingTheOption) {
     for (const auto& [name, what] : {std::pair{"nod.json", "keyed examples"}, std::pair{"crowd-gltf.json", "levels of detail"}}) {
-        auto sim = Simulation::open(scene_path(name), {.backend = BackendKind::Vulkan, .options = lanes(true), .frames = 2});
+        auto sim = Simulation::open(scene_path(name), {.backend = BackendKind::Vulkan, .options = with_kernel(RodKernel::PerJoint), .frames = 2});
         Result<void> stepped = sim.ok() ? sim.value()->step(1) : Result<void>(sim.error());
         ASSERT_FALSE(stepped.ok()) << name << " ran with the joint-lanes kernel";
         EXPECT_EQ(stepped.error().kind, Error::Kind::Unsupported) << name;
-        EXPECT_NE(stepped.error().message.find("rod_joint_lanes"), std::string::npos) << stepped.error().message;
+        EXPECT_NE(stepped.error().message.find("RodKernel::PerJoint"), std::string::npos) << stepped.error().message;
         EXPECT_NE(stepped.error().message.find(what), std::string::npos) << stepped.error().message;
     }
+    auto sim = Simulation::open(scene_path("nod.json"),
+                                {.backend = BackendKind::Vulkan, .options = with_kernel(RodKernel::PerChainSharedConstants), .frames = 2});
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    EXPECT_TRUE(sim.value()->step(2).ok()) << "nod.json with the constants in shared memory";
 }
