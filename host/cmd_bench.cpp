@@ -64,36 +64,46 @@ struct ChainsOptions {
     std::optional<std::string> rod_kernels;
 };
 
-// --rod-kernels per-chain,shared-constants,per-joint: each vulkan variant once per rod
-// kernel (BackendOptions::rod_kernel), side by side; the others as they are.
-std::vector<BenchVariant> with_rod_kernels(std::vector<BenchVariant> variants, const std::optional<std::string>& kernels) {
-    if (!kernels) return variants;
-    constexpr std::pair<const char*, RodKernel> kNames[] = {
-        {"per-chain", RodKernel::PerChain}, {"shared-constants", RodKernel::PerChainSharedConstants}, {"per-joint", RodKernel::PerJoint}};
-    std::vector<std::pair<std::string, RodKernel>> chosen;
-    std::stringstream list(*kernels);
-    for (std::string item; std::getline(list, item, ',');) {
-        const auto* found = std::find_if(std::begin(kNames), std::end(kNames), [&](const auto& n) { return item == n.first; });
-        if (found == std::end(kNames)) {
-            throw UsageError{"--rod-kernels: \"" + item + "\" is none of per-chain, shared-constants, per-joint"};
-        }
+// Each vulkan variant once per item of the comma-separated `list` (each one of `names`),
+// side by side as "<label>/<item>", `apply` setting the item's option; the others as they
+// are. `option` names the flag in errors.
+template <typename T, std::size_t N>
+std::vector<BenchVariant> per_vulkan_item(std::vector<BenchVariant> variants, const char* option, const std::string& list,
+                                          const std::pair<const char*, T> (&names)[N], void (*apply)(BackendOptions&, T)) {
+    std::string all;
+    for (const auto& n : names) all += (all.empty() ? "" : ", ") + std::string(n.first);
+    std::vector<std::pair<std::string, T>> chosen;
+    std::stringstream items(list);
+    for (std::string item; std::getline(items, item, ',');) {
+        const auto* found = std::find_if(std::begin(names), std::end(names), [&](const auto& n) { return item == n.first; });
+        if (found == std::end(names)) throw UsageError{std::string(option) + ": \"" + item + "\" is none of " + all};
         chosen.emplace_back(found->first, found->second);
     }
-    if (chosen.empty()) throw UsageError{"--rod-kernels: expected one or more of per-chain, shared-constants, per-joint"};
+    if (chosen.empty()) throw UsageError{std::string(option) + ": expected one or more of " + all};
     std::vector<BenchVariant> out;
     for (const BenchVariant& v : variants) {
         if (v.kind != BackendKind::Vulkan) {
             out.push_back(v);
             continue;
         }
-        for (const auto& [name, kernel] : chosen) {
+        for (const auto& [name, value] : chosen) {
             BenchVariant each = v;
-            each.options.rod_kernel = kernel;
+            apply(each.options, value);
             each.label += "/" + name;
             out.push_back(std::move(each));
         }
     }
     return out;
+}
+
+// --rod-kernels per-chain,shared-constants,per-joint: each vulkan variant once per rod
+// kernel (BackendOptions::rod_kernel).
+std::vector<BenchVariant> with_rod_kernels(std::vector<BenchVariant> variants, const std::optional<std::string>& kernels) {
+    if (!kernels) return variants;
+    constexpr std::pair<const char*, RodKernel> kNames[] = {
+        {"per-chain", RodKernel::PerChain}, {"shared-constants", RodKernel::PerChainSharedConstants}, {"per-joint", RodKernel::PerJoint}};
+    return per_vulkan_item(std::move(variants), "--rod-kernels", *kernels, kNames,
+                           +[](BackendOptions& o, RodKernel k) { o.rod_kernel = k; });
 }
 
 int bench_chains(ChainsOptions o) {
@@ -346,33 +356,13 @@ struct BirdsOptions {
 };
 
 // --pose-layouts records,fields: each vulkan variant once per layout of its poses
-// (BackendOptions::bird_pose_fields), side by side; the others as they are.
+// (BackendOptions::bird_pose_fields).
 std::vector<BenchVariant> with_pose_layouts(std::vector<BenchVariant> variants, const BirdsOptions& o) {
     if (!o.pose_layouts) return variants;
     if (o.readback) throw UsageError{"--pose-layouts and --readback exclude each other: poses laid out as fields are not read back"};
-    std::vector<bool> fields;
-    std::stringstream list(*o.pose_layouts);
-    for (std::string item; std::getline(list, item, ',');) {
-        if (item != "records" && item != "fields") {
-            throw UsageError{"--pose-layouts: \"" + item + "\" is neither records nor fields"};
-        }
-        fields.push_back(item == "fields");
-    }
-    if (fields.empty()) throw UsageError{"--pose-layouts: expected records, fields or both"};
-    std::vector<BenchVariant> out;
-    for (const BenchVariant& v : variants) {
-        if (v.kind != BackendKind::Vulkan) {
-            out.push_back(v);
-            continue;
-        }
-        for (const bool f : fields) {
-            BenchVariant each = v;
-            each.options.bird_pose_fields = f;
-            each.label += f ? "/fields" : "/records";
-            out.push_back(std::move(each));
-        }
-    }
-    return out;
+    constexpr std::pair<const char*, bool> kNames[] = {{"records", false}, {"fields", true}};
+    return per_vulkan_item(std::move(variants), "--pose-layouts", *o.pose_layouts, kNames,
+                           +[](BackendOptions& options, bool fields) { options.bird_pose_fields = fields; });
 }
 
 int bench_birds(const BirdsOptions& o) {
