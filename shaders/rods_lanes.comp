@@ -29,8 +29,8 @@
 
 layout(local_size_x = KW_RODS_WORKGROUP_SIZE, local_size_x_id = KW_RODS_SPEC_WORKGROUP_SIZE) in;
 
-// Lanes per chain: a power of two, at least the template's joints and at most the
-// workgroup's size, so that a workgroup holds whole chains.
+// Lanes per chain: a power of two (2 to 32), at least the template's joints and at most
+// the workgroup's size, so that a workgroup holds whole chains.
 layout(constant_id = KW_RODS_SPEC_LANES) const uint LANES = 16;
 layout(constant_id = KW_RODS_SPEC_MAX_VIEWS) const uint MAX_VIEWS = KW_RODS_MAX_VIEWS;
 layout(constant_id = KW_RODS_SPEC_SUPPRESSION) const uint SUPPRESSION = KW_RODS_SUPPRESSION_PARTIAL;
@@ -187,7 +187,8 @@ void main() {
         }
     }
     barrier();
-    const vec3 rest_p = s_g0[gl_LocalInvocationID.x];
+    // (lanes past the chain's joints have no rest position: the origin, never stored)
+    const vec3 rest_p = i < n ? s_g0[gl_LocalInvocationID.x] : vec3(0.0);
 
     // ---- load the state ----
     vec3 x = vec3(0.0), v = vec3(0.0), omega = vec3(0.0);
@@ -374,9 +375,12 @@ void main() {
             // group reads its members before any of them settles).
             vec4 q_new = qs;
             if (live) {
-                const float w_lo = s_weight[base + lo], w_hi = s_weight[base + hi];
-                const vec3 p_lo = s_p[base + lo], p_hi = s_p[base + hi];
-                const vec3 xbar_lo = s_xbar[base + lo], xbar_hi = s_xbar[base + hi];
+                // (hi is n for the last joint, whose group has no next member: its loads are
+                // clamped to stay inside the chain's slots, and never used)
+                const uint hi_in = min(hi, n - 1u);
+                const float w_lo = s_weight[base + lo], w_hi = s_weight[base + hi_in];
+                const vec3 p_lo = s_p[base + lo], p_hi = s_p[base + hi_in];
+                const vec3 xbar_lo = s_xbar[base + lo], xbar_hi = s_xbar[base + hi_in];
                 float group_mass = w_lo;
                 vec3 cm = w_lo * p_lo;
                 vec3 cbar = w_lo * xbar_lo;
@@ -477,6 +481,10 @@ void main() {
     }
 
     // ---- store ----
+    // Every lane read the chain's state (chain_states[c]) before lane 0 overwrites it: the
+    // barriers above order shared memory only, so this one orders the storage buffer too.
+    memoryBarrierBuffer();
+    barrier();
     if (!live) return;
     // xyz only: w holds the sag (RodJointMotionGpu).
     motion[j0 + i].x.xyz = x - travel;
