@@ -120,35 +120,9 @@ void main() {
 
     // ---- A.3: view direction and weights (every lane of the chain the same) ----
     const RodTransformGpu ref = reference[chain.ids.y];
-    const vec4 to_reference = qconj(ref.rotation);
-    vec3 d;
-    {
-        const vec3 offset = push.camera_position.xyz - ref.position.xyz;
-        const float len = length(offset);
-        if (push.camera_position.w == 0.0 && len >= 1e-6) {
-            d = qrot(to_reference, offset / len);
-        } else {
-            d = normalize(qrot(to_reference, -push.camera_forward.xyz));
-        }
-    }
+    const vec3 d = view_direction(ref);
     float w[KW_RODS_MAX_VIEWS + 1];
-    {
-        float sum = 0.0;
-        [[unroll]] for (uint k = 0; k < KW_RODS_MAX_VIEWS; ++k) w[k + 1] = 0.0;
-        [[unroll]] for (uint k = 0; k < MAX_VIEWS; ++k) {
-            if (k < m) {
-                const vec4 view = t.views[k];
-                const float s = clamp((dot(view.xyz, d) + 1.0) * 0.5, 0.0, 1.0);
-                w[k + 1] = pow(s, view.w);
-                sum += w[k + 1];
-            }
-        }
-        if (sum >= 1.0) {
-            [[unroll]] for (uint k = 1; k <= MAX_VIEWS; ++k) w[k] /= sum;
-            sum = 1.0;
-        }
-        w[0] = 1.0 - sum;
-    }
+    view_weights(t, m, d, w);
 
     // ---- A.2: blend (this joint's rotations), then forward kinematics (sequential) ----
     const RodChainStateGpu last = chain_states[c];
@@ -301,19 +275,7 @@ void main() {
     // loads them: the same addresses, one transaction).
     const uint cbegin = chain.ids.z;
     col_count = min(chain.ids.w, MAX_COLLIDERS);
-    {
-        const vec4 to_root = qconj(to.rotation);
-        [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
-            const RodColliderGpu col = colliders[cbegin + k];
-            const uint kind = uint(col.b.w);
-            col_kind[k] = kind;
-            col_la[k] = qrot(to_root, col.a.xyz - to.position.xyz);
-            col_lb[k] = kind == KW_RODS_COLLIDER_PLANE ? qrot(to_root, col.b.xyz) : qrot(to_root, col.b.xyz - to.position.xyz);
-            col_reach[k] = kind == KW_RODS_COLLIDER_PLANE    ? thickness
-                           : kind == KW_RODS_COLLIDER_INSIDE ? max(col.a.w - thickness, 0.0)
-                                                             : col.a.w + thickness;
-        }
-    }
+    colliders_in_root_frame(cbegin, to, thickness);
     const bool COLLIDES = MAX_COLLIDERS > 0u && col_count > 0u;
     const uint me = gl_LocalInvocationID.x;
     // The group of joint i (shape matching over G_i = {i-1, i, i+1}, clipped at the ends;
@@ -328,10 +290,7 @@ void main() {
         const vec3 xbar = r_pos + qrot(r_rot, rest_p);
         const vec4 obar = qnormalize(qmul(r_rot, rest_o));
         const vec3 obar_axis = qrot(obar, axis);
-        [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
-            col_ca[k] = r_pos + qrot(r_rot, col_la[k]);
-            col_cb[k] = col_kind[k] == KW_RODS_COLLIDER_PLANE ? qrot(r_rot, col_lb[k]) : r_pos + qrot(r_rot, col_lb[k]);
-        }
+        place_colliders(r_pos, r_rot);
         s_x[me] = x;  // the segments' directions for drag
         s_xbar[me] = xbar;
         s_pulled[me] = vec3(0.0);

@@ -221,17 +221,7 @@ void main() {
 
     // ---- A.3: view direction and weights (world.cpp rest_shape, view.cpp) ----
     const RodTransformGpu ref = reference[chain.ids.y];
-    const vec4 to_reference = qconj(ref.rotation);
-    vec3 d;
-    {
-        const vec3 offset = push.camera_position.xyz - ref.position.xyz;
-        const float len = length(offset);
-        if (push.camera_position.w == 0.0 && len >= 1e-6) {
-            d = qrot(to_reference, offset / len);
-        } else {
-            d = normalize(qrot(to_reference, -push.camera_forward.xyz));
-        }
-    }
+    const vec3 d = view_direction(ref);
     // ---- the level of detail (shaders/lib/rod_lod.glsl, rods::chain_level), from the
     // character's reference joint and the level of the chain's last step ----
     const bool LOD = (FEATURES & KW_RODS_FEATURE_LOD) != 0u;
@@ -272,23 +262,7 @@ void main() {
     const bool DYNAMIC = level == KW_RODS_LEVEL_FULL || level == KW_RODS_LEVEL_REDUCED;
     const bool HANDING = LOD && DYNAMIC && share < 1.0;
     float w[KW_RODS_MAX_VIEWS + 1];
-    {
-        float sum = 0.0;
-        [[unroll]] for (uint k = 0; k < KW_RODS_MAX_VIEWS; ++k) w[k + 1] = 0.0;
-        [[unroll]] for (uint k = 0; k < MAX_VIEWS; ++k) {
-            if (k < m) {
-                const vec4 view = t.views[k];
-                const float s = clamp((dot(view.xyz, d) + 1.0) * 0.5, 0.0, 1.0);
-                w[k + 1] = pow(s, view.w);
-                sum += w[k + 1];
-            }
-        }
-        if (sum >= 1.0) {
-            [[unroll]] for (uint k = 1; k <= MAX_VIEWS; ++k) w[k] /= sum;
-            sum = 1.0;
-        }
-        w[0] = 1.0 - sum;
-    }
+    view_weights(t, m, d, w);
     if (MAX_KEYED > 0) {
         // K.4 (keyed.cpp combine_weights): the keyed examples take their share U of the view
         // weights, W_k = (1 - U) w_k, W_{m+j} = u_j, normalized when U >= 1. Entries of u
@@ -559,20 +533,7 @@ void main() {
 
     // The colliders in the end root's frame (solver.cpp step).
     col_count = min(cend - cbegin, MAX_COLLIDERS);  // (the host sets MAX_COLLIDERS to the world's most)
-    {
-        const vec4 to_root = qconj(to.rotation);
-        [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
-            const RodColliderGpu col = colliders[cbegin + k];
-            const uint kind = uint(col.b.w);
-            col_kind[k] = kind;
-            col_la[k] = qrot(to_root, col.a.xyz - to.position.xyz);
-            col_lb[k] = kind == KW_RODS_COLLIDER_PLANE ? qrot(to_root, col.b.xyz) : qrot(to_root, col.b.xyz - to.position.xyz);
-            // rods::collider_reach().
-            col_reach[k] = kind == KW_RODS_COLLIDER_PLANE    ? thickness
-                           : kind == KW_RODS_COLLIDER_INSIDE ? max(col.a.w - thickness, 0.0)
-                                                             : col.a.w + thickness;
-        }
-    }
+    colliders_in_root_frame(cbegin, to, thickness);
 
     vec3 p[MAX_J], xbar[MAX_J], goal_sum[MAX_J], obar_axis[MAX_J], pulled[MAX_J], pushed[MAX_J];
     vec4 qs[MAX_J], obar[MAX_J], q_new[MAX_J];
@@ -592,10 +553,7 @@ void main() {
         p[0] = xbar[0];
         qs[0] = obar[0];
         // The colliders placed by the substep's root.
-        [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
-            col_ca[k] = r_pos + qrot(r_rot, col_la[k]);
-            col_cb[k] = col_kind[k] == KW_RODS_COLLIDER_PLANE ? qrot(r_rot, col_lb[k]) : r_pos + qrot(r_rot, col_lb[k]);
-        }
+        place_colliders(r_pos, r_rot);
         [[unroll]] for (uint i = 0; i < MAX_J; ++i) pulled[i] = vec3(0.0);
         [[unroll]] for (uint i = 0; i < MAX_J; ++i) pushed[i] = vec3(0.0);
 

@@ -2,7 +2,8 @@
 // chain per invocation; rods_lanes.comp: a chain per group of lanes, a joint per lane), so
 // that the two run the same operations on the same values. Each mirrors engine/rods/solver.cpp;
 // the equations' sources are cited there. Before including, a kernel declares FEATURES
-// (KW_RODS_SPEC_FEATURES) and MAX_COLLIDERS (KW_RODS_SPEC_MAX_COLLIDERS).
+// (KW_RODS_SPEC_FEATURES), MAX_VIEWS (KW_RODS_SPEC_MAX_VIEWS), MAX_COLLIDERS
+// (KW_RODS_SPEC_MAX_COLLIDERS), the colliders buffer and the push constants `push`.
 #ifndef KODAWARI_SHADERS_LIB_ROD_SOLVER_GLSL
 #define KODAWARI_SHADERS_LIB_ROD_SOLVER_GLSL
 
@@ -97,6 +98,61 @@ void collide_all(inout vec3 p) {
         } else {
             [[dont_unroll]] for (uint k = 0; k < col_count; ++k) collide_with(p, k);
         }
+    }
+}
+
+// SPEC A.3 (world.cpp rest_shape, view.cpp): the direction to the camera (or against its
+// view for an orthographic one) in the frame of the character's reference joint `ref`.
+vec3 view_direction(RodTransformGpu ref) {
+    const vec4 to_reference = qconj(ref.rotation);
+    const vec3 offset = push.camera_position.xyz - ref.position.xyz;
+    const float len = length(offset);
+    if (push.camera_position.w == 0.0 && len >= 1e-6) return qrot(to_reference, offset / len);
+    return normalize(qrot(to_reference, -push.camera_forward.xyz));
+}
+
+// SPEC A.3: the weights of template t's m view examples for direction d (w[1..m], 0 past
+// m), normalized when they sum to 1 or more, and the base's w[0], the rest.
+void view_weights(RodTemplateGpu t, uint m, vec3 d, out float w[KW_RODS_MAX_VIEWS + 1]) {
+    float sum = 0.0;
+    [[unroll]] for (uint k = 0; k < KW_RODS_MAX_VIEWS; ++k) w[k + 1] = 0.0;
+    [[unroll]] for (uint k = 0; k < MAX_VIEWS; ++k) {
+        if (k < m) {
+            const vec4 view = t.views[k];
+            const float s = clamp((dot(view.xyz, d) + 1.0) * 0.5, 0.0, 1.0);
+            w[k + 1] = pow(s, view.w);
+            sum += w[k + 1];
+        }
+    }
+    if (sum >= 1.0) {
+        [[unroll]] for (uint k = 1; k <= MAX_VIEWS; ++k) w[k] /= sum;
+        sum = 1.0;
+    }
+    w[0] = 1.0 - sum;
+}
+
+// The chain's col_count colliders from `begin` in the end root's frame `to` (solver.cpp
+// step), each with the distance it keeps from a particle of the chain's `thickness`
+// (rods::collider_reach()).
+void colliders_in_root_frame(uint begin, RodTransformGpu to, float thickness) {
+    const vec4 to_root = qconj(to.rotation);
+    [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
+        const RodColliderGpu col = colliders[begin + k];
+        const uint kind = uint(col.b.w);
+        col_kind[k] = kind;
+        col_la[k] = qrot(to_root, col.a.xyz - to.position.xyz);
+        col_lb[k] = kind == KW_RODS_COLLIDER_PLANE ? qrot(to_root, col.b.xyz) : qrot(to_root, col.b.xyz - to.position.xyz);
+        col_reach[k] = kind == KW_RODS_COLLIDER_PLANE    ? thickness
+                       : kind == KW_RODS_COLLIDER_INSIDE ? max(col.a.w - thickness, 0.0)
+                                                         : col.a.w + thickness;
+    }
+}
+
+// The colliders placed by a substep's root (r_pos, r_rot), solver.cpp step.
+void place_colliders(vec3 r_pos, vec4 r_rot) {
+    [[unroll]] for (uint k = 0; k < MAX_COLLIDERS; ++k) if (k < col_count) {
+        col_ca[k] = r_pos + qrot(r_rot, col_la[k]);
+        col_cb[k] = col_kind[k] == KW_RODS_COLLIDER_PLANE ? qrot(r_rot, col_lb[k]) : r_pos + qrot(r_rot, col_lb[k]);
     }
 }
 
