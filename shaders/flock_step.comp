@@ -1,8 +1,8 @@
 #version 450
-// The flocking step (issue 32): one invocation per bird finds its neighbours in the grid
-// flock_grid.comp built and applies the rules (lib/flock_body.glsl, the same source the
-// CPU backends compile), writing the other state slot and, after a frame's last substep,
-// the frame's motion for the bird domain.
+// The flocking step (issue 32): one invocation per bird, in the grid's order, finds its
+// neighbours in the grid flock_grid.comp built and applies the rules (lib/flock_body.glsl,
+// the same source the CPU backends compile), writing the other state slot and, after a
+// frame's last substep, the frame's motion for the bird domain.
 #extension GL_GOOGLE_include_directive : require
 
 #include "shared/flocking.h"
@@ -18,6 +18,7 @@ layout(std430, binding = KW_FLOCK_BINDING_BUCKETS) readonly buffer Buckets { uin
 layout(std430, binding = KW_FLOCK_BINDING_SORTED) readonly buffer Sorted { uint sorted_birds[]; };
 layout(std430, binding = KW_FLOCK_BINDING_AGENTS) readonly buffer Agents { FlockAgentGpu agents_in[]; };
 layout(std430, binding = KW_FLOCK_BINDING_MOTION) writeonly buffer Motion { BirdMotionGpu motion[]; };
+layout(std430, binding = KW_FLOCK_BINDING_POINTS) readonly buffer Points { vec4 points[]; };
 
 layout(push_constant) uniform Push { FlockPush push; };
 
@@ -29,15 +30,20 @@ FlockStateGpu kw_state(uint i) { return states[push.slots.x * push.counts.x + i]
 uint kw_bucket_start(uint b) { return buckets[2u * b]; }
 uint kw_bucket_count(uint b) { return buckets[2u * b + 1u]; }
 uint kw_sorted(uint s) { return sorted_birds[s]; }
+vec4 kw_point(uint s) { return points[s]; }
 FlockAgentGpu kw_agent(uint a) { return agents_in[push.bases.y + a]; }
 
 #include "lib/flock_hash.glsl"
 #include "lib/flock_body.glsl"
 
 void main() {
-    const uint i = gl_GlobalInvocationID.x;
+    const uint slot = gl_GlobalInvocationID.x;
     const uint count = push.counts.x;
-    if (i >= count) return;
+    if (slot >= count) return;
+    // Birds in the grid's order: the invocations of a subgroup are birds of one cell or of
+    // few, which scan the same buckets (the same loads, loops of about the same length)
+    // where birds by index would each scan their own (docs/performance.md, "Flocking").
+    const uint i = sorted_birds[slot];
     const FlockStep s = flock_step_bird(i, push.counts.y, push.counts.z, push.step.x, push.step.y);
     const uint out_slot = 1u - push.slots.x;
     states[out_slot * count + i] = FlockStateGpu(vec4(s.position, 0.0), vec4(s.velocity, 0.0));

@@ -6,6 +6,9 @@
 //   FlockParamsGpu kw_flock(uint f)      FlockBirdGpu kw_bird(uint i)
 //   FlockStateGpu kw_state(uint i)       (this frame's, the slot read)
 //   uint kw_bucket_start(uint b)  uint kw_bucket_count(uint b)  uint kw_sorted(uint s)
+//   vec4 kw_point(uint s)      the bird in grid slot s: xyz its position, w its flock
+//                              (float(ids.x)); the GPU reads it from the copy the grid's
+//                              scatter writes, cpu-reference by index, the same values
 //   FlockAgentGpu kw_agent(uint a)
 //   KW_INOUT(T)                a parameter read and written: GLSL's inout T, C++'s T&
 // and lib/flock_hash.glsl's functions.
@@ -78,6 +81,7 @@ FlockNeighbours flock_neighbours(uint i, uint mask, float inv_radius) {
     const float radius = flock.radii.x;
     const float radius2 = radius * radius;
     const uint k = flock_k(flock);
+    const float own_flock = float(bird.ids.x);
     FlockNeighbours nb;
     nb.found = 0u;
     uint visited[27];
@@ -96,13 +100,16 @@ FlockNeighbours flock_neighbours(uint i, uint mask, float inv_radius) {
                 const uint first = kw_bucket_start(b);
                 const uint end = first + kw_bucket_count(b);
                 for (uint s = first; s < end; ++s) {
-                    const uint j = kw_sorted(s);
-                    if (j == i || kw_bird(j).ids.x != bird.ids.x) continue;
-                    const vec3 d = KW_XYZ(kw_state(j).position) - p;
+                    const vec4 point = kw_point(s);
+                    if (point.w != own_flock) continue;
+                    const vec3 d = vec3(point.x, point.y, point.z) - p;
                     const float d2 = dot(d, d);
                     if (d2 > radius2) continue;
                     // Behind the bird, in its blind angle: not seen.
                     if (dot(d, forward) < flock.radii.z * sqrt(d2)) continue;
+                    // The bird itself passes the tests above (d = 0): left out by index.
+                    const uint j = kw_sorted(s);
+                    if (j == i) continue;
                     flock_offer(nb, k, d2, j);
                 }
             }

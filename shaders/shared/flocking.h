@@ -25,13 +25,16 @@
 #define KW_FLOCK_BINDING_SORTED 5   // uint per bird: bird indices by bucket
 #define KW_FLOCK_BINDING_AGENTS 6   // FlockAgentGpu: repellers, attractors, obstacles (per frame)
 #define KW_FLOCK_BINDING_MOTION 7   // BirdMotionGpu (shared/birds.h) per frame per bird: what the bird domain flies
-#define KW_FLOCK_BINDING_COUNT 8
+#define KW_FLOCK_BINDING_POINTS 8   // vec4 per bird in SORTED's order: xyz its position, w its flock (a float, exact below 2^24)
+#define KW_FLOCK_BINDING_COUNT 9
+// The most flocking flocks a world holds: a flock index is carried as a float in POINTS.
+#define KW_FLOCK_MAX_FLOCKS 16777216u
 
 // flock_grid.comp's passes (FlockPush.counts.w).
 #define KW_FLOCK_PASS_CLEAR 0u    // every bucket's count to 0
 #define KW_FLOCK_PASS_COUNT 1u    // each bird's bucket, its count incremented
 #define KW_FLOCK_PASS_SCAN 2u     // starts = exclusive prefix sum of the counts; counts to 0
-#define KW_FLOCK_PASS_SCATTER 3u  // each bird into its bucket's range (counts back up)
+#define KW_FLOCK_PASS_SCATTER 3u  // each bird into its bucket's range (counts back up), its point beside it
 
 // FlockAgentGpu.kind_weight.x
 #define KW_FLOCK_AGENT_REPELLER 0.0f  // a predator: birds within radius flee it

@@ -54,7 +54,7 @@ public:
             sizeof(gpu::FlockParamsGpu) * std::max<std::size_t>(world.flocks.size(), 1), sizeof(gpu::FlockBirdGpu) * n,
             2 * sizeof(gpu::FlockStateGpu) * n, sizeof(std::uint32_t) * n, 2 * sizeof(std::uint32_t) * std::uint64_t{world.buckets},
             sizeof(std::uint32_t) * n, sizeof(gpu::FlockAgentGpu) * (world.scene_agents() + kMaxFlockAgents),
-            sizeof(gpu::BirdMotionGpu) * n};
+            sizeof(gpu::BirdMotionGpu) * n, sizeof(gpu::vec4) * n};
         for (std::uint64_t bytes : sizes) {
             if (bytes > device_->info().max_storage_buffer_range) {
                 return make_error(Error::Kind::Unsupported, device_->info().name + " cannot hold " + std::to_string(count_) +

@@ -55,6 +55,10 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
         const std::size_t end = first_bird + spec.count;
         if (spec.flocking) {
             const FlockingSpec& rules = *spec.flocking;
+            if (out.flocks.size() == KW_FLOCK_MAX_FLOCKS) {
+                return make_error(Error::Kind::InvalidInput, scene.path + ": $.flocks[" + std::to_string(f) + "].flocking: more than " +
+                                                                 std::to_string(KW_FLOCK_MAX_FLOCKS) + " flocking flocks in one scene");
+            }
             const auto index = static_cast<std::uint32_t>(out.flocks.size());
             gpu::FlockParamsGpu p{};
             p.counts = {rules.neighbours, rules.metric ? 1u : 0u, 0u, 0u};
