@@ -12,6 +12,8 @@
 
 #include <kodawari/shared/flocking.h>
 
+#include "core/internal_api.hpp"
+
 namespace kodawari::flocking::glsl {
 
 // GLSL's names for the body (inside this namespace only).
@@ -63,11 +65,11 @@ namespace kodawari::flocking {
 
 /// The bucket table's size for `birds` birds: a power of two, at least twice the birds
 /// (few collisions) and at least KW_FLOCK_SCAN_SIZE.
-[[nodiscard]] std::uint32_t bucket_count(std::uint32_t birds);
+[[nodiscard]] KODAWARI_INTERNAL std::uint32_t bucket_count(std::uint32_t birds);
 
 /// flock_grid.comp's passes on the CPU: `buckets` (2 per bucket: start, count) and
 /// `sorted` (the birds by bucket, in bird order within one) for `states`.
-void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::vector<std::uint32_t>& cells,
+KODAWARI_INTERNAL void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::vector<std::uint32_t>& cells,
                 std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted);
 
 }  // namespace kodawari::flocking

@@ -14,6 +14,7 @@
 #include <span>
 #include <vector>
 
+#include "core/internal_api.hpp"
 #include "domains/flocking/flock_kernel.hpp"
 
 namespace kodawari::flocking {
@@ -21,11 +22,12 @@ namespace kodawari::flocking {
 /// The grid's birds in its sorted order (slot s holds bird sorted[s], the grid's own
 /// array, which the kernel reads as kw_sorted), as arrays padded with kSortedPad unused
 /// slots so that a vector load past a bucket's end stays inside.
-struct SortedBirds {
+struct KODAWARI_INTERNAL SortedBirds {
     static constexpr std::size_t kSortedPad = 16;
     std::vector<float> x, y, z;
     std::vector<float> vx, vy, vz;
     std::vector<float> flock;  ///< the bird's flock (exact as a float below 2^24)
+    std::vector<std::uint32_t> index;  ///< the bird (the grid's `sorted`, padded)
 
     /// Fills the arrays from this substep's states and grid (build_grid()'s `sorted`).
     void fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
@@ -42,11 +44,17 @@ struct SearchArgs {
 
 /// Fills out[n] with the neighbours of the bird in grid slot first_slot + n (kw_sorted),
 /// n < count: birds in the grid's order, so that the birds of one cell come
-/// together, share its 27 buckets' candidates, and are read in order.
+/// together, share its 27 buckets' candidates, and are read in order. What
+/// flock_neighbours() gives each, bit for bit.
 using SearchFn = void (*)(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t count,
                           glsl::Kernel::FlockNeighbours* out);
 
 /// The search compiled for the Highway target `target` (simd::Isa::target).
-[[nodiscard]] SearchFn flock_search_kernel(std::int64_t target);
+[[nodiscard]] KODAWARI_INTERNAL SearchFn flock_search_kernel(std::int64_t target);
+
+/// The most candidates a bird may see for the search to pick its nearest by rank; past it
+/// (a dense flock, a metric radius) the search offers them to flock_offer() one by one.
+/// The same lists either way: tests/flocking/test_flock_search.cpp covers both.
+inline constexpr std::size_t kSearchRankedMost = 64;
 
 }  // namespace kodawari::flocking
