@@ -47,6 +47,7 @@ void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, st
 
 #include "core/parallel.hpp"
 #include "domains/flocking/flock_backend.hpp"
+#include "domains/flocking/flock_rules.hpp"
 #include "domains/flocking/flock_search.hpp"
 #include "simd/isa.hpp"
 
@@ -59,7 +60,10 @@ public:
     /// `isa`: the cpu backend's instruction set, whose hand-tuned search it runs; none:
     /// cpu-reference, flock_body.glsl's search.
     CpuFlockBackend(unsigned threads, std::optional<simd::Isa> isa)
-        : threads_(threads), isa_(std::move(isa)), search_(isa_ ? flock_search_kernel(isa_->target) : nullptr) {}
+        : threads_(threads),
+          isa_(std::move(isa)),
+          search_(isa_ ? flock_search_kernel(isa_->target) : nullptr),
+          rules_(isa_ ? flock_rules_kernel(isa_->target) : nullptr) {}
 
     Result<void> load(const FlockWorld& world) override {
         world_ = &world;
@@ -84,6 +88,7 @@ public:
                 glsl::Kernel kernel{flocks.subspan(k * f_count, f_count), w.birds, state_, buckets_, sorted_,
                                           agents.subspan(k * a_count, a_count)};
                 const SearchArgs search_args{&kernel, &sorted_birds_, mask, inv_radius};
+                const RulesArgs rules_args{&kernel, &sorted_birds_, static_cast<std::uint32_t>(a_count), w.dt};
                 const bool last = s + 1 == w.substeps;
                 gpu::BirdMotionGpu* motion = out.data() + std::size_t{k} * n;
                 const auto agent_count = static_cast<std::uint32_t>(a_count);
@@ -98,6 +103,7 @@ public:
                     // In blocks: every bird's neighbours, then every bird's rules, each
                     // phase timed (two clock reads a block of 256 birds).
                     std::vector<glsl::Kernel::FlockNeighbours> found(kBlock);
+                    std::vector<glsl::Kernel::FlockStep> steps(kBlock);
                     double search = 0.0, rules = 0.0;
                     for (std::size_t b0 = begin; b0 < end; b0 += kBlock) {
                         const std::size_t b1 = std::min(end, b0 + kBlock);
@@ -108,9 +114,14 @@ public:
                             for (std::size_t o = b0; o < b1; ++o) found[o - b0] = kernel.flock_neighbours(order[o], mask, inv_radius);
                         }
                         const auto t1 = Clock::now();
+                        if (rules_ != nullptr) {
+                            rules_(rules_args, static_cast<std::uint32_t>(b0), static_cast<std::uint32_t>(b1 - b0), found.data(), steps.data());
+                        } else {
+                            for (std::size_t o = b0; o < b1; ++o) steps[o - b0] = kernel.flock_rules(order[o], found[o - b0], agent_count, w.dt);
+                        }
                         for (std::size_t o = b0; o < b1; ++o) {
                             const std::uint32_t i = order[o];
-                            const glsl::Kernel::FlockStep step = kernel.flock_rules(i, found[o - b0], agent_count, w.dt);
+                            const glsl::Kernel::FlockStep& step = steps[o - b0];
                             next_[i].position = {step.position.x, step.position.y, step.position.z, 0.0f};
                             next_[i].velocity = {step.velocity.x, step.velocity.y, step.velocity.z, 0.0f};
                             if (last) {
@@ -147,6 +158,7 @@ private:
     unsigned threads_;
     std::optional<simd::Isa> isa_;
     SearchFn search_;
+    RulesFn rules_;  // the cpu backend's hand-tuned rules; cpu-reference runs the body's
     SortedBirds sorted_birds_;  // the hand-tuned search's copy of the grid
     const FlockWorld* world_ = nullptr;
     std::vector<gpu::FlockStateGpu> state_, next_;

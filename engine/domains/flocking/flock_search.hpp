@@ -28,6 +28,7 @@ struct KODAWARI_INTERNAL SortedBirds {
     std::vector<float> vx, vy, vz;
     std::vector<float> flock;  ///< the bird's flock (exact as a float below 2^24)
     std::vector<std::uint32_t> index;  ///< the bird (the grid's `sorted`, padded)
+    std::vector<std::uint32_t> slot_of;  ///< bird i's slot: index[slot_of[i]] == i
 
     /// Fills the arrays from this substep's states and grid (build_grid()'s `sorted`).
     void fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
@@ -54,7 +55,7 @@ using SearchFn = void (*)(const SearchArgs& args, std::uint32_t first_slot, std:
 
 /// The most candidates a bird may see for the search to pick its nearest by rank; past it
 /// (a dense flock, a metric radius) the search offers them to flock_offer() one by one.
-/// The same lists either way: tests/flocking/test_flock_search.cpp covers both.
+/// The same lists either way: tests/flocking/test_flock_simd.cpp covers both.
 inline constexpr std::size_t kSearchRankedMost = 64;
 
 }  // namespace kodawari::flocking

@@ -205,6 +205,7 @@ void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<con
     vz.resize(padded);
     flock.resize(padded);
     index.resize(padded);
+    slot_of.resize(n);
     for (std::size_t s = n; s < padded; ++s) flock[s] = -1.0f;  // no bird's flock
     for (std::size_t s = 0; s < n; ++s) {
         const std::uint32_t i = order[s];
@@ -216,6 +217,7 @@ void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<con
         vz[s] = states[i].velocity.z;
         flock[s] = static_cast<float>(birds[i].ids.x);
         index[s] = i;
+        slot_of[i] = static_cast<std::uint32_t>(s);
     }
 }
 

@@ -1,11 +1,13 @@
-// White-box: the cpu backend's hand-tuned neighbour search
-// (engine/domains/flocking/flock_search_simd.cpp) finds what the body's flock_neighbours()
-// finds (cpu-reference's and vulkan's search), bit for bit, at every instruction set, on
-// worlds made to reach each of its paths: the selection by rank (a typical flock, a
-// metric radius, a sparse one whose birds see fewer than k), the insertion past
-// kSearchRankedMost candidates seen (a dense cluster), and exact ties in distance, which
-// the total order (distance, index) decides (a lattice). The motion-level test
+// White-box: the cpu backend's hand-tuned flocking kernels, at every instruction set,
+// against the body (shaders/lib/flock_body.glsl, which cpu-reference and vulkan run), bit
+// for bit, on worlds made to reach each of their paths; the motion-level test
 // (FlockingBackends.StepLikeTheReference) sees only what a flying flock reaches.
+// - The neighbour search (flock_search_simd.cpp) against flock_neighbours(): the selection
+//   by rank (a typical flock, a metric radius, a sparse one whose birds see fewer than k),
+//   the insertion past kSearchRankedMost candidates seen (a dense cluster), and exact
+//   ties in distance, which the total order (distance, index) decides (a lattice).
+// - The rules (flock_rules_simd.cpp) against flock_rules(): every agent kind, each of
+//   their branches, the ground, the speed and pitch limits, separation's front factor.
 #include <gtest/gtest.h>
 
 #include <bit>
@@ -15,6 +17,7 @@
 #include <string>
 #include <vector>
 
+#include "domains/flocking/flock_rules.hpp"
 #include "domains/flocking/flock_search.hpp"
 #include "kodawari/backends/simd.hpp"
 #include "simd/isa.hpp"
@@ -185,6 +188,123 @@ TEST(FlockSearch, TiesInDistanceGoByIndexAsTheReference) {
     const Reach r = compare(w, "lattice");
     EXPECT_EQ(r.mismatches, 0u);
     EXPECT_GT(r.ties, r.birds / 2);
+}
+
+gpu::FlockAgentGpu agent(float kind, glm::vec4 position, float weight, float margin, glm::vec3 velocity) {
+    gpu::FlockAgentGpu a{};
+    a.position = {position.x, position.y, position.z, position.w};
+    a.kind_weight = {kind, weight, margin, 0.0f};
+    a.velocity = {velocity.x, velocity.y, velocity.z, 0.0f};
+    return a;
+}
+
+// The rules of 1 504 birds in two flocks, at every instruction set, against the body's:
+// separation's front factor 0.7 and 2.5 (at 0 or 1 the order of its products cannot
+// show), birds straddling the ground clearance, speeds from rest (where the body's
+// forward is +z) to twice the largest with steep climbs and dives (the speed and pitch
+// limits), and every agent kind among them: a plane, a sphere, an upright capsule, a
+// level one and one of no length, three birds flying dead at them, predators crossing the
+// flock and diving straight down (their two ways to flee), one of negative weight (no
+// panic), an attractor. In calls of 37 birds.
+TEST(FlockRules, AreTheBodysRulesBitForBit) {
+    World w;
+    gpu::FlockParamsGpu first = rules(7, false, 3.0f, 60.0f), second = rules(16, true, 2.5f, 0.0f);
+    first.radii.y = 1.1f;
+    first.weights = {2.0f, 1.5f, 1.0f, 0.5f};
+    first.ground = {3.0f, 20.0f, 0.8f, 0.7f};
+    first.target = {5.0f, 4.0f, -3.0f, 0.0f};
+    second.weights = {1.0f, 2.0f, 0.5f, 0.3f};
+    second.ground = {2.0f, 10.0f, 1.2f, 2.5f};
+    second.target = {-4.0f, 2.0f, 6.0f, 0.0f};
+    w.flocks = {first, second};
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> across(-9.0f, 9.0f), height(0.0f, 8.0f), unit(-1.0f, 1.0f), speed(0.0f, 30.0f);
+    std::size_t at_rest = 0, low = 0;
+    for (int b = 0; b < 1501; ++b) {
+        const glm::vec3 p(across(rng), height(rng), across(rng));
+        glm::vec3 dir(unit(rng), unit(rng), unit(rng));
+        const float len = glm::length(dir);
+        dir = len > 1e-3f ? dir / len : glm::vec3(1.0f, 0.0f, 0.0f);
+        const bool rest = b % 10 == 0;
+        at_rest += rest ? 1 : 0;
+        low += p.y < 3.0f ? 1 : 0;
+        w.add(p, rest ? glm::vec3(0.0f) : speed(rng) * dir, static_cast<std::uint32_t>(b % 2));
+        gpu::FlockBirdGpu& bird = w.birds.back();
+        bird.offset = {unit(rng), unit(rng), unit(rng), 0.0f};
+        bird.speed = {10.0f, 5.0f, 15.0f, 8.0f};
+        bird.turn = {12.0f, 0.5f, 0.6f, 0.0f};
+    }
+    // Three birds flying dead on an obstacle's centre line, where the steer across it has
+    // no direction and the body turns to its side (forward x up; the horizontal
+    // capsule's up is its axis) or, flying along up, to +x.
+    const glm::vec3 aimed[][2] = {{{3.0f, 4.0f, -3.5f}, {0.0f, 0.0f, 10.0f}},
+                                  {{-4.0f, 6.0f, 5.5f}, {0.0f, 0.0f, 10.0f}},
+                                  {{3.0f, 7.5f, 0.0f}, {0.0f, -10.0f, 0.0f}}};
+    for (const auto& a : aimed) {
+        w.add(a[0], a[1], 0u);
+        w.birds.back().speed = {10.0f, 5.0f, 15.0f, 8.0f};
+        w.birds.back().turn = {12.0f, 0.5f, 0.6f, 0.0f};
+    }
+    const std::vector<gpu::FlockAgentGpu> agents = {
+        agent(KW_FLOCK_AGENT_PLANE, {0.0f, 1.0f, 0.0f, 0.0f}, 15.0f, 2.0f, {0.0f, 1.0f, 0.0f}),
+        agent(KW_FLOCK_AGENT_SPHERE, {3.0f, 4.0f, 0.0f, 1.5f}, 20.0f, 3.0f, {}),
+        agent(KW_FLOCK_AGENT_CAPSULE, {-4.0f, 0.0f, -4.0f, 1.0f}, 20.0f, 3.0f, {-4.0f, 8.0f, -4.0f}),
+        agent(KW_FLOCK_AGENT_CAPSULE, {6.0f, 5.0f, 6.0f, 1.2f}, 15.0f, 2.0f, {6.0f, 5.0f, 6.0f}),
+        agent(KW_FLOCK_AGENT_CAPSULE, {-8.0f, 6.0f, 8.0f, 1.0f}, 20.0f, 3.0f, {0.0f, 6.0f, 8.0f}),
+        agent(KW_FLOCK_AGENT_REPELLER, {0.0f, 4.0f, 2.0f, 6.0f}, 40.0f, 0.0f, {12.0f, 0.0f, 0.0f}),
+        agent(KW_FLOCK_AGENT_REPELLER, {-2.0f, 6.0f, -1.0f, 5.0f}, 30.0f, 0.0f, {0.0f, -15.0f, 0.0f}),
+        agent(KW_FLOCK_AGENT_REPELLER, {5.0f, 2.0f, -6.0f, 4.0f}, -5.0f, 0.0f, {0.0f, 0.0f, 3.0f}),
+        agent(KW_FLOCK_AGENT_ATTRACTOR, {2.0f, 3.0f, -5.0f, 8.0f}, 10.0f, 0.0f, {}),
+    };
+    const auto n = static_cast<std::uint32_t>(w.birds.size());
+    const std::uint32_t mask = bucket_count(n) - 1u;
+    const float inv_radius = 1.0f / w.radius, dt = 1.0f / 60.0f;
+    std::vector<std::uint32_t> cells, buckets, sorted;
+    build_grid(w.states, inv_radius, mask, cells, buckets, sorted);
+    SortedBirds sorted_birds;
+    sorted_birds.fill(w.states, w.birds, sorted);
+    glsl::Kernel kernel{w.flocks, w.birds, w.states, buckets, sorted, agents};
+    const auto agent_count = static_cast<std::uint32_t>(agents.size());
+    std::vector<glsl::Kernel::FlockNeighbours> found(n);
+    std::vector<glsl::Kernel::FlockStep> expected(n);
+    std::size_t pitched = 0, clamped = 0;
+    for (std::uint32_t s = 0; s < n; ++s) {
+        found[s] = kernel.flock_neighbours(sorted[s], mask, inv_radius);
+        expected[s] = kernel.flock_rules(sorted[s], found[s], agent_count, dt);
+        const float v = glm::length(expected[s].velocity);
+        clamped += (v <= 5.0f + 1e-4f || v >= 15.0f - 1e-4f) ? 1 : 0;
+        pitched += std::abs(expected[s].velocity.y / v - 0.5f) < 1e-4f || std::abs(expected[s].velocity.y / v + 0.6f) < 1e-4f ? 1 : 0;
+    }
+    std::printf("rules: %u birds, %zu at rest, %zu below the clearance, %zu at a speed limit, %zu at a climb or dive limit\n", n,
+                at_rest, low, clamped, pitched);
+    EXPECT_GT(clamped, 100u);
+    EXPECT_GT(pitched, 100u);
+    const RulesArgs args{&kernel, &sorted_birds, agent_count, dt};
+    for (const std::string& isa_name : available_simd_isas()) {
+        auto isa = simd::choose_isa(isa_name);
+        EXPECT_TRUE(isa.ok()) << isa_name;
+        if (!isa.ok()) continue;
+        const RulesFn run = flock_rules_kernel(isa.value().target);
+        std::vector<glsl::Kernel::FlockStep> steps(n);
+        for (std::uint32_t first_slot = 0; first_slot < n; first_slot += 37) {
+            run(args, first_slot, std::min(37u, n - first_slot), found.data() + first_slot, steps.data() + first_slot);
+        }
+        std::size_t differ = 0;
+        for (std::uint32_t s = 0; s < n; ++s) {
+            const glsl::Kernel::FlockStep &a = steps[s], &e = expected[s];
+            const float got[9] = {a.position.x, a.position.y, a.position.z, a.velocity.x, a.velocity.y, a.velocity.z,
+                                  a.acceleration.x, a.acceleration.y, a.acceleration.z};
+            const float want[9] = {e.position.x, e.position.y, e.position.z, e.velocity.x, e.velocity.y, e.velocity.z,
+                                   e.acceleration.x, e.acceleration.y, e.acceleration.z};
+            bool same = true;
+            for (int c = 0; c < 9; ++c) same = same && std::bit_cast<std::uint32_t>(got[c]) == std::bit_cast<std::uint32_t>(want[c]);
+            if (!same && differ++ < 3) {
+                ADD_FAILURE() << isa_name << ": bird " << sorted[s] << " velocity (" << a.velocity.x << ", " << a.velocity.y << ", "
+                              << a.velocity.z << "), the body's (" << e.velocity.x << ", " << e.velocity.y << ", " << e.velocity.z << ")";
+            }
+        }
+        std::printf("rules, %s: %zu of %u birds differ\n", isa_name.c_str(), differ, n);
+    }
 }
 
 }  // namespace

@@ -1,0 +1,316 @@
+// The cpu backend's rules for every instruction set (flock_rules.hpp): flock_rules() of
+// shaders/lib/flock_body.glsl for a vector of birds, line for line; each step below names
+// the body's line it mirrors. A branch of the body is a mask here, every side computed and
+// the lanes that take it selected, so the operations a lane's result goes through are the
+// body's, in its order.
+#undef HWY_TARGET_INCLUDE
+#define HWY_TARGET_INCLUDE "domains/flocking/flock_rules_simd.cpp"
+#include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/highway.h>
+
+#include <algorithm>
+#include <cmath>
+
+#include "domains/flocking/flock_rules.hpp"
+
+HWY_BEFORE_NAMESPACE();
+namespace kodawari::flocking {
+namespace HWY_NAMESPACE {
+namespace {
+
+namespace hn = hwy::HWY_NAMESPACE;
+using D = hn::ScalableTag<float>;
+using V = hn::Vec<D>;
+using M = hn::Mask<D>;
+
+struct V3 {
+    V x, y, z;
+};
+
+V3 splat(const D d, float x, float y, float z) { return {hn::Set(d, x), hn::Set(d, y), hn::Set(d, z)}; }
+V3 operator+(V3 a, V3 b) { return {hn::Add(a.x, b.x), hn::Add(a.y, b.y), hn::Add(a.z, b.z)}; }
+V3 operator-(V3 a, V3 b) { return {hn::Sub(a.x, b.x), hn::Sub(a.y, b.y), hn::Sub(a.z, b.z)}; }
+V3 operator*(V s, V3 a) { return {hn::Mul(s, a.x), hn::Mul(s, a.y), hn::Mul(s, a.z)}; }
+V3 operator/(V3 a, V s) { return {hn::Div(a.x, s), hn::Div(a.y, s), hn::Div(a.z, s)}; }
+// GLM's dot: (x x' + y y') + z z'.
+V dot(V3 a, V3 b) { return hn::Add(hn::Add(hn::Mul(a.x, b.x), hn::Mul(a.y, b.y)), hn::Mul(a.z, b.z)); }
+V length(V3 a) { return hn::Sqrt(dot(a, a)); }
+// GLM's cross, operand for operand.
+V3 cross(V3 a, V3 b) {
+    return {hn::Sub(hn::Mul(a.y, b.z), hn::Mul(b.y, a.z)), hn::Sub(hn::Mul(a.z, b.x), hn::Mul(b.z, a.x)),
+            hn::Sub(hn::Mul(a.x, b.y), hn::Mul(b.x, a.y))};
+}
+V3 select(M m, V3 yes, V3 no) { return {hn::IfThenElse(m, yes.x, no.x), hn::IfThenElse(m, yes.y, no.y), hn::IfThenElse(m, yes.z, no.z)}; }
+// GLM's min, max and clamp: comparisons (x86's minps and maxps differ on zeros and NaN).
+V gmin(V x, V y) { return hn::IfThenElse(hn::Lt(y, x), y, x); }
+V gmax(V x, V y) { return hn::IfThenElse(hn::Lt(x, y), y, x); }
+V gclamp(V x, V lo, V hi) { return gmin(gmax(x, lo), hi); }
+
+constexpr std::size_t kMaxLanes = HWY_MAX_BYTES / sizeof(float);
+
+// A vector of birds' inputs, lane by lane (lanes past the call's birds repeat its last).
+struct Lanes {
+    HWY_ALIGN float px[kMaxLanes], py[kMaxLanes], pz[kMaxLanes], vx[kMaxLanes], vy[kMaxLanes], vz[kMaxLanes];
+    HWY_ALIGN float v0[kMaxLanes], smin[kMaxLanes], smax[kMaxLanes], dv[kMaxLanes];
+    HWY_ALIGN float lateral[kMaxLanes], climb[kMaxLanes], dive[kMaxLanes];
+    HWY_ALIGN float offx[kMaxLanes], offy[kMaxLanes], offz[kMaxLanes];
+    HWY_ALIGN float radius[kMaxLanes], rsep[kMaxLanes], rroute[kMaxLanes];
+    HWY_ALIGN float wsep[kMaxLanes], walign[kMaxLanes], wcoh[kMaxLanes], wroute[kMaxLanes];
+    HWY_ALIGN float clear[kMaxLanes], ground[kMaxLanes], tau[kMaxLanes], front[kMaxLanes];
+    HWY_ALIGN float tx[kMaxLanes], ty[kMaxLanes], tz[kMaxLanes];
+    HWY_ALIGN float found[kMaxLanes];
+    // Neighbour n of each lane: its position and velocity, distance^2 from the search.
+    HWY_ALIGN float ox[KW_FLOCK_MAX_NEIGHBOURS][kMaxLanes], oy[KW_FLOCK_MAX_NEIGHBOURS][kMaxLanes],
+        oz[KW_FLOCK_MAX_NEIGHBOURS][kMaxLanes];
+    HWY_ALIGN float wx[KW_FLOCK_MAX_NEIGHBOURS][kMaxLanes], wy[KW_FLOCK_MAX_NEIGHBOURS][kMaxLanes],
+        wz[KW_FLOCK_MAX_NEIGHBOURS][kMaxLanes];
+    HWY_ALIGN float nd2[KW_FLOCK_MAX_NEIGHBOURS][kMaxLanes];
+    HWY_ALIGN float scratch[kMaxLanes];
+};
+
+void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count, const glsl::Kernel::FlockNeighbours* found_in,
+           glsl::Kernel::FlockStep* out) {
+    const D d;
+    const std::size_t lanes = hn::Lanes(d);
+    const glsl::Kernel& kernel = *args.kernel;
+    const SortedBirds& sorted = *args.sorted;
+    const V zero = hn::Zero(d), one = hn::Set(d, 1.0f), tiny = hn::Set(d, 1e-6f), small = hn::Set(d, 1e-3f);
+    const V dt = hn::Set(d, args.dt);
+    Lanes in;
+    for (std::uint32_t b0 = 0; b0 < count; b0 += static_cast<std::uint32_t>(lanes)) {
+        const std::size_t live = std::min<std::size_t>(lanes, count - b0);
+        std::uint32_t most = 0;  // the most neighbours a lane has: the slots filled below
+        for (std::size_t m = b0; m < b0 + live; ++m) most = std::max(most, found_in[m].found);
+        for (std::size_t l = 0; l < lanes; ++l) {
+            const std::size_t m = b0 + std::min(l, live - 1);
+            const std::size_t slot = first_slot + m;
+            const gpu::FlockBirdGpu bird = kernel.kw_bird(sorted.index[slot]);
+            const gpu::FlockParamsGpu flock = kernel.kw_flock(bird.ids.x);
+            // The bird's state and its neighbours' from the grid's copy (kw_state's
+            // values): in the grid's order, neighbours are near in memory too.
+            in.px[l] = sorted.x[slot], in.py[l] = sorted.y[slot], in.pz[l] = sorted.z[slot];
+            in.vx[l] = sorted.vx[slot], in.vy[l] = sorted.vy[slot], in.vz[l] = sorted.vz[slot];
+            in.v0[l] = bird.speed.x, in.smin[l] = bird.speed.y, in.smax[l] = bird.speed.z, in.dv[l] = bird.speed.w;
+            in.lateral[l] = bird.turn.x, in.climb[l] = bird.turn.y, in.dive[l] = bird.turn.z;
+            in.offx[l] = bird.offset.x, in.offy[l] = bird.offset.y, in.offz[l] = bird.offset.z;
+            in.radius[l] = flock.radii.x, in.rsep[l] = flock.radii.y, in.rroute[l] = flock.radii.w;
+            in.wsep[l] = flock.weights.x, in.walign[l] = flock.weights.y, in.wcoh[l] = flock.weights.z, in.wroute[l] = flock.weights.w;
+            in.clear[l] = flock.ground.x, in.ground[l] = flock.ground.y, in.tau[l] = flock.ground.z, in.front[l] = flock.ground.w;
+            in.tx[l] = flock.target.x, in.ty[l] = flock.target.y, in.tz[l] = flock.target.z;
+            const glsl::Kernel::FlockNeighbours& nb = found_in[m];
+            in.found[l] = static_cast<float>(nb.found);
+            for (std::uint32_t n = 0; n < nb.found; ++n) {
+                const std::uint32_t o = sorted.slot_of[nb.j[n]];
+                in.ox[n][l] = sorted.x[o], in.oy[n][l] = sorted.y[o], in.oz[n][l] = sorted.z[o];
+                in.wx[n][l] = sorted.vx[o], in.wy[n][l] = sorted.vy[o], in.wz[n][l] = sorted.vz[o];
+                in.nd2[n][l] = nb.d2[n];
+            }
+            // Slots past the lane's neighbours: itself, at rest (masked off below; finite).
+            for (std::uint32_t n = nb.found; n < most; ++n) {
+                in.ox[n][l] = in.px[l], in.oy[n][l] = in.py[l], in.oz[n][l] = in.pz[l];
+                in.wx[n][l] = 0.0f, in.wy[n][l] = 0.0f, in.wz[n][l] = 0.0f;
+                in.nd2[n][l] = 0.0f;
+            }
+        }
+        const V3 p{hn::Load(d, in.px), hn::Load(d, in.py), hn::Load(d, in.pz)};
+        const V3 v{hn::Load(d, in.vx), hn::Load(d, in.vy), hn::Load(d, in.vz)};
+        // speed = length(v); forward = flock_forward(v).
+        const V speed = length(v);
+        const V3 forward = select(hn::Gt(speed, tiny), v / speed, splat(d, 0.0f, 0.0f, 1.0f));
+        const V radius = hn::Load(d, in.radius);
+        const V found = hn::Load(d, in.found);
+
+        // Reynolds' rules over the neighbours, nearest first.
+        V3 separation{zero, zero, zero}, heading{zero, zero, zero}, centre{zero, zero, zero};
+        const V r_sep = hn::Load(d, in.rsep), front = hn::Load(d, in.front);
+        for (std::uint32_t n = 0; n < most; ++n) {
+            const M live_n = hn::Lt(hn::Set(d, static_cast<float>(n)), found);
+            const V3 other{hn::Load(d, in.ox[n]), hn::Load(d, in.oy[n]), hn::Load(d, in.oz[n])};
+            const V3 dn = other - p;
+            const V dist = hn::Sqrt(hn::Load(d, in.nd2[n]));
+            const M apart = hn::Gt(dist, tiny);
+            // along_axis = dist > 1e-6 ? dot(d, forward) / dist : 0
+            const V along_axis = hn::IfThenElse(apart, hn::Div(dot(dn, forward), dist), zero);
+            // r_here = r_sep * (1 + front along_axis along_axis)
+            const V r_here = hn::Mul(r_sep, hn::Add(one, hn::Mul(hn::Mul(front, along_axis), along_axis)));
+            const V over = hn::Div(gmax(hn::Sub(dist, r_here), zero), r_here);
+            // g = exp(-(over over)): libm's, lane by lane, as the body's std::exp.
+            hn::Store(hn::Neg(hn::Mul(over, over)), d, in.scratch);
+            for (std::size_t l = 0; l < lanes; ++l) in.scratch[l] = std::exp(in.scratch[l]);
+            const V g = hn::Load(d, in.scratch);
+            separation = select(hn::And(live_n, apart), separation + hn::Div(g, dist) * dn, separation);
+            const V3 w{hn::Load(d, in.wx[n]), hn::Load(d, in.wy[n]), hn::Load(d, in.wz[n])};
+            const V ws = length(w);
+            heading = select(hn::And(live_n, hn::Gt(ws, tiny)), heading + w / ws, heading);
+            centre = select(live_n, centre + dn, centre);
+        }
+
+        // Agents, in one pass (the same for every lane: their kinds are branches here).
+        V3 fled{zero, zero, zero}, avoid{zero, zero, zero};
+        V panic = zero;
+        for (std::uint32_t a = 0; a < args.agents; ++a) {
+            const gpu::FlockAgentGpu agent = kernel.kw_agent(a);
+            const float kind = agent.kind_weight.x;
+            const V weight = hn::Set(d, agent.kind_weight.y);
+            if (kind == KW_FLOCK_AGENT_PLANE) {
+                const V3 normal = splat(d, agent.velocity.x, agent.velocity.y, agent.velocity.z);
+                const V margin = gmax(hn::Set(d, agent.kind_weight.z), small);
+                const V depth = hn::Sub(margin, dot(p - splat(d, agent.position.x, agent.position.y, agent.position.z), normal));
+                avoid = select(hn::Gt(depth, zero), avoid + hn::Mul(weight, gmin(hn::Div(depth, margin), one)) * normal, avoid);
+                continue;
+            }
+            V3 at = splat(d, agent.position.x, agent.position.y, agent.position.z);
+            V3 facing = forward;
+            V3 up = splat(d, 0.0f, 1.0f, 0.0f);
+            if (kind == KW_FLOCK_AGENT_CAPSULE) {
+                const V3 ab = splat(d, agent.velocity.x, agent.velocity.y, agent.velocity.z) - at;
+                const V ab2 = dot(ab, ab);  // the same in every lane
+                const M has_axis = hn::Gt(ab2, zero);
+                const V t = hn::IfThenElse(has_axis, gclamp(hn::Div(dot(p - at, ab), ab2), zero, one), zero);
+                at = at + t * ab;
+                const V3 axis_up = ab / hn::Sqrt(ab2);
+                const V3 flat_forward = forward - dot(forward, axis_up) * axis_up;
+                const V fl = length(flat_forward);
+                facing = select(hn::And(has_axis, hn::Gt(fl, small)), flat_forward / fl, facing);
+                up = select(has_axis, axis_up, up);
+            }
+            const V3 dp = p - at;
+            const V dist = length(dp);
+            const V reach = hn::Set(d, agent.position.w);
+            const M near = hn::Not(hn::Lt(dist, tiny));  // `if (dist < 1e-6) continue;`
+            if (kind == KW_FLOCK_AGENT_SPHERE || kind == KW_FLOCK_AGENT_CAPSULE) {
+                const V margin = gmax(hn::Set(d, agent.kind_weight.z), small);
+                const V depth = hn::Sub(hn::Add(reach, margin), dist);
+                const V s = hn::Mul(weight, gmin(hn::Div(depth, margin), one));
+                const V along = dot(dp, facing);
+                const V3 across = dp - along * facing;
+                const V cl = length(across);
+                const V3 side = cross(facing, up);
+                const V sl = length(side);
+                const V3 round = select(hn::Gt(cl, small), across / cl, select(hn::Gt(sl, small), side / sl, splat(d, 1.0f, 0.0f, 0.0f)));
+                const V3 away = select(hn::And(hn::Lt(along, zero), hn::Gt(dist, reach)), round, dp / dist);
+                avoid = select(hn::And(near, hn::Gt(depth, zero)), avoid + s * away, avoid);
+            } else {
+                const M inside = hn::And(near, hn::Lt(dist, reach));
+                const V closeness = hn::Sub(one, hn::Div(dist, reach));
+                const V s = hn::Mul(weight, closeness);
+                if (kind == KW_FLOCK_AGENT_REPELLER) {
+                    if (agent.kind_weight.y > 0.0f) panic = hn::IfThenElse(inside, gmax(panic, closeness), panic);
+                    // The predator's side, the same in every lane: its path's crossing with the vertical.
+                    const glm::vec3 u(agent.velocity.x, agent.velocity.y, agent.velocity.z);
+                    const glm::vec3 side = glm::cross(u, glm::vec3(0.0f, 1.0f, 0.0f));
+                    const float sl = glm::length(side);
+                    V3 away;
+                    if (sl > 1e-3f) {
+                        const V3 side_v = splat(d, side.x, side.y, side.z);
+                        const V scale = hn::IfThenElse(hn::Ge(dot(dp, side_v), zero), hn::Set(d, 1.0f / sl), hn::Set(d, -1.0f / sl));
+                        away = scale * side_v;
+                    } else {
+                        const V3 flat_d{dp.x, zero, dp.z};
+                        const V fl = length(flat_d);
+                        away = select(hn::Gt(fl, small), flat_d / fl, splat(d, 1.0f, 0.0f, 0.0f));
+                    }
+                    fled = select(inside, fled + s * away, fled);
+                } else {
+                    fled = select(inside, fled - hn::Div(s, dist) * dp, fled);
+                }
+            }
+        }
+        const V calm = hn::Sub(one, panic);
+        V3 acc{zero, zero, zero};
+        {
+            const M any = hn::Gt(found, zero);
+            const V inv_n = hn::Div(one, found);
+            V3 with = acc + hn::Mul(hn::Neg(hn::Load(d, in.wsep)), inv_n) * separation;
+            const V hl = length(heading);
+            with = select(hn::Gt(hl, tiny), with + hn::Load(d, in.walign) * (heading / hl - forward), with);
+            with = with + hn::Div(hn::Mul(hn::Mul(calm, hn::Load(d, in.wcoh)), inv_n), radius) * centre;
+            acc = select(any, with, acc);
+        }
+        // The route: to the leader's place plus the bird's formation offset.
+        const V3 to_target =
+            (V3{hn::Load(d, in.tx), hn::Load(d, in.ty), hn::Load(d, in.tz)} + V3{hn::Load(d, in.offx), hn::Load(d, in.offy), hn::Load(d, in.offz)}) - p;
+        acc = acc + hn::Div(hn::Mul(calm, hn::Load(d, in.wroute)), gmax(length(to_target), hn::Load(d, in.rroute))) * to_target;
+        // Cruise speed.
+        acc = acc + hn::Div(hn::Sub(hn::Load(d, in.v0), speed), hn::Load(d, in.tau)) * forward;
+        // The ground.
+        const V clear = hn::Load(d, in.clear);
+        acc.y = hn::IfThenElse(hn::Lt(p.y, clear), hn::Add(acc.y, hn::Div(hn::Mul(hn::Load(d, in.ground), hn::Sub(clear, p.y)), clear)),
+                               acc.y);
+        acc = acc + fled;
+
+        // What the wing allows.
+        const V dv = hn::Load(d, in.dv), lateral_most = hn::Load(d, in.lateral);
+        const V a_ahead = dot(acc, forward);
+        // Without obstacles to avoid:
+        const V along_plain = gclamp(a_ahead, hn::Neg(dv), dv);
+        V3 lateral_plain = acc - a_ahead * forward;
+        const V ll = length(lateral_plain);
+        lateral_plain = select(hn::Gt(ll, lateral_most), hn::Div(lateral_most, ll) * lateral_plain, lateral_plain);
+        // With them: the avoidance's lateral part first (Reynolds' prioritized allocation).
+        const V3 total = acc + avoid;
+        const V along_avoid = gclamp(dot(total, forward), hn::Neg(dv), dv);
+        V3 first = avoid - dot(avoid, forward) * forward;
+        const V fl = length(first);
+        first = select(hn::Gt(fl, lateral_most), hn::Div(lateral_most, fl) * first, first);
+        V3 rest = acc - a_ahead * forward;
+        const V budget = hn::Sub(lateral_most, gmin(fl, lateral_most));
+        const V rl = length(rest);
+        rest = select(hn::Gt(rl, budget), hn::Div(budget, rl) * rest, rest);
+        const M plain = hn::Eq(dot(avoid, avoid), zero);
+        const V along = hn::IfThenElse(plain, along_plain, along_avoid);
+        const V3 lateral = select(plain, lateral_plain, first + rest);
+        const V3 a = along * forward + lateral;
+
+        // Semi-implicit Euler; speed within [min, max], climb and dive within the wing's.
+        V3 v1 = v + dt * a;
+        const V s1 = length(v1);
+        const V s = gclamp(s1, hn::Load(d, in.smin), hn::Load(d, in.smax));
+        v1 = select(hn::Gt(s1, tiny), hn::Div(s, s1) * v1, s * forward);
+        const V sin_pitch = hn::Div(v1.y, s);
+        const V limited = gclamp(sin_pitch, hn::Neg(hn::Load(d, in.dive)), hn::Load(d, in.climb));
+        {
+            const V3 h_raw{v1.x, zero, v1.z};
+            const V hl = length(h_raw);
+            const V3 h = select(hn::Gt(hl, tiny), h_raw / hl, splat(d, 1.0f, 0.0f, 0.0f));
+            const V cos_pitch = hn::Sqrt(gmax(hn::Sub(one, hn::Mul(limited, limited)), zero));
+            const V s_cos = hn::Mul(s, cos_pitch);
+            const V3 pitched{hn::Mul(s_cos, h.x), hn::Mul(s, limited), hn::Mul(s_cos, h.z)};
+            v1 = select(hn::Ne(limited, sin_pitch), pitched, v1);
+        }
+        const V3 position = p + dt * v1;
+        const V3 acceleration = (v1 - v) / dt;
+
+        HWY_ALIGN float r[9][kMaxLanes];
+        const V3* results[] = {&position, &v1, &acceleration};
+        for (int q = 0; q < 3; ++q) {
+            hn::Store(results[q]->x, d, r[3 * q]);
+            hn::Store(results[q]->y, d, r[3 * q + 1]);
+            hn::Store(results[q]->z, d, r[3 * q + 2]);
+        }
+        for (std::size_t l = 0; l < live; ++l) {
+            glsl::Kernel::FlockStep& step = out[b0 + l];
+            step.position = glm::vec3(r[0][l], r[1][l], r[2][l]);
+            step.velocity = glm::vec3(r[3][l], r[4][l], r[5][l]);
+            step.acceleration = glm::vec3(r[6][l], r[7][l], r[8][l]);
+        }
+    }
+}
+
+}  // namespace
+
+RulesFn flock_rules_kernel() { return &rules; }
+
+}  // namespace HWY_NAMESPACE
+}  // namespace kodawari::flocking
+HWY_AFTER_NAMESPACE();
+
+#if HWY_ONCE
+#include "simd/dispatch.hpp"
+
+namespace kodawari::flocking {
+
+RulesFn flock_rules_kernel(std::int64_t target) { KW_SIMD_SELECT(target, flock_rules_kernel) }
+
+}  // namespace kodawari::flocking
+#endif
