@@ -1,6 +1,6 @@
 // kodawari bench flock (issue 32): the flocking step of N birds on every backend, in
 // bird-steps per second (birds x substeps / s, Blender's boids and BoidsUnity's unit),
-// with the neighbour search's share on the CPU backends (docs/performance.md).
+// with the neighbour search's share on every backend (docs/performance.md).
 #include <algorithm>
 #include <chrono>
 #include <cmath>
@@ -87,11 +87,15 @@ int bench_flock(const FlockOptions& o) {
         c.measured.device = d.device();
         describe(c.measured, kind, choice.options);
         c.repetition = [&, index, frames](double& gpu_ms) -> Result<double> {
-            gpu_ms = -1.0;
             Domain& dom = *domains[index];
+            const double device_before = flocking_timing(dom).device_seconds;
             const auto start = std::chrono::steady_clock::now();
             for (std::uint32_t f = 0; f < frames; ++f) KW_TRY(dom.step(next[index]++, 1, {}));
-            return std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            const double seconds = std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+            // The device's time of the frames' dispatches, where it has timestamps.
+            const double device_after = flocking_timing(dom).device_seconds;
+            gpu_ms = device_before < 0.0 || device_after < 0.0 ? -1.0 : 1000.0 * (device_after - device_before);
+            return seconds;
         };
         contenders.push_back(std::move(c));
     }
@@ -101,11 +105,19 @@ int bench_flock(const FlockOptions& o) {
                                       "{\"benchmark\":\"flock\",\"count\":" + std::to_string(count) +
                                           ",\"frames\":" + std::to_string(frames),
                                       o.common.json);
-    // Where the CPU backends' time went, over the warm-up and every repetition.
-    std::printf("\nwhere the time went (cpu kinds; the search and the rules in thread-seconds over their threads):\n");
+    // Where the time went: the CPU kinds over the warm-up and every repetition, as they
+    // ran; vulkan timed apart afterwards (profile_flocking: its step is one submission).
+    std::printf("\nwhere the time went (cpu kinds: as they ran, the search and the rules in thread-seconds over their "
+                "threads; vulkan: %u frames of the grid alone, of the grid and the search, and of the whole step, one "
+                "submission each, by the device's timestamps or, without them, the wall clock):\n",
+                frames);
     std::printf("%-20s %10s %12s %12s %14s\n", "backend", "grid %", "search %", "rules %", "search ns/bird");
     for (std::size_t i = 0; i < contenders.size(); ++i) {
-        const FlockingTiming t = flocking_timing(*domains[i]);
+        FlockingTiming t = flocking_timing(*domains[i]);
+        if (t.grid_seconds + t.search_seconds + t.rules_seconds <= 0.0) {
+            auto profiled = profile_flocking(*domains[i], frames);
+            if (profiled) t = profiled.value();
+        }
         const double sum = t.grid_seconds + t.search_seconds + t.rules_seconds;
         if (sum <= 0.0 || t.bird_steps == 0) {
             std::printf("%-20s %10s %12s %12s %14s\n", contenders[i].measured.backend.c_str(), "-", "-", "-", "-");

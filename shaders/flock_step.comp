@@ -3,6 +3,8 @@
 // neighbours in the grid flock_grid.comp built and applies the rules (lib/flock_body.glsl,
 // the same source the CPU backends compile), writing the other state slot and, after a
 // frame's last substep, the frame's motion for the bird domain.
+// Built a second time with KW_FLOCK_SEARCH_ONLY as `flock_search_only`: the neighbour
+// search alone, each bird's state kept (profile_flocking() times the step's parts apart).
 #extension GL_GOOGLE_include_directive : require
 
 #include "shared/flocking.h"
@@ -44,10 +46,19 @@ void main() {
     // few, which scan the same buckets (the same loads, loops of about the same length)
     // where birds by index would each scan their own (docs/performance.md, "Flocking").
     const uint i = sorted_birds[slot];
-    const FlockStep s = flock_step_bird(i, push.counts.y, push.counts.z, push.step.x, push.step.y);
     const uint out_slot = 1u - push.slots.x;
+#ifdef KW_FLOCK_SEARCH_ONLY
+    // The state kept, its unused w given what the search found, so that no compiler
+    // drops the search.
+    const FlockNeighbours nb = flock_neighbours(i, push.counts.y, push.step.y);
+    FlockStateGpu kept = states[push.slots.x * count + i];
+    kept.position.w = float(nb.found) + (nb.found > 0u ? nb.d2[0] : 0.0);
+    states[out_slot * count + i] = kept;
+#else
+    const FlockStep s = flock_step_bird(i, push.counts.y, push.counts.z, push.step.x, push.step.y);
     states[out_slot * count + i] = FlockStateGpu(vec4(s.position, 0.0), vec4(s.velocity, 0.0));
     if (push.slots.w + 1u == push.slots.z) {
         motion[push.slots.y * count + i] = BirdMotionGpu(vec4(s.position, 0.0), vec4(s.velocity, 0.0), vec4(s.acceleration, 0.0));
     }
+#endif
 }

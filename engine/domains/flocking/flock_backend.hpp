@@ -57,6 +57,13 @@ public:
     [[nodiscard]] virtual std::string device() const = 0;
     /// Its time since load() (kodawari/domains/flocking.hpp); zeros where not measured.
     [[nodiscard]] virtual FlockingTiming timing() const { return {}; }
+    /// profile_flocking() (kodawari/domains/flocking.hpp) with one frame's inputs.
+    [[nodiscard]] virtual Result<FlockingTiming> profile(std::uint32_t frames, std::span<const gpu::FlockParamsGpu> flocks,
+                                                         std::span<const gpu::FlockAgentGpu> agents) {
+        (void)frames, (void)flocks, (void)agents;
+        return make_error(Error::Kind::Unsupported, "profile_flocking: the CPU backends time the flocking step's parts as they "
+                                                    "run (flocking_timing)");
+    }
     [[nodiscard]] virtual std::uint32_t validation_messages() const { return 0; }
 };
 

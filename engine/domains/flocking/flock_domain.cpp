@@ -140,6 +140,13 @@ public:
     std::span<const gpu::BirdMotionGpu> motion() const { return motion_; }
     const compute::Buffer* motion_buffer() const { return backend_ ? backend_->motion_buffer() : nullptr; }
     FlockingTiming timing() const { return backend_ ? backend_->timing() : FlockingTiming{}; }
+    Result<FlockingTiming> profile(std::uint32_t frames) {
+        if (!backend_) return make_error(Error::Kind::InvalidInput, "profile_flocking: domain: the flocking domain is not open");
+        flocks_.resize(world_.flocks.size());
+        agents_.resize(world_.scene_agents() + app_agents_.size());
+        frame_inputs(frame_, flocks_, agents_);
+        return backend_->profile(frames, flocks_, agents_);
+    }
     // The application's agents: from host arrays, or that many on the device; each
     // replaces the other.
     void set_agents(std::vector<gpu::FlockAgentGpu> agents) {
@@ -257,6 +264,16 @@ std::span<const gpu::BirdMotionGpu> flocking_motion(const Domain& domain) {
 FlockingTiming flocking_timing(const Domain& domain) {
     const auto* flock = dynamic_cast<const FlockingDomain*>(&domain);
     return flock ? flock->timing() : FlockingTiming{};
+}
+
+Result<FlockingTiming> profile_flocking(Domain& domain, std::uint32_t frames) {
+    auto* flock = dynamic_cast<FlockingDomain*>(&domain);
+    if (flock == nullptr) {
+        return make_error(Error::Kind::InvalidInput, "profile_flocking: domain: expected the flocking domain, got \"" +
+                                                         std::string(domain.name()) + "\"");
+    }
+    if (frames == 0) return make_error(Error::Kind::InvalidInput, "profile_flocking: frames: expected at least 1, got 0");
+    return flock->profile(frames);
 }
 
 namespace flocking {

@@ -6,6 +6,7 @@
 #include <algorithm>
 #include <array>
 #include <cassert>
+#include <chrono>
 #include <cstring>
 #include <optional>
 #include <string>
@@ -39,6 +40,9 @@ public:
         auto step = compute::Kernel::create(*device_, "flock_step", types, sizeof(gpu::FlockPush), spec);
         if (!step) return step.error();
         step_.emplace(std::move(step).value());
+        auto search = compute::Kernel::create(*device_, "flock_search_only", types, sizeof(gpu::FlockPush), spec);
+        if (!search) return search.error();
+        search_only_.emplace(std::move(search).value());
         return {};
     }
 
@@ -46,6 +50,8 @@ public:
         world_ = &world;
         count_ = static_cast<std::uint32_t>(world.birds.size());
         slot_ = 0;
+        timing_ = {};
+        timing_.device_seconds = device_->info().timestamps ? 0.0 : -1.0;
         ring_.reset();
         buffers_.clear();
         const std::uint64_t n = count_;
@@ -89,11 +95,16 @@ public:
             auto recording = queue.begin();
             if (!recording) return recording.error();
             compute::Recording& rec = recording.value();
+            rec.timestamp(compute::Timestamp::Begin);
             for (std::uint32_t k = 0; k < m; ++k) record_frame(rec, k, static_cast<std::uint32_t>(f), static_cast<std::uint32_t>(a));
+            rec.timestamp(compute::Timestamp::End);
             compute::barrier(rec, compute::Stage::Compute, compute::Stage::Transfer | compute::Stage::Host);
             auto submission = queue.submit(std::move(recording).value());
             if (!submission) return submission.error();
-            KW_TRY(submission.value().wait());
+            double ms = -1.0;
+            KW_TRY(submission.value().wait(&ms));
+            if (ms >= 0.0 && timing_.device_seconds >= 0.0) timing_.device_seconds += ms / 1000.0;
+            timing_.bird_steps += std::uint64_t{count_} * w.substeps * m;
             const auto target = out.subspan(std::size_t{done} * n, std::size_t{m} * n);
             KW_TRY(compute::download(*device_, buffers_[KW_FLOCK_BINDING_MOTION], std::as_writable_bytes(target)));
             done += m;
@@ -147,14 +158,75 @@ public:
                           .element_bytes = sizeof(gpu::FlockAgentGpu)};
     }
 
+    Result<FlockingTiming> profile(std::uint32_t frames, std::span<const gpu::FlockParamsGpu> flocks,
+                                   std::span<const gpu::FlockAgentGpu> agents) override {
+        const FlockWorld& w = *world_;
+        if (agents.size() > agent_capacity()) {
+            return make_error(Error::Kind::InvalidInput, "profile_flocking: " + std::to_string(agents.size()) + " agents; at most " +
+                                                             std::to_string(agent_capacity()));
+        }
+        // One frame's inputs at slot 0 of their bindings (each holds a frame at least).
+        if (!flocks.empty()) KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_FLOCKS], bytes_of(flocks)));
+        if (!agents.empty()) KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_AGENTS], bytes_of(agents)));
+        // The state, set aside and put back after: the flock is left as it was.
+        const compute::Buffer& states = buffers_[KW_FLOCK_BINDING_STATES];
+        auto saved = compute::Buffer::create(*device_, states.size(), compute::Usage::Storage);
+        if (!saved) return saved.error();
+        const std::uint32_t slot = slot_;
+        const compute::Queue queue(*device_);
+        const auto copy = [&](const compute::Buffer& from, const compute::Buffer& to) -> Result<void> {
+            auto recording = queue.begin();
+            if (!recording) return recording.error();
+            compute::barrier(recording.value(), compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Transfer);
+            compute::copy(recording.value(), from, 0, to, 0, states.size());
+            compute::barrier(recording.value(), compute::Stage::Transfer, compute::Stage::Compute | compute::Stage::Transfer);
+            auto submission = queue.submit(std::move(recording).value());
+            if (!submission) return submission.error();
+            return submission.value().wait();
+        };
+        KW_TRY(copy(states, saved.value()));
+        double seconds[3] = {};
+        const Part parts[3] = {Part::Grid, Part::Search, Part::Step};
+        for (int p = 0; p < 3; ++p) {
+            auto recording = queue.begin();
+            if (!recording) return recording.error();
+            compute::Recording& rec = recording.value();
+            rec.timestamp(compute::Timestamp::Begin);
+            for (std::uint32_t k = 0; k < frames; ++k) {
+                record_frame(rec, 0, static_cast<std::uint32_t>(flocks.size()), static_cast<std::uint32_t>(agents.size()), parts[p]);
+            }
+            rec.timestamp(compute::Timestamp::End);
+            const auto start = std::chrono::steady_clock::now();
+            auto submission = queue.submit(std::move(recording).value());
+            if (!submission) return submission.error();
+            double ms = -1.0;
+            KW_TRY(submission.value().wait(&ms));
+            seconds[p] = ms >= 0.0 ? ms / 1000.0 : std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
+        }
+        KW_TRY(copy(saved.value(), states));
+        slot_ = slot;
+        FlockingTiming t;
+        t.grid_seconds = seconds[0];
+        t.search_seconds = std::max(seconds[1] - seconds[0], 0.0);
+        t.rules_seconds = std::max(seconds[2] - seconds[1], 0.0);
+        t.bird_steps = std::uint64_t{count_} * w.substeps * frames;
+        t.device_seconds = device_->info().timestamps ? seconds[2] : -1.0;
+        return t;
+    }
+    FlockingTiming timing() const override { return timing_; }
+
     std::string device() const override { return device_->info().name; }
     std::uint32_t validation_messages() const override { return device_->validation_messages(); }
 
 private:
+    // What record_frame() records per substep: the grid's passes, and the search alone
+    // or the whole step (profile()).
+    enum class Part { Grid, Search, Step };
+
     // The substeps of the k-th frame of a recording: per substep the grid's four passes
     // and the birds' step; the frame's motion goes to motion slot k, its flocks and
     // agents are at k x flocks and k x agents.
-    void record_frame(compute::Recording& rec, std::uint32_t k, std::uint32_t flocks, std::uint32_t agents) {
+    void record_frame(compute::Recording& rec, std::uint32_t k, std::uint32_t flocks, std::uint32_t agents, Part part = Part::Step) {
         const FlockWorld& w = *world_;
         const std::uint32_t groups_birds = compute::groups_for(count_, workgroup_);
         const std::uint32_t groups_grid = (count_ + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE;
@@ -176,7 +248,8 @@ private:
             dispatch(*grid_, KW_FLOCK_PASS_COUNT, groups_grid);
             dispatch(*grid_, KW_FLOCK_PASS_SCAN, 1);
             dispatch(*grid_, KW_FLOCK_PASS_SCATTER, groups_grid);
-            dispatch(*step_, 0u, groups_birds);
+            if (part == Part::Grid) continue;  // the state unchanged: the same grid next time
+            dispatch(part == Part::Search ? *search_only_ : *step_, 0u, groups_birds);
             slot_ = 1u - slot_;
         }
     }
@@ -202,10 +275,12 @@ private:
         for (const auto& b : buffers_) bound.push_back(&b);
         grid_->bind(bound);
         step_->bind(bound);
+        search_only_->bind(bound);
     }
 
     std::shared_ptr<compute::Device> device_;
-    std::optional<compute::Kernel> grid_, step_;
+    std::optional<compute::Kernel> grid_, step_, search_only_;
+    FlockingTiming timing_;  // advance()'s device time
     std::vector<compute::Buffer> buffers_;
     std::optional<compute::StagingRing> ring_;  // record()'s per-frame uploads
     const FlockWorld* world_ = nullptr;

@@ -101,17 +101,34 @@ inline constexpr std::string_view agents = "flocking.agents";
 [[nodiscard]] KODAWARI_API Result<gpu::FlockAgentGpu> encode_flock_agent(const FlockAgent& agent);
 
 /// Where a flocking domain's time went since it opened, on the CPU backends (zeros on
-/// vulkan, whose passes run in one submission): the grid's counting sort (one thread),
-/// the neighbour search (each bird's k nearest in view) and the rules and limits, the last
-/// two summed over the threads that ran them (so their sum is thread-seconds).
-/// `kodawari bench flock` reports the search's share.
+/// vulkan, whose passes run in one submission: profile_flocking() times them apart): the
+/// grid's counting sort (one thread), the neighbour search (each bird's k nearest in view)
+/// and the rules and limits, the last two summed over the threads that ran them (so their
+/// sum is thread-seconds). `kodawari bench flock` reports the search's share.
 struct FlockingTiming {
     double grid_seconds = 0.0;
     double search_seconds = 0.0;
     double rules_seconds = 0.0;
     std::uint64_t bird_steps = 0;  ///< birds x substeps stepped
+    /// vulkan: the device's time of the step's submissions by its timestamps (from the
+    /// frames' first dispatch to their last); -1 on the CPU kinds and on a device without
+    /// timestamps (lavapipe).
+    double device_seconds = -1.0;
 };
 [[nodiscard]] KODAWARI_API FlockingTiming flocking_timing(const Domain& domain);
+
+/// Times the parts of the flocking step apart on the vulkan backend, whose step is one
+/// submission (the CPU kinds measure theirs as they run: flocking_timing()): `frames`
+/// frames of the grid's four passes alone, then of the passes and the neighbour search (a
+/// kernel that finds every bird's neighbours and keeps its state), then of the whole step,
+/// each a submission of its own, with the current frame's flock parameters and host
+/// agents, timed by the device's timestamps (by the wall clock around the submission where
+/// it has none). grid_seconds is the first, search_seconds the second less the first,
+/// rules_seconds the third less the second (an ablation: the rules are what the whole
+/// step adds to the search), bird_steps birds x substeps x `frames`, device_seconds the
+/// third. The flock is left as it was. InvalidInput for another domain, a domain not
+/// open or `frames` 0; Unsupported on the CPU kinds.
+[[nodiscard]] KODAWARI_API Result<FlockingTiming> profile_flocking(Domain& domain, std::uint32_t frames);
 
 /// The motion the flocking domain `domain` gave for the frames of its last step():
 /// frames x BirdWorld::driven, frame-major; empty for another domain.
