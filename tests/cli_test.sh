@@ -179,11 +179,14 @@ check "bench chains --rod-kernels times the three rod kernels" bash -c "node -e 
 check "bench --kernel-statistics reports the kernels or why not" grep -q "^kernel statistics of vulkan" "$work/bench-kernels.out"
 "$bin" bench chains --count 130 --frames 2 --backends vulkan --rod-kernels per-thread >/dev/null 2>"$work/bench-kernels.err"
 check "bench chains --rod-kernels with an unknown kernel exits 2 naming it" bash -c "test $? -eq 2 && grep -q 'per-thread' '$work/bench-kernels.err'"
-# bench flock: every backend on one flocking flock, in bird-steps/s, and where the CPU
-# backends' time went (the grid, the neighbour search, the rules).
+# bench flock: every backend on one flocking flock, in bird-steps/s, and where each
+# backend's time went (the grid, the neighbour search, the rules).
 "$bin" bench flock --count 301 --frames 2 --json "$work/bench-flock.json" >"$work/bench-flock.out" 2>&1
 check "bench flock json" bash -c "node -e 'const r=require(\"$work/bench-flock.json\"); if (r.benchmark!==\"flock\"||r.count!==301||r.results.length!==3||!(r.results[1].per_second>0)) process.exit(1)'"
 check "bench flock says the search's share" grep -q '^cpu-reference  *[0-9.]*  *[0-9.]*  *[0-9.]*  *[0-9.]*$' "$work/bench-flock.out"
+# and the vulkan step's, timed apart (profile_flocking), with its device time per frame.
+check "bench flock splits the vulkan step" grep -q '^vulkan  *[0-9.]*  *[0-9.]*  *[0-9.]*  *[0-9.]*$' "$work/bench-flock.out"
+check "bench flock has the vulkan step's device time" bash -c "node -e 'const r=require(\"$work/bench-flock.json\"); const v=r.results.find(x=>x.backend===\"vulkan\"); if (!v||!(v.gpu_ms_per_frame>0)) process.exit(1)'"
 # The old spellings --chains and --steps still work for one release, saying so on stderr.
 "$bin" bench chains --chains 130 --joints 9 --steps 2 --backends cpu --json "$work/bench-steps.json" >/dev/null 2>"$work/bench-steps.err"
 check "bench chains --steps and --chains still work, deprecated" bash -c "test $? -eq 0 && grep -q -- '--steps is deprecated.*use --frames' '$work/bench-steps.err' && grep -q -- '--chains is deprecated.*use --count' '$work/bench-steps.err' && node -e 'const r=require(\"$work/bench-steps.json\"); if (r.chains!==130||r.steps!==2) process.exit(1)'"
