@@ -21,7 +21,7 @@
 #define KW_FLOCK_BINDING_BIRDS 1    // FlockBirdGpu per bird (constants)
 #define KW_FLOCK_BINDING_STATES 2   // FlockStateGpu per bird, two slots: [slot * birds + i]
 #define KW_FLOCK_BINDING_CELLS 3    // uint per bird: its bucket this frame
-#define KW_FLOCK_BINDING_BUCKETS 4  // uvec2 per bucket as two uints: start, count
+#define KW_FLOCK_BINDING_BUCKETS 4  // uvec2 per bucket as two uints: start, count; then a uint per scan tile
 #define KW_FLOCK_BINDING_SORTED 5   // uint per bird: bird indices by bucket
 #define KW_FLOCK_BINDING_AGENTS 6   // FlockAgentGpu: repellers, attractors, obstacles (per frame)
 #define KW_FLOCK_BINDING_MOTION 7   // BirdMotionGpu (shared/birds.h) per frame per bird: what the bird domain flies
@@ -30,11 +30,19 @@
 // The most flocking flocks a world holds: a flock index is carried as a float in POINTS.
 #define KW_FLOCK_MAX_FLOCKS 16777216u
 
-// flock_grid.comp's passes (FlockPush.counts.w).
-#define KW_FLOCK_PASS_CLEAR 0u    // every bucket's count to 0
-#define KW_FLOCK_PASS_COUNT 1u    // each bird's bucket, its count incremented
-#define KW_FLOCK_PASS_SCAN 2u     // starts = exclusive prefix sum of the counts; counts to 0
-#define KW_FLOCK_PASS_SCATTER 3u  // each bird into its bucket's range (counts back up), its point beside it
+// flock_grid.comp's passes (FlockPush.counts.w). The scan of the bucket counts runs over
+// tiles of KW_FLOCK_SCAN_TILE buckets, a workgroup each, so that a million birds' two
+// million buckets spread over the device rather than one workgroup: each tile's total,
+// the tiles' exclusive prefix sums (one workgroup), then each tile's starts from its offset.
+#define KW_FLOCK_PASS_CLEAR 0u       // every bucket's count to 0
+#define KW_FLOCK_PASS_COUNT 1u       // each bird's bucket, its count incremented
+#define KW_FLOCK_PASS_SCAN_TILES 2u  // each tile's total of counts, after the buckets
+#define KW_FLOCK_PASS_SCAN_TOP 3u    // the tiles' totals to their exclusive prefix sums
+#define KW_FLOCK_PASS_SCAN_DOWN 4u   // starts = exclusive prefix sum of the counts; counts to 0
+#define KW_FLOCK_PASS_SCATTER 5u     // each bird into its bucket's range (counts back up), its point beside it
+// Buckets a lane of the scan sums in order, and so buckets per tile (a workgroup's).
+#define KW_FLOCK_SCAN_RUN 16u
+#define KW_FLOCK_SCAN_TILE (KW_FLOCK_SCAN_SIZE * KW_FLOCK_SCAN_RUN)
 
 // FlockAgentGpu.kind_weight.x
 #define KW_FLOCK_AGENT_REPELLER 0.0f  // a predator: birds within radius flee it

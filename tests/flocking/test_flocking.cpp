@@ -588,10 +588,48 @@ TEST(Flocking, ShardsAreTheWholeRunsBirds) {
     }
 }
 
+// The vulkan grid's scan over several tiles (shared/flocking.h: KW_FLOCK_SCAN_TILE
+// buckets a workgroup; 6 001 birds have 16 384 buckets, 4 tiles, where the other tests'
+// 1 001 fit one): the first flocking frames from the same state are cpu-reference's to
+// rounding (measured on lavapipe: 3.8e-6 m, an ulp at 45 m, and 9.6e-7 m/s at frame 3).
+// A bucket's wrong start puts birds in the wrong cells, so that they see the wrong
+// neighbours (each tile's start taken as the first's: 76 m and 17 m/s).
+TEST(Flocking, VulkanGridOfSeveralScanTilesIsTheReferences) {
+    const std::string why = testing_support::no_vulkan_device_reason();
+    if (!why.empty()) GTEST_SKIP() << why;
+    constexpr std::uint32_t kBirds = 6001, kFrames = 4;
+    const std::string text = scene_text(kBirds, 1.0, "{}");
+    const auto fly = [&](BackendKind kind, std::vector<gpu::BirdMotionGpu>& motion) {
+        auto sim = open_text(text, {kind, ""});
+        ASSERT_NE(sim, nullptr);
+        motion.resize(std::size_t{kFrames} * kBirds);
+        const ChannelOutput out[] = {{kFlockingMotionChannel, std::as_writable_bytes(std::span(motion))}};
+        ASSERT_TRUE(sim->step(kFrames, out).ok());
+    };
+    std::vector<gpu::BirdMotionGpu> reference, vulkan;
+    fly(BackendKind::CpuReference, reference);
+    fly(BackendKind::Vulkan, vulkan);
+    ASSERT_EQ(reference.size(), vulkan.size());
+    float position = 0.0f, velocity = 0.0f;
+    for (std::size_t i = std::size_t{kFrames - 1} * kBirds; i < reference.size(); ++i) {
+        const auto& a = reference[i];
+        const auto& b = vulkan[i];
+        position = std::max(position, glm::length(glm::vec3(a.position.x - b.position.x, a.position.y - b.position.y,
+                                                            a.position.z - b.position.z)));
+        velocity = std::max(velocity, glm::length(glm::vec3(a.velocity.x - b.velocity.x, a.velocity.y - b.velocity.y,
+                                                            a.velocity.z - b.velocity.z)));
+    }
+    std::printf("%u birds, frame %u: vulkan within %.3g m and %.3g m/s of cpu-reference\n", kBirds, kFrames - 1,
+                static_cast<double>(position), static_cast<double>(velocity));
+    EXPECT_LT(position, 1e-4f);
+    EXPECT_LT(velocity, 1e-2f);
+}
+
 // profile_flocking() times the vulkan step's parts apart (the grid, the search, what the
 // rules add) and leaves the flock as it was: after it, the next frames are the bits of a
 // run without it. Refused, naming the argument, for the CPU kinds, another domain and 0
-// frames. Measured on lavapipe (301 birds, 5 frames): the search about 95% of the step.
+// frames. Measured on lavapipe (301 birds, 5 frames), alone: the search 74% to 89% of the
+// step (timings are printed, not asserted).
 TEST(Flocking, ProfileTimesTheVulkanStepsPartsAndLeavesTheFlock) {
     const std::string why = testing_support::no_vulkan_device_reason();
     if (!why.empty()) GTEST_SKIP() << why;
@@ -612,8 +650,10 @@ TEST(Flocking, ProfileTimesTheVulkanStepsPartsAndLeavesTheFlock) {
                         "(search %.0f%%), device %.3g s\n",
                         kBirds, kFrames, p.grid_seconds, p.search_seconds, p.rules_seconds, 100.0 * p.search_seconds / step,
                         p.device_seconds);
+            // Times, so only their signs: the parts are differences of three runs, which a
+            // busy machine can order either way (a negative one is given as 0).
             EXPECT_GT(p.grid_seconds, 0.0);
-            EXPECT_GT(p.search_seconds, 0.0);
+            EXPECT_GE(p.search_seconds, 0.0);
             EXPECT_GE(p.rules_seconds, 0.0);
             EXPECT_EQ(p.bird_steps, std::uint64_t{kBirds} * kFrames);  // 60 fps: a substep a frame
             // The domain's own count is of its steps only (frame 0 is the routes').

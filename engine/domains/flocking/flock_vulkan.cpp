@@ -1,5 +1,5 @@
-// The flocking step on a Vulkan device: per substep, the grid in four dispatches of
-// shaders/flock_grid.comp (clear, count, scan, scatter) and the step of every bird
+// The flocking step on a Vulkan device: per substep, the grid in six dispatches of
+// shaders/flock_grid.comp (clear, count, the scan in three, scatter) and the step of every bird
 // (shaders/flock_step.comp, lib/flock_body.glsl), recorded for many frames into one
 // submission with each frame's motion read back for the bird domain, or one frame into an
 // application's command buffer with the motion left on the device for the birds' kernel.
@@ -58,7 +58,7 @@ public:
         // Flocks, agents and motion grow with the frames of a call (advance()).
         const std::uint64_t sizes[KW_FLOCK_BINDING_COUNT] = {
             sizeof(gpu::FlockParamsGpu) * std::max<std::size_t>(world.flocks.size(), 1), sizeof(gpu::FlockBirdGpu) * n,
-            2 * sizeof(gpu::FlockStateGpu) * n, sizeof(std::uint32_t) * n, 2 * sizeof(std::uint32_t) * std::uint64_t{world.buckets},
+            2 * sizeof(gpu::FlockStateGpu) * n, sizeof(std::uint32_t) * n, sizeof(std::uint32_t) * (2 * std::uint64_t{world.buckets} + scan_tiles(world)),
             sizeof(std::uint32_t) * n, sizeof(gpu::FlockAgentGpu) * (world.scene_agents() + kMaxFlockAgents),
             sizeof(gpu::BirdMotionGpu) * n, sizeof(gpu::vec4) * n};
         for (std::uint64_t bytes : sizes) {
@@ -223,7 +223,7 @@ private:
     // or the whole step (profile()).
     enum class Part { Grid, Search, Step };
 
-    // The substeps of the k-th frame of a recording: per substep the grid's four passes
+    // The substeps of the k-th frame of a recording: per substep the grid's six passes
     // and the birds' step; the frame's motion goes to motion slot k, its flocks and
     // agents are at k x flocks and k x agents.
     void record_frame(compute::Recording& rec, std::uint32_t k, std::uint32_t flocks, std::uint32_t agents, Part part = Part::Step) {
@@ -231,6 +231,7 @@ private:
         const std::uint32_t groups_birds = compute::groups_for(count_, workgroup_);
         const std::uint32_t groups_grid = (count_ + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE;
         const std::uint32_t groups_buckets = (w.buckets + KW_FLOCK_SCAN_SIZE - 1) / KW_FLOCK_SCAN_SIZE;
+        const std::uint32_t tiles = scan_tiles(w);
         for (std::uint32_t s = 0; s < w.substeps; ++s) {
             gpu::FlockPush push{};
             push.counts = {count_, w.buckets - 1u, agents, KW_FLOCK_PASS_CLEAR};
@@ -246,13 +247,18 @@ private:
             };
             dispatch(*grid_, KW_FLOCK_PASS_CLEAR, groups_buckets);
             dispatch(*grid_, KW_FLOCK_PASS_COUNT, groups_grid);
-            dispatch(*grid_, KW_FLOCK_PASS_SCAN, 1);
+            dispatch(*grid_, KW_FLOCK_PASS_SCAN_TILES, tiles);
+            dispatch(*grid_, KW_FLOCK_PASS_SCAN_TOP, 1);
+            dispatch(*grid_, KW_FLOCK_PASS_SCAN_DOWN, tiles);
             dispatch(*grid_, KW_FLOCK_PASS_SCATTER, groups_grid);
             if (part == Part::Grid) continue;  // the state unchanged: the same grid next time
             dispatch(part == Part::Search ? *search_only_ : *step_, 0u, groups_birds);
             slot_ = 1u - slot_;
         }
     }
+
+    // The grid scan's tiles (flock_grid.comp): a workgroup each.
+    static std::uint32_t scan_tiles(const FlockWorld& w) { return (w.buckets + KW_FLOCK_SCAN_TILE - 1) / KW_FLOCK_SCAN_TILE; }
 
     // The most agents a frame has: the scene's and the application's.
     std::size_t agent_capacity() const { return world_->scene_agents() + kMaxFlockAgents; }

@@ -119,7 +119,7 @@ struct FlockingTiming {
 
 /// Times the parts of the flocking step apart on the vulkan backend, whose step is one
 /// submission (the CPU kinds measure theirs as they run: flocking_timing()): `frames`
-/// frames of the grid's four passes alone, then of the passes and the neighbour search (a
+/// frames of the grid's six passes alone, then of the passes and the neighbour search (a
 /// kernel that finds every bird's neighbours and keeps its state), then of the whole step,
 /// each a submission of its own, with the current frame's flock parameters and host
 /// agents, timed by the device's timestamps (by the wall clock around the submission where
