@@ -34,9 +34,9 @@ static_assert(HWY_MAX_BYTES / sizeof(float) <= SortedBirds::kSortedPad, "a vecto
 // The k nearest of the n candidates seen (d2, j), nearest first, into nb: what offering
 // each to the body's flock_offer() in the visiting order gives. The k nearest by
 // (distance, index) are a total order's first k, so each candidate's place is its rank,
-// the count of candidates before it (flock_before()), which a vector counts for 16 at
-// once on AVX-512 with no branch per candidate, where the insertion's data-dependent
-// branches mispredicted (about 140 ns a bird of the 555 ns search at 10 000 birds). A NaN
+// the count of candidates before it (flock_before()), counted for 16 candidates at once
+// on AVX-512 with no branch per candidate, where the insertion's data-dependent branches
+// mispredicted (about 140 ns a bird of the 555 ns search at 10 000 birds). A NaN
 // distance has no rank (flock_before() is then no total order), so a bird that sees one
 // takes the insertion, in the visiting order, as the reference.
 void nearest(glsl::Kernel& kernel, glsl::Kernel::FlockNeighbours& nb, std::uint32_t k, const float* d2, const std::uint32_t* j,
@@ -55,18 +55,25 @@ void nearest(glsl::Kernel& kernel, glsl::Kernel::FlockNeighbours& nb, std::uint3
     // Slot k takes every candidate past the first k: a store with no branch.
     float out_d2[KW_FLOCK_MAX_NEIGHBOURS + 1] = {};
     std::uint32_t out_j[KW_FLOCK_MAX_NEIGHBOURS + 1] = {};
-    for (std::size_t m = 0; m < n; ++m) {
-        const auto md2 = hn::Set(d, d2[m]);
-        const auto mj = hn::Set(du, j[m]);
-        std::size_t rank = 0;
-        for (std::size_t s = 0; s < n; s += lanes) {
-            const auto od2 = hn::LoadU(d, d2 + s);
-            const auto tie = hn::And(hn::Eq(od2, md2), hn::RebindMask(d, hn::Lt(hn::LoadU(du, j + s), mj)));
-            rank += hn::CountTrue(d, hn::And(hn::FirstN(d, n - s), hn::Or(hn::Lt(od2, md2), tie)));
+    HWY_ALIGN std::uint32_t ranks[HWY_MAX_BYTES / sizeof(float)];
+    // A vector of candidates' ranks at a time: each candidate o adds one to the rank of
+    // every candidate it comes before (a lane's mask is all ones, -1, so Sub adds one).
+    for (std::size_t s = 0; s < n; s += lanes) {
+        const auto md2 = hn::LoadU(d, d2 + s);
+        const auto mj = hn::LoadU(du, j + s);
+        auto rank = hn::Zero(du);
+        for (std::size_t o = 0; o < n; ++o) {
+            const auto od2 = hn::Set(d, d2[o]);
+            const auto tie = hn::And(hn::Eq(od2, md2), hn::RebindMask(d, hn::Lt(hn::Set(du, j[o]), mj)));
+            rank = hn::Sub(rank, hn::VecFromMask(du, hn::RebindMask(du, hn::Or(hn::Lt(od2, md2), tie))));
         }
-        const std::size_t at = std::min<std::size_t>(rank, k);
-        out_d2[at] = d2[m];
-        out_j[at] = j[m];
+        hn::Store(rank, du, ranks);
+        const std::size_t live = std::min(lanes, n - s);
+        for (std::size_t l = 0; l < live; ++l) {
+            const std::size_t at = std::min<std::size_t>(ranks[l], k);
+            out_d2[at] = d2[s + l];
+            out_j[at] = j[s + l];
+        }
     }
     nb.found = static_cast<std::uint32_t>(std::min<std::size_t>(n, k));
     // Every slot, a copy of fixed size (the ones past `found` are not read).
