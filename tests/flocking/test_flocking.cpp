@@ -590,14 +590,16 @@ TEST(Flocking, ShardsAreTheWholeRunsBirds) {
 
 // The vulkan grid's scan over several tiles (shared/flocking.h: KW_FLOCK_SCAN_TILE
 // buckets a workgroup; 6 001 birds have 16 384 buckets, 4 tiles, where the other tests'
-// 1 001 fit one): the first flocking frames from the same state are cpu-reference's to
-// rounding (measured on lavapipe: 3.8e-6 m, an ulp at 45 m, and 9.6e-7 m/s at frame 3).
-// A bucket's wrong start puts birds in the wrong cells, so that they see the wrong
-// neighbours (each tile's start taken as the first's: 76 m and 17 m/s).
+// 1 001 fit one): the first flocking frame (frame 1) from the same state is
+// cpu-reference's to rounding. One step, so that rounding (a GPU's contractions, its exp)
+// has no frames to change a bird's neighbours by; measured on lavapipe: 3.8e-6 m, an ulp
+// at 45 m, and 9.6e-7 m/s. A bucket's wrong start puts birds in the wrong cells, so that
+// they see the wrong neighbours (each tile's start taken as the first's: metres a second
+// within that step).
 TEST(Flocking, VulkanGridOfSeveralScanTilesIsTheReferences) {
     const std::string why = testing_support::no_vulkan_device_reason();
     if (!why.empty()) GTEST_SKIP() << why;
-    constexpr std::uint32_t kBirds = 6001, kFrames = 4;
+    constexpr std::uint32_t kBirds = 6001, kFrames = 2;
     const std::string text = scene_text(kBirds, 1.0, "{}");
     const auto fly = [&](BackendKind kind, std::vector<gpu::BirdMotionGpu>& motion) {
         auto sim = open_text(text, {kind, ""});
@@ -622,7 +624,7 @@ TEST(Flocking, VulkanGridOfSeveralScanTilesIsTheReferences) {
     std::printf("%u birds, frame %u: vulkan within %.3g m and %.3g m/s of cpu-reference\n", kBirds, kFrames - 1,
                 static_cast<double>(position), static_cast<double>(velocity));
     EXPECT_LT(position, 1e-4f);
-    EXPECT_LT(velocity, 1e-2f);
+    EXPECT_LT(velocity, 1e-3f);
 }
 
 // profile_flocking() times the vulkan step's parts apart (the grid, the search, what the

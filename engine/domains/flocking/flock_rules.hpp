@@ -3,8 +3,10 @@
 // flock_rules() for a vector of birds at once, hand-written with Highway, held to the body
 // bit for bit: the same IEEE operations in the same order (GLM's dot is (x + y) + z, its
 // min, max and clamp are comparisons, not minps/maxps; no fused multiply-add), each
-// branch a mask, the exponential the same libm call lane by lane. cpu-reference and vulkan
-// run the body.
+// branch a mask (NaN deciding each comparison as the body's C++ does), the exponential
+// the same libm call lane by lane. cpu-reference and vulkan run the body. A NaN result is
+// NaN on both, its sign not always the same (the compiler orders a scalar operation's
+// operands as it likes, and x86 gives the first NaN operand's).
 //
 // Why it is faster: a bird's rules take about 8 divisions and 2 square roots per
 // neighbour, which one scalar divider does one after the other (about 200 ns a bird at

@@ -12,35 +12,32 @@
 #include <cmath>
 
 #include "domains/flocking/flock_rules.hpp"
+#include "simd/vecmath-inl.h"
 
 HWY_BEFORE_NAMESPACE();
 namespace kodawari::flocking {
 namespace HWY_NAMESPACE {
 namespace {
 
+// simd/vecmath-inl.h: glm's vec3 operations for lanes, operation for operation (dot,
+// length, cross, select, add, sub, mul, div).
+using simd::HWY_NAMESPACE::D;
+using simd::HWY_NAMESPACE::M;
+using simd::HWY_NAMESPACE::V;
+using simd::HWY_NAMESPACE::V3;
 namespace hn = hwy::HWY_NAMESPACE;
-using D = hn::ScalableTag<float>;
-using V = hn::Vec<D>;
-using M = hn::Mask<D>;
+namespace vm = simd::HWY_NAMESPACE;
 
-struct V3 {
-    V x, y, z;
-};
-
+// The body's vec3 arithmetic written as it is there.
 V3 splat(const D d, float x, float y, float z) { return {hn::Set(d, x), hn::Set(d, y), hn::Set(d, z)}; }
-V3 operator+(V3 a, V3 b) { return {hn::Add(a.x, b.x), hn::Add(a.y, b.y), hn::Add(a.z, b.z)}; }
-V3 operator-(V3 a, V3 b) { return {hn::Sub(a.x, b.x), hn::Sub(a.y, b.y), hn::Sub(a.z, b.z)}; }
-V3 operator*(V s, V3 a) { return {hn::Mul(s, a.x), hn::Mul(s, a.y), hn::Mul(s, a.z)}; }
-V3 operator/(V3 a, V s) { return {hn::Div(a.x, s), hn::Div(a.y, s), hn::Div(a.z, s)}; }
-// GLM's dot: (x x' + y y') + z z'.
-V dot(V3 a, V3 b) { return hn::Add(hn::Add(hn::Mul(a.x, b.x), hn::Mul(a.y, b.y)), hn::Mul(a.z, b.z)); }
-V length(V3 a) { return hn::Sqrt(dot(a, a)); }
-// GLM's cross, operand for operand.
-V3 cross(V3 a, V3 b) {
-    return {hn::Sub(hn::Mul(a.y, b.z), hn::Mul(b.y, a.z)), hn::Sub(hn::Mul(a.z, b.x), hn::Mul(b.z, a.x)),
-            hn::Sub(hn::Mul(a.x, b.y), hn::Mul(b.x, a.y))};
-}
-V3 select(M m, V3 yes, V3 no) { return {hn::IfThenElse(m, yes.x, no.x), hn::IfThenElse(m, yes.y, no.y), hn::IfThenElse(m, yes.z, no.z)}; }
+V3 operator+(const V3& a, const V3& b) { return vm::add(a, b); }
+V3 operator-(const V3& a, const V3& b) { return vm::sub(a, b); }
+V3 operator*(V s, const V3& a) { return vm::mul(s, a); }
+V3 operator/(const V3& a, V s) { return vm::div(a, s); }
+using vm::cross;
+using vm::dot;
+using vm::length;
+using vm::select;
 // GLM's min, max and clamp: comparisons (x86's minps and maxps differ on zeros and NaN).
 V gmin(V x, V y) { return hn::IfThenElse(hn::Lt(y, x), y, x); }
 V gmax(V x, V y) { return hn::IfThenElse(hn::Lt(x, y), y, x); }
@@ -276,7 +273,9 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
             const V cos_pitch = hn::Sqrt(gmax(hn::Sub(one, hn::Mul(limited, limited)), zero));
             const V s_cos = hn::Mul(s, cos_pitch);
             const V3 pitched{hn::Mul(s_cos, h.x), hn::Mul(s, limited), hn::Mul(s_cos, h.z)};
-            v1 = select(hn::Ne(limited, sin_pitch), pitched, v1);
+            // The body's `limited != sin_pitch`, true for a NaN (0 / 0 at no speed): not
+            // Highway's Ne, which is an ordered comparison (false for a NaN) on AVX2 and AVX-512.
+            v1 = select(hn::Not(hn::Eq(limited, sin_pitch)), pitched, v1);
         }
         const V3 position = p + dt * v1;
         const V3 acceleration = (v1 - v) / dt;

@@ -3,7 +3,8 @@
 // hand-tuned with Highway, of what shaders/lib/flock_body.glsl's flock_neighbours() finds
 // (cpu-reference and vulkan run that one), held to it bit for bit: the same candidates,
 // the same distance arithmetic, and a result (the k nearest by distance and index, a
-// total order) that does not depend on the order candidates are visited in.
+// total order) that does not depend on the order candidates are visited in. A NaN
+// distance (from a NaN or infinite position) is NaN on both, its sign not always the same.
 //
 // Why it is faster: the grid's birds are copied each substep into arrays in bucket order
 // (SortedBirds), so a cell's candidates are contiguous floats a vector compares at once

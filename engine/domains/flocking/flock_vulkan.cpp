@@ -168,23 +168,33 @@ public:
         // One frame's inputs at slot 0 of their bindings (each holds a frame at least).
         if (!flocks.empty()) KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_FLOCKS], bytes_of(flocks)));
         if (!agents.empty()) KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_AGENTS], bytes_of(agents)));
-        // The state, set aside and put back after: the flock is left as it was.
+        // The state and the motion of the last frame (record()'s, which the application and
+        // the birds' kernel read) set aside and put back after: the flock is left as it was.
         const compute::Buffer& states = buffers_[KW_FLOCK_BINDING_STATES];
-        auto saved = compute::Buffer::create(*device_, states.size(), compute::Usage::Storage);
+        const compute::Buffer& motion = buffers_[KW_FLOCK_BINDING_MOTION];
+        const std::uint64_t motion_bytes = std::uint64_t{count_} * sizeof(gpu::BirdMotionGpu);
+        auto saved = compute::Buffer::create(*device_, states.size() + motion_bytes, compute::Usage::Storage);
         if (!saved) return saved.error();
         const std::uint32_t slot = slot_;
         const compute::Queue queue(*device_);
-        const auto copy = [&](const compute::Buffer& from, const compute::Buffer& to) -> Result<void> {
+        const auto copy = [&](bool back) -> Result<void> {
             auto recording = queue.begin();
             if (!recording) return recording.error();
-            compute::barrier(recording.value(), compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Transfer);
-            compute::copy(recording.value(), from, 0, to, 0, states.size());
-            compute::barrier(recording.value(), compute::Stage::Transfer, compute::Stage::Compute | compute::Stage::Transfer);
+            compute::Recording& rec = recording.value();
+            compute::barrier(rec, compute::Stage::Compute | compute::Stage::Transfer, compute::Stage::Transfer);
+            if (back) {
+                compute::copy(rec, saved.value(), 0, states, 0, states.size());
+                compute::copy(rec, saved.value(), states.size(), motion, 0, motion_bytes);
+            } else {
+                compute::copy(rec, states, 0, saved.value(), 0, states.size());
+                compute::copy(rec, motion, 0, saved.value(), states.size(), motion_bytes);
+            }
+            compute::barrier(rec, compute::Stage::Transfer, compute::Stage::Compute | compute::Stage::Transfer);
             auto submission = queue.submit(std::move(recording).value());
             if (!submission) return submission.error();
             return submission.value().wait();
         };
-        KW_TRY(copy(states, saved.value()));
+        KW_TRY(copy(false));
         double seconds[3] = {};
         const Part parts[3] = {Part::Grid, Part::Search, Part::Step};
         for (int p = 0; p < 3; ++p) {
@@ -203,8 +213,8 @@ public:
             KW_TRY(submission.value().wait(&ms));
             seconds[p] = ms >= 0.0 ? ms / 1000.0 : std::chrono::duration<double>(std::chrono::steady_clock::now() - start).count();
         }
-        KW_TRY(copy(saved.value(), states));
-        slot_ = slot;
+        KW_TRY(copy(true));
+        slot_ = slot;  // (each pass that steps flips it frames x substeps times: back where it was)
         FlockingTiming t;
         t.grid_seconds = seconds[0];
         t.search_seconds = std::max(seconds[1] - seconds[0], 0.0);

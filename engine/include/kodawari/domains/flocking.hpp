@@ -112,7 +112,7 @@ struct FlockingTiming {
     std::uint64_t bird_steps = 0;  ///< birds x substeps stepped
     /// vulkan: the device's time of the step's submissions by its timestamps (from the
     /// frames' first dispatch to their last); -1 on the CPU kinds and on a device without
-    /// timestamps (lavapipe).
+    /// timestamps.
     double device_seconds = -1.0;
 };
 [[nodiscard]] KODAWARI_API FlockingTiming flocking_timing(const Domain& domain);
@@ -126,8 +126,10 @@ struct FlockingTiming {
 /// it has none). grid_seconds is the first, search_seconds the second less the first,
 /// rules_seconds the third less the second (an ablation: the rules are what the whole
 /// step adds to the search), bird_steps birds x substeps x `frames`, device_seconds the
-/// third. The flock is left as it was. InvalidInput for another domain, a domain not
-/// open or `frames` 0; Unsupported on the CPU kinds.
+/// third. The flock is left as it was (its state and the motion of record()'s last frame).
+/// It waits for its own submissions only: call it with none of the application's work on
+/// the device in flight (it writes the flock's input buffers from the host). InvalidInput
+/// for another domain, a domain not open or `frames` 0; Unsupported on the CPU kinds.
 [[nodiscard]] KODAWARI_API Result<FlockingTiming> profile_flocking(Domain& domain, std::uint32_t frames);
 
 /// The motion the flocking domain `domain` gave for the frames of its last step():
