@@ -101,23 +101,36 @@ int bench_flock(const FlockOptions& o) {
     }
     if (contenders.empty()) return report(make_error(Error::Kind::Unsupported, "bench flock: no backend could run"));
     if (auto r = run_repetitions(contenders, repetitions, frames, static_cast<double>(count)); !r) return report(r.error());
+    // Where the time went: the CPU kinds over the warm-up and every repetition, as they
+    // ran; vulkan timed apart now (profile_flocking: its step is one submission). In the
+    // JSON too (each result's grid_share, search_share, rules_share, search_ns_per_bird).
+    std::vector<FlockingTiming> split(contenders.size());
+    for (std::size_t i = 0; i < contenders.size(); ++i) {
+        split[i] = flocking_timing(*domains[i]);
+        if (split[i].grid_seconds + split[i].search_seconds + split[i].rules_seconds <= 0.0) {
+            auto profiled = profile_flocking(*domains[i], frames);
+            if (profiled) split[i] = profiled.value();
+        }
+        const FlockingTiming& t = split[i];
+        const double sum = t.grid_seconds + t.search_seconds + t.rules_seconds;
+        if (sum <= 0.0 || t.bird_steps == 0) continue;
+        char extra[200];
+        std::snprintf(extra, sizeof extra, ",\"grid_share\":%.4f,\"search_share\":%.4f,\"rules_share\":%.4f,\"search_ns_per_bird\":%.1f",
+                      t.grid_seconds / sum, t.search_seconds / sum, t.rules_seconds / sum,
+                      1e9 * t.search_seconds / static_cast<double>(t.bird_steps));
+        contenders[i].measured.extra_json += extra;
+    }
     const int status = report_results(contenders, "bird-steps/s", repetitions, choice.options,
                                       "{\"benchmark\":\"flock\",\"count\":" + std::to_string(count) +
                                           ",\"frames\":" + std::to_string(frames),
                                       o.common.json);
-    // Where the time went: the CPU kinds over the warm-up and every repetition, as they
-    // ran; vulkan timed apart afterwards (profile_flocking: its step is one submission).
     std::printf("\nwhere the time went (cpu kinds: as they ran, the search and the rules in thread-seconds over their "
                 "threads; vulkan: %u frames of the grid alone, of the grid and the search, and of the whole step, one "
                 "submission each, by the device's timestamps or, without them, the wall clock):\n",
                 frames);
     std::printf("%-20s %10s %12s %12s %14s\n", "backend", "grid %", "search %", "rules %", "search ns/bird");
     for (std::size_t i = 0; i < contenders.size(); ++i) {
-        FlockingTiming t = flocking_timing(*domains[i]);
-        if (t.grid_seconds + t.search_seconds + t.rules_seconds <= 0.0) {
-            auto profiled = profile_flocking(*domains[i], frames);
-            if (profiled) t = profiled.value();
-        }
+        const FlockingTiming& t = split[i];
         const double sum = t.grid_seconds + t.search_seconds + t.rules_seconds;
         if (sum <= 0.0 || t.bird_steps == 0) {
             std::printf("%-20s %10s %12s %12s %14s\n", contenders[i].measured.backend.c_str(), "-", "-", "-", "-");

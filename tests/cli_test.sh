@@ -187,6 +187,7 @@ check "bench flock says the search's share" grep -q '^cpu-reference  *[0-9.]*  *
 # and the vulkan step's, timed apart (profile_flocking), with its device time per frame.
 check "bench flock splits the vulkan step" grep -q '^vulkan  *[0-9.]*  *[0-9.]*  *[0-9.]*  *[0-9.]*$' "$work/bench-flock.out"
 check "bench flock has the vulkan step's device time" bash -c "node -e 'const r=require(\"$work/bench-flock.json\"); const v=r.results.find(x=>x.backend===\"vulkan\"); if (!v||!(v.gpu_ms_per_frame>0)) process.exit(1)'"
+check "bench flock's JSON has every backend's split" bash -c "node -e 'const r=require(\"$work/bench-flock.json\"); if (!r.results.every(x=>[x.grid_share,x.search_share,x.rules_share,x.search_ns_per_bird].every(v=>typeof v===\"number\"))) process.exit(1)'"
 # The old spellings --chains and --steps still work for one release, saying so on stderr.
 "$bin" bench chains --chains 130 --joints 9 --steps 2 --backends cpu --json "$work/bench-steps.json" >/dev/null 2>"$work/bench-steps.err"
 check "bench chains --steps and --chains still work, deprecated" bash -c "test $? -eq 0 && grep -q -- '--steps is deprecated.*use --frames' '$work/bench-steps.err' && grep -q -- '--chains is deprecated.*use --count' '$work/bench-steps.err' && node -e 'const r=require(\"$work/bench-steps.json\"); if (r.chains!==130||r.steps!==2) process.exit(1)'"
