@@ -396,8 +396,8 @@ run_step() {
 
 # The benchmarks' table, from their JSON files: per benchmark and backend the rate's
 # median, min and max, ms/frame, GPU ms/frame, the ratio to cpu of the same run and the
-# device. POSIX awk: the JSON is the flat one `kodawari bench --json` writes (result
-# objects of strings, numbers and null).
+# device (and bench flock's split of the step). POSIX awk: the JSON is the flat one
+# `kodawari bench --json` writes (result objects of strings, numbers and null).
 print_table() {
   local name
   for name in "$@"; do
@@ -426,10 +426,15 @@ print_table() {
       for (i = 1; i <= n; ++i) {
         o = objs[i]
         if (field(o, "backend") == "") continue
-        printf "%-22s %-20s %9s %11s %11s %11s %9s %9s %8s  %s\n", $1, field(o, "backend"), count,
+        # bench flock: the split of the flocking step (grid, search, rules), after the device.
+        shares = ""
+        if (field(o, "search_share") != "" && field(o, "search_share") != "null")
+          shares = sprintf("  [grid %.0f%%, search %.0f%%, rules %.0f%%]", 100 * field(o, "grid_share"),
+                          100 * field(o, "search_share"), 100 * field(o, "rules_share"))
+        printf "%-22s %-20s %9s %11s %11s %11s %9s %9s %8s  %s%s\n", $1, field(o, "backend"), count,
           num(field(o, "per_second"), "%.4g"), num(field(o, "min"), "%.4g"), num(field(o, "max"), "%.4g"),
           num(field(o, "ms_per_frame"), "%.3f"), num(field(o, "gpu_ms_per_frame"), "%.3f"),
-          num(field(o, "vs_cpu"), "%.2fx"), field(o, "device")
+          num(field(o, "vs_cpu"), "%.2fx"), field(o, "device"), shares
       }
       if (!(kind in seen)) units = units (units == "" ? "" : ", ") kind ": " unit "/s"
       seen[kind] = 1
