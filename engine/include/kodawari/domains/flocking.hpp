@@ -100,11 +100,12 @@ inline constexpr std::string_view agents = "flocking.agents";
 /// writes into flock_buffers::agents), or InvalidInput naming the member out of range.
 [[nodiscard]] KODAWARI_API Result<gpu::FlockAgentGpu> encode_flock_agent(const FlockAgent& agent);
 
-/// Where a flocking domain's time went since it opened, on the CPU backends (zeros on
-/// vulkan, whose passes run in one submission: profile_flocking() times them apart): the
-/// grid's counting sort (one thread), the neighbour search (each bird's k nearest in view)
-/// and the rules and limits, the last two summed over the threads that ran them (so their
-/// sum is thread-seconds). `kodawari bench flock` reports the search's share.
+/// Where a flocking domain's time went since it opened, on the CPU backends: the grid's
+/// counting sort (one thread), the neighbour search (each bird's k nearest in view) and
+/// the rules and limits, the last two summed over the threads that ran them (so their sum
+/// is thread-seconds). On vulkan, whose passes run in one submission, those three are 0
+/// (profile_flocking() times them apart) and bird_steps and device_seconds are kept.
+/// `kodawari bench flock` reports the search's share.
 struct FlockingTiming {
     double grid_seconds = 0.0;
     double search_seconds = 0.0;
@@ -125,7 +126,8 @@ struct FlockingTiming {
 /// agents, timed by the device's timestamps (by the wall clock around the submission where
 /// it has none). grid_seconds is the first, search_seconds the second less the first,
 /// rules_seconds the third less the second (an ablation: the rules are what the whole
-/// step adds to the search), bird_steps birds x substeps x `frames`, device_seconds the
+/// step adds to the search; a difference below 0, noise, is given as 0), bird_steps
+/// birds x substeps x `frames`, device_seconds the
 /// third. The flock is left as it was (its state and the motion of record()'s last frame).
 /// It waits for its own submissions only: call it with none of the application's work on
 /// the device in flight (it writes the flock's input buffers from the host). InvalidInput
