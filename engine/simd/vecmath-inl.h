@@ -79,6 +79,13 @@ HWY_INLINE Q4 select(M m, const Q4& a, const Q4& b) {
             hn::IfThenElse(m, a.w, b.w)};
 }
 
+// glm::min, glm::max and glm::clamp of floats: (y < x) ? y : x, (x < y) ? y : x,
+// min(max(x, lo), hi). Comparisons, not hn::Min/Max (x86's minps and maxps pick the
+// second operand for a NaN or two zeros, where glm picks by the comparison).
+HWY_INLINE V glm_min(V x, V y) { return hn::IfThenElse(hn::Lt(y, x), y, x); }
+HWY_INLINE V glm_max(V x, V y) { return hn::IfThenElse(hn::Lt(x, y), y, x); }
+HWY_INLINE V glm_clamp(V x, V lo, V hi) { return glm_min(glm_max(x, lo), hi); }
+
 // glm::dot(vec3), glm::length(vec3), glm::cross, glm::normalize(vec3).
 HWY_INLINE V dot(const V3& a, const V3& b) {
     return hn::Add(hn::Add(hn::Mul(a.x, b.x), hn::Mul(a.y, b.y)), hn::Mul(a.z, b.z));

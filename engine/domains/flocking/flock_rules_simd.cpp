@@ -19,8 +19,8 @@ namespace kodawari::flocking {
 namespace HWY_NAMESPACE {
 namespace {
 
-// simd/vecmath-inl.h: glm's vec3 operations for lanes, operation for operation (dot,
-// length, cross, select, add, sub, mul, div).
+// simd/vecmath-inl.h: glm's operations for lanes, operation for operation (dot, length,
+// cross, select, add, sub, mul, div; min, max and clamp as glm's comparisons).
 using simd::HWY_NAMESPACE::D;
 using simd::HWY_NAMESPACE::M;
 using simd::HWY_NAMESPACE::V;
@@ -38,10 +38,6 @@ using vm::cross;
 using vm::dot;
 using vm::length;
 using vm::select;
-// GLM's min, max and clamp: comparisons (x86's minps and maxps differ on zeros and NaN).
-V gmin(V x, V y) { return hn::IfThenElse(hn::Lt(y, x), y, x); }
-V gmax(V x, V y) { return hn::IfThenElse(hn::Lt(x, y), y, x); }
-V gclamp(V x, V lo, V hi) { return gmin(gmax(x, lo), hi); }
 
 constexpr std::size_t kMaxLanes = HWY_MAX_BYTES / sizeof(float);
 
@@ -130,7 +126,7 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
             const V along_axis = hn::IfThenElse(apart, hn::Div(dot(dn, forward), dist), zero);
             // r_here = r_sep * (1 + front along_axis along_axis)
             const V r_here = hn::Mul(r_sep, hn::Add(one, hn::Mul(hn::Mul(front, along_axis), along_axis)));
-            const V over = hn::Div(gmax(hn::Sub(dist, r_here), zero), r_here);
+            const V over = hn::Div(vm::glm_max(hn::Sub(dist, r_here), zero), r_here);
             // g = exp(-(over over)): libm's, lane by lane, as the body's std::exp.
             hn::Store(hn::Neg(hn::Mul(over, over)), d, in.scratch);
             for (std::size_t l = 0; l < lanes; ++l) in.scratch[l] = std::exp(in.scratch[l]);
@@ -151,9 +147,9 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
             const V weight = hn::Set(d, agent.kind_weight.y);
             if (kind == KW_FLOCK_AGENT_PLANE) {
                 const V3 normal = splat(d, agent.velocity.x, agent.velocity.y, agent.velocity.z);
-                const V margin = gmax(hn::Set(d, agent.kind_weight.z), small);
+                const V margin = vm::glm_max(hn::Set(d, agent.kind_weight.z), small);
                 const V depth = hn::Sub(margin, dot(p - splat(d, agent.position.x, agent.position.y, agent.position.z), normal));
-                avoid = select(hn::Gt(depth, zero), avoid + hn::Mul(weight, gmin(hn::Div(depth, margin), one)) * normal, avoid);
+                avoid = select(hn::Gt(depth, zero), avoid + hn::Mul(weight, vm::glm_min(hn::Div(depth, margin), one)) * normal, avoid);
                 continue;
             }
             V3 at = splat(d, agent.position.x, agent.position.y, agent.position.z);
@@ -163,7 +159,7 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
                 const V3 ab = splat(d, agent.velocity.x, agent.velocity.y, agent.velocity.z) - at;
                 const V ab2 = dot(ab, ab);  // the same in every lane
                 const M has_axis = hn::Gt(ab2, zero);
-                const V t = hn::IfThenElse(has_axis, gclamp(hn::Div(dot(p - at, ab), ab2), zero, one), zero);
+                const V t = hn::IfThenElse(has_axis, vm::glm_clamp(hn::Div(dot(p - at, ab), ab2), zero, one), zero);
                 at = at + t * ab;
                 const V3 axis_up = ab / hn::Sqrt(ab2);
                 const V3 flat_forward = forward - dot(forward, axis_up) * axis_up;
@@ -176,9 +172,9 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
             const V reach = hn::Set(d, agent.position.w);
             const M near = hn::Not(hn::Lt(dist, tiny));  // `if (dist < 1e-6) continue;`
             if (kind == KW_FLOCK_AGENT_SPHERE || kind == KW_FLOCK_AGENT_CAPSULE) {
-                const V margin = gmax(hn::Set(d, agent.kind_weight.z), small);
+                const V margin = vm::glm_max(hn::Set(d, agent.kind_weight.z), small);
                 const V depth = hn::Sub(hn::Add(reach, margin), dist);
-                const V s = hn::Mul(weight, gmin(hn::Div(depth, margin), one));
+                const V s = hn::Mul(weight, vm::glm_min(hn::Div(depth, margin), one));
                 const V along = dot(dp, facing);
                 const V3 across = dp - along * facing;
                 const V cl = length(across);
@@ -192,7 +188,7 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
                 const V closeness = hn::Sub(one, hn::Div(dist, reach));
                 const V s = hn::Mul(weight, closeness);
                 if (kind == KW_FLOCK_AGENT_REPELLER) {
-                    if (agent.kind_weight.y > 0.0f) panic = hn::IfThenElse(inside, gmax(panic, closeness), panic);
+                    if (agent.kind_weight.y > 0.0f) panic = hn::IfThenElse(inside, vm::glm_max(panic, closeness), panic);
                     // The predator's side, the same in every lane: its path's crossing with the vertical.
                     const glm::vec3 u(agent.velocity.x, agent.velocity.y, agent.velocity.z);
                     const glm::vec3 side = glm::cross(u, glm::vec3(0.0f, 1.0f, 0.0f));
@@ -227,7 +223,7 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
         // The route: to the leader's place plus the bird's formation offset.
         const V3 to_target =
             (V3{hn::Load(d, in.tx), hn::Load(d, in.ty), hn::Load(d, in.tz)} + V3{hn::Load(d, in.offx), hn::Load(d, in.offy), hn::Load(d, in.offz)}) - p;
-        acc = acc + hn::Div(hn::Mul(calm, hn::Load(d, in.wroute)), gmax(length(to_target), hn::Load(d, in.rroute))) * to_target;
+        acc = acc + hn::Div(hn::Mul(calm, hn::Load(d, in.wroute)), vm::glm_max(length(to_target), hn::Load(d, in.rroute))) * to_target;
         // Cruise speed.
         acc = acc + hn::Div(hn::Sub(hn::Load(d, in.v0), speed), hn::Load(d, in.tau)) * forward;
         // The ground.
@@ -240,18 +236,18 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
         const V dv = hn::Load(d, in.dv), lateral_most = hn::Load(d, in.lateral);
         const V a_ahead = dot(acc, forward);
         // Without obstacles to avoid:
-        const V along_plain = gclamp(a_ahead, hn::Neg(dv), dv);
+        const V along_plain = vm::glm_clamp(a_ahead, hn::Neg(dv), dv);
         V3 lateral_plain = acc - a_ahead * forward;
         const V ll = length(lateral_plain);
         lateral_plain = select(hn::Gt(ll, lateral_most), hn::Div(lateral_most, ll) * lateral_plain, lateral_plain);
         // With them: the avoidance's lateral part first (Reynolds' prioritized allocation).
         const V3 total = acc + avoid;
-        const V along_avoid = gclamp(dot(total, forward), hn::Neg(dv), dv);
+        const V along_avoid = vm::glm_clamp(dot(total, forward), hn::Neg(dv), dv);
         V3 first = avoid - dot(avoid, forward) * forward;
         const V fl = length(first);
         first = select(hn::Gt(fl, lateral_most), hn::Div(lateral_most, fl) * first, first);
         V3 rest = acc - a_ahead * forward;
-        const V budget = hn::Sub(lateral_most, gmin(fl, lateral_most));
+        const V budget = hn::Sub(lateral_most, vm::glm_min(fl, lateral_most));
         const V rl = length(rest);
         rest = select(hn::Gt(rl, budget), hn::Div(budget, rl) * rest, rest);
         const M plain = hn::Eq(dot(avoid, avoid), zero);
@@ -262,15 +258,15 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
         // Semi-implicit Euler; speed within [min, max], climb and dive within the wing's.
         V3 v1 = v + dt * a;
         const V s1 = length(v1);
-        const V s = gclamp(s1, hn::Load(d, in.smin), hn::Load(d, in.smax));
+        const V s = vm::glm_clamp(s1, hn::Load(d, in.smin), hn::Load(d, in.smax));
         v1 = select(hn::Gt(s1, tiny), hn::Div(s, s1) * v1, s * forward);
         const V sin_pitch = hn::Div(v1.y, s);
-        const V limited = gclamp(sin_pitch, hn::Neg(hn::Load(d, in.dive)), hn::Load(d, in.climb));
+        const V limited = vm::glm_clamp(sin_pitch, hn::Neg(hn::Load(d, in.dive)), hn::Load(d, in.climb));
         {
             const V3 h_raw{v1.x, zero, v1.z};
             const V hl = length(h_raw);
             const V3 h = select(hn::Gt(hl, tiny), h_raw / hl, splat(d, 1.0f, 0.0f, 0.0f));
-            const V cos_pitch = hn::Sqrt(gmax(hn::Sub(one, hn::Mul(limited, limited)), zero));
+            const V cos_pitch = hn::Sqrt(vm::glm_max(hn::Sub(one, hn::Mul(limited, limited)), zero));
             const V s_cos = hn::Mul(s, cos_pitch);
             const V3 pitched{hn::Mul(s_cos, h.x), hn::Mul(s, limited), hn::Mul(s_cos, h.z)};
             // The body's `limited != sin_pitch`, true for a NaN (0 / 0 at no speed): not
