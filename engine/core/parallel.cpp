@@ -1,10 +1,168 @@
+// parallel_for over a pool of threads kept for the process: a frame of a small scene calls
+// it several times (a rod step: its levels, keys, air and kernel passes; a read), and
+// starting and joining a thread costs 40-60 us on this project's 2-core machine, more
+// than one character's whole step (docs/performance.md, "One character").
+//
+// The ranges are the same as before (fixed by n and the thread count), so results do not
+// depend on which thread runs which range. The caller runs range 0 and then takes any
+// range no worker has started, so a tiny job does not wait for a worker to wake.
+//
+// Where the pool cannot serve a call, parallel_for starts threads for it as it did before
+// the pool: a call from inside a range (nested), a call while another thread's call holds
+// the pool (two simulations on two application threads), and calls after the pool's
+// shutdown at exit. In a child process after fork() the parent's workers do not exist:
+// the child starts a pool of its own (pthread_atfork), leaving the parent's untouched.
 #include "core/parallel.hpp"
 
 #include <algorithm>
+#include <atomic>
+#include <condition_variable>
+#include <exception>
+#include <mutex>
+#include <string>
 #include <thread>
 #include <vector>
 
+#if defined(__linux__)
+#include <pthread.h>
+#endif
+
 namespace kodawari {
+
+namespace {
+
+// True on a pool worker, and on a caller while it runs its ranges: parallel_for from
+// there starts threads (the pool is busy with the outer call).
+thread_local bool t_in_pool = false;
+
+class Pool {
+public:
+    Pool() = default;
+    Pool(const Pool&) = delete;
+    Pool& operator=(const Pool&) = delete;
+    ~Pool() {
+        {
+            const std::lock_guard lock(m_);
+            stop_ = true;
+        }
+        wake_.notify_all();
+        for (std::thread& w : workers_) w.join();
+    }
+
+    // Runs part(p) for every p in [0, parts) and waits; false (nothing run) when another
+    // thread's call holds the pool.
+    bool try_run(std::size_t parts, const std::function<void(std::size_t)>& part) {
+        std::unique_lock submit(submit_, std::try_to_lock);
+        if (!submit.owns_lock()) return false;
+        std::unique_lock lock(m_);
+        while (workers_.size() + 1 < parts) {
+            const std::size_t index = workers_.size();
+            workers_.emplace_back([this, index] { work(index); });
+        }
+        job_ = &part;
+        parts_ = parts;
+        next_ = 1;  // range 0 is the caller's
+        finished_ = 0;
+        error_ = nullptr;
+        lock.unlock();
+        wake_.notify_all();
+        t_in_pool = true;
+        run(0);
+        lock.lock();
+        // Ranges no worker has taken yet: the caller's, rather than waiting for a wake.
+        while (next_ < parts_) {
+            const std::size_t p = next_++;
+            lock.unlock();
+            run(p);
+            lock.lock();
+        }
+        done_.wait(lock, [this] { return finished_ == parts_; });
+        t_in_pool = false;
+        job_ = nullptr;
+        const std::exception_ptr error = error_;
+        lock.unlock();
+        if (error) std::rethrow_exception(error);
+        return true;
+    }
+
+private:
+    // One range, its exception kept for the caller (the first one thrown).
+    void run(std::size_t p) {
+        std::exception_ptr error;
+        try {
+            (*job_)(p);
+        } catch (...) {
+            error = std::current_exception();
+        }
+        const std::lock_guard lock(m_);
+        if (error && !error_) error_ = error;
+        if (++finished_ == parts_) done_.notify_all();
+    }
+
+    void work(std::size_t index) {
+#if defined(__linux__)
+        // Named for profilers and debuggers (15 characters at most).
+        const std::string name = "kodawari-" + std::to_string(index + 1);
+        pthread_setname_np(pthread_self(), name.substr(0, 15).c_str());
+#else
+        (void)index;
+#endif
+        t_in_pool = true;
+        std::unique_lock lock(m_);
+        for (;;) {
+            wake_.wait(lock, [this] { return stop_ || (job_ != nullptr && next_ < parts_); });
+            if (stop_) return;
+            const std::size_t p = next_++;
+            lock.unlock();
+            run(p);
+            lock.lock();
+        }
+    }
+
+    std::mutex submit_;  // held by the one call the pool serves
+    std::mutex m_;       // guards everything below
+    std::condition_variable wake_, done_;
+    std::vector<std::thread> workers_;
+    const std::function<void(std::size_t)>* job_ = nullptr;
+    std::size_t parts_ = 0, next_ = 0, finished_ = 0;
+    std::exception_ptr error_;
+    bool stop_ = false;
+};
+
+// The process' pool, made on first use. In a child after fork() the pointer is dropped
+// (the parent's workers are not there; its pool's memory is left as it is).
+std::atomic<Pool*> g_pool{nullptr};
+std::atomic<bool> g_shut{false};
+
+void forget_pool_in_child() { g_pool.store(nullptr); }
+
+// Joins the workers at exit (or when the library is unloaded); later calls start threads.
+struct PoolOwner {
+    ~PoolOwner() {
+        g_shut.store(true);
+        delete g_pool.exchange(nullptr);
+    }
+};
+
+Pool* pool() {
+    if (g_shut.load()) return nullptr;
+    Pool* p = g_pool.load();
+    if (p != nullptr) return p;
+    static PoolOwner owner;
+#if defined(__linux__)
+    static const bool registered = [] { return pthread_atfork(nullptr, nullptr, forget_pool_in_child) == 0; }();
+    (void)registered;
+#endif
+    auto* made = new Pool();
+    Pool* expected = nullptr;
+    if (!g_pool.compare_exchange_strong(expected, made)) {
+        delete made;  // another thread's came first
+        return expected;
+    }
+    return made;
+}
+
+}  // namespace
 
 unsigned resolve_threads(unsigned requested) {
     if (requested > 0) return requested;
@@ -17,12 +175,28 @@ void parallel_for(std::size_t n, unsigned threads, const std::function<void(std:
         fn(0, n);
         return;
     }
-    std::vector<std::jthread> workers;
-    workers.reserve(parts - 1);
-    for (std::size_t p = 1; p < parts; ++p) {
-        workers.emplace_back([&fn, n, parts, p] { fn(n * p / parts, n * (p + 1) / parts); });
+    const std::function<void(std::size_t)> range = [&fn, n, parts](std::size_t p) { fn(n * p / parts, n * (p + 1) / parts); };
+    if (!t_in_pool) {
+        if (Pool* p = pool(); p != nullptr && p->try_run(parts, range)) return;
     }
-    fn(0, n / parts);
+    // Threads of its own, each range's exception kept for the caller as the pool does.
+    std::mutex m;
+    std::exception_ptr error;
+    const auto guarded = [&](std::size_t p) {
+        try {
+            range(p);
+        } catch (...) {
+            const std::lock_guard lock(m);
+            if (!error) error = std::current_exception();
+        }
+    };
+    {
+        std::vector<std::jthread> workers;
+        workers.reserve(parts - 1);
+        for (std::size_t p = 1; p < parts; ++p) workers.emplace_back([&guarded, p] { guarded(p); });
+        guarded(0);
+    }  // joined
+    if (error) std::rethrow_exception(error);
 }
 
 }  // namespace kodawari

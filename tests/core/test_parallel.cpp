@@ -1,0 +1,143 @@
+// parallel_for (engine/core/parallel.cpp) over its pool of threads: the same ranges as
+// threads started per call, every range once, exceptions carried to the caller, and the
+// calls the pool cannot serve (nested, concurrent, after fork()) still run in parallel.
+#include <gtest/gtest.h>
+
+#include <atomic>
+#include <cstdio>
+#include <cstdlib>
+#include <mutex>
+#include <set>
+#include <stdexcept>
+#include <thread>
+#include <utility>
+#include <vector>
+
+#include <csignal>
+#include <sys/wait.h>
+#include <unistd.h>
+
+#include "core/parallel.hpp"
+
+namespace kodawari {
+namespace {
+
+using Ranges = std::set<std::pair<std::size_t, std::size_t>>;
+
+Ranges ranges_of(std::size_t n, unsigned threads) {
+    Ranges got;
+    std::mutex m;
+    parallel_for(n, threads, [&](std::size_t begin, std::size_t end) {
+        const std::lock_guard lock(m);
+        got.insert({begin, end});
+    });
+    return got;
+}
+
+// What the ranges must be: n p / parts .. n (p + 1) / parts, as before the pool.
+Ranges expected(std::size_t n, unsigned threads) {
+    const std::size_t parts = std::min<std::size_t>(std::max(1u, threads), std::max<std::size_t>(n, 1));
+    Ranges r;
+    for (std::size_t p = 0; p < parts; ++p) r.insert({n * p / parts, n * (p + 1) / parts});
+    return r;
+}
+
+TEST(Parallel, RangesAreFixedByTheCountAndThreadsAlone) {
+    // Counts below, at and above the thread counts, over and over (the pool's workers
+    // are reused and grow with the largest count asked for).
+    for (int round = 0; round < 50; ++round) {
+        for (const std::size_t n : {0u, 1u, 2u, 3u, 7u, 1000u, 1001u}) {
+            for (const unsigned threads : {1u, 2u, 3u, 5u, 16u}) {
+                ASSERT_EQ(ranges_of(n, threads), expected(n, threads)) << "n " << n << ", threads " << threads;
+            }
+        }
+    }
+}
+
+TEST(Parallel, EveryIndexOnceAndTheRangesOnSeveralThreads) {
+    const std::size_t n = 100'003;
+    std::vector<std::atomic<int>> hits(n);
+    std::mutex m;
+    std::set<std::thread::id> ids;
+    for (int round = 0; round < 20; ++round) {
+        parallel_for(n, 4, [&](std::size_t begin, std::size_t end) {
+            for (std::size_t i = begin; i < end; ++i) hits[i].fetch_add(1);
+            // Long enough that the workers wake and take a range of their own.
+            std::this_thread::sleep_for(std::chrono::milliseconds(2));
+            const std::lock_guard lock(m);
+            ids.insert(std::this_thread::get_id());
+        });
+    }
+    for (std::size_t i = 0; i < n; ++i) ASSERT_EQ(hits[i].load(), 20) << "index " << i;
+    std::printf("20 calls of 4 ranges ran on %zu threads\n", ids.size());
+    EXPECT_GE(ids.size(), 2u) << "the ranges all ran on one thread";
+}
+
+TEST(Parallel, AnExceptionReachesTheCallerAfterEveryRangeEnded) {
+    std::atomic<int> ended{0};
+    EXPECT_THROW(parallel_for(8, 4,
+                              [&](std::size_t begin, std::size_t) {
+                                  std::this_thread::sleep_for(std::chrono::milliseconds(1));
+                                  ended.fetch_add(1);
+                                  if (begin == 4) throw std::runtime_error("range 2");
+                              }),
+                 std::runtime_error);
+    EXPECT_EQ(ended.load(), 4);
+    // The pool serves the next call.
+    EXPECT_EQ(ranges_of(10, 4), expected(10, 4));
+}
+
+TEST(Parallel, NestedCallsRunTheirRanges) {
+    std::atomic<int> inner{0};
+    parallel_for(4, 4, [&](std::size_t, std::size_t) {
+        parallel_for(100, 3, [&](std::size_t begin, std::size_t end) { inner.fetch_add(static_cast<int>(end - begin)); });
+    });
+    EXPECT_EQ(inner.load(), 400);
+}
+
+TEST(Parallel, CallsFromSeveralApplicationThreadsAtOnce) {
+    // Two simulations on two threads: one call holds the pool, the other starts threads.
+    std::vector<std::jthread> apps;
+    std::atomic<long> total{0};
+    for (int a = 0; a < 4; ++a) {
+        apps.emplace_back([&] {
+            for (int round = 0; round < 200; ++round) {
+                parallel_for(1000, 2, [&](std::size_t begin, std::size_t end) { total.fetch_add(static_cast<long>(end - begin)); });
+            }
+        });
+    }
+    apps.clear();  // joins
+    EXPECT_EQ(total.load(), 4L * 200 * 1000);
+}
+
+TEST(Parallel, AChildAfterForkRunsWithPoolOfItsOwn) {
+    // The parent's workers exist (a call above made them); the child has none of them.
+    EXPECT_EQ(ranges_of(10, 3), expected(10, 3));
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        std::atomic<int> sum{0};
+        parallel_for(10, 3, [&](std::size_t begin, std::size_t end) { sum.fetch_add(static_cast<int>(end - begin)); });
+        // exit(), not _exit(): the child's exit joins its pool's workers (the parent's,
+        // had the child kept them, are not there to join).
+        std::exit(sum.load() == 10 ? 0 : 1);
+    }
+    // A child that used the parent's pool would hang (joining workers it does not have):
+    // 30 s is a thousand times what the child takes.
+    int status = 0;
+    pid_t done = 0;
+    for (int waited = 0; waited < 3000 && done == 0; ++waited) {
+        done = waitpid(child, &status, WNOHANG);
+        if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (done == 0) {
+        kill(child, SIGKILL);
+        waitpid(child, &status, 0);
+        FAIL() << "the child did not exit within 30 s";
+    }
+    ASSERT_EQ(done, child);
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+}
+
+}  // namespace
+}  // namespace kodawari
