@@ -16,6 +16,7 @@
 
 #include <algorithm>
 #include <atomic>
+#include <chrono>
 #include <condition_variable>
 #include <exception>
 #include <mutex>
@@ -35,6 +36,26 @@ namespace {
 // there starts threads (the pool is busy with the outer call).
 thread_local bool t_in_pool = false;
 
+// Spins a while (a pause instruction at a time) until done() or `kSpin` have passed:
+// the passes of a frame come tens of microseconds apart, and a thread that slept takes
+// longer than that to wake (a futex's wake-up on this project's VM: 10-50 us), so workers
+// and the waiting caller spin this long before they sleep. Returns done().
+constexpr std::chrono::microseconds kSpin{50};
+
+template <typename Done>
+bool spin_until(Done&& done) {
+    const auto until = std::chrono::steady_clock::now() + kSpin;
+    for (;;) {
+        for (int i = 0; i < 16; ++i) {
+            if (done()) return true;
+#if defined(__x86_64__) || defined(__i386__)
+            __builtin_ia32_pause();
+#endif
+        }
+        if (std::chrono::steady_clock::now() >= until) return done();
+    }
+}
+
 class Pool {
 public:
     Pool() = default;
@@ -43,7 +64,7 @@ public:
     ~Pool() {
         {
             const std::lock_guard lock(m_);
-            stop_ = true;
+            stop_.store(true);
         }
         wake_.notify_all();
         for (std::thread& w : workers_) w.join();
@@ -62,10 +83,12 @@ public:
         job_ = &part;
         parts_ = parts;
         next_ = 1;  // range 0 is the caller's
-        finished_ = 0;
+        finished_.store(0);
         error_ = nullptr;
+        generation_.fetch_add(1);  // what spinning workers watch
+        const bool sleeping = sleepers_ > 0;
         lock.unlock();
-        wake_.notify_all();
+        if (sleeping) wake_.notify_all();
         t_in_pool = true;
         run(0);
         lock.lock();
@@ -76,8 +99,14 @@ public:
             run(p);
             lock.lock();
         }
-        done_.wait(lock, [this] { return finished_ == parts_; });
+        lock.unlock();
+        if (!spin_until([this] { return finished_.load() == parts_; })) {
+            lock.lock();
+            done_.wait(lock, [this] { return finished_.load() == parts_; });
+            lock.unlock();
+        }
         t_in_pool = false;
+        lock.lock();
         job_ = nullptr;
         const std::exception_ptr error = error_;
         lock.unlock();
@@ -96,7 +125,7 @@ private:
         }
         const std::lock_guard lock(m_);
         if (error && !error_) error_ = error;
-        if (++finished_ == parts_) done_.notify_all();
+        if (finished_.fetch_add(1) + 1 == parts_) done_.notify_all();
     }
 
     void work(std::size_t index) {
@@ -108,25 +137,36 @@ private:
         (void)index;
 #endif
         t_in_pool = true;
-        std::unique_lock lock(m_);
+        std::uint64_t seen = 0;  // the last job's generation this worker looked at
         for (;;) {
-            wake_.wait(lock, [this] { return stop_ || (job_ != nullptr && next_ < parts_); });
-            if (stop_) return;
-            const std::size_t p = next_++;
-            lock.unlock();
-            run(p);
-            lock.lock();
+            spin_until([&] { return stop_.load() || generation_.load() != seen; });
+            std::unique_lock lock(m_);
+            ++sleepers_;
+            wake_.wait(lock, [&] { return stop_.load() || generation_.load() != seen; });
+            --sleepers_;
+            if (stop_.load()) return;
+            seen = generation_.load();
+            // Its ranges no one has taken (none, where the caller and the others were quicker).
+            while (job_ != nullptr && next_ < parts_) {
+                const std::size_t p = next_++;
+                lock.unlock();
+                run(p);
+                lock.lock();
+            }
         }
     }
 
     std::mutex submit_;  // held by the one call the pool serves
-    std::mutex m_;       // guards everything below
+    std::mutex m_;       // guards everything below but the atomics' reads
     std::condition_variable wake_, done_;
     std::vector<std::thread> workers_;
     const std::function<void(std::size_t)>* job_ = nullptr;
-    std::size_t parts_ = 0, next_ = 0, finished_ = 0;
+    std::size_t parts_ = 0, next_ = 0;
+    std::atomic<std::size_t> finished_{0};
+    std::atomic<std::uint64_t> generation_{0};  // one more each job
+    std::size_t sleepers_ = 0;                  // workers waiting on wake_
     std::exception_ptr error_;
-    bool stop_ = false;
+    std::atomic<bool> stop_{false};
 };
 
 // The process' pool, made on first use. In a child after fork() the pointer is dropped
