@@ -104,10 +104,27 @@ void set_step(simd::RodStepConsts& k, const rods::SolverParams& p, float dt) {
     k.ftl_over_h = rods::kFollowTheLeaderDamping / k.h;
 }
 
+// A vector's cost on each width, relative to one lane of the scalar target: a batch of
+// the procedural strands (16 joints, 4 iterations, a collider, 3 views) took 20.5 us a
+// vector on avx512, 14.2 on avx2, 13.0 on sse4 and 8.9 on scalar, one thread of the
+// project's 2-core Xeon (bench chains --count 8..128 --isa X --threads 1). A batch runs
+// on the width that costs least for its lanes in use: one chain, scalar; 2-4, sse4; 5-8,
+// avx2; more, avx512. Every width gives the same bits (rods_simd.hpp, "Exactness"), so
+// the choice changes the time only.
+double vector_cost(unsigned lanes) {
+    switch (lanes) {
+        case 16: return 20.5 / 8.9;
+        case 8: return 14.2 / 8.9;
+        case 4: return 13.0 / 8.9;
+        default: return 1.0;
+    }
+}
+
 class SimdRodBackend final : public RodBackend {
 public:
-    SimdRodBackend(simd::Isa isa, unsigned threads)
-        : isa_(std::move(isa)), threads_(threads), kernels_(simd::rod_kernels(isa_.target)) {}
+    SimdRodBackend(simd::Isa isa, unsigned threads) : isa_(std::move(isa)), threads_(threads), widths_(simd::isas_up_to(isa_)) {
+        for (const simd::Isa& w : widths_) kernels_.push_back(simd::rod_kernels(w.target));
+    }
 
     std::string_view name() const override { return "cpu"; }
     std::string device() const override {
@@ -123,6 +140,7 @@ public:
 
         // Batches: each template's chains in world order, 16 at a time.
         batches_.clear();
+        batch_width_.clear();
         std::vector<std::vector<std::uint32_t>> by_template(world.templates.size());
         for (std::uint32_t c = 0; c < world.chains.size(); ++c) by_template[world.chains[c].template_index].push_back(c);
         std::size_t floats = 0, sag_floats = 0;
@@ -138,6 +156,7 @@ public:
                     b.colliders = std::max(b.colliders, world.chains[b.chain[l]].collider_count);
                 }
                 for (std::uint32_t l = 0; l < b.count; ++l) lane_of_[b.chain[l]] = {batches_.size(), l};
+                batch_width_.push_back(cheapest_width(b.count));
                 b.offset = floats;
                 floats += simd::rod_block_floats(templates_[t].joints);
                 b.sag_offset = sag_floats;
@@ -307,7 +326,15 @@ public:
         if (lod.enabled) split_threads(true);
         const std::size_t parts = split_.size() - 1;
         parallel_for(parts, static_cast<unsigned>(parts), [&](std::size_t begin, std::size_t end) {
-            for (std::size_t p = begin; p < end; ++p) kernels_.step(args, split_[p], split_[p + 1]);
+            for (std::size_t p = begin; p < end; ++p) {
+                // Each run of batches of one width by that width's kernel.
+                for (std::size_t from = split_[p]; from < split_[p + 1];) {
+                    std::size_t to = from + 1;
+                    while (to < split_[p + 1] && batch_width_[to] == batch_width_[from]) ++to;
+                    kernels_[batch_width_[from]].step(args, from, to);
+                    from = to;
+                }
+            }
         });
         return {};
     }
@@ -440,16 +467,18 @@ private:
                 cost[b] = 0.0;
                 continue;
             }
-            for (std::size_t off = 0; off < batch.count; off += isa_.lanes) {
-                vectors += 1.0;
+            const unsigned lanes = widths_[batch_width_[b]].lanes;
+            const double weight = vector_cost(lanes);
+            for (std::size_t off = 0; off < batch.count; off += lanes) {
+                vectors += weight;
                 bool any_full = !levels, any_reduced = false;
-                for (std::size_t l = off; l < std::min<std::size_t>(off + isa_.lanes, kBatchLanes); ++l) {
+                for (std::size_t l = off; l < std::min<std::size_t>(off + lanes, kBatchLanes); ++l) {
                     const float level = chain[simd::kLevel * kBatchLanes + l];
                     any_full = any_full || level == 0.0f;
                     any_reduced = any_reduced || (levels && level == static_cast<float>(rods::Level::Reduced));
                 }
-                if (any_full) full += 1.0;
-                if (any_reduced) reduced += 1.0;
+                if (any_full) full += weight;
+                if (any_reduced) reduced += weight;
             }
             const double per_vector = t.joints * (4.0 + batch.colliders);
             const double reduced_share = static_cast<double>(t.reduced.substeps) / static_cast<double>(t.step.substeps);
@@ -468,9 +497,23 @@ private:
         }
     }
 
+    // The width (an index into widths_) whose vectors cost least for `count` lanes in use.
+    std::uint8_t cheapest_width(std::uint32_t count) const {
+        std::size_t best = 0;
+        double best_cost = 0.0;
+        for (std::size_t w = 0; w < widths_.size(); ++w) {
+            const unsigned lanes = widths_[w].lanes;
+            const double cost = static_cast<double>((count + lanes - 1) / lanes) * vector_cost(lanes);
+            if (w == 0 || cost < best_cost) best = w, best_cost = cost;
+        }
+        return static_cast<std::uint8_t>(best);
+    }
+
     simd::Isa isa_;
     unsigned threads_;
-    simd::RodKernels kernels_;
+    std::vector<simd::Isa> widths_;           // isa_ and the narrower ones this machine runs (simd::isas_up_to)
+    std::vector<simd::RodKernels> kernels_;   // per width
+    std::vector<std::uint8_t> batch_width_;   // per batch, its width (cheapest_width of its lanes in use)
     const rods::RodWorld* world_ = nullptr;
     float dt_ = -1.0f;
     std::vector<simd::RodTemplateConsts> templates_;

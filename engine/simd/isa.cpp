@@ -62,6 +62,17 @@ Result<Isa> choose_isa(std::string_view requested) {
                           "; available here: " + available);
 }
 
+std::vector<Isa> isas_up_to(const Isa& widest) {
+    std::vector<Isa> out;
+    for (const Known& k : kKnown) {
+        if (!runs_here(k) || k.lanes > widest.lanes) continue;
+        if (k.lanes == widest.lanes && k.target != widest.target) continue;  // the widest is the one asked for
+        if (!out.empty() && out.back().lanes == k.lanes) continue;           // emu128 after sse4
+        out.push_back(Isa{k.target, k.name, k.lanes});
+    }
+    return out;
+}
+
 }  // namespace kodawari::simd
 
 namespace kodawari {

@@ -7,6 +7,7 @@
 #include <cstdint>
 #include <string>
 #include <string_view>
+#include <vector>
 
 #include "core/internal_api.hpp"
 #include "kodawari/core/result.hpp"
@@ -22,6 +23,11 @@ struct Isa {
 
 /// The instruction set for BackendOptions::isa == `requested` (kodawari::simd_isa()).
 [[nodiscard]] KODAWARI_INTERNAL Result<Isa> choose_isa(std::string_view requested);
+
+/// The instruction sets this machine runs up to `widest`, widest first, one per vector
+/// width: the narrower ones a backend may take for a batch with few lanes in use, where
+/// a narrower vector costs less (rods_simd.hpp). Every one gives the same bits.
+[[nodiscard]] KODAWARI_INTERNAL std::vector<Isa> isas_up_to(const Isa& widest);
 
 /// Chains, birds or instances per batch: a batch is one AVX-512 vector of floats, two AVX2
 /// vectors, four SSE4 ones, so that the backends' structure-of-arrays layout is the same

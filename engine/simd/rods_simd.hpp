@@ -5,11 +5,13 @@
 // Layout. Chains are grouped by template into batches of kBatchLanes (16) chains; every
 // chain of a batch has the same joint count, view examples and solver settings, so the
 // kernel's loops and constants are uniform and one vector instruction advances 16
-// (AVX-512), 8 (AVX2) or 4 (SSE4) chains. A batch's state is one block of rows of 16
-// floats, a row = one quantity of one joint for the 16 chains (64 bytes, a cache line):
-// per joint x, v, q, omega and last frame's rest shape (kJointRows rows), then per chain
-// the root, view direction and weights (kChainRows rows). Padding lanes of a template's
-// last batch repeat its first chain, so they compute finite values nobody reads.
+// (AVX-512), 8 (AVX2) or 4 (SSE4) chains; the backend runs a batch with few chains in use
+// on the width that costs least (a lone chain on the scalar target). A batch's state is
+// one block of rows of 16 floats, a row = one quantity of one joint for the 16 chains (64
+// bytes, a cache line): per joint x, v, q, omega and last frame's rest shape (kJointRows
+// rows), then per chain the root, view direction and weights (kChainRows rows). Padding
+// lanes of a template's last batch repeat its first chain, so they compute finite values
+// nobody reads.
 //
 // Exactness. The kernel evaluates every expression of engine/rods (solver.cpp, shape.cpp,
 // view.cpp, world.cpp) with the same operations in the same order (glm's association

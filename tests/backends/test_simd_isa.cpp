@@ -116,6 +116,51 @@ TEST(SimdIsa, ChainBackendsOnEveryInstructionSetSideBySideAgreeBitForBit) {
     }
 }
 
+// A batch with few chains in use runs on a narrower width (simd_rods.cpp cheapest_width:
+// one chain on the scalar target, 2-4 on sse4, 5-8 on avx2): worlds whose templates hold
+// 1 to 17 chains, on every instruction set, are cpu-reference's bits.
+TEST(SimdIsa, PartlyFilledBatchesAreTheReferencesBitsOnEveryInstructionSet) {
+    // The synthetic world's 8 templates take chain c in turn: 1, 5, 19, 37, 70 and 139
+    // chains give templates of 0 to 18 chains, so batches of 1 to 16 lanes in use.
+    for (const std::uint32_t chains : {1u, 5u, 19u, 37u, 70u, 139u}) {
+        rods::SyntheticOptions o;
+        o.chains = chains;
+        o.joints = 9;
+        o.views = 3;
+        auto scene = rods::SyntheticScene::make(o);
+        ASSERT_TRUE(scene.ok());
+        rods::RodFrame frame;
+        scene.value().frame(0, 1.0f / 60.0f, frame);
+        auto reference = make_rod_backend(BackendKind::CpuReference, {});
+        ASSERT_TRUE(reference.ok());
+        ASSERT_TRUE(reference.value()->load(scene.value().world(), frame).ok());
+        std::vector<std::unique_ptr<RodBackend>> backends;
+        for (const std::string& isa : available_simd_isas()) {
+            auto made = make_rod_backend(BackendKind::Cpu, with_isa(isa));
+            ASSERT_TRUE(made.ok());
+            ASSERT_TRUE(made.value()->load(scene.value().world(), frame).ok());
+            backends.push_back(std::move(made).value());
+        }
+        for (std::uint32_t f = 1; f <= 20; ++f) {
+            scene.value().frame(f, 1.0f / 60.0f, frame);
+            ASSERT_TRUE(reference.value()->step(frame).ok());
+            for (auto& b : backends) ASSERT_TRUE(b->step(frame).ok());
+        }
+        ChainSnapshot want, got;
+        ASSERT_TRUE(reference.value()->read(want).ok());
+        for (auto& b : backends) {
+            ASSERT_TRUE(b->read(got).ok());
+            std::size_t differ = 0;
+            for (std::size_t j = 0; j < want.positions.size(); ++j) {
+                differ += std::memcmp(&want.positions[j], &got.positions[j], sizeof(glm::vec3)) != 0 ||
+                          std::memcmp(&want.orientations[j], &got.orientations[j], sizeof(glm::quat)) != 0;
+            }
+            EXPECT_EQ(differ, 0u) << chains << " chains, " << b->device() << ": " << differ << " of " << want.positions.size()
+                                  << " joints differ";
+        }
+    }
+}
+
 // Birds: the wings' sine and cosine are the kernel's own, without fused multiply-add, so
 // even they are the same bits on every instruction set (the exports stay one list).
 TEST(SimdIsa, BirdBackendsOnEveryInstructionSetSideBySideAgreeBitForBit) {
