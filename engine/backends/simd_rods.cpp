@@ -111,14 +111,7 @@ void set_step(simd::RodStepConsts& k, const rods::SolverParams& p, float dt) {
 // on the width that costs least for its lanes in use: one chain, scalar; 2-4, sse4; 5-8,
 // avx2; more, avx512. Every width gives the same bits (rods_simd.hpp, "Exactness"), so
 // the choice changes the time only.
-double vector_cost(unsigned lanes) {
-    switch (lanes) {
-        case 16: return 20.5 / 8.9;
-        case 8: return 14.2 / 8.9;
-        case 4: return 13.0 / 8.9;
-        default: return 1.0;
-    }
-}
+constexpr simd::VectorCosts kRodVectorCosts{20.5 / 8.9, 14.2 / 8.9, 13.0 / 8.9, 1.0};
 
 class SimdRodBackend final : public RodBackend {
 public:
@@ -156,7 +149,7 @@ public:
                     b.colliders = std::max(b.colliders, world.chains[b.chain[l]].collider_count);
                 }
                 for (std::uint32_t l = 0; l < b.count; ++l) lane_of_[b.chain[l]] = {batches_.size(), l};
-                batch_width_.push_back(cheapest_width(b.count));
+                batch_width_.push_back(static_cast<std::uint8_t>(simd::cheapest_width(widths_, b.count, kRodVectorCosts)));
                 b.offset = floats;
                 floats += simd::rod_block_floats(templates_[t].joints);
                 b.sag_offset = sag_floats;
@@ -468,7 +461,7 @@ private:
                 continue;
             }
             const unsigned lanes = widths_[batch_width_[b]].lanes;
-            const double weight = vector_cost(lanes);
+            const double weight = kRodVectorCosts.of(lanes);
             for (std::size_t off = 0; off < batch.count; off += lanes) {
                 vectors += weight;
                 bool any_full = !levels, any_reduced = false;
@@ -497,23 +490,11 @@ private:
         }
     }
 
-    // The width (an index into widths_) whose vectors cost least for `count` lanes in use.
-    std::uint8_t cheapest_width(std::uint32_t count) const {
-        std::size_t best = 0;
-        double best_cost = 0.0;
-        for (std::size_t w = 0; w < widths_.size(); ++w) {
-            const unsigned lanes = widths_[w].lanes;
-            const double cost = static_cast<double>((count + lanes - 1) / lanes) * vector_cost(lanes);
-            if (w == 0 || cost < best_cost) best = w, best_cost = cost;
-        }
-        return static_cast<std::uint8_t>(best);
-    }
-
     simd::Isa isa_;
     unsigned threads_;
     std::vector<simd::Isa> widths_;           // isa_ and the narrower ones this machine runs (simd::isas_up_to)
     std::vector<simd::RodKernels> kernels_;   // per width
-    std::vector<std::uint8_t> batch_width_;   // per batch, its width (cheapest_width of its lanes in use)
+    std::vector<std::uint8_t> batch_width_;   // per batch, its width (simd::cheapest_width of its lanes in use)
     const rods::RodWorld* world_ = nullptr;
     float dt_ = -1.0f;
     std::vector<simd::RodTemplateConsts> templates_;

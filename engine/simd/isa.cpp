@@ -73,6 +73,17 @@ std::vector<Isa> isas_up_to(const Isa& widest) {
     return out;
 }
 
+std::size_t cheapest_width(const std::vector<Isa>& widths, std::uint32_t count, const VectorCosts& costs) {
+    std::size_t best = 0;
+    double best_cost = 0.0;
+    for (std::size_t w = 0; w < widths.size(); ++w) {
+        const unsigned lanes = widths[w].lanes;
+        const double cost = static_cast<double>((count + lanes - 1) / lanes) * costs.of(lanes);
+        if (w == 0 || cost < best_cost) best = w, best_cost = cost;
+    }
+    return best;
+}
+
 }  // namespace kodawari::simd
 
 namespace kodawari {

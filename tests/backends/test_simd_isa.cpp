@@ -195,31 +195,37 @@ TEST(SimdIsa, BirdBackendsOnEveryInstructionSetSideBySideAgreeBitForBit) {
 }
 
 // Poses: the shipped character's crowd (its three clips and the rest pose, 37 instances).
+// 1, 5, 9, 17 and 37 instances over the rest pose and three clips (i % 4): batches of 1 to
+// 10 instances, which run on the scalar target (1), sse4 (2-4), avx2 (5-8) or avx512
+// (more) where the machine has them (simd_poses.cpp kPoseVectorCosts).
 TEST(SimdIsa, PoseBackendsOnEveryInstructionSetAgreeWithTheReferenceBitForBit) {
     auto character = gltf::load_character(std::string(KODAWARI_SOURCE_DIR) + "/scenes/characters/chibi.glb");
     ASSERT_TRUE(character.ok()) << character.error().message;
-    std::vector<PoseInstance> instances(37);
-    for (std::size_t i = 0; i < instances.size(); ++i) {
-        instances[i].placement.position = {static_cast<float>(i % 7), 0.0f, static_cast<float>(i / 7)};
-        instances[i].placement.rotation = glm::angleAxis(0.3f * static_cast<float>(i), glm::vec3(0, 1, 0));
-        instances[i].clip = static_cast<std::int32_t>(i % 4) - 1;
-        instances[i].time_offset = 0.137f * static_cast<float>(i);
-    }
-    auto reference = make_pose_backend(BackendKind::CpuReference, {});
-    ASSERT_TRUE(reference.ok());
-    ASSERT_TRUE(reference.value()->load(character.value(), instances).ok());
-    std::vector<glm::mat4> want, got;
-    for (const std::string& isa : available_simd_isas()) {
-        auto made = make_pose_backend(BackendKind::Cpu, with_isa(isa));
-        ASSERT_TRUE(made.ok());
-        ASSERT_TRUE(made.value()->load(character.value(), instances).ok());
-        for (const float t : {0.0f, 0.51f, 1.7f, 3.33f}) {
-            ASSERT_TRUE(reference.value()->evaluate(t).ok());
-            ASSERT_TRUE(reference.value()->read(want).ok());
-            ASSERT_TRUE(made.value()->evaluate(t).ok());
-            ASSERT_TRUE(made.value()->read(got).ok());
-            ASSERT_EQ(want.size(), got.size());
-            EXPECT_EQ(std::memcmp(want.data(), got.data(), want.size() * sizeof(glm::mat4)), 0) << isa << " at t " << t;
+    for (const std::size_t count : {1u, 5u, 9u, 17u, 37u}) {
+        SCOPED_TRACE(std::to_string(count) + " instances");
+        std::vector<PoseInstance> instances(count);
+        for (std::size_t i = 0; i < instances.size(); ++i) {
+            instances[i].placement.position = {static_cast<float>(i % 7), 0.0f, static_cast<float>(i / 7)};
+            instances[i].placement.rotation = glm::angleAxis(0.3f * static_cast<float>(i), glm::vec3(0, 1, 0));
+            instances[i].clip = static_cast<std::int32_t>(i % 4) - 1;
+            instances[i].time_offset = 0.137f * static_cast<float>(i);
+        }
+        auto reference = make_pose_backend(BackendKind::CpuReference, {});
+        ASSERT_TRUE(reference.ok());
+        ASSERT_TRUE(reference.value()->load(character.value(), instances).ok());
+        std::vector<glm::mat4> want, got;
+        for (const std::string& isa : available_simd_isas()) {
+            auto made = make_pose_backend(BackendKind::Cpu, with_isa(isa));
+            ASSERT_TRUE(made.ok());
+            ASSERT_TRUE(made.value()->load(character.value(), instances).ok());
+            for (const float t : {0.0f, 0.51f, 1.7f, 3.33f}) {
+                ASSERT_TRUE(reference.value()->evaluate(t).ok());
+                ASSERT_TRUE(reference.value()->read(want).ok());
+                ASSERT_TRUE(made.value()->evaluate(t).ok());
+                ASSERT_TRUE(made.value()->read(got).ok());
+                ASSERT_EQ(want.size(), got.size());
+                EXPECT_EQ(std::memcmp(want.data(), got.data(), want.size() * sizeof(glm::mat4)), 0) << isa << " at t " << t;
+            }
         }
     }
 }
