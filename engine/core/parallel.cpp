@@ -19,6 +19,7 @@
 #include <chrono>
 #include <condition_variable>
 #include <exception>
+#include <memory>
 #include <mutex>
 #include <string>
 #include <thread>
@@ -61,13 +62,23 @@ public:
     Pool() = default;
     Pool(const Pool&) = delete;
     Pool& operator=(const Pool&) = delete;
-    ~Pool() {
+    ~Pool() { stop(); }
+
+    // Ends the workers (a call in flight on another thread still ends: its caller runs the
+    // ranges no worker took). Not the calling thread's own: exit() from inside a range.
+    void stop() {
         {
             const std::lock_guard lock(m_);
-            stop_.store(true);
+            if (stop_.exchange(true)) return;
         }
-        wake_.notify_all();
-        for (std::thread& w : workers_) w.join();
+        for (auto& w : workers_) w->wake.notify_one();
+        for (auto& w : workers_) {
+            if (w->thread.get_id() == std::this_thread::get_id()) {
+                w->thread.detach();
+            } else if (w->thread.joinable()) {
+                w->thread.join();
+            }
+        }
     }
 
     // Runs part(p) for every p in [0, parts) and waits; false (nothing run) when another
@@ -76,19 +87,25 @@ public:
         std::unique_lock submit(submit_, std::try_to_lock);
         if (!submit.owns_lock()) return false;
         std::unique_lock lock(m_);
-        while (workers_.size() + 1 < parts) {
+        while (!stop_.load() && workers_.size() + 1 < parts) {
             const std::size_t index = workers_.size();
-            workers_.emplace_back([this, index] { work(index); });
+            workers_.push_back(std::make_unique<Worker>());
+            workers_.back()->thread = std::thread([this, index] { work(index); });
         }
         job_ = &part;
         parts_ = parts;
+        wanted_.store(parts - 1);
         next_ = 1;  // range 0 is the caller's
         finished_.store(0);
         error_ = nullptr;
         generation_.fetch_add(1);  // what spinning workers watch
         const bool sleeping = sleepers_ > 0;
         lock.unlock();
-        if (sleeping) wake_.notify_all();
+        // Only the workers this job asks for (the others sleep on: a big job once must not
+        // make every later call wake them all).
+        if (sleeping) {
+            for (std::size_t w = 0; w + 1 < parts && w < workers_.size(); ++w) workers_[w]->wake.notify_one();
+        }
         t_in_pool = true;
         run(0);
         lock.lock();
@@ -108,7 +125,7 @@ public:
         t_in_pool = false;
         lock.lock();
         job_ = nullptr;
-        const std::exception_ptr error = error_;
+        const std::exception_ptr error = std::move(error_);
         lock.unlock();
         if (error) std::rethrow_exception(error);
         return true;
@@ -124,7 +141,8 @@ private:
             error = std::current_exception();
         }
         const std::lock_guard lock(m_);
-        if (error && !error_) error_ = error;
+        if (error && !error_) error_ = std::move(error);
+        error = nullptr;  // released here, under m_, not after it
         if (finished_.fetch_add(1) + 1 == parts_) done_.notify_all();
     }
 
@@ -138,11 +156,13 @@ private:
 #endif
         t_in_pool = true;
         std::uint64_t seen = 0;  // the last job's generation this worker looked at
+        // A job with fewer ranges than there are workers leaves the others asleep.
+        const auto has_work = [&] { return stop_.load() || (generation_.load() != seen && index < wanted_.load()); };
         for (;;) {
-            spin_until([&] { return stop_.load() || generation_.load() != seen; });
+            spin_until(has_work);
             std::unique_lock lock(m_);
             ++sleepers_;
-            wake_.wait(lock, [&] { return stop_.load() || generation_.load() != seen; });
+            workers_[index]->wake.wait(lock, has_work);
             --sleepers_;
             if (stop_.load()) return;
             seen = generation_.load();
@@ -158,13 +178,18 @@ private:
 
     std::mutex submit_;  // held by the one call the pool serves
     std::mutex m_;       // guards everything below but the atomics' reads
-    std::condition_variable wake_, done_;
-    std::vector<std::thread> workers_;
+    struct Worker {
+        std::thread thread;
+        std::condition_variable wake;  // notified for the jobs that ask for this worker
+    };
+    std::condition_variable done_;
+    std::vector<std::unique_ptr<Worker>> workers_;
     const std::function<void(std::size_t)>* job_ = nullptr;
     std::size_t parts_ = 0, next_ = 0;
     std::atomic<std::size_t> finished_{0};
     std::atomic<std::uint64_t> generation_{0};  // one more each job
-    std::size_t sleepers_ = 0;                  // workers waiting on wake_
+    std::atomic<std::size_t> wanted_{0};         // workers the job asks for (parts - 1)
+    std::size_t sleepers_ = 0;                  // workers waiting on their Worker::wake
     std::exception_ptr error_;
     std::atomic<bool> stop_{false};
 };
@@ -180,7 +205,7 @@ void forget_pool_in_child() { g_pool.store(nullptr); }
 struct PoolOwner {
     ~PoolOwner() {
         g_shut.store(true);
-        delete g_pool.exchange(nullptr);
+        if (Pool* p = g_pool.load()) p->stop();  // not freed: another thread may be inside
     }
 };
 

@@ -139,5 +139,31 @@ TEST(Parallel, AChildAfterForkRunsWithPoolOfItsOwn) {
     EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
 }
 
+// exit() from a range on a pool worker: the exit stops the pool's other workers and leaves
+// the calling one (it cannot join itself), and the process ends with the status given.
+TEST(Parallel, ExitFromInsideARangeEndsTheProcessWithItsStatus) {
+    const pid_t child = fork();
+    ASSERT_GE(child, 0);
+    if (child == 0) {
+        parallel_for(4, 4, [](std::size_t begin, std::size_t) {
+            if (begin == 3) std::exit(3);
+            std::this_thread::sleep_for(std::chrono::milliseconds(20));
+        });
+        std::exit(0);
+    }
+    int status = 0;
+    pid_t done = 0;
+    for (int waited = 0; waited < 3000 && done == 0; ++waited) {
+        done = waitpid(child, &status, WNOHANG);
+        if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    if (done == 0) {
+        kill(child, SIGKILL);
+        waitpid(child, &status, 0);
+        FAIL() << "the child did not exit within 30 s";
+    }
+    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 3) << "status " << status;
+}
+
 }  // namespace
 }  // namespace kodawari
