@@ -7,6 +7,7 @@
 #include <cstdio>
 #include <cstdlib>
 #include <mutex>
+#include <optional>
 #include <set>
 #include <stdexcept>
 #include <thread>
@@ -40,6 +41,19 @@ Ranges expected(std::size_t n, unsigned threads) {
     Ranges r;
     for (std::size_t p = 0; p < parts; ++p) r.insert({n * p / parts, n * (p + 1) / parts});
     return r;
+}
+
+// A forked child's wait status, or none (the child killed) when it has not exited within
+// 30 s, a thousand times what the children here take.
+std::optional<int> exit_status(pid_t child) {
+    int status = 0;
+    for (int waited = 0; waited < 3000; ++waited) {
+        if (waitpid(child, &status, WNOHANG) == child) return status;
+        std::this_thread::sleep_for(std::chrono::milliseconds(10));
+    }
+    kill(child, SIGKILL);
+    waitpid(child, &status, 0);
+    return std::nullopt;
 }
 
 TEST(Parallel, RangesAreFixedByTheCountAndThreadsAlone) {
@@ -122,21 +136,10 @@ TEST(Parallel, AChildAfterForkRunsWithPoolOfItsOwn) {
         // had the child kept them, are not there to join).
         std::exit(sum.load() == 10 ? 0 : 1);
     }
-    // A child that used the parent's pool would hang (joining workers it does not have):
-    // 30 s is a thousand times what the child takes.
-    int status = 0;
-    pid_t done = 0;
-    for (int waited = 0; waited < 3000 && done == 0; ++waited) {
-        done = waitpid(child, &status, WNOHANG);
-        if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    if (done == 0) {
-        kill(child, SIGKILL);
-        waitpid(child, &status, 0);
-        FAIL() << "the child did not exit within 30 s";
-    }
-    ASSERT_EQ(done, child);
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 0) << "status " << status;
+    // A child that used the parent's pool would hang (joining workers it does not have).
+    const std::optional<int> status = exit_status(child);
+    ASSERT_TRUE(status.has_value()) << "the child did not exit within 30 s";
+    EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 0) << "status " << *status;
 }
 
 // exit() from a range on a pool worker: the exit stops the pool's other workers and leaves
@@ -151,18 +154,9 @@ TEST(Parallel, ExitFromInsideARangeEndsTheProcessWithItsStatus) {
         });
         std::exit(0);
     }
-    int status = 0;
-    pid_t done = 0;
-    for (int waited = 0; waited < 3000 && done == 0; ++waited) {
-        done = waitpid(child, &status, WNOHANG);
-        if (done == 0) std::this_thread::sleep_for(std::chrono::milliseconds(10));
-    }
-    if (done == 0) {
-        kill(child, SIGKILL);
-        waitpid(child, &status, 0);
-        FAIL() << "the child did not exit within 30 s";
-    }
-    EXPECT_TRUE(WIFEXITED(status) && WEXITSTATUS(status) == 3) << "status " << status;
+    const std::optional<int> status = exit_status(child);
+    ASSERT_TRUE(status.has_value()) << "the child did not exit within 30 s";
+    EXPECT_TRUE(WIFEXITED(*status) && WEXITSTATUS(*status) == 3) << "status " << *status;
 }
 
 }  // namespace
