@@ -668,7 +668,7 @@ run_all() {
   # crowd.json's cpu-reference takes about 0.45 s a frame.
   local chains_s=100000 chains_l=1000000 chains_frames_s=5 chains_frames_l=10
   local birds_s=1000000 birds_l=10000000 birds_frames_s=10 birds_frames_l=20
-  local crowd_s=1000 crowd_l=10000 crowd_frames=30 crowd_lod_frames=60
+  local crowd_s=1000 crowd_l=10000 crowd_frames=30 crowd_lod_frames=60 crowd_one_frames=600
   # The flock: 10 000 birds (issue 32's size beside Blender's boids) and a million.
   local flock_s=10000 flock_l=1000000 flock_frames_s=60 flock_frames_l=5
   # The vulkan kernels' workgroup sizes timed side by side at the large sizes (issue 38,
@@ -679,7 +679,7 @@ run_all() {
   if ((quick)); then
     chains_s=301 chains_l=1001 chains_frames_s=2 chains_frames_l=2
     birds_s=1001 birds_l=10001 birds_frames_s=3 birds_frames_l=3
-    crowd_s=2 crowd_l=5 crowd_frames=3 crowd_lod_frames=11 reps_l=3
+    crowd_s=2 crowd_l=5 crowd_frames=3 crowd_lod_frames=11 crowd_one_frames=5 reps_l=3
     flock_s=1001 flock_l=3001 flock_frames_s=2 flock_frames_l=2
     # Two sizes keep the option's path run; each is a pipeline lavapipe compiles.
     workgroups=32,64
@@ -711,6 +711,11 @@ run_all() {
     --kernel-statistics --json "$out/bench-birds-$birds_s.json"
   run_step "bench-crowd-$crowd_s" "$bench_limit" "$bench_reserve" bench "$bin" bench crowd --count "$crowd_s" \
     --frames "$crowd_frames" --repetitions "$reps_s" --backends "$all" --kernel-statistics --json "$out/bench-crowd-$crowd_s.json"
+  # One character, an embedding's case: a frame's latency on the card (a submission and
+  # its wait) beside the cpu backend's on all the machine's threads (docs/performance.md,
+  # "One character, and other small scenes").
+  run_step "bench-crowd-1" "$bench_limit" "$bench_reserve" bench "$bin" bench crowd --count 1 \
+    --frames "$crowd_one_frames" --repetitions "$reps_s" --backends "$all" --json "$out/bench-crowd-1.json"
   run_step "bench-chains-$chains_l" "$bench_limit" "$bench_reserve" bench "$bin" bench chains --count "$chains_l" \
     --joints 16 --iterations 4 --frames "$chains_frames_l" --repetitions "$reps_l" --backends "$fast" \
     --workgroup-sizes "$workgroups" --json "$out/bench-chains-$chains_l.json"

@@ -95,7 +95,9 @@ expected = ["info"] + [f"validate-{s}" for s in scenes] + (["embed_vulkan"] if e
 for name in expected:
     check(name in steps, f"no step {name}")
 benches = [s for s in d["steps"] if s["name"].startswith("bench-")]
-check(len(benches) == 9, f"{len(benches)} bench steps, not 9")
+check(len(benches) == 10, f"{len(benches)} bench steps, not 10")
+# One character, the embedding's case, on every backend.
+check("bench-crowd-1" in steps, "no step bench-crowd-1")
 # The levels of detail's crowd: the shares of each level and of the kept state per result.
 check("bench-crowd-lod-5" in steps, "no step bench-crowd-lod-5")
 for r in steps["bench-crowd-lod-5"]["bench"]["results"]:
