@@ -1,7 +1,10 @@
 // parallel_for over a pool of threads kept for the process: a frame of a small scene calls
 // it several times (a rod step: its levels, keys, air and kernel passes; a read), and
 // starting and joining a thread costs 40-60 us on this project's 2-core machine, more
-// than one character's whole step (docs/performance.md, "One character").
+// than one character's whole step (docs/performance.md, "One character, and other small
+// scenes"). A job wakes only the workers it has ranges for; at exit the workers are
+// stopped (not the one calling exit(), which cannot join itself) and the pool is not
+// freed, since another thread may still be inside it.
 //
 // The ranges are the same as before (fixed by n and the thread count), so results do not
 // depend on which thread runs which range. The caller runs range 0 and then takes any
