@@ -60,6 +60,13 @@ bool spin_until(Done&& done) {
     }
 }
 
+// One call's ranges: range p is fn(n p / parts, n (p + 1) / parts).
+struct Job {
+    const std::function<void(std::size_t, std::size_t)>* fn;
+    std::size_t n, parts;
+    void range(std::size_t p) const { (*fn)(n * p / parts, n * (p + 1) / parts); }
+};
+
 class Pool {
 public:
     Pool() = default;
@@ -84,9 +91,10 @@ public:
         }
     }
 
-    // Runs part(p) for every p in [0, parts) and waits; false (nothing run) when another
-    // thread's call holds the pool.
-    bool try_run(std::size_t parts, const std::function<void(std::size_t)>& part) {
+    // Runs job's every range and waits; false (nothing run) when another thread's call
+    // holds the pool.
+    bool try_run(const Job& job) {
+        const std::size_t parts = job.parts;
         std::unique_lock submit(submit_, std::try_to_lock);
         if (!submit.owns_lock()) return false;
         std::unique_lock lock(m_);
@@ -95,7 +103,7 @@ public:
             workers_.push_back(std::make_unique<Worker>());
             workers_.back()->thread = std::thread([this, index] { work(index); });
         }
-        job_ = &part;
+        job_ = &job;
         parts_ = parts;
         wanted_.store(parts - 1);
         next_ = 1;  // range 0 is the caller's
@@ -139,7 +147,7 @@ private:
     void run(std::size_t p) {
         std::exception_ptr error;
         try {
-            (*job_)(p);
+            job_->range(p);
         } catch (...) {
             error = std::current_exception();
         }
@@ -187,7 +195,7 @@ private:
     };
     std::condition_variable done_;
     std::vector<std::unique_ptr<Worker>> workers_;
-    const std::function<void(std::size_t)>* job_ = nullptr;
+    const Job* job_ = nullptr;
     std::size_t parts_ = 0, next_ = 0;
     std::atomic<std::size_t> finished_{0};
     std::atomic<std::uint64_t> generation_{0};  // one more each job
@@ -243,16 +251,16 @@ void parallel_for(std::size_t n, unsigned threads, const std::function<void(std:
         fn(0, n);
         return;
     }
-    const std::function<void(std::size_t)> range = [&fn, n, parts](std::size_t p) { fn(n * p / parts, n * (p + 1) / parts); };
+    const Job job{&fn, n, parts};
     if (!t_in_pool) {
-        if (Pool* p = pool(); p != nullptr && p->try_run(parts, range)) return;
+        if (Pool* p = pool(); p != nullptr && p->try_run(job)) return;
     }
     // Threads of its own, each range's exception kept for the caller as the pool does.
     std::mutex m;
     std::exception_ptr error;
     const auto guarded = [&](std::size_t p) {
         try {
-            range(p);
+            job.range(p);
         } catch (...) {
             const std::lock_guard lock(m);
             if (!error) error = std::current_exception();
