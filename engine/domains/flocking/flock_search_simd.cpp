@@ -30,6 +30,50 @@ namespace hn = hwy::HWY_NAMESPACE;
 using D = hn::ScalableTag<float>;
 using DU = hn::RebindToUnsigned<D>;
 static_assert(HWY_MAX_BYTES / sizeof(float) <= SortedBirds::kSortedPad, "a vector's load from a bucket stays in the padding");
+static_assert(kSearchRankedMost <= 64, "a rank is a bit of a 64-bit word");
+
+// Each of the n candidates' rank (how many come before it) a vector of candidates at a
+// time: every candidate o adds one to the rank of each candidate it comes before (a
+// lane's mask is all ones, -1, so Sub adds one); the candidates of rank below k are
+// stored at their rank, the others at slot k. By distance alone (kTies false) or by
+// (distance, index), flock_before(). Returns the ranks seen, a bit each (n <= 64).
+template <bool kTies>
+std::uint64_t rank_into(std::uint32_t k, const float* d2, const std::uint32_t* j, std::size_t n, float* out_d2,
+                        std::uint32_t* out_j) {
+    const D d;
+    const DU du;
+    const std::size_t lanes = hn::Lanes(d);
+    HWY_ALIGN std::uint32_t ranks[HWY_MAX_BYTES / sizeof(float)];
+    std::uint64_t seen = 0;
+    for (std::size_t s = 0; s < n; s += lanes) {
+        const auto md2 = hn::LoadU(d, d2 + s);
+        auto rank = hn::Zero(du);
+        if constexpr (kTies) {
+            const auto mj = hn::LoadU(du, j + s);
+            for (std::size_t o = 0; o < n; ++o) {
+                const auto od2 = hn::Set(d, d2[o]);
+                const auto tie = hn::And(hn::Eq(od2, md2), hn::RebindMask(d, hn::Lt(hn::Set(du, j[o]), mj)));
+                rank = hn::Sub(rank, hn::VecFromMask(du, hn::RebindMask(du, hn::Or(hn::Lt(od2, md2), tie))));
+            }
+        } else {
+            for (std::size_t o = 0; o < n; ++o) {
+                rank = hn::Sub(rank, hn::VecFromMask(du, hn::RebindMask(du, hn::Lt(hn::Set(d, d2[o]), md2))));
+            }
+        }
+        hn::Store(rank, du, ranks);
+        const std::size_t live = std::min(lanes, n - s);
+        for (std::size_t l = 0; l < live; ++l) {
+            seen |= std::uint64_t{1} << ranks[l];
+            const std::size_t at = std::min<std::size_t>(ranks[l], k);
+            out_d2[at] = d2[s + l];
+            out_j[at] = j[s + l];
+        }
+    }
+    return seen;
+}
+
+// The ranks of n candidates in a total order: 0 to n - 1, a bit each.
+constexpr std::uint64_t all_ranks(std::size_t n) { return n >= 64 ? ~std::uint64_t{0} : (std::uint64_t{1} << n) - 1u; }
 
 // The k nearest of the n candidates seen (d2, j), nearest first, into nb: what offering
 // each to the body's flock_offer() in the visiting order gives. The k nearest by
@@ -42,7 +86,6 @@ static_assert(HWY_MAX_BYTES / sizeof(float) <= SortedBirds::kSortedPad, "a vecto
 void nearest(glsl::Kernel& kernel, glsl::Kernel::FlockNeighbours& nb, std::uint32_t k, const float* d2, const std::uint32_t* j,
              std::size_t n) {
     const D d;
-    const DU du;
     const std::size_t lanes = hn::Lanes(d);
     bool ranked = n <= kSearchRankedMost;
     for (std::size_t s = 0; ranked && s < n; s += lanes) {
@@ -55,26 +98,11 @@ void nearest(glsl::Kernel& kernel, glsl::Kernel::FlockNeighbours& nb, std::uint3
     // Slot k takes every candidate past the first k: a store with no branch.
     float out_d2[KW_FLOCK_MAX_NEIGHBOURS + 1] = {};
     std::uint32_t out_j[KW_FLOCK_MAX_NEIGHBOURS + 1] = {};
-    HWY_ALIGN std::uint32_t ranks[HWY_MAX_BYTES / sizeof(float)];
-    // A vector of candidates' ranks at a time: each candidate o adds one to the rank of
-    // every candidate it comes before (a lane's mask is all ones, -1, so Sub adds one).
-    for (std::size_t s = 0; s < n; s += lanes) {
-        const auto md2 = hn::LoadU(d, d2 + s);
-        const auto mj = hn::LoadU(du, j + s);
-        auto rank = hn::Zero(du);
-        for (std::size_t o = 0; o < n; ++o) {
-            const auto od2 = hn::Set(d, d2[o]);
-            const auto tie = hn::And(hn::Eq(od2, md2), hn::RebindMask(d, hn::Lt(hn::Set(du, j[o]), mj)));
-            rank = hn::Sub(rank, hn::VecFromMask(du, hn::RebindMask(du, hn::Or(hn::Lt(od2, md2), tie))));
-        }
-        hn::Store(rank, du, ranks);
-        const std::size_t live = std::min(lanes, n - s);
-        for (std::size_t l = 0; l < live; ++l) {
-            const std::size_t at = std::min<std::size_t>(ranks[l], k);
-            out_d2[at] = d2[s + l];
-            out_j[at] = j[s + l];
-        }
-    }
+    // By distance alone first (a third of the operations): the ranks are the total
+    // order's when no two distances are equal, which the ranks then show by being 0 to
+    // n - 1, each once; two equal distances share a rank, and the ranks are counted
+    // again with the index deciding ties (flock_before()).
+    if (rank_into<false>(k, d2, j, n, out_d2, out_j) != all_ranks(n)) rank_into<true>(k, d2, j, n, out_d2, out_j);
     nb.found = static_cast<std::uint32_t>(std::min<std::size_t>(n, k));
     // Every slot, a copy of fixed size (the ones past `found` are not read).
     std::memcpy(nb.d2, out_d2, sizeof nb.d2);
@@ -141,7 +169,7 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
                         // A handful of birds per bucket: a whole vector at a time from the
                         // padded arrays (one, mostly), with no branch per bird; the lanes
                         // past the bucket's end are overwritten by the next bucket's or
-                        // masked off below.
+                        // marked as no flock's below.
                         for (std::uint32_t t = first; t < last; t += static_cast<std::uint32_t>(lanes)) {
                             const std::size_t at = used + (t - first);
                             hn::StoreU(hn::LoadU(d, sorted.x.data() + t), d, cx.data() + at);
@@ -154,7 +182,10 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
                     }
                 }
             }
-            // The last vector's loads stay inside the arrays (masked off below).
+            // The lanes past the last bucket's end (copies of the next birds in the grid)
+            // belong to no flock, so the scan below needs no mask for its last vector.
+            if (used + lanes > cf.size()) cx.resize(used + lanes), cy.resize(used + lanes), cz.resize(used + lanes), cf.resize(used + lanes), cb.resize(used + lanes);
+            hn::StoreU(hn::Set(d, -1.0f), d, cf.data() + used);
             list_home = home;
             have_list = true;
         }
@@ -164,7 +195,7 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
         const auto own_flock = hn::Set(d, sorted.flock[slot]);
         const auto self = hn::Set(du, i);  // the bird itself passes every test (d = 0)
         const auto candidates = static_cast<std::uint32_t>(used);
-        if (seen_d2.size() < cx.size()) seen_d2.resize(cx.size()), seen_j.resize(cx.size());
+        if (seen_d2.size() < cx.size() + lanes) seen_d2.resize(cx.size() + lanes), seen_j.resize(cx.size() + lanes);
         // Every candidate the bird sees, in the visiting order, compressed into seen_*.
         std::size_t seen = 0;
         for (std::uint32_t s = 0; s < candidates; s += static_cast<std::uint32_t>(lanes)) {
@@ -173,14 +204,15 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
             const auto ez = hn::Sub(hn::LoadU(d, cz.data() + s), pz);
             const auto d2 = hn::Add(hn::Add(hn::Mul(ex, ex), hn::Mul(ey, ey)), hn::Mul(ez, ez));
             const auto ahead = hn::Add(hn::Add(hn::Mul(ex, fx), hn::Mul(ey, fy)), hn::Mul(ez, fz));
-            auto pass = hn::FirstN(d, candidates - s);
-            pass = hn::And(pass, hn::Eq(hn::LoadU(d, cf.data() + s), own_flock));
+            auto pass = hn::Eq(hn::LoadU(d, cf.data() + s), own_flock);
             pass = hn::AndNot(hn::Gt(d2, r2), pass);
-            pass = hn::AndNot(hn::Lt(ahead, hn::Mul(blind, hn::Sqrt(d2))), pass);
             const auto j = hn::LoadU(du, cb.data() + s);
-            const auto keep = hn::AndNot(hn::Eq(j, self), hn::RebindMask(du, pass));
-            hn::CompressStore(j, keep, du, seen_j.data() + seen);
-            seen += hn::CompressStore(d2, hn::RebindMask(d, keep), d, seen_d2.data() + seen);
+            pass = hn::AndNot(hn::RebindMask(d, hn::Eq(j, self)), pass);
+            pass = hn::AndNot(hn::Lt(ahead, hn::Mul(blind, hn::Sqrt(d2))), pass);
+            const auto keep = hn::RebindMask(du, pass);
+            hn::StoreU(hn::Compress(j, keep), du, seen_j.data() + seen);
+            hn::StoreU(hn::Compress(d2, hn::RebindMask(d, keep)), d, seen_d2.data() + seen);
+            seen += hn::CountTrue(du, keep);
         }
         nearest(kernel, nb, k, seen_d2.data(), seen_j.data(), seen);
     }
