@@ -6,6 +6,7 @@
 #undef HWY_TARGET_INCLUDE
 #define HWY_TARGET_INCLUDE "domains/flocking/flock_rules_simd.cpp"
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
+#include <hwy/cache_control.h>
 #include <hwy/highway.h>
 
 #include <algorithm>
@@ -74,6 +75,14 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
         const std::size_t live = std::min<std::size_t>(lanes, count - b0);
         std::uint32_t most = 0;  // the most neighbours a lane has: the slots filled below
         for (std::size_t m = b0; m < b0 + live; ++m) most = std::max(most, found_in[m].found);
+        // The next vector's birds' constants, read by index (scattered in the grid's order:
+        // a cache miss each, nearly a fifth of the rules' time before): fetched now, ready
+        // when their turn comes.
+        for (std::size_t m = b0 + lanes; m < std::min<std::size_t>(count, b0 + 2 * lanes); ++m) {
+            const gpu::FlockBirdGpu* next = &kernel.birds_in[sorted.index[first_slot + m]];
+            hwy::Prefetch(next);
+            hwy::Prefetch(reinterpret_cast<const char*>(next) + sizeof *next - 1);
+        }
         for (std::size_t l = 0; l < lanes; ++l) {
             const std::size_t m = b0 + std::min(l, live - 1);
             const std::size_t slot = first_slot + m;
