@@ -1,14 +1,49 @@
 // The flocking grid's bucket of a cell and of a position, written once for GLSL
 // (flock_grid.comp, flock_step.comp) and C++ (engine/domains/flocking/flock_kernel.hpp):
-// a cell of the search radius's size, hashed (Teschner et al. 2003's primes) into a
-// power-of-two table. Unsigned arithmetic wraps the same way in both languages.
-// KW_FLOCK_FN: nothing in GLSL, `inline` in C++ (a header's functions).
+// a cell of the search radius's size, placed in a power-of-two table by its Morton code
+// (Morton 1966; the order Green 2010's particle grid sorts by), so that cells near in
+// space are near in the table and in the grid's sorted order: a bird's 27 cells and the
+// next birds' lie in a few runs of memory, where Teschner et al. 2003's hash (used until
+// 2026-12) scattered them over the whole table, a cache miss each once the flock
+// outgrows the caches (the cpu backend's search at a million birds: 616 -> 240 ns a
+// bird, docs/performance.md). The code takes 10 bits an axis (cells 1 024 apart share
+// them); the bits above the table's and those cells' blocks, hashed by Teschner's primes
+// and mixed, are xor-ed in, so a wide flock's far cells spread over the table instead of
+// piling into one bucket, and a compact one (within the table's span, no block crossed)
+// keeps the plain code. Nothing depends on which cells share a bucket (the search keeps
+// the k nearest by a total order). Unsigned arithmetic wraps the same way in both
+// languages. KW_FLOCK_FN: nothing in GLSL, `inline` in C++ (a header's functions).
 #ifndef KW_FLOCK_FN
 #define KW_FLOCK_FN
 #endif
 
+// Bit i of v's low 10 bits to bit 3i.
+KW_FLOCK_FN uint flock_spread3(uint v) {
+    v &= 0x3FFu;
+    v = (v | (v << 16u)) & 0x030000FFu;
+    v = (v | (v << 8u)) & 0x0300F00Fu;
+    v = (v | (v << 4u)) & 0x030C30C3u;
+    v = (v | (v << 2u)) & 0x09249249u;
+    return v;
+}
+
+// A 32-bit mix with mix(0) = 0 (Wellons' lowbias32).
+KW_FLOCK_FN uint flock_mix(uint h) {
+    h ^= h >> 16u;
+    h *= 0x7FEB352Du;
+    h ^= h >> 15u;
+    h *= 0x846CA68Bu;
+    h ^= h >> 16u;
+    return h;
+}
+
 KW_FLOCK_FN uint flock_cell_bucket(ivec3 c, uint mask) {
-    return ((uint(c.x) * 73856093u) ^ (uint(c.y) * 19349663u) ^ (uint(c.z) * 83492791u)) & mask;
+    // Offset by half a block, so a flock round the origin lies in one block.
+    const uvec3 u = uvec3(c) + uvec3(512u);
+    const uint morton = flock_spread3(u.x) | (flock_spread3(u.y) << 1u) | (flock_spread3(u.z) << 2u);
+    const uvec3 block = u >> 10u;
+    const uint wrap = (morton & ~mask) ^ (block.x * 73856093u) ^ (block.y * 19349663u) ^ (block.z * 83492791u);
+    return (morton ^ flock_mix(wrap)) & mask;
 }
 
 KW_FLOCK_FN ivec3 flock_cell(vec3 p, float inv_radius) { return ivec3(floor(p * inv_radius)); }

@@ -10,6 +10,7 @@
 //   their branches, the ground, the speed and pitch limits, separation's front factor.
 #include <gtest/gtest.h>
 
+#include <algorithm>
 #include <bit>
 #include <cmath>
 #include <cstdio>
@@ -200,6 +201,52 @@ TEST(FlockSearch, TiesInDistanceGoByIndexAsTheReference) {
     const Reach r = compare(w, "lattice");
     EXPECT_EQ(r.mismatches, 0u);
     EXPECT_GT(r.ties, r.birds / 2);
+}
+
+// Two of a bird's 27 cells in one bucket: both backends visit the bucket once (a
+// candidate offered twice would take two places of the list). The grid's Morton order
+// (shaders/lib/flock_hash.glsl) keeps the 27 cells apart except where they straddle the
+// table's span or a block of 1 024 cells, where the mixed-in high bits place a cell
+// anywhere: the test finds such a cell by the grid's own function and fills its
+// neighbourhood, 9 m a side, with birds.
+TEST(FlockSearch, CellsSharingABucketAreVisitedOnce) {
+    constexpr int kBirds = 400;
+    const std::uint32_t mask = bucket_count(kBirds) - 1u;
+    const auto shared_bucket = [&](glm::ivec3 home) {
+        std::vector<std::uint32_t> seen;
+        for (int dz = -1; dz <= 1; ++dz) {
+            for (int dy = -1; dy <= 1; ++dy) {
+                for (int dx = -1; dx <= 1; ++dx) seen.push_back(glsl::flock_cell_bucket(home + glm::ivec3(dx, dy, dz), mask));
+            }
+        }
+        std::sort(seen.begin(), seen.end());
+        return std::adjacent_find(seen.begin(), seen.end()) != seen.end();
+    };
+    // Cells whose x-neighbours straddle the block boundary at cell 512 (offset 1 024).
+    glm::ivec3 home(0);
+    bool found = false;
+    for (int y = -40; y <= 40 && !found; ++y) {
+        for (int z = -40; z <= 40 && !found; ++z) {
+            home = glm::ivec3(511, y, z);
+            found = shared_bucket(home);
+        }
+    }
+    ASSERT_TRUE(found) << "no cell round x = 511 (cells) has two of its 27 cells in one bucket of " << mask + 1u;
+    World w;
+    w.flocks = {rules(7, false, 3.0f, 60.0f)};
+    std::mt19937 rng(17);
+    std::uniform_real_distribution<float> box(-1.0f, 2.0f);  // cells home - 1 to home + 1
+    for (int b = 0; b < kBirds; ++b) {
+        const glm::vec3 cell(static_cast<float>(home.x) + box(rng), static_cast<float>(home.y) + box(rng),
+                             static_cast<float>(home.z) + box(rng));
+        w.add(cell * w.radius, heading(rng), 0u);
+    }
+    std::size_t sharing = 0;  // birds whose own 27 cells share a bucket
+    for (const gpu::FlockStateGpu& st : w.states) sharing += shared_bucket(glsl::flock_cell(glsl::kw_xyz(st.position), 1.0f / w.radius)) ? 1 : 0;
+    std::printf("cell (%d, %d, %d): %zu of %d birds have two of their 27 cells in one bucket\n", home.x, home.y, home.z, sharing, kBirds);
+    EXPECT_GT(sharing, std::size_t{kBirds / 50}) << "the world is meant to reach the bucket shared by two cells";
+    const Reach r = compare(w, "shared bucket");
+    EXPECT_EQ(r.mismatches, 0u);
 }
 
 gpu::FlockAgentGpu agent(float kind, glm::vec4 position, float weight, float margin, glm::vec3 velocity) {

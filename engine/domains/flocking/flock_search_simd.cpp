@@ -145,7 +145,8 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
         if (!have_list || home != list_home) {
             std::uint32_t visited_count = 0;
             // A 64-bit filter of the buckets seen so far: the list is scanned only when two
-            // buckets share a bit (rare: the hash spreads the 27 cells).
+            // buckets share a bit (rare: the 27 cells' Morton codes differ in their low 6
+            // bits, two an axis, unless the cells straddle a block).
             std::uint64_t filter = 0;
             used = 0;
             for (int dz = -1; dz <= 1; ++dz) {
