@@ -8,6 +8,8 @@
 #include <algorithm>
 #include <bit>
 
+#include "core/parallel.hpp"
+
 namespace kodawari::flocking {
 
 std::uint32_t bucket_count(std::uint32_t birds) {
@@ -16,15 +18,15 @@ std::uint32_t bucket_count(std::uint32_t birds) {
 }
 
 void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::vector<std::uint32_t>& cells,
-                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted) {
+                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted, unsigned threads) {
     const std::size_t n = states.size();
     cells.resize(n);
     buckets.assign(2 * (std::size_t{mask} + 1), 0u);
     sorted.resize(n);
-    for (std::size_t i = 0; i < n; ++i) {
-        cells[i] = glsl::flock_bucket(glsl::kw_xyz(states[i].position), inv_radius, mask);
-        buckets[2 * cells[i] + 1] += 1;
-    }
+    parallel_for(n, threads, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t i = begin; i < end; ++i) cells[i] = glsl::flock_bucket(glsl::kw_xyz(states[i].position), inv_radius, mask);
+    });
+    for (std::size_t i = 0; i < n; ++i) buckets[2 * cells[i] + 1] += 1;
     std::uint32_t start = 0;
     for (std::size_t b = 0; b <= mask; ++b) {
         buckets[2 * b] = start;
@@ -82,8 +84,8 @@ public:
         for (std::uint32_t k = 0; k < frames; ++k) {
             for (std::uint32_t s = 0; s < w.substeps; ++s) {
                 const auto grid_start = Clock::now();
-                build_grid(state_, inv_radius, mask, cells_, buckets_, sorted_);
-                if (search_ != nullptr) sorted_birds_.fill(state_, w.birds, sorted_);
+                build_grid(state_, inv_radius, mask, cells_, buckets_, sorted_, threads_);
+                if (search_ != nullptr) sorted_birds_.fill(state_, w.birds, sorted_, threads_);
                 timing_.grid_seconds += seconds(grid_start, Clock::now());
                 glsl::Kernel kernel{flocks.subspan(k * f_count, f_count), w.birds, state_, buckets_, sorted_,
                                           agents.subspan(k * a_count, a_count)};

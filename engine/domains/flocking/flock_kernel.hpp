@@ -68,8 +68,9 @@ namespace kodawari::flocking {
 [[nodiscard]] KODAWARI_INTERNAL std::uint32_t bucket_count(std::uint32_t birds);
 
 /// flock_grid.comp's passes on the CPU: `buckets` (2 per bucket: start, count) and
-/// `sorted` (the birds by bucket, in bird order within one) for `states`.
+/// `sorted` (the birds by bucket, in bird order within one) for `states`. The birds'
+/// buckets are found on `threads` threads, the counting sort on one; the same result.
 KODAWARI_INTERNAL void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::vector<std::uint32_t>& cells,
-                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted);
+                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted, unsigned threads = 1);
 
 }  // namespace kodawari::flocking

@@ -31,9 +31,10 @@ struct KODAWARI_INTERNAL SortedBirds {
     std::vector<std::uint32_t> index;  ///< the bird (the grid's `sorted`, padded)
     std::vector<std::uint32_t> slot_of;  ///< bird i's slot: index[slot_of[i]] == i
 
-    /// Fills the arrays from this substep's states and grid (build_grid()'s `sorted`).
+    /// Fills the arrays from this substep's states and grid (build_grid()'s `sorted`), on
+    /// `threads` threads.
     void fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
-              std::span<const std::uint32_t> sorted);
+              std::span<const std::uint32_t> sorted, unsigned threads = 1);
 };
 
 /// What one call of the search reads.

@@ -228,6 +228,7 @@ SearchFn flock_search_kernel() { return &search; }
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include "core/parallel.hpp"
 #include "simd/dispatch.hpp"
 
 namespace kodawari::flocking {
@@ -235,7 +236,7 @@ namespace kodawari::flocking {
 SearchFn flock_search_kernel(std::int64_t target) { KW_SIMD_SELECT(target, flock_search_kernel) }
 
 void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
-                       std::span<const std::uint32_t> order) {
+                       std::span<const std::uint32_t> order, unsigned threads) {
     const std::size_t n = order.size(), padded = n + kSortedPad;
     x.resize(padded);
     y.resize(padded);
@@ -247,18 +248,20 @@ void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<con
     index.resize(padded);
     slot_of.resize(n);
     for (std::size_t s = n; s < padded; ++s) flock[s] = -1.0f;  // no bird's flock
-    for (std::size_t s = 0; s < n; ++s) {
-        const std::uint32_t i = order[s];
-        x[s] = states[i].position.x;
-        y[s] = states[i].position.y;
-        z[s] = states[i].position.z;
-        vx[s] = states[i].velocity.x;
-        vy[s] = states[i].velocity.y;
-        vz[s] = states[i].velocity.z;
-        flock[s] = static_cast<float>(birds[i].ids.x);
-        index[s] = i;
-        slot_of[i] = static_cast<std::uint32_t>(s);
-    }
+    parallel_for(n, threads, [&](std::size_t begin, std::size_t end) {
+        for (std::size_t s = begin; s < end; ++s) {
+            const std::uint32_t i = order[s];
+            x[s] = states[i].position.x;
+            y[s] = states[i].position.y;
+            z[s] = states[i].position.z;
+            vx[s] = states[i].velocity.x;
+            vy[s] = states[i].velocity.y;
+            vz[s] = states[i].velocity.z;
+            flock[s] = static_cast<float>(birds[i].ids.x);
+            index[s] = i;
+            slot_of[i] = static_cast<std::uint32_t>(s);
+        }
+    });
 }
 
 }  // namespace kodawari::flocking
