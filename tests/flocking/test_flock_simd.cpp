@@ -249,6 +249,37 @@ TEST(FlockSearch, CellsSharingABucketAreVisitedOnce) {
     EXPECT_EQ(r.mismatches, 0u);
 }
 
+// The grid built on several threads (the birds' buckets found on them) gives the serial
+// build's table and order (a bucket's birds by index): for fewer birds than threads, a
+// flock at starlings' density (several birds a bucket) and one spread over several
+// blocks of cells (a bucket each, mostly).
+TEST(FlockGrid, EveryThreadCountGivesTheSerialSort) {
+    struct Case {
+        int count;
+        float lo, hi;
+    };
+    for (const Case c : {Case{3, -40.0f, 4000.0f}, Case{3001, -8.5f, 8.5f}, Case{20011, -40.0f, 4000.0f}}) {
+        const World w = random_world({rules(7, false, 3.0f, 60.0f)}, 23, c.lo, c.hi, c.count);
+        const auto n = static_cast<std::uint32_t>(w.birds.size());
+        const std::uint32_t mask = bucket_count(n) - 1u;
+        std::vector<std::uint32_t> cells, buckets, sorted;
+        build_grid(w.states, 1.0f / w.radius, mask, cells, buckets, sorted, 1);
+        std::uint32_t fullest = 0;
+        for (std::size_t b = 0; b <= mask; ++b) fullest = std::max(fullest, buckets[2 * b + 1]);
+        std::printf("%d birds in [%g, %g]^3: at most %u a bucket\n", c.count, double{c.lo}, double{c.hi}, fullest);
+        if (c.hi - c.lo < 20.0f) {
+            EXPECT_GT(fullest, 4u) << "the dense flock is meant to put several birds in a bucket";
+        }
+        for (const unsigned threads : {2u, 3u, 7u, 64u}) {
+            std::vector<std::uint32_t> cells_t, buckets_t(7, 99u), sorted_t(3, 99u);  // stale contents, resized
+            build_grid(w.states, 1.0f / w.radius, mask, cells_t, buckets_t, sorted_t, threads);
+            EXPECT_EQ(cells_t, cells) << c.count << " birds, " << threads << " threads";
+            EXPECT_EQ(buckets_t, buckets) << c.count << " birds, " << threads << " threads";
+            EXPECT_EQ(sorted_t, sorted) << c.count << " birds, " << threads << " threads";
+        }
+    }
+}
+
 gpu::FlockAgentGpu agent(float kind, glm::vec4 position, float weight, float margin, glm::vec3 velocity) {
     gpu::FlockAgentGpu a{};
     a.position = {position.x, position.y, position.z, position.w};
