@@ -7,18 +7,48 @@
 #include <cstdlib>
 #include <filesystem>
 
+#include "kodawari/core/atomic_file.hpp"
+
 namespace kodawari::cli {
+
+namespace {
+
+std::string characters_path(const std::string& out, bool has_birds) {
+    return has_birds ? out.substr(0, out.size() - (out.ends_with(".glb") ? 4 : 0)) + "-characters.glb" : out;
+}
+
+}  // namespace
+
 
 std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains,
                                                  const GlbCompaction& compaction) {
     // One file per kind of content.
     std::vector<std::unique_ptr<BakeSink>> sinks;
     if (has_birds) sinks.push_back(make_birds_glb_sink(out, compaction));
-    if (has_chains) {
-        sinks.push_back(make_chains_glb_sink(
-            has_birds ? out.substr(0, out.size() - (out.ends_with(".glb") ? 4 : 0)) + "-characters.glb" : out, compaction));
-    }
+    if (has_chains) sinks.push_back(make_chains_glb_sink(characters_path(out, has_birds), compaction));
     return sinks;
+}
+
+std::vector<std::string> glb_paths(const std::string& out, bool has_birds, bool has_chains) {
+    std::vector<std::string> paths;
+    if (has_birds) paths.push_back(out);
+    if (has_chains) paths.push_back(characters_path(out, has_birds));
+    return paths;
+}
+
+Result<void> refuse_overwriting_inputs(const Scene& scene, const std::vector<std::string>& outputs, const std::string& what,
+                                       const std::string& extension) {
+    for (const std::string& out : outputs) {
+        if (!scene.reads(out)) continue;
+        const bool is_scene = same_file(out, scene.path);
+        const std::filesystem::path p(out);
+        const std::string option = extension == ".jsonl" ? "--trace" : "--out";
+        const std::string other = (p.parent_path() / (p.stem().string() + "-bake" + extension)).string();
+        return make_error(Error::Kind::InvalidInput,
+                          out + ": " + what + " is " + (is_scene ? "the scene file itself" : "a file the scene " + scene.path + " reads") +
+                              "; the bake would replace it. Give " + option + " another path (for example " + option + " " + other + ")");
+    }
+    return {};
 }
 
 CLI::Option* add_compaction_option(CLI::App& app, std::optional<std::string>& into, bool& meshopt) {

@@ -19,6 +19,17 @@ namespace kodawari::cli {
 [[nodiscard]] std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains,
                                                                const GlbCompaction& compaction);
 
+/// The files glb_sinks(out, has_birds, has_chains, ...) writes.
+[[nodiscard]] std::vector<std::string> glb_paths(const std::string& out, bool has_birds, bool has_chains);
+
+/// An InvalidInput error when one of `outputs` is the scene file or a file the scene read
+/// (Scene::inputs: its models, motions, maps): a bake written there would replace its
+/// own input, and the next run would read the bake. `what` says where the path came
+/// from ("--out", "the default output"); the message suggests another path with
+/// `extension` (".glb", ".kwpart"; ".jsonl": a --trace).
+[[nodiscard]] Result<void> refuse_overwriting_inputs(const Scene& scene, const std::vector<std::string>& outputs,
+                                                     const std::string& what, const std::string& extension);
+
 /// Adds `--compact[=METRES[,RADIANS]]` (docs/compact.md), whose value `into` holds, and
 /// `--meshopt`, which sets `meshopt`.
 CLI::Option* add_compaction_option(CLI::App& app, std::optional<std::string>& into, bool& meshopt);

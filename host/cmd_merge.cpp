@@ -2,6 +2,7 @@
 // the files one `run` writes, byte for byte (kodawari/simulation/shards.hpp).
 #include <cstdio>
 
+#include "kodawari/core/atomic_file.hpp"
 #include "bake_outputs.hpp"
 #include "commands.hpp"
 #include "kodawari/simulation/shards.hpp"
@@ -41,7 +42,21 @@ int cmd_merge(const MergeArguments& o) {
     if (out_option) {
         if (auto made = make_parent_folder(*out_option, "--out"); !made) return report(made.error());
     }
-    auto sinks = glb_sinks(out_option ? *out_option : default_output(world.scene->name), has_birds, has_chains, compaction);
+    const std::string out = out_option ? *out_option : default_output(world.scene->name);
+    // Never over the scene, a file it reads or a part being merged.
+    if (auto refused = refuse_overwriting_inputs(*world.scene, glb_paths(out, has_birds, has_chains),
+                                                 out_option ? "--out" : "the default output", ".glb");
+        !refused) {
+        return report(refused.error());
+    }
+    for (const std::string& file : glb_paths(out, has_birds, has_chains)) {
+        for (const std::string& part : parts) {
+            if (!same_file(file, part)) continue;
+            return report(make_error(Error::Kind::InvalidInput, file + ": is " + part +
+                                                                   ", a part being merged; give --out another path"));
+        }
+    }
+    auto sinks = glb_sinks(out, has_birds, has_chains, compaction);
     auto written = bake(*source.value(), sink_pointers(sinks));
     if (!written) return report(written.error());
     for (const BakeOutput& file : written.value()) print_wrote(file);

@@ -10,6 +10,7 @@
 #include <string>
 #include <vector>
 
+#include "bake_outputs.hpp"
 #include "commands.hpp"
 #include "kodawari/core/atomic_file.hpp"
 #include "kodawari/gltf/bird_model_import.hpp"
@@ -52,12 +53,25 @@ std::string relative_to_scene(const std::string& path, const std::string& scene)
 // Writes the scene `json` made from `source` to `out_path` (a temporary file renamed),
 // after the scene loader has accepted it: a scene it rejects is our bug, not the user's.
 // kExitOk, or the exit code of what went wrong (reported).
-int write_checked_scene(const std::string& json, const std::string& source, const std::string& out_path) {
+int write_checked_scene(const std::string& json, const std::string& source, const std::string& out_path, std::string& run_command) {
     auto check = parse_scene(json, out_path);
     if (!check) {
         std::fprintf(stderr, "kodawari: internal error: the scene written for %s does not load: %s\n", source.c_str(),
                      check.error().message.c_str());
         return kExitFailure;
+    }
+    const Scene& scene = check.value();
+    for (const std::string& input : scene.inputs) {
+        if (!same_file(out_path, input)) continue;
+        return report(make_error(Error::Kind::InvalidInput, out_path + ": --out is " + input +
+                                                                ", the file being rigged; give --out a .json path of its own"));
+    }
+    // The command that bakes it: `run`'s default output unless that is the model itself
+    // (a model in out/ named as its scene), which run refuses to write over.
+    run_command = "kodawari run " + out_path;
+    const std::string bake = "out/" + scene.name + ".glb";
+    if (!refuse_overwriting_inputs(scene, {bake}, "the default output", ".glb")) {
+        run_command += " --out out/" + scene.name + "-bake.glb";
     }
     auto out = AtomicFile::open(out_path);
     if (!out) return report(out.error());
@@ -100,7 +114,8 @@ int cmd_rig_bird(const RigArguments& o) {
             return kExitFailure;
         }
     }
-    if (const int written = write_checked_scene(json, file, out_path); written != kExitOk) return written;
+    std::string run_command;
+    if (const int written = write_checked_scene(json, file, out_path, run_command); written != kExitOk) return written;
 
     std::printf("%s: a bird, bones mapped by %s\n", file.c_str(), m.mapped_by.c_str());
     for (std::size_t part = 0; part < birds::kPartCount; ++part) {
@@ -118,7 +133,7 @@ int cmd_rig_bird(const RigArguments& o) {
                 static_cast<double>(f.cruise_speed));
     std::printf("  route: a generated loop %.0f m across, sized for the bird's turns at its cruise speed\n",
                 std::round(90.0 * static_cast<double>(scene.route_scale)));
-    std::printf("wrote %s (kodawari run %s)\n", out_path.c_str(), out_path.c_str());
+    std::printf("wrote %s (%s)\n", out_path.c_str(), run_command.c_str());
     return kExitOk;
 }
 
@@ -156,7 +171,8 @@ int cmd_rig(const RigArguments& o) {
     const gltf::RigScene& r = rig.value();
     for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 
-    if (const int written = write_checked_scene(r.json, character, out_path); written != kExitOk) return written;
+    std::string run_command;
+    if (const int written = write_checked_scene(r.json, character, out_path, run_command); written != kExitOk) return written;
 
     std::printf("%s: %zu chain%s from %s, %u collider%s, size %.3g m, reference joint \"%s\", %s\n", character.c_str(),
                 r.chains.size(), r.chains.size() == 1 ? "" : "s", r.source.c_str(), r.colliders, r.colliders == 1 ? "" : "s",
@@ -172,7 +188,7 @@ int cmd_rig(const RigArguments& o) {
         std::printf("  %-24s root %-24s %2u joints  %.3f m  thickness %.2g m\n", c.name.c_str(), c.root.c_str(), c.joints,
                     static_cast<double>(c.length), static_cast<double>(c.thickness));
     }
-    std::printf("wrote %s (kodawari run %s)\n", out_path.c_str(), out_path.c_str());
+    std::printf("wrote %s (%s)\n", out_path.c_str(), run_command.c_str());
     return kExitOk;
 }
 

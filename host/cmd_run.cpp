@@ -136,6 +136,13 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
     // --strict and --fit-routes: every rank checks (and fits) the scene it loaded, the
     // same way since the fit is a function of the scene; rank 0 alone says what it found.
     options.prepare_scene = [&](Scene& scene) -> Result<void> {
+        // Never over a file the scene reads (every rank decides alike; rank 0 says it).
+        if (!no_export) {
+            const std::string glb = out ? *out : "out/" + scene.name + ".glb";
+            KW_TRY(refuse_overwriting_inputs(scene, glb_paths(glb, !scene.flocks.empty(), !scene.characters.empty()),
+                                             out ? "--out" : "the default output", ".glb"));
+        }
+        if (trace) KW_TRY(refuse_overwriting_inputs(scene, {*trace}, "--trace", ".jsonl"));
         const auto stop = check_scene_routes(scene, strict, fit_routes, root);
         if (!stop) return {};
         return make_error(*stop == kExitBadInput ? Error::Kind::InvalidInput : Error::Kind::Internal,
@@ -244,6 +251,21 @@ int cmd_run(const RunOptions& o) {
     const Scene& scene = sim.scene();
     const bool has_birds = !bird_world(sim).birds.empty();
     const bool has_chains = rod_scene(sim) != nullptr;
+    // Never over a file the scene reads (a bird's model named as the scene is, in out/).
+    const std::string glb = out_option ? *out_option
+                            : shard_option ? default_output(scene.name, ".shard-" + std::to_string(shard.index) + "-of-" +
+                                                                          std::to_string(shard.count) + ".kwpart")
+                                           : default_output(scene.name);
+    const std::string glb_option = out_option ? "--out" : "the default output";
+    if (!no_export) {
+        const auto files = shard_option ? std::vector<std::string>{glb} : glb_paths(glb, has_birds, has_chains);
+        if (auto refused = refuse_overwriting_inputs(scene, files, glb_option, shard_option ? ".kwpart" : ".glb"); !refused) {
+            return report(refused.error());
+        }
+    }
+    if (trace_path) {
+        if (auto refused = refuse_overwriting_inputs(scene, {*trace_path}, "--trace", ".jsonl"); !refused) return report(refused.error());
+    }
     // The outputs' folders, made before the simulation runs (as render makes its --out).
     for (const auto& [path, option] : {std::pair{out_option, "--out"}, std::pair{trace_path, "--trace"}}) {
         if (!path) continue;
@@ -251,12 +273,9 @@ int cmd_run(const RunOptions& o) {
     }
     std::vector<std::unique_ptr<BakeSink>> owned;
     if (shard_option) {
-        const std::string part = out_option ? *out_option
-                                            : default_output(scene.name, ".shard-" + std::to_string(shard.index) + "-of-" +
-                                                                            std::to_string(shard.count) + ".kwpart");
-        owned.push_back(make_part_sink(part, sim));
+        owned.push_back(make_part_sink(glb, sim));
     } else if (!no_export) {
-        owned = glb_sinks(out_option ? *out_option : default_output(scene.name), has_birds, has_chains, compaction);
+        owned = glb_sinks(glb, has_birds, has_chains, compaction);
     }
     if (trace_path) owned.push_back(make_trace_sink(*trace_path));
 

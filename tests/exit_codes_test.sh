@@ -8,7 +8,7 @@
 # that the message names what was wrong and that nothing was written.
 #   usage: exit_codes_test.sh KODAWARI_BINARY SOURCE_DIR
 set -uo pipefail
-bin=$1
+bin=$(realpath "$1")  # absolute: some rows run from a folder of their own
 src=$2
 source "$(dirname "${BASH_SOURCE[0]}")/check.sh"
 cd "$src"
@@ -83,6 +83,28 @@ row render "missing scene file" 2 "nosuch.json" -- render "$work/nosuch.json" --
 row render "--animation not named .png" 2 "a.gif" -- render scenes/ahoge.json --out "$work/frames" --frames 1 --animation "$work/a.gif"
 row render "--contact-sheet folder cannot be made" 1 "a-file/sub" -- \
   render scenes/ahoge.json --out "$work/frames" --frames 1 --contact-sheet "$unwritable/sheet.png"
+# A bake never replaces a file its scene reads: a model in out/ named as its scene (what
+# `rig` makes by default) is the default output's path.
+cp scenes/characters/chibi.glb "$work/chibi.glb"
+"$bin" rig "$work/chibi.glb" --out "$work/chibi.json" >/dev/null 2>&1
+model_sum=$(md5sum <"$work/chibi.glb")
+row run "--out the character model its scene reads" 2 "chibi.glb: --out is a file the scene .*chibi.json reads" -- \
+  run "$work/chibi.json" --frames 2 --backend cpu --out "$work/chibi.glb"
+row run "--out the scene file itself" 2 "--out is the scene file itself" -- run "$work/chibi.json" --frames 2 --backend cpu --out "$work/chibi.json"
+row run "--trace the model its scene reads" 2 "--trace is a file the scene.*--trace .*chibi-bake.jsonl" -- \
+  run "$work/chibi.json" --frames 2 --backend cpu --no-export --trace "$work/chibi.glb"
+row rig "--out the model being rigged" 2 "the file being rigged" -- rig "$work/chibi.glb" --out "$work/chibi.glb"
+row merge "--out a part being merged" 2 "a part being merged" -- merge "$work/ok.kwpart" --out "$work/ok.kwpart"
+mkdir -p "$work/cwd/out" && cp scenes/characters/chibi.glb "$work/cwd/out/chibi.glb"
+rigged=$(cd "$work/cwd" && "$bin" rig out/chibi.glb --out out/chibi.json 2>/dev/null)
+check "rig: the run it suggests names an --out of its own when the default is the model (got: $rigged)" \
+  grep -qF "(kodawari run out/chibi.json --out out/chibi-bake.glb)" <<<"$rigged"
+(cd "$work/cwd" && "$bin" run out/chibi.json --frames 2 --backend cpu >/dev/null 2>"$work/default.err")
+check "run: the default output over the model exits 2" test $? -eq 2
+check "run: the default output over the model: the message says so" grep -qF "the default output is a file the scene" "$work/default.err"
+check "the refused runs left the models as they were" bash -c \
+  "test \"\$(md5sum <'$work/chibi.glb')\" = '$model_sum' && test \"\$(md5sum <'$work/cwd/out/chibi.glb')\" = '$model_sum'"
+check "the refused merge left its part" test -s "$work/ok.kwpart"
 row view "missing scene file" 2 "nosuch.json" -- view "$work/nosuch.json"
 row info "an instruction set that is no name" 2 "" -- info --isa pentium
 row info "a device asked for that is not there" 2 "" -- info --device no-such-device

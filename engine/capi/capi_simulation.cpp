@@ -65,15 +65,21 @@ void require_poses(const kodawari_simulation& sim) {
     fail(error);
 }
 
-// `kodawari run`'s files (host/bake_outputs.cpp, glb_sinks): one per kind of content.
+// `kodawari run`'s files (host/bake_outputs.cpp, glb_sinks): one per kind of content, the
+// characters beside the birds when there are both.
+std::vector<std::string> glb_paths(const std::string& path, bool has_birds, bool has_chains) {
+    std::vector<std::string> paths;
+    if (has_birds) paths.push_back(path);
+    if (has_chains) paths.push_back(has_birds ? path.substr(0, path.size() - (path.ends_with(".glb") ? 4 : 0)) + "-characters.glb" : path);
+    return paths;
+}
+
 std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& path, bool has_birds, bool has_chains,
                                                  const GlbCompaction& compaction) {
+    const std::vector<std::string> paths = glb_paths(path, has_birds, has_chains);
     std::vector<std::unique_ptr<BakeSink>> sinks;
-    if (has_birds) sinks.push_back(make_birds_glb_sink(path, compaction));
-    if (has_chains) {
-        const std::string stem = path.substr(0, path.size() - (path.ends_with(".glb") ? 4 : 0));
-        sinks.push_back(make_chains_glb_sink(has_birds ? stem + "-characters.glb" : path, compaction));
-    }
+    if (has_birds) sinks.push_back(make_birds_glb_sink(paths.front(), compaction));
+    if (has_chains) sinks.push_back(make_chains_glb_sink(paths.back(), compaction));
     return sinks;
 }
 
@@ -377,7 +383,14 @@ KODAWARI_C_API kodawari_status kodawari_simulation_bake(kodawari_simulation* sim
         Simulation& baked = *opened.value();
         GlbCompaction compaction;
         compaction.enabled = compact != 0;
-        auto sinks = glb_sinks(path, !bird_world(baked).birds.empty(), rod_scene(baked) != nullptr, compaction);
+        const bool has_birds = !bird_world(baked).birds.empty(), has_chains = rod_scene(baked) != nullptr;
+        // Never over the scene or a file it reads (a model named as its scene, in one folder).
+        for (const std::string& out : glb_paths(path, has_birds, has_chains)) {
+            if (!baked.scene().reads(out)) continue;
+            invalid("path", "\"" + out + "\" is the scene file or a file its scene reads (" + baked.scene().path +
+                                "); the bake would replace it: give another path");
+        }
+        auto sinks = glb_sinks(path, has_birds, has_chains, compaction);
         if (sinks.empty()) invalid("sim", "its scene has neither birds nor characters; nothing to bake");
         std::vector<BakeSink*> pointers;
         for (auto& sink : sinks) pointers.push_back(sink.get());

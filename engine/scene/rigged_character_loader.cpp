@@ -214,7 +214,8 @@ std::string scene_relative(const JsonReader& r, const std::string& given) {
 
 // The `motions` of a rigged character (docs/scene-format.md, "Motions"): each a clip made
 // for another skeleton, retargeted onto `ch` (gltf/motion.hpp) and appended to its clips.
-Result<void> read_motions(const JsonReader& r, const JsonNode& motions, animation::Character& ch, std::vector<std::string>& warnings) {
+Result<void> read_motions(const JsonReader& r, const JsonNode& motions, animation::Character& ch, std::vector<std::string>& warnings,
+                          std::vector<std::string>& files) {
     std::size_t n = 0;
     KW_SCENE_ASSIGN(n, read_array(r, motions, 1, kMaxPerCharacter,
                                   "a non-empty array of motions (at most " + std::to_string(kMaxPerCharacter) + ")"));
@@ -234,17 +235,20 @@ Result<void> read_motions(const JsonReader& r, const JsonNode& motions, animatio
         const JsonNode file = r.member(m, "file");
         KW_SCENE_ASSIGN(request.file, r.string(file));
         request.file = scene_relative(r, request.file);
+        files.push_back(request.file);
         const JsonNode clip = r.member(m, "clip");
         if (clip.present()) KW_SCENE_ASSIGN(request.clip, r.string(clip));
         const JsonNode map = r.member(m, "map");
         if (map.present()) {
             KW_SCENE_ASSIGN(request.map, r.string(map));
             request.map = scene_relative(r, request.map);
+            files.push_back(request.map);
         }
         const JsonNode target_map = r.member(m, "target_map");
         if (target_map.present()) {
             KW_SCENE_ASSIGN(request.target_map, r.string(target_map));
             request.target_map = scene_relative(r, request.target_map);
+            files.push_back(request.target_map);
         }
         gltf::MotionKey key = gltf::MotionKey::File;
         auto motion = gltf::load_motion(request, ch, &key);
@@ -294,7 +298,7 @@ Result<CharacterSpec> read_rigged_character(const JsonReader& r, const JsonNode&
         return make_error(loaded.error().kind, r.file() + ": " + file.path + ": " + loaded.error().message);
     }
     if (const JsonNode motions = r.member(node, "motions"); motions.present()) {
-        KW_TRY(read_motions(r, motions, loaded.value(), rig.warnings));
+        KW_TRY(read_motions(r, motions, loaded.value(), rig.warnings, rig.motion_files));
     }
     auto character = std::make_shared<const animation::Character>(std::move(loaded.value()));
     const animation::Character& ch = *character;

@@ -12,6 +12,7 @@
 #include <string>
 #include <utility>
 
+#include <kodawari/core/atomic_file.hpp>
 #include <kodawari/scene/scene.hpp>
 #include <kodawari/shared/flocking.h>
 
@@ -586,10 +587,28 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
     } else if (crowds.present()) {
         return r.fail(crowds.path, "needs \"characters\" (a crowd is made of a scene's characters)");
     }
+    // The other files it read, resolved as the readers above resolved them.
+    const auto resolved = [&](const std::string& file) {
+        const std::filesystem::path given(file);
+        return given.is_absolute() ? file : (std::filesystem::path(r.file()).parent_path() / given).string();
+    };
+    for (const FlockSpec& flock : scene.flocks) {
+        if (!flock.model_file.empty()) scene.inputs.push_back(resolved(flock.model_file));
+        if (!flock.map_file.empty()) scene.inputs.push_back(resolved(flock.map_file));
+    }
+    for (const CharacterSpec& character : scene.characters) {
+        if (!character.rig) continue;
+        scene.inputs.push_back(character.rig->resolved);
+        scene.inputs.insert(scene.inputs.end(), character.rig->motion_files.begin(), character.rig->motion_files.end());
+    }
     return scene;
 }
 
 }  // namespace
+
+bool Scene::reads(const std::string& file) const {
+    return same_file(file, path) || std::any_of(inputs.begin(), inputs.end(), [&](const std::string& in) { return same_file(file, in); });
+}
 
 std::uint32_t Scene::frame_count() const {
     const double frames = std::round(static_cast<double>(duration) * static_cast<double>(fps));

@@ -340,6 +340,20 @@ with kodawari.Simulation.open(FLOCK, "cpu", frames=3) as sim:
         check(False, "a bake into a missing folder raised nothing")
     except kodawari.Error as error:
         check("no-such-folder" in str(error), f"bake: {error}")
+# A bake never writes over its scene file or a file the scene reads (a copy of the scene
+# here, so that a failure cannot replace the checkout's).
+scene_copy = os.path.join(temp, "flock-copy.json")
+with open(FLOCK, "rb") as original, open(scene_copy, "wb") as copy:
+    scene_bytes = original.read()
+    copy.write(scene_bytes)
+with kodawari.Simulation.open(scene_copy, "cpu", frames=2) as sim:
+    try:
+        sim.bake(scene_copy)
+        check(False, "a bake over its own scene file raised nothing")
+    except kodawari.Error as error:
+        check("a file its scene reads" in str(error) and "path" in str(error), f"bake over the scene: {error}")
+with open(scene_copy, "rb") as copy:
+    check(copy.read() == scene_bytes, "a refused bake changed the scene file")
 try:
     sim.step()
     check(False, "a closed simulation stepped")

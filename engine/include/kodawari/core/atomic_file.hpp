@@ -68,4 +68,9 @@ private:
 /// own; the `kodawari` command calls this first thing.
 KODAWARI_API void remove_temporary_files_on_signals();
 
+/// Whether two paths name one file: the same file on disk (links included) when both
+/// exist, else the same absolute path once normalized. For refusing an output that is
+/// one of a command's inputs (Scene::reads).
+[[nodiscard]] KODAWARI_API bool same_file(const std::string& a, const std::string& b);
+
 }  // namespace kodawari

@@ -218,6 +218,8 @@ struct RigSpec {
     /// What the character's `motions` could not use (gltf/motion.hpp), each naming the
     /// scene, the motion's JSON path, and the file and JSON path of the problem.
     std::vector<std::string> warnings;
+    /// The files its motions read (their clips and maps), as resolved.
+    std::vector<std::string> motion_files;
 };
 
 /// A character template: skeleton, motions, colliders and chains (SPEC A.1). A rigged
@@ -275,6 +277,9 @@ struct CrowdSpec {
 /// A whole scene file.
 struct KODAWARI_API Scene {
     std::string path;  ///< where it was loaded from (for messages)
+    /// Every other file the scene read (characters' and birds' models, motions, maps),
+    /// as resolved: what a bake must not write over (`kodawari run` refuses to).
+    std::vector<std::string> inputs;
     std::string name;
     std::uint32_t version = 1;  ///< 1: birds only; 2: characters, crowds and camera motion too
     float fps = 60.0f;
@@ -297,6 +302,9 @@ struct KODAWARI_API Scene {
 
     /// Number of frames: round(duration * fps), at least 1.
     [[nodiscard]] std::uint32_t frame_count() const;
+    /// Whether `file` is the scene file or one of `inputs` (same_file()): what a bake must
+    /// not write over.
+    [[nodiscard]] bool reads(const std::string& file) const;
 };
 
 /// Reads and checks a scene file. Errors name the file, the JSON path and what was
