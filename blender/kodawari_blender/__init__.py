@@ -30,6 +30,7 @@ def menu(self, context):
 
 
 def register():
+    flock.restore_numpy_bool()  # Blender 3.4's glTF importer on NumPy 1.24 (flock.py)
     for cls in classes:
         bpy.utils.register_class(cls)
     bpy.types.VIEW3D_MT_object.append(menu)

@@ -171,12 +171,19 @@ def flock_steps(job, description, backend, frames, curves, birds_per_chunk=64, f
     return len(names), simulated
 
 
-def import_gltf(path):
-    # Blender 3.4's glTF importer uses numpy.bool, which NumPy 1.24 removed (Debian 12
-    # ships both): put the alias back, as tests/tools/blender_check.py does.
+def restore_numpy_bool():
+    """Blender 3.4's own glTF importer (File > Import > glTF 2.0) uses numpy.bool, an alias
+    of Python's bool that NumPy 1.24 removed (Debian 12 ships both): every import of a
+    file with a mesh then fails with "module 'numpy' has no attribute 'bool'". Puts the
+    alias back where it is missing; the add-on does so when enabled (register()), so the
+    importer works for the user's own imports too, and before its own imports."""
     import numpy
     if 'bool' not in numpy.__dict__:
         numpy.bool = bool
+
+
+def import_gltf(path):
+    restore_numpy_bool()
     result = bpy.ops.import_scene.gltf(filepath=path)
     if 'FINISHED' not in result:
         raise FlockError(f"Blender's glTF importer did not finish ({sorted(result)})")

@@ -85,8 +85,22 @@ def expect_error(needle, operator=None, **properties):
 bpy.ops.wm.read_factory_settings(use_empty=True)
 scripts = os.environ.get("BLENDER_USER_SCRIPTS", "")
 check(scripts != "", "BLENDER_USER_SCRIPTS is not set: the test would install into the user's own folder")
+import numpy  # noqa: E402
+print(f"NumPy {numpy.__version__}: numpy.bool {'present' if 'bool' in numpy.__dict__ else 'missing'} before the add-on")
 bpy.ops.preferences.addon_install(filepath=zip_path, overwrite=True)
 bpy.ops.preferences.addon_enable(module="kodawari_blender")
+# Enabled, the add-on lets Blender 3.4's own glTF importer read a file with a mesh on NumPy
+# 1.24 (which removed numpy.bool, which the importer uses): the README's File > Import.
+try:
+    imported = bpy.ops.import_scene.gltf(filepath=chibi_path)
+    check('FINISHED' in imported, f"Blender's glTF importer on chibi.glb: {sorted(imported)}")
+except RuntimeError as error:  # bpy.ops raises the importer's AttributeError as a RuntimeError
+    check(False, f"Blender's glTF importer on chibi.glb with the add-on enabled: {str(error).strip().splitlines()[-1]}")
+check(any(o.type == 'ARMATURE' for o in bpy.data.objects), "Blender's glTF importer made no armature of chibi.glb")
+# Back to the empty file (factory settings would disable the add-on).
+for kind in ("objects", "armatures", "meshes", "actions", "materials", "images", "textures", "collections"):
+    for block in list(getattr(bpy.data, kind)):
+        getattr(bpy.data, kind).remove(block)
 import kodawari_blender  # noqa: E402
 from kodawari_blender import flock  # noqa: E402
 
