@@ -29,6 +29,15 @@ std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool ha
     return sinks;
 }
 
+void require_glb_name(const std::optional<std::string>& out) {
+    if (!out) return;
+    std::string extension = std::filesystem::path(*out).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (extension != ".glb") {
+        throw UsageError{"--out " + *out + ": the bake is a binary glTF file: name it .glb (a .gltf is read as JSON glTF)"};
+    }
+}
+
 std::vector<std::string> glb_paths(const std::string& out, bool has_birds, bool has_chains) {
     std::vector<std::string> paths;
     if (has_birds) paths.push_back(out);

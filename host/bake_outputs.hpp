@@ -3,6 +3,7 @@
 // all three so that they write the same files.
 
 #include <memory>
+#include <optional>
 #include <string>
 #include <vector>
 
@@ -18,6 +19,10 @@ namespace kodawari::cli {
 /// as `compaction` says.
 [[nodiscard]] std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains,
                                                                const GlbCompaction& compaction);
+
+/// A UsageError naming --out when `out` is given and not named .glb (any case): what the
+/// glTF sinks write is a binary glTF file, and a reader goes by the name.
+void require_glb_name(const std::optional<std::string>& out);
 
 /// The files glb_sinks(out, has_birds, has_chains, ...) writes.
 [[nodiscard]] std::vector<std::string> glb_paths(const std::string& out, bool has_birds, bool has_chains);

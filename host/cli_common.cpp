@@ -63,7 +63,7 @@ CLI::Option* add_scene(CLI::App& app, std::optional<std::string>& into, const st
 
 void add_backend_options(CLI::App& app, BackendFlags& flags) {
     add_text(app, "--backend", flags.backend, "auto|vulkan|cpu|cpu-reference",
-             "the simulation's backend (default: auto, vulkan when a device opens, else cpu)");
+             "the simulation's backend (default: auto: vulkan on a GPU, else cpu, also where the only Vulkan device is a CPU such as lavapipe)");
     add_text(app, "--device", flags.device, "NAME|INDEX",
              "the Vulkan device, a name or an index as `kodawari info` lists them (default: $KODAWARI_DEVICE, else "
              "the one `kodawari info` chooses)");

@@ -106,7 +106,7 @@ void apply_lod(const LodFlags& flags, Scene& scene);
 
 /// Options common to commands that run a simulation.
 struct BackendChoice {
-    std::optional<BackendKind> backend;  ///< none: auto (vulkan when a device opens, else cpu)
+    std::optional<BackendKind> backend;  ///< none: auto (vulkan on a GPU, else cpu)
     BackendOptions options;
 };
 /// --backend, --device, --threads, --isa, --workgroup-size, --validation; and the environment, which only the

@@ -26,6 +26,7 @@ int cmd_merge(const MergeArguments& o) {
     if (o.scene) options.scene = *o.scene;
     GlbCompaction compaction = read_compaction(o.compact, o.meshopt);
     if (o.threads) compaction.threads = static_cast<unsigned>(*o.threads);
+    require_glb_name(out_option);
     const std::vector<std::string>& parts = o.parts;
     if (parts.empty()) throw UsageError{"merge takes the part files of every shard (written by `run --shard I/N`)"};
     auto source = open_parts(parts, options);

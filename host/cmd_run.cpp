@@ -231,6 +231,7 @@ int cmd_run(const RunOptions& o) {
         throw UsageError{"--shard writes a part file with every key, and compaction happens at merge: give --compact to "
                          "`kodawari merge` instead"};
     }
+    if (!shard_option) require_glb_name(out_option);  // a part file is a .kwpart
     if (mpi) {
         return run_distributed(scene_path, choice, frames_option, out_option, trace_path, no_export, compaction, o.strict,
                                o.fit_routes);

@@ -29,7 +29,7 @@ import numpy
 from . import _config
 from . import _native
 
-__all__ = ["Simulation", "Error", "rig", "bench", "command_path", "BACKENDS", "PARTS", "LEVEL_FULL", "LEVEL_POSED", "LEVEL_HIDDEN", "LEVEL_REDUCED", "__version__", "library_version", "library_path"]
+__all__ = ["Simulation", "Error", "rig", "bench", "BENCH_KINDS", "command_path", "BACKENDS", "PARTS", "LEVEL_FULL", "LEVEL_POSED", "LEVEL_HIDDEN", "LEVEL_REDUCED", "__version__", "library_version", "library_path"]
 
 #: The package's version: the project's (CMake's project version, as the library's).
 __version__ = _config.VERSION
@@ -56,6 +56,19 @@ class Error(Exception):
     def __init__(self, status, message):
         super().__init__(message)
         self.status = status
+
+
+def _whole_number(name, value, low, high, expected):
+    """`value` as an int when it is a whole number in [low, high]; else ValueError naming
+    `name`, the value given and what was `expected` (also for None, text and the like, which
+    int() would refuse with a message naming neither)."""
+    try:
+        whole = int(value) == value and low <= value <= high
+    except (TypeError, ValueError):
+        whole = False
+    if not whole:
+        raise ValueError(f"{name}: {value!r}; expected {expected}")
+    return int(value)
 
 
 def _check(status, handle=None):
@@ -101,13 +114,18 @@ def command_path():
     return found
 
 
+BENCH_KINDS = ("birds", "chains", "crowd", "flock", "view")
+"""What `kodawari bench` times (docs/performance.md)."""
+
+
 def bench(kind, *, command=None, **options):
     """Runs `kodawari bench KIND ... --json` and returns what it writes, as a dict
     (docs/performance.md: "benchmark", the settings, and "results", one dict per backend
     with per_second, min, max, ms_per_frame, gpu_ms_per_frame, vs_cpu_reference, vs_cpu,
     isa, threads).
 
-    kind: "birds", "chains", "crowd" or "view". options: the command's options with _ for
+    kind: one of BENCH_KINDS ("birds", "chains", "crowd", "flock", "view"; ValueError for
+    another). options: the command's options with _ for
     - (count=1000, frames=30, backends=["cpu", "vulkan"], repetitions=3, readback=True,
     threads=2, isa="avx2", device=..., validation=True; `kodawari bench KIND --help` lists
     them); True gives a flag, a list is joined with commas, None and False are left out.
@@ -118,6 +136,8 @@ def bench(kind, *, command=None, **options):
     Raises Error with the command's message when it refuses an option or fails, and when
     the command's version is not this package's.
     """
+    if kind not in BENCH_KINDS:
+        raise ValueError(f"kind: {kind!r}; expected one of {', '.join(BENCH_KINDS)}")
     command = command or command_path()
     arguments = [command, "bench", str(kind)]
     for name, value in options.items():
@@ -177,8 +197,9 @@ class Simulation:
         """
         if backend not in _native.BACKENDS:
             raise ValueError(f"backend: {backend!r}; expected one of {', '.join(BACKENDS)}")
-        if frames is not None and (int(frames) != frames or frames < 1 or frames > 0xFFFFFFFF):
-            raise ValueError(f"frames: {frames!r}; expected a whole number >= 1, or None for the scene's")
+        if frames is not None:
+            _whole_number("frames", frames, 1, 0xFFFFFFFF, "a whole number >= 1, or None for the scene's")
+        threads = _whole_number("threads", threads, 0, 1024, "a whole number from 0 (one per hardware thread) to 1024")
         options = _native.BackendOptions()
         options.backend = _native.BACKENDS[backend]
         options.device = device.encode() if device else None
@@ -228,8 +249,7 @@ class Simulation:
     def step(self, frames=1):
         """Simulates the next `frames` frames (the first call simulates frame 0). Raises
         Error (naming `frames`) past the last frame; nothing changes then."""
-        if int(frames) != frames or frames < 1 or frames > 0xFFFFFFFF:
-            raise ValueError(f"frames: {frames!r}; expected a whole number >= 1")
+        frames = _whole_number("frames", frames, 1, 0xFFFFFFFF, "a whole number >= 1")
         with self._lock:
             handle = self._live()
             _check(_native.lib.kodawari_simulation_step(handle, int(frames)), handle)
@@ -245,8 +265,7 @@ class Simulation:
         if velocity is not None:
             if len(velocity) != 3:
                 raise ValueError(f"velocity: {velocity!r}; expected 3 numbers (m/s)")
-            if int(seed) != seed or not 0 <= seed <= 0xFFFFFFFF:
-                raise ValueError(f"seed: {seed!r}; expected a whole number in [0, 4294967295]")
+            seed = _whole_number("seed", seed, 0, 0xFFFFFFFF, "a whole number in [0, 4294967295]")
             wind = _native.Wind((ctypes.c_float * 3)(*[float(v) for v in velocity]), float(gust), float(gust_period),
                                 float(gust_size), int(seed))
         with self._lock:

@@ -414,6 +414,32 @@ try:
 except kodawari.Error as error:
     check("this package is" in str(error), f"bench with python as the command: {error}")
 
+try:
+    kodawari.bench("fish")
+    check(False, "bench('fish') raised nothing")
+except ValueError as error:
+    check("kind: 'fish'" in str(error) and "flock" in str(error), f"bench('fish'): {error}")
+# BENCH_KINDS is the command's list of benchmarks.
+help_text = subprocess.run([cli, "bench", "--help"], capture_output=True, text=True).stdout
+listed = help_text.split("Subcommands:", 1)[-1].strip().split("\n\n", 1)[0]
+check(tuple(line.split()[0] for line in listed.splitlines() if line.strip()) == kodawari.BENCH_KINDS,
+      f"BENCH_KINDS {kodawari.BENCH_KINDS} against `kodawari bench --help`: {listed!r}")
+# Whole-number arguments: a ValueError naming the argument and the value given, for a
+# negative count of threads, None and text as for a number out of range.
+for call, needle in ((lambda: kodawari.Simulation.open(FLOCK, "cpu", threads=-1), "threads: -1"),
+                     (lambda: kodawari.Simulation.open(FLOCK, "cpu", frames="ten"), "frames: 'ten'")):
+    try:
+        call()
+        check(False, f"{needle}: raised nothing")
+    except ValueError as error:
+        check(needle in str(error), f"{needle}: {error}")
+with kodawari.Simulation.open(FLOCK, "cpu", frames=2) as sim:
+    try:
+        sim.step(None)
+        check(False, "step(None) raised nothing")
+    except ValueError as error:
+        check("frames: None" in str(error), f"step(None): {error}")
+
 # ---- help() is readable: the docstrings are there.
 text = pydoc.render_doc(kodawari.Simulation, renderer=pydoc.plaintext)
 for needle in ("bird_poses", "a copy", "chain_joints", "bake", "Simulation.open", "Error naming the file"):
