@@ -31,6 +31,10 @@ std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool ha
 
 void require_glb_name(const std::optional<std::string>& out) {
     if (!out) return;
+    // A device or a named pipe (/dev/null, /dev/full, a FIFO) has no name to go by.
+    std::error_code ec;
+    const auto status = std::filesystem::status(*out, ec);
+    if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) return;
     std::string extension = std::filesystem::path(*out).extension().string();
     for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
     if (extension != ".glb") {

@@ -21,7 +21,8 @@ namespace kodawari::cli {
                                                                const GlbCompaction& compaction);
 
 /// A UsageError naming --out when `out` is given and not named .glb (any case): what the
-/// glTF sinks write is a binary glTF file, and a reader goes by the name.
+/// glTF sinks write is a binary glTF file, and a reader goes by the name. A device or a
+/// pipe (an existing file that is not a regular one) passes.
 void require_glb_name(const std::optional<std::string>& out);
 
 /// The files glb_sinks(out, has_birds, has_chains, ...) writes.

@@ -152,7 +152,14 @@ Result<SpillFile> SpillFile::open(const std::string& beside) {
     spill.serves_ = beside;
     const int fd = ::mkstemp(name.data());
     spill.path_ = name;
-    if (fd < 0) return make_error(Error::Kind::Io, spill.spill_error("cannot create", std::strerror(errno)));
+    if (fd < 0) {
+        // The output's folder is what the reader can act on; the temporary file's random
+        // name is not (and was never made).
+        const std::string folder = std::filesystem::path(name).parent_path().string();
+        return make_error(Error::Kind::Io, (beside.empty() ? std::string("the keys") : beside) + ": cannot create a file in " +
+                                               (folder.empty() ? std::string("the working folder") : folder) + " (" +
+                                               std::strerror(errno) + ")");
+    }
     spill.file_ = ::fdopen(fd, "w+b");
     if (spill.file_ == nullptr) {
         const int saved = errno;
