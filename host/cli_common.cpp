@@ -9,6 +9,7 @@
 
 #include <cmath>
 #include <cstdio>
+#include <filesystem>
 #include <exception>
 #include <unistd.h>
 
@@ -55,6 +56,17 @@ CLI::Option* add_switch(CLI::App& app, const std::string& names, bool& into, con
 
 CLI::Option* add_size(CLI::App& app, std::optional<std::string>& into, const std::string& what) {
     return add_text(app, "--size", into, "WxH", what + ", W and H in [1, 8192] pixels (default: 1280x720)");
+}
+
+std::string scene_or_default(const std::optional<std::string>& scene) {
+    if (scene) return *scene;
+    std::error_code ec;
+    if (!std::filesystem::exists(kDefaultScene, ec)) {
+        throw UsageError{std::string("no scene given, and the default ") + kDefaultScene +
+                         " is not in this folder (the shipped scenes are in the source tree's scenes/): give a scene "
+                         "file as the first argument"};
+    }
+    return kDefaultScene;
 }
 
 CLI::Option* add_scene(CLI::App& app, std::optional<std::string>& into, const std::string& default_scene) {

@@ -28,6 +28,11 @@ inline constexpr int kExitBadInput = 2;
 /// The scene `make run` and a bare `kodawari run` use.
 inline constexpr const char* kDefaultScene = "scenes/flock.json";
 
+/// The scene a command was given, else kDefaultScene; a UsageError saying that no scene
+/// was given when the default is not there either (a command run outside the source
+/// tree, from an installed package), rather than that scenes/flock.json cannot be opened.
+[[nodiscard]] std::string scene_or_default(const std::optional<std::string>& scene);
+
 /// Thrown for usage errors that CLI11 cannot check (options that exclude each other, a value
 /// checked against the scene); main() prints it with a pointer to --help and exits 2.
 struct UsageError {

@@ -224,7 +224,7 @@ int cmd_render(const RenderOptions& o) {
         }
     }
     const auto camera = parse_camera(o.camera);
-    auto loaded = load_scene(o.scene.value_or(kDefaultScene));
+    auto loaded = load_scene(scene_or_default(o.scene));
     if (!loaded) return report(loaded.error());
     apply_lod(o.lod, loaded.value());
     if (o.show_lod) {

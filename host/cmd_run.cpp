@@ -221,7 +221,7 @@ int cmd_run(const RunOptions& o) {
     GlbCompaction compaction = read_compaction(o.compact, o.meshopt);
     compaction.threads = choice.options.threads;  // --threads bounds the encoder too
     const bool mpi = o.mpi;
-    const std::string scene_path = o.scene.value_or(kDefaultScene);
+    const std::string scene_path = scene_or_default(o.scene);
     if (mpi && shard_option) throw UsageError{"--mpi and --shard exclude each other (--mpi runs one shard per rank)"};
     if (no_export && out_option) throw UsageError{"--out and --no-export exclude each other"};
     if (no_export && compaction.enabled) throw UsageError{"--compact and --no-export exclude each other"};

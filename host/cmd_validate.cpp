@@ -183,7 +183,7 @@ int cmd_validate(const ValidateOptions& o) {
     if (!choice.backend) choice.backend = BackendKind::Vulkan;
     if (choice.backend == BackendKind::CpuReference) throw UsageError{"validate compares a backend against cpu-reference; choose vulkan or cpu"};
     const auto& frames_option = o.frames;
-    auto loaded = load_scene(o.scene.value_or(kDefaultScene));
+    auto loaded = load_scene(scene_or_default(o.scene));
     if (!loaded) return report(loaded.error());
     if (auto stop = check_scene_routes(loaded.value(), o.strict, o.fit_routes)) return *stop;
     const Scene& scene = loaded.value();

@@ -110,7 +110,7 @@ int cmd_view(const ViewOptions& o) {
         }
     }
     // The scene first: a bad scene is reported without opening a window.
-    auto loaded = load_scene(o.scene.value_or(kDefaultScene));
+    auto loaded = load_scene(scene_or_default(o.scene));
     if (!loaded) return report(loaded.error());
     apply_lod(o.lod, loaded.value());
     if (o.show_lod && loaded.value().characters.empty()) {

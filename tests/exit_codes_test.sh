@@ -108,6 +108,10 @@ check "run: the default output over the model: the message says so" grep -qF "th
 check "the refused runs left the models as they were" bash -c \
   "test \"\$(md5sum <'$work/chibi.glb')\" = '$model_sum' && test \"\$(md5sum <'$work/cwd/out/chibi.glb')\" = '$model_sum'"
 check "the refused merge left its part" cmp -s "$work/ok.kwpart" "$work/part-named.glb"
+# No scene given, outside the source tree: the default is not there.
+(cd "$work/cwd" && "$bin" run --backend cpu --frames 2 >/dev/null 2>"$work/noscene.err")
+check "run: no scene and no default here exits 2" test $? -eq 2
+check "run: no scene and no default here: the message says no scene was given" grep -qF "no scene given" "$work/noscene.err"
 row view "missing scene file" 2 "nosuch.json" -- view "$work/nosuch.json"
 row info "an instruction set that is no name" 2 "" -- info --isa pentium
 row info "a device asked for that is not there" 2 "" -- info --device no-such-device
