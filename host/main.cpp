@@ -1,6 +1,7 @@
 // kodawari: the command line of the crowd simulator. Every subcommand defines its options
 // with CLI11 (host/cmd_*.cpp), so `--help`, the usage errors and the bash completion come
 // from the same definitions.
+#include <algorithm>
 #include <cstdio>
 #include <exception>
 #include <filesystem>
@@ -45,6 +46,64 @@ std::string command_path(const CLI::App& app) {
         at = named.front();
         path += " " + at->get_name();
     }
+}
+
+// The parsed command deepest in the tree (`bench flock`), else the top.
+const CLI::App* deepest_command(const CLI::App& app) {
+    const CLI::App* at = &app;
+    for (auto named = at->get_subcommands(); !named.empty(); named = at->get_subcommands()) at = named.front();
+    return at;
+}
+
+// Edits (insertions, deletions, substitutions) between two words.
+std::size_t edit_distance(const std::string& a, const std::string& b) {
+    std::vector<std::size_t> row(b.size() + 1);
+    for (std::size_t j = 0; j <= b.size(); ++j) row[j] = j;
+    for (std::size_t i = 1; i <= a.size(); ++i) {
+        std::size_t diagonal = row[0];
+        row[0] = i;
+        for (std::size_t j = 1; j <= b.size(); ++j) {
+            const std::size_t next = std::min({row[j] + 1, row[j - 1] + 1, diagonal + (a[i - 1] == b[j - 1] ? 0u : 1u)});
+            diagonal = row[j];
+            row[j] = next;
+        }
+    }
+    return row[b.size()];
+}
+
+// What CLI11 says of arguments no option took ("The following arguments were not
+// expected: 10 --frame", in reverse as the words are parsed reversed), said per argument
+// in the order given, with the nearest option of the command for one that looks like a
+// misspelt option (within two edits).
+void explain_extras(const CLI::App& app, const std::vector<std::string>& words) {
+    const CLI::App* command = deepest_command(app);
+    const std::string path = command_path(app);
+    std::vector<std::string> names;
+    for (const CLI::Option* option : command->get_options()) {
+        for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
+    }
+    std::vector<std::string> unknown;
+    for (const std::string& word : words) {
+        if (!word.starts_with("--")) continue;
+        const std::string name = word.substr(0, word.find('='));
+        if (std::find(names.begin(), names.end(), name) == names.end()) unknown.push_back(name);
+    }
+    if (unknown.empty()) {
+        std::string list;
+        for (const std::string& extra : command->remaining()) list += (list.empty() ? "" : " ") + extra;
+        std::fprintf(stderr, "%s: arguments it does not take: %s\n", path.c_str(), list.c_str());
+    }
+    for (const std::string& name : unknown) {
+        std::string nearest;
+        std::size_t best = 3;
+        for (const std::string& candidate : names) {
+            const std::size_t d = edit_distance(name, candidate);
+            if (d < best) best = d, nearest = candidate;
+        }
+        std::fprintf(stderr, "%s: no option %s%s\n", path.c_str(), name.c_str(),
+                     nearest.empty() ? "" : (" (did you mean " + nearest + "?)").c_str());
+    }
+    std::fprintf(stderr, "(`%s --help` lists the options)\n", path.c_str());
 }
 
 // The old reader refused `--name=` with nothing after "="; CLI11 would take the next
@@ -102,6 +161,9 @@ int main(int argc, char** argv) {
         return app.exit(e);
     } catch (const CLI::CallForVersion& e) {
         return app.exit(e);
+    } catch (const CLI::ExtrasError&) {
+        explain_extras(app, words);
+        return kExitBadInput;
     } catch (const CLI::ParseError& e) {
         std::fprintf(stderr, "kodawari: %s\n(`%s --help` lists the options)\n", e.what(), command_path(app).c_str());
         return kExitBadInput;

@@ -47,6 +47,9 @@ row run "a device asked for that is not there" 2 'no usable Vulkan device matche
   run scenes/ahoge.json --frames 2 --no-export --device no-such-device
 row run "output folder cannot be made" 1 "a-file/sub" -- run scenes/ahoge.json --frames 2 --backend cpu --out "$unwritable/x.glb"
 row run "unknown option" 2 "--frobnicate" -- run scenes/ahoge.json --frobnicate
+row run "a misspelt option" 2 "run: no option --frame \(did you mean --frames\?\)" -- run scenes/ahoge.json --frame 10
+row run "words it does not take, in their order" 2 "run: arguments it does not take: extra words" -- run scenes/ahoge.json --frames 3 extra words
+row bench "a misspelt option of a benchmark" 2 "bench flock: no option --cunt \(did you mean --count\?\)" -- bench flock --cunt 5
 row merge "missing part file" 2 "nosuch.kwpart" -- merge "$work/nosuch.kwpart" --out "$work/m.glb"
 row merge "not a part file" 2 "bad.kwpart" -- merge "$work/bad.kwpart" --out "$work/m.glb"
 row merge "output folder cannot be made" 1 "a-file/sub" -- merge "$work/ok.kwpart" --out "$unwritable/m.glb"

@@ -200,6 +200,7 @@ def bake_steps(job, armature, frames, backend, vrm="", frames_per_chunk=10, bone
         files = sim.bake(baked)
     yield 0.4, "importing the baked chains"
     before = {o.as_pointer() for o in bpy.data.objects}
+    before_import = jobs.snapshot()
     import_gltf(files[0])
     imported = [o for o in bpy.data.objects if o.as_pointer() not in before]
     source = next((o for o in imported if o.type == 'ARMATURE'), None)
@@ -258,6 +259,10 @@ def bake_steps(job, armature, frames, backend, vrm="", frames_per_chunk=10, bone
     track = data.nla_tracks.new()
     track.name = "Kodawari chains"
     track.strips.new(baked_action.name, 0, baked_action)
+    # What the import made and nothing uses now (the baked file's armature, mesh, action
+    # and materials; the baked action is the strip's): left, they would pile up in the
+    # file at every bake.
+    jobs.remove_unused_new(before_import)
     return baked_action, track, chains
 
 

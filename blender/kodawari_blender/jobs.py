@@ -45,6 +45,16 @@ def remove_new(before):
             data.remove(block)
 
 
+def remove_unused_new(before):
+    """Removes the data-blocks made since `before` that nothing uses any more (what an
+    import leaves once its objects are removed: their meshes, armatures, actions and
+    materials), in KINDS' order, users first, so that each removal frees the next."""
+    for name in KINDS:
+        data = getattr(bpy.data, name)
+        for block in [b for b in data if b.as_pointer() not in before[name] and b.users == 0]:
+            data.remove(block)
+
+
 class Job:
     """One operation in chunks. `operation(job)` makes the generator; it may put files in
     job.folder (removed at the end) and register undo functions with job.on_cancel()."""

@@ -408,8 +408,18 @@ for bone in chibi.data.edit_bones:
     if bone.name.split("_")[0] in ("ahoge", "bang", "hair", "tail"):
         bone.roll += math.pi / 2
 bpy.ops.object.mode_set(mode="OBJECT")
+before_bake = counts()
+unused_before = {name: sum(1 for b in getattr(bpy.data, name) if b.users == 0)
+                 for name in ("armatures", "meshes", "actions", "materials")}
 result = bpy.ops.kodawari.bake_chains(frames=48)
 check(result == {"FINISHED"}, f"bake_chains returned {result}")
+# One action more (the baked one, in its strip), and nothing the import of the baked file
+# made left behind unused (its armature, mesh, action and materials).
+after_bake = counts()
+check(after_bake == dict(before_bake, actions=before_bake["actions"] + 1),
+      f"bake_chains left data-blocks besides its action: {before_bake} -> {after_bake}")
+unused_after = {name: sum(1 for b in getattr(bpy.data, name) if b.users == 0) for name in unused_before}
+check(unused_after == unused_before, f"bake_chains left unused data-blocks: {unused_before} -> {unused_after}")
 data = chibi.animation_data
 check(data.action == own, "the armature's active action changed")
 check([(f.data_path, f.array_index, [tuple(k.co) for k in f.keyframe_points]) for f in own.fcurves] == own_keys,
