@@ -14,7 +14,10 @@ namespace kodawari::cli {
 namespace {
 
 std::string characters_path(const std::string& out, bool has_birds) {
-    return has_birds ? out.substr(0, out.size() - (out.ends_with(".glb") ? 4 : 0)) + "-characters.glb" : out;
+    if (!has_birds) return out;
+    std::string extension = std::filesystem::path(out).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    return out.substr(0, out.size() - (extension == ".glb" ? 4 : 0)) + "-characters.glb";
 }
 
 }  // namespace
@@ -52,13 +55,16 @@ std::vector<std::string> glb_paths(const std::string& out, bool has_birds, bool 
 Result<void> refuse_overwriting_inputs(const Scene& scene, const std::vector<std::string>& outputs, const std::string& what,
                                        const std::string& extension) {
     for (const std::string& out : outputs) {
-        if (!scene.reads(out)) continue;
-        const bool is_scene = same_file(out, scene.path);
-        const std::filesystem::path p(out);
+        const std::string input = scene.reads(out);
+        if (input.empty()) continue;
+        // The characters' file beside the birds' is named after --out: a new --out is the cure.
+        const bool beside = out != outputs.front();
+        const std::filesystem::path p(outputs.front());
         const std::string option = extension == ".jsonl" ? "--trace" : "--out";
         const std::string other = (p.parent_path() / (p.stem().string() + "-bake" + extension)).string();
         return make_error(Error::Kind::InvalidInput,
-                          out + ": " + what + " is " + (is_scene ? "the scene file itself" : "a file the scene " + scene.path + " reads") +
+                          out + ": " + (beside ? "the characters' file beside " + what + " " + outputs.front() : what) + " is " +
+                              (input == "the scene file" ? input + " itself" : input + " of the scene " + scene.path) +
                               "; the bake would replace it. Give " + option + " another path (for example " + option + " " + other + ")");
     }
     return {};

@@ -53,7 +53,8 @@ std::string relative_to_scene(const std::string& path, const std::string& scene)
 // Writes the scene `json` made from `source` to `out_path` (a temporary file renamed),
 // after the scene loader has accepted it: a scene it rejects is our bug, not the user's.
 // kExitOk, or the exit code of what went wrong (reported).
-int write_checked_scene(const std::string& json, const std::string& source, const std::string& out_path, std::string& run_command) {
+int write_checked_scene(const std::string& json, const std::string& source, const std::string& out_path, bool out_given,
+                        std::string& run_command) {
     auto check = parse_scene(json, out_path);
     if (!check) {
         std::fprintf(stderr, "kodawari: internal error: the scene written for %s does not load: %s\n", source.c_str(),
@@ -61,10 +62,11 @@ int write_checked_scene(const std::string& json, const std::string& source, cons
         return kExitFailure;
     }
     const Scene& scene = check.value();
-    for (const std::string& input : scene.inputs) {
-        if (!same_file(out_path, input)) continue;
-        return report(make_error(Error::Kind::InvalidInput, out_path + ": --out is " + input +
-                                                                ", the file being rigged; give --out a .json path of its own"));
+    // (The scene's own path is out_path: only its inputs can clash.)
+    for (const SceneInput& input : scene.inputs) {
+        if (!same_file(out_path, input.path)) continue;
+        return report(make_error(Error::Kind::InvalidInput, out_path + ": " + (out_given ? "--out" : "the default output") + " is " +
+                                                                input.what + ", which the scene reads; give --out a .json path of its own"));
     }
     // The command that bakes it: `run`'s default output unless that is the model itself
     // (a model in out/ named as its scene), which run refuses to write over.
@@ -115,7 +117,7 @@ int cmd_rig_bird(const RigArguments& o) {
         }
     }
     std::string run_command;
-    if (const int written = write_checked_scene(json, file, out_path, run_command); written != kExitOk) return written;
+    if (const int written = write_checked_scene(json, file, out_path, o.out.has_value(), run_command); written != kExitOk) return written;
 
     std::printf("%s: a bird, bones mapped by %s\n", file.c_str(), m.mapped_by.c_str());
     for (std::size_t part = 0; part < birds::kPartCount; ++part) {
@@ -172,7 +174,9 @@ int cmd_rig(const RigArguments& o) {
     for (const std::string& w : r.warnings) std::fprintf(stderr, "warning: %s\n", w.c_str());
 
     std::string run_command;
-    if (const int written = write_checked_scene(r.json, character, out_path, run_command); written != kExitOk) return written;
+    if (const int written = write_checked_scene(r.json, character, out_path, o.out.has_value(), run_command); written != kExitOk) {
+        return written;
+    }
 
     std::printf("%s: %zu chain%s from %s, %u collider%s, size %.3g m, reference joint \"%s\", %s\n", character.c_str(),
                 r.chains.size(), r.chains.size() == 1 ? "" : "s", r.source.c_str(), r.colliders, r.colliders == 1 ? "" : "s",

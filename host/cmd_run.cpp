@@ -266,6 +266,10 @@ int cmd_run(const RunOptions& o) {
     }
     if (trace_path) {
         if (auto refused = refuse_overwriting_inputs(scene, {*trace_path}, "--trace", ".jsonl"); !refused) return report(refused.error());
+        // Two outputs in one file: whichever finished last would be left.
+        for (const std::string& file : no_export ? std::vector<std::string>{} : glb_paths(glb, has_birds, has_chains)) {
+            if (same_file(*trace_path, file)) throw UsageError{"--trace " + *trace_path + " is also " + (file == glb ? "--out" : "the characters' file beside --out") + "; give it a path of its own"};
+        }
     }
     // The outputs' folders, made before the simulation runs (as render makes its --out).
     for (const auto& [path, option] : {std::pair{out_option, "--out"}, std::pair{trace_path, "--trace"}}) {

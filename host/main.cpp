@@ -74,34 +74,43 @@ std::size_t edit_distance(const std::string& a, const std::string& b) {
 // What CLI11 says of arguments no option took ("The following arguments were not
 // expected: 10 --frame", in reverse as the words are parsed reversed), said per argument
 // in the order given, with the nearest option of the command for one that looks like a
-// misspelt option (within two edits).
+// misspelt option (one edit for names of up to 4 letters, two beyond: `--gpu` is not
+// `--mpi`). Words after `--` are positionals, never options.
 void explain_extras(const CLI::App& app, const std::vector<std::string>& words) {
     const CLI::App* command = deepest_command(app);
     const std::string path = command_path(app);
     std::vector<std::string> names;
-    for (const CLI::Option* option : command->get_options()) {
-        for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
+    for (const CLI::App* at : {&app, command}) {
+        for (const CLI::Option* option : at->get_options()) {
+            for (const std::string& name : option->get_lnames()) names.push_back("--" + name);
+        }
     }
     std::vector<std::string> unknown;
     for (const std::string& word : words) {
+        if (word == "--") break;
         if (!word.starts_with("--")) continue;
         const std::string name = word.substr(0, word.find('='));
-        if (std::find(names.begin(), names.end(), name) == names.end()) unknown.push_back(name);
-    }
-    if (unknown.empty()) {
-        std::string list;
-        for (const std::string& extra : command->remaining()) list += (list.empty() ? "" : " ") + extra;
-        std::fprintf(stderr, "%s: arguments it does not take: %s\n", path.c_str(), list.c_str());
+        if (name.size() > 2 && std::find(names.begin(), names.end(), name) == names.end()) unknown.push_back(name);
     }
     for (const std::string& name : unknown) {
+        const std::size_t letters = name.size() - 2;
         std::string nearest;
-        std::size_t best = 3;
+        std::size_t best = (letters <= 4 ? 1 : 2) + 1;
         for (const std::string& candidate : names) {
             const std::size_t d = edit_distance(name, candidate);
             if (d < best) best = d, nearest = candidate;
         }
         std::fprintf(stderr, "%s: no option %s%s\n", path.c_str(), name.c_str(),
                      nearest.empty() ? "" : (" (did you mean " + nearest + "?)").c_str());
+    }
+    if (unknown.empty()) {
+        // Every command's leftovers (the top level's too: words before the command).
+        std::string list;
+        for (const std::string& extra : app.remaining(true)) {
+            const bool plain = !extra.empty() && extra.find_first_of(" \t") == std::string::npos;
+            list += (list.empty() ? "" : " ") + (plain ? extra : "\"" + extra + "\"");
+        }
+        std::fprintf(stderr, "%s: arguments it does not take: %s\n", path.c_str(), list.c_str());
     }
     std::fprintf(stderr, "(`%s --help` lists the options)\n", path.c_str());
 }

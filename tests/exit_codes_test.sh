@@ -91,14 +91,16 @@ row render "--contact-sheet folder cannot be made" 1 "a-file/sub" -- \
 cp scenes/characters/chibi.glb "$work/chibi.glb"
 "$bin" rig "$work/chibi.glb" --out "$work/chibi.json" >/dev/null 2>&1
 model_sum=$(md5sum <"$work/chibi.glb")
-row run "--out the character model its scene reads" 2 "chibi.glb: --out is a file the scene .*chibi.json reads" -- \
+row run "--out the character model its scene reads" 2 "chibi.glb: --out is the model of character .chibi. of the scene .*chibi.json" -- \
   run "$work/chibi.json" --frames 2 --backend cpu --out "$work/chibi.glb"
 row run "--out the scene file itself" 2 "--out is the scene file itself" -- run "$work/chibi.json" --frames 2 --backend cpu --shard 0/1 --out "$work/chibi.json"
 row run "--out not named .glb" 2 "a.gltf: the bake is a binary glTF file: name it .glb" -- run scenes/ahoge.json --frames 2 --backend cpu --out "$work/a.gltf"
 row merge "--out not named .glb" 2 "m.gltf: the bake is a binary glTF file" -- merge "$work/ok.kwpart" --out "$work/m.gltf"
-row run "--trace the model its scene reads" 2 "--trace is a file the scene.*--trace .*chibi-bake.jsonl" -- \
+row run "--trace the model its scene reads" 2 "--trace is the model of character .chibi. of the scene.*--trace .*chibi-bake.jsonl" -- \
   run "$work/chibi.json" --frames 2 --backend cpu --no-export --trace "$work/chibi.glb"
-row rig "--out the model being rigged" 2 "the file being rigged" -- rig "$work/chibi.glb" --out "$work/chibi.glb"
+row rig "--out the model being rigged" 2 "--out is the model of character .chibi., which the scene reads" -- rig "$work/chibi.glb" --out "$work/chibi.glb"
+row run "--trace the same file as --out" 2 "--trace .*both.glb is also --out" -- \
+  run scenes/ahoge.json --frames 2 --backend cpu --out "$work/both.glb" --trace "$work/both.glb"
 cp "$work/ok.kwpart" "$work/part-named.glb"
 row merge "--out a part being merged" 2 "a part being merged" -- merge "$work/part-named.glb" --out "$work/part-named.glb"
 mkdir -p "$work/cwd/out" && cp scenes/characters/chibi.glb "$work/cwd/out/chibi.glb"
@@ -107,7 +109,7 @@ check "rig: the run it suggests names an --out of its own when the default is th
   grep -qF "(kodawari run out/chibi.json --out out/chibi-bake.glb)" <<<"$rigged"
 (cd "$work/cwd" && "$bin" run out/chibi.json --frames 2 --backend cpu >/dev/null 2>"$work/default.err")
 check "run: the default output over the model exits 2" test $? -eq 2
-check "run: the default output over the model: the message says so" grep -qF "the default output is a file the scene" "$work/default.err"
+check "run: the default output over the model: the message says so" grep -qF "the default output is the model of character" "$work/default.err"
 check "the refused runs left the models as they were" bash -c \
   "test \"\$(md5sum <'$work/chibi.glb')\" = '$model_sum' && test \"\$(md5sum <'$work/cwd/out/chibi.glb')\" = '$model_sum'"
 check "the refused merge left its part" cmp -s "$work/ok.kwpart" "$work/part-named.glb"
@@ -122,7 +124,7 @@ row schema "an argument it does not take" 2 "" -- schema extra
 row completion "a shell it does not know" 2 "" -- completion fish
 row kodawari "unknown command" 2 "lists the commands" -- frobnicate
 
-check "nothing written by the failing rows" bash -c "! ls '$work' | grep -qE '^(x\.glb|m\.glb|m\.gltf|a\.gltf|r\.json|s\.json|frames|a\.gif)$'"
+check "nothing written by the failing rows" bash -c "! ls '$work' | grep -qE '^(x\.glb|m\.glb|m\.gltf|a\.gltf|both\.glb|r\.json|s\.json|frames|a\.gif)$'"
 check "the folder that cannot be written is untouched" test -f "$work/a-file"
 # Writing to a closed stdout is a runtime failure, not bad input.
 "$bin" schema >&- 2>/dev/null

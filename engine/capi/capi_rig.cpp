@@ -35,6 +35,12 @@ KODAWARI_C_API kodawari_status kodawari_rig_scene(const char* character_path, co
         auto parsed = parse_scene(r.json, scene_path);
         if (!parsed.ok()) reject(KODAWARI_INTERNAL, "the scene written for " + std::string(character_path) +
                                                        " does not load: " + parsed.error().message);
+        // Never over a file the scene reads (the character being rigged, its motions).
+        // (The scene's own path is scene_path: only its inputs can clash.)
+        for (const SceneInput& input : parsed.value().inputs) {
+            if (!same_file(scene_path, input.path)) continue;
+            invalid("scene_path", "\"" + std::string(scene_path) + "\" is " + input.what + ", which the scene reads; expected a .json path of its own");
+        }
         auto out = AtomicFile::open(scene_path);
         if (!out.ok()) reject(KODAWARI_INVALID_ARGUMENT, out.error().message);
         out.value().write(r.json);

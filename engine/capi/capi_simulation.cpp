@@ -70,7 +70,8 @@ void require_poses(const kodawari_simulation& sim) {
 std::vector<std::string> glb_paths(const std::string& path, bool has_birds, bool has_chains) {
     std::vector<std::string> paths;
     if (has_birds) paths.push_back(path);
-    if (has_chains) paths.push_back(has_birds ? path.substr(0, path.size() - (path.ends_with(".glb") ? 4 : 0)) + "-characters.glb" : path);
+    const bool glb = path.size() >= 4 && (path.ends_with(".glb") || path.ends_with(".GLB"));
+    if (has_chains) paths.push_back(has_birds ? path.substr(0, path.size() - (glb ? 4 : 0)) + "-characters.glb" : path);
     return paths;
 }
 
@@ -386,9 +387,10 @@ KODAWARI_C_API kodawari_status kodawari_simulation_bake(kodawari_simulation* sim
         const bool has_birds = !bird_world(baked).birds.empty(), has_chains = rod_scene(baked) != nullptr;
         // Never over the scene or a file it reads (a model named as its scene, in one folder).
         for (const std::string& out : glb_paths(path, has_birds, has_chains)) {
-            if (!baked.scene().reads(out)) continue;
-            invalid("path", "\"" + out + "\" is the scene file or a file its scene reads (" + baked.scene().path +
-                                "); the bake would replace it: give another path");
+            const std::string input = baked.scene().reads(out);
+            if (input.empty()) continue;
+            invalid("path", "\"" + out + "\" is " + (input == "the scene file" ? input + " itself" : input + " of the scene " + baked.scene().path) +
+                                "; the bake would replace it: give another path");
         }
         auto sinks = glb_sinks(path, has_birds, has_chains, compaction);
         if (sinks.empty()) invalid("sim", "its scene has neither birds nor characters; nothing to bake");

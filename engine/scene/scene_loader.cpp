@@ -592,22 +592,28 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
         const std::filesystem::path given(file);
         return given.is_absolute() ? file : (std::filesystem::path(r.file()).parent_path() / given).string();
     };
-    for (const FlockSpec& flock : scene.flocks) {
-        if (!flock.model_file.empty()) scene.inputs.push_back(resolved(flock.model_file));
-        if (!flock.map_file.empty()) scene.inputs.push_back(resolved(flock.map_file));
+    for (std::size_t f = 0; f < scene.flocks.size(); ++f) {
+        const FlockSpec& flock = scene.flocks[f];
+        if (!flock.model_file.empty()) scene.inputs.push_back({resolved(flock.model_file), "the model of flock " + std::to_string(f)});
+        if (!flock.map_file.empty()) scene.inputs.push_back({resolved(flock.map_file), "the bone map of flock " + std::to_string(f)});
     }
     for (const CharacterSpec& character : scene.characters) {
         if (!character.rig) continue;
-        scene.inputs.push_back(character.rig->resolved);
-        scene.inputs.insert(scene.inputs.end(), character.rig->motion_files.begin(), character.rig->motion_files.end());
+        const std::string named = "character \"" + character.name + "\"";
+        scene.inputs.push_back({character.rig->resolved, "the model of " + named});
+        for (const std::string& file : character.rig->motion_files) scene.inputs.push_back({file, "a motion file of " + named});
     }
     return scene;
 }
 
 }  // namespace
 
-bool Scene::reads(const std::string& file) const {
-    return same_file(file, path) || std::any_of(inputs.begin(), inputs.end(), [&](const std::string& in) { return same_file(file, in); });
+std::string Scene::reads(const std::string& file) const {
+    if (same_file(file, path)) return "the scene file";
+    for (const SceneInput& input : inputs) {
+        if (same_file(file, input.path)) return input.what;
+    }
+    return {};
 }
 
 std::uint32_t Scene::frame_count() const {

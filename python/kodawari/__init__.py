@@ -64,7 +64,7 @@ def _whole_number(name, value, low, high, expected):
     int() would refuse with a message naming neither)."""
     try:
         whole = int(value) == value and low <= value <= high
-    except (TypeError, ValueError):
+    except (TypeError, ValueError, OverflowError):  # None, text; infinity
         whole = False
     if not whole:
         raise ValueError(f"{name}: {value!r}; expected {expected}")

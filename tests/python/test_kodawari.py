@@ -351,7 +351,19 @@ with kodawari.Simulation.open(scene_copy, "cpu", frames=2) as sim:
         sim.bake(scene_copy)
         check(False, "a bake over its own scene file raised nothing")
     except kodawari.Error as error:
-        check("a file its scene reads" in str(error) and "path" in str(error), f"bake over the scene: {error}")
+        check("the scene file itself" in str(error) and "path" in str(error), f"bake over the scene: {error}")
+# kodawari.rig never writes its scene over the file it rigs (nor over its motions).
+model_copy = os.path.join(temp, "chibi-copy.glb")
+with open(os.path.join(source, "scenes", "characters", "chibi.glb"), "rb") as original, open(model_copy, "wb") as copy:
+    model_bytes = original.read()
+    copy.write(model_bytes)
+try:
+    kodawari.rig(model_copy, model_copy, duration=1.0)
+    check(False, "rig over its own model raised nothing")
+except kodawari.Error as error:
+    check("scene_path" in str(error) and "the model of character" in str(error), f"rig over its model: {error}")
+with open(model_copy, "rb") as copy:
+    check(copy.read() == model_bytes, "a refused rig changed the model")
 with open(scene_copy, "rb") as copy:
     check(copy.read() == scene_bytes, "a refused bake changed the scene file")
 try:
@@ -427,7 +439,8 @@ check(tuple(line.split()[0] for line in listed.splitlines() if line.strip()) == 
 # Whole-number arguments: a ValueError naming the argument and the value given, for a
 # negative count of threads, None and text as for a number out of range.
 for call, needle in ((lambda: kodawari.Simulation.open(FLOCK, "cpu", threads=-1), "threads: -1"),
-                     (lambda: kodawari.Simulation.open(FLOCK, "cpu", frames="ten"), "frames: 'ten'")):
+                     (lambda: kodawari.Simulation.open(FLOCK, "cpu", frames="ten"), "frames: 'ten'"),
+                     (lambda: kodawari.Simulation.open(FLOCK, "cpu", threads=float("inf")), "threads: inf")):
     try:
         call()
         check(False, f"{needle}: raised nothing")

@@ -275,11 +275,18 @@ struct CrowdSpec {
 };
 
 /// A whole scene file.
+/// A file a scene read besides itself.
+struct SceneInput {
+    std::string path;  ///< as resolved (relative to the scene file's folder unless absolute)
+    std::string what;  ///< for messages: "the model of character \"chibi\"", "a motion of ...", "the map of flock 0"
+};
+
 struct KODAWARI_API Scene {
     std::string path;  ///< where it was loaded from (for messages)
-    /// Every other file the scene read (characters' and birds' models, motions, maps),
-    /// as resolved: what a bake must not write over (`kodawari run` refuses to).
-    std::vector<std::string> inputs;
+    /// Every other file the scene read (characters' and birds' models, motions, maps):
+    /// what a bake must not write over (`kodawari run` refuses to). A .gltf model's
+    /// external buffers and images are not listed.
+    std::vector<SceneInput> inputs;
     std::string name;
     std::uint32_t version = 1;  ///< 1: birds only; 2: characters, crowds and camera motion too
     float fps = 60.0f;
@@ -302,9 +309,10 @@ struct KODAWARI_API Scene {
 
     /// Number of frames: round(duration * fps), at least 1.
     [[nodiscard]] std::uint32_t frame_count() const;
-    /// Whether `file` is the scene file or one of `inputs` (same_file()): what a bake must
-    /// not write over.
-    [[nodiscard]] bool reads(const std::string& file) const;
+    /// What `file` is to the scene when it is the scene file ("the scene file") or one of
+    /// `inputs` (same_file(); the input's `what`); empty when the scene does not read it.
+    /// What a bake must not write over.
+    [[nodiscard]] std::string reads(const std::string& file) const;
 };
 
 /// Reads and checks a scene file. Errors name the file, the JSON path and what was
