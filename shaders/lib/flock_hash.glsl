@@ -27,15 +27,10 @@ KW_FLOCK_FN uint flock_spread3(uint v) {
     return v;
 }
 
-// A 32-bit mix with mix(0) = 0 (Wellons' lowbias32).
-KW_FLOCK_FN uint flock_mix(uint h) {
-    h ^= h >> 16u;
-    h *= 0x7FEB352Du;
-    h ^= h >> 15u;
-    h *= 0x846CA68Bu;
-    h ^= h >> 16u;
-    return h;
-}
+// A 32-bit mix with mix(0) = 0 (lib/hash.glsl).
+#define KW_HASH_FN KW_FLOCK_FN
+#include "lib/hash.glsl"
+KW_FLOCK_FN uint flock_mix(uint h) { return kw_lowbias32(h); }
 
 KW_FLOCK_FN uint flock_cell_bucket(ivec3 c, uint mask) {
     // Offset by half a block, so a flock round the origin lies in one block.

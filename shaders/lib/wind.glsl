@@ -18,15 +18,10 @@
 #define KW_WIND_FN
 #endif
 
-// A 32-bit integer hash with good avalanche (Wellons' "lowbias32", hash-prospector).
-KW_WIND_FN uint wind_hash(uint x) {
-    x ^= x >> 16u;
-    x *= 0x7feb352du;
-    x ^= x >> 15u;
-    x *= 0x846ca68bu;
-    x ^= x >> 16u;
-    return x;
-}
+// A 32-bit integer hash with good avalanche (lib/hash.glsl).
+#define KW_HASH_FN KW_WIND_FN
+#include "lib/hash.glsl"
+KW_WIND_FN uint wind_hash(uint x) { return kw_lowbias32(x); }
 
 // Three values in [-1, 1) at lattice point c.
 KW_WIND_FN vec3 wind_lattice(ivec3 c, uint seed) {
