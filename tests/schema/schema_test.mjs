@@ -222,7 +222,7 @@ check(Buffer.compare(printed, schemaBytes) === 0,
   `\`kodawari schema\` (${printed.length} bytes) differs from docs/scene.schema.json (${schemaBytes.length} bytes): rebuild, or the embedding is stale`);
 console.log(`kodawari schema: ${printed.length} bytes, the same as docs/scene.schema.json`);
 const extra = spawnSync(kodawari, ['schema', 'scenes/flock.json'], { encoding: 'utf8' });
-check(extra.status === 2 && extra.stderr.includes('not expected: scenes/flock.json'),
+check(extra.status === 2 && extra.stderr.includes('arguments it does not take: scenes/flock.json'),
   `\`kodawari schema SCENE\` should be a usage error (status 2), got status ${extra.status}: ${extra.stderr.split('\n')[0]}`);
 
 if (failures === 0) rmSync(work, { recursive: true, force: true });
