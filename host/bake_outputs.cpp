@@ -11,24 +11,14 @@
 
 namespace kodawari::cli {
 
-namespace {
-
-std::string characters_path(const std::string& out, bool has_birds) {
-    if (!has_birds) return out;
-    std::string extension = std::filesystem::path(out).extension().string();
-    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    return out.substr(0, out.size() - (extension == ".glb" ? 4 : 0)) + "-characters.glb";
-}
-
-}  // namespace
-
 
 std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool has_birds, bool has_chains,
                                                  const GlbCompaction& compaction) {
     // One file per kind of content.
     std::vector<std::unique_ptr<BakeSink>> sinks;
-    if (has_birds) sinks.push_back(make_birds_glb_sink(out, compaction));
-    if (has_chains) sinks.push_back(make_chains_glb_sink(characters_path(out, has_birds), compaction));
+    const std::vector<std::string> paths = glb_bake_paths(out, has_birds, has_chains);
+    if (has_birds) sinks.push_back(make_birds_glb_sink(paths.front(), compaction));
+    if (has_chains) sinks.push_back(make_chains_glb_sink(paths.back(), compaction));
     return sinks;
 }
 
@@ -43,13 +33,6 @@ void require_glb_name(const std::optional<std::string>& out) {
     if (extension != ".glb") {
         throw UsageError{"--out " + *out + ": the bake is a binary glTF file: name it .glb (a .gltf is read as JSON glTF)"};
     }
-}
-
-std::vector<std::string> glb_paths(const std::string& out, bool has_birds, bool has_chains) {
-    std::vector<std::string> paths;
-    if (has_birds) paths.push_back(out);
-    if (has_chains) paths.push_back(characters_path(out, has_birds));
-    return paths;
 }
 
 Result<void> refuse_overwriting_inputs(const Scene& scene, const std::vector<std::string>& outputs, const std::string& what,

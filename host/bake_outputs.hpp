@@ -25,9 +25,6 @@ namespace kodawari::cli {
 /// pipe (an existing file that is not a regular one) passes.
 void require_glb_name(const std::optional<std::string>& out);
 
-/// The files glb_sinks(out, has_birds, has_chains, ...) writes.
-[[nodiscard]] std::vector<std::string> glb_paths(const std::string& out, bool has_birds, bool has_chains);
-
 /// An InvalidInput error when one of `outputs` is the scene file or a file the scene read
 /// (Scene::inputs: its models, motions, maps): a bake written there would replace its
 /// own input, and the next run would read the bake. `what` says where the path came

@@ -45,12 +45,12 @@ int cmd_merge(const MergeArguments& o) {
     }
     const std::string out = out_option ? *out_option : default_output(world.scene->name);
     // Never over the scene, a file it reads or a part being merged.
-    if (auto refused = refuse_overwriting_inputs(*world.scene, glb_paths(out, has_birds, has_chains),
+    if (auto refused = refuse_overwriting_inputs(*world.scene, glb_bake_paths(out, has_birds, has_chains),
                                                  out_option ? "--out" : "the default output", ".glb");
         !refused) {
         return report(refused.error());
     }
-    for (const std::string& file : glb_paths(out, has_birds, has_chains)) {
+    for (const std::string& file : glb_bake_paths(out, has_birds, has_chains)) {
         for (const std::string& part : parts) {
             if (!same_file(file, part)) continue;
             return report(make_error(Error::Kind::InvalidInput, file + ": is " + part +

@@ -139,7 +139,7 @@ int run_distributed(const std::string& scene_path, const BackendChoice& choice, 
         // Never over a file the scene reads (every rank decides alike; rank 0 says it).
         if (!no_export) {
             const std::string glb = out ? *out : "out/" + scene.name + ".glb";
-            KW_TRY(refuse_overwriting_inputs(scene, glb_paths(glb, !scene.flocks.empty(), !scene.characters.empty()),
+            KW_TRY(refuse_overwriting_inputs(scene, glb_bake_paths(glb, !scene.flocks.empty(), !scene.characters.empty()),
                                              out ? "--out" : "the default output", ".glb"));
         }
         if (trace) KW_TRY(refuse_overwriting_inputs(scene, {*trace}, "--trace", ".jsonl"));
@@ -253,13 +253,15 @@ int cmd_run(const RunOptions& o) {
     const bool has_birds = !bird_world(sim).birds.empty();
     const bool has_chains = rod_scene(sim) != nullptr;
     // Never over a file the scene reads (a bird's model named as the scene is, in out/).
+    // (default_output makes out/: not under --no-export, which writes nothing.)
     const std::string glb = out_option ? *out_option
+                            : no_export    ? std::string()
                             : shard_option ? default_output(scene.name, ".shard-" + std::to_string(shard.index) + "-of-" +
                                                                           std::to_string(shard.count) + ".kwpart")
                                            : default_output(scene.name);
     const std::string glb_option = out_option ? "--out" : "the default output";
     if (!no_export) {
-        const auto files = shard_option ? std::vector<std::string>{glb} : glb_paths(glb, has_birds, has_chains);
+        const auto files = shard_option ? std::vector<std::string>{glb} : glb_bake_paths(glb, has_birds, has_chains);
         if (auto refused = refuse_overwriting_inputs(scene, files, glb_option, shard_option ? ".kwpart" : ".glb"); !refused) {
             return report(refused.error());
         }
@@ -267,7 +269,7 @@ int cmd_run(const RunOptions& o) {
     if (trace_path) {
         if (auto refused = refuse_overwriting_inputs(scene, {*trace_path}, "--trace", ".jsonl"); !refused) return report(refused.error());
         // Two outputs in one file: whichever finished last would be left.
-        for (const std::string& file : no_export ? std::vector<std::string>{} : glb_paths(glb, has_birds, has_chains)) {
+        for (const std::string& file : no_export ? std::vector<std::string>{} : glb_bake_paths(glb, has_birds, has_chains)) {
             if (same_file(*trace_path, file)) throw UsageError{"--trace " + *trace_path + " is also " + (file == glb ? "--out" : "the characters' file beside --out") + "; give it a path of its own"};
         }
     }

@@ -35,24 +35,21 @@ std::string reference_page() {
     return "docs/command-line.md in the source tree (installed as <prefix>/share/doc/kodawari/docs/command-line.md).";
 }
 
-// The deepest subcommand the command line named ("kodawari" when none), for the pointer
-// to its --help after a usage error.
-std::string command_path(const CLI::App& app) {
-    std::string path = app.get_name();
-    const CLI::App* at = &app;
-    for (;;) {
-        const auto named = at->get_subcommands();
-        if (named.empty()) return path;
-        at = named.front();
-        path += " " + at->get_name();
-    }
-}
-
 // The parsed command deepest in the tree (`bench flock`), else the top.
 const CLI::App* deepest_command(const CLI::App& app) {
     const CLI::App* at = &app;
     for (auto named = at->get_subcommands(); !named.empty(); named = at->get_subcommands()) at = named.front();
     return at;
+}
+
+// The words naming that command ("kodawari bench flock"; "kodawari" when none), for the
+// pointer to its --help after a usage error.
+std::string command_path(const CLI::App& app) {
+    std::string path;
+    for (const CLI::App* at = deepest_command(app); at != nullptr; at = at->get_parent()) {
+        path = at->get_name() + (path.empty() ? "" : " " + path);
+    }
+    return path;
 }
 
 // Edits (insertions, deletions, substitutions) between two words.

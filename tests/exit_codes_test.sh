@@ -113,6 +113,10 @@ check "run: the default output over the model: the message says so" grep -qF "th
 check "the refused runs left the models as they were" bash -c \
   "test \"\$(md5sum <'$work/chibi.glb')\" = '$model_sum' && test \"\$(md5sum <'$work/cwd/out/chibi.glb')\" = '$model_sum'"
 check "the refused merge left its part" cmp -s "$work/ok.kwpart" "$work/part-named.glb"
+# --no-export writes nothing: not even run's default out/ folder.
+mkdir -p "$work/noexport" && cp scenes/ahoge.json "$work/noexport/"
+(cd "$work/noexport" && "$bin" run ahoge.json --backend cpu --frames 2 --no-export >/dev/null 2>&1)
+check "run --no-export makes no out/ folder" test ! -e "$work/noexport/out"
 # No scene given, outside the source tree: the default is not there.
 (cd "$work/cwd" && "$bin" run --backend cpu --frames 2 >/dev/null 2>"$work/noscene.err")
 check "run: no scene and no default here exits 2" test $? -eq 2

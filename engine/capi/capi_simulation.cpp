@@ -65,19 +65,10 @@ void require_poses(const kodawari_simulation& sim) {
     fail(error);
 }
 
-// `kodawari run`'s files (host/bake_outputs.cpp, glb_sinks): one per kind of content, the
-// characters beside the birds when there are both.
-std::vector<std::string> glb_paths(const std::string& path, bool has_birds, bool has_chains) {
-    std::vector<std::string> paths;
-    if (has_birds) paths.push_back(path);
-    const bool glb = path.size() >= 4 && (path.ends_with(".glb") || path.ends_with(".GLB"));
-    if (has_chains) paths.push_back(has_birds ? path.substr(0, path.size() - (glb ? 4 : 0)) + "-characters.glb" : path);
-    return paths;
-}
-
+// `kodawari run`'s files (glb_bake_paths): one per kind of content.
 std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& path, bool has_birds, bool has_chains,
                                                  const GlbCompaction& compaction) {
-    const std::vector<std::string> paths = glb_paths(path, has_birds, has_chains);
+    const std::vector<std::string> paths = glb_bake_paths(path, has_birds, has_chains);
     std::vector<std::unique_ptr<BakeSink>> sinks;
     if (has_birds) sinks.push_back(make_birds_glb_sink(paths.front(), compaction));
     if (has_chains) sinks.push_back(make_chains_glb_sink(paths.back(), compaction));
@@ -386,7 +377,7 @@ KODAWARI_C_API kodawari_status kodawari_simulation_bake(kodawari_simulation* sim
         compaction.enabled = compact != 0;
         const bool has_birds = !bird_world(baked).birds.empty(), has_chains = rod_scene(baked) != nullptr;
         // Never over the scene or a file it reads (a model named as its scene, in one folder).
-        for (const std::string& out : glb_paths(path, has_birds, has_chains)) {
+        for (const std::string& out : glb_bake_paths(path, has_birds, has_chains)) {
             const std::string input = baked.scene().reads(out);
             if (input.empty()) continue;
             invalid("path", "\"" + out + "\" is " + (input == "the scene file" ? input + " itself" : input + " of the scene " + baked.scene().path) +
