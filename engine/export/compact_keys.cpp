@@ -2,6 +2,7 @@
 #include "export/compact_keys.hpp"
 
 #include <algorithm>
+#include <cctype>
 #include <cmath>
 #include <cassert>
 #include <cerrno>
@@ -14,6 +15,18 @@
 #include "export/key_reduction.hpp"
 
 namespace kodawari {
+
+std::vector<std::string> glb_bake_paths(const std::string& out, bool has_birds, bool has_chains) {
+    std::vector<std::string> paths;
+    if (has_birds) paths.push_back(out);
+    if (has_chains) {
+        const bool glb = out.size() >= 4 && std::equal(out.end() - 4, out.end(), ".glb", [](char a, char b) {
+            return std::tolower(static_cast<unsigned char>(a)) == b;
+        });
+        paths.push_back(has_birds ? out.substr(0, out.size() - (glb ? 4 : 0)) + "-characters.glb" : out);
+    }
+    return paths;
+}
 
 Result<void> check_compaction(const std::string& path, const GlbCompaction& compaction) {
     if (compaction.meshopt && !compaction.enabled) {

@@ -4,7 +4,6 @@
 #include "kodawari/simulation/bake.hpp"
 
 #include <algorithm>
-#include <cctype>
 #include <string>
 
 #include "kodawari/backends/backend.hpp"
@@ -86,18 +85,6 @@ std::span<const std::byte> BakeFrames::channel(std::string_view name) const {
         if (c.name == name) return c.bytes;
     }
     return {};
-}
-
-std::vector<std::string> glb_bake_paths(const std::string& out, bool has_birds, bool has_chains) {
-    std::vector<std::string> paths;
-    if (has_birds) paths.push_back(out);
-    if (has_chains) {
-        const bool glb = out.size() >= 4 && std::equal(out.end() - 4, out.end(), ".glb", [](char a, char b) {
-            return std::tolower(static_cast<unsigned char>(a)) == b;
-        });
-        paths.push_back(has_birds ? out.substr(0, out.size() - (glb ? 4 : 0)) + "-characters.glb" : out);
-    }
-    return paths;
 }
 
 std::uint32_t bake_chunk_frames(std::span<const Domain* const> domains) {

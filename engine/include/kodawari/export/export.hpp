@@ -75,6 +75,11 @@ struct GlbCompactionStats {
     std::uint64_t byte_rotations = 0;
 };
 
+/// The glTF files a bake to `out` writes, as `kodawari run` and the C API's bake name
+/// them: the birds at `out`; the characters at `out` too when there are no birds, else at
+/// `<out without .glb (any case)>-characters.glb`.
+[[nodiscard]] KODAWARI_API std::vector<std::string> glb_bake_paths(const std::string& out, bool has_birds, bool has_chains);
+
 /// InvalidInput naming `path` unless every bound of an enabled compaction is finite and
 /// >= 0.
 [[nodiscard]] KODAWARI_API Result<void> check_compaction(const std::string& path, const GlbCompaction& compaction);

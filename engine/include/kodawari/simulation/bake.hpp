@@ -131,11 +131,6 @@ struct BakeOptions {
 /// birds as many as keep a call at most 2^18 poses), at most kMaxBakeFrames. Every source
 /// of a bake asks the whole scene's domains, so that shards and ranks step in the same
 /// chunks as a single process.
-/// The glTF files a bake to `out` writes, as `kodawari run` and the C API's bake name
-/// them: the birds at `out`; the characters at `out` too when there are no birds, else at
-/// `<out without .glb (any case)>-characters.glb`.
-[[nodiscard]] KODAWARI_API std::vector<std::string> glb_bake_paths(const std::string& out, bool has_birds, bool has_chains);
-
 [[nodiscard]] KODAWARI_API std::uint32_t bake_chunk_frames(std::span<const Domain* const> domains);
 
 /// Where a bake's frames come from: a Simulation (bake(Simulation&, ...)), the part files
