@@ -94,6 +94,15 @@ std::optional<SketchKeyOptions> key_options(const SketchOptions& o) {
     return k;
 }
 
+// Writes the edited text of the scene at `scene_path` to `out_path`, its relative file
+// paths rewritten for `out_path`'s folder (`--out out/B.json` of scenes/A.json still reads
+// scenes/characters/...).
+Result<void> write_edit(const std::string& scene_path, const std::string& out_path, const std::string& text) {
+    auto moved = move_scene_text(text, scene_path, out_path);
+    if (!moved) return moved.error();
+    return write_scene_text(out_path, moved.value());
+}
+
 int cmd_sketch(const SketchOptions& o) {
     const auto& stroke_path = o.stroke;
     const auto& frame_index = o.frame;
@@ -144,7 +153,7 @@ int cmd_sketch(const SketchOptions& o) {
     if (undo) {
         auto edit = remove_last_sketch(text.value(), scene_path, *chain);
         if (!edit) return report(edit.error());
-        if (auto written = write_scene_text(out_path, edit.value().text); !written) return report(written.error());
+        if (auto written = write_edit(scene_path, out_path, edit.value().text); !written) return report(written.error());
         const SceneEdit& e = edit.value();
         std::printf("removed %s example %u \"%s\" of %s%s; wrote %s\n", e.keyed ? "keyed" : "view", e.index, e.name.c_str(),
                     chain->c_str(), e.replaced ? (", putting back \"" + e.replaced_name + "\", which it had replaced").c_str() : "",
@@ -253,7 +262,7 @@ int cmd_sketch(const SketchOptions& o) {
         k.shape = s.shape;
         auto edit = add_keyed_example(text.value(), scene_path, *chain, k);
         if (!edit) return report(edit.error());
-        if (auto written = write_scene_text(out_path, edit.value().text); !written) return report(written.error());
+        if (auto written = write_edit(scene_path, out_path, edit.value().text); !written) return report(written.error());
         print_camera();
         if (k.kind == rods::KeyKind::Motion) {
             std::printf("motion key: %s %s %.6g %s (magnitude, smoothed over %g s), influence %.6g %s\n", k.joint.c_str(),
@@ -280,7 +289,7 @@ int cmd_sketch(const SketchOptions& o) {
     view.shape = s.shape;
     auto edit = add_view_example(text.value(), scene_path, *chain, view);
     if (!edit) return report(edit.error());
-    if (auto written = write_scene_text(out_path, edit.value().text); !written) return report(written.error());
+    if (auto written = write_edit(scene_path, out_path, edit.value().text); !written) return report(written.error());
 
     print_camera();
     std::printf("view direction %s (reference joint's frame), influence %g\n", vec_text(s.view.direction).c_str(),

@@ -294,7 +294,12 @@ check "a sketch near the front example replaces it and says it is kept" grep -q 
 check "the replaced example is in the file as \"replaces\"" grep -q '"replaces": {' "$work/replaced.json"
 "$bin" sketch "$work/replaced.json" --chain girl/ahoge --undo --in-place >"$work/restored.out" 2>&1
 check "--undo puts back the replaced example" grep -q 'putting back "front", which it had replaced' "$work/restored.out"
-check "--undo after a replacing sketch gives the scene back byte for byte" cmp -s scenes/ahoge.json "$work/replaced.json"
+# (Written in another folder, the copy's "$schema" names the same schema file from there.)
+check "--undo after a replacing sketch gives the scene back byte for byte, but its \$schema" \
+  cmp -s <(grep -v '"\$schema"' scenes/ahoge.json) <(grep -v '"\$schema"' "$work/replaced.json")
+schema_ref=$(python3 -c 'import json, sys; print(json.load(open(sys.argv[1]))["$schema"])' "$work/replaced.json")
+check "the sketched copy's \$schema ($schema_ref) is docs/scene.schema.json from its folder" \
+  cmp -s docs/scene.schema.json "$work/$schema_ref"
 cp scenes/ahoge.json "$work/ahoge-before-noout.json"
 "$bin" sketch scenes/ahoge.json --chain girl/ahoge --stroke "$work/front-stroke.json" >/dev/null 2>&1
 check "sketch without --out or --in-place exits 2" test $? -eq 2

@@ -99,6 +99,8 @@ row merge "--out not named .glb" 2 "m.gltf: the bake is a binary glTF file" -- m
 row run "--trace the model its scene reads" 2 "--trace is the model of character .chibi. of the scene.*--trace .*chibi-bake.jsonl" -- \
   run "$work/chibi.json" --frames 2 --backend cpu --no-export --trace "$work/chibi.glb"
 row rig "--out the model being rigged" 2 "--out is the model of character .chibi., which the scene reads" -- rig "$work/chibi.glb" --out "$work/chibi.glb"
+row sketch "--out the model its scene reads" 2 "chibi.glb: is the model of character .chibi., which the scene reads, so nothing was written" -- \
+  sketch "$work/chibi.json" --chain chibi/ahoge_0 --stroke "$work/stroke.json" --out "$work/chibi.glb"
 row run "--trace the same file as --out" 2 "--trace .*both.glb is also --out" -- \
   run scenes/ahoge.json --frames 2 --backend cpu --out "$work/both.glb" --trace "$work/both.glb"
 cp "$work/ok.kwpart" "$work/part-named.glb"
@@ -113,6 +115,12 @@ check "run: the default output over the model: the message says so" grep -qF "th
 check "the refused runs left the models as they were" bash -c \
   "test \"\$(md5sum <'$work/chibi.glb')\" = '$model_sum' && test \"\$(md5sum <'$work/cwd/out/chibi.glb')\" = '$model_sum'"
 check "the refused merge left its part" cmp -s "$work/ok.kwpart" "$work/part-named.glb"
+# A sketch written to another folder names the scene's files from there (move_scene_text).
+mkdir -p "$work/moved"
+"$bin" sketch "$work/chibi.json" --chain chibi/ahoge_0 --stroke "$work/stroke.json" --out "$work/moved/chibi.json" >/dev/null 2>"$work/moved.err"
+moved_rc=$?
+check "sketch --out another folder exits 0 ($(head -c 300 "$work/moved.err"))" test "$moved_rc" -eq 0
+check "sketch --out another folder: the scene names its model from there" grep -qF '"gltf": "../chibi.glb"' "$work/moved/chibi.json"
 # --no-export writes nothing: not even run's default out/ folder.
 mkdir -p "$work/noexport" && cp scenes/ahoge.json "$work/noexport/"
 (cd "$work/noexport" && "$bin" run ahoge.json --backend cpu --frames 2 --no-export >/dev/null 2>&1)

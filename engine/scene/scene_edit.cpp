@@ -25,79 +25,6 @@
 namespace kodawari::scene_edit_detail {
 namespace {
 
-// ---- where values are in the text (the text is valid JSON: nlohmann parsed it first)
-
-std::size_t skip_ws(const std::string& t, std::size_t i) {
-    while (i < t.size() && (t[i] == ' ' || t[i] == '\t' || t[i] == '\n' || t[i] == '\r')) ++i;
-    return i;
-}
-
-std::size_t value_end(const std::string& t, std::size_t i) {
-    assert(i < t.size());
-    if (t[i] == '"') {
-        ++i;
-        while (i < t.size() && t[i] != '"') i += t[i] == '\\' ? 2 : 1;
-        return i + 1;
-    }
-    if (t[i] == '{' || t[i] == '[') {
-        int depth = 0;
-        while (i < t.size()) {
-            const char c = t[i];
-            if (c == '"') {
-                i = value_end(t, i);
-                continue;
-            }
-            if (c == '{' || c == '[') ++depth;
-            if ((c == '}' || c == ']') && --depth == 0) return i + 1;
-            ++i;
-        }
-        return i;
-    }
-    while (i < t.size() && std::string(",]} \t\n\r").find(t[i]) == std::string::npos) ++i;
-    return i;
-}
-
-// The members of the object at `i` ('{').
-std::vector<Member> members(const std::string& t, std::size_t i) {
-    assert(t[i] == '{');
-    std::vector<Member> out;
-    i = skip_ws(t, i + 1);
-    while (i < t.size() && t[i] != '}') {
-        Member m;
-        m.key_begin = i;
-        const std::size_t key_end = value_end(t, i);
-        m.key = Json::parse(t.substr(i, key_end - i)).get<std::string>();
-        i = skip_ws(t, key_end);
-        assert(t[i] == ':');
-        i = skip_ws(t, i + 1);
-        m.value = {i, value_end(t, i)};
-        out.push_back(m);
-        i = skip_ws(t, m.value.end);
-        if (i < t.size() && t[i] == ',') i = skip_ws(t, i + 1);
-    }
-    return out;
-}
-
-// The elements of the array at `i` ('[').
-std::vector<Span> elements(const std::string& t, std::size_t i) {
-    assert(t[i] == '[');
-    std::vector<Span> out;
-    i = skip_ws(t, i + 1);
-    while (i < t.size() && t[i] != ']') {
-        out.push_back({i, value_end(t, i)});
-        i = skip_ws(t, out.back().end);
-        if (i < t.size() && t[i] == ',') i = skip_ws(t, i + 1);
-    }
-    return out;
-}
-
-const Member* find_member(const std::vector<Member>& ms, const std::string& key) {
-    for (const Member& m : ms) {
-        if (m.key == key) return &m;
-    }
-    return nullptr;
-}
-
 // The white space that starts the line of `pos`, when only white space precedes it there.
 std::optional<std::string> line_indent(const std::string& t, std::size_t pos) {
     const std::size_t nl = t.rfind('\n', pos == 0 ? 0 : pos - 1);
@@ -492,12 +419,22 @@ Result<std::vector<glm::dvec2>> parse_stroke(const std::string& text, const std:
 }
 
 Result<void> write_scene_text(const std::string& path, const std::string& text) {
+    // Opened first, so that a folder that does not exist is named as such rather than as
+    // the files the scene could not find from there (an unused file is removed).
+    auto file = AtomicFile::open(path);
+    if (!file) return file.error();
     auto check = parse_scene(text, path);
     if (!check) {
         return make_error(check.error().kind, "the edited scene does not load, so nothing was written: " + check.error().message);
     }
-    auto file = AtomicFile::open(path);
-    if (!file) return file.error();
+    // Never over a file the scene reads: `sketch chibi.json --out chibi.glb` would put the
+    // scene's text where its model was (the scene's own path is `path`: only inputs clash).
+    for (const SceneInput& input : check.value().inputs) {
+        if (!same_file(path, input.path)) continue;
+        return make_error(Error::Kind::InvalidInput, path + ": is " + input.what +
+                                                         ", which the scene reads, so nothing was written; write the scene to a "
+                                                         ".json path of its own");
+    }
     file.value().write(text);
     KW_TRY(file.value().commit());
     auto reloaded = load_scene(path);

@@ -43,6 +43,20 @@ struct ChainPlace {
     ArrayPlace views, keyed;
 };
 
+// ---- where values are in the text (scene_edit_text.cpp); `text` must be valid JSON and
+// each position that of the value's first character.
+
+// The first position at or after `i` that is not JSON white space.
+std::size_t skip_ws(const std::string& text, std::size_t i);
+// One past the end of the value (string, object, array, literal) that starts at `i`.
+std::size_t value_end(const std::string& text, std::size_t i);
+// The members of the object at `i` ('{'), in the text's order.
+std::vector<Member> members(const std::string& text, std::size_t i);
+// The elements of the array at `i` ('[').
+std::vector<Span> elements(const std::string& text, std::size_t i);
+// The member named `key`, or nullptr.
+const Member* find_member(const std::vector<Member>& members, const std::string& key);
+
 // The chain "character/chain" of scene text `text` (`path` for messages), or an error
 // naming the file and the JSON path (not JSON, no such chain, a mirrored copy).
 [[nodiscard]] Result<ChainPlace> find_chain(const std::string& text, const std::string& path, const std::string& chain_id);

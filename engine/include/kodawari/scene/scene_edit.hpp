@@ -97,9 +97,20 @@ struct KeyedSketch {
 [[nodiscard]] KODAWARI_API Result<SceneEdit> remove_last_sketch(const std::string& text, const std::string& path,
                                                                 const std::string& chain);
 
+/// Scene text `text`, read from `from`, as it must read when written to `to`: a scene names
+/// its files relative to its own folder, so every relative path among `$schema`, flocks'
+/// `model` and `map`, characters' `gltf` and their motions' `file`, `map` and `target_map`
+/// is rewritten relative to the folder of `to` (as Blender's Save As remaps relative paths),
+/// naming the same files. Absolute paths, URIs with a scheme and the rest of the text keep
+/// their bytes; `text` itself when both files are in one folder. Fails (InvalidInput
+/// naming `from`) when `text` is not JSON.
+[[nodiscard]] KODAWARI_API Result<std::string> move_scene_text(const std::string& text, const std::string& from,
+                                                               const std::string& to);
+
 /// Writes scene text to `path` so that a failure leaves the old file: the text is parsed as
-/// a scene first (errors name `path`; nothing is written), written atomically, then loaded
-/// back from the file with load_scene to prove it.
+/// a scene first (errors name `path`; nothing is written), refused when `path` is one of
+/// the files that scene reads (a model, a motion: InvalidInput naming both), written
+/// atomically, then loaded back from the file with load_scene to prove it.
 [[nodiscard]] KODAWARI_API Result<void> write_scene_text(const std::string& path, const std::string& text);
 
 /// The whole text of a scene or stroke file (the scene loader's reader): an
