@@ -1,5 +1,5 @@
 // Fuzz target: the scene editor behind `kodawari sketch` and the viewer's sketch mode
-// (engine/scene/scene_edit.cpp, scene_edit_keyed.cpp), which splices a view or keyed
+// (engine/scene/scene_edit.cpp, scene_edit_keyed.cpp, scene_paths.cpp), which splices a view or keyed
 // example into scene text and takes the last one out again. The input is a 24-byte header
 // (which chain, the example's direction, influence and shape offsets, then what is keyed
 // and by which joint; see below) followed by the scene text.
@@ -11,7 +11,9 @@
 //   for byte, but for an empty `"views": []` (or `"keyed": []`), which goes with it
 //   (scene_edit.hpp promises this);
 // - the same for a keyed example (motion or pose, of one of the character's joints), added
-//   after the view example was undone; undo takes it, not a view example.
+//   after the view example was undone; undo takes it, not a view example;
+// - moving the text to another folder (move_scene_text) takes any JSON and gives JSON; a
+//   scene that reads no file loads from the new folder too.
 #include <cmath>
 #include <cstdint>
 #include <string>
@@ -90,6 +92,24 @@ extern "C" int LLVMFuzzerTestOneInput(const std::uint8_t* data, std::size_t size
     } else {
         view.shape.positions = {{0.0f, 0.0f, 0.0f}, {0.0f, 0.1f, 0.0f}};
         view.shape.orientations.resize(2);
+    }
+
+    // The text moved to another folder (move_scene_text, `sketch --out`): JSON is moved,
+    // anything else refused naming the file; the moved text is JSON, and a scene that
+    // loads and reads no other file loads from there too.
+    const std::string elsewhere = "fuzz-sub/dir/fuzz-scene.json";
+    auto moved = move_scene_text(text, path, elsewhere);
+    if (!moved) {
+        if (nlohmann::json::accept(text)) fuzz::finding("JSON text was not moved: " + moved.error().message);
+        if (moved.error().message.find(path) == std::string::npos) {
+            fuzz::finding("the move's error does not name the file: " + moved.error().message);
+        }
+    } else {
+        if (!nlohmann::json::accept(moved.value())) fuzz::finding("the moved text is not JSON");
+        if (scene && scene.value().inputs.empty()) {
+            auto there = parse_scene(moved.value(), elsewhere);
+            if (!there) fuzz::finding("the moved scene does not load: " + there.error().message);
+        }
     }
 
     auto edit = add_view_example(text, path, chain, view);
