@@ -152,31 +152,46 @@ kodawari_backend backend_enum(BackendKind kind);
 /// Checks `options` (the enum, the flags, the thread count) and names problems under `what`.
 void require_backend_options(const kodawari_backend_options& options, const std::string& what);
 BackendOptions backend_options(const kodawari_backend_options& options);
-/// AUTO for a world (the chain and bird worlds' open_and_load): a vulkan backend made by
-/// `make(BackendKind::Vulkan, options)` with the world loaded by `load(backend)`, when a
-/// GPU (or a named device) opens and the world fits it; else null with `reason` saying
-/// why: a CPU-type device nobody named or no device (open_auto_device()), or a world
-/// larger than the device can bind (Unsupported, which the CPU backends do not know). A `device`
-/// that names nothing, and any other load error, throw (check()): never a reason to run
-/// elsewhere.
+/// Opens the backend `options` ask for (for the chain and bird worlds) and loads the
+/// world into it with `load(backend)`; `kind` says which it is. AUTO takes vulkan, made by
+/// `make(BackendKind::Vulkan, options)`, when a GPU (or a named device) opens and the world
+/// fits it, else cpu with `reason` saying why, as Simulation::create does: a CPU-type
+/// device nobody named (lavapipe: the cpu backend is faster) or no device
+/// (open_auto_device()), or a world larger than the device can bind (Unsupported, which
+/// the CPU backends do not know). A `device` that names nothing, and any other error,
+/// throw (check()): never a reason to run elsewhere. A device the caller lent is always
+/// used (effective_backend).
 template <typename Backend, typename Make, typename Load>
-std::unique_ptr<Backend> open_auto_vulkan(BackendOptions& options, std::string& reason, Make make, Load load) {
-    auto device = open_auto_device(options, reason);
-    check(device);
-    if (!device.value()) return nullptr;
-    options.context = std::move(device).value();
-    auto vulkan = make(BackendKind::Vulkan, options);
-    if (!vulkan.ok()) {
-        if (!options.device.empty()) check(vulkan);
-        reason = vulkan.error().message;
-        return nullptr;
+std::unique_ptr<Backend> open_and_load(const kodawari_backend_options& c_options, BackendKind& kind, std::string& reason,
+                                       Make make, Load load) {
+    BackendOptions options = backend_options(c_options);
+    if (effective_backend(c_options) == KODAWARI_BACKEND_AUTO) {
+        kind = BackendKind::Vulkan;
+        auto device = open_auto_device(options, reason);
+        check(device);
+        if (device.value()) {
+            options.context = std::move(device).value();
+            auto vulkan = make(BackendKind::Vulkan, options);
+            if (vulkan.ok()) {
+                std::unique_ptr<Backend> backend = std::move(vulkan).value();
+                const auto loaded = load(*backend);
+                if (loaded.ok()) return backend;
+                if (loaded.error().kind != Error::Kind::Unsupported) check(loaded);
+                reason = loaded.error().message;
+            } else {
+                if (!options.device.empty()) check(vulkan);
+                reason = vulkan.error().message;
+            }
+        }
+        kind = BackendKind::Cpu;
+    } else {
+        kind = backend_kind(effective_backend(c_options));
     }
-    std::unique_ptr<Backend> backend = std::move(vulkan).value();
-    const auto loaded = load(*backend);
-    if (loaded.ok()) return backend;
-    if (loaded.error().kind != Error::Kind::Unsupported) check(loaded);
-    reason = loaded.error().message;
-    return nullptr;
+    auto made = make(kind, options);
+    check(made);
+    std::unique_ptr<Backend> backend = std::move(made).value();
+    check(load(*backend));
+    return backend;
 }
 
 /// Copies `text` into `out[size]`, cut to fit and always terminated.

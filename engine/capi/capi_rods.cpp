@@ -272,29 +272,9 @@ void fill_frame(const kodawari_chain_world& w, const kodawari_chain_frame& f, fl
     check(rods::check_frame(w.world, out));
 }
 
-// Opens the backend `options` ask for and loads the world into it. AUTO takes vulkan when
-// a GPU opens and can hold the world, else cpu and says why, as Simulation::create does:
-// a CPU-type device unless named (lavapipe: the cpu backend is faster), no device, or a
-// world larger than the device can bind (Unsupported, which the CPU backends do not
-// know). A `device` that names nothing is an error, never a fallback; a device the
-// caller lent is always used (effective_backend).
 void open_and_load(kodawari_chain_world& w, const kodawari_backend_options& options) {
-    BackendOptions engine_options = backend_options(options);
-    if (effective_backend(options) == KODAWARI_BACKEND_AUTO) {
-        w.backend = open_auto_vulkan<RodBackend>(engine_options, w.fallback_reason, make_rod_backend,
-                                                [&](RodBackend& backend) { return backend.load(w.world, w.frame); });
-        if (w.backend) {
-            w.kind = BackendKind::Vulkan;
-            return;
-        }
-        w.kind = BackendKind::Cpu;
-    } else {
-        w.kind = backend_kind(effective_backend(options));
-    }
-    auto made = make_rod_backend(w.kind, engine_options);
-    check(made);
-    w.backend = std::move(made).value();
-    check(w.backend->load(w.world, w.frame));
+    w.backend = capi::open_and_load<RodBackend>(options, w.kind, w.fallback_reason, make_rod_backend,
+                                               [&](RodBackend& backend) { return backend.load(w.world, w.frame); });
 }
 
 void require_world(const kodawari_chain_world* world) { require_pointer(world, "world"); }
