@@ -79,6 +79,19 @@ void append_vec3(std::string& out, float x, float y, float z) {
     out += ']';
 }
 
+// A rotation as [x, y, z, w] (glTF's order).
+void append_quat(std::string& out, float x, float y, float z, float w) {
+    out += '[';
+    append_number(out, x);
+    out += ',';
+    append_number(out, y);
+    out += ',';
+    append_number(out, z);
+    out += ',';
+    append_number(out, w);
+    out += ']';
+}
+
 const char* mode_of(float value) {
     const long mode = std::lround(value);
     assert(mode >= 0 && mode < static_cast<long>(KW_MODE_COUNT) && "diagnostic mode out of range");
@@ -188,15 +201,9 @@ void TraceWriter::write_frame(std::uint32_t frame, const birds::BirdWorld& world
                 append_vec3(out, t[0], t[1], t[2]);
             }
             const gpu::vec4& r = pose.rotation[part];
-            out += ",\"r\":[";
-            append_number(out, r.x);
-            out += ',';
-            append_number(out, r.y);
-            out += ',';
-            append_number(out, r.z);
-            out += ',';
-            append_number(out, r.w);
-            out += "]}";
+            out += ",\"r\":";
+            append_quat(out, r.x, r.y, r.z, r.w);
+            out += '}';
         }
         out += "}}\n";
 
@@ -255,15 +262,7 @@ void TraceWriter::write_chains(std::uint32_t frame, float time, const rods::RodW
         for (std::uint32_t i = 0; i < n; ++i) {
             if (i > 0) out += ',';
             const glm::quat q = snapshot.orientations[chain.joint_begin + i];
-            out += '[';
-            append_number(out, q.x);
-            out += ',';
-            append_number(out, q.y);
-            out += ',';
-            append_number(out, q.z);
-            out += ',';
-            append_number(out, q.w);
-            out += ']';
+            append_quat(out, q.x, q.y, q.z, q.w);
         }
         out += "]}\n";
         if (out.size() >= kFlushBytes) {
