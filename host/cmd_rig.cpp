@@ -93,7 +93,7 @@ int cmd_rig_bird(const RigArguments& o) {
     if (!loaded) return report(loaded.error());
     const birds::BirdModel& m = loaded.value();
     gltf::BirdSceneOptions scene;
-    scene.name = o.name.value_or(m.name);
+    scene.name = as_scene_name(o.name.value_or(m.name), "bird");  // it names the bake's files
     scene.model_file = relative_to_scene(file, out_path);
     if (o.map) scene.map_file = relative_to_scene(*o.map, out_path);
     // The generated route grows, 10 % at a time, until the bird flies it within its own

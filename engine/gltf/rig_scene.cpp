@@ -21,6 +21,7 @@
 #include "kodawari/gltf/motion.hpp"
 #include "kodawari/gltf/vrm.hpp"
 #include "kodawari/rods/world.hpp"
+#include "kodawari/scene/scene.hpp"
 
 namespace kodawari::gltf {
 namespace {
@@ -492,7 +493,8 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
     // The scene: the character once at the origin, the camera orbiting its head.
     const std::string file = fs::absolute(fs::path(character_path)).lexically_relative(scene_dir).generic_string();
     const std::string stem = fs::path(character_path).stem().string();
-    const std::string name = scene_name(options.name.empty() ? stem : options.name);
+    // The character's and the scene's name, which names the bake's files too.
+    const std::string name = as_scene_name(scene_name(options.name.empty() ? stem : options.name), "character");
     const glm::vec3 head = glm::vec3(rest.world[static_cast<std::size_t>(reference)][3]);
     Json character;
     character["name"] = name;

@@ -366,6 +366,45 @@ Result<void> read_flocking(const JsonReader& r, const JsonNode& node, FlockingSp
     return {};
 }
 
+// A flock's name is one flock: predators name the flock whose first bird they are
+// (`flocking.predators[].flock`), which must be a flock without flocking. Checked here,
+// where the JSON paths are known, once every flock is read (a predator may name a later
+// flock); FlockWorld checks scenes built in code again.
+Result<void> check_flock_names(const JsonReader& r, const JsonNode& flocks, const std::vector<FlockSpec>& specs) {
+    const auto name_path = [&](std::size_t i) {
+        const JsonNode name = r.member(r.element(flocks, i), "name");
+        return name.present() ? name.path : r.element(flocks, i).path;
+    };
+    for (std::size_t i = 0; i < specs.size(); ++i) {
+        for (std::size_t j = 0; j < i; ++j) {
+            if (specs[j].name != specs[i].name) continue;
+            return r.fail(name_path(i), "\"" + specs[i].name + "\" is already the name of flock " + std::to_string(j) +
+                                            " (" + name_path(j) + "); expected a name of its own");
+        }
+    }
+    for (std::size_t f = 0; f < specs.size(); ++f) {
+        if (!specs[f].flocking) continue;
+        const JsonNode predators = r.member(r.member(r.element(flocks, f), "flocking"), "predators");
+        for (std::size_t p = 0; p < specs[f].flocking->predators.size(); ++p) {
+            const std::string& wanted = specs[f].flocking->predators[p].flock;
+            if (wanted.empty()) continue;
+            const JsonNode at = r.member(r.element(predators, p), "flock");
+            const auto found = std::find_if(specs.begin(), specs.end(), [&](const FlockSpec& s) { return s.name == wanted; });
+            if (found == specs.end()) {
+                std::string names;
+                for (const FlockSpec& s : specs) names += (names.empty() ? "\"" : ", \"") + s.name + "\"";
+                return r.fail(at.path, "\"" + wanted + "\": the scene has no flock of that name (its flocks: " + names +
+                                           "); expected the name of a flock without \"flocking\"");
+            }
+            if (found->flocking) {
+                return r.fail(at.path, "\"" + wanted + "\" flocks itself; expected the name of a flock without \"flocking\" "
+                                       "(the predator is that flock's first bird, flying its route)");
+            }
+        }
+    }
+    return {};
+}
+
 Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t index, std::uint64_t& total_birds,
                         FlockSpec& flock) {
     KW_TRY(r.object(node, {"name", "wing_type", "model", "map", "count", "seed", "speed", "speed_jitter", "frequency",
@@ -541,9 +580,12 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
     scene.version = version.value->get<double>() == 2.0 ? 2u : 1u;
     KW_TRY(require_version_2(r, root, scene.version, {"characters", "crowds", "wind", "lod"}));
     scene.path = path;
-    scene.name = std::filesystem::path(path).stem().string();
-    if (scene.name.empty()) scene.name = "scene";
-    KW_TRY(optional_member(r, root, "name", scene.name, [&](const JsonNode& n) { return r.string(n); }));
+    scene.name = as_scene_name(std::filesystem::path(path).stem().string(), "scene");
+    const JsonNode name = r.member(root, "name");
+    if (name.present()) {
+        KW_SCENE_ASSIGN(scene.name, r.string(name));
+        if (const std::string problem = scene_name_problem(scene.name); !problem.empty()) return r.expected(name, problem);
+    }
     // At least 0.01 (a frame per 100 s): frame times f / fps stay finite for any frame
     // count (a denormal rate made them infinite, found by fuzzing).
     KW_TRY(optional_member(r, root, "fps", scene.fps,
@@ -572,6 +614,7 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
         scene.flocks.resize(count);
         std::uint64_t total_birds = 0;
         for (std::size_t i = 0; i < count; ++i) KW_TRY(read_flock(r, r.element(flocks, i), i, total_birds, scene.flocks[i]));
+        KW_TRY(check_flock_names(r, flocks, scene.flocks));
     } else if (!characters.present()) {
         return r.fail(root.path, "expected \"flocks\", \"characters\" or both, got neither");
     }
@@ -607,6 +650,24 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
 }
 
 }  // namespace
+
+std::string scene_name_problem(const std::string& name) {
+    const bool bad_character = std::any_of(name.begin(), name.end(), [](char c) {
+        return c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
+    });
+    if (name.empty() || name == "." || name == ".." || bad_character) {
+        return "a file name, as it names the scene's outputs (out/<name>.glb): not empty, \".\" or \"..\", without '/', "
+               "'\\' or control characters";
+    }
+    return {};
+}
+
+std::string as_scene_name(std::string name, const std::string& fallback) {
+    for (char& c : name) {
+        if (c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '_';
+    }
+    return name.empty() || name == "." || name == ".." ? fallback : name;
+}
 
 std::string Scene::reads(const std::string& file) const {
     if (same_file(file, path)) return "the scene file";

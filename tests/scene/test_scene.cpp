@@ -265,6 +265,54 @@ TEST(SceneFormat, SchemaKey) {
     EXPECT_TRUE(contains(parse_error(nested), "test.json: $.flocks[0][\"$schema\"]: unknown key"));
 }
 
+// The scene's name names its output files (out/<name>.glb): one file name, never a path
+// out of the output folder. The default, the file's stem, is made one.
+TEST(SceneFormat, SceneNameIsAFileName) {
+    for (const char* bad : {"../../escape", "a/b", "a\\b", ".", "..", "tab\there"}) {
+        json doc = valid_scene();
+        doc["name"] = bad;
+        EXPECT_TRUE(contains(parse_error(doc), "test.json: $.name: expected a file name")) << bad << ": " << parse_error(doc);
+    }
+    for (const char* good : {"birds", "birds.v2", "...", "a b", "鳥"}) {
+        json doc = valid_scene();
+        doc["name"] = good;
+        const auto scene = kodawari::parse_scene(doc.dump(), "test.json");
+        ASSERT_TRUE(scene.ok()) << good << ": " << scene.error().message;
+        EXPECT_EQ(scene.value().name, good);
+    }
+    EXPECT_EQ(kodawari::as_scene_name("a/b\\c\x01", "x"), "a_b_c_");
+    EXPECT_EQ(kodawari::as_scene_name("..", "x"), "x");
+    EXPECT_EQ(kodawari::as_scene_name("", "x"), "x");
+    const auto unnamed = kodawari::parse_scene(valid_scene().dump(), "dir/...json");
+    ASSERT_TRUE(unnamed.ok()) << unnamed.error().message;
+    EXPECT_EQ(unnamed.value().name, "scene");  // the stem "..": no file name
+}
+
+// A flock's name is one flock, and a predator that is a flock's bird names a flock
+// without flocking: each refused at its JSON path.
+TEST(SceneFormat, FlockNamesAndThePredatorsFlock) {
+    json doc = valid_scene();
+    doc["flocks"][0]["name"] = "gulls";
+    doc["flocks"].push_back(doc["flocks"][0]);
+    EXPECT_EQ(parse_error(doc), "test.json: $.flocks[1].name: \"gulls\" is already the name of flock 0 ($.flocks[0].name); "
+                                "expected a name of its own");
+    doc["flocks"][1].erase("name");
+    doc["flocks"][0]["name"] = "flock1";  // the second one's default
+    EXPECT_TRUE(contains(parse_error(doc), "test.json: $.flocks[1]: \"flock1\" is already the name of flock 0"));
+
+    json chase = valid_scene();
+    chase["flocks"][0]["name"] = "starlings";
+    chase["flocks"].push_back(chase["flocks"][0]);
+    chase["flocks"][1]["name"] = "falcon";
+    chase["flocks"][0]["flocking"] = json::parse(R"({"predators": [{"from": [0, 10, 0], "to": [50, 10, 0]}, {"flock": "falcon"}]})");
+    ASSERT_TRUE(kodawari::parse_scene(chase.dump(), "test.json").ok());
+    chase["flocks"][0]["flocking"]["predators"][1]["flock"] = "hawk";
+    EXPECT_EQ(parse_error(chase), "test.json: $.flocks[0].flocking.predators[1].flock: \"hawk\": the scene has no flock of that "
+                                  "name (its flocks: \"starlings\", \"falcon\"); expected the name of a flock without \"flocking\"");
+    chase["flocks"][0]["flocking"]["predators"][1]["flock"] = "starlings";
+    EXPECT_TRUE(contains(parse_error(chase), "test.json: $.flocks[0].flocking.predators[1].flock: \"starlings\" flocks itself"));
+}
+
 TEST(SceneFormat, WrongType) {
     json doc = valid_scene();
     doc["fps"] = "sixty";

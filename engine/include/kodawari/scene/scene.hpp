@@ -315,6 +315,15 @@ struct KODAWARI_API Scene {
     [[nodiscard]] std::string reads(const std::string& file) const;
 };
 
+/// Why `name` cannot be a scene's `name`, or "" when it can: it names the scene's output
+/// files (out/<name>.glb, <name>_00000.png), so it must be one file name: not empty, "."
+/// or "..", without '/', '\\' or control characters.
+[[nodiscard]] KODAWARI_API std::string scene_name_problem(const std::string& name);
+
+/// `name` made a scene name by scene_name_problem()'s rule: '/', '\\' and control
+/// characters become '_'; "", "." and ".." become `fallback`.
+[[nodiscard]] KODAWARI_API std::string as_scene_name(std::string name, const std::string& fallback);
+
 /// Reads and checks a scene file. Errors name the file, the JSON path and what was
 /// expected (Error::Kind::InvalidInput), or the I/O failure.
 [[nodiscard]] KODAWARI_API Result<Scene> load_scene(const std::string& path);
