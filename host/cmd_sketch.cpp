@@ -11,6 +11,7 @@
 #include <sstream>
 #include <string>
 
+#include "bake_outputs.hpp"
 #include "commands.hpp"
 #include "kodawari/scene/scene.hpp"
 #include "kodawari/rods/sketch.hpp"
@@ -96,10 +97,11 @@ std::optional<SketchKeyOptions> key_options(const SketchOptions& o) {
 
 // Writes the edited text of the scene at `scene_path` to `out_path`, its relative file
 // paths rewritten for `out_path`'s folder (`--out out/B.json` of scenes/A.json still reads
-// scenes/characters/...).
+// scenes/characters/...), whose folder is made when missing, as run's --out.
 Result<void> write_edit(const std::string& scene_path, const std::string& out_path, const std::string& text) {
     auto moved = move_scene_text(text, scene_path, out_path);
     if (!moved) return moved.error();
+    KW_TRY(make_parent_folder(out_path, "--out"));
     return write_scene_text(out_path, moved.value());
 }
 

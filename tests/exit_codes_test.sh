@@ -115,8 +115,8 @@ check "run: the default output over the model: the message says so" grep -qF "th
 check "the refused runs left the models as they were" bash -c \
   "test \"\$(md5sum <'$work/chibi.glb')\" = '$model_sum' && test \"\$(md5sum <'$work/cwd/out/chibi.glb')\" = '$model_sum'"
 check "the refused merge left its part" cmp -s "$work/ok.kwpart" "$work/part-named.glb"
-# A sketch written to another folder names the scene's files from there (move_scene_text).
-mkdir -p "$work/moved"
+# A sketch written to another folder, made as run's --out is, names the scene's files
+# from there (move_scene_text).
 "$bin" sketch "$work/chibi.json" --chain chibi/ahoge_0 --stroke "$work/stroke.json" --out "$work/moved/chibi.json" >/dev/null 2>"$work/moved.err"
 moved_rc=$?
 check "sketch --out another folder exits 0 ($(head -c 300 "$work/moved.err"))" test "$moved_rc" -eq 0
