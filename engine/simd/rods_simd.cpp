@@ -142,7 +142,7 @@ void place(CollidersK& c, const V3& r_p, const Q4& r_q) {
     c.len2 = dot(c.ab, c.ab);
 }
 
-// solver.cpp collide(): closest_on_segment() then push_out() (outside lanes) or pull_in()
+// solver_collide.cpp collide(): closest_on_segment() then push_out() (outside lanes) or pull_in()
 // (inside lanes), and the plane's half-space (plane lanes), each kind's expressions as
 // the reference writes them.
 void collide(V3& p, const CollidersK& c) {
@@ -276,7 +276,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
     const Q4 to_q = load4(in.rows, kToQ, off);
     const V3 travel = sub(to_p, from_p);
 
-    // ---- the posed level of detail (solver.cpp step_posed) for lanes not full, from the
+    // ---- the posed level of detail (solver_posed.cpp step_posed) for lanes not full, from the
     // state before the step; a vector of lanes none of which is full skips the substeps ----
     // Posed and hidden lanes (levels 1 and 2), reduced ones (3); the rest are full.
     const V level = args.lod ? load(chain_rows, kLevel, off) : Z();
@@ -306,7 +306,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
         }
         const Q4 turn_by = qnormalize(qmul(to_q, conj(from_q)));
         // The colliders at their end-of-frame poses relative to the last root position
-        // (solver.cpp step_posed), as place() would leave them.
+        // (solver_posed.cpp step_posed), as place() would leave them.
         CollidersK posed_colliders[kMaxK];
         for (std::size_t k = 0; k < batch.colliders; ++k) {
             const float* rows = in.colliders + k * kColliderRows * kBatchLanes;
@@ -433,7 +433,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
         c.la = rotate(to_root, sub(load3(rows, kCapA, off), to_p));
         c.lb = select(c.plane, rotate(to_root, b), rotate(to_root, sub(b, to_p)));
     }
-    // solver.cpp collide_all(): every collider, the whole set kColliderPasses times.
+    // solver_collide.cpp collide_all(): every collider, the whole set kColliderPasses times.
     auto collide_all = [&](V3& particle) HWY_ATTR {
         for (std::uint32_t pass = 0; pass < rods::kColliderPasses; ++pass) {
             for (std::size_t k = 0; k < batch.colliders; ++k) collide(particle, colliders[k]);
@@ -726,7 +726,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
     const V two_over_dt = S(2.0f / frame.dt);
     for (std::size_t i = 0; i < n; ++i) {
         V3 stored = sub(x[i], travel);
-        if (any_handing) {  // solver.cpp hand_over(): the step's result mixed with the posed one
+        if (any_handing) {  // solver_posed.cpp hand_over(): the step's result mixed with the posed one
             const V3 a = sub(posed_x[i], travel);
             const V3 mixed = add(a, mul(share, sub(stored, a)));
             const Q4 pq = posed_q[i];
