@@ -19,7 +19,7 @@
 // It covers the worlds of a GROUPED dispatch (one template per dispatch, so the substep and
 // iteration counts that bound the loops around the barriers are the same for every lane of
 // a workgroup) without levels of detail, keyed examples, center frames or angle limits;
-// the backend refuses the others (vulkan_rods.cpp, kernel_variant_for).
+// the backend refuses the others (vulkan_rods_load.cpp, kernel_variant_for).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 
