@@ -19,7 +19,7 @@
 // It covers the worlds of a GROUPED dispatch (one template per dispatch, so the substep and
 // iteration counts that bound the loops around the barriers are the same for every lane of
 // a workgroup) without levels of detail, keyed examples, center frames or angle limits;
-// the backend refuses the others (vulkan_rods.cpp, kernel_variant_for).
+// the backend refuses the others (vulkan_rods_load.cpp, kernel_variant_for).
 #extension GL_GOOGLE_include_directive : require
 #extension GL_EXT_control_flow_attributes : require
 
@@ -178,7 +178,7 @@ void main() {
     RodTransformGpu from = last.root;
     const RodTransformGpu to = roots[c];
 
-    // ---- the chain carried by a teleport, the root's jump (solver.cpp follow_teleport):
+    // ---- the chain carried by a teleport, the root's jump (solver_root_motion.cpp follow_teleport):
     // to the new root, then back by one frame of joint 0's own motion ----
     const vec3 jump = to.position.xyz - from.position.xyz;
     const bool teleported = dot(jump, jump) > t.physics.z * t.physics.z;
@@ -213,7 +213,7 @@ void main() {
         }
     }
 
-    // ---- the first step starts moving with the root (solver.cpp start_moving) ----
+    // ---- the first step starts moving with the root (solver_root_motion.cpp start_moving) ----
     if ((push.flags.x & KW_RODS_STEP_FIRST) != 0u && t.physics.w != 0.0) {
         const float dt = push.camera_forward.w;
         const vec4 turn = positive_w(qnormalize(qmul(to.rotation, qconj(from.rotation))));

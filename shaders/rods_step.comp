@@ -256,7 +256,7 @@ void main() {
         }
         share = level == KW_RODS_LEVEL_FULL || level == KW_RODS_LEVEL_REDUCED ? min(1.0, last.root.position.w + t.drag.w) : 0.0;
     }
-    // A posed step covers the frames the chain kept (solver.cpp step_posed with dt x (idle + 1)).
+    // A posed step covers the frames the chain kept (solver_posed.cpp step_posed with dt x (idle + 1)).
     const float steps = float(idle + 1u);
     // Full and reduced chains run the dynamics; posed and hidden ones step_posed.
     const bool DYNAMIC = level == KW_RODS_LEVEL_FULL || level == KW_RODS_LEVEL_REDUCED;
@@ -347,9 +347,9 @@ void main() {
     RodTransformGpu from = chain_states[c].root;
     const RodTransformGpu to = roots[c];
 
-    // ---- the chain carried by its center frame's motion (solver.cpp follow_center) ----
+    // ---- the chain carried by its center frame's motion (solver_root_motion.cpp follow_center) ----
     const uint center = chain.joints.z;
-    // ---- and by a teleport, the root's jump (solver.cpp follow_teleport) ----
+    // ---- and by a teleport, the root's jump (solver_root_motion.cpp follow_teleport) ----
     // Three carries at most, by the same code: the center's motion; a root that jumped
     // farther than the teleport distance from where that left it, carried to the new root
     // and then back by one frame of joint 0's (the root's) own motion (frame_before).
@@ -390,7 +390,7 @@ void main() {
         from.rotation = qnormalize(qmul(r, from.rotation));
     }
 
-    // ---- the first step starts moving with the root (solver.cpp start_moving) ----
+    // ---- the first step starts moving with the root (solver_root_motion.cpp start_moving) ----
     if ((push.flags.x & KW_RODS_STEP_FIRST) != 0u && t.physics.w != 0.0) {
         const float dt = push.camera_forward.w;
         const vec4 turn = positive_w(qnormalize(qmul(to.rotation, qconj(from.rotation))));
@@ -404,7 +404,7 @@ void main() {
         }
     }
 
-    // ---- the posed level of detail (solver.cpp step_posed): no dynamics, the chain carried
+    // ---- the posed level of detail (solver_posed.cpp step_posed): no dynamics, the chain carried
     // by its root and eased onto its rest shape ----
     vec3 posed_x[MAX_J], x_before[MAX_J];
     vec4 posed_q[MAX_J], q_before[MAX_J];
@@ -445,7 +445,7 @@ void main() {
                     const vec3 sagged = moved + qrot(to.rotation, rest_p[i] + sag);
                     const vec3 carried = moved + qrot(turn_by, x[i]);
                     px = carried + blend * (sagged - carried);
-                    // On its parent's segment length and out of the colliders (solver.cpp step_posed).
+                    // On its parent's segment length and out of the colliders (solver_posed.cpp step_posed).
                     {
                         const vec3 dd = px - parent;
                         const float len = length(dd);
@@ -687,7 +687,7 @@ void main() {
         if (i < n) {
             vec3 stored = x[i] - travel;
             if (HANDING) {
-                // Turning full again (solver.cpp hand_over): the step's result mixed with the posed one.
+                // Turning full again (solver_posed.cpp hand_over): the step's result mixed with the posed one.
                 const float dt = push.camera_forward.w;
                 const vec3 a = posed_x[i] - travel;
                 const vec3 mixed = a + share * (stored - a);

@@ -1,6 +1,6 @@
 #pragma once
 // The part meshes and colours of the birds, shared by the glTF export
-// (engine/export/gltf_birds.cpp) and the renderer (engine/domains/bird_layer.cpp) so
+// (engine/export/gltf_birds_meshes.cpp) and the renderer (engine/domains/bird_layer.cpp) so
 // that both show the same birds.
 
 #include <array>

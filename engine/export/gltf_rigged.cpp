@@ -11,53 +11,23 @@
 #include <cmath>
 #include <cstdint>
 #include <cstdio>
-#include <cstring>
-#include <exception>
-#include <filesystem>
 #include <initializer_list>
-#include <limits>
-#include <new>
 #include <optional>
 #include <string>
 #include <utility>
 #include <vector>
 
 #include "kodawari/core/version.hpp"
-#include "core/binary_file.hpp"
 #include "export/compact_keys.hpp"
 #include "export/shared_glb.hpp"
 #include "export/gltf_common.hpp"
+#include "export/gltf_rigged_writer.hpp"
 #include "kodawari/export/export.hpp"
 
 namespace kodawari {
 namespace {
 
-namespace fs = std::filesystem;
 using namespace gltf;
-
-constexpr std::uint32_t kGlbMagic = 0x46546C67u;  // "glTF"
-
-// tinygltf hands every image's bytes to this callback. Images in buffer views stay
-// there; the bytes of images given by URI (external files, data URIs) are kept as they
-// are, undecoded, to be moved into the GLB buffer (no re-encoding, no image codecs).
-bool keep_image_bytes(tinygltf::Image* image, const int, std::string*, std::string*, int, int,
-                      const unsigned char* bytes, int size, void*) {
-    if (image->bufferView < 0 && size > 0) image->image.assign(bytes, bytes + size);
-    return true;
-}
-
-// The MIME type of image bytes from their signature, "" when unknown.
-std::string sniff_mime_type(const std::vector<unsigned char>& b) {
-    auto starts = [&](std::initializer_list<unsigned char> magic, std::size_t at = 0) {
-        if (b.size() < at + magic.size()) return false;
-        return std::equal(magic.begin(), magic.end(), b.begin() + static_cast<std::ptrdiff_t>(at));
-    };
-    if (starts({0x89, 'P', 'N', 'G', 0x0D, 0x0A, 0x1A, 0x0A})) return "image/png";
-    if (starts({0xFF, 0xD8, 0xFF})) return "image/jpeg";
-    if (starts({'R', 'I', 'F', 'F'}) && starts({'W', 'E', 'B', 'P'}, 8)) return "image/webp";
-    if (starts({0xAB, 'K', 'T', 'X', ' ', '2', '0', 0xBB, 0x0D, 0x0A, 0x1A, 0x0A})) return "image/ktx2";
-    return "";
-}
 
 // VRM's extensions name nodes of one character by index (humanoid bones, spring bones,
 // constraints, look-at); they cannot describe the copies, so they are not carried.
@@ -78,222 +48,12 @@ std::vector<double> to_doubles(const glm::quat& q) {
     return {static_cast<double>(q.x), static_cast<double>(q.y), static_cast<double>(q.z), static_cast<double>(q.w)};
 }
 
-bool finite(const glm::vec3& v) { return std::isfinite(v.x) && std::isfinite(v.y) && std::isfinite(v.z); }
-bool finite(const glm::quat& q) {
-    return std::isfinite(q.x) && std::isfinite(q.y) && std::isfinite(q.z) && std::isfinite(q.w);
-}
-
-// One key of one animated node.
-struct Key {
-    glm::vec3 translation;
-    glm::quat rotation;
-    glm::vec3 scale;
-};
-
 }  // namespace
-
-struct RiggedGlbWriter::Impl {
-    std::string source_path;
-    tinygltf::Model model;                          // the source, images' bytes moved out
-    std::vector<std::vector<unsigned char>> image_bytes;  // per image: its bytes when given by URI
-    std::vector<RiggedInstance> instances;
-    float fps = 0.0f;
-    std::string animation_name;
-
-    // Per file node.
-    std::size_t node_count = 0;
-    std::vector<std::string> names;                 // "<name>" or "#<n>"
-    std::vector<int> roots;                         // of the displayed scene
-    std::vector<bool> animated;
-    std::vector<bool> matrix;                       // given by a matrix in the file
-    std::vector<glm::vec3> rest_translation;        // Character's TRS (matrices decomposed)
-    std::vector<glm::quat> rest_rotation;
-    std::vector<glm::vec3> rest_scale;
-    std::vector<bool> skinned;                      // has a mesh and a skin
-    std::vector<bool> moves;                        // skinned mesh node moved to the scene root
-    std::vector<int> extra;                         // index of its extra skinned-mesh node, or -1
-    std::size_t extra_count = 0;
-    std::vector<int> animated_nodes;                // the animated nodes, ascending
-
-    // Keys, frame-major in the spill file: frame f's key of track i * animated_nodes.size()
-    // + k at (f * tracks + track) * sizeof(Key). Per track in memory: the last rotation
-    // (hemispheres) and whether the scale ever left the rest scale.
-    std::string spill_beside;
-    std::optional<SpillFile> keys;
-    std::vector<Key> row;
-    std::vector<glm::quat> previous;
-    std::vector<bool> scaled;  // per own track; on a shared writer's rank 0 at finish, every track's
-    std::uint32_t frames = 0;
-    bool finished = false;
-    // The instances whose keys this writer keeps: all, or one rank's (share()), and a
-    // shared writer's keys joined with the other ranks' (rank 0, at finish).
-    std::size_t own_begin = 0;
-    std::size_t own_end = 0;
-    bool shared = false;
-    CompactKeys* joined = nullptr;  // finish_shared_glb()'s, while rank 0 writes
-    GlbCompaction compaction;
-    GlbCompactionStats stats;
-
-    [[nodiscard]] std::size_t stride() const { return 1 + node_count + extra_count; }
-    [[nodiscard]] int out_node(std::size_t instance, int node) const {
-        return static_cast<int>(instance * stride() + 1) + node;
-    }
-    [[nodiscard]] std::size_t tracks() const { return instances.size() * animated_nodes.size(); }
-    [[nodiscard]] std::size_t own() const { return own_end - own_begin; }
-    [[nodiscard]] std::size_t own_tracks() const { return own() * animated_nodes.size(); }
-    [[nodiscard]] Result<CompactKeys> compact_own();
-
-    Result<void> build_and_write(AtomicFile& file);
-    [[nodiscard]] Result<void> copy_tracks(AtomicFile& file);
-    [[nodiscard]] Result<void> write_compact(AtomicFile& file, tinygltf::Model& out, std::vector<unsigned char>& bytes);
-};
 
 RiggedGlbWriter::RiggedGlbWriter(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 RiggedGlbWriter::RiggedGlbWriter(RiggedGlbWriter&& other) noexcept = default;
 RiggedGlbWriter& RiggedGlbWriter::operator=(RiggedGlbWriter&& other) noexcept = default;
 RiggedGlbWriter::~RiggedGlbWriter() = default;
-
-namespace {
-
-// Loads the source with tinygltf: .glb/.vrm by their magic, anything else as JSON.
-Result<tinygltf::Model> load_source(const std::string& path) {
-    auto read = core::read_binary_file(path);
-    if (!read) return read.error();
-    std::vector<unsigned char> bytes = std::move(read).value();
-    if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
-        return make_error(Error::Kind::Unsupported, path + ": files over 4 GiB are not supported");
-    }
-    std::uint32_t magic = 0;
-    if (bytes.size() >= 4) std::memcpy(&magic, bytes.data(), 4);
-    tinygltf::Model model;
-    tinygltf::TinyGLTF loader;
-    loader.SetImageLoader(&keep_image_bytes, nullptr);
-    std::string err;
-    std::string warn;
-    const std::string dir = fs::path(path).parent_path().string();
-    const bool loaded =
-        magic == kGlbMagic
-            ? loader.LoadBinaryFromMemory(&model, &err, &warn, bytes.data(), static_cast<unsigned int>(bytes.size()), dir)
-            : loader.LoadASCIIFromString(&model, &err, &warn, reinterpret_cast<const char*>(bytes.data()),
-                                         static_cast<unsigned int>(bytes.size()), dir);
-    if (!loaded) {
-        while (!err.empty() && (err.back() == '\n' || err.back() == ' ')) err.pop_back();
-        return make_error(Error::Kind::InvalidInput, path + ": tinygltf: " + (err.empty() ? std::string("cannot load") : err));
-    }
-    return model;
-}
-
-}  // namespace
-
-Result<RiggedGlbWriter> RiggedGlbWriter::create(const std::string& source_path, const animation::Character& character,
-                                                std::span<const RiggedInstance> instances, std::vector<bool> animated,
-                                                float fps, std::string animation_name, std::string spill_beside,
-                                                const GlbCompaction& compaction) {
-    assert(animated.size() == character.nodes.size() && "one animated flag per node of the character");
-    assert(fps > 0.0f && std::isfinite(fps));
-    KW_TRY(check_compaction(spill_beside.empty() ? source_path : spill_beside, compaction));
-    auto impl = std::make_unique<Impl>();
-    impl->compaction = compaction;
-    try {
-        auto loaded = load_source(source_path);
-        if (!loaded) return loaded.error();
-        impl->model = std::move(loaded).value();
-    } catch (const std::bad_alloc&) {
-        return make_error(Error::Kind::InvalidInput, source_path + ": out of memory while loading (a corrupt size?)");
-    } catch (const std::exception& e) {
-        return make_error(Error::Kind::InvalidInput, source_path + ": tinygltf: " + e.what());
-    }
-    tinygltf::Model& model = impl->model;
-    const std::size_t n = character.nodes.size();
-    if (model.nodes.size() != n || model.skins.size() != character.skins.size()) {
-        return make_error(Error::Kind::InvalidInput,
-                          source_path + ": has " + std::to_string(model.nodes.size()) + " nodes and " +
-                              std::to_string(model.skins.size()) + " skins, the character loaded from " +
-                              character.source + " has " + std::to_string(n) + " and " +
-                              std::to_string(character.skins.size()) + " (not the same file?)");
-    }
-
-    // EXT_meshopt_compression names buffers by index, which merging the buffers into one
-    // would break.
-    for (std::size_t v = 0; v < model.bufferViews.size(); ++v) {
-        if (model.bufferViews[v].extensions.count("EXT_meshopt_compression") != 0) {
-            return make_error(Error::Kind::Unsupported, source_path + ": $.bufferViews[" + std::to_string(v) +
-                                                            "]: EXT_meshopt_compression is not supported");
-        }
-    }
-    for (const RiggedInstance& instance : instances) {
-        const glm::quat& q = instance.placement.rotation;
-        if (!finite(instance.placement.position) || !finite(q) || !(glm::length(q) > 0.0f)) {
-            return make_error(Error::Kind::InvalidInput,
-                              "instance " + instance.name + ": the placement is not finite (or a zero rotation)");
-        }
-    }
-
-    // Images given by URI: their bytes, with a MIME type a GLB buffer view needs.
-    impl->image_bytes.resize(model.images.size());
-    for (std::size_t i = 0; i < model.images.size(); ++i) {
-        tinygltf::Image& image = model.images[i];
-        if (image.bufferView >= 0) {
-            image.image.clear();
-            continue;
-        }
-        const std::string where = source_path + ": $.images[" + std::to_string(i) + "]";
-        if (image.image.empty()) {
-            return make_error(Error::Kind::InvalidInput, where + ".uri: cannot read image \"" + image.uri + "\"");
-        }
-        std::string mime = sniff_mime_type(image.image);
-        if (mime.empty() && image.mimeType.rfind("image/", 0) == 0) mime = image.mimeType;
-        if (mime.empty()) {
-            return make_error(Error::Kind::InvalidInput,
-                              where + ": unknown image format (not PNG, JPEG, WebP or KTX2, no image MIME type)");
-        }
-        image.mimeType = mime;
-        impl->image_bytes[i] = std::move(image.image);
-        image.image.clear();
-    }
-
-    impl->source_path = source_path;
-    impl->instances.assign(instances.begin(), instances.end());
-    impl->own_end = impl->instances.size();
-    impl->fps = fps;
-    impl->animation_name = std::move(animation_name);
-    impl->spill_beside = std::move(spill_beside);
-    impl->node_count = n;
-    impl->roots = character.roots;
-    impl->animated = std::move(animated);
-
-    std::vector<bool> joint(n, false);
-    for (const animation::Skin& skin : character.skins) {
-        for (const int j : skin.joints) joint[static_cast<std::size_t>(j)] = true;
-    }
-    std::vector<bool> shown(n, false);  // in the displayed scene
-    std::vector<int> stack(character.roots.begin(), character.roots.end());
-    while (!stack.empty()) {
-        const auto k = static_cast<std::size_t>(stack.back());
-        stack.pop_back();
-        shown[k] = true;
-        stack.insert(stack.end(), character.nodes[k].children.begin(), character.nodes[k].children.end());
-    }
-    impl->moves.assign(n, false);
-    impl->extra.assign(n, -1);
-    for (std::size_t k = 0; k < n; ++k) {
-        const animation::Node& node = character.nodes[k];
-        impl->names.push_back(node.name.empty() ? "#" + std::to_string(k) : node.name);
-        impl->matrix.push_back(node.matrix.has_value());
-        impl->rest_translation.push_back(node.translation);
-        impl->rest_rotation.push_back(node.rotation);
-        impl->rest_scale.push_back(node.scale);
-        impl->skinned.push_back(node.mesh >= 0 && node.skin >= 0);
-        if (impl->animated[k]) impl->animated_nodes.push_back(static_cast<int>(k));
-        if (!impl->skinned[k] || !shown[k]) continue;
-        if (node.children.empty() && !joint[k] && !impl->animated[k]) {
-            impl->moves[k] = true;
-        } else {
-            impl->extra[k] = static_cast<int>(impl->extra_count++);
-        }
-    }
-    return RiggedGlbWriter(std::move(impl));
-}
 
 Result<void> RiggedGlbWriter::add_frame(std::span<const glm::vec3> translation, std::span<const glm::quat> rotation,
                                         std::span<const glm::vec3> scale) {

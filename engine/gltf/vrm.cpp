@@ -16,571 +16,295 @@
 
 #include <nlohmann/json.hpp>
 
-namespace kodawari::gltf {
-namespace {
+#include "gltf/vrm_reader.hpp"
 
-using nlohmann::json;
+namespace kodawari::gltf {
+namespace vrm_detail {
 
 constexpr float kMinThickness = 1e-4f;  // as scaled_physics()
 constexpr float kMaxGravity = 1000.0f;  // m/s^2, the scene format's bound on an acceleration component
 
-std::string at(const std::string& path, std::size_t index) { return path + "[" + std::to_string(index) + "]"; }
+Result<VrmSprings> Reader::read() {
+    if (c_.extensions.empty()) return std::move(out_);
+    json root;
+    try {
+        root = json::parse(c_.extensions);
+    } catch (const std::exception& e) {
+        return invalid("$.extensions", std::string("invalid JSON: ") + e.what());
+    }
+    if (!root.is_object()) return std::move(out_);
+    if (const auto it = root.find("VRMC_springBone"); it != root.end()) {
+        out_.version = 2;
+        KW_TRY(read_1(*it, "$.extensions.VRMC_springBone"));
+    } else if (const auto vrm = root.find("VRM"); vrm != root.end() && vrm->is_object() &&
+                                                   vrm->contains("secondaryAnimation")) {
+        out_.version = 1;
+        KW_TRY(read_0((*vrm)["secondaryAnimation"], "$.extensions.VRM.secondaryAnimation"));
+    }
+    return std::move(out_);
+}
 
-// Per-joint VRM parameters (VRM 1.0 joint, or a VRM 0.x bone group).
-struct Settings {
-    float hit_radius = 0.0f;
-    float stiffness = 1.0f;
-    float gravity_power = 0.0f;
-    glm::vec3 gravity_dir{0.0f, -1.0f, 0.0f};
-    float drag = 0.5f;
-    rods::AngleLimit limit;  // VRMC_springBone_limit on the joint (VRM 1.0 only)
-};
-
-class Reader {
-public:
-    explicit Reader(const animation::Character& character) : c_(character), rest_(animation::rest_pose(character)) {}
-
-    Result<VrmSprings> read() {
-        if (c_.extensions.empty()) return std::move(out_);
-        json root;
-        try {
-            root = json::parse(c_.extensions);
-        } catch (const std::exception& e) {
-            return invalid("$.extensions", std::string("invalid JSON: ") + e.what());
-        }
-        if (!root.is_object()) return std::move(out_);
-        if (const auto it = root.find("VRMC_springBone"); it != root.end()) {
-            out_.version = 2;
-            KW_TRY(read_1(*it, "$.extensions.VRMC_springBone"));
-        } else if (const auto vrm = root.find("VRM"); vrm != root.end() && vrm->is_object() &&
-                                                       vrm->contains("secondaryAnimation")) {
-            out_.version = 1;
-            KW_TRY(read_0((*vrm)["secondaryAnimation"], "$.extensions.VRM.secondaryAnimation"));
-        }
-        return std::move(out_);
-    }
-
-private:
-    const animation::Character& c_;
-    animation::Pose rest_;
-    VrmSprings out_;
-
-    [[nodiscard]] Error invalid(const std::string& path, const std::string& what) const {
-        return make_error(Error::Kind::InvalidInput, c_.source + ": " + path + ": " + what);
-    }
-    void warn(const std::string& path, const std::string& what) { out_.warnings.push_back(c_.source + ": " + path + ": " + what); }
-
-    // Fields. Absent optional fields take `fallback`; present ones must have the type.
-    // A member of JSON type `is` (an object, an array); nullptr when absent and optional.
-    Result<const json*> member(const json& parent, const std::string& key, const std::string& path, bool required,
-                               bool (json::*is)() const noexcept, const char* what) {
-        const auto it = parent.find(key);
-        if (it == parent.end()) {
-            if (required) return invalid(path, "missing \"" + key + "\"");
-            return static_cast<const json*>(nullptr);
-        }
-        if (!((*it).*is)()) return invalid(path + "." + key, std::string("expected ") + what);
-        return &*it;
-    }
-    Result<const json*> object(const json& parent, const std::string& key, const std::string& path, bool required) {
-        return member(parent, key, path, required, &json::is_object, "an object");
-    }
-    Result<const json*> array(const json& parent, const std::string& key, const std::string& path, bool required) {
-        return member(parent, key, path, required, &json::is_array, "an array");
-    }
-    Result<float> number(const json& parent, const std::string& key, const std::string& path, float fallback) {
-        const auto it = parent.find(key);
-        if (it == parent.end()) return fallback;
-        if (!it->is_number()) return invalid(path + "." + key, "expected a number");
-        const auto v = it->get<double>();
-        if (!std::isfinite(v)) return invalid(path + "." + key, "not finite");
-        return static_cast<float>(v);
-    }
-    // A joint's VRMC_springBone_limit (1.0-draft): exactly one of cone {angle, rotation},
-    // hinge {angle, rotation}, spherical {pitch, yaw, rotation}; angles in radians, >= 0,
-    // read as pi (pitch, angle) or pi/2 (yaw) above those, as the draft says an
-    // implementation MUST; rotation a unit quaternion (x, y, z, w), normalized as written.
-    Result<rods::AngleLimit> limit(const json& joint, const std::string& path) {
-        rods::AngleLimit out;
-        const auto exts = joint.find("extensions");
-        if (exts == joint.end() || !exts->is_object()) return out;
-        const auto ext = exts->find("VRMC_springBone_limit");
-        if (ext == exts->end()) return out;
-        const std::string p = path + ".extensions.VRMC_springBone_limit";
-        if (!ext->is_object()) return invalid(p, "expected an object");
-        const auto lim = ext->find("limit");
-        const char* kinds[3] = {"cone", "hinge", "spherical"};
-        if (lim == ext->end() || !lim->is_object()) return invalid(p + ".limit", "expected an object with one of cone, hinge, spherical");
-        int found = -1;
-        for (int k = 0; k < 3; ++k) {
-            if (!lim->contains(kinds[k])) continue;
-            if (found >= 0) return invalid(p + ".limit", "more than one of cone, hinge, spherical");
-            found = k;
-        }
-        if (found < 0) return invalid(p + ".limit", "expected one of cone, hinge, spherical");
-        const json& shape = (*lim)[kinds[found]];
-        const std::string sp = p + ".limit." + kinds[found];
-        if (!shape.is_object()) return invalid(sp, "expected an object");
-        auto angle = [&](const char* key, float most) -> Result<float> {
-            if (!shape.contains(key)) return invalid(sp, std::string("missing \"") + key + "\"");
-            auto v = number(shape, key, sp, 0.0f);
-            if (!v) return v.error();
-            if (v.value() < 0.0f) return invalid(sp + "." + key, "negative (" + std::to_string(v.value()) + " rad); at least 0");
-            return std::min(v.value(), most);
-        };
-        if (found == 2) {
-            out.kind = rods::LimitKind::Spherical;
-            auto pitch = angle("pitch", rods::kMaxLimitAngle);
-            if (!pitch) return pitch.error();
-            auto yaw = angle("yaw", rods::kMaxLimitYaw);
-            if (!yaw) return yaw.error();
-            out.angle = pitch.value();
-            out.yaw = yaw.value();
-        } else {
-            out.kind = found == 0 ? rods::LimitKind::Cone : rods::LimitKind::Hinge;
-            auto a = angle("angle", rods::kMaxLimitAngle);
-            if (!a) return a.error();
-            out.angle = a.value();
-        }
-        if (const auto r = shape.find("rotation"); r != shape.end()) {
-            const std::string rp = sp + ".rotation";
-            if (!r->is_array() || r->size() != 4) return invalid(rp, "expected 4 numbers [x, y, z, w]");
-            float q[4] = {};
-            for (std::size_t i = 0; i < 4; ++i) {
-                if (!(*r)[i].is_number() || !std::isfinite((*r)[i].get<double>())) return invalid(rp, "expected 4 finite numbers");
-                q[i] = (*r)[i].get<float>();
-            }
-            const glm::quat rotation(q[3], q[0], q[1], q[2]);
-            const float len = glm::length(rotation);
-            if (!(len > 1e-6f)) return invalid(rp, "a zero quaternion; expected a unit one");
-            out.rotation = rotation / len;
-        }
-        return out;
-    }
-
-    Result<float> radius(const json& parent, const std::string& path, float fallback) {
-        auto r = number(parent, "radius", path, fallback);
-        if (r && r.value() < 0.0f) return invalid(path + ".radius", "negative (" + std::to_string(r.value()) + ")");
-        return r;
-    }
-    // A VRM 1.0 vec3: [x, y, z].
-    Result<glm::vec3> vec3(const json& parent, const std::string& key, const std::string& path, glm::vec3 fallback) {
-        const auto it = parent.find(key);
-        if (it == parent.end()) return fallback;
-        const std::string p = path + "." + key;
-        if (!it->is_array() || it->size() != 3) return invalid(p, "expected an array of 3 numbers");
-        glm::vec3 v;
-        for (std::size_t i = 0; i < 3; ++i) {
-            if (!(*it)[i].is_number() || !std::isfinite((*it)[i].get<double>())) return invalid(at(p, i), "expected a finite number");
-            v[static_cast<glm::length_t>(i)] = (*it)[i].get<float>();
-        }
-        return v;
-    }
-    // A VRM 0.x vec3: {"x": .., "y": .., "z": ..}, absent components 0.
-    Result<glm::vec3> vec3_object(const json& parent, const std::string& key, const std::string& path, glm::vec3 fallback) {
-        const auto it = parent.find(key);
-        if (it == parent.end()) return fallback;
-        const std::string p = path + "." + key;
-        if (!it->is_object()) return invalid(p, "expected an object {x, y, z}");
-        glm::vec3 v(0.0f);
-        for (glm::length_t i = 0; i < 3; ++i) {
-            auto component = number(*it, std::string(1, "xyz"[i]), p, 0.0f);
-            if (!component) return component.error();
-            v[i] = component.value();
-        }
-        return v;
-    }
-    Result<std::size_t> index(const json& parent, const std::string& key, const std::string& path, std::size_t count,
-                              const std::string& what) {
-        const auto it = parent.find(key);
-        if (it == parent.end()) return invalid(path, "missing \"" + key + "\"");
-        return index_value(*it, path + "." + key, count, what);
-    }
-    Result<std::size_t> index_value(const json& value, const std::string& path, std::size_t count, const std::string& what) {
-        if (!value.is_number_integer()) return invalid(path, "expected an integer");
-        const auto i = value.get<long long>();
-        if (i < 0 || static_cast<unsigned long long>(i) >= count) {
-            return invalid(path, what + " " + std::to_string(i) + " does not exist (" + std::to_string(count) + " of them)");
-        }
-        return static_cast<std::size_t>(i);
-    }
-
-    Result<Settings> settings(const json& obj, const std::string& path, const Settings& defaults, bool vrm0) {
-        Settings s;
-        auto hit = number(obj, "hitRadius", path, defaults.hit_radius);
-        auto stiffness = number(obj, vrm0 ? "stiffiness" : "stiffness", path, defaults.stiffness);  // sic, VRM 0.x
-        auto power = number(obj, "gravityPower", path, defaults.gravity_power);
-        auto dir = vrm0 ? vec3_object(obj, "gravityDir", path, defaults.gravity_dir) : vec3(obj, "gravityDir", path, defaults.gravity_dir);
-        auto drag = number(obj, "dragForce", path, defaults.drag);
-        for (const Result<float>* r : {&hit, &stiffness, &power, &drag}) {
-            if (!*r) return r->error();
-        }
-        if (!dir) return dir.error();
-        s.hit_radius = std::max(hit.value(), 0.0f);
-        s.stiffness = std::max(stiffness.value(), 0.0f);
-        s.gravity_power = std::max(power.value(), 0.0f);
-        // gravityDir is a unit vector by the spec; normalize what authors wrote.
-        const float len = glm::length(dir.value());
-        s.gravity_dir = len > 0.0f ? dir.value() / len : glm::vec3(0.0f);
-        s.drag = drag.value();
-        return s;
-    }
-
-    // A collider shape object {sphere: {...}}, {capsule: {...}} (VRM 1.0 and extended) or,
-    // in the extended collider only, {plane: {offset, normal}}. `inside` is read only
-    // from the extended collider (VRMC_springBone_extended_collider 1.0's shapes).
-    Result<bool> shape(const json& shape_obj, const std::string& path, VrmCollider& out, bool extended) {
-        if (const auto it = shape_obj.find("sphere"); it != shape_obj.end() && it->is_object()) {
-            const std::string p = path + ".sphere";
-            auto offset = vec3(*it, "offset", p, glm::vec3(0.0f));
-            auto r = radius(*it, p, 0.0f);
-            if (!offset) return offset.error();
-            if (!r) return r.error();
-            out.capsule = false;
-            out.offset = out.tail = offset.value();
-            out.radius = r.value();
-            auto inside = flag(*it, "inside", p, extended);
-            if (!inside) return inside.error();
-            out.kind = inside.value() ? rods::ColliderKind::Inside : rods::ColliderKind::Outside;
-            return true;
-        }
-        if (const auto it = shape_obj.find("capsule"); it != shape_obj.end() && it->is_object()) {
-            const std::string p = path + ".capsule";
-            auto offset = vec3(*it, "offset", p, glm::vec3(0.0f));
-            auto tail = vec3(*it, "tail", p, glm::vec3(0.0f));
-            auto r = radius(*it, p, 0.0f);
-            if (!offset) return offset.error();
-            if (!tail) return tail.error();
-            if (!r) return r.error();
-            out.capsule = true;
-            out.offset = offset.value();
-            out.tail = tail.value();
-            out.radius = r.value();
-            auto inside = flag(*it, "inside", p, extended);
-            if (!inside) return inside.error();
-            out.kind = inside.value() ? rods::ColliderKind::Inside : rods::ColliderKind::Outside;
-            return true;
-        }
-        if (const auto it = shape_obj.find("plane"); extended && it != shape_obj.end() && it->is_object()) {
-            const std::string p = path + ".plane";
-            auto offset = vec3(*it, "offset", p, glm::vec3(0.0f));
-            auto normal = vec3(*it, "normal", p, glm::vec3(0.0f, 0.0f, 1.0f));  // the extension's default
-            if (!offset) return offset.error();
-            if (!normal) return normal.error();
-            const float length = glm::length(normal.value());
-            if (!(length > 1e-6f)) {
-                return invalid(p + ".normal", "a plane's normal must be a non-zero vector (got [" + std::to_string(normal.value().x) +
-                                                  ", " + std::to_string(normal.value().y) + ", " + std::to_string(normal.value().z) + "])");
-            }
-            out.capsule = false;
-            out.kind = rods::ColliderKind::Plane;
-            out.offset = offset.value();
-            out.normal = normal.value() / length;
-            out.tail = out.offset + out.normal;
-            out.radius = 0.0f;
-            return true;
-        }
-        return false;
-    }
-    // An optional boolean member, read only when `read` (else false).
-    Result<bool> flag(const json& parent, const std::string& key, const std::string& path, bool read) {
-        if (!read) return false;
-        const auto it = parent.find(key);
-        if (it == parent.end()) return false;
-        if (!it->is_boolean()) return invalid(path + "." + key, "expected true or false");
-        return it->get<bool>();
-    }
-
-    Result<void> read_collider_1(const json& collider, const std::string& path) {
-        if (!collider.is_object()) return invalid(path, "expected an object");
-        auto node = index(collider, "node", path, c_.nodes.size(), "node");
-        if (!node) return node.error();
-        VrmCollider out;
-        out.node = static_cast<int>(node.value());
-        auto base = object(collider, "shape", path, true);
-        if (!base) return base.error();
-        auto mapped = shape(*base.value(), path + ".shape", out, false);
-        if (!mapped) return mapped.error();
-        if (!mapped.value()) return invalid(path + ".shape", "neither a sphere nor a capsule");
-
-        const std::string ext_path = path + ".extensions.VRMC_springBone_extended_collider.shape";
-        const auto exts = collider.find("extensions");
-        if (exts != collider.end() && exts->is_object() && exts->contains("VRMC_springBone_extended_collider")) {
-            const json& ext = (*exts)["VRMC_springBone_extended_collider"];
-            if (ext.is_object() && ext.contains("shape") && ext["shape"].is_object()) {
-                VrmCollider extended = out;
-                auto ok = shape(ext["shape"], ext_path, extended, true);
-                if (!ok) return ok.error();
-                if (ok.value()) {
-                    out = extended;  // the extension's shape replaces the base one, its fallback
-                } else {
-                    warn(ext_path, "unknown shape: the base shape is used");
-                }
-            }
-        }
-        out_.colliders.push_back(out);
+// The chain of `nodes` with `bones` (the settings of each bone: every joint but the
+// tail), truncated and checked, added to out_. `path` names the spring.
+Result<void> Reader::add_chain(std::vector<int> nodes, std::vector<Settings> bones, std::vector<std::size_t> colliders, int center,
+                               const std::string& path) {
+    if (nodes.size() < 2) {
+        warn(path, "a spring of " + std::to_string(nodes.size()) + " joint(s) has no bone; skipped");
         return {};
     }
-
-    // The chain of `nodes` with `bones` (the settings of each bone: every joint but the
-    // tail), truncated and checked, added to out_. `path` names the spring.
-    Result<void> add_chain(std::vector<int> nodes, std::vector<Settings> bones, std::vector<std::size_t> colliders, int center,
-                           const std::string& path) {
-        if (nodes.size() < 2) {
-            warn(path, "a spring of " + std::to_string(nodes.size()) + " joint(s) has no bone; skipped");
-            return {};
-        }
-        if (nodes.size() > rods::kMaxChainJoints) {
-            warn(path, std::to_string(nodes.size()) + " joints; kept the first " + std::to_string(rods::kMaxChainJoints) +
-                           ", node " + std::to_string(nodes[rods::kMaxChainJoints]) + " and below stay kinematic");
-            nodes.resize(rods::kMaxChainJoints);
-            bones.resize(rods::kMaxChainJoints - 1);
-        }
-        auto chain = make_found_chain(c_, rest_, std::move(nodes));
-        if (!chain) return chain.error();
-
-        VrmSpring spring;
-        spring.chain = std::move(chain).value();
-        // Angle limits, one per bone (VRMC_springBone_limit), where any bone has one.
-        if (std::any_of(bones.begin(), bones.end(), [](const Settings& b) { return b.limit.kind != rods::LimitKind::None; })) {
-            for (const Settings& b : bones) spring.limits.push_back(b.limit);
-        }
-        Settings mean;
-        mean.gravity_dir = glm::vec3(0.0f);  // accumulates gravityPower * gravityDir
-        mean.hit_radius = mean.stiffness = mean.drag = 0.0f;
-        for (const Settings& s : bones) {
-            mean.hit_radius += s.hit_radius;
-            mean.stiffness += s.stiffness;
-            mean.drag += s.drag;
-            mean.gravity_dir += s.gravity_power * s.gravity_dir;
-        }
-        const auto n = static_cast<float>(bones.size());
-        const float segment = spring.chain.length / static_cast<float>(spring.chain.nodes.size() - 1);
-        // The stiffnesses are fractions per rods::kReferenceSubstep, whatever the substep
-        // (rods::substep_stiffness), so the calibration holds at every frame rate.
-        const float h = rods::kReferenceSubstep;
-        const float a = kVrmFrameRate * h * h * (mean.stiffness / n);
-        spring.params.rest_stiffness = a / (a + segment);
-        spring.params.stiffness = 0.0f;  // VRM has no shape matching (vrm.hpp)
-        const float drag = std::clamp(mean.drag / n, 0.0f, kMaxDragForce);
-        spring.params.damping = -std::log(1.0f - drag) * kVrmFrameRate;
-        // The solver damps the velocity before adding gravity, as VRM's verlet step damps
-        // the inertia term and not the gravity term, so the equilibrium sags agree without
-        // a correction (vrm.hpp).
-        spring.params.gravity = kVrmFrameRate * mean.gravity_dir / n;
-        // The scene format takes accelerations up to kMaxGravity (100 g) a component; VRM's
-        // gravityPower has no bound, so a strong one is held there rather than refused.
-        if (const float g = glm::length(spring.params.gravity); g > kMaxGravity) {
-            spring.params.gravity *= kMaxGravity / g;
-            warn(path, "gravity " + std::to_string(g) + " m/s^2 (gravityPower, mapped) held at " + std::to_string(kMaxGravity) +
-                           " m/s^2, the scene format's bound");
-        }
-        spring.hit_radius = mean.hit_radius / n;
-
-        spring.physics = scaled_physics(c_, spring.chain);
-        if (spring.hit_radius > 0.0f) {
-            const glm::mat4& world = rest_.world[static_cast<std::size_t>(spring.chain.nodes.front())];
-            const float scale = std::max({glm::length(glm::vec3(world[0])), glm::length(glm::vec3(world[1])),
-                                          glm::length(glm::vec3(world[2]))});
-            float shortest = spring.chain.length;
-            for (std::size_t i = 1; i < spring.chain.base.positions.size(); ++i) {
-                shortest = std::min(shortest, glm::length(spring.chain.base.positions[i] - spring.chain.base.positions[i - 1]));
-            }
-            const float thickness = std::min(std::max(spring.hit_radius * scale, kMinThickness), 0.5f * shortest);
-            // Same cylinder mass as scaled_physics(), at the new thickness.
-            spring.physics.mass *= (thickness * thickness) / (spring.physics.thickness * spring.physics.thickness);
-            spring.physics.thickness = thickness;
-            spring.physics = clamped(spring.physics);
-        }
-        std::sort(colliders.begin(), colliders.end());
-        colliders.erase(std::unique(colliders.begin(), colliders.end()), colliders.end());
-        spring.colliders = std::move(colliders);
-        spring.center = center;
-        out_.springs.push_back(std::move(spring));
-        return {};
+    if (nodes.size() > rods::kMaxChainJoints) {
+        warn(path, std::to_string(nodes.size()) + " joints; kept the first " + std::to_string(rods::kMaxChainJoints) +
+                       ", node " + std::to_string(nodes[rods::kMaxChainJoints]) + " and below stay kinematic");
+        nodes.resize(rods::kMaxChainJoints);
+        bones.resize(rods::kMaxChainJoints - 1);
     }
+    auto chain = make_found_chain(c_, rest_, std::move(nodes));
+    if (!chain) return chain.error();
 
-    // VRMC_springBone 1.0.
-    Result<void> read_1(const json& ext, const std::string& path) {
-        if (!ext.is_object()) return invalid(path, "expected an object");
-        auto colliders = array(ext, "colliders", path, false);
-        if (!colliders) return colliders.error();
-        if (colliders.value() != nullptr) {
-            for (std::size_t i = 0; i < colliders.value()->size(); ++i) {
-                KW_TRY(read_collider_1((*colliders.value())[i], at(path + ".colliders", i)));
-            }
-        }
-        // Collider groups: lists of collider indices.
-        std::vector<std::vector<std::size_t>> groups;
-        auto group_list = array(ext, "colliderGroups", path, false);
-        if (!group_list) return group_list.error();
-        if (group_list.value() != nullptr) {
-            for (std::size_t g = 0; g < group_list.value()->size(); ++g) {
-                const json& group = (*group_list.value())[g];
-                const std::string gp = at(path + ".colliderGroups", g);
-                if (!group.is_object()) return invalid(gp, "expected an object");
-                auto members = array(group, "colliders", gp, true);
-                if (!members) return members.error();
-                std::vector<std::size_t> list;
-                for (std::size_t k = 0; k < members.value()->size(); ++k) {
-                    auto i = index_value((*members.value())[k], at(gp + ".colliders", k), out_.colliders.size(), "collider");
-                    if (!i) return i.error();
-                    list.push_back(i.value());
-                }
-                groups.push_back(std::move(list));
-            }
-        }
-        auto springs = array(ext, "springs", path, false);
-        if (!springs) return springs.error();
-        if (springs.value() == nullptr) return {};
-        const Settings defaults;  // VRMC_springBone 1.0: hitRadius 0, stiffness 1, gravity 0 along -Y, drag 0.5
-        for (std::size_t s = 0; s < springs.value()->size(); ++s) {
-            const json& spring = (*springs.value())[s];
-            const std::string sp = at(path + ".springs", s);
-            if (!spring.is_object()) return invalid(sp, "expected an object");
-            auto joints = array(spring, "joints", sp, true);
-            if (!joints) return joints.error();
-            std::vector<int> nodes;
-            std::vector<Settings> bones;
-            for (std::size_t j = 0; j < joints.value()->size(); ++j) {
-                const json& joint = (*joints.value())[j];
-                const std::string jp = at(sp + ".joints", j);
-                if (!joint.is_object()) return invalid(jp, "expected an object");
-                auto node = index(joint, "node", jp, c_.nodes.size(), "node");
-                if (!node) return node.error();
-                const int n = static_cast<int>(node.value());
-                if (!nodes.empty() && c_.nodes[node.value()].parent != nodes.back()) {
-                    return invalid(jp, "node " + std::to_string(n) + " is not a child of node " +
-                                           std::to_string(nodes.back()) + " (the joint before it); a spring's joints must form a parent-to-child path");
-                }
-                auto settings_j = settings(joint, jp, defaults, false);
-                if (!settings_j) return settings_j.error();
-                // The last joint's limit is ignored, as the draft says it MUST be (the tail
-                // has no child to limit); its settings are dropped below.
-                auto limit_j = limit(joint, jp);
-                if (!limit_j) return limit_j.error();
-                settings_j.value().limit = limit_j.value();
-                nodes.push_back(n);
-                bones.push_back(settings_j.value());
-            }
-            if (!bones.empty()) bones.pop_back();  // the tail's settings move nothing in VRM 1.0
-            std::vector<std::size_t> members;
-            auto spring_groups = array(spring, "colliderGroups", sp, false);
-            if (!spring_groups) return spring_groups.error();
-            if (spring_groups.value() != nullptr) {
-                for (std::size_t k = 0; k < spring_groups.value()->size(); ++k) {
-                    auto g = index_value((*spring_groups.value())[k], at(sp + ".colliderGroups", k), groups.size(), "collider group");
-                    if (!g) return g.error();
-                    members.insert(members.end(), groups[g.value()].begin(), groups[g.value()].end());
-                }
-            }
-            int center = -1;
-            if (spring.contains("center")) {
-                auto c = index(spring, "center", sp, c_.nodes.size(), "node");
-                if (!c) return c.error();
-                center = static_cast<int>(c.value());
-            }
-            KW_TRY(add_chain(std::move(nodes), std::move(bones), std::move(members), center, sp));
-        }
-        return {};
+    VrmSpring spring;
+    spring.chain = std::move(chain).value();
+    // Angle limits, one per bone (VRMC_springBone_limit), where any bone has one.
+    if (std::any_of(bones.begin(), bones.end(), [](const Settings& b) { return b.limit.kind != rods::LimitKind::None; })) {
+        for (const Settings& b : bones) spring.limits.push_back(b.limit);
     }
+    Settings mean;
+    mean.gravity_dir = glm::vec3(0.0f);  // accumulates gravityPower * gravityDir
+    mean.hit_radius = mean.stiffness = mean.drag = 0.0f;
+    for (const Settings& s : bones) {
+        mean.hit_radius += s.hit_radius;
+        mean.stiffness += s.stiffness;
+        mean.drag += s.drag;
+        mean.gravity_dir += s.gravity_power * s.gravity_dir;
+    }
+    const auto n = static_cast<float>(bones.size());
+    const float segment = spring.chain.length / static_cast<float>(spring.chain.nodes.size() - 1);
+    // The stiffnesses are fractions per rods::kReferenceSubstep, whatever the substep
+    // (rods::substep_stiffness), so the calibration holds at every frame rate.
+    const float h = rods::kReferenceSubstep;
+    const float a = kVrmFrameRate * h * h * (mean.stiffness / n);
+    spring.params.rest_stiffness = a / (a + segment);
+    spring.params.stiffness = 0.0f;  // VRM has no shape matching (vrm.hpp)
+    const float drag = std::clamp(mean.drag / n, 0.0f, kMaxDragForce);
+    spring.params.damping = -std::log(1.0f - drag) * kVrmFrameRate;
+    // The solver damps the velocity before adding gravity, as VRM's verlet step damps
+    // the inertia term and not the gravity term, so the equilibrium sags agree without
+    // a correction (vrm.hpp).
+    spring.params.gravity = kVrmFrameRate * mean.gravity_dir / n;
+    // The scene format takes accelerations up to kMaxGravity (100 g) a component; VRM's
+    // gravityPower has no bound, so a strong one is held there rather than refused.
+    if (const float g = glm::length(spring.params.gravity); g > kMaxGravity) {
+        spring.params.gravity *= kMaxGravity / g;
+        warn(path, "gravity " + std::to_string(g) + " m/s^2 (gravityPower, mapped) held at " + std::to_string(kMaxGravity) +
+                       " m/s^2, the scene format's bound");
+    }
+    spring.hit_radius = mean.hit_radius / n;
 
-    // VRM 0.x secondaryAnimation.
-    Result<void> read_0(const json& secondary, const std::string& path) {
-        if (!secondary.is_object()) return invalid(path, "expected an object");
-        std::vector<std::vector<std::size_t>> groups;
-        auto group_list = array(secondary, "colliderGroups", path, false);
-        if (!group_list) return group_list.error();
-        if (group_list.value() != nullptr) {
-            for (std::size_t g = 0; g < group_list.value()->size(); ++g) {
-                const json& group = (*group_list.value())[g];
-                const std::string gp = at(path + ".colliderGroups", g);
-                if (!group.is_object()) return invalid(gp, "expected an object");
-                auto node = index(group, "node", gp, c_.nodes.size(), "node");
-                if (!node) return node.error();
-                auto members = array(group, "colliders", gp, false);
-                if (!members) return members.error();
-                std::vector<std::size_t> list;
-                for (std::size_t k = 0; members.value() != nullptr && k < members.value()->size(); ++k) {
-                    const json& collider = (*members.value())[k];
-                    const std::string cp = at(gp + ".colliders", k);
-                    if (!collider.is_object()) return invalid(cp, "expected an object");
-                    auto offset = vec3_object(collider, "offset", cp, glm::vec3(0.0f));
-                    auto r = radius(collider, cp, 0.0f);
-                    if (!offset) return offset.error();
-                    if (!r) return r.error();
-                    VrmCollider out;
-                    out.node = static_cast<int>(node.value());
-                    out.offset = out.tail = offset.value() * glm::vec3(1.0f, 1.0f, -1.0f);  // stored z-negated (UniVRM 0.x)
-                    out.radius = r.value();
-                    list.push_back(out_.colliders.size());
-                    out_.colliders.push_back(out);
-                }
-                groups.push_back(std::move(list));
-            }
+    spring.physics = scaled_physics(c_, spring.chain);
+    if (spring.hit_radius > 0.0f) {
+        const glm::mat4& world = rest_.world[static_cast<std::size_t>(spring.chain.nodes.front())];
+        const float scale = std::max({glm::length(glm::vec3(world[0])), glm::length(glm::vec3(world[1])),
+                                      glm::length(glm::vec3(world[2]))});
+        float shortest = spring.chain.length;
+        for (std::size_t i = 1; i < spring.chain.base.positions.size(); ++i) {
+            shortest = std::min(shortest, glm::length(spring.chain.base.positions[i] - spring.chain.base.positions[i - 1]));
         }
-        auto bone_groups = array(secondary, "boneGroups", path, false);
-        if (!bone_groups) return bone_groups.error();
-        if (bone_groups.value() == nullptr) return {};
-        Settings defaults;  // UniVRM 0.x VRMSpringBone defaults
-        defaults.hit_radius = 0.02f;
-        defaults.drag = 0.4f;
-        std::vector<bool> claimed(c_.nodes.size(), false);
-        for (std::size_t b = 0; b < bone_groups.value()->size(); ++b) {
-            const json& group = (*bone_groups.value())[b];
-            const std::string bp = at(path + ".boneGroups", b);
-            if (!group.is_object()) return invalid(bp, "expected an object");
-            auto s = settings(group, bp, defaults, true);
-            if (!s) return s.error();
-            std::vector<std::size_t> members;
-            auto group_refs = array(group, "colliderGroups", bp, false);
-            if (!group_refs) return group_refs.error();
-            for (std::size_t k = 0; group_refs.value() != nullptr && k < group_refs.value()->size(); ++k) {
-                auto g = index_value((*group_refs.value())[k], at(bp + ".colliderGroups", k), groups.size(), "collider group");
+        const float thickness = std::min(std::max(spring.hit_radius * scale, kMinThickness), 0.5f * shortest);
+        // Same cylinder mass as scaled_physics(), at the new thickness.
+        spring.physics.mass *= (thickness * thickness) / (spring.physics.thickness * spring.physics.thickness);
+        spring.physics.thickness = thickness;
+        spring.physics = clamped(spring.physics);
+    }
+    std::sort(colliders.begin(), colliders.end());
+    colliders.erase(std::unique(colliders.begin(), colliders.end()), colliders.end());
+    spring.colliders = std::move(colliders);
+    spring.center = center;
+    out_.springs.push_back(std::move(spring));
+    return {};
+}
+
+// VRMC_springBone 1.0.
+Result<void> Reader::read_1(const json& ext, const std::string& path) {
+    if (!ext.is_object()) return invalid(path, "expected an object");
+    auto colliders = array(ext, "colliders", path, false);
+    if (!colliders) return colliders.error();
+    if (colliders.value() != nullptr) {
+        for (std::size_t i = 0; i < colliders.value()->size(); ++i) {
+            KW_TRY(read_collider_1((*colliders.value())[i], at(path + ".colliders", i)));
+        }
+    }
+    // Collider groups: lists of collider indices.
+    std::vector<std::vector<std::size_t>> groups;
+    auto group_list = array(ext, "colliderGroups", path, false);
+    if (!group_list) return group_list.error();
+    if (group_list.value() != nullptr) {
+        for (std::size_t g = 0; g < group_list.value()->size(); ++g) {
+            const json& group = (*group_list.value())[g];
+            const std::string gp = at(path + ".colliderGroups", g);
+            if (!group.is_object()) return invalid(gp, "expected an object");
+            auto members = array(group, "colliders", gp, true);
+            if (!members) return members.error();
+            std::vector<std::size_t> list;
+            for (std::size_t k = 0; k < members.value()->size(); ++k) {
+                auto i = index_value((*members.value())[k], at(gp + ".colliders", k), out_.colliders.size(), "collider");
+                if (!i) return i.error();
+                list.push_back(i.value());
+            }
+            groups.push_back(std::move(list));
+        }
+    }
+    auto springs = array(ext, "springs", path, false);
+    if (!springs) return springs.error();
+    if (springs.value() == nullptr) return {};
+    const Settings defaults;  // VRMC_springBone 1.0: hitRadius 0, stiffness 1, gravity 0 along -Y, drag 0.5
+    for (std::size_t s = 0; s < springs.value()->size(); ++s) {
+        const json& spring = (*springs.value())[s];
+        const std::string sp = at(path + ".springs", s);
+        if (!spring.is_object()) return invalid(sp, "expected an object");
+        auto joints = array(spring, "joints", sp, true);
+        if (!joints) return joints.error();
+        std::vector<int> nodes;
+        std::vector<Settings> bones;
+        for (std::size_t j = 0; j < joints.value()->size(); ++j) {
+            const json& joint = (*joints.value())[j];
+            const std::string jp = at(sp + ".joints", j);
+            if (!joint.is_object()) return invalid(jp, "expected an object");
+            auto node = index(joint, "node", jp, c_.nodes.size(), "node");
+            if (!node) return node.error();
+            const int n = static_cast<int>(node.value());
+            if (!nodes.empty() && c_.nodes[node.value()].parent != nodes.back()) {
+                return invalid(jp, "node " + std::to_string(n) + " is not a child of node " +
+                                       std::to_string(nodes.back()) + " (the joint before it); a spring's joints must form a parent-to-child path");
+            }
+            auto settings_j = settings(joint, jp, defaults, false);
+            if (!settings_j) return settings_j.error();
+            // The last joint's limit is ignored, as the draft says it MUST be (the tail
+            // has no child to limit); its settings are dropped below.
+            auto limit_j = limit(joint, jp);
+            if (!limit_j) return limit_j.error();
+            settings_j.value().limit = limit_j.value();
+            nodes.push_back(n);
+            bones.push_back(settings_j.value());
+        }
+        if (!bones.empty()) bones.pop_back();  // the tail's settings move nothing in VRM 1.0
+        std::vector<std::size_t> members;
+        auto spring_groups = array(spring, "colliderGroups", sp, false);
+        if (!spring_groups) return spring_groups.error();
+        if (spring_groups.value() != nullptr) {
+            for (std::size_t k = 0; k < spring_groups.value()->size(); ++k) {
+                auto g = index_value((*spring_groups.value())[k], at(sp + ".colliderGroups", k), groups.size(), "collider group");
                 if (!g) return g.error();
                 members.insert(members.end(), groups[g.value()].begin(), groups[g.value()].end());
             }
-            // UniVRM 0.x writes -1 for "no center".
-            int center = -1;
-            if (const auto it = group.find("center"); it != group.end() && !(it->is_number_integer() && it->get<long long>() == -1)) {
-                auto c = index_value(*it, bp + ".center", c_.nodes.size(), "node");
-                if (!c) return c.error();
-                center = static_cast<int>(c.value());
+        }
+        int center = -1;
+        if (spring.contains("center")) {
+            auto c = index(spring, "center", sp, c_.nodes.size(), "node");
+            if (!c) return c.error();
+            center = static_cast<int>(c.value());
+        }
+        KW_TRY(add_chain(std::move(nodes), std::move(bones), std::move(members), center, sp));
+    }
+    return {};
+}
+
+// VRM 0.x secondaryAnimation.
+Result<void> Reader::read_0(const json& secondary, const std::string& path) {
+    if (!secondary.is_object()) return invalid(path, "expected an object");
+    std::vector<std::vector<std::size_t>> groups;
+    auto group_list = array(secondary, "colliderGroups", path, false);
+    if (!group_list) return group_list.error();
+    if (group_list.value() != nullptr) {
+        for (std::size_t g = 0; g < group_list.value()->size(); ++g) {
+            const json& group = (*group_list.value())[g];
+            const std::string gp = at(path + ".colliderGroups", g);
+            if (!group.is_object()) return invalid(gp, "expected an object");
+            auto node = index(group, "node", gp, c_.nodes.size(), "node");
+            if (!node) return node.error();
+            auto members = array(group, "colliders", gp, false);
+            if (!members) return members.error();
+            std::vector<std::size_t> list;
+            for (std::size_t k = 0; members.value() != nullptr && k < members.value()->size(); ++k) {
+                const json& collider = (*members.value())[k];
+                const std::string cp = at(gp + ".colliders", k);
+                if (!collider.is_object()) return invalid(cp, "expected an object");
+                auto offset = vec3_object(collider, "offset", cp, glm::vec3(0.0f));
+                auto r = radius(collider, cp, 0.0f);
+                if (!offset) return offset.error();
+                if (!r) return r.error();
+                VrmCollider out;
+                out.node = static_cast<int>(node.value());
+                out.offset = out.tail = offset.value() * glm::vec3(1.0f, 1.0f, -1.0f);  // stored z-negated (UniVRM 0.x)
+                out.radius = r.value();
+                list.push_back(out_.colliders.size());
+                out_.colliders.push_back(out);
             }
-            auto bones = array(group, "bones", bp, false);
-            if (!bones) return bones.error();
-            for (std::size_t k = 0; bones.value() != nullptr && k < bones.value()->size(); ++k) {
-                const std::string rp = at(bp + ".bones", k);
-                auto root = index_value((*bones.value())[k], rp, c_.nodes.size(), "node");
-                if (!root) return root.error();
-                // The subtree below the root: single-child runs are chains; a branch ends
-                // one and starts one per child.
-                std::vector<int> starts{static_cast<int>(root.value())};
-                while (!starts.empty()) {
-                    const int start = starts.back();
-                    starts.pop_back();
-                    if (claimed[static_cast<std::size_t>(start)]) {
-                        warn(rp, "node " + std::to_string(start) + " is already in a chain; skipped");
-                        continue;
-                    }
-                    std::vector<int> nodes{start};
-                    while (c_.nodes[static_cast<std::size_t>(nodes.back())].children.size() == 1) {
-                        nodes.push_back(c_.nodes[static_cast<std::size_t>(nodes.back())].children.front());
-                    }
-                    const std::vector<int>& branch = c_.nodes[static_cast<std::size_t>(nodes.back())].children;
-                    starts.insert(starts.end(), branch.rbegin(), branch.rend());  // file order, first child first
-                    for (const int node : nodes) claimed[static_cast<std::size_t>(node)] = true;
-                    std::vector<Settings> per_bone(nodes.size() > 1 ? nodes.size() - 1 : 0, s.value());
-                    KW_TRY(add_chain(std::move(nodes), std::move(per_bone), members, center,
-                                     rp + " (chain from node " + std::to_string(start) + ")"));
+            groups.push_back(std::move(list));
+        }
+    }
+    auto bone_groups = array(secondary, "boneGroups", path, false);
+    if (!bone_groups) return bone_groups.error();
+    if (bone_groups.value() == nullptr) return {};
+    Settings defaults;  // UniVRM 0.x VRMSpringBone defaults
+    defaults.hit_radius = 0.02f;
+    defaults.drag = 0.4f;
+    std::vector<bool> claimed(c_.nodes.size(), false);
+    for (std::size_t b = 0; b < bone_groups.value()->size(); ++b) {
+        const json& group = (*bone_groups.value())[b];
+        const std::string bp = at(path + ".boneGroups", b);
+        if (!group.is_object()) return invalid(bp, "expected an object");
+        auto s = settings(group, bp, defaults, true);
+        if (!s) return s.error();
+        std::vector<std::size_t> members;
+        auto group_refs = array(group, "colliderGroups", bp, false);
+        if (!group_refs) return group_refs.error();
+        for (std::size_t k = 0; group_refs.value() != nullptr && k < group_refs.value()->size(); ++k) {
+            auto g = index_value((*group_refs.value())[k], at(bp + ".colliderGroups", k), groups.size(), "collider group");
+            if (!g) return g.error();
+            members.insert(members.end(), groups[g.value()].begin(), groups[g.value()].end());
+        }
+        // UniVRM 0.x writes -1 for "no center".
+        int center = -1;
+        if (const auto it = group.find("center"); it != group.end() && !(it->is_number_integer() && it->get<long long>() == -1)) {
+            auto c = index_value(*it, bp + ".center", c_.nodes.size(), "node");
+            if (!c) return c.error();
+            center = static_cast<int>(c.value());
+        }
+        auto bones = array(group, "bones", bp, false);
+        if (!bones) return bones.error();
+        for (std::size_t k = 0; bones.value() != nullptr && k < bones.value()->size(); ++k) {
+            const std::string rp = at(bp + ".bones", k);
+            auto root = index_value((*bones.value())[k], rp, c_.nodes.size(), "node");
+            if (!root) return root.error();
+            // The subtree below the root: single-child runs are chains; a branch ends
+            // one and starts one per child.
+            std::vector<int> starts{static_cast<int>(root.value())};
+            while (!starts.empty()) {
+                const int start = starts.back();
+                starts.pop_back();
+                if (claimed[static_cast<std::size_t>(start)]) {
+                    warn(rp, "node " + std::to_string(start) + " is already in a chain; skipped");
+                    continue;
                 }
+                std::vector<int> nodes{start};
+                while (c_.nodes[static_cast<std::size_t>(nodes.back())].children.size() == 1) {
+                    nodes.push_back(c_.nodes[static_cast<std::size_t>(nodes.back())].children.front());
+                }
+                const std::vector<int>& branch = c_.nodes[static_cast<std::size_t>(nodes.back())].children;
+                starts.insert(starts.end(), branch.rbegin(), branch.rend());  // file order, first child first
+                for (const int node : nodes) claimed[static_cast<std::size_t>(node)] = true;
+                std::vector<Settings> per_bone(nodes.size() > 1 ? nodes.size() - 1 : 0, s.value());
+                KW_TRY(add_chain(std::move(nodes), std::move(per_bone), members, center,
+                                 rp + " (chain from node " + std::to_string(start) + ")"));
             }
         }
-        return {};
     }
-};
+    return {};
+}
 
-}  // namespace
+}  // namespace vrm_detail
+
+using vrm_detail::json;
+using vrm_detail::Reader;
 
 Result<VrmSprings> read_vrm_springs(const animation::Character& character) {
     try {

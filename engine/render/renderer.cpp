@@ -2,7 +2,8 @@
 // resolved into the single-sample colour image at the end of the pass); three pipelines of
 // the draw list's shaders (background without depth, lines, triangles), then the layers
 // domains draw from their device buffers (layer.hpp), in their order; the image copied to
-// a host-visible buffer after the pass, or blitted into a swapchain image.
+// a host-visible buffer after the pass, or blitted into a swapchain image
+// (renderer_present.cpp).
 
 #include "kodawari/render/renderer.hpp"
 
@@ -18,6 +19,7 @@
 #include "gpu/graphics.hpp"
 #include "render/layer.hpp"
 #include "render/draw_recorder.hpp"
+#include "render/renderer_impl.hpp"
 
 namespace kodawari::render {
 
@@ -64,66 +66,6 @@ Rgba8 Image::at(std::uint32_t x, std::uint32_t y) const {
 
 // ---------------------------------------------------------------------------------------
 // Renderer
-
-namespace {
-// Presentation (RendererOptions::create_surface): the swapchain and its own command buffer
-// and fence, because the frame's submission waits on and signals semaphores. At namespace
-// scope, not nested in Impl: clang (< 16) does not see a nested struct's default member
-// initializers while the enclosing class is incomplete, and std::optional::emplace() then
-// finds no default constructor.
-struct PresentTarget {
-    vk::raii::SwapchainKHR swapchain{nullptr};
-    std::vector<vk::Image> images;
-    vk::Extent2D extent{};     // the swapchain's
-    vk::Extent2D requested{};  // the window's framebuffer size it was made for
-    bool stale = false;        // out of date or suboptimal: remade on the next present()
-    vk::raii::Semaphore acquired{nullptr};
-    // One per swapchain image: a present may still wait on an image's semaphore when
-    // the next frame starts, so it is reused only when that image comes back.
-    std::vector<vk::raii::Semaphore> finished;
-    vk::raii::CommandPool pool{nullptr};
-    vk::raii::CommandBuffer cmd{nullptr};
-    vk::raii::Fence fence{nullptr};
-};
-}  // namespace
-
-struct Renderer::Impl {
-    std::shared_ptr<gpu::VulkanContext> ctx;
-    DrawRecorder draws;  // what domains drew through render::Draw
-
-    // `list`, or a copy of it with what domains drew, sized for its camera.
-    [[nodiscard]] const DrawList& with_draws(const DrawList& list, std::optional<DrawList>& merged) const {
-        if (draws.empty()) return list;
-        merged.emplace(list);
-        draws.replay(*merged, std::clamp(static_cast<float>(list.height()) / 720.0f, 0.5f, 2.0f));
-        return *merged;
-    }
-
-    std::uint32_t width = 0, height = 0;
-    bool joints = false;  // RendererOptions::joints
-    vk::SampleCountFlagBits samples = vk::SampleCountFlagBits::e1;
-    // color: the image read back or blitted; multisampled: msaa_color is drawn into and
-    // resolved into color at the end of the pass.
-    std::optional<gpu::GpuImage> color, msaa_color, depth;
-    vk::raii::RenderPass pass{nullptr};
-    vk::raii::Framebuffer framebuffer{nullptr};
-    std::optional<gpu::GraphicsPipeline> background, lines, triangles, shadows;
-    std::optional<compute::Buffer> vertices, readback;
-    // What domains draw from device buffers (render/layer.hpp), in drawing order.
-    struct NamedLayer {
-        int order = 0;
-        std::string name;
-        std::unique_ptr<Layer> layer;
-    };
-    std::vector<NamedLayer> layers;
-
-    // Presentation, when the renderer has a surface (PresentTarget above).
-    std::optional<PresentTarget> window;
-
-    [[nodiscard]] Result<void> upload(const DrawList& list);
-    void record_pass(const vk::raii::CommandBuffer& cmd, const DrawList& list) const;
-    [[nodiscard]] Result<void> make_swapchain(std::uint32_t width, std::uint32_t height);
-};
 
 Renderer::Renderer(std::unique_ptr<Impl> impl) : impl_(std::move(impl)) {}
 Renderer::~Renderer() {
@@ -193,10 +135,6 @@ gpu::VulkanContext& layer_context(Renderer& renderer) { return *LayerAccess::of(
 namespace {
 
 constexpr vk::Format kColorFormat = vk::Format::eR8G8B8A8Unorm;
-
-// The window changed size under the swapchain: control flow (remake it on the next
-// present()), not a failure, told apart by the VkResult that guard() keeps.
-bool out_of_date(const Error& error) { return error.vk_result == static_cast<int>(vk::Result::eErrorOutOfDateKHR); }
 
 // Anti-aliasing: 4 samples per pixel, or the most the device has for colour and depth
 // together if fewer. Fixed sample positions (the standard ones): the same input gives the
@@ -487,166 +425,6 @@ Result<void> Renderer::draw(const DrawList& list) {
     const DrawList& frame = r.with_draws(list, merged);
     KW_TRY(r.upload(frame));
     return r.ctx->submit([&](const vk::raii::CommandBuffer& cmd) { r.record_pass(cmd, frame); });
-}
-
-Result<void> Renderer::Impl::make_swapchain(std::uint32_t w, std::uint32_t h) {
-    const gpu::VulkanContext& c = *ctx;
-    const vk::raii::SurfaceKHR& surface = c.surface();
-    if (!window) {
-        window.emplace();
-        window->acquired = c.device().createSemaphore({});
-        window->pool = c.device().createCommandPool(
-            {.flags = vk::CommandPoolCreateFlagBits::eResetCommandBuffer, .queueFamilyIndex = c.queue_family()});
-        window->cmd = std::move(c.device().allocateCommandBuffers(
-            {.commandPool = *window->pool, .level = vk::CommandBufferLevel::ePrimary, .commandBufferCount = 1})[0]);
-        window->fence = c.device().createFence({});
-    }
-    c.device().waitIdle();  // the old swapchain's images are no longer in use
-    const auto caps = c.physical_device().getSurfaceCapabilitiesKHR(*surface);
-    if (!(caps.supportedUsageFlags & vk::ImageUsageFlagBits::eTransferDst)) {
-        return make_error(Error::Kind::Unsupported, c.info().name + ": the window's images cannot be blitted to");
-    }
-    vk::Extent2D extent = caps.currentExtent;
-    if (extent.width == UINT32_MAX) {
-        extent = vk::Extent2D{.width = std::clamp(w, caps.minImageExtent.width, caps.maxImageExtent.width),
-                              .height = std::clamp(h, caps.minImageExtent.height, caps.maxImageExtent.height)};
-    }
-    window->extent = extent;
-    window->requested = vk::Extent2D{w, h};
-    window->stale = false;
-    window->images.clear();
-    window->finished.clear();
-    if (extent.width == 0 || extent.height == 0) return {};  // minimized: try again later
-    // A UNORM format: the renderer's colours are sRGB values already (an _SRGB swapchain
-    // would encode them a second time).
-    const auto formats = c.physical_device().getSurfaceFormatsKHR(*surface);
-    vk::SurfaceFormatKHR format = formats.front();
-    for (const auto& f : formats) {
-        if ((f.format == vk::Format::eB8G8R8A8Unorm || f.format == vk::Format::eR8G8B8A8Unorm) &&
-            f.colorSpace == vk::ColorSpaceKHR::eSrgbNonlinear) {
-            format = f;
-            break;
-        }
-    }
-    std::uint32_t image_count = caps.minImageCount + 1;
-    if (caps.maxImageCount > 0) image_count = std::min(image_count, caps.maxImageCount);
-    vk::raii::SwapchainKHR old = std::move(window->swapchain);
-    window->swapchain = c.device().createSwapchainKHR({.surface = *surface,
-                                                       .minImageCount = image_count,
-                                                       .imageFormat = format.format,
-                                                       .imageColorSpace = format.colorSpace,
-                                                       .imageExtent = extent,
-                                                       .imageArrayLayers = 1,
-                                                       .imageUsage = vk::ImageUsageFlagBits::eTransferDst,
-                                                       .imageSharingMode = vk::SharingMode::eExclusive,
-                                                       .preTransform = caps.currentTransform,
-                                                       .compositeAlpha = vk::CompositeAlphaFlagBitsKHR::eOpaque,
-                                                       .presentMode = vk::PresentModeKHR::eFifo,
-                                                       .clipped = VK_TRUE,
-                                                       .oldSwapchain = *old});
-    window->images = window->swapchain.getImages();
-    for (std::size_t i = 0; i < window->images.size(); ++i) window->finished.push_back(c.device().createSemaphore({}));
-    return {};
-}
-
-Result<bool> Renderer::present(const DrawList& list, std::uint32_t window_width, std::uint32_t window_height) {
-    assert(list.width() == impl_->width && list.height() == impl_->height && "the draw list is for another size");
-    Impl& r = *impl_;
-    gpu::VulkanContext& c = *r.ctx;
-    if (static_cast<VkSurfaceKHR>(*c.surface()) == VK_NULL_HANDLE) {
-        return make_error(Error::Kind::Unsupported, "present() needs a renderer made with a window surface");
-    }
-    return gpu::guard("Vulkan presentation", [&]() -> Result<bool> {
-        if (!r.window || r.window->stale || r.window->requested != vk::Extent2D{window_width, window_height}) {
-            KW_TRY(r.make_swapchain(window_width, window_height));
-        }
-        if (r.window->images.empty()) return false;  // minimized
-        PresentTarget& w = *r.window;
-        // No image (a timeout) is not an error: the frame is skipped.
-        auto acquired = gpu::guard("Vulkan swapchain image", [&]() -> Result<std::optional<std::uint32_t>> {
-            const auto [result, i] = w.swapchain.acquireNextImage(UINT64_MAX, *w.acquired);
-            if (result != vk::Result::eSuccess && result != vk::Result::eSuboptimalKHR) return std::optional<std::uint32_t>{};
-            return std::optional<std::uint32_t>{i};
-        });
-        if (!acquired) {
-            if (!out_of_date(acquired.error())) return acquired.error();
-            w.stale = true;
-            return false;
-        }
-        if (!acquired.value()) return false;
-        const std::uint32_t index = *acquired.value();
-        std::optional<DrawList> merged;
-        const DrawList& frame = r.with_draws(list, merged);
-        KW_TRY(r.upload(frame));
-        w.cmd.reset();
-        w.cmd.begin({.flags = vk::CommandBufferUsageFlagBits::eOneTimeSubmit});
-        r.record_pass(w.cmd, frame);
-        const vk::ImageSubresourceRange range{.aspectMask = vk::ImageAspectFlagBits::eColor, .levelCount = 1, .layerCount = 1};
-        // The acquire semaphore is waited for at the transfer stage; the image's old
-        // contents are not needed.
-        const vk::ImageMemoryBarrier to_transfer{.srcAccessMask = {},
-                                                 .dstAccessMask = vk::AccessFlagBits::eTransferWrite,
-                                                 .oldLayout = vk::ImageLayout::eUndefined,
-                                                 .newLayout = vk::ImageLayout::eTransferDstOptimal,
-                                                 .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
-                                                 .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
-                                                 .image = w.images[index],
-                                                 .subresourceRange = range};
-        w.cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eTransfer, {}, {}, {}, to_transfer);
-        const vk::ImageSubresourceLayers layers{.aspectMask = vk::ImageAspectFlagBits::eColor, .layerCount = 1};
-        const vk::ImageBlit blit{.srcSubresource = layers,
-                                 .srcOffsets = std::array<vk::Offset3D, 2>{vk::Offset3D{0, 0, 0},
-                                                                           vk::Offset3D{static_cast<std::int32_t>(r.width),
-                                                                                        static_cast<std::int32_t>(r.height), 1}},
-                                 .dstSubresource = layers,
-                                 .dstOffsets = std::array<vk::Offset3D, 2>{
-                                     vk::Offset3D{0, 0, 0}, vk::Offset3D{static_cast<std::int32_t>(w.extent.width),
-                                                                         static_cast<std::int32_t>(w.extent.height), 1}}};
-        w.cmd.blitImage(r.color->handle(), vk::ImageLayout::eTransferSrcOptimal, w.images[index],
-                        vk::ImageLayout::eTransferDstOptimal, blit, vk::Filter::eLinear);
-        const vk::ImageMemoryBarrier to_present{.srcAccessMask = vk::AccessFlagBits::eTransferWrite,
-                                                .dstAccessMask = {},
-                                                .oldLayout = vk::ImageLayout::eTransferDstOptimal,
-                                                .newLayout = vk::ImageLayout::ePresentSrcKHR,
-                                                .srcQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
-                                                .dstQueueFamilyIndex = VK_QUEUE_FAMILY_IGNORED,
-                                                .image = w.images[index],
-                                                .subresourceRange = range};
-        w.cmd.pipelineBarrier(vk::PipelineStageFlagBits::eTransfer, vk::PipelineStageFlagBits::eBottomOfPipe, {}, {}, {}, to_present);
-        w.cmd.end();
-        c.device().resetFences(*w.fence);
-        const vk::PipelineStageFlags wait_stage = vk::PipelineStageFlagBits::eTransfer;
-        const vk::CommandBuffer cmd = *w.cmd;
-        const vk::Semaphore wait = *w.acquired, signal = *w.finished[index];
-        c.queue().submit(vk::SubmitInfo{.waitSemaphoreCount = 1,
-                                        .pWaitSemaphores = &wait,
-                                        .pWaitDstStageMask = &wait_stage,
-                                        .commandBufferCount = 1,
-                                        .pCommandBuffers = &cmd,
-                                        .signalSemaphoreCount = 1,
-                                        .pSignalSemaphores = &signal},
-                         *w.fence);
-        // One frame at a time: the vertex buffer and the offscreen image are reused.
-        constexpr std::uint64_t kTimeoutNs = 600ull * 1000 * 1000 * 1000;
-        if (c.device().waitForFences(*w.fence, VK_TRUE, kTimeoutNs) != vk::Result::eSuccess) {
-            // As compute::Submission::wait does: the code tells a hang from a failure.
-            Error error = make_error(Error::Kind::Vulkan, "the GPU did not finish a frame within 600 s");
-            error.vk_result = static_cast<int>(vk::Result::eTimeout);
-            return error;
-        }
-        const vk::SwapchainKHR swapchain = *w.swapchain;
-        auto presented = gpu::guard("Vulkan present", [&]() -> Result<void> {
-            const vk::Result result = c.queue().presentKHR(
-                {.waitSemaphoreCount = 1, .pWaitSemaphores = &signal, .swapchainCount = 1, .pSwapchains = &swapchain, .pImageIndices = &index});
-            if (result == vk::Result::eSuboptimalKHR) w.stale = true;
-            return {};
-        });
-        if (!presented) {
-            if (!out_of_date(presented.error())) return presented.error();
-            w.stale = true;  // shown or not, the next present() remakes the swapchain
-        }
-        return true;
-    });
 }
 
 }  // namespace kodawari::render

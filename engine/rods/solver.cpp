@@ -5,10 +5,16 @@
 #include <algorithm>
 #include <cassert>
 #include <cmath>
-#include <string>
+#include <cstddef>
+
+#include "rods/solver_internal.hpp"
 
 namespace kodawari::rods {
 namespace {
+
+using detail::collide_all;
+using detail::positive_w;
+using detail::SubstepColliders;
 
 constexpr glm::quat kIdentity{1.0f, 0.0f, 0.0f, 0.0f};
 
@@ -29,9 +35,6 @@ constexpr int kExtractIterations = 1;
 // the strand leaves the root along its rest direction like a hair from its follicle,
 // while every weight stays finite and A well conditioned.
 constexpr float kRootShapeWeight = 10.0f;
-
-// The same rotation with w >= 0, the identity's hemisphere.
-glm::quat positive_w(glm::quat q) { return q.w < 0.0f ? -q : q; }
 
 // The rotation by `fraction` of `q`'s angle about its axis, the short way. The angle is
 // 2 atan2(|xyz|, w), well conditioned everywhere; glm::slerp's acos of a dot product
@@ -74,76 +77,6 @@ glm::quat extract_rotation(const glm::mat3& a, glm::quat q) {
     return q;
 }
 
-// World position of the point of segment [a, b] nearest to p.
-glm::vec3 closest_on_segment(glm::vec3 p, glm::vec3 a, glm::vec3 b) {
-    const glm::vec3 ab = b - a;
-    const float len2 = glm::dot(ab, ab);
-    if (len2 <= 0.0f) return a;
-    const float t = std::clamp(glm::dot(p - a, ab) / len2, 0.0f, 1.0f);
-    return a + t * ab;
-}
-
-// Moves p out of the ball of `radius` around `center` (SPEC A.4, collisions).
-void push_out(glm::vec3& p, glm::vec3 center, float radius) {
-    const glm::vec3 d = p - center;
-    const float len2 = glm::dot(d, d);
-    if (len2 >= radius * radius) return;
-    const float len = std::sqrt(len2);
-    // A particle exactly at the centre has no outward direction; +Y is as good as any
-    // and keeps the result deterministic.
-    const glm::vec3 n = len > 1e-9f ? d / len : glm::vec3(0.0f, 1.0f, 0.0f);
-    p = center + radius * n;
-}
-
-// Keeps p within `radius` of `center` (an inside collider; VRMC_springBone_extended_collider
-// 1.0: the joint's sphere of hitRadius stays inside the collider's, so `radius` is the
-// collider's minus the particle's, at least 0).
-void pull_in(glm::vec3& p, glm::vec3 center, float radius) {
-    const glm::vec3 d = p - center;
-    const float len2 = glm::dot(d, d);
-    if (len2 <= radius * radius) return;
-    const float len = std::sqrt(len2);
-    p = center + radius * (d / len);  // len > radius >= 0: a direction exists
-}
-
-// One collider on one particle of radius `thickness` (SPEC A.4, collisions; the kinds of
-// solver.hpp ColliderKind). `a` and `b` are the collider's, relative to the frame's
-// origin (a plane's b is its unit normal, a direction); `reach` is what the kind keeps:
-// radius + thickness outside, max(radius - thickness, 0) inside, thickness for a plane
-// (collider_reach()).
-void collide(glm::vec3& p, glm::vec3 a, glm::vec3 b, float reach, ColliderKind kind) {
-    if (kind == ColliderKind::Plane) {
-        const glm::vec3 n = b;  // unit
-        const float s = glm::dot(p - a, n);
-        if (s < reach) p += (reach - s) * n;
-        return;
-    }
-    const glm::vec3 c = closest_on_segment(p, a, b);
-    if (kind == ColliderKind::Inside) {
-        pull_in(p, c, reach);
-    } else {
-        push_out(p, c, reach);
-    }
-}
-
-// The colliders of one substep, relative to the frame's origin (a plane's b: its unit
-// normal), with the distance each keeps (collider_reach()).
-struct SubstepColliders {
-    std::array<glm::vec3, kMaxChainColliders> a{}, b{};
-    std::array<float, kMaxChainColliders> reach{};
-    std::array<ColliderKind, kMaxChainColliders> kind{};
-    std::size_t count = 0;
-};
-
-// One particle against every collider, the whole set kColliderPasses times (solver.hpp):
-// Gauss-Seidel over the set, so a particle pushed out of one collider into another is
-// pushed out again by the next pass instead of ending inside whichever came first.
-void collide_all(glm::vec3& p, const SubstepColliders& c) {
-    for (std::uint32_t pass = 0; pass < kColliderPasses; ++pass) {
-        for (std::size_t k = 0; k < c.count; ++k) collide(p, c.a[k], c.b[k], c.reach[k], c.kind[k]);
-    }
-}
-
 // A.5 momentum suppression: the change of rest shape since the last step, applied
 // kinematically. Each segment of the current chain is turned by `suppression` of the
 // turn that takes its old rest direction to its new one (both placed by the current
@@ -171,88 +104,6 @@ void suppress_momentum(const Chain& chain, const ChainShape& rest, float suppres
 }
 
 }  // namespace
-
-Result<void> validate(const SolverParams& p) {
-    auto bad = [](const std::string& what) { return make_error(Error::Kind::InvalidInput, "rods solver: " + what); };
-    if (!(p.max_substep > 0.0f && p.max_substep <= 0.05f)) return bad("max_substep must be in (0, 0.05] s");
-    if (p.iterations < 1 || p.iterations > 64) return bad("iterations must be 1 to 64");
-    if (!(p.stiffness >= 0.0f && p.stiffness <= 1.0f)) return bad("stiffness must be in [0, 1]");
-    if (!(p.rest_stiffness >= 0.0f && p.rest_stiffness <= 1.0f)) return bad("rest_stiffness must be in [0, 1]");
-    if (!(p.damping >= 0.0f && std::isfinite(p.damping))) return bad("damping must be >= 0");
-    if (!(p.momentum_suppression >= 0.0f && p.momentum_suppression <= 1.0f)) {
-        return bad("momentum_suppression must be in [0, 1]");
-    }
-    if (!(p.normal_drag >= 0.0f && p.normal_drag <= 1000.0f)) return bad("normal_drag must be in [0, 1000] 1/s");
-    if (!(p.tangent_drag >= 0.0f && p.tangent_drag <= 1000.0f)) return bad("tangent_drag must be in [0, 1000] 1/s");
-    if (!std::isfinite(glm::dot(p.gravity, p.gravity)) || !std::isfinite(glm::dot(p.wind, p.wind))) {
-        return bad("gravity and wind must be finite");
-    }
-    if (!(p.teleport_distance > 0.0f && std::isfinite(p.teleport_distance))) {
-        return bad("teleport_distance must be > 0 m and finite");
-    }
-    return {};
-}
-
-Result<void> set_limits(Chain& chain, std::span<const AngleLimit> limits, const std::string& what) {
-    if (!limits.empty() && limits.size() + 1 != chain.joint_count) {
-        return make_error(Error::Kind::InvalidInput, what + ": expected " + std::to_string(chain.joint_count - 1) +
-                                                         " limits (one per segment), got " +
-                                                         std::to_string(limits.size()));
-    }
-    Chain limited = chain;
-    limited.limited = false;
-    for (std::uint32_t i = 0; i < kMaxChainJoints; ++i) {
-        const AngleLimit limit = i < limits.size() ? limits[i] : AngleLimit{};
-        KW_TRY(validate(limit, what + "[" + std::to_string(i) + "]"));
-        limited.limit[i] = limit;
-        limited.limit_trig[i] = limit_trig(limit);
-        limited.limit_frame[i] = limit_frame(chain.bone_axis[i], limit.rotation);
-        limited.limited = limited.limited || limit.kind != LimitKind::None;
-    }
-    chain = limited;
-    return {};
-}
-
-Result<Chain> make_chain(const ChainShape& base, float thickness, float mass) {
-    auto basis = make_basis(base);
-    if (!basis) return basis.error();
-    // Lower bounds, not just > 0: the inertia m r^2 of a denormal mass or radius is 0 in
-    // float and its inverse infinite (found by fuzzing the C API). 10 um and 1 ug are
-    // below a single hair's width and a segment's mass.
-    if (!(thickness >= kMinThickness && std::isfinite(thickness))) {
-        return make_error(Error::Kind::InvalidInput, "rods chain: thickness must be >= 1e-5 m");
-    }
-    if (!(mass >= kMinMass && std::isfinite(mass))) {
-        return make_error(Error::Kind::InvalidInput, "rods chain: mass must be >= 1e-9 kg");
-    }
-    Chain chain;
-    chain.joint_count = basis.value().joint_count();
-    chain.thickness = thickness;
-    const std::uint32_t n = chain.joint_count;
-    for (std::uint32_t i = 0; i < n; ++i) {
-        const std::uint32_t seg = std::min(i, n - 2);
-        chain.mass[i] = mass;
-        if (i + 1 < n) chain.segment_length[i] = basis.value().lengths[i];
-        // SPEC A.4: a = half the segment length along the segment.
-        chain.half_length[i] = 0.5f * basis.value().lengths[seg];
-        const glm::vec3 dir = glm::normalize(base.positions[seg + 1] - base.positions[seg]);
-        chain.bone_axis[i] = glm::normalize(glm::conjugate(glm::normalize(base.orientations[i])) * dir);
-    }
-    return chain;
-}
-
-ChainState initial_state(const Chain& chain, const Transform& root, const ChainShape& rest) {
-    assert(rest.positions.size() == chain.joint_count && rest.orientations.size() == chain.joint_count);
-    ChainState s;
-    s.root = root;
-    for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
-        s.x[i] = root.rotation * rest.positions[i];
-        s.q[i] = glm::normalize(root.rotation * rest.orientations[i]);
-        s.rest_position[i] = rest.positions[i];
-        s.rest_orientation[i] = rest.orientations[i];
-    }
-    return s;
-}
 
 std::uint32_t settle(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
                      std::span<const Collider> colliders, ChainState& s, const glm::vec3& air) {
@@ -314,63 +165,6 @@ float substep_stiffness(float k, float h) {
 float iteration_stiffness(float k_substep, std::uint32_t iterations) {
     // (1 - k')^iterations = 1 - k_substep: `iterations` moves compound to k_substep.
     return 1.0f - std::pow(1.0f - k_substep, 1.0f / static_cast<float>(iterations));
-}
-
-float collider_reach(const Collider& c, float thickness) {
-    switch (c.kind) {
-        case ColliderKind::Inside: return std::max(c.radius - thickness, 0.0f);
-        case ColliderKind::Plane: return thickness;
-        case ColliderKind::Outside: break;
-    }
-    return c.radius + thickness;
-}
-
-float collider_gap(const Collider& c, glm::vec3 p, float thickness) {
-    const float reach = collider_reach(c, thickness);
-    if (c.kind == ColliderKind::Plane) return glm::dot(p - c.a, c.b) - reach;
-    const float distance = glm::length(p - closest_on_segment(p, c.a, c.b));
-    return c.kind == ColliderKind::Inside ? reach - distance : distance - reach;
-}
-
-void follow_center(const Transform& from, const Transform& to, ChainState& s) {
-    const glm::quat r = glm::normalize(to.rotation * glm::conjugate(from.rotation));
-    for (std::uint32_t i = 0; i < kMaxChainJoints; ++i) {
-        s.x[i] = r * s.x[i];
-        s.v[i] = r * s.v[i];
-        s.q[i] = glm::normalize(r * s.q[i]);
-        s.omega[i] = r * s.omega[i];
-    }
-    s.root.position = to.position + r * (s.root.position - from.position);
-    s.root.rotation = glm::normalize(r * s.root.rotation);
-}
-
-Transform frame_before(const Transform& root, const ChainState& s, float dt) {
-    const glm::vec3 turn = s.omega[0] * dt;
-    const float angle = glm::length(turn);
-    const glm::vec3 axis = angle > 0.0f ? turn / angle : glm::vec3(0.0f);
-    const glm::quat back(std::cos(0.5f * angle), -std::sin(0.5f * angle) * axis);
-    return {root.position - s.v[0] * dt, glm::normalize(back * root.rotation)};
-}
-
-void start_moving(const Transform& root, float dt, ChainState& s) {
-    const glm::quat turn = positive_w(glm::normalize(root.rotation * glm::conjugate(s.root.rotation)));
-    const glm::vec3 travel = root.position - s.root.position;
-    const glm::vec3 omega = (2.0f / dt) * glm::vec3(turn.x, turn.y, turn.z);
-    for (std::uint32_t i = 0; i < kMaxChainJoints; ++i) {
-        s.v[i] += (travel + (turn * s.x[i] - s.x[i])) / dt;
-        s.omega[i] += omega;
-    }
-}
-
-bool follow_teleport(const SolverParams& params, const Transform& root, float dt, ChainState& s) {
-    if (!teleported(s.root.position, root.position, params.teleport_distance)) return false;
-    // Carried to the new root, then back by one frame of the root's own motion (joint 0
-    // follows the root: its velocities, carried too, are the root's), so that step() sees
-    // the root move on as it moved and the chain's velocities, which carry that motion,
-    // do not take it a second time.
-    follow_center(s.root, root, s);
-    follow_center(root, frame_before(root, s, dt), s);
-    return true;
 }
 
 void step(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
@@ -658,78 +452,6 @@ void step(const Chain& chain, const SolverParams& params, const Transform& root,
     }
     for (std::uint32_t i = 0; i < n; ++i) s.x[i] -= travel;
     s.root = root;
-}
-
-void step_posed(const Chain& chain, const SolverParams& params, const Transform& root, const ChainShape& rest,
-                std::span<const Collider> colliders, float dt, float blend, ChainState& s) {
-    assert(dt > 0.0f && std::isfinite(dt));
-    assert(blend >= 0.0f && blend <= 1.0f);
-    const std::uint32_t n = chain.joint_count;
-    assert(n >= 2 && n <= kMaxChainJoints);
-    assert(rest.positions.size() == n && rest.orientations.size() == n);
-    assert(colliders.size() <= kMaxChainColliders);
-    follow_teleport(params, root, dt, s);
-    if (!s.started && params.settle_start) start_moving(root, dt, s);
-    s.started = true;
-    // Relative to the previous root position, as step() solves; the colliders too, at
-    // their end-of-frame poses.
-    const glm::vec3 travel = root.position - s.root.position;
-    const glm::quat turn = glm::normalize(root.rotation * glm::conjugate(s.root.rotation));
-    SubstepColliders placed;
-    placed.count = colliders.size();
-    for (std::size_t k = 0; k < colliders.size(); ++k) {
-        placed.a[k] = colliders[k].a - s.root.position;
-        placed.b[k] = colliders[k].kind == ColliderKind::Plane ? colliders[k].b : colliders[k].b - s.root.position;
-        placed.reach[k] = collider_reach(colliders[k], chain.thickness);
-        placed.kind[k] = colliders[k].kind;
-    }
-    glm::vec3 parent(0.0f);
-    for (std::uint32_t i = 0; i < n; ++i) {
-        glm::quat goal = glm::normalize(root.rotation * rest.orientations[i]);
-        glm::vec3 x = travel + root.rotation * rest.positions[i];
-        glm::quat q = goal;
-        if (i > 0) {
-            const glm::vec3 target = travel + root.rotation * (rest.positions[i] + s.sag[i]);
-            const glm::vec3 carried = travel + turn * s.x[i];
-            x = carried + blend * (target - carried);
-            // On its parent's segment length, then out of the colliders (one round of
-            // step()'s last sweep: a posed chain is far from the camera, and a chain that
-            // turns full starts from a shape its constraints nearly keep).
-            const glm::vec3 d = x - parent;
-            const float len = glm::length(d);
-            if (len > 1e-9f) x = parent + (chain.segment_length[i - 1] / len) * d;
-            if (placed.count > 0) collide_all(x, placed);
-            const glm::quat held = glm::normalize(turn * s.q[i]);
-            if (glm::dot(held, goal) < 0.0f) goal = -goal;
-            q = glm::normalize(held + blend * (goal - held));
-        }
-        parent = x;
-        s.v[i] = (x - s.x[i]) / dt;
-        const glm::quat dq = positive_w(q * glm::conjugate(s.q[i]));
-        s.omega[i] = (2.0f / dt) * glm::vec3(dq.x, dq.y, dq.z);
-        s.x[i] = x - travel;
-        s.q[i] = q;
-        s.rest_position[i] = rest.positions[i];
-        s.rest_orientation[i] = rest.orientations[i];
-    }
-    s.root = root;
-}
-
-void hand_over(const Chain& chain, const ChainState& before, const ChainState& posed, float share, float dt, ChainState& s) {
-    assert(share >= 0.0f && share <= 1.0f);
-    // Positions relative to the new root position (the state's), the frame's start too.
-    const glm::vec3 travel = s.root.position - before.root.position;
-    for (std::uint32_t i = 0; i < chain.joint_count; ++i) {
-        const glm::vec3 x = posed.x[i] + share * (s.x[i] - posed.x[i]);
-        glm::quat full = s.q[i];
-        if (glm::dot(posed.q[i], full) < 0.0f) full = -full;
-        const glm::quat q = glm::normalize(posed.q[i] + share * (full - posed.q[i]));
-        s.v[i] = (x - (before.x[i] - travel)) / dt;
-        const glm::quat dq = positive_w(q * glm::conjugate(before.q[i]));
-        s.omega[i] = (2.0f / dt) * glm::vec3(dq.x, dq.y, dq.z);
-        s.x[i] = x;
-        s.q[i] = q;
-    }
 }
 
 ChainPose pose(const Chain& chain, const ChainState& s) {

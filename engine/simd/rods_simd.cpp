@@ -10,6 +10,7 @@
 #include <hwy/cache_control.h>
 #include <hwy/highway.h>
 
+#include "simd/rod_colliders-inl.h"
 #include "simd/rods_simd.hpp"
 #include "simd/scalar_math.hpp"
 #include "simd/vecmath-inl.h"
@@ -26,11 +27,6 @@ constexpr std::size_t kMaxK = rods::kMaxChainColliders;
 // kKeyed: the chain's raw keyed weights u_1 .. u_4 (keyed-examples.md K.2, K.3).
 // kAir: the air's velocity around the chain (RodStepArgs::air).
 enum InputRow : std::uint32_t { kRefP = 0, kRefQ = 3, kToP = 7, kToQ = 10, kKeyed = 14, kAir = 18, kInputRows = 21 };
-// Per collider: a (3), b (3), its reach (rods::collider_reach), and 1 in the row of its
-// kind (outside, inside, plane) where the lane's chain has it.
-enum ColliderRow : std::uint32_t {
-    kCapA = 0, kCapB = 3, kCapR = 6, kCapOutside = 7, kCapInside = 8, kCapPlane = 9, kColliderRows = 10
-};
 
 struct Inputs {
     HWY_ALIGN float rows[kInputRows * kBatchLanes];
@@ -107,68 +103,6 @@ Q4 extract_rotation(const M3& a, const Q4& q, const M3& r) {
     const V alignment = hn::Abs(hn::Add(hn::Add(dot(r.c[0], a.c[0]), dot(r.c[1], a.c[1])), dot(r.c[2], a.c[2])));
     const V3 half_omega = mul(hn::Div(S(0.5f), hn::Add(alignment, S(1e-9f))), torque);
     return turn(q, half_omega);
-}
-
-// One collider of a batch in the end root's frame (solver.cpp step: la = R_to^-1 (a - to),
-// lb likewise, a plane's lb its turned normal), the lanes whose chain has it as each kind,
-// and, per substep, where the substep's root places it: a relative to the frame's origin,
-// ab = b - a (a plane's lanes: its normal b) and len2 = dot(ab, ab) (the same for every
-// joint of the substep, computed once), and its reach.
-struct CollidersK {
-    V3 la, lb;
-    V3 a, ab;
-    V len2, reach;
-    M outside, inside, plane;
-    bool any_capsule, any_inside, any_plane;  // some lane has it as a capsule (outside or inside), inside, a plane
-};
-
-// A collider's kinds per lane (the rows gather_inputs() wrote), which of them any lane
-// has, and its reach.
-void load_kinds(const float* rows, std::size_t off, CollidersK& c) {
-    c.outside = hn::Gt(load(rows, kCapOutside, off), Z());
-    c.inside = hn::Gt(load(rows, kCapInside, off), Z());
-    c.plane = hn::Gt(load(rows, kCapPlane, off), Z());
-    c.reach = load(rows, kCapR, off);
-    c.any_capsule = !hn::AllFalse(D(), hn::Or(c.outside, c.inside));
-    c.any_inside = !hn::AllFalse(D(), c.inside);
-    c.any_plane = !hn::AllFalse(D(), c.plane);
-}
-
-// solver.cpp step 3: the collider placed by the substep's root (r_p, r_q).
-void place(CollidersK& c, const V3& r_p, const Q4& r_q) {
-    c.a = add(r_p, rotate(r_q, c.la));
-    const V3 turned = rotate(r_q, c.lb);
-    c.ab = select(c.plane, turned, sub(add(r_p, turned), c.a));
-    c.len2 = dot(c.ab, c.ab);
-}
-
-// solver.cpp collide(): closest_on_segment() then push_out() (outside lanes) or pull_in()
-// (inside lanes), and the plane's half-space (plane lanes), each kind's expressions as
-// the reference writes them.
-void collide(V3& p, const CollidersK& c) {
-    if (c.any_capsule) {
-        V t = hn::Div(dot(sub(p, c.a), c.ab), c.len2);
-        t = hn::IfThenElse(hn::Lt(t, Z()), Z(), hn::IfThenElse(hn::Lt(S(1.0f), t), S(1.0f), t));  // std::clamp
-        const V3 center = select(hn::Le(c.len2, Z()), c.a, add(c.a, mul(t, c.ab)));
-        const V3 d = sub(p, center);
-        const V d2 = dot(d, d);
-        const V r2 = hn::Mul(c.reach, c.reach);
-        const M push = hn::And(c.outside, hn::Not(hn::Ge(d2, r2)));
-        const V len = hn::Sqrt(d2);
-        const V3 unit = div(d, len);
-        const V3 out_n = select(hn::Gt(len, S(1e-9f)), unit, V3{Z(), S(1.0f), Z()});
-        if (c.any_inside) {
-            const M pull = hn::And(c.inside, hn::Not(hn::Le(d2, r2)));
-            p = select(hn::Or(push, pull), add(center, mul(c.reach, select(push, out_n, unit))), p);
-        } else {
-            p = select(push, add(center, mul(c.reach, out_n)), p);
-        }
-    }
-    if (c.any_plane) {
-        const V s = dot(sub(p, c.a), c.ab);
-        const M below = hn::And(c.plane, hn::Lt(s, c.reach));
-        p = select(below, add(p, mul(hn::Sub(c.reach, s), c.ab)), p);
-    }
 }
 
 // shape.cpp blend_one(): the normalized weighted sum of shape k's quaternion i (k = 0..m,
@@ -276,7 +210,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
     const Q4 to_q = load4(in.rows, kToQ, off);
     const V3 travel = sub(to_p, from_p);
 
-    // ---- the posed level of detail (solver.cpp step_posed) for lanes not full, from the
+    // ---- the posed level of detail (solver_posed.cpp step_posed) for lanes not full, from the
     // state before the step; a vector of lanes none of which is full skips the substeps ----
     // Posed and hidden lanes (levels 1 and 2), reduced ones (3); the rest are full.
     const V level = args.lod ? load(chain_rows, kLevel, off) : Z();
@@ -306,7 +240,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
         }
         const Q4 turn_by = qnormalize(qmul(to_q, conj(from_q)));
         // The colliders at their end-of-frame poses relative to the last root position
-        // (solver.cpp step_posed), as place() would leave them.
+        // (solver_posed.cpp step_posed), as place() would leave them.
         CollidersK posed_colliders[kMaxK];
         for (std::size_t k = 0; k < batch.colliders; ++k) {
             const float* rows = in.colliders + k * kColliderRows * kBatchLanes;
@@ -433,7 +367,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
         c.la = rotate(to_root, sub(load3(rows, kCapA, off), to_p));
         c.lb = select(c.plane, rotate(to_root, b), rotate(to_root, sub(b, to_p)));
     }
-    // solver.cpp collide_all(): every collider, the whole set kColliderPasses times.
+    // solver_collide.cpp collide_all(): every collider, the whole set kColliderPasses times.
     auto collide_all = [&](V3& particle) HWY_ATTR {
         for (std::uint32_t pass = 0; pass < rods::kColliderPasses; ++pass) {
             for (std::size_t k = 0; k < batch.colliders; ++k) collide(particle, colliders[k]);
@@ -726,7 +660,7 @@ void step_lanes(const RodStepArgs& args, const RodBatch& batch, std::uint32_t re
     const V two_over_dt = S(2.0f / frame.dt);
     for (std::size_t i = 0; i < n; ++i) {
         V3 stored = sub(x[i], travel);
-        if (any_handing) {  // solver.cpp hand_over(): the step's result mixed with the posed one
+        if (any_handing) {  // solver_posed.cpp hand_over(): the step's result mixed with the posed one
             const V3 a = sub(posed_x[i], travel);
             const V3 mixed = add(a, mul(share, sub(stored, a)));
             const Q4 pq = posed_q[i];

@@ -120,7 +120,7 @@ HWY_INLINE Q4 qnormalize(const Q4& q) {
     const Q4 n{hn::Mul(q.x, inv), hn::Mul(q.y, inv), hn::Mul(q.z, inv), hn::Mul(q.w, inv)};
     return select(hn::Le(len, Z()), Q4{Z(), Z(), Z(), S(1.0f)}, n);
 }
-// q with w >= 0 (solver.cpp positive_w).
+// q with w >= 0 (solver_internal.hpp positive_w).
 HWY_INLINE Q4 positive_w(const Q4& q) {
     const M neg = hn::Lt(q.w, Z());
     return select(neg, Q4{hn::Neg(q.x), hn::Neg(q.y), hn::Neg(q.z), hn::Neg(q.w)}, q);

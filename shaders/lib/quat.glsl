@@ -22,7 +22,7 @@ vec4 qmul_flight(vec4 a, vec4 b) {
 }
 
 vec4 qconj(vec4 q) { return vec4(-q.xyz, q.w); }
-// The same rotation with w >= 0, the short way (rods' positive_w in solver.cpp).
+// The same rotation with w >= 0, the short way (rods' positive_w in solver_internal.hpp).
 vec4 positive_w(vec4 q) { return q.w < 0.0 ? -q : q; }
 
 // glm's quat * vec3.

@@ -77,7 +77,7 @@ float col_reach[COLLIDER_SLOTS];
 uint col_kind[COLLIDER_SLOTS];
 uint col_count;
 
-// solver.cpp collide_all(): one particle against collider k.
+// solver_collide.cpp collide_all(): one particle against collider k.
 void collide_with(inout vec3 p, uint k) {
     if ((FEATURES & KW_RODS_FEATURE_PLANE) != 0u && col_kind[k] == KW_RODS_COLLIDER_PLANE) {
         const float s = dot(p - col_ca[k], col_cb[k]);
@@ -89,7 +89,7 @@ void collide_with(inout vec3 p, uint k) {
     }
 }
 
-// solver.cpp collide_all(): one particle against every collider, the set
+// solver_collide.cpp collide_all(): one particle against every collider, the set
 // KW_RODS_COLLIDER_PASSES times (unrolled for few colliders: UNROLL_COLLIDERS).
 void collide_all(inout vec3 p) {
     [[unroll]] for (uint pass = 0; pass < KW_RODS_COLLIDER_PASSES; ++pass) {

@@ -66,7 +66,7 @@ Difference compare(const std::vector<glm::vec3>& a, const std::vector<glm::vec3>
 
 // Every character of `frame` moved by `by`: from the frame it starts, a jump past
 // SolverParams::teleport_distance (1 m), which the solver carries the chains across
-// (solver.cpp follow_teleport) instead of simulating.
+// (solver_root_motion.cpp follow_teleport) instead of simulating.
 void teleport(rods::RodFrame& frame, glm::vec3 by) {
     for (rods::Transform& t : frame.roots) t.position += by;
     for (rods::Transform& t : frame.reference) t.position += by;
