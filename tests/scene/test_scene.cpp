@@ -313,6 +313,20 @@ TEST(SceneFormat, FlockNamesAndThePredatorsFlock) {
     EXPECT_TRUE(contains(parse_error(chase), "test.json: $.flocks[0].flocking.predators[1].flock: \"starlings\" flocks itself"));
 }
 
+// At most 10 000 000 birds in a scene: a flock past them is told how many are left, or,
+// when none are, that the flocks before it hold them all (not "in [1, 0]").
+TEST(SceneFormat, BirdsInAllAreBounded) {
+    json doc = valid_scene();
+    doc["flocks"][0]["count"] = 9999990;
+    doc["flocks"].push_back(doc["flocks"][0]);
+    doc["flocks"][1]["count"] = 11;
+    EXPECT_TRUE(contains(parse_error(doc), "test.json: $.flocks[1].count: expected an integer in [1, 10] (a scene holds at most"))
+        << parse_error(doc);
+    doc["flocks"][0]["count"] = 10000000;
+    EXPECT_EQ(parse_error(doc), "test.json: $.flocks[1].count: the flocks before it hold 10000000 birds, the most a scene "
+                                "holds: expected no further flock, got 11 birds");
+}
+
 TEST(SceneFormat, WrongType) {
     json doc = valid_scene();
     doc["fps"] = "sixty";
