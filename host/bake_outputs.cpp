@@ -24,15 +24,7 @@ std::vector<std::unique_ptr<BakeSink>> glb_sinks(const std::string& out, bool ha
 
 void require_glb_name(const std::optional<std::string>& out) {
     if (!out) return;
-    // A device or a named pipe (/dev/null, /dev/full, a FIFO) has no name to go by.
-    std::error_code ec;
-    const auto status = std::filesystem::status(*out, ec);
-    if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) return;
-    std::string extension = std::filesystem::path(*out).extension().string();
-    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (extension != ".glb") {
-        throw UsageError{"--out " + *out + ": the bake is a binary glTF file: name it .glb (a .gltf is read as JSON glTF)"};
-    }
+    if (const std::string problem = glb_name_problem(*out); !problem.empty()) throw UsageError{"--out " + *out + ": " + problem};
 }
 
 Result<void> refuse_overwriting_inputs(const Scene& scene, const std::vector<std::string>& outputs, const std::string& what,

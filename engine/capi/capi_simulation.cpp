@@ -367,6 +367,7 @@ KODAWARI_C_API kodawari_status kodawari_simulation_bake(kodawari_simulation* sim
         require_sim(sim);
         require_pointer(path, "path");
         if (path[0] == '\0') invalid("path", "\"\"; expected an output file (OUT.glb)");
+        if (const std::string problem = glb_name_problem(path); !problem.empty()) invalid("path", "\"" + std::string(path) + "\": " + problem);
         require_flag(compact, "compact");
         if (written != nullptr && written_size == 0) invalid("written_size", "0 with a written buffer; expected its size in bytes");
         // A simulation of its own from frame 0, so that `sim` keeps its frame.

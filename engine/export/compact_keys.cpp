@@ -4,6 +4,7 @@
 #include <algorithm>
 #include <cctype>
 #include <cmath>
+#include <filesystem>
 #include <cassert>
 #include <cerrno>
 #include <cstring>
@@ -26,6 +27,16 @@ std::vector<std::string> glb_bake_paths(const std::string& out, bool has_birds, 
         paths.push_back(has_birds ? out.substr(0, out.size() - (glb ? 4 : 0)) + "-characters.glb" : out);
     }
     return paths;
+}
+
+std::string glb_name_problem(const std::string& out) {
+    std::error_code ec;
+    const auto status = std::filesystem::status(out, ec);
+    if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) return {};
+    std::string extension = std::filesystem::path(out).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    if (extension == ".glb") return {};
+    return "the bake is a binary glTF file: name it .glb (a .gltf is read as JSON glTF)";
 }
 
 Result<void> check_compaction(const std::string& path, const GlbCompaction& compaction) {

@@ -345,6 +345,8 @@ static void test_bake(void) {
                 "kodawari_simulation_bake", missing);
     EXPECT_FAIL(kodawari_simulation_bake(sim, path, 2, NULL, 0), KODAWARI_INVALID_ARGUMENT, sim, "compact: 2");
     EXPECT_FAIL(kodawari_simulation_bake(sim, "", 0, NULL, 0), KODAWARI_INVALID_ARGUMENT, sim, "path");
+    /* A bake is binary glTF: a .gltf name is refused, as by `kodawari run --out`. */
+    EXPECT_FAIL(kodawari_simulation_bake(sim, "out-capi.gltf", 0, NULL, 0), KODAWARI_INVALID_ARGUMENT, sim, "name it .glb");
     EXPECT_FAIL(kodawari_simulation_bake(sim, NULL, 0, NULL, 0), KODAWARI_INVALID_ARGUMENT, sim, "path");
     kodawari_simulation_destroy(sim);
 }

@@ -347,11 +347,14 @@ with open(FLOCK, "rb") as original, open(scene_copy, "wb") as copy:
     scene_bytes = original.read()
     copy.write(scene_bytes)
 with kodawari.Simulation.open(scene_copy, "cpu", frames=2) as sim:
-    try:
-        sim.bake(scene_copy)
-        check(False, "a bake over its own scene file raised nothing")
-    except kodawari.Error as error:
-        check("the scene file itself" in str(error) and "path" in str(error), f"bake over the scene: {error}")
+    # (A .json is no bake's name before it is the scene's; the model case is the rig's below.)
+    for wrong in (scene_copy, os.path.join(temp, "flock.gltf")):
+        try:
+            sim.bake(wrong)
+            check(False, f"a bake to {wrong} raised nothing")
+        except kodawari.Error as error:
+            check("name it .glb" in str(error) and "path" in str(error), f"bake to {wrong}: {error}")
+    check(not os.path.exists(os.path.join(temp, "flock.gltf")), "a refused bake wrote flock.gltf")
 # kodawari.rig never writes its scene over the file it rigs (nor over its motions).
 model_copy = os.path.join(temp, "chibi-copy.glb")
 with open(os.path.join(source, "scenes", "characters", "chibi.glb"), "rb") as original, open(model_copy, "wb") as copy:

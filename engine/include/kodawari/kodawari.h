@@ -952,7 +952,8 @@ KODAWARI_C_API kodawari_status kodawari_simulation_chain_levels(kodawari_simulat
 /// writes them). `compact`: 1 drops the keys linear interpolation reproduces within 1 mm
 /// and 0.001 rad (docs/compact.md), 0 keeps every key. Each file is written whole or not
 /// at all. `written` (NULL, or `written_size` bytes): the paths written, one per line,
-/// cut to fit.
+/// cut to fit. A `path` not named .glb (any case) is KODAWARI_INVALID_ARGUMENT unless it is
+/// a device or a named pipe, as is one that is the scene file or a file the scene reads.
 KODAWARI_C_API kodawari_status kodawari_simulation_bake(kodawari_simulation* sim, const char* path, uint32_t compact,
                                                         char* written, size_t written_size);
 

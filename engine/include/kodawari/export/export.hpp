@@ -80,6 +80,11 @@ struct GlbCompactionStats {
 /// `<out without .glb (any case)>-characters.glb`.
 [[nodiscard]] KODAWARI_API std::vector<std::string> glb_bake_paths(const std::string& out, bool has_birds, bool has_chains);
 
+/// Why `out` cannot be a bake's output name, or "" when it can: a bake is binary glTF, so a
+/// regular file (or a new one) is named `.glb` (any case; a `.gltf` is read as JSON glTF
+/// by every importer); a device or a named pipe (/dev/null, a FIFO) has no name to go by.
+[[nodiscard]] KODAWARI_API std::string glb_name_problem(const std::string& out);
+
 /// InvalidInput naming `path` unless every bound of an enabled compaction is finite and
 /// >= 0.
 [[nodiscard]] KODAWARI_API Result<void> check_compaction(const std::string& path, const GlbCompaction& compaction);
