@@ -188,6 +188,14 @@ std::string format_number(double v) {
     return std::string(buffer.data(), end);
 }
 
+std::string format_number(float v) {
+    if (!std::isfinite(v) || (v == std::trunc(v) && std::fabs(v) < 1e15f)) return format_number(static_cast<double>(v));
+    std::array<char, 32> buffer{};
+    const auto [end, ec] = std::to_chars(buffer.data(), buffer.data() + buffer.size(), v);
+    if (ec != std::errc()) return "?";
+    return std::string(buffer.data(), end);
+}
+
 std::string describe_value(const JsonNode& node) {
     if (node.value == nullptr) return "nothing (required key missing)";
     const json& v = *node.value;
@@ -208,9 +216,19 @@ std::string describe_value(const JsonNode& node) {
             if (text.size() <= kShown) return quote(text);
             return quote(text.substr(0, kShown)) + "... (" + std::to_string(text.size()) + " characters)";
         }
-        case json::value_t::array:
+        case json::value_t::array: {
             if (v.empty()) return "an empty array";
+            // A point, a direction, a quaternion: the numbers themselves say what was wrong.
+            const bool numbers = v.size() <= 4 && std::all_of(v.begin(), v.end(), [](const json& e) { return e.is_number(); });
+            if (numbers) {
+                std::string out = "[";
+                for (std::size_t i = 0; i < v.size(); ++i) {
+                    out += (i > 0 ? ", " : "") + describe_value(JsonNode{&v[i], ""});
+                }
+                return out + "]";
+            }
             return "an array of " + std::to_string(v.size()) + (v.size() == 1 ? " element" : " elements");
+        }
         case json::value_t::object:
             return v.empty() ? "an empty object" : "an object";
         case json::value_t::binary:

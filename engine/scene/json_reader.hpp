@@ -67,6 +67,9 @@ struct NumberRange {
 
 /// Shortest text that reads back as `v`, integers without exponent ("10000000", "0.9").
 [[nodiscard]] std::string format_number(double v);
+/// A value the loader already holds as a float: its shortest float text ("3.1", not the
+/// double 3.0999999046325684 it widens to).
+[[nodiscard]] std::string format_number(float v);
 
 /// What a value is, for the "got ..." part of a message: `"sixty"`, `-3`, `infinity`,
 /// `an array of 2 elements`, `an object`, `null`, or `nothing (required key missing)`.

@@ -193,19 +193,19 @@ TEST(CharacterScene, BadShapes) {
     chain0(origin)["shape"] = json::parse(R"({"positions": [[0, 0.1, 0], [0, 0.2, 0]]})");
     EXPECT_EQ(parse_error(origin),
               "test.json: $.characters[0].chains[0].shape.positions[0]: expected [0, 0, 0] (joint 0 sits at the chain root; "
-              "move the chain with \"offset\"), got an array of 3 elements");
+              "move the chain with \"offset\"), got [0, 0.1, 0]");
     json coincident = valid_character_scene();
     chain0(coincident)["shape"] = json::parse(R"({"positions": [[0, 0, 0], [0, 0.1, 0], [0, 0.1, 0]]})");
     chain0(coincident).erase("views");
     EXPECT_EQ(parse_error(coincident),
               "test.json: $.characters[0].chains[0].shape.positions[2]: expected a point at least 1e-6 m from the previous "
-              "joint, got an array of 3 elements");
+              "joint, got [0, 0.1, 0]");
     json quat = valid_character_scene();
     chain0(quat)["shape"] = json::parse(R"({"positions": [[0, 0, 0], [0, 0.1, 0]], "orientations": [[0, 0, 0, 1], [0, 0, 0, 2]]})");
     chain0(quat).erase("views");
     EXPECT_EQ(parse_error(quat),
               "test.json: $.characters[0].chains[0].shape.orientations[1]: expected a unit quaternion [x, y, z, w] (length "
-              "within 1e-3 of 1), got an array of 4 elements");
+              "within 1e-3 of 1), got [0, 0, 0, 2]");
     json count = valid_character_scene();
     chain0(count)["views"][0]["shape"]["arc"]["joints"] = 9;
     EXPECT_EQ(parse_error(count),
@@ -216,7 +216,7 @@ TEST(CharacterScene, BadShapes) {
     chain0(parallel)["shape"]["arc"]["bend_axis"] = {0, 2, 0};
     EXPECT_EQ(parse_error(parallel),
               "test.json: $.characters[0].chains[0].shape.arc.bend_axis: expected a vector not parallel to \"direction\" (the "
-              "arc bends about it), got an array of 3 elements");
+              "arc bends about it), got [0, 2, 0]");
 }
 
 TEST(CharacterScene, BadViews) {
@@ -228,8 +228,7 @@ TEST(CharacterScene, BadViews) {
     json zero = valid_character_scene();
     chain0(zero)["views"][0]["direction"] = {0, 0, 0};
     EXPECT_EQ(parse_error(zero),
-              "test.json: $.characters[0].chains[0].views[0].direction: expected a non-zero vector [x, y, z], got an array of "
-              "3 elements");
+              "test.json: $.characters[0].chains[0].views[0].direction: expected a non-zero vector [x, y, z], got [0, 0, 0]");
     json influence = valid_character_scene();
     chain0(influence)["views"][0]["influence"] = 0;
     EXPECT_EQ(parse_error(influence),
@@ -415,7 +414,7 @@ TEST(CharacterScene, BadCameras) {
     looking["camera"] = json::parse(R"({"path": {"points": [[0, 1, 3], [0, 1, 0]], "target": [0, 1, 0]}})");
     EXPECT_EQ(parse_error(looking),
               "test.json: $.camera.path.points[1]: expected a point other than the path's target (the camera needs a "
-              "direction), got an array of 3 elements");
+              "direction), got [0, 1, 0]");
     json interpolation = valid_character_scene();
     interpolation["camera"] = json::parse(R"({"path": {"points": [[0, 1, 3], [1, 1, 3]], "target": [0, 1, 0], "interpolation": "cubic"}})");
     EXPECT_EQ(parse_error(interpolation),

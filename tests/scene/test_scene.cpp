@@ -327,6 +327,15 @@ TEST(SceneFormat, BirdsInAllAreBounded) {
                                 "holds: expected no further flock, got 11 birds");
 }
 
+// A bound the loader holds as a float is printed as the float it is ("3.1", not the
+// double 3.0999999046325684 it widens to).
+TEST(SceneFormat, FloatBoundsPrintAsWritten) {
+    json doc = valid_scene();
+    doc["flocks"][0]["flocking"] = json::parse(R"({"metric": true, "search_radius": 3.1, "separation_distance": 3.3})");
+    EXPECT_EQ(parse_error(doc), "test.json: $.flocks[0].flocking.separation_distance: expected at most search_radius (3.1 m), "
+                                "got 3.3");
+}
+
 TEST(SceneFormat, WrongType) {
     json doc = valid_scene();
     doc["fps"] = "sixty";
