@@ -203,6 +203,10 @@ KODAWARI_C_API kodawari_status kodawari_simulation_step(kodawari_simulation* sim
         require_sim(sim);
         const std::uint32_t total = sim->sim->frame_count();
         const std::uint32_t left = total - sim->next_frame;
+        if (left == 0) {
+            invalid("frames", std::to_string(frames) + "; the simulation has stepped all its " + std::to_string(total) +
+                                  " frames: expected no further step (open it with more frames to go on)");
+        }
         if (frames < 1 || frames > left) {
             invalid("frames", std::to_string(frames) + "; expected 1 to " + std::to_string(left) + " (frame " +
                                   std::to_string(sim->next_frame) + " of " + std::to_string(total) + " is next)");

@@ -213,6 +213,11 @@ Result<void> read_interval(const JsonReader& r, const JsonNode& node, const char
     const JsonNode end_node = r.member(node, end_key);
     if (!end_node.present() && !end_required) return {};
     double value = 0.0;
+    // A start at kMaxTime leaves no time after it: say so rather than print (1e5, 1e5].
+    if (!(static_cast<double>(start) < kMaxTime)) {
+        return r.fail(r.member(node, "start").path, "expected a time before " + format_number(kMaxTime) + " s, so that \"" +
+                                                        end_key + "\" can come after it, got " + format_number(start));
+    }
     KW_SCENE_ASSIGN(value, r.number(end_node, NumberRange::left_open(static_cast<double>(start), kMaxTime)));
     end = static_cast<float>(value);
     if (!(end > start)) return r.expected(end_node, "a time after \"start\" (" + format_number(start) + " s)");

@@ -122,6 +122,11 @@ Result<void> read_keyed(const JsonReader& r, const JsonNode& node, const JointLo
                              std::to_string(rods::kMaxKeyedExamples) + ", and at most " +
                              std::to_string(rods::kMaxViewExamples) + " examples with the views)";
     std::size_t n = 0;
+    if (room == 0 && node.present() && node.value->is_array() && !node.value->empty()) {
+        return r.fail(node.path, "the chain's " + std::to_string(c.views.size()) + " view examples leave no room for a keyed "
+                                 "one (at most " + std::to_string(rods::kMaxViewExamples) +
+                                 " examples in all): expected an empty array, got " + std::to_string(node.value->size()));
+    }
     KW_SCENE_ASSIGN(n, read_array(r, node, 0, room, what));
     for (std::size_t j = 0; j < n; ++j) {
         const JsonNode element = r.element(node, j);

@@ -157,7 +157,7 @@ static void test_flock(void) {
 
     /* Past the end, and zero frames: rejected, nothing changed. */
     EXPECT_FAIL(kodawari_simulation_step(sim, 1), KODAWARI_INVALID_ARGUMENT, sim, "kodawari_simulation_step", "frames",
-                "expected 1 to 0");
+                "stepped all its 30 frames: expected no further step");
     EXPECT_FAIL(kodawari_simulation_step(sim, 0), KODAWARI_INVALID_ARGUMENT, sim, "frames: 0");
     /* A scene of birds has no chains to read (nothing written), and no chain 0. */
     {

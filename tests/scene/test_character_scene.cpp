@@ -225,6 +225,12 @@ TEST(CharacterScene, BadViews) {
     EXPECT_EQ(parse_error(eight),
               "test.json: $.characters[0].chains[0].views: expected an array of at most 7 view examples, got an array of 8 "
               "elements");
+    // Seven views leave no room for a keyed example: said so, not "at most 0 keyed examples".
+    json full = valid_character_scene();
+    for (int k = 0; k < 6; ++k) chain0(full)["views"].push_back(chain0(full)["views"][0]);
+    chain0(full)["keyed"] = json::array({{{"key", "motion"}, {"value", 2}, {"shape", chain0(full)["views"][0]["shape"]}}});
+    EXPECT_EQ(parse_error(full), "test.json: $.characters[0].chains[0].keyed: the chain's 7 view examples leave no room for a "
+                                 "keyed one (at most 7 examples in all): expected an empty array, got 1");
     json zero = valid_character_scene();
     chain0(zero)["views"][0]["direction"] = {0, 0, 0};
     EXPECT_EQ(parse_error(zero),
