@@ -90,6 +90,10 @@ void add_backend_options(CLI::App& app, BackendFlags& flags) {
                "$KODAWARI_VALIDATION=1)");
 }
 
+std::string counted(std::size_t count, std::string_view noun) {
+    return std::to_string(count) + " " + std::string(noun) + (count == 1 ? "" : "s");
+}
+
 std::string env_text(const char* name) {
     const char* value = std::getenv(name);
     return value != nullptr ? value : "";

@@ -122,6 +122,9 @@ BackendChoice read_backend_choice(const BackendFlags& flags);
 
 /// The value of an environment variable ("" when unset); a flag is set unless "" or "0".
 [[nodiscard]] std::string env_text(const char* name);
+
+/// "1 bird", "270 birds": `count` and `noun` (singular), an "s" added unless it is 1.
+[[nodiscard]] std::string counted(std::size_t count, std::string_view noun);
 [[nodiscard]] bool env_flag(const char* name);
 
 /// A renderer of width x height on the device, validation and staging of `choice`.

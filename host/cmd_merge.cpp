@@ -36,9 +36,10 @@ int cmd_merge(const MergeArguments& o) {
     const RodScene* rods = rod_scene_of(world);
     const bool has_birds = !birds.birds.empty();
     const bool has_chains = rods != nullptr;
-    std::printf("kodawari: merging %zu parts of scene \"%s\" (%s): %zu birds, %zu characters, %u frames\n", parts.size(),
-                world.scene->name.c_str(), world.scene->path.c_str(), birds.birds.size(),
-                has_chains ? rods->instances.size() : std::size_t{0}, world.frames);
+    std::printf("kodawari: merging %s of scene \"%s\" (%s): %s, %s, %s\n", counted(parts.size(), "part").c_str(),
+                world.scene->name.c_str(), world.scene->path.c_str(), counted(birds.birds.size(), "bird").c_str(),
+                counted(has_chains ? rods->instances.size() : std::size_t{0}, "character").c_str(),
+                counted(world.frames, "frame").c_str());
     std::fflush(stdout);
     if (out_option) {
         if (auto made = make_parent_folder(*out_option, "--out"); !made) return report(made.error());

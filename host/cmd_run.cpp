@@ -33,15 +33,16 @@ void print_scene(const Simulation& sim) {
         return part ? std::size_t{sim.shard().part(noun).scene_count} : own;
     };
     if (!bird_world(sim).birds.empty()) {
-        std::printf("kodawari: scene \"%s\" (%s): %zu birds, %u frames at %g fps\n", scene.name.c_str(), scene.path.c_str(),
-                    whole("birds", bird_world(sim).birds.size()), sim.frame_count(), static_cast<double>(bird_world(sim).fps));
+        std::printf("kodawari: scene \"%s\" (%s): %s, %s at %g fps\n", scene.name.c_str(), scene.path.c_str(),
+                    counted(whole("birds", bird_world(sim).birds.size()), "bird").c_str(), counted(sim.frame_count(), "frame").c_str(),
+                    static_cast<double>(bird_world(sim).fps));
     }
     if (const RodScene* rods = rod_scene(sim)) {
         const rods::RodWorld& world = rods->world;
-        std::printf("kodawari: scene \"%s\" (%s): %zu characters, %zu chains, %zu joints%s, %u frames at %g fps\n",
-                    scene.name.c_str(), scene.path.c_str(), whole("characters", world.character_count), world.chains.size(),
-                    std::size_t{world.joint_count}, part ? " in this shard" : "", sim.frame_count(),
-                    static_cast<double>(rods->fps));
+        std::printf("kodawari: scene \"%s\" (%s): %s, %s, %s%s, %s at %g fps\n", scene.name.c_str(), scene.path.c_str(),
+                    counted(whole("characters", world.character_count), "character").c_str(),
+                    counted(world.chains.size(), "chain").c_str(), counted(world.joint_count, "joint").c_str(),
+                    part ? " in this shard" : "", counted(sim.frame_count(), "frame").c_str(), static_cast<double>(rods->fps));
     }
     std::fflush(stdout);
 }
