@@ -9,6 +9,7 @@
 // picked chain and the sketched frame's input while sketching (viewer/viewer.cpp).
 #include <algorithm>
 #include <array>
+#include <cctype>
 #include <chrono>
 #include <cstdio>
 #include <limits>
@@ -102,7 +103,10 @@ int cmd_view(const ViewOptions& o) {
                     throw UsageError{"--keys: expected resize:W:H (window pixels, 1 to 8192), got \"" + name + "\""};
                 }
             } else {
-                const auto k = key_by_name(name);
+                // The keys as viewer.md's table names them (L, W, Space) are taken too.
+                std::string lower = name;
+                for (char& c : lower) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+                const auto k = key_by_name(lower);
                 if (!k) throw UsageError{"--keys: unknown key \"" + name + "\" (known: " + kKnown + ")"};
                 step.key = *k;
             }
