@@ -8,6 +8,7 @@
 #include <cmath>
 #include <cstddef>
 #include <cstdint>
+#include <initializer_list>
 #include <span>
 #include <string>
 #include <string_view>
@@ -69,28 +70,18 @@ void append_string(std::string& out, std::string_view text) {
     out += '"';
 }
 
-void append_vec3(std::string& out, float x, float y, float z) {
+// [a, b, ...]: a point, a direction, or a rotation as [x, y, z, w] (glTF's order).
+void append_numbers(std::string& out, std::initializer_list<float> values) {
     out += '[';
-    append_number(out, x);
-    out += ',';
-    append_number(out, y);
-    out += ',';
-    append_number(out, z);
+    for (const float v : values) {
+        if (out.back() != '[') out += ',';
+        append_number(out, v);
+    }
     out += ']';
 }
 
-// A rotation as [x, y, z, w] (glTF's order).
-void append_quat(std::string& out, float x, float y, float z, float w) {
-    out += '[';
-    append_number(out, x);
-    out += ',';
-    append_number(out, y);
-    out += ',';
-    append_number(out, z);
-    out += ',';
-    append_number(out, w);
-    out += ']';
-}
+void append_vec3(std::string& out, float x, float y, float z) { append_numbers(out, {x, y, z}); }
+void append_quat(std::string& out, float x, float y, float z, float w) { append_numbers(out, {x, y, z, w}); }
 
 const char* mode_of(float value) {
     const long mode = std::lround(value);
