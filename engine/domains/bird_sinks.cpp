@@ -2,6 +2,7 @@
 // the "birds.poses" channel frame by frame.
 #include <algorithm>
 #include <optional>
+#include <set>
 #include <string>
 #include <vector>
 
@@ -39,8 +40,14 @@ public:
         }
         const std::string stem = path_.substr(0, path_.size() - (path_.ends_with(".glb") ? 4 : 0));
         const bool alone = !built_in && birds.models.size() == 1;
+        // Each flock loads its model, so two flocks of one file (or two files of one
+        // stem) are two models of one name: the later ones get "-2", "-3", ..., or the
+        // last file written would replace the others.
+        std::set<std::string> used;
         for (std::size_t k = 0; k < birds.models.size(); ++k) {
-            const std::string path = alone ? path_ : stem + "-" + birds.models[k]->name + ".glb";
+            std::string name = birds.models[k]->name;
+            for (int n = 2; !used.insert(name).second; ++n) name = birds.models[k]->name + "-" + std::to_string(n);
+            const std::string path = alone ? path_ : stem + "-" + name + ".glb";
             auto model = BirdModelExport::create(birds, k, path, compaction_);
             if (!model) return model.error();
             models_.push_back(std::move(model).value());

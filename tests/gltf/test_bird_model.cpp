@@ -297,6 +297,38 @@ TEST(BirdModel, FlockSimulatesAndExports) {
     }
 }
 
+// Two flocks of one model file: each flock loads the file, so the bake has two models of
+// one name, and each gets a file of its own (out-bird.glb, out-bird-2.glb); they shared
+// one path and the second replaced the first, its birds lost.
+TEST(BirdModel, TwoFlocksOfOneModelBakeToTwoFiles) {
+    TempDir dir;
+    make_bird(dir);
+    const std::string scene = dir.file("scene.json");
+    std::ofstream(scene) << R"({"format": "kodawari-scene", "version": 1, "fps": 30, "duration": 1,
+        "flocks": [{"name": "a", "model": "bird.glb", "count": 3,
+                    "generated_route": {"seed": 3, "segments": 4, "center": [0, 40, 0], "extent": [45, 8, 45], "loop": true}},
+                   {"name": "b", "model": "bird.glb", "count": 4,
+                    "generated_route": {"seed": 4, "segments": 4, "center": [0, 40, 0], "extent": [45, 8, 45], "loop": true}}]})";
+    auto sim = Simulation::open(scene, {.backend = BackendKind::CpuReference, .frames = 4});
+    ASSERT_TRUE(sim.ok()) << sim.error().message;
+    auto sink = make_birds_glb_sink(dir.file("out.glb"));
+    BakeSink* sinks[] = {sink.get()};
+    auto written = bake(*sim.value(), sinks);
+    ASSERT_TRUE(written.ok()) << written.error().message;
+    ASSERT_EQ(written.value().size(), 2u);
+    EXPECT_EQ(written.value()[0].path, dir.file("out-bird.glb"));
+    EXPECT_EQ(written.value()[1].path, dir.file("out-bird-2.glb"));
+    tinygltf::TinyGLTF loader;
+    std::string error, warning;
+    std::size_t skins = 0;
+    for (const char* file : {"out-bird.glb", "out-bird-2.glb"}) {
+        tinygltf::Model model;
+        ASSERT_TRUE(loader.LoadBinaryFromFile(&model, &error, &warning, dir.file(file))) << file << ": " << error;
+        skins += model.skins.size();
+    }
+    EXPECT_EQ(skins, 7u);  // every bird of both flocks, one armature each
+}
+
 // The Tail's spread s scales the model's tail bone by 1 + s along its own axis nearest
 // the rig's width (the generator's tail bone keeps X: its scale is (1 + s, 1, 1)), keyed
 // only where the scale moves.
