@@ -38,7 +38,7 @@ public:
             if (!writer) return writer.error();
             writer_.emplace(std::move(writer).value());
         }
-        const std::string stem = path_.substr(0, path_.size() - (path_.ends_with(".glb") ? 4 : 0));
+        const std::string stem = glb_stem(path_);
         const bool alone = !built_in && birds.models.size() == 1;
         // Each flock loads its model, so two flocks of one file (or two files of one
         // stem) are two models of one name: the later ones get "-2", "-3", ..., or the

@@ -35,7 +35,7 @@ public:
         // then the rigged ones too, as bones) into ChainsGlbWriter's file.
         const bool any_procedural =
             std::any_of(rods.characters.begin(), rods.characters.end(), [](const CharacterKinematics& k) { return !k.rig; });
-        const std::string stem = path_.substr(0, path_.size() - (path_.ends_with(".glb") ? 4 : 0));
+        const std::string stem = glb_stem(path_);
         for (std::uint32_t k = 0; k < rods.characters.size(); ++k) {
             if (!rods.characters[k].rig) continue;
             std::string path = !any_procedural && rods.characters.size() == 1 ? path_ : stem + "-" + rods.characters[k].name + ".glb";

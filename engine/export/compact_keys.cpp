@@ -17,15 +17,17 @@
 
 namespace kodawari {
 
+std::string glb_stem(const std::string& path) {
+    const bool glb = path.size() >= 4 && std::equal(path.end() - 4, path.end(), ".glb", [](char a, char b) {
+        return std::tolower(static_cast<unsigned char>(a)) == b;
+    });
+    return path.substr(0, path.size() - (glb ? 4 : 0));
+}
+
 std::vector<std::string> glb_bake_paths(const std::string& out, bool has_birds, bool has_chains) {
     std::vector<std::string> paths;
     if (has_birds) paths.push_back(out);
-    if (has_chains) {
-        const bool glb = out.size() >= 4 && std::equal(out.end() - 4, out.end(), ".glb", [](char a, char b) {
-            return std::tolower(static_cast<unsigned char>(a)) == b;
-        });
-        paths.push_back(has_birds ? out.substr(0, out.size() - (glb ? 4 : 0)) + "-characters.glb" : out);
-    }
+    if (has_chains) paths.push_back(has_birds ? glb_stem(out) + "-characters.glb" : out);
     return paths;
 }
 
@@ -33,9 +35,7 @@ std::string glb_name_problem(const std::string& out) {
     std::error_code ec;
     const auto status = std::filesystem::status(out, ec);
     if (!ec && std::filesystem::exists(status) && !std::filesystem::is_regular_file(status)) return {};
-    std::string extension = std::filesystem::path(out).extension().string();
-    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
-    if (extension == ".glb") return {};
+    if (glb_stem(out).size() < out.size()) return {};
     return "the bake is a binary glTF file: name it .glb (a .gltf is read as JSON glTF)";
 }
 

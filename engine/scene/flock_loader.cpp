@@ -12,6 +12,7 @@
 #include <filesystem>
 #include <limits>
 #include <string>
+#include <unordered_map>
 #include <utility>
 
 #include <kodawari/shared/flocking.h>
@@ -255,12 +256,13 @@ Result<void> check_flock_names(const JsonReader& r, const JsonNode& flocks, cons
         const JsonNode name = r.member(r.element(flocks, i), "name");
         return name.present() ? name.path : r.element(flocks, i).path;
     };
+    // By name, once: a scene may hold up to 10 000 000 one-bird flocks.
+    std::unordered_map<std::string, std::size_t> by_name;
     for (std::size_t i = 0; i < specs.size(); ++i) {
-        for (std::size_t j = 0; j < i; ++j) {
-            if (specs[j].name != specs[i].name) continue;
-            return r.fail(name_path(i), "\"" + specs[i].name + "\" is already the name of flock " + std::to_string(j) +
-                                            " (" + name_path(j) + "); expected a name of its own");
-        }
+        const auto [first, added] = by_name.emplace(specs[i].name, i);
+        if (added) continue;
+        return r.fail(name_path(i), "\"" + specs[i].name + "\" is already the name of flock " + std::to_string(first->second) +
+                                        " (" + name_path(first->second) + "); expected a name of its own");
     }
     for (std::size_t f = 0; f < specs.size(); ++f) {
         if (!specs[f].flocking) continue;
@@ -269,13 +271,14 @@ Result<void> check_flock_names(const JsonReader& r, const JsonNode& flocks, cons
             const std::string& wanted = specs[f].flocking->predators[p].flock;
             if (wanted.empty()) continue;
             const JsonNode at = r.member(r.element(predators, p), "flock");
-            const auto found = std::find_if(specs.begin(), specs.end(), [&](const FlockSpec& s) { return s.name == wanted; });
-            if (found == specs.end()) {
-                std::string names;
-                for (const FlockSpec& s : specs) names += (names.empty() ? "\"" : ", \"") + s.name + "\"";
-                return r.fail(at.path, "\"" + wanted + "\": the scene has no flock of that name (its flocks: " + names +
-                                           "); expected the name of a flock without \"flocking\"");
+            const auto named = by_name.find(wanted);
+            if (named == by_name.end()) {
+                std::vector<std::string> names;  // the first few: enough to see a misspelling
+                for (std::size_t i = 0; i < specs.size() && i < 16; ++i) names.push_back(specs[i].name);
+                return r.fail(at.path, "\"" + wanted + "\": the scene has no flock of that name (its flocks: " + quoted_list(names) +
+                                           (specs.size() > 16 ? ", ..." : "") + "); expected the name of a flock without \"flocking\"");
             }
+            const FlockSpec* found = &specs[named->second];
             if (found->flocking) {
                 return r.fail(at.path, "\"" + wanted + "\" flocks itself; expected the name of a flock without \"flocking\" "
                                        "(the predator is that flock's first bird, flying its route)");

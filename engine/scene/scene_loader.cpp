@@ -286,11 +286,13 @@ Result<Scene> read_scene(const JsonReader& r, const nlohmann::json& document, co
 
 }  // namespace
 
+namespace {
+// A character a file name cannot hold here: a separator or a control character.
+bool not_in_file_names(char c) { return c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f; }
+}  // namespace
+
 std::string scene_name_problem(const std::string& name) {
-    const bool bad_character = std::any_of(name.begin(), name.end(), [](char c) {
-        return c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f;
-    });
-    if (name.empty() || name == "." || name == ".." || bad_character) {
+    if (name.empty() || name == "." || name == ".." || std::any_of(name.begin(), name.end(), not_in_file_names)) {
         return "a file name, as it names the scene's outputs (out/<name>.glb): not empty, \".\" or \"..\", without '/', "
                "'\\' or control characters";
     }
@@ -298,9 +300,7 @@ std::string scene_name_problem(const std::string& name) {
 }
 
 std::string as_scene_name(std::string name, const std::string& fallback) {
-    for (char& c : name) {
-        if (c == '/' || c == '\\' || static_cast<unsigned char>(c) < 0x20 || c == 0x7f) c = '_';
-    }
+    std::replace_if(name.begin(), name.end(), not_in_file_names, '_');
     return name.empty() || name == "." || name == ".." ? fallback : name;
 }
 

@@ -327,6 +327,19 @@ TEST(BirdModel, TwoFlocksOfOneModelBakeToTwoFiles) {
         skins += model.skins.size();
     }
     EXPECT_EQ(skins, 7u);  // every bird of both flocks, one armature each
+
+    // Named after --out without its .glb in any case (they were "OUT.GLB-bird.glb" where
+    // the characters' file was already "OUT-characters.glb").
+    EXPECT_EQ(glb_stem("a/b.GLB"), "a/b");
+    EXPECT_EQ(glb_stem("a/b.gltf"), "a/b.gltf");
+    auto again = Simulation::open(scene, {.backend = BackendKind::CpuReference, .frames = 4});
+    ASSERT_TRUE(again.ok()) << again.error().message;
+    auto upper = make_birds_glb_sink(dir.file("UP.GLB"));
+    BakeSink* upper_sinks[] = {upper.get()};
+    auto rewritten = bake(*again.value(), upper_sinks);
+    ASSERT_TRUE(rewritten.ok()) << rewritten.error().message;
+    ASSERT_EQ(rewritten.value().size(), 2u);
+    EXPECT_EQ(rewritten.value()[0].path, dir.file("UP-bird.glb"));
 }
 
 // The Tail's spread s scales the model's tail bone by 1 + s along its own axis nearest

@@ -75,9 +75,13 @@ struct GlbCompactionStats {
     std::uint64_t byte_rotations = 0;
 };
 
+/// `path` without its `.glb` extension (any case), or `path` itself when it has none: what
+/// a bake's other files are named after (`OUT-characters.glb`, `OUT-bird.glb`).
+[[nodiscard]] KODAWARI_API std::string glb_stem(const std::string& path);
+
 /// The glTF files a bake to `out` writes, as `kodawari run` and the C API's bake name
 /// them: the birds at `out`; the characters at `out` too when there are no birds, else at
-/// `<out without .glb (any case)>-characters.glb`.
+/// `glb_stem(out) + "-characters.glb"`.
 [[nodiscard]] KODAWARI_API std::vector<std::string> glb_bake_paths(const std::string& out, bool has_birds, bool has_chains);
 
 /// Why `out` cannot be a bake's output name, or "" when it can: a bake is binary glTF, so a
