@@ -9,8 +9,10 @@
 #include <string>
 #include <vector>
 
+#include "kodawari/render/renderer.hpp"
 #include "vulkan_backends/device_backends.hpp"
 #include "domains/flocking/flock_backend.hpp"
+#include "domains/flocking/flock_draw.hpp"
 #include "domains/flocking/flock_world.hpp"
 
 namespace kodawari {
@@ -19,7 +21,7 @@ namespace {
 
 class FlockingDomain final : public Domain {
 public:
-    explicit FlockingDomain(flocking::FlockWorld world) : world_(std::move(world)) {}
+    explicit FlockingDomain(flocking::FlockWorld world) : world_(std::move(world)), extent_(flocking::draw_extent(world_)) {}
 
     std::string_view name() const override { return kFlockingDomain; }
     std::string_view instance_noun() const override { return "flocking birds"; }
@@ -133,9 +135,16 @@ public:
 
     std::string device() const override { return backend_ ? backend_->device() : std::string(); }
     std::uint32_t validation_messages() const override { return backend_ ? backend_->validation_messages() : 0; }
-    // The birds draw themselves (the bird domain).
+    // The birds draw themselves (the bird domain); this domain draws the obstacles, the
+    // scene's and those the application placed last (set_flock_agents), through
+    // render::Draw. The agents on the device (set_flock_device_agents) are not read back.
     Result<void> show_on(render::Renderer&, bool) override { return {}; }
-    Result<void> draw_on(render::Renderer&, DrawSource, bool) override { return {}; }
+    Result<void> draw_on(render::Renderer& renderer, DrawSource, bool) override {
+        render::Draw& draw = renderer;
+        flocking::draw_obstacles(draw, world_.fixed_agents, extent_);
+        flocking::draw_obstacles(draw, app_agents_, extent_);
+        return {};
+    }
 
     std::span<const gpu::BirdMotionGpu> motion() const { return motion_; }
     const compute::Buffer* motion_buffer() const { return backend_ ? backend_->motion_buffer() : nullptr; }
@@ -174,6 +183,7 @@ private:
     }
 
     flocking::FlockWorld world_;
+    flocking::DrawExtent extent_;  // where a plane obstacle is drawn
     std::unique_ptr<flocking::FlockBackend> backend_;
     std::uint32_t frame_ = 0;
     std::vector<gpu::BirdMotionGpu> motion_;

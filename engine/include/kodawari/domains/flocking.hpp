@@ -27,6 +27,7 @@
 
 #include "kodawari/core/api.hpp"
 #include "kodawari/birds/world.hpp"
+#include "kodawari/render/draw.hpp"
 #include "kodawari/simulation/domain.hpp"
 #include "kodawari/scene/scene.hpp"
 #include "kodawari/simulation/simulation.hpp"
@@ -67,6 +68,14 @@ struct FlockAgent {
     /// A plane's normal, any length above 1e-6 (normalized): the side birds keep to.
     glm::vec3 normal{0.0f, 1.0f, 0.0f};
 };
+/// How the renderer draws the obstacles birds keep clear of (the scene's and the
+/// application's): spheres and capsules as lit solids in kObstacleColor, a plane as a grid
+/// of lines in kObstaclePlaneColor over the part of it near the flock (its routes and first
+/// positions). Predators and attractors are forces, not objects, and are not drawn (a
+/// predator that is another flock's bird is drawn as that bird).
+inline constexpr render::Rgba8 kObstacleColor{156, 142, 112};
+inline constexpr render::Rgba8 kObstaclePlaneColor{70, 112, 168};
+
 /// The most agents an application may place at once (each bird visits every agent every
 /// substep).
 inline constexpr std::uint32_t kMaxFlockAgents = 64;
