@@ -312,7 +312,7 @@ Command add_run(CLI::App& app) {
     auto o = std::make_shared<RunOptions>();
     CLI::App* c = app.add_subcommand("run", "simulate a scene and bake it to glTF (docs/command-line.md)");
     add_scene(*c, o->scene);
-    add_count(*c, "--frames", o->frames, 1, 10'000'000, "frames to simulate (default: the scene's)");
+    add_count(*c, "--frames", o->frames, 1, kMaxSimulationFrames, "frames to simulate (default: the scene's)");
     add_text(*c, "--out", o->out, "FILE.glb",
              "the glTF file (default: out/<scene>.glb; with --shard out/<scene>.shard-I-of-N.kwpart)");
     add_switch(*c, "--no-export", o->no_export, "simulate (and trace) without writing glTF");

@@ -256,7 +256,7 @@ Command add_validate(CLI::App& app) {
     CLI::App* c = app.add_subcommand(
         "validate", "run a backend and the CPU reference side by side; exit 1 above tolerance (docs/command-line.md)");
     add_scene(*c, o->scene);
-    add_count(*c, "--frames", o->frames, 1, 10'000'000, "frames to compare (default: the scene's)");
+    add_count(*c, "--frames", o->frames, 1, kMaxSimulationFrames, "frames to compare (default: the scene's)");
     add_route_check_options(*c, o->strict, o->fit_routes);
     add_backend_options(*c, o->backend);
     return {c, [o] { return cmd_validate(*o); }};

@@ -50,7 +50,8 @@ namespace {
 birds::WingType read_wing_type(kodawari_wing_type type, const std::string& what) {
     const std::int64_t value = enum_value(type);
     if (value < 0 || value >= static_cast<std::int64_t>(birds::kWingTypeCount)) {
-        invalid(what, std::to_string(value) + "; expected KODAWARI_WING_PIGEON (0), _GULL (1) or _HAWK (2)");
+        static_assert(birds::kWingTypeCount == 4, "the message lists every wing type");
+        invalid(what, std::to_string(value) + "; expected KODAWARI_WING_PIGEON (0), _GULL (1), _HAWK (2) or _HUMMINGBIRD (3)");
     }
     return static_cast<birds::WingType>(value);
 }

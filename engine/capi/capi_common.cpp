@@ -6,6 +6,7 @@
 
 #include <algorithm>
 #include <vector>
+#include <string_view>
 #include <array>
 #include <charconv>
 #include <cmath>
@@ -37,6 +38,27 @@ std::string vector_text(const float* v, std::size_t n) {
 
 const char* last_error_text() noexcept { return t_last_error.c_str(); }
 
+namespace {
+
+// The engine's messages begin with the C++ call that failed ("set_flock_agents: agents[0]
+// ...", "Simulation::buffer: ..."): the C function's name takes that place rather than
+// going before it, when the two name one call (kodawari_simulation_set_flock_agents and
+// set_flock_agents or Simulation::set_flock_agents).
+std::string_view without_cxx_name(std::string_view function, std::string_view message) {
+    const std::size_t colon = message.find(": ");
+    if (colon == std::string_view::npos) return message;
+    std::string_view name = message.substr(0, colon);
+    if (name.starts_with("Simulation::")) name.remove_prefix(std::string_view("Simulation::").size());
+    for (const std::string_view prefix : {std::string_view("kodawari_simulation_"), std::string_view("kodawari_")}) {
+        if (!name.empty() && function.starts_with(prefix) && function.substr(prefix.size()) == name) {
+            return message.substr(colon + 2);
+        }
+    }
+    return message;
+}
+
+}  // namespace
+
 void record(kodawari_status status, const char* function, const std::string& message, std::string* handle_message) noexcept {
     try {
         if (status == KODAWARI_OK) {
@@ -44,7 +66,7 @@ void record(kodawari_status status, const char* function, const std::string& mes
             if (handle_message != nullptr) handle_message->clear();
             return;
         }
-        t_last_error = std::string(function) + ": " + message;
+        t_last_error = std::string(function) + ": " + std::string(without_cxx_name(function, message));
         if (handle_message != nullptr) *handle_message = t_last_error;
     } catch (...) {
         // No memory left for the message: the status still says what happened, and an

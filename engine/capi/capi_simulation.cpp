@@ -107,6 +107,9 @@ KODAWARI_C_API kodawari_status kodawari_simulation_open(const char* path, const 
         const kodawari_backend kind = effective_backend(b);
         if (kind != KODAWARI_BACKEND_AUTO) s->options.backend = backend_kind(kind);
         s->options.options = backend_options(b);
+        if (frames > kMaxSimulationFrames) {
+            invalid("frames", std::to_string(frames) + "; expected 0 (the scene's) or 1 to " + std::to_string(kMaxSimulationFrames));
+        }
         if (frames != 0) s->options.frames = frames;
         auto opened = Simulation::open(path, s->options);
         if (!opened.ok()) fail_on_file(opened.error());

@@ -1,6 +1,9 @@
 // The C API's device embedding (kodawari.h, "Device embedding"): the application's Vulkan
 // device wrapped for the worlds' backend options. Recording and the buffers' ranges are in
 // capi_rods.cpp and capi_birds.cpp, next to the worlds they belong to.
+#include <string>
+#include <string_view>
+
 #include <vulkan/vulkan_core.h>
 
 #include "capi/capi_common.hpp"
@@ -28,7 +31,14 @@ KODAWARI_C_API kodawari_status kodawari_vulkan_device_adopt(const kodawari_vulka
         handles.api_version = desc->api_version;
         handles.frames_in_flight = desc->frames_in_flight;
         auto adopted = adopt_vulkan_device(handles);
-        check(adopted);
+        if (!adopted) {
+            // The C++ struct's members are the C desc's fields: name those.
+            Error error = adopted.error();
+            for (std::size_t at; (at = error.message.find("VulkanDeviceHandles::")) != std::string::npos;) {
+                error.message.replace(at, std::string_view("VulkanDeviceHandles::").size(), "desc->");
+            }
+            fail(error);
+        }
         auto device = std::make_unique<kodawari_vulkan_device>();
         device->context = std::move(adopted).value();
         *out = device.release();

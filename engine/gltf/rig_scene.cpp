@@ -367,7 +367,8 @@ Result<RigScene> make_rig_scene(const std::string& character_path, const std::st
     if (chains.empty()) {
         return make_error(Error::Kind::InvalidInput,
                           ch.source + ": no chain found (" + out.source +
-                              "); name the roots with --roots or the name patterns with --chains");
+                              "); name the chains' roots or name patterns (`kodawari rig --roots` or `--chains`; "
+                              "RigOptions::search in C++)");
     }
 
     // Colliders, in their node's rigid frame at rest (docs/scene-format.md), metres, named

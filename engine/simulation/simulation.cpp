@@ -17,6 +17,7 @@ struct Simulation::Impl {
     Scene scene;
     SimulationOptions options;
     BackendKind kind = BackendKind::Cpu;
+    bool application_device = false;  // SimulationOptions::options.context given: record() can run
     std::string fallback_reason;
     std::uint32_t frames = 1;
     ShardInfo shard;
@@ -88,8 +89,10 @@ Result<std::unique_ptr<Simulation>> Simulation::create(Scene scene, const Simula
                                                          std::to_string(options.shard.index) + " of " +
                                                          std::to_string(options.shard.count));
     }
-    if (options.frames && *options.frames == 0) {
-        return make_error(Error::Kind::InvalidInput, "SimulationOptions::frames: expected at least 1 frame, got 0");
+    if (options.frames && (*options.frames == 0 || *options.frames > kMaxSimulationFrames)) {
+        return make_error(Error::Kind::InvalidInput, "SimulationOptions::frames: expected an integer in [1, " +
+                                                         std::to_string(kMaxSimulationFrames) + "], got " +
+                                                         std::to_string(*options.frames));
     }
     for (std::size_t i = 0; i < domains.size(); ++i) {
         if (!domains[i]) {
@@ -137,6 +140,7 @@ Result<std::unique_ptr<Simulation>> Simulation::create(Scene scene, const Simula
     // Nor does "auto" run on a CPU-type device (lavapipe) unless it was named: the cpu
     // backend is several times faster there (auto_passes_over(), issue 38).
     impl->kind = options.backend.value_or(BackendKind::Vulkan);
+    impl->application_device = options.options.context != nullptr;
     if (impl->kind == BackendKind::Vulkan && !impl->options.options.context) {
         auto device = options.backend ? open_shared_device(impl->options.options)
                                       : open_auto_device(impl->options.options, impl->fallback_reason);
@@ -173,6 +177,7 @@ std::span<Domain* const> Simulation::domains() const { return impl_->domains; }
 std::span<const ChannelInfo> Simulation::channels() const { return impl_->channels; }
 const ShardInfo& Simulation::shard() const { return impl_->shard; }
 BackendKind Simulation::backend() const { return impl_->kind; }
+bool Simulation::can_record() const { return impl_->kind == BackendKind::Vulkan && impl_->application_device; }
 const std::string& Simulation::fallback_reason() const { return impl_->fallback_reason; }
 std::uint32_t Simulation::frame_count() const { return impl_->frames; }
 std::optional<std::uint32_t> Simulation::frame() const { return impl_->current; }

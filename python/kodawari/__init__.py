@@ -44,7 +44,7 @@ library_path = _native.library_path
 
 
 def library_version():
-    """The loaded libkodawari.so's version ("0.2.0"); the same as __version__ unless the
+    """The loaded libkodawari.so's version ("0.3.0"); the same as __version__ unless the
     library next to the package was replaced."""
     return _native.lib.kodawari_version().decode()
 
@@ -188,7 +188,8 @@ class Simulation:
         backend: "cpu-reference" (scalar, one thread: the oracle), "cpu" (vectorized, on
         `threads` threads, 0 = one per hardware thread), "vulkan" (compute shaders; Mesa's
         lavapipe without a GPU) or "auto".
-        frames: how many frames to simulate (None: the scene's duration x fps).
+        frames: how many frames to simulate, at most 10 000 000 (None: the scene's
+        duration x fps).
         device: for vulkan, a device index ("0") or part of its name ("llvmpipe").
         validation: for vulkan, run under the Khronos validation layer.
 
@@ -198,7 +199,7 @@ class Simulation:
         if backend not in _native.BACKENDS:
             raise ValueError(f"backend: {backend!r}; expected one of {', '.join(BACKENDS)}")
         if frames is not None:
-            _whole_number("frames", frames, 1, 0xFFFFFFFF, "a whole number >= 1, or None for the scene's")
+            _whole_number("frames", frames, 1, 10_000_000, "a whole number in [1, 10 000 000], or None for the scene's")
         threads = _whole_number("threads", threads, 0, 1024, "a whole number from 0 (one per hardware thread) to 1024")
         options = _native.BackendOptions()
         options.backend = _native.BACKENDS[backend]
@@ -313,27 +314,47 @@ class Simulation:
         through `position` with `normal`, birds kept on the normal's side), `position` (3
         numbers, m), and optionally `velocity` (m/s, a predator's), `radius` (m, default
         15), `weight` (m/s^2, default 40), `margin` (m, an obstacle's, default 2), `end`
-        (m, a capsule's) and `normal` (a plane's, default up). At most 64. Raises Error naming agents[i] and the
-        member out of range; nothing changes then."""
+        (m, a capsule's) and `normal` (a plane's, default up). At most 64. Raises
+        ValueError naming agents[i] and the key for a missing position, an unknown key or
+        kind, or a value of the wrong shape, and Error naming agents[i] and the member out
+        of range; nothing changes then."""
+        if isinstance(agents, (dict, str, bytes)):
+            raise ValueError(f"agents: {agents!r}; expected a list of dicts, one per agent")
         agents = list(agents)
         array = (_native.FlockAgent * max(len(agents), 1))()
+        keys = ("kind", "position", "velocity", "radius", "weight", "margin", "end", "normal")
         for i, agent in enumerate(agents):
+            if not isinstance(agent, dict):
+                raise ValueError(f"agents[{i}]: {agent!r}; expected a dict with `kind` and `position`")
+            unknown = set(agent) - set(keys)
+            if unknown:
+                raise ValueError(f"agents[{i}]: unknown key(s) {', '.join(sorted(map(str, unknown)))}")
             kind = agent.get("kind", "predator")
             if kind not in self.FLOCK_AGENT_KINDS:
                 raise ValueError(f"agents[{i}].kind: {kind!r}; expected one of {', '.join(self.FLOCK_AGENT_KINDS)}")
-            for key in ("position", "velocity", "end", "normal"):
-                if key in agent and len(agent[key]) != 3:
-                    raise ValueError(f"agents[{i}].{key}: {agent[key]!r}; expected 3 numbers")
-            unknown = set(agent) - {"kind", "position", "velocity", "radius", "weight", "margin", "end", "normal"}
-            if unknown:
-                raise ValueError(f"agents[{i}]: unknown key(s) {', '.join(sorted(unknown))}")
-            array[i] = _native.FlockAgent(self.FLOCK_AGENT_KINDS.index(kind),
-                                          (ctypes.c_float * 3)(*[float(v) for v in agent.get("position", (0, 0, 0))]),
-                                          (ctypes.c_float * 3)(*[float(v) for v in agent.get("velocity", (0, 0, 0))]),
-                                          float(agent.get("radius", 15.0)), float(agent.get("weight", 40.0)),
-                                          float(agent.get("margin", 2.0)),
-                                          (ctypes.c_float * 3)(*[float(v) for v in agent.get("end", (0, 0, 0))]),
-                                          (ctypes.c_float * 3)(*[float(v) for v in agent.get("normal", (0, 1, 0))]))
+            if "position" not in agent:
+                raise ValueError(f"agents[{i}].position: missing; expected 3 numbers (m)")
+
+            def point(key, default):
+                value = agent.get(key, default)
+                try:
+                    numbers = [float(v) for v in value]
+                except (TypeError, ValueError):
+                    numbers = []
+                if len(numbers) != 3:
+                    raise ValueError(f"agents[{i}].{key}: {value!r}; expected 3 numbers")
+                return (ctypes.c_float * 3)(*numbers)
+
+            def number(key, default):
+                value = agent.get(key, default)
+                if isinstance(value, bool) or not isinstance(value, (int, float)):
+                    raise ValueError(f"agents[{i}].{key}: {value!r}; expected a number")
+                return float(value)
+
+            array[i] = _native.FlockAgent(self.FLOCK_AGENT_KINDS.index(kind), point("position", None),
+                                          point("velocity", (0, 0, 0)), number("radius", 15.0),
+                                          number("weight", 40.0), number("margin", 2.0), point("end", (0, 0, 0)),
+                                          point("normal", (0, 1, 0)))
         with self._lock:
             handle = self._live()
             _check(_native.lib.kodawari_simulation_set_flock_agents(handle, array if agents else None, len(agents)), handle)
@@ -440,7 +461,13 @@ class Simulation:
         birds, else to PATH-without-.glb + "-characters.glb". compact=True drops the keys
         that linear interpolation reproduces within 1 mm / 0.001 rad (docs/compact.md).
         Files are written whole or not at all; Error names a path that cannot be written.
+
+        The bake is the scene's own: what was set on this simulation (set_flock_agents,
+        set_wind, set_lod_budget) is not applied to it, since the new simulation starts
+        from the scene file. Step this one and read its outputs to keep them.
         """
+        if not isinstance(compact, bool):
+            raise ValueError(f"compact: {compact!r}; expected True or False")
         with self._lock:
             handle = self._live()
             written = _native.ctypes.create_string_buffer(64 * 1024)

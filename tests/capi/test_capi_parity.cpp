@@ -680,6 +680,11 @@ TEST(CApiEmbedding, RecordedScenesGiveTheStepsBits) {
     VkCommandBuffer cmd = app.begin(9);
     EXPECT_EQ(kodawari_simulation_record(alone, cmd), KODAWARI_INVALID_ARGUMENT);
     EXPECT_NE(std::string(kodawari_simulation_last_error(alone)).find("vulkan_device"), std::string::npos);
+    // Nor take agents on the device, which record() alone reads (step() refuses them).
+    EXPECT_EQ(kodawari_simulation_set_flock_device_agents(alone, 3), KODAWARI_INVALID_ARGUMENT);
+    EXPECT_NE(std::string(kodawari_simulation_last_error(alone)).find("vulkan_device"), std::string::npos)
+        << kodawari_simulation_last_error(alone);
+    EXPECT_EQ(kodawari_simulation_set_flock_device_agents(alone, 0), KODAWARI_OK);
     app.submit(9);
     app.wait_all();
     kodawari_simulation_destroy(alone);
@@ -765,7 +770,7 @@ TEST(CApiEmbedding, RecordedStepsOnTheApplicationsDeviceGiveTheStepsBits) {
     kodawari_vulkan_device* none = nullptr;
     EXPECT_EQ(kodawari_vulkan_device_adopt(&bad, &none), KODAWARI_INVALID_ARGUMENT);
     EXPECT_EQ(none, nullptr);
-    EXPECT_NE(std::string(kodawari_last_error()).find("VulkanDeviceHandles::device"), std::string::npos) << kodawari_last_error();
+    EXPECT_NE(std::string(kodawari_last_error()).find("desc->device is null"), std::string::npos) << kodawari_last_error();
     kodawari_backend_options cpu_on_device = own.desc.backend;
     cpu_on_device.backend = KODAWARI_BACKEND_CPU;
     cpu_on_device.validation = 0;

@@ -372,6 +372,9 @@ static void test_rejects(void) {
     options.threads = 5000;
     EXPECT_FAIL(kodawari_simulation_open(g_flock, &options, 0, &sim), KODAWARI_INVALID_ARGUMENT, NULL,
                 "backend.threads: 5000");
+    options.threads = 0;
+    EXPECT_FAIL(kodawari_simulation_open(g_flock, &options, 10000001u, &sim), KODAWARI_INVALID_ARGUMENT, NULL,
+                "frames: 10000001; expected 0 (the scene's) or 1 to 10000000");
     /* A file that is not a scene: the loader's message, naming the file. */
     EXPECT_FAIL(kodawari_simulation_open(g_not_scene, NULL, 0, &sim), KODAWARI_INVALID_ARGUMENT, NULL, g_not_scene);
     CHECK(sim == NULL, "a failed open left *out set");

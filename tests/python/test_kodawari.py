@@ -295,7 +295,26 @@ with kodawari.Simulation.open(flocking_scene, "cpu", frames=2) as sim:
         check(False, "a kind of hawk raised nothing")
     except ValueError as error:
         check("agents[0].kind" in str(error), f"set_flock_agents(kind=hawk): {error}")
+    # Shapes Python gives that are not a list of agent dicts: ValueError naming where.
+    for bad, expected in (({"kind": "predator", "position": (0, 40, 0)}, "agents:"), ([{}], "agents[0].position: missing"),
+                          ([(0, 0, 0)], "agents[0]:"), ([{"position": 5}], "agents[0].position: 5"),
+                          ([{"position": (0, 0, 0), "radius": "big"}], "agents[0].radius")):
+        try:
+            sim.set_flock_agents(bad)
+            check(False, f"set_flock_agents({bad!r}) raised nothing")
+        except ValueError as error:
+            check(expected in str(error), f"set_flock_agents({bad!r}): {error}")
+    try:
+        sim.bake(os.path.join(temp, "agents.glb"), compact="no")
+        check(False, "bake(compact='no') raised nothing")
+    except ValueError as error:
+        check("compact" in str(error), f"bake(compact='no'): {error}")
     sim.set_flock_agents([])
+try:
+    kodawari.Simulation.open(flocking_scene, "cpu", frames=10_000_001)
+    check(False, "frames=10 000 001 raised nothing")
+except ValueError as error:
+    check("frames" in str(error), f"open(frames=10 000 001): {error}")
 
 # ---- Errors carry the library's message.
 missing = os.path.join(temp, "no-such-scene.json")

@@ -149,6 +149,12 @@ TEST_P(Simulations, MisuseIsAnErrorThatNamesTheArgument) {
     auto zero = Simulation::open(scene_path("flock.json"), options(0));
     ASSERT_FALSE(zero.ok());
     EXPECT_NE(zero.error().message.find("SimulationOptions::frames"), std::string::npos);
+    // Past kMaxSimulationFrames (the command's --frames limit): refused before any work.
+    auto endless = Simulation::open(scene_path("flock.json"), options(kMaxSimulationFrames + 1));
+    ASSERT_FALSE(endless.ok());
+    EXPECT_NE(endless.error().message.find("SimulationOptions::frames: expected an integer in [1, 10000000], got 10000001"),
+              std::string::npos)
+        << endless.error().message;
     auto missing = Simulation::open(scene_path("no-such-scene.json"), options(1));
     ASSERT_FALSE(missing.ok());
     EXPECT_NE(missing.error().message.find("no-such-scene.json"), std::string::npos) << missing.error().message;

@@ -247,8 +247,17 @@ Result<void> set_flock_device_agents(Simulation& sim, std::uint32_t count) {
         return make_error(Error::Kind::InvalidInput, "set_flock_device_agents: count: " + std::to_string(count) +
                                                          " agents; at most " + std::to_string(kMaxFlockAgents));
     }
-    if (auto* flock = dynamic_cast<FlockingDomain*>(sim.domain(kFlockingDomain))) return flock->set_device_agents(count);
-    return {};
+    auto* flock = dynamic_cast<FlockingDomain*>(sim.domain(kFlockingDomain));
+    if (flock == nullptr) return {};
+    // Agents on the device are read by record() only (step() refuses them): a simulation
+    // that cannot record would be left with neither.
+    if (count > 0 && sim.backend() == BackendKind::Vulkan && !sim.can_record()) {
+        return make_error(Error::Kind::InvalidInput,
+                          "set_flock_device_agents: agents on the device are read by record(), which needs the "
+                          "application's device (SimulationOptions::options.context; in C, the backend options' "
+                          "vulkan_device); this simulation opened its own: set_flock_agents takes them from host arrays");
+    }
+    return flock->set_device_agents(count);
 }
 
 Result<void> set_flock_agents(Simulation& sim, std::span<const FlockAgent> agents) {

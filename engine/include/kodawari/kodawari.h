@@ -84,8 +84,10 @@ extern "C" {
 /// The library's version, "MAJOR.MINOR.PATCH" (CMake's project version, the one place it
 /// is set). A static string.
 KODAWARI_C_API const char* kodawari_version(void);
-/// The library's major version; a change of it breaks this API (and the SONAME
-/// libkodawari.so.MAJOR changes with it).
+/// The library's major version; a change of it breaks this API. While it is 0, a change
+/// of the minor version may break the API and the ABI too, and the SONAME is
+/// libkodawari.so.MAJOR.MINOR (libkodawari.so.0.3): a program runs only against the
+/// minor version it was built for.
 KODAWARI_C_API int kodawari_version_major(void);
 /// The library's minor version.
 KODAWARI_C_API int kodawari_version_minor(void);
@@ -764,10 +766,10 @@ KODAWARI_C_API kodawari_status kodawari_bird_world_buffer(kodawari_bird_world* w
 typedef struct kodawari_simulation kodawari_simulation;
 
 /// Loads the scene file at `path` (UTF-8) and opens its backends. `backend`: as for the
-/// worlds (NULL = all zeros: auto); `frames`: how many frames to simulate, or 0 for the
-/// scene's own count (its duration x fps). A file that cannot be read or is not a valid
-/// scene is KODAWARI_INVALID_ARGUMENT with a message naming the file (and the JSON path
-/// of the first problem). `*out` is set only on success (to NULL otherwise).
+/// worlds (NULL = all zeros: auto); `frames`: how many frames to simulate (at most
+/// 10 000 000), or 0 for the scene's own count (its duration x fps). A file that cannot
+/// be read or is not a valid scene is KODAWARI_INVALID_ARGUMENT with a message naming the
+/// file (and the JSON path of the first problem). `*out` is set only on success (to NULL otherwise).
 KODAWARI_C_API kodawari_status kodawari_simulation_open(const char* path, const kodawari_backend_options* backend,
                                                         uint32_t frames, kodawari_simulation** out);
 /// Destroys a simulation (NULL: nothing happens).
@@ -790,9 +792,9 @@ KODAWARI_C_API kodawari_status kodawari_simulation_set_wind(kodawari_simulation*
 /// `measured` 0 prices frames by the scene's cost model alone (`lod.costs`: the same bits
 /// on every run, as a bake must be); non-zero scales the model by what the frames took
 /// (an interactive application's). KODAWARI_INVALID_ARGUMENT naming `budget_ms` for a bad
-/// budget, or when the scene has no characters or its `lod` is off; KODAWARI_UNSUPPORTED
-/// once the rigged characters' rod input is written on the device (set it before the
-/// first step).
+/// budget, or when the scene has no characters or its `lod` is off; KODAWARI_UNAVAILABLE
+/// once the rigged characters' rod input is written on the device, which the vulkan
+/// backend does from the first step (set the budget before it).
 KODAWARI_C_API kodawari_status kodawari_simulation_set_lod_budget(kodawari_simulation* sim, float budget_ms, int measured);
 
 /// What the levels' budget did (kodawari_simulation_lod_budget).
@@ -858,12 +860,14 @@ KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_agents(kodawari_sim
 /// (docs/flocking.md, "Agents on the device"): from the next recorded frame on, the first
 /// `count` elements (at most 64) of the buffer KODAWARI_BUFFER_FLOCK_AGENTS
 /// (kodawari_simulation_buffer; FlockAgentGpu each, kodawari/shared/flocking.h; encode
-/// them as kodawari_simulation_encode_flock_agent does) are the application's agents, in
+/// them as kodawari_encode_flock_agent does) are the application's agents, in
 /// place of kodawari_simulation_set_flock_agents' (each call replaces the other's; 0
 /// removes them). Write them after the previous frame's recording has read them and
 /// before this frame's, which begins with a barrier from transfer and compute-shader
 /// writes. Their values are not checked. KODAWARI_INVALID_ARGUMENT naming `count` above
-/// 64, or on a CPU backend; while `count` > 0, kodawari_simulation_step is refused.
+/// 64, or on a CPU backend, or on a simulation opened without the backend options'
+/// vulkan_device (it cannot record); while `count` > 0, kodawari_simulation_step is
+/// refused.
 KODAWARI_C_API kodawari_status kodawari_simulation_set_flock_device_agents(kodawari_simulation* sim, uint32_t count);
 /// `agent` as the kernels read it: 12 floats (FlockAgentGpu: position xyz and radius;
 /// kind, weight, margin, 0; velocity, a capsule's end or a plane's unit normal, and 0)
@@ -946,7 +950,9 @@ KODAWARI_C_API kodawari_status kodawari_simulation_chain_levels(kodawari_simulat
                                                                 size_t capacity);
 /// Bakes the scene to glTF binary files as `kodawari run --out PATH` does: every frame from
 /// frame 0, on a simulation of its own with the same scene, backend and frame count, so
-/// that `sim`'s own state and frame are untouched. The flock goes to `path`; the
+/// that `sim`'s own state and frame are untouched; being the scene file's, the bake has
+/// nothing of what was set on `sim` (kodawari_simulation_set_flock_agents, _set_wind,
+/// _set_lod_budget). The flock goes to `path`; the
 /// characters to `path` too when the scene has no birds, else to `<path without
 /// .glb>-characters.glb` (one file per rigged character template, as the command line
 /// writes them). `compact`: 1 drops the keys linear interpolation reproduces within 1 mm

@@ -102,7 +102,8 @@ inline constexpr std::string_view agents = "flocking.agents";
 /// barrier from compute-shader reads) and before this frame's: record() begins with a
 /// barrier from transfer and compute-shader writes. Their values are not checked: write
 /// what encode_flock_agent() gives. InvalidInput naming `count` above kMaxFlockAgents, or
-/// on a CPU backend; while `count` > 0, step() is refused (it cannot see them).
+/// on a CPU backend, or on a simulation that cannot record (Simulation::can_record(): it
+/// opened its own device); while `count` > 0, step() is refused (it cannot see them).
 [[nodiscard]] KODAWARI_API Result<void> set_flock_device_agents(Simulation& sim, std::uint32_t count);
 
 /// `agent` as the kernels read it (what set_flock_agents() writes, and what an application

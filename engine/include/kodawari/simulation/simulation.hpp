@@ -64,6 +64,10 @@ struct ShardInfo {
     [[nodiscard]] KODAWARI_API ShardPart part(std::string_view instances) const;
 };
 
+/// The most frames a Simulation runs (SimulationOptions::frames; `kodawari run --frames`):
+/// 46 hours at 60 frames a second.
+inline constexpr std::uint32_t kMaxSimulationFrames = 10'000'000;
+
 /// How a Simulation runs.
 struct SimulationOptions {
     /// The backends' kind; none: "auto", vulkan when a GPU opens and can hold the scene
@@ -75,7 +79,7 @@ struct SimulationOptions {
     /// Device, validation, cpu threads, and a device to run on (a renderer's); without
     /// one, the vulkan backends share one device the Simulation opens.
     BackendOptions options{};
-    /// Simulate this many frames instead of the scene's (>= 1).
+    /// Simulate this many frames instead of the scene's, in [1, kMaxSimulationFrames].
     std::optional<std::uint32_t> frames{};
     /// With the vulkan backends: a domain's inputs that another domain makes on the same
     /// device are written there (the rigged characters' rod input from their poses;
@@ -114,6 +118,9 @@ public:
     [[nodiscard]] const ShardInfo& shard() const;
     /// The kind every backend is of ("auto" resolved).
     [[nodiscard]] BackendKind backend() const;
+    /// Whether record() can run: the vulkan backends on the application's device
+    /// (SimulationOptions::options.context given).
+    [[nodiscard]] bool can_record() const;
     /// Why "auto" runs on the CPU ("" when it did not fall back).
     [[nodiscard]] const std::string& fallback_reason() const;
     /// What the backends run on ("llvmpipe (LLVM 15.0.6, 256 bits)", "2 threads").
