@@ -164,13 +164,46 @@ FlockStep flock_rules(uint i, FlockNeighbours nb, uint agents, float dt) {
         const FlockAgentGpu agent = kw_agent(g);
         const float kind = agent.kind_weight.x;
         if (kind == KW_FLOCK_AGENT_PLANE) {
-            // Kept to the normal's side: pushed along the normal within `margin` of the
-            // plane (and behind it), in proportion to the depth into that layer. A bird
-            // flying at it turns away as its velocity gains the normal's component.
+            // Kept to the normal's side: within `margin` of the plane (and behind it), in
+            // proportion to the depth into that layer. A bird flying into it is steered
+            // across its flight at the full strength, as round a capsule below: across
+            // the plane's upright (world up within the plane; a wall's is up, a floor has
+            // none), so that a bird flying at a wall turns left or right in a level, banked
+            // turn, and one diving at a floor pulls up (Reynolds 1999's steering). A push
+            // along the normal only braked a bird flying straight at a wall, which then
+            // turned as little as its angle to the wall gave; steering in the plane of its
+            // flight and the normal had a diving bird dive further, into its dive limit,
+            // and not turn (scenes/tower.json's cliff: birds 2.9 m into it at a 15 m
+            // margin, 6.7 m at 25 m, 19 m so). One flying along it or away is pushed along
+            // the normal. Dead at it: to its right (facing x up), or, flying straight down
+            // at a floor, to +x.
             const vec3 n = KW_XYZ(agent.velocity);
             const float margin = max(agent.kind_weight.z, 1e-3f);
             const float depth = margin - dot(p - KW_XYZ(agent.position), n);
-            if (depth > 0.0f) avoid += (agent.kind_weight.y * min(depth / margin, 1.0f)) * n;
+            if (depth > 0.0f) {
+                const float s = agent.kind_weight.y * min(depth / margin, 1.0f);
+                const float toward = dot(forward, n);
+                vec3 away = n;
+                float brake = 0.0f;
+                if (toward < 0.0f) {
+                    const vec3 upright = vec3(0.0f, 1.0f, 0.0f) - n.y * n;
+                    const float ul = length(upright);
+                    vec3 facing = forward;
+                    if (ul > 1e-3f) {
+                        const vec3 axis = upright / ul;
+                        const vec3 flat_forward = forward - dot(forward, axis) * axis;
+                        const float fl = length(flat_forward);
+                        if (fl > 1e-3f) facing = flat_forward / fl;
+                    }
+                    const vec3 across = n - dot(n, facing) * facing;
+                    const float cl = length(across);
+                    const vec3 side = cross(facing, vec3(0.0f, 1.0f, 0.0f));
+                    const float sl = length(side);
+                    away = cl > 1e-3f ? across / cl : sl > 1e-3f ? side / sl : vec3(1.0f, 0.0f, 0.0f);
+                    brake = s * toward;
+                }
+                avoid += s * away + brake * forward;
+            }
             continue;
         }
         // A capsule is avoided as the sphere round its segment's point nearest the bird,

@@ -288,12 +288,12 @@ gpu::FlockAgentGpu agent(float kind, glm::vec4 position, float weight, float mar
     return a;
 }
 
-// The rules of 1 506 birds in two flocks, at every instruction set, against the body's:
+// The rules of 1 508 birds in two flocks, at every instruction set, against the body's:
 // separation's front factor 0.7 and 2.5 (at 0 or 1 the order of its products cannot
 // show), birds straddling the ground clearance, speeds from rest (where the body's
 // forward is +z) to twice the largest with steep climbs and dives (the speed and pitch
-// limits), and every agent kind among them: a plane, a sphere, an upright capsule, a
-// level one and one of no length, three birds flying dead at them, predators crossing the
+// limits), and every agent kind among them: a floor and a wall, a sphere, an upright capsule, a
+// level one and one of no length, five birds flying dead at them, predators crossing the
 // flock and diving straight down (their two ways to flee), one of negative weight (no
 // panic), an attractor. In calls of 37 birds.
 TEST(FlockRules, AreTheBodysRulesBitForBit) {
@@ -324,12 +324,15 @@ TEST(FlockRules, AreTheBodysRulesBitForBit) {
         bird.speed = {10.0f, 5.0f, 15.0f, 8.0f};
         bird.turn = {12.0f, 0.5f, 0.6f, 0.0f};
     }
-    // Three birds flying dead on an obstacle's centre line, where the steer across it has
-    // no direction and the body turns to its side (forward x up; the horizontal
-    // capsule's up is its axis) or, flying along up, to +x.
+    // Five birds flying dead on an obstacle's centre line or normal, where the steer across
+    // it has no direction and the body turns to its side (forward x up; the horizontal
+    // capsule's up is its axis) or, flying along up, to +x: at the sphere, the level
+    // capsule, the sphere from above, the wall, and the floor from above.
     const glm::vec3 aimed[][2] = {{{3.0f, 4.0f, -3.5f}, {0.0f, 0.0f, 10.0f}},
                                   {{-4.0f, 6.0f, 5.5f}, {0.0f, 0.0f, 10.0f}},
-                                  {{3.0f, 7.5f, 0.0f}, {0.0f, -10.0f, 0.0f}}};
+                                  {{3.0f, 7.5f, 0.0f}, {0.0f, -10.0f, 0.0f}},
+                                  {{-6.0f, 4.0f, 2.0f}, {-10.0f, 0.0f, 0.0f}},
+                                  {{7.0f, 2.5f, -7.0f}, {0.0f, -10.0f, 0.0f}}};
     for (const auto& a : aimed) {
         w.add(a[0], a[1], 0u);
         w.birds.back().speed = {10.0f, 5.0f, 15.0f, 8.0f};
@@ -345,6 +348,7 @@ TEST(FlockRules, AreTheBodysRulesBitForBit) {
     }
     const std::vector<gpu::FlockAgentGpu> agents = {
         agent(KW_FLOCK_AGENT_PLANE, {0.0f, 1.0f, 0.0f, 0.0f}, 15.0f, 2.0f, {0.0f, 1.0f, 0.0f}),
+        agent(KW_FLOCK_AGENT_PLANE, {-8.0f, 0.0f, 0.0f, 0.0f}, 15.0f, 3.0f, {1.0f, 0.0f, 0.0f}),
         agent(KW_FLOCK_AGENT_SPHERE, {3.0f, 4.0f, 0.0f, 1.5f}, 20.0f, 3.0f, {}),
         agent(KW_FLOCK_AGENT_CAPSULE, {-4.0f, 0.0f, -4.0f, 1.0f}, 20.0f, 3.0f, {-4.0f, 8.0f, -4.0f}),
         agent(KW_FLOCK_AGENT_CAPSULE, {6.0f, 5.0f, 6.0f, 1.2f}, 15.0f, 2.0f, {6.0f, 5.0f, 6.0f}),

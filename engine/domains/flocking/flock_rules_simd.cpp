@@ -158,7 +158,30 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
                 const V3 normal = splat(d, agent.velocity.x, agent.velocity.y, agent.velocity.z);
                 const V margin = vm::glm_max(hn::Set(d, agent.kind_weight.z), small);
                 const V depth = hn::Sub(margin, dot(p - splat(d, agent.position.x, agent.position.y, agent.position.z), normal));
-                avoid = select(hn::Gt(depth, zero), avoid + hn::Mul(weight, vm::glm_min(hn::Div(depth, margin), one)) * normal, avoid);
+                // Flying into it: steered across the flight and the plane's upright (the
+                // body's rule and fallbacks); the upright is the same in every lane.
+                const glm::vec3 n(agent.velocity.x, agent.velocity.y, agent.velocity.z);
+                const glm::vec3 upright = glm::vec3(0.0f, 1.0f, 0.0f) - n.y * n;
+                const float ul = glm::length(upright);
+                V3 facing = forward;
+                if (ul > 1e-3f) {
+                    const glm::vec3 axis = upright / ul;
+                    const V3 axis_v = splat(d, axis.x, axis.y, axis.z);
+                    const V3 flat_forward = forward - dot(forward, axis_v) * axis_v;
+                    const V fl = length(flat_forward);
+                    facing = select(hn::Gt(fl, small), flat_forward / fl, facing);
+                }
+                const V3 across = normal - dot(normal, facing) * facing;
+                const V cl = length(across);
+                const V3 side = cross(facing, splat(d, 0.0f, 1.0f, 0.0f));
+                const V sl = length(side);
+                const V3 round = select(hn::Gt(cl, small), across / cl, select(hn::Gt(sl, small), side / sl, splat(d, 1.0f, 0.0f, 0.0f)));
+                const V s = hn::Mul(weight, vm::glm_min(hn::Div(depth, margin), one));
+                const V toward = dot(forward, normal);
+                const M into = hn::Lt(toward, zero);
+                const V3 away = select(into, round, normal);
+                const V brake = hn::IfThenElse(into, hn::Mul(s, toward), zero);
+                avoid = select(hn::Gt(depth, zero), avoid + (s * away + brake * forward), avoid);
                 continue;
             }
             V3 at = splat(d, agent.position.x, agent.position.y, agent.position.z);
