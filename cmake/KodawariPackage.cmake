@@ -1,7 +1,7 @@
 # The installed package (issue 11): what `cmake --install <build> --prefix P` writes
 # besides the libraries, headers and command (engine/CMakeLists.txt, host/CMakeLists.txt):
 #
-#   P/lib/cmake/kodawari/kodawariConfig.cmake         find_package(kodawari 0.2 CONFIG)
+#   P/lib/cmake/kodawari/kodawariConfig.cmake         find_package(kodawari 0.3 CONFIG)
 #   P/lib/cmake/kodawari/kodawariConfigVersion.cmake  which requested versions this one satisfies
 #   P/lib/cmake/kodawari/kodawariTargets*.cmake       the export set kodawariTargets
 #   P/lib/pkgconfig/kodawari.pc                       pkg-config --cflags --libs kodawari
@@ -26,8 +26,8 @@ configure_package_config_file(${CMAKE_CURRENT_LIST_DIR}/kodawariConfig.cmake.in
   ${PROJECT_BINARY_DIR}/package/kodawariConfig.cmake
   INSTALL_DESTINATION ${KODAWARI_CMAKE_INSTALL_DIR})
 # While the version is 0.x, a minor release may break the API (semantic versioning's rule
-# for 0.y.z), so find_package(kodawari 0.2) accepts 0.2.x and nothing else: 0.3 must be
-# asked for. SameMajorVersion would accept 0.3, 0.4, ... for a request of 0.2. From 1.0
+# for 0.y.z), so find_package(kodawari 0.3) accepts 0.3.x and nothing else: 0.4 must be
+# asked for. SameMajorVersion would accept 0.4, 0.5, ... for a request of 0.3. From 1.0
 # on, SameMajorVersion is the rule.
 if(PROJECT_VERSION_MAJOR EQUAL 0)
   set(compatibility SameMinorVersion)

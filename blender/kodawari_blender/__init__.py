@@ -10,7 +10,7 @@ bpy.ops.preferences.addon_install) is all it takes.
 bl_info = {
     "name": "Kodawari",
     "author": "Kodawari",
-    "version": (0, 2, 0),
+    "version": (0, 3, 0),
     "blender": (3, 4, 0),
     "location": "View3D > Sidebar > Kodawari; F3 > Kodawari: Flock from Curve",
     "description": "Flocks of birds along Bezier curves, and chains (hair, tails, spring bones) baked on armatures",

@@ -1,12 +1,13 @@
 # Which requested versions the installed kodawariConfigVersion.cmake accepts, as
 # find_package(kodawari <request>) asks it:
 #   cmake -DVERSION_FILE=<prefix>/lib/cmake/kodawari/kodawariConfigVersion.cmake -P check_version.cmake
-# While Kodawari is 0.x a minor release may break the API: 0.2 accepts 0.2 and 0.2.x
+# While Kodawari is 0.x a minor release may break the API: 0.3 accepts 0.3 and 0.3.x
 # requests only.
 cmake_minimum_required(VERSION 3.25)
-# 0.2.99 is newer than this 0.2.0; `0` reads as 0.0 (find_package gives a missing minor as 0).
-set(accepted 0.2 0.2.0)
-set(refused 0 0.1 0.3 1.0 0.2.99)
+# 0.3.99 is newer than this 0.3.0; `0` reads as 0.0 (find_package gives a missing minor as 0).
+# 0.2 is refused: 0.3 changed the C ABI (kodawari_backend_options grew).
+set(accepted 0.3 0.3.0)
+set(refused 0 0.1 0.2 0.2.0 0.4 1.0 0.3.99)
 foreach(request IN LISTS accepted refused)
   unset(PACKAGE_VERSION_COMPATIBLE)
   unset(PACKAGE_VERSION_EXACT)

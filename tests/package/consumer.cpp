@@ -42,7 +42,7 @@ namespace {
 using namespace kodawari;
 
 // Built against 0.2 headers: KODAWARI_VERSION_* are compile-time constants.
-static_assert(KODAWARI_VERSION_MAJOR == 0 && KODAWARI_VERSION_MINOR >= 2, "find_package(kodawari 0.2) gave other headers");
+static_assert(KODAWARI_VERSION_MAJOR == 0 && KODAWARI_VERSION_MINOR == 3, "find_package(kodawari 0.3) gave other headers");
 
 int failures = 0;
 

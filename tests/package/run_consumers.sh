@@ -6,9 +6,9 @@
 #   1. `cmake --install BUILD --prefix TMP`; the installed tree has the libraries, the
 #      headers as files (shared/ too, not a link), the package and kodawari.pc, and the
 #      installed command prints the version.
-#   2. kodawariConfigVersion.cmake accepts 0.2 requests only (check_version.cmake).
+#   2. kodawariConfigVersion.cmake accepts 0.3 requests only (check_version.cmake).
 #   3. headers/: every installed header compiles alone against the prefix, -Werror.
-#   4. find_package/: find_package(kodawari 0.2 CONFIG REQUIRED), kodawari::engine,
+#   4. find_package/: find_package(kodawari 0.3 CONFIG REQUIRED), kodawari::engine,
 #      consumer.cpp (every component used, a real run of each).
 #   4b. examples/own_domain/: a domain of the application's own (its kernel, the public
 #      compute layer) built standalone against the prefix and run.
