@@ -23,9 +23,10 @@ void perpendiculars(const glm::vec3& axis, glm::vec3& u, glm::vec3& v) {
     v = glm::cross(axis, u);
 }
 
-// A lit sphere, 8 x 6 facets, each facet's normal its centre's direction.
+// A lit sphere, 16 x 12 facets, each facet's normal its centre's direction (8 x 6 showed
+// its facets on an obstacle a fifth of the picture across: a flock's balloon).
 void add_sphere(DrawList& list, const glm::vec3& c, float r, const glm::vec3& color) {
-    constexpr int kAround = 8, kRings = 6;
+    constexpr int kAround = 16, kRings = 12;
     const auto at = [&](int i, int j) {
         const float theta = kTau * static_cast<float>(i) / kAround;
         const float phi = 0.5f * kTau * static_cast<float>(j) / kRings;
@@ -88,7 +89,7 @@ void DrawRecorder::capsules(std::span<const Capsule> capsules, Rgba8 color) {
             add_sphere(list, k.b, k.radius, c);
             glm::vec3 u, v;
             perpendiculars(along / length, u, v);
-            constexpr int kSides = 12;
+            constexpr int kSides = 24;  // as smooth as the end spheres round
             for (int i = 0; i < kSides; ++i) {
                 const float t0 = kTau * static_cast<float>(i) / kSides, t1 = kTau * static_cast<float>(i + 1) / kSides;
                 const glm::vec3 n0 = std::cos(t0) * u + std::sin(t0) * v, n1 = std::cos(t1) * u + std::sin(t1) * v;
