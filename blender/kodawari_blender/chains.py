@@ -240,6 +240,7 @@ def bake_steps(job, armature, frames, backend, vrm="", frames_per_chunk=10, bone
     location, rotation, scale = build.channels(bases)
 
     baked_action = bpy.data.actions.new(f"{armature.name} kodawari chains")
+    baked_action.id_root = 'OBJECT'  # an armature object's; unset, Blender warns on every read of it
     # Kodawari's frame f is glTF time f / fps, which Blender's exporter wrote for frame f
     # (its times are frame / fps, from frame 0) and its importer reads back at frame f.
     keys = numpy.arange(frames, dtype=numpy.float32)

@@ -108,8 +108,43 @@ def scene_dict(curves, props, fps, frames):
                 # The flocking rules' defaults (docs/flocking.md); the curve draws the flock.
                 flock["flocking"] = {}
             flocks.append(flock)
+    if not flocks:
+        names = ", ".join(f"'{obj.name}'" for obj in curves)
+        raise FlockError(f"curve {names} has no splines: draw a Bezier spline in it (two points at least)"
+                         if len(curves) == 1 else f"curves {names} have no splines: draw a Bezier spline in one")
     return {"format": "kodawari-scene", "version": 1, "name": "blender", "fps": fps,
             "duration": frames / fps, "flocks": flocks}
+
+
+# What a flock holds per bird and frame while it is made: its poses (7 parts of 7 floats)
+# and tail spread from the simulation, and Blender's keyframes (34 F-curves a bird: the
+# Body's location, the 7 parts' rotations, the Tail's scale; a keyframe is a 72-byte
+# BezTriple).
+BYTES_PER_BIRD_FRAME = (7 * 7 + 1) * 4 + 34 * 72
+
+
+def available_memory():
+    """Bytes of memory free for new work (Linux's MemAvailable), or None where unknown."""
+    try:
+        with open("/proc/meminfo") as file:
+            for line in file:
+                if line.startswith("MemAvailable:"):
+                    return int(line.split()[1]) * 1024
+    except (OSError, ValueError, IndexError):
+        pass
+    return None
+
+
+def check_size(birds, frames, available=None):
+    """Raises FlockError when `birds` x `frames` would need more than half the memory free
+    (the poses, then the keyframes): refused before anything is made, rather than ending
+    in a MemoryError or the system's out-of-memory killer."""
+    available = available_memory() if available is None else available
+    need = birds * frames * BYTES_PER_BIRD_FRAME
+    if available is not None and need > available // 2:
+        raise FlockError(f"{birds} birds x {frames} frames would take about {need / 2**30:.1f} GiB (poses and "
+                         f"keyframes), more than half the {available / 2**30:.1f} GiB of memory free: make fewer "
+                         "birds or frames, or bake the flock with `kodawari run` and import its glTF")
 
 
 def flock_steps(job, description, backend, frames, curves, birds_per_chunk=64, frames_per_chunk=25):
@@ -197,6 +232,7 @@ def start_flock(context, curves, settings):
     fps = scene.render.fps / scene.render.fps_base
     frames = settings.frames or (scene.frame_end - scene.frame_start + 1)
     description = scene_dict(curves, settings, fps, frames)
+    check_size(sum(flock["count"] for flock in description["flocks"]), frames)
     job = jobs.Job(context, "Flock from Curve",
                    lambda job: flock_steps(job, description, settings.backend, frames, curves))
     job.frames = frames
@@ -210,7 +246,7 @@ class KODAWARI_OT_flock_from_curve(jobs.ModalJob, bpy.types.Operator):
     bl_label = "Flock from Curve"
     bl_options = {'REGISTER', 'UNDO'}
 
-    count: bpy.props.IntProperty(name="Count", description="Birds per curve", default=20, min=1, max=100000)
+    count: bpy.props.IntProperty(name="Count", description="Birds per spline of each selected curve", default=20, min=1, max=100000)
     wing_type: bpy.props.EnumProperty(name="Wing Type", items=WING_TYPES, default="PIGEON")
     spread: bpy.props.FloatProperty(name="Spread", description="Each bird's offset from the curve, uniform in "
                                     "+-spread across and +-spread/2 up", default=2.0, min=0.0, max=10000.0,

@@ -147,7 +147,8 @@ class ModalJob:
     """The UI half of an operator whose work is a Job: a mixin for bpy.types.Operator
     subclasses that define start(context) -> Job or None (None: refused, reported) and
     finish(context, job) -> {'FINISHED'} (reports the result); execute() and invoke() come
-    from here. ERRORS: the exceptions reported as the operation's error."""
+    from here. ERRORS: the exceptions whose message is the operation's error; any other is
+    reported with its type (describe()), never left as a traceback."""
 
     ERRORS = (RuntimeError, OSError)
     TICK = 0.1  # seconds of work per timer tick: the window stays responsive to Esc
@@ -158,10 +159,20 @@ class ModalJob:
             return {'CANCELLED'}
         try:
             job.run()
-        except self.ERRORS as error:
-            self.report({'ERROR'}, f"{job.title}: {error}")
+        except Exception as error:  # the job cancelled itself (Job.step): report, never a traceback
+            self.report({'ERROR'}, f"{job.title}: {self.describe(error)}")
             return {'CANCELLED'}
         return self.finish(context, job)
+
+    def describe(self, error):
+        """An error's report: ERRORS say what went wrong themselves; anything else is named
+        with its type (a MemoryError, or a bug of the add-on's, reported rather than left
+        as a traceback with the progress bar and the timer running)."""
+        if isinstance(error, self.ERRORS):
+            return str(error)
+        if isinstance(error, MemoryError):
+            return "out of memory; make fewer birds, chains or frames (nothing was made)"
+        return f"{type(error).__name__}: {error} (nothing was made; please report this)"
 
     def invoke(self, context, event):
         if context.window is None:  # no window to tick in (a background script's INVOKE)
@@ -189,9 +200,9 @@ class ModalJob:
             return {'RUNNING_MODAL'}
         try:
             going = job.run(self.TICK)
-        except self.ERRORS as error:
+        except Exception as error:  # as execute(): the timer and status bar end too
             self._end(context)
-            self.report({'ERROR'}, f"{job.title}: {error}")
+            self.report({'ERROR'}, f"{job.title}: {self.describe(error)}")
             return {'CANCELLED'}
         if going:
             self._show(context)

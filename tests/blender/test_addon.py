@@ -126,6 +126,13 @@ scene.collection.objects.link(poly_object)
 bpy.ops.object.select_all(action="DESELECT")
 poly_object.select_set(True)
 expect_error("is a poly spline")
+# A curve object with no spline at all: refused naming it (was an IndexError traceback).
+empty_curve = bpy.data.objects.new("empty route", bpy.data.curves.new("empty route", "CURVE"))
+scene.collection.objects.link(empty_curve)
+bpy.ops.object.select_all(action="DESELECT")
+empty_curve.select_set(True)
+expect_error("curve 'empty route' has no splines")
+bpy.data.objects.remove(empty_curve)
 
 # ---- A route of three control points, moved by its object.
 curve = bpy.data.curves.new("route", "CURVE")
@@ -145,6 +152,18 @@ bpy.ops.object.select_all(action="DESELECT")
 route.select_set(True)
 bpy.context.view_layer.objects.active = route
 bpy.context.view_layer.update()
+
+# More birds and frames than the memory free holds (the poses and Blender's keyframes):
+# refused before anything is made (was a MemoryError traceback after the template), also
+# where the machine has the memory for it, by the add-on's own estimate.
+expect_error("birds x 1000000 frames would take about", count=100000, frames=1000000)
+from kodawari_blender import flock as flock_module  # noqa: E402
+try:
+    flock_module.check_size(2000, 20000, available=8 * 2**30)
+    check(False, "2000 birds x 20000 frames fitted in 8 GiB")
+except flock_module.FlockError as error:
+    check("more than half the 8.0 GiB" in str(error), f"check_size: {error}")
+flock_module.check_size(1000, 250, available=8 * 2**30)  # the docs' 1 000 hawks: 0.6 GiB
 
 # A handle on its point: refused, naming it.
 saved = spline.bezier_points[1].handle_right.copy()
