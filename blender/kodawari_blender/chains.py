@@ -275,6 +275,8 @@ def start_bake(context, armature, settings):
     vrm = bpy.path.abspath(settings.vrm_path) if getattr(settings, "vrm_path", "") else ""
     if vrm and not os.path.isfile(vrm):
         raise FlockError(f"VRM file '{vrm}' not found")
+    if vrm:
+        glb_json(vrm)  # a .vrm (a glTF binary), checked before the export and the rig run
     job = jobs.Job(context, "Bake Chains", lambda job: bake_steps(job, armature, frames, settings.backend, vrm))
     job.frames, job.armature = frames, armature
     return job
@@ -305,7 +307,7 @@ class KODAWARI_OT_bake_chains(jobs.ModalJob, bpy.types.Operator):
             return None
         try:
             return start_bake(context, armature, self)
-        except FlockError as error:
+        except (FlockError, OSError, ValueError) as error:  # the VRM file's check: unreadable, a broken JSON chunk
             self.report({'ERROR'}, f"Bake Chains: {error}")
             return None
 

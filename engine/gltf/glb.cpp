@@ -175,7 +175,11 @@ bool skip_image(tinygltf::Image*, const int, std::string*, std::string*, int, in
 Result<tinygltf::Model> parse(const Context& ctx, const std::vector<unsigned char>& bytes, const fs::path& base_dir,
                               std::string& extensions) {
     const bool binary = bytes.size() >= 4 && read_u32(bytes, 0) == kGlbMagic;
-    const bool named_glb = fs::path(ctx.file).extension() == ".glb";
+    // A file named as a glTF binary (.glb, or VRM's .vrm, any case) that is not one: the
+    // wrong magic, named, rather than the JSON parser's complaint about its first byte.
+    std::string extension = fs::path(ctx.file).extension().string();
+    for (char& c : extension) c = static_cast<char>(std::tolower(static_cast<unsigned char>(c)));
+    const bool named_glb = extension == ".glb" || extension == ".vrm";
     if (named_glb && !binary) KW_TRY(split_glb(ctx, bytes));  // reports the wrong magic
     if (bytes.size() > std::numeric_limits<unsigned int>::max()) {
         return ctx.unsupported("$", "files over 4 GiB are not supported");

@@ -578,6 +578,11 @@ for variant in ("avatar.vrm", "avatar-vrm0.vrm"):
     bpy.context.view_layer.objects.active = avatar
     expect_error("not found", operator=bpy.ops.kodawari.bake_chains, frames=frames,
                  vrm_path=os.path.join(characters, "missing.vrm"))
+    # A file that is no glTF binary: refused before the export and the rig run.
+    not_vrm = os.path.join(scripts, "not-a-model.vrm")
+    with open(not_vrm, "w") as file:
+        file.write("not a model")
+    expect_error("is not a glTF binary", operator=bpy.ops.kodawari.bake_chains, frames=frames, vrm_path=not_vrm)
     started = time.perf_counter()
     result = bpy.ops.kodawari.bake_chains(frames=frames, vrm_path=vrm)
     seconds = time.perf_counter() - started

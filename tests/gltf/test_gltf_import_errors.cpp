@@ -69,6 +69,13 @@ TEST(GltfImportErrors, WrongMagic) {
     // A JSON file named .glb is not a GLB either.
     write_text(file, tiny_character().gltf().dump());
     expect_error(file, "GLB header", "magic is \"{\\x22ac\"");
+    // Nor is a text file named .vrm (VRM files are glTF binaries) or .GLB: the magic is
+    // named, not the JSON parser's first byte.
+    for (const char* name : {"avatar.vrm", "TINY.GLB"}) {
+        const std::string other = dir.file(name);
+        write_text(other, "not a model");
+        expect_error(other, "GLB header", "magic is \"not \"");
+    }
 }
 
 TEST(GltfImportErrors, AccessorOutOfRange) {
