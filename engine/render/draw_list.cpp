@@ -6,6 +6,7 @@
 #include <cmath>
 
 #include "kodawari/render/renderer.hpp"
+#include "render/grid_spacing.hpp"
 
 namespace kodawari::render {
 
@@ -131,12 +132,7 @@ void add_ground_grid(DrawList& list, std::span<const glm::vec3> points) {
     const glm::vec2 center = 0.5f * (lo + hi);
     const float half = std::max(3.0f, 0.5f * std::max(hi.x - lo.x, hi.y - lo.y) * 1.3f + 2.0f);
     // A round spacing giving 10 to 25 lines each way.
-    const float rough = 2.0f * half / 10.0f;
-    const float decade = std::pow(10.0f, std::floor(std::log10(rough)));
-    float spacing = decade;
-    for (const float m : {1.0f, 2.0f, 5.0f, 10.0f}) {
-        if (m * decade <= rough) spacing = m * decade;
-    }
+    const float spacing = grid_spacing(2.0f * half);
     const float x0 = std::floor((center.x - half) / spacing) * spacing, x1 = std::ceil((center.x + half) / spacing) * spacing;
     const float z0 = std::floor((center.y - half) / spacing) * spacing, z1 = std::ceil((center.y + half) / spacing) * spacing;
     const int nx = static_cast<int>(std::lround((x1 - x0) / spacing)), nz = static_cast<int>(std::lround((z1 - z0) / spacing));

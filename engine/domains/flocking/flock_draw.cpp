@@ -9,24 +9,13 @@
 #include <vector>
 
 #include "kodawari/domains/flocking.hpp"
+#include "render/grid_spacing.hpp"
 
 namespace kodawari::flocking {
 
 namespace {
 
 glm::vec3 xyz(const gpu::vec4& v) { return {v.x, v.y, v.z}; }
-
-// A round spacing (1, 2 or 5 times a power of ten) giving 10 to 25 lines over `width`,
-// as the ground grid's (render::add_ground_grid).
-float round_spacing(float width) {
-    const float rough = width / 10.0f;
-    const float decade = std::pow(10.0f, std::floor(std::log10(rough)));
-    float spacing = decade;
-    for (const float m : {1.0f, 2.0f, 5.0f, 10.0f}) {
-        if (m * decade <= rough) spacing = m * decade;
-    }
-    return spacing;
-}
 
 // The plane through `point` with unit `normal` as a square grid of lines, centred where
 // the middle of `extent` falls on it and somewhat wider than the extent (a plane has no
@@ -41,7 +30,7 @@ void add_plane(std::vector<glm::vec3>& pairs, const glm::vec3& point, const glm:
     const float half = std::max(10.0f, empty ? 0.0f : 0.75f * glm::length(extent.hi - extent.lo));
     const glm::vec3 helper = std::abs(normal.y) < 0.9f ? glm::vec3(0.0f, 1.0f, 0.0f) : glm::vec3(1.0f, 0.0f, 0.0f);
     const glm::vec3 u = glm::normalize(glm::cross(normal, helper)), v = glm::cross(normal, u);
-    const float spacing = round_spacing(2.0f * half);
+    const float spacing = render::grid_spacing(2.0f * half);
     const int lines = static_cast<int>(std::ceil(half / spacing));
     const float reach = spacing * static_cast<float>(lines);
     for (int i = -lines; i <= lines; ++i) {
