@@ -48,6 +48,25 @@ vec3 flock_forward(vec3 v) {
     return speed > 1e-6f ? v / speed : vec3(0.0f, 0.0f, 1.0f);
 }
 
+// `forward` within the plane normal to the unit `axis` (a capsule's, a plane's upright):
+// the heading a bird turns from, left or right of the axis; `forward` itself where it
+// runs along the axis.
+vec3 flock_facing(vec3 forward, vec3 axis) {
+    const vec3 flat_forward = forward - dot(forward, axis) * axis;
+    const float fl = length(flat_forward);
+    return fl > 1e-3f ? flat_forward / fl : forward;
+}
+
+// The way an obstacle's steering turns a bird: along `across` (the obstacle's part across
+// the bird's facing); dead on it, towards the bird's right (facing x up), a fixed choice
+// rather than none, and +x where that has no direction either.
+vec3 flock_round(vec3 across, vec3 facing, vec3 up) {
+    const float cl = length(across);
+    const vec3 side = cross(facing, up);
+    const float sl = length(side);
+    return cl > 1e-3f ? across / cl : sl > 1e-3f ? side / sl : vec3(1.0f, 0.0f, 0.0f);
+}
+
 // How many neighbours a bird of `flock` heeds: k, or all it finds (up to the most) with a
 // metric radius.
 uint flock_k(FlockParamsGpu flock) {
@@ -188,18 +207,8 @@ FlockStep flock_rules(uint i, FlockNeighbours nb, uint agents, float dt) {
                 if (toward < 0.0f) {
                     const vec3 upright = vec3(0.0f, 1.0f, 0.0f) - n.y * n;
                     const float ul = length(upright);
-                    vec3 facing = forward;
-                    if (ul > 1e-3f) {
-                        const vec3 axis = upright / ul;
-                        const vec3 flat_forward = forward - dot(forward, axis) * axis;
-                        const float fl = length(flat_forward);
-                        if (fl > 1e-3f) facing = flat_forward / fl;
-                    }
-                    const vec3 across = n - dot(n, facing) * facing;
-                    const float cl = length(across);
-                    const vec3 side = cross(facing, vec3(0.0f, 1.0f, 0.0f));
-                    const float sl = length(side);
-                    away = cl > 1e-3f ? across / cl : sl > 1e-3f ? side / sl : vec3(1.0f, 0.0f, 0.0f);
+                    const vec3 facing = ul > 1e-3f ? flock_facing(forward, upright / ul) : forward;
+                    away = flock_round(n - dot(n, facing) * facing, facing, vec3(0.0f, 1.0f, 0.0f));
                     brake = s * toward;
                 }
                 avoid += s * away + brake * forward;
@@ -220,9 +229,7 @@ FlockStep flock_rules(uint i, FlockNeighbours nb, uint agents, float dt) {
             at += t * ab;
             if (ab2 > 0.0f) {
                 up = ab / sqrt(ab2);
-                const vec3 flat_forward = forward - dot(forward, up) * up;
-                const float fl = length(flat_forward);
-                if (fl > 1e-3f) facing = flat_forward / fl;
+                facing = flock_facing(forward, up);
             }
         }
         const vec3 d = p - at;
@@ -242,15 +249,7 @@ FlockStep flock_rules(uint i, FlockNeighbours nb, uint agents, float dt) {
                 const float s = agent.kind_weight.y * min(depth / margin, 1.0f);
                 const float along = dot(d, facing);
                 vec3 away = d / dist;
-                if (along < 0.0f && dist > reach) {
-                    const vec3 across = d - along * facing;
-                    const float cl = length(across);
-                    // Dead on the centre line: turn towards the side of the bird's right
-                    // (forward x up), a fixed choice rather than none.
-                    const vec3 side = cross(facing, up);
-                    const float sl = length(side);
-                    away = cl > 1e-3f ? across / cl : sl > 1e-3f ? side / sl : vec3(1.0f, 0.0f, 0.0f);
-                }
+                if (along < 0.0f && dist > reach) away = flock_round(d - along * facing, facing, up);
                 avoid += s * away;
             }
         } else if (dist < reach) {

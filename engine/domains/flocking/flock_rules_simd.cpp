@@ -40,6 +40,19 @@ using vm::dot;
 using vm::length;
 using vm::select;
 
+// The body's flock_facing() and flock_round(), lane by lane.
+V3 facing_of(const V3& forward, const V3& axis, V small) {
+    const V3 flat_forward = forward - dot(forward, axis) * axis;
+    const V fl = length(flat_forward);
+    return select(hn::Gt(fl, small), flat_forward / fl, forward);
+}
+V3 round_of(const D d, const V3& across, const V3& facing, const V3& up, V small) {
+    const V cl = length(across);
+    const V3 side = cross(facing, up);
+    const V sl = length(side);
+    return select(hn::Gt(cl, small), across / cl, select(hn::Gt(sl, small), side / sl, splat(d, 1.0f, 0.0f, 0.0f)));
+}
+
 constexpr std::size_t kMaxLanes = HWY_MAX_BYTES / sizeof(float);
 
 // A vector of birds' inputs, lane by lane (lanes past the call's birds repeat its last).
@@ -158,30 +171,22 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
                 const V3 normal = splat(d, agent.velocity.x, agent.velocity.y, agent.velocity.z);
                 const V margin = vm::glm_max(hn::Set(d, agent.kind_weight.z), small);
                 const V depth = hn::Sub(margin, dot(p - splat(d, agent.position.x, agent.position.y, agent.position.z), normal));
+                const M inside = hn::Gt(depth, zero);
+                if (hn::AllFalse(d, inside)) continue;  // no bird of the vector within its margin
                 // Flying into it: steered across the flight and the plane's upright (the
                 // body's rule and fallbacks); the upright is the same in every lane.
                 const glm::vec3 n(agent.velocity.x, agent.velocity.y, agent.velocity.z);
                 const glm::vec3 upright = glm::vec3(0.0f, 1.0f, 0.0f) - n.y * n;
                 const float ul = glm::length(upright);
-                V3 facing = forward;
-                if (ul > 1e-3f) {
-                    const glm::vec3 axis = upright / ul;
-                    const V3 axis_v = splat(d, axis.x, axis.y, axis.z);
-                    const V3 flat_forward = forward - dot(forward, axis_v) * axis_v;
-                    const V fl = length(flat_forward);
-                    facing = select(hn::Gt(fl, small), flat_forward / fl, facing);
-                }
-                const V3 across = normal - dot(normal, facing) * facing;
-                const V cl = length(across);
-                const V3 side = cross(facing, splat(d, 0.0f, 1.0f, 0.0f));
-                const V sl = length(side);
-                const V3 round = select(hn::Gt(cl, small), across / cl, select(hn::Gt(sl, small), side / sl, splat(d, 1.0f, 0.0f, 0.0f)));
+                const glm::vec3 axis = upright / ul;
+                const V3 facing = ul > 1e-3f ? facing_of(forward, splat(d, axis.x, axis.y, axis.z), small) : forward;
+                const V3 round = round_of(d, normal - dot(normal, facing) * facing, facing, splat(d, 0.0f, 1.0f, 0.0f), small);
                 const V s = hn::Mul(weight, vm::glm_min(hn::Div(depth, margin), one));
                 const V toward = dot(forward, normal);
                 const M into = hn::Lt(toward, zero);
                 const V3 away = select(into, round, normal);
                 const V brake = hn::IfThenElse(into, hn::Mul(s, toward), zero);
-                avoid = select(hn::Gt(depth, zero), avoid + (s * away + brake * forward), avoid);
+                avoid = select(inside, avoid + (s * away + brake * forward), avoid);
                 continue;
             }
             V3 at = splat(d, agent.position.x, agent.position.y, agent.position.z);
@@ -194,9 +199,7 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
                 const V t = hn::IfThenElse(has_axis, vm::glm_clamp(hn::Div(dot(p - at, ab), ab2), zero, one), zero);
                 at = at + t * ab;
                 const V3 axis_up = ab / hn::Sqrt(ab2);
-                const V3 flat_forward = forward - dot(forward, axis_up) * axis_up;
-                const V fl = length(flat_forward);
-                facing = select(hn::And(has_axis, hn::Gt(fl, small)), flat_forward / fl, facing);
+                facing = select(has_axis, facing_of(forward, axis_up, small), facing);
                 up = select(has_axis, axis_up, up);
             }
             const V3 dp = p - at;
@@ -206,15 +209,13 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
             if (kind == KW_FLOCK_AGENT_SPHERE || kind == KW_FLOCK_AGENT_CAPSULE) {
                 const V margin = vm::glm_max(hn::Set(d, agent.kind_weight.z), small);
                 const V depth = hn::Sub(hn::Add(reach, margin), dist);
+                const M within = hn::And(near, hn::Gt(depth, zero));
+                if (hn::AllFalse(d, within)) continue;  // no bird of the vector within its margin
                 const V s = hn::Mul(weight, vm::glm_min(hn::Div(depth, margin), one));
                 const V along = dot(dp, facing);
-                const V3 across = dp - along * facing;
-                const V cl = length(across);
-                const V3 side = cross(facing, up);
-                const V sl = length(side);
-                const V3 round = select(hn::Gt(cl, small), across / cl, select(hn::Gt(sl, small), side / sl, splat(d, 1.0f, 0.0f, 0.0f)));
+                const V3 round = round_of(d, dp - along * facing, facing, up, small);
                 const V3 away = select(hn::And(hn::Lt(along, zero), hn::Gt(dist, reach)), round, dp / dist);
-                avoid = select(hn::And(near, hn::Gt(depth, zero)), avoid + s * away, avoid);
+                avoid = select(within, avoid + s * away, avoid);
             } else {
                 const M inside = hn::And(near, hn::Lt(dist, reach));
                 const V closeness = hn::Sub(one, hn::Div(dist, reach));
