@@ -18,6 +18,7 @@ argument or the file, and what was expected).
 import ctypes
 import json
 import math
+import numbers
 import os
 import shutil
 import subprocess
@@ -69,6 +70,26 @@ def _whole_number(name, value, low, high, expected):
     if not whole:
         raise ValueError(f"{name}: {value!r}; expected {expected}")
     return int(value)
+
+
+def _point(name, value, unit):
+    """`value` as 3 C floats when it holds 3 numbers (a list, a tuple, a NumPy array); else
+    ValueError naming `name`."""
+    try:
+        numbers = [float(v) for v in value]
+    except (TypeError, ValueError):
+        numbers = []
+    if len(numbers) != 3:
+        raise ValueError(f"{name}: {value!r}; expected 3 numbers ({unit})")
+    return (ctypes.c_float * 3)(*numbers)
+
+
+def _real(name, value):
+    """`value` as a float when it is a real number (NumPy's scalars too, not a bool); else
+    ValueError naming `name`."""
+    if isinstance(value, bool) or not isinstance(value, numbers.Real):
+        raise ValueError(f"{name}: {value!r}; expected a number")
+    return float(value)
 
 
 def _check(status, handle=None):
@@ -264,10 +285,9 @@ class Simulation:
         out of range; nothing changes then."""
         wind = None
         if velocity is not None:
-            if len(velocity) != 3:
-                raise ValueError(f"velocity: {velocity!r}; expected 3 numbers (m/s)")
+            air = _point("velocity", velocity, "m/s")
             seed = _whole_number("seed", seed, 0, 0xFFFFFFFF, "a whole number in [0, 4294967295]")
-            wind = _native.Wind((ctypes.c_float * 3)(*[float(v) for v in velocity]), float(gust), float(gust_period),
+            wind = _native.Wind(air, float(gust), float(gust_period),
                                 float(gust_size), int(seed))
         with self._lock:
             handle = self._live()
@@ -335,26 +355,16 @@ class Simulation:
             if "position" not in agent:
                 raise ValueError(f"agents[{i}].position: missing; expected 3 numbers (m)")
 
-            def point(key, default):
-                value = agent.get(key, default)
-                try:
-                    numbers = [float(v) for v in value]
-                except (TypeError, ValueError):
-                    numbers = []
-                if len(numbers) != 3:
-                    raise ValueError(f"agents[{i}].{key}: {value!r}; expected 3 numbers")
-                return (ctypes.c_float * 3)(*numbers)
+            def point(key, default, unit="m"):
+                return _point(f"agents[{i}].{key}", agent.get(key, default), unit)
 
             def number(key, default):
-                value = agent.get(key, default)
-                if isinstance(value, bool) or not isinstance(value, (int, float)):
-                    raise ValueError(f"agents[{i}].{key}: {value!r}; expected a number")
-                return float(value)
+                return _real(f"agents[{i}].{key}", agent.get(key, default))
 
             array[i] = _native.FlockAgent(self.FLOCK_AGENT_KINDS.index(kind), point("position", None),
-                                          point("velocity", (0, 0, 0)), number("radius", 15.0),
+                                          point("velocity", (0, 0, 0), "m/s"), number("radius", 15.0),
                                           number("weight", 40.0), number("margin", 2.0), point("end", (0, 0, 0)),
-                                          point("normal", (0, 1, 0)))
+                                          point("normal", (0, 1, 0), "a direction"))
         with self._lock:
             handle = self._live()
             _check(_native.lib.kodawari_simulation_set_flock_agents(handle, array if agents else None, len(agents)), handle)

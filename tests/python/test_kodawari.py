@@ -304,6 +304,9 @@ with kodawari.Simulation.open(flocking_scene, "cpu", frames=2) as sim:
             check(False, f"set_flock_agents({bad!r}) raised nothing")
         except ValueError as error:
             check(expected in str(error), f"set_flock_agents({bad!r}): {error}")
+    # NumPy's scalars and arrays are numbers (a float32 radius, a position from an array).
+    sim.set_flock_agents([{"kind": "obstacle", "position": numpy.array([0, 40, 0], numpy.float32),
+                           "radius": numpy.float32(3.0), "margin": numpy.int64(2)}])
     try:
         sim.bake(os.path.join(temp, "agents.glb"), compact="no")
         check(False, "bake(compact='no') raised nothing")
