@@ -195,10 +195,16 @@ std::vector<RouteWarning> check_routes(const Scene& scene, const birds::BirdWorl
                         text += "the bank the route asks for jumps at the junction with segment " +
                                 std::to_string(warning.segment == 0 ? worst.size() - 1 : warning.segment - 1) + " at " +
                                 number(warning.speed) + " m/s: the " + who + " rolls " + number(warning.value) +
-                                " deg in one frame, above " + number(warning.bound) +
-                                " (match the curvature either side, or fly slower; flight.bank_time_constant " +
-                                number(double{scene.flight.bank_time}) + " s)";
+                                " deg in one frame, above " + number(warning.bound) + " (" +
+                                (flock.generated_route ? std::string("fly slower")
+                                                       : std::string("match the curvature either side, or fly slower")) +
+                                "; flight.bank_time_constant " + number(double{scene.flight.bank_time}) + " s)";
                         break;
+                }
+                // A generated route's waypoints are the seed's, not the user's to move: what
+                // makes its turns gentler is more room between them.
+                if (flock.generated_route) {
+                    text += "; generated_route's turns are gentler with a larger extent or fewer segments";
                 }
                 if (warning.variant > 0) {
                     text += " (in route variant " + std::to_string(warning.variant) + " of " + std::to_string(variants) + ")";

@@ -217,6 +217,13 @@ TEST(RouteLimits, GeneratedRoutesKeepToTheBirdWhereTheyCan) {
     ASSERT_TRUE(fast.ok()) << fast.error().message;
     ASSERT_FALSE(fast.value().empty());
     EXPECT_EQ(fast.value().front().limit, RouteLimit::TurnRadius) << fast.value().front().message;
+    // The advice is the generated route's own keys (its waypoints are not the user's to move).
+    for (const RouteWarning& w : fast.value()) {
+        EXPECT_NE(w.message.find("; generated_route's turns are gentler with a larger extent or fewer segments"),
+                  std::string::npos)
+            << w.message;
+        EXPECT_EQ(w.message.find("match the curvature"), std::string::npos) << w.message;
+    }
 }
 
 // Issue 39: junctions. A level straight along +Z, then one turned 30 degrees toward +X
@@ -283,6 +290,10 @@ TEST(RouteLimits, ABankJumpWarnsUnlessTheRollFilterSpreadsIt) {
               std::string::npos)
         << w.message;
     EXPECT_NE(w.message.find(" m/s: the gull rolls "), std::string::npos) << w.message;
+    EXPECT_NE(w.message.find("(match the curvature either side, or fly slower; flight.bank_time_constant 0.3 s)"),
+              std::string::npos)
+        << w.message;
+    EXPECT_EQ(w.message.find("generated_route"), std::string::npos) << w.message;
     const Scene slow = flock_scene(kSBend, "arc-length", 12.0, "", R"(, "flight": {"bank_time_constant": 1})");
     auto spread = check_routes(slow);
     ASSERT_TRUE(spread.ok());
