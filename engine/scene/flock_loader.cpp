@@ -382,6 +382,18 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
         if (flock.timing == birds::RouteTiming::Parametric) {
             return r.fail(flocking.path, "a flocking flock's route gives its leader at its speed: expected \"timing\": \"arc-length\", got \"parametric\"");
         }
+        // A flocking bird's mode comes from its own flight (docs/flocking.md): a segment's
+        // mode would be ignored, and a take-off or landing is a perch it never uses.
+        if (flock.route) {
+            for (std::size_t k = 0; k < flock.route->modes.size(); ++k) {
+                const birds::SegmentMode mode = flock.route->modes[k];
+                if (mode == birds::SegmentMode::Auto) continue;
+                return r.fail(r.element(r.member(route, "modes"), k).path,
+                              std::string("\"") + birds::segment_mode_name(mode) +
+                                  "\" is not flown by a flocking flock (its birds choose their modes from their own "
+                                  "flight; perches are for flocks without \"flocking\"): expected \"auto\"");
+            }
+        }
         FlockingSpec spec;
         KW_TRY(read_flocking(r, flocking, spec));
         flock.flocking = std::move(spec);
