@@ -7,6 +7,7 @@
 #include "kodawari/vulkan/gpu_info.hpp"
 #include "kodawari/backends/simd.hpp"
 
+#include <algorithm>
 #include <cmath>
 #include <cstdio>
 #include <filesystem>
@@ -243,10 +244,18 @@ std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit, bool 
     }
     if (strict && !warnings.value().empty()) {
         if (print) {
-            std::fprintf(stderr,
-                         "kodawari: error: %zu route limit%s exceeded (--strict; --fit-routes fits corners, turns, bank jumps and "
-                         "speed changes)\n",
-                         warnings.value().size(), warnings.value().size() == 1 ? "" : "s");
+            const auto starts = static_cast<std::size_t>(std::count_if(warnings.value().begin(), warnings.value().end(), [](const RouteWarning& w) {
+                return w.limit == RouteLimit::StartInside;
+            }));
+            const std::size_t limits = warnings.value().size() - starts;
+            std::string what;
+            if (limits > 0) what = std::to_string(limits) + (limits == 1 ? " route limit" : " route limits") + " exceeded";
+            if (starts > 0) {
+                what += (what.empty() ? "" : ", ") + std::to_string(starts) + (starts == 1 ? " obstacle" : " obstacles") +
+                        " with birds inside at the start";
+            }
+            std::fprintf(stderr, "kodawari: error: %s (--strict%s)\n", what.c_str(),
+                         limits > 0 ? "; --fit-routes fits corners, turns, bank jumps and speed changes" : "");
         }
         return kExitBadInput;
     }

@@ -11,6 +11,9 @@
 #include <string>
 #include <vector>
 
+#include <glm/glm.hpp>
+
+#include <kodawari/birds/flight.hpp>
 #include <kodawari/birds/route_limits.hpp>
 
 namespace kodawari {
@@ -73,7 +76,7 @@ struct Worst {
     double excess = 0.0;  // value / limit, > 1 when violated
 };
 
-constexpr std::size_t kLimits = 6;  // RouteLimit's values
+constexpr std::size_t kLimits = 6;  // RouteLimit's values up to BankJump: a route's own limits
 
 // What a flock's birds can fly: its wing type's limits, or for a user's bird (`"model"`)
 // those derived from its wing (birds::derive_flight), under the bird's own name.
@@ -115,6 +118,50 @@ double junction_roll_deg(const Scene& scene, const birds::SegmentDemand& d) {
     return std::fabs(bank_for(scene, d.lateral_after) - bank_for(scene, d.lateral_before)) * first_frame_share(scene) * kRadToDeg;
 }
 
+// Whether p is inside obstacle o (not its margin: the solid itself).
+bool inside(const FlockObstacleSpec& o, const birds::Vec3& p) {
+    const glm::vec3 q(p.x, p.y, p.z);
+    switch (o.type) {
+        case FlockObstacleSpec::Type::Sphere: return glm::length(q - o.a) < o.radius;
+        case FlockObstacleSpec::Type::Capsule: {
+            const glm::vec3 ab = o.b - o.a;
+            const float ab2 = glm::dot(ab, ab);
+            const float t = ab2 > 0.0f ? std::clamp(glm::dot(q - o.a, ab) / ab2, 0.0f, 1.0f) : 0.0f;
+            return glm::length(q - (o.a + t * ab)) < o.radius;
+        }
+        case FlockObstacleSpec::Type::Plane: return glm::dot(q - o.a, o.b) < 0.0f;
+    }
+    return false;
+}
+
+// The birds of flocking flock f (world.birds from `first`) that frame 0 puts inside one of
+// its obstacles: where its route and formation place them, as the flocking world's frame 0
+// (domains/flocking/flock_world.cpp). One warning per obstacle.
+void start_inside(const Scene& scene, const birds::BirdWorld& world, std::size_t f, std::size_t first,
+                  std::vector<RouteWarning>& out) {
+    const FlockSpec& flock = scene.flocks[f];
+    const std::vector<FlockObstacleSpec>& obstacles = flock.flocking->obstacles;
+    if (obstacles.empty()) return;
+    std::vector<std::uint32_t> count(obstacles.size(), 0);
+    for (std::size_t b = first; b < first + flock.count && b < world.birds.size(); ++b) {
+        const gpu::BirdParams& bird = world.birds[b];
+        const birds::RouteSample s = birds::sample_route(world, bird.ids.x, bird.offset.w, bird.motion.x);
+        const birds::Vec3 p{s.position.x + bird.offset.x, s.position.y + bird.offset.y, s.position.z + bird.offset.z};
+        for (std::size_t k = 0; k < obstacles.size(); ++k) count[k] += inside(obstacles[k], p) ? 1u : 0u;
+    }
+    static constexpr const char* kKinds[] = {"a sphere", "a capsule", "a plane"};
+    for (std::size_t k = 0; k < obstacles.size(); ++k) {
+        if (count[k] == 0) continue;
+        RouteWarning w{f, static_cast<std::uint32_t>(k), RouteLimit::StartInside, 0, 0.0, double(count[k]), 0.0, 0.0, {}};
+        w.message = scene.path + ": $.flocks[" + std::to_string(f) + "] \"" + flock.name + "\": " + std::to_string(count[k]) +
+                    " of " + std::to_string(flock.count) + " birds start inside flocking.obstacles[" + std::to_string(k) + "] (" +
+                    kKinds[static_cast<std::size_t>(obstacles[k].type)] +
+                    "), where the route and formation put them at frame 0: they are pushed out through it (move the "
+                    "obstacle, the route's start or formation.spread)";
+        out.push_back(std::move(w));
+    }
+}
+
 }  // namespace
 
 std::vector<RouteWarning> check_routes(const Scene& scene, const birds::BirdWorld& world) {
@@ -122,11 +169,18 @@ std::vector<RouteWarning> check_routes(const Scene& scene, const birds::BirdWorl
     const std::vector<std::vector<FlownRoute>> flown = flown_routes(scene, world);
     const double capacity = turn_capacity(scene);
     const double bank_deg = double{scene.flight.max_bank} * kRadToDeg;
+    std::size_t first_bird = 0;
     for (std::size_t f = 0; f < scene.flocks.size(); ++f) {
         const FlockSpec& flock = scene.flocks[f];
+        const std::size_t flock_first = first_bird;
+        first_bird += flock.count;
         // A flocking flock's birds do not fly its route: it only draws them
-        // (docs/flocking.md), and their own flight keeps within their wing's limits.
-        if (flock.flocking) continue;
+        // (docs/flocking.md), and their own flight keeps within their wing's limits. What
+        // can be wrong is where they start.
+        if (flock.flocking) {
+            start_inside(scene, world, f, flock_first, out);
+            continue;
+        }
         const FlockLimits wing = flock_limits(flock);
         const std::string who = wing.name;
         const std::string prefix = scene.path + ": $.flocks[" + std::to_string(f) + "] \"" + flock.name + "\": ";
@@ -200,6 +254,7 @@ std::vector<RouteWarning> check_routes(const Scene& scene, const birds::BirdWorl
                                                        : std::string("match the curvature either side, or fly slower")) +
                                 "; flight.bank_time_constant " + number(double{scene.flight.bank_time}) + " s)";
                         break;
+                    case RouteLimit::StartInside: break;  // a flocking flock's, start_inside()
                 }
                 // A generated route's waypoints are the seed's, not the user's to move: what
                 // makes its turns gentler is more room between them.

@@ -186,7 +186,7 @@ TEST(RouteLimits, FitLengthensParametricSegments) {
 }
 
 TEST(RouteLimits, ShippedScenesAreFlyable) {
-    for (const char* name : {"birds-closeup.json", "flock.json", "murmuration.json"}) {
+    for (const char* name : {"birds-closeup.json", "flock.json", "murmuration.json", "perch.json", "starlings.json", "tower.json"}) {
         auto scene = load_scene(std::string(KODAWARI_SOURCE_DIR) + "/scenes/" + name);
         ASSERT_TRUE(scene.ok()) << scene.error().message;
         auto warnings = check_routes(scene.value());
@@ -307,4 +307,37 @@ TEST(RouteLimits, ABankJumpWarnsUnlessTheRollFilterSpreadsIt) {
     auto after = check_routes(fitted);
     ASSERT_TRUE(after.ok());
     EXPECT_TRUE(after.value().empty()) << after.value().front().message;
+}
+
+// A flocking flock whose frame 0 puts birds inside one of its obstacles is told so (they
+// would be pushed out through it over the first seconds), per obstacle, counting the birds
+// inside the solid (not its margin); obstacles clear of the start say nothing.
+TEST(RouteLimits, FlockingBirdsStartingInsideAnObstacleWarn) {
+    const auto check = [](const std::string& obstacles) {
+        const std::string text = R"({"format": "kodawari-scene", "version": 1, "name": "t", "fps": 30, "duration": 1,
+            "flocks": [{"name": "starlings", "wing_type": "pigeon", "count": 301, "seed": 3, "speed": 12,
+                        "generated_route": {"seed": 3, "segments": 6, "center": [0, 40, 0], "extent": [60, 5, 60], "loop": true},
+                        "formation": {"spread": [8, 3, 8]}, "flocking": {"obstacles": [)" + obstacles + "]}}]}";
+        auto scene = parse_scene(text, "scenes/o.json");
+        EXPECT_TRUE(scene.ok()) << (scene.ok() ? "" : scene.error().message);
+        auto warnings = check_routes(scene.value());
+        EXPECT_TRUE(warnings.ok());
+        return warnings.value();
+    };
+    // A sphere round the whole route, a plane with every bird behind it, a sphere far off.
+    const auto all = check(R"({"type": "sphere", "center": [0, 40, 0], "radius": 300},
+                              {"type": "sphere", "center": [0, 500, 0], "radius": 10},
+                              {"type": "plane", "point": [0, 100, 0], "normal": [0, 1, 0]})");
+    ASSERT_EQ(all.size(), 2u) << all_messages(all);
+    EXPECT_EQ(all[0].limit, RouteLimit::StartInside);
+    EXPECT_EQ(all[0].segment, 0u);
+    EXPECT_EQ(all[0].value, 301.0);
+    EXPECT_EQ(all[0].message, "scenes/o.json: $.flocks[0] \"starlings\": 301 of 301 birds start inside flocking.obstacles[0] "
+                              "(a sphere), where the route and formation put them at frame 0: they are pushed out through it "
+                              "(move the obstacle, the route's start or formation.spread)");
+    EXPECT_EQ(all[1].segment, 2u);
+    EXPECT_EQ(all[1].value, 301.0);
+    // The same plane facing down: every bird on its open side.
+    const auto start = check(R"({"type": "plane", "point": [0, 100, 0], "normal": [0, -1, 0]})");
+    EXPECT_TRUE(start.empty()) << all_messages(start);
 }

@@ -18,7 +18,10 @@ namespace kodawari {
 
 /// Which limit a route exceeds.
 /// Corner and BankJump are of the junction where the segment starts (u = 0).
-enum class RouteLimit : std::uint32_t { TurnRadius = 0, Climb = 1, Dive = 2, SpeedChange = 3, Corner = 4, BankJump = 5 };
+/// StartInside: a flocking flock's birds start inside one of its obstacles, where its
+/// route and formation put them at frame 0 (`segment` is the obstacle's index in
+/// `flocking.obstacles`, `value` how many birds): they are pushed out through it.
+enum class RouteLimit : std::uint32_t { TurnRadius = 0, Climb = 1, Dive = 2, SpeedChange = 3, Corner = 4, BankJump = 5, StartInside = 6 };
 
 /// Largest corner between the tangents either side of a junction (degrees): the bird's
 /// heading follows the route's direction, so a corner is a turn in one frame (the roll
