@@ -352,6 +352,16 @@ TEST(CompactExport, TheLimitIsTheCompactedSize) {
     ASSERT_FALSE(refused.ok());
     EXPECT_NE(refused.error().message.find("4 GiB"), std::string::npos) << refused.error().message;
     EXPECT_TRUE(BirdGlbWriter::create(dir.file("compact.glb"), world, frames, GlbCompaction{true, 0.001f, 0.001f, 0.001f}).ok());
+    // One frame fewer: the keys alone fit, but every bird's armature, skin and animation
+    // JSON (about 3 kB a bird whatever the frames) takes the file past the limit, which
+    // the writer used to find only after the simulation had run. A million birds over 10
+    // frames: 1.24 GB of keys and some 3 GB of the birds' own part.
+    const auto keys_fit = BirdGlbWriter::create(dir.file("birds.glb"), world, frames - 1);
+    ASSERT_FALSE(keys_fit.ok());
+    EXPECT_NE(keys_fit.error().message.find(" birds exceed the 4 GiB limit of a .glb (about "), std::string::npos)
+        << keys_fit.error().message;
+    // Well within it: taken.
+    EXPECT_TRUE(BirdGlbWriter::create(dir.file("small.glb"), world, frames / 2).ok());
 }
 
 // Compaction off is the uncompacted writer, byte for byte (export_identity pins those
