@@ -193,6 +193,20 @@ Result<tinygltf::Model> parse(const Context& ctx, const std::vector<unsigned cha
         json_text = glb.json;
     } else {
         json_text.assign(reinterpret_cast<const char*>(bytes.data()), bytes.size());
+        // Neither a GLB nor a JSON object (a README, an image, a .bin named as the model):
+        // said as such, rather than as the JSON parser's complaint about its first byte.
+        // An optional UTF-8 byte order mark and whitespace may come first.
+        std::size_t first = json_text.rfind("\xEF\xBB\xBF", 0) == 0 ? 3 : 0;
+        while (first < json_text.size() && (json_text[first] == ' ' || json_text[first] == '\t' || json_text[first] == '\n' ||
+                                            json_text[first] == '\r')) {
+            ++first;
+        }
+        if (first == json_text.size()) return ctx.invalid("$", "not a glTF file: it is empty (or whitespace alone)");
+        if (json_text[first] != '{') {
+            return ctx.invalid("$", "not a glTF file: it starts with " +
+                                        printable(bytes.data() + first, std::min<std::size_t>(bytes.size() - first, 8)) +
+                                        ", where a .gltf starts with a JSON object ('{') and a .glb with \"glTF\"");
+        }
     }
     nlohmann::json doc;
     try {

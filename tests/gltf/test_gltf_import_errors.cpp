@@ -40,6 +40,30 @@ TEST(GltfImportErrors, TruncatedGltf) {
     }
 }
 
+// A file named as the model that is not glTF at all (a README, an image, the model's
+// .bin, an empty file) is said to be so, with its first bytes, rather than as the JSON
+// parser's complaint about its first byte.
+TEST(GltfImportErrors, AFileThatIsNotGltfSaysSo) {
+    TempDir dir;
+    const std::string file = dir.file("model.gltf");
+    const std::string text = "# My model\nSee model.glb.\n";
+    write_bytes(file, std::vector<unsigned char>(text.begin(), text.end()));
+    expect_error(file, "$", "not a glTF file: it starts with \"# My mod\", where a .gltf starts with a JSON object ('{') and a .glb "
+                            "with \"glTF\"");
+    write_bytes(file, {0x89, 'P', 'N', 'G', '\r', '\n', 0x1a, '\n', 0, 0});
+    expect_error(file, "$", "not a glTF file: it starts with \"\\x89PNG\\x0d\\x0a\\x1a\\x0a\"");
+    write_bytes(file, {});
+    expect_error(file, "$", "not a glTF file: it is empty (or whitespace alone)");
+    // A byte order mark and whitespace before the object are JSON's; the object is read.
+    const std::vector<unsigned char> whole = read_all(kRiggedSimple);
+    std::vector<unsigned char> marked = {0xEF, 0xBB, 0xBF, ' ', '\n'};
+    marked.insert(marked.end(), whole.begin(), whole.end());
+    const std::string rigged = dir.file("RiggedSimple.gltf");
+    write_bytes(rigged, marked);
+    const auto loaded = gltf::load_character(rigged);
+    EXPECT_TRUE(loaded.ok()) << loaded.error().message;
+}
+
 TEST(GltfImportErrors, TruncatedGlb) {
     TempDir dir;
     const std::vector<unsigned char> whole = tiny_character().glb();
