@@ -239,8 +239,20 @@ std::optional<int> check_scene_routes(Scene& scene, bool strict, bool fit, bool 
     auto warnings = check_routes(scene);
     if (!warnings) return print ? report(warnings.error()) : exit_code(warnings.error());
     const char* kind = strict ? "error" : "warning";
-    for (const RouteWarning& w : warnings.value()) {
-        if (print) std::fprintf(stderr, "kodawari: %s: %s\n", kind, w.message.c_str());
+    // At most kShown lines a flock: a route drawn far beyond its bird (a generated one in a
+    // tiny box) would otherwise print a hundred, one per segment, limit and variant.
+    constexpr std::size_t kShown = 8;
+    const std::vector<RouteWarning>& all = warnings.value();
+    for (std::size_t i = 0; i < all.size() && print;) {
+        std::size_t end = i;
+        while (end < all.size() && all[end].flock == all[i].flock) ++end;
+        for (std::size_t k = i; k < std::min(end, i + kShown); ++k) std::fprintf(stderr, "kodawari: %s: %s\n", kind, all[k].message.c_str());
+        if (end - i > kShown) {
+            const FlockSpec& flock = scene.flocks[all[i].flock];
+            std::fprintf(stderr, "kodawari: %s: %s: $.flocks[%zu] \"%s\": %zu more like these (%zu in all)\n", kind, scene.path.c_str(),
+                         all[i].flock, flock.name.c_str(), end - i - kShown, end - i);
+        }
+        i = end;
     }
     if (strict && !warnings.value().empty()) {
         if (print) {

@@ -83,6 +83,18 @@ check "a user's bird's warnings name it, not a built-in type" bash -c "grep -q \
 "$bin" run "$work/small.json" --backend cpu-reference --frames 1 --no-export --fit-routes >"$work/small-fit.out" 2>/dev/null
 check "--fit-routes starts from the user's bird's cruise speed" grep -q 'speed 11.2 -> [0-9.]* m/s so its turns, bank jumps and speed changes are within the mybird' "$work/small-fit.out"
 
+# A generated route in a 1 m box at a pigeon's speed is beyond it everywhere: 8 lines for
+# the flock, then how many more, rather than one per segment, limit and variant.
+cat >"$work/tiny.json" <<'JSON'
+{"format": "kodawari-scene", "version": 1, "name": "tiny", "fps": 30, "duration": 1,
+ "flocks": [{"name": "tiny", "wing_type": "pigeon", "count": 10,
+             "generated_route": {"extent": [1, 1, 1], "segments": 64, "loop": true}}]}
+JSON
+"$bin" validate "$work/tiny.json" --backend cpu --frames 2 >/dev/null 2>"$work/tiny.err"
+check "a flock's route warnings stop at 8 lines and a count" bash -c "
+    test \$(grep -c 'warning: .*\\\$.flocks\\[0\\] \"tiny\": segment' '$work/tiny.err') -eq 8 &&
+    grep -q 'warning: $work/tiny.json: \\\$.flocks\\[0\\] \"tiny\": [0-9]* more like these ([0-9]* in all)' '$work/tiny.err'"
+
 for scene in scenes/*.json; do
     grep -q '"flocks"' "$scene" || continue
     "$bin" run "$scene" --backend cpu-reference --frames 1 --no-export --strict >/dev/null 2>"$work/shipped.err"
