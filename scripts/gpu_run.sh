@@ -374,7 +374,8 @@ run_step() {
       bench_steps+=("$name")
       # `bench` skips a backend that cannot start (exit 0, the others timed): on this run
       # a missing vulkan result is the failure that matters most.
-      if [[ "$result" == ok && "$*" == *vulkan* ]] && ! grep -q '"backend":"vulkan' "$out/$name.json"; then
+      # (The results only: a vulkan backend skipped is in the JSON's "skipped" too.)
+      if [[ "$result" == ok && "$*" == *vulkan* ]] && ! sed 's/"skipped":\[.*//' "$out/$name.json" | grep -q '"backend":"vulkan'; then
         result="failed"
         summary="no vulkan result: $(grep -m 1 'skipped:' "$out/step.out" | sed 's/^ *//' || true)"
         failures+=("$name (no vulkan result)")
@@ -396,8 +397,9 @@ run_step() {
 
 # The benchmarks' table, from their JSON files: per benchmark and backend the rate's
 # median, min and max, ms/frame, GPU ms/frame, the ratio to cpu of the same run and the
-# device (and bench flock's split of the step). POSIX awk: the JSON is the flat one
-# `kodawari bench --json` writes (result objects of strings, numbers and null).
+# device (and bench flock's split of the step), and each backend the benchmark skipped with
+# why. POSIX awk: the JSON is the flat one `kodawari bench --json` writes (result and
+# skipped objects of strings, numbers and null).
 print_table() {
   local name
   for name in "$@"; do
@@ -413,15 +415,22 @@ print_table() {
     }
     function num(v, f) { return (v == "" || v == "null") ? "-" : sprintf(f, v) }
     BEGIN {
-      printf "%-22s %-20s %9s %11s %11s %11s %9s %9s %8s  %s\n", "bench", "backend", "count", "median/s",
+      printf "%-22s %-24s %9s %11s %11s %11s %9s %9s %8s  %s\n", "bench", "backend", "count", "median/s",
         "min/s", "max/s", "ms/frame", "GPU ms", "vs cpu", "device"
     }
     {
       json = $2
       kind = field(json, "benchmark")
-      count = field(json, kind == "chains" ? "chains" : (kind == "crowd" ? "instances" : "count"))
+      # Every benchmark writes "count" (before it, chains wrote "chains" and crowd "instances").
+      count = field(json, "count")
+      if (count == "") count = field(json, kind == "chains" ? "chains" : "instances")
       unit = kind == "chains" ? "joint-steps" : (kind == "birds" ? "bird-frames" : (kind == "flock" ? "bird-steps" : "frames"))
       rest = substr(json, index(json, "\"results\":[") + 11)
+      skipped = ""
+      if (index(rest, "],\"skipped\":[") > 0) {
+        skipped = substr(rest, index(rest, "],\"skipped\":[") + 13)
+        rest = substr(rest, 1, index(rest, "],\"skipped\":["))
+      }
       n = split(rest, objs, "},")
       for (i = 1; i <= n; ++i) {
         o = objs[i]
@@ -431,10 +440,15 @@ print_table() {
         if (field(o, "search_share") != "" && field(o, "search_share") != "null")
           shares = sprintf("  [grid %.0f%%, search %.0f%%, rules %.0f%%]", 100 * field(o, "grid_share"),
                           100 * field(o, "search_share"), 100 * field(o, "rules_share"))
-        printf "%-22s %-20s %9s %11s %11s %11s %9s %9s %8s  %s%s\n", $1, field(o, "backend"), count,
+        printf "%-22s %-24s %9s %11s %11s %11s %9s %9s %8s  %s%s\n", $1, field(o, "backend"), count,
           num(field(o, "per_second"), "%.4g"), num(field(o, "min"), "%.4g"), num(field(o, "max"), "%.4g"),
           num(field(o, "ms_per_frame"), "%.3f"), num(field(o, "gpu_ms_per_frame"), "%.3f"),
           num(field(o, "vs_cpu"), "%.2fx"), field(o, "device"), shares
+      }
+      n = split(skipped, objs, "},")
+      for (i = 1; i <= n; ++i) {
+        if (field(objs[i], "backend") == "") continue
+        printf "%-22s %-24s skipped: %s\n", $1, field(objs[i], "backend"), field(objs[i], "reason")
       }
       if (!(kind in seen)) units = units (units == "" ? "" : ", ") kind ": " unit "/s"
       seen[kind] = 1
