@@ -19,7 +19,10 @@
 # step: step name, command, exit status, seconds and the benchmark's --json) and the
 # benchmarks' JSON files; the table of the benchmarks is printed last. The binary is
 # $KODAWARI, else the bundle's bin/kodawari, else build/release/host/kodawari; embed_vulkan
-# is $KODAWARI_EMBED_VULKAN, else the bundle's, else build/release/examples/embed_vulkan/.
+# is $KODAWARI_EMBED_VULKAN, else (with $KODAWARI) the one beside it or in its build tree,
+# else the bundle's, else build/release/examples/embed_vulkan/ (run.log says which).
+# GPU_RUN_BUDGET and GPU_RUN_STEP_LIMIT are whole seconds, 5 or more; a bad one, or a
+# $KODAWARI that is not there, exits 2 before OUT is made.
 # Nothing is built. GPU_RUN_ONLY=REGEX runs only the steps whose names match (bash regex);
 # GPU_RUN_BUDGET=SECONDS replaces the run's deadline (290 s, --quick 110 s).
 # GPU_RUN_STEP_LIMIT=SECONDS replaces the limit of each validate and embed step (40 s,
@@ -593,18 +596,18 @@ run_all() {
   out="$2"
   mode="full"
   ((quick)) && mode="quick"
-  mkdir -p "$out"
-  out="$(cd "$out" && pwd)"
-  log_file="$out/run.log"
-  : >"$log_file"
-  t0="$(now)"
-  started_iso="$(date -u +%Y-%m-%dT%H:%M:%SZ)"
   # The whole run's deadline: 5 minutes on the GPU machine, 2 for --quick (less a margin
-  # for starting and the table).
+  # for starting and the table). Checked, as the binary is, before OUT and run.log are
+  # made: bad usage leaves nothing behind.
   local budget=290
   ((quick)) && budget=110
   budget="${GPU_RUN_BUDGET:-$budget}"
-  deadline="$(awk -v t="$t0" -v b="$budget" 'BEGIN { printf "%.3f", t + b }')"
+  [[ "$budget" =~ ^[0-9]+$ && "$budget" -ge 5 ]] ||
+    { echo "gpu_run.sh: GPU_RUN_BUDGET is '$budget'; expected whole seconds, 5 or more" >&2; return 2; }
+  if [[ -n "${GPU_RUN_STEP_LIMIT:-}" ]] && ! [[ "$GPU_RUN_STEP_LIMIT" =~ ^[0-9]+$ && "$GPU_RUN_STEP_LIMIT" -ge 5 ]]; then
+    echo "gpu_run.sh: GPU_RUN_STEP_LIMIT is '$GPU_RUN_STEP_LIMIT'; expected whole seconds, 5 or more" >&2
+    return 2
+  fi
 
   if [[ -n "${KODAWARI:-}" ]]; then
     bin="$KODAWARI"
@@ -613,18 +616,34 @@ run_all() {
   else
     bin="$root/build/release/host/kodawari"
   fi
-  if [[ -n "${KODAWARI_EMBED_VULKAN:-}" ]]; then
-    embed="$KODAWARI_EMBED_VULKAN"
-  elif [[ "$in_bundle" == 1 ]]; then
-    embed="$root/bin/embed_vulkan"
-  else
-    embed="$root/build/release/examples/embed_vulkan/embed_vulkan"
-  fi
   if [[ "$bin" != */* ]]; then bin="$(command -v "$bin" || echo "$bin")"; fi
   if [[ ! -x "$bin" ]]; then
     echo "gpu_run.sh: no kodawari at $bin (set KODAWARI, or build the tree, or run the bundle's gpu_run.sh)" >&2
     return 2
   fi
+  # embed_vulkan: $KODAWARI_EMBED_VULKAN, else beside $KODAWARI (a bundle's bin/, or the
+  # build tree kodawari came from), else the bundle's or build/release's; run.log says which.
+  local bin_dir
+  bin_dir="$(cd "$(dirname "$bin")" && pwd)"
+  if [[ -n "${KODAWARI_EMBED_VULKAN:-}" ]]; then
+    embed="$KODAWARI_EMBED_VULKAN" embed_note="\$KODAWARI_EMBED_VULKAN"
+  elif [[ -n "${KODAWARI:-}" && -x "$bin_dir/embed_vulkan" ]]; then
+    embed="$bin_dir/embed_vulkan" embed_note="beside \$KODAWARI"
+  elif [[ -n "${KODAWARI:-}" ]]; then
+    embed="$(dirname "$bin_dir")/examples/embed_vulkan/embed_vulkan" embed_note="the build tree of \$KODAWARI"
+  elif [[ "$in_bundle" == 1 ]]; then
+    embed="$root/bin/embed_vulkan" embed_note="the bundle's"
+  else
+    embed="$root/build/release/examples/embed_vulkan/embed_vulkan" embed_note="build/release's"
+  fi
+  mkdir -p "$out"
+  out="$(cd "$out" && pwd)"
+  log_file="$out/run.log"
+  : >"$log_file"
+  t0="$(now)"
+  started_iso="$(date -u +%Y-%m-%dT%H:%M:%SZ)"
+  deadline="$(awk -v t="$t0" -v b="$budget" 'BEGIN { printf "%.3f", t + b }')"
+  log "embed_vulkan: $embed ($embed_note)"
   # Scenes are named relative to the checkout or the bundle; the steps run there.
   cd "$root"
 
