@@ -50,6 +50,14 @@ struct Measured {
     [[nodiscard]] double gpu_ms() const { return gpu_timed && !gpu_ms_per_frame.empty() ? median(gpu_ms_per_frame) : -1.0; }
 };
 
+// A backend the bench did not time and why (a device that cannot run the size, no Vulkan):
+// a row of the table and of the JSON's "skipped", so that a result left out says so.
+struct Skipped {
+    std::string backend, reason;
+};
+/// Says on stdout that `label` is skipped and why, and records it in `skipped`.
+void skip(std::vector<Skipped>& skipped, const std::string& label, const std::string& reason);
+
 // A backend set up and warmed up, and one timed repetition of it: returns the seconds it
 // took and adds the GPU milliseconds it measured (or makes them negative).
 struct Contender {
@@ -82,6 +90,10 @@ struct BenchVariant {
 /// A variant added later from these (with_rod_kernels, with_pose_layouts) shares its device.
 [[nodiscard]] std::vector<BenchVariant> read_variants(const BenchCommon& o, const BackendChoice& choice);
 
+/// Says on stderr that `option` is ignored, being for the `backend` backend, which the
+/// bench does not time.
+void warn_ignored(const std::string& option, const char* backend);
+
 /// --backend NAME or --backends LIST: the backends to time (cpu-reference,cpu,vulkan by default).
 [[nodiscard]] std::vector<BackendKind> read_backends(const BenchCommon& o);
 /// --repetitions: how many timed runs of every backend the medians come from.
@@ -94,9 +106,18 @@ void describe(Measured& m, BackendKind kind, const BackendOptions& options);
                                            std::uint64_t frames_per_repetition, double work_per_frame);
 /// The table and the --json file, the same shape for every benchmark: each backend's
 /// median rate with its min and max, its ratio to cpu-reference and to cpu (medians of the
-/// same run), the ISA and the threads. `json_head` opens the JSON object.
-int report_results(const std::vector<Contender>& contenders, const char* unit, std::uint32_t repetitions,
-                   const BackendOptions& options, const std::string& json_head, const std::optional<std::string>& json_path);
+/// same run), the ISA and the threads. `json_head` opens the JSON object. The backends
+/// skipped are rows of the table and the JSON's "skipped" array; when nothing was timed
+/// at all the exit code is kExitFailure (the JSON still written, saying why).
+int report_results(const std::vector<Contender>& contenders, const std::vector<Skipped>& skipped, const char* unit,
+                   std::uint32_t repetitions, const BackendOptions& options, const std::string& json_head,
+                   const std::optional<std::string>& json_path);
+/// --json FILE checked before anything runs: a name, not "-", in a folder that exists and
+/// can be written; a UsageError naming --json otherwise.
+void check_json_path(const std::optional<std::string>& json_path);
+/// The JSON keys every benchmark's head has: "count" and "frames" (the size and the frames
+/// per repetition, whatever the benchmark's own older keys call them).
+[[nodiscard]] std::string json_size(std::uint64_t count, std::uint64_t frames);
 /// --backends, --repetitions, --json and the backend options, on a bench subcommand.
 void add_common(CLI::App& c, BenchCommon& o);
 

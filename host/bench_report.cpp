@@ -1,8 +1,11 @@
 // What the benchmarks of `kodawari bench` share: the backends and repetitions they take,
 // the interleaved repetitions and the table and JSON they report (bench_common.hpp).
 #include <algorithm>
+#include <cerrno>
 #include <cstdio>
 #include <cstdlib>
+#include <cstring>
+#include <filesystem>
 #include <sstream>
 #include <vector>
 
@@ -10,8 +13,12 @@
 #include "kodawari/core/atomic_file.hpp"
 #include "kodawari/vulkan/backend_factory.hpp"
 #include "kodawari/vulkan/compute.hpp"
+#include "kodawari/vulkan/gpu_info.hpp"
 #include "kodawari/backends/simd.hpp"
 #include "kodawari/simulation/simulation.hpp"
+
+#include <sys/stat.h>
+#include <unistd.h>
 
 namespace kodawari::cli {
 
@@ -44,14 +51,53 @@ std::vector<BackendKind> read_backends(const BenchCommon& o) {
     if (o.backend.backend && *o.backend.backend == "auto") {
         throw UsageError{"--backend: bench times named backends (cpu-reference, cpu, vulkan), not auto"};
     }
+    const char* option = o.backend.backend ? "--backend" : "--backends";
+    const std::string list = o.backend.backend ? *o.backend.backend : o.backends.value_or("cpu-reference,cpu,vulkan");
+    if (list.empty()) throw UsageError{std::string(option) + ": expected one or more of cpu-reference, cpu, vulkan, got an empty list"};
     std::vector<BackendKind> kinds;
-    std::stringstream names(o.backend.backend ? *o.backend.backend : o.backends.value_or("cpu-reference,cpu,vulkan"));
+    std::stringstream names(list);
     for (std::string name; std::getline(names, name, ',');) {
         auto kind = parse_backend_choice(name);
-        if (!kind || !kind.value()) throw UsageError{"--backends: unknown backend \"" + name + "\""};
-        kinds.push_back(*kind.value());
+        if (!kind || !kind.value()) {
+            throw UsageError{std::string(option) + ": unknown backend \"" + name + "\" (bench times cpu-reference, cpu, vulkan)"};
+        }
+        // A backend named twice is timed once, as a size named twice in --workgroup-sizes.
+        if (std::find(kinds.begin(), kinds.end(), *kind.value()) == kinds.end()) kinds.push_back(*kind.value());
     }
     return kinds;
+}
+
+void check_json_path(const std::optional<std::string>& json_path) {
+    if (!json_path) return;
+    const std::string& path = *json_path;
+    if (path.empty()) throw UsageError{"--json: expected a file name, got an empty one"};
+    if (path == "-") {
+        throw UsageError{"--json: \"-\" is not taken: the table goes to stdout; give a file (/dev/stdout writes the JSON there "
+                         "after the table)"};
+    }
+    struct stat existing {};
+    if (::stat(path.c_str(), &existing) == 0) {
+        if (S_ISDIR(existing.st_mode)) throw UsageError{"--json: " + path + " is a folder: give a file in it"};
+        if (S_ISCHR(existing.st_mode) || S_ISFIFO(existing.st_mode)) return;  // /dev/stdout, /dev/null, a pipe
+    }
+    const std::string folder = std::filesystem::path(path).parent_path().string();
+    const std::string dir = folder.empty() ? "." : folder;
+    if (::stat(dir.c_str(), &existing) != 0 || !S_ISDIR(existing.st_mode)) {
+        throw UsageError{"--json: " + path + ": the folder " + dir + " does not exist (bench makes no folders): make it first"};
+    }
+    if (::access(dir.c_str(), W_OK | X_OK) != 0) {
+        throw UsageError{"--json: " + path + ": the folder " + dir + " cannot be written (" + std::strerror(errno) + ")"};
+    }
+}
+
+std::string json_size(std::uint64_t count, std::uint64_t frames) {
+    return ",\"count\":" + std::to_string(count) + ",\"frames\":" + std::to_string(frames);
+}
+
+void skip(std::vector<Skipped>& skipped, const std::string& label, const std::string& reason) {
+    std::printf("  %-14s skipped: %s\n", label.c_str(), reason.c_str());
+    std::fflush(stdout);
+    skipped.push_back({label, reason});
 }
 
 namespace {
@@ -86,6 +132,28 @@ void print_kernel_statistics() {
 
 }  // namespace
 
+void warn_ignored(const std::string& option, const char* backend) {
+    std::fprintf(stderr, "kodawari: warning: %s is ignored: it is for the %s backend, which this bench does not time\n",
+                 option.c_str(), backend);
+}
+
+namespace {
+
+// A device named (--device, else KODAWARI_DEVICE) that matches none: a UsageError before
+// anything runs, as `run` exits 2 for it, rather than the vulkan backend skipped.
+void check_named_device(const BackendFlags& flags, const BackendChoice& choice) {
+    const std::string& request = choice.options.device;
+    if (request.empty()) return;
+    // Without a Vulkan loader or driver there is nothing to match: the vulkan backend is
+    // then skipped with that reason, as with no device named.
+    auto inventory = list_gpus(request);
+    if (!inventory || inventory.value().chosen >= 0) return;
+    const std::string named = flags.device ? "--device " + request : "KODAWARI_DEVICE=" + request;
+    throw UsageError{named + ": " + inventory.value().reason};
+}
+
+}  // namespace
+
 std::vector<BenchVariant> read_variants(const BenchCommon& o, const BackendChoice& choice) {
     std::vector<unsigned> sizes;
     if (o.workgroup_sizes) {
@@ -97,11 +165,29 @@ std::vector<BenchVariant> read_variants(const BenchCommon& o, const BackendChoic
             if (item.empty() || end == nullptr || *end != '\0' || !compute::is_workgroup_size(n)) {
                 throw UsageError{"--workgroup-sizes: \"" + item + "\" is not a power of two from 32 to 1024"};
             }
-            sizes.push_back(static_cast<unsigned>(n));
+            // A size named twice is timed once.
+            if (std::find(sizes.begin(), sizes.end(), n) == sizes.end()) sizes.push_back(static_cast<unsigned>(n));
         }
     }
+    const std::vector<BackendKind> kinds = read_backends(o);
+    const bool vulkan = std::find(kinds.begin(), kinds.end(), BackendKind::Vulkan) != kinds.end();
+    const bool cpu = std::find(kinds.begin(), kinds.end(), BackendKind::Cpu) != kinds.end();
+    if (vulkan) {
+        check_named_device(o.backend, choice);
+    } else {
+        for (const auto& [given, name] : {std::pair{o.workgroup_sizes.has_value(), "--workgroup-sizes"},
+                                          std::pair{o.backend.workgroup_size.has_value(), "--workgroup-size"},
+                                          std::pair{o.kernel_statistics, "--kernel-statistics"},
+                                          std::pair{o.backend.device.has_value(), "--device"}}) {
+            if (given) warn_ignored(name, "vulkan");
+        }
+    }
+    if (!cpu) {
+        if (o.backend.threads) warn_ignored("--threads", "cpu");
+        if (o.backend.isa) warn_ignored("--isa", "cpu");
+    }
     std::vector<BenchVariant> variants;
-    for (const BackendKind kind : read_backends(o)) {
+    for (const BackendKind kind : kinds) {
         const std::string name(backend_name(kind));
         if (kind != BackendKind::Vulkan || sizes.empty()) {
             variants.push_back({kind, choice.options, name});
@@ -171,8 +257,9 @@ Result<void> run_repetitions(std::vector<Contender>& contenders, std::uint32_t r
 // The table and the --json file, the same shape for every benchmark: each backend's median
 // rate with its min and max over the repetitions, its ratio to cpu-reference and to cpu
 // (medians of the same run), the ISA and the threads.
-int report_results(const std::vector<Contender>& contenders, const char* unit, std::uint32_t repetitions,
-                   const BackendOptions& options, const std::string& json_head, const std::optional<std::string>& json_path) {
+int report_results(const std::vector<Contender>& contenders, const std::vector<Skipped>& skipped, const char* unit,
+                   std::uint32_t repetitions, const BackendOptions& options, const std::string& json_head,
+                   const std::optional<std::string>& json_path) {
     double reference = 0.0, cpu = 0.0;
     for (const auto& c : contenders) {
         if (c.measured.backend == "cpu-reference") reference = c.measured.rate();
@@ -186,11 +273,15 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
     auto isa = simd_isa(options.isa);
     const std::string cpu_isa = isa ? isa.value() : "";
     const unsigned cpu_threads = cpu_backend_threads(options);
-    std::printf("\nmedians of %u repetitions (min and max beside them), after warm-up; cpu: %s, %u threads\n", repetitions,
-                cpu_isa.c_str(), cpu_threads);
+    // The cpu backend's ISA and threads, where it was timed.
+    const bool cpu_timed = std::any_of(contenders.begin(), contenders.end(), [](const Contender& c) { return c.measured.backend == "cpu"; });
+    std::printf("\nmedians of %u repetitions (min and max beside them), after warm-up", repetitions);
+    if (cpu_timed) std::printf("; cpu: %s, %u threads", cpu_isa.c_str(), cpu_threads);
+    std::printf("\n");
     // The backend column fits the longest name ("vulkan/wg128/host-in" with --workgroup-sizes).
     int width = 14;
     for (const auto& c : contenders) width = std::max(width, static_cast<int>(c.measured.backend.size()));
+    for (const auto& s : skipped) width = std::max(width, static_cast<int>(s.backend.size()));
     std::printf("%-*s %-36s %14s %11s %11s %10s %12s %9s %7s %-7s %7s\n", width, "backend", "device", unit, "min", "max", "ms/frame",
                 "GPU ms/frame", "vs c-ref", "vs cpu", "isa", "threads");
     bool gpu_above_wall = false;
@@ -204,6 +295,7 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
                     ratio(m.rate(), cpu).c_str(), m.isa.empty() ? "-" : m.isa.c_str(),
                     m.threads == 0 ? "-" : std::to_string(m.threads).c_str());
     }
+    for (const Skipped& s : skipped) std::printf("%-*s skipped: %s\n", width, s.backend.c_str(), s.reason.c_str());
     std::printf("(ms/frame: wall time per frame; GPU ms/frame: the device's timestamps around the frame's dispatches, "
                 "host preparation and waiting left out, '-' without timestamps; both medians of the repetitions)\n");
     // The timestamps bracket the dispatches alone, so they cannot exceed the wall time of
@@ -211,7 +303,13 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
     // timestamps are the CPU's clock, read by its own threads).
     if (gpu_above_wall) std::printf("note: GPU time above wall time: the device's timestamp clock disagrees with the host's\n");
     print_kernel_statistics();
-    if (!json_path) return kExitOk;
+    // A bench that timed nothing (every backend skipped) has no result to report.
+    int status = kExitOk;
+    if (contenders.empty()) {
+        std::fprintf(stderr, "kodawari: error: nothing was timed: every backend was skipped (the table says why)\n");
+        status = kExitFailure;
+    }
+    if (!json_path) return status;
     std::string text = json_head + ",\"isa\":\"" + json_escape(cpu_isa) + "\",\"threads\":" + std::to_string(cpu_threads) +
                        ",\"repetitions\":" + std::to_string(repetitions) + ",\"results\":[";
     for (std::size_t i = 0; i < contenders.size(); ++i) {
@@ -228,22 +326,36 @@ int report_results(const std::vector<Contender>& contenders, const char* unit, s
                 numbers + ",\"isa\":" + (m.isa.empty() ? "null" : "\"" + m.isa + "\"") +
                 ",\"threads\":" + (m.threads == 0 ? "null" : std::to_string(m.threads)) + m.extra_json + "}";
     }
+    text += "],\"skipped\":[";
+    for (std::size_t i = 0; i < skipped.size(); ++i) {
+        text += (i ? "," : "") + std::string("{\"backend\":\"") + json_escape(skipped[i].backend) + "\",\"reason\":\"" +
+                json_escape(skipped[i].reason) + "\"}";
+    }
     text += "]}\n";
-    return write_json(*json_path, text);
+    const int written = write_json(*json_path, text);
+    return status != kExitOk ? status : written;
 }
 
 void add_common(CLI::App& c, BenchCommon& o) {
-    add_text(c, "--backends", o.backends, "LIST", "the backends to time, comma-separated (default: cpu-reference,cpu,vulkan)");
-    add_count(c, "--repetitions", o.repetitions, 3, 1000, "timed runs of every backend, interleaved (default: 3)");
-    add_text(c, "--json", o.json, "FILE.json", "also write the results as JSON (default: none)");
+    add_text(c, "--backends", o.backends, "LIST",
+             "the backends to time, comma-separated, of cpu-reference, cpu and vulkan (not auto); one named twice is timed "
+             "once (default: cpu-reference,cpu,vulkan)");
+    add_count(c, "--repetitions", o.repetitions, 3, 1000, "timed runs of every backend, interleaved, 3 to 1000 (default: 3)");
+    add_text(c, "--json", o.json, "FILE.json",
+             "also write the results as JSON, to a file in a folder that exists (checked before anything runs; \"-\" is "
+             "refused, /dev/stdout writes it after the table; default: none)");
     add_text(c, "--workgroup-sizes", o.workgroup_sizes, "LIST",
-             "time the vulkan backend at each of these workgroup sizes, side by side, e.g. 32,64,128,256 (default: "
+             "time the vulkan backend at each of these workgroup sizes, side by side, e.g. 32,64,128,256; a size named "
+             "twice is timed once (default: "
              "--workgroup-size, else 64)");
     add_switch(c, "--kernel-statistics", o.kernel_statistics,
                "after the table, each vulkan kernel's statistics as the driver reports them (registers, spills, shared "
                "memory; VK_KHR_pipeline_executable_properties, where the driver offers it; default: off)");
     add_backend_options(c, o.backend);
-    c.get_option("--backend")->description("time this one backend, as --backends NAME (default: the --backends list)");
+    c.get_option("--backend")
+        ->description("time this one backend, as --backends NAME (not auto; default: the --backends list)")
+        ->type_name("vulkan|cpu|cpu-reference");
+    c.get_option("--threads")->description("the cpu backend's threads (default: one per hardware thread)");
 }
 
 

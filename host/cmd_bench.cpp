@@ -77,9 +77,14 @@ std::vector<BenchVariant> per_vulkan_item(std::vector<BenchVariant> variants, co
     for (std::string item; std::getline(items, item, ',');) {
         const auto* found = std::find_if(std::begin(names), std::end(names), [&](const auto& n) { return item == n.first; });
         if (found == std::end(names)) throw UsageError{std::string(option) + ": \"" + item + "\" is none of " + all};
-        chosen.emplace_back(found->first, found->second);
+        // An item named twice is timed once, as in --backends and --workgroup-sizes.
+        const bool seen = std::any_of(chosen.begin(), chosen.end(), [&](const auto& c) { return c.first == item; });
+        if (!seen) chosen.emplace_back(found->first, found->second);
     }
     if (chosen.empty()) throw UsageError{std::string(option) + ": expected one or more of " + all};
+    if (std::none_of(variants.begin(), variants.end(), [](const BenchVariant& v) { return v.kind == BackendKind::Vulkan; })) {
+        warn_ignored(option, "vulkan");
+    }
     std::vector<BenchVariant> out;
     for (const BenchVariant& v : variants) {
         if (v.kind != BackendKind::Vulkan) {
@@ -112,6 +117,7 @@ int bench_chains(ChainsOptions o) {
     take_alias(o.count, o.chains, "bench chains --chains", "--count");
     take_alias(o.frames, o.steps, "bench chains --steps", "--frames");
     const BackendChoice choice = read_backend_choice(o.common.backend);
+    check_json_path(o.common.json);
     rods::SyntheticOptions options;
     options.chains = static_cast<std::uint32_t>(o.count.value_or(100'000));
     options.joints = static_cast<std::uint32_t>(o.joints.value_or(16));
@@ -140,10 +146,11 @@ int bench_chains(ChainsOptions o) {
     std::vector<std::unique_ptr<RodBackend>> backends;
     std::vector<std::size_t> next;  // per contender: the next frame to step
     std::vector<Contender> contenders;
+    std::vector<Skipped> skipped;
     for (const auto& [kind, backend_options, label] : variants) {
         auto backend = make_rod_backend(kind, backend_options);
         if (!backend) {
-            std::printf("  %-14s skipped: %s\n", label.c_str(), backend.error().message.c_str());
+            skip(skipped, label, backend.error().message);
             continue;
         }
         RodBackend& b = *backend.value();
@@ -151,7 +158,7 @@ int bench_chains(ChainsOptions o) {
             // A variant this device cannot run (--rod-kernels per-joint at a workgroup size
             // past its shared memory) leaves the others to time.
             if (r.error().kind != Error::Kind::Unsupported) return report(r.error());
-            std::printf("  %-14s skipped: %s\n", label.c_str(), r.error().message.c_str());
+            skip(skipped, label, r.error().message);
             continue;
         }
         if (auto r = b.step(frames[1]); !r) return report(r.error());
@@ -181,8 +188,9 @@ int bench_chains(ChainsOptions o) {
     }
     const std::string head = "{\"benchmark\":\"chains\",\"chains\":" + std::to_string(options.chains) +
                              ",\"joints\":" + std::to_string(options.joints) + ",\"iterations\":" +
-                             std::to_string(options.iterations) + ",\"steps\":" + std::to_string(steps);
-    return report_results(contenders, "joint-steps/s", repetitions, choice.options, head, json_path);
+                             std::to_string(options.iterations) + ",\"steps\":" + std::to_string(steps) +
+                             json_size(options.chains, steps);
+    return report_results(contenders, skipped, "joint-steps/s", repetitions, choice.options, head, json_path);
 }
 
 
@@ -199,6 +207,7 @@ struct CrowdOptions {
 
 int bench_crowd(const CrowdOptions& o) {
     const BackendChoice choice = read_backend_choice(o.common.backend);
+    check_json_path(o.common.json);
     const std::uint32_t count = static_cast<std::uint32_t>(o.count.value_or(1000));
     const std::uint32_t frames = static_cast<std::uint32_t>(o.frames.value_or(60));
     const std::uint32_t repetitions = read_repetitions(o.common);
@@ -249,6 +258,7 @@ int bench_crowd(const CrowdOptions& o) {
     }
     std::vector<std::unique_ptr<Simulation>> sims;
     std::vector<Contender> contenders;
+    std::vector<Skipped> skipped;
     std::vector<double> clip_ms(variants.size(), 0.0);  // per contender, summed over its timed frames
     // With levels of detail, the chains at each level (full, posed, hidden, reduced: by
     // rods::Level) summed over every tenth timed frame, per contender.
@@ -266,7 +276,9 @@ int bench_crowd(const CrowdOptions& o) {
         auto made = Simulation::create(scene, {.backend = kind, .options = variant->options, .frames = frames * repetitions + 3,
                                                .device_inputs = device_input});
         if (!made) {
-            std::printf("  %-14s skipped: %s\n", variant->label.c_str(), made.error().message.c_str());
+            const std::string label =
+                variant->label + (kind == BackendKind::Vulkan ? (device_input ? "/dev-in" : "/host-in") : "");
+            skip(skipped, label, made.error().message);
             continue;
         }
         Simulation& sim = *made.value();
@@ -342,8 +354,8 @@ int bench_crowd(const CrowdOptions& o) {
         if (validation_failed(s->validation_messages())) return kExitFailure;
     }
     const std::string head = "{\"benchmark\":\"crowd\",\"instances\":" + std::to_string(count) + ",\"chains\":" +
-                             std::to_string(rods_scene.world.chains.size()) + ",\"frames\":" + std::to_string(frames);
-    return report_results(contenders, "frames/s", repetitions, choice.options, head, json_path);
+                             std::to_string(rods_scene.world.chains.size()) + json_size(count, frames);
+    return report_results(contenders, skipped, "frames/s", repetitions, choice.options, head, json_path);
 }
 
 
@@ -367,6 +379,7 @@ std::vector<BenchVariant> with_pose_layouts(std::vector<BenchVariant> variants, 
 
 int bench_birds(const BirdsOptions& o) {
     const BackendChoice choice = read_backend_choice(o.common.backend);
+    check_json_path(o.common.json);
     const std::uint32_t count = static_cast<std::uint32_t>(o.count.value_or(1'000'000));
     const std::uint32_t frames = static_cast<std::uint32_t>(o.frames.value_or(30));
     const std::uint32_t repetitions = read_repetitions(o.common);
@@ -385,14 +398,21 @@ int bench_birds(const BirdsOptions& o) {
     std::vector<gpu::BirdPose> poses(readback ? std::size_t{count} : 0);
     std::vector<std::unique_ptr<BirdBackend>> backends;
     std::vector<Contender> contenders;
+    std::vector<Skipped> skipped;
     for (const auto& [kind, backend_options, label] : variants) {
         auto backend = make_bird_backend(kind, backend_options);
         if (!backend) {
-            std::printf("  %-14s skipped: %s\n", label.c_str(), backend.error().message.c_str());
+            skip(skipped, label, backend.error().message);
             continue;
         }
         BirdBackend& b = *backend.value();
-        if (auto r = b.load(world); !r) return report(r.error());
+        if (auto r = b.load(world); !r) {
+            // A backend that cannot run this size (more birds than one dispatch of the
+            // device covers) leaves the others to time.
+            if (r.error().kind != Error::Kind::Unsupported) return report(r.error());
+            skip(skipped, label, r.error().message);
+            continue;
+        }
         // Warm-up: lavapipe compiles the kernel at its first dispatch.
         if (auto r = b.simulate(1, {poses, {}}); !r) return report(r.error());
         const std::size_t index = backends.size();
@@ -421,9 +441,8 @@ int bench_birds(const BirdsOptions& o) {
     for (const auto& b : backends) {
         if (validation_failed(b->validation_messages())) return kExitFailure;
     }
-    const std::string head = "{\"benchmark\":\"birds\",\"count\":" + std::to_string(count) + ",\"frames\":" +
-                             std::to_string(frames) + ",\"readback\":" + (readback ? "true" : "false");
-    return report_results(contenders, "bird-frames/s", repetitions, choice.options, head, json_path);
+    const std::string head = "{\"benchmark\":\"birds\"" + json_size(count, frames) + ",\"readback\":" + (readback ? "true" : "false");
+    return report_results(contenders, skipped, "bird-frames/s", repetitions, choice.options, head, json_path);
 }
 
 }  // namespace
@@ -438,10 +457,12 @@ Command add_bench(CLI::App& app) {
                   "cpu-reference's and cpu's of the same run; isa and threads of the cpu backends. --json writes the same "
                   "(per_second, min, max, ms_per_frame, gpu_ms_per_frame, vs_cpu_reference, vs_cpu, isa, threads; bench "
                   "crowd also clip_ms, chain_ms and the levels' full_share, reduced_share, posed_share, hidden_share, kept_share); "
+                  "the size as count and frames in every benchmark (chains also its older chains and steps, crowd instances); "
+                  "skipped, each backend not timed with why (a row of the table too; nothing timed at all exits 1); "
                   "docs/performance.md.");
     auto birds = std::make_shared<BirdsOptions>();
     CLI::App* b = bench->add_subcommand("birds", "bird-frames per second on a flock of N birds");
-    add_count(*b, "--count", birds->count, 1, 20'000'000, "birds (default: 1000000)");
+    add_count(*b, "--count", birds->count, 1, 20'000'000, "birds, 1 to 20000000 (default: 1000000)");
     add_count(*b, "--frames", birds->frames, 1, 100'000, "frames per repetition (default: 30)");
     add_switch(*b, "--readback", birds->readback, "read the poses back every frame (default: off)");
     add_text(*b, "--pose-layouts", birds->pose_layouts, "LIST",
@@ -451,7 +472,7 @@ Command add_bench(CLI::App& app) {
 
     auto chains = std::make_shared<ChainsOptions>();
     CLI::App* ch = bench->add_subcommand("chains", "joint-steps per second on procedural chains, one solver substep per frame");
-    add_count(*ch, "--count", chains->count, 1, 2'000'000, "chains (default: 100000)");
+    add_count(*ch, "--count", chains->count, 1, 2'000'000, "chains, 1 to 2000000 (default: 100000)");
     add_count(*ch, "--chains", chains->chains, 1, 2'000'000, "deprecated: the old spelling of --count, for one release");
     add_count(*ch, "--joints", chains->joints, 2, rods::kMaxChainJoints, "joints per chain (default: 16)");
     add_count(*ch, "--iterations", chains->iterations, 1, 64, "solver iterations per substep (default: 4)");
@@ -466,7 +487,7 @@ Command add_bench(CLI::App& app) {
     auto crowd = std::make_shared<CrowdOptions>();
     CLI::App* cr = bench->add_subcommand("crowd", "frames per second of a crowd of N skinned characters: clips and chains");
     add_scene(*cr, crowd->scene, "scenes/crowd-gltf.json");
-    add_count(*cr, "--count", crowd->count, 1, 100'000, "characters (default: 1000)");
+    add_count(*cr, "--count", crowd->count, 1, 100'000, "characters, 1 to 100000 (default: 1000)");
     add_count(*cr, "--frames", crowd->frames, 1, 100'000, "frames per repetition (default: 60)");
     add_lod_options(*cr, crowd->lod);
     add_common(*cr, crowd->common);

@@ -51,6 +51,7 @@ Scene flock_scene(std::uint32_t count, std::uint32_t frames) {
 
 int bench_flock(const FlockOptions& o) {
     const BackendChoice choice = read_backend_choice(o.common.backend);
+    check_json_path(o.common.json);
     const auto count = static_cast<std::uint32_t>(o.count.value_or(1'000'000));
     const auto frames = static_cast<std::uint32_t>(o.frames.value_or(5));
     const std::uint32_t repetitions = read_repetitions(o.common);
@@ -69,13 +70,14 @@ int bench_flock(const FlockOptions& o) {
     std::vector<std::unique_ptr<Domain>> domains;
     std::vector<std::uint32_t> next;
     std::vector<Contender> contenders;
+    std::vector<Skipped> skipped;
     for (const auto& [kind, backend_options, label] : variants) {
         auto made = make_flocking_domain(scene, world.value());
         if (!made) return report(made.error());
         Domain& d = *made.value();
         DomainSetup setup{.kind = kind, .options = backend_options};
         if (auto opened = d.open(setup, {}); !opened) {
-            std::printf("  %-14s skipped: %s\n", label.c_str(), opened.error().message.c_str());
+            skip(skipped, label, opened.error().message);
             continue;
         }
         if (auto r = d.step(0, 2, {}); !r) return report(r.error());
@@ -99,7 +101,6 @@ int bench_flock(const FlockOptions& o) {
         };
         contenders.push_back(std::move(c));
     }
-    if (contenders.empty()) return report(make_error(Error::Kind::Unsupported, "bench flock: no backend could run"));
     if (auto r = run_repetitions(contenders, repetitions, frames, static_cast<double>(count)); !r) return report(r.error());
     // Where the time went: the CPU kinds over the warm-up and every repetition, as they
     // ran; vulkan timed apart now (profile_flocking: its step is one submission). In the
@@ -120,10 +121,9 @@ int bench_flock(const FlockOptions& o) {
                       1e9 * t.search_seconds / static_cast<double>(t.bird_steps));
         contenders[i].measured.extra_json += extra;
     }
-    const int status = report_results(contenders, "bird-steps/s", repetitions, choice.options,
-                                      "{\"benchmark\":\"flock\",\"count\":" + std::to_string(count) +
-                                          ",\"frames\":" + std::to_string(frames),
-                                      o.common.json);
+    const int status = report_results(contenders, skipped, "bird-steps/s", repetitions, choice.options,
+                                      "{\"benchmark\":\"flock\"" + json_size(count, frames), o.common.json);
+    if (contenders.empty()) return status;
     std::printf("\nwhere the time went (cpu kinds: as they ran, the search and the rules in thread-seconds over their "
                 "threads; vulkan: %u frames of the grid alone, of the grid and the search, and of the whole step, one "
                 "submission each, by the device's timestamps or, without them, the wall clock):\n",
@@ -149,7 +149,7 @@ CLI::App* add_bench_flock(CLI::App& bench, std::function<int()>& run) {
     auto options = std::make_shared<FlockOptions>();
     CLI::App* f = bench.add_subcommand("flock", "bird-steps per second of the flocking step (neighbours, rules, limits) on a "
                                                 "flock of N birds");
-    add_count(*f, "--count", options->count, 1, 4'000'000, "flocking birds (default: 1000000)");
+    add_count(*f, "--count", options->count, 1, 4'000'000, "flocking birds, 1 to 4000000 (default: 1000000)");
     add_count(*f, "--frames", options->frames, 1, 100'000, "frames per repetition (default: 5)");
     add_common(*f, options->common);
     run = [options] { return bench_flock(*options); };

@@ -34,6 +34,7 @@ struct ViewOptions {
 
 int bench_view(const ViewOptions& o) {
     BackendChoice choice = read_backend_choice(o.backend);
+    check_json_path(o.json);
     const std::uint32_t frames = static_cast<std::uint32_t>(o.frames.value_or(120));
     const auto size = image_size(o.size);  // not bound: a lambda below uses them (clang < 16)
     const auto width = size.first;
@@ -114,8 +115,9 @@ int bench_view(const ViewOptions& o) {
     }
     const double baseline = frames / runs[1].seconds;
     std::printf("\n%-16s %12s %12s %22s %18s\n", "configuration", "frames/s", "ms/frame", "read back B/frame", "vs vulkan readback");
-    std::string json = "{\"benchmark\":\"view\",\"scene\":\"" + json_escape(scene.name) + "\",\"frames\":" +
-                       std::to_string(frames) + ",\"results\":[";
+    // "count": the configurations timed, as every bench's JSON has a count and frames.
+    std::string json = "{\"benchmark\":\"view\",\"scene\":\"" + json_escape(scene.name) + "\"" +
+                       json_size(runs.size(), frames) + ",\"results\":[";
     for (std::size_t i = 0; i < runs.size(); ++i) {
         const Run& run = runs[i];
         const double fps = frames / run.seconds;
@@ -123,9 +125,10 @@ int bench_view(const ViewOptions& o) {
         char bytes[32] = "-";
         if (run.kind == BackendKind::Vulkan) std::snprintf(bytes, sizeof bytes, "%.0f", static_cast<double>(run.read_back_bytes) / frames);
         std::printf("%-16s %12.4g %12.3f %22s %17.2fx\n", run.name, fps, 1e3 * run.seconds / frames, bytes, fps / baseline);
+        // The same in the JSON: null where the table says '-'.
         char numbers[200];
-        std::snprintf(numbers, sizeof numbers, "\"per_second\":%.6g,\"ms_per_frame\":%.6g,\"read_back_bytes_per_frame\":%.6g", fps,
-                      1e3 * run.seconds / frames, static_cast<double>(run.read_back_bytes) / frames);
+        std::snprintf(numbers, sizeof numbers, "\"per_second\":%.6g,\"ms_per_frame\":%.6g,\"read_back_bytes_per_frame\":%s", fps,
+                      1e3 * run.seconds / frames, run.kind == BackendKind::Vulkan ? bytes : "null");
         json += (i ? "," : "") + std::string("{\"configuration\":\"") + run.name + "\"," + numbers + "}";
     }
     json += "]}\n";
@@ -141,11 +144,22 @@ CLI::App* add_bench_view(CLI::App& bench, std::function<int()>& run) {
     add_scene(*v, view->scene, "scenes/crowd.json");
     add_count(*v, "--frames", view->frames, 1, 100'000, "frames (default: 120)");
     add_size(*v, view->size, "the offscreen image");
-    add_text(*v, "--json", view->json, "FILE.json", "also write the results as JSON (default: none)");
+    add_text(*v, "--json", view->json, "FILE.json",
+             "also write the results as JSON, to a file in a folder that exists (checked before anything runs; \"-\" is "
+             "refused, /dev/stdout writes it after the table; default: none)");
     add_backend_options(*v, view->backend);
     // It times fixed contenders (vulkan drawn where computed, vulkan read back, cpu): a
     // backend choice would be ignored, so the option is not offered.
     v->remove_option(v->get_option("--backend"));
+    v->get_option("--threads")->description("the cpu configuration's threads (default: one per hardware thread)");
+    // Not the other benchmarks' columns (medians, ratios to the cpu kinds, ISA, threads):
+    // one measurement per configuration.
+    v->footer("Columns: frames/s and ms/frame over all the timed frames of a configuration (one measurement each, no "
+              "repetitions, medians or min and max); read back B/frame, the bytes the renderer read back from the "
+              "simulation's device per frame ('-' for cpu, whose state is on the host already); vs vulkan readback, the "
+              "frames/s over the vulkan readback configuration's. --json writes the same per configuration "
+              "(configuration, per_second, ms_per_frame, read_back_bytes_per_frame: null for cpu) with the scene, count "
+              "(the configurations) and frames; docs/performance.md.");
     run = [view] { return bench_view(*view); };
     return v;
 }

@@ -155,6 +155,27 @@ int main(int argc, char** argv) {
             std::fprintf(stderr, "kodawari: unknown command \"%s\"\n(`kodawari --help` lists the commands)\n", words[0].c_str());
             return kExitBadInput;
         }
+        // The same for a command's own commands (`bench birdz`, or none named): the kinds it has.
+        if (!named.empty() && !named.front()->get_subcommands({}).empty()) {
+            const CLI::App& command = *named.front();
+            std::string kinds;
+            for (const CLI::App* sub : command.get_subcommands({})) kinds += (kinds.empty() ? "" : ", ") + sub->get_name();
+            const bool given = words.size() > 1 && !words[1].starts_with("-");
+            const bool help = std::find_if(words.begin() + 1, words.end(), [](const std::string& w) {
+                                  return w == "--help" || w == "-h" || w == "--help-all";
+                              }) != words.end();
+            const auto known = command.get_subcommands([&](const CLI::App* sub) { return given && sub->get_name() == words[1]; });
+            if (given && known.empty()) {
+                std::fprintf(stderr, "kodawari: unknown %s \"%s\": expected one of %s\n(`kodawari %s --help` lists them)\n",
+                             words[0].c_str(), words[1].c_str(), kinds.c_str(), words[0].c_str());
+                return kExitBadInput;
+            }
+            if (!given && !help) {
+                std::fprintf(stderr, "kodawari: %s: name one of %s\n(`kodawari %s --help` lists them)\n", words[0].c_str(),
+                             kinds.c_str(), words[0].c_str());
+                return kExitBadInput;
+            }
+        }
         std::vector<std::string> reversed(words.rbegin(), words.rend());
         app.parse(reversed);
         for (const Command& command : commands) {

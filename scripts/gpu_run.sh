@@ -19,7 +19,10 @@
 # step: step name, command, exit status, seconds and the benchmark's --json) and the
 # benchmarks' JSON files; the table of the benchmarks is printed last. The binary is
 # $KODAWARI, else the bundle's bin/kodawari, else build/release/host/kodawari; embed_vulkan
-# is $KODAWARI_EMBED_VULKAN, else the bundle's, else build/release/examples/embed_vulkan/.
+# is $KODAWARI_EMBED_VULKAN, else (with $KODAWARI) the one beside it or in its build tree,
+# else the bundle's, else build/release/examples/embed_vulkan/ (run.log says which).
+# GPU_RUN_BUDGET and GPU_RUN_STEP_LIMIT are whole seconds, 5 or more; a bad one, or a
+# $KODAWARI that is not there, exits 2 before OUT is made.
 # Nothing is built. GPU_RUN_ONLY=REGEX runs only the steps whose names match (bash regex);
 # GPU_RUN_BUDGET=SECONDS replaces the run's deadline (290 s, --quick 110 s).
 # GPU_RUN_STEP_LIMIT=SECONDS replaces the limit of each validate and embed step (40 s,
@@ -374,7 +377,8 @@ run_step() {
       bench_steps+=("$name")
       # `bench` skips a backend that cannot start (exit 0, the others timed): on this run
       # a missing vulkan result is the failure that matters most.
-      if [[ "$result" == ok && "$*" == *vulkan* ]] && ! grep -q '"backend":"vulkan' "$out/$name.json"; then
+      # (The results only: a vulkan backend skipped is in the JSON's "skipped" too.)
+      if [[ "$result" == ok && "$*" == *vulkan* ]] && ! sed 's/"skipped":\[.*//' "$out/$name.json" | grep -q '"backend":"vulkan'; then
         result="failed"
         summary="no vulkan result: $(grep -m 1 'skipped:' "$out/step.out" | sed 's/^ *//' || true)"
         failures+=("$name (no vulkan result)")
@@ -396,8 +400,9 @@ run_step() {
 
 # The benchmarks' table, from their JSON files: per benchmark and backend the rate's
 # median, min and max, ms/frame, GPU ms/frame, the ratio to cpu of the same run and the
-# device (and bench flock's split of the step). POSIX awk: the JSON is the flat one
-# `kodawari bench --json` writes (result objects of strings, numbers and null).
+# device (and bench flock's split of the step), and each backend the benchmark skipped with
+# why. POSIX awk: the JSON is the flat one `kodawari bench --json` writes (result and
+# skipped objects of strings, numbers and null).
 print_table() {
   local name
   for name in "$@"; do
@@ -413,15 +418,22 @@ print_table() {
     }
     function num(v, f) { return (v == "" || v == "null") ? "-" : sprintf(f, v) }
     BEGIN {
-      printf "%-22s %-20s %9s %11s %11s %11s %9s %9s %8s  %s\n", "bench", "backend", "count", "median/s",
+      printf "%-22s %-24s %9s %11s %11s %11s %9s %9s %8s  %s\n", "bench", "backend", "count", "median/s",
         "min/s", "max/s", "ms/frame", "GPU ms", "vs cpu", "device"
     }
     {
       json = $2
       kind = field(json, "benchmark")
-      count = field(json, kind == "chains" ? "chains" : (kind == "crowd" ? "instances" : "count"))
+      # Every benchmark writes "count" (before it, chains wrote "chains" and crowd "instances").
+      count = field(json, "count")
+      if (count == "") count = field(json, kind == "chains" ? "chains" : "instances")
       unit = kind == "chains" ? "joint-steps" : (kind == "birds" ? "bird-frames" : (kind == "flock" ? "bird-steps" : "frames"))
       rest = substr(json, index(json, "\"results\":[") + 11)
+      skipped = ""
+      if (index(rest, "],\"skipped\":[") > 0) {
+        skipped = substr(rest, index(rest, "],\"skipped\":[") + 13)
+        rest = substr(rest, 1, index(rest, "],\"skipped\":["))
+      }
       n = split(rest, objs, "},")
       for (i = 1; i <= n; ++i) {
         o = objs[i]
@@ -431,10 +443,15 @@ print_table() {
         if (field(o, "search_share") != "" && field(o, "search_share") != "null")
           shares = sprintf("  [grid %.0f%%, search %.0f%%, rules %.0f%%]", 100 * field(o, "grid_share"),
                           100 * field(o, "search_share"), 100 * field(o, "rules_share"))
-        printf "%-22s %-20s %9s %11s %11s %11s %9s %9s %8s  %s%s\n", $1, field(o, "backend"), count,
+        printf "%-22s %-24s %9s %11s %11s %11s %9s %9s %8s  %s%s\n", $1, field(o, "backend"), count,
           num(field(o, "per_second"), "%.4g"), num(field(o, "min"), "%.4g"), num(field(o, "max"), "%.4g"),
           num(field(o, "ms_per_frame"), "%.3f"), num(field(o, "gpu_ms_per_frame"), "%.3f"),
           num(field(o, "vs_cpu"), "%.2fx"), field(o, "device"), shares
+      }
+      n = split(skipped, objs, "},")
+      for (i = 1; i <= n; ++i) {
+        if (field(objs[i], "backend") == "") continue
+        printf "%-22s %-24s skipped: %s\n", $1, field(objs[i], "backend"), field(objs[i], "reason")
       }
       if (!(kind in seen)) units = units (units == "" ? "" : ", ") kind ": " unit "/s"
       seen[kind] = 1
@@ -579,18 +596,18 @@ run_all() {
   out="$2"
   mode="full"
   ((quick)) && mode="quick"
-  mkdir -p "$out"
-  out="$(cd "$out" && pwd)"
-  log_file="$out/run.log"
-  : >"$log_file"
-  t0="$(now)"
-  started_iso="$(date -u +%Y-%m-%dT%H:%M:%SZ)"
   # The whole run's deadline: 5 minutes on the GPU machine, 2 for --quick (less a margin
-  # for starting and the table).
+  # for starting and the table). Checked, as the binary is, before OUT and run.log are
+  # made: bad usage leaves nothing behind.
   local budget=290
   ((quick)) && budget=110
   budget="${GPU_RUN_BUDGET:-$budget}"
-  deadline="$(awk -v t="$t0" -v b="$budget" 'BEGIN { printf "%.3f", t + b }')"
+  [[ "$budget" =~ ^[0-9]+$ && "$budget" -ge 5 ]] ||
+    { echo "gpu_run.sh: GPU_RUN_BUDGET is '$budget'; expected whole seconds, 5 or more" >&2; return 2; }
+  if [[ -n "${GPU_RUN_STEP_LIMIT:-}" ]] && ! [[ "$GPU_RUN_STEP_LIMIT" =~ ^[0-9]+$ && "$GPU_RUN_STEP_LIMIT" -ge 5 ]]; then
+    echo "gpu_run.sh: GPU_RUN_STEP_LIMIT is '$GPU_RUN_STEP_LIMIT'; expected whole seconds, 5 or more" >&2
+    return 2
+  fi
 
   if [[ -n "${KODAWARI:-}" ]]; then
     bin="$KODAWARI"
@@ -599,18 +616,34 @@ run_all() {
   else
     bin="$root/build/release/host/kodawari"
   fi
-  if [[ -n "${KODAWARI_EMBED_VULKAN:-}" ]]; then
-    embed="$KODAWARI_EMBED_VULKAN"
-  elif [[ "$in_bundle" == 1 ]]; then
-    embed="$root/bin/embed_vulkan"
-  else
-    embed="$root/build/release/examples/embed_vulkan/embed_vulkan"
-  fi
   if [[ "$bin" != */* ]]; then bin="$(command -v "$bin" || echo "$bin")"; fi
   if [[ ! -x "$bin" ]]; then
     echo "gpu_run.sh: no kodawari at $bin (set KODAWARI, or build the tree, or run the bundle's gpu_run.sh)" >&2
     return 2
   fi
+  # embed_vulkan: $KODAWARI_EMBED_VULKAN, else beside $KODAWARI (a bundle's bin/, or the
+  # build tree kodawari came from), else the bundle's or build/release's; run.log says which.
+  local bin_dir
+  bin_dir="$(cd "$(dirname "$bin")" && pwd)"
+  if [[ -n "${KODAWARI_EMBED_VULKAN:-}" ]]; then
+    embed="$KODAWARI_EMBED_VULKAN" embed_note="\$KODAWARI_EMBED_VULKAN"
+  elif [[ -n "${KODAWARI:-}" && -x "$bin_dir/embed_vulkan" ]]; then
+    embed="$bin_dir/embed_vulkan" embed_note="beside \$KODAWARI"
+  elif [[ -n "${KODAWARI:-}" ]]; then
+    embed="$(dirname "$bin_dir")/examples/embed_vulkan/embed_vulkan" embed_note="the build tree of \$KODAWARI"
+  elif [[ "$in_bundle" == 1 ]]; then
+    embed="$root/bin/embed_vulkan" embed_note="the bundle's"
+  else
+    embed="$root/build/release/examples/embed_vulkan/embed_vulkan" embed_note="build/release's"
+  fi
+  mkdir -p "$out"
+  out="$(cd "$out" && pwd)"
+  log_file="$out/run.log"
+  : >"$log_file"
+  t0="$(now)"
+  started_iso="$(date -u +%Y-%m-%dT%H:%M:%SZ)"
+  deadline="$(awk -v t="$t0" -v b="$budget" 'BEGIN { printf "%.3f", t + b }')"
+  log "embed_vulkan: $embed ($embed_note)"
   # Scenes are named relative to the checkout or the bundle; the steps run there.
   cd "$root"
 

@@ -61,6 +61,52 @@ row bench "--backend and --backends together" 2 "--backends" -- bench chains --b
 row bench "--backend auto" 2 "--backend" -- bench chains --backend auto
 row bench "a workgroup size that is no power of two" 2 "--workgroup-size" -- bench chains --backends vulkan --workgroup-size 96
 row bench "a workgroup size list with one out of range" 2 "--workgroup-sizes" -- bench chains --backends vulkan --workgroup-sizes 64,2048
+row bench "a device asked for that is not there" 2 '--device no-such-device: no usable Vulkan device matches "no-such-device"' -- \
+  bench chains --count 10 --frames 1 --backends vulkan --device no-such-device --json "$work/dev.json"
+row bench "an empty --backends" 2 "--backends: .*an empty list" -- bench chains --count 10 --frames 1 --backends "" --json "$work/bench.json"
+row bench "an unknown backend in --backends" 2 '--backends: unknown backend "gpu"' -- bench chains --count 10 --frames 1 --backends cpu,gpu
+row bench "--json in a folder that does not exist" 2 "--json: .*nosuch-folder/b.json: the folder .* does not exist" -- \
+  bench chains --count 10 --frames 1 --backends cpu --json "$work/nosuch-folder/b.json"
+row bench "--json in a folder that cannot be written" 2 "--json: .*a-file/sub/b.json" -- bench chains --count 10 --frames 1 --backends cpu --json "$unwritable/b.json"
+row bench "--json with an empty name" 2 "--json: expected a file name" -- bench chains --count 10 --frames 1 --backends cpu --json ""
+row bench "--json -" 2 '--json: "-" is not taken' -- bench birds --count 10 --frames 1 --backends cpu --json -
+row bench "--json a folder" 2 "--json: .* is a folder" -- bench flock --count 10 --frames 1 --backends cpu --json "$work"
+row bench "--json in a missing folder, bench view" 2 "--json: .*nosuch-folder" -- bench view scenes/ahoge.json --frames 1 --json "$work/nosuch-folder/v.json"
+row bench "an unknown bench" 2 'unknown bench "birdz": expected one of birds, chains, crowd, flock, view' -- bench birdz
+row bench "a bench named in capitals" 2 'unknown bench "BIRDS"' -- bench BIRDS --count 10
+row bench "no bench named" 2 "bench: name one of birds, chains, crowd, flock, view" -- bench --count 10
+KODAWARI_DEVICE=no-such-device "$bin" bench birds --count 10 --frames 1 >"$work/env-dev.out" 2>"$work/env-dev.err"
+check "bench: KODAWARI_DEVICE that matches nothing exits 2 naming it" bash -c \
+  "test $? -eq 2 && grep -q 'KODAWARI_DEVICE=no-such-device: no usable Vulkan device' '$work/env-dev.err' && ! grep -q 'bench birds:' '$work/env-dev.out'"
+# A backend named twice is timed once, as a size named twice in --workgroup-sizes.
+"$bin" bench chains --count 10 --frames 1 --backends cpu,cpu --json "$work/twice.json" >/dev/null 2>&1
+check "bench: --backends cpu,cpu times cpu once" python3 -c "
+import json, sys; r = json.load(open(sys.argv[1])); assert [m['backend'] for m in r['results']] == ['cpu'], r" "$work/twice.json"
+rm -f "$work/twice.json"
+# Options for a backend the bench does not time are said to be ignored; the header's cpu
+# ISA and threads only when cpu is timed.
+"$bin" bench chains --count 10 --frames 1 --backends cpu-reference --workgroup-sizes 32,64 --rod-kernels per-joint --threads 2 \
+  >"$work/ignored.out" 2>"$work/ignored.err"
+check "bench: vulkan-only and cpu-only options without their backend: warned as ignored" bash -c "test $? -eq 0 &&
+  grep -q 'warning: --workgroup-sizes is ignored' '$work/ignored.err' && grep -q 'warning: --rod-kernels is ignored' '$work/ignored.err' &&
+  grep -q 'warning: --threads is ignored' '$work/ignored.err' && ! grep -q '^medians.*cpu:' '$work/ignored.out'"
+# Every bench's JSON has count and frames; bench view's cpu read-back bytes are null
+# where its table says '-'.
+"$bin" bench view scenes/ahoge.json --frames 2 --size 16x16 --json "$work/view.json" >"$work/view.out" 2>&1
+check "bench view: cpu's read-back bytes null in the JSON, '-' in the table" bash -c "python3 -c \"
+import json, sys; r = json.load(open(sys.argv[1])); c = r['results'][2]
+assert c['configuration'] == 'cpu' and c['read_back_bytes_per_frame'] is None and r['count'] == 3 and r['frames'] == 2, r\" '$work/view.json' &&
+  grep -qE '^cpu +[0-9.e+]+ +[0-9.]+ +- ' '$work/view.out'"
+"$bin" bench chains --count 12 --frames 2 --backends cpu --json "$work/chains.json" >/dev/null 2>&1
+check "bench chains: count and frames in the JSON beside chains and steps" python3 -c "
+import json, sys; r = json.load(open(sys.argv[1])); assert (r['count'], r['frames'], r['chains'], r['steps']) == (12, 2, 12, 2), r" "$work/chains.json"
+rm -f "$work/view.json" "$work/chains.json"
+# --help: each --count's range, bench's backends without auto, bench view's own columns.
+check "bench --help: the counts' ranges, no auto, no --compact" bash -c "'$bin' bench birds --help | grep -q '1 to 20000000' &&
+  '$bin' bench chains --help | grep -q '1 to 2000000 ' && '$bin' bench crowd --help | grep -q '1 to 100000 ' &&
+  '$bin' bench flock --help | grep -q '1 to 4000000 ' && ! '$bin' bench birds --help | grep -qE 'auto\||--compact'"
+check "bench view --help: its own columns, not the medians and ratios" bash -c "'$bin' bench view --help | grep -q 'vs vulkan readback, the' &&
+  ! '$bin' bench view --help | grep -q 'vs c-ref'"
 row run "a level-of-detail bias out of range" 2 "--lod-bias" -- run scenes/crowd-gltf.json --frames 1 --no-export --lod-bias 9
 row render "a level-of-detail bias out of range" 2 "--lod-bias" -- render scenes/crowd-gltf.json --out "$work/lod-frames" --frames 1 --lod-bias 9
 row render "levels of detail shown on a scene without characters" 2 "--show-lod: scene" -- render scenes/flock.json --out "$work/lod-frames" --frames 1 --show-lod
@@ -136,7 +182,7 @@ row schema "an argument it does not take" 2 "" -- schema extra
 row completion "a shell it does not know" 2 "" -- completion fish
 row kodawari "unknown command" 2 "lists the commands" -- frobnicate
 
-check "nothing written by the failing rows" bash -c "! ls '$work' | grep -qE '^(x\.glb|m\.glb|m\.gltf|a\.gltf|both\.glb|r\.json|s\.json|frames|a\.gif)$'"
+check "nothing written by the failing rows" bash -c "! ls '$work' | grep -qE '^(x\.glb|m\.glb|m\.gltf|a\.gltf|both\.glb|r\.json|s\.json|frames|a\.gif|dev\.json|bench\.json|nosuch-folder)$'"
 check "the folder that cannot be written is untouched" test -f "$work/a-file"
 # Writing to a closed stdout is a runtime failure, not bad input.
 "$bin" schema >&- 2>/dev/null

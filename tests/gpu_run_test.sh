@@ -146,4 +146,13 @@ want = [("info", "ok", 0), ("bench-chains-301", "failed", 2), ("validate-flock",
 if got != want or d["finished"] is not True or "broken on purpose" not in d["steps"][1]["summary"]:
     sys.exit(f"FAIL: the broken run's steps {got}, not {want}")
 EOF
+# Bad usage exits 2 before OUT or its run.log is made: a budget or step limit that is no
+# number of seconds, a KODAWARI that is not there.
+for setting in GPU_RUN_BUDGET=abc GPU_RUN_BUDGET=2 GPU_RUN_STEP_LIMIT=abc KODAWARI=/nonexistent; do
+  rc=0
+  env KODAWARI="$kodawari" "$setting" bash "$src/scripts/gpu_run.sh" --quick "$work/bad-usage" >"$work/bad.out" 2>&1 || rc=$?
+  [[ $rc -eq 2 ]] || { cat "$work/bad.out"; fail "$setting: exit $rc, not 2"; }
+  grep -q "${setting%%=*}" "$work/bad.out" || { cat "$work/bad.out"; fail "$setting: the message does not name it"; }
+  [[ ! -e "$work/bad-usage" ]] || fail "$setting: $work/bad-usage made before exiting 2"
+done
 echo "gpu_run_quick: ok"

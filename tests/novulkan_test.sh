@@ -103,6 +103,25 @@ else
   echo "SKIP: view: xvfb-run is not installed (Debian package xvfb)"
 fi
 
+# bench: the vulkan backend skipped with why, in the table and the JSON's "skipped"; the
+# others timed, exit 0. With vulkan alone nothing is timed: exit 1, the JSON saying why.
+"$bin" bench birds --count 10 --frames 1 --backends cpu,vulkan --json "$work/bench.json" >"$work/bench.out" 2>&1
+rc=$?
+cat "$work/bench.out"
+check "bench with vulkan skipped exits 0" test $rc -eq 0
+check "bench: the table has the vulkan row skipped" grep -q "^vulkan  *skipped: .*$missing_driver" "$work/bench.out"
+check "bench: the JSON records vulkan skipped with why, and cpu timed" python3 -c "
+import json, sys; r = json.load(open(sys.argv[1]))
+assert [m['backend'] for m in r['results']] == ['cpu'], r
+assert len(r['skipped']) == 1 and r['skipped'][0]['backend'] == 'vulkan' and sys.argv[2] in r['skipped'][0]['reason'], r" \
+  "$work/bench.json" "$missing_driver"
+"$bin" bench birds --count 10 --frames 1 --backends vulkan --json "$work/bench-none.json" >"$work/bench-none.out" 2>&1
+rc=$?
+check "bench that timed nothing exits 1 saying so" bash -c "test $rc -eq 1 && grep -q 'nothing was timed' '$work/bench-none.out'"
+check "bench that timed nothing: the JSON has no result and says why" python3 -c "
+import json, sys; r = json.load(open(sys.argv[1])); assert r['results'] == [] and r['skipped'][0]['backend'] == 'vulkan', r" \
+  "$work/bench-none.json"
+
 # info: exits 0 and says so.
 "$bin" info >"$work/info.out" 2>&1
 rc=$?
