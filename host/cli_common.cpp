@@ -59,15 +59,21 @@ CLI::Option* add_size(CLI::App& app, std::optional<std::string>& into, const std
     return add_text(app, "--size", into, "WxH", what + ", W and H in [1, 8192] pixels (default: 1280x720)");
 }
 
+std::string shipped_scene(const std::string& relative) {
+    namespace fs = std::filesystem;
+    std::error_code ec;
+    if (fs::exists(relative, ec)) return relative;
+    const fs::path self = fs::read_symlink("/proc/self/exe", ec);
+    const fs::path installed = (self.parent_path() / KODAWARI_DATA_FROM_BIN / relative).lexically_normal();
+    if (!ec && fs::exists(installed, ec)) return installed.string();
+    throw UsageError{"no scene given, and the default " + relative + " is neither in this folder nor installed (" +
+                     (self.empty() ? std::string("<prefix>/share/kodawari/") + relative : installed.string()) +
+                     "; the shipped scenes are the source tree's scenes/): give a scene file as the first argument"};
+}
+
 std::string scene_or_default(const std::optional<std::string>& scene) {
     if (scene) return *scene;
-    std::error_code ec;
-    if (!std::filesystem::exists(kDefaultScene, ec)) {
-        throw UsageError{std::string("no scene given, and the default ") + kDefaultScene +
-                         " is not in this folder (the shipped scenes are in the source tree's scenes/): give a scene "
-                         "file as the first argument"};
-    }
-    return kDefaultScene;
+    return shipped_scene(kDefaultScene);
 }
 
 CLI::Option* add_scene(CLI::App& app, std::optional<std::string>& into, const std::string& default_scene) {

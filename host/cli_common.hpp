@@ -28,6 +28,12 @@ inline constexpr int kExitBadInput = 2;
 /// The scene `make run` and a bare `kodawari run` use.
 inline constexpr const char* kDefaultScene = "scenes/flock.json";
 
+/// A shipped scene by its path in the source tree (`scenes/crowd.json`): there, relative
+/// to the current folder, else where an installed command keeps them
+/// (<prefix>/share/kodawari/scenes, found from the command's own path); a UsageError
+/// naming both places when neither has it.
+[[nodiscard]] std::string shipped_scene(const std::string& relative);
+
 /// The scene a command was given, else kDefaultScene; a UsageError saying that no scene
 /// was given when the default is not there either (a command run outside the source
 /// tree, from an installed package), rather than that scenes/flock.json cannot be opened.

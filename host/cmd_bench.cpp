@@ -213,7 +213,7 @@ int bench_crowd(const CrowdOptions& o) {
     const std::uint32_t repetitions = read_repetitions(o.common);
     const auto& json_path = o.common.json;
     const std::vector<BenchVariant> backends = read_variants(o.common, choice);
-    const std::string path = o.scene.value_or("scenes/crowd-gltf.json");
+    const std::string path = o.scene ? *o.scene : shipped_scene("scenes/crowd-gltf.json");
     auto loaded = load_scene(path);
     if (!loaded) return report(loaded.error());
     Scene scene = std::move(loaded).value();

@@ -40,7 +40,7 @@ int bench_view(const ViewOptions& o) {
     const auto width = size.first;
     const auto height = size.second;
     const auto& json_path = o.json;
-    auto loaded = load_scene(o.scene.value_or("scenes/crowd.json"));
+    auto loaded = load_scene(o.scene ? *o.scene : shipped_scene("scenes/crowd.json"));
     if (!loaded) return report(loaded.error());
     const Scene& scene = loaded.value();
     // A renderer per configuration, so that each keeps its simulation's layers set up

@@ -135,6 +135,13 @@ if [[ -x "$prefix/bin/kodawari" ]]; then
   # docs/command-line.md, which an install has only under share/doc).
   "$prefix/bin/kodawari" --help | tr -d '\n' | grep -qF "$prefix/share/doc/kodawari/docs/command-line.md" \
     || fail "the installed command's --help does not name $prefix/share/doc/kodawari/docs/command-line.md"
+  # The default scenes come with it (<prefix>/share/kodawari/scenes): `validate` without a
+  # scene and `bench crowd` (its rigged crowd and the chibi it loads) work from a folder
+  # that has no scenes/ (a reviewer's `bench crowd` from an install: "cannot open the scene").
+  (cd "$work" && "$prefix/bin/kodawari" validate --backend cpu --frames 2 >"$work/default-scene.log" 2>&1) \
+    || { cat "$work/default-scene.log"; fail "the installed command's validate found no default scene outside the source tree"; }
+  (cd "$work" && "$prefix/bin/kodawari" bench crowd --count 2 --frames 2 --backends cpu --repetitions 3 >"$work/bench-crowd.log" 2>&1) \
+    || { cat "$work/bench-crowd.log"; fail "the installed command's bench crowd found no default scene outside the source tree"; }
 fi
 echo "package: installed into a temporary prefix: $(find "$prefix" -type f | wc -l) files," \
   "$(find "$prefix/include" -type f | wc -l) headers, libraries in $libdir"
