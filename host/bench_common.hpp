@@ -126,5 +126,7 @@ CLI::App* add_bench_flock(CLI::App& bench, std::function<int()>& run);
 
 /// Adds `bench view` to `bench`; `run` runs it once parsed.
 CLI::App* add_bench_view(CLI::App& bench, std::function<int()>& run);
+/// Adds `bench ceilings` to `bench`; `run` runs it once parsed.
+CLI::App* add_bench_ceilings(CLI::App& bench, std::function<int()>& run);
 
 }  // namespace kodawari::cli

@@ -495,14 +495,17 @@ Command add_bench(CLI::App& app) {
     std::function<int()> run_flock;
     CLI::App* fl = add_bench_flock(*bench, run_flock);
     std::function<int()> run_view;
-    add_bench_view(*bench, run_view);
+    CLI::App* vw = add_bench_view(*bench, run_view);
+    std::function<int()> run_ceilings;
+    add_bench_ceilings(*bench, run_ceilings);
 
     return {bench, [=] {
                 if (b->parsed()) return bench_birds(*birds);
                 if (ch->parsed()) return bench_chains(*chains);
                 if (cr->parsed()) return bench_crowd(*crowd);
                 if (fl->parsed()) return run_flock();
-                return run_view();
+                if (vw->parsed()) return run_view();
+                return run_ceilings();
             }};
 }
 

@@ -28,7 +28,7 @@ offers() {  # offers "EXPECTED WORDS" WORD... : the offer is exactly EXPECTED
 check "the commands" bash -c "$(declare -f complete_words); work='$work'; complete_words kodawari '' | grep -qx bench && complete_words kodawari '' | grep -qx completion"
 check "kodawari re -> render" offers "render" kodawari re
 check "kodawari bench ch -> chains" offers "chains" kodawari bench ch
-check "kodawari bench -> its five benchmarks" offers "birds chains crowd flock view" kodawari bench ''
+check "kodawari bench -> its six benchmarks" offers "birds ceilings chains crowd flock view" kodawari bench ''
 check "bench chains --f -> --frames" offers "--frames" kodawari bench chains --f
 check "bench chains --st -> the deprecated --steps still completes" offers "--steps" kodawari bench chains --st
 check "run --ba -> --backend" offers "--backend" kodawari run --ba

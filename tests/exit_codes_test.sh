@@ -72,9 +72,13 @@ row bench "--json with an empty name" 2 "--json: expected a file name" -- bench 
 row bench "--json -" 2 '--json: "-" is not taken' -- bench birds --count 10 --frames 1 --backends cpu --json -
 row bench "--json a folder" 2 "--json: .* is a folder" -- bench flock --count 10 --frames 1 --backends cpu --json "$work"
 row bench "--json in a missing folder, bench view" 2 "--json: .*nosuch-folder" -- bench view scenes/ahoge.json --frames 1 --json "$work/nosuch-folder/v.json"
-row bench "an unknown bench" 2 'unknown bench "birdz": expected one of birds, chains, crowd, flock, view' -- bench birdz
+row bench "an unknown bench" 2 'unknown bench "birdz": expected one of birds, chains, crowd, flock, view, ceilings' -- bench birdz
 row bench "a bench named in capitals" 2 'unknown bench "BIRDS"' -- bench BIRDS --count 10
-row bench "no bench named" 2 "bench: name one of birds, chains, crowd, flock, view" -- bench --count 10
+row bench "no bench named" 2 "bench: name one of birds, chains, crowd, flock, view, ceilings" -- bench --count 10
+row bench "ceilings on 0 threads" 2 "--threads: expected an integer in \\[1, 1024\\]" -- bench ceilings --threads 0
+row bench "ceilings on an unknown isa" 2 '--isa: SIMD instruction set "avx1024" is unknown' -- bench ceilings --isa avx1024 --repetitions 1
+row bench "ceilings with a triad too small" 2 "--triad-mib" -- bench ceilings --triad-mib 1
+row bench "ceilings' --json in a missing folder" 2 "--json: .*nosuch-folder" -- bench ceilings --json "$work/nosuch-folder/c.json"
 KODAWARI_DEVICE=no-such-device "$bin" bench birds --count 10 --frames 1 >"$work/env-dev.out" 2>"$work/env-dev.err"
 check "bench: KODAWARI_DEVICE that matches nothing exits 2 naming it" bash -c \
   "test $? -eq 2 && grep -q 'KODAWARI_DEVICE=no-such-device: no usable Vulkan device' '$work/env-dev.err' && ! grep -q 'bench birds:' '$work/env-dev.out'"

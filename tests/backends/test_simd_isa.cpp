@@ -229,3 +229,38 @@ TEST(SimdIsa, PoseBackendsOnEveryInstructionSetAgreeWithTheReferenceBitForBit) {
         }
     }
 }
+
+// The machine's ceilings (measure_ceilings(), `kodawari bench ceilings`) on every instruction
+// set this machine runs: each a rate a core can have. Not a speed test: the bounds only
+// say that the loops ran. Below: 0.1 GFLOP/s and 0.1 GB/s, far under anything since the
+// Pentium (ASan does not touch the register-only loop). Above: 1 TFLOP/s and 1 TB/s on
+// one thread, past any core (64 flops a cycle at 6 GHz is 0.38 TFLOP/s): a loop the
+// compiler folded into its result (GCC did, for the non-FMA targets, while its operands
+// were constants) measured 3e14.
+TEST(SimdIsa, CeilingsAreMeasuredOnEveryInstructionSetAndBadArgumentsRefused) {
+    for (const std::string& isa : available_simd_isas()) {
+        SCOPED_TRACE(isa);
+        auto measured = measure_ceilings(isa, 1, std::size_t{3} << 20);
+        ASSERT_TRUE(measured.ok()) << measured.error().message;
+        const MachineCeilings& c = measured.value();
+        EXPECT_EQ(c.isa, isa);
+        EXPECT_EQ(c.threads, 1u);
+        EXPECT_EQ(c.triad_bytes, std::size_t{3} << 20);
+        EXPECT_GT(c.fp32_flops, 1e8);
+        EXPECT_LT(c.fp32_flops, 1e12);
+        EXPECT_GT(c.triad_bytes_per_second, 1e8);
+        EXPECT_LT(c.triad_bytes_per_second, 1e12);
+    }
+    const auto threads = measure_ceilings("", 0);
+    ASSERT_FALSE(threads.ok());
+    EXPECT_EQ(threads.error().kind, Error::Kind::InvalidInput);
+    EXPECT_EQ(threads.error().message, "measure_ceilings: threads: expected 1 to 1024, got 0");
+    const auto tiny = measure_ceilings("", 1, 1000);
+    ASSERT_FALSE(tiny.ok());
+    EXPECT_EQ(tiny.error().message, "measure_ceilings: triad_bytes: expected 3 MiB to 64 GiB, got 1000 bytes");
+    const auto isa = measure_ceilings("avx1024", 1);
+    ASSERT_FALSE(isa.ok());
+    EXPECT_EQ(isa.error().kind, Error::Kind::InvalidInput);
+    EXPECT_NE(isa.error().message.find("measure_ceilings: isa: SIMD instruction set \"avx1024\" is unknown"), std::string::npos)
+        << isa.error().message;
+}
