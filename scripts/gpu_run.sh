@@ -707,7 +707,7 @@ run_all() {
   # The vulkan kernels' workgroup sizes timed side by side at the large sizes (issue 38,
   # item 2; `bench --workgroup-sizes`): the first GPU run picks the default from them.
   local workgroups=32,64,128,256
-  local reps_s=3 reps_l=5 validate_frames=20 embed_frames=120 bench_limit=90 step_limit=40
+  local triad_mib=1536 reps_s=3 reps_l=5 validate_frames=20 embed_frames=120 bench_limit=90 step_limit=40
   local bench_reserve=75
   if ((quick)); then
     chains_s=301 chains_l=1001 chains_frames_s=2 chains_frames_l=2
@@ -716,7 +716,7 @@ run_all() {
     flock_s=1001 flock_l=3001 flock_frames_s=2 flock_frames_l=2
     # Two sizes keep the option's path run; each is a pipeline lavapipe compiles.
     workgroups=32,64
-    validate_frames=3 embed_frames=12 bench_limit=40 step_limit=30 bench_reserve=30
+    triad_mib=48 validate_frames=3 embed_frames=12 bench_limit=40 step_limit=30 bench_reserve=30
   fi
   step_limit="${GPU_RUN_STEP_LIMIT:-$step_limit}"
   [[ "$step_limit" =~ ^[0-9]+$ && "$step_limit" -ge 5 ]] ||
@@ -729,6 +729,9 @@ run_all() {
   fi
 
   run_step info 60 0 plain "$bin" info
+  # The host's fp32 peak and memory rate, which the cpu rows of the benches are set against
+  # (docs/performance.md); a few seconds.
+  run_step ceilings 30 0 plain "$bin" bench ceilings --repetitions 3 --triad-mib "$triad_mib" --json "$out/ceilings.json"
   # Benchmarks first: their figures are what the machine is lent for. Each keeps
   # bench_reserve seconds of the deadline for validate and embed_vulkan.
   # The rod kernels side by side: a chain per invocation (its template's constants in

@@ -91,9 +91,13 @@ for s in d["steps"]:
 scenes = sorted(os.path.relpath(p, os.path.join(src, "scenes"))[:-5].replace("/", "-")
                 for p in glob.glob(os.path.join(src, "scenes", "*.json")) + glob.glob(os.path.join(src, "scenes", "*", "*.json"))
                 if not p.endswith("crowd-10k.json"))  # the benchmark scene: gpu_run.sh says why
-expected = ["info"] + [f"validate-{s}" for s in scenes] + (["embed_vulkan"] if embed else [])
+expected = ["info", "ceilings"] + [f"validate-{s}" for s in scenes] + (["embed_vulkan"] if embed else [])
 for name in expected:
     check(name in steps, f"no step {name}")
+# The host's ceilings, beside the results.
+ceilings = json.load(open(os.path.join(os.path.dirname(results), "ceilings.json")))
+check(ceilings["benchmark"] == "ceilings" and 0 < ceilings["fp32_flops"]["min"] <= ceilings["fp32_flops"]["median"]
+      and ceilings["triad_bytes_per_second"]["median"] > 0, f"ceilings.json: {ceilings}")
 benches = [s for s in d["steps"] if s["name"].startswith("bench-")]
 check(len(benches) == 10, f"{len(benches)} bench steps, not 10")
 # One character, the embedding's case, on every backend.
