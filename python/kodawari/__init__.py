@@ -135,7 +135,7 @@ def command_path():
     return found
 
 
-BENCH_KINDS = ("birds", "chains", "crowd", "flock", "view")
+BENCH_KINDS = ("birds", "chains", "crowd", "flock", "view", "ceilings")
 """What `kodawari bench` times (docs/performance.md)."""
 
 
@@ -145,8 +145,9 @@ def bench(kind, *, command=None, **options):
     with per_second, min, max, ms_per_frame, gpu_ms_per_frame, vs_cpu_reference, vs_cpu,
     isa, threads).
 
-    kind: one of BENCH_KINDS ("birds", "chains", "crowd", "flock", "view"; ValueError for
-    another). options: the command's options with _ for
+    kind: one of BENCH_KINDS ("birds", "chains", "crowd", "flock", "view", "ceilings";
+    ValueError for another; "ceilings" gives the machine's fp32_flops and
+    triad_bytes_per_second, each with median, min and max, instead of "results"). options: the command's options with _ for
     - (count=1000, frames=30, backends=["cpu", "vulkan"], repetitions=3, readback=True,
     threads=2, isa="avx2", device=..., validation=True; `kodawari bench KIND --help` lists
     them); True gives a flag, a list is joined with commas, None and False are left out.

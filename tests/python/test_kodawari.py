@@ -440,6 +440,10 @@ check([r.get("backend") for r in rows] == ["cpu-reference", "cpu"] and
       all(r["per_second"] > 0 and r["min"] <= r["per_second"] <= r["max"] for r in rows),
       f"bench results {rows}")
 print(f"bench: {[(r['backend'], r['per_second']) for r in rows]} bird-frames/s")
+ceilings = kodawari.bench("ceilings", threads=1, repetitions=1, triad_mib=12)
+check(ceilings.get("benchmark") == "ceilings" and ceilings.get("threads") == 1 and
+      ceilings["fp32_flops"]["median"] > 0 and ceilings["triad_bytes_per_second"]["median"] > 0,
+      f"bench ceilings {ceilings}")
 try:
     kodawari.bench("birds", count=0)
     check(False, "bench with count=0 raised nothing")
