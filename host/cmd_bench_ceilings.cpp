@@ -28,9 +28,10 @@ struct Spread {
     double median = 0.0, min = 0.0, max = 0.0;
 };
 
-Spread spread(std::vector<double> v) {
-    std::sort(v.begin(), v.end());
-    return {v[v.size() / 2], v.front(), v.back()};
+// The other benchmarks' statistics (Measured: the median of an even count is the mean of
+// the middle two).
+Spread spread(const std::vector<double>& v) {
+    return {Measured::median(v), *std::min_element(v.begin(), v.end()), *std::max_element(v.begin(), v.end())};
 }
 
 int bench_ceilings(const CeilingsOptions& o) {
