@@ -116,8 +116,8 @@ static_assert(sizeof(RenderPush) <= 128, "Vulkan guarantees 128 bytes of push co
 
 // shared/flocking.h and the driven birds' motion (shared/birds.h)
 static_assert(sizeof(BirdMotionGpu) == 48 && offsetof(BirdMotionGpu, velocity) == 16 && offsetof(BirdMotionGpu, acceleration) == 32);
-static_assert(sizeof(FlockParamsGpu) == 80 && offsetof(FlockParamsGpu, radii) == 16 && offsetof(FlockParamsGpu, weights) == 32 &&
-              offsetof(FlockParamsGpu, ground) == 48 && offsetof(FlockParamsGpu, target) == 64);
+static_assert(sizeof(FlockParamsGpu) == 96 && offsetof(FlockParamsGpu, radii) == 16 && offsetof(FlockParamsGpu, weights) == 32 &&
+              offsetof(FlockParamsGpu, ground) == 48 && offsetof(FlockParamsGpu, target) == 64 && offsetof(FlockParamsGpu, collision) == 80);
 static_assert(sizeof(FlockBirdGpu) == 64 && offsetof(FlockBirdGpu, offset) == 16 && offsetof(FlockBirdGpu, speed) == 32 &&
               offsetof(FlockBirdGpu, turn) == 48);
 static_assert(sizeof(FlockStateGpu) == 32 && offsetof(FlockStateGpu, velocity) == 16);

@@ -11,6 +11,7 @@
 #include <limits>
 #include <random>
 #include <string>
+#include <unordered_map>
 #include <utility>
 #include <vector>
 
@@ -24,6 +25,43 @@ namespace kodawari {
 namespace {
 
 using Vec3 = std::array<double, 3>;
+
+// The formation offsets placed so far, in cells as wide as their least distance: whether a
+// new one keeps that distance from each (a flocking flock's birds start no nearer one
+// another than its collision distance, so that no two are within it at the first frame).
+class Spacing {
+public:
+    explicit Spacing(double apart) : apart_(apart) {}
+    [[nodiscard]] bool clear(const Vec3& p) const {
+        const std::array<std::int64_t, 3> c = cell(p);
+        for (std::int64_t dx = -1; dx <= 1; ++dx)
+            for (std::int64_t dy = -1; dy <= 1; ++dy)
+                for (std::int64_t dz = -1; dz <= 1; ++dz) {
+                    const auto found = cells_.find(key({c[0] + dx, c[1] + dy, c[2] + dz}));
+                    if (found == cells_.end()) continue;
+                    for (const Vec3& q : found->second) {
+                        const double x = q[0] - p[0], y = q[1] - p[1], z = q[2] - p[2];
+                        if (x * x + y * y + z * z < apart_ * apart_) return false;
+                    }
+                }
+        return true;
+    }
+    void add(const Vec3& p) { cells_[key(cell(p))].push_back(p); }
+
+private:
+    [[nodiscard]] std::array<std::int64_t, 3> cell(const Vec3& p) const {
+        return {static_cast<std::int64_t>(std::floor(p[0] / apart_)), static_cast<std::int64_t>(std::floor(p[1] / apart_)),
+                static_cast<std::int64_t>(std::floor(p[2] / apart_))};
+    }
+    static std::uint64_t key(const std::array<std::int64_t, 3>& c) {
+        // Offsets are within 10^4 m of the leader and the distance at least 10^-3 m: 2^24
+        // cells an axis hold them.
+        const auto u = [](std::int64_t v) { return static_cast<std::uint64_t>(v + (std::int64_t{1} << 23)) & 0xFFFFFFu; };
+        return (u(c[0]) << 48) | (u(c[1]) << 24) | u(c[2]);
+    }
+    double apart_;
+    std::unordered_map<std::uint64_t, std::vector<Vec3>> cells_;
+};
 
 // Purposes of the random streams. Each draws from its own generator so that, say,
 // changing the trail does not move every bird's offset.
@@ -469,17 +507,30 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
         return static_cast<float>(base * (1.0 + separate_product(static_cast<double>(jitter), rng.symmetric())));
     };
 
+    // A flocking flock's offsets keep its collision distance: a draw nearer an earlier one
+    // is drawn again, at most 16 times (a formation too small for its birds keeps the
+    // last). Route flocks draw as they always have.
+    const double apart = flock.flocking ? static_cast<double>(flock.flocking->collision_distance) : 0.0;
+    Spacing spacing(std::max(apart, 1e-3));
     for (std::uint32_t b = 0; b < flock.count; ++b) {
         gpu::BirdParams p{};
-        double u[3] = {offset_rng.symmetric(), offset_rng.symmetric(), offset_rng.symmetric()};
-        // Uniform in the ellipsoid: the box's draws again until one falls in the unit ball
-        // (on average 1.9 draws of three; the stream is the offsets' own).
-        while (flock.formation.shape == FormationSpec::Shape::Ellipsoid && u[0] * u[0] + u[1] * u[1] + u[2] * u[2] > 1.0) {
-            for (double& c : u) c = offset_rng.symmetric();
+        for (int attempt = 0;; ++attempt) {
+            double u[3] = {offset_rng.symmetric(), offset_rng.symmetric(), offset_rng.symmetric()};
+            // Uniform in the ellipsoid: the box's draws again until one falls in the unit
+            // ball (on average 1.9 draws of three; the stream is the offsets' own).
+            while (flock.formation.shape == FormationSpec::Shape::Ellipsoid && u[0] * u[0] + u[1] * u[1] + u[2] * u[2] > 1.0) {
+                for (double& c : u) c = offset_rng.symmetric();
+            }
+            p.offset.x = static_cast<float>(spread[0] * u[0]);
+            p.offset.y = static_cast<float>(spread[1] * u[1]);
+            p.offset.z = static_cast<float>(spread[2] * u[2]);
+            if (apart <= 0.0) break;
+            const Vec3 at{p.offset.x, p.offset.y, p.offset.z};
+            if (attempt == 15 || spacing.clear(at)) {
+                spacing.add(at);
+                break;
+            }
         }
-        p.offset.x = static_cast<float>(spread[0] * u[0]);
-        p.offset.y = static_cast<float>(spread[1] * u[1]);
-        p.offset.z = static_cast<float>(spread[2] * u[2]);
         // On a route that takes off, a bird further back leaves its perch later (a negative
         // time offset: docs/flight-modes.md F.2); elsewhere it is further along the route.
         p.offset.w = static_cast<float>(trail * time_rng.unit());

@@ -211,7 +211,7 @@ Result<void> read_agents(const JsonReader& r, const JsonNode& node, const char* 
 
 Result<void> read_flocking(const JsonReader& r, const JsonNode& node, FlockingSpec& f) {
     KW_TRY(r.object(node, {"neighbours", "metric", "search_radius", "blind_angle_deg", "separation_distance", "separation", "separation_front",
-                           "alignment", "cohesion", "route", "route_radius", "ground_clearance", "ground", "speed_time",
+                           "collision_distance", "collision_lookahead", "alignment", "cohesion", "route", "route_radius", "ground_clearance", "ground", "speed_time",
                            "predators", "obstacles", "attractors"}));
     const JsonNode neighbours = r.member(node, "neighbours");
     if (neighbours.present()) {
@@ -233,6 +233,10 @@ Result<void> read_flocking(const JsonReader& r, const JsonNode& node, FlockingSp
     }
     KW_TRY(optional_member(r, node, "separation", f.separation, weight));
     KW_TRY(optional_member(r, node, "separation_front", f.separation_front,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 10.0)); }));
+    KW_TRY(optional_member(r, node, "collision_distance", f.collision_distance,
+                           [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 100.0)); }));
+    KW_TRY(optional_member(r, node, "collision_lookahead", f.collision_lookahead,
                            [&](const JsonNode& n) { return r.real(n, NumberRange::closed(0.0, 10.0)); }));
     KW_TRY(optional_member(r, node, "alignment", f.alignment, weight));
     KW_TRY(optional_member(r, node, "cohesion", f.cohesion, weight));

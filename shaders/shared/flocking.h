@@ -61,6 +61,7 @@ struct FlockParamsGpu {
     vec4 weights;   // x: separation, y: alignment, z: cohesion, w: route attraction (m/s^2)
     vec4 ground;    // x: clearance (m), y: weight (m/s^2), z: speed time constant tau (s), w: separation's front factor
     vec4 target;    // xyz: the route's leader this frame (m), w: unused
+    vec4 collision; // x: collision distance (m; 0: off), y: its look-ahead (s), z, w: unused
 };
 
 // Per bird, constant: its flock, its place in the formation about the leader and what

@@ -288,9 +288,9 @@ gpu::FlockAgentGpu agent(float kind, glm::vec4 position, float weight, float mar
     return a;
 }
 
-// The rules of 1 508 birds in two flocks, at every instruction set, against the body's:
+// The rules of 1 512 birds in two flocks, at every instruction set, against the body's:
 // separation's front factor 0.7 and 2.5 (at 0 or 1 the order of its products cannot
-// show), birds straddling the ground clearance, speeds from rest (where the body's
+// show), collision avoidance with and without its look-ahead and both its fallbacks, birds straddling the ground clearance, speeds from rest (where the body's
 // forward is +z) to twice the largest with steep climbs and dives (the speed and pitch
 // limits), and every agent kind among them: a floor and a wall, a sphere, an upright capsule, a
 // level one and one of no length, five birds flying dead at them, predators crossing the
@@ -306,6 +306,9 @@ TEST(FlockRules, AreTheBodysRulesBitForBit) {
     second.weights = {1.0f, 2.0f, 0.5f, 0.3f};
     second.ground = {2.0f, 10.0f, 1.2f, 2.5f};
     second.target = {-4.0f, 2.0f, 6.0f, 0.0f};
+    // Collision avoidance: predicted 0.3 s ahead in one flock, as the birds are in the other.
+    first.collision = {0.6f, 0.3f, 0.0f, 0.0f};
+    second.collision = {0.45f, 0.0f, 0.0f, 0.0f};
     w.flocks = {first, second};
     std::mt19937 rng(17);
     std::uniform_real_distribution<float> across(-9.0f, 9.0f), height(0.0f, 8.0f), unit(-1.0f, 1.0f), speed(0.0f, 30.0f);
@@ -335,6 +338,17 @@ TEST(FlockRules, AreTheBodysRulesBitForBit) {
                                   {{7.0f, 2.5f, -7.0f}, {0.0f, -10.0f, 0.0f}}};
     for (const auto& a : aimed) {
         w.add(a[0], a[1], 0u);
+        w.birds.back().speed = {10.0f, 5.0f, 15.0f, 8.0f};
+        w.birds.back().turn = {12.0f, 0.5f, 0.6f, 0.0f};
+    }
+    // Collision avoidance's fallbacks: two birds at one place flying apart (no direction
+    // to steer from: nothing), and two flying head-on whose predicted nearest is exactly
+    // 0 apart (from where the neighbour is).
+    for (const auto& [at, v] : {std::pair{glm::vec3(3.0f, 5.0f, 3.0f), glm::vec3(0.0f, 0.0f, 10.0f)},
+                                std::pair{glm::vec3(3.0f, 5.0f, 3.0f), glm::vec3(10.0f, 0.0f, 0.0f)},
+                                std::pair{glm::vec3(-3.0f, 5.0f, -3.0f), glm::vec3(0.0f, 0.0f, 10.0f)},
+                                std::pair{glm::vec3(-3.0f, 5.0f, -2.0f), glm::vec3(0.0f, 0.0f, -10.0f)}}) {
+        w.add(at, v, 0u);
         w.birds.back().speed = {10.0f, 5.0f, 15.0f, 8.0f};
         w.birds.back().turn = {12.0f, 0.5f, 0.6f, 0.0f};
     }
@@ -369,9 +383,22 @@ TEST(FlockRules, AreTheBodysRulesBitForBit) {
     const auto agent_count = static_cast<std::uint32_t>(agents.size());
     std::vector<glsl::Kernel::FlockNeighbours> found(n);
     std::vector<glsl::Kernel::FlockStep> expected(n);
-    std::size_t pitched = 0, clamped = 0;
+    std::size_t pitched = 0, clamped = 0, colliding = 0;
     for (std::uint32_t s = 0; s < n; ++s) {
         found[s] = kernel.flock_neighbours(sorted[s], mask, inv_radius);
+        // Birds with a neighbour predicted within the collision distance (the body's sum).
+        const gpu::FlockStateGpu& me = w.states[sorted[s]];
+        const gpu::FlockParamsGpu& f = w.flocks[w.birds[sorted[s]].ids.x];
+        bool collides = false;
+        for (std::uint32_t k = 0; k < found[s].found; ++k) {
+            const gpu::FlockStateGpu& other = w.states[found[s].j[k]];
+            const glm::vec3 d = glsl::kw_xyz(other.position) - glsl::kw_xyz(me.position);
+            const glm::vec3 rel = glsl::kw_xyz(other.velocity) - glsl::kw_xyz(me.velocity);
+            const float rel2 = glm::dot(rel, rel);
+            const float t = rel2 > 0.0f ? glm::clamp(-glm::dot(d, rel) / rel2, 0.0f, f.collision.y) : 0.0f;
+            collides = collides || glm::length(d + t * rel) < f.collision.x;
+        }
+        colliding += collides ? 1 : 0;
         expected[s] = kernel.flock_rules(sorted[s], found[s], agent_count, dt);
         const float v = glm::length(expected[s].velocity);
         clamped += (v <= 5.0f + 1e-4f || v >= 15.0f - 1e-4f) ? 1 : 0;
@@ -380,8 +407,9 @@ TEST(FlockRules, AreTheBodysRulesBitForBit) {
     std::size_t nan = 0;
     for (const glsl::Kernel::FlockStep& e : expected) nan += std::isnan(e.velocity.x) ? 1 : 0;
     std::printf("rules: %u birds, %zu at rest, %zu below the clearance, %zu at a speed limit, %zu at a climb or dive limit, "
-                "%zu with a NaN velocity\n",
-                n, at_rest, low, clamped, pitched, nan);
+                "%zu with a NaN velocity, %zu steering from a collision\n",
+                n, at_rest, low, clamped, pitched, nan, colliding);
+    EXPECT_GT(colliding, 50u) << "the world is meant to reach the collision avoidance";
     EXPECT_GE(nan, 2u) << "the birds without speed are meant to reach the pitch limit's NaN";
     EXPECT_GT(clamped, 100u);
     EXPECT_GT(pitched, 100u);

@@ -61,7 +61,7 @@ struct Lanes {
     HWY_ALIGN float v0[kMaxLanes], smin[kMaxLanes], smax[kMaxLanes], dv[kMaxLanes];
     HWY_ALIGN float lateral[kMaxLanes], climb[kMaxLanes], dive[kMaxLanes];
     HWY_ALIGN float offx[kMaxLanes], offy[kMaxLanes], offz[kMaxLanes];
-    HWY_ALIGN float radius[kMaxLanes], rsep[kMaxLanes], rroute[kMaxLanes];
+    HWY_ALIGN float radius[kMaxLanes], rsep[kMaxLanes], rroute[kMaxLanes], rcol[kMaxLanes], ahead[kMaxLanes];
     HWY_ALIGN float wsep[kMaxLanes], walign[kMaxLanes], wcoh[kMaxLanes], wroute[kMaxLanes];
     HWY_ALIGN float clear[kMaxLanes], ground[kMaxLanes], tau[kMaxLanes], front[kMaxLanes];
     HWY_ALIGN float tx[kMaxLanes], ty[kMaxLanes], tz[kMaxLanes];
@@ -112,6 +112,7 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
             in.wsep[l] = flock.weights.x, in.walign[l] = flock.weights.y, in.wcoh[l] = flock.weights.z, in.wroute[l] = flock.weights.w;
             in.clear[l] = flock.ground.x, in.ground[l] = flock.ground.y, in.tau[l] = flock.ground.z, in.front[l] = flock.ground.w;
             in.tx[l] = flock.target.x, in.ty[l] = flock.target.y, in.tz[l] = flock.target.z;
+            in.rcol[l] = flock.collision.x, in.ahead[l] = flock.collision.y;
             const glsl::Kernel::FlockNeighbours& nb = found_in[m];
             in.found[l] = static_cast<float>(nb.found);
             for (std::uint32_t n = 0; n < nb.found; ++n) {
@@ -136,8 +137,9 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
         const V found = hn::Load(d, in.found);
 
         // Reynolds' rules over the neighbours, nearest first.
-        V3 separation{zero, zero, zero}, heading{zero, zero, zero}, centre{zero, zero, zero};
+        V3 separation{zero, zero, zero}, heading{zero, zero, zero}, centre{zero, zero, zero}, collide{zero, zero, zero};
         const V r_sep = hn::Load(d, in.rsep), front = hn::Load(d, in.front);
+        const V r_col = hn::Load(d, in.rcol), lookahead = hn::Load(d, in.ahead), lateral_most = hn::Load(d, in.lateral);
         for (std::uint32_t n = 0; n < most; ++n) {
             const M live_n = hn::Lt(hn::Set(d, static_cast<float>(n)), found);
             const V3 other{hn::Load(d, in.ox[n]), hn::Load(d, in.oy[n]), hn::Load(d, in.oz[n])};
@@ -158,6 +160,17 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
             const V ws = length(w);
             heading = select(hn::And(live_n, hn::Gt(ws, tiny)), heading + w / ws, heading);
             centre = select(live_n, centre + dn, centre);
+            // Collision avoidance, predicted: t* = rel2 > 0 ? clamp(-dot(d, rel) / rel2, 0,
+            // lookahead) : 0; d* = d + t* rel; within r_col, turn.x (|d*| / r_col - 1) along
+            // d* / |d*| (or d / dist, or nothing).
+            const V3 rel = w - v;
+            const V rel2 = dot(rel, rel);
+            const V t_near = hn::IfThenElse(hn::Gt(rel2, zero), vm::glm_clamp(hn::Div(hn::Neg(dot(dn, rel)), rel2), zero, lookahead), zero);
+            const V3 near_d = dn + t_near * rel;
+            const V near_dist = length(near_d);
+            const V3 from = select(hn::Gt(near_dist, tiny), near_d / near_dist, select(apart, dn / dist, V3{zero, zero, zero}));
+            collide = select(hn::And(live_n, hn::Lt(near_dist, r_col)),
+                             collide + hn::Mul(lateral_most, hn::Sub(hn::Div(near_dist, r_col), one)) * from, collide);
         }
 
         // Agents, in one pass (the same for every lane: their kinds are branches here).
@@ -242,6 +255,7 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
                 }
             }
         }
+        avoid = avoid + collide;
         const V calm = hn::Sub(one, panic);
         V3 acc{zero, zero, zero};
         {
@@ -266,7 +280,7 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
         acc = acc + fled;
 
         // What the wing allows.
-        const V dv = hn::Load(d, in.dv), lateral_most = hn::Load(d, in.lateral);
+        const V dv = hn::Load(d, in.dv);
         const V a_ahead = dot(acc, forward);
         // Without obstacles to avoid:
         const V along_plain = vm::glm_clamp(a_ahead, hn::Neg(dv), dv);

@@ -66,6 +66,7 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
             p.radii = {rules.search_radius, rules.separation_distance, static_cast<float>(std::cos(half_view)), rules.route_radius};
             p.weights = {rules.separation, rules.alignment, rules.cohesion, rules.route};
             p.ground = {rules.ground_clearance, rules.ground, rules.speed_time, rules.separation_front};
+            p.collision = {rules.collision_distance, rules.collision_lookahead, 0.0f, 0.0f};
             out.flocks.push_back(p);
             out.search_radius = std::max(out.search_radius, rules.search_radius);
             out.predators.insert(out.predators.end(), rules.predators.begin(), rules.predators.end());

@@ -110,6 +110,12 @@ struct FlockingSpec {
     /// The separation distance along the flight direction is (1 + this) x as long as to
     /// the side: a bird keeps a longer gap to the bird ahead or behind.
     float separation_front = 1.0f;
+    /// m: a neighbour that will be nearer than this within collision_lookahead (at the two
+    /// birds' present velocities) is steered from before anything else, at up to the
+    /// wing's lateral limit at contact (Reynolds 1987's collision avoidance, predicted as
+    /// Reynolds 1999's unaligned collision avoidance); 0: off.
+    float collision_distance = 0.3f;
+    float collision_lookahead = 0.25f;  ///< s, in [0, 10]
     float alignment = 2.0f;
     float cohesion = 2.0f;
     float route = 10.0f;          ///< drawn to the route's leader plus the bird's formation offset
