@@ -5,6 +5,7 @@
 #include <cstdio>
 #include <exception>
 #include <filesystem>
+#include <regex>
 #include <string>
 #include <system_error>
 #include <vector>
@@ -112,6 +113,18 @@ void explain_extras(const CLI::App& app, const std::vector<std::string>& words) 
     std::fprintf(stderr, "(`%s --help` lists the options)\n", path.c_str());
 }
 
+// CLI11's wording for an option given twice or given no value ("--json: At Most 1
+// required but received 2", "--frames: 1 required N missing") in the words of the
+// command's other errors: what was given and what was expected. Anything else as it is.
+std::string plain_parse_error(const std::string& message) {
+    std::smatch m;
+    static const std::regex twice(R"(^(\S+): At Most 1 required but received (\d+)$)");
+    static const std::regex missing(R"(^(\S+): 1 required (.+) missing$)");
+    if (std::regex_match(message, m, twice)) return m[1].str() + ": given " + m[2].str() + " times; expected it once";
+    if (std::regex_match(message, m, missing)) return m[1].str() + ": expected a value (" + m[2].str() + ") after it, got none";
+    return message;
+}
+
 // The old reader refused `--name=` with nothing after "="; CLI11 would take the next
 // argument as the value instead, so the check stays.
 void refuse_empty_values(int argc, char** argv) {
@@ -192,7 +205,8 @@ int main(int argc, char** argv) {
         explain_extras(app, words);
         return kExitBadInput;
     } catch (const CLI::ParseError& e) {
-        std::fprintf(stderr, "kodawari: %s\n(`%s --help` lists the options)\n", e.what(), command_path(app).c_str());
+        std::fprintf(stderr, "kodawari: %s\n(`%s --help` lists the options)\n", plain_parse_error(e.what()).c_str(),
+                     command_path(app).c_str());
         return kExitBadInput;
     } catch (const UsageError& e) {
         std::fprintf(stderr, "kodawari: %s\n(`%s --help` lists the options)\n", e.message.c_str(), command_path(app).c_str());

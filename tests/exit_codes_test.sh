@@ -76,6 +76,8 @@ row bench "an unknown bench" 2 'unknown bench "birdz": expected one of birds, ch
 row bench "a bench named in capitals" 2 'unknown bench "BIRDS"' -- bench BIRDS --count 10
 row bench "no bench named" 2 "bench: name one of birds, chains, crowd, flock, view, ceilings" -- bench --count 10
 row bench "ceilings on 0 threads" 2 "--threads: expected an integer in \\[1, 1024\\]" -- bench ceilings --threads 0
+row bench "--json given twice" 2 "--json: given 2 times; expected it once" -- bench birds --count 10 --json "$work/a.json" --json "$work/b.json"
+row run "--frames with no value" 2 "--frames: expected a value \\(N\\) after it, got none" -- run scenes/flock.json --frames
 row bench "ceilings on an unknown isa" 2 '--isa: SIMD instruction set "avx1024" is unknown' -- bench ceilings --isa avx1024 --repetitions 1
 row bench "ceilings with a triad too small" 2 "--triad-mib" -- bench ceilings --triad-mib 1
 row bench "ceilings' --json in a missing folder" 2 "--json: .*nosuch-folder" -- bench ceilings --json "$work/nosuch-folder/c.json"
