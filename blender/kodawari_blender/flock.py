@@ -25,6 +25,7 @@ WING_TYPES = (
     ("GULL", "Gull", "Long narrow wings, 12 m/s cruise"),
     ("HAWK", "Hawk", "Broad soaring wings, 11 m/s cruise"),
     ("HUMMINGBIRD", "Hummingbird", "Hovering wings, 8 m/s cruise"),
+    ("STARLING", "Starling", "Short pointed wings of a flocking songbird, 15 m/s cruise"),
 )
 
 

@@ -6,9 +6,10 @@ namespace kodawari::birds {
 namespace {
 
 // Figures and their sources: docs/wing-types.md. Span, length, mass, frequency and
-// cruise speed are field figures (frequencies of gull and hawk are Pennycuick's (1996)
-// estimate, as derive_flight gives them); amplitude is ours (gull and buzzard beat
-// shallower than a pigeon: "fast, stiff, shallow" in field guides). Glide ratio,
+// cruise speed are field figures (frequencies of gull, hawk and starling are Pennycuick's
+// (1996) estimate, as derive_flight gives them: no measured value was read); amplitude is
+// ours (gull and buzzard beat shallower than a pigeon: "fast, stiff, shallow" in field
+// guides; the starling, a short-winged flapper like the pigeon, keeps the seed's). Glide ratio,
 // flap-glide rhythm and the route limits are derive_flight's (allometry.hpp) for each
 // type's span, area and mass, to three digits; docs/wing-types.md has the table and
 // tests/birds/test_allometry.cpp holds them to it.
@@ -18,6 +19,7 @@ constexpr WingTypeSpec kSpecs[kWingTypeCount] = {
     {"gull", 1.40f, 0.60f, 1.0f, 0.14f, 3.6f, 12.0f, 0.8f, 0.5f, 16.5f, 7.0f, 2.04f, false, 14.8f * kDeg, 18.5f * kDeg, 2.51f},
     {"hawk", 1.20f, 0.54f, 0.875f, 0.22f, 3.6f, 11.0f, 0.7f, 0.45f, 12.5f, 7.0f, 1.70f, false, 16.3f * kDeg, 21.1f * kDeg, 2.75f},
     {"hummingbird", 0.11f, 0.09f, 0.0034f, 0.014f, 53.0f, 8.0f, 1.0f, 0.45f, 12.7f, 0.0f, 0.0f, true, 90.0f * kDeg, 90.0f * kDeg, 9.81f},
+    {"starling", 0.40f, 0.215f, 0.082f, 0.060f, 9.48f, 15.0f, 1.0f, 0.45f, 12.9f, 0.0f, 0.0f, false, 38.6f * kDeg, 44.5f * kDeg, 6.12f},
 };
 
 }  // namespace

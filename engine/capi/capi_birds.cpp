@@ -47,11 +47,19 @@ struct kodawari_bird_world {
 
 namespace {
 
+// The C enum and the engine's are one numbering: a value is passed through as it is.
+static_assert(KODAWARI_WING_PIGEON == static_cast<int>(birds::WingType::Pigeon) &&
+                  KODAWARI_WING_GULL == static_cast<int>(birds::WingType::Gull) &&
+                  KODAWARI_WING_HAWK == static_cast<int>(birds::WingType::Hawk) &&
+                  KODAWARI_WING_HUMMINGBIRD == static_cast<int>(birds::WingType::Hummingbird) &&
+                  KODAWARI_WING_STARLING == static_cast<int>(birds::WingType::Starling),
+              "kodawari_wing_type and birds::WingType number the wing types alike");
+
 birds::WingType read_wing_type(kodawari_wing_type type, const std::string& what) {
     const std::int64_t value = enum_value(type);
     if (value < 0 || value >= static_cast<std::int64_t>(birds::kWingTypeCount)) {
-        static_assert(birds::kWingTypeCount == 4, "the message lists every wing type");
-        invalid(what, std::to_string(value) + "; expected KODAWARI_WING_PIGEON (0), _GULL (1), _HAWK (2) or _HUMMINGBIRD (3)");
+        static_assert(birds::kWingTypeCount == 5, "the message lists every wing type");
+        invalid(what, std::to_string(value) + "; expected KODAWARI_WING_PIGEON (0), _GULL (1), _HAWK (2), _HUMMINGBIRD (3) or _STARLING (4)");
     }
     return static_cast<birds::WingType>(value);
 }

@@ -321,7 +321,7 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
     } else {
         if (map.present()) return r.fail(map.path, "a mapping file belongs to a \"model\", and this flock has none");
         std::size_t wing = 0;
-        KW_SCENE_ASSIGN(wing, r.choice(r.member(node, "wing_type"), {"pigeon", "gull", "hawk", "hummingbird"}));
+        KW_SCENE_ASSIGN(wing, r.choice(r.member(node, "wing_type"), {"pigeon", "gull", "hawk", "hummingbird", "starling"}));
         flock.wing_type = static_cast<birds::WingType>(wing);
     }
 

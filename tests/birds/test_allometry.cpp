@@ -13,10 +13,12 @@ namespace {
 
 constexpr double kDeg = 0.017453292519943295;
 
-// The measures of docs/wing-types.md (pigeon and gull tables; hummingbird table).
+// The measures of docs/wing-types.md (pigeon and gull tables; hummingbird table; starling
+// table: area = mean chord 0.060 m * span 0.40 m).
 constexpr WingMeasure kPigeon{0.67f, 0.065f, 0.31f, 0.33f};
 constexpr WingMeasure kGull{1.40f, 0.20f, 1.0f, 0.60f};
 constexpr WingMeasure kHummingbird{0.11f, 0.00154f, 0.0034f, 0.09f};
+constexpr WingMeasure kStarling{0.40f, 0.024f, 0.082f, 0.215f};
 
 // The hand values below carry 4-5 significant digits and the model runs in double
 // precision from float inputs (relative rounding ~1e-7): 0.1 % covers the hand
@@ -148,4 +150,50 @@ TEST(Allometry, BuiltInWingTypesFollowTheModel) {
         // Only the hummingbird hovers.
         EXPECT_EQ(s.can_hover, static_cast<WingType>(i) == WingType::Hummingbird) << s.name;
     }
+}
+
+TEST(Allometry, StarlingFlightIsTheDocsTable) {
+    // docs/wing-types.md, section 5 and "The built-in types: derived and field figures",
+    // worked by hand from b = 0.40 m, S = 0.024 m^2 (AR 6.667), m = 0.082 kg:
+    const DerivedFlight d = derive_flight(kStarling);
+    // f = 0.082^0.375 (0.39148) * 3.13209 * 0.40^-0.95833 (2.4062) * 0.024^-0.33333 (3.4668)
+    //   * 0.92672 = 9.479 Hz (P96).
+    expect_near_relative(d.flap_frequency, 9.479, "frequency");
+    // C_D0 = 0.02 + 0.1 * 0.00813 * 0.082^(2/3) (0.18874) / 0.024 = 0.026394, K = 1.2 /
+    // (pi * 6.6667) = 0.057296: (L/D)max = 0.5 / sqrt(K C_D0) = 12.86; V = sqrt(2 * 0.082 *
+    // 9.81 / (1.225 * 0.024)) (7.3974) * (K / C_D0)^(1/4) (1.21383) = 8.979 m/s.
+    expect_near_relative(d.glide_ratio, 12.86, "glide ratio");
+    expect_near_relative(d.cruise_speed, 8.979, "cruise speed");
+    // Tip excursion 0.3 * 8.979 / 9.479 = 0.28418 m against 0.2 * sin 60 deg = 0.17321 m.
+    expect_near_relative(d.amplitude, 1.6407, "amplitude");
+    // Sustained climb 0.64926 * 0.082^-0.30727 = 1.4001 m/s (the power law's coefficient and
+    // exponent unrounded, as for the gull), four times 5.6006 m/s: sin(climb) = 5.6006 /
+    // 8.979 = 0.62374, climb 38.59 deg, speed change 9.81 * 0.62374 = 6.119 m/s^2;
+    // sin(dive) = 0.62374 + 1 / 12.86 = 0.70150, dive 44.55 deg.
+    expect_near_relative(d.max_climb, 38.59 * kDeg, "max climb");
+    expect_near_relative(d.max_speed_change, 6.119, "max speed change");
+    expect_near_relative(d.max_dive, 44.55 * kDeg, "max dive");
+    // 82 g is under the 0.5 kg of flap-gliding: it flaps continuously.
+    EXPECT_EQ(d.flap_glide_beats, 0.0f);
+    EXPECT_EQ(d.flap_glide_seconds, 0.0f);
+
+    // The built-in type is that table: its frequency is the P96 estimate (no measured one was
+    // read), its cruise speed the field 15 m/s (not the 8.98 m/s of maximum range), and its
+    // limits the model's to three digits.
+    const WingTypeSpec& s = wing_type_spec(WingType::Starling);
+    EXPECT_EQ(s.name, "starling");
+    EXPECT_EQ(parse_wing_type("starling"), WingType::Starling);
+    EXPECT_EQ(s.wingspan, kStarling.wingspan);
+    EXPECT_EQ(s.mass, kStarling.mass);
+    EXPECT_EQ(s.body_length, kStarling.body_length);
+    EXPECT_NEAR(s.mean_chord * s.wingspan, kStarling.wing_area, 1e-7);
+    EXPECT_NEAR(s.flap_frequency, d.flap_frequency, 0.005);
+    EXPECT_EQ(s.cruise_speed, 15.0f);
+    EXPECT_EQ(s.amplitude, 1.0f);
+    EXPECT_FLOAT_EQ(s.glide_ratio, 12.9f);
+    EXPECT_FLOAT_EQ(s.max_climb, static_cast<float>(38.6 * kDeg));
+    EXPECT_FLOAT_EQ(s.max_dive, static_cast<float>(44.5 * kDeg));
+    EXPECT_FLOAT_EQ(s.max_speed_change, 6.12f);
+    EXPECT_EQ(s.flap_glide_beats, 0.0f);
+    EXPECT_FALSE(s.can_hover);
 }

@@ -1090,8 +1090,10 @@ static void test_birds_reject(void) {
     REJECT("desc->backend.backend: -1");
 #undef REJECT
     EXPECT_FAIL(kodawari_flock_desc_default((kodawari_wing_type)9, 1, &flock_desc), KODAWARI_INVALID_ARGUMENT, "wing_type: 9");
-    EXPECT_FAIL(kodawari_flock_desc_default((kodawari_wing_type)4, 1, &flock_desc), KODAWARI_INVALID_ARGUMENT, "_HUMMINGBIRD (3)");
+    EXPECT_FAIL(kodawari_flock_desc_default((kodawari_wing_type)5, 1, &flock_desc), KODAWARI_INVALID_ARGUMENT, "_STARLING (4)");
     EXPECT_OK(kodawari_flock_desc_default(KODAWARI_WING_HUMMINGBIRD, 1, &flock_desc));
+    EXPECT_OK(kodawari_flock_desc_default(KODAWARI_WING_STARLING, 1, &flock_desc));
+    CHECK(fabsf(flock_desc.speed - 15.0f) < 1e-6f, "a starling's default speed is docs/wing-types.md's 15 m/s, got %g", flock_desc.speed);
     EXPECT_FAIL(kodawari_flock_desc_default(KODAWARI_WING_HAWK, 1, NULL), KODAWARI_INVALID_ARGUMENT, "out: is NULL");
 
     /* simulate, rewind, get_info on a world and its twin. */

@@ -40,7 +40,7 @@ namespace kodawari::export_test {
 
 namespace fs = std::filesystem;
 
-constexpr std::size_t kBirds = 67;  // three wing types, and not a multiple of the workgroup size
+constexpr std::size_t kBirds = 67;  // every wing type, and not a multiple of the workgroup size
 constexpr std::uint32_t kFrames = 12;
 constexpr float kFps = 24.0f;
 

@@ -372,7 +372,7 @@ TEST(SceneFormat, OutOfRange) {
     json wing = valid_scene();
     wing["flocks"][0]["wing_type"] = "eagle";
     EXPECT_EQ(parse_error(wing),
-              "test.json: $.flocks[0].wing_type: expected one of \"pigeon\", \"gull\", \"hawk\", \"hummingbird\", got \"eagle\"");
+              "test.json: $.flocks[0].wing_type: expected one of \"pigeon\", \"gull\", \"hawk\", \"hummingbird\", \"starling\", got \"eagle\"");
     json climb = valid_scene();
     climb["flight"] = {{"ascend_exit_deg", 15}};
     EXPECT_EQ(parse_error(climb), "test.json: $.flight.ascend_exit_deg: expected a number below ascend_enter_deg (10), got 15");
@@ -408,7 +408,7 @@ TEST(SceneFormat, MissingRequiredKey) {
     json doc = valid_scene();
     doc["flocks"][0].erase("wing_type");
     EXPECT_EQ(parse_error(doc),
-              "test.json: $.flocks[0].wing_type: expected one of \"pigeon\", \"gull\", \"hawk\", \"hummingbird\", got nothing (required key "
+              "test.json: $.flocks[0].wing_type: expected one of \"pigeon\", \"gull\", \"hawk\", \"hummingbird\", \"starling\", got nothing (required key "
               "missing)");
     json format = valid_scene();
     format.erase("format");

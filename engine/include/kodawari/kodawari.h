@@ -499,12 +499,13 @@ KODAWARI_C_API kodawari_status kodawari_chain_world_get_info(kodawari_chain_worl
 /* Bird worlds (SPEC B: procedural flapping along routes)                               */
 /* ------------------------------------------------------------------------------------ */
 
-/// The three wing types (SPEC B.1).
+/// The wing types (SPEC B.1; figures and sources in docs/wing-types.md).
 typedef enum kodawari_wing_type {
     KODAWARI_WING_PIGEON = 0,  ///< short elliptical wings (woodpecker, pigeon)
     KODAWARI_WING_GULL = 1,    ///< long narrow wings (gull, albatross)
     KODAWARI_WING_HAWK = 2,    ///< broad soaring wings (hawk, eagle)
     KODAWARI_WING_HUMMINGBIRD = 3,  ///< hovering wings (hummingbird)
+    KODAWARI_WING_STARLING = 4,     ///< short pointed wings of a flocking passerine (common starling)
     KODAWARI_WING_MAX_ENUM = 0x7FFFFFFF
 } kodawari_wing_type;
 

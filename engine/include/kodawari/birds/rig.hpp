@@ -1,6 +1,6 @@
 #pragma once
 /// @file
-/// The bird rig (SPEC B.1): seven parts and three wing types with dimensions, flap
+/// The bird rig (SPEC B.1): seven parts and the wing types with dimensions, flap
 /// frequency and cruise speed from real birds (sources in docs/wing-types.md).
 
 #include <array>
@@ -14,9 +14,12 @@
 
 namespace kodawari::birds {
 
-/// The wing types: the seed's three, by aspect ratio, and a hovering type.
-enum class WingType : std::uint32_t { Pigeon = 0, Gull = 1, Hawk = 2, Hummingbird = 3 };
-inline constexpr std::size_t kWingTypeCount = 4;
+/// The wing types: the seed's three, by aspect ratio, a hovering type, and the starling
+/// that the flocking scenes fly. New types go last: the numbers are the C API's
+/// (kodawari_wing_type) and a user's bird models are numbered after them
+/// (kWingTypeCount + model index, never stored in an export).
+enum class WingType : std::uint32_t { Pigeon = 0, Gull = 1, Hawk = 2, Hummingbird = 3, Starling = 4 };
+inline constexpr std::size_t kWingTypeCount = 5;
 
 /// The rig's parts in BirdPose order.
 enum class Part : std::uint32_t {
@@ -40,7 +43,7 @@ inline constexpr std::array<int, kPartCount> kPartParents = {-1, 0, 0, 0, 3, 0, 
 /// Size and motion defaults of a wing type. Axes (glTF): +Y up, +Z forward, +X the
 /// bird's left. Lengths in metres, mass in kg.
 struct WingTypeSpec {
-    std::string_view name;         ///< "pigeon", "gull", "hawk"
+    std::string_view name;         ///< "pigeon", "gull", "hawk", "hummingbird", "starling"
     float wingspan;                ///< tip to tip, wings spread
     float body_length;             ///< beak to tail tip
     float mass;                    ///< body mass
@@ -61,7 +64,7 @@ struct WingTypeSpec {
 /// The spec of a wing type.
 [[nodiscard]] KODAWARI_API const WingTypeSpec& wing_type_spec(WingType type);
 
-/// Parses "pigeon", "gull", "hawk" or "hummingbird".
+/// Parses "pigeon", "gull", "hawk", "hummingbird" or "starling".
 [[nodiscard]] KODAWARI_API std::optional<WingType> parse_wing_type(std::string_view name);
 
 /// BirdParams::flight of a bird with this spec (glide ratio, flap-glide rhythm, hover).
