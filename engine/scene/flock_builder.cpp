@@ -26,12 +26,13 @@ namespace {
 
 using Vec3 = std::array<double, 3>;
 
-// The formation offsets placed so far, in cells as wide as their least distance: whether a
-// new one keeps that distance from each (a flocking flock's birds start no nearer one
+// The formation offsets placed so far, in cells at least as wide as their least distance
+// (so the 27 cells round a point hold every offset nearer): whether a new one keeps that
+// distance from each (a flocking flock's birds start no nearer one
 // another than its collision distance, so that no two are within it at the first frame).
 class Spacing {
 public:
-    explicit Spacing(double apart) : apart_(apart) {}
+    explicit Spacing(double apart) : apart_(apart), cell_(std::max(apart, 1e-3)) {}
     [[nodiscard]] bool clear(const Vec3& p) const {
         const std::array<std::int64_t, 3> c = cell(p);
         for (std::int64_t dx = -1; dx <= 1; ++dx)
@@ -50,16 +51,16 @@ public:
 
 private:
     [[nodiscard]] std::array<std::int64_t, 3> cell(const Vec3& p) const {
-        return {static_cast<std::int64_t>(std::floor(p[0] / apart_)), static_cast<std::int64_t>(std::floor(p[1] / apart_)),
-                static_cast<std::int64_t>(std::floor(p[2] / apart_))};
+        return {static_cast<std::int64_t>(std::floor(p[0] / cell_)), static_cast<std::int64_t>(std::floor(p[1] / cell_)),
+                static_cast<std::int64_t>(std::floor(p[2] / cell_))};
     }
     static std::uint64_t key(const std::array<std::int64_t, 3>& c) {
-        // Offsets are within 10^4 m of the leader and the distance at least 10^-3 m: 2^24
-        // cells an axis hold them.
+        // 24 bits an axis: cells further apart than 2^24 may share a key, which only adds
+        // candidates (clear() compares the distances themselves).
         const auto u = [](std::int64_t v) { return static_cast<std::uint64_t>(v + (std::int64_t{1} << 23)) & 0xFFFFFFu; };
         return (u(c[0]) << 48) | (u(c[1]) << 24) | u(c[2]);
     }
-    double apart_;
+    double apart_, cell_;
     std::unordered_map<std::uint64_t, std::vector<Vec3>> cells_;
 };
 
@@ -511,7 +512,7 @@ Result<void> add_flock(const Scene& scene, const FlockSpec& flock, std::size_t f
     // is drawn again, at most 16 times (a formation too small for its birds keeps the
     // last). Route flocks draw as they always have.
     const double apart = flock.flocking ? static_cast<double>(flock.flocking->collision_distance) : 0.0;
-    Spacing spacing(std::max(apart, 1e-3));
+    Spacing spacing(apart);
     for (std::uint32_t b = 0; b < flock.count; ++b) {
         gpu::BirdParams p{};
         for (int attempt = 0;; ++attempt) {
