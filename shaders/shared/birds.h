@@ -168,12 +168,31 @@ struct BirdDiag {
     vec4 flight;        // x: speed as a fraction of the cruise speed, y: extra body pitch (rad, nose up), z: tail spread, w: seconds glided
 };
 
+// BirdMotionGpu.position.w: what a driven bird flies this frame.
+#define KW_MOTION_FLOWN 0.0  // the motion itself: position, velocity, acceleration
+#define KW_MOTION_ROUTE 1.0  // its own route, as a route bird, eased from where the motion left it (perches)
+
 // What another domain (flocking) flies a driven bird along: per bird per frame, the
 // bird domain's input; its route sample (engine/birds/flight.cpp) is made from it.
+//
+// KW_MOTION_FLOWN (w 0): position, velocity and acceleration are the bird's frame.
+// KW_MOTION_ROUTE (w 1): the bird flies its route (BirdParams.ids.x) as a route bird
+// does, take-off and landing segments included, with the time offset velocity.w and the
+// speed acceleration.z in place of its BirdParams' offset.w and motion.x, and its offset
+// (BirdParams.offset.xyz) added; plus a correction c(t) that eases the bird from where
+// its flocking flight left it onto the route (docs/flocking.md, "Perches"): with the
+// frame's time t = frame * dt, t0 = acceleration.x, 1/T = acceleration.y (0: no
+// correction), e_p = position.xyz, e_v = velocity.xyz and s = clamp((t - t0) / T, 0, 1),
+//   c(t)   = e_p h00(s) + T e_v h10(s)           (added to the position)
+//   c'(t)  = e_p h00'(s) / T + e_v h10'(s)        (to the velocity and the attitude's velocity)
+//   c''(t) = e_p h00''(s) / T^2 + e_v h10''(s) / T, 0 once s = 1 (to the acceleration)
+// with the cubic Hermite bases h00 = 2s^3 - 3s^2 + 1, h10 = s^3 - 2s^2 + s: c(t0) = e_p,
+// c'(t0) = e_v, and c and c' are 0 from t0 + T on. The mode, the phase and every other
+// exact decision come from the route sample alone (the correction moves the bird only).
 struct BirdMotionGpu {
-    vec4 position;      // xyz (m), w: unused
-    vec4 velocity;      // xyz (m/s), w: unused
-    vec4 acceleration;  // xyz (m/s^2): the velocity's change over the frame / dt, w: unused
+    vec4 position;      // xyz (m) or e_p, w: KW_MOTION_FLOWN or KW_MOTION_ROUTE
+    vec4 velocity;      // xyz (m/s) or e_v, w: unused or the route's time offset (s)
+    vec4 acceleration;  // xyz (m/s^2): the velocity's change over the frame / dt; or x: t0 (s), y: 1/T (1/s), z: the route's speed (m/s); w: unused
 };
 
 // Push constants of birds_flap.comp.
