@@ -106,6 +106,8 @@ void main() {
         sorted_birds[slot] = i;
         // What the neighbour search reads of a candidate, beside its index: one 16-byte
         // load in the grid's order instead of its state and flock by index.
-        points[slot] = vec4(states[push.slots.x * count + i].position.xyz, float(birds[i].ids.x));
+        // A bird on its perch or landing is in no flock's search (lib/flock_body.glsl).
+        const FlockBirdGpu bird = birds[i];
+        points[slot] = vec4(states[push.slots.x * count + i].position.xyz, flock_seen_as(bird, flocks[push.bases.x + bird.ids.x]));
     }
 }

@@ -55,6 +55,18 @@ void main() {
     kept.position.w = float(nb.found) + (nb.found > 0u ? nb.d2[0] : 0.0);
     states[out_slot * count + i] = kept;
 #else
+    const FlockBirdGpu bird = birds[i];
+    const FlockParamsGpu flock = kw_flock(bird.ids.x);
+    if (!flock_flies(bird, flock)) {
+        // On its perch or landing (lib/flock_body.glsl): its state kept, its route's motion.
+        const FlockStateGpu kept = states[push.slots.x * count + i];
+        states[out_slot * count + i] = kept;
+        if (push.slots.w + 1u == push.slots.z) {
+            const FlockRouteMotion m = flock_route_motion(bird, flock, kept);
+            motion[push.slots.y * count + i] = BirdMotionGpu(m.position, m.velocity, m.acceleration);
+        }
+        return;
+    }
     const FlockStep s = flock_step_bird(i, push.counts.y, push.counts.z, push.step.x, push.step.y);
     states[out_slot * count + i] = FlockStateGpu(vec4(s.position, 0.0), vec4(s.velocity, 0.0));
     if (push.slots.w + 1u == push.slots.z) {

@@ -387,15 +387,16 @@ Result<void> read_flock(const JsonReader& r, const JsonNode& node, std::size_t i
             return r.fail(flocking.path, "a flocking flock's route gives its leader at its speed: expected \"timing\": \"arc-length\", got \"parametric\"");
         }
         // A flocking bird's mode comes from its own flight (docs/flocking.md): a segment's
-        // mode would be ignored, and a take-off or landing is a perch it never uses.
+        // glide or hover would be ignored. A take-off and a landing are its perches: it
+        // flies those segments by its route (docs/flocking.md, "Perches").
         if (flock.route) {
             for (std::size_t k = 0; k < flock.route->modes.size(); ++k) {
                 const birds::SegmentMode mode = flock.route->modes[k];
-                if (mode == birds::SegmentMode::Auto) continue;
+                if (mode == birds::SegmentMode::Auto || mode == birds::SegmentMode::TakeOff || mode == birds::SegmentMode::Landing) continue;
                 return r.fail(r.element(r.member(route, "modes"), k).path,
                               std::string("\"") + birds::segment_mode_name(mode) +
                                   "\" is not flown by a flocking flock (its birds choose their modes from their own "
-                                  "flight; perches are for flocks without \"flocking\"): expected \"auto\"");
+                                  "flight): expected \"auto\", or \"takeoff\" and \"landing\" for its perches");
             }
         }
         FlockingSpec spec;

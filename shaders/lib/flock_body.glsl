@@ -67,6 +67,35 @@ vec3 flock_round(vec3 across, vec3 facing, vec3 up) {
     return cl > 1e-3f ? across / cl : sl > 1e-3f ? side / sl : vec3(1.0f, 0.0f, 0.0f);
 }
 
+// (flock_flies() and flock_seen_as(), which the grid's scatter shares: lib/flock_hash.glsl.)
+// What a bird that is not flying hands the bird domain (shared/birds.h, KW_MOTION_ROUTE):
+// before its first flocking frame, its route from its take-off's time offset at its own
+// speed, uncorrected (its state is where that route leaves it, flight.cpp's sample at the
+// frame before it flocks: docs/flocking.md); from its flock's landing on, its route at the
+// leader's speed without a time offset, which lands every bird as its formation slot
+// (the leader's place plus its offset) would, eased from where its flight left it (its
+// state, kept since) by the difference to that route's place and velocity at t0.
+struct FlockRouteMotion {
+    vec4 position;
+    vec4 velocity;
+    vec4 acceleration;
+};
+FlockRouteMotion flock_route_motion(FlockBirdGpu bird, FlockParamsGpu flock, FlockStateGpu state) {
+    FlockRouteMotion m;
+    if (flock.counts.z < bird.ids.y) {
+        m.position = vec4(0.0f, 0.0f, 0.0f, float(KW_MOTION_ROUTE));
+        m.velocity = vec4(0.0f, 0.0f, 0.0f, bird.offset.w);
+        m.acceleration = vec4(0.0f, 0.0f, bird.speed.x, 0.0f);
+    } else {
+        const vec3 e_p = KW_XYZ(state.position) - KW_XYZ(bird.land_position);
+        const vec3 e_v = KW_XYZ(state.velocity) - KW_XYZ(bird.land_velocity);
+        m.position = vec4(e_p.x, e_p.y, e_p.z, float(KW_MOTION_ROUTE));
+        m.velocity = vec4(e_v.x, e_v.y, e_v.z, 0.0f);
+        m.acceleration = vec4(bird.land_position.w, bird.land_velocity.w, flock.target.w, 0.0f);
+    }
+    return m;
+}
+
 // How many neighbours a bird of `flock` heeds: k, or all it finds (up to the most) with a
 // metric radius.
 uint flock_k(FlockParamsGpu flock) {
@@ -103,6 +132,8 @@ FlockNeighbours flock_neighbours(uint i, uint mask, float inv_radius) {
     const float own_flock = float(bird.ids.x);
     FlockNeighbours nb;
     nb.found = 0u;
+    // On its perch or landing, it is not stepped: it searches for nobody.
+    if (!flock_flies(bird, flock)) return nb;
     uint visited[27];
     uint visited_count = 0u;
     const ivec3 home = flock_cell(p, inv_radius);

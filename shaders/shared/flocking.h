@@ -56,21 +56,25 @@ KW_NAMESPACE_BEGIN
 // Per flock: the rules' parameters (FlockingSpec) and where its route's leader is this
 // frame, which the flock is drawn to.
 struct FlockParamsGpu {
-    uvec4 counts;   // x: neighbours k, y: 1 = metric (every neighbour within radii.x, nearest k first), z, w: unused
+    uvec4 counts;   // x: neighbours k, y: 1 = metric (every neighbour within radii.x, nearest k first), z: the frame stepped to, w: unused
     vec4 radii;     // x: search radius (m), y: separation distance (m), z: cos of half the field of view (blind angle behind), w: route radius (m)
     vec4 weights;   // x: separation, y: alignment, z: cohesion, w: route attraction (m/s^2)
     vec4 ground;    // x: clearance (m), y: weight (m/s^2), z: speed time constant tau (s), w: separation's front factor
-    vec4 target;    // xyz: the route's leader this frame (m), w: unused
+    vec4 target;    // xyz: the route's leader this frame (m), w: its speed (m/s; a landing flies the route at it)
     vec4 collision; // x: collision distance (m; 0: off), y: its look-ahead (s), z, w: unused
 };
 
-// Per bird, constant: its flock, its place in the formation about the leader and what
-// its wing allows (birds::derive_flight, docs/wing-types.md).
+// Per bird, constant: its flock, its place in the formation about the leader, what its
+// wing allows (birds::derive_flight, docs/wing-types.md) and its perches (docs/flocking.md,
+// "Perches": a bird flocks from frame ids.y, after its take-off, to before frame ids.z,
+// its flock's landing; outside them it flies its route, KW_MOTION_ROUTE in shared/birds.h).
 struct FlockBirdGpu {
-    uvec4 ids;      // x: flock, y, z, w: unused
-    vec4 offset;    // xyz: formation offset from the leader (m), w: unused
+    uvec4 ids;      // x: flock, y: its first flocking frame, z: its first landing frame (0xFFFFFFFF: none), w: unused
+    vec4 offset;    // xyz: formation offset from the leader (m), w: the take-off's route time offset (s)
     vec4 speed;     // x: cruise speed v0, y: minimum speed, z: maximum speed (m/s), w: max speed change (m/s^2)
     vec4 turn;      // x: max lateral acceleration g tan(max bank) (m/s^2), y: sin(max climb), z: sin(max dive), w: unused
+    vec4 land_position;  // xyz: where its landing route (at the leader's speed, no time offset) and offset put it at t0 (m), w: t0 (s)
+    vec4 land_velocity;  // xyz: its velocity there (m/s), w: 1 / T, T the time from t0 to its touchdown (1/s)
 };
 
 // Per bird, carried from frame to frame.

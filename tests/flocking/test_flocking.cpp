@@ -747,18 +747,20 @@ TEST(Flocking, BadValuesAreRefusedNamingThem) {
     EXPECT_EQ(parse_error(scene_text(10, 1.0, R"({"attractors": [{"position": [0, 1, 0], "weight": -1}]})")),
               "flocking-test.json: $.flocks[0].flocking.attractors[0].weight: expected a finite number in [0, 1000], got -1");
     // A segment's mode on a flocking flock: its birds' modes are their own flight's, so a
-    // perch's take-off (or a forced glide) would be silently ignored.
+    // forced glide or hover would be silently ignored; a take-off and a landing are its
+    // perches (first and last segment only, as on any route).
     const auto with_modes = [](const std::string& modes) {
         return parse_error(R"({"format": "kodawari-scene", "version": 1, "name": "t", "fps": 30, "duration": 1,
             "flocks": [{"name": "f", "wing_type": "pigeon", "count": 10, "flocking": {},
                         "route": {"points": [[0,10,0],[0,10,10],[0,12,20],[0,12,30],[0,12,40],[0,12,50],[0,12,60]],
                                   "modes": )" + modes + "}}]}");
     };
-    EXPECT_EQ(with_modes(R"(["auto", "takeoff"])"),
-              "flocking-test.json: $.flocks[0].route.modes[1]: \"takeoff\" is not flown by a flocking flock (its birds choose "
-              "their modes from their own flight; perches are for flocks without \"flocking\"): expected \"auto\"");
-    EXPECT_NE(with_modes(R"(["glide", "auto"])").find("$.flocks[0].route.modes[0]: \"glide\" is not flown"), std::string::npos);
+    EXPECT_EQ(with_modes(R"(["glide", "auto"])"),
+              "flocking-test.json: $.flocks[0].route.modes[0]: \"glide\" is not flown by a flocking flock (its birds choose "
+              "their modes from their own flight): expected \"auto\", or \"takeoff\" and \"landing\" for its perches");
+    EXPECT_NE(with_modes(R"(["auto", "hover"])").find("$.flocks[0].route.modes[1]: \"hover\" is not flown"), std::string::npos);
     EXPECT_EQ(with_modes(R"(["auto", "auto"])"), "(parsed)");
+    EXPECT_EQ(with_modes(R"(["takeoff", "landing"])"), "(parsed)");
 }
 
 // A bird backend given a world with driven birds and no motion says so.

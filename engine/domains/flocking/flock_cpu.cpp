@@ -88,11 +88,11 @@ public:
         for (std::uint32_t k = 0; k < frames; ++k) {
             for (std::uint32_t s = 0; s < w.substeps; ++s) {
                 const auto grid_start = Clock::now();
+                const auto frame_flocks = flocks.subspan(k * f_count, f_count);
                 build_grid(state_, inv_radius, mask, cells_, buckets_, sorted_, threads_);
-                if (search_ != nullptr) sorted_birds_.fill(state_, w.birds, sorted_, threads_);
+                if (search_ != nullptr) sorted_birds_.fill(state_, w.birds, frame_flocks, sorted_, threads_);
                 timing_.grid_seconds += seconds(grid_start, Clock::now());
-                glsl::Kernel kernel{flocks.subspan(k * f_count, f_count), w.birds, state_, buckets_, sorted_,
-                                          agents.subspan(k * a_count, a_count)};
+                glsl::Kernel kernel{frame_flocks, w.birds, state_, buckets_, sorted_, agents.subspan(k * a_count, a_count)};
                 const SearchArgs search_args{&kernel, &sorted_birds_, mask, inv_radius};
                 const RulesArgs rules_args{&kernel, &sorted_birds_, static_cast<std::uint32_t>(a_count), w.dt};
                 const bool last = s + 1 == w.substeps;
@@ -135,6 +135,16 @@ public:
                         }
                         for (std::size_t o = b0; o < b1; ++o) {
                             const std::uint32_t i = order[o];
+                            if (!flies(kernel, i)) {
+                                // On its perch or landing (flock_body.glsl): its state kept,
+                                // its route's motion (the rules' step above is not used).
+                                next_[i] = state_[i];
+                                if (last) {
+                                    const auto m = kernel.flock_route_motion(w.birds[i], kernel.kw_flock(w.birds[i].ids.x), state_[i]);
+                                    motion[i] = {gpu4(m.position), gpu4(m.velocity), gpu4(m.acceleration)};
+                                }
+                                continue;
+                            }
                             const glsl::Kernel::FlockStep& step = steps[o - b0];
                             next_[i].position = {step.position.x, step.position.y, step.position.z, 0.0f};
                             next_[i].velocity = {step.velocity.x, step.velocity.y, step.velocity.z, 0.0f};
@@ -167,6 +177,11 @@ public:
 private:
     using Clock = std::chrono::steady_clock;
     static double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
+    static bool flies(const glsl::Kernel& kernel, std::uint32_t i) {
+        const gpu::FlockBirdGpu& bird = kernel.birds_in[i];
+        return glsl::flock_flies(bird, kernel.flocks[bird.ids.x]);
+    }
+    static gpu::vec4 gpu4(const glm::vec4& v) { return {v.x, v.y, v.z, v.w}; }
     static constexpr std::size_t kBlock = 256;
 
     unsigned threads_;

@@ -48,10 +48,11 @@ struct Kernel {
     uint kw_bucket_start(uint b) const { return buckets[2u * b]; }
     uint kw_bucket_count(uint b) const { return buckets[2u * b + 1u]; }
     uint kw_sorted(uint s) const { return sorted[s]; }
-    // By index, as the reference has always read a candidate (the GPU reads the grid's copy).
+    // By index, as the reference has always read a candidate (the GPU reads the grid's
+    // copy, whose w its scatter writes by the same flock_seen_as()).
     vec4 kw_point(uint s) const {
         const uint j = sorted[s];
-        return vec4(kw_xyz(states[j].position), float(birds_in[j].ids.x));
+        return vec4(kw_xyz(states[j].position), flock_seen_as(birds_in[j], flocks[birds_in[j].ids.x]));
     }
     FlockAgentGpu kw_agent(uint a) const { return agents_in[a]; }
 #include "lib/flock_body.glsl"

@@ -27,14 +27,14 @@ struct KODAWARI_INTERNAL SortedBirds {
     static constexpr std::size_t kSortedPad = 16;
     std::vector<float> x, y, z;
     std::vector<float> vx, vy, vz;
-    std::vector<float> flock;  ///< the bird's flock (exact as a float below 2^24)
+    std::vector<float> flock;  ///< the bird's flock (exact as a float below 2^24); -1 while it is not flying (flock_seen_as())
     std::vector<std::uint32_t> index;  ///< the bird (the grid's `sorted`, padded)
     std::vector<std::uint32_t> slot_of;  ///< bird i's slot: index[slot_of[i]] == i
 
-    /// Fills the arrays from this substep's states and grid (build_grid()'s `sorted`), on
-    /// `threads` threads.
+    /// Fills the arrays from this substep's states, flocks and grid (build_grid()'s
+    /// `sorted`), on `threads` threads.
     void fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
-              std::span<const std::uint32_t> sorted, unsigned threads = 1);
+              std::span<const gpu::FlockParamsGpu> flocks, std::span<const std::uint32_t> sorted, unsigned threads = 1);
 };
 
 /// What one call of the search reads.

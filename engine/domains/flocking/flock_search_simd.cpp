@@ -132,6 +132,10 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
         // The bird in grid slot first_slot + n, read from the sorted arrays (in order,
         // where its own parameters and state by index would be a cache miss each).
         const std::uint32_t slot = first_slot + n;
+        glsl::Kernel::FlockNeighbours& nb = out[n];
+        nb.found = 0u;
+        // A bird on its perch or landing is not stepped (flock_cpu.cpp): no search.
+        if (sorted.flock[slot] < 0.0f) continue;
         const std::uint32_t i = kernel.kw_sorted(slot);
         const auto own = static_cast<std::uint32_t>(sorted.flock[slot]);
         const gpu::FlockParamsGpu flock = kernel.kw_flock(own);
@@ -139,8 +143,6 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
         const glm::vec3 forward = kernel.flock_forward(glm::vec3(sorted.vx[slot], sorted.vy[slot], sorted.vz[slot]));
         const float radius2 = flock.radii.x * flock.radii.x;
         const std::uint32_t k = kernel.flock_k(flock);
-        glsl::Kernel::FlockNeighbours& nb = out[n];
-        nb.found = 0u;
         const glm::ivec3 home = glsl::flock_cell(p, args.inv_radius);
         if (!have_list || home != list_home) {
             std::uint32_t visited_count = 0;
@@ -236,7 +238,7 @@ namespace kodawari::flocking {
 SearchFn flock_search_kernel(std::int64_t target) { KW_SIMD_SELECT(target, flock_search_kernel) }
 
 void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
-                       std::span<const std::uint32_t> order, unsigned threads) {
+                       std::span<const gpu::FlockParamsGpu> flocks, std::span<const std::uint32_t> order, unsigned threads) {
     const std::size_t n = order.size(), padded = n + kSortedPad;
     x.resize(padded);
     y.resize(padded);
@@ -257,7 +259,7 @@ void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<con
             vx[s] = states[i].velocity.x;
             vy[s] = states[i].velocity.y;
             vz[s] = states[i].velocity.z;
-            flock[s] = static_cast<float>(birds[i].ids.x);
+            flock[s] = glsl::flock_seen_as(birds[i], flocks[birds[i].ids.x]);
             index[s] = i;
             slot_of[i] = static_cast<std::uint32_t>(s);
         }

@@ -28,6 +28,76 @@ gpu::FlockAgentGpu obstacle_agent(const FlockObstacleSpec& o) {
 
 gpu::vec4 v4(const birds::Vec3& v) { return {v.x, v.y, v.z, 0.0f}; }
 
+constexpr std::uint32_t kNever = 0xFFFFFFFFu;  // FlockBirdGpu.ids.z: no landing
+
+// A flock's perches (docs/flocking.md, "Perches"): whether its leader's route takes off
+// and lands (a route's take-off and landing segments are its variants' too), and the
+// frame from which its birds land: the first after the last frame at or before the
+// leader's landing segment begins (docs/flight-modes.md F.2: s = d - L0 for d = v (t -
+// crouch) >= 2 L0 past a take-off, and the landing from s = L - Ln).
+struct Perches {
+    bool takeoff = false, landing = false;
+    std::uint32_t landing_frame = kNever;
+};
+
+Perches flock_perches(const birds::BirdWorld& world, const FlockWorld::Leader& leader) {
+    const gpu::RouteHeader& route = world.routes[leader.route];
+    Perches p;
+    p.takeoff = (route.flags.x & KW_ROUTE_TAKEOFF) != 0;
+    p.landing = (route.flags.x & KW_ROUTE_LANDING) != 0;
+    if (p.landing) {
+        const double v = leader.speed, total = route.info.x, l0 = p.takeoff ? double{route.perch.x} : 0.0;
+        const double starts = (p.takeoff ? KW_CROUCH_SECONDS : 0.0) + (total - double{route.perch.z} + l0) / v;
+        p.landing_frame = static_cast<std::uint32_t>(std::floor(starts * static_cast<double>(world.fps))) + 1u;
+    }
+    return p;
+}
+
+// The frame time as the bird domain computes it (flight.cpp step_bird(): frame * dt).
+float frame_time(const birds::BirdWorld& world, std::uint32_t frame) {
+    return static_cast<float>(frame) * static_cast<float>(1.0 / static_cast<double>(world.fps));
+}
+
+// Where a bird that takes off leaves the route for the flock: the first frame at which its
+// take-off segment is behind it (d = v (t + offset - crouch) >= 2 L0), and its route's
+// place and velocity there (flight.cpp's sample, the bird domain's on that frame).
+struct Release {
+    std::uint32_t frame = 0;
+    gpu::FlockStateGpu state{};
+};
+
+Release release(const birds::BirdWorld& world, const gpu::BirdParams& bird) {
+    const gpu::RouteHeader& route = world.routes[bird.ids.x];
+    const double ends = KW_CROUCH_SECONDS + 2.0 * double{route.perch.x} / double{bird.motion.x} - double{bird.offset.w};
+    Release r;
+    r.frame = static_cast<std::uint32_t>(std::ceil(ends * static_cast<double>(world.fps)));
+    // The frame's time rounded as the bird domain rounds it may still fall short of the
+    // end by an ulp: the next frame then.
+    for (int more = 0; more < 2; ++more) {
+        if (birds::sample_route(world, bird.ids.x, frame_time(world, r.frame) + bird.offset.w, bird.motion.x).progress.speed_fraction >= 1.0f) break;
+        ++r.frame;
+    }
+    const birds::RouteSample s = birds::sample_route(world, bird.ids.x, frame_time(world, r.frame) + bird.offset.w, bird.motion.x);
+    r.state = {{s.position.x + bird.offset.x, s.position.y + bird.offset.y, s.position.z + bird.offset.z, 0.0f}, v4(s.velocity)};
+    return r;
+}
+
+// A bird's landing (FlockBirdGpu.land_*): its route at the leader's speed without a time
+// offset (every bird lands as its formation slot would), from t0, the last flocking
+// frame's time, to its touchdown (s = L + Ln, the end of the landing's deceleration).
+void landing(const birds::BirdWorld& world, const Perches& perches, const FlockWorld::Leader& leader, const gpu::BirdParams& bird,
+             gpu::FlockBirdGpu& out) {
+    const gpu::RouteHeader& route = world.routes[bird.ids.x];
+    const float t0 = frame_time(world, perches.landing_frame - 1u);
+    const double l0 = perches.takeoff ? double{route.perch.x} : 0.0;
+    const double touchdown =
+        (perches.takeoff ? KW_CROUCH_SECONDS : 0.0) + (double{route.info.x} + double{route.perch.z} + l0) / double{leader.speed};
+    const birds::RouteSample s = birds::sample_route(world, bird.ids.x, t0, leader.speed);
+    const auto inv_t = static_cast<float>(1.0 / std::max(touchdown - static_cast<double>(t0), 1e-3));
+    out.land_position = {s.position.x + bird.offset.x, s.position.y + bird.offset.y, s.position.z + bird.offset.z, t0};
+    out.land_velocity = {s.velocity.x, s.velocity.y, s.velocity.z, inv_t};
+}
+
 }  // namespace
 
 Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld& world) {
@@ -88,6 +158,8 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
                 change = spec.model->flight.max_speed_change;
             }
             out.leaders.push_back({world.birds[first_bird].ids.x, spec.speed.value_or(cruise)});
+            const Perches perches = flock_perches(world, out.leaders.back());
+            std::uint32_t last_release = 0;  // the last bird's first flocking frame
             const auto lateral = static_cast<float>(static_cast<double>(world.settings.gravity) * std::tan(double{world.settings.max_bank}));
             for (std::size_t b = first_bird; b < end; ++b) {
                 const gpu::BirdParams& bird = world.birds[b];
@@ -97,17 +169,37 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
                 }
                 const float v0 = bird.motion.x;
                 gpu::FlockBirdGpu& fb = out.birds[bird.ids.z];
-                fb.ids = {index, 0u, 0u, 0u};
-                fb.offset = {bird.offset.x, bird.offset.y, bird.offset.z, 0.0f};
+                fb.ids = {index, 0u, perches.landing ? perches.landing_frame : kNever, 0u};
+                fb.offset = {bird.offset.x, bird.offset.y, bird.offset.z, bird.offset.w};
                 // Speeds: a starling's flight ranges over about half to one and a half
                 // times its cruise speed (docs/flocking.md).
                 fb.speed = {v0, 0.5f * v0, 1.5f * v0, change};
                 fb.turn = {lateral, static_cast<float>(std::sin(double{climb})), static_cast<float>(std::sin(double{dive})), 0.0f};
-                // Frame 0: where its route puts it, as a route bird's frame 0.
-                const birds::RouteSample s = birds::sample_route(world, bird.ids.x, bird.offset.w, v0);
-                const birds::Vec3 p0{s.position.x + bird.offset.x, s.position.y + bird.offset.y, s.position.z + bird.offset.z};
-                out.initial[bird.ids.z] = {v4(p0), v4(s.velocity)};
-                out.first[bird.ids.z] = {v4(p0), v4(s.velocity), v4(s.acceleration)};
+                if (perches.takeoff) {
+                    // On its perch until its take-off segment ends: the route (the bird
+                    // domain flies it, KW_MOTION_ROUTE) to the frame that has it flying at
+                    // its speed, where its flocking state starts (flock_body.glsl).
+                    const Release r = release(world, bird);
+                    fb.ids.y = r.frame + 1u;
+                    last_release = std::max(last_release, fb.ids.y);
+                    out.initial[bird.ids.z] = r.state;
+                    out.first[bird.ids.z] = {{0.0f, 0.0f, 0.0f, static_cast<float>(KW_MOTION_ROUTE)}, {0.0f, 0.0f, 0.0f, bird.offset.w}, {0.0f, 0.0f, v0, 0.0f}};
+                } else {
+                    // Frame 0: where its route puts it, as a route bird's frame 0.
+                    const birds::RouteSample s = birds::sample_route(world, bird.ids.x, bird.offset.w, v0);
+                    const birds::Vec3 p0{s.position.x + bird.offset.x, s.position.y + bird.offset.y, s.position.z + bird.offset.z};
+                    out.initial[bird.ids.z] = {v4(p0), v4(s.velocity)};
+                    out.first[bird.ids.z] = {v4(p0), v4(s.velocity), v4(s.acceleration)};
+                }
+                if (perches.landing) landing(world, perches, out.leaders.back(), bird, fb);
+            }
+            if (perches.landing && last_release + 1u > perches.landing_frame) {
+                return make_error(Error::Kind::InvalidInput,
+                                  scene.path + ": $.flocks[" + std::to_string(f) + "]: its last bird leaves its perch at frame " +
+                                      std::to_string(last_release) + ", and its landing begins at frame " +
+                                      std::to_string(perches.landing_frame) +
+                                      ": expected every bird to flock for a frame before the landing (a longer route, a "
+                                      "shorter formation.trail or a faster flock)");
             }
         }
         first_bird = end;
@@ -143,7 +235,8 @@ void FlockWorld::frame_inputs(std::uint32_t frame, std::span<gpu::FlockParamsGpu
     for (std::size_t f = 0; f < flocks.size(); ++f) {
         flocks_out[f] = flocks[f];
         const birds::RouteSample s = birds::sample_route(routes, leaders[f].route, t, leaders[f].speed);
-        flocks_out[f].target = {s.position.x, s.position.y, s.position.z, 0.0f};
+        flocks_out[f].target = {s.position.x, s.position.y, s.position.z, leaders[f].speed};
+        flocks_out[f].counts.z = frame;  // perches: which birds fly (flock_flies())
     }
     for (std::size_t a = 0; a < predators.size(); ++a) {
         const PredatorSpec& p = predators[a];
