@@ -37,7 +37,9 @@ namespace kodawari {
 /// The flocking domain's name in a Simulation, and its output the bird domain reads.
 inline constexpr std::string_view kFlockingDomain = "flocking";
 /// Its channel: per flocking bird per frame a gpu::BirdMotionGpu (a diagnostic: the bake's
-/// glTF is the birds' poses).
+/// glTF is the birds' poses). A bird on its perch or landing (docs/flocking.md, "Perches")
+/// has position.w == KW_MOTION_ROUTE there: its route's time, speed and easing, not a
+/// place (shared/birds.h).
 inline constexpr std::string_view kFlockingMotionChannel = "flocking.motion";
 
 /// A flocking domain for the driven birds of `world` (BirdWorld::driven; their flocks'
