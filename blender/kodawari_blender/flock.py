@@ -90,10 +90,9 @@ def scene_dict(curves, props, fps, frames):
                 if props.landing:
                     modes[-1] = "landing"
             route["modes"] = modes
+            # A flocking flock takes off and lands by the curve too: its perches
+            # (docs/flocking.md, "Perches").
             flocking = getattr(props, "flocking", False)
-            if flocking and (props.takeoff or props.landing):
-                raise FlockError("flocking birds fly by their neighbours and are only drawn to the curve: "
-                                 "take-off and landing need birds that follow it (turn Flocking or them off)")
             flock = {
                 "name": f"{obj.name}.{index}" if len(obj.data.splines) > 1 else obj.name,
                 "wing_type": props.wing_type.lower(),

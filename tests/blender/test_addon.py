@@ -313,9 +313,29 @@ check(far < 25.0, f"flocking: a bird is {far} m from the curve")
 check(closest > 0.1, f"flocking: two birds {closest} m apart")
 for obj in new:
     bpy.data.objects.remove(obj)
-bpy.ops.object.select_all(action="DESELECT")
-route.select_set(True)
-expect_error("take-off and landing need birds that follow it", flocking=True, takeoff=True)
+
+# Flocking with perches (docs/flocking.md, "Perches"): 12 pigeons take off from the curve's
+# first point by their route, flock, and land together on its last: at frame 1 each sits
+# within its offset of the start (the spread reaches 4.5 m), at frame 480 within its offset
+# of the end, at rest (frames 470 and 480 within 1e-4 m: the wings folded, no bob), and in
+# between they flew by their neighbours (more than 0.5 m from the route birds somewhere).
+route_birds, made = make_flock(count=12, wing_type="PIGEON", spread=3.0, frames=480, seed=5, takeoff=True, landing=True)
+route_240 = bodies(route_birds, 240)
+for obj in made:
+    bpy.data.objects.remove(obj)
+armatures, new = make_flock(count=12, wing_type="PIGEON", spread=3.0, frames=480, seed=5, takeoff=True, landing=True,
+                           flocking=True)
+first = max((p - start).length for p in bodies(armatures, 1))
+last = max((p - end).length for p in bodies(armatures, 480))
+still = max((a - b).length for a, b in zip(bodies(armatures, 470), bodies(armatures, 480)))
+apart = max((a - b).length for a, b in zip(bodies(armatures, 240), route_240))
+print(f"flocking perches: {first:.2f} m from the start at frame 1, {last:.2f} m from the end at frame 480, "
+      f"{still:.1e} m moved in the last 10 frames, up to {apart:.2f} m from the route birds at frame 240")
+check(first < reach + 0.01 and last < reach + 0.01, f"flocking perches: {first} m from the start, {last} m from the end")
+check(still < 1e-4, f"flocking perches: still moving {still} m at the end")
+check(apart > 0.5, f"flocking perches: within {apart} m of the route birds at frame 240: not flocking")
+for obj in new:
+    bpy.data.objects.remove(obj)
 
 # ---- Cancelled flocks (Esc): 130 birds x 48 frames run in 6 chunks (the template; frames 1
 # and 26 simulated on; birds 1, 65 and 129 made on); cancelled after each, nothing is left,
