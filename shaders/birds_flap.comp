@@ -167,6 +167,35 @@ RouteSample motion_sample(BirdMotionGpu m) {
     return r;
 }
 
+// flight.cpp route_motion_sample(): the cubic Hermite correction of a driven bird on its
+// route (KW_MOTION_ROUTE, shared/birds.h) at the frame's time `now`, in flight.cpp's order
+// of operations (`precise`: no contraction), so that positions agree with the cpu backends
+// to rounding. Nothing exact changes: the correction moves the bird only.
+void route_correction(inout RouteSample r, BirdMotionGpu m, float now) {
+    float inv_t = m.acceleration.y;
+    precise float s = clamp((now - m.acceleration.x) * inv_t, 0.0, 1.0);
+    if (inv_t == 0.0 || !(s < 1.0)) return;  // no correction, or past t0 + T: the route's own bits
+    precise float span = 1.0 / inv_t;
+    precise float h00 = (2.0 * s - 3.0) * (s * s) + 1.0;
+    precise float h10 = ((s - 2.0) * s + 1.0) * s;
+    precise float d00 = (6.0 * s - 6.0) * s;
+    precise float d10 = (3.0 * s - 4.0) * s + 1.0;
+    precise float dd00 = 12.0 * s - 6.0;
+    precise float dd10 = 6.0 * s - 4.0;
+    vec3 ep = m.position.xyz, ev = m.velocity.xyz;
+    precise vec3 c = h00 * ep + (span * h10) * ev;
+    precise vec3 c1 = (d00 * inv_t) * ep + d10 * ev;
+    precise vec3 c2 = ((dd00 * inv_t) * inv_t) * ep + (dd10 * inv_t) * ev;
+    precise vec3 position = r.position + c;
+    precise vec3 velocity = r.velocity + c1;
+    precise vec3 attitude_velocity = r.attitude_velocity + c1;
+    precise vec3 acceleration = r.acceleration + c2;
+    r.position = position;
+    r.velocity = velocity;
+    r.attitude_velocity = attitude_velocity;
+    r.acceleration = acceleration;
+}
+
 // One Bezier evaluation per frame: lavapipe runs both sides of a divergent branch, so
 // the timing and end cases only choose the parameter and how the result is used.
 RouteSample sample_route(RouteHeader route, float time, float speed, inout RouteCache cache) {
@@ -507,11 +536,27 @@ void main() {
         uint previous = state.mode.x;
         bool first = previous == KW_MODE_UNSET;
 
-        precise float time = float(frame) * dt + bird.offset.w;
         // HAS_DRIVEN is a specialization constant: without driven birds this is the
-        // route alone (lavapipe runs both sides of a branch).
+        // route alone (lavapipe runs both sides of a branch). A driven bird flies its
+        // motion (flown) or its own route at the motion's time offset and speed, eased by
+        // route_correction() (KW_MOTION_ROUTE, shared/birds.h).
         const bool driven = HAS_DRIVEN && bird.ids.w == KW_BIRD_DRIVEN;
-        RouteSample r = driven ? motion_sample(motions[k * push.frames.w + bird.ids.z]) : sample_route(route, time, bird.motion.x, cache);
+        BirdMotionGpu m = BirdMotionGpu(vec4(0.0), vec4(0.0), vec4(0.0));
+        bool on_route = false;
+        if (driven) {
+            m = motions[k * push.frames.w + bird.ids.z];
+            on_route = m.position.w == KW_MOTION_ROUTE;
+        }
+        const bool flown = driven && !on_route;
+        precise float now = float(frame) * dt;
+        precise float time = now + (on_route ? m.velocity.w : bird.offset.w);
+        RouteSample r;
+        if (flown) {
+            r = motion_sample(m);
+        } else {
+            r = sample_route(route, time, on_route ? m.acceleration.z : bird.motion.x, cache);
+            if (on_route) route_correction(r, m, now);
+        }
 
         uint climb_previous = previous <= KW_MODE_DESCEND ? previous : previous == KW_MODE_GLIDE ? KW_MODE_LEVEL : KW_MODE_UNSET;
         uint mode = flight_mode(bird, state, r, next_mode(climb_previous, r));
@@ -619,7 +664,7 @@ void main() {
         float tail_spread = spread + float(KW_TAIL_BANK_SPREAD) * abs(sin_bank);
 
         uint slot = (k % push.frames.z) * count + i;
-        vec3 position = driven ? r.position : r.position + bird.offset.xyz;
+        vec3 position = flown ? r.position : r.position + bird.offset.xyz;
         const vec4 placed = vec4(position.x, position.y + bob_height, position.z, tail_spread);
         if (POSE_FIELDS) {
             uint field = (k % push.frames.z) * 6u * count + i;

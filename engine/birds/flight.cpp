@@ -356,6 +356,38 @@ RouteSample motion_sample(const gpu::BirdMotionGpu& motion) {
     return out;
 }
 
+RouteSample route_motion_sample(const BirdWorld& world, const gpu::BirdParams& bird, std::uint32_t frame, float dt,
+                                const gpu::BirdMotionGpu& motion) {
+    // shared/birds.h, the comment above BirdMotionGpu (KW_MOTION_ROUTE): the bird's own
+    // route as a route bird flies it, at the motion's time offset and speed...
+    const float now = static_cast<float>(frame) * dt;
+    RouteSample out = sample_route(world, bird.ids.x, now + motion.velocity.w, motion.acceleration.z);
+    // ...plus the cubic Hermite correction c(t) from (e_p, e_v) at t0 to 0 at t0 + T. The
+    // exact decisions (segment mode, direction, lift, progress) stay the route's: c only
+    // moves the bird. From t0 + T on (s = 1) c, c' and c'' are 0 and the sample is the
+    // route's own bits; 1/T = 0 means no correction. The SIMD and Vulkan kernels repeat
+    // these operations in this order, so the position is the same bits on the cpu backend.
+    const float inv_t = motion.acceleration.y;
+    const float s = std::clamp((now - motion.acceleration.x) * inv_t, 0.0f, 1.0f);
+    if (inv_t == 0.0f || !(s < 1.0f)) return out;
+    const float span = 1.0f / inv_t;  // T
+    const float h00 = (2.0f * s - 3.0f) * (s * s) + 1.0f;
+    const float h10 = ((s - 2.0f) * s + 1.0f) * s;
+    const float d00 = (6.0f * s - 6.0f) * s;  // h00'(s)
+    const float d10 = (3.0f * s - 4.0f) * s + 1.0f;
+    const float dd00 = 12.0f * s - 6.0f;  // h00''(s)
+    const float dd10 = 6.0f * s - 4.0f;
+    const Vec3 ep = xyz(motion.position), ev = xyz(motion.velocity);
+    const Vec3 c = h00 * ep + (span * h10) * ev;
+    const Vec3 c1 = (d00 * inv_t) * ep + d10 * ev;
+    const Vec3 c2 = ((dd00 * inv_t) * inv_t) * ep + (dd10 * inv_t) * ev;
+    out.position = out.position + c;
+    out.velocity = out.velocity + c1;
+    out.attitude_velocity = out.attitude_velocity + c1;
+    out.acceleration = out.acceleration + c2;
+    return out;
+}
+
 BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms, const gpu::BirdParams& bird,
                     gpu::BirdState& state, std::uint32_t frame, const gpu::BirdMotionGpu* motion) {
     const float dt = uniforms.physics.z;
@@ -365,7 +397,12 @@ BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
     const float time = static_cast<float>(frame) * dt + bird.offset.w;
     const bool driven = bird.ids.w == KW_BIRD_DRIVEN;
     assert(!driven || motion != nullptr);
-    const RouteSample sample = driven ? motion_sample(*motion) : sample_route(world, bird.ids.x, time, bird.motion.x);
+    // A driven bird flies its motion (flown: no offset added) or, KW_MOTION_ROUTE, its
+    // own route (shared/birds.h), which takes the offset as a route bird's does.
+    const bool flown = driven && motion->position.w != static_cast<float>(KW_MOTION_ROUTE);
+    const RouteSample sample = flown    ? motion_sample(*motion)
+                               : driven ? route_motion_sample(world, bird, frame, dt, *motion)
+                                        : sample_route(world, bird.ids.x, time, bird.motion.x);
     const Attitude att = attitude(uniforms, sample);
 
     // Mode (SPEC B.5, docs/flight-modes.md F.1). The climb rule keeps its hysteresis
@@ -505,7 +542,7 @@ BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
     const float tail_spread = spread + kTailBankSpread * std::fabs(sin_bank);
 
     BirdFrame out{};
-    const Vec3 position = driven ? sample.position : sample.position + xyz(bird.offset);
+    const Vec3 position = flown ? sample.position : sample.position + xyz(bird.offset);
     out.pose.position = {position.x, position.y + bob_height, position.z, tail_spread};
     out.pose.rotation[KW_PART_BODY] = body;
     out.pose.rotation[KW_PART_HEAD] = head;

@@ -149,19 +149,37 @@ struct Sample {
     V segment_mode, speed_fraction, since_crouch, since_touchdown;  // flight.hpp RouteSample
 };
 
-// flight.cpp motion_sample(): the lanes' motions (slot per lane) gathered.
-inline Sample motion_sample(const gpu::BirdMotionGpu* motion, const std::array<std::uint32_t, kBatchLanes>& slots) {
-    HWY_ALIGN float rows[9][kBatchLanes];
+// The lanes' motions (slot per lane) gathered: a driven batch's input each frame.
+struct Motion {
+    V3 position, velocity, acceleration;  // as BirdMotionGpu's xyz
+    M on_route;                           // position.w == KW_MOTION_ROUTE
+    V time_offset;                        // velocity.w (on route)
+};
+inline Motion gather_motion(const gpu::BirdMotionGpu* motion, const std::array<std::uint32_t, kBatchLanes>& slots) {
+    constexpr std::size_t kRows = 11;
+    HWY_ALIGN float rows[kRows][kBatchLanes];
     for (std::size_t l = 0; l < hn::Lanes(D()); ++l) {
         const gpu::BirdMotionGpu& m = motion[slots[l]];
-        const float values[9] = {m.position.x, m.position.y, m.position.z, m.velocity.x, m.velocity.y,
-                                 m.velocity.z, m.acceleration.x, m.acceleration.y, m.acceleration.z};
-        for (std::size_t r = 0; r < 9; ++r) rows[r][l] = values[r];
+        const float values[kRows] = {m.position.x,     m.position.y,     m.position.z,     m.velocity.x,
+                                     m.velocity.y,     m.velocity.z,     m.acceleration.x, m.acceleration.y,
+                                     m.acceleration.z, m.position.w,     m.velocity.w};
+        for (std::size_t r = 0; r < kRows; ++r) rows[r][l] = values[r];
     }
-    Sample out;
+    Motion out;
     out.position = {hn::Load(D(), rows[0]), hn::Load(D(), rows[1]), hn::Load(D(), rows[2])};
     out.velocity = {hn::Load(D(), rows[3]), hn::Load(D(), rows[4]), hn::Load(D(), rows[5])};
     out.acceleration = {hn::Load(D(), rows[6]), hn::Load(D(), rows[7]), hn::Load(D(), rows[8])};
+    out.on_route = hn::Eq(hn::Load(D(), rows[9]), S(static_cast<float>(KW_MOTION_ROUTE)));
+    out.time_offset = hn::Load(D(), rows[10]);
+    return out;
+}
+
+// flight.cpp motion_sample(): the lanes flown along their motion.
+inline Sample motion_sample(const Motion& m) {
+    Sample out;
+    out.position = m.position;
+    out.velocity = m.velocity;
+    out.acceleration = m.acceleration;
     out.direction = out.velocity;
     out.attitude_velocity = out.velocity;
     out.lift = out.acceleration.y;
@@ -171,6 +189,49 @@ inline Sample motion_sample(const gpu::BirdMotionGpu* motion, const std::array<s
     out.since_crouch = S(1e9f);
     out.since_touchdown = S(-1.0f);
     return out;
+}
+
+// Lane by lane, a where m is true, else b.
+inline Sample select(M m, const Sample& a, const Sample& b) {
+    Sample out;
+    out.position = select(m, a.position, b.position);
+    out.velocity = select(m, a.velocity, b.velocity);
+    out.acceleration = select(m, a.acceleration, b.acceleration);
+    out.direction = select(m, a.direction, b.direction);
+    out.attitude_velocity = select(m, a.attitude_velocity, b.attitude_velocity);
+    out.lift = hn::IfThenElse(m, a.lift, b.lift);
+    out.lift_scale = hn::IfThenElse(m, a.lift_scale, b.lift_scale);
+    out.segment_mode = hn::IfThenElse(m, a.segment_mode, b.segment_mode);
+    out.speed_fraction = hn::IfThenElse(m, a.speed_fraction, b.speed_fraction);
+    out.since_crouch = hn::IfThenElse(m, a.since_crouch, b.since_crouch);
+    out.since_touchdown = hn::IfThenElse(m, a.since_touchdown, b.since_touchdown);
+    return out;
+}
+
+// flight.cpp route_motion_sample()'s correction (KW_MOTION_ROUTE, shared/birds.h): the
+// cubic Hermite c(t) from (e_p, e_v) at t0 to 0 at t0 + T added to the route sample `r`
+// at the frame's time `now`, in the reference's order of operations (the same bits), on
+// the lanes that have one (1/T not 0, s < 1); the others keep the route's own bits.
+inline void route_correction(Sample& r, const Motion& m, V now) {
+    const V inv_t = m.acceleration.y;
+    const V s = clamp01(hn::Mul(hn::Sub(now, m.acceleration.x), inv_t));
+    const M apply = hn::AndNot(hn::Eq(inv_t, Z()), hn::Lt(s, S(1.0f)));
+    if (hn::AllFalse(D(), apply)) return;
+    const V span = hn::Div(S(1.0f), inv_t);
+    const V h00 = hn::Add(hn::Mul(hn::Sub(hn::Mul(S(2.0f), s), S(3.0f)), hn::Mul(s, s)), S(1.0f));
+    const V h10 = hn::Mul(hn::Add(hn::Mul(hn::Sub(s, S(2.0f)), s), S(1.0f)), s);
+    const V d00 = hn::Mul(hn::Sub(hn::Mul(S(6.0f), s), S(6.0f)), s);
+    const V d10 = hn::Add(hn::Mul(hn::Sub(hn::Mul(S(3.0f), s), S(4.0f)), s), S(1.0f));
+    const V dd00 = hn::Sub(hn::Mul(S(12.0f), s), S(6.0f));
+    const V dd10 = hn::Sub(hn::Mul(S(6.0f), s), S(4.0f));
+    const V3 &ep = m.position, &ev = m.velocity;
+    const V3 c = add(mul(h00, ep), mul(hn::Mul(span, h10), ev));
+    const V3 c1 = add(mul(hn::Mul(d00, inv_t), ep), mul(d10, ev));
+    const V3 c2 = add(mul(hn::Mul(hn::Mul(dd00, inv_t), inv_t), ep), mul(hn::Mul(dd10, inv_t), ev));
+    r.position = select(apply, add(r.position, c), r.position);
+    r.velocity = select(apply, add(r.velocity, c1), r.velocity);
+    r.attitude_velocity = select(apply, add(r.attitude_velocity, c1), r.attitude_velocity);
+    r.acceleration = select(apply, add(r.acceleration, c2), r.acceleration);
 }
 
 // flight.cpp sample_route(): both ends' cases and the inside computed, one chosen per lane.

@@ -317,7 +317,8 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
                                         u.blend_rates2.y, u.blend_rates2.z, u.blend_rates2.w};
 
     RouteCache cache;
-    // A driven batch (flight.cpp motion_sample()) flies its motion, with no offset added.
+    // A driven batch flies its motion (flight.cpp motion_sample(), no offset added) or,
+    // lane by lane, its route (KW_MOTION_ROUTE: route_motion_sample(), the offset added).
     const bool driven = a.params != nullptr && a.params[batch.bird[off]].ids.w == KW_BIRD_DRIVEN;
     std::array<std::uint32_t, kBatchLanes> slots{};
     if (driven) {
@@ -327,9 +328,29 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
         const std::uint32_t frame = a.first_frame + k;
         const V previous = mode_state;
         const M first = hn::Lt(previous, Z());  // KW_MODE_UNSET
-        const V time = hn::Add(hn::Mul(S(static_cast<float>(frame)), dt), offset.w);
-        const Sample sample = driven ? motion_sample(a.motion + std::size_t{k} * a.driven, slots)
-                                     : sample_route(a, route, time, motion.x, cache);
+        const V now = hn::Mul(S(static_cast<float>(frame)), dt);
+        Sample sample;
+        M flown = hn::FirstN(D(), 0);  // the lanes whose position is the motion's (no offset)
+        if (driven) {
+            const Motion m = gather_motion(a.motion + std::size_t{k} * a.driven, slots);
+            sample = motion_sample(m);
+            flown = hn::Not(m.on_route);
+            // The route only where a lane flies it: a flock without perches pays one test.
+            if (!hn::AllFalse(D(), m.on_route)) {
+                // The flown lanes sample the route where the first lane on it does (their
+                // motion's w and z are no time offset and speed): a valid point, and the
+                // route cache is not lost to them.
+                const std::size_t lead = static_cast<std::size_t>(hn::FindKnownFirstTrue(D(), m.on_route));
+                const V lead_offset = hn::Set(D(), hn::ExtractLane(m.time_offset, lead));
+                const V lead_speed = hn::Set(D(), hn::ExtractLane(m.acceleration.z, lead));
+                const V time = hn::Add(now, hn::IfThenElse(m.on_route, m.time_offset, lead_offset));
+                Sample routed = sample_route(a, route, time, hn::IfThenElse(m.on_route, m.acceleration.z, lead_speed), cache);
+                route_correction(routed, m, now);
+                sample = select(m.on_route, routed, sample);
+            }
+        } else {
+            sample = sample_route(a, route, hn::Add(now, offset.w), motion.x, cache);
+        }
 
         // Mode (SPEC B.5; docs/flight-modes.md F.1): the climb rule keeps its hysteresis
         // through a glide and decides afresh after the other modes.
@@ -470,7 +491,7 @@ void simulate_lanes(const BirdStepArgs& a, const BirdBatch& batch, std::size_t o
         const V tail_spread = hn::Add(spread, hn::Mul(S(birds::kTailBankSpread), hn::Abs(sin_bank)));
 
         // Outputs: BirdPose (right wing mirrored) or, without one, the moving parts' rows.
-        const V3 position = driven ? sample.position : add(sample.position, V3{offset.x, offset.y, offset.z});
+        const V3 position = select(flown, sample.position, add(sample.position, V3{offset.x, offset.y, offset.z}));
         const Q4 placed{position.x, hn::Add(position.y, bob_height), position.z, tail_spread};
         if (a.poses != nullptr) {
             const Q4 parts[8] = {placed, body, head, tail, left1, left2,

@@ -87,7 +87,8 @@ struct BirdFrame {
 /// Advances `state` to frame `frame` and evaluates the bird. Frames must be visited in
 /// order from 0 (the state carries hysteresis, transition, phase and the roll filter).
 /// `uniforms` = world.uniforms(), passed in so a loop over birds computes it once. A
-/// driven bird (ids.w == KW_BIRD_DRIVEN) flies `motion`, its frame's, instead of its route.
+/// driven bird (ids.w == KW_BIRD_DRIVEN) flies `motion`, its frame's, instead of its route;
+/// or, when motion->position.w is KW_MOTION_ROUTE, its route (route_motion_sample()).
 [[nodiscard]] KODAWARI_API BirdFrame step_bird(const BirdWorld& world, const gpu::FlightUniforms& uniforms,
                                                const gpu::BirdParams& bird, gpu::BirdState& state, std::uint32_t frame,
                                                const gpu::BirdMotionGpu* motion = nullptr);
@@ -96,6 +97,16 @@ struct BirdFrame {
 /// and acceleration, the direction its velocity's, the lift its vertical acceleration, at
 /// cruise speed (no take-off or landing).
 [[nodiscard]] KODAWARI_API RouteSample motion_sample(const gpu::BirdMotionGpu& motion);
+
+/// The route sample of a driven bird whose `motion` says KW_MOTION_ROUTE (the contract in
+/// shared/birds.h, above BirdMotionGpu): its route (bird.ids.x) sampled as a route bird's,
+/// at time frame * dt + motion.velocity.w and speed motion.acceleration.z, plus the cubic
+/// Hermite correction from (motion.position.xyz, motion.velocity.xyz) at
+/// t0 = motion.acceleration.x to 0 at t0 + T (1/T = motion.acceleration.y; 0: none) in
+/// the position, velocity, attitude velocity and acceleration. Every exact quantity is the
+/// route's. Without the bird's offset, which step_bird() adds as for a route bird.
+[[nodiscard]] KODAWARI_API RouteSample route_motion_sample(const BirdWorld& world, const gpu::BirdParams& bird,
+                                                          std::uint32_t frame, float dt, const gpu::BirdMotionGpu& motion);
 
 /// A state before frame 0.
 [[nodiscard]] KODAWARI_API gpu::BirdState initial_state();
