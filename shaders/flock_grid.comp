@@ -108,6 +108,7 @@ void main() {
         // load in the grid's order instead of its state and flock by index.
         // A bird on its perch or landing is in no flock's search (lib/flock_body.glsl).
         const FlockBirdGpu bird = birds[i];
-        points[slot] = vec4(states[push.slots.x * count + i].position.xyz, flock_seen_as(bird, flocks[push.bases.x + bird.ids.x]));
+        const FlockStateGpu state = states[push.slots.x * count + i];
+        points[slot] = vec4(state.position.xyz, flock_seen_as(bird, flocks[push.bases.x + bird.ids.x], state));
     }
 }

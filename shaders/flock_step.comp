@@ -57,12 +57,18 @@ void main() {
 #else
     const FlockBirdGpu bird = birds[i];
     const FlockParamsGpu flock = kw_flock(bird.ids.x);
-    if (!flock_flies(bird, flock)) {
-        // On its perch or landing (lib/flock_body.glsl): its state kept, its route's motion.
-        const FlockStateGpu kept = states[push.slots.x * count + i];
+    FlockStateGpu kept = states[push.slots.x * count + i];
+    bool flies = flock_flies(bird, flock, kept);
+    // Perches (lib/flock_body.glsl): it leaves the flock to land on a frame's first substep.
+    if (flies && push.slots.w == 0u && flock_lands(bird, flock, kept)) {
+        kept = flock_landing_state(kept, flock.counts.z, push.step.w);
+        flies = false;
+    }
+    if (!flies) {
+        // On its perch or landing: its state kept, its route's motion.
         states[out_slot * count + i] = kept;
         if (push.slots.w + 1u == push.slots.z) {
-            const FlockRouteMotion m = flock_route_motion(bird, flock, kept);
+            const FlockRouteMotion m = flock_route_motion(bird, kept);
             motion[push.slots.y * count + i] = BirdMotionGpu(m.position, m.velocity, m.acceleration);
         }
         return;

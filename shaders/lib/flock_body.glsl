@@ -68,30 +68,49 @@ vec3 flock_round(vec3 across, vec3 facing, vec3 up) {
 }
 
 // (flock_flies() and flock_seen_as(), which the grid's scatter shares: lib/flock_hash.glsl.)
-// What a bird that is not flying hands the bird domain (shared/birds.h, KW_MOTION_ROUTE):
-// before its first flocking frame, its route from its take-off's time offset at its own
-// speed, uncorrected (its state is where that route leaves it, flight.cpp's sample at the
-// frame before it flocks: docs/flocking.md); from its flock's landing on, its route at the
-// leader's speed without a time offset, which lands every bird as its formation slot
-// (the leader's place plus its offset) would, eased from where its flight left it (its
-// state, kept since) by the difference to that route's place and velocity at t0.
+// Whether a flying bird leaves the flock to land at this frame (asked at a frame's first
+// substep, so that it leaves on a whole frame): from the first frame it may, once it has
+// passed its landing's start (the plane through its route's landing start plus its offset,
+// across the route there: it lands where it arrives, a bird behind its slot later), and by
+// the last frame wherever it is (docs/flocking.md, "Perches").
+bool flock_lands(FlockBirdGpu bird, FlockParamsGpu flock, FlockStateGpu state) {
+    if (flock.counts.z < bird.ids.z) return false;
+    const vec3 past = KW_XYZ(state.position) - KW_XYZ(bird.land_position);
+    return flock.counts.z >= bird.ids.w || dot(past, KW_XYZ(bird.land_velocity)) >= 0.0f;
+}
+
+// The state of a bird that leaves the flock to land at this frame: where its last flocking
+// frame left it, marked landing, with that frame's time t0 (frame_dt: the bird domain's).
+FlockStateGpu flock_landing_state(FlockStateGpu state, uint frame, float frame_dt) {
+    state.position.w = float(frame - 1u) * frame_dt;
+    state.velocity.w = 1.0f;
+    return state;
+}
+
+// What a bird that is not flying hands the bird domain (shared/birds.h, KW_MOTION_ROUTE),
+// at its cruise speed: before its take-off is behind it, its route from its take-off's
+// time offset, uncorrected (its state is where that route leaves it, flight.cpp's sample
+// at the frame before it flocks: docs/flocking.md); once landing, its route from its
+// landing's start at t0, eased from where its flight left it (its state, kept since) by
+// the difference to that route's place and velocity there.
 struct FlockRouteMotion {
     vec4 position;
     vec4 velocity;
     vec4 acceleration;
 };
-FlockRouteMotion flock_route_motion(FlockBirdGpu bird, FlockParamsGpu flock, FlockStateGpu state) {
+FlockRouteMotion flock_route_motion(FlockBirdGpu bird, FlockStateGpu state) {
     FlockRouteMotion m;
-    if (flock.counts.z < bird.ids.y) {
+    if (state.velocity.w == 0.0f) {
         m.position = vec4(0.0f, 0.0f, 0.0f, float(KW_MOTION_ROUTE));
         m.velocity = vec4(0.0f, 0.0f, 0.0f, bird.offset.w);
         m.acceleration = vec4(0.0f, 0.0f, bird.speed.x, 0.0f);
     } else {
+        const float t0 = state.position.w;
         const vec3 e_p = KW_XYZ(state.position) - KW_XYZ(bird.land_position);
         const vec3 e_v = KW_XYZ(state.velocity) - KW_XYZ(bird.land_velocity);
         m.position = vec4(e_p.x, e_p.y, e_p.z, float(KW_MOTION_ROUTE));
-        m.velocity = vec4(e_v.x, e_v.y, e_v.z, 0.0f);
-        m.acceleration = vec4(bird.land_position.w, bird.land_velocity.w, flock.target.w, 0.0f);
+        m.velocity = vec4(e_v.x, e_v.y, e_v.z, bird.land_position.w - t0);
+        m.acceleration = vec4(t0, bird.land_velocity.w, bird.speed.x, 0.0f);
     }
     return m;
 }
@@ -133,7 +152,7 @@ FlockNeighbours flock_neighbours(uint i, uint mask, float inv_radius) {
     FlockNeighbours nb;
     nb.found = 0u;
     // On its perch or landing, it is not stepped: it searches for nobody.
-    if (!flock_flies(bird, flock)) return nb;
+    if (!flock_flies(bird, flock, state)) return nb;
     uint visited[27];
     uint visited_count = 0u;
     const ivec3 home = flock_cell(p, inv_radius);

@@ -47,15 +47,16 @@ KW_FLOCK_FN ivec3 flock_cell(vec3 p, float inv_radius) { return ivec3(floor(p * 
 KW_FLOCK_FN uint flock_bucket(vec3 p, float inv_radius, uint mask) { return flock_cell_bucket(flock_cell(p, inv_radius), mask); }
 
 // Perches (docs/flocking.md, "Perches"): a bird flocks from its first flocking frame
-// (after its take-off from its perch) to before its flock's landing; before and after, it
-// flies its route (the bird domain, KW_MOTION_ROUTE), is not stepped (lib/flock_body.glsl's
-// flock_route_motion()), and no other bird sees it: the grid's scatter gives it no flock.
-// `flock` is the bird's flock's parameters this frame (counts.z: the frame stepped to).
-KW_FLOCK_FN bool flock_flies(FlockBirdGpu bird, FlockParamsGpu flock) {
-    return flock.counts.z >= bird.ids.y && flock.counts.z < bird.ids.z;
+// (after its take-off from its perch) until it leaves the flock to land (its state's
+// velocity.w); before and after, it flies its route (the bird domain, KW_MOTION_ROUTE), is
+// not stepped (lib/flock_body.glsl's flock_route_motion()), and no other bird sees it: the
+// grid's scatter gives it no flock. `flock` is the bird's flock's parameters this frame
+// (counts.z: the frame stepped to).
+KW_FLOCK_FN bool flock_flies(FlockBirdGpu bird, FlockParamsGpu flock, FlockStateGpu state) {
+    return flock.counts.z >= bird.ids.y && state.velocity.w == 0.0f;
 }
 
 // A bird's flock as the search compares it (kw_point's w): none (-1) while it is not flying.
-KW_FLOCK_FN float flock_seen_as(FlockBirdGpu bird, FlockParamsGpu flock) {
-    return flock_flies(bird, flock) ? float(bird.ids.x) : -1.0f;
+KW_FLOCK_FN float flock_seen_as(FlockBirdGpu bird, FlockParamsGpu flock, FlockStateGpu state) {
+    return flock_flies(bird, flock, state) ? float(bird.ids.x) : -1.0f;
 }

@@ -60,27 +60,28 @@ struct FlockParamsGpu {
     vec4 radii;     // x: search radius (m), y: separation distance (m), z: cos of half the field of view (blind angle behind), w: route radius (m)
     vec4 weights;   // x: separation, y: alignment, z: cohesion, w: route attraction (m/s^2)
     vec4 ground;    // x: clearance (m), y: weight (m/s^2), z: speed time constant tau (s), w: separation's front factor
-    vec4 target;    // xyz: the route's leader this frame (m), w: its speed (m/s; a landing flies the route at it)
+    vec4 target;    // xyz: the route's leader this frame (m), w: unused
     vec4 collision; // x: collision distance (m; 0: off), y: its look-ahead (s), z, w: unused
 };
 
 // Per bird, constant: its flock, its place in the formation about the leader, what its
 // wing allows (birds::derive_flight, docs/wing-types.md) and its perches (docs/flocking.md,
-// "Perches": a bird flocks from frame ids.y, after its take-off, to before frame ids.z,
-// its flock's landing; outside them it flies its route, KW_MOTION_ROUTE in shared/birds.h).
+// "Perches": a bird flocks from frame ids.y, after its take-off, until it lands: from
+// frame ids.z on, at the first frame it has passed its landing's start, and at ids.w
+// wherever it is; outside them it flies its route, KW_MOTION_ROUTE in shared/birds.h).
 struct FlockBirdGpu {
-    uvec4 ids;      // x: flock, y: its first flocking frame, z: its first landing frame (0xFFFFFFFF: none), w: unused
+    uvec4 ids;      // x: flock, y: its first flocking frame, z: the first frame it may land (0xFFFFFFFF: no landing), w: the frame it lands by
     vec4 offset;    // xyz: formation offset from the leader (m), w: the take-off's route time offset (s)
     vec4 speed;     // x: cruise speed v0, y: minimum speed, z: maximum speed (m/s), w: max speed change (m/s^2)
     vec4 turn;      // x: max lateral acceleration g tan(max bank) (m/s^2), y: sin(max climb), z: sin(max dive), w: unused
-    vec4 land_position;  // xyz: where its landing route (at the leader's speed, no time offset) and offset put it at t0 (m), w: t0 (s)
-    vec4 land_velocity;  // xyz: its velocity there (m/s), w: 1 / T, T the time from t0 to its touchdown (1/s)
+    vec4 land_position;  // xyz: its route's landing start plus its offset (m), w: the route's time there at its speed v0 (s)
+    vec4 land_velocity;  // xyz: the route's velocity there (m/s), w: 1 / T, T the landing's time to its touchdown (1/s)
 };
 
-// Per bird, carried from frame to frame.
+// Per bird, carried from frame to frame. A landing bird's is where it left the flock (kept).
 struct FlockStateGpu {
-    vec4 position;  // xyz (m), w: unused
-    vec4 velocity;  // xyz (m/s), w: unused
+    vec4 position;  // xyz (m), w: 0, or landing: t0, the time of its last flocking frame (s)
+    vec4 velocity;  // xyz (m/s), w: 0 flying (or on its perch before its take-off), 1 landing
 };
 
 // A repeller, attractor or obstacle, given per frame by the scene or the application.
@@ -94,7 +95,7 @@ struct FlockPush {
     uvec4 counts;  // x: birds, y: bucket mask (buckets - 1), z: agents, w: the grid pass (KW_FLOCK_PASS_*)
     uvec4 slots;   // x: state slot read (the other is written), y: motion frame slot, z: substeps, w: substep index
     uvec4 bases;   // x: this frame's first FlockParamsGpu, y: its first FlockAgentGpu, zw: unused
-    vec4 step;     // x: dt of a substep (s), y: 1 / search radius, z: gravity (m/s^2), w: unused
+    vec4 step;     // x: dt of a substep (s), y: 1 / search radius, z: gravity (m/s^2), w: dt of a frame (s; the bird domain's)
 };
 
 KW_NAMESPACE_END

@@ -170,35 +170,37 @@ TEST(FlockSearch, TypicalFlocksAreTheReferencesLists) {
 }
 
 // Perches (flock_hash.glsl's flock_flies()): the typical world at frame 5 with every
-// seventh bird not flying, on its perch before its first flocking frame or landing from
-// frame 5 on. Nobody sees those birds and they search for nobody, on every instruction set
-// as in the reference; without them in the grid's w, 1 in 3 lists would differ.
+// seventh bird not flying, on its perch before its first flocking frame (6) or landing
+// (its state's velocity.w). Nobody sees those birds and they search for nobody, on every
+// instruction set as in the reference; the reference's own lists leave them out.
 TEST(FlockSearch, BirdsOnTheirPerchesAreInNobodysList) {
     World w = random_world({rules(7, false, 3.0f, 60.0f), rules(5, false, 2.5f, 90.0f)}, 7, -8.5f, 8.5f, 2001, 40.0f);
     for (gpu::FlockParamsGpu& f : w.flocks) f.counts.z = 5u;
     std::size_t perched = 0;
     for (std::size_t i = 0; i < w.birds.size(); i += 7, ++perched) {
-        w.birds[i].ids.y = i % 2 == 0 ? 6u : 0u;
-        w.birds[i].ids.z = i % 2 == 0 ? 0xFFFFFFFFu : 5u;
+        if (i % 2 == 0) {
+            w.birds[i].ids.y = 6u;
+        } else {
+            w.states[i].position.w = 0.05f;  // t0, landing since frame 4
+            w.states[i].velocity.w = 1.0f;
+        }
     }
     const Reach r = compare(w, "perched");
     EXPECT_EQ(r.mismatches, 0u);
-    // The reference's lists themselves leave them out.
     const auto n = static_cast<std::uint32_t>(w.birds.size());
     std::vector<std::uint32_t> cells, buckets, sorted;
     build_grid(w.states, 1.0f / w.radius, bucket_count(n) - 1u, cells, buckets, sorted);
-    const glsl::Kernel kernel{w.flocks, w.birds, w.states, buckets, sorted, {}};
+    glsl::Kernel kernel{w.flocks, w.birds, w.states, buckets, sorted, {}};
     std::size_t listed = 0, searching = 0, not_flying = 0;
     for (std::uint32_t i = 0; i < n; ++i) {
-        glsl::Kernel copy = kernel;
-        const auto nb = copy.flock_neighbours(i, bucket_count(n) - 1u, 1.0f / w.radius);
-        const bool flying = glsl::flock_flies(w.birds[i], w.flocks[w.birds[i].ids.x]);
+        const auto nb = kernel.flock_neighbours(i, bucket_count(n) - 1u, 1.0f / w.radius);
+        const bool flying = glsl::flock_flies(w.birds[i], w.flocks[w.birds[i].ids.x], w.states[i]);
         for (std::uint32_t m = 0; m < nb.found; ++m) listed += nb.j[m] % 7 == 0 ? 1 : 0;
         searching += !flying && nb.found > 0 ? 1 : 0;
         not_flying += !flying ? 1 : 0;
     }
-    EXPECT_EQ(listed, 0u) << "a perched bird in a flying bird's list";
-    EXPECT_EQ(searching, 0u) << "a perched bird with neighbours of its own";
+    EXPECT_EQ(listed, 0u) << "a perched or landing bird in a flying bird's list";
+    EXPECT_EQ(searching, 0u) << "a perched or landing bird with neighbours of its own";
     EXPECT_EQ(not_flying, perched) << "every seventh bird is not flying at frame 5";
 }
 

@@ -135,12 +135,22 @@ public:
                         }
                         for (std::size_t o = b0; o < b1; ++o) {
                             const std::uint32_t i = order[o];
-                            if (!flies(kernel, i)) {
-                                // On its perch or landing (flock_body.glsl): its state kept,
-                                // its route's motion (the rules' step above is not used).
-                                next_[i] = state_[i];
+                            const gpu::FlockBirdGpu& bird = w.birds[i];
+                            const gpu::FlockParamsGpu& flock = kernel.flocks[bird.ids.x];
+                            gpu::FlockStateGpu kept = state_[i];
+                            bool flies = glsl::flock_flies(bird, flock, kept);
+                            // Perches (flock_body.glsl): it leaves the flock to land on a
+                            // frame's first substep.
+                            if (flies && s == 0 && kernel.flock_lands(bird, flock, kept)) {
+                                kept = kernel.flock_landing_state(kept, flock.counts.z, w.frame_dt);
+                                flies = false;
+                            }
+                            if (!flies) {
+                                // On its perch or landing: its state kept, its route's motion
+                                // (the search and rules above are not used).
+                                next_[i] = kept;
                                 if (last) {
-                                    const auto m = kernel.flock_route_motion(w.birds[i], kernel.kw_flock(w.birds[i].ids.x), state_[i]);
+                                    const auto m = kernel.flock_route_motion(bird, kept);
                                     motion[i] = {gpu4(m.position), gpu4(m.velocity), gpu4(m.acceleration)};
                                 }
                                 continue;
@@ -177,10 +187,6 @@ public:
 private:
     using Clock = std::chrono::steady_clock;
     static double seconds(Clock::time_point a, Clock::time_point b) { return std::chrono::duration<double>(b - a).count(); }
-    static bool flies(const glsl::Kernel& kernel, std::uint32_t i) {
-        const gpu::FlockBirdGpu& bird = kernel.birds_in[i];
-        return glsl::flock_flies(bird, kernel.flocks[bird.ids.x]);
-    }
     static gpu::vec4 gpu4(const glm::vec4& v) { return {v.x, v.y, v.z, v.w}; }
     static constexpr std::size_t kBlock = 256;
 

@@ -52,7 +52,7 @@ struct Kernel {
     // copy, whose w its scatter writes by the same flock_seen_as()).
     vec4 kw_point(uint s) const {
         const uint j = sorted[s];
-        return vec4(kw_xyz(states[j].position), flock_seen_as(birds_in[j], flocks[birds_in[j].ids.x]));
+        return vec4(kw_xyz(states[j].position), flock_seen_as(birds_in[j], flocks[birds_in[j].ids.x], states[j]));
     }
     FlockAgentGpu kw_agent(uint a) const { return agents_in[a]; }
 #include "lib/flock_body.glsl"

@@ -259,7 +259,7 @@ void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<con
             vx[s] = states[i].velocity.x;
             vy[s] = states[i].velocity.y;
             vz[s] = states[i].velocity.z;
-            flock[s] = glsl::flock_seen_as(birds[i], flocks[birds[i].ids.x]);
+            flock[s] = glsl::flock_seen_as(birds[i], flocks[birds[i].ids.x], states[i]);
             index[s] = i;
             slot_of[i] = static_cast<std::uint32_t>(s);
         }

@@ -247,7 +247,7 @@ private:
             push.counts = {count_, w.buckets - 1u, agents, KW_FLOCK_PASS_CLEAR};
             push.slots = {slot_, k, w.substeps, s};
             push.bases = {k * flocks, k * agents, 0u, 0u};
-            push.step = {w.dt, 1.0f / w.search_radius, w.gravity, 0.0f};
+            push.step = {w.dt, 1.0f / w.search_radius, w.gravity, w.frame_dt};
             const auto dispatch = [&](const compute::Kernel& kernel, std::uint32_t pass, std::uint32_t groups) {
                 // Each pass reads what the previous one (or the last submission's copy,
                 // upload or step) wrote.

@@ -32,23 +32,32 @@ constexpr std::uint32_t kNever = 0xFFFFFFFFu;  // FlockBirdGpu.ids.z: no landing
 
 // A flock's perches (docs/flocking.md, "Perches"): whether its leader's route takes off
 // and lands (a route's take-off and landing segments are its variants' too), and the
-// frame from which its birds land: the first after the last frame at or before the
-// leader's landing segment begins (docs/flight-modes.md F.2: s = d - L0 for d = v (t -
-// crouch) >= 2 L0 past a take-off, and the landing from s = L - Ln).
+// frames between which its birds land: from the one at which the leader is `ahead` metres
+// before its landing segment's start (a bird lands once past its own start, and none
+// should be that far ahead of the leader: `ahead` is three times the formation's reach and
+// at least 30 m), to the one of the leader's touchdown, by which every bird lands. The
+// route's arc length s at time t (docs/flight-modes.md F.2): s = d - L0 for d = v (t -
+// crouch) >= 2 L0 past a take-off, s = v t without one; the landing from s = L - Ln to
+// touchdown at d = L + Ln (+ L0).
 struct Perches {
     bool takeoff = false, landing = false;
-    std::uint32_t landing_frame = kNever;
+    std::uint32_t earliest = kNever, latest = kNever;
 };
 
-Perches flock_perches(const birds::BirdWorld& world, const FlockWorld::Leader& leader) {
+Perches flock_perches(const birds::BirdWorld& world, const FlockWorld::Leader& leader, double reach) {
     const gpu::RouteHeader& route = world.routes[leader.route];
     Perches p;
     p.takeoff = (route.flags.x & KW_ROUTE_TAKEOFF) != 0;
     p.landing = (route.flags.x & KW_ROUTE_LANDING) != 0;
     if (p.landing) {
         const double v = leader.speed, total = route.info.x, l0 = p.takeoff ? double{route.perch.x} : 0.0;
-        const double starts = (p.takeoff ? KW_CROUCH_SECONDS : 0.0) + (total - double{route.perch.z} + l0) / v;
-        p.landing_frame = static_cast<std::uint32_t>(std::floor(starts * static_cast<double>(world.fps))) + 1u;
+        const double crouch = p.takeoff ? KW_CROUCH_SECONDS : 0.0;
+        const auto time_at = [&](double arc) { return crouch + (arc + l0) / v; };
+        const double starts = total - double{route.perch.z};
+        const double from = std::max(starts - std::max(30.0, 3.0 * reach), l0);
+        const double fps = world.fps;
+        p.earliest = static_cast<std::uint32_t>(std::floor(time_at(from) * fps));
+        p.latest = static_cast<std::uint32_t>(std::ceil(time_at(total + double{route.perch.z}) * fps));
     }
     return p;
 }
@@ -82,19 +91,17 @@ Release release(const birds::BirdWorld& world, const gpu::BirdParams& bird) {
     return r;
 }
 
-// A bird's landing (FlockBirdGpu.land_*): its route at the leader's speed without a time
-// offset (every bird lands as its formation slot would), from t0, the last flocking
-// frame's time, to its touchdown (s = L + Ln, the end of the landing's deceleration).
-void landing(const birds::BirdWorld& world, const Perches& perches, const FlockWorld::Leader& leader, const gpu::BirdParams& bird,
-             gpu::FlockBirdGpu& out) {
+// A bird's landing (FlockBirdGpu.land_*): its route at its own speed from the landing
+// segment's start (s = L - Ln), where it leaves the flock, to its touchdown 2 Ln / v0 later
+// (the end of the landing's deceleration, F.2).
+void landing(const birds::BirdWorld& world, bool takeoff, const gpu::BirdParams& bird, gpu::FlockBirdGpu& out) {
     const gpu::RouteHeader& route = world.routes[bird.ids.x];
-    const float t0 = frame_time(world, perches.landing_frame - 1u);
-    const double l0 = perches.takeoff ? double{route.perch.x} : 0.0;
-    const double touchdown =
-        (perches.takeoff ? KW_CROUCH_SECONDS : 0.0) + (double{route.info.x} + double{route.perch.z} + l0) / double{leader.speed};
-    const birds::RouteSample s = birds::sample_route(world, bird.ids.x, t0, leader.speed);
-    const auto inv_t = static_cast<float>(1.0 / std::max(touchdown - static_cast<double>(t0), 1e-3));
-    out.land_position = {s.position.x + bird.offset.x, s.position.y + bird.offset.y, s.position.z + bird.offset.z, t0};
+    const double v = bird.motion.x, l0 = takeoff ? double{route.perch.x} : 0.0;
+    const double starts = double{route.info.x} - double{route.perch.z};
+    const auto at = static_cast<float>((takeoff ? KW_CROUCH_SECONDS : 0.0) + (starts + l0) / v);
+    const birds::RouteSample s = birds::sample_route(world, bird.ids.x, at, bird.motion.x);
+    const auto inv_t = static_cast<float>(v / (2.0 * double{route.perch.z}));
+    out.land_position = {s.position.x + bird.offset.x, s.position.y + bird.offset.y, s.position.z + bird.offset.z, at};
     out.land_velocity = {s.velocity.x, s.velocity.y, s.velocity.z, inv_t};
 }
 
@@ -108,6 +115,7 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
     out.substeps = static_cast<std::uint32_t>(std::ceil(frame_dt * 60.0 - 1e-9));
     out.substeps = std::max(out.substeps, 1u);
     out.dt = static_cast<float>(frame_dt / out.substeps);
+    out.frame_dt = world.uniforms().physics.z;  // the bird domain's frame time step, the same float
     out.gravity = world.settings.gravity;
     out.routes.fps = world.fps;
     out.routes.routes = world.routes;
@@ -158,7 +166,12 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
                 change = spec.model->flight.max_speed_change;
             }
             out.leaders.push_back({world.birds[first_bird].ids.x, spec.speed.value_or(cruise)});
-            const Perches perches = flock_perches(world, out.leaders.back());
+            double reach = 0.0;  // the formation's: its farthest offset
+            for (std::size_t b = first_bird; b < end; ++b) {
+                const gpu::vec4& o = world.birds[b].offset;
+                reach = std::max(reach, std::sqrt(double{o.x} * double{o.x} + double{o.y} * double{o.y} + double{o.z} * double{o.z}));
+            }
+            const Perches perches = flock_perches(world, out.leaders.back(), reach);
             std::uint32_t last_release = 0;  // the last bird's first flocking frame
             const auto lateral = static_cast<float>(static_cast<double>(world.settings.gravity) * std::tan(double{world.settings.max_bank}));
             for (std::size_t b = first_bird; b < end; ++b) {
@@ -169,7 +182,7 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
                 }
                 const float v0 = bird.motion.x;
                 gpu::FlockBirdGpu& fb = out.birds[bird.ids.z];
-                fb.ids = {index, 0u, perches.landing ? perches.landing_frame : kNever, 0u};
+                fb.ids = {index, 0u, perches.earliest, perches.latest};
                 fb.offset = {bird.offset.x, bird.offset.y, bird.offset.z, bird.offset.w};
                 // Speeds: a starling's flight ranges over about half to one and a half
                 // times its cruise speed (docs/flocking.md).
@@ -191,15 +204,15 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
                     out.initial[bird.ids.z] = {v4(p0), v4(s.velocity)};
                     out.first[bird.ids.z] = {v4(p0), v4(s.velocity), v4(s.acceleration)};
                 }
-                if (perches.landing) landing(world, perches, out.leaders.back(), bird, fb);
+                if (perches.landing) landing(world, perches.takeoff, bird, fb);
             }
-            if (perches.landing && last_release + 1u > perches.landing_frame) {
+            if (perches.landing && last_release >= perches.earliest) {
                 return make_error(Error::Kind::InvalidInput,
                                   scene.path + ": $.flocks[" + std::to_string(f) + "]: its last bird leaves its perch at frame " +
-                                      std::to_string(last_release) + ", and its landing begins at frame " +
-                                      std::to_string(perches.landing_frame) +
-                                      ": expected every bird to flock for a frame before the landing (a longer route, a "
-                                      "shorter formation.trail or a faster flock)");
+                                      std::to_string(last_release) + ", and its birds may land from frame " +
+                                      std::to_string(perches.earliest) +
+                                      ": expected every bird to flock before the landing (a longer route, a shorter "
+                                      "formation.trail or a faster flock)");
             }
         }
         first_bird = end;
@@ -235,7 +248,7 @@ void FlockWorld::frame_inputs(std::uint32_t frame, std::span<gpu::FlockParamsGpu
     for (std::size_t f = 0; f < flocks.size(); ++f) {
         flocks_out[f] = flocks[f];
         const birds::RouteSample s = birds::sample_route(routes, leaders[f].route, t, leaders[f].speed);
-        flocks_out[f].target = {s.position.x, s.position.y, s.position.z, leaders[f].speed};
+        flocks_out[f].target = {s.position.x, s.position.y, s.position.z, 0.0f};
         flocks_out[f].counts.z = frame;  // perches: which birds fly (flock_flies())
     }
     for (std::size_t a = 0; a < predators.size(); ++a) {

@@ -35,6 +35,7 @@ struct FlockWorld {
     std::vector<gpu::BirdParams> predator_birds;
     birds::BirdWorld routes;              ///< the bird world's routes (sample_route())
     float dt = 1.0f / 60.0f;              ///< a substep (s)
+    float frame_dt = 1.0f / 60.0f;        ///< a frame (s), as the bird domain rounds it (BirdWorld::uniforms())
     std::uint32_t substeps = 1;           ///< per frame: at most 1/60 s each
     float search_radius = 1.0f;           ///< the grid's cell: the largest flock's
     float gravity = 9.81f;
