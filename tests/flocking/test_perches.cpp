@@ -157,16 +157,17 @@ TEST_P(PerchBackends, PigeonsLeaveTheirPerchesOneByOneFlockAndLandTogether) {
 
 INSTANTIATE_TEST_SUITE_P(All, PerchBackends, testing_support::all_backend_kinds(), testing_support::backend_test_name);
 
-// The perches' frames are the scene's: a flock whose last bird would leave its perch after
-// the landing began is refused, naming the flock and what to change.
-TEST(Perches, ALandingBeforeTheLastTakeOffIsRefused) {
+// The perches' frames are the scene's: a flock whose last bird would still sit on its perch
+// when its leader touches down is refused, naming the flock and what to change.
+TEST(Perches, AFlockStillPerchedWhenItsLeaderLandsIsRefused) {
     Scene scene = perch_scene();
     scene.flocks.at(0).formation.trail = 30.0f;
     auto sim = Simulation::create(std::move(scene), {.backend = BackendKind::CpuReference});
     ASSERT_FALSE(sim.ok());
     const std::string& m = sim.error().message;
     EXPECT_NE(m.find("perch-flock.json: $.flocks[0]: its last bird leaves its perch at frame "), std::string::npos) << m;
-    EXPECT_NE(m.find("expected every bird to flock before the landing"), std::string::npos) << m;
+    EXPECT_NE(m.find("and its leader touches down at frame "), std::string::npos) << m;
+    EXPECT_NE(m.find("expected every bird to take off before the flock lands"), std::string::npos) << m;
 }
 
 }  // namespace

@@ -206,12 +206,16 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
                 }
                 if (perches.landing) landing(world, perches.takeoff, bird, fb);
             }
-            if (perches.landing && last_release >= perches.earliest) {
+            // A bird that leaves its perch after the leader's landing window opened simply
+            // flocks until it passes its own landing's start (on a short route, none at all:
+            // its take-off runs into its landing); one still on its perch when the leader
+            // touches down would be pulled from there onto its landing: refused.
+            if (perches.landing && last_release >= perches.latest) {
                 return make_error(Error::Kind::InvalidInput,
                                   scene.path + ": $.flocks[" + std::to_string(f) + "]: its last bird leaves its perch at frame " +
-                                      std::to_string(last_release) + ", and its birds may land from frame " +
-                                      std::to_string(perches.earliest) +
-                                      ": expected every bird to flock before the landing (a longer route, a shorter "
+                                      std::to_string(last_release) + ", and its leader touches down at frame " +
+                                      std::to_string(perches.latest) +
+                                      ": expected every bird to take off before the flock lands (a longer route, a shorter "
                                       "formation.trail or a faster flock)");
             }
         }
