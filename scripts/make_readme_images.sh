@@ -37,6 +37,12 @@ cp "$work/birds/birds-closeup_00060.png" docs/images/birds-closeup.png
 # are drawn under the perched birds (render::add_perches).
 "$bin" render scenes/perch.json --frames 150:1951:1800 --size 1280x720 --zoom 1.8 --out "$work/perch" \
     --contact-sheet docs/images/perch.png --columns 2
+# perch-flock.json: its flocking pigeons leaving the roof one by one (frame 150, the scene
+# camera) and coming down on the other (frame 1650, from beside that roof).
+"$bin" render scenes/perch-flock.json --frames 150 --size 640x360 --zoom 1.8 --out "$work/perch-flock"
+cp "$work/perch-flock/perch-flock_00150.png" docs/images/perch-flock-takeoff.png
+"$bin" render scenes/perch-flock.json --frames 1650 --size 640x360 --zoom 3 --camera 20,11,56,0,8.8,69 --out "$work/perch-flock"
+cp "$work/perch-flock/perch-flock_01650.png" docs/images/perch-flock-landing.png
 # perch.json's hummingbirds hovering over their flower bed (a roof garden) 22.7 s in, from
 # a camera of their own (--camera: the scene camera never comes within 14.5 m of them, where
 # they are 8-pixel specks; the simulation keeps the scene camera).
