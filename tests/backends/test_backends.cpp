@@ -10,6 +10,7 @@
 #include <vector>
 
 #include "test_support.hpp"
+#include "backends/bird_backend_test.hpp"
 #include "kodawari/backends/backend.hpp"
 #include "kodawari/birds/wingbeat.hpp"
 #include "kodawari/vulkan/backend_factory.hpp"
@@ -77,23 +78,8 @@ Frames simulate_all(BirdBackend& backend, const birds::BirdWorld& world, std::ui
     return r;
 }
 
-class BirdBackends : public ::testing::TestWithParam<testing_support::BackendCase> {
+class BirdBackends : public testing_support::BirdBackendTest {
 protected:
-    void SetUp() override {
-        if (GetParam() == BackendKind::Vulkan) {
-            if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
-        }
-        auto made = make_bird_backend(GetParam(), testing_support::backend_options(GetParam()));
-        ASSERT_TRUE(made.ok()) << made.error().message;
-        backend_ = std::move(made).value();
-        reference_ = std::move(make_bird_backend(BackendKind::CpuReference, {})).value();
-    }
-    void TearDown() override {
-        if (backend_) {
-            EXPECT_EQ(backend_->validation_messages(), 0u) << "Vulkan validation reported problems (see stderr)";
-        }
-    }
-
     void expect_parity(const birds::BirdWorld& world, std::uint32_t chunk) {
         const Frames ref = simulate_all(*reference_, world, 600);
         const Frames got = simulate_all(*backend_, world, chunk);
@@ -129,8 +115,6 @@ protected:
         EXPECT_EQ(differ, 0u) << "bird-frames whose exact quantities differ from the reference; first: entry " << first;
     }
 
-    std::unique_ptr<BirdBackend> backend_;
-    std::unique_ptr<BirdBackend> reference_;
 };
 
 }  // namespace

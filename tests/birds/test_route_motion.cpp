@@ -13,6 +13,7 @@
 #include <vector>
 
 #include "test_support.hpp"
+#include "backends/bird_backend_test.hpp"
 #include "kodawari/backends/backend.hpp"
 #include "kodawari/backends/compare.hpp"
 #include "kodawari/birds/flight.hpp"
@@ -180,23 +181,8 @@ Correction correction(const gpu::BirdMotionGpu& m, double s) {
     return c;
 }
 
-class RouteMotion : public ::testing::TestWithParam<testing_support::BackendCase> {
+class RouteMotion : public testing_support::BirdBackendTest {
 protected:
-    void SetUp() override {
-        if (GetParam() == BackendKind::Vulkan) {
-            if (const std::string why = testing_support::no_vulkan_device_reason(); !why.empty()) GTEST_SKIP() << why;
-        }
-        auto made = make_bird_backend(GetParam(), testing_support::backend_options(GetParam()));
-        ASSERT_TRUE(made.ok()) << made.error().message;
-        backend_ = std::move(made).value();
-        reference_ = std::move(make_bird_backend(BackendKind::CpuReference, {})).value();
-    }
-    void TearDown() override {
-        if (backend_) {
-            EXPECT_EQ(backend_->validation_messages(), 0u) << "Vulkan validation reported problems (see stderr)";
-        }
-    }
-
     // The driven world on this backend against cpu-reference with compare.hpp's
     // BirdTolerances (positions within 1e-5 of the route's length, rotations, phase and
     // blend within 1e-4, modes exactly); on the cpu backend, which repeats flight.cpp's
@@ -230,8 +216,6 @@ protected:
         }
     }
 
-    std::unique_ptr<BirdBackend> backend_;
-    std::unique_ptr<BirdBackend> reference_;
 };
 
 }  // namespace
