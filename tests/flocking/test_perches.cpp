@@ -13,6 +13,7 @@
 
 #include <glm/glm.hpp>
 
+#include "kodawari/birds/world.hpp"
 #include "kodawari/domains/birds.hpp"
 #include "kodawari/scene/scene.hpp"
 #include "kodawari/simulation/simulation.hpp"
@@ -156,6 +157,51 @@ TEST_P(PerchBackends, PigeonsLeaveTheirPerchesOneByOneFlockAndLandTogether) {
 }
 
 INSTANTIATE_TEST_SUITE_P(All, PerchBackends, testing_support::all_backend_kinds(), testing_support::backend_test_name);
+
+// Either perch alone: perch-flock.json with its first segment "auto" (the birds start in
+// flight where their route puts them, flock, and land), or its last (they take off and
+// flock to the end, over the roof where the route would have landed them). cpu-reference,
+// the body every backend shares.
+TEST(Perches, ATakeOffOrALandingAlone) {
+    for (const bool takeoff : {false, true}) {
+        Scene scene = perch_scene();
+        auto& modes = scene.flocks.at(0).route->modes;
+        (takeoff ? modes.back() : modes.front()) = birds::SegmentMode::Auto;
+        auto world = build_bird_world(scene);
+        ASSERT_TRUE(world.ok()) << world.error().message;
+        const std::vector<gpu::BirdParams> params = world.value().birds;
+        const std::uint32_t frames = scene.frame_count(), n = static_cast<std::uint32_t>(params.size());
+        auto sim = Simulation::create(std::move(scene), {.backend = BackendKind::CpuReference});
+        ASSERT_TRUE(sim.ok()) << sim.error().message;
+        std::vector<gpu::BirdPose> poses(std::size_t{frames} * n);
+        ASSERT_TRUE(step_birds(*sim.value(), frames, poses).ok());
+        float worst_start = 0.0f, worst_end = 0.0f, fastest = 0.0f;
+        for (std::uint32_t b = 0; b < n; ++b) {
+            const glm::vec3 offset(params[b].offset.x, params[b].offset.y, params[b].offset.z);
+            worst_start = std::max(worst_start, glm::length(position(poses[b]) - (kTakeOff + offset)));
+            worst_end = std::max(worst_end, glm::length(position(poses[std::size_t{frames - 1} * n + b]) - (kLanding + offset)));
+            for (std::uint32_t k = 0; k + 1 < frames; ++k) {
+                const glm::vec3 d = position(poses[std::size_t{k + 1} * n + b]) - position(poses[std::size_t{k} * n + b]);
+                fastest = std::max(fastest, glm::length(d) * 60.0f);
+            }
+        }
+        std::printf("[ perches ] %s alone: frame 0 %.3g m from the take-off perches, the last %.3g m from the landing "
+                    "perches, fastest %.2f m/s\n",
+                    takeoff ? "take-off" : "landing", double(worst_start), double(worst_end), double(fastest));
+        EXPECT_LT(fastest, 19.3f) << "as fast as the flock flies at most (the pair's test)";
+        if (takeoff) {
+            EXPECT_LT(worst_start, 1e-4f) << "on their perches at frame 0";
+            EXPECT_GT(worst_end, 1.0f) << "no landing: still flying at the end";
+        } else {
+            EXPECT_LT(worst_end, 1e-4f) << "on their landing perches at the end";
+            // In flight at frame 0, where the route puts each (no crouch): without a
+            // take-off the trail puts a bird up to 4 s ahead along the route (50 m at the
+            // fastest's 12.5 m/s) plus its offset (7 m): measured 46.4 m.
+            EXPECT_LT(worst_start, 57.0f) << "where the route starts them";
+            EXPECT_GT(worst_start, 1.0f) << "in flight, not on the take-off perches";
+        }
+    }
+}
 
 // The perches' frames are the scene's: a flock whose last bird would still sit on its perch
 // when its leader touches down is refused, naming the flock and what to change.
