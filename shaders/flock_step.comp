@@ -21,6 +21,7 @@ layout(std430, binding = KW_FLOCK_BINDING_SORTED) readonly buffer Sorted { uint 
 layout(std430, binding = KW_FLOCK_BINDING_AGENTS) readonly buffer Agents { FlockAgentGpu agents_in[]; };
 layout(std430, binding = KW_FLOCK_BINDING_MOTION) writeonly buffer Motion { BirdMotionGpu motion[]; };
 layout(std430, binding = KW_FLOCK_BINDING_POINTS) readonly buffer Points { vec4 points[]; };
+layout(std430, binding = KW_FLOCK_BINDING_PERCHES) readonly buffer Perches { FlockPerchGpu perches[]; };
 
 layout(push_constant) uniform Push { FlockPush push; };
 
@@ -60,7 +61,7 @@ void main() {
     FlockStateGpu kept = states[push.slots.x * count + i];
     bool flies = flock_flies(bird, flock, kept);
     // Perches (lib/flock_body.glsl): it leaves the flock to land on a frame's first substep.
-    if (flies && push.slots.w == 0u && flock_lands(bird, flock, kept)) {
+    if (flies && push.slots.w == 0u && flock_lands(bird, perches[i], flock, kept)) {
         kept = flock_landing_state(kept, flock.counts.z, push.step.w);
         flies = false;
     }
@@ -68,7 +69,7 @@ void main() {
         // On its perch or landing: its state kept, its route's motion.
         states[out_slot * count + i] = kept;
         if (push.slots.w + 1u == push.slots.z) {
-            const FlockRouteMotion m = flock_route_motion(bird, kept);
+            const FlockRouteMotion m = flock_route_motion(bird, perches[i], kept);
             motion[push.slots.y * count + i] = BirdMotionGpu(m.position, m.velocity, m.acceleration);
         }
         return;

@@ -118,8 +118,9 @@ static_assert(sizeof(RenderPush) <= 128, "Vulkan guarantees 128 bytes of push co
 static_assert(sizeof(BirdMotionGpu) == 48 && offsetof(BirdMotionGpu, velocity) == 16 && offsetof(BirdMotionGpu, acceleration) == 32);
 static_assert(sizeof(FlockParamsGpu) == 96 && offsetof(FlockParamsGpu, radii) == 16 && offsetof(FlockParamsGpu, weights) == 32 &&
               offsetof(FlockParamsGpu, ground) == 48 && offsetof(FlockParamsGpu, target) == 64 && offsetof(FlockParamsGpu, collision) == 80);
-static_assert(sizeof(FlockBirdGpu) == 96 && offsetof(FlockBirdGpu, offset) == 16 && offsetof(FlockBirdGpu, speed) == 32 &&
-              offsetof(FlockBirdGpu, turn) == 48 && offsetof(FlockBirdGpu, land_position) == 64 && offsetof(FlockBirdGpu, land_velocity) == 80);
+static_assert(sizeof(FlockBirdGpu) == 64 && offsetof(FlockBirdGpu, offset) == 16 && offsetof(FlockBirdGpu, speed) == 32 &&
+              offsetof(FlockBirdGpu, turn) == 48);
+static_assert(sizeof(FlockPerchGpu) == 32 && offsetof(FlockPerchGpu, land_velocity) == 16);
 static_assert(sizeof(FlockStateGpu) == 32 && offsetof(FlockStateGpu, velocity) == 16);
 static_assert(sizeof(FlockAgentGpu) == 48 && offsetof(FlockAgentGpu, kind_weight) == 16 && offsetof(FlockAgentGpu, velocity) == 32);
 static_assert(sizeof(FlockPush) == 64 && offsetof(FlockPush, slots) == 16 && offsetof(FlockPush, bases) == 32 &&

@@ -73,10 +73,10 @@ vec3 flock_round(vec3 across, vec3 facing, vec3 up) {
 // passed its landing's start (the plane through its route's landing start plus its offset,
 // across the route there: it lands where it arrives, a bird behind its slot later), and by
 // the last frame wherever it is (docs/flocking.md, "Perches").
-bool flock_lands(FlockBirdGpu bird, FlockParamsGpu flock, FlockStateGpu state) {
+bool flock_lands(FlockBirdGpu bird, FlockPerchGpu perch, FlockParamsGpu flock, FlockStateGpu state) {
     if (flock.counts.z < bird.ids.z) return false;
-    const vec3 past = KW_XYZ(state.position) - KW_XYZ(bird.land_position);
-    return flock.counts.z >= bird.ids.w || dot(past, KW_XYZ(bird.land_velocity)) >= 0.0f;
+    const vec3 past = KW_XYZ(state.position) - KW_XYZ(perch.land_position);
+    return flock.counts.z >= bird.ids.w || dot(past, KW_XYZ(perch.land_velocity)) >= 0.0f;
 }
 
 // The state of a bird that leaves the flock to land at this frame: where its last flocking
@@ -98,7 +98,7 @@ struct FlockRouteMotion {
     vec4 velocity;
     vec4 acceleration;
 };
-FlockRouteMotion flock_route_motion(FlockBirdGpu bird, FlockStateGpu state) {
+FlockRouteMotion flock_route_motion(FlockBirdGpu bird, FlockPerchGpu perch, FlockStateGpu state) {
     FlockRouteMotion m;
     if (state.velocity.w == 0.0f) {
         m.position = vec4(0.0f, 0.0f, 0.0f, float(KW_MOTION_ROUTE));
@@ -106,11 +106,11 @@ FlockRouteMotion flock_route_motion(FlockBirdGpu bird, FlockStateGpu state) {
         m.acceleration = vec4(0.0f, 0.0f, bird.speed.x, 0.0f);
     } else {
         const float t0 = state.position.w;
-        const vec3 e_p = KW_XYZ(state.position) - KW_XYZ(bird.land_position);
-        const vec3 e_v = KW_XYZ(state.velocity) - KW_XYZ(bird.land_velocity);
+        const vec3 e_p = KW_XYZ(state.position) - KW_XYZ(perch.land_position);
+        const vec3 e_v = KW_XYZ(state.velocity) - KW_XYZ(perch.land_velocity);
         m.position = vec4(e_p.x, e_p.y, e_p.z, float(KW_MOTION_ROUTE));
-        m.velocity = vec4(e_v.x, e_v.y, e_v.z, bird.land_position.w - t0);
-        m.acceleration = vec4(t0, bird.land_velocity.w, bird.speed.x, 0.0f);
+        m.velocity = vec4(e_v.x, e_v.y, e_v.z, perch.land_position.w - t0);
+        m.acceleration = vec4(t0, perch.land_velocity.w, bird.speed.x, 0.0f);
     }
     return m;
 }

@@ -26,7 +26,8 @@
 #define KW_FLOCK_BINDING_AGENTS 6   // FlockAgentGpu: repellers, attractors, obstacles (per frame)
 #define KW_FLOCK_BINDING_MOTION 7   // BirdMotionGpu (shared/birds.h) per frame per bird: what the bird domain flies
 #define KW_FLOCK_BINDING_POINTS 8   // vec4 per bird in SORTED's order: xyz its position, w its flock (a float, exact below 2^24)
-#define KW_FLOCK_BINDING_COUNT 9
+#define KW_FLOCK_BINDING_PERCHES 9  // FlockPerchGpu per bird (constants; read only by birds that land)
+#define KW_FLOCK_BINDING_COUNT 10
 // The most flocking flocks a world holds: a flock index is carried as a float in POINTS.
 #define KW_FLOCK_MAX_FLOCKS 16777216u
 
@@ -69,11 +70,18 @@ struct FlockParamsGpu {
 // "Perches": a bird flocks from frame ids.y, after its take-off, until it lands: from
 // frame ids.z on, at the first frame it has passed its landing's start, and at ids.w
 // wherever it is; outside them it flies its route, KW_MOTION_ROUTE in shared/birds.h).
+// 64 bytes, a cache line: the rules read it by index for every bird.
 struct FlockBirdGpu {
     uvec4 ids;      // x: flock, y: its first flocking frame, z: the first frame it may land (0xFFFFFFFF: no landing), w: the frame it lands by
     vec4 offset;    // xyz: formation offset from the leader (m), w: the take-off's route time offset (s)
     vec4 speed;     // x: cruise speed v0, y: minimum speed, z: maximum speed (m/s), w: max speed change (m/s^2)
     vec4 turn;      // x: max lateral acceleration g tan(max bank) (m/s^2), y: sin(max climb), z: sin(max dive), w: unused
+};
+
+// Per bird, constant: its landing (docs/flocking.md, "Perches"), apart from FlockBirdGpu
+// so that flocks without one do not carry it through the caches (in it, 9% of the cpu
+// backend's time at a million birds).
+struct FlockPerchGpu {
     vec4 land_position;  // xyz: its route's landing start plus its offset (m), w: the route's time there at its speed v0 (s)
     vec4 land_velocity;  // xyz: the route's velocity there (m/s), w: 1 / T, T the landing's time to its touchdown (1/s)
 };

@@ -95,7 +95,7 @@ Reach compare(const World& w, const char* name) {
     build_grid(w.states, inv_radius, mask, cells, buckets, sorted);
     SortedBirds sorted_birds;
     sorted_birds.fill(w.states, w.birds, w.flocks, sorted);
-    glsl::Kernel kernel{w.flocks, w.birds, w.states, buckets, sorted, {}};
+    glsl::Kernel kernel{w.flocks, w.birds, w.states, buckets, sorted, {}, {}};
     std::vector<glsl::Kernel::FlockNeighbours> expected(n);
     Reach reach;
     reach.birds = n;
@@ -190,7 +190,7 @@ TEST(FlockSearch, BirdsOnTheirPerchesAreInNobodysList) {
     const auto n = static_cast<std::uint32_t>(w.birds.size());
     std::vector<std::uint32_t> cells, buckets, sorted;
     build_grid(w.states, 1.0f / w.radius, bucket_count(n) - 1u, cells, buckets, sorted);
-    glsl::Kernel kernel{w.flocks, w.birds, w.states, buckets, sorted, {}};
+    glsl::Kernel kernel{w.flocks, w.birds, w.states, buckets, sorted, {}, {}};
     std::size_t listed = 0, searching = 0, not_flying = 0;
     for (std::uint32_t i = 0; i < n; ++i) {
         const auto nb = kernel.flock_neighbours(i, bucket_count(n) - 1u, 1.0f / w.radius);
@@ -414,7 +414,7 @@ TEST(FlockRules, AreTheBodysRulesBitForBit) {
     build_grid(w.states, inv_radius, mask, cells, buckets, sorted);
     SortedBirds sorted_birds;
     sorted_birds.fill(w.states, w.birds, w.flocks, sorted);
-    glsl::Kernel kernel{w.flocks, w.birds, w.states, buckets, sorted, agents};
+    glsl::Kernel kernel{w.flocks, w.birds, w.states, buckets, sorted, agents, {}};
     const auto agent_count = static_cast<std::uint32_t>(agents.size());
     std::vector<glsl::Kernel::FlockNeighbours> found(n);
     std::vector<glsl::Kernel::FlockStep> expected(n);

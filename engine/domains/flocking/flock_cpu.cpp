@@ -92,7 +92,7 @@ public:
                 build_grid(state_, inv_radius, mask, cells_, buckets_, sorted_, threads_);
                 if (search_ != nullptr) sorted_birds_.fill(state_, w.birds, frame_flocks, sorted_, threads_);
                 timing_.grid_seconds += seconds(grid_start, Clock::now());
-                glsl::Kernel kernel{frame_flocks, w.birds, state_, buckets_, sorted_, agents.subspan(k * a_count, a_count)};
+                glsl::Kernel kernel{frame_flocks, w.birds, state_, buckets_, sorted_, agents.subspan(k * a_count, a_count), w.perches_of};
                 const SearchArgs search_args{&kernel, &sorted_birds_, mask, inv_radius};
                 const RulesArgs rules_args{&kernel, &sorted_birds_, static_cast<std::uint32_t>(a_count), w.dt};
                 const bool last = s + 1 == w.substeps;
@@ -135,22 +135,28 @@ public:
                         }
                         for (std::size_t o = b0; o < b1; ++o) {
                             const std::uint32_t i = order[o];
+                            // Perches (flock_body.glsl): a bird on its perch or landing is not
+                            // stepped, and a flying one leaves the flock to land on a frame's
+                            // first substep. Asked only in a world with perches (each bird's
+                            // constants and state read by index again).
+                            bool flies = true;
+                            gpu::FlockStateGpu kept{};
                             const gpu::FlockBirdGpu& bird = w.birds[i];
-                            const gpu::FlockParamsGpu& flock = kernel.flocks[bird.ids.x];
-                            gpu::FlockStateGpu kept = state_[i];
-                            bool flies = glsl::flock_flies(bird, flock, kept);
-                            // Perches (flock_body.glsl): it leaves the flock to land on a
-                            // frame's first substep.
-                            if (flies && s == 0 && kernel.flock_lands(bird, flock, kept)) {
-                                kept = kernel.flock_landing_state(kept, flock.counts.z, w.frame_dt);
-                                flies = false;
+                            if (w.perches) {
+                                const gpu::FlockParamsGpu& flock = kernel.flocks[bird.ids.x];
+                                kept = state_[i];
+                                flies = glsl::flock_flies(bird, flock, kept);
+                                if (flies && s == 0 && kernel.flock_lands(bird, w.perches_of[i], flock, kept)) {
+                                    kept = kernel.flock_landing_state(kept, flock.counts.z, w.frame_dt);
+                                    flies = false;
+                                }
                             }
                             if (!flies) {
                                 // On its perch or landing: its state kept, its route's motion
                                 // (the search and rules above are not used).
                                 next_[i] = kept;
                                 if (last) {
-                                    const auto m = kernel.flock_route_motion(bird, kept);
+                                    const auto m = kernel.flock_route_motion(bird, w.perches_of[i], kept);
                                     motion[i] = {gpu4(m.position), gpu4(m.velocity), gpu4(m.acceleration)};
                                 }
                                 continue;

@@ -22,6 +22,7 @@ using uint = std::uint32_t;
 using gpu::FlockAgentGpu;
 using gpu::FlockBirdGpu;
 using gpu::FlockParamsGpu;
+using gpu::FlockPerchGpu;
 using gpu::FlockStateGpu;
 
 inline vec3 kw_xyz(const gpu::vec4& v) { return vec3(v.x, v.y, v.z); }
@@ -39,6 +40,7 @@ struct Kernel {
     std::span<const uint> buckets;          ///< start, count per bucket
     std::span<const uint> sorted;
     std::span<const FlockAgentGpu> agents_in;
+    std::span<const FlockPerchGpu> perches_in;  ///< per bird (read only where a flock lands)
 
 #define KW_XYZ(v) kw_xyz(v)
 #define KW_INOUT(T) T&

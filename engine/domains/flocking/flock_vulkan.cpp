@@ -60,7 +60,7 @@ public:
             sizeof(gpu::FlockParamsGpu) * std::max<std::size_t>(world.flocks.size(), 1), sizeof(gpu::FlockBirdGpu) * n,
             2 * sizeof(gpu::FlockStateGpu) * n, sizeof(std::uint32_t) * n, sizeof(std::uint32_t) * (2 * std::uint64_t{world.buckets} + scan_tiles(world)),
             sizeof(std::uint32_t) * n, sizeof(gpu::FlockAgentGpu) * (world.scene_agents() + kMaxFlockAgents),
-            sizeof(gpu::BirdMotionGpu) * n, sizeof(gpu::vec4) * n};
+            sizeof(gpu::BirdMotionGpu) * n, sizeof(gpu::vec4) * n, sizeof(gpu::FlockPerchGpu) * n};
         for (std::uint64_t bytes : sizes) {
             if (bytes > device_->info().max_storage_buffer_range) {
                 return make_error(Error::Kind::Unsupported, device_->info().name + " cannot hold " + std::to_string(count_) +
@@ -72,6 +72,7 @@ public:
             buffers_.push_back(std::move(buffer).value());
         }
         KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_BIRDS], bytes_of(std::span(world.birds))));
+        KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_PERCHES], bytes_of(std::span(world.perches_of))));
         KW_TRY(compute::upload(*device_, buffers_[KW_FLOCK_BINDING_STATES], bytes_of(std::span(world.initial))));
         bind();
         return {};

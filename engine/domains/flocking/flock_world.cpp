@@ -94,7 +94,7 @@ Release release(const birds::BirdWorld& world, const gpu::BirdParams& bird) {
 // A bird's landing (FlockBirdGpu.land_*): its route at its own speed from the landing
 // segment's start (s = L - Ln), where it leaves the flock, to its touchdown 2 Ln / v0 later
 // (the end of the landing's deceleration, F.2).
-void landing(const birds::BirdWorld& world, bool takeoff, const gpu::BirdParams& bird, gpu::FlockBirdGpu& out) {
+void landing(const birds::BirdWorld& world, bool takeoff, const gpu::BirdParams& bird, gpu::FlockPerchGpu& out) {
     const gpu::RouteHeader& route = world.routes[bird.ids.x];
     const double v = bird.motion.x, l0 = takeoff ? double{route.perch.x} : 0.0;
     const double starts = double{route.info.x} - double{route.perch.z};
@@ -122,6 +122,7 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
     out.routes.control_points = world.control_points;
     out.routes.arc_samples = world.arc_samples;
     out.birds.resize(world.driven);
+    out.perches_of.resize(world.driven);
     out.initial.resize(world.driven);
     out.first.resize(world.driven);
 
@@ -172,6 +173,7 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
                 reach = std::max(reach, std::sqrt(double{o.x} * double{o.x} + double{o.y} * double{o.y} + double{o.z} * double{o.z}));
             }
             const Perches perches = flock_perches(world, out.leaders.back(), reach);
+            out.perches = out.perches || perches.takeoff || perches.landing;
             std::uint32_t last_release = 0;  // the last bird's first flocking frame
             const auto lateral = static_cast<float>(static_cast<double>(world.settings.gravity) * std::tan(double{world.settings.max_bank}));
             for (std::size_t b = first_bird; b < end; ++b) {
@@ -204,7 +206,7 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
                     out.initial[bird.ids.z] = {v4(p0), v4(s.velocity)};
                     out.first[bird.ids.z] = {v4(p0), v4(s.velocity), v4(s.acceleration)};
                 }
-                if (perches.landing) landing(world, perches.takeoff, bird, fb);
+                if (perches.landing) landing(world, perches.takeoff, bird, out.perches_of[bird.ids.z]);
             }
             // A bird that leaves its perch after the leader's landing window opened simply
             // flocks until it passes its own landing's start (on a short route, none at all:

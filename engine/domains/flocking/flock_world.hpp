@@ -18,6 +18,7 @@ namespace kodawari::flocking {
 struct FlockWorld {
     std::vector<gpu::FlockParamsGpu> flocks;  ///< per flocking flock (target: frame_inputs())
     std::vector<gpu::FlockBirdGpu> birds;     ///< per driven bird, by its slot (BirdParams::ids.z)
+    std::vector<gpu::FlockPerchGpu> perches_of;  ///< per driven bird: its landing (zero without one)
     std::vector<gpu::FlockStateGpu> initial;  ///< frame 0: where and how its route flies it
     std::vector<gpu::BirdMotionGpu> first;    ///< frame 0's motion (the route's acceleration)
     /// Per flock: the route its leader flies (arc-length timing) at `speed`.
@@ -36,6 +37,7 @@ struct FlockWorld {
     birds::BirdWorld routes;              ///< the bird world's routes (sample_route())
     float dt = 1.0f / 60.0f;              ///< a substep (s)
     float frame_dt = 1.0f / 60.0f;        ///< a frame (s), as the bird domain rounds it (BirdWorld::uniforms())
+    bool perches = false;                 ///< some flock takes off or lands (docs/flocking.md, "Perches")
     std::uint32_t substeps = 1;           ///< per frame: at most 1/60 s each
     float search_radius = 1.0f;           ///< the grid's cell: the largest flock's
     float gravity = 9.81f;
