@@ -30,8 +30,17 @@ def number(v, rng):
 
 # The scene loader: every shipped scene, and the bad inputs test_scene.cpp checks by kind.
 scene = reset("scene")
+# Not copied: scenes whose keys smaller seeds beside them already reach, whose size only
+# slows each mutation (the limited bunny took fuzz_scene's 40 000 executions from 37 s to
+# 159 s for 0.6% more coverage: bunny-limits.json is one antenna instead).
+covered_elsewhere = {
+    "limits.json": "bunny-limits.json",
+    "windy.json": "bunny-wind.json",
+    "crowd-10k.json": "crowd.json",
+}
 for f in sorted((root / "scenes").glob("*.json")) + sorted((root / "scenes/bench").glob("*.json")):
-    shutil.copy(f, scene / f.name)
+    if f.name not in covered_elsewhere:
+        shutil.copy(f, scene / f.name)
 bad_scenes = {
     "empty.json": "",
     "not-object.json": "[1, 2, 3]",
