@@ -59,13 +59,8 @@ void main() {
     const FlockBirdGpu bird = birds[i];
     const FlockParamsGpu flock = kw_flock(bird.ids.x);
     FlockStateGpu kept = states[push.slots.x * count + i];
-    bool flies = flock_flies(bird, flock, kept);
-    // Perches (lib/flock_body.glsl): it leaves the flock to land on a frame's first substep.
-    if (flies && push.slots.w == 0u && flock_lands(bird, perches[i], flock, kept)) {
-        kept = flock_landing_state(kept, flock.counts.z, push.step.w);
-        flies = false;
-    }
-    if (!flies) {
+    // Perches (lib/flock_body.glsl): on its perch or landing it is not stepped.
+    if (!flock_stepped(bird, perches[i], flock, kept, push.slots.w, push.step.w)) {
         // On its perch or landing: its state kept, its route's motion.
         states[out_slot * count + i] = kept;
         if (push.slots.w + 1u == push.slots.z) {

@@ -87,6 +87,18 @@ FlockStateGpu flock_landing_state(FlockStateGpu state, uint frame, float frame_d
     return state;
 }
 
+// Whether a bird is stepped by the rules this substep (`substep` of the frame; frame_dt the
+// bird domain's): not on its perch or landing, and a flying one leaves the flock to land
+// at a frame's first substep, `state` becoming the landing state it then keeps. The one
+// decision flock_step.comp and the CPU backends take.
+bool flock_stepped(FlockBirdGpu bird, FlockPerchGpu perch, FlockParamsGpu flock, KW_INOUT(FlockStateGpu) state, uint substep,
+                   float frame_dt) {
+    if (!flock_flies(bird, flock, state)) return false;
+    if (substep != 0u || !flock_lands(bird, perch, flock, state)) return true;
+    state = flock_landing_state(state, flock.counts.z, frame_dt);
+    return false;
+}
+
 // What a bird that is not flying hands the bird domain (shared/birds.h, KW_MOTION_ROUTE),
 // at its cruise speed: before its take-off is behind it, its route from its take-off's
 // time offset, uncorrected (its state is where that route leaves it, flight.cpp's sample

@@ -139,19 +139,9 @@ public:
                             // stepped, and a flying one leaves the flock to land on a frame's
                             // first substep. Asked only in a world with perches (each bird's
                             // constants and state read by index again).
-                            bool flies = true;
-                            gpu::FlockStateGpu kept{};
                             const gpu::FlockBirdGpu& bird = w.birds[i];
-                            if (w.perches) {
-                                const gpu::FlockParamsGpu& flock = kernel.flocks[bird.ids.x];
-                                kept = state_[i];
-                                flies = glsl::flock_flies(bird, flock, kept);
-                                if (flies && s == 0 && kernel.flock_lands(bird, w.perches_of[i], flock, kept)) {
-                                    kept = kernel.flock_landing_state(kept, flock.counts.z, w.frame_dt);
-                                    flies = false;
-                                }
-                            }
-                            if (!flies) {
+                            gpu::FlockStateGpu kept = w.perches ? state_[i] : gpu::FlockStateGpu{};
+                            if (w.perches && !kernel.flock_stepped(bird, w.perches_of[i], kernel.flocks[bird.ids.x], kept, s, w.frame_dt)) {
                                 // On its perch or landing: its state kept, its route's motion
                                 // (the search and rules above are not used).
                                 next_[i] = kept;

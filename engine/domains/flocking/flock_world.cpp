@@ -62,36 +62,33 @@ Perches flock_perches(const birds::BirdWorld& world, const FlockWorld::Leader& l
     return p;
 }
 
-// The frame time as the bird domain computes it (flight.cpp step_bird(): frame * dt).
-float frame_time(const birds::BirdWorld& world, std::uint32_t frame) {
-    return static_cast<float>(frame) * static_cast<float>(1.0 / static_cast<double>(world.fps));
-}
-
 // Where a bird that takes off leaves the route for the flock: the first frame at which its
 // take-off segment is behind it (d = v (t + offset - crouch) >= 2 L0), and its route's
-// place and velocity there (flight.cpp's sample, the bird domain's on that frame).
+// place and velocity there (flight.cpp's sample, the bird domain's on that frame, whose
+// time is frame * frame_dt: step_bird()).
 struct Release {
     std::uint32_t frame = 0;
     gpu::FlockStateGpu state{};
 };
 
-Release release(const birds::BirdWorld& world, const gpu::BirdParams& bird) {
+Release release(const birds::BirdWorld& world, const gpu::BirdParams& bird, float frame_dt) {
     const gpu::RouteHeader& route = world.routes[bird.ids.x];
     const double ends = KW_CROUCH_SECONDS + 2.0 * double{route.perch.x} / double{bird.motion.x} - double{bird.offset.w};
     Release r;
     r.frame = static_cast<std::uint32_t>(std::ceil(ends * static_cast<double>(world.fps)));
+    const auto sample = [&] { return birds::sample_route(world, bird.ids.x, static_cast<float>(r.frame) * frame_dt + bird.offset.w, bird.motion.x); };
+    birds::RouteSample s = sample();
     // The frame's time rounded as the bird domain rounds it may still fall short of the
     // end by an ulp: the next frame then.
-    for (int more = 0; more < 2; ++more) {
-        if (birds::sample_route(world, bird.ids.x, frame_time(world, r.frame) + bird.offset.w, bird.motion.x).progress.speed_fraction >= 1.0f) break;
+    for (int more = 0; more < 2 && s.progress.speed_fraction < 1.0f; ++more) {
         ++r.frame;
+        s = sample();
     }
-    const birds::RouteSample s = birds::sample_route(world, bird.ids.x, frame_time(world, r.frame) + bird.offset.w, bird.motion.x);
     r.state = {{s.position.x + bird.offset.x, s.position.y + bird.offset.y, s.position.z + bird.offset.z, 0.0f}, v4(s.velocity)};
     return r;
 }
 
-// A bird's landing (FlockBirdGpu.land_*): its route at its own speed from the landing
+// A bird's landing (FlockPerchGpu): its route at its own speed from the landing
 // segment's start (s = L - Ln), where it leaves the flock, to its touchdown 2 Ln / v0 later
 // (the end of the landing's deceleration, F.2).
 void landing(const birds::BirdWorld& world, bool takeoff, const gpu::BirdParams& bird, gpu::FlockPerchGpu& out) {
@@ -194,7 +191,7 @@ Result<FlockWorld> build_flock_world(const Scene& scene, const birds::BirdWorld&
                     // On its perch until its take-off segment ends: the route (the bird
                     // domain flies it, KW_MOTION_ROUTE) to the frame that has it flying at
                     // its speed, where its flocking state starts (flock_body.glsl).
-                    const Release r = release(world, bird);
+                    const Release r = release(world, bird, out.frame_dt);
                     fb.ids.y = r.frame + 1u;
                     last_release = std::max(last_release, fb.ids.y);
                     out.initial[bird.ids.z] = r.state;
