@@ -171,7 +171,7 @@ FlockNeighbours flock_neighbours(uint i, uint mask, float inv_radius) {
     for (int dz = -1; dz <= 1; ++dz) {
         for (int dy = -1; dy <= 1; ++dy) {
             for (int dx = -1; dx <= 1; ++dx) {
-                const uint b = flock_cell_bucket(home + ivec3(dx, dy, dz), mask);
+                const uint b = flock_cell_bucket(flock_cell_near(home, ivec3(dx, dy, dz)), mask);
                 // Two of the 27 cells may hash to one bucket: visit it once.
                 bool seen = false;
                 for (uint s = 0u; s < visited_count; ++s) seen = seen || visited[s] == b;

@@ -42,7 +42,19 @@ KW_FLOCK_FN uint flock_cell_bucket(ivec3 c, uint mask) {
     return (morton ^ flock_mix(wrap)) & mask;
 }
 
-KW_FLOCK_FN ivec3 flock_cell(vec3 p, float inv_radius) { return ivec3(floor(p * inv_radius)); }
+// A NaN, infinite or far position's cell (beyond the int range) is the range's lowest
+// value, where x86's conversion has always put it: said here, since a float's conversion
+// out of range is undefined in C++ (and stopped by the sanitizers) and in GLSL.
+KW_FLOCK_FN ivec3 flock_cell(vec3 p, float inv_radius) {
+    const vec3 c = floor(p * inv_radius);
+    return ivec3(mix(vec3(-2147483648.0f), c, lessThan(abs(c), vec3(2147483520.0f))));
+}
+
+// The cell d (-1 to 1 an axis) away from cell c, wrapping as unsigned arithmetic does: a
+// NaN or infinite position's cell lies at the int range's end (x86's conversion gives
+// its lowest value), where a signed overflow would be undefined in C++ (and stopped by
+// the sanitizers). The same cells as c + d wherever that does not overflow.
+KW_FLOCK_FN ivec3 flock_cell_near(ivec3 c, ivec3 d) { return ivec3(uvec3(c) + uvec3(d)); }
 
 KW_FLOCK_FN uint flock_bucket(vec3 p, float inv_radius, uint mask) { return flock_cell_bucket(flock_cell(p, inv_radius), mask); }
 

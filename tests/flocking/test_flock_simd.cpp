@@ -14,6 +14,7 @@
 #include <bit>
 #include <cmath>
 #include <cstdio>
+#include <limits>
 #include <random>
 #include <string>
 #include <utility>
@@ -55,11 +56,14 @@ struct Reach {
     std::size_t over_ranked = 0;  // birds that see more than kSearchRankedMost candidates
     std::size_t ties = 0;         // birds whose list holds two neighbours at one distance
     std::size_t short_lists = 0;  // birds that found fewer than k
-    std::size_t mismatches = 0;   // (isa, bird) pairs whose search differs from the reference
+    std::size_t mismatches = 0;   // (isa, pass, bird) pairs whose search differs from the reference
+    std::size_t bounded = 0;      // birds whose bound from the search's own k-th distance holds k candidates
+    std::size_t bounded_short = 0;  // the bounds shrunk 0.6x: birds whose bound holds fewer than k (searched again, whole)
 };
 
-// How many candidates bird i sees: flock_neighbours()'s tests over every bird.
-std::size_t seen_by(const World& w, std::size_t i) {
+// How many candidates bird i sees within distance^2 `bound` (its search radius's when
+// not given): flock_neighbours()'s tests over every bird.
+std::size_t seen_by(const World& w, std::size_t i, float bound = std::numeric_limits<float>::infinity()) {
     const gpu::FlockParamsGpu& f = w.flocks[w.birds[i].ids.x];
     const glm::vec3 p = glsl::kw_xyz(w.states[i].position), v = glsl::kw_xyz(w.states[i].velocity);
     const float speed = glm::length(v);
@@ -69,7 +73,7 @@ std::size_t seen_by(const World& w, std::size_t i) {
         if (j == i || w.birds[j].ids.x != w.birds[i].ids.x) continue;
         const glm::vec3 d = glsl::kw_xyz(w.states[j].position) - p;
         const float d2 = glm::dot(d, d);
-        if (d2 > f.radii.x * f.radii.x || glm::dot(d, forward) < f.radii.z * std::sqrt(d2)) continue;
+        if (d2 > f.radii.x * f.radii.x || d2 > bound || glm::dot(d, forward) < f.radii.z * std::sqrt(d2)) continue;
         ++seen;
     }
     return seen;
@@ -112,29 +116,70 @@ Reach compare(const World& w, const char* name) {
         }
         if (seen_by(w, i) > kSearchRankedMost) ++reach.over_ranked;
     }
-    const SearchArgs args{&kernel, &sorted_birds, mask, inv_radius};
+    // The bounds the search reads as hints (SortedBirds::bound, which its SearchArgs::bounds
+    // of last time give), pass after pass: none
+    // (infinity, a world's first substep), the k-th distances it wrote itself (what the
+    // next substep reads: the first bound holds k for most birds), those shrunk (too tight
+    // for some: the whole radius again), and nonsense. Every pass the reference's lists.
+    struct Pass {
+        const char* what;
+        float scale;  // of the bounds written by the pass before (NaN: set to `value`)
+        float value;
+    };
+    const Pass passes[] = {{"no bounds", std::nanf(""), std::numeric_limits<float>::infinity()},
+                           {"its own", 1.0f, 0.0f},
+                           {"its own, 0.6x", 0.6f, 0.0f},
+                           {"0", std::nanf(""), 0.0f},
+                           {"-1", std::nanf(""), -1.0f},
+                           {"NaN", std::nanf(""), std::nanf("")},
+                           {"none", -1.0f, 0.0f}};
     for (const auto& [isa_name, target] : instruction_sets()) {
         const SearchFn search = flock_search_kernel(target);
-        std::vector<glsl::Kernel::FlockNeighbours> found(n);
-        // In calls of 37 birds (not a multiple of any vector): a call starts its list afresh.
-        for (std::uint32_t first = 0; first < n; first += 37) search(args, first, std::min(37u, n - first), found.data() + first);
-        std::size_t differ = 0;
-        for (std::uint32_t s = 0; s < n; ++s) {
-            const glsl::Kernel::FlockNeighbours &a = found[s], &e = expected[s];
-            bool same = a.found == e.found;
-            for (std::uint32_t m = 0; same && m < e.found; ++m) {
-                same = std::bit_cast<std::uint32_t>(a.d2[m]) == std::bit_cast<std::uint32_t>(e.d2[m]) && a.j[m] == e.j[m];
+        std::vector<float> bounds(n);
+        for (const Pass& pass : passes) {
+            std::vector<float> given = bounds;
+            for (std::uint32_t i = 0; i < n; ++i) given[i] = std::isnan(pass.scale) ? pass.value : bounds[i] * pass.scale;
+            // Birds whose first bound holds k candidates the reference's tests pass, and
+            // those whose bound is tighter than their radius but holds fewer.
+            std::size_t held = 0, short_of_k = 0;
+            for (std::uint32_t i = 0; i < n && !(pass.scale < 0.0f); ++i) {
+                const std::uint32_t k = kernel.flock_k(w.flocks[w.birds[i].ids.x]);
+                const float radius2 = w.flocks[w.birds[i].ids.x].radii.x * w.flocks[w.birds[i].ids.x].radii.x;
+                const float bound = std::min(radius2, given[i] * kBoundGrowth);
+                const std::size_t within = bound < radius2 ? seen_by(w, i, bound) : 0;
+                held += bound < radius2 && within >= k ? 1 : 0;
+                short_of_k += bound < radius2 && within < k ? 1 : 0;
             }
-            if (!same && differ++ < 3) {
-                ADD_FAILURE() << name << ", " << isa_name << ": bird " << sorted[s] << " found " << a.found << " (first j "
-                              << (a.found > 0 ? a.j[0] : 0u) << "), the reference " << e.found << " (first j "
-                              << (e.found > 0 ? e.j[0] : 0u) << ")";
+            // By slot, as the fill hands them over (the world does not move: the slots stay).
+            std::vector<float> written(n);
+            for (std::uint32_t s = 0; s < n; ++s) sorted_birds.bound[s] = given[sorted[s]];
+            const SearchArgs args{&kernel, &sorted_birds, mask, inv_radius, pass.scale < 0.0f ? nullptr : written.data()};
+            std::vector<glsl::Kernel::FlockNeighbours> found(n);
+            // In calls of 37 birds (not a multiple of any vector): a call starts its list afresh.
+            for (std::uint32_t first = 0; first < n; first += 37) search(args, first, std::min(37u, n - first), found.data() + first);
+            std::size_t differ = 0;
+            for (std::uint32_t s = 0; s < n; ++s) {
+                const glsl::Kernel::FlockNeighbours &a = found[s], &e = expected[s];
+                bool same = a.found == e.found;
+                for (std::uint32_t m = 0; same && m < e.found; ++m) {
+                    same = std::bit_cast<std::uint32_t>(a.d2[m]) == std::bit_cast<std::uint32_t>(e.d2[m]) && a.j[m] == e.j[m];
+                }
+                if (!same && differ++ < 3) {
+                    ADD_FAILURE() << name << ", " << isa_name << ", bounds " << pass.what << ": bird " << sorted[s] << " found "
+                                  << a.found << " (first j " << (a.found > 0 ? a.j[0] : 0u) << "), the reference " << e.found
+                                  << " (first j " << (e.found > 0 ? e.j[0] : 0u) << ")";
+                }
             }
+            if (pass.scale == 1.0f) reach.bounded = std::max(reach.bounded, held);
+            if (pass.scale == 0.6f) reach.bounded_short = std::max(reach.bounded_short, short_of_k);
+            reach.mismatches += differ;
+            for (std::uint32_t s = 0; s < n && !(pass.scale < 0.0f); ++s) bounds[sorted[s]] = written[s];  // what this pass wrote
         }
-        reach.mismatches += differ;
     }
-    std::printf("%s: %zu birds, %zu seeing more than %zu, %zu with a tie in their list, %zu with fewer than k; %zu differ\n", name,
-                reach.birds, reach.over_ranked, kSearchRankedMost, reach.ties, reach.short_lists, reach.mismatches);
+    std::printf("%s: %zu birds, %zu seeing more than %zu, %zu with a tie in their list, %zu with fewer than k, %zu whose own bound "
+                "holds k (shrunk 0.6x, %zu hold fewer); %zu differ\n",
+                name, reach.birds, reach.over_ranked, kSearchRankedMost, reach.ties, reach.short_lists, reach.bounded,
+                reach.bounded_short, reach.mismatches);
     return reach;
 }
 
@@ -167,6 +212,8 @@ TEST(FlockSearch, TypicalFlocksAreTheReferencesLists) {
     EXPECT_EQ(r.mismatches, 0u);
     EXPECT_EQ(r.over_ranked, 0u) << "the typical world is meant to stay on the rank's path";
     EXPECT_LT(r.short_lists, r.birds / 3) << "most birds of a typical world find k";
+    EXPECT_GT(r.bounded, r.birds / 2) << "most birds' own k-th distance is meant to bound their search";
+    EXPECT_GT(r.bounded_short, r.birds / 2) << "the shrunk bounds are meant to leave most birds short of k, to their whole radius";
 }
 
 // Perches (flock_hash.glsl's flock_flies()): the typical world at frame 5 with every
@@ -251,7 +298,7 @@ TEST(FlockSearch, CellsSharingABucketAreVisitedOnce) {
         std::vector<std::uint32_t> seen;
         for (int dz = -1; dz <= 1; ++dz) {
             for (int dy = -1; dy <= 1; ++dy) {
-                for (int dx = -1; dx <= 1; ++dx) seen.push_back(glsl::flock_cell_bucket(home + glm::ivec3(dx, dy, dz), mask));
+                for (int dx = -1; dx <= 1; ++dx) seen.push_back(glsl::flock_cell_bucket(glsl::flock_cell_near(home, glm::ivec3(dx, dy, dz)), mask));
             }
         }
         std::sort(seen.begin(), seen.end());
@@ -282,6 +329,117 @@ TEST(FlockSearch, CellsSharingABucketAreVisitedOnce) {
     EXPECT_GT(sharing, std::size_t{kBirds / 50}) << "the world is meant to reach the bucket shared by two cells";
     const Reach r = compare(w, "shared bucket");
     EXPECT_EQ(r.mismatches, 0u);
+}
+
+// A bird at a NaN position among a flock: its distance from every bird is NaN, which
+// passes every test and has no rank, so the birds that visit its bucket take the
+// insertion, whose result follows the order of every candidate they visit: a bound from
+// last time must not leave the nearer candidates alone (the search takes the whole radius
+// where it finds a NaN within the bound). Its cell lies at the int range's end (its
+// neighbours' cells wrap, flock_cell_near()); the flock is placed round a cell of its
+// bucket, found by the grid's own function, so that most birds visit it. A bird with an
+// infinite velocity (a NaN heading: it sees every bird round it) beside them.
+TEST(FlockSearch, ABirdAtANaNPositionIsSeenInTheVisitingOrder) {
+    constexpr int kBirds = 600;
+    const std::uint32_t mask = bucket_count(kBirds) - 1u;
+    World w;
+    w.flocks = {rules(7, false, 3.0f, 60.0f)};
+    const glm::vec3 lost(std::nanf(""), 4.0f, 4.0f);
+    const std::uint32_t lost_bucket = glsl::flock_bucket(lost, 1.0f / w.radius, mask);
+    glm::ivec3 home(0);
+    bool found = false;
+    for (int z = -20; z <= 20 && !found; ++z) {
+        for (int y = -20; y <= 20 && !found; ++y) {
+            for (int x = -20; x <= 20 && !found; ++x) {
+                home = glm::ivec3(x, y, z);
+                found = glsl::flock_cell_bucket(home, mask) == lost_bucket;
+            }
+        }
+    }
+    ASSERT_TRUE(found) << "no cell within 20 of the origin shares the NaN bird's bucket " << lost_bucket;
+    std::mt19937 rng(37);
+    std::uniform_real_distribution<float> box(-1.0f, 2.0f);  // cells home - 1 to home + 1
+    for (int b = 0; b < kBirds; ++b) {
+        const glm::vec3 cell(static_cast<float>(home.x) + box(rng), static_cast<float>(home.y) + box(rng),
+                             static_cast<float>(home.z) + box(rng));
+        w.add(cell * w.radius, heading(rng), 0u);
+    }
+    w.add(lost, heading(rng), 0u);
+    w.states[7].velocity.y = std::numeric_limits<float>::infinity();
+    const Reach r = compare(w, "NaN position");
+    EXPECT_EQ(r.mismatches, 0u);
+    EXPECT_GT(r.bounded, std::size_t{kBirds / 2}) << "the birds' own bounds are meant to hold k (but for the NaN)";
+}
+
+// flock_cell_buckets27() against flock_cell_bucket() cell by cell: round the origin, at
+// the edges of a block of 1 024 cells (where the mixed-in high bits change), at the
+// table's span, far out, at negative cells and at the int range's ends (where the cells
+// wrap, flock_cell_near()), for tables of several sizes.
+TEST(FlockGrid, The27BucketsAreTheGridsOwn) {
+    std::mt19937 rng(31);
+    std::uniform_int_distribution<int> near(-3000, 3000), far(-200000000, 200000000);
+    std::size_t compared = 0, differ = 0;
+    for (const std::uint32_t mask : {1023u, 32767u, (1u << 21) - 1u}) {
+        std::vector<glm::ivec3> homes;
+        constexpr int kLow = std::numeric_limits<int>::min(), kHigh = std::numeric_limits<int>::max();
+        for (const int edge : {kLow, kLow + 1, -1536, -513, -512, -511, 0, 511, 512, 513, 1535, 1536, kHigh - 1, kHigh}) {
+            homes.emplace_back(edge, 0, 0), homes.emplace_back(0, edge, 0), homes.emplace_back(0, 0, edge);
+            homes.emplace_back(edge, edge, edge == kLow ? kHigh : -edge);
+        }
+        for (int t = 0; t < 300; ++t) homes.emplace_back(near(rng), near(rng), near(rng));
+        for (int t = 0; t < 100; ++t) homes.emplace_back(far(rng), far(rng), far(rng));
+        for (const glm::ivec3 home : homes) {
+            std::uint32_t got[27];
+            flock_cell_buckets27(home, mask, got);
+            int c = 0;
+            for (int dz = -1; dz <= 1; ++dz) {
+                for (int dy = -1; dy <= 1; ++dy) {
+                    for (int dx = -1; dx <= 1; ++dx, ++c) {
+                        const glm::ivec3 cell = glsl::flock_cell_near(home, glm::ivec3(dx, dy, dz));
+                        const std::uint32_t want = glsl::flock_cell_bucket(cell, mask);
+                        ++compared;
+                        if (got[c] != want && differ++ < 3) {
+                            ADD_FAILURE() << "cell (" << cell.x << ", " << cell.y << ", " << cell.z << "), mask " << mask << ": "
+                                          << got[c] << ", the grid's " << want;
+                        }
+                    }
+                }
+            }
+        }
+    }
+    std::printf("27 buckets: %zu cells compared, %zu differ\n", compared, differ);
+    EXPECT_EQ(differ, 0u);
+}
+
+// The bounds the search wrote by slot reach each bird at its new slot after the grid
+// is sorted again (the birds moved): a bird's own k-th distance, not its slot's former
+// bird's (the lists would be the same, but the bound a stranger's: slower, not wrong, so
+// only this test sees it). On 1 and 3 threads.
+TEST(FlockSearch, EachBirdsBoundFollowsItToItsNewSlot) {
+    World w = random_world({rules(7, false, 3.0f, 60.0f)}, 41, -8.5f, 8.5f, 2001);
+    const auto n = static_cast<std::uint32_t>(w.birds.size());
+    const std::uint32_t mask = bucket_count(n) - 1u;
+    for (const unsigned threads : {1u, 3u}) {
+        std::vector<std::uint32_t> cells, buckets, sorted;
+        build_grid(w.states, 1.0f / w.radius, mask, cells, buckets, sorted);
+        SortedBirds birds;
+        birds.fill(w.states, w.birds, w.flocks, sorted, threads);
+        std::vector<float> written(n);  // by slot: a value that names the bird
+        for (std::uint32_t s = 0; s < n; ++s) written[s] = static_cast<float>(sorted[s]);
+        World moved = w;  // every bird 4 m along x: most change cell, and slot
+        for (gpu::FlockStateGpu& st : moved.states) st.position.x += 4.0f;
+        std::vector<std::uint32_t> sorted2;
+        build_grid(moved.states, 1.0f / w.radius, mask, cells, buckets, sorted2);
+        std::size_t changed = 0, wrong = 0;
+        for (std::uint32_t s = 0; s < n; ++s) changed += sorted2[s] != sorted[s] ? 1 : 0;
+        birds.fill(moved.states, moved.birds, moved.flocks, sorted2, threads, written);
+        for (std::uint32_t s = 0; s < n; ++s) wrong += birds.bound[s] != static_cast<float>(sorted2[s]) ? 1 : 0;
+        EXPECT_GT(changed, std::size_t{n / 2}) << "most birds are meant to change slot";
+        EXPECT_EQ(wrong, 0u) << threads << " threads";
+        birds.fill(moved.states, moved.birds, moved.flocks, sorted2, threads);  // none given: infinity
+        for (std::uint32_t s = 0; s < n; ++s) wrong += std::isinf(birds.bound[s]) ? 0 : 1;
+        EXPECT_EQ(wrong, 0u) << threads << " threads, no bounds given";
+    }
 }
 
 // The grid built on several threads (the birds' buckets found on them) gives the serial
@@ -331,7 +489,9 @@ gpu::FlockAgentGpu agent(float kind, glm::vec4 position, float weight, float mar
 // level one and one of no length, five birds flying dead at them, predators crossing the
 // flock and diving straight down (their two ways to flee), one of negative weight (no
 // panic), an attractor. In calls of 37 birds.
-TEST(FlockRules, AreTheBodysRulesBitForBit) {
+// `one_flock`: every bird of the first flock, so that the vectors of birds share it (the
+// rules set its parameters once), where otherwise the two flocks alternate in every vector.
+void rules_bit_for_bit(bool one_flock) {
     World w;
     gpu::FlockParamsGpu first = rules(7, false, 3.0f, 60.0f), second = rules(16, true, 2.5f, 0.0f);
     first.radii.y = 1.1f;
@@ -356,7 +516,7 @@ TEST(FlockRules, AreTheBodysRulesBitForBit) {
         const bool rest = b % 10 == 0;
         at_rest += rest ? 1 : 0;
         low += p.y < 3.0f ? 1 : 0;
-        w.add(p, rest ? glm::vec3(0.0f) : speed(rng) * dir, static_cast<std::uint32_t>(b % 2));
+        w.add(p, rest ? glm::vec3(0.0f) : speed(rng) * dir, one_flock ? 0u : static_cast<std::uint32_t>(b % 2));
         gpu::FlockBirdGpu& bird = w.birds.back();
         bird.offset = {unit(rng), unit(rng), unit(rng), 0.0f};
         bird.speed = {10.0f, 5.0f, 15.0f, 8.0f};
@@ -476,6 +636,10 @@ TEST(FlockRules, AreTheBodysRulesBitForBit) {
         std::printf("rules, %s: %zu of %u birds differ\n", isa_name.c_str(), differ, n);
     }
 }
+
+TEST(FlockRules, AreTheBodysRulesBitForBit) { rules_bit_for_bit(false); }
+
+TEST(FlockRules, AreTheBodysRulesBitForBitInOneFlock) { rules_bit_for_bit(true); }
 
 }  // namespace
 }  // namespace kodawari::flocking

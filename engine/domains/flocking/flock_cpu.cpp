@@ -76,6 +76,8 @@ public:
         timing_ = {};
         state_ = world.initial;
         next_.resize(state_.size());
+        // No bounds yet: the first substep's searches take every bird's whole radius.
+        bounds_.clear();
         return {};
     }
 
@@ -90,10 +92,13 @@ public:
                 const auto grid_start = Clock::now();
                 const auto frame_flocks = flocks.subspan(k * f_count, f_count);
                 build_grid(state_, inv_radius, mask, cells_, buckets_, sorted_, threads_);
-                if (search_ != nullptr) sorted_birds_.fill(state_, w.birds, frame_flocks, sorted_, threads_);
+                if (search_ != nullptr) {
+                    sorted_birds_.fill(state_, w.birds, frame_flocks, sorted_, threads_, bounds_);
+                    bounds_.resize(n);  // every slot written by the search
+                }
                 timing_.grid_seconds += seconds(grid_start, Clock::now());
                 glsl::Kernel kernel{frame_flocks, w.birds, state_, buckets_, sorted_, agents.subspan(k * a_count, a_count), w.perches_of};
-                const SearchArgs search_args{&kernel, &sorted_birds_, mask, inv_radius};
+                const SearchArgs search_args{&kernel, &sorted_birds_, mask, inv_radius, bounds_.data()};
                 const RulesArgs rules_args{&kernel, &sorted_birds_, static_cast<std::uint32_t>(a_count), w.dt};
                 const bool last = s + 1 == w.substeps;
                 gpu::BirdMotionGpu* motion = out.data() + std::size_t{k} * n;
@@ -191,6 +196,7 @@ private:
     SearchFn search_;
     RulesFn rules_;  // the cpu backend's hand-tuned rules; cpu-reference runs the body's
     SortedBirds sorted_birds_;  // the hand-tuned search's copy of the grid
+    std::vector<float> bounds_;  // the hand-tuned search's k-th distances of last time, by slot (SearchArgs::bounds)
     const FlockWorld* world_ = nullptr;
     std::vector<gpu::FlockStateGpu> state_, next_;
     std::vector<std::uint32_t> cells_, buckets_, sorted_;

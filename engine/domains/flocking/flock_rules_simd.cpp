@@ -96,11 +96,15 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
             hwy::Prefetch(next);
             hwy::Prefetch(reinterpret_cast<const char*>(next) + sizeof *next - 1);
         }
+        // The flock's parameters: set once where every lane's bird is of one flock (a
+        // scene's flocks rarely share a cell), per lane otherwise.
+        const std::uint32_t flock0 = kernel.birds_in[sorted.index[first_slot + b0]].ids.x;
+        bool one_flock = true;
+        for (std::size_t l = 1; l < live; ++l) one_flock = one_flock && kernel.birds_in[sorted.index[first_slot + b0 + l]].ids.x == flock0;
         for (std::size_t l = 0; l < lanes; ++l) {
             const std::size_t m = b0 + std::min(l, live - 1);
             const std::size_t slot = first_slot + m;
-            const gpu::FlockBirdGpu bird = kernel.kw_bird(sorted.index[slot]);
-            const gpu::FlockParamsGpu flock = kernel.kw_flock(bird.ids.x);
+            const gpu::FlockBirdGpu& bird = kernel.birds_in[sorted.index[slot]];
             // The bird's state and its neighbours' from the grid's copy (kw_state's
             // values): in the grid's order, neighbours are near in memory too.
             in.px[l] = sorted.x[slot], in.py[l] = sorted.y[slot], in.pz[l] = sorted.z[slot];
@@ -108,11 +112,14 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
             in.v0[l] = bird.speed.x, in.smin[l] = bird.speed.y, in.smax[l] = bird.speed.z, in.dv[l] = bird.speed.w;
             in.lateral[l] = bird.turn.x, in.climb[l] = bird.turn.y, in.dive[l] = bird.turn.z;
             in.offx[l] = bird.offset.x, in.offy[l] = bird.offset.y, in.offz[l] = bird.offset.z;
-            in.radius[l] = flock.radii.x, in.rsep[l] = flock.radii.y, in.rroute[l] = flock.radii.w;
-            in.wsep[l] = flock.weights.x, in.walign[l] = flock.weights.y, in.wcoh[l] = flock.weights.z, in.wroute[l] = flock.weights.w;
-            in.clear[l] = flock.ground.x, in.ground[l] = flock.ground.y, in.tau[l] = flock.ground.z, in.front[l] = flock.ground.w;
-            in.tx[l] = flock.target.x, in.ty[l] = flock.target.y, in.tz[l] = flock.target.z;
-            in.rcol[l] = flock.collision.x, in.ahead[l] = flock.collision.y;
+            if (!one_flock) {
+                const gpu::FlockParamsGpu& flock = kernel.flocks[bird.ids.x];
+                in.radius[l] = flock.radii.x, in.rsep[l] = flock.radii.y, in.rroute[l] = flock.radii.w;
+                in.wsep[l] = flock.weights.x, in.walign[l] = flock.weights.y, in.wcoh[l] = flock.weights.z, in.wroute[l] = flock.weights.w;
+                in.clear[l] = flock.ground.x, in.ground[l] = flock.ground.y, in.tau[l] = flock.ground.z, in.front[l] = flock.ground.w;
+                in.tx[l] = flock.target.x, in.ty[l] = flock.target.y, in.tz[l] = flock.target.z;
+                in.rcol[l] = flock.collision.x, in.ahead[l] = flock.collision.y;
+            }
             const glsl::Kernel::FlockNeighbours& nb = found_in[m];
             in.found[l] = static_cast<float>(nb.found);
             for (std::uint32_t n = 0; n < nb.found; ++n) {
@@ -128,18 +135,35 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
                 in.nd2[n][l] = 0.0f;
             }
         }
+        const gpu::FlockParamsGpu& flock0_params = kernel.flocks[flock0];
+        const V f_radius = one_flock ? hn::Set(d, flock0_params.radii.x) : hn::Load(d, in.radius);
+        const V f_rsep = one_flock ? hn::Set(d, flock0_params.radii.y) : hn::Load(d, in.rsep);
+        const V f_rroute = one_flock ? hn::Set(d, flock0_params.radii.w) : hn::Load(d, in.rroute);
+        const V f_wsep = one_flock ? hn::Set(d, flock0_params.weights.x) : hn::Load(d, in.wsep);
+        const V f_walign = one_flock ? hn::Set(d, flock0_params.weights.y) : hn::Load(d, in.walign);
+        const V f_wcoh = one_flock ? hn::Set(d, flock0_params.weights.z) : hn::Load(d, in.wcoh);
+        const V f_wroute = one_flock ? hn::Set(d, flock0_params.weights.w) : hn::Load(d, in.wroute);
+        const V f_clear = one_flock ? hn::Set(d, flock0_params.ground.x) : hn::Load(d, in.clear);
+        const V f_ground = one_flock ? hn::Set(d, flock0_params.ground.y) : hn::Load(d, in.ground);
+        const V f_tau = one_flock ? hn::Set(d, flock0_params.ground.z) : hn::Load(d, in.tau);
+        const V f_front = one_flock ? hn::Set(d, flock0_params.ground.w) : hn::Load(d, in.front);
+        const V f_tx = one_flock ? hn::Set(d, flock0_params.target.x) : hn::Load(d, in.tx);
+        const V f_ty = one_flock ? hn::Set(d, flock0_params.target.y) : hn::Load(d, in.ty);
+        const V f_tz = one_flock ? hn::Set(d, flock0_params.target.z) : hn::Load(d, in.tz);
+        const V f_rcol = one_flock ? hn::Set(d, flock0_params.collision.x) : hn::Load(d, in.rcol);
+        const V f_ahead = one_flock ? hn::Set(d, flock0_params.collision.y) : hn::Load(d, in.ahead);
         const V3 p{hn::Load(d, in.px), hn::Load(d, in.py), hn::Load(d, in.pz)};
         const V3 v{hn::Load(d, in.vx), hn::Load(d, in.vy), hn::Load(d, in.vz)};
         // speed = length(v); forward = flock_forward(v).
         const V speed = length(v);
         const V3 forward = select(hn::Gt(speed, tiny), v / speed, splat(d, 0.0f, 0.0f, 1.0f));
-        const V radius = hn::Load(d, in.radius);
+        const V radius = f_radius;
         const V found = hn::Load(d, in.found);
 
         // Reynolds' rules over the neighbours, nearest first.
         V3 separation{zero, zero, zero}, heading{zero, zero, zero}, centre{zero, zero, zero}, collide{zero, zero, zero};
-        const V r_sep = hn::Load(d, in.rsep), front = hn::Load(d, in.front);
-        const V r_col = hn::Load(d, in.rcol), lookahead = hn::Load(d, in.ahead), lateral_most = hn::Load(d, in.lateral);
+        const V r_sep = f_rsep, front = f_front;
+        const V r_col = f_rcol, lookahead = f_ahead, lateral_most = hn::Load(d, in.lateral);
         for (std::uint32_t n = 0; n < most; ++n) {
             const M live_n = hn::Lt(hn::Set(d, static_cast<float>(n)), found);
             const V3 other{hn::Load(d, in.ox[n]), hn::Load(d, in.oy[n]), hn::Load(d, in.oz[n])};
@@ -261,21 +285,21 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
         {
             const M any = hn::Gt(found, zero);
             const V inv_n = hn::Div(one, found);
-            V3 with = acc + hn::Mul(hn::Neg(hn::Load(d, in.wsep)), inv_n) * separation;
+            V3 with = acc + hn::Mul(hn::Neg(f_wsep), inv_n) * separation;
             const V hl = length(heading);
-            with = select(hn::Gt(hl, tiny), with + hn::Load(d, in.walign) * (heading / hl - forward), with);
-            with = with + hn::Div(hn::Mul(hn::Mul(calm, hn::Load(d, in.wcoh)), inv_n), radius) * centre;
+            with = select(hn::Gt(hl, tiny), with + f_walign * (heading / hl - forward), with);
+            with = with + hn::Div(hn::Mul(hn::Mul(calm, f_wcoh), inv_n), radius) * centre;
             acc = select(any, with, acc);
         }
         // The route: to the leader's place plus the bird's formation offset.
         const V3 to_target =
-            (V3{hn::Load(d, in.tx), hn::Load(d, in.ty), hn::Load(d, in.tz)} + V3{hn::Load(d, in.offx), hn::Load(d, in.offy), hn::Load(d, in.offz)}) - p;
-        acc = acc + hn::Div(hn::Mul(calm, hn::Load(d, in.wroute)), vm::glm_max(length(to_target), hn::Load(d, in.rroute))) * to_target;
+            (V3{f_tx, f_ty, f_tz} + V3{hn::Load(d, in.offx), hn::Load(d, in.offy), hn::Load(d, in.offz)}) - p;
+        acc = acc + hn::Div(hn::Mul(calm, f_wroute), vm::glm_max(length(to_target), f_rroute)) * to_target;
         // Cruise speed.
-        acc = acc + hn::Div(hn::Sub(hn::Load(d, in.v0), speed), hn::Load(d, in.tau)) * forward;
+        acc = acc + hn::Div(hn::Sub(hn::Load(d, in.v0), speed), f_tau) * forward;
         // The ground.
-        const V clear = hn::Load(d, in.clear);
-        acc.y = hn::IfThenElse(hn::Lt(p.y, clear), hn::Add(acc.y, hn::Div(hn::Mul(hn::Load(d, in.ground), hn::Sub(clear, p.y)), clear)),
+        const V clear = f_clear;
+        acc.y = hn::IfThenElse(hn::Lt(p.y, clear), hn::Add(acc.y, hn::Div(hn::Mul(f_ground, hn::Sub(clear, p.y)), clear)),
                                acc.y);
         acc = acc + fled;
 

@@ -30,11 +30,15 @@ struct KODAWARI_INTERNAL SortedBirds {
     std::vector<float> flock;  ///< the bird's flock (exact as a float below 2^24); -1 while it is not flying (flock_seen_as())
     std::vector<std::uint32_t> index;  ///< the bird (the grid's `sorted`, padded)
     std::vector<std::uint32_t> slot_of;  ///< bird i's slot: index[slot_of[i]] == i
+    /// Slot s's bird's k-th distance^2 of last time (SearchArgs::bounds), or infinity.
+    std::vector<float> bound;
 
     /// Fills the arrays from this substep's states, flocks and grid (build_grid()'s
-    /// `sorted`), on `threads` threads.
+    /// `sorted`), on `threads` threads; `bound` from `last_bounds`, the search's of last
+    /// time by the slots of the last fill (SearchArgs::bounds), or infinity where empty.
     void fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
-              std::span<const gpu::FlockParamsGpu> flocks, std::span<const std::uint32_t> sorted, unsigned threads = 1);
+              std::span<const gpu::FlockParamsGpu> flocks, std::span<const std::uint32_t> sorted, unsigned threads = 1,
+              std::span<const float> last_bounds = {});
 };
 
 /// What one call of the search reads.
@@ -43,7 +47,22 @@ struct SearchArgs {
     const SortedBirds* sorted = nullptr;
     std::uint32_t mask = 0;
     float inv_radius = 0.0f;
+    /// Optional (null: none), a float a slot: written with the distance^2 of the k-th
+    /// neighbour each bird found (infinity where it found fewer), which the next fill
+    /// hands to SortedBirds::bound for the next search: read there as a hint only (any
+    /// value gives the same lists; by slot, in the grid's order, so that a million birds'
+    /// bounds are read and written in order). Null: no bound read either.
+    float* bounds = nullptr;
 };
+
+/// A bird's first bound: its k-th distance^2 of last time times this (a distance 1.22
+/// times as far: room for the flock's motion in a substep, measured in docs/performance.md).
+inline constexpr float kBoundGrowth = 1.2f;
+
+/// The buckets of the 27 cells round `home` in flock_neighbours()'s order (dz, dy, dx
+/// from -1 to 1, x fastest): glsl::flock_cell_bucket() of each, bit for bit, with the
+/// Morton code's parts computed once an axis.
+KODAWARI_INTERNAL void flock_cell_buckets27(glm::ivec3 home, std::uint32_t mask, std::uint32_t out[27]);
 
 /// Fills out[n] with the neighbours of the bird in grid slot first_slot + n (kw_sorted),
 /// n < count: birds in the grid's order, so that the birds of one cell come

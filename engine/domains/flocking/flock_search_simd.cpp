@@ -15,7 +15,9 @@
 
 #include <algorithm>
 #include <bit>
+#include <cmath>
 #include <cstring>
+#include <limits>
 #include <vector>
 
 #include "domains/flocking/flock_search.hpp"
@@ -109,6 +111,75 @@ void nearest(glsl::Kernel& kernel, glsl::Kernel::FlockNeighbours& nb, std::uint3
     std::memcpy(nb.j, out_j, sizeof nb.j);
 }
 
+// What one bird's scan compares candidates with.
+struct Probe {
+    hn::Vec<D> px, py, pz, fx, fy, fz, blind, own_flock;
+    hn::Vec<DU> self;
+};
+
+// The candidates of the list (x, y, z, flock, index; `count` of them, padded past it)
+// of the probe's bird's flock, within `bound` (a distance^2, at most the search radius's)
+// and not the bird itself, appended to out_* (distance^2, index, and the component of the
+// offset along the bird's flight) in the list's order: flock_neighbours()'s tests but
+// the field of view's, a vector at a time. Returns how many.
+HWY_INLINE std::size_t scan(const Probe& b, float bound, const float* x, const float* y, const float* z, const float* f,
+                            const std::uint32_t* index, std::size_t count, float* out_d2, std::uint32_t* out_j, float* out_ahead) {
+    const D d;
+    const DU du;
+    const std::size_t lanes = hn::Lanes(d);
+    const auto bound_v = hn::Set(d, bound);
+    std::size_t seen = 0;
+    for (std::size_t t = 0; t < count; t += lanes) {
+        const auto ex = hn::Sub(hn::LoadU(d, x + t), b.px);
+        const auto ey = hn::Sub(hn::LoadU(d, y + t), b.py);
+        const auto ez = hn::Sub(hn::LoadU(d, z + t), b.pz);
+        const auto d2 = hn::Add(hn::Add(hn::Mul(ex, ex), hn::Mul(ey, ey)), hn::Mul(ez, ez));
+        const auto ahead = hn::Add(hn::Add(hn::Mul(ex, b.fx), hn::Mul(ey, b.fy)), hn::Mul(ez, b.fz));
+        auto pass = hn::Eq(hn::LoadU(d, f + t), b.own_flock);
+        pass = hn::AndNot(hn::Gt(d2, bound_v), pass);
+        const auto j = hn::LoadU(du, index + t);
+        pass = hn::AndNot(hn::RebindMask(d, hn::Eq(j, b.self)), pass);
+        const auto keep = hn::RebindMask(du, pass);
+        hn::StoreU(hn::Compress(j, keep), du, out_j + seen);
+        hn::StoreU(hn::Compress(d2, pass), d, out_d2 + seen);
+        hn::StoreU(hn::Compress(ahead, pass), d, out_ahead + seen);
+        seen += hn::CountTrue(du, keep);
+    }
+    return seen;
+}
+
+// The field of view's test (dot(d, forward) < cos * sqrt(d2): behind, not seen) over the
+// n candidates scan() kept, those seen compressed to the front in their order: the square
+// root only for the few within the bound. Returns how many.
+HWY_INLINE std::size_t in_view(const Probe& b, float* d2s, std::uint32_t* js, const float* aheads, std::size_t n) {
+    const D d;
+    const DU du;
+    const std::size_t lanes = hn::Lanes(d);
+    std::size_t seen = 0;
+    for (std::size_t t = 0; t < n; t += lanes) {
+        const auto d2 = hn::LoadU(d, d2s + t);
+        const auto behind = hn::Lt(hn::LoadU(d, aheads + t), hn::Mul(b.blind, hn::Sqrt(d2)));
+        const auto pass = hn::AndNot(behind, hn::FirstN(d, n - t));
+        const auto keep = hn::RebindMask(du, pass);
+        const auto j = hn::LoadU(du, js + t);
+        // In place: the seen of this vector land at or before where it was read.
+        hn::StoreU(hn::Compress(j, keep), du, js + seen);
+        hn::StoreU(hn::Compress(d2, pass), d, d2s + seen);
+        seen += hn::CountTrue(du, keep);
+    }
+    return seen;
+}
+
+// Whether any of the n distances is NaN.
+HWY_INLINE bool any_nan(const float* d2, std::size_t n) {
+    const D d;
+    const std::size_t lanes = hn::Lanes(d);
+    for (std::size_t t = 0; t < n; t += lanes) {
+        if (!hn::AllFalse(d, hn::And(hn::FirstN(d, n - t), hn::IsNaN(hn::LoadU(d, d2 + t))))) return true;
+    }
+    return false;
+}
+
 void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t count, glsl::Kernel::FlockNeighbours* out) {
     const D d;
     const DU du;
@@ -121,11 +192,11 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
     // the thread from call to call (a call is one block of birds).
     thread_local std::vector<float> cx, cy, cz, cf;
     thread_local std::vector<std::uint32_t> cb;
-    // Per bird, the candidates it sees (distance^2, index), each array at least cx's size.
-    thread_local std::vector<float> seen_d2;
+    // Per bird, the candidates it sees (distance^2, index, and the offset along its
+    // flight), each array at least cx's size plus a vector.
+    thread_local std::vector<float> seen_d2, seen_ahead;
     thread_local std::vector<std::uint32_t> seen_j;
     std::size_t used = 0;  // candidates in the arrays
-    std::uint32_t visited[27];
     glm::ivec3 list_home(0);
     bool have_list = false;
     for (std::uint32_t n = 0; n < count; ++n) {
@@ -134,9 +205,13 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
         const std::uint32_t slot = first_slot + n;
         glsl::Kernel::FlockNeighbours& nb = out[n];
         nb.found = 0u;
-        // A bird on its perch or landing is not stepped (flock_cpu.cpp): no search.
-        if (sorted.flock[slot] < 0.0f) continue;
         const std::uint32_t i = kernel.kw_sorted(slot);
+        float* next_bound = args.bounds != nullptr ? args.bounds + slot : nullptr;
+        // A bird on its perch or landing is not stepped (flock_cpu.cpp): no search.
+        if (sorted.flock[slot] < 0.0f) {
+            if (next_bound != nullptr) *next_bound = std::numeric_limits<float>::infinity();
+            continue;
+        }
         const auto own = static_cast<std::uint32_t>(sorted.flock[slot]);
         const gpu::FlockParamsGpu flock = kernel.kw_flock(own);
         const glm::vec3 p(sorted.x[slot], sorted.y[slot], sorted.z[slot]);
@@ -145,79 +220,91 @@ void search(const SearchArgs& args, std::uint32_t first_slot, std::uint32_t coun
         const std::uint32_t k = kernel.flock_k(flock);
         const glm::ivec3 home = glsl::flock_cell(p, args.inv_radius);
         if (!have_list || home != list_home) {
+            std::uint32_t buckets[27];
+            flock_cell_buckets27(home, args.mask, buckets);
+            std::uint32_t visited[27];
             std::uint32_t visited_count = 0;
             // A 64-bit filter of the buckets seen so far: the list is scanned only when two
             // buckets share a bit (rare: the 27 cells' Morton codes differ in their low 6
             // bits, two an axis, unless the cells straddle a block).
             std::uint64_t filter = 0;
             used = 0;
-            for (int dz = -1; dz <= 1; ++dz) {
-                for (int dy = -1; dy <= 1; ++dy) {
-                    for (int dx = -1; dx <= 1; ++dx) {
-                        const std::uint32_t b = glsl::flock_cell_bucket(home + glm::ivec3(dx, dy, dz), args.mask);
-                        const std::uint64_t bit = std::uint64_t{1} << (b & 63u);
-                        bool seen = false;
-                        if ((filter & bit) != 0) {
-                            for (std::uint32_t v = 0; v < visited_count; ++v) seen = seen || visited[v] == b;
-                        }
-                        if (seen) continue;
-                        filter |= bit;
-                        visited[visited_count++] = b;
-                        const std::uint32_t first = kernel.kw_bucket_start(b);
-                        const std::uint32_t last = first + kernel.kw_bucket_count(b);
-                        if (used + (last - first) + lanes > cx.size()) {
-                            const std::size_t grown = 2 * (used + (last - first) + lanes);
-                            cx.resize(grown), cy.resize(grown), cz.resize(grown), cf.resize(grown), cb.resize(grown);
-                        }
-                        // A handful of birds per bucket: a whole vector at a time from the
-                        // padded arrays (one, mostly), with no branch per bird; the lanes
-                        // past the bucket's end are overwritten by the next bucket's or
-                        // marked as no flock's below.
-                        for (std::uint32_t t = first; t < last; t += static_cast<std::uint32_t>(lanes)) {
-                            const std::size_t at = used + (t - first);
-                            hn::StoreU(hn::LoadU(d, sorted.x.data() + t), d, cx.data() + at);
-                            hn::StoreU(hn::LoadU(d, sorted.y.data() + t), d, cy.data() + at);
-                            hn::StoreU(hn::LoadU(d, sorted.z.data() + t), d, cz.data() + at);
-                            hn::StoreU(hn::LoadU(d, sorted.flock.data() + t), d, cf.data() + at);
-                            hn::StoreU(hn::LoadU(du, sorted.index.data() + t), du, cb.data() + at);
-                        }
-                        used += last - first;
-                    }
+            // Buckets next to each other in the visiting order and in the table (cells
+            // x and x + 1 of an even x, in Morton order) are one range of the grid's
+            // arrays: copied as one (the same candidates in the same order).
+            std::uint32_t run_first = 0, run_last = 0, run_bucket = 0;
+            const auto copy_run = [&] {
+                const std::uint32_t length = run_last - run_first;
+                if (used + length + lanes > cx.size()) {
+                    const std::size_t grown = 2 * (used + length + lanes);
+                    cx.resize(grown), cy.resize(grown), cz.resize(grown), cf.resize(grown), cb.resize(grown);
                 }
+                // A handful of birds per run: a whole vector at a time from the padded
+                // arrays, the first one always (one, mostly: no branch to mispredict on an
+                // empty run); the lanes past the run's end are overwritten by the next
+                // run's or marked as no flock's below.
+                for (std::uint32_t t = run_first; t == run_first || t < run_last; t += static_cast<std::uint32_t>(lanes)) {
+                    const std::size_t at = used + (t - run_first);
+                    hn::StoreU(hn::LoadU(d, sorted.x.data() + t), d, cx.data() + at);
+                    hn::StoreU(hn::LoadU(d, sorted.y.data() + t), d, cy.data() + at);
+                    hn::StoreU(hn::LoadU(d, sorted.z.data() + t), d, cz.data() + at);
+                    hn::StoreU(hn::LoadU(d, sorted.flock.data() + t), d, cf.data() + at);
+                    hn::StoreU(hn::LoadU(du, sorted.index.data() + t), du, cb.data() + at);
+                }
+                used += length;
+            };
+            bool have_run = false;
+            for (const std::uint32_t b : buckets) {
+                const std::uint64_t bit = std::uint64_t{1} << (b & 63u);
+                if ((filter & bit) != 0 && std::find(visited, visited + visited_count, b) != visited + visited_count) continue;
+                filter |= bit;
+                visited[visited_count++] = b;
+                const std::uint32_t first = kernel.kw_bucket_start(b);
+                const std::uint32_t last = first + kernel.kw_bucket_count(b);
+                if (have_run && b == run_bucket + 1u) {
+                    run_last = last;  // the previous bucket's range ends where this one's starts
+                } else {
+                    if (have_run) copy_run();
+                    run_first = first, run_last = last, have_run = true;
+                }
+                run_bucket = b;
             }
+            if (have_run) copy_run();
             // The lanes past the last bucket's end (copies of the next birds in the grid)
             // belong to no flock, so the scan below needs no mask for its last vector.
             if (used + lanes > cf.size()) cx.resize(used + lanes), cy.resize(used + lanes), cz.resize(used + lanes), cf.resize(used + lanes), cb.resize(used + lanes);
             hn::StoreU(hn::Set(d, -1.0f), d, cf.data() + used);
+            if (seen_d2.size() < cx.size() + lanes) {
+                seen_d2.resize(cx.size() + lanes), seen_j.resize(cx.size() + lanes), seen_ahead.resize(cx.size() + lanes);
+            }
             list_home = home;
             have_list = true;
         }
-        const auto px = hn::Set(d, p.x), py = hn::Set(d, p.y), pz = hn::Set(d, p.z);
-        const auto fx = hn::Set(d, forward.x), fy = hn::Set(d, forward.y), fz = hn::Set(d, forward.z);
-        const auto r2 = hn::Set(d, radius2), blind = hn::Set(d, flock.radii.z);
-        const auto own_flock = hn::Set(d, sorted.flock[slot]);
-        const auto self = hn::Set(du, i);  // the bird itself passes every test (d = 0)
-        const auto candidates = static_cast<std::uint32_t>(used);
-        if (seen_d2.size() < cx.size() + lanes) seen_d2.resize(cx.size() + lanes), seen_j.resize(cx.size() + lanes);
-        // Every candidate the bird sees, in the visiting order, compressed into seen_*.
+        const Probe probe{hn::Set(d, p.x), hn::Set(d, p.y), hn::Set(d, p.z), hn::Set(d, forward.x), hn::Set(d, forward.y),
+                          hn::Set(d, forward.z), hn::Set(d, flock.radii.z), hn::Set(d, sorted.flock[slot]),
+                          hn::Set(du, i)};  // the bird itself passes every test but the index (d = 0)
+        // First within a bound from the bird's k-th distance of last time, grown by
+        // kBoundGrowth: where k candidates pass every test within it, every candidate
+        // beyond it ranks k or later, so the k nearest are the same and the rank sorts
+        // about half as many (a flock's neighbours change little in a substep). A NaN
+        // distance (a NaN or infinite position) passes every bound (`d2 > bound` is
+        // false) and has no rank: where one is among them, the bird's insertion follows
+        // the visiting order of every candidate, so the search takes the whole radius, as
+        // it does where fewer than k pass within the bound or there is none.
+        const float bound = next_bound != nullptr ? std::min(radius2, sorted.bound[slot] * kBoundGrowth) : radius2;
         std::size_t seen = 0;
-        for (std::uint32_t s = 0; s < candidates; s += static_cast<std::uint32_t>(lanes)) {
-            const auto ex = hn::Sub(hn::LoadU(d, cx.data() + s), px);
-            const auto ey = hn::Sub(hn::LoadU(d, cy.data() + s), py);
-            const auto ez = hn::Sub(hn::LoadU(d, cz.data() + s), pz);
-            const auto d2 = hn::Add(hn::Add(hn::Mul(ex, ex), hn::Mul(ey, ey)), hn::Mul(ez, ez));
-            const auto ahead = hn::Add(hn::Add(hn::Mul(ex, fx), hn::Mul(ey, fy)), hn::Mul(ez, fz));
-            auto pass = hn::Eq(hn::LoadU(d, cf.data() + s), own_flock);
-            pass = hn::AndNot(hn::Gt(d2, r2), pass);
-            const auto j = hn::LoadU(du, cb.data() + s);
-            pass = hn::AndNot(hn::RebindMask(d, hn::Eq(j, self)), pass);
-            pass = hn::AndNot(hn::Lt(ahead, hn::Mul(blind, hn::Sqrt(d2))), pass);
-            const auto keep = hn::RebindMask(du, pass);
-            hn::StoreU(hn::Compress(j, keep), du, seen_j.data() + seen);
-            hn::StoreU(hn::Compress(d2, hn::RebindMask(d, keep)), d, seen_d2.data() + seen);
-            seen += hn::CountTrue(du, keep);
+        bool whole = true;
+        if (bound < radius2) {
+            seen = scan(probe, bound, cx.data(), cy.data(), cz.data(), cf.data(), cb.data(), used, seen_d2.data(), seen_j.data(), seen_ahead.data());
+            seen = in_view(probe, seen_d2.data(), seen_j.data(), seen_ahead.data(), seen);
+            whole = seen < k || any_nan(seen_d2.data(), seen);
+        }
+        if (whole) {
+            seen = scan(probe, radius2, cx.data(), cy.data(), cz.data(), cf.data(), cb.data(), used, seen_d2.data(), seen_j.data(), seen_ahead.data());
+            seen = in_view(probe, seen_d2.data(), seen_j.data(), seen_ahead.data(), seen);
         }
         nearest(kernel, nb, k, seen_d2.data(), seen_j.data(), seen);
+        if (next_bound != nullptr) *next_bound = nb.found == k ? nb.d2[k - 1] : std::numeric_limits<float>::infinity();
     }
 }
 
@@ -237,9 +324,42 @@ namespace kodawari::flocking {
 
 SearchFn flock_search_kernel(std::int64_t target) { KW_SIMD_SELECT(target, flock_search_kernel) }
 
+void flock_cell_buckets27(glm::ivec3 home, std::uint32_t mask, std::uint32_t out[27]) {
+    // glsl::flock_cell_bucket()'s terms, an axis at a time: the Morton code is the or of
+    // each axis's spread bits, and the block's hash the xor of each axis's product; the
+    // mix is computed again only where the wrapped bits change (at a block's or the
+    // table's edge).
+    std::uint32_t mx[3], my[3], mz[3], hx[3], hy[3], hz[3];
+    for (int a = 0; a < 3; ++a) {
+        const glm::uvec3 u = glm::uvec3(glsl::flock_cell_near(home, glm::ivec3(a - 1))) + glm::uvec3(512u);
+        mx[a] = glsl::flock_spread3(u.x);
+        my[a] = glsl::flock_spread3(u.y) << 1u;
+        mz[a] = glsl::flock_spread3(u.z) << 2u;
+        hx[a] = (u.x >> 10u) * 73856093u;
+        hy[a] = (u.y >> 10u) * 19349663u;
+        hz[a] = (u.z >> 10u) * 83492791u;
+    }
+    std::uint32_t wrap_of_mix = 0, mixed = glsl::flock_mix(0u);
+    int c = 0;
+    for (int z = 0; z < 3; ++z) {
+        for (int y = 0; y < 3; ++y) {
+            for (int x = 0; x < 3; ++x) {
+                const std::uint32_t morton = mx[x] | my[y] | mz[z];
+                const std::uint32_t wrap = (morton & ~mask) ^ hx[x] ^ hy[y] ^ hz[z];
+                if (wrap != wrap_of_mix) wrap_of_mix = wrap, mixed = glsl::flock_mix(wrap);
+                out[c++] = (morton ^ mixed) & mask;
+            }
+        }
+    }
+}
+
 void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
-                       std::span<const gpu::FlockParamsGpu> flocks, std::span<const std::uint32_t> order, unsigned threads) {
+                       std::span<const gpu::FlockParamsGpu> flocks, std::span<const std::uint32_t> order, unsigned threads,
+                       std::span<const float> last_bounds) {
     const std::size_t n = order.size(), padded = n + kSortedPad;
+    // The bounds of last time by the last fill's slots (slot_of before this fill's).
+    const bool bounded = !last_bounds.empty() && last_bounds.size() == n && slot_of.size() == n;
+    bound.resize(n);
     x.resize(padded);
     y.resize(padded);
     z.resize(padded);
@@ -261,6 +381,9 @@ void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<con
             vz[s] = states[i].velocity.z;
             flock[s] = glsl::flock_seen_as(birds[i], flocks[birds[i].ids.x], states[i]);
             index[s] = i;
+            // Bird i's old slot read before its new one is written (by this iteration
+            // alone: each bird has one slot).
+            bound[s] = bounded ? last_bounds[slot_of[i]] : std::numeric_limits<float>::infinity();
             slot_of[i] = static_cast<std::uint32_t>(s);
         }
     });
