@@ -411,6 +411,48 @@ TEST(FlockGrid, The27BucketsAreTheGridsOwn) {
     EXPECT_EQ(differ, 0u);
 }
 
+// The cpu backend's buckets, a vector of birds at a time (flock_buckets_kernel()), against
+// flock_bucket() bird by bird, at every instruction set: positions near the origin and
+// on cells' edges (exact multiples of the cell), far out, beyond the int range (a cell
+// at the range's end), NaN, infinite and -0; 1 001 birds (not a multiple of a vector).
+TEST(FlockGrid, TheBucketsOfAVectorOfBirdsAreTheGridsOwn) {
+    std::mt19937 rng(43);
+    std::uniform_real_distribution<float> near(-50.0f, 50.0f), far(-7e9f, 7e9f);
+    std::uniform_int_distribution<int> edge(-20, 20);
+    const float special[] = {std::nanf(""), std::numeric_limits<float>::infinity(), -std::numeric_limits<float>::infinity(), -0.0f,
+                             6442450560.0f, -6442450944.0f, 6442451200.0f, 3e38f, 1e-30f};
+    std::vector<gpu::FlockStateGpu> states(1001);
+    for (std::size_t i = 0; i < states.size(); ++i) {
+        float c[3];
+        for (float& v : c) {
+            switch (i % 5) {
+                case 0: v = near(rng); break;
+                case 1: v = 3.0f * static_cast<float>(edge(rng)); break;
+                case 2: v = far(rng); break;
+                case 3: v = special[(i / 5) % std::size(special)]; break;
+                default: v = near(rng) * 1e-3f; break;
+            }
+        }
+        states[i].position = {c[0], c[1], c[2], 0.0f};
+    }
+    std::size_t compared = 0, differ = 0;
+    for (const std::uint32_t mask : {1023u, 32767u}) {
+        for (const auto& [isa_name, target] : instruction_sets()) {
+            std::vector<std::uint32_t> got(states.size());
+            flock_buckets_kernel(target)(states, 1.0f / 3.0f, mask, got.data());
+            for (std::size_t i = 0; i < states.size(); ++i, ++compared) {
+                const std::uint32_t want = glsl::flock_bucket(glsl::kw_xyz(states[i].position), 1.0f / 3.0f, mask);
+                if (got[i] != want && differ++ < 3) {
+                    ADD_FAILURE() << isa_name << ": (" << states[i].position.x << ", " << states[i].position.y << ", "
+                                  << states[i].position.z << "), mask " << mask << ": " << got[i] << ", the grid's " << want;
+                }
+            }
+        }
+    }
+    std::printf("buckets: %zu compared, %zu differ\n", compared, differ);
+    EXPECT_EQ(differ, 0u);
+}
+
 // The bounds the search wrote by slot reach each bird at its new slot after the grid
 // is sorted again (the birds moved): a bird's own k-th distance, not its slot's former
 // bird's (the lists would be the same, but the bound a stranger's: slower, not wrong, so

@@ -18,12 +18,17 @@ std::uint32_t bucket_count(std::uint32_t birds) {
 }
 
 void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::vector<std::uint32_t>& cells,
-                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted, unsigned threads) {
+                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted, unsigned threads, BucketsFn find) {
     const std::size_t n = states.size();
     cells.resize(n);
     buckets.assign(2 * (std::size_t{mask} + 1), 0u);
     sorted.resize(n);
-    parallel_for(n, threads, [&](std::size_t begin, std::size_t end) {
+    constexpr std::size_t kThreadedFrom = 65536;
+    parallel_for(n, n < kThreadedFrom ? 1u : threads, [&](std::size_t begin, std::size_t end) {
+        if (find != nullptr) {
+            find(states.subspan(begin, end - begin), inv_radius, mask, cells.data() + begin);
+            return;
+        }
         for (std::size_t i = begin; i < end; ++i) cells[i] = glsl::flock_bucket(glsl::kw_xyz(states[i].position), inv_radius, mask);
     });
     // The counting sort on one thread: a stable order by bird index within a bucket. (The
@@ -69,7 +74,8 @@ public:
         : threads_(threads),
           isa_(std::move(isa)),
           search_(isa_ ? flock_search_kernel(isa_->target) : nullptr),
-          rules_(isa_ ? flock_rules_kernel(isa_->target) : nullptr) {}
+          rules_(isa_ ? flock_rules_kernel(isa_->target) : nullptr),
+          buckets_fn_(isa_ ? flock_buckets_kernel(isa_->target) : nullptr) {}
 
     Result<void> load(const FlockWorld& world) override {
         world_ = &world;
@@ -91,7 +97,7 @@ public:
             for (std::uint32_t s = 0; s < w.substeps; ++s) {
                 const auto grid_start = Clock::now();
                 const auto frame_flocks = flocks.subspan(k * f_count, f_count);
-                build_grid(state_, inv_radius, mask, cells_, buckets_, sorted_, threads_);
+                build_grid(state_, inv_radius, mask, cells_, buckets_, sorted_, threads_, buckets_fn_);
                 if (search_ != nullptr) {
                     sorted_birds_.fill(state_, w.birds, frame_flocks, sorted_, threads_, bounds_);
                     bounds_.resize(n);  // every slot written by the search
@@ -195,6 +201,7 @@ private:
     std::optional<simd::Isa> isa_;
     SearchFn search_;
     RulesFn rules_;  // the cpu backend's hand-tuned rules; cpu-reference runs the body's
+    BucketsFn buckets_fn_;  // the cpu backend's birds' buckets, a vector at a time; cpu-reference: flock_bucket()
     SortedBirds sorted_birds_;  // the hand-tuned search's copy of the grid
     std::vector<float> bounds_;  // the hand-tuned search's k-th distances of last time, by slot (SearchArgs::bounds)
     const FlockWorld* world_ = nullptr;

@@ -70,10 +70,20 @@ namespace kodawari::flocking {
 /// (few collisions) and at least KW_FLOCK_SCAN_SIZE.
 [[nodiscard]] KODAWARI_INTERNAL std::uint32_t bucket_count(std::uint32_t birds);
 
+/// out[i] = glsl::flock_bucket(states[i]'s position, inv_radius, mask) for every state:
+/// the cpu backend's, a vector of birds at a time (flock_search_simd.cpp).
+using BucketsFn = void (*)(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::uint32_t* out);
+
+/// BucketsFn compiled for the Highway target `target` (simd::Isa::target).
+[[nodiscard]] KODAWARI_INTERNAL BucketsFn flock_buckets_kernel(std::int64_t target);
+
 /// flock_grid.comp's passes on the CPU: `buckets` (2 per bucket: start, count) and
 /// `sorted` (the birds by bucket, in bird order within one) for `states`. The birds'
-/// buckets are found on `threads` threads, the counting sort on one; the same result.
+/// buckets are found by `find` (null: flock_bucket() bird by bird) on `threads` threads
+/// (on one below 65 536 birds, where waking a thread costs more than it saves), the
+/// counting sort on one; the same result.
 KODAWARI_INTERNAL void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::vector<std::uint32_t>& cells,
-                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted, unsigned threads = 1);
+                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted, unsigned threads = 1,
+                BucketsFn find = nullptr);
 
 }  // namespace kodawari::flocking
