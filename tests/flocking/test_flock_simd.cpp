@@ -201,6 +201,17 @@ World random_world(std::vector<gpu::FlockParamsGpu> flocks, unsigned seed, float
     return w;
 }
 
+// `count` birds of flock 0 uniformly in the 27 cells round cell `home` (of the world's
+// radius), heading as a flock does.
+void add_round(World& w, glm::ivec3 home, int count, std::mt19937& rng) {
+    std::uniform_real_distribution<float> box(-1.0f, 2.0f);  // cells home - 1 to home + 1
+    for (int b = 0; b < count; ++b) {
+        const glm::vec3 cell(static_cast<float>(home.x) + box(rng), static_cast<float>(home.y) + box(rng),
+                             static_cast<float>(home.z) + box(rng));
+        w.add(cell * w.radius, heading(rng), 0u);
+    }
+}
+
 // Starlings' density (about 0.2 birds per cubic metre: 150 candidates in a bird's 27
 // cells), two flocks interleaved with their own k and blind angle, and a third with a
 // metric radius (k = every bird within it, at most KW_FLOCK_MAX_NEIGHBOURS).
@@ -317,12 +328,7 @@ TEST(FlockSearch, CellsSharingABucketAreVisitedOnce) {
     World w;
     w.flocks = {rules(7, false, 3.0f, 60.0f)};
     std::mt19937 rng(17);
-    std::uniform_real_distribution<float> box(-1.0f, 2.0f);  // cells home - 1 to home + 1
-    for (int b = 0; b < kBirds; ++b) {
-        const glm::vec3 cell(static_cast<float>(home.x) + box(rng), static_cast<float>(home.y) + box(rng),
-                             static_cast<float>(home.z) + box(rng));
-        w.add(cell * w.radius, heading(rng), 0u);
-    }
+    add_round(w, home, kBirds, rng);
     std::size_t sharing = 0;  // birds whose own 27 cells share a bucket
     for (const gpu::FlockStateGpu& st : w.states) sharing += shared_bucket(glsl::flock_cell(glsl::kw_xyz(st.position), 1.0f / w.radius)) ? 1 : 0;
     std::printf("cell (%d, %d, %d): %zu of %d birds have two of their 27 cells in one bucket\n", home.x, home.y, home.z, sharing, kBirds);
@@ -358,12 +364,7 @@ TEST(FlockSearch, ABirdAtANaNPositionIsSeenInTheVisitingOrder) {
     }
     ASSERT_TRUE(found) << "no cell within 20 of the origin shares the NaN bird's bucket " << lost_bucket;
     std::mt19937 rng(37);
-    std::uniform_real_distribution<float> box(-1.0f, 2.0f);  // cells home - 1 to home + 1
-    for (int b = 0; b < kBirds; ++b) {
-        const glm::vec3 cell(static_cast<float>(home.x) + box(rng), static_cast<float>(home.y) + box(rng),
-                             static_cast<float>(home.z) + box(rng));
-        w.add(cell * w.radius, heading(rng), 0u);
-    }
+    add_round(w, home, kBirds, rng);
     w.add(lost, heading(rng), 0u);
     w.states[7].velocity.y = std::numeric_limits<float>::infinity();
     const Reach r = compare(w, "NaN position");
