@@ -293,6 +293,8 @@ SearchFn flock_search_kernel() { return &search; }
 HWY_AFTER_NAMESPACE();
 
 #if HWY_ONCE
+#include <array>
+
 #include "core/parallel.hpp"
 #include "simd/dispatch.hpp"
 
@@ -300,30 +302,55 @@ namespace kodawari::flocking {
 
 SearchFn flock_search_kernel(std::int64_t target) { KW_SIMD_SELECT(target, flock_search_kernel) }
 
+namespace {
+
+// glsl::flock_spread3() of every 10-bit value (it reads only the low 10 bits): a load
+// instead of its ten operations. (Made when the library loads: nothing calls the search
+// before main.)
+const auto kSpread3 = [] {
+    std::array<std::uint32_t, 1024> table{};
+    for (std::uint32_t v = 0; v < 1024; ++v) table[v] = glsl::flock_spread3(v);
+    return table;
+}();
+
+}  // namespace
+
 void flock_cell_buckets27(glm::ivec3 home, std::uint32_t mask, std::uint32_t out[27]) {
     // glsl::flock_cell_bucket()'s terms, an axis at a time: the Morton code is the or of
-    // each axis's spread bits, and the block's hash the xor of each axis's product; the
-    // mix is computed again only where the wrapped bits change (at a block's or the
-    // table's edge).
-    std::uint32_t mx[3], my[3], mz[3], hx[3], hy[3], hz[3];
+    // each axis's spread bits (disjoint, so its bits above the table's are the or, and
+    // xor, of each axis's), and the block's hash the xor of each axis's product; so the
+    // wrapped bits are the xor of a term an axis, and where those do not change across
+    // the 27 cells (no block's or table's edge among them: nearly always), one mix serves
+    // them all.
+    std::uint32_t m[3][3], w[3][3];
+    constexpr std::uint32_t kPrime[3] = {73856093u, 19349663u, 83492791u};
     for (int a = 0; a < 3; ++a) {
         const glm::uvec3 u = glm::uvec3(glsl::flock_cell_near(home, glm::ivec3(a - 1))) + glm::uvec3(512u);
-        mx[a] = glsl::flock_spread3(u.x);
-        my[a] = glsl::flock_spread3(u.y) << 1u;
-        mz[a] = glsl::flock_spread3(u.z) << 2u;
-        hx[a] = (u.x >> 10u) * 73856093u;
-        hy[a] = (u.y >> 10u) * 19349663u;
-        hz[a] = (u.z >> 10u) * 83492791u;
+        for (int axis = 0; axis < 3; ++axis) {
+            m[axis][a] = kSpread3[u[axis] & 0x3FFu] << axis;
+            w[axis][a] = (m[axis][a] & ~mask) ^ ((u[axis] >> 10u) * kPrime[axis]);
+        }
+    }
+    const bool one_wrap = w[0][0] == w[0][1] && w[0][1] == w[0][2] && w[1][0] == w[1][1] && w[1][1] == w[1][2] &&
+                          w[2][0] == w[2][1] && w[2][1] == w[2][2];
+    if (one_wrap) {
+        const std::uint32_t mixed = glsl::flock_mix(w[0][0] ^ w[1][0] ^ w[2][0]);
+        int c = 0;
+        for (int z = 0; z < 3; ++z) {
+            for (int y = 0; y < 3; ++y) {
+                for (int x = 0; x < 3; ++x) out[c++] = ((m[0][x] | m[1][y] | m[2][z]) ^ mixed) & mask;
+            }
+        }
+        return;
     }
     std::uint32_t wrap_of_mix = 0, mixed = glsl::flock_mix(0u);
     int c = 0;
     for (int z = 0; z < 3; ++z) {
         for (int y = 0; y < 3; ++y) {
             for (int x = 0; x < 3; ++x) {
-                const std::uint32_t morton = mx[x] | my[y] | mz[z];
-                const std::uint32_t wrap = (morton & ~mask) ^ hx[x] ^ hy[y] ^ hz[z];
+                const std::uint32_t wrap = w[0][x] ^ w[1][y] ^ w[2][z];
                 if (wrap != wrap_of_mix) wrap_of_mix = wrap, mixed = glsl::flock_mix(wrap);
-                out[c++] = (morton ^ mixed) & mask;
+                out[c++] = ((m[0][x] | m[1][y] | m[2][z]) ^ mixed) & mask;
             }
         }
     }
