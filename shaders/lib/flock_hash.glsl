@@ -33,12 +33,25 @@ KW_FLOCK_FN uint flock_spread3(uint v) {
 #include "lib/hash.glsl"
 KW_FLOCK_FN uint flock_mix(uint h) { return kw_lowbias32(h); }
 
+// The hash's constants, named once for its copies on the cpu backend (flock_search_simd.cpp's
+// 27 buckets at a time, flock_grid_simd.cpp's vector of birds at a time): a cell is offset
+// by half a block of 2^10 cells, so a flock round the origin lies in one block, and its
+// block's coordinates are hashed by Teschner et al.'s primes.
+#ifndef KW_FLOCK_HALF_BLOCK
+#define KW_FLOCK_HALF_BLOCK 512u
+#define KW_FLOCK_BLOCK_BITS 10u
+#define KW_FLOCK_PRIME_X 73856093u
+#define KW_FLOCK_PRIME_Y 19349663u
+#define KW_FLOCK_PRIME_Z 83492791u
+// The largest float below 2^31: a cell index of at least this size is out of the int range.
+#define KW_FLOCK_CELL_LIMIT 2147483520.0f
+#endif
+
 KW_FLOCK_FN uint flock_cell_bucket(ivec3 c, uint mask) {
-    // Offset by half a block, so a flock round the origin lies in one block.
-    const uvec3 u = uvec3(c) + uvec3(512u);
+    const uvec3 u = uvec3(c) + uvec3(KW_FLOCK_HALF_BLOCK);
     const uint morton = flock_spread3(u.x) | (flock_spread3(u.y) << 1u) | (flock_spread3(u.z) << 2u);
-    const uvec3 block = u >> 10u;
-    const uint wrap = (morton & ~mask) ^ (block.x * 73856093u) ^ (block.y * 19349663u) ^ (block.z * 83492791u);
+    const uvec3 block = u >> KW_FLOCK_BLOCK_BITS;
+    const uint wrap = (morton & ~mask) ^ (block.x * KW_FLOCK_PRIME_X) ^ (block.y * KW_FLOCK_PRIME_Y) ^ (block.z * KW_FLOCK_PRIME_Z);
     return (morton ^ flock_mix(wrap)) & mask;
 }
 
@@ -47,7 +60,7 @@ KW_FLOCK_FN uint flock_cell_bucket(ivec3 c, uint mask) {
 // out of range is undefined in C++ (and stopped by the sanitizers) and in GLSL.
 KW_FLOCK_FN ivec3 flock_cell(vec3 p, float inv_radius) {
     const vec3 c = floor(p * inv_radius);
-    return ivec3(mix(vec3(-2147483648.0f), c, lessThan(abs(c), vec3(2147483520.0f))));
+    return ivec3(mix(vec3(-2147483648.0f), c, lessThan(abs(c), vec3(KW_FLOCK_CELL_LIMIT))));
 }
 
 // The cell d (-1 to 1 an axis) away from cell c, wrapping as unsigned arithmetic does: a

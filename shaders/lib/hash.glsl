@@ -8,11 +8,17 @@
 #define KW_HASH_FN
 #endif
 
+// Its two multipliers, named for the cpu flocking grid's vector copy (flock_grid_simd.cpp).
+#ifndef KW_LOWBIAS32_M1
+#define KW_LOWBIAS32_M1 0x7feb352du
+#define KW_LOWBIAS32_M2 0x846ca68bu
+#endif
+
 KW_HASH_FN uint kw_lowbias32(uint x) {
     x ^= x >> 16u;
-    x *= 0x7feb352du;
+    x *= KW_LOWBIAS32_M1;
     x ^= x >> 15u;
-    x *= 0x846ca68bu;
+    x *= KW_LOWBIAS32_M2;
     x ^= x >> 16u;
     return x;
 }

@@ -41,20 +41,20 @@ HWY_INLINE hn::Vec<DU> cell_of(hn::Vec<D> c, hn::Vec<D> inv_radius) {
     const DU du;
     const hn::RebindToSigned<D> di;
     const auto f = hn::Floor(hn::Mul(c, inv_radius));
-    const auto in_range = hn::Lt(hn::Abs(f), hn::Set(d, 2147483520.0f));
+    const auto in_range = hn::Lt(hn::Abs(f), hn::Set(d, KW_FLOCK_CELL_LIMIT));
     // Lanes out of range converted to anything (Highway's saturating conversion), then replaced.
     const auto cell = hn::IfThenElse(hn::RebindMask(di, in_range), hn::ConvertTo(di, hn::IfThenElseZero(in_range, f)),
                                      hn::Set(di, std::numeric_limits<std::int32_t>::min()));
     return hn::BitCast(du, cell);
 }
 
-// kw_lowbias32(), lanes at a time.
+// kw_lowbias32() (lib/hash.glsl), lanes at a time.
 HWY_INLINE hn::Vec<DU> mix(hn::Vec<DU> x) {
     const DU du;
     x = hn::Xor(x, hn::ShiftRight<16>(x));
-    x = hn::Mul(x, hn::Set(du, 0x7feb352du));
+    x = hn::Mul(x, hn::Set(du, KW_LOWBIAS32_M1));
     x = hn::Xor(x, hn::ShiftRight<15>(x));
-    x = hn::Mul(x, hn::Set(du, 0x846ca68bu));
+    x = hn::Mul(x, hn::Set(du, KW_LOWBIAS32_M2));
     x = hn::Xor(x, hn::ShiftRight<16>(x));
     return x;
 }
@@ -70,7 +70,7 @@ void buckets(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::
     const auto stride = hn::Mul(hn::Iota(di, 0), hn::Set(di, 8));
     const auto inv = hn::Set(d, inv_radius);
     const auto mask_v = hn::Set(du, mask), high = hn::Set(du, ~mask);
-    const auto half_block = hn::Set(du, 512u);
+    const auto half_block = hn::Set(du, KW_FLOCK_HALF_BLOCK);
     std::size_t i = 0;
     for (; i + lanes <= n; i += lanes) {
         const float* base = &states[i].position.x;
@@ -79,9 +79,9 @@ void buckets(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::
         const auto uz = hn::Add(cell_of(hn::GatherIndex(d, base + 2, stride), inv), half_block);
         const auto morton = hn::Or(hn::Or(spread3(ux), hn::ShiftLeft<1>(spread3(uy))), hn::ShiftLeft<2>(spread3(uz)));
         auto wrap = hn::And(morton, high);
-        wrap = hn::Xor(wrap, hn::Mul(hn::ShiftRight<10>(ux), hn::Set(du, 73856093u)));
-        wrap = hn::Xor(wrap, hn::Mul(hn::ShiftRight<10>(uy), hn::Set(du, 19349663u)));
-        wrap = hn::Xor(wrap, hn::Mul(hn::ShiftRight<10>(uz), hn::Set(du, 83492791u)));
+        wrap = hn::Xor(wrap, hn::Mul(hn::ShiftRight<KW_FLOCK_BLOCK_BITS>(ux), hn::Set(du, KW_FLOCK_PRIME_X)));
+        wrap = hn::Xor(wrap, hn::Mul(hn::ShiftRight<KW_FLOCK_BLOCK_BITS>(uy), hn::Set(du, KW_FLOCK_PRIME_Y)));
+        wrap = hn::Xor(wrap, hn::Mul(hn::ShiftRight<KW_FLOCK_BLOCK_BITS>(uz), hn::Set(du, KW_FLOCK_PRIME_Z)));
         hn::StoreU(hn::And(hn::Xor(morton, mix(wrap)), mask_v), du, out + i);
     }
     for (; i < n; ++i) out[i] = glsl::flock_bucket(glsl::kw_xyz(states[i].position), inv_radius, mask);

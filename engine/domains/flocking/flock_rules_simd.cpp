@@ -138,22 +138,24 @@ void rules(const RulesArgs& args, std::uint32_t first_slot, std::uint32_t count,
             }
         }
         const gpu::FlockParamsGpu& flock0_params = kernel.flocks[flock0];
-        const V f_radius = one_flock ? hn::Set(d, flock0_params.radii.x) : hn::Load(d, in.radius);
-        const V f_rsep = one_flock ? hn::Set(d, flock0_params.radii.y) : hn::Load(d, in.rsep);
-        const V f_rroute = one_flock ? hn::Set(d, flock0_params.radii.w) : hn::Load(d, in.rroute);
-        const V f_wsep = one_flock ? hn::Set(d, flock0_params.weights.x) : hn::Load(d, in.wsep);
-        const V f_walign = one_flock ? hn::Set(d, flock0_params.weights.y) : hn::Load(d, in.walign);
-        const V f_wcoh = one_flock ? hn::Set(d, flock0_params.weights.z) : hn::Load(d, in.wcoh);
-        const V f_wroute = one_flock ? hn::Set(d, flock0_params.weights.w) : hn::Load(d, in.wroute);
-        const V f_clear = one_flock ? hn::Set(d, flock0_params.ground.x) : hn::Load(d, in.clear);
-        const V f_ground = one_flock ? hn::Set(d, flock0_params.ground.y) : hn::Load(d, in.ground);
-        const V f_tau = one_flock ? hn::Set(d, flock0_params.ground.z) : hn::Load(d, in.tau);
-        const V f_front = one_flock ? hn::Set(d, flock0_params.ground.w) : hn::Load(d, in.front);
-        const V f_tx = one_flock ? hn::Set(d, flock0_params.target.x) : hn::Load(d, in.tx);
-        const V f_ty = one_flock ? hn::Set(d, flock0_params.target.y) : hn::Load(d, in.ty);
-        const V f_tz = one_flock ? hn::Set(d, flock0_params.target.z) : hn::Load(d, in.tz);
-        const V f_rcol = one_flock ? hn::Set(d, flock0_params.collision.x) : hn::Load(d, in.rcol);
-        const V f_ahead = one_flock ? hn::Set(d, flock0_params.collision.y) : hn::Load(d, in.ahead);
+        // A flock parameter: flock0's in every lane, or each lane's own.
+        const auto param = [&](float shared, const float* each) { return one_flock ? hn::Set(d, shared) : hn::Load(d, each); };
+        const V f_radius = param(flock0_params.radii.x, in.radius);
+        const V f_rsep = param(flock0_params.radii.y, in.rsep);
+        const V f_rroute = param(flock0_params.radii.w, in.rroute);
+        const V f_wsep = param(flock0_params.weights.x, in.wsep);
+        const V f_walign = param(flock0_params.weights.y, in.walign);
+        const V f_wcoh = param(flock0_params.weights.z, in.wcoh);
+        const V f_wroute = param(flock0_params.weights.w, in.wroute);
+        const V f_clear = param(flock0_params.ground.x, in.clear);
+        const V f_ground = param(flock0_params.ground.y, in.ground);
+        const V f_tau = param(flock0_params.ground.z, in.tau);
+        const V f_front = param(flock0_params.ground.w, in.front);
+        const V f_tx = param(flock0_params.target.x, in.tx);
+        const V f_ty = param(flock0_params.target.y, in.ty);
+        const V f_tz = param(flock0_params.target.z, in.tz);
+        const V f_rcol = param(flock0_params.collision.x, in.rcol);
+        const V f_ahead = param(flock0_params.collision.y, in.ahead);
         const V3 p{hn::Load(d, in.px), hn::Load(d, in.py), hn::Load(d, in.pz)};
         const V3 v{hn::Load(d, in.vx), hn::Load(d, in.vy), hn::Load(d, in.vz)};
         // speed = length(v); forward = flock_forward(v).

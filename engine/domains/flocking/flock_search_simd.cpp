@@ -317,31 +317,18 @@ const auto kSpread3 = [] {
 
 void flock_cell_buckets27(glm::ivec3 home, std::uint32_t mask, std::uint32_t out[27]) {
     // glsl::flock_cell_bucket()'s terms, an axis at a time: the Morton code is the or of
-    // each axis's spread bits (disjoint, so its bits above the table's are the or, and
-    // xor, of each axis's), and the block's hash the xor of each axis's product; so the
-    // wrapped bits are the xor of a term an axis, and where those do not change across
-    // the 27 cells (no block's or table's edge among them: nearly always), one mix serves
-    // them all.
+    // each axis's spread bits (disjoint, so its bits above the table's are the xor of each
+    // axis's), and the block's hash the xor of each axis's product; so the wrapped bits
+    // are the xor of a term an axis, and the mix is computed again only where they change
+    // (at a block's or the table's edge: rarely among one cell's 27).
     std::uint32_t m[3][3], w[3][3];
-    constexpr std::uint32_t kPrime[3] = {73856093u, 19349663u, 83492791u};
+    constexpr std::uint32_t kPrime[3] = {KW_FLOCK_PRIME_X, KW_FLOCK_PRIME_Y, KW_FLOCK_PRIME_Z};
     for (int a = 0; a < 3; ++a) {
-        const glm::uvec3 u = glm::uvec3(glsl::flock_cell_near(home, glm::ivec3(a - 1))) + glm::uvec3(512u);
+        const glm::uvec3 u = glm::uvec3(glsl::flock_cell_near(home, glm::ivec3(a - 1))) + glm::uvec3(KW_FLOCK_HALF_BLOCK);
         for (int axis = 0; axis < 3; ++axis) {
             m[axis][a] = kSpread3[u[axis] & 0x3FFu] << axis;
-            w[axis][a] = (m[axis][a] & ~mask) ^ ((u[axis] >> 10u) * kPrime[axis]);
+            w[axis][a] = (m[axis][a] & ~mask) ^ ((u[axis] >> KW_FLOCK_BLOCK_BITS) * kPrime[axis]);
         }
-    }
-    const bool one_wrap = w[0][0] == w[0][1] && w[0][1] == w[0][2] && w[1][0] == w[1][1] && w[1][1] == w[1][2] &&
-                          w[2][0] == w[2][1] && w[2][1] == w[2][2];
-    if (one_wrap) {
-        const std::uint32_t mixed = glsl::flock_mix(w[0][0] ^ w[1][0] ^ w[2][0]);
-        int c = 0;
-        for (int z = 0; z < 3; ++z) {
-            for (int y = 0; y < 3; ++y) {
-                for (int x = 0; x < 3; ++x) out[c++] = ((m[0][x] | m[1][y] | m[2][z]) ^ mixed) & mask;
-            }
-        }
-        return;
     }
     std::uint32_t wrap_of_mix = 0, mixed = glsl::flock_mix(0u);
     int c = 0;
