@@ -43,8 +43,12 @@ thread_local bool t_in_pool = false;
 // Spins a while (a pause instruction at a time) until done() or `kSpin` have passed:
 // the passes of a frame come tens of microseconds apart, and a thread that slept takes
 // longer than that to wake (a futex's wake-up on this project's VM: 10-50 us), so workers
-// and the waiting caller spin this long before they sleep. Returns done().
-constexpr std::chrono::microseconds kSpin{50};
+// and the waiting caller spin this long before they sleep. 150 us covers the serial part
+// between a flocking substep's passes at 10 000 birds (its grid's counting sort, 60-70 us:
+// at 50 us the worker slept through it and woke late for the next pass, 1.04x slower,
+// docs/performance.md); where a frame's passes are further apart, the pool sleeps as
+// before. Returns done().
+constexpr std::chrono::microseconds kSpin{150};
 
 template <typename Done>
 bool spin_until(Done&& done) {

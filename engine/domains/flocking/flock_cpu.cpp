@@ -2,7 +2,13 @@
 // bird order) and shaders/lib/flock_body.glsl compiled as C++ (flock_kernel.hpp), bird
 // after bird on one thread (cpu-reference) or over the cpu backend's threads, where the
 // neighbour search is the hand-tuned one of flock_search_simd.cpp (the same lists, so the
-// same bits) and the rules the shared body.
+// same bits) and the rules the shared body's, hand-tuned (flock_rules_simd.cpp).
+//
+// The cpu backend keeps each bird's state at its slot of the last grid (SlotStates), not
+// by index: a thread steps the same share of slots substep after substep, and writes,
+// sorts and reads the states of those birds in its own cache, where by index two
+// threads' birds share cache lines (10 000 birds on 2 threads: the grid's copy took 95 us
+// a substep by index, 21 by slot with the pool's workers awake, docs/performance.md).
 #include "domains/flocking/flock_kernel.hpp"
 
 #include <algorithm>
@@ -17,25 +23,16 @@ std::uint32_t bucket_count(std::uint32_t birds) {
     return std::bit_ceil(wanted);
 }
 
-void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::vector<std::uint32_t>& cells,
-                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted, unsigned threads, BucketsFn find) {
-    const std::size_t n = states.size();
-    cells.resize(n);
+namespace {
+
+// The counting sort of build_grid() and build_grid_slots(): `buckets` (start, count) for
+// the birds' `cells`, each one's place handed to place(at, bird) in the order given
+// (stable). The birds' buckets lie anywhere in the table (16 MB at a million birds): each
+// one's entry asked for kAhead birds before it is counted or placed.
+template <typename Place>
+void counting_sort(std::span<const std::uint32_t> cells, std::uint32_t mask, std::vector<std::uint32_t>& buckets, Place&& place) {
+    const std::size_t n = cells.size();
     buckets.assign(2 * (std::size_t{mask} + 1), 0u);
-    sorted.resize(n);
-    constexpr std::size_t kThreadedFrom = 65536;
-    parallel_for(n, n < kThreadedFrom ? 1u : threads, [&](std::size_t begin, std::size_t end) {
-        if (find != nullptr) {
-            find(states.subspan(begin, end - begin), inv_radius, mask, cells.data() + begin);
-            return;
-        }
-        for (std::size_t i = begin; i < end; ++i) cells[i] = glsl::flock_bucket(glsl::kw_xyz(states[i].position), inv_radius, mask);
-    });
-    // The counting sort on one thread: a stable order by bird index within a bucket. (The
-    // same sort with each thread over its own range of the table, reading every bird's
-    // bucket, gained 1% at a million birds on 2 threads: not kept.)
-    // The birds' buckets lie anywhere in the table (16 MB at a million birds): each one's
-    // entry asked for kAhead birds before it is counted or placed.
     constexpr std::size_t kAhead = 16;
     for (std::size_t i = 0; i < n; ++i) {
         if (i + kAhead < n) __builtin_prefetch(&buckets[2 * std::size_t{cells[i + kAhead]}], 1);
@@ -50,12 +47,68 @@ void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, st
     for (std::size_t i = 0; i < n; ++i) {
         if (i + kAhead < n) __builtin_prefetch(&buckets[2 * std::size_t{cells[i + kAhead]}], 1);
         const std::uint32_t b = cells[i];
-        sorted[buckets[2 * b] + buckets[2 * b + 1]++] = static_cast<std::uint32_t>(i);
+        place(buckets[2 * b] + buckets[2 * b + 1]++, static_cast<std::uint32_t>(i));
+    }
+}
+
+}  // namespace
+
+void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::vector<std::uint32_t>& cells,
+                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted) {
+    const std::size_t n = states.size();
+    cells.resize(n);
+    sorted.resize(n);
+    for (std::size_t i = 0; i < n; ++i) cells[i] = glsl::flock_bucket(glsl::kw_xyz(states[i].position), inv_radius, mask);
+    // A stable order by bird index within a bucket.
+    counting_sort(cells, mask, buckets, [&](std::uint32_t at, std::uint32_t i) { sorted[at] = i; });
+}
+
+void build_grid_slots(const float* x, const float* y, const float* z, std::span<const std::uint32_t> index, float inv_radius,
+                      std::uint32_t mask, BucketsFn find, unsigned threads, std::vector<std::uint32_t>& cells,
+                      std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted, std::vector<std::uint32_t>& perm,
+                      std::vector<std::uint32_t>& slot_of) {
+    const std::size_t n = index.size();
+    cells.resize(n);
+    sorted.resize(n);
+    perm.resize(n);
+    slot_of.resize(n);
+    // Each thread the share of slots it stepped (flock_cpu.cpp's blocks): their positions
+    // are in its cache.
+    parallel_for(n, threads, [&](std::size_t begin, std::size_t end) {
+        find(x + begin, y + begin, z + begin, end - begin, inv_radius, mask, cells.data() + begin);
+    });
+    counting_sort(cells, mask, buckets, [&](std::uint32_t at, std::uint32_t t) { perm[at] = t; });
+    // The grid's order within a bucket is by bird index; the old slots' is the last grid's,
+    // by index within each of its buckets, so a bucket's birds come mostly in order:
+    // sorted by insertion, or by std::sort where a bucket holds many (a dense knot of
+    // birds; every NaN position's bird shares one bucket). Indices are unique: one order.
+    const auto by_index = [&](std::uint32_t a, std::uint32_t b) { return index[a] < index[b]; };
+    constexpr std::uint32_t kInsertionMost = 32;
+    for (std::size_t s = 0; s < n;) {
+        const std::uint32_t count = buckets[2 * std::size_t{cells[perm[s]]} + 1];
+        std::uint32_t* first = perm.data() + s;
+        if (count > kInsertionMost) {
+            std::sort(first, first + count, by_index);
+        } else {
+            for (std::uint32_t m = 1; m < count; ++m) {
+                const std::uint32_t t = first[m];
+                std::uint32_t at = m;
+                for (; at > 0 && by_index(t, first[at - 1]); --at) first[at] = first[at - 1];
+                first[at] = t;
+            }
+        }
+        for (std::uint32_t m = 0; m < count; ++m) {
+            const std::uint32_t i = index[first[m]];
+            sorted[s + m] = i;
+            slot_of[i] = static_cast<std::uint32_t>(s + m);
+        }
+        s += count;
     }
 }
 
 }  // namespace kodawari::flocking
 
+#include <array>
 #include <atomic>
 #include <chrono>
 #include <mutex>
@@ -87,9 +140,18 @@ public:
     Result<void> load(const FlockWorld& world) override {
         world_ = &world;
         timing_ = {};
-        state_ = world.initial;
-        next_.resize(state_.size());
-        // No bounds yet: the first substep's searches take every bird's whole radius.
+        const std::size_t n = world.initial.size();
+        if (search_ == nullptr) {
+            state_ = world.initial;
+            next_.resize(n);
+            return {};
+        }
+        // Before the first grid, slot t holds bird t; no bounds yet: the first substep's
+        // searches take every bird's whole radius.
+        stepped_.resize(n);
+        for (std::size_t t = 0; t < n; ++t) stepped_.set(t, world.initial[t]);
+        from_index_.resize(n);
+        for (std::size_t t = 0; t < n; ++t) from_index_[t] = static_cast<std::uint32_t>(t);
         bounds_.clear();
         return {};
     }
@@ -97,103 +159,17 @@ public:
     Result<void> advance(std::uint32_t frames, std::span<const gpu::FlockParamsGpu> flocks, std::span<const gpu::FlockAgentGpu> agents,
                          std::span<gpu::BirdMotionGpu> out) override {
         const FlockWorld& w = *world_;
-        const std::size_t n = state_.size(), f_count = w.flocks.size(), a_count = frames > 0 ? agents.size() / frames : 0;
-        const std::uint32_t mask = w.buckets - 1u;
-        const float inv_radius = 1.0f / w.search_radius;
+        const std::size_t n = w.birds.size(), f_count = w.flocks.size(), a_count = frames > 0 ? agents.size() / frames : 0;
         for (std::uint32_t k = 0; k < frames; ++k) {
+            const Frame frame{flocks.subspan(k * f_count, f_count), agents.subspan(k * a_count, a_count),
+                              out.data() + std::size_t{k} * n};
             for (std::uint32_t s = 0; s < w.substeps; ++s) {
-                const auto grid_start = Clock::now();
-                const auto frame_flocks = flocks.subspan(k * f_count, f_count);
-                build_grid(state_, inv_radius, mask, cells_, buckets_, sorted_, threads_, buckets_fn_);
                 if (search_ != nullptr) {
-                    sorted_birds_.fill(state_, w.birds, frame_flocks, sorted_, threads_, bounds_);
-                    bounds_.resize(n);  // every slot written by the search
+                    substep(frame, s);
+                } else {
+                    substep_reference(frame, s);
                 }
-                timing_.grid_seconds += seconds(grid_start, Clock::now());
-                glsl::Kernel kernel{frame_flocks, w.birds, state_, buckets_, sorted_, agents.subspan(k * a_count, a_count), w.perches_of};
-                const SearchArgs search_args{&kernel, &sorted_birds_, mask, inv_radius, bounds_.data()};
-                const RulesArgs rules_args{&kernel, &sorted_birds_, static_cast<std::uint32_t>(a_count), w.dt};
-                const bool last = s + 1 == w.substeps;
-                gpu::BirdMotionGpu* motion = out.data() + std::size_t{k} * n;
-                const auto agent_count = static_cast<std::uint32_t>(a_count);
-                // cpu-reference goes bird after bird; the cpu backend in the grid's order,
-                // where birds of a cell come together (flock_search.hpp).
-                if (search_ == nullptr && order_.size() != n) {
-                    order_.resize(n);
-                    for (std::size_t i = 0; i < n; ++i) order_[i] = static_cast<std::uint32_t>(i);
-                }
-                const std::uint32_t* order = search_ != nullptr ? sorted_.data() : order_.data();
-                // Blocks of kBlock birds, each thread taking the next block not taken:
-                // a bird's cost follows the flock's density round it (its candidates),
-                // so equal shares of the grid's order may end apart (a million birds on
-                // 2 threads: 1.06x with this; 10 000: 1.00x). A bird's result does not
-                // depend on which thread steps it, nor on the blocks' order: the same bits.
-                const std::size_t blocks = (n + kBlock - 1) / kBlock;
-                std::atomic<std::size_t> next_block{0};
-                parallel_for(std::min<std::size_t>(threads_, blocks), threads_, [&](std::size_t, std::size_t) {
-                    // Per block: every bird's neighbours, then every bird's rules, each
-                    // phase timed (two clock reads a block of 256 birds).
-                    std::vector<glsl::Kernel::FlockNeighbours> found(kBlock);
-                    std::vector<glsl::Kernel::FlockStep> steps(kBlock);
-                    double search = 0.0, rules = 0.0;
-                    for (std::size_t block = next_block.fetch_add(1, std::memory_order_relaxed); block < blocks;
-                         block = next_block.fetch_add(1, std::memory_order_relaxed)) {
-                        const std::size_t b0 = block * kBlock, b1 = std::min(n, b0 + kBlock);
-                        const auto t0 = Clock::now();
-                        if (search_ != nullptr) {
-                            search_(search_args, static_cast<std::uint32_t>(b0), static_cast<std::uint32_t>(b1 - b0), found.data());
-                        } else {
-                            for (std::size_t o = b0; o < b1; ++o) found[o - b0] = kernel.flock_neighbours(order[o], mask, inv_radius);
-                        }
-                        const auto t1 = Clock::now();
-                        if (rules_ != nullptr) {
-                            rules_(rules_args, static_cast<std::uint32_t>(b0), static_cast<std::uint32_t>(b1 - b0), found.data(), steps.data());
-                        } else {
-                            for (std::size_t o = b0; o < b1; ++o) steps[o - b0] = kernel.flock_rules(order[o], found[o - b0], agent_count, w.dt);
-                        }
-                        for (std::size_t o = b0; o < b1; ++o) {
-                            // The writes below go by index (anywhere in the arrays): their
-                            // lines asked for a few birds ahead.
-                            if (o + 8 < b1) {
-                                __builtin_prefetch(&next_[order[o + 8]], 1);
-                                if (last) __builtin_prefetch(&motion[order[o + 8]], 1);
-                            }
-                            const std::uint32_t i = order[o];
-                            // Perches (flock_body.glsl): a bird on its perch or landing is not
-                            // stepped, and a flying one leaves the flock to land on a frame's
-                            // first substep. Asked only in a world with perches (each bird's
-                            // constants and state read by index again).
-                            const gpu::FlockBirdGpu& bird = w.birds[i];
-                            gpu::FlockStateGpu kept = w.perches ? state_[i] : gpu::FlockStateGpu{};
-                            if (w.perches && !kernel.flock_stepped(bird, w.perches_of[i], kernel.flocks[bird.ids.x], kept, s, w.frame_dt)) {
-                                // On its perch or landing: its state kept, its route's motion
-                                // (the search and rules above are not used).
-                                next_[i] = kept;
-                                if (last) {
-                                    const auto m = kernel.flock_route_motion(bird, w.perches_of[i], kept);
-                                    motion[i] = {gpu4(m.position), gpu4(m.velocity), gpu4(m.acceleration)};
-                                }
-                                continue;
-                            }
-                            const glsl::Kernel::FlockStep& step = steps[o - b0];
-                            next_[i].position = {step.position.x, step.position.y, step.position.z, 0.0f};
-                            next_[i].velocity = {step.velocity.x, step.velocity.y, step.velocity.z, 0.0f};
-                            if (last) {
-                                motion[i].position = next_[i].position;
-                                motion[i].velocity = next_[i].velocity;
-                                motion[i].acceleration = {step.acceleration.x, step.acceleration.y, step.acceleration.z, 0.0f};
-                            }
-                        }
-                        const auto t2 = Clock::now();
-                        search += seconds(t0, t1);
-                        rules += seconds(t1, t2);
-                    }
-                    const std::lock_guard lock(timing_mutex_);
-                    timing_.search_seconds += search;
-                    timing_.rules_seconds += rules;
-                });
                 timing_.bird_steps += n;
-                state_.swap(next_);
             }
         }
         return {};
@@ -210,17 +186,171 @@ private:
     static gpu::vec4 gpu4(const glm::vec4& v) { return {v.x, v.y, v.z, v.w}; }
     static constexpr std::size_t kBlock = 256;
 
+    // One frame's inputs and where its motion goes (bird by index).
+    struct Frame {
+        std::span<const gpu::FlockParamsGpu> flocks;
+        std::span<const gpu::FlockAgentGpu> agents;
+        gpu::BirdMotionGpu* motion;
+    };
+
+    // What each block of birds hands back: its neighbours, then its steps.
+    struct BlockScratch {
+        std::vector<glsl::Kernel::FlockNeighbours> found = std::vector<glsl::Kernel::FlockNeighbours>(kBlock);
+        std::vector<glsl::Kernel::FlockStep> steps = std::vector<glsl::Kernel::FlockStep>(kBlock);
+    };
+
+    // Calls body(b0, b1, scratch) for every block of kBlock birds [b0, b1) of n, with the
+    // search's and the rules' time (body returns the split point's clock reading). Each
+    // thread takes the blocks of its own equal share in order, then the ones left in the
+    // others' shares: a bird's cost follows the flock's density round it, so equal shares
+    // may end apart (a million birds on 2 threads: 1.06x with taking others' blocks;
+    // 10 000: 1.00x), while a thread that keeps its share steps the birds whose states
+    // it wrote last substep, in its own cache. A bird's result does not depend on which
+    // thread steps it, nor on the blocks' order: the same bits.
+    template <typename Body>
+    void run_blocks(std::size_t n, Body&& body) {
+        const std::size_t blocks = (n + kBlock - 1) / kBlock;
+        const std::size_t parts = std::min<std::size_t>(threads_, blocks);
+        std::vector<std::atomic<std::size_t>> next(parts);
+        for (std::size_t p = 0; p < parts; ++p) next[p].store(blocks * p / parts);
+        parallel_for(parts, threads_, [&](std::size_t me, std::size_t) {
+            BlockScratch scratch;
+            double search = 0.0, rules = 0.0;
+            for (std::size_t share = 0; share < parts; ++share) {
+                const std::size_t p = (me + share) % parts, end = blocks * (p + 1) / parts;
+                for (std::size_t block = next[p].fetch_add(1, std::memory_order_relaxed); block < end;
+                     block = next[p].fetch_add(1, std::memory_order_relaxed)) {
+                    const std::size_t b0 = block * kBlock, b1 = std::min(n, b0 + kBlock);
+                    const auto t0 = Clock::now();
+                    const auto t1 = body(b0, b1, scratch);
+                    const auto t2 = Clock::now();
+                    search += seconds(t0, t1);
+                    rules += seconds(t1, t2);
+                }
+            }
+            const std::lock_guard lock(timing_mutex_);
+            timing_.search_seconds += search;
+            timing_.rules_seconds += rules;
+        });
+    }
+
+    // cpu-reference: the grid by index and flock_body.glsl bird after bird.
+    void substep_reference(const Frame& frame, std::uint32_t s) {
+        const FlockWorld& w = *world_;
+        const std::uint32_t mask = w.buckets - 1u;
+        const float inv_radius = 1.0f / w.search_radius;
+        const auto agent_count = static_cast<std::uint32_t>(frame.agents.size());
+        const bool last = s + 1 == w.substeps;
+        const auto grid_start = Clock::now();
+        build_grid(state_, inv_radius, mask, cells_, buckets_, sorted_);
+        timing_.grid_seconds += seconds(grid_start, Clock::now());
+        glsl::Kernel kernel{frame.flocks, w.birds, state_, buckets_, sorted_, frame.agents, w.perches_of};
+        run_blocks(state_.size(), [&](std::size_t b0, std::size_t b1, BlockScratch& scratch) {
+            for (std::size_t i = b0; i < b1; ++i) {
+                scratch.found[i - b0] = kernel.flock_neighbours(static_cast<std::uint32_t>(i), mask, inv_radius);
+            }
+            const auto split = Clock::now();
+            for (std::size_t i = b0; i < b1; ++i) {
+                const auto bird = static_cast<std::uint32_t>(i);
+                gpu::FlockStateGpu kept = state_[i];
+                if (!stepped(kernel, bird, kept, s)) {
+                    next_[i] = kept;
+                    if (last) frame.motion[i] = route_motion(kernel, bird, kept);
+                    continue;
+                }
+                const glsl::Kernel::FlockStep step = kernel.flock_rules(bird, scratch.found[i - b0], agent_count, w.dt);
+                next_[i] = {{step.position.x, step.position.y, step.position.z, 0.0f}, {step.velocity.x, step.velocity.y, step.velocity.z, 0.0f}};
+                if (last) frame.motion[i] = motion_of(step);
+            }
+            return split;
+        });
+        state_.swap(next_);
+    }
+
+    // The cpu backend: birds held by slot (stepped_), the grid built from them, the
+    // hand-tuned search and rules in the grid's order (flock_search.hpp), where birds of a
+    // cell come together, and each bird's new state written at its slot.
+    void substep(const Frame& frame, std::uint32_t s) {
+        const FlockWorld& w = *world_;
+        const std::size_t n = w.birds.size();
+        const std::uint32_t mask = w.buckets - 1u;
+        const float inv_radius = 1.0f / w.search_radius;
+        const bool last = s + 1 == w.substeps;
+        const auto grid_start = Clock::now();
+        // Old slot t's bird: from_index_[t] (the last fill's index, or t before the first).
+        if (!bounds_.empty()) std::swap(from_index_, sorted_birds_.index);
+        const std::span<const std::uint32_t> from_index(from_index_.data(), n);
+        build_grid_slots(stepped_.x.data(), stepped_.y.data(), stepped_.z.data(), from_index, inv_radius, mask, buckets_fn_, threads_,
+                         cells_, buckets_, sorted_, perm_, sorted_birds_.slot_of);
+        sorted_birds_.fill(stepped_, from_index, perm_, w.birds, frame.flocks, threads_, bounds_);
+        bounds_.resize(n);  // every slot written by the search
+        timing_.grid_seconds += seconds(grid_start, Clock::now());
+        glsl::Kernel kernel{frame.flocks, w.birds, {}, buckets_, sorted_, frame.agents, w.perches_of};
+        const SortedBirds& sorted = sorted_birds_;
+        const SearchArgs search_args{&kernel, &sorted, mask, inv_radius, bounds_.data()};
+        const RulesArgs rules_args{&kernel, &sorted, static_cast<std::uint32_t>(frame.agents.size()), w.dt};
+        run_blocks(n, [&](std::size_t b0, std::size_t b1, BlockScratch& scratch) {
+            const auto first = static_cast<std::uint32_t>(b0), count = static_cast<std::uint32_t>(b1 - b0);
+            search_(search_args, first, count, scratch.found.data());
+            const auto split = Clock::now();
+            rules_(rules_args, first, count, scratch.found.data(), scratch.steps.data());
+            for (std::size_t t = b0; t < b1; ++t) {
+                // The motion goes by index (anywhere in the array): its lines asked for a
+                // few birds ahead.
+                if (last && t + 8 < b1) __builtin_prefetch(&frame.motion[sorted.index[t + 8]], 1);
+                const std::uint32_t i = sorted.index[t];
+                gpu::FlockStateGpu kept{{sorted.x[t], sorted.y[t], sorted.z[t], sorted.pw[t]},
+                                        {sorted.vx[t], sorted.vy[t], sorted.vz[t], sorted.vw[t]}};
+                if (!stepped(kernel, i, kept, s)) {
+                    stepped_.set(t, kept);
+                    if (last) frame.motion[i] = route_motion(kernel, i, kept);
+                    continue;
+                }
+                const glsl::Kernel::FlockStep& step = scratch.steps[t - b0];
+                stepped_.set(t, {{step.position.x, step.position.y, step.position.z, 0.0f}, {step.velocity.x, step.velocity.y, step.velocity.z, 0.0f}});
+                if (last) frame.motion[i] = motion_of(step);
+            }
+            return split;
+        });
+    }
+
+    // Perches (flock_body.glsl): a bird on its perch or landing is not stepped (`kept`
+    // its state, which flock_stepped() may update), and a flying one leaves the flock to
+    // land on a frame's first substep. Asked only in a world with perches.
+    bool stepped(glsl::Kernel& kernel, std::uint32_t i, gpu::FlockStateGpu& kept, std::uint32_t s) const {
+        const FlockWorld& w = *world_;
+        if (!w.perches) return true;
+        const gpu::FlockBirdGpu& bird = w.birds[i];
+        return kernel.flock_stepped(bird, w.perches_of[i], kernel.flocks[bird.ids.x], kept, s, w.frame_dt);
+    }
+    // A bird not stepped flies its route's motion (the search and rules are not used).
+    gpu::BirdMotionGpu route_motion(glsl::Kernel& kernel, std::uint32_t i, const gpu::FlockStateGpu& kept) const {
+        const auto m = kernel.flock_route_motion(world_->birds[i], world_->perches_of[i], kept);
+        return {gpu4(m.position), gpu4(m.velocity), gpu4(m.acceleration)};
+    }
+    static gpu::BirdMotionGpu motion_of(const glsl::Kernel::FlockStep& step) {
+        return {{step.position.x, step.position.y, step.position.z, 0.0f},
+                {step.velocity.x, step.velocity.y, step.velocity.z, 0.0f},
+                {step.acceleration.x, step.acceleration.y, step.acceleration.z, 0.0f}};
+    }
+
     unsigned threads_;
     std::optional<simd::Isa> isa_;
-    SearchFn search_;
-    RulesFn rules_;  // the cpu backend's hand-tuned rules; cpu-reference runs the body's
-    BucketsFn buckets_fn_;  // the cpu backend's birds' buckets, a vector at a time; cpu-reference: flock_bucket()
-    SortedBirds sorted_birds_;  // the hand-tuned search's copy of the grid
-    std::vector<float> bounds_;  // the hand-tuned search's k-th distances of last time, by slot (SearchArgs::bounds)
+    SearchFn search_;  // the cpu backend's hand-tuned search; cpu-reference runs the body's
+    RulesFn rules_;    // the cpu backend's hand-tuned rules; cpu-reference runs the body's
+    BucketsFn buckets_fn_;  // the cpu backend's birds' buckets, a vector at a time
     const FlockWorld* world_ = nullptr;
+    std::vector<std::uint32_t> cells_, buckets_, sorted_;  // the grid
+    // cpu-reference: the birds' states by index, this substep's and the next.
     std::vector<gpu::FlockStateGpu> state_, next_;
-    std::vector<std::uint32_t> cells_, buckets_, sorted_;
-    std::vector<std::uint32_t> order_;  // cpu-reference's: 0, 1, 2, ...
+    // The cpu backend: the birds' states by slot of the last grid (stepped_, old slot t
+    // holding bird from_index_[t]), the grid's copy for the search and rules
+    // (sorted_birds_), the new grid's old slots (perm_) and the search's k-th distances
+    // of last time by slot (SearchArgs::bounds).
+    SlotStates stepped_;
+    std::vector<std::uint32_t> from_index_, perm_;
+    SortedBirds sorted_birds_;
+    std::vector<float> bounds_;
     FlockingTiming timing_;
     std::mutex timing_mutex_;
 };

@@ -59,24 +59,21 @@ HWY_INLINE hn::Vec<DU> mix(hn::Vec<DU> x) {
     return x;
 }
 
-// BucketsFn: flock_bucket() of a vector of birds at a time, the positions gathered from
-// the states' records (8 floats apart); the last birds short of a vector one by one.
-void buckets(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::uint32_t* out) {
-    static_assert(sizeof(gpu::FlockStateGpu) == 8 * sizeof(float), "a state is 8 floats: its position first");
+// BucketsFn: flock_bucket() of a vector of birds at a time from the slots' arrays; the
+// last birds short of a vector one by one.
+void buckets(const float* x, const float* y, const float* z, std::size_t n, float inv_radius, std::uint32_t mask,
+             std::uint32_t* out) {
     const D d;
     const DU du;
-    const hn::RebindToSigned<D> di;
-    const std::size_t lanes = hn::Lanes(d), n = states.size();
-    const auto stride = hn::Mul(hn::Iota(di, 0), hn::Set(di, 8));
+    const std::size_t lanes = hn::Lanes(d);
     const auto inv = hn::Set(d, inv_radius);
     const auto mask_v = hn::Set(du, mask), high = hn::Set(du, ~mask);
     const auto half_block = hn::Set(du, KW_FLOCK_HALF_BLOCK);
     std::size_t i = 0;
     for (; i + lanes <= n; i += lanes) {
-        const float* base = &states[i].position.x;
-        const auto ux = hn::Add(cell_of(hn::GatherIndex(d, base, stride), inv), half_block);
-        const auto uy = hn::Add(cell_of(hn::GatherIndex(d, base + 1, stride), inv), half_block);
-        const auto uz = hn::Add(cell_of(hn::GatherIndex(d, base + 2, stride), inv), half_block);
+        const auto ux = hn::Add(cell_of(hn::LoadU(d, x + i), inv), half_block);
+        const auto uy = hn::Add(cell_of(hn::LoadU(d, y + i), inv), half_block);
+        const auto uz = hn::Add(cell_of(hn::LoadU(d, z + i), inv), half_block);
         const auto morton = hn::Or(hn::Or(spread3(ux), hn::ShiftLeft<1>(spread3(uy))), hn::ShiftLeft<2>(spread3(uz)));
         auto wrap = hn::And(morton, high);
         wrap = hn::Xor(wrap, hn::Mul(hn::ShiftRight<KW_FLOCK_BLOCK_BITS>(ux), hn::Set(du, KW_FLOCK_PRIME_X)));
@@ -84,7 +81,7 @@ void buckets(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::
         wrap = hn::Xor(wrap, hn::Mul(hn::ShiftRight<KW_FLOCK_BLOCK_BITS>(uz), hn::Set(du, KW_FLOCK_PRIME_Z)));
         hn::StoreU(hn::And(hn::Xor(morton, mix(wrap)), mask_v), du, out + i);
     }
-    for (; i < n; ++i) out[i] = glsl::flock_bucket(glsl::kw_xyz(states[i].position), inv_radius, mask);
+    for (; i < n; ++i) out[i] = glsl::flock_bucket(glsl::vec3(x[i], y[i], z[i]), inv_radius, mask);
 }
 
 }  // namespace

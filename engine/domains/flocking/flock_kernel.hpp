@@ -70,20 +70,34 @@ namespace kodawari::flocking {
 /// (few collisions) and at least KW_FLOCK_SCAN_SIZE.
 [[nodiscard]] KODAWARI_INTERNAL std::uint32_t bucket_count(std::uint32_t birds);
 
-/// out[i] = glsl::flock_bucket(states[i]'s position, inv_radius, mask) for every state:
-/// the cpu backend's, a vector of birds at a time (flock_search_simd.cpp).
-using BucketsFn = void (*)(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::uint32_t* out);
+/// out[t] = glsl::flock_bucket((x[t], y[t], z[t]), inv_radius, mask) for t < n: the cpu
+/// backend's, a vector of birds at a time (flock_grid_simd.cpp).
+using BucketsFn = void (*)(const float* x, const float* y, const float* z, std::size_t n, float inv_radius, std::uint32_t mask,
+                           std::uint32_t* out);
 
 /// BucketsFn compiled for the Highway target `target` (simd::Isa::target).
 [[nodiscard]] KODAWARI_INTERNAL BucketsFn flock_buckets_kernel(std::int64_t target);
 
 /// flock_grid.comp's passes on the CPU: `buckets` (2 per bucket: start, count) and
-/// `sorted` (the birds by bucket, in bird order within one) for `states`. The birds'
-/// buckets are found by `find` (null: flock_bucket() bird by bird) on `threads` threads
-/// (on one below 65 536 birds, where waking a thread costs more than it saves), the
-/// counting sort on one; the same result.
-KODAWARI_INTERNAL void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask, std::vector<std::uint32_t>& cells,
-                std::vector<std::uint32_t>& buckets, std::vector<std::uint32_t>& sorted, unsigned threads = 1,
-                BucketsFn find = nullptr);
+/// `sorted` (the birds by bucket, in bird order within one) for `states`, by index, on one
+/// thread (cpu-reference's; tests').
+KODAWARI_INTERNAL void build_grid(std::span<const gpu::FlockStateGpu> states, float inv_radius, std::uint32_t mask,
+                                  std::vector<std::uint32_t>& cells, std::vector<std::uint32_t>& buckets,
+                                  std::vector<std::uint32_t>& sorted);
+
+/// The same grid for birds held in slot order (the cpu backend's: flock_cpu.cpp keeps each
+/// bird's state at its slot of the last grid, so that a thread reads and writes the same
+/// birds substep after substep): old slot t holds bird index[t] at (x[t], y[t], z[t]).
+/// `buckets` and `sorted` are build_grid()'s of those birds (a bucket's birds by index),
+/// `perm[s]` the old slot of new slot s, `slot_of[i]` bird i's new slot (written here, on
+/// one thread: two threads writing a bird each by index share cache lines), `cells[t]` old
+/// slot t's bucket. The buckets are
+/// found by `find` over `threads` threads' equal shares of the slots, the counting sort
+/// on one.
+KODAWARI_INTERNAL void build_grid_slots(const float* x, const float* y, const float* z, std::span<const std::uint32_t> index,
+                                        float inv_radius, std::uint32_t mask, BucketsFn find, unsigned threads,
+                                        std::vector<std::uint32_t>& cells, std::vector<std::uint32_t>& buckets,
+                                        std::vector<std::uint32_t>& sorted, std::vector<std::uint32_t>& perm,
+                                        std::vector<std::uint32_t>& slot_of);
 
 }  // namespace kodawari::flocking

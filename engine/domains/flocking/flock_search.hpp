@@ -7,7 +7,7 @@
 // distance (from a NaN or infinite position) is NaN on both, its sign not always the same.
 //
 // Why it is faster: the grid's birds are copied each substep into arrays in bucket order
-// (SortedBirds), so a cell's candidates are contiguous floats a vector compares at once
+// (SortedBirds, from the birds' states by slot of the last grid, SlotStates), so a cell's candidates are contiguous floats a vector compares at once
 // (16 on AVX-512), where the reference reads each candidate's 64-byte parameters and
 // 32-byte state by index; only the few that pass go through the scalar insertion. And
 // each bird searches first within a bound from its k-th distance of last time
@@ -22,6 +22,22 @@
 
 namespace kodawari::flocking {
 
+/// Birds' states by slot, as arrays (the cpu backend's: it keeps each bird's state at its
+/// slot of the last grid, flock_cpu.cpp).
+struct KODAWARI_INTERNAL SlotStates {
+    std::vector<float> x, y, z, w;      ///< position (w: FlockStateGpu's)
+    std::vector<float> vx, vy, vz, vw;  ///< velocity (w: FlockStateGpu's)
+
+    void resize(std::size_t n);
+    [[nodiscard]] gpu::FlockStateGpu at(std::size_t t) const {
+        return {{x[t], y[t], z[t], w[t]}, {vx[t], vy[t], vz[t], vw[t]}};
+    }
+    void set(std::size_t t, const gpu::FlockStateGpu& s) {
+        x[t] = s.position.x, y[t] = s.position.y, z[t] = s.position.z, w[t] = s.position.w;
+        vx[t] = s.velocity.x, vy[t] = s.velocity.y, vz[t] = s.velocity.z, vw[t] = s.velocity.w;
+    }
+};
+
 /// The grid's birds in its sorted order (slot s holds bird sorted[s], the grid's own
 /// array, which the kernel reads as kw_sorted), as arrays padded with kSortedPad unused
 /// slots so that a vector load past a bucket's end stays inside.
@@ -29,18 +45,21 @@ struct KODAWARI_INTERNAL SortedBirds {
     static constexpr std::size_t kSortedPad = 16;
     std::vector<float> x, y, z;
     std::vector<float> vx, vy, vz;
+    std::vector<float> pw, vw;  ///< the state's position.w and velocity.w
     std::vector<float> flock;  ///< the bird's flock (exact as a float below 2^24); -1 while it is not flying (flock_seen_as())
     std::vector<std::uint32_t> index;  ///< the bird (the grid's `sorted`, padded)
-    std::vector<std::uint32_t> slot_of;  ///< bird i's slot: index[slot_of[i]] == i
+    std::vector<std::uint32_t> slot_of;  ///< bird i's slot: index[slot_of[i]] == i (build_grid_slots() writes it)
     /// Slot s's bird's k-th distance^2 of last time (SearchArgs::bounds), or infinity.
     std::vector<float> bound;
 
-    /// Fills the arrays from this substep's states, flocks and grid (build_grid()'s
-    /// `sorted`), on `threads` threads; `bound` from `last_bounds`, the search's of last
-    /// time by the slots of the last fill (SearchArgs::bounds), or infinity where empty.
-    void fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
-              std::span<const gpu::FlockParamsGpu> flocks, std::span<const std::uint32_t> sorted, unsigned threads = 1,
-              std::span<const float> last_bounds = {});
+    /// Fills the arrays for a new grid from birds held by slot (the cpu backend's): `from`
+    /// (old slot t: bird from_index[t]) and build_grid_slots()'s `perm` (new slot s holds
+    /// old slot perm[s]), on `threads` threads, each its equal share of the slots;
+    /// `bound` from `last_bounds` by old slot (as the search wrote them), or infinity
+    /// where empty. `from_index` must not be `index`.
+    void fill(const SlotStates& from, std::span<const std::uint32_t> from_index, std::span<const std::uint32_t> perm,
+                std::span<const gpu::FlockBirdGpu> birds, std::span<const gpu::FlockParamsGpu> flocks, unsigned threads,
+                std::span<const float> last_bounds);
 };
 
 /// What one call of the search reads.

@@ -343,48 +343,38 @@ void flock_cell_buckets27(glm::ivec3 home, std::uint32_t mask, std::uint32_t out
     }
 }
 
-void SortedBirds::fill(std::span<const gpu::FlockStateGpu> states, std::span<const gpu::FlockBirdGpu> birds,
-                       std::span<const gpu::FlockParamsGpu> flocks, std::span<const std::uint32_t> order, unsigned threads,
-                       std::span<const float> last_bounds) {
-    const std::size_t n = order.size(), padded = n + kSortedPad;
-    // The bounds of last time by the last fill's slots (slot_of before this fill's).
-    const bool bounded = !last_bounds.empty() && last_bounds.size() == n && slot_of.size() == n;
-    bound.resize(n);
-    x.resize(padded);
-    y.resize(padded);
-    z.resize(padded);
-    vx.resize(padded);
-    vy.resize(padded);
-    vz.resize(padded);
-    flock.resize(padded);
+void SlotStates::resize(std::size_t n) {
+    for (std::vector<float>* v : {&x, &y, &z, &w, &vx, &vy, &vz, &vw}) v->resize(n);
+}
+
+void SortedBirds::fill(const SlotStates& from, std::span<const std::uint32_t> from_index, std::span<const std::uint32_t> perm,
+                         std::span<const gpu::FlockBirdGpu> birds, std::span<const gpu::FlockParamsGpu> flocks, unsigned threads,
+                         std::span<const float> last_bounds) {
+    const std::size_t n = perm.size(), padded = n + kSortedPad;
+    const bool bounded = last_bounds.size() == n;
+    for (std::vector<float>* v : {&x, &y, &z, &vx, &vy, &vz, &pw, &vw, &flock}) v->resize(padded);
     index.resize(padded);
-    slot_of.resize(n);
+    bound.resize(n);
     for (std::size_t s = n; s < padded; ++s) flock[s] = -1.0f;  // no bird's flock
-    // Bird i's state, constants and slot are read by index, in the grid's order: a cache
-    // miss each once the flock outgrows the caches (a million birds), so they are asked
-    // for kPrefetch birds ahead.
-    constexpr std::size_t kPrefetch = 16;
+    // perm is mostly in order (a bird keeps its slot while it keeps its cell), so the old
+    // slots' arrays are read nearly in order, by the thread that wrote them.
     parallel_for(n, threads, [&](std::size_t begin, std::size_t end) {
         for (std::size_t s = begin; s < end; ++s) {
-            if (s + kPrefetch < end) {
-                const std::uint32_t ahead = order[s + kPrefetch];
-                __builtin_prefetch(&states[ahead]);
-                __builtin_prefetch(&birds[ahead]);
-                __builtin_prefetch(&slot_of[ahead], 1);
-            }
-            const std::uint32_t i = order[s];
-            x[s] = states[i].position.x;
-            y[s] = states[i].position.y;
-            z[s] = states[i].position.z;
-            vx[s] = states[i].velocity.x;
-            vy[s] = states[i].velocity.y;
-            vz[s] = states[i].velocity.z;
-            flock[s] = glsl::flock_seen_as(birds[i], flocks[birds[i].ids.x], states[i]);
+            const std::uint32_t t = perm[s];
+            const std::uint32_t i = from_index[t];
+            x[s] = from.x[t];
+            y[s] = from.y[t];
+            z[s] = from.z[t];
+            pw[s] = from.w[t];
+            vx[s] = from.vx[t];
+            vy[s] = from.vy[t];
+            vz[s] = from.vz[t];
+            vw[s] = from.vw[t];
+            const gpu::FlockBirdGpu& bird = birds[i];
+            // glsl::flock_seen_as() of the state (its velocity.w) and the bird's constants.
+            flock[s] = glsl::flock_seen_as(bird, flocks[bird.ids.x], from.at(t));
             index[s] = i;
-            // Bird i's old slot read before its new one is written (by this iteration
-            // alone: each bird has one slot).
-            bound[s] = bounded ? last_bounds[slot_of[i]] : std::numeric_limits<float>::infinity();
-            slot_of[i] = static_cast<std::uint32_t>(s);
+            bound[s] = bounded ? last_bounds[t] : std::numeric_limits<float>::infinity();
         }
     });
 }
