@@ -8,6 +8,7 @@
 #include <hwy/foreach_target.h>  // IWYU pragma: keep
 #include <hwy/highway.h>
 
+#include <cmath>
 #include <cstdint>
 #include <limits>
 
@@ -60,8 +61,8 @@ HWY_INLINE hn::Vec<DU> mix(hn::Vec<DU> x) {
 }
 
 // BucketsFn: flock_bucket() of a vector of birds at a time from the slots' arrays; the
-// last birds short of a vector one by one.
-void buckets(const float* x, const float* y, const float* z, std::size_t n, float inv_radius, std::uint32_t mask,
+// last birds short of a vector one by one. Whether any coordinate is NaN or infinite.
+bool buckets(const float* x, const float* y, const float* z, std::size_t n, float inv_radius, std::uint32_t mask,
              std::uint32_t* out) {
     const D d;
     const DU du;
@@ -69,11 +70,14 @@ void buckets(const float* x, const float* y, const float* z, std::size_t n, floa
     const auto inv = hn::Set(d, inv_radius);
     const auto mask_v = hn::Set(du, mask), high = hn::Set(du, ~mask);
     const auto half_block = hn::Set(du, KW_FLOCK_HALF_BLOCK);
+    auto finite = hn::FirstN(d, lanes);  // every lane
     std::size_t i = 0;
     for (; i + lanes <= n; i += lanes) {
-        const auto ux = hn::Add(cell_of(hn::LoadU(d, x + i), inv), half_block);
-        const auto uy = hn::Add(cell_of(hn::LoadU(d, y + i), inv), half_block);
-        const auto uz = hn::Add(cell_of(hn::LoadU(d, z + i), inv), half_block);
+        const auto px = hn::LoadU(d, x + i), py = hn::LoadU(d, y + i), pz = hn::LoadU(d, z + i);
+        finite = hn::And(finite, hn::And(hn::IsFinite(px), hn::And(hn::IsFinite(py), hn::IsFinite(pz))));
+        const auto ux = hn::Add(cell_of(px, inv), half_block);
+        const auto uy = hn::Add(cell_of(py, inv), half_block);
+        const auto uz = hn::Add(cell_of(pz, inv), half_block);
         const auto morton = hn::Or(hn::Or(spread3(ux), hn::ShiftLeft<1>(spread3(uy))), hn::ShiftLeft<2>(spread3(uz)));
         auto wrap = hn::And(morton, high);
         wrap = hn::Xor(wrap, hn::Mul(hn::ShiftRight<KW_FLOCK_BLOCK_BITS>(ux), hn::Set(du, KW_FLOCK_PRIME_X)));
@@ -81,7 +85,12 @@ void buckets(const float* x, const float* y, const float* z, std::size_t n, floa
         wrap = hn::Xor(wrap, hn::Mul(hn::ShiftRight<KW_FLOCK_BLOCK_BITS>(uz), hn::Set(du, KW_FLOCK_PRIME_Z)));
         hn::StoreU(hn::And(hn::Xor(morton, mix(wrap)), mask_v), du, out + i);
     }
-    for (; i < n; ++i) out[i] = glsl::flock_bucket(glsl::vec3(x[i], y[i], z[i]), inv_radius, mask);
+    bool not_finite = !hn::AllTrue(d, finite);
+    for (; i < n; ++i) {
+        out[i] = glsl::flock_bucket(glsl::vec3(x[i], y[i], z[i]), inv_radius, mask);
+        not_finite = not_finite || !std::isfinite(x[i]) || !std::isfinite(y[i]) || !std::isfinite(z[i]);
+    }
+    return not_finite;
 }
 
 }  // namespace

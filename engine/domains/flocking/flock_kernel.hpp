@@ -71,8 +71,9 @@ namespace kodawari::flocking {
 [[nodiscard]] KODAWARI_INTERNAL std::uint32_t bucket_count(std::uint32_t birds);
 
 /// out[t] = glsl::flock_bucket((x[t], y[t], z[t]), inv_radius, mask) for t < n: the cpu
-/// backend's, a vector of birds at a time (flock_grid_simd.cpp).
-using BucketsFn = void (*)(const float* x, const float* y, const float* z, std::size_t n, float inv_radius, std::uint32_t mask,
+/// backend's, a vector of birds at a time (flock_grid_simd.cpp). Returns whether any
+/// coordinate is NaN or infinite.
+using BucketsFn = bool (*)(const float* x, const float* y, const float* z, std::size_t n, float inv_radius, std::uint32_t mask,
                            std::uint32_t* out);
 
 /// BucketsFn compiled for the Highway target `target` (simd::Isa::target).
@@ -88,8 +89,10 @@ KODAWARI_INTERNAL void build_grid(std::span<const gpu::FlockStateGpu> states, fl
 /// The same grid for birds held in slot order (the cpu backend's: flock_cpu.cpp keeps each
 /// bird's state at its slot of the last grid, so that a thread reads and writes the same
 /// birds substep after substep): old slot t holds bird index[t] at (x[t], y[t], z[t]).
-/// `buckets` and `sorted` are build_grid()'s of those birds (a bucket's birds by index),
-/// `perm[s]` the old slot of new slot s, `slot_of[i]` bird i's new slot (written here, on
+/// `buckets` are build_grid()'s of those birds, and `sorted` too where a position is NaN
+/// or infinite; elsewhere a bucket's birds come in their old slots' order, not always by
+/// index (the cpu backend's search finds the same neighbours in any order of them where
+/// no distance is NaN, flock_search.hpp). `perm[s]` is the old slot of new slot s, `slot_of[i]` bird i's new slot (written here, on
 /// one thread: two threads writing a bird each by index share cache lines), `cells[t]` old
 /// slot t's bucket. The buckets are
 /// found by `find` over `threads` threads' equal shares of the slots, the counting sort
