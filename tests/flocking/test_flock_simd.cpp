@@ -531,7 +531,7 @@ TEST(FlockSearch, EachBirdsBoundFollowsItToItsNewSlot) {
 // elsewhere a bucket's birds in their old slots' order; each new slot's old slot.
 // For fewer birds than threads, a flock at starlings' density (several birds a bucket),
 // one spread over several blocks of cells (a bucket each, mostly), and a knot of birds in
-// one cell with NaN positions among them (a bucket past the insertion sort's size); the
+// one cell with NaN positions among them (a bucket of almost all of them); the
 // old slots in bird order, reversed and shuffled.
 TEST(FlockGrid, TheSlotsGridIsTheGridOfTheBirdsByIndex) {
     struct Case {

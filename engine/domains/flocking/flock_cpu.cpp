@@ -85,46 +85,32 @@ void build_grid_slots(const float* x, const float* y, const float* z, std::span<
     // nearest by distance, then index: a total order, flock_search.hpp), which every
     // distance between finite positions is (a square is at least 0, so an overflow gives
     // infinity, and infinities of one sign add up to one). A NaN distance's insertion
-    // follows the visiting order, so where a position is NaN or infinite the grid takes the
-    // reference's order, by bird index within a bucket: by insertion (the last grid's
-    // order is mostly it already), or std::sort where a bucket holds many (every NaN
-    // position's bird shares one bucket). Indices are unique: one order. (Sorting every
-    // substep cost 49 us of a 10 000-bird substep's 900 on one thread.)
-    const auto by_index = [&](std::uint32_t a, std::uint32_t b) { return index[a] < index[b]; };
-    constexpr std::size_t kInsertionMost = 32, kAhead = 16;
-    for (std::size_t s = 0; s < n;) {
-        std::size_t count = 1;
-        if (not_finite.load()) {
-            // The bucket's birds: the run of slots with its bucket (read by old slot, nearly
-            // in order; the table itself is megabytes at a million birds).
+    // follows the visiting order, so where a position is NaN or infinite (rare) the grid
+    // takes the reference's order, each bucket's run of slots sorted by bird index
+    // (unique: one order). (Sorting every substep cost 49 us of a 10 000-bird substep's
+    // 900 on one thread.)
+    if (not_finite.load()) {
+        for (std::size_t s = 0; s < n;) {
             const std::uint32_t cell = cells[perm[s]];
-            while (s + count < n && cells[perm[s + count]] == cell) ++count;
-            std::uint32_t* first = perm.data() + s;
-            if (count > kInsertionMost) {
-                std::sort(first, first + count, by_index);
-            } else {
-                for (std::size_t m = 1; m < count; ++m) {
-                    const std::uint32_t t = first[m];
-                    std::size_t at = m;
-                    for (; at > 0 && by_index(t, first[at - 1]); --at) first[at] = first[at - 1];
-                    first[at] = t;
-                }
-            }
+            std::size_t end = s + 1;
+            while (end < n && cells[perm[end]] == cell) ++end;
+            std::sort(perm.begin() + static_cast<std::ptrdiff_t>(s), perm.begin() + static_cast<std::ptrdiff_t>(end),
+                      [&](std::uint32_t a, std::uint32_t b) { return index[a] < index[b]; });
+            s = end;
         }
-        for (std::size_t m = 0; m < count; ++m) {
-            // slot_of by index, anywhere in it: its line asked for a few birds ahead.
-            if (s + m + kAhead < n) __builtin_prefetch(&slot_of[index[perm[s + m + kAhead]]], 1);
-            const std::uint32_t i = index[perm[s + m]];
-            sorted[s + m] = i;
-            slot_of[i] = static_cast<std::uint32_t>(s + m);
-        }
-        s += count;
+    }
+    constexpr std::size_t kAhead = 16;
+    for (std::size_t s = 0; s < n; ++s) {
+        // slot_of by index, anywhere in it: its line asked for a few birds ahead.
+        if (s + kAhead < n) __builtin_prefetch(&slot_of[index[perm[s + kAhead]]], 1);
+        const std::uint32_t i = index[perm[s]];
+        sorted[s] = i;
+        slot_of[i] = static_cast<std::uint32_t>(s);
     }
 }
 
 }  // namespace kodawari::flocking
 
-#include <array>
 #include <atomic>
 #include <chrono>
 #include <mutex>
